@@ -1,0 +1,12 @@
+"""clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
+
+from .imagedata import InputError
+from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
+from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "FLOWS", "ClpdeError", "InputError", "KernelBuildError", "NoDeviceError", "PlanarFlow",
+    "denoise_tv", "devices", "diffuse", "get_runtime", "stability_limit", "use_device",
+]

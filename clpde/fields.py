@@ -1,0 +1,201 @@
+"""Ghost-padded device fields, ghost filling, ping-pong pairs, index lists and reductions.
+
+A field of `nc` channels on an ny x nx grid lives on the device as one buffer of shape
+(nc, ny + 2G, nx + 2G). Stencil kernels update interior cells with no border test; the
+ghost layer is refreshed by `Field.fill_ghosts` between steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cla
+
+from .runtime import ClpdeError, Runtime
+
+NEUMANN, DIRICHLET = 0, 1
+_REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 4, "min": 5, "max": 6}
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Geometry of a padded 2D multi-channel field on one device."""
+
+    runtime: Runtime
+    nx: int
+    ny: int
+    nc: int = 1
+    ghost: int = 1
+    dtype: np.dtype = np.dtype(np.float32)
+
+    @property
+    def sx(self) -> int:
+        return self.nx + 2 * self.ghost
+
+    @property
+    def plane(self) -> int:
+        return self.sx * (self.ny + 2 * self.ghost)
+
+    @property
+    def padded_shape(self) -> tuple[int, int, int]:
+        return (self.nc, self.ny + 2 * self.ghost, self.sx)
+
+    def interior(self, padded: np.ndarray) -> np.ndarray:
+        g = self.ghost
+        return padded[:, g : g + self.ny, g : g + self.nx]
+
+    def args(self, xrun: int) -> tuple:
+        """The GRID_ARGS of common.cl."""
+        return tuple(np.int32(v) for v in (self.nx, self.ny, self.sx, self.plane, self.ghost, xrun))
+
+    def launch(self, kernel: cl.Kernel, *args, wait_for=None) -> cl.Event:
+        """Run a FOR_EACH_CELL kernel over every interior cell of every channel."""
+        gsize, lsize, xrun = self.runtime.grid_launch(self.nx, self.ny, self.nc)
+        return kernel(self.runtime.queue, gsize, lsize, *args, *self.args(xrun), wait_for=wait_for)
+
+    def launch_list(self, kernel: cl.Kernel, index_list: IndexList, *args) -> cl.Event | None:
+        """Run a LIST_RANGE kernel over the cells of an index list, in every channel."""
+        if index_list.n == 0:
+            return None
+        (gsize,), (lsize,), run = self.runtime.list_launch(index_list.n)
+        return kernel(
+            self.runtime.queue, (gsize, self.nc), (lsize, 1), *args,
+            index_list.indices.data, np.int32(index_list.n), np.int32(self.plane), np.int32(run),
+        )
+
+    def kernel(self, filename: str, name: str, **defines) -> cl.Kernel:
+        return self.runtime.kernel(filename, name, self.dtype, **defines)
+
+    def scalar(self, value) -> np.generic:
+        return self.dtype.type(value)
+
+
+class Field:
+    """A padded device array on a Grid."""
+
+    def __init__(self, grid: Grid, data: cla.Array):
+        self.grid = grid
+        self.data = data
+
+    @classmethod
+    def empty(cls, grid: Grid) -> Field:
+        nbytes = int(np.prod(grid.padded_shape)) * grid.dtype.itemsize
+        grid.runtime.check_alloc(nbytes)
+        return cls(grid, cla.empty(grid.runtime.queue, grid.padded_shape, grid.dtype))
+
+    @classmethod
+    def from_host(cls, grid: Grid, values: np.ndarray, boundary: str = "neumann", value=0.0) -> Field:
+        """Upload (nc, ny, nx) values and fill the ghosts."""
+        values = np.asarray(values)
+        if values.shape != (grid.nc, grid.ny, grid.nx):
+            raise ClpdeError(f"expected values of shape {(grid.nc, grid.ny, grid.nx)}, got {values.shape}")
+        field = cls.empty(grid)
+        padded = np.zeros(grid.padded_shape, grid.dtype)
+        grid.interior(padded)[...] = values
+        field.data.set(padded)
+        field.fill_ghosts(boundary, value)
+        return field
+
+    def copy(self) -> Field:
+        return Field(self.grid, self.data.copy())
+
+    def assign(self, other: Field) -> None:
+        """Copy another field of the same grid into this one, on the device."""
+        cl.enqueue_copy(self.grid.runtime.queue, self.data.data, other.data.data)
+
+    def to_host(self) -> np.ndarray:
+        """The interior as an (nc, ny, nx) numpy array (one device-to-host copy)."""
+        return np.ascontiguousarray(self.grid.interior(self.data.get()))
+
+    def fill_ghosts(self, boundary: str = "neumann", value=0.0) -> None:
+        """Neumann: mirror the interior across the border; Dirichlet: the fixed value."""
+        mode = {"neumann": NEUMANN, "dirichlet": DIRICHLET}.get(boundary)
+        if mode is None:
+            raise ClpdeError(f"boundary must be 'neumann' or 'dirichlet', not {boundary!r}")
+        g = self.grid
+        q = g.runtime.queue
+        args = (self.data.data, np.int32(mode), g.scalar(value), *g.args(g.nx))
+        g.kernel("fields.cl", "fill_ghost_cols")(q, (g.ny, g.nc), None, *args)
+        g.kernel("fields.cl", "fill_ghost_rows")(q, (g.sx, g.nc), None, *args)
+
+    def reduce(self, op: str, other: Field | None = None) -> np.ndarray:
+        """A per-channel reduction over the interior, computed on the device.
+
+        op: 'sum', 'sumsq', 'maxabsdiff', 'sumsqdiff', 'maxabs', 'min' or 'max'. Only the
+        per-row partials (nc * ny numbers) come back to the host.
+        """
+        g = self.grid
+        partial = cla.empty(g.runtime.queue, (g.nc, g.ny), g.dtype)
+        b = (other if other is not None else self).data.data
+        g.kernel("fields.cl", "row_reduce")(
+            g.runtime.queue, (1, g.ny, g.nc), None,
+            self.data.data, b, np.int32(_REDUCE_OPS[op]), partial.data, *g.args(g.nx),
+        )
+        rows = partial.get().astype(np.float64)
+        if op in ("maxabsdiff", "maxabs", "max"):
+            return rows.max(axis=1)
+        if op == "min":
+            return rows.min(axis=1)
+        return rows.sum(axis=1)
+
+    def max_abs_diff(self, other: Field) -> float:
+        return float(self.reduce("maxabsdiff", other).max())
+
+    def total(self) -> np.ndarray:
+        return self.reduce("sum")
+
+    def norm(self) -> np.ndarray:
+        return np.sqrt(self.reduce("sumsq"))
+
+
+class PingPong:
+    """Two fields a step reads from (`cur`) and writes every interior cell of (`nxt`)."""
+
+    def __init__(self, field: Field):
+        self.cur = field
+        self.nxt = field.copy()
+
+    def swap(self) -> None:
+        self.cur, self.nxt = self.nxt, self.cur
+
+
+@dataclass
+class IndexList:
+    """Flat padded indices of the cells a sparse kernel visits, built on the device."""
+
+    indices: cla.Array
+    n: int
+
+
+def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
+    """The flat indices where a device uint8 array is nonzero, in increasing order."""
+    n = mask.size
+    q = runtime.queue
+    chunk = 4096
+    nchunks = max(1, -(-n // chunk))
+    counts = cla.empty(q, nchunks, np.int32)
+    total = cla.empty(q, 1, np.int32)
+    flat = mask.reshape(n)
+    k = lambda name: runtime.kernel("fields.cl", name)  # noqa: E731
+    k("count_chunks")(q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data)
+    k("exclusive_scan_serial")(q, (1,), None, counts.data, np.int32(nchunks), total.data)
+    count = int(total.get()[0])  # the list's length sizes the launches: one read per build
+    indices = cla.empty(q, max(count, 1), np.int32)
+    if count:
+        k("write_chunks")(
+            q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data, indices.data
+        )
+    return IndexList(indices, count)
+
+
+def index_list(grid: Grid, mask: np.ndarray) -> IndexList:
+    """Index list of the interior cells where a host (ny, nx) mask is true."""
+    mask = np.asarray(mask, bool)
+    if mask.shape != (grid.ny, grid.nx):
+        raise ClpdeError(f"mask shape {mask.shape} differs from the grid's {(grid.ny, grid.nx)}")
+    g = grid.ghost
+    padded = np.zeros(grid.padded_shape[1:], np.uint8)
+    padded[g : g + grid.ny, g : g + grid.nx] = mask
+    return compact(grid.runtime, cla.to_device(grid.runtime.queue, padded))

@@ -1,0 +1,111 @@
+"""Input validation and the round trip between user images and the kernels' layout.
+
+Kernels see (channels, ny, nx) data scaled to [0, 1]; users get back an array of their own
+shape, dtype and range. Inputs are never modified.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .runtime import ClpdeError
+
+
+class InputError(ClpdeError, ValueError):
+    """An input array or parameter that clpde cannot use; the message says how to fix it."""
+
+
+@dataclass
+class ImageLayout:
+    """How to turn kernel data back into an array like the user's."""
+
+    shape: tuple
+    dtype: np.dtype
+    channel_axis: int | None
+    offset: float
+    scale: float
+
+    def restore(self, data: np.ndarray) -> np.ndarray:
+        """(nc, ny, nx) data in [0, 1] units back to the user's shape, dtype and range."""
+        values = np.asarray(data, np.float64) * self.scale + self.offset
+        if self.channel_axis is None:
+            values = values[0]
+        else:
+            values = np.moveaxis(values, 0, self.channel_axis)
+        if np.issubdtype(self.dtype, np.integer):
+            info = np.iinfo(self.dtype)
+            values = np.clip(np.rint(values), info.min, info.max)
+        return values.astype(self.dtype)
+
+
+def check_channel_axis(ndim: int, channel_axis) -> int | None:
+    if channel_axis is None:
+        if ndim != 2:
+            raise InputError(
+                f"expected a 2-D greyscale image, got {ndim} dimensions; for a colour or "
+                "multichannel image pass channel_axis (e.g. channel_axis=-1)"
+            )
+        return None
+    if ndim != 3:
+        raise InputError(
+            f"channel_axis={channel_axis} needs a 3-D (rows, columns, channels) array, "
+            f"got {ndim} dimensions; use channel_axis=None for a greyscale image"
+        )
+    if not isinstance(channel_axis, (int, np.integer)) or not -3 <= channel_axis < 3:
+        raise InputError(f"channel_axis must be an integer in [-3, 2], not {channel_axis!r}")
+    return int(channel_axis) % 3
+
+
+def as_image(image, name: str = "image", allow_nan: bool = False) -> np.ndarray:
+    array = np.asarray(image)
+    if array.dtype == bool or not (
+        np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)
+    ):
+        raise InputError(
+            f"{name} has dtype {array.dtype}; expected unsigned or signed integers or floats "
+            "(convert with image.astype(np.float32))"
+        )
+    if array.size == 0:
+        raise InputError(f"{name} is empty (shape {array.shape})")
+    if np.issubdtype(array.dtype, np.floating) and not allow_nan:
+        bad = ~np.isfinite(array)
+        if bad.any():
+            raise InputError(
+                f"{name} contains {int(bad.sum())} NaN or infinite values; replace them "
+                "(np.nan_to_num) or, to fill them in, use clpde.inpaint"
+            )
+    return array
+
+
+def to_kernel_layout(image, channel_axis=None, name: str = "image"):
+    """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
+
+    Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1); float images by
+    their own minimum and maximum, so a flow's parameters mean the same for any input range.
+    """
+    array = as_image(image, name)
+    axis = check_channel_axis(array.ndim, channel_axis)
+    if np.issubdtype(array.dtype, np.integer):
+        info = np.iinfo(array.dtype)
+        offset, scale = float(info.min), float(info.max) - float(info.min)
+    else:
+        lo, hi = float(array.min()), float(array.max())
+        offset, scale = lo, (hi - lo) if hi > lo else 1.0
+    data = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
+    if min(data.shape[1:]) < 1:
+        raise InputError(f"{name} has no pixels (shape {array.shape})")
+    data = (data.astype(np.float64) - offset) / scale
+    layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
+    return np.ascontiguousarray(data), layout
+
+
+def compute_dtype(image_dtype: np.dtype, requested=None) -> np.dtype:
+    """float32 unless asked for float64."""
+    if requested is None:
+        return np.dtype(np.float32)
+    requested = np.dtype(requested)
+    if requested not in (np.dtype(np.float32), np.dtype(np.float64)):
+        raise InputError(f"precision must be float32 or float64, not {requested}")
+    return requested

@@ -1,0 +1,290 @@
+"""Planar diffusion flows: heat, Perona-Malik, total variation, curvature, and ROF denoising.
+
+`PlanarFlow` keeps the state on the device and enqueues steps back to back; `diffuse` and
+`denoise_tv` are the one-call forms on numpy arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyopencl.array as cla
+from tqdm.auto import tqdm
+
+from .fields import Field, Grid, PingPong
+from .imagedata import InputError, to_kernel_layout
+from .runtime import get_runtime
+
+FLOWS = ("heat", "perona-malik", "tv", "curvature")
+
+
+def _check_dt(dt, limit: float, what: str) -> float:
+    if dt is None:
+        return 0.8 * limit
+    dt = float(dt)
+    if not np.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt must be a positive number, not {dt}")
+    if dt > limit * (1 + 1e-9):
+        raise InputError(
+            f"dt={dt:g} is beyond the stability limit {limit:g} of the explicit {what} scheme; "
+            f"use dt <= {limit:g} (or leave dt=None for {0.8 * limit:g})"
+        )
+    return dt
+
+
+def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
+    """Largest stable explicit time step of a planar flow (unit grid spacing)."""
+    if flow in ("heat", "perona-malik", "curvature"):
+        return 0.25
+    if flow in ("tv", "rof"):
+        return 1.0 / (4.0 / eps + lam)
+    raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
+
+
+def _positive(name: str, value) -> float:
+    value = float(value)
+    if not np.isfinite(value) or value <= 0:
+        raise InputError(f"{name} must be a positive number, not {value}")
+    return value
+
+
+@dataclass
+class FlowState:
+    """One yielded state of a running flow."""
+
+    step: int
+    time: float
+    image: np.ndarray
+    info: dict = field(default_factory=dict)
+
+
+class PlanarFlow:
+    """A planar flow whose state stays on the device between calls.
+
+    >>> flow = PlanarFlow(image, "tv", eps=0.05)
+    >>> for state in flow.iterate(steps=400, every=100):
+    ...     show(state.image)
+    """
+
+    def __init__(self, image, flow: str = "heat", *, dt=None, channel_axis=None, device=None,
+                 precision=None, kappa: float = 0.05, edge: str = "exp", eps=None,
+                 weight=None):
+        if flow not in FLOWS:
+            raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
+        data, self.layout = to_kernel_layout(image, channel_axis)
+        self.runtime = get_runtime(device)
+        dtype = np.dtype(precision or np.float32)
+        nc, ny, nx = data.shape
+        self.grid = Grid(self.runtime, nx, ny, nc, 1, dtype)
+        self.flow = flow
+        self.steps_done = 0
+        self.time = 0.0
+        self.pair = PingPong(Field.from_host(self.grid, data))
+        self._setup(flow, dt, kappa, edge, eps, weight)
+
+    def _setup(self, flow, dt, kappa, edge, eps, weight):
+        g = self.grid
+        if flow == "heat":
+            self.dt = _check_dt(dt, stability_limit(flow), "heat")
+            kernel = g.kernel("planar.cl", "heat_step")
+            self._extra = ()
+        elif flow == "perona-malik":
+            if edge not in ("exp", "rational"):
+                raise InputError(f"edge must be 'exp' or 'rational', not {edge!r}")
+            kappa = _positive("kappa", kappa)
+            self.dt = _check_dt(dt, stability_limit(flow), "Perona-Malik")
+            kernel = g.kernel("planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational"))
+            self._extra = (g.scalar(1.0 / kappa**2),)
+        elif flow == "tv":
+            eps = _positive("eps", 0.05 if eps is None else eps)
+            self.dt = _check_dt(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
+            kernel = g.kernel("planar.cl", "tv_step")
+            self._extra = (g.scalar(eps * eps),)
+        else:  # curvature
+            eps = 1e-10 if eps is None else float(eps)
+            self.dt = _check_dt(dt, stability_limit(flow), "curvature")
+            if weight is None:
+                kernel = g.kernel("planar.cl", "curvature_step")
+                weight_buf = self.pair.cur.data.data  # unread when HAS_WEIGHT is 0
+            else:
+                weight = np.asarray(weight, np.float64)
+                if weight.shape != (g.ny, g.nx) or not np.isfinite(weight).all():
+                    raise InputError(
+                        f"weight must be a finite ({g.ny}, {g.nx}) array, got shape {weight.shape}"
+                    )
+                wgrid = Grid(self.runtime, g.nx, g.ny, 1, 1, g.dtype)
+                self._weight = Field.from_host(wgrid, weight[np.newaxis])
+                weight_buf = self._weight.data.data
+                kernel = g.kernel("planar.cl", "curvature_step", HAS_WEIGHT=1)
+            self._extra = (weight_buf, g.scalar(0), g.scalar(eps))
+        self._kernel = kernel
+
+    def _enqueue_step(self):
+        g = self.grid
+        if self.flow == "curvature":  # the weight buffer comes before dt
+            args = (self._extra[0], g.scalar(self.dt), self._extra[2])
+        else:
+            args = (g.scalar(self.dt), *self._extra)
+        g.launch(self._kernel, self.pair.cur.data.data, self.pair.nxt.data.data, *args)
+        self.pair.nxt.fill_ghosts()
+        self.pair.swap()
+        self.steps_done += 1
+        self.time += self.dt
+
+    def run(self, steps: int, progress=None) -> PlanarFlow:
+        """Enqueue `steps` steps; the host only waits to move the progress bar."""
+        steps = _check_steps(steps)
+        bar = tqdm(total=steps, desc=f"clpde {self.flow}", unit="step",
+                   disable=_progress_disabled(progress, steps, self.grid))
+        chunk = 50
+        with bar:
+            for start in range(0, steps, chunk):
+                for _ in range(min(chunk, steps - start)):
+                    self._enqueue_step()
+                if not bar.disable:
+                    self.runtime.queue.finish()
+                    bar.update(min(chunk, steps - start))
+        return self
+
+    def iterate(self, steps: int, every: int):
+        """Run `steps` steps, yielding a FlowState every `every` steps (and at the end)."""
+        steps = _check_steps(steps)
+        every = max(1, int(every))
+        done = 0
+        while done < steps:
+            n = min(every, steps - done)
+            self.run(n, progress=False)
+            done += n
+            yield FlowState(self.steps_done, self.time, self.result())
+
+    def result(self) -> np.ndarray:
+        """The current state as an array like the input (one device-to-host copy)."""
+        return self.layout.restore(self.pair.cur.to_host())
+
+
+def _check_steps(steps) -> int:
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+        raise InputError(f"steps must be a non-negative integer, not {steps!r}")
+    return int(steps)
+
+
+def _progress_disabled(progress, steps: int, grid: Grid):
+    if progress is None:  # automatic: only for long runs, and only on a terminal
+        return None if steps * grid.nx * grid.ny * grid.nc > 2e9 else True
+    return not progress
+
+
+def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=None,
+            device=None, *, progress=None, precision=None, **params) -> np.ndarray:
+    """Run a planar diffusion flow for `steps` explicit steps.
+
+    flow: 'heat' (u_t = Lap u), 'perona-malik' (params kappa, edge='exp'|'rational'),
+    'tv' (u_t = div(grad u / |grad u|_eps), param eps) or 'curvature'
+    (u_t = g kappa |grad u|, params weight=g, eps). Data is scaled to [0, 1] internally,
+    so kappa and eps are in those units. The time step defaults to 0.8 of the stability
+    limit; a larger dt than the limit is an error. Output has the input's dtype and shape.
+    """
+    state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
+                       precision=precision, **params)
+    return state.run(steps, progress).result()
+
+
+@dataclass
+class DenoiseInfo:
+    steps: int
+    converged: bool
+    lam: np.ndarray
+    residual_variance: np.ndarray
+
+
+def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, device=None,
+               eps: float = 0.02, dt=None, max_steps: int = 2000, tol: float = 2e-4,
+               check_every: int = 20, lambda_every: int = 5, progress=None,
+               precision=None, return_info: bool = False):
+    """Total-variation denoising (Rudin-Osher-Fatemi) by gradient descent.
+
+    u_t = div(grad u / |grad u|_eps) - lambda (u - u0), run to a steady state.
+    Give the noise level `sigma` (in the image's units: 0..255 for uint8) and lambda is
+    updated on the device so that the residual variance tends to sigma^2 (the planar form of
+    thesis eq. C.2); or give `weight`, the denoising strength as in scikit-image
+    (lambda = 1 / weight on data scaled to [0, 1]). With neither, sigma is estimated
+    (skimage.restoration.estimate_sigma).
+
+    Stops when the largest change over `check_every` steps falls below tol * check_every * dt
+    (checked on the device) or after `max_steps`. With return_info, also returns the steps,
+    whether it converged, lambda and the residual variance per channel (image units^2).
+    """
+    if sigma is not None and weight is not None:
+        raise InputError("give sigma or weight, not both")
+    data, layout = to_kernel_layout(image, channel_axis)
+    runtime = get_runtime(device)
+    nc, ny, nx = data.shape
+    grid = Grid(runtime, nx, ny, nc, 1, np.dtype(precision or np.float32))
+    eps = _positive("eps", eps)
+    max_steps = _check_steps(max_steps)
+    check_every = max(1, int(check_every))
+    lambda_every = max(1, int(lambda_every))
+
+    if weight is not None:
+        lam0 = np.full(nc, 1.0 / _positive("weight", weight))
+        sigma2 = None
+    else:
+        if sigma is None:
+            from skimage.restoration import estimate_sigma
+
+            sig = np.array([estimate_sigma(c) for c in data])
+        else:
+            sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
+        sig = np.maximum(sig, 1e-6)
+        sigma2 = sig**2
+        lam0 = np.zeros(nc)
+    lam_max = float(lam0.max()) if sigma2 is None else 0.0
+    # With dynamic lambda the limit is re-checked against lambda as it grows (see below).
+    dt = _check_dt(dt, stability_limit("rof", eps, lam_max), f"ROF (eps={eps:g})")
+
+    u0 = Field.from_host(grid, data)
+    pair = PingPong(u0.copy())
+    previous = u0.copy()
+    q = runtime.queue
+    lam = cla.to_device(q, lam0.astype(grid.dtype))
+    partial = cla.empty(q, (nc, ny), grid.dtype)
+    step_k = grid.kernel("planar.cl", "rof_step")
+    rows_k = grid.kernel("planar.cl", "rof_lambda_rows")
+    finish_k = grid.kernel("planar.cl", "rof_lambda_finish")
+    eps2 = grid.scalar(eps * eps)
+
+    steps = 0
+    converged = False
+    bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="step",
+               disable=_progress_disabled(progress, max_steps, grid))
+    with bar:
+        while steps < max_steps:
+            if sigma2 is not None and steps % lambda_every == 0:
+                grid.launch(rows_k, pair.cur.data.data, u0.data.data, partial.data, eps2)
+                for c in range(nc):
+                    finish_k(q, (1,), None, partial[c].data, lam[c:c + 1].data, np.int32(ny),
+                             grid.scalar(1.0 / (nx * ny * sigma2[c])))
+            grid.launch(step_k, pair.cur.data.data, pair.nxt.data.data, u0.data.data, lam.data,
+                        grid.scalar(dt), eps2)
+            pair.nxt.fill_ghosts()
+            pair.swap()
+            steps += 1
+            if steps % check_every == 0 or steps == max_steps:
+                change = pair.cur.max_abs_diff(previous)  # one small read per check
+                bar.update(steps - bar.n)
+                if sigma2 is not None:
+                    current = lam.get().astype(np.float64)
+                    if dt > stability_limit("rof", eps, current.max()):
+                        dt = 0.8 * stability_limit("rof", eps, current.max())
+                if change < tol * check_every * dt:
+                    converged = True
+                    break
+                previous.assign(pair.cur)
+    u = pair.cur.to_host()
+    out = layout.restore(u)
+    if not return_info:
+        return out
+    residual = ((u - data) ** 2).mean(axis=(1, 2)) * layout.scale**2
+    return out, DenoiseInfo(steps, converged, lam.get().astype(np.float64), residual)
+

@@ -1,0 +1,328 @@
+"""OpenCL runtime: device choice, program building and caching, launch geometry.
+
+Everything that talks to pyopencl's platform layer lives here, so the flows only ask for
+``get_runtime(device).kernel("planar.cl", "heat_step")`` and launch it.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+class ClpdeError(RuntimeError):
+    """Base class of clpde's own errors (device, build and input problems)."""
+
+
+class NoDeviceError(ClpdeError):
+    pass
+
+
+class KernelBuildError(ClpdeError):
+    pass
+
+
+INSTALL_HINT = (
+    'install the CPU runtime with  pip install "clpde[pocl]"  '
+    "or your GPU vendor's OpenCL driver"
+)
+
+
+def _find_kernel_dir() -> Path:
+    # Installed wheels carry the kernels as the package clpde.kernels; a source checkout
+    # keeps them in the top-level kernels/ folder beside clpde/.
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "kernels", here.parent / "kernels"):
+        if (candidate / "common.cl").is_file():
+            return candidate
+    raise ClpdeError(f"clpde's OpenCL kernels were not found next to {here}; reinstall clpde")
+
+
+KERNEL_DIR = _find_kernel_dir()
+
+
+def _ensure_pocl_cache_dir() -> None:
+    """PoCL silently reports zero devices when it cannot write its kernel cache."""
+    current = os.environ.get("POCL_CACHE_DIR")
+    candidates = [current] if current else []
+    candidates += [
+        os.path.join(os.path.expanduser("~"), ".cache", "clpde", "pocl"),
+        os.path.join(tempfile.gettempdir(), f"clpde-pocl-{os.getuid() if hasattr(os, 'getuid') else 0}"),
+    ]
+    for path in candidates:
+        try:
+            os.makedirs(path, exist_ok=True)
+            probe = tempfile.NamedTemporaryFile(dir=path, delete=True)
+            probe.close()
+        except OSError:
+            continue
+        if current and path != current:
+            warnings.warn(
+                f"POCL_CACHE_DIR={current!r} is not writable; PoCL would show no devices. "
+                f"Using {path!r} instead.",
+                stacklevel=3,
+            )
+        os.environ["POCL_CACHE_DIR"] = path
+        return
+    os.environ["POCL_CACHE_DIR"] = tempfile.mkdtemp(prefix="clpde-pocl-")
+
+
+_ensure_pocl_cache_dir()
+
+import pyopencl as cl  # noqa: E402  (PoCL reads POCL_CACHE_DIR when the ICD loads)
+
+
+@dataclass(frozen=True)
+class DeviceInfo:
+    index: int
+    platform: str
+    name: str
+    type: str
+    compute_units: int
+    global_mem_bytes: int
+    max_alloc_bytes: int
+    fp64: bool
+    in_use: bool = False
+
+    def describe(self) -> str:
+        gib = 1024**3
+        mark = "*" if self.in_use else " "
+        return (
+            f"{mark} [{self.index}] {self.name} ({self.type}, {self.platform}): "
+            f"{self.compute_units} compute units, {self.global_mem_bytes / gib:.1f} GiB, "
+            f"largest allocation {self.max_alloc_bytes / gib:.2f} GiB, "
+            f"fp64 {'yes' if self.fp64 else 'no'}"
+        )
+
+
+def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
+    try:
+        platforms = cl.get_platforms()
+    except cl.Error as exc:  # PLATFORM_NOT_FOUND_KHR when no ICD is installed
+        raise NoDeviceError(f"no OpenCL platform found ({exc}); {INSTALL_HINT}") from None
+    found = []
+    for platform in platforms:
+        try:
+            found += [(platform, d) for d in platform.get_devices()]
+        except cl.Error:
+            continue  # a platform with no usable device
+    if not found:
+        raise NoDeviceError(
+            f"OpenCL platforms exist but show no device (for PoCL, check that "
+            f"POCL_CACHE_DIR={os.environ.get('POCL_CACHE_DIR')!r} is writable); {INSTALL_HINT}"
+        )
+    return found
+
+
+def _type_name(device: cl.Device) -> str:
+    if device.type & cl.device_type.GPU:
+        return "gpu"
+    if device.type & cl.device_type.CPU:
+        return "cpu"
+    if device.type & cl.device_type.ACCELERATOR:
+        return "accelerator"
+    return "other"
+
+
+def _has_fp64(device: cl.Device) -> bool:
+    return "cl_khr_fp64" in device.extensions or bool(getattr(device, "double_fp_config", 0))
+
+
+def _resolve(spec) -> int:
+    """Index into _all_devices() of the device a spec names."""
+    found = _all_devices()
+    names = [f"{d.name} ({p.name})" for p, d in found]
+    if isinstance(spec, (int, np.integer)) or (isinstance(spec, str) and spec.strip().isdigit()):
+        index = int(spec)
+        if not 0 <= index < len(found):
+            raise ClpdeError(
+                f"device index {index} is out of range; there are {len(found)} devices: "
+                + "; ".join(f"[{i}] {n}" for i, n in enumerate(names))
+            )
+        return index
+    if not isinstance(spec, str) or not spec.strip():
+        raise ClpdeError(f"device must be 'cpu', 'gpu', an index or a name substring, not {spec!r}")
+    wanted = spec.strip().lower()
+    if wanted in ("cpu", "gpu", "accelerator"):
+        for i, (_, d) in enumerate(found):
+            if _type_name(d) == wanted:
+                return i
+        raise ClpdeError(
+            f"no {wanted.upper()} OpenCL device found; available: {'; '.join(names)}"
+            + (f". {INSTALL_HINT}" if wanted == "cpu" else "")
+        )
+    for i, (p, d) in enumerate(found):
+        if wanted in d.name.lower() or wanted in p.name.lower():
+            return i
+    raise ClpdeError(
+        f"no OpenCL device matches {spec!r}; available: "
+        + "; ".join(f"[{i}] {n}" for i, n in enumerate(names))
+        + ". Run `clpde devices` to list them."
+    )
+
+
+def _default_index() -> int:
+    env = os.environ.get("CLPDE_DEVICE")
+    if env:
+        try:
+            return _resolve(env)
+        except ClpdeError as exc:
+            raise ClpdeError(f"CLPDE_DEVICE={env!r}: {exc}") from None
+    found = _all_devices()
+    for i, (_, d) in enumerate(found):
+        if _type_name(d) == "gpu":
+            return i
+    return 0
+
+
+_chosen_spec = None
+_runtimes: dict[int, Runtime] = {}
+
+
+def use_device(spec) -> Runtime:
+    """Make ``spec`` ('cpu', 'gpu', an index or a name substring) the default device."""
+    global _chosen_spec
+    runtime = get_runtime(spec)
+    _chosen_spec = spec
+    return runtime
+
+
+def get_runtime(device=None) -> Runtime:
+    """The runtime for ``device``; None means use_device's choice, CLPDE_DEVICE, GPU, CPU."""
+    if isinstance(device, Runtime):
+        return device
+    if device is None:
+        device = _chosen_spec
+    index = _default_index() if device is None else _resolve(device)
+    if index not in _runtimes:
+        platform, dev = _all_devices()[index]
+        _runtimes[index] = Runtime(index, platform, dev)
+    return _runtimes[index]
+
+
+def devices() -> list[DeviceInfo]:
+    """Every OpenCL device on every platform; ``in_use`` marks the default device."""
+    try:
+        current = get_runtime().index
+    except ClpdeError:
+        current = -1
+    return [
+        DeviceInfo(
+            index=i,
+            platform=p.name.strip(),
+            name=d.name.strip(),
+            type=_type_name(d),
+            compute_units=d.max_compute_units,
+            global_mem_bytes=d.global_mem_size,
+            max_alloc_bytes=d.max_mem_alloc_size,
+            fp64=_has_fp64(d),
+            in_use=(i == current),
+        )
+        for i, (p, d) in enumerate(_all_devices())
+    ]
+
+
+class Runtime:
+    """A device with its context, queue, built programs and launch geometry."""
+
+    def __init__(self, index: int, platform: cl.Platform, device: cl.Device):
+        self.index = index
+        self.platform = platform
+        self.device = device
+        self.type = _type_name(device)
+        self.is_cpu = self.type == "cpu"
+        self.fp64 = _has_fp64(device)
+        self.ctx = cl.Context([device])
+        self.queue = cl.CommandQueue(self.ctx)
+        self._programs: dict[tuple, cl.Program] = {}
+        self._kernels: dict[tuple, cl.Kernel] = {}
+
+    def __repr__(self) -> str:
+        return f"<clpde Runtime [{self.index}] {self.device.name.strip()} ({self.type})>"
+
+    # ---- programs -------------------------------------------------------------------------
+    def program(self, filename: str, dtype=np.float32, **defines) -> cl.Program:
+        """Build kernels/<filename> once per (file, dtype, defines)."""
+        dtype = np.dtype(dtype)
+        key = (filename, dtype.str, tuple(sorted(defines.items())))
+        prog = self._programs.get(key)
+        if prog is None:
+            prog = self._build(filename, dtype, defines)
+            self._programs[key] = prog
+        return prog
+
+    def kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> cl.Kernel:
+        """A kernel object, fetched once and reused (fetching per call is slow in pyopencl)."""
+        key = (filename, name, np.dtype(dtype).str, tuple(sorted(defines.items())))
+        k = self._kernels.get(key)
+        if k is None:
+            k = getattr(self.program(filename, dtype, **defines), name)
+            self._kernels[key] = k
+        return k
+
+    def _build(self, filename: str, dtype: np.dtype, defines: dict) -> cl.Program:
+        path = KERNEL_DIR / filename
+        if not path.is_file():
+            raise KernelBuildError(f"kernel file {path} does not exist")
+        if dtype == np.float64:
+            if not self.fp64:
+                raise ClpdeError(
+                    f"{self.device.name.strip()} has no double precision (cl_khr_fp64); "
+                    "use dtype=float32 or another device"
+                )
+            real = "double"
+        elif dtype == np.float32:
+            real = "float"
+        else:
+            raise ClpdeError(f"kernels compute in float32 or float64, not {dtype}")
+        # The #line directive makes compiler messages name the real file and line.
+        source = f'#line 1 "{path}"\n' + path.read_text()
+        options = [f"-I{KERNEL_DIR}", f"-DREAL={real}", "-cl-std=CL1.2"]
+        if real == "double":
+            options.append("-DREAL_IS_DOUBLE=1")
+        if "portable computing language" in self.platform.name.lower():
+            options.append("-DCLPDE_POCL=1")
+        options += [f"-D{k}={v}" for k, v in sorted(defines.items())]
+        try:
+            return cl.Program(self.ctx, source).build(options=options)
+        except cl.RuntimeError as exc:
+            raise KernelBuildError(f"building {path} failed:\n{exc}") from None
+
+    # ---- memory ---------------------------------------------------------------------------
+    def check_alloc(self, nbytes: int, what: str = "field") -> None:
+        """Refuse an allocation the device cannot make, before trying it."""
+        limit = self.device.max_mem_alloc_size
+        if nbytes > limit:
+            raise ClpdeError(
+                f"the {what} needs {nbytes / 2**20:.1f} MiB in one buffer, but "
+                f"{self.device.name.strip()} allows at most {limit / 2**20:.1f} MiB per "
+                "allocation; use a smaller image or crop it, or choose a device with more "
+                "memory (clpde devices)"
+            )
+
+    # ---- launch geometry ------------------------------------------------------------------
+    def grid_launch(self, nx: int, ny: int, nz: int = 1):
+        """(global size, local size, xrun) for a kernel that walks `xrun` cells along x.
+
+        On CPUs one work-item walks a whole row, which PoCL vectorises into a loop running
+        at memory bandwidth; on GPUs one work-item takes one cell.
+        """
+        if self.is_cpu:
+            return (1, ny, nz), (1, 1, 1), nx
+        lx, ly = 64, 4
+        gx = -(-nx // lx) * lx
+        gy = -(-ny // ly) * ly
+        return (gx, gy, nz), (lx, ly, 1), 1
+
+    def list_launch(self, n: int):
+        """(global size, local size, run) for a kernel over a compacted list of n items."""
+        if self.is_cpu:
+            groups = 8 * self.device.max_compute_units
+            run = max(256, -(-n // groups))
+            return (-(-n // run),), (1,), run
+        return (-(-n // 64) * 64,), (64,), 1

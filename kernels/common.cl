@@ -1,0 +1,56 @@
+// Shared definitions for every clpde kernel.
+//
+// Fields are stored with a ghost layer of G cells on each side, channel planes one after the
+// other: layout (channels, ny + 2G, nx + 2G), x fastest. Stencil kernels update interior
+// cells only and never test for borders; separate thin kernels (fields.cl) fill the ghosts.
+//
+// REAL (float or double) is set by the host with -DREAL=...
+
+#ifdef REAL_IS_DOUBLE
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+
+#ifndef REAL
+#define REAL float
+#endif
+
+// Every grid kernel takes these arguments, in this order, after its buffers:
+// interior size, row stride, plane stride (one channel), ghost width, cells per work-item.
+#define GRID_ARGS const int nx, const int ny, const int sx, const int plane, const int G, \
+                  const int xrun
+
+// Loop over the interior cells this work-item owns. Work-item (gx, y, c) walks cells
+// [gx*xrun, gx*xrun + xrun) of row y in channel c: on CPUs xrun = nx (one row per item,
+// which vectorises), on GPUs xrun = 1 (one cell per item). `i` is the padded linear index.
+#define FOR_EACH_CELL(i)                                                              \
+    const int row_y_ = get_global_id(1);                                              \
+    if (row_y_ >= ny) return;                                                         \
+    const int x0_ = get_global_id(0) * xrun;                                          \
+    const int x1_ = min(x0_ + xrun, nx);                                              \
+    const int row0_ = get_global_id(2) * plane + (row_y_ + G) * sx + G;               \
+    for (int i = row0_ + x0_; i < row0_ + x1_; ++i)
+
+// The same over a compacted list of padded plane indices: work-item (g, c) takes entries
+// [k0, k1) of `list` in channel c, whose plane starts at `chan`. Use as
+//     LIST_RANGE(k0, k1, chan);
+//     for (int k = k0; k < k1; ++k) { const int i = chan + list[k]; ... }
+#define LIST_ARGS __global const int* restrict list, const int nlist, const int plane, \
+                  const int run
+#define LIST_RANGE(k0, k1, chan)                                                      \
+    const int k0 = get_global_id(0) * run;                                            \
+    const int k1 = min(k0 + run, nlist);                                              \
+    const int chan = get_global_id(1) * plane
+
+#define SQR(a) ((a) * (a))
+
+// PoCL compiles OpenCL's sqrt/rsqrt to library calls that its loop vectoriser cannot
+// widen (about 7x slower here); the compiler builtin becomes the vector instruction.
+// The host defines CLPDE_POCL on PoCL devices.
+#if defined(CLPDE_POCL) && defined(REAL_IS_DOUBLE)
+#define SQRT(x) __builtin_sqrt(x)
+#elif defined(CLPDE_POCL)
+#define SQRT(x) __builtin_sqrtf(x)
+#else
+#define SQRT(x) sqrt(x)
+#endif
+#define RSQRT(x) ((REAL)1 / SQRT(x))

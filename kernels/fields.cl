@@ -1,0 +1,93 @@
+// Ghost filling, index-list compaction and row-wise reductions for padded fields.
+#include "common.cl"
+
+// Ghost columns left and right of every interior row. Neumann (mode 0) mirrors the field
+// about the border face, so the normal difference across it is zero; Dirichlet (mode 1)
+// sets the ghosts to `value`. Work-item (y, c).
+__kernel void fill_ghost_cols(__global REAL* u, const int mode, const REAL value,
+                              GRID_ARGS)
+{
+    const int y = get_global_id(0);
+    if (y >= ny) return;
+    const int row = get_global_id(1) * plane + (y + G) * sx;
+    for (int k = 0; k < G; ++k) {
+        u[row + G - 1 - k] = mode ? value : u[row + G + min(k, nx - 1)];
+        u[row + G + nx + k] = mode ? value : u[row + G + nx - 1 - min(k, nx - 1)];
+    }
+}
+
+// Ghost rows above and below, over the whole padded width (corners included); run after
+// fill_ghost_cols so corners mirror the already-filled column ghosts. Work-item (x, c).
+__kernel void fill_ghost_rows(__global REAL* u, const int mode, const REAL value,
+                              GRID_ARGS)
+{
+    const int x = get_global_id(0);
+    if (x >= sx) return;
+    const int base = get_global_id(1) * plane + x;
+    for (int k = 0; k < G; ++k) {
+        u[base + (G - 1 - k) * sx] = mode ? value : u[base + (G + min(k, ny - 1)) * sx];
+        u[base + (G + ny + k) * sx] = mode ? value : u[base + (G + ny - 1 - min(k, ny - 1)) * sx];
+    }
+}
+
+// Copy the interior of `src` into `dst` (same geometry).
+__kernel void copy_interior(__global const REAL* restrict src, __global REAL* restrict dst,
+                            GRID_ARGS)
+{
+    FOR_EACH_CELL(i) dst[i] = src[i];
+}
+
+// ---- compaction of a mask into a list of flat indices, in three passes ------------------
+// The mask is a flat uchar array of n entries cut into chunks of `chunk`; each work-item
+// counts one chunk, one work-item turns counts into offsets, then each chunk writes its own
+// indices in order. Deterministic, and needs no atomics.
+__kernel void count_chunks(__global const uchar* restrict mask, const int n, const int chunk,
+                           __global int* restrict counts)
+{
+    const int c = get_global_id(0);
+    const int end = min((c + 1) * chunk, n);
+    int total = 0;
+    for (int i = c * chunk; i < end; ++i) total += mask[i] != 0;
+    counts[c] = total;
+}
+
+__kernel void exclusive_scan_serial(__global int* counts, const int nchunks,
+                                    __global int* restrict total)
+{
+    int running = 0;
+    for (int c = 0; c < nchunks; ++c) {
+        const int here = counts[c];
+        counts[c] = running;
+        running += here;
+    }
+    total[0] = running;
+}
+
+__kernel void write_chunks(__global const uchar* restrict mask, const int n, const int chunk,
+                           __global const int* restrict offsets, __global int* restrict list)
+{
+    const int c = get_global_id(0);
+    const int end = min((c + 1) * chunk, n);
+    int out = offsets[c];
+    for (int i = c * chunk; i < end; ++i)
+        if (mask[i]) list[out++] = i;
+}
+
+// ---- reductions: one partial per interior row, combined on the host at check time ------
+// op 0: sum a, 1: sum a^2, 2: max |a - b|, 3: sum (a - b)^2, 4: max |a|, 5: min a, 6: max a
+__kernel void row_reduce(__global const REAL* restrict a, __global const REAL* restrict b,
+                         const int op, __global REAL* restrict partial, GRID_ARGS)
+{
+    const int y = get_global_id(1);
+    if (y >= ny) return;
+    const int row = get_global_id(2) * plane + (y + G) * sx + G;
+    REAL acc = (op == 5) ? INFINITY : ((op == 6) ? -INFINITY : 0);
+    if (op == 0)      for (int x = 0; x < nx; ++x) acc += a[row + x];
+    else if (op == 1) for (int x = 0; x < nx; ++x) acc += SQR(a[row + x]);
+    else if (op == 2) for (int x = 0; x < nx; ++x) acc = fmax(acc, fabs(a[row + x] - b[row + x]));
+    else if (op == 3) for (int x = 0; x < nx; ++x) acc += SQR(a[row + x] - b[row + x]);
+    else if (op == 4) for (int x = 0; x < nx; ++x) acc = fmax(acc, fabs(a[row + x]));
+    else if (op == 5) for (int x = 0; x < nx; ++x) acc = fmin(acc, a[row + x]);
+    else              for (int x = 0; x < nx; ++x) acc = fmax(acc, a[row + x]);
+    partial[get_global_id(2) * ny + y] = acc;
+}
