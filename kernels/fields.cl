@@ -91,3 +91,14 @@ __kernel void row_reduce(__global const REAL* restrict a, __global const REAL* r
     else              for (int x = 0; x < nx; ++x) acc = fmax(acc, a[row + x]);
     partial[get_global_id(2) * ny + y] = acc;
 }
+
+// Copy the listed cells of `src` into `dst` (every channel); other cells keep their value.
+__kernel void copy_listed(__global const REAL* restrict src, __global REAL* restrict dst,
+                          LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        dst[i] = src[i];
+    }
+}

@@ -1,0 +1,50 @@
+"""NumPy references of the inpainting kernels (kernels/inpaint.cl): the same discrete formulas.
+
+Arrays are padded (nc, ny + 2, nx + 2) with Neumann ghosts (tests.reference.planar.pad_neumann);
+masks are (ny, nx). Each step returns the new interior (nc, ny, nx); cells off the kernel's
+list keep their old values.
+"""
+
+import numpy as np
+
+from .planar import _shifts, curvature_speed, pad_neumann
+
+
+def laplacian(p):
+    c, e, w, n, s, *_ = _shifts(p)
+    return e + w + n + s - 4 * c
+
+
+def transport_rate(p, rot=1.0, grad_eps2=1e-10, scaling="none"):
+    """I_t of eqs. (3.6)-(3.11) at every interior cell (L's ghosts mirrored like I's)."""
+    lap = pad_neumann(laplacian(p))
+    c, e, w, n, s, *_ = _shifts(p)
+    _, le, lw, ln, ls, *_ = _shifts(lap)
+    ix, iy = 0.5 * (e - w), 0.5 * (n - s)
+    dlx, dly = le - lw, ln - ls
+    beta = rot * (dly * ix - dlx * iy) / np.sqrt(ix * ix + iy * iy + grad_eps2)
+    xb, xf, yb, yf = c - w, e - c, c - s, n - c
+    lo, hi = np.minimum, np.maximum
+    up = lo(xb, 0) ** 2 + hi(xf, 0) ** 2 + lo(yb, 0) ** 2 + hi(yf, 0) ** 2
+    down = hi(xb, 0) ** 2 + lo(xf, 0) ** 2 + hi(yb, 0) ** 2 + lo(yf, 0) ** 2
+    rate = beta * np.sqrt(np.where(beta > 0, up, down))
+    if scaling == "quartic-root":
+        rate = np.sign(rate) * np.abs(rate) ** 0.25
+    return rate
+
+
+def transport_step(p, omega, dt, rot=1.0, grad_eps2=1e-10, scaling="none"):
+    c = p[:, 1:-1, 1:-1]
+    rate = transport_rate(p, rot, grad_eps2, scaling)
+    return np.where(omega[None], c + dt * rate, c)
+
+
+def diffusion_step(p, g, dt, eps=1e-10):
+    """Anisotropic diffusion (3.4) weighted by g (zero off the band: those cells keep)."""
+    c = p[:, 1:-1, 1:-1]
+    return np.where(g[None] > 0, c + dt * g[None] * curvature_speed(p, eps), c)
+
+
+def fill_step(p, omega):
+    c, e, w, n, s, *_ = _shifts(p)
+    return np.where(omega[None], 0.25 * (e + w + n + s), c)

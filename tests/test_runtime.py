@@ -1,0 +1,137 @@
+import subprocess
+import sys
+import textwrap
+import warnings
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+import clpde
+from clpde import runtime as rt_mod
+from clpde.fields import Field, Grid
+from clpde.runtime import ClpdeError, KernelBuildError, NoDeviceError
+
+
+def test_devices_lists_every_device_and_marks_the_one_in_use():
+    found = clpde.devices()
+    assert found, "PoCL should provide at least one device"
+    assert sum(d.in_use for d in found) == 1
+    for d in found:
+        assert d.compute_units >= 1 and d.global_mem_bytes > 0 and d.max_alloc_bytes > 0
+        assert d.type in ("cpu", "gpu", "accelerator", "other")
+        assert d.name in d.describe()
+
+
+@pytest.fixture
+def fresh_choice(monkeypatch):
+    monkeypatch.setattr(rt_mod, "_chosen_spec", None)
+    monkeypatch.delenv("CLPDE_DEVICE", raising=False)
+
+
+@pytest.mark.parametrize("spec", ["cpu", 0, "0", "pthread", "portable"])
+def test_device_specs_resolve(fresh_choice, spec):
+    runtime = rt_mod.get_runtime(spec)
+    assert runtime.type == "cpu"
+
+
+def test_explicit_argument_beats_use_device_beats_environment(fresh_choice, monkeypatch):
+    monkeypatch.setenv("CLPDE_DEVICE", "no-such-device")
+    with pytest.raises(ClpdeError, match="CLPDE_DEVICE='no-such-device'"):
+        rt_mod.get_runtime()
+    clpde.use_device("cpu")
+    assert rt_mod.get_runtime().type == "cpu"  # use_device wins over the variable
+    monkeypatch.setattr(rt_mod, "_chosen_spec", "no-such-device")
+    assert rt_mod.get_runtime("cpu").type == "cpu"  # an explicit argument wins over both
+
+
+def test_environment_variable_picks_the_device(fresh_choice, monkeypatch):
+    monkeypatch.setenv("CLPDE_DEVICE", "cpu")
+    assert rt_mod.get_runtime().type == "cpu"
+
+
+@pytest.mark.parametrize("spec", ["no-such-device", 99, ""])
+def test_unknown_device_is_a_clear_error(fresh_choice, spec):
+    with pytest.raises(ClpdeError, match="device"):
+        rt_mod.get_runtime(spec)
+
+
+def test_unknown_device_through_the_api(fresh_choice):
+    with pytest.raises(ClpdeError, match="clpde devices"):
+        clpde.diffuse(np.zeros((8, 8)), device="no-such-device")
+
+
+def test_no_platform_names_the_fix(monkeypatch):
+    def no_platforms():
+        raise cl.LogicError("clGetPlatformIDs failed: PLATFORM_NOT_FOUND_KHR")
+
+    monkeypatch.setattr(cl, "get_platforms", no_platforms)
+    with pytest.raises(NoDeviceError, match=r'pip install "clpde\[pocl\]"'):
+        rt_mod.get_runtime("cpu")
+
+
+def test_kernels_are_built_once_and_reused(runtime):
+    k1 = runtime.kernel("planar.cl", "heat_step")
+    k2 = runtime.kernel("planar.cl", "heat_step")
+    assert k1 is k2
+    assert runtime.program("planar.cl") is runtime.program("planar.cl")
+    assert runtime.program("planar.cl", EDGE_STOP=1) is not runtime.program("planar.cl")
+
+
+def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
+    (tmp_path / "common.cl").write_text((rt_mod.KERNEL_DIR / "common.cl").read_text())
+    (tmp_path / "broken.cl").write_text(
+        '#include "common.cl"\n\n__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n'
+    )
+    monkeypatch.setattr(rt_mod, "KERNEL_DIR", tmp_path)
+    with pytest.raises(KernelBuildError) as info:
+        runtime.program("broken.cl")
+    message = str(info.value)
+    assert "broken.cl" in message and ":5:" in message and "undefined_name" in message
+
+
+def test_missing_kernel_file(runtime):
+    with pytest.raises(KernelBuildError, match="does not exist"):
+        runtime.program("no_such_file.cl")
+
+
+def test_oversized_field_is_refused_before_allocation(runtime):
+    side = int(np.sqrt(runtime.device.max_mem_alloc_size / 4)) + 16
+    grid = Grid(runtime, side, side)
+    with pytest.raises(ClpdeError, match="largest allocation|at most"):
+        Field.empty(grid)
+
+
+def test_unwritable_pocl_cache_dir_falls_back_to_a_writable_one(tmp_path):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a directory")
+    code = textwrap.dedent(
+        """
+        import os, warnings
+        warnings.simplefilter("always")
+        with warnings.catch_warnings(record=True) as caught:
+            import clpde
+        print(len(clpde.devices()), os.environ["POCL_CACHE_DIR"], len(caught))
+        """
+    )
+    env = {k: v for k, v in __import__("os").environ.items() if k != "CLPDE_DEVICE"}
+    env["POCL_CACHE_DIR"] = str(blocker / "cache")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True, cwd=tmp_path)
+    count, path, warned = out.stdout.split()
+    assert int(count) >= 1 and path != str(blocker / "cache") and int(warned) >= 1
+
+
+def test_float64_needs_fp64(runtime):
+    if runtime.fp64:
+        out = clpde.diffuse(np.random.default_rng(0).random((16, 16)), steps=3, precision=np.float64)
+        assert out.dtype == np.float64
+    else:
+        with pytest.raises(ClpdeError, match="fp64"):
+            clpde.diffuse(np.zeros((16, 16)), steps=3, precision=np.float64)
+
+
+def test_warnings_are_not_raised_by_normal_use():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        clpde.diffuse(np.zeros((8, 8), np.uint8), steps=2)
