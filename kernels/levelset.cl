@@ -1,0 +1,156 @@
+// Level-set machinery on ghost-padded 2D fields (ghost width 2, unit grid spacing):
+// slope-limited upwind gradient norms (Osher-Sethian), central-difference normals, narrow
+// band marking, PDE reinitialisation with the Russo-Smereka subcell fix, and the coupled
+// morphing / tracking step of thesis eqs. (2.3)-(2.6).
+//
+// The helpers at the top work on the values along one axis, so a 3D file can reuse them
+// with a third stride: include this file and call them with sz.
+#include "common.cl"
+
+// ---- helpers shared by every level-set kernel -------------------------------------------
+
+// minmod(a, b): the smaller-magnitude argument when both have the same sign, else 0.
+inline REAL minmod(const REAL a, const REAL b)
+{
+    const REAL m = fmin(fabs(a), fabs(b));
+    return (a * b > 0) ? copysign(m, a) : (REAL)0;
+}
+
+// Slope-limited one-sided differences at c along one axis, given the values two cells
+// either side (m2, m1, c, p1, p2): the first-order difference corrected by half the minmod
+// of the neighbouring second differences (second-order ENO, Osher-Sethian).
+#define LS_ONE_SIDED(m2, m1, c, p1, p2, dm, dp)                                        \
+    {                                                                                  \
+        const REAL q_m = (m2) - 2 * (m1) + (c);                                        \
+        const REAL q_c = (m1) - 2 * (c) + (p1);                                        \
+        const REAL q_p = (c) - 2 * (p1) + (p2);                                        \
+        dm = ((c) - (m1)) + (REAL)0.5 * minmod(q_m, q_c);                              \
+        dp = ((p1) - (c)) - (REAL)0.5 * minmod(q_c, q_p);                              \
+    }
+
+// One axis' contribution to the squared Godunov gradient norm for u_t = V |grad u|.
+// V < 0 (the level sets move toward larger u): the upwind side is the one u increases
+// away from; V > 0: the mirror choice.
+inline REAL godunov_axis(const REAL dm, const REAL dp, const REAL v)
+{
+    const REAL down = fmax(SQR(fmax(dm, (REAL)0)), SQR(fmin(dp, (REAL)0)));
+    const REAL up = fmax(SQR(fmin(dm, (REAL)0)), SQR(fmax(dp, (REAL)0)));
+    return (v > 0) ? up : down;
+}
+
+// Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| in 2D.
+inline REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, const REAL v)
+{
+    REAL dmx, dpx, dmy, dpy;
+    LS_ONE_SIDED(u[i - 2], u[i - 1], u[i], u[i + 1], u[i + 2], dmx, dpx);
+    LS_ONE_SIDED(u[i - 2 * sx], u[i - sx], u[i], u[i + sx], u[i + 2 * sx], dmy, dpy);
+    return SQRT(godunov_axis(dmx, dpx, v) + godunov_axis(dmy, dpy, v));
+}
+
+// ---- narrow band -----------------------------------------------------------------------
+
+// band = 1 where |u| < w - 1 (inner band), 2 where w - 1 <= |u| < w (the band's edge
+// ring), 0 elsewhere. Ghost entries of `band` are never written (kept 0 by the host).
+__kernel void mark_band(__global const REAL* restrict u, __global uchar* restrict band,
+                        const REAL w, GRID_ARGS)
+{
+    FOR_EACH_CELL(i) {
+        const REAL a = fabs(u[i]);
+        band[i] = (a < w) ? ((a < w - 1) ? 1 : 2) : 0;
+    }
+}
+
+// ---- reinitialisation ------------------------------------------------------------------
+// phi_t + S(phi0) (|grad phi| - 1) = 0, explicit Godunov steps. Cells beside the
+// interface (phi0 changes sign towards a 4-neighbour) use Russo and Smereka's subcell fix:
+// they relax towards D = phi0 / |grad phi0|, the distance to the interface estimated from
+// phi0 itself, so the zero level set does not move.
+inline REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, const int i,
+                          const int sx, const REAL dt)
+{
+    const REAL c0 = phi0[i];
+    const REAL e0 = phi0[i + 1], w0 = phi0[i - 1], n0 = phi0[i + sx], s0 = phi0[i - sx];
+    const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
+    const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) | (c0 * s0 < 0);
+    const REAL p = phi[i];
+    if (at_interface) {
+        // |grad phi0| from the largest of the central estimate and the one-sided slopes,
+        // which stays right when the interface cuts close to a node.
+        REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0));
+        g = fmax(g, fmax(fmax(fabs(e0 - c0), fabs(c0 - w0)), fmax(fabs(n0 - c0), fabs(c0 - s0))));
+        const REAL d = c0 / fmax(g, (REAL)1e-12);
+        return p - dt * (sgn * fabs(p) - d);
+    }
+    return p - dt * sgn * (upwind_norm_2d(phi, i, sx, -sgn) - 1);
+}
+
+__kernel void reinit_step(__global const REAL* restrict phi, __global const REAL* restrict phi0,
+                          __global REAL* restrict out, const REAL dt, GRID_ARGS)
+{
+    FOR_EACH_CELL(i) out[i] = reinit_update(phi, phi0, i, sx, dt);
+}
+
+// The same update over a compacted list of cells (a band).
+__kernel void reinit_step_list(__global const REAL* restrict phi,
+                               __global const REAL* restrict phi0, __global REAL* restrict out,
+                               const REAL dt, const int sx, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        out[i] = reinit_update(phi, phi0, i, sx, dt);
+    }
+}
+
+// ---- features --------------------------------------------------------------------------
+
+// Edge map |grad I| by central differences.
+__kernel void gradient_magnitude(__global const REAL* restrict img, __global REAL* restrict out,
+                                 GRID_ARGS)
+{
+    FOR_EACH_CELL(i) {
+        out[i] = (REAL)0.5 * SQRT(SQR(img[i + 1] - img[i - 1]) + SQR(img[i + sx] - img[i - sx]));
+    }
+}
+
+// ---- the coupled morphing / tracking step (thesis eqs. 2.3-2.6) ---------------------------
+// Over the band cells: beta = F2 - F1;
+//     F1 <- F1 + dt beta |grad F1|                   (morphing, upwind for velocity beta)
+//     u  <- u  + dt beta (N_F1 . N_u) |grad u|        (tracking, projected velocity)
+// with slope-limited upwind norms and central-difference normals; |grad|_eps in the
+// normals' denominators keeps them finite where a field is flat (no information there,
+// so the projected velocity fades to zero).
+// speed[g] gets work-item g's largest |du/dt| (the contour's speed) for the stopping test;
+// hit[0] is set to 1 when an edge-ring cell of the band comes within `near` of the zero
+// level set, which asks the host to rebuild the band.
+__kernel void morph_step(__global const REAL* restrict u, __global const REAL* restrict f1,
+                         __global const REAL* restrict f2, __global const uchar* restrict band,
+                         __global REAL* restrict u_out, __global REAL* restrict f1_out,
+                         __global REAL* restrict speed, __global int* restrict hit,
+                         const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
+                         const int sx, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    REAL fastest = 0;
+    int touched = 0;
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL beta = f2[i] - f1[i];
+        f1_out[i] = f1[i] + dt * beta * upwind_norm_2d(f1, i, sx, beta);
+
+        const REAL fx = (REAL)0.5 * (f1[i + 1] - f1[i - 1]);
+        const REAL fy = (REAL)0.5 * (f1[i + sx] - f1[i - sx]);
+        const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
+        const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
+        const REAL dot = (fx * ux + fy * uy) *
+                         RSQRT((SQR(fx) + SQR(fy) + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
+        const REAL bhat = beta * dot;
+        const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat);
+        const REAL un = u[i] + dt * rate;
+        u_out[i] = un;
+        fastest = fmax(fastest, fabs(rate));
+        touched |= (band[i] == 2) & (fabs(un) < near);
+    }
+    speed[get_global_id(0)] = fastest;
+    if (touched) hit[0] = 1;  // every writer stores the same value
+}

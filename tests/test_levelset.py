@@ -1,0 +1,168 @@
+"""Level-set kernels against their numpy references, and reinitialisation's mathematics."""
+
+import numpy as np
+import pyopencl.array as cla
+import pytest
+
+from clpde.fields import Field, Grid, compact, index_list
+from clpde.imagedata import InputError
+from clpde.levelset import LevelSet, signed_distance
+from tests.reference import levelset as ref
+
+
+def _field(grid, values):
+    return Field.from_host(grid, np.asarray(values)[np.newaxis])
+
+
+def _padded(field):
+    return field.data.get()[0].astype(np.float64)
+
+
+def _circle_sdf(n, r, cx=None, cy=None):
+    cx = n / 2 - 0.3 if cx is None else cx
+    cy = n / 2 + 0.2 if cy is None else cy
+    y, x = np.mgrid[:n, :n]
+    return np.hypot(x - cx, y - cy) - r
+
+
+def _inputs(kind, rng, ny=21, nx=26):
+    if kind == "random":
+        u = rng.normal(size=(ny, nx)) * 2
+        f1, f2 = rng.random((ny, nx)), rng.random((ny, nx))
+    else:  # a distance-like level set and smooth images with an edge that moved
+        y, x = np.mgrid[:ny, :nx]
+        u = np.hypot(x - 12.3, y - 9.6) - 6
+        f1 = 1 / (1 + np.exp((np.hypot(x - 12.3, y - 9.6) - 6) / 1.5))
+        f2 = 1 / (1 + np.exp((np.hypot(x - 13.5, y - 10.1) - 6.5) / 1.5))
+    return u, f1, f2
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
+def test_morph_step_matches_reference(runtime, rng, kind):
+    u, f1, f2 = _inputs(kind, rng)
+    ny, nx = u.shape
+    grid = Grid(runtime, nx, ny, 1, 2, np.dtype(np.float32))
+    fu, ff1, ff2 = _field(grid, u), _field(grid, f1), _field(grid, f2)
+    band = ref.mark_band(u, 3.0)
+    band_dev = cla.zeros(runtime.queue, grid.padded_shape[1:], np.uint8)
+    padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
+    padded_band[2:-2, 2:-2] = band
+    band_dev.set(padded_band)
+    cells = compact(runtime, band_dev)
+    assert cells.n == int((band > 0).sum()) > 0
+    u_out, f1_out = fu.copy(), ff1.copy()
+    (gsize,), _, _ = runtime.list_launch(cells.n)
+    speed = cla.zeros(runtime.queue, gsize, np.float32)
+    hit = cla.zeros(runtime.queue, 1, np.int32)
+    dt, eps_f, eps_u, near = 0.4, 0.02, 1e-3, 1.0
+    grid.launch_list(
+        grid.kernel("levelset.cl", "morph_step"), cells,
+        fu.data.data, ff1.data.data, ff2.data.data, band_dev.data, u_out.data.data,
+        f1_out.data.data, speed.data, hit.data, grid.scalar(dt), grid.scalar(eps_f**2),
+        grid.scalar(eps_u**2), grid.scalar(near), np.int32(grid.sx),
+    )
+    want_u, want_f1, want_speed, want_hit = ref.morph_step(
+        _padded(fu), _padded(ff1), _padded(ff2)[2:-2, 2:-2], band, dt, eps_f, eps_u, near)
+    np.testing.assert_allclose(u_out.to_host()[0], want_u, atol=2e-5, rtol=1e-5)
+    np.testing.assert_allclose(f1_out.to_host()[0], want_f1, atol=2e-5, rtol=1e-5)
+    assert float(speed.get().max()) == pytest.approx(want_speed, rel=1e-4, abs=1e-6)
+    assert bool(hit.get()[0]) == want_hit
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
+def test_reinit_step_matches_reference_on_grid_and_list(runtime, rng, kind):
+    n = 24
+    if kind == "random":
+        phi = rng.normal(size=(n, n)) * 3
+    else:
+        phi = _circle_sdf(n, 7) * (1 + 0.5 * rng.random((n, n)))
+    grid = Grid(runtime, n, n, 1, 2, np.dtype(np.float32))
+    p, p0 = _field(grid, phi), _field(grid, phi * 1.3)
+    want = ref.reinit_step(_padded(p), _padded(p0), 0.5)
+    out = p.copy()
+    grid.launch(grid.kernel("levelset.cl", "reinit_step"), p.data.data, p0.data.data,
+                out.data.data, grid.scalar(0.5))
+    np.testing.assert_allclose(out.to_host()[0], want, atol=2e-5, rtol=1e-5)
+
+    chosen = rng.random((n, n)) < 0.3
+    cells = index_list(grid, chosen)
+    out = p.copy()
+    grid.launch_list(grid.kernel("levelset.cl", "reinit_step_list"), cells, p.data.data,
+                     p0.data.data, out.data.data, grid.scalar(0.5), np.int32(grid.sx))
+    np.testing.assert_allclose(out.to_host()[0], np.where(chosen, want, phi), atol=2e-5, rtol=1e-5)
+
+
+def test_mark_band_and_gradient_magnitude_match_reference(runtime, rng):
+    u = rng.normal(size=(17, 23)) * 4
+    grid = Grid(runtime, 23, 17, 1, 2, np.dtype(np.float32))
+    ls = LevelSet(runtime, u, band_width=3.0)
+    padded = ls.band_mask.get()
+    np.testing.assert_array_equal(padded[2:-2, 2:-2], ref.mark_band(u.astype(np.float32), 3.0))
+    assert not padded[:2].any() and not padded[:, :2].any()  # ghosts never join the band
+    assert ls.band.n == int((np.abs(u.astype(np.float32)) < 3).sum())
+
+    img = rng.random((17, 23))
+    f = _field(grid, img)
+    out = f.copy()
+    grid.launch(grid.kernel("levelset.cl", "gradient_magnitude"), f.data.data, out.data.data)
+    np.testing.assert_allclose(out.to_host()[0], ref.gradient_magnitude(_padded(f)), atol=1e-6)
+
+
+def test_upwind_norm_is_second_order_on_a_smooth_field():
+    # The slope-limited norm of a smooth distance field is exact to O(h^2) away from kinks.
+    errors = []
+    for n in (32, 64):
+        h = 1.0 / n
+        y, x = (np.mgrid[:n, :n] + 0.5) * h
+        u = np.hypot(x + 0.7, y + 0.4) / h  # grid units: |grad u| = 1 exactly
+        p = ref.pad(u)
+        errors.append(np.abs(ref.upwind_norm(p, 1.0) - 1)[4:-4, 4:-4].max())
+    assert errors[1] < errors[0] / 3
+
+
+def test_signed_distance_gives_the_mask_back_and_rejects_bad_masks(rng):
+    mask = rng.random((20, 30)) < 0.4
+    sd = signed_distance(mask)
+    np.testing.assert_array_equal(sd < 0, mask)
+    np.testing.assert_allclose(sd, ref.signed_distance(mask))
+    with pytest.raises(InputError, match="empty"):
+        signed_distance(np.zeros((5, 5), bool))
+    with pytest.raises(InputError, match="whole image"):
+        signed_distance(np.ones((5, 5), bool))
+
+
+def _crossings(u):
+    """Sub-pixel positions of the zero level set on grid edges (linear interpolation)."""
+    points = []
+    for axis in (0, 1):
+        a = u if axis == 1 else u.T
+        left, right = a[:, :-1], a[:, 1:]
+        rows, cols = np.nonzero(left * right < 0)
+        t = left[rows, cols] / (left[rows, cols] - right[rows, cols])
+        pos = np.stack([rows, cols + t], axis=1)
+        points.append(pos if axis == 1 else pos[:, ::-1])
+    return np.concatenate(points)
+
+
+@pytest.mark.parametrize("distortion", ["stretched", "bumpy"])
+def test_reinitialisation_restores_unit_gradient_and_keeps_the_front(runtime, distortion):
+    n, r = 64, 17.3
+    y, x = np.mgrid[:n, :n]
+    cx, cy = 31.6, 32.3
+    true = np.hypot(x - cx, y - cy) - r
+    if distortion == "stretched":
+        u0 = true * (1 + x / n) * 2.5  # far from unit gradient, same front
+    else:
+        u0 = true * (1.5 + np.sin(x / 3.0) * np.cos(y / 4.0))
+    ls = LevelSet(runtime, u0, band_width=3.0)
+    ls.reinitialise(iterations=40)
+    u = ls.values()
+    band = np.abs(true) < 3
+    gy, gx = np.gradient(u)
+    grad_error = np.abs(np.hypot(gx, gy) - 1)[band]
+    assert np.median(grad_error) < 0.03 and grad_error.mean() < 0.06
+    # The front: the crossing points of u0 and of u, each measured against the circle.
+    moved = np.abs(np.hypot(*(_crossings(u) - [cy, cx]).T) - r)
+    before = np.abs(np.hypot(*(_crossings(u0) - [cy, cx]).T) - r)
+    assert moved.max() < 0.1 and moved.max() < before.max() + 0.05
+    assert np.abs(u - true)[band].mean() < 0.05
