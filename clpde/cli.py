@@ -1,0 +1,268 @@
+"""The `clpde` command line.
+
+Each subcommand is one `add_<name>_parser(subparsers)` function registered with
+`@subcommand`; it adds its arguments and sets `run=<function(args) -> exit status>`.
+To add a capability, write those two functions in a new section below; the shared helpers
+(`add_image_arguments`, `load_input`, `split_alpha`, `save_output`) do the file handling:
+the input is never overwritten, the output is checked before any work and written
+atomically, and colour images are processed per channel with any alpha channel kept as is.
+
+Errors print one line `clpde: error: ...` on stderr and exit with status 2, writing nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+import pyopencl as cl
+
+from . import __version__
+from .imagedata import InputError
+from .io import check_not_overwriting_input, check_writable, image_format, read_image, write_image
+from .runtime import ClpdeError, devices, get_runtime
+
+SUBCOMMANDS = []
+ERROR_STATUS = 2
+
+
+def subcommand(add_parser):
+    """Register an `add_<name>_parser(subparsers)` function as a subcommand."""
+    SUBCOMMANDS.append(add_parser)
+    return add_parser
+
+
+# ---- shared helpers ----------------------------------------------------------------------
+
+def add_device_argument(parser) -> None:
+    parser.add_argument(
+        "--device", metavar="SPEC", default=None,
+        help="OpenCL device: 'cpu', 'gpu', an index or a name substring from `clpde devices` "
+             "(default: $CLPDE_DEVICE, else a GPU if present, else the CPU)",
+    )
+
+
+def add_image_arguments(parser) -> None:
+    """IN and OUT image paths and --device."""
+    parser.add_argument("input", metavar="IN", help="input image (.png, .tif/.tiff, .jpg/.jpeg)")
+    parser.add_argument("output", metavar="OUT",
+                        help="output image; same formats; never the input file")
+    add_device_argument(parser)
+
+
+def show_progress() -> bool:
+    """Progress bars go to stderr, so only draw them when stderr is a terminal."""
+    return sys.stderr.isatty()
+
+
+def load_input(args, *extra_inputs) -> np.ndarray:
+    """Check the device and the output path, then read IN; all before any work is done."""
+    get_runtime(args.device)  # an unknown device fails here, before reading anything
+    check_not_overwriting_input([args.input, *extra_inputs], args.output)
+    image_format(args.output)
+    image = read_image(args.input)
+    if image.dtype == bool:  # 1-bit files: compute on 0/255 and write 8-bit
+        image = image.astype(np.uint8) * 255
+    check_writable(args.output, image.dtype, image.shape)
+    return image
+
+
+@dataclass
+class Channels:
+    """An image split into the channels a flow works on and an untouched alpha channel."""
+
+    colour: np.ndarray
+    channel_axis: int | None
+    alpha: np.ndarray | None
+    squeezed: bool
+
+    def join(self, result: np.ndarray) -> np.ndarray:
+        """The flow's result on `colour` back in the input's layout, alpha restored."""
+        result = np.asarray(result)
+        if self.squeezed:
+            result = result[..., np.newaxis]
+        if self.alpha is not None:
+            if result.ndim == 2:
+                result = result[..., np.newaxis]
+            result = np.concatenate([result, self.alpha[..., np.newaxis]], axis=-1)
+        return result
+
+
+def split_alpha(image: np.ndarray, name: str = "input") -> Channels:
+    """Greyscale (rows, cols) or colour (rows, cols, 1..4); 2 and 4 channels end in alpha."""
+    if image.ndim == 2:
+        return Channels(image, None, None, False)
+    if image.ndim != 3 or image.shape[-1] > 4:
+        raise InputError(
+            f"{name} has shape {image.shape}; expected a greyscale (rows, columns) or colour "
+            "(rows, columns, channels<=4) image (multi-page TIFF stacks are not supported)"
+        )
+    alpha = None
+    colour = image
+    if image.shape[-1] in (2, 4):
+        alpha, colour = image[..., -1], image[..., :-1]
+    if colour.shape[-1] == 1:
+        return Channels(colour[..., 0], None, alpha, alpha is None)
+    return Channels(colour, -1, alpha, False)
+
+
+def save_output(args, result: np.ndarray) -> None:
+    write_image(args.output, result)
+    print(f"wrote {args.output}", file=sys.stderr)
+
+
+def _param_check(args, flow: str, allowed: dict) -> None:
+    """Refuse options that the chosen flow would silently ignore."""
+    for option, flows in allowed.items():
+        if getattr(args, option) is not None and flow not in flows:
+            raise InputError(f"--{option} applies to --flow {' or '.join(flows)}, not {flow}")
+
+
+# ---- clpde devices -----------------------------------------------------------------------
+
+@subcommand
+def add_devices_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "devices", help="list OpenCL platforms and devices",
+        description="List every OpenCL device; '*' marks the one clpde uses.",
+    )
+    parser.add_argument("--json", action="store_true", help="print a JSON list instead")
+    add_device_argument(parser)
+    parser.set_defaults(run=run_devices)
+
+
+def run_devices(args) -> int:
+    found = devices()
+    if args.device is not None:
+        chosen = get_runtime(args.device).index
+        found = [replace(d, in_use=(d.index == chosen)) for d in found]
+    if args.json:
+        print(json.dumps([asdict(d) for d in found], indent=2))
+        return 0
+    for info in found:
+        print(info.describe())
+    print("(* = the device in use; choose with --device, CLPDE_DEVICE or clpde.use_device)")
+    return 0
+
+
+# ---- clpde diffuse -----------------------------------------------------------------------
+
+@subcommand
+def add_diffuse_parser(subparsers) -> None:
+    from .planar import FLOWS
+
+    parser = subparsers.add_parser(
+        "diffuse", help="run a planar diffusion flow on an image",
+        description="Run heat, Perona-Malik, TV or curvature diffusion for a number of "
+                    "explicit steps. Colour images are processed per channel.",
+    )
+    add_image_arguments(parser)
+    parser.add_argument("--flow", choices=FLOWS, default="heat", help="default: heat")
+    parser.add_argument("--steps", type=int, default=100, help="explicit steps (default: 100)")
+    parser.add_argument("--dt", type=float, default=None,
+                        help="time step (default: 0.8 of the stability limit)")
+    parser.add_argument("--kappa", type=float, default=None,
+                        help="Perona-Malik edge threshold, intensities in [0, 1] (default 0.05)")
+    parser.add_argument("--edge", choices=("exp", "rational"), default=None,
+                        help="Perona-Malik edge-stopping function (default: exp)")
+    parser.add_argument("--eps", type=float, default=None,
+                        help="TV / curvature regularisation of |grad u| (TV default 0.05)")
+    parser.set_defaults(run=run_diffuse)
+
+
+def run_diffuse(args) -> int:
+    from .planar import diffuse
+
+    _param_check(args, args.flow, {"kappa": ("perona-malik",), "edge": ("perona-malik",),
+                                   "eps": ("tv", "curvature")})
+    image = load_input(args)
+    parts = split_alpha(image, args.input)
+    params = {k: getattr(args, k) for k in ("kappa", "edge", "eps") if getattr(args, k) is not None}
+    result = diffuse(parts.colour, args.flow, steps=args.steps, dt=args.dt,
+                     channel_axis=parts.channel_axis, device=args.device,
+                     progress=show_progress(), **params)
+    save_output(args, parts.join(result))
+    return 0
+
+
+# ---- clpde denoise -----------------------------------------------------------------------
+
+@subcommand
+def add_denoise_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "denoise", help="total-variation (ROF) denoising",
+        description="Rudin-Osher-Fatemi denoising run to a steady state. Give the noise level "
+                    "--sigma (image units: 0..255 for 8-bit) or the strength --weight; with "
+                    "neither, sigma is estimated from the image.",
+    )
+    add_image_arguments(parser)
+    strength = parser.add_mutually_exclusive_group()
+    strength.add_argument("--sigma", type=float, default=None,
+                          help="noise standard deviation in the image's units")
+    strength.add_argument("--weight", type=float, default=None,
+                          help="denoising strength as in scikit-image (1/lambda on [0, 1] data)")
+    parser.add_argument("--eps", type=float, default=None,
+                        help="regularisation of |grad u| (default 0.02)")
+    parser.add_argument("--max-steps", type=int, default=None, help="default 2000")
+    parser.set_defaults(run=run_denoise)
+
+
+def run_denoise(args) -> int:
+    from .planar import denoise_tv
+
+    image = load_input(args)
+    parts = split_alpha(image, args.input)
+    options = {}
+    if args.eps is not None:
+        options["eps"] = args.eps
+    if args.max_steps is not None:
+        options["max_steps"] = args.max_steps
+    result, info = denoise_tv(parts.colour, sigma=args.sigma, weight=args.weight,
+                              channel_axis=parts.channel_axis, device=args.device,
+                              progress=show_progress(), return_info=True, **options)
+    save_output(args, parts.join(result))
+    state = "converged" if info.converged else "stopped at --max-steps"
+    residual = float(np.sqrt(np.mean(info.residual_variance)))
+    print(f"denoise: {info.steps} steps ({state}), residual std {residual:.4g}", file=sys.stderr)
+    return 0
+
+
+# ---- entry point -------------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="clpde", description="PDE image processing on OpenCL devices (GPU or CPU).")
+    parser.add_argument("--version", action="version", version=f"clpde {__version__}")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for add_parser in SUBCOMMANDS:
+        add_parser(subparsers)
+    return parser
+
+
+def _message(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f": {exc.filename}" if exc.filename else ""
+        return f"{exc.strerror}{where}"
+    return str(exc) or type(exc).__name__
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit status (0, or 2 on any error)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version and usage errors
+        if exc.code is None:
+            return 0
+        return exc.code if isinstance(exc.code, int) else ERROR_STATUS
+    try:
+        return args.run(args)
+    except (ClpdeError, OSError, cl.Error) as exc:
+        print(f"clpde: error: {_message(exc)}", file=sys.stderr)
+        return ERROR_STATUS
+    except KeyboardInterrupt:
+        print("clpde: interrupted; nothing was written", file=sys.stderr)
+        return 130

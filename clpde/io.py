@@ -1,0 +1,215 @@
+"""Reading and writing image files: PNG, TIFF and JPEG images, and animated GIFs.
+
+Every write is atomic: the data goes to a temporary file in the destination's folder and
+is renamed over the destination only once it is complete, so a failed or interrupted run
+never leaves a half-written or stray file behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .imagedata import InputError
+
+IMAGE_FORMATS = {".png": "PNG", ".tif": "TIFF", ".tiff": "TIFF", ".jpg": "JPEG", ".jpeg": "JPEG"}
+
+
+def image_format(path) -> str:
+    """'PNG', 'TIFF' or 'JPEG', from the file name's extension."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in IMAGE_FORMATS:
+        raise InputError(
+            f"{path}: unsupported image format {suffix or '(no extension)'!r}; "
+            "use a .png, .tif/.tiff or .jpg/.jpeg file"
+        )
+    return IMAGE_FORMATS[suffix]
+
+
+def read_image(path) -> np.ndarray:
+    """The pixels of a PNG, TIFF or JPEG file, in the file's own dtype.
+
+    Greyscale images come back as (rows, columns), colour ones as (rows, columns, channels).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"input file {path} does not exist")
+    if not path.is_file():
+        raise InputError(f"input {path} is not a file")
+    kind = image_format(path)
+    try:
+        if kind == "TIFF":
+            import tifffile
+
+            image = tifffile.imread(path)
+        else:
+            import imageio.v3 as iio
+
+            image = iio.imread(path, plugin="pillow", extension=path.suffix.lower())
+    except Exception as exc:  # noqa: BLE001  (readers raise many types: all mean unreadable)
+        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise InputError(
+            f"cannot read {path} as a {kind} image (damaged, or another format?): {detail}"
+        ) from None
+    return np.asarray(image)
+
+
+def check_writable(path, dtype, shape) -> None:
+    """Raise InputError, before any work is done, if `path` cannot hold such an image."""
+    path = Path(path)
+    kind = image_format(path)
+    dtype = np.dtype(dtype)
+    shape = tuple(shape)
+    channels = 1 if len(shape) == 2 else shape[-1] if len(shape) == 3 else None
+    if channels is None or channels > 4:
+        raise InputError(
+            f"{path}: cannot write an array of shape {shape} as an image; expected "
+            "(rows, columns) or (rows, columns, channels) with at most 4 channels"
+        )
+    if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
+        raise InputError(
+            f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
+            "channel(s); write a .png or .tif file instead"
+        )
+    if kind == "PNG":
+        if dtype not in (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(bool)):
+            raise InputError(
+                f"{path}: PNG stores 8- or 16-bit integers, not {dtype}; write a .tif file "
+                "to keep the values exactly"
+            )
+        if dtype == np.uint16 and channels != 1:
+            raise InputError(
+                f"{path}: 16-bit colour PNG is not supported; write a .tif file instead"
+            )
+    folder = path.parent
+    if not folder.is_dir():
+        raise InputError(f"output folder {folder} does not exist; create it first")
+    if path.is_dir():
+        raise InputError(f"output {path} is a folder, not a file name")
+
+
+@contextlib.contextmanager
+def atomic_output(path):
+    """Yield a temporary path beside `path`; on success it replaces `path`, else it is removed."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    fd, tmp_name = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".part")
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        yield tmp
+        # mkstemp makes the file private (0600); give it the mode a plain open() would.
+        os.chmod(tmp, _default_file_mode(path))
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def _default_file_mode(path: Path) -> int:
+    if path.exists():
+        return path.stat().st_mode & 0o777
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def write_image(path, array) -> Path:
+    """Write `array` to a PNG, TIFF or JPEG file (chosen by extension), atomically.
+
+    The dtype is kept as the format allows: PNG holds uint8 (any channels) and 16-bit
+    greyscale, JPEG 8-bit greyscale or RGB, TIFF any integer or float dtype.
+    """
+    path = Path(path)
+    array = np.asarray(array)
+    check_writable(path, array.dtype, array.shape)
+    kind = image_format(path)
+    with atomic_output(path) as tmp:
+        if kind == "TIFF":
+            import tifffile
+
+            photometric = "rgb" if array.ndim == 3 and array.shape[-1] in (3, 4) else "minisblack"
+            extra = ("unassalpha",) if array.ndim == 3 and array.shape[-1] == 4 else None
+            tifffile.imwrite(tmp, array, photometric=photometric, extrasamples=extra)
+        else:
+            import imageio.v3 as iio
+
+            if array.ndim == 3 and array.shape[-1] == 1:
+                array = array[..., 0]
+            options = {"quality": 95} if kind == "JPEG" else {}
+            iio.imwrite(tmp, array, plugin="pillow", extension=path.suffix.lower(), **options)
+    return path
+
+
+def _frame_to_uint8(frame) -> np.ndarray:
+    """GIF frames are 8-bit: integers scale by their dtype's range, floats are taken in [0, 1]."""
+    frame = np.asarray(frame)
+    if frame.dtype == np.uint8:
+        return frame
+    if frame.dtype == bool:
+        return frame.astype(np.uint8) * 255
+    if np.issubdtype(frame.dtype, np.integer):
+        info = np.iinfo(frame.dtype)
+        scaled = (frame.astype(np.float64) - info.min) / (float(info.max) - info.min)
+    elif np.issubdtype(frame.dtype, np.floating):
+        if not np.isfinite(frame).all():
+            raise InputError("a GIF frame contains NaN or infinite values")
+        scaled = np.clip(frame, 0.0, 1.0)
+    else:
+        raise InputError(f"GIF frames must be integer, bool or float arrays, not {frame.dtype}")
+    return np.rint(scaled * 255).astype(np.uint8)
+
+
+def write_gif(path, frames, duration: float = 0.1, loop: int = 0) -> Path:
+    """Write an animated GIF atomically.
+
+    frames: a sequence of (rows, columns) or (rows, columns, 3|4) arrays of one shape;
+    uint8 is written as is, other integer dtypes are scaled by their range, floats are
+    taken in [0, 1]. duration: seconds each frame is shown. loop: 0 repeats forever.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".gif":
+        raise InputError(f"{path}: an animation must be written to a .gif file")
+    frames = [_frame_to_uint8(f) for f in frames]
+    if not frames:
+        raise InputError("write_gif needs at least one frame")
+    shapes = {f.shape for f in frames}
+    if len(shapes) != 1:
+        raise InputError(f"all GIF frames must have one shape, got {sorted(shapes)}")
+    shape = frames[0].shape
+    if not (len(shape) == 2 or (len(shape) == 3 and shape[-1] in (3, 4))):
+        raise InputError(f"GIF frames must be (rows, columns[, 3|4]) arrays, not shape {shape}")
+    duration = float(duration)
+    if not np.isfinite(duration) or duration <= 0:
+        raise InputError(f"duration must be a positive number of seconds, not {duration}")
+    if not path.parent.is_dir():
+        raise InputError(f"output folder {path.parent} does not exist; create it first")
+    import imageio.v3 as iio
+
+    with atomic_output(path) as tmp:
+        iio.imwrite(tmp, np.stack(frames), plugin="pillow", extension=".gif",
+                    duration=round(duration * 1000), loop=int(loop))
+    return path
+
+
+def check_not_overwriting_input(inputs, output) -> None:
+    """Refuse an output path that names (or links to) one of the inputs."""
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    out = Path(output)
+    out_resolved = out.resolve()
+    for item in inputs:
+        src = Path(item)
+        same = src.resolve() == out_resolved
+        if not same and src.exists() and out.exists():
+            same = os.path.samefile(src, out)  # hard links and other aliases
+        if same:
+            raise InputError(
+                f"output {out} is the input file {src}; clpde never overwrites its inputs, "
+                "choose another output file name"
+            )
