@@ -1,0 +1,112 @@
+"""Ghost-padded 3D volumes on the device and narrow-band index lists over them.
+
+A volume of `nc` channels on an nz x ny x nx grid lives on the device as one buffer of shape
+(nc, nz + 2G, ny + 2G, nx + 2G), x fastest. Band kernels visit a compacted list of flat
+padded indices (built on the device with clpde.fields.compact) and never test for borders:
+bands are kept at least G cells away from the buffer's edge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyopencl.array as cla
+
+from ..fields import IndexList, compact
+from ..runtime import ClpdeError, Runtime
+
+
+@dataclass(frozen=True)
+class Grid3D:
+    """Geometry of a padded 3D volume on one device."""
+
+    runtime: Runtime
+    nx: int
+    ny: int
+    nz: int
+    ghost: int = 3
+    dtype: np.dtype = np.dtype(np.float32)
+
+    @property
+    def padded_shape(self) -> tuple[int, int, int]:
+        g2 = 2 * self.ghost
+        return (self.nz + g2, self.ny + g2, self.nx + g2)
+
+    @property
+    def sx(self) -> int:
+        return self.nx + 2 * self.ghost
+
+    @property
+    def sxy(self) -> int:
+        return self.sx * (self.ny + 2 * self.ghost)
+
+    @property
+    def volume(self) -> int:
+        """Cells of one padded channel (the channel stride)."""
+        return self.sxy * (self.nz + 2 * self.ghost)
+
+    def strides(self) -> tuple[np.int32, np.int32]:
+        return np.int32(self.sx), np.int32(self.sxy)
+
+    def padded_dims(self) -> tuple[np.int32, np.int32, np.int32]:
+        """Padded sizes along x, y, z (the interpolation clamps its nodes into these)."""
+        pz, py, px = self.padded_shape
+        return np.int32(px), np.int32(py), np.int32(pz)
+
+    def scalar(self, value) -> np.generic:
+        return self.dtype.type(value)
+
+    def kernel(self, name: str, **defines):
+        return self.runtime.kernel("surface.cl", name, self.dtype, **defines)
+
+    # ---- host <-> device --------------------------------------------------------------------
+    def pad(self, values: np.ndarray, mode: str = "edge") -> np.ndarray:
+        """Pad (nc, nz, ny, nx) host values by the ghost width on every spatial side."""
+        g = self.ghost
+        width = ((0, 0), (g, g), (g, g), (g, g))
+        if mode == "linear":
+            # Odd reflection continues the values linearly: right for distance functions.
+            return np.pad(values, width, mode="reflect", reflect_type="odd")
+        return np.pad(values, width, mode=mode)
+
+    def upload(self, values: np.ndarray, mode: str = "edge") -> cla.Array:
+        """Upload (nc, nz, ny, nx) values as a padded device volume."""
+        values = np.asarray(values)
+        if values.ndim != 4 or values.shape[1:] != (self.nz, self.ny, self.nx):
+            raise ClpdeError(
+                f"expected values of shape (channels, {self.nz}, {self.ny}, {self.nx}), "
+                f"got {values.shape}"
+            )
+        padded = np.ascontiguousarray(self.pad(values.astype(np.float64), mode), self.dtype)
+        self.runtime.check_alloc(padded.nbytes, "surface volume")
+        return cla.to_device(self.runtime.queue, padded)
+
+    def interior(self, padded: np.ndarray) -> np.ndarray:
+        g = self.ghost
+        return padded[..., g : g + self.nz, g : g + self.ny, g : g + self.nx]
+
+    def download(self, data: cla.Array) -> np.ndarray:
+        """The interior of a device volume as an (nc, nz, ny, nx) host array."""
+        return np.ascontiguousarray(self.interior(data.get()))
+
+    # ---- bands and launches ----------------------------------------------------------------
+    def band(self, psi: cla.Array, width: float) -> IndexList:
+        """Interior cells with |psi| < width (psi in the units of `width`), on the device."""
+        mask = cla.zeros(self.runtime.queue, self.padded_shape, np.uint8)
+        self.kernel("band_mask")(
+            self.runtime.queue, (self.ny, self.nz), None, psi.data, mask.data,
+            self.scalar(width), np.int32(self.nx), np.int32(self.ny), np.int32(self.nz),
+            *self.strides(), np.int32(self.ghost),
+        )
+        return compact(self.runtime, mask)
+
+    def launch_list(self, kernel, band: IndexList, *args, channels: int = 1):
+        """Run a LIST_RANGE kernel over a band, `channels` work-items per band cell."""
+        if band.n == 0:
+            return None
+        (gsize,), (lsize,), run = self.runtime.list_launch(band.n)
+        return kernel(
+            self.runtime.queue, (gsize, channels), (lsize, 1), *args,
+            band.indices.data, np.int32(band.n), np.int32(self.volume), np.int32(run),
+        )

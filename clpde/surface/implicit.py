@@ -1,0 +1,309 @@
+"""ImplicitSurface: the zero level set of a signed distance function on a 3D grid.
+
+The surface keeps psi on the device together with two band lists:
+- the *step band* |psi| < inner * h, where the flows are updated; inner covers every node
+  the closest-point interpolation reads (2 sqrt(3) cells for tricubic, sqrt(3) trilinear);
+- the *extension band* |psi| < outer * h (outer >= inner + sqrt(2)), re-extended from the
+  step band's values after every step, so every neighbour a step reads holds data that is
+  constant along the normals.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pyopencl.array as cla
+
+from ..imagedata import InputError
+from ..runtime import get_runtime
+from .grid3d import Grid3D
+
+INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
+# Farthest interpolation node from a point, in cells: the step band must contain them.
+_NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
+
+
+def _interp_code(interpolation: str) -> int:
+    code = INTERPOLATIONS.get(interpolation)
+    if code is None:
+        raise InputError(
+            f"interpolation must be one of {sorted(INTERPOLATIONS)}, not {interpolation!r}"
+        )
+    return code
+
+
+def _positive(name: str, value) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a positive number, not {value!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise InputError(f"{name} must be a positive number, not {value!r}")
+    return value
+
+
+class ImplicitSurface:
+    """A closed surface given as the zero level set of a signed distance function psi.
+
+    psi: (nz, ny, nx) volume, negative inside, in world units; spacing: grid spacing h;
+    origin: world (x, y, z) of psi[0, 0, 0]. Points of cell (k, j, i) are
+    origin + h * (i, j, k).
+    """
+
+    def __init__(self, psi, spacing, origin=(0.0, 0.0, 0.0), *, band=None,
+                 interpolation="tricubic", dtype=np.float32, device=None):
+        psi = np.asarray(psi)
+        if psi.ndim != 3:
+            raise InputError(f"psi must be a 3D (nz, ny, nx) volume, got shape {psi.shape}")
+        if min(psi.shape) < 4:
+            raise InputError(f"psi needs at least 4 cells along each axis, got {psi.shape}")
+        if not np.issubdtype(psi.dtype, np.number) or np.iscomplexobj(psi):
+            raise InputError(f"psi must hold real numbers, not {psi.dtype}")
+        if not np.all(np.isfinite(psi)):
+            raise InputError("psi contains NaN or infinite values; fill them before building a surface")
+        if not (psi.min() < 0 < psi.max()):
+            raise InputError("psi has no zero level set (it never changes sign): no surface to work on")
+        self.spacing = h = _positive("spacing", spacing)
+        origin = np.asarray(origin, dtype=np.float64).reshape(-1)
+        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
+            raise InputError(f"origin must be three finite numbers (x, y, z), got {origin!r}")
+        self.origin = origin
+        self.interp = _interp_code(interpolation)
+        self.inner = _NODE_REACH[self.interp] + 0.04
+        min_outer = self.inner + np.sqrt(2.0) + 0.04
+        self.outer = min_outer if band is None else _positive("band", band)
+        if self.outer < min_outer:
+            raise InputError(
+                f"band={self.outer:g} cells is too narrow for {interpolation} re-extension; "
+                f"use band >= {min_outer:.2f}"
+            )
+        self.runtime = get_runtime(device)
+        self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
+                           dtype=np.dtype(dtype))
+        self.psi = psi.astype(np.float64, copy=True)
+        # Ghost cells continue psi linearly so stencils next to the border stay meaningful.
+        self.psi_dev = self.grid.upload(self.psi[None], mode="linear")
+        # Band tests and closest points run in grid units.
+        psi_cells = self.psi_dev / self.grid.scalar(h)
+        self.step_band = self.grid.band(psi_cells, self.inner)
+        self.ext_band = self.grid.band(psi_cells, self.outer)
+        self._check_band_clear_of_border()
+        self.cp = self._closest_points()
+
+    # ---- construction from shapes ----------------------------------------------------------
+    @classmethod
+    def from_volume(cls, psi, spacing, origin=(0.0, 0.0, 0.0), **options) -> ImplicitSurface:
+        """A surface from a signed distance volume (nz, ny, nx) with the given spacing."""
+        return cls(psi, spacing, origin, **options)
+
+    @classmethod
+    def from_function(cls, sdf, bounds, spacing, **options) -> ImplicitSurface:
+        """Sample a signed distance function sdf(x, y, z) on a box bounds = (lo, hi),
+        padded by the band width plus interpolation room on every side."""
+        h = _positive("spacing", spacing)
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
+        margin = (options.get("band") or 5.0) + 3.0
+        lo = lo - margin * h
+        hi = hi + margin * h
+        n = np.ceil((hi - lo) / h).astype(int) + 1
+        x = lo[0] + h * np.arange(n[0])
+        y = lo[1] + h * np.arange(n[1])
+        z = lo[2] + h * np.arange(n[2])
+        psi = sdf(x[None, None, :], y[None, :, None], z[:, None, None])
+        psi = np.broadcast_to(psi, (n[2], n[1], n[0]))
+        return cls(psi, h, lo, **options)
+
+    @classmethod
+    def sphere(cls, radius=1.0, spacing=0.05, center=(0.0, 0.0, 0.0), **options) -> ImplicitSurface:
+        r = _positive("radius", radius)
+        c = np.asarray(center, dtype=np.float64)
+
+        def sdf(x, y, z):
+            return np.sqrt((x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2) - r
+
+        return cls.from_function(sdf, (c - r, c + r), spacing, **options)
+
+    @classmethod
+    def torus(cls, major=1.0, minor=0.4, spacing=0.05, **options) -> ImplicitSurface:
+        """Torus around the z axis: tube radius `minor` at distance `major` from the axis."""
+        big, small = _positive("major", major), _positive("minor", minor)
+        if small >= big:
+            raise InputError(f"minor radius {small} must be smaller than the major radius {big}")
+        ext = np.array([big + small, big + small, small])
+        return cls.from_function(_torus_sdf(big, small, 0.0), (-ext, ext), spacing, **options)
+
+    @classmethod
+    def double_torus(cls, major=0.8, minor=0.3, spacing=0.05, **options) -> ImplicitSurface:
+        """Genus-2 surface: the union of two overlapping tori side by side along x.
+
+        min() of the two distances is exact outside and near the surface away from the seam
+        where the tori merge; reinitialise for an exact distance there."""
+        big, small = _positive("major", major), _positive("minor", minor)
+        if small >= big:
+            raise InputError(f"minor radius {small} must be smaller than the major radius {big}")
+        shift = big + 0.5 * small
+        left, right = _torus_sdf(big, small, -shift), _torus_sdf(big, small, shift)
+
+        def sdf(x, y, z):
+            return np.minimum(left(x, y, z), right(x, y, z))
+
+        ext = np.array([shift + big + small, big + small, small])
+        return cls.from_function(sdf, (-ext, ext), spacing, **options)
+
+    # ---- geometry ----------------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return self.psi.shape
+
+    def coordinates(self):
+        """World coordinates x, y, z of the grid cells, broadcastable to `shape`."""
+        nz, ny, nx = self.shape
+        h, o = self.spacing, self.origin
+        x = o[0] + h * np.arange(nx)
+        y = o[1] + h * np.arange(ny)
+        z = o[2] + h * np.arange(nz)
+        return x[None, None, :], y[None, :, None], z[:, None, None]
+
+    def closest_points_host(self):
+        """World closest points x - psi grad psi / |grad psi| of every cell (numpy)."""
+        g = np.gradient(self.psi, self.spacing)
+        norm = np.sqrt(g[0] ** 2 + g[1] ** 2 + g[2] ** 2)
+        norm[norm == 0] = 1.0
+        x, y, z = self.coordinates()
+        d = self.psi / norm
+        return x - d * g[2], y - d * g[1], z - d * g[0]
+
+    def _closest_points(self):
+        """Closest points of the extension band's cells, padded index units, on the device."""
+        g, q = self.grid, self.runtime.queue
+        n = max(self.ext_band.n, 1)
+        cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
+        g.launch_list(
+            g.kernel("closest_points"), self.ext_band, self.psi_dev.data,
+            g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
+        )
+        return cp
+
+    def _check_band_clear_of_border(self) -> None:
+        """The extension band plus its stencils must stay inside the volume."""
+        h = self.spacing
+        reach = self.outer + 2.0
+        edges = [
+            self.psi[0], self.psi[-1], self.psi[:, 0], self.psi[:, -1],
+            self.psi[:, :, 0], self.psi[:, :, -1],
+        ]
+        closest = min(float(np.abs(e).min()) for e in edges) / h
+        if closest < reach:
+            raise InputError(
+                f"the surface comes within {closest:.1f} cells of the volume's border; the "
+                f"band needs {reach:.1f}: pad psi (e.g. from_function with larger bounds)"
+            )
+        if self.step_band.n == 0:
+            raise InputError("the band is empty: the spacing is too coarse for this surface")
+
+    # ---- data on the surface -----------------------------------------------------------------
+    def field(self, f, dtype=np.float64) -> np.ndarray:
+        """Data f(x, y, z) on the surface, extended constant along the normals.
+
+        f is called once with broadcastable coordinate arrays of the cells' closest points;
+        it returns an array (scalar data: result shape `shape`) or a sequence of arrays
+        (vector data: result shape (channels,) + `shape`).
+        """
+        x, y, z = self.closest_points_host()
+        values = f(x, y, z)
+        if isinstance(values, (list, tuple)):
+            out = np.stack([np.broadcast_to(np.asarray(v, np.float64), self.shape) for v in values])
+        else:
+            out = np.broadcast_to(np.asarray(values, np.float64), self.shape)
+        return np.array(out, dtype=dtype)
+
+    def _as_channels(self, u, what="u"):
+        """(nc, nz, ny, nx) float64 copy of scalar or channel-first vector data."""
+        u = np.asarray(u)
+        if u.shape == self.shape:
+            data = u[None]
+        elif u.ndim == 4 and u.shape[1:] == self.shape:
+            data = u
+        else:
+            raise InputError(
+                f"{what} must have the surface's grid shape {self.shape} (or (channels,) + that "
+                f"for vector data), got {u.shape}"
+            )
+        if not np.issubdtype(u.dtype, np.number) or np.iscomplexobj(u):
+            raise InputError(f"{what} must hold real numbers, not {u.dtype}")
+        data = data.astype(np.float64)
+        band = np.abs(self.psi) < self.outer * self.spacing
+        if not np.all(np.isfinite(data[:, band])):
+            raise InputError(f"{what} contains NaN or infinite values in the band around the surface")
+        return data
+
+    def world_to_index(self, points) -> np.ndarray:
+        """(n, 3) world points to padded index coordinates (3, n)."""
+        p = np.asarray(points, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise InputError(f"points must be an (n, 3) array of x, y, z, got shape {p.shape}")
+        if not np.all(np.isfinite(p)):
+            raise InputError("points contain NaN or infinite values")
+        return ((p - self.origin) / self.spacing + self.grid.ghost).T
+
+    def sample(self, u, points, interpolation="tricubic") -> np.ndarray:
+        """Values of u at world points (n, 3): shape (n,) for scalar u, (n, channels) else.
+
+        Points must lie within the interpolation reach of the surface (on it, typically)."""
+        data = self._as_channels(u)
+        idx = self.world_to_index(points)
+        code = _interp_code(interpolation)
+        g, q = self.grid, self.runtime.queue
+        n = idx.shape[1]
+        if n == 0:
+            return np.zeros((0,) if data.shape[0] == 1 and np.ndim(u) == 3 else (0, data.shape[0]))
+        lo = g.ghost
+        hi = np.array([g.nx, g.ny, g.nz]) + g.ghost - 1
+        if np.any(idx < lo - 1e-9) or np.any(idx.T > hi + 1e-9):
+            raise InputError("some points lie outside the surface's grid")
+        dist = np.abs(self._sample_raw(self.psi_dev, idx, 1, 1)[0]) / self.spacing
+        reach = self.outer - _NODE_REACH[code]
+        if np.any(dist > reach + 1e-6):
+            raise InputError(
+                f"some points lie {dist.max():.2f} cells from the surface; sample() reads "
+                f"data within {reach:.2f} cells of it (project the points onto the surface)"
+            )
+        dev = g.upload(data)
+        out = self._sample_raw(dev, idx, data.shape[0], code)
+        return out[0] if np.ndim(u) == 3 else out.T
+
+    def _sample_raw(self, dev: cla.Array, idx: np.ndarray, nc: int, code: int) -> np.ndarray:
+        g, q = self.grid, self.runtime.queue
+        n = idx.shape[1]
+        pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
+        out = cla.empty(q, (nc, n), g.dtype)
+        g.kernel("sample_points", INTERP=code, NC=nc)(
+            q, (n,), None, dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
+            out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
+        )
+        return out.get().astype(np.float64)
+
+    # ---- flows ---------------------------------------------------------------------------------
+    def heat(self, u, t, dt=None, *, weighted=False, progress=None) -> np.ndarray:
+        """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u for time t."""
+        from .flows import heat
+
+        return heat(self, u, t, dt=dt, weighted=weighted, progress=progress)
+
+    def stability_limit(self, flow: str = "heat") -> float:
+        from .flows import stability_limit
+
+        return stability_limit(self, flow)
+
+
+def _torus_sdf(big: float, small: float, shift: float):
+    def sdf(x, y, z):
+        ring = np.sqrt((x - shift) ** 2 + y**2) - big
+        return np.sqrt(ring**2 + z**2) - small
+
+    return sdf
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, stacklevel=3)

@@ -1,0 +1,110 @@
+"""NumPy references of the surface kernels (kernels/surface.cl): the same discrete formulas.
+
+Volumes are padded (nc, PZ, PY, PX) arrays handled through flat indices, as the kernels do:
+`sx` = PX is the row stride and `sxy` = PX * PY the slab stride.
+"""
+
+import numpy as np
+
+
+def band_indices(psi_pad, width, ghost):
+    """Sorted flat indices of interior cells with |psi| < width."""
+    mask = np.zeros(psi_pad.shape, bool)
+    g = ghost
+    inner = np.abs(psi_pad[g:-g, g:-g, g:-g]) < width
+    mask[g:-g, g:-g, g:-g] = inner
+    return np.flatnonzero(mask)
+
+
+def closest_points(psi_pad, band, inv_h):
+    """Padded index coordinates (3, n) of x - psi grad psi / |grad psi| (central differences)."""
+    pz, py, px = psi_pad.shape
+    sx, sxy = px, px * py
+    f = psi_pad.ravel().astype(np.float64)
+    gx = f[band + 1] - f[band - 1]
+    gy = f[band + sx] - f[band - sx]
+    gz = f[band + sxy] - f[band - sxy]
+    d = f[band] * inv_h / np.sqrt(gx**2 + gy**2 + gz**2 + 1e-30)
+    z, rem = np.divmod(band, sxy)
+    y, x = np.divmod(rem, sx)
+    return np.stack([x - d * gx, y - d * gy, z - d * gz])
+
+
+def _axis_weights(p, n, order):
+    f = np.floor(p)
+    t = p - f
+    if order == 3:
+        w = np.stack([
+            -t * (t - 1) * (t - 2) / 6,
+            (t + 1) * (t - 1) * (t - 2) / 2,
+            -(t + 1) * t * (t - 2) / 2,
+            (t + 1) * t * (t - 1) / 6,
+        ])
+        first = np.clip(f.astype(int) - 1, 0, n - 4)
+    else:
+        w = np.stack([1 - t, t])
+        first = np.clip(f.astype(int), 0, n - 2)
+    return first, w
+
+
+def interpolate(u_pad, points, order=3):
+    """Values (nc, n) of the padded volumes u_pad (nc, PZ, PY, PX) at index points (3, n)."""
+    nc, pz, py, px = u_pad.shape
+    x0, wx = _axis_weights(points[0], px, order)
+    y0, wy = _axis_weights(points[1], py, order)
+    z0, wz = _axis_weights(points[2], pz, order)
+    out = np.zeros((nc, points.shape[1]))
+    nodes = wx.shape[0]
+    for a in range(nodes):
+        for b in range(nodes):
+            for e in range(nodes):
+                w = wz[a] * wy[b] * wx[e]
+                out += w * u_pad[:, z0 + a, y0 + b, x0 + e]
+    return out
+
+
+def extend_cp(u_pad, band, cp, order=3, normalize=False):
+    """The band's new values (nc, n): u interpolated at the closest points."""
+    v = interpolate(u_pad, cp, order)
+    if normalize:
+        norm = np.sqrt((v**2).sum(axis=0))
+        v = np.where(norm > 0, v / np.where(norm > 0, norm, 1), 0)
+    return v
+
+
+def _normal(f, j, sx, sxy):
+    return (
+        0.5 * (f[j + 1] - f[j - 1]),
+        0.5 * (f[j + sx] - f[j - sx]),
+        0.5 * (f[j + sxy] - f[j - sxy]),
+    )
+
+
+def heat_flux(f, p, j, offsets, sx, sxy, weighted):
+    """|N| P_N v (or P_N v) at cells j, v the signed one-sided gradient."""
+    v = [np.sign(e) * (f[j + e] - f[j]) for e in offsets]
+    n = _normal(p, j, sx, sxy)
+    nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
+    s = (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / nn
+    length = np.sqrt(nn) if weighted else 1.0
+    return [length * (v[a] - s * n[a]) for a in range(3)]
+
+
+def heat_step(u_pad, psi_pad, band, r, offsets, weighted=False):
+    """New band values (nc, n) of one appendix-E step v = u + r div(|N| P_N grad u) / |N|."""
+    nc, pz, py, px = u_pad.shape
+    sx, sxy = px, px * py
+    p = psi_pad.ravel().astype(np.float64)
+    out = np.empty((nc, band.size))
+    for c in range(nc):
+        f = u_pad[c].ravel().astype(np.float64)
+        wc = heat_flux(f, p, band, offsets, sx, sxy, weighted)
+        div = 0.0
+        for a, e in enumerate(offsets):
+            wn = heat_flux(f, p, band - e, offsets, sx, sxy, weighted)
+            div = div + np.sign(e) * (wc[a] - wn[a])
+        if weighted:
+            n = _normal(p, band, sx, sxy)
+            div = div / np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30)
+        out[c] = f[band] + r * div
+    return out

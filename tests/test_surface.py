@@ -1,0 +1,232 @@
+"""Implicit surfaces: each kernel against its numpy reference, the heat flow against exact
+solutions on the unit sphere (second-order convergence measured through surf.sample)."""
+
+import numpy as np
+import pyopencl.array as cla
+import pytest
+from numpy.polynomial import legendre
+
+from clpde.imagedata import InputError
+from clpde.surface import ImplicitSurface
+from clpde.surface.flows import _offsets
+
+from reference import surface as ref
+
+
+def sphere_points(n=1500):
+    """Quasi-uniform points on the unit sphere (Fibonacci lattice)."""
+    i = np.arange(n) + 0.5
+    polar = np.arccos(1 - 2 * i / n)
+    azimuth = np.pi * (1 + 5**0.5) * i
+    return np.stack([np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1)
+
+
+def exp3z_exact(z, t, degree=40):
+    """exp(3z) = sum a_l P_l(z) on the sphere; each term decays as exp(-l(l+1)t)."""
+    nodes, weights = legendre.leggauss(80)
+    coef = np.array([
+        (2 * l + 1) / 2 * np.sum(weights * np.exp(3 * nodes) * legendre.legval(nodes, np.eye(degree)[l]))
+        for l in range(degree)
+    ])
+    decay = np.exp(-np.arange(degree) * (np.arange(degree) + 1) * t)
+    return legendre.legval(z, coef * decay)
+
+
+@pytest.fixture(scope="module")
+def small_sphere():
+    return ImplicitSurface.sphere(1.0, 0.2)
+
+
+def padded_host(surf, rng, nc):
+    return rng.standard_normal((nc,) + surf.grid.padded_shape)
+
+
+def band_host(band):
+    return band.indices.get()[: band.n].astype(np.int64)
+
+
+# ---- kernels against references ------------------------------------------------------------
+
+def test_band_lists_match_reference(small_sphere):
+    s = small_sphere
+    psi_pad = s.psi_dev.get()[0].astype(np.float64)
+    for width, band in ((s.inner, s.step_band), (s.outer, s.ext_band)):
+        expect = ref.band_indices(psi_pad / s.spacing, width, s.grid.ghost)
+        got = band_host(band)
+        # float32 psi can move a cell sitting on the band edge by a rounding error
+        assert abs(got.size - expect.size) <= 2
+        assert np.setdiff1d(got, expect).size + np.setdiff1d(expect, got).size <= 2
+
+
+def test_closest_points_match_reference(small_sphere):
+    s = small_sphere
+    band = band_host(s.ext_band)
+    expect = ref.closest_points(s.psi_dev.get()[0].astype(np.float64), band, 1 / s.spacing)
+    got = np.stack([c.get()[: band.size] for c in s.cp])
+    np.testing.assert_allclose(got, expect, atol=2e-4)
+    # and they lie on the unit sphere: |origin + h (cp - G)| = 1 to second order
+    world = s.origin[:, None] + s.spacing * (got - s.grid.ghost)
+    assert np.abs(np.linalg.norm(world, axis=0) - 1).max() < 0.02
+
+
+@pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
+@pytest.mark.parametrize("nc,normalize", [(1, False), (3, True)])
+def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc, normalize):
+    s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation) if order == 1 else small_sphere
+    g, q = s.grid, s.runtime.queue
+    for u in (padded_host(s, rng, nc), np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape)):
+        src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
+        dst = cla.zeros_like(src)
+        kernel = g.kernel("extend_cp", INTERP=order, NC=nc, NORMALIZE=int(normalize))
+        g.launch_list(kernel, s.ext_band, src.data, dst.data, *(c.data for c in s.cp),
+                      *g.strides(), *g.padded_dims())
+        band = band_host(s.ext_band)
+        cp = np.stack([c.get()[: band.size] for c in s.cp]).astype(np.float64)
+        expect = ref.extend_cp(u.astype(np.float32).astype(np.float64), band, cp, order, normalize)
+        got = dst.get().reshape(nc, -1)[:, band]
+        np.testing.assert_allclose(got, expect, atol=5e-5 * np.abs(expect).max() + 1e-5)
+
+
+def test_tricubic_sample_is_exact_on_cubics(small_sphere):
+    s = small_sphere
+    x, y, z = s.coordinates()
+    cubic = lambda x, y, z: 0.3 * x**3 - x * y * z + 0.5 * z**2 * y + y - 0.2  # noqa: E731
+    u = np.broadcast_to(cubic(x, y, z), s.shape)
+    pts = sphere_points(300) * 1.01
+    np.testing.assert_allclose(s.sample(u, pts), cubic(*pts.T), atol=2e-5)
+    linear = lambda x, y, z: 0.3 * x - 2 * y + z  # noqa: E731
+    u = np.broadcast_to(linear(x, y, z), s.shape)
+    np.testing.assert_allclose(s.sample(u, pts, "trilinear"), linear(*pts.T), atol=2e-5)
+    # trilinear is not exact on the cubic: the test can tell the two apart
+    u = np.broadcast_to(cubic(x, y, z), s.shape)
+    assert np.abs(s.sample(u, pts, "trilinear") - cubic(*pts.T)).max() > 1e-3
+
+
+def test_sample_matches_reference_on_random_data(small_sphere, rng):
+    s = small_sphere
+    u = rng.standard_normal((2,) + s.shape)
+    pts = sphere_points(200)
+    idx = s.world_to_index(pts)
+    u_pad = s.grid.pad(u.astype(np.float32).astype(np.float64))
+    expect = ref.interpolate(u_pad, idx, 3).T
+    np.testing.assert_allclose(s.sample(u, pts), expect, atol=1e-4)
+
+
+@pytest.mark.parametrize("weighted", [False, True])
+@pytest.mark.parametrize("sides", [0, 5, 7])
+def test_heat_step_matches_reference(rng, weighted, sides):
+    s = ImplicitSurface.sphere(1.0, 0.2)
+    g, q = s.grid, s.runtime.queue
+    x, y, z = s.coordinates()
+    structured = np.broadcast_to(np.sign(x) * y + z**2, s.shape)[None]
+    # psi scaled by a non-distance factor exercises the |N| weights of eq. (4.7)
+    psi = s.psi_dev.get() * (1.5 if weighted else 1.0)
+    psi_dev = cla.to_device(q, psi)
+    for u in (padded_host(s, rng, 2), g.pad(structured)):
+        u32 = np.ascontiguousarray(u, np.float32)
+        src = cla.to_device(q, u32)
+        dst = cla.zeros_like(src)
+        offsets = _offsets(g, sides)
+        kernel = g.kernel("heat_step", WEIGHTED=int(weighted))
+        g.launch_list(kernel, s.step_band, src.data, dst.data, psi_dev.data, g.scalar(0.1),
+                      *offsets, *g.strides(), channels=u.shape[0])
+        band = band_host(s.step_band)
+        expect = ref.heat_step(u32.astype(np.float64), psi.astype(np.float64), band, 0.1,
+                               [int(o) for o in offsets], weighted)
+        got = dst.get().reshape(u.shape[0], -1)[:, band]
+        np.testing.assert_allclose(got, expect, atol=2e-5 * max(1, np.abs(expect).max()))
+
+
+# ---- the mathematics --------------------------------------------------------------------------
+
+def heat_error(h, f, exact, t=0.1):
+    s = ImplicitSurface.sphere(1.0, h)
+    v = s.heat(s.field(f), t=t)
+    pts = sphere_points()
+    return np.abs(s.sample(v, pts) - exact(pts, t)).max()
+
+
+def test_heat_on_sphere_xy_converges_at_second_order():
+    exact = lambda p, t: np.exp(-6 * t) * p[:, 0] * p[:, 1]  # noqa: E731
+    coarse = heat_error(0.1, lambda x, y, z: x * y, exact)
+    fine = heat_error(0.05, lambda x, y, z: x * y, exact)
+    order = np.log2(coarse / fine)
+    assert fine <= 6e-4, fine
+    assert order > 1.8, (coarse, fine, order)
+
+
+def test_heat_on_sphere_exp3z_converges_at_second_order():
+    exact = lambda p, t: exp3z_exact(p[:, 2], t)  # noqa: E731
+    coarse = heat_error(0.1, lambda x, y, z: np.exp(3 * z), exact)
+    fine = heat_error(0.05, lambda x, y, z: np.exp(3 * z), exact)
+    order = np.log2(coarse / fine)
+    assert order > 1.8, (coarse, fine, order)
+    assert fine < 0.01  # relative to a solution of size up to e^3 = 20
+
+
+def test_legendre_reference_is_right():
+    z = np.linspace(-1, 1, 11)
+    np.testing.assert_allclose(exp3z_exact(z, 0.0), np.exp(3 * z), rtol=1e-10)
+    # the mean over the sphere (the l = 0 term) is kept: sinh(3)/3
+    assert abs(exp3z_exact(z, 50.0)[0] - np.sinh(3) / 3) < 1e-10
+
+
+def test_heat_keeps_constants_and_the_weighted_form_agrees():
+    s = ImplicitSurface.sphere(1.0, 0.2)
+    const = np.full(s.shape, 2.5)
+    np.testing.assert_allclose(s.sample(s.heat(const, t=0.05), sphere_points(100)), 2.5, atol=1e-5)
+    u = s.field(lambda x, y, z: x * y)
+    a = s.sample(s.heat(u, t=0.05), sphere_points(100))
+    b = s.sample(s.heat(u, t=0.05, weighted=True), sphere_points(100))
+    assert np.abs(a - b).max() < 1e-3  # |grad psi| = 1 for a distance function
+
+
+def test_heat_output_dtype_and_input_untouched():
+    s = ImplicitSurface.sphere(1.0, 0.2)
+    u = s.field(lambda x, y, z: z).astype(np.float32)
+    keep = u.copy()
+    v = s.heat(u, t=0.01)
+    assert v.dtype == np.float32 and v.shape == u.shape
+    np.testing.assert_array_equal(u, keep)
+
+
+def test_unstable_time_step_is_an_error_naming_the_limit():
+    s = ImplicitSurface.sphere(1.0, 0.2)
+    limit = s.stability_limit("heat")
+    assert limit == pytest.approx(0.2**2 / 6)
+    with pytest.raises(InputError, match=f"{limit:g}"):
+        s.heat(s.field(lambda x, y, z: x), t=0.1, dt=2 * limit)
+
+
+def test_shapes_build_bands():
+    torus = ImplicitSurface.torus(1.0, 0.4, spacing=0.1)
+    genus2 = ImplicitSurface.double_torus(spacing=0.1)
+    for s in (torus, genus2):
+        assert s.step_band.n > 0 and s.ext_band.n > s.step_band.n
+    # a volume array with its spacing gives the same surface as the analytic constructor
+    again = ImplicitSurface.from_volume(torus.psi, torus.spacing, torus.origin)
+    assert again.ext_band.n == torus.ext_band.n
+    # heat keeps a constant on the torus and smooths a function of position
+    u = torus.field(lambda x, y, z: x)
+    v = torus.heat(u, t=0.05)
+    band = np.abs(torus.psi) < 0.05
+    assert np.abs(v[band]).max() < np.abs(u[band]).max()
+
+
+def test_bad_inputs_are_clear_errors():
+    psi = np.linalg.norm(np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j], axis=0) - 0.5
+    with pytest.raises(InputError, match="NaN"):
+        bad = psi.copy()
+        bad[0, 0, 0] = np.nan
+        ImplicitSurface.from_volume(bad, 0.1)
+    with pytest.raises(InputError, match="never changes sign"):
+        ImplicitSurface.from_volume(np.abs(psi) + 1, 0.1)
+    with pytest.raises(InputError, match="3D"):
+        ImplicitSurface.from_volume(psi[0], 0.1)
+    with pytest.raises(InputError, match="border"):
+        ImplicitSurface.from_volume(np.linalg.norm(np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j], axis=0) - 0.95, 0.1)
+    s = ImplicitSurface.sphere(1.0, 0.2)
+    with pytest.raises(InputError, match="shape"):
+        s.heat(np.zeros((3, 3, 3)), t=0.1)
+    with pytest.raises(InputError, match="cells from the surface"):
+        s.sample(np.zeros(s.shape), np.array([[0.0, 0.0, 0.0]]))
