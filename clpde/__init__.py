@@ -3,6 +3,7 @@
 from .imagedata import InputError
 from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
+from .track import MorphingTracker, track
 
 __version__ = "0.1.0"
 
