@@ -1,0 +1,95 @@
+"""`clpde track INPUT --init MASK -o OUTDIR` and the sequence reading/writing behind it."""
+
+import json
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+import tifffile
+
+from clpde.cli import main
+from clpde.imagedata import InputError
+from clpde.sequence_io import contour_polygons, read_frames, to_grey
+from tests.test_track import iou, synthetic_sequence
+
+
+@pytest.fixture
+def sequence(tmp_path):
+    frames, truth = synthetic_sequence("translate", frames=4)
+    frames8 = (frames * 255).astype(np.uint8)
+    stack = tmp_path / "stack.tif"
+    tifffile.imwrite(stack, frames8, photometric="minisblack")  # one page per frame
+    mask = tmp_path / "mask.png"
+    iio.imwrite(mask, truth[0].astype(np.uint8) * 255)
+    return stack, mask, frames8, truth
+
+
+def test_tracks_a_tiff_stack_and_writes_masks_gif_and_polygons(tmp_path, sequence, capsys):
+    stack, mask, frames8, truth = sequence
+    out = tmp_path / "out"
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out)]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["contours.json", *[f"mask_{t:04d}.png" for t in range(4)], "overlay.gif"]
+    for t in range(4):
+        written = iio.imread(out / f"mask_{t:04d}.png") > 0
+        assert iou(written, truth[t]) >= 0.9
+    gif = iio.imread(out / "overlay.gif", index=None)
+    assert gif.shape[:3] == frames8.shape
+    data = json.loads((out / "contours.json").read_text())
+    assert len(data["frames"]) == 4 and len(data["frames"][0]["polygons"]) == 1
+    assert "wrote 6 files" in capsys.readouterr().err
+
+
+def test_a_folder_of_colour_images_is_read_in_natural_order(tmp_path, sequence):
+    _, mask, frames8, truth = sequence
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for t, f in enumerate(frames8):  # frame_2 before frame_10: natural order
+        iio.imwrite(folder / f"frame_{t * 8}.png", np.repeat(f[..., None], 3, axis=-1))
+    np.testing.assert_array_equal(read_frames(folder), frames8)
+    assert read_frames(folder, grey=False).shape == (*frames8.shape, 3)
+    out = tmp_path / "out"
+    assert main(["track", str(folder), "--init", str(mask), "-o", str(out), "--no-gif"]) == 0
+    assert not (out / "overlay.gif").exists()
+    assert iou(iio.imread(out / "mask_0003.png") > 0, truth[3]) >= 0.9
+
+
+@pytest.mark.parametrize("problem", ["mask size", "empty mask", "frame sizes", "bad video"])
+def test_bad_input_is_a_clear_error_and_writes_nothing(tmp_path, sequence, capsys, problem):
+    stack, mask, frames8, truth = sequence
+    if problem == "mask size":
+        iio.imwrite(mask, truth[0][:50].astype(np.uint8) * 255)
+        expected = "the frames are 64x64"
+    elif problem == "empty mask":
+        iio.imwrite(mask, np.zeros((64, 64), np.uint8))
+        expected = "empty"
+    elif problem == "frame sizes":
+        stack = tmp_path / "frames"
+        stack.mkdir()
+        iio.imwrite(stack / "a1.png", frames8[0])
+        iio.imwrite(stack / "a2.png", frames8[1][:60])
+        expected = "one size"
+    else:
+        stack = tmp_path / "clip.mp4"
+        stack.write_bytes(b"\x00\x01 this is not a video" * 40)
+        expected = "cannot read"
+    out = tmp_path / "out"
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("clpde: error:") and expected in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing half-written
+
+
+def test_grey_conversion_and_polygons():
+    rgb = np.zeros((2, 3, 4, 3), np.uint8)
+    rgb[..., 1] = 200
+    grey = to_grey(rgb)
+    assert grey.dtype == np.uint8 and grey.shape == (2, 3, 4) and (grey == 117).all()
+    square = np.zeros((8, 8), bool)
+    square[2:5, 3:7] = True
+    (poly,) = contour_polygons(square)
+    xs, ys = np.array(poly).T
+    assert xs.min() == 2.5 and xs.max() == 6.5 and ys.min() == 1.5 and ys.max() == 4.5
+    with pytest.raises(InputError, match="unsupported input"):
+        read_frames(__file__)
