@@ -97,7 +97,10 @@ def atomic_output(path):
     """Yield a temporary path beside `path`; on success it replaces `path`, else it is removed."""
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
-    fd, tmp_name = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".part")
+    try:
+        fd, tmp_name = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".part")
+    except OSError as exc:  # name the folder, not the temporary file that was never made
+        raise InputError(f"cannot write {path}: {exc.strerror} in folder {folder}") from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:

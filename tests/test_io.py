@@ -147,3 +147,14 @@ def test_overwrite_guard(tmp_path, monkeypatch):
     with pytest.raises(InputError, match="never overwrites"):
         check_not_overwriting_input([tmp_path / "sym.png"], src)
     check_not_overwriting_input([src], tmp_path / "other.png")
+
+
+def test_unwritable_folder_error_names_the_output(tmp_path, monkeypatch):
+    import tempfile
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    with pytest.raises(InputError, match="cannot write .*out.png: Permission denied"):
+        write_image(tmp_path / "out.png", np.zeros((3, 3), np.uint8))
