@@ -219,3 +219,12 @@ def test_python_dash_m_clpde(grey, tmp_path):
     )
     assert run.returncode == 2
     assert run.stderr.strip().startswith("clpde: error: ")
+
+
+def test_progress_bar_only_on_a_terminal(grey, tmp_path, capsys, monkeypatch):
+    path, _ = grey
+    assert main(["diffuse", str(path), str(tmp_path / "a.png"), "--steps", "60"]) == 0
+    assert "step" not in capsys.readouterr().err
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main(["diffuse", str(path), str(tmp_path / "b.png"), "--steps", "60"]) == 0
+    assert "60/60" in capsys.readouterr().err
