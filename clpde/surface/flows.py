@@ -8,8 +8,10 @@ device from upload to the final read-back; no host round-trip per step.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
+import pyopencl.array as cla
 from tqdm.auto import tqdm
 
 from ..imagedata import InputError
@@ -18,15 +20,20 @@ from ..imagedata import InputError
 _ALL_SIDES = tuple(range(8))
 
 
-def stability_limit(surf, flow: str = "heat") -> float:
+def stability_limit(surf, flow: str = "heat", eps: float = 1.0, lam: float = 0.0) -> float:
     """Largest stable explicit time step (world time units) of a flow on `surf`."""
     h2 = surf.spacing**2
-    if flow == "heat":
+    if flow in ("heat", "harmonic2", "along"):
         # |N| P_N has norm <= |N| and the one-sided div is minus the transpose of the
         # one-sided grad: the operator's spectrum lies in [-12/h^2, 0] for a distance
-        # function, as for the 7-point Laplacian.
+        # function, as for the 7-point Laplacian (|d| <= 1 for the flux along d).
         return h2 / 6.0
-    raise InputError(f"unknown surface flow {flow!r}")
+    if flow in ("tv", "harmonic1"):
+        # the flux gain 1/|P grad u|_eps is at most 1/eps
+        return h2 * eps / 6.0 / (1 + h2 * eps * lam / 6.0)
+    raise InputError(
+        f"unknown surface flow {flow!r}; use heat, tv, harmonic2, harmonic1 or along"
+    )
 
 
 def _check_time(t, dt, limit: float, what: str) -> tuple[int, float]:
@@ -123,3 +130,140 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=False, progress=None)
         )
         flow.after_step()
     return flow.result()
+
+
+def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=None,
+         fidelity=None, sigma=None, weighted=False, alternate=True, progress=None,
+         lambda_every=10):
+    """Shared driver of flow_step: returns (result, info dict)."""
+    eps = float(eps)
+    if not (np.isfinite(eps) and eps > 0):
+        raise InputError(f"eps must be a positive number, not {eps!r}")
+    limit = stability_limit(surf, flow_name, eps, float(fidelity or 0.0))
+    if sigma is not None and dt is None:
+        limit *= 0.5  # room for the dynamic lambda to grow (checked every update below)
+    steps, dt = _check_time(t, dt, limit, flow_name)
+    flow = BandFlow(surf, u, normalize=harmonic)
+    g, q, h = surf.grid, surf.runtime.queue, surf.spacing
+    defines = dict(NC=flow.nc, FLOW_P=p, HARMONIC=int(harmonic), FIDELITY=int(fidelity is not None),
+                   ALONG=int(direction is not None), WEIGHTED=int(bool(weighted)))
+    kernel = g.kernel("flow_step", **defines)
+    r = g.scalar(dt / h**p)
+    e2 = g.scalar((h * eps) ** 2)
+    dir_dev = g.upload(direction) if direction is not None else surf.psi_dev
+    u0_dev = flow.cur.copy() if fidelity is not None else surf.psi_dev
+    lam, info = 0.0, {"steps": steps, "dt": dt}
+    if fidelity is not None and sigma is None:
+        lam = float(fidelity)
+    terms = None
+    if sigma is not None:
+        n = surf.step_band.n
+        terms = [cla.empty(q, n, g.dtype) for _ in range(3)]
+        info["lambda"] = []
+    for n in _progress(progress, steps, f"surface {flow_name}"):
+        sides = _ALL_SIDES[n % 8] if alternate else 0
+        offsets = _offsets(g, sides)
+        if terms is not None and n % lambda_every == 0:
+            lam = max(0.0, _tv_lambda(surf, flow.cur, u0_dev, terms, offsets, eps, sigma))
+            info["lambda"].append(lam)
+            limit = stability_limit(surf, "tv", eps, lam)
+            if dt > limit:
+                # dynamic lambda grew past what the chosen dt can carry: say so, do not blow up
+                raise InputError(
+                    f"lambda reached {lam:g}, which needs dt <= {limit:g}; pass a smaller dt"
+                )
+        g.launch_list(
+            kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
+            dir_dev.data, u0_dev.data, r, g.scalar(dt), g.scalar(lam), e2, *offsets,
+            *g.strides(),
+        )
+        flow.after_step()
+    if terms is not None:
+        info["residual_variance"] = _residual_variance(surf, flow.cur, u0_dev, terms, eps)
+    return flow.result(), info
+
+
+def device_sum(grid, a, n: int, chunk: int = 2048) -> float:
+    """Sum of the first n entries of a device array: partial sums on the device."""
+    groups = max(1, -(-n // chunk))
+    partial = cla.empty(grid.runtime.queue, groups, grid.dtype)
+    grid.kernel("chunk_sum")(grid.runtime.queue, (groups,), None, a.data, np.int32(n),
+                             np.int32(chunk), partial.data)
+    return float(partial.get().astype(np.float64).sum())
+
+
+def _tv_lambda(surf, u_dev, u0_dev, terms, offsets, eps, sigma):
+    """Dynamic lambda of (C.2) from surface integrals computed on the device."""
+    num, area, _ = _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps)
+    return -(num / surf.spacing) / (sigma**2 * area)
+
+
+def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps):
+    g = surf.grid
+    g.launch_list(
+        g.kernel("tv_lambda_terms"), surf.step_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
+        g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
+        *offsets, *g.strides(), *(a.data for a in terms),
+    )
+    # three sums come back: one read per lambda update, never a field
+    return tuple(device_sum(surf.grid, a, surf.step_band.n) for a in terms)
+
+
+def _residual_variance(surf, u_dev, u0_dev, terms, eps):
+    """Mean of (u - u0)^2 over the surface (smeared-delta quadrature)."""
+    _, area, resid = _lambda_terms(surf, u_dev, u0_dev, terms, _offsets(surf.grid, 0), eps)
+    return resid / area
+
+
+def tv(surf, u, t, dt=None, *, eps=1.0, weighted=False, alternate=True, progress=None):
+    """Intrinsic anisotropic (total variation) flow (4.10) for time t; eps (world gradient
+    units) regularises |P grad u| so the explicit step stays bounded (dt <= h^2 eps / 6)."""
+    return _run(surf, u, t, dt, "tv", p=1, eps=eps, weighted=weighted, alternate=alternate,
+                progress=progress)[0]
+
+
+def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, alternate=True,
+               progress=None, return_info=False):
+    """TV denoising on the surface with a fidelity term (C.1).
+
+    Give the noise level sigma for the dynamic lambda of (C.2) (updated on the device every
+    10 steps), or a fixed lam. With return_info, also returns a dict with the residual
+    variance (mean of (u - u0)^2 over the surface) and the lambda history."""
+    if (sigma is None) == (lam is None):
+        raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
+    if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
+        raise InputError(f"sigma must be a positive number, not {sigma!r}")
+    fidelity = 0.0 if sigma is not None else float(lam)
+    out, info = _run(surf, u, t, dt, "tv", p=1, eps=eps, fidelity=fidelity, sigma=sigma,
+                     alternate=alternate, progress=progress)
+    return (out, info) if return_info else out
+
+
+def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=None):
+    """Harmonic map flow of unit vectors on the surface, (D.7) for p = 2 and (4.11) for
+    p = 1, renormalised after every step. u: (channels, nz, ny, nx)."""
+    if p not in (1, 2):
+        raise InputError(f"p must be 1 or 2, not {p!r}")
+    data = np.asarray(u, dtype=np.float64)
+    if data.ndim != 4:
+        raise InputError(f"harmonic maps need vector data (channels, nz, ny, nx), got shape {data.shape}")
+    band = np.abs(surf.psi) < surf.outer * surf.spacing
+    norm = np.sqrt((data**2).sum(axis=0))
+    if np.any(norm[band] == 0):
+        raise InputError("u has zero vectors in the band; harmonic maps need unit vectors")
+    if np.abs(norm[band] - 1).max() > 1e-3:
+        warnings.warn("u is not made of unit vectors; normalising it", stacklevel=2)
+    return _run(surf, u, t, dt, f"harmonic{p}", p=p, eps=eps, harmonic=True,
+                alternate=alternate, progress=progress)[0]
+
+
+def diffuse_along(surf, u, direction, t, dt=None, *, alternate=True, progress=None):
+    """Anisotropic diffusion along a tangent field d (4.15): flow visualisation of d when u is
+    noise. direction: (3, nz, ny, nx), normalised here."""
+    d = np.asarray(direction, dtype=np.float64)
+    if d.shape != (3,) + surf.shape:
+        raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
+    norm = np.sqrt((d**2).sum(axis=0))
+    d = np.where(norm > 0, d / np.where(norm > 0, norm, 1), 0)
+    return _run(surf, u, t, dt, "along", p=2, direction=d, alternate=alternate,
+                progress=progress)[0]

@@ -291,10 +291,34 @@ class ImplicitSurface:
 
         return heat(self, u, t, dt=dt, weighted=weighted, progress=progress)
 
-    def stability_limit(self, flow: str = "heat") -> float:
+    def tv(self, u, t, dt=None, **options) -> np.ndarray:
+        """Intrinsic anisotropic (total variation) flow (4.10); see flows.tv."""
+        from .flows import tv
+
+        return tv(self, u, t, dt, **options)
+
+    def denoise_tv(self, u, sigma=None, t=1.0, **options):
+        """TV denoising with fidelity and dynamic lambda (C.1, C.2); see flows.denoise_tv."""
+        from .flows import denoise_tv
+
+        return denoise_tv(self, u, sigma, t, **options)
+
+    def harmonic_map(self, u, t, p=2, **options) -> np.ndarray:
+        """Harmonic map flow of unit vectors (4.11, D.7); see flows.harmonic_map."""
+        from .flows import harmonic_map
+
+        return harmonic_map(self, u, t, p, **options)
+
+    def diffuse_along(self, u, direction, t, **options) -> np.ndarray:
+        """Diffusion along a tangent field (4.15); see flows.diffuse_along."""
+        from .flows import diffuse_along
+
+        return diffuse_along(self, u, direction, t, **options)
+
+    def stability_limit(self, flow: str = "heat", eps: float = 1.0, lam: float = 0.0) -> float:
         from .flows import stability_limit
 
-        return stability_limit(self, flow)
+        return stability_limit(self, flow, eps, lam)
 
 
 def _torus_sdf(big: float, small: float, shift: float):

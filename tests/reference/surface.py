@@ -108,3 +108,76 @@ def heat_step(u_pad, psi_pad, band, r, offsets, weighted=False):
             div = div / np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30)
         out[c] = f[band] + r * div
     return out
+
+
+def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direction=None):
+    """flow_step's fluxes at cells j: list over channels of 3 components, and |P v|^2."""
+    n = _normal(p, j, sx, sxy)
+    nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
+    length = np.sqrt(nn) if weighted else 1.0
+    nc = u_flat.size // plane
+    pv, g2 = [], 0.0
+    for c in range(nc):
+        f = u_flat[c * plane:(c + 1) * plane]
+        v = [np.sign(e) * (f[j + e] - f[j]) for e in offsets]
+        s = (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / nn
+        w = [v[a] - s * n[a] for a in range(3)]
+        g2 = g2 + w[0] ** 2 + w[1] ** 2 + w[2] ** 2
+        pv.append(w)
+    if direction is not None:
+        d = [direction[a * plane + j] for a in range(3)]
+        out = []
+        for w in pv:
+            a = length * (d[0] * w[0] + d[1] * w[1] + d[2] * w[2])
+            out.append([a * d[0], a * d[1], a * d[2]])
+        return out, g2
+    gain = length / np.sqrt(g2 + e2) if flow_p == 1 else length
+    return [[gain * x for x in w] for w in pv], g2
+
+
+def flow_step(u_pad, psi_pad, band, r, dt, lam, e2, offsets, flow_p=2, harmonic=False,
+              u0_pad=None, direction=None, weighted=False):
+    """New band values (nc, n) of flow_step (TV, harmonic maps, flux along d, fidelity)."""
+    nc, pz, py, px = u_pad.shape
+    sx, sxy, plane = px, px * py, px * py * pz
+    u = u_pad.ravel().astype(np.float64)
+    p = psi_pad.ravel().astype(np.float64)
+    d = None if direction is None else direction.ravel().astype(np.float64)
+    wc, g2 = flow_flux(u, p, band, offsets, sx, sxy, plane, e2, flow_p, weighted, d)
+    nb = [flow_flux(u, p, band - e, offsets, sx, sxy, plane, e2, flow_p, weighted, d)[0]
+          for e in offsets]
+    inv_len = 1.0
+    if weighted:
+        n = _normal(p, band, sx, sxy)
+        inv_len = 1 / np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30)
+    out = np.empty((nc, band.size))
+    for c in range(nc):
+        uc = u[c * plane + band]
+        div = sum(np.sign(e) * (wc[c][a] - nb[a][c][a]) for a, e in enumerate(offsets))
+        rate = div * inv_len
+        if harmonic:
+            rate = rate + uc * (g2 if flow_p == 2 else np.sqrt(g2))
+        val = uc + r * rate
+        if u0_pad is not None:
+            val = val - dt * lam * (uc - u0_pad.ravel()[c * plane + band])
+        out[c] = val
+    return out
+
+
+def tv_lambda_terms(u_pad, u0_pad, psi_pad, band, inv_h, eps_cells, e2, offsets):
+    """(num, area, resid) per band cell, as the tv_lambda_terms kernel."""
+    nc, pz, py, px = u_pad.shape
+    sx, sxy = px, px * py
+    u, u0 = u_pad.ravel().astype(np.float64), u0_pad.ravel().astype(np.float64)
+    p = psi_pad.ravel().astype(np.float64)
+    d = p[band] * inv_h
+    delta = np.where(np.abs(d) < eps_cells, (1 + np.cos(np.pi * d / eps_cells)) / (2 * eps_cells), 0)
+    n = _normal(p, band, sx, sxy)
+    nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
+    v = [np.sign(e) * (u[band + e] - u[band]) for e in offsets]
+    v0 = [np.sign(e) * (u0[band + e] - u0[band]) for e in offsets]
+    s = (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / nn
+    pv = [v[a] - s * n[a] for a in range(3)]
+    norm = np.sqrt(pv[0] ** 2 + pv[1] ** 2 + pv[2] ** 2 + e2)
+    num = delta * sum((v[a] - v0[a]) * pv[a] for a in range(3)) / norm
+    return num, delta, delta * (u[band] - u0[band]) ** 2

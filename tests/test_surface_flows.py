@@ -1,0 +1,207 @@
+"""TV, TV denoising with dynamic lambda, harmonic maps and diffusion along a tangent field on
+implicit surfaces: kernels against numpy references, flows against their mathematics."""
+
+import numpy as np
+import pyopencl.array as cla
+import pytest
+
+from clpde.imagedata import InputError
+from clpde.surface import ImplicitSurface
+from clpde.surface import flows
+from clpde.surface.flows import _offsets
+
+from reference import surface as ref
+
+
+@pytest.fixture(scope="module")
+def sphere02():
+    return ImplicitSurface.sphere(1.0, 0.2)
+
+
+@pytest.fixture(scope="module")
+def sphere05():
+    return ImplicitSurface.sphere(1.0, 0.05)
+
+
+def unit_points(n, seed=3):
+    p = np.random.default_rng(seed).standard_normal((n, 3))
+    return p / np.linalg.norm(p, axis=1)[:, None]
+
+
+def band_host(band):
+    return band.indices.get()[: band.n].astype(np.int64)
+
+
+CASES = {
+    "tv": dict(nc=1, FLOW_P=1, HARMONIC=0, FIDELITY=0, ALONG=0),
+    "tv-fidelity": dict(nc=1, FLOW_P=1, HARMONIC=0, FIDELITY=1, ALONG=0),
+    "harmonic2": dict(nc=3, FLOW_P=2, HARMONIC=1, FIDELITY=0, ALONG=0),
+    "harmonic1": dict(nc=3, FLOW_P=1, HARMONIC=1, FIDELITY=0, ALONG=0),
+    "along": dict(nc=1, FLOW_P=2, HARMONIC=0, FIDELITY=0, ALONG=1),
+    "tv-weighted": dict(nc=1, FLOW_P=1, HARMONIC=0, FIDELITY=0, ALONG=0, WEIGHTED=1),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_flow_step_matches_reference(sphere02, rng, case):
+    s = sphere02
+    g, q = s.grid, s.runtime.queue
+    opts = dict(CASES[case])
+    nc = opts.pop("nc")
+    weighted = opts.get("WEIGHTED", 0)
+    x, y, z = s.coordinates()
+    structured = np.stack([np.broadcast_to(np.sign(x - 0.1) + 0.3 * y * c, s.shape) for c in range(nc)])
+    psi = s.psi_dev.get() * (1.3 if weighted else 1.0)
+    direction = rng.standard_normal((3,) + g.padded_shape)
+    direction /= np.sqrt((direction**2).sum(axis=0))
+    dev = lambda a: cla.to_device(q, np.ascontiguousarray(a, np.float32))  # noqa: E731
+    for u in (rng.standard_normal((nc,) + g.padded_shape), g.pad(structured)):
+        u32 = np.ascontiguousarray(u, np.float32)
+        u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
+        src, dst = dev(u32), cla.zeros(q, u.shape, np.float32)
+        offsets = _offsets(g, 6)
+        kernel = g.kernel("flow_step", NC=nc, **opts)
+        r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
+        g.launch_list(kernel, s.step_band, src.data, dst.data, dev(psi).data, dev(direction).data,
+                      dev(u0).data, g.scalar(r), g.scalar(dt), g.scalar(lam), g.scalar(e2),
+                      *offsets, *g.strides())
+        band = band_host(s.step_band)
+        expect = ref.flow_step(
+            u32.astype(np.float64), psi.astype(np.float64), band, r, dt, lam, e2,
+            [int(o) for o in offsets], flow_p=opts["FLOW_P"], harmonic=bool(opts["HARMONIC"]),
+            u0_pad=u0.astype(np.float64) if opts["FIDELITY"] else None,
+            direction=direction.astype(np.float32).astype(np.float64) if opts["ALONG"] else None,
+            weighted=bool(weighted),
+        )
+        got = dst.get().reshape(nc, -1)[:, band]
+        np.testing.assert_allclose(got, expect, atol=3e-5 * max(1, np.abs(expect).max()))
+
+
+def test_lambda_terms_match_reference(sphere02, rng):
+    s = sphere02
+    g, q = s.grid, s.runtime.queue
+    u = rng.standard_normal((1,) + g.padded_shape).astype(np.float32)
+    u0 = (u + 0.2 * rng.standard_normal(u.shape)).astype(np.float32)
+    terms = [cla.empty(q, s.step_band.n, np.float32) for _ in range(3)]
+    offsets = _offsets(g, 3)
+    g.launch_list(g.kernel("tv_lambda_terms"), s.step_band, cla.to_device(q, u).data,
+                  cla.to_device(q, u0).data, s.psi_dev.data, g.scalar(1 / s.spacing),
+                  g.scalar(1.5), g.scalar(0.01), *offsets, *g.strides(), *(t.data for t in terms))
+    band = band_host(s.step_band)
+    expect = ref.tv_lambda_terms(u, u0, s.psi_dev.get(), band, 1 / s.spacing, 1.5, 0.01,
+                                 [int(o) for o in offsets])
+    for got, want in zip(terms, expect):
+        np.testing.assert_allclose(got.get(), want, atol=2e-4 * max(1, np.abs(want).max()))
+    assert flows.device_sum(g, terms[1], s.step_band.n) == pytest.approx(want_sum := expect[1].sum(), rel=1e-4)
+    # the smeared delta integrates to the sphere's area: sum(delta) h^2 = 4 pi
+    assert want_sum * s.spacing**2 == pytest.approx(4 * np.pi, rel=0.03)
+
+
+def surface_noise(surf, sigma, seed=0, waves=200):
+    """Noise of variance sigma^2 on the surface, constant along normals: random plane waves
+    of wavelength about 4 cells evaluated at the closest points."""
+    rng = np.random.default_rng(seed)
+    k = rng.standard_normal((waves, 3))
+    k *= (2 * np.pi / (4 * surf.spacing)) / np.linalg.norm(k, axis=1)[:, None]
+    phase = rng.uniform(0, 2 * np.pi, waves)
+
+    def f(x, y, z):
+        total = 0.0
+        for kk, ph in zip(k, phase):
+            total = total + np.cos(kk[0] * x + kk[1] * y + kk[2] * z + ph)
+        return sigma * np.sqrt(2.0 / waves) * total
+
+    return surf.field(f)
+
+
+def test_tv_denoising_reaches_the_noise_variance(sphere05):
+    s = sphere05
+    sigma = 0.1
+    clean = s.field(lambda x, y, z: (z > 0.2).astype(float) + 0.5 * (x > 0.3))
+    noisy = clean + surface_noise(s, sigma)
+    pts = unit_points(800)
+    before = np.abs(s.sample(noisy, pts) - s.sample(clean, pts)).mean()
+    out, info = flows.denoise_tv(s, noisy, sigma=sigma, t=0.02, return_info=True)
+    after = np.abs(s.sample(out, pts) - s.sample(clean, pts)).mean()
+    assert after < 0.6 * before, (before, after)
+    # the dynamic lambda drives the residual variance close to sigma^2
+    assert 0.7 * sigma**2 < info["residual_variance"] < 1.2 * sigma**2, info["residual_variance"]
+    assert all(lam >= 0 for lam in info["lambda"]) and info["lambda"][-1] > 0
+
+
+def test_tv_keeps_edges_that_heat_smears(sphere05):
+    s = sphere05
+    step = s.field(lambda x, y, z: (z > 0).astype(float))
+    t = 0.004
+    pts = unit_points(2000)
+    after_tv = s.sample(flows.tv(s, step, t=t), pts)
+    after_heat = s.sample(s.heat(step, t=t), pts)
+    exact = (pts[:, 2] > 0).astype(float)
+    away = np.abs(pts[:, 2]) > 0.15
+    assert np.abs(after_tv - exact)[away].max() < 0.5 * np.abs(after_heat - exact)[away].max()
+    # TV is a gradient descent of total variation: stays within the data range (no overshoot
+    # beyond the interpolation's)
+    assert after_tv.min() > -0.1 and after_tv.max() < 1.1
+
+
+@pytest.mark.parametrize("p,t", [(2, 0.002), (1, 0.006)])
+def test_harmonic_maps_keep_unit_norm_and_smooth(sphere05, p, t):
+    s = sphere05
+    rng = np.random.default_rng(5)
+    base = s.field(lambda x, y, z: [np.ones_like(x), 0.4 * np.sin(3 * y), 0.4 * np.cos(2 * z)])
+    noise = np.stack([surface_noise(s, 0.15, seed=c) for c in range(3)])
+    u = base + noise
+    u /= np.sqrt((u**2).sum(axis=0))
+    pts = unit_points(800)
+    v = flows.harmonic_map(s, u, t=t, p=p)
+    # unit vectors at every band node (the state); between nodes the interpolant of unit
+    # vectors is not exactly unit, so check the nodes themselves
+    nodes = np.abs(s.psi) < s.outer * s.spacing
+    assert np.abs(np.sqrt((v[:, nodes] ** 2).sum(axis=0)) - 1).max() < 1e-5
+    samples = s.sample(v, pts)
+    # smoothing: the noise's roughness (distance to the smooth field) drops
+    clean = s.sample(base / np.sqrt((base**2).sum(axis=0)), pts)
+    before = np.linalg.norm(s.sample(u, pts) - clean, axis=1).mean()
+    after = np.linalg.norm(samples - clean, axis=1).mean()
+    assert after < 0.7 * before, (before, after)
+    del rng
+
+
+def test_harmonic_map_normalises_with_a_warning(sphere02):
+    s = sphere02
+    u = s.field(lambda x, y, z: [2 + 0 * x, 0 * y, 0 * z])
+    with pytest.warns(UserWarning, match="unit"):
+        v = flows.harmonic_map(s, u, t=0.001)
+    np.testing.assert_allclose(s.sample(v, unit_points(50)), [[1, 0, 0]] * 50, atol=1e-5)
+    with pytest.raises(InputError, match="vector"):
+        flows.harmonic_map(s, u[0], t=0.001)
+
+
+def test_diffusion_along_a_field_only_smooths_along_it(sphere05):
+    """Along the azimuthal field of the z axis, a function of z is a steady state; a function
+    of the azimuth diffuses."""
+    s = sphere05
+    d = s.field(lambda x, y, z: [-y, x, 0 * z])
+    of_z = s.field(lambda x, y, z: z**2)
+    pts = unit_points(500)
+    kept = s.sample(flows.diffuse_along(s, of_z, d, t=0.05), pts)
+    rho2 = 1 - pts[:, 2] ** 2
+    ok = rho2 > 0.25  # away from the poles, where the field vanishes
+    assert np.abs(kept - pts[:, 2] ** 2)[ok].max() < 2e-3
+    of_x = s.field(lambda x, y, z: x * y)
+    moved = s.sample(flows.diffuse_along(s, of_x, d, t=0.05), pts)
+    # x y = r^2 sin(2 phi) / 2: pure azimuthal mode 2, decays as exp(-4 t / r^2) along the
+    # circles of latitude (radius r = sqrt(1 - z^2))
+    exact = pts[:, 0] * pts[:, 1] * np.exp(-4 * 0.05 / np.maximum(rho2, 1e-9))
+    ok = rho2 > 0.5
+    assert np.abs(moved - pts[:, 0] * pts[:, 1])[ok].max() > 0.05  # it did move
+    assert np.abs(moved - exact)[ok].max() < 0.01
+
+
+def test_tv_stability_limit_is_enforced(sphere02):
+    s = sphere02
+    limit = flows.stability_limit(s, "tv", eps=0.5)
+    with pytest.raises(InputError, match="stability limit"):
+        flows.tv(s, np.zeros(s.shape), t=0.01, dt=2 * limit, eps=0.5)
+    with pytest.raises(InputError, match="exactly one"):
+        flows.denoise_tv(s, np.zeros(s.shape))
