@@ -381,3 +381,71 @@ __kernel void chunk_sum(__global const REAL* restrict a, const int n, const int 
     for (int k = g * chunk; k < end; ++k) acc += a[k];
     partial[g] = acc;
 }
+
+// ---- extension along normals by the PDE of section 4.2 ------------------------------------
+// u_t + sign(psi) grad u . grad psi / |grad psi| = 0, first-order upwind, r = dt / h (grid
+// units; stable for r <= 1/sqrt(3) since the velocity has unit length). sign is smoothed as
+// psi / sqrt(psi^2 + h^2) so the surface's own cells barely move. All NC channels.
+__kernel void extend_pde_step(__global const REAL* restrict u, __global REAL* restrict v,
+                              __global const REAL* restrict psi, const REAL r, const REAL h,
+                              const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const vec3r n = psi_normal(psi, i, sx, sxy);
+        const REAL inv = RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);
+        const REAL sgn = psi[i] * RSQRT(psi[i] * psi[i] + h * h);
+        const REAL ax = sgn * n.x * inv, ay = sgn * n.y * inv, az = sgn * n.z * inv;
+        for (int c = 0; c < NC; ++c) {
+            const int ic = c * plane + i;
+            const REAL dx = ax > 0 ? u[ic] - u[ic - 1] : u[ic + 1] - u[ic];
+            const REAL dy = ay > 0 ? u[ic] - u[ic - sx] : u[ic + sx] - u[ic];
+            const REAL dz = az > 0 ? u[ic] - u[ic - sxy] : u[ic + sxy] - u[ic];
+            v[ic] = u[ic] - r * (ax * dx + ay * dy + az * dz);
+        }
+    }
+}
+
+// ---- reinitialisation of psi to a signed distance ------------------------------------------
+// phi_t + sgn(phi0) (|grad phi| - 1) = 0 with Godunov's upwind norm (Sussman, Smereka, Osher),
+// and Russo and Smereka's subcell fix on cells next to the surface: there the update pulls
+// phi towards D = phi0 / |grad phi0| (a distance estimate from phi0 itself), so the zero
+// level set does not move. World units; r = dt / h.
+inline REAL godunov_sq(const REAL back, const REAL fwd, const REAL s)
+{
+    return s > 0 ? fmax(SQR(fmax(back, (REAL)0)), SQR(fmin(fwd, (REAL)0)))
+                 : fmax(SQR(fmin(back, (REAL)0)), SQR(fmax(fwd, (REAL)0)));
+}
+
+inline REAL subcell_slope(__global const REAL* restrict p, const int i, const int s)
+{
+    return fmax(fmax(fabs(p[i + s] - p[i - s]) * (REAL)0.5, fabs(p[i + s] - p[i])),
+                fmax(fabs(p[i] - p[i - s]), (REAL)1e-12));
+}
+
+__kernel void reinit_step(__global const REAL* restrict phi, __global REAL* restrict out,
+                          __global const REAL* restrict phi0, const REAL r, const REAL inv_h,
+                          const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const REAL p0 = phi0[i];
+        const REAL s = p0 > 0 ? (REAL)1 : (p0 < 0 ? (REAL)-1 : (REAL)0);
+        const bool near = p0 * phi0[i + 1] <= 0 || p0 * phi0[i - 1] <= 0 ||
+                          p0 * phi0[i + sx] <= 0 || p0 * phi0[i - sx] <= 0 ||
+                          p0 * phi0[i + sxy] <= 0 || p0 * phi0[i - sxy] <= 0;
+        const REAL c = phi[i];
+        if (near) {
+            const REAL g = SQRT(SQR(subcell_slope(phi0, i, 1)) + SQR(subcell_slope(phi0, i, sx)) +
+                                SQR(subcell_slope(phi0, i, sxy))) * inv_h;
+            out[i] = c - r * (s * fabs(c) - p0 / g);
+        } else {
+            const REAL gx = godunov_sq(c - phi[i - 1], phi[i + 1] - c, s);
+            const REAL gy = godunov_sq(c - phi[i - sx], phi[i + sx] - c, s);
+            const REAL gz = godunov_sq(c - phi[i - sxy], phi[i + sxy] - c, s);
+            out[i] = c - r * s * (SQRT(gx + gy + gz) * inv_h - 1) / inv_h;
+        }
+    }
+}

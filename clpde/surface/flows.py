@@ -68,7 +68,7 @@ def _offsets(grid, sides: int):
 class BandFlow:
     """Device state of data on a surface: `cur` (extended) and a scratch volume `tmp`."""
 
-    def __init__(self, surf, u, normalize: bool = False):
+    def __init__(self, surf, u, normalize: bool = False, extend: bool = True):
         self.surf = surf
         self.input = np.asarray(u)
         data = surf._as_channels(u)
@@ -79,7 +79,8 @@ class BandFlow:
         self.tmp = self.cur.copy()
         self._extend_kernel = g.kernel("extend_cp", INTERP=surf.interp, NC=self.nc,
                                        NORMALIZE=int(normalize))
-        self.extend()
+        if extend:
+            self.extend()
 
     def extend(self) -> None:
         """Re-extend cur along the normals (through tmp; cur holds the result)."""

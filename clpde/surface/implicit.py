@@ -52,7 +52,7 @@ class ImplicitSurface:
     """
 
     def __init__(self, psi, spacing, origin=(0.0, 0.0, 0.0), *, band=None,
-                 interpolation="tricubic", dtype=np.float32, device=None):
+                 interpolation="tricubic", dtype=np.float32, device=None, _check_border=True):
         psi = np.asarray(psi)
         if psi.ndim != 3:
             raise InputError(f"psi must be a 3D (nz, ny, nx) volume, got shape {psi.shape}")
@@ -79,22 +79,42 @@ class ImplicitSurface:
                 f"use band >= {min_outer:.2f}"
             )
         self.runtime = get_runtime(device)
+        self._check_border = _check_border
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
                            dtype=np.dtype(dtype))
-        self.psi = psi.astype(np.float64, copy=True)
+        self._set_psi(psi.astype(np.float64, copy=True))
+
+    def _set_psi(self, psi: np.ndarray) -> None:
+        """(Re)build the device copy of psi, the two bands and the closest points."""
+        h = self.spacing
+        self.psi = psi
         # Ghost cells continue psi linearly so stencils next to the border stay meaningful.
         self.psi_dev = self.grid.upload(self.psi[None], mode="linear")
         # Band tests and closest points run in grid units.
         psi_cells = self.psi_dev / self.grid.scalar(h)
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
-        self._check_band_clear_of_border()
+        if self._check_border:
+            self._check_band_clear_of_border()
         self.cp = self._closest_points()
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
-    def from_volume(cls, psi, spacing, origin=(0.0, 0.0, 0.0), **options) -> ImplicitSurface:
-        """A surface from a signed distance volume (nz, ny, nx) with the given spacing."""
+    def from_volume(cls, psi, spacing, origin=(0.0, 0.0, 0.0), *, reinitialize=False,
+                    **options) -> ImplicitSurface:
+        """A surface from a signed distance volume (nz, ny, nx) with the given spacing.
+
+        reinitialize=True first turns any level-set function (negative inside) into a
+        signed distance, on the device."""
+        if reinitialize:
+            psi = np.asarray(psi, dtype=np.float64)
+            # rescale to unit slope at the surface first (the zero level set is kept), so
+            # the bands are about right before the exact reinitialisation
+            scale = _slope_at_surface(psi, spacing) if psi.ndim == 3 else 1.0
+            surf = cls(psi / scale, spacing, origin, _check_border=False, **options)
+            surf.reinitialize()
+            surf._check_band_clear_of_border()
+            return surf
         return cls(psi, spacing, origin, **options)
 
     @classmethod
@@ -186,21 +206,65 @@ class ImplicitSurface:
         return cp
 
     def _check_band_clear_of_border(self) -> None:
-        """The extension band plus its stencils must stay inside the volume."""
-        h = self.spacing
-        reach = self.outer + 2.0
-        edges = [
-            self.psi[0], self.psi[-1], self.psi[:, 0], self.psi[:, -1],
-            self.psi[:, :, 0], self.psi[:, :, -1],
-        ]
-        closest = min(float(np.abs(e).min()) for e in edges) / h
-        if closest < reach:
+        """Band cells must keep 2 cells from the volume's border, so that every stencil
+        and interpolation node stays inside the padded buffer's meaningful values."""
+        band = np.abs(self.psi) < self.outer * self.spacing
+        if not band.any():
+            raise InputError("the band is empty: the spacing is too coarse for this surface")
+        m = 2
+        edge = np.ones_like(band)
+        edge[m:-m, m:-m, m:-m] = False
+        if np.any(band & edge):
             raise InputError(
-                f"the surface comes within {closest:.1f} cells of the volume's border; the "
-                f"band needs {reach:.1f}: pad psi (e.g. from_function with larger bounds)"
+                f"the band around the surface (|psi| < {self.outer:.1f} cells) reaches within "
+                f"{m} cells of the volume's border: pad psi by {int(np.ceil(self.outer)) + m} "
+                "cells a side (e.g. from_function with larger bounds)"
             )
         if self.step_band.n == 0:
             raise InputError("the band is empty: the spacing is too coarse for this surface")
+
+    def reinitialize(self, iterations=None, progress=None) -> ImplicitSurface:
+        """Turn psi into a signed distance function on the device (Sussman's PDE with
+        Russo-Smereka's subcell fix), keeping its zero level set; rebuilds the bands."""
+        g, q = self.grid, self.runtime.queue
+        reach = self.outer + 4.0
+        r = 0.3
+        steps = int(np.ceil(reach / r)) if iterations is None else int(iterations)
+        everywhere = g.band(self.psi_dev, np.inf)
+        phi0 = self.psi_dev
+        cur, nxt = phi0.copy(), phi0.copy()
+        kernel = g.kernel("reinit_step")
+        from .flows import _progress
+
+        for _ in _progress(progress, steps, "reinitialise"):
+            g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
+                          g.scalar(1 / self.spacing), *g.strides())
+            cur, nxt = nxt, cur
+        self._set_psi(g.download(cur)[0].astype(np.float64))
+        return self
+
+    def extend(self, u, method="closest-point", iterations=None) -> np.ndarray:
+        """Extend data off the surface, constant along the normals: by closest-point
+        interpolation (one pass), or by the upwind PDE of section 4.2,
+        u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
+        from .flows import BandFlow
+
+        if method not in ("closest-point", "pde"):
+            raise InputError(f"method must be 'closest-point' or 'pde', not {method!r}")
+        if method == "closest-point":
+            return BandFlow(self, u).result()
+        flow = BandFlow(self, u, extend=False)
+        g = self.grid
+        r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1
+        steps = int(np.ceil(2 * self.outer / r)) if iterations is None else int(iterations)
+        kernel = g.kernel("extend_pde_step", NC=flow.nc)
+        for _ in range(steps):
+            g.launch_list(kernel, self.ext_band, flow.cur.data, flow.tmp.data, self.psi_dev.data,
+                          g.scalar(r), g.scalar(self.spacing), *g.strides())
+            # cells outside the band keep their values in both buffers
+            g.launch_list(kernel, self.ext_band, flow.tmp.data, flow.cur.data, self.psi_dev.data,
+                          g.scalar(r), g.scalar(self.spacing), *g.strides())
+        return flow.result()
 
     # ---- data on the surface -----------------------------------------------------------------
     def field(self, f, dtype=np.float64) -> np.ndarray:
@@ -331,3 +395,18 @@ def _torus_sdf(big: float, small: float, shift: float):
 
 def _warn(message: str) -> None:
     warnings.warn(message, stacklevel=3)
+
+
+def _slope_at_surface(psi: np.ndarray, spacing: float) -> float:
+    """Median |grad psi| over the cells next to a sign change (1 if there are none)."""
+    g = np.gradient(psi, spacing)
+    slope = np.sqrt(g[0] ** 2 + g[1] ** 2 + g[2] ** 2)
+    near = np.zeros(psi.shape, bool)
+    for axis in range(3):
+        a = np.moveaxis(psi, axis, 0)
+        change = np.signbit(a[1:]) != np.signbit(a[:-1])
+        n = np.moveaxis(near, axis, 0)
+        n[1:] |= change
+        n[:-1] |= change
+    values = slope[near & (slope > 0)]
+    return float(np.median(values)) if values.size else 1.0

@@ -181,3 +181,55 @@ def tv_lambda_terms(u_pad, u0_pad, psi_pad, band, inv_h, eps_cells, e2, offsets)
     norm = np.sqrt(pv[0] ** 2 + pv[1] ** 2 + pv[2] ** 2 + e2)
     num = delta * sum((v[a] - v0[a]) * pv[a] for a in range(3)) / norm
     return num, delta, delta * (u[band] - u0[band]) ** 2
+
+
+def extend_pde_step(u_pad, psi_pad, band, r, h):
+    """Band values (nc, n) after one upwind step of u_t + sign(psi) N . grad u = 0."""
+    nc, pz, py, px = u_pad.shape
+    sx, sxy = px, px * py
+    p = psi_pad.ravel().astype(np.float64)
+    n = _normal(p, band, sx, sxy)
+    inv = 1 / np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30)
+    sgn = p[band] / np.sqrt(p[band] ** 2 + h * h)
+    a = [sgn * n[k] * inv for k in range(3)]
+    out = np.empty((nc, band.size))
+    for c in range(nc):
+        f = u_pad[c].ravel().astype(np.float64)
+        total = 0.0
+        for k, s in enumerate((1, sx, sxy)):
+            back = f[band] - f[band - s]
+            fwd = f[band + s] - f[band]
+            total = total + a[k] * np.where(a[k] > 0, back, fwd)
+        out[c] = f[band] - r * total
+    return out
+
+
+def reinit_step(phi_pad, phi0_pad, band, r, h):
+    """Band values after one Sussman/Godunov step with Russo-Smereka's subcell fix."""
+    pz, py, px = phi_pad.shape[-3:]
+    sx, sxy = px, px * py
+    f = phi_pad.ravel().astype(np.float64)
+    f0 = phi0_pad.ravel().astype(np.float64)
+    p0 = f0[band]
+    s = np.sign(p0)
+    near = np.zeros(band.size, bool)
+    for st in (1, -1, sx, -sx, sxy, -sxy):
+        near |= p0 * f0[band + st] <= 0
+    c = f[band]
+    slope2 = 0.0
+    gsum = 0.0
+    for st in (1, sx, sxy):
+        sl = np.maximum.reduce([
+            np.abs(f0[band + st] - f0[band - st]) * 0.5, np.abs(f0[band + st] - p0),
+            np.abs(p0 - f0[band - st]), np.full(band.size, 1e-12),
+        ])
+        slope2 = slope2 + sl**2
+        back = c - f[band - st]
+        fwd = f[band + st] - c
+        pos = np.maximum(np.maximum(back, 0) ** 2, np.minimum(fwd, 0) ** 2)
+        neg = np.maximum(np.minimum(back, 0) ** 2, np.maximum(fwd, 0) ** 2)
+        gsum = gsum + np.where(s > 0, pos, neg)
+    g = np.sqrt(slope2) / h
+    near_val = c - r * (s * np.abs(c) - p0 / g)
+    far_val = c - r * s * (np.sqrt(gsum) / h - 1) * h
+    return np.where(near, near_val, far_val)
