@@ -12,10 +12,11 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cla
 
-from .fields import Field, Grid, PingPong, compact
+from .fields import Field, Grid, PingPong, compact, index_list
 from .imagedata import InputError
 
 GHOST = 2
+MARGIN = 2  # frozen cells around the caller's grid (see LevelSet)
 REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
 
 
@@ -43,6 +44,12 @@ def signed_distance(mask) -> np.ndarray:
 class LevelSet:
     """A 2D level set u on the device with its narrow band.
 
+    The grid is the caller's (ny, nx) grid with a frozen margin of MARGIN cells added on
+    every side, holding edge-replicated values (`pad` does the same for data fields on this
+    grid). Band and reinitialisation kernels update only the cells inside the margin, so
+    their stencils never reach the ghosts and no ghost refresh is needed between steps:
+    each step is a single kernel launch.
+
     band_width w: the band holds the cells with |u| < w; its outer ring (w - 1 <= |u| < w)
     is the edge a flow watches to ask for a rebuild.
     """
@@ -53,26 +60,33 @@ class LevelSet:
             raise InputError(f"the level set must be 2-D, got shape {u0.shape}")
         if band_width < 2:
             raise InputError(f"band_width must be at least 2 pixels, not {band_width}")
+        self.shape = u0.shape
         ny, nx = u0.shape
         self.runtime = runtime
-        self.grid = Grid(runtime, nx, ny, 1, GHOST, np.dtype(dtype))
+        self.grid = Grid(runtime, nx + 2 * MARGIN, ny + 2 * MARGIN, 1, GHOST, np.dtype(dtype))
         self.band_width = float(band_width)
-        self.u = PingPong(Field.from_host(self.grid, u0[np.newaxis]))
+        self.u = PingPong(Field.from_host(self.grid, self.pad(u0)[np.newaxis]))
         self._phi0 = Field.empty(self.grid)
-        q = runtime.queue
-        # Ghost entries stay 0 (mark_band writes the interior only), so a band never
-        # includes a ghost cell.
-        self.band_mask = cla.zeros(q, self.grid.padded_shape[1:], np.uint8)
+        inner = np.zeros((self.grid.ny, self.grid.nx), bool)
+        inner[MARGIN:-MARGIN, MARGIN:-MARGIN] = True
+        self.active = index_list(self.grid, inner)
+        # Ghost entries stay 0 (mark_band writes the interior only).
+        self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self.band = None
         self.rebuilds = 0
         self.build_band()
+
+    @staticmethod
+    def pad(values: np.ndarray) -> np.ndarray:
+        """(ny, nx) data to the level set's grid: the frozen margin replicates the edge."""
+        return np.pad(np.asarray(values, np.float64), MARGIN, mode="edge")
 
     # ---- band --------------------------------------------------------------------------
     def build_band(self) -> None:
         """Mark |u| < w on the device and compact it into the band's index list."""
         g = self.grid
         g.launch(g.kernel("levelset.cl", "mark_band"), self.u.cur.data.data,
-                 self.band_mask.data, g.scalar(self.band_width))
+                 self.band_mask.data, g.scalar(self.band_width), np.int32(MARGIN))
         self.band = compact(self.runtime, self.band_mask)
         # Cells outside the band are never written by band kernels: make both buffers agree
         # there so swapping never brings back stale values.
@@ -86,33 +100,38 @@ class LevelSet:
 
     # ---- reinitialisation --------------------------------------------------------------
     def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT) -> None:
-        """PDE reinitialisation over the whole grid, Russo-Smereka subcell fix at the front.
+        """PDE reinitialisation of every cell inside the margin, with the Russo-Smereka
+        subcell fix at the front.
 
         Information travels one cell per 1/dt iterations, so the default count corrects u
-        out to about two band widths beyond the front, which covers every cell the band can
-        reach before the next rebuild.
+        out to the band's width plus two cells beyond the front, which covers every cell
+        the band can reach before the next rebuild (a rebuild is asked for while the front
+        is still inside the band).
         """
         if iterations is None:
-            iterations = int(np.ceil(2 * (self.band_width + 1) / dt))
+            iterations = int(np.ceil((self.band_width + 2) / dt))
         g = self.grid
-        kernel = g.kernel("levelset.cl", "reinit_step")
+        kernel = g.kernel("levelset.cl", "reinit_step_list")
         self._phi0.assign(self.u.cur)
+        self.u.nxt.assign(self.u.cur)  # the frozen margin is the same in both buffers
         for _ in range(iterations):
-            g.launch(kernel, self.u.cur.data.data, self._phi0.data.data, self.u.nxt.data.data,
-                     g.scalar(dt))
-            self.u.nxt.fill_ghosts()
+            g.launch_list(kernel, self.active, self.u.cur.data.data, self._phi0.data.data,
+                          self.u.nxt.data.data, g.scalar(dt), np.int32(g.sx))
             self.u.swap()
 
     # ---- results -----------------------------------------------------------------------
+    def crop(self, padded: np.ndarray) -> np.ndarray:
+        return padded[..., MARGIN:-MARGIN, MARGIN:-MARGIN]
+
     def values(self) -> np.ndarray:
-        """u on the host, (ny, nx) float64."""
-        return self.u.cur.to_host()[0].astype(np.float64)
+        """u on the caller's (ny, nx) grid, float64."""
+        return self.crop(self.u.cur.to_host()[0]).astype(np.float64)
 
     def inside(self) -> np.ndarray:
         """The region u < 0 as a boolean (ny, nx) mask."""
-        return self.u.cur.to_host()[0] < 0
+        return self.values() < 0
 
     def band_cells(self) -> np.ndarray:
         """The band as a boolean (ny, nx) mask (for inspection and tests)."""
         g = self.grid
-        return g.interior(self.band_mask.get()[np.newaxis])[0] > 0
+        return self.crop(g.interior(self.band_mask.get()[np.newaxis])[0]) > 0

@@ -153,8 +153,9 @@ class MorphingTracker:
                           device=self.runtime, progress=False)
         return np.asarray(img, np.float64)
 
-    def _feature_field(self, image: np.ndarray, grid) -> Field:
-        f = Field.from_host(grid, image[np.newaxis])
+    def _feature_field(self, image: np.ndarray, ls: LevelSet) -> Field:
+        grid = ls.grid
+        f = Field.from_host(grid, ls.pad(image)[np.newaxis])
         if self.features == "edges":
             edges = Field.empty(grid)
             grid.launch(grid.kernel("levelset.cl", "gradient_magnitude"), f.data.data,
@@ -185,8 +186,6 @@ class MorphingTracker:
             g.launch_list(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
                           f2.data.data, ls.band_mask.data, ls.u.nxt.data.data,
                           pair.nxt.data.data, speed.data, hit.data, *consts)
-            ls.u.nxt.fill_ghosts()
-            pair.nxt.fill_ghosts()
             ls.u.swap()
             pair.swap()
             iterations += 1
@@ -214,8 +213,8 @@ class MorphingTracker:
         prepared_prev = self.prepared(0)
         for t in range(1, len(self.frames)):
             prepared = self.prepared(t)
-            f1 = self._feature_field(prepared_prev, ls.grid)
-            f2 = self._feature_field(prepared, ls.grid)
+            f1 = self._feature_field(prepared_prev, ls)
+            f2 = self._feature_field(prepared, ls)
             ls.rebuild()
             rebuilds0 = ls.rebuilds
             iterations, converged = self._morph(ls, f1, f2)

@@ -50,13 +50,18 @@ inline REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, co
 // ---- narrow band -----------------------------------------------------------------------
 
 // band = 1 where |u| < w - 1 (inner band), 2 where w - 1 <= |u| < w (the band's edge
-// ring), 0 elsewhere. Ghost entries of `band` are never written (kept 0 by the host).
+// ring), 0 elsewhere and in the outer `margin` cells of the interior, which stay frozen
+// (they hold edge-replicated data, so band stencils never reach the ghosts and no ghost
+// refresh is needed between steps). Ghost entries of `band` are never written.
 __kernel void mark_band(__global const REAL* restrict u, __global uchar* restrict band,
-                        const REAL w, GRID_ARGS)
+                        const REAL w, const int margin, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
+        const int cell = i % plane;
+        const int x = cell % sx - G, y = cell / sx - G;
+        const int movable = (x >= margin) & (x < nx - margin) & (y >= margin) & (y < ny - margin);
         const REAL a = fabs(u[i]);
-        band[i] = (a < w) ? ((a < w - 1) ? 1 : 2) : 0;
+        band[i] = (movable && a < w) ? ((a < w - 1) ? 1 : 2) : 0;
     }
 }
 

@@ -45,9 +45,14 @@ def upwind_norm(p, v):
     return np.sqrt(godunov_axis(dmx, dpx, v) + godunov_axis(dmy, dpy, v))
 
 
-def mark_band(u, w):
+def mark_band(u, w, margin=0):
     a = np.abs(u)
-    return np.where(a < w, np.where(a < w - 1, 1, 2), 0).astype(np.uint8)
+    band = np.where(a < w, np.where(a < w - 1, 1, 2), 0).astype(np.uint8)
+    if margin:
+        frozen = np.ones(u.shape, bool)
+        frozen[margin:-margin, margin:-margin] = False
+        band[frozen] = 0
+    return band
 
 
 def reinit_step(p, p0, dt):
