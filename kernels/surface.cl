@@ -449,3 +449,109 @@ __kernel void reinit_step(__global const REAL* restrict phi, __global REAL* rest
         }
     }
 }
+
+// ---- principal curvature directions ---------------------------------------------------------
+// Hessian of psi by central differences, restricted to the tangent plane spanned by an
+// orthonormal pair (t1, t2) orthogonal to N; the 2x2 form's eigenvectors are the principal
+// directions and its eigenvalues the principal curvatures (1/R for a sphere of radius R, psi
+// negative inside). For a distance function the directions are constant along the normals,
+// so every band cell gets its own values, no interpolation. Outputs per band entry k: the major direction (larger curvature) in
+// dir[0..2][k], the minor in dir[3..5][k] and the curvatures in curv[0..1][k] (world units).
+__kernel void principal_directions(__global const REAL* restrict psi, const REAL inv_h,
+                                   __global REAL* restrict dir, __global REAL* restrict curv,
+                                   const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const vec3r g = psi_normal(psi, i, sx, sxy);
+        const REAL inv = RSQRT(g.x * g.x + g.y * g.y + g.z * g.z + (REAL)1e-30);
+        const REAL nx = g.x * inv, ny = g.y * inv, nz = g.z * inv;
+        const REAL c = psi[i];
+        const REAL hxx = psi[i + 1] - 2 * c + psi[i - 1];
+        const REAL hyy = psi[i + sx] - 2 * c + psi[i - sx];
+        const REAL hzz = psi[i + sxy] - 2 * c + psi[i - sxy];
+        const REAL hxy = (REAL)0.25 * (psi[i + 1 + sx] - psi[i - 1 + sx] - psi[i + 1 - sx] + psi[i - 1 - sx]);
+        const REAL hxz = (REAL)0.25 * (psi[i + 1 + sxy] - psi[i - 1 + sxy] - psi[i + 1 - sxy] + psi[i - 1 - sxy]);
+        const REAL hyz = (REAL)0.25 * (psi[i + sx + sxy] - psi[i - sx + sxy] - psi[i + sx - sxy] + psi[i - sx - sxy]);
+        // t1 = N x e, e the axis least aligned with N; t2 = N x t1
+        REAL ex = 0, ey = 0, ez = 0;
+        if (fabs(nx) <= fabs(ny) && fabs(nx) <= fabs(nz)) ex = 1;
+        else if (fabs(ny) <= fabs(nz)) ey = 1;
+        else ez = 1;
+        REAL ax = ny * ez - nz * ey, ay = nz * ex - nx * ez, az = nx * ey - ny * ex;
+        const REAL ia = RSQRT(ax * ax + ay * ay + az * az);
+        ax *= ia; ay *= ia; az *= ia;
+        const REAL bx = ny * az - nz * ay, by = nz * ax - nx * az, bz = nx * ay - ny * ax;
+        // H t for t = a and t = b
+        const REAL hax = hxx * ax + hxy * ay + hxz * az, hay = hxy * ax + hyy * ay + hyz * az,
+                   haz = hxz * ax + hyz * ay + hzz * az;
+        const REAL hbx = hxx * bx + hxy * by + hxz * bz, hby = hxy * bx + hyy * by + hyz * bz,
+                   hbz = hxz * bx + hyz * by + hzz * bz;
+        const REAL p = ax * hax + ay * hay + az * haz;
+        const REAL q = ax * hbx + ay * hby + az * hbz;
+        const REAL r = bx * hbx + by * hby + bz * hbz;
+        const REAL mean = (REAL)0.5 * (p + r);
+        const REAL dev = SQRT(SQR((REAL)0.5 * (p - r)) + q * q);
+        const REAL theta = (REAL)0.5 * atan2(2 * q, p - r);
+        const REAL ct = cos(theta), st = sin(theta);
+        dir[k] = ct * ax + st * bx;
+        dir[nlist + k] = ct * ay + st * by;
+        dir[2 * nlist + k] = ct * az + st * bz;
+        dir[3 * nlist + k] = -st * ax + ct * bx;
+        dir[4 * nlist + k] = -st * ay + ct * by;
+        dir[5 * nlist + k] = -st * az + ct * bz;
+        // curvature = tangential Hessian / |grad psi| in world units: second differences
+        // are h^2 psi'' and |grad psi| = 1 / (inv h), so the factor is inv / h
+        const REAL scale = inv * inv_h;
+        // a distance function's level set at distance d = psi has curvatures k / (1 + d k):
+        // undo that so every band cell carries the surface's own curvatures
+        const REAL k1 = (mean + dev) * scale, k2 = (mean - dev) * scale;
+        curv[k] = k1 / (1 - c * k1);
+        curv[nlist + k] = k2 / (1 - c * k2);
+    }
+}
+
+// ---- reaction-diffusion (Turk), eqs. (4.12)-(4.14), in grid units ---------------------------
+// a += dt (s (16 - a b) + Da div(P grad a)), b += dt (s (a b - b - beta) + Db div(P grad b)),
+// b clamped at >= 0. With ALONG, a diffuses along the tangent field d only (4.14).
+inline vec3r along_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
+                        __global const REAL* restrict dir, const int j, const int ex,
+                        const int ey, const int ez, const int sx, const int sxy, const int plane)
+{
+    const vec3r w = heat_flux(u, psi, j, ex, ey, ez, sx, sxy);
+    const REAL dx = dir[j], dy = dir[plane + j], dz = dir[2 * plane + j];
+    const REAL a = dx * w.x + dy * w.y + dz * w.z;
+    vec3r out;
+    out.x = a * dx;
+    out.y = a * dy;
+    out.z = a * dz;
+    return out;
+}
+
+__kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict v,
+                        __global const REAL* restrict psi, __global const REAL* restrict dir,
+                        __global const REAL* restrict beta, const REAL dt, const REAL da,
+                        const REAL db, const REAL s, const int ex, const int ey, const int ez,
+                        const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    __global const REAL* ub = u + plane;
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const REAL a = u[i], b = ub[i];
+#if ALONG
+        const vec3r wc = along_flux(u, psi, dir, i, ex, ey, ez, sx, sxy, plane);
+        const vec3r wx = along_flux(u, psi, dir, i - ex, ex, ey, ez, sx, sxy, plane);
+        const vec3r wy = along_flux(u, psi, dir, i - ey, ex, ey, ez, sx, sxy, plane);
+        const vec3r wz = along_flux(u, psi, dir, i - ez, ex, ey, ez, sx, sxy, plane);
+        const REAL diff_a = ONE_SIDED_SIGN(ex) * (wc.x - wx.x) + ONE_SIDED_SIGN(ey) * (wc.y - wy.y) +
+                            ONE_SIDED_SIGN(ez) * (wc.z - wz.z);
+#else
+        const REAL diff_a = heat_div(u, psi, i, ex, ey, ez, sx, sxy);
+#endif
+        const REAL diff_b = heat_div(ub, psi, i, ex, ey, ez, sx, sxy);
+        v[i] = a + dt * (s * (16 - a * b) + da * diff_a);
+        v[plane + i] = fmax((REAL)0, b + dt * (s * (a * b - b - beta[i]) + db * diff_b));
+    }
+}

@@ -268,3 +268,67 @@ def diffuse_along(surf, u, direction, t, dt=None, *, alternate=True, progress=No
     d = np.where(norm > 0, d / np.where(norm > 0, norm, 1), 0)
     return _run(surf, u, t, dt, "along", p=2, direction=d, alternate=alternate,
                 progress=progress)[0]
+
+
+def principal_directions(surf):
+    """Principal curvature directions and curvatures of the surface, extended along normals.
+
+    Returns (major, minor, curvatures): two (3, nz, ny, nx) unit tangent fields (major = the
+    larger curvature) and a (2, nz, ny, nx) array (larger, smaller), computed at every cell of
+    the extension band (constant along normals for a distance function). Directions are
+    defined up to sign, which the flows along them ignore (the flux (d.Pv)d is even in d);
+    sample them at nodes rather than interpolating across sign flips. Zeros off the band."""
+    g, q = surf.grid, surf.runtime.queue
+    band = surf.ext_band
+    n = max(band.n, 1)
+    dirs = cla.empty(q, (6, n), g.dtype)
+    curv = cla.empty(q, (2, n), g.dtype)
+    g.launch_list(g.kernel("principal_directions"), band, surf.psi_dev.data,
+                  g.scalar(1 / surf.spacing), dirs.data, curv.data, *g.strides())
+    idx = band.indices.get()[: band.n]
+    vol = np.zeros((8, g.volume))
+    vol[:6, idx] = dirs.get()[:, : band.n]
+    vol[6:, idx] = curv.get()[:, : band.n]
+    vol = g.interior(vol.reshape((8,) + g.padded_shape))
+    return vol[0:3].copy(), vol[3:6].copy(), vol[6:8].copy()
+
+
+TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
+THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
+
+
+def reaction_diffusion(surf, iterations, *, direction=None, dt=1.0, seed=0, params=None,
+                       alternate=True, progress=None, state=None):
+    """Turk's two-chemical reaction-diffusion on the surface (4.12, 4.13; 4.14 with a tangent
+    field `direction`), in grid units as Turk's own code: dt per iteration, diffusion rates
+    in cells^2 per unit time, so patterns have the same size in cells on any surface.
+    Defaults: Turk's rates (TURK); THESIS_FIG_4_7 gives Figure 4.7's numbers.
+    Returns the (2, nz, ny, nx) chemicals (a, b); pass them back as `state` to continue."""
+    p = dict(TURK if params is None else params)
+    limit = 1.0 / (6.0 * max(p["da"], p["db"]))
+    if dt > limit * (1 + 1e-9):
+        raise InputError(
+            f"dt={dt:g} is above the reaction-diffusion stability limit {limit:g} for "
+            f"diffusion rate {max(p['da'], p['db']):g}; use dt <= {limit:g}"
+        )
+    rng = np.random.default_rng(seed)
+    beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
+    start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)
+    flow = BandFlow(surf, start)
+    g = surf.grid
+    beta_dev = g.upload(beta[None])
+    dir_dev = surf.psi_dev
+    if direction is not None:
+        d = np.asarray(direction, dtype=np.float64)
+        if d.shape != (3,) + surf.shape:
+            raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
+        norm = np.sqrt((d**2).sum(axis=0))
+        dir_dev = g.upload(d / np.where(norm > 0, norm, 1))
+    kernel = g.kernel("turk_step", ALONG=int(direction is not None))
+    for n in _progress(progress, int(iterations), "reaction-diffusion"):
+        offsets = _offsets(g, _ALL_SIDES[n % 8] if alternate else 0)
+        g.launch_list(kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
+                      dir_dev.data, beta_dev.data, g.scalar(dt), g.scalar(p["da"]),
+                      g.scalar(p["db"]), g.scalar(p["s"]), *offsets, *g.strides())
+        flow.after_step()
+    return flow.result()

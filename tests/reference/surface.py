@@ -233,3 +233,69 @@ def reinit_step(phi_pad, phi0_pad, band, r, h):
     near_val = c - r * (s * np.abs(c) - p0 / g)
     far_val = c - r * s * (np.sqrt(gsum) / h - 1) * h
     return np.where(near, near_val, far_val)
+
+
+def principal_directions(psi_pad, band, inv_h):
+    """(dirs (6, n), curv (2, n)) as the principal_directions kernel."""
+    pz, py, px = psi_pad.shape[-3:]
+    sx, sxy = px, px * py
+    f = psi_pad.ravel().astype(np.float64)
+    i = band
+    g = np.stack(_normal(f, i, sx, sxy))
+    inv = 1 / np.sqrt((g**2).sum(axis=0) + 1e-30)
+    n = g * inv
+    c = f[i]
+    H = np.empty((3, 3, i.size))
+    for a, sa in enumerate((1, sx, sxy)):
+        H[a, a] = f[i + sa] - 2 * c + f[i - sa]
+        for b, sb in enumerate((1, sx, sxy)):
+            if b > a:
+                H[a, b] = H[b, a] = 0.25 * (f[i + sa + sb] - f[i - sa + sb] - f[i + sa - sb] + f[i - sa - sb])
+    absn = np.abs(n)
+    e = np.zeros_like(n)
+    pick = np.where((absn[0] <= absn[1]) & (absn[0] <= absn[2]), 0, np.where(absn[1] <= absn[2], 1, 2))
+    e[pick, np.arange(i.size)] = 1
+    ta = np.cross(n.T, e.T).T
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ta /= np.sqrt((ta**2).sum(axis=0))
+    tb = np.cross(n.T, ta.T).T
+    Ha = np.einsum("abk,bk->ak", H, ta)
+    Hb = np.einsum("abk,bk->ak", H, tb)
+    p = (ta * Ha).sum(axis=0)
+    q = (ta * Hb).sum(axis=0)
+    r = (tb * Hb).sum(axis=0)
+    mean = 0.5 * (p + r)
+    dev = np.sqrt((0.5 * (p - r)) ** 2 + q**2)
+    theta = 0.5 * np.arctan2(2 * q, p - r)
+    ct, st = np.cos(theta), np.sin(theta)
+    dirs = np.concatenate([ct * ta + st * tb, -st * ta + ct * tb])
+    scale = inv * inv_h
+    k1, k2 = (mean + dev) * scale, (mean - dev) * scale
+    return dirs, np.stack([k1 / (1 - c * k1), k2 / (1 - c * k2)])
+
+
+def turk_step(u_pad, psi_pad, band, beta_pad, dt, da, db, s, offsets, direction=None):
+    """New (a, b) band values of one Turk reaction-diffusion step."""
+    nc, pz, py, px = u_pad.shape
+    sx, sxy, plane = px, px * py, px * py * pz
+    p = psi_pad.ravel().astype(np.float64)
+    fa = u_pad[0].ravel().astype(np.float64)
+    fb = u_pad[1].ravel().astype(np.float64)
+
+    def div(f, along):
+        def flux(j):
+            w = heat_flux(f, p, j, offsets, sx, sxy, False)
+            if not along:
+                return w
+            d = [direction.ravel()[k * plane + j] for k in range(3)]
+            a = d[0] * w[0] + d[1] * w[1] + d[2] * w[2]
+            return [a * d[0], a * d[1], a * d[2]]
+
+        wc = flux(band)
+        return sum(np.sign(e) * (wc[k] - flux(band - e)[k]) for k, e in enumerate(offsets))
+
+    a, b = fa[band], fb[band]
+    beta = beta_pad.ravel()[band]
+    new_a = a + dt * (s * (16 - a * b) + da * div(fa, direction is not None))
+    new_b = np.maximum(0, b + dt * (s * (a * b - b - beta) + db * div(fb, False)))
+    return np.stack([new_a, new_b])
