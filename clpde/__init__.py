@@ -1,6 +1,7 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
 from .imagedata import InputError
+from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
 from .track import MorphingTracker, track

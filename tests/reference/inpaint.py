@@ -29,7 +29,7 @@ def transport_rate(p, rot=1.0, grad_eps2=1e-10, scaling="none"):
     down = hi(xb, 0) ** 2 + lo(xf, 0) ** 2 + hi(yb, 0) ** 2 + lo(yf, 0) ** 2
     rate = beta * np.sqrt(np.where(beta > 0, up, down))
     if scaling == "quartic-root":
-        rate = np.sign(rate) * np.abs(rate) ** 0.25
+        rate = np.sign(rate) * np.abs(rate) ** 0.25 / np.sqrt(255.0)  # appendix A's 8-bit scale
     return rate
 
 

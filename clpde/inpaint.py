@@ -1,0 +1,539 @@
+"""Image inpainting by transport of smoothness along isophotes (thesis chapter 3, appendix A).
+
+Inside the region Omega to fill, the image evolves by eqs. (3.5)-(3.11),
+
+    I_t = (delta L . N / |N|) |grad I|_limited,   L = Lap I,   N = grad-perp I,
+
+so that the Laplacian (the "smoothness") is carried along the isophotes arriving at the
+border of Omega; every A = 15 such steps, B = 2 steps of anisotropic diffusion (3.4),
+I_t = g_eps kappa |grad I|, keep the isophotes from crossing. At the steady state the
+Laplacian is constant along isophotes.
+
+How this implementation runs it (all on the OpenCL device):
+
+- The data is scaled to [0, 1] (the transport term grows with the square of the intensity).
+- The whole image is first smoothed by a few steps of anisotropic diffusion, so that noise
+  does not steer the isophote directions (section 3.3.3).
+- Start inside Omega: the harmonic (diffusion) fill on the coarsest level, i.e. the steady
+  state of the heat equation in Omega with the known pixels as boundary values; each finer
+  level starts from the upsampled result of the coarser one. The thesis reports the result to
+  be robust to the start; a smooth one that already matches the border values cuts the
+  number of steps several-fold compared with a constant start.
+- Three index lists, built on the device once per level, restrict the work to
+  Omega-epsilon: the Laplacian is computed on Omega grown by one cell, the transport updates
+  Omega only, the diffusion runs where g_eps > 0 (g_eps = 1 in Omega, falling as a cosine to
+  0 at distance epsilon from Omega). Known pixels next to Omega feed the boundary.
+- Every `check_every` cycles the largest change inside Omega is reduced on the device; the
+  run stops once it falls below `tol` (or after `max_steps`).
+- Multiresolution: Omega's thickness picks the number of levels (one for text and
+  scratches); the converged coarse level, upsampled, starts the next one.
+- The output equals the input bit for bit outside the mask.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyopencl.array as cla
+from scipy import ndimage
+from tqdm.auto import tqdm
+
+from . import multiresolution as mr
+from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
+from .fields import Field, Grid, PingPong, index_list
+from .imagedata import ImageLayout, InputError, as_image, check_channel_axis, compute_dtype
+from .runtime import ClpdeError, get_runtime
+
+SCALINGS = ("none", "quartic-root")
+COLOUR_MODELS = ("channels", "rho-phi-psi")
+ROTATIONS = ("ccw", "cw")
+FILLS = ("diffusion", "biharmonic", "mean", "zero")
+
+
+@dataclass
+class InpaintState:
+    """One intermediate state: the whole image (in the input's layout and dtype)."""
+
+    level: int  # 0 is the finest
+    step: int  # steps taken on this level so far
+    image: np.ndarray
+    change: float | None = None  # largest change in Omega over the last check interval
+
+
+@dataclass
+class InpaintInfo:
+    """What a run did. `steps` counts transport plus diffusion steps on the finest level."""
+
+    steps: int
+    converged: bool
+    levels: int
+    steps_per_level: list = field(default_factory=list)  # fine to coarse
+    omega_pixels: int = 0
+    band_pixels: int = 0
+    seconds: float = 0.0
+    snapshots: list = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class InpaintParams:
+    dt: float = 0.1
+    transport_steps: int = 15  # A
+    diffusion_steps: int = 2  # B
+    diffusion_dt: float = 0.1  # the thesis' speed; appendix A's code uses 0.2
+    epsilon: float = 3.0
+    presmooth: int = 1
+    scaling: str = "none"
+    rotation: str = "ccw"
+    max_steps: int = 3000
+    tol: float = 1e-3
+    check_every: int = 2  # cycles of A + B steps
+    fill: str = "diffusion"
+    keep_band: bool = True
+
+
+# ---------------------------------------------------------------------------------------
+# Input handling
+
+
+def _as_mask(mask, shape_hw) -> np.ndarray:
+    m = np.asarray(mask)
+    if m.dtype != bool and not (np.issubdtype(m.dtype, np.number)):
+        raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = inpaint)")
+    if m.ndim == 3 and m.shape[-1] == 1:
+        m = m[..., 0]
+    if m.shape != tuple(shape_hw):
+        raise InputError(
+            f"mask shape {m.shape} does not match the image's height and width {tuple(shape_hw)}; "
+            "give a (rows, columns) mask of the same size as the image"
+        )
+    if np.issubdtype(m.dtype, np.floating) and not np.isfinite(m).all():
+        raise InputError("mask contains NaN or infinite values; use 0 for keep and 1 for inpaint")
+    return m != 0
+
+
+def _prepare(image, mask, channel_axis, alpha):
+    """(data (nc, ny, nx) in [0, 1], omega, layout, channel_data_axis_info)."""
+    array = as_image(image, allow_nan=True)
+    axis = check_channel_axis(array.ndim, channel_axis)
+    planes = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
+    finite = np.isfinite(planes).all(axis=0) if np.issubdtype(array.dtype, np.floating) else None
+    if mask is None:
+        if finite is None:
+            raise InputError(
+                f"mask=None fills the NaN pixels of a float image, but this image is {array.dtype}; "
+                "pass a mask (nonzero where to inpaint)"
+            )
+        omega = ~finite
+    else:
+        omega = _as_mask(mask, planes.shape[1:])
+        if finite is not None and not finite[~omega].all():
+            raise InputError(
+                f"image has {int((~finite[~omega]).sum())} NaN or infinite pixels outside the mask; "
+                "include them in the mask, or pass mask=None to fill every NaN pixel"
+            )
+    nc = planes.shape[0]
+    if alpha is None:
+        alpha = axis is not None and nc == 4
+    if alpha and nc < 2:
+        raise InputError("alpha=True needs at least two channels (the last one is the alpha)")
+    known = ~omega
+    if np.issubdtype(array.dtype, np.integer):
+        info = np.iinfo(array.dtype)
+        offset, scale = float(info.min), float(info.max) - float(info.min)
+    else:
+        values = planes[:, known] if known.any() else planes[np.isfinite(planes)]
+        lo, hi = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
+        offset, scale = lo, (hi - lo) if hi > lo else 1.0
+    data = (np.where(np.isfinite(planes), planes, 0).astype(np.float64) - offset) / scale
+    layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
+    return array, data, omega, layout, bool(alpha)
+
+
+def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
+    def positive(name, value):
+        if not np.isfinite(value) or value <= 0:
+            raise InputError(f"{name} must be a positive number, not {value}")
+
+    positive("dt", p.dt)
+    positive("diffusion_dt", p.diffusion_dt)
+    if p.diffusion_dt > 0.25:
+        raise InputError(
+            f"diffusion_dt={p.diffusion_dt:g} is beyond the stability limit 0.25 of the explicit "
+            "curvature diffusion; use diffusion_dt <= 0.25"
+        )
+    if p.epsilon < 2:
+        raise InputError(
+            f"epsilon={p.epsilon:g} is too small: the transport stencil reaches two pixels past "
+            "Omega, so epsilon must be at least 2"
+        )
+    for name in ("transport_steps", "diffusion_steps", "presmooth", "max_steps", "check_every"):
+        v = getattr(p, name)
+        low = 1 if name in ("transport_steps", "check_every") else 0
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
+            raise InputError(f"{name} must be an integer >= {low}, not {v!r}")
+    if not np.isfinite(p.tol) or p.tol < 0:
+        raise InputError(f"tol must be a number >= 0, not {p.tol}")
+    if p.scaling not in SCALINGS:
+        raise InputError(f"scaling must be one of {', '.join(SCALINGS)}, not {p.scaling!r}")
+    if p.rotation not in ROTATIONS:
+        raise InputError(f"rotation must be 'ccw' or 'cw', not {p.rotation!r}")
+    if p.fill not in FILLS:
+        raise InputError(f"fill must be one of {', '.join(FILLS)}, not {p.fill!r}")
+    if colour not in COLOUR_MODELS:
+        raise InputError(f"colour must be one of {', '.join(COLOUR_MODELS)}, not {colour!r}")
+    if colour == "rho-phi-psi" and ncolour != 3:
+        raise InputError(
+            f"colour='rho-phi-psi' needs 3 colour channels (R, G, B), the image has {ncolour}; "
+            "use colour='channels'"
+        )
+
+
+# ---------------------------------------------------------------------------------------
+# One resolution level on the device
+
+
+class LevelSolver:
+    """The inpainting loop on one resolution level; the state stays on the device."""
+
+    def __init__(self, runtime, data: np.ndarray, omega: np.ndarray, params: InpaintParams,
+                 dtype=np.float32):
+        self.p = params
+        nc, ny, nx = data.shape
+        self.grid = g = Grid(runtime, nx, ny, nc, 1, np.dtype(dtype))
+        self.q = runtime.queue
+        self.omega = omega
+
+        dist = ndimage.distance_transform_edt(~omega)  # 0 in Omega
+        weight = np.where(dist < params.epsilon, 0.5 * (1 + np.cos(np.pi * dist / params.epsilon)), 0)
+        near = ndimage.binary_dilation(omega, np.ones((3, 3), bool)) if omega.any() else omega
+        band = weight > 0
+        self.omega_list = index_list(g, omega)
+        self.near_list = index_list(g, near)
+        self.band_list = index_list(g, band)
+        # The known part of the band: diffusion may move it during a cycle (g_eps > 0 there),
+        # but it is reset afterwards, so pixels outside Omega keep their values.
+        self.ring_list = index_list(g, band & ~omega)
+
+        def touches_border(m):
+            return bool(m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any())
+
+        # Ghosts only matter when a list reaches the image border; otherwise skip refilling.
+        self.ghosts = touches_border(band) or touches_border(near)
+        self.pair = PingPong(Field.from_host(g, data))
+        self.lap = Field.from_host(g, np.zeros_like(data))
+        self.prev = self.pair.cur.copy()
+        self.known = self.pair.cur.copy()
+        self.weight = Field.from_host(Grid(runtime, nx, ny, 1, 1, g.dtype), weight[None])
+
+        k = lambda name, **d: g.kernel("inpaint.cl", name, **d)  # noqa: E731
+        self.k_lap = k("inpaint_laplacian")
+        self.k_transport = k("inpaint_transport", SCALING=SCALINGS.index(params.scaling))
+        self.k_diffusion = k("inpaint_diffusion")
+        self.k_fill = k("inpaint_fill")
+        self.k_copy = k("inpaint_copy")
+        self.k_change = k("inpaint_max_change")
+        self.sx = np.int32(g.sx)
+        self.rot = g.scalar(1.0 if params.rotation == "ccw" else -1.0)
+        self.steps = 0
+
+    # -- building blocks ---------------------------------------------------------------
+    def _finish_step(self, field: Field) -> None:
+        if self.ghosts:
+            field.fill_ghosts()
+        self.pair.swap()
+
+    def _sync(self, lst) -> None:
+        """Make nxt equal cur on a list, so the pair agrees everywhere."""
+        self.grid.launch_list(self.k_copy, lst, self.pair.cur.data.data, self.pair.nxt.data.data)
+
+    def transport_step(self) -> None:
+        g, p = self.grid, self.p
+        g.launch_list(self.k_lap, self.near_list, self.pair.cur.data.data, self.lap.data.data, self.sx)
+        if self.ghosts:
+            self.lap.fill_ghosts()
+        g.launch_list(self.k_transport, self.omega_list, self.pair.cur.data.data,
+                      self.lap.data.data, self.pair.nxt.data.data, g.scalar(p.dt), self.rot,
+                      g.scalar(1e-10), self.sx)
+        self._finish_step(self.pair.nxt)
+
+    def diffusion_step(self) -> None:
+        g = self.grid
+        g.launch_list(self.k_diffusion, self.band_list, self.pair.cur.data.data,
+                      self.pair.nxt.data.data, self.weight.data.data, g.scalar(self.p.diffusion_dt),
+                      g.scalar(1e-10), self.sx)
+        self._finish_step(self.pair.nxt)
+
+    def presmooth(self, steps: int) -> None:
+        """Anisotropic diffusion of the whole image (planar.cl's curvature step)."""
+        g = self.grid
+        kernel = g.kernel("planar.cl", "curvature_step")
+        for _ in range(steps):
+            g.launch(kernel, self.pair.cur.data.data, self.pair.nxt.data.data,
+                     self.pair.cur.data.data, g.scalar(self.p.diffusion_dt), g.scalar(1e-10))
+            self.pair.nxt.fill_ghosts()
+            self.pair.swap()
+        if steps:
+            self.pair.nxt.assign(self.pair.cur)
+        self.known.assign(self.pair.cur)
+
+    def harmonic_fill(self, iterations: int) -> None:
+        for _ in range(iterations):
+            self.grid.launch_list(self.k_fill, self.omega_list, self.pair.cur.data.data,
+                                  self.pair.nxt.data.data, self.sx)
+            self._finish_step(self.pair.nxt)
+        self._sync(self.omega_list)
+
+    def max_change(self) -> float:
+        """Largest |cur - prev| in Omega (a device reduction; a few numbers come back)."""
+        g, lst = self.grid, self.omega_list
+        (gsize,), _, _ = g.runtime.list_launch(lst.n)
+        partial = cla.empty(self.q, (g.nc, gsize), g.dtype)
+        g.launch_list(self.k_change, lst, self.pair.cur.data.data, self.prev.data.data, partial.data)
+        return float(partial.get().max())
+
+    def cycle(self) -> None:
+        """A transport steps, then B diffusion steps."""
+        for _ in range(self.p.transport_steps):
+            self.transport_step()
+        for _ in range(self.p.diffusion_steps):
+            self.diffusion_step()
+        if self.p.diffusion_steps:
+            if self.p.keep_band:
+                self.grid.launch_list(self.k_copy, self.ring_list, self.known.data.data,
+                                      self.pair.cur.data.data)
+                if self.ghosts:
+                    self.pair.cur.fill_ghosts()
+            self._sync(self.band_list)
+        self.steps += self.p.transport_steps + self.p.diffusion_steps
+
+    def run(self, max_steps: int, tol: float):
+        """Cycle until converged or max_steps; yields (steps, change) after every check."""
+        p = self.p
+        self.prev.assign(self.pair.cur)
+        cycles = 0
+        while self.steps < max_steps:
+            self.cycle()
+            cycles += 1
+            if cycles % p.check_every == 0:
+                change = self.max_change()
+                if not np.isfinite(change) or change > 1e3:
+                    raise ClpdeError(
+                        f"the inpainting diverged after {self.steps} steps (change {change:g}); "
+                        "use a smaller dt or more diffusion_steps"
+                    )
+                yield self.steps, change
+                if change < tol:
+                    return
+                self.grid.launch_list(self.k_copy, self.omega_list, self.pair.cur.data.data,
+                                      self.prev.data.data)
+        yield self.steps, None
+
+    def result(self) -> np.ndarray:
+        return self.pair.cur.to_host().astype(np.float64)
+
+
+# ---------------------------------------------------------------------------------------
+# The public object form and function
+
+
+class Inpainting:
+    """Inpainting whose intermediate states can be watched.
+
+    >>> job = Inpainting(image, mask, channel_axis=-1)
+    >>> for state in job.states(every=100):
+    ...     show(state.image)
+    >>> out = job.result
+
+    The keyword arguments are those of `inpaint`.
+    """
+
+    def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
+                 levels=None, device=None, precision=None, progress=None, **params):
+        unknown = set(params) - set(InpaintParams.__dataclass_fields__)
+        if unknown:
+            raise InputError(f"unknown inpainting option(s): {', '.join(sorted(unknown))}")
+        self.p = InpaintParams(**params)
+        self.image, data, self.mask, self.layout, self.alpha = _prepare(image, mask, channel_axis, alpha)
+        ncolour = data.shape[0] - int(self.alpha)
+        _check_params(self.p, ncolour, colour)
+        if self.mask.all():
+            raise InputError(
+                "the mask covers every pixel, so nothing is known to inpaint from; "
+                "mark only the damaged region"
+            )
+        if levels is not None and (isinstance(levels, bool) or not isinstance(levels, (int, np.integer))
+                                   or levels < 1):
+            raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
+        self.colour = colour
+        self.data = data
+        self.ncolour = ncolour
+        self.levels = levels
+        self.device = device
+        self.dtype = compute_dtype(None, precision)
+        self.progress = progress
+        self.result = None
+        self.info = None
+
+    # -- conversions between the user's image and the solved channels -----------------
+    def _to_model(self, data):
+        colour = data[: self.ncolour]
+        return rgb_to_rho_phi_psi(colour) if self.colour == "rho-phi-psi" else colour
+
+    def _to_image(self, solved):
+        colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
+        data = self.data.copy()
+        data[: self.ncolour] = colour
+        restored = self.layout.restore(data)
+        # Bit-exact outside the mask (and in the alpha channel): only Omega's colour
+        # channels are taken from the solution.
+        out = self.image.copy()
+        axis = self.layout.channel_axis
+        if axis is None:
+            out[self.mask] = restored[self.mask]
+        else:
+            out_v, res_v = np.moveaxis(out, axis, -1), np.moveaxis(restored, axis, -1)
+            out_v[self.mask, : self.ncolour] = res_v[self.mask, : self.ncolour]
+        return out
+
+    def states(self, every: int | None = None):
+        """Run to the end, yielding an InpaintState at the start of the finest level, every
+        `every` steps there (rounded to whole check intervals) and at the end. Coarser
+        levels run without yielding. Afterwards `result` and `info` are set."""
+        start = time.perf_counter()
+        p = self.p
+        if not self.mask.any():
+            self.result = self.image.copy()
+            self.info = InpaintInfo(0, True, 0)
+            yield InpaintState(0, 0, self.result)
+            return
+        runtime = get_runtime(self.device)
+        model = self._to_model(self.data)
+        nlevels = self.levels if self.levels is not None else mr.auto_levels(self.mask)
+        levels = mr.pyramid(model, self.mask, nlevels)
+        steps_per_level = [0] * len(levels)
+        converged = False
+        bar = tqdm(total=p.max_steps * len(levels), desc="clpde inpaint", unit="step",
+                   disable=None if self.progress is None else not self.progress)
+        solution = None
+        with bar:
+            for level in range(len(levels) - 1, -1, -1):
+                data, omega = levels[level]
+                data = data.copy()
+                if solution is None:
+                    start_values = self._start_values(data, omega)
+                else:
+                    start_values = mr.upsample(solution, omega.shape)
+                data[:, omega] = start_values[:, omega]
+                solver = LevelSolver(runtime, data, omega, p, self.dtype)
+                solver.presmooth(p.presmooth)  # also records the known values (solver.known)
+                if solution is None and p.fill == "diffusion":
+                    width = mr.hole_half_width(omega)
+                    solver.harmonic_fill(int(np.clip(4 * width * width, 20, 4000)))
+                finest = level == 0
+                if finest and every:
+                    yield InpaintState(0, 0, self._to_image(solver.result()))
+                last_yield = 0
+                done = 0
+                for steps, change in solver.run(p.max_steps, p.tol):
+                    bar.update(steps - done)
+                    done = steps
+                    if change is not None and change < p.tol:
+                        converged = finest
+                    if finest and every and steps - last_yield >= every:
+                        last_yield = steps
+                        yield InpaintState(0, steps, self._to_image(solver.result()), change)
+                bar.update(p.max_steps - done)
+                steps_per_level[level] = solver.steps
+                solution = solver.result()
+                if finest:
+                    self.info = InpaintInfo(
+                        steps=solver.steps, converged=converged, levels=len(levels),
+                        steps_per_level=steps_per_level, omega_pixels=int(omega.sum()),
+                        band_pixels=solver.band_list.n,
+                    )
+        self.result = self._to_image(solution)
+        self.info.seconds = time.perf_counter() - start
+        if every:
+            yield InpaintState(0, self.info.steps, self.result)
+
+    def _start_values(self, data, omega):
+        known = ~omega
+        fill = self.p.fill
+        if fill == "mean":
+            return np.broadcast_to(data[:, known].mean(axis=1)[:, None, None], data.shape)
+        if fill == "zero":
+            return np.zeros_like(data)
+        if fill == "biharmonic":
+            from skimage.restoration import inpaint_biharmonic
+
+            return np.stack([inpaint_biharmonic(c, omega) for c in data])
+        # "diffusion": begin the Jacobi iterations from the nearest known value, which is
+        # already close to the harmonic fill of a thin region.
+        _, (iy, ix) = ndimage.distance_transform_edt(omega, return_indices=True)
+        return data[:, iy, ix]
+
+    def run(self) -> np.ndarray:
+        for _ in self.states():
+            pass
+        return self.result
+
+
+def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
+            diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
+            scaling="none", rotation="ccw", max_steps=3000, tol=1e-3, check_every=2,
+            levels=None, colour="channels", alpha=None, fill="diffusion", keep_band=True, device=None,
+            precision=None, progress=None, snapshots=None, return_info=False):
+    """Fill the masked region of an image by continuing the isophotes that reach it.
+
+    image: 2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8,
+        uint16, other integers or floats of any range (scaled to [0, 1] internally).
+    mask: bool or numeric (rows, columns) array, nonzero where to inpaint. None fills the
+        NaN pixels of a float image.
+    dt, transport_steps, diffusion_steps: the time step and the A / B schedule (0.1, 15, 2).
+    diffusion_dt: time step of the interleaved anisotropic diffusion (<= 0.25; appendix A's
+        code uses 0.2, the text 0.1).
+    epsilon: width of the band Omega-epsilon around Omega (>= 2 pixels).
+    presmooth: steps of anisotropic diffusion of the whole image before the loop.
+    scaling: 'none' uses eq. (3.6) as printed; 'quartic-root' applies sign(I_t) |I_t|^(1/4)
+        to the transport update as appendix A's code does, on its 0..255 scale. The root
+        keeps faint structures moving but never settles (the largest change stays near
+        dt |I_t|^(1/4)), so with it the run usually ends at max_steps.
+    rotation: 'ccw' or 'cw' rotation of the gradient (the steady state is the same).
+    max_steps, tol, check_every: stop after max_steps steps per level, or once the largest
+        change inside Omega over check_every cycles of A + B steps is below tol (in [0, 1]
+        units), checked on the device.
+    levels: number of resolution levels; None picks it from the mask's thickness.
+    colour: 'channels' inpaints every channel independently; 'rho-phi-psi' inpaints the
+        luminance-chroma model of thesis Figure 3.7 (3 colour channels).
+    alpha: treat the last channel as alpha, which passes through untouched; None means yes
+        for 4-channel images.
+    fill: start inside Omega: 'diffusion' (harmonic fill), 'mean' or 'zero'.
+    keep_band: reset the known pixels of Omega-epsilon after each diffusion batch (True), or
+        let the diffusion keep smoothing them cycle after cycle (False).
+    snapshots: an integer N: also return intermediate states every N steps of the finest
+        level, as `(image, [InpaintState, ...])` (or in info.snapshots with return_info).
+    return_info: also return an InpaintInfo (steps taken, whether it converged, ...).
+
+    The output has the input's shape and dtype, and equals it bit for bit outside the mask.
+    """
+    job = Inpainting(
+        image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour, levels=levels,
+        device=device, precision=precision, progress=progress, dt=dt,
+        transport_steps=transport_steps, diffusion_steps=diffusion_steps,
+        diffusion_dt=diffusion_dt, epsilon=epsilon, presmooth=presmooth, scaling=scaling,
+        rotation=rotation, max_steps=max_steps, tol=tol, check_every=check_every, fill=fill,
+        keep_band=keep_band,
+    )
+    if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer))
+                                  or snapshots < 1):
+        raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")
+    states = list(job.states(every=snapshots))
+    if snapshots:
+        job.info.snapshots = states
+    if return_info:
+        return job.result, job.info
+    if snapshots:
+        return job.result, states
+    return job.result

@@ -1,0 +1,121 @@
+// Image inpainting (thesis chapter 3, appendix A) on compacted index lists.
+//
+// Every kernel visits the cells of a list of padded plane indices (LIST_ARGS), once per
+// channel, and reads its neighbours through the row stride `sx`. The host builds the lists
+// once per resolution level, on the device:
+//   near   = Omega dilated by one cell   (where the Laplacian is needed),
+//   omega  = Omega                       (the only cells the transport step changes),
+//   band   = Omega-epsilon with g > 0    (where the anisotropic diffusion runs).
+// A kernel writes every cell of its list into `v`; cells off the list keep whatever `v`
+// held, so the host keeps both buffers of a ping-pong pair equal off the list.
+#include "common.cl"
+
+#ifndef SCALING
+#define SCALING 0  // 0: I_t as in eq. (3.6); 1: sign(I_t) |I_t|^(1/4) as in appendix A
+#endif
+// Appendix A applies the quartic root to 8-bit data (0..255). Our data lies in [0, 1]; with
+// s = 255, sign(c) |c s^2|^(1/4) / s = sign(c) |c|^(1/4) / sqrt(s), so the same dt means the
+// same motion as in the appendix.
+#define QUARTIC_GAIN ((REAL)0.06262242910851495)  // 1 / sqrt(255)
+
+// L = I_xx + I_yy, the five-point Laplacian (eq. 3.8).
+__kernel void inpaint_laplacian(__global const REAL* restrict u, __global REAL* restrict lap,
+                                const int sx, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        lap[i] = u[i + 1] + u[i - 1] + u[i + sx] + u[i - sx] - 4 * u[i];
+    }
+}
+
+// One transport step, eqs. (3.5)-(3.11):
+//   delta L = (L(x+1) - L(x-1), L(y+1) - L(y-1))                           (3.7)
+//   N / |N| = rot * (-I_y, I_x) / |grad I|, central differences             (3.9)
+//   beta    = delta L . N / |N|                                              (3.10)
+//   I_t     = beta * |grad I|_limited                                        (3.11)
+// The slope limiter upwinds I_t = beta |grad I| like a Hamilton-Jacobi equation: for
+// beta > 0 it keeps the backward differences that are negative and the forward ones that
+// are positive, for beta < 0 the reverse (appendix A's code; eq. 3.11 as printed has
+// I_ybM where I_ybm belongs). rot = +1 rotates the gradient counter-clockwise, -1 clockwise.
+__kernel void inpaint_transport(__global const REAL* restrict u, __global const REAL* restrict lap,
+                                __global REAL* restrict v, const REAL dt, const REAL rot,
+                                const REAL grad_eps2, const int sx, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
+        const REAL ix = (REAL)0.5 * (e - w), iy = (REAL)0.5 * (n - s);
+        const REAL dlx = lap[i + 1] - lap[i - 1], dly = lap[i + sx] - lap[i - sx];
+        const REAL beta = rot * (dly * ix - dlx * iy) * RSQRT(ix * ix + iy * iy + grad_eps2);
+        const REAL xb = c - w, xf = e - c, yb = c - s, yf = n - c;
+        const REAL up = SQR(fmin(xb, (REAL)0)) + SQR(fmax(xf, (REAL)0)) +
+                        SQR(fmin(yb, (REAL)0)) + SQR(fmax(yf, (REAL)0));
+        const REAL down = SQR(fmax(xb, (REAL)0)) + SQR(fmin(xf, (REAL)0)) +
+                          SQR(fmax(yb, (REAL)0)) + SQR(fmin(yf, (REAL)0));
+        REAL rate = beta * SQRT(beta > 0 ? up : down);
+#if SCALING == 1
+        rate = copysign(SQRT(SQRT(fabs(rate))), rate) * QUARTIC_GAIN;
+#endif
+        v[i] = c + dt * rate;
+    }
+}
+
+// One step of the anisotropic diffusion (3.4), I_t = g kappa |grad I|, with appendix A's
+// central differences. `g` is a one-channel plane: 1 in Omega, falling smoothly to 0 at the
+// edge of Omega-epsilon.
+__kernel void inpaint_diffusion(__global const REAL* restrict u, __global REAL* restrict v,
+                                __global const REAL* restrict g, const REAL dt, const REAL eps,
+                                const int sx, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
+        const REAL ne = u[i + 1 + sx], nw = u[i - 1 + sx], se = u[i + 1 - sx], sw = u[i - 1 - sx];
+        const REAL ux = (REAL)0.5 * (e - w), uy = (REAL)0.5 * (n - s);
+        const REAL uxx = e - 2 * c + w, uyy = n - 2 * c + s;
+        const REAL uxy = (REAL)0.25 * (ne - nw - se + sw);
+        const REAL speed = (uxx * uy * uy - 2 * ux * uy * uxy + uyy * ux * ux) /
+                           (ux * ux + uy * uy + eps);
+        v[i] = c + dt * g[list[k]] * speed;
+    }
+}
+
+// Start inside Omega: one Jacobi step of Laplace's equation (the harmonic fill).
+__kernel void inpaint_fill(__global const REAL* restrict u, __global REAL* restrict v,
+                           const int sx, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        v[i] = (REAL)0.25 * (u[i + 1] + u[i - 1] + u[i + sx] + u[i - sx]);
+    }
+}
+
+// dst = src on the listed cells (keeps the two buffers of a pair equal off a list).
+__kernel void inpaint_copy(__global const REAL* restrict src, __global REAL* restrict dst,
+                           LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        dst[i] = src[i];
+    }
+}
+
+// Largest |a - b| over the listed cells: one partial per work-item, (channel, item) order.
+// The host reads the few partials at check time only.
+__kernel void inpaint_max_change(__global const REAL* restrict a, __global const REAL* restrict b,
+                                 __global REAL* restrict partial, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    REAL m = 0;
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL d = fabs(a[i] - b[i]);
+        m = (d == d) ? fmax(m, d) : (REAL)INFINITY;  // fmax alone would hide a NaN
+    }
+    partial[get_global_id(1) * get_global_size(0) + get_global_id(0)] = m;
+}
