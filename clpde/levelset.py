@@ -17,6 +17,7 @@ from .imagedata import InputError
 
 GHOST = 2
 MARGIN = 2  # frozen cells around the caller's grid (see LevelSet)
+REACH = 3  # a rebuild reinitialises the band dilated by this many cells (<= MARGIN + GHOST - 1)
 REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
 
 
@@ -72,6 +73,7 @@ class LevelSet:
         self.active = index_list(self.grid, inner)
         # Ghost entries stay 0 (mark_band writes the interior only).
         self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
+        self._near_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self.band = None
         self.rebuilds = 0
         self.build_band()
@@ -93,29 +95,39 @@ class LevelSet:
         self.u.nxt.assign(self.u.cur)
 
     def rebuild(self, iterations: int | None = None) -> None:
-        """Reinitialise u to a signed distance, then rebuild the band around its zero set."""
-        self.reinitialise(iterations)
+        """Reinitialise u near the front, then rebuild the band around its zero set.
+
+        The region reinitialised is the current band dilated by REACH cells. The front is
+        still inside the band when a rebuild is asked for, so this region holds every cell
+        within REACH of the front: those the new band can take in. Cells farther out keep
+        older values, correct in sign and no closer to the front than they really are, and
+        are corrected at a later rebuild before the band reaches them.
+        """
+        g = self.grid
+        g.launch(g.kernel("levelset.cl", "dilate_band"), self.band_mask.data,
+                 self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
+        self.reinitialise(iterations, cells=compact(self.runtime, self._near_mask))
         self.build_band()
         self.rebuilds += 1
 
     # ---- reinitialisation --------------------------------------------------------------
-    def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT) -> None:
-        """PDE reinitialisation of every cell inside the margin, with the Russo-Smereka
-        subcell fix at the front.
+    def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT,
+                     cells=None) -> None:
+        """PDE reinitialisation with the Russo-Smereka subcell fix at the front, of the
+        given cells (an IndexList; default: every cell inside the frozen margin).
 
         Information travels one cell per 1/dt iterations, so the default count corrects u
-        out to the band's width plus two cells beyond the front, which covers every cell
-        the band can reach before the next rebuild (a rebuild is asked for while the front
-        is still inside the band).
+        out to the band's width plus two cells beyond the front.
         """
         if iterations is None:
             iterations = int(np.ceil((self.band_width + 2) / dt))
+        cells = self.active if cells is None else cells
         g = self.grid
         kernel = g.kernel("levelset.cl", "reinit_step_list")
         self._phi0.assign(self.u.cur)
-        self.u.nxt.assign(self.u.cur)  # the frozen margin is the same in both buffers
+        self.u.nxt.assign(self.u.cur)  # cells left out are the same in both buffers
         for _ in range(iterations):
-            g.launch_list(kernel, self.active, self.u.cur.data.data, self._phi0.data.data,
+            g.launch_list(kernel, cells, self.u.cur.data.data, self._phi0.data.data,
                           self.u.nxt.data.data, g.scalar(dt), np.int32(g.sx))
             self.u.swap()
 

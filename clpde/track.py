@@ -27,6 +27,8 @@ from .levelset import LevelSet, signed_distance
 from .runtime import get_runtime
 
 FEATURES = ("intensity", "edges")
+CFL = 0.5  # largest distance in pixels a level set moves in one step
+NEAR_EDGE = 1.5  # rebuild when the front comes this close to the band's outer ring
 
 
 @dataclass
@@ -103,7 +105,8 @@ class MorphingTracker:
                  equalize="match", smooth: bool = True, smooth_steps: int = 10,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
                  max_iterations: int = 60, tol: float = 0.05, check_every: int = 3,
-                 dt: float = 0.5, min_size: int = 0, device=None, precision=None):
+                 dt: float = 0.5, max_dt: float = 4.0, min_size: int = 0, device=None,
+                 precision=None):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape)
         if features not in FEATURES:
@@ -122,6 +125,7 @@ class MorphingTracker:
         self.band_width = float(band_width)
         self.max_iterations, self.tol = int(max_iterations), float(tol)
         self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
+        self.max_dt = max(float(max_dt), self.dt)
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(precision or np.float32)
         stack = np.stack([f.astype(np.float64) for f in self.frames])
@@ -166,40 +170,50 @@ class MorphingTracker:
 
     # ---- the morphing of one frame pair ------------------------------------------------
     def _morph(self, ls: LevelSet, f1: Field, f2: Field):
+        """Run the coupled system on one frame pair; returns (iterations, converged).
+
+        The time step adapts at each check to the largest stable one: the level sets move
+        at most CFL pixels per step (dt |beta| <= CFL) and F1's relaxation towards F2 does
+        not overshoot (dt |grad F1| <= 1). It restarts from `dt` whenever the band changes.
+        """
         g = ls.grid
         q = self.runtime.queue
         kernel = g.kernel("levelset.cl", "morph_step")
         pair = PingPong(f1)
-        hit = cla.zeros(q, 1, np.int32)
-        consts = (g.scalar(self.dt), g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(1.5),
-                  np.int32(g.sx))
-        speed = None
+        consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), np.int32(g.sx))
+        stats = None
+        dt = self.dt
         converged = False
         iterations = 0
         while iterations < self.max_iterations:
             if ls.band.n == 0:  # the contour vanished from the frame
                 converged = True
                 break
-            if speed is None:
-                (gsize,), _, _ = self.runtime.list_launch(ls.band.n)
-                speed = cla.zeros(q, gsize, g.dtype)
+            if stats is None:
+                (parts,), _, _ = self.runtime.list_launch(ls.band.n)
+                stats = cla.zeros(q, 3 * parts + 1, g.dtype)
             g.launch_list(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
                           f2.data.data, ls.band_mask.data, ls.u.nxt.data.data,
-                          pair.nxt.data.data, speed.data, hit.data, *consts)
+                          pair.nxt.data.data, stats.data, g.scalar(dt), *consts)
             ls.u.swap()
             pair.swap()
             iterations += 1
             if iterations % self.check_every == 0 or iterations == self.max_iterations:
-                # One small read every few steps: the contour's top speed and the edge flag.
-                fastest = float(speed.get().max())
+                # One small read every few steps: speed, stability maxima and edge flag.
+                values = stats.get()
+                fastest, beta_max, grad_max = (values[k * parts:(k + 1) * parts].max()
+                                               for k in range(3))
                 if fastest < self.tol:
                     converged = True
                     break
-                if hit.get()[0]:
+                if values[3 * parts]:
                     ls.rebuild()
                     pair.nxt.assign(pair.cur)  # the band moved: both copies agree outside it
-                    hit.fill(0)
-                    speed = None
+                    stats = None
+                    dt = self.dt
+                else:
+                    dt = float(min(self.max_dt, CFL / max(beta_max, 1e-6),
+                                   1.0 / max(grad_max, 1e-6)))
         return iterations, converged
 
     # ---- iteration ---------------------------------------------------------------------

@@ -65,6 +65,24 @@ __kernel void mark_band(__global const REAL* restrict u, __global uchar* restric
     }
 }
 
+// near = 1 where a band cell lies within `reach` cells (Chebyshev distance, reach <= 3)
+// of the cell, for the movable cells: the region a rebuild reinitialises. Band cells are 0
+// in the margin and the ghosts, so a reach of up to margin + G - 1 stays inside the buffer.
+__kernel void dilate_band(__global const uchar* restrict band, __global uchar* restrict near,
+                          const int reach, const int margin, GRID_ARGS)
+{
+    FOR_EACH_CELL(i) {
+        const int cell = i % plane;
+        const int x = cell % sx - G, y = cell / sx - G;
+        const int movable = (x >= margin) & (x < nx - margin) & (y >= margin) & (y < ny - margin);
+        uchar any = 0;
+        for (int dy = -reach; dy <= reach; ++dy)
+            for (int dx = -reach; dx <= reach; ++dx)
+                any |= movable ? band[i + dy * sx + dx] : (uchar)0;
+        near[i] = any != 0;
+    }
+}
+
 // ---- reinitialisation ------------------------------------------------------------------
 // phi_t + S(phi0) (|grad phi| - 1) = 0, explicit Godunov steps. Cells beside the
 // interface (phi0 changes sign towards a 4-neighbour) use Russo and Smereka's subcell fix:
@@ -125,23 +143,25 @@ __kernel void gradient_magnitude(__global const REAL* restrict img, __global REA
 // with slope-limited upwind norms and central-difference normals; |grad|_eps in the
 // normals' denominators keeps them finite where a field is flat (no information there,
 // so the projected velocity fades to zero).
-// speed[g] gets work-item g's largest |du/dt| (the contour's speed) for the stopping test;
-// hit[0] is set to 1 when an edge-ring cell of the band comes within `near` of the zero
+// Work-item g of the launch's n items writes three maxima over its cells for the host's
+// check every few steps: stats[g] = |du/dt| (the contour's speed, for the stopping test),
+// stats[n + g] = |beta| and stats[2n + g] = |grad F1| (for the next stable time step);
+// stats[3n] is set to 1 when an edge-ring cell of the band comes within `near` of the zero
 // level set, which asks the host to rebuild the band.
 __kernel void morph_step(__global const REAL* restrict u, __global const REAL* restrict f1,
                          __global const REAL* restrict f2, __global const uchar* restrict band,
                          __global REAL* restrict u_out, __global REAL* restrict f1_out,
-                         __global REAL* restrict speed, __global int* restrict hit,
-                         const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
-                         const int sx, LIST_ARGS)
+                         __global REAL* restrict stats, const REAL dt, const REAL eps_f2,
+                         const REAL eps_u2, const REAL near, const int sx, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
-    REAL fastest = 0;
+    REAL fastest = 0, beta_max = 0, grad_max = 0;
     int touched = 0;
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
         const REAL beta = f2[i] - f1[i];
-        f1_out[i] = f1[i] + dt * beta * upwind_norm_2d(f1, i, sx, beta);
+        const REAL grad_f = upwind_norm_2d(f1, i, sx, beta);
+        f1_out[i] = f1[i] + dt * beta * grad_f;
 
         const REAL fx = (REAL)0.5 * (f1[i + 1] - f1[i - 1]);
         const REAL fy = (REAL)0.5 * (f1[i + sx] - f1[i - sx]);
@@ -154,8 +174,13 @@ __kernel void morph_step(__global const REAL* restrict u, __global const REAL* r
         const REAL un = u[i] + dt * rate;
         u_out[i] = un;
         fastest = fmax(fastest, fabs(rate));
+        beta_max = fmax(beta_max, fabs(beta));
+        grad_max = fmax(grad_max, grad_f);
         touched |= (band[i] == 2) & (fabs(un) < near);
     }
-    speed[get_global_id(0)] = fastest;
-    if (touched) hit[0] = 1;  // every writer stores the same value
+    const int g = get_global_id(0), n = get_global_size(0);
+    stats[g] = fastest;
+    stats[n + g] = beta_max;
+    stats[2 * n + g] = grad_max;
+    if (touched) stats[3 * n] = 1;  // every writer stores the same value
 }

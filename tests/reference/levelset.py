@@ -55,6 +55,16 @@ def mark_band(u, w, margin=0):
     return band
 
 
+def dilate_band(band, reach, margin):
+    """Movable cells with a band cell within Chebyshev distance `reach`."""
+    from scipy import ndimage
+
+    near = ndimage.maximum_filter(band > 0, size=2 * reach + 1, mode="constant")
+    frozen = np.ones(band.shape, bool)
+    frozen[margin:-margin, margin:-margin] = False
+    return (near & ~frozen).astype(np.uint8)
+
+
 def reinit_step(p, p0, dt):
     c0 = _view(p0, 0, 0)
     e0, w0, n0, s0 = _view(p0, 0, 1), _view(p0, 0, -1), _view(p0, 1, 0), _view(p0, -1, 0)
@@ -75,13 +85,15 @@ def gradient_magnitude(p):
 
 
 def morph_step(pu, pf1, f2, band, dt, eps_f, eps_u, near):
-    """One coupled step; returns (u_new, f1_new, largest |du/dt|, hit) over the band cells.
+    """One coupled step; returns (u_new, f1_new, (max |du/dt|, max |beta|, max |grad F1|),
+    hit) over the band cells.
 
     Cells outside the band keep their values, as the kernel leaves them untouched.
     """
     u, f1 = _view(pu, 0, 0), _view(pf1, 0, 0)
     beta = f2 - f1
-    f1_new = f1 + dt * beta * upwind_norm(pf1, beta)
+    grad_f = upwind_norm(pf1, beta)
+    f1_new = f1 + dt * beta * grad_f
     fx = 0.5 * (_view(pf1, 0, 1) - _view(pf1, 0, -1))
     fy = 0.5 * (_view(pf1, 1, 0) - _view(pf1, -1, 0))
     ux = 0.5 * (_view(pu, 0, 1) - _view(pu, 0, -1))
@@ -92,8 +104,9 @@ def morph_step(pu, pf1, f2, band, dt, eps_f, eps_u, near):
     u_new = u + dt * rate
     inside = band > 0
     hit = bool(np.any((band == 2) & (np.abs(u_new) < near)))
-    speed = float(np.abs(rate[inside]).max()) if inside.any() else 0.0
-    return np.where(inside, u_new, u), np.where(inside, f1_new, f1), speed, hit
+    maxima = tuple(float(np.abs(a[inside]).max()) if inside.any() else 0.0
+                   for a in (rate, beta, grad_f))
+    return np.where(inside, u_new, u), np.where(inside, f1_new, f1), maxima, hit
 
 
 def signed_distance(mask):
