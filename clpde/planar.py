@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import pyopencl.array as cla
 from tqdm.auto import tqdm
 
 from .fields import Field, Grid, PingPong
@@ -190,101 +189,5 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     return state.run(steps, progress).result()
 
 
-@dataclass
-class DenoiseInfo:
-    steps: int
-    converged: bool
-    lam: np.ndarray
-    residual_variance: np.ndarray
-
-
-def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, device=None,
-               eps: float = 0.02, dt=None, max_steps: int = 2000, tol: float = 2e-4,
-               check_every: int = 20, lambda_every: int = 5, progress=None,
-               precision=None, return_info: bool = False):
-    """Total-variation denoising (Rudin-Osher-Fatemi) by gradient descent.
-
-    u_t = div(grad u / |grad u|_eps) - lambda (u - u0), run to a steady state.
-    Give the noise level `sigma` (in the image's units: 0..255 for uint8) and lambda is
-    updated on the device so that the residual variance tends to sigma^2 (the planar form of
-    thesis eq. C.2); or give `weight`, the denoising strength as in scikit-image
-    (lambda = 1 / weight on data scaled to [0, 1]). With neither, sigma is estimated
-    (skimage.restoration.estimate_sigma).
-
-    Stops when the largest change over `check_every` steps falls below tol * check_every * dt
-    (checked on the device) or after `max_steps`. With return_info, also returns the steps,
-    whether it converged, lambda and the residual variance per channel (image units^2).
-    """
-    if sigma is not None and weight is not None:
-        raise InputError("give sigma or weight, not both")
-    data, layout = to_kernel_layout(image, channel_axis)
-    runtime = get_runtime(device)
-    nc, ny, nx = data.shape
-    grid = Grid(runtime, nx, ny, nc, 1, np.dtype(precision or np.float32))
-    eps = _positive("eps", eps)
-    max_steps = _check_steps(max_steps)
-    check_every = max(1, int(check_every))
-    lambda_every = max(1, int(lambda_every))
-
-    if weight is not None:
-        lam0 = np.full(nc, 1.0 / _positive("weight", weight))
-        sigma2 = None
-    else:
-        if sigma is None:
-            from skimage.restoration import estimate_sigma
-
-            sig = np.array([estimate_sigma(c) for c in data])
-        else:
-            sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
-        sig = np.maximum(sig, 1e-6)
-        sigma2 = sig**2
-        lam0 = np.zeros(nc)
-    lam_max = float(lam0.max()) if sigma2 is None else 0.0
-    # With dynamic lambda the limit is re-checked against lambda as it grows (see below).
-    dt = _check_dt(dt, stability_limit("rof", eps, lam_max), f"ROF (eps={eps:g})")
-
-    u0 = Field.from_host(grid, data)
-    pair = PingPong(u0.copy())
-    previous = u0.copy()
-    q = runtime.queue
-    lam = cla.to_device(q, lam0.astype(grid.dtype))
-    partial = cla.empty(q, (nc, ny), grid.dtype)
-    step_k = grid.kernel("planar.cl", "rof_step")
-    rows_k = grid.kernel("planar.cl", "rof_lambda_rows")
-    finish_k = grid.kernel("planar.cl", "rof_lambda_finish")
-    eps2 = grid.scalar(eps * eps)
-
-    steps = 0
-    converged = False
-    bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="step",
-               disable=_progress_disabled(progress, max_steps, grid))
-    with bar:
-        while steps < max_steps:
-            if sigma2 is not None and steps % lambda_every == 0:
-                grid.launch(rows_k, pair.cur.data.data, u0.data.data, partial.data, eps2)
-                for c in range(nc):
-                    finish_k(q, (1,), None, partial[c].data, lam[c:c + 1].data, np.int32(ny),
-                             grid.scalar(1.0 / (nx * ny * sigma2[c])))
-            grid.launch(step_k, pair.cur.data.data, pair.nxt.data.data, u0.data.data, lam.data,
-                        grid.scalar(dt), eps2)
-            pair.nxt.fill_ghosts()
-            pair.swap()
-            steps += 1
-            if steps % check_every == 0 or steps == max_steps:
-                change = pair.cur.max_abs_diff(previous)  # one small read per check
-                bar.update(steps - bar.n)
-                if sigma2 is not None:
-                    current = lam.get().astype(np.float64)
-                    if dt > stability_limit("rof", eps, current.max()):
-                        dt = 0.8 * stability_limit("rof", eps, current.max())
-                if change < tol * check_every * dt:
-                    converged = True
-                    break
-                previous.assign(pair.cur)
-    u = pair.cur.to_host()
-    out = layout.restore(u)
-    if not return_info:
-        return out
-    residual = ((u - data) ** 2).mean(axis=(1, 2)) * layout.scale**2
-    return out, DenoiseInfo(steps, converged, lam.get().astype(np.float64), residual)
-
+# denoise_tv moved to clpde/rof.py; kept importable from here.
+from .rof import DenoiseInfo, denoise_tv  # noqa: F401

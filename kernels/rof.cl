@@ -1,0 +1,122 @@
+// Rudin-Osher-Fatemi denoising with exact total variation, solved in the dual:
+//
+//     min_u  TV(u) + lambda/2 |u - f|^2,     u = f + div(p) / lambda,  |p| <= 1 per cell,
+//
+// by fast projected gradient on p (Beck and Teboulle's FGP: a projected gradient step from
+// an extrapolated point q, step 1/8 since |div|^2 <= 8 on the unit grid).
+//
+// Discretisation (unit spacing): grad u is the forward difference, zero across the image
+// border; div is its negative adjoint, the backward difference of p with no flux through
+// the border. p lives on cell faces: px(x, y) on the face between (x, y) and (x + 1, y),
+// py(x, y) on the face between (x, y) and (x, y + 1). They are stored interleaved, px of
+// padded cell i at p[2i] and py at p[2i + 1]: with separate px and py arrays the step kernel
+// has more pointers than PoCL's loop vectoriser will check for overlap, and runs scalar
+// (about 5x slower); interleaved pairs vectorise.
+//
+// Borders without branches in the cell loop: the ghost layer of p holds the reflection of p
+// about the border faces (px odd and py even across a vertical border, the converse across
+// a horizontal one). With f mirrored too, u = f + div(p)/lambda comes out mirrored, so the
+// forward difference across the border is exactly zero and the border-face flux stays zero.
+// Ghosts that reflect to zero (px left of column 0, py above row 0) are zero from the start
+// and never written; the others are written by the step kernel from values it has just
+// computed itself (one small epilogue per row), which saves four ghost-fill launches per
+// iteration; on PoCL a launch costs tens of microseconds, as much as a small image's step.
+#include "common.cl"
+
+// The extrapolated dual point q = p + beta (p - p_old), formed on the fly from the last two
+// iterates rather than stored: reading two iterates of p costs the same as storing q and
+// reading p once more, and saves writing q.
+#define QX(j) (p[2 * (j)] + beta * (p[2 * (j)] - p_old[2 * (j)]))
+#define QY(j) (p[2 * (j) + 1] + beta * (p[2 * (j) + 1] - p_old[2 * (j) + 1]))
+
+// One FGP iteration: p_new = P(q + grad(lambda f + div q) / 8), P the projection onto the
+// unit disc per cell. `lambda` holds one value per channel (it may be updated on the device,
+// see rof_dual_lambda). Reads p (ghosts included) and p_old, writes p_new with its ghosts.
+__kernel void rof_dual_step(__global const REAL* restrict p, __global const REAL* restrict p_old,
+                            __global REAL* restrict p_new, __global const REAL* restrict f,
+                            __global const REAL* restrict lambda, const REAL beta, GRID_ARGS)
+{
+    const int y = get_global_id(1);
+    if (y >= ny) return;
+    const REAL lam = lambda[get_global_id(2)];
+    const int x0 = get_global_id(0) * xrun;
+    const int x1 = min(x0 + xrun, nx);
+    const int row = get_global_id(2) * plane + (y + G) * sx + G;
+    for (int i = row + x0; i < row + x1; ++i) {
+        const REAL qx = QX(i), qx_w = QX(i - 1), qx_e = QX(i + 1);
+        const REAL qx_n = QX(i + sx), qx_nw = QX(i + sx - 1);
+        const REAL qy = QY(i), qy_s = QY(i - sx), qy_e = QY(i + 1);
+        const REAL qy_se = QY(i + 1 - sx), qy_n = QY(i + sx);
+        // w = lambda u = lambda f + div q at the cell and its east and north neighbours.
+        const REAL w = lam * f[i] + (qx - qx_w + qy - qy_s);
+        const REAL w_e = lam * f[i + 1] + (qx_e - qx + qy_e - qy_se);
+        const REAL w_n = lam * f[i + sx] + (qx_n - qx_nw + qy_n - qy);
+        const REAL ax = qx + (REAL)0.125 * (w_e - w);
+        const REAL ay = qy + (REAL)0.125 * (w_n - w);
+        // Projection onto |p| <= 1. A select, not fmin: PoCL calls fmin out of line, which
+        // also stops the loop from vectorising.
+        const REAL norm2 = ax * ax + ay * ay;
+        const REAL shrink = norm2 > 1 ? RSQRT(norm2) : (REAL)1;
+        p_new[2 * i] = ax * shrink;
+        p_new[2 * i + 1] = ay * shrink;
+    }
+    // Reflected ghosts of p_new, each written by the work-item that owns its source cell:
+    // right of the last column px = -px(nx - 2), py = py(nx - 1); below the last row
+    // px = px(ny - 1), py = -py(ny - 2).
+    if (x0 <= nx - 2 && nx - 2 < x1) p_new[2 * (row + nx)] = -p_new[2 * (row + nx - 2)];
+    if (x0 < nx && x1 == nx) p_new[2 * (row + nx) + 1] = p_new[2 * (row + nx - 1) + 1];
+    if (y == ny - 1)
+        for (int i = row + x0; i < row + x1; ++i) p_new[2 * (i + sx)] = p_new[2 * i];
+    if (y == ny - 2)
+        for (int i = row + x0; i < row + x1; ++i)
+            p_new[2 * (i + 2 * sx) + 1] = -p_new[2 * i + 1];
+}
+
+// Every K iterations, per interior row (work-item (0, y, c)): the primal image
+// u = f + div(p)/lambda written into `u`, and three partial sums written to
+// partial[(c * 3 + k) * ny + y]: k = 0 sum (div p)^2, 1 sum (u - u_before)^2, 2 sum u^2.
+// The first feeds lambda (rof_dual_lambda) and the residual |u - f|^2 = sum (div p)^2 /
+// lambda^2; the other two give the relative change since the last call, the stopping test.
+__kernel void rof_dual_rows(__global const REAL* restrict p, __global const REAL* restrict f,
+                            __global const REAL* restrict lambda, __global REAL* restrict u,
+                            __global REAL* restrict partial, GRID_ARGS)
+{
+#ifdef __clang__
+    // Let the sums below be reordered: otherwise their fixed order keeps the compiler from
+    // vectorising the loop (PoCL; about 3x slower).
+#pragma clang fp reassociate(on)
+#endif
+    const int y = get_global_id(1);
+    if (y >= ny) return;
+    const int c = get_global_id(2);
+    const REAL inv_lam = (REAL)1 / lambda[c];
+    const int row = c * plane + (y + G) * sx + G;
+    REAL sum_dd = 0, sum_du = 0, sum_uu = 0;
+    for (int i = row; i < row + nx; ++i) {
+        const REAL d = p[2 * i] - p[2 * (i - 1)] + p[2 * i + 1] - p[2 * (i - sx) + 1];
+        const REAL v = f[i] + d * inv_lam;
+        sum_dd += d * d;
+        sum_du += SQR(v - u[i]);
+        sum_uu += v * v;
+        u[i] = v;
+    }
+    partial[(c * 3 + 0) * ny + y] = sum_dd;
+    partial[(c * 3 + 1) * ny + y] = sum_du;
+    partial[(c * 3 + 2) * ny + y] = sum_uu;
+}
+
+// Dynamic lambda (thesis eq. C.2 in this dual form). At the minimiser div p = lambda (u - f);
+// multiplying by (u - f) and summing, -sum p . grad(u - f) = sum div(p) (u - f)
+// = sum (div p)^2 / lambda, so asking sum (u - f)^2 = N sigma^2 gives
+//     lambda_new = sum (div p)^2 / (lambda N sigma^2),
+// which grows lambda while the residual is larger than the noise and shrinks it otherwise.
+// One work-item per channel; lambda stays above `lam_min` so u = f + div(p)/lambda is defined.
+__kernel void rof_dual_lambda(__global const REAL* restrict partial,
+                              __global REAL* restrict lambda, const int ny,
+                              __global const REAL* restrict inv_n_sigma2, const REAL lam_min)
+{
+    const int c = get_global_id(0);
+    REAL sum_dd = 0;
+    for (int y = 0; y < ny; ++y) sum_dd += partial[c * 3 * ny + y];
+    lambda[c] = fmax(lam_min, sum_dd * inv_n_sigma2[c] / lambda[c]);
+}
