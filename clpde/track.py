@@ -102,11 +102,11 @@ class MorphingTracker:
     """
 
     def __init__(self, frames, first_mask, *, features: str = "intensity",
-                 equalize="match", smooth: bool = True, smooth_steps: int = 10,
+                 equalize="match", smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
-                 max_iterations: int = 60, tol: float = 0.05, check_every: int = 3,
-                 dt: float = 0.5, max_dt: float = 4.0, min_size: int = 0, device=None,
-                 precision=None):
+                 max_iterations: int = 60, tol: float = 0.02, check_every: int = 3,
+                 dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 10,
+                 min_size: int = 0, device=None, precision=None):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape)
         if features not in FEATURES:
@@ -126,6 +126,7 @@ class MorphingTracker:
         self.max_iterations, self.tol = int(max_iterations), float(tol)
         self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
         self.max_dt = max(float(max_dt), self.dt)
+        self.reinit_iterations = int(reinit_iterations)
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(precision or np.float32)
         stack = np.stack([f.astype(np.float64) for f in self.frames])
@@ -143,9 +144,7 @@ class MorphingTracker:
         if self.equalize == "match" and index > 0:
             # Equalise the grey levels across the sequence: each frame gets the first
             # frame's histogram, as beta = F2 - F1 compares grey values directly.
-            from skimage.exposure import match_histograms
-
-            img = match_histograms(img, self._scaled[0])
+            img = match_histogram(img, self._scaled[0])
         elif self.equalize == "global":
             from skimage.exposure import equalize_hist
 
@@ -153,8 +152,10 @@ class MorphingTracker:
         if self.smooth and self.smooth_steps > 0:
             from .planar import diffuse
 
+            # The rational edge-stopping function: as anisotropic as the exponential one
+            # and about 3x faster on PoCL, where exp() does not vectorise.
             img = diffuse(img, "perona-malik", steps=self.smooth_steps, kappa=self.smooth_kappa,
-                          device=self.runtime, progress=False)
+                          edge="rational", device=self.runtime, progress=False)
         return np.asarray(img, np.float64)
 
     def _feature_field(self, image: np.ndarray, ls: LevelSet) -> Field:
@@ -207,7 +208,7 @@ class MorphingTracker:
                     converged = True
                     break
                 if values[3 * parts]:
-                    ls.rebuild()
+                    ls.rebuild(self.reinit_iterations)
                     pair.nxt.assign(pair.cur)  # the band moved: both copies agree outside it
                     stats = None
                     dt = self.dt
@@ -249,6 +250,24 @@ class MorphingTracker:
         return _drop_small(~_drop_small(~mask, self.min_size), self.min_size)
 
 
+def match_histogram(image: np.ndarray, reference: np.ndarray, levels: int = 4096) -> np.ndarray:
+    """Histogram specification of data in [0, 1]: the grey-level map that gives `image` the
+    grey-level distribution of `reference`, on `levels` quantisation levels (equal values
+    stay equal)."""
+    def quantise(a):
+        return np.minimum((np.asarray(a) * levels).astype(np.int64), levels - 1)
+
+    q = quantise(image)
+    src = np.bincount(q.ravel(), minlength=levels).astype(np.float64)
+    ref = np.bincount(quantise(reference).ravel(), minlength=levels).astype(np.float64)
+    src_cdf = (np.cumsum(src) - 0.5 * src) / src.sum()  # each level at its mid-rank
+    ref_cdf = (np.cumsum(ref) - 0.5 * ref) / ref.sum()
+    present = ref > 0
+    centres = (np.arange(levels) + 0.5) / levels
+    mapping = np.interp(src_cdf, ref_cdf[present], centres[present])
+    return mapping[q]
+
+
 def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
     """The mask without its 8-connected components of fewer than min_size pixels."""
     from scipy import ndimage
@@ -261,8 +280,8 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
 
 
 def track(frames, first_mask, *, features: str = "intensity", equalize="match",
-          smooth: bool = True, smooth_steps: int = 10, band_width: float = 3.0,
-          max_iterations: int = 60, tol: float = 0.05, min_size: int = 0, device=None,
+          smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
+          max_iterations: int = 60, tol: float = 0.02, min_size: int = 0, device=None,
           progress=None, return_level_sets: bool = False, **options):
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 

@@ -135,3 +135,18 @@ def test_bad_inputs_get_clear_errors():
         track(frames, truth[0], features="colour")
     with pytest.raises(InputError, match="dt"):
         track(frames, truth[0], dt=0.9)
+
+
+def test_histogram_matching_gives_the_reference_distribution(rng):
+    from clpde.track import match_histogram
+
+    reference = rng.beta(2, 5, (64, 64))
+    image = np.sqrt(rng.random((64, 64)))  # another distribution, another order
+    matched = match_histogram(image, reference)
+    percent = np.arange(1, 100)
+    np.testing.assert_allclose(np.percentile(matched, percent), np.percentile(reference, percent),
+                               atol=2e-3)
+    order = np.argsort(image.ravel())
+    assert (np.diff(matched.ravel()[order]) >= 0).all()  # the map keeps the grey-level order
+    flat = np.full((8, 8), 0.3)
+    assert np.ptp(match_histogram(flat, reference)) == 0  # equal values stay equal
