@@ -18,6 +18,9 @@
 // same motion as in the appendix.
 #define QUARTIC_GAIN ((REAL)0.06262242910851495)  // 1 / sqrt(255)
 
+#define NEG(a) ((a) < 0 ? (a) : (REAL)0)
+#define POS(a) ((a) > 0 ? (a) : (REAL)0)
+
 // L = I_xx + I_yy, the five-point Laplacian (eq. 3.8).
 __kernel void inpaint_laplacian(__global const REAL* restrict u, __global REAL* restrict lap,
                                 const int sx, LIST_ARGS)
@@ -50,10 +53,9 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global const 
         const REAL dlx = lap[i + 1] - lap[i - 1], dly = lap[i + sx] - lap[i - sx];
         const REAL beta = rot * (dly * ix - dlx * iy) * RSQRT(ix * ix + iy * iy + grad_eps2);
         const REAL xb = c - w, xf = e - c, yb = c - s, yf = n - c;
-        const REAL up = SQR(fmin(xb, (REAL)0)) + SQR(fmax(xf, (REAL)0)) +
-                        SQR(fmin(yb, (REAL)0)) + SQR(fmax(yf, (REAL)0));
-        const REAL down = SQR(fmax(xb, (REAL)0)) + SQR(fmin(xf, (REAL)0)) +
-                          SQR(fmax(yb, (REAL)0)) + SQR(fmin(yf, (REAL)0));
+        // (NEG/POS: min/max with 0 as plain selects, which PoCL compiles far better than fmin)
+        const REAL up = SQR(NEG(xb)) + SQR(POS(xf)) + SQR(NEG(yb)) + SQR(POS(yf));
+        const REAL down = SQR(POS(xb)) + SQR(NEG(xf)) + SQR(POS(yb)) + SQR(NEG(yf));
         REAL rate = beta * SQRT(beta > 0 ? up : down);
 #if SCALING == 1
         rate = copysign(SQRT(SQRT(fabs(rate))), rate) * QUARTIC_GAIN;
