@@ -66,7 +66,8 @@ def main(argv=None) -> int:
     print(f"camera {clean.shape[1]}x{clean.shape[0]}, noise sigma {args.sigma:g} "
           f"({args.sigma * 255:.1f} grey levels)")
     print(f"PSNR noisy {psnr_noisy:.2f} dB -> denoised {psnr_denoised:.2f} dB")
-    print(f"{info.steps} steps ({'converged' if info.converged else 'max_steps reached'}) "
+    print(f"{info.steps} {info.method} iterations "
+          f"({'converged' if info.converged else 'max_steps reached'}) "
           f"in {seconds:.2f} s; residual std {np.sqrt(info.residual_variance[0]):.1f} "
           f"(target {args.sigma * 255:.1f})")
 

@@ -139,6 +139,22 @@ def test_denoise_matches_the_library(tmp_path, grey, capsys, option):
     assert _files(tmp_path) == ["grey.png", "out.png"]
 
 
+def test_denoise_colour_with_sigma_and_the_gradient_method(tmp_path, rng):
+    rgb = rng.integers(0, 256, (14, 15, 3)).astype(np.uint8)
+    write_image(tmp_path / "in.png", rgb)
+    assert main(["denoise", str(tmp_path / "in.png"), str(tmp_path / "a.png"),
+                 "--sigma", "20", "--max-steps", "30"]) == 0
+    np.testing.assert_array_equal(
+        read_image(tmp_path / "a.png"),
+        clpde.denoise_tv(rgb, sigma=20, channel_axis=-1, max_steps=30))
+    assert main(["denoise", str(tmp_path / "in.png"), str(tmp_path / "b.png"), "--method",
+                 "gradient", "--eps", "0.05", "--weight", "0.2", "--max-steps", "30"]) == 0
+    np.testing.assert_array_equal(
+        read_image(tmp_path / "b.png"),
+        clpde.denoise_tv(rgb, weight=0.2, channel_axis=-1, method="gradient", eps=0.05,
+                         max_steps=30))
+
+
 def test_denoise_colour_jpeg(tmp_path, rng):
     rgb = rng.integers(0, 256, (16, 16, 3)).astype(np.uint8)
     write_image(tmp_path / "in.jpg", rgb)
@@ -177,6 +193,7 @@ def test_refuses_to_overwrite_its_input(grey, tmp_path, capsys, monkeypatch):
     (["diffuse", "IN", "out.bmp"], "unsupported image format"),
     (["diffuse", "IN", "no/such/folder/out.png"], "does not exist"),
     (["denoise", "IN", "out.jpg", "--sigma", "-2"], "sigma"),
+    (["denoise", "IN", "out.png", "--eps", "0.1"], "--eps applies to --method gradient"),
 ])
 def test_errors_are_one_line_and_write_nothing(grey, tmp_path, capsys, monkeypatch, args,
                                               words):
