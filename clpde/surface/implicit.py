@@ -118,6 +118,56 @@ class ImplicitSurface:
         return cls(psi, spacing, origin, **options)
 
     @classmethod
+    def from_mesh(cls, mesh, spacing=None, resolution=128, *, band=None, **options) -> ImplicitSurface:
+        """A surface from a triangle mesh (trimesh.Trimesh or any file trimesh loads).
+
+        spacing defaults to the bounding box's longest side / resolution. The distance is exact
+        in the band; the sign is orientation-free (see mesh_sdf), so flipped faces and holes
+        smaller than a cell are harmless; a mesh that is not watertight gets a warning."""
+        from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf
+
+        mesh = load_mesh(mesh)
+        outer = band if band is not None else _NODE_REACH[_interp_code(options.get("interpolation", "tricubic"))] + np.sqrt(2.0) + 0.08
+        padding = int(np.ceil(outer)) + 4
+        origin, h, shape = grid_for_mesh(mesh, spacing, resolution, padding)
+        psi, face, cpoint = mesh_to_sdf(mesh, origin, h, shape, outer + 3.0,
+                                        device=options.get("device"))
+        surf = cls(psi, h, origin, band=band, **options)
+        surf.mesh = mesh
+        surf._mesh_face = face
+        surf._mesh_cp = cpoint
+        return surf
+
+    def field_from_mesh(self, values) -> np.ndarray:
+        """Data given at the vertices of the mesh this surface was built from (shape
+        (vertices,) or (vertices, channels), e.g. colours), carried to the band: each cell
+        takes the barycentric interpolation on its nearest triangle at its closest point.
+        Returns (nz, ny, nx) or (channels, nz, ny, nx); zeros off the band."""
+        from trimesh.triangles import points_to_barycentric
+
+        mesh = getattr(self, "mesh", None)
+        if mesh is None:
+            raise InputError("this surface was not built from a mesh; use surf.field(f) instead")
+        values = np.asarray(values, dtype=np.float64)
+        if values.shape[0] != len(mesh.vertices):
+            raise InputError(
+                f"values must have one row per mesh vertex ({len(mesh.vertices)}), got {values.shape}"
+            )
+        if not np.all(np.isfinite(values)):
+            raise InputError("values contain NaN or infinite entries")
+        flat_face = self._mesh_face.reshape(-1)
+        cells = np.flatnonzero(flat_face >= 0)
+        faces = flat_face[cells]
+        bary = points_to_barycentric(np.asarray(mesh.triangles)[faces], self._mesh_cp.reshape(-1, 3)[cells])
+        corner = np.asarray(mesh.faces)[faces]
+        vals = values.reshape(len(values), -1)
+        per_cell = np.einsum("ck,ckm->cm", bary, vals[corner])
+        out = np.zeros((vals.shape[1], flat_face.size))
+        out[:, cells] = per_cell.T
+        out = out.reshape((vals.shape[1],) + self.shape)
+        return out[0] if values.ndim == 1 else out
+
+    @classmethod
     def from_function(cls, sdf, bounds, spacing, **options) -> ImplicitSurface:
         """Sample a signed distance function sdf(x, y, z) on a box bounds = (lo, hi),
         padded by the band width plus interpolation room on every side."""
@@ -389,6 +439,30 @@ class ImplicitSurface:
         from .flows import diffuse_along
 
         return diffuse_along(self, u, direction, t, **options)
+
+    def principal_directions(self):
+        """(major, minor, curvatures) of the surface; see flows.principal_directions."""
+        from .flows import principal_directions
+
+        return principal_directions(self)
+
+    def reaction_diffusion(self, iterations, **options) -> np.ndarray:
+        """Turk's reaction-diffusion texture (4.12-4.14); see flows.reaction_diffusion."""
+        from .flows import reaction_diffusion
+
+        return reaction_diffusion(self, iterations, **options)
+
+    def to_mesh(self, u=None, **options):
+        """Marching-cubes mesh of the surface with u as vertex colours; see render.to_mesh."""
+        from .render import to_mesh
+
+        return to_mesh(self, u, **options)
+
+    def render(self, u=None, path=None, **options) -> np.ndarray:
+        """PNG picture(s) of u on the surface; see render.render."""
+        from .render import render
+
+        return render(self, u, path, **options)
 
     def stability_limit(self, flow: str = "heat", eps: float = 1.0, lam: float = 0.0) -> float:
         from .flows import stability_limit

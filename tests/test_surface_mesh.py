@@ -1,0 +1,120 @@
+"""Meshes in (exact band distance, orientation-free sign) and pictures out."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from clpde.imagedata import InputError
+from clpde.surface import ImplicitSurface, render, to_mesh
+from clpde.surface.mesh_sdf import grid_for_mesh, mesh_to_sdf
+from clpde.surface.render import colormap, export_mesh
+
+
+@pytest.fixture(scope="module")
+def icosphere():
+    return trimesh.creation.icosphere(4, radius=1.0)
+
+
+def exact_mesh_distance(mesh, points):
+    from trimesh.triangles import closest_point
+
+    tri = np.asarray(mesh.triangles)
+    best = np.full(len(points), np.inf)
+    for p_idx in range(len(points)):
+        cp = closest_point(tri, np.repeat(points[p_idx:p_idx + 1], len(tri), 0))
+        best[p_idx] = np.linalg.norm(cp - points[p_idx], axis=1).min()
+    return best
+
+
+def grid_points(origin, h, shape):
+    nz, ny, nx = shape
+    z, y, x = np.meshgrid(np.arange(nz), np.arange(ny), np.arange(nx), indexing="ij")
+    return origin + h * np.stack([x, y, z], axis=-1).reshape(-1, 3)
+
+
+def test_band_distance_is_exact_and_sign_is_right(icosphere, rng):
+    origin, h, shape = grid_for_mesh(icosphere, resolution=32, padding=8)
+    psi, face, cp = mesh_to_sdf(icosphere, origin, h, shape, 6.0)
+    pts = grid_points(origin, h, shape)
+    r = np.linalg.norm(pts, axis=1)
+    band = np.flatnonzero(np.abs(r - 1) < 5 * h)
+    pick = rng.choice(band, 60, replace=False)
+    exact = exact_mesh_distance(icosphere, pts[pick])
+    np.testing.assert_allclose(np.abs(psi.ravel()[pick]), exact, atol=1e-4)
+    # the closest points lie on the reported triangles' planes at the reported distance
+    np.testing.assert_allclose(np.linalg.norm(pts[pick] - cp.reshape(-1, 3)[pick], axis=1), exact, atol=1e-4)
+    away = np.abs(r - 1) > 0.02  # the icosphere sits slightly inside the sphere
+    assert np.all(np.sign(psi.ravel()[away]) == np.sign(r[away] - 1))
+
+
+def test_sign_ignores_flipped_faces_and_seals_small_holes(icosphere):
+    flipped = icosphere.copy()
+    faces = flipped.faces.copy()
+    faces[::3] = faces[::3, ::-1]
+    flipped.faces = faces
+    holed = icosphere.copy()
+    holed.update_faces(np.arange(len(icosphere.faces)) != 7)
+    origin, h, shape = grid_for_mesh(icosphere, resolution=32, padding=8)
+    reference, _, _ = mesh_to_sdf(icosphere, origin, h, shape, 6.0)
+    for mesh in (flipped, holed):
+        psi, _, _ = mesh_to_sdf(mesh, origin, h, shape, 6.0)
+        far = np.abs(reference) > h
+        assert np.all(np.sign(psi[far]) == np.sign(reference[far]))
+
+
+def test_surface_from_mesh_runs_heat_to_the_exact_solution(icosphere):
+    mesh = trimesh.creation.icosphere(5, radius=1.0)
+    surf = ImplicitSurface.from_mesh(mesh, resolution=40)
+    u = surf.field_from_mesh(mesh.vertices[:, 0] * mesh.vertices[:, 1])
+    pts = np.random.default_rng(2).standard_normal((300, 3))
+    pts /= np.linalg.norm(pts, axis=1)[:, None]
+    pts *= 0.9997  # the icosphere's mean radius
+    np.testing.assert_allclose(surf.sample(u, pts), pts[:, 0] * pts[:, 1], atol=2e-3)
+    out = surf.sample(surf.heat(u, t=0.1), pts)
+    assert np.abs(out - np.exp(-0.6) * pts[:, 0] * pts[:, 1]).max() < 2e-3
+    with pytest.raises(InputError, match="vertex"):
+        surf.field_from_mesh(np.zeros(3))
+
+
+def test_open_mesh_warns_and_bad_files_are_errors(tmp_path, icosphere):
+    holed = icosphere.copy()
+    holed.update_faces(np.arange(len(icosphere.faces)) != 7)
+    with pytest.warns(UserWarning, match="watertight"):
+        ImplicitSurface.from_mesh(holed, resolution=24)
+    bad = tmp_path / "broken.ply"
+    bad.write_text("not a mesh")
+    with pytest.raises(InputError, match="could not read"):
+        ImplicitSurface.from_mesh(bad)
+
+
+def test_to_mesh_export_and_render(tmp_path):
+    s = ImplicitSurface.sphere(1.0, 0.1)
+    u = s.field(lambda x, y, z: z)
+    mesh = to_mesh(s, u)
+    r = np.linalg.norm(mesh.vertices, axis=1)
+    assert np.abs(r - 1).max() < 0.02
+    np.testing.assert_allclose(mesh.vertex_attributes["u"], mesh.vertices[:, 2], atol=1e-3)
+    # normals point outwards
+    assert np.mean(np.einsum("ij,ij->i", mesh.face_normals, mesh.triangles_center)) > 0.9
+    # colours follow the ramp: the top is yellow-ish, the bottom dark
+    top, bottom = mesh.vertices[:, 2].argmax(), mesh.vertices[:, 2].argmin()
+    assert mesh.visual.vertex_colors[top, 0] > 200 and mesh.visual.vertex_colors[bottom, 0] < 100
+    for ext in ("ply", "glb"):
+        export_mesh(mesh, tmp_path / f"s.{ext}")
+        back = trimesh.load(tmp_path / f"s.{ext}", force="mesh")
+        assert len(back.faces) == len(mesh.faces)
+    image = render(s, u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64)
+    assert image.shape == (64, 128, 3) and (tmp_path / "s.png").stat().st_size > 0
+    # a sphere seen from the side fills a disk: about pi/4 * 0.92^2 of the square
+    filled = (image[:, :64] != 255).any(axis=2).mean()
+    assert 0.55 < filled < 0.75
+    # seen from the side (elevation 0) with u = z the top row of the disk is bright
+    rows = np.flatnonzero((image[:, :64] != 255).any(axis=2).any(axis=1))
+    assert image[rows[2], 32].sum() > image[rows[-3], 32].sum()
+    with pytest.raises(InputError, match="png"):
+        render(s, u, tmp_path / "s.jpg")
+
+
+def test_colormap_ends():
+    c = colormap(np.array([0.0, 0.5, 1.0]))
+    assert c.shape == (3, 3) and c[0].sum() < c[2].sum()
