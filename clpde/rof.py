@@ -175,13 +175,24 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
                 steps += 1
             # u = f + div(p)/lambda and the check's sums; only the nc * 3 * ny row sums come
             # back to the host.
-            grid.launch(rows_k, gens[1].data, f.data.data, lam.data, u.data.data, partial.data)
+            _launch_rows(grid, rows_k, gens[1].data, f.data.data, lam.data, u.data.data,
+                         partial.data)
             converged = _relative_change(partial.get(), nc, ny) < tol
             if sigma2 is not None and not converged:
                 lambda_k(q, (nc,), None, partial.data, lam.data, np.int32(ny),
                          inv_n_sigma2.data, grid.scalar(_LAMBDA_MIN))
             bar.update(steps - bar.n)
     return u.to_host().astype(np.float64), steps, converged, lam.get().astype(np.float64)
+
+
+def _launch_rows(grid: Grid, kernel, *args):
+    """A row-sum kernel: one work-item per interior row and channel, on every device.
+
+    The local size is fixed on CPUs, as grid launches do: PoCL compiles a kernel anew for
+    each local size it is given.
+    """
+    local = (1, 1, 1) if grid.runtime.is_cpu else None
+    kernel(grid.runtime.queue, (1, grid.ny, grid.nc), local, *args, *grid.args(grid.nx))
 
 
 def _relative_change(sums: np.ndarray, nc: int, ny: int) -> float:
@@ -218,7 +229,7 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
     with bar:
         while steps < max_steps:
             if sigma2 is not None and steps % lambda_every == 0:
-                grid.launch(rows_k, pair.cur.data.data, u0.data.data, partial.data, eps2)
+                _launch_rows(grid, rows_k, pair.cur.data.data, u0.data.data, partial.data, eps2)
                 for c in range(nc):  # one work-item at channel c (sigma may differ)
                     finish_k(q, (1,), None, partial.data, lam.data, np.int32(ny),
                              grid.scalar(1.0 / (nx * ny * sigma2[c])), global_offset=(c,))

@@ -21,7 +21,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 inline REAL pm_flux(const REAL d, const REAL inv_k2)
 {
 #if EDGE_STOP == 0
-    return d * exp(-d * d * inv_k2);
+    return d * EXP(-d * d * inv_k2);
 #else
     return d / (1 + d * d * inv_k2);
 #endif

@@ -53,10 +53,11 @@ __kernel void rof_dual_step(__global const REAL* restrict p, __global const REAL
         const REAL w_n = lam * f[i + sx] + (qx_n - qx_nw + qy_n - qy);
         const REAL ax = qx + (REAL)0.125 * (w_e - w);
         const REAL ay = qy + (REAL)0.125 * (w_n - w);
-        // Projection onto |p| <= 1. A select, not fmin: PoCL calls fmin out of line, which
-        // also stops the loop from vectorising.
+        // Projection onto |p| <= 1: p / max(1, |p|). The max as a select of plain values,
+        // with the square root outside it: PoCL calls fmax out of line, and a square root
+        // under a condition stays a branch; either keeps the loop from vectorising.
         const REAL norm2 = ax * ax + ay * ay;
-        const REAL shrink = norm2 > 1 ? RSQRT(norm2) : (REAL)1;
+        const REAL shrink = RSQRT(norm2 > 1 ? norm2 : (REAL)1);
         p_new[2 * i] = ax * shrink;
         p_new[2 * i + 1] = ay * shrink;
     }
