@@ -105,7 +105,7 @@ class MorphingTracker:
                  equalize="match", smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
                  max_iterations: int = 60, tol: float = 0.02, check_every: int = 3,
-                 dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 10,
+                 dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, device=None, precision=None):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape)
