@@ -59,16 +59,19 @@
 // 100x slower than the heat step). On PoCL, float EXP is computed inline instead: x = k ln2
 // + r with |r| <= ln2/2 (k rounded by the 1.5 * 2^23 trick, ln2 split in two for an exact
 // k ln2), e^r by its degree-6 Taylor polynomial, 2^k written into the exponent bits. Within
-// 3 ulp of exp (relative error < 3e-7) for x in [-87, 88], where x is clamped. Plain
-// arithmetic and selects only, so loops calling it vectorise.
-inline float clpde_expf(float x)
+// 3 ulp of exp (relative error < 3e-7) for x in [-87, 88]; beyond, 0 below and e^88 above
+// (0 rather than a tiny normal: products with it would be denormals, which x86 computes
+// many times slower). Plain arithmetic and selects of plain values only (a select of the
+// result itself became a branch), so loops calling it vectorise.
+inline float clpde_expf(const float x)
 {
-    x = x < -87.0f ? -87.0f : (x > 88.0f ? 88.0f : x);
-    const float k = (x * 1.44269504f + 12582912.0f) - 12582912.0f;
-    const float r = (x - k * 0.693145751953125f) - k * 1.428606765330187e-6f;
+    const float xc = x < -87.0f ? -87.0f : (x > 88.0f ? 88.0f : x);
+    const float k = (xc * 1.44269504f + 12582912.0f) - 12582912.0f;
+    const float r = (xc - k * 0.693145751953125f) - k * 1.428606765330187e-6f;
     const float p = 1.0f + r * (1.0f + r * (0.5f + r * (1.6666667e-1f + r * (4.1666668e-2f +
                     r * (8.3333338e-3f + r * 1.3888889e-3f)))));
-    return p * as_float(((int)k + 127) << 23);
+    const int scale_bits = x < -87.0f ? 0 : ((int)k + 127) << 23;  // 2^k, or 0.0f
+    return p * as_float(scale_bits);
 }
 #if defined(CLPDE_POCL) && !defined(REAL_IS_DOUBLE)
 #define EXP(x) clpde_expf(x)

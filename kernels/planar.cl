@@ -21,7 +21,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 inline REAL pm_flux(const REAL d, const REAL inv_k2)
 {
 #if EDGE_STOP == 0
-    return d * EXP(-d * d * inv_k2);
+    return d * EXP(-d * d * inv_k2);  // EXP: inline on PoCL, see common.cl
 #else
     return d / (1 + d * d * inv_k2);
 #endif
@@ -91,6 +91,10 @@ __kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict 
 __kernel void rof_lambda_rows(__global const REAL* restrict u, __global const REAL* restrict u0,
                               __global REAL* restrict partial, const REAL eps2, GRID_ARGS)
 {
+#ifdef __clang__
+    // Let the row sum be reordered, or its fixed order keeps the loop scalar (PoCL).
+#pragma clang fp reassociate(on)
+#endif
     const int y = get_global_id(1);
     if (y >= ny) return;
     const int row = get_global_id(2) * plane + (y + G) * sx + G;
