@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 
-def damage_mask(shape, seed: int = 3) -> np.ndarray:
+def damage_mask(shape, seed: int = 3, text: bool = True, scratches: bool = True) -> np.ndarray:
     """Text and thin scratches (about 8% of the pixels) for an image of `shape` (rows, cols)."""
     from PIL import Image, ImageDraw, ImageFont
 
@@ -19,11 +19,11 @@ def damage_mask(shape, seed: int = 3) -> np.ndarray:
     size = max(12, nx // 13)
     font = ImageFont.load_default(size=size)
     lines = ["Summer 1984", "Houston, TX", "do not copy", "25.12.1984"]
-    for k, line in enumerate(lines):
+    for k, line in enumerate(lines if text else []):
         draw.text((nx // 20 + (k % 2) * nx // 6, ny // 10 + k * ny // 4.4), line, fill=255,
                   font=font, stroke_width=max(1, size // 16), stroke_fill=255)
     rng = np.random.default_rng(seed)
-    for _ in range(6):  # scratches: gently curved, 1-2 pixels wide
+    for _ in range(6 if scratches else 0):  # scratches: gently curved, 1-2 pixels wide
         x0, y0 = rng.uniform(0, nx), rng.uniform(0, ny)
         angle = rng.uniform(0, np.pi)
         t = np.linspace(-0.35, 0.35, 30) * nx
