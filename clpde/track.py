@@ -226,13 +226,16 @@ class MorphingTracker:
             return
         ls = LevelSet(self.runtime, u, self.band_width, self.dtype)
         prepared_prev = self.prepared(0)
+        fresh = True  # u is a signed distance with a band around its zero set
         for t in range(1, len(self.frames)):
             prepared = self.prepared(t)
             f1 = self._feature_field(prepared_prev, ls)
             f2 = self._feature_field(prepared, ls)
-            ls.rebuild()
+            if not fresh:  # a frame without rebuilds may have bent u away from a distance
+                ls.rebuild(self.reinit_iterations)
             rebuilds0 = ls.rebuilds
             iterations, converged = self._morph(ls, f1, f2)
+            fresh = ls.rebuilds > rebuilds0
             u = ls.values()
             mask = u < 0
             if self.min_size > 0:
@@ -240,9 +243,11 @@ class MorphingTracker:
                 if (cleaned != mask).any() and cleaned.any() and not cleaned.all():
                     mask = cleaned
                     u = signed_distance(mask)
+                    rebuilds = ls.rebuilds
                     ls = LevelSet(self.runtime, u, self.band_width, self.dtype)
+                    ls.rebuilds, fresh = rebuilds, True
             yield TrackState(t, mask, u.astype(np.float32), iterations, converged,
-                             ls.rebuilds - rebuilds0 if ls.rebuilds >= rebuilds0 else 0)
+                             ls.rebuilds - rebuilds0)
             prepared_prev = prepared
 
     def _clean(self, mask: np.ndarray) -> np.ndarray:

@@ -148,6 +148,34 @@ __kernel void gradient_magnitude(__global const REAL* restrict img, __global REA
 // stats[n + g] = |beta| and stats[2n + g] = |grad F1| (for the next stable time step);
 // stats[3n] is set to 1 when an edge-ring cell of the band comes within `near` of the zero
 // level set, which asks the host to rebuild the band.
+// The coupled update of one cell; returns |du/dt| and folds |beta|, |grad F1| and the
+// edge test into the running maxima.
+inline REAL morph_cell(__global const REAL* u, __global const REAL* f1,
+                       __global const REAL* f2, __global const uchar* band,
+                       __global REAL* u_out, __global REAL* f1_out, const int i, const int sx,
+                       const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
+                       REAL* beta_max, REAL* grad_max, int* touched)
+{
+    const REAL beta = f2[i] - f1[i];
+    const REAL grad_f = upwind_norm_2d(f1, i, sx, beta);
+    f1_out[i] = f1[i] + dt * beta * grad_f;
+
+    const REAL fx = (REAL)0.5 * (f1[i + 1] - f1[i - 1]);
+    const REAL fy = (REAL)0.5 * (f1[i + sx] - f1[i - sx]);
+    const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
+    const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
+    const REAL dot = (fx * ux + fy * uy) *
+                     RSQRT((SQR(fx) + SQR(fy) + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
+    const REAL bhat = beta * dot;
+    const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat);
+    const REAL un = u[i] + dt * rate;
+    u_out[i] = un;
+    *beta_max = fmax(*beta_max, fabs(beta));
+    *grad_max = fmax(*grad_max, grad_f);
+    *touched |= (band[i] == 2) & (fabs(un) < near);
+    return fabs(rate);
+}
+
 __kernel void morph_step(__global const REAL* restrict u, __global const REAL* restrict f1,
                          __global const REAL* restrict f2, __global const uchar* restrict band,
                          __global REAL* restrict u_out, __global REAL* restrict f1_out,
@@ -158,25 +186,9 @@ __kernel void morph_step(__global const REAL* restrict u, __global const REAL* r
     REAL fastest = 0, beta_max = 0, grad_max = 0;
     int touched = 0;
     for (int k = k0; k < k1; ++k) {
-        const int i = chan + list[k];
-        const REAL beta = f2[i] - f1[i];
-        const REAL grad_f = upwind_norm_2d(f1, i, sx, beta);
-        f1_out[i] = f1[i] + dt * beta * grad_f;
-
-        const REAL fx = (REAL)0.5 * (f1[i + 1] - f1[i - 1]);
-        const REAL fy = (REAL)0.5 * (f1[i + sx] - f1[i - sx]);
-        const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
-        const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
-        const REAL dot = (fx * ux + fy * uy) *
-                         RSQRT((SQR(fx) + SQR(fy) + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
-        const REAL bhat = beta * dot;
-        const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat);
-        const REAL un = u[i] + dt * rate;
-        u_out[i] = un;
-        fastest = fmax(fastest, fabs(rate));
-        beta_max = fmax(beta_max, fabs(beta));
-        grad_max = fmax(grad_max, grad_f);
-        touched |= (band[i] == 2) & (fabs(un) < near);
+        const REAL r = morph_cell(u, f1, f2, band, u_out, f1_out, chan + list[k], sx, dt,
+                                  eps_f2, eps_u2, near, &beta_max, &grad_max, &touched);
+        fastest = fmax(fastest, r);
     }
     const int g = get_global_id(0), n = get_global_size(0);
     stats[g] = fastest;
@@ -184,3 +196,4 @@ __kernel void morph_step(__global const REAL* restrict u, __global const REAL* r
     stats[2 * n + g] = grad_max;
     if (touched) stats[3 * n] = 1;  // every writer stores the same value
 }
+
