@@ -112,18 +112,20 @@ class LevelSet:
 
     # ---- reinitialisation --------------------------------------------------------------
     def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT,
-                     cells=None) -> None:
+                     cells=None, subcell_fix: bool = True) -> None:
         """PDE reinitialisation with the Russo-Smereka subcell fix at the front, of the
         given cells (an IndexList; default: every cell inside the frozen margin).
 
         Information travels one cell per 1/dt iterations, so the default count corrects u
-        out to the band's width plus two cells beyond the front.
+        out to the band's width plus two cells beyond the front. subcell_fix=False runs the
+        plain Godunov scheme everywhere (it moves the front; for comparisons).
         """
         if iterations is None:
             iterations = int(np.ceil((self.band_width + 2) / dt))
         cells = self.active if cells is None else cells
         g = self.grid
-        kernel = g.kernel("levelset.cl", "reinit_step_list")
+        plain = {} if subcell_fix else {"PLAIN_REINIT": 1}
+        kernel = g.kernel("levelset.cl", "reinit_step_list", **plain)
         self._phi0.assign(self.u.cur)
         self.u.nxt.assign(self.u.cur)  # cells left out are the same in both buffers
         for _ in range(iterations):

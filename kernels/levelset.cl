@@ -96,6 +96,7 @@ inline REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, c
     const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
     const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) | (c0 * s0 < 0);
     const REAL p = phi[i];
+#ifndef PLAIN_REINIT  // -DPLAIN_REINIT=1 drops the fix (for comparisons only)
     if (at_interface) {
         // |grad phi0| from the largest of the central estimate and the one-sided slopes,
         // which stays right when the interface cuts close to a node.
@@ -104,6 +105,7 @@ inline REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, c
         const REAL d = c0 / fmax(g, (REAL)1e-12);
         return p - dt * (sgn * fabs(p) - d);
     }
+#endif
     return p - dt * sgn * (upwind_norm_2d(phi, i, sx, -sgn) - 1);
 }
 

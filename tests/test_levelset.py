@@ -181,3 +181,28 @@ def test_dilate_band_matches_reference(runtime, rng):
     want = ref.dilate_band(band, 3, 2)
     np.testing.assert_array_equal(ls._near_mask.get()[2:-2, 2:-2], want)
     assert want.sum() > band.astype(bool).sum()
+
+
+def test_plain_reinit_matches_reference_and_the_subcell_fix_is_more_accurate(runtime, rng):
+    n = 24
+    phi = _circle_sdf(n, 7) * (1 + 0.5 * rng.random((n, n)))
+    grid = Grid(runtime, n, n, 1, 2, np.dtype(np.float32))
+    p, p0 = _field(grid, phi), _field(grid, phi * 1.3)
+    out = p.copy()
+    cells = index_list(grid, np.ones((n, n), bool))
+    grid.launch_list(grid.kernel("levelset.cl", "reinit_step_list", PLAIN_REINIT=1), cells,
+                     p.data.data, p0.data.data, out.data.data, grid.scalar(0.5), np.int32(grid.sx))
+    want = ref.reinit_step(_padded(p), _padded(p0), 0.5, subcell_fix=False)
+    np.testing.assert_allclose(out.to_host()[0], want, atol=2e-5, rtol=1e-5)
+
+    m, r = 64, 17.3
+    y, x = np.mgrid[:m, :m]
+    true = np.hypot(x - 31.6, y - 32.3) - r
+    band = np.abs(true) < 3
+    for u0 in (true * (1 + x / m) * 2.5, true * (1.5 + np.sin(x / 3.0) * np.cos(y / 4.0))):
+        errors = []
+        for fix in (True, False):
+            ls = LevelSet(runtime, u0)
+            ls.reinitialise(40, subcell_fix=fix)
+            errors.append(np.abs(ls.values() - true)[band].mean())
+        assert errors[0] * 3 < errors[1], errors

@@ -65,7 +65,7 @@ def dilate_band(band, reach, margin):
     return (near & ~frozen).astype(np.uint8)
 
 
-def reinit_step(p, p0, dt):
+def reinit_step(p, p0, dt, subcell_fix=True):
     c0 = _view(p0, 0, 0)
     e0, w0, n0, s0 = _view(p0, 0, 1), _view(p0, 0, -1), _view(p0, 1, 0), _view(p0, -1, 0)
     sgn = np.sign(c0)
@@ -76,7 +76,7 @@ def reinit_step(p, p0, dt):
     c = _view(p, 0, 0)
     subcell = c - dt * (sgn * np.abs(c) - d)
     godunov = c - dt * sgn * (upwind_norm(p, -sgn) - 1)
-    return np.where(interface, subcell, godunov)
+    return np.where(interface & subcell_fix, subcell, godunov)
 
 
 def gradient_magnitude(p):
