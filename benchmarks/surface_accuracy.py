@@ -205,10 +205,21 @@ def main(argv=None):
         print(f"{r['case']:6} {scheme:10} {r['spacing']:6.3f} {r['ext_band']:8d} {r['error']:10.2e} {order:>6} {r['seconds']:7.2f}")
 
     print("\n2. cotangent Laplacian on an icosphere, explicit Euler (error at the vertices)")
-    cot = [row for s in ((3, 4) if args.quick else (3, 4, 5, 6)) for row in icosphere_heat(s)]
+    cot = [row for s in ((3, 4) if args.quick else (3, 4, 5, 6, 7)) for row in icosphere_heat(s)]
     print(f"{'case':6} {'subdiv':>6} {'vertices':>8} {'steps':>6} {'error':>10} {'time s':>7}")
     for r in cot:
         print(f"{r['case']:6} {r['subdivisions']:6d} {r['vertices']:8d} {r['steps']:6d} {r['error']:10.2e} {r['seconds']:7.2f}")
+
+    print("\n   at equal numbers of unknowns (cotangent error interpolated log-log at the band's size):")
+    for r in conv:
+        for name in ("step_band", "ext_band"):
+            rows = sorted((c["vertices"], c["error"]) for c in cot if c["case"] == r["case"])
+            n, e = np.log([a for a, _ in rows]), np.log([b for _, b in rows])
+            r[f"cot_error_at_{name}"] = float(np.exp(np.interp(np.log(r[name]), n, e)))
+        scheme = "alternate" if r["alternate"] else "forward"
+        print(f"   {r['case']:6} {scheme:10} h={r['spacing']:.3f}: error / cotangent error = "
+              f"{r['error'] / r['cot_error_at_step_band']:.2f} (step band unknowns), "
+              f"{r['error'] / r['cot_error_at_ext_band']:.2f} (whole band)")
 
     print("\n3. per-step time against band size (heat step + whole-band re-extension)")
     timing = step_timing([64, 128] if args.quick else [64, 128, 256])

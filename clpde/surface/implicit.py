@@ -410,11 +410,11 @@ class ImplicitSurface:
         return out.get().astype(np.float64)
 
     # ---- flows ---------------------------------------------------------------------------------
-    def heat(self, u, t, dt=None, *, weighted=False, progress=None) -> np.ndarray:
-        """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u for time t."""
+    def heat(self, u, t, dt=None, **options) -> np.ndarray:
+        """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u for time t; see flows.heat."""
         from .flows import heat
 
-        return heat(self, u, t, dt=dt, weighted=weighted, progress=progress)
+        return heat(self, u, t, dt=dt, **options)
 
     def tv(self, u, t, dt=None, **options) -> np.ndarray:
         """Intrinsic anisotropic (total variation) flow (4.10); see flows.tv."""
