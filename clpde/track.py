@@ -28,7 +28,10 @@ from .runtime import get_runtime
 
 FEATURES = ("intensity", "edges")
 CFL = 0.5  # largest distance in pixels a level set moves in one step
-NEAR_EDGE = 1.5  # rebuild when the front comes this close to the band's outer ring
+# Rebuild when the front comes this close to the band's outer ring. Between two checks
+# (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
+# the band unnoticed while NEAR_EDGE >= check_every * CFL.
+NEAR_EDGE = 1.0
 
 
 @dataclass
@@ -104,7 +107,7 @@ class MorphingTracker:
     def __init__(self, frames, first_mask, *, features: str = "intensity",
                  equalize="match", smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
-                 max_iterations: int = 60, tol: float = 0.02, check_every: int = 3,
+                 max_iterations: int = 60, tol: float = 0.02, check_every: int = 2,
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, device=None, precision=None):
         self.frames = _check_frames(frames)
@@ -115,6 +118,11 @@ class MorphingTracker:
             raise InputError(f"dt={dt} is outside (0, 0.5], the stable range of the upwind scheme")
         if max_iterations < 1 or check_every < 1:
             raise InputError("max_iterations and check_every must be at least 1")
+        if check_every * CFL > NEAR_EDGE:
+            raise InputError(
+                f"check_every={check_every} lets the front move {check_every * CFL:g} pixels "
+                f"between checks, more than the band's {NEAR_EDGE:g}-pixel safety margin; "
+                f"use check_every <= {int(NEAR_EDGE / CFL)}")
         self.features = features
         if equalize is True:
             equalize = "match"
