@@ -74,6 +74,7 @@ class LevelSet:
         # Ghost entries stay 0 (mark_band writes the interior only).
         self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self._near_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
+        self._near_rows = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self.band = None
         self.rebuilds = 0
         self.build_band()
@@ -104,11 +105,18 @@ class LevelSet:
         are corrected at a later rebuild before the band reaches them.
         """
         g = self.grid
-        g.launch(g.kernel("levelset.cl", "dilate_band"), self.band_mask.data,
-                 self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
+        self.dilate_band()
         self.reinitialise(iterations, cells=compact(self.runtime, self._near_mask))
         self.build_band()
         self.rebuilds += 1
+
+    def dilate_band(self) -> None:
+        """Mark the movable cells within REACH cells of the band (into _near_mask)."""
+        g = self.grid
+        g.launch(g.kernel("levelset.cl", "dilate_band_rows"), self.band_mask.data,
+                 self._near_rows.data, np.int32(REACH))
+        g.launch(g.kernel("levelset.cl", "dilate_band_cols"), self._near_rows.data,
+                 self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
 
     # ---- reinitialisation --------------------------------------------------------------
     def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT,

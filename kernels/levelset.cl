@@ -66,20 +66,32 @@ __kernel void mark_band(__global const REAL* restrict u, __global uchar* restric
 }
 
 // near = 1 where a band cell lies within `reach` cells (Chebyshev distance, reach <= 3)
-// of the cell, for the movable cells: the region a rebuild reinitialises. Band cells are 0
-// in the margin and the ghosts, so a reach of up to margin + G - 1 stays inside the buffer.
-__kernel void dilate_band(__global const uchar* restrict band, __global uchar* restrict near,
-                          const int reach, const int margin, GRID_ARGS)
+// of a movable cell: the region a rebuild reinitialises. Separable, in two passes:
+// dilate_band_rows takes the maximum along x into `rows` (reads stay inside the buffer:
+// at most G + 1 cells past an interior row's end, into the next or previous ghost
+// column, where the band is 0), then dilate_band_cols along y, with the rows clamped to
+// the buffer. `rows` starts as zeros, so its ghost entries read as 0.
+__kernel void dilate_band_rows(__global const uchar* restrict band, __global uchar* restrict rows,
+                               const int reach, GRID_ARGS)
+{
+    FOR_EACH_CELL(i) {
+        uchar any = 0;
+        for (int dx = -reach; dx <= reach; ++dx) any |= band[i + dx];
+        rows[i] = any != 0;
+    }
+}
+
+__kernel void dilate_band_cols(__global const uchar* restrict rows, __global uchar* restrict near,
+                               const int reach, const int margin, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
         const int cell = i % plane;
         const int x = cell % sx - G, y = cell / sx - G;
         const int movable = (x >= margin) & (x < nx - margin) & (y >= margin) & (y < ny - margin);
         uchar any = 0;
-        for (int dy = -reach; dy <= reach; ++dy)
-            for (int dx = -reach; dx <= reach; ++dx)
-                any |= movable ? band[i + dy * sx + dx] : (uchar)0;
-        near[i] = any != 0;
+        const int lo = max(-reach, -(y + G)), hi = min(reach, ny + G - 1 - y);
+        for (int dy = lo; dy <= hi; ++dy) any |= rows[i + dy * sx];
+        near[i] = movable && any;
     }
 }
 
