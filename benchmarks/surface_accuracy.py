@@ -11,6 +11,8 @@
    same t; error at the vertices (which lie on the sphere), against the number of unknowns.
 3. Per-step time against band size on 64^3, 128^3 and 256^3 grids (a sphere filling the box),
    and the effective bandwidth of the bytes a band step must move, against a device copy.
+4. Turk's reaction-diffusion on a sphere of radius 25 cells: the pattern's dominant
+   spherical-harmonic degree against the planar linear stability analysis (about 9.9 cells).
 """
 
 from __future__ import annotations
@@ -186,17 +188,72 @@ def step_timing(sizes, steps=20):
     return rows
 
 
+def degree_power(values, points, lmax=40):
+    """Energy per spherical-harmonic degree of samples at quasi-uniform points on the unit
+    sphere, by the addition theorem: sum_m |a_lm|^2 = (2l+1)/(4 pi) (4 pi/N)^2 f.P_l(X).f."""
+    f = values - values.mean()
+    x = np.clip(points @ points.T, -1, 1)
+    n = len(points)
+    p_prev, p_cur = np.ones_like(x), x.copy()
+    power = [0.0]
+    for l in range(1, lmax + 1):
+        if l > 1:
+            p_prev, p_cur = p_cur, ((2 * l - 1) * x * p_cur - (l - 1) * p_prev) / l
+        power.append((2 * l + 1) / (4 * np.pi) * (4 * np.pi / n) ** 2 * float(f @ p_cur @ f))
+    return np.array(power)
+
+
+def turk_wavelength(iterations=12000, radius_cells=25):
+    from clpde.surface import ImplicitSurface, flows
+
+    h = 1.0 / radius_cells
+    surf = ImplicitSurface.sphere(1.0, h)
+    start = time.perf_counter()
+    ab = flows.reaction_diffusion(surf, iterations, seed=3)
+    seconds = time.perf_counter() - start
+    pts = sphere_points(3000)
+    power = degree_power(surf.sample(ab[0], pts), pts)
+    l_star = int(np.argmax(power[1:]) + 1)
+    measured = 2 * np.pi * radius_cells / np.sqrt(l_star * (l_star + 1))
+    return dict(iterations=iterations, radius_cells=radius_cells, dominant_degree=l_star,
+                measured_wavelength_cells=float(measured),
+                predicted_wavelength_cells=flows.turk_linear_wavelength(),
+                power=power.tolist(), seconds=seconds, band=surf.ext_band.n)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--quick", action="store_true", help="coarse grids only (a smoke test)")
+    parser.add_argument("--sections", default="1234", help="which sections to run (default: 1234)")
     args = parser.parse_args(argv)
     import clpde
 
     rt = clpde.get_runtime()
     device = f"{rt.device.name.strip()} ({rt.type}, {rt.platform.name.strip()})"
     spacings = [0.1, 0.05] if args.quick else [0.1, 0.05, 0.025]
-    print(f"device: {device}\n\n1. heat flow on the unit sphere to t = 0.1 (max error through surf.sample)")
+    results = dict(device=device)
+    print(f"device: {device}")
+    if "1" in args.sections or "2" in args.sections:
+        results.update(accuracy(spacings, args.quick))
+    if "3" in args.sections:
+        results["timing"] = timing_table([64, 128] if args.quick else [64, 128, 256])
+    if "4" in args.sections:
+        rd = turk_wavelength(3000 if args.quick else 12000)
+        results["turk"] = rd
+        print(f"\n4. Turk reaction-diffusion on a sphere of radius {rd['radius_cells']} cells, "
+              f"{rd['iterations']} iterations ({rd['seconds']:.0f} s, band {rd['band']} cells): "
+              f"dominant degree {rd['dominant_degree']}, wavelength {rd['measured_wavelength_cells']:.1f} "
+              f"cells; linear stability predicts {rd['predicted_wavelength_cells']:.1f} cells")
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.json.with_suffix(".tmp")
+    tmp.write_text(json.dumps(results, indent=1))
+    os.replace(tmp, args.json)
+    print(f"\nwrote {args.json}")
+
+
+def accuracy(spacings, quick):
+    print("\n1. heat flow on the unit sphere to t = 0.1 (max error through surf.sample)")
     conv = convergence(spacings)
     print(f"{'case':6} {'scheme':10} {'h':>6} {'band':>8} {'error':>10} {'order':>6} {'time s':>7}")
     for r in conv:
@@ -205,7 +262,7 @@ def main(argv=None):
         print(f"{r['case']:6} {scheme:10} {r['spacing']:6.3f} {r['ext_band']:8d} {r['error']:10.2e} {order:>6} {r['seconds']:7.2f}")
 
     print("\n2. cotangent Laplacian on an icosphere, explicit Euler (error at the vertices)")
-    cot = [row for s in ((3, 4) if args.quick else (3, 4, 5, 6, 7)) for row in icosphere_heat(s)]
+    cot = [row for s in ((3, 4) if quick else (3, 4, 5, 6, 7)) for row in icosphere_heat(s)]
     print(f"{'case':6} {'subdiv':>6} {'vertices':>8} {'steps':>6} {'error':>10} {'time s':>7}")
     for r in cot:
         print(f"{r['case']:6} {r['subdivisions']:6d} {r['vertices']:8d} {r['steps']:6d} {r['error']:10.2e} {r['seconds']:7.2f}")
@@ -221,19 +278,18 @@ def main(argv=None):
               f"{r['error'] / r['cot_error_at_step_band']:.2f} (step band unknowns), "
               f"{r['error'] / r['cot_error_at_ext_band']:.2f} (whole band)")
 
+    return dict(convergence=conv, cotangent=cot)
+
+
+def timing_table(sizes):
     print("\n3. per-step time against band size (heat step + whole-band re-extension)")
-    timing = step_timing([64, 128] if args.quick else [64, 128, 256])
+    timing = step_timing(sizes)
     print(f"{'grid':>14} {'step band':>10} {'ext band':>10} {'step ms':>8} {'ext ms':>8} {'ns/cell':>8} "
           f"{'step GB/s':>9} {'ext GB/s':>8} {'copy GB/s':>9}")
     for r in timing:
         print(f"{'x'.join(map(str, r['grid'])):>14} {r['step_band']:10d} {r['ext_band']:10d} {r['step_ms']:8.2f} "
               f"{r['extend_ms']:8.2f} {r['ns_per_cell']:8.2f} {r['step_gbs']:9.2f} {r['extend_gbs']:8.2f} {r['copy_gbs']:9.2f}")
-
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.json.with_suffix(".tmp")
-    tmp.write_text(json.dumps(dict(device=device, convergence=conv, cotangent=cot, timing=timing), indent=1))
-    os.replace(tmp, args.json)
-    print(f"\nwrote {args.json}")
+    return timing
 
 
 if __name__ == "__main__":

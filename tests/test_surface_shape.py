@@ -94,3 +94,10 @@ def test_turk_rejects_unstable_rates():
     s = ImplicitSurface.sphere(1.0, 0.2)
     with pytest.raises(InputError, match="stability limit"):
         flows.reaction_diffusion(s, 1, params=flows.THESIS_FIG_4_7, dt=1.0)
+
+
+def test_turk_linear_stability_wavelength():
+    # Turk's rates (1/8, 1/32 per unit time, s = 0.2/16, beta = 12): about 9.9 cells
+    assert flows.turk_linear_wavelength() == pytest.approx(9.93, abs=0.05)
+    # a slower-diffusing inhibitor b gives a shorter pattern
+    assert flows.turk_linear_wavelength(dict(flows.TURK, db=1 / 64)) < 9.9

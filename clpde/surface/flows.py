@@ -335,3 +335,22 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=1.0, seed=0, para
                       g.scalar(p["db"]), g.scalar(p["s"]), *offsets, *g.strides())
         flow.after_step()
     return flow.result()
+
+
+def turk_linear_wavelength(params=None) -> float:
+    """Wavelength (cells) of the fastest-growing mode of Turk's system linearised about its
+    uniform state b = 16 - beta, a = 16 / b (planar linear stability analysis, grid units)."""
+    p = dict(TURK if params is None else params)
+    s, beta = p["s"], p["beta"]
+    b = 16.0 - beta  # a b = 16 and a b - b - beta = 0
+    a = 16.0 / b
+    k = np.linspace(1e-3, np.pi, 20000)  # wavenumber, radians per cell
+    k2 = k**2
+    # Jacobian [[-s b - Da k^2, -s a], [s b, s (a - 1) - Db k^2]]
+    j11 = -s * b - p["da"] * k2
+    j12 = -s * a
+    j21 = s * b
+    j22 = s * (a - 1) - p["db"] * k2
+    tr, det = j11 + j22, j11 * j22 - j12 * j21
+    growth = 0.5 * tr + np.sqrt(np.maximum(0.25 * tr**2 - det, 0))
+    return float(2 * np.pi / k[np.argmax(growth)])
