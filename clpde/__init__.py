@@ -5,7 +5,7 @@ from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
 from .track import MorphingTracker, track
-from . import surface  # noqa: E402  clpde.surface.ImplicitSurface and the chapter-4 flows
+from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
 
 __version__ = "0.1.0"
 
