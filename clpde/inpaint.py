@@ -19,10 +19,12 @@ How this implementation runs it (all on the OpenCL device):
   level starts from the upsampled result of the coarser one. The thesis reports the result to
   be robust to the start; a smooth one that already matches the border values cuts the
   number of steps several-fold compared with a constant start.
-- Three index lists, built on the device once per level, restrict the work to
-  Omega-epsilon: the Laplacian is computed on Omega grown by one cell, the transport updates
-  Omega only, the diffusion runs where g_eps > 0 (g_eps = 1 in Omega, falling as a cosine to
-  0 at distance epsilon from Omega). Known pixels next to Omega feed the boundary.
+- Index lists, built on the device once per level, restrict the work to Omega-epsilon: the
+  transport updates Omega only (its stencil, with the Laplacian at the four neighbours,
+  reads known pixels up to two cells outside), the diffusion runs where g_eps > 0
+  (g_eps = 1 in Omega, falling as a cosine to 0 at distance epsilon from Omega). Known
+  pixels next to Omega feed the boundary; after each diffusion batch the known pixels of
+  the band are reset, so values outside Omega never drift.
 - Every `check_every` cycles the largest change inside Omega is reduced on the device; the
   run stops once it falls below `tol` (or after `max_steps`).
 - Multiresolution: Omega's thickness picks the number of levels (one for text and
@@ -36,6 +38,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 from tqdm.auto import tqdm
@@ -50,6 +53,7 @@ SCALINGS = ("none", "quartic-root")
 COLOUR_MODELS = ("channels", "rho-phi-psi")
 ROTATIONS = ("ccw", "cw")
 FILLS = ("diffusion", "biharmonic", "mean", "zero")
+GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
 @dataclass
@@ -201,16 +205,14 @@ class LevelSolver:
                  dtype=np.float32):
         self.p = params
         nc, ny, nx = data.shape
-        self.grid = g = Grid(runtime, nx, ny, nc, 1, np.dtype(dtype))
+        self.grid = g = Grid(runtime, nx, ny, nc, GHOST, np.dtype(dtype))
         self.q = runtime.queue
         self.omega = omega
 
         dist = ndimage.distance_transform_edt(~omega)  # 0 in Omega
         weight = np.where(dist < params.epsilon, 0.5 * (1 + np.cos(np.pi * dist / params.epsilon)), 0)
-        near = ndimage.binary_dilation(omega, np.ones((3, 3), bool)) if omega.any() else omega
         band = weight > 0
         self.omega_list = index_list(g, omega)
-        self.near_list = index_list(g, near)
         self.band_list = index_list(g, band)
         # The known part of the band: diffusion may move it during a cycle (g_eps > 0 there),
         # but it is reset afterwards, so pixels outside Omega keep their values.
@@ -219,29 +221,96 @@ class LevelSolver:
         def touches_border(m):
             return bool(m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any())
 
-        # Ghosts only matter when a list reaches the image border; otherwise skip refilling.
-        self.ghosts = touches_border(band) or touches_border(near)
+        # Ghosts only matter when the band comes within two cells of the image border (the
+        # transport stencil's reach); otherwise they are never read and are not refilled.
+        self.ghosts = touches_border(ndimage.binary_dilation(band, np.ones((3, 3), bool)))
+        self.ghost_pairs = self._ghost_pairs(band) if self.ghosts else None
         self.pair = PingPong(Field.from_host(g, data))
-        self.lap = Field.from_host(g, np.zeros_like(data))
         self.prev = self.pair.cur.copy()
         self.known = self.pair.cur.copy()
-        self.weight = Field.from_host(Grid(runtime, nx, ny, 1, 1, g.dtype), weight[None])
+        self.weight = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), weight[None])
 
         k = lambda name, **d: g.kernel("inpaint.cl", name, **d)  # noqa: E731
-        self.k_lap = k("inpaint_laplacian")
-        self.k_transport = k("inpaint_transport", SCALING=SCALINGS.index(params.scaling))
-        self.k_diffusion = k("inpaint_diffusion")
         self.k_fill = k("inpaint_fill")
         self.k_copy = k("inpaint_copy")
         self.k_change = k("inpaint_max_change")
+        self.k_ghosts = k("inpaint_ghosts")
         self.sx = np.int32(g.sx)
         self.rot = g.scalar(1.0 if params.rotation == "ccw" else -1.0)
         self.steps = 0
+        self._bind_step_kernels(runtime, params)
+
+    def _bind_step_kernels(self, runtime, params) -> None:
+        """Kernel instances with every argument set, one per ping-pong direction: a step is
+        then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
+        a step's work on a small region)."""
+        g = self.grid
+        program = runtime.program("inpaint.cl", g.dtype, SCALING=SCALINGS.index(params.scaling))
+        bufs = (self.pair.cur.data.data, self.pair.nxt.data.data)
+        self._buf_a = bufs[0]
+
+        def bound(name, lst, *args):
+            (gsize,), (lsize,), run = runtime.list_launch(max(lst.n, 1))
+            kernel = cl.Kernel(program, name)
+            kernel.set_args(*args, lst.indices.data, np.int32(lst.n), np.int32(g.plane),
+                            np.int32(run))
+            return kernel, (gsize, g.nc), (lsize, 1), lst.n
+
+        def ghosts(buf):
+            if not self.ghosts:
+                return None
+            kernel = cl.Kernel(program, "inpaint_ghosts")
+            n = self.ghost_pairs.shape[0]
+            kernel.set_args(buf, self.ghost_pairs.data, np.int32(n), np.int32(g.plane))
+            return kernel, (n, g.nc), None, n
+
+        dt, eps = g.scalar(params.dt), g.scalar(1e-10)
+        ddt = g.scalar(params.diffusion_dt)
+        self._steps = {}
+        for src, dst in (bufs, bufs[::-1]):
+            self._steps[("transport", src.int_ptr)] = (
+                bound("inpaint_transport", self.omega_list, src, dst, dt, self.rot, eps, self.sx),
+                ghosts(dst))
+            self._steps[("diffusion", src.int_ptr)] = (
+                bound("inpaint_diffusion", self.band_list, src, dst, self.weight.data.data, ddt,
+                      eps, self.sx),
+                ghosts(dst))
+
+    def _enqueue_step(self, name: str) -> None:
+        """One bound step from the current buffer into the other, ghosts refreshed, swap."""
+        step, ghosts = self._steps[(name, self.pair.cur.data.data.int_ptr)]
+        for launch in (step, ghosts):
+            if launch is not None and launch[3] > 0:
+                cl.enqueue_nd_range_kernel(self.q, launch[0], launch[1], launch[2])
+        self.pair.swap()
+
+    def _ghost_pairs(self, active: np.ndarray) -> cla.Array:
+        """(ghost, source) padded indices of the ghosts within reach of active cells; the
+        source mirrors the ghost across the border face, as Field.fill_ghosts does."""
+        g = self.grid
+        ny, nx = active.shape
+        padded = np.pad(active, GHOST)
+        reach = ndimage.binary_dilation(padded, np.ones((2 * GHOST + 1,) * 2, bool))
+        reach[GHOST:-GHOST, GHOST:-GHOST] = False  # keep the ghost frame only
+        gy, gx = np.nonzero(reach)
+
+        def mirror(p, size):
+            q = p - GHOST
+            q = np.where(q < 0, -1 - q, np.where(q >= size, 2 * size - 1 - q, q))
+            return np.clip(q, 0, size - 1) + GHOST
+
+        pairs = np.stack([gy * g.sx + gx, mirror(gy, ny) * g.sx + mirror(gx, nx)], axis=1)
+        return cla.to_device(self.q, pairs.astype(np.int32))
+
+    def _fill_ghosts(self, field: Field) -> None:
+        if self.ghosts:
+            n = self.ghost_pairs.shape[0]
+            self.k_ghosts(self.q, (n, self.grid.nc), None, field.data.data,
+                          self.ghost_pairs.data, np.int32(n), np.int32(self.grid.plane))
 
     # -- building blocks ---------------------------------------------------------------
     def _finish_step(self, field: Field) -> None:
-        if self.ghosts:
-            field.fill_ghosts()
+        self._fill_ghosts(field)
         self.pair.swap()
 
     def _sync(self, lst) -> None:
@@ -249,21 +318,10 @@ class LevelSolver:
         self.grid.launch_list(self.k_copy, lst, self.pair.cur.data.data, self.pair.nxt.data.data)
 
     def transport_step(self) -> None:
-        g, p = self.grid, self.p
-        g.launch_list(self.k_lap, self.near_list, self.pair.cur.data.data, self.lap.data.data, self.sx)
-        if self.ghosts:
-            self.lap.fill_ghosts()
-        g.launch_list(self.k_transport, self.omega_list, self.pair.cur.data.data,
-                      self.lap.data.data, self.pair.nxt.data.data, g.scalar(p.dt), self.rot,
-                      g.scalar(1e-10), self.sx)
-        self._finish_step(self.pair.nxt)
+        self._enqueue_step("transport")
 
     def diffusion_step(self) -> None:
-        g = self.grid
-        g.launch_list(self.k_diffusion, self.band_list, self.pair.cur.data.data,
-                      self.pair.nxt.data.data, self.weight.data.data, g.scalar(self.p.diffusion_dt),
-                      g.scalar(1e-10), self.sx)
-        self._finish_step(self.pair.nxt)
+        self._enqueue_step("diffusion")
 
     def presmooth(self, steps: int) -> None:
         """Anisotropic diffusion of the whole image (planar.cl's curvature step)."""
@@ -303,8 +361,7 @@ class LevelSolver:
             if self.p.keep_band:
                 self.grid.launch_list(self.k_copy, self.ring_list, self.known.data.data,
                                       self.pair.cur.data.data)
-                if self.ghosts:
-                    self.pair.cur.fill_ghosts()
+                self._fill_ghosts(self.pair.cur)
             self._sync(self.band_list)
         self.steps += self.p.transport_steps + self.p.diffusion_steps
 

@@ -1,9 +1,9 @@
 // Image inpainting (thesis chapter 3, appendix A) on compacted index lists.
 //
 // Every kernel visits the cells of a list of padded plane indices (LIST_ARGS), once per
-// channel, and reads its neighbours through the row stride `sx`. The host builds the lists
-// once per resolution level, on the device:
-//   near   = Omega dilated by one cell   (where the Laplacian is needed),
+// channel, and reads its neighbours through the row stride `sx`. Fields carry two ghost
+// layers (the transport stencil reaches two cells). The host builds the lists once per
+// resolution level, on the device:
 //   omega  = Omega                       (the only cells the transport step changes),
 //   band   = Omega-epsilon with g > 0    (where the anisotropic diffusion runs).
 // A kernel writes every cell of its list into `v`; cells off the list keep whatever `v`
@@ -21,17 +21,6 @@
 #define NEG(a) ((a) < 0 ? (a) : (REAL)0)
 #define POS(a) ((a) > 0 ? (a) : (REAL)0)
 
-// L = I_xx + I_yy, the five-point Laplacian (eq. 3.8).
-__kernel void inpaint_laplacian(__global const REAL* restrict u, __global REAL* restrict lap,
-                                const int sx, LIST_ARGS)
-{
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = chan + list[k];
-        lap[i] = u[i + 1] + u[i - 1] + u[i + sx] + u[i - sx] - 4 * u[i];
-    }
-}
-
 // One transport step, eqs. (3.5)-(3.11):
 //   delta L = (L(x+1) - L(x-1), L(y+1) - L(y-1))                           (3.7)
 //   N / |N| = rot * (-I_y, I_x) / |grad I|, central differences             (3.9)
@@ -41,16 +30,22 @@ __kernel void inpaint_laplacian(__global const REAL* restrict u, __global REAL* 
 // beta > 0 it keeps the backward differences that are negative and the forward ones that
 // are positive, for beta < 0 the reverse (appendix A's code; eq. 3.11 as printed has
 // I_ybM where I_ybm belongs). rot = +1 rotates the gradient counter-clockwise, -1 clockwise.
-__kernel void inpaint_transport(__global const REAL* restrict u, __global const REAL* restrict lap,
-                                __global REAL* restrict v, const REAL dt, const REAL rot,
-                                const REAL grad_eps2, const int sx, LIST_ARGS)
+__kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* restrict v,
+                                const REAL dt, const REAL rot, const REAL grad_eps2,
+                                const int sx, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
+        // The 13-cell diamond of radius 2, loaded once: the Laplacian L (eq. 3.8) is needed
+        // at the four neighbours, so it is computed here rather than in a separate pass.
         const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
+        const REAL ne = u[i + 1 + sx], nw = u[i - 1 + sx], se = u[i + 1 - sx], sw = u[i - 1 - sx];
+        const REAL ee = u[i + 2], ww = u[i - 2], nn = u[i + 2 * sx], ss = u[i - 2 * sx];
+        const REAL le = ee + c + ne + se - 4 * e, lw = c + ww + nw + sw - 4 * w;
+        const REAL ln = ne + nw + nn + c - 4 * n, ls = se + sw + c + ss - 4 * s;
         const REAL ix = (REAL)0.5 * (e - w), iy = (REAL)0.5 * (n - s);
-        const REAL dlx = lap[i + 1] - lap[i - 1], dly = lap[i + sx] - lap[i - sx];
+        const REAL dlx = le - lw, dly = ln - ls;
         const REAL beta = rot * (dly * ix - dlx * iy) * RSQRT(ix * ix + iy * iy + grad_eps2);
         const REAL xb = c - w, xf = e - c, yb = c - s, yf = n - c;
         // (NEG/POS: min/max with 0 as plain selects, which PoCL compiles far better than fmin)
@@ -120,4 +115,17 @@ __kernel void inpaint_max_change(__global const REAL* restrict a, __global const
         m = (d == d) ? fmax(m, d) : (REAL)INFINITY;  // fmax alone would hide a NaN
     }
     partial[get_global_id(1) * get_global_size(0) + get_global_id(0)] = m;
+}
+
+// Neumann ghosts, only where the lists reach the border: pairs (ghost, source) of padded
+// plane indices, the source being the ghost's mirror image across the border (as
+// Field.fill_ghosts does). One tiny launch instead of refilling the whole ghost frame.
+__kernel void inpaint_ghosts(__global REAL* u, __global const int2* restrict pairs,
+                             const int npairs, const int plane)
+{
+    const int k = get_global_id(0);
+    if (k >= npairs) return;
+    const int chan = get_global_id(1) * plane;
+    const int2 p = pairs[k];
+    u[chan + p.x] = u[chan + p.y];
 }
