@@ -73,8 +73,8 @@ def boundary(mask):
 
 
 def boundary_f(pred, true):
-    from skimage.morphology import disk
     from scipy import ndimage
+    from skimage.morphology import disk
 
     tol = math.ceil(0.008 * math.hypot(*true.shape))
     bp, bt = boundary(pred), boundary(true)
@@ -113,7 +113,10 @@ def run_mcv(frames, first, iterations=20):
 
 
 def run_mgac(frames, first, iterations=50):
-    from skimage.segmentation import inverse_gaussian_gradient, morphological_geodesic_active_contour
+    from skimage.segmentation import (
+        inverse_gaussian_gradient,
+        morphological_geodesic_active_contour,
+    )
 
     f = _scaled(frames)
     out = [first]

@@ -104,7 +104,6 @@ class LevelSet:
         older values, correct in sign and no closer to the front than they really are, and
         are corrected at a later rebuild before the band reaches them.
         """
-        g = self.grid
         self.dilate_band()
         self.reinitialise(iterations, cells=compact(self.runtime, self._near_mask))
         self.build_band()

@@ -3,11 +3,11 @@
 import numpy as np
 import pyopencl.array as cla
 import pytest
+from reference import levelset as ref
 
 from clpde.fields import Field, Grid, compact, index_list
 from clpde.imagedata import InputError
 from clpde.levelset import LevelSet, signed_distance
-from tests.reference import levelset as ref
 
 
 def _field(grid, values):

@@ -6,11 +6,11 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 import tifffile
+from test_track import iou, synthetic_sequence
 
 from clpde.cli import main
 from clpde.imagedata import InputError
 from clpde.sequence_io import contour_polygons, read_frames, to_grey
-from tests.test_track import iou, synthetic_sequence
 
 
 @pytest.fixture
