@@ -238,3 +238,13 @@ def test_bad_images():
         clpde.inpaint(nan, mask)
     with pytest.raises(clpde.InputError, match="unknown inpainting option"):
         Inpainting(np.zeros((8, 8)), mask, steps=3)
+
+
+@pytest.mark.parametrize("options", [dict(fill="biharmonic"), dict(fill="zero", levels=1),
+                                     dict(scaling="quartic-root"), dict(keep_band=False)])
+def test_options_run_and_stay_close(options):
+    image = _edge_image(32)
+    hole = _disc(32, 16, 16, 4)
+    out, info = clpde.inpaint(image, hole, return_info=True, **options)
+    assert np.array_equal(out[~hole], image[~hole])
+    assert _err(out, image, hole).mean() < 0.05 and info.steps > 0
