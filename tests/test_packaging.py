@@ -51,15 +51,19 @@ def test_wheel_ships_kernels_and_runs_outside_the_checkout(tmp_path):
     (wheel,) = wheels.glob("clpde-*.whl")
 
     names = set(zipfile.ZipFile(wheel).namelist())
-    kernels = sorted(p.name for p in (src / "kernels").glob("*.cl"))
-    assert kernels, "no kernels/*.cl in the checkout"
+    kernels = sorted(p.name for p in (src / "kernels").iterdir() if p.is_file())
+    assert any(k.endswith(".cl") for k in kernels), "no kernels/*.cl in the checkout"
     missing = [k for k in kernels if f"clpde/kernels/{k}" not in names]
-    assert not missing, f"kernels missing from the wheel: {missing}"
-    modules = sorted(p.relative_to(src).as_posix() for p in (src / "clpde").rglob("*.py"))
+    assert not missing, (
+        f"kernel files missing from the wheel: {missing}; add their pattern to "
+        "[tool.setuptools.package-data] of pyproject.toml"
+    )
+    modules = sorted(p.relative_to(src).as_posix() for p in (src / "clpde").rglob("*")
+                     if p.is_file())
     missing = [m for m in modules if m not in names]
     assert not missing, (
-        f"modules missing from the wheel: {missing}; list every package under clpde/ in "
-        "[tool.setuptools] packages of pyproject.toml"
+        f"files missing from the wheel: {missing}; list every package under clpde/ in "
+        "[tool.setuptools] packages of pyproject.toml (and data files in package-data)"
     )
     assert any(n.endswith("entry_points.txt") for n in names)
 
