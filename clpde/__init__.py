@@ -13,3 +13,4 @@ __all__ = [
     "FLOWS", "ClpdeError", "InputError", "KernelBuildError", "NoDeviceError", "PlanarFlow",
     "denoise_tv", "devices", "diffuse", "get_runtime", "stability_limit", "use_device",
 ]
+__all__ += ["Inpainting", "inpaint"]
