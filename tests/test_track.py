@@ -150,3 +150,12 @@ def test_histogram_matching_gives_the_reference_distribution(rng):
     assert (np.diff(matched.ravel()[order]) >= 0).all()  # the map keeps the grey-level order
     flat = np.full((8, 8), 0.3)
     assert np.ptp(match_histogram(flat, reference)) == 0  # equal values stay equal
+
+
+def test_the_band_follows_a_front_that_moves_beyond_it():
+    # 2 px per frame along x and 1 along y: the front leaves the first band (|u| < 3), so
+    # the band must be rebuilt on the device while the contour moves.
+    frames, truth = synthetic_sequence("translate", frames=4)
+    states = list(MorphingTracker(frames, truth[0], band_width=3))
+    assert sum(s.rebuilds for s in states[1:]) >= 2
+    assert iou(states[-1].mask, truth[-1]) >= 0.9

@@ -93,3 +93,15 @@ def test_grey_conversion_and_polygons():
     assert xs.min() == 2.5 and xs.max() == 6.5 and ys.min() == 1.5 and ys.max() == 4.5
     with pytest.raises(InputError, match="unsupported input"):
         read_frames(__file__)
+
+
+def test_an_existing_output_folder_gets_its_files_replaced(tmp_path, sequence):
+    stack, mask, frames8, truth = sequence
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mask_0000.png").write_bytes(b"old")
+    (out / "notes.txt").write_text("kept")
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2"]) == 0
+    assert (iio.imread(out / "mask_0000.png") > 0).sum() == truth[0].sum()
+    assert (out / "notes.txt").read_text() == "kept"
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]  # no staging left
