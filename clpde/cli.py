@@ -260,8 +260,8 @@ def add_track_parser(subparsers) -> None:
                         help="skip the histogram equalisation across frames")
     parser.add_argument("--no-smooth", action="store_true",
                         help="skip the anisotropic (Perona-Malik) pre-smoothing")
-    parser.add_argument("--max-iterations", type=int, default=60,
-                        help="cap of morphing iterations per frame (default: 60)")
+    parser.add_argument("--max-iterations", type=int, default=40,
+                        help="cap of morphing iterations per frame (default: 40)")
     parser.add_argument("--min-size", type=int, default=0,
                         help="remove pieces and holes smaller than this many pixels (default: 0)")
     parser.add_argument("--frames", type=int, default=None, metavar="N",

@@ -107,7 +107,7 @@ class MorphingTracker:
     def __init__(self, frames, first_mask, *, features: str = "intensity",
                  equalize="match", smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
-                 max_iterations: int = 60, tol: float = 0.02, check_every: int = 2,
+                 max_iterations: int = 40, tol: float = 0.02, check_every: int = 2,
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, device=None, precision=None):
         self.frames = _check_frames(frames)
@@ -294,7 +294,7 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
 
 def track(frames, first_mask, *, features: str = "intensity", equalize="match",
           smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
-          max_iterations: int = 60, tol: float = 0.02, min_size: int = 0, device=None,
+          max_iterations: int = 40, tol: float = 0.02, min_size: int = 0, device=None,
           progress=None, return_level_sets: bool = False, **options):
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
