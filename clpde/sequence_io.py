@@ -40,24 +40,32 @@ def to_grey(frames: np.ndarray) -> np.ndarray:
     return luma.astype(frames.dtype)
 
 
+def _video_plugins() -> list[str]:
+    """The imageio plugins that can decode video here: PyAV first, then ffmpeg."""
+    import importlib.util
+
+    found = []
+    if importlib.util.find_spec("av") is not None:
+        found.append("pyav")
+    if importlib.util.find_spec("imageio_ffmpeg") is not None:
+        found.append("FFMPEG")
+    return found
+
+
 def _read_video(path: Path) -> np.ndarray:
     import imageio.v3 as iio
 
-    errors = []
-    for plugin in ("pyav", "FFMPEG"):
-        try:
-            frames = np.asarray(iio.imread(path, plugin=plugin))
-        except ImportError as exc:
-            errors.append(f"{plugin}: {exc}")
-            continue
-        except Exception as exc:  # noqa: BLE001  (decoders raise many types: all mean unreadable)
-            detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-            raise InputError(f"cannot read {path} as a video (damaged, or not a video?): {detail}") from None
-        return frames
-    raise InputError(
-        f"cannot read the video {path}: no video backend is installed; "
-        'pip install "clpde[video]" (PyAV), or imageio-ffmpeg'
-    )
+    plugins = _video_plugins()
+    if not plugins:
+        raise InputError(
+            f"cannot read the video {path}: no video backend is installed; "
+            'pip install "clpde[video]" (PyAV), or imageio-ffmpeg'
+        )
+    try:
+        return np.asarray(iio.imread(path, plugin=plugins[0]))
+    except Exception as exc:  # noqa: BLE001  (decoders raise many types: all mean unreadable)
+        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise InputError(f"cannot read {path} as a video (damaged, or not a video?): {detail}") from None
 
 
 def _read_tiff_stack(path: Path) -> np.ndarray:

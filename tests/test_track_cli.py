@@ -105,3 +105,13 @@ def test_an_existing_output_folder_gets_its_files_replaced(tmp_path, sequence):
     assert (iio.imread(out / "mask_0000.png") > 0).sum() == truth[0].sum()
     assert (out / "notes.txt").read_text() == "kept"
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]  # no staging left
+
+
+def test_a_missing_video_backend_is_named(tmp_path, monkeypatch):
+    import clpde.sequence_io as sequence_io
+
+    clip = tmp_path / "clip.mp4"
+    clip.write_bytes(b"\x00" * 64)
+    monkeypatch.setattr(sequence_io, "_video_plugins", lambda: [])
+    with pytest.raises(InputError, match=r"clpde\[video\]"):
+        read_frames(clip)
