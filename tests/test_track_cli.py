@@ -96,7 +96,7 @@ def test_grey_conversion_and_polygons():
 
 
 def test_an_existing_output_folder_gets_its_files_replaced(tmp_path, sequence):
-    stack, mask, frames8, truth = sequence
+    stack, mask, _frames8, truth = sequence
     out = tmp_path / "out"
     out.mkdir()
     (out / "mask_0000.png").write_bytes(b"old")
@@ -108,10 +108,10 @@ def test_an_existing_output_folder_gets_its_files_replaced(tmp_path, sequence):
 
 
 def test_a_missing_video_backend_is_named(tmp_path, monkeypatch):
-    import clpde.sequence_io as sequence_io
+    from clpde import sequence_io
 
     clip = tmp_path / "clip.mp4"
     clip.write_bytes(b"\x00" * 64)
-    monkeypatch.setattr(sequence_io, "_video_plugins", lambda: [])
+    monkeypatch.setattr(sequence_io, "_video_plugins", list)
     with pytest.raises(InputError, match=r"clpde\[video\]"):
         read_frames(clip)
