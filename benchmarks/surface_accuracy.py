@@ -69,9 +69,9 @@ def convergence(spacings, t=0.1):
                 v = heat(surf, u, t, alternate=alternate)
                 seconds = time.perf_counter() - start
                 err = float(np.abs(surf.sample(v, pts) - exact(pts, t)).max())
-                rows.append(dict(case=name, spacing=h, alternate=alternate, error=err,
-                                 seconds=seconds, step_band=surf.step_band.n,
-                                 ext_band=surf.ext_band.n))
+                rows.append({"case": name, "spacing": h, "alternate": alternate, "error": err,
+                                 "seconds": seconds, "step_band": surf.step_band.n,
+                                 "ext_band": surf.ext_band.n})
     for row in rows:
         prev = [r for r in rows if r["case"] == row["case"] and r["alternate"] == row["alternate"]
                 and r["spacing"] == 2 * row["spacing"]]
@@ -126,66 +126,69 @@ def icosphere_heat(subdivisions, t=0.1):
             u = u + dt * (op @ u)
         seconds = time.perf_counter() - start
         err = float(np.abs(u - exact(v, t)).max())
-        rows.append(dict(case=name, subdivisions=subdivisions, vertices=len(v), error=err,
-                         steps=steps, seconds=seconds))
+        rows.append({"case": name, "subdivisions": subdivisions, "vertices": len(v), "error": err,
+                         "steps": steps, "seconds": seconds})
     return rows
 
 
 def step_timing(sizes, steps=20):
+    return [_time_size(n, steps) for n in sizes]
+
+
+def _time_size(n, steps):
     import pyopencl as cl
     import pyopencl.array as cla
 
     from clpde.surface import ImplicitSurface
     from clpde.surface.flows import BandFlow, _offsets
 
-    rows = []
-    for n in sizes:
-        # from_function pads the unit sphere's box by 8 cells a side: n cells in all
-        spacing = 2.0 / (n - 17)
-        surf = ImplicitSurface.sphere(1.0, spacing)
-        g = surf.grid
-        flow = BandFlow(surf, surf.field(lambda x, y, z: x * y))
-        kernel = g.kernel("heat_step", WEIGHTED=0)
-        r = g.scalar(0.1)
-        q = surf.runtime.queue
+    # from_function pads the unit sphere's box by 8 cells a side: n cells in all
+    spacing = 2.0 / (n - 17)
+    surf = ImplicitSurface.sphere(1.0, spacing)
+    g = surf.grid
+    flow = BandFlow(surf, surf.field(lambda x, y, z: x * y))
+    kernel = g.kernel("heat_step", WEIGHTED=0)
+    r = g.scalar(0.1)
+    q = surf.runtime.queue
 
-        def one_step():
-            g.launch_list(kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
-                          *_offsets(g, 0), *g.strides())
+    def one_step():
+        g.launch_list(kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
+                      *_offsets(g, 0), *g.strides())
 
-        def run(what, count):
-            q.finish()
-            start = time.perf_counter()
-            for _ in range(count):
-                what()
-            q.finish()
-            return (time.perf_counter() - start) / count
+    def run(what, count):
+        q.finish()
+        start = time.perf_counter()
+        for _ in range(count):
+            what()
+        q.finish()
+        return (time.perf_counter() - start) / count
 
-        run(one_step, 2)
-        run(flow.after_step, 2)
-        t_step = run(one_step, steps)
-        t_ext = run(flow.after_step, steps)
-        # bytes each kernel must move at least: step = index + u + psi read, tmp write;
-        # extension = index + 3 closest-point coordinates read, one value written (the
-        # interpolation's reads are neighbours, counted once through the written value).
-        b_step = surf.step_band.n * 16
-        b_ext = surf.ext_band.n * (4 + 12 + 4 + 4)
-        nbytes = 256 * 2**20
-        a = cla.empty(q, nbytes // 4, np.float32)
-        a.fill(1.0)
-        b = cla.zeros_like(a)
-        copy = lambda: cl.enqueue_copy(q, b.data, a.data)  # noqa: E731
-        run(copy, 2)
-        t_copy = run(copy, 5)
-        copy_bw = 2 * nbytes / t_copy
-        rows.append(dict(
-            grid=list(surf.shape), step_band=surf.step_band.n, ext_band=surf.ext_band.n,
-            step_ms=1e3 * t_step, extend_ms=1e3 * t_ext,
-            ns_per_cell=1e9 * (t_step + t_ext) / surf.ext_band.n,
-            step_gbs=b_step / t_step / 1e9, extend_gbs=b_ext / t_ext / 1e9,
-            copy_gbs=copy_bw / 1e9,
-        ))
-    return rows
+    run(one_step, 2)
+    run(flow.after_step, 2)
+    t_step = run(one_step, steps)
+    t_ext = run(flow.after_step, steps)
+    # bytes each kernel must move at least: step = index + u + psi read, tmp write;
+    # extension = index + 3 closest-point coordinates read, one value written (the
+    # interpolation's reads are neighbours, counted once through the written value).
+    b_step = surf.step_band.n * 16
+    b_ext = surf.ext_band.n * (4 + 12 + 4 + 4)
+    nbytes = 256 * 2**20
+    a = cla.empty(q, nbytes // 4, np.float32)
+    a.fill(1.0)
+    b = cla.zeros_like(a)
+    def copy():
+        cl.enqueue_copy(q, b.data, a.data)
+
+    run(copy, 2)
+    t_copy = run(copy, 5)
+    copy_bw = 2 * nbytes / t_copy
+    return {
+        "grid": list(surf.shape), "step_band": surf.step_band.n, "ext_band": surf.ext_band.n,
+        "step_ms": 1e3 * t_step, "extend_ms": 1e3 * t_ext,
+        "ns_per_cell": 1e9 * (t_step + t_ext) / surf.ext_band.n,
+        "step_gbs": b_step / t_step / 1e9, "extend_gbs": b_ext / t_ext / 1e9,
+        "copy_gbs": copy_bw / 1e9,
+    }
 
 
 def degree_power(values, points, lmax=40):
@@ -215,10 +218,10 @@ def turk_wavelength(iterations=12000, radius_cells=25):
     power = degree_power(surf.sample(ab[0], pts), pts)
     l_star = int(np.argmax(power[1:]) + 1)
     measured = 2 * np.pi * radius_cells / np.sqrt(l_star * (l_star + 1))
-    return dict(iterations=iterations, radius_cells=radius_cells, dominant_degree=l_star,
-                measured_wavelength_cells=float(measured),
-                predicted_wavelength_cells=flows.turk_linear_wavelength(),
-                power=power.tolist(), seconds=seconds, band=surf.ext_band.n)
+    return {"iterations": iterations, "radius_cells": radius_cells, "dominant_degree": l_star,
+                "measured_wavelength_cells": float(measured),
+                "predicted_wavelength_cells": flows.turk_linear_wavelength(),
+                "power": power.tolist(), "seconds": seconds, "band": surf.ext_band.n}
 
 
 def main(argv=None):
@@ -232,7 +235,7 @@ def main(argv=None):
     rt = clpde.get_runtime()
     device = f"{rt.device.name.strip()} ({rt.type}, {rt.platform.name.strip()})"
     spacings = [0.1, 0.05] if args.quick else [0.1, 0.05, 0.025]
-    results = dict(device=device)
+    results = {"device": device}
     print(f"device: {device}")
     if "1" in args.sections or "2" in args.sections:
         results.update(accuracy(spacings, args.quick))
@@ -278,7 +281,7 @@ def accuracy(spacings, quick):
               f"{r['error'] / r['cot_error_at_step_band']:.2f} (step band unknowns), "
               f"{r['error'] / r['cot_error_at_ext_band']:.2f} (whole band)")
 
-    return dict(convergence=conv, cotangent=cot)
+    return {"convergence": conv, "cotangent": cot}
 
 
 def timing_table(sizes):

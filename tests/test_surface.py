@@ -5,12 +5,11 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 from numpy.polynomial import legendre
+from reference import surface as ref
 
 from clpde.imagedata import InputError
 from clpde.surface import ImplicitSurface
 from clpde.surface.flows import _offsets
-
-from reference import surface as ref
 
 
 def sphere_points(n=1500):
@@ -90,11 +89,11 @@ def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc
 def test_tricubic_sample_is_exact_on_cubics(small_sphere):
     s = small_sphere
     x, y, z = s.coordinates()
-    cubic = lambda x, y, z: 0.3 * x**3 - x * y * z + 0.5 * z**2 * y + y - 0.2  # noqa: E731
+    cubic = lambda x, y, z: 0.3 * x**3 - x * y * z + 0.5 * z**2 * y + y - 0.2
     u = np.broadcast_to(cubic(x, y, z), s.shape)
     pts = sphere_points(300) * 1.01
     np.testing.assert_allclose(s.sample(u, pts), cubic(*pts.T), atol=2e-5)
-    linear = lambda x, y, z: 0.3 * x - 2 * y + z  # noqa: E731
+    linear = lambda x, y, z: 0.3 * x - 2 * y + z
     u = np.broadcast_to(linear(x, y, z), s.shape)
     np.testing.assert_allclose(s.sample(u, pts, "trilinear"), linear(*pts.T), atol=2e-5)
     # trilinear is not exact on the cubic: the test can tell the two apart
@@ -147,7 +146,7 @@ def heat_error(h, f, exact, t=0.1, alternate=True):
 
 
 def test_heat_on_sphere_xy_converges_at_second_order():
-    exact = lambda p, t: np.exp(-6 * t) * p[:, 0] * p[:, 1]  # noqa: E731
+    exact = lambda p, t: np.exp(-6 * t) * p[:, 0] * p[:, 1]
     for alternate in (True, False):  # both one-sided variants of appendix E
         coarse = heat_error(0.1, lambda x, y, z: x * y, exact, alternate=alternate)
         fine = heat_error(0.05, lambda x, y, z: x * y, exact, alternate=alternate)
@@ -157,7 +156,7 @@ def test_heat_on_sphere_xy_converges_at_second_order():
 
 
 def test_heat_on_sphere_exp3z_converges_at_second_order():
-    exact = lambda p, t: exp3z_exact(p[:, 2], t)  # noqa: E731
+    exact = lambda p, t: exp3z_exact(p[:, 2], t)
     coarse = heat_error(0.1, lambda x, y, z: np.exp(3 * z), exact)
     fine = heat_error(0.05, lambda x, y, z: np.exp(3 * z), exact)
     order = np.log2(coarse / fine)

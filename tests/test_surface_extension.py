@@ -4,11 +4,10 @@ on the device: kernels against numpy references, results against the exact geome
 import numpy as np
 import pyopencl.array as cla
 import pytest
+from reference import surface as ref
 
 from clpde.imagedata import InputError
 from clpde.surface import ImplicitSurface
-
-from reference import surface as ref
 
 
 def band_host(band):
@@ -77,7 +76,7 @@ def test_pde_extension_makes_data_constant_along_normals(h):
 
 def test_reinitialisation_gives_a_distance_and_keeps_the_surface():
     s = ImplicitSurface.sphere(1.0, 0.1)
-    x, y, z = s.coordinates()
+    x, _y, _z = s.coordinates()
     r = radius(s)
     bent = (r**2 - 1) * (1 + 0.3 * x)  # same zero level set, far from a distance
     again = ImplicitSurface.from_volume(bent, s.spacing, s.origin, reinitialize=True)

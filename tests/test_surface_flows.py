@@ -4,13 +4,11 @@ implicit surfaces: kernels against numpy references, flows against their mathema
 import numpy as np
 import pyopencl.array as cla
 import pytest
+from reference import surface as ref
 
 from clpde.imagedata import InputError
-from clpde.surface import ImplicitSurface
-from clpde.surface import flows
+from clpde.surface import ImplicitSurface, flows
 from clpde.surface.flows import _offsets
-
-from reference import surface as ref
 
 
 @pytest.fixture(scope="module")
@@ -33,12 +31,12 @@ def band_host(band):
 
 
 CASES = {
-    "tv": dict(nc=1, FLOW_P=1, HARMONIC=0, FIDELITY=0, ALONG=0),
-    "tv-fidelity": dict(nc=1, FLOW_P=1, HARMONIC=0, FIDELITY=1, ALONG=0),
-    "harmonic2": dict(nc=3, FLOW_P=2, HARMONIC=1, FIDELITY=0, ALONG=0),
-    "harmonic1": dict(nc=3, FLOW_P=1, HARMONIC=1, FIDELITY=0, ALONG=0),
-    "along": dict(nc=1, FLOW_P=2, HARMONIC=0, FIDELITY=0, ALONG=1),
-    "tv-weighted": dict(nc=1, FLOW_P=1, HARMONIC=0, FIDELITY=0, ALONG=0, WEIGHTED=1),
+    "tv": {"nc": 1, "FLOW_P": 1, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 0},
+    "tv-fidelity": {"nc": 1, "FLOW_P": 1, "HARMONIC": 0, "FIDELITY": 1, "ALONG": 0},
+    "harmonic2": {"nc": 3, "FLOW_P": 2, "HARMONIC": 1, "FIDELITY": 0, "ALONG": 0},
+    "harmonic1": {"nc": 3, "FLOW_P": 1, "HARMONIC": 1, "FIDELITY": 0, "ALONG": 0},
+    "along": {"nc": 1, "FLOW_P": 2, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 1},
+    "tv-weighted": {"nc": 1, "FLOW_P": 1, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 0, "WEIGHTED": 1},
 }
 
 
@@ -49,12 +47,12 @@ def test_flow_step_matches_reference(sphere02, rng, case):
     opts = dict(CASES[case])
     nc = opts.pop("nc")
     weighted = opts.get("WEIGHTED", 0)
-    x, y, z = s.coordinates()
+    x, y, _z = s.coordinates()
     structured = np.stack([np.broadcast_to(np.sign(x - 0.1) + 0.3 * y * c, s.shape) for c in range(nc)])
     psi = s.psi_dev.get() * (1.3 if weighted else 1.0)
     direction = rng.standard_normal((3,) + g.padded_shape)
     direction /= np.sqrt((direction**2).sum(axis=0))
-    dev = lambda a: cla.to_device(q, np.ascontiguousarray(a, np.float32))  # noqa: E731
+    dev = lambda a: cla.to_device(q, np.ascontiguousarray(a, np.float32))
     for u in (rng.standard_normal((nc,) + g.padded_shape), g.pad(structured)):
         u32 = np.ascontiguousarray(u, np.float32)
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)

@@ -34,7 +34,7 @@ def grid_points(origin, h, shape):
 
 def test_band_distance_is_exact_and_sign_is_right(icosphere, rng):
     origin, h, shape = grid_for_mesh(icosphere, resolution=32, padding=8)
-    psi, face, cp = mesh_to_sdf(icosphere, origin, h, shape, 6.0)
+    psi, _face, cp = mesh_to_sdf(icosphere, origin, h, shape, 6.0)
     pts = grid_points(origin, h, shape)
     r = np.linalg.norm(pts, axis=1)
     band = np.flatnonzero(np.abs(r - 1) < 5 * h)

@@ -3,12 +3,11 @@
 import numpy as np
 import pyopencl.array as cla
 import pytest
+from reference import surface as ref
 
 from clpde.imagedata import InputError
 from clpde.surface import ImplicitSurface, flows
 from clpde.surface.flows import _offsets
-
-from reference import surface as ref
 
 
 def band_host(band):

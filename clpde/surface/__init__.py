@@ -1,8 +1,16 @@
 """PDEs on implicit surfaces (thesis chapter 4): data on a narrow band around psi = 0."""
 
 from .flows import (
-    THESIS_FIG_4_7, TURK, denoise_tv, diffuse_along, harmonic_map, heat, principal_directions,
-    reaction_diffusion, stability_limit, tv,
+    THESIS_FIG_4_7,
+    TURK,
+    denoise_tv,
+    diffuse_along,
+    harmonic_map,
+    heat,
+    principal_directions,
+    reaction_diffusion,
+    stability_limit,
+    tv,
 )
 from .grid3d import Grid3D
 from .implicit import INTERPOLATIONS, ImplicitSurface

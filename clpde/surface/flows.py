@@ -149,8 +149,8 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     steps, dt = _check_time(t, dt, limit, flow_name)
     flow = BandFlow(surf, u, normalize=harmonic)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
-    defines = dict(NC=flow.nc, FLOW_P=p, HARMONIC=int(harmonic), FIDELITY=int(fidelity is not None),
-                   ALONG=int(direction is not None), WEIGHTED=int(bool(weighted)))
+    defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic), "FIDELITY": int(fidelity is not None),
+                   "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted))}
     kernel = g.kernel("flow_step", **defines)
     r = g.scalar(dt / h**p)
     e2 = g.scalar((h * eps) ** 2)

@@ -26,7 +26,7 @@ class Grid3D:
     ny: int
     nz: int
     ghost: int = 3
-    dtype: np.dtype = np.dtype(np.float32)
+    dtype: np.dtype = np.dtype(np.float32)  # noqa: RUF009  (immutable, as in fields.Grid)
 
     @property
     def padded_shape(self) -> tuple[int, int, int]:

@@ -64,7 +64,7 @@ class ImplicitSurface:
             raise InputError("psi contains NaN or infinite values; fill them before building a surface")
         if not (psi.min() < 0 < psi.max()):
             raise InputError("psi has no zero level set (it never changes sign): no surface to work on")
-        self.spacing = h = _positive("spacing", spacing)
+        self.spacing = _positive("spacing", spacing)
         origin = np.asarray(origin, dtype=np.float64).reshape(-1)
         if origin.shape != (3,) or not np.all(np.isfinite(origin)):
             raise InputError(f"origin must be three finite numbers (x, y, z), got {origin!r}")
@@ -86,12 +86,11 @@ class ImplicitSurface:
 
     def _set_psi(self, psi: np.ndarray) -> None:
         """(Re)build the device copy of psi, the two bands and the closest points."""
-        h = self.spacing
         self.psi = psi
         # Ghost cells continue psi linearly so stencils next to the border stay meaningful.
         self.psi_dev = self.grid.upload(self.psi[None], mode="linear")
         # Band tests and closest points run in grid units.
-        psi_cells = self.psi_dev / self.grid.scalar(h)
+        psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
         if self._check_border:
@@ -287,7 +286,7 @@ class ImplicitSurface:
     def reinitialize(self, iterations=None, progress=None) -> ImplicitSurface:
         """Turn psi into a signed distance function on the device (Sussman's PDE with
         Russo-Smereka's subcell fix), keeping its zero level set; rebuilds the bands."""
-        g, q = self.grid, self.runtime.queue
+        g = self.grid
         reach = self.outer + 4.0
         r = 0.3
         steps = int(np.ceil(reach / r)) if iterations is None else int(iterations)
@@ -379,7 +378,7 @@ class ImplicitSurface:
         data = self._as_channels(u)
         idx = self.world_to_index(points)
         code = _interp_code(interpolation)
-        g, q = self.grid, self.runtime.queue
+        g = self.grid
         n = idx.shape[1]
         if n == 0:
             return np.zeros((0,) if data.shape[0] == 1 and np.ndim(u) == 3 else (0, data.shape[0]))

@@ -30,7 +30,7 @@ def load_mesh(mesh):
     if isinstance(mesh, (str, bytes)) or hasattr(mesh, "__fspath__"):
         try:
             mesh = trimesh.load(mesh, force="mesh")
-        except Exception as exc:  # trimesh raises many kinds for unreadable files
+        except Exception as exc:  # noqa: BLE001  (trimesh raises many kinds for unreadable files)
             raise InputError(f"could not read a mesh from {mesh!s}: {exc}") from None
     if isinstance(mesh, trimesh.Scene):
         mesh = mesh.dump(concatenate=True)

@@ -18,7 +18,7 @@ def band_indices(psi_pad, width, ghost):
 
 def closest_points(psi_pad, band, inv_h):
     """Padded index coordinates (3, n) of x - psi grad psi / |grad psi| (central differences)."""
-    pz, py, px = psi_pad.shape
+    _pz, py, px = psi_pad.shape
     sx, sxy = px, px * py
     f = psi_pad.ravel().astype(np.float64)
     gx = f[band + 1] - f[band - 1]
@@ -92,7 +92,7 @@ def heat_flux(f, p, j, offsets, sx, sxy, weighted):
 
 def heat_step(u_pad, psi_pad, band, r, offsets, weighted=False):
     """New band values (nc, n) of one appendix-E step v = u + r div(|N| P_N grad u) / |N|."""
-    nc, pz, py, px = u_pad.shape
+    nc, _pz, py, px = u_pad.shape
     sx, sxy = px, px * py
     p = psi_pad.ravel().astype(np.float64)
     out = np.empty((nc, band.size))
@@ -166,7 +166,7 @@ def flow_step(u_pad, psi_pad, band, r, dt, lam, e2, offsets, flow_p=2, harmonic=
 
 def tv_lambda_terms(u_pad, u0_pad, psi_pad, band, inv_h, eps_cells, e2, offsets):
     """(num, area, resid) per band cell, as the tv_lambda_terms kernel."""
-    nc, pz, py, px = u_pad.shape
+    _nc, _pz, py, px = u_pad.shape
     sx, sxy = px, px * py
     u, u0 = u_pad.ravel().astype(np.float64), u0_pad.ravel().astype(np.float64)
     p = psi_pad.ravel().astype(np.float64)
@@ -185,7 +185,7 @@ def tv_lambda_terms(u_pad, u0_pad, psi_pad, band, inv_h, eps_cells, e2, offsets)
 
 def extend_pde_step(u_pad, psi_pad, band, r, h):
     """Band values (nc, n) after one upwind step of u_t + sign(psi) N . grad u = 0."""
-    nc, pz, py, px = u_pad.shape
+    nc, _pz, py, px = u_pad.shape
     sx, sxy = px, px * py
     p = psi_pad.ravel().astype(np.float64)
     n = _normal(p, band, sx, sxy)
@@ -206,7 +206,7 @@ def extend_pde_step(u_pad, psi_pad, band, r, h):
 
 def reinit_step(phi_pad, phi0_pad, band, r, h):
     """Band values after one Sussman/Godunov step with Russo-Smereka's subcell fix."""
-    pz, py, px = phi_pad.shape[-3:]
+    _pz, py, px = phi_pad.shape[-3:]
     sx, sxy = px, px * py
     f = phi_pad.ravel().astype(np.float64)
     f0 = phi0_pad.ravel().astype(np.float64)
@@ -237,7 +237,7 @@ def reinit_step(phi_pad, phi0_pad, band, r, h):
 
 def principal_directions(psi_pad, band, inv_h):
     """(dirs (6, n), curv (2, n)) as the principal_directions kernel."""
-    pz, py, px = psi_pad.shape[-3:]
+    _pz, py, px = psi_pad.shape[-3:]
     sx, sxy = px, px * py
     f = psi_pad.ravel().astype(np.float64)
     i = band
@@ -276,7 +276,7 @@ def principal_directions(psi_pad, band, inv_h):
 
 def turk_step(u_pad, psi_pad, band, beta_pad, dt, da, db, s, offsets, direction=None):
     """New (a, b) band values of one Turk reaction-diffusion step."""
-    nc, pz, py, px = u_pad.shape
+    _nc, pz, py, px = u_pad.shape
     sx, sxy, plane = px, px * py, px * py * pz
     p = psi_pad.ravel().astype(np.float64)
     fa = u_pad[0].ravel().astype(np.float64)
