@@ -91,7 +91,7 @@ __kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict 
 __kernel void rof_lambda_rows(__global const REAL* restrict u, __global const REAL* restrict u0,
                               __global REAL* restrict partial, const REAL eps2, GRID_ARGS)
 {
-#ifdef __clang__
+#ifdef CLPDE_POCL
     // Let the row sum be reordered, or its fixed order keeps the loop scalar (PoCL).
 #pragma clang fp reassociate(on)
 #endif

@@ -82,9 +82,9 @@ __kernel void rof_dual_rows(__global const REAL* restrict p, __global const REAL
                             __global const REAL* restrict lambda, __global REAL* restrict u,
                             __global REAL* restrict partial, GRID_ARGS)
 {
-#ifdef __clang__
+#ifdef CLPDE_POCL
     // Let the sums below be reordered: otherwise their fixed order keeps the compiler from
-    // vectorising the loop (PoCL; about 3x slower).
+    // vectorising the loop (PoCL, whose clang knows this pragma; about 3x slower).
 #pragma clang fp reassociate(on)
 #endif
     const int y = get_global_id(1);
