@@ -57,7 +57,7 @@ class DenoiseInfo:
 
 def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str = "primal-dual",
                device=None, max_steps=None, tol=None, check_every=None, eps=None, dt=None,
-               lambda_every: int = 5, progress=None, precision=None,
+               lambda_every=None, progress=None, precision=None,
                return_info: bool = False):
     """Total-variation denoising (Rudin-Osher-Fatemi), run on the device to convergence.
 
@@ -74,7 +74,8 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
 
     method: 'primal-dual' (default; exact TV, fast) or 'gradient' (the thesis's explicit
     scheme with |grad u|_eps; takes ``eps`` (default 0.02, on [0, 1] data), ``dt`` and
-    ``lambda_every``).
+    ``lambda_every`` (default 5 steps between lambda updates)). The primal-dual method
+    updates lambda at every stopping test.
 
     Stopping, tested on the device every ``check_every`` iterations: primal-dual stops when
     the RMS change of u over those iterations is below ``tol`` times the RMS of u (default
@@ -116,9 +117,9 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         lam0 = None
 
     if method == "primal-dual":
-        if eps is not None or dt is not None:
-            raise InputError("eps and dt belong to method='gradient'; the primal-dual method "
-                             "uses exact TV and needs neither")
+        if eps is not None or dt is not None or lambda_every is not None:
+            raise InputError("eps, dt and lambda_every belong to method='gradient'; the "
+                             "primal-dual method uses exact TV and needs none of them")
         if lam0 is None:
             # Start from weight = sigma, a good guess for natural images; the update corrects it.
             lam0 = 1.0 / np.sqrt(sigma2)
@@ -127,8 +128,8 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     else:
         eps = _positive("eps", 0.02 if eps is None else eps)
         u, steps, converged, lam = _gradient(grid, data, lam0, sigma2, eps, dt, max_steps,
-                                             tol, check_every, max(1, int(lambda_every)),
-                                             progress)
+                                             tol, check_every,
+                                             max(1, int(lambda_every or 5)), progress)
     if sigma2 is not None:
         # Noise as large as the image's own spread: the only image that far from the data
         # is its mean (lambda -> 0), which the iterations approach only slowly.
