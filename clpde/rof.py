@@ -161,7 +161,11 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
     rows_k = grid.kernel("rof.cl", "rof_dual_rows")
     lambda_k = grid.kernel("rof.cl", "rof_dual_lambda")
     if sigma2 is not None:
-        inv_n_sigma2 = cla.to_device(q, (1.0 / (grid.nx * ny * sigma2)).astype(grid.dtype))
+        # 0 holds lambda: channels whose sigma is beyond their spread get the mean anyway
+        # (see denoise_tv), and a lambda falling towards 0 would only slow the stopping test.
+        held = sigma2 >= data.var(axis=(1, 2))
+        inv = np.where(held, 0.0, 1.0 / (grid.nx * ny * sigma2))
+        inv_n_sigma2 = cla.to_device(q, inv.astype(grid.dtype))
     t, beta = 1.0, 0.0
     steps, converged = 0, False
     bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="it",

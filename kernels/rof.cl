@@ -112,11 +112,14 @@ __kernel void rof_dual_rows(__global const REAL* restrict p, __global const REAL
 //     lambda_new = sum (div p)^2 / (lambda N sigma^2),
 // which grows lambda while the residual is larger than the noise and shrinks it otherwise.
 // One work-item per channel; lambda stays above `lam_min` so u = f + div(p)/lambda is defined.
+// A channel whose inv_n_sigma2 is 0 keeps its lambda (the host fixes it for channels whose
+// sigma exceeds their own spread, where no lambda reaches it).
 __kernel void rof_dual_lambda(__global const REAL* restrict partial,
                               __global REAL* restrict lambda, const int ny,
                               __global const REAL* restrict inv_n_sigma2, const REAL lam_min)
 {
     const int c = get_global_id(0);
+    if (inv_n_sigma2[c] == 0) return;
     REAL sum_dd = 0;
     for (int y = 0; y < ny; ++y) sum_dd += partial[c * 3 * ny + y];
     lambda[c] = fmax(lam_min, sum_dd * inv_n_sigma2[c] / lambda[c]);

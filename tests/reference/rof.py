@@ -61,8 +61,11 @@ def dual_rows(p, f, lam, u_before):
 
 
 def dual_lambda(sum_dd, lam, n, sigma2, lam_min):
-    """rof_dual_lambda: lambda_new = sum (div p)^2 / (lambda N sigma^2), at least lam_min."""
-    return np.maximum(lam_min, np.asarray(sum_dd) / (np.asarray(lam) * n * np.asarray(sigma2)))
+    """rof_dual_lambda: lambda_new = sum (div p)^2 / (lambda N sigma^2), at least lam_min;
+    channels with sigma2 = inf (inv_n_sigma2 = 0) keep their lambda."""
+    sigma2 = np.asarray(sigma2, float)
+    new = np.maximum(lam_min, np.asarray(sum_dd) / (np.asarray(lam) * n * sigma2))
+    return np.where(np.isinf(sigma2), lam, new)
 
 
 # ---- the textbook algorithm, for comparison with whole device runs ---------------------
