@@ -3,7 +3,7 @@
     python benchmarks/inpaint_quality.py [--json PATH] [--quick]
 
 On scikit-image's bundled photos with three kinds of mask (overlaid text, thin scratches,
-30-pixel blobs) and on sharp stripes crossed by a 6-pixel slot, it compares
+30-pixel blobs) and on sharp stripes crossed by a 6-pixel slot (vertical stripes, and diagonal ones), it compares
 clpde.inpaint with cv2.inpaint (INPAINT_NS and INPAINT_TELEA, radius 3) and
 skimage.restoration.inpaint_biharmonic: PSNR and SSIM inside the mask, and wall time.
 Note that OpenCV's INPAINT_NS is not an iterative Navier-Stokes solver: like INPAINT_TELEA
@@ -76,10 +76,12 @@ def blob_mask(shape, count=8, diameter=30, seed=2):
     return mask
 
 
-def stripes_case(size=128, period=16, slot=6):
-    """Sharp diagonal stripes (anti-aliased edges) with a horizontal slot `slot` px high."""
+def stripes_case(size=128, period=16, slot=6, angle=0.0):
+    """Sharp stripes (anti-aliased edges) with a horizontal slot `slot` px high. angle=0:
+    vertical stripes, perpendicular to the slot (the canonical case); angle=0.6 (radians):
+    stripes meeting the slot at about 56 degrees."""
     y, x = np.mgrid[0:size, 0:size].astype(float)
-    phase = (x * np.cos(0.6) + y * np.sin(0.6)) / period
+    phase = (x * np.cos(angle) + y * np.sin(angle)) / period
     image = np.clip(0.5 + 2.0 * np.sin(2 * np.pi * phase), 0, 1)
     image = (np.round((0.15 + 0.7 * image) * 255)).astype(np.uint8)
     mask = np.zeros((size, size), bool)
@@ -153,6 +155,8 @@ def cases(quick=False):
         out.append(("blobs", name, image, blob_mask(shape)))
     image, mask = stripes_case()
     out.append(("stripes-slot", "stripes", image, mask))
+    image, mask = stripes_case(angle=0.6)
+    out.append(("diagonal-stripes-slot", "stripes", image, mask))
     return out
 
 

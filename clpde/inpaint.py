@@ -25,8 +25,10 @@ How this implementation runs it (all on the OpenCL device):
   (g_eps = 1 in Omega, falling as a cosine to 0 at distance epsilon from Omega). Known
   pixels next to Omega feed the boundary; after each diffusion batch the known pixels of
   the band are reset, so values outside Omega never drift.
-- Every `check_every` cycles the largest change inside Omega is reduced on the device; the
-  run stops once it falls below `tol` (or after `max_steps`).
+- Every `check_every` cycles the largest and the mean change inside Omega are reduced on the
+  device; the run stops once the largest falls below `tol` or the mean below `mean_tol` (or
+  after `max_steps`). The mean test is the one that ends runs on photos, where a few pixels
+  never settle (see `inpaint`'s docstring).
 - Multiresolution: Omega's thickness picks the number of levels (one for text and
   scratches); the converged coarse level, upsampled, starts the next one.
 - The output equals the input bit for bit outside the mask.
@@ -91,7 +93,8 @@ class InpaintParams:
     scaling: str = "none"
     rotation: str = "ccw"
     max_steps: int = 3000
-    tol: float = 1e-3
+    tol: float = 1e-4  # on the largest change in Omega over a check interval
+    mean_tol: float = 2e-4  # on the mean change in Omega over a check interval
     check_every: int = 2  # cycles of A + B steps
     fill: str = "diffusion"
     keep_band: bool = True
@@ -177,8 +180,10 @@ def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
         low = 1 if name in ("transport_steps", "check_every") else 0
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
             raise InputError(f"{name} must be an integer >= {low}, not {v!r}")
-    if not np.isfinite(p.tol) or p.tol < 0:
-        raise InputError(f"tol must be a number >= 0, not {p.tol}")
+    for name in ("tol", "mean_tol"):
+        v = getattr(p, name)
+        if not np.isfinite(v) or v < 0:
+            raise InputError(f"{name} must be a number >= 0, not {v}")
     if p.scaling not in SCALINGS:
         raise InputError(f"scaling must be one of {', '.join(SCALINGS)}, not {p.scaling!r}")
     if p.rotation not in ROTATIONS:
@@ -234,6 +239,7 @@ class LevelSolver:
         self.k_fill = k("inpaint_fill")
         self.k_copy = k("inpaint_copy")
         self.k_change = k("inpaint_max_change")
+        self.k_sum_change = k("inpaint_sum_change")
         self.k_ghosts = k("inpaint_ghosts")
         self.sx = np.int32(g.sx)
         self.rot = g.scalar(1.0 if params.rotation == "ccw" else -1.0)
@@ -351,6 +357,15 @@ class LevelSolver:
         g.launch_list(self.k_change, lst, self.pair.cur.data.data, self.prev.data.data, partial.data)
         return float(partial.get().max())
 
+    def mean_change(self) -> float:
+        """Mean |cur - prev| over Omega and the channels (device partial sums)."""
+        g, lst = self.grid, self.omega_list
+        (gsize,), _, _ = g.runtime.list_launch(lst.n)
+        partial = cla.empty(self.q, (g.nc, gsize), g.dtype)
+        g.launch_list(self.k_sum_change, lst, self.pair.cur.data.data, self.prev.data.data,
+                      partial.data)
+        return float(partial.get().astype(np.float64).sum()) / max(lst.n * g.nc, 1)
+
     def cycle(self) -> None:
         """A transport steps, then B diffusion steps."""
         for _ in range(self.p.transport_steps):
@@ -365,11 +380,14 @@ class LevelSolver:
             self._sync(self.band_list)
         self.steps += self.p.transport_steps + self.p.diffusion_steps
 
-    def run(self, max_steps: int, tol: float):
-        """Cycle until converged or max_steps; yields (steps, change) after every check."""
+    def run(self, max_steps: int, tol: float, mean_tol: float = 0.0):
+        """Cycle until converged or max_steps; yields (steps, change) after every check
+        (change: the largest change in Omega). Converged: the largest change is below
+        `tol`, or the mean change below `mean_tol`; `self.converged` tells."""
         p = self.p
         self.prev.assign(self.pair.cur)
         cycles = 0
+        self.converged = False
         while self.steps < max_steps:
             self.cycle()
             cycles += 1
@@ -380,8 +398,9 @@ class LevelSolver:
                         f"the inpainting diverged after {self.steps} steps (change {change:g}); "
                         "use a smaller dt or more diffusion_steps"
                     )
+                self.converged = change < tol or (mean_tol > 0 and self.mean_change() < mean_tol)
                 yield self.steps, change
-                if change < tol:
+                if self.converged:
                     return
                 self.grid.launch_list(self.k_copy, self.omega_list, self.pair.cur.data.data,
                                       self.prev.data.data)
@@ -493,10 +512,10 @@ class Inpainting:
                     yield InpaintState(0, 0, self._to_image(solver.result()))
                 last_yield = 0
                 done = 0
-                for steps, change in solver.run(p.max_steps, p.tol):
+                for steps, change in solver.run(p.max_steps, p.tol, p.mean_tol):
                     bar.update(steps - done)
                     done = steps
-                    if change is not None and change < p.tol:
+                    if solver.converged:
                         converged = finest
                     if finest and every and steps - last_yield >= every:
                         last_yield = steps
@@ -539,7 +558,7 @@ class Inpainting:
 
 def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
             diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
-            scaling="none", rotation="ccw", max_steps=3000, tol=1e-3, check_every=2,
+            scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=2e-4, check_every=2,
             levels=None, colour="channels", alpha=None, fill="diffusion", keep_band=True, device=None,
             precision=None, progress=None, snapshots=None, return_info=False):
     """Fill the masked region of an image by continuing the isophotes that reach it.
@@ -558,9 +577,14 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         keeps faint structures moving but never settles (the largest change stays near
         dt |I_t|^(1/4)), so with it the run usually ends at max_steps.
     rotation: 'ccw' or 'cw' rotation of the gradient (the steady state is the same).
-    max_steps, tol, check_every: stop after max_steps steps per level, or once the largest
-        change inside Omega over check_every cycles of A + B steps is below tol (in [0, 1]
-        units), checked on the device.
+    max_steps, tol, mean_tol, check_every: stop after max_steps steps per level, or once,
+        over check_every cycles of A + B steps, the largest change inside Omega is below
+        tol or the mean change there is below mean_tol (in [0, 1] units; 0 turns a test
+        off), checked on the device. On photos the largest change rarely settles: a few
+        dozen pixels next to the border cycle as the limiter's branch flips with the sign
+        of beta, and isophotes closed inside Omega keep drifting, while the mean change
+        falls steadily; the mean test (2e-4) also stops near the best PSNR on photos, which
+        slowly falls afterwards as texture of the border is carried inwards.
     levels: number of resolution levels; None picks it from the mask's thickness.
     colour: 'channels' inpaints every channel independently; 'rho-phi-psi' inpaints the
         luminance-chroma model of thesis Figure 3.7 (3 colour channels).
@@ -580,7 +604,8 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         device=device, precision=precision, progress=progress, dt=dt,
         transport_steps=transport_steps, diffusion_steps=diffusion_steps,
         diffusion_dt=diffusion_dt, epsilon=epsilon, presmooth=presmooth, scaling=scaling,
-        rotation=rotation, max_steps=max_steps, tol=tol, check_every=check_every, fill=fill,
+        rotation=rotation, max_steps=max_steps, tol=tol, mean_tol=mean_tol,
+        check_every=check_every, fill=fill,
         keep_band=keep_band,
     )
     if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer))

@@ -117,6 +117,21 @@ __kernel void inpaint_max_change(__global const REAL* restrict a, __global const
     partial[get_global_id(1) * get_global_size(0) + get_global_id(0)] = m;
 }
 
+// Sum of |a - b| over the listed cells: one partial per work-item, (channel, item) order.
+// The host adds the partials and divides by the list's length: the mean change in Omega,
+// which (unlike the largest) is not held up by a handful of pixels in a limit cycle.
+__kernel void inpaint_sum_change(__global const REAL* restrict a, __global const REAL* restrict b,
+                                 __global REAL* restrict partial, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    REAL total = 0;
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        total += fabs(a[i] - b[i]);  // a NaN propagates into the sum
+    }
+    partial[get_global_id(1) * get_global_size(0) + get_global_id(0)] = total;
+}
+
 // Neumann ghosts, only where the lists reach the border: pairs (ghost, source) of padded
 // plane indices, the source being the ghost's mirror image across the border (as
 // Field.fill_ghosts does). One tiny launch instead of refilling the whole ghost frame.

@@ -46,7 +46,7 @@ def test_cw_and_ccw_rotations_reach_the_same_steady_state():
     runs = {}
     for rot in ("ccw", "cw"):
         early = clpde.inpaint(image, hole, rotation=rot, fill="mean", max_steps=68, tol=0)
-        final, info = clpde.inpaint(image, hole, rotation=rot, fill="mean", tol=1e-4,
+        final, info = clpde.inpaint(image, hole, rotation=rot, fill="mean", tol=1e-4, mean_tol=0,
                                     max_steps=8000, return_info=True)
         assert info.converged
         runs[rot] = early, final
@@ -104,8 +104,12 @@ def test_convergence_check_stops_early_and_fixed_steps_run_fully():
     hole = _disc(32, 16, 16, 4)
     _, info = clpde.inpaint(image, hole, tol=1e-2, return_info=True)
     assert info.converged and info.steps < 3000
-    _, info = clpde.inpaint(image, hole, tol=0, max_steps=170, return_info=True)
+    _, info = clpde.inpaint(image, hole, tol=0, mean_tol=0, max_steps=170, return_info=True)
     assert not info.converged and info.steps == 170
+    # The mean-change test alone also ends a run, and earlier than a strict largest-change one.
+    _, by_mean = clpde.inpaint(image, hole, tol=0, mean_tol=1e-3, return_info=True)
+    _, by_max = clpde.inpaint(image, hole, tol=1e-5, mean_tol=0, max_steps=6000, return_info=True)
+    assert by_mean.converged and by_mean.steps < by_max.steps
 
 
 # ---- colour --------------------------------------------------------------------------------
@@ -215,6 +219,7 @@ def test_snapshots_and_object_form():
     (dict(transport_steps=0), "transport_steps"),
     (dict(fill="noise"), "fill"),
     (dict(tol=-1), "tol"),
+    (dict(mean_tol=-1), "mean_tol"),
 ])
 def test_bad_inputs(kwargs, match):
     image = np.random.default_rng(0).random((8, 8))

@@ -83,3 +83,13 @@ def test_max_change_reduction():
     solver.transport_step()
     diff = np.abs(solver.result() - solver.prev.to_host())
     assert solver.max_change() == pytest.approx(diff[:, omega].max(), rel=1e-6)
+
+
+def test_mean_change_reduction():
+    data, omega = _inputs("random", seed=4)
+    solver = _solver(data, omega)
+    solver.prev.assign(solver.pair.cur)
+    solver.transport_step()
+    diff = np.abs(solver.result() - solver.prev.to_host())
+    assert solver.mean_change() == pytest.approx(diff[:, omega].mean(), rel=1e-4)
+    assert solver.mean_change() < solver.max_change()
