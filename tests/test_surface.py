@@ -234,3 +234,25 @@ def test_bad_inputs_are_clear_errors():
         s.heat(np.zeros((3, 3, 3)), t=0.1)
     with pytest.raises(InputError, match="cells from the surface"):
         s.sample(np.zeros(s.shape), np.array([[0.0, 0.0, 0.0]]))
+
+
+def surface_mean(surf, u, width=1.5):
+    """Mean of u over the surface: smeared-delta quadrature on the grid."""
+    d = surf.psi / surf.spacing
+    delta = np.where(np.abs(d) < width, 1 + np.cos(np.pi * d / width), 0.0)
+    return float((delta * u).sum() / delta.sum())
+
+
+def test_heat_on_a_torus_keeps_the_mean_and_decays_to_it():
+    s = ImplicitSurface.torus(1.0, 0.5, spacing=0.08)
+    u = s.field(lambda x, y, z: np.cos(np.arctan2(y, x)) + z + 0.3)
+    before = surface_mean(s, u)
+    v = s.heat(u, t=0.05)
+    w = s.heat(u, t=1.0)
+    # the intrinsic heat flow conserves the integral over the closed surface ...
+    assert abs(surface_mean(s, v) - before) < 2e-3
+    # ... and tends to the constant equal to the mean (the slowest mode, cos of the angle
+    # around the axis, decays as exp(-t / R^2) on average over the tube)
+    band = np.abs(s.psi) < s.spacing
+    assert np.abs(w[band] - before).max() < 0.5 * np.abs(u[band] - before).max()
+    assert np.abs(w[band] - before).max() < np.abs(v[band] - before).max()
