@@ -126,7 +126,6 @@ class PlanarFlow:
         else:
             args = (g.scalar(self.dt), *self._extra)
         g.launch(self._kernel, self.pair.cur.data.data, self.pair.nxt.data.data, *args)
-        self.pair.nxt.fill_ghosts()
         self.pair.swap()
         self.steps_done += 1
         self.time += self.dt

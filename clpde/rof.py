@@ -241,8 +241,7 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
                     finish_k(q, (1,), None, partial.data, lam.data, np.int32(ny),
                              grid.scalar(1.0 / (nx * ny * sigma2[c])), global_offset=(c,))
             grid.launch(step_k, pair.cur.data.data, pair.nxt.data.data, u0.data.data, lam.data,
-                        grid.scalar(dt), eps2)
-            pair.nxt.fill_ghosts()
+                        grid.scalar(dt), eps2)  # the step also refreshes the ghosts
             pair.swap()
             steps += 1
             if steps % check_every == 0 or steps == max_steps:

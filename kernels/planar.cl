@@ -1,6 +1,6 @@
 // Explicit steps of the planar flows on ghost-padded fields (unit grid spacing).
-// Each step reads `u` and writes every interior cell of `v`; the host fills the ghosts of
-// `v` before the next step and swaps the two.
+// Each step reads `u` and writes every interior cell of `v` and its mirror-image ghosts
+// (Neumann borders, MIRROR_GHOSTS), so the host only swaps the two before the next step.
 #include "common.cl"
 
 // Heat flow u_t = Lap u (thesis eq. 4.1), five-point Laplacian. Stable for dt <= 1/4.
@@ -10,6 +10,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
     FOR_EACH_CELL(i) {
         v[i] = u[i] + dt * (u[i - 1] + u[i + 1] + u[i - sx] + u[i + sx] - 4 * u[i]);
     }
+    MIRROR_GHOSTS(v);
 }
 
 // Perona-Malik u_t = div(c(|grad u|) grad u), with c evaluated on each neighbour
@@ -35,6 +36,7 @@ __kernel void perona_malik_step(__global const REAL* restrict u, __global REAL* 
         v[i] = c + dt * (pm_flux(u[i - 1] - c, inv_k2) + pm_flux(u[i + 1] - c, inv_k2) +
                          pm_flux(u[i - sx] - c, inv_k2) + pm_flux(u[i + sx] - c, inv_k2));
     }
+    MIRROR_GHOSTS(v);
 }
 
 // Total-variation flux d / |grad u|_eps across one cell face, given the normal difference d
@@ -67,6 +69,7 @@ __kernel void tv_step(__global const REAL* restrict u, __global REAL* restrict v
         TV_NEIGHBOURHOOD(u, i);
         v[i] = c + dt * TV_DIV;
     }
+    MIRROR_GHOSTS(v);
 }
 
 // Rudin-Osher-Fatemi: u_t = div(grad u / |grad u|_eps) - lambda_c (u - u0), lambda per
@@ -81,6 +84,7 @@ __kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict 
         TV_NEIGHBOURHOOD(u, i);
         v[i] = c + dt * (TV_DIV - lam * (c - u0[i]));
     }
+    MIRROR_GHOSTS(v);
 }
 
 // Dynamic fidelity weight (the planar form of thesis eq. C.2). At a steady state
@@ -148,4 +152,5 @@ __kernel void curvature_step(__global const REAL* restrict u, __global REAL* res
 #endif
         v[i] = u[i] + dt * w * curvature_speed(u, i, sx, eps);
     }
+    MIRROR_GHOSTS(v);
 }

@@ -248,3 +248,26 @@ def test_unstable_dt_is_an_error_stating_the_limit(flow, limit):
 def test_bad_inputs_raise_clear_errors(image, kwargs, match):
     with pytest.raises(InputError, match=match):
         clpde.diffuse(image, **kwargs)
+
+
+@pytest.mark.parametrize("geometry", ["cpu-rows", "one-cell-per-item"])
+@pytest.mark.parametrize("ghost", [1, 2])
+def test_steps_write_their_own_mirror_ghosts(runtime, rng, geometry, ghost):
+    """The step leaves `v` fully padded (as Field.fill_ghosts would) under either launch
+    geometry: one row per work-item (PoCL) or one cell per work-item (GPUs)."""
+    nc, ny, nx = 2, 7, 9
+    grid = Grid(runtime, nx, ny, nc, ghost)
+    cur = Field.from_host(grid, rng.random((nc, ny, nx)))
+    nxt = Field.from_host(grid, np.full((nc, ny, nx), np.nan))
+    nxt.data.fill(np.nan)
+    kernel = grid.kernel("planar.cl", "heat_step")
+    if geometry == "cpu-rows":
+        gsize, lsize, xrun = (1, ny, nc), (1, 1, 1), nx
+    else:
+        gsize, lsize, xrun = (12, 8, nc), (4, 4, 1), 1  # rounded up past the interior
+    kernel(runtime.queue, gsize, lsize, cur.data.data, nxt.data.data, np.float32(0.2),
+           *grid.args(xrun))
+    padded = nxt.data.get()
+    expected = np.pad(grid.interior(padded), ((0, 0), (ghost, ghost), (ghost, ghost)),
+                      mode="symmetric")
+    np.testing.assert_array_equal(padded, expected)
