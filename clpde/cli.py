@@ -316,9 +316,12 @@ def add_inpaint_parser(subparsers) -> None:
     parser.add_argument("--gif-every", type=int, default=100, metavar="N",
                         help="steps between GIF frames (default: 100)")
     parser.add_argument("--max-steps", type=int, default=3000, help="per level (default: 3000)")
-    parser.add_argument("--tol", type=float, default=1e-3,
+    parser.add_argument("--tol", type=float, default=1e-4,
                         help="stop when the largest change in the region over a check interval "
-                             "is below this, intensities in [0, 1] (default: 1e-3; 0 = never)")
+                             "is below this, intensities in [0, 1] (default: 1e-4; 0 = off)")
+    parser.add_argument("--mean-tol", type=float, default=3e-4,
+                        help="stop when the mean change in the region over a check interval "
+                             "is below this (default: 3e-4; 0 = off)")
     parser.add_argument("--dt", type=float, default=0.1, help="time step (default: 0.1)")
     parser.add_argument("--scaling", choices=("none", "quartic-root"), default="none",
                         help="transport update as in eq. 3.6 (none) or appendix A's "
@@ -368,7 +371,7 @@ def run_inpaint(args) -> int:
     parts = split_alpha(image, args.input)
     options = dict(channel_axis=parts.channel_axis, dt=args.dt, scaling=args.scaling,
                    colour=args.colour, levels=args.levels, max_steps=args.max_steps,
-                   tol=args.tol, device=args.device, progress=show_progress(),
+                   tol=args.tol, mean_tol=args.mean_tol, device=args.device, progress=show_progress(),
                    return_info=True)
     if args.gif:
         result, info = inpaint(parts.colour, mask, snapshots=args.gif_every, **options)

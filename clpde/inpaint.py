@@ -14,11 +14,14 @@ How this implementation runs it (all on the OpenCL device):
 - The data is scaled to [0, 1] (the transport term grows with the square of the intensity).
 - The whole image is first smoothed by a few steps of anisotropic diffusion, so that noise
   does not steer the isophote directions (section 3.3.3).
-- Start inside Omega: the harmonic (diffusion) fill on the coarsest level, i.e. the steady
-  state of the heat equation in Omega with the known pixels as boundary values; each finer
-  level starts from the upsampled result of the coarser one. The thesis reports the result to
-  be robust to the start; a smooth one that already matches the border values cuts the
-  number of steps several-fold compared with a constant start.
+- Start inside Omega: the biharmonic fill on the coarsest level (scikit-image's solver,
+  once, on the host), which matches the border's values and slopes; `fill="diffusion"` is
+  the harmonic fill (the steady state of the heat equation in Omega with the known pixels
+  as boundary values, iterated on the device). Each finer level starts from the upsampled
+  result of the coarser one. The thesis reports the steady state to be robust to the start;
+  a smooth one that already matches the border cuts the number of steps several-fold
+  compared with a constant start, and on photos, where the best PSNR comes long before the
+  steady state, the biharmonic start is worth 0.3-0.5 dB (benchmarks/inpaint_quality.py).
 - Index lists, built on the device once per level, restrict the work to Omega-epsilon: the
   transport updates Omega only (its stencil, with the Laplacian at the four neighbours,
   reads known pixels up to two cells outside), the diffusion runs where g_eps > 0
@@ -94,9 +97,9 @@ class InpaintParams:
     rotation: str = "ccw"
     max_steps: int = 3000
     tol: float = 1e-4  # on the largest change in Omega over a check interval
-    mean_tol: float = 2e-4  # on the mean change in Omega over a check interval
+    mean_tol: float = 3e-4  # on the mean change in Omega over a check interval
     check_every: int = 2  # cycles of A + B steps
-    fill: str = "diffusion"
+    fill: str = "biharmonic"
     keep_band: bool = True
 
 
@@ -558,8 +561,8 @@ class Inpainting:
 
 def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
             diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
-            scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=2e-4, check_every=2,
-            levels=None, colour="channels", alpha=None, fill="diffusion", keep_band=True, device=None,
+            scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=3e-4, check_every=2,
+            levels=None, colour="channels", alpha=None, fill="biharmonic", keep_band=True, device=None,
             precision=None, progress=None, snapshots=None, return_info=False):
     """Fill the masked region of an image by continuing the isophotes that reach it.
 
@@ -583,14 +586,19 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         off), checked on the device. On photos the largest change rarely settles: a few
         dozen pixels next to the border cycle as the limiter's branch flips with the sign
         of beta, and isophotes closed inside Omega keep drifting, while the mean change
-        falls steadily; the mean test (2e-4) also stops near the best PSNR on photos, which
+        falls steadily; the mean test (3e-4) also stops near the best PSNR on photos, which
         slowly falls afterwards as texture of the border is carried inwards.
     levels: number of resolution levels; None picks it from the mask's thickness.
     colour: 'channels' inpaints every channel independently; 'rho-phi-psi' inpaints the
         luminance-chroma model of thesis Figure 3.7 (3 colour channels).
     alpha: treat the last channel as alpha, which passes through untouched; None means yes
         for 4-channel images.
-    fill: start inside Omega: 'diffusion' (harmonic fill), 'mean' or 'zero'.
+    fill: start inside Omega (on the coarsest level): 'biharmonic' (scikit-image's
+        biharmonic fill, computed once on the host), 'diffusion' (the harmonic fill,
+        iterated on the device), 'mean' or 'zero'. The steady state hardly depends on it
+        (thesis 3.3.3), but the best PSNR on photos comes early, so the start matters:
+        the biharmonic one is 0.3-0.5 dB better than the harmonic one on the benchmark's
+        text and scratch masks and needs fewer steps.
     keep_band: reset the known pixels of Omega-epsilon after each diffusion batch (True), or
         let the diffusion keep smoothing them cycle after cycle (False).
     snapshots: an integer N: also return intermediate states every N steps of the finest

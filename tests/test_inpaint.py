@@ -33,9 +33,14 @@ def test_straight_isophotes_continue_across_a_hole():
     err = _err(out, image, hole)
     assert err.max() < 0.03 and err.mean() < 0.01, (err.max(), err.mean())
     assert info.converged and info.steps > 0 and info.levels == 1
-    # The start (harmonic fill) is much further off: the flow, not the start, did the work.
+    # From the harmonic fill, much further off, the flow (not the start) does the work.
+    start = clpde.inpaint(image, hole, levels=1, max_steps=0, fill="diffusion")
+    flowed = clpde.inpaint(image, hole, levels=1, fill="diffusion")
+    assert _err(start, image, hole).mean() > 4 * _err(flowed, image, hole).mean()
+    assert _err(flowed, image, hole).max() < 0.03
+    # The default (biharmonic) start is better than the harmonic one, and the flow improves it.
     start = clpde.inpaint(image, hole, levels=1, max_steps=0)
-    assert _err(start, image, hole).mean() > 4 * err.mean()
+    assert _err(start, image, hole).mean() > 2 * err.mean()
 
 
 def test_cw_and_ccw_rotations_reach_the_same_steady_state():

@@ -43,7 +43,8 @@ def test_rgba_keeps_alpha_and_gif_shows_the_evolution(tmp_path, damaged):
     write_image(tmp_path / "rgba.png", rgba)
     out, gif = tmp_path / "out.png", tmp_path / "evolution.gif"
     assert main(["inpaint", str(tmp_path / "rgba.png"), str(maskfile), "-o", str(out),
-                 "--gif", str(gif), "--gif-every", "68", "--max-steps", "340", "--tol", "0"]) == 0
+                 "--gif", str(gif), "--gif-every", "68", "--max-steps", "340", "--tol", "0",
+                 "--mean-tol", "0"]) == 0
     result = read_image(out)
     assert result.shape == rgba.shape and np.array_equal(result[..., 3], rgba[..., 3])
     assert np.array_equal(result[~mask], rgba[~mask])
