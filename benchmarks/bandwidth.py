@@ -7,13 +7,14 @@ For each size (1024^2, 2048^2, 4096^2 float32 by default), on one device:
   the two effective bandwidths is the roofline (the table says which);
 - every kernel's time per launch and its effective bandwidth: the bytes it must read and
   write once per step (e.g. 8 bytes per cell for heat in float32: read u, write v) divided by
-  that time; its ratio to the roofline; the full step's time where a step also refills the
-  ghost layer (Field.fill_ghosts: two thin launches);
+  that time; its ratio to the roofline. The planar steps write their own ghost layer
+  (MIRROR_GHOSTS in kernels/common.cl), so one launch is a whole step; the time of a
+  separate ghost refill (Field.fill_ghosts, two thin launches) is shown for reference;
 - the same step in NumPy, timed with the numpy references of the same schemes
   (tests/reference/), and the speedup per step.
 
 And end to end: clpde.diffuse(image, flow="heat", steps=500) on a 2048^2 float32 image
-(upload, 500 steps with their ghost fills, download), counted as 8 * N * 500 bytes.
+(upload, 500 steps, download), counted as 8 * N * 500 bytes.
 
 Times are the best of several repeats of back-to-back launches. Prints a table; writes JSON.
 
@@ -78,9 +79,9 @@ def host_time(fn, budget=3.0):
 class Case:
     """One kernel: how to launch it on the device and the NumPy reference of its step."""
 
-    def __init__(self, name, bytes_per_cell, launch, numpy_step, ghosts=False):
+    def __init__(self, name, bytes_per_cell, launch, numpy_step):
         self.name, self.bytes_per_cell = name, bytes_per_cell
-        self.launch, self.numpy_step, self.ghosts = launch, numpy_step, ghosts
+        self.launch, self.numpy_step = launch, numpy_step
 
 
 def cases(grid: Grid, rng):
@@ -120,24 +121,24 @@ def cases(grid: Grid, rng):
 
     return [
         Case("heat_step", 8, lambda: grid.launch(heat, ub, vb, f32(0.2)),
-             lambda: ref_planar.heat_step(pad, 0.2), ghosts=True),
+             lambda: ref_planar.heat_step(pad, 0.2)),
         Case("perona_malik_step exp", 8,
              lambda: grid.launch(pm_exp, ub, vb, f32(0.2), f32(1 / 0.05**2)),
-             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "exp"), ghosts=True),
+             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "exp")),
         Case("perona_malik_step rational", 8,
              lambda: grid.launch(pm_rat, ub, vb, f32(0.2), f32(1 / 0.05**2)),
-             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "rational"), ghosts=True),
+             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "rational")),
         Case("tv_step", 8, lambda: grid.launch(tv, ub, vb, f32(0.01), f32(0.05**2)),
-             lambda: ref_planar.tv_step(pad, 0.01, 0.05), ghosts=True),
+             lambda: ref_planar.tv_step(pad, 0.01, 0.05)),
         Case("curvature_step", 8,
              lambda: grid.launch(curv, ub, vb, ub, f32(0.2), f32(1e-10)),
-             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10), ghosts=True),
+             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10)),
         Case("curvature_step weighted", 12,
              lambda: grid.launch(curv_w, ub, vb, weight.data.data, f32(0.2), f32(1e-10)),
-             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10, padw), ghosts=True),
+             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10, padw)),
         Case("rof_step", 12,
              lambda: grid.launch(rof, ub, vb, u0b, lam.data, f32(0.004), f32(0.02**2)),
-             lambda: ref_planar.rof_step(pad, pad0, [8.0], 0.004, 0.02), ghosts=True),
+             lambda: ref_planar.rof_step(pad, pad0, [8.0], 0.004, 0.02)),
         Case("rof_lambda_rows", 8, rows(lam_rows, ub, u0b, partial.data, f32(0.02**2)),
              lambda: ref_planar.rof_lambda(pad, pad0, 0.02, 0.01)),
         Case("rof_dual_step", 28,
@@ -171,13 +172,10 @@ def measure_size(runtime, n, rng, numpy_budget):
         t = device_time(q, case.launch)
         t_np = host_time(case.numpy_step, numpy_budget)
         bw = case.bytes_per_cell * cells / t
-        step = t + (ghost_t if case.ghosts else 0.0)
         out["kernels"].append({
             "kernel": case.name, "bytes_per_cell": case.bytes_per_cell, "ms": t * 1e3,
             "GBps": bw / 1e9, "fraction_of_copy": bw / roof,
-            "step_with_ghosts_ms": step * 1e3 if case.ghosts else None,
             "numpy_ms": t_np * 1e3, "speedup_vs_numpy": t_np / t,
-            "step_speedup_vs_numpy": t_np / step,
         })
     return out
 
@@ -217,14 +215,12 @@ def main(argv=None) -> int:
               f"{res['roofline_GBps']:.1f} GB/s ({res['roofline_from']}); "
               f"fill_ghosts {res['fill_ghosts_ms']:.3f} ms")
         header = (f"  {'kernel':28s} {'B/cell':>6s} {'ms':>8s} {'GB/s':>6s} {'of copy':>7s} "
-                  f"{'step+ghost ms':>13s} {'numpy ms':>9s} {'x numpy':>8s} {'step x':>7s}")
+                  f"{'numpy ms':>9s} {'x numpy':>8s}")
         print(header)
         for k in res["kernels"]:
-            step = f"{k['step_with_ghosts_ms']:.3f}" if k["step_with_ghosts_ms"] else "-"
             print(f"  {k['kernel']:28s} {k['bytes_per_cell']:6d} {k['ms']:8.3f} "
-                  f"{k['GBps']:6.1f} {k['fraction_of_copy']:7.0%} {step:>13s} "
-                  f"{k['numpy_ms']:9.1f} {k['speedup_vs_numpy']:7.1f}x "
-                  f"{k['step_speedup_vs_numpy']:6.1f}x", flush=True)
+                  f"{k['GBps']:6.1f} {k['fraction_of_copy']:7.0%} "
+                  f"{k['numpy_ms']:9.1f} {k['speedup_vs_numpy']:7.1f}x", flush=True)
 
     e2e = end_to_end(runtime)
     roof2048 = next((s["roofline_GBps"] for s in sizes if s["n"] == 2048), None)
@@ -233,8 +229,7 @@ def main(argv=None) -> int:
     print(f"\nend to end: diffuse(2048^2 float32, heat, 500 steps) {e2e['seconds']:.3f} s, "
           f"{e2e['GBps']:.1f} GB/s{frac}")
     print("(B/cell: bytes each step must read and write once; of copy: effective bandwidth / "
-          "roofline; x numpy: numpy reference time / kernel time; step x: the same with the "
-          "ghost refill counted in clpde's step)")
+          "roofline; x numpy: numpy reference time / kernel time)")
 
     result = {"device": runtime.device.name.strip(), "platform": runtime.platform.name.strip(),
               "compute_units": runtime.device.max_compute_units,
