@@ -319,9 +319,9 @@ def add_inpaint_parser(subparsers) -> None:
     parser.add_argument("--tol", type=float, default=1e-4,
                         help="stop when the largest change in the region over a check interval "
                              "is below this, intensities in [0, 1] (default: 1e-4; 0 = off)")
-    parser.add_argument("--mean-tol", type=float, default=3e-4,
+    parser.add_argument("--mean-tol", type=float, default=4e-4,
                         help="stop when the mean change in the region over a check interval "
-                             "is below this (default: 3e-4; 0 = off)")
+                             "is below this (default: 4e-4; 0 = off)")
     parser.add_argument("--dt", type=float, default=0.1, help="time step (default: 0.1)")
     parser.add_argument("--scaling", choices=("none", "quartic-root"), default="none",
                         help="transport update as in eq. 3.6 (none) or appendix A's "
