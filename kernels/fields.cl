@@ -74,21 +74,45 @@ __kernel void write_chunks(__global const uchar* restrict mask, const int n, con
 }
 
 // ---- reductions: one partial per interior row, combined on the host at check time ------
+#define MAX_SEL(p, q) ((q) > (p) ? (q) : (p))
+#define MIN_SEL(p, q) ((q) < (p) ? (q) : (p))
 // op 0: sum a, 1: sum a^2, 2: max |a - b|, 3: sum (a - b)^2, 4: max |a|, 5: min a, 6: max a
 __kernel void row_reduce(__global const REAL* restrict a, __global const REAL* restrict b,
                          const int op, __global REAL* restrict partial, GRID_ARGS)
 {
+#ifdef CLPDE_POCL
+    // Let the sums be reordered, or their fixed order keeps PoCL's loops scalar; maxima and
+    // minima use plain selects (fmax/fmin/fabs, even a select for |x|, keep them scalar).
+#pragma clang fp reassociate(on)
+#endif
     const int y = get_global_id(1);
     if (y >= ny) return;
     const int row = get_global_id(2) * plane + (y + G) * sx + G;
     REAL acc = (op == 5) ? INFINITY : ((op == 6) ? -INFINITY : 0);
-    if (op == 0)      for (int x = 0; x < nx; ++x) acc += a[row + x];
-    else if (op == 1) for (int x = 0; x < nx; ++x) acc += SQR(a[row + x]);
-    else if (op == 2) for (int x = 0; x < nx; ++x) acc = fmax(acc, fabs(a[row + x] - b[row + x]));
-    else if (op == 3) for (int x = 0; x < nx; ++x) acc += SQR(a[row + x] - b[row + x]);
-    else if (op == 4) for (int x = 0; x < nx; ++x) acc = fmax(acc, fabs(a[row + x]));
-    else if (op == 5) for (int x = 0; x < nx; ++x) acc = fmin(acc, a[row + x]);
-    else              for (int x = 0; x < nx; ++x) acc = fmax(acc, a[row + x]);
+    // One loop per operation: a switch inside the loop would keep it scalar.
+    __global const REAL* ra = a + row;
+    __global const REAL* rb = b + row;
+    if (op == 0)      for (int x = 0; x < nx; ++x) acc += ra[x];
+    else if (op == 1) for (int x = 0; x < nx; ++x) acc += SQR(ra[x]);
+    else if (op == 2) {  // max |a - b| = max(max(a - b), -min(a - b)): two plain reductions
+        REAL lo = 0;
+        for (int x = 0; x < nx; ++x) {
+            acc = MAX_SEL(acc, ra[x] - rb[x]);
+            lo = MIN_SEL(lo, ra[x] - rb[x]);
+        }
+        acc = MAX_SEL(acc, -lo);
+    }
+    else if (op == 3) for (int x = 0; x < nx; ++x) acc += SQR(ra[x] - rb[x]);
+    else if (op == 4) {
+        REAL lo = 0;
+        for (int x = 0; x < nx; ++x) {
+            acc = MAX_SEL(acc, ra[x]);
+            lo = MIN_SEL(lo, ra[x]);
+        }
+        acc = MAX_SEL(acc, -lo);
+    }
+    else if (op == 5) for (int x = 0; x < nx; ++x) acc = MIN_SEL(acc, ra[x]);
+    else              for (int x = 0; x < nx; ++x) acc = MAX_SEL(acc, ra[x]);
     partial[get_global_id(2) * ny + y] = acc;
 }
 
