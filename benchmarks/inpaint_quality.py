@@ -136,6 +136,7 @@ def methods():
         "opencv-telea": lambda im, m: run_cv2(im, m, cv2.INPAINT_TELEA),
         "skimage-biharmonic": run_biharmonic,
         "clpde": lambda im, m: run_clpde(im, m),
+        "clpde-harmonic-start": lambda im, m: run_clpde(im, m, fill="diffusion"),
         "clpde-quartic-root": lambda im, m: run_clpde(im, m, scaling="quartic-root"),
     }
 
