@@ -33,7 +33,10 @@ def main():
     parser.add_argument("--out", default="out", help="output folder (default: out/)")
     args = parser.parse_args()
     image, omega = synthetic()
-    result, info = clpde.inpaint(image, omega, return_info=True)
+    # mean_tol=0: run to the thesis' T (or the largest-change test); the default mean test
+    # stops this thick, purely geometric region early (510 steps, mean error 0.055 against
+    # 0.046 after 3009).
+    result, info = clpde.inpaint(image, omega, mean_tol=0, return_info=True)
     shown = np.where(omega, 1.0, image)
     panel = side_by_side(*(np.rint(255 * np.kron(a, np.ones((2, 2)))).astype(np.uint8)
                            for a in (shown, result)))
