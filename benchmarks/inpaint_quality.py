@@ -192,9 +192,10 @@ def best_of(repeats, fn):
 def speed():
     """512x512 colour photo, 10% text mask: clpde to steady state vs OpenCV; and the
     per-step cost against the size of Omega-epsilon and of the image."""
-    import clpde
     import cv2
     from skimage import data
+
+    import clpde
 
     image = data.astronaut()
     mask = text_mask(image.shape[:2], 0.10)
@@ -255,7 +256,7 @@ def summarise(rows):
 
 def print_table(summary, speed_result):
     print("Inpainting quality inside the mask (mean over images)\n")
-    print(f"| mask | method | images | PSNR (dB) | SSIM | time (s) |")
+    print("| mask | method | images | PSNR (dB) | SSIM | time (s) |")
     print("|---|---|---|---|---|---|")
     for s in summary:
         print(f"| {s['mask']} | {s['method']} | {s['n']} | {s['psnr']:.2f} | {s['ssim']:.3f} | "

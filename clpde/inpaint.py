@@ -238,7 +238,7 @@ class LevelSolver:
         self.known = self.pair.cur.copy()
         self.weight = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), weight[None])
 
-        k = lambda name, **d: g.kernel("inpaint.cl", name, **d)  # noqa: E731
+        k = lambda name, **d: g.kernel("inpaint.cl", name, **d)
         self.k_fill = k("inpaint_fill")
         self.k_copy = k("inpaint_copy")
         self.k_change = k("inpaint_max_change")

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from clpde.fields import Field, Grid
 from clpde.inpaint import InpaintParams, LevelSolver
 from clpde.runtime import get_runtime
 from tests.reference import inpaint as ref
