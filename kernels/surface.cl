@@ -11,6 +11,10 @@
 // error grows under refinement.
 #include "common.cl"
 
+// PoCL leaves larger inline helpers as calls inside the band loops, which keeps those loops
+// scalar: force them inline.
+#define INLINE inline __attribute__((always_inline))
+
 // INTERP 3: tricubic Lagrange interpolation (4x4x4 nodes); 1: trilinear (2x2x2).
 #ifndef INTERP
 #define INTERP 3
@@ -61,7 +65,7 @@ __kernel void closest_points(__global const REAL* restrict psi, const REAL inv_h
 // first node clamped into [0, n - NODES] so a read never leaves the volume.
 #if INTERP == 3
 #define NODES 4
-inline int axis_weights(const REAL p, const int n, REAL* w)
+INLINE int axis_weights(const REAL p, const int n, REAL* w)
 {
     const REAL f = floor(p);
     const REAL t = p - f;
@@ -74,7 +78,7 @@ inline int axis_weights(const REAL p, const int n, REAL* w)
 }
 #else
 #define NODES 2
-inline int axis_weights(const REAL p, const int n, REAL* w)
+INLINE int axis_weights(const REAL p, const int n, REAL* w)
 {
     const REAL f = floor(p);
     const REAL t = p - f;
@@ -85,7 +89,7 @@ inline int axis_weights(const REAL p, const int n, REAL* w)
 #endif
 
 // Interpolate all NC channels of u (channel stride `plane`) at (px, py, pz) into out[].
-inline void interpolate(__global const REAL* restrict u, const REAL px, const REAL py,
+INLINE void interpolate(__global const REAL* restrict u, const REAL px, const REAL py,
                         const REAL pz, const int sx, const int sxy, const int pnx,
                         const int pny, const int pnz, const int plane, REAL* out)
 {
@@ -110,20 +114,93 @@ inline void interpolate(__global const REAL* restrict u, const REAL px, const RE
     }
 }
 
+// The interpolation stencil of each closest point, computed once (psi is fixed): the flat
+// padded index of its first node (x0, y0, z0) in base[k] and its position relative to
+// floor(p) in frac[k], frac[nlist + k], frac[2 nlist + k]. The same nodes and weights as
+// interpolate() above; the re-extension then needs no floor, clamp or index arithmetic.
+__kernel void cp_stencils(__global const REAL* restrict cpx, __global const REAL* restrict cpy,
+                          __global const REAL* restrict cpz, const int sx, const int sxy,
+                          const int pnx, const int pny, const int pnz,
+                          __global int* restrict base, __global REAL* restrict frac, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        REAL wx[NODES], wy[NODES], wz[NODES];
+        const int x0 = axis_weights(cpx[k], pnx, wx);
+        const int y0 = axis_weights(cpy[k], pny, wy);
+        const int z0 = axis_weights(cpz[k], pnz, wz);
+        base[k] = z0 * sxy + y0 * sx + x0;
+        frac[k] = cpx[k] - floor(cpx[k]);
+        frac[nlist + k] = cpy[k] - floor(cpy[k]);
+        frac[2 * nlist + k] = cpz[k] - floor(cpz[k]);
+    }
+}
+
+// Weights of the nodes along one axis from the position t in [0, 1) relative to floor(p):
+// the same polynomials as axis_weights, with multiplications instead of divisions.
+INLINE void node_weights(const REAL t, REAL* w)
+{
+#if INTERP == 3
+    const REAL tm1 = t - 1, tm2 = t - 2, tp1 = t + 1;
+    const REAL sixth = (REAL)1 / 6;
+    w[0] = -sixth * t * tm1 * tm2;
+    w[1] = (REAL)0.5 * tp1 * tm1 * tm2;
+    w[2] = (REAL)-0.5 * tp1 * t * tm2;
+    w[3] = sixth * tp1 * t * tm1;
+#else
+    w[0] = 1 - t;
+    w[1] = t;
+#endif
+}
+
+#ifdef REAL_IS_DOUBLE
+#define REAL4 double4
+#else
+#define REAL4 float4
+#endif
+// Four consecutive REALs read as one vector at any REAL-aligned address (PoCL's vload4 is an
+// out-of-line call; this is a plain unaligned vector load).
+typedef REAL4 __attribute__((aligned(sizeof(REAL)))) unaligned_real4;
+#define LOAD4(p) (*(__global const unaligned_real4*)(p))
+
 // Whole-band closest-point re-extension: dst(x) = src(cp(x)) for every band cell, all NC
-// channels. With NORMALIZE the NC-vector is rescaled to unit length (harmonic maps).
+// channels, from the stencils of cp_stencils. With NORMALIZE the NC-vector is rescaled to
+// unit length (harmonic maps). Tricubic: the 4 nodes of a row are contiguous, so each of
+// the 16 rows is one 4-wide load, summed with the y-z weights; one dot product with the x
+// weights at the end.
 #ifndef NORMALIZE
 #define NORMALIZE 0
 #endif
 __kernel void extend_cp(__global const REAL* restrict src, __global REAL* restrict dst,
-                        __global const REAL* restrict cpx, __global const REAL* restrict cpy,
-                        __global const REAL* restrict cpz, const int sx, const int sxy,
-                        const int pnx, const int pny, const int pnz, LIST_ARGS)
+                        __global const int* restrict base, __global const REAL* restrict frac,
+                        const int sx, const int sxy, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
+        REAL wx[NODES], wy[NODES], wz[NODES];
+        node_weights(frac[k], wx);
+        node_weights(frac[nlist + k], wy);
+        node_weights(frac[2 * nlist + k], wz);
+        const int b0 = base[k];
         REAL v[NC];
-        interpolate(src, cpx[k], cpy[k], cpz[k], sx, sxy, pnx, pny, pnz, plane, v);
+        for (int c = 0; c < NC; ++c) {
+            __global const REAL* u = src + c * plane + b0;
+#if INTERP == 3
+            REAL4 acc = 0;
+            for (int a = 0; a < 4; ++a)
+                for (int b = 0; b < 4; ++b)
+                    acc += (wz[a] * wy[b]) * LOAD4(u + a * sxy + b * sx);
+            v[c] = acc.x * wx[0] + acc.y * wx[1] + acc.z * wx[2] + acc.w * wx[3];
+#else
+            REAL acc = 0;
+            for (int a = 0; a < 2; ++a)
+                for (int b = 0; b < 2; ++b) {
+                    const int row = a * sxy + b * sx;
+                    acc += (wz[a] * wy[b]) * (wx[0] * u[row] + wx[1] * u[row + 1]);
+                }
+            v[c] = acc;
+#endif
+        }
 #if NORMALIZE
         REAL n2 = 0;
         for (int c = 0; c < NC; ++c) n2 += v[c] * v[c];
@@ -163,7 +240,7 @@ __kernel void sample_points(__global const REAL* restrict u, __global const REAL
 
 typedef struct { REAL x, y, z; } vec3r;
 
-inline vec3r psi_normal(__global const REAL* restrict psi, const int j, const int sx,
+INLINE vec3r psi_normal(__global const REAL* restrict psi, const int j, const int sx,
                         const int sxy)
 {
     vec3r n;
@@ -174,7 +251,7 @@ inline vec3r psi_normal(__global const REAL* restrict psi, const int j, const in
 }
 
 // |N| P_N v (or P_N v) at cell j.
-inline vec3r heat_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
+INLINE vec3r heat_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
                        const int j, const int ex, const int ey, const int ez, const int sx,
                        const int sxy)
 {
@@ -199,7 +276,7 @@ inline vec3r heat_flux(__global const REAL* restrict u, __global const REAL* res
 }
 
 // The appendix-E divergence of the flux at cell i (grid units).
-inline REAL heat_div(__global const REAL* restrict u, __global const REAL* restrict psi,
+INLINE REAL heat_div(__global const REAL* restrict u, __global const REAL* restrict psi,
                      const int i, const int ex, const int ey, const int ez, const int sx,
                      const int sxy)
 {
@@ -251,7 +328,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 #define ALONG 0
 #endif
 
-inline REAL flow_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
+INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
                       __global const REAL* restrict dir, const int j, const int ex,
                       const int ey, const int ez, const int sx, const int sxy, const int plane,
                       const REAL e2, REAL w[NC][3])
@@ -412,13 +489,13 @@ __kernel void extend_pde_step(__global const REAL* restrict u, __global REAL* re
 // and Russo and Smereka's subcell fix on cells next to the surface: there the update pulls
 // phi towards D = phi0 / |grad phi0| (a distance estimate from phi0 itself), so the zero
 // level set does not move. World units; r = dt / h.
-inline REAL godunov_sq(const REAL back, const REAL fwd, const REAL s)
+INLINE REAL godunov_sq(const REAL back, const REAL fwd, const REAL s)
 {
     return s > 0 ? fmax(SQR(fmax(back, (REAL)0)), SQR(fmin(fwd, (REAL)0)))
                  : fmax(SQR(fmin(back, (REAL)0)), SQR(fmax(fwd, (REAL)0)));
 }
 
-inline REAL subcell_slope(__global const REAL* restrict p, const int i, const int s)
+INLINE REAL subcell_slope(__global const REAL* restrict p, const int i, const int s)
 {
     return fmax(fmax(fabs(p[i + s] - p[i - s]) * (REAL)0.5, fabs(p[i + s] - p[i])),
                 fmax(fabs(p[i] - p[i - s]), (REAL)1e-12));
@@ -515,7 +592,7 @@ __kernel void principal_directions(__global const REAL* restrict psi, const REAL
 // ---- reaction-diffusion (Turk), eqs. (4.12)-(4.14), in grid units ---------------------------
 // a += dt (s (16 - a b) + Da div(P grad a)), b += dt (s (a b - b - beta) + Db div(P grad b)),
 // b clamped at >= 0. With ALONG, a diffuses along the tangent field d only (4.14).
-inline vec3r along_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
+INLINE vec3r along_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
                         __global const REAL* restrict dir, const int j, const int ex,
                         const int ey, const int ez, const int sx, const int sxy, const int plane)
 {
@@ -560,12 +637,12 @@ __kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict
 
 // Closest point to p on triangle (a, b, c), by the Voronoi regions of its vertices, edges and
 // face (as in Ericson's Real-Time Collision Detection, section 5.1.5).
-inline vec3r v3(const REAL x, const REAL y, const REAL z) { vec3r r; r.x = x; r.y = y; r.z = z; return r; }
-inline vec3r v3sub(const vec3r a, const vec3r b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-inline REAL v3dot(const vec3r a, const vec3r b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline vec3r v3mad(const vec3r a, const REAL s, const vec3r d) { return v3(a.x + s * d.x, a.y + s * d.y, a.z + s * d.z); }
+INLINE vec3r v3(const REAL x, const REAL y, const REAL z) { vec3r r; r.x = x; r.y = y; r.z = z; return r; }
+INLINE vec3r v3sub(const vec3r a, const vec3r b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+INLINE REAL v3dot(const vec3r a, const vec3r b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+INLINE vec3r v3mad(const vec3r a, const REAL s, const vec3r d) { return v3(a.x + s * d.x, a.y + s * d.y, a.z + s * d.z); }
 
-inline vec3r closest_on_triangle(const vec3r p, const vec3r a, const vec3r b, const vec3r c)
+INLINE vec3r closest_on_triangle(const vec3r p, const vec3r a, const vec3r b, const vec3r c)
 {
     const vec3r ab = v3sub(b, a), ac = v3sub(c, a), ap = v3sub(p, a);
     const REAL d1 = v3dot(ab, ap), d2 = v3dot(ac, ap);

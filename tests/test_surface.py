@@ -69,6 +69,16 @@ def test_closest_points_match_reference(small_sphere):
 
 
 @pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
+def test_cp_stencils_match_reference(small_sphere, interpolation, order):
+    s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation) if order == 1 else small_sphere
+    n = s.ext_band.n
+    cp = np.stack([c.get()[:n] for c in s.cp]).astype(np.float64)
+    base, frac = ref.cp_stencils(cp, s.grid.padded_shape, order)
+    np.testing.assert_array_equal(s.cp_base.get()[:n], base)
+    np.testing.assert_allclose(s.cp_frac.get()[:, :n], frac, atol=1e-6)
+
+
+@pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
 @pytest.mark.parametrize("nc,normalize", [(1, False), (3, True)])
 def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc, normalize):
     s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation) if order == 1 else small_sphere
@@ -77,8 +87,8 @@ def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc
         src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
         dst = cla.zeros_like(src)
         kernel = g.kernel("extend_cp", INTERP=order, NC=nc, NORMALIZE=int(normalize))
-        g.launch_list(kernel, s.ext_band, src.data, dst.data, *(c.data for c in s.cp),
-                      *g.strides(), *g.padded_dims())
+        g.launch_list(kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
+                      *g.strides())
         band = band_host(s.ext_band)
         cp = np.stack([c.get()[: band.size] for c in s.cp]).astype(np.float64)
         expect = ref.extend_cp(u.astype(np.float32).astype(np.float64), band, cp, order, normalize)

@@ -90,8 +90,8 @@ class BandFlow:
     def _extend(self, src, dst) -> None:
         s, g = self.surf, self.surf.grid
         g.launch_list(
-            self._extend_kernel, s.ext_band, src.data, dst.data, s.cp[0].data, s.cp[1].data,
-            s.cp[2].data, *g.strides(), *g.padded_dims(),
+            self._extend_kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
+            *g.strides(),
         )
 
     def after_step(self) -> None:

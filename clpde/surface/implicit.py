@@ -96,6 +96,7 @@ class ImplicitSurface:
         if self._check_border:
             self._check_band_clear_of_border()
         self.cp = self._closest_points()
+        self.cp_base, self.cp_frac = self._cp_stencils()
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
@@ -253,6 +254,20 @@ class ImplicitSurface:
             g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
         )
         return cp
+
+    def _cp_stencils(self):
+        """Per extension-band cell: the flat index of its closest point's first interpolation
+        node and the point's offsets (3, n) from floor(cp), on the device (psi is fixed, so
+        the re-extension after each step only gathers and weighs)."""
+        g, q = self.grid, self.runtime.queue
+        n = max(self.ext_band.n, 1)
+        base = cla.empty(q, n, np.int32)
+        frac = cla.empty(q, (3, n), g.dtype)
+        g.launch_list(
+            g.kernel("cp_stencils", INTERP=self.interp), self.ext_band, *(c.data for c in self.cp),
+            *g.strides(), *g.padded_dims(), base.data, frac.data,
+        )
+        return base, frac
 
     def _check_band_clear_of_border(self) -> None:
         """Band cells must keep 2 cells from the volume's border, so that every stencil

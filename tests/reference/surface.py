@@ -63,6 +63,16 @@ def interpolate(u_pad, points, order=3):
     return out
 
 
+def cp_stencils(points, padded_shape, order=3):
+    """Flat padded index of each point's first interpolation node, and the point's offsets
+    (3, n) from floor(point): what kernels/surface.cl's cp_stencils stores per band cell."""
+    pz, py, px = padded_shape
+    x0, _ = _axis_weights(points[0], px, order)
+    y0, _ = _axis_weights(points[1], py, order)
+    z0, _ = _axis_weights(points[2], pz, order)
+    return z0 * px * py + y0 * px + x0, points - np.floor(points)
+
+
 def extend_cp(u_pad, band, cp, order=3, normalize=False):
     """The band's new values (nc, n): u interpolated at the closest points."""
     v = interpolate(u_pad, cp, order)
