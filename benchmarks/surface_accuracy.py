@@ -152,7 +152,7 @@ def _time_size(n, steps):
     q = surf.runtime.queue
 
     def one_step():
-        g.launch_list(kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
+        g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
                       *_offsets(g, 0), *g.strides())
 
     def run(what, count):

@@ -38,6 +38,36 @@ __kernel void band_mask(__global const REAL* restrict psi, __global uchar* restr
     for (int x = 0; x < nx; ++x) mask[row + x] = fabs(psi[row + x]) < width;
 }
 
+// Band runs: maximal stretches of consecutive cells along x in a band list. flags[k] = 1
+// where entry k starts a run; the host compacts the flags into run offsets (the positions
+// of the run starts in the list, plus the list's length at the end).
+__kernel void band_run_starts(__global const int* restrict list, const int n,
+                              __global uchar* restrict flags)
+{
+    const int k = get_global_id(0);
+    if (k >= n) return;
+    flags[k] = k == 0 || list[k - 1] != list[k] - 1;
+}
+
+// Kernels over band runs take these arguments after their own: the band list, the run
+// offsets (nruns + 1 entries), the channel stride and runs per work-item. On CPUs a
+// work-item walks whole runs, whose cells are consecutive in memory, so the cell loop
+// vectorises with contiguous loads (on GPUs every cell is a run of its own). Use as
+//     RUN_RANGE(r0, r1, chan);
+//     for (int r = r0; r < r1; ++r) {
+//         RUN_CELLS(r, begin, end);
+//         for (int i = begin; i < end; ++i) { ... chan + i ... }
+//     }
+#define RUN_ARGS __global const int* restrict list, __global const int* restrict offsets, \
+                 const int nruns, const int plane, const int runs_per_item
+#define RUN_RANGE(r0, r1, chan)                                                       \
+    const int r0 = get_global_id(0) * runs_per_item;                                  \
+    const int r1 = min(r0 + runs_per_item, nruns);                                    \
+    const int chan = get_global_id(1) * plane
+#define RUN_CELLS(r, begin, end)                                                      \
+    const int begin = list[offsets[r]];                                               \
+    const int end = begin + offsets[(r) + 1] - offsets[r]
+
 // Closest points x - psi grad(psi) / |grad(psi)| of the band cells, in padded index units
 // (grad by central differences; psi in grid units = world units / spacing).
 __kernel void closest_points(__global const REAL* restrict psi, const REAL inv_h,
@@ -136,32 +166,32 @@ __kernel void cp_stencils(__global const REAL* restrict cpx, __global const REAL
     }
 }
 
-// Weights of the nodes along one axis from the position t in [0, 1) relative to floor(p):
-// the same polynomials as axis_weights, with multiplications instead of divisions.
-INLINE void node_weights(const REAL t, REAL* w)
-{
-#if INTERP == 3
-    const REAL tm1 = t - 1, tm2 = t - 2, tp1 = t + 1;
-    const REAL sixth = (REAL)1 / 6;
-    w[0] = -sixth * t * tm1 * tm2;
-    w[1] = (REAL)0.5 * tp1 * tm1 * tm2;
-    w[2] = (REAL)-0.5 * tp1 * t * tm2;
-    w[3] = sixth * tp1 * t * tm1;
-#else
-    w[0] = 1 - t;
-    w[1] = t;
-#endif
-}
-
 #ifdef REAL_IS_DOUBLE
+#define REAL2 double2
 #define REAL4 double4
 #else
+#define REAL2 float2
 #define REAL4 float4
 #endif
 // Four consecutive REALs read as one vector at any REAL-aligned address (PoCL's vload4 is an
 // out-of-line call; this is a plain unaligned vector load).
 typedef REAL4 __attribute__((aligned(sizeof(REAL)))) unaligned_real4;
 #define LOAD4(p) (*(__global const unaligned_real4*)(p))
+
+// Weights of the nodes along one axis from the position t in [0, 1) relative to floor(p):
+// axis_weights' polynomials, the four cubic ones expanded in powers of t and computed at once.
+#if INTERP == 3
+INLINE REAL4 node_weights(const REAL t)
+{
+    const REAL4 c3 = (REAL4)(-1, 3, -3, 1) / 6;
+    const REAL4 c2 = (REAL4)(3, -6, 3, 0) / 6;
+    const REAL4 c1 = (REAL4)(-2, -3, 6, -1) / 6;
+    const REAL4 c0 = (REAL4)(0, 1, 0, 0);
+    return ((c3 * t + c2) * t + c1) * t + c0;
+}
+#else
+INLINE REAL2 node_weights(const REAL t) { return (REAL2)(1 - t, t); }
+#endif
 
 // Whole-band closest-point re-extension: dst(x) = src(cp(x)) for every band cell, all NC
 // channels, from the stencils of cp_stencils. With NORMALIZE the NC-vector is rescaled to
@@ -177,26 +207,28 @@ __kernel void extend_cp(__global const REAL* restrict src, __global REAL* restri
 {
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
-        REAL wx[NODES], wy[NODES], wz[NODES];
-        node_weights(frac[k], wx);
-        node_weights(frac[nlist + k], wy);
-        node_weights(frac[2 * nlist + k], wz);
         const int b0 = base[k];
+        const REAL tx = frac[k], ty = frac[nlist + k], tz = frac[2 * nlist + k];
         REAL v[NC];
         for (int c = 0; c < NC; ++c) {
             __global const REAL* u = src + c * plane + b0;
 #if INTERP == 3
+            const REAL4 wy = node_weights(ty), wz = node_weights(tz);
             REAL4 acc = 0;
-            for (int a = 0; a < 4; ++a)
-                for (int b = 0; b < 4; ++b)
-                    acc += (wz[a] * wy[b]) * LOAD4(u + a * sxy + b * sx);
-            v[c] = acc.x * wx[0] + acc.y * wx[1] + acc.z * wx[2] + acc.w * wx[3];
+            for (int a = 0; a < 4; ++a) {
+                __global const REAL* slab = u + a * sxy;
+                acc += wz[a] * (wy.x * LOAD4(slab) + wy.y * LOAD4(slab + sx) +
+                                wy.z * LOAD4(slab + 2 * sx) + wy.w * LOAD4(slab + 3 * sx));
+            }
+            const REAL4 wx = node_weights(tx);
+            v[c] = acc.x * wx.x + acc.y * wx.y + acc.z * wx.z + acc.w * wx.w;
 #else
+            const REAL2 wx = node_weights(tx), wy = node_weights(ty), wz = node_weights(tz);
             REAL acc = 0;
             for (int a = 0; a < 2; ++a)
                 for (int b = 0; b < 2; ++b) {
                     const int row = a * sxy + b * sx;
-                    acc += (wz[a] * wy[b]) * (wx[0] * u[row] + wx[1] * u[row + 1]);
+                    acc += (wz[a] * wy[b]) * (wx.x * u[row] + wx.y * u[row + 1]);
                 }
             v[c] = acc;
 #endif
@@ -296,13 +328,15 @@ INLINE REAL heat_div(__global const REAL* restrict u, __global const REAL* restr
 // One explicit step v = u + r * div(...) over the band (r = dt / h^2), every channel.
 __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                         __global const REAL* restrict psi, const REAL r, const int ex,
-                        const int ey, const int ez, const int sx, const int sxy, LIST_ARGS)
+                        const int ey, const int ez, const int sx, const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
+    RUN_RANGE(r0, r1, chan);
     __global const REAL* uc = u + chan;
-    for (int k = k0; k < k1; ++k) {
-        const int i = list[k];
-        v[chan + i] = uc[i] + r * heat_div(uc, psi, i, ex, ey, ez, sx, sxy);
+    __global REAL* vc = v + chan;
+    for (int run = r0; run < r1; ++run) {
+        RUN_CELLS(run, begin, end);
+        for (int i = begin; i < end; ++i)
+            vc[i] = uc[i] + r * heat_div(uc, psi, i, ex, ey, ez, sx, sxy);
     }
 }
 

@@ -137,13 +137,27 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         dst = cla.zeros_like(src)
         offsets = _offsets(g, sides)
         kernel = g.kernel("heat_step", WEIGHTED=int(weighted))
-        g.launch_list(kernel, s.step_band, src.data, dst.data, psi_dev.data, g.scalar(0.1),
+        g.launch_runs(kernel, s.step_runs, src.data, dst.data, psi_dev.data, g.scalar(0.1),
                       *offsets, *g.strides(), channels=u.shape[0])
         band = band_host(s.step_band)
         expect = ref.heat_step(u32.astype(np.float64), psi.astype(np.float64), band, 0.1,
                                [int(o) for o in offsets], weighted)
-        got = dst.get().reshape(u.shape[0], -1)[:, band]
-        np.testing.assert_allclose(got, expect, atol=2e-5 * max(1, np.abs(expect).max()))
+        out = dst.get().reshape(u.shape[0], -1)
+        np.testing.assert_allclose(out[:, band], expect, atol=2e-5 * max(1, np.abs(expect).max()))
+        # the runs cover the band and nothing else
+        out[:, band] = 0
+        assert not out.any()
+
+
+def test_band_runs_are_maximal_stretches_of_the_band(small_sphere):
+    s = small_sphere
+    band = band_host(s.step_band)
+    offsets = s.step_runs.offsets.get()
+    assert offsets[0] == 0 and offsets[-1] == band.size and np.all(np.diff(offsets) > 0)
+    if s.runtime.is_cpu:
+        expect = np.flatnonzero(np.diff(band, prepend=-2) != 1)
+        np.testing.assert_array_equal(offsets[:-1], expect)
+        assert s.step_runs.n < band.size / 3  # runs are many cells long on a sphere's band
 
 
 # ---- the mathematics --------------------------------------------------------------------------

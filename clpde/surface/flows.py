@@ -128,8 +128,8 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
     r = g.scalar(dt / surf.spacing**2)
     for n in _progress(progress, steps, "surface heat"):
         sides = _ALL_SIDES[n % 8] if alternate else 0
-        g.launch_list(
-            kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
+        g.launch_runs(
+            kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
             *_offsets(g, sides), *g.strides(), channels=flow.nc,
         )
         flow.after_step()

@@ -18,6 +18,18 @@ from ..runtime import ClpdeError, Runtime
 
 
 @dataclass(frozen=True)
+class BandRuns:
+    """A band list cut into runs of consecutive cells along x (kernels' RUN_ARGS).
+
+    offsets (nruns + 1 entries, on the device) are the positions in the band list where runs
+    start, then the list's length. On GPUs every cell is a run of its own."""
+
+    band: IndexList
+    offsets: cla.Array
+    n: int
+
+
+@dataclass(frozen=True)
 class Grid3D:
     """Geometry of a padded 3D volume on one device."""
 
@@ -100,6 +112,30 @@ class Grid3D:
             *self.strides(), np.int32(self.ghost),
         )
         return compact(self.runtime, mask)
+
+    def runs(self, band: IndexList) -> BandRuns:
+        """The band's runs of consecutive cells (on CPUs; single cells on GPUs), on the device."""
+        q = self.runtime.queue
+        n = band.n
+        if n == 0 or not self.runtime.is_cpu:
+            return BandRuns(band, cla.arange(q, 0, n + 1, dtype=np.int32), n)
+        flags = cla.empty(q, n, np.uint8)
+        self.kernel("band_run_starts")(q, (n,), None, band.indices.data, np.int32(n), flags.data)
+        starts = compact(self.runtime, flags)
+        offsets = cla.empty(q, starts.n + 1, np.int32)
+        offsets[: starts.n] = starts.indices[: starts.n]
+        offsets[starts.n :] = n
+        return BandRuns(band, offsets, starts.n)
+
+    def launch_runs(self, kernel, runs: BandRuns, *args, channels: int = 1):
+        """Run a RUN_RANGE kernel over a band's runs, `channels` work-items per run."""
+        if runs.n == 0:
+            return None
+        (gsize,), (lsize,), per_item = self.runtime.list_launch(runs.n)
+        return kernel(
+            self.runtime.queue, (gsize, channels), (lsize, 1), *args, runs.band.indices.data,
+            runs.offsets.data, np.int32(runs.n), np.int32(self.volume), np.int32(per_item),
+        )
 
     def launch_list(self, kernel, band: IndexList, *args, channels: int = 1):
         """Run a LIST_RANGE kernel over a band, `channels` work-items per band cell."""

@@ -93,6 +93,7 @@ class ImplicitSurface:
         psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
+        self.step_runs = self.grid.runs(self.step_band)
         if self._check_border:
             self._check_band_clear_of_border()
         self.cp = self._closest_points()
