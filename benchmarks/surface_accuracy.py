@@ -167,11 +167,12 @@ def _time_size(n, steps):
     run(flow.after_step, 2)
     t_step = run(one_step, steps)
     t_ext = run(flow.after_step, steps)
-    # bytes each kernel must move at least: step = index + u + psi read, tmp write;
-    # extension = index + 3 closest-point coordinates read, one value written (the
+    # bytes each kernel must move at least: the step reads u and psi and writes tmp on each
+    # node (its runs cost two list reads each); the re-extension reads the index, the
+    # stencil's base and three offsets and writes one value per reach cell (the
     # interpolation's reads are neighbours, counted once through the written value).
-    b_step = surf.step_band.n * 16
-    b_ext = surf.ext_band.n * (4 + 12 + 4 + 4)
+    b_step = surf.node_band.n * 12 + surf.step_runs.n * 8
+    b_ext = surf.reach_band.n * (4 + 4 + 12 + 4)
     nbytes = 256 * 2**20
     a = cla.empty(q, nbytes // 4, np.float32)
     a.fill(1.0)
@@ -184,6 +185,7 @@ def _time_size(n, steps):
     copy_bw = 2 * nbytes / t_copy
     return {
         "grid": list(surf.shape), "step_band": surf.step_band.n, "ext_band": surf.ext_band.n,
+        "node_band": surf.node_band.n, "reach_band": surf.reach_band.n, "runs": surf.step_runs.n,
         "step_ms": 1e3 * t_step, "extend_ms": 1e3 * t_ext,
         "ns_per_cell": 1e9 * (t_step + t_ext) / surf.ext_band.n,
         "step_gbs": b_step / t_step / 1e9, "extend_gbs": b_ext / t_ext / 1e9,
@@ -285,13 +287,15 @@ def accuracy(spacings, quick):
 
 
 def timing_table(sizes):
-    print("\n3. per-step time against band size (heat step + whole-band re-extension)")
+    print("\n3. per-step time against band size (heat step on the nodes + re-extension of what the step reads;"
+          "\n   ns/cell per cell of the whole extension band, the band a result covers)")
     timing = step_timing(sizes)
-    print(f"{'grid':>14} {'step band':>10} {'ext band':>10} {'step ms':>8} {'ext ms':>8} {'ns/cell':>8} "
-          f"{'step GB/s':>9} {'ext GB/s':>8} {'copy GB/s':>9}")
+    print(f"{'grid':>14} {'ext band':>9} {'nodes':>8} {'reach':>8} {'runs':>7} {'step ms':>8} {'ext ms':>7} "
+          f"{'ns/cell':>8} {'step GB/s':>9} {'ext GB/s':>8} {'copy GB/s':>9}")
     for r in timing:
-        print(f"{'x'.join(map(str, r['grid'])):>14} {r['step_band']:10d} {r['ext_band']:10d} {r['step_ms']:8.2f} "
-              f"{r['extend_ms']:8.2f} {r['ns_per_cell']:8.2f} {r['step_gbs']:9.2f} {r['extend_gbs']:8.2f} {r['copy_gbs']:9.2f}")
+        print(f"{'x'.join(map(str, r['grid'])):>14} {r['ext_band']:9d} {r['node_band']:8d} {r['reach_band']:8d} "
+              f"{r['runs']:7d} {r['step_ms']:8.2f} {r['extend_ms']:7.2f} {r['ns_per_cell']:8.2f} "
+              f"{r['step_gbs']:9.2f} {r['extend_gbs']:8.2f} {r['copy_gbs']:9.2f}")
     return timing
 
 

@@ -40,7 +40,7 @@ __kernel void band_mask(__global const REAL* restrict psi, __global uchar* restr
 
 // Band runs: maximal stretches of consecutive cells along x in a band list. flags[k] = 1
 // where entry k starts a run; the host compacts the flags into run offsets (the positions
-// of the run starts in the list, plus the list's length at the end).
+// of the run starts in the list).
 __kernel void band_run_starts(__global const int* restrict list, const int n,
                               __global uchar* restrict flags)
 {
@@ -49,24 +49,41 @@ __kernel void band_run_starts(__global const int* restrict list, const int n,
     flags[k] = k == 0 || list[k - 1] != list[k] - 1;
 }
 
-// Kernels over band runs take these arguments after their own: the band list, the run
-// offsets (nruns + 1 entries), the channel stride and runs per work-item. On CPUs a
-// work-item walks whole runs, whose cells are consecutive in memory, so the cell loop
-// vectorises with contiguous loads (on GPUs every cell is a run of its own). Use as
-//     RUN_RANGE(r0, r1, chan);
-//     for (int r = r0; r < r1; ++r) {
-//         RUN_CELLS(r, begin, end);
-//         for (int i = begin; i < end; ++i) { ... chan + i ... }
-//     }
-#define RUN_ARGS __global const int* restrict list, __global const int* restrict offsets, \
+// Cell ranges [start, end) of the runs, each lengthened to a multiple of `pad` cells where
+// its row's interior and the next run leave room: a vectorised loop then ends without a
+// scalar remainder (about as slow per cell as a whole vector). The extra cells' stepped
+// values are never read (re-extension reads only the band's nodes).
+__kernel void band_run_bounds(__global const int* restrict list,
+                              __global const int* restrict offsets, const int nruns,
+                              const int n, const int pad, const int nx, const int sx,
+                              const int G, __global int* restrict start,
+                              __global int* restrict end)
+{
+    const int r = get_global_id(0);
+    if (r >= nruns) return;
+    const int first = list[offsets[r]];
+    const int count = (r + 1 < nruns ? offsets[r + 1] : n) - offsets[r];
+    const int row_end = first - first % sx + G + nx;
+    int last = min(first + (count + pad - 1) / pad * pad, row_end);
+    if (r + 1 < nruns) last = min(last, list[offsets[r + 1]]);
+    start[r] = first;
+    end[r] = max(last, first + count);
+}
+
+// Kernels over band runs take these arguments after their own: the runs' cell ranges, their
+// number, the channel stride and runs per work-item. On CPUs a work-item walks whole runs,
+// whose cells are consecutive in memory, so the cell loop vectorises with contiguous loads
+// (on GPUs every cell is a run of its own). `chan` is the work-item's channel offset, `i`
+// the padded index of a cell:
+//     FOR_EACH_RUN_CELL(i) { v[chan + i] = ...; }
+#define RUN_ARGS __global const int* restrict run_start, __global const int* restrict run_end, \
                  const int nruns, const int plane, const int runs_per_item
-#define RUN_RANGE(r0, r1, chan)                                                       \
-    const int r0 = get_global_id(0) * runs_per_item;                                  \
-    const int r1 = min(r0 + runs_per_item, nruns);                                    \
-    const int chan = get_global_id(1) * plane
-#define RUN_CELLS(r, begin, end)                                                      \
-    const int begin = list[offsets[r]];                                               \
-    const int end = begin + offsets[(r) + 1] - offsets[r]
+#define FOR_EACH_RUN_CELL(i)                                                          \
+    const int r0_ = get_global_id(0) * runs_per_item;                                 \
+    const int r1_ = min(r0_ + runs_per_item, nruns);                                  \
+    const int chan = get_global_id(1) * plane;                                        \
+    for (int run_ = r0_; run_ < r1_; ++run_)                                          \
+        for (int i = run_start[run_], end_ = run_end[run_]; i < end_; ++i)
 
 // Closest points x - psi grad(psi) / |grad(psi)| of the band cells, in padded index units
 // (grad by central differences; psi in grid units = world units / spacing).
@@ -177,6 +194,35 @@ __kernel void cp_stencils(__global const REAL* restrict cpx, __global const REAL
 // out-of-line call; this is a plain unaligned vector load).
 typedef REAL4 __attribute__((aligned(sizeof(REAL)))) unaligned_real4;
 #define LOAD4(p) (*(__global const unaligned_real4*)(p))
+
+// The cells a step must update: the interpolation nodes of the band's closest points
+// (base from cp_stencils). Every other band cell's new value comes from re-extension alone.
+// Concurrent work-items may mark the same node: they all write 1.
+__kernel void mark_nodes(__global const int* restrict base, __global uchar* restrict mask,
+                         const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k)
+        for (int a = 0; a < NODES; ++a)
+            for (int b = 0; b < NODES; ++b)
+                for (int e = 0; e < NODES; ++e) mask[base[k] + a * sxy + b * sx + e] = 1;
+}
+
+// The cells the steps read around the listed ones: the cell, its 6 face and 12 edge
+// neighbours (appendix E's one-sided stencils, over all eight side choices). These need
+// fresh re-extended values after every step.
+__kernel void mark_stencil(__global uchar* restrict mask, const int sx, const int sxy,
+                           LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    if (abs(dx) + abs(dy) + abs(dz) <= 2) mask[i + dz * sxy + dy * sx + dx] = 1;
+    }
+}
 
 // Weights of the nodes along one axis from the position t in [0, 1) relative to floor(p):
 // axis_weights' polynomials, the four cubic ones expanded in powers of t and computed at once.
@@ -330,13 +376,8 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
                         __global const REAL* restrict psi, const REAL r, const int ex,
                         const int ey, const int ez, const int sx, const int sxy, RUN_ARGS)
 {
-    RUN_RANGE(r0, r1, chan);
-    __global const REAL* uc = u + chan;
-    __global REAL* vc = v + chan;
-    for (int run = r0; run < r1; ++run) {
-        RUN_CELLS(run, begin, end);
-        for (int i = begin; i < end; ++i)
-            vc[i] = uc[i] + r * heat_div(uc, psi, i, ex, ey, ez, sx, sxy);
+    FOR_EACH_RUN_CELL(i) {
+        v[chan + i] = u[chan + i] + r * heat_div(u + chan, psi, i, ex, ey, ez, sx, sxy);
     }
 }
 
@@ -413,11 +454,9 @@ __kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict
                         __global const REAL* restrict psi, __global const REAL* restrict dir,
                         __global const REAL* restrict u0, const REAL r, const REAL dt,
                         const REAL lambda, const REAL e2, const int ex, const int ey,
-                        const int ez, const int sx, const int sxy, LIST_ARGS)
+                        const int ez, const int sx, const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = list[k];
+    FOR_EACH_RUN_CELL(i) {
         REAL wc[NC][3], wx[NC][3], wy[NC][3], wz[NC][3];
         const REAL g2 = flow_flux(u, psi, dir, i, ex, ey, ez, sx, sxy, plane, e2, wc);
         flow_flux(u, psi, dir, i - ex, ex, ey, ez, sx, sxy, plane, e2, wx);
@@ -644,12 +683,10 @@ __kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict
                         __global const REAL* restrict psi, __global const REAL* restrict dir,
                         __global const REAL* restrict beta, const REAL dt, const REAL da,
                         const REAL db, const REAL s, const int ex, const int ey, const int ez,
-                        const int sx, const int sxy, LIST_ARGS)
+                        const int sx, const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
     __global const REAL* ub = u + plane;
-    for (int k = k0; k < k1; ++k) {
-        const int i = list[k];
+    FOR_EACH_RUN_CELL(i) {
         const REAL a = u[i], b = ub[i];
 #if ALONG
         const vec3r wc = along_flux(u, psi, dir, i, ex, ey, ez, sx, sxy, plane);

@@ -8,7 +8,7 @@ from numpy.polynomial import legendre
 from reference import surface as ref
 
 from clpde.imagedata import InputError
-from clpde.surface import ImplicitSurface
+from clpde.surface import ImplicitSurface, flows
 from clpde.surface.flows import _offsets
 
 
@@ -139,25 +139,88 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         kernel = g.kernel("heat_step", WEIGHTED=int(weighted))
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, psi_dev.data, g.scalar(0.1),
                       *offsets, *g.strides(), channels=u.shape[0])
-        band = band_host(s.step_band)
+        band = band_host(s.node_band)
         expect = ref.heat_step(u32.astype(np.float64), psi.astype(np.float64), band, 0.1,
                                [int(o) for o in offsets], weighted)
         out = dst.get().reshape(u.shape[0], -1)
         np.testing.assert_allclose(out[:, band], expect, atol=2e-5 * max(1, np.abs(expect).max()))
-        # the runs cover the band and nothing else
-        out[:, band] = 0
+        # nothing is written outside the runs
+        runs = s.step_runs
+        spans = [np.arange(a, b) for a, b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n])]
+        out[:, np.concatenate(spans)] = 0
         assert not out.any()
 
 
-def test_band_runs_are_maximal_stretches_of_the_band(small_sphere):
+def test_node_and_reach_bands_match_reference(small_sphere):
     s = small_sphere
-    band = band_host(s.step_band)
-    offsets = s.step_runs.offsets.get()
-    assert offsets[0] == 0 and offsets[-1] == band.size and np.all(np.diff(offsets) > 0)
+    g = s.grid
+    base, _ = ref.cp_stencils(np.stack([c.get()[: s.ext_band.n] for c in s.cp]).astype(np.float64),
+                              g.padded_shape, 3)
+    nodes = ref.node_cells(base, g.padded_shape, 3)
+    np.testing.assert_array_equal(band_host(s.node_band), nodes)
+    np.testing.assert_array_equal(band_host(s.reach_band), ref.stencil_cells(nodes, g.padded_shape))
+    # narrower than the distance bands they replace, and inside them
+    step, ext = band_host(s.step_band), band_host(s.ext_band)
+    assert np.isin(nodes, step).all() and np.isin(band_host(s.reach_band), ext).all()
+    assert nodes.size < 0.9 * step.size and s.reach_band.n < 0.9 * ext.size
+
+
+@pytest.mark.parametrize("flow", ["heat", "harmonic"])
+def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
+    """Stepping only the nodes and re-extending only what the steps read is the same scheme
+    as stepping the step band and re-extending the whole band every step."""
+    s = small_sphere
+    g = s.grid
+    x, y, z = s.coordinates()
+    if flow == "heat":
+        u = np.broadcast_to(np.sin(3 * x) * y + z, s.shape)
+        got = s.heat(u, 0.02)
+        kernel, nc, normalize = g.kernel("heat_step", WEIGHTED=0), 1, False
+    else:
+        v = np.stack(np.broadcast_arrays(x + 0.3 * y, np.cos(2 * y), z + 0.5))
+        u = v / np.sqrt((v**2).sum(axis=0))
+        got = s.harmonic_map(u, 0.02)
+        kernel = g.kernel("flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0, ALONG=0, WEIGHTED=0)
+        nc, normalize = 3, True
+    steps, dt = flows._check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
+    whole = flows.BandFlow(s, u, normalize=normalize)
+    r = g.scalar(dt / s.spacing**2)
+    full_runs = g.runs(s.step_band)
+    for n in range(steps):
+        args = (whole.cur.data, whole.tmp.data, s.psi_dev.data)
+        if flow == "heat":
+            args += (r,)
+        else:
+            args += (s.psi_dev.data, s.psi_dev.data, r, g.scalar(dt), g.scalar(0), g.scalar(1))
+        g.launch_runs(kernel, full_runs, *args, *flows._offsets(g, n % 8), *g.strides(),
+                      channels=1 if flow != "heat" else nc)
+        whole._extend(whole.tmp, whole.cur, s.ext_band, s.cp_base, s.cp_frac)
+    expect = g.download(whole.cur)
+    expect = expect[0] if nc == 1 else expect
+    band = np.abs(s.psi) < s.outer * s.spacing
+    np.testing.assert_allclose(got[..., band], expect[..., band], rtol=0, atol=1e-6)
+
+
+def test_band_runs_cover_the_band_in_row_stretches(small_sphere):
+    s = small_sphere
+    g = s.grid
+    band = band_host(s.node_band)
+    runs = s.step_runs
+    start, end = runs.start.get()[: runs.n], runs.end.get()[: runs.n]
+    assert np.all(end > start) and np.all(start[1:] >= end[:-1])  # ordered, disjoint
+    cells = np.concatenate([np.arange(a, b) for a, b in zip(start, end)])
+    assert np.isin(band, cells).all()
+    # runs stay inside the interior of their row
+    x = cells % g.sx
+    assert x.min() >= g.ghost and x.max() < g.ghost + g.nx
     if s.runtime.is_cpu:
-        expect = np.flatnonzero(np.diff(band, prepend=-2) != 1)
-        np.testing.assert_array_equal(offsets[:-1], expect)
-        assert s.step_runs.n < band.size / 3  # runs are many cells long on a sphere's band
+        first = band[np.diff(band, prepend=-2) != 1]
+        np.testing.assert_array_equal(start, first)  # one run per maximal stretch
+        assert runs.n < band.size / 3
+        # lengthened to multiples of 16 cells unless the row or the next run is in the way
+        short = (end - start) % 16 != 0
+        blocked = np.append(end[:-1] == start[1:], True) | ((end - g.ghost) % g.sx == g.nx)
+        assert np.all(blocked[short])
 
 
 # ---- the mathematics --------------------------------------------------------------------------

@@ -60,10 +60,10 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         offsets = _offsets(g, 6)
         kernel = g.kernel("flow_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
-        g.launch_list(kernel, s.step_band, src.data, dst.data, dev(psi).data, dev(direction).data,
+        g.launch_runs(kernel, s.step_runs, src.data, dst.data, dev(psi).data, dev(direction).data,
                       dev(u0).data, g.scalar(r), g.scalar(dt), g.scalar(lam), g.scalar(e2),
                       *offsets, *g.strides())
-        band = band_host(s.step_band)
+        band = band_host(s.node_band)
         expect = ref.flow_step(
             u32.astype(np.float64), psi.astype(np.float64), band, r, dt, lam, e2,
             [int(o) for o in offsets], flow_p=opts["FLOW_P"], harmonic=bool(opts["HARMONIC"]),

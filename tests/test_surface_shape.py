@@ -66,11 +66,11 @@ def test_turk_step_matches_reference(rng):
     for along in (False, True):
         dst = cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 2)
-        g.launch_list(g.kernel("turk_step", ALONG=int(along)), s.step_band, cla.to_device(q, u).data,
+        g.launch_runs(g.kernel("turk_step", ALONG=int(along)), s.step_runs, cla.to_device(q, u).data,
                       dst.data, s.psi_dev.data, cla.to_device(q, d).data, cla.to_device(q, beta).data,
                       g.scalar(1.0), g.scalar(0.125), g.scalar(1 / 32), g.scalar(0.0125),
                       *offsets, *g.strides())
-        band = band_host(s.step_band)
+        band = band_host(s.node_band)
         expect = ref.turk_step(u.astype(np.float64), s.psi_dev.get(), band, beta, 1.0, 0.125, 1 / 32,
                                0.0125, [int(o) for o in offsets], d.astype(np.float64) if along else None)
         np.testing.assert_allclose(dst.get().reshape(2, -1)[:, band], expect, atol=3e-5)

@@ -1,7 +1,8 @@
 """Explicit flows on implicit surfaces, stepped over the narrow band on the device.
 
-Every step is two kernels: the flow's update over the step band (cur -> tmp), then the
-closest-point re-extension of the whole extension band (tmp -> cur). State stays on the
+Every step is two kernels: the flow's update over the interpolation nodes (cur -> tmp, the
+node band's runs), then the closest-point re-extension of every cell the next step reads
+(tmp -> cur, the reach band); the whole extension band is re-extended when a flow returns. State stays on the
 device from upload to the final read-back; no host round-trip per step.
 """
 
@@ -79,26 +80,36 @@ class BandFlow:
         self.tmp = self.cur.copy()
         self._extend_kernel = g.kernel("extend_cp", INTERP=surf.interp, NC=self.nc,
                                        NORMALIZE=int(normalize))
+        self._stepped = False
         if extend:
             self.extend()
 
     def extend(self) -> None:
-        """Re-extend cur along the normals (through tmp; cur holds the result)."""
-        self._extend(self.cur, self.tmp)
+        """Re-extend cur along the normals over the whole band (through tmp; cur holds the
+        result)."""
+        s = self.surf
+        self._extend(self.cur, self.tmp, s.ext_band, s.cp_base, s.cp_frac)
         self.cur, self.tmp = self.tmp, self.cur
+        self._stepped = False
 
-    def _extend(self, src, dst) -> None:
-        s, g = self.surf, self.surf.grid
-        g.launch_list(
-            self._extend_kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
-            *g.strides(),
-        )
+    def _extend(self, src, dst, band, base, frac) -> None:
+        g = self.surf.grid
+        g.launch_list(self._extend_kernel, band, src.data, dst.data, base.data, frac.data,
+                      *g.strides(), channels=1)
 
     def after_step(self) -> None:
-        """The step wrote tmp over the step band: extend it back into cur."""
-        self._extend(self.tmp, self.cur)
+        """The step wrote tmp over the node band: extend it back into cur over the cells the
+        next step reads (surf.reach_band)."""
+        s = self.surf
+        self._extend(self.tmp, self.cur, s.reach_band, *s.reach_stencils)
+        self._stepped = True
 
     def result(self) -> np.ndarray:
+        if self._stepped:
+            # tmp still holds the last step at every node: extend the whole band from it
+            s = self.surf
+            self._extend(self.tmp, self.cur, s.ext_band, s.cp_base, s.cp_frac)
+            self._stepped = False
         out = self.surf.grid.download(self.cur)
         out = out[0] if self.input.shape == self.surf.shape else out
         dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
@@ -161,7 +172,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         lam = float(fidelity)
     terms = None
     if sigma is not None:
-        n = surf.step_band.n
+        n = surf.node_band.n
         terms = [cla.empty(q, n, g.dtype) for _ in range(3)]
         info["lambda"] = []
     for n in _progress(progress, steps, f"surface {flow_name}"):
@@ -176,8 +187,8 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
                 raise InputError(
                     f"lambda reached {lam:g}, which needs dt <= {limit:g}; pass a smaller dt"
                 )
-        g.launch_list(
-            kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
+        g.launch_runs(
+            kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
             dir_dev.data, u0_dev.data, r, g.scalar(dt), g.scalar(lam), e2, *offsets,
             *g.strides(),
         )
@@ -205,12 +216,12 @@ def _tv_lambda(surf, u_dev, u0_dev, terms, offsets, eps, sigma):
 def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps):
     g = surf.grid
     g.launch_list(
-        g.kernel("tv_lambda_terms"), surf.step_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
+        g.kernel("tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
         g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
         *offsets, *g.strides(), *(a.data for a in terms),
     )
     # three sums come back: one read per lambda update, never a field
-    return tuple(device_sum(surf.grid, a, surf.step_band.n) for a in terms)
+    return tuple(device_sum(surf.grid, a, surf.node_band.n) for a in terms)
 
 
 def _residual_variance(surf, u_dev, u0_dev, terms, eps):
@@ -330,7 +341,7 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=1.0, seed=0, para
     kernel = g.kernel("turk_step", ALONG=int(direction is not None))
     for n in _progress(progress, int(iterations), "reaction-diffusion"):
         offsets = _offsets(g, _ALL_SIDES[n % 8] if alternate else 0)
-        g.launch_list(kernel, surf.step_band, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
+        g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
                       dir_dev.data, beta_dev.data, g.scalar(dt), g.scalar(p["da"]),
                       g.scalar(p["db"]), g.scalar(p["s"]), *offsets, *g.strides())
         flow.after_step()

@@ -21,11 +21,13 @@ from ..runtime import ClpdeError, Runtime
 class BandRuns:
     """A band list cut into runs of consecutive cells along x (kernels' RUN_ARGS).
 
-    offsets (nruns + 1 entries, on the device) are the positions in the band list where runs
-    start, then the list's length. On GPUs every cell is a run of its own."""
+    Run r covers cells [start[r], end[r]) (device arrays): the band's cells, on CPUs each run
+    lengthened to a multiple of the vector width where room allows (those extra cells get
+    stepped values nobody reads). On GPUs every cell is a run of its own."""
 
     band: IndexList
-    offsets: cla.Array
+    start: cla.Array
+    end: cla.Array
     n: int
 
 
@@ -113,19 +115,27 @@ class Grid3D:
         )
         return compact(self.runtime, mask)
 
-    def runs(self, band: IndexList) -> BandRuns:
-        """The band's runs of consecutive cells (on CPUs; single cells on GPUs), on the device."""
+    def runs(self, band: IndexList, pad: int = 16) -> BandRuns:
+        """The band's runs of consecutive cells, lengthened to multiples of `pad` cells (on
+        CPUs; single cells on GPUs), on the device."""
         q = self.runtime.queue
         n = band.n
         if n == 0 or not self.runtime.is_cpu:
-            return BandRuns(band, cla.arange(q, 0, n + 1, dtype=np.int32), n)
-        flags = cla.empty(q, n, np.uint8)
-        self.kernel("band_run_starts")(q, (n,), None, band.indices.data, np.int32(n), flags.data)
-        starts = compact(self.runtime, flags)
-        offsets = cla.empty(q, starts.n + 1, np.int32)
-        offsets[: starts.n] = starts.indices[: starts.n]
-        offsets[starts.n :] = n
-        return BandRuns(band, offsets, starts.n)
+            offsets, nruns, pad = cla.arange(q, 0, max(n, 1), dtype=np.int32), n, 1
+        else:
+            flags = cla.empty(q, n, np.uint8)
+            self.kernel("band_run_starts")(q, (n,), None, band.indices.data, np.int32(n), flags.data)
+            starts = compact(self.runtime, flags)
+            offsets, nruns = starts.indices, starts.n
+        start = cla.empty(q, max(nruns, 1), np.int32)
+        end = cla.empty(q, max(nruns, 1), np.int32)
+        if nruns:
+            self.kernel("band_run_bounds")(
+                q, (nruns,), None, band.indices.data, offsets.data, np.int32(nruns), np.int32(n),
+                np.int32(pad), np.int32(self.nx), np.int32(self.sx), np.int32(self.ghost),
+                start.data, end.data,
+            )
+        return BandRuns(band, start, end, nruns)
 
     def launch_runs(self, kernel, runs: BandRuns, *args, channels: int = 1):
         """Run a RUN_RANGE kernel over a band's runs, `channels` work-items per run."""
@@ -133,8 +143,8 @@ class Grid3D:
             return None
         (gsize,), (lsize,), per_item = self.runtime.list_launch(runs.n)
         return kernel(
-            self.runtime.queue, (gsize, channels), (lsize, 1), *args, runs.band.indices.data,
-            runs.offsets.data, np.int32(runs.n), np.int32(self.volume), np.int32(per_item),
+            self.runtime.queue, (gsize, channels), (lsize, 1), *args, runs.start.data,
+            runs.end.data, np.int32(runs.n), np.int32(self.volume), np.int32(per_item),
         )
 
     def launch_list(self, kernel, band: IndexList, *args, channels: int = 1):

@@ -6,6 +6,11 @@ The surface keeps psi on the device together with two band lists:
 - the *extension band* |psi| < outer * h (outer >= inner + sqrt(2)), re-extended from the
   step band's values after every step, so every neighbour a step reads holds data that is
   constant along the normals.
+The steps themselves run on two narrower lists cut to what they need (same results):
+- `node_band`: the interpolation nodes of the extension band's closest points, the only
+  cells whose stepped values are ever read;
+- `reach_band`: those nodes and their 18 neighbours, the cells a step reads, re-extended
+  after every step. The whole extension band is re-extended once, when a flow returns.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ import numpy as np
 import pyopencl.array as cla
 
 from ..imagedata import InputError
+from ..fields import compact
 from ..runtime import get_runtime
 from .grid3d import Grid3D
 
@@ -93,11 +99,24 @@ class ImplicitSurface:
         psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
-        self.step_runs = self.grid.runs(self.step_band)
         if self._check_border:
             self._check_band_clear_of_border()
-        self.cp = self._closest_points()
-        self.cp_base, self.cp_frac = self._cp_stencils()
+        self.cp = self._closest_points(self.ext_band)
+        self.cp_base, self.cp_frac = self._cp_stencils(self.ext_band, self.cp)
+        self._narrow_bands()
+
+    def _narrow_bands(self) -> None:
+        """node_band, its runs, reach_band and reach_band's closest-point stencils."""
+        g, q = self.grid, self.runtime.queue
+        nodes = cla.zeros(q, g.padded_shape, np.uint8)
+        g.launch_list(g.kernel("mark_nodes", INTERP=self.interp), self.ext_band,
+                      self.cp_base.data, nodes.data, *g.strides())
+        self.node_band = compact(self.runtime, nodes)
+        self.step_runs = g.runs(self.node_band)
+        reach = cla.zeros(q, g.padded_shape, np.uint8)
+        g.launch_list(g.kernel("mark_stencil"), self.node_band, reach.data, *g.strides())
+        self.reach_band = compact(self.runtime, reach)
+        self.reach_stencils = self._cp_stencils(self.reach_band, self._closest_points(self.reach_band))
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
@@ -245,27 +264,27 @@ class ImplicitSurface:
         d = self.psi / norm
         return x - d * g[2], y - d * g[1], z - d * g[0]
 
-    def _closest_points(self):
-        """Closest points of the extension band's cells, padded index units, on the device."""
+    def _closest_points(self, band):
+        """Closest points of a band's cells, padded index units, on the device."""
         g, q = self.grid, self.runtime.queue
-        n = max(self.ext_band.n, 1)
+        n = max(band.n, 1)
         cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
         g.launch_list(
-            g.kernel("closest_points"), self.ext_band, self.psi_dev.data,
+            g.kernel("closest_points"), band, self.psi_dev.data,
             g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
         )
         return cp
 
-    def _cp_stencils(self):
-        """Per extension-band cell: the flat index of its closest point's first interpolation
-        node and the point's offsets (3, n) from floor(cp), on the device (psi is fixed, so
-        the re-extension after each step only gathers and weighs)."""
+    def _cp_stencils(self, band, cp):
+        """Per band cell: the flat index of its closest point's first interpolation node and
+        the point's offsets (3, n) from floor(cp), on the device (psi is fixed, so the
+        re-extension after each step only gathers and weighs)."""
         g, q = self.grid, self.runtime.queue
-        n = max(self.ext_band.n, 1)
+        n = max(band.n, 1)
         base = cla.empty(q, n, np.int32)
         frac = cla.empty(q, (3, n), g.dtype)
         g.launch_list(
-            g.kernel("cp_stencils", INTERP=self.interp), self.ext_band, *(c.data for c in self.cp),
+            g.kernel("cp_stencils", INTERP=self.interp), band, *(c.data for c in cp),
             *g.strides(), *g.padded_dims(), base.data, frac.data,
         )
         return base, frac

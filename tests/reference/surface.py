@@ -73,6 +73,23 @@ def cp_stencils(points, padded_shape, order=3):
     return z0 * px * py + y0 * px + x0, points - np.floor(points)
 
 
+def node_cells(base, padded_shape, order=3):
+    """Sorted flat indices of every interpolation node of the stencils starting at `base`."""
+    _pz, py, px = padded_shape
+    k = 4 if order == 3 else 2
+    a, b, e = np.meshgrid(np.arange(k), np.arange(k), np.arange(k), indexing="ij")
+    offsets = (a * px * py + b * px + e).ravel()
+    return np.unique(base[:, None] + offsets[None, :])
+
+
+def stencil_cells(cells, padded_shape):
+    """Sorted flat indices of the cells and their 6 face and 12 edge neighbours."""
+    _pz, py, px = padded_shape
+    offsets = [dz * px * py + dy * px + dx for dz in (-1, 0, 1) for dy in (-1, 0, 1)
+               for dx in (-1, 0, 1) if abs(dx) + abs(dy) + abs(dz) <= 2]
+    return np.unique(cells[:, None] + np.array(offsets)[None, :])
+
+
 def extend_cp(u_pad, band, cp, order=3, normalize=False):
     """The band's new values (nc, n): u interpolated at the closest points."""
     v = interpolate(u_pad, cp, order)
