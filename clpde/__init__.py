@@ -6,6 +6,7 @@ from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
 from .track import MorphingTracker, track
 from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
+from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
 
 __version__ = "0.1.0"
 

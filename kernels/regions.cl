@@ -1,0 +1,262 @@
+// Region tracking on deforming level-set surfaces (thesis section 2.2), in 3D.
+//
+// One padded volume holds every level set, channel after channel: channel 0 is Phi (the
+// surface S is Phi = 0), channels 1.. are the auxiliary functions Phi-hat, one per tracked
+// region (the region's boundary is Phi = Phi-hat = 0). Layout (channels, nz + 2G, ny + 2G,
+// nx + 2G), x fastest; `sx` is the row stride, `sxy` the slab stride, `plane` (LIST_ARGS)
+// the channel stride. All values are in grid units (distances in cells, spacing 1); the
+// host converts world speeds. Kernels visit a compacted band list and never test for
+// borders: the host keeps the band clear of the volume's edge.
+//
+// Sign convention: u_t = V |grad u| (the tracking issue's helpers in levelset.cl); Phi is
+// negative inside, so V > 0 moves the surface inwards. The host passes V = -beta / h for an
+// outward normal speed beta.
+#include "levelset.cl"
+
+// ---- stencils ---------------------------------------------------------------------------
+
+// Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| (3D Godunov norm).
+inline REAL upwind_norm_3d(__global const REAL* u, const int i, const int sx, const int sxy,
+                           const REAL v)
+{
+    REAL dmx, dpx, dmy, dpy, dmz, dpz;
+    LS_ONE_SIDED(u[i - 2], u[i - 1], u[i], u[i + 1], u[i + 2], dmx, dpx);
+    LS_ONE_SIDED(u[i - 2 * sx], u[i - sx], u[i], u[i + sx], u[i + 2 * sx], dmy, dpy);
+    LS_ONE_SIDED(u[i - 2 * sxy], u[i - sxy], u[i], u[i + sxy], u[i + 2 * sxy], dmz, dpz);
+    return SQRT(godunov_axis(dmx, dpx, v) + godunov_axis(dmy, dpy, v) +
+                godunov_axis(dmz, dpz, v));
+}
+
+// Central-difference gradient.
+#define CENTRAL_GRAD(u, i, gx, gy, gz)                                                 \
+    const REAL gx = (REAL)0.5 * ((u)[(i) + 1] - (u)[(i) - 1]);                         \
+    const REAL gy = (REAL)0.5 * ((u)[(i) + sx] - (u)[(i) - sx]);                       \
+    const REAL gz = (REAL)0.5 * ((u)[(i) + sxy] - (u)[(i) - sxy])
+
+// Mean curvature div(grad u / |grad u|) (kappa = 2 / R on a sphere of radius R cells) and
+// Gaussian curvature (1 / R^2) of the level set of u through cell i, from central first
+// and second differences: kappa = (|g|^2 tr H - g.Hg) / |g|^3, K = g.adj(H)g / |g|^4.
+inline void curvatures(__global const REAL* u, const int i, const int sx, const int sxy,
+                       REAL* mean, REAL* gauss)
+{
+    CENTRAL_GRAD(u, i, gx, gy, gz);
+    const REAL c2 = 2 * u[i];
+    const REAL hxx = u[i + 1] - c2 + u[i - 1];
+    const REAL hyy = u[i + sx] - c2 + u[i - sx];
+    const REAL hzz = u[i + sxy] - c2 + u[i - sxy];
+    const REAL hxy = (REAL)0.25 * (u[i + 1 + sx] - u[i - 1 + sx] - u[i + 1 - sx] + u[i - 1 - sx]);
+    const REAL hxz = (REAL)0.25 * (u[i + 1 + sxy] - u[i - 1 + sxy] - u[i + 1 - sxy] + u[i - 1 - sxy]);
+    const REAL hyz = (REAL)0.25 * (u[i + sx + sxy] - u[i - sx + sxy] - u[i + sx - sxy] + u[i - sx - sxy]);
+    const REAL g2 = gx * gx + gy * gy + gz * gz + (REAL)1e-12;
+    const REAL ghg = gx * gx * hxx + gy * gy * hyy + gz * gz * hzz +
+                     2 * (gx * gy * hxy + gx * gz * hxz + gy * gz * hyz);
+    *mean = (g2 * (hxx + hyy + hzz) - ghg) / (g2 * SQRT(g2));
+    // g . adj(H) g: adj(H) is the cofactor matrix of the symmetric Hessian
+    const REAL axx = hyy * hzz - hyz * hyz, ayy = hxx * hzz - hxz * hxz, azz = hxx * hyy - hxy * hxy;
+    const REAL axy = hxz * hyz - hxy * hzz, axz = hxy * hyz - hxz * hyy, ayz = hxy * hxz - hxx * hyz;
+    const REAL gag = gx * gx * axx + gy * gy * ayy + gz * gz * azz +
+                     2 * (gx * gy * axy + gx * gz * axz + gy * gz * ayz);
+    *gauss = gag / (g2 * g2);
+}
+
+// Speeds fade smoothly to 0 between |Phi| = lo and hi cells (Peng et al.'s narrow-band
+// cut-off): cells near the band's edge, whose neighbours outside the band hold stale
+// values, stay put, and the reinitialisation rebuilds them from the surface outwards.
+// Without it a translated sphere's far side picked up 2-cell errors after 5 cells of motion.
+inline REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
+{
+    const REAL t = clamp((fabs(phi) - lo) / (hi - lo), (REAL)0, (REAL)1);
+    return 1 - t * t * (3 - 2 * t);
+}
+
+// ---- the speed V of Phi_t = V |grad Phi| on the band ----------------------------------------
+// SPEED 0: V = scale (a constant); 1: V = scale * mean curvature of Phi; 2: V = scale *
+// max(Gaussian curvature, 0); 3: V = scale * (aux - Phi) (morphing toward the target whose
+// signed distance is aux); 4: V = scale * aux (a user array).
+#ifndef SPEED
+#define SPEED 0
+#endif
+__kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
+                           __global REAL* restrict speed, const REAL scale, const int sx,
+                           const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+#if SPEED == 0
+        speed[i] = scale;
+#elif SPEED == 1 || SPEED == 2
+        REAL mean, gauss;
+        curvatures(phi, i, sx, sxy, &mean, &gauss);
+        speed[i] = scale * (SPEED == 1 ? mean : fmax(gauss, (REAL)0));
+#elif SPEED == 3
+        speed[i] = scale * (aux[i] - phi[i]);
+#else
+        speed[i] = scale * aux[i];
+#endif
+    }
+}
+
+// ---- one explicit step of the coupled flows ------------------------------------------------
+// Channel 0: Phi <- Phi + dt V |grad Phi|, upwind and slope-limited.
+// Channel c > 0: Phi-hat <- Phi-hat + dt V (N_Phi . N_Phi-hat) |grad Phi-hat|: the surface's
+// velocity projected on Phi-hat's normal, used on the whole band (the thesis' extension),
+// with central-difference normals; eps2 keeps them finite where a function is flat.
+__kernel void region_step(__global const REAL* restrict ls, __global const REAL* restrict speed,
+                          __global REAL* restrict out, const REAL dt, const REAL eps2,
+                          const REAL lo, const REAL hi, const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const int j = chan + i;
+        REAL v = speed[i] * band_cutoff(ls[i], lo, hi);
+        if (chan != 0) {
+            CENTRAL_GRAD(ls, i, fx, fy, fz);
+            CENTRAL_GRAD(ls, j, ux, uy, uz);
+            v *= (fx * ux + fy * uy + fz * uz) *
+                 RSQRT((fx * fx + fy * fy + fz * fz + eps2) * (ux * ux + uy * uy + uz * uz + eps2));
+        }
+        out[j] = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
+    }
+}
+
+// Rigid motion with velocity (ux, uy, uz) (cells per unit time), every channel:
+// u <- u - dt U . grad u with slope-limited upwind differences per axis. For Phi-hat this is
+// beta-hat |grad Phi-hat| with beta-hat = U . N_Phi-hat: the projection of the surface's full
+// velocity (not only its normal part) on Phi-hat's normal.
+__kernel void advect_step(__global const REAL* restrict ls, __global REAL* restrict out,
+                          const REAL dt, const REAL ux, const REAL uy, const REAL uz,
+                          const REAL lo, const REAL hi, const int sx, const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int j = chan + list[k];
+        const REAL cut = band_cutoff(ls[list[k]], lo, hi);
+        REAL dmx, dpx, dmy, dpy, dmz, dpz;
+        LS_ONE_SIDED(ls[j - 2], ls[j - 1], ls[j], ls[j + 1], ls[j + 2], dmx, dpx);
+        LS_ONE_SIDED(ls[j - 2 * sx], ls[j - sx], ls[j], ls[j + sx], ls[j + 2 * sx], dmy, dpy);
+        LS_ONE_SIDED(ls[j - 2 * sxy], ls[j - sxy], ls[j], ls[j + sxy], ls[j + 2 * sxy], dmz, dpz);
+        const REAL adv = ux * (ux > 0 ? dmx : dpx) + uy * (uy > 0 ? dmy : dpy) +
+                         uz * (uz > 0 ? dmz : dpz);
+        out[j] = ls[j] - dt * cut * adv;
+    }
+}
+
+// ---- reinitialisation, every channel -------------------------------------------------------
+// u_t + S(u0) (|grad u| - 1) = 0 with the slope-limited Godunov norm; cells where u0 changes
+// sign towards one of their 6 neighbours use Russo and Smereka's subcell fix (relax towards
+// D = u0 / |grad u0|, |grad u0| the largest of the central and one-sided estimates), so the
+// zero level set stays where it is.
+#ifndef SUBCELL_TOL
+#define SUBCELL_TOL 0.1
+#endif
+__kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL* restrict u0,
+                            __global REAL* restrict out, const REAL dt, const int sx,
+                            const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL c0 = u0[i];
+        const REAL e0 = u0[i + 1], w0 = u0[i - 1];
+        const REAL n0 = u0[i + sx], s0 = u0[i - sx];
+        const REAL t0 = u0[i + sxy], b0 = u0[i - sxy];
+        const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
+        const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) |
+                                 (c0 * s0 < 0) | (c0 * t0 < 0) | (c0 * b0 < 0);
+        const REAL p = u[i];
+        if (at_interface) {
+            // |grad u0| by central differences: on a signed distance this is 1 up to
+            // O(h^2 / R^2), so repeated reinitialisations (every few steps) leave the zero
+            // level set in place; Russo-Smereka's max with the one-sided slopes (1 + h / 2R
+            // on curved surfaces) moved a sphere's radius by 0.4 cells in 40 calls. Half
+            // the steepest one-sided slope guards against flat central estimates at kinks.
+            REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0) + SQR(t0 - b0));
+            REAL steep = fmax(fmax(fabs(e0 - c0), fabs(c0 - w0)), fmax(fabs(n0 - c0), fabs(c0 - s0)));
+            steep = fmax(steep, fmax(fabs(t0 - c0), fabs(c0 - b0)));
+            g = fmax(g, (REAL)0.5 * steep);
+            const REAL d = c0 / fmax(g, (REAL)1e-12);
+            // keep cells whose slope is already close to 1 as they are: the relaxation's
+            // O(h^2) bias, repeated every few steps, otherwise grows (SUBCELL_TOL)
+            out[i] = fabs(g - 1) < (REAL)SUBCELL_TOL ? p : p - dt * (sgn * fabs(p) - d);
+        } else {
+            out[i] = p - dt * sgn * (upwind_norm_3d(u, i, sx, sxy, -sgn) - 1);
+        }
+    }
+}
+
+// ---- band safety ---------------------------------------------------------------------------
+// flag[0] = 1 when a band cell lies within `margin` cells of the interior's border (the host
+// then stops: the surface grew out of its volume).
+__kernel void band_near_border(__global int* restrict flag, const int nx, const int ny,
+                               const int nz, const int G, const int margin, const int sx,
+                               const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    int hit = 0;
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const int z = i / sxy - G, y = (i % sxy) / sx - G, x = i % sx - G;
+        hit |= (x < margin) | (y < margin) | (z < margin) | (x >= nx - margin) |
+               (y >= ny - margin) | (z >= nz - margin);
+    }
+    if (hit) flag[0] = 1;  // every writer stores the same value
+}
+
+// out[g] = max |v| over the band cells of work-item g (the host takes the maximum of these
+// few values: the largest speed, for the next stable time step).
+__kernel void band_max_abs(__global const REAL* restrict v, __global REAL* restrict out,
+                           LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    REAL m = 0;
+    for (int k = k0; k < k1; ++k) m = fmax(m, fabs(v[chan + list[k]]));
+    out[get_global_id(0)] = m;
+}
+
+// Heun's (TVD Runge-Kutta 2) last stage, every channel: out = (u + stage2) / 2, where
+// stage2 is two Euler steps from u. Plain Euler with the slope-limited differences slowly
+// sharpens convex level sets (a translated sphere grew 1% in 10 steps); Heun does not.
+__kernel void heun_average(__global const REAL* restrict u, __global const REAL* restrict stage2,
+                           __global REAL* restrict out, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int j = chan + list[k];
+        out[j] = (REAL)0.5 * (u[j] + stage2[j]);
+    }
+}
+
+// mask[i] = 1 where |Phi| < width on the interior cells (Phi: channel 0). Work-item (y, z)
+// of the interior walks one row. (The same test as surface.cl's band_mask, kept here so
+// this file builds on its own.)
+__kernel void region_band_mask(__global const REAL* restrict phi, __global uchar* restrict mask,
+                               const REAL width, const int nx, const int ny, const int nz,
+                               const int sx, const int sxy, const int G)
+{
+    const int y = get_global_id(0), z = get_global_id(1);
+    if (y >= ny || z >= nz) return;
+    const int row = (z + G) * sxy + (y + G) * sx + G;
+    for (int x = 0; x < nx; ++x) mask[row + x] = fabs(phi[row + x]) < width;
+}
+
+// dst = 1 where src is nonzero within `reach` cells along one axis (offset `stride`):
+// three passes (x, y, z) dilate a band mask by a cube. The reinitialisation band is the
+// step band dilated this way, not a wider |Phi| test: a cell that was outside every band
+// holds a stale value, possibly far too large, and a value test would keep it out (and
+// frozen) while the surface sweeps past it. reach <= G, so reads stay in the buffer (ghost
+// entries of the masks are 0).
+__kernel void dilate_mask(__global const uchar* restrict src, __global uchar* restrict dst,
+                          const int stride, const int reach, const int nx, const int ny,
+                          const int nz, const int sx, const int sxy, const int G)
+{
+    const int y = get_global_id(0), z = get_global_id(1);
+    if (y >= ny || z >= nz) return;
+    const int row = (z + G) * sxy + (y + G) * sx + G;
+    for (int x = 0; x < nx; ++x) {
+        uchar any = 0;
+        for (int d = -reach; d <= reach; ++d) any |= src[row + x + d * stride];
+        dst[row + x] = any != 0;
+    }
+}

@@ -1,0 +1,170 @@
+"""Region tracking (thesis section 2.2): kernels against their numpy references, and the
+tracked regions against geometry (caps on moving spheres, a region that splits, two that merge)."""
+
+import numpy as np
+import pyopencl.array as cla
+import pytest
+from reference import regions as ref
+
+from clpde.fields import compact
+from clpde.regions import split_regions, surface_mesh, track_region
+from clpde.surface.grid3d import Grid3D
+
+# ---- kernels vs numpy references ----------------------------------------------------------
+
+SHAPE = (9, 10, 11)  # nz, ny, nx
+
+
+def _setup(runtime, volumes):
+    """Grid (float64), padded device volumes and the band of every interior cell."""
+    nz, ny, nx = SHAPE
+    g = Grid3D(runtime, nx, ny, nz, ghost=3, dtype=np.dtype(np.float64))
+    devs = [g.upload(v, mode="linear") for v in volumes]
+    mask = np.zeros(g.padded_shape, np.uint8)
+    g.interior(mask)[...] = 1
+    band = compact(runtime, cla.to_device(runtime.queue, mask))
+    return g, devs, band, [d.get().reshape(-1).astype(np.float64) for d in devs]
+
+
+def _inputs(kind, rng, nc):
+    nz, ny, nx = SHAPE
+    if kind == "random":
+        return rng.normal(size=(nc, nz, ny, nx))
+    z, y, x = np.meshgrid(np.arange(nz) - 4.2, np.arange(ny) - 4.6, np.arange(nx) - 5.1, indexing="ij")
+    sphere = np.sqrt(x**2 + y**2 + z**2) - 3.3
+    planes = [0.8 * z + 0.3 * x - 0.5 * c for c in range(nc - 1)]
+    return np.stack([sphere] + planes)
+
+
+def _kernel(runtime, name, **defines):
+    return runtime.kernel("regions.cl", name, np.float64, **defines)
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
+@pytest.mark.parametrize("mode", [0, 1, 2, 3, 4])
+def test_region_speed_matches_reference(runtime, rng, kind, mode):
+    data = _inputs(kind, rng, 2)
+    g, (ls, aux), band, (ls_h, aux_h) = _setup(runtime, [data[:1], data[1:]])
+    speed = cla.zeros(runtime.queue, g.padded_shape, g.dtype)
+    g.launch_list(_kernel(runtime, "region_speed", SPEED=mode), band, ls.data, aux.data,
+                  speed.data, g.scalar(0.7), *g.strides())
+    idx = band.indices.get().astype(np.int64)
+    want = ref.region_speed(ls_h, aux_h, idx, 0.7, mode, g.sx, g.sxy)
+    np.testing.assert_allclose(speed.get().reshape(-1)[idx], want, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
+def test_region_step_matches_reference(runtime, rng, kind):
+    data = _inputs(kind, rng, 3)
+    g, (ls, speed), band, (ls_h, speed_h) = _setup(runtime, [data, rng.normal(size=(1,) + SHAPE)])
+    out = ls.copy()
+    g.launch_list(_kernel(runtime, "region_step"), band, ls.data, speed.data, out.data,
+                  g.scalar(0.3), g.scalar(1e-12), g.scalar(1.0), g.scalar(2.5), *g.strides(),
+                  channels=3)
+    idx = band.indices.get().astype(np.int64)
+    want = ref.region_step(ls_h, speed_h, idx, 0.3, 1e-12, 1.0, 2.5, 3, g.volume, g.sx, g.sxy)
+    got = out.get().reshape(3, -1)[:, idx]
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
+def test_advect_and_reinit_match_reference(runtime, rng, kind):
+    data = _inputs(kind, rng, 2)
+    g, (ls, ls0), band, (ls_h, ls0_h) = _setup(runtime, [data, data + 0.3 * rng.normal(size=data.shape)])
+    idx = band.indices.get().astype(np.int64)
+    out = ls.copy()
+    vel = (0.4, -0.7, 0.2)
+    g.launch_list(_kernel(runtime, "advect_step"), band, ls.data, out.data, g.scalar(0.25),
+                  *(g.scalar(v) for v in vel), g.scalar(1.0), g.scalar(2.5), *g.strides(),
+                  channels=2)
+    want = ref.advect_step(ls_h, idx, 0.25, vel, 1.0, 2.5, 2, g.volume, g.sx, g.sxy)
+    np.testing.assert_allclose(out.get().reshape(2, -1)[:, idx], want, rtol=1e-9, atol=1e-9)
+    g.launch_list(_kernel(runtime, "reinit3d_step"), band, ls.data, ls0.data, out.data,
+                  g.scalar(0.3), *g.strides(), channels=2)
+    want = ref.reinit_step(ls_h, ls0_h, idx, 0.3, 2, g.volume, g.sx, g.sxy)
+    np.testing.assert_allclose(out.get().reshape(2, -1)[:, idx], want, rtol=1e-9, atol=1e-9)
+
+
+def test_curvatures_of_a_sphere(runtime):
+    """Mean curvature 2/R and Gaussian curvature 1/R^2 (grid units) on a sphere's level sets."""
+    n = 24
+    z, y, x = np.meshgrid(*(np.arange(n) - 11.5,) * 3, indexing="ij")
+    r = np.sqrt(x**2 + y**2 + z**2)
+    g = Grid3D(runtime, n, n, n, ghost=3, dtype=np.dtype(np.float64))
+    phi = g.upload((r - 8.0)[None], mode="linear")
+    band = g.band(phi, 0.5)
+    speed = cla.zeros(runtime.queue, g.padded_shape, g.dtype)
+    idx = band.indices.get().astype(np.int64)
+    radius = g.pad(r[None], "linear").reshape(-1)[idx]
+    for mode, expect in ((1, 2 / radius), (2, 1 / radius**2)):
+        g.launch_list(_kernel(runtime, "region_speed", SPEED=mode), band, phi.data, phi.data,
+                      speed.data, g.scalar(1.0), *g.strides())
+        got = speed.get().reshape(-1)[idx]
+        np.testing.assert_allclose(got, expect, rtol=0.03)
+
+
+# ---- mesh splitting ---------------------------------------------------------------------------
+
+def test_split_puts_the_boundary_on_the_zero():
+    verts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    faces = np.array([[0, 1, 2], [1, 3, 2]])
+    vals = (verts[:, 0] - 0.3)[:, None]  # region: x < 0.3
+    v, f, labels, bnd = split_regions(verts, vals, faces)
+    area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    assert area[labels == 0].sum() == pytest.approx(0.3, abs=1e-12)
+    assert area.sum() == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(bnd[0][:, 0], 0.3)
+
+
+# ---- tracking on spheres ------------------------------------------------------------------------
+
+H = 0.1
+
+
+def _sphere(n=36, radius=1.0, centre=(0.0, 0.0, 0.0)):
+    ax = (np.arange(n) - (n - 1) / 2) * H
+    z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
+    c = centre
+    phi = np.sqrt((x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2) - radius
+    return phi, (x, y, z), (ax[0],) * 3
+
+
+def _cap_stats(frame, centre):
+    """Area fraction of the cap and its angular radius (from the boundary points)."""
+    p = frame.boundaries[0] - centre
+    angle = np.arccos(np.clip(p[:, 2] / np.linalg.norm(p, axis=1), -1, 1))
+    return frame.area_fraction(0), float(np.mean(angle))
+
+
+COS_CAP = 0.5  # cap z > 0.5 R: angular radius 60 degrees, area fraction 1/4
+
+
+@pytest.mark.parametrize("motion", ["expansion", "translation"])
+def test_cap_keeps_its_relative_area_and_angular_radius(motion):
+    phi, (_x, _y, z), origin = _sphere(42, 0.9, (-0.25, 0.0, 0.0) if motion == "translation" else (0, 0, 0))
+    centre0 = np.array([-0.25, 0.0, 0.0]) if motion == "translation" else np.zeros(3)
+    cap = COS_CAP * 0.9 - z  # region: z > 0.45
+    if motion == "expansion":
+        frames = track_region(phi, cap, beta=0.5, t=0.5, spacing=H, saves=1, origin=origin)
+        centre1 = centre0
+        assert frames[-1].area() == pytest.approx(4 * np.pi * 1.15**2, rel=0.01)
+    else:
+        v = np.array([0.5, 0.0, 0.2])
+        frames = track_region(phi, cap, velocity=v, t=1.0, spacing=H, saves=1, origin=origin)
+        centre1 = centre0 + v
+    frac0, angle0 = _cap_stats(frames[0], centre0)
+    frac1, angle1 = _cap_stats(frames[-1], centre1)
+    assert frac0 == pytest.approx(0.25, rel=0.01)
+    assert frac1 == pytest.approx(frac0, rel=0.01)
+    assert angle1 == pytest.approx(np.pi / 3, rel=0.01)
+    assert angle1 == pytest.approx(angle0, rel=0.01)
+
+
+def test_vertex_mask_input_tracks_like_an_implicit_region():
+    phi, _, origin = _sphere(40, 0.8)
+    mesh = surface_mesh(phi, H, origin)
+    mask = mesh.vertices[:, 2] > 0.4
+    frames = track_region(phi, mask, beta=0.4, t=0.25, spacing=H, saves=1, origin=origin)
+    want = (1 - 0.5) / 2
+    assert frames[0].area_fraction(0) == pytest.approx(want, rel=0.05)
+    assert frames[1].area_fraction(0) == pytest.approx(frames[0].area_fraction(0), rel=0.02)
