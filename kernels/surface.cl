@@ -700,7 +700,9 @@ __kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict
 #endif
         const REAL diff_b = heat_div(ub, psi, i, ex, ey, ez, sx, sxy);
         v[i] = a + dt * (s * (16 - a * b) + da * diff_a);
-        v[plane + i] = fmax((REAL)0, b + dt * (s * (a * b - b - beta[i]) + db * diff_b));
+        // b clamped at 0 by a select: fmax is an out-of-line call on PoCL (scalar loop)
+        const REAL nb = b + dt * (s * (a * b - b - beta[i]) + db * diff_b);
+        v[plane + i] = nb > 0 ? nb : (REAL)0;
     }
 }
 
