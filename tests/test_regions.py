@@ -6,7 +6,9 @@ import pyopencl.array as cla
 import pytest
 from reference import regions as ref
 
+import clpde
 from clpde.fields import compact
+from clpde.imagedata import InputError
 from clpde.regions import split_regions, surface_mesh, track_region
 from clpde.surface.grid3d import Grid3D
 
@@ -168,3 +170,86 @@ def test_vertex_mask_input_tracks_like_an_implicit_region():
     want = (1 - 0.5) / 2
     assert frames[0].area_fraction(0) == pytest.approx(want, rel=0.05)
     assert frames[1].area_fraction(0) == pytest.approx(frames[0].area_fraction(0), rel=0.02)
+
+
+# ---- Figure 2.7's toy cases: a region that splits, two that merge --------------------------------
+
+SHAPE_XYZ = (42, 30, 30)  # nx, ny, nz
+
+
+def _toy_grid():
+    nx, ny, nz = SHAPE_XYZ
+    axes = [(np.arange(n) - (n - 1) / 2) * H for n in (nx, ny, nz)]
+    x, y, z = axes[0][None, None, :], axes[1][None, :, None], axes[2][:, None, None]
+    return x, y, z, tuple(a[0] for a in axes), (nz, ny, nx)
+
+
+def _capsule(x, y, z, half, r):
+    return np.sqrt((x - np.clip(x, -half, half)) ** 2 + y**2 + z**2) - r
+
+
+def _two_spheres(x, y, z, c, r):
+    return np.minimum(np.sqrt((x - c) ** 2 + y**2 + z**2), np.sqrt((x + c) ** 2 + y**2 + z**2)) - r
+
+
+def _region_components(frame, label=0):
+    """Connected pieces of a region (ignoring slivers under 2% of its area)."""
+    faces = np.flatnonzero(frame.face_labels == label)
+    parts = frame.mesh.submesh([faces], append=True).split(only_watertight=False)
+    areas = np.array([p.area for p in parts])
+    return int((areas > 0.02 * areas.sum()).sum())
+
+
+@pytest.mark.parametrize("case", ["split", "merge"])
+def test_region_changes_topology_with_the_surface(case):
+    x, y, z, origin, shape = _toy_grid()
+    if case == "split":
+        # a capsule pinches into two spheres; the belt around its middle splits in two
+        start, target = _capsule(x, y, z, 0.6, 0.45), _two_spheres(x, y, z, 0.75, 0.45)
+        region = np.sqrt(x**2 + y**2) - 0.8 + 0 * z
+        want = [1, 2]
+    else:
+        # two spheres merge into a capsule; their facing caps join into one belt
+        start, target = _two_spheres(x, y, z, 0.55, 0.45), _capsule(x, y, z, 0.6, 0.45)
+        region = np.abs(x) - 0.35 + 0 * y + 0 * z
+        want = [2, 1]
+    frames = track_region(np.broadcast_to(start, shape), np.broadcast_to(region, shape),
+                          beta="morph", target=np.broadcast_to(target, shape), t=4.0,
+                          spacing=H, saves=1, origin=origin)
+    assert [_region_components(f) for f in frames] == want
+    surfaces = [len(f.mesh.split(only_watertight=False)) for f in frames]
+    assert surfaces[0] != surfaces[1]  # the surface itself changed topology too
+    assert 0.2 < frames[-1].area_fraction(0) < 0.8
+
+
+def test_labelled_regions_cover_the_surface():
+    phi, _, origin = _sphere(36, 0.7)
+    mesh = surface_mesh(phi, H, origin)
+    labels = (mesh.vertices[:, 0] > 0).astype(int) + 2 * (mesh.vertices[:, 2] > 0)
+    frames = track_region(phi, labels, beta=0.3, t=0.1, spacing=H, saves=1, origin=origin)
+    for f in frames:
+        fractions = [f.area_fraction(k) for k in range(4)]
+        assert sum(fractions) == pytest.approx(1.0, abs=0.01)
+        np.testing.assert_allclose(fractions, 0.25, atol=0.03)
+
+
+def test_bad_input_is_named():
+    phi, _, origin = _sphere(24, 0.6)
+    with pytest.raises(InputError, match="region"):
+        track_region(phi, np.zeros(5), spacing=H, origin=origin)
+    with pytest.raises(InputError, match="beta"):
+        track_region(phi, phi, beta="sideways", spacing=H, origin=origin)
+    with pytest.raises(InputError, match="target"):
+        track_region(phi, phi, beta="morph", spacing=H, origin=origin)
+    with pytest.raises(InputError, match="border"):
+        track_region(phi, phi, beta=1.0, t=2.0, spacing=H, origin=origin)
+
+
+def test_inputs_are_not_modified_and_the_api_is_exported():
+    phi, (_, _, z), origin = _sphere(32, 0.5)
+    before, cap = phi.copy(), 0.2 - z
+    cap_before = cap.copy()
+    frames = clpde.track_region(phi, cap, beta=0.2, t=0.1, spacing=H, origin=origin)
+    np.testing.assert_array_equal(phi, before)
+    np.testing.assert_array_equal(cap, cap_before)
+    assert len(frames) == 2 and frames[1].time == pytest.approx(0.1)
