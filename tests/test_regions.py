@@ -253,3 +253,18 @@ def test_inputs_are_not_modified_and_the_api_is_exported():
     np.testing.assert_array_equal(phi, before)
     np.testing.assert_array_equal(cap, cap_before)
     assert len(frames) == 2 and frames[1].time == pytest.approx(0.1)
+
+
+def test_cli_writes_meshes_and_a_picture(tmp_path):
+    from clpde.cli import main
+
+    out = tmp_path / "out"
+    assert main(["regions", "merge", "-o", str(out), "--spacing", "0.1", "--saves", "1",
+                 "--size", "48"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["regions.png", "regions_0.ply", "regions_1.ply"]
+    import trimesh
+
+    mesh = trimesh.load(out / "regions_1.ply", process=False)
+    colours = np.unique(np.asarray(mesh.visual.vertex_colors)[:, :3], axis=0)
+    assert len(colours) == 2  # the region and the rest
+    assert main(["regions", "nowhere.obj", "-o", str(tmp_path / "x")]) == 2
