@@ -227,6 +227,7 @@ __kernel void mark_stencil(__global uchar* restrict mask, const int sx, const in
 // Weights of the nodes along one axis from the position t in [0, 1) relative to floor(p):
 // axis_weights' polynomials, the four cubic ones expanded in powers of t and computed at once.
 #if INTERP == 3
+#define NODE_WEIGHTS REAL4
 INLINE REAL4 node_weights(const REAL t)
 {
     const REAL4 c3 = (REAL4)(-1, 3, -3, 1) / 6;
@@ -236,8 +237,26 @@ INLINE REAL4 node_weights(const REAL t)
     return ((c3 * t + c2) * t + c1) * t + c0;
 }
 #else
+#define NODE_WEIGHTS REAL2
 INLINE REAL2 node_weights(const REAL t) { return (REAL2)(1 - t, t); }
 #endif
+
+// LINE_FIELD: u is a line field (u and -u mean the same line, e.g. principal directions):
+// every vector a step or the re-extension reads is first turned to the side of a reference
+// vector u(ref) (the updated cell's own; floor(cp)'s node), so sign flips between neighbours
+// are not mistaken for jumps.
+#ifndef LINE_FIELD
+#define LINE_FIELD 0
+#endif
+
+// +1 or -1: the sign that turns the NC-vector at p to the side of the one at ref.
+INLINE REAL line_sign(__global const REAL* restrict u, const int ref, const int p,
+                      const int plane)
+{
+    REAL dot = 0;
+    for (int c = 0; c < NC; ++c) dot += u[c * plane + ref] * u[c * plane + p];
+    return dot < 0 ? (REAL)-1 : (REAL)1;
+}
 
 // Whole-band closest-point re-extension: dst(x) = src(cp(x)) for every band cell, all NC
 // channels, from the stencils of cp_stencils. With NORMALIZE the NC-vector is rescaled to
@@ -258,7 +277,19 @@ __kernel void extend_cp(__global const REAL* restrict src, __global REAL* restri
         REAL v[NC];
         for (int c = 0; c < NC; ++c) {
             __global const REAL* u = src + c * plane + b0;
-#if INTERP == 3
+#if LINE_FIELD
+            // line field: every node's vector turned to the side of floor(cp)'s node
+            const int ref = b0 + (NODES / 2 - 1) * (sxy + sx + 1);  // floor(cp)'s node
+            const NODE_WEIGHTS wx = node_weights(tx), wy = node_weights(ty), wz = node_weights(tz);
+            REAL acc = 0;
+            for (int a = 0; a < NODES; ++a)
+                for (int b = 0; b < NODES; ++b)
+                    for (int e = 0; e < NODES; ++e) {
+                        const int p = b0 + a * sxy + b * sx + e;
+                        acc += line_sign(src, ref, p, plane) * (wz[a] * wy[b] * wx[e]) * u[p - b0];
+                    }
+            v[c] = acc;
+#elif INTERP == 3
             const REAL4 wy = node_weights(ty), wz = node_weights(tz);
             REAL4 acc = 0;
             for (int a = 0; a < 4; ++a) {
@@ -406,8 +437,14 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
                       __global const REAL* restrict dir, const int j, const int ex,
                       const int ey, const int ez, const int sx, const int sxy, const int plane,
-                      const REAL e2, REAL w[NC][3])
+                      const REAL e2, const int ref, REAL w[NC][3])
 {
+#if LINE_FIELD
+    const REAL s0 = line_sign(u, ref, j, plane), s1 = line_sign(u, ref, j + ex, plane);
+    const REAL s2 = line_sign(u, ref, j + ey, plane), s3 = line_sign(u, ref, j + ez, plane);
+#else
+    const REAL s0 = 1, s1 = 1, s2 = 1, s3 = 1;
+#endif
     const vec3r n = psi_normal(psi, j, sx, sxy);
     const REAL nn = n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30;
 #if WEIGHTED
@@ -418,9 +455,10 @@ INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* rest
     REAL g2 = 0;
     for (int c = 0; c < NC; ++c) {
         const int jc = c * plane + j;
-        const REAL vx = ONE_SIDED_SIGN(ex) * (u[jc + ex] - u[jc]);
-        const REAL vy = ONE_SIDED_SIGN(ey) * (u[jc + ey] - u[jc]);
-        const REAL vz = ONE_SIDED_SIGN(ez) * (u[jc + ez] - u[jc]);
+        const REAL uj = s0 * u[jc];
+        const REAL vx = ONE_SIDED_SIGN(ex) * (s1 * u[jc + ex] - uj);
+        const REAL vy = ONE_SIDED_SIGN(ey) * (s2 * u[jc + ey] - uj);
+        const REAL vz = ONE_SIDED_SIGN(ez) * (s3 * u[jc + ez] - uj);
         const REAL s = (n.x * vx + n.y * vy + n.z * vz) / nn;
         w[c][0] = vx - s * n.x;
         w[c][1] = vy - s * n.y;
@@ -458,10 +496,10 @@ __kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict
 {
     FOR_EACH_RUN_CELL(i) {
         REAL wc[NC][3], wx[NC][3], wy[NC][3], wz[NC][3];
-        const REAL g2 = flow_flux(u, psi, dir, i, ex, ey, ez, sx, sxy, plane, e2, wc);
-        flow_flux(u, psi, dir, i - ex, ex, ey, ez, sx, sxy, plane, e2, wx);
-        flow_flux(u, psi, dir, i - ey, ex, ey, ez, sx, sxy, plane, e2, wy);
-        flow_flux(u, psi, dir, i - ez, ex, ey, ez, sx, sxy, plane, e2, wz);
+        const REAL g2 = flow_flux(u, psi, dir, i, ex, ey, ez, sx, sxy, plane, e2, i, wc);
+        flow_flux(u, psi, dir, i - ex, ex, ey, ez, sx, sxy, plane, e2, i, wx);
+        flow_flux(u, psi, dir, i - ey, ex, ey, ez, sx, sxy, plane, e2, i, wy);
+        flow_flux(u, psi, dir, i - ez, ex, ey, ez, sx, sxy, plane, e2, i, wz);
 #if WEIGHTED
         const vec3r n = psi_normal(psi, i, sx, sxy);
         const REAL inv_len = RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);

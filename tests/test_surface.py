@@ -79,19 +79,21 @@ def test_cp_stencils_match_reference(small_sphere, interpolation, order):
 
 
 @pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
-@pytest.mark.parametrize("nc,normalize", [(1, False), (3, True)])
-def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc, normalize):
+@pytest.mark.parametrize("nc,normalize,lines", [(1, False, False), (3, True, False), (3, True, True)])
+def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc, normalize, lines):
     s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation) if order == 1 else small_sphere
     g, q = s.grid, s.runtime.queue
     for u in (padded_host(s, rng, nc), np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape)):
         src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
         dst = cla.zeros_like(src)
-        kernel = g.kernel("extend_cp", INTERP=order, NC=nc, NORMALIZE=int(normalize))
+        kernel = g.kernel("extend_cp", INTERP=order, NC=nc, NORMALIZE=int(normalize),
+                          LINE_FIELD=int(lines))
         g.launch_list(kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
                       *g.strides())
         band = band_host(s.ext_band)
         cp = np.stack([c.get()[: band.size] for c in s.cp]).astype(np.float64)
-        expect = ref.extend_cp(u.astype(np.float32).astype(np.float64), band, cp, order, normalize)
+        expect = ref.extend_cp(u.astype(np.float32).astype(np.float64), band, cp, order, normalize,
+                               line_field=lines)
         got = dst.get().reshape(nc, -1)[:, band]
         np.testing.assert_allclose(got, expect, atol=5e-5 * np.abs(expect).max() + 1e-5)
 

@@ -69,7 +69,8 @@ def _offsets(grid, sides: int):
 class BandFlow:
     """Device state of data on a surface: `cur` (extended) and a scratch volume `tmp`."""
 
-    def __init__(self, surf, u, normalize: bool = False, extend: bool = True):
+    def __init__(self, surf, u, normalize: bool = False, extend: bool = True,
+                 line_field: bool = False):
         self.surf = surf
         self.input = np.asarray(u)
         data = surf._as_channels(u)
@@ -79,7 +80,7 @@ class BandFlow:
         self.cur = g.upload(data)
         self.tmp = self.cur.copy()
         self._extend_kernel = g.kernel("extend_cp", INTERP=surf.interp, NC=self.nc,
-                                       NORMALIZE=int(normalize))
+                                       NORMALIZE=int(normalize), LINE_FIELD=int(line_field))
         self._stepped = False
         if extend:
             self.extend()
@@ -149,7 +150,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
 
 def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=None,
          fidelity=None, sigma=None, weighted=False, alternate=True, progress=None,
-         lambda_every=10):
+         lambda_every=10, line_field=False):
     """Shared driver of flow_step: returns (result, info dict)."""
     eps = float(eps)
     if not (np.isfinite(eps) and eps > 0):
@@ -158,10 +159,11 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     if sigma is not None and dt is None:
         limit *= 0.5  # room for the dynamic lambda to grow (checked every update below)
     steps, dt = _check_time(t, dt, limit, flow_name)
-    flow = BandFlow(surf, u, normalize=harmonic)
+    flow = BandFlow(surf, u, normalize=harmonic, line_field=line_field)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
     defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic), "FIDELITY": int(fidelity is not None),
-                   "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted))}
+                   "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted)),
+                   "LINE_FIELD": int(bool(line_field))}
     kernel = g.kernel("flow_step", **defines)
     r = g.scalar(dt / h**p)
     e2 = g.scalar((h * eps) ** 2)
@@ -254,9 +256,18 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     return (out, info) if return_info else out
 
 
-def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=None):
+def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=None,
+                 line_field=False):
     """Harmonic map flow of unit vectors on the surface, (D.7) for p = 2 and (4.11) for
-    p = 1, renormalised after every step. u: (channels, nz, ny, nx)."""
+    p = 1, renormalised after every step. u: (channels, nz, ny, nx).
+
+    line_field=True treats u as a field of lines, u and -u alike (principal directions,
+    Figure 4.5): before a step or an interpolation weighs neighbouring vectors, each is
+    turned to the side of the vector it is compared with, so arbitrary sign flips between
+    neighbours are neither smoothed into zero vectors nor counted as edges. This is the
+    harmonic map into the projective plane, worked in local sign-aligned charts; the doubled-
+    angle alternative needs a tangent frame, which has no smooth global choice on a sphere.
+    The result's signs are arbitrary (consistent only locally)."""
     if p not in (1, 2):
         raise InputError(f"p must be 1 or 2, not {p!r}")
     data = np.asarray(u, dtype=np.float64)
@@ -269,7 +280,7 @@ def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=
     if np.abs(norm[band] - 1).max() > 1e-3:
         warnings.warn("u is not made of unit vectors; normalising it", stacklevel=2)
     return _run(surf, u, t, dt, f"harmonic{p}", p=p, eps=eps, harmonic=True,
-                alternate=alternate, progress=progress)[0]
+                alternate=alternate, progress=progress, line_field=line_field)[0]
 
 
 def diffuse_along(surf, u, direction, t, dt=None, *, alternate=True, progress=None):

@@ -20,8 +20,8 @@ import warnings
 import numpy as np
 import pyopencl.array as cla
 
-from ..imagedata import InputError
 from ..fields import compact
+from ..imagedata import InputError
 from ..runtime import get_runtime
 from .grid3d import Grid3D
 

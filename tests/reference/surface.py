@@ -90,9 +90,29 @@ def stencil_cells(cells, padded_shape):
     return np.unique(cells[:, None] + np.array(offsets)[None, :])
 
 
-def extend_cp(u_pad, band, cp, order=3, normalize=False):
+def interpolate_lines(u_pad, points, order=3):
+    """interpolate() for line fields: each node's vector is first turned to the side of the
+    vector at the node floor(point)."""
+    nc, pz, py, px = u_pad.shape
+    x0, wx = _axis_weights(points[0], px, order)
+    y0, wy = _axis_weights(points[1], py, order)
+    z0, wz = _axis_weights(points[2], pz, order)
+    k = wx.shape[0]
+    m = k // 2 - 1
+    ref = u_pad[:, z0 + m, y0 + m, x0 + m]
+    out = np.zeros((nc, points.shape[1]))
+    for a in range(k):
+        for b in range(k):
+            for e in range(k):
+                node = u_pad[:, z0 + a, y0 + b, x0 + e]
+                sign = np.where((node * ref).sum(axis=0) < 0, -1.0, 1.0)
+                out += wz[a] * wy[b] * wx[e] * sign * node
+    return out
+
+
+def extend_cp(u_pad, band, cp, order=3, normalize=False, line_field=False):
     """The band's new values (nc, n): u interpolated at the closest points."""
-    v = interpolate(u_pad, cp, order)
+    v = interpolate_lines(u_pad, cp, order) if line_field else interpolate(u_pad, cp, order)
     if normalize:
         norm = np.sqrt((v**2).sum(axis=0))
         v = np.where(norm > 0, v / np.where(norm > 0, norm, 1), 0)
@@ -137,16 +157,27 @@ def heat_step(u_pad, psi_pad, band, r, offsets, weighted=False):
     return out
 
 
-def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direction=None):
-    """flow_step's fluxes at cells j: list over channels of 3 components, and |P v|^2."""
+def _line_sign(u_flat, plane, ref, cells):
+    """+1 or -1 per cell: turns the vector at `cells` to the side of the one at `ref`."""
+    nc = u_flat.size // plane
+    dot = sum(u_flat[c * plane + ref] * u_flat[c * plane + cells] for c in range(nc))
+    return np.where(dot < 0, -1.0, 1.0)
+
+
+def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direction=None,
+              ref=None):
+    """flow_step's fluxes at cells j: list over channels of 3 components, and |P v|^2.
+    With ref (line fields), every vector read is turned to the side of the one at ref."""
     n = _normal(p, j, sx, sxy)
     nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
     length = np.sqrt(nn) if weighted else 1.0
     nc = u_flat.size // plane
+    sign = (lambda cells: 1.0) if ref is None else (lambda cells: _line_sign(u_flat, plane, ref, cells))
     pv, g2 = [], 0.0
     for c in range(nc):
         f = u_flat[c * plane:(c + 1) * plane]
-        v = [np.sign(e) * (f[j + e] - f[j]) for e in offsets]
+        fj = sign(j) * f[j]
+        v = [np.sign(e) * (sign(j + e) * f[j + e] - fj) for e in offsets]
         s = (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / nn
         w = [v[a] - s * n[a] for a in range(3)]
         g2 = g2 + w[0] ** 2 + w[1] ** 2 + w[2] ** 2
@@ -163,15 +194,16 @@ def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direc
 
 
 def flow_step(u_pad, psi_pad, band, r, dt, lam, e2, offsets, flow_p=2, harmonic=False,
-              u0_pad=None, direction=None, weighted=False):
+              u0_pad=None, direction=None, weighted=False, line_field=False):
     """New band values (nc, n) of flow_step (TV, harmonic maps, flux along d, fidelity)."""
     nc, pz, py, px = u_pad.shape
     sx, sxy, plane = px, px * py, px * py * pz
     u = u_pad.ravel().astype(np.float64)
     p = psi_pad.ravel().astype(np.float64)
     d = None if direction is None else direction.ravel().astype(np.float64)
-    wc, g2 = flow_flux(u, p, band, offsets, sx, sxy, plane, e2, flow_p, weighted, d)
-    nb = [flow_flux(u, p, band - e, offsets, sx, sxy, plane, e2, flow_p, weighted, d)[0]
+    ref = band if line_field else None
+    wc, g2 = flow_flux(u, p, band, offsets, sx, sxy, plane, e2, flow_p, weighted, d, ref)
+    nb = [flow_flux(u, p, band - e, offsets, sx, sxy, plane, e2, flow_p, weighted, d, ref)[0]
           for e in offsets]
     inv_len = 1.0
     if weighted:
