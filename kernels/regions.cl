@@ -71,7 +71,7 @@ inline REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
 
 // ---- the speed V of Phi_t = V |grad Phi| on the band ----------------------------------------
 // SPEED 0: V = scale (a constant); 1: V = scale * mean curvature of Phi; 2: V = scale *
-// max(Gaussian curvature, 0); 3: V = scale * (aux - Phi) (morphing toward the target whose
+// sign(mean curvature) max(Gaussian curvature, 0); 3: V = scale * (aux - Phi) (morphing toward the target whose
 // signed distance is aux); 4: V = scale * aux (a user array).
 #ifndef SPEED
 #define SPEED 0
@@ -88,7 +88,10 @@ __kernel void region_speed(__global const REAL* restrict phi, __global const REA
 #elif SPEED == 1 || SPEED == 2
         REAL mean, gauss;
         curvatures(phi, i, sx, sxy, &mean, &gauss);
-        speed[i] = scale * (SPEED == 1 ? mean : fmax(gauss, (REAL)0));
+        // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
+        // curvature): convex and concave elliptic parts both flatten, which unfolds
+        const REAL toward = mean > 0 ? (REAL)1 : (mean < 0 ? (REAL)-1 : (REAL)0);
+        speed[i] = scale * (SPEED == 1 ? mean : toward * fmax(gauss, (REAL)0));
 #elif SPEED == 3
         speed[i] = scale * (aux[i] - phi[i]);
 #else
@@ -258,5 +261,34 @@ __kernel void dilate_mask(__global const uchar* restrict src, __global uchar* re
         uchar any = 0;
         for (int d = -reach; d <= reach; ++d) any |= src[row + x + d * stride];
         dst[row + x] = any != 0;
+    }
+}
+
+// Outer-band extension of the Phi-hat (channels 1.., launched with one channel fewer):
+// u_t + sign(Phi) N_Phi . grad u = 0, first-order upwind, weighted by 1 - band_cutoff, so
+// it acts only where the flows are faded out. Cells that enter the band as the surface
+// moves hold stale Phi-hat values (from the start, or from when they last left the band);
+// the reinitialisation keeps every sign, so a stale zero would stay and meet the surface
+// when it arrives (an expanding sphere's cap gained 0.7% that way). Extension replaces them
+// by the values just inside, carried out along the surface's normals.
+__kernel void extend_outer(__global const REAL* restrict ls, __global REAL* restrict out,
+                           const REAL dt, const REAL lo, const REAL hi, const int sx,
+                           const int sxy, LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = list[k];
+        const int j = chan + plane + i;
+        const REAL p = ls[i];
+        const REAL w = 1 - band_cutoff(p, lo, hi);
+        CENTRAL_GRAD(ls, i, gx, gy, gz);
+        const REAL s = (p > 0 ? (REAL)1 : (p < 0 ? (REAL)-1 : (REAL)0)) *
+                       RSQRT(gx * gx + gy * gy + gz * gz + (REAL)1e-12);
+        const REAL ax = s * gx, ay = s * gy, az = s * gz;
+        const REAL c = ls[j];
+        const REAL du = ax * (ax > 0 ? c - ls[j - 1] : ls[j + 1] - c) +
+                        ay * (ay > 0 ? c - ls[j - sx] : ls[j + sx] - c) +
+                        az * (az > 0 ? c - ls[j - sxy] : ls[j + sxy] - c);
+        out[j] = c - dt * w * du;
     }
 }

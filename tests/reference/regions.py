@@ -59,7 +59,7 @@ def region_speed(phi, aux, band, scale, mode, sx, sxy):
         return np.full(len(band), float(scale))
     if mode in (1, 2):
         mean, gauss = curvatures(phi, band, sx, sxy)
-        return scale * (mean if mode == 1 else np.maximum(gauss, 0))
+        return scale * (mean if mode == 1 else np.sign(mean) * np.maximum(gauss, 0))
     if mode == 3:
         return scale * (aux[band] - phi[band])
     return scale * aux[band]
@@ -117,4 +117,21 @@ def reinit_step(u, u0, band, dt, nc, plane, sx, sxy, tol=0.1):
         subcell = np.where(np.abs(g - 1) < tol, p, p - dt * (sgn * np.abs(p) - d))
         godunov = p - dt * sgn * (upwind_norm(u, i, sx, sxy, -sgn) - 1)
         out[c] = np.where(interface, subcell, godunov)
+    return out
+
+
+def extend_outer(ls, band, dt, lo, hi, nc, plane, sx, sxy):
+    """New values of channels 1..nc-1 at the band cells: array (nc - 1, len(band))."""
+    p = ls[band]
+    w = 1 - band_cutoff(p, lo, hi)
+    g = central_grad(ls, band, sx, sxy)
+    s = np.sign(p) / np.sqrt(sum(a * a for a in g) + 1e-12)
+    out = np.empty((nc - 1, len(band)))
+    for c in range(1, nc):
+        j = band + c * plane
+        du = 0.0
+        for a, st in zip(g, (1, sx, sxy)):
+            a = s * a
+            du = du + a * np.where(a > 0, ls[j] - ls[j - st], ls[j + st] - ls[j])
+        out[c - 1] = ls[j] - dt * w * du
     return out
