@@ -2,9 +2,12 @@
 implicit surface, computed on a narrow band of a 3D grid.
 
     python examples/surface_figures.py [--mesh FILE] [--resolution 64] [--out docs/images]
+                                       [--figures 4.3,4.4,4.5,4.6,4.7,4.8]
 
 Writes surface_fig4_3.png (heat flow), surface_fig4_4.png (noisy / TV denoising with dynamic
-lambda / TV flow without fidelity), surface_fig4_6.png (colour denoising: chroma by the
+lambda / TV flow without fidelity), surface_fig4_5.png (the major principal direction of a
+bumpy surface, shown by noise diffused along it, before and after its regularisation as a
+line field by the p = 1 harmonic map), surface_fig4_6.png (colour denoising: chroma by the
 p = 1 harmonic map, brightness by heat), surface_fig4_7.png (Turk reaction-diffusion,
 isotropic and along the major principal direction) and surface_fig4_8.png (noise diffused
 along the major and the minor principal direction).
@@ -16,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from clpde.surface import render_mesh, to_mesh
+from clpde.surface import ImplicitSurface, render_mesh, to_mesh
 from clpde.surface.demo import _write_png, checker, colour_pattern, load_surface
 
 
@@ -36,7 +39,9 @@ def main():
     parser.add_argument("--size", type=int, default=260, help="pixels per panel")
     parser.add_argument("--iterations", type=int, default=12000, help="reaction-diffusion")
     parser.add_argument("--out", default="docs/images")
+    parser.add_argument("--figures", default="4.3,4.4,4.5,4.6,4.7,4.8", help="which figures")
     args = parser.parse_args()
+    wanted = set(args.figures.split(","))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(0)
@@ -46,6 +51,10 @@ def main():
     h = torus.spacing
 
     start = time.perf_counter()
+    if "4.5" in wanted:
+        figure_4_5(args, out, rng)
+    if wanted <= {"4.5"}:
+        return
     u = checker(torus)
     panels = [picture(torus, u, size, vmin=0, vmax=1)]
     for t in (20 * h**2 / 6, 80 * h**2 / 6):  # 20 and 80 steps at the stability limit
@@ -78,6 +87,30 @@ def main():
               for d in (major, minor)]
     save(out / "surface_fig4_8.png", panels)
     print(f"all figures in {time.perf_counter() - start:.0f} s")
+
+
+def bumpy_torus(resolution):
+    """A torus with small bumps: its principal directions turn irregularly, as on a scanned
+    mesh (the thesis uses a bunny)."""
+    torus = load_surface("torus", resolution)
+    x, y, z = torus.coordinates()
+    k = 2 * np.pi / 0.35
+    bumps = 0.012 * np.sin(k * x + 1) * np.sin(k * y) * np.sin(k * z + 2)
+    psi = np.broadcast_to(torus.psi + bumps, torus.shape)
+    return ImplicitSurface.from_volume(psi, torus.spacing, torus.origin)
+
+
+def figure_4_5(args, out, rng):
+    """Major principal direction before / after regularisation as a line field (its sign
+    is arbitrary), each shown by noise diffused along it (as Figure 4.8 does)."""
+    surf = load_surface(args.mesh, args.resolution) if args.mesh else bumpy_torus(args.resolution)
+    h = surf.spacing
+    major, _, _ = surf.principal_directions()
+    smooth = surf.harmonic_map(major, t=4 * h, p=1, line_field=True)
+    noise = surf.field(lambda x, y, z: 0 * x) + rng.random(surf.shape)
+    panels = [picture(surf, surf.diffuse_along(noise, d, t=10 * h**2), args.size)
+              for d in (major, smooth)]
+    save(out / "surface_fig4_5.png", panels)
 
 
 if __name__ == "__main__":
