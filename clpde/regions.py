@@ -86,8 +86,9 @@ class RegionTracker:
 
     def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
                  velocity=None, band=5.0, reinit_every=4, reinit_iterations=8, cfl=0.4,
-                 device=None, dtype=np.float32):
+                 max_speed=None, device=None, dtype=np.float32):
         self.h = float(spacing)
+        self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
         nz, ny, nx = phi.shape
         self.grid = Grid3D(self.runtime, nx, ny, nz, ghost=GHOST, dtype=np.dtype(dtype))
@@ -187,7 +188,7 @@ class RegionTracker:
     def _compute_speed(self) -> None:
         g = self.grid
         g.launch_list(self._k["region_speed"], self.step_band, self.cur.data, self.aux.data,
-                      self.speed.data, g.scalar(self.scale), *g.strides())
+                      self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
 
     def stable_dt(self) -> float:
         """Largest stable step (grid units) for the current speeds: one device read."""
@@ -221,7 +222,7 @@ class RegionTracker:
         if self.velocity is None:
             if self.mode in (1, 2, 3):  # speeds that depend on Phi
                 g.launch_list(self._k["region_speed"], self.step_band, src.data, self.aux.data,
-                              self.speed.data, g.scalar(self.scale), *g.strides())
+                              self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
             g.launch_list(self._k["region_step"], self.step_band, src.data, self.speed.data,
                           dst.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
                           *g.strides(), channels=self.nc)
@@ -328,7 +329,7 @@ def _speed_setup(beta, target, weight, h, shape, coords):
 
 def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
                  target=None, velocity=None, weight=1.0, band=5.0, reinit_every=4,
-                 reinit_iterations=8, cfl=0.4, keep_volumes=False, device=None,
+                 reinit_iterations=8, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
                  dtype=np.float32, progress=None) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
@@ -344,7 +345,8 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
     toward target=, a signed distance volume: -weight (target - phi)), an array of phi's
     shape or a callable f(x, y, z) giving one. velocity=(vx, vy, vz): translate instead.
     t: final time; saves: number of saved intervals (frames at t * k / saves, k = 0..saves)
-    or a sequence of times in [0, t].
+    or a sequence of times in [0, t]. max_speed: clamp |beta| (world units) where the
+    curvature of creases finer than the grid would otherwise set a tiny time step.
 
     Returns a RegionFrame per saved time: mesh (trimesh, per-vertex region colours),
     face_labels, boundary points, and (keep_volumes=True) the level sets.
@@ -385,7 +387,9 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
         vel = None
     tracker = RegionTracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
                             band=band, reinit_every=reinit_every,
-                            reinit_iterations=reinit_iterations, cfl=cfl, device=device, dtype=dtype)
+                            reinit_iterations=reinit_iterations, cfl=cfl,
+                            max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
+                            device=device, dtype=dtype)
     frames = []
     disable = None if progress is None else not progress
     with tqdm(total=t_end, desc="track regions", disable=disable, leave=False) as bar:

@@ -72,31 +72,34 @@ inline REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
 // ---- the speed V of Phi_t = V |grad Phi| on the band ----------------------------------------
 // SPEED 0: V = scale (a constant); 1: V = scale * mean curvature of Phi; 2: V = scale *
 // sign(mean curvature) max(Gaussian curvature, 0); 3: V = scale * (aux - Phi) (morphing toward the target whose
-// signed distance is aux); 4: V = scale * aux (a user array).
+// signed distance is aux); 4: V = scale * aux (a user array). Then clamped to [-vmax, vmax].
 #ifndef SPEED
 #define SPEED 0
 #endif
 __kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
-                           __global REAL* restrict speed, const REAL scale, const int sx,
-                           const int sxy, LIST_ARGS)
+                           __global REAL* restrict speed, const REAL scale, const REAL vmax,
+                           const int sx, const int sxy, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
         const int i = list[k];
 #if SPEED == 0
-        speed[i] = scale;
+        REAL v = scale;
 #elif SPEED == 1 || SPEED == 2
         REAL mean, gauss;
         curvatures(phi, i, sx, sxy, &mean, &gauss);
         // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
         // curvature): convex and concave elliptic parts both flatten, which unfolds
         const REAL toward = mean > 0 ? (REAL)1 : (mean < 0 ? (REAL)-1 : (REAL)0);
-        speed[i] = scale * (SPEED == 1 ? mean : toward * fmax(gauss, (REAL)0));
+        REAL v = scale * (SPEED == 1 ? mean : toward * fmax(gauss, (REAL)0));
 #elif SPEED == 3
-        speed[i] = scale * (aux[i] - phi[i]);
+        REAL v = scale * (aux[i] - phi[i]);
 #else
-        speed[i] = scale * aux[i];
+        REAL v = scale * aux[i];
 #endif
+        // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
+        // the time step (the host passes a huge vmax for no limit)
+        speed[i] = clamp(v, -vmax, vmax);
     }
 }
 

@@ -53,8 +53,12 @@ def curvatures(u, i, sx, sxy):
     return mean, gag / g2**2
 
 
-def region_speed(phi, aux, band, scale, mode, sx, sxy):
+def region_speed(phi, aux, band, scale, mode, sx, sxy, vmax=np.inf):
     """Speeds V at the band cells (in band order)."""
+    return np.clip(_raw_speed(phi, aux, band, scale, mode, sx, sxy), -vmax, vmax)
+
+
+def _raw_speed(phi, aux, band, scale, mode, sx, sxy):
     if mode == 0:
         return np.full(len(band), float(scale))
     if mode in (1, 2):
