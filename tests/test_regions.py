@@ -293,3 +293,13 @@ def test_curvature_flows_shrink_a_sphere_at_the_analytic_rate(beta, t, radius):
     # normal motion of a sphere keeps the cap's share of the area (within 2% here: the
     # sphere ends 7.5 cells across, and curvature speeds are second differences of Phi)
     assert frames[-1].area_fraction(0) == pytest.approx(0.25, rel=0.02)
+
+
+def test_beta_array_and_callable_match_the_constant():
+    phi, (_, _, z), origin = _sphere(32, 0.5)
+    cap = 0.25 - z
+    runs = [track_region(phi, cap, beta=b, t=0.2, spacing=H, saves=1, origin=origin)[-1]
+            for b in (0.5, np.full(phi.shape, 0.5), lambda x, y, z: 0.5 + 0 * x)]
+    areas = [f.area(0) for f in runs]
+    np.testing.assert_allclose(areas, areas[0], rtol=1e-5)
+    assert runs[0].area() == pytest.approx(4 * np.pi * 0.6**2, rel=0.02)  # 6 cells across
