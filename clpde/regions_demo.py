@@ -99,18 +99,24 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None) -> Scene:
     surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
     region = curvature_sign_regions(phi, h)
-    size = h * max(phi.shape)
     if flow == "gaussian":
-        options = {"beta": "gaussian", "weight": 1.0, "t": t if t is not None else 0.02 * size**3}
+        # weight h^3: speed K+ in cells per unit time (K in 1 / cells^2); creases sharper
+        # than a 2-cell radius move at that radius' speed
+        options = {"beta": "gaussian", "weight": h**3, "max_speed": 0.25 * h,
+                   "t": t if t is not None else 60.0}
     elif flow == "mean-curvature":
-        options = {"beta": "mean-curvature", "t": t if t is not None else 0.01 * size**2}
+        # about 15 curvature-limited steps' worth: a few cells of motion on curved parts
+        options = {"beta": "mean-curvature", "t": t if t is not None else 15 * h**2}
     else:
+        # morph toward the sphere of the same volume around the shape's centroid
         x, y, z = surf.coordinates()
-        centre = np.array([np.mean(a) for a in (x, y, z)])
-        radius = 0.3 * size
+        inside = phi < 0
+        weights = inside / inside.sum()
+        centre = [float((np.broadcast_to(a, phi.shape) * weights).sum()) for a in (x, y, z)]
+        radius = np.cbrt(3 * inside.sum() * h**3 / (4 * np.pi))
         target = np.sqrt((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2) - radius
         options = {"beta": "morph", "target": np.broadcast_to(target, phi.shape).copy(),
-                       "t": t if t is not None else 3.0}
+                   "t": t if t is not None else 3.0}
     return Scene(phi, region, h, origin, options)
 
 

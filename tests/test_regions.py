@@ -303,3 +303,19 @@ def test_beta_array_and_callable_match_the_constant():
     areas = [f.area(0) for f in runs]
     np.testing.assert_allclose(areas, areas[0], rtol=1e-5)
     assert runs[0].area() == pytest.approx(4 * np.pi * 0.6**2, rel=0.02)  # 6 cells across
+
+
+def test_cli_tracks_curvature_sign_regions_on_a_mesh(tmp_path):
+    import trimesh
+
+    from clpde.cli import main
+
+    path = tmp_path / "torus.ply"
+    trimesh.creation.torus(1.0, 0.4).export(path)
+    out = tmp_path / "out"
+    assert main(["regions", str(path), "-o", str(out), "--flow", "morph-sphere",
+                 "--resolution", "32", "--saves", "1", "--size", "32"]) == 0
+    # pieces cut along region boundaries add up to the surface's Euler characteristic:
+    # the torus (0) became a sphere (2)
+    euler = [trimesh.load(out / f"regions_{k}.ply", process=False).euler_number for k in (0, 1)]
+    assert euler == [0, 2]
