@@ -170,10 +170,10 @@ def quality(quick=False):
             result = fn(image, mask)
             seconds = time.perf_counter() - start
             assert result.dtype == image.dtype and result.shape == image.shape
-            rows.append(dict(mask=kind, image=name, method=method, seconds=seconds,
-                             psnr=psnr_in_mask(result, image, mask),
-                             ssim=ssim_in_mask(result, image, mask),
-                             coverage=float(mask.mean())))
+            rows.append({"mask": kind, "image": name, "method": method, "seconds": seconds,
+                             "psnr": psnr_in_mask(result, image, mask),
+                             "ssim": ssim_in_mask(result, image, mask),
+                             "coverage": float(mask.mean())})
             print(f"  {kind:12s} {name:10s} {method:19s} PSNR {rows[-1]['psnr']:6.2f}  "
                   f"SSIM {rows[-1]['ssim']:.3f}  {seconds:7.3f} s", file=sys.stderr, flush=True)
     return rows
@@ -235,8 +235,8 @@ def speed():
 
         cycles(2)
         secs, _ = best_of(3, cycles)
-        per_step.append(dict(case=label, band_pixels=solver.band_list.n, image_pixels=int(m.size),
-                             ms_per_step=1e3 * secs / 340))
+        per_step.append({"case": label, "band_pixels": solver.band_list.n, "image_pixels": int(m.size),
+                             "ms_per_step": 1e3 * secs / 340})
     result["per_step"] = per_step
     return result
 
@@ -247,10 +247,10 @@ def summarise(rows):
         groups.setdefault((r["mask"], r["method"]), []).append(r)
     summary = []
     for (kind, method), rs in groups.items():
-        summary.append(dict(mask=kind, method=method, n=len(rs),
-                            psnr=float(np.mean([r["psnr"] for r in rs])),
-                            ssim=float(np.mean([r["ssim"] for r in rs])),
-                            seconds=float(np.mean([r["seconds"] for r in rs]))))
+        summary.append({"mask": kind, "method": method, "n": len(rs),
+                            "psnr": float(np.mean([r["psnr"] for r in rs])),
+                            "ssim": float(np.mean([r["ssim"] for r in rs])),
+                            "seconds": float(np.mean([r["seconds"] for r in rs]))})
     return summary
 
 
@@ -286,8 +286,8 @@ def main(argv=None):
     summary = summarise(rows)
     speed_result = None if args.no_speed else speed()
     print_table(summary, speed_result)
-    out = dict(device=f"{device.name.strip()} ({device.platform.name.strip()})",
-               cpu_count=os.cpu_count(), rows=rows, summary=summary, speed=speed_result)
+    out = {"device": f"{device.name.strip()} ({device.platform.name.strip()})",
+               "cpu_count": os.cpu_count(), "rows": rows, "summary": summary, "speed": speed_result}
     path = Path(args.json)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(path.suffix + ".tmp")

@@ -1,17 +1,32 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
+from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
+from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
 from .track import MorphingTracker, track
-from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
-from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "FLOWS", "ClpdeError", "InputError", "KernelBuildError", "NoDeviceError", "PlanarFlow",
-    "denoise_tv", "devices", "diffuse", "get_runtime", "stability_limit", "use_device",
+    "FLOWS",
+    "ClpdeError",
+    "Inpainting",
+    "InputError",
+    "KernelBuildError",
+    "MorphingTracker",
+    "NoDeviceError",
+    "PlanarFlow",
+    "denoise_tv",
+    "devices",
+    "diffuse",
+    "get_runtime",
+    "inpaint",
+    "stability_limit",
+    "surface",
+    "track",
+    "track_region",
+    "use_device",
 ]
-__all__ += ["Inpainting", "inpaint"]

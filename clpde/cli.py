@@ -369,10 +369,10 @@ def run_inpaint(args) -> int:
     image = load_input(args, args.mask)
     mask = _read_inpaint_mask(args.mask, image.shape[:2])
     parts = split_alpha(image, args.input)
-    options = dict(channel_axis=parts.channel_axis, dt=args.dt, scaling=args.scaling,
-                   colour=args.colour, levels=args.levels, max_steps=args.max_steps,
-                   tol=args.tol, mean_tol=args.mean_tol, device=args.device, progress=show_progress(),
-                   return_info=True)
+    options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
+                   "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,
+                   "tol": args.tol, "mean_tol": args.mean_tol, "device": args.device, "progress": show_progress(),
+                   "return_info": True}
     if args.gif:
         result, info = inpaint(parts.colour, mask, snapshots=args.gif_every, **options)
     else:

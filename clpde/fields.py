@@ -16,6 +16,7 @@ import pyopencl.array as cla
 from .runtime import ClpdeError, Runtime
 
 NEUMANN, DIRICHLET = 0, 1
+FLOAT32 = np.dtype(np.float32)
 _REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 4, "min": 5, "max": 6}
 
 
@@ -28,7 +29,7 @@ class Grid:
     ny: int
     nc: int = 1
     ghost: int = 1
-    dtype: np.dtype = np.dtype(np.float32)
+    dtype: np.dtype = FLOAT32
 
     @property
     def sx(self) -> int:
@@ -178,7 +179,10 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     counts = cla.empty(q, nchunks, np.int32)
     total = cla.empty(q, 1, np.int32)
     flat = mask.reshape(n)
-    k = lambda name: runtime.kernel("fields.cl", name)  # noqa: E731
+
+    def k(name):
+        return runtime.kernel("fields.cl", name)
+
     k("count_chunks")(q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data)
     k("exclusive_scan_serial")(q, (1,), None, counts.data, np.int32(nchunks), total.data)
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build

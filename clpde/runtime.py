@@ -57,8 +57,8 @@ def _ensure_pocl_cache_dir() -> None:
     for path in candidates:
         try:
             os.makedirs(path, exist_ok=True)
-            probe = tempfile.NamedTemporaryFile(dir=path, delete=True)
-            probe.close()
+            with tempfile.NamedTemporaryFile(dir=path):
+                pass
         except OSError:
             continue
         if current and path != current:
@@ -74,7 +74,7 @@ def _ensure_pocl_cache_dir() -> None:
 
 _ensure_pocl_cache_dir()
 
-import pyopencl as cl  # noqa: E402  (PoCL reads POCL_CACHE_DIR when the ICD loads)
+import pyopencl as cl  # (imported here: PoCL reads POCL_CACHE_DIR when the ICD loads)
 
 
 @dataclass(frozen=True)

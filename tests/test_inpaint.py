@@ -65,7 +65,7 @@ def test_annular_region_joins_inner_and_outer_contours():
     # Figure 3.8: Omega is a ring; the dark bar crossing it must join its inner and outer
     # pieces through the ring, and the background must stay light.
     n = 64
-    y, x = np.mgrid[0:n, 0:n]
+    _, x = np.mgrid[0:n, 0:n]
     image = np.where(np.abs(x - 30.5) <= 3, 0.1, 0.9)
     ring = _disc(n, 32, 31, 15) & ~_disc(n, 32, 31, 6)
     out = clpde.inpaint(image, ring)
@@ -208,23 +208,23 @@ def test_snapshots_and_object_form():
 
 
 @pytest.mark.parametrize("kwargs,match", [
-    (dict(mask=np.zeros((5, 5), bool)), "does not match"),
-    (dict(mask=np.ones((8, 8), bool)), "covers every pixel"),
-    (dict(mask=np.array([["a"] * 8] * 8)), "dtype"),
-    (dict(mask=np.full((8, 8), np.nan)), "NaN"),
-    (dict(dt=0), "dt"),
-    (dict(diffusion_dt=0.5), "stability"),
-    (dict(epsilon=1), "epsilon"),
-    (dict(scaling="cube"), "scaling"),
-    (dict(rotation="left"), "rotation"),
-    (dict(colour="rho-phi-psi"), "3 colour channels"),
-    (dict(colour="lab"), "colour"),
-    (dict(levels=0), "levels"),
-    (dict(snapshots=0), "snapshots"),
-    (dict(transport_steps=0), "transport_steps"),
-    (dict(fill="noise"), "fill"),
-    (dict(tol=-1), "tol"),
-    (dict(mean_tol=-1), "mean_tol"),
+    ({"mask": np.zeros((5, 5), bool)}, "does not match"),
+    ({"mask": np.ones((8, 8), bool)}, "covers every pixel"),
+    ({"mask": np.array([["a"] * 8] * 8)}, "dtype"),
+    ({"mask": np.full((8, 8), np.nan)}, "NaN"),
+    ({"dt": 0}, "dt"),
+    ({"diffusion_dt": 0.5}, "stability"),
+    ({"epsilon": 1}, "epsilon"),
+    ({"scaling": "cube"}, "scaling"),
+    ({"rotation": "left"}, "rotation"),
+    ({"colour": "rho-phi-psi"}, "3 colour channels"),
+    ({"colour": "lab"}, "colour"),
+    ({"levels": 0}, "levels"),
+    ({"snapshots": 0}, "snapshots"),
+    ({"transport_steps": 0}, "transport_steps"),
+    ({"fill": "noise"}, "fill"),
+    ({"tol": -1}, "tol"),
+    ({"mean_tol": -1}, "mean_tol"),
 ])
 def test_bad_inputs(kwargs, match):
     image = np.random.default_rng(0).random((8, 8))
@@ -250,8 +250,8 @@ def test_bad_images():
         Inpainting(np.zeros((8, 8)), mask, steps=3)
 
 
-@pytest.mark.parametrize("options", [dict(fill="biharmonic"), dict(fill="zero", levels=1),
-                                     dict(scaling="quartic-root"), dict(keep_band=False)])
+@pytest.mark.parametrize("options", [{"fill": "biharmonic"}, {"fill": "zero", "levels": 1},
+                                     {"scaling": "quartic-root"}, {"keep_band": False}])
 def test_options_run_and_stay_close(options):
     image = _edge_image(32)
     hole = _disc(32, 16, 16, 4)

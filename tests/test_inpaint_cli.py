@@ -38,7 +38,7 @@ def test_inpaint_matches_the_library(tmp_path, damaged, capsys):
 
 
 def test_rgba_keeps_alpha_and_gif_shows_the_evolution(tmp_path, damaged):
-    photo, maskfile, spoiled, mask, _ = damaged
+    _, maskfile, spoiled, mask, _ = damaged
     rgba = np.dstack([spoiled, 255 - spoiled, spoiled // 2, np.full_like(spoiled, 180)])
     write_image(tmp_path / "rgba.png", rgba)
     out, gif = tmp_path / "out.png", tmp_path / "evolution.gif"
@@ -63,8 +63,8 @@ def test_rgba_keeps_alpha_and_gif_shows_the_evolution(tmp_path, damaged):
 def test_errors_write_nothing(tmp_path, damaged, capsys, args, match):
     photo, maskfile, *_ = damaged
     write_image(tmp_path / "small.png", np.zeros((5, 5), np.uint8))
-    names = dict(photo=photo, mask=maskfile, small=tmp_path / "small.png", out=tmp_path / "out.png",
-                 dir=tmp_path)
+    names = {"photo": photo, "mask": maskfile, "small": tmp_path / "small.png", "out": tmp_path / "out.png",
+                 "dir": tmp_path}
     before = sorted(os.listdir(tmp_path))
     assert main(["inpaint", *[a.format(**names) for a in args]]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -2,13 +2,12 @@
 
 import numpy as np
 import pytest
+from reference import planar as ref
 from skimage import data
 
 import clpde
 from clpde.fields import Field, Grid
 from clpde.imagedata import InputError
-
-from reference import planar as ref
 
 
 def structured(ny=40, nx=56):
@@ -42,7 +41,7 @@ def inputs(rng):
 @pytest.mark.parametrize("kind", ["random", "structured"])
 def test_heat_kernel_matches_reference(runtime, rng, kind):
     u = inputs(rng)[kind]
-    out, g = device_step(runtime, "heat_step", u, np.float32(0.2))
+    out, _ = device_step(runtime, "heat_step", u, np.float32(0.2))
     np.testing.assert_allclose(out, ref.heat_step(ref.pad_neumann(u), 0.2), atol=2e-6)
 
 
@@ -69,7 +68,7 @@ def test_tv_kernel_matches_reference(runtime, rng, kind):
 @pytest.mark.parametrize("weighted", [False, True])
 def test_curvature_kernel_matches_reference(runtime, rng, kind, weighted):
     u = inputs(rng)[kind]
-    nc, ny, nx = u.shape
+    _, ny, nx = u.shape
     eps = 1e-6
     weight = rng.random((ny, nx)) if weighted else None
     if weighted:
