@@ -40,6 +40,17 @@ class ImageLayout:
         return values.astype(self.dtype)
 
 
+def positive(name: str, value) -> float:
+    """A parameter that must be a finite positive number, as a float."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a positive number, not {value!r}") from None
+    if not np.isfinite(number) or number <= 0:
+        raise InputError(f"{name} must be a positive number, not {value!r}")
+    return number
+
+
 def check_channel_axis(ndim: int, channel_axis) -> int | None:
     if channel_axis is None:
         if ndim != 2:

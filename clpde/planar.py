@@ -13,6 +13,7 @@ from tqdm.auto import tqdm
 
 from .fields import Field, Grid, PingPong
 from .imagedata import InputError, to_kernel_layout
+from .imagedata import positive as _positive
 from .runtime import get_runtime
 
 FLOWS = ("heat", "perona-malik", "tv", "curvature")
@@ -40,12 +41,6 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
         return 1.0 / (4.0 / eps + lam)
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
-
-def _positive(name: str, value) -> float:
-    value = float(value)
-    if not np.isfinite(value) or value <= 0:
-        raise InputError(f"{name} must be a positive number, not {value}")
-    return value
 
 
 @dataclass

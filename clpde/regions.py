@@ -30,6 +30,7 @@ from tqdm.auto import tqdm
 
 from .fields import IndexList, compact
 from .imagedata import InputError
+from .imagedata import positive as _positive
 from .regions_mesh import functions_from_mask, region_colours, split_regions, surface_mesh
 from .runtime import get_runtime
 from .surface.grid3d import Grid3D
@@ -64,15 +65,6 @@ class RegionFrame:
     def area_fraction(self, label=0) -> float:
         return self.area(label) / self.area()
 
-
-def _positive(name, value) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive number, not {value!r}") from None
-    if not np.isfinite(value) or value <= 0:
-        raise InputError(f"{name} must be a positive number, not {value!r}")
-    return value
 
 
 class RegionTracker:

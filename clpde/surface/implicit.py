@@ -22,6 +22,7 @@ import pyopencl.array as cla
 
 from ..fields import compact
 from ..imagedata import InputError
+from ..imagedata import positive as _positive
 from ..runtime import get_runtime
 from .grid3d import Grid3D
 
@@ -38,15 +39,6 @@ def _interp_code(interpolation: str) -> int:
         )
     return code
 
-
-def _positive(name: str, value) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive number, not {value!r}") from None
-    if not np.isfinite(value) or value <= 0:
-        raise InputError(f"{name} must be a positive number, not {value!r}")
-    return value
 
 
 class ImplicitSurface:
