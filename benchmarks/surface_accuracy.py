@@ -26,30 +26,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-from numpy.polynomial import legendre
+
+from clpde.surface.exact import exp3z_exact, sphere_points, xy_exact
 
 RESULTS = Path(__file__).resolve().parent / "results" / "surface_accuracy.json"
 
 
-def sphere_points(n=2000):
-    i = np.arange(n) + 0.5
-    polar = np.arccos(1 - 2 * i / n)
-    azimuth = np.pi * (1 + 5**0.5) * i
-    return np.stack([np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1)
-
-
-def exp3z_exact(z, t, degree=40):
-    nodes, weights = legendre.leggauss(80)
-    coef = np.array([
-        (2 * l + 1) / 2 * np.sum(weights * np.exp(3 * nodes) * legendre.legval(nodes, np.eye(degree)[l]))
-        for l in range(degree)
-    ])
-    decay = np.exp(-np.arange(degree) * (np.arange(degree) + 1) * t)
-    return legendre.legval(z, coef * decay)
-
-
 CASES = {
-    "xy": (lambda x, y, z: x * y, lambda p, t: np.exp(-6 * t) * p[:, 0] * p[:, 1]),
+    "xy": (lambda x, y, z: x * y, xy_exact),
     "exp3z": (lambda x, y, z: np.exp(3 * z), lambda p, t: exp3z_exact(p[:, 2], t)),
 }
 
@@ -58,7 +42,7 @@ def convergence(spacings, t=0.1):
     from clpde.surface import ImplicitSurface
     from clpde.surface.flows import heat
 
-    pts = sphere_points()
+    pts = sphere_points(2000)
     rows = []
     for h in spacings:
         surf = ImplicitSurface.sphere(1.0, h)

@@ -4,31 +4,12 @@ solutions on the unit sphere (second-order convergence measured through surf.sam
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from numpy.polynomial import legendre
 from reference import surface as ref
 
 from clpde.imagedata import InputError
 from clpde.surface import ImplicitSurface, flows
+from clpde.surface.exact import exp3z_exact, sphere_points
 from clpde.surface.flows import _offsets
-
-
-def sphere_points(n=1500):
-    """Quasi-uniform points on the unit sphere (Fibonacci lattice)."""
-    i = np.arange(n) + 0.5
-    polar = np.arccos(1 - 2 * i / n)
-    azimuth = np.pi * (1 + 5**0.5) * i
-    return np.stack([np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1)
-
-
-def exp3z_exact(z, t, degree=40):
-    """exp(3z) = sum a_l P_l(z) on the sphere; each term decays as exp(-l(l+1)t)."""
-    nodes, weights = legendre.leggauss(80)
-    coef = np.array([
-        (2 * l + 1) / 2 * np.sum(weights * np.exp(3 * nodes) * legendre.legval(nodes, np.eye(degree)[l]))
-        for l in range(degree)
-    ])
-    decay = np.exp(-np.arange(degree) * (np.arange(degree) + 1) * t)
-    return legendre.legval(z, coef * decay)
 
 
 @pytest.fixture(scope="module")
