@@ -119,6 +119,10 @@ class RegionTracker:
         g = self.grid
         self.step_band: IndexList = self._band(self.width)
         self.reinit_band: IndexList = self._band(self.width, dilate=3)
+        # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs),
+        # exactly the band's cells: cells outside it must keep their values
+        self.step_runs = g.runs(self.step_band, pad=1)
+        self.reinit_runs = g.runs(self.reinit_band, pad=1)
         if self.step_band.n == 0:
             raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
                              "track for a shorter time")
@@ -156,10 +160,10 @@ class RegionTracker:
         """Every level set back to a signed distance in the reinitialisation band."""
         g = self.grid
         its = self.reinit_iterations if iterations is None else int(iterations)
-        band, k = self.reinit_band, self._k
+        band, k = self.reinit_runs, self._k
         _copy(self.nxt, self.cur)
         for _ in range(EXTEND_ITERATIONS if its else 0):
-            g.launch_list(k["extend_outer"], band, self.cur.data, self.nxt.data,
+            g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
                           g.scalar(EXTEND_DT), *self._cutoff(), *g.strides(),
                           channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
@@ -170,16 +174,16 @@ class RegionTracker:
             # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a
             # sphere's interface drifted 0.3 cells in 40 reinitialisations)
             for src, dst in ((self.cur, self.nxt), (self.nxt, self.stage)):
-                g.launch_list(k["reinit3d_step"], band, src.data, self.ls0.data, dst.data,
+                g.launch_runs(k["reinit3d_step"], band, src.data, self.ls0.data, dst.data,
                               g.scalar(REINIT_DT), *g.strides(), channels=self.nc)
-            g.launch_list(k["heun_average"], band, self.cur.data, self.stage.data,
+            g.launch_runs(k["heun_average"], band, self.cur.data, self.stage.data,
                           self.cur.data, channels=self.nc)
         self.rebuild()
 
     # ---- time steps ------------------------------------------------------------------------
     def _compute_speed(self) -> None:
         g = self.grid
-        g.launch_list(self._k["region_speed"], self.step_band, self.cur.data, self.aux.data,
+        g.launch_runs(self._k["region_speed"], self.step_runs, self.cur.data, self.aux.data,
                       self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
 
     def stable_dt(self) -> float:
@@ -213,14 +217,14 @@ class RegionTracker:
         g = self.grid
         if self.velocity is None:
             if self.mode in (1, 2, 3):  # speeds that depend on Phi
-                g.launch_list(self._k["region_speed"], self.step_band, src.data, self.aux.data,
+                g.launch_runs(self._k["region_speed"], self.step_runs, src.data, self.aux.data,
                               self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
-            g.launch_list(self._k["region_step"], self.step_band, src.data, self.speed.data,
+            g.launch_runs(self._k["region_step"], self.step_runs, src.data, self.speed.data,
                           dst.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
                           *g.strides(), channels=self.nc)
         else:
             u = self.velocity
-            g.launch_list(self._k["advect_step"], self.step_band, src.data, dst.data,
+            g.launch_runs(self._k["advect_step"], self.step_runs, src.data, dst.data,
                           g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
                           *self._cutoff(), *g.strides(), channels=self.nc)
 
@@ -229,7 +233,7 @@ class RegionTracker:
         g = self.grid
         self._euler(self.cur, self.nxt, dt)
         self._euler(self.nxt, self.stage, dt)
-        g.launch_list(self._k["heun_average"], self.step_band, self.cur.data, self.stage.data,
+        g.launch_runs(self._k["heun_average"], self.step_runs, self.cur.data, self.stage.data,
                       self.cur.data, channels=self.nc)
         self.time += dt
         self.steps += 1

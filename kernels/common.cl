@@ -71,7 +71,28 @@ inline void mirror_ghosts(__global REAL* v, const int row0, const int x0, const 
     const int k1 = min(k0 + run, nlist);                                              \
     const int chan = get_global_id(1) * plane
 
+// Kernels over the runs of a 3D band (stretches of consecutive band cells along x, built by
+// surface.cl's band_run_* kernels, clpde.surface.grid3d.BandRuns) take these arguments after
+// their own: the runs' cell ranges, their number, the channel stride and runs per work-item.
+// On CPUs a work-item walks whole runs, whose cells are consecutive in memory, so the cell
+// loop vectorises with contiguous loads (a list's gathers keep it scalar); on GPUs every
+// cell is a run of its own. `chan` is the work-item's channel offset, `i`
+// the padded index of a cell:
+//     FOR_EACH_RUN_CELL(i) { v[chan + i] = ...; }
+#define RUN_ARGS __global const int* restrict run_start, __global const int* restrict run_end, \
+                 const int nruns, const int plane, const int runs_per_item
+#define FOR_EACH_RUN_CELL(i)                                                          \
+    const int r0_ = get_global_id(0) * runs_per_item;                                 \
+    const int r1_ = min(r0_ + runs_per_item, nruns);                                  \
+    const int chan = get_global_id(1) * plane;                                        \
+    for (int run_ = r0_; run_ < r1_; ++run_)                                          \
+        for (int i = run_start[run_], end_ = run_end[run_]; i < end_; ++i)
+
 #define SQR(a) ((a) * (a))
+
+// PoCL leaves larger inline helpers as calls inside loops, which keeps those loops scalar:
+// helpers called from a cell loop are declared INLINE.
+#define INLINE inline __attribute__((always_inline))
 
 // PoCL compiles OpenCL's sqrt/rsqrt to library calls that its loop vectoriser cannot
 // widen (about 7x slower here); the compiler builtin becomes the vector instruction.
@@ -84,6 +105,21 @@ inline void mirror_ghosts(__global REAL* v, const int row0, const int x0, const 
 #define SQRT(x) sqrt(x)
 #endif
 #define RSQRT(x) ((REAL)1 / SQRT(x))
+
+// fmin, fmax, fabs and copysign are out-of-line calls on PoCL too, and a loop calling them
+// stays scalar; plain selects vectorise. (NaN handling differs from fmin/fmax: none is
+// expected.)
+#if defined(CLPDE_POCL)
+#define FABS(a) ((a) < 0 ? -(a) : (a))
+#define FMIN(a, b) ((a) < (b) ? (a) : (b))
+#define FMAX(a, b) ((a) > (b) ? (a) : (b))
+#define COPYSIGN(m, s) ((s) < 0 ? -(m) : (m))
+#else
+#define FABS(a) fabs(a)
+#define FMIN(a, b) fmin(a, b)
+#define FMAX(a, b) fmax(a, b)
+#define COPYSIGN(m, s) copysign(m, s)
+#endif
 
 // Likewise PoCL's exp is an out-of-line call (Perona-Malik's exponential edge-stopping ran
 // 100x slower than the heat step). On PoCL, float EXP is computed inline instead: x = k ln2

@@ -10,10 +10,10 @@
 // ---- helpers shared by every level-set kernel -------------------------------------------
 
 // minmod(a, b): the smaller-magnitude argument when both have the same sign, else 0.
-inline REAL minmod(const REAL a, const REAL b)
+INLINE REAL minmod(const REAL a, const REAL b)
 {
-    const REAL m = fmin(fabs(a), fabs(b));
-    return (a * b > 0) ? copysign(m, a) : (REAL)0;
+    const REAL m = FMIN(FABS(a), FABS(b));
+    return (a * b > 0) ? COPYSIGN(m, a) : (REAL)0;
 }
 
 // Slope-limited one-sided differences at c along one axis, given the values two cells
@@ -31,15 +31,15 @@ inline REAL minmod(const REAL a, const REAL b)
 // One axis' contribution to the squared Godunov gradient norm for u_t = V |grad u|.
 // V < 0 (the level sets move toward larger u): the upwind side is the one u increases
 // away from; V > 0: the mirror choice.
-inline REAL godunov_axis(const REAL dm, const REAL dp, const REAL v)
+INLINE REAL godunov_axis(const REAL dm, const REAL dp, const REAL v)
 {
-    const REAL down = fmax(SQR(fmax(dm, (REAL)0)), SQR(fmin(dp, (REAL)0)));
-    const REAL up = fmax(SQR(fmin(dm, (REAL)0)), SQR(fmax(dp, (REAL)0)));
+    const REAL down = FMAX(SQR(FMAX(dm, (REAL)0)), SQR(FMIN(dp, (REAL)0)));
+    const REAL up = FMAX(SQR(FMIN(dm, (REAL)0)), SQR(FMAX(dp, (REAL)0)));
     return (v > 0) ? up : down;
 }
 
 // Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| in 2D.
-inline REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, const REAL v)
+INLINE REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, const REAL v)
 {
     REAL dmx, dpx, dmy, dpy;
     LS_ONE_SIDED(u[i - 2], u[i - 1], u[i], u[i + 1], u[i + 2], dmx, dpx);
@@ -60,7 +60,7 @@ __kernel void mark_band(__global const REAL* restrict u, __global uchar* restric
         const int cell = i % plane;
         const int x = cell % sx - G, y = cell / sx - G;
         const int movable = (x >= margin) & (x < nx - margin) & (y >= margin) & (y < ny - margin);
-        const REAL a = fabs(u[i]);
+        const REAL a = FABS(u[i]);
         band[i] = (movable && a < w) ? ((a < w - 1) ? 1 : 2) : 0;
     }
 }
@@ -100,7 +100,7 @@ __kernel void dilate_band_cols(__global const uchar* restrict rows, __global uch
 // interface (phi0 changes sign towards a 4-neighbour) use Russo and Smereka's subcell fix:
 // they relax towards D = phi0 / |grad phi0|, the distance to the interface estimated from
 // phi0 itself, so the zero level set does not move.
-inline REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, const int i,
+INLINE REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, const int i,
                           const int sx, const REAL dt)
 {
     const REAL c0 = phi0[i];
@@ -113,9 +113,9 @@ inline REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, c
         // |grad phi0| from the largest of the central estimate and the one-sided slopes,
         // which stays right when the interface cuts close to a node.
         REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0));
-        g = fmax(g, fmax(fmax(fabs(e0 - c0), fabs(c0 - w0)), fmax(fabs(n0 - c0), fabs(c0 - s0))));
-        const REAL d = c0 / fmax(g, (REAL)1e-12);
-        return p - dt * (sgn * fabs(p) - d);
+        g = FMAX(g, FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0))));
+        const REAL d = c0 / FMAX(g, (REAL)1e-12);
+        return p - dt * (sgn * FABS(p) - d);
     }
 #endif
     return p - dt * sgn * (upwind_norm_2d(phi, i, sx, -sgn) - 1);
@@ -164,7 +164,7 @@ __kernel void gradient_magnitude(__global const REAL* restrict img, __global REA
 // level set, which asks the host to rebuild the band.
 // The coupled update of one cell; returns |du/dt| and folds |beta|, |grad F1| and the
 // edge test into the running maxima.
-inline REAL morph_cell(__global const REAL* u, __global const REAL* f1,
+INLINE REAL morph_cell(__global const REAL* u, __global const REAL* f1,
                        __global const REAL* f2, __global const uchar* band,
                        __global REAL* u_out, __global REAL* f1_out, const int i, const int sx,
                        const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
@@ -184,10 +184,10 @@ inline REAL morph_cell(__global const REAL* u, __global const REAL* f1,
     const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat);
     const REAL un = u[i] + dt * rate;
     u_out[i] = un;
-    *beta_max = fmax(*beta_max, fabs(beta));
-    *grad_max = fmax(*grad_max, grad_f);
-    *touched |= (band[i] == 2) & (fabs(un) < near);
-    return fabs(rate);
+    *beta_max = FMAX(*beta_max, FABS(beta));
+    *grad_max = FMAX(*grad_max, grad_f);
+    *touched |= (band[i] == 2) & (FABS(un) < near);
+    return FABS(rate);
 }
 
 __kernel void morph_step(__global const REAL* restrict u, __global const REAL* restrict f1,
@@ -202,7 +202,7 @@ __kernel void morph_step(__global const REAL* restrict u, __global const REAL* r
     for (int k = k0; k < k1; ++k) {
         const REAL r = morph_cell(u, f1, f2, band, u_out, f1_out, chan + list[k], sx, dt,
                                   eps_f2, eps_u2, near, &beta_max, &grad_max, &touched);
-        fastest = fmax(fastest, r);
+        fastest = FMAX(fastest, r);
     }
     const int g = get_global_id(0), n = get_global_size(0);
     stats[g] = fastest;

@@ -16,7 +16,7 @@
 // ---- stencils ---------------------------------------------------------------------------
 
 // Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| (3D Godunov norm).
-inline REAL upwind_norm_3d(__global const REAL* u, const int i, const int sx, const int sxy,
+INLINE REAL upwind_norm_3d(__global const REAL* u, const int i, const int sx, const int sxy,
                            const REAL v)
 {
     REAL dmx, dpx, dmy, dpy, dmz, dpz;
@@ -36,7 +36,7 @@ inline REAL upwind_norm_3d(__global const REAL* u, const int i, const int sx, co
 // Mean curvature div(grad u / |grad u|) (kappa = 2 / R on a sphere of radius R cells) and
 // Gaussian curvature (1 / R^2) of the level set of u through cell i, from central first
 // and second differences: kappa = (|g|^2 tr H - g.Hg) / |g|^3, K = g.adj(H)g / |g|^4.
-inline void curvatures(__global const REAL* u, const int i, const int sx, const int sxy,
+INLINE void curvatures(__global const REAL* u, const int i, const int sx, const int sxy,
                        REAL* mean, REAL* gauss)
 {
     CENTRAL_GRAD(u, i, gx, gy, gz);
@@ -63,9 +63,10 @@ inline void curvatures(__global const REAL* u, const int i, const int sx, const 
 // cut-off): cells near the band's edge, whose neighbours outside the band hold stale
 // values, stay put, and the reinitialisation rebuilds them from the surface outwards.
 // Without it a translated sphere's far side picked up 2-cell errors after 5 cells of motion.
-inline REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
+INLINE REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
 {
-    const REAL t = clamp((fabs(phi) - lo) / (hi - lo), (REAL)0, (REAL)1);
+    const REAL a = (FABS(phi) - lo) / (hi - lo);
+    const REAL t = a < 0 ? (REAL)0 : (a > 1 ? (REAL)1 : a);
     return 1 - t * t * (3 - 2 * t);
 }
 
@@ -78,11 +79,9 @@ inline REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
 #endif
 __kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
                            __global REAL* restrict speed, const REAL scale, const REAL vmax,
-                           const int sx, const int sxy, LIST_ARGS)
+                           const int sx, const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = list[k];
+    FOR_EACH_RUN_CELL(i) {
 #if SPEED == 0
         REAL v = scale;
 #elif SPEED == 1 || SPEED == 2
@@ -91,7 +90,7 @@ __kernel void region_speed(__global const REAL* restrict phi, __global const REA
         // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
         // curvature): convex and concave elliptic parts both flatten, which unfolds
         const REAL toward = mean > 0 ? (REAL)1 : (mean < 0 ? (REAL)-1 : (REAL)0);
-        REAL v = scale * (SPEED == 1 ? mean : toward * fmax(gauss, (REAL)0));
+        REAL v = scale * (SPEED == 1 ? mean : toward * FMAX(gauss, (REAL)0));
 #elif SPEED == 3
         REAL v = scale * (aux[i] - phi[i]);
 #else
@@ -99,7 +98,7 @@ __kernel void region_speed(__global const REAL* restrict phi, __global const REA
 #endif
         // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
         // the time step (the host passes a huge vmax for no limit)
-        speed[i] = clamp(v, -vmax, vmax);
+        speed[i] = v < -vmax ? -vmax : (v > vmax ? vmax : v);
     }
 }
 
@@ -110,19 +109,16 @@ __kernel void region_speed(__global const REAL* restrict phi, __global const REA
 // with central-difference normals; eps2 keeps them finite where a function is flat.
 __kernel void region_step(__global const REAL* restrict ls, __global const REAL* restrict speed,
                           __global REAL* restrict out, const REAL dt, const REAL eps2,
-                          const REAL lo, const REAL hi, const int sx, const int sxy, LIST_ARGS)
+                          const REAL lo, const REAL hi, const int sx, const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = list[k];
+    FOR_EACH_RUN_CELL(i) {
         const int j = chan + i;
-        REAL v = speed[i] * band_cutoff(ls[i], lo, hi);
-        if (chan != 0) {
-            CENTRAL_GRAD(ls, i, fx, fy, fz);
-            CENTRAL_GRAD(ls, j, ux, uy, uz);
-            v *= (fx * ux + fy * uy + fz * uz) *
-                 RSQRT((fx * fx + fy * fy + fz * fz + eps2) * (ux * ux + uy * uy + uz * uz + eps2));
-        }
+        CENTRAL_GRAD(ls, i, fx, fy, fz);
+        CENTRAL_GRAD(ls, j, ux, uy, uz);
+        const REAL proj = (fx * ux + fy * uy + fz * uz) *
+            RSQRT((fx * fx + fy * fy + fz * fz + eps2) * (ux * ux + uy * uy + uz * uz + eps2));
+        // a select, not a branch on the channel, so the loop vectorises (Phi's own is 1)
+        const REAL v = speed[i] * band_cutoff(ls[i], lo, hi) * (chan != 0 ? proj : (REAL)1);
         out[j] = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
     }
 }
@@ -133,12 +129,11 @@ __kernel void region_step(__global const REAL* restrict ls, __global const REAL*
 // velocity (not only its normal part) on Phi-hat's normal.
 __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restrict out,
                           const REAL dt, const REAL ux, const REAL uy, const REAL uz,
-                          const REAL lo, const REAL hi, const int sx, const int sxy, LIST_ARGS)
+                          const REAL lo, const REAL hi, const int sx, const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int j = chan + list[k];
-        const REAL cut = band_cutoff(ls[list[k]], lo, hi);
+    FOR_EACH_RUN_CELL(i) {
+        const int j = chan + i;
+        const REAL cut = band_cutoff(ls[i], lo, hi);
         REAL dmx, dpx, dmy, dpy, dmz, dpz;
         LS_ONE_SIDED(ls[j - 2], ls[j - 1], ls[j], ls[j + 1], ls[j + 2], dmx, dpx);
         LS_ONE_SIDED(ls[j - 2 * sx], ls[j - sx], ls[j], ls[j + sx], ls[j + 2 * sx], dmy, dpy);
@@ -159,11 +154,10 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
 #endif
 __kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL* restrict u0,
                             __global REAL* restrict out, const REAL dt, const int sx,
-                            const int sxy, LIST_ARGS)
+                            const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = chan + list[k];
+    FOR_EACH_RUN_CELL(cell) {
+        const int i = chan + cell;
         const REAL c0 = u0[i];
         const REAL e0 = u0[i + 1], w0 = u0[i - 1];
         const REAL n0 = u0[i + sx], s0 = u0[i - sx];
@@ -179,13 +173,13 @@ __kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL
             // on curved surfaces) moved a sphere's radius by 0.4 cells in 40 calls. Half
             // the steepest one-sided slope guards against flat central estimates at kinks.
             REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0) + SQR(t0 - b0));
-            REAL steep = fmax(fmax(fabs(e0 - c0), fabs(c0 - w0)), fmax(fabs(n0 - c0), fabs(c0 - s0)));
-            steep = fmax(steep, fmax(fabs(t0 - c0), fabs(c0 - b0)));
-            g = fmax(g, (REAL)0.5 * steep);
-            const REAL d = c0 / fmax(g, (REAL)1e-12);
+            REAL steep = FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0)));
+            steep = FMAX(steep, FMAX(FABS(t0 - c0), FABS(c0 - b0)));
+            g = FMAX(g, (REAL)0.5 * steep);
+            const REAL d = c0 / FMAX(g, (REAL)1e-12);
             // keep cells whose slope is already close to 1 as they are: the relaxation's
             // O(h^2) bias, repeated every few steps, otherwise grows (SUBCELL_TOL)
-            out[i] = fabs(g - 1) < (REAL)SUBCELL_TOL ? p : p - dt * (sgn * fabs(p) - d);
+            out[i] = FABS(g - 1) < (REAL)SUBCELL_TOL ? p : p - dt * (sgn * FABS(p) - d);
         } else {
             out[i] = p - dt * sgn * (upwind_norm_3d(u, i, sx, sxy, -sgn) - 1);
         }
@@ -217,7 +211,7 @@ __kernel void band_max_abs(__global const REAL* restrict v, __global REAL* restr
 {
     LIST_RANGE(k0, k1, chan);
     REAL m = 0;
-    for (int k = k0; k < k1; ++k) m = fmax(m, fabs(v[chan + list[k]]));
+    for (int k = k0; k < k1; ++k) m = FMAX(m, FABS(v[chan + list[k]]));
     out[get_global_id(0)] = m;
 }
 
@@ -225,11 +219,10 @@ __kernel void band_max_abs(__global const REAL* restrict v, __global REAL* restr
 // stage2 is two Euler steps from u. Plain Euler with the slope-limited differences slowly
 // sharpens convex level sets (a translated sphere grew 1% in 10 steps); Heun does not.
 __kernel void heun_average(__global const REAL* restrict u, __global const REAL* restrict stage2,
-                           __global REAL* restrict out, LIST_ARGS)
+                           __global REAL* restrict out, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int j = chan + list[k];
+    FOR_EACH_RUN_CELL(i) {
+        const int j = chan + i;
         out[j] = (REAL)0.5 * (u[j] + stage2[j]);
     }
 }
@@ -244,7 +237,7 @@ __kernel void region_band_mask(__global const REAL* restrict phi, __global uchar
     const int y = get_global_id(0), z = get_global_id(1);
     if (y >= ny || z >= nz) return;
     const int row = (z + G) * sxy + (y + G) * sx + G;
-    for (int x = 0; x < nx; ++x) mask[row + x] = fabs(phi[row + x]) < width;
+    for (int x = 0; x < nx; ++x) mask[row + x] = FABS(phi[row + x]) < width;
 }
 
 // dst = 1 where src is nonzero within `reach` cells along one axis (offset `stride`):
@@ -260,11 +253,10 @@ __kernel void dilate_mask(__global const uchar* restrict src, __global uchar* re
     const int y = get_global_id(0), z = get_global_id(1);
     if (y >= ny || z >= nz) return;
     const int row = (z + G) * sxy + (y + G) * sx + G;
-    for (int x = 0; x < nx; ++x) {
-        uchar any = 0;
-        for (int d = -reach; d <= reach; ++d) any |= src[row + x + d * stride];
-        dst[row + x] = any != 0;
-    }
+    // one pass along the row per offset: the loops over x vectorise (src holds 0 or 1)
+    for (int x = 0; x < nx; ++x) dst[row + x] = src[row + x - reach * stride];
+    for (int d = 1 - reach; d <= reach; ++d)
+        for (int x = 0; x < nx; ++x) dst[row + x] |= src[row + x + d * stride];
 }
 
 // Outer-band extension of the Phi-hat (channels 1.., launched with one channel fewer):
@@ -276,11 +268,9 @@ __kernel void dilate_mask(__global const uchar* restrict src, __global uchar* re
 // by the values just inside, carried out along the surface's normals.
 __kernel void extend_outer(__global const REAL* restrict ls, __global REAL* restrict out,
                            const REAL dt, const REAL lo, const REAL hi, const int sx,
-                           const int sxy, LIST_ARGS)
+                           const int sxy, RUN_ARGS)
 {
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = list[k];
+    FOR_EACH_RUN_CELL(i) {
         const int j = chan + plane + i;
         const REAL p = ls[i];
         const REAL w = 1 - band_cutoff(p, lo, hi);

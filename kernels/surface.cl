@@ -11,9 +11,6 @@
 // error grows under refinement.
 #include "common.cl"
 
-// PoCL leaves larger inline helpers as calls inside the band loops, which keeps those loops
-// scalar: force them inline.
-#define INLINE inline __attribute__((always_inline))
 
 // INTERP 3: tricubic Lagrange interpolation (4x4x4 nodes); 1: trilinear (2x2x2).
 #ifndef INTERP
@@ -70,20 +67,7 @@ __kernel void band_run_bounds(__global const int* restrict list,
     end[r] = max(last, first + count);
 }
 
-// Kernels over band runs take these arguments after their own: the runs' cell ranges, their
-// number, the channel stride and runs per work-item. On CPUs a work-item walks whole runs,
-// whose cells are consecutive in memory, so the cell loop vectorises with contiguous loads
-// (on GPUs every cell is a run of its own). `chan` is the work-item's channel offset, `i`
-// the padded index of a cell:
-//     FOR_EACH_RUN_CELL(i) { v[chan + i] = ...; }
-#define RUN_ARGS __global const int* restrict run_start, __global const int* restrict run_end, \
-                 const int nruns, const int plane, const int runs_per_item
-#define FOR_EACH_RUN_CELL(i)                                                          \
-    const int r0_ = get_global_id(0) * runs_per_item;                                 \
-    const int r1_ = min(r0_ + runs_per_item, nruns);                                  \
-    const int chan = get_global_id(1) * plane;                                        \
-    for (int run_ = r0_; run_ < r1_; ++run_)                                          \
-        for (int i = run_start[run_], end_ = run_end[run_]; i < end_; ++i)
+// (RUN_ARGS and FOR_EACH_RUN_CELL, the loops over these runs, are in common.cl.)
 
 // Closest points x - psi grad(psi) / |grad(psi)| of the band cells, in padded index units
 // (grad by central differences; psi in grid units = world units / spacing).
@@ -602,14 +586,14 @@ __kernel void extend_pde_step(__global const REAL* restrict u, __global REAL* re
 // level set does not move. World units; r = dt / h.
 INLINE REAL godunov_sq(const REAL back, const REAL fwd, const REAL s)
 {
-    return s > 0 ? fmax(SQR(fmax(back, (REAL)0)), SQR(fmin(fwd, (REAL)0)))
-                 : fmax(SQR(fmin(back, (REAL)0)), SQR(fmax(fwd, (REAL)0)));
+    return s > 0 ? FMAX(SQR(FMAX(back, (REAL)0)), SQR(FMIN(fwd, (REAL)0)))
+                 : FMAX(SQR(FMIN(back, (REAL)0)), SQR(FMAX(fwd, (REAL)0)));
 }
 
 INLINE REAL subcell_slope(__global const REAL* restrict p, const int i, const int s)
 {
-    return fmax(fmax(fabs(p[i + s] - p[i - s]) * (REAL)0.5, fabs(p[i + s] - p[i])),
-                fmax(fabs(p[i] - p[i - s]), (REAL)1e-12));
+    return FMAX(FMAX(fabs(p[i + s] - p[i - s]) * (REAL)0.5, fabs(p[i + s] - p[i])),
+                FMAX(fabs(p[i] - p[i - s]), (REAL)1e-12));
 }
 
 __kernel void reinit_step(__global const REAL* restrict phi, __global REAL* restrict out,
