@@ -238,6 +238,7 @@ INLINE REAL line_sign(__global const REAL* restrict u, const int ref, const int 
                       const int plane)
 {
     REAL dot = 0;
+    #pragma unroll
     for (int c = 0; c < NC; ++c) dot += u[c * plane + ref] * u[c * plane + p];
     return dot < 0 ? (REAL)-1 : (REAL)1;
 }
@@ -404,7 +405,8 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 // where |P v|^2 sums over the channels (the vectorial gradient of appendix D); with ALONG the
 // flux is |N| (d . P_N v_c) d for a tangent field d (3 channels of `dir`): eqs. (4.14), (4.15).
 // The step is v_c = u_c + r (div w_c / |N| + HARMONIC u_c |P v|^p) - dt lambda (u_c - u0_c)
-// (FIDELITY, C.1), with r = dt / h^p (dt / h^2 with ALONG), e2 = (h eps)^2.
+// (FIDELITY, C.1), with r = dt / h^p (dt / h^2 with ALONG), e2 = (h eps)^2. lambda is a
+// one-value device buffer, so the dynamic lambda (tv_lambda_update) never visits the host.
 #ifndef FLOW_P
 #define FLOW_P 2
 #endif
@@ -418,6 +420,8 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 #define ALONG 0
 #endif
 
+// The channel loops are unrolled (#pragma unroll, NC is a constant) so the loop over a run's
+// cells is the innermost one, which PoCL's vectoriser widens.
 INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* restrict psi,
                       __global const REAL* restrict dir, const int j, const int ex,
                       const int ey, const int ez, const int sx, const int sxy, const int plane,
@@ -437,6 +441,7 @@ INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* rest
     const REAL len = 1;
 #endif
     REAL g2 = 0;
+    #pragma unroll
     for (int c = 0; c < NC; ++c) {
         const int jc = c * plane + j;
         const REAL uj = s0 * u[jc];
@@ -451,6 +456,7 @@ INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* rest
     }
 #if ALONG
     const REAL dx = dir[j], dy = dir[plane + j], dz = dir[2 * plane + j];
+    #pragma unroll
     for (int c = 0; c < NC; ++c) {
         const REAL a = len * (dx * w[c][0] + dy * w[c][1] + dz * w[c][2]);
         w[c][0] = a * dx;
@@ -463,6 +469,7 @@ INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* rest
 #else
     const REAL gain = len;
 #endif
+    #pragma unroll
     for (int c = 0; c < NC; ++c) {
         w[c][0] *= gain;
         w[c][1] *= gain;
@@ -475,7 +482,7 @@ INLINE REAL flow_flux(__global const REAL* restrict u, __global const REAL* rest
 __kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict v,
                         __global const REAL* restrict psi, __global const REAL* restrict dir,
                         __global const REAL* restrict u0, const REAL r, const REAL dt,
-                        const REAL lambda, const REAL e2, const int ex, const int ey,
+                        __global const REAL* restrict lambda, const REAL e2, const int ex, const int ey,
                         const int ez, const int sx, const int sxy, RUN_ARGS)
 {
     FOR_EACH_RUN_CELL(i) {
@@ -490,6 +497,7 @@ __kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict
 #else
         const REAL inv_len = 1;
 #endif
+        #pragma unroll
         for (int c = 0; c < NC; ++c) {
             const int ic = c * plane + i;
             const REAL div = ONE_SIDED_SIGN(ex) * (wc[c][0] - wx[c][0]) +
@@ -503,7 +511,7 @@ __kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict
 #endif
             REAL val = u[ic] + r * rate;
 #if FIDELITY
-            val -= dt * lambda * (u[ic] - u0[ic]);
+            val -= dt * lambda[0] * (u[ic] - u0[ic]);
 #endif
             v[ic] = val;
         }
@@ -552,6 +560,30 @@ __kernel void chunk_sum(__global const REAL* restrict a, const int n, const int 
     REAL acc = 0;
     for (int k = g * chunk; k < end; ++k) acc += a[k];
     partial[g] = acc;
+}
+
+// Dynamic lambda of (C.2) from the chunk sums of tv_lambda_terms' num and area:
+// lambda = max(0, -num / (h sigma^2 area)) (scale = 1 / (h sigma^2)), capped at lam_max, the
+// largest lambda the time step keeps stable (capped[0] = 1 then). Also kept in history[slot].
+// One work-item: the partial sums are a few hundred numbers.
+__kernel void tv_lambda_update(__global const REAL* restrict num, __global const REAL* restrict area,
+                               const int groups, const REAL scale, const REAL lam_max,
+                               __global REAL* restrict lambda, __global REAL* restrict history,
+                               const int slot, __global int* restrict capped)
+{
+    REAL sum_num = 0, sum_area = 0;
+    for (int g = 0; g < groups; ++g) {
+        sum_num += num[g];
+        sum_area += area[g];
+    }
+    REAL lam = sum_area > 0 ? -sum_num * scale / sum_area : (REAL)0;
+    lam = lam > 0 ? lam : (REAL)0;
+    if (lam > lam_max) {
+        lam = lam_max;
+        capped[0] = 1;
+    }
+    lambda[0] = lam;
+    history[slot] = lam;
 }
 
 // ---- extension along normals by the PDE of section 4.2 ------------------------------------
@@ -726,6 +758,16 @@ __kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict
         const REAL nb = b + dt * (s * (a * b - b - beta[i]) + db * diff_b);
         v[plane + i] = nb > 0 ? nb : (REAL)0;
     }
+}
+
+// ---- the band's own roofline -----------------------------------------------------------------
+// v = u + psi over band runs: the bytes a heat step must move (read u and psi, write v) with
+// its access pattern and no arithmetic. benchmarks/surface_accuracy.py times it beside the
+// steps: what the band's short runs allow, as against a plain copy of one long array.
+__kernel void band_copy(__global const REAL* restrict u, __global REAL* restrict v,
+                        __global const REAL* restrict psi, RUN_ARGS)
+{
+    FOR_EACH_RUN_CELL(i) { v[chan + i] = u[chan + i] + psi[i]; }
 }
 
 // ---- mesh -> distance: exact point-triangle distances refined over neighbouring cells ------

@@ -62,7 +62,7 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         kernel = g.kernel("flow_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, dev(psi).data, dev(direction).data,
-                      dev(u0).data, g.scalar(r), g.scalar(dt), g.scalar(lam), g.scalar(e2),
+                      dev(u0).data, g.scalar(r), g.scalar(dt), dev([lam]).data, g.scalar(e2),
                       *offsets, *g.strides())
         band = band_host(s.node_band)
         expect = ref.flow_step(
@@ -96,6 +96,23 @@ def test_lambda_terms_match_reference(sphere02, rng):
     assert want_sum * s.spacing**2 == pytest.approx(4 * np.pi, rel=0.03)
 
 
+def test_lambda_update_on_the_device(runtime, rng):
+    """tv_lambda_update: lambda = max(0, -num scale / area) from chunk sums, capped at lam_max
+    (with the capped flag), written to lambda[0] and history[slot]."""
+    q = runtime.queue
+    kernel = runtime.kernel("surface.cl", "tv_lambda_update", np.float64)
+    num, area = rng.normal(size=37), rng.uniform(0.5, 1.0, 37)
+    for shift, lam_max, want_capped in ((-2.0, 1e9, 0), (2.0, 1e9, 0), (-2.0, 1.0, 1)):
+        n = num + shift
+        lam, hist, capped = (cla.zeros(q, 1, np.float64), cla.zeros(q, 4, np.float64),
+                             cla.zeros(q, 1, np.int32))
+        kernel(q, (1,), None, cla.to_device(q, n).data, cla.to_device(q, area).data, np.int32(37),
+               np.float64(0.7), np.float64(lam_max), lam.data, hist.data, np.int32(2), capped.data)
+        want = min(max(0.0, -n.sum() * 0.7 / area.sum()), lam_max)
+        assert lam.get()[0] == pytest.approx(want, rel=1e-12, abs=1e-15)
+        assert hist.get()[2] == lam.get()[0] and capped.get()[0] == want_capped
+
+
 def surface_noise(surf, sigma, seed=0, waves=200):
     """Noise of variance sigma^2 on the surface, constant along normals: random plane waves
     of wavelength about 4 cells evaluated at the closest points."""
@@ -126,6 +143,7 @@ def test_tv_denoising_reaches_the_noise_variance(sphere05):
     # the dynamic lambda drives the residual variance close to sigma^2
     assert 0.7 * sigma**2 < info["residual_variance"] < 1.2 * sigma**2, info["residual_variance"]
     assert all(lam >= 0 for lam in info["lambda"]) and info["lambda"][-1] > 0
+    assert len(info["lambda"]) == -(-info["steps"] // 10)
 
 
 def test_tv_keeps_edges_that_heat_smears(sphere05):
@@ -204,6 +222,12 @@ def test_tv_stability_limit_is_enforced(sphere02):
         flows.tv(s, np.zeros(s.shape), t=0.01, dt=2 * limit, eps=0.5)
     with pytest.raises(InputError, match="exactly one"):
         flows.denoise_tv(s, np.zeros(s.shape))
+    # at the limit, the dynamic lambda has no room to grow: capped at 0, with a warning
+    noisy = s.field(lambda x, y, z: np.sin(40 * x))
+    with pytest.warns(UserWarning, match="capped"):
+        _, info = flows.denoise_tv(s, noisy, sigma=0.01, t=20 * limit, dt=limit, eps=0.5,
+                                   return_info=True)
+    assert max(info["lambda"]) < 1e-6
 
 
 def test_line_field_regularisation_ignores_signs_and_restores_principal_directions(rng):

@@ -157,7 +157,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         raise InputError(f"eps must be a positive number, not {eps!r}")
     limit = stability_limit(surf, flow_name, eps, float(fidelity or 0.0))
     if sigma is not None and dt is None:
-        limit *= 0.5  # room for the dynamic lambda to grow (checked every update below)
+        limit *= 0.5  # room for the dynamic lambda to grow (capped on the device below)
     steps, dt = _check_time(t, dt, limit, flow_name)
     flow = BandFlow(surf, u, normalize=harmonic, line_field=line_field)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
@@ -169,34 +169,28 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     e2 = g.scalar((h * eps) ** 2)
     dir_dev = g.upload(direction) if direction is not None else surf.psi_dev
     u0_dev = flow.cur.copy() if fidelity is not None else surf.psi_dev
-    lam, info = 0.0, {"steps": steps, "dt": dt}
-    if fidelity is not None and sigma is None:
-        lam = float(fidelity)
-    terms = None
+    info = {"steps": steps, "dt": dt}
+    lam_dev = cla.to_device(q, np.array([fidelity or 0.0], g.dtype))
+    dynamic = None
     if sigma is not None:
-        n = surf.node_band.n
-        terms = [cla.empty(q, n, g.dtype) for _ in range(3)]
-        info["lambda"] = []
+        # lambda may grow to where dt is at the stability limit, no further
+        lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
+        dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
+                                 updates=-(-steps // lambda_every))
     for n in _progress(progress, steps, f"surface {flow_name}"):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         offsets = _offsets(g, sides)
-        if terms is not None and n % lambda_every == 0:
-            lam = max(0.0, _tv_lambda(surf, flow.cur, u0_dev, terms, offsets, eps, sigma))
-            info["lambda"].append(lam)
-            limit = stability_limit(surf, "tv", eps, lam)
-            if dt > limit:
-                # dynamic lambda grew past what the chosen dt can carry: say so, do not blow up
-                raise InputError(
-                    f"lambda reached {lam:g}, which needs dt <= {limit:g}; pass a smaller dt"
-                )
+        if dynamic is not None and n % lambda_every == 0:
+            dynamic.update(offsets, n // lambda_every)
         g.launch_runs(
             kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
-            dir_dev.data, u0_dev.data, r, g.scalar(dt), g.scalar(lam), e2, *offsets,
+            dir_dev.data, u0_dev.data, r, g.scalar(dt), lam_dev.data, e2, *offsets,
             *g.strides(),
         )
         flow.after_step()
-    if terms is not None:
-        info["residual_variance"] = _residual_variance(surf, flow.cur, u0_dev, terms, eps)
+    if dynamic is not None:
+        info["lambda"] = dynamic.history()
+        info["residual_variance"] = _residual_variance(surf, flow.cur, u0_dev, dynamic.terms, eps)
     return flow.result(), info
 
 
@@ -209,20 +203,59 @@ def device_sum(grid, a, n: int, chunk: int = 2048) -> float:
     return float(partial.get().astype(np.float64).sum())
 
 
-def _tv_lambda(surf, u_dev, u0_dev, terms, offsets, eps, sigma):
-    """Dynamic lambda of (C.2) from surface integrals computed on the device."""
-    num, area, _ = _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps)
-    return -(num / surf.spacing) / (sigma**2 * area)
+class _DynamicLambda:
+    """lambda of (C.2) kept on the device: each update enqueues the surface integrals, their
+    chunk sums and the new lambda (tv_lambda_update), with no read-back; the history of
+    lambda comes back once, at the end."""
+
+    CHUNK = 2048
+
+    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates):
+        g, q = surf.grid, surf.runtime.queue
+        self.surf, self.flow, self.u0, self.lam, self.eps = surf, flow, u0_dev, lam_dev, eps
+        self.sigma, self.lam_max = sigma, lam_max
+        n = surf.node_band.n
+        self.terms = [cla.empty(q, n, g.dtype) for _ in range(3)]
+        self.groups = max(1, -(-n // self.CHUNK))
+        self.partials = [cla.empty(q, self.groups, g.dtype) for _ in range(2)]
+        self.slots = cla.zeros(q, max(updates, 1), g.dtype)
+        self.capped = cla.zeros(q, 1, np.int32)
+
+    def update(self, offsets, slot: int) -> None:
+        s = self.surf
+        g, q = s.grid, s.runtime.queue
+        _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
+        for a, partial in zip(self.terms[:2], self.partials):
+            g.kernel("chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
+                                  np.int32(self.CHUNK), partial.data)
+        g.kernel("tv_lambda_update")(
+            q, (1,), None, self.partials[0].data, self.partials[1].data, np.int32(self.groups),
+            g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.lam_max), self.lam.data,
+            self.slots.data, np.int32(slot), self.capped.data,
+        )
+
+    def history(self) -> list[float]:
+        if self.capped.get()[0]:
+            warnings.warn(
+                f"the dynamic lambda was capped at {self.lam_max:g}, the largest this time step "
+                "keeps stable; pass a smaller dt (or leave dt=None) to let it grow further",
+                stacklevel=4,
+            )
+        return [float(v) for v in self.slots.get()]
 
 
-def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps):
+def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps) -> None:
     g = surf.grid
     g.launch_list(
         g.kernel("tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
         g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
         *offsets, *g.strides(), *(a.data for a in terms),
     )
-    # three sums come back: one read per lambda update, never a field
+
+
+def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps):
+    """The three surface integrals (num, area, residual) summed to host numbers."""
+    _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps)
     return tuple(device_sum(surf.grid, a, surf.node_band.n) for a in terms)
 
 
@@ -244,7 +277,8 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     """TV denoising on the surface with a fidelity term (C.1).
 
     Give the noise level sigma for the dynamic lambda of (C.2) (updated on the device every
-    10 steps), or a fixed lam. With return_info, also returns a dict with the residual
+    10 steps, never read back while stepping; capped, with a warning, where it would make
+    dt unstable), or a fixed lam. With return_info, also returns a dict with the residual
     variance (mean of (u - u0)^2 over the surface) and the lambda history."""
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
