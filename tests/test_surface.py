@@ -174,7 +174,8 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
         if flow == "heat":
             args += (r,)
         else:
-            args += (s.psi_dev.data, s.psi_dev.data, r, g.scalar(dt), g.scalar(0), g.scalar(1))
+            lam = cla.zeros(s.runtime.queue, 1, g.dtype)
+            args += (s.psi_dev.data, s.psi_dev.data, r, g.scalar(dt), lam.data, g.scalar(1))
         g.launch_runs(kernel, full_runs, *args, *flows._offsets(g, n % 8), *g.strides(),
                       channels=1 if flow != "heat" else nc)
         whole._extend(whole.tmp, whole.cur, s.ext_band, s.cp_base, s.cp_frac)
