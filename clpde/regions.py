@@ -10,7 +10,8 @@ evolve on the same grid, in a narrow band around S, with kernels/regions.cl:
 and are reinitialised to signed distances every few steps. V comes from beta, the outward
 normal speed of S: a constant, the mean curvature (kappa = k1 + k2, mean curvature flow), the
 positive part of the Gaussian curvature (towards the centres of curvature, so folds
-flatten), morphing toward a target shape, or a user array.
+flatten), morphing toward a target shape, or a user array, fixed or re-sampled in time
+(a callable beta(x, y, z, t): sampled at the middle of every block of `reinit_every` steps).
 Rigid translations are given as a velocity vector instead: then Phi-hat moves with the
 projection of the full velocity on its normal (for a normal speed that is the thesis'
 beta N_Phi . N_Phi-hat; tangential motion of S is only known when the velocity is given).
@@ -21,6 +22,7 @@ sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,12 +75,14 @@ class RegionTracker:
     phi: (nz, ny, nx) signed distance (world units, negative inside); phihat: (L, nz, ny, nx)
     auxiliary functions. speed: one of SPEEDS with `scale` converting it to grid units, or
     velocity (cells per unit time) for rigid translation. band: half-width in cells of the
-    band that is stepped; reinitialisation covers band + 3 cells.
+    band that is stepped; reinitialisation covers band + 3 cells. aux_at: for speed="array",
+    a function of time giving aux (nz, ny, nx): a time-dependent speed, sampled once per
+    block of `reinit_every` steps, at the block's middle (see advance).
     """
 
     def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
                  velocity=None, band=5.0, reinit_every=4, reinit_iterations=8, cfl=0.4,
-                 max_speed=None, device=None, dtype=np.float32):
+                 max_speed=None, aux_at=None, device=None, dtype=np.float32):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -92,6 +96,11 @@ class RegionTracker:
         self.reinit_every = int(reinit_every)
         self.reinit_iterations = int(reinit_iterations)
         self.cfl = float(cfl)
+        self.aux_at = aux_at
+        if aux_at is not None and (speed != "array" or velocity is not None):
+            raise InputError("a time-dependent speed (aux_at) needs speed='array' and no velocity")
+        if aux_at is not None and aux is None:
+            aux = aux_at(0.0)
         g, q = self.grid, self.runtime.queue
         cells = np.concatenate([phi[None], phihat]) / self.h
         # ghosts continue distances linearly: stencils near the border stay meaningful
@@ -239,11 +248,18 @@ class RegionTracker:
         self.steps += 1
 
     def advance(self, until, bar=None) -> None:
-        """Step to time `until` (grid-unit time as the speeds), reinitialising every few steps."""
+        """Step to time `until` (the speeds' time unit), reinitialising every few steps.
+
+        Steps go in blocks of `reinit_every`, each block followed by a reinitialisation. A
+        time-dependent speed (aux_at) is sampled once per block, at its middle (the midpoint
+        rule: second order in the block's length), and held for the block."""
         dt = self.stable_dt()
         while self.time < until - 1e-12:
-            for _ in range(self.reinit_every):
-                step = min(dt, until - self.time)
+            steps = [dt] * self.reinit_every
+            if self.aux_at is not None:
+                steps, dt = self._sample_block(until, dt)
+            for dt_k in steps:
+                step = min(dt_k, until - self.time)
                 if step <= 1e-12:
                     break
                 self.step(step)
@@ -251,6 +267,32 @@ class RegionTracker:
                     bar.update(step)
             self.reinitialize()
             dt = self.stable_dt()
+
+    def _sample_block(self, until, guess):
+        """Upload the time-dependent speed for the next block and return its steps.
+
+        The block's length depends on the speed (its stable step) and the speed on the
+        block's middle time, so the length only shrinks until a stable step fits: start
+        from `guess` (the stable step at the last sample, infinite for a zero speed), sample
+        at the middle, and shorten to reinit_every stable steps of that sample if needed."""
+        n = self.reinit_every
+        left = until - self.time
+        span = min(left, n * guess)
+        for _ in range(8):
+            self.set_aux(self.aux_at(self.time + 0.5 * span))
+            dt = self.stable_dt()
+            if n * dt >= span * (1 - 1e-9):
+                break
+            span = n * dt
+        else:  # still shrinking: keep the last sample, with its own stable step
+            span = min(span, n * dt)
+        return [span / n] * n, dt
+
+    def set_aux(self, values) -> None:
+        """Replace the auxiliary volume (nz, ny, nx) on the device (speed='array': the speed)."""
+        g = self.grid
+        padded = g.pad(np.asarray(values, np.float64)[None], "edge")
+        self.aux.set(np.ascontiguousarray(padded, g.dtype))
 
     def volumes(self):
         """(Phi, Phi-hats) in world units on the host."""
@@ -295,32 +337,60 @@ def _region_functions(phi, region, spacing, origin):
     )
 
 
+def _time_dependent(beta) -> bool:
+    """True for a callable taking (x, y, z, t), False for one taking (x, y, z)."""
+    try:
+        params = inspect.signature(beta).parameters.values()
+    except (TypeError, ValueError):  # builtins without a signature: f(x, y, z)
+        return False
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 4
+
+
+def _beta_array(values, shape, when="") -> np.ndarray:
+    """A user's beta (number or array) as an array of phi's shape, checked."""
+    arr = np.asarray(values, np.float64)
+    try:
+        arr = np.broadcast_to(arr, shape)
+    except ValueError:
+        raise InputError(f"a beta array{when} must have phi's shape {shape}, got {arr.shape}") from None
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"beta{when} contains NaN or infinite values")
+    return arr
+
+
 def _speed_setup(beta, target, weight, h, shape, coords):
-    """(speed name, scale, aux array) for RegionTracker from the user's beta."""
+    """(speed name, scale, aux array, aux as a function of time or None) for RegionTracker
+    from the user's beta."""
     if isinstance(beta, str):
         if beta == "mean-curvature":
-            return "mean-curvature", weight / h**2, None
+            return "mean-curvature", weight / h**2, None, None
         if beta == "gaussian":
-            return "gaussian", weight / h**3, None
+            return "gaussian", weight / h**3, None, None
         if beta == "morph":
             if target is None:
                 raise InputError("beta='morph' needs target=: the target shape's signed distance volume")
             target = np.asarray(target, np.float64)
             if target.shape != shape:
                 raise InputError(f"target must have phi's shape {shape}, got {target.shape}")
-            return "morph", weight, target
+            return "morph", weight, target, None
         raise InputError(f"beta must be a number, an array, a callable or one of "
                          f"'mean-curvature', 'gaussian', 'morph'; not {beta!r}")
     if callable(beta):
-        beta = np.broadcast_to(np.asarray(beta(*coords), np.float64), shape)
+        if _time_dependent(beta):
+            def beta_at(t):
+                return _beta_array(beta(*coords, t), shape, f" (the callable at t = {t:g})")
+
+            return "array", -weight / h, beta_at(0.0), beta_at
+        beta = _beta_array(beta(*coords), shape, " (the callable's result)")
     arr = np.asarray(beta, np.float64)
     if arr.ndim == 0:
-        return "constant", -weight * float(arr) / h, None
+        if not np.isfinite(arr):
+            raise InputError(f"beta must be finite, not {beta!r}")
+        return "constant", -weight * float(arr) / h, None, None
     if arr.shape != shape:
         raise InputError(f"a beta array must have phi's shape {shape}, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise InputError("beta contains NaN or infinite values")
-    return "array", -weight / h, arr
+    return "array", -weight / h, _beta_array(arr, shape), None
 
 
 def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
@@ -339,7 +409,11 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
     (k1 + k2): mean curvature flow), 'gaussian' (speed -weight max(K, 0) sign(k1 + k2): elliptic
     parts move toward their centres of curvature, so folds flatten), 'morph' (speed
     toward target=, a signed distance volume: -weight (target - phi)), an array of phi's
-    shape or a callable f(x, y, z) giving one. velocity=(vx, vy, vz): translate instead.
+    shape, a callable f(x, y, z) giving one (world coordinates, broadcastable arrays), or a
+    time-dependent callable f(x, y, z, t) (four positional parameters): re-evaluated and
+    re-uploaded once per block of `reinit_every` steps, at the block's middle time, and held
+    for the block (the midpoint rule; the block shrinks until the sampled speed's stable
+    step fits). velocity=(vx, vy, vz): translate instead.
     t: final time; saves: number of saved intervals (frames at t * k / saves, k = 0..saves)
     or a sequence of times in [0, t]. max_speed: clamp |beta| (world units) where the
     curvature of creases finer than the grid would otherwise set a tiny time step.
@@ -377,15 +451,15 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
         vel = np.asarray(velocity, np.float64).reshape(-1)
         if vel.shape != (3,) or not np.all(np.isfinite(vel)):
             raise InputError(f"velocity must be three finite numbers (vx, vy, vz), got {velocity!r}")
-        speed, scale, aux, vel = "constant", 0.0, None, vel / h
+        speed, scale, aux, aux_at, vel = "constant", 0.0, None, None, vel / h
     else:
-        speed, scale, aux = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
+        speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
         vel = None
     tracker = RegionTracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
                             band=band, reinit_every=reinit_every,
                             reinit_iterations=reinit_iterations, cfl=cfl,
                             max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
-                            device=device, dtype=dtype)
+                            aux_at=aux_at, device=device, dtype=dtype)
     frames = []
     disable = None if progress is None else not progress
     with tqdm(total=t_end, desc="track regions", disable=disable, leave=False) as bar:
