@@ -412,7 +412,7 @@ def add_surface_parser(subparsers) -> None:
     parser.add_argument("--t", type=float, default=None,
                         help="evolution time (default: chosen per flow from the grid spacing)")
     parser.add_argument("--iterations", type=int, default=None,
-                        help="reaction-diffusion iterations (default: 6000)")
+                        help="reaction-diffusion iterations (default: 4000)")
     parser.add_argument("--sigma", type=float, default=0.15,
                         help="noise level added for tv, denoise and chroma (default: 0.15)")
     parser.add_argument("--direction", choices=("major", "minor", "none"), default="major",

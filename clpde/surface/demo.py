@@ -111,13 +111,13 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
             after = surf.diffuse_along(before, field, t=t, progress=progress)
             return SurfaceRun(flow, surf, before, after,
                               f"noise diffused along the {direction} principal direction to t={t:g}")
-        iterations = 6000 if iterations is None else iterations
+        iterations = 4000 if iterations is None else iterations
         along = field if direction != "none" else None
         ab = surf.reaction_diffusion(iterations, direction=along, seed=seed, progress=progress)
         return SurfaceRun(flow, surf, np.full(surf.shape, 4.0), ab[0],
-                          f"Turk reaction-diffusion, {iterations} iterations, diffusion of a "
+                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations, diffusion of a "
                           f"along the {direction} direction" if along is not None else
-                          f"Turk reaction-diffusion, {iterations} iterations")
+                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations")
     raise InputError(f"unknown surface flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
 

@@ -356,15 +356,24 @@ TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0
 THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
 
 
-def reaction_diffusion(surf, iterations, *, direction=None, dt=1.0, seed=0, params=None,
+def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, params=None,
                        alternate=True, progress=None, state=None):
     """Turk's two-chemical reaction-diffusion on the surface (4.12, 4.13; 4.14 with a tangent
     field `direction`), in grid units as Turk's own code: dt per iteration, diffusion rates
     in cells^2 per unit time, so patterns have the same size in cells on any surface.
-    Defaults: Turk's rates (TURK); THESIS_FIG_4_7 gives Figure 4.7's numbers.
+    Defaults: Figure 4.7's numbers (THESIS_FIG_4_7: D1 = 1, D2 = 1/16, s = 0.025, a pattern
+    of about 12 cells, dt = 0.15); TURK gives Turk's own rates (1/8, 1/32, s = 0.2/16, dt = 1,
+    spots of about 10 cells). Turk's rates sit at the edge of the Turing instability (the
+    fastest mode's growth rate is 0 at beta = 12): only the random spread of beta grows a
+    pattern, and the anisotropic flow (4.14) along a tube's short circles, where few
+    wavelengths fit, stays flat. Figure 4.7's numbers are unstable over 10-30 cells.
+    dt (None: 0.9 times the stability limit, at most 1) is in grid time units.
     Returns the (2, nz, ny, nx) chemicals (a, b); pass them back as `state` to continue."""
-    p = dict(TURK if params is None else params)
+    p = dict(THESIS_FIG_4_7 if params is None else params)
     limit = 1.0 / (6.0 * max(p["da"], p["db"]))
+    dt = min(1.0, 0.9 * limit) if dt is None else float(dt)
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"dt must be a positive number, not {dt!r}")
     if dt > limit * (1 + 1e-9):
         raise InputError(
             f"dt={dt:g} is above the reaction-diffusion stability limit {limit:g} for "
