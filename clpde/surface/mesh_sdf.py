@@ -10,8 +10,8 @@ Sign: orientation-free, so flipped faces do not matter and holes smaller than a 
 sealed: the cells closer than half a cell to the mesh form a shell that no 6-connected path
 crosses; a flood fill from the box's border through the other cells finds the outside;
 every other cell is inside. Shell cells take the side found one cell further along the
-direction from their closest point. (trimesh's own signed_distance, with rtree, took 6-25x
-longer on the band's cells at 64-128 cells across, and needs consistent orientation:
+direction from their closest point. (trimesh's own signed_distance, with rtree, took 6-50x
+longer on the band's cells at 64-256 cells across, and needs consistent orientation:
 benchmarks/surface_accuracy.py, section 5.)
 """
 
