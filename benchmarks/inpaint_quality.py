@@ -205,7 +205,7 @@ def speed():
                                                           return_info=True, progress=False))
     cv = {}
     for name, flag in (("opencv-ns", cv2.INPAINT_NS), ("opencv-telea", cv2.INPAINT_TELEA)):
-        cv[name], _ = best_of(3, lambda: cv2.inpaint(image, mask.astype(np.uint8), 3, flag))
+        cv[name], _ = best_of(3, lambda f=flag: cv2.inpaint(image, mask.astype(np.uint8), 3, f))
     result = dict(image="astronaut 512x512x3", mask_fraction=float(mask.mean()),
                   clpde_seconds=clpde_s, steps=info.steps, converged=info.converged,
                   levels=info.levels, band_pixels=info.band_pixels, **{f"{k}_seconds": v for k, v in cv.items()},
@@ -228,7 +228,7 @@ def speed():
                          ("1024, mask 2A", big, double_mask_big)):
         solver = LevelSolver(runtime, np.moveaxis(im, -1, 0) / 255.0, m, InpaintParams())
 
-        def cycles(n=20):
+        def cycles(n=20, solver=solver):
             for _ in range(n):
                 solver.cycle()
             runtime.queue.finish()

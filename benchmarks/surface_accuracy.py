@@ -297,7 +297,7 @@ def mesh_sdf_table(resolutions, sample=1500):
             rows.append(row)
             print(f"{name:12} {row['faces']:6d} {'x'.join(map(str, row['grid'])):>12} {row['band']:8d} "
                   f"{seconds:8.2f} {row['ns_per_cell']:8.0f} {t_theirs:16.1f} {row['ratio']:7.0f} "
-                  f"{err:11.1e} {sign_diff:9d} {str(flip_proof):>10}")
+                  f"{err:11.1e} {sign_diff:9d} {flip_proof!s:>10}")
     print("   (max |d| err: largest difference of |psi| from trimesh's exact distance, in cells;"
           "\n    sign diff: sample cells whose side differs from trimesh's inside test)")
     return rows

@@ -26,7 +26,7 @@ def main():
     mask = damage_mask(photo.shape[:2], seed=11)
     damaged = photo.copy()
     damaged[mask] = 255
-    result, states = clpde.inpaint(damaged, mask, channel_axis=-1, snapshots=68, tol=0,
+    _, states = clpde.inpaint(damaged, mask, channel_axis=-1, snapshots=68, tol=0,
                                    mean_tol=0)
     chosen = [s for s in states if s.step in (0, 136, 680)] + [states[-1]]
     for s in chosen:

@@ -31,7 +31,7 @@ def test_planar_flows_and_denoising(runtime, gpu_like, rng):
     image = rng.random((37, 53)).astype(np.float32)
     for flow in ("heat", "perona-malik", "tv", "curvature"):
         cpu, gpu = _pair(runtime, gpu_like,
-                         lambda d: clpde.diffuse(image, flow=flow, steps=7, device=d))
+                         lambda d, f=flow: clpde.diffuse(image, flow=f, steps=7, device=d))
         np.testing.assert_allclose(gpu, cpu, atol=2e-6)
     cpu, gpu = _pair(runtime, gpu_like, lambda d: clpde.denoise_tv(image, sigma=0.1, device=d))
     np.testing.assert_allclose(gpu, cpu, atol=1e-4)
