@@ -27,7 +27,7 @@ def main():
     damaged = photo.copy()
     damaged[mask] = 255
     _, states = clpde.inpaint(damaged, mask, channel_axis=-1, snapshots=68, tol=0,
-                                   mean_tol=0)
+                              mean_tol=0)
     chosen = [s for s in states if s.step in (0, 136, 680)] + [states[-1]]
     for s in chosen:
         print(f"step {s.step:4d}: PSNR inside the mask "
