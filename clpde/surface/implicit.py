@@ -170,7 +170,8 @@ class ImplicitSurface:
         flat_face = self._mesh_face.reshape(-1)
         cells = np.flatnonzero(flat_face >= 0)
         faces = flat_face[cells]
-        bary = points_to_barycentric(np.asarray(mesh.triangles)[faces], self._mesh_cp.reshape(-1, 3)[cells])
+        # _mesh_cp holds the closest points of exactly these cells, in this order
+        bary = points_to_barycentric(np.asarray(mesh.triangles)[faces], self._mesh_cp)
         corner = np.asarray(mesh.faces)[faces]
         vals = values.reshape(len(values), -1)
         per_cell = np.einsum("ck,ckm->cm", bary, vals[corner])
@@ -300,8 +301,13 @@ class ImplicitSurface:
             raise InputError("the band is empty: the spacing is too coarse for this surface")
         # a medial axis (|grad psi| far from 1) inside the band means thin features are
         # resolved by too few cells: the flows still run but lose accuracy there
-        g = np.gradient(self.psi, self.spacing)
-        slope = np.sqrt(g[0] ** 2 + g[1] ** 2 + g[2] ** 2)[band]
+        # central differences at the band's cells only (a whole-volume gradient would take
+        # three float64 volumes); band cells are 2 cells from the border, checked above
+        cells = np.flatnonzero(band)
+        p = self.psi.reshape(-1)
+        nz, ny, nx = self.shape
+        diffs = [p[cells + s] - p[cells - s] for s in (1, nx, nx * ny)]
+        slope = np.sqrt(sum(d**2 for d in diffs)) / (2 * self.spacing)
         bad = float(np.mean(slope < 0.5))
         if bad > 0:
             _warn(

@@ -87,7 +87,10 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None)
     """Signed distance (nz, ny, nx), negative inside, exact within band_cells of the mesh
     (up to picking the nearest triangle through the nearest surface-crossing cell).
 
-    Returns (psi, closest_face, closest_point) where the last two are -1 / NaN off the band."""
+    Returns (psi, closest_face, closest_point): closest_face is a volume, -1 off the band;
+    closest_point has one row per band cell (where closest_face >= 0), in flat index order.
+    Only the band's cells get per-cell closest points: a volume of them would take 24 bytes
+    a cell (0.5 GB at 275^3)."""
     from scipy import ndimage
     h = float(spacing)
     nz, ny, nx = shape
@@ -97,21 +100,20 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None)
     points, owners = _surface_samples(mesh, 0.5 * h)
     ijk = np.clip(np.rint((points - origin) / h).astype(int), 0, np.array([nx, ny, nz]) - 1)
     flat = np.ravel_multi_index((ijk[:, 2], ijk[:, 1], ijk[:, 0]), shape)
-    first = np.full(total, -1, dtype=np.int64)
+    first = np.full(total, -1, dtype=np.int32)
     first[flat[::-1]] = owners[::-1]
     crossed = (first >= 0).reshape(shape)
     # Euclidean distance transform: every cell's nearest crossed cell (in cells)
     cell_dist, nearest = ndimage.distance_transform_edt(~crossed, return_indices=True)
     idx = np.flatnonzero(cell_dist.ravel() <= band_cells + 1.5)
     src = np.ravel_multi_index(tuple(a.ravel()[idx] for a in nearest), shape)
+    del cell_dist, nearest, crossed
     face0 = np.full(total, -1, dtype=np.int32)
     face0[idx] = first[src]
     # exact nearest triangles: propagate candidates between neighbouring cells on the device
     face, dist, cpt = _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device)
     udist = np.full(total, np.inf)
     udist[idx] = dist
-    cpoint = np.full((total, 3), np.nan)
-    cpoint[idx] = cpt
     udist = udist.reshape(shape)
     # sign by flood fill from the border through cells outside the half-cell shell
     shell = udist <= 0.5 * h * (1 + 1e-6)
@@ -126,15 +128,16 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None)
     # shell cells: look one and a half cells further from the surface along x - cp
     sidx = np.flatnonzero(shell.ravel())
     if sidx.size:
+        shell_cp = cpt[np.searchsorted(idx, sidx)]  # shell cells are band cells
         kz, rem = np.divmod(sidx, ny * nx)
         ky, kx = np.divmod(rem, nx)
         centres_s = origin + h * np.stack([kx, ky, kz], axis=1)
-        direction = centres_s - cpoint[sidx]
+        direction = centres_s - shell_cp
         length = np.linalg.norm(direction, axis=1)
         direction /= np.where(length > 0, length, 1)[:, None]
         votes = np.zeros(sidx.size)
         for step in (1.0, 1.5, 2.0):
-            probe = cpoint[sidx] + step * h * direction
+            probe = shell_cp + step * h * direction
             ijk = np.rint((probe - origin) / h).astype(int)
             ijk = np.clip(ijk, 0, np.array([nx, ny, nz]) - 1)
             flat = np.ravel_multi_index((ijk[:, 2], ijk[:, 1], ijk[:, 0]), shape)
@@ -142,7 +145,7 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None)
         # on-surface cells (length 0) have no direction: their |psi| is ~0 anyway
         sign.ravel()[sidx] = np.where(votes < 0, -1.0, 1.0)
     psi = sign * np.minimum(udist, cap)
-    return psi, face.reshape(shape), cpoint.reshape(shape + (3,))
+    return psi, face.reshape(shape), cpt
 
 
 def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
