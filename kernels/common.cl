@@ -76,8 +76,8 @@ inline void mirror_ghosts(__global REAL* v, const int row0, const int x0, const 
 // their own: the runs' cell ranges, their number, the channel stride and runs per work-item.
 // On CPUs a work-item walks whole runs, whose cells are consecutive in memory, so the cell
 // loop vectorises with contiguous loads (a list's gathers keep it scalar); on GPUs every
-// cell is a run of its own. `chan` is the work-item's channel offset, `i`
-// the padded index of a cell:
+// cell is a run of its own. `chan` is the work-item's channel offset, `i` the padded index
+// of a cell:
 //     FOR_EACH_RUN_CELL(i) { v[chan + i] = ...; }
 #define RUN_ARGS __global const int* restrict run_start, __global const int* restrict run_end, \
                  const int nruns, const int plane, const int runs_per_item
