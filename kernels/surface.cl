@@ -11,7 +11,6 @@
 // error grows under refinement.
 #include "common.cl"
 
-
 // INTERP 3: tricubic Lagrange interpolation (4x4x4 nodes); 1: trilinear (2x2x2).
 #ifndef INTERP
 #define INTERP 3
