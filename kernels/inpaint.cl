@@ -53,7 +53,7 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* 
         const REAL down = SQR(POS(xb)) + SQR(NEG(xf)) + SQR(POS(yb)) + SQR(NEG(yf));
         REAL rate = beta * SQRT(beta > 0 ? up : down);
 #if SCALING == 1
-        rate = copysign(SQRT(SQRT(fabs(rate))), rate) * QUARTIC_GAIN;
+        rate = COPYSIGN(SQRT(SQRT(FABS(rate))), rate) * QUARTIC_GAIN;
 #endif
         v[i] = c + dt * rate;
     }
@@ -111,8 +111,8 @@ __kernel void inpaint_max_change(__global const REAL* restrict a, __global const
     REAL m = 0;
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
-        const REAL d = fabs(a[i] - b[i]);
-        m = (d == d) ? fmax(m, d) : (REAL)INFINITY;  // fmax alone would hide a NaN
+        const REAL d = FABS(a[i] - b[i]);
+        m = (d == d) ? FMAX(m, d) : (REAL)INFINITY;  // fmax alone would hide a NaN
     }
     partial[get_global_id(1) * get_global_size(0) + get_global_id(0)] = m;
 }
@@ -127,7 +127,7 @@ __kernel void inpaint_sum_change(__global const REAL* restrict a, __global const
     REAL total = 0;
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
-        total += fabs(a[i] - b[i]);  // a NaN propagates into the sum
+        total += FABS(a[i] - b[i]);  // a NaN propagates into the sum
     }
     partial[get_global_id(1) * get_global_size(0) + get_global_id(0)] = total;
 }

@@ -31,7 +31,7 @@ __kernel void band_mask(__global const REAL* restrict psi, __global uchar* restr
     const int y = get_global_id(0), z = get_global_id(1);
     if (y >= ny || z >= nz) return;
     const int row = (z + G) * sxy + (y + G) * sx + G;
-    for (int x = 0; x < nx; ++x) mask[row + x] = fabs(psi[row + x]) < width;
+    for (int x = 0; x < nx; ++x) mask[row + x] = FABS(psi[row + x]) < width;
 }
 
 // Band runs: maximal stretches of consecutive cells along x in a band list. flags[k] = 1
@@ -531,7 +531,7 @@ __kernel void tv_lambda_terms(__global const REAL* restrict u, __global const RE
     for (int k = k0; k < k1; ++k) {
         const int i = list[k];
         const REAL d = psi[i] * inv_h;
-        const REAL delta = fabs(d) < eps_cells
+        const REAL delta = FABS(d) < eps_cells
             ? (1 + cos((REAL)M_PI * d / eps_cells)) / (2 * eps_cells) : (REAL)0;
         const vec3r n = psi_normal(psi, i, sx, sxy);
         const REAL nn = n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30;
@@ -623,8 +623,8 @@ INLINE REAL godunov_sq(const REAL back, const REAL fwd, const REAL s)
 
 INLINE REAL subcell_slope(__global const REAL* restrict p, const int i, const int s)
 {
-    return FMAX(FMAX(fabs(p[i + s] - p[i - s]) * (REAL)0.5, fabs(p[i + s] - p[i])),
-                FMAX(fabs(p[i] - p[i - s]), (REAL)1e-12));
+    return FMAX(FMAX(FABS(p[i + s] - p[i - s]) * (REAL)0.5, FABS(p[i + s] - p[i])),
+                FMAX(FABS(p[i] - p[i - s]), (REAL)1e-12));
 }
 
 __kernel void reinit_step(__global const REAL* restrict phi, __global REAL* restrict out,
@@ -643,7 +643,7 @@ __kernel void reinit_step(__global const REAL* restrict phi, __global REAL* rest
         if (near) {
             const REAL g = SQRT(SQR(subcell_slope(phi0, i, 1)) + SQR(subcell_slope(phi0, i, sx)) +
                                 SQR(subcell_slope(phi0, i, sxy))) * inv_h;
-            out[i] = c - r * (s * fabs(c) - p0 / g);
+            out[i] = c - r * (s * FABS(c) - p0 / g);
         } else {
             const REAL gx = godunov_sq(c - phi[i - 1], phi[i + 1] - c, s);
             const REAL gy = godunov_sq(c - phi[i - sx], phi[i + sx] - c, s);
@@ -679,8 +679,8 @@ __kernel void principal_directions(__global const REAL* restrict psi, const REAL
         const REAL hyz = (REAL)0.25 * (psi[i + sx + sxy] - psi[i - sx + sxy] - psi[i + sx - sxy] + psi[i - sx - sxy]);
         // t1 = N x e, e the axis least aligned with N; t2 = N x t1
         REAL ex = 0, ey = 0, ez = 0;
-        if (fabs(nx) <= fabs(ny) && fabs(nx) <= fabs(nz)) ex = 1;
-        else if (fabs(ny) <= fabs(nz)) ey = 1;
+        if (FABS(nx) <= FABS(ny) && FABS(nx) <= FABS(nz)) ex = 1;
+        else if (FABS(ny) <= FABS(nz)) ey = 1;
         else ez = 1;
         REAL ax = ny * ez - nz * ey, ay = nz * ex - nx * ez, az = nx * ey - ny * ex;
         const REAL ia = RSQRT(ax * ax + ay * ay + az * az);
