@@ -33,17 +33,30 @@ from tqdm.auto import tqdm
 from .fields import IndexList, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
-from .regions_mesh import functions_from_mask, region_colours, split_regions, surface_mesh
+from .regions_mesh import (
+    along_normals,
+    functions_from_mask,
+    region_colours,
+    split_regions,
+    surface_mesh,
+)
 from .runtime import get_runtime
 from .surface.grid3d import Grid3D
 
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
 GHOST = 3
 REINIT_DT = 0.3  # pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3))
-# Outer-band extension of the Phi-hat before each reinitialisation: 10 upwind steps of 0.5
-# (CFL 0.5 sqrt(3) < 1) carry values 5 cells out, across the faded ring and beyond.
+# Extension of the Phi-hat along the surface's normals before each reinitialisation: the
+# cells within EXTEND_FROM[0] cells of the surface are kept (they fix Phi-hat on the
+# surface, so the regions), those beyond EXTEND_FROM[1] cells take the values carried out
+# from them. 10 upwind steps of 0.5 (CFL 0.5 sqrt(3) < 1) carry values 5 cells out; the
+# reinitialisation band's last cells were reached by earlier extensions (the surface moves
+# at most 1.6 cells between two). Phi-hat stays constant along the normals, meeting the
+# surface at right angles (see regions_mesh.along_normals for why), and cells that enter
+# the band as the surface moves get values from the surface, not stale ones.
 EXTEND_DT = 0.5
 EXTEND_ITERATIONS = 10
+EXTEND_FROM = (0.8, 1.5)
 
 __all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_region"]
 
@@ -75,14 +88,14 @@ class RegionTracker:
     phi: (nz, ny, nx) signed distance (world units, negative inside); phihat: (L, nz, ny, nx)
     auxiliary functions. speed: one of SPEEDS with `scale` converting it to grid units, or
     velocity (cells per unit time) for rigid translation. band: half-width in cells of the
-    band that is stepped; reinitialisation covers band + 3 cells. aux_at: for speed="array",
-    a function of time giving aux (nz, ny, nx): a time-dependent speed, sampled once per
-    block of `reinit_every` steps, at the block's middle (see advance).
+    band that is stepped; reinitialisation covers the band dilated by `reinit_ring` cells.
+    aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
+    speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     """
 
     def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
                  velocity=None, band=5.0, reinit_every=4, reinit_iterations=8, cfl=0.4,
-                 max_speed=None, aux_at=None, device=None, dtype=np.float32):
+                 reinit_ring=3, max_speed=None, aux_at=None, device=None, dtype=np.float32):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -95,6 +108,9 @@ class RegionTracker:
         self.width = float(band)
         self.reinit_every = int(reinit_every)
         self.reinit_iterations = int(reinit_iterations)
+        self.reinit_ring = int(reinit_ring)
+        if not 0 <= self.reinit_ring <= GHOST:
+            raise InputError(f"reinit_ring must lie in 0..{GHOST} cells, not {reinit_ring!r}")
         self.cfl = float(cfl)
         self.aux_at = aux_at
         if aux_at is not None and (speed != "array" or velocity is not None):
@@ -127,7 +143,7 @@ class RegionTracker:
         """Bands from the current Phi; both ping-pong buffers made equal outside them."""
         g = self.grid
         self.step_band: IndexList = self._band(self.width)
-        self.reinit_band: IndexList = self._band(self.width, dilate=3)
+        self.reinit_band: IndexList = self._band(self.width, dilate=self.reinit_ring)
         # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs),
         # exactly the band's cells: cells outside it must keep their values
         self.step_runs = g.runs(self.step_band, pad=1)
@@ -141,8 +157,9 @@ class RegionTracker:
                       np.int32(1), *g.strides())
         if self._flag.get()[0]:
             raise InputError(
-                f"the surface came within {self.width + 4:.0f} cells of the volume's border at "
-                f"t = {self.time:g}: pad phi (and the other volumes) with more cells"
+                f"the surface came within {self.width + self.reinit_ring + 1:.0f} cells of the "
+                f"volume's border at t = {self.time:g}: pad phi (and the other volumes) with "
+                f"more cells"
             )
         _copy(self.nxt, self.cur)
         _copy(self.stage, self.cur)
@@ -171,10 +188,10 @@ class RegionTracker:
         its = self.reinit_iterations if iterations is None else int(iterations)
         band, k = self.reinit_runs, self._k
         _copy(self.nxt, self.cur)
+        keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(EXTEND_ITERATIONS if its else 0):
             g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
-                          g.scalar(EXTEND_DT), *self._cutoff(), *g.strides(),
-                          channels=self.nc - 1)
+                          g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
         _copy(self.ls0, self.cur)
         _copy(self.nxt, self.cur)
@@ -312,7 +329,7 @@ def _region_functions(phi, region, spacing, origin):
         out = np.stack([a.astype(np.float64) for a in arrays])
         if not np.all(np.isfinite(out)):
             raise InputError("the region functions contain NaN or infinite values")
-        return out, len(arrays)
+        return along_normals(phi, spacing, out), len(arrays)
     if len(arrays) == 1 and arrays[0].ndim == 1:
         mesh = surface_mesh(phi, spacing, origin)
         marks = arrays[0]
@@ -404,7 +421,9 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
     (x, y, z) of phi[0, 0, 0] at `origin`.
     region: a bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
     origin)`), integer vertex labels (one region per label), an implicit function Phi-hat of
-    phi's shape (the region is where Phi-hat < 0 on the surface), or a list of such functions.
+    phi's shape (the region is where Phi-hat < 0 on the surface; off the surface it is
+    replaced by its value at the closest surface point, which keeps the region and tracks
+    its boundary more accurately), or a list of such functions.
     beta: outward normal speed of the surface: a number, 'mean-curvature' (speed -weight
     (k1 + k2): mean curvature flow), 'gaussian' (speed -weight max(K, 0) sign(k1 + k2): elliptic
     parts move toward their centres of curvature, so folds flatten), 'morph' (speed

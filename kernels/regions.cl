@@ -259,13 +259,16 @@ __kernel void dilate_mask(__global const uchar* restrict src, __global uchar* re
         for (int x = 0; x < nx; ++x) dst[row + x] |= src[row + x + d * stride];
 }
 
-// Outer-band extension of the Phi-hat (channels 1.., launched with one channel fewer):
-// u_t + sign(Phi) N_Phi . grad u = 0, first-order upwind, weighted by 1 - band_cutoff, so
-// it acts only where the flows are faded out. Cells that enter the band as the surface
-// moves hold stale Phi-hat values (from the start, or from when they last left the band);
-// the reinitialisation keeps every sign, so a stale zero would stay and meet the surface
-// when it arrives (an expanding sphere's cap gained 0.7% that way). Extension replaces them
-// by the values just inside, carried out along the surface's normals.
+// Extension of the Phi-hat along the surface's normals (channels 1.., launched with one
+// channel fewer): u_t + sign(Phi) N_Phi . grad u = 0, first-order upwind, weighted by
+// 1 - band_cutoff(Phi, lo, hi), so it leaves the cells with |Phi| < lo alone (the host
+// passes lo = 0.8, hi = 1.5 cells: the cells that fix Phi-hat on the surface are kept).
+// Cells that enter the band as the surface moves hold stale Phi-hat values (from the start,
+// or from when they last left the band); the reinitialisation keeps every sign, so a stale
+// zero would stay and meet the surface when it arrives (an expanding sphere's cap gained
+// 0.7% that way). Extension replaces them by values carried out from the surface, and keeps
+// Phi-hat meeting the surface at right angles (a tilted Phi-hat, bent by the band's faded
+// edges, let a cap's boundary drift 0.1 cell per cell the surface moved).
 __kernel void extend_outer(__global const REAL* restrict ls, __global REAL* restrict out,
                            const REAL dt, const REAL lo, const REAL hi, const int sx,
                            const int sxy, RUN_ARGS)
