@@ -26,7 +26,6 @@ import inspect
 from dataclasses import dataclass, field
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
@@ -132,7 +131,8 @@ class RegionTracker:
         self._k = {name: self.runtime.kernel("regions.cl", name, g.dtype, SPEED=self.mode)
                    for name in ("region_speed", "region_step", "advect_step", "reinit3d_step",
                                 "band_near_border", "band_max_abs", "heun_average",
-                                "region_band_mask", "dilate_mask", "extend_outer")}
+                                "region_band_mask", "dilate_mask", "extend_outer",
+                                "copy_runs")}
         self.time = 0.0
         self.steps = 0
         self.rebuild()
@@ -140,7 +140,8 @@ class RegionTracker:
 
     # ---- bands ---------------------------------------------------------------------------
     def rebuild(self) -> None:
-        """Bands from the current Phi; both ping-pong buffers made equal outside them."""
+        """Bands from the current Phi. The work buffers (nxt, stage, ls0) must equal cur
+        outside the reinitialisation band: every write lands in it (reinitialize syncs it)."""
         g = self.grid
         self.step_band: IndexList = self._band(self.width)
         self.reinit_band: IndexList = self._band(self.width, dilate=self.reinit_ring)
@@ -161,8 +162,6 @@ class RegionTracker:
                 f"volume's border at t = {self.time:g}: pad phi (and the other volumes) with "
                 f"more cells"
             )
-        _copy(self.nxt, self.cur)
-        _copy(self.stage, self.cur)
 
     def _band(self, width, dilate=0) -> IndexList:
         """Interior cells with |Phi| < width cells, dilated by `dilate` cells (a cube),
@@ -187,15 +186,15 @@ class RegionTracker:
         g = self.grid
         its = self.reinit_iterations if iterations is None else int(iterations)
         band, k = self.reinit_runs, self._k
-        _copy(self.nxt, self.cur)
+        # the band holds every cell written since the last sync (steps write the step band,
+        # inside it), so syncing it keeps the work buffers equal to cur everywhere
+        self._sync(self.nxt)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(EXTEND_ITERATIONS if its else 0):
             g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
                           g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
-        _copy(self.ls0, self.cur)
-        _copy(self.nxt, self.cur)
-        _copy(self.stage, self.cur)
+        self._sync(self.ls0, self.nxt, self.stage)
         for _ in range(its):
             # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a
             # sphere's interface drifted 0.3 cells in 40 reinitialisations)
@@ -204,7 +203,14 @@ class RegionTracker:
                               g.scalar(REINIT_DT), *g.strides(), channels=self.nc)
             g.launch_runs(k["heun_average"], band, self.cur.data, self.stage.data,
                           self.cur.data, channels=self.nc)
+        self._sync(self.ls0, self.nxt, self.stage)
         self.rebuild()
+
+    def _sync(self, *buffers) -> None:
+        """Copy cur into the buffers on the reinitialisation band (every channel)."""
+        for dst in buffers:
+            self.grid.launch_runs(self._k["copy_runs"], self.reinit_runs, self.cur.data,
+                                  dst.data, channels=self.nc)
 
     # ---- time steps ------------------------------------------------------------------------
     def _compute_speed(self) -> None:
@@ -315,10 +321,6 @@ class RegionTracker:
         """(Phi, Phi-hats) in world units on the host."""
         data = self.grid.download(self.cur).astype(np.float64) * self.h
         return data[0], data[1:]
-
-
-def _copy(dst, src) -> None:
-    cl.enqueue_copy(dst.queue, dst.data, src.data, byte_count=src.nbytes)
 
 
 def _region_functions(phi, region, spacing, origin):

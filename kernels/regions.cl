@@ -227,6 +227,17 @@ __kernel void heun_average(__global const REAL* restrict u, __global const REAL*
     }
 }
 
+// dst = src on the band's cells, every channel. The host keeps its work buffers equal to
+// the level sets outside the band (every write lands in the band), so syncing the band
+// replaces copies of whole volumes (at 256^3 a volume copy cost as much as 2 Heun steps).
+__kernel void copy_runs(__global const REAL* restrict src, __global REAL* restrict dst, RUN_ARGS)
+{
+    FOR_EACH_RUN_CELL(i) {
+        const int j = chan + i;
+        dst[j] = src[j];
+    }
+}
+
 // mask[i] = 1 where |Phi| < width on the interior cells (Phi: channel 0). Work-item (y, z)
 // of the interior walks one row. (The same test as surface.cl's band_mask, kept here so
 // this file builds on its own.)

@@ -105,6 +105,22 @@ def test_extend_outer_matches_reference(runtime, rng, kind):
     np.testing.assert_allclose(out.get().reshape(3, -1)[1:, idx], want, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("name", ["heun_average", "copy_runs"])
+def test_band_copies_match_reference(runtime, rng, name):
+    data = _inputs("random", rng, 2)
+    g, (a, b), runs, (a_h, b_h) = _setup(runtime, [data, rng.normal(size=data.shape)])
+    idx = runs.band.indices.get().astype(np.int64)
+    if name == "heun_average":
+        out = b.copy()
+        g.launch_runs(_kernel(runtime, name), runs, a.data, b.data, out.data, channels=2)
+        want = ref.heun_average(a_h, b_h, b_h, idx, 2, g.volume)
+    else:
+        out = b
+        g.launch_runs(_kernel(runtime, name), runs, a.data, b.data, channels=2)
+        want = ref.copy_runs(a_h, b_h, idx, 2, g.volume)
+    np.testing.assert_array_equal(out.get().reshape(-1), want)
+
+
 def test_curvatures_of_a_sphere(runtime):
     """Mean curvature 2/R and Gaussian curvature 1/R^2 (grid units) on a sphere's level sets."""
     n = 24

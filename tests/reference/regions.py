@@ -139,3 +139,19 @@ def extend_outer(ls, band, dt, lo, hi, nc, plane, sx, sxy):
             du = du + a * np.where(a > 0, ls[j] - ls[j - st], ls[j + st] - ls[j])
         out[c - 1] = ls[j] - dt * w * du
     return out
+
+
+def heun_average(u, stage, out, band, nc, plane):
+    """heun_average: out with (u + stage) / 2 on the band, every channel."""
+    idx = np.concatenate([band + c * plane for c in range(nc)])
+    out = out.copy()
+    out[idx] = 0.5 * (u[idx] + stage[idx])
+    return out
+
+
+def copy_runs(src, dst, band, nc, plane):
+    """copy_runs: dst with src's values on the band, every channel."""
+    idx = np.concatenate([band + c * plane for c in range(nc)])
+    out = dst.copy()
+    out[idx] = src[idx]
+    return out
