@@ -127,8 +127,11 @@ def run_scene(scene: Scene, saves=4, progress=None, device=None):
 
 def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions"):
     """OUTDIR/<stem>_<k>.ply per frame and OUTDIR/<stem>.png: frames top to bottom, views
-    side by side. Returns the paths written."""
-    import imageio.v3 as iio
+    side by side, as a 128-colour palette PNG (two shaded colours on white: no visible loss,
+    2.5x smaller than RGB). Returns the paths written."""
+    import io
+
+    from PIL import Image
 
     from .surface.render import _atomic_write, export_mesh, render_mesh
 
@@ -142,6 +145,10 @@ def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions"
         rows.append(np.concatenate([render_mesh(frame.mesh, size, a, e) for a, e in views], axis=1))
     picture = np.concatenate(rows, axis=0)
     path = os.path.join(outdir, f"{stem}.png")
-    _atomic_write(path, iio.imwrite("<bytes>", picture, extension=".png"))
+    palette = Image.fromarray(np.ascontiguousarray(picture[..., :3])).quantize(
+        colors=128, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    data = io.BytesIO()
+    palette.save(data, format="PNG", optimize=True)
+    _atomic_write(path, data.getvalue())
     written.append(path)
     return written
