@@ -57,7 +57,8 @@ def main():
     # weight h^3 makes the speed K+ in cells per unit time, with K in 1 / cells^2; creases
     # sharper than a 2-cell radius (K > 1/4) move at the speed of that radius
     frames = track_region(phi, sulci, beta="gaussian", weight=h**3, t=args.t, spacing=h,
-                          saves=args.saves, origin=origin, max_speed=0.25 * h, progress=True)
+                          saves=args.saves, origin=origin, max_speed=0.25 * h, progress=True,
+                          keep_volumes=True)
     seconds = time.perf_counter() - start
     written = write_frames(frames, os.path.join("out", "regions_cortex"), size=args.size,
                            views=((-90.0, 10.0), (90.0, 10.0)), stem="cortex")
@@ -66,6 +67,25 @@ def main():
     print(f"cortex: grid {'x'.join(map(str, phi.shape[::-1]))} (h = {h:.2f} mm), {seconds:.1f} s; "
           f"sulcal (yellow) area fraction {shares}; surface area "
           f"{', '.join(f'{f.area():.0f}' for f in frames)} mm^2")
+    # the check of the tracking: the sulci stay the concave parts while the folds flatten
+    for f in frames:
+        yellow, grey = concave_shares(f, h, origin)
+        print(f"t = {f.time:g}: concave share of the yellow area {yellow:.2f}, of the rest {grey:.2f}")
+
+
+def concave_shares(frame, h, origin):
+    """Area shares of the region and of the rest where the surface is concave (mean
+    curvature div(grad phi / |grad phi|) < 0, from the frame's phi)."""
+    from scipy.ndimage import map_coordinates
+
+    g = np.gradient(frame.phi, h)
+    norm = np.sqrt(g[0] ** 2 + g[1] ** 2 + g[2] ** 2) + 1e-12
+    mean = sum(np.gradient(g[k] / norm, h)[k] for k in range(3))
+    at = ((frame.mesh.triangles_center - np.asarray(origin)) / h)[:, ::-1].T  # (z, y, x)
+    concave = map_coordinates(mean, at, order=1) < 0
+    area, inside = frame.mesh.area_faces, frame.face_labels == 0
+    return (area[inside & concave].sum() / area[inside].sum(),
+            area[~inside & concave].sum() / area[~inside].sum())
 
 
 if __name__ == "__main__":
