@@ -117,6 +117,10 @@ class RegionTracker:
         if aux_at is not None and aux is None:
             aux = aux_at(0.0)
         g, q = self.grid, self.runtime.queue
+        # region functions constant along the surface's normals: the extension before each
+        # reinitialisation keeps them so, and would otherwise move an oblique one's zero on
+        # the surface once (a plane cutting a sphere at 60 degrees: the cap grew 1.6%)
+        phihat = along_normals(phi, self.h, np.asarray(phihat, np.float64))
         cells = np.concatenate([phi[None], phihat]) / self.h
         # ghosts continue distances linearly: stencils near the border stay meaningful
         self.cur = g.upload(cells, mode="linear")
@@ -329,7 +333,7 @@ def _region_functions(phi, region, spacing, origin):
         out = np.stack([a.astype(np.float64) for a in arrays])
         if not np.all(np.isfinite(out)):
             raise InputError("the region functions contain NaN or infinite values")
-        return along_normals(phi, spacing, out), len(arrays)
+        return out, len(arrays)
     if len(arrays) == 1 and arrays[0].ndim == 1:
         mesh = surface_mesh(phi, spacing, origin)
         marks = arrays[0]
