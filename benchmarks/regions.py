@@ -4,7 +4,7 @@ cap's area error against grid spacing, in one run.
 1. Step time: a sphere carrying a cap on an N^3 grid (N = 128, 256; two radii each) moving
    by mean curvature flow (the speed is recomputed from Phi every step). A step is one Heun
    step of Phi and the Phi-hat over the band (4 launches); a reinitialisation (every 4
-   steps: 10 extension steps of the Phi-hat and 8 Heun iterations of both over the band
+   steps: 10 extension steps of the Phi-hat and 6 Heun iterations of both over the band
    dilated by 3 cells, then the bands' rebuild) is timed apart, the rebuild also alone.
    Times are means over repeated calls after a warm-up (the first launch compiles).
 2. Cap accuracy: a sphere of radius 0.9 with the cap z > 0.45 (angular radius 60 degrees,

@@ -44,7 +44,11 @@ from .surface.grid3d import Grid3D
 
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
 GHOST = 3
-REINIT_DT = 0.3  # pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3))
+# Pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3)). Six Heun iterations
+# of 0.45 (2.7 cells of pseudo-time) correct the band as well as eight of 0.3 did, for 25%
+# less work; with less pseudo-time (5 x 0.45, 6 x 0.3) an expanding sphere's outer band
+# lagged and its area drifted (0.04-0.6% where 0.02% is the norm at h = 0.025).
+REINIT_DT = 0.45
 # Extension of the Phi-hat along the surface's normals before each reinitialisation: the
 # cells within EXTEND_FROM[0] cells of the surface are kept (they fix Phi-hat on the
 # surface, so the regions), those beyond EXTEND_FROM[1] cells take the values carried out
@@ -93,7 +97,7 @@ class RegionTracker:
     """
 
     def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
-                 velocity=None, band=5.0, reinit_every=4, reinit_iterations=8, cfl=0.4,
+                 velocity=None, band=5.0, reinit_every=4, reinit_iterations=6, cfl=0.4,
                  reinit_ring=3, max_speed=None, aux_at=None, device=None, dtype=np.float32):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
@@ -416,7 +420,7 @@ def _speed_setup(beta, target, weight, h, shape, coords):
 
 def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
                  target=None, velocity=None, weight=1.0, band=5.0, reinit_every=4,
-                 reinit_iterations=8, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
+                 reinit_iterations=6, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
                  dtype=np.float32, progress=None) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
