@@ -392,8 +392,9 @@ def test_time_dependent_beta_moves_a_sphere_by_its_time_integral(beta, radius):
     for frame in frames:
         got = np.sqrt(frame.area() / (4 * np.pi))
         assert got == pytest.approx(radius(frame.time), abs=0.15 * H)
-        # the cap's share is kept (within 3%: the sphere grows or shrinks by 5 cells)
-        assert frame.area_fraction(0) == pytest.approx(0.25, rel=0.03)
+        # the cap's share is kept (within 1.5%, 0.8% measured: the sphere is 6 cells across
+        # at the start and grows or shrinks by 5 cells)
+        assert frame.area_fraction(0) == pytest.approx(0.25, rel=0.015)
 
 
 def test_cli_tracks_curvature_sign_regions_on_a_mesh(tmp_path):
