@@ -489,7 +489,9 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
                             aux_at=aux_at, device=device, dtype=dtype)
     frames = []
     disable = None if progress is None else not progress
-    with tqdm(total=t_end, desc="track regions", disable=disable, leave=False) as bar:
+    # the bar counts simulated time, so it prints rounded times rather than step counts
+    with tqdm(total=t_end, desc="track regions", disable=disable, leave=False, unit="time",
+              bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
         for when in times:
             tracker.advance(when, bar)
             frames.append(make_frame(tracker, when, origin, keep_volumes))

@@ -5,7 +5,8 @@ coloured by the sign of its original curvature (yellow: sulci, FreeSurfer's curv
 evolves by the positive part of its Gaussian curvature (elliptic parts move toward their
 centres of curvature, so folds flatten) while the yellow region is tracked.
 
-    python examples/regions_cortex.py [--resolution 96] [--t 90] [--out docs/images]
+    pip install nilearn nibabel      # or: pip install ".[examples]"
+    python examples/regions_cortex.py [--resolution 96] [--t 300] [--out docs/images]
 
 Writes OUT/regions_cortex.png (saved times top to bottom, lateral and medial views) and PLY
 meshes per saved time under out/regions_cortex/ (git-ignored).
@@ -20,8 +21,11 @@ import numpy as np
 
 def fsaverage_white_left():
     """(vertices, faces, curvature) of nilearn's bundled fsaverage5 left white surface."""
-    import nibabel as nib
-    import nilearn
+    try:
+        import nibabel as nib
+        import nilearn
+    except ImportError:
+        raise SystemExit("this example needs the meshes inside nilearn: pip install nilearn nibabel") from None
 
     folder = os.path.join(os.path.dirname(nilearn.__file__), "datasets", "data", "fsaverage5")
     surf = nib.load(os.path.join(folder, "white_left.gii.gz"))
@@ -40,7 +44,7 @@ def main():
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--resolution", type=int, default=96)
-    parser.add_argument("--t", type=float, default=90.0, help="time, in grid units (h^3 / weight)")
+    parser.add_argument("--t", type=float, default=300.0, help="time, in grid units (h^3 / weight)")
     parser.add_argument("--saves", type=int, default=3)
     parser.add_argument("--size", type=int, default=180)
     parser.add_argument("--out", default=os.path.join("docs", "images"))
