@@ -134,8 +134,11 @@ class ImplicitSurface:
         """A surface from a triangle mesh (trimesh.Trimesh or any file trimesh loads).
 
         spacing defaults to the bounding box's longest side / resolution. The distance is exact
-        in the band; the sign is orientation-free (see mesh_sdf), so flipped faces and holes
-        smaller than a cell are harmless; a mesh that is not watertight gets a warning."""
+        in the band. The sign comes from a flood fill checked by the generalized winding number
+        (see mesh_sdf): flipped faces, a mesh turned inside out and holes of any size are
+        handled, a hole being closed along the sheet where the winding number crosses 1/2 (there
+        |psi| is the distance to the hole's rim). The mesh passed in is not modified; one that
+        is not watertight gets a warning."""
         from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf
 
         mesh = load_mesh(mesh)

@@ -6,13 +6,23 @@ a Euclidean distance transform gives every cell its nearest crossed cell, and th
 point-triangle distance to that cell's triangles is taken. Cells beyond the band get the
 band's cap, with their sign. (A k-d tree over the samples was measured 5-10x slower.)
 
-Sign: orientation-free, so flipped faces do not matter and holes smaller than a cell are
-sealed: the cells closer than half a cell to the mesh form a shell that no 6-connected path
-crosses; a flood fill from the box's border through the other cells finds the outside;
-every other cell is inside. Shell cells take the side found one cell further along the
-direction from their closest point. (trimesh's own signed_distance, with rtree, took 6-50x
-longer on the band's cells at 64-256 cells across, and needs consistent orientation:
-benchmarks/surface_accuracy.py, section 5.)
+Sign: a flood fill, checked and repaired by the generalized winding number. The cells
+closer than half a cell to the mesh form a shell that no 6-connected path crosses where the
+mesh is closed (holes smaller than a cell are sealed, and the orientation of the faces does
+not matter); a flood fill from the box's border through the other cells finds the outside,
+and the other components of the fill are inside. Then the winding number w (winding.cl:
+the sum of the triangles' solid angles / 4 pi, with a two-level far-field expansion; the
+faces are made consistently oriented first, on a copy, and |w| > 1/2 is inside, so a mesh
+turned inside out works too) is evaluated at a sample of cells of every component: a
+component whose samples agree takes their side. One that leaked, through a hole wider than
+a cell (a border component with samples inside, or samples on both sides), is decided cell
+by cell: each band cell by its own w, the cells beyond the band by w on a lattice of up to
+4 cells' spacing (w is smooth that far from the mesh). Across a hole w falls smoothly
+through 1/2, so the sign changes on a sheet spanning the hole; |psi| stays the distance to
+the mesh, there the distance to the hole's rim. Shell cells take the side found one cell
+further along the direction from their closest point. (trimesh's own signed_distance, with
+rtree, took 6-50x longer on the band's cells at 64-256 cells across, and needs consistent
+orientation: benchmarks/surface_accuracy.py, section 5.)
 """
 
 from __future__ import annotations
@@ -43,8 +53,9 @@ def load_mesh(mesh):
         raise InputError("the mesh has NaN or infinite vertex coordinates")
     if not mesh.is_watertight:
         warnings.warn(
-            "the mesh is not watertight; holes smaller than a grid cell are sealed, larger ones "
-            "may let the outside leak in (check the result, or repair the mesh first)",
+            "the mesh is not watertight; its holes are closed by the winding number (the sign "
+            "changes where it crosses 1/2, a sheet spanning each hole; there |psi| is the "
+            "distance to the hole's rim, not to a surface: repair the mesh for an exact one)",
             stacklevel=3,
         )
     return mesh
@@ -90,7 +101,10 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
     Returns (psi, closest_face, closest_point): closest_face is a volume, -1 off the band;
     closest_point has one row per band cell (where closest_face >= 0), in flat index order.
     Only the band's cells get per-cell closest points: a volume of them would take 24 bytes
-    a cell (0.5 GB at 275^3)."""
+    a cell (0.5 GB at 275^3). The sign: the module's docstring; the winding numbers add a
+    volume of labels and a few of booleans, and hold w for the cells they decide only.
+    stats, a dict, receives the components of the flood fill, how many leaked, how many
+    points had their winding number evaluated and the seconds the sign's check took."""
     from scipy import ndimage
     h = float(spacing)
     nz, ny, nx = shape
