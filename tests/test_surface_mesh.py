@@ -121,3 +121,120 @@ def test_to_mesh_export_and_render(tmp_path):
 def test_colormap_ends():
     c = colormap(np.array([0.0, 0.5, 1.0]))
     assert c.shape == (3, 3) and c[0].sum() < c[2].sum()
+
+
+# ---- holes wider than a cell: the winding number ------------------------------------------
+
+def winding_reference(mesh, points):
+    """Exact generalized winding number in float64: Van Oosterom-Strackee per triangle."""
+    tri = np.asarray(mesh.triangles, dtype=np.float64)
+    out = np.empty(len(points))
+    for k, p in enumerate(points):
+        a, b, c = (tri[:, i] - p for i in range(3))
+        la, lb, lc = (np.linalg.norm(v, axis=1) for v in (a, b, c))
+        det = np.einsum("ij,ij->i", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", b, c) * la
+               + np.einsum("ij,ij->i", c, a) * lb)
+        out[k] = np.arctan2(det, den).sum() / (2 * np.pi)
+    return out
+
+
+def test_winding_kernel_matches_the_exact_sum_and_its_far_field_approximation(rng):
+    from clpde.surface.mesh_sdf import winding_number
+
+    small = trimesh.creation.icosphere(2, radius=1.0)
+    pts = rng.uniform(-1.6, 1.6, (300, 3))
+    np.testing.assert_allclose(winding_number(small, pts, exact=True), winding_reference(small, pts),
+                               atol=1e-5)
+    mesh = trimesh.creation.icosphere(4, radius=1.0)
+    pts = np.concatenate([rng.uniform(-1.6, 1.6, (1500, 3)),
+                          mesh.vertices[:500] * rng.uniform(0.9, 1.1, (500, 1))])
+    exact = winding_number(mesh, pts, exact=True)
+    np.testing.assert_allclose(exact[:300], winding_reference(mesh, pts[:300]), atol=1e-5)
+    fast = winding_number(mesh, pts)  # two-level far field, beta = 2 (its documented bound)
+    assert np.abs(fast - exact).max() < 0.05
+    r = np.linalg.norm(pts, axis=1)
+    assert np.abs(exact[r < 0.95] - 1).max() < 1e-4 and np.abs(exact[r > 1.05]).max() < 1e-4
+    assert np.abs(fast[r < 0.95] - 1).max() < 0.05 and np.abs(fast[r > 1.05]).max() < 0.05
+
+
+def _cap_removed(mesh, radius):
+    """The mesh without the faces within `radius` of its top, and the removed faces."""
+    gone = np.linalg.norm(mesh.triangles_center - [0, 0, 1], axis=1) < radius
+    holed = mesh.copy()
+    holed.update_faces(~gone)
+    removed = mesh.copy()
+    removed.update_faces(gone)
+    return holed, removed
+
+
+def _check_sphere_sign(surf, removed=None, cells_away=2.0):
+    """Every band cell farther than cells_away cells from the removed faces has the exact
+    sphere's side, and its psi is the sphere's distance there (the zero level set is the
+    sphere's)."""
+    from scipy.spatial import cKDTree
+
+    from clpde.surface.mesh_sdf import _surface_samples
+
+    h = surf.spacing
+    pts = grid_points(surf.origin, h, surf.shape)
+    band = np.flatnonzero(surf._mesh_face.ravel() >= 0)
+    keep, near = band, np.zeros(band.size, dtype=bool)
+    if removed is not None:
+        samples, _ = _surface_samples(removed, 0.2 * h)
+        tree = cKDTree(samples)
+        keep = band[tree.query(pts[band])[0] > cells_away * h]
+        # cells whose nearest point on the sphere is near the hole: |psi| is the distance to
+        # the hole's rim there, not to the sphere
+        radial = pts[keep] / np.linalg.norm(pts[keep], axis=1)[:, None]
+        near = tree.query(radial)[0] <= cells_away * h
+    r = np.linalg.norm(pts[keep], axis=1)
+    psi = surf.psi.ravel()[keep]
+    off_surface = np.abs(r - 1) > 0.01  # the icosphere lies within 0.003 inside the sphere
+    assert keep.size > 0.8 * band.size
+    assert np.all((psi[off_surface] < 0) == (r[off_surface] < 1))
+    cap = np.abs(surf.psi).max()  # cells past the band hold the band's cap
+    assert np.abs(psi - np.clip(r - 1, -cap, cap))[~near].max() < 0.01
+
+def test_hole_wider_than_cells_is_closed_by_the_winding_number():
+    mesh = trimesh.creation.icosphere(4, radius=1.0)
+    holed, removed = _cap_removed(mesh, 0.25)  # a hole about 12 cells across at resolution 48
+    assert not holed.is_watertight
+    with pytest.warns(UserWarning, match="winding number"):
+        surf = ImplicitSurface.from_mesh(holed, resolution=48)
+    _check_sphere_sign(surf, removed)
+    # one missing triangle several cells wide (the issue's example)
+    coarse = trimesh.creation.icosphere(2)
+    one = coarse.copy()
+    one.update_faces(np.arange(len(coarse.faces)) != 7)
+    gone = coarse.copy()
+    gone.update_faces(np.arange(len(coarse.faces)) == 7)
+    with pytest.warns(UserWarning, match="watertight"):
+        surf = ImplicitSurface.from_mesh(one, resolution=64)
+    pts = grid_points(surf.origin, surf.spacing, surf.shape)
+    band = np.flatnonzero(surf._mesh_face.ravel() >= 0)
+    inner = np.linalg.norm(pts[band], axis=1) < 0.7  # well inside the coarse icosphere
+    assert np.all(surf.psi.ravel()[band[inner]] < 0)
+
+
+def test_inside_out_and_half_flipped_meshes_with_a_big_hole():
+    mesh = trimesh.creation.icosphere(4, radius=1.0)
+    inverted = mesh.copy()
+    inverted.invert()
+    surf = ImplicitSurface.from_mesh(inverted, resolution=40)  # closed, inside out
+    _check_sphere_sign(surf, None)
+    holed, removed = _cap_removed(mesh, 0.3)
+    holed_inverted = holed.copy()
+    holed_inverted.invert()
+    flipped = holed.copy()
+    faces = flipped.faces.copy()
+    faces[::2] = faces[::2, ::-1]
+    flipped.faces = faces
+    for case in (holed_inverted, flipped):
+        vertices, faces = case.vertices.copy(), case.faces.copy()
+        with pytest.warns(UserWarning, match="watertight"):
+            surf = ImplicitSurface.from_mesh(case, resolution=40)
+        _check_sphere_sign(surf, removed)
+        # the caller's mesh is left as it was
+        np.testing.assert_array_equal(case.faces, faces)
+        np.testing.assert_array_equal(case.vertices, vertices)
