@@ -414,7 +414,14 @@ def add_surface_parser(subparsers) -> None:
     parser.add_argument("--iterations", type=int, default=None,
                         help="reaction-diffusion iterations (default: 4000)")
     parser.add_argument("--sigma", type=float, default=0.15,
-                        help="noise level added for tv, denoise and chroma (default: 0.15)")
+                        help="noise level: added to the demonstration data of tv, denoise and "
+                             "chroma, or that of the mesh's own colours for denoise "
+                             "(default: 0.15)")
+    parser.add_argument("--data", choices=("auto", "mesh", "pattern"), default="auto",
+                        help="what heat, tv, denoise and chroma process: the mesh file's vertex "
+                             "colours ('mesh'), or a checkerboard / colour pattern with added "
+                             "noise ('pattern'); 'auto' (default) takes the colours when the "
+                             "mesh has them")
     parser.add_argument("--direction", choices=("major", "minor", "none"), default="major",
                         help="principal direction for flowvis and anisotropic "
                              "reaction-diffusion ('none': isotropic; default: major)")
@@ -425,7 +432,7 @@ def add_surface_parser(subparsers) -> None:
 
 
 def run_surface(args) -> int:
-    from .surface.demo import load_surface, run_flow, write_run
+    from .surface.demo import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
 
     get_runtime(args.device)
     check_not_overwriting_input([args.mesh], args.output)
@@ -436,8 +443,13 @@ def run_surface(args) -> int:
     if args.direction == "none" and args.flow == "flowvis":
         raise InputError("flowvis needs --direction major or minor")
     surf = load_surface(args.mesh, args.resolution, device=args.device)
+    data = None
+    if args.data != "pattern" and args.flow in DATA_FLOWS:
+        data = mesh_colours(surf)
+        if data is None and args.data == "mesh":
+            raise InputError(f"{args.mesh} has no vertex colours; use --data pattern")
     run = run_flow(surf, args.flow, t=args.t, iterations=args.iterations, sigma=args.sigma,
-                   seed=args.seed, direction=args.direction, progress=show_progress())
+                   seed=args.seed, direction=args.direction, data=data, progress=show_progress())
     written = write_run(run, args.output, size=args.size)
     print(f"surface {args.flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
           f"{surf.ext_band.n} cells; wrote {len(written)} files to {args.output}", file=sys.stderr)

@@ -8,7 +8,7 @@ Writes surface_fig4_3.png (heat flow), surface_fig4_4.png (noisy / TV denoising 
 lambda / TV flow without fidelity), surface_fig4_5.png (the major principal direction of a
 bumpy surface, shown by noise diffused along it, before and after its regularisation as a
 line field by the p = 1 harmonic map), surface_fig4_6.png (colour denoising: chroma by the
-p = 1 harmonic map, brightness by heat), surface_fig4_7.png (Turk's reaction-diffusion with
+p = 1 harmonic map, brightness by TV flow), surface_fig4_7.png (Turk's reaction-diffusion with
 Figure 4.7's numbers, isotropic and along the major principal direction) and
 surface_fig4_8.png (noise diffused along the major and the minor principal direction).
 """
@@ -74,9 +74,7 @@ def main():
         clean = colour_pattern(torus)
         noise = 0.25 * np.random.default_rng(6).standard_normal(clean.shape)
         noisy = np.clip(clean + noise, 0.01, 1)
-        brightness = np.sqrt((noisy**2).sum(axis=0))
-        chroma = torus.harmonic_map(noisy / brightness, t=4 * h**2, p=1)
-        restored = chroma * torus.heat(brightness, t=4 * h**2)
+        restored = torus.denoise_colour(noisy, t=4 * h**2)
         save(out / "surface_fig4_6.png", [picture(torus, x, size) for x in (clean, noisy, restored)])
 
     if wanted & {"4.7", "4.8"}:

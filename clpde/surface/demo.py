@@ -64,12 +64,34 @@ class SurfaceRun:
     note: str
 
 
+def mesh_colours(surf):
+    """The vertex colours of the mesh `surf` was built from, carried to the band as RGB in
+    [0, 1], shape (3, nz, ny, nx); None when the mesh has none (or all vertices alike)."""
+    mesh = getattr(surf, "mesh", None)
+    if mesh is None or getattr(mesh.visual, "kind", None) != "vertex":
+        return None
+    rgb = np.asarray(mesh.visual.vertex_colors)[:, :3]
+    if len(rgb) != len(mesh.vertices) or np.all(rgb == rgb[0]):
+        return None
+    return surf.field_from_mesh(rgb / 255.0)
+
+
+DATA_FLOWS = ("heat", "tv", "denoise", "chroma")  # the flows that can take the user's colours
+
+
 def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, direction="major",
-             progress=None) -> SurfaceRun:
-    """Run one of FLOWS with the thesis' settings; returns the data before and after."""
+             data=None, progress=None) -> SurfaceRun:
+    """Run one of FLOWS with the thesis' settings; returns the data before and after.
+
+    data: the user's values on the band (e.g. mesh_colours(surf)) for heat, tv, denoise and
+    chroma, processed as they are (sigma is then their noise level for denoise). Without
+    it these flows make the figures' demonstration data: a checkerboard or a colour pattern,
+    with noise of sigma added for tv, denoise and chroma."""
     rng = np.random.default_rng(seed)
     h = surf.spacing
     size = h * max(surf.shape)
+    if data is not None:
+        return _run_on_data(surf, flow, np.asarray(data), t, sigma, progress)
     if flow == "heat":  # Figure 4.3: intrinsic isotropic diffusion of an image
         before = checker(surf)
         t = 2e-4 * size**2 if t is None else t
@@ -90,12 +112,8 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
     if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by heat
         clean = colour_pattern(surf)
         before = np.clip(clean + sigma * rng.standard_normal(clean.shape), 0.01, 1)
-        brightness = np.sqrt((before**2).sum(axis=0))
-        chroma = before / brightness
         t = 4 * h**2 if t is None else t
-        chroma_after = surf.harmonic_map(chroma, t=t, p=1, progress=progress)
-        brightness_after = surf.heat(brightness, t=t, progress=progress)
-        return SurfaceRun(flow, surf, before, chroma_after * brightness_after,
+        return SurfaceRun(flow, surf, before, surf.denoise_colour(before, t=t, progress=progress),
                           f"chroma harmonic map p=1 and brightness heat flow to t={t:g}")
     if flow in ("reaction-diffusion", "flowvis", "curvature"):
         major, minor, curv = surf.principal_directions()
@@ -119,6 +137,31 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
                           f"along the {direction} direction" if along is not None else
                           f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations")
     raise InputError(f"unknown surface flow {flow!r}; choose one of {', '.join(FLOWS)}")
+
+
+def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
+    h = surf.spacing
+    if flow not in DATA_FLOWS:
+        raise InputError(f"the {flow} flow makes its own data; only {', '.join(DATA_FLOWS)} take yours")
+    if flow == "chroma" and data.shape[:1] != (3,):
+        raise InputError("chroma denoising needs colour (3-channel) data")
+    if flow == "heat":
+        t = 2e-4 * (h * max(surf.shape)) ** 2 if t is None else t
+        return SurfaceRun(flow, surf, data, surf.heat(data, t=t, progress=progress),
+                          f"heat flow of the mesh's data to t={t:g}")
+    if flow == "tv":
+        t = 40 * h**2 if t is None else t
+        return SurfaceRun(flow, surf, data, surf.tv(data, t=t, progress=progress),
+                          f"TV flow of the mesh's data to t={t:g}")
+    if flow == "denoise":
+        t = 40 * h**2 if t is None else t
+        after, info = surf.denoise_tv(data, sigma=sigma, t=t, return_info=True, progress=progress)
+        return SurfaceRun(flow, surf, data, after,
+                          f"TV denoising of the mesh's data for noise sigma={sigma:g}: residual "
+                          f"variance {info['residual_variance']:.4g}")
+    t = 4 * h**2 if t is None else t
+    return SurfaceRun(flow, surf, data, surf.denoise_colour(data, t=t, progress=progress),
+                      f"the mesh's colours: chroma harmonic map p=1 and brightness heat flow to t={t:g}")
 
 
 def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400) -> list:

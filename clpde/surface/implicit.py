@@ -175,6 +175,10 @@ class ImplicitSurface:
         faces = flat_face[cells]
         # _mesh_cp holds the closest points of exactly these cells, in this order
         bary = points_to_barycentric(np.asarray(mesh.triangles)[faces], self._mesh_cp)
+        # closest points lie on their triangles: the weights are convex but for rounding, and
+        # clipping keeps e.g. colours within their range
+        bary = np.clip(bary, 0, None)
+        bary /= bary.sum(axis=1, keepdims=True)
         corner = np.asarray(mesh.faces)[faces]
         vals = values.reshape(len(values), -1)
         per_cell = np.einsum("ck,ckm->cm", bary, vals[corner])
@@ -308,7 +312,7 @@ class ImplicitSurface:
         # three float64 volumes); band cells are 2 cells from the border, checked above
         cells = np.flatnonzero(band)
         p = self.psi.reshape(-1)
-        nz, ny, nx = self.shape
+        _, ny, nx = self.shape
         diffs = [p[cells + s] - p[cells - s] for s in (1, nx, nx * ny)]
         slope = np.sqrt(sum(d**2 for d in diffs)) / (2 * self.spacing)
         bad = float(np.mean(slope < 0.5))
@@ -468,6 +472,13 @@ class ImplicitSurface:
         from .flows import harmonic_map
 
         return harmonic_map(self, u, t, p, **options)
+
+    def denoise_colour(self, rgb, t, **options) -> np.ndarray:
+        """Colour denoising as in Figure 4.6: chroma by harmonic map, brightness by a scalar
+        flow; see flows.denoise_colour."""
+        from .flows import denoise_colour
+
+        return denoise_colour(self, rgb, t, **options)
 
     def diffuse_along(self, u, direction, t, **options) -> np.ndarray:
         """Diffusion along a tangent field (4.15); see flows.diffuse_along."""
