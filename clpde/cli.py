@@ -466,10 +466,10 @@ def add_regions_parser(subparsers) -> None:
         "regions", help="track painted regions on a deforming surface (thesis 2.2)",
         description="Track regions on a surface that deforms by level sets (thesis section "
                     "2.2). SCENE is one of " + ", ".join(SCENES) + " (Figure 2.7's toy cases "
-                    "and caps on a sphere), or a mesh file: its surface, coloured by the sign "
-                    "of its Gaussian curvature, evolves by --flow. Writes OUTDIR/regions_K.ply "
-                    "per saved time (per-vertex region colours) and OUTDIR/regions.png "
-                    "(saved times top to bottom).",
+                    "and caps on a sphere), or a mesh file: its surface evolves by --flow, with "
+                    "regions from its vertex colours or the sign of its Gaussian curvature. "
+                    "Writes OUTDIR/regions_K.ply per saved time (per-vertex region colours) "
+                    "and OUTDIR/regions.png (saved times top to bottom).",
     )
     parser.add_argument("scene", metavar="SCENE", help="scene name or mesh file")
     parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
@@ -477,6 +477,10 @@ def add_regions_parser(subparsers) -> None:
     parser.add_argument("--flow", choices=FLOWS, default="gaussian",
                         help="surface motion for a mesh file (default: gaussian, the positive "
                              "part of the Gaussian curvature)")
+    parser.add_argument("--regions", choices=("auto", "colours", "curvature"), default="auto",
+                        help="regions on a mesh file: one per flat vertex colour ('colours'), "
+                             "or where its Gaussian curvature is positive ('curvature'); "
+                             "'auto' (default) takes the colours when the mesh has them")
     parser.add_argument("--spacing", type=float, default=0.05,
                         help="grid spacing of the named scenes (default: 0.05)")
     parser.add_argument("--resolution", type=int, default=96,
@@ -500,7 +504,7 @@ def run_regions(args) -> int:
             scene.options["t"] = args.t
     else:
         check_not_overwriting_input([args.scene], args.output)
-        scene = mesh_scene(args.scene, args.flow, args.resolution, args.t)
+        scene = mesh_scene(args.scene, args.flow, args.resolution, args.t, args.regions)
     frames = run_scene(scene, saves=args.saves, progress=show_progress(), device=args.device)
     written = write_frames(frames, args.output, size=args.size,
                            views=((30.0, 25.0), (-60.0, 35.0)))

@@ -329,23 +329,31 @@ class RegionTracker:
         return data[0], data[1:]
 
 
-def _region_functions(phi, region, spacing, origin):
-    """Phi-hat volumes (L, nz, ny, nx) and the number of regions from the `region` input."""
+def _region_functions(phi, region, spacing, origin, mesh=None):
+    """Phi-hat volumes (L, nz, ny, nx) from the `region` input (a vertex mask or labels refer
+    to `mesh`, by default the starting mesh of phi), and whether they partition the surface
+    (integer labels: every point lies in one region)."""
     region_arr = region if isinstance(region, (list, tuple)) else [region]
     arrays = [np.asarray(r) for r in region_arr]
     if all(a.shape == phi.shape for a in arrays):
         out = np.stack([a.astype(np.float64) for a in arrays])
         if not np.all(np.isfinite(out)):
             raise InputError("the region functions contain NaN or infinite values")
-        return out, len(arrays)
+        return out, False
     if len(arrays) == 1 and arrays[0].ndim == 1:
-        mesh = surface_mesh(phi, spacing, origin)
         marks = arrays[0]
-        if len(marks) != len(mesh.vertices):
-            raise InputError(
-                f"a vertex mask needs one entry per vertex of the starting mesh "
-                f"(clpde.regions.surface_mesh(phi, spacing) has {len(mesh.vertices)}), got {len(marks)}"
-            )
+        if mesh is None:
+            mesh = surface_mesh(phi, spacing, origin)
+            if len(marks) != len(mesh.vertices):
+                raise InputError(
+                    f"a vertex mask needs one entry per vertex of the starting mesh "
+                    f"(clpde.regions.surface_mesh(phi, spacing) has {len(mesh.vertices)}), got "
+                    f"{len(marks)}; or pass mesh= the mesh whose vertices it marks")
+        else:
+            mesh = _as_trimesh(mesh)
+            if len(marks) != len(mesh.vertices):
+                raise InputError(f"a vertex mask needs one entry per vertex of mesh= "
+                                 f"({len(mesh.vertices)} vertices), got {len(marks)}")
         if marks.dtype == bool:
             masks = [marks]
         elif np.issubdtype(marks.dtype, np.integer):
@@ -355,11 +363,25 @@ def _region_functions(phi, region, spacing, origin):
             masks = [marks == v for v in values]
         else:
             raise InputError(f"a vertex mask must be bool (one region) or integer labels, not {marks.dtype}")
-        return functions_from_mask(phi, spacing, origin, mesh, masks), len(masks)
+        partition = marks.dtype != bool
+        return functions_from_mask(phi, spacing, origin, mesh, masks), partition
     raise InputError(
         f"region must be a vertex mask/labels of the starting mesh (1-D), an implicit function of "
         f"phi's shape {phi.shape}, or a list of such functions; got shape(s) {[a.shape for a in arrays]}"
     )
+
+
+def _as_trimesh(mesh):
+    """A trimesh.Trimesh from a Trimesh or a (vertices, faces) pair (not copied)."""
+    import trimesh
+
+    if isinstance(mesh, trimesh.Trimesh):
+        return mesh
+    try:
+        vertices, faces = mesh
+        return trimesh.Trimesh(np.asarray(vertices, np.float64), np.asarray(faces), process=False)
+    except (TypeError, ValueError):
+        raise InputError("mesh must be a trimesh.Trimesh or a (vertices, faces) pair") from None
 
 
 def _time_dependent(beta) -> bool:
@@ -419,7 +441,7 @@ def _speed_setup(beta, target, weight, h, shape, coords):
 
 
 def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
-                 target=None, velocity=None, weight=1.0, band=5.0, reinit_every=4,
+                 mesh=None, palette=None, target=None, velocity=None, weight=1.0, band=5.0, reinit_every=4,
                  reinit_iterations=6, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
                  dtype=np.float32, progress=None) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
@@ -428,7 +450,8 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
     level-set functions are reinitialised first), with grid spacing `spacing` and world
     (x, y, z) of phi[0, 0, 0] at `origin`.
     region: a bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
-    origin)`), integer vertex labels (one region per label), an implicit function Phi-hat of
+    origin)`, or of `mesh=`, any mesh of the same surface in world coordinates: the one phi
+    was made from, say), integer vertex labels (one region per label), an implicit function Phi-hat of
     phi's shape (the region is where Phi-hat < 0 on the surface; off the surface it is
     replaced by its value at the closest surface point, which keeps the region and tracks
     its boundary more accurately), or a list of such functions.
@@ -444,6 +467,9 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
     t: final time; saves: number of saved intervals (frames at t * k / saves, k = 0..saves)
     or a sequence of times in [0, t]. max_speed: clamp |beta| (world units) where the
     curvature of creases finer than the grid would otherwise set a tiny time step.
+
+    palette: (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
+    clpde's palette; where no region is, grey).
 
     Returns a RegionFrame per saved time: mesh (trimesh, per-vertex region colours),
     face_labels, boundary points, and (keep_volumes=True) the level sets.
@@ -470,7 +496,7 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
         times = sorted(float(s) for s in saves)
         if not times or times[0] < 0 or times[-1] > t_end + 1e-12:
             raise InputError(f"save times must lie in [0, t={t_end:g}], got {saves!r}")
-    phihat, _nregions = _region_functions(phi, region, h, origin)
+    phihat, partition = _region_functions(phi, region, h, origin, mesh)
     nz, ny, nx = phi.shape
     coords = (origin[0] + h * np.arange(nx)[None, None, :], origin[1] + h * np.arange(ny)[None, :, None],
               origin[2] + h * np.arange(nz)[:, None, None])
@@ -494,12 +520,15 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
               bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
         for when in times:
             tracker.advance(when, bar)
-            frames.append(make_frame(tracker, when, origin, keep_volumes))
+            frames.append(make_frame(tracker, when, origin, keep_volumes, palette, partition))
     return frames
 
 
-def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False) -> RegionFrame:
-    """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region."""
+def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
+               palette=None, partition=False) -> RegionFrame:
+    """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region (with partition,
+    every face in one: slivers where the labels' boundaries part by rounding go to the
+    nearest region)."""
     import trimesh
     from scipy.ndimage import map_coordinates
 
@@ -508,10 +537,10 @@ def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False) 
     mesh = surface_mesh(phi, h, origin)
     idx = ((np.asarray(mesh.vertices) - origin) / h)[:, ::-1].T  # (z, y, x) index coordinates
     vals = np.stack([map_coordinates(p, idx, order=1, mode="nearest") for p in phihat], axis=1)
-    verts, faces, labels, boundaries = split_regions(mesh.vertices, vals, mesh.faces)
+    verts, faces, labels, boundaries = split_regions(mesh.vertices, vals, mesh.faces, partition)
     vertex_label = np.full(len(verts), -1)
     vertex_label[faces.reshape(-1)] = np.repeat(labels, 3)
-    rgb = region_colours(vertex_label)
+    rgb = region_colours(vertex_label, palette)
     colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], 1)
     out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
     return RegionFrame(time, out, labels, boundaries,

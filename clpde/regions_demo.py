@@ -89,16 +89,43 @@ def curvature_sign_regions(phi, spacing, smooth=1.0):
     return -gag / g2**2 * spacing  # scaled to about distance units near the zero
 
 
-def mesh_scene(path, flow="gaussian", resolution=96, t=None) -> Scene:
-    """A mesh file's surface, coloured by the sign of its Gaussian curvature, evolved by the
-    positive part of the Gaussian curvature, mean curvature, or morphing to a sphere."""
+MAX_COLOUR_REGIONS = 8  # each region costs an auxiliary level set of the grid's size
+
+
+def colour_labels(mesh):
+    """(labels, colours): integer vertex labels from a mesh's vertex colours, one per distinct
+    colour, and those colours as RGB in [0, 1]; None when it has fewer than two colours; an
+    error when it has more than MAX_COLOUR_REGIONS."""
+    if getattr(mesh.visual, "kind", None) != "vertex":
+        return None
+    rgb = np.asarray(mesh.visual.vertex_colors)[:, :3]
+    colours, labels = np.unique(rgb, axis=0, return_inverse=True)
+    if len(colours) < 2:
+        return None
+    if len(colours) > MAX_COLOUR_REGIONS:
+        raise InputError(
+            f"the mesh has {len(colours)} vertex colours; as regions it may have at most "
+            f"{MAX_COLOUR_REGIONS} (paint each region in one flat colour), or use --regions curvature")
+    return labels.reshape(-1), colours / 255.0
+
+
+def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> Scene:
+    """A mesh file's surface evolved by the positive part of the Gaussian curvature, mean
+    curvature, or morphing to a sphere, with regions from its vertex colours (one region per
+    flat colour: regions='colours', or 'auto' when it has some) or else the sign of its
+    Gaussian curvature (regions='curvature')."""
     from .surface import ImplicitSurface
 
     if flow not in FLOWS:
         raise InputError(f"flow must be one of {', '.join(FLOWS)}, not {flow!r}")
+    if regions not in ("auto", "colours", "curvature"):
+        raise InputError(f"regions must be 'auto', 'colours' or 'curvature', not {regions!r}")
     surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
-    region = curvature_sign_regions(phi, h)
+    painted = colour_labels(surf.mesh) if regions != "curvature" else None
+    if painted is None and regions == "colours":
+        raise InputError(f"{path} has no vertex colours to take regions from; use --regions curvature")
+    region = painted[0] if painted is not None else curvature_sign_regions(phi, h)
     if flow == "gaussian":
         # weight h^3: speed K+ in cells per unit time (K in 1 / cells^2); creases sharper
         # than a 2-cell radius move at that radius' speed
@@ -117,6 +144,8 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None) -> Scene:
         target = np.sqrt((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2) - radius
         options = {"beta": "morph", "target": np.broadcast_to(target, phi.shape).copy(),
                    "t": t if t is not None else 3.0}
+    if painted is not None:  # the regions keep the mesh's colours
+        options["mesh"], options["palette"] = surf.mesh, painted[1]
     return Scene(phi, region, h, origin, options)
 
 

@@ -116,13 +116,13 @@ def _split_once(verts, vals, faces, label):
     return verts, vals, np.concatenate([faces[~mixed], new]), pab
 
 
-def split_regions(verts, vals, faces):
+def split_regions(verts, vals, faces, partition=False):
     """Split a mesh along the zeros of its vertex values vals (n, L), one column per region.
 
     Returns (vertices, faces, face_labels, boundaries): vertices are shared only between
     faces of the same label (so vertex colours stay sharp along the cuts), face_labels the
-    region each face lies in (the most negative function; -1 outside all), boundaries the
-    cut points on each region's boundary."""
+    region each face lies in (the most negative function; -1 outside all, unless the
+    regions partition the surface), boundaries the cut points on each region's boundary."""
     verts = np.asarray(verts, np.float64)
     vals = np.asarray(vals, np.float64).reshape(len(verts), -1)
     faces = np.asarray(faces, np.int64)
@@ -132,7 +132,7 @@ def split_regions(verts, vals, faces):
         boundaries.append(cut_points)
     centre = vals[faces].mean(axis=1)
     best = np.argmin(centre, axis=1)
-    labels = np.where(centre[np.arange(len(faces)), best] < 0, best, -1)
+    labels = best if partition else np.where(centre[np.arange(len(faces)), best] < 0, best, -1)
     # one vertex per (position, label): merge cut points made twice by neighbouring faces
     scale = 1e7 / max(np.ptp(verts, axis=0).max(), 1e-300)
     key = np.concatenate([np.rint(verts[faces].reshape(-1, 3) * scale).astype(np.int64),
@@ -144,9 +144,11 @@ def split_regions(verts, vals, faces):
     return new_verts, inverse.reshape(-1, 3), labels, boundaries
 
 
-def region_colours(labels) -> np.ndarray:
+def region_colours(labels, palette=None) -> np.ndarray:
+    """RGB in [0, 1] per label: palette[label] (clpde's PALETTE by default), BACKGROUND for -1."""
     labels = np.asarray(labels)
+    colours = PALETTE if palette is None else np.asarray(palette, np.float64).reshape(-1, 3)
     rgb = np.tile(BACKGROUND, (len(labels), 1))
     inside = labels >= 0
-    rgb[inside] = PALETTE[labels[inside] % len(PALETTE)]
+    rgb[inside] = colours[labels[inside] % len(colours)]
     return rgb

@@ -254,6 +254,28 @@ def test_vertex_mask_input_tracks_like_an_implicit_region():
     assert frames[1].area_fraction(0) == pytest.approx(frames[0].area_fraction(0), rel=0.02)
 
 
+
+def test_vertex_labels_of_another_mesh_of_the_surface():
+    """mesh=: a mask or labels given on any mesh of the surface (here an icosphere, as a user's
+    mesh would be), with the regions' colours from palette=."""
+    import trimesh
+
+    phi, _, origin = _sphere(40, 0.8)
+    ball = trimesh.creation.icosphere(4, radius=0.8)
+    labels = (ball.vertices[:, 2] > 0.4).astype(int)  # 1: the cap of angular radius 60 deg
+    palette = [(0.2, 0.4, 0.8), (0.8, 0.2, 0.2)]
+    frames = track_region(phi, labels, beta=0.4, t=0.25, spacing=H, saves=1, origin=origin,
+                          mesh=(ball.vertices, ball.faces), palette=palette)
+    for frame in frames:
+        assert frame.area_fraction(1) == pytest.approx(0.25, rel=0.03)
+        assert frame.area_fraction(0) == pytest.approx(0.75, rel=0.01)
+    colours = {tuple(c) for c in frames[1].mesh.visual.vertex_colors[:, :3]}
+    assert colours == {(51, 102, 204), (204, 51, 51)}  # labels partition: no background
+    with pytest.raises(InputError, match="mesh="):
+        track_region(phi, labels[:-1], spacing=H, origin=origin, mesh=ball)
+    with pytest.raises(InputError, match="mesh must be"):
+        track_region(phi, labels, spacing=H, origin=origin, mesh="ball.ply")
+
 # ---- Figure 2.7's toy cases: a region that splits, two that merge --------------------------------
 
 SHAPE_XYZ = (42, 30, 30)  # nx, ny, nz
@@ -411,3 +433,34 @@ def test_cli_tracks_curvature_sign_regions_on_a_mesh(tmp_path):
     # the torus (0) became a sphere (2)
     euler = [trimesh.load(out / f"regions_{k}.ply", process=False).euler_number for k in (0, 1)]
     assert euler == [0, 2]
+
+
+def test_cli_tracks_the_regions_painted_on_a_mesh(tmp_path, capsys):
+    import trimesh
+
+    from clpde.cli import main
+
+    ball = trimesh.creation.icosphere(4, radius=1.0)
+    cap = ball.vertices[:, 2] > 0.5
+    paint = np.where(cap[:, None], [[230, 200, 30, 255]], [[110, 120, 170, 255]]).astype(np.uint8)
+    ball.visual.vertex_colors = paint
+    path = tmp_path / "painted.ply"
+    ball.export(path)
+    out = tmp_path / "out"
+    assert main(["regions", str(path), "-o", str(out), "--flow", "mean-curvature",
+                 "--resolution", "32", "--saves", "1", "--size", "32"]) == 0
+    for k in (0, 1):
+        frame = trimesh.load(out / f"regions_{k}.ply", process=False)
+        colours = frame.visual.vertex_colors[:, :3]
+        assert {tuple(c) for c in colours} == {(230, 200, 30), (110, 120, 170)}
+        # the cap (yellow) keeps its share of the area (1 - cos 60 deg) / 2 = 0.25
+        yellow = np.all(colours[frame.faces[:, 0]] == (230, 200, 30), axis=1)
+        assert frame.area_faces[yellow].sum() / frame.area == pytest.approx(0.25, rel=0.05)
+    ball.visual.vertex_colors = np.random.default_rng(0).integers(0, 255, (len(ball.vertices), 4), dtype=np.uint8)
+    ball.export(path)
+    assert main(["regions", str(path), "-o", str(out), "--resolution", "32"]) == 2
+    assert "at most 8" in capsys.readouterr().err
+    plain = tmp_path / "plain.ply"
+    trimesh.creation.icosphere(2).export(plain)
+    assert main(["regions", str(plain), "-o", str(out), "--regions", "colours"]) == 2
+    assert "no vertex colours" in capsys.readouterr().err
