@@ -36,9 +36,8 @@ def fsaverage_white_left():
 
 def main():
     import trimesh
-    from scipy.spatial import cKDTree
 
-    from clpde.regions import surface_mesh, track_region
+    from clpde.regions import track_region
     from clpde.regions_demo import write_frames
     from clpde.surface import ImplicitSurface
 
@@ -51,18 +50,16 @@ def main():
     args = parser.parse_args()
 
     vertices, faces, curv = fsaverage_white_left()
-    surf = ImplicitSurface.from_mesh(trimesh.Trimesh(vertices, faces, process=False),
-                                     resolution=args.resolution, band=12.0)
+    cortex = trimesh.Trimesh(vertices, faces, process=False)
+    surf = ImplicitSurface.from_mesh(cortex, resolution=args.resolution, band=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
-    start_mesh = surface_mesh(phi, h, origin)
-    _, nearest = cKDTree(vertices).query(start_mesh.vertices)
-    sulci = curv[nearest] > 0
     start = time.perf_counter()
+    # the region: FreeSurfer's sulci, a mask over the vertices of the original mesh (mesh=).
     # weight h^3 makes the speed K+ in cells per unit time, with K in 1 / cells^2; creases
     # sharper than a 2-cell radius (K > 1/4) move at the speed of that radius
-    frames = track_region(phi, sulci, beta="gaussian", weight=h**3, t=args.t, spacing=h,
-                          saves=args.saves, origin=origin, max_speed=0.25 * h, progress=True,
-                          keep_volumes=True)
+    frames = track_region(phi, curv > 0, mesh=cortex, beta="gaussian", weight=h**3, t=args.t,
+                          spacing=h, saves=args.saves, origin=origin, max_speed=0.25 * h,
+                          progress=True, keep_volumes=True)
     seconds = time.perf_counter() - start
     written = write_frames(frames, os.path.join("out", "regions_cortex"), size=args.size,
                            views=((-90.0, 10.0), (90.0, 10.0)), stem="cortex")
