@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from clpde.surface import ImplicitSurface, render_mesh, to_mesh
-from clpde.surface.demo import _write_png, checker, colour_pattern, load_surface
+from clpde.surface.demo import _write_png, checker, colour_pattern, load_surface, surface_noise
 
 
 def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):
@@ -62,7 +62,7 @@ def main():
 
     if "4.4" in wanted:
         sigma = 0.2
-        noisy = checker(torus) + sigma * np.random.default_rng(4).standard_normal(torus.shape)
+        noisy = checker(torus) + surface_noise(torus, sigma, np.random.default_rng(4))
         denoised, info = torus.denoise_tv(noisy, sigma=sigma, t=40 * h**2, return_info=True)
         print(f"  TV denoising: residual variance {info['residual_variance']:.4f}, "
               f"sigma^2 = {sigma**2:.4f}")
@@ -72,7 +72,7 @@ def main():
 
     if "4.6" in wanted:
         clean = colour_pattern(torus)
-        noise = 0.25 * np.random.default_rng(6).standard_normal(clean.shape)
+        noise = surface_noise(torus, 0.25, np.random.default_rng(6), channels=3)
         noisy = np.clip(clean + noise, 0.01, 1)
         restored = torus.denoise_colour(noisy, t=4 * h**2)
         save(out / "surface_fig4_6.png", [picture(torus, x, size) for x in (clean, noisy, restored)])

@@ -55,6 +55,21 @@ def colour_pattern(surf):
     return surf.field(f)
 
 
+def surface_noise(surf, sigma, rng, channels=None):
+    """Gaussian noise of standard deviation sigma on the surface, constant along its normals.
+
+    Independent values per grid cell would not do: data on a surface is its values at the
+    closest points, interpolated from several cells, which averages cell noise down (to
+    about half its variance with tricubic interpolation), so a flow told the noise is sigma
+    would remove more than the noise. Here the cell noise is extended from the closest
+    points and rescaled so that what a flow sees of it (its own extension of the data)
+    has deviation sigma on the cells nearest the surface."""
+    shape = surf.shape if channels is None else (channels,) + surf.shape
+    noise = surf.extend(rng.standard_normal(shape))
+    near = np.abs(surf.psi) < 0.5 * surf.spacing
+    return noise * (sigma / surf.extend(noise)[..., near].std())
+
+
 @dataclass
 class SurfaceRun:
     flow: str
@@ -98,12 +113,12 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
         return SurfaceRun(flow, surf, before, surf.heat(before, t=t, progress=progress),
                           f"heat flow to t={t:g}")
     if flow == "tv":  # Figure 4.4 right: anisotropic diffusion without a stopping term
-        before = checker(surf) + sigma * rng.standard_normal(surf.shape)
+        before = checker(surf) + surface_noise(surf, sigma, rng)
         t = 40 * h**2 if t is None else t
         return SurfaceRun(flow, surf, before, surf.tv(before, t=t, progress=progress),
                           f"TV flow to t={t:g}")
     if flow == "denoise":  # Figure 4.4 middle: TV with fidelity and dynamic lambda
-        before = checker(surf) + sigma * rng.standard_normal(surf.shape)
+        before = checker(surf) + surface_noise(surf, sigma, rng)
         t = 40 * h**2 if t is None else t
         after, info = surf.denoise_tv(before, sigma=sigma, t=t, return_info=True, progress=progress)
         return SurfaceRun(flow, surf, before, after,
@@ -111,7 +126,7 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
                           f"{info['residual_variance']:.4g} (sigma^2 = {sigma**2:.4g})")
     if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by heat
         clean = colour_pattern(surf)
-        before = np.clip(clean + sigma * rng.standard_normal(clean.shape), 0.01, 1)
+        before = np.clip(clean + surface_noise(surf, sigma, rng, channels=3), 0.01, 1)
         t = 4 * h**2 if t is None else t
         return SurfaceRun(flow, surf, before, surf.denoise_colour(before, t=t, progress=progress),
                           f"chroma harmonic map p=1 and brightness heat flow to t={t:g}")

@@ -150,7 +150,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
 
 def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=None,
          fidelity=None, sigma=None, weighted=False, alternate=True, progress=None,
-         lambda_every=10, line_field=False):
+         lambda_every=10, line_field=False, correct_lambda=True):
     """Shared driver of flow_step: returns (result, info dict)."""
     eps = float(eps)
     if not (np.isfinite(eps) and eps > 0):
@@ -176,7 +176,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         # lambda may grow to where dt is at the stability limit, no further
         lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
         dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
-                                 updates=-(-steps // lambda_every))
+                                 updates=-(-steps // lambda_every), correct=correct_lambda)
     for n in _progress(progress, steps, f"surface {flow_name}"):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         offsets = _offsets(g, sides)
@@ -210,28 +210,30 @@ class _DynamicLambda:
 
     CHUNK = 2048
 
-    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates):
+    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates, correct=True):
         g, q = surf.grid, surf.runtime.queue
         self.surf, self.flow, self.u0, self.lam, self.eps = surf, flow, u0_dev, lam_dev, eps
-        self.sigma, self.lam_max = sigma, lam_max
+        self.sigma, self.lam_max, self.correct = sigma, lam_max, correct
         n = surf.node_band.n
         self.terms = [cla.empty(q, n, g.dtype) for _ in range(3)]
         self.groups = max(1, -(-n // self.CHUNK))
-        self.partials = [cla.empty(q, self.groups, g.dtype) for _ in range(2)]
+        self.partials = [cla.empty(q, self.groups, g.dtype) for _ in range(3)]
         self.slots = cla.zeros(q, max(updates, 1), g.dtype)
         self.capped = cla.zeros(q, 1, np.int32)
+        self.state = cla.to_device(q, np.ones(1, g.dtype))  # the correction factor f
 
     def update(self, offsets, slot: int) -> None:
         s = self.surf
         g, q = s.grid, s.runtime.queue
         _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
-        for a, partial in zip(self.terms[:2], self.partials):
+        for a, partial in zip(self.terms, self.partials):
             g.kernel("chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
                                   np.int32(self.CHUNK), partial.data)
         g.kernel("tv_lambda_update")(
-            q, (1,), None, self.partials[0].data, self.partials[1].data, np.int32(self.groups),
-            g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.lam_max), self.lam.data,
-            self.slots.data, np.int32(slot), self.capped.data,
+            q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
+            g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
+            g.scalar(self.lam_max), self.lam.data, self.state.data, self.slots.data,
+            np.int32(slot), self.capped.data,
         )
 
     def history(self) -> list[float]:
@@ -273,20 +275,24 @@ def tv(surf, u, t, dt=None, *, eps=1.0, weighted=False, alternate=True, progress
 
 
 def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, alternate=True,
-               progress=None, return_info=False):
+               correct_lambda=True, progress=None, return_info=False):
     """TV denoising on the surface with a fidelity term (C.1).
 
     Give the noise level sigma for the dynamic lambda of (C.2) (updated on the device every
     10 steps, never read back while stepping; capped, with a warning, where it would make
-    dt unstable), or a fixed lam. With return_info, also returns a dict with the residual
-    variance (mean of (u - u0)^2 over the surface) and the lambda history."""
+    dt unstable), or a fixed lam. The discrete (C.2) settles at a residual variance of
+    1.2-1.6 sigma^2 for noise at the grid's scale; correct_lambda (default) scales it by a
+    factor that moves until the residual variance is sigma^2, the constraint (C.2) comes
+    from (kernels/surface.cl, tv_lambda_update); correct_lambda=False is the plain formula.
+    With return_info, also returns a dict with the residual variance (mean of (u - u0)^2
+    over the surface) and the lambda history."""
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
     if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
         raise InputError(f"sigma must be a positive number, not {sigma!r}")
     fidelity = 0.0 if sigma is not None else float(lam)
     out, info = _run(surf, u, t, dt, "tv", p=1, eps=eps, fidelity=fidelity, sigma=sigma,
-                     alternate=alternate, progress=progress)
+                     alternate=alternate, progress=progress, correct_lambda=correct_lambda)
     return (out, info) if return_info else out
 
 
