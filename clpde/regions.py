@@ -140,7 +140,7 @@ class RegionTracker:
                    for name in ("region_speed", "region_step", "advect_step", "reinit3d_step",
                                 "band_near_border", "band_max_abs", "heun_average",
                                 "region_band_mask", "dilate_mask", "extend_outer",
-                                "copy_runs")}
+                                "reinit3d_heun", "copy_runs")}
         self.time = 0.0
         self.steps = 0
         self.rebuild()
@@ -148,8 +148,8 @@ class RegionTracker:
 
     # ---- bands ---------------------------------------------------------------------------
     def rebuild(self) -> None:
-        """Bands from the current Phi. The work buffers (nxt, stage, ls0) must equal cur
-        outside the reinitialisation band: every write lands in it (reinitialize syncs it)."""
+        """Bands from the current Phi. The work buffers nxt and ls0 must equal cur outside
+        the reinitialisation band: every write lands in it (reinitialize syncs it)."""
         g = self.grid
         self.step_band, self.reinit_band = self._bands()
         # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs),
@@ -193,30 +193,35 @@ class RegionTracker:
         its = self.reinit_iterations if iterations is None else int(iterations)
         band, k = self.reinit_runs, self._k
         # the band holds every cell written since the last sync (steps write the step band,
-        # inside it), so syncing it keeps the work buffers equal to cur everywhere
-        self._sync(self.nxt)
+        # inside it), so syncing it keeps the work buffers equal to cur everywhere. The
+        # extension's first sweep writes every Phi-hat channel of nxt on the band, so only
+        # Phi's is copied; nxt is written anew by the first reinitialisation stage after.
+        self._sync(self.nxt, channels=1)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(EXTEND_ITERATIONS if its else 0):
             g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
                           g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
-        self._sync(self.ls0, self.nxt, self.stage)
+        self._sync(self.ls0)
         for _ in range(its):
             # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a
-            # sphere's interface drifted 0.3 cells in 40 reinitialisations)
-            for src, dst in ((self.cur, self.nxt), (self.nxt, self.stage)):
-                g.launch_runs(k["reinit3d_step"], band, src.data, self.ls0.data, dst.data,
-                              g.scalar(REINIT_DT), *g.strides(), channels=self.nc)
-            g.launch_runs(k["heun_average"], band, self.cur.data, self.stage.data,
-                          self.cur.data, channels=self.nc)
-        self._sync(self.ls0, self.nxt, self.stage)
+            # sphere's interface drifted 0.3 cells in 40 reinitialisations). The second
+            # stage averages in place (reinit3d_heun): no third buffer, no averaging sweep.
+            g.launch_runs(k["reinit3d_step"], band, self.cur.data, self.ls0.data, self.nxt.data,
+                          g.scalar(REINIT_DT), *g.strides(), channels=self.nc)
+            g.launch_runs(k["reinit3d_heun"], band, self.cur.data, self.nxt.data, self.ls0.data,
+                          g.scalar(REINIT_DT), *g.strides(), channels=self.nc)
+        # the next bands may leave cells of this one: nxt and ls0 must equal cur there (stage
+        # is read only where a step has written it first, so it needs no sync)
+        self._sync(self.ls0, self.nxt)
         self.rebuild()
 
-    def _sync(self, *buffers) -> None:
-        """Copy cur into the buffers on the reinitialisation band (every channel)."""
+    def _sync(self, *buffers, channels=None) -> None:
+        """Copy cur into the buffers on the reinitialisation band (every channel, or the
+        first `channels`)."""
         for dst in buffers:
             self.grid.launch_runs(self._k["copy_runs"], self.reinit_runs, self.cur.data,
-                                  dst.data, channels=self.nc)
+                                  dst.data, channels=self.nc if channels is None else channels)
 
     # ---- time steps ------------------------------------------------------------------------
     def _compute_speed(self) -> None:

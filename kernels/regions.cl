@@ -152,37 +152,58 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
 #ifndef SUBCELL_TOL
 #define SUBCELL_TOL 0.1
 #endif
+// The new value of u at padded index i (any channel) after one step of dt.
+INLINE REAL reinit3d_update(__global const REAL* u, __global const REAL* u0, const int i,
+                            const REAL dt, const int sx, const int sxy)
+{
+    const REAL c0 = u0[i];
+    const REAL e0 = u0[i + 1], w0 = u0[i - 1];
+    const REAL n0 = u0[i + sx], s0 = u0[i - sx];
+    const REAL t0 = u0[i + sxy], b0 = u0[i - sxy];
+    const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
+    const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) |
+                             (c0 * s0 < 0) | (c0 * t0 < 0) | (c0 * b0 < 0);
+    const REAL p = u[i];
+    if (at_interface) {
+        // |grad u0| by central differences: on a signed distance this is 1 up to
+        // O(h^2 / R^2), so repeated reinitialisations (every few steps) leave the zero
+        // level set in place; Russo-Smereka's max with the one-sided slopes (1 + h / 2R
+        // on curved surfaces) moved a sphere's radius by 0.4 cells in 40 calls. Half
+        // the steepest one-sided slope guards against flat central estimates at kinks.
+        REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0) + SQR(t0 - b0));
+        REAL steep = FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0)));
+        steep = FMAX(steep, FMAX(FABS(t0 - c0), FABS(c0 - b0)));
+        g = FMAX(g, (REAL)0.5 * steep);
+        const REAL d = c0 / FMAX(g, (REAL)1e-12);
+        // keep cells whose slope is already close to 1 as they are: the relaxation's
+        // O(h^2) bias, repeated every few steps, otherwise grows (SUBCELL_TOL)
+        return FABS(g - 1) < (REAL)SUBCELL_TOL ? p : p - dt * (sgn * FABS(p) - d);
+    }
+    return p - dt * sgn * (upwind_norm_3d(u, i, sx, sxy, -sgn) - 1);
+}
+
+// Heun's first stage: out = u + dt L(u).
 __kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL* restrict u0,
                             __global REAL* restrict out, const REAL dt, const int sx,
                             const int sxy, RUN_ARGS)
 {
     FOR_EACH_RUN_CELL(cell) {
         const int i = chan + cell;
-        const REAL c0 = u0[i];
-        const REAL e0 = u0[i + 1], w0 = u0[i - 1];
-        const REAL n0 = u0[i + sx], s0 = u0[i - sx];
-        const REAL t0 = u0[i + sxy], b0 = u0[i - sxy];
-        const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
-        const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) |
-                                 (c0 * s0 < 0) | (c0 * t0 < 0) | (c0 * b0 < 0);
-        const REAL p = u[i];
-        if (at_interface) {
-            // |grad u0| by central differences: on a signed distance this is 1 up to
-            // O(h^2 / R^2), so repeated reinitialisations (every few steps) leave the zero
-            // level set in place; Russo-Smereka's max with the one-sided slopes (1 + h / 2R
-            // on curved surfaces) moved a sphere's radius by 0.4 cells in 40 calls. Half
-            // the steepest one-sided slope guards against flat central estimates at kinks.
-            REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0) + SQR(t0 - b0));
-            REAL steep = FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0)));
-            steep = FMAX(steep, FMAX(FABS(t0 - c0), FABS(c0 - b0)));
-            g = FMAX(g, (REAL)0.5 * steep);
-            const REAL d = c0 / FMAX(g, (REAL)1e-12);
-            // keep cells whose slope is already close to 1 as they are: the relaxation's
-            // O(h^2) bias, repeated every few steps, otherwise grows (SUBCELL_TOL)
-            out[i] = FABS(g - 1) < (REAL)SUBCELL_TOL ? p : p - dt * (sgn * FABS(p) - d);
-        } else {
-            out[i] = p - dt * sgn * (upwind_norm_3d(u, i, sx, sxy, -sgn) - 1);
-        }
+        out[i] = reinit3d_update(u, u0, i, dt, sx, sxy);
+    }
+}
+
+// Heun's second stage and average in one sweep: acc <- (acc + stage1 + dt L(stage1)) / 2,
+// where stage1 = acc + dt L(acc) (reinit3d_step). acc is read and written only at the cell
+// itself, so the update in place is race-free; fusing saved the averaging sweep and its
+// buffer (one read of three volumes per iteration instead of two sweeps).
+__kernel void reinit3d_heun(__global REAL* restrict acc, __global const REAL* restrict stage1,
+                            __global const REAL* restrict u0, const REAL dt, const int sx,
+                            const int sxy, RUN_ARGS)
+{
+    FOR_EACH_RUN_CELL(cell) {
+        const int i = chan + cell;
+        acc[i] = (REAL)0.5 * (acc[i] + reinit3d_update(stage1, u0, i, dt, sx, sxy));
     }
 }
 
@@ -299,3 +320,4 @@ __kernel void extend_outer(__global const REAL* restrict ls, __global REAL* rest
         out[j] = c - dt * w * du;
     }
 }
+

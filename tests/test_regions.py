@@ -94,6 +94,20 @@ def test_advect_and_reinit_match_reference(runtime, rng, kind):
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])
+def test_reinit_heun_matches_reference(runtime, rng, kind):
+    """The fused second Heun stage, in place: acc <- (acc + stage1 + dt L(stage1)) / 2 on the
+    band, every other cell untouched."""
+    data = _inputs(kind, rng, 2)
+    noisy = [data + s * rng.normal(size=data.shape) for s in (0.2, 0.3)]
+    g, (acc, stage1, ls0), runs, (acc_h, stage1_h, ls0_h) = _setup(runtime, [data] + noisy)
+    idx = runs.band.indices.get().astype(np.int64)
+    g.launch_runs(_kernel(runtime, "reinit3d_heun"), runs, acc.data, stage1.data, ls0.data,
+                  g.scalar(0.3), *g.strides(), channels=2)
+    want = ref.reinit_heun(acc_h, stage1_h, ls0_h, idx, 0.3, 2, g.volume, g.sx, g.sxy)
+    np.testing.assert_allclose(acc.get().reshape(-1), want, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
 def test_extend_outer_matches_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 3)
     g, (ls,), runs, (ls_h,) = _setup(runtime, [data])

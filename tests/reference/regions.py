@@ -155,3 +155,14 @@ def copy_runs(src, dst, band, nc, plane):
     out = dst.copy()
     out[idx] = src[idx]
     return out
+
+
+
+def reinit_heun(acc, stage1, u0, band, dt, nc, plane, sx, sxy):
+    """reinit3d_heun: acc with (acc + Euler step of stage1) / 2 on the band, every channel."""
+    out = acc.copy()
+    new = reinit_step(stage1, u0, band, dt, nc, plane, sx, sxy)
+    for c in range(nc):
+        i = band + c * plane
+        out[i] = 0.5 * (acc[i] + new[c])
+    return out
