@@ -315,7 +315,8 @@ def holed_mesh_table(resolutions, exact_points=3000):
     import trimesh
 
     from clpde.surface import ImplicitSurface
-    from clpde.surface.mesh_sdf import WindingNumbers, grid_for_mesh
+    from clpde.surface.mesh_sdf import grid_for_mesh
+    from clpde.surface.winding import WindingNumbers
 
     print("\n5b. meshes with a hole many cells wide: from_mesh (sign by the winding number where the\n"
           "    flood fill leaks) and the winding number per point, two-level against the exact sum")

@@ -140,7 +140,7 @@ def winding_reference(mesh, points):
 
 
 def test_winding_kernel_matches_the_exact_sum_and_its_far_field_approximation(rng):
-    from clpde.surface.mesh_sdf import winding_number
+    from clpde.surface.winding import winding_number
 
     small = trimesh.creation.icosphere(2, radius=1.0)
     pts = rng.uniform(-1.6, 1.6, (300, 3))
