@@ -320,4 +320,3 @@ __kernel void extend_outer(__global const REAL* restrict ls, __global REAL* rest
         out[j] = c - dt * w * du;
     }
 }
-
