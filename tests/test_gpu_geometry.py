@@ -67,6 +67,21 @@ def test_surface_flows(runtime, gpu_like):
         np.testing.assert_allclose(gpu, cpu, atol=2e-5)
 
 
+def test_mesh_to_signed_distance_with_a_hole(runtime, gpu_like):
+    """Nearest-triangle refinement and the winding numbers (one point per work-item on GPUs)
+    that close a hole several cells wide."""
+    import trimesh
+
+    ball = trimesh.creation.icosphere(2)
+    ball.update_faces(np.arange(len(ball.faces)) != 7)
+    with pytest.warns(UserWarning, match="watertight"):
+        cpu, gpu = _pair(runtime, gpu_like,
+                         lambda d: ImplicitSurface.from_mesh(ball, resolution=40, device=d))
+    # the inside survived the hole: about the ball's volume
+    assert (cpu.psi < 0).sum() * cpu.spacing**3 == pytest.approx(4 / 3 * np.pi, rel=0.05)
+    np.testing.assert_allclose(gpu.psi, cpu.psi, atol=1e-6)
+
+
 def test_region_tracking(runtime, gpu_like):
     h = 0.1
     ax = np.arange(-2.1, 2.1 + h / 2, h)
