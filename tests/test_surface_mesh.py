@@ -1,5 +1,7 @@
 """Meshes in (exact band distance, orientation-free sign) and pictures out."""
 
+import warnings
+
 import numpy as np
 import pytest
 import trimesh
@@ -238,3 +240,28 @@ def test_inside_out_and_half_flipped_meshes_with_a_big_hole():
         # the caller's mesh is left as it was
         np.testing.assert_array_equal(case.faces, faces)
         np.testing.assert_array_equal(case.vertices, vertices)
+
+
+def test_a_closed_hole_is_a_distance_and_carries_flows_across():
+    """Where a hole was closed, |psi| was the distance to its rim and psi jumped across the
+    closing sheet; the rim's cells are reinitialised, so psi is a distance there too and the
+    heat flow away from the hole stays close to the closed sphere's (measured: error 1.1e-3
+    against 6.0e-4 closed, 8.0e-3 without the reinitialisation)."""
+    mesh = trimesh.creation.icosphere(4, radius=1.0)
+    holed, _ = _cap_removed(mesh, 0.45)  # a polar hole about 18 cells across
+    pts = np.random.default_rng(4).standard_normal((600, 3))
+    pts /= np.linalg.norm(pts, axis=1)[:, None]
+    away = pts[pts[:, 2] < 0.7] * 0.999
+    errors = []
+    for case in (mesh, holed):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            surf = ImplicitSurface.from_mesh(case, resolution=40)
+        slope = np.sqrt(sum(g**2 for g in np.gradient(surf.psi, surf.spacing)))
+        band = np.abs(surf.psi) < 2 * surf.spacing
+        assert np.mean(np.abs(slope[band] - 1) > 0.1) < 0.005
+        u = surf.field(lambda x, y, z: x * y)
+        v = surf.heat(u, t=0.1)
+        errors.append(np.abs(surf.sample(v, away) - np.exp(-0.6) * away[:, 0] * away[:, 1]).max())
+        surf.sample(v, [[0.0, 0.0, 0.93]])  # the sheet closing the hole is a surface to sample
+    assert errors[1] < 3 * errors[0], errors

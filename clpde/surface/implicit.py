@@ -136,18 +136,32 @@ class ImplicitSurface:
         spacing defaults to the bounding box's longest side / resolution. The distance is exact
         in the band. The sign comes from a flood fill checked by the generalized winding number
         (see mesh_sdf): flipped faces, a mesh turned inside out and holes of any size are
-        handled, a hole being closed along the sheet where the winding number crosses 1/2 (there
-        |psi| is the distance to the hole's rim). The mesh passed in is not modified; one that
-        is not watertight gets a warning."""
-        from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf
+        handled, a hole being closed along the sheet where the winding number crosses 1/2; the
+        cells whose closest mesh point lies on a hole's rim are reinitialised, so psi is a
+        distance across the sheet too. The mesh passed in is not modified; one that is not
+        watertight gets a warning."""
+        from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
 
         mesh = load_mesh(mesh)
         outer = band if band is not None else _NODE_REACH[_interp_code(options.get("interpolation", "tricubic"))] + np.sqrt(2.0) + 0.08
         padding = int(np.ceil(outer)) + 4
         origin, h, shape = grid_for_mesh(mesh, spacing, resolution, padding)
+        stats = {}
         psi, face, cpoint = mesh_to_sdf(mesh, origin, h, shape, outer + 3.0,
-                                        device=options.get("device"))
+                                        device=options.get("device"), stats=stats)
         surf = cls(psi, h, origin, band=band, **options)
+        rim = rim_cells(mesh, face, cpoint, h) if stats.get("leaked") else ()
+        if len(rim):
+            # a closed hole: psi jumps across the sheet that closes it (|psi| is the distance
+            # to the rim there), so normals, closest points and the signed-distance flows
+            # (4.8) would be wrong near it; the cells whose closest point is on the rim take
+            # a reinitialised distance, the others keep their exact one
+            exact = surf.psi
+            cap = np.abs(exact).max()  # what cells past the band hold
+            surf.reinitialize()
+            patched = exact.copy()
+            patched.reshape(-1)[rim] = np.clip(surf.psi.reshape(-1)[rim], -cap, cap)
+            surf._set_psi(patched)
         surf.mesh = mesh
         surf._mesh_face = face
         surf._mesh_cp = cpoint

@@ -19,7 +19,8 @@ a cell (a border component with samples inside, or samples on both sides), is de
 by cell: each band cell by its own w, the cells beyond the band by w on a lattice of up to
 4 cells' spacing (w is smooth that far from the mesh). Across a hole w falls smoothly
 through 1/2, so the sign changes on a sheet spanning the hole; |psi| stays the distance to
-the mesh, there the distance to the hole's rim. Shell cells take the side found one cell
+the mesh, there the distance to the hole's rim (ImplicitSurface.from_mesh reinitialises
+the cells whose closest point is on a rim: rim_cells). Shell cells take the side found one cell
 further along the direction from their closest point. (trimesh's own signed_distance, with
 rtree, took 6-50x longer on the band's cells at 64-256 cells across, and needs consistent
 orientation: benchmarks/surface_accuracy.py, section 5.)
@@ -54,9 +55,9 @@ def load_mesh(mesh):
         raise InputError("the mesh has NaN or infinite vertex coordinates")
     if not mesh.is_watertight:
         warnings.warn(
-            "the mesh is not watertight; its holes are closed by the winding number (the sign "
-            "changes where it crosses 1/2, a sheet spanning each hole; there |psi| is the "
-            "distance to the hole's rim, not to a surface: repair the mesh for an exact one)",
+            "the mesh is not watertight; its holes are closed by the winding number, along the "
+            "sheet where it crosses 1/2 (a smooth patch, not a reconstruction of what is "
+            "missing: repair the mesh if the holes' shape matters)",
             stacklevel=3,
         )
     return mesh
@@ -163,6 +164,27 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
         sign.ravel()[sidx] = np.where(votes < 0, -1.0, 1.0)
     psi = sign * np.minimum(udist, cap)
     return psi, face.reshape(shape), cpt
+
+
+def rim_cells(mesh, face, closest_point, spacing) -> np.ndarray:
+    """Flat indices of the band cells whose closest mesh point lies on a boundary edge (the
+    rim of a hole): where mesh_to_sdf closed a hole, their |psi| is the distance to the rim,
+    not to the surface that closes it. face and closest_point as mesh_to_sdf returns them."""
+    flat_face = face.reshape(-1)
+    cells = np.flatnonzero(flat_face >= 0)
+    counts = np.bincount(np.asarray(mesh.edges_unique_inverse), minlength=len(mesh.edges_unique))
+    on_boundary = (counts == 1)[np.asarray(mesh.faces_unique_edges)]  # (faces, 3)
+    near = on_boundary[flat_face[cells]].any(axis=1)
+    if not near.any():
+        return np.zeros(0, dtype=np.int64)
+    edges = np.asarray(mesh.edges_unique)[np.asarray(mesh.faces_unique_edges)[flat_face[cells[near]]]]
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    a, b = vertices[edges[..., 0]], vertices[edges[..., 1]]  # (n, 3 edges, 3)
+    p = closest_point[near][:, None, :]
+    t = np.clip(((p - a) * (b - a)).sum(axis=2) / np.maximum(((b - a) ** 2).sum(axis=2), 1e-300), 0, 1)
+    gap = np.linalg.norm(a + t[..., None] * (b - a) - p, axis=2)
+    gap = np.where(on_boundary[flat_face[cells[near]]], gap, np.inf).min(axis=1)
+    return cells[near][gap < 1e-3 * spacing]
 
 
 def _oriented_triangles(mesh) -> np.ndarray:
