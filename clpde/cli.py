@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -534,6 +535,11 @@ def _message(exc: BaseException) -> str:
     return str(exc) or type(exc).__name__
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line for the command line's user, without the source location."""
+    print(f"clpde: warning: {message}", file=sys.stderr)
+
+
 def main(argv=None) -> int:
     """Run the command line; returns the exit status (0, or 2 on any error)."""
     parser = build_parser()
@@ -544,7 +550,9 @@ def main(argv=None) -> int:
             return 0
         return exc.code if isinstance(exc.code, int) else ERROR_STATUS
     try:
-        return args.run(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            return args.run(args)
     except (ClpdeError, OSError, cl.Error) as exc:
         print(f"clpde: error: {_message(exc)}", file=sys.stderr)
         return ERROR_STATUS

@@ -57,3 +57,15 @@ def test_surface_chroma_denoises_a_meshs_own_colours(tmp_path, capsys):
     trimesh.creation.icosphere(2, radius=2.0).export(plain)
     assert main(["surface", "heat", str(plain), "-o", str(out), "--resolution", "24", "--data", "mesh"]) == 2
     assert "no vertex colours" in capsys.readouterr().err
+
+
+def test_warnings_are_one_line_for_the_user(tmp_path, capsys):
+    ball = trimesh.creation.icosphere(2, radius=2.0)
+    ball.update_faces(np.arange(len(ball.faces)) != 3)  # not watertight: a warning
+    path = tmp_path / "open.ply"
+    ball.export(path)
+    assert main(["surface", "heat", str(path), "-o", str(tmp_path / "out"), "--resolution", "24",
+                 "--size", "32"]) == 0
+    err = capsys.readouterr().err
+    assert "clpde: warning: the mesh is not watertight" in err
+    assert ".py:" not in err  # no source locations
