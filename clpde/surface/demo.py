@@ -124,12 +124,12 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
         return SurfaceRun(flow, surf, before, after,
                           f"TV denoising, sigma={sigma:g}: residual variance "
                           f"{info['residual_variance']:.4g} (sigma^2 = {sigma**2:.4g})")
-    if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by heat
+    if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by TV
         clean = colour_pattern(surf)
         before = np.clip(clean + surface_noise(surf, sigma, rng, channels=3), 0.01, 1)
         t = 4 * h**2 if t is None else t
         return SurfaceRun(flow, surf, before, surf.denoise_colour(before, t=t, progress=progress),
-                          f"chroma harmonic map p=1 and brightness heat flow to t={t:g}")
+                          f"chroma harmonic map p=1 and brightness TV flow to t={t:g}")
     if flow in ("reaction-diffusion", "flowvis", "curvature"):
         major, minor, curv = surf.principal_directions()
         field = {"major": major, "minor": minor}.get(direction)
@@ -176,7 +176,7 @@ def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
                           f"variance {info['residual_variance']:.4g}")
     t = 4 * h**2 if t is None else t
     return SurfaceRun(flow, surf, data, surf.denoise_colour(data, t=t, progress=progress),
-                      f"the mesh's colours: chroma harmonic map p=1 and brightness heat flow to t={t:g}")
+                      f"the mesh's colours: chroma harmonic map p=1 and brightness TV flow to t={t:g}")
 
 
 def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400) -> list:

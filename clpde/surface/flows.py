@@ -328,8 +328,9 @@ def denoise_colour(surf, rgb, t, dt=None, *, brightness="tv", p=1, eps=1.0, alte
     """Colour data on the surface denoised as in Figure 4.6: the chroma (the RGB vector over
     its length, a unit vector) by the harmonic map flow of exponent p (4.11 for p = 1), the
     brightness (the length) separately by a scalar flow, "tv" (4.10, the default: it keeps
-    edges of brightness that heat blurs), "heat" (4.8) or None (kept), both for time t. rgb: (3, nz, ny, nx), non-negative (e.g. colours in [0, 1]).
-    Cells with no colour (black) take the grey chroma, so they carry no direction."""
+    edges of brightness that heat blurs), "heat" (4.8) or None (kept), both for time t.
+    rgb: (3, nz, ny, nx), non-negative (e.g. colours in [0, 1]). Cells with no colour
+    (black) take the grey chroma, so they carry no direction."""
     data = np.asarray(rgb)
     if data.shape != (3,) + surf.shape:
         raise InputError(f"rgb must have shape {(3,) + surf.shape} (channels first), got {data.shape}")
