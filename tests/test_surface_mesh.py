@@ -265,3 +265,30 @@ def test_a_closed_hole_is_a_distance_and_carries_flows_across():
         errors.append(np.abs(surf.sample(v, away) - np.exp(-0.6) * away[:, 0] * away[:, 1]).max())
         surf.sample(v, [[0.0, 0.0, 0.93]])  # the sheet closing the hole is a surface to sample
     assert errors[1] < 3 * errors[0], errors
+
+
+@pytest.mark.parametrize("variant", ["holed", "half-flipped", "inside-out"])
+def test_face_sides_agree_with_the_winding_number(monkeypatch, variant):
+    """Leaked components decide most band cells by the side of their closest triangle's
+    plane; every band cell gets the side the winding number alone gives it."""
+    from clpde.surface import mesh_sdf
+
+    holed, _ = _cap_removed(trimesh.creation.icosphere(4, radius=1.0), 0.3)
+    if variant == "half-flipped":
+        faces = holed.faces.copy()
+        faces[::2] = faces[::2, ::-1]
+        holed.faces = faces
+    elif variant == "inside-out":
+        holed.invert()
+    origin, h, shape = grid_for_mesh(holed, None, 40, 9)
+    stats = {}
+    fast, face, _ = mesh_to_sdf(holed, origin, h, shape, 8.0, stats=stats)
+    assert stats["decided_by_faces"] > stats["winding_points"]  # most cells skip the winding number
+
+    def undecided(triangles, components, face, *rest, **options):
+        return np.zeros(len(face), dtype=bool), np.zeros(len(face), dtype=bool)
+
+    monkeypatch.setattr(mesh_sdf, "_face_sides", undecided)
+    slow, _, _ = mesh_to_sdf(holed, origin, h, shape, 8.0)
+    band = face >= 0
+    np.testing.assert_array_equal(np.sign(fast[band]), np.sign(slow[band]))

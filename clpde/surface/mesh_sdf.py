@@ -140,7 +140,7 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
         labels[:, :, 0].ravel(), labels[:, :, -1].ravel(),
     ]))
     inside, outside = _sign_by_winding(mesh, labels, nlabels, border[border > 0], idx, origin, h,
-                                       band_cells, device, stats)
+                                       band_cells, device, stats, face=face, closest=cpt)
     del labels
     sign = np.where(inside, -1.0, 1.0)
     # shell cells: look one and a half cells further from the surface along x - cp
@@ -199,6 +199,13 @@ def _oriented_triangles(mesh) -> np.ndarray:
     return np.asarray(copy.triangles, dtype=np.float64)
 
 
+def _face_components(mesh) -> np.ndarray:
+    """Connected part (by shared edges) of every face."""
+    import trimesh
+
+    return trimesh.graph.connected_component_labels(mesh.face_adjacency, node_count=len(mesh.faces))
+
+
 def _cells_of(labels, box, label, count, rng) -> np.ndarray:
     """Up to `count` random flat indices of cells labelled `label` within the slices box."""
     shape = labels.shape
@@ -224,8 +231,36 @@ def _node_starts(n, step):
     return starts, np.floor(np.arange(n) / step + 0.5).astype(np.int64)
 
 
+def _face_sides(triangles, components, face, closest, centres, side_of, samples=64):
+    """Inside (True) / outside for band cells whose closest point lies inside its triangle
+    (not on an edge or a corner): the side of that triangle's plane, which needs no winding
+    number. Returns (decided mask, inside). The oriented copy's faces point all outward or
+    all inward per connected part, so each part's orientation is found once, by the winding
+    number (side_of) at up to `samples` of its decided cells."""
+    tri = triangles[face]
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    normal = np.cross(b - a, c - a)
+    # barycentric coordinates of the closest points (they lie in the triangle's plane)
+    area2 = np.einsum("ij,ij->i", normal, normal)
+    bary = np.stack([np.einsum("ij,ij->i", np.cross(c - b, closest - b), normal),
+                     np.einsum("ij,ij->i", np.cross(a - c, closest - c), normal)], axis=1)
+    bary /= np.maximum(area2, 1e-300)[:, None]
+    interior = (bary.min(axis=1) > 1e-3) & (1 - bary.sum(axis=1) > 1e-3)
+    offset = np.einsum("ij,ij->i", centres - closest, normal)
+    decided = interior & (np.abs(offset) > 1e-6 * np.sqrt(area2))
+    below = offset < 0  # behind the face: inside if the face points outward
+    part = components[face]
+    outward = np.ones(part.max() + 1 if part.size else 1, dtype=bool)
+    rng = np.random.default_rng(1)
+    for p in np.unique(part[decided]):
+        cells = np.flatnonzero(decided & (part == p))
+        pick = rng.choice(cells, min(samples, cells.size), replace=False)
+        outward[p] = np.mean(side_of(pick) == below[pick]) >= 0.5
+    return decided, np.where(outward[part], below, ~below)
+
+
 def _sign_by_winding(mesh, labels, nlabels, border, idx, origin, h, band_cells, device, stats,
-                     samples=128):
+                     samples=128, face=None, closest=None):
     """(inside, outside) volumes for the cells off the shell (labels > 0, the components of
     the flood fill; border: the labels touching the box's border).
 
@@ -251,13 +286,17 @@ def _sign_by_winding(mesh, labels, nlabels, border, idx, origin, h, band_cells, 
     info = {"components": int(nlabels), "leaked": 0, "winding_points": 0}
     if nlabels == 0:
         return np.zeros(shape, dtype=bool), np.zeros(shape, dtype=bool)
-    wn = WindingNumbers((_oriented_triangles(mesh) - origin) / h, device=device)
+    oriented = _oriented_triangles(mesh)
+    wn = WindingNumbers((oriented - origin) / h, device=device)
 
-    def side(cells):  # |w| > 1/2 at flat cell indices: |w| so an inside-out mesh works too
+    def cell_xyz(cells):  # grid coordinates (x, y, z) of flat cell indices
         z, rem = np.divmod(cells, shape[1] * shape[2])
         y, x = np.divmod(rem, shape[2])
+        return np.stack([x, y, z], axis=1).astype(np.float64)
+
+    def side(cells):  # |w| > 1/2 at flat cell indices: |w| so an inside-out mesh works too
         info["winding_points"] += len(cells)
-        return np.abs(wn(np.stack([x, y, z], axis=1).astype(np.float64))) > 0.5
+        return np.abs(wn(cell_xyz(cells))) > 0.5
 
     # samples of every component, band cells grouped by component
     rng = np.random.default_rng(0)
@@ -293,9 +332,23 @@ def _sign_by_winding(mesh, labels, nlabels, border, idx, origin, h, band_cells, 
     info["leaked"] = int(leaked.sum())
     if leaked.any():
         flat_in, flat_out = inside.reshape(-1), outside.reshape(-1)
-        # band cells of leaked components: each by its own winding number
-        cells = idx[leaked[band_label]]
-        cells_in = side(cells)
+        # band cells of leaked components: by the side of their closest triangle's plane
+        # where their closest point lies inside it (most of them), else by their own
+        # winding number (closest points on edges, corners and the holes' rims)
+        in_leaked = leaked[band_label]
+        cells = idx[in_leaked]
+        cells_in = np.zeros(cells.size, dtype=bool)
+        todo = np.ones(cells.size, dtype=bool)
+        if face is not None and closest is not None and cells.size:
+            parts = _face_components(mesh)
+            band_pos = np.flatnonzero(in_leaked)  # rows of closest (idx order)
+            decided, local_in = _face_sides(
+                oriented, parts, face.reshape(-1)[cells], closest[band_pos],
+                origin + h * cell_xyz(cells), lambda k: side(cells[k]))
+            cells_in[decided] = local_in[decided]
+            todo = ~decided
+            info["decided_by_faces"] = int(decided.sum())
+        cells_in[todo] = side(cells[todo])
         flat_in[cells] = cells_in
         flat_out[cells] = ~cells_in
         # cells beyond the band: the nearest node of a coarse lattice
