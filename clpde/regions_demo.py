@@ -5,6 +5,7 @@ Used by `clpde regions` and the examples."""
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,7 +123,14 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
         raise InputError(f"regions must be 'auto', 'colours' or 'curvature', not {regions!r}")
     surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
-    painted = colour_labels(surf.mesh) if regions != "curvature" else None
+    painted = None
+    if regions == "colours":
+        painted = colour_labels(surf.mesh)
+    elif regions == "auto":
+        try:
+            painted = colour_labels(surf.mesh)
+        except InputError as exc:  # shaded or photographed colours are no regions
+            warnings.warn(f"{exc}; tracking the curvature-sign regions instead", stacklevel=2)
     if painted is None and regions == "colours":
         raise InputError(f"{path} has no vertex colours to take regions from; use --regions curvature")
     region = painted[0] if painted is not None else curvature_sign_regions(phi, h)
