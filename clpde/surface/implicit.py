@@ -156,11 +156,9 @@ class ImplicitSurface:
             # to the rim there), so normals, closest points and the signed-distance flows
             # (4.8) would be wrong near it; the cells whose closest point is on the rim take
             # a reinitialised distance, the others keep their exact one
-            exact = surf.psi
-            cap = np.abs(exact).max()  # what cells past the band hold
-            surf.reinitialize()
-            patched = exact.copy()
-            patched.reshape(-1)[rim] = np.clip(surf.psi.reshape(-1)[rim], -cap, cap)
+            cap = np.abs(surf.psi).max()  # what cells past the band hold
+            patched = surf.psi.copy()
+            patched.reshape(-1)[rim] = np.clip(surf._reinitialized_psi().reshape(-1)[rim], -cap, cap)
             surf._set_psi(patched)
         surf.mesh = mesh
         surf._mesh_face = face
@@ -340,6 +338,11 @@ class ImplicitSurface:
     def reinitialize(self, iterations=None, progress=None) -> ImplicitSurface:
         """Turn psi into a signed distance function on the device (Sussman's PDE with
         Russo-Smereka's subcell fix), keeping its zero level set; rebuilds the bands."""
+        self._set_psi(self._reinitialized_psi(iterations, progress))
+        return self
+
+    def _reinitialized_psi(self, iterations=None, progress=None) -> np.ndarray:
+        """psi made a signed distance (see reinitialize), without touching the surface."""
         g = self.grid
         reach = self.outer + 4.0
         r = 0.3
@@ -354,8 +357,7 @@ class ImplicitSurface:
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
             cur, nxt = nxt, cur
-        self._set_psi(g.download(cur)[0].astype(np.float64))
-        return self
+        return g.download(cur)[0].astype(np.float64)
 
     def extend(self, u, method="closest-point", iterations=None) -> np.ndarray:
         """Extend data off the surface, constant along the normals: by closest-point

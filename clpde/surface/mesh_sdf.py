@@ -177,13 +177,14 @@ def rim_cells(mesh, face, closest_point, spacing) -> np.ndarray:
     near = on_boundary[flat_face[cells]].any(axis=1)
     if not near.any():
         return np.zeros(0, dtype=np.int64)
-    edges = np.asarray(mesh.edges_unique)[np.asarray(mesh.faces_unique_edges)[flat_face[cells[near]]]]
+    rim_faces = flat_face[cells[near]]
+    edges = np.asarray(mesh.edges_unique)[np.asarray(mesh.faces_unique_edges)[rim_faces]]
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     a, b = vertices[edges[..., 0]], vertices[edges[..., 1]]  # (n, 3 edges, 3)
     p = closest_point[near][:, None, :]
     t = np.clip(((p - a) * (b - a)).sum(axis=2) / np.maximum(((b - a) ** 2).sum(axis=2), 1e-300), 0, 1)
     gap = np.linalg.norm(a + t[..., None] * (b - a) - p, axis=2)
-    gap = np.where(on_boundary[flat_face[cells[near]]], gap, np.inf).min(axis=1)
+    gap = np.where(on_boundary[rim_faces], gap, np.inf).min(axis=1)
     return cells[near][gap < 1e-3 * spacing]
 
 
@@ -250,12 +251,16 @@ def _face_sides(triangles, components, face, closest, centres, side_of, samples=
     decided = interior & (np.abs(offset) > 1e-6 * np.sqrt(area2))
     below = offset < 0  # behind the face: inside if the face points outward
     part = components[face]
-    outward = np.ones(part.max() + 1 if part.size else 1, dtype=bool)
+    nparts = part.max() + 1 if part.size else 1
+    # up to `samples` decided cells of every part, all in one winding-number evaluation
     rng = np.random.default_rng(1)
-    for p in np.unique(part[decided]):
-        cells = np.flatnonzero(decided & (part == p))
-        pick = rng.choice(cells, min(samples, cells.size), replace=False)
-        outward[p] = np.mean(side_of(pick) == below[pick]) >= 0.5
+    cells = np.flatnonzero(decided)
+    cells = cells[np.argsort(rng.random(cells.size))]  # shuffled, then grouped by part
+    cells = cells[np.argsort(part[cells], kind="stable")]
+    first = np.searchsorted(part[cells], np.arange(nparts))
+    pick = cells[np.arange(cells.size) - first[part[cells]] < samples]
+    agree = np.bincount(part[pick], weights=side_of(pick) == below[pick], minlength=nparts)
+    outward = agree >= 0.5 * np.bincount(part[pick], minlength=nparts)
     return decided, np.where(outward[part], below, ~below)
 
 
