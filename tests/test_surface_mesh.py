@@ -245,8 +245,9 @@ def test_inside_out_and_half_flipped_meshes_with_a_big_hole():
 def test_a_closed_hole_is_a_distance_and_carries_flows_across():
     """Where a hole was closed, |psi| was the distance to its rim and psi jumped across the
     closing sheet; the rim's cells are reinitialised, so psi is a distance there too and the
-    heat flow away from the hole stays close to the closed sphere's (measured: error 1.1e-3
-    against 6.0e-4 closed, 8.0e-3 without the reinitialisation)."""
+    heat flow away from the hole stays close to the closed sphere's (benchmarks/
+    surface_accuracy.py section 5c: error 9.0e-4 against 2.8e-4 closed, 8.6e-3 without the
+    reinitialisation)."""
     mesh = trimesh.creation.icosphere(4, radius=1.0)
     holed, _ = _cap_removed(mesh, 0.45)  # a polar hole about 18 cells across
     pts = np.random.default_rng(4).standard_normal((600, 3))
