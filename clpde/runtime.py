@@ -149,9 +149,13 @@ def _resolve(spec) -> int:
         raise ClpdeError(f"device must be 'cpu', 'gpu', an index or a name substring, not {spec!r}")
     wanted = spec.strip().lower()
     if wanted in ("cpu", "gpu", "accelerator"):
-        for i, (_, d) in enumerate(found):
-            if _type_name(d) == wanted:
+        of_type = [i for i, (_, d) in enumerate(found) if _type_name(d) == wanted]
+        # The first of that type whose compiler works; else the first, whose error then says why.
+        for i in of_type:
+            if _build_problem(i) is None:
                 return i
+        if of_type:
+            return of_type[0]
         raise ClpdeError(
             f"no {wanted.upper()} OpenCL device found; available: {'; '.join(names)}"
             + (f". {INSTALL_HINT}" if wanted == "cpu" else "")
@@ -166,18 +170,65 @@ def _resolve(spec) -> int:
     )
 
 
+_PROBE_SOURCE = "__kernel void probe(__global float *a) { a[get_global_id(0)] *= 2.0f; }"
+_build_problems: dict[int, str | None] = {}
+
+
+def _build_problem(index: int) -> str | None:
+    """Why device ``index`` cannot compile OpenCL C, or None when it can.
+
+    An OpenCL platform can list a device whose compiler does not work: PoCL 3.0's LLVM 14
+    (the one pip installs) does not know CPUs newer than itself, such as AMD's Zen 5, and
+    fails every build with "unknown target CPU 'generic'". Probing once per device lets the
+    default choice skip such a device when another one works.
+    """
+    if index not in _build_problems:
+        platform, device = _all_devices()[index]
+        try:
+            ctx = cl.Context([device])
+            cl.Program(ctx, _PROBE_SOURCE).build()
+            _build_problems[index] = None
+        except cl.Error as exc:
+            log = str(exc)
+            if "unknown target CPU" in log:
+                reason = (
+                    f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
+                    "its LLVM does not know this CPU; install your system's PoCL "
+                    "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
+                )
+            else:
+                first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
+                reason = (f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+                          f"kernels: {first.strip()[:200]}")
+            _build_problems[index] = reason
+    return _build_problems[index]
+
+
+def _usable(index: int) -> int:
+    """``index`` itself, or an error saying why the device cannot run clpde's kernels."""
+    problem = _build_problem(index)
+    if problem is not None:
+        raise NoDeviceError(problem)
+    return index
+
+
 def _default_index() -> int:
     env = os.environ.get("CLPDE_DEVICE")
     if env:
         try:
-            return _resolve(env)
+            return _usable(_resolve(env))
         except ClpdeError as exc:
             raise ClpdeError(f"CLPDE_DEVICE={env!r}: {exc}") from None
     found = _all_devices()
-    for i, (_, d) in enumerate(found):
-        if _type_name(d) == "gpu":
+    order = [i for i, (_, d) in enumerate(found) if _type_name(d) == "gpu"]
+    order += [i for i in range(len(found)) if i not in order]
+    problems = []
+    for i in order:
+        problem = _build_problem(i)
+        if problem is None:
             return i
-    return 0
+        problems.append(problem)
+    raise NoDeviceError("no OpenCL device can compile kernels: " + "; ".join(problems))
 
 
 _chosen_spec = None
@@ -198,7 +249,7 @@ def get_runtime(device=None) -> Runtime:
         return device
     if device is None:
         device = _chosen_spec
-    index = _default_index() if device is None else _resolve(device)
+    index = _default_index() if device is None else _usable(_resolve(device))
     if index not in _runtimes:
         platform, dev = _all_devices()[index]
         _runtimes[index] = Runtime(index, platform, dev)

@@ -1,0 +1,100 @@
+"""What every subcommand shares: the device option, reading the input and writing the output.
+
+The input is never overwritten, the output is checked before any work and written
+atomically, and colour images are processed per channel with any alpha channel kept as is.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..imagedata import InputError
+from ..io import check_not_overwriting_input, check_writable, image_format, read_image, write_image
+from ..runtime import get_runtime
+
+
+def add_device_argument(parser) -> None:
+    parser.add_argument(
+        "--device", metavar="SPEC", default=None,
+        help="OpenCL device: 'cpu', 'gpu', an index or a name substring from `clpde devices` "
+             "(default: $CLPDE_DEVICE, else a GPU if present, else the CPU)",
+    )
+
+
+def add_image_arguments(parser) -> None:
+    """IN and OUT image paths and --device."""
+    parser.add_argument("input", metavar="IN", help="input image (.png, .tif/.tiff, .jpg/.jpeg)")
+    parser.add_argument("output", metavar="OUT",
+                        help="output image; same formats; never the input file")
+    add_device_argument(parser)
+
+
+def show_progress() -> bool:
+    """Progress bars go to stderr, so only draw them when stderr is a terminal."""
+    return sys.stderr.isatty()
+
+
+def load_input(args, *extra_inputs) -> np.ndarray:
+    """Check the device and the output path, then read IN; all before any work is done."""
+    get_runtime(args.device)  # an unknown device fails here, before reading anything
+    check_not_overwriting_input([args.input, *extra_inputs], args.output)
+    image_format(args.output)
+    image = read_image(args.input)
+    if image.dtype == bool:  # 1-bit files: compute on 0/255 and write 8-bit
+        image = image.astype(np.uint8) * 255
+    check_writable(args.output, image.dtype, image.shape)
+    return image
+
+
+@dataclass
+class Channels:
+    """An image split into the channels a flow works on and an untouched alpha channel."""
+
+    colour: np.ndarray
+    channel_axis: int | None
+    alpha: np.ndarray | None
+    squeezed: bool
+
+    def join(self, result: np.ndarray) -> np.ndarray:
+        """The flow's result on `colour` back in the input's layout, alpha restored."""
+        result = np.asarray(result)
+        if self.squeezed:
+            result = result[..., np.newaxis]
+        if self.alpha is not None:
+            if result.ndim == 2:
+                result = result[..., np.newaxis]
+            result = np.concatenate([result, self.alpha[..., np.newaxis]], axis=-1)
+        return result
+
+
+def split_alpha(image: np.ndarray, name: str = "input") -> Channels:
+    """Greyscale (rows, cols) or colour (rows, cols, 1..4); 2 and 4 channels end in alpha."""
+    if image.ndim == 2:
+        return Channels(image, None, None, False)
+    if image.ndim != 3 or image.shape[-1] > 4:
+        raise InputError(
+            f"{name} has shape {image.shape}; expected a greyscale (rows, columns) or colour "
+            "(rows, columns, channels<=4) image (multi-page TIFF stacks are not supported)"
+        )
+    alpha = None
+    colour = image
+    if image.shape[-1] in (2, 4):
+        alpha, colour = image[..., -1], image[..., :-1]
+    if colour.shape[-1] == 1:
+        return Channels(colour[..., 0], None, alpha, alpha is None)
+    return Channels(colour, -1, alpha, False)
+
+
+def save_output(args, result: np.ndarray) -> None:
+    write_image(args.output, result)
+    print(f"wrote {args.output}", file=sys.stderr)
+
+
+def param_check(args, flow: str, allowed: dict) -> None:
+    """Refuse options that the chosen flow would silently ignore."""
+    for option, flows in allowed.items():
+        if getattr(args, option) is not None and flow not in flows:
+            raise InputError(f"--{option} applies to --flow {' or '.join(flows)}, not {flow}")

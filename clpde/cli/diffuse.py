@@ -1,0 +1,49 @@
+"""`clpde diffuse`: a planar diffusion flow on an image (clpde.planar)."""
+
+from __future__ import annotations
+
+from ._common import (
+    add_image_arguments,
+    load_input,
+    param_check,
+    save_output,
+    show_progress,
+    split_alpha,
+)
+
+
+def add_diffuse_parser(subparsers) -> None:
+    from ..planar import FLOWS
+
+    parser = subparsers.add_parser(
+        "diffuse", help="run a planar diffusion flow on an image",
+        description="Run heat, Perona-Malik, TV or curvature diffusion for a number of "
+                    "explicit steps. Colour images are processed per channel.",
+    )
+    add_image_arguments(parser)
+    parser.add_argument("--flow", choices=FLOWS, default="heat", help="default: heat")
+    parser.add_argument("--steps", type=int, default=100, help="explicit steps (default: 100)")
+    parser.add_argument("--dt", type=float, default=None,
+                        help="time step (default: 0.8 of the stability limit)")
+    parser.add_argument("--kappa", type=float, default=None,
+                        help="Perona-Malik edge threshold, intensities in [0, 1] (default 0.05)")
+    parser.add_argument("--edge", choices=("exp", "rational"), default=None,
+                        help="Perona-Malik edge-stopping function (default: exp)")
+    parser.add_argument("--eps", type=float, default=None,
+                        help="TV / curvature regularisation of |grad u| (TV default 0.05)")
+    parser.set_defaults(run=run_diffuse)
+
+
+def run_diffuse(args) -> int:
+    from ..planar import diffuse
+
+    param_check(args, args.flow, {"kappa": ("perona-malik",), "edge": ("perona-malik",),
+                                   "eps": ("tv", "curvature")})
+    image = load_input(args)
+    parts = split_alpha(image, args.input)
+    params = {k: getattr(args, k) for k in ("kappa", "edge", "eps") if getattr(args, k) is not None}
+    result = diffuse(parts.colour, args.flow, steps=args.steps, dt=args.dt,
+                     channel_axis=parts.channel_axis, device=args.device,
+                     progress=show_progress(), **params)
+    save_output(args, parts.join(result))
+    return 0
