@@ -144,3 +144,18 @@ __kernel void inpaint_ghosts(__global REAL* u, __global const int2* restrict pai
     const int2 p = pairs[k];
     u[chan + p.x] = u[chan + p.y];
 }
+
+// Soft masks: u = v = u + w (obs - u) on the listed cells, w a one-channel plane in [0, 1)
+// (1 - the degree of damage). Written into both buffers of the pair, which stay equal.
+__kernel void inpaint_fidelity(__global REAL* restrict u, __global REAL* restrict v,
+                               __global const REAL* restrict obs, __global const REAL* restrict w,
+                               LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL r = u[i] + w[list[k]] * (obs[i] - u[i]);
+        u[i] = r;
+        v[i] = r;
+    }
+}
