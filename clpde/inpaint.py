@@ -59,6 +59,7 @@ SCALINGS = ("none", "quartic-root")
 COLOUR_MODELS = ("channels", "rho-phi-psi")
 ROTATIONS = ("ccw", "cw")
 FILLS = ("diffusion", "biharmonic", "mean", "zero")
+STENCILS = ("central", "isotropic")
 GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
@@ -104,6 +105,7 @@ class InpaintParams:
     check_every: int = 2  # cycles of A + B steps
     fill: str = "biharmonic"
     keep_band: bool = True
+    stencil: str = "isotropic"
 
 
 # ---------------------------------------------------------------------------------------
@@ -217,6 +219,8 @@ def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
         raise InputError(f"scaling must be one of {', '.join(SCALINGS)}, not {p.scaling!r}")
     if p.rotation not in ROTATIONS:
         raise InputError(f"rotation must be 'ccw' or 'cw', not {p.rotation!r}")
+    if p.stencil not in STENCILS:
+        raise InputError(f"stencil must be one of {', '.join(STENCILS)}, not {p.stencil!r}")
     if p.fill not in FILLS:
         raise InputError(f"fill must be one of {', '.join(FILLS)}, not {p.fill!r}")
     if colour not in COLOUR_MODELS:
@@ -288,7 +292,8 @@ class LevelSolver:
         then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
         a step's work on a small region)."""
         g = self.grid
-        program = runtime.program("inpaint.cl", g.dtype, SCALING=SCALINGS.index(params.scaling))
+        program = runtime.program("inpaint.cl", g.dtype, SCALING=SCALINGS.index(params.scaling),
+                                  STENCIL=STENCILS.index(params.stencil))
         bufs = (self.pair.cur.data.data, self.pair.nxt.data.data)
         self._buf_a = bufs[0]
 
