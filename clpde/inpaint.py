@@ -60,6 +60,7 @@ COLOUR_MODELS = ("channels", "rho-phi-psi")
 ROTATIONS = ("ccw", "cw")
 FILLS = ("diffusion", "biharmonic", "mean", "zero")
 STENCILS = ("central", "isotropic")
+COARSE_STARTS = ("corrected", "upsampled")
 GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
@@ -106,6 +107,7 @@ class InpaintParams:
     fill: str = "biharmonic"
     keep_band: bool = True
     stencil: str = "isotropic"
+    coarse_start: str = "corrected"
 
 
 # ---------------------------------------------------------------------------------------
@@ -219,6 +221,8 @@ def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
         raise InputError(f"scaling must be one of {', '.join(SCALINGS)}, not {p.scaling!r}")
     if p.rotation not in ROTATIONS:
         raise InputError(f"rotation must be 'ccw' or 'cw', not {p.rotation!r}")
+    if p.coarse_start not in COARSE_STARTS:
+        raise InputError(f"coarse_start must be one of {', '.join(COARSE_STARTS)}, not {p.coarse_start!r}")
     if p.stencil not in STENCILS:
         raise InputError(f"stencil must be one of {', '.join(STENCILS)}, not {p.stencil!r}")
     if p.fill not in FILLS:
@@ -501,6 +505,13 @@ class TransportRun:
                 data = data.copy()
                 if solution is None:
                     start_values = self._start_values(data, omega)
+                elif p.coarse_start == "corrected":
+                    # The upsampled coarse result misses the fine border values by up to a
+                    # coarse pixel's variation, which leaves seams; the mismatch on the known
+                    # pixels is extended into Omega (as the start is) and added back.
+                    start_values = mr.upsample(solution, omega.shape)
+                    mismatch = np.where(omega, 0.0, data - start_values)
+                    start_values = start_values + self._start_values(mismatch, omega)
                 else:
                     start_values = mr.upsample(solution, omega.shape)
                 data[:, omega] = start_values[:, omega]
@@ -761,7 +772,8 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         of beta, and isophotes closed inside Omega keep drifting, while the mean change
         falls steadily; the mean test (4e-4) also stops near the best PSNR on photos, which
         slowly falls afterwards as texture of the border is carried inwards.
-    levels: number of resolution levels; None picks it from the mask's thickness.
+    levels: number of resolution levels; None picks it per box from the mask's thickness
+        (1 for half-widths up to 8 px, else 2: multiresolution.auto_levels, measured).
     colour: 'channels' inpaints every channel independently; 'rho-phi-psi' inpaints the
         luminance-chroma model of thesis Figure 3.7 (3 colour channels; any method).
     alpha: treat the last channel as alpha, which passes through untouched; None means yes
@@ -773,6 +785,14 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         benchmark's text and scratch masks and needs fewer steps.
     keep_band: reset the known pixels of Omega-epsilon after each diffusion batch (True), or
         let the diffusion keep smoothing them cycle after cycle (False).
+    stencil: 'isotropic' (default) takes grad I in N and delta L (eqs. 3.7, 3.9) with
+        Scharr's derivatives; 'central' with appendix A's central differences, whose
+        discrete delta L and N are not parallel on sharp isophotes at 30 or 60 degrees, so
+        that oblique stripes bleed (docs/inpainting.md: +1.6 to +3.8 dB on stripes at
+        30-60 degrees; about 2x the time per step).
+    coarse_start: with levels > 1, the start of a finer level: 'corrected' (the upsampled
+        coarse result plus the extension of its mismatch with the known border pixels, so
+        that no seam is left) or 'upsampled' (the upsampled coarse result as it is).
     A soft mask's fidelity acts after every A + B cycle on the finest level: a pixel of
         damage m is moved (1 - m) of the way back to its observed value.
     snapshots: an integer N: also return intermediate states every N steps of the finest
