@@ -483,6 +483,7 @@ class TransportRun:
                  progress=None, fidelity=None):
         self.p = params if isinstance(params, InpaintParams) else transport_params(params)
         self.runtime, self.data, self.omega = runtime, data, omega
+        self.device = runtime  # get_runtime(self.device) is this runtime
         self.levels = levels if levels is not None else mr.auto_levels(omega)
         self.dtype, self.progress, self.fidelity = dtype, progress, fidelity
         self.solution = None
