@@ -230,13 +230,29 @@ PEERS = ("opencv-ns", "opencv-telea", "skimage-biharmonic")
 
 
 def texture_cases():
-    """(class, name, image, mask) from benchmarks/inpaint_texture_cases.py, if present."""
+    """(class, name, image, mask) from benchmarks/inpaint_texture_cases.py, if present:
+    its classes prefixed 'texture-' unless already 'texture'; float images as uint8."""
     try:
         import inpaint_texture_cases as tc
     except ImportError:
         return []
-    return [("texture", *case[1:]) if len(case) == 4 else ("texture", *case)
-            for case in tc.cases()]
+    out = []
+    for case in tc.texture_cases():
+        image = case["image"]
+        if np.issubdtype(image.dtype, np.floating):
+            image = _u8(image)
+        kind = case["class"] if case["class"] == "texture" else f"texture-{case['class']}"
+        out.append((kind, case["name"], image, case["mask"]))
+    return out
+
+
+def edge_energy(result, truth, mask):
+    """The texture's energy kept in the hole (benchmarks/inpaint_texture_cases.py), or None."""
+    try:
+        import inpaint_texture_cases as tc
+    except ImportError:
+        return None
+    return float(tc.edge_energy(result, truth, mask))
 
 
 def cases(quick=False):
@@ -283,6 +299,7 @@ def quality(quick=False, only=None):
             rows.append({"class": kind, "image": name, "method": method, "seconds": seconds,
                          "psnr": psnr_in_mask(result, image, mask),
                          "ssim": ssim_in_mask(result, image, mask),
+                         "edge_energy": edge_energy(result, image, mask),
                          "coverage": float(mask.mean())})
             print(f"  {kind:10s} {name:22s} {method:19s} PSNR {rows[-1]['psnr']:6.2f}  "
                   f"SSIM {rows[-1]['ssim']:.3f}  {seconds:7.3f} s", file=sys.stderr, flush=True)
@@ -351,17 +368,20 @@ def summarise(rows):
         summary.append({"class": kind, "method": method, "n": len(rs),
                         "psnr": float(np.mean([r["psnr"] for r in rs])),
                         "ssim": float(np.mean([r["ssim"] for r in rs])),
-                        "seconds": float(np.mean([r["seconds"] for r in rs]))})
+                        "seconds": float(np.mean([r["seconds"] for r in rs])),
+                        "edge_energy": None if rs[0]["edge_energy"] is None else
+                        float(np.mean([r["edge_energy"] for r in rs]))})
     return summary
 
 
 def print_table(summary, huge_rows):
     print("Inpainting quality inside the mask (mean over the cases of each class)\n")
-    print("| class | method | cases | PSNR (dB) | SSIM | time (s) |")
-    print("|---|---|---|---|---|---|")
+    print("| class | method | cases | PSNR (dB) | SSIM | edge energy | time (s) |")
+    print("|---|---|---|---|---|---|---|")
     for s in summary:
+        energy = "-" if s["edge_energy"] is None else f"{s['edge_energy']:.2f}"
         print(f"| {s['class']} | {s['method']} | {s['n']} | {s['psnr']:.2f} | {s['ssim']:.3f} | "
-              f"{s['seconds']:.3f} |")
+              f"{energy} | {s['seconds']:.3f} |")
     if huge_rows:
         print("\n20000x20000 uint8, 20x50 mask (own process each; input + output = 0.75 GiB)\n")
         print("| method | time (s) | peak memory (GiB) | note |")
