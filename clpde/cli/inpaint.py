@@ -47,6 +47,15 @@ def add_inpaint_parser(subparsers) -> None:
                         help="colour model (default: channels)")
     parser.add_argument("--levels", type=int, default=None,
                         help="multiresolution levels (default: chosen from the mask)")
+    from ..inpainting import METHODS
+
+    parser.add_argument("--method", choices=("auto", *METHODS), default="auto",
+                        help="inpainting method (default: auto, see docs/inpainting.md); "
+                             "the step options above are the transport's")
+    parser.add_argument("--soft-mask", action="store_true",
+                        help="read MASK's grey levels as the degree of damage (black 0 = "
+                             "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
+                             "to the observed pixel) instead of nonzero = inpaint")
     add_device_argument(parser)
     parser.set_defaults(run=run_inpaint)
 
@@ -60,6 +69,21 @@ def _read_inpaint_mask(path, shape) -> np.ndarray:
         raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
                          f"is {shape[1]}x{shape[0]}; give a mask of the same size")
     return mask != 0
+
+
+def _read_soft_mask(path, shape) -> np.ndarray:
+    """The mask's grey level over its dtype's range as a float degree of damage in [0, 1]
+    (a colour mask: its brightest colour channel; an alpha channel is ignored)."""
+    mask = read_image(path)
+    if mask.ndim == 3:
+        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
+        mask = mask[..., :channels].max(axis=-1)
+    if mask.shape != tuple(shape):
+        raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
+                         f"is {shape[1]}x{shape[0]}; give a mask of the same size")
+    if np.issubdtype(mask.dtype, np.integer):
+        return mask.astype(np.float32) / np.iinfo(mask.dtype).max
+    return np.clip(mask.astype(np.float32), 0, 1)
 
 
 def run_inpaint(args) -> int:
@@ -85,12 +109,15 @@ def run_inpaint(args) -> int:
         if not str(args.gif).lower().endswith(".gif"):
             raise InputError(f"--gif {args.gif}: the animation must be a .gif file")
     image = load_input(args, args.mask)
-    mask = _read_inpaint_mask(args.mask, image.shape[:2])
+    if args.soft_mask:
+        mask = _read_soft_mask(args.mask, image.shape[:2])
+    else:
+        mask = _read_inpaint_mask(args.mask, image.shape[:2])
     parts = split_alpha(image, args.input)
     options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
                "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,
                "tol": args.tol, "mean_tol": args.mean_tol, "device": args.device,
-               "progress": show_progress(), "return_info": True}
+               "progress": show_progress(), "return_info": True, "method": args.method}
     if args.gif:
         result, info = inpaint(parts.colour, mask, snapshots=args.gif_every, **options)
     else:
@@ -100,6 +127,6 @@ def run_inpaint(args) -> int:
         write_gif(args.gif, [s.image for s in info.snapshots])
         print(f"wrote {args.gif} ({len(info.snapshots)} frames)", file=sys.stderr)
     state = "converged" if info.converged else "stopped at --max-steps"
-    print(f"inpaint: {int(mask.sum())} pixels, {info.steps} steps ({state}), "
+    print(f"inpaint ({info.method}): {int((mask > 0).sum())} pixels, {info.steps} steps ({state}), "
           f"{info.levels} level(s), {info.seconds:.2f} s", file=sys.stderr)
     return 0
