@@ -181,6 +181,83 @@ def ssim_in_mask(result, truth, mask):
     return float(full[mask].mean())
 
 
+# ---- item 1: why oblique isophotes fail ----------------------------------------------------
+def _rate_residual(image, stencil):
+    """max |I_t| of one transport step on the exact image, away from the border (numpy
+    reference of the kernel, tests/reference/inpaint.py)."""
+    from tests.reference.inpaint import transport_rate
+    from tests.reference.planar import pad_neumann
+
+    p = pad_neumann(image[None] / 255.0)
+    return float(np.abs(transport_rate(p, stencil=stencil))[0, 8:-8, 8:-8].max())
+
+
+def _from_truth(image, mask, steps, **params):
+    """PSNR in the slot after `steps` steps started from the exact image."""
+    import clpde
+    from clpde.inpaint import InpaintParams, LevelSolver
+
+    p = InpaintParams(tol=0, mean_tol=0, **params)
+    solver = LevelSolver(clpde.get_runtime(), image[None] / 255.0, mask, p)
+    solver.presmooth(p.presmooth)
+    for _ in solver.run(steps, 0.0):
+        pass
+    out = _u8(solver.result()[0])
+    return psnr_in_mask(out, image, mask)
+
+
+def diagnose():
+    """Experiments on a straight edge and on sharp stripes crossing a 6-pixel slot at 0, 30,
+    45, 60 and 90 degrees: PSNR in the slot for the candidates of issue 14 (the start, the
+    stopping rule, the pre-smoothing, the diffusion interleave, the stencil), the residual
+    of the exact image, and the drift of a run started from the exact image."""
+    from skimage.restoration import inpaint_biharmonic
+
+    variants = {
+        "default": {},
+        "steady": dict(tol=0, mean_tol=0, max_steps=3000),
+        "presmooth=0": dict(presmooth=0),
+        "B=0": dict(diffusion_steps=0),
+        "harmonic start": dict(fill="diffusion"),
+        "central": dict(stencil="central"),
+        "central steady": dict(stencil="central", tol=0, mean_tol=0, max_steps=3000),
+    }
+    rows = []
+    print("\nPSNR (dB) in the slot, one level; isotropic stencil unless 'central'\n")
+    print("| case | biharmonic | " + " | ".join(variants) + " |")
+    print("|---|---|" + "---|" * len(variants))
+    for kind, make in (("edge", edge_case), ("stripes", stripes_case)):
+        for angle in (0, 30, 45, 60, 90):
+            image, mask = make(angle)
+            bih = _u8(inpaint_biharmonic(image / 255.0, mask))
+            row = {"case": f"{kind}-{angle}", "biharmonic": psnr_in_mask(bih, image, mask)}
+            for name, options in variants.items():
+                out = run_clpde(image, mask, levels=1, **options)
+                row[name] = psnr_in_mask(out, image, mask)
+            rows.append(row)
+            print("| " + " | ".join([row["case"]] + [f"{row[k]:.1f}" for k in
+                                                     ["biharmonic", *variants]]) + " |", flush=True)
+    print("\nThe exact image: max |I_t| of one step (numpy reference), and the PSNR in the slot "
+          "after 300 / 3000 steps started from it (no pre-smoothing, no diffusion)\n")
+    print("| case | residual central | residual isotropic | central 300 / 3000 | "
+          "isotropic 300 / 3000 |")
+    print("|---|---|---|---|---|")
+    exact = []
+    for kind, make in (("edge", edge_case), ("stripes", stripes_case)):
+        for angle in (0, 30, 45, 60):
+            image, mask = make(angle)
+            r = {"case": f"{kind}-{angle}"}
+            for stencil in ("central", "isotropic"):
+                r[f"residual_{stencil}"] = _rate_residual(image, stencil)
+                r[f"drift_{stencil}"] = [_from_truth(image, mask, n, stencil=stencil, presmooth=0,
+                                                     diffusion_steps=0) for n in (300, 3000)]
+            exact.append(r)
+            print(f"| {r['case']} | {r['residual_central']:.1e} | {r['residual_isotropic']:.1e} | "
+                  f"{r['drift_central'][0]:.1f} / {r['drift_central'][1]:.1f} | "
+                  f"{r['drift_isotropic'][0]:.1f} / {r['drift_isotropic'][1]:.1f} |", flush=True)
+    return {"variants": rows, "exact": exact}
+
+
 # ---- methods -----------------------------------------------------------------------------
 def run_cv2(image, mask, flag):
     import cv2
@@ -398,8 +475,18 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="fewer photos, for a smoke test")
     parser.add_argument("--no-huge", action="store_true", help="skip the 20000x20000 row")
     parser.add_argument("--methods", nargs="*", default=None, help="only these methods")
+    parser.add_argument("--diagnose", action="store_true",
+                        help="only the experiments on oblique isophotes (issue 14, item 1)")
     args = parser.parse_args(argv)
     import clpde
+
+    if args.diagnose:
+        result = diagnose()
+        path = Path(args.json).with_name("inpaint_diagnosis.json")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(result, indent=2))
+        print(f"\nwrote {path}", file=sys.stderr)
+        return
 
     device = clpde.get_runtime().device
     rows = quality(args.quick, args.methods)
