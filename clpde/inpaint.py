@@ -11,29 +11,40 @@ Laplacian is constant along isophotes.
 
 How this implementation runs it (all on the OpenCL device):
 
+- Methods: `method=` picks one of clpde.inpainting's modules (this scheme is "transport");
+  the dispatch, the boxes and the soft masks below are shared by all of them.
+- Boxes: each connected component of the mask, or cluster of nearby components, is solved
+  in its own box, its bounding box grown by the method's margin (clpde/inpainting/boxes.py);
+  only the box is converted to float, so time and memory follow the damage. The output
+  is one copy of the input, written in place, box by box.
 - The data is scaled to [0, 1] (the transport term grows with the square of the intensity).
-- The whole image is first smoothed by a few steps of anisotropic diffusion, so that noise
-  does not steer the isophote directions (section 3.3.3).
-- Start inside Omega: the biharmonic fill on the coarsest level (scikit-image's solver,
-  once, on the host), which matches the border's values and slopes; `fill="diffusion"` is
-  the harmonic fill (the steady state of the heat equation in Omega with the known pixels
-  as boundary values, iterated on the device). Each finer level starts from the upsampled
-  result of the coarser one. The thesis reports the steady state to be robust to the start;
-  a smooth one that already matches the border cuts the number of steps several-fold
-  compared with a constant start, and on photos, where the best PSNR comes long before the
-  steady state, the biharmonic start is worth 0.3-0.5 dB (benchmarks/inpaint_quality.py).
+- The box is first smoothed by a few steps of anisotropic diffusion, so that noise does not
+  steer the isophote directions (section 3.3.3).
+- Start inside Omega: the biharmonic fill on the coarsest level, which matches the border's
+  values and slopes; `fill="diffusion"` is the harmonic fill (the steady state of the heat
+  equation in Omega with the known pixels as boundary values, iterated on the device). Each
+  finer level starts from the upsampled result of the coarser one plus the extension of its
+  mismatch with the known border (no seams). A smooth start that already matches the
+  border cuts the number of steps several-fold compared with a constant start, and on
+  photos, where the best PSNR comes long before the steady state, the biharmonic start is
+  worth 0.3-0.5 dB (benchmarks/inpaint_quality.py).
+- The derivatives of N and delta L are Scharr's (stencil="isotropic"); appendix A's central
+  differences (stencil="central") are not isotropic enough for sharp oblique isophotes
+  (docs/inpainting.md has the experiments).
 - Index lists, built on the device once per level, restrict the work to Omega-epsilon: the
-  transport updates Omega only (its stencil, with the Laplacian at the four neighbours,
-  reads known pixels up to two cells outside), the diffusion runs where g_eps > 0
-  (g_eps = 1 in Omega, falling as a cosine to 0 at distance epsilon from Omega). Known
-  pixels next to Omega feed the boundary; after each diffusion batch the known pixels of
-  the band are reset, so values outside Omega never drift.
+  transport updates Omega only (its stencil, with the Laplacian at the neighbours, reads
+  known pixels up to two cells outside), the diffusion runs where g_eps > 0 (g_eps = 1 in
+  Omega, falling as a cosine to 0 at distance epsilon from Omega). Known pixels next to
+  Omega feed the boundary; after each diffusion batch the known pixels of the band are
+  reset, so values outside Omega never drift.
+- Soft masks (a float mask, the degree of damage m in [0, 1]): after every cycle, a pixel
+  of Omega is moved (1 - m) of the way back to its observed value.
 - Every `check_every` cycles the largest and the mean change inside Omega are reduced on the
   device; the run stops once the largest falls below `tol` or the mean below `mean_tol` (or
   after `max_steps`). The mean test is the one that ends runs on photos, where a few pixels
   never settle (see `inpaint`'s docstring).
-- Multiresolution: Omega's thickness picks the number of levels (one for text and
-  scratches); the converged coarse level, upsampled, starts the next one.
+- Multiresolution: one level for thin masks (half-width up to 8 px), two for thicker ones
+  (multiresolution.auto_levels has the measurements).
 - The output equals the input bit for bit outside the mask.
 """
 
