@@ -732,11 +732,16 @@ class Inpainting:
 
 
 def choose_method(omega: np.ndarray, method) -> str:
-    """The method for `method=None` or "auto" (see `inpaint`'s docstring)."""
+    """The method to run: None is "transport" (the thesis's scheme, whose options inpaint()
+    takes by name); "auto" is the first installed of inpainting.AUTO (docs/inpainting.md
+    has the measurements behind it)."""
     from . import inpainting
 
-    if method is None or method == "auto":
+    if method is None:
         return inpainting.DEFAULT
+    if method == "auto":
+        installed = inpainting.available()
+        return next(name for name in inpainting.AUTO if name in installed)
     inpainting.load(method)  # a clear error for unknown or missing ones
     return method
 
@@ -755,10 +760,11 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         degree of damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity
         (1 - m) to its observed value (a soft mask; NaN or values outside [0, 1] are an
         error). None fills the NaN pixels of a float image.
-    method: 'transport' (the thesis's scheme, below), 'coherence', 'navier-stokes',
-        'exemplar', 'structure-texture' (where installed: clpde.inpainting.available()),
-        or None / 'auto' (see docs/inpainting.md for the rule). Options of methods other
-        than 'transport' go in **options.
+    method: None or 'transport' (the thesis's scheme, below), 'coherence',
+        'navier-stokes', 'exemplar', 'structure-texture' (where installed:
+        clpde.inpainting.available()), or 'auto': coherence transport where installed,
+        else the transport (the best on the benchmark's photos and structure, see
+        docs/inpainting.md). Options of methods other than 'transport' go in **options.
     boxes: solve each connected component of the mask, or cluster of nearby components,
         in its own box grown by the method's margin (True), so that time and memory follow
         the damage; False solves the whole image at once. Results agree (bit for bit where

@@ -132,8 +132,11 @@ def test_methods_registry():
     assert "transport" in inpainting.available()
     image, mask = _photo_like(40, 50), np.zeros((40, 50), bool)
     mask[10:13, 10:30] = True
-    auto = clpde.inpaint(image, mask, method="auto", progress=False)
-    assert np.array_equal(auto, clpde.inpaint(image, mask, progress=False))
+    expected = next(m for m in inpainting.AUTO if m in inpainting.available())
+    auto, info = clpde.inpaint(image, mask, method="auto", progress=False, return_info=True)
+    assert info.method == expected
+    assert np.array_equal(auto, clpde.inpaint(image, mask, method=expected, progress=False))
+    assert clpde.inpaint(image, mask, return_info=True, progress=False)[1].method == "transport"
 
 
 @pytest.mark.parametrize("mask_value,match", [

@@ -49,9 +49,10 @@ def add_inpaint_parser(subparsers) -> None:
                         help="multiresolution levels (default: chosen from the mask)")
     from ..inpainting import METHODS
 
-    parser.add_argument("--method", choices=("auto", *METHODS), default="auto",
-                        help="inpainting method (default: auto, see docs/inpainting.md); "
-                             "the step options above are the transport's")
+    parser.add_argument("--method", choices=("auto", *METHODS), default="transport",
+                        help="inpainting method (default: transport, the thesis's scheme, "
+                             "whose options are those above; auto: coherence where "
+                             "installed, see docs/inpainting.md)")
     parser.add_argument("--soft-mask", action="store_true",
                         help="read MASK's grey levels as the degree of damage (black 0 = "
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "

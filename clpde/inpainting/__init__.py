@@ -19,7 +19,7 @@ Every method is a module of this package, imported only when asked for, with
 
 Optional module attributes:
 
-- MARGIN: int, or a function MARGIN(omega, **params) -> int. How many known pixels
+- MARGIN: int, or a function MARGIN(omega, **params) -> int (or MARGIN(**params)). How many known pixels
   around omega the method reads (its stencil's reach, its pre-smoothing, coarse levels,
   patch radii...). clpde.inpaint solves each connected component of the mask, or
   cluster of nearby components, in its own box: omega's bounding box grown by MARGIN
@@ -46,7 +46,12 @@ METHODS = {
     "structure-texture": "clpde.inpainting.structure_texture",
 }
 
-DEFAULT = "transport"
+DEFAULT = "transport"  # method=None: the thesis's scheme, whose options inpaint() names
+# method="auto": the first of these that is installed. Measured (docs/inpainting.md, one run
+# of benchmarks/inpaint_quality.py with every method): coherence transport is the best on
+# text, scratches, thick holes and the structure class, 0.3 dB behind the transport on
+# 20-30 px blobs; the mask's thickness picks no better one.
+AUTO = ("coherence", "transport")
 COMMON = ("dtype", "progress", "seed")  # keywords every solve takes, passed by the dispatch
 
 
@@ -96,7 +101,8 @@ def margin(module, omega, params: dict):
     """The method's margin in pixels for this omega, or None for the whole image."""
     value = getattr(module, "MARGIN", None)
     if callable(value):
-        value = value(omega, **params)
+        takes_omega = "omega" in inspect.signature(value).parameters
+        value = value(omega, **params) if takes_omega else value(**params)
     return None if value is None else int(value)
 
 
