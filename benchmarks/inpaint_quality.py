@@ -440,6 +440,9 @@ def huge(n=20000, timeout=300, only=None):
     return rows
 
 
+PSNR_CAP = 60.0  # an exact fill (periodic structure copied whole) counts as 60 dB in means
+
+
 def summarise(rows):
     groups = {}
     for r in rows:
@@ -447,7 +450,7 @@ def summarise(rows):
     summary = []
     for (kind, method), rs in groups.items():
         summary.append({"class": kind, "method": method, "n": len(rs),
-                        "psnr": float(np.mean([r["psnr"] for r in rs])),
+                        "psnr": float(np.mean([min(r["psnr"], PSNR_CAP) for r in rs])),
                         "ssim": float(np.mean([r["ssim"] for r in rs])),
                         "seconds": float(np.mean([r["seconds"] for r in rs])),
                         "edge_energy": None if rs[0]["edge_energy"] is None else
@@ -456,7 +459,8 @@ def summarise(rows):
 
 
 def print_table(summary, huge_rows):
-    print("Inpainting quality inside the mask (mean over the cases of each class)\n")
+    print("Inpainting quality inside the mask (mean over the cases of each class; PSNR "
+          f"capped at {PSNR_CAP:g} dB)\n")
     print("| class | method | cases | PSNR (dB) | SSIM | edge energy | time (s) |")
     print("|---|---|---|---|---|---|---|")
     for s in summary:
