@@ -128,6 +128,8 @@ def run_inpaint(args) -> int:
         write_gif(args.gif, [s.image for s in info.snapshots])
         print(f"wrote {args.gif} ({len(info.snapshots)} frames)", file=sys.stderr)
     state = "converged" if info.converged else "stopped at --max-steps"
-    print(f"inpaint ({info.method}): {int((mask > 0).sum())} pixels, {info.steps} steps ({state}), "
-          f"{info.levels} level(s), {info.seconds:.2f} s", file=sys.stderr)
+    steps = f"{info.steps} steps ({state}), {info.levels} level(s), " \
+        if info.method == "transport" else ""
+    print(f"inpaint ({info.method}): {int((mask > 0).sum())} pixels, {steps}"
+          f"{len(info.boxes)} box(es), {info.seconds:.2f} s", file=sys.stderr)
     return 0
