@@ -1,5 +1,5 @@
-"""The pictures of docs/inpainting.md (method="transport"): oblique structure, thick holes,
-soft masks.
+"""The pictures of docs/inpainting.md: oblique structure, thick holes, soft masks (the
+transport), and every installed method on four kinds of damage.
 
     python benchmarks/inpaint_pictures.py [OUTDIR]   (default docs/images)
 """
@@ -117,6 +117,42 @@ def soft(path):
     write(path, _grid([row]))
 
 
+def methods_figure(path):
+    """Before and after for every installed method, on one case of each kind of damage."""
+    from skimage import data
+
+    from clpde.inpainting import available
+    from inpaint_quality import blob_mask, text_mask
+
+    from scipy import ndimage
+
+    def around(mask, size, which=0):
+        """A size x size box centred on the which-th component of the mask."""
+        labels, _ = ndimage.label(mask)
+        cy, cx = (int(v) for v in ndimage.center_of_mass(labels == which + 1))
+        y0 = int(np.clip(cy - size // 2, 0, mask.shape[0] - size))
+        x0 = int(np.clip(cx - size // 2, 0, mask.shape[1] - size))
+        return y0, y0 + size, x0, x0 + size
+
+    camera, chelsea, coffee = data.camera(), data.chelsea(), data.coffee()
+    stripes, slot = stripes_case(30)
+    blobs, hole = blob_mask(chelsea.shape[:2]), thick_mask(coffee.shape[:2], 100)
+    cases = [("text", camera, text_mask(camera.shape), (150, 278, 170, 298), 2),
+             ("blobs", chelsea, blobs, around(blobs, 128, 1), 2),
+             ("stripes 30", stripes, slot, (32, 96, 32, 96), 4),
+             ("thick hole", coffee, hole, around(hole, 256), 1)]
+    rows = []
+    for name, image, mask, box, factor in cases:
+        row = [_label(_zoom(_damaged(image, mask), box, factor), name)]
+        for method in available():
+            out = run_clpde(image, mask, method=method)
+            row.append(_label(_zoom(out, box, factor),
+                              f"{method} {psnr_in_mask(out, image, mask):.1f} dB"))
+        row.append(_label(_zoom(image, box, factor), "original"))
+        rows.append(row)
+    write(path, _grid(rows))
+
+
 def write(path, image):
     import imageio.v3 as iio
 
@@ -130,3 +166,4 @@ if __name__ == "__main__":
     oblique(out / "inpaint_oblique.png")
     thick(out / "inpaint_thick_levels.png")
     soft(out / "inpaint_soft.png")
+    methods_figure(out / "inpaint_methods.png")
