@@ -1,0 +1,161 @@
+"""Quick comparison of clpde's texture methods with the peers, on inpaint_texture_cases.
+
+    python benchmarks/inpaint_texture_quick.py [--json PATH] [--only NAME,...] [--methods M,...]
+
+For each case of texture_cases() (texture, periodic and thick-hole classes) it runs
+clpde's exemplar and structure-texture methods, scikit-image's inpaint_biharmonic, and
+OpenCV's INPAINT_NS and INPAINT_TELEA (radius 3), and reports PSNR in the hole, SSIM in the
+holes' boxes (the mean of the SSIM map over the union of each hole's bounding box), the
+edge energy (texture kept in the hole; 1 is the original's) and wall time. Then the mean
+per class and method, as a Markdown table, and all rows as JSON. The full comparison, with
+part 1's methods and cases, is benchmarks/inpaint_quality.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from inpaint_texture_cases import edge_energy, texture_cases  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results" / "inpaint_texture_quick.json"
+
+
+def to_data(image):
+    """(channels, rows, cols) float in [0, 1] from a (rows, cols[, 3]) uint8 or float image."""
+    image = np.asarray(image)
+    f = image.astype(np.float64)
+    if np.issubdtype(image.dtype, np.integer):
+        f /= np.iinfo(image.dtype).max
+    return f[None] if f.ndim == 2 else np.moveaxis(f, -1, 0)
+
+
+def from_data(data, like):
+    f = data[0] if np.asarray(like).ndim == 2 else np.moveaxis(data, 0, -1)
+    if np.issubdtype(np.asarray(like).dtype, np.integer):
+        return np.clip(np.rint(f * 255), 0, 255).astype(np.uint8)
+    return f
+
+
+def clpde_method(name):
+    def run(image, mask):
+        import clpde
+
+        axis = -1 if np.asarray(image).ndim == 3 else None
+        try:  # the dispatcher of issue 14 (clpde.inpaint(..., method=...)), once merged
+            return clpde.inpaint(image, mask, channel_axis=axis, method=name)
+        except TypeError:
+            pass
+        from importlib import import_module
+
+        from clpde.runtime import get_runtime
+
+        module = import_module("clpde.inpainting." + name.replace("-", "_"))
+        out = module.solve(to_data(image), mask, get_runtime(), seed=0)
+        return from_data(out, image)
+    return run
+
+
+def biharmonic(image, mask):
+    from skimage.restoration import inpaint_biharmonic
+
+    axis = -1 if np.asarray(image).ndim == 3 else None
+    out = inpaint_biharmonic(image, mask, channel_axis=axis)
+    return from_data(to_data(out), image) if np.asarray(image).dtype == np.uint8 else out
+
+
+def opencv(flag):
+    def run(image, mask):
+        import cv2
+
+        img = np.asarray(image)
+        u8 = img if img.dtype == np.uint8 else np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
+        out = cv2.inpaint(np.ascontiguousarray(u8), mask.astype(np.uint8), 3, flag)
+        return out if img.dtype == np.uint8 else out.astype(np.float64) / 255
+    return run
+
+
+def methods():
+    import cv2
+
+    return {
+        "clpde-exemplar": clpde_method("exemplar"),
+        "clpde-structure-texture": clpde_method("structure-texture"),
+        "skimage-biharmonic": biharmonic,
+        "opencv-ns": opencv(cv2.INPAINT_NS),
+        "opencv-telea": opencv(cv2.INPAINT_TELEA),
+    }
+
+
+def hole_boxes(mask):
+    boxes = np.zeros_like(mask)
+    for sl in ndimage.find_objects(ndimage.label(mask)[0]):
+        boxes[sl] = True
+    return boxes
+
+
+def scores(result, image, mask):
+    from skimage.metrics import structural_similarity
+
+    r, t = to_data(result), to_data(image)
+    mse = float(np.mean((r[:, mask] - t[:, mask]) ** 2))
+    psnr = float("inf") if mse == 0 else 10 * np.log10(1 / mse)
+    _, ssim_map = structural_similarity(np.moveaxis(t, 0, -1), np.moveaxis(r, 0, -1),
+                                        data_range=1.0, channel_axis=-1, full=True)
+    ssim = float(ssim_map.mean(axis=-1)[hole_boxes(mask)].mean())
+    return psnr, ssim, edge_energy(result, image, mask)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", type=Path, default=RESULTS)
+    ap.add_argument("--only", default="", help="comma-separated case names")
+    ap.add_argument("--methods", default="", help="comma-separated method names")
+    args = ap.parse_args(argv)
+    cases = texture_cases()
+    if args.only:
+        cases = [c for c in cases if c["name"] in args.only.split(",")]
+    ms = methods()
+    if args.methods:
+        ms = {k: v for k, v in ms.items() if k in args.methods.split(",")}
+    # Warm up the kernel builds so that the first case's time is not a compile time.
+    warm = next(c for c in texture_cases() if c["class"] == "periodic")
+    for name, fn in ms.items():
+        if name.startswith("clpde"):
+            fn(warm["image"], warm["mask"])
+    rows = []
+    for case in cases:
+        for name, fn in ms.items():
+            t0 = time.perf_counter()
+            result = fn(case["image"], case["mask"])
+            seconds = time.perf_counter() - t0
+            psnr, ssim, energy = scores(result, case["image"], case["mask"])
+            rows.append({"case": case["name"], "class": case["class"], "method": name,
+                         "psnr": psnr, "ssim": ssim, "edge_energy": energy, "seconds": seconds,
+                         "hole_fraction": float(case["mask"].mean())})
+            print(f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
+                  f"SSIM {ssim:.3f} energy {energy:.2f} {seconds:7.3f} s", file=sys.stderr,
+                  flush=True)
+    print("| class | method | cases | PSNR (dB) | SSIM | edge energy | time (s) |")
+    print("|---|---|---|---|---|---|---|")
+    for cls in ("texture", "periodic", "thick"):
+        for name in ms:
+            rs = [r for r in rows if r["class"] == cls and r["method"] == name]
+            if not rs:
+                continue
+            mean = lambda k: float(np.mean([r[k] for r in rs]))  # noqa: E731
+            print(f"| {cls} | {name} | {len(rs)} | {mean('psnr'):.2f} | {mean('ssim'):.3f} | "
+                  f"{mean('edge_energy'):.2f} | {mean('seconds'):.3f} |")
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()
