@@ -233,15 +233,17 @@ class _Level:
         self._launch(self.k_score, n, self.img.data, self.d_use.data, np.int32(0),
                      self.nnf[0].data, self.dist.data, lst.data, np.int32(n), *self._args())
 
-    def vote(self, best_only: bool = False) -> None:
-        lst, n = self.targets
-        d = self.dist.get()[self.targets_idx] if not best_only else None
-        d = d[np.isfinite(d)] if d is not None else None
-        sigma2 = float(np.percentile(d, 75)) if d is not None and d.size else 1.0
+    def vote(self, best_only: bool = False, sigma2: float | None = None) -> float:
+        if sigma2 is None and not best_only:
+            d = self.dist.get()[self.targets_idx]
+            d = d[np.isfinite(d)]
+            sigma2 = float(np.percentile(d, 75)) if d.size else 1.0
+        sigma2 = 1.0 if sigma2 is None else sigma2
         hl, hn = self.holes
         self._launch(self.k_vote, hn, self.img.data, self.nnf[0].data, self.dist.data, hl.data,
                      np.int32(hn), np.int32(self.W), np.int32(self.H), np.int32(self.nch),
                      self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
+        return sigma2
 
     def onion_peel(self, rng, passes: int, seed: int, counter: list) -> None:
         """Fill the hole shell by shell from its border, matching only known neighbours."""
