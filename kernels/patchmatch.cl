@@ -16,7 +16,7 @@
 //
 // Patch distance: the mean over the patch pixels inside the box of
 //     sum_c w_c (I_c(p + o) - I_c(s + o))^2,
-// w_c = 1 for colour and the feature weight for feature planes. With `masked` set, only
+// w_c = 1 for colour, the feature weight for feature planes, the guide weight for guides. With `masked` set, only
 // patch pixels whose `use` flag is set count (the onion-peel start at the coarsest level,
 // where the hole has no values yet); otherwise every in-box pixel counts, and the sum stops
 // early once it exceeds the best distance so far.
@@ -146,10 +146,11 @@ __kernel void pm_pass(const __global REAL* img, const __global uchar* use, const
 // (every pixel within PR of a hole pixel is a target) proposes the value its source patch
 // has at the same offset, with weight exp(-dist(q) / (2 sigma2)); `best_only` takes the
 // single proposal of the closest patch instead (sharper, for the last vote). Sources lie in
-// the known part, so the hole can be written in place.
+// the known part, so the hole can be written in place. Only the first `nout` planes are
+// written: planes after them are guides, known everywhere, that only enter the distance.
 __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __global REAL* dist,
                       const __global int* holes, const int nholes, const int W, const int H,
-                      const int nch, const REAL sigma2, const int best_only)
+                      const int nch, const int nout, const REAL sigma2, const int best_only)
 {
     const int k = get_global_id(0);
     if (k >= nholes) return;
@@ -174,11 +175,11 @@ __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __glob
         }
     if (smin < 0) return;
     if (best_only) {
-        for (int c = 0; c < nch; ++c) img[c * plane + p] = img[c * plane + smin];
+        for (int c = 0; c < nout; ++c) img[c * plane + p] = img[c * plane + smin];
         return;
     }
     REAL acc[NCH_MAX];
-    for (int c = 0; c < nch; ++c) acc[c] = 0;
+    for (int c = 0; c < nout; ++c) acc[c] = 0;
     REAL wsum = 0;
     for (int oy = oy0; oy <= oy1; ++oy)
         for (int ox = ox0; ox <= ox1; ++ox) {
@@ -189,15 +190,15 @@ __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __glob
             const int sp = (s.y + oy) * W + s.x + ox;
             const REAL w = exp(-(dq - dmin) / (2 * sigma2));
             wsum += w;
-            for (int c = 0; c < nch; ++c) acc[c] += w * img[c * plane + sp];
+            for (int c = 0; c < nout; ++c) acc[c] += w * img[c * plane + sp];
         }
-    for (int c = 0; c < nch; ++c) img[c * plane + p] = acc[c] / wsum;
+    for (int c = 0; c < nout; ++c) img[c * plane + p] = acc[c] / wsum;
 }
 
 // Onion-peel start: each pixel of the current layer takes the centre value of its source.
 __kernel void pm_copy_centre(__global REAL* img, const __global int2* nnf,
                              const __global REAL* dist, const __global int* pixels,
-                             const int npixels, const int W, const int H, const int nch)
+                             const int npixels, const int W, const int H, const int nout)
 {
     const int k = get_global_id(0);
     if (k >= npixels) return;
@@ -205,5 +206,5 @@ __kernel void pm_copy_centre(__global REAL* img, const __global int2* nnf,
     if (!isfinite(dist[p])) return;
     const int2 s = nnf[p];
     const int plane = W * H;
-    for (int c = 0; c < nch; ++c) img[c * plane + p] = img[c * plane + s.y * W + s.x];
+    for (int c = 0; c < nout; ++c) img[c * plane + p] = img[c * plane + s.y * W + s.x];
 }

@@ -53,18 +53,12 @@ DEFAULTS = {
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 
 
-def MARGIN(params: dict | None = None) -> int:
+def MARGIN(omega=None, search=DEFAULTS["search"], **_params) -> int:
     """Context pixels the method needs around a hole component: its search region."""
-    return int((params or {}).get("search", DEFAULTS["search"]))
+    return int(search)
 
 
 def _params(params: dict) -> dict:
-    unknown = set(params) - set(DEFAULTS) - {"guide"}
-    if unknown:
-        raise InputError(
-            f"method 'exemplar' takes no parameter {', '.join(sorted(unknown))}; "
-            f"its parameters are {', '.join(sorted(DEFAULTS))}"
-        )
     p = {**DEFAULTS, **params}
     patch = p["patch"]
     if not isinstance(patch, (int, np.integer)) or patch < 3 or patch % 2 == 0:
@@ -150,11 +144,13 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
 
 
 class _Level:
-    def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int):
+    def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int,
+                 nout: int | None = None):
         self.rt = runtime
         self.q = runtime.queue
         self.dtype = np.dtype(dtype)
         self.nch, self.H, self.W = img.shape
+        self.nout = self.nch if nout is None else nout  # planes the votes fill; then guides
         self.r = patch // 2
         self.hole = hole
         defines = {"PATCH": patch, "NCH_MAX": self.nch}
@@ -242,7 +238,7 @@ class _Level:
         hl, hn = self.holes
         self._launch(self.k_vote, hn, self.img.data, self.nnf[0].data, self.dist.data, hl.data,
                      np.int32(hn), np.int32(self.W), np.int32(self.H), np.int32(self.nch),
-                     self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
+                     np.int32(self.nout), self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
         return sigma2
 
     def onion_peel(self, rng, passes: int, seed: int, counter: list) -> None:
@@ -257,7 +253,7 @@ class _Level:
             self.patchmatch(passes, lst, True, seed, counter)
             self._launch(self.k_copy, lst[1], self.img.data, self.nnf[0].data, self.dist.data,
                          lst[0].data, np.int32(lst[1]), np.int32(self.W), np.int32(self.H),
-                         np.int32(self.nch))
+                         np.int32(self.nout))
             filled = filled | layer
         self.d_use.fill(1)
 
@@ -276,7 +272,10 @@ def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
 # ---------------------------------------------------------------------------------------
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, **params):
+def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
+          patch=DEFAULTS["patch"], search=DEFAULTS["search"], iterations=DEFAULTS["iterations"],
+          passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
+          onion_passes=DEFAULTS["onion_passes"], guide=None):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (48 px of context around the hole's box),
@@ -286,7 +285,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, *
     e.g. an inpainted structure image). ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
-    p = _params(params)
+    p = _params({"patch": patch, "search": search, "iterations": iterations, "passes": passes,
+                 "features": features, "levels": levels, "onion_passes": onion_passes})
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, copy=True)
@@ -300,46 +300,48 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, *
     r = patch // 2
     nc = data.shape[0]
 
-    box = _box(omega, MARGIN(p))
+    box = _box(omega, MARGIN(omega, p["search"]))
     hole = omega[box]
-    planes = [np.asarray(data[(slice(None),) + box], np.float64)]
-    weights = [1.0] * nc
-    guide = p.get("guide")
+    colour = np.asarray(data[(slice(None),) + box], np.float64)
+    guides = None
     if guide is not None:
         guide = np.asarray(guide, np.float64)
-        if guide.ndim == 2:
-            guide = guide[None]
+        guide = guide[None] if guide.ndim == 2 else guide
         if guide.shape[1:] != data.shape[1:]:
-            raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, {data.shape[2]})")
-        planes.append(guide[(slice(None),) + box])
-        weights += [1.0] * guide.shape[0]
-    colour = np.concatenate(planes)
+            raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
+                             f"{data.shape[2]}) planes known everywhere, the hole included")
+        guides = guide[(slice(None),) + box]
     if min(hole.shape) < patch + 2:
         raise InputError(
             f"the region around the hole ({hole.shape[0]}x{hole.shape[1]} px) is smaller than "
             f"a {patch}x{patch} patch; use a smaller patch"
         )
 
-    levels = p["levels"] or _levels_for(hole, r, hole.shape)
-    pyramid = [(colour, hole)]
-    for _ in range(levels - 1):
-        c, h = _downsample(*pyramid[-1])
+    nlevels = p["levels"] or _levels_for(hole, r, hole.shape)
+    pyramid = [(colour, hole, guides)]
+    for _ in range(nlevels - 1):
+        c, h, g = pyramid[-1]
+        c, h = _downsample(c, h)
         if min(h.shape) < patch + 2 or h.all():
             break
-        pyramid.append((c, h))
+        if g is not None:  # guides are known everywhere: plain 2 x 2 means
+            g = _downsample(g, np.zeros(g.shape[1:], bool))[0]
+        pyramid.append((c, h, g))
 
     fw = float(p["features"])
     counter = [0]
     prev_nnf = None
     for level in range(len(pyramid) - 1, -1, -1):
-        c, h = pyramid[level]
+        c, h, g = pyramid[level]
+        planes, w = [c], [1.0] * nc
         if fw > 0:
-            feats = texture_features(c[:nc], h, patch)
-            img = np.concatenate([c, feats])
-            w = weights + [fw * nc / 2] * 2
-        else:
-            img, w = c, weights
-        lv = _Level(runtime, dtype, img, h, w, patch)
+            planes.append(texture_features(c, h, patch))
+            w += [fw * nc / 2] * 2
+        nout = sum(len(x) for x in planes)
+        if g is not None:
+            planes.append(g)
+            w += [1.0] * len(g)
+        lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout)
         if prev_nnf is None:
             lv.onion_peel(rng, int(p["onion_passes"]), seed, counter)
             lv.set_nnf(lv.nnf_to_host(), rng)

@@ -33,10 +33,12 @@ def distances(img, weights, nnf, targets, r, use=None):
     return out
 
 
-def vote(img, nnf, dist, hole, r, sigma2, best_only=False):
+def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None):
     """New hole values: each covering patch q proposes its source's value at the same
-    offset, weighted by exp(-(d_q - d_min) / (2 sigma2)); best_only keeps the closest's."""
+    offset, weighted by exp(-(d_q - d_min) / (2 sigma2)); best_only keeps the closest's.
+    Only the first `nout` planes change (the others are guides)."""
     nch, H, W = img.shape
+    nout = nch if nout is None else nout
     out = img.astype(np.float64).copy()
     for py, px in zip(*np.nonzero(hole)):
         props = []
@@ -46,13 +48,13 @@ def vote(img, nnf, dist, hole, r, sigma2, best_only=False):
                 if not (0 <= qy < H and 0 <= qx < W) or not np.isfinite(dist[qy, qx]):
                     continue
                 sx, sy = nnf[qy, qx]
-                props.append((dist[qy, qx], img[:, sy + oy, sx + ox]))
+                props.append((dist[qy, qx], img[:nout, sy + oy, sx + ox]))
         if not props:
             continue
         dmin = min(d for d, _ in props)
         if best_only:
-            out[:, py, px] = next(v for d, v in props if d == dmin)
+            out[:nout, py, px] = next(v for d, v in props if d == dmin)
             continue
         w = np.array([np.exp(-(d - dmin) / (2 * sigma2)) for d, _ in props])
-        out[:, py, px] = np.sum(w[:, None] * np.array([v for _, v in props]), 0) / w.sum()
+        out[:nout, py, px] = np.sum(w[:, None] * np.array([v for _, v in props]), 0) / w.sum()
     return out
