@@ -104,14 +104,18 @@ __kernel void pm_pass(const __global REAL* img, const __global uchar* use, const
                       const __global int2* nnf_in, __global int2* nnf_out, __global REAL* dist,
                       const __global int* targets, const int ntargets,
                       const int W, const int H, const int nch, const __global REAL* chw,
-                      const int jump, const int radius, const uint seed, const uint pass)
+                      const int jump, const int radius, const uint seed, const uint pass,
+                      const int rescore)
 {
     const int k = get_global_id(0);
     if (k >= ntargets) return;
     const int t = targets[k];
     const int px = t % W, py = t / W;
     int2 best = nnf_in[t];
-    REAL bd = patch_distance(img, use, masked, W, H, nch, chw, px, py, best.x, best.y, INFINITY);
+    // The first pass after a vote rescores the current source; later ones trust dist.
+    REAL bd = rescore ? patch_distance(img, use, masked, W, H, nch, chw, px, py, best.x, best.y,
+                                       INFINITY)
+                      : dist[t];
 
     const int dx[4] = {-1, 1, 0, 0};
     const int dy[4] = {0, 0, -1, 1};

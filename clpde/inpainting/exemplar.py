@@ -220,7 +220,8 @@ class _Level:
             self._launch(self.k_pass, n, self.img.data, self.d_use.data, np.int32(masked),
                          self.d_valid.data, self.nnf[0].data, self.nnf[1].data, self.dist.data,
                          lst.data, np.int32(n), *self._args(), np.int32(jump),
-                         np.int32(self.radius), np.uint32(seed), np.uint32(counter[0]))
+                         np.int32(self.radius), np.uint32(seed), np.uint32(counter[0]),
+                         np.int32(j == 0))
             counter[0] += 1
             self.nnf.reverse()
 

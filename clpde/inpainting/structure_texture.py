@@ -21,7 +21,7 @@ from scipy import ndimage
 from ..imagedata import InputError
 from . import exemplar
 
-DEFAULTS = {"tv_weight": 0.1, "guide": 0.5, "structure": None}
+DEFAULTS = {"tv_weight": 1.0, "guide": 0.5, "structure": None}
 STRUCTURE_METHODS = ("coherence", "transport")
 
 
