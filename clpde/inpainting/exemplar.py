@@ -49,6 +49,7 @@ DEFAULTS = {
     "features": 1.0,  # weight of the texture features in the patch distance; 0 turns them off
     "levels": None,  # pyramid levels; None chooses from the hole's thickness
     "onion_passes": 4,  # PatchMatch passes per shell of the coarsest level's onion peel
+    "sharpen": True,  # the last vote takes the closest patch's value (else the weighted mean)
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 
@@ -276,7 +277,7 @@ def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           patch=DEFAULTS["patch"], search=DEFAULTS["search"], iterations=DEFAULTS["iterations"],
           passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
-          onion_passes=DEFAULTS["onion_passes"], guide=None):
+          onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"], guide=None):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (48 px of context around the hole's box),
@@ -352,7 +353,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             lv.vote()
         for it in range(int(p["iterations"])):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
-            lv.vote(best_only=(level == 0 and it == int(p["iterations"]) - 1))
+            last = level == 0 and it == int(p["iterations"]) - 1
+            lv.vote(best_only=bool(sharpen) and last)
         prev_nnf = lv.nnf_to_host()
         if level == 0:
             result = lv.image()
