@@ -8,7 +8,8 @@ overlaps the hole, of the distance to its nearest patch in the known part:
 - An image pyramid (2 x 2 averages of the known pixels; a coarse pixel is in the hole when
   any pixel under it is), with as many levels as bring the hole's half-thickness down to
   about a patch radius.
-- At each level, alternate a few times: nearest-neighbour fields (NNF) by PatchMatch (random
+- At each level, alternate a few times (6 at the coarsest level, 3 at the finer ones, which
+  start from a good field): nearest-neighbour fields (NNF) by PatchMatch (random
   search plus propagation, all targets in parallel on the device, propagating with jumps
   4, 2, 1 in the manner of jump flooding); then each hole pixel from the votes of the patches
   covering it, weighted by exp(-d / 2 sigma^2), sigma^2 the 75th percentile of the distances.
@@ -37,6 +38,7 @@ import math
 import numpy as np
 import pyopencl.array as cla
 from scipy import ndimage
+from tqdm.auto import tqdm
 
 from ..imagedata import InputError
 
@@ -44,7 +46,8 @@ KERNELS = "patchmatch.cl"
 DEFAULTS = {
     "patch": 7,  # patch side, odd
     "search": 48,  # search region around the hole's box, in pixels of the finest level
-    "iterations": 6,  # EM iterations (PatchMatch, then vote) per level
+    "iterations": 6,  # EM iterations (PatchMatch, then vote) at the coarsest level
+    "fine_iterations": 3,  # at each finer level, which starts from the coarser field
     "passes": 3,  # PatchMatch passes per iteration (jumps 4, 2, 1)
     "features": 1.0,  # weight of the texture features in the patch distance; 0 turns them off
     "levels": None,  # pyramid levels; None chooses from the hole's thickness
@@ -64,7 +67,7 @@ def _params(params: dict) -> dict:
     patch = p["patch"]
     if not isinstance(patch, (int, np.integer)) or patch < 3 or patch % 2 == 0:
         raise InputError(f"patch must be an odd integer >= 3 (the patch side), not {patch!r}")
-    for name in ("search", "iterations", "passes", "onion_passes"):
+    for name in ("search", "iterations", "fine_iterations", "passes", "onion_passes"):
         v = p[name]
         if not isinstance(v, (int, np.integer)) or v < (0 if name == "search" else 1):
             raise InputError(f"{name} must be a positive integer, not {v!r}")
@@ -276,18 +279,22 @@ def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
 
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           patch=DEFAULTS["patch"], search=DEFAULTS["search"], iterations=DEFAULTS["iterations"],
+          fine_iterations=DEFAULTS["fine_iterations"],
           passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
           onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"], guide=None):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (48 px of context around the hole's box),
-    iterations (6 per level), passes (3 PatchMatch passes per iteration), features (1.0,
-    weight of the texture features; 0 turns them off), levels (automatic), onion_passes (4),
-    guide (extra (k, rows, cols) planes that enter the patch distance but are not returned,
-    e.g. an inpainted structure image). ``seed`` (default 0) fixes the random search.
+    iterations (6 at the coarsest level), fine_iterations (3 at each finer one), passes (3
+    PatchMatch passes per iteration), features (1.0, weight of the texture features; 0 turns
+    them off), levels (automatic), onion_passes (4), sharpen (True: the last vote takes the
+    closest patch), guide (extra (k, rows, cols) planes, known everywhere, that enter the
+    patch distance but are not filled, e.g. an inpainted structure image). ``seed``
+    (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
-    p = _params({"patch": patch, "search": search, "iterations": iterations, "passes": passes,
+    p = _params({"patch": patch, "search": search, "iterations": iterations,
+                 "fine_iterations": fine_iterations, "passes": passes,
                  "features": features, "levels": levels, "onion_passes": onion_passes})
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
@@ -333,6 +340,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     fw = float(p["features"])
     counter = [0]
     prev_nnf = None
+    bar = tqdm(total=len(pyramid), desc="exemplar levels", disable=not progress, leave=False)
     for level in range(len(pyramid) - 1, -1, -1):
         c, h, g = pyramid[level]
         planes, w = [c], [1.0] * nc
@@ -344,6 +352,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             planes.append(g)
             w += [1.0] * len(g)
         lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout)
+        # A level started from the coarser field needs fewer iterations than the coarsest.
+        its = int(p["iterations"] if prev_nnf is None else p["fine_iterations"])
         if prev_nnf is None:
             lv.onion_peel(rng, int(p["onion_passes"]), seed, counter)
             lv.set_nnf(lv.nnf_to_host(), rng)
@@ -351,13 +361,15 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             lv.set_nnf(_upsample_nnf(prev_nnf, h.shape), rng)
             lv.score()
             lv.vote()
-        for it in range(int(p["iterations"])):
+        for it in range(its):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
-            last = level == 0 and it == int(p["iterations"]) - 1
+            last = level == 0 and it == its - 1
             lv.vote(best_only=bool(sharpen) and last)
         prev_nnf = lv.nnf_to_host()
+        bar.update()
         if level == 0:
             result = lv.image()
+    bar.close()
     filled = out[(slice(None),) + box]
     filled[:, hole] = result[:nc][:, hole].astype(out.dtype)
     return out
