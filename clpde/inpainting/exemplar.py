@@ -42,10 +42,9 @@ from tqdm.auto import tqdm
 
 from ..imagedata import InputError
 
-KERNELS = "patchmatch.cl"
 DEFAULTS = {
     "patch": 7,  # patch side, odd
-    "search": 48,  # search region around the hole's box, in pixels of the finest level
+    "search": 128,  # search region around the hole's box, in pixels of the finest level
     "iterations": 6,  # EM iterations (PatchMatch, then vote) at the coarsest level
     "fine_iterations": 3,  # at each finer level, which starts from the coarser field
     "passes": 3,  # PatchMatch passes per iteration (jumps 4, 2, 1)
@@ -158,9 +157,11 @@ class _Level:
         self.r = patch // 2
         self.hole = hole
         defines = {"PATCH": patch, "NCH_MAX": self.nch}
-        k = lambda name: runtime.kernel(KERNELS, name, self.dtype, **defines)
-        self.k_pass, self.k_score = k("pm_pass"), k("pm_score")
-        self.k_vote, self.k_copy = k("pm_vote"), k("pm_copy_centre")
+        rt, dt = runtime, self.dtype
+        self.k_pass = rt.kernel("patchmatch.cl", "pm_pass", dt, **defines)
+        self.k_score = rt.kernel("patchmatch.cl", "pm_score", dt, **defines)
+        self.k_vote = rt.kernel("patchmatch.cl", "pm_vote", dt, **defines)
+        self.k_copy = rt.kernel("patchmatch.cl", "pm_copy_centre", dt, **defines)
 
         self.valid = _valid_sources(hole, self.r)
         self.valid_idx = np.flatnonzero(self.valid)
@@ -284,7 +285,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"], guide=None):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
-    Parameters (all optional): patch (7), search (48 px of context around the hole's box),
+    Parameters (all optional): patch (7), search (128 px of context around the hole's box),
     iterations (6 at the coarsest level), fine_iterations (3 at each finer one), passes (3
     PatchMatch passes per iteration), features (1.0, weight of the texture features; 0 turns
     them off), levels (automatic), onion_passes (4), sharpen (True: the last vote takes the
