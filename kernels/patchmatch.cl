@@ -8,10 +8,11 @@
 //
 // The nearest-neighbour field (NNF) holds, per pixel, the source centre (x, y) as an int2.
 // One PatchMatch pass, for each target in parallel, reads the previous field and writes the
-// next (ping-pong): it rescores its current source on the current image, tries the sources
+// next (ping-pong): it rescores its current source (first pass after a vote), tries the sources
 // its four neighbours at distance `jump` point to, shifted back by that distance (jump
 // flooding: the host runs jumps 4, 2, 1, so good offsets cross a patch in one pass), then a
-// random search around its best with radius halving from `radius` to 1. The random numbers
+// random search around its best with radius halving from `radius` to 1 (none when radius is
+// 0: the host searches in the first pass of an iteration only). The random numbers
 // come from a hash of (seed, pass, pixel, trial): results depend only on the seed.
 //
 // Patch distance: the mean over the patch pixels inside the box of

