@@ -96,6 +96,18 @@ def test_constant_image_gives_the_constant(runtime, dtype):
     np.testing.assert_allclose(out, 0.3, atol=1e-6 if dtype == np.float32 else 1e-14)
 
 
+def test_values_in_the_hole_are_not_read(runtime):
+    img = _periodic(64)
+    omega = np.zeros(img.shape[1:], bool)
+    omega[20:40, 24:44] = True
+    a, b = img.copy(), img.copy()
+    a[:, omega] = np.nan
+    b[:, omega] = 0.9
+    out = exemplar.solve(a, omega, runtime, seed=3)
+    assert np.isfinite(out).all()
+    assert np.array_equal(out, exemplar.solve(b, omega, runtime, seed=3))
+
+
 def test_same_seed_same_result(runtime):
     rng = np.random.default_rng(2)
     img = np.clip(0.5 + 0.2 * rng.standard_normal((3, 64, 64)), 0, 1)

@@ -315,7 +315,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
 
     box = _box(omega, MARGIN(omega, p["search"]))
     hole = omega[box]
-    colour = np.asarray(data[(slice(None),) + box], np.float64)
+    colour = np.asarray(data[(slice(None),) + box], np.float64).copy()
+    colour[:, hole] = 0  # values there are unknown, may be NaN, and are never read
     guides = None
     if guide is not None:
         guide = np.asarray(guide, np.float64)
@@ -335,8 +336,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     for _ in range(nlevels - 1):
         c, h, g = pyramid[-1]
         c, h = _downsample(c, h)
-        if min(h.shape) < patch + 2 or h.all():
-            break
+        if min(h.shape) < patch + 2 or not _valid_sources(h, r).any():
+            break  # a level with nothing to copy from would only guess
         if g is not None:  # guides are known everywhere: plain 2 x 2 means
             g = _downsample(g, np.zeros(g.shape[1:], bool))[0]
         pyramid.append((c, h, g))
