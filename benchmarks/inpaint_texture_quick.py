@@ -4,13 +4,14 @@
                                                [--speed]
 
 For each case of texture_cases() (texture, periodic and thick-hole classes) it runs
-clpde's exemplar and structure-texture methods, scikit-image's inpaint_biharmonic, and
-OpenCV's INPAINT_NS and INPAINT_TELEA (radius 3), and reports PSNR in the hole, SSIM in the
-holes' boxes (the mean of the SSIM map over the union of each hole's bounding box), the
-edge energy (texture kept in the hole; 1 is the original's) and wall time. Then the mean
-per class and method (PSNR capped at 60 dB, an exact fill being infinite), as a Markdown
-table, and all rows as JSON. The full comparison, with
-part 1's methods and cases, is benchmarks/inpaint_quality.py.
+clpde's exemplar and structure-texture methods, clpde.inpaint's default method,
+scikit-image's inpaint_biharmonic, OpenCV's INPAINT_NS and INPAINT_TELEA (radius 3), and
+two CPU PatchMatch inpainting packages from PyPI (pypatchmatch 2.2, patchmatch-cython 0.2;
+in the [bench] extra), and reports PSNR in the hole, SSIM in the holes' boxes (the mean of
+the SSIM map over the union of each hole's bounding box), the edge energy (texture kept in
+the hole; 1 is the original's) and wall time. Then the mean per class and method (PSNR
+capped at 60 dB, an exact fill being infinite), as a Markdown table, and all rows as JSON.
+The full comparison, with part 1's methods and cases, is benchmarks/inpaint_quality.py.
 """
 
 from __future__ import annotations
@@ -63,6 +64,14 @@ def clpde_method(name):
         out = module.solve(to_data(image), mask, get_runtime(), seed=0)
         return from_data(out, image)
     return run
+
+
+def clpde_default(image, mask):
+    """clpde.inpaint with its default method (the thesis's transport before issue 14)."""
+    import clpde
+
+    axis = -1 if np.asarray(image).ndim == 3 else None
+    return clpde.inpaint(image, mask, channel_axis=axis)
 
 
 def biharmonic(image, mask):
@@ -119,6 +128,7 @@ def methods():
         "patchmatch-cython": patchmatch_cython,
         "clpde-exemplar": clpde_method("exemplar"),
         "clpde-structure-texture": clpde_method("structure-texture"),
+        "clpde-default": clpde_default,
         "skimage-biharmonic": biharmonic,
         "opencv-ns": opencv(cv2.INPAINT_NS),
         "opencv-telea": opencv(cv2.INPAINT_TELEA),
