@@ -55,21 +55,25 @@ def side_by_side(*images, gap: int = 6) -> np.ndarray:
     return np.concatenate(parts[:-1], axis=1)
 
 
-def run_demo(outdir, device=None, progress=None) -> list[Path]:
-    """Damage the photo, inpaint it and write the PNGs into `outdir`; returns the paths."""
+def run_demo(outdir, device=None, progress=None, overwrite=False) -> list[Path]:
+    """Damage the photo, inpaint it and write the PNGs into the folder `outdir`; returns the
+    paths. The folder is created if missing; an existing one must be empty, or with
+    overwrite=True hold only clpde's kinds of output files (clpde.io.output_folder)."""
     from . import inpaint
-    from .io import write_image
+    from .io import check_output_folder, output_folder, write_image
 
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    check_output_folder(outdir, overwrite)
     original, damaged, mask = demo_case()
     restored, info = inpaint(damaged, mask, channel_axis=-1, device=device, progress=progress,
                              return_info=True)
     written = []
-    for name, image in (("original.png", original), ("damaged.png", damaged),
-                        ("mask.png", mask.astype(np.uint8) * 255), ("inpainted.png", restored),
-                        ("inpaint_before_after.png", side_by_side(damaged, restored))):
-        written.append(write_image(outdir / name, image))
+    with output_folder(outdir, overwrite) as staging:
+        for name, image in (("original.png", original), ("damaged.png", damaged),
+                            ("mask.png", mask.astype(np.uint8) * 255), ("inpainted.png", restored),
+                            ("inpaint_before_after.png", side_by_side(damaged, restored))):
+            write_image(staging / name, image)
+            written.append(outdir / name)
     diff = restored[mask].astype(float) - original[mask]
     psnr = 10 * np.log10(255**2 / np.mean(diff**2))
     print(f"inpainted {mask.sum()} pixels ({100 * mask.mean():.1f}%) in {info.steps} steps, "

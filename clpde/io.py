@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -216,3 +217,72 @@ def check_not_overwriting_input(inputs, output) -> None:
                 f"output {out} is the input file {src}; clpde never overwrites its inputs, "
                 "choose another output file name"
             )
+
+
+# ---- output folders ---------------------------------------------------------------------
+# What clpde writes into output folders; a folder holding anything else is never replaced.
+OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg"}
+
+
+def check_output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True") -> Path:
+    """Refuse, before any work, an output folder that a run could not replace as a whole.
+
+    The rule of every command that writes a folder: the folder is created if missing (its
+    parent must exist); an existing one must be empty, unless `overwrite`, which replaces
+    the whole folder, and only if it holds nothing but files of the kinds clpde writes
+    (OUTPUT_SUFFIXES), so that a run's folder holds that run's outputs only. `option` names
+    the way to ask for overwriting in the caller's interface (e.g. '--overwrite').
+    """
+    outdir = Path(outdir)
+    parent = outdir.parent if str(outdir.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"the folder {parent} for the output {outdir} does not exist; "
+                         "create it first")
+    if not outdir.exists():
+        return outdir
+    if not outdir.is_dir():
+        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
+    entries = sorted(outdir.iterdir())
+    if not entries:
+        return outdir
+    if not overwrite:
+        raise InputError(
+            f"output folder {outdir} is not empty ({len(entries)} entries); choose a new "
+            f"folder, or give {option} to replace its contents")
+    foreign = [e.name for e in entries if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES]
+    if foreign:
+        raise InputError(
+            f"output folder {outdir} holds {foreign[0]!r}, which clpde does not write, so it "
+            f"will not replace the folder even with {option}; choose another folder")
+    return outdir
+
+
+@contextlib.contextmanager
+def output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True"):
+    """Yield an empty staging folder beside `outdir`; on success it becomes `outdir` (the old
+    folder, if any, is removed as a unit); on failure it is removed and `outdir` is left as
+    it was. See check_output_folder for the rule."""
+    outdir = check_output_folder(outdir, overwrite, option=option)
+    parent = outdir.parent if str(outdir.parent) else Path(".")
+    staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".part"))
+    try:
+        yield staging
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+        if outdir.exists():
+            # rename(2) may replace an empty folder: move the old one aside into an empty
+            # temporary name, put the new one in place, then delete the old one
+            old = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".old"))
+            os.replace(outdir, old)
+            os.replace(staging, outdir)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(staging, outdir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

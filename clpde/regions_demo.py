@@ -162,17 +162,27 @@ def run_scene(scene: Scene, saves=4, progress=None, device=None):
                         origin=scene.origin, progress=progress, device=device, **scene.options)
 
 
-def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions"):
+def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions",
+                 overwrite=False):
     """OUTDIR/<stem>_<k>.ply per frame and OUTDIR/<stem>.png: frames top to bottom, views
     side by side, as a 128-colour palette PNG (two shaded colours on white: no visible loss,
-    2.5x smaller than RGB). Returns the paths written."""
+    2.5x smaller than RGB). OUTDIR is created if missing; an existing one must be empty, or
+    with overwrite=True hold only clpde's kinds of output files, and is then replaced as a
+    whole (clpde.io.output_folder). Returns the paths written."""
+    from .io import output_folder
+
+    with output_folder(outdir, overwrite) as staging:
+        written = _write_frame_files(frames, str(staging), size, views, stem)
+    return [os.path.join(outdir, os.path.basename(p)) for p in written]
+
+
+def _write_frame_files(frames, outdir, size, views, stem):
     import io
 
     from PIL import Image
 
     from .surface.render import _atomic_write, export_mesh, render_mesh
 
-    os.makedirs(outdir, exist_ok=True)
     written = []
     rows = []
     for k, frame in enumerate(frames):

@@ -38,3 +38,45 @@ def test_default_denoise_works_without_pywavelets(noisy_png, tmp_path, monkeypat
     # sigma was estimated near the 15 grey levels added: the residual reaches it
     residual = float(capsys.readouterr().err.split("residual std ")[1].split()[0])
     assert residual == pytest.approx(15, rel=0.2)
+
+
+# ---- 2 and 7. one rule for output folders -------------------------------------------------
+def test_regions_rerun_holds_only_its_own_files(tmp_path, capsys):
+    out = tmp_path / "out"
+    args = ["regions", "merge", "-o", str(out), "--spacing", "0.1", "--size", "32"]
+    assert main([*args, "--saves", "2"]) == 0
+    capsys.readouterr()
+    assert main([*args, "--saves", "1"]) == 2
+    assert "is not empty (4 entries); choose a new folder, or give --overwrite" in _one_error_line(capsys)
+    assert main([*args, "--saves", "1", "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["regions.png", "regions_0.ply", "regions_1.ply"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging or old folder left
+
+
+@pytest.mark.parametrize("command", [
+    ["surface", "heat", "sphere"],
+    ["regions", "merge"],
+    ["inpaint", "--demo"],
+    ["track", "FRAMES", "--init", "MASK"],
+])
+def test_every_folder_command_has_one_rule(tmp_path, capsys, command):
+    """Refused before any work: a non-empty folder without --overwrite, a folder with files
+    clpde does not write even with it, and a missing parent (create it first)."""
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    write_image(frames / "f1.png", np.zeros((8, 8), np.uint8))
+    write_image(tmp_path / "mask.png", np.zeros((8, 8), np.uint8))
+    command = [str(frames) if a == "FRAMES" else str(tmp_path / "mask.png") if a == "MASK" else a
+               for a in command]
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "old.png").write_bytes(b"old")
+    assert main([*command, "-o", str(out)]) == 2
+    assert "give --overwrite" in _one_error_line(capsys)
+    (out / "notes.txt").write_text("mine")
+    assert main([*command, "-o", str(out), "--overwrite"]) == 2
+    assert "'notes.txt', which clpde does not write" in _one_error_line(capsys)
+    assert main([*command, "-o", str(tmp_path / "no" / "such")]) == 2
+    assert "does not exist; create it first" in _one_error_line(capsys)
+    assert sorted(os.listdir(out)) == ["notes.txt", "old.png"]
+    assert not (tmp_path / "no").exists()

@@ -25,9 +25,11 @@ def test_surface_on_a_mesh_file_and_errors(tmp_path, capsys):
     out = tmp_path / "curv"
     assert main(["surface", "curvature", str(path), "-o", str(out), "--resolution", "24", "--size", "48"]) == 0
     assert (out / "result.glb").stat().st_size > 0
-    assert main(["surface", "heat", str(tmp_path / "missing.obj"), "-o", str(out)]) == 2
+    assert main(["surface", "heat", str(tmp_path / "missing.obj"), "-o", str(out),
+                 "--overwrite"]) == 2
     assert "neither a mesh file" in capsys.readouterr().err
-    assert main(["surface", "flowvis", "sphere", "-o", str(out), "--direction", "none"]) == 2
+    assert main(["surface", "flowvis", "sphere", "-o", str(out), "--direction", "none",
+                 "--overwrite"]) == 2
 
 
 def test_surface_chroma_denoises_a_meshs_own_colours(tmp_path, capsys):
@@ -55,7 +57,8 @@ def test_surface_chroma_denoises_a_meshs_own_colours(tmp_path, capsys):
     # a mesh without colours cannot give them
     plain = tmp_path / "plain.ply"
     trimesh.creation.icosphere(2, radius=2.0).export(plain)
-    assert main(["surface", "heat", str(plain), "-o", str(out), "--resolution", "24", "--data", "mesh"]) == 2
+    assert main(["surface", "heat", str(plain), "-o", str(out), "--resolution", "24", "--data", "mesh",
+                 "--overwrite"]) == 2
     assert "no vertex colours" in capsys.readouterr().err
 
 

@@ -12,7 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input, check_writable, image_format, read_image, write_image
+from ..io import (
+    check_not_overwriting_input,
+    check_output_folder,
+    check_writable,
+    image_format,
+    read_image,
+    write_image,
+)
 from ..runtime import get_runtime
 
 
@@ -30,6 +37,25 @@ def add_image_arguments(parser) -> None:
     parser.add_argument("output", metavar="OUT",
                         help="output image; same formats; never the input file")
     add_device_argument(parser)
+
+
+OUTPUT_FOLDER_RULE = ("created if missing (its parent must exist); it must be empty, "
+                      "unless --overwrite, which replaces it as a whole")
+
+
+def add_output_folder_arguments(parser, what: str = "output folder") -> None:
+    """-o/--output OUTDIR and --overwrite, with the one rule of every folder-writing command."""
+    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
+                        help=f"{what}: {OUTPUT_FOLDER_RULE}")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace the output folder's contents (only a folder of clpde's "
+                             "kinds of output files: .png .gif .json .ply .glb .tif .jpg)")
+
+
+def check_output_folder_args(args, inputs=()) -> None:
+    """The output folder's checks, before any work: not an input, and the folder rule."""
+    check_not_overwriting_input(list(inputs), args.output)
+    check_output_folder(args.output, args.overwrite, option="--overwrite")
 
 
 def show_progress() -> bool:

@@ -9,7 +9,15 @@ import numpy as np
 from ..imagedata import InputError
 from ..io import check_not_overwriting_input, read_image
 from ..runtime import get_runtime
-from ._common import add_device_argument, load_input, save_output, show_progress, split_alpha
+from ._common import (
+    OUTPUT_FOLDER_RULE,
+    add_device_argument,
+    check_output_folder_args,
+    load_input,
+    save_output,
+    show_progress,
+    split_alpha,
+)
 
 
 def add_inpaint_parser(subparsers) -> None:
@@ -27,7 +35,11 @@ def add_inpaint_parser(subparsers) -> None:
     parser.add_argument("-o", "--output", metavar="OUT", required=True,
                         help="output image (with --demo: an output folder)")
     parser.add_argument("--demo", action="store_true",
-                        help="inpaint a bundled damaged photo; writes PNGs into the folder OUT")
+                        help="inpaint a bundled damaged photo; writes PNGs into the folder OUT "
+                             "(" + OUTPUT_FOLDER_RULE + ")")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="with --demo: replace the folder OUT's contents (only a folder of "
+                             "clpde's kinds of output files)")
     parser.add_argument("--gif", metavar="EVOLUTION.gif", default=None,
                         help="also write the evolution as an animated GIF")
     parser.add_argument("--gif-every", type=int, default=100, metavar="N",
@@ -75,11 +87,16 @@ def run_inpaint(args) -> int:
             raise InputError(
                 "--demo takes no IMAGE, MASK or --gif; it writes into the folder -o OUT")
         get_runtime(args.device)
-        written = run_demo(args.output, device=args.device, progress=show_progress())
+        check_output_folder_args(args)
+        written = run_demo(args.output, device=args.device, progress=show_progress(),
+                           overwrite=args.overwrite)
         print(f"wrote {len(written)} files to {args.output}", file=sys.stderr)
         return 0
     if not args.input or not args.mask:
         raise InputError("give IMAGE and MASK (or --demo)")
+    if args.overwrite:
+        raise InputError("--overwrite is for --demo's output folder; an output image is "
+                         "always replaced")
     if args.gif:
         check_not_overwriting_input([args.input, args.mask], args.gif)
         if not str(args.gif).lower().endswith(".gif"):

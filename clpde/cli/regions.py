@@ -5,9 +5,13 @@ from __future__ import annotations
 import sys
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input
 from ..runtime import get_runtime
-from ._common import add_device_argument, show_progress
+from ._common import (
+    add_device_argument,
+    add_output_folder_arguments,
+    check_output_folder_args,
+    show_progress,
+)
 
 
 def add_regions_parser(subparsers) -> None:
@@ -23,8 +27,7 @@ def add_regions_parser(subparsers) -> None:
                     "and OUTDIR/regions.png (saved times top to bottom).",
     )
     parser.add_argument("scene", metavar="SCENE", help="scene name or mesh file")
-    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
-                        help="output folder (created if missing; its files are replaced)")
+    add_output_folder_arguments(parser)
     parser.add_argument("--flow", choices=FLOWS, default="gaussian",
                         help="surface motion for a mesh file (default: gaussian, the positive "
                              "part of the Gaussian curvature)")
@@ -47,6 +50,7 @@ def run_regions(args) -> int:
     from ..regions_demo import SCENES, mesh_scene, run_scene, toy_scene, write_frames
 
     get_runtime(args.device)
+    check_output_folder_args(args, [] if args.scene in SCENES else [args.scene])
     if args.size < 16:
         raise InputError(f"--size must be at least 16, not {args.size}")
     if args.scene in SCENES:
@@ -54,11 +58,10 @@ def run_regions(args) -> int:
         if args.t is not None:
             scene.options["t"] = args.t
     else:
-        check_not_overwriting_input([args.scene], args.output)
         scene = mesh_scene(args.scene, args.flow, args.resolution, args.t, args.regions)
     frames = run_scene(scene, saves=args.saves, progress=show_progress(), device=args.device)
     written = write_frames(frames, args.output, size=args.size,
-                           views=((30.0, 25.0), (-60.0, 35.0)))
+                           views=((30.0, 25.0), (-60.0, 35.0)), overwrite=args.overwrite)
     share = ", ".join(f"{f.area_fraction(0):.3f}" for f in frames)
     print(f"regions {args.scene}: grid {'x'.join(map(str, scene.phi.shape[::-1]))}, region 0 "
           f"area fraction {share} at t = {', '.join(f'{f.time:g}' for f in frames)}; wrote "

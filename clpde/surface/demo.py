@@ -179,11 +179,22 @@ def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
                       f"the mesh's colours: chroma harmonic map p=1 and brightness TV flow to t={t:g}")
 
 
-def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400) -> list:
-    """before.png, after.png, result.ply and result.glb (after, coloured) in outdir."""
+def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400,
+              overwrite=False) -> list:
+    """before.png, after.png, result.ply and result.glb (after, coloured) in the folder
+    outdir, created if missing; an existing one must be empty, or with overwrite=True hold
+    only clpde's kinds of output files, and is then replaced as a whole
+    (clpde.io.output_folder). Returns the paths."""
+    from ..io import output_folder
+
+    with output_folder(outdir, overwrite) as staging:
+        names = _write_run_files(run, staging, views, size)
+    return [os.path.join(outdir, n) for n in names]
+
+
+def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
     from .render import export_mesh, render_mesh, to_mesh
 
-    os.makedirs(outdir, exist_ok=True)
     written = []
     after = to_mesh(run.surface, run.after)
     lo = hi = None
@@ -194,13 +205,11 @@ def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), s
     before = to_mesh(run.surface, run.before, vmin=lo, vmax=hi)
     for name, mesh in (("before", before), ("after", after)):
         image = np.concatenate([render_mesh(mesh, size, a, e) for a, e in views], axis=1)
-        path = os.path.join(outdir, f"{name}.png")
-        _write_png(path, image)
-        written.append(path)
+        _write_png(os.path.join(outdir, f"{name}.png"), image)
+        written.append(f"{name}.png")
     for ext in ("ply", "glb"):
-        path = os.path.join(outdir, f"result.{ext}")
-        export_mesh(after, path)
-        written.append(path)
+        export_mesh(after, os.path.join(outdir, f"result.{ext}"))
+        written.append(f"result.{ext}")
     return written
 
 
