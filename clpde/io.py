@@ -286,3 +286,51 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+# ---- masks ------------------------------------------------------------------------------
+LOSSY_FORMATS = ("JPEG",)
+MASK_RULE = ("grey masks are cut half-way between their darkest and brightest values (a "
+             "0/255 mask at 127.5); colour masks by their brightest channel; alpha is ignored")
+
+
+def read_mask(path, shape=None, *, what: str = "the image") -> np.ndarray:
+    """A mask image file as a boolean array: True where the mask is bright.
+
+    Pixels brighter than half-way between the file's darkest and brightest values are inside
+    (a 0/255 or 0/1 mask reads as drawn; a uniform nonzero mask is all inside); colour masks
+    are read by their brightest colour channel, an alpha channel is ignored. Warns when the
+    file is in a lossy format (JPEG blurs a mask's edges into grey ringing) or has more than
+    two levels, since either means the threshold decides the edge. `shape` (rows, columns),
+    if given, is the size it must have; `what` names the image it must match in the error.
+    """
+    import warnings
+
+    path = Path(path)
+    mask = read_image(path)
+    if mask.ndim == 3:
+        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
+        mask = mask[..., :channels].max(axis=-1)
+    if shape is not None and mask.shape != tuple(shape):
+        verb = "are" if what.endswith("s") else "is"
+        raise InputError(f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but "
+                         f"{what} {verb} {shape[1]}x{shape[0]}; give a mask of the same size")
+    if mask.dtype == bool:
+        return mask.copy()
+    if np.issubdtype(mask.dtype, np.floating) and not np.isfinite(mask).all():
+        raise InputError(f"the mask {path} contains NaN or infinite values; save it as a "
+                         "0/255 PNG")
+    lo, hi = mask.min(), mask.max()
+    if lo == hi:
+        return np.full(mask.shape, hi != 0)
+    cut = (float(lo) + float(hi)) / 2
+    levels = len(np.unique(mask))
+    if image_format(path) in LOSSY_FORMATS:
+        warnings.warn(f"the mask {path} is a lossy {image_format(path)} file, whose edges "
+                      f"come out grey; read as inside above {cut:g} (half-way between its "
+                      f"darkest and brightest values); save masks as PNG", stacklevel=2)
+    elif levels > 2:
+        warnings.warn(f"the mask {path} has {levels} grey levels, not two; read as inside "
+                      f"above {cut:g} (half-way between its darkest and brightest values)",
+                      stacklevel=2)
+    return mask > cut

@@ -18,6 +18,7 @@ import numpy as np
 
 from .imagedata import InputError
 from .io import IMAGE_FORMATS, atomic_output, output_folder, read_image, write_gif, write_image
+from .io import read_mask as _read_mask
 
 VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".webm", ".mpg", ".mpeg", ".m4v", ".ogv"}
 TIFF_SUFFIXES = {".tif", ".tiff"}
@@ -136,17 +137,14 @@ def read_frames(path, grey: bool = True) -> np.ndarray:
 
 
 def read_mask(path, shape=None) -> np.ndarray:
-    """A mask image as a boolean array (any nonzero pixel, of any colour, is inside)."""
-    mask = read_image(path)
-    if mask.ndim == 3:
-        mask = mask[..., :3].any(axis=-1) if mask.shape[-1] in (3, 4) else mask[..., 0]
-    mask = mask > 0
-    if shape is not None and mask.shape != tuple(shape):
-        raise InputError(
-            f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} but the frames are "
-            f"{shape[1]}x{shape[0]}; draw the mask on the first frame at its size"
-        )
-    return mask
+    """A mask image as a boolean array, sized as the frames (clpde.io.read_mask's rule)."""
+    if shape is None:
+        return _read_mask(path)
+    try:
+        return _read_mask(path, shape, what="the frames")
+    except InputError as exc:  # name the fix for a tracking mask
+        raise InputError(str(exc).replace("give a mask of the same size",
+                                          "draw the mask on the first frame at its size")) from None
 
 
 # ---- results ---------------------------------------------------------------------------

@@ -80,3 +80,19 @@ def test_every_folder_command_has_one_rule(tmp_path, capsys, command):
     assert "does not exist; create it first" in _one_error_line(capsys)
     assert sorted(os.listdir(out)) == ["notes.txt", "old.png"]
     assert not (tmp_path / "no").exists()
+
+
+# ---- 3. lossy and grey masks ----------------------------------------------------------------
+def test_inpaint_reads_a_jpeg_mask_at_half_range_and_warns(noisy_png, tmp_path, capsys):
+    from PIL import Image
+
+    path, image = noisy_png
+    truth = np.zeros(image.shape, bool)
+    truth[10:12, 5:40] = truth[25:27, 5:40] = True
+    Image.fromarray(truth.astype(np.uint8) * 255).save(tmp_path / "mask.jpg", quality=75)
+    assert main(["inpaint", str(path), str(tmp_path / "mask.jpg"), "-o", str(tmp_path / "o.png"),
+                 "--max-steps", "20", "--levels", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "clpde: warning: the mask" in err and "lossy JPEG" in err and ".py:" not in err
+    filled = int(err.split("inpaint: ")[1].split()[0])
+    assert abs(filled - truth.sum()) <= 0.05 * truth.sum()

@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
-
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input, read_image
+from ..io import MASK_RULE, check_not_overwriting_input, read_mask
 from ..runtime import get_runtime
 from ._common import (
     OUTPUT_FOLDER_RULE,
@@ -31,7 +29,7 @@ def add_inpaint_parser(subparsers) -> None:
     )
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
     parser.add_argument("mask", metavar="MASK", nargs="?",
-                        help="mask image of the same size; nonzero (white) = inpaint")
+                        help="mask image of the same size; white = inpaint (" + MASK_RULE + ")")
     parser.add_argument("-o", "--output", metavar="OUT", required=True,
                         help="output image (with --demo: an output folder)")
     parser.add_argument("--demo", action="store_true",
@@ -63,17 +61,6 @@ def add_inpaint_parser(subparsers) -> None:
     parser.set_defaults(run=run_inpaint)
 
 
-def _read_inpaint_mask(path, shape) -> np.ndarray:
-    mask = read_image(path)
-    if mask.ndim == 3:  # colour mask: any colour channel; an alpha channel is ignored
-        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
-        mask = (mask[..., :channels] != 0).any(axis=-1)
-    if mask.shape != tuple(shape):
-        raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
-                         f"is {shape[1]}x{shape[0]}; give a mask of the same size")
-    return mask != 0
-
-
 def run_inpaint(args) -> int:
     from ..inpaint import inpaint
     from ..io import write_gif
@@ -102,7 +89,7 @@ def run_inpaint(args) -> int:
         if not str(args.gif).lower().endswith(".gif"):
             raise InputError(f"--gif {args.gif}: the animation must be a .gif file")
     image = load_input(args, args.mask)
-    mask = _read_inpaint_mask(args.mask, image.shape[:2])
+    mask = read_mask(args.mask, image.shape[:2])
     parts = split_alpha(image, args.input)
     options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
                "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..imagedata import InputError
+from ..io import MASK_RULE
 from ..runtime import get_runtime
 from ._common import (
     add_device_argument,
@@ -25,7 +26,8 @@ def add_track_parser(subparsers) -> None:
     )
     parser.add_argument("input", metavar="INPUT", help="video file, image folder or TIFF stack")
     parser.add_argument("--init", metavar="MASK", required=True,
-                        help="mask image of the object in the first frame (nonzero = inside)")
+                        help="mask image of the object in the first frame, white = inside ("
+                             + MASK_RULE + ")")
     add_output_folder_arguments(parser)
     parser.add_argument("--features", choices=("intensity", "edges"), default="intensity",
                         help="what the frames are compared by (default: intensity)")
