@@ -96,3 +96,17 @@ def test_inpaint_reads_a_jpeg_mask_at_half_range_and_warns(noisy_png, tmp_path, 
     assert "clpde: warning: the mask" in err and "lossy JPEG" in err and ".py:" not in err
     filled = int(err.split("inpaint: ")[1].split()[0])
     assert abs(filled - truth.sum()) <= 0.05 * truth.sum()
+
+
+# ---- 4. a CLPDE_DEVICE that matches nothing -------------------------------------------------
+def test_devices_says_when_clpde_device_matches_nothing(monkeypatch, capsys):
+    monkeypatch.setenv("CLPDE_DEVICE", "bogus")
+    assert main(["devices"]) == 2
+    listed = capsys.readouterr()
+    err = listed.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("clpde: error: CLPDE_DEVICE='bogus' matches none")
+    assert "unset it" in err[0]
+    assert len(listed.out.splitlines()) == len(clpde.devices())  # the list, nothing marked
+    assert not [line for line in listed.out.splitlines() if line.startswith("*")]
+    monkeypatch.delenv("CLPDE_DEVICE")
+    assert main(["devices"]) == 0
