@@ -42,6 +42,8 @@ def read_image(path) -> np.ndarray:
     if not path.is_file():
         raise InputError(f"input {path} is not a file")
     kind = image_format(path)
+    if path.stat().st_size == 0:
+        raise InputError(f"input file {path} is empty (0 bytes); give an image file")
     try:
         if kind == "TIFF":
             import tifffile
@@ -50,13 +52,32 @@ def read_image(path) -> np.ndarray:
         else:
             import imageio.v3 as iio
 
-            image = iio.imread(path, plugin="pillow", extension=path.suffix.lower())
+            with _no_pixel_limit():
+                image = iio.imread(path, plugin="pillow", extension=path.suffix.lower())
+    except MemoryError:
+        raise InputError(f"{path} is too large to read into this computer's memory; crop or "
+                         "downscale it first") from None
     except Exception as exc:  # noqa: BLE001  (readers raise many types: all mean unreadable)
         detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise InputError(
             f"cannot read {path} as a {kind} image (damaged, or another format?): {detail}"
         ) from None
     return np.asarray(image)
+
+
+@contextlib.contextmanager
+def _no_pixel_limit():
+    """Lift Pillow's decompression-bomb limit (about 179 million pixels) while reading: it
+    guards servers against untrusted uploads, while clpde reads the local files its user
+    names, such as a 20000x20000 scan."""
+    from PIL import Image
+
+    limit = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None
+    try:
+        yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
 
 
 def check_writable(path, dtype, shape) -> None:

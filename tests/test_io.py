@@ -222,3 +222,22 @@ def test_colour_and_uniform_masks(tmp_path):
     assert read_mask(tmp_path / "w.png").all()
     with pytest.raises(InputError, match="is 5x4 pixels but the image is 6x4; give a mask"):
         read_mask(tmp_path / "w.png", (4, 6))
+
+
+# ---- large and empty files (issue 11, item 5) -------------------------------------------
+def test_large_images_are_not_blocked_by_pillows_bomb_limit(tmp_path, monkeypatch):
+    from PIL import Image
+
+    image = np.arange(60 * 70, dtype=np.uint32).reshape(60, 70).astype(np.uint8)
+    write_image(tmp_path / "big.png", image)
+    # the limit scaled down: 4200 pixels are more than twice it, where Pillow refuses to open
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1000)
+    np.testing.assert_array_equal(read_image(tmp_path / "big.png"), image)
+    assert Image.MAX_IMAGE_PIXELS == 1000  # restored for the rest of the program
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif", ".jpg"])
+def test_an_empty_file_is_reported_as_empty(tmp_path, suffix):
+    (tmp_path / f"e{suffix}").write_bytes(b"")
+    with pytest.raises(InputError, match=r"is empty \(0 bytes\)"):
+        read_image(tmp_path / f"e{suffix}")
