@@ -93,9 +93,10 @@ def check_writable(path, dtype, shape) -> None:
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
+        png = dtype in (np.dtype(np.uint8), np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
-            "channel(s); write a .png or .tif file instead"
+            f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
         )
     if kind == "PNG":
         if dtype not in (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(bool)):

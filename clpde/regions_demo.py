@@ -121,7 +121,12 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
         raise InputError(f"flow must be one of {', '.join(FLOWS)}, not {flow!r}")
     if regions not in ("auto", "colours", "curvature"):
         raise InputError(f"regions must be 'auto', 'colours' or 'curvature', not {regions!r}")
-    surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
+    from .surface.demo import encloses_volume
+
+    if isinstance(path, (str, os.PathLike)) and not os.path.exists(path):
+        raise InputError(f"the mesh file {path} does not exist")
+    with encloses_volume(path):
+        surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
     painted = None
     if regions == "colours":

@@ -110,3 +110,97 @@ def test_devices_says_when_clpde_device_matches_nothing(monkeypatch, capsys):
     assert not [line for line in listed.out.splitlines() if line.startswith("*")]
     monkeypatch.delenv("CLPDE_DEVICE")
     assert main(["devices"]) == 0
+
+
+# ---- 6. messages in command-line terms ------------------------------------------------------
+@pytest.fixture
+def nan_tiff(tmp_path):
+    y, x = np.mgrid[0:24, 0:30]
+    image = (0.2 + 0.02 * x).astype(np.float32)
+    holed = image.copy()
+    holed[8:12, 10:16] = np.nan
+    path = tmp_path / "holed.tif"
+    write_image(path, holed)
+    return path, image, np.isnan(holed)
+
+
+def test_inpaint_fills_nan_pixels_with_mask_nan(nan_tiff, tmp_path, capsys):
+    path, image, holes = nan_tiff
+    assert main(["inpaint", str(path), "nan", "-o", str(tmp_path / "filled.tif"),
+                 "--max-steps", "200"]) == 0
+    filled = read_image(tmp_path / "filled.tif")
+    assert filled.dtype == np.float32 and np.isfinite(filled).all()
+    np.testing.assert_array_equal(filled[~holes], image[~holes])
+    assert np.abs(filled[holes] - image[holes]).max() < 0.05  # a ramp continues
+    assert f"inpaint: {holes.sum()} pixels" in capsys.readouterr().err
+
+
+def test_nan_pixels_get_command_line_advice(nan_tiff, tmp_path, capsys):
+    path, _, _ = nan_tiff
+    write_image(tmp_path / "none.png", np.zeros((24, 30), np.uint8))
+    assert main(["inpaint", str(path), str(tmp_path / "none.png"), "-o", str(tmp_path / "o.tif")]) == 2
+    line = _one_error_line(capsys)
+    assert "24 NaN pixels outside the mask" in line and "give 'nan' as MASK" in line
+    assert "mask=None" not in line
+    assert main(["diffuse", str(path), str(tmp_path / "o.tif")]) == 2
+    line = _one_error_line(capsys)
+    assert f"clpde inpaint {path} nan -o FILLED.tif" in line and "clpde.inpaint" not in line
+    assert main(["inpaint", str(tmp_path / "none.png"), "nan", "-o", str(tmp_path / "o.png")]) == 2
+    assert "has no NaN pixels to fill" in _one_error_line(capsys)
+    assert sorted(os.listdir(tmp_path)) == ["holed.tif", "none.png"]
+
+
+def test_sixteen_bit_colour_to_jpeg_suggests_what_works(tmp_path, capsys):
+    write_image(tmp_path / "deep.tif", np.full((6, 7, 3), 40000, np.uint16))
+    assert main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.jpg")]) == 2
+    line = _one_error_line(capsys)
+    assert "write a .tif file instead" in line and ".png" not in line
+    assert main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.tif"), "--steps", "1"]) == 0
+
+
+def test_mesh_messages(tmp_path, capsys):
+    import trimesh
+
+    assert main(["regions", "nosuch", "-o", str(tmp_path / "r")]) == 2
+    assert "'nosuch' is neither a mesh file nor one of the scenes split" in _one_error_line(capsys)
+    sheet = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]])
+    sheet.export(tmp_path / "sheet.ply")
+    for command in (["surface", "heat"], ["regions"]):
+        assert main([*command, str(tmp_path / "sheet.ply"), "-o", str(tmp_path / "s"),
+                     "--resolution", "16"]) == 2
+        err = capsys.readouterr().err
+        assert "encloses no volume (an open sheet" in err and "zero level set" not in err
+    trimesh.creation.box([2, 2, 0.12]).export(tmp_path / "plate.ply")
+    assert main(["surface", "heat", str(tmp_path / "plate.ply"), "-o", str(tmp_path / "s"),
+                 "--resolution", "24"]) == 2
+    assert "thinner than the grid's spacing" in _one_error_line(capsys)
+    assert not (tmp_path / "s").exists()
+
+
+def test_coarse_grid_warning_names_resolution(tmp_path, capsys):
+    import trimesh
+
+    trimesh.creation.box([2, 2, 0.12]).export(tmp_path / "plate.ply")
+    assert main(["surface", "heat", str(tmp_path / "plate.ply"), "-o", str(tmp_path / "s"),
+                 "--resolution", "32", "--size", "32", "--t", "1e-5"]) == 0
+    warning = [line for line in capsys.readouterr().err.splitlines() if "too coarse" in line]
+    assert len(warning) == 1
+    assert "give a larger --resolution (such as 64" in warning[0]
+    assert "spacing (below" not in warning[0] and "0.00%" not in warning[0]
+
+
+def test_negligible_coarse_grid_shares_are_not_shown():
+    import warnings
+
+    from clpde.cli._common import grid_advice
+
+    text = ("the grid is too coarse for this shape's thinnest features: {}% of the band lies on "
+            "a medial axis (|grad psi| < 0.5); use a finer spacing (below 0.0123) or a narrower band")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with grid_advice(50):
+            warnings.warn(text.format("0.00"))
+            warnings.warn(text.format("2.50"))
+            warnings.warn("something else")
+    assert [str(w.message).split("; ")[-1] for w in caught] == [
+        "give a larger --resolution (such as 100, which halves the spacing)", "something else"]

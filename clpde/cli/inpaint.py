@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
 import sys
+
+import numpy as np
 
 from ..imagedata import InputError
 from ..io import MASK_RULE, check_not_overwriting_input, read_mask
@@ -29,7 +32,8 @@ def add_inpaint_parser(subparsers) -> None:
     )
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
     parser.add_argument("mask", metavar="MASK", nargs="?",
-                        help="mask image of the same size; white = inpaint (" + MASK_RULE + ")")
+                        help="mask image of the same size; white = inpaint (" + MASK_RULE + "); "
+                             "or the word 'nan' to fill the NaN pixels of a float TIFF")
     parser.add_argument("-o", "--output", metavar="OUT", required=True,
                         help="output image (with --demo: an output folder)")
     parser.add_argument("--demo", action="store_true",
@@ -88,8 +92,23 @@ def run_inpaint(args) -> int:
         check_not_overwriting_input([args.input, args.mask], args.gif)
         if not str(args.gif).lower().endswith(".gif"):
             raise InputError(f"--gif {args.gif}: the animation must be a .gif file")
-    image = load_input(args, args.mask)
-    mask = read_mask(args.mask, image.shape[:2])
+    nan_mask = args.mask.lower() == "nan" and not os.path.exists(args.mask)
+    image = load_input(args, *([] if nan_mask else [args.mask]), allow_nan=True)
+    finite = (np.isfinite(image) if np.issubdtype(image.dtype, np.floating)
+              else np.ones(image.shape, bool))
+    finite = finite.all(axis=-1) if finite.ndim == 3 else finite
+    if nan_mask:
+        if finite.all():
+            raise InputError(f"{args.input} has no NaN pixels to fill (MASK 'nan'); give a mask "
+                             "image of the pixels to inpaint")
+        mask = ~finite
+    else:
+        mask = read_mask(args.mask, image.shape[:2])
+        if not finite[~mask].all():
+            raise InputError(
+                f"{args.input} has {int((~finite[~mask]).sum())} NaN pixels outside the mask "
+                f"{args.mask}; paint them into the mask, or give 'nan' as MASK to fill exactly "
+                "the NaN pixels")
     parts = split_alpha(image, args.input)
     options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
                "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 from ..imagedata import InputError
@@ -10,6 +11,7 @@ from ._common import (
     add_device_argument,
     add_output_folder_arguments,
     check_output_folder_args,
+    grid_advice,
     show_progress,
 )
 
@@ -53,12 +55,16 @@ def run_regions(args) -> int:
     check_output_folder_args(args, [] if args.scene in SCENES else [args.scene])
     if args.size < 16:
         raise InputError(f"--size must be at least 16, not {args.size}")
+    if args.scene not in SCENES and not os.path.exists(args.scene):
+        raise InputError(f"{args.scene!r} is neither a mesh file nor one of the scenes "
+                         f"{', '.join(SCENES)}")
     if args.scene in SCENES:
         scene = toy_scene(args.scene, args.spacing)
         if args.t is not None:
             scene.options["t"] = args.t
     else:
-        scene = mesh_scene(args.scene, args.flow, args.resolution, args.t, args.regions)
+        with grid_advice(args.resolution):
+            scene = mesh_scene(args.scene, args.flow, args.resolution, args.t, args.regions)
     frames = run_scene(scene, saves=args.saves, progress=show_progress(), device=args.device)
     written = write_frames(frames, args.output, size=args.size,
                            views=((30.0, 25.0), (-60.0, 35.0)), overwrite=args.overwrite)

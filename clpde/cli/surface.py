@@ -10,6 +10,7 @@ from ._common import (
     add_device_argument,
     add_output_folder_arguments,
     check_output_folder_args,
+    grid_advice,
     show_progress,
 )
 
@@ -65,7 +66,8 @@ def run_surface(args) -> int:
         raise InputError(f"--size must be at least 16, not {args.size}")
     if args.direction == "none" and args.flow == "flowvis":
         raise InputError("flowvis needs --direction major or minor")
-    surf = load_surface(args.mesh, args.resolution, device=args.device)
+    with grid_advice(args.resolution):
+        surf = load_surface(args.mesh, args.resolution, device=args.device)
     data = None
     if args.data != "pattern" and args.flow in DATA_FLOWS:
         data = mesh_colours(surf)

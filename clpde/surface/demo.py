@@ -5,7 +5,9 @@ as pictures (PNG) and a coloured mesh (PLY, GLB) into an output folder.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +32,33 @@ def load_surface(mesh, resolution=96, device=None) -> ImplicitSurface:
         return build()
     if isinstance(mesh, str) and not os.path.exists(mesh):
         raise InputError(f"{mesh!r} is neither a mesh file nor one of the shapes {', '.join(SHAPES)}")
-    return ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
+    with encloses_volume(mesh):
+        return ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
+
+
+@contextlib.contextmanager
+def encloses_volume(mesh):
+    """Say why a mesh gives psi without a zero level set (psi, from the winding number,
+    never changes sign on the grid): an open sheet has no inside, and a closed shape
+    thinner than the spacing has no grid cell inside."""
+    try:
+        yield
+    except InputError as exc:
+        if "no zero level set" not in str(exc):
+            raise
+        from .mesh_sdf import load_mesh
+
+        name = f"the mesh {mesh}" if isinstance(mesh, (str, os.PathLike)) else "the mesh"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the watertightness warning was already given
+            closed = load_mesh(mesh).is_watertight
+        if closed:
+            raise InputError(f"no grid cell lies inside {name}: it is thinner than the grid's "
+                             "spacing; use a finer grid (a larger resolution, --resolution "
+                             "on the command line)") from None
+        raise InputError(f"{name} encloses no volume (an open sheet, not a closed surface), "
+                         "so it has no inside and outside to work between; give a closed "
+                         "(watertight) mesh, or close its holes first") from None
 
 
 def checker(surf, cells=6):
