@@ -17,6 +17,9 @@ from .imagedata import positive as _positive
 from .runtime import get_runtime
 
 FLOWS = ("heat", "perona-malik", "tv", "curvature")
+# The parameters each flow takes besides dt; any other is refused rather than ignored.
+FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge"), "tv": ("eps",),
+               "curvature": ("eps", "weight")}
 
 
 def _check_dt(dt, limit: float, what: str) -> float:
@@ -62,10 +65,17 @@ class PlanarFlow:
     """
 
     def __init__(self, image, flow: str = "heat", *, dt=None, channel_axis=None, device=None,
-                 precision=None, kappa: float = 0.05, edge: str = "exp", eps=None,
-                 weight=None):
+                 precision=None, kappa=None, edge=None, eps=None, weight=None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
+        given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight}
+        for name, value in given.items():
+            if value is not None and name not in FLOW_PARAMS[flow]:
+                users = [f for f, params in FLOW_PARAMS.items() if name in params]
+                raise InputError(f"{name} applies to the {' and '.join(users)} flow"
+                                 f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+        kappa = 0.05 if kappa is None else kappa
+        edge = "exp" if edge is None else edge
         data, self.layout = to_kernel_layout(image, channel_axis)
         self.runtime = get_runtime(device)
         dtype = np.dtype(precision or np.float32)
@@ -178,6 +188,10 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     so kappa and eps are in those units. The time step defaults to 0.8 of the stability
     limit; a larger dt than the limit is an error. Output has the input's dtype and shape.
     """
+    unknown = sorted(set(params) - {p for names in FLOW_PARAMS.values() for p in names})
+    if unknown:
+        listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())
+        raise InputError(f"diffuse takes no parameter {unknown[0]!r}; the flows take ({listed})")
     state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
                        precision=precision, **params)
     return state.run(steps, progress).result()

@@ -35,10 +35,11 @@ def add_diffuse_parser(subparsers) -> None:
 
 
 def run_diffuse(args) -> int:
-    from ..planar import diffuse
+    from ..planar import FLOW_PARAMS, diffuse
 
-    param_check(args, args.flow, {"kappa": ("perona-malik",), "edge": ("perona-malik",),
-                                   "eps": ("tv", "curvature")})
+    param_check(args, args.flow, {option: tuple(f for f, params in FLOW_PARAMS.items()
+                                                if option in params)
+                                  for option in ("kappa", "edge", "eps")})
     image = load_input(args)
     parts = split_alpha(image, args.input)
     params = {k: getattr(args, k) for k in ("kappa", "edge", "eps") if getattr(args, k) is not None}
