@@ -204,3 +204,29 @@ def test_negligible_coarse_grid_shares_are_not_shown():
             warnings.warn("something else")
     assert [str(w.message).split("; ")[-1] for w in caught] == [
         "give a larger --resolution (such as 100, which halves the spacing)", "something else"]
+
+
+# ---- 8. the inpainting GIF --------------------------------------------------------------------
+def test_inpaint_gif_starts_from_the_damaged_image_and_counts_what_it_writes(tmp_path, capsys):
+    import imageio.v3 as iio
+
+    y, x = np.mgrid[0:40, 0:48]
+    truth = np.where(x + 0.5 * y > 30, 200, 60).astype(np.uint8)
+    mask = np.zeros(truth.shape, bool)
+    mask[15:21, 10:40] = True
+    damaged = truth.copy()
+    damaged[mask] = 255
+    write_image(tmp_path / "d.png", damaged)
+    write_image(tmp_path / "m.png", mask.astype(np.uint8) * 255)
+    # converging early, the last states repeat: the count must be what the file holds
+    assert main(["inpaint", str(tmp_path / "d.png"), str(tmp_path / "m.png"), "-o",
+                 str(tmp_path / "o.png"), "--gif", str(tmp_path / "e.gif"), "--gif-every", "20",
+                 "--levels", "1"]) == 0
+    err = capsys.readouterr().err
+    frames = iio.imread(tmp_path / "e.gif", index=None)
+    frames = frames[..., 0] if frames.ndim == 4 else frames
+    assert f"({len(frames)} frames: the damaged image" in err
+    np.testing.assert_array_equal(frames[0], damaged)
+    np.testing.assert_array_equal(frames[-1], read_image(tmp_path / "o.png"))
+    assert all(not np.array_equal(a, b) for a, b in zip(frames[:-1], frames[1:]))
+    assert np.abs(frames[1][mask].astype(float) - damaged[mask]).mean() > 50  # filled

@@ -92,6 +92,9 @@ def run_inpaint(args) -> int:
         check_not_overwriting_input([args.input, args.mask], args.gif)
         if not str(args.gif).lower().endswith(".gif"):
             raise InputError(f"--gif {args.gif}: the animation must be a .gif file")
+        folder = os.path.dirname(os.path.abspath(args.gif))
+        if not os.path.isdir(folder):
+            raise InputError(f"the folder {folder} for --gif does not exist; create it first")
     nan_mask = args.mask.lower() == "nan" and not os.path.exists(args.mask)
     image = load_input(args, *([] if nan_mask else [args.mask]), allow_nan=True)
     finite = (np.isfinite(image) if np.issubdtype(image.dtype, np.floating)
@@ -120,9 +123,32 @@ def run_inpaint(args) -> int:
         result, info = inpaint(parts.colour, mask, **options)
     save_output(args, parts.join(result))
     if args.gif:
-        write_gif(args.gif, [s.image for s in info.snapshots])
-        print(f"wrote {args.gif} ({len(info.snapshots)} frames)", file=sys.stderr)
+        frames = evolution_frames(parts.colour, [s.image for s in info.snapshots])
+        write_gif(args.gif, frames, duration=0.25)
+        print(f"wrote {args.gif} ({len(frames)} frames: the damaged image, then every "
+              f"{args.gif_every} steps from the start fill to the result)", file=sys.stderr)
     state = "converged" if info.converged else "stopped at --max-steps"
     print(f"inpaint: {int(mask.sum())} pixels, {info.steps} steps ({state}), "
           f"{info.levels} level(s), {info.seconds:.2f} s", file=sys.stderr)
     return 0
+
+
+def evolution_frames(damaged, states) -> list[np.ndarray]:
+    """The GIF's frames as uint8: the damaged image first (its region shown as it came, NaN
+    as black), then the states; all on one intensity scale (the result's range for floats),
+    consecutive equal frames merged, since a GIF cannot show them apart."""
+    frames = [np.asarray(damaged), *(np.asarray(s) for s in states)]
+    result = frames[-1]
+    if np.issubdtype(result.dtype, np.floating):
+        finite = result[np.isfinite(result)]
+        lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+        scale = hi - lo if hi > lo else 1.0
+        frames = [np.nan_to_num((f.astype(np.float64) - lo) / scale, nan=0.0, posinf=1.0,
+                                neginf=0.0) for f in frames]
+    from ..io import _frame_to_uint8
+
+    out = []
+    for frame in map(_frame_to_uint8, frames):
+        if not out or not np.array_equal(frame, out[-1]):
+            out.append(frame)
+    return out
