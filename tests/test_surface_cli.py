@@ -2,6 +2,7 @@
 
 import imageio.v3 as iio
 import numpy as np
+import pytest
 import trimesh
 
 from clpde.cli import main
@@ -11,7 +12,8 @@ def test_surface_heat_on_a_generated_shape(tmp_path, capsys):
     out = tmp_path / "heat"
     assert main(["surface", "heat", "sphere", "-o", str(out), "--resolution", "24", "--size", "64"]) == 0
     before, after = iio.imread(out / "before.png"), iio.imread(out / "after.png")
-    assert before.shape == after.shape == (64, 128, 3)
+    assert before.shape == after.shape and after.shape[1] == 128
+    assert after.shape[0] > 64  # the views, then the colour bar
     # heat smooths the checkerboard: fewer saturated colours after
     assert np.std(after.astype(float)) < np.std(before.astype(float))
     mesh = trimesh.load(out / "result.ply", force="mesh")
@@ -72,3 +74,53 @@ def test_warnings_are_one_line_for_the_user(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "clpde: warning: the mesh is not watertight" in err
     assert ".py:" not in err  # no source locations
+
+
+def _bar(picture, size):
+    """The colour bar's rows below the views."""
+    return picture[size:]
+
+
+def test_every_scalar_render_has_a_colour_bar(tmp_path):
+    from clpde.surface import ImplicitSurface
+    from clpde.surface.render import _RAMP, render
+
+    out = tmp_path / "heat"
+    assert main(["surface", "heat", "sphere", "-o", str(out), "--resolution", "24", "--size", "64"]) == 0
+    for name in ("before.png", "after.png"):
+        bar = _bar(iio.imread(out / name), 64).reshape(-1, 3).astype(float) / 255
+        # both ends of the colour ramp are drawn, and black label text
+        for end in (_RAMP[0], _RAMP[-1]):
+            assert np.abs(bar - end).max(axis=1).min() < 0.03
+        assert (bar.sum(axis=1) < 0.3).any()
+    surf = ImplicitSurface.sphere(1.0, 0.1)
+    x, _, _ = surf.coordinates()
+    picture = render(surf, np.broadcast_to(x, surf.shape), size=96)
+    assert picture.shape[0] > 96 and picture.shape[1] == 96
+    assert render(surf, np.broadcast_to(x, surf.shape), size=96, colour_bar=False).shape == (96, 96, 3)
+    assert render(surf, None, size=96).shape == (96, 96, 3)  # nothing to scale
+
+
+def test_curvature_of_a_mesh_shows_its_shape_not_its_triangles(tmp_path):
+    from clpde.surface.demo import load_surface, run_flow
+    from clpde.surface.render import to_mesh
+
+    path = tmp_path / "ico.ply"
+    trimesh.creation.icosphere(3, radius=2.0).export(path)
+    run = run_flow(load_surface(str(path), 40), "curvature")
+    values = to_mesh(run.surface, run.after).vertex_attributes["u"]
+    # a sphere of radius 2: mean curvature 1/2 everywhere (at the grid's scale the
+    # triangles' edges and vertices gave 0 to 1.6, a spread of 70% of the mean)
+    assert np.median(values) == pytest.approx(0.5, rel=0.03)
+    assert values.std() < 0.03 * np.median(values)
+    out = tmp_path / "curv"
+    assert main(["surface", "curvature", str(path), "-o", str(out), "--resolution", "24",
+                 "--size", "48"]) == 0
+    before, after = iio.imread(out / "before.png"), iio.imread(out / "after.png")
+    assert before.shape != after.shape or not np.array_equal(before, after)
+    views = after[:48].reshape(-1, 3).astype(int)
+    surface = views[(views != 255).any(axis=1)]
+    hue = surface / np.maximum(surface.sum(axis=1, keepdims=True), 1)
+    assert hue.std(axis=0).max() < 0.02  # one flat colour (shaded), no dots at the vertices
+    grey = before[:48].reshape(-1, 3).astype(int)
+    assert (grey.max(axis=1) - grey.min(axis=1)).max() <= 2  # the bare shape, in grey
