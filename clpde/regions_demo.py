@@ -162,6 +162,16 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
     return Scene(phi, region, h, origin, options)
 
 
+def displacement(scene: Scene, frame) -> float:
+    """How far (world units) the surface of `frame` lies from the scene's starting surface
+    at most: the starting signed distance at the frame's mesh vertices."""
+    from scipy.ndimage import map_coordinates
+
+    at = (np.asarray(frame.mesh.vertices) - np.asarray(scene.origin)) / scene.spacing
+    return float(np.abs(map_coordinates(np.asarray(scene.phi, np.float64), at[:, ::-1].T,
+                                        order=1, mode="nearest")).max())
+
+
 def run_scene(scene: Scene, saves=4, progress=None, device=None):
     return track_region(scene.phi, scene.region, spacing=scene.spacing, saves=saves,
                         origin=scene.origin, progress=progress, device=device, **scene.options)

@@ -230,3 +230,26 @@ def test_inpaint_gif_starts_from_the_damaged_image_and_counts_what_it_writes(tmp
     np.testing.assert_array_equal(frames[-1], read_image(tmp_path / "o.png"))
     assert all(not np.array_equal(a, b) for a, b in zip(frames[:-1], frames[1:]))
     assert np.abs(frames[1][mask].astype(float) - damaged[mask]).mean() > 50  # filled
+
+
+# ---- 10. the regions default on a convex mesh -----------------------------------------------
+def test_regions_says_when_the_surface_hardly_moved(tmp_path, capsys, monkeypatch):
+    import trimesh
+
+    ball = trimesh.creation.icosphere(3, radius=1.0)
+    cap = ball.vertices[:, 2] > 0.5
+    ball.visual.vertex_colors = np.where(cap[:, None], [[230, 200, 30, 255]],
+                                         [[110, 120, 170, 255]]).astype(np.uint8)
+    ball.export(tmp_path / "painted.ply")
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)  # as on a terminal
+    assert main(["regions", str(tmp_path / "painted.ply"), "-o", str(tmp_path / "a"),
+                 "--resolution", "20", "--saves", "1", "--size", "16"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("regions: building a grid of 20 cells")  # before the silent part
+    assert "the surface hardly moved" in err and "--flow morph-sphere" in err
+    trimesh.creation.box([2.0, 1.0, 1.0]).export(tmp_path / "box.ply")
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
+    assert main(["regions", str(tmp_path / "box.ply"), "-o", str(tmp_path / "b"), "--flow",
+                 "morph-sphere", "--resolution", "20", "--saves", "1", "--size", "16",
+                 "--t", "1"]) == 0
+    assert "hardly moved" not in capsys.readouterr().err
