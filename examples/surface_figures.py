@@ -20,7 +20,14 @@ import numpy as np
 from _output import add_output_arguments, output_folder
 
 from clpde.surface import ImplicitSurface, render_mesh, to_mesh
-from clpde.surface.demo import _write_png, checker, colour_pattern, load_surface, surface_noise
+from clpde.surface.demo import (
+    _write_png,
+    checker,
+    colour_pattern,
+    load_surface,
+    surface_noise,
+    tv_time,
+)
 
 
 def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):
@@ -65,7 +72,7 @@ def main():
         denoised, info = torus.denoise_tv(noisy, sigma=sigma, t=40 * h**2, return_info=True)
         print(f"  TV denoising: residual variance {info['residual_variance']:.4f}, "
               f"sigma^2 = {sigma**2:.4f}")
-        flowed = torus.tv(noisy, t=10 * h**2)
+        flowed = torus.tv(noisy, t=tv_time(sigma, h))  # flattens the noise, keeps the squares
         save(out / "surface_fig4_4.png",
              [picture(torus, x, size, vmin=0, vmax=1) for x in (noisy, denoised, flowed)])
 

@@ -30,3 +30,22 @@ def test_used_parameters_still_work_and_cli_agrees(tmp_path, capsys):
     write_image(tmp_path / "in.png", image)
     assert main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--kappa", "0.1"]) == 2
     assert "--kappa applies to --flow perona-malik, not heat" in capsys.readouterr().err
+
+
+def test_tv_defaults_flatten_regions_and_keep_edges_where_heat_blurs():
+    """Issue 11: with eps = 0.05 TV flow blurred the camera more than heat. With the
+    default, 200 steps leave more flat pixels than heat's 50 steps and edges about three
+    times sharper (half-size camera: flat share 0.62 vs 0.50, 99th percentile of |grad u|
+    0.19 vs 0.054; eps = 0.05 gave 0.52 and 0.039)."""
+    from skimage import data, img_as_float
+
+    u = img_as_float(data.camera())[::2, ::2]
+
+    def flat_and_edges(v):
+        g = np.hypot(*np.gradient(v))
+        return np.mean(g < 0.002), np.percentile(g, 99)
+
+    heat = flat_and_edges(clpde.diffuse(u, "heat", steps=50))
+    tv = flat_and_edges(clpde.diffuse(u, "tv", steps=200))
+    assert tv[0] > heat[0]
+    assert tv[1] > 2 * heat[1]

@@ -30,7 +30,9 @@ def add_diffuse_parser(subparsers) -> None:
     parser.add_argument("--edge", choices=("exp", "rational"), default=None,
                         help="Perona-Malik edge-stopping function (default: exp)")
     parser.add_argument("--eps", type=float, default=None,
-                        help="TV / curvature regularisation of |grad u| (TV default 0.05)")
+                        help="TV / curvature regularisation of |grad u|, intensities in [0, 1] "
+                             "(TV default 0.005, about one 8-bit grey level: regions flatten, "
+                             "edges stay)")
     parser.set_defaults(run=run_diffuse)
 
 
