@@ -6,8 +6,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 DOCS = EXAMPLES.parent / "docs" / "images"
 
@@ -35,13 +33,32 @@ def test_an_example_creates_its_new_output_folder_and_leaves_the_docs_alone(tmp_
     assert {p.name: p.stat().st_mtime_ns for p in DOCS.iterdir()} == docs_before
 
 
-@pytest.mark.parametrize("script", sorted(p.name for p in EXAMPLES.glob("*.py")
-                                          if not p.name.startswith("_")))
-def test_no_example_writes_the_docs_by_default(script):
-    """Every example's --help: out/ by default; docs/images only behind --docs or --figure."""
-    run = _run([EXAMPLES / script, "--help"], EXAMPLES.parent)
+_HELPS = """
+import contextlib, io, json, os, runpy, sys
+out = {}
+sys.path.insert(0, os.path.dirname(sys.argv[1]))  # as `python examples/x.py` has it
+for path in sys.argv[1:]:
+    sys.argv = [path, "--help"]
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text), contextlib.suppress(SystemExit):
+        runpy.run_path(path, run_name="__main__")
+    out[path] = text.getvalue()
+print(json.dumps(out))
+"""
+
+
+def test_no_example_writes_the_docs_by_default():
+    """Every example's --help (all in one interpreter, to keep the test quick): out/ by
+    default; docs/images only behind --docs or --figure."""
+    import json
+
+    scripts = sorted(str(p) for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
+    run = _run(["-c", _HELPS, *scripts], EXAMPLES.parent)
     assert run.returncode == 0, run.stderr
-    text = " ".join(run.stdout.split())
-    assert "default: out" in text
-    if "docs" in text:
-        assert "--docs" in text or "--figure" in text
+    helps = json.loads(run.stdout.strip().splitlines()[-1])
+    assert sorted(helps) == scripts
+    for script, text in helps.items():
+        text = " ".join(text.split())
+        assert "default: out" in text, script
+        if "docs" in text:
+            assert "--docs" in text or "--figure" in text, script

@@ -1,6 +1,7 @@
 """What a new user hit (issue 11), through the command line: each case as the user typed it,
 with a one-line `clpde: error: ...` (or warning) that gives command-line advice."""
 
+import itertools
 import os
 import sys
 
@@ -115,7 +116,7 @@ def test_devices_says_when_clpde_device_matches_nothing(monkeypatch, capsys):
 # ---- 6. messages in command-line terms ------------------------------------------------------
 @pytest.fixture
 def nan_tiff(tmp_path):
-    y, x = np.mgrid[0:24, 0:30]
+    x = np.mgrid[0:24, 0:30][1]
     image = (0.2 + 0.02 * x).astype(np.float32)
     holed = image.copy()
     holed[8:12, 10:16] = np.nan
@@ -228,7 +229,7 @@ def test_inpaint_gif_starts_from_the_damaged_image_and_counts_what_it_writes(tmp
     assert f"({len(frames)} frames: the damaged image" in err
     np.testing.assert_array_equal(frames[0], damaged)
     np.testing.assert_array_equal(frames[-1], read_image(tmp_path / "o.png"))
-    assert all(not np.array_equal(a, b) for a, b in zip(frames[:-1], frames[1:]))
+    assert all(not np.array_equal(a, b) for a, b in itertools.pairwise(frames))
     assert np.abs(frames[1][mask].astype(float) - damaged[mask]).mean() > 50  # filled
 
 
