@@ -261,6 +261,18 @@ class MorphingTracker:
             f = out
         return f
 
+    def _match_features(self, image: np.ndarray, ls: LevelSet) -> np.ndarray:
+        """(C, H, W) host copy of the frame's local contrast normalisation, for matching."""
+        if self.features == "contrast":
+            return ls.crop(self._feature_field(image, ls).to_host())
+        grid = replace(ls.grid, nc=image.shape[0])
+        f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
+        out = Field.empty(grid)
+        grid.launch(grid.kernel("track_features.cl", "local_contrast"), f.data.data,
+                    out.data.data, np.int32(self.contrast_radius), grid.scalar(0.02**2),
+                    grid.scalar(0.25))
+        return ls.crop(out.to_host())
+
     # ---- the morphing of one frame pair ------------------------------------------------
     def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field):
         """Run the coupled system on one frame pair; returns (iterations, converged,
@@ -340,9 +352,11 @@ class MorphingTracker:
             f2 = self._feature_field(prepared, ls)
             shift = (0.0, 0.0)
             if motion is not None:
-                feats = ls.crop(f2.to_host())
+                # Matched on contrast-normalised frames, whatever the morphing compares:
+                # a shadow or a flicker does not move the measured displacement.
+                feats = self._match_features(prepared, ls)
                 if feats_prev is None:
-                    feats_prev = ls.crop(self._feature_field(prepared_prev, ls).to_host())
+                    feats_prev = self._match_features(prepared_prev, ls)
                 shift = motion.predict(feats_prev, feats, mask)
                 feats_prev = feats
                 if shift != (0.0, 0.0):
