@@ -99,7 +99,7 @@ def boundary_f(pred, true):
 # and the default now. Every configuration is spelled out in full, so the table keeps its
 # meaning when the defaults change.
 OLD_DEFAULT = dict(features="intensity", colour=False, discrepancy="difference", motion=None,
-                   shape_weight=0.0)
+                   equalize="match", shape_weight=0.0)
 CONFIGS = {
     "clpde old default": {},
     "clpde contrast": dict(features="contrast"),
@@ -108,8 +108,9 @@ CONFIGS = {
     "clpde huber": dict(discrepancy="huber"),
     "clpde velocity": dict(motion="velocity"),
     "clpde kalman": dict(motion="kalman"),
-    "clpde shape 0.1": dict(shape_weight=0.1),
-    "clpde new default": "default",
+    "clpde kalman+shape": dict(motion="kalman", shape_weight=0.02),
+    "clpde kalman+contrast": dict(motion="kalman", features="contrast", equalize=False),
+    "clpde new default": "default",  # = kalman + ncc, no equalisation
 }
 
 

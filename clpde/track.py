@@ -151,12 +151,13 @@ class MorphingTracker:
     """
 
     def __init__(self, frames, first_mask, *, features="intensity", colour: bool = False,
-                 discrepancy: str = "difference", motion=None, shape_weight: float = 0.0,
-                 equalize="match", smooth: bool = True, smooth_steps: int = 5,
+                 discrepancy: str = "ncc", motion="kalman", shape_weight: float = 0.0,
+                 equalize=False, smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
                  max_iterations: int = 40, tol: float = 0.02, check_every: int = 2,
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
-                 min_size: int = 0, contrast_radius: int = 4, ncc_radius: int = 3,
+                 min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
+                 ncc_radius: int = 3,
                  huber_delta: float = 0.05, search_radius: int = 6, device=None,
                  precision=None):
         self.frames = _check_frames(frames)
@@ -186,11 +187,13 @@ class MorphingTracker:
             raise InputError(f"ncc_radius must be 1 to 4 pixels, not {ncc_radius}")
         if not 1 <= int(contrast_radius) <= 16:
             raise InputError(f"contrast_radius must be 1 to 16 pixels, not {contrast_radius}")
-        if shape_weight < 0 or huber_delta <= 0 or search_radius < 0:
-            raise InputError("shape_weight and search_radius must be >= 0, huber_delta > 0")
+        if shape_weight < 0 or huber_delta <= 0 or search_radius < 0 or contrast_eps <= 0:
+            raise InputError("shape_weight and search_radius must be >= 0, huber_delta and "
+                             "contrast_eps > 0")
         self.features, self.discrepancy, self.motion = features, discrepancy, motion
         self.shape_weight = float(shape_weight)
         self.contrast_radius, self.ncc_radius = int(contrast_radius), int(ncc_radius)
+        self.contrast_eps = float(contrast_eps)
         self.huber_delta, self.search_radius = float(huber_delta), int(search_radius)
         if equalize is True:
             equalize = "match"
@@ -256,25 +259,19 @@ class MorphingTracker:
                 # order of the [0, 1] grey levels, for which tol and dt are set.
                 grid.launch(grid.kernel("track_features.cl", "local_contrast"), f.data.data,
                             out.data.data, np.int32(self.contrast_radius),
-                            grid.scalar(0.02**2), grid.scalar(0.25))
+                            grid.scalar(self.contrast_eps**2), grid.scalar(0.25))
             out.fill_ghosts()
             f = out
         return f
 
     def _match_features(self, image: np.ndarray, ls: LevelSet) -> np.ndarray:
-        """(C, H, W) host copy of the frame's local contrast normalisation, for matching."""
-        if self.features == "contrast":
-            return ls.crop(self._feature_field(image, ls).to_host())
-        grid = replace(ls.grid, nc=image.shape[0])
-        f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
-        out = Field.empty(grid)
-        grid.launch(grid.kernel("track_features.cl", "local_contrast"), f.data.data,
-                    out.data.data, np.int32(self.contrast_radius), grid.scalar(0.02**2),
-                    grid.scalar(0.25))
-        return ls.crop(out.to_host())
+        """(C, H, W) local contrast normalisation of a prepared frame, for matching."""
+        from .track_features import local_contrast
+
+        return local_contrast(image, self.contrast_radius)
 
     # ---- the morphing of one frame pair ------------------------------------------------
-    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field):
+    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field, discrepancy=None):
         """Run the coupled system on one frame pair; returns (iterations, converged,
         final mean |beta| in the band).
 
@@ -285,11 +282,12 @@ class MorphingTracker:
         """
         g = ls.grid
         q = self.runtime.queue
+        discrepancy = discrepancy or self.discrepancy
         kernel = g.kernel("track_features.cl", "morph_track", NCH=self.channels,
-                          DISC=DISCREPANCIES[self.discrepancy], WIN=self.ncc_radius)
+                          DISC=DISCREPANCIES[discrepancy], WIN=self.ncc_radius)
         pair = PingPong(f1)
         lam = self.shape_weight
-        delta = self.huber_delta if self.discrepancy == "huber" else 0.02
+        delta = self.huber_delta if discrepancy == "huber" else 0.02
         consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), g.scalar(lam),
                   g.scalar(delta), np.int32(g.sx), np.int32(g.plane))
         dt_cap = self.max_dt if lam == 0 else min(self.max_dt, 0.5 / lam)
@@ -359,7 +357,10 @@ class MorphingTracker:
                     feats_prev = self._match_features(prepared_prev, ls)
                 shift = motion.predict(feats_prev, feats, mask)
                 feats_prev = feats
-                if shift != (0.0, 0.0):
+                if max(abs(shift[0]), abs(shift[1])) < 0.25:
+                    # Below the matching's precision; shifting would only blur F1.
+                    shift = (0.0, 0.0)
+                else:
                     # Start from the predicted place: u and F1 move together, so the
                     # morphing only has to explain what the displacement does not.
                     u = shift_image(ls.values(), shift)
@@ -425,7 +426,7 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
     return keep[labels]
 
 
-def track(frames, first_mask, *, features="intensity", equalize="match",
+def track(frames, first_mask, *, features="intensity", equalize=False,
           smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
           max_iterations: int = 40, tol: float = 0.02, min_size: int = 0, device=None,
           progress=None, return_level_sets: bool = False, return_discrepancy: bool = False,

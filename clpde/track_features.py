@@ -29,17 +29,29 @@ def shift_image(image: np.ndarray, shift) -> np.ndarray:
     return ndimage.shift(np.asarray(image, np.float64), shift, order=1, mode="nearest")
 
 
-def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, centre, radius: int):
-    """The (dy, dx) within `radius` of `centre` minimising the mean absolute difference
-    between cur(x + d) and prev(x) over the dilated mask (features (C, H, W)): the best
-    integer shift, refined to sub-pixel by a parabola; also returns the cost map."""
+def local_contrast(image: np.ndarray, radius: int = 4, eps: float = 0.02,
+                   scale: float = 0.25) -> np.ndarray:
+    """scale (I - mean) / sqrt(var + eps^2) over (2 radius + 1)^2 boxes, per channel of
+    (C, H, W) data, the edge repeated: kernels/track_features.cl's local_contrast on the
+    host (separable box sums), used to match frames for the motion model."""
     from scipy import ndimage
 
-    weight = ndimage.binary_dilation(mask, iterations=3)
+    size = 2 * int(radius) + 1
+    out = np.empty(np.shape(image), np.float64)
+    for c, x in enumerate(np.asarray(image, np.float64)):
+        mean = ndimage.uniform_filter(x, size, mode="nearest")
+        var = np.maximum(ndimage.uniform_filter(x * x, size, mode="nearest") - mean**2, 0)
+        out[c] = scale * (x - mean) / np.sqrt(var + eps**2)
+    return out
+
+
+def _search(prev, cur, weight, centre, radius):
+    """Mean absolute differences of cur(x + d) and prev(x) over the weight's pixels, for
+    the integer d within `radius` of `centre` (inf where cur has no pixels)."""
     ys, xs = np.nonzero(weight)
     y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
-    h, w = mask.shape
-    cy, cx = (int(round(c)) for c in centre)
+    h, w = weight.shape
+    cy, cx = centre
     template = prev[:, y0:y1, x0:x1]
     wt = weight[y0:y1, x0:x1]
     total = wt.sum()
@@ -53,12 +65,45 @@ def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, cent
             window = cur[:, y0 + dy:y1 + dy, x0 + dx:x1 + dx]
             costs[dy - cy + radius, dx - cx + radius] = (
                 np.abs(window - template).sum(axis=0)[wt].sum() / total)
+    return costs
+
+
+def _halve(a):
+    """2x2 mean pooling of (C, H, W) (an odd last row or column dropped)."""
+    h, w = a.shape[-2] // 2 * 2, a.shape[-1] // 2 * 2
+    a = a[..., :h, :w]
+    return 0.25 * (a[..., ::2, ::2] + a[..., 1::2, ::2] + a[..., ::2, 1::2] + a[..., 1::2, 1::2])
+
+
+def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, centre, radius: int):
+    """The (dy, dx) within about `radius` of `centre` minimising the mean absolute
+    difference between cur(x + d) and prev(x) over the mask dilated by 3 px (features
+    (C, H, W)); also returns the final cost map.
+
+    Coarse to fine: the search runs at half resolution over radius / 2, then at full
+    resolution within one pixel of the coarse answer, and the best integer shift is
+    refined to sub-pixel by a parabola through its neighbours along each axis (an object
+    moving 1.5 px per frame is not seen as 1 or 2)."""
+    from scipy import ndimage
+
+    weight = ndimage.binary_dilation(mask, iterations=3)
+    cy, cx = (int(round(c)) for c in centre)
+    coarse_w = _halve(weight[np.newaxis].astype(np.float64))[0] > 0.5
+    if radius >= 2 and coarse_w.any() and min(mask.shape) >= 16:
+        r2 = -(-radius // 2)
+        costs = _search(_halve(prev), _halve(cur), coarse_w, (cy // 2, cx // 2), r2)
+        if np.isfinite(costs).any():
+            k = np.unravel_index(np.argmin(costs), costs.shape)
+            cy, cx = 2 * (cy // 2 + k[0] - r2), 2 * (cx // 2 + k[1] - r2)
+        costs = _search(prev, cur, weight, (cy, cx), 2)
+        r = 2
+    else:
+        costs = _search(prev, cur, weight, (cy, cx), radius)
+        r = radius
     if not np.isfinite(costs).any():  # the object fills the frame: no room to search
         return (float(cy), float(cx)), costs
     k = np.unravel_index(np.argmin(costs), costs.shape)
-    best = [float(cy + k[0] - radius), float(cx + k[1] - radius)]
-    # Sub-pixel: the vertex of the parabola through the minimum and its two neighbours
-    # along each axis (an object moving 1.5 px per frame is not seen as 1 or 2).
+    best = [float(cy + k[0] - r), float(cx + k[1] - r)]
     for axis in (0, 1):
         j = k[axis]
         if 0 < j < costs.shape[axis] - 1:

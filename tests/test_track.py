@@ -200,6 +200,6 @@ def test_the_band_follows_a_front_that_moves_beyond_it():
     # 2 px per frame along x and 1 along y: the front leaves the first band (|u| < 3), so
     # the band must be rebuilt on the device while the contour moves.
     frames, truth = synthetic_sequence("translate", frames=4)
-    states = list(MorphingTracker(frames, truth[0], band_width=3))
+    states = list(MorphingTracker(frames, truth[0], band_width=3, motion=None))
     assert sum(s.rebuilds for s in states[1:]) >= 2
     assert iou(states[-1].mask, truth[-1]) >= 0.9
