@@ -152,13 +152,19 @@ class MotionFilter:
         self.v = (c1 - c0)
 
 
-def write_mp4(path, pictures, fps: float = 10.0) -> Path:
-    """Write RGB uint8 pictures (T, H, W, 3) as an H.264 MP4 through PyAV. Odd sizes are
-    padded by one black row or column (yuv420p needs even sizes), never rescaled."""
+def require_av():
+    """PyAV, or a clear error naming the fix."""
     try:
         import av
     except ImportError:
         raise InputError("the MP4 overlay needs PyAV: pip install av (or clpde[video])") from None
+    return av
+
+
+def write_mp4(path, pictures, fps: float = 10.0) -> Path:
+    """Write RGB uint8 pictures (T, H, W, 3) as an H.264 MP4 through PyAV. Odd sizes are
+    padded by one black row or column (yuv420p needs even sizes), never rescaled."""
+    av = require_av()
     path = Path(path)
     pictures = [np.asarray(p, np.uint8) for p in pictures]
     if not pictures:

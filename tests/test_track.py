@@ -203,3 +203,46 @@ def test_the_band_follows_a_front_that_moves_beyond_it():
     states = list(MorphingTracker(frames, truth[0], band_width=3, motion=None))
     assert sum(s.rebuilds for s in states[1:]) >= 2
     assert iou(states[-1].mask, truth[-1]) >= 0.9
+
+
+@pytest.mark.parametrize("kind", ["shadow", "flicker", "distractor"])
+def test_default_holds_under_shadow_flicker_and_a_distractor(kind):
+    frames, truth = synthetic_sequence(kind, frames=8)
+    scores = [iou(m, t) for m, t in zip(track(frames, truth[0]), truth)]
+    assert min(scores) >= 0.9, scores
+    if kind == "shadow":  # the thesis' grey F2 - F1 alone is moved by the shadow
+        old = track(frames, truth[0], discrepancy="difference", motion=None, equalize="match")
+        assert min(iou(m, t) for m, t in zip(old, truth)) < 0.8
+
+
+def test_colour_and_user_feature_maps():
+    frames, truth = synthetic_sequence("translate", frames=4, noise=0.03)
+    # Colour: the object differs from the background in one channel only, which the grey
+    # conversion weakens; every channel enters the discrepancy.
+    rgb = np.stack([0.5 + 0 * frames, frames, 0.5 + 0 * frames], axis=-1)
+    keep = rgb.copy()
+    for m, t in zip(track(rgb, truth[0], colour=True)[1:], truth[1:]):
+        assert iou(m, t) > 0.9
+    np.testing.assert_array_equal(rgb, keep)
+    # The user's maps: an array per frame, or a callable on each frame.
+    maps = 1 - frames  # inverted: tracks the same
+    for features in (maps, list(maps[..., None]), lambda f: 1 - f):
+        masks = track(frames, truth[0], features=features)
+        assert min(iou(m, t) for m, t in zip(masks, truth)) > 0.9
+    with pytest.raises(InputError, match="one per frame"):
+        track(frames, truth[0], features=maps[:2])
+    with pytest.raises(InputError, match="do not fit"):
+        track(frames, truth[0], features=maps[:, :10])
+    with pytest.raises(InputError, match="discrepancy"):
+        track(frames, truth[0], discrepancy="mutual")
+    with pytest.raises(InputError, match="motion"):
+        track(frames, truth[0], motion="lucas")
+
+
+def test_each_frame_reports_its_final_discrepancy():
+    frames, truth = synthetic_sequence("translate", frames=5, noise=0.03)
+    frames = frames.copy()
+    frames[3] = np.random.default_rng(0).random(frames[3].shape)  # a broken frame
+    masks, residuals = track(frames, truth[0], return_discrepancy=True)
+    assert residuals.shape == (5,) and residuals[0] == 0
+    assert residuals[3] > 2 * np.median(residuals[1:])
