@@ -99,7 +99,7 @@ def boundary_f(pred, true):
 # and the default now. Every configuration is spelled out in full, so the table keeps its
 # meaning when the defaults change.
 OLD_DEFAULT = dict(features="intensity", colour=False, discrepancy="difference", motion=None,
-                   equalize="match", shape_weight=0.0)
+                   equalize="match", shape_weight=0.0, max_iterations=40)
 CONFIGS = {
     "clpde old default": {},
     "clpde contrast": dict(features="contrast"),
@@ -218,7 +218,8 @@ BASELINES = {"skimage MCV": run_mcv, "skimage MGAC": run_mgac, "static": run_sta
 
 
 def methods(only_default=False):
-    configs = {"clpde new default": "default"} if only_default else CONFIGS
+    configs = ({k: CONFIGS[k] for k in ("clpde old default", "clpde new default")}
+               if only_default else CONFIGS)
     table = {name: (lambda f, m, o=opts: run_clpde(f, m, o)) for name, opts in configs.items()}
     return {**table, **BASELINES}
 
@@ -257,13 +258,15 @@ def main(argv=None):
     parser.add_argument("--only", nargs="*", default=None, metavar="SUBSTRING",
                         help="run only the sequences whose names contain one of these")
     parser.add_argument("--default-only", action="store_true",
-                        help="clpde's new default only (with the baselines)")
+                        help="clpde's old and new defaults only (with the baselines)")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="timing runs per method, best kept (default: 3; 1 for carphone)")
     args = parser.parse_args(argv)
     import clpde
     from clpde.runtime import get_runtime
 
     frames_n = 5 if args.quick else 8
-    repeats = 1 if args.quick else 3
+    repeats = args.repeats or (1 if args.quick else 3)
     loaders = {f"synthetic {k}": (lambda k=k: synthetic(k, frames_n))
                for k in ("translate", "deform", "split", "merge", "phantom",
                          "shadow", "flicker", "distractor")}
@@ -287,7 +290,7 @@ def main(argv=None):
     for name, load in loaders.items():
         frames, truth = load()
         truth = truth if isinstance(truth, dict) else _as_truth(truth)
-        rows = evaluate(frames, truth, 1 if len(frames) > 30 else repeats, table)
+        rows = evaluate(frames, truth, repeats if args.repeats or len(frames) <= 30 else 1, table)
         results["sequences"][name] = {"shape": list(frames.shape),
                                       "scored_frames": sorted(k for k in truth if k), **rows}
         for method, r in rows.items():
