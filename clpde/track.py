@@ -264,7 +264,7 @@ class MorphingTracker:
             f = out
         return f
 
-    def _match_features(self, image: np.ndarray, ls: LevelSet) -> np.ndarray:
+    def _match_features(self, image: np.ndarray) -> np.ndarray:
         """(C, H, W) local contrast normalisation of a prepared frame, for matching."""
         from .track_features import local_contrast
 
@@ -340,6 +340,8 @@ class MorphingTracker:
         if len(self.frames) == 1:
             return
         ls = LevelSet(self.runtime, u, self.band_width, self.dtype)
+        # The shape pull's target; without it the kernel multiplies it by 0, so any finite
+        # buffer of the grid will do.
         prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
         prepared_prev = self.prepared(0)
         motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
@@ -352,9 +354,9 @@ class MorphingTracker:
             if motion is not None:
                 # Matched on contrast-normalised frames, whatever the morphing compares:
                 # a shadow or a flicker does not move the measured displacement.
-                feats = self._match_features(prepared, ls)
+                feats = self._match_features(prepared)
                 if feats_prev is None:
-                    feats_prev = self._match_features(prepared_prev, ls)
+                    feats_prev = self._match_features(prepared_prev)
                 shift = motion.predict(feats_prev, feats, mask)
                 feats_prev = feats
                 if max(abs(shift[0]), abs(shift[1])) < 0.25:

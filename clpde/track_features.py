@@ -87,7 +87,7 @@ def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, cent
     from scipy import ndimage
 
     weight = ndimage.binary_dilation(mask, iterations=3)
-    cy, cx = (int(round(c)) for c in centre)
+    cy, cx = (round(c) for c in centre)
     coarse_w = _halve(weight[np.newaxis].astype(np.float64))[0] > 0.5
     if radius >= 2 and coarse_w.any() and min(mask.shape) >= 16:
         r2 = -(-radius // 2)

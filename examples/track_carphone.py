@@ -30,7 +30,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 
-OLD = dict(discrepancy="difference", motion=None, equalize="match")
+OLD = {"discrepancy": "difference", "motion": None, "equalize": "match"}
 
 
 def outline(picture, mask, colour):

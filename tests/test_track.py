@@ -243,6 +243,6 @@ def test_each_frame_reports_its_final_discrepancy():
     frames, truth = synthetic_sequence("translate", frames=5, noise=0.03)
     frames = frames.copy()
     frames[3] = np.random.default_rng(0).random(frames[3].shape)  # a broken frame
-    masks, residuals = track(frames, truth[0], return_discrepancy=True)
+    _masks, residuals = track(frames, truth[0], return_discrepancy=True)
     assert residuals.shape == (5,) and residuals[0] == 0
     assert residuals[3] > 2 * np.median(residuals[1:])

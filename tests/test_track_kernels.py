@@ -1,6 +1,8 @@
 """kernels/track_features.cl against its numpy references (tests/reference/levelset.py),
 and the helpers of clpde.track_features."""
 
+import itertools
+
 import numpy as np
 import pyopencl.array as cla
 import pytest
@@ -121,7 +123,7 @@ def test_kalman_filter_damps_a_jump():
     f = MotionFilter("kalman", radius=6)
     frames = [ndimage.shift(scene, (0, 1.0 * t), order=3, mode="nearest") for t in range(6)]
     shifts = [f.predict(local_contrast(a[None]), local_contrast(b[None]), mask)[1]
-              for a, b in zip(frames, frames[1:])]
+              for a, b in itertools.pairwise(frames)]
     assert abs(shifts[-1] - 1.0) < 0.25  # it learns the constant velocity
     jump = ndimage.shift(frames[-1], (0, 5.0), order=3, mode="nearest")
     step = f.predict(local_contrast(frames[-1][None]), local_contrast(jump[None]), mask)[1]
