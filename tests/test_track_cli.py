@@ -95,16 +95,30 @@ def test_grey_conversion_and_polygons():
         read_frames(__file__)
 
 
-def test_an_existing_output_folder_gets_its_files_replaced(tmp_path, sequence):
+def test_an_output_folder_holds_one_runs_files_only(tmp_path, sequence, capsys):
+    """Issue 11: a short run after a long one into the same folder left the long run's files.
+    Now a non-empty folder is refused, and --overwrite replaces it as a whole."""
     stack, mask, _frames8, truth = sequence
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "mask_0000.png").write_bytes(b"old")
-    (out / "notes.txt").write_text("kept")
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2"]) == 0
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out)]) == 0
+    long_run = sorted(p.name for p in out.iterdir())
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2"]) == 2
+    assert "give --overwrite" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == long_run  # untouched
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2",
+                 "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "contours.json", "mask_0000.png", "mask_0001.png", "overlay.gif"]
     assert (iio.imread(out / "mask_0000.png") > 0).sum() == truth[0].sum()
-    assert (out / "notes.txt").read_text() == "kept"
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]  # no staging left
+    # a folder with files clpde does not write is never replaced
+    (out / "notes.txt").write_text("mine")
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--overwrite"]) == 2
+    assert "'notes.txt', which clpde does not write" in capsys.readouterr().err
+    assert (out / "notes.txt").read_text() == "mine"
+    # one rule for a missing parent in every command: create it first
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(tmp_path / "a" / "b")]) == 2
+    assert "does not exist; create it first" in capsys.readouterr().err
 
 
 def test_a_missing_video_backend_is_named(tmp_path, monkeypatch):
@@ -137,6 +151,11 @@ def test_mp4_overlay_is_padded_to_even_sizes_not_rescaled(tmp_path, sequence, ca
     assert np.abs(grey - odd[0])[inside].mean() < 12
     assert pictures[0][63].max() < 30 and pictures[0][:, 61].max() < 30  # black padding
     assert not [p for p in out.iterdir() if p.name.endswith(".part")]
+    # A second run replaces the folder, its MP4 included.
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--mp4",
+                 "--overwrite", "--frames", "2"]) == 0
+    with av.open(str(out / "overlay.mp4")) as container:
+        assert len(list(container.decode(video=0))) == 2
 
 
 def test_options_reach_the_tracker_and_low_confidence_frames_are_reported(tmp_path, sequence,
@@ -152,9 +171,10 @@ def test_options_reach_the_tracker_and_low_confidence_frames_are_reported(tmp_pa
                  "contrast", "--equalize", "match", "--shape-weight", "0.01"]) == 0
     err = capsys.readouterr().err
     assert "low confidence" in err and "frames 2" in err
+    out = tmp_path / "out2"
     assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--no-gif"]) == 0
     assert "low confidence" not in capsys.readouterr().err
     assert iou(iio.imread(out / "mask_0003.png") > 0, truth[3]) >= 0.9
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(out),
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(tmp_path / "out3"),
                  "--shape-weight", "-1"]) == 2
     assert "--shape-weight" in capsys.readouterr().err

@@ -5,9 +5,14 @@ from __future__ import annotations
 import sys
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input
+from ..io import MASK_RULE
 from ..runtime import get_runtime
-from ._common import add_device_argument, show_progress
+from ._common import (
+    add_device_argument,
+    add_output_folder_arguments,
+    check_output_folder_args,
+    show_progress,
+)
 
 
 def add_track_parser(subparsers) -> None:
@@ -22,9 +27,9 @@ def add_track_parser(subparsers) -> None:
     )
     parser.add_argument("input", metavar="INPUT", help="video file, image folder or TIFF stack")
     parser.add_argument("--init", metavar="MASK", required=True,
-                        help="mask image of the object in the first frame (nonzero = inside)")
-    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
-                        help="output folder (created if missing; its files are replaced)")
+                        help="mask image of the object in the first frame, white = inside ("
+                             + MASK_RULE + ")")
+    add_output_folder_arguments(parser)
     parser.add_argument("--features", choices=("intensity", "edges", "contrast"),
                         default="intensity",
                         help="what the frames are compared by: grey levels, edge maps or local "
@@ -72,7 +77,7 @@ def run_track(args) -> int:
     from ..track import track
 
     get_runtime(args.device)
-    check_not_overwriting_input([args.input, args.init], args.output)
+    check_output_folder_args(args, [args.input, args.init])
     if args.mp4:
         from ..track_features import require_av
 
@@ -95,7 +100,8 @@ def run_track(args) -> int:
         min_size=args.min_size, device=args.device, progress=show_progress(),
         return_discrepancy=True)
     grey = to_grey(frames) if frames.ndim == 4 else frames
-    written = write_tracking(args.output, grey, masks, gif=not args.no_gif)
+    written = write_tracking(args.output, grey, masks, gif=not args.no_gif,
+                             overwrite=args.overwrite)
     if args.mp4:
         written.append(_write_mp4(args.output, grey, masks))
     print(f"track: {len(masks)} frames; wrote {len(written)} files to {args.output}",
