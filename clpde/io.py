@@ -243,7 +243,8 @@ def check_not_overwriting_input(inputs, output) -> None:
 
 # ---- output folders ---------------------------------------------------------------------
 # What clpde writes into output folders; a folder holding anything else is never replaced.
-OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg"}
+OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg",
+                   ".mp4"}
 
 
 def check_output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True") -> Path:
