@@ -1,0 +1,221 @@
+"""Harmonic, biharmonic and Poisson fills of a hole, by conjugate gradients on the device.
+
+The unknowns are the hole's pixels (an index list built once); the known pixels around it
+are the boundary values. With L the graph Laplacian of the pixel grid (the 5-point stencil,
+in Neumann form at the image border):
+
+- harmonic:    L u = 0 in the hole (the steady state of the heat equation);
+- biharmonic:  L L u = 0 in the hole, which matches the values and the slopes of the border
+  (the 13-point stencil of scikit-image's `inpaint_biharmonic`, solved iteratively here);
+- Poisson:     L u = f in the hole, for a given right-hand side f (Navier-Stokes inpainting
+  recovers the image from its vorticity this way).
+
+Both systems are symmetric positive definite once the known pixels are moved to the right-
+hand side, so plain conjugate gradients converge; every vector operation, the dot products
+and the step lengths stay on the device, and the host reads the residuals (a few numbers)
+every `check_every` iterations. Colour channels are solved together, one system each.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cla
+from scipy import ndimage
+
+from ..imagedata import InputError
+from ..runtime import ClpdeError
+
+KINDS = ("harmonic", "biharmonic")
+MARGIN = 2  # the biharmonic stencil reaches two pixels past the hole
+
+
+def box_around(omega: np.ndarray, margin: int):
+    """The (row slice, column slice) of the hole's bounding box grown by margin pixels."""
+    rows = np.flatnonzero(omega.any(axis=1))
+    cols = np.flatnonzero(omega.any(axis=0))
+    ny, nx = omega.shape
+    return (slice(max(rows[0] - margin, 0), min(rows[-1] + margin + 1, ny)),
+            slice(max(cols[0] - margin, 0), min(cols[-1] + margin + 1, nx)))
+
+
+def item_geometry(runtime, n: int):
+    """(global size, local size, chunk, stride, per, items) for poisson.cl's ITEM_ARGS."""
+    n = max(int(n), 1)
+    if runtime.is_cpu:
+        items = max(1, min(8 * runtime.device.max_compute_units, -(-n // 256)))
+        per = -(-n // items)
+        items = -(-n // per)
+        return items, None, per, 1, per, items
+    items = min(1024, -(-n // 64) * 64)
+    return items, 64, 1, items, -(-n // items), items
+
+
+class DeviceList:
+    """A host list of flat indices on the device, with its launch geometry."""
+
+    def __init__(self, runtime, flat: np.ndarray):
+        self.n = int(flat.size)
+        self.buf = cla.to_device(runtime.queue, np.ascontiguousarray(flat, np.int32)
+                                 if flat.size else np.zeros(1, np.int32))
+        self.gsize, self.lsize, self.chunk, self.stride, self.per, self.items = \
+            item_geometry(runtime, self.n)
+
+    def args(self):
+        return (self.buf.data, np.int32(self.n), np.int32(self.chunk), np.int32(self.stride),
+                np.int32(self.per), np.int32(self.items))
+
+    def bind(self, runtime, program, name, nc, *args):
+        """A kernel of its own with its arguments set once: launching it costs no argument
+        setting (pyopencl's per-call argument handling dominates a small launch on PoCL)."""
+        kernel = cl.Kernel(program, name)
+        kernel.set_args(*args, *self.args())
+        local = None if self.lsize is None else (self.lsize, 1)
+        queue = runtime.queue
+        if self.n == 0:
+            return lambda: None
+        return lambda: cl.enqueue_nd_range_kernel(queue, kernel, (self.gsize, nc), local)
+
+
+class PoissonSolver:
+    """CG for L u = f (harmonic) or L L u = f (biharmonic) in a hole of a box.
+
+    `u` is the device field (nc, ny, nx): known values off the hole, the current guess in
+    it; solve() improves it in place. `f` (device, same shape) is the right-hand side,
+    zero unless set. Other modules (Navier-Stokes) share `u` and set `f` between solves.
+    """
+
+    def __init__(self, runtime, values: np.ndarray, omega: np.ndarray, kind="harmonic",
+                 dtype=np.float32):
+        if kind not in KINDS:
+            raise InputError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
+        self.runtime, self.kind = runtime, kind
+        self.dtype = dt = np.dtype(dtype)
+        self.nc, self.ny, self.nx = nc, ny, nx = values.shape
+        q = self.queue = runtime.queue
+        runtime.check_alloc(values.size * dt.itemsize)
+        self.u = cla.to_device(q, np.ascontiguousarray(values, dt))
+        zeros = lambda shape=values.shape: cla.zeros(q, shape, dt)
+        self.f, self.r, self.p, self.qv = zeros(), zeros(), zeros(), zeros()
+        o = self.omega_list = DeviceList(runtime, np.flatnonzero(omega))
+        ng = o.items
+        self.rr = [zeros((nc, ng)), zeros((nc, ng))]
+        self.pq = zeros((nc, ng))
+        prog = runtime.program("poisson.cl", dt)
+        dims = (np.int32(nx), np.int32(ny))
+        s = dt.type
+
+        def lap(lst, src, dst, a, b, dot, partial):
+            return lst.bind(runtime, prog, "lap_axpy_dot", nc, src.data, dst.data, self.f.data,
+                            s(a), s(b), dot.data, partial.data, *dims)
+
+        if kind == "harmonic":
+            # r = b - A u = L u - f; A p = -L p
+            self._residual = [lap(o, self.u, self.r, 1, -1, self.r, self.rr[0])]
+            self._apply = [lap(o, self.p, self.qv, -1, 0, self.p, self.pq)]
+        else:
+            # r = f - L L u; A p = L L p, through t = L p on the hole grown by one pixel
+            ring = ndimage.binary_dilation(omega, ndimage.generate_binary_structure(2, 1))
+            rl = self.ring_list = DeviceList(runtime, np.flatnonzero(ring))
+            self.t = zeros()
+            # (buffers bound to kernels must outlive them: kernel arguments hold no reference)
+            self.dummy = dummy = zeros((nc, rl.items))
+            self._residual = [lap(rl, self.u, self.t, 1, 0, self.t, dummy),
+                              lap(o, self.t, self.r, -1, 1, self.r, self.rr[0])]
+            self._apply = [lap(rl, self.p, self.t, 1, 0, self.t, dummy),
+                           lap(o, self.t, self.qv, 1, 0, self.p, self.pq)]
+        self._update = [o.bind(runtime, prog, "cg_update", nc, self.u.data, self.r.data,
+                               self.p.data, self.qv.data, self.rr[a].data, self.pq.data,
+                               self.rr[1 - a].data, *dims) for a in (0, 1)]
+        self._direction = [o.bind(runtime, prog, "cg_direction", nc, self.p.data, self.r.data,
+                                  self.rr[a].data, self.rr[1 - a].data, *dims) for a in (0, 1)]
+        self.iterations = 0
+        self.residual = None
+
+    def _rr(self, which) -> np.ndarray:
+        return self.rr[which].get().astype(np.float64).sum(axis=1)
+
+    def solve(self, tol=1e-5, max_iter=5000, check_every=10, atol=0.0):
+        """Iterate until every channel's residual norm is below tol times its starting
+        norm (or atol), or max_iter. Returns the number of iterations."""
+        if self.omega_list.n == 0:
+            return 0
+        for launch in self._residual:
+            launch()
+        cl.enqueue_copy(self.queue, self.p.data, self.r.data)
+        rr0 = self._rr(0)
+        if np.all(rr0 <= atol * atol) or np.all(rr0 == 0):
+            self.residual = np.zeros_like(rr0)
+            return 0
+        it, cur = 0, 0
+        while it < max_iter:
+            for _ in range(min(check_every, max_iter - it)):
+                for launch in self._apply:
+                    launch()
+                self._update[cur]()
+                self._direction[cur]()
+                cur = 1 - cur
+                it += 1
+            rr = self._rr(cur)
+            if not np.isfinite(rr).all():
+                raise ClpdeError("the conjugate-gradient solve diverged (a non-finite residual); "
+                                 "use precision='double'")
+            if np.all((rr <= tol * tol * rr0) | (rr <= atol * atol)):
+                break
+        # the next solve starts from rr[0]
+        if cur == 1:
+            cl.enqueue_copy(self.queue, self.rr[0].data, self.rr[1].data)
+        self.iterations += it
+        self.residual = np.sqrt(rr / np.maximum(rr0, 1e-300))
+        return it
+
+    def result(self) -> np.ndarray:
+        return self.u.get()
+
+
+def ring_mean_start(data: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """A cheap first guess: each hole component gets the mean of the known pixels around it."""
+    grown = ndimage.binary_dilation(omega, np.ones((3, 3), bool))
+    labels, n = ndimage.label(grown)
+    ring = grown & ~omega
+    index = np.arange(1, n + 1)
+    out = data.copy()
+    for c in range(data.shape[0]):
+        means = np.asarray(ndimage.mean(data[c], labels * ring, index))
+        out[c][omega] = np.concatenate([[0.0], means])[labels[omega]]
+    return out
+
+
+def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dtype=np.float32,
+         tol=1e-5, max_iter=20000, start=None) -> np.ndarray:
+    """The harmonic or biharmonic fill of omega, solved in the hole's box on the device.
+
+    data: (channels, rows, cols) floats; only omega changes. start: optional first guess
+    inside omega (same shape as data); by default each component's mean border value.
+    """
+    if not omega.any():
+        return data.copy()
+    if omega.all():
+        raise InputError("the mask covers every pixel, so nothing is known to fill from; "
+                         "mark only the damaged region")
+    rows, cols = box_around(omega, MARGIN)
+    box_omega = omega[rows, cols]
+    box = data[:, rows, cols].astype(np.float64)
+    if start is None:
+        guess = ring_mean_start(box, box_omega)
+    else:
+        guess = np.asarray(start, np.float64)[:, rows, cols]
+    box[:, box_omega] = guess[:, box_omega]
+    solver = PoissonSolver(runtime, box, box_omega, kind, dtype)
+    solver.solve(tol=tol, max_iter=max_iter)
+    out = data.copy()
+    out[:, rows, cols] = np.where(box_omega, solver.result(), out[:, rows, cols])
+    return out
+
+
+def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
+          kind="biharmonic", tol=1e-5, max_iter=20000):
+    """Registry entry point: the harmonic or biharmonic fill (see `fill`)."""
+    data = np.asarray(data)
+    return fill(data, np.asarray(omega, bool), runtime, kind, dtype=dtype, tol=tol,
+                max_iter=max_iter).astype(data.dtype, copy=False)

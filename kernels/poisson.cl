@@ -1,0 +1,100 @@
+// Harmonic, biharmonic and Poisson fills of a hole by conjugate gradients on the device.
+//
+// Fields are plain (channels, ny, nx) arrays of one box around the hole, with no ghost
+// layer: the operators are the graph Laplacian of the box's pixel grid,
+//     (L u)(p) = sum over the 4-neighbours q inside the box of (u(q) - u(p)),
+// which is the 5-point Laplacian in the interior and its Neumann form at the box border
+// (the mirrored-ghost Laplacian). L is symmetric, so both systems below are SPD:
+//     harmonic / Poisson   -L_OO x = b,         L u = f in the hole O,
+//     biharmonic           (L L)_OO x = b,      L L u = f in O,
+// with the known pixels moved to b. The CG vectors live on the whole box and are zero
+// off the hole (p, q) so that the operators can gather neighbours without tests for
+// membership; only the lists' cells are visited.
+//
+// Work distribution: item g of a launch takes list entries k = g*chunk + j*stride,
+// j = 0 .. per-1 (on CPUs a contiguous run: chunk = per, stride = 1; on GPUs a strided
+// sweep: chunk = 1, stride = number of items), and writes one partial sum per channel
+// (partial[c * ng + g]), which a one-item kernel adds up: no atomics, and the result does
+// not depend on the scheduling.
+#include "common.cl"
+
+#define ITEM_ARGS __global const int* restrict list, const int n, const int chunk, \
+                  const int stride, const int per, const int ng
+#define FOR_ITEMS(k)                                                                   \
+    const int g_ = get_global_id(0);                                                  \
+    const int c_ = get_global_id(1);                                                  \
+    const int chan = c_ * nx * ny;                                                    \
+    if (g_ >= ng) return;                                                             \
+    int j_ = 0;                                                                       \
+    for (int k = g_ * chunk; j_ < per && k < n; ++j_, k += stride)
+
+// Graph Laplacian at flat index i (y * nx + x) of one channel plane starting at `chan`.
+INLINE REAL graph_laplacian(__global const REAL* u, const int chan, const int i,
+                            const int nx, const int ny)
+{
+    const int y = i / nx, x = i - y * nx;
+    const REAL c = u[chan + i];
+    REAL s = 0;
+    if (x > 0) s += u[chan + i - 1] - c;
+    if (x < nx - 1) s += u[chan + i + 1] - c;
+    if (y > 0) s += u[chan + i - nx] - c;
+    if (y < ny - 1) s += u[chan + i + nx] - c;
+    return s;
+}
+
+// dst = a * L(src) + b * f on the list; partial sums of dot * dst. (`dot` may be dst.)
+__kernel void lap_axpy_dot(__global const REAL* src, __global REAL* dst,
+                           __global const REAL* f, const REAL a, const REAL b,
+                           __global const REAL* dot, __global REAL* partial,
+                           const int nx, const int ny, ITEM_ARGS)
+{
+    REAL acc = 0;
+    FOR_ITEMS(k) {
+        const int i = list[k];
+        const REAL v = a * graph_laplacian(src, chan, i, nx, ny) + b * f[chan + i];
+        dst[chan + i] = v;
+        acc += dot[chan + i] * v;
+    }
+    partial[c_ * ng + g_] = acc;
+}
+
+// A channel's sum of its partials, added in the same order by every item that needs it.
+INLINE REAL sum_partials(__global const REAL* partial, const int c, const int ng)
+{
+    REAL s = 0;
+    for (int g = 0; g < ng; ++g) s += partial[c * ng + g];
+    return s;
+}
+
+// x += alpha p, r -= alpha q with alpha = r.r / p.q (from the partials of both); writes
+// the partials of the new r.r into rr_new.
+__kernel void cg_update(__global REAL* x, __global REAL* r, __global const REAL* p,
+                        __global const REAL* q, __global const REAL* rr_old,
+                        __global const REAL* pq, __global REAL* rr_new,
+                        const int nx, const int ny, ITEM_ARGS)
+{
+    const REAL den = sum_partials(pq, get_global_id(1), ng);
+    const REAL alpha = den > 0 ? sum_partials(rr_old, get_global_id(1), ng) / den : (REAL)0;
+    REAL acc = 0;
+    FOR_ITEMS(k) {
+        const int i = chan + list[k];
+        x[i] += alpha * p[i];
+        const REAL ri = r[i] - alpha * q[i];
+        r[i] = ri;
+        acc += ri * ri;
+    }
+    rr_new[c_ * ng + g_] = acc;
+}
+
+// p = r + beta p with beta = new r.r / old r.r.
+__kernel void cg_direction(__global REAL* p, __global const REAL* r,
+                           __global const REAL* rr_old, __global const REAL* rr_new,
+                           const int nx, const int ny, ITEM_ARGS)
+{
+    const REAL old = sum_partials(rr_old, get_global_id(1), ng);
+    const REAL beta = old > 0 ? sum_partials(rr_new, get_global_id(1), ng) / old : (REAL)0;
+    FOR_ITEMS(k) {
+        const int i = chan + list[k];
+        p[i] = r[i] + beta * p[i];
+    }
+}
