@@ -1,0 +1,175 @@
+// Coherence transport (after Bornemann & Maerz, J. Math. Imaging Vision 28, 2007), one
+// distance shell of the hole at a time.
+//
+// Fields are plain (planes, ny, nx) arrays of one box around the hole; `known` (ny, nx) is
+// 1 for the pixels known before the current shell (the image's and the earlier shells').
+// Per shell the host runs:
+//   1. ct_smooth_rows / ct_smooth_cols: u_sigma = (K_sigma * (known u)) / (K_sigma * known),
+//      the Gaussian smoothing of the known pixels only, each channel;
+//   2. ct_products: the products of the central-difference gradients of u_sigma summed
+//      over the channels (one tensor for colour), J11, J12, J22, times `valid` (the pixel
+//      and its four neighbours known), plus `valid` itself; ct_tensor_rows: their K_rho
+//      row pass;
+//   3. ct_fill over the shell's pixels: the K_rho column pass at the pixel (normalized by
+//      the valid weight), the tensor's eigenvector n of the larger eigenvalue (across the
+//      structure) and the coherence ((l1 - l2) / (l1 + l2))^2, and the weighted mean of the
+//      known pixels y in the disc |y - x| <= epsilon,
+//          w(x, y) = exp(-mu^2 / (2 eps^2) <n, y - x>^2) / |y - x|,   mu = kappa coherence;
+//   4. ct_mark: the shell's pixels become known.
+// Borders of the box: the smoothing sums are normalized, so pixels outside simply count as
+// unknown.
+#include "common.cl"
+
+// Row pass of a normalized Gaussian smoothing. in: nin planes, weighted by `weight`
+// (a (ny, nx) plane) when `weighted` (then an extra output plane gets the weights' sum).
+__kernel void ct_smooth_rows(__global const REAL* in, __global const REAL* weight,
+                             __global REAL* out, __constant REAL* taps, const int r,
+                             const int nin, const int nx, const int ny)
+{
+    const int x = get_global_id(0), y = get_global_id(1);
+    if (x >= nx || y >= ny) return;
+    const int plane = nx * ny, row = y * nx;
+    const int a = max(x - r, 0) - x, b = min(x + r, nx - 1) - x;
+    REAL wsum = 0;
+    for (int j = a; j <= b; ++j) wsum += taps[j + r] * weight[row + x + j];
+    out[nin * plane + row + x] = wsum;
+    for (int c = 0; c < nin; ++c) {
+        REAL s = 0;
+        for (int j = a; j <= b; ++j)
+            s += taps[j + r] * weight[row + x + j] * in[c * plane + row + x + j];
+        out[c * plane + row + x] = s;
+    }
+}
+
+// Column pass: out_c = (sum taps h_c) / (sum taps h_w), 0 where the weights vanish.
+__kernel void ct_smooth_cols(__global const REAL* h, __global REAL* out,
+                             __constant REAL* taps, const int r, const int nin,
+                             const int nx, const int ny)
+{
+    const int x = get_global_id(0), y = get_global_id(1);
+    if (x >= nx || y >= ny) return;
+    const int plane = nx * ny;
+    const int a = max(y - r, 0) - y, b = min(y + r, ny - 1) - y;
+    REAL wsum = 0;
+    for (int j = a; j <= b; ++j) wsum += taps[j + r] * h[nin * plane + (y + j) * nx + x];
+    const REAL inv = wsum > (REAL)1e-12 ? (REAL)1 / wsum : (REAL)0;
+    for (int c = 0; c < nin; ++c) {
+        REAL s = 0;
+        for (int j = a; j <= b; ++j) s += taps[j + r] * h[c * plane + (y + j) * nx + x];
+        out[c * plane + y * nx + x] = s * inv;
+    }
+}
+
+// The gradient products of u_sigma (nc planes) summed over the channels, times `valid`
+// (the pixel and its four neighbours known): out planes J11, J12, J22, valid.
+__kernel void ct_products(__global const REAL* us, __global const REAL* known,
+                          __global REAL* out, const int nc, const int nx, const int ny)
+{
+    const int x = get_global_id(0), y = get_global_id(1);
+    if (x >= nx || y >= ny) return;
+    const int plane = nx * ny, i = y * nx + x;
+    REAL p0 = 0, p1 = 0, p2 = 0, p3 = 0;
+    if (x >= 1 && y >= 1 && x < nx - 1 && y < ny - 1 &&
+        known[i] * known[i - 1] * known[i + 1] * known[i - nx] * known[i + nx] != 0) {
+        for (int c = 0; c < nc; ++c) {
+            const int k = c * plane + i;
+            const REAL ux = (REAL)0.5 * (us[k + 1] - us[k - 1]);
+            const REAL uy = (REAL)0.5 * (us[k + nx] - us[k - nx]);
+            p0 += ux * ux;
+            p1 += ux * uy;
+            p2 += uy * uy;
+        }
+        p3 = 1;
+    }
+    out[i] = p0;
+    out[plane + i] = p1;
+    out[2 * plane + i] = p2;
+    out[3 * plane + i] = p3;
+}
+
+// The K_rho row pass of the four product planes.
+__kernel void ct_tensor_rows(__global const REAL* prod, __global REAL* out,
+                             __constant REAL* taps, const int r, const int nx, const int ny)
+{
+    const int x = get_global_id(0), y = get_global_id(1);
+    if (x >= nx || y >= ny) return;
+    const int plane = nx * ny, row = y * nx;
+    const int a = max(x - r, 0) - x, b = min(x + r, nx - 1) - x;
+    for (int q = 0; q < 4; ++q) {
+        REAL s = 0;
+        for (int j = a; j <= b; ++j) s += taps[j + r] * prod[q * plane + row + x + j];
+        out[q * plane + row + x] = s;
+    }
+}
+
+// One shell: list entries [first, first + count) of `list` (flat indices y * nx + x).
+__kernel void ct_fill(__global REAL* u, __global const REAL* known, __global const REAL* t,
+                      __constant REAL* taps, const int r, __global const int* list,
+                      const int first, const int count, const REAL epsilon,
+                      const REAL kappa, const int nc, const int nx, const int ny)
+{
+    const int k = get_global_id(0);
+    if (k >= count) return;
+    const int i = list[first + k];
+    const int y = i / nx, x = i - y * nx;
+    const int plane = nx * ny;
+    // the column pass of K_rho at this pixel
+    const int a = max(y - r, 0) - y, b = min(y + r, ny - 1) - y;
+    REAL J[4] = {0, 0, 0, 0};
+    for (int j = a; j <= b; ++j)
+        for (int q = 0; q < 4; ++q) J[q] += taps[j + r] * t[q * plane + (y + j) * nx + x];
+    REAL n1 = 1, n2 = 0, mu = 0;
+    if (J[3] > (REAL)1e-12) {
+        const REAL j11 = J[0] / J[3], j12 = J[1] / J[3], j22 = J[2] / J[3];
+        const REAL tr = j11 + j22;
+        const REAL d = SQRT((j11 - j22) * (j11 - j22) + 4 * j12 * j12);
+        const REAL l1 = (REAL)0.5 * (tr + d), l2 = (REAL)0.5 * (tr - d);
+        // the eigenvector of l1: whichever of the two forms is better conditioned
+        REAL a1 = j12, a2 = l1 - j11, b1 = l1 - j22, b2 = j12;
+        if (a1 * a1 + a2 * a2 < b1 * b1 + b2 * b2) { a1 = b1; a2 = b2; }
+        const REAL norm = SQRT(a1 * a1 + a2 * a2);
+        if (norm > 0) { n1 = a1 / norm; n2 = a2 / norm; }
+        if (tr > (REAL)1e-12) {
+            const REAL coh = (l1 - l2) / (l1 + l2);
+            mu = kappa * coh * coh;
+        }
+    }
+    const REAL g = mu * mu / (2 * epsilon * epsilon);
+    const int R = (int)floor(epsilon);
+    REAL den = 0, den_iso = 0;
+    REAL num[MAX_CHANNELS], num_iso[MAX_CHANNELS];
+    for (int c = 0; c < nc; ++c) num[c] = num_iso[c] = 0;
+    for (int dy = -R; dy <= R; ++dy) {
+        const int yy = y + dy;
+        if (yy < 0 || yy >= ny) continue;
+        for (int dx = -R; dx <= R; ++dx) {
+            const int xx = x + dx;
+            const int d2 = dx * dx + dy * dy;
+            if (xx < 0 || xx >= nx || d2 == 0 || (REAL)d2 > epsilon * epsilon) continue;
+            const int jy = yy * nx + xx;
+            if (known[jy] == 0) continue;
+            const REAL inv = RSQRT((REAL)d2);
+            const REAL along = n1 * dx + n2 * dy;
+            const REAL w = exp(-g * along * along) * inv;
+            den += w;
+            den_iso += inv;
+            for (int c = 0; c < nc; ++c) {
+                const REAL v = u[c * plane + jy];
+                num[c] += w * v;
+                num_iso[c] += inv * v;
+            }
+        }
+    }
+    // no known pixel near the coherence line: the isotropic mean
+    const int aniso = den > (REAL)1e-6 * den_iso;
+    for (int c = 0; c < nc; ++c)
+        u[c * plane + i] = den_iso > 0 ? (aniso ? num[c] / den : num_iso[c] / den_iso)
+                                       : u[c * plane + i];
+}
+
+__kernel void ct_mark(__global REAL* known, __global const int* list, const int first,
+                      const int count)
+{
+    const int k = get_global_id(0);
+    if (k < count) known[list[first + k]] = 1;
+}
