@@ -10,37 +10,8 @@
 // with the known pixels moved to b. The CG vectors live on the whole box and are zero
 // off the hole (p, q) so that the operators can gather neighbours without tests for
 // membership; only the lists' cells are visited.
-//
-// Work distribution: item g of a launch takes list entries k = g*chunk + j*stride,
-// j = 0 .. per-1 (on CPUs a contiguous run: chunk = per, stride = 1; on GPUs a strided
-// sweep: chunk = 1, stride = number of items), and writes one partial sum per channel
-// (partial[c * ng + g]), which a one-item kernel adds up: no atomics, and the result does
-// not depend on the scheduling.
-#include "common.cl"
-
-#define ITEM_ARGS __global const int* restrict list, const int n, const int chunk, \
-                  const int stride, const int per, const int ng
-#define FOR_ITEMS(k)                                                                   \
-    const int g_ = get_global_id(0);                                                  \
-    const int c_ = get_global_id(1);                                                  \
-    const int chan = c_ * nx * ny;                                                    \
-    if (g_ >= ng) return;                                                             \
-    int j_ = 0;                                                                       \
-    for (int k = g_ * chunk; j_ < per && k < n; ++j_, k += stride)
-
-// Graph Laplacian at flat index i (y * nx + x) of one channel plane starting at `chan`.
-INLINE REAL graph_laplacian(__global const REAL* u, const int chan, const int i,
-                            const int nx, const int ny)
-{
-    const int y = i / nx, x = i - y * nx;
-    const REAL c = u[chan + i];
-    REAL s = 0;
-    if (x > 0) s += u[chan + i - 1] - c;
-    if (x < nx - 1) s += u[chan + i + 1] - c;
-    if (y > 0) s += u[chan + i - nx] - c;
-    if (y < ny - 1) s += u[chan + i + nx] - c;
-    return s;
-}
+// Work distribution and reductions: box_lists.cl.
+#include "box_lists.cl"
 
 // dst = a * L(src) + b * f on the list; partial sums of dot * dst. (`dot` may be dst.)
 __kernel void lap_axpy_dot(__global const REAL* src, __global REAL* dst,

@@ -158,3 +158,44 @@ def coherence_transport(data, omega, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0
         known = known.copy()
         known[ys, xs] = True
     return out
+
+
+# ---------------------------------------------------------------------------------------
+# Navier-Stokes inpainting
+
+
+def _neighbours(a):
+    """(east, west, north, south) of each pixel, mirrored at the border (zero differences)."""
+    p = np.pad(a, 1, mode="edge")
+    return p[1:-1, 2:], p[1:-1, :-2], p[2:, 1:-1], p[:-2, 1:-1]
+
+
+def ns_vorticity_step(img, w, omega, dt, nu, contrast):
+    """One explicit step of w_t + v . grad w = nu div(g grad w) at the hole's pixels
+    (first-order upwind transport, face fluxes g(|w_q - w_p|)(w_q - w_p))."""
+    out = w.copy()
+    g = lambda d: 1 / (1 + (d / contrast) ** 2)
+    for c in range(img.shape[0]):
+        ie, iw, i_n, i_s = _neighbours(img[c])
+        we, ww, wn, ws = _neighbours(w[c])
+        vx, vy = -0.5 * (i_n - i_s), 0.5 * (ie - iw)
+        de, dw, dn, ds = we - w[c], w[c] - ww, wn - w[c], w[c] - ws
+        adv = np.where(vx > 0, vx * dw, vx * de) + np.where(vy > 0, vy * ds, vy * dn)
+        diff = g(de) * de - g(dw) * dw + g(dn) * dn - g(ds) * ds
+        out[c] = np.where(omega, w[c] + dt * (nu * diff - adv), w[c])
+    return out
+
+
+def transport_residual(img, omega):
+    """Mean over the hole of |grad(L I) . grad-perp(I)| / (|grad L I| |grad I|), central
+    differences: 0 where the Laplacian is constant along the isophotes."""
+    num = den = 0.0
+    for c in range(img.shape[0]):
+        lap = graph_laplacian(img[c])
+        ie, iw, i_n, i_s = _neighbours(img[c])
+        le, lw, ln, ls = _neighbours(lap)
+        ix, iy = 0.5 * (ie - iw), 0.5 * (i_n - i_s)
+        lx, ly = 0.5 * (le - lw), 0.5 * (ln - ls)
+        num += np.abs(lx * -iy + ly * ix)[omega].sum()
+        den += (np.hypot(lx, ly) * np.hypot(ix, iy))[omega].sum()
+    return num / max(den, 1e-300)
