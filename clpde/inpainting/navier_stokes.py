@@ -78,19 +78,21 @@ class NavierStokesSolver:
         ring = ndimage.binary_dilation(omega, ndimage.generate_binary_structure(2, 1)) & ~omega
         self.ring_list = DeviceList(runtime, np.flatnonzero(ring))
         self.partial = cla.zeros(q, (nc, self.omega_list.items), dt)
-        prog = runtime.program("navier_stokes.cl", dt)
+        k_lap = runtime.kernel("navier_stokes.cl", "ns_laplacian", dt)
+        k_step = runtime.kernel("navier_stokes.cl", "ns_vorticity_step", dt)
+        k_change = runtime.kernel("navier_stokes.cl", "ns_change", dt)
         dims = (np.int32(nx), np.int32(ny))
         self.dt = 0.9 / (1.0 + 4.0 * nu)
-        self._laplacian_ring = self.ring_list.bind(runtime, prog, "ns_laplacian", nc,
+        self._laplacian_ring = self.ring_list.bind(runtime, k_lap, nc,
                                                    self.img.data, self.w.data, *dims)
-        laplacian_hole = self.omega_list.bind(runtime, prog, "ns_laplacian", nc, self.img.data,
+        laplacian_hole = self.omega_list.bind(runtime, k_lap, nc, self.img.data,
                                               self.w.data, *dims)
         s = dt.type
-        self._steps = [self.omega_list.bind(runtime, prog, "ns_vorticity_step", nc, a.data,
+        self._steps = [self.omega_list.bind(runtime, k_step, nc, a.data,
                                             b.data, c.data, s(self.dt), s(nu),
                                             s(1.0 / contrast ** 2), *dims)
                        for a, b, c in ((self.img, self.w, self.wn), (self.img, self.wn, self.w))]
-        self._change = self.omega_list.bind(runtime, prog, "ns_change", nc, self.img.data,
+        self._change = self.omega_list.bind(runtime, k_change, nc, self.img.data,
                                             self.prev.data, self.partial.data, *dims)
         laplacian_hole()
         # both vorticity buffers hold the boundary values

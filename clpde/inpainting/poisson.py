@@ -65,10 +65,11 @@ class DeviceList:
         return (self.buf.data, np.int32(self.n), np.int32(self.chunk), np.int32(self.stride),
                 np.int32(self.per), np.int32(self.items))
 
-    def bind(self, runtime, program, name, nc, *args):
-        """A kernel of its own with its arguments set once: launching it costs no argument
-        setting (pyopencl's per-call argument handling dominates a small launch on PoCL)."""
-        kernel = cl.Kernel(program, name)
+    def bind(self, runtime, template: cl.Kernel, nc, *args):
+        """A copy of a kernel with its arguments set once: launching it costs no argument
+        setting (pyopencl's per-call argument handling dominates a small launch on PoCL),
+        and the shared kernel object of the runtime's cache keeps its own arguments."""
+        kernel = cl.Kernel(template.program, template.function_name)
         kernel.set_args(*args, *self.args())
         local = None if self.lsize is None else (self.lsize, 1)
         queue = runtime.queue
@@ -101,12 +102,14 @@ class PoissonSolver:
         ng = o.items
         self.rr = [zeros((nc, ng)), zeros((nc, ng))]
         self.pq = zeros((nc, ng))
-        prog = runtime.program("poisson.cl", dt)
+        k_lap = runtime.kernel("poisson.cl", "lap_axpy_dot", dt)
+        k_update = runtime.kernel("poisson.cl", "cg_update", dt)
+        k_direction = runtime.kernel("poisson.cl", "cg_direction", dt)
         dims = (np.int32(nx), np.int32(ny))
         s = dt.type
 
         def lap(lst, src, dst, a, b, dot, partial):
-            return lst.bind(runtime, prog, "lap_axpy_dot", nc, src.data, dst.data, self.f.data,
+            return lst.bind(runtime, k_lap, nc, src.data, dst.data, self.f.data,
                             s(a), s(b), dot.data, partial.data, *dims)
 
         if kind == "harmonic":
@@ -124,10 +127,10 @@ class PoissonSolver:
                               lap(o, self.t, self.r, -1, 1, self.r, self.rr[0])]
             self._apply = [lap(rl, self.p, self.t, 1, 0, self.t, dummy),
                            lap(o, self.t, self.qv, 1, 0, self.p, self.pq)]
-        self._update = [o.bind(runtime, prog, "cg_update", nc, self.u.data, self.r.data,
+        self._update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
                                self.p.data, self.qv.data, self.rr[a].data, self.pq.data,
                                self.rr[1 - a].data, *dims) for a in (0, 1)]
-        self._direction = [o.bind(runtime, prog, "cg_direction", nc, self.p.data, self.r.data,
+        self._direction = [o.bind(runtime, k_direction, nc, self.p.data, self.r.data,
                                   self.rr[a].data, self.rr[1 - a].data, *dims) for a in (0, 1)]
         self.iterations = 0
         self.residual = None
