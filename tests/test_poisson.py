@@ -24,7 +24,7 @@ def _case(seed=0, shape=(37, 45), nc=2):
 @pytest.mark.parametrize("kind", ["harmonic", "biharmonic"])
 def test_fill_matches_sparse_solve(runtime, kind):
     data, omega = _case()
-    got = poisson.fill(data, omega, runtime, kind, tol=1e-7)
+    got = poisson.fill(data, omega, runtime, kind, tol=1e-7, clip=False)
     want = ref.poisson_fill(data, omega, kind)
     np.testing.assert_allclose(got, want, atol=2e-5)
     assert np.array_equal(got[:, ~omega], data[:, ~omega])
@@ -70,9 +70,24 @@ def test_biharmonic_matches_scikit_image(runtime):
     omega = np.hypot(yy - 40, xx - 50) < 9
     omega[90:93, 10:110] = True  # a scratch
     omega[60:75, 100:104] = True
+    omega[20:40, 60:66] = True  # two holes one pixel apart
+    omega[41:44, 58:70] = True
     got = poisson.fill(image[None], omega, runtime, "biharmonic", tol=1e-6)[0]
     want = inpaint_biharmonic(image, omega)
     assert np.abs(got - want)[omega].max() < 1e-4
+
+
+def test_biharmonic_is_clipped_to_the_known_range(runtime):
+    # like scikit-image's: unclipped, the fill overshoots across a sharp step
+    step = np.zeros((1, 30, 30))
+    step[0, :, 15:] = 1.0
+    omega = np.zeros((30, 30), bool)
+    omega[10:20, 8:22] = True
+    raw = poisson.fill(step, omega, runtime, tol=1e-6, clip=False)
+    assert raw.max() > 1.0005 and raw.min() < -0.0005
+    clipped = poisson.fill(step, omega, runtime, tol=1e-6)
+    assert clipped.min() == 0.0 and clipped.max() == 1.0
+    np.testing.assert_allclose(clipped, np.clip(raw, 0, 1), atol=1e-6)
 
 
 def test_solve_contract(runtime):

@@ -203,11 +203,15 @@ def ring_mean_start(data: np.ndarray, omega: np.ndarray) -> np.ndarray:
 
 
 def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dtype=np.float32,
-         tol=1e-5, max_iter=20000, start=None) -> np.ndarray:
+         tol=1e-5, max_iter=20000, start=None, clip=True) -> np.ndarray:
     """The harmonic or biharmonic fill of omega, solved in the hole's box on the device.
 
     data: (channels, rows, cols) floats; only omega changes. start: optional first guess
     inside omega (same shape as data); by default each component's mean border value.
+    (A coarse-grid solution as the start does not cut the iterations: measured on a
+    100x100 hole, 3950 against 4000 to tol=1e-5.) clip: clip the result to each
+    channel's range over the known pixels, as scikit-image's inpaint_biharmonic does (the
+    biharmonic fill overshoots next to sharp edges).
     """
     if not omega.any():
         return data.copy()
@@ -224,8 +228,12 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dty
     box[:, box_omega] = guess[:, box_omega]
     solver = PoissonSolver(runtime, box, box_omega, kind, dtype)
     solver.solve(tol=tol, max_iter=max_iter)
-    out = data.copy()
-    out[:, rows, cols] = np.where(box_omega, solver.result(), out[:, rows, cols])
+    solved = solver.result().astype(np.float64)
+    if clip:
+        known = data[:, ~omega]
+        solved = np.clip(solved, known.min(axis=1)[:, None, None], known.max(axis=1)[:, None, None])
+    out = np.array(data, copy=True)
+    out[:, rows, cols] = np.where(box_omega, solved, out[:, rows, cols])
     return out
 
 
