@@ -48,16 +48,19 @@ __kernel void ns_laplacian(__global const REAL* img, __global REAL* w, const int
     }
 }
 
-// Partial maxima of |I - prev| over the list, then prev = I.
+// Partial maxima and sums of |I - prev| over the list, then prev = I.
 __kernel void ns_change(__global const REAL* img, __global REAL* prev,
-                        __global REAL* partial, const int nx, const int ny, ITEM_ARGS)
+                        __global REAL* partial_max, __global REAL* partial_sum,
+                        const int nx, const int ny, ITEM_ARGS)
 {
-    REAL m = 0;
+    REAL m = 0, total = 0;
     FOR_ITEMS(k) {
         const int i = chan + list[k];
         const REAL d = FABS(img[i] - prev[i]);
         m = d > m ? d : m;
+        total += d;
         prev[i] = img[i];
     }
-    partial[c_ * ng + g_] = m;
+    partial_max[c_ * ng + g_] = m;
+    partial_sum[c_ * ng + g_] = total;
 }
