@@ -20,85 +20,100 @@
 // unknown.
 #include "common.cl"
 
-// Row pass of a normalized Gaussian smoothing. in: nin planes, weighted by `weight`
-// (a (ny, nx) plane) when `weighted` (then an extra output plane gets the weights' sum).
+// The full-box passes walk runs of `xrun` pixels of one row (a whole row on CPUs, where
+// the innermost loops over x vectorise; one pixel on GPUs), tap by tap, accumulating into
+// the output row; a tap's x range is clipped to the row, so there is no per-pixel test.
+#define RUN_RANGE                                                                     \
+    const int y = get_global_id(1);                                                   \
+    const int x0 = get_global_id(0) * xrun;                                           \
+    const int x1 = min(x0 + xrun, nx);                                                \
+    if (y >= ny || x0 >= nx) return;                                                  \
+    const int plane = nx * ny, row = y * nx
+
+// Row pass of a normalized Gaussian smoothing: planes c < nin of `out` get
+// sum_j taps_j weight(x+j) in_c(x+j), plane nin the weights' sum.
 __kernel void ct_smooth_rows(__global const REAL* in, __global const REAL* weight,
                              __global REAL* out, __constant REAL* taps, const int r,
-                             const int nin, const int nx, const int ny)
+                             const int nin, const int nx, const int ny, const int xrun)
 {
-    const int x = get_global_id(0), y = get_global_id(1);
-    if (x >= nx || y >= ny) return;
-    const int plane = nx * ny, row = y * nx;
-    const int a = max(x - r, 0) - x, b = min(x + r, nx - 1) - x;
-    REAL wsum = 0;
-    for (int j = a; j <= b; ++j) wsum += taps[j + r] * weight[row + x + j];
-    out[nin * plane + row + x] = wsum;
-    for (int c = 0; c < nin; ++c) {
-        REAL s = 0;
-        for (int j = a; j <= b; ++j)
-            s += taps[j + r] * weight[row + x + j] * in[c * plane + row + x + j];
-        out[c * plane + row + x] = s;
+    RUN_RANGE;
+    for (int c = 0; c <= nin; ++c)
+        for (int x = x0; x < x1; ++x) out[c * plane + row + x] = 0;
+    for (int j = -r; j <= r; ++j) {
+        const REAL t = taps[j + r];
+        const int xa = max(x0, -j), xb = min(x1, nx - j);
+        for (int x = xa; x < xb; ++x) out[nin * plane + row + x] += t * weight[row + x + j];
+        for (int c = 0; c < nin; ++c)
+            for (int x = xa; x < xb; ++x)
+                out[c * plane + row + x] += t * weight[row + x + j] * in[c * plane + row + x + j];
     }
 }
 
-// Column pass: out_c = (sum taps h_c) / (sum taps h_w), 0 where the weights vanish.
+// Column pass: out_c = (sum_j taps_j h_c(y+j)) / (sum_j taps_j h_nin(y+j)), 0 where the
+// weights vanish; plane nin of `out` keeps the weights' sum.
 __kernel void ct_smooth_cols(__global const REAL* h, __global REAL* out,
                              __constant REAL* taps, const int r, const int nin,
-                             const int nx, const int ny)
+                             const int nx, const int ny, const int xrun)
 {
-    const int x = get_global_id(0), y = get_global_id(1);
-    if (x >= nx || y >= ny) return;
-    const int plane = nx * ny;
-    const int a = max(y - r, 0) - y, b = min(y + r, ny - 1) - y;
-    REAL wsum = 0;
-    for (int j = a; j <= b; ++j) wsum += taps[j + r] * h[nin * plane + (y + j) * nx + x];
-    const REAL inv = wsum > (REAL)1e-12 ? (REAL)1 / wsum : (REAL)0;
-    for (int c = 0; c < nin; ++c) {
-        REAL s = 0;
-        for (int j = a; j <= b; ++j) s += taps[j + r] * h[c * plane + (y + j) * nx + x];
-        out[c * plane + y * nx + x] = s * inv;
+    RUN_RANGE;
+    for (int c = 0; c <= nin; ++c)
+        for (int x = x0; x < x1; ++x) out[c * plane + row + x] = 0;
+    for (int j = max(-r, -y); j <= min(r, ny - 1 - y); ++j) {
+        const REAL t = taps[j + r];
+        const int src = row + j * nx;
+        for (int c = 0; c <= nin; ++c)
+            for (int x = x0; x < x1; ++x) out[c * plane + row + x] += t * h[c * plane + src + x];
+    }
+    for (int x = x0; x < x1; ++x) {
+        const REAL w = out[nin * plane + row + x];
+        const REAL inv = w > (REAL)1e-12 ? (REAL)1 / w : (REAL)0;
+        for (int c = 0; c < nin; ++c) out[c * plane + row + x] *= inv;
     }
 }
 
 // The gradient products of u_sigma (nc planes) summed over the channels, times `valid`
 // (the pixel and its four neighbours known): out planes J11, J12, J22, valid.
 __kernel void ct_products(__global const REAL* us, __global const REAL* known,
-                          __global REAL* out, const int nc, const int nx, const int ny)
+                          __global REAL* out, const int nc, const int nx, const int ny,
+                          const int xrun)
 {
-    const int x = get_global_id(0), y = get_global_id(1);
-    if (x >= nx || y >= ny) return;
-    const int plane = nx * ny, i = y * nx + x;
-    REAL p0 = 0, p1 = 0, p2 = 0, p3 = 0;
-    if (x >= 1 && y >= 1 && x < nx - 1 && y < ny - 1 &&
-        known[i] * known[i - 1] * known[i + 1] * known[i - nx] * known[i + nx] != 0) {
-        for (int c = 0; c < nc; ++c) {
-            const int k = c * plane + i;
-            const REAL ux = (REAL)0.5 * (us[k + 1] - us[k - 1]);
-            const REAL uy = (REAL)0.5 * (us[k + nx] - us[k - nx]);
-            p0 += ux * ux;
-            p1 += ux * uy;
-            p2 += uy * uy;
+    RUN_RANGE;
+    for (int x = x0; x < x1; ++x) {
+        const int i = row + x;
+        REAL p0 = 0, p1 = 0, p2 = 0, p3 = 0;
+        if (x >= 1 && y >= 1 && x < nx - 1 && y < ny - 1 &&
+            known[i] * known[i - 1] * known[i + 1] * known[i - nx] * known[i + nx] != 0) {
+            for (int c = 0; c < nc; ++c) {
+                const int k = c * plane + i;
+                const REAL ux = (REAL)0.5 * (us[k + 1] - us[k - 1]);
+                const REAL uy = (REAL)0.5 * (us[k + nx] - us[k - nx]);
+                p0 += ux * ux;
+                p1 += ux * uy;
+                p2 += uy * uy;
+            }
+            p3 = 1;
         }
-        p3 = 1;
+        out[i] = p0;
+        out[plane + i] = p1;
+        out[2 * plane + i] = p2;
+        out[3 * plane + i] = p3;
     }
-    out[i] = p0;
-    out[plane + i] = p1;
-    out[2 * plane + i] = p2;
-    out[3 * plane + i] = p3;
 }
 
 // The K_rho row pass of the four product planes.
 __kernel void ct_tensor_rows(__global const REAL* prod, __global REAL* out,
-                             __constant REAL* taps, const int r, const int nx, const int ny)
+                             __constant REAL* taps, const int r, const int nx, const int ny,
+                             const int xrun)
 {
-    const int x = get_global_id(0), y = get_global_id(1);
-    if (x >= nx || y >= ny) return;
-    const int plane = nx * ny, row = y * nx;
-    const int a = max(x - r, 0) - x, b = min(x + r, nx - 1) - x;
-    for (int q = 0; q < 4; ++q) {
-        REAL s = 0;
-        for (int j = a; j <= b; ++j) s += taps[j + r] * prod[q * plane + row + x + j];
-        out[q * plane + row + x] = s;
+    RUN_RANGE;
+    for (int q = 0; q < 4; ++q)
+        for (int x = x0; x < x1; ++x) out[q * plane + row + x] = 0;
+    for (int j = -r; j <= r; ++j) {
+        const REAL t = taps[j + r];
+        const int xa = max(x0, -j), xb = min(x1, nx - j);
+        for (int q = 0; q < 4; ++q)
+            for (int x = xa; x < xb; ++x)
+                out[q * plane + row + x] += t * prod[q * plane + row + x + j];
     }
 }
 

@@ -95,7 +95,7 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     known = cla.to_device(q, (~box_omega).astype(dt))
     lst = cla.to_device(q, flat.astype(np.int32))
     h = cla.empty(q, (nc + 1, ny, nx), dt)
-    us = cla.empty(q, (nc, ny, nx), dt)
+    us = cla.empty(q, (nc + 1, ny, nx), dt)  # the last plane: the weights' sums
     t = cla.empty(q, (4, ny, nx), dt)
     prod = cla.empty(q, (4, ny, nx), dt)
     taps_s, taps_r = gaussian_taps(sigma), gaussian_taps(rho)
@@ -109,15 +109,16 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     k_tensor = runtime.kernel("coherence.cl", "ct_tensor_rows", dt, **defines)
     k_fill = runtime.kernel("coherence.cl", "ct_fill", dt, **defines)
     k_mark = runtime.kernel("coherence.cl", "ct_mark", dt, **defines)
-    grid = (nx, ny)
+    grid, local, xrun = runtime.grid_launch(nx, ny, 1)
     dims = (np.int32(nx), np.int32(ny))
+    run = (*dims, np.int32(xrun))
     for first, count in zip(starts, counts):
         if count == 0:
             continue
-        k_rows(q, grid, None, u.data, known.data, h.data, buf_s.data, rs, np.int32(nc), *dims)
-        k_cols(q, grid, None, h.data, us.data, buf_s.data, rs, np.int32(nc), *dims)
-        k_products(q, grid, None, us.data, known.data, prod.data, np.int32(nc), *dims)
-        k_tensor(q, grid, None, prod.data, t.data, buf_r.data, rr, *dims)
+        k_rows(q, grid, local, u.data, known.data, h.data, buf_s.data, rs, np.int32(nc), *run)
+        k_cols(q, grid, local, h.data, us.data, buf_s.data, rs, np.int32(nc), *run)
+        k_products(q, grid, local, us.data, known.data, prod.data, np.int32(nc), *run)
+        k_tensor(q, grid, local, prod.data, t.data, buf_r.data, rr, *run)
         args = (np.int32(first), np.int32(count))
         k_fill(q, (int(count),), None, u.data, known.data, t.data, buf_r.data, rr, lst.data,
                *args, dt.type(epsilon), dt.type(kappa), np.int32(nc), *dims)
