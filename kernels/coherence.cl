@@ -151,35 +151,32 @@ __kernel void ct_fill(__global REAL* u, __global const REAL* known, __global con
     }
     const REAL g = mu * mu / (2 * epsilon * epsilon);
     const int R = (int)floor(epsilon);
+    const REAL eps2 = epsilon * epsilon;
+    // pass 0: the coherence weights; pass 1 (only where no known pixel lies near the
+    // coherence line, so that those weights all but vanish): the isotropic 1 / |y - x|
+    REAL num[MAX_CHANNELS];
     REAL den = 0, den_iso = 0;
-    REAL num[MAX_CHANNELS], num_iso[MAX_CHANNELS];
-    for (int c = 0; c < nc; ++c) num[c] = num_iso[c] = 0;
-    for (int dy = -R; dy <= R; ++dy) {
-        const int yy = y + dy;
-        if (yy < 0 || yy >= ny) continue;
-        for (int dx = -R; dx <= R; ++dx) {
-            const int xx = x + dx;
-            const int d2 = dx * dx + dy * dy;
-            if (xx < 0 || xx >= nx || d2 == 0 || (REAL)d2 > epsilon * epsilon) continue;
-            const int jy = yy * nx + xx;
-            if (known[jy] == 0) continue;
-            const REAL inv = RSQRT((REAL)d2);
-            const REAL along = n1 * dx + n2 * dy;
-            const REAL w = exp(-g * along * along) * inv;
-            den += w;
-            den_iso += inv;
-            for (int c = 0; c < nc; ++c) {
-                const REAL v = u[c * plane + jy];
-                num[c] += w * v;
-                num_iso[c] += inv * v;
+    for (int pass = 0; pass < 2; ++pass) {
+        for (int c = 0; c < nc; ++c) num[c] = 0;
+        den = 0;
+        for (int dy = max(-R, -y); dy <= min(R, ny - 1 - y); ++dy) {
+            for (int dx = max(-R, -x); dx <= min(R, nx - 1 - x); ++dx) {
+                const int d2 = dx * dx + dy * dy;
+                if (d2 == 0 || (REAL)d2 > eps2) continue;
+                const int jy = (y + dy) * nx + x + dx;
+                if (known[jy] == 0) continue;
+                const REAL inv = RSQRT((REAL)d2);
+                const REAL along = n1 * dx + n2 * dy;
+                const REAL w = pass == 0 ? EXP(-g * along * along) * inv : inv;  // EXP: common.cl
+                den += w;
+                if (pass == 0) den_iso += inv;
+                for (int c = 0; c < nc; ++c) num[c] += w * u[c * plane + jy];
             }
         }
+        if (pass == 0 && den > (REAL)1e-6 * den_iso) break;
     }
-    // no known pixel near the coherence line: the isotropic mean
-    const int aniso = den > (REAL)1e-6 * den_iso;
-    for (int c = 0; c < nc; ++c)
-        u[c * plane + i] = den_iso > 0 ? (aniso ? num[c] / den : num_iso[c] / den_iso)
-                                       : u[c * plane + i];
+    if (den > 0)
+        for (int c = 0; c < nc; ++c) u[c * plane + i] = num[c] / den;
 }
 
 __kernel void ct_mark(__global REAL* known, __global const int* list, const int first,
