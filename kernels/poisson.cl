@@ -6,7 +6,7 @@
 // which is the 5-point Laplacian in the interior and its Neumann form at the box border
 // (the mirrored-ghost Laplacian). L is symmetric, so both systems below are SPD:
 //     harmonic / Poisson   -L_OO x = b,         L u = f in the hole O,
-//     biharmonic           (L L)_OO x = b,      L L u = f in O,
+//     biharmonic           (L L)_OO x = b,      L L u = f in O  (one 13-point pass),
 // with the known pixels moved to b. The CG vectors live on the whole box and are zero
 // off the hole (p, q) so that the operators can gather neighbours without tests for
 // membership; only the lists' cells are visited.
@@ -23,6 +23,45 @@ __kernel void lap_axpy_dot(__global const REAL* src, __global REAL* dst,
     FOR_ITEMS(k) {
         const int i = list[k];
         const REAL v = a * graph_laplacian(src, chan, i, nx, ny) + b * f[chan + i];
+        dst[chan + i] = v;
+        acc += dot[chan + i] * v;
+    }
+    partial[c_ * ng + g_] = acc;
+}
+
+// (L L u)(i) directly from u: the 13-point stencil where all of it lies in the box, the
+// graph Laplacian of the graph Laplacian (25 reads) within two pixels of its border.
+INLINE REAL bilaplacian(__global const REAL* u, const int chan, const int i, const int nx,
+                        const int ny)
+{
+    const int y = i / nx, x = i - y * nx;
+    if (x >= 2 && y >= 2 && x < nx - 2 && y < ny - 2) {
+        // in differences from the centre (the weights sum to 0): less cancellation
+        const __global REAL* c = u + chan + i;
+        const REAL c0 = c[0];
+        return -8 * ((c[1] - c0) + (c[-1] - c0) + (c[nx] - c0) + (c[-nx] - c0))
+             + 2 * ((c[1 + nx] - c0) + (c[1 - nx] - c0) + (c[-1 + nx] - c0) + (c[-1 - nx] - c0))
+             + ((c[2] - c0) + (c[-2] - c0) + (c[2 * nx] - c0) + (c[-2 * nx] - c0));
+    }
+    const REAL lc = graph_laplacian(u, chan, i, nx, ny);
+    REAL s = 0;
+    if (x > 0) s += graph_laplacian(u, chan, i - 1, nx, ny) - lc;
+    if (x < nx - 1) s += graph_laplacian(u, chan, i + 1, nx, ny) - lc;
+    if (y > 0) s += graph_laplacian(u, chan, i - nx, nx, ny) - lc;
+    if (y < ny - 1) s += graph_laplacian(u, chan, i + nx, nx, ny) - lc;
+    return s;
+}
+
+// dst = a * L(L(src)) + b * f on the list; partial sums of dot * dst.
+__kernel void bilap_axpy_dot(__global const REAL* src, __global REAL* dst,
+                             __global const REAL* f, const REAL a, const REAL b,
+                             __global const REAL* dot, __global REAL* partial,
+                             const int nx, const int ny, ITEM_ARGS)
+{
+    REAL acc = 0;
+    FOR_ITEMS(k) {
+        const int i = list[k];
+        const REAL v = a * bilaplacian(src, chan, i, nx, ny) + b * f[chan + i];
         dst[chan + i] = v;
         acc += dot[chan + i] * v;
     }

@@ -117,16 +117,15 @@ class PoissonSolver:
             self._residual = [lap(o, self.u, self.r, 1, -1, self.r, self.rr[0])]
             self._apply = [lap(o, self.p, self.qv, -1, 0, self.p, self.pq)]
         else:
-            # r = f - L L u; A p = L L p, through t = L p on the hole grown by one pixel
-            ring = ndimage.binary_dilation(omega, ndimage.generate_binary_structure(2, 1))
-            rl = self.ring_list = DeviceList(runtime, np.flatnonzero(ring))
-            self.t = zeros()
-            # (buffers bound to kernels must outlive them: kernel arguments hold no reference)
-            self.dummy = dummy = zeros((nc, rl.items))
-            self._residual = [lap(rl, self.u, self.t, 1, 0, self.t, dummy),
-                              lap(o, self.t, self.r, -1, 1, self.r, self.rr[0])]
-            self._apply = [lap(rl, self.p, self.t, 1, 0, self.t, dummy),
-                           lap(o, self.t, self.qv, 1, 0, self.p, self.pq)]
+            # r = f - L L u; A p = L L p
+            k_bilap = runtime.kernel("poisson.cl", "bilap_axpy_dot", dt)
+
+            def bilap(src, dst, a, b, dot, partial):
+                return o.bind(runtime, k_bilap, nc, src.data, dst.data, self.f.data, s(a),
+                              s(b), dot.data, partial.data, *dims)
+
+            self._residual = [bilap(self.u, self.r, -1, 1, self.r, self.rr[0])]
+            self._apply = [bilap(self.p, self.qv, 1, 0, self.p, self.pq)]
         self._update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
                                self.p.data, self.qv.data, self.rr[a].data, self.pq.data,
                                self.rr[1 - a].data, *dims) for a in (0, 1)]
