@@ -108,3 +108,83 @@ __kernel void cg_direction(__global REAL* p, __global const REAL* r,
         p[i] = r[i] + beta * p[i];
     }
 }
+
+// ---- multigrid preconditioner (a V-cycle on nested boxes, clpde.inpainting.poisson) ----
+// Level l's operator is A = s * op, op = L (bi = 0) or L L (bi = 1), on vectors that are
+// zero off the level's hole; damped Jacobi smoothing with weight w = omega / diag(A).
+INLINE REAL mg_op(__global const REAL* x, const int chan, const int i, const int nx,
+                  const int ny, const int bi)
+{
+    return bi ? bilaplacian(x, chan, i, nx, ny) : graph_laplacian(x, chan, i, nx, ny);
+}
+
+// y = x + w (b - s op(x)) on the list
+__kernel void mg_smooth(__global const REAL* x, __global REAL* y, __global const REAL* b,
+                        const REAL s, const REAL w, const int bi, const int nx, const int ny,
+                        ITEM_ARGS)
+{
+    FOR_ITEMS(k) {
+        const int i = list[k];
+        y[chan + i] = x[chan + i] + w * (b[chan + i] - s * mg_op(x, chan, i, nx, ny, bi));
+    }
+}
+
+// x = w b (the first sweep, from zero)
+__kernel void mg_scale(__global const REAL* b, __global REAL* x, const REAL w, const int nx,
+                       const int ny, ITEM_ARGS)
+{
+    FOR_ITEMS(k) { x[chan + list[k]] = w * b[chan + list[k]]; }
+}
+
+// r = b - s op(x)
+__kernel void mg_residual(__global const REAL* x, __global const REAL* b, __global REAL* r,
+                          const REAL s, const int bi, const int nx, const int ny, ITEM_ARGS)
+{
+    FOR_ITEMS(k) {
+        const int i = list[k];
+        r[chan + i] = b[chan + i] - s * mg_op(x, chan, i, nx, ny, bi);
+    }
+}
+
+// Coarse cell (Y, X) covers fine cells (2Y - 2 + {0, 1}, 2X - 2 + {0, 1}): the coarse box
+// has a ring of cells outside the hole all around. b_c = the sum of the children's r
+// (r is zero off the fine hole). The list is the coarse hole; nx, ny the coarse box.
+__kernel void mg_restrict(__global const REAL* r, __global REAL* bc, const int nxf,
+                          const int nyf, const int nx, const int ny, ITEM_ARGS)
+{
+    FOR_ITEMS(k) {
+        const int I = list[k];
+        const int Y = I / nx, X = I - Y * nx;
+        const int fine = c_ * nxf * nyf;
+        REAL sum = 0;
+        for (int dy = 0; dy < 2; ++dy) {
+            const int y = 2 * Y - 2 + dy;
+            if (y < 0 || y >= nyf) continue;
+            for (int dx = 0; dx < 2; ++dx) {
+                const int x = 2 * X - 2 + dx;
+                if (x >= 0 && x < nxf) sum += r[fine + y * nxf + x];
+            }
+        }
+        bc[chan + I] = sum;
+    }
+}
+
+// x += the parent's value (piecewise-constant interpolation); the list is the fine hole.
+__kernel void mg_prolong(__global REAL* x, __global const REAL* xc, const int nxc,
+                         const int nyc, const int nx, const int ny, ITEM_ARGS)
+{
+    FOR_ITEMS(k) {
+        const int i = list[k];
+        const int y = i / nx, xx = i - y * nx;
+        x[chan + i] += xc[c_ * nxc * nyc + (y / 2 + 1) * nxc + xx / 2 + 1];
+    }
+}
+
+// partial sums of a . b
+__kernel void dot_partial(__global const REAL* a, __global const REAL* b,
+                          __global REAL* partial, const int nx, const int ny, ITEM_ARGS)
+{
+    REAL acc = 0;
+    FOR_ITEMS(k) { acc += a[chan + list[k]] * b[chan + list[k]]; }
+    partial[c_ * ng + g_] = acc;
+}

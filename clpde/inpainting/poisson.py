@@ -78,6 +78,100 @@ class DeviceList:
         return lambda: cl.enqueue_nd_range_kernel(queue, kernel, (self.gsize, nc), local)
 
 
+class Multigrid:
+    """A symmetric V-cycle z = M r for the hole's operator, as a CG preconditioner.
+
+    Level l+1 halves level l's box, with a ring of cells outside the hole all around (coarse
+    cell (Y, X) covers fine cells 2Y-2, 2Y-1 and 2X-2, 2X-1); its hole is every coarse cell
+    with a hole pixel among its four. Vectors are zero off each level's hole (zero
+    Dirichlet values for the corrections). Transfer: piecewise-constant interpolation and
+    its transpose (the sum of the four children); coarse operators s^l op with op = L or
+    L L of the coarse grid, s = 2 from the Galerkin product of those transfers for L
+    (R L P = 2 L_c), s = 1.5 for L L (measured: 1 suits thick holes, 2 thin ones); damped
+    Jacobi smoothing, two sweeps before and after, eight on the coarsest level. Every launch is bound once, so a V-cycle is a
+    fixed sequence of launches with no host work.
+    """
+
+    OMEGA = {"harmonic": 0.8, "biharmonic": 0.6}  # Jacobi damping, below 2 / lambda_max
+    DIAG = {"harmonic": 4.0, "biharmonic": 20.0}
+    COARSE_SCALE = {"harmonic": 2.0, "biharmonic": 1.5}
+
+    def __init__(self, runtime, omega, kind, nc, dtype, level0):
+        """level0: (list, b, z, tmp, res): the finest level's list and device buffers (the
+        input r, the output z, scratch)."""
+        q = runtime.queue
+        s = dtype.type
+        bi = np.int32(kind == "biharmonic")
+        sign = -1.0 if kind == "harmonic" else 1.0
+        k = lambda name: runtime.kernel("poisson.cl", name, dtype)
+        k_smooth, k_scale, k_residual = k("mg_smooth"), k("mg_scale"), k("mg_residual")
+        k_restrict, k_prolong = k("mg_restrict"), k("mg_prolong")
+        levels = [(omega.shape, *level0)]
+        om = omega
+        self.buffers = []  # bound kernels hold no references: keep the buffers alive
+        while len(levels) < 9:
+            ny, nx = om.shape
+            cy, cx = (ny + 1) // 2 + 2, (nx + 1) // 2 + 2
+            padded = np.zeros((2 * cy, 2 * cx), bool)
+            padded[2 : 2 + ny, 2 : 2 + nx] = om
+            coarse = padded.reshape(cy, 2, cx, 2).any(axis=(1, 3))
+            if coarse.sum() < 4 or coarse.sum() >= om.sum():
+                break
+            bufs = [cla.zeros(q, (nc, cy, cx), dtype) for _ in range(4)]
+            self.buffers += bufs
+            lst = DeviceList(runtime, np.flatnonzero(coarse))
+            self.buffers.append(lst)
+            b, x, y, r = bufs
+            levels.append(((cy, cx), lst, b, x, y, r))
+            om = coarse
+        self.levels = len(levels)
+        self.launches = []
+        self.runtime, self.nc = runtime, nc
+        out = self._cycle(levels, 0, kind, sign, bi, s, k_smooth, k_scale, k_residual,
+                          k_restrict, k_prolong)
+        z, tmp = level0[2], level0[3]
+        if out is tmp:  # the result must end in z
+            self.launches.append(lambda: cl.enqueue_copy(q, z.data, tmp.data))
+
+    def _cycle(self, levels, l, kind, sign, bi, s, k_smooth, k_scale, k_residual,
+               k_restrict, k_prolong):
+        (ny, nx), lst, b, x, y, r = levels[l]
+        launch = self.launches.append
+        scale = sign * self.COARSE_SCALE[kind] ** l
+        w = self.OMEGA[kind] / (abs(scale) * self.DIAG[kind])
+        dims = (np.int32(nx), np.int32(ny))
+        rt, nc = self.runtime, self.nc
+        last = l == len(levels) - 1
+        sweeps = 8 if last else 2
+
+        def smooth(count, cur, other):
+            for _ in range(count):
+                launch(lst.bind(rt, k_smooth, nc, cur.data, other.data, b.data,
+                                        s(scale), s(w), bi, *dims))
+                cur, other = other, cur
+            return cur, other
+
+        launch(lst.bind(rt, k_scale, nc, b.data, x.data, s(w), *dims))
+        cur, other = smooth(sweeps - 1, x, y)
+        if last:
+            return cur
+        launch(lst.bind(rt, k_residual, nc, cur.data, b.data, r.data, s(scale),
+                                bi, *dims))
+        (cy, cx), clst, cb = levels[l + 1][:3]
+        launch(clst.bind(rt, k_restrict, nc, r.data, cb.data, *dims,
+                                 np.int32(cx), np.int32(cy)))
+        coarse = self._cycle(levels, l + 1, kind, sign, bi, s, k_smooth, k_scale, k_residual,
+                             k_restrict, k_prolong)
+        launch(lst.bind(rt, k_prolong, nc, cur.data, coarse.data, np.int32(cx),
+                                np.int32(cy), *dims))
+        cur, other = smooth(sweeps, cur, other)
+        return cur
+
+    def apply(self):
+        for launch in self.launches:
+            launch()
+
+
 class PoissonSolver:
     """CG for L u = f (harmonic) or L L u = f (biharmonic) in a hole of a box.
 
@@ -87,7 +181,7 @@ class PoissonSolver:
     """
 
     def __init__(self, runtime, values: np.ndarray, omega: np.ndarray, kind="harmonic",
-                 dtype=np.float32):
+                 dtype=np.float32, precondition=False):
         if kind not in KINDS:
             raise InputError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
         self.runtime, self.kind = runtime, kind
@@ -131,8 +225,60 @@ class PoissonSolver:
                                self.rr[1 - a].data, *dims) for a in (0, 1)]
         self._direction = [o.bind(runtime, k_direction, nc, self.p.data, self.r.data,
                                   self.rr[a].data, self.rr[1 - a].data, *dims) for a in (0, 1)]
+        self.mg = None
+        if precondition and o.n:
+            self.z, tmp, res = zeros(), zeros(), zeros()
+            self._mg_buffers = (tmp, res)
+            self.mg = Multigrid(runtime, omega, kind, nc, dt, (o, self.r, self.z, tmp, res))
+            self.rz = [zeros((nc, ng)), zeros((nc, ng))]
+            self.rr_now = zeros((nc, ng))
+            k_dot = runtime.kernel("poisson.cl", "dot_partial", dt)
+            self._pcg_residual = [lap(o, self.u, self.r, 1, -1, self.r, self.rr_now)] \
+                if kind == "harmonic" else [bilap(self.u, self.r, -1, 1, self.r, self.rr_now)]
+            self._pcg_update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
+                                       self.p.data, self.qv.data, self.rz[a].data, self.pq.data,
+                                       self.rr_now.data, *dims) for a in (0, 1)]
+            self._pcg_dot = [o.bind(runtime, k_dot, nc, self.r.data, self.z.data,
+                                    self.rz[a].data, *dims) for a in (0, 1)]
+            self._pcg_direction = [o.bind(runtime, k_direction, nc, self.p.data, self.z.data,
+                                          self.rz[a].data, self.rz[1 - a].data, *dims)
+                                   for a in (0, 1)]
         self.iterations = 0
         self.residual = None
+
+    def _solve_pcg(self, tol, max_iter, check_every, atol):
+        """Conjugate gradients preconditioned by the multigrid V-cycle: the same
+        recurrences with z = M r in place of r (alpha = r.z / p.Ap, beta = new r.z / old);
+        the residual norm r.r is still what the stopping test reads."""
+        for launch in self._pcg_residual:
+            launch()
+        rr0 = self.rr_now.get().astype(np.float64).sum(axis=1)
+        if np.all(rr0 <= atol * atol) or np.all(rr0 == 0):
+            self.residual = np.zeros_like(rr0)
+            return 0
+        self.mg.apply()
+        self._pcg_dot[0]()
+        cl.enqueue_copy(self.queue, self.p.data, self.z.data)
+        it, cur = 0, 0
+        while it < max_iter:
+            for _ in range(min(check_every, max_iter - it)):
+                for launch in self._apply:
+                    launch()
+                self._pcg_update[cur]()
+                self.mg.apply()
+                self._pcg_dot[1 - cur]()
+                self._pcg_direction[cur]()
+                cur = 1 - cur
+                it += 1
+            rr = self.rr_now.get().astype(np.float64).sum(axis=1)
+            if not np.isfinite(rr).all():
+                raise ClpdeError("the conjugate-gradient solve diverged (a non-finite residual); "
+                                 "use precision='double'")
+            if np.all((rr <= tol * tol * rr0) | (rr <= atol * atol)):
+                break
+        self.iterations += it
+        self.residual = np.sqrt(rr / np.maximum(rr0, 1e-300))
+        return it
 
     def _rr(self, which) -> np.ndarray:
         return self.rr[which].get().astype(np.float64).sum(axis=1)
@@ -143,6 +289,8 @@ class PoissonSolver:
         read-back. Returns the number of iterations."""
         if self.omega_list.n == 0:
             return 0
+        if self.mg is not None and not fixed:
+            return self._solve_pcg(tol, max_iter, check_every, atol)
         for launch in self._residual:
             launch()
         cl.enqueue_copy(self.queue, self.p.data, self.r.data)
@@ -203,8 +351,17 @@ def ring_mean_start(data: np.ndarray, omega: np.ndarray) -> np.ndarray:
     return out
 
 
+THICK = 16  # half-width (pixels) from which the multigrid preconditioner pays on PoCL
+
+
+def thick(omega: np.ndarray, half_width: int = THICK) -> bool:
+    """Whether some hole pixel lies more than about half_width pixels from the known ones."""
+    return bool(ndimage.minimum_filter(omega.view(np.uint8), size=2 * half_width + 1,
+                                       mode="constant").any())
+
+
 def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dtype=np.float32,
-         tol=1e-5, max_iter=20000, start=None, clip=True) -> np.ndarray:
+         tol=1e-5, max_iter=20000, start=None, clip=True, precondition="auto") -> np.ndarray:
     """The harmonic or biharmonic fill of omega, solved in the hole's box on the device.
 
     data: (channels, rows, cols) floats; only omega changes. start: optional first guess
@@ -212,7 +369,12 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dty
     (A coarse-grid solution as the start does not cut the iterations: measured on a
     100x100 hole, 3950 against 4000 to tol=1e-5.) clip: clip the result to each
     channel's range over the known pixels, as scikit-image's inpaint_biharmonic does (the
-    biharmonic fill overshoots next to sharp edges).
+    biharmonic fill overshoots next to sharp edges). precondition: conjugate gradients
+    preconditioned by a multigrid V-cycle (`Multigrid`), True, False or "auto": where some
+    hole pixel lies more than THICK pixels from the known ones. On PoCL (2 cores) a V-cycle
+    costs about 8 plain iterations in launches, so it pays only on thick holes: a 100x100
+    hole takes 170 instead of 3840 iterations, 0.8 s instead of 2.4 s; text 40 instead of
+    150 iterations but 2.4 times the time.
     """
     if not omega.any():
         return data.copy()
@@ -227,7 +389,9 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dty
     else:
         guess = np.asarray(start, np.float64)[:, rows, cols]
     box[:, box_omega] = guess[:, box_omega]
-    solver = PoissonSolver(runtime, box, box_omega, kind, dtype)
+    if precondition == "auto":
+        precondition = thick(box_omega)
+    solver = PoissonSolver(runtime, box, box_omega, kind, dtype, precondition=bool(precondition))
     solver.solve(tol=tol, max_iter=max_iter)
     solved = solver.result().astype(np.float64)
     if clip:
