@@ -1,6 +1,6 @@
 """Quick quality and speed of clpde's coherence, Navier-Stokes and Poisson inpainting methods.
 
-    python benchmarks/inpaint_methods_quick.py [--json PATH] [--cases stripes,photos]
+    python benchmarks/inpaint_methods_quick.py [--json PATH] [--cases stripes,photos,holes]
     python benchmarks/inpaint_methods_quick.py --figure docs/images/inpainting_methods.png
 
 In one run, PSNR inside the hole and wall time of clpde.inpainting's methods (coherence
@@ -9,7 +9,9 @@ inpaint_biharmonic and OpenCV's INPAINT_NS and INPAINT_TELEA (radius 3), on
 - structure: sharp stripes (period 16) crossing a vertical slot 8 px wide at 0, 30, 45 and
   60 degrees from the slot's normal, and a straight edge at 30 and 60 degrees;
 - photos: text and scratch masks on four of scikit-image's bundled photos (colour ones in
-  colour). Times are the best of 2 runs after a warm-up (kernel builds excluded).
+  colour);
+- thick holes: a centred 60x60 and 100x100 square on three of them.
+Times are the best of 2 runs after a warm-up (kernel builds excluded).
 (benchmarks/inpaint_quality.py is the full benchmark of every registered method.)
 """
 
@@ -141,6 +143,13 @@ def cases(which):
         for name, img in photos():
             out.append(("text", name, img, text_mask(img.shape[:2])))
             out.append(("scratches", name, img, scratch_mask(img.shape[:2])))
+    if "holes" in which:
+        for name, img in photos()[:3]:
+            for side in (60, 100):
+                mask = np.zeros(img.shape[:2], bool)
+                cy, cx = img.shape[0] // 2, img.shape[1] // 2
+                mask[cy - side // 2 : cy + side // 2, cx - side // 2 : cx + side // 2] = True
+                out.append(("thick", f"{name} {side}x{side}", img, mask))
     return out
 
 
@@ -178,7 +187,7 @@ def figure(path, runtime):
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--json", type=Path, default=RESULTS)
-    ap.add_argument("--cases", default="stripes,photos")
+    ap.add_argument("--cases", default="stripes,photos,holes")
     ap.add_argument("--methods", default=None, help="comma-separated subset")
     ap.add_argument("--figure", type=Path, default=None, help="write the comparison picture")
     args = ap.parse_args(argv)

@@ -44,7 +44,7 @@ from scipy import ndimage
 
 from ..imagedata import InputError
 from ..runtime import ClpdeError
-from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start
+from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
 
 MARGIN = 3  # the biharmonic start reads two pixels past the hole; L I on the ring, one more
 
@@ -72,7 +72,8 @@ class NavierStokesSolver:
         nc, ny, nx = box.shape
         self.nc, self.ny, self.nx = nc, ny, nx
         q = self.queue = runtime.queue
-        start = PoissonSolver(runtime, ring_mean_start(box, omega), omega, "biharmonic", dt)
+        start = PoissonSolver(runtime, ring_mean_start(box, omega), omega, "biharmonic", dt,
+                              precondition=thick(omega))
         start.solve(tol=1e-4, max_iter=5000)
         # the Poisson solver owns the image: its u is I, its f the vorticity in the hole
         self.poisson = PoissonSolver(runtime, start.result(), omega, "harmonic", dt)
