@@ -91,3 +91,17 @@ def test_bad_parameters(runtime):
         coherence.solve(data, omega, runtime, epsilon=1.0)
     with pytest.raises(InputError, match="kappa"):
         coherence.solve(data, omega, runtime, kappa=-1)
+
+
+def test_margin_covers_what_it_reads(runtime):
+    # the registry's MARGIN(omega, **params): a box of that margin gives the whole-image result
+    data, omega = _case("structured", shape=(60, 70))
+    omega[:] = False
+    omega[25:35, 30:38] = True
+    m = coherence.MARGIN(omega, epsilon=4.0, rho=3.0)
+    assert m == coherence.margin(4.0, 1.4, 3.0) == 4 + 5 + 9 + 1
+    whole = coherence.transport(data, omega, runtime, epsilon=4.0, rho=3.0)
+    rows, cols = slice(25 - m, 35 + m), slice(30 - m, 38 + m)
+    boxed = coherence.transport(data[:, rows, cols], omega[rows, cols], runtime, epsilon=4.0,
+                                rho=3.0)
+    np.testing.assert_allclose(boxed, whole[:, rows, cols], atol=1e-6)

@@ -48,9 +48,15 @@ def gaussian_taps(s: float) -> np.ndarray:
     return w / w.sum()
 
 
-def MARGIN(epsilon=DEFAULTS["epsilon"], sigma=DEFAULTS["sigma"], rho=DEFAULTS["rho"], **_):
+def margin(epsilon=DEFAULTS["epsilon"], sigma=DEFAULTS["sigma"], rho=DEFAULTS["rho"]) -> int:
     """Pixels of context a hole needs: the disc, plus the smoothing and tensor windows."""
     return int(np.ceil(epsilon)) + len(gaussian_taps(sigma)) // 2 + len(gaussian_taps(rho)) // 2 + 1
+
+
+def MARGIN(omega=None, *, epsilon=DEFAULTS["epsilon"], sigma=DEFAULTS["sigma"],
+           rho=DEFAULTS["rho"], **_):
+    """The registry's margin: MARGIN(omega, **params) -> pixels (omega is not needed)."""
+    return margin(epsilon, sigma, rho)
 
 
 def _check(epsilon, kappa, sigma, rho):
@@ -76,7 +82,7 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     if omega.all():
         raise InputError("the mask covers every pixel, so nothing is known to inpaint from; "
                          "mark only the damaged region")
-    rows, cols = box_around(omega, MARGIN(epsilon, sigma, rho))
+    rows, cols = box_around(omega, margin(epsilon, sigma, rho))
     box_omega = omega[rows, cols]
     box = data[:, rows, cols]
     nc, ny, nx = box.shape
