@@ -172,8 +172,15 @@ def inpaint(data, omega, runtime, *, nu=0.05, contrast=0.2, steps=5, cg_iteratio
                                 nu=nu, contrast=contrast, dtype=dtype)
     solver.run(steps=steps, cg_iterations=cg_iterations, max_iter=max_iter, tol=tol,
                mean_tol=mean_tol, check_every=check_every)
+    solved = solver.result().astype(np.float64)
+    known = ~omega
+    for c in range(data.shape[0]):
+        # The recovered image obeys no maximum principle: on thick holes it can leave the
+        # known range far (below); clip as the biharmonic fill does.
+        plane = data[c][known]
+        np.clip(solved[c], plane.min(), plane.max(), out=solved[c])
     out = np.array(data, copy=True)
-    out[:, rows, cols] = np.where(box_omega, solver.result(), out[:, rows, cols])
+    out[:, rows, cols] = np.where(box_omega, solved, out[:, rows, cols])
     return (out, solver) if return_solver else out
 
 
