@@ -25,7 +25,9 @@ So kappa = 0 gives the isotropic 1/|y - x| mean, and a large kappa a transport a
 structure wherever it is coherent. The map from coherence to the guidance strength mu
 (kappa times the squared normalized eigenvalue gap) is our choice, in the spirit of the
 paper's switch between diffusion and directional transport; epsilon, kappa, sigma and rho
-default to the values the paper uses (5, 25, 1.4, 4).
+default to the values of the paper's examples as we know them (5, 25, 1.4, 4). This was
+written from the paper's description of the method, without its full text at hand; the
+weight's exact form is worth checking against it.
 """
 
 from __future__ import annotations
