@@ -105,3 +105,11 @@ def test_margin_covers_what_it_reads(runtime):
     boxed = coherence.transport(data[:, rows, cols], omega[rows, cols], runtime, epsilon=4.0,
                                 rho=3.0)
     np.testing.assert_allclose(boxed, whole[:, rows, cols], atol=1e-6)
+
+
+def test_double_precision_equals_reference(runtime):
+    if not runtime.fp64:
+        pytest.skip("the device has no double precision")
+    data, omega = _case("structured")
+    got = coherence.transport(data, omega, runtime, dtype=np.float64)
+    np.testing.assert_allclose(got, ref.coherence_transport(data, omega), atol=1e-12)
