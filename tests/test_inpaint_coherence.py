@@ -113,3 +113,14 @@ def test_double_precision_equals_reference(runtime):
     data, omega = _case("structured")
     got = coherence.transport(data, omega, runtime, dtype=np.float64)
     np.testing.assert_allclose(got, ref.coherence_transport(data, omega), atol=1e-12)
+
+
+def test_shells_equal_the_distance_transform():
+    rng = np.random.default_rng(7)
+    omega = rng.random((60, 70)) < 0.3
+    omega[10:40, 10:40] = True  # thicker than the shifted masks' reach: the fallback
+    for mask in (omega, omega & ~np.pad(np.ones((20, 30), bool), ((10, 30), (10, 30)))):
+        np.testing.assert_array_equal(coherence.shells(mask), ref.coherence_shells(mask))
+    thin = np.zeros((30, 30), bool)
+    thin[5:8, :] = True
+    np.testing.assert_array_equal(coherence.shells(thin), ref.coherence_shells(thin))
