@@ -566,9 +566,10 @@ class TransportRun:
         if fill == "zero":
             return np.zeros_like(data)
         if fill == "biharmonic":
-            from skimage.restoration import inpaint_biharmonic
+            from .inpainting import poisson  # conjugate gradients on the device
 
-            return np.stack([inpaint_biharmonic(c, omega) for c in data])
+            return poisson.fill(data, omega, get_runtime(self.device), "biharmonic",
+                                dtype=self.dtype)
         # "diffusion": begin the Jacobi iterations from the nearest known value, which is
         # already close to the harmonic fill of a thin region.
         _, (iy, ix) = ndimage.distance_transform_edt(omega, return_indices=True)
