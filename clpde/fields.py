@@ -13,7 +13,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from .runtime import ClpdeError, Runtime
+from .runtime import ClpdeError, Kernel, Runtime
 
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
@@ -51,12 +51,12 @@ class Grid:
         """The GRID_ARGS of common.cl."""
         return tuple(np.int32(v) for v in (self.nx, self.ny, self.sx, self.plane, self.ghost, xrun))
 
-    def launch(self, kernel: cl.Kernel, *args, wait_for=None) -> cl.Event:
+    def launch(self, kernel: Kernel, *args, wait_for=None) -> cl.Event:
         """Run a FOR_EACH_CELL kernel over every interior cell of every channel."""
         gsize, lsize, xrun = self.runtime.grid_launch(self.nx, self.ny, self.nc)
         return kernel(self.runtime.queue, gsize, lsize, *args, *self.args(xrun), wait_for=wait_for)
 
-    def launch_list(self, kernel: cl.Kernel, index_list: IndexList, *args) -> cl.Event | None:
+    def launch_list(self, kernel: Kernel, index_list: IndexList, *args) -> cl.Event | None:
         """Run a LIST_RANGE kernel over the cells of an index list, in every channel."""
         if index_list.n == 0:
             return None
@@ -66,7 +66,7 @@ class Grid:
             index_list.indices.data, np.int32(index_list.n), np.int32(self.plane), np.int32(run),
         )
 
-    def kernel(self, filename: str, name: str, **defines) -> cl.Kernel:
+    def kernel(self, filename: str, name: str, **defines) -> Kernel:
         return self.runtime.kernel(filename, name, self.dtype, **defines)
 
     def scalar(self, value) -> np.generic:

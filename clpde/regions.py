@@ -159,7 +159,8 @@ class RegionTracker:
         if self.step_band.n == 0:
             raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
                              "track for a shorter time")
-        self._flag.fill(0)
+        with self.runtime.lock:  # pyopencl's fill kernel is shared by every thread
+            self._flag.fill(0)
         g.launch_list(self._k["band_near_border"], self.reinit_band, self._flag.data,
                       np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), np.int32(g.ghost),
                       np.int32(1), *g.strides())

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+import threading
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -170,6 +171,10 @@ def _resolve(spec) -> int:
     )
 
 
+# Guards the module's caches (devices probed, runtimes made): two threads making their first
+# call at once must share one context, or buffers of one would meet kernels of the other.
+_lock = threading.RLock()
+
 _PROBE_SOURCE = "__kernel void probe(__global float *a) { a[get_global_id(0)] *= 2.0f; }"
 _build_problems: dict[int, str | None] = {}
 
@@ -182,26 +187,32 @@ def _build_problem(index: int) -> str | None:
     fails every build with "unknown target CPU 'generic'". Probing once per device lets the
     default choice skip such a device when another one works.
     """
-    if index not in _build_problems:
-        platform, device = _all_devices()[index]
-        try:
-            ctx = cl.Context([device])
-            cl.Program(ctx, _PROBE_SOURCE).build()
-            _build_problems[index] = None
-        except cl.Error as exc:
-            log = str(exc)
-            if "unknown target CPU" in log:
-                reason = (
-                    f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
-                    "its LLVM does not know this CPU; install your system's PoCL "
-                    "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
-                )
-            else:
-                first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
-                reason = (f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
-                          f"kernels: {first.strip()[:200]}")
-            _build_problems[index] = reason
-    return _build_problems[index]
+    with _lock:
+        if index not in _build_problems:
+            _build_problems[index] = _probe(index)
+        return _build_problems[index]
+
+
+def _probe(index: int) -> str | None:
+    """Build a tiny program on device ``index``: None, or why it fails."""
+    platform, device = _all_devices()[index]
+    try:
+        ctx = cl.Context([device])
+        cl.Program(ctx, _PROBE_SOURCE).build()
+        return None
+    except cl.Error as exc:
+        log = str(exc)
+        if "unknown target CPU" in log:
+            reason = (
+                f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
+                "its LLVM does not know this CPU; install your system's PoCL "
+                "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
+            )
+        else:
+            first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
+            reason = (f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+                      f"kernels: {first.strip()[:200]}")
+        return reason
 
 
 def _usable(index: int) -> int:
@@ -249,11 +260,13 @@ def get_runtime(device=None) -> Runtime:
         return device
     if device is None:
         device = _chosen_spec
-    index = _default_index() if device is None else _usable(_resolve(device))
-    if index not in _runtimes:
-        platform, dev = _all_devices()[index]
-        _runtimes[index] = Runtime(index, platform, dev)
-    return _runtimes[index]
+    with _lock:
+        index = _default_index() if device is None else _usable(_resolve(device))
+        runtime = _runtimes.get(index)
+        if runtime is None:
+            platform, dev = _all_devices()[index]
+            runtime = _runtimes[index] = Runtime(index, platform, dev)
+        return runtime
 
 
 def devices() -> list[DeviceInfo]:
@@ -278,6 +291,28 @@ def devices() -> list[DeviceInfo]:
     ]
 
 
+class Kernel:
+    """A pyopencl kernel whose launches hold the runtime's lock.
+
+    pyopencl's Kernel.__call__ sets the arguments on the shared kernel object and then
+    enqueues it; two threads in between would run one thread's step on the other's buffers.
+    Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
+    """
+
+    __slots__ = ("cl_kernel", "_lock")
+
+    def __init__(self, cl_kernel: cl.Kernel, lock):
+        self.cl_kernel = cl_kernel
+        self._lock = lock
+
+    def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
+        with self._lock:
+            return self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
+
+    def __getattr__(self, name):
+        return getattr(self.cl_kernel, name)
+
+
 class Runtime:
     """A device with its context, queue, built programs and launch geometry."""
 
@@ -291,7 +326,11 @@ class Runtime:
         self.ctx = cl.Context([device])
         self.queue = cl.CommandQueue(self.ctx)
         self._programs: dict[tuple, cl.Program] = {}
-        self._kernels: dict[tuple, cl.Kernel] = {}
+        self._kernels: dict[tuple, Kernel] = {}
+        # Held while a kernel's arguments are set and it is enqueued (see Kernel), and
+        # around pyopencl's own array kernels (Array.fill, arithmetic), which share kernel
+        # objects per context; re-entrant so that the caches may be filled under it.
+        self.lock = threading.RLock()
 
     def __repr__(self) -> str:
         return f"<clpde Runtime [{self.index}] {self.device.name.strip()} ({self.type})>"
@@ -303,17 +342,23 @@ class Runtime:
         key = (filename, dtype.str, tuple(sorted(defines.items())))
         prog = self._programs.get(key)
         if prog is None:
-            prog = self._build(filename, dtype, defines)
-            self._programs[key] = prog
+            with self.lock:  # one build per key, even when threads ask at once
+                prog = self._programs.get(key)
+                if prog is None:
+                    prog = self._programs[key] = self._build(filename, dtype, defines)
         return prog
 
-    def kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> cl.Kernel:
-        """A kernel object, fetched once and reused (fetching per call is slow in pyopencl)."""
+    def kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> Kernel:
+        """A kernel, fetched once and reused (fetching per call is slow in pyopencl);
+        calling it launches it as pyopencl's Kernel.__call__ does, safely from any thread."""
         key = (filename, name, np.dtype(dtype).str, tuple(sorted(defines.items())))
         k = self._kernels.get(key)
         if k is None:
-            k = getattr(self.program(filename, dtype, **defines), name)
-            self._kernels[key] = k
+            with self.lock:
+                k = self._kernels.get(key)
+                if k is None:
+                    program = self.program(filename, dtype, **defines)
+                    k = self._kernels[key] = Kernel(getattr(program, name), self.lock)
         return k
 
     def _build(self, filename: str, dtype: np.dtype, defines: dict) -> cl.Program:

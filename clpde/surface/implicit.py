@@ -88,7 +88,8 @@ class ImplicitSurface:
         # Ghost cells continue psi linearly so stencils next to the border stay meaningful.
         self.psi_dev = self.grid.upload(self.psi[None], mode="linear")
         # Band tests and closest points run in grid units.
-        psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
+        with self.runtime.lock:  # pyopencl's arithmetic kernels are shared by every thread
+            psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
         if self._check_border:
