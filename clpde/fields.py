@@ -13,7 +13,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from .runtime import ClpdeError, Kernel, Runtime
+from .runtime import ClpdeError, Kernel, Runtime, _check_not_forked
 
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
@@ -108,6 +108,7 @@ class Field:
 
     def to_host(self) -> np.ndarray:
         """The interior as an (nc, ny, nx) numpy array (one device-to-host copy)."""
+        _check_not_forked()  # a forked child would wait forever for the copy
         return np.ascontiguousarray(self.grid.interior(self.data.get()))
 
     def fill_ghosts(self, boundary: str = "neumann", value=0.0) -> None:

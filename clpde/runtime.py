@@ -6,7 +6,9 @@ Everything that talks to pyopencl's platform layer lives here, so the flows only
 
 from __future__ import annotations
 
+import copyreg
 import os
+import pickle
 import tempfile
 import threading
 import warnings
@@ -102,6 +104,9 @@ class DeviceInfo:
 
 
 def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
+    global _used_opencl
+    _check_not_forked()
+    _used_opencl = True
     try:
         platforms = cl.get_platforms()
     except cl.Error as exc:  # PLATFORM_NOT_FOUND_KHR when no ICD is installed
@@ -299,11 +304,12 @@ class Kernel:
     Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
     """
 
-    __slots__ = ("cl_kernel", "_lock")
+    __slots__ = ("cl_kernel", "_lock", "_runtime", "_key")
 
-    def __init__(self, cl_kernel: cl.Kernel, lock):
+    def __init__(self, cl_kernel: cl.Kernel, runtime: Runtime, key: tuple):
         self.cl_kernel = cl_kernel
-        self._lock = lock
+        self._lock = runtime.lock
+        self._runtime, self._key = runtime, key
 
     def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
         with self._lock:
@@ -311,6 +317,13 @@ class Kernel:
 
     def __getattr__(self, name):
         return getattr(self.cl_kernel, name)
+
+    def __reduce__(self):
+        return (_receive_kernel, (self._runtime, *self._key))
+
+
+def _receive_kernel(runtime: Runtime, filename, name, dtype, defines) -> Kernel:
+    return runtime.kernel(filename, name, np.dtype(dtype), **dict(defines))
 
 
 class Runtime:
@@ -331,6 +344,16 @@ class Runtime:
         # around pyopencl's own array kernels (Array.fill, arithmetic), which share kernel
         # objects per context; re-entrant so that the caches may be filled under it.
         self.lock = threading.RLock()
+
+    def __reduce__(self):
+        # by device name: the process that unpickles builds (or reuses) its own runtime
+        return (_receive_runtime, (self.platform.name.strip(), self.device.name.strip()))
+
+    def _forked(self) -> None:
+        """In a forked child: every later launch raises (see _after_fork_in_child)."""
+        self.lock = _ForkedLock()
+        for k in self._kernels.values():
+            k._lock = self.lock
 
     def __repr__(self) -> str:
         return f"<clpde Runtime [{self.index}] {self.device.name.strip()} ({self.type})>"
@@ -358,7 +381,7 @@ class Runtime:
                 k = self._kernels.get(key)
                 if k is None:
                     program = self.program(filename, dtype, **defines)
-                    k = self._kernels[key] = Kernel(getattr(program, name), self.lock)
+                    k = self._kernels[key] = Kernel(getattr(program, name), self, key)
         return k
 
     def _build(self, filename: str, dtype: np.dtype, defines: dict) -> cl.Program:
@@ -392,6 +415,7 @@ class Runtime:
     # ---- memory ---------------------------------------------------------------------------
     def check_alloc(self, nbytes: int, what: str = "field") -> None:
         """Refuse an allocation the device cannot make, before trying it."""
+        _check_not_forked()
         limit = self.device.max_mem_alloc_size
         if nbytes > limit:
             raise ClpdeError(
@@ -422,3 +446,111 @@ class Runtime:
             run = max(256, -(-n // groups))
             return (-(-n // run),), (1,), run
         return (-(-n // 64) * 64,), (64,), 1
+
+
+# ---- processes ------------------------------------------------------------------------------
+# OpenCL drivers do not survive fork(): PoCL's worker threads stay in the parent, so a child
+# that enqueues anything, even on a fresh context, waits forever (measured: a fork pool of
+# diffuse calls hung). A forked child therefore gets a clear error instead, unless its
+# parent never touched OpenCL, in which case it starts its own runtimes as usual.
+_used_opencl = False  # this process has asked OpenCL for its devices
+_forked_from: int | None = None  # the parent whose OpenCL state a forked child inherited
+
+
+def _fork_message() -> str:
+    return (
+        f"this process was forked from process {_forked_from}, which had already used "
+        "OpenCL; OpenCL drivers do not survive a fork (the child would hang). Start worker "
+        "processes with the 'spawn' method: multiprocessing.get_context('spawn').Pool(...) or "
+        "ProcessPoolExecutor(mp_context=multiprocessing.get_context('spawn')); or create the "
+        "pool before the first clpde call"
+    )
+
+
+def _check_not_forked() -> None:
+    if _forked_from is not None:
+        raise ClpdeError(_fork_message())
+
+
+class _ForkedLock:
+    """Stands for a runtime's lock in a forked child: entering it raises the fork error."""
+
+    def __enter__(self):
+        raise ClpdeError(_fork_message())
+
+    def __exit__(self, *exc):
+        return False
+
+
+def _after_fork_in_child() -> None:
+    global _lock, _forked_from
+    _lock = threading.RLock()  # another thread may have held it at the fork
+    if _used_opencl and _forked_from is None:
+        _forked_from = os.getppid()
+    for runtime in _runtimes.values():
+        runtime._forked()
+    _runtimes.clear()
+    _build_problems.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+# ---- pickling by value --------------------------------------------------------------------------
+# Device buffers pickle as their bytes, read back from the device, and arrays as views of
+# their buffers (pickle's memo keeps two references to one buffer one buffer); the runtime
+# pickles as its device's name and is rebuilt where the object is unpickled. So clpde's
+# objects that hold device state (PlanarFlow, ImplicitSurface, ...) pickle by value.
+
+
+def _receive_runtime(platform_name: str, device_name: str) -> Runtime:
+    with _lock:
+        for i, (p, d) in enumerate(_all_devices()):
+            if p.name.strip() == platform_name and d.name.strip() == device_name:
+                return get_runtime(i)
+    return get_runtime()  # that device is not here: the default one
+
+
+def _runtime_of(obj) -> Runtime:
+    _check_not_forked()
+    ctx = obj.context
+    for runtime in list(_runtimes.values()):
+        if runtime.ctx == ctx:
+            return runtime
+    raise pickle.PicklingError(f"cannot pickle {type(obj).__name__} of a context clpde did not make")
+
+
+def _reduce_buffer(buf: cl.Buffer):
+    runtime = _runtime_of(buf)
+    host = np.empty(buf.size, np.uint8)
+    cl.enqueue_copy(runtime.queue, host, buf)  # in order: after every enqueued step
+    return _receive_buffer, (runtime, host)
+
+
+def _receive_buffer(runtime: Runtime, host: np.ndarray) -> cl.Buffer:
+    buf = cl.Buffer(runtime.ctx, cl.mem_flags.READ_WRITE, max(host.size, 1))
+    cl.enqueue_copy(runtime.queue, buf, host)
+    return buf
+
+
+def _reduce_array(a):
+    return _receive_array, (_runtime_of(a), a.shape, a.dtype, a.strides, a.offset, a.base_data)
+
+
+def _receive_array(runtime: Runtime, shape, dtype, strides, offset, base):
+    import pyopencl.array as cla
+
+    return cla.Array(runtime.queue, shape, dtype, strides=strides, data=base, offset=offset)
+
+
+def _register_picklers() -> None:
+    import pyopencl.array as cla
+
+    copyreg.pickle(cl.Buffer, _reduce_buffer)
+    copyreg.pickle(cla.Array, _reduce_array)
+    copyreg.pickle(cl.CommandQueue, lambda q: (getattr, (_runtime_of(q), "queue")))
+    copyreg.pickle(cl.Context, lambda c: (getattr, (_runtime_of(c), "ctx")))
+
+
+_register_picklers()

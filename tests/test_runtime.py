@@ -135,3 +135,25 @@ def test_warnings_are_not_raised_by_normal_use():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         clpde.diffuse(np.zeros((8, 8), np.uint8), steps=2)
+
+
+def test_kernels_launch_under_the_runtime_lock_and_pickle_by_name():
+    import pickle
+
+    runtime = rt_mod.get_runtime("cpu")
+    k = runtime.kernel("fields.cl", "fill_ghost_rows")
+    assert isinstance(k, rt_mod.Kernel) and k._lock is runtime.lock
+    assert k.function_name == "fill_ghost_rows"  # attributes reach pyopencl's kernel
+    assert pickle.loads(pickle.dumps(k)) is k  # same process: the cached kernel
+    assert pickle.loads(pickle.dumps(runtime)) is runtime
+
+
+def test_device_arrays_pickle_as_their_values_keeping_shared_buffers_shared():
+    import pickle
+
+    import pyopencl.array as cla
+
+    runtime = rt_mod.get_runtime("cpu")
+    a = cla.to_device(runtime.queue, np.arange(12, dtype=np.float32).reshape(3, 4))
+    b, c = pickle.loads(pickle.dumps((a, a.data)))
+    assert np.array_equal(b.get(), a.get()) and b.data is c and b.data is not a.data
