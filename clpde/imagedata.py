@@ -90,6 +90,17 @@ def as_image(image, name: str = "image", allow_nan: bool = False) -> np.ndarray:
     return array
 
 
+def value_range(lo: float, hi: float, name: str = "image") -> tuple[float, float]:
+    """(offset, scale) mapping values in [lo, hi] to [0, 1]."""
+    scale = hi - lo
+    if not np.isfinite(scale):  # e.g. -1e308 .. 1e308: the span overflows float64
+        raise InputError(
+            f"{name} spans {lo:g} to {hi:g}, a range too wide for float64 arithmetic; "
+            "scale it down first (e.g. image / 1e10)"
+        )
+    return lo, scale if hi > lo else 1.0
+
+
 def to_kernel_layout(image, channel_axis=None, name: str = "image"):
     """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
 
@@ -102,8 +113,7 @@ def to_kernel_layout(image, channel_axis=None, name: str = "image"):
         info = np.iinfo(array.dtype)
         offset, scale = float(info.min), float(info.max) - float(info.min)
     else:
-        lo, hi = float(array.min()), float(array.max())
-        offset, scale = lo, (hi - lo) if hi > lo else 1.0
+        offset, scale = value_range(float(array.min()), float(array.max()), name)
     data = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
     if min(data.shape[1:]) < 1:
         raise InputError(f"{name} has no pixels (shape {array.shape})")

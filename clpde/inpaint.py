@@ -51,7 +51,7 @@ from tqdm.auto import tqdm
 from . import multiresolution as mr
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .fields import Field, Grid, PingPong, index_list
-from .imagedata import ImageLayout, InputError, as_image, check_channel_axis, compute_dtype
+from .imagedata import ImageLayout, InputError, as_image, check_channel_axis, compute_dtype, value_range
 from .runtime import ClpdeError, get_runtime
 
 SCALINGS = ("none", "quartic-root")
@@ -148,6 +148,11 @@ def _prepare(image, mask, channel_axis, alpha):
         alpha = axis is not None and nc == 4
     if alpha and nc < 2:
         raise InputError("alpha=True needs at least two channels (the last one is the alpha)")
+    if alpha and finite is not None and not np.isfinite(planes[-1]).all():
+        raise InputError(
+            "the alpha channel (the last one) holds NaN or infinite values, and only the colour "
+            "channels are inpainted; fix the alpha channel first, or pass alpha=False"
+        )
     known = ~omega
     if np.issubdtype(array.dtype, np.integer):
         info = np.iinfo(array.dtype)
@@ -155,7 +160,7 @@ def _prepare(image, mask, channel_axis, alpha):
     else:
         values = planes[:, known] if known.any() else planes[np.isfinite(planes)]
         lo, hi = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
-        offset, scale = lo, (hi - lo) if hi > lo else 1.0
+        offset, scale = value_range(lo, hi)
     data = (np.where(np.isfinite(planes), planes, 0).astype(np.float64) - offset) / scale
     layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
     return array, data, omega, layout, bool(alpha)

@@ -38,6 +38,9 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
     if flow in ("heat", "perona-malik", "curvature"):
         return 0.25
     if flow in ("tv", "rof"):
+        eps = _positive("eps", eps)
+        if not np.isfinite(lam) or lam < 0:
+            raise InputError(f"lam must be a number >= 0, not {lam!r}")
         return 1.0 / (4.0 / eps + lam)
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
 

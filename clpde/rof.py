@@ -110,7 +110,8 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         if sigma is None:
             from skimage.restoration import estimate_sigma
 
-            sig = np.array([estimate_sigma(c) for c in data])
+            # NaN for images too small to estimate from (1 x N): taken as noise-free
+            sig = np.nan_to_num(np.array([estimate_sigma(c) for c in data]), nan=0.0)
         else:
             sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
         sigma2 = np.maximum(sig, 1e-6) ** 2
