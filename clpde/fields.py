@@ -73,6 +73,17 @@ class Grid:
         return self.dtype.type(value)
 
 
+def check_fits(runtime: Runtime, shape, what: str, fields: float, ghost: int = 1,
+               dtype=FLOAT32, largest: float = 1.0) -> None:
+    """Refuse, before any work, a computation on (nc, ny, nx) data (or (nc, nz, ny, nx)
+    volumes) that keeps about `fields` padded fields of that shape on the device, the
+    largest buffer `largest` fields."""
+    padded = int(np.prod([n + 2 * ghost for n in shape[1:]], dtype=np.float64)) * shape[0]
+    one = padded * np.dtype(dtype).itemsize
+    dims = "x".join(str(n) for n in shape[:0:-1]) + (f"x{shape[0]}" if shape[0] > 1 else "")
+    runtime.check_fits(int(fields * one), int(largest * one), f"{what} of {dims} values")
+
+
 class Field:
     """A padded device array on a Grid."""
 

@@ -101,14 +101,18 @@ def value_range(lo: float, hi: float, name: str = "image") -> tuple[float, float
     return lo, scale if hi > lo else 1.0
 
 
-def to_kernel_layout(image, channel_axis=None, name: str = "image"):
+def to_kernel_layout(image, channel_axis=None, name: str = "image", fits=None):
     """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
 
     Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1); float images by
     their own minimum and maximum, so a flow's parameters mean the same for any input range.
+    fits(shape), given, may refuse the (nc, ny, nx) shape before any conversion.
     """
     array = as_image(image, name)
     axis = check_channel_axis(array.ndim, channel_axis)
+    if fits is not None:
+        rest = tuple(n for i, n in enumerate(array.shape) if i != axis)
+        fits((1,) + array.shape if axis is None else (array.shape[axis],) + rest)
     if np.issubdtype(array.dtype, np.integer):
         info = np.iinfo(array.dtype)
         offset, scale = float(info.min), float(info.max) - float(info.min)

@@ -50,7 +50,7 @@ from tqdm.auto import tqdm
 
 from . import multiresolution as mr
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
-from .fields import Field, Grid, PingPong, index_list
+from .fields import Field, Grid, PingPong, check_fits, index_list
 from .imagedata import ImageLayout, InputError, as_image, check_channel_axis, compute_dtype, value_range
 from .runtime import ClpdeError, get_runtime
 
@@ -459,6 +459,10 @@ class Inpainting:
         self.progress = progress
         self.result = None
         self.info = None
+        # the finest level: the ping-pong pair, prev and known, the one-channel weight and
+        # three index lists; refused here, before any device work
+        check_fits(get_runtime(device), data.shape, "inpainting", 4 + 4 / data.shape[0],
+                   ghost=GHOST, dtype=self.dtype)
 
     # -- conversions between the user's image and the solved channels -----------------
     def _to_model(self, data):

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm.auto import tqdm
 
-from .fields import Field, Grid, PingPong
+from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import InputError, to_kernel_layout
 from .imagedata import positive as _positive
 from .runtime import get_runtime
@@ -69,9 +69,13 @@ class PlanarFlow:
                  weight=None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
-        data, self.layout = to_kernel_layout(image, channel_axis)
         self.runtime = get_runtime(device)
         dtype = np.dtype(precision or np.float32)
+        # two fields (ping-pong) and the curvature flow's one-channel weight
+        def fits(shape):
+            check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None), dtype=dtype)
+
+        data, self.layout = to_kernel_layout(image, channel_axis, fits=fits)
         nc, ny, nx = data.shape
         self.grid = Grid(self.runtime, nx, ny, nc, 1, dtype)
         self.flow = flow

@@ -29,7 +29,7 @@ import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
-from .fields import IndexList, compact
+from .fields import IndexList, check_fits, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
 from .regions_mesh import (
@@ -105,6 +105,9 @@ class RegionTracker:
         nz, ny, nx = phi.shape
         self.grid = Grid3D(self.runtime, nx, ny, nz, ghost=GHOST, dtype=np.dtype(dtype))
         self.nc = 1 + len(phihat)
+        # cur, nxt, ls0 and stage of every level set, the speed, aux and two masks
+        check_fits(self.runtime, (self.nc,) + tuple(phi.shape), "region tracking",
+                   4 + 2.5 / self.nc, ghost=GHOST, dtype=dtype)
         self.mode = SPEEDS[speed]
         self.scale = float(scale)
         self.velocity = None if velocity is None else np.asarray(velocity, np.float64)

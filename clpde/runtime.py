@@ -30,6 +30,18 @@ class KernelBuildError(ClpdeError):
     pass
 
 
+class DeviceMemoryError(ClpdeError, MemoryError):
+    """A request that cannot fit the device's memory; the message gives the size and the way out."""
+
+
+MEMORY_WAY_OUT = ("use a smaller input (crop or downsample it) or process it in tiles, or "
+                  "choose a device with more memory (clpde devices)")
+
+
+def _mib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.2f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.1f} MiB"
+
+
 INSTALL_HINT = (
     'install the CPU runtime with  pip install "clpde[pocl]"  '
     "or your GPU vendor's OpenCL driver"
@@ -336,6 +348,8 @@ class Runtime:
         self.type = _type_name(device)
         self.is_cpu = self.type == "cpu"
         self.fp64 = _has_fp64(device)
+        self.global_mem = device.global_mem_size
+        self.max_alloc = device.max_mem_alloc_size
         self.ctx = cl.Context([device])
         self.queue = cl.CommandQueue(self.ctx)
         self._programs: dict[tuple, cl.Program] = {}
@@ -415,14 +429,22 @@ class Runtime:
     # ---- memory ---------------------------------------------------------------------------
     def check_alloc(self, nbytes: int, what: str = "field") -> None:
         """Refuse an allocation the device cannot make, before trying it."""
+        self.check_fits(nbytes, nbytes, f"the {what}")
+
+    def check_fits(self, total: int, largest: int, what: str, way_out: str = MEMORY_WAY_OUT) -> None:
+        """Refuse, before any work, a request whose buffers cannot fit the device: `total`
+        bytes in all, the largest single buffer `largest` bytes."""
         _check_not_forked()
-        limit = self.device.max_mem_alloc_size
-        if nbytes > limit:
-            raise ClpdeError(
-                f"the {what} needs {nbytes / 2**20:.1f} MiB in one buffer, but "
-                f"{self.device.name.strip()} allows at most {limit / 2**20:.1f} MiB per "
-                "allocation; use a smaller image or crop it, or choose a device with more "
-                "memory (clpde devices)"
+        name = self.device.name.strip()
+        if largest > self.max_alloc:
+            raise DeviceMemoryError(
+                f"{what} needs {_mib(largest)} in one buffer, but {name} allows at most "
+                f"{_mib(self.max_alloc)} per allocation; {way_out}"
+            )
+        if total > self.global_mem:
+            raise DeviceMemoryError(
+                f"{what} needs {_mib(total)} of device memory, but {name} has "
+                f"{_mib(self.global_mem)}; {way_out}"
             )
 
     # ---- launch geometry ------------------------------------------------------------------

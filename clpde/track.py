@@ -21,8 +21,8 @@ import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
-from .fields import Field, PingPong
-from .imagedata import InputError
+from .fields import Field, PingPong, check_fits
+from .imagedata import InputError, value_range
 from .levelset import LevelSet, signed_distance
 from .runtime import get_runtime
 
@@ -137,8 +137,14 @@ class MorphingTracker:
         self.reinit_iterations = int(reinit_iterations)
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(precision or np.float32)
+        # a frame's level set (three fields, three masks, index lists) and its features
+        from .levelset import GHOST, MARGIN
+
+        check_fits(self.runtime, (1,) + self.frames[0].shape, "tracking", 10,
+                   ghost=GHOST + MARGIN, dtype=self.dtype)
         stack = np.stack([f.astype(np.float64) for f in self.frames])
         lo, hi = float(stack.min()), float(stack.max())
+        value_range(lo, hi, "frames")  # refuses a span that overflows float64
         self._scaled = (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
 
     def __len__(self) -> int:
