@@ -108,7 +108,8 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     # image's units, so lambda on the kernels' [0, 1] data is scale / weight.
     weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
     if weight is not None:
-        lam0 = np.full(nc, weight_unit / _positive("weight", weight))
+        # capped where float32 ends: a weight that small next to the range changes nothing
+        lam0 = np.full(nc, min(weight_unit / _positive("weight", weight), 1e30))
         sigma2 = None
     else:
         if sigma is None:
