@@ -78,10 +78,13 @@ def check_fits(runtime: Runtime, shape, what: str, fields: float, ghost: int = 1
     """Refuse, before any work, a computation on (nc, ny, nx) data (or (nc, nz, ny, nx)
     volumes) that keeps about `fields` padded fields of that shape on the device, the
     largest buffer `largest` fields."""
-    padded = int(np.prod([n + 2 * ghost for n in shape[1:]], dtype=np.float64)) * shape[0]
-    one = padded * np.dtype(dtype).itemsize
-    dims = "x".join(str(n) for n in shape[:0:-1]) + (f"x{shape[0]}" if shape[0] > 1 else "")
-    runtime.check_fits(int(fields * one), int(largest * one), f"{what} of {dims} values")
+    one = shape[0] * np.dtype(dtype).itemsize
+    for n in shape[1:]:
+        one *= n + 2 * ghost
+    total, biggest = int(fields * one), int(largest * one)
+    if total > runtime.global_mem or biggest > runtime.max_alloc:  # (the message only then)
+        dims = "x".join(str(n) for n in shape[:0:-1]) + (f"x{shape[0]}" if shape[0] > 1 else "")
+        runtime.check_fits(total, biggest, f"{what} of {dims} values")
 
 
 class Field:

@@ -37,8 +37,8 @@ class ImageLayout:
         if np.issubdtype(self.dtype, np.integer):
             info = np.iinfo(self.dtype)
             values = np.clip(np.rint(values), info.min, info.max)
-        else:  # rounding at the ends of a float32 or float16 range would give inf
-            big = float(np.finfo(self.dtype).max)
+        elif abs(self.offset) + abs(self.scale) > 0.5 * float(np.finfo(self.dtype).max):
+            big = float(np.finfo(self.dtype).max)  # rounding at the range's ends gives inf
             values = np.clip(values, -big, big)
         return values.astype(self.dtype)
 
