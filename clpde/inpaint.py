@@ -51,7 +51,14 @@ from tqdm.auto import tqdm
 from . import multiresolution as mr
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .fields import Field, Grid, PingPong, check_fits, index_list
-from .imagedata import ImageLayout, InputError, as_image, check_channel_axis, compute_dtype, value_range
+from .imagedata import (
+    ImageLayout,
+    InputError,
+    as_image,
+    check_channel_axis,
+    compute_dtype,
+    value_range,
+)
 from .runtime import ClpdeError, get_runtime
 
 SCALINGS = ("none", "quartic-root")

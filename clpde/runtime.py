@@ -316,7 +316,7 @@ class Kernel:
     Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
     """
 
-    __slots__ = ("cl_kernel", "_lock", "_runtime", "_key")
+    __slots__ = ("_key", "_lock", "_runtime", "cl_kernel")
 
     def __init__(self, cl_kernel: cl.Kernel, runtime: Runtime, key: tuple):
         self.cl_kernel = cl_kernel

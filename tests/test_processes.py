@@ -24,7 +24,7 @@ TIMEOUT = 120  # seconds: a hang fails the test instead of blocking the suite
 
 def _script(body: str) -> subprocess.CompletedProcess:
     code = textwrap.dedent(body)
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False,
                           timeout=TIMEOUT)
 
 
