@@ -328,6 +328,8 @@ class Kernel:
             return self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
 
     def __getattr__(self, name):
+        if name == "cl_kernel":  # not set yet: no recursion through this method
+            raise AttributeError(name)
         return getattr(self.cl_kernel, name)
 
     def __reduce__(self):
