@@ -13,7 +13,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from .runtime import ClpdeError, Runtime
+from .runtime import ClpdeError, Kernel, Runtime, _check_not_forked
 
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
@@ -51,12 +51,12 @@ class Grid:
         """The GRID_ARGS of common.cl."""
         return tuple(np.int32(v) for v in (self.nx, self.ny, self.sx, self.plane, self.ghost, xrun))
 
-    def launch(self, kernel: cl.Kernel, *args, wait_for=None) -> cl.Event:
+    def launch(self, kernel: Kernel, *args, wait_for=None) -> cl.Event:
         """Run a FOR_EACH_CELL kernel over every interior cell of every channel."""
         gsize, lsize, xrun = self.runtime.grid_launch(self.nx, self.ny, self.nc)
         return kernel(self.runtime.queue, gsize, lsize, *args, *self.args(xrun), wait_for=wait_for)
 
-    def launch_list(self, kernel: cl.Kernel, index_list: IndexList, *args) -> cl.Event | None:
+    def launch_list(self, kernel: Kernel, index_list: IndexList, *args) -> cl.Event | None:
         """Run a LIST_RANGE kernel over the cells of an index list, in every channel."""
         if index_list.n == 0:
             return None
@@ -66,11 +66,25 @@ class Grid:
             index_list.indices.data, np.int32(index_list.n), np.int32(self.plane), np.int32(run),
         )
 
-    def kernel(self, filename: str, name: str, **defines) -> cl.Kernel:
+    def kernel(self, filename: str, name: str, **defines) -> Kernel:
         return self.runtime.kernel(filename, name, self.dtype, **defines)
 
     def scalar(self, value) -> np.generic:
         return self.dtype.type(value)
+
+
+def check_fits(runtime: Runtime, shape, what: str, fields: float, ghost: int = 1,
+               dtype=FLOAT32, largest: float = 1.0) -> None:
+    """Refuse, before any work, a computation on (nc, ny, nx) data (or (nc, nz, ny, nx)
+    volumes) that keeps about `fields` padded fields of that shape on the device, the
+    largest buffer `largest` fields."""
+    one = shape[0] * np.dtype(dtype).itemsize
+    for n in shape[1:]:
+        one *= n + 2 * ghost
+    total, biggest = int(fields * one), int(largest * one)
+    if total > runtime.global_mem or biggest > runtime.max_alloc:  # (the message only then)
+        dims = "x".join(str(n) for n in shape[:0:-1]) + (f"x{shape[0]}" if shape[0] > 1 else "")
+        runtime.check_fits(total, biggest, f"{what} of {dims} values")
 
 
 class Field:
@@ -108,6 +122,7 @@ class Field:
 
     def to_host(self) -> np.ndarray:
         """The interior as an (nc, ny, nx) numpy array (one device-to-host copy)."""
+        _check_not_forked()  # a forked child would wait forever for the copy
         return np.ascontiguousarray(self.grid.interior(self.data.get()))
 
     def fill_ghosts(self, boundary: str = "neumann", value=0.0) -> None:

@@ -37,6 +37,9 @@ class ImageLayout:
         if np.issubdtype(self.dtype, np.integer):
             info = np.iinfo(self.dtype)
             values = np.clip(np.rint(values), info.min, info.max)
+        elif abs(self.offset) + abs(self.scale) > 0.5 * float(np.finfo(self.dtype).max):
+            big = float(np.finfo(self.dtype).max)  # rounding at the range's ends gives inf
+            values = np.clip(values, -big, big)
         return values.astype(self.dtype)
 
 
@@ -90,20 +93,34 @@ def as_image(image, name: str = "image", allow_nan: bool = False) -> np.ndarray:
     return array
 
 
-def to_kernel_layout(image, channel_axis=None, name: str = "image"):
+def value_range(lo: float, hi: float, name: str = "image") -> tuple[float, float]:
+    """(offset, scale) mapping values in [lo, hi] to [0, 1]."""
+    scale = hi - lo
+    if not np.isfinite(scale):  # e.g. -1e308 .. 1e308: the span overflows float64
+        raise InputError(
+            f"{name} spans {lo:g} to {hi:g}, a range too wide for float64 arithmetic; "
+            "scale it down first (e.g. image / 1e10)"
+        )
+    return lo, scale if hi > lo else 1.0
+
+
+def to_kernel_layout(image, channel_axis=None, name: str = "image", fits=None):
     """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
 
     Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1); float images by
     their own minimum and maximum, so a flow's parameters mean the same for any input range.
+    fits(shape), given, may refuse the (nc, ny, nx) shape before any conversion.
     """
     array = as_image(image, name)
     axis = check_channel_axis(array.ndim, channel_axis)
+    if fits is not None:
+        rest = tuple(n for i, n in enumerate(array.shape) if i != axis)
+        fits((1,) + array.shape if axis is None else (array.shape[axis],) + rest)
     if np.issubdtype(array.dtype, np.integer):
         info = np.iinfo(array.dtype)
         offset, scale = float(info.min), float(info.max) - float(info.min)
     else:
-        lo, hi = float(array.min()), float(array.max())
-        offset, scale = lo, (hi - lo) if hi > lo else 1.0
+        offset, scale = value_range(float(array.min()), float(array.max()), name)
     data = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
     if min(data.shape[1:]) < 1:
         raise InputError(f"{name} has no pixels (shape {array.shape})")

@@ -62,8 +62,15 @@ from tqdm.auto import tqdm
 
 from . import multiresolution as mr
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
-from .fields import Field, Grid, PingPong, index_list
-from .imagedata import ImageLayout, InputError, as_image, check_channel_axis, compute_dtype
+from .fields import Field, Grid, PingPong, check_fits, index_list
+from .imagedata import (
+    ImageLayout,
+    InputError,
+    as_image,
+    check_channel_axis,
+    compute_dtype,
+    value_range,
+)
 from .runtime import ClpdeError, get_runtime
 
 SCALINGS = ("none", "quartic-root")
@@ -187,6 +194,11 @@ def _prepare(image, mask, channel_axis, alpha):
         alpha = axis is not None and nc == 4
     if alpha and nc < 2:
         raise InputError("alpha=True needs at least two channels (the last one is the alpha)")
+    if alpha and finite is not None and not np.isfinite(planes[-1]).all():
+        raise InputError(
+            "the alpha channel (the last one) holds NaN or infinite values, and only the colour "
+            "channels are inpainted; fix the alpha channel first, or pass alpha=False"
+        )
     if np.issubdtype(array.dtype, np.integer):
         info = np.iinfo(array.dtype)
         offset, scale = float(info.min), float(info.max) - float(info.min)
@@ -197,7 +209,7 @@ def _prepare(image, mask, channel_axis, alpha):
             hi = float(np.max(planes, where=where[None], initial=-np.inf))
         else:
             lo, hi = 0.0, 1.0
-        offset, scale = lo, (hi - lo) if hi > lo else 1.0
+        offset, scale = value_range(lo, hi)
     layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
     return array, planes, omega, softness, layout, bool(alpha)
 
@@ -638,6 +650,10 @@ class Inpainting:
         self.progress = progress
         self.result = None
         self.info = None
+        # the finest level: the ping-pong pair, prev and known, the one-channel weight and
+        # three index lists; refused here, before any device work
+        check_fits(get_runtime(device), data.shape, "inpainting", 4 + 4 / data.shape[0],
+                   ghost=GHOST, dtype=self.dtype)
 
     # -- conversions between the user's image and the solved channels -----------------
     def _box_data(self, box):

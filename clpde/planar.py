@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm.auto import tqdm
 
-from .fields import Field, Grid, PingPong
+from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import InputError, to_kernel_layout
 from .imagedata import positive as _positive
 from .runtime import get_runtime
@@ -46,6 +46,9 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
     if flow in ("heat", "perona-malik", "curvature"):
         return 0.25
     if flow in ("tv", "rof"):
+        eps = _positive("eps", eps)
+        if not np.isfinite(lam) or lam < 0:
+            raise InputError(f"lam must be a number >= 0, not {lam!r}")
         return 1.0 / (4.0 / eps + lam)
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
@@ -81,9 +84,13 @@ class PlanarFlow:
                                  f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
         kappa = 0.05 if kappa is None else kappa
         edge = "exp" if edge is None else edge
-        data, self.layout = to_kernel_layout(image, channel_axis)
         self.runtime = get_runtime(device)
         dtype = np.dtype(precision or np.float32)
+        # two fields (ping-pong) and the curvature flow's one-channel weight
+        def fits(shape):
+            check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None), dtype=dtype)
+
+        data, self.layout = to_kernel_layout(image, channel_axis, fits=fits)
         nc, ny, nx = data.shape
         self.grid = Grid(self.runtime, nx, ny, nc, 1, dtype)
         self.flow = flow

@@ -29,7 +29,7 @@ import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
-from .fields import IndexList, compact
+from .fields import IndexList, check_fits, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
 from .regions_mesh import (
@@ -105,6 +105,9 @@ class RegionTracker:
         nz, ny, nx = phi.shape
         self.grid = Grid3D(self.runtime, nx, ny, nz, ghost=GHOST, dtype=np.dtype(dtype))
         self.nc = 1 + len(phihat)
+        # cur, nxt, ls0 and stage of every level set, the speed, aux and two masks
+        check_fits(self.runtime, (self.nc,) + tuple(phi.shape), "region tracking",
+                   4 + 2.5 / self.nc, ghost=GHOST, dtype=dtype)
         self.mode = SPEEDS[speed]
         self.scale = float(scale)
         self.velocity = None if velocity is None else np.asarray(velocity, np.float64)
@@ -159,7 +162,8 @@ class RegionTracker:
         if self.step_band.n == 0:
             raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
                              "track for a shorter time")
-        self._flag.fill(0)
+        with self.runtime.lock:  # pyopencl's fill kernel is shared by every thread
+            self._flag.fill(0)
         g.launch_list(self._k["band_near_border"], self.reinit_band, self._flag.data,
                       np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), np.int32(g.ghost),
                       np.int32(1), *g.strides())
@@ -289,6 +293,7 @@ class RegionTracker:
         rule: second order in the block's length), and held for the block."""
         dt = self.stable_dt()
         while self.time < until - 1e-12:
+            self._check_step_count(until, dt)
             steps = [dt] * self.reinit_every
             if self.aux_at is not None:
                 steps, dt = self._sample_block(until, dt)
@@ -301,6 +306,21 @@ class RegionTracker:
                     bar.update(step)
             self.reinitialize()
             dt = self.stable_dt()
+
+    MAX_STEPS = 100_000
+
+    def _check_step_count(self, until, dt) -> None:
+        """Refuse a run that would take forever: a speed that a singularity makes huge
+        (the curvature at the centre of a sphere a few cells wide, a crease) gives a stable
+        step of ~1e-7 and millions of steps (found by fuzzing: it looked like a hang)."""
+        needed = (until - self.time) / dt
+        if needed > self.MAX_STEPS:
+            raise InputError(
+                f"the speed's stable time step is {dt:.3g}, so reaching t = {until:g} takes "
+                f"{needed:.3g} steps (more than {self.MAX_STEPS}); the curvature of a shape a "
+                "few cells wide or of a crease makes the speed huge: pass max_speed= to clamp "
+                "|beta|, use a finer grid, or a shorter t"
+            )
 
     def _sample_block(self, until, guess):
         """Upload the time-dependent speed for the next block and return its steps.
@@ -487,6 +507,10 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
     phi = phi.astype(np.float64)
     if not (phi.min() < 0 < phi.max()):
         raise InputError("phi never changes sign: it has no surface to track regions on")
+    limit = np.sqrt(np.finfo(np.dtype(dtype)).max)  # squared gradients must not overflow
+    if np.abs(phi).max() > limit:
+        raise InputError(f"phi reaches {np.abs(phi).max():.3g}, beyond what {np.dtype(dtype)} "
+                         f"arithmetic squares ({limit:.3g}); phi is a distance: rescale it")
     h = _positive("spacing", spacing)
     t_end = float(t)
     if not np.isfinite(t_end) or t_end < 0:
@@ -539,6 +563,9 @@ def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
 
     phi, phihat = tracker.volumes()
     h = tracker.h
+    if not (phi.min() < 0 < phi.max()):  # gone between two band rebuilds
+        raise InputError(f"the surface vanished by t = {time:g} (Phi has no zero level set "
+                         "left on the grid); track for a shorter time")
     mesh = surface_mesh(phi, h, origin)
     idx = ((np.asarray(mesh.vertices) - origin) / h)[:, ::-1].T  # (z, y, x) index coordinates
     vals = np.stack([map_coordinates(p, idx, order=1, mode="nearest") for p in phihat], axis=1)

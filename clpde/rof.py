@@ -21,7 +21,7 @@ import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
-from .fields import Field, Grid, PingPong
+from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import InputError, compute_dtype, to_kernel_layout
 from .planar import _check_dt, _check_steps, _positive, _progress_disabled, stability_limit
 from .runtime import get_runtime
@@ -91,8 +91,12 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if sigma is not None and weight is not None:
         raise InputError("give sigma (the noise level) or weight (the strength), not both")
-    data, layout = to_kernel_layout(image, channel_axis)
     runtime = get_runtime(device)
+    # primal-dual: f, u and three dual fields of two components each; gradient: four fields
+    def fits(shape):
+        check_fits(runtime, shape, "TV denoising", 8, dtype=compute_dtype(None, precision), largest=2)
+
+    data, layout = to_kernel_layout(image, channel_axis, fits=fits)
     nc, ny, nx = data.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(data.dtype, precision))
     defaults = _DEFAULTS[method]
@@ -104,11 +108,13 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     # image's units, so lambda on the kernels' [0, 1] data is scale / weight.
     weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
     if weight is not None:
-        lam0 = np.full(nc, weight_unit / _positive("weight", weight))
+        # capped where float32 ends: a weight that small next to the range changes nothing
+        lam0 = np.full(nc, min(weight_unit / _positive("weight", weight), 1e30))
         sigma2 = None
     else:
         if sigma is None:
-            sig = np.array([_noise_std(c) for c in data])
+            # NaN for images too small to estimate from (1 x N): taken as noise-free
+            sig = np.nan_to_num(np.array([_noise_std(c) for c in data]), nan=0.0)
         else:
             sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
         sigma2 = np.maximum(sig, 1e-6) ** 2
@@ -272,6 +278,11 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
                 for c in range(nc):  # one work-item at channel c (sigma may differ)
                     finish_k(q, (1,), None, partial.data, lam.data, np.int32(ny),
                              grid.scalar(1.0 / (nx * ny * sigma2[c])), global_offset=(c,))
+                # (C.2) divides by sigma^2: lambda can jump at any update, and a step that
+                # was stable before it would blow up (found by fuzzing: 1e12 for sigma=1e-3)
+                top = min(float(np.nan_to_num(lam.get().max(), nan=0.0)), 1e30)
+                if dt > stability_limit("rof", eps, top):
+                    dt = 0.8 * stability_limit("rof", eps, top)
             grid.launch(step_k, pair.cur.data.data, pair.nxt.data.data, u0.data.data, lam.data,
                         grid.scalar(dt), eps2)  # the step also refreshes the ghosts
             pair.swap()

@@ -6,8 +6,11 @@ Everything that talks to pyopencl's platform layer lives here, so the flows only
 
 from __future__ import annotations
 
+import copyreg
 import os
+import pickle
 import tempfile
+import threading
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +28,18 @@ class NoDeviceError(ClpdeError):
 
 class KernelBuildError(ClpdeError):
     pass
+
+
+class DeviceMemoryError(ClpdeError, MemoryError):
+    """A request that cannot fit the device's memory; the message gives the size and the way out."""
+
+
+MEMORY_WAY_OUT = ("use a smaller input (crop or downsample it) or process it in tiles, or "
+                  "choose a device with more memory (clpde devices)")
+
+
+def _mib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.2f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.1f} MiB"
 
 
 INSTALL_HINT = (
@@ -101,6 +116,9 @@ class DeviceInfo:
 
 
 def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
+    global _used_opencl
+    _check_not_forked()
+    _used_opencl = True
     try:
         platforms = cl.get_platforms()
     except cl.Error as exc:  # PLATFORM_NOT_FOUND_KHR when no ICD is installed
@@ -170,6 +188,10 @@ def _resolve(spec) -> int:
     )
 
 
+# Guards the module's caches (devices probed, runtimes made): two threads making their first
+# call at once must share one context, or buffers of one would meet kernels of the other.
+_lock = threading.RLock()
+
 _PROBE_SOURCE = "__kernel void probe(__global float *a) { a[get_global_id(0)] *= 2.0f; }"
 _build_problems: dict[int, str | None] = {}
 
@@ -182,26 +204,32 @@ def _build_problem(index: int) -> str | None:
     fails every build with "unknown target CPU 'generic'". Probing once per device lets the
     default choice skip such a device when another one works.
     """
-    if index not in _build_problems:
-        platform, device = _all_devices()[index]
-        try:
-            ctx = cl.Context([device])
-            cl.Program(ctx, _PROBE_SOURCE).build()
-            _build_problems[index] = None
-        except cl.Error as exc:
-            log = str(exc)
-            if "unknown target CPU" in log:
-                reason = (
-                    f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
-                    "its LLVM does not know this CPU; install your system's PoCL "
-                    "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
-                )
-            else:
-                first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
-                reason = (f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
-                          f"kernels: {first.strip()[:200]}")
-            _build_problems[index] = reason
-    return _build_problems[index]
+    with _lock:
+        if index not in _build_problems:
+            _build_problems[index] = _probe(index)
+        return _build_problems[index]
+
+
+def _probe(index: int) -> str | None:
+    """Build a tiny program on device ``index``: None, or why it fails."""
+    platform, device = _all_devices()[index]
+    try:
+        ctx = cl.Context([device])
+        cl.Program(ctx, _PROBE_SOURCE).build()
+        return None
+    except cl.Error as exc:
+        log = str(exc)
+        if "unknown target CPU" in log:
+            reason = (
+                f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
+                "its LLVM does not know this CPU; install your system's PoCL "
+                "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
+            )
+        else:
+            first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
+            reason = (f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+                      f"kernels: {first.strip()[:200]}")
+        return reason
 
 
 def _usable(index: int) -> int:
@@ -249,11 +277,13 @@ def get_runtime(device=None) -> Runtime:
         return device
     if device is None:
         device = _chosen_spec
-    index = _default_index() if device is None else _usable(_resolve(device))
-    if index not in _runtimes:
-        platform, dev = _all_devices()[index]
-        _runtimes[index] = Runtime(index, platform, dev)
-    return _runtimes[index]
+    with _lock:
+        index = _default_index() if device is None else _usable(_resolve(device))
+        runtime = _runtimes.get(index)
+        if runtime is None:
+            platform, dev = _all_devices()[index]
+            runtime = _runtimes[index] = Runtime(index, platform, dev)
+        return runtime
 
 
 def devices() -> list[DeviceInfo]:
@@ -278,6 +308,38 @@ def devices() -> list[DeviceInfo]:
     ]
 
 
+class Kernel:
+    """A pyopencl kernel whose launches hold the runtime's lock.
+
+    pyopencl's Kernel.__call__ sets the arguments on the shared kernel object and then
+    enqueues it; two threads in between would run one thread's step on the other's buffers.
+    Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
+    """
+
+    __slots__ = ("_key", "_lock", "_runtime", "cl_kernel")
+
+    def __init__(self, cl_kernel: cl.Kernel, runtime: Runtime, key: tuple):
+        self.cl_kernel = cl_kernel
+        self._lock = runtime.lock
+        self._runtime, self._key = runtime, key
+
+    def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
+        with self._lock:
+            return self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
+
+    def __getattr__(self, name):
+        if name == "cl_kernel":  # not set yet: no recursion through this method
+            raise AttributeError(name)
+        return getattr(self.cl_kernel, name)
+
+    def __reduce__(self):
+        return (_receive_kernel, (self._runtime, *self._key))
+
+
+def _receive_kernel(runtime: Runtime, filename, name, dtype, defines) -> Kernel:
+    return runtime.kernel(filename, name, np.dtype(dtype), **dict(defines))
+
+
 class Runtime:
     """A device with its context, queue, built programs and launch geometry."""
 
@@ -288,10 +350,26 @@ class Runtime:
         self.type = _type_name(device)
         self.is_cpu = self.type == "cpu"
         self.fp64 = _has_fp64(device)
+        self.global_mem = device.global_mem_size
+        self.max_alloc = device.max_mem_alloc_size
         self.ctx = cl.Context([device])
         self.queue = cl.CommandQueue(self.ctx)
         self._programs: dict[tuple, cl.Program] = {}
-        self._kernels: dict[tuple, cl.Kernel] = {}
+        self._kernels: dict[tuple, Kernel] = {}
+        # Held while a kernel's arguments are set and it is enqueued (see Kernel), and
+        # around pyopencl's own array kernels (Array.fill, arithmetic), which share kernel
+        # objects per context; re-entrant so that the caches may be filled under it.
+        self.lock = threading.RLock()
+
+    def __reduce__(self):
+        # by device name: the process that unpickles builds (or reuses) its own runtime
+        return (_receive_runtime, (self.platform.name.strip(), self.device.name.strip()))
+
+    def _forked(self) -> None:
+        """In a forked child: every later launch raises (see _after_fork_in_child)."""
+        self.lock = _ForkedLock()
+        for k in self._kernels.values():
+            k._lock = self.lock
 
     def __repr__(self) -> str:
         return f"<clpde Runtime [{self.index}] {self.device.name.strip()} ({self.type})>"
@@ -303,17 +381,23 @@ class Runtime:
         key = (filename, dtype.str, tuple(sorted(defines.items())))
         prog = self._programs.get(key)
         if prog is None:
-            prog = self._build(filename, dtype, defines)
-            self._programs[key] = prog
+            with self.lock:  # one build per key, even when threads ask at once
+                prog = self._programs.get(key)
+                if prog is None:
+                    prog = self._programs[key] = self._build(filename, dtype, defines)
         return prog
 
-    def kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> cl.Kernel:
-        """A kernel object, fetched once and reused (fetching per call is slow in pyopencl)."""
+    def kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> Kernel:
+        """A kernel, fetched once and reused (fetching per call is slow in pyopencl);
+        calling it launches it as pyopencl's Kernel.__call__ does, safely from any thread."""
         key = (filename, name, np.dtype(dtype).str, tuple(sorted(defines.items())))
         k = self._kernels.get(key)
         if k is None:
-            k = getattr(self.program(filename, dtype, **defines), name)
-            self._kernels[key] = k
+            with self.lock:
+                k = self._kernels.get(key)
+                if k is None:
+                    program = self.program(filename, dtype, **defines)
+                    k = self._kernels[key] = Kernel(getattr(program, name), self, key)
         return k
 
     def _build(self, filename: str, dtype: np.dtype, defines: dict) -> cl.Program:
@@ -347,13 +431,22 @@ class Runtime:
     # ---- memory ---------------------------------------------------------------------------
     def check_alloc(self, nbytes: int, what: str = "field") -> None:
         """Refuse an allocation the device cannot make, before trying it."""
-        limit = self.device.max_mem_alloc_size
-        if nbytes > limit:
-            raise ClpdeError(
-                f"the {what} needs {nbytes / 2**20:.1f} MiB in one buffer, but "
-                f"{self.device.name.strip()} allows at most {limit / 2**20:.1f} MiB per "
-                "allocation; use a smaller image or crop it, or choose a device with more "
-                "memory (clpde devices)"
+        self.check_fits(nbytes, nbytes, f"the {what}")
+
+    def check_fits(self, total: int, largest: int, what: str, way_out: str = MEMORY_WAY_OUT) -> None:
+        """Refuse, before any work, a request whose buffers cannot fit the device: `total`
+        bytes in all, the largest single buffer `largest` bytes."""
+        _check_not_forked()
+        name = self.device.name.strip()
+        if largest > self.max_alloc:
+            raise DeviceMemoryError(
+                f"{what} needs {_mib(largest)} in one buffer, but {name} allows at most "
+                f"{_mib(self.max_alloc)} per allocation; {way_out}"
+            )
+        if total > self.global_mem:
+            raise DeviceMemoryError(
+                f"{what} needs {_mib(total)} of device memory, but {name} has "
+                f"{_mib(self.global_mem)}; {way_out}"
             )
 
     # ---- launch geometry ------------------------------------------------------------------
@@ -377,3 +470,111 @@ class Runtime:
             run = max(256, -(-n // groups))
             return (-(-n // run),), (1,), run
         return (-(-n // 64) * 64,), (64,), 1
+
+
+# ---- processes ------------------------------------------------------------------------------
+# OpenCL drivers do not survive fork(): PoCL's worker threads stay in the parent, so a child
+# that enqueues anything, even on a fresh context, waits forever (measured: a fork pool of
+# diffuse calls hung). A forked child therefore gets a clear error instead, unless its
+# parent never touched OpenCL, in which case it starts its own runtimes as usual.
+_used_opencl = False  # this process has asked OpenCL for its devices
+_forked_from: int | None = None  # the parent whose OpenCL state a forked child inherited
+
+
+def _fork_message() -> str:
+    return (
+        f"this process was forked from process {_forked_from}, which had already used "
+        "OpenCL; OpenCL drivers do not survive a fork (the child would hang). Start worker "
+        "processes with the 'spawn' method: multiprocessing.get_context('spawn').Pool(...) or "
+        "ProcessPoolExecutor(mp_context=multiprocessing.get_context('spawn')); or create the "
+        "pool before the first clpde call"
+    )
+
+
+def _check_not_forked() -> None:
+    if _forked_from is not None:
+        raise ClpdeError(_fork_message())
+
+
+class _ForkedLock:
+    """Stands for a runtime's lock in a forked child: entering it raises the fork error."""
+
+    def __enter__(self):
+        raise ClpdeError(_fork_message())
+
+    def __exit__(self, *exc):
+        return False
+
+
+def _after_fork_in_child() -> None:
+    global _lock, _forked_from
+    _lock = threading.RLock()  # another thread may have held it at the fork
+    if _used_opencl and _forked_from is None:
+        _forked_from = os.getppid()
+    for runtime in _runtimes.values():
+        runtime._forked()
+    _runtimes.clear()
+    _build_problems.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+# ---- pickling by value --------------------------------------------------------------------------
+# Device buffers pickle as their bytes, read back from the device, and arrays as views of
+# their buffers (pickle's memo keeps two references to one buffer one buffer); the runtime
+# pickles as its device's name and is rebuilt where the object is unpickled. So clpde's
+# objects that hold device state (PlanarFlow, ImplicitSurface, ...) pickle by value.
+
+
+def _receive_runtime(platform_name: str, device_name: str) -> Runtime:
+    with _lock:
+        for i, (p, d) in enumerate(_all_devices()):
+            if p.name.strip() == platform_name and d.name.strip() == device_name:
+                return get_runtime(i)
+    return get_runtime()  # that device is not here: the default one
+
+
+def _runtime_of(obj) -> Runtime:
+    _check_not_forked()
+    ctx = obj.context
+    for runtime in list(_runtimes.values()):
+        if runtime.ctx == ctx:
+            return runtime
+    raise pickle.PicklingError(f"cannot pickle {type(obj).__name__} of a context clpde did not make")
+
+
+def _reduce_buffer(buf: cl.Buffer):
+    runtime = _runtime_of(buf)
+    host = np.empty(buf.size, np.uint8)
+    cl.enqueue_copy(runtime.queue, host, buf)  # in order: after every enqueued step
+    return _receive_buffer, (runtime, host)
+
+
+def _receive_buffer(runtime: Runtime, host: np.ndarray) -> cl.Buffer:
+    buf = cl.Buffer(runtime.ctx, cl.mem_flags.READ_WRITE, max(host.size, 1))
+    cl.enqueue_copy(runtime.queue, buf, host)
+    return buf
+
+
+def _reduce_array(a):
+    return _receive_array, (_runtime_of(a), a.shape, a.dtype, a.strides, a.offset, a.base_data)
+
+
+def _receive_array(runtime: Runtime, shape, dtype, strides, offset, base):
+    import pyopencl.array as cla
+
+    return cla.Array(runtime.queue, shape, dtype, strides=strides, data=base, offset=offset)
+
+
+def _register_picklers() -> None:
+    import pyopencl.array as cla
+
+    copyreg.pickle(cl.Buffer, _reduce_buffer)
+    copyreg.pickle(cla.Array, _reduce_array)
+    copyreg.pickle(cl.CommandQueue, lambda q: (getattr, (_runtime_of(q), "queue")))
+    copyreg.pickle(cl.Context, lambda c: (getattr, (_runtime_of(c), "ctx")))
+
+
+_register_picklers()

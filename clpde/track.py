@@ -30,8 +30,8 @@ import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
-from .fields import Field, PingPong
-from .imagedata import InputError
+from .fields import Field, PingPong, check_fits
+from .imagedata import InputError, value_range
 from .levelset import LevelSet, signed_distance
 from .runtime import get_runtime
 
@@ -208,6 +208,11 @@ class MorphingTracker:
         self.reinit_iterations = int(reinit_iterations)
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(precision or np.float32)
+        # a frame's level set (three fields, three masks, index lists) and its features
+        from .levelset import GHOST, MARGIN
+
+        check_fits(self.runtime, (1,) + self.frames[0].shape, "tracking", 10,
+                   ghost=GHOST + MARGIN, dtype=self.dtype)
         stack = np.stack([f.astype(np.float64) for f in self.frames])
         if stack.ndim == 4:  # colour: all channels, or grey (Rec. 601 luma)
             stack = (np.moveaxis(stack[..., :3], -1, 1) if colour else
@@ -215,6 +220,7 @@ class MorphingTracker:
         else:
             stack = stack[:, np.newaxis]
         lo, hi = float(stack.min()), float(stack.max())
+        value_range(lo, hi, "frames")  # refuses a span that overflows float64
         self._scaled = (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
         self.channels = (self._user if self._user is not None else self._scaled).shape[1]
 

@@ -135,3 +135,110 @@ def test_warnings_are_not_raised_by_normal_use():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         clpde.diffuse(np.zeros((8, 8), np.uint8), steps=2)
+
+
+def test_kernels_launch_under_the_runtime_lock_and_pickle_by_name():
+    import pickle
+
+    runtime = rt_mod.get_runtime("cpu")
+    k = runtime.kernel("fields.cl", "fill_ghost_rows")
+    assert isinstance(k, rt_mod.Kernel) and k._lock is runtime.lock
+    assert k.function_name == "fill_ghost_rows"  # attributes reach pyopencl's kernel
+    assert pickle.loads(pickle.dumps(k)) is k  # same process: the cached kernel
+    assert pickle.loads(pickle.dumps(runtime)) is runtime
+
+
+def test_device_arrays_pickle_as_their_values_keeping_shared_buffers_shared():
+    import pickle
+
+    import pyopencl.array as cla
+
+    runtime = rt_mod.get_runtime("cpu")
+    a = cla.to_device(runtime.queue, np.arange(12, dtype=np.float32).reshape(3, 4))
+    b, c = pickle.loads(pickle.dumps((a, a.data)))
+    assert np.array_equal(b.get(), a.get()) and b.data is c and b.data is not a.data
+
+
+# ---- device memory ----------------------------------------------------------------------------
+def _sphere_phi(n=28, r=4.0):
+    ax = np.arange(n) - (n - 1) / 2
+    z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
+    return np.sqrt(x**2 + y**2 + z**2) - r, z
+
+
+def _calls():
+    """One small call of every public function that allocates on the device."""
+    from clpde.surface import ImplicitSurface
+
+    rng = np.random.default_rng(1)
+    image = rng.random((24, 32)).astype(np.float32)
+    mask = np.zeros(image.shape, bool)
+    mask[8:14, 10:20] = True
+    yy, xx = np.mgrid[:24, :24]
+    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25) for k in range(2)]).astype(np.uint8)
+    phi, z = _sphere_phi()
+    return {
+        "diffuse": lambda: clpde.diffuse(image, "tv", steps=3),
+        "denoise_tv": lambda: clpde.denoise_tv(image, 0.1, max_steps=6),
+        "inpaint": lambda: clpde.inpaint(image, mask, max_steps=6),
+        "track": lambda: clpde.track(frames, frames[0] > 0, max_iterations=3),
+        "surface": lambda: ImplicitSurface(phi, 1.0).heat(z, 0.5),
+        "track_region": lambda: clpde.track_region(phi, z, beta=0.5, t=0.2),
+    }
+
+
+@pytest.mark.parametrize("name", list(_calls()))
+def test_requests_that_cannot_fit_are_refused_before_any_allocation(name, monkeypatch):
+    call = _calls()[name]
+    runtime = rt_mod.get_runtime()
+    allocated = []
+    real = cl.Buffer
+    monkeypatch.setattr(cl, "Buffer", lambda *a, **k: allocated.append(a) or real(*a, **k))
+    for limit in ("max_alloc", "global_mem"):
+        with monkeypatch.context() as m:
+            m.setattr(runtime, limit, 1024)
+            with pytest.raises(rt_mod.DeviceMemoryError) as err:
+                call()
+        message = str(err.value)
+        assert "MiB" in message and "tiles" in message and "smaller input" in message
+        assert ("per allocation" if limit == "max_alloc" else "of device memory") in message
+    assert allocated == []
+    assert isinstance(err.value, MemoryError) and isinstance(err.value, ClpdeError)
+
+
+def test_a_huge_image_is_refused_without_converting_it():
+    # 10^10 pixels that take no memory: the refusal must come before any float copy
+    huge = np.broadcast_to(np.uint8(7), (100_000, 100_000))
+    with pytest.raises(rt_mod.DeviceMemoryError, match=r"the heat flow of 100000x100000 values needs"):
+        clpde.diffuse(huge, steps=1)
+
+
+def _live_buffers() -> int:
+    import gc
+
+    gc.collect()
+    return sum(isinstance(o, cl.MemoryObject) for o in gc.get_objects())
+
+
+@pytest.mark.parametrize("name", list(_calls()))
+def test_a_failed_allocation_leaks_no_buffers(name, monkeypatch):
+    call = _calls()[name]
+    call()  # kernels built, caches filled
+    real = cl.Buffer
+    count = [0, None]
+
+    def buffer(*args, **kwargs):
+        count[0] += 1
+        if count[0] == count[1]:
+            raise cl.MemoryError("simulated allocation failure")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(cl, "Buffer", buffer)
+    call()
+    allocations = count[0]
+    before = _live_buffers()
+    for fail_at in sorted({1, allocations // 2, allocations}):
+        count[:] = [0, fail_at]
+        with pytest.raises(cl.MemoryError):
+            call()
+        assert _live_buffers() == before, f"buffers left after allocation {fail_at} failed"

@@ -20,7 +20,7 @@ import warnings
 import numpy as np
 import pyopencl.array as cla
 
-from ..fields import compact
+from ..fields import check_fits, compact
 from ..imagedata import InputError
 from ..imagedata import positive as _positive
 from ..runtime import get_runtime
@@ -78,6 +78,8 @@ class ImplicitSurface:
             )
         self.runtime = get_runtime(device)
         self._check_border = _check_border
+        # psi, psi in cells and the band masks at the least; the bands' lists come on top
+        check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
                            dtype=np.dtype(dtype))
         self._set_psi(psi.astype(np.float64, copy=True))
@@ -88,7 +90,8 @@ class ImplicitSurface:
         # Ghost cells continue psi linearly so stencils next to the border stay meaningful.
         self.psi_dev = self.grid.upload(self.psi[None], mode="linear")
         # Band tests and closest points run in grid units.
-        psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
+        with self.runtime.lock:  # pyopencl's arithmetic kernels are shared by every thread
+            psi_cells = self.psi_dev / self.grid.scalar(self.spacing)
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
         if self._check_border:
