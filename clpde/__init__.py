@@ -1,6 +1,9 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
-from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
+from . import (
+    data,  # test images and scenes, like skimage.data
+    surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
+)
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
@@ -19,6 +22,7 @@ __all__ = [
     "MorphingTracker",
     "NoDeviceError",
     "PlanarFlow",
+    "data",
     "denoise_tv",
     "devices",
     "diffuse",
