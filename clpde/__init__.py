@@ -6,8 +6,9 @@ from . import (
 )
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
-from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
+from .planar import FLOWS, PlanarFlow, diffuse, stability_limit
 from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
+from .rof import denoise_tv
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
 from .track import MorphingTracker, track
 

@@ -10,11 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .runtime import ClpdeError
-
-
-class InputError(ClpdeError, ValueError):
-    """An input array or parameter that clpde cannot use; the message says how to fix it."""
+from ._validation import InputError, positive  # noqa: F401  (importable from here)
 
 
 @dataclass
@@ -38,17 +34,6 @@ class ImageLayout:
             info = np.iinfo(self.dtype)
             values = np.clip(np.rint(values), info.min, info.max)
         return values.astype(self.dtype)
-
-
-def positive(name: str, value) -> float:
-    """A parameter that must be a finite positive number, as a float."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive number, not {value!r}") from None
-    if not np.isfinite(number) or number <= 0:
-        raise InputError(f"{name} must be a positive number, not {value!r}")
-    return number
 
 
 def check_channel_axis(ndim: int, channel_axis) -> int | None:

@@ -137,6 +137,14 @@ def atomic_output(path):
         raise
 
 
+def write_bytes(path, data: bytes) -> Path:
+    """Write `data` to the file `path`, atomically (see atomic_output)."""
+    path = Path(path)
+    with atomic_output(path) as tmp:
+        tmp.write_bytes(data)
+    return path
+
+
 def _default_file_mode(path: Path) -> int:
     if path.exists():
         return path.stat().st_mode & 0o777

@@ -9,11 +9,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from tqdm.auto import tqdm
 
+from ._progress import is_long_run, progress_bar
+from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong
-from .imagedata import InputError, to_kernel_layout
-from .imagedata import positive as _positive
+from .imagedata import to_kernel_layout
 from .runtime import get_runtime
 
 FLOWS = ("heat", "perona-malik", "tv", "curvature")
@@ -27,20 +27,6 @@ FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge"), "tv": ("eps",),
                "curvature": ("eps", "weight")}
 
 
-def _check_dt(dt, limit: float, what: str) -> float:
-    if dt is None:
-        return 0.8 * limit
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise InputError(f"dt must be a positive number, not {dt}")
-    if dt > limit * (1 + 1e-9):
-        raise InputError(
-            f"dt={dt:g} is beyond the stability limit {limit:g} of the explicit {what} scheme; "
-            f"use dt <= {limit:g} (or leave dt=None for {0.8 * limit:g})"
-        )
-    return dt
-
-
 def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
     """Largest stable explicit time step of a planar flow (unit grid spacing)."""
     if flow in ("heat", "perona-malik", "curvature"):
@@ -48,7 +34,6 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
     if flow in ("tv", "rof"):
         return 1.0 / (4.0 / eps + lam)
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
-
 
 
 @dataclass
@@ -95,24 +80,24 @@ class PlanarFlow:
     def _setup(self, flow, dt, kappa, edge, eps, weight):
         g = self.grid
         if flow == "heat":
-            self.dt = _check_dt(dt, stability_limit(flow), "heat")
+            self.dt = check_time_step(dt, stability_limit(flow), "heat")
             kernel = g.kernel("planar.cl", "heat_step")
             self._extra = ()
         elif flow == "perona-malik":
             if edge not in ("exp", "rational"):
                 raise InputError(f"edge must be 'exp' or 'rational', not {edge!r}")
-            kappa = _positive("kappa", kappa)
-            self.dt = _check_dt(dt, stability_limit(flow), "Perona-Malik")
+            kappa = positive("kappa", kappa)
+            self.dt = check_time_step(dt, stability_limit(flow), "Perona-Malik")
             kernel = g.kernel("planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational"))
             self._extra = (g.scalar(1.0 / kappa**2),)
         elif flow == "tv":
-            eps = _positive("eps", TV_EPS if eps is None else eps)
-            self.dt = _check_dt(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
+            eps = positive("eps", TV_EPS if eps is None else eps)
+            self.dt = check_time_step(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
             kernel = g.kernel("planar.cl", "tv_step")
             self._extra = (g.scalar(eps * eps),)
         else:  # curvature
             eps = 1e-10 if eps is None else float(eps)
-            self.dt = _check_dt(dt, stability_limit(flow), "curvature")
+            self.dt = check_time_step(dt, stability_limit(flow), "curvature")
             if weight is None:
                 kernel = g.kernel("planar.cl", "curvature_step")
                 weight_buf = self.pair.cur.data.data  # unread when HAS_WEIGHT is 0
@@ -142,9 +127,9 @@ class PlanarFlow:
 
     def run(self, steps: int, progress=None) -> PlanarFlow:
         """Enqueue `steps` steps; the host only waits to move the progress bar."""
-        steps = _check_steps(steps)
-        bar = tqdm(total=steps, desc=f"clpde {self.flow}", unit="step",
-                   disable=_progress_disabled(progress, steps, self.grid))
+        steps = check_steps(steps)
+        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step",
+                           long_run=is_long_run(steps, self.grid.nx * self.grid.ny * self.grid.nc))
         chunk = 50
         with bar:
             for start in range(0, steps, chunk):
@@ -157,7 +142,7 @@ class PlanarFlow:
 
     def iterate(self, steps: int, every: int):
         """Run `steps` steps, yielding a FlowState every `every` steps (and at the end)."""
-        steps = _check_steps(steps)
+        steps = check_steps(steps)
         every = max(1, int(every))
         done = 0
         while done < steps:
@@ -169,18 +154,6 @@ class PlanarFlow:
     def result(self) -> np.ndarray:
         """The current state as an array like the input (one device-to-host copy)."""
         return self.layout.restore(self.pair.cur.to_host())
-
-
-def _check_steps(steps) -> int:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise InputError(f"steps must be a non-negative integer, not {steps!r}")
-    return int(steps)
-
-
-def _progress_disabled(progress, steps: int, grid: Grid):
-    if progress is None:  # automatic: only for long runs, and only on a terminal
-        return None if steps * grid.nx * grid.ny * grid.nc > 2e9 else True
-    return not progress
 
 
 def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=None,
@@ -202,5 +175,15 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     return state.run(steps, progress).result()
 
 
-# denoise_tv moved to clpde/rof.py; kept importable from here.
-from .rof import DenoiseInfo, denoise_tv  # noqa: F401
+def __getattr__(name: str):
+    """denoise_tv and DenoiseInfo moved to clpde.rof; importable from here for one release."""
+    if name in ("denoise_tv", "DenoiseInfo"):
+        import warnings
+
+        from . import rof
+
+        warnings.warn(f"clpde.planar.{name} moved to clpde.rof (or use clpde.{name})"
+                      if name == "denoise_tv" else f"clpde.planar.{name} moved to clpde.rof",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(rof, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -19,11 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyopencl.array as cla
-from tqdm.auto import tqdm
 
+from ._progress import is_long_run, progress_bar
+from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong
-from .imagedata import InputError, compute_dtype, to_kernel_layout
-from .planar import _check_dt, _check_steps, _positive, _progress_disabled, stability_limit
+from .imagedata import compute_dtype, to_kernel_layout
+from .planar import stability_limit
 from .runtime import get_runtime
 
 METHODS = ("primal-dual", "gradient")
@@ -96,21 +97,21 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     nc, ny, nx = data.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(data.dtype, precision))
     defaults = _DEFAULTS[method]
-    max_steps = _check_steps(defaults["max_steps"] if max_steps is None else max_steps)
-    tol = _positive("tol", defaults["tol"] if tol is None else tol)
+    max_steps = check_steps(defaults["max_steps"] if max_steps is None else max_steps)
+    tol = positive("tol", defaults["tol"] if tol is None else tol)
     check_every = max(1, int(defaults["check_every"] if check_every is None else check_every))
 
     # Float images are scaled by their own range for the kernels; skimage's weight is in the
     # image's units, so lambda on the kernels' [0, 1] data is scale / weight.
     weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
     if weight is not None:
-        lam0 = np.full(nc, weight_unit / _positive("weight", weight))
+        lam0 = np.full(nc, weight_unit / positive("weight", weight))
         sigma2 = None
     else:
         if sigma is None:
             sig = np.array([_noise_std(c) for c in data])
         else:
-            sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
+            sig = np.full(nc, positive("sigma", sigma) / layout.scale)
         sigma2 = np.maximum(sig, 1e-6) ** 2
         lam0 = None
 
@@ -124,7 +125,7 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         u, steps, converged, lam = _primal_dual(grid, data, lam0, sigma2, max_steps, tol,
                                                 check_every, progress)
     else:
-        eps = _positive("eps", 0.02 if eps is None else eps)
+        eps = positive("eps", 0.02 if eps is None else eps)
         u, steps, converged, lam = _gradient(grid, data, lam0, sigma2, eps, dt, max_steps,
                                              tol, check_every,
                                              max(1, int(lambda_every or 5)), progress)
@@ -200,8 +201,8 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
         inv_n_sigma2 = cla.to_device(q, inv.astype(grid.dtype))
     t, beta = 1.0, 0.0
     steps, converged = 0, False
-    bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="it",
-               disable=_progress_disabled(progress, max_steps, grid))
+    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="it",
+                       long_run=is_long_run(max_steps, grid.nx * grid.ny * grid.nc))
     with bar:
         while steps < max_steps and not converged:
             for _ in range(min(check_every, max_steps - steps)):
@@ -249,7 +250,7 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
         lam0 = np.zeros(nc)  # with sigma given, lambda grows from zero by eq. C.2
     lam_max = 0.0 if sigma2 is not None else float(lam0.max())
     # With dynamic lambda the limit is re-checked against lambda as it grows (see below).
-    dt = _check_dt(dt, stability_limit("rof", eps, lam_max), f"ROF (eps={eps:g})")
+    dt = check_time_step(dt, stability_limit("rof", eps, lam_max), f"ROF (eps={eps:g})")
 
     u0 = Field.from_host(grid, data)
     pair = PingPong(u0.copy())
@@ -263,8 +264,8 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
 
     steps = 0
     converged = False
-    bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="step",
-               disable=_progress_disabled(progress, max_steps, grid))
+    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="step",
+                       long_run=is_long_run(max_steps, grid.nx * grid.ny * grid.nc))
     with bar:
         while steps < max_steps:
             if sigma2 is not None and steps % lambda_every == 0:

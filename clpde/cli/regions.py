@@ -230,7 +230,8 @@ def _write_frame_files(frames, outdir, size, views, stem):
 
     from PIL import Image
 
-    from ..surface.render import _atomic_write, export_mesh, render_mesh
+    from ..io import write_bytes
+    from ..surface.render import export_mesh, render_mesh
 
     written = []
     rows = []
@@ -245,6 +246,6 @@ def _write_frame_files(frames, outdir, size, views, stem):
         colors=128, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
     data = io.BytesIO()
     palette.save(data, format="PNG", optimize=True)
-    _atomic_write(path, data.getvalue())
+    write_bytes(path, data.getvalue())
     written.append(path)
     return written

@@ -317,6 +317,6 @@ def write_png(path, image) -> None:
     """An RGB(A) uint8 picture as a PNG file, written atomically."""
     import imageio.v3 as iio
 
-    from ..surface.render import _atomic_write
+    from ..io import write_bytes
 
-    _atomic_write(path, iio.imwrite("<bytes>", image, extension=".png"))
+    write_bytes(path, iio.imwrite("<bytes>", image, extension=".png"))
