@@ -11,34 +11,46 @@ Laplacian is constant along isophotes.
 
 How this implementation runs it (all on the OpenCL device):
 
+- Methods: `method=` picks one of clpde.inpainting's modules (this scheme is "transport");
+  the dispatch, the boxes and the soft masks below are shared by all of them.
+- Boxes: each connected component of the mask, or cluster of nearby components, is solved
+  in its own box, its bounding box grown by the method's margin (clpde/inpainting/boxes.py);
+  only the box is converted to float, so time and memory follow the damage. The output
+  is one copy of the input, written in place, box by box.
 - The data is scaled to [0, 1] (the transport term grows with the square of the intensity).
-- The whole image is first smoothed by a few steps of anisotropic diffusion, so that noise
-  does not steer the isophote directions (section 3.3.3).
-- Start inside Omega: the biharmonic fill on the coarsest level (scikit-image's solver,
-  once, on the host), which matches the border's values and slopes; `fill="diffusion"` is
-  the harmonic fill (the steady state of the heat equation in Omega with the known pixels
-  as boundary values, iterated on the device). Each finer level starts from the upsampled
-  result of the coarser one. The thesis reports the steady state to be robust to the start;
-  a smooth one that already matches the border cuts the number of steps several-fold
-  compared with a constant start, and on photos, where the best PSNR comes long before the
-  steady state, the biharmonic start is worth 0.3-0.5 dB (benchmarks/inpaint_quality.py).
+- The box is first smoothed by a few steps of anisotropic diffusion, so that noise does not
+  steer the isophote directions (section 3.3.3).
+- Start inside Omega: the biharmonic fill on the coarsest level, which matches the border's
+  values and slopes; `fill="diffusion"` is the harmonic fill (the steady state of the heat
+  equation in Omega with the known pixels as boundary values, iterated on the device). Each
+  finer level starts from the upsampled result of the coarser one plus the extension of its
+  mismatch with the known border (no seams). A smooth start that already matches the
+  border cuts the number of steps several-fold compared with a constant start, and on
+  photos, where the best PSNR comes long before the steady state, the biharmonic start is
+  worth 0.3-0.5 dB (benchmarks/inpaint_quality.py).
+- The derivatives of N and delta L are Scharr's (stencil="isotropic"); appendix A's central
+  differences (stencil="central") are not isotropic enough for sharp oblique isophotes
+  (docs/inpainting.md has the experiments).
 - Index lists, built on the device once per level, restrict the work to Omega-epsilon: the
-  transport updates Omega only (its stencil, with the Laplacian at the four neighbours,
-  reads known pixels up to two cells outside), the diffusion runs where g_eps > 0
-  (g_eps = 1 in Omega, falling as a cosine to 0 at distance epsilon from Omega). Known
-  pixels next to Omega feed the boundary; after each diffusion batch the known pixels of
-  the band are reset, so values outside Omega never drift.
+  transport updates Omega only (its stencil, with the Laplacian at the neighbours, reads
+  known pixels up to two cells outside), the diffusion runs where g_eps > 0 (g_eps = 1 in
+  Omega, falling as a cosine to 0 at distance epsilon from Omega). Known pixels next to
+  Omega feed the boundary; after each diffusion batch the known pixels of the band are
+  reset, so values outside Omega never drift.
+- Soft masks (a float mask, the degree of damage m in [0, 1]): after every cycle, a pixel
+  of Omega is moved (1 - m) of the way back to its observed value.
 - Every `check_every` cycles the largest and the mean change inside Omega are reduced on the
   device; the run stops once the largest falls below `tol` or the mean below `mean_tol` (or
   after `max_steps`). The mean test is the one that ends runs on photos, where a few pixels
   never settle (see `inpaint`'s docstring).
-- Multiresolution: Omega's thickness picks the number of levels (one for text and
-  scratches); the converged coarse level, upsampled, starts the next one.
+- Multiresolution: one level for thin masks (half-width up to 8 px), two for thicker ones
+  (multiresolution.auto_levels has the measurements).
 - The output equals the input bit for bit outside the mask.
 """
 
 from __future__ import annotations
 
+import inspect
 import time
 from dataclasses import dataclass, field
 
@@ -58,6 +70,8 @@ SCALINGS = ("none", "quartic-root")
 COLOUR_MODELS = ("channels", "rho-phi-psi")
 ROTATIONS = ("ccw", "cw")
 FILLS = ("diffusion", "biharmonic", "mean", "zero")
+STENCILS = ("central", "isotropic")
+COARSE_STARTS = ("corrected", "upsampled")
 GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
@@ -83,6 +97,8 @@ class InpaintInfo:
     band_pixels: int = 0
     seconds: float = 0.0
     snapshots: list = field(default_factory=list)
+    method: str = "transport"
+    boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved
 
 
 @dataclass(frozen=True)
@@ -101,13 +117,18 @@ class InpaintParams:
     check_every: int = 2  # cycles of A + B steps
     fill: str = "biharmonic"
     keep_band: bool = True
+    stencil: str = "isotropic"
+    coarse_start: str = "corrected"
 
 
 # ---------------------------------------------------------------------------------------
 # Input handling
 
 
-def _as_mask(mask, shape_hw) -> np.ndarray:
+def _as_mask(mask, shape_hw):
+    """(omega, softness): omega is a bool (rows, cols) array, True where anything is to be
+    filled; softness is None for a binary mask, else the float degree of damage in [0, 1].
+    A bool mask is used as is (no copy)."""
     m = np.asarray(mask)
     if m.dtype != bool and not (np.issubdtype(m.dtype, np.number)):
         raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = inpaint)")
@@ -118,17 +139,32 @@ def _as_mask(mask, shape_hw) -> np.ndarray:
             f"mask shape {m.shape} does not match the image's height and width {tuple(shape_hw)}; "
             "give a (rows, columns) mask of the same size as the image"
         )
-    if np.issubdtype(m.dtype, np.floating) and not np.isfinite(m).all():
-        raise InputError("mask contains NaN or infinite values; use 0 for keep and 1 for inpaint")
-    return m != 0
+    if m.dtype == bool:
+        return m, None
+    if not np.issubdtype(m.dtype, np.floating):
+        return m != 0, None
+    lo, hi = m.min(), m.max()  # NaN propagates into both
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise InputError("mask contains NaN or infinite values; a float mask is the degree of "
+                         "damage in [0, 1] (0 keep, 1 inpaint)")
+    if lo < 0 or hi > 1:
+        raise InputError(f"float mask values lie in [{lo:g}, {hi:g}], outside [0, 1]; a float mask "
+                         "is the degree of damage (0 keep, 1 inpaint): rescale it, or pass a bool "
+                         "mask (mask != 0)")
+    omega = m > 0
+    soft = bool(((m > 0) & (m < 1)).any())
+    return omega, (m if soft else None)
 
 
 def _prepare(image, mask, channel_axis, alpha):
-    """(data (nc, ny, nx) in [0, 1], omega, layout, channel_data_axis_info)."""
+    """(array, planes view (nc, ny, nx), omega, softness, layout, alpha): validation and the
+    [0, 1] scaling, without a float copy of the image (boxes are converted one at a time)."""
     array = as_image(image, allow_nan=True)
     axis = check_channel_axis(array.ndim, channel_axis)
     planes = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
-    finite = np.isfinite(planes).all(axis=0) if np.issubdtype(array.dtype, np.floating) else None
+    floating = np.issubdtype(array.dtype, np.floating)
+    finite = np.isfinite(planes).all(axis=0) if floating else None
+    softness = None
     if mask is None:
         if finite is None:
             raise InputError(
@@ -137,28 +173,33 @@ def _prepare(image, mask, channel_axis, alpha):
             )
         omega = ~finite
     else:
-        omega = _as_mask(mask, planes.shape[1:])
+        omega, softness = _as_mask(mask, planes.shape[1:])
         if finite is not None and not finite[~omega].all():
             raise InputError(
                 f"image has {int((~finite[~omega]).sum())} NaN or infinite pixels outside the mask; "
                 "include them in the mask, or pass mask=None to fill every NaN pixel"
             )
+        if softness is not None and finite is not None and not finite[(softness > 0) & (softness < 1)].all():
+            raise InputError("image has NaN or infinite pixels where the soft mask is below 1; "
+                             "a partly damaged pixel needs its observed value (set the mask to 1 there)")
     nc = planes.shape[0]
     if alpha is None:
         alpha = axis is not None and nc == 4
     if alpha and nc < 2:
         raise InputError("alpha=True needs at least two channels (the last one is the alpha)")
-    known = ~omega
     if np.issubdtype(array.dtype, np.integer):
         info = np.iinfo(array.dtype)
         offset, scale = float(info.min), float(info.max) - float(info.min)
     else:
-        values = planes[:, known] if known.any() else planes[np.isfinite(planes)]
-        lo, hi = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
+        where = finite & ~omega if omega.any() and not omega.all() else finite
+        if where.any():
+            lo = float(np.min(planes, where=where[None], initial=np.inf))
+            hi = float(np.max(planes, where=where[None], initial=-np.inf))
+        else:
+            lo, hi = 0.0, 1.0
         offset, scale = lo, (hi - lo) if hi > lo else 1.0
-    data = (np.where(np.isfinite(planes), planes, 0).astype(np.float64) - offset) / scale
     layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
-    return array, data, omega, layout, bool(alpha)
+    return array, planes, omega, softness, layout, bool(alpha)
 
 
 def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
@@ -191,6 +232,10 @@ def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
         raise InputError(f"scaling must be one of {', '.join(SCALINGS)}, not {p.scaling!r}")
     if p.rotation not in ROTATIONS:
         raise InputError(f"rotation must be 'ccw' or 'cw', not {p.rotation!r}")
+    if p.coarse_start not in COARSE_STARTS:
+        raise InputError(f"coarse_start must be one of {', '.join(COARSE_STARTS)}, not {p.coarse_start!r}")
+    if p.stencil not in STENCILS:
+        raise InputError(f"stencil must be one of {', '.join(STENCILS)}, not {p.stencil!r}")
     if p.fill not in FILLS:
         raise InputError(f"fill must be one of {', '.join(FILLS)}, not {p.fill!r}")
     if colour not in COLOUR_MODELS:
@@ -210,7 +255,7 @@ class LevelSolver:
     """The inpainting loop on one resolution level; the state stays on the device."""
 
     def __init__(self, runtime, data: np.ndarray, omega: np.ndarray, params: InpaintParams,
-                 dtype=np.float32):
+                 dtype=np.float32, fidelity: np.ndarray | None = None, observed=None):
         self.p = params
         nc, ny, nx = data.shape
         self.grid = g = Grid(runtime, nx, ny, nc, GHOST, np.dtype(dtype))
@@ -244,6 +289,14 @@ class LevelSolver:
         self.k_change = k("inpaint_max_change")
         self.k_sum_change = k("inpaint_sum_change")
         self.k_ghosts = k("inpaint_ghosts")
+        # Soft masks: pixels of Omega with fidelity w > 0 are drawn back towards their
+        # observed value by w after every cycle.
+        self.fidelity = None
+        if fidelity is not None and (fidelity > 0).any():
+            self.fidelity_list = index_list(g, fidelity > 0)
+            self.fidelity = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), fidelity[None])
+            self.observed = Field.from_host(g, observed)
+            self.k_fidelity = k("inpaint_fidelity")
         self.sx = np.int32(g.sx)
         self.rot = g.scalar(1.0 if params.rotation == "ccw" else -1.0)
         self.steps = 0
@@ -254,7 +307,8 @@ class LevelSolver:
         then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
         a step's work on a small region)."""
         g = self.grid
-        program = runtime.program("inpaint.cl", g.dtype, SCALING=SCALINGS.index(params.scaling))
+        program = runtime.program("inpaint.cl", g.dtype, SCALING=SCALINGS.index(params.scaling),
+                                  STENCIL=STENCILS.index(params.stencil))
         bufs = (self.pair.cur.data.data, self.pair.nxt.data.data)
         self._buf_a = bufs[0]
 
@@ -381,7 +435,14 @@ class LevelSolver:
                                       self.pair.cur.data.data)
                 self._fill_ghosts(self.pair.cur)
             self._sync(self.band_list)
+        self.apply_fidelity()
         self.steps += self.p.transport_steps + self.p.diffusion_steps
+
+    def apply_fidelity(self) -> None:
+        if self.fidelity is not None:
+            self.grid.launch_list(self.k_fidelity, self.fidelity_list, self.pair.cur.data.data,
+                                  self.pair.nxt.data.data, self.observed.data.data,
+                                  self.fidelity.data.data)
 
     def run(self, max_steps: int, tol: float, mean_tol: float = 0.0):
         """Cycle until converged or max_steps; yields (steps, change) after every check
@@ -414,128 +475,88 @@ class LevelSolver:
 
 
 # ---------------------------------------------------------------------------------------
-# The public object form and function
+# method="transport" on one box: the levels, coarse to fine
 
 
-class Inpainting:
-    """Inpainting whose intermediate states can be watched.
+def transport_params(params: dict) -> InpaintParams:
+    unknown = set(params) - set(InpaintParams.__dataclass_fields__)
+    if unknown:
+        raise InputError(f"unknown inpainting option(s): {', '.join(sorted(unknown))}")
+    return InpaintParams(**params)
 
-    >>> job = Inpainting(image, mask, channel_axis=-1)
-    >>> for state in job.states(every=100):
-    ...     show(state.image)
-    >>> out = job.result
 
-    The keyword arguments are those of `inpaint`.
-    """
+class TransportRun:
+    """The thesis's scheme on (nc, ny, nx) data in [0, 1]: the pyramid, the start on the
+    coarsest level, one LevelSolver per level. `states(every)` yields (steps, change, data)
+    on the finest level; afterwards `solution` and the counters are set."""
 
-    def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
-                 levels=None, device=None, precision=None, progress=None, **params):
-        unknown = set(params) - set(InpaintParams.__dataclass_fields__)
-        if unknown:
-            raise InputError(f"unknown inpainting option(s): {', '.join(sorted(unknown))}")
-        self.p = InpaintParams(**params)
-        self.image, data, self.mask, self.layout, self.alpha = _prepare(image, mask, channel_axis, alpha)
-        ncolour = data.shape[0] - int(self.alpha)
-        _check_params(self.p, ncolour, colour)
-        if self.mask.all():
-            raise InputError(
-                "the mask covers every pixel, so nothing is known to inpaint from; "
-                "mark only the damaged region"
-            )
-        if levels is not None and (isinstance(levels, bool) or not isinstance(levels, (int, np.integer))
-                                   or levels < 1):
-            raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
-        self.colour = colour
-        self.data = data
-        self.ncolour = ncolour
-        self.levels = levels
-        self.device = device
-        self.dtype = compute_dtype(None, precision)
-        self.progress = progress
-        self.result = None
-        self.info = None
+    def __init__(self, runtime, data, omega, params, *, levels=None, dtype=np.float32,
+                 progress=None, fidelity=None):
+        self.p = params if isinstance(params, InpaintParams) else transport_params(params)
+        self.runtime, self.data, self.omega = runtime, data, omega
+        self.device = runtime  # get_runtime(self.device) is this runtime
+        self.levels = levels if levels is not None else mr.auto_levels(omega)
+        self.dtype, self.progress, self.fidelity = dtype, progress, fidelity
+        self.solution = None
+        self.steps = 0
+        self.steps_per_level = []
+        self.converged = False
+        self.band_pixels = 0
 
-    # -- conversions between the user's image and the solved channels -----------------
-    def _to_model(self, data):
-        colour = data[: self.ncolour]
-        return rgb_to_rho_phi_psi(colour) if self.colour == "rho-phi-psi" else colour
-
-    def _to_image(self, solved):
-        colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
-        data = self.data.copy()
-        data[: self.ncolour] = colour
-        restored = self.layout.restore(data)
-        # Bit-exact outside the mask (and in the alpha channel): only Omega's colour
-        # channels are taken from the solution.
-        out = self.image.copy()
-        axis = self.layout.channel_axis
-        if axis is None:
-            out[self.mask] = restored[self.mask]
-        else:
-            out_v, res_v = np.moveaxis(out, axis, -1), np.moveaxis(restored, axis, -1)
-            out_v[self.mask, : self.ncolour] = res_v[self.mask, : self.ncolour]
-        return out
-
-    def states(self, every: int | None = None):
-        """Run to the end, yielding an InpaintState at the start of the finest level, every
-        `every` steps there (rounded to whole check intervals) and at the end. Coarser
-        levels run without yielding. Afterwards `result` and `info` are set."""
-        start = time.perf_counter()
+    def states(self, every=None):
         p = self.p
-        if not self.mask.any():
-            self.result = self.image.copy()
-            self.info = InpaintInfo(0, True, 0)
-            yield InpaintState(0, 0, self.result)
-            return
-        runtime = get_runtime(self.device)
-        model = self._to_model(self.data)
-        nlevels = self.levels if self.levels is not None else mr.auto_levels(self.mask)
-        levels = mr.pyramid(model, self.mask, nlevels)
-        steps_per_level = [0] * len(levels)
-        converged = False
+        levels = mr.pyramid(self.data, self.omega, self.levels)
+        self.steps_per_level = [0] * len(levels)
         bar = tqdm(total=p.max_steps * len(levels), desc="clpde inpaint", unit="step",
                    disable=None if self.progress is None else not self.progress)
         solution = None
         with bar:
             for level in range(len(levels) - 1, -1, -1):
                 data, omega = levels[level]
+                observed = data
                 data = data.copy()
                 if solution is None:
                     start_values = self._start_values(data, omega)
+                elif p.coarse_start == "corrected":
+                    # The upsampled coarse result misses the fine border values by up to a
+                    # coarse pixel's variation, which leaves seams; the mismatch on the known
+                    # pixels is extended into Omega (as the start is) and added back.
+                    start_values = mr.upsample(solution, omega.shape)
+                    mismatch = np.where(omega, 0.0, data - start_values)
+                    start_values = start_values + self._start_values(mismatch, omega)
                 else:
                     start_values = mr.upsample(solution, omega.shape)
                 data[:, omega] = start_values[:, omega]
-                solver = LevelSolver(runtime, data, omega, p, self.dtype)
+                finest = level == 0
+                # the fidelity of a soft mask acts on the finest level, where it is observed
+                fidelity = self.fidelity if finest else None
+                solver = LevelSolver(self.runtime, data, omega, p, self.dtype, fidelity, observed)
                 solver.presmooth(p.presmooth)  # also records the known values (solver.known)
                 if solution is None and p.fill == "diffusion":
                     width = mr.hole_half_width(omega)
                     solver.harmonic_fill(int(np.clip(4 * width * width, 20, 4000)))
-                finest = level == 0
+                solver.apply_fidelity()
                 if finest and every:
-                    yield InpaintState(0, 0, self._to_image(solver.result()))
+                    yield 0, None, solver.result()
                 last_yield = 0
                 done = 0
                 for steps, change in solver.run(p.max_steps, p.tol, p.mean_tol):
                     bar.update(steps - done)
                     done = steps
-                    if solver.converged:
-                        converged = finest
+                    if solver.converged and finest:
+                        self.converged = True
                     if finest and every and steps - last_yield >= every:
                         last_yield = steps
-                        yield InpaintState(0, steps, self._to_image(solver.result()), change)
+                        yield steps, change, solver.result()
                 bar.update(p.max_steps - done)
-                steps_per_level[level] = solver.steps
+                self.steps_per_level[level] = solver.steps
                 solution = solver.result()
                 if finest:
-                    self.info = InpaintInfo(
-                        steps=solver.steps, converged=converged, levels=len(levels),
-                        steps_per_level=steps_per_level, omega_pixels=int(omega.sum()),
-                        band_pixels=solver.band_list.n,
-                    )
-        self.result = self._to_image(solution)
-        self.info.seconds = time.perf_counter() - start
-        if every:
-            yield InpaintState(0, self.info.steps, self.result)
+                    self.steps, self.band_pixels = solver.steps, solver.band_list.n
+        self.levels = len(levels)
+        out = self.data.copy()
+        out[:, self.omega] = solution[:, self.omega]
+        self.solution = out
 
     def _start_values(self, data, omega):
         known = ~omega
@@ -553,28 +574,209 @@ class Inpainting:
         _, (iy, ix) = ndimage.distance_transform_edt(omega, return_indices=True)
         return data[:, iy, ix]
 
+
+# ---------------------------------------------------------------------------------------
+# The public object form and function
+
+
+class Inpainting:
+    """Inpainting whose intermediate states can be watched.
+
+    >>> job = Inpainting(image, mask, channel_axis=-1)
+    >>> for state in job.states(every=100):
+    ...     show(state.image)
+    >>> out = job.result
+
+    The keyword arguments are those of `inpaint`. Intermediate states come from
+    method="transport" only; other methods yield their start and their result.
+    """
+
+    def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
+                 levels=None, device=None, precision=None, progress=None, method=None,
+                 boxes=True, seed=None, **params):
+        from . import inpainting
+
+        self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
+            image, mask, channel_axis, alpha)
+        ncolour = self.planes.shape[0] - int(self.alpha)
+        if colour not in COLOUR_MODELS:
+            raise InputError(f"colour must be one of {', '.join(COLOUR_MODELS)}, not {colour!r}")
+        if colour == "rho-phi-psi" and ncolour != 3:
+            raise InputError(
+                f"colour='rho-phi-psi' needs 3 colour channels (R, G, B), the image has {ncolour}; "
+                "use colour='channels'"
+            )
+        if self.mask.all():
+            raise InputError(
+                "the mask covers every pixel, so nothing is known to inpaint from; "
+                "mark only the damaged region"
+            )
+        if levels is not None and (isinstance(levels, bool) or not isinstance(levels, (int, np.integer))
+                                   or levels < 1):
+            raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
+        self.method = choose_method(self.mask, method)
+        self.module = inpainting.load(self.method)
+        if self.method == "transport":
+            self.p = transport_params(params)
+            _check_params(self.p, ncolour, colour)
+            if levels is not None:
+                params = dict(params, levels=levels)
+        else:
+            self.p = None
+            if levels is not None:
+                params = dict(params, levels=levels)
+            inpainting.check_params(self.method, self.module, params)
+        self.params = params
+        self.boxes = bool(boxes)
+        self.seed = seed
+        self.colour = colour
+        self.ncolour = ncolour
+        self.levels = levels
+        self.device = device
+        self.dtype = compute_dtype(None, precision)
+        self.progress = progress
+        self.result = None
+        self.info = None
+
+    # -- conversions between the user's image and the solved channels -----------------
+    def _box_data(self, box):
+        """The box's channels as float64 in [0, 1] (NaN -> 0), colour model applied."""
+        y0, y1, x0, x1 = box
+        part = self.planes[: self.ncolour, y0:y1, x0:x1]
+        data = (part.astype(np.float64) - self.layout.offset) / self.layout.scale
+        if np.issubdtype(part.dtype, np.floating):
+            data[~np.isfinite(data)] = 0.0
+        return rgb_to_rho_phi_psi(data) if self.colour == "rho-phi-psi" else data
+
+    def _write(self, out, box, solved, omega):
+        """Omega's colour channels of the box from the solution (everything else of `out`
+        stays the input's, bit for bit)."""
+        y0, y1, x0, x1 = box
+        colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
+        values = colour[:, omega] * self.layout.scale + self.layout.offset
+        if np.issubdtype(self.layout.dtype, np.integer):
+            info = np.iinfo(self.layout.dtype)
+            values = np.clip(np.rint(values), info.min, info.max)
+        view = out[np.newaxis] if self.layout.channel_axis is None else np.moveaxis(
+            out, self.layout.channel_axis, 0)
+        view[: self.ncolour, y0:y1, x0:x1][:, omega] = values.astype(self.layout.dtype)
+
+    def _boxes(self):
+        from .inpainting import boxes, margin
+
+        ny, nx = self.mask.shape
+        if not self.boxes:
+            return [(0, ny, 0, nx)]
+        align = getattr(self.module, "ALIGN", None)
+        return boxes.boxes(
+            self.mask, lambda crop: margin(self.module, crop, self.params),
+            (lambda crop: align(crop, **self.params)) if callable(align) else lambda crop: 1)
+
+    def states(self, every: int | None = None):
+        """Run to the end, yielding an InpaintState at the start of the finest level, every
+        `every` steps there (rounded to whole check intervals) and at the end. Coarser
+        levels run without yielding. Afterwards `result` and `info` are set."""
+        from .inpainting import soft
+
+        start = time.perf_counter()
+        out = self.image.copy()
+        if not self.mask.any():
+            self.result = out
+            self.info = InpaintInfo(0, True, 0)
+            yield InpaintState(0, 0, self.result)
+            return
+        runtime = get_runtime(self.device)
+        info = InpaintInfo(0, True, 0, method=self.method)
+        soft_mask = soft(self.module)
+        for box in self._boxes():
+            y0, y1, x0, x1 = box
+            omega = np.array(self.mask[y0:y1, x0:x1], bool)
+            data = self._box_data(box)
+            damage = None if self.softness is None else np.asarray(
+                self.softness[y0:y1, x0:x1], np.float64)
+            fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
+            if self.method == "transport":
+                run = TransportRun(runtime, data, omega, self.p, levels=self.levels,
+                                   dtype=self.dtype, progress=self.progress, fidelity=fidelity)
+                for steps, change, solved in run.states(every):
+                    self._write(out, box, solved, omega)
+                    yield InpaintState(0, info.steps + steps, out.copy(), change)
+                solved = run.solution
+                info.steps = max(info.steps, run.steps)
+                info.converged &= run.converged
+                info.levels = max(info.levels, run.levels)
+                info.steps_per_level = run.steps_per_level
+                info.band_pixels += run.band_pixels
+            else:
+                extra = {"fidelity": fidelity} if soft_mask and fidelity is not None else {}
+                solved = self.module.solve(data, omega, runtime, dtype=self.dtype,
+                                           progress=self.progress, seed=self.seed,
+                                           **self.params, **extra)
+                solved = np.asarray(solved, np.float64)
+                if damage is not None and not soft_mask:
+                    solved = np.where(omega, damage * solved + (1 - damage) * data, data)
+                info.levels = max(info.levels, 1)
+            self._write(out, box, solved, omega)
+            info.omega_pixels += int(omega.sum())
+            info.boxes.append(box)
+        self.result = out
+        self.info = info
+        info.seconds = time.perf_counter() - start
+        if every:
+            yield InpaintState(0, info.steps, self.result)
+
     def run(self) -> np.ndarray:
         for _ in self.states():
             pass
         return self.result
 
 
+def choose_method(omega: np.ndarray, method) -> str:
+    """The method to run: None is "transport" (the thesis's scheme, whose options inpaint()
+    takes by name); "auto" is the first installed of inpainting.AUTO (docs/inpainting.md
+    has the measurements behind it)."""
+    from . import inpainting
+
+    if method is None:
+        return inpainting.DEFAULT
+    if method == "auto":
+        installed = inpainting.available()
+        return next(name for name in inpainting.AUTO if name in installed)
+    inpainting.load(method)  # a clear error for unknown or missing ones
+    return method
+
+
 def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
             diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
             scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=4e-4, check_every=2,
             levels=None, colour="channels", alpha=None, fill="biharmonic", keep_band=True, device=None,
-            precision=None, progress=None, snapshots=None, return_info=False):
-    """Fill the masked region of an image by continuing the isophotes that reach it.
+            precision=None, progress=None, snapshots=None, return_info=False, method=None,
+            boxes=True, seed=None, **options):
+    """Fill the masked region of an image.
 
     image: 2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8,
         uint16, other integers or floats of any range (scaled to [0, 1] internally).
-    mask: bool or numeric (rows, columns) array, nonzero where to inpaint. None fills the
-        NaN pixels of a float image.
+    mask: (rows, columns) array. bool or integer: nonzero where to inpaint. float: the
+        degree of damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity
+        (1 - m) to its observed value (a soft mask; NaN or values outside [0, 1] are an
+        error). None fills the NaN pixels of a float image.
+    method: None or 'transport' (the thesis's scheme, below), 'coherence',
+        'navier-stokes', 'exemplar', 'structure-texture' (where installed:
+        clpde.inpainting.available()), or 'auto': coherence transport where installed,
+        else the transport (the best on the benchmark's photos and structure, see
+        docs/inpainting.md). Options of methods other than 'transport' go in **options.
+    boxes: solve each connected component of the mask, or cluster of nearby components,
+        in its own box grown by the method's margin (True), so that time and memory follow
+        the damage; False solves the whole image at once. Results agree (bit for bit where
+        each run takes the same number of steps; each box stops on its own).
+    seed: for methods with randomness.
+
+    method="transport" options (thesis chapter 3):
     dt, transport_steps, diffusion_steps: the time step and the A / B schedule (0.1, 15, 2).
     diffusion_dt: time step of the interleaved anisotropic diffusion (<= 0.25; appendix A's
         code uses 0.2, the text 0.1).
     epsilon: width of the band Omega-epsilon around Omega (>= 2 pixels).
-    presmooth: steps of anisotropic diffusion of the whole image before the loop.
+    presmooth: steps of anisotropic diffusion of the box before the loop.
     scaling: 'none' uses eq. (3.6) as printed; 'quartic-root' applies sign(I_t) |I_t|^(1/4)
         to the transport update as appendix A's code does, on its 0..255 scale. The root
         keeps faint structures moving but never settles (the largest change stays near
@@ -588,37 +790,50 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         of beta, and isophotes closed inside Omega keep drifting, while the mean change
         falls steadily; the mean test (4e-4) also stops near the best PSNR on photos, which
         slowly falls afterwards as texture of the border is carried inwards.
-    levels: number of resolution levels; None picks it from the mask's thickness.
+    levels: number of resolution levels; None picks it per box from the mask's thickness
+        (1 for half-widths up to 8 px, else 2: multiresolution.auto_levels, measured).
     colour: 'channels' inpaints every channel independently; 'rho-phi-psi' inpaints the
-        luminance-chroma model of thesis Figure 3.7 (3 colour channels).
+        luminance-chroma model of thesis Figure 3.7 (3 colour channels; any method).
     alpha: treat the last channel as alpha, which passes through untouched; None means yes
         for 4-channel images.
-    fill: start inside Omega (on the coarsest level): 'biharmonic' (scikit-image's
-        biharmonic fill, computed once on the host), 'diffusion' (the harmonic fill,
-        iterated on the device), 'mean' or 'zero'. The steady state hardly depends on it
-        (thesis 3.3.3), but the best PSNR on photos comes early, so the start matters:
-        the biharmonic one is 0.3-0.5 dB better than the harmonic one on the benchmark's
-        text and scratch masks and needs fewer steps.
+    fill: start inside Omega (on the coarsest level): 'biharmonic', 'diffusion' (the
+        harmonic fill, iterated on the device), 'mean' or 'zero'. The steady state hardly
+        depends on it (thesis 3.3.3), but the best PSNR on photos comes early, so the start
+        matters: the biharmonic one is 0.3-0.5 dB better than the harmonic one on the
+        benchmark's text and scratch masks and needs fewer steps.
     keep_band: reset the known pixels of Omega-epsilon after each diffusion batch (True), or
         let the diffusion keep smoothing them cycle after cycle (False).
+    stencil: 'isotropic' (default) takes grad I in N and delta L (eqs. 3.7, 3.9) with
+        Scharr's derivatives; 'central' with appendix A's central differences, whose
+        discrete delta L and N are not parallel on sharp isophotes at 30 or 60 degrees, so
+        that oblique stripes bleed (docs/inpainting.md: +1.6 to +3.8 dB on stripes at
+        30-60 degrees; about 2x the time per step).
+    coarse_start: with levels > 1, the start of a finer level: 'corrected' (the upsampled
+        coarse result plus the extension of its mismatch with the known border pixels, so
+        that no seam is left) or 'upsampled' (the upsampled coarse result as it is).
+    A soft mask's fidelity acts after every A + B cycle on the finest level: a pixel of
+        damage m is moved (1 - m) of the way back to its observed value.
     snapshots: an integer N: also return intermediate states every N steps of the finest
         level, as `(image, [InpaintState, ...])` (or in info.snapshots with return_info).
     return_info: also return an InpaintInfo (steps taken, whether it converged, ...).
 
     The output has the input's shape and dtype, and equals it bit for bit outside the mask.
     """
-    job = Inpainting(
-        image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour, levels=levels,
-        device=device, precision=precision, progress=progress, dt=dt,
-        transport_steps=transport_steps, diffusion_steps=diffusion_steps,
-        diffusion_dt=diffusion_dt, epsilon=epsilon, presmooth=presmooth, scaling=scaling,
-        rotation=rotation, max_steps=max_steps, tol=tol, mean_tol=mean_tol,
-        check_every=check_every, fill=fill,
-        keep_band=keep_band,
-    )
+    transport = dict(dt=dt, transport_steps=transport_steps, diffusion_steps=diffusion_steps,
+                     diffusion_dt=diffusion_dt, epsilon=epsilon, presmooth=presmooth,
+                     scaling=scaling, rotation=rotation, max_steps=max_steps, tol=tol,
+                     mean_tol=mean_tol, check_every=check_every, fill=fill, keep_band=keep_band)
     if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer))
                                   or snapshots < 1):
         raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")
+    # Only the transport options the caller changed are passed on: the defaults are those
+    # of InpaintParams, and another method rejects a transport option it lacks by name.
+    defaults = inspect.signature(inpaint).parameters
+    params = {k: v for k, v in transport.items() if not _same(v, defaults[k].default)}
+    params.update(options)
+    job = Inpainting(image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour,
+                     levels=levels, device=device, precision=precision, progress=progress,
+                     method=method, boxes=boxes, seed=seed, **params)
     states = list(job.states(every=snapshots))
     if snapshots:
         job.info.snapshots = states
@@ -627,3 +842,7 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
     if snapshots:
         return job.result, states
     return job.result
+
+
+def _same(value, default) -> bool:
+    return type(value) is type(default) and value == default

@@ -269,7 +269,8 @@ def check_not_overwriting_input(inputs: PathLike | Iterable[PathLike], output: P
 
 # ---- output folders ---------------------------------------------------------------------
 # What clpde writes into output folders; a folder holding anything else is never replaced.
-OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg"}
+OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg",
+                   ".mp4"}
 
 
 def check_output_folder(outdir: PathLike, overwrite: bool = False, *,

@@ -10,6 +10,9 @@
 // held, so the host keeps both buffers of a ping-pong pair equal off the list.
 #include "common.cl"
 
+#ifndef STENCIL
+#define STENCIL 0  // 0: central differences (appendix A); 1: isotropic (Scharr) derivatives
+#endif
 #ifndef SCALING
 #define SCALING 0  // 0: I_t as in eq. (3.6); 1: sign(I_t) |I_t|^(1/4) as in appendix A
 #endif
@@ -37,6 +40,7 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* 
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
+#if STENCIL == 0
         // The 13-cell diamond of radius 2, loaded once: the Laplacian L (eq. 3.8) is needed
         // at the four neighbours, so it is computed here rather than in a separate pass.
         const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
@@ -46,6 +50,32 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* 
         const REAL ln = ne + nw + nn + c - 4 * n, ls = se + sw + c + ss - 4 * s;
         const REAL ix = (REAL)0.5 * (e - w), iy = (REAL)0.5 * (n - s);
         const REAL dlx = le - lw, dly = ln - ls;
+#else
+        // STENCIL 1, isotropic: the same equations with Scharr's derivative (weights 3, 10,
+        // 3 across) for grad I in N and for delta L, and the 5-point L at the 3x3
+        // neighbours (a 5x5 block less its corners). With central differences, the
+        // discrete delta L and grad I of a sharp straight edge at 30 or 60 degrees are not
+        // parallel, so the exact image is no steady state (|I_t| up to 0.16 on sharp
+        // stripes); this stencil cuts that residual 2.5-4 fold (docs/inpainting.md).
+        // (written out, not as loops over private arrays: PoCL keeps those in memory, 40x
+        // slower)
+        const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
+        const REAL ne = u[i + 1 + sx], nw = u[i - 1 + sx], se = u[i + 1 - sx], sw = u[i - 1 - sx];
+        const REAL ee = u[i + 2], ww = u[i - 2], nn = u[i + 2 * sx], ss = u[i - 2 * sx];
+        const REAL een = u[i + 2 + sx], ees = u[i + 2 - sx], wwn = u[i - 2 + sx], wws = u[i - 2 - sx];
+        const REAL nne = u[i + 1 + 2 * sx], nnw = u[i - 1 + 2 * sx];
+        const REAL sse = u[i + 1 - 2 * sx], ssw = u[i - 1 - 2 * sx];
+        const REAL l_e = ee + c + ne + se - 4 * e, l_w = c + ww + nw + sw - 4 * w;
+        const REAL l_n = ne + nw + nn + c - 4 * n, l_s = se + sw + c + ss - 4 * s;
+        const REAL l_ne = een + n + nne + e - 4 * ne, l_nw = n + wwn + nnw + w - 4 * nw;
+        const REAL l_se = ees + s + e + sse - 4 * se, l_sw = s + wws + w + ssw - 4 * sw;
+        const REAL K0 = (REAL)(3.0 / 32.0), K1 = (REAL)(10.0 / 32.0);
+        const REAL ix = K0 * (ne - nw + se - sw) + K1 * (e - w);
+        const REAL iy = K0 * (ne - se + nw - sw) + K1 * (n - s);
+        // delta L spans two cells (eq. 3.7): twice the derivative
+        const REAL dlx = 2 * (K0 * (l_ne - l_nw + l_se - l_sw) + K1 * (l_e - l_w));
+        const REAL dly = 2 * (K0 * (l_ne - l_se + l_nw - l_sw) + K1 * (l_n - l_s));
+#endif
         const REAL beta = rot * (dly * ix - dlx * iy) * RSQRT(ix * ix + iy * iy + grad_eps2);
         const REAL xb = c - w, xf = e - c, yb = c - s, yf = n - c;
         // (NEG/POS: min/max with 0 as plain selects, which PoCL compiles far better than fmin)
@@ -143,4 +173,19 @@ __kernel void inpaint_ghosts(__global REAL* u, __global const int2* restrict pai
     const int chan = get_global_id(1) * plane;
     const int2 p = pairs[k];
     u[chan + p.x] = u[chan + p.y];
+}
+
+// Soft masks: u = v = u + w (obs - u) on the listed cells, w a one-channel plane in [0, 1)
+// (1 - the degree of damage). Written into both buffers of the pair, which stay equal.
+__kernel void inpaint_fidelity(__global REAL* restrict u, __global REAL* restrict v,
+                               __global const REAL* restrict obs, __global const REAL* restrict w,
+                               LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL r = u[i] + w[list[k]] * (obs[i] - u[i]);
+        u[i] = r;
+        v[i] = r;
+    }
 }

@@ -89,6 +89,19 @@ def test_demo_writes_the_pictures(tmp_path, monkeypatch):
         np.abs(damaged_[mask].astype(float) - original[mask]).mean() / 2
 
 
+def test_method_and_soft_mask(tmp_path, damaged, capsys):
+    photo, maskfile, spoiled, mask, _ = damaged
+    grey = (mask * 128).astype(np.uint8)  # about half damaged
+    write_image(tmp_path / "soft.png", grey)
+    out = tmp_path / "soft_out.png"
+    assert main(["inpaint", str(photo), str(tmp_path / "soft.png"), "-o", str(out),
+                 "--soft-mask", "--method", "transport", "--max-steps", "68"]) == 0
+    want = clpde.inpaint(spoiled, grey.astype(np.float32) / 255, method="transport", max_steps=68)
+    np.testing.assert_array_equal(read_image(out), want)
+    assert main(["inpaint", str(photo), str(maskfile), "-o", str(out), "--method", "paint"]) == 2
+    assert "invalid choice: 'paint'" in capsys.readouterr().err
+
+
 def test_demo_puts_its_psnr_beside_the_peers(tmp_path, monkeypatch, capsys):
     """Issue 11: the demo's PSNR had nothing to compare it with."""
     full = inpaint_demo.damaged_astronaut

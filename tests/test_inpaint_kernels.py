@@ -33,15 +33,18 @@ def _solver(data, omega, **params):
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])
-@pytest.mark.parametrize("scaling,rotation", [("none", "ccw"), ("quartic-root", "cw")])
-def test_transport_step_matches_reference(kind, scaling, rotation):
+@pytest.mark.parametrize("scaling,rotation,stencil", [("none", "ccw", "central"),
+                                                      ("quartic-root", "cw", "central"),
+                                                      ("none", "ccw", "isotropic"),
+                                                      ("quartic-root", "cw", "isotropic")])
+def test_transport_step_matches_reference(kind, scaling, rotation, stencil):
     data, omega = _inputs(kind)
-    solver = _solver(data, omega, scaling=scaling, rotation=rotation, dt=0.1)
+    solver = _solver(data, omega, scaling=scaling, rotation=rotation, dt=0.1, stencil=stencil)
     solver.transport_step()
     got = solver.result()
     rot = 1.0 if rotation == "ccw" else -1.0
     want = ref.transport_step(pad_neumann(data.astype(np.float32).astype(float)), omega, 0.1,
-                              rot=rot, scaling=scaling)
+                              rot=rot, scaling=scaling, stencil=stencil)
     np.testing.assert_allclose(got, want, atol=2e-5)
     assert np.array_equal(got[:, ~omega], data.astype(np.float32)[:, ~omega])
     assert np.abs(got - data).max() > 1e-3  # the step did something

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 from ..imagedata import InputError
-from ..io import MASK_RULE, check_not_overwriting_input, read_mask
+from ..io import MASK_RULE, check_not_overwriting_input, read_image, read_mask
 from ..runtime import get_runtime
 from ._common import (
     OUTPUT_FOLDER_RULE,
@@ -61,8 +61,33 @@ def add_inpaint_parser(subparsers) -> None:
                         help="colour model (default: channels)")
     parser.add_argument("--levels", type=int, default=None,
                         help="multiresolution levels (default: chosen from the mask)")
+    from ..inpainting import METHODS
+
+    parser.add_argument("--method", choices=("auto", *METHODS), default="transport",
+                        help="inpainting method (default: transport, the thesis's scheme, "
+                             "whose options are those above; auto: coherence where "
+                             "installed, see docs/inpainting.md)")
+    parser.add_argument("--soft-mask", action="store_true",
+                        help="read MASK's grey levels as the degree of damage (black 0 = "
+                             "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
+                             "to the observed pixel) instead of bright = inpaint")
     add_device_argument(parser)
     parser.set_defaults(run=run_inpaint)
+
+
+def _read_soft_mask(path, shape) -> np.ndarray:
+    """The mask's grey level over its dtype's range as a float degree of damage in [0, 1]
+    (a colour mask: its brightest colour channel; an alpha channel is ignored)."""
+    mask = read_image(path)
+    if mask.ndim == 3:
+        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
+        mask = mask[..., :channels].max(axis=-1)
+    if mask.shape != tuple(shape):
+        raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
+                         f"is {shape[1]}x{shape[0]}; give a mask of the same size")
+    if np.issubdtype(mask.dtype, np.integer):
+        return mask.astype(np.float32) / np.iinfo(mask.dtype).max
+    return np.clip(mask.astype(np.float32), 0, 1)
 
 
 def run_inpaint(args) -> int:
@@ -106,17 +131,20 @@ def run_inpaint(args) -> int:
                              "image of the pixels to inpaint")
         mask = ~finite
     else:
-        mask = read_mask(args.mask, image.shape[:2])
-        if not finite[~mask].all():
+        if args.soft_mask:
+            mask = _read_soft_mask(args.mask, image.shape[:2])
+        else:
+            mask = read_mask(args.mask, image.shape[:2])
+        if not finite[~(mask > 0)].all():
             raise InputError(
-                f"{args.input} has {int((~finite[~mask]).sum())} NaN pixels outside the mask "
+                f"{args.input} has {int((~finite[~(mask > 0)]).sum())} NaN pixels outside the mask "
                 f"{args.mask}; paint them into the mask, or give 'nan' as MASK to fill exactly "
                 "the NaN pixels")
     parts = split_alpha(image, args.input)
     options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
                "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,
                "tol": args.tol, "mean_tol": args.mean_tol, "device": args.device,
-               "progress": show_progress(), "return_info": True}
+               "progress": show_progress(), "return_info": True, "method": args.method}
     if args.gif:
         result, info = inpaint(parts.colour, mask, snapshots=args.gif_every, **options)
     else:
@@ -128,8 +156,10 @@ def run_inpaint(args) -> int:
         print(f"wrote {args.gif} ({len(frames)} frames: the damaged image, then every "
               f"{args.gif_every} steps from the start fill to the result)", file=sys.stderr)
     state = "converged" if info.converged else "stopped at --max-steps"
-    print(f"inpaint: {int(mask.sum())} pixels, {info.steps} steps ({state}), "
-          f"{info.levels} level(s), {info.seconds:.2f} s", file=sys.stderr)
+    steps = f"{info.steps} steps ({state}), {info.levels} level(s), " \
+        if info.method == "transport" else ""
+    print(f"inpaint: {int((mask > 0).sum())} pixels, method {info.method}, {steps}"
+          f"{len(info.boxes)} box(es), {info.seconds:.2f} s", file=sys.stderr)
     return 0
 
 

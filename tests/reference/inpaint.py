@@ -15,13 +15,27 @@ def laplacian(p):
     return e + w + n + s - 4 * c
 
 
-def transport_rate(p, rot=1.0, grad_eps2=1e-10, scaling="none"):
-    """I_t of eqs. (3.6)-(3.11) at every interior cell (L's ghosts mirrored like I's)."""
+def scharr(p):
+    """Scharr's derivatives (x, y) of the interior of a padded array."""
+    c, e, w, n, s, ne, nw, se, sw = _shifts(p)
+    gx = (3 * (ne - nw + se - sw) + 10 * (e - w)) / 32
+    gy = (3 * (ne - se + nw - sw) + 10 * (n - s)) / 32
+    return gx, gy
+
+
+def transport_rate(p, rot=1.0, grad_eps2=1e-10, scaling="none", stencil="central"):
+    """I_t of eqs. (3.6)-(3.11) at every interior cell (L's ghosts mirrored like I's).
+    stencil 'central': appendix A's central differences; 'isotropic': Scharr's derivatives
+    for grad I (in N) and for delta L (twice the derivative: eq. 3.7 spans two cells)."""
     lap = pad_neumann(laplacian(p))
     c, e, w, n, s, *_ = _shifts(p)
-    _, le, lw, ln, ls, *_ = _shifts(lap)
-    ix, iy = 0.5 * (e - w), 0.5 * (n - s)
-    dlx, dly = le - lw, ln - ls
+    if stencil == "central":
+        _, le, lw, ln, ls, *_ = _shifts(lap)
+        ix, iy = 0.5 * (e - w), 0.5 * (n - s)
+        dlx, dly = le - lw, ln - ls
+    else:
+        ix, iy = scharr(p)
+        dlx, dly = (2 * d for d in scharr(lap))
     beta = rot * (dly * ix - dlx * iy) / np.sqrt(ix * ix + iy * iy + grad_eps2)
     xb, xf, yb, yf = c - w, e - c, c - s, n - c
     lo, hi = np.minimum, np.maximum
@@ -33,9 +47,9 @@ def transport_rate(p, rot=1.0, grad_eps2=1e-10, scaling="none"):
     return rate
 
 
-def transport_step(p, omega, dt, rot=1.0, grad_eps2=1e-10, scaling="none"):
+def transport_step(p, omega, dt, rot=1.0, grad_eps2=1e-10, scaling="none", stencil="central"):
     c = p[:, 1:-1, 1:-1]
-    rate = transport_rate(p, rot, grad_eps2, scaling)
+    rate = transport_rate(p, rot, grad_eps2, scaling, stencil)
     return np.where(omega[None], c + dt * rate, c)
 
 
