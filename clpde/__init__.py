@@ -1,10 +1,14 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
-from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
+from . import (
+    data,  # test images and scenes, like skimage.data
+    surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
+)
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
-from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
+from .planar import FLOWS, PlanarFlow, diffuse, stability_limit
 from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
+from .rof import denoise_tv
 from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
 from .track import MorphingTracker, track
 
@@ -19,6 +23,7 @@ __all__ = [
     "MorphingTracker",
     "NoDeviceError",
     "PlanarFlow",
+    "data",
     "denoise_tv",
     "devices",
     "diffuse",

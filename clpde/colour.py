@@ -18,10 +18,20 @@ which the inverse maps back to the same colour.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def rgb_to_rho_phi_psi(rgb: np.ndarray) -> np.ndarray:
-    """(3, ...) non-negative R, G, B -> (3, ...) rho, sin phi, sin psi."""
+def rgb_to_rho_phi_psi(rgb: ArrayLike) -> np.ndarray:
+    """(3, ...) non-negative R, G, B -> (3, ...) rho, sin phi, sin psi.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.colour import rgb_to_rho_phi_psi
+    >>> rho, sin_phi, sin_psi = rgb_to_rho_phi_psi(np.array([3.0, 0.0, 4.0]))
+    >>> float(rho), float(sin_phi), float(sin_psi)
+    (5.0, 0.6, 0.0)
+    """
     r, g, b = (np.asarray(c, np.float64) for c in rgb)
     rho = np.sqrt(r * r + g * g + b * b)
     rb = np.sqrt(r * r + b * b)
@@ -31,9 +41,18 @@ def rgb_to_rho_phi_psi(rgb: np.ndarray) -> np.ndarray:
     return np.stack([rho, sin_phi, sin_psi])
 
 
-def rho_phi_psi_to_rgb(model: np.ndarray) -> np.ndarray:
+def rho_phi_psi_to_rgb(model: ArrayLike) -> np.ndarray:
     """Inverse of rgb_to_rho_phi_psi. Values a flow pushed out of range are clipped first
-    (rho >= 0, sines in [0, 1]) so the result is a valid colour."""
+    (rho >= 0, sines in [0, 1]) so the result is a valid colour.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
+    >>> rgb = np.random.default_rng(0).random((3, 4, 5))
+    >>> bool(np.allclose(rho_phi_psi_to_rgb(rgb_to_rho_phi_psi(rgb)), rgb))
+    True
+    """
     rho = np.maximum(np.asarray(model[0], np.float64), 0.0)
     sin_phi = np.clip(np.asarray(model[1], np.float64), 0.0, 1.0)
     sin_psi = np.clip(np.asarray(model[2], np.float64), 0.0, 1.0)

@@ -9,12 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
 
-from .runtime import ClpdeError
-
-
-class InputError(ClpdeError, ValueError):
-    """An input array or parameter that clpde cannot use; the message says how to fix it."""
+from ._validation import InputError, positive  # noqa: F401  (importable from here)
 
 
 @dataclass
@@ -43,18 +40,8 @@ class ImageLayout:
         return values.astype(self.dtype)
 
 
-def positive(name: str, value) -> float:
-    """A parameter that must be a finite positive number, as a float."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive number, not {value!r}") from None
-    if not np.isfinite(number) or number <= 0:
-        raise InputError(f"{name} must be a positive number, not {value!r}")
-    return number
-
-
-def check_channel_axis(ndim: int, channel_axis) -> int | None:
+def check_channel_axis(ndim: int, channel_axis: int | None) -> int | None:
+    """The channel axis as a non-negative int (None for greyscale), checked against ndim."""
     if channel_axis is None:
         if ndim != 2:
             raise InputError(
@@ -72,7 +59,9 @@ def check_channel_axis(ndim: int, channel_axis) -> int | None:
     return int(channel_axis) % 3
 
 
-def as_image(image, name: str = "image", allow_nan: bool = False) -> np.ndarray:
+def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> np.ndarray:
+    """`image` as an array of integers or floats, neither empty nor (unless allow_nan)
+    holding NaN or infinite values; `name` names it in the error."""
     array = np.asarray(image)
     if array.dtype == bool or not (
         np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)
@@ -104,12 +93,25 @@ def value_range(lo: float, hi: float, name: str = "image") -> tuple[float, float
     return lo, scale if hi > lo else 1.0
 
 
-def to_kernel_layout(image, channel_axis=None, name: str = "image", fits=None):
+def to_kernel_layout(image: ArrayLike, channel_axis: int | None = None,
+                     name: str = "image", fits=None) -> tuple[np.ndarray, ImageLayout]:
     """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
 
     Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1); float images by
     their own minimum and maximum, so a flow's parameters mean the same for any input range.
     fits(shape), given, may refuse the (nc, ny, nx) shape before any conversion.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.imagedata import to_kernel_layout
+    >>> rgb = np.zeros((4, 5, 3), np.uint8)
+    >>> rgb[..., 1] = 255
+    >>> data, layout = to_kernel_layout(rgb, channel_axis=-1)
+    >>> data.shape, float(data[1].min()), layout.scale
+    ((3, 4, 5), 1.0, 255.0)
+    >>> bool((layout.restore(data) == rgb).all())
+    True
     """
     array = as_image(image, name)
     axis = check_channel_axis(array.ndim, channel_axis)
@@ -129,7 +131,7 @@ def to_kernel_layout(image, channel_axis=None, name: str = "image", fits=None):
     return np.ascontiguousarray(data), layout
 
 
-def compute_dtype(image_dtype: np.dtype, requested=None) -> np.dtype:
+def compute_dtype(image_dtype: DTypeLike, requested: DTypeLike | None = None) -> np.dtype:
     """float32 unless asked for float64."""
     if requested is None:
         return np.dtype(np.float32)

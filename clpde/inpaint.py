@@ -650,10 +650,6 @@ class Inpainting:
         self.progress = progress
         self.result = None
         self.info = None
-        # the finest level: the ping-pong pair, prev and known, the one-channel weight and
-        # three index lists; refused here, before any device work
-        check_fits(get_runtime(device), data.shape, "inpainting", 4 + 4 / data.shape[0],
-                   ghost=GHOST, dtype=self.dtype)
 
     # -- conversions between the user's image and the solved channels -----------------
     def _box_data(self, box):
@@ -705,7 +701,13 @@ class Inpainting:
         runtime = get_runtime(self.device)
         info = InpaintInfo(0, True, 0, method=self.method)
         soft_mask = soft(self.module)
-        for box in self._boxes():
+        boxes = self._boxes()
+        # Each box's finest level keeps the ping-pong pair, prev and known, the one-channel
+        # weight and three index lists on the device: every box is checked before any work.
+        for y0, y1, x0, x1 in boxes:
+            check_fits(runtime, (self.ncolour, y1 - y0, x1 - x0), "inpainting",
+                       4 + 4 / self.ncolour, ghost=GHOST, dtype=self.dtype)
+        for box in boxes:
             y0, y1, x0, x1 = box
             omega = np.array(self.mask[y0:y1, x0:x1], bool)
             data = self._box_data(box)

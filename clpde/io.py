@@ -11,16 +11,20 @@ import contextlib
 import os
 import shutil
 import tempfile
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
 
 from .imagedata import InputError
+
+PathLike = str | os.PathLike
 
 IMAGE_FORMATS = {".png": "PNG", ".tif": "TIFF", ".tiff": "TIFF", ".jpg": "JPEG", ".jpeg": "JPEG"}
 
 
-def image_format(path) -> str:
+def image_format(path: PathLike) -> str:
     """'PNG', 'TIFF' or 'JPEG', from the file name's extension."""
     suffix = Path(path).suffix.lower()
     if suffix not in IMAGE_FORMATS:
@@ -31,7 +35,7 @@ def image_format(path) -> str:
     return IMAGE_FORMATS[suffix]
 
 
-def read_image(path) -> np.ndarray:
+def read_image(path: PathLike) -> np.ndarray:
     """The pixels of a PNG, TIFF or JPEG file, in the file's own dtype.
 
     Greyscale images come back as (rows, columns), colour ones as (rows, columns, channels).
@@ -80,7 +84,7 @@ def _no_pixel_limit():
         Image.MAX_IMAGE_PIXELS = limit
 
 
-def check_writable(path, dtype, shape) -> None:
+def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> None:
     """Raise InputError, before any work is done, if `path` cannot hold such an image."""
     path = Path(path)
     kind = image_format(path)
@@ -116,7 +120,7 @@ def check_writable(path, dtype, shape) -> None:
 
 
 @contextlib.contextmanager
-def atomic_output(path):
+def atomic_output(path: PathLike) -> Iterator[Path]:
     """Yield a temporary path beside `path`; on success it replaces `path`, else it is removed."""
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -137,6 +141,14 @@ def atomic_output(path):
         raise
 
 
+def write_bytes(path: PathLike, data: bytes) -> Path:
+    """Write `data` to the file `path`, atomically (see atomic_output)."""
+    path = Path(path)
+    with atomic_output(path) as tmp:
+        tmp.write_bytes(data)
+    return path
+
+
 def _default_file_mode(path: Path) -> int:
     if path.exists():
         return path.stat().st_mode & 0o777
@@ -145,11 +157,24 @@ def _default_file_mode(path: Path) -> int:
     return 0o666 & ~umask
 
 
-def write_image(path, array) -> Path:
+def write_image(path: PathLike, array: ArrayLike) -> Path:
     """Write `array` to a PNG, TIFF or JPEG file (chosen by extension), atomically.
 
     The dtype is kept as the format allows: PNG holds uint8 (any channels) and 16-bit
     greyscale, JPEG 8-bit greyscale or RGB, TIFF any integer or float dtype.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from clpde.io import read_image, write_image
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> ramp = np.arange(0, 65536, 4369, dtype=np.uint16).reshape(4, 4)
+    >>> path = write_image(folder / "ramp.png", ramp)
+    >>> back = read_image(path)
+    >>> back.dtype, bool((back == ramp).all())
+    (dtype('uint16'), True)
     """
     path = Path(path)
     array = np.asarray(array)
@@ -191,7 +216,8 @@ def _frame_to_uint8(frame) -> np.ndarray:
     return np.rint(scaled * 255).astype(np.uint8)
 
 
-def write_gif(path, frames, duration: float = 0.1, loop: int = 0) -> Path:
+def write_gif(path: PathLike, frames: Iterable[ArrayLike], duration: float = 0.1,
+              loop: int = 0) -> Path:
     """Write an animated GIF atomically.
 
     frames: a sequence of (rows, columns) or (rows, columns, 3|4) arrays of one shape;
@@ -223,7 +249,7 @@ def write_gif(path, frames, duration: float = 0.1, loop: int = 0) -> Path:
     return path
 
 
-def check_not_overwriting_input(inputs, output) -> None:
+def check_not_overwriting_input(inputs: PathLike | Iterable[PathLike], output: PathLike) -> None:
     """Refuse an output path that names (or links to) one of the inputs."""
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
@@ -247,7 +273,8 @@ OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".j
                    ".mp4"}
 
 
-def check_output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True") -> Path:
+def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
+                        option: str = "overwrite=True") -> Path:
     """Refuse, before any work, an output folder that a run could not replace as a whole.
 
     The rule of every command that writes a folder: the folder is created if missing (its
@@ -281,7 +308,8 @@ def check_output_folder(outdir, overwrite: bool = False, *, option: str = "overw
 
 
 @contextlib.contextmanager
-def output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True"):
+def output_folder(outdir: PathLike, overwrite: bool = False, *,
+                  option: str = "overwrite=True") -> Iterator[Path]:
     """Yield an empty staging folder beside `outdir`; on success it becomes `outdir` (the old
     folder, if any, is removed as a unit); on failure it is removed and `outdir` is left as
     it was. See check_output_folder for the rule."""
@@ -317,7 +345,8 @@ MASK_RULE = ("grey masks are cut half-way between their darkest and brightest va
              "0/255 mask at 127.5); colour masks by their brightest channel; alpha is ignored")
 
 
-def read_mask(path, shape=None, *, what: str = "the image") -> np.ndarray:
+def read_mask(path: PathLike, shape: Sequence[int] | None = None, *,
+              what: str = "the image") -> np.ndarray:
     """A mask image file as a boolean array: True where the mask is bright.
 
     Pixels brighter than half-way between the file's darkest and brightest values are inside

@@ -6,14 +6,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
-from tqdm.auto import tqdm
+from numpy.typing import ArrayLike, DTypeLike
 
+from ._progress import is_long_run, progress_bar
+from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong, check_fits
-from .imagedata import InputError, to_kernel_layout
-from .imagedata import positive as _positive
+from .imagedata import to_kernel_layout
 from .runtime import get_runtime
 
 FLOWS = ("heat", "perona-malik", "tv", "curvature")
@@ -27,31 +29,40 @@ FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge"), "tv": ("eps",),
                "curvature": ("eps", "weight")}
 
 
-def _check_dt(dt, limit: float, what: str) -> float:
-    if dt is None:
-        return 0.8 * limit
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise InputError(f"dt must be a positive number, not {dt}")
-    if dt > limit * (1 + 1e-9):
-        raise InputError(
-            f"dt={dt:g} is beyond the stability limit {limit:g} of the explicit {what} scheme; "
-            f"use dt <= {limit:g} (or leave dt=None for {0.8 * limit:g})"
-        )
-    return dt
-
-
 def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
-    """Largest stable explicit time step of a planar flow (unit grid spacing)."""
+    """Largest stable explicit time step of a planar flow (unit grid spacing).
+
+    Parameters
+    ----------
+    flow : {'heat', 'perona-malik', 'tv', 'curvature', 'rof'}
+        The flow; 'rof' is denoise_tv's gradient method (TV flow with fidelity).
+    eps : float
+        TV's regularisation of |grad u| (needed by 'tv' and 'rof').
+    lam : float
+        The fidelity weight lambda of 'rof'.
+
+    Returns
+    -------
+    float
+        1/4 for heat, Perona-Malik and curvature flow; 1 / (4/eps + lam) for TV and ROF,
+        whose face coefficients reach 1/eps. `diffuse` runs at 0.8 of it by default.
+
+    Examples
+    --------
+    >>> from clpde import stability_limit
+    >>> stability_limit("heat")
+    0.25
+    >>> stability_limit("tv", eps=0.01)
+    0.0025
+    """
     if flow in ("heat", "perona-malik", "curvature"):
         return 0.25
     if flow in ("tv", "rof"):
-        eps = _positive("eps", eps)
+        eps = positive("eps", eps)
         if not np.isfinite(lam) or lam < 0:
             raise InputError(f"lam must be a number >= 0, not {lam!r}")
         return 1.0 / (4.0 / eps + lam)
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
-
 
 
 @dataclass
@@ -67,13 +78,37 @@ class FlowState:
 class PlanarFlow:
     """A planar flow whose state stays on the device between calls.
 
+    Parameters are those of `diffuse` (without `steps`): the image, the flow, the time step
+    and the flow's own parameters. `run` enqueues steps, `iterate` yields a `FlowState`
+    every few steps, `result` copies the current state back as an array like the input.
+
+    Attributes
+    ----------
+    steps_done : int
+        Steps run so far.
+    time : float
+        The flow's time, steps_done * dt.
+    dt : float
+        The time step (0.8 of `stability_limit` unless given).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde import PlanarFlow
+    >>> image = np.zeros((32, 32), np.uint8)
+    >>> image[8:24, 8:24] = 200
     >>> flow = PlanarFlow(image, "tv")
-    >>> for state in flow.iterate(steps=400, every=100):
-    ...     show(state.image)
+    >>> [state.step for state in flow.iterate(steps=300, every=100)]
+    [100, 200, 300]
+    >>> flow.result().dtype, flow.steps_done
+    (dtype('uint8'), 300)
     """
 
-    def __init__(self, image, flow: str = "heat", *, dt=None, channel_axis=None, device=None,
-                 precision=None, kappa=None, edge=None, eps=None, weight=None):
+    def __init__(self, image: ArrayLike, flow: str = "heat", *, dt: float | None = None,
+                 channel_axis: int | None = None, device: str | int | None = None,
+                 precision: DTypeLike | None = None, kappa: float | None = None,
+                 edge: str | None = None, eps: float | None = None,
+                 weight: ArrayLike | None = None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
         given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight}
@@ -102,24 +137,24 @@ class PlanarFlow:
     def _setup(self, flow, dt, kappa, edge, eps, weight):
         g = self.grid
         if flow == "heat":
-            self.dt = _check_dt(dt, stability_limit(flow), "heat")
+            self.dt = check_time_step(dt, stability_limit(flow), "heat")
             kernel = g.kernel("planar.cl", "heat_step")
             self._extra = ()
         elif flow == "perona-malik":
             if edge not in ("exp", "rational"):
                 raise InputError(f"edge must be 'exp' or 'rational', not {edge!r}")
-            kappa = _positive("kappa", kappa)
-            self.dt = _check_dt(dt, stability_limit(flow), "Perona-Malik")
+            kappa = positive("kappa", kappa)
+            self.dt = check_time_step(dt, stability_limit(flow), "Perona-Malik")
             kernel = g.kernel("planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational"))
             self._extra = (g.scalar(1.0 / kappa**2),)
         elif flow == "tv":
-            eps = _positive("eps", TV_EPS if eps is None else eps)
-            self.dt = _check_dt(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
+            eps = positive("eps", TV_EPS if eps is None else eps)
+            self.dt = check_time_step(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
             kernel = g.kernel("planar.cl", "tv_step")
             self._extra = (g.scalar(eps * eps),)
         else:  # curvature
             eps = 1e-10 if eps is None else float(eps)
-            self.dt = _check_dt(dt, stability_limit(flow), "curvature")
+            self.dt = check_time_step(dt, stability_limit(flow), "curvature")
             if weight is None:
                 kernel = g.kernel("planar.cl", "curvature_step")
                 weight_buf = self.pair.cur.data.data  # unread when HAS_WEIGHT is 0
@@ -147,11 +182,11 @@ class PlanarFlow:
         self.steps_done += 1
         self.time += self.dt
 
-    def run(self, steps: int, progress=None) -> PlanarFlow:
+    def run(self, steps: int, progress: bool | None = None) -> PlanarFlow:
         """Enqueue `steps` steps; the host only waits to move the progress bar."""
-        steps = _check_steps(steps)
-        bar = tqdm(total=steps, desc=f"clpde {self.flow}", unit="step",
-                   disable=_progress_disabled(progress, steps, self.grid))
+        steps = check_steps(steps)
+        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step",
+                           long_run=is_long_run(steps, self.grid.nx * self.grid.ny * self.grid.nc))
         chunk = 50
         with bar:
             for start in range(0, steps, chunk):
@@ -162,9 +197,9 @@ class PlanarFlow:
                     bar.update(min(chunk, steps - start))
         return self
 
-    def iterate(self, steps: int, every: int):
+    def iterate(self, steps: int, every: int) -> Iterator[FlowState]:
         """Run `steps` steps, yielding a FlowState every `every` steps (and at the end)."""
-        steps = _check_steps(steps)
+        steps = check_steps(steps)
         every = max(1, int(every))
         done = 0
         while done < steps:
@@ -178,27 +213,54 @@ class PlanarFlow:
         return self.layout.restore(self.pair.cur.to_host())
 
 
-def _check_steps(steps) -> int:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise InputError(f"steps must be a non-negative integer, not {steps!r}")
-    return int(steps)
-
-
-def _progress_disabled(progress, steps: int, grid: Grid):
-    if progress is None:  # automatic: only for long runs, and only on a terminal
-        return None if steps * grid.nx * grid.ny * grid.nc > 2e9 else True
-    return not progress
-
-
-def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=None,
-            device=None, *, progress=None, precision=None, **params) -> np.ndarray:
+def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
+            channel_axis: int | None = None, device: str | int | None = None, *,
+            progress: bool | None = None, precision: DTypeLike | None = None,
+            **params) -> np.ndarray:
     """Run a planar diffusion flow for `steps` explicit steps.
 
-    flow: 'heat' (u_t = Lap u), 'perona-malik' (params kappa, edge='exp'|'rational'),
-    'tv' (u_t = div(grad u / |grad u|_eps), param eps, default TV_EPS = 0.005) or 'curvature'
-    (u_t = g kappa |grad u|, params weight=g, eps). Data is scaled to [0, 1] internally,
-    so kappa and eps are in those units. The time step defaults to 0.8 of the stability
-    limit; a larger dt than the limit is an error. Output has the input's dtype and shape.
+    Parameters
+    ----------
+    image : (rows, columns) or (rows, columns, channels) array
+        Integer or float data, never modified; channels need `channel_axis`.
+    flow : {'heat', 'perona-malik', 'tv', 'curvature'}
+        'heat' (u_t = Lap u), 'perona-malik' (params kappa, edge='exp'|'rational'),
+        'tv' (u_t = div(grad u / |grad u|_eps), param eps, default TV_EPS = 0.005) or
+        'curvature' (u_t = g kappa |grad u|, params weight=g, eps). Data is scaled to
+        [0, 1] internally, so kappa and eps are in those units.
+    steps : int
+        Explicit time steps.
+    dt : float, optional
+        The time step; 0.8 of `stability_limit` by default, and a larger one than the
+        limit is an error.
+    channel_axis : int, optional
+        The axis of the channels of a colour image, each diffused on its own.
+    device : str or int, optional
+        An OpenCL device ('cpu', 'gpu', an index or a name part; see `clpde.devices`).
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    precision : {float32, float64}, optional
+        The device's arithmetic (float32 by default).
+    **params
+        The flow's parameters named above; one that the flow does not take is an error.
+
+    Returns
+    -------
+    ndarray
+        The result, with the input's shape and dtype.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> image = np.zeros((32, 32), np.uint8)
+    >>> image[8:24, 8:24] = 200
+    >>> smooth = clpde.diffuse(image, "heat", steps=20)
+    >>> smooth.shape, smooth.dtype
+    ((32, 32), dtype('uint8'))
+    >>> centre, corner, outside = (int(smooth[p]) for p in ((16, 16), (8, 8), (16, 4)))
+    >>> centre > 190, 0 < outside < corner < 100  # the square's edges blur outwards
+    (True, True)
     """
     unknown = sorted(set(params) - {p for names in FLOW_PARAMS.values() for p in names})
     if unknown:
@@ -209,5 +271,15 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     return state.run(steps, progress).result()
 
 
-# denoise_tv moved to clpde/rof.py; kept importable from here.
-from .rof import DenoiseInfo, denoise_tv  # noqa: F401
+def __getattr__(name: str):
+    """denoise_tv and DenoiseInfo moved to clpde.rof; importable from here for one release."""
+    if name in ("denoise_tv", "DenoiseInfo"):
+        import warnings
+
+        from . import rof
+
+        warnings.warn(f"clpde.planar.{name} moved to clpde.rof (or use clpde.{name})"
+                      if name == "denoise_tv" else f"clpde.planar.{name} moved to clpde.rof",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(rof, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -19,11 +19,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyopencl.array as cla
-from tqdm.auto import tqdm
+from numpy.typing import ArrayLike, DTypeLike
 
+from ._progress import is_long_run, progress_bar
+from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong, check_fits
-from .imagedata import InputError, compute_dtype, to_kernel_layout
-from .planar import _check_dt, _check_steps, _positive, _progress_disabled, stability_limit
+from .imagedata import compute_dtype, to_kernel_layout
+from .planar import stability_limit
 from .runtime import get_runtime
 
 METHODS = ("primal-dual", "gradient")
@@ -55,10 +57,14 @@ class DenoiseInfo:
     method: str = "primal-dual"
 
 
-def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str = "primal-dual",
-               device=None, max_steps=None, tol=None, check_every=None, eps=None, dt=None,
-               lambda_every=None, progress=None, precision=None,
-               return_info: bool = False):
+def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | None = None,
+               channel_axis: int | None = None, *, method: str = "primal-dual",
+               device: str | int | None = None, max_steps: int | None = None,
+               tol: float | None = None, check_every: int | None = None,
+               eps: float | None = None, dt: float | None = None,
+               lambda_every: int | None = None, progress: bool | None = None,
+               precision: DTypeLike | None = None,
+               return_info: bool = False) -> np.ndarray | tuple[np.ndarray, DenoiseInfo]:
     """Total-variation denoising (Rudin-Osher-Fatemi), run on the device to convergence.
 
     Solves min_u TV(u) + lambda/2 |u - u0|^2 per channel. Give either
@@ -84,8 +90,41 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     tol * check_every * dt (default 2e-4 every 20). ``max_steps`` caps the iterations
     (default 500 / 2000).
 
-    Returns the denoised image (input's shape and dtype); with ``return_info`` also a
-    DenoiseInfo (steps, converged, lambda and residual variance per channel).
+    Parameters
+    ----------
+    image : (rows, columns) or (rows, columns, channels) array
+        Integer or float data, never modified; channels need `channel_axis`.
+    sigma, weight : float, optional
+        The noise level or the strength, as above.
+    channel_axis : int, optional
+        The axis of the channels of a colour image, each denoised with its own lambda.
+    method : {'primal-dual', 'gradient'}
+    device, progress, precision
+        As for `clpde.diffuse`.
+    max_steps, tol, check_every, eps, dt, lambda_every
+        The stopping test and the gradient method's parameters, as above.
+    return_info : bool
+        Also return a `DenoiseInfo`.
+
+    Returns
+    -------
+    ndarray, or (ndarray, DenoiseInfo) with return_info
+        The denoised image (input's shape and dtype); the info holds the steps, whether
+        it converged, lambda and the residual variance per channel.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> clean = np.zeros((64, 64))
+    >>> clean[16:48, 16:48] = 1.0
+    >>> noisy = clean + 0.1 * np.random.default_rng(0).standard_normal(clean.shape)
+    >>> denoised, info = clpde.denoise_tv(noisy, sigma=0.1, return_info=True)
+    >>> info.converged, info.method
+    (True, 'primal-dual')
+    >>> error = lambda u: float(np.abs(u - clean).mean())
+    >>> error(denoised) < error(noisy) / 3
+    True
     """
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
@@ -100,8 +139,8 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     nc, ny, nx = data.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(data.dtype, precision))
     defaults = _DEFAULTS[method]
-    max_steps = _check_steps(defaults["max_steps"] if max_steps is None else max_steps)
-    tol = _positive("tol", defaults["tol"] if tol is None else tol)
+    max_steps = check_steps(defaults["max_steps"] if max_steps is None else max_steps)
+    tol = positive("tol", defaults["tol"] if tol is None else tol)
     check_every = max(1, int(defaults["check_every"] if check_every is None else check_every))
 
     # Float images are scaled by their own range for the kernels; skimage's weight is in the
@@ -109,14 +148,14 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
     weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
     if weight is not None:
         # capped where float32 ends: a weight that small next to the range changes nothing
-        lam0 = np.full(nc, min(weight_unit / _positive("weight", weight), 1e30))
+        lam0 = np.full(nc, min(weight_unit / positive("weight", weight), 1e30))
         sigma2 = None
     else:
         if sigma is None:
             # NaN for images too small to estimate from (1 x N): taken as noise-free
             sig = np.nan_to_num(np.array([_noise_std(c) for c in data]), nan=0.0)
         else:
-            sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
+            sig = np.full(nc, positive("sigma", sigma) / layout.scale)
         sigma2 = np.maximum(sig, 1e-6) ** 2
         lam0 = None
 
@@ -130,7 +169,7 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         u, steps, converged, lam = _primal_dual(grid, data, lam0, sigma2, max_steps, tol,
                                                 check_every, progress)
     else:
-        eps = _positive("eps", 0.02 if eps is None else eps)
+        eps = positive("eps", 0.02 if eps is None else eps)
         u, steps, converged, lam = _gradient(grid, data, lam0, sigma2, eps, dt, max_steps,
                                              tol, check_every,
                                              max(1, int(lambda_every or 5)), progress)
@@ -167,7 +206,7 @@ def _noise_std(u: np.ndarray) -> float:
     return float(np.median(np.abs(r))) * _MAD_TO_STD / 6.0
 
 
-def estimate_sigma(image, channel_axis=None):
+def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float | np.ndarray:
     """The noise standard deviation of an image, in its own units (0..255 for uint8), per
     channel (an array) when channel_axis is given.
 
@@ -175,6 +214,15 @@ def estimate_sigma(image, channel_axis=None):
     residual, scaled as for Gaussian white noise. Needs only numpy (no PyWavelets). Within a
     few percent on photos with noise of 2% of the range and more; textured images read a
     little high at low noise, as with any single-image estimate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.rof import estimate_sigma
+    >>> ramp = np.linspace(0, 1, 128)[None, :] * np.ones((128, 1))
+    >>> noisy = ramp + 0.05 * np.random.default_rng(1).standard_normal(ramp.shape)
+    >>> round(estimate_sigma(noisy), 2)
+    0.05
     """
     data, layout = to_kernel_layout(image, channel_axis)
     sig = np.array([_noise_std(c) for c in data]) * layout.scale
@@ -206,8 +254,8 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
         inv_n_sigma2 = cla.to_device(q, inv.astype(grid.dtype))
     t, beta = 1.0, 0.0
     steps, converged = 0, False
-    bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="it",
-               disable=_progress_disabled(progress, max_steps, grid))
+    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="it",
+                       long_run=is_long_run(max_steps, grid.nx * grid.ny * grid.nc))
     with bar:
         while steps < max_steps and not converged:
             for _ in range(min(check_every, max_steps - steps)):
@@ -255,7 +303,7 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
         lam0 = np.zeros(nc)  # with sigma given, lambda grows from zero by eq. C.2
     lam_max = 0.0 if sigma2 is not None else float(lam0.max())
     # With dynamic lambda the limit is re-checked against lambda as it grows (see below).
-    dt = _check_dt(dt, stability_limit("rof", eps, lam_max), f"ROF (eps={eps:g})")
+    dt = check_time_step(dt, stability_limit("rof", eps, lam_max), f"ROF (eps={eps:g})")
 
     u0 = Field.from_host(grid, data)
     pair = PingPong(u0.copy())
@@ -269,8 +317,8 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
 
     steps = 0
     converged = False
-    bar = tqdm(total=max_steps, desc="clpde denoise_tv", unit="step",
-               disable=_progress_disabled(progress, max_steps, grid))
+    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="step",
+                       long_run=is_long_run(max_steps, grid.nx * grid.ny * grid.nc))
     with bar:
         while steps < max_steps:
             if sigma2 is not None and steps % lambda_every == 0:

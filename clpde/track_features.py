@@ -49,13 +49,15 @@ def _search(prev, cur, weight, centre, radius):
     """Mean absolute differences of cur(x + d) and prev(x) over the weight's pixels, for
     the integer d within `radius` of `centre` (inf where cur has no pixels)."""
     ys, xs = np.nonzero(weight)
+    costs = np.full((2 * radius + 1, 2 * radius + 1), np.inf)
+    if ys.size == 0:  # the contour has vanished: nothing to match
+        return costs
     y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
     h, w = weight.shape
     cy, cx = centre
     template = prev[:, y0:y1, x0:x1]
     wt = weight[y0:y1, x0:x1]
     total = wt.sum()
-    costs = np.full((2 * radius + 1, 2 * radius + 1), np.inf)
     for dy in range(cy - radius, cy + radius + 1):
         if y0 + dy < 0 or y1 + dy > h:
             continue

@@ -14,7 +14,8 @@ import numpy as np
 from skimage import data
 
 import clpde
-from clpde.inpaint_demo import damage_mask, side_by_side
+from clpde.cli._inpaint_demo import side_by_side
+from clpde.data import damage_mask
 from clpde.io import write_gif, write_image
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 import clpde
-from clpde.inpaint_demo import side_by_side
+from clpde.cli._inpaint_demo import side_by_side
 from clpde.io import write_image
 
 

@@ -41,8 +41,8 @@ def fsaverage_white_left():
 def main():
     import trimesh
 
+    from clpde.cli.regions import write_frames
     from clpde.regions import track_region
-    from clpde.regions_demo import write_frames
     from clpde.surface import ImplicitSurface
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

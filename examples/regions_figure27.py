@@ -17,7 +17,8 @@ from pathlib import Path
 
 from _output import add_output_arguments, output_folder
 
-from clpde.regions_demo import run_scene, toy_scene, write_frames
+from clpde.cli.regions import run_scene, write_frames
+from clpde.data import region_scene
 
 
 def main():
@@ -31,7 +32,7 @@ def main():
     Path("out").mkdir(exist_ok=True)
     for name in ("split", "merge"):
         start = time.perf_counter()
-        scene = toy_scene(name, args.spacing)
+        scene = region_scene(name, args.spacing)
         frames = run_scene(scene, saves=args.saves)
         seconds = time.perf_counter() - start
         meshes = Path("out") / f"regions_{name}"  # git-ignored; replaced by each run

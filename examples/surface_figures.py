@@ -19,15 +19,9 @@ import time
 import numpy as np
 from _output import add_output_arguments, output_folder
 
+from clpde.cli.surface import load_surface, tv_time, write_png
+from clpde.data import checker, colour_pattern, surface_noise
 from clpde.surface import ImplicitSurface, render_mesh, to_mesh
-from clpde.surface.demo import (
-    _write_png,
-    checker,
-    colour_pattern,
-    load_surface,
-    surface_noise,
-    tv_time,
-)
 
 
 def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):
@@ -35,7 +29,7 @@ def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):
 
 
 def save(path, panels):
-    _write_png(str(path), np.concatenate(panels, axis=1))
+    write_png(str(path), np.concatenate(panels, axis=1))
     print(f"wrote {path}")
 
 

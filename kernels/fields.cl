@@ -1,5 +1,6 @@
 // Ghost filling, index-list compaction and row-wise reductions for padded fields.
 #include "common.cl"
+#include "reduce.h"
 
 // Ghost columns left and right of every interior row. Neumann (mode 0) mirrors the field
 // about the border face, so the normal difference across it is zero; Dirichlet (mode 1)
@@ -74,20 +75,12 @@ __kernel void write_chunks(__global const uchar* restrict mask, const int n, con
 }
 
 // ---- reductions: one partial per interior row, combined on the host at check time ------
-#define MAX_SEL(p, q) ((q) > (p) ? (q) : (p))
-#define MIN_SEL(p, q) ((q) < (p) ? (q) : (p))
 // op 0: sum a, 1: sum a^2, 2: max |a - b|, 3: sum (a - b)^2, 4: max |a|, 5: min a, 6: max a
 __kernel void row_reduce(__global const REAL* restrict a, __global const REAL* restrict b,
                          const int op, __global REAL* restrict partial, GRID_ARGS)
 {
-#ifdef CLPDE_POCL
-    // Let the sums be reordered, or their fixed order keeps PoCL's loops scalar; maxima and
-    // minima use plain selects (fmax/fmin/fabs, even a select for |x|, keep them scalar).
-#pragma clang fp reassociate(on)
-#endif
-    const int y = get_global_id(1);
-    if (y >= ny) return;
-    const int row = get_global_id(2) * plane + (y + G) * sx + G;
+    REASSOCIATE_SUMS  // maxima and minima below: MAX_SEL / MIN_SEL (reduce.h)
+    ROW_OF_ITEM(y, row);
     REAL acc = (op == 5) ? INFINITY : ((op == 6) ? -INFINITY : 0);
     // One loop per operation: a switch inside the loop would keep it scalar.
     __global const REAL* ra = a + row;

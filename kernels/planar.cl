@@ -2,6 +2,8 @@
 // Each step reads `u` and writes every interior cell of `v` and its mirror-image ghosts
 // (Neumann borders, MIRROR_GHOSTS), so the host only swaps the two before the next step.
 #include "common.cl"
+#include "reduce.h"
+#include "stencil.h"
 
 // Heat flow u_t = Lap u (thesis eq. 4.1), five-point Laplacian. Stable for dt <= 1/4.
 __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict v,
@@ -39,34 +41,13 @@ __kernel void perona_malik_step(__global const REAL* restrict u, __global REAL* 
     MIRROR_GHOSTS(v);
 }
 
-// Total-variation flux d / |grad u|_eps across one cell face, given the normal difference d
-// (exact on the face) and the tangential one t (average of the two central differences
-// beside the face); |.|_eps = sqrt(|.|^2 + eps^2).
-inline REAL tv_flux(const REAL d, const REAL t, const REAL eps2)
-{
-    return d * RSQRT(d * d + t * t + eps2);
-}
-
-// div(grad u / |grad u|_eps) at cell i as a difference of face fluxes: conservative, so
-// mass is kept with Neumann borders (mirrored ghosts give zero flux across border faces).
-// The 3x3 neighbourhood is loaded once into registers.
-#define TV_NEIGHBOURHOOD(u, i)                                                       \
-    const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];   \
-    const REAL ne = u[i + 1 + sx], nw = u[i - 1 + sx];                               \
-    const REAL se = u[i + 1 - sx], sw = u[i - 1 - sx]
-#define TV_FLUX_E tv_flux(e - c, (REAL)0.25 * (n + ne - s - se), eps2)
-#define TV_FLUX_W tv_flux(c - w, (REAL)0.25 * (n + nw - s - sw), eps2)
-#define TV_FLUX_N tv_flux(n - c, (REAL)0.25 * (e + ne - w - nw), eps2)
-#define TV_FLUX_S tv_flux(c - s, (REAL)0.25 * (e + se - w - sw), eps2)
-#define TV_DIV (TV_FLUX_E - TV_FLUX_W + TV_FLUX_N - TV_FLUX_S)
-
 // Anisotropic (total variation) flow u_t = div(grad u / |grad u|_eps) (thesis eq. 4.9).
 // Every face coefficient is at most 1/eps, so dt <= eps/4 is stable.
 __kernel void tv_step(__global const REAL* restrict u, __global REAL* restrict v,
                       const REAL dt, const REAL eps2, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
-        TV_NEIGHBOURHOOD(u, i);
+        NEIGHBOURS_3X3(u, i);
         v[i] = c + dt * TV_DIV;
     }
     MIRROR_GHOSTS(v);
@@ -81,7 +62,7 @@ __kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict 
 {
     const REAL lam = lambda[get_global_id(2)];
     FOR_EACH_CELL(i) {
-        TV_NEIGHBOURHOOD(u, i);
+        NEIGHBOURS_3X3(u, i);
         v[i] = c + dt * (TV_DIV - lam * (c - u0[i]));
     }
     MIRROR_GHOSTS(v);
@@ -95,18 +76,13 @@ __kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict 
 __kernel void rof_lambda_rows(__global const REAL* restrict u, __global const REAL* restrict u0,
                               __global REAL* restrict partial, const REAL eps2, GRID_ARGS)
 {
-#ifdef CLPDE_POCL
-    // Let the row sum be reordered, or its fixed order keeps the loop scalar (PoCL).
-#pragma clang fp reassociate(on)
-#endif
-    const int y = get_global_id(1);
-    if (y >= ny) return;
-    const int row = get_global_id(2) * plane + (y + G) * sx + G;
+    REASSOCIATE_SUMS
+    ROW_OF_ITEM(y, row);
     REAL acc = 0;
     for (int i = row; i < row + nx; ++i) {
         const REAL wx = (u[i + 1] - u0[i + 1]) - (u[i] - u0[i]);
         const REAL wy = (u[i + sx] - u0[i + sx]) - (u[i] - u0[i]);
-        TV_NEIGHBOURHOOD(u, i);
+        NEIGHBOURS_3X3(u, i);
         acc += TV_FLUX_E * wx + TV_FLUX_N * wy;
     }
     partial[get_global_id(2) * ny + y] = acc;
@@ -118,26 +94,15 @@ __kernel void rof_lambda_finish(__global const REAL* restrict partial,
                                 const REAL inv_n_sigma2)
 {
     const int c = get_global_id(0);
-    REAL acc = 0;
-    for (int y = 0; y < ny; ++y) acc += partial[c * ny + y];
-    lambda[c] = fmax((REAL)0, -acc * inv_n_sigma2);
+    lambda[c] = fmax((REAL)0, -sum_rows(partial + c * ny, ny) * inv_n_sigma2);
 }
 
 // Curvature diffusion u_t = g kappa |grad u| (thesis eq. 3.4), central differences as in
-// appendix A:  kappa |grad u| = (uxx uy^2 - 2 ux uy uxy + uyy ux^2) / (ux^2 + uy^2 + eps).
-// With HAS_WEIGHT, `g` is a one-channel weight field on the same padded plane.
+// appendix A (curvature_speed, stencil.h). With HAS_WEIGHT, `g` is a one-channel weight
+// field on the same padded plane.
 #ifndef HAS_WEIGHT
 #define HAS_WEIGHT 0
 #endif
-inline REAL curvature_speed(__global const REAL* u, const int i, const int sx, const REAL eps)
-{
-    const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
-    const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
-    const REAL uxx = u[i + 1] - 2 * u[i] + u[i - 1];
-    const REAL uyy = u[i + sx] - 2 * u[i] + u[i - sx];
-    const REAL uxy = (REAL)0.25 * (u[i + 1 + sx] - u[i - 1 + sx] - u[i + 1 - sx] + u[i - 1 - sx]);
-    return (uxx * uy * uy - 2 * ux * uy * uxy + uyy * ux * ux) / (ux * ux + uy * uy + eps);
-}
 
 __kernel void curvature_step(__global const REAL* restrict u, __global REAL* restrict v,
                              __global const REAL* restrict g, const REAL dt, const REAL eps,
@@ -146,11 +111,12 @@ __kernel void curvature_step(__global const REAL* restrict u, __global REAL* res
     const int chan = get_global_id(2) * plane;
     FOR_EACH_CELL(i) {
 #if HAS_WEIGHT
-        const REAL w = g[i - chan];
+        const REAL weight = g[i - chan];
 #else
-        const REAL w = 1;
+        const REAL weight = 1;
 #endif
-        v[i] = u[i] + dt * w * curvature_speed(u, i, sx, eps);
+        NEIGHBOURS_3X3(u, i);
+        v[i] = c + dt * weight * curvature_speed(c, e, w, n, s, ne, nw, se, sw, eps);
     }
     MIRROR_GHOSTS(v);
 }

@@ -22,6 +22,7 @@
 // computed itself (one small epilogue per row), which saves four ghost-fill launches per
 // iteration; on PoCL a launch costs tens of microseconds, as much as a small image's step.
 #include "common.cl"
+#include "reduce.h"
 
 // The extrapolated dual point q = p + beta (p - p_old), formed on the fly from the last two
 // iterates rather than stored: reading two iterates of p costs the same as storing q and
@@ -82,16 +83,10 @@ __kernel void rof_dual_rows(__global const REAL* restrict p, __global const REAL
                             __global const REAL* restrict lambda, __global REAL* restrict u,
                             __global REAL* restrict partial, GRID_ARGS)
 {
-#ifdef CLPDE_POCL
-    // Let the sums below be reordered: otherwise their fixed order keeps the compiler from
-    // vectorising the loop (PoCL, whose clang knows this pragma; about 3x slower).
-#pragma clang fp reassociate(on)
-#endif
-    const int y = get_global_id(1);
-    if (y >= ny) return;
+    REASSOCIATE_SUMS
+    ROW_OF_ITEM(y, row);
     const int c = get_global_id(2);
     const REAL inv_lam = (REAL)1 / lambda[c];
-    const int row = c * plane + (y + G) * sx + G;
     REAL sum_dd = 0, sum_du = 0, sum_uu = 0;
     for (int i = row; i < row + nx; ++i) {
         const REAL d = p[2 * i] - p[2 * (i - 1)] + p[2 * i + 1] - p[2 * (i - sx) + 1];
@@ -120,7 +115,5 @@ __kernel void rof_dual_lambda(__global const REAL* restrict partial,
 {
     const int c = get_global_id(0);
     if (inv_n_sigma2[c] == 0) return;
-    REAL sum_dd = 0;
-    for (int y = 0; y < ny; ++y) sum_dd += partial[c * 3 * ny + y];
-    lambda[c] = fmax(lam_min, sum_dd * inv_n_sigma2[c] / lambda[c]);
+    lambda[c] = fmax(lam_min, sum_rows(partial + c * 3 * ny, ny) * inv_n_sigma2[c] / lambda[c]);
 }

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import clpde
-from clpde import inpaint_demo
+from clpde.cli import _inpaint_demo as inpaint_demo
 from clpde.cli import main
 from clpde.io import read_image, write_image
 
@@ -74,8 +74,8 @@ def test_errors_write_nothing(tmp_path, damaged, capsys, args, match):
 
 def test_demo_writes_the_pictures(tmp_path, monkeypatch):
     # The real demo inpaints a 512x512 photo; a corner of it keeps the test fast.
-    full = inpaint_demo.demo_case
-    monkeypatch.setattr(inpaint_demo, "demo_case", lambda: tuple(a[:96, :96] for a in full()))
+    full = inpaint_demo.damaged_astronaut
+    monkeypatch.setattr(inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full()))
     out = tmp_path / "demo"
     assert main(["inpaint", "--demo", "-o", str(out)]) == 0
     names = sorted(os.listdir(out))
@@ -104,8 +104,8 @@ def test_method_and_soft_mask(tmp_path, damaged, capsys):
 
 def test_demo_puts_its_psnr_beside_the_peers(tmp_path, monkeypatch, capsys):
     """Issue 11: the demo's PSNR had nothing to compare it with."""
-    full = inpaint_demo.demo_case
-    monkeypatch.setattr(inpaint_demo, "demo_case", lambda: tuple(a[:96, :96] for a in full()))
+    full = inpaint_demo.damaged_astronaut
+    monkeypatch.setattr(inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full()))
     assert main(["inpaint", "--demo", "-o", str(tmp_path / "demo")]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert "PSNR inside the mask" in line and "scikit-image biharmonic" in line

@@ -64,6 +64,9 @@ def main(argv=None) -> int:
         return exc.code if isinstance(exc.code, int) else ERROR_STATUS
     try:
         with warnings.catch_warnings():
+            # Deprecations speak to Python code, not to the command line's user (Python
+            # hides them outside __main__ too).
+            warnings.simplefilter("ignore", DeprecationWarning)
             warnings.showwarning = _show_warning
             return args.run(args)
     except (ClpdeError, OSError, cl.Error) as exc:

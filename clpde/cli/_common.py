@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._progress import on_terminal as show_progress  # noqa: F401  (the subcommands' name)
 from ..imagedata import InputError
 from ..io import (
     check_not_overwriting_input,
@@ -85,11 +86,6 @@ def grid_advice(resolution: int):
                           f"give a larger --resolution (such as {2 * resolution}, which halves "
                           "the spacing)", text)
         warnings.warn(text, w.category, stacklevel=3)
-
-
-def show_progress() -> bool:
-    """Progress bars go to stderr, so only draw them when stderr is a terminal."""
-    return sys.stderr.isatty()
 
 
 def load_input(args, *extra_inputs, allow_nan: bool = False) -> np.ndarray:

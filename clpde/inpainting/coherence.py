@@ -33,7 +33,6 @@ weight's exact form is worth checking against it.
 from __future__ import annotations
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 

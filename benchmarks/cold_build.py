@@ -1,0 +1,88 @@
+"""Cold build of a first diffuse + denoise_tv call: the OpenCL programs it builds and the
+time it takes, each run in a fresh process with an empty PoCL kernel cache.
+
+A run imports clpde, then times clpde.diffuse (heat, 2 steps) and clpde.denoise_tv (sigma
+0.1) on a 64 x 64 float32 image: the program builds (Runtime._build, timed by wrapping it)
+and the whole first calls, in wall and in CPU seconds (CPU time is the steadier figure on a
+shared machine; PoCL compiles in the calling process). With --other PATH the same runs are
+made with PYTHONPATH=PATH as well, alternating with this checkout's, so that both meet the
+same load: `--other /path/to/main` compares a branch with main.
+
+    python benchmarks/cold_build.py [--runs 5] [--device cpu] [--other PATH] [--json PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+ONE_RUN = r"""
+import json, sys, time
+import numpy as np
+import clpde
+from clpde import runtime
+
+built = []
+build = runtime.Runtime._build
+def timed(self, filename, dtype, defines):
+    start = time.perf_counter()
+    program = build(self, filename, dtype, defines)
+    built.append([filename, np.dtype(dtype).name, dict(defines), time.perf_counter() - start])
+    return program
+runtime.Runtime._build = timed
+image = np.random.default_rng(0).random((64, 64)).astype(np.float32)
+wall, cpu = time.perf_counter(), time.process_time()
+clpde.diffuse(image, "heat", steps=2, device=sys.argv[1])
+clpde.denoise_tv(image, sigma=0.1, device=sys.argv[1])
+print(json.dumps({"programs": built, "wall": time.perf_counter() - wall,
+                  "cpu": time.process_time() - cpu}))
+"""
+
+
+def one_run(pythonpath: Path, device: str) -> dict:
+    with tempfile.TemporaryDirectory(prefix="clpde-cold-") as cache:
+        env = dict(os.environ, POCL_CACHE_DIR=cache, PYTHONPATH=str(pythonpath))
+        out = subprocess.run([sys.executable, "-c", ONE_RUN, device], env=env, cwd=cache,
+                             capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--device", default="cpu")
+    parser.add_argument("--other", type=Path, default=None,
+                        help="another checkout to time alternately (e.g. main's)")
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args()
+    trees = {"this checkout": ROOT} | ({"other": args.other} if args.other else {})
+    runs = {name: [] for name in trees}
+    for _ in range(args.runs):
+        for name, path in trees.items():
+            runs[name].append(one_run(path, args.device))
+    print(f"{'tree':14s} {'programs built':40s} {'build s':>8s} {'first calls s':>14s} "
+          f"{'CPU s':>6s}   (medians of {args.runs} cold runs)")
+    summary = {}
+    for name, results in runs.items():
+        programs = ", ".join(p[0] for p in results[0]["programs"])
+        build = statistics.median(sum(p[3] for p in r["programs"]) for r in results)
+        wall = statistics.median(r["wall"] for r in results)
+        cpu = statistics.median(r["cpu"] for r in results)
+        summary[name] = {"path": str(trees[name]), "programs": programs, "build_s": build,
+                         "first_calls_s": wall, "cpu_s": cpu, "runs": results}
+        print(f"{name:14s} {programs:40s} {build:8.3f} {wall:14.3f} {cpu:6.3f}")
+    if args.json:
+        args.json.write_text(json.dumps(summary, indent=1))
+        print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,40 @@
+"""When clpde draws a progress bar: the one policy of the library and the command line.
+
+``progress=True`` always draws one, ``False`` never, and ``None`` (the default) decides:
+only on a terminal (bars go to stderr), and, where the caller says how long the run is,
+only for a long one.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from tqdm.auto import tqdm
+
+# The automatic bar of a grid flow waits for runs of more cell updates than this (seconds of
+# work on a GPU): shorter ones would only flash a bar, and reading it costs a queue wait.
+LONG_RUN_CELL_UPDATES = 2e9
+
+
+def is_long_run(steps: int, cells: int) -> bool:
+    """Whether `steps` steps over `cells` cells make a run long enough for an automatic bar."""
+    return steps * cells > LONG_RUN_CELL_UPDATES
+
+
+def on_terminal() -> bool:
+    """Whether stderr, where the bars go, is a terminal (the command line's `progress`)."""
+    return sys.stderr.isatty()
+
+
+def bar_disabled(progress: bool | None, long_run: bool = True) -> bool | None:
+    """tqdm's ``disable=`` for a `progress` argument; None lets tqdm hide the bar when
+    stderr is not a terminal."""
+    if progress is None:
+        return None if long_run else True
+    return not progress
+
+
+def progress_bar(progress: bool | None, total: int, desc: str, *, long_run: bool = True,
+                 **options) -> tqdm:
+    """A tqdm bar over `total` units, drawn by the policy of `bar_disabled`."""
+    return tqdm(total=total, desc=desc, disable=bar_disabled(progress, long_run), **options)
