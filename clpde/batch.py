@@ -280,6 +280,15 @@ def options_argv(options: dict) -> list[str]:
     return argv
 
 
+def _command_options(command, argv, options, flow):
+    """(argv, flow): the command's flags; `flow` is surface's positional FLOW and diffuse's
+    --flow."""
+    argv = list(argv or []) + options_argv(options)
+    if flow is not None and command != "surface":
+        return ["--flow", str(flow), *argv], None
+    return argv, flow
+
+
 def _plan(command, inputs, outdir: Path, mask, masks, argv, flow, tile) -> list[dict]:
     if command not in COMMANDS:
         raise InputError(f"unknown batch command {command!r}; choose one of {', '.join(COMMANDS)}")
@@ -305,7 +314,7 @@ def _plan(command, inputs, outdir: Path, mask, masks, argv, flow, tile) -> list[
     specs, names = [], {}
     for item in inputs:
         source = Path(item)
-        name = source.stem if command in FOLDER_OUTPUTS else source.name
+        (name,) = _output_names(command, [source])
         if not name or name == MANIFEST:
             raise InputError(f"input {source} gives no usable output name")
         if name in names:
@@ -331,10 +340,17 @@ def _plan(command, inputs, outdir: Path, mask, masks, argv, flow, tile) -> list[
     return specs
 
 
+def _output_names(command, inputs) -> list[str]:
+    return [Path(p).stem if command in FOLDER_OUTPUTS else Path(p).name for p in inputs]
+
+
 def _fingerprint(spec: dict) -> dict:
     """What makes an output what it is: the inputs' contents and the command line."""
+    digest = _hash_path(spec["input"])
+    if digest is None and spec["command"] == "surface":  # a shape name (sphere, torus...)
+        digest = hashlib.sha256(f"shape:{spec['input']}".encode()).hexdigest()
     return {"command": spec["command"], "argv": spec["argv"], "flow": spec["flow"],
-            "tile": spec["tile"], "input_sha256": _hash_path(spec["input"]),
+            "tile": spec["tile"], "input_sha256": digest,
             "mask_sha256": None if spec["mask"] is None else _hash_path(spec["mask"])}
 
 
@@ -525,6 +541,8 @@ class BatchFutures:
             raise
         finally:
             bar.close()
+        # A worker killed while writing leaves its temporary file; its task ran again elsewhere.
+        _sweep_temporaries(self._outdir, [s["name"] for s in self.specs])
         ordered = [results[i] for i in range(len(self.specs))]
         return BatchResult(ordered, seconds=time.perf_counter() - self._start)
 
@@ -543,7 +561,7 @@ def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=N
     and .results() to wait). The arguments are those of batch()."""
     start = time.perf_counter()
     outdir = Path(output_dir)
-    argv = list(argv or []) + options_argv(options)
+    argv, flow = _command_options(command, argv, options, flow)
     specs = _plan(command, list(inputs), outdir, mask, masks, argv, flow, tile)
     outdir.mkdir(parents=True, exist_ok=True)
     _sweep_temporaries(outdir, [s["name"] for s in specs])
@@ -593,15 +611,22 @@ def batch(command, inputs, output_dir, *, mask=None, masks=None, workers=None, t
     inputs = list(inputs)
     # Bad options fail here, before a cluster is started.
     _plan(command, inputs, Path(output_dir), mask, masks,
-          list(argv or []) + options_argv(options), flow, tile)
+          *_command_options(command, argv, options, flow), tile)
     device = options.get("device")
     if argv and "--device" in argv[:-1]:
         device = argv[argv.index("--device") + 1]
-    with connect(workers, scheduler, client, threads, device=device,
-                 tasks=len(inputs)) as (live, info):
-        run = submit(command, inputs, output_dir, client=live, mask=mask, masks=masks,
-                     flow=flow, tile=tile, force=force, argv=argv, **options)
-        result = run.results(progress)
+    try:
+        with connect(workers, scheduler, client, threads, device=device,
+                     tasks=len(inputs)) as (live, info):
+            run = submit(command, inputs, output_dir, client=live, mask=mask, masks=masks,
+                         flow=flow, tile=tile, force=force, argv=argv, **options)
+            result = run.results(progress)
+    except BaseException:
+        # Ctrl-C or a lost scheduler: the cluster started here is gone by now, so the
+        # temporary files of the tasks it was running can go too; complete outputs stay.
+        if Path(output_dir).is_dir():
+            _sweep_temporaries(Path(output_dir), _output_names(command, inputs))
+        raise
     result.cluster_seconds = info.get("seconds", 0.0)
     result.workers, result.threads = info["workers"], info["threads"]
     return result

@@ -60,16 +60,10 @@ def run_batch(args) -> int:
     from ..batch import batch, result_table
 
     argv = list(getattr(args, "extra", []))
-    flow = None
-    if args.flow is not None:
-        if args.batch_command == "surface":
-            flow = args.flow
-        else:
-            argv = ["--flow", args.flow, *argv]
     try:
         result = batch(args.batch_command, args.inputs, args.output, mask=args.mask,
                        masks=args.masks, workers=args.workers, threads=args.threads,
-                       scheduler=args.scheduler, flow=flow, tile=args.tile, force=args.force,
+                       scheduler=args.scheduler, flow=args.flow, tile=args.tile, force=args.force,
                        argv=argv)
     except KeyboardInterrupt:
         print(f"clpde batch: interrupted; {args.output} holds complete outputs only (a rerun "
