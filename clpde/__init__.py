@@ -1,6 +1,7 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
 from . import surface  # clpde.surface.ImplicitSurface and the chapter-4 flows
+from .batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, denoise_tv, diffuse, stability_limit
@@ -19,6 +20,7 @@ __all__ = [
     "MorphingTracker",
     "NoDeviceError",
     "PlanarFlow",
+    "batch",
     "denoise_tv",
     "devices",
     "diffuse",

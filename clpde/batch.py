@@ -407,7 +407,7 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
     from distributed import LocalCluster, Nanny, Scheduler, SpecCluster
 
     gpus = _gpu_indices(device) if gpus is None and workers is None and threads is None else gpus
-    common = {"nthreads": 1, "silence_logs": 40}
+    common = {"nthreads": 1, "silence_logs": 50}
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn",
                           "distributed.worker.daemon": False}):
         if gpus:
@@ -416,12 +416,12 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
                 "env": {"CLPDE_DEVICE": str(i), "POCL_MAX_PTHREAD_COUNT": "1"}}} for i in gpus}
             cluster = SpecCluster(
                 workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard_address": None}},
-                silence_logs=40)
+                silence_logs=50)
             return cluster, len(gpus), None
         workers, threads = plan_workers(workers, threads, tasks)
         env = {"POCL_MAX_PTHREAD_COUNT": str(threads), "OMP_NUM_THREADS": "1"}
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=40, env=env)
+                               dashboard_address=None, silence_logs=50, env=env)
         return cluster, workers, threads
 
 

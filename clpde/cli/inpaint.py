@@ -9,6 +9,7 @@ import numpy as np
 from ..imagedata import InputError
 from ..io import check_not_overwriting_input, read_image
 from ..runtime import get_runtime
+from ..video import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 from ._common import add_device_argument, load_input, save_output, show_progress, split_alpha
 
 
@@ -48,6 +49,7 @@ def add_inpaint_parser(subparsers) -> None:
     parser.add_argument("--levels", type=int, default=None,
                         help="multiresolution levels (default: chosen from the mask)")
     add_device_argument(parser)
+    add_sequence_arguments(parser)  # a video or an image folder: clpde/video.py
     parser.set_defaults(run=run_inpaint)
 
 
@@ -66,6 +68,8 @@ def run_inpaint(args) -> int:
     from ..inpaint import inpaint
     from ..io import write_gif
 
+    if prepare_sequence_args(args):  # a film or a folder of frames, over Dask workers
+        return run_sequence_inpaint(args)
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
     if args.demo:
