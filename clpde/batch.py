@@ -202,6 +202,17 @@ def _umask() -> int:
     return mask
 
 
+def dask_setup(worker) -> None:
+    """Worker preload (``preload=["clpde.batch"]``, ``dask worker --preload clpde.batch``):
+    Ctrl-C in a terminal reaches every process of the group, but only the client should
+    act on it: it cancels the batch and stops the workers it started, whose temporary
+    files it then removes."""
+    import signal
+
+    with contextlib.suppress(ValueError):  # not the main thread: nothing to do
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 # ---- hashes and the manifest ------------------------------------------------------------------
 def _hash_path(path) -> str | None:
     """sha256 of a file, or of a folder's files (names and contents, sorted); None if absent."""
@@ -407,7 +418,7 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
     from distributed import LocalCluster, Nanny, Scheduler, SpecCluster
 
     gpus = _gpu_indices(device) if gpus is None and workers is None and threads is None else gpus
-    common = {"nthreads": 1, "silence_logs": 50}
+    common = {"nthreads": 1, "silence_logs": 50, "preload": ["clpde.batch"]}
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn",
                           "distributed.worker.daemon": False}):
         if gpus:
@@ -421,7 +432,8 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
         workers, threads = plan_workers(workers, threads, tasks)
         env = {"POCL_MAX_PTHREAD_COUNT": str(threads), "OMP_NUM_THREADS": "1"}
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=50, env=env)
+                               dashboard_address=None, silence_logs=50, env=env,
+                               preload=["clpde.batch"])
         return cluster, workers, threads
 
 

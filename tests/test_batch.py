@@ -262,3 +262,41 @@ def test_batch_tile_option_gives_the_untiled_result(client, photos, tmp_path):
         assert np.array_equal(read_image(out / p.name), clpde.diffuse(image, steps=8, channel_axis=axis))
     with pytest.raises(clpde.InputError, match="--tile"):
         batch("inpaint", paths[:1], out, client=client, mask=paths[0], tile=True)
+
+
+def test_ctrl_c_leaves_complete_outputs_only(client, tmp_path):
+    import subprocess
+    import sys
+
+    yy, xx = np.mgrid[0:96, 0:96]
+    inputs = []
+    for k in range(8):
+        inputs.append(tmp_path / f"b{k}.png")
+        write_image(inputs[-1], (120 + 60 * np.sin(xx / (4 + k)) * np.cos(yy / 7)).astype(np.uint8))
+    mask = tmp_path / "mask.png"
+    write_image(mask, ((np.abs(yy - 48) < 3) * 255).astype(np.uint8))
+    out = tmp_path / "out"
+    slow = ["--max-steps", "4000", "--tol", "0", "--mean-tol", "0"]
+    command = [sys.executable, "-m", "clpde", "batch", "inpaint", *map(str, inputs), "-o", str(out),
+               "--mask", str(mask), "--workers", "2", "--threads", "1", *slow]
+    # A terminal's Ctrl-C: SIGINT to the whole process group, client and workers alike.
+    proc = subprocess.Popen(command, start_new_session=True, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 90
+    while not (out / MANIFEST).exists() and time.monotonic() < deadline:  # one recorded
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "complete outputs only" in err
+    written = sorted(p.name for p in out.iterdir())
+    assert not [n for n in written if n.startswith(".")]  # no temporary files
+    images = [n for n in written if n.endswith(".png")]
+    assert 1 <= len(images) < 8
+    for name in images:
+        read_image(out / name)  # complete files
+    # The rerun keeps what was recorded complete and does the rest (an output written but
+    # not yet recorded when the batch stopped is redone).
+    rerun = batch("inpaint", inputs, out, mask=mask, client=client,
+                  argv=["--max-steps", "4000", "--tol", "0", "--mean-tol", "0"])
+    assert rerun.ok and len(rerun.done) + len(rerun.skipped) == 8 and rerun.skipped
