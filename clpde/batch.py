@@ -30,6 +30,7 @@ import hashlib
 import io
 import json
 import os
+import platform
 import shutil
 import sys
 import tempfile
@@ -45,6 +46,7 @@ FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by i
 MASKED = ("inpaint", "track")  # commands that take a mask per input (track: --init)
 TILED = ("diffuse", "denoise")
 MANIFEST = "clpde-manifest.json"
+MANIFEST_EVERY_S = 1.0
 
 
 # ---- results ------------------------------------------------------------------------------
@@ -142,7 +144,7 @@ def run_task(spec: dict) -> dict:
     dying worker makes the scheduler run the task again, elsewhere.
     """
     start = time.perf_counter()
-    record = {"worker": f"{os.uname().nodename}:{os.getpid()}"}
+    record = {"worker": f"{platform.node()}:{os.getpid()}"}
     try:
         output = spec["output"]
         if spec["mask_error"]:
@@ -164,9 +166,11 @@ def run_task(spec: dict) -> dict:
 def _run_to_file(spec: dict, output: str) -> None:
     args = _parse(spec["command"], _command_argv(spec, output))
     if spec["command"] in TILED:
-        from .tiled import run_tiled_command
+        from .tiled import may_exceed_device, run_tiled_command
 
-        if run_tiled_command(args, force=spec["tile"]):
+        # The header is enough to rule tiling out; only then is the image read twice.
+        if (spec["tile"] or may_exceed_device(args.input, args.device)) and \
+                run_tiled_command(args, force=spec["tile"]):
             return
     status = args.run(args)
     if status:
@@ -399,8 +403,10 @@ def plan_workers(workers=None, threads=None, tasks=None) -> tuple[int, int]:
 
 def _gpu_indices(device) -> list[int]:
     """clpde's device indices of the GPUs, when the batch should use one worker per GPU."""
-    if device is not None and str(device).strip().lower() not in ("gpu",):
-        return []
+    if device is None:
+        device = os.environ.get("CLPDE_DEVICE") or None
+    if device is not None and str(device).strip().lower() != "gpu":
+        return []  # a device was chosen: every worker uses it
     try:
         from .runtime import _build_problem, devices
 
@@ -417,18 +423,23 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
     import dask
     from distributed import LocalCluster, Nanny, Scheduler, SpecCluster
 
-    gpus = _gpu_indices(device) if gpus is None and workers is None and threads is None else gpus
+    if gpus is None and threads is None:
+        gpus = _gpu_indices(device)
     common = {"nthreads": 1, "silence_logs": 50, "preload": ["clpde.batch"]}
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn",
                           "distributed.worker.daemon": False}):
         if gpus:
-            specs = {f"gpu{i}": {"cls": Nanny, "options": {
+            # One worker per GPU (or `workers` of them, spread round robin), each pinned
+            # through clpde's device choice before it loads OpenCL.
+            count = len(gpus) if workers is None else plan_workers(workers, 1)[0]
+            specs = {f"gpu{k}": {"cls": Nanny, "options": {
                 **common, "resources": {"GPU": 1},
-                "env": {"CLPDE_DEVICE": str(i), "POCL_MAX_PTHREAD_COUNT": "1"}}} for i in gpus}
+                "env": {"CLPDE_DEVICE": str(gpus[k % len(gpus)]), "POCL_MAX_PTHREAD_COUNT": "1"}}}
+                for k in range(count)}
             cluster = SpecCluster(
                 workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard_address": None}},
                 silence_logs=50)
-            return cluster, len(gpus), None
+            return cluster, count, None
         workers, threads = plan_workers(workers, threads, tasks)
         env = {"POCL_MAX_PTHREAD_COUNT": str(threads), "OMP_NUM_THREADS": "1"}
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
@@ -516,10 +527,10 @@ class BatchFutures:
     """A batch submitted to a cluster: its futures, and results() to wait for them, record
     them in the manifest and get the BatchResult."""
 
-    def __init__(self, client, specs, futures, prepared, manifest, outdir, start, log):
+    def __init__(self, client, specs, futures, prepared, manifest, outdir, start):
         self.client, self.specs, self.futures = client, specs, futures
         self._prepared, self._manifest, self._outdir = prepared, manifest, outdir
-        self._start, self._log = start, log
+        self._start = start
 
     def results(self, progress=None) -> BatchResult:
         from distributed import as_completed
@@ -527,6 +538,9 @@ class BatchFutures:
         results = dict(self._prepared)
         pending = {f.key: (i, f) for i, f in self.futures}
         bar = _Progress(len(self.specs), len(results), progress)
+        saved_at, unsaved = float("-inf"), 0  # the first output is recorded at once
+        workers = self.client.scheduler_info()["workers"].values()
+        slots = sum(w.get("nthreads", 1) for w in workers)  # tasks that can run at once
         try:
             for future in as_completed([f for _, f in self.futures], loop=self.client.loop):
                 index, _ = pending.pop(future.key)
@@ -544,27 +558,27 @@ class BatchFutures:
                         **spec["fingerprint"], "input": spec["input"], "mask": spec["mask"],
                         "output_sha256": record["output_sha256"],
                         "seconds": round(result.seconds, 4)}
-                    _write_manifest(self._outdir, self._manifest)
+                    unsaved += 1
+                    # Rewriting the whole manifest per output would make a large batch
+                    # quadratic: at most once a second, and at the end or on an interrupt.
+                    if time.monotonic() - saved_at >= MANIFEST_EVERY_S:
+                        _write_manifest(self._outdir, self._manifest)
+                        saved_at, unsaved = time.monotonic(), 0
                 else:
-                    self._log(f"clpde batch: {spec['input']} failed: {result.error}", bar)
-                bar.update(min(len(pending), self._slots()), result.status == "failed")
+                    bar.note(f"clpde batch: {spec['input']} failed: {result.error}")
+                bar.update(min(len(pending), slots), result.status == "failed")
         except BaseException:
             self.client.cancel([f for _, f in self.futures], force=True)
             raise
         finally:
+            if unsaved:
+                _write_manifest(self._outdir, self._manifest)
             bar.close()
         # A worker killed while writing leaves its temporary file; its task ran again elsewhere.
         _sweep_temporaries(self._outdir, [s["name"] for s in self.specs])
         ordered = [results[i] for i in range(len(self.specs))]
         return BatchResult(ordered, seconds=time.perf_counter() - self._start)
 
-    @functools.lru_cache(maxsize=1)  # noqa: B019  (one per batch; the client does not change)
-    def _slots(self) -> int:
-        return sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values())
-
-
-def _log_failure(line: str, bar: _Progress) -> None:
-    bar.note(line)
 
 
 def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=None,
@@ -592,7 +606,7 @@ def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=N
         key = f"clpde-{command}-{spec['name']}-{hashlib.sha1(os.urandom(8)).hexdigest()[:8]}"
         futures.append((index, client.submit(run_task, task, key=key, pure=False,
                                              resources=resources)))
-    return BatchFutures(client, specs, futures, prepared, manifest, outdir, start, _log_failure)
+    return BatchFutures(client, specs, futures, prepared, manifest, outdir, start)
 
 
 def batch(command, inputs, output_dir, *, mask=None, masks=None, workers=None, threads=None,

@@ -119,6 +119,28 @@ def exceeds_device(shape, channels: int, device=None, dtype=np.float32) -> bool:
     return nbytes > get_runtime(device).device.max_mem_alloc_size
 
 
+def may_exceed_device(path, device=None) -> bool:
+    """From the file's header only: whether the image at `path` could need tiling (True
+    when the header cannot tell)."""
+    from pathlib import Path
+
+    try:
+        if Path(path).suffix.lower() in (".tif", ".tiff"):
+            import tifffile
+
+            with tifffile.TiffFile(path) as tif:
+                shape = tif.pages[0].shape
+        else:
+            from PIL import Image
+
+            with Image.open(path) as im:
+                shape = (im.height, im.width, len(im.getbands()))
+    except Exception:  # noqa: BLE001  (unreadable: the command itself says why)
+        return False
+    channels = shape[2] if len(shape) > 2 else 1
+    return exceeds_device(shape, 2 * channels, device)
+
+
 def device_chunks(channels: int, depth: int, device=None, factor: int = 2) -> int:
     """A tile side whose padded tile (with its margins) needs at most a quarter of the
     device's largest allocation, in `factor` fields' worth."""

@@ -103,7 +103,9 @@ def iter_video(path):
         width, height = _stored_size(container, stream)
         try:
             for frame in container.decode(stream):
-                yield frame.to_ndarray(format="rgb24")[:height, :width]
+                # An array of its own: PyAV's shares the frame's buffer, and a batch of
+                # frames waits (and is sent) while the next ones are decoded.
+                yield np.array(frame.to_ndarray(format="rgb24")[:height, :width])
         except av.FFmpegError as exc:
             raise InputError(f"cannot decode {path}: {exc}") from None
 

@@ -300,3 +300,25 @@ def test_ctrl_c_leaves_complete_outputs_only(client, tmp_path):
     rerun = batch("inpaint", inputs, out, mask=mask, client=client,
                   argv=["--max-steps", "4000", "--tol", "0", "--mean-tol", "0"])
     assert rerun.ok and len(rerun.done) + len(rerun.skipped) == 8 and rerun.skipped
+
+
+def test_gpu_layout_pins_one_worker_per_device_and_asks_for_the_resource(photos, tmp_path):
+    """The GPU machines' cluster (one worker per device, CLPDE_DEVICE, resources GPU=1),
+    exercised here with the CPU device standing in for two GPUs."""
+    from distributed import Client
+
+    paths, _ = photos
+    index = clpde.get_runtime().index
+    cluster, workers, _ = start_cluster(gpus=[index, index])
+    try:
+        with Client(cluster, set_as_default=False) as c:
+            c.wait_for_workers(2, timeout=60)
+            assert set(c.run(lambda: os.environ["CLPDE_DEVICE"]).values()) == {str(index)}
+            info = c.scheduler_info()["workers"].values()
+            assert all(w["resources"] == {"GPU": 1} for w in info)
+            result = batch("diffuse", paths[:2], tmp_path / "out", client=c, steps=5)
+            assert result.ok and workers == 2
+    finally:
+        cluster.close()
+    image = read_image(paths[0])
+    assert np.array_equal(read_image(tmp_path / "out" / paths[0].name), clpde.diffuse(image, steps=5))
