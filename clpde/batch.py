@@ -426,18 +426,18 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
     if gpus is None and threads is None:
         gpus = _gpu_indices(device)
     common = {"nthreads": 1, "silence_logs": 50, "preload": ["clpde.batch"]}
-    with dask.config.set({"distributed.worker.multiprocessing-method": "spawn",
-                          "distributed.worker.daemon": False}):
+    with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
         if gpus:
             # One worker per GPU (or `workers` of them, spread round robin), each pinned
             # through clpde's device choice before it loads OpenCL.
             count = len(gpus) if workers is None else plan_workers(workers, 1)[0]
             specs = {f"gpu{k}": {"cls": Nanny, "options": {
-                **common, "resources": {"GPU": 1},
+                **common, "resources": {"GPU": 1}, "host": "127.0.0.1", "dashboard": False,
                 "env": {"CLPDE_DEVICE": str(gpus[k % len(gpus)]), "POCL_MAX_PTHREAD_COUNT": "1"}}}
                 for k in range(count)}
             cluster = SpecCluster(
-                workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard_address": None}},
+                workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard": False,
+                                                                      "host": "127.0.0.1"}},
                 silence_logs=50)
             return cluster, count, None
         workers, threads = plan_workers(workers, threads, tasks)
