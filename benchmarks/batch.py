@@ -1,6 +1,6 @@
 """clpde batch and film restoration against a serial Python loop, in one run.
 
-    python benchmarks/batch.py [--photos 100] [--frames 120] [--json PATH]
+    python benchmarks/batch.py [--photos 100] [--frames 120] [--repeat 2] [--json PATH]
 
 Workloads (each with one fixed scratch mask: three slanted 2-pixel lines and a vertical one):
 
@@ -198,7 +198,7 @@ def main():
     parser.add_argument("--frames", type=int, default=120)
     parser.add_argument("--max-steps", type=int, default=3000)
     parser.add_argument("--repeat", type=int, default=1,
-                        help="runs of each configuration, interleaved; the fastest is kept")
+                        help="runs of each configuration, one after the other; the fastest is kept")
     parser.add_argument("--json", type=Path, default=RESULTS)
     args = parser.parse_args()
 

@@ -241,10 +241,9 @@ class _Sequence:
             for p in self.files:
                 yield read_image(p)
 
-    def names(self, count: int) -> list[str]:
-        if self.files is not None:
-            return [p.name for p in self.files]
-        return [f"frame_{t:05d}.png" for t in range(count)]
+    def name(self, t: int) -> str:
+        """The file name of frame t in an output folder: the input's, or frame_00000.png..."""
+        return self.files[t].name if self.files is not None else f"frame_{t:05d}.png"
 
 
 def _masks_for(mask, count_hint: int):
@@ -324,9 +323,8 @@ def inpaint_sequence(source, mask, output, *, workers=None, threads=None, schedu
     try:
         with connect(workers, scheduler, client, threads, device=options.get("device"),
                      tasks=max(1, sequence.count // frames_per_task)) as (live, info):
-            names = sequence.names(sequence.count)
-            written = _pipeline(live, info, sequence, mask_of, names, writer, output,
-                                frames_per_task, options, progress, _read_inpaint_mask)
+            written = _pipeline(live, sequence, mask_of, writer, output, frames_per_task,
+                                options, progress, _read_inpaint_mask)
         if writer is not None:
             writer.close()
     except BaseException:
@@ -337,8 +335,8 @@ def inpaint_sequence(source, mask, output, *, workers=None, threads=None, schedu
                          info.get("seconds", 0.0), info["workers"])
 
 
-def _pipeline(client, info, sequence, mask_of, names, writer, output, per_task, options,
-              progress, read_mask) -> int:
+def _pipeline(client, sequence, mask_of, writer, output, per_task, options, progress,
+              read_mask) -> int:
     """Read, send in batches, and write in order, with a bounded number of batches in
     flight (memory stays proportional to the workers, not to the film)."""
     from tqdm.auto import tqdm
@@ -360,7 +358,8 @@ def _pipeline(client, info, sequence, mask_of, names, writer, output, per_task, 
             path = mask_of(first + k)
             key = (path, frame.shape[:2])
             if key not in mask_cache:
-                mask_cache.clear() if len(mask_cache) > 8 else None
+                if len(mask_cache) > 8:  # per-frame masks: keep only the latest few
+                    mask_cache.clear()
                 mask_cache[key] = read_mask(path, frame.shape[:2])
             out.append(mask_cache[key])
         return out
@@ -372,7 +371,7 @@ def _pipeline(client, info, sequence, mask_of, names, writer, output, per_task, 
                 if writer is not None:
                     writer.write(frame)
                 else:
-                    write_image(output / names[written], frame)
+                    write_image(output / sequence.name(written), frame)
                 written += 1
                 bar.update(1)
 
@@ -400,8 +399,8 @@ def _pipeline(client, info, sequence, mask_of, names, writer, output, per_task, 
         raise
     finally:
         bar.close()
-    if sequence.files is not None and written != len(names):
-        raise InputError(f"read {written} of {len(names)} frames")
+    if sequence.files is not None and written != len(sequence.files):
+        raise InputError(f"read {written} of {len(sequence.files)} frames")
     return written
 
 
