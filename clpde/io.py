@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -41,6 +42,8 @@ def read_image(path) -> np.ndarray:
     if not path.is_file():
         raise InputError(f"input {path} is not a file")
     kind = image_format(path)
+    if path.stat().st_size == 0:
+        raise InputError(f"input file {path} is empty (0 bytes); give an image file")
     try:
         if kind == "TIFF":
             import tifffile
@@ -49,13 +52,32 @@ def read_image(path) -> np.ndarray:
         else:
             import imageio.v3 as iio
 
-            image = iio.imread(path, plugin="pillow", extension=path.suffix.lower())
+            with _no_pixel_limit():
+                image = iio.imread(path, plugin="pillow", extension=path.suffix.lower())
+    except MemoryError:
+        raise InputError(f"{path} is too large to read into this computer's memory; crop or "
+                         "downscale it first") from None
     except Exception as exc:  # noqa: BLE001  (readers raise many types: all mean unreadable)
         detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise InputError(
             f"cannot read {path} as a {kind} image (damaged, or another format?): {detail}"
         ) from None
     return np.asarray(image)
+
+
+@contextlib.contextmanager
+def _no_pixel_limit():
+    """Lift Pillow's decompression-bomb limit (about 179 million pixels) while reading: it
+    guards servers against untrusted uploads, while clpde reads the local files its user
+    names, such as a 20000x20000 scan."""
+    from PIL import Image
+
+    limit = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None
+    try:
+        yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
 
 
 def check_writable(path, dtype, shape) -> None:
@@ -71,9 +93,10 @@ def check_writable(path, dtype, shape) -> None:
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
+        png = dtype in (np.dtype(np.uint8), np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
-            "channel(s); write a .png or .tif file instead"
+            f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
         )
     if kind == "PNG":
         if dtype not in (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(bool)):
@@ -216,3 +239,121 @@ def check_not_overwriting_input(inputs, output) -> None:
                 f"output {out} is the input file {src}; clpde never overwrites its inputs, "
                 "choose another output file name"
             )
+
+
+# ---- output folders ---------------------------------------------------------------------
+# What clpde writes into output folders; a folder holding anything else is never replaced.
+OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg",
+                   ".mp4"}
+
+
+def check_output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True") -> Path:
+    """Refuse, before any work, an output folder that a run could not replace as a whole.
+
+    The rule of every command that writes a folder: the folder is created if missing (its
+    parent must exist); an existing one must be empty, unless `overwrite`, which replaces
+    the whole folder, and only if it holds nothing but files of the kinds clpde writes
+    (OUTPUT_SUFFIXES), so that a run's folder holds that run's outputs only. `option` names
+    the way to ask for overwriting in the caller's interface (e.g. '--overwrite').
+    """
+    outdir = Path(outdir)
+    parent = outdir.parent if str(outdir.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"the folder {parent} for the output {outdir} does not exist; "
+                         "create it first")
+    if not outdir.exists():
+        return outdir
+    if not outdir.is_dir():
+        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
+    entries = sorted(outdir.iterdir())
+    if not entries:
+        return outdir
+    if not overwrite:
+        raise InputError(
+            f"output folder {outdir} is not empty ({len(entries)} entries); choose a new "
+            f"folder, or give {option} to replace its contents")
+    foreign = [e.name for e in entries if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES]
+    if foreign:
+        raise InputError(
+            f"output folder {outdir} holds {foreign[0]!r}, which clpde does not write, so it "
+            f"will not replace the folder even with {option}; choose another folder")
+    return outdir
+
+
+@contextlib.contextmanager
+def output_folder(outdir, overwrite: bool = False, *, option: str = "overwrite=True"):
+    """Yield an empty staging folder beside `outdir`; on success it becomes `outdir` (the old
+    folder, if any, is removed as a unit); on failure it is removed and `outdir` is left as
+    it was. See check_output_folder for the rule."""
+    outdir = check_output_folder(outdir, overwrite, option=option)
+    parent = outdir.parent if str(outdir.parent) else Path(".")
+    staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".part"))
+    try:
+        yield staging
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+        if outdir.exists():
+            # rename(2) may replace an empty folder: move the old one aside into an empty
+            # temporary name, put the new one in place, then delete the old one
+            old = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".old"))
+            os.replace(outdir, old)
+            os.replace(staging, outdir)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(staging, outdir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# ---- masks ------------------------------------------------------------------------------
+LOSSY_FORMATS = ("JPEG",)
+MASK_RULE = ("grey masks are cut half-way between their darkest and brightest values (a "
+             "0/255 mask at 127.5); colour masks by their brightest channel; alpha is ignored")
+
+
+def read_mask(path, shape=None, *, what: str = "the image") -> np.ndarray:
+    """A mask image file as a boolean array: True where the mask is bright.
+
+    Pixels brighter than half-way between the file's darkest and brightest values are inside
+    (a 0/255 or 0/1 mask reads as drawn; a uniform nonzero mask is all inside); colour masks
+    are read by their brightest colour channel, an alpha channel is ignored. Warns when the
+    file is in a lossy format (JPEG blurs a mask's edges into grey ringing) or has more than
+    two levels, since either means the threshold decides the edge. `shape` (rows, columns),
+    if given, is the size it must have; `what` names the image it must match in the error.
+    """
+    import warnings
+
+    path = Path(path)
+    mask = read_image(path)
+    if mask.ndim == 3:
+        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
+        mask = mask[..., :channels].max(axis=-1)
+    if shape is not None and mask.shape != tuple(shape):
+        verb = "are" if what.endswith("s") else "is"
+        raise InputError(f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but "
+                         f"{what} {verb} {shape[1]}x{shape[0]}; give a mask of the same size")
+    if mask.dtype == bool:
+        return mask.copy()
+    if np.issubdtype(mask.dtype, np.floating) and not np.isfinite(mask).all():
+        raise InputError(f"the mask {path} contains NaN or infinite values; save it as a "
+                         "0/255 PNG")
+    lo, hi = mask.min(), mask.max()
+    if lo == hi:
+        return np.full(mask.shape, hi != 0)
+    cut = (float(lo) + float(hi)) / 2
+    levels = len(np.unique(mask))
+    if image_format(path) in LOSSY_FORMATS:
+        warnings.warn(f"the mask {path} is a lossy {image_format(path)} file, whose edges "
+                      f"come out grey; read as inside above {cut:g} (half-way between its "
+                      f"darkest and brightest values); save masks as PNG", stacklevel=2)
+    elif levels > 2:
+        warnings.warn(f"the mask {path} has {levels} grey levels, not two; read as inside "
+                      f"above {cut:g} (half-way between its darkest and brightest values)",
+                      stacklevel=2)
+    return mask > cut

@@ -84,6 +84,18 @@ class LevelSet:
         """(ny, nx) data to the level set's grid: the frozen margin replicates the edge."""
         return np.pad(np.asarray(values, np.float64), MARGIN, mode="edge")
 
+    def assign(self, u) -> None:
+        """Replace u by new (ny, nx) values (a signed distance, e.g. a shifted one) in the
+        same device buffers, and rebuild the band around its zero set."""
+        u = np.asarray(u, np.float64)
+        if u.shape != self.shape:
+            raise InputError(f"the level set must have shape {self.shape}, got {u.shape}")
+        padded = np.zeros(self.grid.padded_shape, self.grid.dtype)
+        self.grid.interior(padded)[0] = self.pad(u)
+        self.u.cur.data.set(padded)
+        self.u.cur.fill_ghosts()
+        self.build_band()
+
     # ---- band --------------------------------------------------------------------------
     def build_band(self) -> None:
         """Mark |u| < w on the device and compact it into the band's index list."""

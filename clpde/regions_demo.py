@@ -121,7 +121,12 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
         raise InputError(f"flow must be one of {', '.join(FLOWS)}, not {flow!r}")
     if regions not in ("auto", "colours", "curvature"):
         raise InputError(f"regions must be 'auto', 'colours' or 'curvature', not {regions!r}")
-    surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
+    from .surface.demo import encloses_volume
+
+    if isinstance(path, (str, os.PathLike)) and not os.path.exists(path):
+        raise InputError(f"the mesh file {path} does not exist")
+    with encloses_volume(path):
+        surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
     painted = None
     if regions == "colours":
@@ -157,22 +162,42 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
     return Scene(phi, region, h, origin, options)
 
 
+def displacement(scene: Scene, frame) -> float:
+    """How far (world units) the surface of `frame` lies from the scene's starting surface
+    at most: the starting signed distance at the frame's mesh vertices."""
+    from scipy.ndimage import map_coordinates
+
+    at = (np.asarray(frame.mesh.vertices) - np.asarray(scene.origin)) / scene.spacing
+    return float(np.abs(map_coordinates(np.asarray(scene.phi, np.float64), at[:, ::-1].T,
+                                        order=1, mode="nearest")).max())
+
+
 def run_scene(scene: Scene, saves=4, progress=None, device=None):
     return track_region(scene.phi, scene.region, spacing=scene.spacing, saves=saves,
                         origin=scene.origin, progress=progress, device=device, **scene.options)
 
 
-def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions"):
+def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions",
+                 overwrite=False):
     """OUTDIR/<stem>_<k>.ply per frame and OUTDIR/<stem>.png: frames top to bottom, views
     side by side, as a 128-colour palette PNG (two shaded colours on white: no visible loss,
-    2.5x smaller than RGB). Returns the paths written."""
+    2.5x smaller than RGB). OUTDIR is created if missing; an existing one must be empty, or
+    with overwrite=True hold only clpde's kinds of output files, and is then replaced as a
+    whole (clpde.io.output_folder). Returns the paths written."""
+    from .io import output_folder
+
+    with output_folder(outdir, overwrite) as staging:
+        written = _write_frame_files(frames, str(staging), size, views, stem)
+    return [os.path.join(outdir, os.path.basename(p)) for p in written]
+
+
+def _write_frame_files(frames, outdir, size, views, stem):
     import io
 
     from PIL import Image
 
     from .surface.render import _atomic_write, export_mesh, render_mesh
 
-    os.makedirs(outdir, exist_ok=True)
     written = []
     rows = []
     for k, frame in enumerate(frames):

@@ -70,7 +70,7 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
       weight in the image's units for float images, on the [0, 1] scale for integer ones,
       as skimage.restoration.denoise_tv_chambolle). Larger is smoother.
 
-    With neither, sigma is estimated (skimage.restoration.estimate_sigma).
+    With neither, sigma is estimated from the image (``estimate_sigma``).
 
     method: 'primal-dual' (default; exact TV, fast) or 'gradient' (the thesis's explicit
     scheme with |grad u|_eps; takes ``eps`` (default 0.02, on [0, 1] data), ``dt`` and
@@ -108,9 +108,7 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         sigma2 = None
     else:
         if sigma is None:
-            from skimage.restoration import estimate_sigma
-
-            sig = np.array([estimate_sigma(c) for c in data])
+            sig = np.array([_noise_std(c) for c in data])
         else:
             sig = np.full(nc, _positive("sigma", sigma) / layout.scale)
         sigma2 = np.maximum(sig, 1e-6) ** 2
@@ -141,6 +139,40 @@ def denoise_tv(image, sigma=None, weight=None, channel_axis=None, *, method: str
         return out
     residual = ((u - data) ** 2).mean(axis=(1, 2)) * layout.scale**2
     return out, DenoiseInfo(steps, converged, lam / weight_unit, residual, method)
+
+
+# The difference of two discrete Laplacians (Immerkaer 1996): it annihilates constant, linear
+# and most of the quadratic content of an image, and turns white noise of deviation sigma
+# into values of deviation 6 sigma (the root of the sum of its squared weights, 36).
+_NOISE_MASK = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
+_MAD_TO_STD = 1.0 / 0.6744897501960817  # median |x| of a unit normal variable
+
+
+def _noise_std(u: np.ndarray) -> float:
+    """Noise deviation of one 2-D channel: the median absolute value of its fine-scale
+    residual, as for a normal variable. The median, not the mean, so that the edges and
+    texture where the residual is large do not count as noise."""
+    ny, nx = u.shape
+    if ny < 3 or nx < 3:
+        raise InputError(f"an image of {nx}x{ny} pixels is too small to estimate its noise "
+                         "from; give sigma or weight")
+    r = sum(_NOISE_MASK[i, j] * u[i:ny - 2 + i, j:nx - 2 + j]
+            for i in range(3) for j in range(3))
+    return float(np.median(np.abs(r))) * _MAD_TO_STD / 6.0
+
+
+def estimate_sigma(image, channel_axis=None):
+    """The noise standard deviation of an image, in its own units (0..255 for uint8), per
+    channel (an array) when channel_axis is given.
+
+    Robust estimate from the finest scale: the median absolute value of a Laplacian-difference
+    residual, scaled as for Gaussian white noise. Needs only numpy (no PyWavelets). Within a
+    few percent on photos with noise of 2% of the range and more; textured images read a
+    little high at low noise, as with any single-image estimate.
+    """
+    data, layout = to_kernel_layout(image, channel_axis)
+    sig = np.array([_noise_std(c) for c in data]) * layout.scale
+    return sig if channel_axis is not None else float(sig[0])
 
 
 def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, progress):

@@ -11,16 +11,14 @@ partial set of files behind.
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from .imagedata import InputError
-from .io import IMAGE_FORMATS, atomic_output, read_image, write_gif, write_image
+from .io import IMAGE_FORMATS, atomic_output, output_folder, read_image, write_gif, write_image
+from .io import read_mask as _read_mask
 
 VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".webm", ".mpg", ".mpeg", ".m4v", ".ogv"}
 TIFF_SUFFIXES = {".tif", ".tiff"}
@@ -139,17 +137,14 @@ def read_frames(path, grey: bool = True) -> np.ndarray:
 
 
 def read_mask(path, shape=None) -> np.ndarray:
-    """A mask image as a boolean array (any nonzero pixel, of any colour, is inside)."""
-    mask = read_image(path)
-    if mask.ndim == 3:
-        mask = mask[..., :3].any(axis=-1) if mask.shape[-1] in (3, 4) else mask[..., 0]
-    mask = mask > 0
-    if shape is not None and mask.shape != tuple(shape):
-        raise InputError(
-            f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} but the frames are "
-            f"{shape[1]}x{shape[0]}; draw the mask on the first frame at its size"
-        )
-    return mask
+    """A mask image as a boolean array, sized as the frames (clpde.io.read_mask's rule)."""
+    if shape is None:
+        return _read_mask(path)
+    try:
+        return _read_mask(path, shape, what="the frames")
+    except InputError as exc:  # name the fix for a tracking mask
+        raise InputError(str(exc).replace("give a mask of the same size",
+                                          "draw the mask on the first frame at its size")) from None
 
 
 # ---- results ---------------------------------------------------------------------------
@@ -178,22 +173,18 @@ def overlay(frame, mask, colour=(255, 40, 40)) -> np.ndarray:
     return rgb
 
 
-def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float = 0.1) -> list[Path]:
-    """Write mask_0000.png..., overlay.gif and contours.json into `outdir`.
+def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float = 0.1,
+                   overwrite: bool = False) -> list[Path]:
+    """Write mask_0000.png..., overlay.gif and contours.json into the folder `outdir`.
 
-    Everything is written into a temporary folder beside `outdir` first and moved in only
-    when complete, so a failure leaves `outdir` as it was.
+    The folder is created if missing; an existing one must be empty, or with overwrite=True
+    hold only clpde's kinds of output files: it is then replaced as a whole (see
+    clpde.io.output_folder), so it holds this run's files only. Everything is written into a
+    temporary folder beside `outdir` first, so a failure leaves `outdir` as it was.
     """
-    outdir = Path(outdir)
-    parent = outdir.parent if str(outdir.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"the folder {parent} for the output does not exist; create it first")
-    if outdir.exists() and not outdir.is_dir():
-        raise InputError(f"output {outdir} exists and is not a folder")
     masks = np.asarray(masks, bool)
-    staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".part"))
-    try:
-        names = []
+    names = []
+    with output_folder(outdir, overwrite) as staging:
         for t, mask in enumerate(masks):
             name = f"mask_{t:04d}.png"
             write_image(staging / name, mask.astype(np.uint8) * 255)
@@ -208,20 +199,4 @@ def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float =
             write_gif(staging / "overlay.gif", [overlay(f, m) for f, m in zip(frames, masks)],
                       duration=duration)
             names.append("overlay.gif")
-        os.chmod(staging, 0o777 & ~_umask())
-        if not outdir.exists():
-            os.replace(staging, outdir)
-        else:
-            for name in names:
-                os.replace(staging / name, outdir / name)
-            shutil.rmtree(staging, ignore_errors=True)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    return [outdir / n for n in names]
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+    return [Path(outdir) / n for n in names]

@@ -11,11 +11,20 @@ on its own normal. u starts as the signed distance to the first mask's boundary;
 follows the zero level set and is rebuilt, with u reinitialised on the device, whenever the
 front nears its edge. Each frame stops when the contour has stopped moving or after a cap;
 its result starts the next frame. Topology changes need no special handling.
+
+For real video (issue 18) the features may be contrast-invariant (features='contrast':
+local contrast normalisation), colour (colour=True: every channel enters the discrepancy)
+or the user's own maps (an array per frame or a callable); the discrepancy may be a local
+normalised cross-correlation ('ncc') or a Huber difference instead of F2 - F1; a motion
+model (motion='velocity' or 'kalman', clpde.track_features.MotionFilter) shifts the level
+set and F1 by the predicted displacement before each frame's evolution; shape_weight pulls
+the contour towards that predicted start where the features say nothing; and each frame
+reports its final discrepancy in the band (TrackState.discrepancy), a confidence measure.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pyopencl.array as cla
@@ -26,7 +35,9 @@ from .imagedata import InputError
 from .levelset import LevelSet, signed_distance
 from .runtime import get_runtime
 
-FEATURES = ("intensity", "edges")
+FEATURES = ("intensity", "edges", "contrast")
+DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2}
+MOTIONS = (None, "velocity", "kalman")
 CFL = 0.5  # largest distance in pixels a level set moves in one step
 # Rebuild when the front comes this close to the band's outer ring. Between two checks
 # (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
@@ -46,14 +57,16 @@ class TrackState:
     converged: bool = True
     rebuilds: int = 0
     info: dict = field(default_factory=dict)
+    discrepancy: float = 0.0  # final mean |beta| in the band (lower: the frames agree)
+    displacement: tuple = (0.0, 0.0)  # (dy, dx) the motion model shifted the start by
 
 
 def _check_frames(frames) -> list[np.ndarray]:
     if isinstance(frames, np.ndarray):
-        if frames.ndim != 3:
+        if frames.ndim not in (3, 4) or (frames.ndim == 4 and frames.shape[-1] not in (3, 4)):
             raise InputError(
-                f"frames must be a (T, H, W) array or a sequence of 2-D frames, got an array "
-                f"of shape {frames.shape}; convert colour frames to grey first"
+                f"frames must be a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence "
+                f"of frames, got an array of shape {frames.shape}"
             )
         items = list(frames)
     else:
@@ -64,12 +77,14 @@ def _check_frames(frames) -> list[np.ndarray]:
     if not items:
         raise InputError("frames is empty: give at least one frame")
     for k, f in enumerate(items):
-        if f.ndim != 2:
-            raise InputError(f"frame {k} has shape {f.shape}; every frame must be 2-D (grey)")
+        if not (f.ndim == 2 or (f.ndim == 3 and f.shape[-1] in (3, 4))):
+            raise InputError(f"frame {k} has shape {f.shape}; every frame must be 2-D (grey) "
+                             f"or (H, W, 3) colour")
         if f.shape != items[0].shape:
             raise InputError(
                 f"frame {k} is {f.shape[1]}x{f.shape[0]} but frame 0 is "
                 f"{items[0].shape[1]}x{items[0].shape[0]}; all frames must have one size"
+                + ("" if f.shape[:2] != items[0].shape[:2] else " and kind (grey or colour)")
             )
         if f.dtype == bool or not (np.issubdtype(f.dtype, np.integer)
                                    or np.issubdtype(f.dtype, np.floating)):
@@ -96,6 +111,37 @@ def _check_mask(mask, shape) -> np.ndarray:
     return mask
 
 
+def _user_features(features, frames: list[np.ndarray]) -> np.ndarray:
+    """The user's feature maps as a (T, C, H, W) float64 array scaled to [0, 1] over the
+    whole sequence (one scale for all frames keeps F2 - F1 meaningful)."""
+    shape = frames[0].shape[:2]
+    if callable(features):
+        try:
+            maps = [np.asarray(features(f), np.float64) for f in frames]
+        except InputError:
+            raise
+        except Exception as exc:
+            raise InputError(f"the features callable failed on a frame: {exc}") from exc
+    else:
+        maps = features
+    try:
+        stack = np.stack([np.asarray(m, np.float64) for m in maps])
+    except ValueError:
+        raise InputError("the feature maps must all have one shape") from None
+    if len(stack) != len(frames):
+        raise InputError(f"{len(stack)} feature maps for {len(frames)} frames: give one per frame")
+    if stack.shape[1:3] == shape:
+        stack = stack[:, np.newaxis] if stack.ndim == 3 else np.moveaxis(stack, -1, 1)
+    if stack.ndim != 4 or stack.shape[2:] != shape:
+        raise InputError(
+            f"feature maps of shape {stack.shape[1:]} do not fit frames of {shape[1]}x{shape[0]}: "
+            "give (H, W) or (H, W, C) per frame")
+    if not np.isfinite(stack).all():
+        raise InputError("the feature maps contain NaN or infinite values")
+    lo, hi = float(stack.min()), float(stack.max())
+    return (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
+
+
 class MorphingTracker:
     """The object form of `track`: iterate to get each frame's mask and level set in turn.
 
@@ -104,16 +150,30 @@ class MorphingTracker:
     ...     show(state.mask, state.level_set)
     """
 
-    def __init__(self, frames, first_mask, *, features: str = "intensity",
-                 equalize="match", smooth: bool = True, smooth_steps: int = 5,
+    def __init__(self, frames, first_mask, *, features="intensity", colour: bool = False,
+                 discrepancy: str = "ncc", motion="kalman", shape_weight: float = 0.0,
+                 equalize=False, smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
                  max_iterations: int = 40, tol: float = 0.02, check_every: int = 2,
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
-                 min_size: int = 0, device=None, precision=None):
+                 min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
+                 ncc_radius: int = 3,
+                 huber_delta: float = 0.05, search_radius: int = 6, device=None,
+                 precision=None):
         self.frames = _check_frames(frames)
-        self.first_mask = _check_mask(first_mask, self.frames[0].shape)
-        if features not in FEATURES:
-            raise InputError(f"features must be one of {', '.join(FEATURES)}, not {features!r}")
+        self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
+        self._user = None
+        if callable(features) or not isinstance(features, str):
+            self._user = _user_features(features, self.frames)
+            features = "user"
+        elif features not in FEATURES:
+            raise InputError(f"features must be one of {', '.join(FEATURES)}, an array of maps "
+                             f"per frame or a callable, not {features!r}")
+        if discrepancy not in DISCREPANCIES:
+            raise InputError(f"discrepancy must be one of {', '.join(DISCREPANCIES)}, "
+                             f"not {discrepancy!r}")
+        if motion not in MOTIONS:
+            raise InputError(f"motion must be None, 'velocity' or 'kalman', not {motion!r}")
         if not 0 < dt <= 0.5:
             raise InputError(f"dt={dt} is outside (0, 0.5], the stable range of the upwind scheme")
         if max_iterations < 1 or check_every < 1:
@@ -123,7 +183,18 @@ class MorphingTracker:
                 f"check_every={check_every} lets the front move {check_every * CFL:g} pixels "
                 f"between checks, more than the band's {NEAR_EDGE:g}-pixel safety margin; "
                 f"use check_every <= {int(NEAR_EDGE / CFL)}")
-        self.features = features
+        if not 1 <= int(ncc_radius) <= 4:
+            raise InputError(f"ncc_radius must be 1 to 4 pixels, not {ncc_radius}")
+        if not 1 <= int(contrast_radius) <= 16:
+            raise InputError(f"contrast_radius must be 1 to 16 pixels, not {contrast_radius}")
+        if shape_weight < 0 or huber_delta <= 0 or search_radius < 0 or contrast_eps <= 0:
+            raise InputError("shape_weight and search_radius must be >= 0, huber_delta and "
+                             "contrast_eps > 0")
+        self.features, self.discrepancy, self.motion = features, discrepancy, motion
+        self.shape_weight = float(shape_weight)
+        self.contrast_radius, self.ncc_radius = int(contrast_radius), int(ncc_radius)
+        self.contrast_eps = float(contrast_eps)
+        self.huber_delta, self.search_radius = float(huber_delta), int(search_radius)
         if equalize is True:
             equalize = "match"
         if equalize not in (False, None, "match", "global"):
@@ -138,8 +209,14 @@ class MorphingTracker:
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(precision or np.float32)
         stack = np.stack([f.astype(np.float64) for f in self.frames])
+        if stack.ndim == 4:  # colour: all channels, or grey (Rec. 601 luma)
+            stack = (np.moveaxis(stack[..., :3], -1, 1) if colour else
+                     (stack[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis])
+        else:
+            stack = stack[:, np.newaxis]
         lo, hi = float(stack.min()), float(stack.max())
         self._scaled = (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
+        self.channels = (self._user if self._user is not None else self._scaled).shape[1]
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -147,62 +224,88 @@ class MorphingTracker:
     # ---- pre-processing and features ---------------------------------------------------
     def prepared(self, index: int) -> np.ndarray:
         """Frame `index` after pre-processing (histogram equalisation, anisotropic
-        smoothing), in [0, 1]."""
+        smoothing), in [0, 1], as (C, H, W); the user's feature maps as given (scaled)."""
+        if self._user is not None:
+            return self._user[index]
         img = self._scaled[index]
         if self.equalize == "match" and index > 0:
             # Equalise the grey levels across the sequence: each frame gets the first
             # frame's histogram, as beta = F2 - F1 compares grey values directly.
-            img = match_histogram(img, self._scaled[0])
+            img = np.stack([match_histogram(c, r) for c, r in zip(img, self._scaled[0])])
         elif self.equalize == "global":
             from skimage.exposure import equalize_hist
 
-            img = equalize_hist(img)
+            img = np.stack([equalize_hist(c) for c in img])
         if self.smooth and self.smooth_steps > 0:
             from .planar import diffuse
 
             # The rational edge-stopping function: as anisotropic as the exponential one
             # and about 3x faster on PoCL, where exp() does not vectorise.
-            img = diffuse(img, "perona-malik", steps=self.smooth_steps, kappa=self.smooth_kappa,
-                          edge="rational", device=self.runtime, progress=False)
+            img = np.stack([diffuse(c, "perona-malik", steps=self.smooth_steps,
+                                    kappa=self.smooth_kappa, edge="rational",
+                                    device=self.runtime, progress=False) for c in img])
         return np.asarray(img, np.float64)
 
     def _feature_field(self, image: np.ndarray, ls: LevelSet) -> Field:
-        grid = ls.grid
-        f = Field.from_host(grid, ls.pad(image)[np.newaxis])
-        if self.features == "edges":
-            edges = Field.empty(grid)
-            grid.launch(grid.kernel("levelset.cl", "gradient_magnitude"), f.data.data,
-                        edges.data.data)
-            edges.fill_ghosts()
-            f = edges
+        grid = replace(ls.grid, nc=self.channels)
+        f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
+        if self.features in ("edges", "contrast"):
+            out = Field.empty(grid)
+            if self.features == "edges":
+                grid.launch(grid.kernel("levelset.cl", "gradient_magnitude"), f.data.data,
+                            out.data.data)
+            else:
+                # Scaled by 1/4: normalised values of about +-2 become F2 - F1 of the
+                # order of the [0, 1] grey levels, for which tol and dt are set.
+                grid.launch(grid.kernel("track_features.cl", "local_contrast"), f.data.data,
+                            out.data.data, np.int32(self.contrast_radius),
+                            grid.scalar(self.contrast_eps**2), grid.scalar(0.25))
+            out.fill_ghosts()
+            f = out
         return f
 
+    def _match_features(self, image: np.ndarray) -> np.ndarray:
+        """(C, H, W) local contrast normalisation of a prepared frame, for matching."""
+        from .track_features import local_contrast
+
+        return local_contrast(image, self.contrast_radius)
+
     # ---- the morphing of one frame pair ------------------------------------------------
-    def _morph(self, ls: LevelSet, f1: Field, f2: Field):
-        """Run the coupled system on one frame pair; returns (iterations, converged).
+    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field, discrepancy=None):
+        """Run the coupled system on one frame pair; returns (iterations, converged,
+        final mean |beta| in the band).
 
         The time step adapts at each check to the largest stable one: the level sets move
-        at most CFL pixels per step (dt |beta| <= CFL) and F1's relaxation towards F2 does
-        not overshoot (dt |grad F1| <= 1). It restarts from `dt` whenever the band changes.
+        at most CFL pixels per step (dt (|beta| + lam w) <= CFL), F1's relaxation towards
+        F2 does not overshoot (dt |grad F1| <= 1) nor does u's towards the prior
+        (dt lam <= 1/2). It restarts from `dt` whenever the band changes.
         """
         g = ls.grid
         q = self.runtime.queue
-        kernel = g.kernel("levelset.cl", "morph_step")
+        discrepancy = discrepancy or self.discrepancy
+        kernel = g.kernel("track_features.cl", "morph_track", NCH=self.channels,
+                          DISC=DISCREPANCIES[discrepancy], WIN=self.ncc_radius)
         pair = PingPong(f1)
-        consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), np.int32(g.sx))
+        lam = self.shape_weight
+        delta = self.huber_delta if discrepancy == "huber" else 0.02
+        consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), g.scalar(lam),
+                  g.scalar(delta), np.int32(g.sx), np.int32(g.plane))
+        dt_cap = self.max_dt if lam == 0 else min(self.max_dt, 0.5 / lam)
+        first_dt = min(self.dt, dt_cap)
         stats = None
-        dt = self.dt
+        dt = first_dt
         converged = False
         iterations = 0
+        residual = 0.0
         while iterations < self.max_iterations:
             if ls.band.n == 0:  # the contour vanished from the frame
                 converged = True
                 break
             if stats is None:
                 (parts,), _, _ = self.runtime.list_launch(ls.band.n)
-                stats = cla.zeros(q, 3 * parts + 1, g.dtype)
+                stats = cla.zeros(q, 5 * parts + 1, g.dtype)
             g.launch_list(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
-                          f2.data.data, ls.band_mask.data, ls.u.nxt.data.data,
+                          f2.data.data, ls.band_mask.data, prior.data.data, ls.u.nxt.data.data,
                           pair.nxt.data.data, stats.data, g.scalar(dt), *consts)
             ls.u.swap()
             pair.swap()
@@ -212,50 +315,83 @@ class MorphingTracker:
                 values = stats.get()
                 fastest, beta_max, grad_max = (values[k * parts:(k + 1) * parts].max()
                                                for k in range(3))
+                residual = float(values[3 * parts:4 * parts].sum()
+                                 / max(values[4 * parts:5 * parts].sum(), 1))
                 if fastest < self.tol:
                     converged = True
                     break
-                if values[3 * parts]:
+                if values[5 * parts]:
                     ls.rebuild(self.reinit_iterations)
                     pair.nxt.assign(pair.cur)  # the band moved: both copies agree outside it
                     stats = None
-                    dt = self.dt
+                    dt = first_dt
                 else:
-                    dt = float(min(self.max_dt, CFL / max(beta_max, 1e-6),
-                                   1.0 / max(grad_max, 1e-6)))
-        return iterations, converged
+                    speed = beta_max + lam * self.band_width
+                    dt = float(min(dt_cap, CFL / max(speed, 1e-6), 1.0 / max(grad_max, 1e-6)))
+        return iterations, converged, residual
 
     # ---- iteration ---------------------------------------------------------------------
     def __iter__(self):
+        from .track_features import MotionFilter, shift_image
+
         mask = self.first_mask
         u = signed_distance(mask)
         yield TrackState(0, mask.copy(), u.astype(np.float32))
         if len(self.frames) == 1:
             return
         ls = LevelSet(self.runtime, u, self.band_width, self.dtype)
+        # The shape pull's target; without it the kernel multiplies it by 0, so any finite
+        # buffer of the grid will do.
+        prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
         prepared_prev = self.prepared(0)
+        motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
+        feats_prev = None
         fresh = True  # u is a signed distance with a band around its zero set
         for t in range(1, len(self.frames)):
             prepared = self.prepared(t)
-            f1 = self._feature_field(prepared_prev, ls)
             f2 = self._feature_field(prepared, ls)
+            shift = (0.0, 0.0)
+            if motion is not None:
+                # Matched on contrast-normalised frames, whatever the morphing compares:
+                # a shadow or a flicker does not move the measured displacement.
+                feats = self._match_features(prepared)
+                if feats_prev is None:
+                    feats_prev = self._match_features(prepared_prev)
+                shift = motion.predict(feats_prev, feats, mask)
+                feats_prev = feats
+                if max(abs(shift[0]), abs(shift[1])) < 0.25:
+                    # Below the matching's precision; shifting would only blur F1.
+                    shift = (0.0, 0.0)
+                else:
+                    # Start from the predicted place: u and F1 move together, so the
+                    # morphing only has to explain what the displacement does not.
+                    u = shift_image(ls.values(), shift)
+                    ls.assign(u)
+                    prepared_prev = np.stack([shift_image(c, shift) for c in prepared_prev])
+                    fresh = False
+            f1 = self._feature_field(prepared_prev, ls)
             if not fresh:  # a frame without rebuilds may have bent u away from a distance
                 ls.rebuild(self.reinit_iterations)
+            if self.shape_weight:
+                prior.assign(ls.u.cur)
             rebuilds0 = ls.rebuilds
-            iterations, converged = self._morph(ls, f1, f2)
+            iterations, converged, residual = self._morph(ls, f1, f2, prior)
             fresh = ls.rebuilds > rebuilds0
             u = ls.values()
-            mask = u < 0
+            new_mask = u < 0
             if self.min_size > 0:
-                cleaned = self._clean(mask)
-                if (cleaned != mask).any() and cleaned.any() and not cleaned.all():
-                    mask = cleaned
-                    u = signed_distance(mask)
-                    rebuilds = ls.rebuilds
-                    ls = LevelSet(self.runtime, u, self.band_width, self.dtype)
-                    ls.rebuilds, fresh = rebuilds, True
+                cleaned = self._clean(new_mask)
+                if (cleaned != new_mask).any() and cleaned.any() and not cleaned.all():
+                    new_mask = cleaned
+                    u = signed_distance(new_mask)
+                    ls.assign(u)
+                    fresh = True
+            if motion is not None:
+                motion.observe(mask, new_mask)
+            mask = new_mask
             yield TrackState(t, mask, u.astype(np.float32), iterations, converged,
-                             ls.rebuilds - rebuilds0)
+                             ls.rebuilds - rebuilds0, discrepancy=residual,
+                             displacement=tuple(float(s) for s in shift))
             prepared_prev = prepared
 
     def _clean(self, mask: np.ndarray) -> np.ndarray:
@@ -292,20 +428,34 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
     return keep[labels]
 
 
-def track(frames, first_mask, *, features: str = "intensity", equalize="match",
+def track(frames, first_mask, *, features="intensity", equalize=False,
           smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
           max_iterations: int = 40, tol: float = 0.02, min_size: int = 0, device=None,
-          progress=None, return_level_sets: bool = False, **options):
+          progress=None, return_level_sets: bool = False, return_discrepancy: bool = False,
+          **options):
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
-    frames: a (T, H, W) array or a sequence of T 2-D arrays (grey; any int or float dtype).
-    first_mask: (H, W) boolean (or nonzero) mask of the object in frame 0; it may hold
-    several pieces, and pieces may split or merge on the way.
+    frames: a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence of T such frames
+    (any int or float dtype). first_mask: (H, W) boolean (or nonzero) mask of the object
+    in frame 0; it may hold several pieces, and pieces may split or merge on the way.
 
-    features: 'intensity' (the frames themselves, after pre-processing) or 'edges'
-    (gradient-magnitude edge maps). equalize / smooth: the thesis' pre-processing, on by
-    default. equalize='match' (or True) gives every frame the first frame's grey-level
-    histogram (histogram specification); 'global' equalises each frame's histogram flat
+    features: 'intensity' (the frames themselves, after pre-processing), 'edges'
+    (gradient-magnitude edge maps), 'contrast' (local contrast normalisation over a
+    (2 contrast_radius + 1)^2 box: invariant to local changes of brightness and contrast),
+    or the user's own maps: a (T, H, W[, C]) array or a list of T maps, or a callable
+    taking a frame and returning its (H, W[, C]) map (scaled to [0, 1] over the sequence;
+    no pre-processing). colour=True puts every channel of colour frames in the
+    discrepancy (default: grey, Rec. 601 luma). discrepancy: 'difference' (F2 - F1, the
+    thesis), 'ncc' (steepest ascent of the local normalised cross-correlation over a
+    (2 ncc_radius + 1)^2 window) or 'huber' (F2 - F1 clipped at huber_delta). motion:
+    None, 'velocity' (the previous frames' displacement, damped) or 'kalman' (a constant-
+    velocity Kalman filter fed by matching the object's features between frames, within
+    search_radius pixels of the prediction) shifts each frame's start. shape_weight
+    (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
+
+    equalize / smooth: the thesis' pre-processing, on by default. equalize='match' (or
+    True) gives every frame the first frame's grey-level histogram (histogram
+    specification); 'global' equalises each frame's histogram flat
     (skimage.exposure.equalize_hist), which squeezes a large uniform background into a
     narrow grey range and costs accuracy (measured: IoU 0.80 instead of 0.99 on a clean
     translating disc); False skips it. smooth: Perona-Malik smoothing, `smooth_steps`
@@ -316,7 +466,9 @@ def track(frames, first_mask, *, features: str = "intensity", equalize="match",
     mask.
 
     Returns a (T, H, W) boolean array (frame 0 is the given mask); with return_level_sets,
-    also the (T, H, W) float32 level sets (negative inside).
+    also the (T, H, W) float32 level sets (negative inside); with return_discrepancy,
+    also the (T,) final mean |beta| in each frame's band (0 for frame 0), whose high
+    values mark frames of low confidence.
     """
     tracker = MorphingTracker(frames, first_mask, features=features, equalize=equalize,
                               smooth=smooth, smooth_steps=smooth_steps, band_width=band_width,
@@ -326,9 +478,13 @@ def track(frames, first_mask, *, features: str = "intensity", equalize="match",
     height, width = tracker.first_mask.shape
     masks = np.zeros((n, height, width), bool)
     levels = np.zeros((n, height, width), np.float32) if return_level_sets else None
+    residuals = np.zeros(n)
     disable = (None if n >= 20 else True) if progress is None else not progress
     for state in tqdm(tracker, total=n, desc="clpde track", unit="frame", disable=disable):
         masks[state.index] = state.mask
+        residuals[state.index] = state.discrepancy
         if levels is not None:
             levels[state.index] = state.level_set
-    return (masks, levels) if return_level_sets else masks
+    out = (masks,) + ((levels,) if return_level_sets else ()) + (
+        (residuals,) if return_discrepancy else ())
+    return out[0] if len(out) == 1 else out

@@ -296,13 +296,16 @@ class RestoreResult:
 
 def inpaint_sequence(source, mask, output, *, workers=None, threads=None, scheduler=None,
                      client=None, frames_per_task: int = 4, progress=None,
+                     overwrite: bool = False, overwrite_option: str = "overwrite=True",
                      **options) -> RestoreResult:
     """Inpaint every frame of `source` (a video or an image folder) where `mask` (an image,
     or a folder of per-frame masks) is set, over Dask workers; write a video (`output`
     ends in .mp4, .mkv, .mov, .avi) with the input's frame rate, or an image folder.
-    Options are clpde.inpaint's (max_steps, tol, dt, ...)."""
+    Options are clpde.inpaint's (max_steps, tol, dt, ...). An output folder follows
+    clpde's folder rule: new or empty, or with `overwrite` one holding only clpde's kinds
+    of output files (frames of the same names are replaced)."""
     from .batch import connect
-    from .cli.inpaint import _read_inpaint_mask
+    from .io import read_mask
 
     if frames_per_task < 1:
         raise InputError(f"frames per task must be at least 1, not {frames_per_task}")
@@ -317,14 +320,17 @@ def inpaint_sequence(source, mask, output, *, workers=None, threads=None, schedu
     mask_of = _masks_for(mask, sequence.count)
     start = time.perf_counter()
     if not to_video:
-        output.mkdir(parents=True, exist_ok=True)
+        from .io import check_output_folder
+
+        check_output_folder(output, overwrite, option=overwrite_option)
+        output.mkdir(exist_ok=True)
     writer = VideoWriter(output, sequence.rate) if to_video else None
     written = 0
     try:
         with connect(workers, scheduler, client, threads, device=options.get("device"),
                      tasks=max(1, sequence.count // frames_per_task)) as (live, info):
             written = _pipeline(live, sequence, mask_of, writer, output, frames_per_task,
-                                options, progress, _read_inpaint_mask)
+                                options, progress, read_mask)
         if writer is not None:
             writer.close()
     except BaseException:
@@ -360,7 +366,7 @@ def _pipeline(client, sequence, mask_of, writer, output, per_task, options, prog
             if key not in mask_cache:
                 if len(mask_cache) > 8:  # per-frame masks: keep only the latest few
                     mask_cache.clear()
-                mask_cache[key] = read_mask(path, frame.shape[:2])
+                mask_cache[key] = read_mask(path, frame.shape[:2], what="the frames")
             out.append(mask_cache[key])
         return out
 
@@ -447,7 +453,8 @@ def run_sequence_inpaint(args) -> int:
                "mean_tol": args.mean_tol, "device": args.device}
     result = inpaint_sequence(args.input, args.mask, args.output, workers=args.workers,
                               scheduler=args.scheduler, frames_per_task=args.frames_per_task,
-                              **options)
+                              overwrite=getattr(args, "overwrite", False),
+                              overwrite_option="--overwrite", **options)
     print(f"inpaint: {result.frames} frames at {float(result.rate):.3f} fps in "
           f"{result.seconds:.1f} s on {result.workers} worker(s); wrote {result.output}",
           file=sys.stderr)

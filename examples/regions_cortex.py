@@ -6,17 +6,21 @@ evolves by the positive part of its Gaussian curvature (elliptic parts move towa
 centres of curvature, so folds flatten) while the yellow region is tracked.
 
     pip install nilearn nibabel      # or: pip install ".[examples]"
-    python examples/regions_cortex.py [--resolution 96] [--t 300] [--out docs/images]
+    python examples/regions_cortex.py [--resolution 96] [--t 300] [--out out/ | --docs]
 
 Writes OUT/regions_cortex.png (saved times top to bottom, lateral and medial views) and PLY
-meshes per saved time under out/regions_cortex/ (git-ignored).
+meshes per saved time under out/regions_cortex/ (git-ignored); --docs writes the picture
+into docs/images instead of out/.
 """
 
 import argparse
 import os
+import shutil
 import time
+from pathlib import Path
 
 import numpy as np
+from _output import add_output_arguments, output_folder
 
 
 def fsaverage_white_left():
@@ -46,8 +50,9 @@ def main():
     parser.add_argument("--t", type=float, default=300.0, help="time, in grid units (h^3 / weight)")
     parser.add_argument("--saves", type=int, default=3)
     parser.add_argument("--size", type=int, default=180)
-    parser.add_argument("--out", default=os.path.join("docs", "images"))
+    add_output_arguments(parser)
     args = parser.parse_args()
+    out = output_folder(parser, args)  # before the minute of work, not after
 
     vertices, faces, curv = fsaverage_white_left()
     cortex = trimesh.Trimesh(vertices, faces, process=False)
@@ -61,9 +66,12 @@ def main():
                           spacing=h, saves=args.saves, origin=origin, max_speed=0.25 * h,
                           progress=True, keep_volumes=True)
     seconds = time.perf_counter() - start
-    written = write_frames(frames, os.path.join("out", "regions_cortex"), size=args.size,
-                           views=((-90.0, 10.0), (90.0, 10.0)), stem="cortex")
-    os.replace(written[-1], os.path.join(args.out, "regions_cortex.png"))
+    meshes = Path("out") / "regions_cortex"  # git-ignored; replaced by each run
+    meshes.parent.mkdir(exist_ok=True)
+    written = write_frames(frames, meshes, size=args.size, views=((-90.0, 10.0), (90.0, 10.0)),
+                           stem="cortex", overwrite=True)
+    shutil.copyfile(written[-1], out / "regions_cortex.png")
+    print(f"wrote {out / 'regions_cortex.png'} and the meshes in {meshes}/")
     shares = ", ".join(f"{f.area_fraction(0):.3f}" for f in frames)
     print(f"cortex: grid {'x'.join(map(str, phi.shape[::-1]))} (h = {h:.2f} mm), {seconds:.1f} s; "
           f"sulcal (yellow) area fraction {shares}; surface area "

@@ -4,15 +4,18 @@ spheres and the yellow belt around its middle splits in two. Right: two spheres 
 capsule and their yellow facing caps join into one belt. Saved times top to bottom, two views
 side by side.
 
-    python examples/regions_figure27.py [--spacing 0.05] [--out docs/images]
+    python examples/regions_figure27.py [--spacing 0.05] [--out out/ | --docs]
 
-Writes OUT/regions_split.png and OUT/regions_merge.png, and PLY meshes per saved time under
-out/regions_meshes/ (git-ignored).
+Writes OUT/regions_split.png and OUT/regions_merge.png (--docs: into docs/images), and PLY
+meshes per saved time under out/regions_split/ and out/regions_merge/ (git-ignored).
 """
 
 import argparse
-import os
+import shutil
 import time
+from pathlib import Path
+
+from _output import add_output_arguments, output_folder
 
 from clpde.regions_demo import run_scene, toy_scene, write_frames
 
@@ -22,17 +25,19 @@ def main():
     parser.add_argument("--spacing", type=float, default=0.05)
     parser.add_argument("--saves", type=int, default=4)
     parser.add_argument("--size", type=int, default=150)
-    parser.add_argument("--out", default=os.path.join("docs", "images"))
+    add_output_arguments(parser)
     args = parser.parse_args()
-    meshes = os.path.join("out", "regions_meshes")  # git-ignored
+    out = output_folder(parser, args)
+    Path("out").mkdir(exist_ok=True)
     for name in ("split", "merge"):
         start = time.perf_counter()
         scene = toy_scene(name, args.spacing)
         frames = run_scene(scene, saves=args.saves)
         seconds = time.perf_counter() - start
+        meshes = Path("out") / f"regions_{name}"  # git-ignored; replaced by each run
         written = write_frames(frames, meshes, size=args.size,
-                               views=((30.0, 25.0), (-60.0, 35.0)), stem=name)
-        os.replace(written[-1], os.path.join(args.out, f"regions_{name}.png"))
+                               views=((30.0, 25.0), (-60.0, 35.0)), stem=name, overwrite=True)
+        shutil.copyfile(written[-1], out / f"regions_{name}.png")
         shares = ", ".join(f"{f.area_fraction(0):.3f}" for f in frames)
         print(f"{name}: grid {'x'.join(map(str, scene.phi.shape[::-1]))}, {seconds:.1f} s; "
               f"yellow area fraction {shares} at t = {', '.join(f'{f.time:g}' for f in frames)}")

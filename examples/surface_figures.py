@@ -1,7 +1,7 @@
 """Thesis Figures 4.3-4.8 on generated shapes (or on your own mesh): PDEs intrinsic to an
 implicit surface, computed on a narrow band of a 3D grid.
 
-    python examples/surface_figures.py [--mesh FILE] [--resolution 64] [--out docs/images]
+    python examples/surface_figures.py [--mesh FILE] [--resolution 64] [--out out/ | --docs]
                                        [--figures 4.3,4.4,4.5,4.6,4.7,4.8]
 
 Writes surface_fig4_3.png (heat flow), surface_fig4_4.png (noisy / TV denoising with dynamic
@@ -15,12 +15,19 @@ surface_fig4_8.png (noise diffused along the major and the minor principal direc
 
 import argparse
 import time
-from pathlib import Path
 
 import numpy as np
+from _output import add_output_arguments, output_folder
 
 from clpde.surface import ImplicitSurface, render_mesh, to_mesh
-from clpde.surface.demo import _write_png, checker, colour_pattern, load_surface, surface_noise
+from clpde.surface.demo import (
+    _write_png,
+    checker,
+    colour_pattern,
+    load_surface,
+    surface_noise,
+    tv_time,
+)
 
 
 def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):
@@ -38,12 +45,11 @@ def main():
     parser.add_argument("--resolution", type=int, default=64)
     parser.add_argument("--size", type=int, default=260, help="pixels per panel")
     parser.add_argument("--iterations", type=int, default=4000, help="reaction-diffusion")
-    parser.add_argument("--out", default="docs/images")
+    add_output_arguments(parser)
     parser.add_argument("--figures", default="4.3,4.4,4.5,4.6,4.7,4.8", help="which figures")
     args = parser.parse_args()
     wanted = set(args.figures.split(","))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(parser, args)
     rng = np.random.default_rng(0)
     torus = load_surface(args.mesh or "torus", args.resolution)
     genus2 = load_surface(args.mesh or "double-torus", int(args.resolution * 1.4))
@@ -66,7 +72,7 @@ def main():
         denoised, info = torus.denoise_tv(noisy, sigma=sigma, t=40 * h**2, return_info=True)
         print(f"  TV denoising: residual variance {info['residual_variance']:.4f}, "
               f"sigma^2 = {sigma**2:.4f}")
-        flowed = torus.tv(noisy, t=10 * h**2)
+        flowed = torus.tv(noisy, t=tv_time(sigma, h))  # flattens the noise, keeps the squares
         save(out / "surface_fig4_4.png",
              [picture(torus, x, size, vmin=0, vmax=1) for x in (noisy, denoised, flowed)])
 

@@ -87,3 +87,18 @@ def test_demo_writes_the_pictures(tmp_path, monkeypatch):
     assert mask.any() and np.array_equal(restored[~mask], damaged_[~mask])
     assert np.abs(restored[mask].astype(float) - original[mask]).mean() < \
         np.abs(damaged_[mask].astype(float) - original[mask]).mean() / 2
+
+
+def test_demo_puts_its_psnr_beside_the_peers(tmp_path, monkeypatch, capsys):
+    """Issue 11: the demo's PSNR had nothing to compare it with."""
+    full = inpaint_demo.demo_case
+    monkeypatch.setattr(inpaint_demo, "demo_case", lambda: tuple(a[:96, :96] for a in full()))
+    assert main(["inpaint", "--demo", "-o", str(tmp_path / "demo")]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert "PSNR inside the mask" in line and "scikit-image biharmonic" in line
+    pytest.importorskip("cv2")
+    assert "OpenCV Telea" in line and "OpenCV Navier-Stokes" in line
+    original, damaged, mask = (a[:96, :96] for a in full())
+    peers = inpaint_demo.peer_psnr(damaged, mask, original)
+    assert all(15 < v < 40 for v in peers.values())  # real fills, not the damage (about 5 dB)
+    assert inpaint_demo.psnr_in_mask(damaged, original, mask) < 12

@@ -158,3 +158,86 @@ def test_unwritable_folder_error_names_the_output(tmp_path, monkeypatch):
     monkeypatch.setattr(tempfile, "mkstemp", refuse)
     with pytest.raises(InputError, match="cannot write .*out.png: Permission denied"):
         write_image(tmp_path / "out.png", np.zeros((3, 3), np.uint8))
+
+
+# ---- masks (issue 11, item 3) -------------------------------------------------------------
+def _strokes(shape=(120, 160)):
+    """Thin text-like strokes over about 2.5% of the pixels, as a damage mask."""
+    mask = np.zeros(shape, bool)
+    for k in range(6):
+        mask[15 + 18 * k: 17 + 18 * k, 10:150] = True
+    mask[:, 80:82] = True
+    return mask
+
+
+def test_a_jpeg_mask_is_binarised_at_half_its_range_with_a_warning(tmp_path):
+    from PIL import Image
+
+    from clpde.io import read_mask
+
+    truth = _strokes()
+    path = tmp_path / "mask.jpg"
+    Image.fromarray(truth.astype(np.uint8) * 255).save(path, quality=75)  # Pillow's default
+    grey = read_image(path)
+    assert (grey > 0).sum() > 1.5 * truth.sum()  # ringing: "nonzero" would grow the mask
+    with pytest.warns(UserWarning, match="lossy JPEG.*save masks as PNG"):
+        mask = read_mask(path, truth.shape)
+    assert mask.dtype == bool
+    assert abs(int(mask.sum()) - int(truth.sum())) < 0.03 * truth.sum()
+    assert (mask != truth).mean() < 0.002
+
+
+@pytest.mark.parametrize("levels, expected", [
+    ((0, 255), None),        # drawn masks read as drawn, without a warning
+    ((0, 1), None),          # a 0/1 label image too
+    ((10, 200), None),
+    ((0, 100, 255), "3 grey levels"),
+])
+def test_grey_masks_cut_half_way(tmp_path, levels, expected):
+    import warnings
+
+    from clpde.io import read_mask
+
+    values = np.array(levels, np.uint8)[np.arange(12) % len(levels)].reshape(3, 4)
+    write_image(tmp_path / "m.png", values)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mask = read_mask(tmp_path / "m.png")
+    np.testing.assert_array_equal(mask, values > (levels[0] + levels[-1]) / 2)
+    assert [str(w.message) for w in caught if expected and expected in str(w.message)] or \
+        (expected is None and not caught)
+
+
+def test_colour_and_uniform_masks(tmp_path):
+    from clpde.io import read_mask
+
+    rgba = np.zeros((4, 5, 4), np.uint8)
+    rgba[..., 3] = 255  # alpha is ignored
+    rgba[1, 2, 0] = 250  # a red pixel
+    write_image(tmp_path / "c.png", rgba)
+    expected = np.zeros((4, 5), bool)
+    expected[1, 2] = True
+    np.testing.assert_array_equal(read_mask(tmp_path / "c.png"), expected)
+    write_image(tmp_path / "w.png", np.full((4, 5), 255, np.uint8))
+    assert read_mask(tmp_path / "w.png").all()
+    with pytest.raises(InputError, match="is 5x4 pixels but the image is 6x4; give a mask"):
+        read_mask(tmp_path / "w.png", (4, 6))
+
+
+# ---- large and empty files (issue 11, item 5) -------------------------------------------
+def test_large_images_are_not_blocked_by_pillows_bomb_limit(tmp_path, monkeypatch):
+    from PIL import Image
+
+    image = np.arange(60 * 70, dtype=np.uint32).reshape(60, 70).astype(np.uint8)
+    write_image(tmp_path / "big.png", image)
+    # the limit scaled down: 4200 pixels are more than twice it, where Pillow refuses to open
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1000)
+    np.testing.assert_array_equal(read_image(tmp_path / "big.png"), image)
+    assert Image.MAX_IMAGE_PIXELS == 1000  # restored for the rest of the program
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif", ".jpg"])
+def test_an_empty_file_is_reported_as_empty(tmp_path, suffix):
+    (tmp_path / f"e{suffix}").write_bytes(b"")
+    with pytest.raises(InputError, match=r"is empty \(0 bytes\)"):
+        read_image(tmp_path / f"e{suffix}")

@@ -473,13 +473,14 @@ def test_cli_tracks_the_regions_painted_on_a_mesh(tmp_path, capsys):
     ball.visual.vertex_colors = np.random.default_rng(0).integers(0, 255, (len(ball.vertices), 4), dtype=np.uint8)
     ball.export(path)
     assert main(["regions", str(path), "-o", str(out), "--resolution", "32", "--regions",
-                 "colours"]) == 2
+                 "colours", "--overwrite"]) == 2
     assert "at most 8" in capsys.readouterr().err
     # by default such a mesh falls back to the curvature-sign regions, with a warning
     assert main(["regions", str(path), "-o", str(out), "--flow", "mean-curvature",
-                 "--resolution", "24", "--saves", "1", "--size", "32"]) == 0
+                 "--resolution", "24", "--saves", "1", "--size", "32", "--overwrite"]) == 0
     assert "curvature-sign regions instead" in capsys.readouterr().err
     plain = tmp_path / "plain.ply"
     trimesh.creation.icosphere(2).export(plain)
-    assert main(["regions", str(plain), "-o", str(out), "--regions", "colours"]) == 2
+    assert main(["regions", str(plain), "-o", str(out), "--regions", "colours",
+                 "--overwrite"]) == 2
     assert "no vertex colours" in capsys.readouterr().err

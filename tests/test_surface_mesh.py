@@ -108,7 +108,8 @@ def test_to_mesh_export_and_render(tmp_path):
         export_mesh(mesh, tmp_path / f"s.{ext}")
         back = trimesh.load(tmp_path / f"s.{ext}", force="mesh")
         assert len(back.faces) == len(mesh.faces)
-    image = render(s, u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64)
+    image = render(s, u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64,
+                   colour_bar=False)
     assert image.shape == (64, 128, 3) and (tmp_path / "s.png").stat().st_size > 0
     # a sphere seen from the side fills a disk: about pi/4 * 0.92^2 of the square
     filled = (image[:, :64] != 255).any(axis=2).mean()

@@ -16,9 +16,53 @@ def _render(inside, rng, noise):
     return np.clip(img + rng.normal(0, noise, img.shape), 0, 1)
 
 
+def _texture(rng, n, scale):
+    """A fixed random texture in [-1, 1]: noise smoothed over `scale` pixels."""
+    t = ndimage.gaussian_filter(rng.normal(size=(n, n)), scale, mode="wrap")
+    return t / np.abs(t).max()
+
+
+def hard_sequence(kind, n=64, frames=8, noise=0.04, seed=0):
+    """(frames, true masks) of the hard cases of real video: a textured disc under a
+    shadow that sweeps across the scene ('shadow'), under a global flicker of brightness
+    and contrast ('flicker'), or passing next to a look-alike of the same mean brightness
+    but a smoother texture ('distractor'). The disc moves 1.5 px per frame along x."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[:n, :n] + 0.0
+    big = 2 * n
+    fine, coarse = _texture(rng, big, 1.0), _texture(rng, big, 3.0)
+    back = 0.45 + 0.12 * _texture(rng, n, 2.0)
+    images, masks = [], []
+    for t in range(frames):
+        cx, cy = 20 + 1.5 * t, 30.0
+        inside = np.hypot(x - cx, y - cy) < 11
+        # The object's texture moves with it (sampled at x - shift).
+        tex = ndimage.shift(fine, (0, 1.5 * t), order=1, mode="wrap")[:n, :n]
+        obj = 0.62 + 0.25 * tex
+        img = back.copy()
+        if kind == "distractor":  # a still look-alike just below the disc's path
+            other = np.hypot(x - 40, y - 52) < 10
+            img = np.where(ndimage.gaussian_filter(other * 1.0, 0.7) > 0.5,
+                           0.62 + 0.25 * coarse[:n, :n], img)
+        edge = ndimage.gaussian_filter(inside * 1.0, 0.7)
+        img = (1 - edge) * img + edge * obj
+        if kind == "shadow":  # a soft-edged shadow sweeping from the left, 0.45x light
+            front = 2 + 6.0 * t
+            img = img * (1 - 0.55 / (1 + np.exp((x + 0.3 * y - front) / 3.0)))
+        elif kind == "flicker":
+            gain, offset = rng.uniform(0.6, 1.3), rng.uniform(-0.15, 0.15)
+            img = gain * (img - 0.5) + 0.5 + offset
+        images.append(np.clip(img + rng.normal(0, noise, img.shape), 0, 1))
+        masks.append(inside)
+    return np.array(images), np.array(masks)
+
+
 def synthetic_sequence(kind, n=64, frames=6, noise=0.08, seed=0):
     """(frames, true masks) of a translating, deforming, splitting or merging shape, or
-    consecutive slices of a 3D phantom."""
+    consecutive slices of a 3D phantom; 'shadow', 'flicker' and 'distractor' are the hard
+    cases of hard_sequence."""
+    if kind in ("shadow", "flicker", "distractor"):
+        return hard_sequence(kind, n=n, frames=frames, seed=seed)
     rng = np.random.default_rng(seed)
     if kind == "phantom":
         # A tilted ellipsoid and a ball that leaves it; slices 2 voxels apart.
@@ -156,6 +200,49 @@ def test_the_band_follows_a_front_that_moves_beyond_it():
     # 2 px per frame along x and 1 along y: the front leaves the first band (|u| < 3), so
     # the band must be rebuilt on the device while the contour moves.
     frames, truth = synthetic_sequence("translate", frames=4)
-    states = list(MorphingTracker(frames, truth[0], band_width=3))
+    states = list(MorphingTracker(frames, truth[0], band_width=3, motion=None))
     assert sum(s.rebuilds for s in states[1:]) >= 2
     assert iou(states[-1].mask, truth[-1]) >= 0.9
+
+
+@pytest.mark.parametrize("kind", ["shadow", "flicker", "distractor"])
+def test_default_holds_under_shadow_flicker_and_a_distractor(kind):
+    frames, truth = synthetic_sequence(kind, frames=8)
+    scores = [iou(m, t) for m, t in zip(track(frames, truth[0]), truth)]
+    assert min(scores) >= 0.9, scores
+    if kind == "shadow":  # the thesis' grey F2 - F1 alone is moved by the shadow
+        old = track(frames, truth[0], discrepancy="difference", motion=None, equalize="match")
+        assert min(iou(m, t) for m, t in zip(old, truth)) < 0.8
+
+
+def test_colour_and_user_feature_maps():
+    frames, truth = synthetic_sequence("translate", frames=4, noise=0.03)
+    # Colour: the object differs from the background in one channel only, which the grey
+    # conversion weakens; every channel enters the discrepancy.
+    rgb = np.stack([0.5 + 0 * frames, frames, 0.5 + 0 * frames], axis=-1)
+    keep = rgb.copy()
+    for m, t in zip(track(rgb, truth[0], colour=True)[1:], truth[1:]):
+        assert iou(m, t) > 0.9
+    np.testing.assert_array_equal(rgb, keep)
+    # The user's maps: an array per frame, or a callable on each frame.
+    maps = 1 - frames  # inverted: tracks the same
+    for features in (maps, list(maps[..., None]), lambda f: 1 - f):
+        masks = track(frames, truth[0], features=features)
+        assert min(iou(m, t) for m, t in zip(masks, truth)) > 0.9
+    with pytest.raises(InputError, match="one per frame"):
+        track(frames, truth[0], features=maps[:2])
+    with pytest.raises(InputError, match="do not fit"):
+        track(frames, truth[0], features=maps[:, :10])
+    with pytest.raises(InputError, match="discrepancy"):
+        track(frames, truth[0], discrepancy="mutual")
+    with pytest.raises(InputError, match="motion"):
+        track(frames, truth[0], motion="lucas")
+
+
+def test_each_frame_reports_its_final_discrepancy():
+    frames, truth = synthetic_sequence("translate", frames=5, noise=0.03)
+    frames = frames.copy()
+    frames[3] = np.random.default_rng(0).random(frames[3].shape)  # a broken frame
+    _masks, residuals = track(frames, truth[0], return_discrepancy=True)
+    assert residuals.shape == (5,) and residuals[0] == 0
+    assert residuals[3] > 2 * np.median(residuals[1:])

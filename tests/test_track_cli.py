@@ -95,16 +95,30 @@ def test_grey_conversion_and_polygons():
         read_frames(__file__)
 
 
-def test_an_existing_output_folder_gets_its_files_replaced(tmp_path, sequence):
+def test_an_output_folder_holds_one_runs_files_only(tmp_path, sequence, capsys):
+    """Issue 11: a short run after a long one into the same folder left the long run's files.
+    Now a non-empty folder is refused, and --overwrite replaces it as a whole."""
     stack, mask, _frames8, truth = sequence
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "mask_0000.png").write_bytes(b"old")
-    (out / "notes.txt").write_text("kept")
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2"]) == 0
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out)]) == 0
+    long_run = sorted(p.name for p in out.iterdir())
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2"]) == 2
+    assert "give --overwrite" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == long_run  # untouched
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2",
+                 "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "contours.json", "mask_0000.png", "mask_0001.png", "overlay.gif"]
     assert (iio.imread(out / "mask_0000.png") > 0).sum() == truth[0].sum()
-    assert (out / "notes.txt").read_text() == "kept"
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]  # no staging left
+    # a folder with files clpde does not write is never replaced
+    (out / "notes.txt").write_text("mine")
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--overwrite"]) == 2
+    assert "'notes.txt', which clpde does not write" in capsys.readouterr().err
+    assert (out / "notes.txt").read_text() == "mine"
+    # one rule for a missing parent in every command: create it first
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(tmp_path / "a" / "b")]) == 2
+    assert "does not exist; create it first" in capsys.readouterr().err
 
 
 def test_a_missing_video_backend_is_named(tmp_path, monkeypatch):
@@ -115,3 +129,52 @@ def test_a_missing_video_backend_is_named(tmp_path, monkeypatch):
     monkeypatch.setattr(sequence_io, "_video_plugins", list)
     with pytest.raises(InputError, match=r"clpde\[video\]"):
         read_frames(clip)
+
+
+def test_mp4_overlay_is_padded_to_even_sizes_not_rescaled(tmp_path, sequence, capsys):
+    av = pytest.importorskip("av")
+    _, _, frames8, truth = sequence
+    odd = frames8[:, :63, :61]  # odd height and width
+    stack = tmp_path / "odd.tif"
+    tifffile.imwrite(stack, odd, photometric="minisblack")
+    mask = tmp_path / "odd_mask.png"
+    iio.imwrite(mask, truth[0][:63, :61].astype(np.uint8) * 255)
+    out = tmp_path / "out"
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--mp4",
+                 "--no-gif"]) == 0
+    with av.open(str(out / "overlay.mp4")) as container:
+        pictures = [f.to_ndarray(format="rgb24") for f in container.decode(video=0)]
+    assert len(pictures) == 4 and pictures[0].shape == (64, 62, 3)
+    grey = pictures[0][:63, :61].astype(float).mean(axis=-1)
+    # The frame itself sits unscaled in the top-left corner (H.264 is lossy: a loose check).
+    inside = ~truth[0][:63, :61]
+    assert np.abs(grey - odd[0])[inside].mean() < 12
+    assert pictures[0][63].max() < 30 and pictures[0][:, 61].max() < 30  # black padding
+    assert not [p for p in out.iterdir() if p.name.endswith(".part")]
+    # A second run replaces the folder, its MP4 included.
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--mp4",
+                 "--overwrite", "--frames", "2"]) == 0
+    with av.open(str(out / "overlay.mp4")) as container:
+        assert len(list(container.decode(video=0))) == 2
+
+
+def test_options_reach_the_tracker_and_low_confidence_frames_are_reported(tmp_path, sequence,
+                                                                          capsys):
+    stack, mask, frames8, truth = sequence
+    bad = frames8.copy()
+    bad[2] = np.random.default_rng(1).integers(0, 256, bad[2].shape)  # a broken frame
+    broken = tmp_path / "broken.tif"
+    tifffile.imwrite(broken, bad, photometric="minisblack")
+    out = tmp_path / "out"
+    assert main(["track", str(broken), "--init", str(mask), "-o", str(out), "--no-gif",
+                 "--discrepancy", "difference", "--motion", "velocity", "--features",
+                 "contrast", "--equalize", "match", "--shape-weight", "0.01"]) == 0
+    err = capsys.readouterr().err
+    assert "low confidence" in err and "frames 2" in err
+    out = tmp_path / "out2"
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--no-gif"]) == 0
+    assert "low confidence" not in capsys.readouterr().err
+    assert iou(iio.imread(out / "mask_0003.png") > 0, truth[3]) >= 0.9
+    assert main(["track", str(stack), "--init", str(mask), "-o", str(tmp_path / "out3"),
+                 "--shape-weight", "-1"]) == 2
+    assert "--shape-weight" in capsys.readouterr().err

@@ -6,13 +6,23 @@ atomically, and colour images are processed per channel with any alpha channel k
 
 from __future__ import annotations
 
+import contextlib
+import re
 import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input, check_writable, image_format, read_image, write_image
+from ..io import (
+    check_not_overwriting_input,
+    check_output_folder,
+    check_writable,
+    image_format,
+    read_image,
+    write_image,
+)
 from ..runtime import get_runtime
 
 
@@ -32,19 +42,71 @@ def add_image_arguments(parser) -> None:
     add_device_argument(parser)
 
 
+OUTPUT_FOLDER_RULE = ("created if missing (its parent must exist); it must be empty, "
+                      "unless --overwrite, which replaces it as a whole")
+
+
+def add_output_folder_arguments(parser, what: str = "output folder") -> None:
+    """-o/--output OUTDIR and --overwrite, with the one rule of every folder-writing command."""
+    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
+                        help=f"{what}: {OUTPUT_FOLDER_RULE}")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace the output folder's contents (only a folder of clpde's "
+                             "kinds of output files: .png .gif .json .ply .glb .tif .jpg)")
+
+
+def check_output_folder_args(args, inputs=()) -> None:
+    """The output folder's checks, before any work: not an input, and the folder rule."""
+    check_not_overwriting_input(list(inputs), args.output)
+    check_output_folder(args.output, args.overwrite, option="--overwrite")
+
+
+# Below this share of the band on a medial axis the flows' loss of accuracy is negligible.
+_COARSE_SHARE_SHOWN = 0.1  # percent
+
+
+@contextlib.contextmanager
+def grid_advice(resolution: int):
+    """The surface library's warnings in command-line terms: its grid is set by
+    --resolution (cells across the longest side), not by a spacing."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            pending = list(caught)
+    for w in pending:
+        text = str(w.message)
+        if "use a finer spacing" in text:
+            share = re.search(r"([\d.]+)% of the band", text)
+            if share and float(share.group(1)) < _COARSE_SHARE_SHOWN:
+                continue
+            text = re.sub(r"use a finer spacing \(below [^)]*\) or a narrower band",
+                          f"give a larger --resolution (such as {2 * resolution}, which halves "
+                          "the spacing)", text)
+        warnings.warn(text, w.category, stacklevel=3)
+
+
 def show_progress() -> bool:
     """Progress bars go to stderr, so only draw them when stderr is a terminal."""
     return sys.stderr.isatty()
 
 
-def load_input(args, *extra_inputs) -> np.ndarray:
-    """Check the device and the output path, then read IN; all before any work is done."""
+def load_input(args, *extra_inputs, allow_nan: bool = False) -> np.ndarray:
+    """Check the device and the output path, then read IN; all before any work is done.
+    NaN pixels are refused with the command that fills them, unless allow_nan."""
     get_runtime(args.device)  # an unknown device fails here, before reading anything
     check_not_overwriting_input([args.input, *extra_inputs], args.output)
     image_format(args.output)
     image = read_image(args.input)
     if image.dtype == bool:  # 1-bit files: compute on 0/255 and write 8-bit
         image = image.astype(np.uint8) * 255
+    if not allow_nan and np.issubdtype(image.dtype, np.floating):
+        bad = int((~np.isfinite(image)).sum())
+        if bad:
+            raise InputError(
+                f"{args.input} has {bad} NaN or infinite values; fill them first with "
+                f"`clpde inpaint {args.input} nan -o FILLED.tif`, then use FILLED.tif")
     check_writable(args.output, image.dtype, image.shape)
     return image
 

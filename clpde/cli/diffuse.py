@@ -30,15 +30,18 @@ def add_diffuse_parser(subparsers) -> None:
     parser.add_argument("--edge", choices=("exp", "rational"), default=None,
                         help="Perona-Malik edge-stopping function (default: exp)")
     parser.add_argument("--eps", type=float, default=None,
-                        help="TV / curvature regularisation of |grad u| (TV default 0.05)")
+                        help="TV / curvature regularisation of |grad u|, intensities in [0, 1] "
+                             "(TV default 0.005, about one 8-bit grey level: regions flatten, "
+                             "edges stay)")
     parser.set_defaults(run=run_diffuse)
 
 
 def run_diffuse(args) -> int:
-    from ..planar import diffuse
+    from ..planar import FLOW_PARAMS, diffuse
 
-    param_check(args, args.flow, {"kappa": ("perona-malik",), "edge": ("perona-malik",),
-                                   "eps": ("tv", "curvature")})
+    param_check(args, args.flow, {option: tuple(f for f, params in FLOW_PARAMS.items()
+                                                if option in params)
+                                  for option in ("kappa", "edge", "eps")})
     image = load_input(args)
     parts = split_alpha(image, args.input)
     params = {k: getattr(args, k) for k in ("kappa", "edge", "eps") if getattr(args, k) is not None}

@@ -2,15 +2,24 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 import numpy as np
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input, read_image
+from ..io import MASK_RULE, check_not_overwriting_input, read_mask
 from ..runtime import get_runtime
 from ..video import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
-from ._common import add_device_argument, load_input, save_output, show_progress, split_alpha
+from ._common import (
+    OUTPUT_FOLDER_RULE,
+    add_device_argument,
+    check_output_folder_args,
+    load_input,
+    save_output,
+    show_progress,
+    split_alpha,
+)
 
 
 def add_inpaint_parser(subparsers) -> None:
@@ -24,11 +33,16 @@ def add_inpaint_parser(subparsers) -> None:
     )
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
     parser.add_argument("mask", metavar="MASK", nargs="?",
-                        help="mask image of the same size; nonzero (white) = inpaint")
+                        help="mask image of the same size; white = inpaint (" + MASK_RULE + "); "
+                             "or the word 'nan' to fill the NaN pixels of a float TIFF")
     parser.add_argument("-o", "--output", metavar="OUT", required=True,
                         help="output image (with --demo: an output folder)")
     parser.add_argument("--demo", action="store_true",
-                        help="inpaint a bundled damaged photo; writes PNGs into the folder OUT")
+                        help="inpaint a bundled damaged photo; writes PNGs into the folder OUT "
+                             "(" + OUTPUT_FOLDER_RULE + ")")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="with --demo: replace the folder OUT's contents (only a folder of "
+                             "clpde's kinds of output files)")
     parser.add_argument("--gif", metavar="EVOLUTION.gif", default=None,
                         help="also write the evolution as an animated GIF")
     parser.add_argument("--gif-every", type=int, default=100, metavar="N",
@@ -53,17 +67,6 @@ def add_inpaint_parser(subparsers) -> None:
     parser.set_defaults(run=run_inpaint)
 
 
-def _read_inpaint_mask(path, shape) -> np.ndarray:
-    mask = read_image(path)
-    if mask.ndim == 3:  # colour mask: any colour channel; an alpha channel is ignored
-        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
-        mask = (mask[..., :channels] != 0).any(axis=-1)
-    if mask.shape != tuple(shape):
-        raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
-                         f"is {shape[1]}x{shape[0]}; give a mask of the same size")
-    return mask != 0
-
-
 def run_inpaint(args) -> int:
     from ..inpaint import inpaint
     from ..io import write_gif
@@ -79,17 +82,40 @@ def run_inpaint(args) -> int:
             raise InputError(
                 "--demo takes no IMAGE, MASK or --gif; it writes into the folder -o OUT")
         get_runtime(args.device)
-        written = run_demo(args.output, device=args.device, progress=show_progress())
+        check_output_folder_args(args)
+        written = run_demo(args.output, device=args.device, progress=show_progress(),
+                           overwrite=args.overwrite)
         print(f"wrote {len(written)} files to {args.output}", file=sys.stderr)
         return 0
     if not args.input or not args.mask:
         raise InputError("give IMAGE and MASK (or --demo)")
+    if args.overwrite:
+        raise InputError("--overwrite is for --demo's output folder; an output image is "
+                         "always replaced")
     if args.gif:
         check_not_overwriting_input([args.input, args.mask], args.gif)
         if not str(args.gif).lower().endswith(".gif"):
             raise InputError(f"--gif {args.gif}: the animation must be a .gif file")
-    image = load_input(args, args.mask)
-    mask = _read_inpaint_mask(args.mask, image.shape[:2])
+        folder = os.path.dirname(os.path.abspath(args.gif))
+        if not os.path.isdir(folder):
+            raise InputError(f"the folder {folder} for --gif does not exist; create it first")
+    nan_mask = args.mask.lower() == "nan" and not os.path.exists(args.mask)
+    image = load_input(args, *([] if nan_mask else [args.mask]), allow_nan=True)
+    finite = (np.isfinite(image) if np.issubdtype(image.dtype, np.floating)
+              else np.ones(image.shape, bool))
+    finite = finite.all(axis=-1) if finite.ndim == 3 else finite
+    if nan_mask:
+        if finite.all():
+            raise InputError(f"{args.input} has no NaN pixels to fill (MASK 'nan'); give a mask "
+                             "image of the pixels to inpaint")
+        mask = ~finite
+    else:
+        mask = read_mask(args.mask, image.shape[:2])
+        if not finite[~mask].all():
+            raise InputError(
+                f"{args.input} has {int((~finite[~mask]).sum())} NaN pixels outside the mask "
+                f"{args.mask}; paint them into the mask, or give 'nan' as MASK to fill exactly "
+                "the NaN pixels")
     parts = split_alpha(image, args.input)
     options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
                "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,
@@ -101,9 +127,32 @@ def run_inpaint(args) -> int:
         result, info = inpaint(parts.colour, mask, **options)
     save_output(args, parts.join(result))
     if args.gif:
-        write_gif(args.gif, [s.image for s in info.snapshots])
-        print(f"wrote {args.gif} ({len(info.snapshots)} frames)", file=sys.stderr)
+        frames = evolution_frames(parts.colour, [s.image for s in info.snapshots])
+        write_gif(args.gif, frames, duration=0.25)
+        print(f"wrote {args.gif} ({len(frames)} frames: the damaged image, then every "
+              f"{args.gif_every} steps from the start fill to the result)", file=sys.stderr)
     state = "converged" if info.converged else "stopped at --max-steps"
     print(f"inpaint: {int(mask.sum())} pixels, {info.steps} steps ({state}), "
           f"{info.levels} level(s), {info.seconds:.2f} s", file=sys.stderr)
     return 0
+
+
+def evolution_frames(damaged, states) -> list[np.ndarray]:
+    """The GIF's frames as uint8: the damaged image first (its region shown as it came, NaN
+    as black), then the states; all on one intensity scale (the result's range for floats),
+    consecutive equal frames merged, since a GIF cannot show them apart."""
+    frames = [np.asarray(damaged), *(np.asarray(s) for s in states)]
+    result = frames[-1]
+    if np.issubdtype(result.dtype, np.floating):
+        finite = result[np.isfinite(result)]
+        lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+        scale = hi - lo if hi > lo else 1.0
+        frames = [np.nan_to_num((f.astype(np.float64) - lo) / scale, nan=0.0, posinf=1.0,
+                                neginf=0.0) for f in frames]
+    from ..io import _frame_to_uint8
+
+    out = []
+    for frame in map(_frame_to_uint8, frames):
+        if not out or not np.array_equal(frame, out[-1]):
+            out.append(frame)
+    return out

@@ -5,9 +5,14 @@ from __future__ import annotations
 import sys
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input
 from ..runtime import get_runtime
-from ._common import add_device_argument, show_progress
+from ._common import (
+    add_device_argument,
+    add_output_folder_arguments,
+    check_output_folder_args,
+    grid_advice,
+    show_progress,
+)
 
 
 def add_surface_parser(subparsers) -> None:
@@ -25,8 +30,7 @@ def add_surface_parser(subparsers) -> None:
     )
     parser.add_argument("flow", metavar="FLOW", choices=FLOWS, help=" | ".join(FLOWS))
     parser.add_argument("mesh", metavar="MESH", help="mesh file or shape name")
-    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
-                        help="output folder (created if missing; its files are replaced)")
+    add_output_folder_arguments(parser)
     parser.add_argument("--resolution", type=int, default=96,
                         help="grid cells across the shape's longest side (default: 96)")
     parser.add_argument("--t", type=float, default=None,
@@ -55,14 +59,15 @@ def run_surface(args) -> int:
     from ..surface.demo import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
 
     get_runtime(args.device)
-    check_not_overwriting_input([args.mesh], args.output)
+    check_output_folder_args(args, [args.mesh])
     if args.resolution < 16:
         raise InputError(f"--resolution must be at least 16, not {args.resolution}")
     if args.size < 16:
         raise InputError(f"--size must be at least 16, not {args.size}")
     if args.direction == "none" and args.flow == "flowvis":
         raise InputError("flowvis needs --direction major or minor")
-    surf = load_surface(args.mesh, args.resolution, device=args.device)
+    with grid_advice(args.resolution):
+        surf = load_surface(args.mesh, args.resolution, device=args.device)
     data = None
     if args.data != "pattern" and args.flow in DATA_FLOWS:
         data = mesh_colours(surf)
@@ -70,7 +75,7 @@ def run_surface(args) -> int:
             raise InputError(f"{args.mesh} has no vertex colours; use --data pattern")
     run = run_flow(surf, args.flow, t=args.t, iterations=args.iterations, sigma=args.sigma,
                    seed=args.seed, direction=args.direction, data=data, progress=show_progress())
-    written = write_run(run, args.output, size=args.size)
+    written = write_run(run, args.output, size=args.size, overwrite=args.overwrite)
     print(f"surface {args.flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
           f"{surf.ext_band.n} cells; wrote {len(written)} files to {args.output}", file=sys.stderr)
     return 0

@@ -5,9 +5,14 @@ from __future__ import annotations
 import sys
 
 from ..imagedata import InputError
-from ..io import check_not_overwriting_input
+from ..io import MASK_RULE
 from ..runtime import get_runtime
-from ._common import add_device_argument, show_progress
+from ._common import (
+    add_device_argument,
+    add_output_folder_arguments,
+    check_output_folder_args,
+    show_progress,
+)
 
 
 def add_track_parser(subparsers) -> None:
@@ -15,19 +20,39 @@ def add_track_parser(subparsers) -> None:
         "track", help="follow an object through video frames or image slices",
         description="Morphing active contours (thesis section 2.1): the object marked in the "
                     "first frame by --init is carried through the sequence. INPUT is a video, "
-                    "a folder of images or a multi-page TIFF; colour frames are made grey. "
+                    "a folder of images or a multi-page TIFF; colour frames are made grey "
+                    "unless --colour. Frames whose final discrepancy is high are reported. "
                     "Writes OUTDIR/mask_0000.png..., OUTDIR/overlay.gif and "
-                    "OUTDIR/contours.json (polygons per frame).",
+                    "OUTDIR/contours.json (polygons per frame), and with --mp4 OUTDIR/overlay.mp4.",
     )
     parser.add_argument("input", metavar="INPUT", help="video file, image folder or TIFF stack")
     parser.add_argument("--init", metavar="MASK", required=True,
-                        help="mask image of the object in the first frame (nonzero = inside)")
-    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
-                        help="output folder (created if missing; its files are replaced)")
-    parser.add_argument("--features", choices=("intensity", "edges"), default="intensity",
-                        help="what the frames are compared by (default: intensity)")
+                        help="mask image of the object in the first frame, white = inside ("
+                             + MASK_RULE + ")")
+    add_output_folder_arguments(parser)
+    parser.add_argument("--features", choices=("intensity", "edges", "contrast"),
+                        default="intensity",
+                        help="what the frames are compared by: grey levels, edge maps or local "
+                             "contrast normalisation (invariant to local light changes) "
+                             "(default: intensity)")
+    parser.add_argument("--colour", action="store_true",
+                        help="compare all colour channels, not grey only")
+    parser.add_argument("--discrepancy", choices=("ncc", "difference", "huber"), default="ncc",
+                        help="how F2 and F1 are compared: local normalised cross-correlation "
+                             "(ignores changes of light), F2 - F1 (the thesis; best on slices "
+                             "of a volume) or a Huber-clipped difference (default: ncc)")
+    parser.add_argument("--motion", choices=("kalman", "velocity", "none"), default="kalman",
+                        help="start each frame at the predicted displacement: a constant-"
+                             "velocity Kalman filter fed by matching the frames, the previous "
+                             "displacement, or none (default: kalman)")
+    parser.add_argument("--shape-weight", type=float, default=0.0, metavar="W",
+                        help="pull the contour towards the predicted start where the frames "
+                             "say nothing, against leaks (e.g. 0.02; default: 0)")
+    parser.add_argument("--equalize", choices=("none", "match", "global"), default="none",
+                        help="grey-level equalisation across frames: histogram matching to "
+                             "the first frame, flat equalisation, or none (default: none)")
     parser.add_argument("--no-equalize", action="store_true",
-                        help="skip the histogram equalisation across frames")
+                        help="skip the histogram equalisation across frames (= --equalize none)")
     parser.add_argument("--no-smooth", action="store_true",
                         help="skip the anisotropic (Perona-Malik) pre-smoothing")
     parser.add_argument("--max-iterations", type=int, default=40,
@@ -37,26 +62,81 @@ def add_track_parser(subparsers) -> None:
     parser.add_argument("--frames", type=int, default=None, metavar="N",
                         help="use only the first N frames")
     parser.add_argument("--no-gif", action="store_true", help="do not write overlay.gif")
+    parser.add_argument("--mp4", action="store_true",
+                        help="also write overlay.mp4 (H.264 through PyAV: pip install av; odd "
+                             "sizes padded by a black row or column, never rescaled)")
+    parser.add_argument("--low-confidence", type=float, default=2.0, metavar="K",
+                        help="report frames whose final discrepancy in the band exceeds K "
+                             "times the sequence's median (default: 2)")
     add_device_argument(parser)
     parser.set_defaults(run=run_track)
 
 
 def run_track(args) -> int:
-    from ..sequence_io import read_frames, read_mask, write_tracking
+    from ..sequence_io import read_frames, read_mask, to_grey, write_tracking
     from ..track import track
 
     get_runtime(args.device)
-    check_not_overwriting_input([args.input, args.init], args.output)
-    frames = read_frames(args.input)
+    check_output_folder_args(args, [args.input, args.init])
+    if args.mp4:
+        from ..track_features import require_av
+
+        require_av()
+    if args.shape_weight < 0:
+        raise InputError(f"--shape-weight must be at least 0, not {args.shape_weight}")
+    if args.low_confidence <= 0:
+        raise InputError(f"--low-confidence must be positive, not {args.low_confidence}")
+    frames = read_frames(args.input, grey=not args.colour)
     if args.frames is not None:
         if args.frames < 1:
             raise InputError(f"--frames must be at least 1, not {args.frames}")
         frames = frames[: args.frames]
     mask = read_mask(args.init, frames.shape[1:3])
-    masks = track(frames, mask, features=args.features, equalize=not args.no_equalize and "match",
-                  smooth=not args.no_smooth, max_iterations=args.max_iterations,
-                  min_size=args.min_size, device=args.device, progress=show_progress())
-    written = write_tracking(args.output, frames, masks, gif=not args.no_gif)
+    equalize = False if args.no_equalize or args.equalize == "none" else args.equalize
+    masks, residuals = track(
+        frames, mask, features=args.features, colour=args.colour, discrepancy=args.discrepancy,
+        motion=None if args.motion == "none" else args.motion, shape_weight=args.shape_weight,
+        equalize=equalize, smooth=not args.no_smooth, max_iterations=args.max_iterations,
+        min_size=args.min_size, device=args.device, progress=show_progress(),
+        return_discrepancy=True)
+    grey = to_grey(frames) if frames.ndim == 4 else frames
+    written = write_tracking(args.output, grey, masks, gif=not args.no_gif,
+                             overwrite=args.overwrite)
+    if args.mp4:
+        written.append(_write_mp4(args.output, grey, masks))
     print(f"track: {len(masks)} frames; wrote {len(written)} files to {args.output}",
           file=sys.stderr)
+    low = low_confidence_frames(residuals, args.low_confidence)
+    if low:
+        print(f"track: low confidence (final discrepancy above {args.low_confidence:g}x the "
+              f"median) in frames {', '.join(map(str, low))}", file=sys.stderr)
     return 0
+
+
+def low_confidence_frames(residuals, factor: float) -> list[int]:
+    """Frames (after the first) whose final discrepancy exceeds factor x the median."""
+    import numpy as np
+
+    later = np.asarray(residuals[1:], float)
+    if later.size == 0:
+        return []
+    median = float(np.median(later))
+    return [int(k) + 1 for k in np.nonzero(later > factor * max(median, 1e-12))[0]]
+
+
+def _write_mp4(outdir, frames, masks):
+    """overlay.mp4 beside the GIF, written under a temporary name and then moved in."""
+    import os
+    from pathlib import Path
+
+    from ..sequence_io import overlay
+    from ..track_features import write_mp4
+
+    final = Path(outdir) / "overlay.mp4"
+    tmp = final.with_name(".overlay.mp4.part")
+    try:
+        write_mp4(tmp, [overlay(f, m) for f, m in zip(frames, masks)])
+        os.replace(tmp, final)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return final

@@ -88,6 +88,60 @@ def _atomic_write(path: str, data: bytes) -> None:
         raise
 
 
+def _label_format(lo: float, hi: float):
+    """Labels with enough digits to tell the two ends apart."""
+    for digits in range(3, 8):
+        a, b = f"{lo:.{digits}g}", f"{hi:.{digits}g}"
+        if a != b or lo == hi:
+            return a, b
+    return a, b
+
+
+def colour_bar(width: int, vmin: float, vmax: float, *, label: str = "") -> np.ndarray:
+    """(height, width, 3) uint8 strip: the colour ramp from vmin to vmax, with the two values
+    written at its ends (and `label` before them), black on white."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    width = int(width)
+    height = max(22, min(40, width // 12))
+    font = ImageFont.load_default(size=max(10, height // 2))
+    lo_text, hi_text = _label_format(float(vmin), float(vmax))
+    lo_text = f"{label}:  {lo_text}" if label else lo_text
+    canvas = Image.new("RGB", (width, height), (255, 255, 255))
+    draw = ImageDraw.Draw(canvas)
+    lo_w = draw.textlength(lo_text, font=font)
+    hi_w = draw.textlength(hi_text, font=font)
+    pad = max(4, height // 4)
+    x0, x1 = int(lo_w + 2 * pad), int(width - hi_w - 2 * pad)
+    if x1 - x0 < 16:  # too narrow for text: the ramp alone
+        x0, x1, lo_text, hi_text = pad, width - pad, "", ""
+    ramp = colormap(np.linspace(0.0, 1.0, x1 - x0), 0.0, 1.0)
+    bar = np.rint(255 * ramp).astype(np.uint8)
+    top, bottom = pad, height - pad
+    strip = np.asarray(canvas).copy()
+    strip[top:bottom, x0:x1] = bar[np.newaxis]
+    canvas = Image.fromarray(strip)
+    draw = ImageDraw.Draw(canvas)
+    middle = height / 2
+    draw.text((pad, middle), lo_text, fill=(0, 0, 0), font=font, anchor="lm")
+    draw.text((width - pad, middle), hi_text, fill=(0, 0, 0), font=font, anchor="rm")
+    return np.asarray(canvas)
+
+
+def with_colour_bar(image, vmin: float, vmax: float, *, label: str = "") -> np.ndarray:
+    """`image` with a colour bar from vmin to vmax below it."""
+    image = np.asarray(image)
+    return np.concatenate([image, colour_bar(image.shape[1], vmin, vmax, label=label)], axis=0)
+
+
+def scalar_range(values, vmin=None, vmax=None) -> tuple[float, float]:
+    """The range the colour ramp spans for these values, as colormap uses it."""
+    v = np.asarray(values, dtype=np.float64)
+    lo = float(np.nanmin(v)) if vmin is None else float(vmin)
+    hi = float(np.nanmax(v)) if vmax is None else float(vmax)
+    return lo, hi
+
+
 def view_rotation(azimuth=30.0, elevation=20.0) -> np.ndarray:
     """Rotation taking world (x, y, z; z up) to camera (right, up, towards the viewer)."""
     a, e = np.radians(azimuth), np.radians(elevation)
@@ -104,7 +158,10 @@ def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1
     faces = np.asarray(mesh.faces)
     if len(faces) == 0:
         raise InputError("the mesh has no triangles to render")
+    # trimesh reports a default dark grey for meshes without colours: draw those light grey
     colours = getattr(mesh.visual, "vertex_colors", None)
+    if getattr(mesh.visual, "kind", None) != "vertex":
+        colours = None
     if colours is None or len(colours) != len(verts):
         colours = np.full((len(verts), 3), 0.8)
     else:
@@ -152,11 +209,13 @@ def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1
 
 
 def render(surf_or_mesh, u=None, path=None, *, views=((30.0, 20.0),), size=512, vmin=None,
-           vmax=None):
+           vmax=None, colour_bar: bool = True):
     """Picture(s) of data on a surface (an ImplicitSurface with u, or a trimesh.Trimesh).
 
-    views: (azimuth, elevation) pairs in degrees, placed side by side. Returns the
-    (size, size * len(views), 3) uint8 image and writes it as PNG to `path` if given."""
+    views: (azimuth, elevation) pairs in degrees, placed side by side. Scalar data gets a
+    colour bar with its value range below the views (colour_bar=False leaves it out).
+    Returns the (size [+ bar], size * len(views), 3) uint8 image and writes it as PNG to
+    `path` if given."""
     import imageio.v3 as iio
     import trimesh
 
@@ -165,6 +224,9 @@ def render(surf_or_mesh, u=None, path=None, *, views=((30.0, 20.0),), size=512, 
     if not views:
         raise InputError("give at least one (azimuth, elevation) view")
     image = np.concatenate([render_mesh(mesh, size, a, e) for a, e in views], axis=1)
+    values = mesh.vertex_attributes.get("u") if hasattr(mesh, "vertex_attributes") else None
+    if colour_bar and values is not None and np.ndim(values) == 1:
+        image = with_colour_bar(image, *scalar_range(values, vmin, vmax))
     if path is not None:
         path = os.fspath(path)
         if not path.lower().endswith(".png"):

@@ -117,3 +117,86 @@ def signed_distance(mask):
     inside = ndimage.distance_transform_edt(mask)
     outside = ndimage.distance_transform_edt(~mask)
     return np.where(mask, 0.5 - inside, outside - 0.5)
+
+
+# ---- kernels/track_features.cl ---------------------------------------------------------
+
+def local_contrast(img, r, eps, scale):
+    """(ny, nx) -> scale (I - mean) / sqrt(var + eps^2) over (2r+1)^2 boxes, edge repeated."""
+    img = np.asarray(img, np.float64)
+    p = np.pad(img, r, mode="edge")
+    ny, nx = img.shape
+    s = np.zeros_like(img)
+    s2 = np.zeros_like(img)
+    for dy in range(2 * r + 1):
+        for dx in range(2 * r + 1):
+            v = p[dy:dy + ny, dx:dx + nx]
+            s += v
+            s2 += v * v
+    n = (2 * r + 1) ** 2
+    mean = s / n
+    var = np.maximum(s2 / n - mean**2, 0)
+    return scale * (img - mean) / np.sqrt(var + eps**2)
+
+
+def discrepancy(pf1, pf2, kind, delta, win=3):
+    """beta on the interior of padded (ny+4, nx+4) channel arrays: 'difference', 'huber'
+    or 'ncc' (window reads may reach `win` cells out, so the caller pads enough)."""
+    f1, f2 = _view(pf1, 0, 0), _view(pf2, 0, 0)
+    if kind == "difference":
+        return f2 - f1
+    if kind == "huber":
+        return np.clip(f2 - f1, -delta, delta)
+    # Padded `win` more (values beyond the ghosts only reach cells the caller ignores).
+    q1, q2 = (np.pad(p, win, mode="edge") for p in (pf1, pf2))
+    ny, nx = f1.shape
+    o = G + win
+
+    def view(q, dy, dx):
+        return q[o + dy:o + dy + ny, o + dx:o + dx + nx]
+
+    sums = np.zeros((5,) + f1.shape)
+    for dy in range(-win, win + 1):
+        for dx in range(-win, win + 1):
+            a, b = view(q1, dy, dx), view(q2, dy, dx)
+            sums += np.array([a, b, a * a, b * b, a * b])
+    n = (2 * win + 1) ** 2
+    m1, m2 = sums[0] / n, sums[1] / n
+    v1 = np.maximum(sums[2] / n - m1**2, 0) + delta**2
+    v2 = np.maximum(sums[3] / n - m2**2, 0) + delta**2
+    rho = (sums[4] / n - m1 * m2) / np.sqrt(v1 * v2)
+    return np.sqrt(v1 / v2) * (f2 - m2) - rho * (f1 - m1)
+
+
+def morph_track(pu, pf1, pf2, band, prior, dt, eps_f, eps_u, near, lam, delta, kind, win=3):
+    """The generalised step over C channels: pf1, pf2 (C, ny+4, nx+4); returns (u_new,
+    f1_new (C, ny, nx), (max |du/dt|, max |beta|, max |grad F1|), mean over band cells of
+    the channels' mean |beta|, hit)."""
+    u = _view(pu, 0, 0)
+    ux = 0.5 * (_view(pu, 0, 1) - _view(pu, 0, -1))
+    uy = 0.5 * (_view(pu, 1, 0) - _view(pu, -1, 0))
+    proj = np.zeros_like(u)
+    gsum = np.zeros_like(u)
+    babs = np.zeros_like(u)
+    f1_new, betas, grads = [], [], []
+    for p1, p2 in zip(pf1, pf2):
+        beta = discrepancy(p1, p2, kind, delta, win)
+        grad_f = upwind_norm(p1, beta)
+        f1_new.append(_view(p1, 0, 0) + dt * beta * grad_f)
+        fx = 0.5 * (_view(p1, 0, 1) - _view(p1, 0, -1))
+        fy = 0.5 * (_view(p1, 1, 0) - _view(p1, -1, 0))
+        proj += beta * (fx * ux + fy * uy)
+        gsum += fx**2 + fy**2
+        babs += np.abs(beta)
+        betas.append(np.abs(beta))
+        grads.append(grad_f)
+    bhat = proj / np.sqrt((gsum + eps_f**2) * (ux**2 + uy**2 + eps_u**2))
+    rate = bhat * upwind_norm(pu, bhat) + lam * (_view(prior, 0, 0) - u)
+    u_new = u + dt * rate
+    inside = band > 0
+    hit = bool(np.any((band == 2) & (np.abs(u_new) < near)))
+    maxima = (float(np.abs(rate[inside]).max()), float(np.max([b[inside] for b in betas])),
+              float(np.max([g[inside] for g in grads])))
+    mean_beta = float((babs / len(pf1))[inside].mean())
+    f1_new = np.array([np.where(inside, f, _view(p1, 0, 0)) for f, p1 in zip(f1_new, pf1)])
+    return np.where(inside, u_new, u), f1_new, maxima, mean_beta, hit

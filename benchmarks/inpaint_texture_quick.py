@@ -1,0 +1,238 @@
+"""Quick comparison of clpde's texture methods with the peers, on inpaint_texture_cases.
+
+    python benchmarks/inpaint_texture_quick.py [--json PATH] [--only NAME,...] [--methods M,...]
+                                               [--speed]
+
+For each case of texture_cases() (texture, periodic and thick-hole classes) it runs
+clpde's exemplar and structure-texture methods, clpde.inpaint's default method,
+scikit-image's inpaint_biharmonic, OpenCV's INPAINT_NS and INPAINT_TELEA (radius 3), and
+two CPU PatchMatch inpainting packages from PyPI (pypatchmatch 2.2, patchmatch-cython 0.2;
+in the [bench] extra), and reports PSNR in the hole, SSIM in the holes' boxes (the mean of
+the SSIM map over the union of each hole's bounding box), the edge energy (texture kept in
+the hole; 1 is the original's) and wall time. Then the mean per class and method (PSNR
+capped at 60 dB, an exact fill being infinite), as a Markdown table, and all rows as JSON.
+The full comparison, with part 1's methods and cases, is benchmarks/inpaint_quality.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from inpaint_texture_cases import edge_energy, texture_cases  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results" / "inpaint_texture_quick.json"
+
+
+def to_data(image):
+    """(channels, rows, cols) float in [0, 1] from a (rows, cols[, 3]) uint8 or float image."""
+    image = np.asarray(image)
+    f = image.astype(np.float64)
+    if np.issubdtype(image.dtype, np.integer):
+        f /= np.iinfo(image.dtype).max
+    return f[None] if f.ndim == 2 else np.moveaxis(f, -1, 0)
+
+
+def from_data(data, like):
+    f = data[0] if np.asarray(like).ndim == 2 else np.moveaxis(data, 0, -1)
+    if np.issubdtype(np.asarray(like).dtype, np.integer):
+        return np.clip(np.rint(f * 255), 0, 255).astype(np.uint8)
+    return f
+
+
+def clpde_method(name):
+    def run(image, mask):
+        import clpde
+
+        axis = -1 if np.asarray(image).ndim == 3 else None
+        try:  # the dispatcher of issue 14 (clpde.inpaint(..., method=...)), once merged
+            return clpde.inpaint(image, mask, channel_axis=axis, method=name)
+        except TypeError:
+            pass
+        from importlib import import_module
+
+        from clpde.runtime import get_runtime
+
+        module = import_module("clpde.inpainting." + name.replace("-", "_"))
+        out = module.solve(to_data(image), mask, get_runtime(), seed=0)
+        return from_data(out, image)
+    return run
+
+
+def clpde_default(image, mask):
+    """clpde.inpaint with its default method (the thesis's transport before issue 14)."""
+    import clpde
+
+    axis = -1 if np.asarray(image).ndim == 3 else None
+    return clpde.inpaint(image, mask, channel_axis=axis)
+
+
+def biharmonic(image, mask):
+    from skimage.restoration import inpaint_biharmonic
+
+    axis = -1 if np.asarray(image).ndim == 3 else None
+    out = inpaint_biharmonic(image, mask, channel_axis=axis)
+    return from_data(to_data(out), image) if np.asarray(image).dtype == np.uint8 else out
+
+
+def opencv(flag):
+    def run(image, mask):
+        import cv2
+
+        img = np.asarray(image)
+        u8 = img if img.dtype == np.uint8 else np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
+        out = cv2.inpaint(np.ascontiguousarray(u8), mask.astype(np.uint8), 3, flag)
+        return out if img.dtype == np.uint8 else out.astype(np.float64) / 255
+    return run
+
+
+def _rgb(image):
+    img = np.asarray(image)
+    u8 = img if img.dtype == np.uint8 else np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(np.repeat(u8[..., None], 3, -1) if u8.ndim == 2 else u8)
+
+
+def _back(out, image):
+    img = np.asarray(image)
+    out = out[..., 0] if img.ndim == 2 else out
+    return out if img.dtype == np.uint8 else out.astype(np.float64) / 255
+
+
+def pypatchmatch(image, mask):
+    """PyPatchMatch (InvokeAI's PatchMatch, C++ on the CPU), patch radius 3 as its examples."""
+    from patchmatch import patch_match
+
+    patch_match.set_random_seed(0)
+    return _back(patch_match.inpaint(_rgb(image), mask.astype(np.uint8), patch_size=3), image)
+
+
+def patchmatch_cython(image, mask):
+    """patchmatch-cython's multi-scale PatchMatch (Cython on the CPU), its defaults."""
+    from patchmatch_cython import inpaint_pyramid
+
+    return _back(inpaint_pyramid(_rgb(image), mask, seed=0), image)
+
+
+def methods():
+    import cv2
+
+    return {
+        "pypatchmatch": pypatchmatch,
+        "patchmatch-cython": patchmatch_cython,
+        "clpde-exemplar": clpde_method("exemplar"),
+        "clpde-structure-texture": clpde_method("structure-texture"),
+        "clpde-default": clpde_default,
+        "skimage-biharmonic": biharmonic,
+        "opencv-ns": opencv(cv2.INPAINT_NS),
+        "opencv-telea": opencv(cv2.INPAINT_TELEA),
+    }
+
+
+def hole_boxes(mask):
+    boxes = np.zeros_like(mask)
+    for sl in ndimage.find_objects(ndimage.label(mask)[0]):
+        boxes[sl] = True
+    return boxes
+
+
+def scores(result, image, mask):
+    from skimage.metrics import structural_similarity
+
+    r, t = to_data(result), to_data(image)
+    mse = float(np.mean((r[:, mask] - t[:, mask]) ** 2))
+    psnr = float("inf") if mse == 0 else 10 * np.log10(1 / mse)
+    _, ssim_map = structural_similarity(np.moveaxis(t, 0, -1), np.moveaxis(r, 0, -1),
+                                        data_range=1.0, channel_axis=-1, full=True)
+    ssim = float(ssim_map.mean(axis=-1)[hole_boxes(mask)].mean())
+    return psnr, ssim, edge_energy(result, image, mask)
+
+
+def speed(ms):
+    """Times on a 512 x 512 colour photo with a 10% text mask, and the same 40 px hole in
+    images of growing size (the cost must follow the hole and its search region). Wall
+    time, and the process's CPU time (all threads; on a shared machine the wall time of a
+    parallel run can be several times what it is alone)."""
+    from importlib import import_module
+
+    from clpde.runtime import get_runtime
+    from inpaint_quality import text_mask
+    from skimage import data
+
+    img = data.astronaut()
+    mask = text_mask(img.shape[:2], 0.10)
+    print(f"\nSpeed: astronaut 512x512 colour, {100 * mask.mean():.1f}% text mask")
+    for name, fn in ms.items():
+        t0, c0 = time.perf_counter(), time.process_time()
+        fn(img, mask)
+        print(f"  {name:24s} {time.perf_counter() - t0:7.3f} s wall, "
+              f"{time.process_time() - c0:7.3f} s CPU")
+    print("Same 40 px hole, growing image (exemplar's solve on (1, n, n) float data):")
+    solve = import_module("clpde.inpainting.exemplar").solve
+    tile = data.brick()
+    for n in (256, 1024, 4096):
+        big = np.tile(tile, (n // 512 + 1, n // 512 + 1))[None, :n, :n] / 255.0
+        hole = np.zeros((n, n), bool)
+        hole[n // 2 - 20:n // 2 + 20, n // 2 - 20:n // 2 + 20] = True
+        t0, c0 = time.perf_counter(), time.process_time()
+        solve(big, hole, get_runtime(), seed=0)
+        print(f"  {n}x{n}: {time.perf_counter() - t0:.3f} s wall, "
+              f"{time.process_time() - c0:.3f} s CPU")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", type=Path, default=RESULTS)
+    ap.add_argument("--only", default="", help="comma-separated case names")
+    ap.add_argument("--methods", default="", help="comma-separated method names")
+    ap.add_argument("--speed", action="store_true", help="also run the timing rows")
+    args = ap.parse_args(argv)
+    cases = texture_cases()
+    if args.only:
+        cases = [c for c in cases if c["name"] in args.only.split(",")]
+    ms = methods()
+    if args.methods:
+        ms = {k: v for k, v in ms.items() if k in args.methods.split(",")}
+    # Warm up the kernel builds so that the first case's time is not a compile time.
+    warm = next(c for c in texture_cases() if c["class"] == "periodic")
+    for name, fn in ms.items():
+        if name.startswith("clpde"):
+            fn(warm["image"], warm["mask"])
+    rows = []
+    for case in cases:
+        for name, fn in ms.items():
+            t0 = time.perf_counter()
+            result = fn(case["image"], case["mask"])
+            seconds = time.perf_counter() - t0
+            psnr, ssim, energy = scores(result, case["image"], case["mask"])
+            rows.append({"case": case["name"], "class": case["class"], "method": name,
+                         "psnr": psnr, "ssim": ssim, "edge_energy": energy, "seconds": seconds,
+                         "hole_fraction": float(case["mask"].mean())})
+            print(f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
+                  f"SSIM {ssim:.3f} energy {energy:.2f} {seconds:7.3f} s", file=sys.stderr,
+                  flush=True)
+    print("| class | method | cases | PSNR (dB) | SSIM | edge energy | time (s) |")
+    print("|---|---|---|---|---|---|---|")
+    for cls in ("texture", "periodic", "thick"):
+        for name in ms:
+            rs = [r for r in rows if r["class"] == cls and r["method"] == name]
+            if not rs:
+                continue
+            # PSNR capped at 60 dB in the means: an exact fill is infinite.
+            mean = lambda k: float(np.mean([min(r[k], 60.0) for r in rs]))  # noqa: E731
+            print(f"| {cls} | {name} | {len(rs)} | {mean('psnr'):.2f} | {mean('ssim'):.3f} | "
+                  f"{mean('edge_energy'):.2f} | {mean('seconds'):.3f} |")
+    if args.speed:
+        speed(ms)
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()

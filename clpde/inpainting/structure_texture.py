@@ -1,0 +1,102 @@
+"""Structure plus texture inpainting, after Bertalmio, Vese, Sapiro and Osher (IEEE TIP 2003).
+
+The image f is split into a structure part u, the minimiser of TV(u) + lambda/2 |u - f|^2
+(clpde.denoise_tv, ROF, on the device), and a texture part v = f - u. Each is filled by
+the method that suits it: u, piecewise smooth, by a structure method that continues its
+edges (the registry's "coherence" method where present, else "transport", else
+clpde.inpaint); v, which has no large-scale structure left, by texture synthesis (the
+exemplar method on v). The result is their sum.
+
+The TV split needs values in the hole; they are set to those of the nearest known pixel
+before the split, and only the split's known part is used afterwards. With ``guide`` > 0
+the exemplar search on v also compares the filled structure u (weighted by ``guide``),
+so that a texture patch is taken from where the structure looks alike.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from ..imagedata import InputError
+from . import exemplar
+
+DEFAULTS = {"tv_weight": 1.0, "guide": 0.5, "structure": None}
+STRUCTURE_METHODS = ("coherence", "transport")
+
+
+def MARGIN(omega=None, search=exemplar.DEFAULTS["search"], **_params) -> int:
+    """The exemplar's search region, which also covers the structure methods' reach."""
+    return max(int(search), 16)
+
+
+def _structure_solver(name):
+    """solve(data, omega, runtime, ...) of the structure method, or a call of clpde.inpaint."""
+    try:
+        from . import load  # the method registry (issue 14), once present
+    except ImportError:
+        load = None
+    if load is not None:
+        for method in ([name] if name else list(STRUCTURE_METHODS)):
+            try:
+                return load(method).solve
+            except InputError:
+                if name:
+                    raise
+    if name:
+        raise InputError(f"structure method {name!r} is not available in this installation")
+
+    def via_inpaint(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None):
+        from ..inpaint import inpaint
+
+        out = inpaint(np.moveaxis(data, 0, -1), omega, channel_axis=-1, device=runtime,
+                      precision="double" if np.dtype(dtype) == np.float64 else None,
+                      progress=progress)
+        return np.moveaxis(out, -1, 0)
+
+    return via_inpaint
+
+
+def decompose(data, omega, runtime, tv_weight: float):
+    """(u, v): the TV structure and the texture f - u, the hole pre-filled by nearest values."""
+    from ..rof import denoise_tv
+
+    idx = ndimage.distance_transform_edt(omega, return_distances=False, return_indices=True)
+    filled = data[:, idx[0], idx[1]]
+    u = denoise_tv(np.moveaxis(filled, 0, -1), weight=tv_weight, channel_axis=-1,
+                   device=runtime, progress=False)
+    u = np.moveaxis(np.asarray(u, np.float64), -1, 0)
+    return u, filled - u
+
+
+def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
+          tv_weight=DEFAULTS["tv_weight"], guide=DEFAULTS["guide"], structure=None,
+          **exemplar_params):
+    """Fill ``omega``: TV structure by a structure method, texture by the exemplar method.
+
+    tv_weight: the ROF weight (on [0, 1] data; larger puts more into the texture part).
+    guide: weight of the filled structure in the texture's patch distance (0: none).
+    structure: the structure method's name (default: coherence, else transport).
+    Other keywords (patch, search, iterations, ...) go to the exemplar method.
+    """
+    for name, value in (("tv_weight", tv_weight), ("guide", guide)):
+        if not isinstance(value, (int, float, np.integer, np.floating)) or not np.isfinite(value) \
+                or value < (0 if name == "guide" else 1e-12):
+            raise InputError(f"{name} must be a {'weight >= 0' if name == 'guide' else 'positive number'}, "
+                             f"not {value!r}")
+    data = np.asarray(data)
+    omega = np.asarray(omega, bool)
+    out = np.array(data, copy=True)
+    if not omega.any():
+        return out
+    if "guide" in exemplar_params:
+        raise InputError("guide is this method's weight of the structure; give a number")
+    u, v = decompose(np.asarray(data, np.float64), omega, runtime, float(tv_weight))
+    u_filled = np.asarray(_structure_solver(structure)(u, omega, runtime, dtype=dtype,
+                                                      progress=progress, seed=seed), np.float64)
+    guide_planes = guide * u_filled if guide > 0 else None
+    v_filled = exemplar.solve(v, omega, runtime, dtype=dtype, progress=progress, seed=seed,
+                              guide=guide_planes, **exemplar_params)
+    total = np.clip(u_filled + v_filled, 0.0, 1.0)
+    out[:, omega] = total[:, omega].astype(out.dtype)
+    return out

@@ -1,0 +1,142 @@
+// Features and discrepancies for tracking real video (clpde.track, issue 18): local
+// contrast normalisation of a frame, and the generalised morphing step over the band with
+// several feature channels, a choice of discrepancy and a pull towards a prior level set.
+//
+// Defines (set by the host):
+//   NCH   feature channels (1 grey, 3 colour, or a user's count), planes `fplane` apart
+//   DISC  0: beta = F2 - F1 (the thesis);  1: local normalised cross-correlation over a
+//         (2 WIN + 1)^2 window;  2: Huber, beta = clamp(F2 - F1, -delta, delta)
+//   WIN   window radius of DISC 1 (band cells lie MARGIN + G = 4 cells inside the buffer,
+//         so WIN <= 4 reads stay inside it)
+#include "levelset.cl"
+
+#ifndef NCH
+#define NCH 1
+#endif
+#ifndef DISC
+#define DISC 0
+#endif
+#ifndef WIN
+#define WIN 3
+#endif
+
+// ---- local contrast normalisation ------------------------------------------------------
+// out = scale (I - mean) / sqrt(var + eps^2), mean and variance over the (2r + 1)^2 box
+// around the cell, its coordinates clamped to the interior (the frame's edge repeats).
+// A local change of brightness and contrast, I -> a I + b with a > 0 slowly varying,
+// leaves it unchanged up to eps.
+__kernel void local_contrast(__global const REAL* restrict img, __global REAL* restrict out,
+                             const int r, const REAL eps2, const REAL scale, GRID_ARGS)
+{
+    FOR_EACH_CELL(i) {
+        const int c = i % plane, base = i - c;
+        const int x = c % sx - G, y = c / sx - G;
+        REAL s = 0, s2 = 0;
+        for (int dy = -r; dy <= r; ++dy) {
+            const int yy = clamp(y + dy, 0, ny - 1);
+            for (int dx = -r; dx <= r; ++dx) {
+                const int xx = clamp(x + dx, 0, nx - 1);
+                const REAL v = img[base + (yy + G) * sx + xx + G];
+                s += v;
+                s2 += v * v;
+            }
+        }
+        const REAL n = (REAL)((2 * r + 1) * (2 * r + 1));
+        const REAL mean = s / n;
+        const REAL var = FMAX(s2 / n - mean * mean, (REAL)0);
+        out[i] = scale * (img[i] - mean) * RSQRT(var + eps2);
+    }
+}
+
+// ---- discrepancies ---------------------------------------------------------------------
+
+// beta of one channel at padded index i (f1, f2 point at that channel's plane).
+INLINE REAL discrepancy(__global const REAL* f1, __global const REAL* f2, const int i,
+                        const int sx, const REAL delta)
+{
+#if DISC == 1
+    // The steepest ascent of the window's correlation rho(F1, F2) with respect to F1(x),
+    // scaled by sigma1 to keep F1's units:
+    //     beta = (sigma1 / sigma2) (F2 - mu2) - rho (F1 - mu1).
+    // Zero where F2 is locally an increasing affine map of F1 (a change of brightness
+    // and contrast); delta^2 regularises the variances of flat windows.
+    REAL s1 = 0, s2 = 0, s11 = 0, s22 = 0, s12 = 0;
+    for (int dy = -WIN; dy <= WIN; ++dy) {
+        for (int dx = -WIN; dx <= WIN; ++dx) {
+            const int j = i + dy * sx + dx;
+            const REAL a = f1[j], b = f2[j];
+            s1 += a; s2 += b; s11 += a * a; s22 += b * b; s12 += a * b;
+        }
+    }
+    const REAL n = (REAL)((2 * WIN + 1) * (2 * WIN + 1));
+    const REAL m1 = s1 / n, m2 = s2 / n;
+    const REAL v1 = FMAX(s11 / n - m1 * m1, (REAL)0) + delta * delta;
+    const REAL v2 = FMAX(s22 / n - m2 * m2, (REAL)0) + delta * delta;
+    const REAL rho = (s12 / n - m1 * m2) * RSQRT(v1 * v2);
+    return SQRT(v1 / v2) * (f2[i] - m2) - rho * (f1[i] - m1);
+#elif DISC == 2
+    return clamp(f2[i] - f1[i], -delta, delta);
+#else
+    return f2[i] - f1[i];
+#endif
+}
+
+// ---- the generalised morphing step -----------------------------------------------------
+// Over the band cells, for each channel c: beta_c from `discrepancy`, and
+//     F1_c <- F1_c + dt beta_c |grad F1_c|                         (morphing, upwind)
+//     u    <- u + dt [ sum_c beta_c (grad F1_c . grad u)
+//                       / sqrt((sum_c |grad F1_c|^2 + eps_f^2) (|grad u|^2 + eps_u^2))
+//                       |grad u|_upwind + lam (prior - u) ]
+// With one channel, DISC 0 and lam = 0 this is morph_step of levelset.cl (thesis eqs.
+// 2.3-2.6): the contour moves with the projection of the channels' morphing velocities on
+// its normal, channels with stronger edges weighing more. The lam term relaxes u towards
+// the prior level set (the frame's predicted start), which holds the contour where the
+// features say nothing and damps leaks.
+// stats per work-item g of n: [g] max |du/dt|, [n+g] max |beta|, [2n+g] max |grad F1|,
+// [3n+g] sum over its cells of the channels' mean |beta|, [4n+g] its cell count; [5n] the
+// edge flag, as in morph_step.
+__kernel void morph_track(__global const REAL* restrict u, __global const REAL* restrict f1,
+                          __global const REAL* restrict f2, __global const uchar* restrict band,
+                          __global const REAL* restrict prior, __global REAL* restrict u_out,
+                          __global REAL* restrict f1_out, __global REAL* restrict stats,
+                          const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
+                          const REAL lam, const REAL delta, const int sx, const int fplane,
+                          LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan);
+    REAL fastest = 0, beta_max = 0, grad_max = 0, beta_sum = 0;
+    int touched = 0;
+    for (int k = k0; k < k1; ++k) {
+        const int i = chan + list[k];
+        const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
+        const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
+        REAL proj = 0, gsum = 0, babs = 0;
+        for (int c = 0; c < NCH; ++c) {
+            const int j = i + c * fplane;
+            const REAL beta = discrepancy(f1 + c * fplane, f2 + c * fplane, i, sx, delta);
+            const REAL grad_f = upwind_norm_2d(f1 + c * fplane, i, sx, beta);
+            f1_out[j] = f1[j] + dt * beta * grad_f;
+            const REAL fx = (REAL)0.5 * (f1[j + 1] - f1[j - 1]);
+            const REAL fy = (REAL)0.5 * (f1[j + sx] - f1[j - sx]);
+            proj += beta * (fx * ux + fy * uy);
+            gsum += SQR(fx) + SQR(fy);
+            beta_max = FMAX(beta_max, FABS(beta));
+            grad_max = FMAX(grad_max, grad_f);
+            babs += FABS(beta);
+        }
+        const REAL bhat = proj * RSQRT((gsum + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
+        const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat) + lam * (prior[i] - u[i]);
+        const REAL un = u[i] + dt * rate;
+        u_out[i] = un;
+        fastest = FMAX(fastest, FABS(rate));
+        beta_sum += babs / NCH;
+        touched |= (band[i] == 2) & (FABS(un) < near);
+    }
+    const int g = get_global_id(0), n = get_global_size(0);
+    stats[g] = fastest;
+    stats[n + g] = beta_max;
+    stats[2 * n + g] = grad_max;
+    stats[3 * n + g] = beta_sum;
+    stats[4 * n + g] = (REAL)(k1 > k0 ? k1 - k0 : 0);
+    if (touched) stats[5 * n] = 1;
+}

@@ -1,0 +1,144 @@
+"""Exemplar inpainting (clpde.inpainting.exemplar): kernels against their NumPy references
+(tests/reference/patchmatch.py), and the method against what it must do exactly."""
+
+import numpy as np
+import pytest
+
+from clpde.inpainting import exemplar
+from tests.reference import patchmatch as ref
+
+
+def _level(runtime, seed=0, patch=5, shape=(21, 26), nch=3, dtype=np.float32, nout=None):
+    rng = np.random.default_rng(seed)
+    img = rng.random((nch,) + shape)
+    hole = np.zeros(shape, bool)
+    hole[6:12, 8:15] = True
+    hole[15:, 20:] = True  # touches two borders: clipped target patches
+    weights = rng.uniform(0.5, 2.0, nch)
+    lv = exemplar._Level(runtime, dtype, img, hole, weights, patch, nout)
+    lv.random_nnf(rng)
+    return lv, img, hole, weights
+
+
+@pytest.mark.parametrize("masked", [False, True])
+def test_patch_distance_matches_reference(runtime, masked):
+    lv, img, hole, w = _level(runtime)
+    use = None
+    if masked:
+        use = ~hole & (np.random.default_rng(1).random(hole.shape) < 0.7)
+        lv.d_use.set(use.astype(np.uint8).ravel())
+    lv._launch(lv.k_score, lv.targets[1], lv.img.data, lv.d_use.data, np.int32(masked),
+               lv.nnf[0].data, lv.dist.data, lv.targets[0].data, np.int32(lv.targets[1]),
+               *lv._args())
+    got = lv.dist.get().reshape(hole.shape)
+    want = ref.distances(img, w, lv.nnf_to_host(), lv.targets_mask, lv.r, use)
+    finite = np.isfinite(want)
+    assert np.array_equal(finite, np.isfinite(got))
+    np.testing.assert_allclose(got[finite], want[finite], rtol=2e-5, atol=1e-7)
+
+
+@pytest.mark.parametrize("best_only,nout", [(False, None), (True, None), (False, 2)])
+def test_vote_matches_reference(runtime, best_only, nout):
+    lv, img, hole, w = _level(runtime, seed=3, nout=nout)
+    lv.score()
+    nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
+    lv.vote(best_only=best_only, sigma2=0.05)
+    got = lv.image()
+    want = ref.vote(img, nnf, dist, hole, lv.r, 0.05, best_only, nout)
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+    assert np.array_equal(got[:, ~hole], img[:, ~hole].astype(np.float32))
+
+
+def test_patchmatch_pass_never_worsens_and_stays_legal(runtime):
+    lv, img, hole, w = _level(runtime, seed=5)
+    lv.score()
+    before = lv.dist.get()[lv.targets_idx]
+    lv.patchmatch(3, lv.targets, False, seed=0, counter=[0])
+    after = lv.dist.get()[lv.targets_idx]
+    assert np.all(after <= before * (1 + 1e-6))
+    assert after.mean() < 0.9 * before.mean()
+    src = lv.nnf_to_host().reshape(-1, 2)[lv.targets_idx]
+    assert lv.valid[src[:, 1], src[:, 0]].all()
+
+
+def _periodic(n=112):
+    y, x = np.mgrid[0:n, 0:n].astype(np.float64)
+    return np.stack([
+        0.5 + 0.4 * np.sin(2 * np.pi * x / 12) * np.cos(2 * np.pi * y / 16),
+        0.5 + 0.3 * np.sin(2 * np.pi * (x / 12 + y / 16)),
+        0.3 + 0.4 * ((x // 6 + y // 8) % 2),
+    ])
+
+
+def _psnr(a, b, mask):
+    mse = np.mean((a[:, mask] - b[:, mask]) ** 2)
+    return np.inf if mse == 0 else 10 * np.log10(1 / mse)
+
+
+def test_periodic_pattern_comes_back(runtime):
+    img = _periodic()
+    omega = np.zeros(img.shape[1:], bool)
+    omega[30:62, 40:70] = True  # 32 x 30: two pyramid levels
+    out = exemplar.solve(img, omega, runtime, seed=0)
+    assert _psnr(out, img, omega) > 35
+    assert np.array_equal(out[:, ~omega], img[:, ~omega])
+    assert out.dtype == img.dtype and out.shape == img.shape
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_constant_image_gives_the_constant(runtime, dtype):
+    if dtype == np.float64 and not runtime.fp64:
+        pytest.skip("the device has no double precision")
+    img = np.full((1, 60, 70), 0.3)
+    omega = np.zeros((60, 70), bool)
+    omega[10:40, 20:50] = True
+    out = exemplar.solve(img, omega, runtime, dtype=dtype)
+    np.testing.assert_allclose(out, 0.3, atol=1e-6 if dtype == np.float32 else 1e-14)
+
+
+def test_values_in_the_hole_are_not_read(runtime):
+    img = _periodic(64)
+    omega = np.zeros(img.shape[1:], bool)
+    omega[20:40, 24:44] = True
+    a, b = img.copy(), img.copy()
+    a[:, omega] = np.nan
+    b[:, omega] = 0.9
+    out = exemplar.solve(a, omega, runtime, seed=3)
+    assert np.isfinite(out).all()
+    assert np.array_equal(out, exemplar.solve(b, omega, runtime, seed=3))
+
+
+def test_same_seed_same_result(runtime):
+    rng = np.random.default_rng(2)
+    img = np.clip(0.5 + 0.2 * rng.standard_normal((3, 64, 64)), 0, 1)
+    omega = np.zeros((64, 64), bool)
+    omega[20:44, 18:40] = True
+    a = exemplar.solve(img, omega, runtime, seed=7)
+    b = exemplar.solve(img, omega, runtime, seed=7)
+    c = exemplar.solve(img, omega, runtime, seed=8)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def test_hole_touching_two_borders(runtime):
+    img = _periodic(96)
+    omega = np.zeros(img.shape[1:], bool)
+    omega[:20, -24:] = True  # the top right corner
+    omega[70:, :10] = True  # and the bottom left one
+    out = exemplar.solve(img, omega, runtime, seed=0)
+    assert _psnr(out, img, omega) > 35
+    assert np.array_equal(out[:, ~omega], img[:, ~omega])
+
+
+def test_bad_parameters_are_clear_errors(runtime):
+    from clpde import InputError
+
+    img = np.zeros((1, 20, 20))
+    omega = np.zeros((20, 20), bool)
+    omega[5:8, 5:8] = True
+    with pytest.raises(InputError, match="patch must be an odd"):
+        exemplar.solve(img, omega, runtime, patch=4)
+    with pytest.raises(InputError, match="iterations must be"):
+        exemplar.solve(img, omega, runtime, iterations=0)
+    with pytest.raises(InputError, match="whole image"):
+        exemplar.solve(img, np.ones((20, 20), bool), runtime)

@@ -1,0 +1,53 @@
+"""The default noise estimate of denoise_tv: numpy only (no PyWavelets), checked against the
+known sigma of noise added to several kinds of images."""
+
+import sys
+
+import numpy as np
+import pytest
+from skimage import color, data, img_as_float
+
+import clpde
+from clpde.imagedata import InputError
+from clpde.rof import estimate_sigma
+
+IMAGES = {
+    "camera": lambda: img_as_float(data.camera()),
+    "astronaut": lambda: color.rgb2gray(data.astronaut()),
+    "coins": lambda: img_as_float(data.coins()),
+    "text": lambda: img_as_float(data.text()),
+    "checkerboard": lambda: img_as_float(data.checkerboard()),
+}
+
+
+@pytest.mark.parametrize("name", sorted(IMAGES))
+@pytest.mark.parametrize("sigma", [0.05, 0.1, 0.2])
+def test_estimate_matches_the_added_noise(name, sigma):
+    clean = IMAGES[name]()
+    noisy = clean + np.random.default_rng(1).normal(0, sigma, clean.shape)
+    # float images are in their own units: the estimate must not depend on the range
+    assert estimate_sigma(noisy) == pytest.approx(sigma, rel=0.1)
+    assert estimate_sigma(100 * noisy) == pytest.approx(100 * sigma, rel=0.1)
+
+
+def test_estimate_in_uint8_units_and_per_channel():
+    clean = data.astronaut().astype(np.float64)
+    noisy = np.clip(clean + np.random.default_rng(2).normal(0, [6, 12, 24], clean.shape),
+                    0, 255).astype(np.uint8)
+    actual = (noisy - clean).std(axis=(0, 1))  # what clipping left of the noise
+    np.testing.assert_allclose(estimate_sigma(noisy, channel_axis=-1), actual, rtol=0.1)
+
+
+def test_default_denoise_needs_no_pywavelets(monkeypatch):
+    monkeypatch.setitem(sys.modules, "pywt", None)  # as on a fresh install: import pywt fails
+    clean = img_as_float(data.camera())[::4, ::4]
+    noisy = clean + np.random.default_rng(3).normal(0, 0.1, clean.shape)
+    result, info = clpde.denoise_tv(noisy, return_info=True)
+    # sigma was estimated near 0.1: the residual variance tends to it
+    assert np.sqrt(info.residual_variance[0]) == pytest.approx(0.1, rel=0.15)
+    assert np.abs(result - clean).mean() < 0.6 * np.abs(noisy - clean).mean()
+
+
+def test_too_small_to_estimate():
+    with pytest.raises(InputError, match="give sigma or weight"):
+        clpde.denoise_tv(np.zeros((2, 5)))
