@@ -436,14 +436,17 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
                 "env": {"CLPDE_DEVICE": str(gpus[k % len(gpus)]), "POCL_MAX_PTHREAD_COUNT": "1"}}}
                 for k in range(count)}
             cluster = SpecCluster(
-                workers=specs, scheduler={"cls": Scheduler, "options": {"dashboard": False,
-                                                                      "host": "127.0.0.1"}},
+                workers=specs, scheduler={"cls": Scheduler, "options": {
+                    "dashboard": False, "dashboard_address": ":0", "host": "127.0.0.1"}},
                 silence_logs=50)
             return cluster, count, None
         workers, threads = plan_workers(workers, threads, tasks)
         env = {"POCL_MAX_PTHREAD_COUNT": str(threads), "OMP_NUM_THREADS": "1"}
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=50, env=env,
+                               # No dashboard; its HTTP server (always started) on any
+                               # free port, so that clusters side by side do not clash.
+                               dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                               silence_logs=50, env=env,
                                preload=["clpde.batch"])
         return cluster, workers, threads
 
