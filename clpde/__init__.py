@@ -4,6 +4,7 @@ from . import (
     data,  # test images and scenes, like skimage.data
     surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
 )
+from .batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, diffuse, stability_limit
@@ -23,6 +24,7 @@ __all__ = [
     "MorphingTracker",
     "NoDeviceError",
     "PlanarFlow",
+    "batch",
     "data",
     "denoise_tv",
     "devices",

@@ -17,7 +17,7 @@ import pyopencl as cl
 
 from .. import __version__
 from ..runtime import ClpdeError
-from . import denoise, devices, diffuse, inpaint, regions, surface, track
+from . import batch, denoise, devices, diffuse, inpaint, regions, surface, track
 
 SUBCOMMANDS = [
     devices.add_devices_parser,
@@ -27,6 +27,7 @@ SUBCOMMANDS = [
     inpaint.add_inpaint_parser,
     surface.add_surface_parser,
     regions.add_regions_parser,
+    batch.add_batch_parser,
 ]
 ERROR_STATUS = 2
 

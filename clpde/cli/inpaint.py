@@ -10,6 +10,7 @@ import numpy as np
 from ..imagedata import InputError
 from ..io import MASK_RULE, check_not_overwriting_input, read_image, read_mask
 from ..runtime import get_runtime
+from ..video import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 from ._common import (
     OUTPUT_FOLDER_RULE,
     add_device_argument,
@@ -72,6 +73,7 @@ def add_inpaint_parser(subparsers) -> None:
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
                              "to the observed pixel) instead of bright = inpaint")
     add_device_argument(parser)
+    add_sequence_arguments(parser)  # a video or an image folder: clpde/video.py
     parser.set_defaults(run=run_inpaint)
 
 
@@ -94,6 +96,8 @@ def run_inpaint(args) -> int:
     from ..inpaint import inpaint
     from ..io import write_gif
 
+    if prepare_sequence_args(args):  # a film or a folder of frames, over Dask workers
+        return run_sequence_inpaint(args)
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
     if args.demo:
