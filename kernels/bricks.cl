@@ -139,16 +139,19 @@ INLINE void load_tile(TILE REAL* t, __global const REAL* restrict src,
 // offsets in the tile (+-1, +-tx, +-txy).
 #define ONE_SIDED_SIGN(e) ((e) > 0 ? (REAL)1 : (REAL)-1)
 
-INLINE void tile_flux(TILE const REAL* u, TILE const REAL* p, const int j, const int ex,
-                      const int ey, const int ez, const int sx, const int sxy, REAL* w)
+INLINE void tile_flux(TILE const REAL* u, TILE const REAL* p, const int j, const int q,
+                      const int ex, const int ey, const int ez, const int usx, const int usxy,
+                      const int sx, const int sxy, REAL* w)
 {
+    // j: the cell in the u tile (one-sided offsets ex, ey, ez), q: in the psi tile (strides
+    // sx, sxy)
     const REAL c = u[j];
     const REAL vx = ONE_SIDED_SIGN(ex) * (u[j + ex] - c);
     const REAL vy = ONE_SIDED_SIGN(ey) * (u[j + ey] - c);
     const REAL vz = ONE_SIDED_SIGN(ez) * (u[j + ez] - c);
-    const REAL nx = (REAL)0.5 * (p[j + 1] - p[j - 1]);
-    const REAL ny = (REAL)0.5 * (p[j + sx] - p[j - sx]);
-    const REAL nz = (REAL)0.5 * (p[j + sxy] - p[j - sxy]);
+    const REAL nx = (REAL)0.5 * (p[q + 1] - p[q - 1]);
+    const REAL ny = (REAL)0.5 * (p[q + sx] - p[q - sx]);
+    const REAL nz = (REAL)0.5 * (p[q + sxy] - p[q - sxy]);
     const REAL nn = nx * nx + ny * ny + nz * nz + (REAL)1e-30;
     const REAL s = (nx * vx + ny * vy + nz * vz) / nn;
 #if WEIGHTED
@@ -161,20 +164,25 @@ INLINE void tile_flux(TILE const REAL* u, TILE const REAL* p, const int j, const
     w[2] = len * (vz - s * nz);
 }
 
-INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, const int ex,
-                          const int ey, const int ez, const int sx, const int sxy)
+// The divergence at cell i of the u tile (halo 1), q of the psi tile (halo 2): the fluxes
+// one cell back read psi two cells away along an axis, u only one (faces and edges).
+INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, const int q,
+                          const int dx, const int dy, const int dz)
 {
+    const int ex = dx, ey = dy * TILE_X(1), ez = dz * TILE_XY(1);
+    const int px = dx, py = dy * TILE_X(2), pz = dz * TILE_XY(2);
+    const int usx = TILE_X(1), usxy = TILE_XY(1), sx = TILE_X(2), sxy = TILE_XY(2);
     REAL wc[3], wx[3], wy[3], wz[3];
-    tile_flux(u, p, i, ex, ey, ez, sx, sxy, wc);
-    tile_flux(u, p, i - ex, ex, ey, ez, sx, sxy, wx);
-    tile_flux(u, p, i - ey, ex, ey, ez, sx, sxy, wy);
-    tile_flux(u, p, i - ez, ex, ey, ez, sx, sxy, wz);
+    tile_flux(u, p, i, q, ex, ey, ez, usx, usxy, sx, sxy, wc);
+    tile_flux(u, p, i - ex, q - px, ex, ey, ez, usx, usxy, sx, sxy, wx);
+    tile_flux(u, p, i - ey, q - py, ex, ey, ez, usx, usxy, sx, sxy, wy);
+    tile_flux(u, p, i - ez, q - pz, ex, ey, ez, usx, usxy, sx, sxy, wz);
     REAL div = ONE_SIDED_SIGN(ex) * (wc[0] - wx[0]) + ONE_SIDED_SIGN(ey) * (wc[1] - wy[1]) +
                ONE_SIDED_SIGN(ez) * (wc[2] - wz[2]);
 #if WEIGHTED
-    const REAL nx = (REAL)0.5 * (p[i + 1] - p[i - 1]);
-    const REAL ny = (REAL)0.5 * (p[i + sx] - p[i - sx]);
-    const REAL nz = (REAL)0.5 * (p[i + sxy] - p[i - sxy]);
+    const REAL nx = (REAL)0.5 * (p[q + 1] - p[q - 1]);
+    const REAL ny = (REAL)0.5 * (p[q + sx] - p[q - sx]);
+    const REAL nz = (REAL)0.5 * (p[q + sxy] - p[q - sxy]);
     div *= RSQRT(nx * nx + ny * ny + nz * nz + (REAL)1e-30);
 #endif
     return div;
@@ -182,8 +190,7 @@ INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, c
 
 // One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
 // NODE cell (the other cells' values are never read: re-extension reads nodes only). sx, sy,
-// sz: the one-sided directions (+1 forward gradient, -1 backward). A flux two cells back
-// reads psi two cells away along an axis: the tiles have a halo of 2. v is in the apron
+// sz: the one-sided directions (+1 forward gradient, -1 backward). v is in the apron
 // layout: each work-item also writes its first AX columns into the apron of the brick
 // before it along x (one writer per apron cell).
 __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
@@ -192,21 +199,20 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 {
     const int chan = get_global_id(1) * plane;
     const int chan_v = get_global_id(1) * (nbricks + 2) * BVA;
-    const int ex = sx, ey = sy * TILE_X(2), ez = sz * TILE_XY(2);
 #if GROUP_PER_BRICK
-    __local REAL ut[TILE_CELLS(2)], pt[TILE_CELLS(2)];
+    __local REAL ut[TILE_CELLS(1)], pt[TILE_CELLS(2)];
 #else
-    REAL ut[TILE_CELLS(2)], pt[TILE_CELLS(2)];
+    REAL ut[TILE_CELLS(1)], pt[TILE_CELLS(2)];
 #endif
     FOR_EACH_BRICK(b, BIT_NODE) {
-        load_tile(ut, u + chan, nbr, b, 2);
+        load_tile(ut, u + chan, nbr, b, 1);
         load_tile(pt, psi, nbr, b, 2);
         __global REAL* out = v + chan_v + b * BVA;
         const int before = nbr[27 * b + 12];  // the brick at x - 1 (0: none stored)
         __global REAL* apron = v + chan_v + before * BVA + BX;
         FOR_EACH_BRICK_CELL(l, x, y, z) {
-            const int i = TILE_AT(2, x, y, z);
-            const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, ex, ey, ez, TILE_X(2), TILE_XY(2));
+            const int i = TILE_AT(1, x, y, z);
+            const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
             const int o = (z * BY + y) * BXA + x;
             out[o] = val;
             if (x < AX && before) apron[o] = val;
@@ -217,8 +223,8 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 // ---- closest-point re-extension --------------------------------------------------------------
 // dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface.cl's
 // extend_cp (tricubic Lagrange, or trilinear) from stencils computed once per psi (psi is
-// fixed): per entry k the brick-storage index of the target cell, of the stencil's first
-// node (x0, y0, z0), and the closest point's offsets from floor(cp) (frac[k], frac[n + k],
+// fixed): per entry k the brick-storage index of the target cell, the stencil's first node
+// (x0, y0, z0) as its brick and place there (BrickBand.node_code), and the closest point's offsets from floor(cp) (frac[k], frac[n + k],
 // frac[2n + k]); `list` holds the targets (plain layout), src is in the apron layout. The
 // nodes span at most 2 bricks along y and z (the apron covers x). Computing the closest point here instead, from a tile of psi, cost
 // more than the whole list re-extension on dense storage (floor and the clamps are calls on
@@ -255,9 +261,9 @@ __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* 
 {
     LIST_RANGE(k0, k1, chan_unused);
     for (int k = k0; k < k1; ++k) {
-        const int b0 = base[k];
-        const int node = b0 / BVA, d = b0 - node * BVA;
-        const int ly0 = (d / BXA) % BY, lz0 = d / (BXA * BY);
+        const int code = base[k];  // brick << 12 | z << 8 | y << 4 | x of the first node
+        const int node = code >> 12, lz0 = (code >> 8) & 15, ly0 = (code >> 4) & 15;
+        const int d = (lz0 * BY + ly0) * BXA + (code & 15);
         const REAL tx = frac[k], ty = frac[nlist + k], tz = frac[2 * nlist + k];
         // the nodes' bricks: the node's own and its neighbours along y, z and both (27-entry
         // table, x fastest); the rows of slab a start at P[a >= zs][e >= ys] + a BXA BY +

@@ -31,12 +31,15 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cla
 
+from ..runtime import ClpdeError
+
 NODE, REACH, EXT = 1, 2, 4
 # Cells of the next brick's rows kept after each row of the re-extension's source (bricks.cl)
 APRON = 3
-# Sizes measured (benchmarks/surface_accuracy.py --sections 6); the default is the fastest.
+# Sizes measured (benchmarks/surface_accuracy.py --sections 6); the default was the fastest
+# at 217^3 and 256^3 (docs/surfaces.md).
 BRICK_SIZES = ((4, 4, 4), (8, 4, 4), (8, 8, 8))
-DEFAULT_BRICK = (8, 4, 4)
+DEFAULT_BRICK = (8, 8, 8)
 
 
 def morton_key(bx: np.ndarray, by: np.ndarray, bz: np.ndarray) -> np.ndarray:
@@ -116,8 +119,9 @@ class BrickBand:
               brick=DEFAULT_BRICK) -> BrickBand:
         """Bricks holding every True cell of `stored` (padded grid), with per-cell `bits`."""
         bx, by, bz = (int(b) for b in brick)
-        if min(bx, by, bz) < 4:
-            raise ValueError("bricks need at least 4 cells a side (a tricubic stencil spans 2 bricks)")
+        if min(bx, by, bz) < 4 or max(bx, by, bz) > 16:
+            raise ValueError("bricks need 4 to 16 cells a side (a tricubic stencil spans at most "
+                             "2 bricks; node_code keeps 4 bits an axis)")
         pz, py, px = padded_shape
         # one brick place more than needed on each axis: a gather's "next brick" always exists
         mz, my, mx = -(-pz // bz) + 1, -(-py // by) + 1, -(-px // bx) + 1
@@ -161,6 +165,20 @@ class BrickBand:
         b = self.map_host[z // bz, y // by, x // bx].astype(np.int64)
         row = bx + apron
         return (b * (row * by * bz) + ((z % bz) * by + y % by) * row + x % bx).astype(np.int32)
+
+    def node_code(self, flat: np.ndarray) -> np.ndarray:
+        """The first interpolation nodes of closest points (flat padded indices) coded for
+        bricks.cl's re-extension: brick << 12 | z << 8 | y << 4 | x, the node's place in its
+        brick (a code, not an index, saves the kernel three divisions)."""
+        _, py, px = self.padded_shape
+        bx, by, bz = self.brick
+        if self.nbricks >= 2**19:
+            raise ClpdeError(f"{self.nbricks} bricks are more than the re-extension's node code "
+                             "holds (2^19); use a larger brick size")
+        z, rem = np.divmod(np.asarray(flat, np.int64), py * px)
+        y, x = np.divmod(rem, px)
+        b = self.map_host[z // bz, y // by, x // bx].astype(np.int64)
+        return (b << 12 | (z % bz) << 8 | (y % by) << 4 | x % bx).astype(np.int32)
 
     # ---- dense <-> bricks ---------------------------------------------------------------------
     def scatter(self, padded: np.ndarray, dtype, apron: int = 0) -> cla.Array:

@@ -24,7 +24,7 @@ from ..fields import compact
 from ..imagedata import InputError
 from ..imagedata import positive as _positive
 from ..runtime import get_runtime
-from .bricks import APRON, DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
+from .bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
 from .grid3d import Grid3D
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
@@ -79,7 +79,11 @@ class ImplicitSurface:
             )
         self.runtime = get_runtime(device)
         self._check_border = _check_border
-        self._storage = "bricks"  # the band storage of the flows that have both: or "lists"
+        # the band storage of heat (the flow that has both): "lists" (band lists over the dense
+        # grid) or "bricks" (bricks.py); lists stay the default while they measure faster
+        # (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, bricks took
+        # 1.3-1.6x the lists' time per step at 217^3)
+        self._storage = "lists"
         self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
                            dtype=np.dtype(dtype))
@@ -125,7 +129,7 @@ class ImplicitSurface:
                 # ran 3-7x slower)
                 target = bb.index_of(band.indices.get()[: band.n])
                 order = np.argsort(target, kind="stable")
-                first = bb.index_of(base.get()[: band.n], APRON)[order]
+                first = bb.node_code(base.get()[: band.n])[order]
                 offsets = np.ascontiguousarray(frac.get()[:, : band.n][:, order])
                 return (band.n, cla.to_device(q, target[order]), cla.to_device(q, first),
                         cla.to_device(q, offsets))
