@@ -53,7 +53,7 @@
 #endif
 
 // Arguments every brick kernel takes last (BrickBand.launch).
-#define BRICK_ARGS __global const int* restrict nbr, __global const uchar* restrict mask, \
+#define BRICK_ARGS __global const int* restrict nbr,                                      \
                    __global const uchar* restrict brick_bits, const int nbricks,         \
                    const int plane, const int per_item
 

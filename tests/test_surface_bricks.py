@@ -59,7 +59,8 @@ def test_layout_and_tables_match_reference(runtime, brick):
     for cells, bit in ((node, NODE), (reach, REACH), (ext, EXT)):
         bits.reshape(-1)[cells] += bit
     expect_bits = bref.to_bricks(bits[None], coords, brick)[0].reshape(len(coords) + 2, -1)
-    np.testing.assert_array_equal(bb.mask.get(), expect_bits)
+    np.testing.assert_array_equal(bb.mask_host, expect_bits)
+    np.testing.assert_array_equal(bb.brick_bits.get(), np.bitwise_or.reduce(expect_bits.astype(np.uint8), axis=1))
 
 
 @pytest.mark.parametrize("brick", BRICK_SIZES)

@@ -14,9 +14,11 @@ memory. On the device:
 - `nbr`: per brick the indices of its 27 neighbours (itself in the middle, the sentinel where
   none is stored), for the stencils, which read the neighbours' faces (no halo is stored),
   and for the closest-point gathers, which read the bricks next to their first node's;
-- `mask`: per cell a byte of the band's bits (NODE: the step updates it, REACH: re-extended
-  after every step, EXT: re-extended when a flow returns), and `brick_bits` their union per
-  brick (the kernels skip bricks without the bits they update).
+- `brick_bits`: per brick the union of its cells' band bits (NODE: the step updates the
+  cell, REACH: re-extended after every step, EXT: re-extended when a flow returns); the
+  kernels skip bricks without the bits they update. The per-cell bits (`mask_host`) stay on
+  the host, where `gather` reads only the cells that carry meaning; the re-extension visits
+  lists of its cells, in brick order.
 On the host, `map_host` is the coarse brick-index map of the whole padded grid (one int per
 brick place, the sentinel where none is stored): it turns the closest points' first nodes,
 which may lie many bricks away, into brick-storage indices (`index_of`).
@@ -87,7 +89,6 @@ class BrickBand:
     # (row i describes brick i + 1)
     map_shape: tuple[int, int, int]
     nbr: cla.Array
-    mask: cla.Array
     mask_host: np.ndarray  # (nbricks + 2, BV) band bits (brick 0: the sentinel)
     brick_bits: cla.Array  # per brick the OR of its cells' bits
     map_host: np.ndarray
@@ -150,9 +151,9 @@ class BrickBand:
         mask_host[1 : n + 1][valid] = flat_bits[cells[valid]]
         q = runtime.queue
         dev = {name: cla.to_device(q, np.ascontiguousarray(a)) for name, a in
-               (("nbr", nbr), ("mask", mask_host), ("bits", np.bitwise_or.reduce(mask_host, axis=1)))}
+               (("nbr", nbr), ("bits", np.bitwise_or.reduce(mask_host, axis=1)))}
         return cls(runtime, tuple(padded_shape), (bx, by, bz), coords, cells, (mz, my, mx),
-                   dev["nbr"], dev["mask"], mask_host, dev["bits"], bmap)
+                   dev["nbr"], mask_host, dev["bits"], bmap)
 
     def index_of(self, flat: np.ndarray, apron: int = 0) -> np.ndarray:
         """Brick-storage indices (int32) of cells given by flat padded indices, in the
@@ -225,5 +226,4 @@ class BrickBand:
         else:
             per = 1
             gsize, lsize = (n * self.cells_per_brick, channels), (self.cells_per_brick, 1)
-        return kernel(rt.queue, gsize, lsize, *args, self.nbr.data, self.mask.data,
-                      self.brick_bits.data, np.int32(n), np.int32(self.plane), np.int32(per))
+        return kernel(rt.queue, gsize, lsize, *args, self.nbr.data, self.brick_bits.data, np.int32(n), np.int32(self.plane), np.int32(per))
