@@ -229,7 +229,7 @@ def storage_table(sizes, steps=10, reps=5):
 
     print("\n6. band storage: lists over the dense grid against dense bricks (heat step + re-extension"
           "\n   of the reach band; best of %d runs of %d steps, all variants interleaved)" % (reps, steps))
-    print(f"{'grid':>9} {'storage':>8} {'ext band':>9} {'stored':>9} {'step ms':>8} {'ext ms':>7} "
+    print(f"{'grid':>9} {'storage':>8} {'ext band':>9} {'stored':>9} {'visited':>9} {'step ms':>8} {'ext ms':>7} "
           f"{'x copy':>7} {'ns/cell':>8} {'useful GB/s':>11} {'stored GB/s':>11} {'copy GB/s':>9}")
     rows = []
     for n in sizes:
@@ -247,7 +247,8 @@ def storage_table(sizes, steps=10, reps=5):
 
         runs = surf.step_runs
         run_cells = int((runs.end.get()[: runs.n] - runs.start.get()[: runs.n]).sum())
-        variants["lists"] = (list_step, flow.after_step, run_cells, 12 * run_cells + 8 * runs.n)
+        variants["lists"] = (list_step, flow.after_step, g.volume, run_cells,
+                             12 * run_cells + 8 * runs.n)
         for brick in BRICK_SIZES:
             surf._brick = brick
             bf = BrickFlow(surf, u)
@@ -261,7 +262,7 @@ def storage_table(sizes, steps=10, reps=5):
             bx, by, bz = brick
             apron = (bx + 3) / bx  # the step writes the apron too
             variants["x".join(map(str, brick))] = (brick_step, bf.after_step, bf.bricks.stored_cells,
-                                                   int(visited * (8 + 4 * apron)))
+                                                   visited, int(visited * (8 + 4 * apron)))
         a = cla.empty(q, g.volume, np.float32)
         a.fill(1.0)
         b = cla.empty_like(a)
@@ -276,32 +277,33 @@ def storage_table(sizes, steps=10, reps=5):
 
         best = {name: [np.inf, np.inf] for name in variants}
         t_copy = np.inf
-        for name, (step, ext, _, _) in variants.items():  # warm up (and compile)
+        for name, (step, ext, *_) in variants.items():  # warm up (and compile)
             step(), ext()
         for _ in range(reps):
             t_copy = min(t_copy, timed(lambda: cl.enqueue_copy(q, b.data, a.data)))
-            for name, (step, ext, _, _) in variants.items():
+            for name, (step, ext, *_) in variants.items():
                 best[name][0] = min(best[name][0], timed(step))
                 best[name][1] = min(best[name][1], timed(ext))
         copy_gbs = 2 * a.nbytes / t_copy / 1e9
         useful = 12 * surf.node_band.n + 24 * surf.reach_band.n
-        for name, (_, _, stored, step_bytes) in variants.items():
+        for name, (_, _, stored, visited, step_bytes) in variants.items():
             ts, te = best[name]
             row = {"grid": n, "storage": name, "ext_band": surf.ext_band.n,
                    "node_band": surf.node_band.n, "reach_band": surf.reach_band.n,
-                   "stored_cells": stored, "step_ms": 1e3 * ts, "extend_ms": 1e3 * te,
+                   "stored_cells": stored, "visited_cells": visited, "step_ms": 1e3 * ts, "extend_ms": 1e3 * te,
                    "copy_ms": 1e3 * t_copy, "x_copy": (ts + te) / t_copy,
                    "ns_per_cell": 1e9 * (ts + te) / surf.ext_band.n,
                    "useful_gbs": useful / (ts + te) / 1e9,
                    "stored_gbs": (step_bytes + 24 * surf.reach_band.n) / (ts + te) / 1e9,
                    "copy_gbs": copy_gbs}
             rows.append(row)
-            print(f"{n:>7}^3 {name:>8} {row['ext_band']:9d} {stored:9d} {row['step_ms']:8.2f} "
+            print(f"{n:>7}^3 {name:>8} {row['ext_band']:9d} {stored:9d} {visited:9d} {row['step_ms']:8.2f} "
                   f"{row['extend_ms']:7.2f} {row['x_copy']:7.2f} {row['ns_per_cell']:8.2f} "
                   f"{row['useful_gbs']:11.2f} {row['stored_gbs']:11.2f} {copy_gbs:9.2f}")
         del surf, flow, variants, a, b
-    print("   (stored: the grid's cells for the lists, the bricks' for bricks; x copy: a step's time over a\n"
-          "    device copy of the whole padded grid, float32)")
+    print("   (stored: the padded grid's cells for the lists, the bricks' for bricks; visited: the cells the\n"
+          "    step updates, the runs' or the bricks' holding a node; x copy: a step's time over a device copy\n"
+          "    of the whole padded grid, float32; stored GB/s: the bytes the step and the re-extension move)")
     return rows
 
 

@@ -39,9 +39,9 @@ NODE, REACH, EXT = 1, 2, 4
 # Cells of the next brick's rows kept after each row of the re-extension's source (bricks.cl)
 APRON = 3
 # Sizes measured (benchmarks/surface_accuracy.py --sections 6); the default was the fastest
-# at 217^3 and 256^3 (docs/surfaces.md).
+# at 217^3 and 256^3, with the fewest stored cells but 4^3's (docs/surfaces.md).
 BRICK_SIZES = ((4, 4, 4), (8, 4, 4), (8, 8, 8))
-DEFAULT_BRICK = (8, 8, 8)
+DEFAULT_BRICK = (8, 4, 4)
 
 
 def morton_key(bx: np.ndarray, by: np.ndarray, bz: np.ndarray) -> np.ndarray:
