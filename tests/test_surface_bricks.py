@@ -37,7 +37,7 @@ def surface(device, brick, h=0.2):
 @pytest.mark.parametrize("brick", BRICK_SIZES)
 def test_layout_and_tables_match_reference(runtime, brick):
     s = surface(runtime, brick)
-    bb, psi, _ = s.bricks()
+    bb, psi, _ = s._brick_band()
     g = s.grid
     # what is stored: every cell a kernel reads
     node, reach, ext = (band_host(b) for b in (s.node_band, s.reach_band, s.ext_band))
@@ -66,7 +66,7 @@ def test_layout_and_tables_match_reference(runtime, brick):
 @pytest.mark.parametrize("brick", BRICK_SIZES)
 def test_scatter_and_gather_round_trip(runtime, rng, brick):
     s = surface(runtime, brick)
-    bb, _, _ = s.bricks()
+    bb, _, _ = s._brick_band()
     g = s.grid
     u = rng.standard_normal((2,) + g.padded_shape).astype(np.float32)
     for apron in (0, APRON):
@@ -86,7 +86,7 @@ def test_scatter_and_gather_round_trip(runtime, rng, brick):
 def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, weighted, sides):
     s = surface(runtime if geometry == "cpu" else gpu_like, brick)
     g, q = s.grid, s.runtime.queue
-    bb, _, _ = s.bricks()
+    bb, _, _ = s._brick_band()
     coords = [tuple(c) for c in bb.coords]
     # psi scaled by a non-distance factor exercises the |N| weights of eq. (4.7)
     psi = s.psi_dev.get().astype(np.float64) * (1.5 if weighted else 1.0)
@@ -127,7 +127,7 @@ def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, in
     s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation, device=device)
     s._brick = brick
     g = s.grid
-    bb, _, lists = s.bricks()
+    bb, _, lists = s._brick_band()
     coords = [tuple(c) for c in bb.coords]
     u = rng.standard_normal((nc,) + g.padded_shape).astype(np.float32).astype(np.float64)
     src = bb.scatter(u, np.float32, APRON)

@@ -130,7 +130,7 @@ class BrickFlow:
         data = surf._as_channels(u)
         self.nc = data.shape[0]
         g = surf.grid
-        self.bricks, self.psi, self.lists = surf.bricks()
+        self.bricks, self.psi, self.lists = surf._brick_band()
         # cells off the band come back as they went in, through the device's precision
         self.padded = g.pad(data).astype(g.dtype)
         self.cur = self.bricks.scatter(self.padded, g.dtype)

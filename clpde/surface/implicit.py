@@ -82,7 +82,7 @@ class ImplicitSurface:
         # the band storage of heat (the flow that has both): "lists" (band lists over the dense
         # grid) or "bricks" (bricks.py); lists stay the default while they measure faster
         # (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, bricks took
-        # 1.3-1.6x the lists' time per step at 217^3)
+        # 1.3-1.4x the lists' time per step at 217^3 and 256^3, docs/surfaces.md)
         self._storage = "lists"
         self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
@@ -105,7 +105,7 @@ class ImplicitSurface:
         self._narrow_bands()
         self._bricks = None  # built when a flow on bricks first needs them
 
-    def bricks(self):
+    def _brick_band(self):
         """(BrickBand, psi on it, {EXT, REACH: re-extension lists}) of the band in dense
         bricks (bricks.py), built once per psi.
 
@@ -124,9 +124,8 @@ class ImplicitSurface:
             q = self.runtime.queue
 
             def stencils(band, base, frac):
-                # targets and first nodes as brick-storage indices, in brick order: the
-                # gathers of consecutive entries then share bricks (in the grid's order they
-                # ran 3-7x slower)
+                # targets as brick-storage indices and first nodes as node codes, in brick
+                # order: consecutive entries write one brick and gather from a few
                 target = bb.index_of(band.indices.get()[: band.n])
                 order = np.argsort(target, kind="stable")
                 first = bb.node_code(base.get()[: band.n])[order]
