@@ -21,12 +21,15 @@
 #define BZ 4
 #endif
 #define BV (BX * BY * BZ)
-// The re-extension's source (the stepped values) has rows lengthened by an apron of AX
-// cells, copies of the next brick's first ones, so a row of interpolation nodes never runs
-// into another brick (BXA cells a row, BVA a brick).
+// The re-extension's source (the stepped values) has each brick lengthened along x, y and z
+// by an apron of AX cells, copies of the next bricks' first ones, so a tricubic stencil
+// whose first node lies in a brick lies in that brick and its apron (BXA cells a row, BXA
+// BYA a slab, BVA a brick).
 #define AX 3
 #define BXA (BX + AX)
-#define BVA (BXA * BY * BZ)
+#define BYA (BY + AX)
+#define BZA (BZ + AX)
+#define BVA (BXA * BYA * BZA)
 #ifndef GROUP_PER_BRICK
 #define GROUP_PER_BRICK 0
 #endif
@@ -188,17 +191,31 @@ INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, c
     return div;
 }
 
+// Copy the low (HX, HY, HZ) part of brick b of vc into the apron of the brick before it
+// (before[HX + 2 HY + 4 HZ]); compile-time bounds, so the rows are vector copies.
+#define APRON_COPY(HX, HY, HZ)                                                            \
+    if (before[(HX) + 2 * (HY) + 4 * (HZ)]) {                                             \
+        __global REAL* to = vc + before[(HX) + 2 * (HY) + 4 * (HZ)] * BVA +               \
+                            ((HZ) * BZ * BYA + (HY) * BY) * BXA + (HX) * BX;               \
+        __global const REAL* from = vc + b * BVA;                                         \
+        for (int z = 0; z < ((HZ) ? AX : BZ); ++z)                                        \
+            for (int y = 0; y < ((HY) ? AX : BY); ++y)                                    \
+                for (int x = 0; x < ((HX) ? AX : BX); ++x)                                \
+                    to[(z * BYA + y) * BXA + x] = from[(z * BYA + y) * BXA + x];          \
+    }
+
 // One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
 // NODE cell (the other cells' values are never read: re-extension reads nodes only). sx, sy,
 // sz: the one-sided directions (+1 forward gradient, -1 backward). v is in the apron
-// layout: each work-item also writes its first AX columns into the apron of the brick
-// before it along x (one writer per apron cell).
+// layout: a cell within AX of the brick's low faces is also written into the aprons of the
+// bricks before it (along x, y, z and their combinations: up to 7), one writer per apron
+// cell.
 __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, const REAL r, const int sx,
                               const int sy, const int sz, BRICK_ARGS)
 {
     const int chan = get_global_id(1) * plane;
-    const int chan_v = get_global_id(1) * (nbricks + 2) * BVA;
+    __global REAL* vc = v + get_global_id(1) * (nbricks + 2) * BVA;
 #if GROUP_PER_BRICK
     __local REAL ut[TILE_CELLS(1)], pt[TILE_CELLS(2)];
 #else
@@ -207,28 +224,41 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
     FOR_EACH_BRICK(b, BIT_NODE) {
         load_tile(ut, u + chan, nbr, b, 1);
         load_tile(pt, psi, nbr, b, 2);
-        __global REAL* out = v + chan_v + b * BVA;
-        const int before = nbr[27 * b + 12];  // the brick at x - 1 (0: none stored)
-        __global REAL* apron = v + chan_v + before * BVA + BX;
+        // the bricks before this one: k = 1..7, bit 0 x, bit 1 y, bit 2 z (0: none stored)
+        __global const int* nb = nbr + 27 * b;
+        const int before[8] = {b, nb[12], nb[10], nb[9], nb[4], nb[3], nb[1], nb[0]};
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             const int i = TILE_AT(1, x, y, z);
             const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
-            const int o = (z * BY + y) * BXA + x;
-            out[o] = val;
-            if (x < AX && before) apron[o] = val;
+            vc[b * BVA + (z * BYA + y) * BXA + x] = val;
+#if GROUP_PER_BRICK
+            // each work-item copies its own value into the aprons it belongs to
+            for (int k = 1; k < 8; ++k) {
+                const int hx = k & 1, hy = (k >> 1) & 1, hz = k >> 2;
+                if ((hx && x >= AX) || (hy && y >= AX) || (hz && z >= AX) || !before[k]) continue;
+                vc[before[k] * BVA + ((z + hz * BZ) * BYA + y + hy * BY) * BXA + x + hx * BX] = val;
+            }
+#endif
         }
+#if !GROUP_PER_BRICK
+        // then the brick's low faces, edges and corner go to the aprons (a separate pass:
+        // in the cell loop these stores kept it from being vectorised, 3x slower)
+        APRON_COPY(1, 0, 0); APRON_COPY(0, 1, 0); APRON_COPY(1, 1, 0); APRON_COPY(0, 0, 1);
+        APRON_COPY(1, 0, 1); APRON_COPY(0, 1, 1); APRON_COPY(1, 1, 1);
+#endif
     }
 }
 
 // ---- closest-point re-extension --------------------------------------------------------------
 // dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface.cl's
 // extend_cp (tricubic Lagrange, or trilinear) from stencils computed once per psi (psi is
-// fixed): per entry k the brick-storage index of the target cell, the stencil's first node
-// (x0, y0, z0) as its brick and place there (BrickBand.node_code), and the closest point's offsets from floor(cp) (frac[k], frac[n + k],
-// frac[2n + k]); `list` holds the targets (plain layout), src is in the apron layout. The
-// nodes span at most 2 bricks along y and z (the apron covers x). Computing the closest point here instead, from a tile of psi, cost
-// more than the whole list re-extension on dense storage (floor and the clamps are calls on
-// PoCL), so the stencils are kept: 16 bytes a cell, as before.
+// fixed): per entry k the brick-storage index of the target cell (`list`, plain layout),
+// the stencil's first node (x0, y0, z0) as its brick and place there (BrickBand.node_code),
+// and the closest point's offsets from floor(cp) (frac[k], frac[n + k], frac[2n + k]). src
+// is in the apron layout, so the whole stencil lies in the node's brick: fixed strides, as
+// on the dense grid. (Gathering across the neighbouring bricks instead, with rows picking
+// their brick, ran 3-4x slower; computing the closest points here from a psi tile cost more
+// than the whole list re-extension on dense storage.)
 #ifdef REAL_IS_DOUBLE
 #define REAL4 double4
 #define INT4 long4
@@ -256,53 +286,38 @@ INLINE REAL4 node_weights(const REAL t)
 
 __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* restrict dst,
                               __global const int* restrict base,
-                              __global const REAL* restrict frac,
-                              __global const int* restrict nbr, const int src_plane, LIST_ARGS)
+                              __global const REAL* restrict frac, const int src_plane,
+                              LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan_unused);
     for (int k = k0; k < k1; ++k) {
         const int code = base[k];  // brick << 12 | z << 8 | y << 4 | x of the first node
         const int node = code >> 12, lz0 = (code >> 8) & 15, ly0 = (code >> 4) & 15;
-        const int d = (lz0 * BY + ly0) * BXA + (code & 15);
+        const int b0 = node * BVA + (lz0 * BYA + ly0) * BXA + (code & 15);
         const REAL tx = frac[k], ty = frac[nlist + k], tz = frac[2 * nlist + k];
-        // the nodes' bricks: the node's own and its neighbours along y, z and both (27-entry
-        // table, x fastest); the rows of slab a start at P[a >= zs][e >= ys] + a BXA BY +
-        // e BXA, with zs, ys the node counts before the next brick
-        __global const int* nb = nbr + 27 * node;
-        const int zs = BZ - lz0, ys = BY - ly0;
-        const int p00 = node * BVA + d, p01 = nb[16] * BVA + d - BY * BXA;
-        const int p10 = nb[22] * BVA + d - BZ * BXA * BY;
-        const int p11 = nb[25] * BVA + d - BZ * BXA * BY - BY * BXA;
-#if INTERP == 3
-        const REAL4 wx = node_weights(tx), wy = node_weights(ty), wz = node_weights(tz);
-#else
-        const REAL wx[2] = {1 - tx, tx}, wy[2] = {1 - ty, ty}, wz[2] = {1 - tz, tz};
-#endif
         REAL val[NC];
         #pragma unroll
         for (int c = 0; c < NC; ++c) {
-            __global const REAL* s = src + c * src_plane;
+            __global const REAL* u = src + c * src_plane + b0;
 #if INTERP == 3
-            // the 16 rows summed as 4-vectors with their y-z weights, one dot with the x
-            // weights at the end (as surface.cl's extend_cp)
+            // 16 rows of 4 nodes at fixed strides in the node's brick and its apron, summed
+            // as 4-vectors (as surface.cl's extend_cp)
+            const REAL4 wy = node_weights(ty), wz = node_weights(tz);
             REAL4 acc = 0;
-            #pragma unroll
             for (int a = 0; a < 4; ++a) {
-                const int pa0 = a < zs ? p00 : p10, pa1 = a < zs ? p01 : p11;
-                #pragma unroll
-                for (int e = 0; e < 4; ++e)
-                    acc += (wz[a] * wy[e]) * LOAD4(s + (e < ys ? pa0 : pa1) + a * (BXA * BY) + e * BXA);
+                __global const REAL* slab = u + a * (BXA * BYA);
+                acc += wz[a] * (wy.x * LOAD4(slab) + wy.y * LOAD4(slab + BXA) +
+                                wy.z * LOAD4(slab + 2 * BXA) + wy.w * LOAD4(slab + 3 * BXA));
             }
+            const REAL4 wx = node_weights(tx);
             val[c] = acc.x * wx.x + acc.y * wx.y + acc.z * wx.z + acc.w * wx.w;
 #else
             REAL acc = 0;
-            for (int a = 0; a < 2; ++a) {
-                const int pa0 = a < zs ? p00 : p10, pa1 = a < zs ? p01 : p11;
+            for (int a = 0; a < 2; ++a)
                 for (int e = 0; e < 2; ++e) {
-                    const int row = (e < ys ? pa0 : pa1) + a * (BXA * BY) + e * BXA;
-                    acc += (wz[a] * wy[e]) * (wx[0] * s[row] + wx[1] * s[row + 1]);
+                    const int row = a * (BXA * BYA) + e * BXA;
+                    acc += ((a ? tz : 1 - tz) * (e ? ty : 1 - ty)) * ((1 - tx) * u[row] + tx * u[row + 1]);
                 }
-            }
             val[c] = acc;
 #endif
         }

@@ -104,16 +104,21 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     expect = ref.heat_step(u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets, weighted)
     got = dst.get().reshape(2, -1)[:, bref.brick_index(node, g.padded_shape, coords, brick, APRON)]
     np.testing.assert_allclose(got, expect, atol=2e-5 * max(1, np.abs(expect).max()))
-    # the apron repeats the next brick's first columns wherever both bricks were stepped
-    out = dst.get().reshape(2, len(coords) + 2, *brick[::-1][:2], brick[0] + APRON)
+    # the apron repeats the next bricks' first cells wherever both bricks were stepped
+    bx, by, bz = brick
+    out = dst.get().reshape(2, len(coords) + 2, bz + APRON, by + APRON, bx + APRON)
     index = {c: i + 1 for i, c in enumerate(coords)}
     stepped = bb.brick_bits.get() & NODE != 0
     checked = 0
     for (x, y, z), i in index.items():
-        j = index.get((x + 1, y, z))
-        if j and stepped[i] and stepped[j]:
-            np.testing.assert_array_equal(out[:, i, :, :, brick[0]:], out[:, j, :, :, :APRON])
-            checked += 1
+        for hx, hy, hz in ((1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)):
+            j = index.get((x + hx, y + hy, z + hz))
+            if j and stepped[i] and stepped[j]:
+                mine = out[:, i, hz * bz: hz * bz + APRON if hz else bz,
+                           hy * by: hy * by + APRON if hy else by, hx * bx: hx * bx + APRON if hx else bx]
+                theirs = out[:, j, :APRON if hz else bz, :APRON if hy else by, :APRON if hx else bx]
+                np.testing.assert_array_equal(mine, theirs)
+                checked += 1
     assert checked > 0
 
 

@@ -8,9 +8,9 @@ memory. On the device:
 - one buffer per quantity, `(channels, nbricks + 2, BV)` with BV = BX BY BZ cells a brick, x
   fastest inside a brick; the stored bricks are 1..nbricks, brick 0 is a sentinel of zeros
   that stands for every brick not stored (brick nbricks + 1 is spare). The stepped values,
-  which the closest-point re-extension gathers, have their rows lengthened by an apron of
-  APRON cells, copies of the next brick's first ones, so a row of interpolation nodes never
-  runs into another brick (the step writes both);
+  which the closest-point re-extension gathers, have each brick lengthened along x, y and z
+  by an apron of APRON cells, copies of the next bricks' first ones, so a tricubic stencil
+  never leaves the brick of its first node (the step writes both);
 - `nbr`: per brick the indices of its 27 neighbours (itself in the middle, the sentinel where
   none is stored), for the stencils, which read the neighbours' faces (no halo is stored),
   and for the closest-point gathers, which read the bricks next to their first node's;
@@ -54,11 +54,13 @@ def morton_key(bx: np.ndarray, by: np.ndarray, bz: np.ndarray) -> np.ndarray:
 
 
 def _brick_cells(coords, brick, padded_shape, apron: int) -> np.ndarray:
-    """(nbricks, BZ * BY * (BX + apron)) flat padded index of every cell of the bricks, rows
-    along x lengthened by `apron` cells of the next brick place; -1 past the grid."""
+    """(nbricks, (BZ + apron) (BY + apron) (BX + apron)) flat padded index of every cell of
+    the bricks lengthened along each axis by `apron` cells of the next brick places; -1 past
+    the grid."""
     bx, by, bz = brick
     pz, py, px = padded_shape
-    lz, ly, lx = np.meshgrid(np.arange(bz), np.arange(by), np.arange(bx + apron), indexing="ij")
+    lz, ly, lx = np.meshgrid(np.arange(bz + apron), np.arange(by + apron), np.arange(bx + apron),
+                             indexing="ij")
     z = coords[:, 2, None] * bz + lz.ravel()
     y = coords[:, 1, None] * by + ly.ravel()
     x = coords[:, 0, None] * bx + lx.ravel()
@@ -164,8 +166,8 @@ class BrickBand:
         z, rem = np.divmod(np.asarray(flat, np.int64), py * px)
         y, x = np.divmod(rem, px)
         b = self.map_host[z // bz, y // by, x // bx].astype(np.int64)
-        row = bx + apron
-        return (b * (row * by * bz) + ((z % bz) * by + y % by) * row + x % bx).astype(np.int32)
+        ax, ay, az = bx + apron, by + apron, bz + apron
+        return (b * (ax * ay * az) + ((z % bz) * ay + y % by) * ax + x % bx).astype(np.int32)
 
     def node_code(self, flat: np.ndarray) -> np.ndarray:
         """The first interpolation nodes of closest points (flat padded indices) coded for
@@ -183,14 +185,15 @@ class BrickBand:
 
     # ---- dense <-> bricks ---------------------------------------------------------------------
     def scatter(self, padded: np.ndarray, dtype, apron: int = 0) -> cla.Array:
-        """Device brick buffer (channels, nbricks + 2, BZ, BY, BX + apron) from padded
-        (channels, PZ, PY, PX); the apron holds the first cells of the next brick place's
-        rows (the re-extension's source, whose rows of nodes then never leave a brick)."""
+        """Device brick buffer (channels, nbricks + 2, BZ + apron, BY + apron, BX + apron)
+        from padded (channels, PZ, PY, PX); the apron holds the first cells of the next brick
+        places (the re-extension's source, whose stencils then never leave a brick)."""
         flat = np.asarray(padded).reshape(padded.shape[0], -1)
         bx, by, bz = self.brick
         cells = self.cells if apron == 0 else _brick_cells(self.coords, self.brick,
                                                            self.padded_shape, apron)
-        out = np.zeros((flat.shape[0], self.nbricks + 2, (bx + apron) * by * bz), dtype)
+        out = np.zeros((flat.shape[0], self.nbricks + 2, (bx + apron) * (by + apron) * (bz + apron)),
+                       dtype)
         valid = cells >= 0
         out[:, 1 : self.nbricks + 1][:, valid] = flat[:, cells[valid]]
         self.runtime.check_alloc(out.nbytes, "brick volume")

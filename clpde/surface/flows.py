@@ -134,7 +134,7 @@ class BrickFlow:
         # cells off the band come back as they went in, through the device's precision
         self.padded = g.pad(data).astype(g.dtype)
         self.cur = self.bricks.scatter(self.padded, g.dtype)
-        # the stepped values, in the layout the re-extension reads (rows with an apron)
+        # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
         self.src_plane = np.int32(self.tmp.size // self.nc)
         self._extend_kernel = self.kernel("brick_extend_cp", INTERP=surf.interp, NC=self.nc,
@@ -151,7 +151,7 @@ class BrickFlow:
         n, target, base, frac = self.lists[which]
         b = self.bricks
         b.launch_list(self._extend_kernel, n, src.data, dst.data, base.data, frac.data,
-                      b.nbr.data, self.src_plane, target.data)
+                      self.src_plane, target.data)
 
     def after_step(self) -> None:
         from .bricks import REACH

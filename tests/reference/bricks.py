@@ -2,7 +2,7 @@
 
 Written brick by brick with plain loops, independently of bricks.py's vectorised build: the
 layout (bricks 1..n in Morton order, brick 0 the sentinel, x fastest inside a brick, rows
-lengthened by an apron of the next brick place's first cells), the 27-neighbour table, and
+lengthened along each axis by an apron of the next brick places' first cells), the 27-neighbour table, and
 the kernels as the dense references of tests/reference/surface.py read through it.
 """
 
@@ -39,13 +39,14 @@ def neighbours(coords):
 
 
 def to_bricks(padded, coords, brick, apron=0):
-    """(nc, n + 2, BZ, BY, BX + apron) brick values of padded (nc, PZ, PY, PX) volumes."""
+    """(nc, n + 2, BZ + apron, BY + apron, BX + apron) brick values of padded (nc, PZ, PY, PX)
+    volumes (the apron: the next brick places' first cells)."""
     bx, by, bz = brick
     nc, pz, py, px = padded.shape
-    out = np.zeros((nc, len(coords) + 2, bz, by, bx + apron))
+    out = np.zeros((nc, len(coords) + 2, bz + apron, by + apron, bx + apron))
     for i, (cx, cy, cz) in enumerate(coords):
-        for z in range(bz):
-            for y in range(by):
+        for z in range(bz + apron):
+            for y in range(by + apron):
                 for x in range(bx + apron):
                     gz, gy, gx = cz * bz + z, cy * by + y, cx * bx + x
                     if gz < pz and gy < py and gx < px:
@@ -63,5 +64,5 @@ def brick_index(cells, padded_shape, coords, brick, apron=0):
         z, rem = divmod(int(cell), py * px)
         y, x = divmod(rem, px)
         b = index.get((x // bx, y // by, z // bz), 0)
-        out.append(((b * bz + z % bz) * by + y % by) * (bx + apron) + x % bx)
+        out.append(((b * (bz + apron) + z % bz) * (by + apron) + y % by) * (bx + apron) + x % bx)
     return np.array(out)
