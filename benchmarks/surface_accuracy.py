@@ -260,7 +260,7 @@ def storage_table(sizes, steps=10, reps=5):
             bits = bf.bricks.brick_bits.get()
             visited = int((bits & 1 != 0).sum()) * bf.bricks.cells_per_brick
             bx, by, bz = brick
-            apron = (bx + 3) / bx  # the step writes the apron too
+            apron = (bx + 3) * (by + 3) * (bz + 3) / (bx * by * bz)  # the step writes the aprons too
             variants["x".join(map(str, brick))] = (brick_step, bf.after_step, bf.bricks.stored_cells,
                                                    visited, int(visited * (8 + 4 * apron)))
         a = cla.empty(q, g.volume, np.float32)

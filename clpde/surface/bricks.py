@@ -39,9 +39,9 @@ NODE, REACH, EXT = 1, 2, 4
 # Cells of the next brick's rows kept after each row of the re-extension's source (bricks.cl)
 APRON = 3
 # Sizes measured (benchmarks/surface_accuracy.py --sections 6); the default was the fastest
-# at 217^3 and 256^3, with the fewest stored cells but 4^3's (docs/surfaces.md).
+# from 64^3 to 256^3, and its aprons cost the least memory (docs/surfaces.md).
 BRICK_SIZES = ((4, 4, 4), (8, 4, 4), (8, 8, 8))
-DEFAULT_BRICK = (8, 4, 4)
+DEFAULT_BRICK = (8, 8, 8)
 
 
 def morton_key(bx: np.ndarray, by: np.ndarray, bz: np.ndarray) -> np.ndarray:
@@ -159,7 +159,7 @@ class BrickBand:
 
     def index_of(self, flat: np.ndarray, apron: int = 0) -> np.ndarray:
         """Brick-storage indices (int32) of cells given by flat padded indices, in the
-        layout with rows lengthened by `apron` (cells in bricks not stored land in the
+        layout with bricks lengthened by `apron` (cells in bricks not stored land in the
         sentinel, brick 0)."""
         _, py, px = self.padded_shape
         bx, by, bz = self.brick

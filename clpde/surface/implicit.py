@@ -81,8 +81,9 @@ class ImplicitSurface:
         self._check_border = _check_border
         # the band storage of heat (the flow that has both): "lists" (band lists over the dense
         # grid) or "bricks" (bricks.py); lists stay the default while they measure faster
-        # (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, bricks took
-        # 1.3-1.4x the lists' time per step at 217^3 and 256^3, docs/surfaces.md)
+        # (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, 8x8x8 bricks took
+        # 1.05-1.07x the lists' time per step at 217^3 and 256^3, more on smaller grids;
+        # docs/surfaces.md)
         self._storage = "lists"
         self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
