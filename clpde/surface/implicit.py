@@ -82,7 +82,7 @@ class ImplicitSurface:
         # the band storage of heat (the flow that has both): "lists" (band lists over the dense
         # grid) or "bricks" (bricks.py); lists stay the default while they measure faster
         # (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, 8x8x8 bricks took
-        # 1.05-1.07x the lists' time per step at 217^3 and 256^3, more on smaller grids;
+        # 1.05-1.24x the lists' time per step at 217^3 and 256^3, more on smaller grids;
         # docs/surfaces.md)
         self._storage = "lists"
         self._brick = DEFAULT_BRICK
