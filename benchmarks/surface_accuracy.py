@@ -255,11 +255,11 @@ def storage_table(sizes, steps=10, reps=5):
             k_brick = bf.kernel("brick_heat_step", WEIGHTED=0)
 
             def brick_step(bf=bf, k=k_brick):
-                bf.bricks.launch(k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0))
+                bf.bricks.launch(k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0),
+                                 bf.bricks.node_rows.data)
 
-            bits = bf.bricks.brick_bits.get()
-            visited = int((bits & 1 != 0).sum()) * bf.bricks.cells_per_brick
             bx, by, bz = brick
+            visited = int(bf.bricks.node_rows.get().astype(np.int64).sum()) * bx  # rows with a node
             apron = (bx + 3) * (by + 3) * (bz + 3) / (bx * by * bz)  # the step writes the aprons too
             variants["x".join(map(str, brick))] = (brick_step, bf.after_step, bf.bricks.stored_cells,
                                                    visited, int(visited * (8 + 4 * apron)))
@@ -302,7 +302,7 @@ def storage_table(sizes, steps=10, reps=5):
                   f"{row['useful_gbs']:11.2f} {row['stored_gbs']:11.2f} {copy_gbs:9.2f}")
         del surf, flow, variants, a, b
     print("   (stored: the padded grid's cells for the lists, the bricks' for bricks; visited: the cells the\n"
-          "    step updates, the runs' or the bricks' holding a node; x copy: a step's time over a device copy\n"
+          "    step updates, the runs' or the bricks' rows holding a node; x copy: a step's time over a device copy\n"
           "    of the whole padded grid, float32; stored GB/s: the bytes the step and the re-extension move)")
     return rows
 

@@ -212,7 +212,8 @@ INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, c
 // cell.
 __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, const REAL r, const int sx,
-                              const int sy, const int sz, BRICK_ARGS)
+                              const int sy, const int sz, __global const uchar* restrict rows,
+                              BRICK_ARGS)
 {
     const int chan = get_global_id(1) * plane;
     __global REAL* vc = v + get_global_id(1) * (nbricks + 2) * BVA;
@@ -227,7 +228,15 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
         // the bricks before this one: k = 1..7, bit 0 x, bit 1 y, bit 2 z (0: none stored)
         __global const int* nb = nbr + 27 * b;
         const int before[8] = {b, nb[12], nb[10], nb[9], nb[4], nb[3], nb[1], nb[0]};
+#if GROUP_PER_BRICK
         FOR_EACH_BRICK_CELL(l, x, y, z) {
+#else
+        // rows along x without a node are skipped whole (their values are never read)
+        for (int z = 0; z < BZ; ++z)
+            for (int y = 0; y < BY; ++y) {
+                if (!rows[b * BY * BZ + z * BY + y]) continue;
+                for (int x = 0; x < BX; ++x) {
+#endif
             const int i = TILE_AT(1, x, y, z);
             const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
             vc[b * BVA + (z * BYA + y) * BXA + x] = val;
@@ -239,7 +248,12 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
                 vc[before[k] * BVA + ((z + hz * BZ) * BYA + y + hy * BY) * BXA + x + hx * BX] = val;
             }
 #endif
+#if GROUP_PER_BRICK
         }
+#else
+                }
+            }
+#endif
 #if !GROUP_PER_BRICK
         // then the brick's low faces, edges and corner go to the aprons (a separate pass:
         // in the cell loop these stores kept it from being vectorised, 3x slower)

@@ -98,7 +98,7 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     flow.surf, flow.bricks = s, bb
     kernel = flow.kernel("brick_heat_step", WEIGHTED=int(weighted))
     bb.launch(kernel, src.data, dst.data, psi_dev.data, g.scalar(0.1), *flows._signs(sides),
-              channels=2)
+              bb.node_rows.data, channels=2)
     node = band_host(s.node_band)
     offsets = [int(o) for o in flows._offsets(g, sides)]
     expect = ref.heat_step(u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets, weighted)

@@ -93,6 +93,7 @@ class BrickBand:
     nbr: cla.Array
     mask_host: np.ndarray  # (nbricks + 2, BV) band bits (brick 0: the sentinel)
     brick_bits: cla.Array  # per brick the OR of its cells' bits
+    node_rows: cla.Array  # (nbricks + 2, BZ, BY): 1 where the row along x holds a node
     map_host: np.ndarray
 
     @property
@@ -152,10 +153,11 @@ class BrickBand:
         flat_bits = bits.reshape(-1)
         mask_host[1 : n + 1][valid] = flat_bits[cells[valid]]
         q = runtime.queue
+        rows = (mask_host.reshape(n + 2, bz, by, bx) & NODE).any(axis=3).astype(np.uint8)
         dev = {name: cla.to_device(q, np.ascontiguousarray(a)) for name, a in
-               (("nbr", nbr), ("bits", np.bitwise_or.reduce(mask_host, axis=1)))}
+               (("nbr", nbr), ("bits", np.bitwise_or.reduce(mask_host, axis=1)), ("rows", rows))}
         return cls(runtime, tuple(padded_shape), (bx, by, bz), coords, cells, (mz, my, mx),
-                   dev["nbr"], mask_host, dev["bits"], bmap)
+                   dev["nbr"], mask_host, dev["bits"], dev["rows"], bmap)
 
     def index_of(self, flat: np.ndarray, apron: int = 0) -> np.ndarray:
         """Brick-storage indices (int32) of cells given by flat padded indices, in the

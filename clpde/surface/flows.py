@@ -203,7 +203,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
         for n in _progress(progress, steps, "surface heat"):
             sides = _ALL_SIDES[n % 8] if alternate else 0
             flow.bricks.launch(kernel, flow.cur.data, flow.tmp.data, flow.psi.data, r,
-                               *_signs(sides), channels=flow.nc)
+                               *_signs(sides), flow.bricks.node_rows.data, channels=flow.nc)
             flow.after_step()
         return flow.result()
     flow = BandFlow(surf, u)
