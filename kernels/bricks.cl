@@ -142,7 +142,7 @@ INLINE void load_tile(TILE REAL* t, __global const REAL* restrict src,
 // offsets in the tile (+-1, +-tx, +-txy).
 #define ONE_SIDED_SIGN(e) ((e) > 0 ? (REAL)1 : (REAL)-1)
 
-INLINE void tile_flux(TILE const REAL* u, TILE const REAL* p, const int j, const int q,
+INLINE void tile_flux(TILE const REAL* u, __global const REAL* p, const int j, const int q,
                       const int ex, const int ey, const int ez, const int usx, const int usxy,
                       const int sx, const int sxy, REAL* w)
 {
@@ -169,7 +169,7 @@ INLINE void tile_flux(TILE const REAL* u, TILE const REAL* p, const int j, const
 
 // The divergence at cell i of the u tile (halo 1), q of the psi tile (halo 2): the fluxes
 // one cell back read psi two cells away along an axis, u only one (faces and edges).
-INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, const int q,
+INLINE REAL tile_heat_div(TILE const REAL* u, __global const REAL* p, const int i, const int q,
                           const int dx, const int dy, const int dz)
 {
     const int ex = dx, ey = dy * TILE_X(1), ez = dz * TILE_XY(1);
@@ -204,7 +204,8 @@ INLINE REAL tile_heat_div(TILE const REAL* u, TILE const REAL* p, const int i, c
                     to[(z * BYA + y) * BXA + x] = from[(z * BYA + y) * BXA + x];          \
     }
 
-// One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
+// psi: the psi tiles (BrickBand.scatter with halo 2: per brick its cells and those within 2
+// of its faces, the tile layout). One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
 // NODE cell (the other cells' values are never read: re-extension reads nodes only). sx, sy,
 // sz: the one-sided directions (+1 forward gradient, -1 backward). v is in the apron
 // layout: a cell within AX of the brick's low faces is also written into the aprons of the
@@ -218,13 +219,14 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
     const int chan = get_global_id(1) * plane;
     __global REAL* vc = v + get_global_id(1) * (nbricks + 2) * BVA;
 #if GROUP_PER_BRICK
-    __local REAL ut[TILE_CELLS(1)], pt[TILE_CELLS(2)];
+    __local REAL ut[TILE_CELLS(1)];
 #else
-    REAL ut[TILE_CELLS(1)], pt[TILE_CELLS(2)];
+    REAL ut[TILE_CELLS(1)];
 #endif
     FOR_EACH_BRICK(b, BIT_NODE) {
         load_tile(ut, u + chan, nbr, b, 1);
-        load_tile(pt, psi, nbr, b, 2);
+        // psi is fixed: its tiles of halo 2 are stored, one after the other (psi_tiles)
+        __global const REAL* pt = psi + b * TILE_CELLS(2);
         // the bricks before this one: k = 1..7, bit 0 x, bit 1 y, bit 2 z (0: none stored)
         __global const int* nb = nbr + 27 * b;
         const int before[8] = {b, nb[12], nb[10], nb[9], nb[4], nb[3], nb[1], nb[0]};

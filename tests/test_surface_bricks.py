@@ -52,8 +52,8 @@ def test_layout_and_tables_match_reference(runtime, brick):
     coords = bref.brick_coords(need, brick)
     np.testing.assert_array_equal(bb.coords, np.array(coords))
     np.testing.assert_array_equal(bb.nbr.get(), bref.neighbours(coords))
-    # psi and the band bits in brick layout
-    expect = bref.to_bricks(g.pad(s.psi[None], mode="linear"), coords, brick)
+    # psi in tiles of halo 2 and the band bits in brick layout
+    expect = bref.to_tiles(g.pad(s.psi[None], mode="linear"), coords, brick, 2)
     np.testing.assert_allclose(psi.get().reshape(expect.shape), expect, atol=1e-6)
     bits = np.zeros(g.padded_shape)
     for cells, bit in ((node, NODE), (reach, REACH), (ext, EXT)):
@@ -92,7 +92,7 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     psi = s.psi_dev.get().astype(np.float64) * (1.5 if weighted else 1.0)
     u = rng.standard_normal((2,) + g.padded_shape).astype(np.float32).astype(np.float64)
     src = bb.scatter(u, np.float32)
-    psi_dev = bb.scatter(psi[None], np.float32)
+    psi_dev = bb.scatter_tiles(psi[None], np.float32, 2)
     dst = bb.scatter(np.zeros_like(u), np.float32, APRON)
     flow = flows.BrickFlow.__new__(flows.BrickFlow)
     flow.surf, flow.bricks = s, bb

@@ -53,18 +53,19 @@ def morton_key(bx: np.ndarray, by: np.ndarray, bz: np.ndarray) -> np.ndarray:
     return key
 
 
-def _brick_cells(coords, brick, padded_shape, apron: int) -> np.ndarray:
-    """(nbricks, (BZ + apron) (BY + apron) (BX + apron)) flat padded index of every cell of
-    the bricks lengthened along each axis by `apron` cells of the next brick places; -1 past
-    the grid."""
+def _brick_cells(coords, brick, padded_shape, apron: int, halo: int = 0) -> np.ndarray:
+    """(nbricks, (BZ + a) (BY + a) (BX + a)) flat padded index of every cell of the bricks
+    lengthened along each axis by `apron` cells of the next brick places and `halo` cells on
+    both sides (a = apron + 2 halo); -1 outside the grid."""
     bx, by, bz = brick
     pz, py, px = padded_shape
-    lz, ly, lx = np.meshgrid(np.arange(bz + apron), np.arange(by + apron), np.arange(bx + apron),
-                             indexing="ij")
-    z = coords[:, 2, None] * bz + lz.ravel()
-    y = coords[:, 1, None] * by + ly.ravel()
-    x = coords[:, 0, None] * bx + lx.ravel()
-    return np.where((z < pz) & (y < py) & (x < px), (z * py + y) * px + x, -1).astype(np.int64)
+    a = apron + 2 * halo
+    lz, ly, lx = np.meshgrid(np.arange(bz + a), np.arange(by + a), np.arange(bx + a), indexing="ij")
+    z = coords[:, 2, None] * bz + lz.ravel() - halo
+    y = coords[:, 1, None] * by + ly.ravel() - halo
+    x = coords[:, 0, None] * bx + lx.ravel() - halo
+    inside = (z >= 0) & (y >= 0) & (x >= 0) & (z < pz) & (y < py) & (x < px)
+    return np.where(inside, (z * py + y) * px + x, -1).astype(np.int64)
 
 
 def dilate_axes(mask: np.ndarray, reach: int) -> np.ndarray:
@@ -186,6 +187,18 @@ class BrickBand:
         return (b << 12 | (z % bz) << 8 | (y % by) << 4 | x % bx).astype(np.int32)
 
     # ---- dense <-> bricks ---------------------------------------------------------------------
+    def scatter_tiles(self, padded: np.ndarray, dtype, halo: int) -> cla.Array:
+        """Device tiles (channels, nbricks + 2, BZ + 2 halo, BY + 2 halo, BX + 2 halo) of
+        padded values: each brick with the cells within `halo` of its faces (for fixed
+        quantities, read by every step: psi)."""
+        flat = np.asarray(padded).reshape(padded.shape[0], -1)
+        cells = _brick_cells(self.coords, self.brick, self.padded_shape, 0, halo)
+        out = np.zeros((flat.shape[0], self.nbricks + 2, cells.shape[1]), dtype)
+        valid = cells >= 0
+        out[:, 1 : self.nbricks + 1][:, valid] = flat[:, cells[valid]]
+        self.runtime.check_alloc(out.nbytes, "brick tiles")
+        return cla.to_device(self.runtime.queue, out)
+
     def scatter(self, padded: np.ndarray, dtype, apron: int = 0) -> cla.Array:
         """Device brick buffer (channels, nbricks + 2, BZ + apron, BY + apron, BX + apron)
         from padded (channels, PZ, PY, PX); the apron holds the first cells of the next brick

@@ -107,7 +107,7 @@ class ImplicitSurface:
         self._bricks = None  # built when a flow on bricks first needs them
 
     def _brick_band(self):
-        """(BrickBand, psi on it, {EXT, REACH: re-extension lists}) of the band in dense
+        """(BrickBand, psi's tiles on it, {EXT, REACH: re-extension lists}) of the band in dense
         bricks (bricks.py), built once per psi.
 
         Stored: every brick holding a cell a brick kernel reads, the cells of the extension
@@ -121,7 +121,8 @@ class ImplicitSurface:
                 flat[band.indices.get()[: band.n]] |= bit
             stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
             bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, self._brick)
-            psi = bb.scatter(g.pad(self.psi[None], mode="linear"), g.dtype)
+            # psi in tiles of halo 2, what the heat step reads around each brick
+            psi = bb.scatter_tiles(g.pad(self.psi[None], mode="linear"), g.dtype, 2)
             q = self.runtime.queue
 
             def stencils(band, base, frac):

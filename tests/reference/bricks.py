@@ -66,3 +66,20 @@ def brick_index(cells, padded_shape, coords, brick, apron=0):
         b = index.get((x // bx, y // by, z // bz), 0)
         out.append(((b * (bz + apron) + z % bz) * (by + apron) + y % by) * (bx + apron) + x % bx)
     return np.array(out)
+
+
+def to_tiles(padded, coords, brick, halo):
+    """(nc, n + 2, BZ + 2 halo, BY + 2 halo, BX + 2 halo): each brick with the cells within
+    `halo` of its faces (0 outside the grid)."""
+    bx, by, bz = brick
+    nc, pz, py, px = padded.shape
+    h2 = 2 * halo
+    out = np.zeros((nc, len(coords) + 2, bz + h2, by + h2, bx + h2))
+    for i, (cx, cy, cz) in enumerate(coords):
+        for z in range(bz + h2):
+            for y in range(by + h2):
+                for x in range(bx + h2):
+                    gz, gy, gx = cz * bz + z - halo, cy * by + y - halo, cx * bx + x - halo
+                    if 0 <= gz < pz and 0 <= gy < py and 0 <= gx < px:
+                        out[:, i + 1, z, y, x] = padded[:, gz, gy, gx]
+    return out
