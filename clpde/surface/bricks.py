@@ -10,18 +10,20 @@ memory. On the device:
   that stands for every brick not stored (brick nbricks + 1 is spare). The stepped values,
   which the closest-point re-extension gathers, have each brick lengthened along x, y and z
   by an apron of APRON cells, copies of the next bricks' first ones, so a tricubic stencil
-  never leaves the brick of its first node (the step writes both);
+  never leaves the brick of its first node (the step writes both). psi, which is fixed, is
+  stored as tiles of halo 2 (`scatter_tiles`), what the heat step reads around a brick;
 - `nbr`: per brick the indices of its 27 neighbours (itself in the middle, the sentinel where
-  none is stored), for the stencils, which read the neighbours' faces (no halo is stored),
-  and for the closest-point gathers, which read the bricks next to their first node's;
+  none is stored), for the step, which reads u with its neighbours' faces (no halo is
+  stored for data), and for the aprons it writes;
+- `node_rows`: per brick and row along x, whether it holds a node (the step skips the others);
 - `brick_bits`: per brick the union of its cells' band bits (NODE: the step updates the
   cell, REACH: re-extended after every step, EXT: re-extended when a flow returns); the
   kernels skip bricks without the bits they update. The per-cell bits (`mask_host`) stay on
   the host, where `gather` reads only the cells that carry meaning; the re-extension visits
-  lists of its cells, in brick order.
+  lists of its cells, in the order of their stencils' first nodes.
 On the host, `map_host` is the coarse brick-index map of the whole padded grid (one int per
 brick place, the sentinel where none is stored): it turns the closest points' first nodes,
-which may lie many bricks away, into brick-storage indices (`index_of`).
+which may lie many bricks away, into brick-storage places (`index_of`, `node_code`).
 
 Dense numpy arrays go in and out through `scatter` and `gather` (users' contract).
 """

@@ -80,10 +80,10 @@ class ImplicitSurface:
         self.runtime = get_runtime(device)
         self._check_border = _check_border
         # the band storage of heat (the flow that has both): "lists" (band lists over the dense
-        # grid) or "bricks" (bricks.py); lists stay the default while they measure faster
-        # (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, 8x8x8 bricks took
-        # 1.05-1.24x the lists' time per step at 217^3 and 256^3, more on smaller grids;
-        # docs/surfaces.md)
+        # grid) or "bricks" (bricks.py); lists stay the default while bricks do not measure
+        # faster (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, 8x8x8
+        # bricks took 0.83-1.09x the lists' time per step at 217^3 and 256^3, 1.2-1.6x on
+        # smaller grids; docs/surfaces.md)
         self._storage = "lists"
         self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
