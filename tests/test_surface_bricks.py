@@ -6,7 +6,6 @@ on GPUs) and for the three brick sizes measured; and the heat flow on bricks aga
 same flow on the band lists."""
 
 import numpy as np
-import pyopencl.array as cla
 import pytest
 from reference import bricks as bref
 from reference import surface as ref
@@ -85,7 +84,7 @@ def test_scatter_and_gather_round_trip(runtime, rng, brick):
 @pytest.mark.parametrize("weighted,sides", [(False, 5), (True, 6)])
 def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, weighted, sides):
     s = surface(runtime if geometry == "cpu" else gpu_like, brick)
-    g, q = s.grid, s.runtime.queue
+    g = s.grid
     bb, _, _ = s._brick_band()
     coords = [tuple(c) for c in bb.coords]
     # psi scaled by a non-distance factor exercises the |N| weights of eq. (4.7)
