@@ -197,7 +197,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
     steps, dt = _check_time(t, dt, stability_limit(surf, "heat"), "heat flow")
     g = surf.grid
     r = g.scalar(dt / surf.spacing**2)
-    if surf._storage == "bricks":
+    if getattr(surf, "_storage", "lists") == "bricks":
         flow = BrickFlow(surf, u)
         kernel = flow.kernel("brick_heat_step", WEIGHTED=int(bool(weighted)))
         for n in _progress(progress, steps, "surface heat"):

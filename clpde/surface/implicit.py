@@ -113,14 +113,15 @@ class ImplicitSurface:
         Stored: every brick holding a cell a brick kernel reads, the cells of the extension
         and reach bands with their psi neighbours (closest points) and the nodes with psi two
         cells away along each axis (the fluxes one cell back)."""
-        if self._bricks is None or self._bricks[0].brick != tuple(self._brick):
+        brick = tuple(getattr(self, "_brick", DEFAULT_BRICK))
+        if getattr(self, "_bricks", None) is None or self._bricks[0].brick != brick:
             g = self.grid
             bits = np.zeros(g.padded_shape, np.uint8)
             flat = bits.reshape(-1)
             for band, bit in ((self.node_band, NODE), (self.reach_band, REACH), (self.ext_band, EXT)):
                 flat[band.indices.get()[: band.n]] |= bit
             stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
-            bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, self._brick)
+            bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, brick)
             # psi in tiles of halo 2, what the heat step reads around each brick
             psi = bb.scatter_tiles(g.pad(self.psi[None], mode="linear"), g.dtype, 2)
             q = self.runtime.queue
