@@ -26,6 +26,15 @@
    chunks), with the far field's largest difference from the exact sum there. Last, heat
    flow on an icosphere whose polar hole from_mesh closed, with and without reinitialising
    the cells of the hole's rim (section 5c).
+6. The band's two storages in one run: the band lists over the dense padded grid (kernels/
+   surface.cl) and the dense bricks (kernels/bricks.cl) at each brick size, a heat step plus
+   the re-extension of what the next step reads, on 64^3 to 256^3 grids (--storage-sizes;
+   512 if memory allows): time per step against a device copy of the whole grid (the
+   yardstick: at most one copy is the target), per band cell, and the effective bandwidth of
+   the useful bytes (12 a node cell stepped, 24 a reach cell re-extended: index, stencil,
+   value) and of the bytes the storage moves (the step's over every cell of the bricks it
+   visits, or of the lists' runs), against the copy's. Then the sphere's accuracy table
+   with both storages (section 1's cases, alternating scheme).
 """
 
 from __future__ import annotations
@@ -210,6 +219,125 @@ def _time_size(n, steps):
     }
 
 
+def storage_table(sizes, steps=10, reps=5):
+    print("\n6. band storage: lists over the dense grid against dense bricks (heat step + re-extension"
+          f"\n   of the reach band; best of {reps} runs of {steps} steps, all variants interleaved)")
+    print(f"{'grid':>9} {'storage':>8} {'ext band':>9} {'stored':>9} {'visited':>9} {'step ms':>8} {'ext ms':>7} "
+          f"{'x copy':>7} {'ns/cell':>8} {'useful GB/s':>11} {'stored GB/s':>11} {'copy GB/s':>9}")
+    rows = [row for n in sizes for row in _storage_size(n, steps, reps)]
+    print("   (stored: the padded grid's cells for the lists, the bricks' for bricks; visited: the cells the\n"
+          "    step updates, the runs' or the bricks' rows holding a node; x copy: a step's time over a device copy\n"
+          "    of the whole padded grid, float32; stored GB/s: the bytes the step and the re-extension move)")
+    return rows
+
+
+def _storage_size(n, steps, reps):
+    import pyopencl as cl
+    import pyopencl.array as cla
+
+    from clpde.surface import ImplicitSurface
+    from clpde.surface.bricks import BRICK_SIZES
+    from clpde.surface.flows import BandFlow, BrickFlow, _offsets, _signs
+
+    surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))
+    g, q = surf.grid, surf.runtime.queue
+    u = surf.field(lambda x, y, z: x * y)
+    r = g.scalar(0.1)
+    variants = {}
+    flow = BandFlow(surf, u)
+    k_list = g.kernel("heat_step", WEIGHTED=0)
+
+    def list_step():
+        g.launch_runs(k_list, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
+                      r, *_offsets(g, 0), *g.strides())
+
+    runs = surf.step_runs
+    run_cells = int((runs.end.get()[: runs.n] - runs.start.get()[: runs.n]).sum())
+    variants["lists"] = (list_step, flow.after_step, g.volume, run_cells,
+                         12 * run_cells + 8 * runs.n)
+    for brick in BRICK_SIZES:
+        surf._brick = brick
+        bf = BrickFlow(surf, u)
+        k_brick = bf.kernel("brick_heat_step", WEIGHTED=0)
+
+        def brick_step(bf=bf, k=k_brick):
+            bf.bricks.launch(k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0),
+                             bf.bricks.node_rows.data)
+
+        bx, by, bz = brick
+        visited = int(bf.bricks.node_rows.get().astype(np.int64).sum()) * bx  # rows with a node
+        apron = (bx + 3) * (by + 3) * (bz + 3) / (bx * by * bz)  # the step writes the aprons too
+        variants["x".join(map(str, brick))] = (brick_step, bf.after_step, bf.bricks.stored_cells,
+                                               visited, int(visited * (8 + 4 * apron)))
+    a = cla.empty(q, g.volume, np.float32)
+    a.fill(1.0)
+    b = cla.empty_like(a)
+
+    def timed(fn):
+        q.finish()
+        start = time.perf_counter()
+        for _ in range(steps):
+            fn()
+        q.finish()
+        return (time.perf_counter() - start) / steps
+
+    def copy():
+        cl.enqueue_copy(q, b.data, a.data)
+
+    best = {name: [np.inf, np.inf] for name in variants}
+    t_copy = np.inf
+    for step, ext, *_ in variants.values():  # warm up (and compile)
+        step(), ext()
+    for _ in range(reps):
+        t_copy = min(t_copy, timed(copy))
+        for name, (step, ext, *_) in variants.items():
+            best[name][0] = min(best[name][0], timed(step))
+            best[name][1] = min(best[name][1], timed(ext))
+    copy_gbs = 2 * a.nbytes / t_copy / 1e9
+    useful = 12 * surf.node_band.n + 24 * surf.reach_band.n
+    rows = []
+    for name, (_, _, stored, visited, step_bytes) in variants.items():
+        ts, te = best[name]
+        row = {"grid": n, "storage": name, "ext_band": surf.ext_band.n,
+               "node_band": surf.node_band.n, "reach_band": surf.reach_band.n,
+               "stored_cells": stored, "visited_cells": visited, "step_ms": 1e3 * ts,
+               "extend_ms": 1e3 * te, "copy_ms": 1e3 * t_copy, "x_copy": (ts + te) / t_copy,
+               "ns_per_cell": 1e9 * (ts + te) / surf.ext_band.n,
+               "useful_gbs": useful / (ts + te) / 1e9,
+               "stored_gbs": (step_bytes + 24 * surf.reach_band.n) / (ts + te) / 1e9,
+               "copy_gbs": copy_gbs}
+        rows.append(row)
+        print(f"{n:>7}^3 {name:>8} {row['ext_band']:9d} {stored:9d} {visited:9d} {row['step_ms']:8.2f} "
+              f"{row['extend_ms']:7.2f} {row['x_copy']:7.2f} {row['ns_per_cell']:8.2f} "
+              f"{row['useful_gbs']:11.2f} {row['stored_gbs']:11.2f} {copy_gbs:9.2f}")
+    return rows
+
+
+def storage_accuracy(spacings, t=0.1):
+    from clpde.surface import ImplicitSurface
+
+    pts = sphere_points(2000)
+    print("\n6b. heat flow on the unit sphere to t = 0.1 in both storages (max error through surf.sample)")
+    print(f"{'case':6} {'h':>6} {'lists':>10} {'bricks':>10} {'ratio':>6} {'order':>6}")
+    rows = []
+    for h in spacings:
+        surf = ImplicitSurface.sphere(1.0, h)
+        for name, (f, exact) in CASES.items():
+            u = surf.field(f)
+            err = {}
+            for storage in ("lists", "bricks"):
+                surf._storage = storage
+                err[storage] = float(np.abs(surf.sample(surf.heat(u, t), pts) - exact(pts, t)).max())
+            prev = [r for r in rows if r["case"] == name and r["spacing"] == 2 * h]
+            order = math.log2(prev[0]["bricks"] / err["bricks"]) if prev else None
+            rows.append({"case": name, "spacing": h, **err, "ratio": err["bricks"] / err["lists"],
+                         "order": order})
+            o = f"{order:.2f}" if order is not None else "-"
+            print(f"{name:6} {h:6.3f} {err['lists']:10.3e} {err['bricks']:10.3e} "
+                  f"{err['bricks'] / err['lists']:6.3f} {o:>6}")
+    return rows
+
+
 def _dense_runs(g, q):
     """Runs covering whole rows of the box, 2 cells in from its edges on every side."""
     import pyopencl.array as cla
@@ -259,7 +387,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--quick", action="store_true", help="coarse grids only (a smoke test)")
-    parser.add_argument("--sections", default="12345", help="which sections to run (default: 12345)")
+    parser.add_argument("--sections", default="123456", help="which sections to run (default: 123456)")
+    parser.add_argument("--storage-sizes", default="64,128,217,256",
+                        help="grid sizes of section 6 (add 512 where memory allows)")
     args = parser.parse_args(argv)
     import clpde
 
@@ -283,6 +413,10 @@ def main(argv=None):
         results["mesh_sdf"] = mesh_sdf_table([64, 128] if args.quick else [64, 128, 256])
         results["mesh_sdf_holed"] = holed_mesh_table([64, 128])
         results["closed_hole_heat"] = closed_hole_heat()
+    if "6" in args.sections:
+        sizes = [64, 128] if args.quick else [int(v) for v in args.storage_sizes.split(",")]
+        results["storage"] = storage_table(sizes)
+        results["storage_accuracy"] = storage_accuracy(spacings)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.json.with_suffix(".tmp")
     tmp.write_text(json.dumps(results, indent=1))

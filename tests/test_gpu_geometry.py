@@ -67,6 +67,19 @@ def test_surface_flows(runtime, gpu_like):
         np.testing.assert_allclose(gpu, cpu, atol=2e-5)
 
 
+def test_surface_heat_on_bricks(runtime, gpu_like):
+    """The band in dense bricks: a work-item walking whole bricks from a private tile (CPUs)
+    against a work-group per brick sharing a local tile (GPUs)."""
+    def run(device):
+        s = ImplicitSurface.sphere(1.0, 0.2, device=device)
+        s._storage = "bricks"
+        u = s.field(lambda x, y, z: x * y + z)
+        return s.heat(u, 0.02), s.heat(u, 0.02, weighted=True)
+
+    for cpu, gpu in zip(*_pair(runtime, gpu_like, run)):
+        np.testing.assert_allclose(gpu, cpu, atol=2e-6)
+
+
 def test_mesh_to_signed_distance_with_a_hole(runtime, gpu_like):
     """Nearest-triangle refinement and the winding numbers (one point per work-item on GPUs)
     that close a hole several cells wide."""

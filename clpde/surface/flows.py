@@ -117,6 +117,67 @@ class BandFlow:
         return out.astype(dtype)
 
 
+class BrickFlow:
+    """BandFlow's state on the surface's bricks (bricks.py): `cur` (extended) and `tmp`,
+    brick buffers; a flow steps cur -> tmp on the bricks holding nodes, then re-extends
+    tmp -> cur over the reach band (after_step), the whole band when it returns."""
+
+    def __init__(self, surf, u, normalize: bool = False):
+        from .bricks import APRON, EXT
+
+        self.surf = surf
+        self.input = np.asarray(u)
+        data = surf._as_channels(u)
+        self.nc = data.shape[0]
+        g = surf.grid
+        self.bricks, self.psi, self.lists = surf._brick_band()
+        # cells off the band come back as they went in, through the device's precision
+        self.padded = g.pad(data).astype(g.dtype)
+        self.cur = self.bricks.scatter(self.padded, g.dtype)
+        # the stepped values, in the layout the re-extension reads (bricks with an apron)
+        self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
+        self.src_plane = np.int32(self.tmp.size // self.nc)
+        self._extend_kernel = self.kernel("brick_extend_cp", INTERP=surf.interp, NC=self.nc,
+                                          NORMALIZE=int(normalize))
+        self._extend(self.tmp, self.cur, EXT)
+        self._stepped = False
+
+    def kernel(self, name: str, **defines):
+        s = self.surf
+        return s.runtime.kernel("bricks.cl", name, s.grid.dtype, **self.bricks.defines(),
+                                GROUP_PER_BRICK=int(not s.runtime.is_cpu), **defines)
+
+    def _extend(self, src, dst, which: int) -> None:
+        n, target, base, frac = self.lists[which]
+        b = self.bricks
+        b.launch_list(self._extend_kernel, n, src.data, dst.data, base.data, frac.data,
+                      self.src_plane, target.data)
+
+    def after_step(self) -> None:
+        from .bricks import REACH
+
+        self._extend(self.tmp, self.cur, REACH)
+        self._stepped = True
+
+    def result(self) -> np.ndarray:
+        from .bricks import EXT
+
+        if self._stepped:
+            self._extend(self.tmp, self.cur, EXT)
+            self._stepped = False
+        g = self.surf.grid
+        out = g.interior(self.bricks.gather(self.cur, self.padded.copy(), EXT))
+        out = out[0] if self.input.shape == self.surf.shape else out
+        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        return out.astype(dtype)
+
+
+def _signs(sides: int):
+    """One-sided directions (+1 forward gradient, -1 backward) along x, y, z for a choice
+    of sides (bits x, y, z), as the brick kernels take them."""
+    return tuple(np.int32(-1 if (sides >> a) & 1 else 1) for a in range(3))
+
+
 def _progress(progress, steps: int, desc: str):
     disable = None if progress is None else not progress
     return tqdm(range(steps), desc=desc, disable=disable, leave=False)
@@ -134,10 +195,19 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
     divergence throughout.
     """
     steps, dt = _check_time(t, dt, stability_limit(surf, "heat"), "heat flow")
-    flow = BandFlow(surf, u)
     g = surf.grid
-    kernel = g.kernel("heat_step", WEIGHTED=int(bool(weighted)))
     r = g.scalar(dt / surf.spacing**2)
+    if getattr(surf, "_storage", "lists") == "bricks":
+        flow = BrickFlow(surf, u)
+        kernel = flow.kernel("brick_heat_step", WEIGHTED=int(bool(weighted)))
+        for n in _progress(progress, steps, "surface heat"):
+            sides = _ALL_SIDES[n % 8] if alternate else 0
+            flow.bricks.launch(kernel, flow.cur.data, flow.tmp.data, flow.psi.data, r,
+                               *_signs(sides), flow.bricks.node_rows.data, channels=flow.nc)
+            flow.after_step()
+        return flow.result()
+    flow = BandFlow(surf, u)
+    kernel = g.kernel("heat_step", WEIGHTED=int(bool(weighted)))
     for n in _progress(progress, steps, "surface heat"):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         g.launch_runs(

@@ -24,6 +24,7 @@ from ..fields import check_fits, compact
 from ..imagedata import InputError
 from ..imagedata import positive as _positive
 from ..runtime import get_runtime
+from .bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
 from .grid3d import Grid3D
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
@@ -80,6 +81,13 @@ class ImplicitSurface:
         self._check_border = _check_border
         # psi, psi in cells and the band masks at the least; the bands' lists come on top
         check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
+        # the band storage of heat (the flow that has both): "lists" (band lists over the dense
+        # grid) or "bricks" (bricks.py); lists stay the default while bricks do not measure
+        # faster (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, 8x8x8
+        # bricks took 0.83-1.09x the lists' time per step at 217^3 and 256^3, 1.2-1.6x on
+        # smaller grids; docs/surfaces.md)
+        self._storage = "lists"
+        self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
                            dtype=np.dtype(dtype))
         self._set_psi(psi.astype(np.float64, copy=True))
@@ -99,6 +107,44 @@ class ImplicitSurface:
         self.cp = self._closest_points(self.ext_band)
         self.cp_base, self.cp_frac = self._cp_stencils(self.ext_band, self.cp)
         self._narrow_bands()
+        self._bricks = None  # built when a flow on bricks first needs them
+
+    def _brick_band(self):
+        """(BrickBand, psi's tiles on it, {EXT, REACH: re-extension lists}) of the band in dense
+        bricks (bricks.py), built once per psi.
+
+        Stored: every brick holding a cell a brick kernel reads, the cells of the extension
+        and reach bands with their psi neighbours (closest points) and the nodes with psi two
+        cells away along each axis (the fluxes one cell back)."""
+        brick = tuple(getattr(self, "_brick", DEFAULT_BRICK))
+        if getattr(self, "_bricks", None) is None or self._bricks[0].brick != brick:
+            g = self.grid
+            bits = np.zeros(g.padded_shape, np.uint8)
+            flat = bits.reshape(-1)
+            for band, bit in ((self.node_band, NODE), (self.reach_band, REACH), (self.ext_band, EXT)):
+                flat[band.indices.get()[: band.n]] |= bit
+            stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
+            bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, brick)
+            # psi in tiles of halo 2, what the heat step reads around each brick
+            psi = bb.scatter_tiles(g.pad(self.psi[None], mode="linear"), g.dtype, 2)
+            q = self.runtime.queue
+
+            def stencils(band, base, frac):
+                # targets as brick-storage indices and first nodes as node codes, in the
+                # order of the nodes, so consecutive entries gather from the same bricks
+                # (10-20% faster than in the targets' order, 128^3 and 217^3)
+                target = bb.index_of(band.indices.get()[: band.n])
+                first = bb.node_code(base.get()[: band.n])
+                order = np.argsort(first, kind="stable")
+                first = first[order]
+                offsets = np.ascontiguousarray(frac.get()[:, : band.n][:, order])
+                return (band.n, cla.to_device(q, target[order]), cla.to_device(q, first),
+                        cla.to_device(q, offsets))
+
+            lists = {EXT: stencils(self.ext_band, self.cp_base, self.cp_frac),
+                     REACH: stencils(self.reach_band, *self.reach_stencils)}
+            self._bricks = (bb, psi, lists)
+        return self._bricks
 
     def _narrow_bands(self) -> None:
         """node_band, its runs, reach_band and reach_band's closest-point stencils."""

@@ -1,0 +1,363 @@
+// The narrow band in dense bricks (clpde/surface/bricks.py): kernels of the surface flows.
+//
+// A brick holds BX x BY x BZ cells (BV in all), x fastest; a quantity is one buffer
+// (channels, nbricks + 2, BV), `plane` its channel stride: bricks 1..nbricks are stored,
+// brick 0 is a sentinel of zeros for every brick place not stored, the last one slack. No halo is stored: a kernel copies its brick and the faces of its neighbours (the
+// 27-entry table nbr) into a tile, then runs the stencils on the tile with plain strides.
+//
+// Launch geometry (GROUP_PER_BRICK): on CPUs (0) one work-item walks whole bricks, from a
+// private tile; on GPUs (1) one work-group of BV work-items takes a brick, one cell each,
+// from a tile in local memory. The arithmetic is the same (and is surface.cl's): the
+// results agree to rounding.
+#include "common.cl"
+
+#ifndef BX
+#define BX 8
+#endif
+#ifndef BY
+#define BY 4
+#endif
+#ifndef BZ
+#define BZ 4
+#endif
+#define BV (BX * BY * BZ)
+// The re-extension's source (the stepped values) has each brick lengthened along x, y and z
+// by an apron of AX cells, copies of the next bricks' first ones, so a tricubic stencil
+// whose first node lies in a brick lies in that brick and its apron (BXA cells a row, BXA
+// BYA a slab, BVA a brick).
+#define AX 3
+#define BXA (BX + AX)
+#define BYA (BY + AX)
+#define BZA (BZ + AX)
+#define BVA (BXA * BYA * BZA)
+#ifndef GROUP_PER_BRICK
+#define GROUP_PER_BRICK 0
+#endif
+#ifndef NC
+#define NC 1
+#endif
+#ifndef INTERP
+#define INTERP 3
+#endif
+#ifndef WEIGHTED
+#define WEIGHTED 0
+#endif
+#ifndef NORMALIZE
+#define NORMALIZE 0
+#endif
+
+// band bits of a cell (bricks.py: NODE, REACH, EXT)
+#define BIT_NODE 1
+
+#if GROUP_PER_BRICK
+#define TILE __local
+#else
+#define TILE __private
+#endif
+
+// Arguments every brick kernel takes last (BrickBand.launch).
+#define BRICK_ARGS __global const int* restrict nbr,                                      \
+                   __global const uchar* restrict brick_bits, const int nbricks,         \
+                   const int plane, const int per_item
+
+// Tile of halo H around a brick: (BX + 2H) x (BY + 2H) x (BZ + 2H) cells, x fastest.
+#define TILE_X(H) (BX + 2 * (H))
+#define TILE_XY(H) (TILE_X(H) * (BY + 2 * (H)))
+#define TILE_CELLS(H) (TILE_XY(H) * (BZ + 2 * (H)))
+
+// Copy brick b of src and the cells of its neighbours within H of its faces into t. H <= the
+// brick's sides, so every tile cell lies in one of the 27 neighbours. On CPUs one work-item
+// copies whole rows (three runs: left neighbour, own brick, right neighbour); on GPUs tile
+// cell k goes to work-item k % BV.
+#if GROUP_PER_BRICK
+INLINE void load_tile(TILE REAL* t, __global const REAL* restrict src,
+                      __global const int* restrict nbr, const int b, const int H)
+{
+    const int tx = BX + 2 * H, txy = tx * (BY + 2 * H), n = txy * (BZ + 2 * H);
+    __global const int* nb = nbr + 27 * b;
+    for (int k = get_local_id(0); k < n; k += BV) {
+        const int z = k / txy - H, y = (k / tx) % (BY + 2 * H) - H, x = k % tx - H;
+        const int dz = z < 0 ? -1 : (z >= BZ ? 1 : 0);
+        const int dy = y < 0 ? -1 : (y >= BY ? 1 : 0);
+        const int dx = x < 0 ? -1 : (x >= BX ? 1 : 0);
+        const int brick = nb[(dz + 1) * 9 + (dy + 1) * 3 + dx + 1];
+        t[k] = src[brick * BV + ((z - dz * BZ) * BY + (y - dy * BY)) * BX + x - dx * BX];
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+}
+#else
+INLINE void load_tile(TILE REAL* t, __global const REAL* restrict src,
+                      __global const int* restrict nbr, const int b, const int H)
+{
+    __global const int* nb = nbr + 27 * b;
+    for (int z = -H; z < BZ + H; ++z) {
+        const int dz = z < 0 ? -1 : (z >= BZ ? 1 : 0);
+        for (int y = -H; y < BY + H; ++y) {
+            const int dy = y < 0 ? -1 : (y >= BY ? 1 : 0);
+            const int side = (dz + 1) * 9 + (dy + 1) * 3;
+            const int row = ((z - dz * BZ) * BY + y - dy * BY) * BX;
+            TILE REAL* out = t + ((z + H) * (BY + 2 * H) + y + H) * (BX + 2 * H) + H;
+            __global const REAL* left = src + nb[side] * BV + row + BX;
+            __global const REAL* mid = src + nb[side + 1] * BV + row;
+            __global const REAL* right = src + nb[side + 2] * BV + row - BX;
+            for (int x = -H; x < 0; ++x) out[x] = left[x];
+            for (int x = 0; x < BX; ++x) out[x] = mid[x];
+            for (int x = BX; x < BX + H; ++x) out[x] = right[x];
+        }
+    }
+}
+#endif
+
+// The tile index of cell (x, y, z) of the brick.
+#define TILE_AT(H, x, y, z) ((((z) + (H)) * (BY + 2 * (H)) + (y) + (H)) * TILE_X(H) + (x) + (H))
+
+// The cells a work-item updates: on CPUs all of the brick's, x innermost (the loop PoCL
+// widens); on GPUs its own. Sets l (cell in the brick) and x, y, z (its coordinates).
+#if GROUP_PER_BRICK
+#define FOR_EACH_BRICK_CELL(l, x, y, z)                                                   \
+    for (int l = get_local_id(0), x = l % BX, y = (l / BX) % BY, z = l / (BX * BY);       \
+         l == get_local_id(0); ++l)
+#else
+#define FOR_EACH_BRICK_CELL(l, x, y, z)                                                   \
+    for (int z = 0; z < BZ; ++z)                                                          \
+        for (int y = 0; y < BY; ++y)                                                      \
+            for (int x = 0, l = (z * BY + y) * BX; x < BX; ++x, ++l)
+#endif
+
+// The bricks a work-item takes (b), skipping those with no cell carrying `bits` (whole
+// work-groups return together on GPUs, before any barrier). Open one block per brick.
+#if GROUP_PER_BRICK
+#define FOR_EACH_BRICK(b, bits)                                                           \
+    const int b = get_group_id(0) + 1;                                                    \
+    if (b > nbricks || !(brick_bits[b] & (bits))) return;
+#else
+#define FOR_EACH_BRICK(b, bits)                                                           \
+    for (int b = 1 + get_global_id(0) * per_item, b_end_ = min(b + per_item, nbricks + 1); \
+         b < b_end_; ++b)                                                                 \
+        if (brick_bits[b] & (bits))
+#endif
+
+// ---- intrinsic heat flow (4.7) / (4.8), appendix E, on a tile ------------------------------
+// surface.cl's heat_flux / heat_div with tile strides: ex, ey, ez are the signed one-sided
+// offsets in the tile (+-1, +-tx, +-txy).
+#define ONE_SIDED_SIGN(e) ((e) > 0 ? (REAL)1 : (REAL)-1)
+
+INLINE void tile_flux(TILE const REAL* u, __global const REAL* p, const int j, const int q,
+                      const int ex, const int ey, const int ez, const int usx, const int usxy,
+                      const int sx, const int sxy, REAL* w)
+{
+    // j: the cell in the u tile (one-sided offsets ex, ey, ez), q: in the psi tile (strides
+    // sx, sxy)
+    const REAL c = u[j];
+    const REAL vx = ONE_SIDED_SIGN(ex) * (u[j + ex] - c);
+    const REAL vy = ONE_SIDED_SIGN(ey) * (u[j + ey] - c);
+    const REAL vz = ONE_SIDED_SIGN(ez) * (u[j + ez] - c);
+    const REAL nx = (REAL)0.5 * (p[q + 1] - p[q - 1]);
+    const REAL ny = (REAL)0.5 * (p[q + sx] - p[q - sx]);
+    const REAL nz = (REAL)0.5 * (p[q + sxy] - p[q - sxy]);
+    const REAL nn = nx * nx + ny * ny + nz * nz + (REAL)1e-30;
+    const REAL s = (nx * vx + ny * vy + nz * vz) / nn;
+#if WEIGHTED
+    const REAL len = SQRT(nn);
+#else
+    const REAL len = 1;
+#endif
+    w[0] = len * (vx - s * nx);
+    w[1] = len * (vy - s * ny);
+    w[2] = len * (vz - s * nz);
+}
+
+// The divergence at cell i of the u tile (halo 1), q of the psi tile (halo 2): the fluxes
+// one cell back read psi two cells away along an axis, u only one (faces and edges).
+INLINE REAL tile_heat_div(TILE const REAL* u, __global const REAL* p, const int i, const int q,
+                          const int dx, const int dy, const int dz)
+{
+    const int ex = dx, ey = dy * TILE_X(1), ez = dz * TILE_XY(1);
+    const int px = dx, py = dy * TILE_X(2), pz = dz * TILE_XY(2);
+    const int usx = TILE_X(1), usxy = TILE_XY(1), sx = TILE_X(2), sxy = TILE_XY(2);
+    REAL wc[3], wx[3], wy[3], wz[3];
+    tile_flux(u, p, i, q, ex, ey, ez, usx, usxy, sx, sxy, wc);
+    tile_flux(u, p, i - ex, q - px, ex, ey, ez, usx, usxy, sx, sxy, wx);
+    tile_flux(u, p, i - ey, q - py, ex, ey, ez, usx, usxy, sx, sxy, wy);
+    tile_flux(u, p, i - ez, q - pz, ex, ey, ez, usx, usxy, sx, sxy, wz);
+    REAL div = ONE_SIDED_SIGN(ex) * (wc[0] - wx[0]) + ONE_SIDED_SIGN(ey) * (wc[1] - wy[1]) +
+               ONE_SIDED_SIGN(ez) * (wc[2] - wz[2]);
+#if WEIGHTED
+    const REAL nx = (REAL)0.5 * (p[q + 1] - p[q - 1]);
+    const REAL ny = (REAL)0.5 * (p[q + sx] - p[q - sx]);
+    const REAL nz = (REAL)0.5 * (p[q + sxy] - p[q - sxy]);
+    div *= RSQRT(nx * nx + ny * ny + nz * nz + (REAL)1e-30);
+#endif
+    return div;
+}
+
+// Copy the low (HX, HY, HZ) part of brick b of vc into the apron of the brick before it
+// (before[HX + 2 HY + 4 HZ]); compile-time bounds, so the rows are vector copies.
+#define APRON_COPY(HX, HY, HZ)                                                            \
+    if (before[(HX) + 2 * (HY) + 4 * (HZ)]) {                                             \
+        __global REAL* to = vc + before[(HX) + 2 * (HY) + 4 * (HZ)] * BVA +               \
+                            ((HZ) * BZ * BYA + (HY) * BY) * BXA + (HX) * BX;               \
+        __global const REAL* from = vc + b * BVA;                                         \
+        for (int z = 0; z < ((HZ) ? AX : BZ); ++z)                                        \
+            for (int y = 0; y < ((HY) ? AX : BY); ++y)                                    \
+                for (int x = 0; x < ((HX) ? AX : BX); ++x)                                \
+                    to[(z * BYA + y) * BXA + x] = from[(z * BYA + y) * BXA + x];          \
+    }
+
+// psi: the psi tiles (BrickBand.scatter with halo 2: per brick its cells and those within 2
+// of its faces, the tile layout). One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
+// NODE cell (the other cells' values are never read: re-extension reads nodes only). sx, sy,
+// sz: the one-sided directions (+1 forward gradient, -1 backward). v is in the apron
+// layout: a cell within AX of the brick's low faces is also written into the aprons of the
+// bricks before it (along x, y, z and their combinations: up to 7), one writer per apron
+// cell.
+__kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
+                              __global const REAL* restrict psi, const REAL r, const int sx,
+                              const int sy, const int sz, __global const uchar* restrict rows,
+                              BRICK_ARGS)
+{
+    const int chan = get_global_id(1) * plane;
+    __global REAL* vc = v + get_global_id(1) * (nbricks + 2) * BVA;
+#if GROUP_PER_BRICK
+    __local REAL ut[TILE_CELLS(1)];
+#else
+    REAL ut[TILE_CELLS(1)];
+#endif
+    FOR_EACH_BRICK(b, BIT_NODE) {
+        load_tile(ut, u + chan, nbr, b, 1);
+        // psi is fixed: its tiles of halo 2 are stored, one after the other (psi_tiles)
+        __global const REAL* pt = psi + b * TILE_CELLS(2);
+        // the bricks before this one: k = 1..7, bit 0 x, bit 1 y, bit 2 z (0: none stored)
+        __global const int* nb = nbr + 27 * b;
+        const int before[8] = {b, nb[12], nb[10], nb[9], nb[4], nb[3], nb[1], nb[0]};
+#if GROUP_PER_BRICK
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+#else
+        // rows along x without a node are skipped whole (their values are never read)
+        for (int z = 0; z < BZ; ++z)
+            for (int y = 0; y < BY; ++y) {
+                if (!rows[b * BY * BZ + z * BY + y]) continue;
+                for (int x = 0; x < BX; ++x) {
+#endif
+            const int i = TILE_AT(1, x, y, z);
+            const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
+            vc[b * BVA + (z * BYA + y) * BXA + x] = val;
+#if GROUP_PER_BRICK
+            // each work-item copies its own value into the aprons it belongs to
+            for (int k = 1; k < 8; ++k) {
+                const int hx = k & 1, hy = (k >> 1) & 1, hz = k >> 2;
+                if ((hx && x >= AX) || (hy && y >= AX) || (hz && z >= AX) || !before[k]) continue;
+                vc[before[k] * BVA + ((z + hz * BZ) * BYA + y + hy * BY) * BXA + x + hx * BX] = val;
+            }
+#endif
+#if GROUP_PER_BRICK
+        }
+#else
+                }
+            }
+#endif
+#if !GROUP_PER_BRICK
+        // then the brick's low faces, edges and corner go to the aprons (a separate pass:
+        // in the cell loop these stores kept it from being vectorised, 3x slower)
+        APRON_COPY(1, 0, 0); APRON_COPY(0, 1, 0); APRON_COPY(1, 1, 0); APRON_COPY(0, 0, 1);
+        APRON_COPY(1, 0, 1); APRON_COPY(0, 1, 1); APRON_COPY(1, 1, 1);
+#endif
+    }
+}
+
+// ---- closest-point re-extension --------------------------------------------------------------
+// dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface.cl's
+// extend_cp (tricubic Lagrange, or trilinear) from stencils computed once per psi (psi is
+// fixed): per entry k the brick-storage index of the target cell (`list`, plain layout),
+// the stencil's first node (x0, y0, z0) as its brick and place there (BrickBand.node_code),
+// and the closest point's offsets from floor(cp) (frac[k], frac[n + k], frac[2n + k]). src
+// is in the apron layout, so the whole stencil lies in the node's brick: fixed strides, as
+// on the dense grid. (Gathering across the neighbouring bricks instead, with rows picking
+// their brick, ran 3-4x slower; computing the closest points here from a psi tile cost more
+// than the whole list re-extension on dense storage.)
+#ifdef REAL_IS_DOUBLE
+#define REAL4 double4
+#define INT4 long4
+#else
+#define REAL4 float4
+#define INT4 int4
+#endif
+// Four consecutive REALs as one vector at any REAL-aligned address (as in surface.cl).
+typedef REAL4 __attribute__((aligned(sizeof(REAL)))) unaligned_real4;
+#define LOAD4(p) (*(__global const unaligned_real4*)(p))
+
+#if INTERP == 3
+#define NODES 4
+INLINE REAL4 node_weights(const REAL t)
+{
+    const REAL4 c3 = (REAL4)(-1, 3, -3, 1) / 6;
+    const REAL4 c2 = (REAL4)(3, -6, 3, 0) / 6;
+    const REAL4 c1 = (REAL4)(-2, -3, 6, -1) / 6;
+    const REAL4 c0 = (REAL4)(0, 1, 0, 0);
+    return ((c3 * t + c2) * t + c1) * t + c0;
+}
+#else
+#define NODES 2
+#endif
+
+__kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* restrict dst,
+                              __global const int* restrict base,
+                              __global const REAL* restrict frac, const int src_plane,
+                              LIST_ARGS)
+{
+    LIST_RANGE(k0, k1, chan_unused);
+    for (int k = k0; k < k1; ++k) {
+        const int code = base[k];  // brick << 12 | z << 8 | y << 4 | x of the first node
+        const int node = code >> 12, lz0 = (code >> 8) & 15, ly0 = (code >> 4) & 15;
+        const int b0 = node * BVA + (lz0 * BYA + ly0) * BXA + (code & 15);
+        const REAL tx = frac[k], ty = frac[nlist + k], tz = frac[2 * nlist + k];
+        REAL val[NC];
+        #pragma unroll
+        for (int c = 0; c < NC; ++c) {
+            __global const REAL* u = src + c * src_plane + b0;
+#if INTERP == 3
+            // 16 rows of 4 nodes at fixed strides in the node's brick and its apron, summed
+            // as 4-vectors (as surface.cl's extend_cp)
+            const REAL4 wy = node_weights(ty), wz = node_weights(tz);
+            REAL4 acc = 0;
+            for (int a = 0; a < 4; ++a) {
+                __global const REAL* slab = u + a * (BXA * BYA);
+                acc += wz[a] * (wy.x * LOAD4(slab) + wy.y * LOAD4(slab + BXA) +
+                                wy.z * LOAD4(slab + 2 * BXA) + wy.w * LOAD4(slab + 3 * BXA));
+            }
+            const REAL4 wx = node_weights(tx);
+            val[c] = acc.x * wx.x + acc.y * wx.y + acc.z * wx.z + acc.w * wx.w;
+#else
+            REAL acc = 0;
+            for (int a = 0; a < 2; ++a)
+                for (int e = 0; e < 2; ++e) {
+                    const int row = a * (BXA * BYA) + e * BXA;
+                    acc += ((a ? tz : 1 - tz) * (e ? ty : 1 - ty)) * ((1 - tx) * u[row] + tx * u[row + 1]);
+                }
+            val[c] = acc;
+#endif
+        }
+#if NORMALIZE
+        REAL n2 = 0;
+        for (int c = 0; c < NC; ++c) n2 += val[c] * val[c];
+        const REAL sc = n2 > 0 ? RSQRT(n2) : (REAL)0;
+        for (int c = 0; c < NC; ++c) val[c] *= sc;
+#endif
+        const int i = list[k];
+        for (int c = 0; c < NC; ++c) dst[c * plane + i] = val[c];
+    }
+}
+
+// ---- the bricks' own roofline ------------------------------------------------------------------
+// v = u + psi over every cell of the bricks holding a NODE cell: the bytes a heat step must
+// move, with no stencil and no tile (benchmarks/surface_accuracy.py).
+__kernel void brick_copy(__global const REAL* restrict u, __global REAL* restrict v,
+                         __global const REAL* restrict psi, BRICK_ARGS)
+{
+    const int chan = get_global_id(1) * plane;
+    FOR_EACH_BRICK(b, BIT_NODE) {
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            v[chan + b * BV + l] = u[chan + b * BV + l] + psi[b * BV + l];
+        }
+    }
+}
