@@ -38,3 +38,9 @@ def progress_bar(progress: bool | None, total: int, desc: str, *, long_run: bool
                  **options) -> tqdm:
     """A tqdm bar over `total` units, drawn by the policy of `bar_disabled`."""
     return tqdm(total=total, desc=desc, disable=bar_disabled(progress, long_run), **options)
+
+
+def progress_range(progress: bool | None, steps: int, desc: str, *, long_run: bool = True,
+                   **options) -> tqdm:
+    """range(steps) under a tqdm bar drawn by the policy of `bar_disabled`."""
+    return tqdm(range(steps), desc=desc, disable=bar_disabled(progress, long_run), **options)

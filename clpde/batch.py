@@ -504,11 +504,10 @@ class _Progress:
     """One bar over the batch: done, running, failed (and skipped), redrawn on each event."""
 
     def __init__(self, total: int, skipped: int, enabled):
-        from tqdm.auto import tqdm
+        from ._progress import progress_bar
 
-        disable = not (sys.stderr.isatty() if enabled is None else enabled)
-        self.bar = tqdm(total=total, initial=skipped, desc="clpde batch", unit="file",
-                        disable=disable, dynamic_ncols=True)
+        self.bar = progress_bar(enabled, total, "clpde batch", initial=skipped, unit="file",
+                                dynamic_ncols=True)
         self.failed = 0
         self.skipped = skipped
 

@@ -82,6 +82,12 @@ def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> 
     return array
 
 
+def integer_range(dtype: DTypeLike) -> tuple[float, float]:
+    """(offset, scale) mapping an integer dtype's whole range to [0, 1] (uint8: 0, 255)."""
+    info = np.iinfo(dtype)
+    return float(info.min), float(info.max) - float(info.min)
+
+
 def value_range(lo: float, hi: float, name: str = "image") -> tuple[float, float]:
     """(offset, scale) mapping values in [lo, hi] to [0, 1]."""
     scale = hi - lo
@@ -119,8 +125,7 @@ def to_kernel_layout(image: ArrayLike, channel_axis: int | None = None,
         rest = tuple(n for i, n in enumerate(array.shape) if i != axis)
         fits((1,) + array.shape if axis is None else (array.shape[axis],) + rest)
     if np.issubdtype(array.dtype, np.integer):
-        info = np.iinfo(array.dtype)
-        offset, scale = float(info.min), float(info.max) - float(info.min)
+        offset, scale = integer_range(array.dtype)
     else:
         offset, scale = value_range(float(array.min()), float(array.max()), name)
     data = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)

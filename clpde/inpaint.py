@@ -58,7 +58,6 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
-from tqdm.auto import tqdm
 
 from . import multiresolution as mr
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
@@ -69,8 +68,11 @@ from .imagedata import (
     as_image,
     check_channel_axis,
     compute_dtype,
+    integer_range,
     value_range,
 )
+from ._progress import progress_bar
+from ._validation import positive
 from .runtime import ClpdeError, get_runtime
 
 SCALINGS = ("none", "quartic-root")
@@ -200,8 +202,7 @@ def _prepare(image, mask, channel_axis, alpha):
             "channels are inpainted; fix the alpha channel first, or pass alpha=False"
         )
     if np.issubdtype(array.dtype, np.integer):
-        info = np.iinfo(array.dtype)
-        offset, scale = float(info.min), float(info.max) - float(info.min)
+        offset, scale = integer_range(array.dtype)
     else:
         where = finite & ~omega if omega.any() and not omega.all() else finite
         if where.any():
@@ -215,10 +216,6 @@ def _prepare(image, mask, channel_axis, alpha):
 
 
 def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
-    def positive(name, value):
-        if not np.isfinite(value) or value <= 0:
-            raise InputError(f"{name} must be a positive number, not {value}")
-
     positive("dt", p.dt)
     positive("diffusion_dt", p.diffusion_dt)
     if p.diffusion_dt > 0.25:
@@ -519,8 +516,7 @@ class TransportRun:
         p = self.p
         levels = mr.pyramid(self.data, self.omega, self.levels)
         self.steps_per_level = [0] * len(levels)
-        bar = tqdm(total=p.max_steps * len(levels), desc="clpde inpaint", unit="step",
-                   disable=None if self.progress is None else not self.progress)
+        bar = progress_bar(self.progress, p.max_steps * len(levels), "clpde inpaint", unit="step")
         solution = None
         with bar:
             for level in range(len(levels) - 1, -1, -1):

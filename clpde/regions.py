@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pyopencl.array as cla
-from tqdm.auto import tqdm
 
+from ._progress import progress_bar
 from .fields import IndexList, check_fits, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
@@ -543,10 +543,9 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
                             max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
                             aux_at=aux_at, device=device, dtype=dtype)
     frames = []
-    disable = None if progress is None else not progress
     # the bar counts simulated time, so it prints rounded times rather than step counts
-    with tqdm(total=t_end, desc="track regions", disable=disable, leave=False, unit="time",
-              bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
+    with progress_bar(progress, t_end, "track regions", leave=False, unit="time",
+                      bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
         for when in times:
             tracker.advance(when, bar)
             frames.append(make_frame(tracker, when, origin, keep_volumes, palette, partition))

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pyopencl.array as cla
-from tqdm.auto import tqdm
 
+from ._progress import progress_bar
 from .fields import Field, PingPong, check_fits
 from .imagedata import InputError, value_range
 from .levelset import LevelSet, signed_distance
@@ -485,8 +485,8 @@ def track(frames, first_mask, *, features="intensity", equalize=False,
     masks = np.zeros((n, height, width), bool)
     levels = np.zeros((n, height, width), np.float32) if return_level_sets else None
     residuals = np.zeros(n)
-    disable = (None if n >= 20 else True) if progress is None else not progress
-    for state in tqdm(tracker, total=n, desc="clpde track", unit="frame", disable=disable):
+    for state in progress_bar(progress, n, "clpde track", iterable=tracker, unit="frame",
+                              long_run=n >= 20):
         masks[state.index] = state.mask
         residuals[state.index] = state.discrepancy
         if levels is not None:

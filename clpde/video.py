@@ -345,15 +345,14 @@ def _pipeline(client, sequence, mask_of, writer, output, per_task, options, prog
               read_mask) -> int:
     """Read, send in batches, and write in order, with a bounded number of batches in
     flight (memory stays proportional to the workers, not to the film)."""
-    from tqdm.auto import tqdm
+    from ._progress import progress_bar
 
     resources = None
     workers = client.scheduler_info()["workers"].values()
     if any("GPU" in (w.get("resources") or {}) for w in workers):
         resources = {"GPU": 1}
     window = max(2, 2 * len(workers))
-    bar = tqdm(total=sequence.count or None, desc="clpde inpaint", unit="frame",
-               disable=not (sys.stderr.isatty() if progress is None else progress))
+    bar = progress_bar(progress, sequence.count or None, "clpde inpaint", unit="frame")
     pending, written, t = [], 0, 0
     frames = iter(sequence)
     mask_cache = {}

@@ -101,7 +101,7 @@ def run_inpaint(args) -> int:
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
     if args.demo:
-        from ..inpaint_demo import run_demo
+        from ._inpaint_demo import run_demo
 
         if args.input or args.mask or args.gif:
             raise InputError(

@@ -13,9 +13,8 @@ import warnings
 
 import numpy as np
 import pyopencl.array as cla
-from tqdm.auto import tqdm
-
-from ..imagedata import InputError
+from .._progress import progress_range
+from .._validation import InputError, check_time_step, positive
 
 # One-sided difference choices per axis: bit set = backward gradient (forward divergence).
 _ALL_SIDES = tuple(range(8))
@@ -48,14 +47,7 @@ def _check_time(t, dt, limit: float, what: str) -> tuple[int, float]:
     if dt is None:
         steps = max(1, math.ceil(t / limit - 1e-9))
         return steps, t / steps
-    dt = float(dt)
-    if not math.isfinite(dt) or dt <= 0:
-        raise InputError(f"dt must be a positive number, not {dt!r}")
-    if dt > limit * (1 + 1e-9):
-        raise InputError(
-            f"dt={dt:g} is above the {what} stability limit {limit:g} for spacing; use dt <= {limit:g} "
-            "(or leave dt=None to pick it)"
-        )
+    dt = check_time_step(dt, limit, what)
     steps = max(1, math.ceil(t / dt - 1e-9))
     return steps, t / steps
 
@@ -179,8 +171,7 @@ def _signs(sides: int):
 
 
 def _progress(progress, steps: int, desc: str):
-    disable = None if progress is None else not progress
-    return tqdm(range(steps), desc=desc, disable=disable, leave=False)
+    return progress_range(progress, steps, desc, leave=False)
 
 
 def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) -> np.ndarray:
@@ -222,9 +213,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
          fidelity=None, sigma=None, weighted=False, alternate=True, progress=None,
          lambda_every=10, line_field=False, correct_lambda=True):
     """Shared driver of flow_step: returns (result, info dict)."""
-    eps = float(eps)
-    if not (np.isfinite(eps) and eps > 0):
-        raise InputError(f"eps must be a positive number, not {eps!r}")
+    eps = positive("eps", eps)
     limit = stability_limit(surf, flow_name, eps, float(fidelity or 0.0))
     if sigma is not None and dt is None:
         limit *= 0.5  # room for the dynamic lambda to grow (capped on the device below)
@@ -358,8 +347,8 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     over the surface) and the lambda history."""
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
-    if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
-        raise InputError(f"sigma must be a positive number, not {sigma!r}")
+    if sigma is not None:
+        sigma = positive("sigma", sigma)
     fidelity = 0.0 if sigma is not None else float(lam)
     out, info = _run(surf, u, t, dt, "tv", p=1, eps=eps, fidelity=fidelity, sigma=sigma,
                      alternate=alternate, progress=progress, correct_lambda=correct_lambda)
@@ -479,14 +468,8 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, par
     Returns the (2, nz, ny, nx) chemicals (a, b); pass them back as `state` to continue."""
     p = dict(THESIS_FIG_4_7 if params is None else params)
     limit = 1.0 / (6.0 * max(p["da"], p["db"]))
-    dt = min(1.0, 0.9 * limit) if dt is None else float(dt)
-    if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"dt must be a positive number, not {dt!r}")
-    if dt > limit * (1 + 1e-9):
-        raise InputError(
-            f"dt={dt:g} is above the reaction-diffusion stability limit {limit:g} for "
-            f"diffusion rate {max(p['da'], p['db']):g}; use dt <= {limit:g}"
-        )
+    what = f"reaction-diffusion (diffusion rate {max(p['da'], p['db']):g})"
+    dt = min(1.0, 0.9 * limit) if dt is None else check_time_step(dt, limit, what)
     rng = np.random.default_rng(seed)
     beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
     start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)

@@ -20,9 +20,10 @@ import warnings
 import numpy as np
 import pyopencl.array as cla
 
+from .._progress import progress_range
+from .._validation import InputError
+from .._validation import positive as _positive
 from ..fields import check_fits, compact
-from ..imagedata import InputError
-from ..imagedata import positive as _positive
 from ..runtime import get_runtime
 from .bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
 from .grid3d import Grid3D
@@ -400,9 +401,7 @@ class ImplicitSurface:
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
         kernel = g.kernel("reinit_step")
-        from .flows import _progress
-
-        for _ in _progress(progress, steps, "reinitialise"):
+        for _ in progress_range(progress, steps, "reinitialise", leave=False):
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
             cur, nxt = nxt, cur

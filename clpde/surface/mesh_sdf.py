@@ -32,7 +32,7 @@ import warnings
 
 import numpy as np
 
-from ..imagedata import InputError
+from .._validation import InputError, positive
 from .winding import WindingNumbers
 
 
@@ -70,9 +70,7 @@ def grid_for_mesh(mesh, spacing=None, resolution=128, padding=8):
     extent = float((hi - lo).max())
     if extent <= 0:
         raise InputError("the mesh is flat or a single point; it encloses no volume")
-    h = extent / int(resolution) if spacing is None else float(spacing)
-    if not np.isfinite(h) or h <= 0:
-        raise InputError(f"spacing must be a positive number, not {spacing!r}")
+    h = positive("spacing", extent / int(resolution) if spacing is None else spacing)
     origin = lo - padding * h
     n = np.ceil((hi - lo) / h).astype(int) + 2 * padding + 1
     return origin, h, (int(n[2]), int(n[1]), int(n[0]))

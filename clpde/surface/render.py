@@ -9,11 +9,11 @@ vectorised and good enough for figures of smooth data on surfaces.
 from __future__ import annotations
 
 import os
-import tempfile
 
 import numpy as np
 
-from ..imagedata import InputError
+from .._validation import InputError
+from ..io import write_bytes
 
 # A perceptually ordered colour ramp (dark blue -> teal -> green -> yellow), sampled at nine
 # stops and interpolated linearly: enough for pseudo-colour pictures of scalar data.
@@ -69,23 +69,7 @@ def export_mesh(mesh, path) -> None:
     if ext not in ("ply", "glb", "obj", "stl"):
         raise InputError(f"mesh files are written as .ply, .glb, .obj or .stl, not {path!r}")
     data = mesh.export(file_type=ext)
-    _atomic_write(path, data if isinstance(data, bytes) else data.encode())
-
-
-def _atomic_write(path: str, data: bytes) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".clpde-", suffix=os.path.splitext(path)[1])
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600 files; give the usual mode
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    write_bytes(path, data if isinstance(data, bytes) else data.encode())
 
 
 def _label_format(lo: float, hi: float):
@@ -231,5 +215,5 @@ def render(surf_or_mesh, u=None, path=None, *, views=((30.0, 20.0),), size=512, 
         path = os.fspath(path)
         if not path.lower().endswith(".png"):
             raise InputError(f"render writes PNG files; give a path ending in .png, not {path!r}")
-        _atomic_write(path, iio.imwrite("<bytes>", image, extension=".png"))
+        write_bytes(path, iio.imwrite("<bytes>", image, extension=".png"))
     return image
