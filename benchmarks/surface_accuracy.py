@@ -153,7 +153,7 @@ def _time_size(n, steps):
     surf = ImplicitSurface.sphere(1.0, spacing)
     g = surf.grid
     flow = BandFlow(surf, surf.field(lambda x, y, z: x * y))
-    kernel = g.kernel("heat_step", WEIGHTED=0)
+    kernel = g.kernel("surface.cl", "heat_step", WEIGHTED=0)
     r = g.scalar(0.1)
     q = surf.runtime.queue
 
@@ -169,7 +169,7 @@ def _time_size(n, steps):
         q.finish()
         return (time.perf_counter() - start) / count
 
-    band_copy = g.kernel("band_copy")
+    band_copy = g.kernel("surface.cl", "band_copy")
 
     def one_band_copy():
         g.launch_runs(band_copy, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data)
@@ -245,7 +245,7 @@ def _storage_size(n, steps, reps):
     r = g.scalar(0.1)
     variants = {}
     flow = BandFlow(surf, u)
-    k_list = g.kernel("heat_step", WEIGHTED=0)
+    k_list = g.kernel("surface.cl", "heat_step", WEIGHTED=0)
 
     def list_step():
         g.launch_runs(k_list, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
@@ -258,7 +258,7 @@ def _storage_size(n, steps, reps):
     for brick in BRICK_SIZES:
         surf._brick = brick
         bf = BrickFlow(surf, u)
-        k_brick = bf.kernel("brick_heat_step", WEIGHTED=0)
+        k_brick = bf.kernel("bricks.cl", "brick_heat_step", WEIGHTED=0)
 
         def brick_step(bf=bf, k=k_brick):
             bf.bricks.launch(k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0),

@@ -15,6 +15,9 @@ import pyopencl.array as cla
 
 from .runtime import ClpdeError, Kernel, Runtime, _check_not_forked
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("fields.cl",)
+
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
 _REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 4, "min": 5, "max": 6}
@@ -195,15 +198,12 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     total = cla.empty(q, 1, np.int32)
     flat = mask.reshape(n)
 
-    def k(name):
-        return runtime.kernel("fields.cl", name)
-
-    k("count_chunks")(q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data)
-    k("exclusive_scan_serial")(q, (1,), None, counts.data, np.int32(nchunks), total.data)
+    runtime.kernel("fields.cl", "count_chunks")(q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data)
+    runtime.kernel("fields.cl", "exclusive_scan_serial")(q, (1,), None, counts.data, np.int32(nchunks), total.data)
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build
     indices = cla.empty(q, max(count, 1), np.int32)
     if count:
-        k("write_chunks")(
+        runtime.kernel("fields.cl", "write_chunks")(
             q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data, indices.data
         )
     return IndexList(indices, count)

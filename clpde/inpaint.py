@@ -75,6 +75,9 @@ from ._progress import progress_bar
 from ._validation import positive
 from .runtime import ClpdeError, get_runtime
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("inpaint.cl", "planar.cl")
+
 SCALINGS = ("none", "quartic-root")
 COLOUR_MODELS = ("channels", "rho-phi-psi")
 ROTATIONS = ("ccw", "cw")
@@ -292,12 +295,11 @@ class LevelSolver:
         self.known = self.pair.cur.copy()
         self.weight = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), weight[None])
 
-        k = lambda name, **d: g.kernel("inpaint.cl", name, **d)
-        self.k_fill = k("inpaint_fill")
-        self.k_copy = k("inpaint_copy")
-        self.k_change = k("inpaint_max_change")
-        self.k_sum_change = k("inpaint_sum_change")
-        self.k_ghosts = k("inpaint_ghosts")
+        self.k_fill = g.kernel("inpaint.cl", "inpaint_fill")
+        self.k_copy = g.kernel("inpaint.cl", "inpaint_copy")
+        self.k_change = g.kernel("inpaint.cl", "inpaint_max_change")
+        self.k_sum_change = g.kernel("inpaint.cl", "inpaint_sum_change")
+        self.k_ghosts = g.kernel("inpaint.cl", "inpaint_ghosts")
         # Soft masks: pixels of Omega with fidelity w > 0 are drawn back towards their
         # observed value by w after every cycle.
         self.fidelity = None
@@ -305,7 +307,7 @@ class LevelSolver:
             self.fidelity_list = index_list(g, fidelity > 0)
             self.fidelity = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), fidelity[None])
             self.observed = Field.from_host(g, observed)
-            self.k_fidelity = k("inpaint_fidelity")
+            self.k_fidelity = g.kernel("inpaint.cl", "inpaint_fidelity")
         self.sx = np.int32(g.sx)
         self.rot = g.scalar(1.0 if params.rotation == "ccw" else -1.0)
         self.steps = 0
@@ -316,14 +318,12 @@ class LevelSolver:
         then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
         a step's work on a small region)."""
         g = self.grid
-        program = runtime.program("inpaint.cl", g.dtype, SCALING=SCALINGS.index(params.scaling),
-                                  STENCIL=STENCILS.index(params.stencil))
+        defines = {"SCALING": SCALINGS.index(params.scaling), "STENCIL": STENCILS.index(params.stencil)}
         bufs = (self.pair.cur.data.data, self.pair.nxt.data.data)
         self._buf_a = bufs[0]
 
-        def bound(name, lst, *args):
+        def bound(kernel, lst, *args):
             (gsize,), (lsize,), run = runtime.list_launch(max(lst.n, 1))
-            kernel = cl.Kernel(program, name)
             kernel.set_args(*args, lst.indices.data, np.int32(lst.n), np.int32(g.plane),
                             np.int32(run))
             return kernel, (gsize, g.nc), (lsize, 1), lst.n
@@ -331,7 +331,7 @@ class LevelSolver:
         def ghosts(buf):
             if not self.ghosts:
                 return None
-            kernel = cl.Kernel(program, "inpaint_ghosts")
+            kernel = runtime.new_kernel("inpaint.cl", "inpaint_ghosts", g.dtype, **defines)
             n = self.ghost_pairs.shape[0]
             kernel.set_args(buf, self.ghost_pairs.data, np.int32(n), np.int32(g.plane))
             return kernel, (n, g.nc), None, n
@@ -341,10 +341,12 @@ class LevelSolver:
         self._steps = {}
         for src, dst in (bufs, bufs[::-1]):
             self._steps[("transport", src.int_ptr)] = (
-                bound("inpaint_transport", self.omega_list, src, dst, dt, self.rot, eps, self.sx),
+                bound(runtime.new_kernel("inpaint.cl", "inpaint_transport", g.dtype, **defines),
+                      self.omega_list, src, dst, dt, self.rot, eps, self.sx),
                 ghosts(dst))
             self._steps[("diffusion", src.int_ptr)] = (
-                bound("inpaint_diffusion", self.band_list, src, dst, self.weight.data.data, ddt,
+                bound(runtime.new_kernel("inpaint.cl", "inpaint_diffusion", g.dtype, **defines),
+                      self.band_list, src, dst, self.weight.data.data, ddt,
                       eps, self.sx),
                 ghosts(dst))
 

@@ -15,6 +15,9 @@ import pyopencl.array as cla
 from .fields import Field, Grid, PingPong, compact, index_list
 from .imagedata import InputError
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("levelset.cl",)
+
 GHOST = 2
 MARGIN = 2  # frozen cells around the caller's grid (see LevelSet)
 REACH = 3  # a rebuild reinitialises the band dilated by this many cells (<= MARGIN + GHOST - 1)

@@ -18,6 +18,9 @@ from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import to_kernel_layout
 from .runtime import get_runtime
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("planar.cl",)
+
 FLOWS = ("heat", "perona-malik", "tv", "curvature")
 # TV's regularisation of |grad u| on [0, 1] data: about one grey level of 8-bit data, so
 # that only gradients below it (noise, quantisation) are smoothed like heat while every

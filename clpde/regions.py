@@ -42,6 +42,9 @@ from .regions_mesh import (
 from .runtime import get_runtime
 from .surface.grid3d import Grid3D
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("regions.cl",)
+
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
 GHOST = 3
 # Pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3)). Six Heun iterations
@@ -139,11 +142,21 @@ class RegionTracker:
         self._flag = cla.zeros(q, 1, np.int32)
         self._mask = cla.zeros(q, g.padded_shape, np.uint8)
         self._mask2 = cla.zeros(q, g.padded_shape, np.uint8)
-        self._k = {name: self.runtime.kernel("regions.cl", name, g.dtype, SPEED=self.mode)
-                   for name in ("region_speed", "region_step", "advect_step", "reinit3d_step",
-                                "band_near_border", "band_max_abs", "heun_average",
-                                "region_band_mask", "dilate_mask", "extend_outer",
-                                "reinit3d_heun", "copy_runs")}
+        rt, mode = self.runtime, self.mode
+        self._k = {
+            "region_speed": rt.kernel("regions.cl", "region_speed", g.dtype, SPEED=mode),
+            "region_step": rt.kernel("regions.cl", "region_step", g.dtype, SPEED=mode),
+            "advect_step": rt.kernel("regions.cl", "advect_step", g.dtype, SPEED=mode),
+            "reinit3d_step": rt.kernel("regions.cl", "reinit3d_step", g.dtype, SPEED=mode),
+            "band_near_border": rt.kernel("regions.cl", "band_near_border", g.dtype, SPEED=mode),
+            "band_max_abs": rt.kernel("regions.cl", "band_max_abs", g.dtype, SPEED=mode),
+            "heun_average": rt.kernel("regions.cl", "heun_average", g.dtype, SPEED=mode),
+            "region_band_mask": rt.kernel("regions.cl", "region_band_mask", g.dtype, SPEED=mode),
+            "dilate_mask": rt.kernel("regions.cl", "dilate_mask", g.dtype, SPEED=mode),
+            "extend_outer": rt.kernel("regions.cl", "extend_outer", g.dtype, SPEED=mode),
+            "reinit3d_heun": rt.kernel("regions.cl", "reinit3d_heun", g.dtype, SPEED=mode),
+            "copy_runs": rt.kernel("regions.cl", "copy_runs", g.dtype, SPEED=mode),
+        }
         self.time = 0.0
         self.steps = 0
         self.rebuild()

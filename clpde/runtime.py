@@ -17,6 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("planar.cl",)
+
 
 class ClpdeError(RuntimeError):
     """Base class of clpde's own errors (device, build and input problems)."""
@@ -386,6 +389,11 @@ class Runtime:
                 if prog is None:
                     prog = self._programs[key] = self._build(filename, dtype, defines)
         return prog
+
+    def new_kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> cl.Kernel:
+        """A pyopencl kernel instance of its own (not the shared one `kernel` returns), for
+        code that sets its arguments once and enqueues it bare."""
+        return cl.Kernel(self.program(filename, dtype, **defines), name)
 
     def kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> Kernel:
         """A kernel, fetched once and reused (fetching per call is slow in pyopencl);

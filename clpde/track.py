@@ -35,6 +35,9 @@ from .imagedata import InputError, value_range
 from .levelset import LevelSet, signed_distance
 from .runtime import get_runtime
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("levelset.cl", "track_features.cl")
+
 FEATURES = ("intensity", "edges", "contrast")
 DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2}
 MOTIONS = (None, "velocity", "kalman")

@@ -95,7 +95,7 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     dst = bb.scatter(np.zeros_like(u), np.float32, APRON)
     flow = flows.BrickFlow.__new__(flows.BrickFlow)
     flow.surf, flow.bricks = s, bb
-    kernel = flow.kernel("brick_heat_step", WEIGHTED=int(weighted))
+    kernel = flow.kernel("bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
     bb.launch(kernel, src.data, dst.data, psi_dev.data, g.scalar(0.1), *flows._signs(sides),
               bb.node_rows.data, channels=2)
     node = band_host(s.node_band)
@@ -139,7 +139,7 @@ def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, in
     flow = flows.BrickFlow.__new__(flows.BrickFlow)
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)
-    flow._extend_kernel = flow.kernel("brick_extend_cp", INTERP=s.interp, NC=nc,
+    flow._extend_kernel = flow.kernel("bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc,
                                       NORMALIZE=int(normalize))
     for which, band in ((EXT, s.ext_band), (REACH, s.reach_band)):
         flow._extend(src, dst, which)

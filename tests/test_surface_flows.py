@@ -59,7 +59,7 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
         src, dst = dev(u32), cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 6)
-        kernel = g.kernel("flow_step", NC=nc, **opts)
+        kernel = g.kernel("surface.cl", "flow_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, dev(psi).data, dev(direction).data,
                       dev(u0).data, g.scalar(r), g.scalar(dt), dev([lam]).data, g.scalar(e2),
@@ -83,7 +83,7 @@ def test_lambda_terms_match_reference(sphere02, rng):
     u0 = (u + 0.2 * rng.standard_normal(u.shape)).astype(np.float32)
     terms = [cla.empty(q, s.step_band.n, np.float32) for _ in range(3)]
     offsets = _offsets(g, 3)
-    g.launch_list(g.kernel("tv_lambda_terms"), s.step_band, cla.to_device(q, u).data,
+    g.launch_list(g.kernel("surface.cl", "tv_lambda_terms"), s.step_band, cla.to_device(q, u).data,
                   cla.to_device(q, u0).data, s.psi_dev.data, g.scalar(1 / s.spacing),
                   g.scalar(1.5), g.scalar(0.01), *offsets, *g.strides(), *(t.data for t in terms))
     band = band_host(s.step_band)

@@ -26,6 +26,9 @@ from scipy import ndimage
 from ..imagedata import InputError
 from ..runtime import ClpdeError
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("poisson.cl",)
+
 KINDS = ("harmonic", "biharmonic")
 MARGIN = 2  # the biharmonic stencil reaches two pixels past the hole
 
@@ -103,9 +106,11 @@ class Multigrid:
         s = dtype.type
         bi = np.int32(kind == "biharmonic")
         sign = -1.0 if kind == "harmonic" else 1.0
-        k = lambda name: runtime.kernel("poisson.cl", name, dtype)
-        k_smooth, k_scale, k_residual = k("mg_smooth"), k("mg_scale"), k("mg_residual")
-        k_restrict, k_prolong = k("mg_restrict"), k("mg_prolong")
+        k_smooth = runtime.kernel("poisson.cl", "mg_smooth", dtype)
+        k_scale = runtime.kernel("poisson.cl", "mg_scale", dtype)
+        k_residual = runtime.kernel("poisson.cl", "mg_residual", dtype)
+        k_restrict = runtime.kernel("poisson.cl", "mg_restrict", dtype)
+        k_prolong = runtime.kernel("poisson.cl", "mg_prolong", dtype)
         levels = [(omega.shape, *level0)]
         om = omega
         self.buffers = []  # bound kernels hold no references: keep the buffers alive

@@ -16,6 +16,9 @@ import pyopencl.array as cla
 from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("bricks.cl", "surface.cl")
+
 # One-sided difference choices per axis: bit set = backward gradient (forward divergence).
 _ALL_SIDES = tuple(range(8))
 
@@ -71,7 +74,7 @@ class BandFlow:
         g = surf.grid
         self.cur = g.upload(data)
         self.tmp = self.cur.copy()
-        self._extend_kernel = g.kernel("extend_cp", INTERP=surf.interp, NC=self.nc,
+        self._extend_kernel = g.kernel("surface.cl", "extend_cp", INTERP=surf.interp, NC=self.nc,
                                        NORMALIZE=int(normalize), LINE_FIELD=int(line_field))
         self._stepped = False
         if extend:
@@ -129,14 +132,15 @@ class BrickFlow:
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
         self.src_plane = np.int32(self.tmp.size // self.nc)
-        self._extend_kernel = self.kernel("brick_extend_cp", INTERP=surf.interp, NC=self.nc,
+        self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp", INTERP=surf.interp, NC=self.nc,
                                           NORMALIZE=int(normalize))
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
 
-    def kernel(self, name: str, **defines):
+    def kernel(self, filename: str, name: str, **defines):
+        """Kernel `name` of `filename` with the brick layout's defines (as Grid.kernel)."""
         s = self.surf
-        return s.runtime.kernel("bricks.cl", name, s.grid.dtype, **self.bricks.defines(),
+        return s.runtime.kernel(filename, name, s.grid.dtype, **self.bricks.defines(),
                                 GROUP_PER_BRICK=int(not s.runtime.is_cpu), **defines)
 
     def _extend(self, src, dst, which: int) -> None:
@@ -190,7 +194,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
     r = g.scalar(dt / surf.spacing**2)
     if getattr(surf, "_storage", "lists") == "bricks":
         flow = BrickFlow(surf, u)
-        kernel = flow.kernel("brick_heat_step", WEIGHTED=int(bool(weighted)))
+        kernel = flow.kernel("bricks.cl", "brick_heat_step", WEIGHTED=int(bool(weighted)))
         for n in _progress(progress, steps, "surface heat"):
             sides = _ALL_SIDES[n % 8] if alternate else 0
             flow.bricks.launch(kernel, flow.cur.data, flow.tmp.data, flow.psi.data, r,
@@ -198,7 +202,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
             flow.after_step()
         return flow.result()
     flow = BandFlow(surf, u)
-    kernel = g.kernel("heat_step", WEIGHTED=int(bool(weighted)))
+    kernel = g.kernel("surface.cl", "heat_step", WEIGHTED=int(bool(weighted)))
     for n in _progress(progress, steps, "surface heat"):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         g.launch_runs(
@@ -223,7 +227,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic), "FIDELITY": int(fidelity is not None),
                    "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted)),
                    "LINE_FIELD": int(bool(line_field))}
-    kernel = g.kernel("flow_step", **defines)
+    kernel = g.kernel("surface.cl", "flow_step", **defines)
     r = g.scalar(dt / h**p)
     e2 = g.scalar((h * eps) ** 2)
     dir_dev = g.upload(direction) if direction is not None else surf.psi_dev
@@ -257,7 +261,7 @@ def device_sum(grid, a, n: int, chunk: int = 2048) -> float:
     """Sum of the first n entries of a device array: partial sums on the device."""
     groups = max(1, -(-n // chunk))
     partial = cla.empty(grid.runtime.queue, groups, grid.dtype)
-    grid.kernel("chunk_sum")(grid.runtime.queue, (groups,), None, a.data, np.int32(n),
+    grid.kernel("surface.cl", "chunk_sum")(grid.runtime.queue, (groups,), None, a.data, np.int32(n),
                              np.int32(chunk), partial.data)
     return float(partial.get().astype(np.float64).sum())
 
@@ -286,9 +290,9 @@ class _DynamicLambda:
         g, q = s.grid, s.runtime.queue
         _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
         for a, partial in zip(self.terms, self.partials):
-            g.kernel("chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
+            g.kernel("surface.cl", "chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
                                   np.int32(self.CHUNK), partial.data)
-        g.kernel("tv_lambda_update")(
+        g.kernel("surface.cl", "tv_lambda_update")(
             q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
             g.scalar(self.lam_max), self.lam.data, self.state.data, self.slots.data,
@@ -308,7 +312,7 @@ class _DynamicLambda:
 def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps) -> None:
     g = surf.grid
     g.launch_list(
-        g.kernel("tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
+        g.kernel("surface.cl", "tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
         g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
         *offsets, *g.strides(), *(a.data for a in terms),
     )
@@ -439,7 +443,7 @@ def principal_directions(surf):
     n = max(band.n, 1)
     dirs = cla.empty(q, (6, n), g.dtype)
     curv = cla.empty(q, (2, n), g.dtype)
-    g.launch_list(g.kernel("principal_directions"), band, surf.psi_dev.data,
+    g.launch_list(g.kernel("surface.cl", "principal_directions"), band, surf.psi_dev.data,
                   g.scalar(1 / surf.spacing), dirs.data, curv.data, *g.strides())
     idx = band.indices.get()[: band.n]
     vol = np.zeros((8, g.volume))
@@ -483,7 +487,7 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, par
             raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
         norm = np.sqrt((d**2).sum(axis=0))
         dir_dev = g.upload(d / np.where(norm > 0, norm, 1))
-    kernel = g.kernel("turk_step", ALONG=int(direction is not None))
+    kernel = g.kernel("surface.cl", "turk_step", ALONG=int(direction is not None))
     for n in _progress(progress, int(iterations), "reaction-diffusion"):
         offsets = _offsets(g, _ALL_SIDES[n % 8] if alternate else 0)
         g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,

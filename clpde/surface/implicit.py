@@ -28,6 +28,9 @@ from ..runtime import get_runtime
 from .bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
 from .grid3d import Grid3D
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("surface.cl",)
+
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 # Farthest interpolation node from a point, in cells: the step band must contain them.
 _NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
@@ -151,12 +154,12 @@ class ImplicitSurface:
         """node_band, its runs, reach_band and reach_band's closest-point stencils."""
         g, q = self.grid, self.runtime.queue
         nodes = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("mark_nodes", INTERP=self.interp), self.ext_band,
+        g.launch_list(g.kernel("surface.cl", "mark_nodes", INTERP=self.interp), self.ext_band,
                       self.cp_base.data, nodes.data, *g.strides())
         self.node_band = compact(self.runtime, nodes)
         self.step_runs = g.runs(self.node_band)
         reach = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("mark_stencil"), self.node_band, reach.data, *g.strides())
+        g.launch_list(g.kernel("surface.cl", "mark_stencil"), self.node_band, reach.data, *g.strides())
         self.reach_band = compact(self.runtime, reach)
         self.reach_stencils = self._cp_stencils(self.reach_band, self._closest_points(self.reach_band))
 
@@ -332,7 +335,7 @@ class ImplicitSurface:
         n = max(band.n, 1)
         cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
         g.launch_list(
-            g.kernel("closest_points"), band, self.psi_dev.data,
+            g.kernel("surface.cl", "closest_points"), band, self.psi_dev.data,
             g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
         )
         return cp
@@ -346,7 +349,7 @@ class ImplicitSurface:
         base = cla.empty(q, n, np.int32)
         frac = cla.empty(q, (3, n), g.dtype)
         g.launch_list(
-            g.kernel("cp_stencils", INTERP=self.interp), band, *(c.data for c in cp),
+            g.kernel("surface.cl", "cp_stencils", INTERP=self.interp), band, *(c.data for c in cp),
             *g.strides(), *g.padded_dims(), base.data, frac.data,
         )
         return base, frac
@@ -400,7 +403,7 @@ class ImplicitSurface:
         everywhere = g.band(self.psi_dev, np.inf)
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
-        kernel = g.kernel("reinit_step")
+        kernel = g.kernel("surface.cl", "reinit_step")
         for _ in progress_range(progress, steps, "reinitialise", leave=False):
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
@@ -421,7 +424,7 @@ class ImplicitSurface:
         g = self.grid
         r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1
         steps = int(np.ceil(2 * self.outer / r)) if iterations is None else int(iterations)
-        kernel = g.kernel("extend_pde_step", NC=flow.nc)
+        kernel = g.kernel("surface.cl", "extend_pde_step", NC=flow.nc)
         for _ in range(steps):
             g.launch_list(kernel, self.ext_band, flow.cur.data, flow.tmp.data, self.psi_dev.data,
                           g.scalar(r), g.scalar(self.spacing), *g.strides())
@@ -506,7 +509,7 @@ class ImplicitSurface:
         n = idx.shape[1]
         pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
         out = cla.empty(q, (nc, n), g.dtype)
-        g.kernel("sample_points", INTERP=code, NC=nc)(
+        g.kernel("surface.cl", "sample_points", INTERP=code, NC=nc)(
             q, (n,), None, dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
             out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
         )

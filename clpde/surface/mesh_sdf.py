@@ -35,6 +35,9 @@ import numpy as np
 from .._validation import InputError, positive
 from .winding import WindingNumbers
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("surface.cl",)
+
 
 def load_mesh(mesh):
     """A trimesh.Trimesh from a Trimesh, a Scene or any file trimesh can load."""

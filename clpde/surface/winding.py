@@ -8,6 +8,9 @@ import numpy as np
 
 from ..imagedata import InputError
 
+# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+KERNEL_FILES = ("winding.cl",)
+
 
 def _morton_order(points: np.ndarray) -> np.ndarray:
     """Indices sorting points (n, 3) along a Morton (Z-order) curve, 10 bits an axis."""
