@@ -76,7 +76,7 @@ from ._validation import positive
 from .runtime import ClpdeError, get_runtime
 
 # The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
-KERNEL_FILES = ("inpaint.cl", "planar.cl")
+KERNEL_FILES = ("fields.cl", "inpaint.cl", "planar.cl")
 
 SCALINGS = ("none", "quartic-root")
 COLOUR_MODELS = ("channels", "rho-phi-psi")
@@ -296,7 +296,7 @@ class LevelSolver:
         self.weight = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), weight[None])
 
         self.k_fill = g.kernel("inpaint.cl", "inpaint_fill")
-        self.k_copy = g.kernel("inpaint.cl", "inpaint_copy")
+        self.k_copy = g.kernel("fields.cl", "copy_listed")  # keeps the pair equal off a list
         self.k_change = g.kernel("inpaint.cl", "inpaint_max_change")
         self.k_sum_change = g.kernel("inpaint.cl", "inpaint_sum_change")
         self.k_ghosts = g.kernel("inpaint.cl", "inpaint_ghosts")

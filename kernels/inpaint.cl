@@ -9,6 +9,7 @@
 // A kernel writes every cell of its list into `v`; cells off the list keep whatever `v`
 // held, so the host keeps both buffers of a ping-pong pair equal off the list.
 #include "common.cl"
+#include "stencil.h"
 
 #ifndef STENCIL
 #define STENCIL 0  // 0: central differences (appendix A); 1: isotropic (Scharr) derivatives
@@ -90,8 +91,8 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* 
 }
 
 // One step of the anisotropic diffusion (3.4), I_t = g kappa |grad I|, with appendix A's
-// central differences. `g` is a one-channel plane: 1 in Omega, falling smoothly to 0 at the
-// edge of Omega-epsilon.
+// central differences (stencil.h's curvature_speed). `g` is a one-channel plane: 1 in
+// Omega, falling smoothly to 0 at the edge of Omega-epsilon.
 __kernel void inpaint_diffusion(__global const REAL* restrict u, __global REAL* restrict v,
                                 __global const REAL* restrict g, const REAL dt, const REAL eps,
                                 const int sx, LIST_ARGS)
@@ -99,14 +100,8 @@ __kernel void inpaint_diffusion(__global const REAL* restrict u, __global REAL* 
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
-        const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
-        const REAL ne = u[i + 1 + sx], nw = u[i - 1 + sx], se = u[i + 1 - sx], sw = u[i - 1 - sx];
-        const REAL ux = (REAL)0.5 * (e - w), uy = (REAL)0.5 * (n - s);
-        const REAL uxx = e - 2 * c + w, uyy = n - 2 * c + s;
-        const REAL uxy = (REAL)0.25 * (ne - nw - se + sw);
-        const REAL speed = (uxx * uy * uy - 2 * ux * uy * uxy + uyy * ux * ux) /
-                           (ux * ux + uy * uy + eps);
-        v[i] = c + dt * g[list[k]] * speed;
+        NEIGHBOURS_3X3(u, i);
+        v[i] = c + dt * g[list[k]] * curvature_speed(c, e, w, n, s, ne, nw, se, sw, eps);
     }
 }
 
@@ -118,17 +113,6 @@ __kernel void inpaint_fill(__global const REAL* restrict u, __global REAL* restr
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
         v[i] = (REAL)0.25 * (u[i + 1] + u[i - 1] + u[i + sx] + u[i - sx]);
-    }
-}
-
-// dst = src on the listed cells (keeps the two buffers of a pair equal off a list).
-__kernel void inpaint_copy(__global const REAL* restrict src, __global REAL* restrict dst,
-                           LIST_ARGS)
-{
-    LIST_RANGE(k0, k1, chan);
-    for (int k = k0; k < k1; ++k) {
-        const int i = chan + list[k];
-        dst[i] = src[i];
     }
 }
 

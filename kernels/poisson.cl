@@ -12,6 +12,7 @@
 // membership; only the lists' cells are visited.
 // Work distribution and reductions: box_lists.cl.
 #include "box_lists.cl"
+#include "reduce.h"
 
 // dst = a * L(src) + b * f on the list; partial sums of dot * dst. (`dot` may be dst.)
 __kernel void lap_axpy_dot(__global const REAL* src, __global REAL* dst,
@@ -68,23 +69,16 @@ __kernel void bilap_axpy_dot(__global const REAL* src, __global REAL* dst,
     partial[c_ * ng + g_] = acc;
 }
 
-// A channel's sum of its partials, added in the same order by every item that needs it.
-INLINE REAL sum_partials(__global const REAL* partial, const int c, const int ng)
-{
-    REAL s = 0;
-    for (int g = 0; g < ng; ++g) s += partial[c * ng + g];
-    return s;
-}
-
 // x += alpha p, r -= alpha q with alpha = r.r / p.q (from the partials of both); writes
-// the partials of the new r.r into rr_new.
+// the partials of the new r.r into rr_new. A channel's sum of its partials is reduce.h's
+// sum_rows(partial + c * ng, ng): the same order in every item that needs it.
 __kernel void cg_update(__global REAL* x, __global REAL* r, __global const REAL* p,
                         __global const REAL* q, __global const REAL* rr_old,
                         __global const REAL* pq, __global REAL* rr_new,
                         const int nx, const int ny, ITEM_ARGS)
 {
-    const REAL den = sum_partials(pq, get_global_id(1), ng);
-    const REAL alpha = den > 0 ? sum_partials(rr_old, get_global_id(1), ng) / den : (REAL)0;
+    const REAL den = sum_rows(pq + get_global_id(1) * ng, ng);
+    const REAL alpha = den > 0 ? sum_rows(rr_old + get_global_id(1) * ng, ng) / den : (REAL)0;
     REAL acc = 0;
     FOR_ITEMS(k) {
         const int i = chan + list[k];
@@ -101,8 +95,8 @@ __kernel void cg_direction(__global REAL* p, __global const REAL* r,
                            __global const REAL* rr_old, __global const REAL* rr_new,
                            const int nx, const int ny, ITEM_ARGS)
 {
-    const REAL old = sum_partials(rr_old, get_global_id(1), ng);
-    const REAL beta = old > 0 ? sum_partials(rr_new, get_global_id(1), ng) / old : (REAL)0;
+    const REAL old = sum_rows(rr_old + get_global_id(1) * ng, ng);
+    const REAL beta = old > 0 ? sum_rows(rr_new + get_global_id(1) * ng, ng) / old : (REAL)0;
     FOR_ITEMS(k) {
         const int i = chan + list[k];
         p[i] = r[i] + beta * p[i];

@@ -23,7 +23,8 @@
     if (y >= ny) return;                                                              \
     const int row = get_global_id(2) * plane + (y + G) * sx + G
 
-// The second pass on the device: the sum of `n` row partials starting at `partial`, in order.
+// The second pass on the device: the sum of `n` partials starting at `partial`, in order
+// (row partials here; also box_lists.cl's per-item partials and surface.cl's chunk sums).
 inline REAL sum_rows(__global const REAL* restrict partial, const int n)
 {
     REAL acc = 0;

@@ -10,6 +10,7 @@
 // band after every step (extend_cp). Without it the 2001 scheme drifts off the surface and its
 // error grows under refinement.
 #include "common.cl"
+#include "reduce.h"
 
 // INTERP 3: tricubic Lagrange interpolation (4x4x4 nodes); 1: trilinear (2x2x2).
 #ifndef INTERP
@@ -556,9 +557,7 @@ __kernel void chunk_sum(__global const REAL* restrict a, const int n, const int 
 {
     const int g = get_global_id(0);
     const int end = min((g + 1) * chunk, n);
-    REAL acc = 0;
-    for (int k = g * chunk; k < end; ++k) acc += a[k];
-    partial[g] = acc;
+    partial[g] = sum_rows(a + g * chunk, end - g * chunk);
 }
 
 // Dynamic lambda of (C.2) from the chunk sums of tv_lambda_terms' num, area and resid:
