@@ -134,7 +134,10 @@ def _valid_sources(hole: np.ndarray, r: int) -> np.ndarray:
 
 
 def _levels_for(hole: np.ndarray, r: int, shape) -> int:
-    depth = ndimage.distance_transform_cdt(np.pad(hole, 1, constant_values=False), "chessboard").max()
+    depth = ndimage.distance_transform_cdt(np.pad(hole, 1, constant_values=False), "chessboard")
+    # The 99th percentile of the hole pixels' depth, not the maximum: a text mask's strokes
+    # cross at a few deeper pixels, and a coarse level for those costs time and PSNR.
+    depth = float(np.percentile(depth[depth > 0], 99))
     levels = 1 + max(0, math.ceil(math.log2(max(depth, 1) / r)))
     # Keep the coarsest box a few patches wide, or there is nothing left to copy from.
     while levels > 1 and min(shape) / 2 ** (levels - 1) < 4 * (2 * r + 1):
@@ -148,7 +151,7 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
 
 class _Level:
     def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int,
-                 nout: int | None = None):
+                 nout: int | None = None, radius: int | None = None):
         self.rt = runtime
         self.q = runtime.queue
         self.dtype = np.dtype(dtype)
@@ -183,7 +186,10 @@ class _Level:
         self.targets = self._list(targets)
         self.targets_idx = np.flatnonzero(targets)
         self.holes = self._list(hole)
-        self.radius = max(self.W, self.H)
+        # The random search covers the search region (the margin around the hole), not the
+        # whole box: a text mask's box is the image, and samples farther than the margin
+        # cost 20% of a searching pass for no PSNR (measured on the texture and thick cases).
+        self.radius = max(1, min(max(self.W, self.H), int(radius))) if radius else max(self.W, self.H)
 
     def _list(self, mask: np.ndarray):
         idx = np.flatnonzero(mask).astype(np.int32)
@@ -356,9 +362,14 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         if g is not None:
             planes.append(g)
             w += [1.0] * len(g)
-        lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout)
-        # A level started from the coarser field needs fewer iterations than the coarsest.
-        its = int(p["iterations"] if prev_nnf is None else p["fine_iterations"])
+        lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout,
+                    radius=int(p["search"]))
+        # A level started from the coarser field needs fewer iterations than the coarsest;
+        # so does a single level (a thin hole), whose onion peel is already at full
+        # resolution: on a 10% text mask 3 iterations instead of 6 cost 0.3 dB and a third
+        # of the time.
+        coarse_start = prev_nnf is None and len(pyramid) > 1
+        its = int(p["iterations"] if coarse_start else p["fine_iterations"])
         if prev_nnf is None:
             lv.onion_peel(rng, int(p["onion_passes"]), seed, counter)
             lv.set_nnf(lv.nnf_to_host(), rng)
