@@ -52,6 +52,7 @@ DEFAULTS = {
     "levels": None,  # pyramid levels; None chooses from the hole's thickness
     "onion_passes": 4,  # PatchMatch passes per shell of the coarsest level's onion peel
     "sharpen": True,  # the last vote takes the closest patch's value (else the weighted mean)
+    "confidence": 1.3,  # vote weights times confidence**-depth into the hole (Wexler et al.); 1: off
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 
@@ -72,6 +73,9 @@ def _params(params: dict) -> dict:
             raise InputError(f"{name} must be a positive integer, not {v!r}")
     if p["levels"] is not None and (not isinstance(p["levels"], (int, np.integer)) or p["levels"] < 1):
         raise InputError(f"levels must be a positive integer or None (automatic), not {p['levels']!r}")
+    g = p["confidence"]
+    if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
+        raise InputError(f"confidence must be a number >= 1 (1 turns it off), not {g!r}")
     f = p["features"]
     if not isinstance(f, (int, float, np.floating, np.integer)) or not np.isfinite(f) or f < 0:
         raise InputError(f"features must be a weight >= 0 (0 turns them off), not {f!r}")
@@ -151,7 +155,7 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
 
 class _Level:
     def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int,
-                 nout: int | None = None, radius: int | None = None):
+                 nout: int | None = None, radius: int | None = None, confidence: float = 1.0):
         self.rt = runtime
         self.q = runtime.queue
         self.dtype = np.dtype(dtype)
@@ -176,6 +180,8 @@ class _Level:
         targets = ndimage.binary_dilation(hole, structure=np.ones((2 * self.r + 1,) * 2, bool))
         self.targets_mask = targets
         self.img = cla.to_device(self.q, np.ascontiguousarray(img, self.dtype))
+        depth = ndimage.distance_transform_edt(hole) if confidence != 1.0 else np.zeros(hole.shape)
+        self.pen = cla.to_device(self.q, (depth * math.log(confidence)).astype(self.dtype).ravel())
         self.d_valid = cla.to_device(self.q, self.valid.astype(np.uint8).ravel())
         self.d_use = cla.to_device(self.q, np.ones(self.H * self.W, np.uint8))
         self.chw = cla.to_device(self.q, np.asarray(weights, self.dtype))
@@ -245,13 +251,14 @@ class _Level:
                      self.nnf[0].data, self.dist.data, lst.data, np.int32(n), *self._args())
 
     def vote(self, best_only: bool = False, sigma2: float | None = None) -> float:
-        if sigma2 is None and not best_only:
+        if sigma2 is None:
             d = self.dist.get()[self.targets_idx]
             d = d[np.isfinite(d)]
             sigma2 = float(np.percentile(d, 75)) if d.size else 1.0
         sigma2 = 1.0 if sigma2 is None else sigma2
         hl, hn = self.holes
-        self._launch(self.k_vote, hn, self.img.data, self.nnf[0].data, self.dist.data, hl.data,
+        self._launch(self.k_vote, hn, self.img.data, self.nnf[0].data, self.dist.data,
+                     self.pen.data, hl.data,
                      np.int32(hn), np.int32(self.W), np.int32(self.H), np.int32(self.nch),
                      np.int32(self.nout), self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
         return sigma2
@@ -291,7 +298,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           patch=DEFAULTS["patch"], search=DEFAULTS["search"], iterations=DEFAULTS["iterations"],
           fine_iterations=DEFAULTS["fine_iterations"],
           passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
-          onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"], guide=None):
+          onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"],
+          confidence=DEFAULTS["confidence"], guide=None):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (128 px of context around the hole's box),
@@ -305,7 +313,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     """
     p = _params({"patch": patch, "search": search, "iterations": iterations,
                  "fine_iterations": fine_iterations, "passes": passes,
-                 "features": features, "levels": levels, "onion_passes": onion_passes})
+                 "features": features, "levels": levels, "onion_passes": onion_passes,
+                 "confidence": confidence})
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, copy=True)
@@ -363,7 +372,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             planes.append(g)
             w += [1.0] * len(g)
         lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout,
-                    radius=int(p["search"]))
+                    radius=int(p["search"]), confidence=float(p["confidence"]))
         # A level started from the coarser field needs fewer iterations than the coarsest;
         # so does a single level (a thin hole), whose onion peel is already at full
         # resolution: on a 10% text mask 3 iterations instead of 6 cost 0.3 dB and a third
