@@ -150,3 +150,16 @@ def test_bad_parameters_are_clear_errors(runtime):
         exemplar.solve(img, omega, runtime, confidence=0.5)
     with pytest.raises(InputError, match="whole image"):
         exemplar.solve(img, np.ones((20, 20), bool), runtime)
+
+
+def test_levels_follow_the_hole_thickness_not_a_few_crossings():
+    # Thin strokes (3 px) that cross: one level, however deep the few crossing pixels are.
+    thin = np.zeros((200, 200), bool)
+    for k in range(20, 180, 12):
+        thin[k:k + 3, 10:190] = True
+        thin[10:190, k:k + 3] = True
+    thin[100:108, 100:108] = True  # one small blob, deeper than the strokes
+    assert exemplar._levels_for(thin, 3, thin.shape) == 1
+    thick = np.zeros((300, 300), bool)
+    thick[100:180, 100:180] = True  # 80 px: half-thickness 40, down to ~3 in 4 levels
+    assert exemplar._levels_for(thick, 3, thick.shape) == 4
