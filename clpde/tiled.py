@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._validation import check_steps
 from .imagedata import InputError, compute_dtype, to_kernel_layout
-from .planar import FLOWS, PlanarFlow, _check_steps
+from .planar import FLOWS, PlanarFlow
 from .runtime import get_runtime
 
 RADIUS = 1  # every planar.cl and rof.cl step reads the 3x3 neighbourhood only
@@ -84,7 +85,7 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
         raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
     if "weight" in params:
         raise InputError("tiled diffuse does not take a weight; run it untiled")
-    steps = _check_steps(steps)
+    steps = check_steps(steps)
     data, layout = to_kernel_layout(image, channel_axis)
     runtime = get_runtime(device)
     out = _chunked(data, chunks, steps * RADIUS, _tile_diffuse, flow=flow, steps=steps, dt=dt,
@@ -99,7 +100,7 @@ def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chu
     tol=1e-300, check_every=check_every)``."""
     from .imagedata import positive
 
-    steps = _check_steps(steps)
+    steps = check_steps(steps)
     data, layout = to_kernel_layout(image, channel_axis)
     weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
     lam = weight_unit / positive("weight", weight)

@@ -447,9 +447,13 @@ def run_sequence_inpaint(args) -> int:
         raise InputError("give the mask: clpde inpaint VIDEO --mask MASK -o OUT.mp4")
     if args.workers is not None and args.scheduler is not None:
         raise InputError("give --workers or --scheduler, not both")
-    options = {"dt": args.dt, "scaling": args.scaling, "colour": args.colour,
-               "levels": args.levels, "max_steps": args.max_steps, "tol": args.tol,
-               "mean_tol": args.mean_tol, "device": args.device}
+    from .cli.inpaint import TRANSPORT_OPTIONS
+
+    # as for one image: only the options given, so that the default method is chosen by them
+    options = {"colour": args.colour, "levels": args.levels, "device": args.device,
+               "method": args.method}
+    options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
+                    if getattr(args, name) is not None})
     result = inpaint_sequence(args.input, args.mask, args.output, workers=args.workers,
                               scheduler=args.scheduler, frames_per_task=args.frames_per_task,
                               overwrite=getattr(args, "overwrite", False),

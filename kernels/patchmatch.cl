@@ -71,18 +71,26 @@ inline REAL patch_distance(const __global REAL* img, const __global uchar* use, 
         }
         return sum / (REAL)((ox1 - ox0 + 1) * (oy1 - oy0 + 1));
     }
+    // Only the `use` pixels count (the onion peel). A product instead of a branch per pixel
+    // keeps the loop vectorisable, and the sum can still stop early: the mean over the n <=
+    // full used pixels is at least sum / full, so sum > bound * full means a worse patch.
+    const REAL limit = bound * (REAL)((ox1 - ox0 + 1) * (oy1 - oy0 + 1));
     int n = 0;
     for (int oy = oy0; oy <= oy1; ++oy) {
         const int tp = (py + oy) * W + px;
         const int sp = (sy + oy) * W + sx;
-        for (int ox = ox0; ox <= ox1; ++ox) {
-            if (!use[tp + ox]) continue;
-            ++n;
-            for (int c = 0; c < nch; ++c) {
-                const REAL d = img[c * plane + tp + ox] - img[c * plane + sp + ox];
-                sum += chw[c] * d * d;
+        for (int ox = ox0; ox <= ox1; ++ox) n += use[tp + ox];
+        for (int c = 0; c < nch; ++c) {
+            const __global REAL* a = img + c * plane + tp;
+            const __global REAL* b = img + c * plane + sp;
+            REAL row = 0;
+            for (int ox = ox0; ox <= ox1; ++ox) {
+                const REAL d = a[ox] - b[ox];
+                row += (REAL)use[tp + ox] * d * d;
             }
+            sum += chw[c] * row;
         }
+        if (sum > limit) return INFINITY;
     }
     return n ? sum / (REAL)n : INFINITY;
 }
@@ -149,11 +157,15 @@ __kernel void pm_pass(const __global REAL* img, const __global uchar* use, const
 
 // New values of the hole pixels from the patches that cover them. Each covering target q
 // (every pixel within PR of a hole pixel is a target) proposes the value its source patch
-// has at the same offset, with weight exp(-dist(q) / (2 sigma2)); `best_only` takes the
-// single proposal of the closest patch instead (sharper, for the last vote). Sources lie in
-// the known part, so the hole can be written in place. Only the first `nout` planes are
-// written: planes after them are guides, known everywhere, that only enter the distance.
+// has at the same offset, with weight exp(-dist(q) / (2 sigma2) - pen(q)); pen(q) is the
+// target's depth into the hole times log(gamma) (Wexler et al.'s confidence gamma^-depth: a
+// patch centred near the known border is more trustworthy than one deep in the hole).
+// `best_only` takes the single proposal of the largest weight instead (sharper, for the last
+// vote). Sources lie in the known part, so the hole can be written in place. Only the first
+// `nout` planes are written: planes after them are guides, known everywhere, that only enter
+// the distance.
 __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __global REAL* dist,
+                      const __global REAL* pen,
                       const __global int* holes, const int nholes, const int W, const int H,
                       const int nch, const int nout, const REAL sigma2, const int best_only)
 {
@@ -164,16 +176,17 @@ __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __glob
     const int plane = W * H;
     const int ox0 = max(-PR, px - (W - 1)), ox1 = min(PR, px);
     const int oy0 = max(-PR, py - (H - 1)), oy1 = min(PR, py);
-    // First the closest covering patch: the weights are taken relative to it, so that they
-    // cannot all underflow, and best_only needs nothing more.
-    REAL dmin = INFINITY;
+    const REAL inv = 1 / (2 * sigma2);
+    // First the proposal of the largest weight: the weights are taken relative to it, so
+    // that they cannot all underflow, and best_only needs nothing more.
+    REAL emin = INFINITY;
     int smin = -1;
     for (int oy = oy0; oy <= oy1; ++oy)
         for (int ox = ox0; ox <= ox1; ++ox) {
             const int q = (py - oy) * W + px - ox;
-            const REAL dq = dist[q];
-            if (dq < dmin) {
-                dmin = dq;
+            const REAL eq = dist[q] * inv + pen[q];
+            if (eq < emin) {
+                emin = eq;
                 const int2 s = nnf[q];
                 smin = (s.y + oy) * W + s.x + ox;
             }
@@ -193,7 +206,7 @@ __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __glob
             if (!isfinite(dq)) continue;
             const int2 s = nnf[q];
             const int sp = (s.y + oy) * W + s.x + ox;
-            const REAL w = exp(-(dq - dmin) / (2 * sigma2));
+            const REAL w = exp(-(dq * inv + pen[q] - emin));
             wsum += w;
             for (int c = 0; c < nout; ++c) acc[c] += w * img[c * plane + sp];
         }

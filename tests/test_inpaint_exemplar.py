@@ -8,14 +8,15 @@ from clpde.inpainting import exemplar
 from tests.reference import patchmatch as ref
 
 
-def _level(runtime, seed=0, patch=5, shape=(21, 26), nch=3, dtype=np.float32, nout=None):
+def _level(runtime, seed=0, patch=5, shape=(21, 26), nch=3, dtype=np.float32, nout=None,
+           confidence=1.0):
     rng = np.random.default_rng(seed)
     img = rng.random((nch,) + shape)
     hole = np.zeros(shape, bool)
     hole[6:12, 8:15] = True
     hole[15:, 20:] = True  # touches two borders: clipped target patches
     weights = rng.uniform(0.5, 2.0, nch)
-    lv = exemplar._Level(runtime, dtype, img, hole, weights, patch, nout)
+    lv = exemplar._Level(runtime, dtype, img, hole, weights, patch, nout, confidence=confidence)
     lv.random_nnf(rng)
     return lv, img, hole, weights
 
@@ -37,14 +38,19 @@ def test_patch_distance_matches_reference(runtime, masked):
     np.testing.assert_allclose(got[finite], want[finite], rtol=2e-5, atol=1e-7)
 
 
-@pytest.mark.parametrize("best_only,nout", [(False, None), (True, None), (False, 2)])
-def test_vote_matches_reference(runtime, best_only, nout):
-    lv, img, hole, w = _level(runtime, seed=3, nout=nout)
+@pytest.mark.parametrize("best_only,nout,confidence",
+                         [(False, None, 1.0), (True, None, 1.0), (False, 2, 1.0),
+                          (False, None, 1.3), (True, None, 2.0)])
+def test_vote_matches_reference(runtime, best_only, nout, confidence):
+    lv, img, hole, w = _level(runtime, seed=3, nout=nout, confidence=confidence)
     lv.score()
     nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
     lv.vote(best_only=best_only, sigma2=0.05)
     got = lv.image()
-    want = ref.vote(img, nnf, dist, hole, lv.r, 0.05, best_only, nout)
+    # The confidence penalty: depth into the hole (Euclidean) times log(confidence).
+    from scipy import ndimage
+    pen = ndimage.distance_transform_edt(hole) * np.log(confidence)
+    want = ref.vote(img, nnf, dist, hole, lv.r, 0.05, best_only, nout, pen)
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
     assert np.array_equal(got[:, ~hole], img[:, ~hole].astype(np.float32))
 
@@ -140,5 +146,20 @@ def test_bad_parameters_are_clear_errors(runtime):
         exemplar.solve(img, omega, runtime, patch=4)
     with pytest.raises(InputError, match="iterations must be"):
         exemplar.solve(img, omega, runtime, iterations=0)
+    with pytest.raises(InputError, match="confidence must be"):
+        exemplar.solve(img, omega, runtime, confidence=0.5)
     with pytest.raises(InputError, match="whole image"):
         exemplar.solve(img, np.ones((20, 20), bool), runtime)
+
+
+def test_levels_follow_the_hole_thickness_not_a_few_crossings():
+    # Thin strokes (3 px) that cross: one level, however deep the few crossing pixels are.
+    thin = np.zeros((200, 200), bool)
+    for k in range(20, 180, 12):
+        thin[k:k + 3, 10:190] = True
+        thin[10:190, k:k + 3] = True
+    thin[100:108, 100:108] = True  # one small blob, deeper than the strokes
+    assert exemplar._levels_for(thin, 3, thin.shape) == 1
+    thick = np.zeros((300, 300), bool)
+    thick[100:180, 100:180] = True  # 80 px: half-thickness 40, down to ~3 in 4 levels
+    assert exemplar._levels_for(thick, 3, thick.shape) == 4

@@ -28,7 +28,7 @@ def _photo_like(ny=120, nx=160, seed=0):
 @pytest.mark.parametrize("angle", [30, 60])
 def test_oblique_straight_edge_is_continued_across_a_slot(angle):
     image, mask = edge_case(angle, size=64)
-    out = clpde.inpaint(image, mask, progress=False)
+    out = clpde.inpaint(image, mask, method="transport", progress=False)
     err = np.abs(out.astype(float) - image)[mask] / 255
     # measured: max 0.047 / 0.078, mean 0.0035 / 0.0089 (in [0, 1]) at 30 / 60 degrees
     assert err.max() < 0.1 and err.mean() < 0.011, (err.max(), err.mean())
@@ -123,7 +123,7 @@ def test_soft_mask_is_blended_for_methods_without_fidelity(monkeypatch):
     mask[5:8, 3:6] = 0.25
     out = clpde.inpaint(image, mask, method="fake")
     assert np.allclose(out[5:8, 3:6], 0.25) and np.array_equal(out[mask == 0], image[mask == 0])
-    with pytest.raises(InputError, match="has no option"):
+    with pytest.raises(InputError, match="unknown inpainting option"):
         clpde.inpaint(image, mask, method="fake", radius=3)
 
 
@@ -136,7 +136,10 @@ def test_methods_registry():
     auto, info = clpde.inpaint(image, mask, method="auto", progress=False, return_info=True)
     assert info.method == expected
     assert np.array_equal(auto, clpde.inpaint(image, mask, method=expected, progress=False))
-    assert clpde.inpaint(image, mask, return_info=True, progress=False)[1].method == "transport"
+    # the default is "auto", or the transport when one of the transport's options is given
+    assert clpde.inpaint(image, mask, return_info=True, progress=False)[1].method == expected
+    assert clpde.inpaint(image, mask, dt=0.05, return_info=True,
+                         progress=False)[1].method == "transport"
 
 
 @pytest.mark.parametrize("mask_value,match", [

@@ -47,16 +47,18 @@ def add_inpaint_parser(subparsers) -> None:
                         help="also write the evolution as an animated GIF")
     parser.add_argument("--gif-every", type=int, default=100, metavar="N",
                         help="steps between GIF frames (default: 100)")
-    parser.add_argument("--max-steps", type=int, default=3000, help="per level (default: 3000)")
-    parser.add_argument("--tol", type=float, default=1e-4,
-                        help="stop when the largest change in the region over a check interval "
+    parser.add_argument("--max-steps", type=int, default=None,
+                        help="transport: steps per level (default: 3000)")
+    parser.add_argument("--tol", type=float, default=None,
+                        help="transport: stop when the largest change in the region over a check interval "
                              "is below this, intensities in [0, 1] (default: 1e-4; 0 = off)")
-    parser.add_argument("--mean-tol", type=float, default=4e-4,
-                        help="stop when the mean change in the region over a check interval "
+    parser.add_argument("--mean-tol", type=float, default=None,
+                        help="transport: stop when the mean change in the region over a check interval "
                              "is below this (default: 4e-4; 0 = off)")
-    parser.add_argument("--dt", type=float, default=0.1, help="time step (default: 0.1)")
-    parser.add_argument("--scaling", choices=("none", "quartic-root"), default="none",
-                        help="transport update as in eq. 3.6 (none) or appendix A's "
+    parser.add_argument("--dt", type=float, default=None,
+                        help="transport: time step (default: 0.1)")
+    parser.add_argument("--scaling", choices=("none", "quartic-root"), default=None,
+                        help="transport: the update as in eq. 3.6 (none) or appendix A's "
                              "sign(c)|c|^(1/4) (default: none)")
     parser.add_argument("--colour", choices=("channels", "rho-phi-psi"), default="channels",
                         help="colour model (default: channels)")
@@ -64,10 +66,11 @@ def add_inpaint_parser(subparsers) -> None:
                         help="multiresolution levels (default: chosen from the mask)")
     from ..inpainting import METHODS
 
-    parser.add_argument("--method", choices=("auto", *METHODS), default="transport",
-                        help="inpainting method (default: transport, the thesis's scheme, "
-                             "whose options are those above; auto: coherence where "
-                             "installed, see docs/inpainting.md)")
+    parser.add_argument("--method", choices=("auto", *METHODS), default=None,
+                        help="inpainting method (default: auto, coherence transport where "
+                             "installed, the best on the benchmark, docs/inpainting.md; "
+                             "'transport', the thesis's scheme, when one of its options "
+                             "above or --gif is given)")
     parser.add_argument("--soft-mask", action="store_true",
                         help="read MASK's grey levels as the degree of damage (black 0 = "
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
@@ -90,6 +93,9 @@ def _read_soft_mask(path, shape) -> np.ndarray:
     if np.issubdtype(mask.dtype, np.integer):
         return mask.astype(np.float32) / np.iinfo(mask.dtype).max
     return np.clip(mask.astype(np.float32), 0, 1)
+
+
+TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
 
 
 def run_inpaint(args) -> int:
@@ -145,10 +151,15 @@ def run_inpaint(args) -> int:
                 f"{args.mask}; paint them into the mask, or give 'nan' as MASK to fill exactly "
                 "the NaN pixels")
     parts = split_alpha(image, args.input)
-    options = {"channel_axis": parts.channel_axis, "dt": args.dt, "scaling": args.scaling,
-               "colour": args.colour, "levels": args.levels, "max_steps": args.max_steps,
-               "tol": args.tol, "mean_tol": args.mean_tol, "device": args.device,
-               "progress": show_progress(), "return_info": True, "method": args.method}
+    method = args.method
+    if method is None and args.gif:
+        method = "transport"  # the evolution the GIF shows is the thesis scheme's
+    options = {"channel_axis": parts.channel_axis, "colour": args.colour,
+               "levels": args.levels, "device": args.device, "progress": show_progress(),
+               "return_info": True, "method": method}
+    # only the transport options given, so that the default method can be chosen by them
+    options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
+                    if getattr(args, name) is not None})
     if args.gif:
         result, info = inpaint(parts.colour, mask, snapshots=args.gif_every, **options)
     else:

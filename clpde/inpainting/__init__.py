@@ -46,7 +46,8 @@ METHODS = {
     "structure-texture": "clpde.inpainting.structure_texture",
 }
 
-DEFAULT = "transport"  # method=None: the thesis's scheme, whose options inpaint() names
+# method=None: "auto", except that a call giving any of the transport's own options
+# (InpaintParams: dt, max_steps, tol, ...) runs the transport, so such calls keep their meaning.
 # method="auto": the first of these that is installed. Measured (docs/inpainting.md, one run
 # of benchmarks/inpaint_quality.py with every method): coherence transport is the best on
 # text, scratches, thick holes and the structure class, 0.3 dB behind the transport on
@@ -93,7 +94,8 @@ def check_params(name: str, module, params: dict) -> None:
     accepted = {n for n, p in sig.parameters.items() if p.kind is p.KEYWORD_ONLY} - set(COMMON)
     unknown = sorted(set(params) - accepted)
     if unknown:
-        raise InputError(f"method {name!r} has no option(s) {', '.join(unknown)}; its options are "
+        raise InputError(f"unknown inpainting option(s) {', '.join(unknown)} for method {name!r}; "
+                         f"its options are "
                          f"{', '.join(sorted(accepted)) or 'none'}")
 
 

@@ -33,12 +33,14 @@ def distances(img, weights, nnf, targets, r, use=None):
     return out
 
 
-def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None):
+def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None, pen=None):
     """New hole values: each covering patch q proposes its source's value at the same
-    offset, weighted by exp(-(d_q - d_min) / (2 sigma2)); best_only keeps the closest's.
-    Only the first `nout` planes change (the others are guides)."""
+    offset, weighted by exp(-d_q / (2 sigma2) - pen_q) (pen: the confidence penalty, 0 when
+    None); best_only keeps the proposal of the largest weight. Only the first `nout` planes
+    change (the others are guides)."""
     nch, H, W = img.shape
     nout = nch if nout is None else nout
+    pen = np.zeros((H, W)) if pen is None else pen
     out = img.astype(np.float64).copy()
     for py, px in zip(*np.nonzero(hole)):
         props = []
@@ -48,13 +50,14 @@ def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None):
                 if not (0 <= qy < H and 0 <= qx < W) or not np.isfinite(dist[qy, qx]):
                     continue
                 sx, sy = nnf[qy, qx]
-                props.append((dist[qy, qx], img[:nout, sy + oy, sx + ox]))
+                e = dist[qy, qx] / (2 * sigma2) + pen[qy, qx]
+                props.append((e, img[:nout, sy + oy, sx + ox]))
         if not props:
             continue
-        dmin = min(d for d, _ in props)
+        emin = min(e for e, _ in props)
         if best_only:
-            out[:nout, py, px] = next(v for d, v in props if d == dmin)
+            out[:nout, py, px] = next(v for e, v in props if e == emin)
             continue
-        w = np.array([np.exp(-(d - dmin) / (2 * sigma2)) for d, _ in props])
+        w = np.array([np.exp(-(e - emin)) for e, _ in props])
         out[:nout, py, px] = np.sum(w[:, None] * np.array([v for _, v in props]), 0) / w.sum()
     return out
