@@ -174,10 +174,6 @@ def _signs(sides: int):
     return tuple(np.int32(-1 if (sides >> a) & 1 else 1) for a in range(3))
 
 
-def _progress(progress, steps: int, desc: str):
-    return progress_range(progress, steps, desc, leave=False)
-
-
 def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) -> np.ndarray:
     """Intrinsic heat flow on `surf` for time t: eq. (4.8), or (4.7) with weighted=True.
 
@@ -195,7 +191,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
     if getattr(surf, "_storage", "lists") == "bricks":
         flow = BrickFlow(surf, u)
         kernel = flow.kernel("bricks.cl", "brick_heat_step", WEIGHTED=int(bool(weighted)))
-        for n in _progress(progress, steps, "surface heat"):
+        for n in progress_range(progress, steps, "surface heat", leave=False):
             sides = _ALL_SIDES[n % 8] if alternate else 0
             flow.bricks.launch(kernel, flow.cur.data, flow.tmp.data, flow.psi.data, r,
                                *_signs(sides), flow.bricks.node_rows.data, channels=flow.nc)
@@ -203,7 +199,7 @@ def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) 
         return flow.result()
     flow = BandFlow(surf, u)
     kernel = g.kernel("surface.cl", "heat_step", WEIGHTED=int(bool(weighted)))
-    for n in _progress(progress, steps, "surface heat"):
+    for n in progress_range(progress, steps, "surface heat", leave=False):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         g.launch_runs(
             kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
@@ -240,7 +236,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
         dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
                                  updates=-(-steps // lambda_every), correct=correct_lambda)
-    for n in _progress(progress, steps, f"surface {flow_name}"):
+    for n in progress_range(progress, steps, f"surface {flow_name}", leave=False):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         offsets = _offsets(g, sides)
         if dynamic is not None and n % lambda_every == 0:
@@ -488,7 +484,7 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, par
         norm = np.sqrt((d**2).sum(axis=0))
         dir_dev = g.upload(d / np.where(norm > 0, norm, 1))
     kernel = g.kernel("surface.cl", "turk_step", ALONG=int(direction is not None))
-    for n in _progress(progress, int(iterations), "reaction-diffusion"):
+    for n in progress_range(progress, int(iterations), "reaction-diffusion", leave=False):
         offsets = _offsets(g, _ALL_SIDES[n % 8] if alternate else 0)
         g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
                       dir_dev.data, beta_dev.data, g.scalar(dt), g.scalar(p["da"]),
