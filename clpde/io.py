@@ -318,19 +318,25 @@ def output_folder(outdir: PathLike, overwrite: bool = False, *,
     staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".part"))
     try:
         yield staging
-        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
-        if outdir.exists():
-            # rename(2) may replace an empty folder: move the old one aside into an empty
-            # temporary name, put the new one in place, then delete the old one
-            old = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".old"))
-            os.replace(outdir, old)
-            os.replace(staging, outdir)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(staging, outdir)
+        move_folder_in(staging, outdir)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
+
+
+def move_folder_in(staging: Path, outdir: Path) -> None:
+    """Rename the finished folder `staging` to `outdir`, replacing an old `outdir` as a unit."""
+    os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+    if outdir.exists():
+        # rename(2) may replace an empty folder: move the old one aside into an empty
+        # temporary name, put the new one in place, then delete the old one
+        parent = outdir.parent if str(outdir.parent) else Path(".")
+        old = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".old"))
+        os.replace(outdir, old)
+        os.replace(staging, outdir)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(staging, outdir)
 
 
 def _umask() -> int:

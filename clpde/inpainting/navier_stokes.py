@@ -42,7 +42,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
-from ..imagedata import InputError
+from .._validation import InputError, positive
 from ..runtime import ClpdeError
 from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
 
@@ -55,8 +55,7 @@ MARGIN = 3  # the biharmonic start reads two pixels past the hole; L I on the ri
 def _check(nu, contrast, steps, max_iter, tol, cg_iterations, check_every):
     if not np.isfinite(nu) or nu < 0:
         raise InputError(f"nu must be a number >= 0, not {nu!r}")
-    if not np.isfinite(contrast) or contrast <= 0:
-        raise InputError(f"contrast must be a positive number, not {contrast!r}")
+    positive("contrast", contrast)
     if not np.isfinite(tol) or tol < 0:
         raise InputError(f"tol must be a number >= 0, not {tol!r}")
     for name, v in (("steps", steps), ("max_iter", max_iter), ("cg_iterations", cg_iterations),
