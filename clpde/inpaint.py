@@ -250,6 +250,10 @@ def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
         raise InputError(f"stencil must be one of {', '.join(STENCILS)}, not {p.stencil!r}")
     if p.fill not in FILLS:
         raise InputError(f"fill must be one of {', '.join(FILLS)}, not {p.fill!r}")
+    _check_colour(colour, ncolour)
+
+
+def _check_colour(colour: str, ncolour: int) -> None:
     if colour not in COLOUR_MODELS:
         raise InputError(f"colour must be one of {', '.join(COLOUR_MODELS)}, not {colour!r}")
     if colour == "rho-phi-psi" and ncolour != 3:
@@ -610,13 +614,7 @@ class Inpainting:
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
             image, mask, channel_axis, alpha)
         ncolour = self.planes.shape[0] - int(self.alpha)
-        if colour not in COLOUR_MODELS:
-            raise InputError(f"colour must be one of {', '.join(COLOUR_MODELS)}, not {colour!r}")
-        if colour == "rho-phi-psi" and ncolour != 3:
-            raise InputError(
-                f"colour='rho-phi-psi' needs 3 colour channels (R, G, B), the image has {ncolour}; "
-                "use colour='channels'"
-            )
+        _check_colour(colour, ncolour)
         if self.mask.all():
             raise InputError(
                 "the mask covers every pixel, so nothing is known to inpaint from; "
