@@ -38,10 +38,11 @@ import pyopencl.array as cla
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-import clpde
-from clpde.fields import Field, Grid
-from tests.reference import planar as ref_planar
-from tests.reference import rof as ref_rof
+# (E402: these import the repository's clpde and tests, so they follow the sys.path line)
+import clpde  # noqa: E402
+from clpde.fields import Field, Grid  # noqa: E402
+from tests.reference import planar as ref_planar  # noqa: E402
+from tests.reference import rof as ref_rof  # noqa: E402
 
 
 def device_time(queue, launch, min_seconds=0.1, repeats=9):

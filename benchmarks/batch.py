@@ -121,10 +121,11 @@ def run_serial(kind, inputs, mask, out, threads, options) -> dict:
     listing.write_text(json.dumps([str(p) for p in inputs]))
     env = {**os.environ, "POCL_MAX_PTHREAD_COUNT": str(threads),
            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    code = ("import json, sys; from pathlib import Path; sys.path.insert(0, %r); "
-            "from batch import serial_loop; print(json.dumps(serial_loop(%r, Path(%r), Path(%r), "
-            "Path(%r), json.loads(%r))))" % (str(Path(__file__).parent), kind, str(listing),
-                                              str(mask), str(out), json.dumps(options)))
+    here, opts = str(Path(__file__).parent), json.dumps(options)
+    code = ("import json, sys; from pathlib import Path; "
+            f"sys.path.insert(0, {here!r}); from batch import serial_loop; "
+            f"print(json.dumps(serial_loop({kind!r}, Path({str(listing)!r}), "
+            f"Path({str(mask)!r}), Path({str(out)!r}), json.loads({opts!r}))))")
     import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)

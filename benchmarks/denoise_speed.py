@@ -67,11 +67,12 @@ def main(argv=None) -> int:
     runtime = clpde.get_runtime(args.device)
     clean = img_as_float(data.camera())
     noisy = clean + np.random.default_rng(0).normal(0, SIGMA, clean.shape)
-    metrics = lambda u: {
-        "psnr": float(peak_signal_noise_ratio(clean, u, data_range=1)),
-        "ssim": float(structural_similarity(clean, u, data_range=1)),
-        "residual_std": float(np.std(u - noisy)),
-    }
+    def metrics(u):
+        return {
+            "psnr": float(peak_signal_noise_ratio(clean, u, data_range=1)),
+            "ssim": float(structural_similarity(clean, u, data_range=1)),
+            "residual_std": float(np.std(u - noisy)),
+        }
 
     def ours(**kw):
         return lambda: clpde.denoise_tv(noisy, device=runtime, return_info=True, **kw)
@@ -134,7 +135,7 @@ def main(argv=None) -> int:
                 best[k] = min(best[k], seconds)
     rows = []
     for (package, method, params, _fn, note, with_error, _), seconds, result in zip(
-            configs, best, results):
+            configs, best, results, strict=False):
         image, info = result if package == "clpde" else (result, None)
         if info is not None and "sigma" in params:
             note += f"; lambda found {info.lam[0]:.3f} (weight {1 / info.lam[0]:.4f})"

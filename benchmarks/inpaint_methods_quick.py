@@ -168,7 +168,8 @@ def figure(path, runtime):
     for image, mask in rows:
         rgb = image if image.ndim == 3 else np.repeat(image[..., None], 3, -1)
         size = 256
-        fit = lambda a: np.kron(a, np.ones((2, 2, 1)))  # 128 px cases shown at 2x
+        def fit(a):
+            return np.kron(a, np.ones((2, 2, 1)))  # 128 px cases shown at 2x
         damaged = rgb.copy()
         damaged[mask] = [0.9, 0.1, 0.1]
         row = [fit(damaged)]

@@ -14,8 +14,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from inpaint_quality import (psnr_in_mask, rings_case, run_biharmonic, run_clpde,  # noqa: E402
-                             stripes_case, thick_mask)
+from inpaint_quality import (  # noqa: E402
+    psnr_in_mask,
+    rings_case,
+    run_biharmonic,
+    run_clpde,
+    stripes_case,
+    thick_mask,
+)
 
 
 def _rgb(image):
@@ -119,12 +125,11 @@ def soft(path):
 
 def methods_figure(path):
     """Before and after for every installed method, on one case of each kind of damage."""
+    from inpaint_quality import blob_mask, text_mask
+    from scipy import ndimage
     from skimage import data
 
     from clpde.inpainting import available
-    from inpaint_quality import blob_mask, text_mask
-
-    from scipy import ndimage
 
     def around(mask, size, which=0):
         """A size x size box centred on the which-th component of the mask."""

@@ -161,9 +161,10 @@ def speed(ms):
     parallel run can be several times what it is alone)."""
     from importlib import import_module
 
-    from clpde.runtime import get_runtime
     from inpaint_quality import text_mask
     from skimage import data
+
+    from clpde.runtime import get_runtime
 
     img = data.astronaut()
     mask = text_mask(img.shape[:2], 0.10)
@@ -225,7 +226,9 @@ def main(argv=None):
             if not rs:
                 continue
             # PSNR capped at 60 dB in the means: an exact fill is infinite.
-            mean = lambda k: float(np.mean([min(r[k], 60.0) for r in rs]))  # noqa: E731
+            def mean(k, rs=rs):
+                return float(np.mean([min(r[k], 60.0) for r in rs]))
+
             print(f"| {cls} | {name} | {len(rs)} | {mean('psnr'):.2f} | {mean('ssim'):.3f} | "
                   f"{mean('edge_energy'):.2f} | {mean('seconds'):.3f} |")
     if args.speed:

@@ -57,7 +57,7 @@ def threads(device, rounds=5) -> dict:
     for _ in range(rounds):
         with ThreadPoolExecutor(4) as pool:
             threaded = list(pool.map(call, images))
-        differ += sum(not np.array_equal(a, b) for a, b in zip(serial, threaded))
+        differ += sum(not np.array_equal(a, b) for a, b in zip(serial, threaded, strict=False))
     return {"results": rounds * len(images), "differ": differ}
 
 

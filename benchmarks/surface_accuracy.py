@@ -358,10 +358,10 @@ def degree_power(values, points, lmax=40):
     n = len(points)
     p_prev, p_cur = np.ones_like(x), x.copy()
     power = [0.0]
-    for l in range(1, lmax + 1):
-        if l > 1:
-            p_prev, p_cur = p_cur, ((2 * l - 1) * x * p_cur - (l - 1) * p_prev) / l
-        power.append((2 * l + 1) / (4 * np.pi) * (4 * np.pi / n) ** 2 * float(f @ p_cur @ f))
+    for ell in range(1, lmax + 1):
+        if ell > 1:
+            p_prev, p_cur = p_cur, ((2 * ell - 1) * x * p_cur - (ell - 1) * p_prev) / ell
+        power.append((2 * ell + 1) / (4 * np.pi) * (4 * np.pi / n) ** 2 * float(f @ p_cur @ f))
     return np.array(power)
 
 

@@ -76,7 +76,7 @@ def damage_mask(shape: tuple[int, int], seed: int = 3, text: bool = True,
         bend = rng.uniform(-0.2, 0.2) * t**2 / nx
         xs = x0 + t * np.cos(angle) - bend * np.sin(angle)
         ys = y0 + t * np.sin(angle) + bend * np.cos(angle)
-        draw.line(list(zip(xs, ys)), fill=255, width=int(rng.integers(1, 3)))
+        draw.line(list(zip(xs, ys, strict=False)), fill=255, width=int(rng.integers(1, 3)))
     return np.asarray(canvas) > 0
 
 
@@ -178,7 +178,8 @@ def region_scene(name: str, spacing: float = 0.05) -> RegionScene:
         else:
             start, target = _two_spheres(x, y, z, 0.55, 0.45), _capsule(x, y, z, 0.6, 0.45)
             region = np.abs(x) - 0.35 + 0 * y + 0 * z  # the spheres' facing caps
-        b = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape))
+        def b(a):
+            return np.ascontiguousarray(np.broadcast_to(a, shape))
         return RegionScene(b(start), b(region), h, origin,
                            {"beta": "morph", "target": b(target), "t": 4.0})
     if name in ("cap-expand", "cap-translate"):

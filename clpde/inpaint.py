@@ -60,6 +60,8 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from . import multiresolution as mr
+from ._progress import progress_bar
+from ._validation import positive
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .fields import Field, Grid, PingPong, check_fits, index_list
 from .imagedata import (
@@ -71,8 +73,6 @@ from .imagedata import (
     integer_range,
     value_range,
 )
-from ._progress import progress_bar
-from ._validation import positive
 from .runtime import ClpdeError, get_runtime
 
 # The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).

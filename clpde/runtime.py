@@ -92,7 +92,7 @@ def _ensure_pocl_cache_dir() -> None:
 
 _ensure_pocl_cache_dir()
 
-import pyopencl as cl  # (imported here: PoCL reads POCL_CACHE_DIR when the ICD loads)
+import pyopencl as cl  # noqa: E402  (imported here: PoCL reads POCL_CACHE_DIR when the ICD loads)
 
 
 @dataclass(frozen=True)

@@ -93,7 +93,7 @@ def _read_folder(path: Path) -> np.ndarray:
             "there, named so that they sort in order (frame_001.png, frame_002.png, ...)"
         )
     frames = [read_image(p) for p in files]
-    for p, f in zip(files, frames):
+    for p, f in zip(files, frames, strict=False):
         if f.shape[:2] != frames[0].shape[:2]:
             raise InputError(
                 f"{p.name} is {f.shape[1]}x{f.shape[0]} but {files[0].name} is "
@@ -196,7 +196,7 @@ def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float =
             tmp.write_text(json.dumps(polygons))
         names.append("contours.json")
         if gif:
-            write_gif(staging / "overlay.gif", [overlay(f, m) for f, m in zip(frames, masks)],
+            write_gif(staging / "overlay.gif", [overlay(f, m) for f, m in zip(frames, masks, strict=False)],
                       duration=duration)
             names.append("overlay.gif")
     return [Path(outdir) / n for n in names]

@@ -65,7 +65,7 @@ def _chunked(data: np.ndarray, chunks, depth: int, func, **kwargs) -> np.ndarray
     if isinstance(chunks, (int, np.integer)):
         chunks = (int(chunks), int(chunks))
     ny, nx = data.shape[1:]
-    cy, cx = (max(1, min(int(c), n)) for c, n in zip(chunks, (ny, nx)))
+    cy, cx = (max(1, min(int(c), n)) for c, n in zip(chunks, (ny, nx), strict=False))
     array = da.from_array(data, chunks=(data.shape[0], cy, cx))
     # map_overlap needs each chunk at least as large as the depth; it rechunks if not,
     # which changes only the tiling, never the result.

@@ -240,7 +240,7 @@ class MorphingTracker:
         if self.equalize == "match" and index > 0:
             # Equalise the grey levels across the sequence: each frame gets the first
             # frame's histogram, as beta = F2 - F1 compares grey values directly.
-            img = np.stack([match_histogram(c, r) for c, r in zip(img, self._scaled[0])])
+            img = np.stack([match_histogram(c, r) for c, r in zip(img, self._scaled[0], strict=False)])
         elif self.equalize == "global":
             from skimage.exposure import equalize_hist
 

@@ -272,7 +272,7 @@ def inpaint_frames(frames, masks, options) -> list[np.ndarray]:
     from .inpaint import inpaint
 
     out = []
-    for frame, mask in zip(frames, masks):
+    for frame, mask in zip(frames, masks, strict=False):
         if not mask.any():
             out.append(frame)
             continue

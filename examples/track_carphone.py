@@ -75,7 +75,7 @@ def carphone_figure(out: Path):
     crop = (slice(0, 112), slice(8, 136))
     write_gif(out / "track_carphone.gif",
               [outline(to_rgb(f), m, (255, 40, 40))[crop]
-               for f, m in zip(frames[::6], masks[::6])], duration=0.2)
+               for f, m in zip(frames[::6], masks[::6], strict=False)], duration=0.2)
 
 
 def hard_cases_figure(out: Path):
@@ -87,7 +87,7 @@ def hard_cases_figure(out: Path):
         row = []
         for options in (OLD, {}):
             masks = clpde.track(frames, truth[0], **options)
-            worst = min(jaccard(m, t) for m, t in zip(masks[1:], truth[1:]))
+            worst = min(jaccard(m, t) for m, t in zip(masks[1:], truth[1:], strict=False))
             print(f"{kind:10s} {'old default' if options else 'default':12s} "
                   f"worst IoU {worst:.3f}")
             row.append(np.concatenate(

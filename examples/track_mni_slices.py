@@ -46,7 +46,7 @@ def main():
     # Slices of a volume: no motion to predict and comparable grey levels (benchmark:
     # the Huber difference after histogram matching suits them best).
     masks = clpde.track(frames, truth[0], discrepancy="huber", motion=None, equalize="match")
-    for k, (m, t) in enumerate(zip(masks, truth)):
+    for k, (m, t) in enumerate(zip(masks, truth, strict=False)):
         print(f"slice z={args.start + k}: J = {(m & t).sum() / (m | t).sum():.3f}")
     picks = np.linspace(0, len(frames) - 1, 4).round().astype(int)
     panels = []

@@ -63,7 +63,7 @@ def test_surface_flows(runtime, gpu_like):
         v /= np.sqrt((v**2).sum(axis=0))
         return s.heat(u, 0.02), s.harmonic_map(v, 0.01), s.denoise_tv(u, sigma=0.05, t=0.01)
 
-    for cpu, gpu in zip(*_pair(runtime, gpu_like, run)):
+    for cpu, gpu in zip(*_pair(runtime, gpu_like, run), strict=False):
         np.testing.assert_allclose(gpu, cpu, atol=2e-5)
 
 
@@ -76,7 +76,7 @@ def test_surface_heat_on_bricks(runtime, gpu_like):
         u = s.field(lambda x, y, z: x * y + z)
         return s.heat(u, 0.02), s.heat(u, 0.02, weighted=True)
 
-    for cpu, gpu in zip(*_pair(runtime, gpu_like, run)):
+    for cpu, gpu in zip(*_pair(runtime, gpu_like, run), strict=False):
         np.testing.assert_allclose(gpu, cpu, atol=2e-6)
 
 

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 import clpde
-from clpde import InputError
-from clpde import inpainting
+from clpde import InputError, inpainting
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from inpaint_quality import edge_case, stripes_case  # noqa: E402

@@ -200,9 +200,9 @@ def test_negligible_coarse_grid_shares_are_not_shown():
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with grid_advice(50):
-            warnings.warn(text.format("0.00"))
-            warnings.warn(text.format("2.50"))
-            warnings.warn("something else")
+            warnings.warn(text.format("0.00"), stacklevel=1)
+            warnings.warn(text.format("2.50"), stacklevel=1)
+            warnings.warn("something else", stacklevel=1)
     assert [str(w.message).split("; ")[-1] for w in caught] == [
         "give a larger --resolution (such as 100, which halves the spacing)", "something else"]
 

@@ -86,7 +86,7 @@ def test_spawn_pool_gives_the_serial_results_and_carries_objects_by_value():
         # the flow goes to a worker by value, takes 4 more steps there and comes back
         returned = pool.apply(operator.methodcaller("run", 4), (flow,))
     assert all(np.array_equal(a, clpde.diffuse(im, "perona-malik", 6))
-               for a, im in zip(spawned, images))
+               for a, im in zip(spawned, images, strict=False))
     assert returned.steps_done == 8
     assert np.array_equal(returned.result(), flow.run(4).result())
 
@@ -119,7 +119,7 @@ def test_surface_tracker_inpainting_and_region_tracker_pickle_by_value():
                        for k in range(3)])
     tracker = clpde.MorphingTracker(frames, frames[0] > 0, max_iterations=8)
     masks = [s.mask for s in _round_trip(tracker)]
-    assert all(np.array_equal(a, s.mask) for a, s in zip(masks, tracker))
+    assert all(np.array_equal(a, s.mask) for a, s in zip(masks, tracker, strict=False))
 
     image = _images(1)[0]
     mask = np.zeros(image.shape, bool)
@@ -138,7 +138,7 @@ def test_surface_tracker_inpainting_and_region_tracker_pickle_by_value():
     regions.advance(0.1)
     copy.advance(0.1)
     assert copy.steps == regions.steps
-    assert all(np.array_equal(a, b) for a, b in zip(copy.volumes(), regions.volumes()))
+    assert all(np.array_equal(a, b) for a, b in zip(copy.volumes(), regions.volumes(), strict=False))
 
 
 def test_device_objects_of_other_contexts_refuse_to_pickle():

@@ -50,7 +50,7 @@ def fill(dtype, shape, kind, seed):
     """An array of `shape` and `dtype` with values of the given kind."""
     rng = np.random.default_rng(seed)
     dtype = np.dtype(dtype)
-    if dtype == bool:
+    if dtype.kind == "b":
         return rng.random(shape) < 0.5
     if np.issubdtype(dtype, np.integer):
         info = np.iinfo(dtype)
@@ -144,7 +144,7 @@ def call(fn, *args, **kwargs):
         out = None
     else:
         event(f"{fn.__name__}: result")
-    for a, c in zip(arrays, copies):
+    for a, c in zip(arrays, copies, strict=False):
         assert a.dtype == c.dtype and np.array_equal(a, c, equal_nan=True), "an input was modified"
     return out
 

@@ -150,7 +150,8 @@ def test_weight_mode_matches_scikit_image_minimiser(rng):
     assert ref.rof_energy(u, f, lam) <= ref.rof_energy(ref.fgp(f, lam, 2000), f, lam) * (1 + 1e-4)
     # more weight, smoother result
     smoother = clpde.denoise_tv(noisy, weight=0.3)
-    tv = lambda u: np.abs(np.diff(u, axis=0)).sum() + np.abs(np.diff(u, axis=1)).sum()
+    def tv(u):
+        return np.abs(np.diff(u, axis=0)).sum() + np.abs(np.diff(u, axis=1)).sum()
     assert tv(smoother) < tv(ours) < tv(noisy)
 
 

@@ -82,11 +82,13 @@ def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc
 def test_tricubic_sample_is_exact_on_cubics(small_sphere):
     s = small_sphere
     x, y, z = s.coordinates()
-    cubic = lambda x, y, z: 0.3 * x**3 - x * y * z + 0.5 * z**2 * y + y - 0.2
+    def cubic(x, y, z):
+        return 0.3 * x**3 - x * y * z + 0.5 * z**2 * y + y - 0.2
     u = np.broadcast_to(cubic(x, y, z), s.shape)
     pts = sphere_points(300) * 1.01
     np.testing.assert_allclose(s.sample(u, pts), cubic(*pts.T), atol=2e-5)
-    linear = lambda x, y, z: 0.3 * x - 2 * y + z
+    def linear(x, y, z):
+        return 0.3 * x - 2 * y + z
     u = np.broadcast_to(linear(x, y, z), s.shape)
     np.testing.assert_allclose(s.sample(u, pts, "trilinear"), linear(*pts.T), atol=2e-5)
     # trilinear is not exact on the cubic: the test can tell the two apart
@@ -129,7 +131,7 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         np.testing.assert_allclose(out[:, band], expect, atol=2e-5 * max(1, np.abs(expect).max()))
         # nothing is written outside the runs
         runs = s.step_runs
-        spans = [np.arange(a, b) for a, b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n])]
+        spans = [np.arange(a, b) for a, b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n], strict=False)]
         out[:, np.concatenate(spans)] = 0
         assert not out.any()
 
@@ -192,7 +194,7 @@ def test_band_runs_cover_the_band_in_row_stretches(small_sphere):
     runs = s.step_runs
     start, end = runs.start.get()[: runs.n], runs.end.get()[: runs.n]
     assert np.all(end > start) and np.all(start[1:] >= end[:-1])  # ordered, disjoint
-    cells = np.concatenate([np.arange(a, b) for a, b in zip(start, end)])
+    cells = np.concatenate([np.arange(a, b) for a, b in zip(start, end, strict=False)])
     assert np.isin(band, cells).all()
     # runs stay inside the interior of their row
     x = cells % g.sx
@@ -217,7 +219,8 @@ def heat_error(h, f, exact, t=0.1, alternate=True):
 
 
 def test_heat_on_sphere_xy_converges_at_second_order():
-    exact = lambda p, t: np.exp(-6 * t) * p[:, 0] * p[:, 1]
+    def exact(p, t):
+        return np.exp(-6 * t) * p[:, 0] * p[:, 1]
     for alternate in (True, False):  # both one-sided variants of appendix E
         coarse = heat_error(0.1, lambda x, y, z: x * y, exact, alternate=alternate)
         fine = heat_error(0.05, lambda x, y, z: x * y, exact, alternate=alternate)
@@ -227,7 +230,8 @@ def test_heat_on_sphere_xy_converges_at_second_order():
 
 
 def test_heat_on_sphere_exp3z_converges_at_second_order():
-    exact = lambda p, t: exp3z_exact(p[:, 2], t)
+    def exact(p, t):
+        return exp3z_exact(p[:, 2], t)
     coarse = heat_error(0.1, lambda x, y, z: np.exp(3 * z), exact)
     fine = heat_error(0.05, lambda x, y, z: np.exp(3 * z), exact)
     order = np.log2(coarse / fine)

@@ -53,7 +53,8 @@ def test_flow_step_matches_reference(sphere02, rng, case):
     psi = s.psi_dev.get() * (1.3 if weighted else 1.0)
     direction = rng.standard_normal((3,) + g.padded_shape)
     direction /= np.sqrt((direction**2).sum(axis=0))
-    dev = lambda a: cla.to_device(q, np.ascontiguousarray(a, np.float32))
+    def dev(a):
+        return cla.to_device(q, np.ascontiguousarray(a, np.float32))
     for u in (rng.standard_normal((nc,) + g.padded_shape), g.pad(structured)):
         u32 = np.ascontiguousarray(u, np.float32)
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
@@ -89,7 +90,7 @@ def test_lambda_terms_match_reference(sphere02, rng):
     band = band_host(s.step_band)
     expect = ref.tv_lambda_terms(u, u0, s.psi_dev.get(), band, 1 / s.spacing, 1.5, 0.01,
                                  [int(o) for o in offsets])
-    for got, want in zip(terms, expect):
+    for got, want in zip(terms, expect, strict=False):
         np.testing.assert_allclose(got.get(), want, atol=2e-4 * max(1, np.abs(want).max()))
     assert flows.device_sum(g, terms[1], s.step_band.n) == pytest.approx(want_sum := expect[1].sum(), rel=1e-4)
     # the smeared delta integrates to the sphere's area: sum(delta) h^2 = 4 pi
@@ -139,7 +140,7 @@ def surface_noise(surf, sigma, seed=0, waves=200):
 
     def f(x, y, z):
         total = 0.0
-        for kk, ph in zip(k, phase):
+        for kk, ph in zip(k, phase, strict=False):
             total = total + np.cos(kk[0] * x + kk[1] * y + kk[2] * z + ph)
         return sigma * np.sqrt(2.0 / waves) * total
 

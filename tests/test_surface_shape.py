@@ -50,7 +50,7 @@ def test_principal_curvatures_and_directions_of_a_torus():
     np.testing.assert_allclose(k[:, 1], expect, atol=0.02)
     # at the outer equator the minor direction runs around the axis, the major along z
     idx = np.rint((pts - s.origin) / s.spacing).astype(int)
-    for p, (i, j, kk) in zip(pts[[0, 1, 4]], idx[[0, 1, 4]]):
+    for p, (i, j, kk) in zip(pts[[0, 1, 4]], idx[[0, 1, 4]], strict=False):
         around = np.array([-p[1], p[0], 0]) / np.hypot(p[0], p[1])
         assert abs(minor[:, kk, j, i] @ around) > 0.99
         assert abs(major[:, kk, j, i][2]) > 0.99

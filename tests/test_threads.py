@@ -28,9 +28,9 @@ def _same_in_threads(fn, inputs, repeats=1):
     for _ in range(repeats):
         with ThreadPoolExecutor(THREADS) as pool:
             threaded = list(pool.map(fn, inputs))
-        for a, b in zip(serial, threaded):
+        for a, b in zip(serial, threaded, strict=False):
             a, b = (a if isinstance(a, tuple) else (a,)), (b if isinstance(b, tuple) else (b,))
-            bad += not all(np.array_equal(x, y, equal_nan=True) for x, y in zip(a, b))
+            bad += not all(np.array_equal(x, y, equal_nan=True) for x, y in zip(a, b, strict=False))
     return bad
 
 

@@ -102,7 +102,7 @@ def test_tracks_synthetic_sequences_under_noise(kind):
     frames, truth = synthetic_sequence(kind)
     masks = track(frames, truth[0])
     assert masks.shape == truth.shape and masks.dtype == bool
-    scores = [iou(m, t) for m, t in zip(masks, truth)]
+    scores = [iou(m, t) for m, t in zip(masks, truth, strict=False)]
     assert min(scores) >= 0.9, scores
     # Without the morphing the first mask would not do: the test can fail.
     assert min(iou(truth[0], t) for t in truth) < 0.85 or kind in ("deform", "phantom")
@@ -137,7 +137,7 @@ def test_object_form_yields_masks_and_level_sets_and_edges_feature_tracks():
     np.testing.assert_array_equal(levels[1:] < 0, masks[1:])
     # Edge maps peak on the contour, where their normal is undefined, so they follow the
     # motion less closely than the intensities do; they still follow it.
-    for m, t in zip(masks[1:], truth[1:]):
+    for m, t in zip(masks[1:], truth[1:], strict=False):
         assert iou(m, t) > iou(truth[0], t) + 0.05 and iou(m, t) > 0.75
 
 
@@ -208,11 +208,11 @@ def test_the_band_follows_a_front_that_moves_beyond_it():
 @pytest.mark.parametrize("kind", ["shadow", "flicker", "distractor"])
 def test_default_holds_under_shadow_flicker_and_a_distractor(kind):
     frames, truth = synthetic_sequence(kind, frames=8)
-    scores = [iou(m, t) for m, t in zip(track(frames, truth[0]), truth)]
+    scores = [iou(m, t) for m, t in zip(track(frames, truth[0]), truth, strict=False)]
     assert min(scores) >= 0.9, scores
     if kind == "shadow":  # the thesis' grey F2 - F1 alone is moved by the shadow
         old = track(frames, truth[0], discrepancy="difference", motion=None, equalize="match")
-        assert min(iou(m, t) for m, t in zip(old, truth)) < 0.8
+        assert min(iou(m, t) for m, t in zip(old, truth, strict=False)) < 0.8
 
 
 def test_colour_and_user_feature_maps():
@@ -221,14 +221,14 @@ def test_colour_and_user_feature_maps():
     # conversion weakens; every channel enters the discrepancy.
     rgb = np.stack([0.5 + 0 * frames, frames, 0.5 + 0 * frames], axis=-1)
     keep = rgb.copy()
-    for m, t in zip(track(rgb, truth[0], colour=True)[1:], truth[1:]):
+    for m, t in zip(track(rgb, truth[0], colour=True)[1:], truth[1:], strict=False):
         assert iou(m, t) > 0.9
     np.testing.assert_array_equal(rgb, keep)
     # The user's maps: an array per frame, or a callable on each frame.
     maps = 1 - frames  # inverted: tracks the same
     for features in (maps, list(maps[..., None]), lambda f: 1 - f):
         masks = track(frames, truth[0], features=features)
-        assert min(iou(m, t) for m, t in zip(masks, truth)) > 0.9
+        assert min(iou(m, t) for m, t in zip(masks, truth, strict=False)) > 0.9
     with pytest.raises(InputError, match="one per frame"):
         track(frames, truth[0], features=maps[:2])
     with pytest.raises(InputError, match="do not fit"):

@@ -135,7 +135,7 @@ def _write_mp4(outdir, frames, masks):
     final = Path(outdir) / "overlay.mp4"
     tmp = final.with_name(".overlay.mp4.part")
     try:
-        write_mp4(tmp, [overlay(f, m) for f, m in zip(frames, masks)])
+        write_mp4(tmp, [overlay(f, m) for f, m in zip(frames, masks, strict=False)])
         os.replace(tmp, final)
     finally:
         tmp.unlink(missing_ok=True)

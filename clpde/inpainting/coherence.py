@@ -145,7 +145,7 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     grid, local, xrun = runtime.grid_launch(nx, ny, 1)
     dims = (np.int32(nx), np.int32(ny))
     run = (*dims, np.int32(xrun))
-    for first, count in zip(starts, counts):
+    for first, count in zip(starts, counts, strict=False):
         if count == 0:
             continue
         k_rows(q, grid, local, u.data, known.data, h.data, buf_s.data, rs, np.int32(nc), *run)

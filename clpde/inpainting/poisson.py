@@ -138,15 +138,15 @@ class Multigrid:
         if out is tmp:  # the result must end in z
             self.launches.append(lambda: cl.enqueue_copy(q, z.data, tmp.data))
 
-    def _cycle(self, levels, l, kind, sign, bi, s, k_smooth, k_scale, k_residual,
+    def _cycle(self, levels, depth, kind, sign, bi, s, k_smooth, k_scale, k_residual,
                k_restrict, k_prolong):
-        (ny, nx), lst, b, x, y, r = levels[l]
+        (ny, nx), lst, b, x, y, r = levels[depth]
         launch = self.launches.append
-        scale = sign * self.COARSE_SCALE[kind] ** l
+        scale = sign * self.COARSE_SCALE[kind] ** depth
         w = self.OMEGA[kind] / (abs(scale) * self.DIAG[kind])
         dims = (np.int32(nx), np.int32(ny))
         rt, nc = self.runtime, self.nc
-        last = l == len(levels) - 1
+        last = depth == len(levels) - 1
         sweeps = 8 if last else 2
 
         def smooth(count, cur, other):
@@ -162,10 +162,10 @@ class Multigrid:
             return cur
         launch(lst.bind(rt, k_residual, nc, cur.data, b.data, r.data, s(scale),
                                 bi, *dims))
-        (cy, cx), clst, cb = levels[l + 1][:3]
+        (cy, cx), clst, cb = levels[depth + 1][:3]
         launch(clst.bind(rt, k_restrict, nc, r.data, cb.data, *dims,
                                  np.int32(cx), np.int32(cy)))
-        coarse = self._cycle(levels, l + 1, kind, sign, bi, s, k_smooth, k_scale, k_residual,
+        coarse = self._cycle(levels, depth + 1, kind, sign, bi, s, k_smooth, k_scale, k_residual,
                              k_restrict, k_prolong)
         launch(lst.bind(rt, k_prolong, nc, cur.data, coarse.data, np.int32(cx),
                                 np.int32(cy), *dims))
@@ -195,7 +195,8 @@ class PoissonSolver:
         q = self.queue = runtime.queue
         runtime.check_alloc(values.size * dt.itemsize)
         self.u = cla.to_device(q, np.ascontiguousarray(values, dt))
-        zeros = lambda shape=values.shape: cla.zeros(q, shape, dt)
+        def zeros(shape=values.shape):
+            return cla.zeros(q, shape, dt)
         self.f, self.r, self.p, self.qv = zeros(), zeros(), zeros(), zeros()
         o = self.omega_list = DeviceList(runtime, np.flatnonzero(omega))
         ng = o.items

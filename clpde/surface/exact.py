@@ -27,9 +27,9 @@ def exp3z_exact(z: np.ndarray, t: float, degree: int = 40) -> np.ndarray:
     """Heat flow of u = exp(3z) on the unit sphere: sum a_l P_l(z) exp(-l(l+1)t)."""
     nodes, weights = legendre.leggauss(80)
     coef = np.array([
-        (2 * l + 1) / 2 * np.sum(weights * np.exp(3 * nodes)
-                                 * legendre.legval(nodes, np.eye(degree)[l]))
-        for l in range(degree)
+        (2 * ell + 1) / 2 * np.sum(weights * np.exp(3 * nodes)
+                                   * legendre.legval(nodes, np.eye(degree)[ell]))
+        for ell in range(degree)
     ])
     decay = np.exp(-np.arange(degree) * (np.arange(degree) + 1) * t)
     return legendre.legval(z, coef * decay)

@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 import pyopencl.array as cla
+
 from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
 
@@ -285,7 +286,7 @@ class _DynamicLambda:
         s = self.surf
         g, q = s.grid, s.runtime.queue
         _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
-        for a, partial in zip(self.terms, self.partials):
+        for a, partial in zip(self.terms, self.partials, strict=False):
             g.kernel("surface.cl", "chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
                                   np.int32(self.CHUNK), partial.data)
         g.kernel("surface.cl", "tv_lambda_update")(

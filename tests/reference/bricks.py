@@ -21,7 +21,7 @@ def morton(bx, by, bz):
 def brick_coords(stored, brick):
     """Brick coordinates (x, y, z) of every brick holding a stored cell, in Morton order."""
     bx, by, bz = brick
-    found = {(x // bx, y // by, z // bz) for z, y, x in zip(*np.nonzero(stored))}
+    found = {(x // bx, y // by, z // bz) for z, y, x in zip(*np.nonzero(stored), strict=False)}
     return sorted(found, key=lambda c: morton(*c))
 
 

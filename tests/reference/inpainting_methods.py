@@ -62,8 +62,7 @@ def gaussian_taps(s: float) -> np.ndarray:
 
 def _sep(p, taps, shape):
     ny, nx = shape
-    r = len(taps) // 2
-    tmp = sum(t * p[:, j : j + nx] for j, t in enumerate(taps))  # (ny + 2r, nx)
+    tmp = sum(t * p[:, j : j + nx] for j, t in enumerate(taps))  # (ny + len(taps) - 1, nx)
     return sum(t * tmp[j : j + ny, :] for j, t in enumerate(taps))
 
 
@@ -91,7 +90,7 @@ def structure_tensor(data, known, sigma, rho):
     pm = np.pad(m, 1)
     valid = pm[1:-1, 2:] * pm[1:-1, :-2] * pm[2:, 1:-1] * pm[:-2, 1:-1] * m
     j11 = sum(ux * ux for ux in ux_all)
-    j12 = sum(ux * uy for ux, uy in zip(ux_all, uy_all))
+    j12 = sum(ux * uy for ux, uy in zip(ux_all, uy_all, strict=False))
     j22 = sum(uy * uy for uy in uy_all)
     out = [normalized_smooth(j, valid, rho)[0] for j in (j11, j12, j22)]
     return tuple(out)
@@ -138,7 +137,7 @@ def coherence_transport(data, omega, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0
         n1, n2, mu = coherence_weights(j11, j12, j22, kappa)
         ys, xs = np.nonzero(shells == s)
         new = np.zeros((out.shape[0], ys.size))
-        for k, (y, x) in enumerate(zip(ys, xs)):
+        for k, (y, x) in enumerate(zip(ys, xs, strict=False)):
             num = np.zeros(out.shape[0])
             den = 0.0
             num_iso = np.zeros(out.shape[0])
@@ -174,7 +173,8 @@ def ns_vorticity_step(img, w, omega, dt, nu, contrast):
     """One explicit step of w_t + v . grad w = nu div(g grad w) at the hole's pixels
     (first-order upwind transport, face fluxes g(|w_q - w_p|)(w_q - w_p))."""
     out = w.copy()
-    g = lambda d: 1 / (1 + (d / contrast) ** 2)
+    def g(d):
+        return 1 / (1 + (d / contrast) ** 2)
     for c in range(img.shape[0]):
         ie, iw, i_n, i_s = _neighbours(img[c])
         we, ww, wn, ws = _neighbours(w[c])

@@ -27,7 +27,7 @@ def distances(img, weights, nnf, targets, r, use=None):
     """dist[y, x] for every target (inf elsewhere); nnf[y, x] = (source x, source y)."""
     H, W = targets.shape
     out = np.full((H, W), np.inf)
-    for py, px in zip(*np.nonzero(targets)):
+    for py, px in zip(*np.nonzero(targets), strict=False):
         sx, sy = nnf[py, px]
         out[py, px] = patch_distance(img, weights, px, py, sx, sy, r, use)
     return out
@@ -42,7 +42,7 @@ def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None, pen=None):
     nout = nch if nout is None else nout
     pen = np.zeros((H, W)) if pen is None else pen
     out = img.astype(np.float64).copy()
-    for py, px in zip(*np.nonzero(hole)):
+    for py, px in zip(*np.nonzero(hole), strict=False):
         props = []
         for oy in range(-r, r + 1):
             for ox in range(-r, r + 1):

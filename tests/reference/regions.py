@@ -84,7 +84,7 @@ def region_step(ls, speed, band, dt, eps2, lo, hi, nc, plane, sx, sxy):
         if c:
             f = central_grad(ls, band, sx, sxy)
             g = central_grad(ls, j, sx, sxy)
-            dot = sum(a * b for a, b in zip(f, g))
+            dot = sum(a * b for a, b in zip(f, g, strict=False))
             v = v0 * dot / np.sqrt((sum(a * a for a in f) + eps2) * (sum(b * b for b in g) + eps2))
         out[c] = ls[j] + dt * v * upwind_norm(ls, j, sx, sxy, v)
     return out
@@ -96,7 +96,7 @@ def advect_step(ls, band, dt, velocity, lo, hi, nc, plane, sx, sxy):
     for c in range(nc):
         j = band + c * plane
         adv = 0.0
-        for u, s in zip(velocity, (1, sx, sxy)):
+        for u, s in zip(velocity, (1, sx, sxy), strict=False):
             dm, dp = one_sided(ls, j, s)
             adv = adv + u * (dm if u > 0 else dp)
         out[c] = ls[j] - dt * cut * adv
@@ -134,7 +134,7 @@ def extend_outer(ls, band, dt, lo, hi, nc, plane, sx, sxy):
     for c in range(1, nc):
         j = band + c * plane
         du = 0.0
-        for a, st in zip(g, (1, sx, sxy)):
+        for a, st in zip(g, (1, sx, sxy), strict=False):
             a = s * a
             du = du + a * np.where(a > 0, ls[j] - ls[j - st], ls[j + st] - ls[j])
         out[c - 1] = ls[j] - dt * w * du
