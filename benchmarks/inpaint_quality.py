@@ -354,7 +354,9 @@ def cases(quick=False):
              ("chelsea", 70, True), ("rocket", 90, False)]
     for name, size, square in (thick[:1] if quick else thick):
         image = getattr(data, name)()
-        out.append(("thick", f"{name}-{size}", image, thick_mask(image.shape[:2], size, square=square)))
+        out.append(
+            ("thick", f"{name}-{size}", image, thick_mask(image.shape[:2], size, square=square))
+        )
     out.extend(texture_cases())
     return out
 
@@ -391,7 +393,8 @@ image = np.full((n, n), 128, np.uint8)
 image[:, ::7] = 40
 mask = np.zeros((n, n), bool)
 mask[n // 4: n // 4 + 20, n // 3: n // 3 + 50] = True
-if not method.startswith("transport") and method in ("opencv-ns", "opencv-telea", "skimage-biharmonic"):
+peers = ("opencv-ns", "opencv-telea", "skimage-biharmonic")
+if not method.startswith("transport") and method in peers:
     # peers get 8 GiB of address space, so that one that grows with the image fails
     # with a MemoryError instead of crowding the machine
     resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30))
@@ -468,7 +471,10 @@ def print_table(summary, huge_rows):
         print(f"| {s['class']} | {s['method']} | {s['n']} | {s['psnr']:.2f} | {s['ssim']:.3f} | "
               f"{energy} | {s['seconds']:.3f} |")
     if huge_rows:
-        print("\n20000x20000 uint8, 20x50 mask (own process each; image + bool mask + output = 1.12 GiB)\n")
+        print(
+            "\n20000x20000 uint8, 20x50 mask (own process each; image + bool mask + output = "
+            "1.12 GiB)\n"
+        )
         print("| method | time (s) | peak memory (GiB) | note |")
         print("|---|---|---|---|")
         for r in huge_rows:

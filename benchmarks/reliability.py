@@ -141,7 +141,9 @@ def main(argv=None) -> None:
               f"{m['ms_per_call']:>8.3f}")
     o = report["overhead"]
     print(f"overhead: diffuse 64x64, 10 steps: median {o['median_ms']} ms per call")
-    path = Path(args.json) if args.json else (Path(__file__).parent / "results" / "reliability.json")
+    path = (
+        Path(args.json) if args.json else (Path(__file__).parent / "results" / "reliability.json")
+    )
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(report, indent=1))
     print(f"wrote {path}")

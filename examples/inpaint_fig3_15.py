@@ -31,8 +31,8 @@ def main():
                               mean_tol=0)
     chosen = [s for s in states if s.step in (0, 136, 680)] + [states[-1]]
     for s in chosen:
-        print(f"step {s.step:4d}: PSNR inside the mask "
-              f"{10 * np.log10(255**2 / np.mean((s.image[mask].astype(float) - photo[mask]) ** 2)):.2f} dB")
+        mse = np.mean((s.image[mask].astype(float) - photo[mask]) ** 2)
+        print(f"step {s.step:4d}: PSNR inside the mask {10 * np.log10(255**2 / mse):.2f} dB")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     panel = side_by_side(damaged, *(s.image for s in chosen))

@@ -127,7 +127,9 @@ def test_track_and_surface_batches_equal_serial_runs(client, tmp_path):
     _serial_cli(["track", str(sequences[1]), "--init", str(init), "-o", str(tmp_path / "one"),
                  "--no-gif", "--max-iterations", "10"])
     for name in ("mask_0003.png", "contours.json"):
-        assert (tmp_path / "tracks" / "seq1" / name).read_bytes() == (tmp_path / "one" / name).read_bytes()
+        assert (tmp_path / "tracks" / "seq1" / name).read_bytes() == (
+            tmp_path / "one" / name
+        ).read_bytes()
 
     result = batch("surface", ["sphere"], tmp_path / "surfaces", flow="heat", client=client,
                    resolution=16, size=32)
@@ -161,10 +163,17 @@ def test_rerun_skips_complete_outputs_and_redoes_changed_ones(client, photos, tm
     (out / copies[1].name).write_bytes(b"truncated")
     third = batch("diffuse", copies, out, client=client, steps=20)
     assert [r.status for r in third] == ["done", "done", "skipped"]
-    assert np.array_equal(read_image(out / copies[1].name),
-                          clpde.diffuse(read_image(copies[1]), steps=20,
-                                        channel_axis=-1 if read_image(copies[1]).ndim == 3 else None))
-    assert [r.status for r in batch("diffuse", copies, out, client=client, steps=21)] == ["done"] * 3
+    assert np.array_equal(
+        read_image(out / copies[1].name),
+        clpde.diffuse(
+            read_image(copies[1]),
+            steps=20,
+            channel_axis=-1 if read_image(copies[1]).ndim == 3 else None,
+        ),
+    )
+    assert [r.status for r in batch("diffuse", copies, out, client=client, steps=21)] == [
+        "done"
+    ] * 3
 
 
 def test_failures_are_reported_by_name_and_do_not_stop_the_others(client, photos, tmp_path):
@@ -269,7 +278,9 @@ def test_batch_tile_option_gives_the_untiled_result(client, photos, tmp_path):
     for p in paths[:2]:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
-        assert np.array_equal(read_image(out / p.name), clpde.diffuse(image, steps=8, channel_axis=axis))
+        assert np.array_equal(
+            read_image(out / p.name), clpde.diffuse(image, steps=8, channel_axis=axis)
+        )
     with pytest.raises(clpde.InputError, match="--tile"):
         batch("inpaint", paths[:1], out, client=client, mask=paths[0], tile=True)
 

@@ -98,7 +98,9 @@ def _round_trip(obj):
 def test_planar_flow_pickles_by_value_mid_run_for_each_flow():
     image = _images(1)[0]
     for name in clpde.FLOWS:
-        params = {"weight": np.linspace(0, 1, 28)[None].repeat(20, 0)} if name == "curvature" else {}
+        params = (
+            {"weight": np.linspace(0, 1, 28)[None].repeat(20, 0)} if name == "curvature" else {}
+        )
         flow = clpde.PlanarFlow(image, name, **params).run(3)
         copy = _round_trip(flow)
         assert copy.runtime is flow.runtime  # same process: the same runtime
@@ -138,7 +140,9 @@ def test_surface_tracker_inpainting_and_region_tracker_pickle_by_value():
     regions.advance(0.1)
     copy.advance(0.1)
     assert copy.steps == regions.steps
-    assert all(np.array_equal(a, b) for a, b in zip(copy.volumes(), regions.volumes(), strict=False))
+    assert all(
+        np.array_equal(a, b) for a, b in zip(copy.volumes(), regions.volumes(), strict=False)
+    )
 
 
 def test_device_objects_of_other_contexts_refuse_to_pickle():

@@ -49,12 +49,20 @@ def add_inpaint_parser(subparsers) -> None:
                         help="steps between GIF frames (default: 100)")
     parser.add_argument("--max-steps", type=int, default=None,
                         help="transport: steps per level (default: 3000)")
-    parser.add_argument("--tol", type=float, default=None,
-                        help="transport: stop when the largest change in the region over a check interval "
-                             "is below this, intensities in [0, 1] (default: 1e-4; 0 = off)")
-    parser.add_argument("--mean-tol", type=float, default=None,
-                        help="transport: stop when the mean change in the region over a check interval "
-                             "is below this (default: 4e-4; 0 = off)")
+    parser.add_argument(
+        "--tol",
+        type=float,
+        default=None,
+        help="transport: stop when the largest change in the region over a check interval "
+        "is below this, intensities in [0, 1] (default: 1e-4; 0 = off)",
+    )
+    parser.add_argument(
+        "--mean-tol",
+        type=float,
+        default=None,
+        help="transport: stop when the mean change in the region over a check interval "
+        "is below this (default: 4e-4; 0 = off)",
+    )
     parser.add_argument("--dt", type=float, default=None,
                         help="transport: time step (default: 0.1)")
     parser.add_argument("--scaling", choices=("none", "quartic-root"), default=None,

@@ -56,7 +56,9 @@ def add_regions_parser(subparsers) -> None:
                         help="grid cells across a mesh's longest side (default: 96)")
     parser.add_argument("--t", type=float, default=None, help="final time (default: per scene)")
     parser.add_argument("--saves", type=int, default=4, help="saved intervals (default: 4)")
-    parser.add_argument("--size", type=int, default=256, help="picture size per view (default: 256)")
+    parser.add_argument(
+        "--size", type=int, default=256, help="picture size per view (default: 256)"
+    )
     add_device_argument(parser)
     parser.set_defaults(run=run_regions)
 
@@ -142,7 +144,9 @@ def colour_labels(mesh):
     if len(colours) > MAX_COLOUR_REGIONS:
         raise InputError(
             f"the mesh has {len(colours)} vertex colours; as regions it may have at most "
-            f"{MAX_COLOUR_REGIONS} (paint each region in one flat colour), or use --regions curvature")
+            f"{MAX_COLOUR_REGIONS} (paint each region in one flat colour), or use --regions "
+            "curvature"
+        )
     return labels.reshape(-1), colours / 255.0
 
 
@@ -171,7 +175,9 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
         except InputError as exc:  # shaded or photographed colours are no regions
             warnings.warn(f"{exc}; tracking the curvature-sign regions instead", stacklevel=2)
     if painted is None and regions == "colours":
-        raise InputError(f"{path} has no vertex colours to take regions from; use --regions curvature")
+        raise InputError(
+            f"{path} has no vertex colours to take regions from; use --regions curvature"
+        )
     region = painted[0] if painted is not None else curvature_sign_regions(phi, h)
     if flow == "gaussian":
         # weight h^3: speed K+ in cells per unit time (K in 1 / cells^2); creases sharper
@@ -188,7 +194,9 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
         weights = inside / inside.sum()
         centre = [float((np.broadcast_to(a, phi.shape) * weights).sum()) for a in (x, y, z)]
         radius = np.cbrt(3 * inside.sum() * h**3 / (4 * np.pi))
-        target = np.sqrt((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2) - radius
+        target = (
+            np.sqrt((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2) - radius
+        )
         options = {"beta": "morph", "target": np.broadcast_to(target, phi.shape).copy(),
                    "t": t if t is not None else 3.0}
     if painted is not None:  # the regions keep the mesh's colours

@@ -19,9 +19,9 @@ Every method is a module of this package, imported only when asked for, with
 
 Optional module attributes:
 
-- MARGIN: int, or a function MARGIN(omega, **params) -> int (or MARGIN(**params)). How many known pixels
-  around omega the method reads (its stencil's reach, its pre-smoothing, coarse levels,
-  patch radii...). clpde.inpaint solves each connected component of the mask, or
+- MARGIN: int, or a function MARGIN(omega, **params) -> int (or MARGIN(**params)). How
+  many known pixels around omega the method reads (its stencil's reach, its pre-smoothing,
+  coarse levels, patch radii...). clpde.inpaint solves each connected component of the mask, or
   cluster of nearby components, in its own box: omega's bounding box grown by MARGIN
   (clipped to the image). A method whose result must not depend on the box sets it to
   cover everything it reads; None (or no attribute) means the whole image: no boxes.
@@ -68,8 +68,10 @@ def load(name: str):
     except ModuleNotFoundError as error:
         if error.name != path:
             raise
-        raise InputError(f"inpainting method {name!r} is not available in this installation "
-                         f"(module {path} is missing); use one of {', '.join(available())}") from None
+        raise InputError(
+            f"inpainting method {name!r} is not available in this installation "
+            f"(module {path} is missing); use one of {', '.join(available())}"
+        ) from None
 
 
 def available() -> list:

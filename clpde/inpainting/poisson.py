@@ -91,8 +91,8 @@ class Multigrid:
     its transpose (the sum of the four children); coarse operators s^l op with op = L or
     L L of the coarse grid, s = 2 from the Galerkin product of those transfers for L
     (R L P = 2 L_c), s = 1.5 for L L (measured: 1 suits thick holes, 2 thin ones); damped
-    Jacobi smoothing, two sweeps before and after, eight on the coarsest level. Every launch is bound once, so a V-cycle is a
-    fixed sequence of launches with no host work.
+    Jacobi smoothing, two sweeps before and after, eight on the coarsest level. Every launch
+    is bound once, so a V-cycle is a fixed sequence of launches with no host work.
     """
 
     OMEGA = {"harmonic": 0.8, "biharmonic": 0.6}  # Jacobi damping, below 2 / lambda_max

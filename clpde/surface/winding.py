@@ -56,7 +56,10 @@ class WindingNumbers:
         weight = np.add.reduceat(area, starts)
         count = np.diff(np.append(starts, nf))
         plain = np.add.reduceat(centroid, starts) / count[:, None]
-        weighted = np.add.reduceat(centroid * area[:, None], starts) / np.where(weight > 0, weight, 1)[:, None]
+        weighted = (
+            np.add.reduceat(centroid * area[:, None], starts)
+            / np.where(weight > 0, weight, 1)[:, None]
+        )
         centre = np.where((weight > 0)[:, None], weighted, plain)
         owner = np.repeat(np.arange(len(starts)), count)
         reach = np.linalg.norm(tri - centre[owner][:, None, :], axis=2).max(axis=1)
@@ -122,7 +125,9 @@ class WindingNumbers:
         per_tile = -(-tile_size // self._chunk)
         chunk_tile = np.repeat(np.arange(ntiles), per_tile)
         first_chunk = np.cumsum(per_tile) - per_tile
-        chunk_start = tile_start[chunk_tile] + self._chunk * (np.arange(len(chunk_tile)) - first_chunk[chunk_tile])
+        chunk_start = tile_start[chunk_tile] + self._chunk * (
+            np.arange(len(chunk_tile)) - first_chunk[chunk_tile]
+        )
         chunk_end = np.minimum(chunk_start + self._chunk, (tile_start + tile_size)[chunk_tile])
 
         def dev(a, dtype=np.int32):
@@ -131,10 +136,24 @@ class WindingNumbers:
 
         out = cla.empty(q, n, np.float32)
         nchunks = len(chunk_tile)
-        self._kernel(q, (nchunks,), None, dev(sorted_pts.reshape(-1), np.float32), dev(chunk_start),
-                     dev(chunk_end), dev(chunk_tile), np.int32(nchunks), dev(near_off), dev(near_cols),
-                     dev(far_off), dev(far_cols), self._cl_start.data, self._clu.data, self._tri.data,
-                     out.data)
+        self._kernel(
+            q,
+            (nchunks,),
+            None,
+            dev(sorted_pts.reshape(-1), np.float32),
+            dev(chunk_start),
+            dev(chunk_end),
+            dev(chunk_tile),
+            np.int32(nchunks),
+            dev(near_off),
+            dev(near_cols),
+            dev(far_off),
+            dev(far_cols),
+            self._cl_start.data,
+            self._clu.data,
+            self._tri.data,
+            out.data,
+        )
         w = np.empty(n)
         w[order] = out.get()
         return w

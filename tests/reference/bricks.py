@@ -2,8 +2,9 @@
 
 Written brick by brick with plain loops, independently of bricks.py's vectorised build: the
 layout (bricks 1..n in Morton order, brick 0 the sentinel, x fastest inside a brick, rows
-lengthened along each axis by an apron of the next brick places' first cells), the 27-neighbour table, and
-the kernels as the dense references of tests/reference/surface.py read through it.
+lengthened along each axis by an apron of the next brick places' first cells), the
+27-neighbour table, and the kernels as the dense references of tests/reference/surface.py
+read through it.
 """
 
 import numpy as np
@@ -34,7 +35,9 @@ def neighbours(coords):
         for dz in (-1, 0, 1):
             for dy in (-1, 0, 1):
                 for dx in (-1, 0, 1):
-                    table[i + 1, (dz + 1) * 9 + (dy + 1) * 3 + dx + 1] = index.get((x + dx, y + dy, z + dz), 0)
+                    table[i + 1, (dz + 1) * 9 + (dy + 1) * 3 + dx + 1] = index.get(
+                        (x + dx, y + dy, z + dz), 0
+                    )
     return table
 
 

@@ -45,11 +45,21 @@ def curvatures(u, i, sx, sxy):
 
     hxy, hxz, hyz = mixed(1, sx), mixed(1, sxy), mixed(sx, sxy)
     g2 = gx**2 + gy**2 + gz**2 + 1e-12
-    ghg = gx * gx * hxx + gy * gy * hyy + gz * gz * hzz + 2 * (gx * gy * hxy + gx * gz * hxz + gy * gz * hyz)
+    ghg = (
+        gx * gx * hxx
+        + gy * gy * hyy
+        + gz * gz * hzz
+        + 2 * (gx * gy * hxy + gx * gz * hxz + gy * gz * hyz)
+    )
     mean = (g2 * (hxx + hyy + hzz) - ghg) / g2**1.5
     axx, ayy, azz = hyy * hzz - hyz**2, hxx * hzz - hxz**2, hxx * hyy - hxy**2
     axy, axz, ayz = hxz * hyz - hxy * hzz, hxy * hyz - hxz * hyy, hxy * hxz - hxx * hyz
-    gag = gx * gx * axx + gy * gy * ayy + gz * gz * azz + 2 * (gx * gy * axy + gx * gz * axz + gy * gz * ayz)
+    gag = (
+        gx * gx * axx
+        + gy * gy * ayy
+        + gz * gz * azz
+        + 2 * (gx * gy * axy + gx * gz * axz + gy * gz * ayz)
+    )
     return mean, gag / g2**2
 
 
