@@ -2,8 +2,8 @@
 
 Every step is two kernels: the flow's update over the interpolation nodes (cur -> tmp, the
 node band's runs), then the closest-point re-extension of every cell the next step reads
-(tmp -> cur, the reach band); the whole extension band is re-extended when a flow returns.
-State stays on the device from upload to the final read-back; no host round-trip per step.
+(tmp -> cur, the reach band); the whole extension band is re-extended when a flow returns. State stays on the
+device from upload to the final read-back; no host round-trip per step.
 """
 
 from __future__ import annotations
@@ -133,9 +133,8 @@ class BrickFlow:
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
         self.src_plane = np.int32(self.tmp.size // self.nc)
-        self._extend_kernel = self.kernel(
-            "bricks.cl", "brick_extend_cp", INTERP=surf.interp, NC=self.nc, NORMALIZE=int(normalize)
-        )
+        self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp", INTERP=surf.interp, NC=self.nc,
+                                          NORMALIZE=int(normalize))
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
 
@@ -222,15 +221,9 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     steps, dt = _check_time(t, dt, limit, flow_name)
     flow = BandFlow(surf, u, normalize=harmonic, line_field=line_field)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
-    defines = {
-        "NC": flow.nc,
-        "FLOW_P": p,
-        "HARMONIC": int(harmonic),
-        "FIDELITY": int(fidelity is not None),
-        "ALONG": int(direction is not None),
-        "WEIGHTED": int(bool(weighted)),
-        "LINE_FIELD": int(bool(line_field)),
-    }
+    defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic), "FIDELITY": int(fidelity is not None),
+                   "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted)),
+                   "LINE_FIELD": int(bool(line_field))}
     kernel = g.kernel("surface.cl", "flow_step", **defines)
     r = g.scalar(dt / h**p)
     e2 = g.scalar((h * eps) ** 2)
@@ -294,15 +287,8 @@ class _DynamicLambda:
         g, q = s.grid, s.runtime.queue
         _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
         for a, partial in zip(self.terms, self.partials, strict=False):
-            g.kernel("surface.cl", "chunk_sum")(
-                q,
-                (self.groups,),
-                None,
-                a.data,
-                np.int32(s.node_band.n),
-                np.int32(self.CHUNK),
-                partial.data,
-            )
+            g.kernel("surface.cl", "chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
+                                  np.int32(self.CHUNK), partial.data)
         g.kernel("surface.cl", "tv_lambda_update")(
             q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
@@ -323,17 +309,9 @@ class _DynamicLambda:
 def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps) -> None:
     g = surf.grid
     g.launch_list(
-        g.kernel("surface.cl", "tv_lambda_terms"),
-        surf.node_band,
-        u_dev.data,
-        u0_dev.data,
-        surf.psi_dev.data,
-        g.scalar(1 / surf.spacing),
-        g.scalar(1.5),
-        g.scalar((surf.spacing * eps) ** 2),
-        *offsets,
-        *g.strides(),
-        *(a.data for a in terms),
+        g.kernel("surface.cl", "tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
+        g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
+        *offsets, *g.strides(), *(a.data for a in terms),
     )
 
 
@@ -394,9 +372,7 @@ def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=
         raise InputError(f"p must be 1 or 2, not {p!r}")
     data = np.asarray(u, dtype=np.float64)
     if data.ndim != 4:
-        raise InputError(
-            f"harmonic maps need vector data (channels, nz, ny, nx), got shape {data.shape}"
-        )
+        raise InputError(f"harmonic maps need vector data (channels, nz, ny, nx), got shape {data.shape}")
     band = np.abs(surf.psi) < surf.outer * surf.spacing
     norm = np.sqrt((data**2).sum(axis=0))
     if np.any(norm[band] == 0):
@@ -417,9 +393,7 @@ def denoise_colour(surf, rgb, t, dt=None, *, brightness="tv", p=1, eps=1.0, alte
     (black) take the grey chroma, so they carry no direction."""
     data = np.asarray(rgb)
     if data.shape != (3,) + surf.shape:
-        raise InputError(
-            f"rgb must have shape {(3,) + surf.shape} (channels first), got {data.shape}"
-        )
+        raise InputError(f"rgb must have shape {(3,) + surf.shape} (channels first), got {data.shape}")
     if brightness not in ("heat", "tv", None):
         raise InputError(f"brightness must be 'heat', 'tv' or None, not {brightness!r}")
     values = data.astype(np.float64)
@@ -477,14 +451,7 @@ def principal_directions(surf):
 
 
 TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
-THESIS_FIG_4_7 = {
-    "da": 1.0,
-    "db": 0.0625,
-    "s": 0.025,
-    "beta": 12.0,
-    "beta_spread": 0.1,
-    "start": 4.0,
-}
+THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
 
 
 def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, params=None,
@@ -506,9 +473,7 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, par
     dt = min(1.0, 0.9 * limit) if dt is None else check_time_step(dt, limit, what)
     rng = np.random.default_rng(seed)
     beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
-    start = (
-        np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)
-    )
+    start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)
     flow = BandFlow(surf, start)
     g = surf.grid
     beta_dev = g.upload(beta[None])
