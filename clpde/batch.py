@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .imagedata import InputError
-from .io import IMAGE_FORMATS, atomic_output
+from .io import IMAGE_FORMATS, atomic_output, replace_folder
 
 COMMANDS = ("inpaint", "denoise", "diffuse", "track", "surface")
 FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
@@ -187,23 +187,10 @@ def _run_into_folder(spec: dict, output: str) -> None:
         status = args.run(args)
         if status:
             raise InputError(f"clpde {spec['command']} exited with status {status}")
-        os.chmod(staging, 0o777 & ~_umask())
-        if final.exists():  # a rerun with other options: the old result goes only now
-            old = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{final.name}.", suffix=".part"))
-            os.replace(final, old / final.name)
-            os.replace(staging, final)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(staging, final)
+        replace_folder(staging, final)  # a rerun with other options: the old result goes only now
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def dask_setup(worker) -> None:

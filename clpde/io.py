@@ -318,19 +318,25 @@ def output_folder(outdir: PathLike, overwrite: bool = False, *,
     staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".part"))
     try:
         yield staging
-        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
-        if outdir.exists():
-            # rename(2) may replace an empty folder: move the old one aside into an empty
-            # temporary name, put the new one in place, then delete the old one
-            old = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".old"))
-            os.replace(outdir, old)
-            os.replace(staging, outdir)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(staging, outdir)
+        replace_folder(staging, outdir)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
+
+
+def replace_folder(staging: Path, final: Path) -> None:
+    """Put the finished folder `staging` in place of `final` (which may exist), so that a
+    reader sees the old folder or the new one, never a mixture."""
+    os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+    if final.exists():
+        # rename(2) may replace an empty folder: move the old one aside into an empty
+        # temporary name, put the new one in place, then delete the old one
+        old = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{final.name}.", suffix=".old"))
+        os.replace(final, old)
+        os.replace(staging, final)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(staging, final)
 
 
 def _umask() -> int:
