@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import inspect
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,6 +62,7 @@ from scipy import ndimage
 from tqdm.auto import tqdm
 
 from . import multiresolution as mr
+from ._state import State, deprecated, renamed_keyword
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .fields import Field, Grid, PingPong, check_fits, index_list
 from .imagedata import (
@@ -83,13 +85,18 @@ GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
 @dataclass
-class InpaintState:
+class InpaintState(State):
     """One intermediate state: the whole image (in the input's layout and dtype)."""
 
     level: int  # 0 is the finest
     step: int  # steps taken on this level so far
     image: np.ndarray
     change: float | None = None  # largest change in Omega over the last check interval
+
+    @property
+    def time(self) -> None:
+        """None: inpainting mixes transport and diffusion steps, it has no single time."""
+        return None
 
 
 @dataclass
@@ -596,7 +603,7 @@ class Inpainting:
     """Inpainting whose intermediate states can be watched.
 
     >>> job = Inpainting(image, mask, channel_axis=-1)
-    >>> for state in job.states(every=100):
+    >>> for state in job.iterate(every=100):
     ...     show(state.image)
     >>> out = job.result
 
@@ -605,8 +612,8 @@ class Inpainting:
     """
 
     def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
-                 levels=None, device=None, precision=None, progress=None, method=None,
-                 boxes=True, seed=None, **params):
+                 levels=None, device=None, dtype=None, progress=None, method=None,
+                 boxes=True, seed=None, precision=None, **params):
         from . import inpainting
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
@@ -646,7 +653,7 @@ class Inpainting:
         self.ncolour = ncolour
         self.levels = levels
         self.device = device
-        self.dtype = compute_dtype(None, precision)
+        self.dtype = compute_dtype(None, renamed_keyword("dtype", dtype, "precision", precision))
         self.progress = progress
         self.result = None
         self.info = None
@@ -685,7 +692,11 @@ class Inpainting:
             self.mask, lambda crop: margin(self.module, crop, self.params),
             (lambda crop: align(crop, **self.params)) if callable(align) else lambda crop: 1)
 
-    def states(self, every: int | None = None):
+    @deprecated("iterate", "states")
+    def states(self, every: int | None = None) -> Iterator[InpaintState]:
+        """Deprecated alias of `iterate`."""
+
+    def iterate(self, every: int | None = None) -> Iterator[InpaintState]:
         """Run to the end, yielding an InpaintState at the start of the finest level, every
         `every` steps there (rounded to whole check intervals) and at the end. Coarser
         levels run without yielding. Afterwards `result` and `info` are set."""
@@ -745,7 +756,7 @@ class Inpainting:
             yield InpaintState(0, info.steps, self.result)
 
     def run(self) -> np.ndarray:
-        for _ in self.states():
+        for _ in self.iterate():
             pass
         return self.result
 
@@ -769,8 +780,8 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
             diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
             scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=4e-4, check_every=2,
             levels=None, colour="channels", alpha=None, fill="biharmonic", keep_band=True, device=None,
-            precision=None, progress=None, snapshots=None, return_info=False, method=None,
-            boxes=True, seed=None, **options):
+            dtype=None, progress=None, snapshots=None, return_info=False, method=None,
+            boxes=True, seed=None, precision=None, **options):
     """Fill the masked region of an image.
 
     image: 2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8,
@@ -850,10 +861,11 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
     defaults = inspect.signature(inpaint).parameters
     params = {k: v for k, v in transport.items() if not _same(v, defaults[k].default)}
     params.update(options)
+    dtype = renamed_keyword("dtype", dtype, "precision", precision)
     job = Inpainting(image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour,
-                     levels=levels, device=device, precision=precision, progress=progress,
+                     levels=levels, device=device, dtype=dtype, progress=progress,
                      method=method, boxes=boxes, seed=seed, **params)
-    states = list(job.states(every=snapshots))
+    states = list(job.iterate(every=snapshots))
     if snapshots:
         job.info.snapshots = states
     if return_info:
