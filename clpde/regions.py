@@ -23,12 +23,14 @@ sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
 from __future__ import annotations
 
 import inspect
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
+from ._state import State, renamed_keyword
 from .fields import IndexList, check_fits, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
@@ -65,7 +67,7 @@ __all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_regi
 
 
 @dataclass
-class RegionFrame:
+class RegionFrame(State):
     """The surface and its regions at one saved time."""
 
     time: float
@@ -74,6 +76,7 @@ class RegionFrame:
     boundaries: list = field(default_factory=list)  # (k, 3) points on each region's boundary
     phi: np.ndarray | None = None  # world-unit level sets, (nz, ny, nx)
     phihat: np.ndarray | None = None  # (regions, nz, ny, nx)
+    step: int = 0  # the tracker's steps so far
 
     def area(self, label=None) -> float:
         """Area of region `label` (of the whole surface when None)."""
@@ -90,15 +93,16 @@ class RegionTracker:
 
     phi: (nz, ny, nx) signed distance (world units, negative inside); phihat: (L, nz, ny, nx)
     auxiliary functions. speed: one of SPEEDS with `scale` converting it to grid units, or
-    velocity (cells per unit time) for rigid translation. band: half-width in cells of the
+    velocity (cells per unit time) for rigid translation. band_width: half-width in cells of the
     band that is stepped; reinitialisation covers the band dilated by `reinit_ring` cells.
     aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     """
 
     def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
-                 velocity=None, band=5.0, reinit_every=4, reinit_iterations=6, cfl=0.4,
-                 reinit_ring=3, max_speed=None, aux_at=None, device=None, dtype=np.float32):
+                 velocity=None, band_width=5.0, reinit_every=4, reinit_iterations=6, cfl=0.4,
+                 reinit_ring=3, max_speed=None, aux_at=None, device=None, dtype=np.float32,
+                 band=None):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -111,7 +115,7 @@ class RegionTracker:
         self.mode = SPEEDS[speed]
         self.scale = float(scale)
         self.velocity = None if velocity is None else np.asarray(velocity, np.float64)
-        self.width = float(band)
+        self.width = float(renamed_keyword("band_width", band_width, "band", band, 5.0))
         self.reinit_every = int(reinit_every)
         self.reinit_iterations = int(reinit_iterations)
         self.reinit_ring = int(reinit_ring)
@@ -307,6 +311,14 @@ class RegionTracker:
             self.reinitialize()
             dt = self.stable_dt()
 
+    def iterate(self, times, *, origin=(0.0, 0.0, 0.0), keep_volumes: bool = False,
+                palette=None, partition: bool = False, bar=None) -> Iterator[RegionFrame]:
+        """Advance to each of `times` (ascending) in turn, yielding the RegionFrame there
+        (see `make_frame`); `bar` is a tqdm bar counting time."""
+        for when in times:
+            self.advance(when, bar)
+            yield make_frame(self, when, origin, keep_volumes, palette, partition)
+
     MAX_STEPS = 100_000
 
     def _check_step_count(self, until, dt) -> None:
@@ -466,9 +478,9 @@ def _speed_setup(beta, target, weight, h, shape, coords):
 
 
 def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
-                 mesh=None, palette=None, target=None, velocity=None, weight=1.0, band=5.0, reinit_every=4,
+                 mesh=None, palette=None, target=None, velocity=None, weight=1.0, band_width=5.0, reinit_every=4,
                  reinit_iterations=6, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
-                 dtype=np.float32, progress=None) -> list[RegionFrame]:
+                 dtype=np.float32, progress=None, band=None) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
@@ -538,19 +550,17 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
         speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
         vel = None
     tracker = RegionTracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
-                            band=band, reinit_every=reinit_every,
+                            band_width=renamed_keyword("band_width", band_width, "band", band, 5.0),
+                            reinit_every=reinit_every,
                             reinit_iterations=reinit_iterations, cfl=cfl,
                             max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
                             aux_at=aux_at, device=device, dtype=dtype)
-    frames = []
     disable = None if progress is None else not progress
     # the bar counts simulated time, so it prints rounded times rather than step counts
     with tqdm(total=t_end, desc="track regions", disable=disable, leave=False, unit="time",
               bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
-        for when in times:
-            tracker.advance(when, bar)
-            frames.append(make_frame(tracker, when, origin, keep_volumes, palette, partition))
-    return frames
+        return list(tracker.iterate(times, origin=origin, keep_volumes=keep_volumes,
+                                    palette=palette, partition=partition, bar=bar))
 
 
 def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
@@ -576,4 +586,5 @@ def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
     colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], 1)
     out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
     return RegionFrame(time, out, labels, boundaries,
-                       phi if keep_volumes else None, phihat if keep_volumes else None)
+                       phi if keep_volumes else None, phihat if keep_volumes else None,
+                       tracker.steps)

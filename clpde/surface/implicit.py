@@ -20,6 +20,7 @@ import warnings
 import numpy as np
 import pyopencl.array as cla
 
+from .._state import renamed_keyword
 from ..fields import check_fits, compact
 from ..imagedata import InputError
 from ..imagedata import positive as _positive
@@ -47,11 +48,13 @@ class ImplicitSurface:
 
     psi: (nz, ny, nx) volume, negative inside, in world units; spacing: grid spacing h;
     origin: world (x, y, z) of psi[0, 0, 0]. Points of cell (k, j, i) are
-    origin + h * (i, j, k).
+    origin + h * (i, j, k). band_width: the outer band's half-width in cells (default: the
+    narrowest the interpolation allows; `band=` is its deprecated old name).
     """
 
-    def __init__(self, psi, spacing, origin=(0.0, 0.0, 0.0), *, band=None,
-                 interpolation="tricubic", dtype=np.float32, device=None, _check_border=True):
+    def __init__(self, psi, spacing, origin=(0.0, 0.0, 0.0), *, band_width=None,
+                 interpolation="tricubic", dtype=np.float32, device=None, band=None,
+                 _check_border=True):
         psi = np.asarray(psi)
         if psi.ndim != 3:
             raise InputError(f"psi must be a 3D (nz, ny, nx) volume, got shape {psi.shape}")
@@ -71,11 +74,12 @@ class ImplicitSurface:
         self.interp = _interp_code(interpolation)
         self.inner = _NODE_REACH[self.interp] + 0.04
         min_outer = self.inner + np.sqrt(2.0) + 0.04
-        self.outer = min_outer if band is None else _positive("band", band)
+        band_width = renamed_keyword("band_width", band_width, "band", band)
+        self.outer = min_outer if band_width is None else _positive("band_width", band_width)
         if self.outer < min_outer:
             raise InputError(
-                f"band={self.outer:g} cells is too narrow for {interpolation} re-extension; "
-                f"use band >= {min_outer:.2f}"
+                f"band_width={self.outer:g} cells is too narrow for {interpolation} re-extension; "
+                f"use band_width >= {min_outer:.2f}"
             )
         self.runtime = get_runtime(device)
         self._check_border = _check_border
@@ -179,7 +183,8 @@ class ImplicitSurface:
         return cls(psi, spacing, origin, **options)
 
     @classmethod
-    def from_mesh(cls, mesh, spacing=None, resolution=128, *, band=None, **options) -> ImplicitSurface:
+    def from_mesh(cls, mesh, spacing=None, resolution=128, *, band_width=None, band=None,
+                  **options) -> ImplicitSurface:
         """A surface from a triangle mesh (trimesh.Trimesh or any file trimesh loads).
 
         spacing defaults to the bounding box's longest side / resolution. The distance is exact
@@ -191,14 +196,15 @@ class ImplicitSurface:
         watertight gets a warning."""
         from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
 
+        band_width = renamed_keyword("band_width", band_width, "band", band)
         mesh = load_mesh(mesh)
-        outer = band if band is not None else _NODE_REACH[_interp_code(options.get("interpolation", "tricubic"))] + np.sqrt(2.0) + 0.08
+        outer = band_width if band_width is not None else _NODE_REACH[_interp_code(options.get("interpolation", "tricubic"))] + np.sqrt(2.0) + 0.08
         padding = int(np.ceil(outer)) + 4
         origin, h, shape = grid_for_mesh(mesh, spacing, resolution, padding)
         stats = {}
         psi, face, cpoint = mesh_to_sdf(mesh, origin, h, shape, outer + 3.0,
                                         device=options.get("device"), stats=stats)
-        surf = cls(psi, h, origin, band=band, **options)
+        surf = cls(psi, h, origin, band_width=band_width, **options)
         rim = rim_cells(mesh, face, cpoint, h) if stats.get("leaked") else ()
         if len(rim):
             # a closed hole: psi jumps across the sheet that closes it (|psi| is the distance
@@ -254,7 +260,7 @@ class ImplicitSurface:
         padded by the band width plus interpolation room on every side."""
         h = _positive("spacing", spacing)
         lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
-        margin = (options.get("band") or 5.0) + 3.0
+        margin = (options.get("band_width") or options.get("band") or 5.0) + 3.0
         lo = lo - margin * h
         hi = hi + margin * h
         n = np.ceil((hi - lo) / h).astype(int) + 1
