@@ -10,12 +10,48 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 import pyopencl.array as cla
 from tqdm.auto import tqdm
 
 from ..imagedata import InputError
+
+
+@dataclass
+class SurfaceDenoiseInfo:
+    """What a surface denoise_tv run did (the surface's counterpart of clpde.DenoiseInfo).
+
+    steps: time steps run, of length dt; lam_history: the dynamic lambda after each of its
+    updates (every 10 steps; None for a fixed lam); residual_variance: mean (u - u0)^2 over
+    the surface (None for a fixed lam). ``info["key"]`` with the old dict's keys ("steps",
+    "dt", "lambda", "residual_variance") still works for one release, with a
+    DeprecationWarning.
+    """
+
+    steps: int
+    dt: float
+    lam_history: list[float] | None = None
+    residual_variance: float | None = None
+
+    @property
+    def lam(self) -> float | None:
+        """The final lambda (None for a fixed lam)."""
+        return self.lam_history[-1] if self.lam_history else None
+
+    _KEYS = {"steps": "steps", "dt": "dt", "lambda": "lam_history",
+             "residual_variance": "residual_variance"}
+
+    def __getitem__(self, key: str):
+        warnings.warn("denoise_tv's info is a SurfaceDenoiseInfo now; use its attributes "
+                      f"(info.{self._KEYS.get(key, key)}) instead of info[{key!r}]",
+                      DeprecationWarning, stacklevel=2)
+        value = getattr(self, self._KEYS[key]) if key in self._KEYS else None
+        if value is None:  # the old dict had no such key
+            raise KeyError(key)
+        return value
+
 
 # One-sided difference choices per axis: bit set = backward gradient (forward divergence).
 _ALL_SIDES = tuple(range(8))
@@ -344,8 +380,10 @@ def tv(surf, u, t, dt=None, *, eps=1.0, weighted=False, alternate=True, progress
                 progress=progress)[0]
 
 
-def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, alternate=True,
-               correct_lambda=True, progress=None, return_info=False):
+def denoise_tv(surf, u: np.ndarray, sigma: float | None = None, t: float = 1.0,
+               dt: float | None = None, *, lam: float | None = None, eps: float = 1.0,
+               alternate: bool = True, correct_lambda: bool = True, progress: bool | None = None,
+               return_info: bool = False) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
     """TV denoising on the surface with a fidelity term (C.1).
 
     Give the noise level sigma for the dynamic lambda of (C.2) (updated on the device every
@@ -354,8 +392,8 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     1.2-1.6 sigma^2 for noise at the grid's scale; correct_lambda (default) scales it by a
     factor that moves until the residual variance is sigma^2, the constraint (C.2) comes
     from (kernels/surface.cl, tv_lambda_update); correct_lambda=False is the plain formula.
-    With return_info, also returns a dict with the residual variance (mean of (u - u0)^2
-    over the surface) and the lambda history."""
+    With return_info, also returns a SurfaceDenoiseInfo with the residual variance (mean of
+    (u - u0)^2 over the surface) and the lambda history."""
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
     if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
@@ -363,7 +401,10 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     fidelity = 0.0 if sigma is not None else float(lam)
     out, info = _run(surf, u, t, dt, "tv", p=1, eps=eps, fidelity=fidelity, sigma=sigma,
                      alternate=alternate, progress=progress, correct_lambda=correct_lambda)
-    return (out, info) if return_info else out
+    if not return_info:
+        return out
+    return out, SurfaceDenoiseInfo(info["steps"], info["dt"], info.get("lambda"),
+                                   info.get("residual_variance"))
 
 
 def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=None,
