@@ -497,6 +497,13 @@ class LevelSolver:
 # method="transport" on one box: the levels, coarse to fine
 
 
+# InpaintParams' fields that `inpaint` names in its signature (the others go in **options),
+# in the fields' order
+_TRANSPORT_ARGS = ("dt", "transport_steps", "diffusion_steps", "diffusion_dt", "epsilon",
+                   "presmooth", "scaling", "rotation", "max_steps", "tol", "mean_tol",
+                   "check_every", "fill", "keep_band")
+
+
 def transport_params(params: dict) -> InpaintParams:
     unknown = set(params) - set(InpaintParams.__dataclass_fields__)
     if unknown:
@@ -607,8 +614,9 @@ class Inpainting:
     ...     show(state.image)
     >>> out = job.result
 
-    The keyword arguments are those of `inpaint`. Intermediate states come from
-    method="transport" only; other methods yield their start and their result.
+    The keyword arguments are those of `inpaint` (its docstring has them and the return
+    shapes). Intermediate states come from method="transport" only; other methods yield
+    their start and their result.
     """
 
     def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
@@ -843,16 +851,22 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         that no seam is left) or 'upsampled' (the upsampled coarse result as it is).
     A soft mask's fidelity acts after every A + B cycle on the finest level: a pixel of
         damage m is moved (1 - m) of the way back to its observed value.
-    snapshots: an integer N: also return intermediate states every N steps of the finest
-        level, as `(image, [InpaintState, ...])` (or in info.snapshots with return_info).
+    snapshots: an integer N: also keep the intermediate states (InpaintState) every N steps
+        of the finest level.
     return_info: also return an InpaintInfo (steps taken, whether it converged, ...).
+    dtype: the device's arithmetic, float32 (default) or float64 (`precision=` is its
+        deprecated old name). device, progress: as for `clpde.diffuse`.
 
-    The output has the input's shape and dtype, and equals it bit for bit outside the mask.
+    Returns one of three shapes (a public contract, kept as it is):
+    - `image` by default;
+    - `(image, info)` with return_info (then info.snapshots holds the states, if asked for);
+    - `(image, [InpaintState, ...])` with snapshots and without return_info.
+    `image` has the input's shape and dtype, and equals it bit for bit outside the mask.
+    `Inpainting` is the object form with the same keywords: `iterate(every)` yields the
+    states, and `result` and `info` are set at the end.
     """
-    transport = dict(dt=dt, transport_steps=transport_steps, diffusion_steps=diffusion_steps,
-                     diffusion_dt=diffusion_dt, epsilon=epsilon, presmooth=presmooth,
-                     scaling=scaling, rotation=rotation, max_steps=max_steps, tol=tol,
-                     mean_tol=mean_tol, check_every=check_every, fill=fill, keep_band=keep_band)
+    given = locals()  # the transport options are InpaintParams' fields, named alike here
+    transport = {name: given[name] for name in _TRANSPORT_ARGS}
     if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer))
                                   or snapshots < 1):
         raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")

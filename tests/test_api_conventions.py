@@ -133,3 +133,31 @@ def test_surface_denoise_info_is_a_dataclass_with_deprecated_keys():
     assert fixed.lam_history is None and fixed.residual_variance is None
     with pytest.warns(DeprecationWarning), pytest.raises(KeyError):
         fixed["lambda"]  # the old dict had no such key for a fixed lambda
+
+
+def test_inpaint_names_the_transport_options_with_their_defaults():
+    """inpaint's signature repeats InpaintParams' defaults: only changed ones are passed on."""
+    import dataclasses
+    import inspect
+
+    from clpde.inpaint import _TRANSPORT_ARGS, InpaintParams, inpaint
+
+    signature = inspect.signature(inpaint).parameters
+    fields = {f.name: f.default for f in dataclasses.fields(InpaintParams)}
+    assert list(_TRANSPORT_ARGS) == [name for name in fields if name in signature]
+    assert all(signature[name].default == fields[name] for name in _TRANSPORT_ARGS)
+
+
+def test_inpaint_return_shapes():
+    from clpde.inpaint import InpaintInfo
+
+    image = _square()
+    mask = np.zeros(image.shape, bool)
+    mask[10:14, 4:20] = True
+    out = clpde.inpaint(image, mask, max_steps=12)
+    out_info, info = clpde.inpaint(image, mask, max_steps=12, return_info=True)
+    out_states, states = clpde.inpaint(image, mask, max_steps=12, snapshots=6)
+    _, both = clpde.inpaint(image, mask, max_steps=12, snapshots=6, return_info=True)
+    assert np.array_equal(out, out_info) and np.array_equal(out, out_states)
+    assert isinstance(info, InpaintInfo) and info.snapshots == []
+    assert [s.step for s in states] == [s.step for s in both.snapshots]
