@@ -10,9 +10,16 @@ from __future__ import annotations
 
 import functools
 import warnings
+from collections.abc import Callable
 from typing import Any
 
-__all__ = ["State", "deprecated", "renamed_keyword"]
+from .runtime import Runtime
+
+__all__ = ["DeviceLike", "State", "deprecated", "renamed_keyword"]
+
+# What every `device=` takes: a name part ('cpu', 'gpu', ...), an index, a Runtime, or None
+# for the default choice (see clpde.devices).
+DeviceLike = str | int | Runtime | None
 
 
 class State:
@@ -32,7 +39,7 @@ def _warn(message: str, up: int) -> None:
     warnings.warn(message, DeprecationWarning, stacklevel=up + 2)
 
 
-def deprecated(new: str, old: str):
+def deprecated(new: str, old: str) -> Callable[[Callable], Callable]:
     """Decorator making a method `old` a deprecated alias of `new` (same arguments)."""
 
     def wrap(func):

@@ -54,15 +54,17 @@ import inspect
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
 from scipy import ndimage
 from tqdm.auto import tqdm
 
 from . import multiresolution as mr
-from ._state import State, deprecated, renamed_keyword
+from ._state import DeviceLike, State, deprecated, renamed_keyword
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .fields import Field, Grid, PingPong, check_fits, index_list
 from .imagedata import (
@@ -619,9 +621,12 @@ class Inpainting:
     their start and their result.
     """
 
-    def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
-                 levels=None, device=None, dtype=None, progress=None, method=None,
-                 boxes=True, seed=None, precision=None, **params):
+    def __init__(self, image: ArrayLike, mask: ArrayLike | None = None, *,
+                 channel_axis: int | None = None, alpha: bool | None = None,
+                 colour: str = "channels", levels: int | None = None, device: DeviceLike = None,
+                 dtype: DTypeLike | None = None, progress: bool | None = None,
+                 method: str | None = None, boxes: bool = True, seed: int | None = None,
+                 precision: DTypeLike | None = None, **params: Any):
         from . import inpainting
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
@@ -769,7 +774,7 @@ class Inpainting:
         return self.result
 
 
-def choose_method(omega: np.ndarray, method) -> str:
+def choose_method(omega: np.ndarray, method: str | None) -> str:
     """The method to run: None is "transport" (the thesis's scheme, whose options inpaint()
     takes by name); "auto" is the first installed of inpainting.AUTO (docs/inpainting.md
     has the measurements behind it)."""
@@ -784,12 +789,18 @@ def choose_method(omega: np.ndarray, method) -> str:
     return method
 
 
-def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
-            diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
-            scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=4e-4, check_every=2,
-            levels=None, colour="channels", alpha=None, fill="biharmonic", keep_band=True, device=None,
-            dtype=None, progress=None, snapshots=None, return_info=False, method=None,
-            boxes=True, seed=None, precision=None, **options):
+def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: int | None = None,
+            dt: float = 0.1, transport_steps: int = 15, diffusion_steps: int = 2,
+            diffusion_dt: float = 0.1, epsilon: float = 3.0, presmooth: int = 1,
+            scaling: str = "none", rotation: str = "ccw", max_steps: int = 3000,
+            tol: float = 1e-4, mean_tol: float = 4e-4, check_every: int = 2,
+            levels: int | None = None, colour: str = "channels", alpha: bool | None = None,
+            fill: str = "biharmonic", keep_band: bool = True, device: DeviceLike = None,
+            dtype: DTypeLike | None = None, progress: bool | None = None,
+            snapshots: int | None = None, return_info: bool = False, method: str | None = None,
+            boxes: bool = True, seed: int | None = None, precision: DTypeLike | None = None,
+            **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
+                                | tuple[np.ndarray, list[InpaintState]]):
     """Fill the masked region of an image.
 
     image: 2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8,

@@ -217,7 +217,7 @@ class PlanarFlow:
 def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
             channel_axis: int | None = None, device: str | int | None = None, *,
             progress: bool | None = None, dtype: DTypeLike | None = None,
-            precision: DTypeLike | None = None, **params) -> np.ndarray:
+            precision: DTypeLike | None = None, **params: ArrayLike | float | str) -> np.ndarray:
     """Run a planar diffusion flow for `steps` explicit steps.
 
     Parameters

@@ -23,14 +23,15 @@ sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
 from __future__ import annotations
 
 import inspect
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
 from tqdm.auto import tqdm
 
-from ._state import State, renamed_keyword
+from ._state import DeviceLike, State, renamed_keyword
 from .fields import IndexList, check_fits, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
@@ -78,12 +79,12 @@ class RegionFrame(State):
     phihat: np.ndarray | None = None  # (regions, nz, ny, nx)
     step: int = 0  # the tracker's steps so far
 
-    def area(self, label=None) -> float:
+    def area(self, label: int | None = None) -> float:
         """Area of region `label` (of the whole surface when None)."""
         areas = self.mesh.area_faces
         return float(areas.sum() if label is None else areas[self.face_labels == label].sum())
 
-    def area_fraction(self, label=0) -> float:
+    def area_fraction(self, label: int = 0) -> float:
         return self.area(label) / self.area()
 
 
@@ -99,10 +100,13 @@ class RegionTracker:
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     """
 
-    def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
-                 velocity=None, band_width=5.0, reinit_every=4, reinit_iterations=6, cfl=0.4,
-                 reinit_ring=3, max_speed=None, aux_at=None, device=None, dtype=np.float32,
-                 band=None):
+    def __init__(self, phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
+                 speed: str = "constant", scale: float = 0.0, aux: np.ndarray | None = None,
+                 velocity: ArrayLike | None = None, band_width: float = 5.0,
+                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
+                 reinit_ring: int = 3, max_speed: float | None = None,
+                 aux_at: Callable[[float], np.ndarray] | None = None, device: DeviceLike = None,
+                 dtype: DTypeLike = np.float32, band: float | None = None):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -195,7 +199,7 @@ class RegionTracker:
             src, dst = dst, src
         return step, compact(self.runtime, src)
 
-    def reinitialize(self, iterations=None) -> None:
+    def reinitialize(self, iterations: int | None = None) -> None:
         """Every level set back to a signed distance in the reinitialisation band."""
         g = self.grid
         its = self.reinit_iterations if iterations is None else int(iterations)
@@ -279,7 +283,7 @@ class RegionTracker:
                           g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
                           *self._cutoff(), *g.strides(), channels=self.nc)
 
-    def step(self, dt) -> None:
+    def step(self, dt: float) -> None:
         """One Heun (TVD Runge-Kutta 2) step of every level set."""
         g = self.grid
         self._euler(self.cur, self.nxt, dt)
@@ -289,7 +293,7 @@ class RegionTracker:
         self.time += dt
         self.steps += 1
 
-    def advance(self, until, bar=None) -> None:
+    def advance(self, until: float, bar: tqdm | None = None) -> None:
         """Step to time `until` (the speeds' time unit), reinitialising every few steps.
 
         Steps go in blocks of `reinit_every`, each block followed by a reinitialisation. A
@@ -311,8 +315,9 @@ class RegionTracker:
             self.reinitialize()
             dt = self.stable_dt()
 
-    def iterate(self, times, *, origin=(0.0, 0.0, 0.0), keep_volumes: bool = False,
-                palette=None, partition: bool = False, bar=None) -> Iterator[RegionFrame]:
+    def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
+                keep_volumes: bool = False, palette: ArrayLike | None = None,
+                partition: bool = False, bar: tqdm | None = None) -> Iterator[RegionFrame]:
         """Advance to each of `times` (ascending) in turn, yielding the RegionFrame there
         (see `make_frame`); `bar` is a tqdm bar counting time."""
         for when in times:
@@ -354,13 +359,13 @@ class RegionTracker:
             span = min(span, n * dt)
         return [span / n] * n, dt
 
-    def set_aux(self, values) -> None:
+    def set_aux(self, values: ArrayLike) -> None:
         """Replace the auxiliary volume (nz, ny, nx) on the device (speed='array': the speed)."""
         g = self.grid
         padded = g.pad(np.asarray(values, np.float64)[None], "edge")
         self.aux.set(np.ascontiguousarray(padded, g.dtype))
 
-    def volumes(self):
+    def volumes(self) -> tuple[np.ndarray, np.ndarray]:
         """(Phi, Phi-hats) in world units on the host."""
         data = self.grid.download(self.cur).astype(np.float64) * self.h
         return data[0], data[1:]
@@ -477,10 +482,16 @@ def _speed_setup(beta, target, weight, h, shape, coords):
     return "array", -weight / h, _beta_array(arr, shape), None
 
 
-def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
-                 mesh=None, palette=None, target=None, velocity=None, weight=1.0, band_width=5.0, reinit_every=4,
-                 reinit_iterations=6, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
-                 dtype=np.float32, progress=None, band=None) -> list[RegionFrame]:
+def track_region(phi: ArrayLike, region: ArrayLike | list,
+                 beta: float | str | ArrayLike | Callable = 1.0, t: float = 1.0,
+                 spacing: float = 1.0, saves: int | Iterable[float] = 1, *,
+                 origin: ArrayLike = (0.0, 0.0, 0.0), mesh: object = None,
+                 palette: ArrayLike | None = None, target: ArrayLike | None = None,
+                 velocity: ArrayLike | None = None, weight: float = 1.0, band_width: float = 5.0,
+                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
+                 max_speed: float | None = None, keep_volumes: bool = False,
+                 device: DeviceLike = None, dtype: DTypeLike = np.float32,
+                 progress: bool | None = None, band: float | None = None) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
@@ -563,8 +574,8 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
                                     palette=palette, partition=partition, bar=bar))
 
 
-def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
-               palette=None, partition=False) -> RegionFrame:
+def make_frame(tracker: RegionTracker, time: float, origin: ArrayLike, keep_volumes: bool = False,
+               palette: ArrayLike | None = None, partition: bool = False) -> RegionFrame:
     """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region (with partition,
     every face in one: slivers where the labels' boundaries part by rounding go to the
     nearest region)."""
