@@ -18,8 +18,9 @@ from __future__ import annotations
 import numpy as np
 
 from ._state import renamed_keyword
+from ._validation import check_steps as _check_steps
 from .imagedata import InputError, compute_dtype, to_kernel_layout
-from .planar import FLOWS, PlanarFlow, _check_steps
+from .planar import FLOWS, PlanarFlow
 from .runtime import get_runtime
 
 RADIUS = 1  # every planar.cl and rof.cl step reads the 3x3 neighbourhood only

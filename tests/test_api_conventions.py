@@ -161,3 +161,14 @@ def test_inpaint_return_shapes():
     assert np.array_equal(out, out_info) and np.array_equal(out, out_states)
     assert isinstance(info, InpaintInfo) and info.snapshots == []
     assert [s.step for s in states] == [s.step for s in both.snapshots]
+
+
+def test_tiled_forms_take_dtype():
+    from clpde import tiled
+
+    image = np.random.default_rng(1).random((40, 40))
+    new = tiled.diffuse(image, "tv", steps=4, chunks=16, dtype=np.float64)
+    with pytest.warns(DeprecationWarning):
+        old = tiled.diffuse(image, "tv", steps=4, chunks=16, precision=np.float64)
+    assert np.array_equal(new, old)
+    assert np.array_equal(new, clpde.diffuse(image, "tv", steps=4, dtype=np.float64))
