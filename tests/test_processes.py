@@ -118,8 +118,8 @@ def test_surface_tracker_inpainting_and_region_tracker_pickle_by_value():
     frames = np.stack([((yy - 16) ** 2 + (xx - 12 - 2 * k) ** 2 < 36).astype(np.float32)
                        for k in range(3)])
     tracker = clpde.MorphingTracker(frames, frames[0] > 0, max_iterations=8)
-    masks = [s.mask for s in _round_trip(tracker)]
-    assert all(np.array_equal(a, s.mask) for a, s in zip(masks, tracker))
+    masks = [s.mask for s in _round_trip(tracker).iterate()]
+    assert all(np.array_equal(a, s.mask) for a, s in zip(masks, tracker.iterate()))
 
     image = _images(1)[0]
     mask = np.zeros(image.shape, bool)

@@ -124,11 +124,11 @@ def test_unwritable_pocl_cache_dir_falls_back_to_a_writable_one(tmp_path):
 
 def test_float64_needs_fp64(runtime):
     if runtime.fp64:
-        out = clpde.diffuse(np.random.default_rng(0).random((16, 16)), steps=3, precision=np.float64)
+        out = clpde.diffuse(np.random.default_rng(0).random((16, 16)), steps=3, dtype=np.float64)
         assert out.dtype == np.float64
     else:
         with pytest.raises(ClpdeError, match="fp64"):
-            clpde.diffuse(np.zeros((16, 16)), steps=3, precision=np.float64)
+            clpde.diffuse(np.zeros((16, 16)), steps=3, dtype=np.float64)
 
 
 def test_warnings_are_not_raised_by_normal_use():
