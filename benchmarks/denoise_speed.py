@@ -83,7 +83,7 @@ def main(argv=None) -> int:
     ours(sigma=SIGMA, method="gradient", max_steps=5)()  # builds the gradient kernels
 
     exact, _ = clpde.denoise_tv(noisy, weight=0.1, tol=1e-7, max_steps=20000,
-                                precision=np.float64, device=runtime, return_info=True)
+                                dtype=np.float64, device=runtime, return_info=True)
     # The configurations: (package, method, params, callable, note, error column, repeats).
     # Weight sweeps and the oracle step count are settled first, untimed.
     chambolle_sweep = {w: denoise_tv_chambolle(noisy, weight=w) for w in WEIGHTS}

@@ -202,7 +202,7 @@ def reinit_accuracy():
             row = {"n": n, "case": name}
             for fix in (True, False):
                 ls = LevelSet(get_runtime(), u0)
-                ls.reinitialise(40, subcell_fix=fix)
+                ls.reinitialize(40, subcell_fix=fix)
                 u = ls.values()
                 key = "subcell" if fix else "plain"
                 row[f"{key}_band_error"] = float(np.abs(u - true)[band].mean())

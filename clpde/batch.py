@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .imagedata import InputError
-from .io import IMAGE_FORMATS, atomic_output, move_folder_in
+from .io import IMAGE_FORMATS, atomic_output, replace_folder
 
 COMMANDS = ("inpaint", "denoise", "diffuse", "track", "surface")
 FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
@@ -187,7 +187,7 @@ def _run_into_folder(spec: dict, output: str) -> None:
         status = args.run(args)
         if status:
             raise InputError(f"clpde {spec['command']} exited with status {status}")
-        move_folder_in(staging, final)  # a rerun with other options: the old result goes only now
+        replace_folder(staging, final)  # a rerun with other options: the old result goes only now
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise

@@ -52,15 +52,19 @@ from __future__ import annotations
 
 import inspect
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
 from scipy import ndimage
 
 from . import multiresolution as mr
 from ._progress import progress_bar
+from ._state import DeviceLike, State, deprecated, renamed_keyword
 from ._validation import positive
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .fields import Field, Grid, PingPong, check_fits, index_list
@@ -88,13 +92,18 @@ GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
 @dataclass
-class InpaintState:
+class InpaintState(State):
     """One intermediate state: the whole image (in the input's layout and dtype)."""
 
     level: int  # 0 is the finest
     step: int  # steps taken on this level so far
     image: np.ndarray
     change: float | None = None  # largest change in Omega over the last check interval
+
+    @property
+    def time(self) -> None:
+        """None: inpainting mixes transport and diffusion steps, it has no single time."""
+        return None
 
 
 @dataclass
@@ -493,6 +502,13 @@ class LevelSolver:
 # method="transport" on one box: the levels, coarse to fine
 
 
+# InpaintParams' fields that `inpaint` names in its signature (the others go in **options),
+# in the fields' order
+_TRANSPORT_ARGS = ("dt", "transport_steps", "diffusion_steps", "diffusion_dt", "epsilon",
+                   "presmooth", "scaling", "rotation", "max_steps", "tol", "mean_tol",
+                   "check_every", "fill", "keep_band")
+
+
 def transport_params(params: dict) -> InpaintParams:
     unknown = set(params) - set(InpaintParams.__dataclass_fields__)
     if unknown:
@@ -598,17 +614,21 @@ class Inpainting:
     """Inpainting whose intermediate states can be watched.
 
     >>> job = Inpainting(image, mask, channel_axis=-1)
-    >>> for state in job.states(every=100):
+    >>> for state in job.iterate(every=100):
     ...     show(state.image)
     >>> out = job.result
 
-    The keyword arguments are those of `inpaint`. Intermediate states come from
-    method="transport" only; other methods yield their start and their result.
+    The keyword arguments are those of `inpaint` (its docstring has them and the return
+    shapes). Intermediate states come from method="transport" only; other methods yield
+    their start and their result.
     """
 
-    def __init__(self, image, mask=None, *, channel_axis=None, alpha=None, colour="channels",
-                 levels=None, device=None, precision=None, progress=None, method=None,
-                 boxes=True, seed=None, **params):
+    def __init__(self, image: ArrayLike, mask: ArrayLike | None = None, *,
+                 channel_axis: int | None = None, alpha: bool | None = None,
+                 colour: str = "channels", levels: int | None = None, device: DeviceLike = None,
+                 dtype: DTypeLike | None = None, progress: bool | None = None,
+                 method: str | None = None, boxes: bool = True, seed: int | None = None,
+                 precision: DTypeLike | None = None, **params: Any):
         from . import inpainting
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
@@ -642,7 +662,7 @@ class Inpainting:
         self.ncolour = ncolour
         self.levels = levels
         self.device = device
-        self.dtype = compute_dtype(None, precision)
+        self.dtype = compute_dtype(None, renamed_keyword("dtype", dtype, "precision", precision))
         self.progress = progress
         self.result = None
         self.info = None
@@ -688,7 +708,11 @@ class Inpainting:
             self.mask, lambda crop: margin(self.module, crop, self.params),
             (lambda crop: align(crop, **self.params)) if callable(align) else lambda crop: 1)
 
-    def states(self, every: int | None = None):
+    @deprecated("iterate", "states")
+    def states(self, every: int | None = None) -> Iterator[InpaintState]:
+        """Deprecated alias of `iterate`."""
+
+    def iterate(self, every: int | None = None) -> Iterator[InpaintState]:
         """Run to the end, yielding an InpaintState at the start of the finest level, every
         `every` steps there (rounded to whole check intervals) and at the end. Coarser
         levels run without yielding. Afterwards `result` and `info` are set."""
@@ -748,12 +772,12 @@ class Inpainting:
             yield InpaintState(0, info.steps, self.result)
 
     def run(self) -> np.ndarray:
-        for _ in self.states():
+        for _ in self.iterate():
             pass
         return self.result
 
 
-def choose_method(omega: np.ndarray, method, params=()) -> str:
+def choose_method(omega: np.ndarray, method: str | None, params=()) -> str:
     """The method to run. None is "auto", unless `params` holds one of the transport's own
     options (InpaintParams), when it is "transport" (the thesis's scheme); "auto" is the
     first installed of inpainting.AUTO (docs/inpainting.md has the measurements)."""
@@ -769,12 +793,18 @@ def choose_method(omega: np.ndarray, method, params=()) -> str:
     return method
 
 
-def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
-            diffusion_steps=2, diffusion_dt=0.1, epsilon=3.0, presmooth=1,
-            scaling="none", rotation="ccw", max_steps=3000, tol=1e-4, mean_tol=4e-4, check_every=2,
-            levels=None, colour="channels", alpha=None, fill="biharmonic", keep_band=True, device=None,
-            precision=None, progress=None, snapshots=None, return_info=False, method=None,
-            boxes=True, seed=None, **options):
+def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: int | None = None,
+            dt: float = 0.1, transport_steps: int = 15, diffusion_steps: int = 2,
+            diffusion_dt: float = 0.1, epsilon: float = 3.0, presmooth: int = 1,
+            scaling: str = "none", rotation: str = "ccw", max_steps: int = 3000,
+            tol: float = 1e-4, mean_tol: float = 4e-4, check_every: int = 2,
+            levels: int | None = None, colour: str = "channels", alpha: bool | None = None,
+            fill: str = "biharmonic", keep_band: bool = True, device: DeviceLike = None,
+            dtype: DTypeLike | None = None, progress: bool | None = None,
+            snapshots: int | None = None, return_info: bool = False, method: str | None = None,
+            boxes: bool = True, seed: int | None = None, precision: DTypeLike | None = None,
+            **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
+                                | tuple[np.ndarray, list[InpaintState]]):
     """Fill the masked region of an image.
 
     image: 2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8,
@@ -838,16 +868,22 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
         that no seam is left) or 'upsampled' (the upsampled coarse result as it is).
     A soft mask's fidelity acts after every A + B cycle on the finest level: a pixel of
         damage m is moved (1 - m) of the way back to its observed value.
-    snapshots: an integer N: also return intermediate states every N steps of the finest
-        level, as `(image, [InpaintState, ...])` (or in info.snapshots with return_info).
+    snapshots: an integer N: also keep the intermediate states (InpaintState) every N steps
+        of the finest level.
     return_info: also return an InpaintInfo (steps taken, whether it converged, ...).
+    dtype: the device's arithmetic, float32 (default) or float64 (`precision=` is its
+        deprecated old name). device, progress: as for `clpde.diffuse`.
 
-    The output has the input's shape and dtype, and equals it bit for bit outside the mask.
+    Returns one of three shapes (a public contract, kept as it is):
+    - `image` by default;
+    - `(image, info)` with return_info (then info.snapshots holds the states, if asked for);
+    - `(image, [InpaintState, ...])` with snapshots and without return_info.
+    `image` has the input's shape and dtype, and equals it bit for bit outside the mask.
+    `Inpainting` is the object form with the same keywords: `iterate(every)` yields the
+    states, and `result` and `info` are set at the end.
     """
-    transport = dict(dt=dt, transport_steps=transport_steps, diffusion_steps=diffusion_steps,
-                     diffusion_dt=diffusion_dt, epsilon=epsilon, presmooth=presmooth,
-                     scaling=scaling, rotation=rotation, max_steps=max_steps, tol=tol,
-                     mean_tol=mean_tol, check_every=check_every, fill=fill, keep_band=keep_band)
+    given = locals()  # the transport options are InpaintParams' fields, named alike here
+    transport = {name: given[name] for name in _TRANSPORT_ARGS}
     if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer))
                                   or snapshots < 1):
         raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")
@@ -856,10 +892,11 @@ def inpaint(image, mask=None, *, channel_axis=None, dt=0.1, transport_steps=15,
     defaults = inspect.signature(inpaint).parameters
     params = {k: v for k, v in transport.items() if not _same(v, defaults[k].default)}
     params.update(options)
+    dtype = renamed_keyword("dtype", dtype, "precision", precision)
     job = Inpainting(image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour,
-                     levels=levels, device=device, precision=precision, progress=progress,
+                     levels=levels, device=device, dtype=dtype, progress=progress,
                      method=method, boxes=boxes, seed=seed, **params)
-    states = list(job.states(every=snapshots))
+    states = list(job.iterate(every=snapshots))
     if snapshots:
         job.info.snapshots = states
     if return_info:

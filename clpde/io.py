@@ -97,9 +97,7 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
-        png = dtype in (np.dtype(np.uint8), np.dtype(bool)) or (
-            dtype == np.uint16 and channels == 1
-        )
+        png = dtype in (np.dtype(np.uint8), np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
             f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
@@ -301,9 +299,7 @@ def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
         raise InputError(
             f"output folder {outdir} is not empty ({len(entries)} entries); choose a new "
             f"folder, or give {option} to replace its contents")
-    foreign = [
-        e.name for e in entries if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES
-    ]
+    foreign = [e.name for e in entries if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES]
     if foreign:
         raise InputError(
             f"output folder {outdir} holds {foreign[0]!r}, which clpde does not write, so it "
@@ -322,25 +318,25 @@ def output_folder(outdir: PathLike, overwrite: bool = False, *,
     staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".part"))
     try:
         yield staging
-        move_folder_in(staging, outdir)
+        replace_folder(staging, outdir)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
 
 
-def move_folder_in(staging: Path, outdir: Path) -> None:
-    """Rename the finished folder `staging` to `outdir`, replacing an old `outdir` as a unit."""
+def replace_folder(staging: Path, final: Path) -> None:
+    """Put the finished folder `staging` in place of `final` (which may exist), so that a
+    reader sees the old folder or the new one, never a mixture."""
     os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
-    if outdir.exists():
+    if final.exists():
         # rename(2) may replace an empty folder: move the old one aside into an empty
         # temporary name, put the new one in place, then delete the old one
-        parent = outdir.parent if str(outdir.parent) else Path(".")
-        old = Path(tempfile.mkdtemp(dir=parent, prefix=f".{outdir.name}.", suffix=".old"))
-        os.replace(outdir, old)
-        os.replace(staging, outdir)
+        old = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{final.name}.", suffix=".old"))
+        os.replace(final, old)
+        os.replace(staging, final)
         shutil.rmtree(old, ignore_errors=True)
     else:
-        os.replace(staging, outdir)
+        os.replace(staging, final)
 
 
 def _umask() -> int:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cla
 
+from ._state import deprecated
 from .fields import Field, Grid, PingPong, compact, index_list
 from .imagedata import InputError
 
@@ -120,7 +121,7 @@ class LevelSet:
         are corrected at a later rebuild before the band reaches them.
         """
         self.dilate_band()
-        self.reinitialise(iterations, cells=compact(self.runtime, self._near_mask))
+        self.reinitialize(iterations, cells=compact(self.runtime, self._near_mask))
         self.build_band()
         self.rebuilds += 1
 
@@ -133,7 +134,12 @@ class LevelSet:
                  self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
 
     # ---- reinitialisation --------------------------------------------------------------
+    @deprecated("reinitialize", "reinitialise")
     def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT,
+                     cells=None, subcell_fix: bool = True) -> None:
+        """Deprecated spelling of `reinitialize`."""
+
+    def reinitialize(self, iterations: int | None = None, dt: float = REINIT_DT,
                      cells=None, subcell_fix: bool = True) -> None:
         """PDE reinitialisation with the Russo-Smereka subcell fix at the front, of the
         given cells (an IndexList; default: every cell inside the frozen margin).

@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
 from ._progress import is_long_run, progress_bar
+from ._state import State, renamed_keyword
 from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import to_kernel_layout
@@ -69,8 +70,8 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
 
 
 @dataclass
-class FlowState:
-    """One yielded state of a running flow."""
+class FlowState(State):
+    """One yielded state of a running flow: steps and time so far, the image like the input."""
 
     step: int
     time: float
@@ -109,9 +110,9 @@ class PlanarFlow:
 
     def __init__(self, image: ArrayLike, flow: str = "heat", *, dt: float | None = None,
                  channel_axis: int | None = None, device: str | int | None = None,
-                 precision: DTypeLike | None = None, kappa: float | None = None,
+                 dtype: DTypeLike | None = None, kappa: float | None = None,
                  edge: str | None = None, eps: float | None = None,
-                 weight: ArrayLike | None = None):
+                 weight: ArrayLike | None = None, precision: DTypeLike | None = None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
         given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight}
@@ -123,7 +124,7 @@ class PlanarFlow:
         kappa = 0.05 if kappa is None else kappa
         edge = "exp" if edge is None else edge
         self.runtime = get_runtime(device)
-        dtype = np.dtype(precision or np.float32)
+        dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
         # two fields (ping-pong) and the curvature flow's one-channel weight
         def fits(shape):
             check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None), dtype=dtype)
@@ -218,8 +219,8 @@ class PlanarFlow:
 
 def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
             channel_axis: int | None = None, device: str | int | None = None, *,
-            progress: bool | None = None, precision: DTypeLike | None = None,
-            **params) -> np.ndarray:
+            progress: bool | None = None, dtype: DTypeLike | None = None,
+            precision: DTypeLike | None = None, **params: ArrayLike | float | str) -> np.ndarray:
     """Run a planar diffusion flow for `steps` explicit steps.
 
     Parameters
@@ -242,8 +243,10 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
         An OpenCL device ('cpu', 'gpu', an index or a name part; see `clpde.devices`).
     progress : bool, optional
         Draw a progress bar; by default only for long runs on a terminal.
-    precision : {float32, float64}, optional
+    dtype : {float32, float64}, optional
         The device's arithmetic (float32 by default).
+    precision : {float32, float64}, optional
+        Deprecated old name of `dtype`.
     **params
         The flow's parameters named above; one that the flow does not take is an error.
 
@@ -269,8 +272,9 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
     if unknown:
         listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())
         raise InputError(f"diffuse takes no parameter {unknown[0]!r}; the flows take ({listed})")
+    dtype = renamed_keyword("dtype", dtype, "precision", precision)
     state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
-                       precision=precision, **params)
+                       dtype=dtype, **params)
     return state.run(steps, progress).result()
 
 

@@ -23,12 +23,16 @@ sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
+from tqdm.auto import tqdm  # (the bars' type)
 
 from ._progress import progress_bar
+from ._state import DeviceLike, State, renamed_keyword
 from .fields import IndexList, check_fits, compact
 from .imagedata import InputError
 from .imagedata import positive as _positive
@@ -68,7 +72,7 @@ __all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_regi
 
 
 @dataclass
-class RegionFrame:
+class RegionFrame(State):
     """The surface and its regions at one saved time."""
 
     time: float
@@ -77,13 +81,14 @@ class RegionFrame:
     boundaries: list = field(default_factory=list)  # (k, 3) points on each region's boundary
     phi: np.ndarray | None = None  # world-unit level sets, (nz, ny, nx)
     phihat: np.ndarray | None = None  # (regions, nz, ny, nx)
+    step: int = 0  # the tracker's steps so far
 
-    def area(self, label=None) -> float:
+    def area(self, label: int | None = None) -> float:
         """Area of region `label` (of the whole surface when None)."""
         areas = self.mesh.area_faces
         return float(areas.sum() if label is None else areas[self.face_labels == label].sum())
 
-    def area_fraction(self, label=0) -> float:
+    def area_fraction(self, label: int = 0) -> float:
         return self.area(label) / self.area()
 
 
@@ -93,15 +98,19 @@ class RegionTracker:
 
     phi: (nz, ny, nx) signed distance (world units, negative inside); phihat: (L, nz, ny, nx)
     auxiliary functions. speed: one of SPEEDS with `scale` converting it to grid units, or
-    velocity (cells per unit time) for rigid translation. band: half-width in cells of the
+    velocity (cells per unit time) for rigid translation. band_width: half-width in cells of the
     band that is stepped; reinitialisation covers the band dilated by `reinit_ring` cells.
     aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     """
 
-    def __init__(self, phi, phihat, spacing, *, speed="constant", scale=0.0, aux=None,
-                 velocity=None, band=5.0, reinit_every=4, reinit_iterations=6, cfl=0.4,
-                 reinit_ring=3, max_speed=None, aux_at=None, device=None, dtype=np.float32):
+    def __init__(self, phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
+                 speed: str = "constant", scale: float = 0.0, aux: np.ndarray | None = None,
+                 velocity: ArrayLike | None = None, band_width: float = 5.0,
+                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
+                 reinit_ring: int = 3, max_speed: float | None = None,
+                 aux_at: Callable[[float], np.ndarray] | None = None, device: DeviceLike = None,
+                 dtype: DTypeLike = np.float32, band: float | None = None):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -114,7 +123,7 @@ class RegionTracker:
         self.mode = SPEEDS[speed]
         self.scale = float(scale)
         self.velocity = None if velocity is None else np.asarray(velocity, np.float64)
-        self.width = float(band)
+        self.width = float(renamed_keyword("band_width", band_width, "band", band, 5.0))
         self.reinit_every = int(reinit_every)
         self.reinit_iterations = int(reinit_iterations)
         self.reinit_ring = int(reinit_ring)
@@ -204,7 +213,7 @@ class RegionTracker:
             src, dst = dst, src
         return step, compact(self.runtime, src)
 
-    def reinitialize(self, iterations=None) -> None:
+    def reinitialize(self, iterations: int | None = None) -> None:
         """Every level set back to a signed distance in the reinitialisation band."""
         g = self.grid
         its = self.reinit_iterations if iterations is None else int(iterations)
@@ -288,7 +297,7 @@ class RegionTracker:
                           g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
                           *self._cutoff(), *g.strides(), channels=self.nc)
 
-    def step(self, dt) -> None:
+    def step(self, dt: float) -> None:
         """One Heun (TVD Runge-Kutta 2) step of every level set."""
         g = self.grid
         self._euler(self.cur, self.nxt, dt)
@@ -298,7 +307,7 @@ class RegionTracker:
         self.time += dt
         self.steps += 1
 
-    def advance(self, until, bar=None) -> None:
+    def advance(self, until: float, bar: tqdm | None = None) -> None:
         """Step to time `until` (the speeds' time unit), reinitialising every few steps.
 
         Steps go in blocks of `reinit_every`, each block followed by a reinitialisation. A
@@ -319,6 +328,15 @@ class RegionTracker:
                     bar.update(step)
             self.reinitialize()
             dt = self.stable_dt()
+
+    def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
+                keep_volumes: bool = False, palette: ArrayLike | None = None,
+                partition: bool = False, bar: tqdm | None = None) -> Iterator[RegionFrame]:
+        """Advance to each of `times` (ascending) in turn, yielding the RegionFrame there
+        (see `make_frame`); `bar` is a tqdm bar counting time."""
+        for when in times:
+            self.advance(when, bar)
+            yield make_frame(self, when, origin, keep_volumes, palette, partition)
 
     MAX_STEPS = 100_000
 
@@ -355,13 +373,13 @@ class RegionTracker:
             span = min(span, n * dt)
         return [span / n] * n, dt
 
-    def set_aux(self, values) -> None:
+    def set_aux(self, values: ArrayLike) -> None:
         """Replace the auxiliary volume (nz, ny, nx) on the device (speed='array': the speed)."""
         g = self.grid
         padded = g.pad(np.asarray(values, np.float64)[None], "edge")
         self.aux.set(np.ascontiguousarray(padded, g.dtype))
 
-    def volumes(self):
+    def volumes(self) -> tuple[np.ndarray, np.ndarray]:
         """(Phi, Phi-hats) in world units on the host."""
         data = self.grid.download(self.cur).astype(np.float64) * self.h
         return data[0], data[1:]
@@ -478,10 +496,16 @@ def _speed_setup(beta, target, weight, h, shape, coords):
     return "array", -weight / h, _beta_array(arr, shape), None
 
 
-def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(0.0, 0.0, 0.0),
-                 mesh=None, palette=None, target=None, velocity=None, weight=1.0, band=5.0, reinit_every=4,
-                 reinit_iterations=6, cfl=0.4, max_speed=None, keep_volumes=False, device=None,
-                 dtype=np.float32, progress=None) -> list[RegionFrame]:
+def track_region(phi: ArrayLike, region: ArrayLike | list,
+                 beta: float | str | ArrayLike | Callable = 1.0, t: float = 1.0,
+                 spacing: float = 1.0, saves: int | Iterable[float] = 1, *,
+                 origin: ArrayLike = (0.0, 0.0, 0.0), mesh: object = None,
+                 palette: ArrayLike | None = None, target: ArrayLike | None = None,
+                 velocity: ArrayLike | None = None, weight: float = 1.0, band_width: float = 5.0,
+                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
+                 max_speed: float | None = None, keep_volumes: bool = False,
+                 device: DeviceLike = None, dtype: DTypeLike = np.float32,
+                 progress: bool | None = None, band: float | None = None) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
@@ -551,22 +575,20 @@ def track_region(phi, region, beta=1.0, t=1.0, spacing=1.0, saves=1, *, origin=(
         speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
         vel = None
     tracker = RegionTracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
-                            band=band, reinit_every=reinit_every,
+                            band_width=renamed_keyword("band_width", band_width, "band", band, 5.0),
+                            reinit_every=reinit_every,
                             reinit_iterations=reinit_iterations, cfl=cfl,
                             max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
                             aux_at=aux_at, device=device, dtype=dtype)
-    frames = []
     # the bar counts simulated time, so it prints rounded times rather than step counts
     with progress_bar(progress, t_end, "track regions", leave=False, unit="time",
                       bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
-        for when in times:
-            tracker.advance(when, bar)
-            frames.append(make_frame(tracker, when, origin, keep_volumes, palette, partition))
-    return frames
+        return list(tracker.iterate(times, origin=origin, keep_volumes=keep_volumes,
+                                    palette=palette, partition=partition, bar=bar))
 
 
-def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
-               palette=None, partition=False) -> RegionFrame:
+def make_frame(tracker: RegionTracker, time: float, origin: ArrayLike, keep_volumes: bool = False,
+               palette: ArrayLike | None = None, partition: bool = False) -> RegionFrame:
     """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region (with partition,
     every face in one: slivers where the labels' boundaries part by rounding go to the
     nearest region)."""
@@ -588,4 +610,5 @@ def make_frame(tracker: RegionTracker, time: float, origin, keep_volumes=False,
     colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], 1)
     out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
     return RegionFrame(time, out, labels, boundaries,
-                       phi if keep_volumes else None, phihat if keep_volumes else None)
+                       phi if keep_volumes else None, phihat if keep_volumes else None,
+                       tracker.steps)

@@ -22,6 +22,7 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
 from ._progress import is_long_run, progress_bar
+from ._state import renamed_keyword
 from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import compute_dtype, to_kernel_layout
@@ -66,7 +67,7 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
                tol: float | None = None, check_every: int | None = None,
                eps: float | None = None, dt: float | None = None,
                lambda_every: int | None = None, progress: bool | None = None,
-               precision: DTypeLike | None = None,
+               dtype: DTypeLike | None = None, precision: DTypeLike | None = None,
                return_info: bool = False) -> np.ndarray | tuple[np.ndarray, DenoiseInfo]:
     """Total-variation denoising (Rudin-Osher-Fatemi), run on the device to convergence.
 
@@ -102,8 +103,8 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
     channel_axis : int, optional
         The axis of the channels of a colour image, each denoised with its own lambda.
     method : {'primal-dual', 'gradient'}
-    device, progress, precision
-        As for `clpde.diffuse`.
+    device, progress, dtype
+        As for `clpde.diffuse` (`precision` is the deprecated old name of `dtype`).
     max_steps, tol, check_every, eps, dt, lambda_every
         The stopping test and the gradient method's parameters, as above.
     return_info : bool
@@ -133,6 +134,7 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if sigma is not None and weight is not None:
         raise InputError("give sigma (the noise level) or weight (the strength), not both")
+    precision = renamed_keyword("dtype", dtype, "precision", precision)
     runtime = get_runtime(device)
     # primal-dual: f, u and three dual fields of two components each; gradient: four fields
     def fits(shape):

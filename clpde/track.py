@@ -24,12 +24,16 @@ reports its final discrepancy in the band (TrackState.discrepancy), a confidence
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
 
 from ._progress import progress_bar
+from ._state import DeviceLike, State, deprecated, renamed_keyword
 from .fields import Field, PingPong, check_fits
 from .imagedata import InputError, value_range
 from .levelset import LevelSet, signed_distance
@@ -49,7 +53,7 @@ NEAR_EDGE = 1.0
 
 
 @dataclass
-class TrackState:
+class TrackState(State):
     """One frame's result: its boolean mask, the level set u (negative inside) and how the
     morphing went (iterations, whether it stopped on its own, band rebuilds)."""
 
@@ -62,6 +66,16 @@ class TrackState:
     info: dict = field(default_factory=dict)
     discrepancy: float = 0.0  # final mean |beta| in the band (lower: the frames agree)
     displacement: tuple = (0.0, 0.0)  # (dy, dx) the motion model shifted the start by
+
+    @property
+    def step(self) -> int:
+        """The frame's index: how far along the sequence the run is."""
+        return self.index
+
+    @property
+    def time(self) -> None:
+        """None: frames have indices, not times."""
+        return None
 
 
 def _check_frames(frames) -> list[np.ndarray]:
@@ -149,20 +163,22 @@ class MorphingTracker:
     """The object form of `track`: iterate to get each frame's mask and level set in turn.
 
     >>> tracker = MorphingTracker(frames, first_mask)
-    >>> for state in tracker:
+    >>> for state in tracker.iterate():
     ...     show(state.mask, state.level_set)
     """
 
-    def __init__(self, frames, first_mask, *, features="intensity", colour: bool = False,
-                 discrepancy: str = "ncc", motion="kalman", shape_weight: float = 0.0,
-                 equalize=False, smooth: bool = True, smooth_steps: int = 5,
+    def __init__(self, frames: ArrayLike, first_mask: ArrayLike, *,
+                 features: str | ArrayLike | Callable = "intensity", colour: bool = False,
+                 discrepancy: str = "ncc", motion: str | None = "kalman",
+                 shape_weight: float = 0.0, equalize: bool | str = False,
+                 smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
                  max_iterations: int = 40, tol: float = 0.02, check_every: int = 2,
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
                  ncc_radius: int = 3,
-                 huber_delta: float = 0.05, search_radius: int = 6, device=None,
-                 precision=None):
+                 huber_delta: float = 0.05, search_radius: int = 6, device: DeviceLike = None,
+                 dtype: DTypeLike | None = None, precision: DTypeLike | None = None):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
         self._user = None
@@ -210,7 +226,7 @@ class MorphingTracker:
         self.max_dt = max(float(max_dt), self.dt)
         self.reinit_iterations = int(reinit_iterations)
         self.runtime = get_runtime(device)
-        self.dtype = np.dtype(precision or np.float32)
+        self.dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
         from .levelset import GHOST, MARGIN
 
@@ -340,7 +356,12 @@ class MorphingTracker:
         return iterations, converged, residual
 
     # ---- iteration ---------------------------------------------------------------------
-    def __iter__(self):
+    @deprecated("iterate", "__iter__")
+    def __iter__(self) -> Iterator[TrackState]:
+        """Deprecated: iterate over `tracker.iterate()`."""
+
+    def iterate(self) -> Iterator[TrackState]:
+        """Track frame after frame, yielding each one's TrackState (frame 0's first)."""
         from .track_features import MotionFilter, shift_image
 
         mask = self.first_mask
@@ -437,11 +458,13 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
     return keep[labels]
 
 
-def track(frames, first_mask, *, features="intensity", equalize=False,
+def track(frames: ArrayLike, first_mask: ArrayLike, *,
+          features: str | ArrayLike | Callable = "intensity", equalize: bool | str = False,
           smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
-          max_iterations: int = 40, tol: float = 0.02, min_size: int = 0, device=None,
-          progress=None, return_level_sets: bool = False, return_discrepancy: bool = False,
-          **options):
+          max_iterations: int = 40, tol: float = 0.02, min_size: int = 0,
+          device: DeviceLike = None, progress: bool | None = None,
+          return_level_sets: bool = False, return_discrepancy: bool = False,
+          **options: Any) -> np.ndarray | tuple[np.ndarray, ...]:
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
     frames: a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence of T such frames
@@ -488,8 +511,8 @@ def track(frames, first_mask, *, features="intensity", equalize=False,
     masks = np.zeros((n, height, width), bool)
     levels = np.zeros((n, height, width), np.float32) if return_level_sets else None
     residuals = np.zeros(n)
-    for state in progress_bar(progress, n, "clpde track", iterable=tracker, unit="frame",
-                              long_run=n >= 20):
+    for state in progress_bar(progress, n, "clpde track", iterable=tracker.iterate(),
+                              unit="frame", long_run=n >= 20):
         masks[state.index] = state.mask
         residuals[state.index] = state.discrepancy
         if levels is not None:

@@ -58,7 +58,7 @@ def main():
 
     vertices, faces, curv = fsaverage_white_left()
     cortex = trimesh.Trimesh(vertices, faces, process=False)
-    surf = ImplicitSurface.from_mesh(cortex, resolution=args.resolution, band=12.0)
+    surf = ImplicitSurface.from_mesh(cortex, resolution=args.resolution, band_width=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
     start = time.perf_counter()
     # the region: FreeSurfer's sulci, a mask over the vertices of the original mesh (mesh=).

@@ -64,7 +64,7 @@ def main():
         sigma = 0.2
         noisy = checker(torus) + surface_noise(torus, sigma, np.random.default_rng(4))
         denoised, info = torus.denoise_tv(noisy, sigma=sigma, t=40 * h**2, return_info=True)
-        print(f"  TV denoising: residual variance {info['residual_variance']:.4f}, "
+        print(f"  TV denoising: residual variance {info.residual_variance:.4f}, "
               f"sigma^2 = {sigma**2:.4f}")
         flowed = torus.tv(noisy, t=tv_time(sigma, h))  # flattens the noise, keeps the squares
         save(out / "surface_fig4_4.png",

@@ -207,7 +207,7 @@ def test_snapshots_and_object_form():
     assert steps[0] == 0 and steps[-1] == 340 and steps == sorted(steps) and len(steps) >= 5
     assert np.array_equal(states[-1].image, out)
     job = Inpainting(image, hole, tol=0, max_steps=68)
-    assert [s.step for s in job.states(every=34)] == [0, 34, 68, 68]
+    assert [s.step for s in job.iterate(every=34)] == [0, 34, 68, 68]
     assert job.info.steps == 68 and np.array_equal(job.result[~hole], image[~hole])
 
 

@@ -158,7 +158,7 @@ def test_reinitialisation_restores_unit_gradient_and_keeps_the_front(runtime, di
     else:
         u0 = true * (1.5 + np.sin(x / 3.0) * np.cos(y / 4.0))
     ls = LevelSet(runtime, u0, band_width=3.0)
-    ls.reinitialise(iterations=40)
+    ls.reinitialize(iterations=40)
     u = ls.values()
     band = np.abs(true) < 3
     gy, gx = np.gradient(u)
@@ -201,6 +201,6 @@ def test_plain_reinit_matches_reference_and_the_subcell_fix_is_more_accurate(run
         errors = []
         for fix in (True, False):
             ls = LevelSet(runtime, u0)
-            ls.reinitialise(40, subcell_fix=fix)
+            ls.reinitialize(40, subcell_fix=fix)
             errors.append(np.abs(ls.values() - true)[band].mean())
         assert errors[0] * 3 < errors[1], errors

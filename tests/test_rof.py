@@ -127,7 +127,7 @@ def test_device_iterations_are_the_textbook_fgp(rng, shape):
     """Reflected ghosts reproduce the zero-flux gradient/divergence pair exactly."""
     f = unit_range(rng, shape)
     for steps in (1, 2, 17):
-        got = clpde.denoise_tv(f, weight=0.25, max_steps=steps, tol=1e-12, precision=np.float64)
+        got = clpde.denoise_tv(f, weight=0.25, max_steps=steps, tol=1e-12, dtype=np.float64)
         np.testing.assert_allclose(got, ref.fgp(f, 4.0, steps), atol=1e-12)
     got32 = clpde.denoise_tv(f, weight=0.25, max_steps=17, tol=1e-12)
     np.testing.assert_allclose(got32, ref.fgp(f, 4.0, 17), atol=2e-5)

@@ -81,8 +81,7 @@ def test_kernels_are_built_once_and_reused(runtime):
 def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
     (tmp_path / "common.cl").write_text((rt_mod.KERNEL_DIR / "common.cl").read_text())
     (tmp_path / "broken.cl").write_text(
-        '#include "common.cl"\n\n'
-        "__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n"
+        '#include "common.cl"\n\n__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n'
     )
     monkeypatch.setattr(rt_mod, "KERNEL_DIR", tmp_path)
     with pytest.raises(KernelBuildError) as info:
@@ -125,13 +124,11 @@ def test_unwritable_pocl_cache_dir_falls_back_to_a_writable_one(tmp_path):
 
 def test_float64_needs_fp64(runtime):
     if runtime.fp64:
-        out = clpde.diffuse(
-            np.random.default_rng(0).random((16, 16)), steps=3, precision=np.float64
-        )
+        out = clpde.diffuse(np.random.default_rng(0).random((16, 16)), steps=3, dtype=np.float64)
         assert out.dtype == np.float64
     else:
         with pytest.raises(ClpdeError, match="fp64"):
-            clpde.diffuse(np.zeros((16, 16)), steps=3, precision=np.float64)
+            clpde.diffuse(np.zeros((16, 16)), steps=3, dtype=np.float64)
 
 
 def test_warnings_are_not_raised_by_normal_use():
@@ -178,9 +175,7 @@ def _calls():
     mask = np.zeros(image.shape, bool)
     mask[8:14, 10:20] = True
     yy, xx = np.mgrid[:24, :24]
-    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25) for k in range(2)]).astype(
-        np.uint8
-    )
+    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25) for k in range(2)]).astype(np.uint8)
     phi, z = _sphere_phi()
     return {
         "diffuse": lambda: clpde.diffuse(image, "tv", steps=3),
@@ -214,9 +209,7 @@ def test_requests_that_cannot_fit_are_refused_before_any_allocation(name, monkey
 def test_a_huge_image_is_refused_without_converting_it():
     # 10^10 pixels that take no memory: the refusal must come before any float copy
     huge = np.broadcast_to(np.uint8(7), (100_000, 100_000))
-    with pytest.raises(
-        rt_mod.DeviceMemoryError, match=r"the heat flow of 100000x100000 values needs"
-    ):
+    with pytest.raises(rt_mod.DeviceMemoryError, match=r"the heat flow of 100000x100000 values needs"):
         clpde.diffuse(huge, steps=1)
 
 

@@ -169,9 +169,9 @@ def test_tv_denoising_reaches_the_noise_variance(sphere05):
     after = np.abs(s.sample(out, pts) - s.sample(clean, pts)).mean()
     assert after < 0.6 * before, (before, after)
     # the dynamic lambda drives the residual variance to sigma^2 (measured 0.986 sigma^2)
-    assert 0.9 * sigma**2 < info["residual_variance"] < 1.1 * sigma**2, info["residual_variance"]
-    assert all(lam >= 0 for lam in info["lambda"]) and info["lambda"][-1] > 0
-    assert len(info["lambda"]) == -(-info["steps"] // 10)
+    assert 0.9 * sigma**2 < info.residual_variance < 1.1 * sigma**2, info.residual_variance
+    assert all(lam >= 0 for lam in info.lam_history) and info.lam_history[-1] > 0
+    assert len(info.lam_history) == -(-info.steps // 10)
 
 
 def test_dynamic_lambda_is_corrected_for_grid_scale_noise():
@@ -188,7 +188,7 @@ def test_dynamic_lambda_is_corrected_for_grid_scale_noise():
     for correct in (False, True):
         _, info = flows.denoise_tv(s, noisy, sigma=sigma, t=0.3, correct_lambda=correct,
                                    return_info=True)
-        ratios[correct] = info["residual_variance"] / sigma**2
+        ratios[correct] = info.residual_variance / sigma**2
     assert ratios[False] > 1.2, ratios  # measured 1.34
     assert 0.95 < ratios[True] < 1.05, ratios
 
@@ -309,7 +309,7 @@ def test_tv_stability_limit_is_enforced(sphere02):
     with pytest.warns(UserWarning, match="capped"):
         _, info = flows.denoise_tv(s, noisy, sigma=0.01, t=20 * limit, dt=limit, eps=0.5,
                                    return_info=True)
-    assert max(info["lambda"]) < 1e-6
+    assert max(info.lam_history) < 1e-6
 
 
 def test_line_field_regularisation_ignores_signs_and_restores_principal_directions(rng):

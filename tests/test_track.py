@@ -120,7 +120,7 @@ def test_topology_changes_need_no_special_code():
 def test_a_still_sequence_keeps_the_contour_and_stops_early():
     frames, truth = synthetic_sequence("translate", frames=1)
     frames = np.repeat(frames, 3, axis=0)
-    states = list(MorphingTracker(frames, truth[0]))
+    states = list(MorphingTracker(frames, truth[0]).iterate())
     assert [s.index for s in states] == [0, 1, 2]
     for s in states[1:]:
         assert iou(s.mask, truth[0]) > 0.97
@@ -200,7 +200,7 @@ def test_the_band_follows_a_front_that_moves_beyond_it():
     # 2 px per frame along x and 1 along y: the front leaves the first band (|u| < 3), so
     # the band must be rebuilt on the device while the contour moves.
     frames, truth = synthetic_sequence("translate", frames=4)
-    states = list(MorphingTracker(frames, truth[0], band_width=3, motion=None))
+    states = list(MorphingTracker(frames, truth[0], band_width=3, motion=None).iterate())
     assert sum(s.rebuilds for s in states[1:]) >= 2
     assert iou(states[-1].mask, truth[-1]) >= 0.9
 

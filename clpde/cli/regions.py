@@ -164,7 +164,7 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
     if isinstance(path, (str, os.PathLike)) and not os.path.exists(path):
         raise InputError(f"the mesh file {path} does not exist")
     with encloses_volume(path):
-        surf = ImplicitSurface.from_mesh(path, resolution=resolution, band=12.0)
+        surf = ImplicitSurface.from_mesh(path, resolution=resolution, band_width=12.0)
     phi, h, origin = surf.psi, surf.spacing, tuple(surf.origin)
     painted = None
     if regions == "colours":

@@ -188,7 +188,7 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
         after, info = surf.denoise_tv(before, sigma=sigma, t=t, return_info=True, progress=progress)
         return SurfaceRun(flow, surf, before, after,
                           f"TV denoising, sigma={sigma:g}: residual variance "
-                          f"{info['residual_variance']:.4g} (sigma^2 = {sigma**2:.4g})")
+                          f"{info.residual_variance:.4g} (sigma^2 = {sigma**2:.4g})")
     if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by TV
         clean = colour_pattern(surf)
         before = np.clip(clean + surface_noise(surf, sigma, rng, channels=3), 0.01, 1)
@@ -285,7 +285,7 @@ def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
         after, info = surf.denoise_tv(data, sigma=sigma, t=t, return_info=True, progress=progress)
         return SurfaceRun(flow, surf, data, after,
                           f"TV denoising of the mesh's data for noise sigma={sigma:g}: residual "
-                          f"variance {info['residual_variance']:.4g}")
+                          f"variance {info.residual_variance:.4g}")
     t = 4 * h**2 if t is None else t
     return SurfaceRun(
         flow,

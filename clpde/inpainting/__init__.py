@@ -9,7 +9,7 @@ Every method is a module of this package, imported only when asked for, with
   irrelevant (the caller may have put anything there).
 - omega: bool (rows, cols) array, True where to fill.
 - runtime: the clpde OpenCL runtime (`clpde.runtime.get_runtime`).
-- dtype: the device's compute type (float32, or float64 with precision="double").
+- dtype: the device's compute type (float32, or float64 with dtype=np.float64).
 - progress: None (tqdm decides), True or False: show a progress bar or not.
 - seed: for methods with randomness; the same seed gives the same result.
 - params: the method's own keyword options. Unknown names are turned into an InputError

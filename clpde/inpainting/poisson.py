@@ -279,7 +279,7 @@ class PoissonSolver:
             rr = self.rr_now.get().astype(np.float64).sum(axis=1)
             if not np.isfinite(rr).all():
                 raise ClpdeError("the conjugate-gradient solve diverged (a non-finite residual); "
-                                 "use precision='double'")
+                                 "use dtype=np.float64")
             if np.all((rr <= tol * tol * rr0) | (rr <= atol * atol)):
                 break
         self.iterations += it
@@ -328,7 +328,7 @@ class PoissonSolver:
             rr = self._rr(cur)
             if not np.isfinite(rr).all():
                 raise ClpdeError("the conjugate-gradient solve diverged (a non-finite residual); "
-                                 "use precision='double'")
+                                 "use dtype=np.float64")
             if np.all((rr <= tol * tol * rr0) | (rr <= atol * atol)):
                 break
         # the next solve starts from rr[0]

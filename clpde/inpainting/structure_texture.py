@@ -50,7 +50,7 @@ def _structure_solver(name):
         from ..inpaint import inpaint
 
         out = inpaint(np.moveaxis(data, 0, -1), omega, channel_axis=-1, device=runtime,
-                      precision="double" if np.dtype(dtype) == np.float64 else None,
+                      dtype=np.float64 if np.dtype(dtype) == np.float64 else None,
                       progress=progress)
         return np.moveaxis(out, -1, 0)
 

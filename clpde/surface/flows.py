@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyopencl.array as cla
+from numpy.typing import ArrayLike
 
 from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
@@ -20,11 +23,50 @@ from .._validation import InputError, check_time_step, positive
 # The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
 KERNEL_FILES = ("bricks.cl", "surface.cl")
 
+if TYPE_CHECKING:
+    from .implicit import ImplicitSurface
+
+
+@dataclass
+class SurfaceDenoiseInfo:
+    """What a surface denoise_tv run did (the surface's counterpart of clpde.DenoiseInfo).
+
+    steps: time steps run, of length dt; lam_history: the dynamic lambda after each of its
+    updates (every 10 steps; None for a fixed lam); residual_variance: mean (u - u0)^2 over
+    the surface (None for a fixed lam). ``info["key"]`` with the old dict's keys ("steps",
+    "dt", "lambda", "residual_variance") still works for one release, with a
+    DeprecationWarning.
+    """
+
+    steps: int
+    dt: float
+    lam_history: list[float] | None = None
+    residual_variance: float | None = None
+
+    @property
+    def lam(self) -> float | None:
+        """The final lambda (None for a fixed lam)."""
+        return self.lam_history[-1] if self.lam_history else None
+
+    _KEYS = {"steps": "steps", "dt": "dt", "lambda": "lam_history",
+             "residual_variance": "residual_variance"}
+
+    def __getitem__(self, key: str):
+        warnings.warn("denoise_tv's info is a SurfaceDenoiseInfo now; use its attributes "
+                      f"(info.{self._KEYS.get(key, key)}) instead of info[{key!r}]",
+                      DeprecationWarning, stacklevel=2)
+        value = getattr(self, self._KEYS[key]) if key in self._KEYS else None
+        if value is None:  # the old dict had no such key
+            raise KeyError(key)
+        return value
+
+
 # One-sided difference choices per axis: bit set = backward gradient (forward divergence).
 _ALL_SIDES = tuple(range(8))
 
 
-def stability_limit(surf, flow: str = "heat", eps: float = 1.0, lam: float = 0.0) -> float:
+def stability_limit(surf: ImplicitSurface, flow: str = "heat", eps: float = 1.0,
+                    lam: float = 0.0) -> float:
     """Largest stable explicit time step (world time units) of a flow on `surf`."""
     h2 = surf.spacing**2
     if flow in ("heat", "harmonic2", "along"):
@@ -175,7 +217,9 @@ def _signs(sides: int):
     return tuple(np.int32(-1 if (sides >> a) & 1 else 1) for a in range(3))
 
 
-def heat(surf, u, t, dt=None, *, weighted=False, alternate=True, progress=None) -> np.ndarray:
+def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *,
+         weighted: bool = False, alternate: bool = True,
+         progress: bool | None = None) -> np.ndarray:
     """Intrinsic heat flow on `surf` for time t: eq. (4.8), or (4.7) with weighted=True.
 
     Appendix E's scheme (one-sided gradient, projection on the tangent plane with N from
@@ -327,15 +371,19 @@ def _residual_variance(surf, u_dev, u0_dev, terms, eps):
     return resid / area
 
 
-def tv(surf, u, t, dt=None, *, eps=1.0, weighted=False, alternate=True, progress=None):
+def tv(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *,
+       eps: float = 1.0, weighted: bool = False, alternate: bool = True,
+       progress: bool | None = None) -> np.ndarray:
     """Intrinsic anisotropic (total variation) flow (4.10) for time t; eps (world gradient
     units) regularises |P grad u| so the explicit step stays bounded (dt <= h^2 eps / 6)."""
     return _run(surf, u, t, dt, "tv", p=1, eps=eps, weighted=weighted, alternate=alternate,
                 progress=progress)[0]
 
 
-def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, alternate=True,
-               correct_lambda=True, progress=None, return_info=False):
+def denoise_tv(surf: ImplicitSurface, u: ArrayLike, sigma: float | None = None, t: float = 1.0,
+               dt: float | None = None, *, lam: float | None = None, eps: float = 1.0,
+               alternate: bool = True, correct_lambda: bool = True, progress: bool | None = None,
+               return_info: bool = False) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
     """TV denoising on the surface with a fidelity term (C.1).
 
     Give the noise level sigma for the dynamic lambda of (C.2) (updated on the device every
@@ -344,8 +392,8 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     1.2-1.6 sigma^2 for noise at the grid's scale; correct_lambda (default) scales it by a
     factor that moves until the residual variance is sigma^2, the constraint (C.2) comes
     from (kernels/surface.cl, tv_lambda_update); correct_lambda=False is the plain formula.
-    With return_info, also returns a dict with the residual variance (mean of (u - u0)^2
-    over the surface) and the lambda history."""
+    With return_info, also returns a SurfaceDenoiseInfo with the residual variance (mean of
+    (u - u0)^2 over the surface) and the lambda history."""
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
     if sigma is not None:
@@ -353,11 +401,15 @@ def denoise_tv(surf, u, sigma=None, t=1.0, dt=None, *, lam=None, eps=1.0, altern
     fidelity = 0.0 if sigma is not None else float(lam)
     out, info = _run(surf, u, t, dt, "tv", p=1, eps=eps, fidelity=fidelity, sigma=sigma,
                      alternate=alternate, progress=progress, correct_lambda=correct_lambda)
-    return (out, info) if return_info else out
+    if not return_info:
+        return out
+    return out, SurfaceDenoiseInfo(info["steps"], info["dt"], info.get("lambda"),
+                                   info.get("residual_variance"))
 
 
-def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=None,
-                 line_field=False):
+def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
+                 dt: float | None = None, *, eps: float = 1.0, alternate: bool = True,
+                 progress: bool | None = None, line_field: bool = False) -> np.ndarray:
     """Harmonic map flow of unit vectors on the surface, (D.7) for p = 2 and (4.11) for
     p = 1, renormalised after every step. u: (channels, nz, ny, nx).
 
@@ -383,8 +435,9 @@ def harmonic_map(surf, u, t, p=2, dt=None, *, eps=1.0, alternate=True, progress=
                 alternate=alternate, progress=progress, line_field=line_field)[0]
 
 
-def denoise_colour(surf, rgb, t, dt=None, *, brightness="tv", p=1, eps=1.0, alternate=True,
-                   progress=None) -> np.ndarray:
+def denoise_colour(surf: ImplicitSurface, rgb: ArrayLike, t: float, dt: float | None = None, *,
+                   brightness: str = "tv", p: int = 1, eps: float = 1.0,
+                   alternate: bool = True, progress: bool | None = None) -> np.ndarray:
     """Colour data on the surface denoised as in Figure 4.6: the chroma (the RGB vector over
     its length, a unit vector) by the harmonic map flow of exponent p (4.11 for p = 1), the
     brightness (the length) separately by a scalar flow, "tv" (4.10, the default: it keeps
@@ -415,7 +468,9 @@ def denoise_colour(surf, rgb, t, dt=None, *, brightness="tv", p=1, eps=1.0, alte
     return out.astype(data.dtype if np.issubdtype(data.dtype, np.floating) else np.float64)
 
 
-def diffuse_along(surf, u, direction, t, dt=None, *, alternate=True, progress=None):
+def diffuse_along(surf: ImplicitSurface, u: ArrayLike, direction: ArrayLike, t: float,
+                  dt: float | None = None, *, alternate: bool = True,
+                  progress: bool | None = None) -> np.ndarray:
     """Anisotropic diffusion along a tangent field d (4.15): flow visualisation of d when u is
     noise. direction: (3, nz, ny, nx), normalised here."""
     d = np.asarray(direction, dtype=np.float64)
@@ -427,7 +482,8 @@ def diffuse_along(surf, u, direction, t, dt=None, *, alternate=True, progress=No
                 progress=progress)[0]
 
 
-def principal_directions(surf):
+def principal_directions(surf: ImplicitSurface,
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Principal curvature directions and curvatures of the surface, extended along normals.
 
     Returns (major, minor, curvatures): two (3, nz, ny, nx) unit tangent fields (major = the
@@ -454,8 +510,11 @@ TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0
 THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
 
 
-def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, params=None,
-                       alternate=True, progress=None, state=None):
+def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
+                       direction: ArrayLike | None = None, dt: float | None = None,
+                       seed: int = 0, params: dict | None = None, alternate: bool = True,
+                       progress: bool | None = None,
+                       state: ArrayLike | None = None) -> np.ndarray:
     """Turk's two-chemical reaction-diffusion on the surface (4.12, 4.13; 4.14 with a tangent
     field `direction`), in grid units as Turk's own code: dt per iteration, diffusion rates
     in cells^2 per unit time, so patterns have the same size in cells on any surface.
@@ -494,7 +553,7 @@ def reaction_diffusion(surf, iterations, *, direction=None, dt=None, seed=0, par
     return flow.result()
 
 
-def turk_linear_wavelength(params=None) -> float:
+def turk_linear_wavelength(params: dict | None = None) -> float:
     """Wavelength (cells) of the fastest-growing mode of Turk's system linearised about its
     uniform state b = 16 - beta, a = 16 / b (planar linear stability analysis, grid units)."""
     p = dict(TURK if params is None else params)

@@ -16,17 +16,24 @@ The steps themselves run on two narrower lists cut to what they need (same resul
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_range
+from .._state import DeviceLike, renamed_keyword
 from .._validation import InputError
 from .._validation import positive as _positive
 from ..fields import check_fits, compact
 from ..runtime import get_runtime
 from .bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
 from .grid3d import Grid3D
+
+if TYPE_CHECKING:
+    from .flows import SurfaceDenoiseInfo
 
 # The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
 KERNEL_FILES = ("surface.cl",)
@@ -51,11 +58,14 @@ class ImplicitSurface:
 
     psi: (nz, ny, nx) volume, negative inside, in world units; spacing: grid spacing h;
     origin: world (x, y, z) of psi[0, 0, 0]. Points of cell (k, j, i) are
-    origin + h * (i, j, k).
+    origin + h * (i, j, k). band_width: the outer band's half-width in cells (default: the
+    narrowest the interpolation allows; `band=` is its deprecated old name).
     """
 
-    def __init__(self, psi, spacing, origin=(0.0, 0.0, 0.0), *, band=None,
-                 interpolation="tricubic", dtype=np.float32, device=None, _check_border=True):
+    def __init__(self, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,
+                 band_width: float | None = None, interpolation: str = "tricubic",
+                 dtype: DTypeLike = np.float32, device: DeviceLike = None,
+                 band: float | None = None, _check_border: bool = True):
         psi = np.asarray(psi)
         if psi.ndim != 3:
             raise InputError(f"psi must be a 3D (nz, ny, nx) volume, got shape {psi.shape}")
@@ -75,11 +85,12 @@ class ImplicitSurface:
         self.interp = _interp_code(interpolation)
         self.inner = _NODE_REACH[self.interp] + 0.04
         min_outer = self.inner + np.sqrt(2.0) + 0.04
-        self.outer = min_outer if band is None else _positive("band", band)
+        band_width = renamed_keyword("band_width", band_width, "band", band)
+        self.outer = min_outer if band_width is None else _positive("band_width", band_width)
         if self.outer < min_outer:
             raise InputError(
-                f"band={self.outer:g} cells is too narrow for {interpolation} re-extension; "
-                f"use band >= {min_outer:.2f}"
+                f"band_width={self.outer:g} cells is too narrow for {interpolation} re-extension; "
+                f"use band_width >= {min_outer:.2f}"
             )
         self.runtime = get_runtime(device)
         self._check_border = _check_border
@@ -165,8 +176,8 @@ class ImplicitSurface:
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
-    def from_volume(cls, psi, spacing, origin=(0.0, 0.0, 0.0), *, reinitialize=False,
-                    **options) -> ImplicitSurface:
+    def from_volume(cls, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,
+                    reinitialize: bool = False, **options: Any) -> ImplicitSurface:
         """A surface from a signed distance volume (nz, ny, nx) with the given spacing.
 
         reinitialize=True first turns any level-set function (negative inside) into a
@@ -183,7 +194,9 @@ class ImplicitSurface:
         return cls(psi, spacing, origin, **options)
 
     @classmethod
-    def from_mesh(cls, mesh, spacing=None, resolution=128, *, band=None, **options) -> ImplicitSurface:
+    def from_mesh(cls, mesh: object, spacing: float | None = None, resolution: int = 128, *,
+                  band_width: float | None = None, band: float | None = None,
+                  **options: Any) -> ImplicitSurface:
         """A surface from a triangle mesh (trimesh.Trimesh or any file trimesh loads).
 
         spacing defaults to the bounding box's longest side / resolution. The distance is exact
@@ -195,14 +208,18 @@ class ImplicitSurface:
         watertight gets a warning."""
         from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
 
+        band_width = renamed_keyword("band_width", band_width, "band", band)
         mesh = load_mesh(mesh)
-        outer = band if band is not None else _NODE_REACH[_interp_code(options.get("interpolation", "tricubic"))] + np.sqrt(2.0) + 0.08
+        outer = band_width
+        if outer is None:
+            interp = _interp_code(options.get("interpolation", "tricubic"))
+            outer = _NODE_REACH[interp] + np.sqrt(2.0) + 0.08
         padding = int(np.ceil(outer)) + 4
         origin, h, shape = grid_for_mesh(mesh, spacing, resolution, padding)
         stats = {}
         psi, face, cpoint = mesh_to_sdf(mesh, origin, h, shape, outer + 3.0,
                                         device=options.get("device"), stats=stats)
-        surf = cls(psi, h, origin, band=band, **options)
+        surf = cls(psi, h, origin, band_width=band_width, **options)
         rim = rim_cells(mesh, face, cpoint, h) if stats.get("leaked") else ()
         if len(rim):
             # a closed hole: psi jumps across the sheet that closes it (|psi| is the distance
@@ -218,7 +235,7 @@ class ImplicitSurface:
         surf._mesh_cp = cpoint
         return surf
 
-    def field_from_mesh(self, values) -> np.ndarray:
+    def field_from_mesh(self, values: ArrayLike) -> np.ndarray:
         """Data given at the vertices of the mesh this surface was built from (shape
         (vertices,) or (vertices, channels), e.g. colours), carried to the band: each cell
         takes the barycentric interpolation on its nearest triangle at its closest point.
@@ -253,12 +270,13 @@ class ImplicitSurface:
         return out[0] if values.ndim == 1 else out
 
     @classmethod
-    def from_function(cls, sdf, bounds, spacing, **options) -> ImplicitSurface:
+    def from_function(cls, sdf: Callable, bounds: tuple[ArrayLike, ArrayLike], spacing: float,
+                      **options: Any) -> ImplicitSurface:
         """Sample a signed distance function sdf(x, y, z) on a box bounds = (lo, hi),
         padded by the band width plus interpolation room on every side."""
         h = _positive("spacing", spacing)
         lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
-        margin = (options.get("band") or 5.0) + 3.0
+        margin = (options.get("band_width") or options.get("band") or 5.0) + 3.0
         lo = lo - margin * h
         hi = hi + margin * h
         n = np.ceil((hi - lo) / h).astype(int) + 1
@@ -270,7 +288,8 @@ class ImplicitSurface:
         return cls(psi, h, lo, **options)
 
     @classmethod
-    def sphere(cls, radius=1.0, spacing=0.05, center=(0.0, 0.0, 0.0), **options) -> ImplicitSurface:
+    def sphere(cls, radius: float = 1.0, spacing: float = 0.05,
+               center: ArrayLike = (0.0, 0.0, 0.0), **options: Any) -> ImplicitSurface:
         r = _positive("radius", radius)
         c = np.asarray(center, dtype=np.float64)
 
@@ -280,7 +299,8 @@ class ImplicitSurface:
         return cls.from_function(sdf, (c - r, c + r), spacing, **options)
 
     @classmethod
-    def torus(cls, major=1.0, minor=0.4, spacing=0.05, **options) -> ImplicitSurface:
+    def torus(cls, major: float = 1.0, minor: float = 0.4, spacing: float = 0.05,
+              **options: Any) -> ImplicitSurface:
         """Torus around the z axis: tube radius `minor` at distance `major` from the axis."""
         big, small = _positive("major", major), _positive("minor", minor)
         if small >= big:
@@ -289,7 +309,8 @@ class ImplicitSurface:
         return cls.from_function(_torus_sdf(big, small, 0.0), (-ext, ext), spacing, **options)
 
     @classmethod
-    def double_torus(cls, major=0.8, minor=0.3, spacing=0.05, **options) -> ImplicitSurface:
+    def double_torus(cls, major: float = 0.8, minor: float = 0.3, spacing: float = 0.05,
+                     **options: Any) -> ImplicitSurface:
         """Genus-2 surface: the union of two overlapping tori side by side along x.
 
         min() of the two distances is exact outside and near the surface away from the seam
@@ -311,7 +332,7 @@ class ImplicitSurface:
     def shape(self) -> tuple[int, int, int]:
         return self.psi.shape
 
-    def coordinates(self):
+    def coordinates(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """World coordinates x, y, z of the grid cells, broadcastable to `shape`."""
         nz, ny, nx = self.shape
         h, o = self.spacing, self.origin
@@ -388,7 +409,8 @@ class ImplicitSurface:
                 f"(below {self.spacing / 2:g}) or a narrower band"
             )
 
-    def reinitialize(self, iterations=None, progress=None) -> ImplicitSurface:
+    def reinitialize(self, iterations: int | None = None,
+                     progress: bool | None = None) -> ImplicitSurface:
         """Turn psi into a signed distance function on the device (Sussman's PDE with
         Russo-Smereka's subcell fix), keeping its zero level set; rebuilds the bands."""
         self._set_psi(self._reinitialized_psi(iterations, progress))
@@ -410,7 +432,8 @@ class ImplicitSurface:
             cur, nxt = nxt, cur
         return g.download(cur)[0].astype(np.float64)
 
-    def extend(self, u, method="closest-point", iterations=None) -> np.ndarray:
+    def extend(self, u: ArrayLike, method: str = "closest-point",
+               iterations: int | None = None) -> np.ndarray:
         """Extend data off the surface, constant along the normals: by closest-point
         interpolation (one pass), or by the upwind PDE of section 4.2,
         u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
@@ -434,7 +457,7 @@ class ImplicitSurface:
         return flow.result()
 
     # ---- data on the surface -----------------------------------------------------------------
-    def field(self, f, dtype=np.float64) -> np.ndarray:
+    def field(self, f: Callable, dtype: DTypeLike = np.float64) -> np.ndarray:
         """Data f(x, y, z) on the surface, extended constant along the normals.
 
         f is called once with broadcastable coordinate arrays of the cells' closest points;
@@ -469,7 +492,7 @@ class ImplicitSurface:
             raise InputError(f"{what} contains NaN or infinite values in the band around the surface")
         return data
 
-    def world_to_index(self, points) -> np.ndarray:
+    def world_to_index(self, points: ArrayLike) -> np.ndarray:
         """(n, 3) world points to padded index coordinates (3, n)."""
         p = np.asarray(points, dtype=np.float64)
         if p.ndim != 2 or p.shape[1] != 3:
@@ -478,7 +501,8 @@ class ImplicitSurface:
             raise InputError("points contain NaN or infinite values")
         return ((p - self.origin) / self.spacing + self.grid.ghost).T
 
-    def sample(self, u, points, interpolation="tricubic") -> np.ndarray:
+    def sample(self, u: ArrayLike, points: ArrayLike,
+               interpolation: str = "tricubic") -> np.ndarray:
         """Values of u at world points (n, 3): shape (n,) for scalar u, (n, channels) else.
 
         Points must lie within the interpolation reach of the surface (on it, typically)."""
@@ -516,62 +540,65 @@ class ImplicitSurface:
         return out.get().astype(np.float64)
 
     # ---- flows ---------------------------------------------------------------------------------
-    def heat(self, u, t, dt=None, **options) -> np.ndarray:
+    def heat(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
         """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u for time t; see flows.heat."""
         from .flows import heat
 
         return heat(self, u, t, dt=dt, **options)
 
-    def tv(self, u, t, dt=None, **options) -> np.ndarray:
+    def tv(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
         """Intrinsic anisotropic (total variation) flow (4.10); see flows.tv."""
         from .flows import tv
 
         return tv(self, u, t, dt, **options)
 
-    def denoise_tv(self, u, sigma=None, t=1.0, **options):
+    def denoise_tv(self, u: ArrayLike, sigma: float | None = None, t: float = 1.0, **options: Any,
+                   ) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
         """TV denoising with fidelity and dynamic lambda (C.1, C.2); see flows.denoise_tv."""
         from .flows import denoise_tv
 
         return denoise_tv(self, u, sigma, t, **options)
 
-    def harmonic_map(self, u, t, p=2, **options) -> np.ndarray:
+    def harmonic_map(self, u: ArrayLike, t: float, p: int = 2, **options: Any) -> np.ndarray:
         """Harmonic map flow of unit vectors (4.11, D.7); see flows.harmonic_map."""
         from .flows import harmonic_map
 
         return harmonic_map(self, u, t, p, **options)
 
-    def denoise_colour(self, rgb, t, **options) -> np.ndarray:
+    def denoise_colour(self, rgb: ArrayLike, t: float, **options: Any) -> np.ndarray:
         """Colour denoising as in Figure 4.6: chroma by harmonic map, brightness by a scalar
         flow; see flows.denoise_colour."""
         from .flows import denoise_colour
 
         return denoise_colour(self, rgb, t, **options)
 
-    def diffuse_along(self, u, direction, t, **options) -> np.ndarray:
+    def diffuse_along(self, u: ArrayLike, direction: ArrayLike, t: float,
+                      **options: Any) -> np.ndarray:
         """Diffusion along a tangent field (4.15); see flows.diffuse_along."""
         from .flows import diffuse_along
 
         return diffuse_along(self, u, direction, t, **options)
 
-    def principal_directions(self):
+    def principal_directions(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(major, minor, curvatures) of the surface; see flows.principal_directions."""
         from .flows import principal_directions
 
         return principal_directions(self)
 
-    def reaction_diffusion(self, iterations, **options) -> np.ndarray:
+    def reaction_diffusion(self, iterations: int, **options: Any) -> np.ndarray:
         """Turk's reaction-diffusion texture (4.12-4.14); see flows.reaction_diffusion."""
         from .flows import reaction_diffusion
 
         return reaction_diffusion(self, iterations, **options)
 
-    def to_mesh(self, u=None, **options):
+    def to_mesh(self, u: ArrayLike | None = None, **options: Any) -> object:
         """Marching-cubes mesh of the surface with u as vertex colours; see render.to_mesh."""
         from .render import to_mesh
 
         return to_mesh(self, u, **options)
 
-    def render(self, u=None, path=None, **options) -> np.ndarray:
+    def render(self, u: ArrayLike | None = None, path: str | None = None,
+               **options: Any) -> np.ndarray:
         """PNG picture(s) of u on the surface; see render.render."""
         from .render import render
 
