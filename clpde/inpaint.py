@@ -152,7 +152,8 @@ def _as_mask(mask, shape_hw):
     A bool mask is used as is (no copy)."""
     m = np.asarray(mask)
     if m.dtype != bool and not (np.issubdtype(m.dtype, np.number)):
-        raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = inpaint)")
+        raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = "
+                         "inpaint)")
     if m.ndim == 3 and m.shape[-1] == 1:
         m = m[..., 0]
     if m.shape != tuple(shape_hw):
@@ -189,7 +190,8 @@ def _prepare(image, mask, channel_axis, alpha):
     if mask is None:
         if finite is None:
             raise InputError(
-                f"mask=None fills the NaN pixels of a float image, but this image is {array.dtype}; "
+                "mask=None fills the NaN pixels of a float image, but this image is "
+                f"{array.dtype}; "
                 "pass a mask (nonzero where to inpaint)"
             )
         omega = ~finite
@@ -197,12 +199,15 @@ def _prepare(image, mask, channel_axis, alpha):
         omega, softness = _as_mask(mask, planes.shape[1:])
         if finite is not None and not finite[~omega].all():
             raise InputError(
-                f"image has {int((~finite[~omega]).sum())} NaN or infinite pixels outside the mask; "
+                f"image has {int((~finite[~omega]).sum())} NaN or infinite pixels outside the "
+                "mask; "
                 "include them in the mask, or pass mask=None to fill every NaN pixel"
             )
-        if softness is not None and finite is not None and not finite[(softness > 0) & (softness < 1)].all():
+        partly = None if softness is None else (softness > 0) & (softness < 1)
+        if partly is not None and finite is not None and not finite[partly].all():
             raise InputError("image has NaN or infinite pixels where the soft mask is below 1; "
-                             "a partly damaged pixel needs its observed value (set the mask to 1 there)")
+                             "a partly damaged pixel needs its observed value (set the mask to 1 "
+                             "there)")
     nc = planes.shape[0]
     if alpha is None:
         alpha = axis is not None and nc == 4
@@ -254,7 +259,8 @@ def _check_params(p: InpaintParams, ncolour: int, colour: str) -> None:
     if p.rotation not in ROTATIONS:
         raise InputError(f"rotation must be 'ccw' or 'cw', not {p.rotation!r}")
     if p.coarse_start not in COARSE_STARTS:
-        raise InputError(f"coarse_start must be one of {', '.join(COARSE_STARTS)}, not {p.coarse_start!r}")
+        raise InputError(f"coarse_start must be one of {', '.join(COARSE_STARTS)}, not "
+                         f"{p.coarse_start!r}")
     if p.stencil not in STENCILS:
         raise InputError(f"stencil must be one of {', '.join(STENCILS)}, not {p.stencil!r}")
     if p.fill not in FILLS:
@@ -288,7 +294,8 @@ class LevelSolver:
         self.omega = omega
 
         dist = ndimage.distance_transform_edt(~omega)  # 0 in Omega
-        weight = np.where(dist < params.epsilon, 0.5 * (1 + np.cos(np.pi * dist / params.epsilon)), 0)
+        weight = np.where(dist < params.epsilon, 0.5 * (1 + np.cos(np.pi * dist / params.epsilon)),
+                          0)
         band = weight > 0
         self.omega_list = index_list(g, omega)
         self.band_list = index_list(g, band)
@@ -318,7 +325,8 @@ class LevelSolver:
         self.fidelity = None
         if fidelity is not None and (fidelity > 0).any():
             self.fidelity_list = index_list(g, fidelity > 0)
-            self.fidelity = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), fidelity[None])
+            self.fidelity = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype),
+                                            fidelity[None])
             self.observed = Field.from_host(g, observed)
             self.k_fidelity = g.kernel("inpaint.cl", "inpaint_fidelity")
         self.sx = np.int32(g.sx)
@@ -331,7 +339,8 @@ class LevelSolver:
         then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
         a step's work on a small region)."""
         g = self.grid
-        defines = {"SCALING": SCALINGS.index(params.scaling), "STENCIL": STENCILS.index(params.stencil)}
+        defines = {"SCALING": SCALINGS.index(params.scaling),
+                   "STENCIL": STENCILS.index(params.stencil)}
         bufs = (self.pair.cur.data.data, self.pair.nxt.data.data)
         self._buf_a = bufs[0]
 
@@ -435,7 +444,8 @@ class LevelSolver:
         g, lst = self.grid, self.omega_list
         (gsize,), _, _ = g.runtime.list_launch(lst.n)
         partial = cla.empty(self.q, (g.nc, gsize), g.dtype)
-        g.launch_list(self.k_change, lst, self.pair.cur.data.data, self.prev.data.data, partial.data)
+        g.launch_list(self.k_change, lst, self.pair.cur.data.data, self.prev.data.data,
+                      partial.data)
         return float(partial.get().max())
 
     def mean_change(self) -> float:
@@ -640,7 +650,8 @@ class Inpainting:
                 "the mask covers every pixel, so nothing is known to inpaint from; "
                 "mark only the damaged region"
             )
-        if levels is not None and (isinstance(levels, bool) or not isinstance(levels, (int, np.integer))
+        if levels is not None and (isinstance(levels, bool) or not isinstance(levels,
+                                                                              (int, np.integer))
                                    or levels < 1):
             raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
         self.method = choose_method(self.mask, method,
@@ -815,11 +826,12 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         error). None fills the NaN pixels of a float image.
     method: 'auto' (coherence transport where installed, else the transport: on the
         benchmark it matches or beats every peer on text, scratches, blobs and thick holes
-        and leads by 10 dB on structure crossing thin holes, docs/inpainting.md), 'transport' (the thesis's scheme, options below),
-        'coherence', 'navier-stokes', 'exemplar' (texture, periodic patterns),
-        'structure-texture' (clpde.inpainting.available() lists what is installed). None,
-        the default, is 'auto', or 'transport' when any transport option below is given.
-        Options of methods other than 'transport' go in **options.
+        and leads by 10 dB on structure crossing thin holes, docs/inpainting.md), 'transport'
+        (the thesis's scheme, options below), 'coherence', 'navier-stokes', 'exemplar'
+        (texture, periodic patterns), 'structure-texture' (clpde.inpainting.available()
+        lists what is installed). None, the default, is 'auto', or 'transport' when any
+        transport option below is given. Options of methods other than 'transport' go in
+        **options.
     boxes: solve each connected component of the mask, or cluster of nearby components,
         in its own box grown by the method's margin (True), so that time and memory follow
         the damage; False solves the whole image at once. Results agree (bit for bit where
@@ -884,7 +896,8 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
     """
     given = locals()  # the transport options are InpaintParams' fields, named alike here
     transport = {name: given[name] for name in _TRANSPORT_ARGS}
-    if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer))
+    if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots,
+                                                                                (int, np.integer))
                                   or snapshots < 1):
         raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")
     # Only the transport options the caller changed are passed on: the defaults are those

@@ -97,7 +97,8 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
-        png = dtype in (np.dtype(np.uint8), np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
+        png = dtype in (np.dtype(np.uint8),
+                        np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
             f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
@@ -299,7 +300,8 @@ def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
         raise InputError(
             f"output folder {outdir} is not empty ({len(entries)} entries); choose a new "
             f"folder, or give {option} to replace its contents")
-    foreign = [e.name for e in entries if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES]
+    foreign = [e.name for e in entries
+               if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES]
     if foreign:
         raise InputError(
             f"output folder {outdir} holds {foreign[0]!r}, which clpde does not write, so it "

@@ -127,7 +127,8 @@ class PlanarFlow:
         dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
         # two fields (ping-pong) and the curvature flow's one-channel weight
         def fits(shape):
-            check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None), dtype=dtype)
+            check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None),
+                       dtype=dtype)
 
         data, self.layout = to_kernel_layout(image, channel_axis, fits=fits)
         nc, ny, nx = data.shape

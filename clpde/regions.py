@@ -147,7 +147,8 @@ class RegionTracker:
         self.ls0 = self.cur.copy()
         self.stage = self.cur.copy()
         self.speed = cla.zeros(q, g.padded_shape, g.dtype)
-        self.aux = g.upload(aux[None] / (self.h if speed == "morph" else 1.0)) if aux is not None else self.speed
+        self.aux = (g.upload(aux[None] / (self.h if speed == "morph" else 1.0))
+                    if aux is not None else self.speed)
         self._flag = cla.zeros(q, 1, np.int32)
         self._mask = cla.zeros(q, g.padded_shape, np.uint8)
         self._mask2 = cla.zeros(q, g.padded_shape, np.uint8)
@@ -287,7 +288,8 @@ class RegionTracker:
         if self.velocity is None:
             if self.mode in (1, 2, 3):  # speeds that depend on Phi
                 g.launch_runs(self._k["region_speed"], self.step_runs, src.data, self.aux.data,
-                              self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
+                              self.speed.data, g.scalar(self.scale), g.scalar(self.vmax),
+                              *g.strides())
             g.launch_runs(self._k["region_step"], self.step_runs, src.data, self.speed.data,
                           dst.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
                           *g.strides(), channels=self.nc)
@@ -418,12 +420,14 @@ def _region_functions(phi, region, spacing, origin, mesh=None):
                 raise InputError("vertex labels need at least two different values")
             masks = [marks == v for v in values]
         else:
-            raise InputError(f"a vertex mask must be bool (one region) or integer labels, not {marks.dtype}")
+            raise InputError("a vertex mask must be bool (one region) or integer labels, not "
+                             f"{marks.dtype}")
         partition = marks.dtype != bool
         return functions_from_mask(phi, spacing, origin, mesh, masks), partition
     raise InputError(
         f"region must be a vertex mask/labels of the starting mesh (1-D), an implicit function of "
-        f"phi's shape {phi.shape}, or a list of such functions; got shape(s) {[a.shape for a in arrays]}"
+        f"phi's shape {phi.shape}, or a list of such functions; got shape(s) "
+        f"{[a.shape for a in arrays]}"
     )
 
 
@@ -456,7 +460,8 @@ def _beta_array(values, shape, when="") -> np.ndarray:
     try:
         arr = np.broadcast_to(arr, shape)
     except ValueError:
-        raise InputError(f"a beta array{when} must have phi's shape {shape}, got {arr.shape}") from None
+        raise InputError(f"a beta array{when} must have phi's shape {shape}, got "
+                         f"{arr.shape}") from None
     if not np.all(np.isfinite(arr)):
         raise InputError(f"beta{when} contains NaN or infinite values")
     return arr
@@ -472,7 +477,8 @@ def _speed_setup(beta, target, weight, h, shape, coords):
             return "gaussian", weight / h**3, None, None
         if beta == "morph":
             if target is None:
-                raise InputError("beta='morph' needs target=: the target shape's signed distance volume")
+                raise InputError("beta='morph' needs target=: the target shape's signed distance "
+                                 "volume")
             target = np.asarray(target, np.float64)
             if target.shape != shape:
                 raise InputError(f"target must have phi's shape {shape}, got {target.shape}")
@@ -513,8 +519,8 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
     (x, y, z) of phi[0, 0, 0] at `origin`.
     region: a bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
     origin)`, or of `mesh=`, any mesh of the same surface in world coordinates: the one phi
-    was made from, say), integer vertex labels (one region per label), an implicit function Phi-hat of
-    phi's shape (the region is where Phi-hat < 0 on the surface; off the surface it is
+    was made from, say), integer vertex labels (one region per label), an implicit function
+    Phi-hat of phi's shape (the region is where Phi-hat < 0 on the surface; off the surface it is
     replaced by its value at the closest surface point, which keeps the region and tracks
     its boundary more accurately), or a list of such functions.
     beta: outward normal speed of the surface: a number, 'mean-curvature' (speed -weight
@@ -538,7 +544,8 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
     """
     phi = np.asarray(phi)
     if phi.ndim != 3 or min(phi.shape) < 8:
-        raise InputError(f"phi must be a 3D (nz, ny, nx) volume with at least 8 cells a side, got {phi.shape}")
+        raise InputError("phi must be a 3D (nz, ny, nx) volume with at least 8 cells a side, got "
+                         f"{phi.shape}")
     if not np.issubdtype(phi.dtype, np.number) or not np.all(np.isfinite(phi)):
         raise InputError("phi must hold finite real numbers")
     phi = phi.astype(np.float64)
@@ -564,12 +571,14 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
             raise InputError(f"save times must lie in [0, t={t_end:g}], got {saves!r}")
     phihat, partition = _region_functions(phi, region, h, origin, mesh)
     nz, ny, nx = phi.shape
-    coords = (origin[0] + h * np.arange(nx)[None, None, :], origin[1] + h * np.arange(ny)[None, :, None],
+    coords = (origin[0] + h * np.arange(nx)[None, None, :],
+              origin[1] + h * np.arange(ny)[None, :, None],
               origin[2] + h * np.arange(nz)[:, None, None])
     if velocity is not None:
         vel = np.asarray(velocity, np.float64).reshape(-1)
         if vel.shape != (3,) or not np.all(np.isfinite(vel)):
-            raise InputError(f"velocity must be three finite numbers (vx, vy, vz), got {velocity!r}")
+            raise InputError("velocity must be three finite numbers (vx, vy, vz), got "
+                             f"{velocity!r}")
         speed, scale, aux, aux_at, vel = "constant", 0.0, None, None, vel / h
     else:
         speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
@@ -578,11 +587,13 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                             band_width=renamed_keyword("band_width", band_width, "band", band, 5.0),
                             reinit_every=reinit_every,
                             reinit_iterations=reinit_iterations, cfl=cfl,
-                            max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
+                            max_speed=None if max_speed is None else _positive("max_speed",
+                                                                               max_speed) / h,
                             aux_at=aux_at, device=device, dtype=dtype)
     # the bar counts simulated time, so it prints rounded times rather than step counts
+    time_format = "{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
     with progress_bar(progress, t_end, "track regions", leave=False, unit="time",
-                      bar_format="{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]") as bar:
+                      bar_format=time_format) as bar:
         return list(tracker.iterate(times, origin=origin, keep_volumes=keep_volumes,
                                     palette=palette, partition=partition, bar=bar))
 
@@ -607,7 +618,8 @@ def make_frame(tracker: RegionTracker, time: float, origin: ArrayLike, keep_volu
     vertex_label = np.full(len(verts), -1)
     vertex_label[faces.reshape(-1)] = np.repeat(labels, 3)
     rgb = region_colours(vertex_label, palette)
-    colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], 1)
+    colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8),
+                              np.full((len(rgb), 1), 255, np.uint8)], 1)
     out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
     return RegionFrame(time, out, labels, boundaries,
                        phi if keep_volumes else None, phihat if keep_volumes else None,

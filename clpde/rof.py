@@ -138,7 +138,8 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
     runtime = get_runtime(device)
     # primal-dual: f, u and three dual fields of two components each; gradient: four fields
     def fits(shape):
-        check_fits(runtime, shape, "TV denoising", 8, dtype=compute_dtype(None, precision), largest=2)
+        check_fits(runtime, shape, "TV denoising", 8, dtype=compute_dtype(None, precision),
+                   largest=2)
 
     data, layout = to_kernel_layout(image, channel_axis, fits=fits)
     nc, ny, nx = data.shape
@@ -235,7 +236,8 @@ def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float |
 
 
 def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, progress):
-    """Fast projected gradient on the dual (kernels/rof.cl); returns (u, steps, converged, lambda)."""
+    """Fast projected gradient on the dual (kernels/rof.cl); returns (u, steps, converged,
+    lambda)."""
     q = grid.runtime.queue
     nc, ny = grid.nc, grid.ny
     f = Field.from_host(grid, data)  # Neumann (mirrored) ghosts, as rof.cl expects

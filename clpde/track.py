@@ -90,7 +90,8 @@ def _check_frames(frames) -> list[np.ndarray]:
         try:
             items = [np.asarray(f) for f in frames]
         except TypeError:
-            raise InputError("frames must be a (T, H, W) array or a sequence of 2-D arrays") from None
+            raise InputError("frames must be a (T, H, W) array or a sequence of 2-D "
+                             "arrays") from None
     if not items:
         raise InputError("frames is empty: give at least one frame")
     for k, f in enumerate(items):
@@ -256,7 +257,8 @@ class MorphingTracker:
         if self.equalize == "match" and index > 0:
             # Equalise the grey levels across the sequence: each frame gets the first
             # frame's histogram, as beta = F2 - F1 compares grey values directly.
-            img = np.stack([match_histogram(c, r) for c, r in zip(img, self._scaled[0], strict=False)])
+            img = np.stack([match_histogram(c, r) for c,
+                            r in zip(img, self._scaled[0], strict=False)])
         elif self.equalize == "global":
             from skimage.exposure import equalize_hist
 

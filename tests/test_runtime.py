@@ -81,7 +81,8 @@ def test_kernels_are_built_once_and_reused(runtime):
 def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
     (tmp_path / "common.cl").write_text((rt_mod.KERNEL_DIR / "common.cl").read_text())
     (tmp_path / "broken.cl").write_text(
-        '#include "common.cl"\n\n__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n'
+        '#include "common.cl"\n\n'
+        "__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n"
     )
     monkeypatch.setattr(rt_mod, "KERNEL_DIR", tmp_path)
     with pytest.raises(KernelBuildError) as info:
@@ -175,7 +176,8 @@ def _calls():
     mask = np.zeros(image.shape, bool)
     mask[8:14, 10:20] = True
     yy, xx = np.mgrid[:24, :24]
-    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25) for k in range(2)]).astype(np.uint8)
+    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25)
+                       for k in range(2)]).astype(np.uint8)
     phi, z = _sphere_phi()
     return {
         "diffuse": lambda: clpde.diffuse(image, "tv", steps=3),
@@ -209,7 +211,8 @@ def test_requests_that_cannot_fit_are_refused_before_any_allocation(name, monkey
 def test_a_huge_image_is_refused_without_converting_it():
     # 10^10 pixels that take no memory: the refusal must come before any float copy
     huge = np.broadcast_to(np.uint8(7), (100_000, 100_000))
-    with pytest.raises(rt_mod.DeviceMemoryError, match=r"the heat flow of 100000x100000 values needs"):
+    with pytest.raises(rt_mod.DeviceMemoryError,
+                       match=r"the heat flow of 100000x100000 values needs"):
         clpde.diffuse(huge, steps=1)
 
 

@@ -39,10 +39,12 @@ def run_demo(outdir, device=None, progress=None, overwrite: bool = False) -> lis
                             ("inpaint_before_after.png", side_by_side(damaged, restored))):
             write_image(staging / name, image)
             written.append(outdir / name)
-    peers = ", ".join(f"{name} {value:.1f} dB" for name, value in peer_psnr(damaged, mask, original).items())
+    peers = ", ".join(f"{name} {value:.1f} dB" for name,
+                      value in peer_psnr(damaged, mask, original).items())
     steps = f"{info.steps} steps, " if info.method == "transport" else ""
     print(f"inpainted {mask.sum()} pixels ({100 * mask.mean():.1f}%) by {info.method}, {steps}"
-          f"{info.seconds:.1f} s; PSNR inside the mask {psnr_in_mask(restored, original, mask):.1f} "
+          f"{info.seconds:.1f} s; PSNR inside the mask "
+          f"{psnr_in_mask(restored, original, mask):.1f} "
           f"dB (higher is closer to the original; on the same damage: {peers})")
     return written
 

@@ -2,8 +2,8 @@
 
 Every step is two kernels: the flow's update over the interpolation nodes (cur -> tmp, the
 node band's runs), then the closest-point re-extension of every cell the next step reads
-(tmp -> cur, the reach band); the whole extension band is re-extended when a flow returns. State stays on the
-device from upload to the final read-back; no host round-trip per step.
+(tmp -> cur, the reach band); the whole extension band is re-extended when a flow returns.
+State stays on the device from upload to the final read-back; no host round-trip per step.
 """
 
 from __future__ import annotations
@@ -175,7 +175,8 @@ class BrickFlow:
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
         self.src_plane = np.int32(self.tmp.size // self.nc)
-        self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp", INTERP=surf.interp, NC=self.nc,
+        self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp", INTERP=surf.interp,
+                                          NC=self.nc,
                                           NORMALIZE=int(normalize))
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
@@ -265,7 +266,8 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     steps, dt = _check_time(t, dt, limit, flow_name)
     flow = BandFlow(surf, u, normalize=harmonic, line_field=line_field)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
-    defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic), "FIDELITY": int(fidelity is not None),
+    defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic),
+               "FIDELITY": int(fidelity is not None),
                    "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted)),
                    "LINE_FIELD": int(bool(line_field))}
     kernel = g.kernel("surface.cl", "flow_step", **defines)
@@ -331,7 +333,8 @@ class _DynamicLambda:
         g, q = s.grid, s.runtime.queue
         _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
         for a, partial in zip(self.terms, self.partials, strict=False):
-            g.kernel("surface.cl", "chunk_sum")(q, (self.groups,), None, a.data, np.int32(s.node_band.n),
+            g.kernel("surface.cl", "chunk_sum")(q, (self.groups,), None, a.data,
+                                                np.int32(s.node_band.n),
                                   np.int32(self.CHUNK), partial.data)
         g.kernel("surface.cl", "tv_lambda_update")(
             q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
@@ -353,7 +356,8 @@ class _DynamicLambda:
 def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps) -> None:
     g = surf.grid
     g.launch_list(
-        g.kernel("surface.cl", "tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data, surf.psi_dev.data,
+        g.kernel("surface.cl", "tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data,
+                  surf.psi_dev.data,
         g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
         *offsets, *g.strides(), *(a.data for a in terms),
     )
@@ -424,7 +428,8 @@ def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
         raise InputError(f"p must be 1 or 2, not {p!r}")
     data = np.asarray(u, dtype=np.float64)
     if data.ndim != 4:
-        raise InputError(f"harmonic maps need vector data (channels, nz, ny, nx), got shape {data.shape}")
+        raise InputError("harmonic maps need vector data (channels, nz, ny, nx), got shape "
+                         f"{data.shape}")
     band = np.abs(surf.psi) < surf.outer * surf.spacing
     norm = np.sqrt((data**2).sum(axis=0))
     if np.any(norm[band] == 0):
@@ -446,7 +451,8 @@ def denoise_colour(surf: ImplicitSurface, rgb: ArrayLike, t: float, dt: float | 
     (black) take the grey chroma, so they carry no direction."""
     data = np.asarray(rgb)
     if data.shape != (3,) + surf.shape:
-        raise InputError(f"rgb must have shape {(3,) + surf.shape} (channels first), got {data.shape}")
+        raise InputError(f"rgb must have shape {(3,) + surf.shape} (channels first), got "
+                         f"{data.shape}")
     if brightness not in ("heat", "tv", None):
         raise InputError(f"brightness must be 'heat', 'tv' or None, not {brightness!r}")
     values = data.astype(np.float64)
@@ -507,7 +513,8 @@ def principal_directions(surf: ImplicitSurface,
 
 
 TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
-THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
+THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1,
+                  "start": 4.0}
 
 
 def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
@@ -532,7 +539,8 @@ def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
     dt = min(1.0, 0.9 * limit) if dt is None else check_time_step(dt, limit, what)
     rng = np.random.default_rng(seed)
     beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
-    start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)
+    start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state,
+                                                                                    np.float64)
     flow = BandFlow(surf, start)
     g = surf.grid
     beta_dev = g.upload(beta[None])

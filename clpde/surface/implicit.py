@@ -74,9 +74,11 @@ class ImplicitSurface:
         if not np.issubdtype(psi.dtype, np.number) or np.iscomplexobj(psi):
             raise InputError(f"psi must hold real numbers, not {psi.dtype}")
         if not np.all(np.isfinite(psi)):
-            raise InputError("psi contains NaN or infinite values; fill them before building a surface")
+            raise InputError("psi contains NaN or infinite values; fill them before building a "
+                             "surface")
         if not (psi.min() < 0 < psi.max()):
-            raise InputError("psi has no zero level set (it never changes sign): no surface to work on")
+            raise InputError("psi has no zero level set (it never changes sign): no surface to "
+                             "work on")
         self.spacing = _positive("spacing", spacing)
         origin = np.asarray(origin, dtype=np.float64).reshape(-1)
         if origin.shape != (3,) or not np.all(np.isfinite(origin)):
@@ -136,7 +138,8 @@ class ImplicitSurface:
             g = self.grid
             bits = np.zeros(g.padded_shape, np.uint8)
             flat = bits.reshape(-1)
-            for band, bit in ((self.node_band, NODE), (self.reach_band, REACH), (self.ext_band, EXT)):
+            for band, bit in ((self.node_band, NODE), (self.reach_band, REACH),
+                              (self.ext_band, EXT)):
                 flat[band.indices.get()[: band.n]] |= bit
             stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
             bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, brick)
@@ -170,9 +173,11 @@ class ImplicitSurface:
         self.node_band = compact(self.runtime, nodes)
         self.step_runs = g.runs(self.node_band)
         reach = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface.cl", "mark_stencil"), self.node_band, reach.data, *g.strides())
+        g.launch_list(g.kernel("surface.cl", "mark_stencil"), self.node_band, reach.data,
+                      *g.strides())
         self.reach_band = compact(self.runtime, reach)
-        self.reach_stencils = self._cp_stencils(self.reach_band, self._closest_points(self.reach_band))
+        self.reach_stencils = self._cp_stencils(self.reach_band,
+                                                self._closest_points(self.reach_band))
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
@@ -228,7 +233,8 @@ class ImplicitSurface:
             # a reinitialised distance, the others keep their exact one
             cap = np.abs(surf.psi).max()  # what cells past the band hold
             patched = surf.psi.copy()
-            patched.reshape(-1)[rim] = np.clip(surf._reinitialized_psi().reshape(-1)[rim], -cap, cap)
+            patched.reshape(-1)[rim] = np.clip(surf._reinitialized_psi().reshape(-1)[rim], -cap,
+                                               cap)
             surf._set_psi(patched)
         surf.mesh = mesh
         surf._mesh_face = face
@@ -248,7 +254,8 @@ class ImplicitSurface:
         values = np.asarray(values, dtype=np.float64)
         if values.shape[0] != len(mesh.vertices):
             raise InputError(
-                f"values must have one row per mesh vertex ({len(mesh.vertices)}), got {values.shape}"
+                f"values must have one row per mesh vertex ({len(mesh.vertices)}), got "
+                f"{values.shape}"
             )
         if not np.all(np.isfinite(values)):
             raise InputError("values contain NaN or infinite entries")
@@ -489,7 +496,8 @@ class ImplicitSurface:
         data = data.astype(np.float64)
         band = np.abs(self.psi) < self.outer * self.spacing
         if not np.all(np.isfinite(data[:, band])):
-            raise InputError(f"{what} contains NaN or infinite values in the band around the surface")
+            raise InputError(f"{what} contains NaN or infinite values in the band around the "
+                             "surface")
         return data
 
     def world_to_index(self, points: ArrayLike) -> np.ndarray:
