@@ -112,9 +112,8 @@ def soft(path):
     damage = np.clip(1.6 - np.hypot((y - 90) / 45, (x - 100) / 70) * 1.6, 0, 1)
     damage = np.where(damage > 0.02, damage, 0.0)
     stain = np.array([230, 200, 120], float)
-    observed = np.round((1 - damage[..., None]) * truth + damage[..., None] * stain).astype(
-        np.uint8
-    )
+    observed = np.round((1 - damage[..., None]) * truth + damage[...,
+                                                                 None] * stain).astype(np.uint8)
     hard = run_clpde(observed, damage > 0)
     soft = run_clpde(observed, damage)
     region = damage > 0

@@ -112,11 +112,10 @@ def main():
         for r in (0.2, 0.35):
             row = step_timing(n, r, device=args.device)
             timings.append(row)
-            print(
-                f"{n:>5} {r:>6} {row['band_cells']:>9} {row['reinit_cells']:>11} "
-                f"{row['step_ms']:>8.1f} {row['ns_per_band_cell']:>8.1f} {row['reinit_ms']:>9.1f} "
-                f"{row['rebuild_ms']:>10.1f}"
-            )
+            print(f"{n:>5} {r:>6} {row['band_cells']:>9} {row['reinit_cells']:>11} "
+                  f"{row['step_ms']:>8.1f} {row['ns_per_band_cell']:>8.1f} "
+                  f"{row['reinit_ms']:>9.1f} "
+                  f"{row['rebuild_ms']:>10.1f}")
     accuracy = []
     print(f"\n{'h':>6} {'cells':>8} {'s':>6} {'cap area':>9} {'zero order':>10} {'angle':>8} "
           f"{'sphere':>8}")

@@ -130,12 +130,8 @@ class RegionScene:
 def _axes(h, extent):
     """Grid coordinates covering [-e, e] per axis (x, y, z), broadcastable."""
     axes = [np.arange(-e, e + 0.5 * h, h) for e in extent]
-    return (
-        axes[0][None, None, :],
-        axes[1][None, :, None],
-        axes[2][:, None, None],
-        tuple(a[0] for a in axes),
-    )
+    return axes[0][None, None, :], axes[1][None, :, None], axes[2][:, None,
+                                                                   None], tuple(a[0] for a in axes)
 
 
 def _capsule(x, y, z, half, r):
@@ -240,9 +236,8 @@ def checker(surf, cells: int = 6) -> np.ndarray:
     lo = surf.origin
     hi = surf.origin + surf.spacing * (np.array(surf.shape[::-1]) - 1)
     k = np.pi * cells / (hi - lo).max()
-    return surf.field(
-        lambda x, y, z: 0.5 + 0.5 * np.sign(np.sin(k * x) * np.sin(k * y) * np.sin(k * z))
-    )
+    return surf.field(lambda x, y,
+                      z: 0.5 + 0.5 * np.sign(np.sin(k * x) * np.sin(k * y) * np.sin(k * z)))
 
 
 def colour_pattern(surf) -> np.ndarray:

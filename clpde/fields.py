@@ -20,15 +20,8 @@ KERNEL_FILES = ("fields.cl",)
 
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
-_REDUCE_OPS = {
-    "sum": 0,
-    "sumsq": 1,
-    "maxabsdiff": 2,
-    "sumsqdiff": 3,
-    "maxabs": 4,
-    "min": 5,
-    "max": 6,
-}
+_REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 4, "min": 5,
+               "max": 6}
 
 
 @dataclass(frozen=True)
@@ -112,15 +105,13 @@ class Field:
         return cls(grid, cla.empty(grid.runtime.queue, grid.padded_shape, grid.dtype))
 
     @classmethod
-    def from_host(
-        cls, grid: Grid, values: np.ndarray, boundary: str = "neumann", value=0.0
-    ) -> Field:
+    def from_host(cls, grid: Grid, values: np.ndarray, boundary: str = "neumann",
+                  value=0.0) -> Field:
         """Upload (nc, ny, nx) values and fill the ghosts."""
         values = np.asarray(values)
         if values.shape != (grid.nc, grid.ny, grid.nx):
-            raise ClpdeError(
-                f"expected values of shape {(grid.nc, grid.ny, grid.nx)}, got {values.shape}"
-            )
+            raise ClpdeError(f"expected values of shape {(grid.nc, grid.ny, grid.nx)}, got "
+                             f"{values.shape}")
         field = cls.empty(grid)
         padded = np.zeros(grid.padded_shape, grid.dtype)
         grid.interior(padded)[...] = values
@@ -210,12 +201,10 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     total = cla.empty(q, 1, np.int32)
     flat = mask.reshape(n)
 
-    runtime.kernel("fields.cl", "count_chunks")(
-        q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data
-    )
-    runtime.kernel("fields.cl", "exclusive_scan_serial")(
-        q, (1,), None, counts.data, np.int32(nchunks), total.data
-    )
+    runtime.kernel("fields.cl", "count_chunks")(q, (nchunks,), None, flat.data, np.int32(n),
+                                                np.int32(chunk), counts.data)
+    runtime.kernel("fields.cl", "exclusive_scan_serial")(q, (1,), None, counts.data,
+                                                         np.int32(nchunks), total.data)
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build
     indices = cla.empty(q, max(count, 1), np.int32)
     if count:

@@ -110,9 +110,8 @@ def _split_once(verts, vals, faces, label):
     pac, vac = cut(a, c)
     n0, m = len(verts), len(f)
     ab, ac = n0 + np.arange(m), n0 + m + np.arange(m)
-    new = np.concatenate(
-        [np.stack([a, ab, ac], 1), np.stack([ab, b, c], 1), np.stack([ab, c, ac], 1)]
-    )
+    new = np.concatenate([np.stack([a, ab, ac], 1), np.stack([ab, b, c], 1),
+                          np.stack([ab, c, ac], 1)])
     verts = np.concatenate([verts, pab, pac])
     vals = np.concatenate([vals, vab, vac])
     return verts, vals, np.concatenate([faces[~mixed], new]), pab

@@ -70,9 +70,8 @@ def _ensure_pocl_cache_dir() -> None:
     candidates = [current] if current else []
     candidates += [
         os.path.join(os.path.expanduser("~"), ".cache", "clpde", "pocl"),
-        os.path.join(
-            tempfile.gettempdir(), f"clpde-pocl-{os.getuid() if hasattr(os, 'getuid') else 0}"
-        ),
+        os.path.join(tempfile.gettempdir(),
+                     f"clpde-pocl-{os.getuid() if hasattr(os, 'getuid') else 0}"),
     ]
     for path in candidates:
         try:
@@ -443,9 +442,8 @@ class Runtime:
         """Refuse an allocation the device cannot make, before trying it."""
         self.check_fits(nbytes, nbytes, f"the {what}")
 
-    def check_fits(
-        self, total: int, largest: int, what: str, way_out: str = MEMORY_WAY_OUT
-    ) -> None:
+    def check_fits(self, total: int, largest: int, what: str,
+                   way_out: str = MEMORY_WAY_OUT) -> None:
         """Refuse, before any work, a request whose buffers cannot fit the device: `total`
         bytes in all, the largest single buffer `largest` bytes."""
         _check_not_forked()
@@ -554,9 +552,8 @@ def _runtime_of(obj) -> Runtime:
     for runtime in list(_runtimes.values()):
         if runtime.ctx == ctx:
             return runtime
-    raise pickle.PicklingError(
-        f"cannot pickle {type(obj).__name__} of a context clpde did not make"
-    )
+    raise pickle.PicklingError(f"cannot pickle {type(obj).__name__} of a context clpde did not "
+                               "make")
 
 
 def _reduce_buffer(buf: cl.Buffer):

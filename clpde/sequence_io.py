@@ -63,9 +63,8 @@ def _read_video(path: Path) -> np.ndarray:
         return np.asarray(iio.imread(path, plugin=plugins[0]))
     except Exception as exc:  # noqa: BLE001  (decoders raise many types: all mean unreadable)
         detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise InputError(
-            f"cannot read {path} as a video (damaged, or not a video?): {detail}"
-        ) from None
+        raise InputError(f"cannot read {path} as a video (damaged, or not a video?): "
+                         f"{detail}") from None
 
 
 def _read_tiff_stack(path: Path) -> np.ndarray:
@@ -198,10 +197,8 @@ def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float =
             tmp.write_text(json.dumps(polygons))
         names.append("contours.json")
         if gif:
-            write_gif(
-                staging / "overlay.gif",
-                [overlay(f, m) for f, m in zip(frames, masks, strict=False)],
-                duration=duration,
-            )
+            write_gif(staging / "overlay.gif",
+                      [overlay(f, m) for f, m in zip(frames, masks, strict=False)],
+                      duration=duration)
             names.append("overlay.gif")
     return [Path(outdir) / n for n in names]

@@ -52,9 +52,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     runtime = clpde.get_runtime(args.device)
-    print(
-        f"device: {runtime.device.name.strip()} ({runtime.type}, {runtime.platform.name.strip()})"
-    )
+    print(f"device: {runtime.device.name.strip()} ({runtime.type}, "
+          f"{runtime.platform.name.strip()})")
     clean, noisy = noisy_photo(args.sigma)
 
     clpde.denoise_tv(noisy[:64, :64], sigma=args.sigma * 255, device=args.device, max_steps=20)

@@ -29,9 +29,8 @@ def fsaverage_white_left():
         import nibabel as nib
         import nilearn
     except ImportError:
-        raise SystemExit(
-            "this example needs the meshes inside nilearn: pip install nilearn nibabel"
-        ) from None
+        raise SystemExit("this example needs the meshes inside nilearn: pip install nilearn "
+                         "nibabel") from None
 
     folder = os.path.join(os.path.dirname(nilearn.__file__), "datasets", "data", "fsaverage5")
     surf = nib.load(os.path.join(folder, "white_left.gii.gz"))
@@ -81,9 +80,8 @@ def main():
     # the check of the tracking: the sulci stay the concave parts while the folds flatten
     for f in frames:
         yellow, grey = concave_shares(f, h, origin)
-        print(
-            f"t = {f.time:g}: concave share of the yellow area {yellow:.2f}, of the rest {grey:.2f}"
-        )
+        print(f"t = {f.time:g}: concave share of the yellow area {yellow:.2f}, of the rest "
+              f"{grey:.2f}")
 
 
 def concave_shares(frame, h, origin):

@@ -75,9 +75,8 @@ def main():
         noise = surface_noise(torus, 0.25, np.random.default_rng(6), channels=3)
         noisy = np.clip(clean + noise, 0.01, 1)
         restored = torus.denoise_colour(noisy, t=4 * h**2)
-        save(
-            out / "surface_fig4_6.png", [picture(torus, x, size) for x in (clean, noisy, restored)]
-        )
+        save(out / "surface_fig4_6.png",
+             [picture(torus, x, size) for x in (clean, noisy, restored)])
 
     if wanted & {"4.7", "4.8"}:
         major, minor, _ = genus2.principal_directions()

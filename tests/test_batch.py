@@ -171,9 +171,8 @@ def test_rerun_skips_complete_outputs_and_redoes_changed_ones(client, photos, tm
             channel_axis=-1 if read_image(copies[1]).ndim == 3 else None,
         ),
     )
-    assert [r.status for r in batch("diffuse", copies, out, client=client, steps=21)] == [
-        "done"
-    ] * 3
+    assert [r.status for r in batch("diffuse", copies, out, client=client,
+                                    steps=21)] == ["done"] * 3
 
 
 def test_failures_are_reported_by_name_and_do_not_stop_the_others(client, photos, tmp_path):
@@ -278,9 +277,8 @@ def test_batch_tile_option_gives_the_untiled_result(client, photos, tmp_path):
     for p in paths[:2]:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
-        assert np.array_equal(
-            read_image(out / p.name), clpde.diffuse(image, steps=8, channel_axis=axis)
-        )
+        assert np.array_equal(read_image(out / p.name),
+                              clpde.diffuse(image, steps=8, channel_axis=axis))
     with pytest.raises(clpde.InputError, match="--tile"):
         batch("inpaint", paths[:1], out, client=client, mask=paths[0], tile=True)
 

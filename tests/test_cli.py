@@ -224,33 +224,17 @@ def test_usage_errors_exit_2(grey, tmp_path, capsys):
 def test_python_dash_m_clpde(grey, tmp_path):
     path, image = grey
     run = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "clpde",
-            "diffuse",
-            str(path),
-            str(tmp_path / "o.png"),
-            "--steps",
-            "2",
-        ],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        check=False,
-        stdin=subprocess.DEVNULL,
-        timeout=120,
+        [sys.executable, "-m", "clpde", "diffuse", str(path), str(tmp_path / "o.png"),
+         "--steps", "2"],
+        capture_output=True, text=True, cwd=tmp_path, check=False, stdin=subprocess.DEVNULL,
+                         timeout=120,
     )
     assert run.returncode == 0, run.stderr
     np.testing.assert_array_equal(read_image(tmp_path / "o.png"), clpde.diffuse(image, steps=2))
     run = subprocess.run(
         [sys.executable, "-m", "clpde", "diffuse", str(path), str(path)],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        check=False,
-        stdin=subprocess.DEVNULL,
-        timeout=120,
+        capture_output=True, text=True, cwd=tmp_path, check=False, stdin=subprocess.DEVNULL,
+                         timeout=120,
     )
     assert run.returncode == 2
     assert run.stderr.strip().startswith("clpde: error: ")

@@ -100,10 +100,9 @@ def test_pyramid_geometry():
     up = mr.upsample(coarse, (7, 9))
     assert up.shape == (2, 7, 9)
     ramp = np.broadcast_to(np.arange(16.0), (1, 16, 16))
-    assert np.allclose(
-        mr.upsample(mr.downsample(ramp, np.zeros((16, 16), bool))[0], (16, 16))[:, :, 1:-1],
-        ramp[:, :, 1:-1],
-    )
+    assert np.allclose(mr.upsample(mr.downsample(ramp, np.zeros((16, 16), bool))[0], (16, 16))[:, :,
+                                                                                               1:-1],
+                       ramp[:, :, 1:-1])
 
 
 def test_convergence_check_stops_early_and_fixed_steps_run_fully():
@@ -133,9 +132,8 @@ def test_rho_phi_psi_round_trip():
 
 @pytest.mark.parametrize("colour", ["channels", "rho-phi-psi"])
 def test_colour_image_with_alpha(colour):
-    image = (
-        np.stack([_edge_image(32), _edge_image(32, 1.2), 1 - _edge_image(32)], -1) * 255
-    ).astype(np.uint8)
+    image = (np.stack([_edge_image(32), _edge_image(32, 1.2), 1 - _edge_image(32)],
+                      -1) * 255).astype(np.uint8)
     alpha = np.full((32, 32, 1), 200, np.uint8)
     rgba = np.concatenate([image, alpha], -1)
     hole = _disc(32, 16, 16, 4)

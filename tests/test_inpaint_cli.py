@@ -63,13 +63,9 @@ def test_rgba_keeps_alpha_and_gif_shows_the_evolution(tmp_path, damaged):
 def test_errors_write_nothing(tmp_path, damaged, capsys, args, match):
     photo, maskfile, *_ = damaged
     write_image(tmp_path / "small.png", np.zeros((5, 5), np.uint8))
-    names = {
-        "photo": photo,
-        "mask": maskfile,
-        "small": tmp_path / "small.png",
-        "out": tmp_path / "out.png",
-        "dir": tmp_path,
-    }
+    names = {"photo": photo, "mask": maskfile, "small": tmp_path / "small.png",
+             "out": tmp_path / "out.png",
+                 "dir": tmp_path}
     before = sorted(os.listdir(tmp_path))
     assert main(["inpaint", *[a.format(**names) for a in args]]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -80,17 +76,15 @@ def test_errors_write_nothing(tmp_path, damaged, capsys, args, match):
 def test_demo_writes_the_pictures(tmp_path, monkeypatch):
     # The real demo inpaints a 512x512 photo; a corner of it keeps the test fast.
     full = inpaint_demo.damaged_astronaut
-    monkeypatch.setattr(
-        inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full())
-    )
+    monkeypatch.setattr(inpaint_demo, "damaged_astronaut",
+                        lambda: tuple(a[:96, :96] for a in full()))
     out = tmp_path / "demo"
     assert main(["inpaint", "--demo", "-o", str(out)]) == 0
     names = sorted(os.listdir(out))
     assert names == ["damaged.png", "inpaint_before_after.png", "inpainted.png", "mask.png",
                      "original.png"]
-    original, damaged_, mask = (
-        read_image(out / n) for n in ("original.png", "damaged.png", "mask.png")
-    )
+    original, damaged_, mask = (read_image(out / n) for n in ("original.png", "damaged.png",
+                                                              "mask.png"))
     restored = read_image(out / "inpainted.png")
     mask = mask > 0
     assert mask.any() and np.array_equal(restored[~mask], damaged_[~mask])
@@ -114,9 +108,8 @@ def test_method_and_soft_mask(tmp_path, damaged, capsys):
 def test_demo_puts_its_psnr_beside_the_peers(tmp_path, monkeypatch, capsys):
     """Issue 11: the demo's PSNR had nothing to compare it with."""
     full = inpaint_demo.damaged_astronaut
-    monkeypatch.setattr(
-        inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full())
-    )
+    monkeypatch.setattr(inpaint_demo, "damaged_astronaut",
+                        lambda: tuple(a[:96, :96] for a in full()))
     assert main(["inpaint", "--demo", "-o", str(tmp_path / "demo")]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert "PSNR inside the mask" in line and "scikit-image biharmonic" in line

@@ -16,9 +16,8 @@ KERNEL_DIR = ROOT / "kernels"
 # names no file first (a kernel name alone, or a variable), which the one signature forbids
 WITH_FILE = re.compile(r"""kernel\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']""")
 FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["'](\w+\.cl)["']""")
-NOT_LITERAL = re.compile(
-    r"""\.(?:new_)?kernel\((?!\s*["']\w+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)"""
-)
+NOT_LITERAL = re.compile(r"""\.(?:new_)?kernel\("""
+                         r"""(?!\s*["']\w+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
 DEFINED = re.compile(r"__kernel\s+(?:__attribute__\s*\(\(.*?\)\)\s*)?void\s+(\w+)", re.S)
 INCLUDE = re.compile(r'#include\s+"([\w.]+)"')
 

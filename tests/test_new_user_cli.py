@@ -52,11 +52,8 @@ def test_regions_rerun_holds_only_its_own_files(tmp_path, capsys):
         capsys
     )
     assert main([*args, "--saves", "1", "--overwrite"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == [
-        "regions.png",
-        "regions_0.ply",
-        "regions_1.ply",
-    ]
+    assert sorted(p.name for p in out.iterdir()) == ["regions.png", "regions_0.ply",
+                                                     "regions_1.ply"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging or old folder left
 
 
@@ -145,9 +142,8 @@ def test_inpaint_fills_nan_pixels_with_mask_nan(nan_tiff, tmp_path, capsys):
 def test_nan_pixels_get_command_line_advice(nan_tiff, tmp_path, capsys):
     path, _, _ = nan_tiff
     write_image(tmp_path / "none.png", np.zeros((24, 30), np.uint8))
-    assert (
-        main(["inpaint", str(path), str(tmp_path / "none.png"), "-o", str(tmp_path / "o.tif")]) == 2
-    )
+    assert main(["inpaint", str(path), str(tmp_path / "none.png"), "-o",
+                 str(tmp_path / "o.tif")]) == 2
     line = _one_error_line(capsys)
     assert "24 NaN pixels outside the mask" in line and "give 'nan' as MASK" in line
     assert "mask=None" not in line
@@ -164,9 +160,8 @@ def test_sixteen_bit_colour_to_jpeg_suggests_what_works(tmp_path, capsys):
     assert main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.jpg")]) == 2
     line = _one_error_line(capsys)
     assert "write a .tif file instead" in line and ".png" not in line
-    assert (
-        main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.tif"), "--steps", "1"]) == 0
-    )
+    assert main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.tif"), "--steps",
+                 "1"]) == 0
 
 
 def test_mesh_messages(tmp_path, capsys):
@@ -205,10 +200,9 @@ def test_negligible_coarse_grid_shares_are_not_shown():
 
     from clpde.cli._common import grid_advice
 
-    text = (
-        "the grid is too coarse for this shape's thinnest features: {}% of the band lies on "
-        "a medial axis (|grad psi| < 0.5); use a finer spacing (below 0.0123) or a narrower band"
-    )
+    text = ("the grid is too coarse for this shape's thinnest features: {}% of the band lies on "
+            "a medial axis (|grad psi| < 0.5); use a finer spacing (below 0.0123) or a narrower "
+            "band")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with grid_advice(50):

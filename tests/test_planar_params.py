@@ -28,9 +28,8 @@ def test_used_parameters_still_work_and_cli_agrees(tmp_path, capsys):
         given = {"kappa": 0.1, "edge": "rational", "eps": 0.1, "weight": np.ones((6, 7))}
         assert clpde.diffuse(image, flow, steps=1, **{p: given[p] for p in params}).shape == (6, 7)
     write_image(tmp_path / "in.png", image)
-    assert (
-        main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--kappa", "0.1"]) == 2
-    )
+    assert main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--kappa",
+                 "0.1"]) == 2
     assert "--kappa applies to --flow perona-malik, not heat" in capsys.readouterr().err
 
 

@@ -35,9 +35,8 @@ def _inputs(kind, rng, nc):
     nz, ny, nx = SHAPE
     if kind == "random":
         return rng.normal(size=(nc, nz, ny, nx))
-    z, y, x = np.meshgrid(
-        np.arange(nz) - 4.2, np.arange(ny) - 4.6, np.arange(nx) - 5.1, indexing="ij"
-    )
+    z, y, x = np.meshgrid(np.arange(nz) - 4.2, np.arange(ny) - 4.6, np.arange(nx) - 5.1,
+                          indexing="ij")
     sphere = np.sqrt(x**2 + y**2 + z**2) - 3.3
     planes = [0.8 * z + 0.3 * x - 0.5 * c for c in range(nc - 1)]
     return np.stack([sphere] + planes)
@@ -80,9 +79,8 @@ def test_region_step_matches_reference(runtime, rng, kind):
 @pytest.mark.parametrize("kind", ["random", "structured"])
 def test_advect_and_reinit_match_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 2)
-    g, (ls, ls0), runs, (ls_h, ls0_h) = _setup(
-        runtime, [data, data + 0.3 * rng.normal(size=data.shape)]
-    )
+    g, (ls, ls0), runs, (ls_h, ls0_h) = _setup(runtime,
+                                               [data, data + 0.3 * rng.normal(size=data.shape)])
     idx = runs.band.indices.get().astype(np.int64)
     out = ls.copy()
     vel = (0.4, -0.7, 0.2)
@@ -209,9 +207,8 @@ COS_CAP = 0.5  # cap z > 0.5 R: angular radius 60 degrees, area fraction 1/4
 
 @pytest.mark.parametrize("motion", ["expansion", "translation"])
 def test_cap_keeps_its_relative_area_and_angular_radius(motion):
-    phi, (_x, _y, z), origin = _sphere(
-        42, 0.9, (-0.25, 0.0, 0.0) if motion == "translation" else (0, 0, 0)
-    )
+    phi, (_x, _y, z), origin = _sphere(42, 0.9,
+                                       (-0.25, 0.0, 0.0) if motion == "translation" else (0, 0, 0))
     centre0 = np.array([-0.25, 0.0, 0.0]) if motion == "translation" else np.zeros(3)
     cap = COS_CAP * 0.9 - z  # region: z > 0.45
     if motion == "expansion":
@@ -364,9 +361,8 @@ def test_bad_input_is_named():
     with pytest.raises(InputError, match="beta"):
         track_region(phi, phi, beta="sideways", spacing=H, origin=origin)
     with pytest.raises(InputError, match="t = 0"):
-        track_region(
-            phi, phi, beta=lambda x, y, z, t: np.inf * (t == 0) + 0 * x, spacing=H, origin=origin
-        )
+        track_region(phi, phi, beta=lambda x, y, z, t: np.inf * (t == 0) + 0 * x, spacing=H,
+                     origin=origin)
     with pytest.raises(InputError, match="target"):
         track_region(phi, phi, beta="morph", spacing=H, origin=origin)
     with pytest.raises(InputError, match="border"):
@@ -389,11 +385,8 @@ def test_cli_writes_meshes_and_a_picture(tmp_path):
     out = tmp_path / "out"
     assert main(["regions", "merge", "-o", str(out), "--spacing", "0.1", "--saves", "1",
                  "--size", "48"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == [
-        "regions.png",
-        "regions_0.ply",
-        "regions_1.ply",
-    ]
+    assert sorted(p.name for p in out.iterdir()) == ["regions.png", "regions_0.ply",
+                                                     "regions_1.ply"]
     import trimesh
 
     mesh = trimesh.load(out / "regions_1.ply", process=False)
@@ -482,9 +475,8 @@ def test_cli_tracks_the_regions_painted_on_a_mesh(tmp_path, capsys):
         # the cap (yellow) keeps its share of the area (1 - cos 60 deg) / 2 = 0.25
         yellow = np.all(colours[frame.faces[:, 0]] == (230, 200, 30), axis=1)
         assert frame.area_faces[yellow].sum() / frame.area == pytest.approx(0.25, rel=0.05)
-    ball.visual.vertex_colors = np.random.default_rng(0).integers(
-        0, 255, (len(ball.vertices), 4), dtype=np.uint8
-    )
+    ball.visual.vertex_colors = np.random.default_rng(0).integers(0, 255, (len(ball.vertices), 4),
+                                                                  dtype=np.uint8)
     ball.export(path)
     assert main(["regions", str(path), "-o", str(out), "--resolution", "32", "--regions",
                  "colours", "--overwrite"]) == 2

@@ -51,11 +51,8 @@ def test_closest_points_match_reference(small_sphere):
 
 @pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
 def test_cp_stencils_match_reference(small_sphere, interpolation, order):
-    s = (
-        ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation)
-        if order == 1
-        else small_sphere
-    )
+    s = ImplicitSurface.sphere(1.0, 0.2,
+                               interpolation=interpolation) if order == 1 else small_sphere
     n = s.ext_band.n
     cp = np.stack([c.get()[:n] for c in s.cp]).astype(np.float64)
     base, frac = ref.cp_stencils(cp, s.grid.padded_shape, order)
@@ -64,20 +61,14 @@ def test_cp_stencils_match_reference(small_sphere, interpolation, order):
 
 
 @pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
-@pytest.mark.parametrize(
-    "nc,normalize,lines", [(1, False, False), (3, True, False), (3, True, True)]
-)
+@pytest.mark.parametrize("nc,normalize,lines",
+                         [(1, False, False), (3, True, False), (3, True, True)])
 def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc, normalize, lines):
-    s = (
-        ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation)
-        if order == 1
-        else small_sphere
-    )
+    s = ImplicitSurface.sphere(1.0, 0.2,
+                               interpolation=interpolation) if order == 1 else small_sphere
     g, q = s.grid, s.runtime.queue
-    for u in (
-        padded_host(s, rng, nc),
-        np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape),
-    ):
+    for u in (padded_host(s, rng, nc),
+              np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape)):
         src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
         dst = cla.zeros_like(src)
         kernel = g.kernel("surface.cl", "extend_cp", INTERP=order, NC=nc, NORMALIZE=int(normalize),
@@ -144,10 +135,8 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         np.testing.assert_allclose(out[:, band], expect, atol=2e-5 * max(1, np.abs(expect).max()))
         # nothing is written outside the runs
         runs = s.step_runs
-        spans = [
-            np.arange(a, b)
-            for a, b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n], strict=False)
-        ]
+        spans = [np.arange(a, b) for a,
+                 b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n], strict=False)]
         out[:, np.concatenate(spans)] = 0
         assert not out.any()
 
@@ -181,9 +170,8 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
         v = np.stack(np.broadcast_arrays(x + 0.3 * y, np.cos(2 * y), z + 0.5))
         u = v / np.sqrt((v**2).sum(axis=0))
         got = s.harmonic_map(u, 0.02)
-        kernel = g.kernel(
-            "surface.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0, ALONG=0, WEIGHTED=0
-        )
+        kernel = g.kernel("surface.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0,
+                          ALONG=0, WEIGHTED=0)
         nc, normalize = 3, True
     steps, dt = flows._check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
     whole = flows.BandFlow(s, u, normalize=normalize)
@@ -321,9 +309,8 @@ def test_bad_inputs_are_clear_errors():
     with pytest.raises(InputError, match="3D"):
         ImplicitSurface.from_volume(psi[0], 0.1)
     with pytest.raises(InputError, match="border"):
-        ImplicitSurface.from_volume(
-            np.linalg.norm(np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j], axis=0) - 0.95, 0.1
-        )
+        ImplicitSurface.from_volume(np.linalg.norm(np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j],
+                                                   axis=0) - 0.95, 0.1)
     s = ImplicitSurface.sphere(1.0, 0.2)
     with pytest.raises(InputError, match="shape"):
         s.heat(np.zeros((3, 3, 3)), t=0.1)

@@ -59,9 +59,8 @@ def test_layout_and_tables_match_reference(runtime, brick):
         bits.reshape(-1)[cells] += bit
     expect_bits = bref.to_bricks(bits[None], coords, brick)[0].reshape(len(coords) + 2, -1)
     np.testing.assert_array_equal(bb.mask_host, expect_bits)
-    np.testing.assert_array_equal(
-        bb.brick_bits.get(), np.bitwise_or.reduce(expect_bits.astype(np.uint8), axis=1)
-    )
+    np.testing.assert_array_equal(bb.brick_bits.get(),
+                                  np.bitwise_or.reduce(expect_bits.astype(np.uint8), axis=1))
 
 
 @pytest.mark.parametrize("brick", BRICK_SIZES)
@@ -102,9 +101,8 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
               bb.node_rows.data, channels=2)
     node = band_host(s.node_band)
     offsets = [int(o) for o in flows._offsets(g, sides)]
-    expect = ref.heat_step(
-        u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets, weighted
-    )
+    expect = ref.heat_step(u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets,
+                           weighted)
     got = dst.get().reshape(2, -1)[:, bref.brick_index(node, g.padded_shape, coords, brick, APRON)]
     np.testing.assert_allclose(got, expect, atol=2e-5 * max(1, np.abs(expect).max()))
     # the apron repeats the next bricks' first cells wherever both bricks were stepped
@@ -117,13 +115,9 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
         for hx, hy, hz in ((1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)):
             j = index.get((x + hx, y + hy, z + hz))
             if j and stepped[i] and stepped[j]:
-                mine = out[
-                    :,
-                    i,
-                    hz * bz : hz * bz + APRON if hz else bz,
-                    hy * by : hy * by + APRON if hy else by,
-                    hx * bx : hx * bx + APRON if hx else bx,
-                ]
+                mine = out[:, i, hz * bz: hz * bz + APRON if hz else bz,
+                           hy * by: hy * by + APRON if hy else by,
+                           hx * bx: hx * bx + APRON if hx else bx]
                 theirs = out[:, j, :APRON if hz else bz, :APRON if hy else by, :APRON if hx else bx]
                 np.testing.assert_array_equal(mine, theirs)
                 checked += 1

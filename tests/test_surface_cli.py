@@ -10,10 +10,8 @@ from clpde.cli import main
 
 def test_surface_heat_on_a_generated_shape(tmp_path, capsys):
     out = tmp_path / "heat"
-    assert (
-        main(["surface", "heat", "sphere", "-o", str(out), "--resolution", "24", "--size", "64"])
-        == 0
-    )
+    assert main(["surface", "heat", "sphere", "-o", str(out), "--resolution", "24", "--size",
+                 "64"]) == 0
     before, after = iio.imread(out / "before.png"), iio.imread(out / "after.png")
     assert before.shape == after.shape and after.shape[1] == 128
     assert after.shape[0] > 64  # the views, then the colour bar
@@ -28,22 +26,8 @@ def test_surface_on_a_mesh_file_and_errors(tmp_path, capsys):
     path = tmp_path / "ball.ply"
     trimesh.creation.icosphere(3, radius=2.0).export(path)
     out = tmp_path / "curv"
-    assert (
-        main(
-            [
-                "surface",
-                "curvature",
-                str(path),
-                "-o",
-                str(out),
-                "--resolution",
-                "24",
-                "--size",
-                "48",
-            ]
-        )
-        == 0
-    )
+    assert main(["surface", "curvature", str(path), "-o", str(out), "--resolution", "24", "--size",
+                 "48"]) == 0
     assert (out / "result.glb").stat().st_size > 0
     assert main(["surface", "heat", str(tmp_path / "missing.obj"), "-o", str(out),
                  "--overwrite"]) == 2
@@ -57,9 +41,8 @@ def test_surface_chroma_denoises_a_meshs_own_colours(tmp_path, capsys):
 
     def pattern(v):
         d = v / np.linalg.norm(v, axis=1, keepdims=True)
-        return np.stack(
-            [0.5 + 0.35 * np.tanh(4 * d[:, 0]), 0.5 + 0.3 * d[:, 1], 0.45 + 0 * d[:, 2]], 1
-        )
+        return np.stack([0.5 + 0.35 * np.tanh(4 * d[:, 0]), 0.5 + 0.3 * d[:, 1],
+                         0.45 + 0 * d[:, 2]], 1)
 
     noisy = np.clip(
         pattern(ball.vertices)
@@ -73,10 +56,8 @@ def test_surface_chroma_denoises_a_meshs_own_colours(tmp_path, capsys):
     ball.export(path)
     data = path.read_bytes()
     out = tmp_path / "chroma"
-    assert (
-        main(["surface", "chroma", str(path), "-o", str(out), "--resolution", "32", "--size", "48"])
-        == 0
-    )
+    assert main(["surface", "chroma", str(path), "-o", str(out), "--resolution", "32", "--size",
+                 "48"]) == 0
     assert "the mesh's colours" in capsys.readouterr().err
     assert path.read_bytes() == data  # the input is never modified
     result = trimesh.load(out / "result.ply", force="mesh")
@@ -87,23 +68,9 @@ def test_surface_chroma_denoises_a_meshs_own_colours(tmp_path, capsys):
     # a mesh without colours cannot give them
     plain = tmp_path / "plain.ply"
     trimesh.creation.icosphere(2, radius=2.0).export(plain)
-    assert (
-        main(
-            [
-                "surface",
-                "heat",
-                str(plain),
-                "-o",
-                str(out),
-                "--resolution",
-                "24",
-                "--data",
-                "mesh",
-                "--overwrite",
-            ]
-        )
-        == 2
-    )
+    assert main(["surface", "heat", str(plain), "-o", str(out), "--resolution", "24", "--data",
+                 "mesh",
+                 "--overwrite"]) == 2
     assert "no vertex colours" in capsys.readouterr().err
 
 
@@ -129,10 +96,8 @@ def test_every_scalar_render_has_a_colour_bar(tmp_path):
     from clpde.surface.render import _RAMP, render
 
     out = tmp_path / "heat"
-    assert (
-        main(["surface", "heat", "sphere", "-o", str(out), "--resolution", "24", "--size", "64"])
-        == 0
-    )
+    assert main(["surface", "heat", "sphere", "-o", str(out), "--resolution", "24", "--size",
+                 "64"]) == 0
     for name in ("before.png", "after.png"):
         bar = _bar(iio.imread(out / name), 64).reshape(-1, 3).astype(float) / 255
         # both ends of the colour ramp are drawn, and black label text
@@ -143,11 +108,8 @@ def test_every_scalar_render_has_a_colour_bar(tmp_path):
     x, _, _ = surf.coordinates()
     picture = render(surf, np.broadcast_to(x, surf.shape), size=96)
     assert picture.shape[0] > 96 and picture.shape[1] == 96
-    assert render(surf, np.broadcast_to(x, surf.shape), size=96, colour_bar=False).shape == (
-        96,
-        96,
-        3,
-    )
+    assert render(surf, np.broadcast_to(x, surf.shape), size=96, colour_bar=False).shape == (96, 96,
+                                                                                             3)
     assert render(surf, None, size=96).shape == (96, 96, 3)  # nothing to scale
 
 

@@ -37,14 +37,8 @@ CASES = {
     "harmonic1": {"nc": 3, "FLOW_P": 1, "HARMONIC": 1, "FIDELITY": 0, "ALONG": 0},
     "along": {"nc": 1, "FLOW_P": 2, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 1},
     "tv-weighted": {"nc": 1, "FLOW_P": 1, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 0, "WEIGHTED": 1},
-    "harmonic1-lines": {
-        "nc": 3,
-        "FLOW_P": 1,
-        "HARMONIC": 1,
-        "FIDELITY": 0,
-        "ALONG": 0,
-        "LINE_FIELD": 1,
-    },
+    "harmonic1-lines": {"nc": 3, "FLOW_P": 1, "HARMONIC": 1, "FIDELITY": 0, "ALONG": 0,
+                        "LINE_FIELD": 1},
 }
 
 
@@ -56,9 +50,8 @@ def test_flow_step_matches_reference(sphere02, rng, case):
     nc = opts.pop("nc")
     weighted = opts.get("WEIGHTED", 0)
     x, y, _z = s.coordinates()
-    structured = np.stack(
-        [np.broadcast_to(np.sign(x - 0.1) + 0.3 * y * c, s.shape) for c in range(nc)]
-    )
+    structured = np.stack([np.broadcast_to(np.sign(x - 0.1) + 0.3 * y * c,
+                                           s.shape) for c in range(nc)])
     psi = s.psi_dev.get() * (1.3 if weighted else 1.0)
     direction = rng.standard_normal((3,) + g.padded_shape)
     direction /= np.sqrt((direction**2).sum(axis=0))
@@ -101,9 +94,8 @@ def test_lambda_terms_match_reference(sphere02, rng):
                                  [int(o) for o in offsets])
     for got, want in zip(terms, expect, strict=False):
         np.testing.assert_allclose(got.get(), want, atol=2e-4 * max(1, np.abs(want).max()))
-    assert flows.device_sum(g, terms[1], s.step_band.n) == pytest.approx(
-        want_sum := expect[1].sum(), rel=1e-4
-    )
+    assert flows.device_sum(g, terms[1],
+                            s.step_band.n) == pytest.approx(want_sum := expect[1].sum(), rel=1e-4)
     # the smeared delta integrates to the sphere's area: sum(delta) h^2 = 4 pi
     assert want_sum * s.spacing**2 == pytest.approx(4 * np.pi, rel=0.03)
 

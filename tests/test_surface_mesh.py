@@ -147,9 +147,9 @@ def test_winding_kernel_matches_the_exact_sum_and_its_far_field_approximation(rn
 
     small = trimesh.creation.icosphere(2, radius=1.0)
     pts = rng.uniform(-1.6, 1.6, (300, 3))
-    np.testing.assert_allclose(
-        winding_number(small, pts, exact=True), winding_reference(small, pts), atol=1e-5
-    )
+    np.testing.assert_allclose(winding_number(small, pts, exact=True),
+                               winding_reference(small, pts),
+                               atol=1e-5)
     mesh = trimesh.creation.icosphere(4, radius=1.0)
     pts = np.concatenate([rng.uniform(-1.6, 1.6, (1500, 3)),
                           mesh.vertices[:500] * rng.uniform(0.9, 1.1, (500, 1))])

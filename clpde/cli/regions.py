@@ -56,9 +56,8 @@ def add_regions_parser(subparsers) -> None:
                         help="grid cells across a mesh's longest side (default: 96)")
     parser.add_argument("--t", type=float, default=None, help="final time (default: per scene)")
     parser.add_argument("--saves", type=int, default=4, help="saved intervals (default: 4)")
-    parser.add_argument(
-        "--size", type=int, default=256, help="picture size per view (default: 256)"
-    )
+    parser.add_argument("--size", type=int, default=256,
+                        help="picture size per view (default: 256)")
     add_device_argument(parser)
     parser.set_defaults(run=run_regions)
 
@@ -145,8 +144,7 @@ def colour_labels(mesh):
         raise InputError(
             f"the mesh has {len(colours)} vertex colours; as regions it may have at most "
             f"{MAX_COLOUR_REGIONS} (paint each region in one flat colour), or use --regions "
-            "curvature"
-        )
+            "curvature")
     return labels.reshape(-1), colours / 255.0
 
 
@@ -175,9 +173,8 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
         except InputError as exc:  # shaded or photographed colours are no regions
             warnings.warn(f"{exc}; tracking the curvature-sign regions instead", stacklevel=2)
     if painted is None and regions == "colours":
-        raise InputError(
-            f"{path} has no vertex colours to take regions from; use --regions curvature"
-        )
+        raise InputError(f"{path} has no vertex colours to take regions from; use --regions "
+                         "curvature")
     region = painted[0] if painted is not None else curvature_sign_regions(phi, h)
     if flow == "gaussian":
         # weight h^3: speed K+ in cells per unit time (K in 1 / cells^2); creases sharper

@@ -63,9 +63,8 @@ def add_surface_parser(subparsers) -> None:
     parser.add_argument("--direction", choices=("major", "minor", "none"), default="major",
                         help="principal direction for flowvis and anisotropic "
                              "reaction-diffusion ('none': isotropic; default: major)")
-    parser.add_argument(
-        "--size", type=int, default=400, help="picture size per view (default: 400)"
-    )
+    parser.add_argument("--size", type=int, default=400,
+                        help="picture size per view (default: 400)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     add_device_argument(parser)
     parser.set_defaults(run=run_surface)
@@ -101,9 +100,8 @@ def load_surface(mesh, resolution=96, device=None) -> ImplicitSurface:
     if isinstance(mesh, str) and mesh in SHAPES:
         return surface_shape(mesh, resolution, device=device)
     if isinstance(mesh, str) and not os.path.exists(mesh):
-        raise InputError(
-            f"{mesh!r} is neither a mesh file nor one of the shapes {', '.join(SHAPES)}"
-        )
+        raise InputError(f"{mesh!r} is neither a mesh file nor one of the shapes "
+                         f"{', '.join(SHAPES)}")
     with encloses_volume(mesh):
         return ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
 
@@ -213,27 +211,18 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
             before = surf.field(lambda x, y, z: 0 * x) + rng.random(surf.shape)
             t = 10 * h**2 if t is None else t
             after = surf.diffuse_along(before, field, t=t, progress=progress)
-            return SurfaceRun(
-                flow,
-                surf,
-                before,
-                after,
-                f"noise diffused along the {direction} principal direction to t={t:g}",
-            )
+            return SurfaceRun(flow, surf, before, after,
+                              f"noise diffused along the {direction} principal direction to "
+                              f"t={t:g}")
         iterations = 4000 if iterations is None else iterations
         along = field if direction != "none" else None
         ab = surf.reaction_diffusion(iterations, direction=along, seed=seed, progress=progress)
-        return SurfaceRun(
-            flow,
-            surf,
-            np.full(surf.shape, 4.0),
-            ab[0],
-            f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations, diffusion of a "
-            f"along the {direction} direction"
-            if along is not None
-            else f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations",
-            "chemical a",
-        )
+        return SurfaceRun(flow, surf, np.full(surf.shape, 4.0), ab[0],
+                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations, "
+                          "diffusion of a "
+                          f"along the {direction} direction" if along is not None else
+                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations",
+                          "chemical a")
     raise InputError(f"unknown surface flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
 
@@ -267,9 +256,8 @@ def _mean_curvature(surf, mean, progress=None):
 def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
     h = surf.spacing
     if flow not in DATA_FLOWS:
-        raise InputError(
-            f"the {flow} flow makes its own data; only {', '.join(DATA_FLOWS)} take yours"
-        )
+        raise InputError(f"the {flow} flow makes its own data; only {', '.join(DATA_FLOWS)} take "
+                         "yours")
     if flow == "chroma" and data.shape[:1] != (3,):
         raise InputError("chroma denoising needs colour (3-channel) data")
     if flow == "heat":
@@ -287,13 +275,9 @@ def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
                           f"TV denoising of the mesh's data for noise sigma={sigma:g}: residual "
                           f"variance {info.residual_variance:.4g}")
     t = 4 * h**2 if t is None else t
-    return SurfaceRun(
-        flow,
-        surf,
-        data,
-        surf.denoise_colour(data, t=t, progress=progress),
-        f"the mesh's colours: chroma harmonic map p=1 and brightness TV flow to t={t:g}",
-    )
+    return SurfaceRun(flow, surf, data, surf.denoise_colour(data, t=t, progress=progress),
+                      "the mesh's colours: chroma harmonic map p=1 and brightness TV flow to "
+                      f"t={t:g}")
 
 
 def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400,

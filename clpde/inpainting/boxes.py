@@ -67,12 +67,8 @@ def boxes(omega: np.ndarray, margin_of, align_of=lambda crop: 1, tile: int = TIL
     while i < len(found):
         grown = np.array([g for _, g in found])
         a = grown[i]
-        hit = (
-            (grown[:, 0] < a[1])
-            & (a[0] < grown[:, 1])
-            & (grown[:, 2] < a[3])
-            & (a[2] < grown[:, 3])
-        )
+        hit = (grown[:, 0] < a[1]) & (a[0] < grown[:, 1]) & (grown[:, 2] < a[3]) & (a[2] < grown[:,
+                                                                                                 3])
         hit[i] = False
         if not hit.any():
             i += 1

@@ -21,9 +21,8 @@ def _reach(params) -> int:
     biharmonic start's two cells."""
     from ..inpaint import GHOST, InpaintParams
 
-    p = InpaintParams(
-        **{k: v for k, v in params.items() if k in InpaintParams.__dataclass_fields__}
-    )
+    p = InpaintParams(**{k: v for k,
+                         v in params.items() if k in InpaintParams.__dataclass_fields__})
     return int(np.ceil(p.epsilon)) + 1 + p.presmooth + GHOST + 2
 
 

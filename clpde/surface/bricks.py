@@ -211,9 +211,9 @@ class BrickBand:
         bx, by, bz = self.brick
         cells = self.cells if apron == 0 else _brick_cells(self.coords, self.brick,
                                                            self.padded_shape, apron)
-        out = np.zeros(
-            (flat.shape[0], self.nbricks + 2, (bx + apron) * (by + apron) * (bz + apron)), dtype
-        )
+        out = np.zeros((flat.shape[0], self.nbricks + 2,
+                        (bx + apron) * (by + apron) * (bz + apron)),
+                       dtype)
         valid = cells >= 0
         out[:, 1 : self.nbricks + 1][:, valid] = flat[:, cells[valid]]
         self.runtime.check_alloc(out.nbytes, "brick volume")
@@ -249,14 +249,5 @@ class BrickBand:
         else:
             per = 1
             gsize, lsize = (n * self.cells_per_brick, channels), (self.cells_per_brick, 1)
-        return kernel(
-            rt.queue,
-            gsize,
-            lsize,
-            *args,
-            self.nbr.data,
-            self.brick_bits.data,
-            np.int32(n),
-            np.int32(self.plane),
-            np.int32(per),
-        )
+        return kernel(rt.queue, gsize, lsize, *args, self.nbr.data, self.brick_bits.data,
+                      np.int32(n), np.int32(self.plane), np.int32(per))

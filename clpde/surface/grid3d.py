@@ -128,9 +128,8 @@ class Grid3D:
             offsets, nruns, pad = cla.arange(q, 0, max(n, 1), dtype=np.int32), n, 1
         else:
             flags = cla.empty(q, n, np.uint8)
-            self.kernel("surface.cl", "band_run_starts")(
-                q, (n,), None, band.indices.data, np.int32(n), flags.data
-            )
+            self.kernel("surface.cl", "band_run_starts")(q, (n,), None, band.indices.data,
+                                                         np.int32(n), flags.data)
             starts = compact(self.runtime, flags)
             offsets, nruns = starts.indices, starts.n
         start = cla.empty(q, max(nruns, 1), np.int32)

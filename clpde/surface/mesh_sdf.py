@@ -183,9 +183,8 @@ def rim_cells(mesh, face, closest_point, spacing) -> np.ndarray:
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     a, b = vertices[edges[..., 0]], vertices[edges[..., 1]]  # (n, 3 edges, 3)
     p = closest_point[near][:, None, :]
-    t = np.clip(
-        ((p - a) * (b - a)).sum(axis=2) / np.maximum(((b - a) ** 2).sum(axis=2), 1e-300), 0, 1
-    )
+    t = np.clip(((p - a) * (b - a)).sum(axis=2) / np.maximum(((b - a) ** 2).sum(axis=2), 1e-300), 0,
+                1)
     gap = np.linalg.norm(a + t[..., None] * (b - a) - p, axis=2)
     gap = np.where(on_boundary[rim_faces], gap, np.inf).min(axis=1)
     return cells[near][gap < 1e-3 * spacing]
@@ -402,22 +401,10 @@ def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
     nbr_dev = cla.to_device(q, _edge_neighbours(mesh))
     kernel = rt.kernel("surface.cl", "mesh_refine")
     for _ in range(max(1, int(passes))):
-        kernel(
-            q,
-            (idx.size,),
-            None,
-            cells.data,
-            np.int32(idx.size),
-            faces[0].data,
-            faces[1].data,
-            dist.data,
-            cpt.data,
-            tri_dev.data,
-            nbr_dev.data,
-            np.int32(nx),
-            np.int32(ny),
-            np.int32(nz),
-        )
+        kernel(q, (idx.size,), None, cells.data, np.int32(idx.size), faces[0].data,
+               faces[1].data, dist.data, cpt.data, tri_dev.data, nbr_dev.data, np.int32(nx),
+               np.int32(ny),
+               np.int32(nz))
         faces.reverse()
     d = dist.get()[: idx.size].astype(np.float64) * h
     cp = origin + h * cpt.get()[: 3 * idx.size].reshape(-1, 3).astype(np.float64)

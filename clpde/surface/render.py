@@ -55,9 +55,8 @@ def to_mesh(surf, u=None, *, vmin=None, vmax=None, interpolation="tricubic"):
         elif values.shape[1] == 3:
             rgb = np.clip(values, 0, 1)
         else:
-            raise InputError(
-                f"to_mesh colours scalar or 3-channel data, not {values.shape[1]} channels"
-            )
+            raise InputError(f"to_mesh colours scalar or 3-channel data, not {values.shape[1]} "
+                             "channels")
         mesh.visual.vertex_colors = np.concatenate(
             [np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], axis=1
         )
@@ -205,11 +204,9 @@ def render(surf_or_mesh, u=None, path=None, *, views=((30.0, 20.0),), size=512, 
     import imageio.v3 as iio
     import trimesh
 
-    mesh = (
-        surf_or_mesh
-        if isinstance(surf_or_mesh, trimesh.Trimesh)
-        else to_mesh(surf_or_mesh, u, vmin=vmin, vmax=vmax)
-    )
+    mesh = surf_or_mesh if isinstance(surf_or_mesh, trimesh.Trimesh) else to_mesh(surf_or_mesh, u,
+                                                                                  vmin=vmin,
+                                                                                  vmax=vmax)
     views = list(views)
     if not views:
         raise InputError("give at least one (azimuth, elevation) view")

@@ -56,10 +56,8 @@ class WindingNumbers:
         weight = np.add.reduceat(area, starts)
         count = np.diff(np.append(starts, nf))
         plain = np.add.reduceat(centroid, starts) / count[:, None]
-        weighted = (
-            np.add.reduceat(centroid * area[:, None], starts)
-            / np.where(weight > 0, weight, 1)[:, None]
-        )
+        weighted = np.add.reduceat(centroid * area[:, None], starts) / np.where(weight > 0, weight,
+                                                                                1)[:, None]
         centre = np.where((weight > 0)[:, None], weighted, plain)
         owner = np.repeat(np.arange(len(starts)), count)
         reach = np.linalg.norm(tri - centre[owner][:, None, :], axis=2).max(axis=1)
@@ -136,24 +134,12 @@ class WindingNumbers:
 
         out = cla.empty(q, n, np.float32)
         nchunks = len(chunk_tile)
-        self._kernel(
-            q,
-            (nchunks,),
-            None,
-            dev(sorted_pts.reshape(-1), np.float32),
-            dev(chunk_start),
-            dev(chunk_end),
-            dev(chunk_tile),
-            np.int32(nchunks),
-            dev(near_off),
-            dev(near_cols),
-            dev(far_off),
-            dev(far_cols),
-            self._cl_start.data,
-            self._clu.data,
-            self._tri.data,
-            out.data,
-        )
+        self._kernel(q, (nchunks,), None, dev(sorted_pts.reshape(-1), np.float32), dev(chunk_start),
+                     dev(chunk_end), dev(chunk_tile), np.int32(nchunks), dev(near_off),
+                     dev(near_cols),
+                     dev(far_off), dev(far_cols), self._cl_start.data, self._clu.data,
+                     self._tri.data,
+                     out.data)
         w = np.empty(n)
         w[order] = out.get()
         return w

@@ -198,7 +198,6 @@ def morph_track(pu, pf1, pf2, band, prior, dt, eps_f, eps_u, near, lam, delta, k
     maxima = (float(np.abs(rate[inside]).max()), float(np.max([b[inside] for b in betas])),
               float(np.max([g[inside] for g in grads])))
     mean_beta = float((babs / len(pf1))[inside].mean())
-    f1_new = np.array(
-        [np.where(inside, f, _view(p1, 0, 0)) for f, p1 in zip(f1_new, pf1, strict=False)]
-    )
+    f1_new = np.array([np.where(inside, f, _view(p1, 0, 0)) for f,
+                       p1 in zip(f1_new, pf1, strict=False)])
     return np.where(inside, u_new, u), f1_new, maxima, mean_beta, hit

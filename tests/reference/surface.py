@@ -172,11 +172,8 @@ def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direc
     nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
     length = np.sqrt(nn) if weighted else 1.0
     nc = u_flat.size // plane
-    sign = (
-        (lambda cells: 1.0)
-        if ref is None
-        else (lambda cells: _line_sign(u_flat, plane, ref, cells))
-    )
+    sign = (lambda cells: 1.0) if ref is None else (lambda cells: _line_sign(u_flat, plane, ref,
+                                                                             cells))
     pv, g2 = [], 0.0
     for c in range(nc):
         f = u_flat[c * plane:(c + 1) * plane]
@@ -234,9 +231,8 @@ def tv_lambda_terms(u_pad, u0_pad, psi_pad, band, inv_h, eps_cells, e2, offsets)
     u, u0 = u_pad.ravel().astype(np.float64), u0_pad.ravel().astype(np.float64)
     p = psi_pad.ravel().astype(np.float64)
     d = p[band] * inv_h
-    delta = np.where(
-        np.abs(d) < eps_cells, (1 + np.cos(np.pi * d / eps_cells)) / (2 * eps_cells), 0
-    )
+    delta = np.where(np.abs(d) < eps_cells, (1 + np.cos(np.pi * d / eps_cells)) / (2 * eps_cells),
+                     0)
     n = _normal(p, band, sx, sxy)
     nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
     v = [np.sign(e) * (u[band + e] - u[band]) for e in offsets]
@@ -320,9 +316,8 @@ def principal_directions(psi_pad, band, inv_h):
                 )
     absn = np.abs(n)
     e = np.zeros_like(n)
-    pick = np.where(
-        (absn[0] <= absn[1]) & (absn[0] <= absn[2]), 0, np.where(absn[1] <= absn[2], 1, 2)
-    )
+    pick = np.where((absn[0] <= absn[1]) & (absn[0] <= absn[2]), 0,
+                    np.where(absn[1] <= absn[2], 1, 2))
     e[pick, np.arange(i.size)] = 1
     ta = np.cross(n.T, e.T).T
     with np.errstate(invalid="ignore", divide="ignore"):
