@@ -35,7 +35,7 @@ def save(out: Path) -> None:
         "transport_central": dict(),
         "transport_isotropic_quartic": dict(stencil="isotropic", scaling="quartic-root"),
         "transport_cw_mean_fill": dict(rotation="cw", fill="mean"),
-        "transport_double": dict(precision="double"),
+        "transport_double": dict(dtype=np.float64),
     }
     for name, kw in cases.items():
         r = clpde.inpaint(img, m, channel_axis=-1, method="transport", max_steps=60, **kw)
