@@ -38,8 +38,8 @@ import math
 import numpy as np
 import pyopencl.array as cla
 from scipy import ndimage
-from tqdm.auto import tqdm
 
+from .._progress import progress_bar
 from ..imagedata import InputError
 
 DEFAULTS = {
@@ -52,9 +52,11 @@ DEFAULTS = {
     "levels": None,  # pyramid levels; None chooses from the hole's thickness
     "onion_passes": 4,  # PatchMatch passes per shell of the coarsest level's onion peel
     "sharpen": True,  # the last vote takes the closest patch's value (else the weighted mean)
-    "confidence": 1.3,  # vote weights times confidence**-depth into the hole (Wexler et al.); 1: off
+    # vote weights times confidence**-depth into the hole (Wexler et al.); 1: off
+    "confidence": 1.3,
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
+KERNEL_FILES = ("patchmatch.cl",)
 
 
 def MARGIN(omega=None, search=DEFAULTS["search"], **_params) -> int:
@@ -71,8 +73,9 @@ def _params(params: dict) -> dict:
         v = p[name]
         if not isinstance(v, (int, np.integer)) or v < (0 if name == "search" else 1):
             raise InputError(f"{name} must be a positive integer, not {v!r}")
-    if p["levels"] is not None and (not isinstance(p["levels"], (int, np.integer)) or p["levels"] < 1):
-        raise InputError(f"levels must be a positive integer or None (automatic), not {p['levels']!r}")
+    levels = p["levels"]
+    if levels is not None and (not isinstance(levels, (int, np.integer)) or levels < 1):
+        raise InputError(f"levels must be a positive integer or None (automatic), not {levels!r}")
     g = p["confidence"]
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"confidence must be a number >= 1 (1 turns it off), not {g!r}")
@@ -196,7 +199,8 @@ class _Level:
         # The random search covers the search region (the margin around the hole), not the
         # whole box: a text mask's box is the image, and samples farther than the margin
         # cost 20% of a searching pass for no PSNR (measured on the texture and thick cases).
-        self.radius = max(1, min(max(self.W, self.H), int(radius))) if radius else max(self.W, self.H)
+        widest = max(self.W, self.H)
+        self.radius = max(1, min(widest, int(radius))) if radius else widest
 
     def _list(self, mask: np.ndarray):
         idx = np.flatnonzero(mask).astype(np.int32)
@@ -308,8 +312,9 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     PatchMatch passes per iteration), features (weight of the texture features; 0 turns
     them off; default 1 when the hole needs a pyramid, 0 for a thin one), levels (automatic),
     onion_passes (4), sharpen (True: the last vote takes the closest patch), confidence
-    (1.3: vote weights times confidence**-depth into the hole; 1 turns it off), guide (extra (k, rows, cols) planes, known everywhere, that enter the
-    patch distance but are not filled, e.g. an inpainted structure image). ``seed``
+    (1.3: vote weights times confidence**-depth into the hole; 1 turns it off), guide
+    (extra (k, rows, cols) planes, known everywhere, that enter the patch distance but are
+    not filled, e.g. an inpainted structure image). ``seed``
     (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
@@ -365,7 +370,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     fw = float(p["features"]) if p["features"] is not None else (1.0 if len(pyramid) > 1 else 0.0)
     counter = [0]
     prev_nnf = None
-    bar = tqdm(total=len(pyramid), desc="exemplar levels", disable=not progress, leave=False)
+    bar = progress_bar(progress, len(pyramid), "exemplar levels", leave=False)
     for level in range(len(pyramid) - 1, -1, -1):
         c, h, g = pyramid[level]
         planes, w = [c], [1.0] * nc

@@ -82,8 +82,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     for name, value in (("tv_weight", tv_weight), ("guide", guide)):
         if not isinstance(value, (int, float, np.integer, np.floating)) or not np.isfinite(value) \
                 or value < (0 if name == "guide" else 1e-12):
-            raise InputError(f"{name} must be a {'weight >= 0' if name == 'guide' else 'positive number'}, "
-                             f"not {value!r}")
+            wanted = "weight >= 0" if name == "guide" else "positive number"
+            raise InputError(f"{name} must be a {wanted}, not {value!r}")
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, copy=True)
