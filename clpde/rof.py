@@ -345,10 +345,6 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
             if steps % check_every == 0 or steps == max_steps:
                 change = pair.cur.max_abs_diff(previous)  # one small read per check
                 bar.update(steps - bar.n)
-                if sigma2 is not None:
-                    current = lam.get().astype(np.float64)
-                    if dt > stability_limit("rof", eps, current.max()):
-                        dt = 0.8 * stability_limit("rof", eps, current.max())
                 if change < tol * check_every * dt:
                     converged = True
                     break
