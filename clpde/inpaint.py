@@ -79,7 +79,7 @@ from .imagedata import (
 )
 from .runtime import ClpdeError, get_runtime
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("fields.cl", "inpaint.cl", "planar.cl")
 
 SCALINGS = ("none", "quartic-root")

@@ -16,7 +16,7 @@ from ._state import deprecated
 from .fields import Field, Grid, PingPong, compact, index_list
 from .imagedata import InputError
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("levelset.cl",)
 
 GHOST = 2

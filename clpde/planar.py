@@ -19,7 +19,7 @@ from .fields import Field, Grid, PingPong, check_fits
 from .imagedata import to_kernel_layout
 from .runtime import get_runtime
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("planar.cl",)
 
 FLOWS = ("heat", "perona-malik", "tv", "curvature")

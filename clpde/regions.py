@@ -46,7 +46,7 @@ from .regions_mesh import (
 from .runtime import get_runtime
 from .surface.grid3d import Grid3D
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions.cl",)
 
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}

@@ -29,7 +29,7 @@ from .imagedata import compute_dtype, to_kernel_layout
 from .planar import stability_limit
 from .runtime import get_runtime
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("planar.cl", "rof.cl")
 
 METHODS = ("primal-dual", "gradient")

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("planar.cl",)
 
 

@@ -39,7 +39,7 @@ from .imagedata import InputError, value_range
 from .levelset import LevelSet, signed_distance
 from .runtime import get_runtime
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("levelset.cl", "track_features.cl")
 
 FEATURES = ("intensity", "edges", "contrast")

@@ -12,7 +12,7 @@ is read from the installed package, not copied into this repository.
 Writes track_carphone.png (the scored frames: old default on top, default below; red the
 tracked contour, green the hand-drawn one), track_carphone.gif (the default, every sixth
 frame) and track_hard_cases.png (the synthetic shadow, flicker and distractor sequences of
-tests/test_track.py, old default and default).
+tests/track/test_track.py, old default and default).
 """
 
 import argparse

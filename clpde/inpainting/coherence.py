@@ -39,7 +39,7 @@ from scipy import ndimage
 from ..imagedata import InputError
 from .poisson import box_around
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("coherence.cl",)
 
 DEFAULTS = dict(epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0)

@@ -46,7 +46,7 @@ from .._validation import InputError, positive
 from ..runtime import ClpdeError
 from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("navier_stokes.cl",)
 
 MARGIN = 3  # the biharmonic start reads two pixels past the hole; L I on the ring, one more

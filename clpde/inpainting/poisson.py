@@ -26,7 +26,7 @@ from scipy import ndimage
 from ..imagedata import InputError
 from ..runtime import ClpdeError
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("poisson.cl",)
 
 KINDS = ("harmonic", "biharmonic")

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("bricks.cl", "surface.cl")
 
 if TYPE_CHECKING:

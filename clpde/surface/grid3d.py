@@ -16,7 +16,7 @@ import pyopencl.array as cla
 from ..fields import IndexList, compact
 from ..runtime import ClpdeError, Runtime
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("surface.cl",)
 
 

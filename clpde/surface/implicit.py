@@ -35,7 +35,7 @@ from .grid3d import Grid3D
 if TYPE_CHECKING:
     from .flows import SurfaceDenoiseInfo
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("surface.cl",)
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}

@@ -35,7 +35,7 @@ import numpy as np
 from .._validation import InputError, positive
 from .winding import WindingNumbers
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("surface.cl",)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..imagedata import InputError
 
-# The kernels/ files this module's kernel lookups name (tests/test_kernel_names.py checks).
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("winding.cl",)
 
 
@@ -35,7 +35,7 @@ class WindingNumbers:
     beta * (cluster radius) from the cluster's centre, the exact triangle sum otherwise.
     With beta = 2 the expansion was within 0.035 of the exact sum (0.01-0.02 at the band
     cells of a 20 480-face icosphere; beta = 3: within 0.006, at 1.5x the time), and
-    tests/test_surface_mesh.py holds it to 0.05: deciding a side compares |w| with 1/2."""
+    tests/surface/test_surface_mesh.py holds it to 0.05: deciding a side compares |w| with 1/2."""
 
     def __init__(self, triangles, cluster=64, device=None):
         import pyopencl.array as cla

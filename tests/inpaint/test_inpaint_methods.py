@@ -11,7 +11,7 @@ import pytest
 import clpde
 from clpde import InputError, inpainting
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from inpaint_quality import edge_case, stripes_case  # noqa: E402
 
 

@@ -9,7 +9,7 @@ import ast
 import re
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 KERNEL_DIR = ROOT / "kernels"
 
 # kernel("file.cl", "name" ...), new_kernel(...), program("file.cl" ...); and any lookup that
