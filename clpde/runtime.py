@@ -266,16 +266,56 @@ _chosen_spec = None
 _runtimes: dict[int, Runtime] = {}
 
 
-def use_device(spec) -> Runtime:
-    """Make ``spec`` ('cpu', 'gpu', an index or a name substring) the default device."""
+def use_device(spec: str | int | Runtime | None) -> Runtime:
+    """Make ``spec`` the default device of every later call in this process.
+
+    Parameters
+    ----------
+    spec : str, int, Runtime or None
+        'cpu', 'gpu', an index from :func:`devices`, or a substring of a device's name.
+        None returns to the automatic choice (CLPDE_DEVICE, else a GPU, else a CPU).
+
+    Returns
+    -------
+    Runtime
+        The device's runtime (its context, queue and kernel cache).
+
+    Examples
+    --------
+    >>> import clpde
+    >>> clpde.use_device("cpu").type
+    'cpu'
+    >>> clpde.diffuse(np.zeros((8, 8), np.float32), steps=1).dtype
+    dtype('float32')
+    >>> _ = clpde.use_device(None)   # back to the automatic choice
+    """
     global _chosen_spec
     runtime = get_runtime(spec)
     _chosen_spec = spec
     return runtime
 
 
-def get_runtime(device=None) -> Runtime:
-    """The runtime for ``device``; None means use_device's choice, CLPDE_DEVICE, GPU, CPU."""
+def get_runtime(device: str | int | Runtime | None = None) -> Runtime:
+    """The runtime of one device, built once per process and shared by threads.
+
+    Parameters
+    ----------
+    device : str, int, Runtime or None
+        As for :func:`use_device`; None means use_device's choice, else CLPDE_DEVICE, else
+        a GPU, else a CPU, skipping devices whose compiler cannot build a kernel.
+
+    Returns
+    -------
+    Runtime
+
+    Examples
+    --------
+    >>> rt = get_runtime("cpu")
+    >>> rt is get_runtime("cpu")
+    True
+    >>> rt.type
+    'cpu'
+    """
     if isinstance(device, Runtime):
         return device
     if device is None:
@@ -290,7 +330,22 @@ def get_runtime(device=None) -> Runtime:
 
 
 def devices() -> list[DeviceInfo]:
-    """Every OpenCL device on every platform; ``in_use`` marks the default device."""
+    """Every OpenCL device on every platform, in the order the indices count.
+
+    Returns
+    -------
+    list of DeviceInfo
+        One record per device; ``in_use`` marks the default device (the one
+        :func:`get_runtime` returns with no argument).
+
+    Examples
+    --------
+    >>> found = devices()
+    >>> any(d.type == "cpu" for d in found)
+    True
+    >>> sum(d.in_use for d in found)
+    1
+    """
     try:
         current = get_runtime().index
     except ClpdeError:
