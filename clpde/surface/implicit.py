@@ -36,11 +36,13 @@ if TYPE_CHECKING:
     from .flows import SurfaceDenoiseInfo
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface.cl",)
+KERNEL_FILES = ("surface_band.cl", "surface_extend.cl", "surface_reinit.cl")
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 # Farthest interpolation node from a point, in cells: the step band must contain them.
 _NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
+# Interpolation nodes per axis.
+_NODES = {3: 4, 1: 2}
 
 
 def _interp_code(interpolation: str) -> int:
@@ -168,12 +170,12 @@ class ImplicitSurface:
         """node_band, its runs, reach_band and reach_band's closest-point stencils."""
         g, q = self.grid, self.runtime.queue
         nodes = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface.cl", "mark_nodes", INTERP=self.interp), self.ext_band,
-                      self.cp_base.data, nodes.data, *g.strides())
+        g.launch_list(g.kernel("surface_band.cl", "mark_nodes"), self.ext_band,
+                      self.cp_base.data, nodes.data, *g.strides(), np.int32(_NODES[self.interp]))
         self.node_band = compact(self.runtime, nodes)
         self.step_runs = g.runs(self.node_band)
         reach = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface.cl", "mark_stencil"), self.node_band, reach.data,
+        g.launch_list(g.kernel("surface_band.cl", "mark_stencil"), self.node_band, reach.data,
                       *g.strides())
         self.reach_band = compact(self.runtime, reach)
         self.reach_stencils = self._cp_stencils(self.reach_band,
@@ -363,7 +365,7 @@ class ImplicitSurface:
         n = max(band.n, 1)
         cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
         g.launch_list(
-            g.kernel("surface.cl", "closest_points"), band, self.psi_dev.data,
+            g.kernel("surface_band.cl", "closest_points"), band, self.psi_dev.data,
             g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
         )
         return cp
@@ -377,8 +379,8 @@ class ImplicitSurface:
         base = cla.empty(q, n, np.int32)
         frac = cla.empty(q, (3, n), g.dtype)
         g.launch_list(
-            g.kernel("surface.cl", "cp_stencils", INTERP=self.interp), band, *(c.data for c in cp),
-            *g.strides(), *g.padded_dims(), base.data, frac.data,
+            g.kernel("surface_band.cl", "cp_stencils"), band, *(c.data for c in cp),
+            *g.strides(), *g.padded_dims(), np.int32(self.interp), base.data, frac.data,
         )
         return base, frac
 
@@ -432,7 +434,7 @@ class ImplicitSurface:
         everywhere = g.band(self.psi_dev, np.inf)
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
-        kernel = g.kernel("surface.cl", "reinit_step")
+        kernel = g.kernel("surface_reinit.cl", "reinit_step")
         for _ in progress_range(progress, steps, "reinitialise", leave=False):
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
@@ -444,7 +446,7 @@ class ImplicitSurface:
         """Extend data off the surface, constant along the normals: by closest-point
         interpolation (one pass), or by the upwind PDE of section 4.2,
         u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
-        from .flows import BandFlow
+        from .flows import BandFlow, extend_defines
 
         if method not in ("closest-point", "pde"):
             raise InputError(f"method must be 'closest-point' or 'pde', not {method!r}")
@@ -454,7 +456,8 @@ class ImplicitSurface:
         g = self.grid
         r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1
         steps = int(np.ceil(2 * self.outer / r)) if iterations is None else int(iterations)
-        kernel = g.kernel("surface.cl", "extend_pde_step", NC=flow.nc)
+        defines = extend_defines(self.interp, flow.nc)  # the re-extension's program
+        kernel = g.kernel("surface_extend.cl", "extend_pde_step", **defines)
         for _ in range(steps):
             g.launch_list(kernel, self.ext_band, flow.cur.data, flow.tmp.data, self.psi_dev.data,
                           g.scalar(r), g.scalar(self.spacing), *g.strides())
@@ -537,11 +540,13 @@ class ImplicitSurface:
         return out[0] if np.ndim(u) == 3 else out.T
 
     def _sample_raw(self, dev: cla.Array, idx: np.ndarray, nc: int, code: int) -> np.ndarray:
+        from .flows import extend_defines
+
         g, q = self.grid, self.runtime.queue
         n = idx.shape[1]
         pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
         out = cla.empty(q, (nc, n), g.dtype)
-        g.kernel("surface.cl", "sample_points", INTERP=code, NC=nc)(
+        g.kernel("surface_extend.cl", "sample_points", **extend_defines(code, nc))(
             q, (n,), None, dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
             out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
         )
