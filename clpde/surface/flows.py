@@ -121,11 +121,18 @@ class BandFlow:
                  line_field: bool = False):
         self.surf = surf
         self.input = np.asarray(u)
-        data = surf._as_channels(u)
-        self.nc = data.shape[0]
-        self.normalize = normalize
+        # band form (values at the band's cells only): no dense float64 copy on the way
+        self.band_form = surf._band_form_channels(self.input) is not None
         g = surf.grid
-        self.cur = g.upload(data)
+        if self.band_form:
+            padded = surf._padded_from_band(self.input)
+            surf.runtime.check_alloc(padded.nbytes, "surface volume")
+            self.cur = cla.to_device(surf.runtime.queue, padded)
+            del padded
+        else:
+            self.cur = g.upload(surf._as_channels(u))
+        self.nc = self.cur.shape[0]
+        self.normalize = normalize
         self.tmp = self.cur.copy()
         self._extend_kernel = g.kernel("surface_extend.cl", "extend_cp",
                                        **extend_defines(surf.interp, self.nc, normalize,
@@ -160,9 +167,12 @@ class BandFlow:
             s = self.surf
             self._extend(self.tmp, self.cur, s.ext_band, s.cp_base, s.cp_frac)
             self._stepped = False
+        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        if self.band_form:
+            values = self.cur.get().reshape(self.nc, -1)[:, self.surf._band_cells_of()[1]]
+            return (values[0] if self.input.ndim == 1 else values).astype(dtype)
         out = self.surf.grid.download(self.cur)
         out = out[0] if self.input.shape == self.surf.shape else out
-        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
         return out.astype(dtype)
 
 
@@ -176,12 +186,15 @@ class BrickFlow:
 
         self.surf = surf
         self.input = np.asarray(u)
-        data = surf._as_channels(u)
-        self.nc = data.shape[0]
+        self.band_form = surf._band_form_channels(self.input) is not None
         g = surf.grid
         self.bricks, self.psi, self.lists = surf._brick_band()
         # cells off the band come back as they went in, through the device's precision
-        self.padded = g.pad(data).astype(g.dtype)
+        if self.band_form:
+            self.padded = surf._padded_from_band(self.input)
+        else:
+            self.padded = g.pad(surf._as_channels(u)).astype(g.dtype)
+        self.nc = self.padded.shape[0]
         self.cur = self.bricks.scatter(self.padded, g.dtype)
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
@@ -217,9 +230,14 @@ class BrickFlow:
             self._extend(self.tmp, self.cur, EXT)
             self._stepped = False
         g = self.surf.grid
+        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        if self.band_form:
+            # the band's cells only: into a zero volume, read at the band
+            gathered = self.bricks.gather(self.cur, np.zeros_like(self.padded), EXT)
+            values = gathered.reshape(self.nc, -1)[:, self.surf._band_cells_of()[1]]
+            return (values[0] if self.input.ndim == 1 else values).astype(dtype)
         out = g.interior(self.bricks.gather(self.cur, self.padded.copy(), EXT))
         out = out[0] if self.input.shape == self.surf.shape else out
-        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
         return out.astype(dtype)
 
 
