@@ -1,14 +1,21 @@
-"""Cold build of a first diffuse + denoise_tv call: the OpenCL programs it builds and the
-time it takes, each run in a fresh process with an empty PoCL kernel cache.
+"""Cold build of a first run: the OpenCL programs it builds and the time it takes, each run
+in a fresh process with an empty PoCL kernel cache.
 
-A run imports clpde, then times clpde.diffuse (heat, 2 steps) and clpde.denoise_tv (sigma
-0.1) on a 64 x 64 float32 image: the program builds (Runtime._build, timed by wrapping it)
-and the whole first calls, in wall and in CPU seconds (CPU time is the steadier figure on a
-shared machine; PoCL compiles in the calling process). With --other PATH the same runs are
-made with PYTHONPATH=PATH as well, alternating with this checkout's, so that both meet the
-same load: `--other /path/to/main` compares a branch with main.
+A run imports clpde, then times its first calls: the program builds (Runtime._build, timed
+by wrapping it) and the whole first calls, in wall and in CPU seconds (CPU time is the
+steadier figure on a shared machine; PoCL compiles in the calling process). Cases:
 
-    python benchmarks/cold_build.py [--runs 5] [--device cpu] [--other PATH] [--json PATH]
+- `planar` (the default): clpde.diffuse (heat, 2 steps) and clpde.denoise_tv (sigma 0.1) on
+  a 64 x 64 float32 image;
+- `surface`: a unit sphere at spacing 0.1, its heat flow (t = 0.01) and a TV denoising with
+  the dynamic lambda (sigma 0.3, t = 0.01).
+
+With --other PATH the same runs are made with PYTHONPATH=PATH as well, alternating with this
+checkout's, so that both meet the same load: `--other /path/to/main` compares a branch with
+main.
+
+    python benchmarks/cold_build.py [--case planar|surface] [--runs 5] [--device cpu]
+                                    [--other PATH] [--json PATH]
 """
 
 from __future__ import annotations
@@ -38,19 +45,26 @@ def timed(self, filename, dtype, defines):
     built.append([filename, np.dtype(dtype).name, dict(defines), time.perf_counter() - start])
     return program
 runtime.Runtime._build = timed
-image = np.random.default_rng(0).random((64, 64)).astype(np.float32)
 wall, cpu = time.perf_counter(), time.process_time()
-clpde.diffuse(image, "heat", steps=2, device=sys.argv[1])
-clpde.denoise_tv(image, sigma=0.1, device=sys.argv[1])
+if sys.argv[2] == "planar":
+    image = np.random.default_rng(0).random((64, 64)).astype(np.float32)
+    clpde.diffuse(image, "heat", steps=2, device=sys.argv[1])
+    clpde.denoise_tv(image, sigma=0.1, device=sys.argv[1])
+else:
+    from clpde.surface import ImplicitSurface
+    surf = ImplicitSurface.sphere(1.0, spacing=0.1, device=sys.argv[1])
+    u = np.random.default_rng(0).normal(size=surf.shape)
+    surf.heat(u, 0.01)
+    surf.denoise_tv(u, sigma=0.3, t=0.01)
 print(json.dumps({"programs": built, "wall": time.perf_counter() - wall,
                   "cpu": time.process_time() - cpu}))
 """
 
 
-def one_run(pythonpath: Path, device: str) -> dict:
+def one_run(pythonpath: Path, device: str, case: str) -> dict:
     with tempfile.TemporaryDirectory(prefix="clpde-cold-") as cache:
         env = dict(os.environ, POCL_CACHE_DIR=cache, PYTHONPATH=str(pythonpath))
-        out = subprocess.run([sys.executable, "-c", ONE_RUN, device], env=env, cwd=cache,
+        out = subprocess.run([sys.executable, "-c", ONE_RUN, device, case], env=env, cwd=cache,
                              capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -59,6 +73,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--case", choices=("planar", "surface"), default="planar")
     parser.add_argument("--other", type=Path, default=None,
                         help="another checkout to time alternately (e.g. main's)")
     parser.add_argument("--json", type=Path, default=None)
@@ -67,7 +82,7 @@ def main():
     runs = {name: [] for name in trees}
     for _ in range(args.runs):
         for name, path in trees.items():
-            runs[name].append(one_run(path, args.device))
+            runs[name].append(one_run(path, args.device, args.case))
     print(f"{'tree':14s} {'programs built':40s} {'build s':>8s} {'first calls s':>14s} "
           f"{'CPU s':>6s}   (medians of {args.runs} cold runs)")
     summary = {}
@@ -79,6 +94,10 @@ def main():
         summary[name] = {"path": str(trees[name]), "programs": programs, "build_s": build,
                          "first_calls_s": wall, "cpu_s": cpu, "runs": results}
         print(f"{name:14s} {programs:40s} {build:8.3f} {wall:14.3f} {cpu:6.3f}")
+        for i, prog in enumerate(results[0]["programs"]):
+            times = statistics.median(r["programs"][i][3] for r in results
+                                      if len(r["programs"]) > i)
+            print(f"    {prog[0]:22s} {prog[1]:8s} {times:6.3f} s  {prog[2]}")
     if args.json:
         args.json.write_text(json.dumps(summary, indent=1))
         print(f"wrote {args.json}")

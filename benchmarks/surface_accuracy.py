@@ -27,7 +27,7 @@
    flow on an icosphere whose polar hole from_mesh closed, with and without reinitialising
    the cells of the hole's rim (section 5c).
 6. The band's two storages in one run: the band lists over the dense padded grid (kernels/
-   surface.cl) and the dense bricks (kernels/bricks.cl) at each brick size, a heat step plus
+   surface_heat.cl) and the dense bricks (kernels/bricks.cl) at each brick size, a heat step plus
    the re-extension of what the next step reads, on 64^3 to 256^3 grids (--storage-sizes;
    512 if memory allows): time per step against a device copy of the whole grid (the
    yardstick: at most one copy is the target), per band cell, and the effective bandwidth of
@@ -155,7 +155,7 @@ def _time_size(n, steps):
     surf = ImplicitSurface.sphere(1.0, spacing)
     g = surf.grid
     flow = BandFlow(surf, surf.field(lambda x, y, z: x * y))
-    kernel = g.kernel("surface.cl", "heat_step", WEIGHTED=0)
+    kernel = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0)
     r = g.scalar(0.1)
     q = surf.runtime.queue
 
@@ -171,7 +171,7 @@ def _time_size(n, steps):
         q.finish()
         return (time.perf_counter() - start) / count
 
-    band_copy = g.kernel("surface.cl", "band_copy")
+    band_copy = g.kernel("surface_bench.cl", "band_copy")
 
     def one_band_copy():
         g.launch_runs(band_copy, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data)
@@ -253,7 +253,7 @@ def _storage_size(n, steps, reps):
     r = g.scalar(0.1)
     variants = {}
     flow = BandFlow(surf, u)
-    k_list = g.kernel("surface.cl", "heat_step", WEIGHTED=0)
+    k_list = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0)
 
     def list_step():
         g.launch_runs(k_list, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,

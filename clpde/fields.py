@@ -24,8 +24,59 @@ _REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 
                "max": 6}
 
 
+class BaseGrid:
+    """What the 2D and 3D grids share (Grid here, clpde.surface.grid3d.Grid3D): kernel
+    lookups in the grid's dtype, scalars, the interior of padded arrays and launches over
+    index lists. A subclass is a frozen dataclass with `runtime`, `dtype` and `ghost`, and
+    says its interior's `shape` (slowest axis first), the cells of one padded channel
+    (`channel_stride`, the kernels' `plane`) and how many channels a list launch covers
+    unless told (`list_channels`)."""
+
+    runtime: Runtime
+    dtype: np.dtype
+    ghost: int
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        raise NotImplementedError
+
+    @property
+    def channel_stride(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def list_channels(self) -> int:
+        return 1
+
+    def kernel(self, filename: str, name: str, **defines) -> Kernel:
+        """Kernel `name` of kernels/<filename> in this grid's dtype."""
+        return self.runtime.kernel(filename, name, self.dtype, **defines)
+
+    def scalar(self, value) -> np.generic:
+        return self.dtype.type(value)
+
+    def interior(self, padded: np.ndarray) -> np.ndarray:
+        """The interior of a padded host array (leading channel axes kept)."""
+        g = self.ghost
+        return padded[(Ellipsis,) + tuple(slice(g, g + n) for n in self.shape)]
+
+    def launch_list(self, kernel: Kernel, index_list: IndexList, *args,
+                    channels: int | None = None) -> cl.Event | None:
+        """Run a LIST_RANGE kernel over the cells of an index list, `channels` work-items per
+        cell (default `list_channels`)."""
+        if index_list.n == 0:
+            return None
+        channels = self.list_channels if channels is None else channels
+        (gsize,), (lsize,), run = self.runtime.list_launch(index_list.n)
+        return kernel(
+            self.runtime.queue, (gsize, channels), (lsize, 1), *args,
+            index_list.indices.data, np.int32(index_list.n), np.int32(self.channel_stride),
+            np.int32(run),
+        )
+
+
 @dataclass(frozen=True)
-class Grid:
+class Grid(BaseGrid):
     """Geometry of a padded 2D multi-channel field on one device."""
 
     runtime: Runtime
@@ -34,6 +85,19 @@ class Grid:
     nc: int = 1
     ghost: int = 1
     dtype: np.dtype = FLOAT32
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.ny, self.nx)
+
+    @property
+    def channel_stride(self) -> int:
+        return self.plane
+
+    @property
+    def list_channels(self) -> int:
+        """A list launch covers every channel."""
+        return self.nc
 
     @property
     def sx(self) -> int:
@@ -47,10 +111,6 @@ class Grid:
     def padded_shape(self) -> tuple[int, int, int]:
         return (self.nc, self.ny + 2 * self.ghost, self.sx)
 
-    def interior(self, padded: np.ndarray) -> np.ndarray:
-        g = self.ghost
-        return padded[:, g : g + self.ny, g : g + self.nx]
-
     def args(self, xrun: int) -> tuple:
         """The GRID_ARGS of common.cl."""
         return tuple(np.int32(v) for v in (self.nx, self.ny, self.sx, self.plane, self.ghost, xrun))
@@ -60,21 +120,6 @@ class Grid:
         gsize, lsize, xrun = self.runtime.grid_launch(self.nx, self.ny, self.nc)
         return kernel(self.runtime.queue, gsize, lsize, *args, *self.args(xrun), wait_for=wait_for)
 
-    def launch_list(self, kernel: Kernel, index_list: IndexList, *args) -> cl.Event | None:
-        """Run a LIST_RANGE kernel over the cells of an index list, in every channel."""
-        if index_list.n == 0:
-            return None
-        (gsize,), (lsize,), run = self.runtime.list_launch(index_list.n)
-        return kernel(
-            self.runtime.queue, (gsize, self.nc), (lsize, 1), *args,
-            index_list.indices.data, np.int32(index_list.n), np.int32(self.plane), np.int32(run),
-        )
-
-    def kernel(self, filename: str, name: str, **defines) -> Kernel:
-        return self.runtime.kernel(filename, name, self.dtype, **defines)
-
-    def scalar(self, value) -> np.generic:
-        return self.dtype.type(value)
 
 
 def check_fits(runtime: Runtime, shape, what: str, fields: float, ghost: int = 1,

@@ -7,9 +7,10 @@
 //
 // Launch geometry (GROUP_PER_BRICK): on CPUs (0) one work-item walks whole bricks, from a
 // private tile; on GPUs (1) one work-group of BV work-items takes a brick, one cell each,
-// from a tile in local memory. The arithmetic is the same (and is surface.cl's): the
+// from a tile in local memory. The arithmetic is the same (and is surface_heat.cl's): the
 // results agree to rounding.
 #include "common.cl"
+#include "surface.h"
 
 #ifndef BX
 #define BX 8
@@ -32,12 +33,6 @@
 #define BVA (BXA * BYA * BZA)
 #ifndef GROUP_PER_BRICK
 #define GROUP_PER_BRICK 0
-#endif
-#ifndef NC
-#define NC 1
-#endif
-#ifndef INTERP
-#define INTERP 3
 #endif
 #ifndef WEIGHTED
 #define WEIGHTED 0
@@ -138,10 +133,8 @@ INLINE void load_tile(TILE REAL* t, __global const REAL* restrict src,
 #endif
 
 // ---- intrinsic heat flow (4.7) / (4.8), appendix E, on a tile ------------------------------
-// surface.cl's heat_flux / heat_div with tile strides: ex, ey, ez are the signed one-sided
+// surface_heat.cl's heat_flux / heat_div with tile strides: ex, ey, ez are the signed one-sided
 // offsets in the tile (+-1, +-tx, +-txy).
-#define ONE_SIDED_SIGN(e) ((e) > 0 ? (REAL)1 : (REAL)-1)
-
 INLINE void tile_flux(TILE const REAL* u, __global const REAL* p, const int j, const int q,
                       const int ex, const int ey, const int ez, const int usx, const int usxy,
                       const int sx, const int sxy, REAL* w)
@@ -266,7 +259,7 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 }
 
 // ---- closest-point re-extension --------------------------------------------------------------
-// dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface.cl's
+// dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface_extend.cl's
 // extend_cp (tricubic Lagrange, or trilinear) from stencils computed once per psi (psi is
 // fixed): per entry k the brick-storage index of the target cell (`list`, plain layout),
 // the stencil's first node (x0, y0, z0) as its brick and place there (BrickBand.node_code),
@@ -275,30 +268,7 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 // on the dense grid. (Gathering across the neighbouring bricks instead, with rows picking
 // their brick, ran 3-4x slower; computing the closest points here from a psi tile cost more
 // than the whole list re-extension on dense storage.)
-#ifdef REAL_IS_DOUBLE
-#define REAL4 double4
-#define INT4 long4
-#else
-#define REAL4 float4
-#define INT4 int4
-#endif
-// Four consecutive REALs as one vector at any REAL-aligned address (as in surface.cl).
-typedef REAL4 __attribute__((aligned(sizeof(REAL)))) unaligned_real4;
-#define LOAD4(p) (*(__global const unaligned_real4*)(p))
-
-#if INTERP == 3
-#define NODES 4
-INLINE REAL4 node_weights(const REAL t)
-{
-    const REAL4 c3 = (REAL4)(-1, 3, -3, 1) / 6;
-    const REAL4 c2 = (REAL4)(3, -6, 3, 0) / 6;
-    const REAL4 c1 = (REAL4)(-2, -3, 6, -1) / 6;
-    const REAL4 c0 = (REAL4)(0, 1, 0, 0);
-    return ((c3 * t + c2) * t + c1) * t + c0;
-}
-#else
-#define NODES 2
-#endif
+// (REAL4, LOAD4, node_weights and NODES: surface.h.)
 
 __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* restrict dst,
                               __global const int* restrict base,
@@ -317,7 +287,7 @@ __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* 
             __global const REAL* u = src + c * src_plane + b0;
 #if INTERP == 3
             // 16 rows of 4 nodes at fixed strides in the node's brick and its apron, summed
-            // as 4-vectors (as surface.cl's extend_cp)
+            // as 4-vectors (as surface_extend.cl's extend_cp)
             const REAL4 wy = node_weights(ty), wz = node_weights(tz);
             REAL4 acc = 0;
             for (int a = 0; a < 4; ++a) {

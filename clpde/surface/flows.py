@@ -21,7 +21,8 @@ from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("bricks.cl", "surface.cl")
+KERNEL_FILES = ("bricks.cl", "surface_extend.cl", "surface_flows.cl", "surface_heat.cl",
+                "surface_shape.cl")
 
 if TYPE_CHECKING:
     from .implicit import ImplicitSurface
@@ -104,6 +105,15 @@ def _offsets(grid, sides: int):
     return tuple(np.int32(-s if (sides >> a) & 1 else s) for a, s in enumerate((1, sx, sxy)))
 
 
+def extend_defines(interp: int, nc: int, normalize: bool = False,
+                   line_field: bool = False) -> dict:
+    """The defines of surface_extend.cl's program: every lookup in that file passes all of
+    them (the ones a kernel ignores at their defaults), so a flow's re-extension, sampling
+    and the extension PDE share one build."""
+    return {"INTERP": interp, "NC": nc, "NORMALIZE": int(normalize),
+            "LINE_FIELD": int(line_field)}
+
+
 class BandFlow:
     """Device state of data on a surface: `cur` (extended) and a scratch volume `tmp`."""
 
@@ -111,14 +121,22 @@ class BandFlow:
                  line_field: bool = False):
         self.surf = surf
         self.input = np.asarray(u)
-        data = surf._as_channels(u)
-        self.nc = data.shape[0]
-        self.normalize = normalize
+        # band form (values at the band's cells only): no dense float64 copy on the way
+        self.band_form = surf._band_form_channels(self.input) is not None
         g = surf.grid
-        self.cur = g.upload(data)
+        if self.band_form:
+            padded = surf._padded_from_band(self.input)
+            surf.runtime.check_alloc(padded.nbytes, "surface volume")
+            self.cur = cla.to_device(surf.runtime.queue, padded)
+            del padded
+        else:
+            self.cur = g.upload(surf._as_channels(u))
+        self.nc = self.cur.shape[0]
+        self.normalize = normalize
         self.tmp = self.cur.copy()
-        self._extend_kernel = g.kernel("surface.cl", "extend_cp", INTERP=surf.interp, NC=self.nc,
-                                       NORMALIZE=int(normalize), LINE_FIELD=int(line_field))
+        self._extend_kernel = g.kernel("surface_extend.cl", "extend_cp",
+                                       **extend_defines(surf.interp, self.nc, normalize,
+                                                        line_field))
         self._stepped = False
         if extend:
             self.extend()
@@ -149,9 +167,12 @@ class BandFlow:
             s = self.surf
             self._extend(self.tmp, self.cur, s.ext_band, s.cp_base, s.cp_frac)
             self._stepped = False
+        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        if self.band_form:
+            values = self.cur.get().reshape(self.nc, -1)[:, self.surf._band_cells_of()[1]]
+            return (values[0] if self.input.ndim == 1 else values).astype(dtype)
         out = self.surf.grid.download(self.cur)
         out = out[0] if self.input.shape == self.surf.shape else out
-        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
         return out.astype(dtype)
 
 
@@ -165,12 +186,15 @@ class BrickFlow:
 
         self.surf = surf
         self.input = np.asarray(u)
-        data = surf._as_channels(u)
-        self.nc = data.shape[0]
+        self.band_form = surf._band_form_channels(self.input) is not None
         g = surf.grid
         self.bricks, self.psi, self.lists = surf._brick_band()
         # cells off the band come back as they went in, through the device's precision
-        self.padded = g.pad(data).astype(g.dtype)
+        if self.band_form:
+            self.padded = surf._padded_from_band(self.input)
+        else:
+            self.padded = g.pad(surf._as_channels(u)).astype(g.dtype)
+        self.nc = self.padded.shape[0]
         self.cur = self.bricks.scatter(self.padded, g.dtype)
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
@@ -206,9 +230,14 @@ class BrickFlow:
             self._extend(self.tmp, self.cur, EXT)
             self._stepped = False
         g = self.surf.grid
+        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        if self.band_form:
+            # the band's cells only: into a zero volume, read at the band
+            gathered = self.bricks.gather(self.cur, np.zeros_like(self.padded), EXT)
+            values = gathered.reshape(self.nc, -1)[:, self.surf._band_cells_of()[1]]
+            return (values[0] if self.input.ndim == 1 else values).astype(dtype)
         out = g.interior(self.bricks.gather(self.cur, self.padded.copy(), EXT))
         out = out[0] if self.input.shape == self.surf.shape else out
-        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
         return out.astype(dtype)
 
 
@@ -244,7 +273,7 @@ def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None,
             flow.after_step()
         return flow.result()
     flow = BandFlow(surf, u)
-    kernel = g.kernel("surface.cl", "heat_step", WEIGHTED=int(bool(weighted)))
+    kernel = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=int(bool(weighted)))
     for n in progress_range(progress, steps, "surface heat", leave=False):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         g.launch_runs(
@@ -270,7 +299,7 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
                "FIDELITY": int(fidelity is not None),
                    "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted)),
                    "LINE_FIELD": int(bool(line_field))}
-    kernel = g.kernel("surface.cl", "flow_step", **defines)
+    kernel = g.kernel("surface_flows.cl", "flow_step", **defines)
     r = g.scalar(dt / h**p)
     e2 = g.scalar((h * eps) ** 2)
     dir_dev = g.upload(direction) if direction is not None else surf.psi_dev
@@ -282,7 +311,8 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         # lambda may grow to where dt is at the stability limit, no further
         lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
         dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
-                                 updates=-(-steps // lambda_every), correct=correct_lambda)
+                                 updates=-(-steps // lambda_every), correct=correct_lambda,
+                                 defines=defines)
     for n in progress_range(progress, steps, f"surface {flow_name}", leave=False):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         offsets = _offsets(g, sides)
@@ -296,28 +326,33 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         flow.after_step()
     if dynamic is not None:
         info["lambda"] = dynamic.history()
-        info["residual_variance"] = _residual_variance(surf, flow.cur, u0_dev, dynamic.terms, eps)
+        info["residual_variance"] = _residual_variance(surf, flow.cur, u0_dev, dynamic.terms, eps,
+                                                       defines)
     return flow.result(), info
 
 
-def device_sum(grid, a, n: int, chunk: int = 2048) -> float:
-    """Sum of the first n entries of a device array: partial sums on the device."""
+def device_sum(grid, a, n: int, chunk: int = 2048, defines: dict | None = None) -> float:
+    """Sum of the first n entries of a device array: partial sums on the device. defines:
+    those of a flow's program of surface_flows.cl (chunk_sum reads none), to use its build."""
     groups = max(1, -(-n // chunk))
     partial = cla.empty(grid.runtime.queue, groups, grid.dtype)
-    grid.kernel("surface.cl", "chunk_sum")(grid.runtime.queue, (groups,), None, a.data, np.int32(n),
-                             np.int32(chunk), partial.data)
+    grid.kernel("surface_flows.cl", "chunk_sum", **(defines or {}))(
+        grid.runtime.queue, (groups,), None, a.data, np.int32(n), np.int32(chunk), partial.data)
     return float(partial.get().astype(np.float64).sum())
 
 
 class _DynamicLambda:
     """lambda of (C.2) kept on the device: each update enqueues the surface integrals, their
     chunk sums and the new lambda (tv_lambda_update), with no read-back; the history of
-    lambda comes back once, at the end."""
+    lambda comes back once, at the end. Its kernels come from the flow's program of
+    surface_flows.cl (`defines`; they read none of them): no build of their own."""
 
     CHUNK = 2048
 
-    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates, correct=True):
+    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates, correct=True,
+                 defines=None):
         g, q = surf.grid, surf.runtime.queue
+        self.defines = defines or {}
         self.surf, self.flow, self.u0, self.lam, self.eps = surf, flow, u0_dev, lam_dev, eps
         self.sigma, self.lam_max, self.correct = sigma, lam_max, correct
         n = surf.node_band.n
@@ -331,12 +366,13 @@ class _DynamicLambda:
     def update(self, offsets, slot: int) -> None:
         s = self.surf
         g, q = s.grid, s.runtime.queue
-        _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps)
+        _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps,
+                              self.defines)
         for a, partial in zip(self.terms, self.partials, strict=False):
-            g.kernel("surface.cl", "chunk_sum")(q, (self.groups,), None, a.data,
-                                                np.int32(s.node_band.n),
-                                  np.int32(self.CHUNK), partial.data)
-        g.kernel("surface.cl", "tv_lambda_update")(
+            g.kernel("surface_flows.cl", "chunk_sum", **self.defines)(
+                q, (self.groups,), None, a.data, np.int32(s.node_band.n), np.int32(self.CHUNK),
+                partial.data)
+        g.kernel("surface_flows.cl", "tv_lambda_update", **self.defines)(
             q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
             g.scalar(self.lam_max), self.lam.data, self.state.data, self.slots.data,
@@ -353,25 +389,27 @@ class _DynamicLambda:
         return [float(v) for v in self.slots.get()]
 
 
-def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps) -> None:
+def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps, defines=None) -> None:
     g = surf.grid
     g.launch_list(
-        g.kernel("surface.cl", "tv_lambda_terms"), surf.node_band, u_dev.data, u0_dev.data,
+        g.kernel("surface_flows.cl", "tv_lambda_terms", **(defines or {})), surf.node_band,
+        u_dev.data, u0_dev.data,
                   surf.psi_dev.data,
         g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
         *offsets, *g.strides(), *(a.data for a in terms),
     )
 
 
-def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps):
+def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps, defines=None):
     """The three surface integrals (num, area, residual) summed to host numbers."""
-    _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps)
-    return tuple(device_sum(surf.grid, a, surf.node_band.n) for a in terms)
+    _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps, defines)
+    return tuple(device_sum(surf.grid, a, surf.node_band.n, defines=defines) for a in terms)
 
 
-def _residual_variance(surf, u_dev, u0_dev, terms, eps):
+def _residual_variance(surf, u_dev, u0_dev, terms, eps, defines=None):
     """Mean of (u - u0)^2 over the surface (smeared-delta quadrature)."""
-    _, area, resid = _lambda_terms(surf, u_dev, u0_dev, terms, _offsets(surf.grid, 0), eps)
+    _, area, resid = _lambda_terms(surf, u_dev, u0_dev, terms, _offsets(surf.grid, 0), eps,
+                                   defines)
     return resid / area
 
 
@@ -395,7 +433,7 @@ def denoise_tv(surf: ImplicitSurface, u: ArrayLike, sigma: float | None = None, 
     dt unstable), or a fixed lam. The discrete (C.2) settles at a residual variance of
     1.2-1.6 sigma^2 for noise at the grid's scale; correct_lambda (default) scales it by a
     factor that moves until the residual variance is sigma^2, the constraint (C.2) comes
-    from (kernels/surface.cl, tv_lambda_update); correct_lambda=False is the plain formula.
+    from (kernels/surface_flows.cl, tv_lambda_update); correct_lambda=False is the plain formula.
     With return_info, also returns a SurfaceDenoiseInfo with the residual variance (mean of
     (u - u0)^2 over the surface) and the lambda history."""
     if (sigma is None) == (lam is None):
@@ -502,7 +540,7 @@ def principal_directions(surf: ImplicitSurface,
     n = max(band.n, 1)
     dirs = cla.empty(q, (6, n), g.dtype)
     curv = cla.empty(q, (2, n), g.dtype)
-    g.launch_list(g.kernel("surface.cl", "principal_directions"), band, surf.psi_dev.data,
+    g.launch_list(g.kernel("surface_shape.cl", "principal_directions"), band, surf.psi_dev.data,
                   g.scalar(1 / surf.spacing), dirs.data, curv.data, *g.strides())
     idx = band.indices.get()[: band.n]
     vol = np.zeros((8, g.volume))
@@ -551,7 +589,7 @@ def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
             raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
         norm = np.sqrt((d**2).sum(axis=0))
         dir_dev = g.upload(d / np.where(norm > 0, norm, 1))
-    kernel = g.kernel("surface.cl", "turk_step", ALONG=int(direction is not None))
+    kernel = g.kernel("surface_heat.cl", "turk_step", ALONG=int(direction is not None))
     for n in progress_range(progress, int(iterations), "reaction-diffusion", leave=False):
         offsets = _offsets(g, _ALL_SIDES[n % 8] if alternate else 0)
         g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,

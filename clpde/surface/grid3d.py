@@ -13,11 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cla
 
-from ..fields import IndexList, compact
+from ..fields import BaseGrid, IndexList, compact
 from ..runtime import ClpdeError, Runtime
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface.cl",)
+KERNEL_FILES = ("surface_band.cl",)
 
 
 @dataclass(frozen=True)
@@ -35,8 +35,9 @@ class BandRuns:
 
 
 @dataclass(frozen=True)
-class Grid3D:
-    """Geometry of a padded 3D volume on one device."""
+class Grid3D(BaseGrid):
+    """Geometry of a padded 3D volume on one device (kernel, scalar, interior and
+    launch_list come from fields.BaseGrid; a list launch covers one channel unless told)."""
 
     runtime: Runtime
     nx: int
@@ -44,6 +45,14 @@ class Grid3D:
     nz: int
     ghost: int = 3
     dtype: np.dtype = np.dtype(np.float32)  # noqa: RUF009  (immutable, as in fields.Grid)
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return (self.nz, self.ny, self.nx)
+
+    @property
+    def channel_stride(self) -> int:
+        return self.volume
 
     @property
     def padded_shape(self) -> tuple[int, int, int]:
@@ -71,13 +80,6 @@ class Grid3D:
         pz, py, px = self.padded_shape
         return np.int32(px), np.int32(py), np.int32(pz)
 
-    def scalar(self, value) -> np.generic:
-        return self.dtype.type(value)
-
-    def kernel(self, filename: str, name: str, **defines):
-        """Kernel `name` of kernels/<filename> in this grid's dtype (as Grid.kernel)."""
-        return self.runtime.kernel(filename, name, self.dtype, **defines)
-
     # ---- host <-> device --------------------------------------------------------------------
     def pad(self, values: np.ndarray, mode: str = "edge") -> np.ndarray:
         """Pad (nc, nz, ny, nx) host values by the ghost width on every spatial side."""
@@ -100,10 +102,6 @@ class Grid3D:
         self.runtime.check_alloc(padded.nbytes, "surface volume")
         return cla.to_device(self.runtime.queue, padded)
 
-    def interior(self, padded: np.ndarray) -> np.ndarray:
-        g = self.ghost
-        return padded[..., g : g + self.nz, g : g + self.ny, g : g + self.nx]
-
     def download(self, data: cla.Array) -> np.ndarray:
         """The interior of a device volume as an (nc, nz, ny, nx) host array."""
         return np.ascontiguousarray(self.interior(data.get()))
@@ -112,7 +110,7 @@ class Grid3D:
     def band(self, psi: cla.Array, width: float) -> IndexList:
         """Interior cells with |psi| < width (psi in the units of `width`), on the device."""
         mask = cla.zeros(self.runtime.queue, self.padded_shape, np.uint8)
-        self.kernel("surface.cl", "band_mask")(
+        self.kernel("surface_band.cl", "band_mask")(
             self.runtime.queue, (self.ny, self.nz), None, psi.data, mask.data,
             self.scalar(width), np.int32(self.nx), np.int32(self.ny), np.int32(self.nz),
             *self.strides(), np.int32(self.ghost),
@@ -128,14 +126,14 @@ class Grid3D:
             offsets, nruns, pad = cla.arange(q, 0, max(n, 1), dtype=np.int32), n, 1
         else:
             flags = cla.empty(q, n, np.uint8)
-            self.kernel("surface.cl", "band_run_starts")(q, (n,), None, band.indices.data,
-                                                         np.int32(n), flags.data)
+            self.kernel("surface_band.cl", "band_run_starts")(q, (n,), None, band.indices.data,
+                                                              np.int32(n), flags.data)
             starts = compact(self.runtime, flags)
             offsets, nruns = starts.indices, starts.n
         start = cla.empty(q, max(nruns, 1), np.int32)
         end = cla.empty(q, max(nruns, 1), np.int32)
         if nruns:
-            self.kernel("surface.cl", "band_run_bounds")(
+            self.kernel("surface_band.cl", "band_run_bounds")(
                 q, (nruns,), None, band.indices.data, offsets.data, np.int32(nruns), np.int32(n),
                 np.int32(pad), np.int32(self.nx), np.int32(self.sx), np.int32(self.ghost),
                 start.data, end.data,
@@ -150,14 +148,4 @@ class Grid3D:
         return kernel(
             self.runtime.queue, (gsize, channels), (lsize, 1), *args, runs.start.data,
             runs.end.data, np.int32(runs.n), np.int32(self.volume), np.int32(per_item),
-        )
-
-    def launch_list(self, kernel, band: IndexList, *args, channels: int = 1):
-        """Run a LIST_RANGE kernel over a band, `channels` work-items per band cell."""
-        if band.n == 0:
-            return None
-        (gsize,), (lsize,), run = self.runtime.list_launch(band.n)
-        return kernel(
-            self.runtime.queue, (gsize, channels), (lsize, 1), *args,
-            band.indices.data, np.int32(band.n), np.int32(self.volume), np.int32(run),
         )

@@ -36,11 +36,13 @@ if TYPE_CHECKING:
     from .flows import SurfaceDenoiseInfo
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface.cl",)
+KERNEL_FILES = ("surface_band.cl", "surface_extend.cl", "surface_reinit.cl")
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 # Farthest interpolation node from a point, in cells: the step band must contain them.
 _NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
+# Interpolation nodes per axis.
+_NODES = {3: 4, 1: 2}
 
 
 def _interp_code(interpolation: str) -> int:
@@ -125,6 +127,7 @@ class ImplicitSurface:
         self.cp_base, self.cp_frac = self._cp_stencils(self.ext_band, self.cp)
         self._narrow_bands()
         self._bricks = None  # built when a flow on bricks first needs them
+        self._band_cells = None  # the band form's cells (band_indices), built when asked
 
     def _brick_band(self):
         """(BrickBand, psi's tiles on it, {EXT, REACH: re-extension lists}) of the band in dense
@@ -168,12 +171,12 @@ class ImplicitSurface:
         """node_band, its runs, reach_band and reach_band's closest-point stencils."""
         g, q = self.grid, self.runtime.queue
         nodes = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface.cl", "mark_nodes", INTERP=self.interp), self.ext_band,
-                      self.cp_base.data, nodes.data, *g.strides())
+        g.launch_list(g.kernel("surface_band.cl", "mark_nodes"), self.ext_band,
+                      self.cp_base.data, nodes.data, *g.strides(), np.int32(_NODES[self.interp]))
         self.node_band = compact(self.runtime, nodes)
         self.step_runs = g.runs(self.node_band)
         reach = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface.cl", "mark_stencil"), self.node_band, reach.data,
+        g.launch_list(g.kernel("surface_band.cl", "mark_stencil"), self.node_band, reach.data,
                       *g.strides())
         self.reach_band = compact(self.runtime, reach)
         self.reach_stencils = self._cp_stencils(self.reach_band,
@@ -363,7 +366,7 @@ class ImplicitSurface:
         n = max(band.n, 1)
         cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
         g.launch_list(
-            g.kernel("surface.cl", "closest_points"), band, self.psi_dev.data,
+            g.kernel("surface_band.cl", "closest_points"), band, self.psi_dev.data,
             g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
         )
         return cp
@@ -377,8 +380,8 @@ class ImplicitSurface:
         base = cla.empty(q, n, np.int32)
         frac = cla.empty(q, (3, n), g.dtype)
         g.launch_list(
-            g.kernel("surface.cl", "cp_stencils", INTERP=self.interp), band, *(c.data for c in cp),
-            *g.strides(), *g.padded_dims(), base.data, frac.data,
+            g.kernel("surface_band.cl", "cp_stencils"), band, *(c.data for c in cp),
+            *g.strides(), *g.padded_dims(), np.int32(self.interp), base.data, frac.data,
         )
         return base, frac
 
@@ -432,7 +435,7 @@ class ImplicitSurface:
         everywhere = g.band(self.psi_dev, np.inf)
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
-        kernel = g.kernel("surface.cl", "reinit_step")
+        kernel = g.kernel("surface_reinit.cl", "reinit_step")
         for _ in progress_range(progress, steps, "reinitialise", leave=False):
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
@@ -444,7 +447,7 @@ class ImplicitSurface:
         """Extend data off the surface, constant along the normals: by closest-point
         interpolation (one pass), or by the upwind PDE of section 4.2,
         u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
-        from .flows import BandFlow
+        from .flows import BandFlow, extend_defines
 
         if method not in ("closest-point", "pde"):
             raise InputError(f"method must be 'closest-point' or 'pde', not {method!r}")
@@ -454,7 +457,8 @@ class ImplicitSurface:
         g = self.grid
         r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1
         steps = int(np.ceil(2 * self.outer / r)) if iterations is None else int(iterations)
-        kernel = g.kernel("surface.cl", "extend_pde_step", NC=flow.nc)
+        defines = extend_defines(self.interp, flow.nc)  # the re-extension's program
+        kernel = g.kernel("surface_extend.cl", "extend_pde_step", **defines)
         for _ in range(steps):
             g.launch_list(kernel, self.ext_band, flow.cur.data, flow.tmp.data, self.psi_dev.data,
                           g.scalar(r), g.scalar(self.spacing), *g.strides())
@@ -479,6 +483,117 @@ class ImplicitSurface:
             out = np.broadcast_to(np.asarray(values, np.float64), self.shape)
         return np.array(out, dtype=dtype)
 
+    # ---- the band form: data at the extension band's cells only ------------------------------
+    def _band_cells_of(self) -> tuple[np.ndarray, np.ndarray]:
+        """(flat indices into `shape`, flat padded indices) of the extension band's cells."""
+        if getattr(self, "_band_cells", None) is None:
+            g = self.grid
+            padded = self.ext_band.indices.get()[: self.ext_band.n].astype(np.int64)
+            z, rest = np.divmod(padded, g.sxy)
+            y, x = np.divmod(rest, g.sx)
+            _, ny, nx = self.shape
+            flat = ((z - g.ghost) * ny + (y - g.ghost)) * nx + (x - g.ghost)
+            self._band_cells = (flat, padded)
+        return self._band_cells
+
+    def band_indices(self) -> np.ndarray:
+        """Flat (C-order) indices into `shape` of the extension band's cells, increasing.
+
+        They fix the *band form* of data on this surface: values at these cells only, shape
+        (n,) for scalar data or (channels, n). The flows (heat, tv, denoise_tv), `extend` and
+        `sample` take the band form in place of a dense volume and return it in kind, so a
+        big grid (512^3) never needs a dense float64 copy of the data; `band_values` and
+        `from_band` convert. Every value a flow reads lies on the band, so a flow's band-form
+        result is its dense result at these cells, bitwise.
+
+        >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+        >>> u = s.band_field(lambda x, y, z: z)
+        >>> u.shape == s.band_indices().shape
+        True
+        >>> bool(np.allclose(s.heat(u, 0.01), s.band_values(s.heat(s.from_band(u), 0.01))))
+        True
+        """
+        return self._band_cells_of()[0].copy()
+
+    def band_coordinates(self) -> np.ndarray:
+        """World (x, y, z) of the extension band's cells, shape (n, 3), in band-form order."""
+        flat = self._band_cells_of()[0]
+        _, ny, nx = self.shape
+        z, rest = np.divmod(flat, ny * nx)
+        y, x = np.divmod(rest, nx)
+        return self.origin + self.spacing * np.stack([x, y, z], axis=1).astype(np.float64)
+
+    def band_closest_points(self) -> np.ndarray:
+        """World closest points x - psi grad psi / |grad psi| of the extension band's cells,
+        shape (n, 3) (central differences, as `closest_points_host`, at the band only)."""
+        flat = self._band_cells_of()[0]
+        p = self.psi.reshape(-1)
+        _, ny, nx = self.shape
+        grad = [(p[flat + s] - p[flat - s]) / (2 * self.spacing) for s in (1, nx, nx * ny)]
+        norm = np.sqrt(grad[0] ** 2 + grad[1] ** 2 + grad[2] ** 2)
+        norm[norm == 0] = 1.0
+        d = p[flat] / norm
+        return self.band_coordinates() - d[:, None] * np.stack(grad, axis=1)
+
+    def band_field(self, f: Callable, dtype: DTypeLike = np.float64) -> np.ndarray:
+        """`field` in band form: f(x, y, z) at the band cells' closest points (1D arrays),
+        shape (n,) for an array result or (channels, n) for a sequence of them."""
+        cp = self.band_closest_points()
+        values = f(cp[:, 0], cp[:, 1], cp[:, 2])
+        n = cp.shape[0]
+        if isinstance(values, (list, tuple)):
+            out = np.stack([np.broadcast_to(np.asarray(v, np.float64), (n,)) for v in values])
+        else:
+            out = np.broadcast_to(np.asarray(values, np.float64), (n,))
+        return np.array(out, dtype=dtype)
+
+    def band_values(self, u: ArrayLike) -> np.ndarray:
+        """Dense data (`shape`, or (channels,) + `shape`) in band form: its values at the
+        band's cells, dtype kept."""
+        u = np.asarray(u)
+        if u.shape == self.shape:
+            return u.reshape(-1)[self._band_cells_of()[0]]
+        if u.ndim == 4 and u.shape[1:] == self.shape:
+            return u.reshape(u.shape[0], -1)[:, self._band_cells_of()[0]]
+        raise InputError(f"u must have the surface's grid shape {self.shape} (or (channels,) + "
+                         f"that), got {u.shape}")
+
+    def from_band(self, values: ArrayLike, fill: float = 0.0) -> np.ndarray:
+        """Band-form values as a dense volume (`shape`, or (channels,) + `shape`), `fill` off
+        the band, dtype kept (floats; others become float64)."""
+        v = np.asarray(values)
+        nc = self._band_form_channels(v)
+        if nc is None:
+            raise InputError(f"values must have shape ({self.ext_band.n},) or (channels, "
+                             f"{self.ext_band.n}) (the band form), got {v.shape}")
+        dtype = v.dtype if np.issubdtype(v.dtype, np.floating) else np.float64
+        out = np.full((nc, int(np.prod(self.shape))), fill, dtype)
+        out[:, self._band_cells_of()[0]] = v.reshape(nc, -1)
+        out = out.reshape((nc,) + self.shape)
+        return out[0] if v.ndim == 1 else out
+
+    def _band_form_channels(self, u: np.ndarray) -> int | None:
+        """Channels of band-form data (shape (n,) or (channels, n)), None for other shapes."""
+        n = self.ext_band.n
+        if u.ndim == 1 and u.shape[0] == n:
+            return 1
+        if u.ndim == 2 and u.shape[1] == n:
+            return u.shape[0]
+        return None
+
+    def _padded_from_band(self, u: np.ndarray) -> np.ndarray:
+        """Band-form data as a padded (channels, PZ, PY, PX) host volume in the grid's dtype,
+        zeros off the band (no flow reads them), checked as `_as_channels` checks."""
+        if not np.issubdtype(u.dtype, np.number) or np.iscomplexobj(u):
+            raise InputError(f"u must hold real numbers, not {u.dtype}")
+        values = u.reshape(self._band_form_channels(u), -1)
+        if not np.all(np.isfinite(values)):
+            raise InputError("u contains NaN or infinite values in the band around the surface")
+        g = self.grid
+        padded = np.zeros((values.shape[0], g.volume), g.dtype)
+        padded[:, self._band_cells_of()[1]] = values
+        return padded.reshape((values.shape[0],) + g.padded_shape)
+
     def _as_channels(self, u, what="u"):
         """(nc, nz, ny, nx) float64 copy of scalar or channel-first vector data."""
         u = np.asarray(u)
@@ -489,7 +604,8 @@ class ImplicitSurface:
         else:
             raise InputError(
                 f"{what} must have the surface's grid shape {self.shape} (or (channels,) + that "
-                f"for vector data), got {u.shape}"
+                f"for vector data), got {u.shape}; flows also take the band form, shape "
+                f"({self.ext_band.n},) or (channels, {self.ext_band.n}) (band_values)"
             )
         if not np.issubdtype(u.dtype, np.number) or np.iscomplexobj(u):
             raise InputError(f"{what} must hold real numbers, not {u.dtype}")
@@ -512,15 +628,19 @@ class ImplicitSurface:
     def sample(self, u: ArrayLike, points: ArrayLike,
                interpolation: str = "tricubic") -> np.ndarray:
         """Values of u at world points (n, 3): shape (n,) for scalar u, (n, channels) else.
+        u may be dense or in band form (band_indices).
 
         Points must lie within the interpolation reach of the surface (on it, typically)."""
-        data = self._as_channels(u)
+        u = np.asarray(u)
+        band_form = self._band_form_channels(u) is not None
+        data = self._padded_from_band(u) if band_form else self._as_channels(u)
+        scalar = u.ndim == (1 if band_form else 3)
         idx = self.world_to_index(points)
         code = _interp_code(interpolation)
         g = self.grid
         n = idx.shape[1]
         if n == 0:
-            return np.zeros((0,) if data.shape[0] == 1 and np.ndim(u) == 3 else (0, data.shape[0]))
+            return np.zeros((0,) if data.shape[0] == 1 and scalar else (0, data.shape[0]))
         lo = g.ghost
         hi = np.array([g.nx, g.ny, g.nz]) + g.ghost - 1
         if np.any(idx < lo - 1e-9) or np.any(idx.T > hi + 1e-9):
@@ -532,16 +652,22 @@ class ImplicitSurface:
                 f"some points lie {dist.max():.2f} cells from the surface; sample() reads "
                 f"data within {reach:.2f} cells of it (project the points onto the surface)"
             )
-        dev = g.upload(data)
+        if band_form:
+            self.runtime.check_alloc(data.nbytes, "surface volume")
+            dev = cla.to_device(self.runtime.queue, data)
+        else:
+            dev = g.upload(data)
         out = self._sample_raw(dev, idx, data.shape[0], code)
-        return out[0] if np.ndim(u) == 3 else out.T
+        return out[0] if scalar else out.T
 
     def _sample_raw(self, dev: cla.Array, idx: np.ndarray, nc: int, code: int) -> np.ndarray:
+        from .flows import extend_defines
+
         g, q = self.grid, self.runtime.queue
         n = idx.shape[1]
         pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
         out = cla.empty(q, (nc, n), g.dtype)
-        g.kernel("surface.cl", "sample_points", INTERP=code, NC=nc)(
+        g.kernel("surface_extend.cl", "sample_points", **extend_defines(code, nc))(
             q, (n,), None, dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
             out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
         )

@@ -57,7 +57,7 @@ def test_every_named_kernel_exists_in_its_file():
 
 
 def test_every_lookup_names_its_file_and_kernel_as_literals():
-    """`g.kernel("surface.cl", "heat_step")`: grepping a kernel's name lands on its lookups."""
+    """`g.kernel("surface_heat.cl", "heat_step")`: grepping a kernel's name lands on its lookups."""
     loose = [f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
              for path, text in _host_sources() for m in NOT_LITERAL.finditer(text)]
     assert not loose, "kernel lookups without a literal file and kernel name:\n" + "\n".join(loose)

@@ -1,4 +1,4 @@
-"""NumPy references of the surface kernels (kernels/surface.cl): the same discrete formulas.
+"""NumPy references of the surface kernels (kernels/surface_*.cl): the same discrete formulas.
 
 Volumes are padded (nc, PZ, PY, PX) arrays handled through flat indices, as the kernels do:
 `sx` = PX is the row stride and `sxy` = PX * PY the slab stride.
@@ -65,7 +65,7 @@ def interpolate(u_pad, points, order=3):
 
 def cp_stencils(points, padded_shape, order=3):
     """Flat padded index of each point's first interpolation node, and the point's offsets
-    (3, n) from floor(point): what kernels/surface.cl's cp_stencils stores per band cell."""
+    (3, n) from floor(point): what kernels/surface_band.cl's cp_stencils stores per band cell."""
     pz, py, px = padded_shape
     x0, _ = _axis_weights(points[0], px, order)
     y0, _ = _axis_weights(points[1], py, order)

@@ -71,8 +71,8 @@ def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc
               np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape)):
         src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
         dst = cla.zeros_like(src)
-        kernel = g.kernel("surface.cl", "extend_cp", INTERP=order, NC=nc, NORMALIZE=int(normalize),
-                          LINE_FIELD=int(lines))
+        kernel = g.kernel("surface_extend.cl", "extend_cp", INTERP=order, NC=nc,
+                          NORMALIZE=int(normalize), LINE_FIELD=int(lines))
         g.launch_list(kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
                       *g.strides())
         band = band_host(s.ext_band)
@@ -125,7 +125,7 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         src = cla.to_device(q, u32)
         dst = cla.zeros_like(src)
         offsets = _offsets(g, sides)
-        kernel = g.kernel("surface.cl", "heat_step", WEIGHTED=int(weighted))
+        kernel = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=int(weighted))
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, psi_dev.data, g.scalar(0.1),
                       *offsets, *g.strides(), channels=u.shape[0])
         band = band_host(s.node_band)
@@ -165,12 +165,12 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
     if flow == "heat":
         u = np.broadcast_to(np.sin(3 * x) * y + z, s.shape)
         got = s.heat(u, 0.02)
-        kernel, nc, normalize = g.kernel("surface.cl", "heat_step", WEIGHTED=0), 1, False
+        kernel, nc, normalize = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0), 1, False
     else:
         v = np.stack(np.broadcast_arrays(x + 0.3 * y, np.cos(2 * y), z + 0.5))
         u = v / np.sqrt((v**2).sum(axis=0))
         got = s.harmonic_map(u, 0.02)
-        kernel = g.kernel("surface.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0,
+        kernel = g.kernel("surface_flows.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0,
                           ALONG=0, WEIGHTED=0)
         nc, normalize = 3, True
     steps, dt = flows._check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")

@@ -62,7 +62,7 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
         src, dst = dev(u32), cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 6)
-        kernel = g.kernel("surface.cl", "flow_step", NC=nc, **opts)
+        kernel = g.kernel("surface_flows.cl", "flow_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, dev(psi).data, dev(direction).data,
                       dev(u0).data, g.scalar(r), g.scalar(dt), dev([lam]).data, g.scalar(e2),
@@ -86,9 +86,10 @@ def test_lambda_terms_match_reference(sphere02, rng):
     u0 = (u + 0.2 * rng.standard_normal(u.shape)).astype(np.float32)
     terms = [cla.empty(q, s.step_band.n, np.float32) for _ in range(3)]
     offsets = _offsets(g, 3)
-    g.launch_list(g.kernel("surface.cl", "tv_lambda_terms"), s.step_band, cla.to_device(q, u).data,
-                  cla.to_device(q, u0).data, s.psi_dev.data, g.scalar(1 / s.spacing),
-                  g.scalar(1.5), g.scalar(0.01), *offsets, *g.strides(), *(t.data for t in terms))
+    g.launch_list(g.kernel("surface_flows.cl", "tv_lambda_terms"), s.step_band,
+                  cla.to_device(q, u).data, cla.to_device(q, u0).data, s.psi_dev.data,
+                  g.scalar(1 / s.spacing), g.scalar(1.5), g.scalar(0.01), *offsets, *g.strides(),
+                  *(t.data for t in terms))
     band = band_host(s.step_band)
     expect = ref.tv_lambda_terms(u, u0, s.psi_dev.get(), band, 1 / s.spacing, 1.5, 0.01,
                                  [int(o) for o in offsets])
@@ -114,7 +115,7 @@ def test_lambda_update_on_the_device(runtime, rng):
     (with the capped flag), written to lambda[0] and history[slot]; the correction factor f
     moves by residual / sigma^2 (limited) once the residual passes half of sigma^2."""
     q = runtime.queue
-    kernel = runtime.kernel("surface.cl", "tv_lambda_update", np.float64)
+    kernel = runtime.kernel("surface_flows.cl", "tv_lambda_update", np.float64)
     num, area = rng.normal(size=37), rng.uniform(0.5, 1.0, 37)
     cases = [(-2.0, 1e9, 0.1, 1.0), (2.0, 1e9, 0.1, 1.0), (-2.0, 1.0, 0.1, 1.0),  # f stays 1
              (-2.0, 1e9, 1.2, 1.0), (-2.0, 1e9, 0.7, 2.0), (-2.0, 1e9, 4.0, 9.5)]  # f moves
