@@ -67,29 +67,34 @@ INLINE REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
 #ifndef SPEED
 #define SPEED 0
 #endif
+// V at padded index i of channel 0.
+INLINE REAL region_speed_at(__global const REAL* phi, __global const REAL* aux, const int i,
+                            const REAL scale, const REAL vmax, const int sx, const int sxy)
+{
+#if SPEED == 0
+    REAL v = scale;
+#elif SPEED == 1 || SPEED == 2
+    REAL mean, gauss;
+    curvatures(phi, i, sx, sxy, &mean, &gauss);
+    // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
+    // curvature): convex and concave elliptic parts both flatten, which unfolds
+    const REAL toward = ls_sign(mean);
+    REAL v = scale * (SPEED == 1 ? mean : toward * FMAX(gauss, (REAL)0));
+#elif SPEED == 3
+    REAL v = scale * (aux[i] - phi[i]);
+#else
+    REAL v = scale * aux[i];
+#endif
+    // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
+    // the time step (the host passes a huge vmax for no limit)
+    return v < -vmax ? -vmax : (v > vmax ? vmax : v);
+}
+
 __kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
                            __global REAL* restrict speed, const REAL scale, const REAL vmax,
                            const int sx, const int sxy, RUN_ARGS)
 {
-    FOR_EACH_RUN_CELL(i) {
-#if SPEED == 0
-        REAL v = scale;
-#elif SPEED == 1 || SPEED == 2
-        REAL mean, gauss;
-        curvatures(phi, i, sx, sxy, &mean, &gauss);
-        // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
-        // curvature): convex and concave elliptic parts both flatten, which unfolds
-        const REAL toward = ls_sign(mean);
-        REAL v = scale * (SPEED == 1 ? mean : toward * FMAX(gauss, (REAL)0));
-#elif SPEED == 3
-        REAL v = scale * (aux[i] - phi[i]);
-#else
-        REAL v = scale * aux[i];
-#endif
-        // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
-        // the time step (the host passes a huge vmax for no limit)
-        speed[i] = v < -vmax ? -vmax : (v > vmax ? vmax : v);
-    }
+    FOR_EACH_RUN_CELL(i) speed[i] = region_speed_at(phi, aux, i, scale, vmax, sx, sxy);
 }
 
 // ---- one explicit step of the coupled flows ------------------------------------------------
@@ -111,6 +116,44 @@ __kernel void region_step(__global const REAL* restrict ls, __global const REAL*
         const REAL v = speed[i] * band_cutoff(ls[i], lo, hi) * (chan != 0 ? proj : (REAL)1);
         out[j] = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
     }
+}
+
+#ifndef NC
+#define NC 2  // level sets: Phi and the Phi-hats
+#endif
+// One Euler stage of every level set with the speed computed in place, one work-item walking
+// whole runs with every channel (launched with one channel): the separate sweeps of
+// region_speed, region_step and heun_average read and wrote the speed and a stage buffer
+// besides. second = 0: out = ls + dt L(ls); second = 1 (Heun's second stage, averaging
+// in place): out = (out + ls + dt L(ls)) / 2, where out holds the step's start (read and
+// written only at the cell itself, so race-free). stats[n * second + g] = max |V| over
+// work-item g's cells (n items), for the host's next stable time step without a sweep.
+__kernel void region_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
+                           __global REAL* restrict out, __global REAL* restrict stats,
+                           const REAL dt, const REAL eps2, const REAL lo, const REAL hi,
+                           const REAL scale, const REAL vmax, const int second, const int sx,
+                           const int sxy, RUN_ARGS)
+{
+    REAL fastest = 0;
+    FOR_EACH_RUN_CELL(i) {
+        const REAL speed = region_speed_at(ls, aux, i, scale, vmax, sx, sxy);
+        fastest = FMAX(fastest, FABS(speed));
+        const REAL v0 = speed * band_cutoff(ls[i], lo, hi);
+        CENTRAL_GRAD(ls, i, fx, fy, fz);
+        const REAL f2 = fx * fx + fy * fy + fz * fz + eps2;
+#pragma unroll
+        for (int c = 0; c < NC; ++c) {
+            const int j = c * plane + i;
+            REAL v = v0;
+            if (c > 0) {
+                CENTRAL_GRAD(ls, j, ux, uy, uz);
+                v *= (fx * ux + fy * uy + fz * uz) * RSQRT(f2 * (ux * ux + uy * uy + uz * uz + eps2));
+            }
+            const REAL next = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
+            out[j] = second ? (REAL)0.5 * (out[j] + next) : next;
+        }
+    }
+    stats[get_global_size(0) * second + get_global_id(0)] = fastest;
 }
 
 // Rigid motion with velocity (ux, uy, uz) (cells per unit time), every channel:
