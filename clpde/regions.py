@@ -155,7 +155,8 @@ class RegionTracker:
         rt, mode = self.runtime, self.mode
         self._k = {
             "region_speed": rt.kernel("regions.cl", "region_speed", g.dtype, SPEED=mode),
-            "region_step": rt.kernel("regions.cl", "region_step", g.dtype, SPEED=mode),
+            "region_stage": rt.kernel("regions.cl", "region_stage", g.dtype, SPEED=mode,
+                                      NC=self.nc),
             "advect_step": rt.kernel("regions.cl", "advect_step", g.dtype, SPEED=mode),
             "reinit3d_step": rt.kernel("regions.cl", "reinit3d_step", g.dtype, SPEED=mode),
             "band_near_border": rt.kernel("regions.cl", "band_near_border", g.dtype, SPEED=mode),
@@ -169,6 +170,13 @@ class RegionTracker:
         }
         self.time = 0.0
         self.steps = 0
+        self.reinits = 0
+        # reinitialise when the surface may have moved this many cells since the last time:
+        # reinit_every full steps at the CFL limit (a slower flow, like a curvature flow on a
+        # fine grid, moves far less per step and needs it far less often)
+        self.reinit_distance = self.reinit_every * self.cfl
+        self._moved = 0.0  # bound on the cells the surface moved since the last one
+        self._vmax = 0.0  # the speed bound (cells per unit time) of the last stable_dt
         self.rebuild()
         self.reinitialize(4 * self.reinit_iterations)
 
@@ -182,6 +190,10 @@ class RegionTracker:
         # exactly the band's cells: cells outside it must keep their values
         self.step_runs = g.runs(self.step_band, pad=1)
         self.reinit_runs = g.runs(self.reinit_band, pad=1)
+        # max |V| of each work-item of region_stage, both stages (see stable_dt)
+        (items,), _, _ = self.runtime.list_launch(max(self.step_runs.n, 1))
+        self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
+        self._stats_fresh = False
         if self.step_band.n == 0:
             raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
                              "track for a shorter time")
@@ -242,6 +254,8 @@ class RegionTracker:
         # is read only where a step has written it first, so it needs no sync)
         self._sync(self.ls0, self.nxt)
         self.rebuild()
+        self.reinits += 1
+        self._moved = 0.0
 
     def _sync(self, *buffers, channels=None) -> None:
         """Copy cur into the buffers on the reinitialisation band (every channel, or the
@@ -257,12 +271,18 @@ class RegionTracker:
                       self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
 
     def stable_dt(self) -> float:
-        """Largest stable step (grid units) for the current speeds: one device read."""
+        """Largest stable step (grid units) for the current speeds: one device read. After
+        a step, the speeds its two stages met (no sweep); else computed from Phi."""
         if self.velocity is not None:
             fastest = float(np.abs(self.velocity).sum())
+            self._vmax = fastest
             return self.cfl / fastest if fastest > 0 else np.inf
-        self._compute_speed()
-        vmax = self._band_max(self.speed)
+        if self._stats_fresh:
+            vmax = float(self._stats.get().max())
+        else:
+            self._compute_speed()
+            vmax = self._band_max(self.speed)
+        self._vmax = vmax
         dt = self.cfl / vmax if vmax > 0 else np.inf
         # curvature flows are parabolic: explicit steps need dt ~ h^2 / (6 diffusivity)
         if self.mode == 1:
@@ -282,39 +302,47 @@ class RegionTracker:
         """Speeds fade out between these |Phi| (cells): the band's outer 2 cells."""
         return self.grid.scalar(self.width - 2.0), self.grid.scalar(self.width)
 
-    def _euler(self, src, dst, dt) -> None:
-        """dst = src + dt L(src) on the step band (the speed recomputed from src)."""
+    def _advect(self, src, dst, dt) -> None:
+        """dst = src + dt L(src) on the step band for a rigid motion (velocity)."""
+        g, u = self.grid, self.velocity
+        g.launch_runs(self._k["advect_step"], self.step_runs, src.data, dst.data,
+                      g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
+                      *self._cutoff(), *g.strides(), channels=self.nc)
+
+    def _stage(self, src, dst, dt, second) -> None:
+        """One Euler stage of every level set over the step band, the speed computed from
+        src in the same sweep (region_stage); second: Heun's averaging into dst."""
         g = self.grid
-        if self.velocity is None:
-            if self.mode in (1, 2, 3):  # speeds that depend on Phi
-                g.launch_runs(self._k["region_speed"], self.step_runs, src.data, self.aux.data,
-                              self.speed.data, g.scalar(self.scale), g.scalar(self.vmax),
-                              *g.strides())
-            g.launch_runs(self._k["region_step"], self.step_runs, src.data, self.speed.data,
-                          dst.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
-                          *g.strides(), channels=self.nc)
-        else:
-            u = self.velocity
-            g.launch_runs(self._k["advect_step"], self.step_runs, src.data, dst.data,
-                          g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
-                          *self._cutoff(), *g.strides(), channels=self.nc)
+        g.launch_runs(self._k["region_stage"], self.step_runs, src.data, self.aux.data,
+                      dst.data, self._stats.data, g.scalar(dt), g.scalar(1e-12),
+                      *self._cutoff(), g.scalar(self.scale), g.scalar(self.vmax),
+                      np.int32(second), *g.strides())
 
     def step(self, dt: float) -> None:
         """One Heun (TVD Runge-Kutta 2) step of every level set."""
         g = self.grid
-        self._euler(self.cur, self.nxt, dt)
-        self._euler(self.nxt, self.stage, dt)
-        g.launch_runs(self._k["heun_average"], self.step_runs, self.cur.data, self.stage.data,
-                      self.cur.data, channels=self.nc)
+        if self.velocity is None:
+            # two fused sweeps: cur -> nxt, then cur <- (cur + nxt + dt L(nxt)) / 2 in place
+            self._stage(self.cur, self.nxt, dt, 0)
+            self._stage(self.nxt, self.cur, dt, 1)
+            self._stats_fresh = True
+        else:
+            self._advect(self.cur, self.nxt, dt)
+            self._advect(self.nxt, self.stage, dt)
+            g.launch_runs(self._k["heun_average"], self.step_runs, self.cur.data,
+                          self.stage.data, self.cur.data, channels=self.nc)
         self.time += dt
         self.steps += 1
 
     def advance(self, until: float, bar: tqdm | None = None) -> None:
-        """Step to time `until` (the speeds' time unit), reinitialising every few steps.
+        """Step to time `until` (the speeds' time unit), reinitialising when needed.
 
-        Steps go in blocks of `reinit_every`, each block followed by a reinitialisation. A
-        time-dependent speed (aux_at) is sampled once per block, at its middle (the midpoint
-        rule: second order in the block's length), and held for the block."""
+        Steps go in blocks of `reinit_every`. After a block, the level sets are
+        reinitialised when the surface may have moved `reinit_distance` cells since the
+        last time (the speed bound times the time stepped: reinit_every steps at the CFL
+        limit), at `until`, and after every block of a time-dependent speed (aux_at). That
+        speed is sampled once per block, at its middle (the midpoint rule: second order in
+        the block's length), and held for the block."""
         dt = self.stable_dt()
         while self.time < until - 1e-12:
             self._check_step_count(until, dt)
@@ -326,9 +354,13 @@ class RegionTracker:
                 if step <= 1e-12:
                     break
                 self.step(step)
+                self._moved += self._vmax * step
                 if bar is not None:
                     bar.update(step)
-            self.reinitialize()
+            done = self.time >= until - 1e-12
+            if (self.aux_at is not None or self._moved >= self.reinit_distance * (1 - 1e-6)
+                    or (done and self._moved > 0)):
+                self.reinitialize()
             dt = self.stable_dt()
 
     def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
@@ -380,6 +412,7 @@ class RegionTracker:
         g = self.grid
         padded = g.pad(np.asarray(values, np.float64)[None], "edge")
         self.aux.set(np.ascontiguousarray(padded, g.dtype))
+        self._stats_fresh = False  # the speeds changed
 
     def volumes(self) -> tuple[np.ndarray, np.ndarray]:
         """(Phi, Phi-hats) in world units on the host."""

@@ -3,49 +3,11 @@
 // band marking, PDE reinitialisation with the Russo-Smereka subcell fix, and the coupled
 // morphing / tracking step of thesis eqs. (2.3)-(2.6).
 //
-// The helpers at the top work on the values along one axis, so a 3D file can reuse them
-// with a third stride: include this file and call them with sz.
+// The shared stencils and the reinitialisation's update live in godunov.h and reinit.h
+// (regions.cl uses them in 3D).
 #include "common.cl"
-
-// ---- helpers shared by every level-set kernel -------------------------------------------
-
-// minmod(a, b): the smaller-magnitude argument when both have the same sign, else 0.
-INLINE REAL minmod(const REAL a, const REAL b)
-{
-    const REAL m = FMIN(FABS(a), FABS(b));
-    return (a * b > 0) ? COPYSIGN(m, a) : (REAL)0;
-}
-
-// Slope-limited one-sided differences at c along one axis, given the values two cells
-// either side (m2, m1, c, p1, p2): the first-order difference corrected by half the minmod
-// of the neighbouring second differences (second-order ENO, Osher-Sethian).
-#define LS_ONE_SIDED(m2, m1, c, p1, p2, dm, dp)                                        \
-    {                                                                                  \
-        const REAL q_m = (m2) - 2 * (m1) + (c);                                        \
-        const REAL q_c = (m1) - 2 * (c) + (p1);                                        \
-        const REAL q_p = (c) - 2 * (p1) + (p2);                                        \
-        dm = ((c) - (m1)) + (REAL)0.5 * minmod(q_m, q_c);                              \
-        dp = ((p1) - (c)) - (REAL)0.5 * minmod(q_c, q_p);                              \
-    }
-
-// One axis' contribution to the squared Godunov gradient norm for u_t = V |grad u|.
-// V < 0 (the level sets move toward larger u): the upwind side is the one u increases
-// away from; V > 0: the mirror choice.
-INLINE REAL godunov_axis(const REAL dm, const REAL dp, const REAL v)
-{
-    const REAL down = FMAX(SQR(FMAX(dm, (REAL)0)), SQR(FMIN(dp, (REAL)0)));
-    const REAL up = FMAX(SQR(FMIN(dm, (REAL)0)), SQR(FMAX(dp, (REAL)0)));
-    return (v > 0) ? up : down;
-}
-
-// Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| in 2D.
-INLINE REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, const REAL v)
-{
-    REAL dmx, dpx, dmy, dpy;
-    LS_ONE_SIDED(u[i - 2], u[i - 1], u[i], u[i + 1], u[i + 2], dmx, dpx);
-    LS_ONE_SIDED(u[i - 2 * sx], u[i - sx], u[i], u[i + sx], u[i + 2 * sx], dmy, dpy);
-    return SQRT(godunov_axis(dmx, dpx, v) + godunov_axis(dmy, dpy, v));
-}
+#include "godunov.h"
+#include "reinit.h"
 
 // ---- narrow band -----------------------------------------------------------------------
 
@@ -96,35 +58,13 @@ __kernel void dilate_band_cols(__global const uchar* restrict rows, __global uch
 }
 
 // ---- reinitialisation ------------------------------------------------------------------
-// phi_t + S(phi0) (|grad phi| - 1) = 0, explicit Godunov steps. Cells beside the
-// interface (phi0 changes sign towards a 4-neighbour) use Russo and Smereka's subcell fix:
-// they relax towards D = phi0 / |grad phi0|, the distance to the interface estimated from
-// phi0 itself, so the zero level set does not move.
-INLINE REAL reinit_update(__global const REAL* phi, __global const REAL* phi0, const int i,
-                          const int sx, const REAL dt)
-{
-    const REAL c0 = phi0[i];
-    const REAL e0 = phi0[i + 1], w0 = phi0[i - 1], n0 = phi0[i + sx], s0 = phi0[i - sx];
-    const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
-    const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) | (c0 * s0 < 0);
-    const REAL p = phi[i];
-#ifndef PLAIN_REINIT  // -DPLAIN_REINIT=1 drops the fix (for comparisons only)
-    if (at_interface) {
-        // |grad phi0| from the largest of the central estimate and the one-sided slopes,
-        // which stays right when the interface cuts close to a node.
-        REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0));
-        g = FMAX(g, FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0))));
-        const REAL d = c0 / FMAX(g, (REAL)1e-12);
-        return p - dt * (sgn * FABS(p) - d);
-    }
-#endif
-    return p - dt * sgn * (upwind_norm_2d(phi, i, sx, -sgn) - 1);
-}
-
+// phi_t + S(phi0) (|grad phi| - 1) = 0, explicit Godunov steps; cells beside the interface
+// (phi0 changes sign towards a 4-neighbour) use Russo and Smereka's subcell fix as published
+// (reinit.h's reinit_update_2d), so the zero level set does not move.
 __kernel void reinit_step(__global const REAL* restrict phi, __global const REAL* restrict phi0,
                           __global REAL* restrict out, const REAL dt, GRID_ARGS)
 {
-    FOR_EACH_CELL(i) out[i] = reinit_update(phi, phi0, i, sx, dt);
+    FOR_EACH_CELL(i) out[i] = reinit_update_2d(phi, phi0, i, sx, dt);
 }
 
 // The same update over a compacted list of cells (a band).
@@ -135,7 +75,7 @@ __kernel void reinit_step_list(__global const REAL* restrict phi,
     LIST_RANGE(k0, k1, chan);
     for (int k = k0; k < k1; ++k) {
         const int i = chan + list[k];
-        out[i] = reinit_update(phi, phi0, i, sx, dt);
+        out[i] = reinit_update_2d(phi, phi0, i, sx, dt);
     }
 }
 

@@ -8,24 +8,14 @@
 // host converts world speeds. Kernels visit a compacted band list and never test for
 // borders: the host keeps the band clear of the volume's edge.
 //
-// Sign convention: u_t = V |grad u| (the tracking issue's helpers in levelset.cl); Phi is
-// negative inside, so V > 0 moves the surface inwards. The host passes V = -beta / h for an
-// outward normal speed beta.
-#include "levelset.cl"
+// Sign convention: u_t = V |grad u| (godunov.h's upwind norms); Phi is negative inside, so
+// V > 0 moves the surface inwards. The host passes V = -beta / h for an outward normal
+// speed beta.
+#include "common.cl"
+#include "godunov.h"
+#include "reinit.h"
 
 // ---- stencils ---------------------------------------------------------------------------
-
-// Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| (3D Godunov norm).
-INLINE REAL upwind_norm_3d(__global const REAL* u, const int i, const int sx, const int sxy,
-                           const REAL v)
-{
-    REAL dmx, dpx, dmy, dpy, dmz, dpz;
-    LS_ONE_SIDED(u[i - 2], u[i - 1], u[i], u[i + 1], u[i + 2], dmx, dpx);
-    LS_ONE_SIDED(u[i - 2 * sx], u[i - sx], u[i], u[i + sx], u[i + 2 * sx], dmy, dpy);
-    LS_ONE_SIDED(u[i - 2 * sxy], u[i - sxy], u[i], u[i + sxy], u[i + 2 * sxy], dmz, dpz);
-    return SQRT(godunov_axis(dmx, dpx, v) + godunov_axis(dmy, dpy, v) +
-                godunov_axis(dmz, dpz, v));
-}
 
 // Central-difference gradient.
 #define CENTRAL_GRAD(u, i, gx, gy, gz)                                                 \
@@ -77,29 +67,34 @@ INLINE REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
 #ifndef SPEED
 #define SPEED 0
 #endif
+// V at padded index i of channel 0.
+INLINE REAL region_speed_at(__global const REAL* phi, __global const REAL* aux, const int i,
+                            const REAL scale, const REAL vmax, const int sx, const int sxy)
+{
+#if SPEED == 0
+    REAL v = scale;
+#elif SPEED == 1 || SPEED == 2
+    REAL mean, gauss;
+    curvatures(phi, i, sx, sxy, &mean, &gauss);
+    // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
+    // curvature): convex and concave elliptic parts both flatten, which unfolds
+    const REAL toward = ls_sign(mean);
+    REAL v = scale * (SPEED == 1 ? mean : toward * FMAX(gauss, (REAL)0));
+#elif SPEED == 3
+    REAL v = scale * (aux[i] - phi[i]);
+#else
+    REAL v = scale * aux[i];
+#endif
+    // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
+    // the time step (the host passes a huge vmax for no limit)
+    return v < -vmax ? -vmax : (v > vmax ? vmax : v);
+}
+
 __kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
                            __global REAL* restrict speed, const REAL scale, const REAL vmax,
                            const int sx, const int sxy, RUN_ARGS)
 {
-    FOR_EACH_RUN_CELL(i) {
-#if SPEED == 0
-        REAL v = scale;
-#elif SPEED == 1 || SPEED == 2
-        REAL mean, gauss;
-        curvatures(phi, i, sx, sxy, &mean, &gauss);
-        // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
-        // curvature): convex and concave elliptic parts both flatten, which unfolds
-        const REAL toward = mean > 0 ? (REAL)1 : (mean < 0 ? (REAL)-1 : (REAL)0);
-        REAL v = scale * (SPEED == 1 ? mean : toward * FMAX(gauss, (REAL)0));
-#elif SPEED == 3
-        REAL v = scale * (aux[i] - phi[i]);
-#else
-        REAL v = scale * aux[i];
-#endif
-        // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
-        // the time step (the host passes a huge vmax for no limit)
-        speed[i] = v < -vmax ? -vmax : (v > vmax ? vmax : v);
-    }
+    FOR_EACH_RUN_CELL(i) speed[i] = region_speed_at(phi, aux, i, scale, vmax, sx, sxy);
 }
 
 // ---- one explicit step of the coupled flows ------------------------------------------------
@@ -123,6 +118,44 @@ __kernel void region_step(__global const REAL* restrict ls, __global const REAL*
     }
 }
 
+#ifndef NC
+#define NC 2  // level sets: Phi and the Phi-hats
+#endif
+// One Euler stage of every level set with the speed computed in place, one work-item walking
+// whole runs with every channel (launched with one channel): the separate sweeps of
+// region_speed, region_step and heun_average read and wrote the speed and a stage buffer
+// besides. second = 0: out = ls + dt L(ls); second = 1 (Heun's second stage, averaging
+// in place): out = (out + ls + dt L(ls)) / 2, where out holds the step's start (read and
+// written only at the cell itself, so race-free). stats[n * second + g] = max |V| over
+// work-item g's cells (n items), for the host's next stable time step without a sweep.
+__kernel void region_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
+                           __global REAL* restrict out, __global REAL* restrict stats,
+                           const REAL dt, const REAL eps2, const REAL lo, const REAL hi,
+                           const REAL scale, const REAL vmax, const int second, const int sx,
+                           const int sxy, RUN_ARGS)
+{
+    REAL fastest = 0;
+    FOR_EACH_RUN_CELL(i) {
+        const REAL speed = region_speed_at(ls, aux, i, scale, vmax, sx, sxy);
+        fastest = FMAX(fastest, FABS(speed));
+        const REAL v0 = speed * band_cutoff(ls[i], lo, hi);
+        CENTRAL_GRAD(ls, i, fx, fy, fz);
+        const REAL f2 = fx * fx + fy * fy + fz * fz + eps2;
+#pragma unroll
+        for (int c = 0; c < NC; ++c) {
+            const int j = c * plane + i;
+            REAL v = v0;
+            if (c > 0) {
+                CENTRAL_GRAD(ls, j, ux, uy, uz);
+                v *= (fx * ux + fy * uy + fz * uz) * RSQRT(f2 * (ux * ux + uy * uy + uz * uz + eps2));
+            }
+            const REAL next = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
+            out[j] = second ? (REAL)0.5 * (out[j] + next) : next;
+        }
+    }
+    stats[get_global_size(0) * second + get_global_id(0)] = fastest;
+}
+
 // Rigid motion with velocity (ux, uy, uz) (cells per unit time), every channel:
 // u <- u - dt U . grad u with slope-limited upwind differences per axis. For Phi-hat this is
 // beta-hat |grad Phi-hat| with beta-hat = U . N_Phi-hat: the projection of the surface's full
@@ -135,9 +168,9 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
         const int j = chan + i;
         const REAL cut = band_cutoff(ls[i], lo, hi);
         REAL dmx, dpx, dmy, dpy, dmz, dpz;
-        LS_ONE_SIDED(ls[j - 2], ls[j - 1], ls[j], ls[j + 1], ls[j + 2], dmx, dpx);
-        LS_ONE_SIDED(ls[j - 2 * sx], ls[j - sx], ls[j], ls[j + sx], ls[j + 2 * sx], dmy, dpy);
-        LS_ONE_SIDED(ls[j - 2 * sxy], ls[j - sxy], ls[j], ls[j + sxy], ls[j + 2 * sxy], dmz, dpz);
+        LS_ONE_SIDED_AT(ls, j, 1, dmx, dpx);
+        LS_ONE_SIDED_AT(ls, j, sx, dmy, dpy);
+        LS_ONE_SIDED_AT(ls, j, sxy, dmz, dpz);
         const REAL adv = ux * (ux > 0 ? dmx : dpx) + uy * (uy > 0 ? dmy : dpy) +
                          uz * (uz > 0 ? dmz : dpz);
         out[j] = ls[j] - dt * cut * adv;
@@ -145,42 +178,22 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
 }
 
 // ---- reinitialisation, every channel -------------------------------------------------------
-// u_t + S(u0) (|grad u| - 1) = 0 with the slope-limited Godunov norm; cells where u0 changes
-// sign towards one of their 6 neighbours use Russo and Smereka's subcell fix (relax towards
-// D = u0 / |grad u0|, |grad u0| the largest of the central and one-sided estimates), so the
-// zero level set stays where it is.
+// u_t + S(u0) (|grad u| - 1) = 0 with the slope-limited Godunov norm and Russo and Smereka's
+// subcell fix at the cells where u0 changes sign towards one of their 6 neighbours (reinit.h's
+// reinit_update_3d), so the zero level set stays where it is. Their |grad u0| leans on the
+// central estimate (SUBCELL_STEEP = 1/2 of the steepest one-sided slope at most): on a signed
+// distance the central one is 1 up to O(h^2 / R^2), so repeated reinitialisations (every few
+// steps) leave the zero level set in place; Russo-Smereka's max with the one-sided slopes
+// (1 + h / 2R on curved surfaces) moved a sphere's radius by 0.4 cells in 40 calls. Half the
+// steepest slope still guards against flat central estimates at kinks. Cells whose slope is
+// already within SUBCELL_TOL of 1 are kept as they are: the relaxation's O(h^2) bias,
+// repeated every few steps, otherwise grows.
 #ifndef SUBCELL_TOL
 #define SUBCELL_TOL 0.1
 #endif
-// The new value of u at padded index i (any channel) after one step of dt.
-INLINE REAL reinit3d_update(__global const REAL* u, __global const REAL* u0, const int i,
-                            const REAL dt, const int sx, const int sxy)
-{
-    const REAL c0 = u0[i];
-    const REAL e0 = u0[i + 1], w0 = u0[i - 1];
-    const REAL n0 = u0[i + sx], s0 = u0[i - sx];
-    const REAL t0 = u0[i + sxy], b0 = u0[i - sxy];
-    const REAL sgn = (c0 > 0) ? (REAL)1 : ((c0 < 0) ? (REAL)-1 : (REAL)0);
-    const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) |
-                             (c0 * s0 < 0) | (c0 * t0 < 0) | (c0 * b0 < 0);
-    const REAL p = u[i];
-    if (at_interface) {
-        // |grad u0| by central differences: on a signed distance this is 1 up to
-        // O(h^2 / R^2), so repeated reinitialisations (every few steps) leave the zero
-        // level set in place; Russo-Smereka's max with the one-sided slopes (1 + h / 2R
-        // on curved surfaces) moved a sphere's radius by 0.4 cells in 40 calls. Half
-        // the steepest one-sided slope guards against flat central estimates at kinks.
-        REAL g = (REAL)0.5 * SQRT(SQR(e0 - w0) + SQR(n0 - s0) + SQR(t0 - b0));
-        REAL steep = FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0)));
-        steep = FMAX(steep, FMAX(FABS(t0 - c0), FABS(c0 - b0)));
-        g = FMAX(g, (REAL)0.5 * steep);
-        const REAL d = c0 / FMAX(g, (REAL)1e-12);
-        // keep cells whose slope is already close to 1 as they are: the relaxation's
-        // O(h^2) bias, repeated every few steps, otherwise grows (SUBCELL_TOL)
-        return FABS(g - 1) < (REAL)SUBCELL_TOL ? p : p - dt * (sgn * FABS(p) - d);
-    }
-    return p - dt * sgn * (upwind_norm_3d(u, i, sx, sxy, -sgn) - 1);
-}
+#define SUBCELL_STEEP 0.5
+#define REINIT3D_UPDATE(u, u0, i, dt)                                                      \
+    reinit_update_3d(u, u0, i, sx, sxy, dt, (REAL)SUBCELL_STEEP, (REAL)SUBCELL_TOL)
 
 // Heun's first stage: out = u + dt L(u).
 __kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL* restrict u0,
@@ -189,7 +202,7 @@ __kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL
 {
     FOR_EACH_RUN_CELL(cell) {
         const int i = chan + cell;
-        out[i] = reinit3d_update(u, u0, i, dt, sx, sxy);
+        out[i] = REINIT3D_UPDATE(u, u0, i, dt);
     }
 }
 
@@ -203,7 +216,7 @@ __kernel void reinit3d_heun(__global REAL* restrict acc, __global const REAL* re
 {
     FOR_EACH_RUN_CELL(cell) {
         const int i = chan + cell;
-        acc[i] = (REAL)0.5 * (acc[i] + reinit3d_update(stage1, u0, i, dt, sx, sxy));
+        acc[i] = (REAL)0.5 * (acc[i] + REINIT3D_UPDATE(stage1, u0, i, dt));
     }
 }
 
@@ -310,8 +323,7 @@ __kernel void extend_outer(__global const REAL* restrict ls, __global REAL* rest
         const REAL p = ls[i];
         const REAL w = 1 - band_cutoff(p, lo, hi);
         CENTRAL_GRAD(ls, i, gx, gy, gz);
-        const REAL s = (p > 0 ? (REAL)1 : (p < 0 ? (REAL)-1 : (REAL)0)) *
-                       RSQRT(gx * gx + gy * gy + gz * gz + (REAL)1e-12);
+        const REAL s = ls_sign(p) * RSQRT(gx * gx + gy * gy + gz * gz + (REAL)1e-12);
         const REAL ax = s * gx, ay = s * gy, az = s * gz;
         const REAL c = ls[j];
         const REAL du = ax * (ax > 0 ? c - ls[j - 1] : ls[j + 1] - c) +
