@@ -99,7 +99,7 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
 
     inputs = json.loads(listing.read_text())
     m = None if kind == "empty" else read_image(mask) > 0
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()  # CPU: all the process's threads
     if kind == "video":
         from clpde.video import VideoWriter, iter_video, video_info
 
@@ -108,7 +108,8 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
             for frame in iter_video(inputs[0]):
                 writer.write(clpde.inpaint(frame, m, channel_axis=-1, progress=False, **options))
                 count += 1
-        return {"seconds": time.perf_counter() - start, "tasks": count}
+        return {"seconds": time.perf_counter() - start, "tasks": count,
+                "cpu_seconds": time.process_time() - cpu}
     for p in inputs:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
@@ -117,7 +118,8 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
         else:
             result = clpde.inpaint(image, m, channel_axis=axis, progress=False, **options)
         write_image(out / Path(p).name, result)
-    return {"seconds": time.perf_counter() - start, "tasks": len(inputs)}
+    return {"seconds": time.perf_counter() - start, "tasks": len(inputs),
+            "cpu_seconds": time.process_time() - cpu}
 
 
 def run_serial(kind, inputs, mask, out, threads, options) -> dict:
@@ -130,16 +132,9 @@ def run_serial(kind, inputs, mask, out, threads, options) -> dict:
             f"sys.path.insert(0, {here!r}); from batch import serial_loop; "
             f"print(json.dumps(serial_loop({kind!r}, Path({str(listing)!r}), "
             f"Path({str(mask)!r}), Path({str(out)!r}), json.loads({opts!r}))))")
-    import resource
-
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    result = json.loads(run.stdout.strip().splitlines()[-1])
-    # CPU time of the whole process (start and imports too): an upper bound for the loop's.
-    result["cpu_seconds"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return result
+    return json.loads(run.stdout.strip().splitlines()[-1])
 
 
 def _cpu_seconds() -> float:
@@ -150,14 +145,26 @@ def _cpu_seconds() -> float:
 
 
 # ---- clpde batch ----------------------------------------------------------------------------
-def run_batch(kind, inputs, mask, out, workers, threads, options) -> dict:
+def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
+    """clpde batch (or the film pipeline) on a fresh local cluster; dask_defaults: with
+    Dask's own worker settings instead of clpde's (MALLOC_TRIM_THRESHOLD_ and the
+    profiler, see clpde.batch.WORKER_CONFIG), for the before/after of the overhead."""
+    import importlib
+
     from distributed import Client
 
     from clpde.batch import batch, start_cluster
     from clpde.video import inpaint_sequence
 
+    module = importlib.import_module("clpde.batch")
+    saved = dict(module.WORKER_CONFIG)
+    if dask_defaults:
+        module.WORKER_CONFIG = {"distributed.worker.multiprocessing-method": "spawn"}
     start = time.perf_counter()
-    cluster, workers, threads = start_cluster(workers, threads)
+    try:
+        cluster, workers, threads = start_cluster(workers, threads)
+    finally:
+        module.WORKER_CONFIG = saved
     try:
         with Client(cluster, set_as_default=False) as client:
             client.wait_for_workers(workers, timeout=120)
@@ -188,24 +195,34 @@ def run_batch(kind, inputs, mask, out, workers, threads, options) -> dict:
 
 
 def same_outputs(kind, a: Path, b: Path) -> bool:
-    if kind == "video":
-        from clpde.video import read_video
-
-        return np.array_equal(read_video(a)[0], read_video(b)[0])
+    if kind == "video":  # the files themselves: the same frames give the same bytes
+        return a.read_bytes() == b.read_bytes()
     names = sorted(p.name for p in a.glob("*.png"))
     return names == sorted(p.name for p in b.glob("*.png")) and all(
         (a / n).read_bytes() == (b / n).read_bytes() for n in names)
+
+
+def _label(mode, workers, threads, dask_defaults):
+    if mode == "serial":
+        return f"serial loop, PoCL {threads} thread{'s' if threads > 1 else ''}"
+    return f"batch {workers} x {threads}" + (", Dask's worker defaults" if dask_defaults else "")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--photos", type=int, default=100)
     parser.add_argument("--frames", type=int, default=120)
+    parser.add_argument("--empty", type=int, default=100, help="tasks of the empty workload")
     parser.add_argument("--max-steps", type=int, default=3000)
     parser.add_argument("--repeat", type=int, default=1,
-                        help="runs of each configuration, one after the other; the fastest is kept")
+                        help="rounds over all configurations (A B A B); each row keeps its "
+                             "fastest run")
+    parser.add_argument("--quick", action="store_true",
+                        help="20 photos, 40 frames, 30 empty tasks, one round (about 2 minutes)")
     parser.add_argument("--json", type=Path, default=RESULTS)
     args = parser.parse_args()
+    if args.quick:
+        args.photos, args.frames, args.empty, args.repeat = 20, 40, 30, 1
 
     from clpde.batch import cores
     from clpde.io import write_image
@@ -227,69 +244,96 @@ def main():
         write_image(video_mask, scratch_mask(144, 176).astype(np.uint8) * 255)
         (work / "tiny").mkdir()
         tiny = []
-        for k in range(100):
+        for k in range(args.empty):
             tiny.append(work / "tiny" / f"t{k:03d}.png")
-            write_image(tiny[-1], np.full((16, 16), k, np.uint8))
+            write_image(tiny[-1], np.full((16, 16), k % 256, np.uint8))
         options = {"max_steps": args.max_steps}
         workloads = [("photos", "images", photos, photo_mask),
                      ("carphone", "video", [clip], video_mask),
                      ("empty", "empty", tiny, None)]
-        configs = [("serial", 1, 1), ("serial", 1, n), ("batch", 1, 1), ("batch", 1, n),
-                   ("batch", 2, max(1, n // 2))]
+        # (mode, workers, PoCL threads per worker, Dask's worker defaults)
+        configs = [("serial", 1, 1, False), ("serial", 1, n, False), ("batch", 1, 1, False),
+                   ("batch", 1, n, False), ("batch", 2, max(1, n // 2), False),
+                   ("batch", 2, max(1, n // 2), True)]
         load = os.getloadavg()[0]
-        rows = []
-        for name, kind, inputs, mask in workloads:
-            reference = None
-            for mode, workers, threads in configs:
-                out = work / f"{name}-{mode}-{workers}x{threads}"
-                if kind == "video":
-                    out = out.with_suffix(".mp4")
-                else:
-                    out.mkdir()
-                runs = []
-                for _ in range(args.repeat):
+        runs = {}
+        for round_ in range(args.repeat):
+            for name, kind, inputs, mask in workloads:
+                for config in configs:
+                    mode, workers, threads, defaults = config
+                    if defaults and name != "photos":
+                        continue
+                    out = work / f"{name}-{mode}-{workers}x{threads}{'-dask' if defaults else ''}"
+                    if kind == "video":
+                        out = out.with_suffix(".mp4")
+                    out.unlink() if out.is_file() else shutil.rmtree(out, ignore_errors=True)
+                    if kind != "video":
+                        out.mkdir()
                     if mode == "serial":
-                        runs.append(run_serial(kind, inputs, mask, out, threads, options))
-                        runs[-1].update(cluster_seconds=None, task_seconds=None)
+                        r = run_serial(kind, inputs, mask, out, threads, options)
+                        r.update(cluster_seconds=None, task_seconds=None)
                     else:
-                        runs.append(run_batch(kind, inputs, mask, out, workers, threads, options))
-                r = min(runs, key=lambda run: run["seconds"])
-                r["all_seconds"] = [run["seconds"] for run in runs]
-                equal = None
-                if reference is None:
-                    reference = out
-                else:
-                    equal = same_outputs(kind, reference, out)
-                overhead = None
-                if r["task_seconds"] is not None:
-                    overhead = (r["seconds"] * workers - r["task_seconds"]) / r["tasks"]
-                row = {"workload": name, "mode": mode, "workers": workers, "threads": threads,
-                       **r, "per_second": r["tasks"] / r["seconds"], "overhead_s": overhead,
-                       "bitwise_equal_to_serial": equal}
-                rows.append(row)
-                print(f"{name:9s} {mode:6s} {workers}x{threads}  {r['tasks']:4d} tasks  "
-                      f"{r['seconds']:7.2f} s  {row['per_second']:7.2f}/s  start "
-                      + (f"{r['cluster_seconds']:5.2f} s" if r["cluster_seconds"] is not None
-                         else "   -   ")
-                      + f"  cpu {r['cpu_seconds']:6.1f} s"
-                      + (f"  overhead {1000 * overhead:6.1f} ms" if overhead is not None else "")
-                      + (f"  equal {equal}" if equal is not None else ""), flush=True)
-        for name in ("photos", "carphone", "empty"):
-            base = next(r for r in rows if r["workload"] == name and r["mode"] == "serial"
-                        and r["threads"] == n)
-            for r in rows:
-                if r["workload"] == name:
-                    r["speedup_vs_serial_all_threads"] = r["per_second"] / base["per_second"]
-        print("\nspeed-up against the serial loop with PoCL on all cores:")
+                        r = run_batch(kind, inputs, mask, out, workers, threads, options,
+                                      dask_defaults=defaults)
+                    r["load_average"] = os.getloadavg()[0]
+                    # the first configuration's outputs are the reference
+                    reference = work / f"{name}-serial-1x1"
+                    if kind == "video":
+                        reference = reference.with_suffix(".mp4")
+                    r["equal"] = None if out == reference else same_outputs(kind, reference, out)
+                    runs.setdefault((name, config), []).append(r)
+                    print(f"round {round_ + 1}: {name:9s} {_label(*config):40s} "
+                          f"{r['seconds']:7.2f} s wall  {1000 * r['cpu_seconds'] / r['tasks']:6.1f}"
+                          f" ms cpu/task  load {r['load_average']:.1f}"
+                          + ("" if r["equal"] is None else f"  equal {r['equal']}"), flush=True)
+        rows = []
+        for (name, config), done in runs.items():
+            mode, workers, threads, defaults = config
+            best = min(done, key=lambda run: run["seconds"])
+            serial = min(runs[(name, configs[0])], key=lambda run: run["seconds"])
+            cpu_task = min(run["cpu_seconds"] for run in done) / best["tasks"]
+            overhead = None
+            if best["task_seconds"] is not None:  # wall: the workers' time outside tasks
+                overhead = (best["seconds"] * workers - best["task_seconds"]) / best["tasks"]
+            rows.append({
+                "workload": name, "configuration": _label(*config), "mode": mode,
+                "workers": workers, "threads": threads, "dask_defaults": defaults,
+                "tasks": best["tasks"], "seconds": best["seconds"],
+                "all_seconds": [run["seconds"] for run in done],
+                "per_second": best["tasks"] / best["seconds"],
+                "cluster_seconds": best["cluster_seconds"],
+                "longest_task_seconds": best.get("longest_task_seconds"),
+                "cpu_per_task_s": cpu_task,
+                "extra_cpu_per_task_s": cpu_task - serial["cpu_seconds"] / serial["tasks"],
+                "wall_overhead_per_task_s": overhead,
+                "load_average": [run["load_average"] for run in done],
+                "bitwise_equal_to_serial": (None if all(run["equal"] is None for run in done)
+                                            else all(run["equal"] for run in done))})
         for r in rows:
-            print(f"  {r['workload']:9s} {r['mode']:6s} {r['workers']}x{r['threads']}: "
-                  f"{r['speedup_vs_serial_all_threads']:.2f}x")
+            base = next(b for b in rows if b["workload"] == r["workload"] and b["mode"] == "serial"
+                        and b["threads"] == n)
+            r["speedup_vs_serial_all_threads"] = r["per_second"] / base["per_second"]
+        print(f"\n{n} cores; load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at "
+              f"the end; {clip_name}; fastest of {args.repeat} round(s)\n")
+        print("| workload | configuration | wall (s) | throughput | speed-up | start (s) | "
+              "cpu / task (ms) | extra cpu / task (ms) | bitwise = serial |")
+        print("|---|---|---:|---:|---:|---:|---:|---:|---|")
+        for r in rows:
+            unit = "fps" if r["workload"] == "carphone" else "/s"
+            equal = {None: "(reference)", True: "yes",
+                     False: "**no**"}[r["bitwise_equal_to_serial"]]
+            start = "-" if r["cluster_seconds"] is None else f"{r['cluster_seconds']:.1f}"
+            print(f"| {r['workload']} | {r['configuration']} | {r['seconds']:.2f} | "
+                  f"{r['per_second']:.2f} {unit} | {r['speedup_vs_serial_all_threads']:.2f}x | "
+                  f"{start} | {1000 * r['cpu_per_task_s']:.1f} | "
+                  f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {equal} |")
         result = {"cores": n, "load_average_at_start": load,
                   "load_average_at_end": os.getloadavg()[0], "clip": clip_name,
-                  "photos": args.photos, "frames": args.frames, "rows": rows}
+                  "photos": args.photos, "frames": args.frames, "repeat": args.repeat,
+                  "rows": rows}
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(result, indent=1))
-        print(f"wrote {args.json}")
+        print(f"\nwrote {args.json}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

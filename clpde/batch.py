@@ -402,6 +402,21 @@ def _gpu_indices(device) -> list[int]:
         return []
 
 
+# The local cluster's Dask settings, measured on 512x512 photo inpaintings (docs/batch.md):
+# - spawn: a forked OpenCL context is unusable.
+# - No MALLOC_TRIM_THRESHOLD_ (the nanny sets 65536 before spawning a worker): fixing any of
+#   glibc's malloc thresholds turns off its adaptive mmap threshold, so every large numpy
+#   temporary is mmapped, page-faulted in and unmapped again; that cost 25-35 ms of system
+#   time per task (10 000 extra page faults), a fifth of a task's CPU.
+# - No statistical profiler (it samples the task's stack every 10 ms for the dashboard,
+#   which clpde's clusters do not run): 10-13 ms of CPU per task on the worker's event loop.
+WORKER_CONFIG = {
+    "distributed.worker.multiprocessing-method": "spawn",
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    "distributed.worker.profile.enabled": False,
+}
+
+
 def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=None):
     """A local cluster for clpde: one worker per GPU, else workers x PoCL threads = cores.
 
@@ -413,7 +428,7 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
     if gpus is None and threads is None:
         gpus = _gpu_indices(device)
     common = {"nthreads": 1, "silence_logs": 50, "preload": ["clpde.batch"]}
-    with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
+    with dask.config.set(WORKER_CONFIG):
         if gpus:
             # One worker per GPU (or `workers` of them, spread round robin), each pinned
             # through clpde's device choice before it loads OpenCL.

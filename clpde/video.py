@@ -14,6 +14,7 @@ pixels repeated) for the encoder, and its size is kept in the file's metadata so
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import re
 import sys
 import time
@@ -123,21 +124,35 @@ def read_video(path) -> tuple[np.ndarray, Fraction]:
 class VideoWriter:
     """Frames into a video file with PyAV (H.264, 4:2:0), written atomically: the file
     appears under its name only when close() succeeds; abort() (or an error in a with
-    block) leaves nothing."""
+    block) leaves nothing.
 
-    def __init__(self, path, rate, *, crf: int = 17, codec: str = "libx264"):
+    threads: the encoder's threads. With more than one, x264 (as PyAV drives it) wrote
+    different bytes for the same frames from run to run (2-3 distinct films in 20 encodes
+    of the 120 carphone frames, docs/batch.md), so a film restored over workers would not
+    be bitwise the serial loop's; one thread is reproducible, and fast enough beside
+    inpainting (hundreds of frames per second at 176x144). Give more for large films when
+    bitwise reproducibility does not matter."""
+
+    def __init__(self, path, rate, *, crf: int = 17, codec: str = "libx264", threads: int = 1):
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix not in VIDEO_FORMATS:
             raise InputError(f"{path}: write a video as one of {', '.join(sorted(VIDEO_FORMATS))}")
         if not path.parent.is_dir():
             raise InputError(f"output folder {path.parent} does not exist; create it first")
+        if isinstance(threads, bool) or not isinstance(threads, int) or threads < 0:
+            raise InputError(f"threads must be a whole number >= 0 (0: FFmpeg's choice), "
+                             f"not {threads!r}")
         self.path, self.rate, self.crf, self.codec = path, Fraction(rate), crf, codec
+        self.threads = threads
         self._atomic = atomic_output(path)
         self._tmp = self._atomic.__enter__()
         self._container = _av().open(str(self._tmp), mode="w", format=VIDEO_FORMATS[suffix])
         self._stream = None
         self.count = 0
+        # The frames as given, before the (lossy) encoder: what a film restored over
+        # workers and one restored serially must agree on, bit for bit.
+        self._digest = hashlib.sha256()
 
     def _start(self, height: int, width: int) -> None:
         self.size = (height, width)
@@ -145,6 +160,7 @@ class VideoWriter:
         stream.width, stream.height = width + width % 2, height + height % 2
         stream.pix_fmt = "yuv420p"
         stream.options = {"crf": str(self.crf)}
+        stream.thread_count = self.threads  # 1: the same bytes for the same frames, every run
         if (stream.width, stream.height) != (width, height):
             self._container.metadata[_SIZE_TAG] = f"clpde size={width}x{height}"
         self._stream = stream
@@ -157,12 +173,13 @@ class VideoWriter:
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[-1] not in (3, 4):
             raise InputError(f"video frames must be 8-bit grey or RGB, not {frame.dtype} "
                              f"of shape {frame.shape}")
-        frame = frame[..., :3]
+        frame = np.ascontiguousarray(frame[..., :3])
         if self._stream is None:
             self._start(*frame.shape[:2])
         if frame.shape[:2] != self.size:
             raise InputError(f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the "
                              f"film {self.size[1]}x{self.size[0]}; all frames need one size")
+        self._digest.update(frame.data)
         pad = ((0, self._stream.height - frame.shape[0]), (0, self._stream.width - frame.shape[1]),
                (0, 0))
         if any(p[1] for p in pad):
@@ -172,6 +189,11 @@ class VideoWriter:
         for packet in self._stream.encode(picture):
             self._container.mux(packet)
         self.count += 1
+
+    @property
+    def frames_sha256(self) -> str:
+        """SHA-256 of the RGB frames written so far (rows, columns, 3 uint8 each, in order)."""
+        return self._digest.hexdigest()
 
     def close(self) -> Path:
         if self._stream is None:
@@ -199,9 +221,10 @@ class VideoWriter:
             self.abort()
 
 
-def write_video(path, frames, rate) -> Path:
-    """Write (T, rows, columns[, 3]) uint8 frames as a video at `rate` frames per second."""
-    with VideoWriter(path, rate) as writer:
+def write_video(path, frames, rate, *, threads: int = 1) -> Path:
+    """Write (T, rows, columns[, 3]) uint8 frames as a video at `rate` frames per second
+    (`threads`: the encoder's, see VideoWriter)."""
+    with VideoWriter(path, rate, threads=threads) as writer:
         for frame in frames:
             writer.write(frame)
     return Path(path)
@@ -296,6 +319,7 @@ class RestoreResult:
     seconds: float
     cluster_seconds: float
     workers: int
+    frames_sha256: str | None = None  # a video's frames before encoding (VideoWriter's)
 
 
 def inpaint_sequence(source, mask, output, *, workers=None, threads=None, scheduler=None,
@@ -342,7 +366,8 @@ def inpaint_sequence(source, mask, output, *, workers=None, threads=None, schedu
             writer.abort()
         raise
     return RestoreResult(output, written, sequence.rate, time.perf_counter() - start,
-                         info.get("seconds", 0.0), info["workers"])
+                         info.get("seconds", 0.0), info["workers"],
+                         writer.frames_sha256 if writer is not None else None)
 
 
 def _pipeline(client, sequence, mask_of, writer, output, per_task, options, progress,

@@ -12,7 +12,13 @@ pytest.importorskip("distributed")
 import clpde  # noqa: E402
 from clpde.cli import main  # noqa: E402
 from clpde.io import read_image, write_image  # noqa: E402
-from clpde.video import inpaint_sequence, read_video, video_info, write_video  # noqa: E402
+from clpde.video import (  # noqa: E402
+    VideoWriter,
+    inpaint_sequence,
+    read_video,
+    video_info,
+    write_video,
+)
 
 
 @pytest.fixture(scope="module")
@@ -74,6 +80,22 @@ def test_inpaint_video_command_restores_the_film(tmp_path, address, capsys):
     after = np.abs(restored[:, mask].astype(int) - clean[:, mask]).mean()
     assert after < before / 5, (before, after)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["damaged.mp4", "mask.png", "restored.mp4"]
+
+
+def test_film_restoration_gives_the_serial_loops_frames(tmp_path, address):
+    """Over 2 workers, 3 frames a task: the frames handed to the encoder are bitwise those
+    of a serial loop (decode, clpde.inpaint, write), in their order."""
+    _, damaged, mask = _film(25, 33, count=12)
+    source = write_video(tmp_path / "damaged.mp4", damaged, 24)
+    write_image(tmp_path / "mask.png", mask.astype(np.uint8) * 255)
+    result = inpaint_sequence(source, tmp_path / "mask.png", tmp_path / "restored.mp4",
+                              scheduler=address, frames_per_task=3, max_steps=300)
+    decoded, _ = read_video(source)
+    with VideoWriter(tmp_path / "serial.mp4", 24) as serial:
+        for frame in decoded:
+            serial.write(clpde.inpaint(frame, mask, channel_axis=-1, max_steps=300))
+    assert result.frames == 12 and result.frames_sha256 == serial.frames_sha256
+    assert read_video(tmp_path / "restored.mp4")[0].shape == decoded.shape
 
 
 def test_frame_folder_to_folder_equals_serial_inpainting(tmp_path, address):
