@@ -60,7 +60,8 @@ DEFAULTS = {
     "stitch": True,
     # weight of a structure guide: the coherence fill of the hole, compared in the patch
     # distance so that patches continue the edges that cross the hole; 0: none
-    "structure": 0.0,
+    # None: automatic, 1 unless the hole's surroundings are periodic (choose.periodicity)
+    "structure": None,
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 KERNEL_FILES = ("patchmatch.cl",)
@@ -87,8 +88,10 @@ def _params(params: dict) -> dict:
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"confidence must be a number >= 1 (1 turns it off), not {g!r}")
     sw = p["structure"]
-    if not isinstance(sw, (int, float, np.floating, np.integer)) or not np.isfinite(sw) or sw < 0:
-        raise InputError(f"structure must be a weight >= 0 (0 turns it off), not {sw!r}")
+    if sw is not None and (not isinstance(sw, (int, float, np.floating, np.integer))
+                           or not np.isfinite(sw) or sw < 0):
+        raise InputError(f"structure must be a weight >= 0 (0 turns it off) or None "
+                         f"(automatic), not {sw!r}")
     f = p["features"]
     if f is not None and (not isinstance(f, (int, float, np.floating, np.integer))
                           or not np.isfinite(f) or f < 0):
@@ -325,8 +328,9 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     onion_passes (4), sharpen (True: the last vote takes the closest patch), confidence
     (1.3: vote weights times confidence**-depth into the hole; 1 turns it off), guide
     (extra (k, rows, cols) planes, known everywhere, that enter the patch distance but are
-    not filled, e.g. an inpainted structure image), structure (0: weight of the coherence
-    fill of the hole as such a guide, so that edges crossing the hole are continued),
+    not filled, e.g. an inpainted structure image), structure (weight of the coherence
+    fill of the hole as such a guide, so that edges crossing the hole are continued; None,
+    the default: 1, or 0 where the hole's surroundings are periodic),
     stitch (True: re-solve the last vote's fill from its sources' gradients, stitch.py).
     ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
@@ -360,7 +364,16 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
                              f"{data.shape[2]}) planes known everywhere, the hole included")
         guides = guide[(slice(None),) + box]
-    sw = float(structure)
+    if structure is None:
+        # Automatic: the guide, unless the surroundings repeat (periodic texture, stripes),
+        # where copies can be exact and a smooth fill would pull them away (choose.py).
+        from .choose import MIN_PERIODICITY, periodicity
+
+        near = _box(hole, 24)
+        sw = 0.0 if periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY \
+            else 1.0
+    else:
+        sw = float(structure)
     if sw > 0:
         from . import coherence
 
