@@ -120,6 +120,7 @@ class InpaintInfo:
     snapshots: list = field(default_factory=list)
     method: str = "transport"
     boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved
+    box_methods: list = field(default_factory=list)  # the method that solved each box
 
 
 @dataclass(frozen=True)
@@ -654,8 +655,12 @@ class Inpainting:
                                                                               (int, np.integer))
                                    or levels < 1):
             raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
-        self.method = choose_method(self.mask, method,
-                                    {**params, **({} if levels is None else {"levels": levels})})
+        given = {**params, **({} if levels is None else {"levels": levels})}
+        self.method = choose_method(self.mask, method, given)
+        # "auto" picks per box between this structure method and the exemplar
+        # (inpainting/choose.py); the options given are the structure method's.
+        self.auto = choose_method(self.mask, method, given, per_box=True) == "auto" and \
+            "exemplar" in inpainting.available()
         if self.method == "transport":
             self.p = transport_params(params)
             _check_params(self.p, ncolour, colour)
@@ -752,7 +757,18 @@ class Inpainting:
             damage = None if self.softness is None else np.asarray(
                 self.softness[y0:y1, x0:x1], np.float64)
             fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
-            if self.method == "transport":
+            method, options = self.method, {}
+            if self.auto:
+                from .inpainting import choose
+
+                method, options = choose.pick(choose.features(data, omega), self.method)
+            info.box_methods.append(method)
+            if method == "exemplar" and method != self.method:
+                solved = self._exemplar_box(runtime, box, data, options)
+                if damage is not None:
+                    solved = np.where(omega, damage * solved + (1 - damage) * data, data)
+                info.levels = max(info.levels, 1)
+            elif self.method == "transport":
                 run = TransportRun(runtime, data, omega, self.p, levels=self.levels,
                                    dtype=self.dtype, progress=self.progress, fidelity=fidelity)
                 for steps, change, solved in run.states(every):
@@ -782,21 +798,41 @@ class Inpainting:
         if every:
             yield InpaintState(0, info.steps, self.result)
 
+    def _exemplar_box(self, runtime, box, data, options):
+        """The exemplar's fill of a box that auto gave it: solved in the box grown by the
+        exemplar's search region (the structure method's box is too small to copy from),
+        with every masked pixel there unknown; returns the box's part."""
+        from .inpainting import exemplar
+
+        y0, y1, x0, x1 = box
+        ny, nx = self.mask.shape
+        m = exemplar.MARGIN()
+        big = (max(0, y0 - m), min(ny, y1 + m), max(0, x0 - m), min(nx, x1 + m))
+        solved = exemplar.solve(self._box_data(big), self.mask[big[0]:big[1], big[2]:big[3]],
+                                runtime, dtype=self.dtype, progress=self.progress,
+                                seed=self.seed, **options)
+        part = np.asarray(solved, np.float64)[:, y0 - big[0]:y1 - big[0], x0 - big[2]:x1 - big[2]]
+        return np.where(self.mask[y0:y1, x0:x1], part, data)
+
     def run(self) -> np.ndarray:
         for _ in self.iterate():
             pass
         return self.result
 
 
-def choose_method(omega: np.ndarray, method: str | None, params=()) -> str:
+def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=False) -> str:
     """The method to run. None is "auto", unless `params` holds one of the transport's own
     options (InpaintParams), when it is "transport" (the thesis's scheme); "auto" is the
-    first installed of inpainting.AUTO (docs/inpainting.md has the measurements)."""
+    first installed of inpainting.AUTO (docs/inpainting.md has the measurements), which
+    each box may trade for the exemplar (inpainting/choose.py). per_box=True returns
+    "auto" itself in that case."""
     from . import inpainting
 
     if method is None:  # levels too: the transport's multiresolution
         transport_only = {"levels", *InpaintParams.__dataclass_fields__}
         method = "transport" if set(params) & transport_only else "auto"
+    if method == "auto" and per_box:
+        return method
     if method == "auto":
         installed = inpainting.available()
         return next(name for name in inpainting.AUTO if name in installed)

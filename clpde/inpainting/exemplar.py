@@ -41,6 +41,7 @@ from scipy import ndimage
 
 from .._progress import progress_bar
 from ..imagedata import InputError
+from . import stitch as _stitch
 
 DEFAULTS = {
     "patch": 7,  # patch side, odd
@@ -54,6 +55,13 @@ DEFAULTS = {
     "sharpen": True,  # the last vote takes the closest patch's value (else the weighted mean)
     # vote weights times confidence**-depth into the hole (Wexler et al.); 1: off
     "confidence": 1.3,
+    # re-solve the final fill from its sources' gradients (stitch.py), so copied regions
+    # meet without a jump in tone
+    "stitch": True,
+    # weight of a structure guide: the coherence fill of the hole, compared in the patch
+    # distance so that patches continue the edges that cross the hole; 0: none
+    # None: automatic, 1 unless the hole's surroundings are periodic (choose.periodicity)
+    "structure": None,
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 KERNEL_FILES = ("patchmatch.cl",)
@@ -79,6 +87,11 @@ def _params(params: dict) -> dict:
     g = p["confidence"]
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"confidence must be a number >= 1 (1 turns it off), not {g!r}")
+    sw = p["structure"]
+    if sw is not None and (not isinstance(sw, (int, float, np.floating, np.integer))
+                           or not np.isfinite(sw) or sw < 0):
+        raise InputError(f"structure must be a weight >= 0 (0 turns it off) or None "
+                         f"(automatic), not {sw!r}")
     f = p["features"]
     if f is not None and (not isinstance(f, (int, float, np.floating, np.integer))
                           or not np.isfinite(f) or f < 0):
@@ -304,7 +317,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           fine_iterations=DEFAULTS["fine_iterations"],
           passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
           onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"],
-          confidence=DEFAULTS["confidence"], guide=None):
+          confidence=DEFAULTS["confidence"], guide=None, stitch=DEFAULTS["stitch"],
+          structure=DEFAULTS["structure"]):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (128 px of context around the hole's box),
@@ -314,14 +328,17 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     onion_passes (4), sharpen (True: the last vote takes the closest patch), confidence
     (1.3: vote weights times confidence**-depth into the hole; 1 turns it off), guide
     (extra (k, rows, cols) planes, known everywhere, that enter the patch distance but are
-    not filled, e.g. an inpainted structure image). ``seed``
-    (default 0) fixes the random search.
+    not filled, e.g. an inpainted structure image), structure (weight of the coherence
+    fill of the hole as such a guide, so that edges crossing the hole are continued; None,
+    the default: 1, or 0 where the hole's surroundings are periodic),
+    stitch (True: re-solve the last vote's fill from its sources' gradients, stitch.py).
+    ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
     p = _params({"patch": patch, "search": search, "iterations": iterations,
                  "fine_iterations": fine_iterations, "passes": passes,
                  "features": features, "levels": levels, "onion_passes": onion_passes,
-                 "confidence": confidence})
+                 "confidence": confidence, "structure": structure})
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, copy=True)
@@ -347,6 +364,21 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
                              f"{data.shape[2]}) planes known everywhere, the hole included")
         guides = guide[(slice(None),) + box]
+    if structure is None:
+        # Automatic: the guide, unless the surroundings repeat (periodic texture, stripes),
+        # where copies can be exact and a smooth fill would pull them away (choose.py).
+        from .choose import MIN_PERIODICITY, periodicity
+
+        near = _box(hole, 24)
+        sw = 0.0 if periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY \
+            else 1.0
+    else:
+        sw = float(structure)
+    if sw > 0:
+        from . import coherence
+
+        filled = coherence.solve(colour, hole, runtime, dtype=dtype)
+        guides = sw * filled if guides is None else np.concatenate([guides, sw * filled])
     if min(hole.shape) < patch + 2:
         raise InputError(
             f"the region around the hole ({hole.shape[0]}x{hole.shape[1]} px) is smaller than "
@@ -399,11 +431,15 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         for it in range(its):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
             last = level == 0 and it == its - 1
-            lv.vote(best_only=bool(sharpen) and last)
+            sigma2 = lv.vote(best_only=bool(sharpen) and last)
         prev_nnf = lv.nnf_to_host()
         bar.update()
         if level == 0:
             result = lv.image()
+            if stitch and sharpen:
+                src = _stitch.vote_sources(prev_nnf, lv.dist.get().reshape(h.shape),
+                                           lv.pen.get().reshape(h.shape), h, r, sigma2)
+                result[:nc] = _stitch.stitch(result[:nc], h, src, r)
     bar.close()
     filled = out[(slice(None),) + box]
     filled[:, hole] = result[:nc][:, hole].astype(out.dtype)

@@ -95,6 +95,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     u_filled = np.asarray(_structure_solver(structure)(u, omega, runtime, dtype=dtype,
                                                       progress=progress, seed=seed), np.float64)
     guide_planes = guide * u_filled if guide > 0 else None
+    # the texture's own search is guided by u (above), not by a structure fill of v
+    exemplar_params.setdefault("structure", 0.0)
     v_filled = exemplar.solve(v, omega, runtime, dtype=dtype, progress=progress, seed=seed,
                               guide=guide_planes, **exemplar_params)
     total = np.clip(u_filled + v_filled, 0.0, 1.0)

@@ -1,0 +1,109 @@
+"""What `method="auto"` runs on each box of the mask: a structure method or the exemplar.
+
+A diffusion or transport continues the smooth part of the border into the hole; patches
+bring back texture. Which wins depends on the hole and its surroundings, which are measured
+on the host, in proportion to the box:
+
+- ``radius``: the hole's half-thickness, the largest distance of a hole pixel to the known
+  ones (Euclidean). Thin holes (text, scratches) are filled well by a structure method from
+  the pixels a few steps away; patches have little to add there.
+- ``texture``: how much fine texture surrounds the hole. On the ring of known pixels within
+  RING pixels of the hole, the grey image minus its local mean (a normalised Gaussian of
+  the known pixels, sigma SMOOTH, so that the hole's values never count) leaves the detail
+  that a smooth fill cannot make; ``texture`` is its root mean square, in [0, 1] units.
+- ``periodicity``: how well the surroundings repeat themselves. The same detail image, on
+  the known pixels of the box, is correlated with itself shifted by every lag of LAGS
+  pixels (normalised over the pixels both copies know, by FFTs); ``periodicity`` is the
+  largest correlation, 1 for a pattern that repeats exactly (a periodic texture, stripes,
+  a straight edge), near 0 for stochastic texture and most photos.
+
+The rule (`pick`): surroundings that repeat (periodicity >= MIN_PERIODICITY) go to the
+exemplar whatever the hole's size, without a structure guide (a copy can be exact there,
+and the guide, a smooth fill, would pull it away); holes at least MIN_RADIUS thick in
+surroundings with some detail (texture >= MIN_TEXTURE) go to the exemplar with the
+structure guide; the others (text, scratches, smooth surroundings) stay with the structure
+method. Measured by benchmarks/inpaint_auto_calibrate.py on 50 cases (docs/
+inpainting_texture.md has the table): the texture threshold is a guard for smooth
+surroundings (sky, a clock's face: the structure fill is 1-2 dB better there), on a plateau
+from 0.005 to 0.008; at 0.01 and above it loses 0.4 dB on 20-30 px blobs in photos, where
+the patch fill wins even on moderately textured ground.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import fft as sfft
+from scipy import ndimage
+
+RING = 8  # width of the ring of known pixels around the hole that is measured, in pixels
+SMOOTH = 2.0  # sigma of the local mean removed before measuring the texture, in pixels
+LAGS = (6, 32)  # the lags (chessboard distance, pixels) over which periodicity is sought
+# The rule's thresholds (benchmarks/inpaint_auto_calibrate.py):
+MIN_RADIUS = 6.0  # holes thinner than this stay with the structure method
+MIN_PERIODICITY = 0.9  # surroundings that repeat this well are copied without a guide
+MIN_TEXTURE = 0.005  # rms detail (in [0, 1]) below which surroundings count as smooth
+
+
+def _detail(data: np.ndarray, known: np.ndarray):
+    """The grey image minus its local mean over the known pixels (0 where unknown), and the
+    pixels where that mean is reliable (half its Gaussian weight known)."""
+    grey = np.where(known, np.asarray(data, np.float32).mean(axis=0), 0).astype(np.float32)
+    w = ndimage.gaussian_filter(known.astype(np.float32), SMOOTH, mode="constant", truncate=3)
+    mean = ndimage.gaussian_filter(grey, SMOOTH, mode="constant", truncate=3) / np.maximum(w, 1e-6)
+    return np.where(known, grey - mean, 0.0), known & (w > 0.5)
+
+
+def periodicity(data: np.ndarray, omega: np.ndarray) -> float:
+    """Largest normalised autocorrelation of the detail of the known pixels over the lags
+    LAGS (module docstring); 0 when too little is known."""
+    return _periodicity(*_detail(data, ~np.asarray(omega, bool)))
+
+
+def _periodicity(detail, ok) -> float:
+    d = np.where(ok, detail, 0).astype(np.float32)
+    k = ok.astype(np.float32)
+    H, W = d.shape
+    hi = LAGS[1]
+    # zero padding by the largest lag: no wrap-around within the lags looked at
+    shape = (sfft.next_fast_len(H + hi + 1, True), sfft.next_fast_len(W + hi + 1, True))
+    fd, fd2, fk = (sfft.rfft2(a, shape) for a in (d, d * d, k))
+
+    def corr(fa, fb):
+        return sfft.irfft2(fa * np.conj(fb), shape)
+
+    num, e1, e2, count = corr(fd, fd), corr(fd2, fk), corr(fk, fd2), corr(fk, fk)
+    ty = np.abs(sfft.fftfreq(shape[0], 1 / shape[0]))[:, None]
+    tx = np.abs(sfft.fftfreq(shape[1], 1 / shape[1]))[None, :]
+    lag = np.maximum(ty, tx)
+    # lags whose overlap holds at least a quarter of the known pixels, and some detail
+    use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
+    use &= np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1)
+    if not use.any():
+        return 0.0
+    a = num[use] / np.sqrt(e1[use] * e2[use])
+    return float(a.max())
+
+
+def features(data: np.ndarray, omega: np.ndarray) -> dict:
+    """{"radius", "texture", "periodicity"} of the hole ``omega`` in ``data`` ((channels,
+    rows, cols) in [0, 1]; values inside omega are not read)."""
+    omega = np.asarray(omega, bool)
+    if not omega.any():
+        return {"radius": 0.0, "texture": 0.0, "periodicity": 0.0}
+    known = ~omega
+    depth = ndimage.distance_transform_edt(np.pad(omega, 1))[1:-1, 1:-1]
+    detail, ok = _detail(data, known)
+    ring = known & (ndimage.distance_transform_edt(known) <= RING)
+    texture = float(np.sqrt(np.mean(detail[ring].astype(np.float64) ** 2))) if ring.any() else 0.0
+    return {"radius": float(depth.max()), "texture": texture,
+            "periodicity": _periodicity(detail, ok)}
+
+
+def pick(measured: dict, structure: str):
+    """(method, options) for one box: the exemplar (with or without the structure guide) or
+    ``structure``, by the rule of the module docstring."""
+    if measured["periodicity"] >= MIN_PERIODICITY:
+        return "exemplar", {"structure": 0.0}
+    if measured["radius"] >= MIN_RADIUS and measured["texture"] >= MIN_TEXTURE:
+        return "exemplar", {"structure": 1.0}
+    return structure, {}
