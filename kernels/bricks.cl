@@ -197,6 +197,50 @@ INLINE REAL tile_heat_div(TILE const REAL* u, __global const REAL* p, const int 
                     to[(z * BYA + y) * BXA + x] = from[(z * BYA + y) * BXA + x];          \
     }
 
+// The fluxes of a brick, each computed once (CPU path). A cell's divergence takes the flux at
+// the cell and at the cells one step back along each axis (i - ex, i - ey, i - ez), which
+// are the fluxes of its neighbours: per brick the fluxes of the brick's cells and of the one
+// layer of cells behind its low (sx, sy, sz > 0) or high faces, (BX + 1) (BY + 1) (BZ + 1)
+// of them, instead of four per cell (tile_heat_div). The same tile_flux on the same cells,
+// so the same values; flux rows no updated row reads are skipped.
+#define FX (BX + 1)
+#define FXY (FX * (BY + 1))
+#define FLUX_CELLS (FXY * (BZ + 1))
+
+// Whether row (y, z) of the brick holds a node (false outside the brick).
+INLINE bool node_row(__global const uchar* restrict rows, const int b, const int y, const int z)
+{
+    return y >= 0 && y < BY && z >= 0 && z < BZ && rows[b * BY * BZ + z * BY + y];
+}
+
+// The fluxes of the cells (x, y, z), x in [lo, lo + BX] (lo = -1 for a forward gradient,
+// sx > 0, else 0; the same along y and z), into f: three components, FLUX_CELLS apart.
+INLINE void brick_fluxes(REAL* f, TILE const REAL* u, __global const REAL* p,
+                         __global const uchar* restrict rows, const int b, const int dx,
+                         const int dy, const int dz)
+{
+    const int ex = dx, ey = dy * TILE_X(1), ez = dz * TILE_XY(1);
+    const int usx = TILE_X(1), usxy = TILE_XY(1), sx = TILE_X(2), sxy = TILE_XY(2);
+    const int lx = dx > 0 ? -1 : 0, ly = dy > 0 ? -1 : 0, lz = dz > 0 ? -1 : 0;
+    for (int fz = 0; fz <= BZ; ++fz)
+        for (int fy = 0; fy <= BY; ++fy) {
+            const int y = fy + ly, z = fz + lz;
+            // rows y + dy, z + dz read this flux row one step back; row y, z itself too
+            if (!node_row(rows, b, y, z) && !node_row(rows, b, y + dy, z) &&
+                !node_row(rows, b, y, z + dz)) continue;
+            for (int fx = 0; fx <= BX; ++fx) {
+                const int x = fx + lx;
+                REAL w[3];
+                tile_flux(u, p, TILE_AT(1, x, y, z), TILE_AT(2, x, y, z), ex, ey, ez, usx, usxy,
+                          sx, sxy, w);
+                const int k = (fz * (BY + 1) + fy) * FX + fx;
+                f[k] = w[0];
+                f[FLUX_CELLS + k] = w[1];
+                f[2 * FLUX_CELLS + k] = w[2];
+            }
+        }
+}
+
 // psi: the psi tiles (BrickBand.scatter with halo 2: per brick its cells and those within 2
 // of its faces, the tile layout). One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
 // NODE cell (the other cells' values are never read: re-extension reads nodes only). sx, sy,
@@ -215,6 +259,10 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
     __local REAL ut[TILE_CELLS(1)];
 #else
     REAL ut[TILE_CELLS(1)];
+    REAL f[3 * FLUX_CELLS];
+    // the flux cell of brick cell (0, 0, 0), and the flux offsets one step back along x, y, z
+    const int f0 = ((sz > 0) * (BY + 1) + (sy > 0)) * FX + (sx > 0);
+    const int fex = sx, fey = sy * FX, fez = sz * FXY;
 #endif
     FOR_EACH_BRICK(b, BIT_NODE) {
         load_tile(ut, u + chan, nbr, b, 1);
@@ -225,15 +273,30 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
         const int before[8] = {b, nb[12], nb[10], nb[9], nb[4], nb[3], nb[1], nb[0]};
 #if GROUP_PER_BRICK
         FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(1, x, y, z);
+            const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
 #else
+        brick_fluxes(f, ut, pt, rows, b, sx, sy, sz);
         // rows along x without a node are skipped whole (their values are never read)
         for (int z = 0; z < BZ; ++z)
             for (int y = 0; y < BY; ++y) {
                 if (!rows[b * BY * BZ + z * BY + y]) continue;
                 for (int x = 0; x < BX; ++x) {
-#endif
             const int i = TILE_AT(1, x, y, z);
-            const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
+            const int k = f0 + (z * (BY + 1) + y) * FX + x;
+            // tile_heat_div's sum, with the fluxes looked up
+            REAL div = ONE_SIDED_SIGN(sx) * (f[k] - f[k - fex]) +
+                       ONE_SIDED_SIGN(sy) * (f[FLUX_CELLS + k] - f[FLUX_CELLS + k - fey]) +
+                       ONE_SIDED_SIGN(sz) * (f[2 * FLUX_CELLS + k] - f[2 * FLUX_CELLS + k - fez]);
+#if WEIGHTED
+            const int q = TILE_AT(2, x, y, z), psx = TILE_X(2), psxy = TILE_XY(2);
+            const REAL nx = (REAL)0.5 * (pt[q + 1] - pt[q - 1]);
+            const REAL ny = (REAL)0.5 * (pt[q + psx] - pt[q - psx]);
+            const REAL nz = (REAL)0.5 * (pt[q + psxy] - pt[q - psxy]);
+            div *= RSQRT(nx * nx + ny * ny + nz * nz + (REAL)1e-30);
+#endif
+            const REAL val = ut[i] + r * div;
+#endif
             vc[b * BVA + (z * BYA + y) * BXA + x] = val;
 #if GROUP_PER_BRICK
             // each work-item copies its own value into the aprons it belongs to

@@ -102,9 +102,10 @@ class ImplicitSurface:
         check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
         # the band storage of heat (the flow that has both): "lists" (band lists over the dense
         # grid) or "bricks" (bricks.py); lists stay the default while bricks do not measure
-        # faster (benchmarks/surface_accuracy.py --sections 6: on PoCL, 2 cores, 8x8x8
-        # bricks took 0.83-1.09x the lists' time per step at 217^3 and 256^3, 1.2-1.6x on
-        # smaller grids; docs/surfaces.md)
+        # faster where surfaces are mostly run (benchmarks/brick_roofline.py: on PoCL, 2
+        # cores, 8x8x8 bricks took 0.81-0.96x the lists' time per step from 217^3 to 512^3,
+        # 1.16-1.81x at 64^3 and 128^3, and their host set-up is 10x the lists' at 512^3;
+        # docs/surfaces.md)
         self._storage = "lists"
         self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
