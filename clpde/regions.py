@@ -155,8 +155,10 @@ class RegionTracker:
         rt, mode = self.runtime, self.mode
         self._k = {
             "region_speed": rt.kernel("regions.cl", "region_speed", g.dtype, SPEED=mode),
-            "region_stage": rt.kernel("regions.cl", "region_stage", g.dtype, SPEED=mode,
+            "region_euler": rt.kernel("regions.cl", "region_euler", g.dtype, SPEED=mode,
                                       NC=self.nc),
+            "region_heun": rt.kernel("regions.cl", "region_heun", g.dtype, SPEED=mode,
+                                     NC=self.nc),
             "advect_step": rt.kernel("regions.cl", "advect_step", g.dtype, SPEED=mode),
             "reinit3d_step": rt.kernel("regions.cl", "reinit3d_step", g.dtype, SPEED=mode),
             "band_near_border": rt.kernel("regions.cl", "band_near_border", g.dtype, SPEED=mode),
@@ -190,7 +192,7 @@ class RegionTracker:
         # exactly the band's cells: cells outside it must keep their values
         self.step_runs = g.runs(self.step_band, pad=1)
         self.reinit_runs = g.runs(self.reinit_band, pad=1)
-        # max |V| of each work-item of region_stage, both stages (see stable_dt)
+        # max |V| of each work-item of region_euler and region_heun (see stable_dt)
         (items,), _, _ = self.runtime.list_launch(max(self.step_runs.n, 1))
         self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
         self._stats_fresh = False
@@ -309,22 +311,21 @@ class RegionTracker:
                       g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
                       *self._cutoff(), *g.strides(), channels=self.nc)
 
-    def _stage(self, src, dst, dt, second) -> None:
+    def _stage(self, name, src, dst, dt) -> None:
         """One Euler stage of every level set over the step band, the speed computed from
-        src in the same sweep (region_stage); second: Heun's averaging into dst."""
+        src in the same sweep: region_euler, or region_heun (Heun's averaging into dst)."""
         g = self.grid
-        g.launch_runs(self._k["region_stage"], self.step_runs, src.data, self.aux.data,
-                      dst.data, self._stats.data, g.scalar(dt), g.scalar(1e-12),
-                      *self._cutoff(), g.scalar(self.scale), g.scalar(self.vmax),
-                      np.int32(second), *g.strides())
+        g.launch_runs(self._k[name], self.step_runs, src.data, self.aux.data, dst.data,
+                      self._stats.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
+                      g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
 
     def step(self, dt: float) -> None:
         """One Heun (TVD Runge-Kutta 2) step of every level set."""
         g = self.grid
         if self.velocity is None:
             # two fused sweeps: cur -> nxt, then cur <- (cur + nxt + dt L(nxt)) / 2 in place
-            self._stage(self.cur, self.nxt, dt, 0)
-            self._stage(self.nxt, self.cur, dt, 1)
+            self._stage("region_euler", self.cur, self.nxt, dt)
+            self._stage("region_heun", self.nxt, self.cur, dt)
             self._stats_fresh = True
         else:
             self._advect(self.cur, self.nxt, dt)
