@@ -137,7 +137,8 @@ __kernel void region_step(__global const REAL* restrict ls, __global const REAL*
 // in place): out = (out + ls + dt L(ls)) / 2, where out holds the step's start (read and
 // written only at the cell itself, so race-free). Two kernels, not a flag: a select between
 // the two stores kept the loop scalar. stats[n * second + g] = max |V| over work-item g's
-// cells (n items), for the host's next stable time step without a sweep of its own.
+// cells inside the band (n items), for the host's next stable time step without a sweep of
+// its own. Cells where |Phi| >= hi keep their values (band_cutoff is 0 there).
 INLINE void region_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
                          __global REAL* restrict out, __global REAL* restrict stats,
                          const REAL dt, const REAL eps2, const REAL lo, const REAL hi,
@@ -150,7 +151,8 @@ INLINE void region_stage(__global const REAL* restrict ls, __global const REAL* 
     REAL_BITS fastest = 0;
     FOR_EACH_RUN_CELL(i) {
         const REAL speed = region_speed_at(ls, aux, i, scale, vmax, sx, sxy);
-        const REAL_BITS bits = AS_BITS(FABS(speed));
+        // only cells inside the band count (|Phi| < hi): the host may lengthen runs past it
+        const REAL_BITS bits = FABS(ls[i]) < hi ? AS_BITS(FABS(speed)) : 0;
         fastest = bits > fastest ? bits : fastest;
         const REAL v0 = speed * band_cutoff(ls[i], lo, hi);
         CENTRAL_GRAD(ls, i, fx, fy, fz);
