@@ -68,6 +68,14 @@ REINIT_DT = 0.45
 EXTEND_DT = 0.5
 EXTEND_ITERATIONS = 10
 EXTEND_FROM = (0.8, 1.5)
+# When the surface moved only part of the tracker's reinit_distance since the last
+# reinitialisation (a slow flow, or a block cut short at a saved time), that part of the
+# iterations, but at least these: 2 Heun iterations (0.9 cells of pseudo-time) and 4
+# extension steps (2 cells). At 256^3 a curvature flow moves 0.004 cells a step, so the
+# reinitialisation after 32 steps takes 2 + 4 instead of 6 + 10; the tests' curvature
+# flows and caps moved by 0.02% at most (benchmarks/regions.py, docs/regions.md).
+MIN_REINIT_ITERATIONS = 2
+MIN_EXTEND_ITERATIONS = 4
 
 __all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_region"]
 
@@ -236,10 +244,15 @@ class RegionTracker:
             src, dst = dst, src
         return step, compact(self.runtime, src)
 
-    def reinitialize(self, iterations: int | None = None) -> None:
-        """Every level set back to a signed distance in the reinitialisation band."""
+    def reinitialize(self, iterations: int | None = None,
+                     extension: int | None = None) -> None:
+        """Every level set back to a signed distance in the reinitialisation band:
+        `iterations` Heun iterations (default reinit_iterations) after `extension` steps of
+        the Phi-hat's extension along the normals (default EXTEND_ITERATIONS; none when
+        iterations is 0)."""
         g = self.grid
         its = self.reinit_iterations if iterations is None else int(iterations)
+        ext = EXTEND_ITERATIONS if extension is None else int(extension)
         band, k = self.reinit_runs, self._k
         # the band holds every cell written since the last sync (steps write the step band,
         # inside it), so syncing it keeps the work buffers equal to cur everywhere. The
@@ -247,7 +260,7 @@ class RegionTracker:
         # Phi's is copied; nxt is written anew by the first reinitialisation stage after.
         self._sync(self.nxt, channels=1)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
-        for _ in range(EXTEND_ITERATIONS if its else 0):
+        for _ in range(ext if its else 0):
             g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
                           g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
@@ -369,8 +382,17 @@ class RegionTracker:
             done = self.time >= until - 1e-12
             if (self.aux_at is not None or self._moved >= self.reinit_distance * (1 - 1e-6)
                     or (done and self._moved > 0)):
-                self.reinitialize()
+                self._reinitialize_for(self._moved / self.reinit_distance)
             dt = self.stable_dt()
+
+    def _reinitialize_for(self, share: float) -> None:
+        """Reinitialise with `share` (<= 1) of the full iterations, at least the minimum:
+        the surface moved that share of reinit_distance since the last time."""
+        def part(full, least):
+            return min(full, max(least, int(np.ceil(full * min(1.0, share) - 1e-6))))
+
+        self.reinitialize(part(self.reinit_iterations, MIN_REINIT_ITERATIONS),
+                          part(EXTEND_ITERATIONS, MIN_EXTEND_ITERATIONS))
 
     def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
                 keep_volumes: bool = False, palette: ArrayLike | None = None,
