@@ -9,8 +9,8 @@ in one run.
    advance` runs 32 steps, reinitialisations included (the one `advance` ends with too);
    the time per step is the total over 32, the fastest of 3 such runs (the constant flow
    turning back each run), after a warm-up advance that compiles every kernel. The
-   yardstick is one device copy of the tracker's whole padded volume (every level set). With --baseline DIR the same measurement runs in a subprocess on the clpde
-   sources in DIR (`git archive <commit> | tar -x -C DIR`), alternating with this tree's
+   yardstick is one device copy of the tracker's whole padded volume (every level set).
+   With --baseline DIR the same measurement runs in a subprocess on the clpde sources in DIR (`git archive <commit> | tar -x -C DIR`), alternating with this tree's
    (A B A B), so the ratios come from one run under the same load; the load average is
    printed with each row.
 2. Cap accuracy (this tree): a sphere of radius 0.9 with the cap z > 0.45 (angular radius
