@@ -10,9 +10,10 @@ in one run.
    the time per step is the total over 32, the fastest of 3 such runs (the constant flow
    turning back each run), after a warm-up advance that compiles every kernel. The
    yardstick is one device copy of the tracker's whole padded volume (every level set).
-   With --baseline DIR the same measurement runs in a subprocess on the clpde sources in DIR (`git archive <commit> | tar -x -C DIR`), alternating with this tree's
-   (A B A B), so the ratios come from one run under the same load; the load average is
-   printed with each row.
+   With --baseline DIR the same measurement runs in a subprocess on the clpde sources in
+   DIR (`git archive <commit> | tar -x -C DIR`), alternating with this tree's (A B A B), so
+   the ratios come from one run under the same load; the load average is printed with each
+   row.
 2. Cap accuracy (this tree): a sphere of radius 0.9 with the cap z > 0.45 (angular radius
    60 degrees, 1/4 of the area) expanding at unit speed 0.5 for t = 0.5, at several
    spacings: relative error of the cap's area fraction at the end, with triangles split
