@@ -7,7 +7,8 @@ evolve on the same grid, in a narrow band around S, with kernels/regions.cl:
     Phi_t     = V |grad Phi|                                  (upwind, slope-limited)
     Phi-hat_t = V (N_Phi . N_Phi-hat) |grad Phi-hat|           (the projected velocity)
 
-and are reinitialised to signed distances every few steps. V comes from beta, the outward
+and are reinitialised to signed distances once the surface may have moved a cell or two
+(every few steps at the CFL limit, rarely for slow flows). V comes from beta, the outward
 normal speed of S: a constant, the mean curvature (kappa = k1 + k2, mean curvature flow), the
 positive part of the Gaussian curvature (towards the centres of curvature, so folds
 flatten), morphing toward a target shape, or a user array, fixed or re-sampled in time
@@ -67,6 +68,14 @@ REINIT_DT = 0.45
 EXTEND_DT = 0.5
 EXTEND_ITERATIONS = 10
 EXTEND_FROM = (0.8, 1.5)
+# When the surface moved only part of the tracker's reinit_distance since the last
+# reinitialisation (a slow flow, or a block cut short at a saved time), that part of the
+# iterations, but at least these: 2 Heun iterations (0.9 cells of pseudo-time) and 4
+# extension steps (2 cells). At 256^3 a curvature flow moves 0.004 cells a step, so the
+# reinitialisation after 32 steps takes 2 + 4 instead of 6 + 10; the tests' curvature
+# flows and caps moved by 0.02% at most (benchmarks/regions.py, docs/regions.md).
+MIN_REINIT_ITERATIONS = 2
+MIN_EXTEND_ITERATIONS = 4
 
 __all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_region"]
 
@@ -100,6 +109,9 @@ class RegionTracker:
     auxiliary functions. speed: one of SPEEDS with `scale` converting it to grid units, or
     velocity (cells per unit time) for rigid translation. band_width: half-width in cells of the
     band that is stepped; reinitialisation covers the band dilated by `reinit_ring` cells.
+    Steps go in blocks of `reinit_every`; after a block the level sets are reinitialised
+    once the surface may have moved `reinit_every * cfl` cells since the last time (every
+    block at the CFL limit; far less often for slow flows: see advance).
     aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     """
@@ -155,8 +167,10 @@ class RegionTracker:
         rt, mode = self.runtime, self.mode
         self._k = {
             "region_speed": rt.kernel("regions.cl", "region_speed", g.dtype, SPEED=mode),
-            "region_stage": rt.kernel("regions.cl", "region_stage", g.dtype, SPEED=mode,
+            "region_euler": rt.kernel("regions.cl", "region_euler", g.dtype, SPEED=mode,
                                       NC=self.nc),
+            "region_heun": rt.kernel("regions.cl", "region_heun", g.dtype, SPEED=mode,
+                                     NC=self.nc),
             "advect_step": rt.kernel("regions.cl", "advect_step", g.dtype, SPEED=mode),
             "reinit3d_step": rt.kernel("regions.cl", "reinit3d_step", g.dtype, SPEED=mode),
             "band_near_border": rt.kernel("regions.cl", "band_near_border", g.dtype, SPEED=mode),
@@ -186,11 +200,15 @@ class RegionTracker:
         the reinitialisation band: every write lands in it (reinitialize syncs it)."""
         g = self.grid
         self.step_band, self.reinit_band = self._bands()
-        # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs),
-        # exactly the band's cells: cells outside it must keep their values
-        self.step_runs = g.runs(self.step_band, pad=1)
+        # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs).
+        # The step's runs are lengthened to whole vectors (16 cells) where the row allows:
+        # the extra cells lie outside the band, where band_cutoff is exactly 0, so their
+        # values stay as they are (2/3 of the time per stage measured at 256^3, runs of 20
+        # cells on average). The reinitialisation's runs are exactly its band's cells:
+        # cells outside it must keep their values.
+        self.step_runs = g.runs(self.step_band, pad=16)
         self.reinit_runs = g.runs(self.reinit_band, pad=1)
-        # max |V| of each work-item of region_stage, both stages (see stable_dt)
+        # max |V| of each work-item of region_euler and region_heun (see stable_dt)
         (items,), _, _ = self.runtime.list_launch(max(self.step_runs.n, 1))
         self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
         self._stats_fresh = False
@@ -226,10 +244,15 @@ class RegionTracker:
             src, dst = dst, src
         return step, compact(self.runtime, src)
 
-    def reinitialize(self, iterations: int | None = None) -> None:
-        """Every level set back to a signed distance in the reinitialisation band."""
+    def reinitialize(self, iterations: int | None = None,
+                     extension: int | None = None) -> None:
+        """Every level set back to a signed distance in the reinitialisation band:
+        `iterations` Heun iterations (default reinit_iterations) after `extension` steps of
+        the Phi-hat's extension along the normals (default EXTEND_ITERATIONS; none when
+        iterations is 0)."""
         g = self.grid
         its = self.reinit_iterations if iterations is None else int(iterations)
+        ext = EXTEND_ITERATIONS if extension is None else int(extension)
         band, k = self.reinit_runs, self._k
         # the band holds every cell written since the last sync (steps write the step band,
         # inside it), so syncing it keeps the work buffers equal to cur everywhere. The
@@ -237,7 +260,7 @@ class RegionTracker:
         # Phi's is copied; nxt is written anew by the first reinitialisation stage after.
         self._sync(self.nxt, channels=1)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
-        for _ in range(EXTEND_ITERATIONS if its else 0):
+        for _ in range(ext if its else 0):
             g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
                           g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
@@ -309,22 +332,21 @@ class RegionTracker:
                       g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
                       *self._cutoff(), *g.strides(), channels=self.nc)
 
-    def _stage(self, src, dst, dt, second) -> None:
+    def _stage(self, name, src, dst, dt) -> None:
         """One Euler stage of every level set over the step band, the speed computed from
-        src in the same sweep (region_stage); second: Heun's averaging into dst."""
+        src in the same sweep: region_euler, or region_heun (Heun's averaging into dst)."""
         g = self.grid
-        g.launch_runs(self._k["region_stage"], self.step_runs, src.data, self.aux.data,
-                      dst.data, self._stats.data, g.scalar(dt), g.scalar(1e-12),
-                      *self._cutoff(), g.scalar(self.scale), g.scalar(self.vmax),
-                      np.int32(second), *g.strides())
+        g.launch_runs(self._k[name], self.step_runs, src.data, self.aux.data, dst.data,
+                      self._stats.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
+                      g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
 
     def step(self, dt: float) -> None:
         """One Heun (TVD Runge-Kutta 2) step of every level set."""
         g = self.grid
         if self.velocity is None:
             # two fused sweeps: cur -> nxt, then cur <- (cur + nxt + dt L(nxt)) / 2 in place
-            self._stage(self.cur, self.nxt, dt, 0)
-            self._stage(self.nxt, self.cur, dt, 1)
+            self._stage("region_euler", self.cur, self.nxt, dt)
+            self._stage("region_heun", self.nxt, self.cur, dt)
             self._stats_fresh = True
         else:
             self._advect(self.cur, self.nxt, dt)
@@ -360,8 +382,17 @@ class RegionTracker:
             done = self.time >= until - 1e-12
             if (self.aux_at is not None or self._moved >= self.reinit_distance * (1 - 1e-6)
                     or (done and self._moved > 0)):
-                self.reinitialize()
+                self._reinitialize_for(self._moved / self.reinit_distance)
             dt = self.stable_dt()
+
+    def _reinitialize_for(self, share: float) -> None:
+        """Reinitialise with `share` (<= 1) of the full iterations, at least the minimum:
+        the surface moved that share of reinit_distance since the last time."""
+        def part(full, least):
+            return min(full, max(least, int(np.ceil(full * min(1.0, share) - 1e-6))))
+
+        self.reinitialize(part(self.reinit_iterations, MIN_REINIT_ITERATIONS),
+                          part(EXTEND_ITERATIONS, MIN_EXTEND_ITERATIONS))
 
     def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
                 keep_volumes: bool = False, palette: ArrayLike | None = None,

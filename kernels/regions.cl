@@ -121,23 +121,39 @@ __kernel void region_step(__global const REAL* restrict ls, __global const REAL*
 #ifndef NC
 #define NC 2  // level sets: Phi and the Phi-hats
 #endif
+#ifdef REAL_IS_DOUBLE
+#define REAL_BITS long
+#define AS_BITS(x) as_long(x)
+#define AS_REAL(b) as_double(b)
+#else
+#define REAL_BITS int
+#define AS_BITS(x) as_int(x)
+#define AS_REAL(b) as_float(b)
+#endif
 // One Euler stage of every level set with the speed computed in place, one work-item walking
 // whole runs with every channel (launched with one channel): the separate sweeps of
 // region_speed, region_step and heun_average read and wrote the speed and a stage buffer
-// besides. second = 0: out = ls + dt L(ls); second = 1 (Heun's second stage, averaging
+// besides. region_euler: out = ls + dt L(ls); region_heun (Heun's second stage, averaging
 // in place): out = (out + ls + dt L(ls)) / 2, where out holds the step's start (read and
-// written only at the cell itself, so race-free). stats[n * second + g] = max |V| over
-// work-item g's cells (n items), for the host's next stable time step without a sweep.
-__kernel void region_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
-                           __global REAL* restrict out, __global REAL* restrict stats,
-                           const REAL dt, const REAL eps2, const REAL lo, const REAL hi,
-                           const REAL scale, const REAL vmax, const int second, const int sx,
-                           const int sxy, RUN_ARGS)
+// written only at the cell itself, so race-free). Two kernels, not a flag: a select between
+// the two stores kept the loop scalar. stats[n * second + g] = max |V| over work-item g's
+// cells inside the band (n items), for the host's next stable time step without a sweep of
+// its own. Cells where |Phi| >= hi keep their values (band_cutoff is 0 there).
+INLINE void region_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
+                         __global REAL* restrict out, __global REAL* restrict stats,
+                         const REAL dt, const REAL eps2, const REAL lo, const REAL hi,
+                         const REAL scale, const REAL vmax, const int sx, const int sxy,
+                         const int second, RUN_ARGS)
 {
-    REAL fastest = 0;
+    // max |V| on the bit patterns: for non-negative floats their order is the integers'
+    // order, and an integer maximum keeps the loop vectorisable (a floating-point one,
+    // without fast-math, kept it scalar)
+    REAL_BITS fastest = 0;
     FOR_EACH_RUN_CELL(i) {
         const REAL speed = region_speed_at(ls, aux, i, scale, vmax, sx, sxy);
-        fastest = FMAX(fastest, FABS(speed));
+        // only cells inside the band count (|Phi| < hi): the host may lengthen runs past it
+        const REAL_BITS bits = FABS(ls[i]) < hi ? AS_BITS(FABS(speed)) : 0;
+        fastest = bits > fastest ? bits : fastest;
         const REAL v0 = speed * band_cutoff(ls[i], lo, hi);
         CENTRAL_GRAD(ls, i, fx, fy, fz);
         const REAL f2 = fx * fx + fy * fy + fz * fz + eps2;
@@ -150,11 +166,25 @@ __kernel void region_stage(__global const REAL* restrict ls, __global const REAL
                 v *= (fx * ux + fy * uy + fz * uz) * RSQRT(f2 * (ux * ux + uy * uy + uz * uz + eps2));
             }
             const REAL next = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
-            out[j] = second ? (REAL)0.5 * (out[j] + next) : next;
+            if (second)
+                out[j] = (REAL)0.5 * (out[j] + next);
+            else
+                out[j] = next;
         }
     }
-    stats[get_global_size(0) * second + get_global_id(0)] = fastest;
+    stats[get_global_size(0) * second + get_global_id(0)] = AS_REAL(fastest);
 }
+
+#define REGION_STAGE_ARGS                                                                  \
+    __global const REAL* restrict ls, __global const REAL* restrict aux,                   \
+        __global REAL* restrict out, __global REAL* restrict stats, const REAL dt,         \
+        const REAL eps2, const REAL lo, const REAL hi, const REAL scale, const REAL vmax,  \
+        const int sx, const int sxy, RUN_ARGS
+#define REGION_STAGE_CALL(second)                                                          \
+    region_stage(ls, aux, out, stats, dt, eps2, lo, hi, scale, vmax, sx, sxy, second,     \
+                 run_start, run_end, nruns, plane, runs_per_item)
+__kernel void region_euler(REGION_STAGE_ARGS) { REGION_STAGE_CALL(0); }
+__kernel void region_heun(REGION_STAGE_ARGS) { REGION_STAGE_CALL(1); }
 
 // Rigid motion with velocity (ux, uy, uz) (cells per unit time), every channel:
 // u <- u - dt U . grad u with slope-limited upwind differences per axis. For Phi-hat this is

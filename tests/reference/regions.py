@@ -176,3 +176,18 @@ def reinit_heun(acc, stage1, u0, band, dt, nc, plane, sx, sxy):
         i = band + c * plane
         out[i] = 0.5 * (acc[i] + new[c])
     return out
+
+
+def region_stages(ls, aux, start, band, dt, eps2, lo, hi, scale, mode, vmax, nc, plane, sx,
+                  sxy):
+    """region_euler and region_heun: the speed from ls at the band cells (region_speed),
+    then region_step's update of every channel. Returns (euler, heun, max |V|): euler =
+    ls + dt L(ls) and heun = (start + ls + dt L(ls)) / 2 at the band cells, (nc, len(band)),
+    and max |V| over the band cells where |Phi| < hi (0 if none)."""
+    speed = np.zeros_like(ls[:plane])
+    v = region_speed(ls, aux, band, scale, mode, sx, sxy, vmax)
+    speed[band] = v
+    euler = region_step(ls, speed, band, dt, eps2, lo, hi, nc, plane, sx, sxy)
+    starts = np.stack([start[band + c * plane] for c in range(nc)])
+    inside = np.abs(ls[band]) < hi
+    return euler, 0.5 * (starts + euler), float(np.abs(v[inside]).max(initial=0.0))

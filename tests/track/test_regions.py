@@ -77,6 +77,33 @@ def test_region_step_matches_reference(runtime, rng, kind):
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])
+@pytest.mark.parametrize(("mode", "nc"), [(0, 2), (1, 3), (2, 2), (3, 2), (4, 1)])
+def test_fused_stages_match_reference(runtime, rng, kind, mode, nc):
+    """region_euler / region_heun: the speed computed in the sweep, every channel per
+    work-item, Heun's average in place, and max |V| per work-item in stats."""
+    data = _inputs(kind, rng, nc)
+    g, (ls, aux, start), runs, (ls_h, aux_h, start_h) = _setup(
+        runtime, [data, rng.normal(size=(1,) + SHAPE), data + rng.normal(size=data.shape)])
+    idx = runs.band.indices.get().astype(np.int64)
+    args = (g.scalar(0.3), g.scalar(1e-12), g.scalar(1.0), g.scalar(2.5), g.scalar(0.7),
+            g.scalar(0.9), *g.strides())
+    (items,), _, _ = runtime.list_launch(runs.n)
+    stats = cla.zeros(runtime.queue, 2 * items, g.dtype)
+    euler, heun, fastest = ref.region_stages(ls_h, aux_h, start_h, idx, 0.3, 1e-12, 1.0, 2.5,
+                                             0.7, mode, 0.9, nc, g.volume, g.sx, g.sxy)
+    outside = np.ones(g.volume, bool)
+    outside[idx] = False
+    for name, want, dst in (("region_euler", euler, ls.copy()), ("region_heun", heun, start)):
+        g.launch_runs(_kernel(runtime, name, SPEED=mode, NC=nc), runs, ls.data, aux.data,
+                      dst.data, stats.data, *args)
+        got = dst.get().reshape(nc, -1)
+        np.testing.assert_allclose(got[:, idx], want, rtol=1e-9, atol=1e-9)
+        before = ls_h if name == "region_euler" else start_h
+        np.testing.assert_array_equal(got[:, outside], before.reshape(nc, -1)[:, outside])
+    assert stats.get().max() == pytest.approx(fastest, rel=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
 def test_advect_and_reinit_match_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 2)
     g, (ls, ls0), runs, (ls_h, ls0_h) = _setup(runtime,
