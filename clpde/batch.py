@@ -409,11 +409,16 @@ def _gpu_indices(device) -> list[int]:
 #   temporary is mmapped, page-faulted in and unmapped again; that cost 25-35 ms of system
 #   time per task (10 000 extra page faults), a fifth of a task's CPU.
 # - No statistical profiler (it samples the task's stack every 10 ms for the dashboard,
-#   which clpde's clusters do not run): 10-13 ms of CPU per task on the worker's event loop.
+#   which clpde's clusters do not run): about 40 ms of CPU per second of a running task on
+#   the worker's event loop, 10-30 ms per task here.
+# - The event loops' health tick every 500 ms, not 20 ms: an idle 2-worker cluster then
+#   takes about 40 ms of CPU a second instead of 110 (client and scheduler 60 -> 20-30, each
+#   worker 20-38 -> 5-15), CPU that the tasks of a busy machine would otherwise lose.
 WORKER_CONFIG = {
     "distributed.worker.multiprocessing-method": "spawn",
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "500ms",
 }
 
 
