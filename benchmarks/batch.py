@@ -351,6 +351,8 @@ def main():
                 "kernel_seconds": best["kernel_seconds"],
                 "longest_task_seconds": best.get("longest_task_seconds"),
                 "cpu_per_task_s": cpu_task,
+                # cores the run received: its CPU over its wall time (2 = this whole machine)
+                "cores_used": best["cpu_seconds"] / best["seconds"],
                 "extra_cpu_per_task_s": cpu_task - serial["cpu_seconds"] / serial["tasks"],
                 "wall_overhead_per_task_s": overhead,
                 "load_average": [run["load_average"] for run in done],
@@ -365,8 +367,9 @@ def main():
         print(f"\n{n} cores; load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at "
               f"the end; {clip_name}; fastest of {args.repeat} round(s)\n")
         print("| workload | configuration | wall (s) | throughput | speed-up | start (s) | "
-              "kernels (s) | cpu / task (ms) | extra cpu / task (ms) | bitwise = serial |")
-        print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|")
+              "kernels (s) | cpu / task (ms) | extra cpu / task (ms) | cores used | "
+              "bitwise = serial |")
+        print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
         for r in rows:
             unit = "fps" if r["workload"] == "carphone" else "/s"
             equal = {None: "(reference)", True: "yes",
@@ -377,7 +380,7 @@ def main():
             print(f"| {r['workload']} | {r['configuration']} | {r['seconds']:.2f} | "
                   f"{r['per_second']:.2f} {unit} | {r['speedup_vs_serial_all_threads']:.2f}x | "
                   f"{start} | {r['kernel_seconds']:.2f} | {1000 * r['cpu_per_task_s']:.1f} | "
-                  f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {equal} |")
+                  f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {r['cores_used']:.2f} | {equal} |")
         result = {"cores": n, "load_average_at_start": load,
                   "load_average_at_end": os.getloadavg()[0], "clip": clip_name,
                   "photos": args.photos, "frames": args.frames, "repeat": args.repeat,
