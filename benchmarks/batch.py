@@ -179,26 +179,39 @@ def _cpu_seconds() -> float:
 
 
 # ---- clpde batch ----------------------------------------------------------------------------
-def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
-    """clpde batch (or the film pipeline) on a fresh local cluster; dask_defaults: with
-    Dask's own worker settings instead of clpde's (MALLOC_TRIM_THRESHOLD_ and the
-    profiler, see clpde.batch.WORKER_CONFIG), for the before/after of the overhead."""
-    import importlib
+def dask_cluster(workers: int, threads: int):
+    """The local cluster as Dask makes it (the "before" of clpde.batch.WORKER_CONFIG and of
+    the workers' malloc settings): spawned workers of one thread, PoCL's threads set, and
+    nothing else of clpde's."""
+    import dask
+    from distributed import LocalCluster
 
+    saved = dict(os.environ)
+    try:
+        with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
+            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                                silence_logs=50, env={"POCL_MAX_PTHREAD_COUNT": str(threads)})
+    finally:
+        # The nanny puts MALLOC_TRIM_THRESHOLD_ into this process's environment before it
+        # spawns a worker; the serial loops started later must not inherit it.
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
+    """clpde batch (or the film pipeline) on a fresh local cluster: clpde's, or with
+    dask_defaults the one of dask_cluster."""
     from distributed import Client
 
     from clpde.batch import batch, start_cluster
     from clpde.video import inpaint_sequence
 
-    module = importlib.import_module("clpde.batch")
-    saved = dict(module.WORKER_CONFIG)
-    if dask_defaults:
-        module.WORKER_CONFIG = {"distributed.worker.multiprocessing-method": "spawn"}
     start = time.perf_counter()
-    try:
+    if dask_defaults:
+        cluster = dask_cluster(workers, threads)
+    else:
         cluster, workers, threads = start_cluster(workers, threads)
-    finally:
-        module.WORKER_CONFIG = saved
     try:
         with Client(cluster, set_as_default=False) as client:
             client.wait_for_workers(workers, timeout=120)
@@ -224,8 +237,6 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
                 assert result.ok, result.failed
                 seconds, tasks = result.seconds, len(result.results)
                 task_seconds = sum(r.seconds for r in result.results)
-                # The slowest task is a worker's first: it builds the kernels (PoCL caches
-                # the binaries on disk, so this is loading them).
                 longest = max(r.seconds for r in result.results)
             cpu = sum(client.run(_cpu_seconds).values()) + _cpu_seconds() - cpu
     finally:
