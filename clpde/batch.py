@@ -194,14 +194,37 @@ def _run_into_folder(spec: dict, output: str) -> None:
 
 
 def dask_setup(worker) -> None:
-    """Worker preload (``preload=["clpde.batch"]``, ``dask worker --preload clpde.batch``):
+    """Worker preload (``preload=["clpde.batch"]``, ``dask worker --preload clpde.batch``).
+
     Ctrl-C in a terminal reaches every process of the group, but only the client should
     act on it: it cancels the batch and stops the workers it started, whose temporary
-    files it then removes."""
+    files it then removes. And the worker's malloc is set for image-sized arrays
+    (_malloc_for_arrays)."""
     import signal
 
     with contextlib.suppress(ValueError):  # not the main thread: nothing to do
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _malloc_for_arrays()
+
+
+def _malloc_for_arrays() -> None:
+    """Serve arrays of up to 32 MiB from glibc's heap, and keep up to 64 MiB of it free.
+
+    Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536, which also turns off
+    glibc's adaptive mmap threshold: every numpy temporary over 128 kB is then mmapped,
+    page-faulted in and unmapped again, 10 000 extra page faults and 25-35 ms of system time
+    per 512x512 inpainting (docs/batch.md). These two settings bring it back to 1-2 ms,
+    whatever the worker's environment (a `dask worker` started by hand too). Not glibc:
+    nothing to do."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+    except OSError:
+        return
+    m_trim_threshold, m_mmap_threshold = -1, -3  # glibc's malloc.h
+    libc.mallopt(m_mmap_threshold, 32 << 20)
+    libc.mallopt(m_trim_threshold, 64 << 20)
 
 
 # ---- hashes and the manifest ------------------------------------------------------------------
@@ -409,11 +432,16 @@ def _gpu_indices(device) -> list[int]:
 #   temporary is mmapped, page-faulted in and unmapped again; that cost 25-35 ms of system
 #   time per task (10 000 extra page faults), a fifth of a task's CPU.
 # - No statistical profiler (it samples the task's stack every 10 ms for the dashboard,
-#   which clpde's clusters do not run): 10-13 ms of CPU per task on the worker's event loop.
+#   which clpde's clusters do not run): about 40 ms of CPU per second of a running task on
+#   the worker's event loop, 10-30 ms per task here.
+# - The event loops' health tick every 500 ms, not 20 ms: an idle 2-worker cluster then
+#   takes about 40 ms of CPU a second instead of 110 (client and scheduler 60 -> 20-30, each
+#   worker 20-38 -> 5-15), CPU that the tasks of a busy machine would otherwise lose.
 WORKER_CONFIG = {
     "distributed.worker.multiprocessing-method": "spawn",
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "500ms",
 }
 
 
