@@ -1,7 +1,7 @@
 """Calibration of method="auto"'s choice between the structure method and the exemplar.
 
     python benchmarks/inpaint_auto_calibrate.py [--json PATH] [--classes text,thick,...]
-                                                [--rule]
+                                                [--methods M,...] [--rule]
 
 Runs every case of benchmarks/inpaint_quality.py (text, scratches and blobs over seven
 photos, the structure class, thick holes, and the texture, periodic and thick-hole cases of
@@ -15,8 +15,8 @@ squared error over the box's hole pixels. Then:
 - the table, per case, of each method's PSNR, SSIM (inside the mask) and edge energy, and
   the methods auto picked in its boxes;
 - with --rule, for a grid of thresholds, the mean PSNR per class of the composite that
-  picks per box by the rule (the calibration: the thresholds must hold on every class, not
-  on one picture).
+  picks per box by choose.pick's rule (the calibration: the thresholds must hold on every
+  class, not on one picture).
 """
 
 from __future__ import annotations
@@ -50,7 +50,8 @@ def methods():
 
     return {
         "coherence": clpde_run(method="coherence"),
-        "exemplar": clpde_run(method="exemplar"),
+        "exemplar": clpde_run(method="exemplar"),  # its structure guide automatic
+        "exemplar-plain": clpde_run(method="exemplar", structure=0.0),
         "exemplar-structure": clpde_run(method="exemplar", structure=1.0),
         "auto": clpde_run(method="auto"),
         "opencv-ns": lambda im, m: q.run_cv2(im, m, cv2.INPAINT_NS),
@@ -77,9 +78,12 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", type=Path, default=RESULTS)
     ap.add_argument("--classes", default="", help="comma-separated classes to run")
+    ap.add_argument("--methods", default="", help="comma-separated methods to run")
     ap.add_argument("--rule", action="store_true", help="evaluate a grid of thresholds")
     args = ap.parse_args(argv)
     table = methods()
+    if args.methods:
+        table = {k: v for k, v in table.items() if k in args.methods.split(",")}
     clpde_run(method="exemplar")(np.zeros((64, 64, 3), np.uint8), np.eye(64, dtype=bool))
     rows, boxes_rows = [], []
     for kind, name, image, mask in q.cases():
@@ -111,7 +115,8 @@ def main(argv=None):
             sse = {meth: float(((res[y0:y1, x0:x1][m].astype(np.float64)
                                  - image[y0:y1, x0:x1][m]) ** 2).sum())
                    for meth, res in results.items()}
-            boxes_rows.append({"class": kind, "case": name, "box": box, "n": int(m.sum()),
+            boxes_rows.append({"class": kind, "case": name, "box": box,
+                               "n": int(m.sum()) * (1 if image.ndim == 2 else image.shape[2]),
                                **f, "sse": sse})
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"rows": rows, "boxes": boxes_rows}, indent=1))
@@ -146,24 +151,34 @@ def print_table(rows):
 
 
 def rule_grid(boxes_rows):
-    """Mean PSNR per class of the per-box composite for a grid of thresholds."""
+    """Mean PSNR per class of the per-box composite of choose.pick's rule, for a grid of
+    its thresholds (each box takes the squared error of the method the rule names)."""
     classes = list(dict.fromkeys(b["class"] for b in boxes_rows))
-    print("\nPer-box composite (coherence, or exemplar where radius >= R and texture >= T):")
-    print("| R | T | " + " | ".join(classes) + " |")
-    print("|---|---|" + "---|" * len(classes))
-    for radius in (0, 4, 6, 8, 12):
-        for texture in (0.0, 0.01, 0.02, 0.03, 0.04, 0.06, 0.08, 1.0):
-            means = []
-            for kind in classes:
-                psnrs = []
-                for case in dict.fromkeys(b["case"] for b in boxes_rows if b["class"] == kind):
-                    bs = [b for b in boxes_rows if b["class"] == kind and b["case"] == case]
-                    sse = sum(b["sse"]["exemplar" if b["radius"] >= radius
-                                       and b["texture"] >= texture else "coherence"] for b in bs)
-                    n = sum(b["n"] for b in bs)
-                    psnrs.append(min(60.0, 10 * np.log10(255.0 ** 2 / max(sse / n, 1e-12))))
-                means.append(f"{np.mean(psnrs):.2f}")
-            print(f"| {radius} | {texture} | " + " | ".join(means) + " |")
+
+    def rule(b, radius, texture, periodic):
+        if b["periodicity"] >= periodic:
+            return "exemplar-plain"
+        return "exemplar-structure" if b["radius"] >= radius and b["texture"] >= texture \
+            else "coherence"
+
+    print("\nPer-box composite of the rule, mean PSNR per class (R: MIN_RADIUS, T: "
+          "MIN_TEXTURE, P: MIN_PERIODICITY):")
+    print("| R | T | P | " + " | ".join(classes) + " |")
+    print("|---|---|---|" + "---|" * len(classes))
+    grid = [(6, t, 0.9) for t in (0, 0.002, 0.005, 0.008, 0.01, 0.02, 0.04)]
+    grid += [(r, 0.005, 0.9) for r in (0, 4, 5, 8, 12)]
+    grid += [(6, 0.005, p) for p in (0.8, 0.85, 0.95, 1.01)]
+    for radius, texture, periodic in grid:
+        means = []
+        for kind in classes:
+            psnrs = []
+            for case in dict.fromkeys(b["case"] for b in boxes_rows if b["class"] == kind):
+                bs = [b for b in boxes_rows if b["class"] == kind and b["case"] == case]
+                sse = sum(b["sse"][rule(b, radius, texture, periodic)] for b in bs)
+                n = sum(b["n"] for b in bs)
+                psnrs.append(min(60.0, 10 * np.log10(255.0 ** 2 / max(sse / n, 1e-12))))
+            means.append(f"{np.mean(psnrs):.2f}")
+        print(f"| {radius} | {texture} | {periodic} | " + " | ".join(means) + " |")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@
 
 Writes inpaint_texture.png (texture cases) and inpaint_thick.png (thick holes in photos):
 one row per case, cropped around the holes: the damaged image (holes in black),
-biharmonic, clpde's exemplar, clpde's structure-texture, the original.
+biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (method="auto"),
+the original.
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from inpaint_texture_cases import texture_cases  # noqa: E402
 from inpaint_texture_quick import biharmonic, clpde_method  # noqa: E402
 
-COLUMNS = ["damaged", "biharmonic", "exemplar", "structure-texture", "original"]
+COLUMNS = ["damaged", "biharmonic", "exemplar", "structure-texture", "default (auto)",
+           "original"]
 
 
 def _rgb8(a):
@@ -39,7 +41,7 @@ def _row(case, pad=24, size=200):
     damaged = _rgb8(img).copy()
     damaged[mask] = 0
     tiles = [damaged, biharmonic(img, mask), clpde_method("exemplar")(img, mask),
-             clpde_method("structure-texture")(img, mask), img]
+             clpde_method("structure-texture")(img, mask), clpde_method("auto")(img, mask), img]
     out = []
     for t in tiles:
         t = _rgb8(t)[sl]

@@ -114,14 +114,15 @@ def test_values_in_the_hole_are_not_read(runtime):
     assert np.array_equal(out, exemplar.solve(b, omega, runtime, seed=3))
 
 
-def test_same_seed_same_result(runtime):
+@pytest.mark.parametrize("structure", [None, 0.0, 1.0])
+def test_same_seed_same_result(runtime, structure):
     rng = np.random.default_rng(2)
     img = np.clip(0.5 + 0.2 * rng.standard_normal((3, 64, 64)), 0, 1)
     omega = np.zeros((64, 64), bool)
     omega[20:44, 18:40] = True
-    a = exemplar.solve(img, omega, runtime, seed=7)
-    b = exemplar.solve(img, omega, runtime, seed=7)
-    c = exemplar.solve(img, omega, runtime, seed=8)
+    a = exemplar.solve(img, omega, runtime, seed=7, structure=structure)
+    b = exemplar.solve(img, omega, runtime, seed=7, structure=structure)
+    c = exemplar.solve(img, omega, runtime, seed=8, structure=structure)
     assert np.array_equal(a, b)
     assert not np.array_equal(a, c)
 
@@ -148,6 +149,8 @@ def test_bad_parameters_are_clear_errors(runtime):
         exemplar.solve(img, omega, runtime, iterations=0)
     with pytest.raises(InputError, match="confidence must be"):
         exemplar.solve(img, omega, runtime, confidence=0.5)
+    with pytest.raises(InputError, match="structure must be"):
+        exemplar.solve(img, omega, runtime, structure=-1)
     with pytest.raises(InputError, match="whole image"):
         exemplar.solve(img, np.ones((20, 20), bool), runtime)
 
