@@ -67,7 +67,7 @@ def clpde_method(name):
 
 
 def clpde_default(image, mask):
-    """clpde.inpaint with its default method (the thesis's transport before issue 14)."""
+    """clpde.inpaint with its default method ("auto": clpde/inpainting/choose.py)."""
     import clpde
 
     axis = -1 if np.asarray(image).ndim == 3 else None
