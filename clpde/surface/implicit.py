@@ -104,7 +104,7 @@ class ImplicitSurface:
         # grid) or "bricks" (bricks.py); lists stay the default while bricks do not measure
         # faster where surfaces are mostly run (benchmarks/brick_roofline.py: on PoCL, 2
         # cores, 8x8x8 bricks took 0.81-0.96x the lists' time per step from 217^3 to 512^3,
-        # 1.16-1.81x at 64^3 and 128^3, and their host set-up is 10x the lists' at 512^3;
+        # 1.16-1.81x at 64^3 and 128^3, and their host set-up is 4x the lists' at 512^3;
         # docs/surfaces.md)
         self._storage = "lists"
         self._brick = DEFAULT_BRICK

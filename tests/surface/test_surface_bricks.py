@@ -184,3 +184,30 @@ def test_heat_on_bricks_keeps_the_accuracy():
     for h in (0.1, 0.05):
         assert errors["bricks", h] <= 1.05 * errors["lists", h], errors
     assert np.log2(errors["bricks", 0.1] / errors["bricks", 0.05]) > 1.8, errors
+
+
+@pytest.mark.parametrize("brick", BRICK_SIZES)
+@pytest.mark.parametrize("apron,halo", [(0, 0), (APRON, 0), (0, 2)])
+def test_brick_cells_index_every_cell_and_mark_those_outside(rng, brick, apron, halo):
+    """_brick_cells (the index arithmetic of scatter, tiles and the layout) against a cell by
+    cell loop, with bricks on every face and corner of the grid, where cells fall outside."""
+    from clpde.surface.bricks import _brick_cells
+
+    shape = (21, 19, 27)  # (PZ, PY, PX): no side a multiple of a brick's
+    bx, by, bz = brick
+    places = [-(-n // b) for n, b in zip(shape[::-1], brick, strict=True)]
+    corners = [(x, y, z) for x in (0, places[0] - 1) for y in (0, places[1] - 1)
+               for z in (0, places[2] - 1)]
+    coords = np.array(corners + [tuple(rng.integers(0, p) for p in places) for _ in range(20)],
+                      np.int32)
+    got = _brick_cells(coords, brick, shape, apron, halo)
+    a = apron + 2 * halo
+    for k, (cx, cy, cz) in enumerate(coords):
+        expect = []
+        for lz in range(bz + a):
+            for ly in range(by + a):
+                for lx in range(bx + a):
+                    z, y, x = cz * bz + lz - halo, cy * by + ly - halo, cx * bx + lx - halo
+                    inside = 0 <= z < shape[0] and 0 <= y < shape[1] and 0 <= x < shape[2]
+                    expect.append((z * shape[1] + y) * shape[2] + x if inside else -1)
+        np.testing.assert_array_equal(got[k], expect)
