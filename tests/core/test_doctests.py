@@ -10,6 +10,7 @@ import importlib
 import pytest
 
 MODULES = ["clpde.data", "clpde.planar", "clpde.rof", "clpde.imagedata", "clpde.io",
+           "clpde.surface.implicit",
            "clpde.colour", "clpde.runtime"]
 
 
