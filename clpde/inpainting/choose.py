@@ -44,6 +44,7 @@ LAGS = (6, 32)  # the lags (chessboard distance, pixels) over which periodicity 
 MIN_RADIUS = 6.0  # holes thinner than this stay with the structure method
 MIN_PERIODICITY = 0.85  # surroundings that repeat this well are copied without a guide
 MIN_TEXTURE = 0.005  # rms detail (in [0, 1]) below which surroundings count as smooth
+MIN_SHARE = 0.5  # a component of the hole thick over less than this share is a stroke
 
 
 def _detail(data: np.ndarray, known: np.ndarray):
@@ -99,6 +100,46 @@ def features(data: np.ndarray, omega: np.ndarray) -> dict:
     texture = float(np.sqrt(np.mean(detail[ring].astype(np.float64) ** 2))) if ring.any() else 0.0
     return {"radius": float(depth.max()), "texture": texture,
             "periodicity": _periodicity(detail, ok)}
+
+
+def exemplar_part(omega: np.ndarray) -> np.ndarray:
+    """The pixels of ``omega`` that the thick-hole rule gives to the exemplar (module
+    docstring): the parts where the hole is at least MIN_RADIUS thick, in the connected
+    components of the hole that are mostly such parts.
+
+    The thick parts are the discs of radius MIN_RADIUS around the core pixels (depth >=
+    MIN_RADIUS), which lie inside the hole, plus the pieces of the hole left over next to
+    them that hold fewer than MIN_RADIUS**2 pixels (a blob's corners, the gap between two
+    discs). A component of the hole (8-connected) whose thick parts are under MIN_SHARE of
+    its pixels is a stroke that is thick in places (bold text, a scratch through a letter)
+    and stays with the structure method as a whole; in the others only the thick parts go
+    to the exemplar, the strokes that touch them stay with the structure method."""
+    omega = np.asarray(omega, bool)
+    depth = ndimage.distance_transform_edt(np.pad(omega, 1))[1:-1, 1:-1]
+    core = depth >= MIN_RADIUS
+    if not core.any():
+        return np.zeros_like(omega)
+    # the disc test on the core's bounding box grown by the radius: cost follows the core
+    ys, xs = np.nonzero(core)
+    m = int(np.ceil(MIN_RADIUS)) + 1
+    y0, y1 = max(0, ys.min() - m), min(omega.shape[0], ys.max() + m + 1)
+    x0, x1 = max(0, xs.min() - m), min(omega.shape[1], xs.max() + m + 1)
+    part = np.zeros_like(omega)
+    near = ndimage.distance_transform_edt(~core[y0:y1, x0:x1]) < MIN_RADIUS
+    part[y0:y1, x0:x1] = near & omega[y0:y1, x0:x1]
+    rest, count = ndimage.label(omega & ~part)
+    if count:
+        sizes = np.bincount(rest.ravel(), minlength=count + 1)
+        touching = np.zeros(count + 1, bool)
+        touching[rest[ndimage.binary_dilation(part, np.ones((3, 3), bool))]] = True
+        join = touching & (sizes < MIN_RADIUS ** 2)
+        join[0] = False
+        part |= join[rest]
+    comps, count = ndimage.label(omega, np.ones((3, 3), bool))
+    share = np.bincount(comps[part], minlength=count + 1) / np.maximum(
+        np.bincount(comps.ravel(), minlength=count + 1), 1)
+    share[0] = 0
+    return part & (share >= MIN_SHARE)[comps]
 
 
 def pick(measured: dict, structure: str):
