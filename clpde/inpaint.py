@@ -887,10 +887,11 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         degree of damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity
         (1 - m) to its observed value (a soft mask; NaN or values outside [0, 1] are an
         error). None fills the NaN pixels of a float image.
-    method: 'auto' (per box of the mask: the exemplar where the surroundings repeat or
-        the hole is at least 6 px thick in surroundings with detail, else coherence
-        transport where installed, else the transport; calibrated on the benchmark,
-        docs/inpainting_texture.md; info.box_methods names each box's), 'transport'
+    method: 'auto' (per box of the mask: the exemplar where the surroundings repeat, or
+        on the parts of the hole at least 6 px thick in surroundings with detail, else
+        coherence transport where installed, else the transport; calibrated on the
+        benchmark, docs/inpainting_texture.md; info.box_methods names each box's,
+        info.box_exemplar_pixels counts the exemplar's pixels), 'transport'
         (the thesis's scheme, options below), 'coherence', 'navier-stokes', 'exemplar'
         (texture, periodic patterns), 'structure-texture' (clpde.inpainting.available()
         lists what is installed). None, the default, is 'auto', or 'transport' when any

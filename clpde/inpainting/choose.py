@@ -21,14 +21,21 @@ The rule (`pick`): surroundings that repeat (periodicity >= MIN_PERIODICITY) go 
 exemplar whatever the hole's size, without a structure guide (a copy can be exact there,
 and the guide, a smooth fill, would pull it away); holes at least MIN_RADIUS thick in
 surroundings with some detail (texture >= MIN_TEXTURE) go to the exemplar with the
-structure guide; the others (text, scratches, smooth surroundings) stay with the structure
-method. Measured by benchmarks/inpaint_auto_calibrate.py on 50 cases (docs/
-inpainting_texture.md has the table): the texture threshold is a guard for smooth
+structure guide, but only on their thick components (`exemplar_part`: where the hole is
+that thick, in components of the hole that are mostly so), the structure method filling
+the rest of the box first; the others (text, scratches, smooth surroundings, bold strokes
+that are thick only where they cross) stay with the structure method. Measured by
+benchmarks/inpaint_auto_calibrate.py on 50 cases (docs/inpainting_texture.md has the
+table): the texture threshold is a guard for smooth
 surroundings (sky, a clock's face: the structure fill is 1-2 dB better there), on a plateau
 from 0.005 to 0.008; at 0.01 and above it loses 0.4 dB on 20-30 px blobs in photos, where
 the patch fill wins even on moderately textured ground. The periodicity threshold lies on
 a plateau from 0.85 to 0.9 (at 0.8 the structure class loses 0.4 dB, at 0.95 1.9 dB: a
 curved edge across a thin slot repeats at 0.83, a straight one at 60 degrees at 0.86).
+Per component rather than per box: on `clpde.data.damaged_astronaut()` (bold text and
+scratches in one box) the exemplar cost 10x coherence's time for 0.25 dB, which it owed to
+the strokes, not to their few thick spots; on text plus 20-30 px blobs in one box it gains
+0.6 dB over the whole box to the exemplar (benchmarks/inpaint_auto_parts.py).
 """
 
 from __future__ import annotations
