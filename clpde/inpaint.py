@@ -121,6 +121,9 @@ class InpaintInfo:
     method: str = "transport"
     boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved
     box_methods: list = field(default_factory=list)  # the method that solved each box
+    # omega pixels of each box that the exemplar filled (under method="auto" a box named
+    # "<structure>+exemplar" had only its thick parts refilled by the exemplar)
+    box_exemplar_pixels: list = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -757,12 +760,23 @@ class Inpainting:
             damage = None if self.softness is None else np.asarray(
                 self.softness[y0:y1, x0:x1], np.float64)
             fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
-            method, options = self.method, {}
+            method, options, part = self.method, {}, None
             if self.auto:
                 from .inpainting import choose
 
                 method, options = choose.pick(choose.features(data, omega), self.method)
-            info.box_methods.append(method)
+                if method == "exemplar" and options.get("structure"):
+                    # the thick-hole rule: only the thick components go to the exemplar, in
+                    # a second pass after the structure method has filled the whole box
+                    # (text and scratches cost the exemplar 10x the time for no gain)
+                    part = choose.exemplar_part(omega)
+                    if np.array_equal(part, omega):
+                        part = None
+                    else:
+                        method, part = self.method, part if part.any() else None
+            info.box_methods.append(method if part is None else f"{method}+exemplar")
+            by_exemplar = omega if method == "exemplar" else part
+            info.box_exemplar_pixels.append(0 if by_exemplar is None else int(by_exemplar.sum()))
             if method == "exemplar" and method != self.method:
                 solved = self._exemplar_box(runtime, box, data, options)
                 if damage is not None:
@@ -789,6 +803,12 @@ class Inpainting:
                 if damage is not None and not soft_mask:
                     solved = np.where(omega, damage * solved + (1 - damage) * data, data)
                 info.levels = max(info.levels, 1)
+            if part is not None:
+                thick = self._exemplar_box(runtime, box, data, options, part=part,
+                                           filled=solved)
+                if damage is not None:
+                    thick = damage * thick + (1 - damage) * data
+                solved = np.where(part, thick, solved)
             self._write(out, box, solved, omega)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
@@ -798,21 +818,28 @@ class Inpainting:
         if every:
             yield InpaintState(0, info.steps, self.result)
 
-    def _exemplar_box(self, runtime, box, data, options):
+    def _exemplar_box(self, runtime, box, data, options, part=None, filled=None):
         """The exemplar's fill of a box that auto gave it: solved in the box grown by the
         exemplar's search region (the structure method's box is too small to copy from),
-        with every masked pixel there unknown; returns the box's part."""
+        with every masked pixel there unknown; returns the box's part. With `part` (the
+        box's pixels to fill) and `filled` (the box already filled by the structure
+        method), the box's other masked pixels count as known, with their filled values."""
         from .inpainting import exemplar
 
         y0, y1, x0, x1 = box
         ny, nx = self.mask.shape
         m = exemplar.MARGIN()
         big = (max(0, y0 - m), min(ny, y1 + m), max(0, x0 - m), min(nx, x1 + m))
-        solved = exemplar.solve(self._box_data(big), self.mask[big[0]:big[1], big[2]:big[3]],
-                                runtime, dtype=self.dtype, progress=self.progress,
-                                seed=self.seed, **options)
-        part = np.asarray(solved, np.float64)[:, y0 - big[0]:y1 - big[0], x0 - big[2]:x1 - big[2]]
-        return np.where(self.mask[y0:y1, x0:x1], part, data)
+        big_data = self._box_data(big)
+        hole = np.array(self.mask[big[0]:big[1], big[2]:big[3]], bool)
+        inner = (slice(y0 - big[0], y1 - big[0]), slice(x0 - big[2], x1 - big[2]))
+        if part is not None:
+            big_data[(slice(None),) + inner] = filled
+            hole[inner] = part
+        solved = exemplar.solve(big_data, hole, runtime, dtype=self.dtype,
+                                progress=self.progress, seed=self.seed, **options)
+        solved = np.asarray(solved, np.float64)[(slice(None),) + inner]
+        return np.where(self.mask[y0:y1, x0:x1], solved, data)
 
     def run(self) -> np.ndarray:
         for _ in self.iterate():
@@ -860,10 +887,11 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         degree of damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity
         (1 - m) to its observed value (a soft mask; NaN or values outside [0, 1] are an
         error). None fills the NaN pixels of a float image.
-    method: 'auto' (per box of the mask: the exemplar where the surroundings repeat or
-        the hole is at least 6 px thick in surroundings with detail, else coherence
-        transport where installed, else the transport; calibrated on the benchmark,
-        docs/inpainting_texture.md; info.box_methods names each box's), 'transport'
+    method: 'auto' (per box of the mask: the exemplar where the surroundings repeat, or
+        on the parts of the hole at least 6 px thick in surroundings with detail, else
+        coherence transport where installed, else the transport; calibrated on the
+        benchmark, docs/inpainting_texture.md; info.box_methods names each box's,
+        info.box_exemplar_pixels counts the exemplar's pixels), 'transport'
         (the thesis's scheme, options below), 'coherence', 'navier-stokes', 'exemplar'
         (texture, periodic patterns), 'structure-texture' (clpde.inpainting.available()
         lists what is installed). None, the default, is 'auto', or 'transport' when any

@@ -49,7 +49,7 @@ METHODS = {
 # method=None: "auto", except that a call giving any of the transport's own options
 # (InpaintParams: dt, max_steps, tol, ...) runs the transport, so such calls keep their meaning.
 # method="auto": per box, the exemplar where choose.py's rule says it wins (repeating
-# surroundings; holes at least 6 px thick with detail around), else the first of these
+# surroundings; the thick parts of holes with detail around), else the first of these
 # that is installed. Measured (docs/inpainting.md, one run of benchmarks/inpaint_quality.py
 # with every method): coherence transport is the best of the structure methods on text,
 # scratches, thick holes and the structure class, 0.3 dB behind the transport on 20-30 px

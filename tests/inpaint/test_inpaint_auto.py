@@ -64,3 +64,45 @@ def test_auto_keeps_the_structure_method_on_smooth_images():
     mask[30:70, 40:80] = True
     _, info = clpde.inpaint(image, mask, method="auto", return_info=True, progress=False)
     assert info.box_methods == [info.method]
+
+
+def test_exemplar_part_keeps_blobs_and_leaves_strokes():
+    y, x = np.mgrid[0:100, 0:100]
+    disc = np.hypot(y - 50, x - 50) <= 12
+    assert np.array_equal(choose.exemplar_part(disc), disc)
+    stroke = (np.abs(y - 20) <= 1) & (x >= 10) & (x < 90)  # 3 px wide: never thick
+    assert not choose.exemplar_part(stroke).any()
+    # a thin stroke touching the disc stays out; the disc stays in
+    part = choose.exemplar_part(disc | ((np.abs(x - 50) <= 1) & (y >= 10)))
+    assert np.array_equal(part & ~disc, np.zeros_like(disc)) and part.sum() >= 0.95 * disc.sum()
+    # a cross of 9 px bold strokes is 6 px thick only where they cross: a stroke
+    plus = ((np.abs(y - 50) <= 4) & (np.abs(x - 50) <= 40)) | \
+        ((np.abs(x - 50) <= 4) & (np.abs(y - 50) <= 40))
+    assert choose.features(np.zeros((1, 100, 100)), plus)["radius"] >= choose.MIN_RADIUS
+    assert not choose.exemplar_part(plus).any()
+
+
+def test_auto_sends_only_the_thick_blob_of_a_box_of_strokes_to_the_exemplar():
+    if "exemplar" not in inpainting.available():
+        pytest.skip("no exemplar method in this installation")
+    rng = np.random.default_rng(5)
+    y, x = np.mgrid[0:140, 0:160]
+    image = 0.3 + 0.3 * np.sin(x / 19.0) * np.cos(y / 27.0) + 0.08 * rng.standard_normal(x.shape)
+    image = np.clip(np.round(255 * image), 0, 255).astype(np.uint8)  # stochastic texture
+    blob = np.hypot(y - 70, x - 80) <= 12
+    strokes = (np.abs(y - 40) <= 1) & (x >= 30) & (x < 130)
+    strokes |= (np.abs(x - y - 10) <= 1) & (y >= 85) & (y < 120)
+    strokes |= (np.abs(x - 80) <= 1) & (y >= 40) & (y < 70)  # from the first one to the blob
+    mask = blob | strokes
+    out, info = clpde.inpaint(image, mask, method="auto", return_info=True, progress=False,
+                              seed=0)
+    assert len(info.boxes) == 1
+    assert info.box_methods == [f"{info.method}+exemplar"]
+    assert 0.95 * blob.sum() <= info.box_exemplar_pixels[0] <= blob.sum()
+    # the strokes are the structure method's fill of the box, bit for bit; the blob is not
+    coherent = clpde.inpaint(image, mask, method=info.method, progress=False)
+    thin = mask & ~blob
+    assert np.array_equal(out[thin], coherent[thin])
+    assert not np.array_equal(out[blob], coherent[blob])
+    assert np.array_equal(out[~mask], image[~mask])
+    assert np.array_equal(out, clpde.inpaint(image, mask, method="auto", progress=False, seed=0))
