@@ -8,7 +8,8 @@
 //         (2 WIN + 1)^2 window;  2: Huber, beta = clamp(F2 - F1, -delta, delta)
 //   WIN   window radius of DISC 1 (band cells lie MARGIN + G = 4 cells inside the buffer,
 //         so WIN <= 4 reads stay inside it)
-#include "levelset.cl"
+#include "common.cl"
+#include "godunov.h"
 
 #ifndef NCH
 #define NCH 1
