@@ -1,7 +1,8 @@
-// Upwind level-set stencils shared by the level-set kernels (levelset.cl in 2D, regions.cl
-// in 3D): the sign function, minmod, slope-limited one-sided differences (second-order ENO,
-// Osher-Sethian) and the Godunov gradient norm for u_t = V |grad u|. Unit grid spacing;
-// `sx` is the row stride, `sxy` the slab stride. Include after common.cl.
+// Upwind level-set stencils shared by the level-set kernels (levelset.cl and
+// track_features.cl in 2D, regions.cl and surface_reinit.cl in 3D): the sign function,
+// minmod, slope-limited one-sided differences (second-order ENO, Osher-Sethian) and the
+// Godunov gradient norm for u_t = V |grad u|. Unit grid spacing (godunov_axis takes any
+// differences); `sx` is the row stride, `sxy` the slab stride. Include after common.cl.
 #ifndef CLPDE_GODUNOV_H
 #define CLPDE_GODUNOV_H
 

@@ -1,10 +1,10 @@
-// PDE reinitialisation of a level set to a signed distance, shared by levelset.cl (2D) and
-// regions.cl (3D): explicit Godunov steps of
+// PDE reinitialisation of a level set to a signed distance, shared by levelset.cl (2D),
+// regions.cl (3D) and surface_reinit.cl (3D bands, world units): explicit Godunov steps of
 //     u_t + S(u0) (|grad u| - 1) = 0,
 // with Russo and Smereka's subcell fix at the cells beside the interface (u0 changes sign
 // towards one of their 4 or 6 neighbours): there u relaxes towards D = u0 / |grad u0|, the
 // distance to the interface estimated from u0 itself, so the zero level set does not move.
-// Unit grid spacing. Include after common.cl and godunov.h.
+// Unit grid spacing unless said otherwise. Include after common.cl and godunov.h.
 #ifndef CLPDE_REINIT_H
 #define CLPDE_REINIT_H
 
@@ -33,6 +33,16 @@ INLINE REAL subcell_update(const REAL p, const REAL c0, const REAL g, const REAL
 INLINE REAL godunov_update(const REAL p, const REAL sgn, const REAL norm, const REAL dt)
 {
     return p - dt * sgn * (norm - 1);
+}
+
+// godunov_update for a field in world units (surface_reinit.cl): `norm` the upwind norm in
+// grid units, r = dt / h. The same step as godunov_update(p, sgn, norm * inv_h, r / inv_h),
+// but rounded as the surface's reinitialisation always has (dividing by inv_h last), so that
+// its results stay bit for bit what they were.
+INLINE REAL godunov_update_world(const REAL p, const REAL sgn, const REAL norm, const REAL r,
+                                 const REAL inv_h)
+{
+    return p - r * sgn * (norm * inv_h - 1) / inv_h;
 }
 
 // The new value of u at padded index i of a 2D field after one step of dt: Russo and

@@ -2,18 +2,21 @@
 // Layout and conventions: surface.h.
 #include "common.cl"
 #include "surface.h"
+#include "godunov.h"
+#include "reinit.h"
 
 // ---- reinitialisation of psi to a signed distance ------------------------------------------
 // phi_t + sgn(phi0) (|grad phi| - 1) = 0 with Godunov's upwind norm (Sussman, Smereka, Osher),
 // and Russo and Smereka's subcell fix on cells next to the surface: there the update pulls
 // phi towards D = phi0 / |grad phi0| (a distance estimate from phi0 itself), so the zero
-// level set does not move. World units; r = dt / h.
-INLINE REAL godunov_sq(const REAL back, const REAL fwd, const REAL s)
-{
-    return s > 0 ? FMAX(SQR(FMAX(back, (REAL)0)), SQR(FMIN(fwd, (REAL)0)))
-                 : FMAX(SQR(FMIN(back, (REAL)0)), SQR(FMAX(fwd, (REAL)0)));
-}
+// level set does not move. World units; r = dt / h. The sign, the Godunov choice per axis
+// and both updates are reinit.h's and godunov.h's; what stays here is the surface's own
+// variant of the scheme: first-order one-sided differences, the slope per axis below, and
+// an interface test with `<= 0` (so phi0 = 0 cells take the subcell fix, never a Godunov
+// step with sign 0).
 
+// |d phi0| along one axis for the subcell fix, in grid units: the largest of the central
+// and both one-sided differences, at least 1e-12.
 INLINE REAL subcell_slope(__global const REAL* restrict p, const int i, const int s)
 {
     return FMAX(FMAX(FABS(p[i + s] - p[i - s]) * (REAL)0.5, FABS(p[i + s] - p[i])),
@@ -28,20 +31,23 @@ __kernel void reinit_step(__global const REAL* restrict phi, __global REAL* rest
     for (int k = k0; k < k1; ++k) {
         const int i = list[k];
         const REAL p0 = phi0[i];
-        const REAL s = p0 > 0 ? (REAL)1 : (p0 < 0 ? (REAL)-1 : (REAL)0);
+        const REAL s = ls_sign(p0);
         const bool near = p0 * phi0[i + 1] <= 0 || p0 * phi0[i - 1] <= 0 ||
                           p0 * phi0[i + sx] <= 0 || p0 * phi0[i - sx] <= 0 ||
                           p0 * phi0[i + sxy] <= 0 || p0 * phi0[i - sxy] <= 0;
         const REAL c = phi[i];
         if (near) {
+            // |grad phi0| in world units; each slope is at least 1e-12 grid units, so g is
+            // above subcell_update's floor of 1e-12 for h < sqrt(3), where D = p0 / g as is.
             const REAL g = SQRT(SQR(subcell_slope(phi0, i, 1)) + SQR(subcell_slope(phi0, i, sx)) +
                                 SQR(subcell_slope(phi0, i, sxy))) * inv_h;
-            out[i] = c - r * (s * FABS(c) - p0 / g);
+            out[i] = subcell_update(c, p0, g, r, 0);
         } else {
-            const REAL gx = godunov_sq(c - phi[i - 1], phi[i + 1] - c, s);
-            const REAL gy = godunov_sq(c - phi[i - sx], phi[i + sx] - c, s);
-            const REAL gz = godunov_sq(c - phi[i - sxy], phi[i + sxy] - c, s);
-            out[i] = c - r * s * (SQRT(gx + gy + gz) * inv_h - 1) / inv_h;
+            // godunov.h's V is -sgn, as in reinit.h (s != 0 here: phi0 = 0 is `near`).
+            const REAL gx = godunov_axis(c - phi[i - 1], phi[i + 1] - c, -s);
+            const REAL gy = godunov_axis(c - phi[i - sx], phi[i + sx] - c, -s);
+            const REAL gz = godunov_axis(c - phi[i - sxy], phi[i + sxy] - c, -s);
+            out[i] = godunov_update_world(c, s, SQRT(gx + gy + gz), r, inv_h);
         }
     }
 }
