@@ -1,7 +1,7 @@
-// Level-set machinery on ghost-padded 2D fields (ghost width 2, unit grid spacing):
-// slope-limited upwind gradient norms (Osher-Sethian), central-difference normals, narrow
-// band marking, PDE reinitialisation with the Russo-Smereka subcell fix, and the coupled
-// morphing / tracking step of thesis eqs. (2.3)-(2.6).
+// Level-set machinery on ghost-padded 2D fields (ghost width 2, unit grid spacing): narrow
+// band marking, PDE reinitialisation with the Russo-Smereka subcell fix and the edge map.
+// The coupled morphing / tracking step of thesis eqs. (2.3)-(2.6) is track_features.cl's
+// morph_track (one channel, DISC 0, lam = 0).
 //
 // The shared stencils and the reinitialisation's update live in godunov.h and reinit.h
 // (regions.cl uses them in 3D).
@@ -89,65 +89,3 @@ __kernel void gradient_magnitude(__global const REAL* restrict img, __global REA
         out[i] = (REAL)0.5 * SQRT(SQR(img[i + 1] - img[i - 1]) + SQR(img[i + sx] - img[i - sx]));
     }
 }
-
-// ---- the coupled morphing / tracking step (thesis eqs. 2.3-2.6) ---------------------------
-// Over the band cells: beta = F2 - F1;
-//     F1 <- F1 + dt beta |grad F1|                   (morphing, upwind for velocity beta)
-//     u  <- u  + dt beta (N_F1 . N_u) |grad u|        (tracking, projected velocity)
-// with slope-limited upwind norms and central-difference normals; |grad|_eps in the
-// normals' denominators keeps them finite where a field is flat (no information there,
-// so the projected velocity fades to zero).
-// Work-item g of the launch's n items writes three maxima over its cells for the host's
-// check every few steps: stats[g] = |du/dt| (the contour's speed, for the stopping test),
-// stats[n + g] = |beta| and stats[2n + g] = |grad F1| (for the next stable time step);
-// stats[3n] is set to 1 when an edge-ring cell of the band comes within `near` of the zero
-// level set, which asks the host to rebuild the band.
-// The coupled update of one cell; returns |du/dt| and folds |beta|, |grad F1| and the
-// edge test into the running maxima.
-INLINE REAL morph_cell(__global const REAL* u, __global const REAL* f1,
-                       __global const REAL* f2, __global const uchar* band,
-                       __global REAL* u_out, __global REAL* f1_out, const int i, const int sx,
-                       const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
-                       REAL* beta_max, REAL* grad_max, int* touched)
-{
-    const REAL beta = f2[i] - f1[i];
-    const REAL grad_f = upwind_norm_2d(f1, i, sx, beta);
-    f1_out[i] = f1[i] + dt * beta * grad_f;
-
-    const REAL fx = (REAL)0.5 * (f1[i + 1] - f1[i - 1]);
-    const REAL fy = (REAL)0.5 * (f1[i + sx] - f1[i - sx]);
-    const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
-    const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
-    const REAL dot = (fx * ux + fy * uy) *
-                     RSQRT((SQR(fx) + SQR(fy) + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
-    const REAL bhat = beta * dot;
-    const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat);
-    const REAL un = u[i] + dt * rate;
-    u_out[i] = un;
-    *beta_max = FMAX(*beta_max, FABS(beta));
-    *grad_max = FMAX(*grad_max, grad_f);
-    *touched |= (band[i] == 2) & (FABS(un) < near);
-    return FABS(rate);
-}
-
-__kernel void morph_step(__global const REAL* restrict u, __global const REAL* restrict f1,
-                         __global const REAL* restrict f2, __global const uchar* restrict band,
-                         __global REAL* restrict u_out, __global REAL* restrict f1_out,
-                         __global REAL* restrict stats, const REAL dt, const REAL eps_f2,
-                         const REAL eps_u2, const REAL near, const int sx, LIST_ARGS)
-{
-    LIST_RANGE(k0, k1, chan);
-    REAL fastest = 0, beta_max = 0, grad_max = 0;
-    int touched = 0;
-    for (int k = k0; k < k1; ++k) {
-        const REAL r = morph_cell(u, f1, f2, band, u_out, f1_out, chan + list[k], sx, dt,
-                                  eps_f2, eps_u2, near, &beta_max, &grad_max, &touched);
-        fastest = FMAX(fastest, r);
-    }
-    const int g = get_global_id(0), n = get_global_size(0);
-    stats[g] = fastest;
-    stats[n + g] = beta_max;
-    stats[2 * n + g] = grad_max;
-    if (touched) stats[3 * n] = 1;  // every writer stores the same value
-}
-

@@ -88,14 +88,17 @@ INLINE REAL discrepancy(__global const REAL* f1, __global const REAL* f2, const 
 //     u    <- u + dt [ sum_c beta_c (grad F1_c . grad u)
 //                       / sqrt((sum_c |grad F1_c|^2 + eps_f^2) (|grad u|^2 + eps_u^2))
 //                       |grad u|_upwind + lam (prior - u) ]
-// With one channel, DISC 0 and lam = 0 this is morph_step of levelset.cl (thesis eqs.
-// 2.3-2.6): the contour moves with the projection of the channels' morphing velocities on
-// its normal, channels with stronger edges weighing more. The lam term relaxes u towards
-// the prior level set (the frame's predicted start), which holds the contour where the
-// features say nothing and damps leaks.
+// With one channel, DISC 0 and lam = 0 this is the thesis' coupled step (eqs. 2.3-2.6;
+// tests/reference/levelset.py's morph_step): the contour moves with the projection of the
+// channels' morphing velocities on its normal, channels with stronger edges weighing more.
+// eps_f and eps_u keep the normals finite where a field is flat (no information there, so
+// the projected velocity fades to zero). The lam term relaxes u towards the prior level set
+// (the frame's predicted start), which holds the contour where the features say nothing
+// and damps leaks.
 // stats per work-item g of n: [g] max |du/dt|, [n+g] max |beta|, [2n+g] max |grad F1|,
 // [3n+g] sum over its cells of the channels' mean |beta|, [4n+g] its cell count; [5n] the
-// edge flag, as in morph_step.
+// edge flag: set to 1 when an edge-ring cell of the band (band == 2) comes within `near` of
+// the zero level set, which asks the host to rebuild the band.
 __kernel void morph_track(__global const REAL* restrict u, __global const REAL* restrict f1,
                           __global const REAL* restrict f2, __global const uchar* restrict band,
                           __global const REAL* restrict prior, __global REAL* restrict u_out,

@@ -1,11 +1,10 @@
 """Level-set kernels against their numpy references, and reinitialisation's mathematics."""
 
 import numpy as np
-import pyopencl.array as cla
 import pytest
 from reference import levelset as ref
 
-from clpde.fields import Field, Grid, compact, index_list
+from clpde.fields import Field, Grid, index_list
 from clpde.imagedata import InputError
 from clpde.levelset import LevelSet, signed_distance
 
@@ -23,51 +22,6 @@ def _circle_sdf(n, r, cx=None, cy=None):
     cy = n / 2 + 0.2 if cy is None else cy
     y, x = np.mgrid[:n, :n]
     return np.hypot(x - cx, y - cy) - r
-
-
-def _inputs(kind, rng, ny=21, nx=26):
-    if kind == "random":
-        u = rng.normal(size=(ny, nx)) * 2
-        f1, f2 = rng.random((ny, nx)), rng.random((ny, nx))
-    else:  # a distance-like level set and smooth images with an edge that moved
-        y, x = np.mgrid[:ny, :nx]
-        u = np.hypot(x - 12.3, y - 9.6) - 6
-        f1 = 1 / (1 + np.exp((np.hypot(x - 12.3, y - 9.6) - 6) / 1.5))
-        f2 = 1 / (1 + np.exp((np.hypot(x - 13.5, y - 10.1) - 6.5) / 1.5))
-    return u, f1, f2
-
-
-@pytest.mark.parametrize("kind", ["random", "structured"])
-def test_morph_step_matches_reference(runtime, rng, kind):
-    u, f1, f2 = _inputs(kind, rng)
-    ny, nx = u.shape
-    grid = Grid(runtime, nx, ny, 1, 2, np.dtype(np.float32))
-    fu, ff1, ff2 = _field(grid, u), _field(grid, f1), _field(grid, f2)
-    band = ref.mark_band(u, 3.0)
-    band_dev = cla.zeros(runtime.queue, grid.padded_shape[1:], np.uint8)
-    padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
-    padded_band[2:-2, 2:-2] = band
-    band_dev.set(padded_band)
-    cells = compact(runtime, band_dev)
-    assert cells.n == int((band > 0).sum()) > 0
-    u_out, f1_out = fu.copy(), ff1.copy()
-    (gsize,), _, _ = runtime.list_launch(cells.n)
-    stats = cla.zeros(runtime.queue, 3 * gsize + 1, np.float32)
-    dt, eps_f, eps_u, near = 0.4, 0.02, 1e-3, 1.0
-    grid.launch_list(
-        grid.kernel("levelset.cl", "morph_step"), cells,
-        fu.data.data, ff1.data.data, ff2.data.data, band_dev.data, u_out.data.data,
-        f1_out.data.data, stats.data, grid.scalar(dt), grid.scalar(eps_f**2),
-        grid.scalar(eps_u**2), grid.scalar(near), np.int32(grid.sx),
-    )
-    want_u, want_f1, want_maxima, want_hit = ref.morph_step(
-        _padded(fu), _padded(ff1), _padded(ff2)[2:-2, 2:-2], band, dt, eps_f, eps_u, near)
-    np.testing.assert_allclose(u_out.to_host()[0], want_u, atol=2e-5, rtol=1e-5)
-    np.testing.assert_allclose(f1_out.to_host()[0], want_f1, atol=2e-5, rtol=1e-5)
-    got = stats.get()
-    maxima = [got[k * gsize : (k + 1) * gsize].max() for k in range(3)]
-    np.testing.assert_allclose(maxima, want_maxima, rtol=1e-4, atol=1e-6)
-    assert bool(got[3 * gsize]) == want_hit
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])

@@ -1,4 +1,5 @@
-"""NumPy references of kernels/levelset.cl: the same discrete formulas on padded arrays.
+"""NumPy references of kernels/levelset.cl and track_features.cl: the same discrete
+formulas on padded arrays.
 
 2D arrays are (ny + 4, nx + 4) with a two-cell ghost layer; each function returns values on
 the interior (ny, nx). `pad` fills ghosts as Field.fill_ghosts('neumann') does.
@@ -85,8 +86,9 @@ def gradient_magnitude(p):
 
 
 def morph_step(pu, pf1, f2, band, dt, eps_f, eps_u, near):
-    """One coupled step; returns (u_new, f1_new, (max |du/dt|, max |beta|, max |grad F1|),
-    hit) over the band cells.
+    """One coupled step of thesis eqs. (2.3)-(2.6), written from the equations (the kernel
+    is track_features.cl's morph_track with one channel, DISC 0 and lam = 0); returns
+    (u_new, f1_new, (max |du/dt|, max |beta|, max |grad F1|), hit) over the band cells.
 
     Cells outside the band keep their values, as the kernel leaves them untouched.
     """

@@ -90,6 +90,42 @@ def test_morph_track_matches_reference(runtime, rng, kind, disc, channels, lam):
     assert bool(got[5 * gsize]) == want_hit
 
 
+@pytest.mark.parametrize("kind", ["random", "structured"])
+def test_morph_track_with_one_channel_is_the_thesis_step(runtime, rng, kind):
+    # NCH 1, DISC 0 and lam = 0: the coupled step of thesis eqs. (2.3)-(2.6), against its
+    # own reference (ref.morph_step, written from the equations, not from morph_track's
+    # generalisation). Band cells reach the interior's edge: DISC 0 reads 2 cells out.
+    u, f1, f2 = _inputs(kind, rng, 1, ny=21, nx=26)
+    ny, nx = u.shape
+    grid = Grid(runtime, nx, ny, 1, 2, np.dtype(np.float32))
+    fu, ff1, ff2 = (Field.from_host(grid, a.reshape(1, ny, nx)) for a in (u, f1, f2))
+    band = ref.mark_band(u, 3.0)
+    padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
+    padded_band[2:-2, 2:-2] = band
+    band_dev = cla.to_device(runtime.queue, padded_band)
+    cells = compact(runtime, band_dev)
+    assert cells.n == int((band > 0).sum()) > 0
+    u_out, f1_out = fu.copy(), ff1.copy()
+    (gsize,), _, _ = runtime.list_launch(cells.n)
+    stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
+    dt, eps_f, eps_u, near = 0.4, 0.02, 1e-3, 1.0
+    kernel = grid.kernel("track_features.cl", "morph_track", NCH=1, DISC=0, WIN=3)
+    grid.launch_list(kernel, cells, fu.data.data, ff1.data.data, ff2.data.data, band_dev.data,
+                     fu.data.data, u_out.data.data, f1_out.data.data, stats.data,
+                     grid.scalar(dt), grid.scalar(eps_f**2), grid.scalar(eps_u**2),
+                     grid.scalar(near), grid.scalar(0.0), grid.scalar(0.0),
+                     np.int32(grid.sx), np.int32(grid.plane))
+    padded = [a.data.get()[0].astype(np.float64) for a in (fu, ff1, ff2)]
+    want_u, want_f1, want_maxima, want_hit = ref.morph_step(
+        padded[0], padded[1], padded[2][2:-2, 2:-2], band, dt, eps_f, eps_u, near)
+    np.testing.assert_allclose(u_out.to_host()[0], want_u, atol=2e-5, rtol=1e-5)
+    np.testing.assert_allclose(f1_out.to_host()[0], want_f1, atol=2e-5, rtol=1e-5)
+    got = stats.get()
+    maxima = [got[k * gsize:(k + 1) * gsize].max() for k in range(3)]
+    np.testing.assert_allclose(maxima, want_maxima, rtol=1e-4, atol=1e-6)
+    assert bool(got[5 * gsize]) == want_hit
+
+
 def test_ncc_discrepancy_ignores_a_change_of_light_that_the_difference_sees(rng):
     # F2 = 0.5 F1 + 0.3 (a shadow over a still scene): F2 - F1 is large, the NCC's
     # steepest ascent vanishes (up to the variance regularisation).
