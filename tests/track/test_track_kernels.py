@@ -42,6 +42,28 @@ def _inputs(kind, rng, channels, ny=22, nx=27):
     return u, f1, f2
 
 
+def _run_morph_track(runtime, grid, band, fu, ff1, ff2, fprior, dt, eps_f, eps_u, near, lam,
+                     delta, channels, disc):
+    """One launch of morph_track over the cells where band > 0; returns (u_out, f1_out,
+    stats, the launch's work-item count)."""
+    padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
+    padded_band[2:-2, 2:-2] = band
+    band_dev = cla.to_device(runtime.queue, padded_band)
+    cells = compact(runtime, band_dev)
+    assert cells.n == int((band > 0).sum()) > 0
+    u_out, f1_out = fu.copy(), ff1.copy()
+    (gsize,), _, _ = runtime.list_launch(cells.n)
+    stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
+    kernel = grid.kernel("track_features.cl", "morph_track", NCH=channels,
+                         DISC={"difference": 0, "ncc": 1, "huber": 2}[disc], WIN=3)
+    grid.launch_list(kernel, cells, fu.data.data, ff1.data.data, ff2.data.data, band_dev.data,
+                     fprior.data.data, u_out.data.data, f1_out.data.data, stats.data,
+                     grid.scalar(dt), grid.scalar(eps_f**2), grid.scalar(eps_u**2),
+                     grid.scalar(near), grid.scalar(lam), grid.scalar(delta),
+                     np.int32(grid.sx), np.int32(grid.plane))
+    return u_out, f1_out, stats.get(), gsize
+
+
 @pytest.mark.parametrize("kind", ["random", "structured"])
 @pytest.mark.parametrize("disc,channels,lam", [("difference", 1, 0.0), ("ncc", 1, 0.0),
                                                ("huber", 3, 0.0), ("ncc", 3, 0.1),
@@ -58,22 +80,9 @@ def test_morph_track_matches_reference(runtime, rng, kind, disc, channels, lam):
     # Band cells 2 cells inside the interior, as in a LevelSet (its frozen margin), so an
     # NCC window of radius 3 stays inside the buffer.
     band = ref.mark_band(u, 3.0, margin=2)
-    padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
-    padded_band[2:-2, 2:-2] = band
-    band_dev = cla.to_device(runtime.queue, padded_band)
-    cells = compact(runtime, band_dev)
-    assert cells.n == int((band > 0).sum()) > 0
-    u_out, f1_out = fu.copy(), ff1.copy()
-    (gsize,), _, _ = runtime.list_launch(cells.n)
-    stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
     dt, eps_f, eps_u, near, delta = 0.3, 0.02, 1e-3, 1.0, 0.05
-    kernel = grid.kernel("track_features.cl", "morph_track", NCH=channels,
-                         DISC={"difference": 0, "ncc": 1, "huber": 2}[disc], WIN=3)
-    grid.launch_list(kernel, cells, fu.data.data, ff1.data.data, ff2.data.data, band_dev.data,
-                     fprior.data.data, u_out.data.data, f1_out.data.data, stats.data,
-                     grid.scalar(dt), grid.scalar(eps_f**2), grid.scalar(eps_u**2),
-                     grid.scalar(near), grid.scalar(lam), grid.scalar(delta),
-                     np.int32(grid.sx), np.int32(grid.plane))
+    u_out, f1_out, got, gsize = _run_morph_track(runtime, grid, band, fu, ff1, ff2, fprior, dt,
+                                                 eps_f, eps_u, near, lam, delta, channels, disc)
     host = ff1.data.get().astype(np.float64), ff2.data.get().astype(np.float64)
     want_u, want_f1, want_maxima, want_mean, want_hit = ref.morph_track(
         fu.data.get()[0].astype(np.float64), *host, band, fprior.data.get()[0].astype(np.float64),
@@ -82,7 +91,6 @@ def test_morph_track_matches_reference(runtime, rng, kind, disc, channels, lam):
     np.testing.assert_allclose(u_out.to_host()[0][inside], want_u[inside], atol=3e-5, rtol=1e-4)
     np.testing.assert_allclose(f1_out.to_host()[:, inside], want_f1[:, inside], atol=3e-5,
                                rtol=1e-4)
-    got = stats.get()
     maxima = [got[k * gsize:(k + 1) * gsize].max() for k in range(3)]
     np.testing.assert_allclose(maxima, want_maxima, rtol=2e-4, atol=1e-6)
     mean = got[3 * gsize:4 * gsize].sum() / got[4 * gsize:5 * gsize].sum()
@@ -100,27 +108,14 @@ def test_morph_track_with_one_channel_is_the_thesis_step(runtime, rng, kind):
     grid = Grid(runtime, nx, ny, 1, 2, np.dtype(np.float32))
     fu, ff1, ff2 = (Field.from_host(grid, a.reshape(1, ny, nx)) for a in (u, f1, f2))
     band = ref.mark_band(u, 3.0)
-    padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
-    padded_band[2:-2, 2:-2] = band
-    band_dev = cla.to_device(runtime.queue, padded_band)
-    cells = compact(runtime, band_dev)
-    assert cells.n == int((band > 0).sum()) > 0
-    u_out, f1_out = fu.copy(), ff1.copy()
-    (gsize,), _, _ = runtime.list_launch(cells.n)
-    stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
     dt, eps_f, eps_u, near = 0.4, 0.02, 1e-3, 1.0
-    kernel = grid.kernel("track_features.cl", "morph_track", NCH=1, DISC=0, WIN=3)
-    grid.launch_list(kernel, cells, fu.data.data, ff1.data.data, ff2.data.data, band_dev.data,
-                     fu.data.data, u_out.data.data, f1_out.data.data, stats.data,
-                     grid.scalar(dt), grid.scalar(eps_f**2), grid.scalar(eps_u**2),
-                     grid.scalar(near), grid.scalar(0.0), grid.scalar(0.0),
-                     np.int32(grid.sx), np.int32(grid.plane))
+    u_out, f1_out, got, gsize = _run_morph_track(runtime, grid, band, fu, ff1, ff2, fu, dt,
+                                                 eps_f, eps_u, near, 0.0, 0.0, 1, "difference")
     padded = [a.data.get()[0].astype(np.float64) for a in (fu, ff1, ff2)]
     want_u, want_f1, want_maxima, want_hit = ref.morph_step(
         padded[0], padded[1], padded[2][2:-2, 2:-2], band, dt, eps_f, eps_u, near)
     np.testing.assert_allclose(u_out.to_host()[0], want_u, atol=2e-5, rtol=1e-5)
     np.testing.assert_allclose(f1_out.to_host()[0], want_f1, atol=2e-5, rtol=1e-5)
-    got = stats.get()
     maxima = [got[k * gsize:(k + 1) * gsize].max() for k in range(3)]
     np.testing.assert_allclose(maxima, want_maxima, rtol=1e-4, atol=1e-6)
     assert bool(got[5 * gsize]) == want_hit
