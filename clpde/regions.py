@@ -208,10 +208,11 @@ class RegionTracker:
         # The step's runs are lengthened to whole vectors (16 cells) where the row allows:
         # the extra cells lie outside the band, where band_cutoff is exactly 0, so their
         # values stay as they are (2/3 of the time per stage measured at 256^3, runs of 20
-        # cells on average). The reinitialisation's runs are exactly its band's cells:
-        # cells outside it must keep their values.
+        # cells on average). The reinitialisation's runs are lengthened the same way: its
+        # kernels read the band's mask (_reinit_mask) and keep the values of the cells
+        # outside it, which the syncs copy unchanged (the work buffers equal cur there).
         self.step_runs = g.runs(self.step_band, pad=16)
-        self.reinit_runs = g.runs(self.reinit_band, pad=1)
+        self.reinit_runs = g.runs(self.reinit_band, pad=16)
         # max |V| of each work-item of region_euler and region_heun (see stable_dt)
         (items,), _, _ = self.runtime.list_launch(max(self.step_runs.n, 1))
         self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
@@ -246,6 +247,7 @@ class RegionTracker:
             self._k["dilate_mask"](q, (g.ny, g.nz), None, src.data, dst.data,
                                    np.int32(stride), np.int32(self.reinit_ring), *dims)
             src, dst = dst, src
+        self._reinit_mask = src  # the reinitialisation band's mask, read by its kernels
         return step, compact(self.runtime, src)
 
     def reinitialize(self, iterations: int | None = None,
@@ -265,7 +267,8 @@ class RegionTracker:
         self._sync(self.nxt, channels=1)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(ext if its else 0):
-            g.launch_runs(k["extend_outer"], band, self.cur.data, self.nxt.data,
+            g.launch_runs(k["extend_outer"], band, self.cur.data, self._reinit_mask.data,
+                          self.nxt.data,
                           g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
             self.cur, self.nxt = self.nxt, self.cur
         self._sync(self.ls0)
@@ -273,7 +276,8 @@ class RegionTracker:
         # here: a step writes it before reading it), they save a third of each sweep
         target = self.stage
         if its:
-            g.launch_runs(k["reinit3d_targets"], band, self.ls0.data, target.data,
+            g.launch_runs(k["reinit3d_targets"], band, self.ls0.data, self._reinit_mask.data,
+                          target.data,
                           *g.strides(), channels=self.nc)
         for _ in range(its):
             # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a

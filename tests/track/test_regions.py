@@ -31,6 +31,13 @@ def _setup(runtime, volumes):
     return g, devs, g.runs(band, pad=1), [d.get().reshape(-1).astype(np.float64) for d in devs]
 
 
+def _inband(runtime, g, runs):
+    """The band's mask on the device (one byte per padded cell), as the tracker keeps it."""
+    mask = np.zeros(g.padded_shape, np.uint8).reshape(-1)
+    mask[runs.band.indices.get()] = 1
+    return cla.to_device(runtime.queue, mask)
+
+
 def _inputs(kind, rng, nc):
     nz, ny, nx = SHAPE
     if kind == "random":
@@ -152,8 +159,8 @@ def test_reinit_from_targets_is_bitwise_the_plain_reinit(runtime, rng, kind, dty
         return runtime.kernel("regions.cl", name, dtype)
 
     target, plain, pre = u.copy(), u.copy(), u.copy()
-    g.launch_runs(kernel("reinit3d_targets"), runs, ls0.data, target.data, *g.strides(),
-                  channels=2)
+    g.launch_runs(kernel("reinit3d_targets"), runs, ls0.data, _inband(runtime, g, runs).data,
+                  target.data, *g.strides(), channels=2)
     dt = g.scalar(0.45)
     g.launch_runs(kernel("reinit3d_step"), runs, u.data, ls0.data, plain.data, dt,
                   *g.strides(), channels=2)
@@ -176,11 +183,46 @@ def test_extend_outer_matches_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 3)
     g, (ls,), runs, (ls_h,) = _setup(runtime, [data])
     out = ls.copy()
-    g.launch_runs(_kernel(runtime, "extend_outer"), runs, ls.data, out.data, g.scalar(0.5),
-                  g.scalar(0.5), g.scalar(2.0), *g.strides(), channels=2)
+    g.launch_runs(_kernel(runtime, "extend_outer"), runs, ls.data,
+                  _inband(runtime, g, runs).data, out.data, g.scalar(0.5), g.scalar(0.5),
+                  g.scalar(2.0), *g.strides(), channels=2)
     idx = runs.band.indices.get().astype(np.int64)
     want = ref.extend_outer(ls_h, idx, 0.5, 0.5, 2.0, 3, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(out.get().reshape(3, -1)[1:, idx], want, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["random", "structured"])
+def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, kind):
+    """The tracker lengthens the reinitialisation band's runs to whole vectors (16 cells):
+    with the band's mask, the extension, the targets and both Heun stages give bit for bit
+    what runs of the band's cells alone give, and the padding's cells keep their values."""
+    data = _inputs(kind, rng, 2)
+    g, (u, ls0), exact, (u_h, _) = _setup(runtime, [data, data + 0.2 * rng.normal(size=data.shape)])
+    padded = g.runs(exact.band, pad=16)
+    ends = padded.end.get()[: padded.n] - padded.start.get()[: padded.n]
+    assert (ends > exact.end.get()[: exact.n] - exact.start.get()[: exact.n]).any()
+    inband = _inband(runtime, g, exact)
+    dt = g.scalar(0.45)
+    results = []
+    for runs in (exact, padded):
+        ext, target, stage, acc = u.copy(), u.copy(), u.copy(), u.copy()
+        g.launch_runs(_kernel(runtime, "extend_outer"), runs, u.data, inband.data, ext.data,
+                      g.scalar(0.5), g.scalar(0.5), g.scalar(2.0), *g.strides(), channels=1)
+        g.launch_runs(_kernel(runtime, "reinit3d_targets"), runs, ls0.data, inband.data,
+                      target.data, *g.strides(), channels=2)
+        g.launch_runs(_kernel(runtime, "reinit3d_step_pre"), runs, u.data, ls0.data,
+                      target.data, stage.data, dt, *g.strides(), channels=2)
+        g.launch_runs(_kernel(runtime, "reinit3d_heun_pre"), runs, acc.data, stage.data,
+                      ls0.data, target.data, dt, *g.strides(), channels=2)
+        idx = exact.band.indices.get()
+        results.append([b.get().reshape(2, -1)[:, idx] for b in (ext, target, stage, acc)])
+        outside = np.ones(g.volume, bool)
+        outside[idx] = False
+        for b in (ext, stage, acc):
+            np.testing.assert_array_equal(b.get().reshape(2, -1)[:, outside],
+                                          u_h.reshape(2, -1)[:, outside])
+    for a, b in zip(*results, strict=True):
+        np.testing.assert_array_equal(a, b)
 
 
 @pytest.mark.parametrize("name", ["heun_average", "copy_runs"])
