@@ -60,19 +60,24 @@ REINIT_DT = 0.45
 # Extension of the Phi-hat along the surface's normals before each reinitialisation: the
 # cells within EXTEND_FROM[0] cells of the surface are kept (they fix Phi-hat on the
 # surface, so the regions), those beyond EXTEND_FROM[1] cells take the values carried out
-# from them. 10 upwind steps of 0.5 (CFL 0.5 sqrt(3) < 1) carry values 5 cells out; the
-# reinitialisation band's last cells were reached by earlier extensions (the surface moves
-# at most 1.6 cells between two). Phi-hat stays constant along the normals, meeting the
-# surface at right angles (see regions_mesh.along_normals for why), and cells that enter
-# the band as the surface moves get values from the surface, not stale ones.
+# from them. 6 upwind steps of 0.5 (CFL 0.5 sqrt(3) < 1) carry values 3 cells out, about
+# twice the 1.6 cells the surface moves between two reinitialisations at most: the
+# reinitialisation band's outer cells were reached by earlier extensions, and the Phi-hat
+# stay close to constant along the normals in between (the projected flow keeps them so).
+# 10 steps (5 cells), as before, cost 4 more sweeps of the reinitialisation band for
+# little: benchmarks/regions.py's cap errors changed by 0.03% at most, except at h = 0.1
+# (-0.23% to -0.10%); with 4 steps the grown sphere's cap (t = 1.2) drifted by 0.075%.
+# Phi-hat stays constant along the normals, meeting the surface at right angles (see
+# regions_mesh.along_normals for why), and cells that enter the band as the surface moves
+# get values from the surface, not stale ones.
 EXTEND_DT = 0.5
-EXTEND_ITERATIONS = 10
+EXTEND_ITERATIONS = 6
 EXTEND_FROM = (0.8, 1.5)
 # When the surface moved only part of the tracker's reinit_distance since the last
 # reinitialisation (a slow flow, or a block cut short at a saved time), that part of the
 # iterations, but at least these: 2 Heun iterations (0.9 cells of pseudo-time) and 4
 # extension steps (2 cells). At 256^3 a curvature flow moves 0.004 cells a step, so the
-# reinitialisation after 32 steps takes 2 + 4 instead of 6 + 10; the tests' curvature
+# reinitialisation after 32 steps takes 2 + 4 instead of 6 + 6; the tests' curvature
 # flows and caps moved by 0.02% at most (benchmarks/regions.py, docs/regions.md).
 MIN_REINIT_ITERATIONS = 2
 MIN_EXTEND_ITERATIONS = 4
