@@ -70,7 +70,16 @@ __kernel void write_chunks(__global const uchar* restrict mask, const int n, con
     const int c = get_global_id(0);
     const int end = min((c + 1) * chunk, n);
     int out = offsets[c];
-    for (int i = c * chunk; i < end; ++i)
+    int i = c * chunk;
+    // 8 bytes at a time while whole words remain (chunk is a multiple of 8, so the words are
+    // aligned): band masks are mostly zeros, and a zero word is skipped with one test
+    // instead of eight (the same list, in the same order)
+    for (; i + 8 <= end; i += 8) {
+        if (*(__global const ulong*)(mask + i) == 0) continue;
+        for (int j = i; j < i + 8; ++j)
+            if (mask[j]) list[out++] = j;
+    }
+    for (; i < end; ++i)
         if (mask[i]) list[out++] = i;
 }
 

@@ -83,6 +83,17 @@ def test_compaction_spans_many_chunks(runtime, rng):
     np.testing.assert_array_equal(lst.indices.get()[: lst.n], np.flatnonzero(flat))
 
 
+@pytest.mark.parametrize("n", [1, 7, 9, 4095, 4097, 12_345])
+@pytest.mark.parametrize("density", [0.0, 0.01, 0.3, 1.0])
+def test_compaction_of_sparse_and_ragged_masks(runtime, rng, n, density):
+    """write_chunks skips zero 8-byte words: lengths off the words and the chunks, nonzero
+    values other than 1, empty and full masks all give numpy's list."""
+    flat = (rng.random(n) < density) * rng.integers(1, 256, n).astype(np.uint8)
+    lst = compact(runtime, cla.to_device(runtime.queue, flat.astype(np.uint8)))
+    assert lst.n == np.count_nonzero(flat)
+    np.testing.assert_array_equal(lst.indices.get()[: lst.n], np.flatnonzero(flat))
+
+
 def test_list_kernel_touches_only_listed_cells(runtime, rng):
     ny, nx = 20, 30
     mask = rng.random((ny, nx)) < 0.3
