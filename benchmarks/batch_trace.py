@@ -7,9 +7,11 @@ on clpde's local cluster and on a plain Dask LocalCluster (Dask's worker setting
 "before" of clpde.batch.WORKER_CONFIG and of the preload's malloc settings), and the serial
 loop in this process. Every process first inpaints one photo untimed (its kernels). For
 each, the CPU (user and system, from /proc) of each thread over the timed part, divided by
-the number of photos, and the minor page faults per photo. Threads: "task" runs the
-inpaintings (a worker's Dask thread, the serial loop's main thread), "event loop" Dask's
-communication and monitors, "other" native threads (PoCL's, which run the kernels).
+the number of photos of the whole batch (so the rows add up to the CPU per photo), and the
+minor page faults per photo. Threads: "task" runs the inpaintings (a worker's Dask thread,
+the serial loop's main thread), "event loop" Dask's communication and monitors (with the
+scheduler, in the client), "main" the client's caller (hashes, manifest), "other" native
+threads (PoCL's, which run the kernels).
 CPU time hardly depends on what else the machine runs; compare rows of one run.
 """
 
@@ -27,8 +29,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from batch import dask_cluster, make_photos, scratch_mask  # noqa: E402
 
 
-def thread_cpu() -> dict:
-    """{thread kind: [user s, system s]} of this process, and its minor page faults."""
+def thread_cpu(main: str = "event loop") -> dict:
+    """{thread kind: [user s, system s]} of this process, and its minor page faults; `main`:
+    the kind of the main thread (a worker's runs its event loop)."""
     import resource
     import threading
 
@@ -41,9 +44,10 @@ def thread_cpu() -> dict:
         name = names.get(int(tid))
         if name is None:
             kind = "other"
-        elif "Dask-Default-Threads" in name or (name == "MainThread" and
-                                                 os.environ.get("TRACE_SERIAL")):
+        elif "Dask-Default-Threads" in name:
             kind = "task"
+        elif name == "MainThread":
+            kind = main
         else:
             kind = "event loop"
         user, system = int(fields[11]) / tick, int(fields[12]) / tick
@@ -101,12 +105,12 @@ def run_batch(photos, mask, workers, threads, plain: bool) -> None:
     with Client(cluster, set_as_default=False) as client:
         client.wait_for_workers(workers, timeout=120)
         client.run(warm, str(photos[0]), str(mask))
-        before, client_before = client.run(thread_cpu), thread_cpu()
+        before, client_before = client.run(thread_cpu), thread_cpu("main")
         start = time.perf_counter()
         result = batch.batch("inpaint", photos, out, mask=mask, client=client, force=True,
                              progress=False)
         wall = time.perf_counter() - start
-        after, client_after = client.run(thread_cpu), thread_cpu()
+        after, client_after = client.run(thread_cpu), thread_cpu("main")
     cluster.close()
     assert result.ok, result.failed
     parts = [(f"worker {k}", difference(after[a], before[a])) for k, a in enumerate(after)]
@@ -119,17 +123,15 @@ def run_serial(photos, mask) -> None:
     import clpde
     from clpde.io import read_image, write_image
 
-    os.environ["TRACE_SERIAL"] = "1"
     out = Path(tempfile.mkdtemp(prefix="clpde-trace-"))
     m = read_image(mask) > 0
     warm(photos[0], mask)
-    before, start = thread_cpu(), time.perf_counter()
+    before, start = thread_cpu("task"), time.perf_counter()
     for p in photos:
         write_image(out / p.name, clpde.inpaint(read_image(p), m, channel_axis=-1,
                                                 progress=False))
     wall = time.perf_counter() - start
-    del os.environ["TRACE_SERIAL"]
-    report("serial loop (this process)", [("serial", difference(thread_cpu(), before))],
+    report("serial loop (this process)", [("serial", difference(thread_cpu("task"), before))],
            len(photos), wall)
 
 
