@@ -81,16 +81,17 @@ def test_plan_workers_fills_the_cores():
 
 
 def _page_faults_of_temporaries() -> int:
-    """Minor page faults while 20 arrays of 4 MiB are made and dropped (after one warm-up):
-    a few when malloc reuses its heap, about 20 000 when each is mmapped anew."""
+    """Minor page faults while 20 float32 512x512 RGB images (3 MiB) are made and dropped
+    after one warm-up: a few when malloc reuses its heap, about 15 000 when each is mmapped
+    anew. (Under 4 MiB, where NumPy would ask for huge pages, which fault once per 2 MiB.)"""
     import resource
 
     import numpy as np
 
-    np.ones(1 << 19).sum()
+    np.ones((512, 512, 3), np.float32).sum()
     before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
     for _ in range(20):
-        np.ones(1 << 19).sum()
+        np.ones((512, 512, 3), np.float32).sum()
     return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
 
 
@@ -119,7 +120,7 @@ def test_the_preload_fixes_malloc_under_dasks_environment():
         run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                              text=True, check=True, timeout=120)
         faults[bool(fix)] = int(run.stdout.split()[-1])
-    assert faults[False] > 10000 and faults[True] < 2000, faults
+    assert faults[False] > 8000 and faults[True] < 2000, faults
 
 
 def test_batch_equals_serial_calls(client, photos, serial_inpainted, tmp_path):
