@@ -35,11 +35,13 @@ import shutil
 import sys
 import tempfile
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .imagedata import InputError
-from .io import IMAGE_FORMATS, atomic_output, replace_folder
+from .io import IMAGE_FORMATS, PathLike, atomic_output, replace_folder
 
 COMMANDS = ("inpaint", "denoise", "diffuse", "track", "surface")
 FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
@@ -641,9 +643,12 @@ def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=N
     return BatchFutures(client, specs, futures, prepared, manifest, outdir, start)
 
 
-def batch(command, inputs, output_dir, *, mask=None, masks=None, workers=None, threads=None,
-          scheduler=None, client=None, flow=None, tile=False, force=False, futures=False,
-          progress=None, argv=None, **options):
+def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
+          mask: PathLike | None = None, masks: PathLike | None = None,
+          workers: int | None = None, threads: int | None = None, scheduler: str | None = None,
+          client: Any = None, flow: str | None = None, tile: bool = False, force: bool = False,
+          futures: bool = False, progress: bool | None = None, argv: list[str] | None = None,
+          **options: Any) -> BatchResult | BatchFutures:
     """Run `command` ('inpaint', 'denoise', 'diffuse', 'track' or 'surface') on every input,
     over Dask workers, writing one output per input into the folder `output_dir`.
 

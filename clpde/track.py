@@ -163,9 +163,15 @@ def _user_features(features, frames: list[np.ndarray]) -> np.ndarray:
 class MorphingTracker:
     """The object form of `track`: iterate to get each frame's mask and level set in turn.
 
-    >>> tracker = MorphingTracker(frames, first_mask)
-    >>> for state in tracker.iterate():
-    ...     show(state.mask, state.level_set)
+    Examples
+    --------
+    >>> import numpy as np
+    >>> yy, xx = np.mgrid[:48, :48]
+    >>> frames = np.stack([((yy - 24) ** 2 + (xx - 16 - 3 * t) ** 2 < 64).astype(np.float32)
+    ...                    for t in range(3)])
+    >>> tracker = MorphingTracker(frames, frames[0] > 0.5)
+    >>> [state.mask.shape for state in tracker.iterate()]     # show(state.mask, ...)
+    [(48, 48), (48, 48), (48, 48)]
     """
 
     def __init__(self, frames: ArrayLike, first_mask: ArrayLike, *,
@@ -503,6 +509,19 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     also the (T, H, W) float32 level sets (negative inside); with return_discrepancy,
     also the (T,) final mean |beta| in each frame's band (0 for frame 0), whose high
     values mark frames of low confidence.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> yy, xx = np.mgrid[:48, :48]
+    >>> frames = np.stack([((yy - 24) ** 2 + (xx - 16 - 3 * t) ** 2 < 64).astype(np.float32)
+    ...                    for t in range(4)])                 # a disc moving right
+    >>> masks = clpde.track(frames, frames[0] > 0.5)
+    >>> masks.shape, masks.dtype
+    ((4, 48, 48), dtype('bool'))
+    >>> bool((masks[-1] == (frames[-1] > 0.5)).mean() > 0.99)   # found in the last frame
+    True
     """
     tracker = MorphingTracker(frames, first_mask, features=features, equalize=equalize,
                               smooth=smooth, smooth_steps=smooth_steps, band_width=band_width,

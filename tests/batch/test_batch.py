@@ -80,6 +80,49 @@ def test_plan_workers_fills_the_cores():
         plan_workers(workers=0)
 
 
+def _page_faults_of_temporaries() -> int:
+    """Minor page faults while 20 float32 512x512 RGB images (3 MiB) are made and dropped
+    after one warm-up: a few when malloc reuses its heap, about 15 000 when each is mmapped
+    anew. (Under 4 MiB, where NumPy would ask for huge pages, which fault once per 2 MiB.)"""
+    import resource
+
+    import numpy as np
+
+    np.ones((512, 512, 3), np.float32).sum()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for _ in range(20):
+        np.ones((512, 512, 3), np.float32).sum()
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+
+
+def test_workers_reuse_memory_and_run_no_profiler(client):
+    """Dask's nanny sets MALLOC_TRIM_THRESHOLD_, which made every image-sized temporary a
+    fresh mmap (13 000 page faults per 512x512 inpainting, docs/batch.md); clpde's workers
+    go without it and without the dashboard's profiler."""
+    assert set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values()) == {None}
+    assert all(n < 2000 for n in client.run(_page_faults_of_temporaries).values())
+    profiling = client.run(lambda dask_worker: "profile" in dask_worker.periodic_callbacks)
+    assert not any(profiling.values())
+
+
+def test_the_preload_fixes_malloc_under_dasks_environment():
+    """A worker of a cluster started by hand has the nanny's MALLOC_TRIM_THRESHOLD_; the
+    preload's malloc settings (clpde.batch._malloc_for_arrays) undo its effect."""
+    import inspect
+    import subprocess
+    import sys
+
+    measure = inspect.getsource(_page_faults_of_temporaries)
+    env = {**os.environ, "MALLOC_TRIM_THRESHOLD_": "65536"}
+    faults = {}
+    for fix in ("", "from clpde.batch import _malloc_for_arrays\n_malloc_for_arrays()\n"):
+        code = measure + fix + "print(_page_faults_of_temporaries())\n"
+        run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                             text=True, check=True, timeout=120)
+        faults[bool(fix)] = int(run.stdout.split()[-1])
+    assert faults[False] > 8000 and faults[True] < 2000, faults
+
+
 def test_batch_equals_serial_calls(client, photos, serial_inpainted, tmp_path):
     paths, scratch = photos
     out = tmp_path / "diffuse"

@@ -95,7 +95,39 @@ def test_film_restoration_gives_the_serial_loops_frames(tmp_path, address):
         for frame in decoded:
             serial.write(clpde.inpaint(frame, mask, channel_axis=-1, max_steps=300))
     assert result.frames == 12 and result.frames_sha256 == serial.frames_sha256
-    assert read_video(tmp_path / "restored.mp4")[0].shape == decoded.shape
+    assert (tmp_path / "restored.mp4").read_bytes() == (tmp_path / "serial.mp4").read_bytes()
+
+
+WRITE_FILM = """
+import sys
+import numpy as np
+from clpde.video import write_video
+yy, xx = np.mgrid[0:144, 0:176]
+frames = [np.stack([120 + 70 * np.sin((xx + 2 * t) / 6), 110 + 60 * np.cos((yy - t) / 5),
+                    100 + 40 * np.sin((xx + yy + t) / 9)], axis=-1).astype(np.uint8)
+          for t in range(30)]
+write_video(sys.argv[1], frames, 25)
+"""
+
+
+def test_film_bytes_do_not_depend_on_the_heap(tmp_path):
+    """The same frames give the same file whatever the heap held before: x264's mbtree read
+    memory it never initialised, so glibc's MALLOC_PERTURB_ (which fills new allocations
+    with a pattern) changed the bytes, and a film restored over workers differed from the
+    serial loop's with the same frames."""
+    import os
+    import subprocess
+    import sys
+
+    files = []
+    for name, perturb in (("plain.mp4", None), ("perturbed.mp4", "1")):
+        env = {k: v for k, v in os.environ.items() if k != "MALLOC_PERTURB_"}
+        if perturb:
+            env["MALLOC_PERTURB_"] = perturb
+        subprocess.run([sys.executable, "-c", WRITE_FILM, str(tmp_path / name)], env=env,
+                       check=True, timeout=120)
+        files.append((tmp_path / name).read_bytes())
+    assert files[0] == files[1]
 
 
 def test_frame_folder_to_folder_equals_serial_inpainting(tmp_path, address):

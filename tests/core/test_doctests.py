@@ -11,7 +11,7 @@ import pytest
 
 MODULES = ["clpde.data", "clpde.planar", "clpde.rof", "clpde.imagedata", "clpde.io",
            "clpde.surface.implicit",
-           "clpde.colour", "clpde.runtime"]
+           "clpde.colour", "clpde.runtime", "clpde.inpaint", "clpde.track"]
 
 
 @pytest.mark.parametrize("name", MODULES)
@@ -27,7 +27,7 @@ def test_every_public_function_listed_has_an_example():
     from clpde import data
 
     named = [clpde.diffuse, clpde.denoise_tv, clpde.PlanarFlow, clpde.stability_limit,
-             clpde.devices, clpde.use_device, clpde.get_runtime,
+             clpde.devices, clpde.use_device, clpde.get_runtime, clpde.inpaint, clpde.track,
              *(getattr(data, n) for n in data.__all__ if callable(getattr(data, n))
                and not isinstance(getattr(data, n), type))]
     missing = [f.__name__ for f in named if ">>>" not in (f.__doc__ or "")]
