@@ -14,6 +14,7 @@
 #include "common.cl"
 #include "godunov.h"
 #include "reinit.h"
+#include "extend.h"
 
 // ---- stencils ---------------------------------------------------------------------------
 
@@ -398,9 +399,7 @@ __kernel void extend_outer(__global const REAL* restrict ls,
         const REAL s = ls_sign(p) * RSQRT(gx * gx + gy * gy + gz * gz + (REAL)1e-12);
         const REAL ax = s * gx, ay = s * gy, az = s * gz;
         const REAL c = ls[j];
-        const REAL du = ax * (ax > 0 ? c - ls[j - 1] : ls[j + 1] - c) +
-                        ay * (ay > 0 ? c - ls[j - sx] : ls[j + sx] - c) +
-                        az * (az > 0 ? c - ls[j - sxy] : ls[j + sxy] - c);
+        const REAL du = upwind_transport(ls, j, sx, sxy, ax, ay, az);
         out[j] = inband[i] ? c - dt * w * du : c;
     }
 }

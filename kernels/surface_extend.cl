@@ -3,6 +3,7 @@
 // INTERP, NC, NORMALIZE, LINE_FIELD. Layout and conventions: surface.h.
 #include "common.cl"
 #include "surface.h"
+#include "extend.h"
 
 // Interpolation nodes and weights along one axis for position p (index units), with the
 // first node clamped into [0, n - NODES] so a read never leaves the volume.
@@ -149,10 +150,7 @@ __kernel void extend_pde_step(__global const REAL* restrict u, __global REAL* re
         const REAL ax = sgn * n.x * inv, ay = sgn * n.y * inv, az = sgn * n.z * inv;
         for (int c = 0; c < NC; ++c) {
             const int ic = c * plane + i;
-            const REAL dx = ax > 0 ? u[ic] - u[ic - 1] : u[ic + 1] - u[ic];
-            const REAL dy = ay > 0 ? u[ic] - u[ic - sx] : u[ic + sx] - u[ic];
-            const REAL dz = az > 0 ? u[ic] - u[ic - sxy] : u[ic + sxy] - u[ic];
-            v[ic] = u[ic] - r * (ax * dx + ay * dy + az * dz);
+            v[ic] = u[ic] - r * upwind_transport(u, ic, sx, sxy, ax, ay, az);
         }
     }
 }
