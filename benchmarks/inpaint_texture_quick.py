@@ -25,7 +25,7 @@ across the edge with the steps just beside it on the same line, in the same imag
     seam_ring = R_2(result) / R_2(original)   (2 px blocks: the 2 px either side of the edge,
                 against the next 2 px out and in; a soft jump spread over the ring).
 
-Values in [0, 1], steps averaged over the colour channels. The original scores exactly 1; >1
+Image values in [0, 1], steps averaged over the colour channels. The original scores exactly 1; >1
 is an edge at the boundary stronger than the texture beside it (a visible seam); <1 is a
 boundary smoother than its surroundings (a diffusion that continues the border values).
 Normalising by the steps beside the edge, not only by the original's step, is what makes a
@@ -35,11 +35,22 @@ side over the original's (0.87 on astronaut-80: the zero gradient inside the hol
 the jump), and the width-2 step across alone over the original's (0.98 on camera-60's
 grass: a constant is a good guess of an uncorrelated texture). On a smooth boundary (the
 coffee-100 wall) the steps beside the edge are small and the ratios large.
-Seams between regions copied from different sources inside the hole are not measured: no
-method here exposes its source map.
-Control rows (asserted >1.2 on each case): the hole filled with the mean of the known
-pixels on its border ("constant"), and with a copy of the image shifted by 1.5 hole widths
-("shifted copy", a hard paste of real texture).
+
+    seam_inner = R_1 on the seams inside the hole: the 4-neighbour pairs p, q = p + d, both
+                 in the hole, whose sources are not neighbours (s(q) != s(p) + d), where
+                 two copied regions meet. Only for the clpde methods that copy (exemplar,
+                 structure-texture's texture part, the default when it picks the exemplar):
+                 with --seams the script wraps clpde.inpainting.stitch.stitch to record the
+                 last vote's source of each hole pixel (the wrapper passes everything on
+                 unchanged). The peers do not expose their source maps; their cell is "-".
+With --seams, "clpde-exemplar-nostitch" is the exemplar with stitch=False (the last vote's
+copy as it is; its seam_inner is on the exemplar's recorded seams, the same seed giving the
+same field), for comparison. Control rows (asserted >1.2 on each case): the hole
+filled with the mean of the known pixels on its border ("constant"), and with a copy of
+the image shifted by 1.5 hole widths ("shifted copy", a hard paste of real texture); for
+seam_inner, the hole filled with a plain copy of the exemplar's recorded sources, I(s(p))
+("control: source paste", asserted >1.05 only: it is 1.18 on astronaut-80, many seams
+joining patches that look alike).
 """
 
 from __future__ import annotations
@@ -92,6 +103,15 @@ def clpde_method(name):
         out = module.solve(to_data(image), mask, get_runtime(), seed=0)
         return from_data(out, image)
     return run
+
+
+def exemplar_nostitch(image, mask):
+    """clpde's exemplar with stitch=False (the last vote's copy, not re-solved)."""
+    from clpde.inpainting import exemplar
+    from clpde.runtime import get_runtime
+
+    return from_data(exemplar.solve(to_data(image), mask, get_runtime(), seed=0, stitch=False),
+                     image)
 
 
 def clpde_default(image, mask):
@@ -156,6 +176,7 @@ def methods():
         "patchmatch-cython": patchmatch_cython,
         "clpde-exemplar": clpde_method("exemplar"),
         "clpde-structure-texture": clpde_method("structure-texture"),
+        "clpde-exemplar-nostitch": exemplar_nostitch,
         "clpde-default": clpde_default,
         "skimage-biharmonic": biharmonic,
         "opencv-ns": opencv(cv2.INPAINT_NS),
@@ -236,6 +257,92 @@ def seam_scores(result, image, mask):
                  for w in (1, 2))
 
 
+SOURCES = []  # (hole box, flat source index per hole pixel) per call of stitch.stitch
+
+
+def record_sources():
+    """Wrap clpde.inpainting.stitch.stitch to record its sources (seam_inner); idempotent."""
+    from clpde.inpainting import stitch as st
+
+    if getattr(st.stitch, "records", False):
+        return
+    inner = st.stitch
+
+    def stitch(img, hole, sources, r):
+        SOURCES.append((np.array(hole, bool), np.array(sources[0], np.int64)))
+        return inner(img, hole, sources, r)
+
+    stitch.records = True
+    st.stitch = stitch
+
+
+def source_map(mask):
+    """(sy, sx) full-image source of each pixel from the last recorded call (-1 where none),
+    or None if nothing matching this mask was recorded."""
+    if not SOURCES:
+        return None
+    hole, src = SOURCES[-1]
+    if hole.sum() != mask.sum():
+        return None
+    rows, cols = np.nonzero(mask)
+    hr, hc = np.nonzero(hole)
+    r0, c0 = rows.min() - hr.min(), cols.min() - hc.min()
+    W = hole.shape[1]
+    sy = np.full(mask.shape, -1, np.int64)
+    sx = np.full(mask.shape, -1, np.int64)
+    ok = src >= 0
+    sy[hr[ok] + r0, hc[ok] + c0] = src[ok] // W + r0
+    sx[hr[ok] + r0, hc[ok] + c0] = src[ok] % W + c0
+    return sy, sx
+
+
+def _inner_ratio(image, mask, sy, sx):
+    """R_1 on the pairs inside the hole whose sources are not neighbours (docstring)."""
+    f = to_data(image)
+    across = beside = 0.0
+    pairs = 0
+    for axis in (1, 2):
+        a = axis - 1
+        q_in = mask & _shift(mask, 1, a)
+        has = (sy >= 0) & _shift(sy >= 0, 1, a)
+        dy, dx = (1, 0) if a == 0 else (0, 1)
+        seam = q_in & has & ((_shift(sy, 1, a) != sy + dy) | (_shift(sx, 1, a) != sx + dx))
+        n = mask.shape[a]
+        ok = np.arange(n) + 2 < n
+        seam &= ok[:, None] if a == 0 else ok[None, :]
+        ok = np.arange(n) >= 1
+        seam &= ok[:, None] if a == 0 else ok[None, :]
+        up, uq = f, _shift(f, 1, axis)
+        step = np.abs(uq - up).mean(0)[seam].sum()
+        out = np.abs(_shift(f, 2, axis) - uq).mean(0)[seam].sum()
+        inn = np.abs(up - _shift(f, -1, axis)).mean(0)[seam].sum()
+        across += float(step)
+        beside += 0.5 * float(out + inn)
+        pairs += int(seam.sum())
+    return across / max(beside, 1e-12), pairs
+
+
+def seam_inner(result, image, mask, smap):
+    """(seam_inner, number of seam pairs) or (None, 0) without a source map."""
+    if smap is None:
+        return None, 0
+    r, pairs = _inner_ratio(result, mask, *smap)
+    if pairs == 0:
+        return None, 0
+    o, _ = _inner_ratio(image, mask, *smap)
+    return r / max(o, 1e-12), pairs
+
+
+def source_paste(image, mask, smap):
+    """The hole filled with a plain copy of its recorded sources."""
+    img = np.asarray(image)
+    sy, sx = smap
+    out = img.copy()
+    ok = mask & (sy >= 0)
+    out[ok] = img[sy[ok], sx[ok]]
+    return out
+
+
 def seam_controls(image, mask):
     """Hard pastes that must score clearly above 1: {name: filled image}."""
     img = np.asarray(image)
@@ -303,6 +410,10 @@ def main(argv=None):
     if args.only:
         cases = [c for c in cases if c["name"] in args.only.split(",")]
     ms = methods()
+    if not args.seams:
+        ms.pop("clpde-exemplar-nostitch")
+    else:
+        record_sources()
     if args.methods:
         ms = {k: v for k, v in ms.items() if k in args.methods.split(",")}
     # Warm up the kernel builds so that the first case's time is not a compile time.
@@ -312,15 +423,24 @@ def main(argv=None):
             fn(warm["image"], warm["mask"])
     rows = []
     for case in cases:
+        exemplar_smap = None
         for name, fn in ms.items():
+            SOURCES.clear()
             t0 = time.perf_counter()
             result = fn(case["image"], case["mask"])
             seconds = time.perf_counter() - t0
+            smap = source_map(case["mask"]) if name.startswith("clpde") else None
+            if name == "clpde-exemplar-nostitch":
+                smap = exemplar_smap  # the same seed and field: only the stitch is left out
+            if name == "clpde-exemplar":
+                exemplar_smap = smap
             psnr, ssim, energy = scores(result, case["image"], case["mask"])
             edge, ring = seam_scores(result, case["image"], case["mask"])
             rows.append({"case": case["name"], "class": case["class"], "method": name,
                          "psnr": psnr, "ssim": ssim, "edge_energy": energy, "seconds": seconds,
                          "seam_edge": edge, "seam_ring": ring,
+                         "seam_inner": seam_inner(result, case["image"], case["mask"], smap)[0],
+                         "seam_pairs": seam_inner(result, case["image"], case["mask"], smap)[1],
                          "hole_fraction": float(case["mask"].mean())})
             print(f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
                   f"SSIM {ssim:.3f} energy {energy:.2f} seam {edge:.2f}/{ring:.2f} "
@@ -333,7 +453,16 @@ def main(argv=None):
                 else:
                     assert edge > 1.2 and ring > 1.2, (case["name"], name, edge, ring)
                 rows.append({"case": case["name"], "class": "thick", "method": name,
-                             "seam_edge": edge, "seam_ring": ring})
+                             "seam_edge": edge, "seam_ring": ring, "seam_inner": None})
+            if args.seams and exemplar_smap is not None:
+                paste = source_paste(case["image"], case["mask"], exemplar_smap)
+                inner, _ = seam_inner(paste, case["image"], case["mask"], exemplar_smap)
+                # weaker than the hard pastes above: many seams join near-alike patches
+                assert inner is not None and inner > 1.05, (case["name"], inner)
+                edge, ring = seam_scores(paste, case["image"], case["mask"])
+                rows.append({"case": case["name"], "class": "thick",
+                             "method": "control: source paste", "seam_edge": edge,
+                             "seam_ring": ring, "seam_inner": inner})
     if args.seams:
         seam_table(rows)
     else:
@@ -349,14 +478,21 @@ def seam_table(rows):
     thick = [r for r in rows if r["class"] == "thick"]
     cases = list(dict.fromkeys(r["case"] for r in thick))
     names = list(dict.fromkeys(r["method"] for r in thick))
-    print("| method | " + " | ".join(cases) + " | mean edge | mean ring |")
-    print("|---|" + "---|" * (len(cases) + 2))
+    print("| method | " + " | ".join(cases) + " | mean edge | mean ring | mean inner |")
+    print("|---|" + "---|" * (len(cases) + 3))
+
+    def fmt(v):
+        return "-" if v is None else f"{v:.2f}"
+
     for name in names:
         rs = {r["case"]: r for r in thick if r["method"] == name}
-        cells = [f"{rs[c]['seam_edge']:.2f} / {rs[c]['seam_ring']:.2f}" for c in cases]
-        me = np.mean([r["seam_edge"] for r in rs.values()])
-        mr = np.mean([r["seam_ring"] for r in rs.values()])
-        print(f"| {name} | " + " | ".join(cells) + f" | {me:.2f} | {mr:.2f} |")
+        cells = [" / ".join(fmt(rs[c].get(k)) for k in ("seam_edge", "seam_ring", "seam_inner"))
+                 if c in rs else "" for c in cases]
+        means = []
+        for k in ("seam_edge", "seam_ring", "seam_inner"):
+            vs = [r[k] for r in rs.values() if r.get(k) is not None]
+            means.append(fmt(float(np.mean(vs))) if vs else "-")
+        print(f"| {name} | " + " | ".join(cells) + " | " + " | ".join(means) + " |")
 
 
 def mean_table(rows, ms):
