@@ -42,7 +42,9 @@ coffee-100 wall) the steps beside the edge are small and the ratios large.
                  structure-texture's texture part, the default when it picks the exemplar):
                  with --seams the script wraps clpde.inpainting.stitch.stitch to record the
                  last vote's source of each hole pixel (the wrapper passes everything on
-                 unchanged). The peers do not expose their source maps; their cell is "-".
+                 unchanged). seam_inner4 is R_4 on the same pairs (4 px blocks either
+                 side: a transition spread over a few pixels, as a stitch leaves it).
+                 The peers do not expose their source maps; their cell is "-".
 With --seams, "clpde-exemplar-nostitch" is the exemplar with stitch=False (the last vote's
 copy as it is; its seam_inner is on the exemplar's recorded seams, the same seed giving the
 same field), for comparison. Control rows (asserted >1.2 on each case): the hole
@@ -296,8 +298,8 @@ def source_map(mask):
     return sy, sx
 
 
-def _inner_ratio(image, mask, sy, sx):
-    """R_1 on the pairs inside the hole whose sources are not neighbours (docstring)."""
+def _inner_ratio(image, mask, sy, sx, width=1):
+    """R_width on the pairs inside the hole whose sources are not neighbours (docstring)."""
     f = to_data(image)
     across = beside = 0.0
     pairs = 0
@@ -308,28 +310,30 @@ def _inner_ratio(image, mask, sy, sx):
         dy, dx = (1, 0) if a == 0 else (0, 1)
         seam = q_in & has & ((_shift(sy, 1, a) != sy + dy) | (_shift(sx, 1, a) != sx + dx))
         n = mask.shape[a]
-        ok = np.arange(n) + 2 < n
+        ok = (np.arange(n) + 2 * width < n) & (np.arange(n) >= 2 * width - 1)
         seam &= ok[:, None] if a == 0 else ok[None, :]
-        ok = np.arange(n) >= 1
-        seam &= ok[:, None] if a == 0 else ok[None, :]
-        up, uq = f, _shift(f, 1, axis)
-        step = np.abs(uq - up).mean(0)[seam].sum()
-        out = np.abs(_shift(f, 2, axis) - uq).mean(0)[seam].sum()
-        inn = np.abs(up - _shift(f, -1, axis)).mean(0)[seam].sum()
+
+        def block(k, axis=axis):
+            return sum(_shift(f, k + j, axis) for j in range(width)) / width
+
+        b_out, b_in = block(1), block(1 - width)
+        step = np.abs(b_out - b_in).mean(0)[seam].sum()
+        out = np.abs(block(1 + width) - b_out).mean(0)[seam].sum()
+        inn = np.abs(b_in - block(1 - 2 * width)).mean(0)[seam].sum()
         across += float(step)
         beside += 0.5 * float(out + inn)
         pairs += int(seam.sum())
     return across / max(beside, 1e-12), pairs
 
 
-def seam_inner(result, image, mask, smap):
-    """(seam_inner, number of seam pairs) or (None, 0) without a source map."""
+def seam_inner(result, image, mask, smap, width=1):
+    """(seam_inner at this width, number of seam pairs) or (None, 0) without a source map."""
     if smap is None:
         return None, 0
-    r, pairs = _inner_ratio(result, mask, *smap)
+    r, pairs = _inner_ratio(result, mask, *smap, width)
     if pairs == 0:
         return None, 0
-    o, _ = _inner_ratio(image, mask, *smap)
+    o, _ = _inner_ratio(image, mask, *smap, width)
     return r / max(o, 1e-12), pairs
 
 
@@ -441,6 +445,8 @@ def main(argv=None):
                          "seam_edge": edge, "seam_ring": ring,
                          "seam_inner": seam_inner(result, case["image"], case["mask"], smap)[0],
                          "seam_pairs": seam_inner(result, case["image"], case["mask"], smap)[1],
+                         "seam_inner4": seam_inner(result, case["image"], case["mask"], smap,
+                                                   4)[0],
                          "hole_fraction": float(case["mask"].mean())})
             print(f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
                   f"SSIM {ssim:.3f} energy {energy:.2f} seam {edge:.2f}/{ring:.2f} "
@@ -462,7 +468,9 @@ def main(argv=None):
                 edge, ring = seam_scores(paste, case["image"], case["mask"])
                 rows.append({"case": case["name"], "class": "thick",
                              "method": "control: source paste", "seam_edge": edge,
-                             "seam_ring": ring, "seam_inner": inner})
+                             "seam_ring": ring, "seam_inner": inner,
+                             "seam_inner4": seam_inner(paste, case["image"], case["mask"],
+                                                       exemplar_smap, 4)[0]})
     if args.seams:
         seam_table(rows)
     else:
@@ -478,8 +486,9 @@ def seam_table(rows):
     thick = [r for r in rows if r["class"] == "thick"]
     cases = list(dict.fromkeys(r["case"] for r in thick))
     names = list(dict.fromkeys(r["method"] for r in thick))
-    print("| method | " + " | ".join(cases) + " | mean edge | mean ring | mean inner |")
-    print("|---|" + "---|" * (len(cases) + 3))
+    print("| method | " + " | ".join(cases) + " | mean edge | mean ring | mean inner | "
+          "mean inner4 |")
+    print("|---|" + "---|" * (len(cases) + 4))
 
     def fmt(v):
         return "-" if v is None else f"{v:.2f}"
@@ -489,7 +498,7 @@ def seam_table(rows):
         cells = [" / ".join(fmt(rs[c].get(k)) for k in ("seam_edge", "seam_ring", "seam_inner"))
                  if c in rs else "" for c in cases]
         means = []
-        for k in ("seam_edge", "seam_ring", "seam_inner"):
+        for k in ("seam_edge", "seam_ring", "seam_inner", "seam_inner4"):
             vs = [r[k] for r in rs.values() if r.get(k) is not None]
             means.append(fmt(float(np.mean(vs))) if vs else "-")
         print(f"| {name} | " + " | ".join(cells) + " | " + " | ".join(means) + " |")
