@@ -7,6 +7,7 @@ ghost layer is refreshed by `Field.fill_ghosts` between steps.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,7 @@ _REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 
                "max": 6}
 
 
-class BaseGrid:
+class BaseGrid(ABC):
     """What the 2D and 3D grids share (Grid here, clpde.surface.grid3d.Grid3D): kernel
     lookups in the grid's dtype, scalars, the interior of padded arrays and launches over
     index lists. A subclass is a frozen dataclass with `runtime`, `dtype` and `ghost`, and
@@ -37,12 +38,12 @@ class BaseGrid:
     ghost: int
 
     @property
-    def shape(self) -> tuple[int, ...]:
-        raise NotImplementedError
+    @abstractmethod
+    def shape(self) -> tuple[int, ...]: ...
 
     @property
-    def channel_stride(self) -> int:
-        raise NotImplementedError
+    @abstractmethod
+    def channel_stride(self) -> int: ...
 
     @property
     def list_channels(self) -> int:
