@@ -770,12 +770,13 @@ class Inpainting:
             if self.auto:
                 from .inpainting import choose
 
-                method, options = choose.pick(choose.features(data, omega), self.method)
+                depth = choose.hole_depth(omega)  # both measures need it
+                method, options = choose.pick(choose.features(data, omega, depth), self.method)
                 if method == "exemplar" and options.get("structure"):
                     # the thick-hole rule: only the thick components go to the exemplar, in
                     # a second pass after the structure method has filled the whole box
                     # (text and scratches cost the exemplar 10x the time for no gain)
-                    part = choose.exemplar_part(omega)
+                    part = choose.exemplar_part(omega, depth)
                     if np.array_equal(part, omega):
                         part = None
                     else:

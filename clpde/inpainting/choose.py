@@ -94,14 +94,21 @@ def _periodicity(detail, ok) -> float:
     return float(a.max())
 
 
-def features(data: np.ndarray, omega: np.ndarray) -> dict:
+def hole_depth(omega: np.ndarray) -> np.ndarray:
+    """Each hole pixel's Euclidean distance to the nearest known pixel (0 where known); the
+    pixels beyond the box's edge count as known."""
+    return ndimage.distance_transform_edt(np.pad(omega, 1))[1:-1, 1:-1]
+
+
+def features(data: np.ndarray, omega: np.ndarray, depth: np.ndarray | None = None) -> dict:
     """{"radius", "texture", "periodicity"} of the hole ``omega`` in ``data`` ((channels,
-    rows, cols) in [0, 1]; values inside omega are not read)."""
+    rows, cols) in [0, 1]; values inside omega are not read). ``depth``: hole_depth(omega),
+    if the caller has it already."""
     omega = np.asarray(omega, bool)
     if not omega.any():
         return {"radius": 0.0, "texture": 0.0, "periodicity": 0.0}
     known = ~omega
-    depth = ndimage.distance_transform_edt(np.pad(omega, 1))[1:-1, 1:-1]
+    depth = hole_depth(omega) if depth is None else depth
     detail, ok = _detail(data, known)
     ring = known & (ndimage.distance_transform_edt(known) <= RING)
     texture = float(np.sqrt(np.mean(detail[ring].astype(np.float64) ** 2))) if ring.any() else 0.0
@@ -109,7 +116,7 @@ def features(data: np.ndarray, omega: np.ndarray) -> dict:
             "periodicity": _periodicity(detail, ok)}
 
 
-def exemplar_part(omega: np.ndarray) -> np.ndarray:
+def exemplar_part(omega: np.ndarray, depth: np.ndarray | None = None) -> np.ndarray:
     """The pixels of ``omega`` that the thick-hole rule gives to the exemplar (module
     docstring): the parts where the hole is at least MIN_RADIUS thick, in the connected
     components of the hole that are mostly such parts.
@@ -120,9 +127,10 @@ def exemplar_part(omega: np.ndarray) -> np.ndarray:
     discs). A component of the hole (8-connected) whose thick parts are under MIN_SHARE of
     its pixels is a stroke that is thick in places (bold text, a scratch through a letter)
     and stays with the structure method as a whole; in the others only the thick parts go
-    to the exemplar, the strokes that touch them stay with the structure method."""
+    to the exemplar, the strokes that touch them stay with the structure method.
+    ``depth``: hole_depth(omega), if the caller has it already."""
     omega = np.asarray(omega, bool)
-    depth = ndimage.distance_transform_edt(np.pad(omega, 1))[1:-1, 1:-1]
+    depth = hole_depth(omega) if depth is None else depth
     core = depth >= MIN_RADIUS
     if not core.any():
         return np.zeros_like(omega)
