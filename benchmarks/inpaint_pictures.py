@@ -168,11 +168,13 @@ def write(path, image):
 
 
 if __name__ == "__main__":
-    out = (
-        Path(sys.argv[1])
-        if len(sys.argv) > 1
-        else Path(__file__).resolve().parents[1] / "docs" / "images"
-    )
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", nargs="?", type=Path,
+                        default=Path(__file__).resolve().parents[1] / "docs" / "images",
+                        help="folder for the pictures (default: docs/images)")
+    out = parser.parse_args().out
     oblique(out / "inpaint_oblique.png")
     thick(out / "inpaint_thick_levels.png")
     soft(out / "inpaint_soft.png")
