@@ -185,8 +185,8 @@ class Field:
         g = self.grid
         q = g.runtime.queue
         args = (self.data.data, np.int32(mode), g.scalar(value), *g.args(g.nx))
-        g.kernel("fields.cl", "fill_ghost_cols")(q, (g.ny, g.nc), None, *args)
-        g.kernel("fields.cl", "fill_ghost_rows")(q, (g.sx, g.nc), None, *args)
+        g.kernel("fields.cl", "fill_ghost_cols")(q, *g.runtime.items(g.ny, g.nc), *args)
+        g.kernel("fields.cl", "fill_ghost_rows")(q, *g.runtime.items(g.sx, g.nc), *args)
 
     def reduce(self, op: str, other: Field | None = None) -> np.ndarray:
         """A per-channel reduction over the interior, computed on the device.
@@ -198,7 +198,7 @@ class Field:
         partial = cla.empty(g.runtime.queue, (g.nc, g.ny), g.dtype)
         b = (other if other is not None else self).data.data
         g.kernel("fields.cl", "row_reduce")(
-            g.runtime.queue, (1, g.ny, g.nc), None,
+            g.runtime.queue, (1, g.ny, g.nc), (1, 1, 1),  # a fixed work-group (Runtime.items)
             self.data.data, b, np.int32(_REDUCE_OPS[op]), partial.data, *g.args(g.nx),
         )
         rows = partial.get().astype(np.float64)
@@ -247,7 +247,8 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     total = cla.empty(q, 1, np.int32)
     flat = mask.reshape(n)
 
-    runtime.kernel("fields.cl", "count_chunks")(q, (nchunks,), None, flat.data, np.int32(n),
+    launch = runtime.items(nchunks)
+    runtime.kernel("fields.cl", "count_chunks")(q, *launch, flat.data, np.int32(n),
                                                 np.int32(chunk), counts.data)
     runtime.kernel("fields.cl", "exclusive_scan_serial")(q, (1,), None, counts.data,
                                                          np.int32(nchunks), total.data)
@@ -255,7 +256,7 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     indices = cla.empty(q, max(count, 1), np.int32)
     if count:
         runtime.kernel("fields.cl", "write_chunks")(
-            q, (nchunks,), None, flat.data, np.int32(n), np.int32(chunk), counts.data, indices.data
+            q, *launch, flat.data, np.int32(n), np.int32(chunk), counts.data, indices.data
         )
     return IndexList(indices, count)
 

@@ -360,7 +360,7 @@ class LevelSolver:
             kernel = runtime.new_kernel("inpaint.cl", "inpaint_ghosts", g.dtype, **defines)
             n = self.ghost_pairs.shape[0]
             kernel.set_args(buf, self.ghost_pairs.data, np.int32(n), np.int32(g.plane))
-            return kernel, (n, g.nc), None, n
+            return kernel, *runtime.items(n, g.nc), n
 
         dt, eps = g.scalar(params.dt), g.scalar(1e-10)
         ddt = g.scalar(params.diffusion_dt)
@@ -405,7 +405,7 @@ class LevelSolver:
     def _fill_ghosts(self, field: Field) -> None:
         if self.ghosts:
             n = self.ghost_pairs.shape[0]
-            self.k_ghosts(self.q, (n, self.grid.nc), None, field.data.data,
+            self.k_ghosts(self.q, *self.grid.runtime.items(n, self.grid.nc), field.data.data,
                           self.ghost_pairs.data, np.int32(n), np.int32(self.grid.plane))
 
     # -- building blocks ---------------------------------------------------------------

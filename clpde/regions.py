@@ -244,12 +244,13 @@ class RegionTracker:
         0 from their allocation, so nothing is cleared (clearing a 256^3 mask cost 48 ms)."""
         g, q = self.grid, self.runtime.queue
         dims = (np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), *g.strides(), np.int32(g.ghost))
-        self._k["region_band_mask"](q, (g.ny, g.nz), None, self.cur.data, self._mask.data,
+        launch = self.runtime.items(g.ny, g.nz)
+        self._k["region_band_mask"](q, *launch, self.cur.data, self._mask.data,
                                     g.scalar(self.width), *dims)
         step = compact(self.runtime, self._mask)
         src, dst = self._mask, self._mask2
         for stride in (1, g.sx, g.sxy) if self.reinit_ring else ():
-            self._k["dilate_mask"](q, (g.ny, g.nz), None, src.data, dst.data,
+            self._k["dilate_mask"](q, *launch, src.data, dst.data,
                                    np.int32(stride), np.int32(self.reinit_ring), *dims)
             src, dst = dst, src
         self._reinit_mask = src  # the reinitialisation band's mask, read by its kernels

@@ -19,6 +19,7 @@ import numpy as np
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("planar.cl",)
+ITEM_GROUP = 64  # the work-group of Runtime.items
 
 
 class ClpdeError(RuntimeError):
@@ -526,6 +527,17 @@ class Runtime:
         gx = -(-nx // lx) * lx
         gy = -(-ny // ly) * ly
         return (gx, gy, nz), (lx, ly, 1), 1
+
+    def items(self, n: int, *rest: int):
+        """(global size, local size) for a kernel of n work-items along its first axis, each
+        checking its own index, and `rest` along the others.
+
+        The work-group is fixed, ITEM_GROUP items along the first axis, and the global size
+        rounded up to it: PoCL compiles a kernel anew for every work-group size it meets, and
+        the one it picks by itself follows the global size (measured: each new image size
+        cost 0.75 s of ghost-fill builds, each new band length 0.25 s of compaction builds).
+        """
+        return (-(-n // ITEM_GROUP) * ITEM_GROUP, *rest), (ITEM_GROUP,) + (1,) * len(rest)
 
     def list_launch(self, n: int):
         """(global size, local size, run) for a kernel over a compacted list of n items."""

@@ -41,11 +41,15 @@ __kernel void copy_interior(__global const REAL* restrict src, __global REAL* re
 // ---- compaction of a mask into a list of flat indices, in three passes ------------------
 // The mask is a flat uchar array of n entries cut into chunks of `chunk`; each work-item
 // counts one chunk, one work-item turns counts into offsets, then each chunk writes its own
-// indices in order. Deterministic, and needs no atomics.
+// indices in order. Deterministic, and needs no atomics. The launches are rounded up to
+// whole work-groups (Runtime.items): the items past the last chunk return at once.
+#define NCHUNKS(n, chunk) max(1, ((n) + (chunk) - 1) / (chunk))
+
 __kernel void count_chunks(__global const uchar* restrict mask, const int n, const int chunk,
                            __global int* restrict counts)
 {
     const int c = get_global_id(0);
+    if (c >= NCHUNKS(n, chunk)) return;
     const int end = min((c + 1) * chunk, n);
     int total = 0;
     for (int i = c * chunk; i < end; ++i) total += mask[i] != 0;
@@ -68,6 +72,7 @@ __kernel void write_chunks(__global const uchar* restrict mask, const int n, con
                            __global const int* restrict offsets, __global int* restrict list)
 {
     const int c = get_global_id(0);
+    if (c >= NCHUNKS(n, chunk)) return;
     const int end = min((c + 1) * chunk, n);
     int out = offsets[c];
     int i = c * chunk;

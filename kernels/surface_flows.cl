@@ -170,6 +170,7 @@ __kernel void chunk_sum(__global const REAL* restrict a, const int n, const int 
                         __global REAL* restrict partial)
 {
     const int g = get_global_id(0);
+    if (g >= max(1, (n + chunk - 1) / chunk)) return;  // past the last chunk (Runtime.items)
     const int end = min((g + 1) * chunk, n);
     partial[g] = sum_rows(a + g * chunk, end - g * chunk);
 }

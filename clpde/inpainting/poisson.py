@@ -49,7 +49,7 @@ def item_geometry(runtime, n: int):
         items = max(1, min(8 * runtime.device.max_compute_units, -(-n // 256)))
         per = -(-n // items)
         items = -(-n // per)
-        return items, None, per, 1, per, items
+        return items, 1, per, 1, per, items  # a fixed work-group: one PoCL build (Runtime.items)
     items = min(1024, -(-n // 64) * 64)
     return items, 64, 1, items, -(-n // items), items
 
@@ -74,7 +74,7 @@ class DeviceList:
         and the shared kernel object of the runtime's cache keeps its own arguments."""
         kernel = cl.Kernel(template.program, template.function_name)
         kernel.set_args(*args, *self.args())
-        local = None if self.lsize is None else (self.lsize, 1)
+        local = (self.lsize, 1)
         queue = runtime.queue
         if self.n == 0:
             return lambda: None

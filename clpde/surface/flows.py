@@ -337,7 +337,8 @@ def device_sum(grid, a, n: int, chunk: int = 2048, defines: dict | None = None) 
     groups = max(1, -(-n // chunk))
     partial = cla.empty(grid.runtime.queue, groups, grid.dtype)
     grid.kernel("surface_flows.cl", "chunk_sum", **(defines or {}))(
-        grid.runtime.queue, (groups,), None, a.data, np.int32(n), np.int32(chunk), partial.data)
+        grid.runtime.queue, *grid.runtime.items(groups), a.data, np.int32(n), np.int32(chunk),
+        partial.data)
     return float(partial.get().astype(np.float64).sum())
 
 
@@ -370,8 +371,8 @@ class _DynamicLambda:
                               self.defines)
         for a, partial in zip(self.terms, self.partials, strict=False):
             g.kernel("surface_flows.cl", "chunk_sum", **self.defines)(
-                q, (self.groups,), None, a.data, np.int32(s.node_band.n), np.int32(self.CHUNK),
-                partial.data)
+                q, *s.runtime.items(self.groups), a.data, np.int32(s.node_band.n),
+                np.int32(self.CHUNK), partial.data)
         g.kernel("surface_flows.cl", "tv_lambda_update", **self.defines)(
             q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),

@@ -111,7 +111,7 @@ class Grid3D(BaseGrid):
         """Interior cells with |psi| < width (psi in the units of `width`), on the device."""
         mask = cla.zeros(self.runtime.queue, self.padded_shape, np.uint8)
         self.kernel("surface_band.cl", "band_mask")(
-            self.runtime.queue, (self.ny, self.nz), None, psi.data, mask.data,
+            self.runtime.queue, *self.runtime.items(self.ny, self.nz), psi.data, mask.data,
             self.scalar(width), np.int32(self.nx), np.int32(self.ny), np.int32(self.nz),
             *self.strides(), np.int32(self.ghost),
         )
@@ -126,17 +126,17 @@ class Grid3D(BaseGrid):
             offsets, nruns, pad = cla.arange(q, 0, max(n, 1), dtype=np.int32), n, 1
         else:
             flags = cla.empty(q, n, np.uint8)
-            self.kernel("surface_band.cl", "band_run_starts")(q, (n,), None, band.indices.data,
-                                                              np.int32(n), flags.data)
+            self.kernel("surface_band.cl", "band_run_starts")(
+                q, *self.runtime.items(n), band.indices.data, np.int32(n), flags.data)
             starts = compact(self.runtime, flags)
             offsets, nruns = starts.indices, starts.n
         start = cla.empty(q, max(nruns, 1), np.int32)
         end = cla.empty(q, max(nruns, 1), np.int32)
         if nruns:
             self.kernel("surface_band.cl", "band_run_bounds")(
-                q, (nruns,), None, band.indices.data, offsets.data, np.int32(nruns), np.int32(n),
-                np.int32(pad), np.int32(self.nx), np.int32(self.sx), np.int32(self.ghost),
-                start.data, end.data,
+                q, *self.runtime.items(nruns), band.indices.data, offsets.data, np.int32(nruns),
+                np.int32(n), np.int32(pad), np.int32(self.nx), np.int32(self.sx),
+                np.int32(self.ghost), start.data, end.data,
             )
         return BandRuns(band, start, end, nruns)
 

@@ -669,7 +669,7 @@ class ImplicitSurface:
         pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
         out = cla.empty(q, (nc, n), g.dtype)
         g.kernel("surface_extend.cl", "sample_points", **extend_defines(code, nc))(
-            q, (n,), None, dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
+            q, *self.runtime.items(n), dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
             out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
         )
         return out.get().astype(np.float64)

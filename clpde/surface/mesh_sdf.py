@@ -401,7 +401,7 @@ def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
     nbr_dev = cla.to_device(q, _edge_neighbours(mesh))
     kernel = rt.kernel("surface_mesh.cl", "mesh_refine")
     for _ in range(max(1, int(passes))):
-        kernel(q, (idx.size,), None, cells.data, np.int32(idx.size), faces[0].data,
+        kernel(q, *rt.items(idx.size), cells.data, np.int32(idx.size), faces[0].data,
                faces[1].data, dist.data, cpt.data, tri_dev.data, nbr_dev.data, np.int32(nx),
                np.int32(ny),
                np.int32(nz))

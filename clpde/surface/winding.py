@@ -134,9 +134,9 @@ class WindingNumbers:
 
         out = cla.empty(q, n, np.float32)
         nchunks = len(chunk_tile)
-        self._kernel(q, (nchunks,), None, dev(sorted_pts.reshape(-1), np.float32), dev(chunk_start),
-                     dev(chunk_end), dev(chunk_tile), np.int32(nchunks), dev(near_off),
-                     dev(near_cols),
+        self._kernel(q, *self.rt.items(nchunks), dev(sorted_pts.reshape(-1), np.float32),
+                     dev(chunk_start), dev(chunk_end), dev(chunk_tile), np.int32(nchunks),
+                     dev(near_off), dev(near_cols),
                      dev(far_off), dev(far_cols), self._cl_start.data, self._clu.data,
                      self._tri.data,
                      out.data)
