@@ -250,7 +250,7 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     launch = runtime.items(nchunks)
     runtime.kernel("fields.cl", "count_chunks")(q, *launch, flat.data, np.int32(n),
                                                 np.int32(chunk), counts.data)
-    runtime.kernel("fields.cl", "exclusive_scan_serial")(q, (1,), None, counts.data,
+    runtime.kernel("fields.cl", "exclusive_scan_serial")(q, (1,), (1,), counts.data,
                                                          np.int32(nchunks), total.data)
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build
     indices = cla.empty(q, max(count, 1), np.int32)

@@ -279,7 +279,7 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
                          partial.data)
             converged = _relative_change(partial.get(), nc, ny) < tol
             if sigma2 is not None and not converged:
-                lambda_k(q, (nc,), None, partial.data, lam.data, np.int32(ny),
+                lambda_k(q, (nc,), (1,), partial.data, lam.data, np.int32(ny),
                          inv_n_sigma2.data, grid.scalar(_LAMBDA_MIN))
             bar.update(steps - bar.n)
     return u.to_host().astype(np.float64), steps, converged, lam.get().astype(np.float64)
@@ -331,7 +331,7 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
             if sigma2 is not None and steps % lambda_every == 0:
                 _launch_rows(grid, rows_k, pair.cur.data.data, u0.data.data, partial.data, eps2)
                 for c in range(nc):  # one work-item at channel c (sigma may differ)
-                    finish_k(q, (1,), None, partial.data, lam.data, np.int32(ny),
+                    finish_k(q, (1,), (1,), partial.data, lam.data, np.int32(ny),
                              grid.scalar(1.0 / (nx * ny * sigma2[c])), global_offset=(c,))
                 # (C.2) divides by sigma^2: lambda can jump at any update, and a step that
                 # was stable before it would blow up (found by fuzzing: 1e12 for sigma=1e-3)

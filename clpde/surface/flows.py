@@ -374,7 +374,7 @@ class _DynamicLambda:
                 q, *s.runtime.items(self.groups), a.data, np.int32(s.node_band.n),
                 np.int32(self.CHUNK), partial.data)
         g.kernel("surface_flows.cl", "tv_lambda_update", **self.defines)(
-            q, (1,), None, *(p.data for p in self.partials), np.int32(self.groups),
+            q, (1,), (1,), *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
             g.scalar(self.lam_max), self.lam.data, self.state.data, self.slots.data,
             np.int32(slot), self.capped.data,
