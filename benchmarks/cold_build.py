@@ -10,6 +10,12 @@ steadier figure on a shared machine; PoCL compiles in the calling process). Case
 - `surface`: a unit sphere at spacing 0.1, its heat flow (t = 0.01) and a TV denoising with
   the dynamic lambda (sigma 0.3, t = 0.01).
 
+After the first calls the same calls run again on three other sizes (images of 61, 80 and
+97 pixels a side; spheres at spacing 0.09, 0.11 and 0.12), in the same process: *new sizes*
+is their mean wall time, the cost of meeting an input size for the first time once the
+programs are built (PoCL builds a kernel again for each new work-group size; see
+tests/core/test_work_groups.py).
+
 With --other PATH the same runs are made with PYTHONPATH=PATH as well, alternating with this
 checkout's, so that both meet the same load: `--other /path/to/main` compares a branch with
 main.
@@ -45,19 +51,27 @@ def timed(self, filename, dtype, defines):
     built.append([filename, np.dtype(dtype).name, dict(defines), time.perf_counter() - start])
     return program
 runtime.Runtime._build = timed
+def calls(size):
+    if sys.argv[2] == "planar":
+        image = np.random.default_rng(0).random((size, size)).astype(np.float32)
+        clpde.diffuse(image, "heat", steps=2, device=sys.argv[1])
+        clpde.denoise_tv(image, sigma=0.1, device=sys.argv[1])
+    else:
+        from clpde.surface import ImplicitSurface
+        surf = ImplicitSurface.sphere(1.0, spacing=size, device=sys.argv[1])
+        u = np.random.default_rng(0).normal(size=surf.shape)
+        surf.heat(u, 0.01)
+        surf.denoise_tv(u, sigma=0.3, t=0.01)
+first, later = (64, (61, 80, 97)) if sys.argv[2] == "planar" else (0.1, (0.09, 0.11, 0.12))
 wall, cpu = time.perf_counter(), time.process_time()
-if sys.argv[2] == "planar":
-    image = np.random.default_rng(0).random((64, 64)).astype(np.float32)
-    clpde.diffuse(image, "heat", steps=2, device=sys.argv[1])
-    clpde.denoise_tv(image, sigma=0.1, device=sys.argv[1])
-else:
-    from clpde.surface import ImplicitSurface
-    surf = ImplicitSurface.sphere(1.0, spacing=0.1, device=sys.argv[1])
-    u = np.random.default_rng(0).normal(size=surf.shape)
-    surf.heat(u, 0.01)
-    surf.denoise_tv(u, sigma=0.3, t=0.01)
-print(json.dumps({"programs": built, "wall": time.perf_counter() - wall,
-                  "cpu": time.process_time() - cpu}))
+calls(first)
+wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+new = []
+for size in later:
+    start = time.perf_counter()
+    calls(size)
+    new.append(time.perf_counter() - start)
+print(json.dumps({"programs": built, "wall": wall, "cpu": cpu, "new_sizes": sum(new) / len(new)}))
 """
 
 
@@ -84,16 +98,18 @@ def main():
         for name, path in trees.items():
             runs[name].append(one_run(path, args.device, args.case))
     print(f"{'tree':14s} {'programs built':40s} {'build s':>8s} {'first calls s':>14s} "
-          f"{'CPU s':>6s}   (medians of {args.runs} cold runs)")
+          f"{'CPU s':>6s} {'new sizes s':>12s}   (medians of {args.runs} cold runs)")
     summary = {}
     for name, results in runs.items():
         programs = ", ".join(p[0] for p in results[0]["programs"])
         build = statistics.median(sum(p[3] for p in r["programs"]) for r in results)
         wall = statistics.median(r["wall"] for r in results)
         cpu = statistics.median(r["cpu"] for r in results)
+        new = statistics.median(r["new_sizes"] for r in results)
         summary[name] = {"path": str(trees[name]), "programs": programs, "build_s": build,
-                         "first_calls_s": wall, "cpu_s": cpu, "runs": results}
-        print(f"{name:14s} {programs:40s} {build:8.3f} {wall:14.3f} {cpu:6.3f}")
+                         "first_calls_s": wall, "cpu_s": cpu, "new_sizes_s": new,
+                         "runs": results}
+        print(f"{name:14s} {programs:40s} {build:8.3f} {wall:14.3f} {cpu:6.3f} {new:12.3f}")
         for i, prog in enumerate(results[0]["programs"]):
             times = statistics.median(r["programs"][i][3] for r in results
                                       if len(r["programs"]) > i)
