@@ -14,22 +14,6 @@
 #include "box_lists.cl"
 #include "reduce.h"
 
-// dst = a * L(src) + b * f on the list; partial sums of dot * dst. (`dot` may be dst.)
-__kernel void lap_axpy_dot(__global const REAL* src, __global REAL* dst,
-                           __global const REAL* f, const REAL a, const REAL b,
-                           __global const REAL* dot, __global REAL* partial,
-                           const int nx, const int ny, ITEM_ARGS)
-{
-    REAL acc = 0;
-    FOR_ITEMS(k) {
-        const int i = list[k];
-        const REAL v = a * graph_laplacian(src, chan, i, nx, ny) + b * f[chan + i];
-        dst[chan + i] = v;
-        acc += dot[chan + i] * v;
-    }
-    partial[c_ * ng + g_] = acc;
-}
-
 // (L L u)(i) directly from u: the 13-point stencil where all of it lies in the box, the
 // graph Laplacian of the graph Laplacian (25 reads) within two pixels of its border.
 INLINE REAL bilaplacian(__global const REAL* u, const int chan, const int i, const int nx,
@@ -53,16 +37,19 @@ INLINE REAL bilaplacian(__global const REAL* u, const int chan, const int i, con
     return s;
 }
 
-// dst = a * L(L(src)) + b * f on the list; partial sums of dot * dst.
-__kernel void bilap_axpy_dot(__global const REAL* src, __global REAL* dst,
-                             __global const REAL* f, const REAL a, const REAL b,
-                             __global const REAL* dot, __global REAL* partial,
-                             const int nx, const int ny, ITEM_ARGS)
+// dst = a * L^order(src) + b * f on the list (order 1: the Laplacian, 2: the bilaplacian);
+// partial sums of dot * dst. (`dot` may be dst.)
+__kernel void operator_axpy_dot(__global const REAL* src, __global REAL* dst,
+                                __global const REAL* f, const REAL a, const REAL b,
+                                __global const REAL* dot, __global REAL* partial,
+                                const int order, const int nx, const int ny, ITEM_ARGS)
 {
     REAL acc = 0;
     FOR_ITEMS(k) {
         const int i = list[k];
-        const REAL v = a * bilaplacian(src, chan, i, nx, ny) + b * f[chan + i];
+        const REAL op = order == 2 ? bilaplacian(src, chan, i, nx, ny)
+                                   : graph_laplacian(src, chan, i, nx, ny);
+        const REAL v = a * op + b * f[chan + i];
         dst[chan + i] = v;
         acc += dot[chan + i] * v;
     }

@@ -202,30 +202,22 @@ class PoissonSolver:
         ng = o.items
         self.rr = [zeros((nc, ng)), zeros((nc, ng))]
         self.pq = zeros((nc, ng))
-        k_lap = runtime.kernel("poisson.cl", "lap_axpy_dot", dt)
+        k_op = runtime.kernel("poisson.cl", "operator_axpy_dot", dt)
         k_update = runtime.kernel("poisson.cl", "cg_update", dt)
         k_direction = runtime.kernel("poisson.cl", "cg_direction", dt)
         dims = (np.int32(nx), np.int32(ny))
         s = dt.type
+        order = 1 if kind == "harmonic" else 2
 
-        def lap(lst, src, dst, a, b, dot, partial):
-            return lst.bind(runtime, k_lap, nc, src.data, dst.data, self.f.data,
-                            s(a), s(b), dot.data, partial.data, *dims)
+        def apply(src, dst, a, b, dot, partial):
+            """dst = a L^order src + b f, and the partials of dot . dst."""
+            return o.bind(runtime, k_op, nc, src.data, dst.data, self.f.data, s(a), s(b),
+                          dot.data, partial.data, np.int32(order), *dims)
 
-        if kind == "harmonic":
-            # r = b - A u = L u - f; A p = -L p
-            self._residual = [lap(o, self.u, self.r, 1, -1, self.r, self.rr[0])]
-            self._apply = [lap(o, self.p, self.qv, -1, 0, self.p, self.pq)]
-        else:
-            # r = f - L L u; A p = L L p
-            k_bilap = runtime.kernel("poisson.cl", "bilap_axpy_dot", dt)
-
-            def bilap(src, dst, a, b, dot, partial):
-                return o.bind(runtime, k_bilap, nc, src.data, dst.data, self.f.data, s(a),
-                              s(b), dot.data, partial.data, *dims)
-
-            self._residual = [bilap(self.u, self.r, -1, 1, self.r, self.rr[0])]
-            self._apply = [bilap(self.p, self.qv, 1, 0, self.p, self.pq)]
+        # harmonic: A = -L, r = b - A u = L u - f; biharmonic: A = L L, r = f - L L u
+        sign = 1 if kind == "harmonic" else -1
+        self._residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr[0])]
+        self._apply = [apply(self.p, self.qv, -sign, 0, self.p, self.pq)]
         self._update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
                                self.p.data, self.qv.data, self.rr[a].data, self.pq.data,
                                self.rr[1 - a].data, *dims) for a in (0, 1)]
@@ -239,8 +231,7 @@ class PoissonSolver:
             self.rz = [zeros((nc, ng)), zeros((nc, ng))]
             self.rr_now = zeros((nc, ng))
             k_dot = runtime.kernel("poisson.cl", "dot_partial", dt)
-            self._pcg_residual = [lap(o, self.u, self.r, 1, -1, self.r, self.rr_now)] \
-                if kind == "harmonic" else [bilap(self.u, self.r, -1, 1, self.r, self.rr_now)]
+            self._pcg_residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr_now)]
             self._pcg_update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
                                        self.p.data, self.qv.data, self.rz[a].data, self.pq.data,
                                        self.rr_now.data, *dims) for a in (0, 1)]
