@@ -10,6 +10,7 @@
 //         so WIN <= 4 reads stay inside it)
 #include "common.cl"
 #include "godunov.h"
+#include "bricks2d.h"
 
 #ifndef NCH
 #define NCH 1
@@ -99,48 +100,82 @@ INLINE REAL discrepancy(__global const REAL* f1, __global const REAL* f2, const 
 // [3n+g] sum over its cells of the channels' mean |beta|, [4n+g] its cell count; [5n] the
 // edge flag: set to 1 when an edge-ring cell of the band (band == 2) comes within `near` of
 // the zero level set, which asks the host to rebuild the band.
-__kernel void morph_track(__global const REAL* restrict u, __global const REAL* restrict f1,
-                          __global const REAL* restrict f2, __global const uchar* restrict band,
-                          __global const REAL* restrict prior, __global REAL* restrict u_out,
-                          __global REAL* restrict f1_out, __global REAL* restrict stats,
-                          const REAL dt, const REAL eps_f2, const REAL eps_u2, const REAL near,
-                          const REAL lam, const REAL delta, const int sx, const int fplane,
-                          LIST_ARGS)
+// What a work-item gathers over its cells for the host's checks.
+typedef struct {
+    REAL fastest, beta_max, grad_max, beta_sum, cells;
+    int touched;
+} MorphStats;
+
+// The step at band cell i (any band layout: the list and brick kernels below call it).
+INLINE void morph_cell(__global const REAL* restrict u, __global const REAL* restrict f1,
+                       __global const REAL* restrict f2, __global const uchar* restrict band,
+                       __global const REAL* restrict prior, __global REAL* restrict u_out,
+                       __global REAL* restrict f1_out, const int i, const REAL dt,
+                       const REAL eps_f2, const REAL eps_u2, const REAL near, const REAL lam,
+                       const REAL delta, const int sx, const int fplane, MorphStats* s)
+{
+    const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
+    const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
+    REAL proj = 0, gsum = 0, babs = 0;
+    for (int c = 0; c < NCH; ++c) {
+        const int j = i + c * fplane;
+        const REAL beta = discrepancy(f1 + c * fplane, f2 + c * fplane, i, sx, delta);
+        const REAL grad_f = upwind_norm_2d(f1 + c * fplane, i, sx, beta);
+        f1_out[j] = f1[j] + dt * beta * grad_f;
+        const REAL fx = (REAL)0.5 * (f1[j + 1] - f1[j - 1]);
+        const REAL fy = (REAL)0.5 * (f1[j + sx] - f1[j - sx]);
+        proj += beta * (fx * ux + fy * uy);
+        gsum += SQR(fx) + SQR(fy);
+        s->beta_max = FMAX(s->beta_max, FABS(beta));
+        s->grad_max = FMAX(s->grad_max, grad_f);
+        babs += FABS(beta);
+    }
+    const REAL bhat = proj * RSQRT((gsum + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
+    const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat) + lam * (prior[i] - u[i]);
+    const REAL un = u[i] + dt * rate;
+    u_out[i] = un;
+    s->fastest = FMAX(s->fastest, FABS(rate));
+    s->beta_sum += babs / NCH;
+    s->cells += 1;
+    s->touched |= (band[i] == 2) & (FABS(un) < near);
+}
+
+INLINE void morph_stats_store(__global REAL* restrict stats, const MorphStats* s)
+{
+    const int g = get_global_id(0), n = get_global_size(0);
+    stats[g] = s->fastest;
+    stats[n + g] = s->beta_max;
+    stats[2 * n + g] = s->grad_max;
+    stats[3 * n + g] = s->beta_sum;
+    stats[4 * n + g] = s->cells;
+    if (s->touched) stats[5 * n] = 1;
+}
+
+#define MORPH_ARGS                                                                        \
+    __global const REAL* restrict u, __global const REAL* restrict f1,                    \
+    __global const REAL* restrict f2, __global const uchar* restrict band,                \
+    __global const REAL* restrict prior, __global REAL* restrict u_out,                   \
+    __global REAL* restrict f1_out, __global REAL* restrict stats, const REAL dt,         \
+    const REAL eps_f2, const REAL eps_u2, const REAL near, const REAL lam,                \
+    const REAL delta, const int sx, const int fplane
+#define MORPH_CELL(i)                                                                     \
+    morph_cell(u, f1, f2, band, prior, u_out, f1_out, i, dt, eps_f2, eps_u2, near, lam,   \
+               delta, sx, fplane, &s)
+
+__kernel void morph_track(MORPH_ARGS, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
-    REAL fastest = 0, beta_max = 0, grad_max = 0, beta_sum = 0;
-    int touched = 0;
-    for (int k = k0; k < k1; ++k) {
-        const int i = chan + list[k];
-        const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
-        const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
-        REAL proj = 0, gsum = 0, babs = 0;
-        for (int c = 0; c < NCH; ++c) {
-            const int j = i + c * fplane;
-            const REAL beta = discrepancy(f1 + c * fplane, f2 + c * fplane, i, sx, delta);
-            const REAL grad_f = upwind_norm_2d(f1 + c * fplane, i, sx, beta);
-            f1_out[j] = f1[j] + dt * beta * grad_f;
-            const REAL fx = (REAL)0.5 * (f1[j + 1] - f1[j - 1]);
-            const REAL fy = (REAL)0.5 * (f1[j + sx] - f1[j - sx]);
-            proj += beta * (fx * ux + fy * uy);
-            gsum += SQR(fx) + SQR(fy);
-            beta_max = FMAX(beta_max, FABS(beta));
-            grad_max = FMAX(grad_max, grad_f);
-            babs += FABS(beta);
-        }
-        const REAL bhat = proj * RSQRT((gsum + eps_f2) * (SQR(ux) + SQR(uy) + eps_u2));
-        const REAL rate = bhat * upwind_norm_2d(u, i, sx, bhat) + lam * (prior[i] - u[i]);
-        const REAL un = u[i] + dt * rate;
-        u_out[i] = un;
-        fastest = FMAX(fastest, FABS(rate));
-        beta_sum += babs / NCH;
-        touched |= (band[i] == 2) & (FABS(un) < near);
+    MorphStats s = {0, 0, 0, 0, 0, 0};
+    for (int k = k0; k < k1; ++k) MORPH_CELL(chan + list[k]);
+    morph_stats_store(stats, &s);
+}
+
+// The same step over the band's bricks (bricks2d.h), at the cells where band > 0.
+__kernel void morph_track_bricks(MORPH_ARGS, BRICK2D_ARGS)
+{
+    MorphStats s = {0, 0, 0, 0, 0, 0};
+    FOR_EACH_BRICK_CELL(i) {
+        if (band[i]) MORPH_CELL(i);
     }
-    const int g = get_global_id(0), n = get_global_size(0);
-    stats[g] = fastest;
-    stats[n + g] = beta_max;
-    stats[2 * n + g] = grad_max;
-    stats[3 * n + g] = beta_sum;
-    stats[4 * n + g] = (REAL)(k1 > k0 ? k1 - k0 : 0);
-    if (touched) stats[5 * n] = 1;
+    morph_stats_store(stats, &s);
 }
