@@ -18,7 +18,8 @@ with a disc and a wavy blob) it times, per layout (lists, bricks 8x8, bricks 16x
 with the band's cells against the cells its launches visit (stored: lists visit the band's
 cells, bricks every movable cell of the bricks holding one). Each round times every layout
 in turn (A B C A B C ...), `--steps` launches each after a warm-up; the table gives the
-median over rounds of the wall time per launch and of the process CPU time per launch.
+median over rounds of the wall time per launch and of the process CPU time per launch, and
+the speed-ups over the lists of both (the CPU time is the steadier on a shared machine).
 """
 
 from __future__ import annotations
@@ -175,10 +176,11 @@ def main(argv=None):
             print(f"{name:26s} {lay:13s} {cells['band']:7d} {cells['band visited']:8d} "
                   + " ".join(f"{m[0]:7.3f}/{m[1]:7.3f}" for m in med.values()))
         for lay in layouts[1:]:
-            ratio = {a: entry["lists"]["ms"][a][0] / entry[lay]["ms"][a][0] for a in actions}
+            ratio = {a: [entry["lists"]["ms"][a][k] / entry[lay]["ms"][a][k] for k in (0, 1)]
+                     for a in actions}
             entry[lay]["speedup over lists"] = ratio
             print(f"{'':26s} {lay + ' x':13s} {'':16s} "
-                  + " ".join(f"{r:15.2f}" for r in ratio.values()))
+                  + " ".join(f"{r[0]:7.2f}/{r[1]:7.2f}" for r in ratio.values()))
         results["cases"][name] = entry
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=1))
