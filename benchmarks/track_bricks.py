@@ -138,6 +138,19 @@ def timed(runtime, action, steps):
     return (time.perf_counter() - w) / steps, (time.process_time() - c) / steps
 
 
+def markdown(results) -> str:
+    """The table of docs/tracking.md: CPU ms per launch, lists / 8x8 / 16x4."""
+    lines = ["| frames | band cells | visited 8x8 / 16x4 | step (NCC) | step (F2-F1) | "
+             "reinit iteration | rebuild |", "|---|---|---|---|---|---|---|"]
+    for name, e in results["cases"].items():
+        cells = e["lists"]["cells"]["band"]
+        visited = " / ".join(str(e[lay]["cells"]["band visited"]) for lay in LAYOUTS[1:])
+        cols = [" / ".join(f"{e[lay]['ms'][a][1]:.2f}" for lay in LAYOUTS)
+                for a in ("step", "step F2-F1", "reinit", "rebuild")]
+        lines.append(f"| {name} | {cells} | {visited} | " + " | ".join(cols) + " |")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
@@ -182,6 +195,7 @@ def main(argv=None):
             print(f"{'':26s} {lay + ' x':13s} {'':16s} "
                   + " ".join(f"{r[0]:7.2f}/{r[1]:7.2f}" for r in ratio.values()))
         results["cases"][name] = entry
+    print(markdown(results))
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=1))
     print(f"wrote {args.json}")

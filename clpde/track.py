@@ -500,6 +500,8 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     velocity Kalman filter fed by matching the object's features between frames, within
     search_radius pixels of the prediction) shifts each frame's start. shape_weight
     (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
+    band_layout: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
+    same results, bit for bit; measured slower on CPUs, docs/tracking.md).
 
     equalize / smooth: the thesis' pre-processing, on by default. equalize='match' (or
     True) gives every frame the first frame's grey-level histogram (histogram
