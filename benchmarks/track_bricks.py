@@ -9,7 +9,9 @@ with a disc and a wavy blob) it times, per layout (lists, bricks 8x8, bricks 16x
 
 - `step`: one morph_track launch over the band (the tracker's default features and
   discrepancy: grey intensity, NCC over a 7x7 window), and the same with the thesis'
-  F2 - F1 (`step F2-F1`, less arithmetic per cell);
+  F2 - F1 (`step F2-F1`, less arithmetic per cell). Bricks sum each cell's window as the
+  lists do; `--tiled` adds bricks that slide the sums over the brick (morph_track_tiled,
+  what MorphingTracker(band_layout='bricks...') runs on CPUs);
 - `reinit`: one reinitialisation iteration over the rebuild's region (the band dilated by
   REACH cells), the tracker's reinitialisation;
 - `rebuild`: a whole rebuild (dilation, 5 reinitialisation iterations, band marking and
@@ -39,6 +41,9 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests" / "track
 LAYOUTS = ("lists", "bricks8x8", "bricks16x4")
 # With --groups, the GPU launch geometry (a work-group per brick) too, run on the CPU.
 GROUPED = ("bricks8x8 wg", "bricks16x4 wg")
+# With --tiled, bricks whose NCC step slides the window sums over the brick
+# (morph_track_tiled); their other launches are the plain bricks'.
+TILED = ("bricks8x8 tiled", "bricks16x4 tiled")
 
 
 def blob_frames(ny, nx):
@@ -78,19 +83,24 @@ class Case:
 
     def __init__(self, runtime, frames, mask, label):
         from clpde.levelset import LevelSet, signed_distance
-        from clpde.track import DISCREPANCIES, MorphingTracker
+        from clpde.track import DISCREPANCIES, MorphingTracker, morph_kernel_name
 
-        layout, grouped = label.split()[0], label.endswith(" wg")
+        layout, grouped, tiled = label.split()[0], label.endswith(" wg"), label.endswith("tiled")
         self.tracker = MorphingTracker(frames, mask, band_layout=layout, device=runtime)
         self.ls = ls = LevelSet(runtime, signed_distance(mask), self.tracker.band_width,
                                 np.float32, layout=layout, group_per_brick=grouped or None)
         self.f1 = self.tracker._feature_field(self.tracker.prepared(0), ls)
         self.f2 = self.tracker._feature_field(self.tracker.prepared(1), ls)
         self.f1_out = self.f1.copy()
-        name = "morph_track" if ls.brick is None else "morph_track_bricks"
-        self.morph = {disc: ls.band_kernel("track_features.cl", name, NCH=1,
-                                           DISC=DISCREPANCIES[disc], WIN=3)
-                      for disc in ("ncc", "difference")}
+        # The tracker's kernels, but bricks without "tiled" sum the NCC's windows cell by
+        # cell, as the lists do.
+        self.morph = {}
+        for disc in ("ncc", "difference"):
+            name = morph_kernel_name(ls, disc)
+            if name == "morph_track_tiled" and not tiled:
+                name = "morph_track_bricks"
+            self.morph[disc] = ls.band_kernel("track_features.cl", name, NCH=1,
+                                              DISC=DISCREPANCIES[disc], WIN=3)
         self.reinit = ls.band_kernel("levelset.cl", "reinit_step_bricks" if ls.brick else
                                      "reinit_step_list")
         ls.dilate_band()
@@ -139,13 +149,15 @@ def timed(runtime, action, steps):
 
 
 def markdown(results) -> str:
-    """The table of docs/tracking.md: CPU ms per launch, lists / 8x8 / 16x4."""
+    """The table of docs/tracking.md: CPU ms per launch, lists / 8x8 / 16x4 (then, for
+    the NCC step, 8x8 and 16x4 tiled, when measured)."""
     lines = ["| frames | band cells | visited 8x8 / 16x4 | step (NCC) | step (F2-F1) | "
              "reinit iteration | rebuild |", "|---|---|---|---|---|---|---|"]
     for name, e in results["cases"].items():
         cells = e["lists"]["cells"]["band"]
         visited = " / ".join(str(e[lay]["cells"]["band visited"]) for lay in LAYOUTS[1:])
-        cols = [" / ".join(f"{e[lay]['ms'][a][1]:.2f}" for lay in LAYOUTS)
+        cols = [" / ".join(f"{e[lay]['ms'][a][1]:.2f}" for lay in
+                           LAYOUTS + (tuple(t for t in TILED if t in e) if a == "step" else ()))
                 for a in ("step", "step F2-F1", "reinit", "rebuild")]
         lines.append(f"| {name} | {cells} | {visited} | " + " | ".join(cols) + " |")
     return "\n".join(lines)
@@ -159,8 +171,10 @@ def main(argv=None):
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--groups", action="store_true",
                         help="also the work-group-per-brick geometry (GPUs') on this device")
+    parser.add_argument("--tiled", action="store_true",
+                        help="also bricks whose NCC step slides its window sums")
     args = parser.parse_args(argv)
-    layouts = LAYOUTS + (GROUPED if args.groups else ())
+    layouts = LAYOUTS + (GROUPED if args.groups else ()) + (TILED if args.tiled else ())
     from clpde.runtime import get_runtime
 
     rt = get_runtime(args.device)

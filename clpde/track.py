@@ -323,9 +323,9 @@ class MorphingTracker:
         g = ls.grid
         q = self.runtime.queue
         discrepancy = discrepancy or self.discrepancy
-        kernel = ls.band_kernel("track_features.cl", "morph_track" if ls.brick is None
-                                else "morph_track_bricks", NCH=self.channels,
-                                DISC=DISCREPANCIES[discrepancy], WIN=self.ncc_radius)
+        kernel = ls.band_kernel("track_features.cl", morph_kernel_name(ls, discrepancy),
+                                NCH=self.channels, DISC=DISCREPANCIES[discrepancy],
+                                WIN=self.ncc_radius)
         pair = PingPong(f1)
         lam = self.shape_weight
         delta = self.huber_delta if discrepancy == "huber" else 0.02
@@ -445,6 +445,17 @@ class MorphingTracker:
         return _drop_small(~_drop_small(~mask, self.min_size), self.min_size)
 
 
+def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
+    """The morphing step's kernel for the band's layout: with bricks walked by one
+    work-item, the NCC slides its window sums over each brick (morph_track_tiled: 1.0-1.45x
+    the cell-by-cell sums, measured in docs/tracking.md; equal to rounding)."""
+    if ls.brick is None:
+        return "morph_track"
+    if discrepancy == "ncc" and not ls.group_per_brick:
+        return "morph_track_tiled"
+    return "morph_track_bricks"
+
+
 def match_histogram(image: np.ndarray, reference: np.ndarray, levels: int = 4096) -> np.ndarray:
     """Histogram specification of data in [0, 1]: the grey-level map that gives `image` the
     grey-level distribution of `reference`, on `levels` quantisation levels (equal values
@@ -501,7 +512,8 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     search_radius pixels of the prediction) shifts each frame's start. shape_weight
     (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
     band_layout: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
-    same results, bit for bit; measured slower on CPUs, docs/tracking.md).
+    same results, bit for bit, except the NCC's window sums, equal to rounding; measured
+    no faster on CPUs, docs/tracking.md).
 
     equalize / smooth: the thesis' pre-processing, on by default. equalize='match' (or
     True) gives every frame the first frame's grey-level histogram (histogram

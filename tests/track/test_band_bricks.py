@@ -3,7 +3,9 @@ against the list layout and the numpy references (tests/reference/levelset.py).
 
 Every band cell runs the same inline arithmetic (morph_cell, reinit_update_2d) in every
 layout and launch geometry, so the stepped values are the list's bit for bit; only the
-per-work-item statistics are grouped differently (maxima exact, sums to rounding)."""
+per-work-item statistics are grouped differently (maxima exact, sums to rounding). The one
+exception is morph_track_tiled, the NCC step of bricks on CPUs, which slides the window
+sums over each brick: equal to rounding."""
 
 from dataclasses import replace
 
@@ -15,7 +17,7 @@ from reference import levelset as ref
 from clpde.fields import Field, PingPong
 from clpde.levelset import LevelSet, signed_distance
 from clpde.runtime import Runtime
-from clpde.track import MorphingTracker
+from clpde.track import MorphingTracker, morph_kernel_name
 
 BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True),
           ("bricks16x4", True)]
@@ -40,9 +42,9 @@ def _features(ls, rng, channels):
     return f1, f2, prior
 
 
-def _step(ls, f1, f2, prior, channels, disc, lam):
+def _step(ls, f1, f2, prior, channels, disc, lam, name=None):
     g = ls.grid
-    name = "morph_track" if ls.brick is None else "morph_track_bricks"
+    name = name or ("morph_track" if ls.brick is None else "morph_track_bricks")
     kernel = ls.band_kernel("track_features.cl", name, NCH=channels, DISC=disc, WIN=3)
     parts = ls.band_parts()
     stats = cla.zeros(ls.runtime.queue, 5 * parts + 1, g.dtype)
@@ -83,21 +85,49 @@ def test_brick_step_is_bitwise_the_list_step_and_matches_reference(runtime, rng,
     np.testing.assert_array_equal(got_f1, want_f1)
     np.testing.assert_array_equal(got_stats[[0, 1, 2, 4, 5]], want_stats[[0, 1, 2, 4, 5]])
     np.testing.assert_allclose(got_stats[3], want_stats[3], rtol=1e-5)  # a sum, regrouped
-    # ... and the numpy reference of the same discrete step.
-    band = bricks.grid.interior(bricks.band_mask.get()[np.newaxis])[0]
+    _check_reference(bricks, (got_u, got_f1, got_stats), f1, f2, prior, disc, lam)
+
+
+def _check_reference(ls, got, f1, f2, prior, disc, lam):
+    """A step's results against the numpy reference of the same discrete step."""
+    got_u, got_f1, got_stats = got
+    band = ls.grid.interior(ls.band_mask.get()[np.newaxis])[0]
     host = [a.data.get().astype(np.float64) for a in (f1, f2)]
     ref_u, ref_f1, maxima, mean, hit = ref.morph_track(
-        bricks.u.cur.data.get()[0].astype(np.float64), *host, band,
+        ls.u.cur.data.get()[0].astype(np.float64), *host, band,
         prior.data.get()[0].astype(np.float64), 0.3, 0.02, 1e-3, 1.0, lam, 0.05,
         {0: "difference", 1: "ncc", 2: "huber"}[disc])
     inside = band > 0
-    interior = bricks.grid.interior
+    interior = ls.grid.interior
     np.testing.assert_allclose(interior(got_u)[0][inside], ref_u[inside], atol=3e-5, rtol=1e-4)
     np.testing.assert_allclose(interior(got_f1)[:, inside], ref_f1[:, inside], atol=3e-5,
                                rtol=1e-4)
     np.testing.assert_allclose(got_stats[:3], maxima, rtol=2e-4, atol=1e-6)
     np.testing.assert_allclose(got_stats[3] / got_stats[4], mean, rtol=2e-4)
     assert bool(got_stats[5]) == hit
+
+
+@pytest.mark.parametrize("layout", ["bricks8x8", "bricks16x4"])
+@pytest.mark.parametrize("channels,lam", [(1, 0.0), (3, 0.1)])
+def test_tiled_ncc_step_matches_the_list_step_to_rounding(runtime, rng, layout, channels, lam):
+    # The NCC's window sums slid over each brick: the same sums, added in another order
+    # (and with rows taken out again), so float32 rounding differs, by about 1e-6 here.
+    lists, bricks = _level_set(runtime, "lists"), _level_set(runtime, layout)
+    assert morph_kernel_name(bricks, "ncc") == "morph_track_tiled"
+    f1, f2, prior = _features(lists, rng, channels)
+    want_u, want_f1, want_stats = _step(lists, f1, f2, prior, channels, 1, lam)
+    got_u, got_f1, got_stats = _step(bricks, f1, f2, prior, channels, 1, lam,
+                                     "morph_track_tiled")
+    np.testing.assert_allclose(got_u, want_u, atol=2e-5, rtol=1e-5)
+    np.testing.assert_allclose(got_f1, want_f1, atol=2e-5, rtol=1e-5)
+    np.testing.assert_allclose(got_stats[:4], want_stats[:4], rtol=1e-4)
+    np.testing.assert_array_equal(got_stats[4:], want_stats[4:])  # cell count, edge flag
+    assert not np.array_equal(got_u, want_u)  # it did run the other sums
+    _check_reference(bricks, (got_u, got_f1, got_stats), f1, f2, prior, 1, lam)
+    # Cells outside the band keep their values exactly.
+    outside = bricks.grid.interior(bricks.band_mask.get()[np.newaxis]) == 0
+    np.testing.assert_array_equal(bricks.grid.interior(got_u)[outside],
+                                  bricks.grid.interior(bricks.u.cur.data.get())[outside])
 
 
 @pytest.mark.parametrize("layout,group", BRICKS)
@@ -129,24 +159,31 @@ def _frames(n=6, size=72):
 
 
 @pytest.mark.parametrize("layout", ["bricks8x8", "bricks16x4"])
-def test_tracker_with_bricks_is_bitwise_the_tracker_with_lists(runtime, layout):
+def test_tracker_with_bricks_is_the_tracker_with_lists(runtime, layout):
     frames = _frames()
 
-    def run(band_layout, device=runtime):
+    def run(band_layout, device=runtime, discrepancy="ncc"):
         return list(MorphingTracker(frames, frames[0] > 0.5, band_layout=band_layout,
-                                    motion=None, device=device).iterate())
+                                    motion=None, discrepancy=discrepancy,
+                                    device=device).iterate())
 
-    lists, bricks = run("lists"), run(layout)
+    # Bit for bit where every cell sums its own window: F2 - F1 on the CPU geometry, and
+    # the NCC in the GPU geometry (a work-group per brick), run on the CPU.
+    lists, bricks = run("lists", discrepancy="difference"), run(layout, discrepancy="difference")
     assert sum(s.rebuilds for s in lists) > 0  # the band moved: upkeep is exercised
     for a, b in zip(lists, bricks, strict=True):
         np.testing.assert_array_equal(b.level_set, a.level_set)
         assert (b.iterations, b.rebuilds) == (a.iterations, a.rebuilds)
         assert b.discrepancy == pytest.approx(a.discrepancy, rel=1e-5)
-    # The GPU launch geometry (a work-group per brick), run on the CPU.
     gpu_like = Runtime(runtime.index, runtime.platform, runtime.device)
     gpu_like.is_cpu = False
-    for a, b in zip(bricks, run(layout, gpu_like), strict=True):
+    lists = run("lists")
+    for a, b in zip(lists, run(layout, gpu_like), strict=True):
         np.testing.assert_array_equal(b.level_set, a.level_set)
+    # The tiled NCC sums: equal to rounding, which grows through the frames (1e-3 here).
+    for a, b in zip(lists, run(layout), strict=True):
+        np.testing.assert_allclose(b.level_set, a.level_set, atol=1e-2)
+        assert np.mean(b.mask != a.mask) < 1e-3
 
 
 def test_unknown_layout_is_refused(runtime):
