@@ -18,10 +18,12 @@ with a disc and a wavy blob) it times, per layout (lists, bricks 8x8, bricks 16x
   compaction: the upkeep);
 
 with the band's cells against the cells its launches visit (stored: lists visit the band's
-cells, bricks every movable cell of the bricks holding one). Each round times every layout
-in turn (A B C A B C ...), `--steps` launches each after a warm-up; the table gives the
-median over rounds of the wall time per launch and of the process CPU time per launch, and
-the speed-ups over the lists of both (the CPU time is the steadier on a shared machine).
+cells, bricks every movable cell of the bricks holding one). Then whole tracks with the
+default options (the synthetic sequence, 8 frames, and MNI152 z = 90..99), ms per frame.
+Each round times every layout in turn (A B C A B C ...), `--steps` launches each after a
+warm-up; the table gives the median over rounds of the wall time per launch and of the
+process CPU time per launch, and the speed-ups over the lists of both (the CPU time is the
+steadier on a shared machine).
 """
 
 from __future__ import annotations
@@ -163,6 +165,43 @@ def markdown(results) -> str:
     return "\n".join(lines)
 
 
+def sequences():
+    """Whole sequences for the end-to-end times: the tracking benchmark's."""
+    from test_track import synthetic_sequence
+
+    yield "synthetic deform, 8 frames", synthetic_sequence("deform", frames=8)[0], \
+        synthetic_sequence("deform", frames=8)[1][0]
+    try:
+        from tracking import mni_slices
+
+        frames, masks = mni_slices(90, 10)
+        yield "MNI152 wm z=90..99", frames, masks[0]
+    except SystemExit:
+        pass
+
+
+def whole_tracks(rt, rounds, layouts):
+    """ms per frame of clpde.track with the default options, each layout in turn."""
+    from clpde.track import track
+
+    out = {}
+    for name, frames, first in sequences():
+        times = {lay: [] for lay in layouts}
+        for lay in layouts:  # warm-up: kernel builds
+            track(frames[:2], first, band_layout=lay, device=rt)
+        for _ in range(rounds):
+            for lay in layouts:
+                w, c = time.perf_counter(), time.process_time()
+                track(frames, first, band_layout=lay, device=rt)
+                n = len(frames) - 1
+                times[lay].append(((time.perf_counter() - w) / n, (time.process_time() - c) / n))
+        out[name] = {lay: [1e3 * statistics.median(t[k] for t in times[lay]) for k in (0, 1)]
+                     for lay in layouts}
+        print(f"{name:34s} " + "  ".join(f"{lay} {m[0]:.1f}/{m[1]:.1f}"
+                                          for lay, m in out[name].items()) + "  ms/frame")
+    return out
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
@@ -210,6 +249,8 @@ def main(argv=None):
                   + " ".join(f"{r[0]:7.2f}/{r[1]:7.2f}" for r in ratio.values()))
         results["cases"][name] = entry
     print(markdown(results))
+    print("whole tracks (default options), wall / CPU ms per frame:")
+    results["tracks"] = whole_tracks(rt, args.rounds, LAYOUTS)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=1))
     print(f"wrote {args.json}")
