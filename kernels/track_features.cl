@@ -1,6 +1,8 @@
 // Features and discrepancies for tracking real video (clpde.track, issue 18): local
 // contrast normalisation of a frame, and the generalised morphing step over the band with
-// several feature channels, a choice of discrepancy and a pull towards a prior level set.
+// several feature channels, a choice of discrepancy and a pull towards a prior level set,
+// over a list of band cells (morph_track) or over bricks (bricks2d.h: morph_track_bricks,
+// and morph_track_tiled, whose NCC window sums slide over each brick).
 //
 // Defines (set by the host):
 //   NCH   feature channels (1 grey, 3 colour, or a user's count), planes `fplane` apart
@@ -108,6 +110,7 @@ INLINE REAL discrepancy(__global const REAL* f1, __global const REAL* f2, const 
 // [3n+g] sum over its cells of the channels' mean |beta|, [4n+g] its cell count; [5n] the
 // edge flag: set to 1 when an edge-ring cell of the band (band == 2) comes within `near` of
 // the zero level set, which asks the host to rebuild the band.
+
 // What a work-item gathers over its cells for the host's checks.
 typedef struct {
     REAL fastest, beta_max, grad_max, beta_sum, cells;
