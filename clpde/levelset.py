@@ -9,6 +9,8 @@ band; other level-set flows can do the same.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pyopencl.array as cla
 
@@ -23,6 +25,19 @@ GHOST = 2
 MARGIN = 2  # frozen cells around the caller's grid (see LevelSet)
 REACH = 3  # a rebuild reinitialises the band dilated by this many cells (<= MARGIN + GHOST - 1)
 REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
+# How the band's work is laid out (docs/tracking.md, "2D bricks, measured"): a list of
+# cells, or bricks of BX x BY cells of the frame (kernels/bricks2d.h).
+LAYOUTS = {"lists": None, "bricks8x8": (8, 8), "bricks16x4": (16, 4)}
+
+
+@dataclass
+class BrickSet:
+    """The bricks of the movable region holding a cell where `mask` is nonzero (their
+    indices bx + nbx by, in increasing order, built on the device)."""
+
+    ids: cla.Array
+    n: int
+    mask: cla.Array
 
 
 def signed_distance(mask) -> np.ndarray:
@@ -59,7 +74,14 @@ class LevelSet:
     is the edge a flow watches to ask for a rebuild.
     """
 
-    def __init__(self, runtime, u0, band_width: float = 3.0, dtype=np.float32):
+    def __init__(self, runtime, u0, band_width: float = 3.0, dtype=np.float32,
+                 layout: str = "lists", group_per_brick: bool | None = None):
+        if layout not in LAYOUTS:
+            raise InputError(f"layout must be one of {', '.join(LAYOUTS)}, not {layout!r}")
+        self.layout, self.brick = layout, LAYOUTS[layout]
+        # GPUs take a brick per work-group; forced either way only to test both on a CPU.
+        self.group_per_brick = (not runtime.is_cpu if group_per_brick is None
+                                else bool(group_per_brick))
         u0 = np.asarray(u0, np.float64)
         if u0.ndim != 2:
             raise InputError(f"the level set must be 2-D, got shape {u0.shape}")
@@ -74,7 +96,12 @@ class LevelSet:
         self._phi0 = Field.empty(self.grid)
         inner = np.zeros((self.grid.ny, self.grid.nx), bool)
         inner[MARGIN:-MARGIN, MARGIN:-MARGIN] = True
-        self.active = index_list(self.grid, inner)
+        if self.brick is None:
+            self.active = index_list(self.grid, inner)
+        else:
+            padded = np.zeros(self.grid.padded_shape[1:], np.uint8)
+            self.grid.interior(padded)[...] = inner
+            self.active = self._cells(cla.to_device(runtime.queue, padded))
         # Ghost entries stay 0 (mark_band writes the interior only).
         self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self._near_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
@@ -106,7 +133,7 @@ class LevelSet:
         g = self.grid
         g.launch(g.kernel("levelset.cl", "mark_band"), self.u.cur.data.data,
                  self.band_mask.data, g.scalar(self.band_width), np.int32(MARGIN))
-        self.band = compact(self.runtime, self.band_mask)
+        self.band = self._cells(self.band_mask)
         # Cells outside the band are never written by band kernels: make both buffers agree
         # there so swapping never brings back stale values.
         self.u.nxt.assign(self.u.cur)
@@ -121,7 +148,7 @@ class LevelSet:
         are corrected at a later rebuild before the band reaches them.
         """
         self.dilate_band()
-        self.reinitialize(iterations, cells=compact(self.runtime, self._near_mask))
+        self.reinitialize(iterations, cells=self._cells(self._near_mask))
         self.build_band()
         self.rebuilds += 1
 
@@ -153,13 +180,83 @@ class LevelSet:
         cells = self.active if cells is None else cells
         g = self.grid
         plain = {} if subcell_fix else {"PLAIN_REINIT": 1}
-        kernel = g.kernel("levelset.cl", "reinit_step_list", **plain)
+        bricks = self.brick is not None
+        kernel = self.band_kernel("levelset.cl", "reinit_step_bricks" if bricks
+                                  else "reinit_step_list", **plain)
         self._phi0.assign(self.u.cur)
         self.u.nxt.assign(self.u.cur)  # cells left out are the same in both buffers
         for _ in range(iterations):
-            g.launch_list(kernel, cells, self.u.cur.data.data, self._phi0.data.data,
-                          self.u.nxt.data.data, g.scalar(dt), np.int32(g.sx))
+            args = (self.u.cur.data.data, self._phi0.data.data, self.u.nxt.data.data)
+            if bricks:
+                self.launch_band(kernel, cells, *args, cells.mask.data, g.scalar(dt))
+            else:
+                self.launch_band(kernel, cells, *args, g.scalar(dt), np.int32(g.sx))
             self.u.swap()
+
+    # ---- the band's layout -------------------------------------------------------------
+    def _brick_geometry(self):
+        """(nbx, nby, x0, y0, x1, y1): the bricks over the movable region, its padded
+        corners."""
+        bx, by = self.brick
+        g = self.grid
+        x0, y0 = g.ghost + MARGIN, g.ghost + MARGIN
+        x1, y1 = g.ghost + g.nx - MARGIN, g.ghost + g.ny - MARGIN
+        return -(-(x1 - x0) // bx), -(-(y1 - y0) // by), x0, y0, x1, y1
+
+    def _cells(self, mask: cla.Array):
+        """The cells where a padded device mask is nonzero, in this layout."""
+        if self.brick is None:
+            return compact(self.runtime, mask)
+        nbx, nby, *corners = self._brick_geometry()
+        flags = cla.empty(self.runtime.queue, nbx * nby, np.uint8)
+        self.band_kernel("levelset.cl", "mark_bricks")(
+            self.runtime.queue, (nbx * nby,), None, mask.data, flags.data, np.int32(nbx),
+            np.int32(nby), *(np.int32(c) for c in corners), np.int32(self.grid.sx))
+        ids = compact(self.runtime, flags)
+        return BrickSet(ids.indices, ids.n, mask)
+
+    def band_kernel(self, filename: str, name: str, **defines):
+        """A kernel of the band's layout: list kernels as they are, brick kernels built for
+        this brick size and launch geometry."""
+        if self.brick is not None:
+            defines.update(BX=self.brick[0], BY=self.brick[1],
+                           GROUP_PER_BRICK=int(self.group_per_brick))
+        return self.grid.kernel(filename, name, **defines)
+
+    def _brick_launch(self, n: int):
+        """(global size, local size, bricks per work-item) for n bricks."""
+        cells = self.brick[0] * self.brick[1]
+        if self.group_per_brick:
+            return n * cells, cells, 1
+        per = max(1, -(-n // (16 * self.runtime.device.max_compute_units)))
+        return -(-n // per), 1, per
+
+    def band_parts(self, cells=None) -> int:
+        """How many work-items a band launch over `cells` (default: the band) has: the
+        length of its per-work-item statistics."""
+        cells = self.band if cells is None else cells
+        if self.brick is None:
+            return self.runtime.list_launch(max(cells.n, 1))[0][0]
+        return self._brick_launch(max(cells.n, 1))[0]
+
+    def launch_band(self, kernel, cells, *args):
+        """Run a band kernel (band_kernel's) over `cells` (the band, or a BrickSet / IndexList
+        of this layout)."""
+        if cells.n == 0:
+            return None
+        if self.brick is None:
+            return self.grid.launch_list(kernel, cells, *args)
+        gsize, lsize, per = self._brick_launch(cells.n)
+        nbx, _, *corners = self._brick_geometry()
+        return kernel(self.runtime.queue, (gsize,), (lsize,), *args, cells.ids.data,
+                      np.int32(cells.n), np.int32(nbx), *(np.int32(c) for c in corners),
+                      np.int32(self.grid.sx), np.int32(per))
+
+    def stored_cells(self) -> int:
+        """Cells the band's launches visit: the band's cells, or its bricks' cells."""
+        if self.brick is None:
+            return self.band.n
+        return self.band.n * self.brick[0] * self.brick[1]
 
     # ---- results -----------------------------------------------------------------------
     def crop(self, padded: np.ndarray) -> np.ndarray:

@@ -184,7 +184,8 @@ class MorphingTracker:
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
                  ncc_radius: int = 3,
-                 huber_delta: float = 0.05, search_radius: int = 6, device: DeviceLike = None,
+                 huber_delta: float = 0.05, search_radius: int = 6, band_layout: str = "lists",
+                 device: DeviceLike = None,
                  dtype: DTypeLike | None = None, precision: DTypeLike | None = None):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
@@ -232,6 +233,12 @@ class MorphingTracker:
         self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
         self.max_dt = max(float(max_dt), self.dt)
         self.reinit_iterations = int(reinit_iterations)
+        from .levelset import LAYOUTS
+
+        if band_layout not in LAYOUTS:
+            raise InputError(f"band_layout must be one of {', '.join(LAYOUTS)}, "
+                             f"not {band_layout!r}")
+        self.band_layout = band_layout
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
@@ -316,8 +323,9 @@ class MorphingTracker:
         g = ls.grid
         q = self.runtime.queue
         discrepancy = discrepancy or self.discrepancy
-        kernel = g.kernel("track_features.cl", "morph_track", NCH=self.channels,
-                          DISC=DISCREPANCIES[discrepancy], WIN=self.ncc_radius)
+        kernel = ls.band_kernel("track_features.cl", morph_kernel_name(ls, discrepancy),
+                                NCH=self.channels, DISC=DISCREPANCIES[discrepancy],
+                                WIN=self.ncc_radius)
         pair = PingPong(f1)
         lam = self.shape_weight
         delta = self.huber_delta if discrepancy == "huber" else 0.02
@@ -335,11 +343,11 @@ class MorphingTracker:
                 converged = True
                 break
             if stats is None:
-                (parts,), _, _ = self.runtime.list_launch(ls.band.n)
+                parts = ls.band_parts()
                 stats = cla.zeros(q, 5 * parts + 1, g.dtype)
-            g.launch_list(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
-                          f2.data.data, ls.band_mask.data, prior.data.data, ls.u.nxt.data.data,
-                          pair.nxt.data.data, stats.data, g.scalar(dt), *consts)
+            ls.launch_band(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
+                           f2.data.data, ls.band_mask.data, prior.data.data, ls.u.nxt.data.data,
+                           pair.nxt.data.data, stats.data, g.scalar(dt), *consts)
             ls.u.swap()
             pair.swap()
             iterations += 1
@@ -377,7 +385,7 @@ class MorphingTracker:
         yield TrackState(0, mask.copy(), u.astype(np.float32))
         if len(self.frames) == 1:
             return
-        ls = LevelSet(self.runtime, u, self.band_width, self.dtype)
+        ls = LevelSet(self.runtime, u, self.band_width, self.dtype, layout=self.band_layout)
         # The shape pull's target; without it the kernel multiplies it by 0, so any finite
         # buffer of the grid will do.
         prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
@@ -437,6 +445,17 @@ class MorphingTracker:
         return _drop_small(~_drop_small(~mask, self.min_size), self.min_size)
 
 
+def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
+    """The morphing step's kernel for the band's layout: with bricks walked by one
+    work-item, the NCC slides its window sums over each brick (morph_track_tiled: 1.0-1.45x
+    the cell-by-cell sums, measured in docs/tracking.md; equal to rounding)."""
+    if ls.brick is None:
+        return "morph_track"
+    if discrepancy == "ncc" and not ls.group_per_brick:
+        return "morph_track_tiled"
+    return "morph_track_bricks"
+
+
 def match_histogram(image: np.ndarray, reference: np.ndarray, levels: int = 4096) -> np.ndarray:
     """Histogram specification of data in [0, 1]: the grey-level map that gives `image` the
     grey-level distribution of `reference`, on `levels` quantisation levels (equal values
@@ -492,6 +511,9 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     velocity Kalman filter fed by matching the object's features between frames, within
     search_radius pixels of the prediction) shifts each frame's start. shape_weight
     (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
+    band_layout: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
+    same results, bit for bit, except the NCC's window sums, equal to rounding; measured
+    no faster on CPUs, docs/tracking.md).
 
     equalize / smooth: the thesis' pre-processing, on by default. equalize='match' (or
     True) gives every frame the first frame's grey-level histogram (histogram

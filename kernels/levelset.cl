@@ -8,6 +8,7 @@
 #include "common.cl"
 #include "godunov.h"
 #include "reinit.h"
+#include "bricks2d.h"
 
 // ---- narrow band -----------------------------------------------------------------------
 
@@ -77,6 +78,32 @@ __kernel void reinit_step_list(__global const REAL* restrict phi,
         const int i = chan + list[k];
         out[i] = reinit_update_2d(phi, phi0, i, sx, dt);
     }
+}
+
+// The same update over the bricks of a band (bricks2d.h), at the cells where cells > 0.
+__kernel void reinit_step_bricks(__global const REAL* restrict phi,
+                                 __global const REAL* restrict phi0, __global REAL* restrict out,
+                                 __global const uchar* restrict cells, const REAL dt,
+                                 BRICK2D_ARGS)
+{
+    FOR_EACH_BRICK_CELL(i) {
+        if (cells[i]) out[i] = reinit_update_2d(phi, phi0, i, rs, dt);
+    }
+}
+
+// bricks[b] = 1 where brick b (bx + nbx by, over the movable region) holds a cell with
+// mask > 0: one work-item per brick.
+__kernel void mark_bricks(__global const uchar* restrict mask, __global uchar* restrict flags,
+                          const int nbx, const int nby, const int x0, const int y0,
+                          const int x1, const int y1, const int rs)
+{
+    const int b = get_global_id(0);
+    if (b >= nbx * nby) return;
+    const int ox = x0 + (b % nbx) * BX, oy = y0 + (b / nbx) * BY;
+    uchar any = 0;
+    for (int y = oy; y < min(oy + BY, y1); ++y)
+        for (int x = ox; x < min(ox + BX, x1); ++x) any |= mask[y * rs + x];
+    flags[b] = any != 0;
 }
 
 // ---- features --------------------------------------------------------------------------
