@@ -41,7 +41,7 @@ sys.path.insert(0, str(ROOT))
 # ---- data ------------------------------------------------------------------------------
 
 def synthetic(kind, frames):
-    from tests.test_track import synthetic_sequence
+    from tests.track.test_track import synthetic_sequence
 
     return synthetic_sequence(kind, frames=frames)
 

@@ -79,7 +79,7 @@ def carphone_figure(out: Path):
 
 
 def hard_cases_figure(out: Path):
-    from tests.test_track import synthetic_sequence
+    from tests.track.test_track import synthetic_sequence
 
     panels = []
     for kind in ("shadow", "flicker", "distractor"):
