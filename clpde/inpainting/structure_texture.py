@@ -57,13 +57,25 @@ def _structure_solver(name):
     return via_inpaint
 
 
+def known_range(data, omega):
+    """(lo, hi) of the known pixels over all channels: the span clpde.inpaint maps to [0, 1]
+    for a float image, so that the method sees the same problem through it as alone."""
+    known = data[:, ~omega]
+    lo, hi = float(known.min()), float(known.max())
+    return lo, (hi if hi > lo else lo + 1.0)
+
+
 def decompose(data, omega, runtime, tv_weight: float):
-    """(u, v): the TV structure and the texture f - u, the hole pre-filled by nearest values."""
+    """(u, v): the TV structure and the texture f - u, the hole pre-filled by nearest values.
+
+    tv_weight is relative to the known pixels' span (ROF's weight is in the image's units):
+    the split of a * f + b is then a * u + b and a * v, whatever the image's contrast."""
     from ..rof import denoise_tv
 
+    lo, hi = known_range(data, omega)
     idx = ndimage.distance_transform_edt(omega, return_distances=False, return_indices=True)
     filled = data[:, idx[0], idx[1]]
-    u = denoise_tv(np.moveaxis(filled, 0, -1), weight=tv_weight, channel_axis=-1,
+    u = denoise_tv(np.moveaxis(filled, 0, -1), weight=tv_weight * (hi - lo), channel_axis=-1,
                    device=runtime, progress=False)
     u = np.moveaxis(np.asarray(u, np.float64), -1, 0)
     return u, filled - u
@@ -74,7 +86,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           **exemplar_params):
     """Fill ``omega``: TV structure by a structure method, texture by the exemplar method.
 
-    tv_weight: the ROF weight (on [0, 1] data; larger puts more into the texture part).
+    tv_weight: the ROF weight relative to the known pixels' span (larger puts more into the
+        texture part); the result of a * data + b is a * result + b.
     guide: weight of the filled structure in the texture's patch distance (0: none).
     structure: the structure method's name (default: coherence, else transport).
     Other keywords (patch, search, iterations, ...) go to the exemplar method.
@@ -99,6 +112,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     exemplar_params.setdefault("structure", 0.0)
     v_filled = exemplar.solve(v, omega, runtime, dtype=dtype, progress=progress, seed=seed,
                               guide=guide_planes, **exemplar_params)
-    total = np.clip(u_filled + v_filled, 0.0, 1.0)
+    # the known range, not [0, 1]: the same clip for a float image alone and through
+    # clpde.inpaint, which stretches it to [0, 1]
+    total = np.clip(u_filled + v_filled, *known_range(data, omega))
     out[:, omega] = total[:, omega].astype(out.dtype)
     return out
