@@ -103,6 +103,20 @@ def _params(params: dict) -> dict:
 # Host-side preparation, per level (proportional to the box, not the image)
 
 
+# The structure guide's coherence for holes deeper than GUIDE_DEPTH px: a stronger pull
+# along the coherence direction (kappa 100 for the fill's 25), so that edges entering a
+# thick hole are carried further before the isotropic mean takes over. Seeds 0-2 of the
+# exemplar: thick 22.21 -> 22.36 dB (kappa 50: see docs, 200: 21.89), texture 20.48 ->
+# 20.62; thinner holes (text, scratches) keep the fill's defaults.
+GUIDE_DEPTH = 8
+GUIDE_KAPPA = 100.0
+
+
+def _guide_params(hole: np.ndarray) -> dict:
+    deep = ndimage.distance_transform_edt(np.pad(hole, 1)).max() > GUIDE_DEPTH
+    return {"kappa": GUIDE_KAPPA} if deep else {}
+
+
 def _box(omega: np.ndarray, margin: int):
     rows = np.flatnonzero(omega.any(axis=1))
     cols = np.flatnonzero(omega.any(axis=0))
@@ -377,7 +391,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     if sw > 0:
         from . import coherence
 
-        filled = coherence.solve(colour, hole, runtime, dtype=dtype)
+        filled = coherence.solve(colour, hole, runtime, dtype=dtype, **_guide_params(hole))
         guides = sw * filled if guides is None else np.concatenate([guides, sw * filled])
     if min(hole.shape) < patch + 2:
         raise InputError(
