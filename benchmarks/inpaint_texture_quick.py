@@ -1,7 +1,7 @@
 """Quick comparison of clpde's texture methods with the peers, on inpaint_texture_cases.
 
     python benchmarks/inpaint_texture_quick.py [--json PATH] [--only NAME,...] [--methods M,...]
-                                               [--speed]
+                                               [--speed] [--seams]
 
 For each case of texture_cases() (texture, periodic and thick-hole classes) it runs
 clpde's exemplar and structure-texture methods, clpde.inpaint's default method,
@@ -45,6 +45,21 @@ coffee-100 wall) the steps beside the edge are small and the ratios large.
                  unchanged). seam_inner4 is R_4 on the same pairs (4 px blocks either
                  side: a transition spread over a few pixels, as a stitch leaves it).
                  The peers do not expose their source maps; their cell is "-".
+    seam_far   = on the far seams only: seam pairs whose two sources' offsets s - p differ
+                 by more than a patch side (7 px, max norm), two regions copied from far
+                 apart rather than two near-alike patches of one region, and whose four
+                 blocks lie in the hole: the step of 8 px block means across them,
+                 sum |B(1) - B(-7)|, over the original's on the same pairs (the original
+                 scores 1). seam_far16 the same with 16 px blocks (none where the hole is
+                 under 64 px across). far_fraction: the far seams' share of the hole's
+                 4-neighbour pairs (of its internal edge length). Steps alone, not over
+                 the steps beside them as R_w: 16-32 px beside a seam lie across other
+                 seams or textures, and the ratio put a hard two-region paste below 1 on
+                 three of five cases. Control ("two-region paste": the hole's left half
+                 copied from just left of the hole, its right half from just right,
+                 meeting in one far seam down the middle): asserted > 1.2 at 16 px on every
+                 case, and at 8 px on the mean of the cases (on astronaut-80 and camera-60
+                 a single seam at 8 px is within the texture's own steps).
 With --seams, "clpde-exemplar-nostitch" is the exemplar with stitch=False (the last vote's
 copy as it is; its seam_inner is on the exemplar's recorded seams, the same seed giving the
 same field), for comparison. Control rows (asserted >1.2 on each case): the hole
