@@ -61,3 +61,36 @@ def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None, pen=None):
         w = np.array([np.exp(-(e - emin)) for e, _ in props])
         out[:nout, py, px] = np.sum(w[:, None] * np.array([v for _, v in props]), 0) / w.sum()
     return out
+
+
+def cohere(img, weights, nnf, dist, valid, targets, r, factor, sweeps):
+    """pm_coherence's ICM sweeps: per sweep, the targets of parity 0 then 1 ((x + y) % 2)
+    each take, among their own offset and their 8 neighbours' (read before the half-sweep),
+    the one of least dist * factor^-agree (agree: neighbours with that offset); the first in
+    row-major neighbour order wins a tie, the own offset before all. Returns (nnf, dist)."""
+    H, W = targets.shape
+    nnf, dist = nnf.copy(), dist.astype(np.float64).copy()
+    ys, xs = np.nonzero(targets)
+    for _ in range(sweeps):
+        for parity in (0, 1):
+            before = nnf.copy()
+            for py, px in zip(ys, xs, strict=False):
+                if (px + py) % 2 != parity:
+                    continue
+                offs = []
+                for oy in (-1, 0, 1):
+                    for ox in (-1, 0, 1):
+                        qy, qx = py + oy, px + ox
+                        if (oy or ox) and 0 <= qy < H and 0 <= qx < W:
+                            offs.append(tuple(before[qy, qx] - (qx, qy)))
+                own = tuple(before[py, px] - (px, py))
+                best_e = dist[py, px] / factor ** offs.count(own)
+                for o in dict.fromkeys(offs):
+                    sx, sy = px + o[0], py + o[1]
+                    if o == own or not (0 <= sx < W and 0 <= sy < H) or not valid[sy, sx]:
+                        continue
+                    d = patch_distance(img, weights, px, py, sx, sy, r)
+                    if d / factor ** offs.count(o) < best_e:
+                        best_e = d / factor ** offs.count(o)
+                        nnf[py, px], dist[py, px] = (sx, sy), d
+    return nnf, dist
