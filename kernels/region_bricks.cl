@@ -1,0 +1,352 @@
+// Region tracking (regions.cl) on the narrow band in dense bricks (clpde/regions_bricks.py).
+//
+// Every level set (channel 0 Phi, channels 1.. the Phi-hats) is one brick buffer
+// (NC, nbricks + 2, BV) of bricks.h, `plane` its channel stride. Brick 0 stands for every
+// brick place not stored and holds FAR (a positive distance beyond every band), so a tile
+// cell there counts as outside the band; the upkeep keeps every brick a band cell's stencils
+// reach (see brick_upkeep_flags), so no update reads it. A kernel copies a brick of every
+// channel and its neighbours' faces into a private tile (load_tile) and runs regions.h's,
+// godunov.h's, reinit.h's and extend.h's functions on it with the tile's strides: the same
+// arithmetic as regions.cl's kernels. One work-item walks whole bricks (the CPU geometry of
+// bricks.h, also used on GPUs here).
+//
+// `mask` (one byte per brick cell, BrickBand's layout) holds the band bits written by
+// brick_band_mask: BIT_STEP, the step band (interior cells with |Phi| < width, as
+// regions.cl's region_band_mask), and BIT_REINIT, the reinitialisation band (the step band
+// dilated by RING cells, a cube, as dilate_mask does). brick_bits is their union per brick:
+// the kernels skip bricks without the bit they update, so the work follows the band.
+#define LS_SPACE __private
+#define GROUP_PER_BRICK 0
+#include "common.cl"
+#include "godunov.h"
+#include "reinit.h"
+#include "extend.h"
+#include "regions.h"
+#include "bricks.h"
+
+#define BIT_STEP 1
+#define BIT_REINIT 2
+#ifndef RING
+#define RING 3  // the reinitialisation band's ring (RegionTracker's reinit_ring)
+#endif
+// The cells a band cell's updates reach: its reinitialisation ring and two more, the
+// slope-limited stencils' half-width.
+#define REACH (RING + 2)
+
+// Tiles of every channel around brick b: channel c at t + c * TILE_CELLS(H).
+INLINE void load_tiles(TILE REAL* t, __global const REAL* restrict src,
+                       __global const int* restrict nbr, const int b, const int H,
+                       const int plane)
+{
+    for (int c = 0; c < NC; ++c) load_tile(t + c * TILE_CELLS(H), src + c * plane, nbr, b, H);
+}
+
+// ---- one Euler stage of every level set (regions.cl's region_euler / region_heun) ----------
+// Cells outside the step band keep their values: region_euler copies them (so out equals ls
+// there, as the lists' synced work buffers do), region_heun averages two equal values.
+// stats: as regions.cl's, per work-item max |V| over the step band's cells with |Phi| < hi.
+INLINE void brick_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
+                        __global REAL* restrict out, __global REAL* restrict stats,
+                        __global const uchar* restrict mask, const REAL dt, const REAL eps2,
+                        const REAL lo, const REAL hi, const REAL scale, const REAL vmax,
+                        const int second, BRICK_ARGS)
+{
+    const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
+    REAL t[NC * TILE_CELLS(2)];
+    REAL_BITS fastest = 0;
+    FOR_EACH_BRICK(b, BIT_STEP) {
+        load_tiles(t, ls, nbr, b, 2, plane);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(2, x, y, z), k = b * BV + l;
+            const int step = mask[k] & BIT_STEP;
+            const REAL speed = region_speed_at(t, aux[k], i, scale, vmax, sx, sxy);
+            const REAL_BITS bits = (step && FABS(t[i]) < hi) ? AS_BITS(FABS(speed)) : 0;
+            fastest = bits > fastest ? bits : fastest;
+            const REAL v0 = speed * band_cutoff(t[i], lo, hi);
+            CENTRAL_GRAD(t, i, fx, fy, fz);
+            const REAL f2 = fx * fx + fy * fy + fz * fz + eps2;
+            for (int c = 0; c < NC; ++c) {
+                const int j = c * tp + i;
+                const REAL next = region_next(t, c, j, v0, fx, fy, fz, f2, eps2, dt, sx, sxy);
+                const REAL val = step ? next : t[j];
+                __global REAL* o = out + c * plane + k;
+                *o = second ? (REAL)0.5 * (*o + val) : val;
+            }
+        }
+    }
+    stats[get_global_size(0) * second + get_global_id(0)] = AS_REAL(fastest);
+}
+
+#define BRICK_STAGE_ARGS                                                                   \
+    __global const REAL* restrict ls, __global const REAL* restrict aux,                   \
+        __global REAL* restrict out, __global REAL* restrict stats,                        \
+        __global const uchar* restrict mask, const REAL dt, const REAL eps2, const REAL lo, \
+        const REAL hi, const REAL scale, const REAL vmax, BRICK_ARGS
+#define BRICK_STAGE_CALL(second)                                                           \
+    brick_stage(ls, aux, out, stats, mask, dt, eps2, lo, hi, scale, vmax, second, nbr,     \
+                brick_bits, nbricks, plane, per_item)
+__kernel void region_brick_euler(BRICK_STAGE_ARGS) { BRICK_STAGE_CALL(0); }
+__kernel void region_brick_heun(BRICK_STAGE_ARGS) { BRICK_STAGE_CALL(1); }
+
+// Rigid motion (regions.cl's advect_step) as a Heun stage: second = 0 writes out = ls +
+// dt L(ls), second = 1 averages out = (out + ls + dt L(ls)) / 2 (the lists' heun_average
+// of the second stage, the same values).
+__kernel void region_brick_advect(__global const REAL* restrict ls, __global REAL* restrict out,
+                                  __global const uchar* restrict mask, const REAL dt,
+                                  const REAL ux, const REAL uy, const REAL uz, const REAL lo,
+                                  const REAL hi, const int second, BRICK_ARGS)
+{
+    const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
+    REAL t[NC * TILE_CELLS(2)];
+    FOR_EACH_BRICK(b, BIT_STEP) {
+        load_tiles(t, ls, nbr, b, 2, plane);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(2, x, y, z), k = b * BV + l;
+            const int step = mask[k] & BIT_STEP;
+            const REAL cut = band_cutoff(t[i], lo, hi);
+            for (int c = 0; c < NC; ++c) {
+                const int j = c * tp + i;
+                const REAL val = step ? advect_next(t, j, cut, dt, ux, uy, uz, sx, sxy) : t[j];
+                __global REAL* o = out + c * plane + k;
+                *o = second ? (REAL)0.5 * (*o + val) : val;
+            }
+        }
+    }
+}
+
+// ---- reinitialisation (regions.cl's extend_outer, reinit3d_targets, _step_pre, _heun_pre) --
+// The extension of the Phi-hat along Phi's normals; Phi itself is copied (so out equals ls
+// on every brick written, and the host swaps the two).
+__kernel void region_brick_extend(__global const REAL* restrict ls,
+                                  __global const uchar* restrict mask,
+                                  __global REAL* restrict out, const REAL dt, const REAL lo,
+                                  const REAL hi, BRICK_ARGS)
+{
+    const int sx = TILE_X(1), sxy = TILE_XY(1), tp = TILE_CELLS(1);
+    REAL t[NC * TILE_CELLS(1)];
+    FOR_EACH_BRICK(b, BIT_REINIT) {
+        load_tiles(t, ls, nbr, b, 1, plane);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(1, x, y, z), k = b * BV + l;
+            const int inband = mask[k] & BIT_REINIT;
+            REAL ax, ay, az;
+            const REAL w = extend_velocity(t, i, lo, hi, sx, sxy, &ax, &ay, &az);
+            out[k] = t[i];
+            for (int c = 1; c < NC; ++c) {
+                const int j = c * tp + i;
+                const REAL v = t[j];
+                const REAL du = upwind_transport(t, j, sx, sxy, ax, ay, az);
+                out[c * plane + k] = inband ? v - dt * w * du : v;
+            }
+        }
+    }
+}
+
+// The subcell fix's targets (reinit.h's subcell_target_3d), -INFINITY outside the band.
+__kernel void region_brick_targets(__global const REAL* restrict u0,
+                                   __global const uchar* restrict mask,
+                                   __global REAL* restrict target, BRICK_ARGS)
+{
+    const int sx = TILE_X(1), sxy = TILE_XY(1), tp = TILE_CELLS(1);
+    REAL t[NC * TILE_CELLS(1)];
+    FOR_EACH_BRICK(b, BIT_REINIT) {
+        load_tiles(t, u0, nbr, b, 1, plane);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(1, x, y, z), k = b * BV + l;
+            const int inband = mask[k] & BIT_REINIT;
+            for (int c = 0; c < NC; ++c) {
+                const REAL g = subcell_target_3d(t, c * tp + i, sx, sxy, (REAL)SUBCELL_STEEP,
+                                                 (REAL)SUBCELL_TOL);
+                target[c * plane + k] = inband ? g : (REAL)-INFINITY;
+            }
+        }
+    }
+}
+
+// Heun's first stage of the reinitialisation: out = u + dt L(u).
+__kernel void region_brick_reinit_step(__global const REAL* restrict u,
+                                       __global const REAL* restrict u0,
+                                       __global const REAL* restrict target,
+                                       __global REAL* restrict out, const REAL dt, BRICK_ARGS)
+{
+    const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
+    REAL t[NC * TILE_CELLS(2)];
+    FOR_EACH_BRICK(b, BIT_REINIT) {
+        load_tiles(t, u, nbr, b, 2, plane);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(2, x, y, z), k = b * BV + l;
+            for (int c = 0; c < NC; ++c) {
+                const int ck = c * plane + k;
+                out[ck] = reinit_update_at(t, c * tp + i, sx, sxy, u0[ck], target[ck], dt);
+            }
+        }
+    }
+}
+
+// Its second stage, averaged in place: acc <- (acc + stage1 + dt L(stage1)) / 2.
+__kernel void region_brick_reinit_heun(__global REAL* restrict acc,
+                                       __global const REAL* restrict stage1,
+                                       __global const REAL* restrict u0,
+                                       __global const REAL* restrict target, const REAL dt,
+                                       BRICK_ARGS)
+{
+    const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
+    REAL t[NC * TILE_CELLS(2)];
+    FOR_EACH_BRICK(b, BIT_REINIT) {
+        load_tiles(t, stage1, nbr, b, 2, plane);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int i = TILE_AT(2, x, y, z), k = b * BV + l;
+            for (int c = 0; c < NC; ++c) {
+                const int ck = c * plane + k;
+                acc[ck] = (REAL)0.5 * (acc[ck] + reinit_update_at(t, c * tp + i, sx, sxy, u0[ck],
+                                                                  target[ck], dt));
+            }
+        }
+    }
+}
+
+// ---- the bands and their upkeep ----------------------------------------------------------------
+// Whether cell (x, y, z) of brick b (coords: per brick its brick coordinates, 3 ints, row b)
+// is an interior cell of the grid (nx, ny, nz) with ghost width G.
+INLINE int interior(__global const int* restrict coords, const int b, const int x, const int y,
+                    const int z, const int nx, const int ny, const int nz, const int G)
+{
+    const int gx = coords[3 * b] * BX + x - G, gy = coords[3 * b + 1] * BY + y - G;
+    const int gz = coords[3 * b + 2] * BZ + z - G;
+    return gx >= 0 && gy >= 0 && gz >= 0 && gx < nx && gy < ny && gz < nz;
+}
+
+// The band bits of every cell (mask), their union per brick (bits), and flag[0] = 1 when a
+// cell of the reinitialisation band lies within one cell of the interior's border (regions.cl's
+// band_near_border with margin 1). Per brick: Phi's tile of halo RING, the step band on it,
+// then its dilation by RING cells along x, y and z in turn (a cube).
+#define MX TILE_X(RING)
+#define MXY TILE_XY(RING)
+__kernel void region_brick_band_mask(__global const REAL* restrict phi,
+                                     __global uchar* restrict mask, __global uchar* restrict bits,
+                                     __global const int* restrict coords,
+                                     __global int* restrict flag, const REAL width,
+                                     const int nx, const int ny, const int nz, const int G,
+                                     __global const int* restrict nbr, const int nbricks,
+                                     const int per_item)
+{
+    REAL t[TILE_CELLS(RING)];
+    uchar m[TILE_CELLS(RING)];
+    uchar dx[BX * (BY + 2 * RING) * (BZ + 2 * RING)];  // dilated along x
+    uchar dy[BX * BY * (BZ + 2 * RING)];               // and along y
+    int hit = 0;
+    for (int b = 1 + get_global_id(0) * per_item, b_end = min(b + per_item, nbricks + 1);
+         b < b_end; ++b) {
+        load_tile(t, phi, nbr, b, RING);
+        for (int z = -RING; z < BZ + RING; ++z)
+            for (int y = -RING; y < BY + RING; ++y)
+                for (int x = -RING; x < BX + RING; ++x) {
+                    const int k = TILE_AT(RING, x, y, z);
+                    m[k] = FABS(t[k]) < width && interior(coords, b, x, y, z, nx, ny, nz, G);
+                }
+        for (int z = 0; z < BZ + 2 * RING; ++z)
+            for (int y = 0; y < BY + 2 * RING; ++y)
+                for (int x = 0; x < BX; ++x) {
+                    uchar v = 0;
+                    for (int d = 0; d <= 2 * RING; ++d) v |= m[(z * (BY + 2 * RING) + y) * MX + x + d];
+                    dx[(z * (BY + 2 * RING) + y) * BX + x] = v;
+                }
+        for (int z = 0; z < BZ + 2 * RING; ++z)
+            for (int y = 0; y < BY; ++y)
+                for (int x = 0; x < BX; ++x) {
+                    uchar v = 0;
+                    for (int d = 0; d <= 2 * RING; ++d) v |= dx[(z * (BY + 2 * RING) + y + d) * BX + x];
+                    dy[(z * BY + y) * BX + x] = v;
+                }
+        uchar any = 0;
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            uchar v = 0;
+            for (int d = 0; d <= 2 * RING; ++d) v |= dy[((z + d) * BY + y) * BX + x];
+            const uchar cell = m[TILE_AT(RING, x, y, z)] * BIT_STEP | v * BIT_REINIT;
+            mask[b * BV + l] = cell;
+            any |= cell;
+            if (v) {
+                const int gx = coords[3 * b] * BX + x - G, gy = coords[3 * b + 1] * BY + y - G;
+                const int gz = coords[3 * b + 2] * BZ + z - G;
+                hit |= (gx < 1) | (gy < 1) | (gz < 1) | (gx >= nx - 1) | (gy >= ny - 1) |
+                       (gz >= nz - 1);
+            }
+        }
+        bits[b] = any;
+    }
+    if (hit) flag[0] = 1;  // every writer stores the same value
+}
+
+// The upkeep's flag word of every brick (flags[b - 1]): bit k (k = (dz + 1) 9 + (dy + 1) 3 +
+// dx + 1, the neighbour table's order) is set when brick b + (dx, dy, dz) holds a cell within
+// REACH cells (a cube) of a step-band cell of brick b (|Phi| < width, interior), so bit 13
+// says the brick holds one; bit 27 is the brick's sign (its middle cell's Phi < 0), kept
+// for the bricks the host drops. The host stores exactly the bricks some brick flags: every
+// cell of the next reinitialisation band (the step band dilated by RING) and the stencils
+// of its cells (2 more) then lie in stored bricks. Needs REACH <= every brick side.
+INLINE int axis_code(const int x, const int side)
+{
+    return 2 | (x < REACH) | ((x >= side - REACH) << 2);  // bit 0: -1, bit 1: 0, bit 2: +1
+}
+
+__kernel void region_brick_flags(__global const REAL* restrict phi, __global int* restrict flags,
+                                 __global const int* restrict coords, const REAL width,
+                                 const int nx, const int ny, const int nz, const int G,
+                                 const int nbricks, const int per_item)
+{
+    for (int b = 1 + get_global_id(0) * per_item, b_end = min(b + per_item, nbricks + 1);
+         b < b_end; ++b) {
+        int word = phi[b * BV + ((BZ / 2) * BY + BY / 2) * BX + BX / 2] < 0 ? 1 << 27 : 0;
+        for (int z = 0; z < BZ; ++z)
+            for (int y = 0; y < BY; ++y) {
+                int rx = 0;
+                for (int x = 0; x < BX; ++x) {
+                    const int band = FABS(phi[b * BV + (z * BY + y) * BX + x]) < width &&
+                                     interior(coords, b, x, y, z, nx, ny, nz, G);
+                    rx |= band ? axis_code(x, BX) : 0;
+                }
+                if (!rx) continue;
+                const int ry = axis_code(y, BY), rz = axis_code(z, BZ);
+                for (int kz = 0; kz < 3; ++kz)
+                    for (int ky = 0; ky < 3; ++ky)
+                        for (int kx = 0; kx < 3; ++kx)
+                            if ((rz >> kz) & (ry >> ky) & (rx >> kx) & 1)
+                                word |= 1 << (kz * 9 + ky * 3 + kx);
+            }
+        flags[b - 1] = word;
+    }
+}
+
+// The new storage from the old: new brick b (1..nbricks) copies old brick src[b] when
+// dir[b] < 0 (kept); else it is new, next to old brick src[b] in direction dir[b] (the
+// neighbour table's order), and every cell takes the values of the nearest cell of that
+// brick's facing side, Phi replaced by `far` with its sign (beyond the step band: the
+// reinitialisations that follow bring the cells they reach to distances). Work-item 0
+// also fills the sentinel brick 0 of every channel with FAR.
+__kernel void region_brick_remap(__global const REAL* restrict old, __global REAL* restrict out,
+                                 __global const int* restrict src, __global const int* restrict dir,
+                                 const REAL far, const REAL sentinel, const int old_plane,
+                                 const int plane, const int nbricks, const int per_item)
+{
+    if (get_global_id(0) == 0)
+        for (int c = 0; c < NC; ++c)
+            for (int l = 0; l < BV; ++l) out[c * plane + l] = sentinel;
+    for (int b = 1 + get_global_id(0) * per_item, b_end = min(b + per_item, nbricks + 1);
+         b < b_end; ++b) {
+        const int s = src[b], d = dir[b];
+        if (d < 0) {
+            for (int c = 0; c < NC; ++c)
+                for (int l = 0; l < BV; ++l) out[c * plane + b * BV + l] = old[c * old_plane + s * BV + l];
+            continue;
+        }
+        const int ddx = d % 3 - 1, ddy = (d / 3) % 3 - 1, ddz = d / 9 - 1;
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int fx = ddx > 0 ? BX - 1 : (ddx < 0 ? 0 : x);
+            const int fy = ddy > 0 ? BY - 1 : (ddy < 0 ? 0 : y);
+            const int fz = ddz > 0 ? BZ - 1 : (ddz < 0 ? 0 : z);
+            const int from = s * BV + (fz * BY + fy) * BX + fx;
+            out[b * BV + l] = COPYSIGN(far, old[from]);
+            for (int c = 1; c < NC; ++c) out[c * plane + b * BV + l] = old[c * old_plane + from];
+        }
+    }
+}
