@@ -120,6 +120,8 @@ class RegionTracker:
     block at the CFL limit; far less often for slow flows: see advance).
     aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
+    storage: "lists" (this class) or "bricks" (clpde.regions_bricks.BrickRegionTracker, which
+    also takes brick=(BX, BY, BZ)).
     """
 
     def __init__(self, phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
@@ -617,7 +619,8 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                  reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
                  max_speed: float | None = None, keep_volumes: bool = False,
                  device: DeviceLike = None, dtype: DTypeLike = np.float32,
-                 progress: bool | None = None, band: float | None = None) -> list[RegionFrame]:
+                 progress: bool | None = None, band: float | None = None,
+                 storage: str = "lists") -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
@@ -644,6 +647,10 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
 
     palette: (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
     clpde's palette; where no region is, grey).
+
+    storage: "lists" (dense padded volumes on the device, the band as index lists) or
+    "bricks" (dense bricks of the band only, kept up on the device: memory in proportion to
+    the band; see clpde.regions_bricks and docs/regions.md for the measurements).
 
     Returns a RegionFrame per saved time: mesh (trimesh, per-vertex region colours),
     face_labels, boundary points, and (keep_volumes=True) the level sets.
@@ -695,7 +702,7 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                             reinit_iterations=reinit_iterations, cfl=cfl,
                             max_speed=None if max_speed is None else _positive("max_speed",
                                                                                max_speed) / h,
-                            aux_at=aux_at, device=device, dtype=dtype)
+                            aux_at=aux_at, device=device, dtype=dtype, storage=storage)
     # the bar counts simulated time, so it prints rounded times rather than step counts
     time_format = "{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
     with progress_bar(progress, t_end, "track regions", leave=False, unit="time",

@@ -127,19 +127,29 @@ class BrickRegionTracker(RegionTracker):
         self._aux_to_bricks()
         self._stats_fresh = False
 
-    def volumes(self) -> tuple[np.ndarray, np.ndarray]:
-        """(Phi, Phi-hats) in world units on the host: the stored bricks, and FAR cells
-        of their sign where no brick is stored."""
+    def padded(self, data: cla.Array, signed: bool = True) -> np.ndarray:
+        """A brick buffer as dense padded host values (channels, PZ, PY, PX): the stored
+        bricks, and FAR where no brick is stored, with the sign of its place (signed) or
+        positive (what the kernels read there)."""
         g, b = self.grid, self.bricks
         bx, by, bz = self.brick
         pz, py, px = g.padded_shape
-        sign = self._sign.repeat(bz, 0).repeat(by, 1).repeat(bx, 2)[:pz, :py, :px]
-        dense = np.broadcast_to(self.far * sign.astype(np.float64),
-                                (self.nc, pz, py, px)).copy()
-        host = self.cur.get().reshape(self.nc, b.nbricks + 2, b.cells_per_brick)
+        channels = data.size // b.plane
+        if signed:
+            sign = self._sign.repeat(bz, 0).repeat(by, 1).repeat(bx, 2)[:pz, :py, :px]
+            dense = np.broadcast_to(self.far * sign.astype(np.float64),
+                                    (channels, pz, py, px)).copy()
+        else:
+            dense = np.full((channels, pz, py, px), self.far)
+        host = data.get().reshape(channels, b.nbricks + 2, b.cells_per_brick)
         valid = b.cells >= 0
-        dense.reshape(self.nc, -1)[:, b.cells[valid]] = host[:, 1 : b.nbricks + 1][:, valid]
-        data = np.ascontiguousarray(g.interior(dense)) * self.h
+        dense.reshape(channels, -1)[:, b.cells[valid]] = host[:, 1 : b.nbricks + 1][:, valid]
+        return dense
+
+    def volumes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(Phi, Phi-hats) in world units on the host (FAR cells of the right sign where no
+        brick is stored)."""
+        data = np.ascontiguousarray(self.grid.interior(self.padded(self.cur))) * self.h
         return data[0], data[1:]
 
     def memory(self) -> int:
