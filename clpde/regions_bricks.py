@@ -83,12 +83,28 @@ class BrickRegionTracker(RegionTracker):
         self._flag = cla.zeros(self.runtime.queue, 1, np.int32)
         rt = self.runtime
         defines = dict(SPEED=self.mode, NC=self.nc, RING=self.reinit_ring, BX=bx, BY=by, BZ=bz)
-        names = ("region_brick_euler", "region_brick_heun", "region_brick_advect",
-                 "region_brick_extend", "region_brick_targets", "region_brick_reinit_step",
-                 "region_brick_reinit_heun", "region_brick_band_mask", "region_brick_flags",
-                 "region_brick_remap")
-        self._k = {name: rt.kernel("region_bricks.cl", name, g.dtype, **defines)
-                   for name in names}
+        k = {}
+        k["region_brick_euler"] = rt.kernel("region_bricks.cl", "region_brick_euler", g.dtype,
+                                            **defines)
+        k["region_brick_heun"] = rt.kernel("region_bricks.cl", "region_brick_heun", g.dtype,
+                                           **defines)
+        k["region_brick_advect"] = rt.kernel("region_bricks.cl", "region_brick_advect",
+                                             g.dtype, **defines)
+        k["region_brick_extend"] = rt.kernel("region_bricks.cl", "region_brick_extend",
+                                             g.dtype, **defines)
+        k["region_brick_targets"] = rt.kernel("region_bricks.cl", "region_brick_targets",
+                                              g.dtype, **defines)
+        k["region_brick_reinit_step"] = rt.kernel("region_bricks.cl",
+                                                  "region_brick_reinit_step", g.dtype, **defines)
+        k["region_brick_reinit_heun"] = rt.kernel("region_bricks.cl",
+                                                  "region_brick_reinit_heun", g.dtype, **defines)
+        k["region_brick_band_mask"] = rt.kernel("region_bricks.cl", "region_brick_band_mask",
+                                                g.dtype, **defines)
+        k["region_brick_flags"] = rt.kernel("region_bricks.cl", "region_brick_flags", g.dtype,
+                                            **defines)
+        k["region_brick_remap"] = rt.kernel("region_bricks.cl", "region_brick_remap", g.dtype,
+                                            **defines)
+        self._k = k
 
     def _initial_coords(self, phi: np.ndarray, reach: int) -> np.ndarray:
         """The bricks the upkeep keeps for the initial Phi (padded): those holding a cell
