@@ -65,6 +65,7 @@ INLINE void brick_stage(__global const REAL* restrict ls, __global const REAL* r
             const REAL v0 = speed * band_cutoff(t[i], lo, hi);
             CENTRAL_GRAD(t, i, fx, fy, fz);
             const REAL f2 = fx * fx + fy * fy + fz * fz + eps2;
+#pragma unroll
             for (int c = 0; c < NC; ++c) {
                 const int j = c * tp + i;
                 const REAL next = region_next(t, c, j, v0, fx, fy, fz, f2, eps2, dt, sx, sxy);
@@ -104,6 +105,7 @@ __kernel void region_brick_advect(__global const REAL* restrict ls, __global REA
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
             const int step = mask[k] & BIT_STEP;
             const REAL cut = band_cutoff(t[i], lo, hi);
+#pragma unroll
             for (int c = 0; c < NC; ++c) {
                 const int j = c * tp + i;
                 const REAL val = step ? advect_next(t, j, cut, dt, ux, uy, uz, sx, sxy) : t[j];
@@ -132,6 +134,7 @@ __kernel void region_brick_extend(__global const REAL* restrict ls,
             REAL ax, ay, az;
             const REAL w = extend_velocity(t, i, lo, hi, sx, sxy, &ax, &ay, &az);
             out[k] = t[i];
+#pragma unroll
             for (int c = 1; c < NC; ++c) {
                 const int j = c * tp + i;
                 const REAL v = t[j];
@@ -154,6 +157,7 @@ __kernel void region_brick_targets(__global const REAL* restrict u0,
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             const int i = TILE_AT(1, x, y, z), k = b * BV + l;
             const int inband = mask[k] & BIT_REINIT;
+#pragma unroll
             for (int c = 0; c < NC; ++c) {
                 const REAL g = subcell_target_3d(t, c * tp + i, sx, sxy, (REAL)SUBCELL_STEEP,
                                                  (REAL)SUBCELL_TOL);
@@ -175,6 +179,7 @@ __kernel void region_brick_reinit_step(__global const REAL* restrict u,
         load_tiles(t, u, nbr, b, 2, plane);
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
+#pragma unroll
             for (int c = 0; c < NC; ++c) {
                 const int ck = c * plane + k;
                 out[ck] = reinit_update_at(t, c * tp + i, sx, sxy, u0[ck], target[ck], dt);
@@ -196,6 +201,7 @@ __kernel void region_brick_reinit_heun(__global REAL* restrict acc,
         load_tiles(t, stage1, nbr, b, 2, plane);
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
+#pragma unroll
             for (int c = 0; c < NC; ++c) {
                 const int ck = c * plane + k;
                 acc[ck] = (REAL)0.5 * (acc[ck] + reinit_update_at(t, c * tp + i, sx, sxy, u0[ck],
