@@ -139,7 +139,7 @@ def step_timing(n, flow, storage=None, radius=0.35, steps=STEPS, rounds=ROUNDS):
             "copy_ms": 1e3 * float(np.median(copies)), "load": os.getloadavg()[0]}
 
 
-def curvature_accuracy():
+def curvature_accuracy(storage=None):
     """Area and cap-share errors of the tests' curvature flows (h = 0.1)."""
     from clpde.regions import track_region
 
@@ -150,14 +150,15 @@ def curvature_accuracy():
     rows = []
     for beta, t, radius in (("mean-curvature", 0.05, np.sqrt(0.81 - 4 * 0.05)),
                             ("gaussian", 0.1, np.cbrt(0.729 - 3 * 0.1))):
+        kw = {} if storage is None else {"storage": storage}
         end = track_region(phi, 0.45 - z, beta=beta, t=t, spacing=h, saves=1,
-                           origin=(ax[0],) * 3, progress=False)[-1]
+                           origin=(ax[0],) * 3, progress=False, **kw)[-1]
         rows.append({"flow": beta, "area_error": end.area() / (4 * np.pi * radius**2) - 1,
                      "cap_share_error": end.area_fraction(0) / 0.25 - 1, "steps": end.step})
     return rows
 
 
-def cap_accuracy(h, device=None):
+def cap_accuracy(h, device=None, storage="lists"):
     from scipy.ndimage import map_coordinates
 
     from clpde.regions import surface_mesh, track_region
@@ -171,7 +172,7 @@ def cap_accuracy(h, device=None):
     start = time.perf_counter()
     frames = track_region(phi, cap, beta=0.5, t=0.5, spacing=h, saves=1,
                           origin=(ax[0],) * 3, keep_volumes=True, device=device,
-                          progress=False)
+                          progress=False, storage=storage)
     seconds = time.perf_counter() - start
     end = frames[-1]
     p = end.boundaries[0]
@@ -203,7 +204,7 @@ def _in_checkout(source, task, *args):
 def _task(name, args):
     if name == "step":
         return step_timing(int(args[0]), args[1], *args[2:3])
-    return curvature_accuracy()
+    return curvature_accuracy(*args[:1])
 
 
 def main():
@@ -233,7 +234,6 @@ def main():
     runs = [(s, ROOT, s) for s in args.storages]
     if args.baseline:
         runs.append(("baseline", args.baseline, None))
-    sources = [("this", ROOT)] + ([("baseline", args.baseline)] if args.baseline else [])
     timings = []
     print(f"{'grid':>5} {'flow':>9} {'tree':>8} {'band':>8} {'reinit band':>11} "
           f"{'reinits':>7} {'ms/step':>8} {'step ms':>8} {'reinit ms':>9} {'MiB':>6} "
@@ -263,7 +263,9 @@ def main():
                     ratios = [b / a for a, b in zip(first, other, strict=True)]
                     print(f"{'':>5} {flow:>9} {runs[j][0]} / {runs[0][0]} (ms per step, "
                           "pairwise): " + ", ".join(f"{r:.2f}x" for r in ratios), flush=True)
-    curvature = {name: _in_checkout(source, "curvature") for name, source in sources}
+    curvature = {name: _in_checkout(source, "curvature", *extra) for name, source, extra in
+                 [(s, ROOT, (s,)) for s in args.storages] +
+                 ([("baseline", args.baseline, ())] if args.baseline else [])}
     print(f"\n{'flow':>15} {'tree':>8} {'steps':>5} {'area':>8} {'cap share':>9}")
     for name, rows in curvature.items():
         for row in rows:
@@ -271,14 +273,18 @@ def main():
                   f"{100 * row['area_error']:>7.2f}% {100 * row['cap_share_error']:>8.2f}%")
     accuracy = []
     if args.spacings:
-        print(f"\n{'h':>6} {'cells':>8} {'s':>6} {'cap area':>9} {'zero order':>10} "
-              f"{'angle':>8} {'sphere':>8}")
+        print(f"\n{'h':>6} {'storage':>7} {'cells':>8} {'s':>6} {'cap area':>9} "
+              f"{'zero order':>10} {'angle':>8} {'sphere':>8}")
     for h in args.spacings:
-        row = cap_accuracy(h)
-        accuracy.append(row)
-        print(f"{h:>6} {row['cells']:>8} {row['seconds']:>6.1f} "
-              f"{100 * row['area_fraction_error']:>8.3f}% {100 * row['zero_order_error']:>9.3f}% "
-              f"{100 * row['angular_radius_error']:>7.3f}% {100 * row['sphere_area_error']:>7.3f}%")
+        for storage in args.storages:
+            row = cap_accuracy(h, storage=storage)
+            row["storage"] = storage
+            accuracy.append(row)
+            print(f"{h:>6} {storage:>7} {row['cells']:>8} {row['seconds']:>6.1f} "
+                  f"{100 * row['area_fraction_error']:>8.3f}% "
+                  f"{100 * row['zero_order_error']:>9.3f}% "
+                  f"{100 * row['angular_radius_error']:>7.3f}% "
+                  f"{100 * row['sphere_area_error']:>7.3f}%", flush=True)
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:
         json.dump({"device": rt.device.name.strip(), "step_timing": timings,
