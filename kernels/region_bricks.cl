@@ -41,9 +41,25 @@ INLINE void load_tiles(TILE REAL* t, __global const REAL* restrict src,
     for (int c = 0; c < NC; ++c) load_tile(t + c * TILE_CELLS(H), src + c * plane, nbr, b, H);
 }
 
+// The rows along x of brick b holding a step-band cell (the stages skip the others: a third
+// or more of a brick's rows for a band 10 cells thick).
+#define FOR_EACH_STEP_ROW(b, y, z)                                                        \
+    for (int z = 0; z < BZ; ++z)                                                          \
+        for (int y = 0; y < BY; ++y)                                                      \
+            if (row_steps(mask, b, y, z))
+
+INLINE int row_steps(__global const uchar* restrict mask, const int b, const int y, const int z)
+{
+    uchar any = 0;
+    for (int x = 0; x < BX; ++x) any |= mask[b * BV + (z * BY + y) * BX + x];
+    return any & BIT_STEP;
+}
+
 // ---- one Euler stage of every level set (regions.cl's region_euler / region_heun) ----------
 // Cells outside the step band keep their values: region_euler copies them (so out equals ls
-// there, as the lists' synced work buffers do), region_heun averages two equal values.
+// there, as the lists' synced work buffers do), region_heun averages two equal values. Rows
+// without a step-band cell are skipped: the tracker keeps nxt equal to cur outside the step
+// band (region_bricks.py), which is what both stages would write there.
 // stats: as regions.cl's, per work-item max |V| over the step band's cells with |Phi| < hi.
 INLINE void brick_stage(__global const REAL* restrict ls, __global const REAL* restrict aux,
                         __global REAL* restrict out, __global REAL* restrict stats,
@@ -56,7 +72,8 @@ INLINE void brick_stage(__global const REAL* restrict ls, __global const REAL* r
     REAL_BITS fastest = 0;
     FOR_EACH_BRICK(b, BIT_STEP) {
         load_tiles(t, ls, nbr, b, 2, plane);
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
+        FOR_EACH_STEP_ROW(b, y, z)
+        for (int x = 0, l = (z * BY + y) * BX; x < BX; ++x, ++l) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
             const int step = mask[k] & BIT_STEP;
             const REAL speed = region_speed_at(t, aux[k], i, scale, vmax, sx, sxy);
@@ -101,7 +118,8 @@ __kernel void region_brick_advect(__global const REAL* restrict ls, __global REA
     REAL t[NC * TILE_CELLS(2)];
     FOR_EACH_BRICK(b, BIT_STEP) {
         load_tiles(t, ls, nbr, b, 2, plane);
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
+        FOR_EACH_STEP_ROW(b, y, z)
+        for (int x = 0, l = (z * BY + y) * BX; x < BX; ++x, ++l) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
             const int step = mask[k] & BIT_STEP;
             const REAL cut = band_cutoff(t[i], lo, hi);
