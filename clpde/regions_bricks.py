@@ -310,9 +310,9 @@ class BrickRegionTracker(RegionTracker):
                          self.stage.data)
         for _ in range(its):
             self._launch("region_brick_reinit_step", self.cur.data, self.ls0.data,
-                         self.stage.data, self.nxt.data, g.scalar(REINIT_DT))
+                         self.stage.data, self.nxt.data, self._mask.data, g.scalar(REINIT_DT))
             self._launch("region_brick_reinit_heun", self.cur.data, self.nxt.data,
-                         self.ls0.data, self.stage.data, g.scalar(REINIT_DT))
+                         self.ls0.data, self.stage.data, self._mask.data, g.scalar(REINIT_DT))
         self.rebuild()
         self.reinits += 1
         self._moved = 0.0

@@ -43,16 +43,20 @@ INLINE void load_tiles(TILE REAL* t, __global const REAL* restrict src,
 
 // The rows along x of brick b holding a step-band cell (the stages skip the others: a third
 // or more of a brick's rows for a band 10 cells thick).
-#define FOR_EACH_STEP_ROW(b, y, z)                                                        \
+#define FOR_EACH_BAND_ROW(b, y, z, bit)                                                   \
     for (int z = 0; z < BZ; ++z)                                                          \
         for (int y = 0; y < BY; ++y)                                                      \
-            if (row_steps(mask, b, y, z))
+            if (row_bits(mask, b, y, z) & (bit))
+#define FOR_EACH_STEP_ROW(b, y, z) FOR_EACH_BAND_ROW(b, y, z, BIT_STEP)
+// ... and of the reinitialisation band (the tracker keeps cur and nxt equal outside it)
+#define FOR_EACH_REINIT_ROW(b, y, z) FOR_EACH_BAND_ROW(b, y, z, BIT_REINIT)
+#define ROW_CELLS(x, l, y, z) for (int x = 0, l = ((z) * BY + (y)) * BX; x < BX; ++x, ++l)
 
-INLINE int row_steps(__global const uchar* restrict mask, const int b, const int y, const int z)
+INLINE uchar row_bits(__global const uchar* restrict mask, const int b, const int y, const int z)
 {
     uchar any = 0;
     for (int x = 0; x < BX; ++x) any |= mask[b * BV + (z * BY + y) * BX + x];
-    return any & BIT_STEP;
+    return any;
 }
 
 // ---- one Euler stage of every level set (regions.cl's region_euler / region_heun) ----------
@@ -72,8 +76,7 @@ INLINE void brick_stage(__global const REAL* restrict ls, __global const REAL* r
     REAL_BITS fastest = 0;
     FOR_EACH_BRICK(b, BIT_STEP) {
         load_tiles(t, ls, nbr, b, 2, plane);
-        FOR_EACH_STEP_ROW(b, y, z)
-        for (int x = 0, l = (z * BY + y) * BX; x < BX; ++x, ++l) {
+        FOR_EACH_STEP_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
             const int step = mask[k] & BIT_STEP;
             const REAL speed = region_speed_at(t, aux[k], i, scale, vmax, sx, sxy);
@@ -118,8 +121,7 @@ __kernel void region_brick_advect(__global const REAL* restrict ls, __global REA
     REAL t[NC * TILE_CELLS(2)];
     FOR_EACH_BRICK(b, BIT_STEP) {
         load_tiles(t, ls, nbr, b, 2, plane);
-        FOR_EACH_STEP_ROW(b, y, z)
-        for (int x = 0, l = (z * BY + y) * BX; x < BX; ++x, ++l) {
+        FOR_EACH_STEP_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
             const int step = mask[k] & BIT_STEP;
             const REAL cut = band_cutoff(t[i], lo, hi);
@@ -146,7 +148,7 @@ __kernel void region_brick_extend(__global const REAL* restrict ls,
     REAL t[NC * TILE_CELLS(1)];
     FOR_EACH_BRICK(b, BIT_REINIT) {
         load_tiles(t, ls, nbr, b, 1, plane);
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
+        FOR_EACH_REINIT_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
             const int i = TILE_AT(1, x, y, z), k = b * BV + l;
             const int inband = mask[k] & BIT_REINIT;
             REAL ax, ay, az;
@@ -172,7 +174,7 @@ __kernel void region_brick_targets(__global const REAL* restrict u0,
     REAL t[NC * TILE_CELLS(1)];
     FOR_EACH_BRICK(b, BIT_REINIT) {
         load_tiles(t, u0, nbr, b, 1, plane);
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
+        FOR_EACH_REINIT_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
             const int i = TILE_AT(1, x, y, z), k = b * BV + l;
             const int inband = mask[k] & BIT_REINIT;
 #pragma unroll
@@ -189,13 +191,15 @@ __kernel void region_brick_targets(__global const REAL* restrict u0,
 __kernel void region_brick_reinit_step(__global const REAL* restrict u,
                                        __global const REAL* restrict u0,
                                        __global const REAL* restrict target,
-                                       __global REAL* restrict out, const REAL dt, BRICK_ARGS)
+                                       __global REAL* restrict out,
+                                       __global const uchar* restrict mask, const REAL dt,
+                                       BRICK_ARGS)
 {
     const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
     REAL t[NC * TILE_CELLS(2)];
     FOR_EACH_BRICK(b, BIT_REINIT) {
         load_tiles(t, u, nbr, b, 2, plane);
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
+        FOR_EACH_REINIT_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
 #pragma unroll
             for (int c = 0; c < NC; ++c) {
@@ -210,14 +214,15 @@ __kernel void region_brick_reinit_step(__global const REAL* restrict u,
 __kernel void region_brick_reinit_heun(__global REAL* restrict acc,
                                        __global const REAL* restrict stage1,
                                        __global const REAL* restrict u0,
-                                       __global const REAL* restrict target, const REAL dt,
+                                       __global const REAL* restrict target,
+                                       __global const uchar* restrict mask, const REAL dt,
                                        BRICK_ARGS)
 {
     const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
     REAL t[NC * TILE_CELLS(2)];
     FOR_EACH_BRICK(b, BIT_REINIT) {
         load_tiles(t, stage1, nbr, b, 2, plane);
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
+        FOR_EACH_REINIT_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
             const int i = TILE_AT(2, x, y, z), k = b * BV + l;
 #pragma unroll
             for (int c = 0; c < NC; ++c) {
