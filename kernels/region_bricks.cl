@@ -247,10 +247,11 @@ INLINE int interior(__global const int* restrict coords, const int b, const int 
 
 // The band bits of every cell (mask), their union per brick (bits), and flag[0] = 1 when a
 // cell of the reinitialisation band lies within one cell of the interior's border (regions.cl's
-// band_near_border with margin 1). Per brick: Phi's tile of halo RING, the step band on it,
-// then its dilation by RING cells along x, y and z in turn (a cube).
-#define MX TILE_X(RING)
-#define MXY TILE_XY(RING)
+// band_near_border with margin 1). Per brick: Phi's tile of halo RING, the step band on it as
+// one bit word per tile row along x (bit RING + x for cell x), then its dilation by RING
+// cells along x (shifts), y and z (ORs of rows) in turn: a cube, as dilate_mask's passes.
+#define MY (BY + 2 * RING)
+#define MZ (BZ + 2 * RING)
 __kernel void region_brick_band_mask(__global const REAL* restrict phi,
                                      __global uchar* restrict mask, __global uchar* restrict bits,
                                      __global const int* restrict coords,
@@ -260,47 +261,54 @@ __kernel void region_brick_band_mask(__global const REAL* restrict phi,
                                      const int per_item)
 {
     REAL t[TILE_CELLS(RING)];
-    uchar m[TILE_CELLS(RING)];
-    uchar dx[BX * (BY + 2 * RING) * (BZ + 2 * RING)];  // dilated along x
-    uchar dy[BX * BY * (BZ + 2 * RING)];               // and along y
+    uint rows[MZ * MY];  // the step band on the tile
+    uint wide[MZ * MY];  // dilated along x (bit x for brick cell x)
+    uint tall[MZ * BY];  // and along y
     int hit = 0;
     for (int b = 1 + get_global_id(0) * per_item, b_end = min(b + per_item, nbricks + 1);
          b < b_end; ++b) {
         load_tile(t, phi, nbr, b, RING);
-        for (int z = -RING; z < BZ + RING; ++z)
-            for (int y = -RING; y < BY + RING; ++y)
-                for (int x = -RING; x < BX + RING; ++x) {
-                    const int k = TILE_AT(RING, x, y, z);
-                    m[k] = FABS(t[k]) < width && interior(coords, b, x, y, z, nx, ny, nz, G);
-                }
-        for (int z = 0; z < BZ + 2 * RING; ++z)
-            for (int y = 0; y < BY + 2 * RING; ++y)
-                for (int x = 0; x < BX; ++x) {
-                    uchar v = 0;
-                    for (int d = 0; d <= 2 * RING; ++d) v |= m[(z * (BY + 2 * RING) + y) * MX + x + d];
-                    dx[(z * (BY + 2 * RING) + y) * BX + x] = v;
-                }
-        for (int z = 0; z < BZ + 2 * RING; ++z)
-            for (int y = 0; y < BY; ++y)
-                for (int x = 0; x < BX; ++x) {
-                    uchar v = 0;
-                    for (int d = 0; d <= 2 * RING; ++d) v |= dx[(z * (BY + 2 * RING) + y + d) * BX + x];
-                    dy[(z * BY + y) * BX + x] = v;
-                }
-        uchar any = 0;
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
-            uchar v = 0;
-            for (int d = 0; d <= 2 * RING; ++d) v |= dy[((z + d) * BY + y) * BX + x];
-            const uchar cell = m[TILE_AT(RING, x, y, z)] * BIT_STEP | v * BIT_REINIT;
-            mask[b * BV + l] = cell;
-            any |= cell;
-            if (v) {
-                const int gx = coords[3 * b] * BX + x - G, gy = coords[3 * b + 1] * BY + y - G;
-                const int gz = coords[3 * b + 2] * BZ + z - G;
-                hit |= (gx < 1) | (gy < 1) | (gz < 1) | (gx >= nx - 1) | (gy >= ny - 1) |
-                       (gz >= nz - 1);
+        const int x0 = coords[3 * b] * BX - G - RING, y0 = coords[3 * b + 1] * BY - G - RING;
+        const int z0 = coords[3 * b + 2] * BZ - G - RING;
+        uint inner = 0;  // the tile's columns inside the interior along x
+        for (int x = 0; x < BX + 2 * RING; ++x)
+            inner |= (uint)(x0 + x >= 0 && x0 + x < nx) << x;
+        for (int z = 0; z < MZ; ++z)
+            for (int y = 0; y < MY; ++y) {
+                const int k = (z * MY + y) * TILE_X(RING);
+                uint row = 0;
+                for (int x = 0; x < BX + 2 * RING; ++x) row |= (uint)(FABS(t[k + x]) < width) << x;
+                const int in = y0 + y >= 0 && y0 + y < ny && z0 + z >= 0 && z0 + z < nz;
+                rows[z * MY + y] = in ? row & inner : 0;
+                uint w = 0;
+                for (int d = 0; d <= 2 * RING; ++d) w |= rows[z * MY + y] >> d;
+                wide[z * MY + y] = w;
             }
-        }
+        for (int z = 0; z < MZ; ++z)
+            for (int y = 0; y < BY; ++y) {
+                uint w = 0;
+                for (int d = 0; d <= 2 * RING; ++d) w |= wide[z * MY + y + d];
+                tall[z * BY + y] = w;
+            }
+        uchar any = 0;
+        for (int z = 0; z < BZ; ++z)
+            for (int y = 0; y < BY; ++y) {
+                uint w = 0;
+                for (int d = 0; d <= 2 * RING; ++d) w |= tall[(z + d) * BY + y];
+                const uint step = rows[(z + RING) * MY + y + RING] >> RING;
+                for (int x = 0, l = (z * BY + y) * BX; x < BX; ++x, ++l) {
+                    const uchar cell = ((step >> x) & 1) * BIT_STEP | ((w >> x) & 1) * BIT_REINIT;
+                    mask[b * BV + l] = cell;
+                    any |= cell;
+                }
+                if (w & ((1u << BX) - 1)) {
+                    // the row's first and last reinitialisation cells, and the row itself
+                    const int gy = y0 + RING + y, gz = z0 + RING + z;
+                    const int first = 31 - clz(w & -w), last = 31 - clz(w & ((1u << BX) - 1));
+                    hit |= (gy < 1) | (gz < 1) | (gy >= ny - 1) | (gz >= nz - 1) |
+                           (x0 + RING + first < 1) | (x0 + RING + last >= nx - 1);
+                }
+            }
         bits[b] = any;
     }
     if (hit) flag[0] = 1;  // every writer stores the same value

@@ -216,5 +216,8 @@ def test_bricks_need_room_for_their_reach():
     phi, cap, h = _sphere(32, 5.0)
     with pytest.raises(InputError, match="reinit_ring"):
         RegionTracker(phi, cap[None], h, storage="bricks", brick=(4, 4, 4))
+    big, cap, h = _sphere(32, 12.0)  # its band reaches the border
+    with pytest.raises(InputError, match="border"):
+        RegionTracker(big, cap[None], h, storage="bricks")
     with pytest.raises(InputError, match="storage"):
         RegionTracker(phi, cap[None], h, storage="octree")
