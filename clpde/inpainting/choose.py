@@ -69,11 +69,13 @@ def periodicity(data: np.ndarray, omega: np.ndarray) -> float:
     return _periodicity(*_detail(data, ~np.asarray(omega, bool)))
 
 
-def _periodicity(detail, ok) -> float:
+def _autocorrelation(detail, ok, hi: int):
+    """The detail's normalised autocorrelation at every lag up to ``hi`` (chessboard) over
+    the pixels both copies know, and the lags where it is defined: (corr, use, ty, tx) on
+    the FFT grid, ty and tx the signed lags of its rows and columns."""
     d = np.where(ok, detail, 0).astype(np.float32)
     k = ok.astype(np.float32)
     H, W = d.shape
-    hi = LAGS[1]
     # zero padding by the largest lag: no wrap-around within the lags looked at
     shape = (sfft.next_fast_len(H + hi + 1, True), sfft.next_fast_len(W + hi + 1, True))
     fd, fd2, fk = (sfft.rfft2(a, shape) for a in (d, d * d, k))
@@ -82,16 +84,36 @@ def _periodicity(detail, ok) -> float:
         return sfft.irfft2(fa * np.conj(fb), shape)
 
     num, e1, e2, count = corr(fd, fd), corr(fd2, fk), corr(fk, fd2), corr(fk, fk)
-    ty = np.abs(sfft.fftfreq(shape[0], 1 / shape[0]))[:, None]
-    tx = np.abs(sfft.fftfreq(shape[1], 1 / shape[1]))[None, :]
-    lag = np.maximum(ty, tx)
+    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
+    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
     # lags whose overlap holds at least a quarter of the known pixels, and some detail
-    use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
+    use = (np.maximum(np.abs(ty), np.abs(tx)) <= hi) & (count > 0.25 * k.sum())
     use &= np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1)
-    if not use.any():
-        return 0.0
-    a = num[use] / np.sqrt(e1[use] * e2[use])
-    return float(a.max())
+    a = np.where(use, num / np.sqrt(np.where(use, e1 * e2, 1)), 0)
+    return a, use, ty, tx
+
+
+def _periodicity(detail, ok) -> float:
+    a, use, ty, tx = _autocorrelation(detail, ok, LAGS[1])
+    use &= np.maximum(np.abs(ty), np.abs(tx)) >= LAGS[0]
+    return float(a[use].max()) if use.any() else 0.0
+
+
+def lattice_offsets(data: np.ndarray, omega: np.ndarray, max_lag: int = 96,
+                    min_corr: float = 0.97, limit: int = 96) -> np.ndarray:
+    """The lags (dx, dy), up to ``max_lag`` px, at which the known pixels of ``data``
+    ((channels, rows, cols)) repeat: the local maxima of the detail's autocorrelation of at
+    least ``min_corr``, the ``limit`` shortest. Empty when nothing repeats that well.
+
+    For a periodic pattern these are the lattice's vectors and their sums: a patch copied
+    from any of them is exact, whatever the phase a flat patch alone would allow."""
+    a, use, ty, tx = _autocorrelation(*_detail(data, ~np.asarray(omega, bool)), max_lag)
+    peak = a >= ndimage.maximum_filter(np.where(use, a, -1), size=3, mode="wrap")
+    ly, lx = np.broadcast_arrays(ty, tx)
+    keep = use & peak & (a >= min_corr) & ((ly != 0) | (lx != 0))
+    lags = np.stack([lx[keep], ly[keep]], -1).astype(np.int32)
+    order = np.lexsort((lags[:, 1], lags[:, 0], np.abs(lags).sum(axis=1)))
+    return lags[order][:limit]
 
 
 def hole_depth(omega: np.ndarray) -> np.ndarray:

@@ -62,6 +62,10 @@ DEFAULTS = {
     # distance so that patches continue the edges that cross the hole; 0: none
     # None: automatic, 1 unless the hole's surroundings are periodic (choose.periodicity)
     "structure": None,
+    # where the hole's surroundings are periodic (choose.periodicity), every target also
+    # tries the lattice's lags as offsets after each PatchMatch (choose.lattice_offsets), so
+    # that the field takes the lattice's phase whatever the seed
+    "lattice": True,
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 KERNEL_FILES = ("patchmatch.cl",)
@@ -186,7 +190,8 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
 
 class _Level:
     def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int,
-                 nout: int | None = None, radius: int | None = None, confidence: float = 1.0):
+                 nout: int | None = None, radius: int | None = None, confidence: float = 1.0,
+                 ncolour: int | None = None):
         self.rt = runtime
         self.q = runtime.queue
         self.dtype = np.dtype(dtype)
@@ -200,6 +205,9 @@ class _Level:
         self.k_score = rt.kernel("patchmatch.cl", "pm_score", dt, **defines)
         self.k_vote = rt.kernel("patchmatch.cl", "pm_vote", dt, **defines)
         self.k_copy = rt.kernel("patchmatch.cl", "pm_copy_centre", dt, **defines)
+        self.k_offsets = rt.kernel("patchmatch.cl", "pm_offsets", dt, **defines)
+        self.ncolour = self.nch if ncolour is None else ncolour  # planes before the features
+        self.chw_colour = None  # try_offsets' weights: the colours only, made when first used
 
         self.valid = _valid_sources(hole, self.r)
         self.valid_idx = np.flatnonzero(self.valid)
@@ -277,6 +285,18 @@ class _Level:
             counter[0] += 1
             self.nnf.reverse()
 
+    def try_offsets(self, offsets) -> None:
+        """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
+        list of (dx, dy)), keeping it when at least as close (pm_offsets)."""
+        lst, n = self.targets
+        if self.chw_colour is None:
+            w = self.chw.get()
+            w[self.ncolour:] = 0
+            self.chw_colour = cla.to_device(self.q, w)
+        self._launch(self.k_offsets, n, self.img.data, self.d_valid.data, self.nnf[0].data,
+                     self.dist.data, lst.data, np.int32(n), *self._args(), self.chw_colour.data,
+                     offsets.data, np.int32(offsets.size // 2))
+
     def score(self) -> None:
         lst, n = self.targets
         self._launch(self.k_score, n, self.img.data, self.d_use.data, np.int32(0),
@@ -315,6 +335,34 @@ class _Level:
         return self.img.get()
 
 
+def _periodic(colour: np.ndarray, hole: np.ndarray) -> bool:
+    """Whether the hole's near surroundings repeat (choose.periodicity, on the hole's box
+    grown by 24 px)."""
+    from .choose import MIN_PERIODICITY, periodicity
+
+    near = _box(hole, 24)
+    return periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY
+
+
+def _lattice_offsets(lv: _Level, colour: np.ndarray, hole: np.ndarray):
+    """The lags at which this level's known colours repeat, on the device; None if none."""
+    from .choose import lattice_offsets
+
+    lags = lattice_offsets(colour, hole)
+    return cla.to_device(lv.q, np.ascontiguousarray(lags, np.int32)) if lags.size else None
+
+
+def _lattice_polish(lv: _Level, offsets, sigma2: float) -> None:
+    """Once more, on the final fill: rescore, try the lattice's lags, and take the closest
+    patches' values again. The last PatchMatch compared patches with the fill before the
+    last vote, where a slightly wrong fill can favour a wrong phase; on the exact fill every
+    lattice lag ties with the best, and the tie goes to the lattice, so the sources that the
+    stitch reads beyond each patch are right too."""
+    lv.score()
+    lv.try_offsets(offsets)
+    lv.vote(best_only=True, sigma2=sigma2)
+
+
 def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
     """A fine field from a coarse one: the source of 2p + e is 2 s(p) + e."""
     H, W = shape
@@ -332,7 +380,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
           onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"],
           confidence=DEFAULTS["confidence"], guide=None, stitch=DEFAULTS["stitch"],
-          structure=DEFAULTS["structure"]):
+          structure=DEFAULTS["structure"], lattice=DEFAULTS["lattice"]):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (128 px of context around the hole's box),
@@ -345,7 +393,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     not filled, e.g. an inpainted structure image), structure (weight of the coherence
     fill of the hole as such a guide, so that edges crossing the hole are continued; None,
     the default: 1, or 0 where the hole's surroundings are periodic),
-    stitch (True: re-solve the last vote's fill from its sources' gradients, stitch.py).
+    stitch (True: re-solve the last vote's fill from its sources' gradients, stitch.py),
+    lattice (True: on periodic surroundings, try the lattice's lags for every target).
     ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
@@ -378,14 +427,11 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
                              f"{data.shape[2]}) planes known everywhere, the hole included")
         guides = guide[(slice(None),) + box]
+    periodic = _periodic(colour, hole) if structure is None or lattice else False
     if structure is None:
         # Automatic: the guide, unless the surroundings repeat (periodic texture, stripes),
         # where copies can be exact and a smooth fill would pull them away (choose.py).
-        from .choose import MIN_PERIODICITY, periodicity
-
-        near = _box(hole, 24)
-        sw = 0.0 if periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY \
-            else 1.0
+        sw = 0.0 if periodic else 1.0
     else:
         sw = float(structure)
     if sw > 0:
@@ -428,7 +474,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             planes.append(g)
             w += [1.0] * len(g)
         lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout,
-                    radius=int(p["search"]), confidence=float(p["confidence"]))
+                    radius=int(p["search"]), confidence=float(p["confidence"]), ncolour=nc)
         # A level started from the coarser field needs fewer iterations than the coarsest;
         # so does a single level (a thin hole), whose onion peel is already at full
         # resolution: on a 10% text mask 3 iterations instead of 6 cost 0.3 dB and a third
@@ -442,10 +488,15 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             lv.set_nnf(_upsample_nnf(prev_nnf, h.shape), rng)
             lv.score()
             lv.vote()
+        offsets = _lattice_offsets(lv, c, h) if lattice and periodic else None
         for it in range(its):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
+            if offsets is not None:
+                lv.try_offsets(offsets)
             last = level == 0 and it == its - 1
             sigma2 = lv.vote(best_only=bool(sharpen) and last)
+        if offsets is not None and level == 0 and sharpen:
+            _lattice_polish(lv, offsets, sigma2)
         prev_nnf = lv.nnf_to_host()
         bar.update()
         if level == 0:
