@@ -235,9 +235,9 @@ __kernel void pm_copy_centre(__global REAL* img, const __global int2* nnf,
 // matches many phases equally well; the lattice's phase is the one whose neighbours beyond
 // the patch are right too, whatever the seed's random search found. Colours only, because
 // the features of known pixels next to the hole are means over fewer pixels and do not
-// repeat with the pattern.
-__kernel void pm_offsets(const __global REAL* img, const __global uchar* valid,
-                         __global int2* nnf, __global REAL* dist,
+// repeat with the pattern. `masked`: only the `use` pixels count, as in pm_pass.
+__kernel void pm_offsets(const __global REAL* img, const __global uchar* use, const int masked,
+                         const __global uchar* valid, __global int2* nnf, __global REAL* dist,
                          const __global int* targets, const int ntargets,
                          const int W, const int H, const int nch, const __global REAL* chw,
                          const __global REAL* chw_colour,
@@ -248,17 +248,17 @@ __kernel void pm_offsets(const __global REAL* img, const __global uchar* valid,
     const int t = targets[k];
     const int px = t % W, py = t / W;
     int2 best = nnf[t];
-    // `use` is not read when masked is 0
-    REAL bd = patch_distance(img, valid, 0, W, H, nch, chw_colour, px, py, best.x, best.y,
+    REAL bd = patch_distance(img, use, masked, W, H, nch, chw_colour, px, py, best.x, best.y,
                              INFINITY);
     int moved = 0;
     for (int i = 0; i < noffsets; ++i) {
         const int sx = px + offsets[i].x, sy = py + offsets[i].y;
         if (sx < 0 || sx >= W || sy < 0 || sy >= H || !valid[sy * W + sx]) continue;
-        const REAL dd = patch_distance(img, valid, 0, W, H, nch, chw_colour, px, py, sx, sy, bd);
+        const REAL dd = patch_distance(img, use, masked, W, H, nch, chw_colour, px, py, sx, sy,
+                                       bd);
         if (dd <= bd) { bd = dd; best = (int2)(sx, sy); moved = 1; }
     }
     if (!moved) return;
     nnf[t] = best;
-    dist[t] = patch_distance(img, valid, 0, W, H, nch, chw, px, py, best.x, best.y, INFINITY);
+    dist[t] = patch_distance(img, use, masked, W, H, nch, chw, px, py, best.x, best.y, INFINITY);
 }

@@ -285,17 +285,18 @@ class _Level:
             counter[0] += 1
             self.nnf.reverse()
 
-    def try_offsets(self, offsets) -> None:
+    def try_offsets(self, offsets, targets=None, masked: bool = False) -> None:
         """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
-        list of (dx, dy)), keeping it when at least as close (pm_offsets)."""
-        lst, n = self.targets
+        list of (dx, dy)), keeping it when its colours are at least as close (pm_offsets)."""
+        lst, n = self.targets if targets is None else targets
         if self.chw_colour is None:
             w = self.chw.get()
             w[self.ncolour:] = 0
             self.chw_colour = cla.to_device(self.q, w)
-        self._launch(self.k_offsets, n, self.img.data, self.d_valid.data, self.nnf[0].data,
-                     self.dist.data, lst.data, np.int32(n), *self._args(), self.chw_colour.data,
-                     offsets.data, np.int32(offsets.size // 2))
+        self._launch(self.k_offsets, n, self.img.data, self.d_use.data, np.int32(masked),
+                     self.d_valid.data, self.nnf[0].data, self.dist.data, lst.data, np.int32(n),
+                     *self._args(), self.chw_colour.data, offsets.data,
+                     np.int32(offsets.size // 2))
 
     def score(self) -> None:
         lst, n = self.targets
@@ -315,8 +316,9 @@ class _Level:
                      np.int32(self.nout), self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
         return sigma2
 
-    def onion_peel(self, rng, passes: int, seed: int, counter: list) -> None:
-        """Fill the hole shell by shell from its border, matching only known neighbours."""
+    def onion_peel(self, rng, passes: int, seed: int, counter: list, offsets=None) -> None:
+        """Fill the hole shell by shell from its border, matching only known neighbours;
+        ``offsets``: lattice lags each shell's pixels also try (try_offsets)."""
         self.random_nnf(rng)
         depth = ndimage.distance_transform_cdt(self.hole, "chessboard")
         filled = ~self.hole
@@ -325,6 +327,8 @@ class _Level:
             self.d_use.set(filled.astype(np.uint8).ravel())
             lst = self._list(layer)
             self.patchmatch(passes, lst, True, seed, counter)
+            if offsets is not None:
+                self.try_offsets(offsets, lst, masked=True)
             self._launch(self.k_copy, lst[1], self.img.data, self.nnf[0].data, self.dist.data,
                          lst[0].data, np.int32(lst[1]), np.int32(self.W), np.int32(self.H),
                          np.int32(self.nout))
@@ -481,14 +485,14 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         # of the time.
         coarse_start = prev_nnf is None and len(pyramid) > 1
         its = int(p["iterations"] if coarse_start else p["fine_iterations"])
+        offsets = _lattice_offsets(lv, c, h) if lattice and periodic else None
         if prev_nnf is None:
-            lv.onion_peel(rng, int(p["onion_passes"]), seed, counter)
+            lv.onion_peel(rng, int(p["onion_passes"]), seed, counter, offsets)
             lv.set_nnf(lv.nnf_to_host(), rng)
         else:
             lv.set_nnf(_upsample_nnf(prev_nnf, h.shape), rng)
             lv.score()
             lv.vote()
-        offsets = _lattice_offsets(lv, c, h) if lattice and periodic else None
         for it in range(its):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
             if offsets is not None:
