@@ -21,6 +21,12 @@ overlaps the hole, of the distance to its nearest patch in the known part:
   pixel takes the centre of the patch that best matches its already known neighbours.
   A finer level starts from the coarser NNF, upsampled (offsets doubled), and a vote, so
   that its detail comes from real fine-scale patches.
+- Periodic surroundings (choose.periodicity): the lags at which the known part repeats
+  (choose.lattice_offsets) are offsets that every target also tries, in the onion peel
+  and before the last vote, keeping one when its colours match at least as well (ties go
+  to the lattice). A flat patch of a periodic pattern matches many phases; which one the
+  random search found depended on the seed, and the stitch, which reads the source's
+  neighbours beyond the patch, turned a wrong phase into a visible error.
 - The last vote at the finest level takes, for each pixel, the closest patch's value only;
   a weighted mean of slightly misaligned patches blurs the texture that the method exists
   to keep.
@@ -62,9 +68,9 @@ DEFAULTS = {
     # distance so that patches continue the edges that cross the hole; 0: none
     # None: automatic, 1 unless the hole's surroundings are periodic (choose.periodicity)
     "structure": None,
-    # where the hole's surroundings are periodic (choose.periodicity), every target also
-    # tries the lattice's lags as offsets after each PatchMatch (choose.lattice_offsets), so
-    # that the field takes the lattice's phase whatever the seed
+    # where the hole's surroundings are periodic (choose.periodicity), the targets also try
+    # the lattice's lags (choose.lattice_offsets) in the onion peel and before the last
+    # vote, so that the field takes the lattice's phase whatever the seed
     "lattice": True,
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
@@ -356,17 +362,6 @@ def _lattice_offsets(lv: _Level, colour: np.ndarray, hole: np.ndarray):
     return cla.to_device(lv.q, np.ascontiguousarray(lags, np.int32)) if lags.size else None
 
 
-def _lattice_polish(lv: _Level, offsets, sigma2: float) -> None:
-    """Once more, on the final fill: rescore, try the lattice's lags, and take the closest
-    patches' values again. The last PatchMatch compared patches with the fill before the
-    last vote, where a slightly wrong fill can favour a wrong phase; on the exact fill every
-    lattice lag ties with the best, and the tie goes to the lattice, so the sources that the
-    stitch reads beyond each patch are right too."""
-    lv.score()
-    lv.try_offsets(offsets)
-    lv.vote(best_only=True, sigma2=sigma2)
-
-
 def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
     """A fine field from a coarse one: the source of 2p + e is 2 s(p) + e."""
     H, W = shape
@@ -398,7 +393,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     fill of the hole as such a guide, so that edges crossing the hole are continued; None,
     the default: 1, or 0 where the hole's surroundings are periodic),
     stitch (True: re-solve the last vote's fill from its sources' gradients, stitch.py),
-    lattice (True: on periodic surroundings, try the lattice's lags for every target).
+    lattice (True: on periodic surroundings, the targets also try the lattice's lags).
     ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
@@ -485,7 +480,10 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         # of the time.
         coarse_start = prev_nnf is None and len(pyramid) > 1
         its = int(p["iterations"] if coarse_start else p["fine_iterations"])
-        offsets = _lattice_offsets(lv, c, h) if lattice and periodic else None
+        # the lattice's lags: in the onion peel (the phase the levels start from) and before
+        # the last vote (the sources the stitch reads); the levels between keep the phase
+        needed = lattice and periodic and (prev_nnf is None or level == 0)
+        offsets = _lattice_offsets(lv, c, h) if needed else None
         if prev_nnf is None:
             lv.onion_peel(rng, int(p["onion_passes"]), seed, counter, offsets)
             lv.set_nnf(lv.nnf_to_host(), rng)
@@ -495,12 +493,11 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             lv.vote()
         for it in range(its):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
-            if offsets is not None:
-                lv.try_offsets(offsets)
             last = level == 0 and it == its - 1
+            if offsets is not None and last:
+                # before the last vote, whose sources the stitch reads beyond their patches
+                lv.try_offsets(offsets)
             sigma2 = lv.vote(best_only=bool(sharpen) and last)
-        if offsets is not None and level == 0 and sharpen:
-            _lattice_polish(lv, offsets, sigma2)
         prev_nnf = lv.nnf_to_host()
         bar.update()
         if level == 0:
