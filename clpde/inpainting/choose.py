@@ -69,13 +69,11 @@ def periodicity(data: np.ndarray, omega: np.ndarray) -> float:
     return _periodicity(*_detail(data, ~np.asarray(omega, bool)))
 
 
-def _autocorrelation(detail, ok, hi: int):
-    """The detail's normalised autocorrelation at every lag up to ``hi`` (chessboard) over
-    the pixels both copies know, and the lags where it is defined: (corr, use, ty, tx) on
-    the FFT grid, ty and tx the signed lags of its rows and columns."""
+def _periodicity(detail, ok) -> float:
     d = np.where(ok, detail, 0).astype(np.float32)
     k = ok.astype(np.float32)
     H, W = d.shape
+    hi = LAGS[1]
     # zero padding by the largest lag: no wrap-around within the lags looked at
     shape = (sfft.next_fast_len(H + hi + 1, True), sfft.next_fast_len(W + hi + 1, True))
     fd, fd2, fk = (sfft.rfft2(a, shape) for a in (d, d * d, k))
@@ -84,19 +82,16 @@ def _autocorrelation(detail, ok, hi: int):
         return sfft.irfft2(fa * np.conj(fb), shape)
 
     num, e1, e2, count = corr(fd, fd), corr(fd2, fk), corr(fk, fd2), corr(fk, fk)
-    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
-    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    ty = np.abs(sfft.fftfreq(shape[0], 1 / shape[0]))[:, None]
+    tx = np.abs(sfft.fftfreq(shape[1], 1 / shape[1]))[None, :]
+    lag = np.maximum(ty, tx)
     # lags whose overlap holds at least a quarter of the known pixels, and some detail
-    use = (np.maximum(np.abs(ty), np.abs(tx)) <= hi) & (count > 0.25 * k.sum())
+    use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
     use &= np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1)
-    a = np.where(use, num / np.sqrt(np.where(use, e1 * e2, 1)), 0)
-    return a, use, ty, tx
-
-
-def _periodicity(detail, ok) -> float:
-    a, use, ty, tx = _autocorrelation(detail, ok, LAGS[1])
-    use &= np.maximum(np.abs(ty), np.abs(tx)) >= LAGS[0]
-    return float(a[use].max()) if use.any() else 0.0
+    if not use.any():
+        return 0.0
+    a = num[use] / np.sqrt(e1[use] * e2[use])
+    return float(a.max())
 
 
 def lattice_offsets(data: np.ndarray, omega: np.ndarray, max_lag: int = 96,
