@@ -64,9 +64,15 @@ def _header(width, tile=204):
 
 
 def main(argv=None):
+    import argparse
+
     from skimage.io import imsave
 
-    out_dir = Path((argv or sys.argv[1:] or ["docs/images"])[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", nargs="?", type=Path,
+                        default=Path(__file__).resolve().parents[1] / "docs" / "images",
+                        help="folder for the pictures (default: docs/images)")
+    out_dir = parser.parse_args(argv).out
     out_dir.mkdir(parents=True, exist_ok=True)
     cases = {c["name"]: c for c in texture_cases()}
     for filename, names in (("inpaint_texture.png", ["brick", "grass", "fur", "tiles"]),

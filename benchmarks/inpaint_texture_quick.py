@@ -1,7 +1,7 @@
 """Quick comparison of clpde's texture methods with the peers, on inpaint_texture_cases.
 
     python benchmarks/inpaint_texture_quick.py [--json PATH] [--only NAME,...] [--methods M,...]
-                                               [--speed]
+                                               [--speed] [--seams]
 
 For each case of texture_cases() (texture, periodic and thick-hole classes) it runs
 clpde's exemplar and structure-texture methods, clpde.inpaint's default method,
@@ -45,6 +45,21 @@ coffee-100 wall) the steps beside the edge are small and the ratios large.
                  unchanged). seam_inner4 is R_4 on the same pairs (4 px blocks either
                  side: a transition spread over a few pixels, as a stitch leaves it).
                  The peers do not expose their source maps; their cell is "-".
+    seam_far   = on the far seams only: seam pairs whose two sources' offsets s - p differ
+                 by more than a patch side (7 px, max norm), two regions copied from far
+                 apart rather than two near-alike patches of one region, and whose four
+                 blocks lie in the hole: the step of 8 px block means across them,
+                 sum |B(1) - B(-7)|, over the original's on the same pairs (the original
+                 scores 1). seam_far16 the same with 16 px blocks (none where the hole is
+                 under 64 px across). far_fraction: the far seams' share of the hole's
+                 4-neighbour pairs (of its internal edge length). Steps alone, not over
+                 the steps beside them as R_w: 16-32 px beside a seam lie across other
+                 seams or textures, and the ratio put a hard two-region paste below 1 on
+                 three of five cases. Control ("two-region paste": the hole's left half
+                 copied from just left of the hole, its right half from just right,
+                 meeting in one far seam down the middle): asserted > 1.2 at 16 px on every
+                 case, and at 8 px on the mean of the cases (on astronaut-80 and camera-60
+                 a single seam at 8 px is within the texture's own steps).
 With --seams, "clpde-exemplar-nostitch" is the exemplar with stitch=False (the last vote's
 copy as it is; its seam_inner is on the exemplar's recorded seams, the same seed giving the
 same field), for comparison. Control rows (asserted >1.2 on each case): the hole
@@ -298,20 +313,37 @@ def source_map(mask):
     return sy, sx
 
 
-def _inner_ratio(image, mask, sy, sx, width=1):
-    """R_width on the pairs inside the hole whose sources are not neighbours (docstring)."""
+def seam_pairs(mask, sy, sx, axis, far=None):
+    """The seam pairs (p, q = p + e_axis), both in the hole with sources, marked at p:
+    sources not neighbours (s(q) != s(p) + e_axis); with ``far``, only those whose offsets
+    s - p differ by more than ``far`` pixels (max norm): two regions copied from far
+    apart, not two near-alike patches of one region."""
+    a = axis - 1
+    q_in = mask & _shift(mask, 1, a)
+    has = (sy >= 0) & _shift(sy >= 0, 1, a)
+    dy, dx = (1, 0) if a == 0 else (0, 1)
+    jy, jx = _shift(sy, 1, a) - sy - dy, _shift(sx, 1, a) - sx - dx  # offset change
+    seam = q_in & has & ((jy != 0) | (jx != 0))
+    if far is not None:
+        seam &= np.maximum(np.abs(jy), np.abs(jx)) > far
+    return seam
+
+
+def _inner_ratio(image, mask, sy, sx, width=1, far=None, step_only=False):
+    """R_width on the seam pairs inside the hole (docstring; far: seam_pairs); with
+    step_only, the sum of the steps across alone."""
     f = to_data(image)
     across = beside = 0.0
     pairs = 0
     for axis in (1, 2):
         a = axis - 1
-        q_in = mask & _shift(mask, 1, a)
-        has = (sy >= 0) & _shift(sy >= 0, 1, a)
-        dy, dx = (1, 0) if a == 0 else (0, 1)
-        seam = q_in & has & ((_shift(sy, 1, a) != sy + dy) | (_shift(sx, 1, a) != sx + dx))
+        seam = seam_pairs(mask, sy, sx, axis, far)
         n = mask.shape[a]
         ok = (np.arange(n) + 2 * width < n) & (np.arange(n) >= 2 * width - 1)
         seam &= ok[:, None] if a == 0 else ok[None, :]
+        if far is not None:  # the four blocks inside the hole: no other kind of seam in them
+            for k in range(1 - 2 * width, 1 + 2 * width):
+                seam &= _shift(mask, k, a)
 
         def block(k, axis=axis):
             return sum(_shift(f, k + j, axis) for j in range(width)) / width
@@ -323,18 +355,36 @@ def _inner_ratio(image, mask, sy, sx, width=1):
         across += float(step)
         beside += 0.5 * float(out + inn)
         pairs += int(seam.sum())
-    return across / max(beside, 1e-12), pairs
+    return across / max(1.0 if step_only else beside, 1e-12), pairs
 
 
-def seam_inner(result, image, mask, smap, width=1):
+def seam_inner(result, image, mask, smap, width=1, far=None, step_only=False):
     """(seam_inner at this width, number of seam pairs) or (None, 0) without a source map."""
     if smap is None:
         return None, 0
-    r, pairs = _inner_ratio(result, mask, *smap, width)
+    r, pairs = _inner_ratio(result, mask, *smap, width, far, step_only)
     if pairs == 0:
         return None, 0
-    o, _ = _inner_ratio(image, mask, *smap, width)
+    o, _ = _inner_ratio(image, mask, *smap, width, far, step_only)
     return r / max(o, 1e-12), pairs
+
+
+FAR = 7  # offsets differing by more than the exemplar's patch side
+FAR_WIDTH = 8  # blocks of 8 px: the scale over which stitching spreads a jump
+
+
+def far_seams(result, image, mask, smap):
+    """(seam_far, seam_far16, far_fraction): the step of 8 and 16 px block means across the
+    far seams (seam_pairs with far=FAR; pairs whose four blocks lie in the hole) over the
+    original's on the same pairs, and the far seams' share of the hole's 4-neighbour pairs
+    (of its internal edge length); None without a source map or such pairs."""
+    if smap is None:
+        return None, None, None
+    total = sum(int((mask & _shift(mask, 1, axis - 1)).sum()) for axis in (1, 2))
+    far = sum(int(seam_pairs(mask, *smap, axis, FAR).sum()) for axis in (1, 2))
+    r8, r16 = (seam_inner(result, image, mask, smap, w, FAR, step_only=True)[0]
+               for w in (FAR_WIDTH, 2 * FAR_WIDTH))
+    return r8, r16, far / max(total, 1)
 
 
 def source_paste(image, mask, smap):
@@ -364,6 +414,24 @@ def seam_controls(image, mask):
     shifted[rows, cols] = img[np.clip(rows + dy, 0, ny - 1), np.clip(cols + dx, 0, nx - 1)]
     return {"control: original": img, "control: constant": const,
             "control: shifted copy": shifted}
+
+
+def two_region_paste(image, mask):
+    """A hard paste with one far seam: the hole's left half copied from the image just left
+    of the hole (shifted by the hole's width), its right half from just right of it, as an
+    exemplar fill might take them. Returns the filled image and its source map (sy, sx),
+    for the far-seam control."""
+    img = np.asarray(image)
+    rows, cols = np.nonzero(mask)
+    nx = mask.shape[1]
+    w = np.ptp(cols) + 1
+    left = cols < (cols.min() + cols.max()) / 2
+    sx = np.clip(np.where(left, cols - w, cols + w), 0, nx - 1)
+    out = img.copy()
+    out[rows, cols] = img[rows, sx]
+    smap = (np.full(mask.shape, -1, np.int64), np.full(mask.shape, -1, np.int64))
+    smap[0][rows, cols], smap[1][rows, cols] = rows, sx
+    return out, smap
 
 
 def speed(ms):
@@ -448,6 +516,8 @@ def main(argv=None):
                          "seam_inner4": seam_inner(result, case["image"], case["mask"], smap,
                                                    4)[0],
                          "hole_fraction": float(case["mask"].mean())})
+            far8, far16, share = far_seams(result, case["image"], case["mask"], smap)
+            rows[-1].update(seam_far=far8, seam_far16=far16, far_fraction=share)
             print(f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
                   f"SSIM {ssim:.3f} energy {energy:.2f} seam {edge:.2f}/{ring:.2f} "
                   f"{seconds:7.3f} s", file=sys.stderr, flush=True)
@@ -466,12 +536,30 @@ def main(argv=None):
                 # weaker than the hard pastes above: many seams join near-alike patches
                 assert inner is not None and inner > 1.05, (case["name"], inner)
                 edge, ring = seam_scores(paste, case["image"], case["mask"])
+                far8, far16, share = far_seams(paste, case["image"], case["mask"],
+                                               exemplar_smap)
                 rows.append({"case": case["name"], "class": "thick",
                              "method": "control: source paste", "seam_edge": edge,
                              "seam_ring": ring, "seam_inner": inner,
                              "seam_inner4": seam_inner(paste, case["image"], case["mask"],
-                                                       exemplar_smap, 4)[0]})
+                                                       exemplar_smap, 4)[0],
+                             "seam_far": far8, "seam_far16": far16, "far_fraction": share})
+            if args.seams:
+                paste, smap = two_region_paste(case["image"], case["mask"])
+                far8, far16, share = far_seams(paste, case["image"], case["mask"], smap)
+                o8, o16, _ = far_seams(case["image"], case["image"], case["mask"], smap)
+                assert abs(o8 - 1) < 1e-9 and (o16 is None or abs(o16 - 1) < 1e-9)
+                # a hard seam between two real regions must stand out at 16 px (at 8 px it
+                # does on the mean of the cases only: main's check after the loop)
+                assert far16 is None or far16 > 1.2, (case["name"], far16)
+                edge, ring = seam_scores(paste, case["image"], case["mask"])
+                rows.append({"case": case["name"], "class": "thick",
+                             "method": "control: two-region paste", "seam_edge": edge,
+                             "seam_ring": ring, "seam_inner": None, "seam_far": far8,
+                             "seam_far16": far16, "far_fraction": share})
     if args.seams:
+        pastes = [r["seam_far"] for r in rows if r["method"] == "control: two-region paste"]
+        assert not pastes or np.mean(pastes) > 1.2, pastes
         seam_table(rows)
     else:
         mean_table(rows, ms)
@@ -482,26 +570,31 @@ def main(argv=None):
 
 
 def seam_table(rows):
-    """Per case and method seam_edge / seam_ring, and their means, for the thick class."""
+    """Per case and method seam_edge / seam_ring / seam_inner and their means, then per
+    case seam_far / seam_far16 / far_fraction and theirs, for the thick class."""
     thick = [r for r in rows if r["class"] == "thick"]
     cases = list(dict.fromkeys(r["case"] for r in thick))
     names = list(dict.fromkeys(r["method"] for r in thick))
-    print("| method | " + " | ".join(cases) + " | mean edge | mean ring | mean inner | "
-          "mean inner4 |")
-    print("|---|" + "---|" * (len(cases) + 4))
 
-    def fmt(v):
-        return "-" if v is None else f"{v:.2f}"
+    def fmt(v, pct=False):
+        return "-" if v is None else (f"{100 * v:.1f}%" if pct else f"{v:.2f}")
 
-    for name in names:
-        rs = {r["case"]: r for r in thick if r["method"] == name}
-        cells = [" / ".join(fmt(rs[c].get(k)) for k in ("seam_edge", "seam_ring", "seam_inner"))
-                 if c in rs else "" for c in cases]
-        means = []
-        for k in ("seam_edge", "seam_ring", "seam_inner", "seam_inner4"):
-            vs = [r[k] for r in rs.values() if r.get(k) is not None]
-            means.append(fmt(float(np.mean(vs))) if vs else "-")
-        print(f"| {name} | " + " | ".join(cells) + " | " + " | ".join(means) + " |")
+    for keys, means in ((("seam_edge", "seam_ring", "seam_inner"),
+                         ("seam_edge", "seam_ring", "seam_inner", "seam_inner4")),
+                        (("seam_far", "seam_far16", "far_fraction"),
+                         ("seam_far", "seam_far16", "far_fraction"))):
+        print("\n| method | " + " | ".join(cases) + " | "
+              + " | ".join("mean " + k.replace("seam_", "") for k in means) + " |")
+        print("|---|" + "---|" * (len(cases) + len(means)))
+        for name in names:
+            rs = {r["case"]: r for r in thick if r["method"] == name}
+            cells = [" / ".join(fmt(rs[c].get(k), k == "far_fraction") for k in keys)
+                     if c in rs else "" for c in cases]
+            ms = []
+            for k in means:
+                vs = [r[k] for r in rs.values() if r.get(k) is not None]
+                ms.append(fmt(float(np.mean(vs)), k == "far_fraction") if vs else "-")
+            print(f"| {name} | " + " | ".join(cells) + " | " + " | ".join(ms) + " |")
 
 
 def mean_table(rows, ms):

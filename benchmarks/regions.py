@@ -24,7 +24,12 @@ in one run.
    h = 0.1 (40^3) under mean curvature flow to t = 0.05 and Gaussian-curvature flow to t = 0.1:
    error of the area against the analytic radius, and of the cap's share.
 
+   With --storages lists bricks (the default) this tree's two storages (RegionTracker's
+   storage=) alternate the same way, and each row also gives a step alone, a
+   reinitialisation with its band upkeep alone, and the level sets' device memory.
+
     python benchmarks/regions.py [--sizes 64 128 256] [--baseline DIR] [--repeats 2]
+                                 [--storages lists bricks]
                                  [--spacings 0.1 0.07 0.05 0.035 0.025] [--json PATH]
 """
 
@@ -43,12 +48,15 @@ ROUNDS = 3  # timed runs per tracker: the fastest is the one least disturbed by 
 FLOWS = ("curvature", "constant")
 
 
-def step_timing(n, flow, radius=0.35, steps=STEPS, rounds=ROUNDS):
+def step_timing(n, flow, storage=None, radius=0.35, steps=STEPS, rounds=ROUNDS):
     """ms per step (reinitialisations included) of a cap on a sphere on an n^3 grid, the
     fastest of `rounds` runs of `steps` steps (the constant flow turns back each round, so
-    the sphere keeps its size); only the API that older checkouts share (RegionTracker,
-    advance, stable_dt, reinitialize, scale)."""
+    the sphere keeps its size); then, apart, the fastest of 3 runs of 8 steps without a
+    reinitialisation (ms per step) and of 3 reinitialisations with their band upkeep (ms
+    each). Only the API that older checkouts share (RegionTracker, advance, step,
+    stable_dt, reinitialize, scale), and storage= when given."""
     import pyopencl as cl
+    import pyopencl.array as cla
 
     from clpde.regions import RegionTracker
 
@@ -57,10 +65,12 @@ def step_timing(n, flow, radius=0.35, steps=STEPS, rounds=ROUNDS):
     z, y, x = np.meshgrid(ax, ax, ax, indexing="ij", sparse=True)
     phi = (np.sqrt(x**2 + y**2 + z**2) - radius).astype(np.float32)
     cap = np.broadcast_to((0.5 * radius - z).astype(np.float32), phi.shape)
+    kw = {} if storage is None else {"storage": storage}
     if flow == "curvature":
-        tracker = RegionTracker(phi, cap[None], h, speed="mean-curvature", scale=1.0 / h**2)
+        tracker = RegionTracker(phi, cap[None], h, speed="mean-curvature", scale=1.0 / h**2,
+                                **kw)
     else:  # inward at 1 cell per unit time: the CFL step moves the surface 0.4 cells
-        tracker = RegionTracker(phi, cap[None], h, speed="constant", scale=1.0)
+        tracker = RegionTracker(phi, cap[None], h, speed="constant", scale=1.0, **kw)
     q = tracker.runtime.queue
     calls = []
     plain = tracker.reinitialize
@@ -73,7 +83,14 @@ def step_timing(n, flow, radius=0.35, steps=STEPS, rounds=ROUNDS):
     dt = tracker.stable_dt()
     tracker.advance(tracker.time + 4 * dt)  # warm-up: compiles every kernel
     q.finish()
-    band, reinit_band = tracker.step_band.n, tracker.reinit_band.n
+    if hasattr(tracker, "band_sizes"):
+        band, reinit_band = tracker.band_sizes()
+    else:
+        band, reinit_band = tracker.step_band.n, tracker.reinit_band.n
+    # the four work buffers of every level set (cur, nxt, ls0, stage), at this band
+    level_set_mib = 4 * tracker.cur.nbytes / 2**20
+    bricks = getattr(tracker, "bricks", None)
+    stored = None if bricks is None else int(bricks.stored_cells)
     times, reinits = [], []
     for k in range(rounds):
         if flow == "constant" and k:
@@ -87,21 +104,42 @@ def step_timing(n, flow, radius=0.35, steps=STEPS, rounds=ROUNDS):
         times.append((time.perf_counter() - start) / (tracker.steps - start_steps))
         reinits.append(len(calls))
     done = tracker.steps - start_steps
+    step_only, reinit_only = [], []
+    for _ in range(3):
+        dt = tracker.stable_dt()
+        q.finish()
+        t0 = time.perf_counter()
+        for _ in range(8):
+            tracker.step(dt)
+        q.finish()
+        step_only.append((time.perf_counter() - t0) / 8)
+        t0 = time.perf_counter()
+        tracker.reinitialize()
+        q.finish()
+        reinit_only.append(time.perf_counter() - t0)
+        if flow == "constant":
+            tracker.scale = -tracker.scale
+    # the yardstick: one device copy of a dense padded volume of every level set
+    g = tracker.grid
+    dense = [cla.empty(q, tracker.nc * g.volume, g.dtype) for _ in range(2)]
     copies = []
     for _ in range(5):
         q.finish()
         t0 = time.perf_counter()
-        cl.enqueue_copy(q, tracker.stage.data, tracker.cur.data)
+        cl.enqueue_copy(q, dense[1].data, dense[0].data)
         q.finish()
         copies.append(time.perf_counter() - t0)
-    return {"grid": n, "flow": flow, "band_cells": int(band),
+    return {"grid": n, "flow": flow, "storage": storage or "lists", "band_cells": int(band),
             "reinit_cells": int(reinit_band), "steps": int(done),
             "reinits": int(max(reinits)), "ms_per_step": 1e3 * min(times),
             "ms_per_step_rounds": [1e3 * t for t in times],
+            "ms_step_only": 1e3 * min(step_only), "ms_reinit": 1e3 * min(reinit_only),
+            "level_set_mib": level_set_mib, "stored_cells": stored,
+            "cpu_s": time.process_time(),
             "copy_ms": 1e3 * float(np.median(copies)), "load": os.getloadavg()[0]}
 
 
-def curvature_accuracy():
+def curvature_accuracy(storage=None):
     """Area and cap-share errors of the tests' curvature flows (h = 0.1)."""
     from clpde.regions import track_region
 
@@ -112,14 +150,15 @@ def curvature_accuracy():
     rows = []
     for beta, t, radius in (("mean-curvature", 0.05, np.sqrt(0.81 - 4 * 0.05)),
                             ("gaussian", 0.1, np.cbrt(0.729 - 3 * 0.1))):
+        kw = {} if storage is None else {"storage": storage}
         end = track_region(phi, 0.45 - z, beta=beta, t=t, spacing=h, saves=1,
-                           origin=(ax[0],) * 3, progress=False)[-1]
+                           origin=(ax[0],) * 3, progress=False, **kw)[-1]
         rows.append({"flow": beta, "area_error": end.area() / (4 * np.pi * radius**2) - 1,
                      "cap_share_error": end.area_fraction(0) / 0.25 - 1, "steps": end.step})
     return rows
 
 
-def cap_accuracy(h, device=None):
+def cap_accuracy(h, device=None, storage="lists"):
     from scipy.ndimage import map_coordinates
 
     from clpde.regions import surface_mesh, track_region
@@ -133,7 +172,7 @@ def cap_accuracy(h, device=None):
     start = time.perf_counter()
     frames = track_region(phi, cap, beta=0.5, t=0.5, spacing=h, saves=1,
                           origin=(ax[0],) * 3, keep_volumes=True, device=device,
-                          progress=False)
+                          progress=False, storage=storage)
     seconds = time.perf_counter() - start
     end = frames[-1]
     p = end.boundaries[0]
@@ -164,8 +203,8 @@ def _in_checkout(source, task, *args):
 
 def _task(name, args):
     if name == "step":
-        return step_timing(int(args[0]), args[1])
-    return curvature_accuracy()
+        return step_timing(int(args[0]), args[1], *args[2:3])
+    return curvature_accuracy(*args[:1])
 
 
 def main():
@@ -177,6 +216,9 @@ def main():
     parser.add_argument("--baseline", default=None,
                         help="a folder holding an older checkout of clpde, timed alongside")
     parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--storages", nargs="+", default=["lists", "bricks"],
+                        choices=["lists", "bricks"],
+                        help="this tree's storages, timed in alternation (A B A B)")
     parser.add_argument("--json", default=os.path.join("benchmarks", "results", "regions.json"))
     parser.add_argument("--task", nargs="+", help=argparse.SUPPRESS)  # the subprocess's work
     args = parser.parse_args()
@@ -188,29 +230,42 @@ def main():
     rt = get_runtime()
     print(f"device: {rt.device.name.strip()} ({rt.device.platform.name.strip()}), "
           f"{rt.device.max_compute_units} compute units")
-    sources = [("this", ROOT)] + ([("baseline", args.baseline)] if args.baseline else [])
+    # (name, source, storage): this tree's storages, then the baseline (lists only)
+    runs = [(s, ROOT, s) for s in args.storages]
+    if args.baseline:
+        runs.append(("baseline", args.baseline, None))
     timings = []
     print(f"{'grid':>5} {'flow':>9} {'tree':>8} {'band':>8} {'reinit band':>11} "
-          f"{'reinits':>7} {'ms/step':>8} {'copy ms':>8} {'step/copy':>9} {'load':>5}")
+          f"{'reinits':>7} {'ms/step':>8} {'step ms':>8} {'reinit ms':>9} {'MiB':>6} "
+          f"{'copy ms':>8} {'step/copy':>9} {'cpu s':>6} {'load':>5}")
     for n in args.sizes:
         for flow in args.flows:
             for _ in range(args.repeats):
-                for name, source in sources:  # A B A B
-                    row = _in_checkout(source, "step", n, flow)
+                for name, source, storage in runs:  # A B A B
+                    extra = () if storage is None else (storage,)
+                    row = _in_checkout(source, "step", n, flow, *extra)
                     row["tree"] = name
                     timings.append(row)
                     print(f"{n:>5} {flow:>9} {name:>8} {row['band_cells']:>8} "
                           f"{row['reinit_cells']:>11} {row['reinits']:>3}/{row['steps']:<3} "
-                          f"{row['ms_per_step']:>8.1f} {row['copy_ms']:>8.1f} "
-                          f"{row['ms_per_step'] / row['copy_ms']:>9.2f} {row['load']:>5.1f}",
+                          f"{row['ms_per_step']:>8.1f} {row.get('ms_step_only', 0):>8.1f} "
+                          f"{row.get('ms_reinit', 0):>9.1f} {row.get('level_set_mib', 0):>6.0f} "
+                          f"{row['copy_ms']:>8.1f} "
+                          f"{row['ms_per_step'] / row['copy_ms']:>9.2f} "
+                          f"{row.get('cpu_s', 0):>6.1f} {row['load']:>5.1f}",
                           flush=True)
-            if args.baseline:
-                mine = [r["ms_per_step"] for r in timings[-2 * args.repeats::2]]
-                base = [r["ms_per_step"] for r in timings[-2 * args.repeats + 1::2]]
-                ratios = [b / a for a, b in zip(mine, base, strict=True)]
-                print(f"{'':>5} {flow:>9} speed-up (baseline / this, pairwise): "
-                      + ", ".join(f"{r:.2f}x" for r in ratios), flush=True)
-    curvature = {name: _in_checkout(source, "curvature") for name, source in sources}
+            if len(runs) > 1:
+                k = len(runs)
+                block = timings[-k * args.repeats:]
+                first = [r["ms_per_step"] for r in block[0::k]]
+                for j in range(1, k):
+                    other = [r["ms_per_step"] for r in block[j::k]]
+                    ratios = [b / a for a, b in zip(first, other, strict=True)]
+                    print(f"{'':>5} {flow:>9} {runs[j][0]} / {runs[0][0]} (ms per step, "
+                          "pairwise): " + ", ".join(f"{r:.2f}x" for r in ratios), flush=True)
+    curvature = {name: _in_checkout(source, "curvature", *extra) for name, source, extra in
+                 [(s, ROOT, (s,)) for s in args.storages] +
+                 ([("baseline", args.baseline, ())] if args.baseline else [])}
     print(f"\n{'flow':>15} {'tree':>8} {'steps':>5} {'area':>8} {'cap share':>9}")
     for name, rows in curvature.items():
         for row in rows:
@@ -218,14 +273,18 @@ def main():
                   f"{100 * row['area_error']:>7.2f}% {100 * row['cap_share_error']:>8.2f}%")
     accuracy = []
     if args.spacings:
-        print(f"\n{'h':>6} {'cells':>8} {'s':>6} {'cap area':>9} {'zero order':>10} "
-              f"{'angle':>8} {'sphere':>8}")
+        print(f"\n{'h':>6} {'storage':>7} {'cells':>8} {'s':>6} {'cap area':>9} "
+              f"{'zero order':>10} {'angle':>8} {'sphere':>8}")
     for h in args.spacings:
-        row = cap_accuracy(h)
-        accuracy.append(row)
-        print(f"{h:>6} {row['cells']:>8} {row['seconds']:>6.1f} "
-              f"{100 * row['area_fraction_error']:>8.3f}% {100 * row['zero_order_error']:>9.3f}% "
-              f"{100 * row['angular_radius_error']:>7.3f}% {100 * row['sphere_area_error']:>7.3f}%")
+        for storage in args.storages:
+            row = cap_accuracy(h, storage=storage)
+            row["storage"] = storage
+            accuracy.append(row)
+            print(f"{h:>6} {storage:>7} {row['cells']:>8} {row['seconds']:>6.1f} "
+                  f"{100 * row['area_fraction_error']:>8.3f}% "
+                  f"{100 * row['zero_order_error']:>9.3f}% "
+                  f"{100 * row['angular_radius_error']:>7.3f}% "
+                  f"{100 * row['sphere_area_error']:>7.3f}%", flush=True)
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:
         json.dump({"device": rt.device.name.strip(), "step_timing": timings,

@@ -50,6 +50,7 @@ from .surface.grid3d import Grid3D
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions.cl",)
 
+STORAGES = ("lists", "bricks")
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
 GHOST = 3
 # Pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3)). Six Heun iterations
@@ -119,6 +120,8 @@ class RegionTracker:
     block at the CFL limit; far less often for slow flows: see advance).
     aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
+    storage: "lists" (this class) or "bricks" (clpde.regions_bricks.BrickRegionTracker, which
+    also takes brick=(BX, BY, BZ)).
     """
 
     def __init__(self, phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
@@ -127,16 +130,14 @@ class RegionTracker:
                  reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
                  reinit_ring: int = 3, max_speed: float | None = None,
                  aux_at: Callable[[float], np.ndarray] | None = None, device: DeviceLike = None,
-                 dtype: DTypeLike = np.float32, band: float | None = None):
+                 dtype: DTypeLike = np.float32, band: float | None = None,
+                 storage: str = "lists"):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
         nz, ny, nx = phi.shape
         self.grid = Grid3D(self.runtime, nx, ny, nz, ghost=GHOST, dtype=np.dtype(dtype))
         self.nc = 1 + len(phihat)
-        # cur, nxt, ls0 and stage of every level set, the speed, aux and two masks
-        check_fits(self.runtime, (self.nc,) + tuple(phi.shape), "region tracking",
-                   4 + 2.5 / self.nc, ghost=GHOST, dtype=dtype)
         self.mode = SPEEDS[speed]
         self.scale = float(scale)
         self.velocity = None if velocity is None else np.asarray(velocity, np.float64)
@@ -152,20 +153,49 @@ class RegionTracker:
             raise InputError("a time-dependent speed (aux_at) needs speed='array' and no velocity")
         if aux_at is not None and aux is None:
             aux = aux_at(0.0)
-        g, q = self.grid, self.runtime.queue
         # region functions constant along the surface's normals: the extension before each
         # reinitialisation keeps them so, and would otherwise move an oblique one's zero on
         # the surface once (a plane cutting a sphere at 60 degrees: the cap grew 1.6%)
         phihat = along_normals(phi, self.h, np.asarray(phihat, np.float64))
         cells = np.concatenate([phi[None], phihat]) / self.h
+        self._setup(cells, aux if aux is None else aux / (self.h if speed == "morph" else 1.0))
+        self.time = 0.0
+        self.steps = 0
+        self.reinits = 0
+        # reinitialise when the surface may have moved this many cells since the last time:
+        # reinit_every full steps at the CFL limit (a slower flow, like a curvature flow on a
+        # fine grid, moves far less per step and needs it far less often)
+        self.reinit_distance = self.reinit_every * self.cfl
+        self._moved = 0.0  # bound on the cells the surface moved since the last one
+        self._vmax = 0.0  # the speed bound (cells per unit time) of the last stable_dt
+        self.rebuild()
+        self.reinitialize(4 * self.reinit_iterations)
+
+    def __new__(cls, *args, storage: str = "lists", **kwargs):
+        """storage="lists" (this class: dense padded volumes, band lists) or "bricks"
+        (regions_bricks.BrickRegionTracker: dense bricks of the band, kept on the device)."""
+        if storage not in STORAGES:
+            raise InputError(f"storage must be one of {STORAGES}, not {storage!r}")
+        if cls is RegionTracker and storage == "bricks":
+            from .regions_bricks import BrickRegionTracker
+
+            cls = BrickRegionTracker
+        return super().__new__(cls)
+
+    def _setup(self, cells: np.ndarray, aux: np.ndarray | None) -> None:
+        """The level sets `cells` (channels, nz, ny, nx; grid units) and the auxiliary
+        volume (aux, or None) on the device, with the work buffers and the kernels."""
+        g, q = self.grid, self.runtime.queue
+        # cur, nxt, ls0 and stage of every level set, the speed, aux and two masks
+        check_fits(self.runtime, (self.nc,) + tuple(cells.shape[1:]), "region tracking",
+                   4 + 2.5 / self.nc, ghost=GHOST, dtype=g.dtype)
         # ghosts continue distances linearly: stencils near the border stay meaningful
         self.cur = g.upload(cells, mode="linear")
         self.nxt = self.cur.copy()
         self.ls0 = self.cur.copy()
         self.stage = self.cur.copy()
         self.speed = cla.zeros(q, g.padded_shape, g.dtype)
-        self.aux = (g.upload(aux[None] / (self.h if speed == "morph" else 1.0))
-                    if aux is not None else self.speed)
+        self.aux = g.upload(aux[None]) if aux is not None else self.speed
         self._flag = cla.zeros(q, 1, np.int32)
         self._mask = cla.zeros(q, g.padded_shape, np.uint8)
         self._mask2 = cla.zeros(q, g.padded_shape, np.uint8)
@@ -191,17 +221,6 @@ class RegionTracker:
             "extend_outer": rt.kernel("regions.cl", "extend_outer", g.dtype, SPEED=mode),
             "copy_runs": rt.kernel("regions.cl", "copy_runs", g.dtype, SPEED=mode),
         }
-        self.time = 0.0
-        self.steps = 0
-        self.reinits = 0
-        # reinitialise when the surface may have moved this many cells since the last time:
-        # reinit_every full steps at the CFL limit (a slower flow, like a curvature flow on a
-        # fine grid, moves far less per step and needs it far less often)
-        self.reinit_distance = self.reinit_every * self.cfl
-        self._moved = 0.0  # bound on the cells the surface moved since the last one
-        self._vmax = 0.0  # the speed bound (cells per unit time) of the last stable_dt
-        self.rebuild()
-        self.reinitialize(4 * self.reinit_iterations)
 
     # ---- bands ---------------------------------------------------------------------------
     def rebuild(self) -> None:
@@ -323,11 +342,7 @@ class RegionTracker:
             fastest = float(np.abs(self.velocity).sum())
             self._vmax = fastest
             return self.cfl / fastest if fastest > 0 else np.inf
-        if self._stats_fresh:
-            vmax = float(self._stats.get().max())
-        else:
-            self._compute_speed()
-            vmax = self._band_max(self.speed)
+        vmax = self._speed_bound()
         self._vmax = vmax
         dt = self.cfl / vmax if vmax > 0 else np.inf
         # curvature flows are parabolic: explicit steps need dt ~ h^2 / (6 diffusivity)
@@ -336,6 +351,13 @@ class RegionTracker:
         elif self.mode == 2 and vmax > 0:
             dt = min(dt, 1.0 / (6.0 * np.sqrt(abs(self.scale) * vmax)))
         return dt
+
+    def _speed_bound(self) -> float:
+        """max |V| over the step band (cells per unit time)."""
+        if self._stats_fresh:
+            return float(self._stats.get().max())
+        self._compute_speed()
+        return self._band_max(self.speed)
 
     def _band_max(self, volume) -> float:
         """max |volume| over the step band, reduced per work-item on the device."""
@@ -598,7 +620,8 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                  reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
                  max_speed: float | None = None, keep_volumes: bool = False,
                  device: DeviceLike = None, dtype: DTypeLike = np.float32,
-                 progress: bool | None = None, band: float | None = None) -> list[RegionFrame]:
+                 progress: bool | None = None, band: float | None = None,
+                 storage: str = "lists") -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
@@ -625,6 +648,10 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
 
     palette: (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
     clpde's palette; where no region is, grey).
+
+    storage: "lists" (dense padded volumes on the device, the band as index lists) or
+    "bricks" (dense bricks of the band only, kept up on the device: memory in proportion to
+    the band; see clpde.regions_bricks and docs/regions.md for the measurements).
 
     Returns a RegionFrame per saved time: mesh (trimesh, per-vertex region colours),
     face_labels, boundary points, and (keep_volumes=True) the level sets.
@@ -676,7 +703,7 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                             reinit_iterations=reinit_iterations, cfl=cfl,
                             max_speed=None if max_speed is None else _positive("max_speed",
                                                                                max_speed) / h,
-                            aux_at=aux_at, device=device, dtype=dtype)
+                            aux_at=aux_at, device=device, dtype=dtype, storage=storage)
     # the bar counts simulated time, so it prints rounded times rather than step counts
     time_format = "{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
     with progress_bar(progress, t_end, "track regions", leave=False, unit="time",

@@ -11,9 +11,13 @@
 #ifndef CLPDE_EXTEND_H
 #define CLPDE_EXTEND_H
 
+#ifndef LS_SPACE
+#define LS_SPACE __global  // the fields' address space (see godunov.h)
+#endif
+
 // a . grad u at padded index j, each axis' difference one-sided from the side the velocity
 // comes from (upwind), summed x, y, z in that order (callers' results depend on it).
-INLINE REAL upwind_transport(__global const REAL* u, const int j, const int sx,
+INLINE REAL upwind_transport(LS_SPACE const REAL* u, const int j, const int sx,
                              const int sxy, const REAL ax, const REAL ay, const REAL az)
 {
     const REAL c = u[j];

@@ -6,6 +6,13 @@
 #ifndef CLPDE_GODUNOV_H
 #define CLPDE_GODUNOV_H
 
+// The address space of the fields the stencil functions here, in reinit.h and in extend.h
+// read: __global volumes by default; region_bricks.cl defines it as its tiles' (private on
+// CPUs) before including them, so the brick kernels run the same functions on a tile.
+#ifndef LS_SPACE
+#define LS_SPACE __global
+#endif
+
 // sign(a) in {-1, 0, 1}, as selects (PoCL keeps sign() out of line, and loops scalar).
 INLINE REAL ls_sign(const REAL a)
 {
@@ -47,7 +54,7 @@ INLINE REAL godunov_axis(const REAL dm, const REAL dp, const REAL v)
 }
 
 // Slope-limited upwind |grad u| at padded index i for u_t = V |grad u| in 2D.
-INLINE REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, const REAL v)
+INLINE REAL upwind_norm_2d(LS_SPACE const REAL* u, const int i, const int sx, const REAL v)
 {
     REAL dmx, dpx, dmy, dpy;
     LS_ONE_SIDED_AT(u, i, 1, dmx, dpx);
@@ -56,7 +63,7 @@ INLINE REAL upwind_norm_2d(__global const REAL* u, const int i, const int sx, co
 }
 
 // The same in 3D.
-INLINE REAL upwind_norm_3d(__global const REAL* u, const int i, const int sx, const int sxy,
+INLINE REAL upwind_norm_3d(LS_SPACE const REAL* u, const int i, const int sx, const int sxy,
                            const REAL v)
 {
     REAL dmx, dpx, dmy, dpy, dmz, dpz;

@@ -227,6 +227,65 @@ __kernel void pm_copy_centre(__global REAL* img, const __global int2* nnf,
     for (int c = 0; c < nout; ++c) img[c * plane + p] = img[c * plane + s.y * W + s.x];
 }
 
+// One half-sweep of iterated conditional modes over the offsets (the coherence step before
+// the last vote): each target of the given parity ((x + y) % 2) takes, among its own source
+// and the sources its eight neighbours' offsets give it, the one of least
+//     dist * factor^-agree,
+// agree the number of the eight neighbours with that offset. A pixel thus follows its
+// neighbours when their offset is within a small factor as good as its own: copied regions
+// grow and their seams become fewer (counting four neighbours only, a line one pixel wide
+// that agrees along itself never moves). Targets of one parity are updated in place from
+// the other's field and their own; a diagonal neighbour has the same parity, so its value
+// is read from the field before this half-sweep (a copy, nnf_in), and the result is the
+// same on every run.
+__kernel void pm_coherence(const __global REAL* img, const __global uchar* valid,
+                           const __global int2* nnf_in, __global int2* nnf,
+                           __global REAL* dist, const __global int* targets,
+                           const int ntargets, const int W, const int H, const int nch,
+                           const __global REAL* chw, const int parity, const REAL factor)
+{
+    const int k = get_global_id(0);
+    if (k >= ntargets) return;
+    const int t = targets[k];
+    const int px = t % W, py = t / W;
+    if (((px + py) & 1) != parity) return;
+    int2 off[8];
+    int has[8];
+    int n = 0;
+    for (int oy = -1; oy <= 1; ++oy)
+        for (int ox = -1; ox <= 1; ++ox) {
+            if (!ox && !oy) continue;
+            const int qx = px + ox, qy = py + oy;
+            has[n] = qx >= 0 && qx < W && qy >= 0 && qy < H;
+            off[n] = has[n] ? nnf_in[qy * W + qx] - (int2)(qx, qy) : (int2)(0, 0);
+            ++n;
+        }
+    int2 best = nnf_in[t];
+    const int2 own = best - (int2)(px, py);
+    REAL bd = dist[t];
+    int agree = 0;
+    for (int d = 0; d < 8; ++d) agree += has[d] && off[d].x == own.x && off[d].y == own.y;
+    REAL be = bd / pown(factor, agree);
+    for (int d = 0; d < 8; ++d) {
+        if (!has[d] || (off[d].x == own.x && off[d].y == own.y)) continue;
+        int seen = 0, c = 0;
+        for (int e = 0; e < 8; ++e) {
+            const int same = has[e] && off[e].x == off[d].x && off[e].y == off[d].y;
+            seen |= same && e < d;
+            c += same;
+        }
+        if (seen) continue;  // this offset was tried already
+        const int sx = px + off[d].x, sy = py + off[d].y;
+        if (sx < 0 || sx >= W || sy < 0 || sy >= H || !valid[sy * W + sx]) continue;
+        const REAL scale = pown(factor, c);
+        const REAL dd = patch_distance(img, valid, 0, W, H, nch, chw, px, py, sx, sy,
+                                       be * scale);
+        if (dd / scale < be) { be = dd / scale; bd = dd; best = (int2)(sx, sy); }
+    }
+    nnf[t] = best;
+    dist[t] = bd;
+}
+
 // Candidate offsets shared by every target (the lags at which a periodic pattern repeats,
 // choose.lattice_offsets): each target tries its pixel plus each offset and takes it when
 // its colours (weights `chw_colour`: the texture features are 0 there) match at least as

@@ -15,87 +15,13 @@
 #include "godunov.h"
 #include "reinit.h"
 #include "extend.h"
-
-// ---- stencils ---------------------------------------------------------------------------
-
-// Central-difference gradient.
-#define CENTRAL_GRAD(u, i, gx, gy, gz)                                                 \
-    const REAL gx = (REAL)0.5 * ((u)[(i) + 1] - (u)[(i) - 1]);                         \
-    const REAL gy = (REAL)0.5 * ((u)[(i) + sx] - (u)[(i) - sx]);                       \
-    const REAL gz = (REAL)0.5 * ((u)[(i) + sxy] - (u)[(i) - sxy])
-
-// Mean curvature div(grad u / |grad u|) (kappa = 2 / R on a sphere of radius R cells) and
-// Gaussian curvature (1 / R^2) of the level set of u through cell i, from central first
-// and second differences: kappa = (|g|^2 tr H - g.Hg) / |g|^3, K = g.adj(H)g / |g|^4.
-INLINE void curvatures(__global const REAL* u, const int i, const int sx, const int sxy,
-                       REAL* mean, REAL* gauss)
-{
-    CENTRAL_GRAD(u, i, gx, gy, gz);
-    const REAL c2 = 2 * u[i];
-    const REAL hxx = u[i + 1] - c2 + u[i - 1];
-    const REAL hyy = u[i + sx] - c2 + u[i - sx];
-    const REAL hzz = u[i + sxy] - c2 + u[i - sxy];
-    const REAL hxy = (REAL)0.25 * (u[i + 1 + sx] - u[i - 1 + sx] - u[i + 1 - sx] + u[i - 1 - sx]);
-    const REAL hxz = (REAL)0.25 * (u[i + 1 + sxy] - u[i - 1 + sxy] - u[i + 1 - sxy] + u[i - 1 - sxy]);
-    const REAL hyz = (REAL)0.25 * (u[i + sx + sxy] - u[i - sx + sxy] - u[i + sx - sxy] + u[i - sx - sxy]);
-    const REAL g2 = gx * gx + gy * gy + gz * gz + (REAL)1e-12;
-    const REAL ghg = gx * gx * hxx + gy * gy * hyy + gz * gz * hzz +
-                     2 * (gx * gy * hxy + gx * gz * hxz + gy * gz * hyz);
-    *mean = (g2 * (hxx + hyy + hzz) - ghg) / (g2 * SQRT(g2));
-    // g . adj(H) g: adj(H) is the cofactor matrix of the symmetric Hessian
-    const REAL axx = hyy * hzz - hyz * hyz, ayy = hxx * hzz - hxz * hxz, azz = hxx * hyy - hxy * hxy;
-    const REAL axy = hxz * hyz - hxy * hzz, axz = hxy * hyz - hxz * hyy, ayz = hxy * hxz - hxx * hyz;
-    const REAL gag = gx * gx * axx + gy * gy * ayy + gz * gz * azz +
-                     2 * (gx * gy * axy + gx * gz * axz + gy * gz * ayz);
-    *gauss = gag / (g2 * g2);
-}
-
-// Speeds fade smoothly to 0 between |Phi| = lo and hi cells (Peng et al.'s narrow-band
-// cut-off): cells near the band's edge, whose neighbours outside the band hold stale
-// values, stay put, and the reinitialisation rebuilds them from the surface outwards.
-// Without it a translated sphere's far side picked up 2-cell errors after 5 cells of motion.
-INLINE REAL band_cutoff(const REAL phi, const REAL lo, const REAL hi)
-{
-    const REAL a = (FABS(phi) - lo) / (hi - lo);
-    const REAL t = a < 0 ? (REAL)0 : (a > 1 ? (REAL)1 : a);
-    return 1 - t * t * (3 - 2 * t);
-}
-
-// ---- the speed V of Phi_t = V |grad Phi| on the band ----------------------------------------
-// SPEED 0: V = scale (a constant); 1: V = scale * mean curvature of Phi; 2: V = scale *
-// sign(mean curvature) max(Gaussian curvature, 0); 3: V = scale * (aux - Phi) (morphing toward the target whose
-// signed distance is aux); 4: V = scale * aux (a user array). Then clamped to [-vmax, vmax].
-#ifndef SPEED
-#define SPEED 0
-#endif
-// V at padded index i of channel 0.
-INLINE REAL region_speed_at(__global const REAL* phi, __global const REAL* aux, const int i,
-                            const REAL scale, const REAL vmax, const int sx, const int sxy)
-{
-#if SPEED == 0
-    REAL v = scale;
-#elif SPEED == 1 || SPEED == 2
-    REAL mean, gauss;
-    curvatures(phi, i, sx, sxy, &mean, &gauss);
-    // SPEED 2: |speed| = K+, towards the centres of curvature (sign of the mean
-    // curvature): convex and concave elliptic parts both flatten, which unfolds
-    const REAL toward = ls_sign(mean);
-    REAL v = scale * (SPEED == 1 ? mean : toward * FMAX(gauss, (REAL)0));
-#elif SPEED == 3
-    REAL v = scale * (aux[i] - phi[i]);
-#else
-    REAL v = scale * aux[i];
-#endif
-    // |V| <= vmax: curvature of creases finer than the grid is noise, and would set
-    // the time step (the host passes a huge vmax for no limit)
-    return v < -vmax ? -vmax : (v > vmax ? vmax : v);
-}
+#include "regions.h"
 
 __kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
                            __global REAL* restrict speed, const REAL scale, const REAL vmax,
                            const int sx, const int sxy, RUN_ARGS)
 {
-    FOR_EACH_RUN_CELL(i) speed[i] = region_speed_at(phi, aux, i, scale, vmax, sx, sxy);
+    FOR_EACH_RUN_CELL(i) speed[i] = region_speed_at(phi, aux[i], i, scale, vmax, sx, sxy);
 }
 
 // ---- one explicit step of the coupled flows ------------------------------------------------
@@ -119,18 +45,6 @@ __kernel void region_step(__global const REAL* restrict ls, __global const REAL*
     }
 }
 
-#ifndef NC
-#define NC 2  // level sets: Phi and the Phi-hats
-#endif
-#ifdef REAL_IS_DOUBLE
-#define REAL_BITS long
-#define AS_BITS(x) as_long(x)
-#define AS_REAL(b) as_double(b)
-#else
-#define REAL_BITS int
-#define AS_BITS(x) as_int(x)
-#define AS_REAL(b) as_float(b)
-#endif
 // One Euler stage of every level set with the speed computed in place, one work-item walking
 // whole runs with every channel (launched with one channel): the separate sweeps of
 // region_speed, region_step and heun_average read and wrote the speed and a stage buffer
@@ -151,7 +65,7 @@ INLINE void region_stage(__global const REAL* restrict ls, __global const REAL* 
     // without fast-math, kept it scalar)
     REAL_BITS fastest = 0;
     FOR_EACH_RUN_CELL(i) {
-        const REAL speed = region_speed_at(ls, aux, i, scale, vmax, sx, sxy);
+        const REAL speed = region_speed_at(ls, aux[i], i, scale, vmax, sx, sxy);
         // only cells inside the band count (|Phi| < hi): the host may lengthen runs past it
         const REAL_BITS bits = FABS(ls[i]) < hi ? AS_BITS(FABS(speed)) : 0;
         fastest = bits > fastest ? bits : fastest;
@@ -161,12 +75,7 @@ INLINE void region_stage(__global const REAL* restrict ls, __global const REAL* 
 #pragma unroll
         for (int c = 0; c < NC; ++c) {
             const int j = c * plane + i;
-            REAL v = v0;
-            if (c > 0) {
-                CENTRAL_GRAD(ls, j, ux, uy, uz);
-                v *= (fx * ux + fy * uy + fz * uz) * RSQRT(f2 * (ux * ux + uy * uy + uz * uz + eps2));
-            }
-            const REAL next = ls[j] + dt * v * upwind_norm_3d(ls, j, sx, sxy, v);
+            const REAL next = region_next(ls, c, j, v0, fx, fy, fz, f2, eps2, dt, sx, sxy);
             if (second)
                 out[j] = (REAL)0.5 * (out[j] + next);
             else
@@ -197,14 +106,7 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
 {
     FOR_EACH_RUN_CELL(i) {
         const int j = chan + i;
-        const REAL cut = band_cutoff(ls[i], lo, hi);
-        REAL dmx, dpx, dmy, dpy, dmz, dpz;
-        LS_ONE_SIDED_AT(ls, j, 1, dmx, dpx);
-        LS_ONE_SIDED_AT(ls, j, sx, dmy, dpy);
-        LS_ONE_SIDED_AT(ls, j, sxy, dmz, dpz);
-        const REAL adv = ux * (ux > 0 ? dmx : dpx) + uy * (uy > 0 ? dmy : dpy) +
-                         uz * (uz > 0 ? dmz : dpz);
-        out[j] = ls[j] - dt * cut * adv;
+        out[j] = advect_next(ls, j, band_cutoff(ls[i], lo, hi), dt, ux, uy, uz, sx, sxy);
     }
 }
 
@@ -219,10 +121,7 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
 // steepest slope still guards against flat central estimates at kinks. Cells whose slope is
 // already within SUBCELL_TOL of 1 are kept as they are: the relaxation's O(h^2) bias,
 // repeated every few steps, otherwise grows.
-#ifndef SUBCELL_TOL
-#define SUBCELL_TOL 0.1
-#endif
-#define SUBCELL_STEEP 0.5
+// (SUBCELL_TOL and SUBCELL_STEEP: regions.h, which region_bricks.cl shares.)
 #define REINIT3D_UPDATE(u, u0, i, dt)                                                      \
     reinit_update_3d(u, u0, i, sx, sxy, dt, (REAL)SUBCELL_STEEP, (REAL)SUBCELL_TOL)
 
@@ -393,11 +292,8 @@ __kernel void extend_outer(__global const REAL* restrict ls,
 {
     FOR_EACH_RUN_CELL(i) {
         const int j = chan + plane + i;
-        const REAL p = ls[i];
-        const REAL w = 1 - band_cutoff(p, lo, hi);
-        CENTRAL_GRAD(ls, i, gx, gy, gz);
-        const REAL s = ls_sign(p) * RSQRT(gx * gx + gy * gy + gz * gz + (REAL)1e-12);
-        const REAL ax = s * gx, ay = s * gy, az = s * gz;
+        REAL ax, ay, az;
+        const REAL w = extend_velocity(ls, i, lo, hi, sx, sxy, &ax, &ay, &az);
         const REAL c = ls[j];
         const REAL du = upwind_transport(ls, j, sx, sxy, ax, ay, az);
         out[j] = inband[i] ? c - dt * w * du : c;

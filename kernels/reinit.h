@@ -48,7 +48,7 @@ INLINE REAL godunov_update_world(const REAL p, const REAL sgn, const REAL norm, 
 // The new value of u at padded index i of a 2D field after one step of dt: Russo and
 // Smereka's fix as published (steep_weight 1, no tolerance). -DPLAIN_REINIT=1 drops the fix
 // (for comparisons only).
-INLINE REAL reinit_update_2d(__global const REAL* u, __global const REAL* u0, const int i,
+INLINE REAL reinit_update_2d(LS_SPACE const REAL* u, LS_SPACE const REAL* u0, const int i,
                              const int sx, const REAL dt)
 {
     const REAL c0 = u0[i];
@@ -69,7 +69,7 @@ INLINE REAL reinit_update_2d(__global const REAL* u, __global const REAL* u0, co
 
 // The same at padded index i (any channel) of a 3D volume, with the subcell gradient's
 // steep_weight and tol as given.
-INLINE REAL reinit_update_3d(__global const REAL* u, __global const REAL* u0, const int i,
+INLINE REAL reinit_update_3d(LS_SPACE const REAL* u, LS_SPACE const REAL* u0, const int i,
                              const int sx, const int sxy, const REAL dt,
                              const REAL steep_weight, const REAL tol)
 {
@@ -96,7 +96,7 @@ INLINE REAL reinit_update_3d(__global const REAL* u, __global const REAL* u0, co
 // else D = u0 / |grad u0|. Each iteration then reads one value instead of u0's 6 neighbours
 // and skips the slope (about a third of the sweep's time at 256^3); the results are the
 // same, bit for bit, as reinit_update_3d's.
-INLINE REAL subcell_target_3d(__global const REAL* u0, const int i, const int sx,
+INLINE REAL subcell_target_3d(LS_SPACE const REAL* u0, const int i, const int sx,
                               const int sxy, const REAL steep_weight, const REAL tol)
 {
     const REAL c0 = u0[i];
@@ -113,17 +113,24 @@ INLINE REAL subcell_target_3d(__global const REAL* u0, const int i, const int sx
     return !at_interface ? (REAL)INFINITY : (FABS(g - 1) < tol ? (REAL)-INFINITY : d);
 }
 
-// reinit_update_3d from the targets of subcell_target_3d.
-INLINE REAL reinit_update_target(__global const REAL* u, __global const REAL* u0,
-                                 __global const REAL* target, const int i, const int sx,
-                                 const int sxy, const REAL dt)
+// reinit_update_3d at index i of u from the cell's start value c0 and its target t of
+// subcell_target_3d (given as values: the brick kernels read them from other buffers than u).
+INLINE REAL reinit_update_at(LS_SPACE const REAL* u, const int i, const int sx, const int sxy,
+                             const REAL c0, const REAL t, const REAL dt)
 {
-    const REAL t = target[i];
     const REAL p = u[i];
-    const REAL sgn = ls_sign(u0[i]);
+    const REAL sgn = ls_sign(c0);
     if (t > (REAL)1e30) return godunov_update(p, sgn, upwind_norm_3d(u, i, sx, sxy, -sgn), dt);
     if (t < (REAL)-1e30) return p;
     return p - dt * (sgn * FABS(p) - t);
+}
+
+// reinit_update_3d from the targets of subcell_target_3d.
+INLINE REAL reinit_update_target(LS_SPACE const REAL* u, LS_SPACE const REAL* u0,
+                                 LS_SPACE const REAL* target, const int i, const int sx,
+                                 const int sxy, const REAL dt)
+{
+    return reinit_update_at(u, i, sx, sxy, u0[i], target[i], dt);
 }
 
 #endif

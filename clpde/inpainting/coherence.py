@@ -43,7 +43,6 @@ from .poisson import box_around
 KERNEL_FILES = ("coherence.cl",)
 
 DEFAULTS = dict(epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0)
-_LOCAL = 64  # work-group size of the per-shell kernels (both check k < count)
 
 
 def gaussian_taps(s: float) -> np.ndarray:
@@ -154,13 +153,11 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
         k_products(q, grid, local, us.data, known.data, prod.data, np.int32(nc), *run)
         k_tensor(q, grid, local, prod.data, t.data, buf_r.data, rr, *run)
         args = (np.int32(first), np.int32(count))
-        # A fixed work-group size: with None, PoCL picks one from each shell's count and
-        # compiles the kernel anew for every size it has not seen (seconds each, the
-        # first time a hole shape is met).
-        launch = (-(-int(count) // _LOCAL) * _LOCAL,)
-        k_fill(q, launch, (_LOCAL,), u.data, known.data, t.data, buf_r.data, rr, lst.data,
+        # a fixed work-group (Runtime.items): PoCL would compile anew for each shell's count
+        launch = runtime.items(int(count))
+        k_fill(q, *launch, u.data, known.data, t.data, buf_r.data, rr, lst.data,
                *args, dt.type(epsilon), dt.type(kappa), np.int32(nc), *dims)
-        k_mark(q, launch, (_LOCAL,), known.data, lst.data, *args)
+        k_mark(q, *launch, known.data, lst.data, *args)
     out = np.array(data, copy=True)
     filled = u.get()
     out[:, rows, cols] = np.where(box_omega, filled, out[:, rows, cols])

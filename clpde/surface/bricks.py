@@ -106,6 +106,30 @@ def dilate_axes(mask: np.ndarray, reach: int) -> np.ndarray:
     return out
 
 
+def brick_neighbours(coords: np.ndarray) -> np.ndarray:
+    """(n, 27) the 1-based index of each brick's 27 neighbours ((dz, dy, dx) in -1..1, x
+    fastest) among `coords` (n, 3), 0 where none is stored: the neighbours' keys looked up
+    in the sorted keys of the bricks (n log n, whatever the grid's size)."""
+    c = np.asarray(coords, np.int64) + 1  # neighbours' coordinates stay >= 0
+    span = int(c.max(initial=0)) + 2
+
+    def key(a):
+        return (a[..., 2] * span + a[..., 1]) * span + a[..., 0]
+
+    keys = key(c)
+    order = np.argsort(keys)
+    ranked = keys[order]
+    d = np.arange(-1, 2)
+    dz, dy, dx = np.meshgrid(d, d, d, indexing="ij")
+    offsets = np.stack([dx.ravel(), dy.ravel(), dz.ravel()], axis=1)
+    want = key(c[:, None, :] + offsets[None])
+    at = np.minimum(np.searchsorted(ranked, want), max(len(ranked) - 1, 0))
+    if not len(ranked):
+        return np.zeros((0, 27), np.int32)
+    found = ranked[at] == want
+    return np.where(found, order[at] + 1, 0).astype(np.int32)
+
+
 @dataclass
 class BrickBand:
     """Bricks covering a band of a padded grid, with their tables on the device."""
@@ -118,10 +142,10 @@ class BrickBand:
     # (row i describes brick i + 1)
     map_shape: tuple[int, int, int]
     nbr: cla.Array
-    mask_host: np.ndarray  # (nbricks + 2, BV) band bits (brick 0: the sentinel)
+    mask_host: np.ndarray | None  # (nbricks + 2, BV) band bits (brick 0: the sentinel)
     brick_bits: cla.Array  # per brick the OR of its cells' bits
-    node_rows: cla.Array  # (nbricks + 2, BZ, BY): 1 where the row along x holds a node
-    map_host: np.ndarray
+    node_rows: cla.Array | None  # (nbricks + 2, BZ, BY): 1 where the row along x holds a node
+    map_host: np.ndarray | None
 
     @property
     def nbricks(self) -> int:
@@ -185,6 +209,27 @@ class BrickBand:
                (("nbr", nbr), ("bits", np.bitwise_or.reduce(mask_host, axis=1)), ("rows", rows))}
         return cls(runtime, tuple(padded_shape), (bx, by, bz), coords, cells, (mz, my, mx),
                    dev["nbr"], mask_host, dev["bits"], dev["rows"], bmap)
+
+    @classmethod
+    def from_coords(cls, runtime, padded_shape, coords: np.ndarray,
+                    brick=DEFAULT_BRICK) -> BrickBand:
+        """Bricks at the brick coordinates `coords` ((n, 3), x y z), put in Morton order,
+        with the neighbour table found from the coordinates alone (brick_neighbours: work
+        in proportion to the bricks, no map of the grid), for a band kept on the device
+        (regions_bricks.py): the per-cell band bits and the coarse map stay empty."""
+        coords = np.asarray(coords, np.int32).reshape(-1, 3)
+        order = np.argsort(morton_key(coords[:, 0], coords[:, 1], coords[:, 2]), kind="stable")
+        coords = np.ascontiguousarray(coords[order])
+        n = len(coords)
+        bz, by, bx = brick[2], brick[1], brick[0]
+        pz, py, px = padded_shape
+        nbr = np.zeros((n + 2, 27), np.int32)
+        nbr[1 : n + 1] = brick_neighbours(coords)
+        q = runtime.queue
+        return cls(runtime, tuple(padded_shape), tuple(int(b) for b in brick), coords,
+                   _brick_cells(coords, brick, padded_shape, 0),
+                   (-(-pz // bz), -(-py // by), -(-px // bx)), cla.to_device(q, nbr), None,
+                   cla.zeros(q, n + 2, np.uint8), None, None)
 
     def index_of(self, flat: np.ndarray, apron: int = 0) -> np.ndarray:
         """Brick-storage indices (int32) of cells given by flat padded indices, in the

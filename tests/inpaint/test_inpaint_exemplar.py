@@ -67,6 +67,46 @@ def test_patchmatch_pass_never_worsens_and_stays_legal(runtime):
     assert lv.valid[src[:, 1], src[:, 0]].all()
 
 
+def test_coherence_matches_reference(runtime):
+    lv, img, hole, w = _level(runtime, seed=7)
+    lv.score()
+    nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
+    lv.cohere(2, 1.5)
+    want_nnf, want_dist = ref.cohere(img, w, nnf, dist, lv.valid, lv.targets_mask, lv.r,
+                                     1.5, 2)
+    got = lv.nnf_to_host()
+    assert (got != nnf).any(2).sum() > 20  # the sweeps did move offsets
+    assert np.array_equal(got, want_nnf)
+    np.testing.assert_allclose(lv.dist.get().reshape(hole.shape)[lv.targets_mask],
+                               want_dist[lv.targets_mask], rtol=2e-5, atol=1e-7)
+
+
+def _distinct_offsets(lv):
+    off = lv.nnf_to_host() - np.stack(np.meshgrid(np.arange(lv.W), np.arange(lv.H)), -1)
+    return len(np.unique(off[lv.hole], axis=0))
+
+
+def test_coherence_joins_equally_good_copies(runtime):
+    # Stripes with a little noise: every source of the right phase is nearly as good, so
+    # PatchMatch leaves a patchwork of them; the sweeps must join it into fewer regions.
+    rng = np.random.default_rng(0)
+    x = np.arange(64)
+    img = (0.5 + 0.4 * np.sin(2 * np.pi * x / 8))[None, None, :].repeat(64, 1)
+    img = img + 0.01 * rng.standard_normal((1, 64, 64))
+    hole = np.zeros((64, 64), bool)
+    hole[24:40, 24:40] = True
+    lv = exemplar._Level(runtime, np.float32, img, hole, [1.0], 5)
+    lv.random_nnf(rng)
+    lv.score()
+    lv.patchmatch(6, lv.targets, False, seed=0, counter=[0])
+    before = _distinct_offsets(lv)
+    d0 = lv.dist.get()[lv.targets_idx]
+    lv.cohere(4, 1.5)
+    assert _distinct_offsets(lv) < 0.5 * before
+    # each pixel gave up at most a factor 1.5**8 of its distance, most far less
+    assert lv.dist.get()[lv.targets_idx].mean() < 2 * d0.mean()
+
+
 @pytest.mark.parametrize("masked", [False, True])
 def test_try_offsets_matches_reference(runtime, masked):
     lv, img, hole, w = _level(runtime, seed=7, nout=2)  # plane 2 plays a texture feature

@@ -63,6 +63,39 @@ def vote(img, nnf, dist, hole, r, sigma2, best_only=False, nout=None, pen=None):
     return out
 
 
+def cohere(img, weights, nnf, dist, valid, targets, r, factor, sweeps):
+    """pm_coherence's ICM sweeps: per sweep, the targets of parity 0 then 1 ((x + y) % 2)
+    each take, among their own offset and their 8 neighbours' (read before the half-sweep),
+    the one of least dist * factor^-agree (agree: neighbours with that offset); the first in
+    row-major neighbour order wins a tie, the own offset before all. Returns (nnf, dist)."""
+    H, W = targets.shape
+    nnf, dist = nnf.copy(), dist.astype(np.float64).copy()
+    ys, xs = np.nonzero(targets)
+    for _ in range(sweeps):
+        for parity in (0, 1):
+            before = nnf.copy()
+            for py, px in zip(ys, xs, strict=False):
+                if (px + py) % 2 != parity:
+                    continue
+                offs = []
+                for oy in (-1, 0, 1):
+                    for ox in (-1, 0, 1):
+                        qy, qx = py + oy, px + ox
+                        if (oy or ox) and 0 <= qy < H and 0 <= qx < W:
+                            offs.append(tuple(before[qy, qx] - (qx, qy)))
+                own = tuple(before[py, px] - (px, py))
+                best_e = dist[py, px] / factor ** offs.count(own)
+                for o in dict.fromkeys(offs):
+                    sx, sy = px + o[0], py + o[1]
+                    if o == own or not (0 <= sx < W and 0 <= sy < H) or not valid[sy, sx]:
+                        continue
+                    d = patch_distance(img, weights, px, py, sx, sy, r)
+                    if d / factor ** offs.count(o) < best_e:
+                        best_e = d / factor ** offs.count(o)
+                        nnf[py, px], dist[py, px] = (sx, sy), d
+    return nnf, dist
+
+
 def try_offsets(img, weights, colour_weights, nnf, dist, targets, valid, lags, r, use=None):
     """pm_offsets: each target tries its pixel plus each lag (dx, dy) with a legal source
     and keeps it when its colour distance (colour_weights) is at most the best so far, the
