@@ -285,3 +285,39 @@ __kernel void pm_coherence(const __global REAL* img, const __global uchar* valid
     nnf[t] = best;
     dist[t] = bd;
 }
+
+// Candidate offsets shared by every target (the lags at which a periodic pattern repeats,
+// choose.lattice_offsets): each target tries its pixel plus each offset and takes it when
+// its colours (weights `chw_colour`: the texture features are 0 there) match at least as
+// well as the current source's (ties go to the lattice, in the order of the list); then
+// its distance is rescored with the full weights. A flat patch of a periodic pattern
+// matches many phases equally well; the lattice's phase is the one whose neighbours beyond
+// the patch are right too, whatever the seed's random search found. Colours only, because
+// the features of known pixels next to the hole are means over fewer pixels and do not
+// repeat with the pattern. `masked`: only the `use` pixels count, as in pm_pass.
+__kernel void pm_offsets(const __global REAL* img, const __global uchar* use, const int masked,
+                         const __global uchar* valid, __global int2* nnf, __global REAL* dist,
+                         const __global int* targets, const int ntargets,
+                         const int W, const int H, const int nch, const __global REAL* chw,
+                         const __global REAL* chw_colour,
+                         const __global int2* offsets, const int noffsets)
+{
+    const int k = get_global_id(0);
+    if (k >= ntargets) return;
+    const int t = targets[k];
+    const int px = t % W, py = t / W;
+    int2 best = nnf[t];
+    REAL bd = patch_distance(img, use, masked, W, H, nch, chw_colour, px, py, best.x, best.y,
+                             INFINITY);
+    int moved = 0;
+    for (int i = 0; i < noffsets; ++i) {
+        const int sx = px + offsets[i].x, sy = py + offsets[i].y;
+        if (sx < 0 || sx >= W || sy < 0 || sy >= H || !valid[sy * W + sx]) continue;
+        const REAL dd = patch_distance(img, use, masked, W, H, nch, chw_colour, px, py, sx, sy,
+                                       bd);
+        if (dd <= bd) { bd = dd; best = (int2)(sx, sy); moved = 1; }
+    }
+    if (!moved) return;
+    nnf[t] = best;
+    dist[t] = patch_distance(img, use, masked, W, H, nch, chw, px, py, best.x, best.y, INFINITY);
+}

@@ -94,6 +94,47 @@ def _periodicity(detail, ok) -> float:
     return float(a.max())
 
 
+def lattice_offsets(data: np.ndarray, omega: np.ndarray, max_lag: int = 96,
+                    tol: float = 1e-3, limit: int = 96) -> np.ndarray:
+    """The lags (dx, dy), up to ``max_lag`` px, at which the known pixels of ``data``
+    ((channels, rows, cols)) repeat exactly, up to ``tol``: the local minima of the mean
+    squared difference between the known pixels and their shifts (over the pairs both
+    known, a quarter of the known pixels at least) of at most ``tol`` times the known
+    pixels' variance; the ``limit`` shortest. Empty when nothing repeats that well.
+
+    For a periodic pattern these are the lattice's vectors and their sums: a patch copied
+    from any of them is exact, whatever the phase a flat patch alone would allow. The
+    autocorrelation's peaks (periodicity) are not enough: at 0.97 they let in a rotated
+    stripe pattern's near repeats, which differ on the stripes' edges."""
+    known = ~np.asarray(omega, bool)
+    x = np.where(known, np.asarray(data, np.float64), 0)
+    k = known.astype(np.float64)
+    H, W = k.shape
+    shape = (sfft.next_fast_len(H + max_lag + 1, True), sfft.next_fast_len(W + max_lag + 1, True))
+    fk = sfft.rfft2(k, shape)
+
+    def corr(fa, fb):  # sum over p of a(p + lag) b(p)
+        return sfft.irfft2(fa * np.conj(fb), shape)
+
+    sq = np.zeros(shape)
+    for xc in x:
+        fx, fx2 = sfft.rfft2(xc, shape), sfft.rfft2(xc * xc, shape)
+        sq += corr(fx2, fk) + corr(fk, fx2) - 2 * corr(fx, fx)
+    count = corr(fk, fk)
+    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
+    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    ly, lx = np.broadcast_arrays(ty, tx)
+    use = (np.maximum(np.abs(ly), np.abs(lx)) <= max_lag) & (count > 0.25 * k.sum())
+    use &= (ly != 0) | (lx != 0)
+    msd = np.where(use, sq / np.maximum(count, 1), np.inf)
+    var = float(sum(np.var(xc[known]) for xc in x)) if known.any() else 0.0
+    low = msd <= ndimage.minimum_filter(msd, size=3, mode="wrap")
+    keep = use & low & (msd <= tol * var)
+    lags = np.stack([lx[keep], ly[keep]], -1).astype(np.int32)
+    order = np.lexsort((lags[:, 1], lags[:, 0], np.abs(lags).sum(axis=1)))
+    return lags[order][:limit]
+
+
 def hole_depth(omega: np.ndarray) -> np.ndarray:
     """Each hole pixel's Euclidean distance to the nearest known pixel (0 where known); the
     pixels beyond the box's edge count as known."""

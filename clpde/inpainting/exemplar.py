@@ -24,6 +24,13 @@ overlaps the hole, of the distance to its nearest patch in the known part:
 - Before that last vote, a few ICM sweeps over the offsets (pm_coherence): a pixel takes a
   neighbour's offset when its patch distance is within a small factor per agreeing
   neighbour of its own, so that copied regions are larger and their seams fewer.
+- Periodic surroundings (choose.periodicity): the lags at which the known part repeats
+  (choose.lattice_offsets) are offsets that every target also tries, in the onion peel
+  and before the last vote (after the sweeps), keeping one when its colours match at
+  least as well (ties go to the lattice). A flat patch of a periodic pattern matches many
+  phases; which one the random search found depended on the seed, and the stitch, which
+  reads the source's neighbours beyond the patch, turned a wrong phase into a visible
+  error.
 - The last vote at the finest level takes, for each pixel, the closest patch's value only;
   a weighted mean of slightly misaligned patches blurs the texture that the method exists
   to keep.
@@ -71,6 +78,10 @@ DEFAULTS = {
     # neighbour of its own, so that copied regions are larger and seams fewer; 1: off
     "cohere": 1.5,
     "cohere_sweeps": 4,
+    # where the hole's surroundings are periodic (choose.periodicity), the targets also try
+    # the lattice's lags (choose.lattice_offsets) in the onion peel and before the last
+    # vote, so that the field takes the lattice's phase whatever the seed
+    "lattice": True,
 }
 _LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 KERNEL_FILES = ("patchmatch.cl",)
@@ -199,7 +210,8 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
 
 class _Level:
     def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int,
-                 nout: int | None = None, radius: int | None = None, confidence: float = 1.0):
+                 nout: int | None = None, radius: int | None = None, confidence: float = 1.0,
+                 ncolour: int | None = None):
         self.rt = runtime
         self.q = runtime.queue
         self.dtype = np.dtype(dtype)
@@ -213,6 +225,9 @@ class _Level:
         self.k_score = rt.kernel("patchmatch.cl", "pm_score", dt, **defines)
         self.k_vote = rt.kernel("patchmatch.cl", "pm_vote", dt, **defines)
         self.k_copy = rt.kernel("patchmatch.cl", "pm_copy_centre", dt, **defines)
+        self.k_offsets = rt.kernel("patchmatch.cl", "pm_offsets", dt, **defines)
+        self.ncolour = self.nch if ncolour is None else ncolour  # planes before the features
+        self.chw_colour = None  # try_offsets' weights: the colours only, made when first used
         self.k_cohere = rt.kernel("patchmatch.cl", "pm_coherence", dt, **defines)
 
         self.valid = _valid_sources(hole, self.r)
@@ -304,6 +319,19 @@ class _Level:
                              np.int32(n), *self._args(), np.int32(parity),
                              self.dtype.type(factor))
 
+    def try_offsets(self, offsets, targets=None, masked: bool = False) -> None:
+        """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
+        list of (dx, dy)), keeping it when its colours are at least as close (pm_offsets)."""
+        lst, n = self.targets if targets is None else targets
+        if self.chw_colour is None:
+            w = self.chw.get()
+            w[self.ncolour:] = 0
+            self.chw_colour = cla.to_device(self.q, w)
+        self._launch(self.k_offsets, n, self.img.data, self.d_use.data, np.int32(masked),
+                     self.d_valid.data, self.nnf[0].data, self.dist.data, lst.data, np.int32(n),
+                     *self._args(), self.chw_colour.data, offsets.data,
+                     np.int32(offsets.size // 2))
+
     def score(self) -> None:
         lst, n = self.targets
         self._launch(self.k_score, n, self.img.data, self.d_use.data, np.int32(0),
@@ -322,8 +350,9 @@ class _Level:
                      np.int32(self.nout), self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
         return sigma2
 
-    def onion_peel(self, rng, passes: int, seed: int, counter: list) -> None:
-        """Fill the hole shell by shell from its border, matching only known neighbours."""
+    def onion_peel(self, rng, passes: int, seed: int, counter: list, offsets=None) -> None:
+        """Fill the hole shell by shell from its border, matching only known neighbours;
+        ``offsets``: lattice lags each shell's pixels also try (try_offsets)."""
         self.random_nnf(rng)
         depth = ndimage.distance_transform_cdt(self.hole, "chessboard")
         filled = ~self.hole
@@ -332,6 +361,8 @@ class _Level:
             self.d_use.set(filled.astype(np.uint8).ravel())
             lst = self._list(layer)
             self.patchmatch(passes, lst, True, seed, counter)
+            if offsets is not None:
+                self.try_offsets(offsets, lst, masked=True)
             self._launch(self.k_copy, lst[1], self.img.data, self.nnf[0].data, self.dist.data,
                          lst[0].data, np.int32(lst[1]), np.int32(self.W), np.int32(self.H),
                          np.int32(self.nout))
@@ -340,6 +371,23 @@ class _Level:
 
     def image(self) -> np.ndarray:
         return self.img.get()
+
+
+def _periodic(colour: np.ndarray, hole: np.ndarray) -> bool:
+    """Whether the hole's near surroundings repeat (choose.periodicity, on the hole's box
+    grown by 24 px)."""
+    from .choose import MIN_PERIODICITY, periodicity
+
+    near = _box(hole, 24)
+    return periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY
+
+
+def _lattice_offsets(lv: _Level, colour: np.ndarray, hole: np.ndarray):
+    """The lags at which this level's known colours repeat, on the device; None if none."""
+    from .choose import lattice_offsets
+
+    lags = lattice_offsets(colour, hole)
+    return cla.to_device(lv.q, np.ascontiguousarray(lags, np.int32)) if lags.size else None
 
 
 def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
@@ -360,7 +408,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"],
           confidence=DEFAULTS["confidence"], guide=None, stitch=DEFAULTS["stitch"],
           structure=DEFAULTS["structure"], cohere=DEFAULTS["cohere"],
-          cohere_sweeps=DEFAULTS["cohere_sweeps"]):
+          cohere_sweeps=DEFAULTS["cohere_sweeps"], lattice=DEFAULTS["lattice"]):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (128 px of context around the hole's box),
@@ -375,7 +423,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     the default: 1, or 0 where the hole's surroundings are periodic),
     stitch (True: re-solve the last vote's fill from its sources' gradients, stitch.py),
     cohere (factor >= 1 of the coherence sweeps before the finest level's last vote; 1
-    turns them off) and cohere_sweeps (their number).
+    turns them off) and cohere_sweeps (their number),
+    lattice (True: on periodic surroundings, the targets also try the lattice's lags).
     ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
@@ -409,14 +458,11 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
                              f"{data.shape[2]}) planes known everywhere, the hole included")
         guides = guide[(slice(None),) + box]
+    periodic = _periodic(colour, hole) if structure is None or lattice else False
     if structure is None:
         # Automatic: the guide, unless the surroundings repeat (periodic texture, stripes),
         # where copies can be exact and a smooth fill would pull them away (choose.py).
-        from .choose import MIN_PERIODICITY, periodicity
-
-        near = _box(hole, 24)
-        sw = 0.0 if periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY \
-            else 1.0
+        sw = 0.0 if periodic else 1.0
     else:
         sw = float(structure)
     if sw > 0:
@@ -459,15 +505,19 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             planes.append(g)
             w += [1.0] * len(g)
         lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout,
-                    radius=int(p["search"]), confidence=float(p["confidence"]))
+                    radius=int(p["search"]), confidence=float(p["confidence"]), ncolour=nc)
         # A level started from the coarser field needs fewer iterations than the coarsest;
         # so does a single level (a thin hole), whose onion peel is already at full
         # resolution: on a 10% text mask 3 iterations instead of 6 cost 0.3 dB and a third
         # of the time.
         coarse_start = prev_nnf is None and len(pyramid) > 1
         its = int(p["iterations"] if coarse_start else p["fine_iterations"])
+        # the lattice's lags: in the onion peel (the phase the levels start from) and before
+        # the last vote (the sources the stitch reads); the levels between keep the phase
+        needed = lattice and periodic and (prev_nnf is None or level == 0)
+        offsets = _lattice_offsets(lv, c, h) if needed else None
         if prev_nnf is None:
-            lv.onion_peel(rng, int(p["onion_passes"]), seed, counter)
+            lv.onion_peel(rng, int(p["onion_passes"]), seed, counter, offsets)
             lv.set_nnf(lv.nnf_to_host(), rng)
         else:
             lv.set_nnf(_upsample_nnf(prev_nnf, h.shape), rng)
@@ -480,6 +530,9 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
             # same as at every iteration of the finest level, for less time.
             if last and p["cohere"] > 1:
                 lv.cohere(int(p["cohere_sweeps"]), float(p["cohere"]))
+            if offsets is not None and last:
+                # before the last vote, whose sources the stitch reads beyond their patches
+                lv.try_offsets(offsets)
             sigma2 = lv.vote(best_only=bool(sharpen) and last)
         prev_nnf = lv.nnf_to_host()
         bar.update()

@@ -94,3 +94,27 @@ def cohere(img, weights, nnf, dist, valid, targets, r, factor, sweeps):
                         best_e = d / factor ** offs.count(o)
                         nnf[py, px], dist[py, px] = (sx, sy), d
     return nnf, dist
+
+
+def try_offsets(img, weights, colour_weights, nnf, dist, targets, valid, lags, r, use=None):
+    """pm_offsets: each target tries its pixel plus each lag (dx, dy) with a legal source
+    and keeps it when its colour distance (colour_weights) is at most the best so far, the
+    current source's first (ties go to the later lag); a target that moved gets the full
+    distance (weights) of its new source. Returns the new (nnf, dist)."""
+    H, W = targets.shape
+    nnf, dist = nnf.copy(), dist.copy()
+    for py, px in zip(*np.nonzero(targets), strict=False):
+        best = tuple(nnf[py, px])
+        bd = patch_distance(img, colour_weights, px, py, *best, r, use)
+        moved = False
+        for dx, dy in lags:
+            sx, sy = px + dx, py + dy
+            if not (0 <= sx < W and 0 <= sy < H) or not valid[sy, sx]:
+                continue
+            d = patch_distance(img, colour_weights, px, py, sx, sy, r, use)
+            if d <= bd:
+                bd, best, moved = d, (sx, sy), True
+        if moved:
+            nnf[py, px] = best
+            dist[py, px] = patch_distance(img, weights, px, py, *best, r, use)
+    return nnf, dist
