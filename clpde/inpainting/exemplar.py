@@ -83,7 +83,6 @@ DEFAULTS = {
     # vote, so that the field takes the lattice's phase whatever the seed
     "lattice": True,
 }
-_LOCAL = 64  # fixed work-group size: PoCL recompiles for each new one
 KERNEL_FILES = ("patchmatch.cl",)
 
 
@@ -264,7 +263,7 @@ class _Level:
 
     def _launch(self, kernel, n, *args):
         if n:
-            kernel(self.q, (-(-n // _LOCAL) * _LOCAL,), (_LOCAL,), *args)
+            kernel(self.q, *self.rt.items(n), *args)  # a fixed work-group (Runtime.items)
 
     def set_nnf(self, nnf: np.ndarray, rng) -> None:
         """Upload a field for the targets, replacing sources that are not legal by random ones."""
