@@ -94,10 +94,9 @@ class BrickRegionTracker(RegionTracker):
                                              g.dtype, **defines)
         k["region_brick_targets"] = rt.kernel("region_bricks.cl", "region_brick_targets",
                                               g.dtype, **defines)
-        k["region_brick_reinit_step"] = rt.kernel("region_bricks.cl",
-                                                  "region_brick_reinit_step", g.dtype, **defines)
-        k["region_brick_reinit_heun"] = rt.kernel("region_bricks.cl",
-                                                  "region_brick_reinit_heun", g.dtype, **defines)
+        k["region_brick_reinit_stage"] = rt.kernel("region_bricks.cl",
+                                                   "region_brick_reinit_stage", g.dtype,
+                                                   **defines)
         k["region_brick_band_mask"] = rt.kernel("region_bricks.cl", "region_brick_band_mask",
                                                 g.dtype, **defines)
         k["region_brick_flags"] = rt.kernel("region_bricks.cl", "region_brick_flags", g.dtype,
@@ -309,10 +308,10 @@ class BrickRegionTracker(RegionTracker):
             self._launch("region_brick_targets", self.ls0.data, self._mask.data,
                          self.stage.data)
         for _ in range(its):
-            self._launch("region_brick_reinit_step", self.cur.data, self.ls0.data,
-                         self.stage.data, self.nxt.data, self._mask.data, g.scalar(REINIT_DT))
-            self._launch("region_brick_reinit_heun", self.cur.data, self.nxt.data,
-                         self.ls0.data, self.stage.data, self._mask.data, g.scalar(REINIT_DT))
+            for src, dst, second in ((self.cur, self.nxt, 0), (self.nxt, self.cur, 1)):
+                self._launch("region_brick_reinit_stage", src.data, self.ls0.data,
+                             self.stage.data, dst.data, self._mask.data, g.scalar(REINIT_DT),
+                             np.int32(second))
         self.rebuild()
         self.reinits += 1
         self._moved = 0.0

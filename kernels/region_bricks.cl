@@ -187,13 +187,14 @@ __kernel void region_brick_targets(__global const REAL* restrict u0,
     }
 }
 
-// Heun's first stage of the reinitialisation: out = u + dt L(u).
-__kernel void region_brick_reinit_step(__global const REAL* restrict u,
-                                       __global const REAL* restrict u0,
-                                       __global const REAL* restrict target,
-                                       __global REAL* restrict out,
-                                       __global const uchar* restrict mask, const REAL dt,
-                                       BRICK_ARGS)
+// A stage of the reinitialisation's Heun step: out = u + dt L(u) (the first), or averaged
+// in place, out <- (out + u + dt L(u)) / 2 (the second, u the first stage's result).
+__kernel void region_brick_reinit_stage(__global const REAL* restrict u,
+                                        __global const REAL* restrict u0,
+                                        __global const REAL* restrict target,
+                                        __global REAL* restrict out,
+                                        __global const uchar* restrict mask, const REAL dt,
+                                        const int second, BRICK_ARGS)
 {
     const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
     REAL t[NC * TILE_CELLS(2)];
@@ -204,31 +205,8 @@ __kernel void region_brick_reinit_step(__global const REAL* restrict u,
 #pragma unroll
             for (int c = 0; c < NC; ++c) {
                 const int ck = c * plane + k;
-                out[ck] = reinit_update_at(t, c * tp + i, sx, sxy, u0[ck], target[ck], dt);
-            }
-        }
-    }
-}
-
-// Its second stage, averaged in place: acc <- (acc + stage1 + dt L(stage1)) / 2.
-__kernel void region_brick_reinit_heun(__global REAL* restrict acc,
-                                       __global const REAL* restrict stage1,
-                                       __global const REAL* restrict u0,
-                                       __global const REAL* restrict target,
-                                       __global const uchar* restrict mask, const REAL dt,
-                                       BRICK_ARGS)
-{
-    const int sx = TILE_X(2), sxy = TILE_XY(2), tp = TILE_CELLS(2);
-    REAL t[NC * TILE_CELLS(2)];
-    FOR_EACH_BRICK(b, BIT_REINIT) {
-        load_tiles(t, stage1, nbr, b, 2, plane);
-        FOR_EACH_REINIT_ROW(b, y, z) ROW_CELLS(x, l, y, z) {
-            const int i = TILE_AT(2, x, y, z), k = b * BV + l;
-#pragma unroll
-            for (int c = 0; c < NC; ++c) {
-                const int ck = c * plane + k;
-                acc[ck] = (REAL)0.5 * (acc[ck] + reinit_update_at(t, c * tp + i, sx, sxy, u0[ck],
-                                                                  target[ck], dt));
+                const REAL next = reinit_update_at(t, c * tp + i, sx, sxy, u0[ck], target[ck], dt);
+                out[ck] = second ? (REAL)0.5 * (out[ck] + next) : next;
             }
         }
     }

@@ -126,15 +126,15 @@ def test_brick_reinit_and_extension_match_reference(runtime, rng):
     target = cla.empty_like(u_dev)
     tracker._launch("region_brick_targets", u0_dev.data, tracker._mask.data, target.data)
     stage1 = u_dev.copy()
-    tracker._launch("region_brick_reinit_step", u_dev.data, u0_dev.data, target.data,
-                    stage1.data, tracker._mask.data, g.scalar(dt))
+    tracker._launch("region_brick_reinit_stage", u_dev.data, u0_dev.data, target.data,
+                    stage1.data, tracker._mask.data, g.scalar(dt), np.int32(0))
     got = dense(stage1)
     want = ref.reinit_step(u, u0, band, dt, nc, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(got[:, band], want, rtol=1e-9, atol=1e-9)
     np.testing.assert_array_equal(got[:, other], u.reshape(nc, -1)[:, other])
     s1 = got.reshape(-1)
-    tracker._launch("region_brick_reinit_heun", u_dev.data, stage1.data, u0_dev.data,
-                    target.data, tracker._mask.data, g.scalar(dt))
+    tracker._launch("region_brick_reinit_stage", stage1.data, u0_dev.data, target.data,
+                    u_dev.data, tracker._mask.data, g.scalar(dt), np.int32(1))
     want = ref.reinit_heun(u, s1, u0, band, dt, nc, g.volume, g.sx, g.sxy)
     got = dense(u_dev).reshape(-1)
     idx = np.concatenate([band + c * g.volume for c in range(nc)])
