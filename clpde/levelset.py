@@ -210,8 +210,9 @@ class LevelSet:
         nbx, nby, *corners = self._brick_geometry()
         flags = cla.empty(self.runtime.queue, nbx * nby, np.uint8)
         self.band_kernel("levelset.cl", "mark_bricks")(
-            self.runtime.queue, (nbx * nby,), None, mask.data, flags.data, np.int32(nbx),
-            np.int32(nby), *(np.int32(c) for c in corners), np.int32(self.grid.sx))
+            self.runtime.queue, *self.runtime.items(nbx * nby), mask.data, flags.data,
+            np.int32(nbx), np.int32(nby), *(np.int32(c) for c in corners),
+            np.int32(self.grid.sx))
         ids = compact(self.runtime, flags)
         return BrickSet(ids.indices, ids.n, mask)
 

@@ -75,5 +75,14 @@ def test_surfaces_and_tracking(launches):
         yy, xx = np.mgrid[:n, :n]
         frames = [((xx - n / 2 - k) ** 2 + (yy - n / 2) ** 2 < (n / 5) ** 2).astype(np.float32)
                   for k in range(2)]
-        clpde.track(frames, frames[0] > 0.5, max_iterations=5)
+        for layout in ("lists", "bricks8x8"):
+            clpde.track(frames, frames[0] > 0.5, max_iterations=5, band_layout=layout)
+    for n in (32, 40):
+        h = 2.0 / n
+        ax = (np.arange(n) - n / 2 + 0.5) * h
+        z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
+        phi = np.sqrt(x**2 + y**2 + z**2) - 0.4
+        for storage in ("lists", "bricks"):
+            clpde.track_region(phi, z - 0.1, beta=0.5, t=0.01, spacing=h, saves=1,
+                               storage=storage)
     _check(launches)
