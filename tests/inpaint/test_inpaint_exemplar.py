@@ -2,6 +2,7 @@
 (tests/reference/patchmatch.py), and the method against what it must do exactly."""
 
 import numpy as np
+import pyopencl.array as cla
 import pytest
 
 from clpde.inpainting import exemplar
@@ -21,16 +22,23 @@ def _level(runtime, seed=0, patch=5, shape=(21, 26), nch=3, dtype=np.float32, no
     return lv, img, hole, weights
 
 
-@pytest.mark.parametrize("masked", [False, True])
-def test_patch_distance_matches_reference(runtime, masked):
-    lv, img, hole, w = _level(runtime)
+def _score(lv, hole, masked, seed):
+    """Score the level's field (pm_score), with a random 70% of the known pixels usable if
+    masked; the mask used (None: all)."""
     use = None
     if masked:
-        use = ~hole & (np.random.default_rng(1).random(hole.shape) < 0.7)
+        use = ~hole & (np.random.default_rng(seed).random(hole.shape) < 0.7)
         lv.d_use.set(use.astype(np.uint8).ravel())
     lv._launch(lv.k_score, lv.targets[1], lv.img.data, lv.d_use.data, np.int32(masked),
                lv.nnf[0].data, lv.dist.data, lv.targets[0].data, np.int32(lv.targets[1]),
                *lv._args())
+    return use
+
+
+@pytest.mark.parametrize("masked", [False, True])
+def test_patch_distance_matches_reference(runtime, masked):
+    lv, img, hole, w = _level(runtime)
+    use = _score(lv, hole, masked, seed=1)
     got = lv.dist.get().reshape(hole.shape)
     want = ref.distances(img, w, lv.nnf_to_host(), lv.targets_mask, lv.r, use)
     finite = np.isfinite(want)
@@ -113,16 +121,9 @@ def test_try_offsets_matches_reference(runtime, masked):
     lv.ncolour = 2
     img[:2] = np.tile(img[:2, :, :5], (1, 1, 6))[:, :, :img.shape[2]]  # colours repeat by 5
     lv.img.set(img.astype(np.float32))
-    use = None
-    if masked:
-        use = ~hole & (np.random.default_rng(2).random(hole.shape) < 0.7)
-        lv.d_use.set(use.astype(np.uint8).ravel())
-    lv._launch(lv.k_score, lv.targets[1], lv.img.data, lv.d_use.data, np.int32(masked),
-               lv.nnf[0].data, lv.dist.data, lv.targets[0].data, np.int32(lv.targets[1]),
-               *lv._args())
+    use = _score(lv, hole, masked, seed=2)
     nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
     lags = np.array([[5, 0], [-5, 0], [10, 0], [-10, 0], [3, 2], [0, -4]], np.int32)
-    import pyopencl.array as cla
     lv.try_offsets(cla.to_device(lv.q, lags), masked=masked)
     want_nnf, want_dist = ref.try_offsets(img.astype(np.float32), w, [w[0], w[1], 0], nnf,
                                           dist, lv.targets_mask, lv.valid, lags, lv.r, use)
