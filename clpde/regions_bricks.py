@@ -172,9 +172,9 @@ class BrickRegionTracker(RegionTracker):
         return 4 * self.cur.nbytes + self._mask.nbytes
 
     # ---- launches -----------------------------------------------------------------------------
-    def _geometry(self) -> tuple[int, int]:
-        """(work-items, bricks each) of a launch over every brick."""
-        n = self.bricks.nbricks
+    def _geometry(self, n: int | None = None) -> tuple[int, int]:
+        """(work-items, bricks each) of a launch over n bricks (default: every brick)."""
+        n = self.bricks.nbricks if n is None else n
         per = max(1, -(-n // (16 * self.runtime.device.max_compute_units)))
         return -(-n // per), per
 
@@ -190,8 +190,7 @@ class BrickRegionTracker(RegionTracker):
         g, q = self.grid, self.runtime.queue
         dims = (g.scalar(self.width), np.int32(g.nx), np.int32(g.ny), np.int32(g.nz),
                 np.int32(g.ghost))
-        coords_dev = cla.to_device(q, np.concatenate(
-            [np.zeros((1, 3), np.int32), self.bricks.coords, np.zeros((1, 3), np.int32)]))
+        coords_dev = self._coords_on_device()
         flags = cla.empty(q, max(self.bricks.nbricks, 1), np.int32)
         items, per = self._geometry()
         self._k["region_brick_flags"](q, (items,), (1,), self.cur.data, flags.data,
@@ -202,8 +201,7 @@ class BrickRegionTracker(RegionTracker):
             raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
                              "track for a shorter time")
         if self._upkeep(words):
-            coords_dev = cla.to_device(q, np.concatenate(
-                [np.zeros((1, 3), np.int32), self.bricks.coords, np.zeros((1, 3), np.int32)]))
+            coords_dev = self._coords_on_device()
         # the work buffers equal cur on every brick no kernel writes (see region_bricks.cl)
         cl.enqueue_copy(q, self.nxt.data, self.cur.data)
         self._mask = cla.zeros(q, self.bricks.plane, np.uint8)
@@ -222,6 +220,12 @@ class BrickRegionTracker(RegionTracker):
                 f"volume's border at t = {self.time:g}: pad phi (and the other volumes) with "
                 f"more cells"
             )
+
+    def _coords_on_device(self) -> cla.Array:
+        """The bricks' coordinates, with zero rows for the sentinel and the spare brick."""
+        zero = np.zeros((1, 3), np.int32)
+        return cla.to_device(self.runtime.queue,
+                             np.concatenate([zero, self.bricks.coords, zero]).astype(np.int32))
 
     def _upkeep(self, words: np.ndarray) -> bool:
         """Store exactly the bricks the flag words name; whether the set changed."""
@@ -257,8 +261,8 @@ class BrickRegionTracker(RegionTracker):
         q = self.runtime.queue
         out = cla.empty(q, self.nc * band.plane, self.grid.dtype)
         self.runtime.check_alloc(out.nbytes, "brick level sets")
-        per = max(1, -(-band.nbricks // (16 * self.runtime.device.max_compute_units)))
-        self._k["region_brick_remap"](q, (-(-band.nbricks // per),), (1,), self.cur.data,
+        items, per = self._geometry(band.nbricks)
+        self._k["region_brick_remap"](q, (items,), (1,), self.cur.data,
                                       out.data, cla.to_device(q, src).data,
                                       cla.to_device(q, dirs).data, self.grid.scalar(self.far),
                                       self.grid.scalar(self.far), np.int32(self.bricks.plane),
