@@ -229,8 +229,8 @@ class LevelSet:
         cells = self.brick[0] * self.brick[1]
         if self.group_per_brick:
             return n * cells, cells, 1
-        per = max(1, -(-n // (16 * self.runtime.device.max_compute_units)))
-        return -(-n // per), 1, per
+        items, per = self.runtime.brick_items(n)
+        return items, 1, per
 
     def band_parts(self, cells=None) -> int:
         """How many work-items a band launch over `cells` (default: the band) has: the

@@ -174,9 +174,7 @@ class BrickRegionTracker(RegionTracker):
     # ---- launches -----------------------------------------------------------------------------
     def _geometry(self, n: int | None = None) -> tuple[int, int]:
         """(work-items, bricks each) of a launch over n bricks (default: every brick)."""
-        n = self.bricks.nbricks if n is None else n
-        per = max(1, -(-n // (16 * self.runtime.device.max_compute_units)))
-        return -(-n // per), per
+        return self.runtime.brick_items(self.bricks.nbricks if n is None else n)
 
     def _launch(self, name: str, *args) -> None:
         items, per = self._geometry()

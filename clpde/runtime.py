@@ -539,6 +539,12 @@ class Runtime:
         """
         return (-(-n // ITEM_GROUP) * ITEM_GROUP, *rest), (ITEM_GROUP,) + (1,) * len(rest)
 
+    def brick_items(self, n: int) -> tuple[int, int]:
+        """(work-items, bricks each) for n bricks walked whole by one work-item each (CPUs):
+        16 work-items per compute unit, so the threads share the bricks evenly."""
+        per = max(1, -(-n // (16 * self.device.max_compute_units)))
+        return -(-n // per), per
+
     def list_launch(self, n: int):
         """(global size, local size, run) for a kernel over a compacted list of n items."""
         if self.is_cpu:

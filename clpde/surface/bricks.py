@@ -309,8 +309,8 @@ class BrickBand:
             return None
         rt = self.runtime
         if rt.is_cpu:
-            per = max(1, -(-n // (16 * rt.device.max_compute_units)))
-            gsize, lsize = (-(-n // per), channels), (1, 1)
+            items, per = rt.brick_items(n)
+            gsize, lsize = (items, channels), (1, 1)
         else:
             per = 1
             gsize, lsize = (n * self.cells_per_brick, channels), (self.cells_per_brick, 1)
