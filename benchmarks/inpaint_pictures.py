@@ -90,11 +90,12 @@ def thick(path):
     mask = thick_mask(image.shape[:2], 100)
     ys, xs = np.nonzero(mask)
     box = (max(0, ys.min() - 40), ys.max() + 40, max(0, xs.min() - 40), xs.max() + 40)
+    # the transport's multiresolution (docs/inpainting.md): its levels and coarse starts
     results = [("damaged", _damaged(image, mask)),
-               ("1 level", run_clpde(image, mask, levels=1)),
-               ("4 levels, upsampled start", run_clpde(image, mask, levels=4,
-                                                       coarse_start="upsampled")),
-               ("2 levels, corrected (auto)", run_clpde(image, mask))]
+               ("1 level", run_clpde(image, mask, method="transport", levels=1)),
+               ("4 levels, upsampled start", run_clpde(image, mask, method="transport",
+                                                       levels=4, coarse_start="upsampled")),
+               ("2 levels, corrected (automatic)", run_clpde(image, mask, method="transport"))]
     row = []
     for label, out in results:
         text = label if label == "damaged" else f"{label} {psnr_in_mask(out, image, mask):.1f} dB"
