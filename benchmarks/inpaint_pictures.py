@@ -72,8 +72,9 @@ def oblique(path):
         else:
             box = (40, 88, 24, 104)
         results = [("damaged", image, None), ("biharmonic", run_biharmonic(image, mask), True),
-                   ("central (thesis)", run_clpde(image, mask, stencil="central"), True),
-                   ("isotropic (default)", run_clpde(image, mask), True)]
+                   ("central (thesis)", run_clpde(image, mask, method="transport",
+                                                  stencil="central"), True),
+                   ("isotropic (default)", run_clpde(image, mask, method="transport"), True)]
         row = []
         for label, out, score in results:
             shown = _damaged(out, mask) if score is None else out
