@@ -55,7 +55,7 @@ def measure(n: int, steps: int, reps: int) -> dict:
     k_list = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0)
     k_band_copy = g.kernel("surface_bench.cl", "band_copy")
     runs = surf.step_runs
-    surf._storage, surf._brick = "bricks", (8, 8, 8)
+    surf.storage, surf._brick = "bricks", (8, 8, 8)
     bf = BrickFlow(surf, u)
     k_brick = bf.kernel("bricks.cl", "brick_heat_step", WEIGHTED=0)
     k_brick_copy = bf.kernel("bricks.cl", "brick_copy")

@@ -336,7 +336,7 @@ def storage_accuracy(spacings, t=0.1):
             u = surf.field(f)
             err = {}
             for storage in ("lists", "bricks"):
-                surf._storage = storage
+                surf.storage = storage
                 err[storage] = float(np.abs(surf.sample(surf.heat(u, t), pts) - exact(pts,
                                                                                       t)).max())
             prev = [r for r in rows if r["case"] == name and r["spacing"] == 2 * h]

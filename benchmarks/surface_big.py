@@ -57,7 +57,7 @@ def main():
     t_total = args.steps * dt
     results = {}
     for storage in args.storage.split(","):
-        surf._storage = storage
+        surf.storage = storage
         start = time.perf_counter()
         surf.heat(u, dt)  # set-up (the bricks' build) and one step
         setup = time.perf_counter() - start

@@ -35,11 +35,11 @@ def save(out: Path) -> None:
     res["heat"] = s.heat(u, 0.02)
     res["heat_weighted"] = s.heat(u, 0.02, weighted=True)
     res["heat_forward"] = s.heat(u, 0.02, alternate=False)
-    s._storage = "bricks"
+    s.storage = "bricks"
     res["heat_bricks"] = s.heat(u, 0.02)
     res["heat_bricks_weighted"] = s.heat(u, 0.02, weighted=True)
     res["heat_bricks_vector"] = s.heat(np.stack([u, -u]), 0.01)
-    s._storage = "lists"
+    s.storage = "lists"
     res["tv"] = s.tv(u, 0.01)
     res["tv_lam"] = s.denoise_tv(u, lam=2.0, t=0.01)
     res["tv_sigma"] = s.denoise_tv(u, sigma=0.3, t=0.02)

@@ -1,4 +1,7 @@
-// The narrow band in dense bricks (clpde/surface/bricks.py): kernels of the surface flows.
+// The narrow band in dense bricks (clpde/surface/bricks.py): kernels of the surface flows
+// (heat, TV, harmonic maps, diffusion along a field, Turk's reaction-diffusion, TV's dynamic
+// lambda) and the closest-point re-extension, with surface_flux.h's per-cell arithmetic, the
+// band lists' own.
 //
 // A brick holds BX x BY x BZ cells (BV in all), x fastest; a quantity is one buffer
 // (channels, nbricks + 2, BV), `plane` its channel stride: bricks 1..nbricks are stored,
@@ -12,6 +15,9 @@
 #include "common.cl"
 #include "surface.h"
 #include "bricks.h"
+// the flux functions read u from the brick's tile
+#define U_SPACE TILE
+#include "surface_flux.h"
 
 // The re-extension's source (the stepped values) has each brick lengthened along x, y and z
 // by an apron of AX cells, copies of the next bricks' first ones, so a tricubic stencil
@@ -32,56 +38,55 @@
 // band bits of a cell (bricks.py: NODE, REACH, EXT)
 #define BIT_NODE 1
 
-// ---- intrinsic heat flow (4.7) / (4.8), appendix E, on a tile ------------------------------
-// surface_heat.cl's heat_flux / heat_div with tile strides: ex, ey, ez are the signed one-sided
-// offsets in the tile (+-1, +-tx, +-txy).
-INLINE void tile_flux(TILE const REAL* u, __global const REAL* p, const int j, const int q,
-                      const int ex, const int ey, const int ez, const int usx, const int usxy,
-                      const int sx, const int sxy, REAL* w)
-{
-    // j: the cell in the u tile (one-sided offsets ex, ey, ez), q: in the psi tile (strides
-    // sx, sxy)
-    const REAL c = u[j];
-    const REAL vx = ONE_SIDED_SIGN(ex) * (u[j + ex] - c);
-    const REAL vy = ONE_SIDED_SIGN(ey) * (u[j + ey] - c);
-    const REAL vz = ONE_SIDED_SIGN(ez) * (u[j + ez] - c);
-    const REAL nx = (REAL)0.5 * (p[q + 1] - p[q - 1]);
-    const REAL ny = (REAL)0.5 * (p[q + sx] - p[q - sx]);
-    const REAL nz = (REAL)0.5 * (p[q + sxy] - p[q - sxy]);
-    const REAL nn = nx * nx + ny * ny + nz * nz + (REAL)1e-30;
-    const REAL s = (nx * vx + ny * vy + nz * vz) / nn;
-#if WEIGHTED
-    const REAL len = SQRT(nn);
-#else
-    const REAL len = 1;
+#ifndef FIDELITY
+#define FIDELITY 0
 #endif
-    w[0] = len * (vx - s * nx);
-    w[1] = len * (vy - s * ny);
-    w[2] = len * (vz - s * nz);
+
+// A tile of n REALs: in local memory on GPUs (declared at the kernel's scope), private on CPUs.
+#if GROUP_PER_BRICK
+#define TILE_ARRAY(name, n) __local REAL name[n]
+#else
+#define TILE_ARRAY(name, n) REAL name[n]
+#endif
+
+// The signed one-sided offsets (ex, ey, ez) in a tile of halo 1 for directions sx, sy, sz (+1
+// forward gradient, -1 backward), and psi's strides in its tiles of halo 2.
+#define TILE_STEPS(sx, sy, sz)                                                              \
+    const int ex = (sx), ey = (sy) * TILE_X(1), ez = (sz) * TILE_XY(1);                   \
+    const int psx = TILE_X(2), psxy = TILE_XY(2)
+
+// ---- the stepped values, in the apron layout ------------------------------------------------
+// A step writes v in the apron layout: a cell within AX of the brick's low faces is also
+// written into the aprons of the bricks before it (along x, y, z and their combinations: up
+// to 7), one writer per apron cell. before[k], k = 1..7 (bit 0 x, bit 1 y, bit 2 z): the
+// brick before this one in those directions (0: none stored); before[0] = b.
+INLINE void bricks_before(__global const int* restrict nbr, const int b, int before[8])
+{
+    __global const int* nb = nbr + 27 * b;
+    before[0] = b;
+    before[1] = nb[12];
+    before[2] = nb[10];
+    before[3] = nb[9];
+    before[4] = nb[4];
+    before[5] = nb[3];
+    before[6] = nb[1];
+    before[7] = nb[0];
 }
 
-// The divergence at cell i of the u tile (halo 1), q of the psi tile (halo 2): the fluxes
-// one cell back read psi two cells away along an axis, u only one (faces and edges).
-INLINE REAL tile_heat_div(TILE const REAL* u, __global const REAL* p, const int i, const int q,
-                          const int dx, const int dy, const int dz)
+// Store the stepped value of cell (x, y, z) of brick b (channel vc); on GPUs each work-item
+// copies its own value into the aprons it belongs to, on CPUs apron_copy does it after the
+// brick (in the cell loop these stores kept it from being vectorised, 3x slower).
+INLINE void store_stepped(__global REAL* restrict vc, const int b, const int before[8],
+                          const int x, const int y, const int z, const REAL val)
 {
-    const int ex = dx, ey = dy * TILE_X(1), ez = dz * TILE_XY(1);
-    const int px = dx, py = dy * TILE_X(2), pz = dz * TILE_XY(2);
-    const int usx = TILE_X(1), usxy = TILE_XY(1), sx = TILE_X(2), sxy = TILE_XY(2);
-    REAL wc[3], wx[3], wy[3], wz[3];
-    tile_flux(u, p, i, q, ex, ey, ez, usx, usxy, sx, sxy, wc);
-    tile_flux(u, p, i - ex, q - px, ex, ey, ez, usx, usxy, sx, sxy, wx);
-    tile_flux(u, p, i - ey, q - py, ex, ey, ez, usx, usxy, sx, sxy, wy);
-    tile_flux(u, p, i - ez, q - pz, ex, ey, ez, usx, usxy, sx, sxy, wz);
-    REAL div = ONE_SIDED_SIGN(ex) * (wc[0] - wx[0]) + ONE_SIDED_SIGN(ey) * (wc[1] - wy[1]) +
-               ONE_SIDED_SIGN(ez) * (wc[2] - wz[2]);
-#if WEIGHTED
-    const REAL nx = (REAL)0.5 * (p[q + 1] - p[q - 1]);
-    const REAL ny = (REAL)0.5 * (p[q + sx] - p[q - sx]);
-    const REAL nz = (REAL)0.5 * (p[q + sxy] - p[q - sxy]);
-    div *= RSQRT(nx * nx + ny * ny + nz * nz + (REAL)1e-30);
+    vc[b * BVA + (z * BYA + y) * BXA + x] = val;
+#if GROUP_PER_BRICK
+    for (int k = 1; k < 8; ++k) {
+        const int hx = k & 1, hy = (k >> 1) & 1, hz = k >> 2;
+        if ((hx && x >= AX) || (hy && y >= AX) || (hz && z >= AX) || !before[k]) continue;
+        vc[before[k] * BVA + ((z + hz * BZ) * BYA + y + hy * BY) * BXA + x + hx * BX] = val;
+    }
 #endif
-    return div;
 }
 
 // Copy the low (HX, HY, HZ) part of brick b of vc into the apron of the brick before it
@@ -97,57 +102,63 @@ INLINE REAL tile_heat_div(TILE const REAL* u, __global const REAL* p, const int 
                     to[(z * BYA + y) * BXA + x] = from[(z * BYA + y) * BXA + x];          \
     }
 
-// The fluxes of a brick, each computed once (CPU path). A cell's divergence takes the flux at
-// the cell and at the cells one step back along each axis (i - ex, i - ey, i - ez), which
-// are the fluxes of its neighbours: per brick the fluxes of the brick's cells and of the one
-// layer of cells behind its low (sx, sy, sz > 0) or high faces, (BX + 1) (BY + 1) (BZ + 1)
-// of them, instead of four per cell (tile_heat_div). The same tile_flux on the same cells,
-// so the same values; flux rows no updated row reads are skipped.
-#define FX (BX + 1)
-#define FXY (FX * (BY + 1))
-#define FLUX_CELLS (FXY * (BZ + 1))
+// The brick's low faces, edges and corner into the aprons (CPUs; on GPUs store_stepped did).
+INLINE void apron_copy(__global REAL* restrict vc, const int b, const int before[8])
+{
+#if !GROUP_PER_BRICK
+    APRON_COPY(1, 0, 0); APRON_COPY(0, 1, 0); APRON_COPY(1, 1, 0); APRON_COPY(0, 0, 1);
+    APRON_COPY(1, 0, 1); APRON_COPY(0, 1, 1); APRON_COPY(1, 1, 1);
+#endif
+}
 
-// Whether row (y, z) of the brick holds a node (false outside the brick).
+// Whether row (y, z) of brick b holds a node (false outside the brick): the steps skip the
+// other rows, whose values are never read (the re-extension reads nodes only).
 INLINE bool node_row(__global const uchar* restrict rows, const int b, const int y, const int z)
 {
     return y >= 0 && y < BY && z >= 0 && z < BZ && rows[b * BY * BZ + z * BY + y];
 }
 
+// ---- intrinsic heat flow (4.7) / (4.8), appendix E -----------------------------------------
+// The fluxes of a brick, each computed once (CPU path). A cell's divergence takes the flux at
+// the cell and at the cells one step back along each axis (i - ex, i - ey, i - ez), which
+// are the fluxes of its neighbours: per brick the fluxes of the brick's cells and of the one
+// layer of cells behind its low (sx, sy, sz > 0) or high faces, (BX + 1) (BY + 1) (BZ + 1)
+// of them, instead of four per cell (heat_div). The same heat_flux on the same cells, so the
+// same values; flux rows no updated row reads are skipped.
+#define FX (BX + 1)
+#define FXY (FX * (BY + 1))
+#define FLUX_CELLS (FXY * (BZ + 1))
+
 // The fluxes of the cells (x, y, z), x in [lo, lo + BX] (lo = -1 for a forward gradient,
 // sx > 0, else 0; the same along y and z), into f: three components, FLUX_CELLS apart.
 INLINE void brick_fluxes(REAL* f, TILE const REAL* u, __global const REAL* p,
-                         __global const uchar* restrict rows, const int b, const int dx,
-                         const int dy, const int dz)
+                         __global const uchar* restrict rows, const int b, const int sx,
+                         const int sy, const int sz)
 {
-    const int ex = dx, ey = dy * TILE_X(1), ez = dz * TILE_XY(1);
-    const int usx = TILE_X(1), usxy = TILE_XY(1), sx = TILE_X(2), sxy = TILE_XY(2);
-    const int lx = dx > 0 ? -1 : 0, ly = dy > 0 ? -1 : 0, lz = dz > 0 ? -1 : 0;
+    TILE_STEPS(sx, sy, sz);
+    const int lx = sx > 0 ? -1 : 0, ly = sy > 0 ? -1 : 0, lz = sz > 0 ? -1 : 0;
     for (int fz = 0; fz <= BZ; ++fz)
         for (int fy = 0; fy <= BY; ++fy) {
             const int y = fy + ly, z = fz + lz;
-            // rows y + dy, z + dz read this flux row one step back; row y, z itself too
-            if (!node_row(rows, b, y, z) && !node_row(rows, b, y + dy, z) &&
-                !node_row(rows, b, y, z + dz)) continue;
+            // rows y + sy, z + sz read this flux row one step back; row y, z itself too
+            if (!node_row(rows, b, y, z) && !node_row(rows, b, y + sy, z) &&
+                !node_row(rows, b, y, z + sz)) continue;
             for (int fx = 0; fx <= BX; ++fx) {
                 const int x = fx + lx;
-                REAL w[3];
-                tile_flux(u, p, TILE_AT(1, x, y, z), TILE_AT(2, x, y, z), ex, ey, ez, usx, usxy,
-                          sx, sxy, w);
+                const vec3r w = heat_flux(u, TILE_AT(1, x, y, z), ex, ey, ez, p,
+                                          TILE_AT(2, x, y, z), psx, psxy);
                 const int k = (fz * (BY + 1) + fy) * FX + fx;
-                f[k] = w[0];
-                f[FLUX_CELLS + k] = w[1];
-                f[2 * FLUX_CELLS + k] = w[2];
+                f[k] = w.x;
+                f[FLUX_CELLS + k] = w.y;
+                f[2 * FLUX_CELLS + k] = w.z;
             }
         }
 }
 
-// psi: the psi tiles (BrickBand.scatter with halo 2: per brick its cells and those within 2
-// of its faces, the tile layout). One explicit step v = u + r div(...) (r = dt / h^2) on every cell of the bricks holding a
-// NODE cell (the other cells' values are never read: re-extension reads nodes only). sx, sy,
-// sz: the one-sided directions (+1 forward gradient, -1 backward). v is in the apron
-// layout: a cell within AX of the brick's low faces is also written into the aprons of the
-// bricks before it (along x, y, z and their combinations: up to 7), one writer per apron
-// cell.
+// psi: the psi tiles (BrickBand.scatter_tiles with halo 2: per brick its cells and those
+// within 2 of its faces). One explicit step v = u + r div(...) (r = dt / h^2) on the node
+// rows of the bricks holding a NODE cell, one channel per get_global_id(1). sx, sy, sz: the
+// one-sided directions (+1 forward gradient, -1 backward).
 __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, const REAL r, const int sx,
                               const int sy, const int sz, __global const uchar* restrict rows,
@@ -155,69 +166,147 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 {
     const int chan = get_global_id(1) * plane;
     __global REAL* vc = v + get_global_id(1) * (nbricks + 2) * BVA;
-#if GROUP_PER_BRICK
-    __local REAL ut[TILE_CELLS(1)];
-#else
-    REAL ut[TILE_CELLS(1)];
+    TILE_ARRAY(ut, TILE_CELLS(1));
+#if !GROUP_PER_BRICK
     REAL f[3 * FLUX_CELLS];
     // the flux cell of brick cell (0, 0, 0), and the flux offsets one step back along x, y, z
     const int f0 = ((sz > 0) * (BY + 1) + (sy > 0)) * FX + (sx > 0);
     const int fex = sx, fey = sy * FX, fez = sz * FXY;
 #endif
+    TILE_STEPS(sx, sy, sz);
     FOR_EACH_BRICK(b, BIT_NODE) {
         load_tile(ut, u + chan, nbr, b, 1);
-        // psi is fixed: its tiles of halo 2 are stored, one after the other (psi_tiles)
         __global const REAL* pt = psi + b * TILE_CELLS(2);
-        // the bricks before this one: k = 1..7, bit 0 x, bit 1 y, bit 2 z (0: none stored)
-        __global const int* nb = nbr + 27 * b;
-        const int before[8] = {b, nb[12], nb[10], nb[9], nb[4], nb[3], nb[1], nb[0]};
+        int before[8];
+        bricks_before(nbr, b, before);
 #if GROUP_PER_BRICK
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             const int i = TILE_AT(1, x, y, z);
-            const REAL val = ut[i] + r * tile_heat_div(ut, pt, i, TILE_AT(2, x, y, z), sx, sy, sz);
+            store_stepped(vc, b, before, x, y, z,
+                          ut[i] + r * heat_div(ut, i, ex, ey, ez, pt, TILE_AT(2, x, y, z), psx,
+                                               psxy));
+        }
 #else
         brick_fluxes(f, ut, pt, rows, b, sx, sy, sz);
-        // rows along x without a node are skipped whole (their values are never read)
         for (int z = 0; z < BZ; ++z)
             for (int y = 0; y < BY; ++y) {
                 if (!rows[b * BY * BZ + z * BY + y]) continue;
                 for (int x = 0; x < BX; ++x) {
-            const int i = TILE_AT(1, x, y, z);
-            const int k = f0 + (z * (BY + 1) + y) * FX + x;
-            // tile_heat_div's sum, with the fluxes looked up
-            REAL div = ONE_SIDED_SIGN(sx) * (f[k] - f[k - fex]) +
-                       ONE_SIDED_SIGN(sy) * (f[FLUX_CELLS + k] - f[FLUX_CELLS + k - fey]) +
-                       ONE_SIDED_SIGN(sz) * (f[2 * FLUX_CELLS + k] - f[2 * FLUX_CELLS + k - fez]);
+                    const int i = TILE_AT(1, x, y, z);
+                    const int k = f0 + (z * (BY + 1) + y) * FX + x;
+                    // heat_div's sum, with the fluxes looked up
+                    REAL div = ONE_SIDED_SIGN(sx) * (f[k] - f[k - fex]) +
+                               ONE_SIDED_SIGN(sy) * (f[FLUX_CELLS + k] - f[FLUX_CELLS + k - fey]) +
+                               ONE_SIDED_SIGN(sz) * (f[2 * FLUX_CELLS + k] -
+                                                     f[2 * FLUX_CELLS + k - fez]);
 #if WEIGHTED
-            const int q = TILE_AT(2, x, y, z), psx = TILE_X(2), psxy = TILE_XY(2);
-            const REAL nx = (REAL)0.5 * (pt[q + 1] - pt[q - 1]);
-            const REAL ny = (REAL)0.5 * (pt[q + psx] - pt[q - psx]);
-            const REAL nz = (REAL)0.5 * (pt[q + psxy] - pt[q - psxy]);
-            div *= RSQRT(nx * nx + ny * ny + nz * nz + (REAL)1e-30);
+                    const vec3r n = psi_normal(pt, TILE_AT(2, x, y, z), psx, psxy);
+                    div *= RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);
 #endif
-            const REAL val = ut[i] + r * div;
-#endif
-            vc[b * BVA + (z * BYA + y) * BXA + x] = val;
-#if GROUP_PER_BRICK
-            // each work-item copies its own value into the aprons it belongs to
-            for (int k = 1; k < 8; ++k) {
-                const int hx = k & 1, hy = (k >> 1) & 1, hz = k >> 2;
-                if ((hx && x >= AX) || (hy && y >= AX) || (hz && z >= AX) || !before[k]) continue;
-                vc[before[k] * BVA + ((z + hz * BZ) * BYA + y + hy * BY) * BXA + x + hx * BX] = val;
-            }
-#endif
-#if GROUP_PER_BRICK
-        }
-#else
+                    store_stepped(vc, b, before, x, y, z, ut[i] + r * div);
                 }
             }
+        apron_copy(vc, b, before);
 #endif
-#if !GROUP_PER_BRICK
-        // then the brick's low faces, edges and corner go to the aprons (a separate pass:
-        // in the cell loop these stores kept it from being vectorised, 3x slower)
-        APRON_COPY(1, 0, 0); APRON_COPY(0, 1, 0); APRON_COPY(1, 1, 0); APRON_COPY(0, 0, 1);
-        APRON_COPY(1, 0, 1); APRON_COPY(0, 1, 1); APRON_COPY(1, 1, 1);
+    }
+}
+
+// ---- TV, harmonic maps, diffusion along a field (surface_flows.cl's flow_step) -------------
+// All NC channels per work-item (the flows couple them): u's tiles of halo 1, one per channel;
+// psi and dir (ALONG, 3 channels) in stored tiles of halo 2, dir's channel stride that of
+// the tiles; u0 (FIDELITY) in the plain brick layout. v as brick_heat_step writes it.
+__kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* restrict v,
+                              __global const REAL* restrict psi, __global const REAL* restrict dir,
+                              __global const REAL* restrict u0, const REAL r, const REAL dt,
+                              __global const REAL* restrict lambda, const REAL e2, const int sx,
+                              const int sy, const int sz, __global const uchar* restrict rows,
+                              BRICK_ARGS)
+{
+    TILE_ARRAY(ut, NC * TILE_CELLS(1));
+    TILE_STEPS(sx, sy, sz);
+    const int dplane = (nbricks + 2) * TILE_CELLS(2), vplane = (nbricks + 2) * BVA;
+    FOR_EACH_BRICK(b, BIT_NODE) {
+        for (int c = 0; c < NC; ++c) load_tile(ut + c * TILE_CELLS(1), u + c * plane, nbr, b, 1);
+        __global const REAL* pt = psi + b * TILE_CELLS(2);
+        __global const REAL* dirt = dir + b * TILE_CELLS(2);
+        int before[8];
+        bricks_before(nbr, b, before);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            if (!node_row(rows, b, y, z)) continue;
+            const int i = TILE_AT(1, x, y, z);
+            REAL val[NC];
+            flow_cell(ut, TILE_CELLS(1), i, ex, ey, ez, pt, dirt, dplane, TILE_AT(2, x, y, z),
+                      psx, psxy, e2, r, val);
+            #pragma unroll
+            for (int c = 0; c < NC; ++c) {
+#if FIDELITY
+                val[c] -= dt * lambda[0] * (ut[c * TILE_CELLS(1) + i] - u0[c * plane + b * BV + l]);
 #endif
+                store_stepped(v + c * vplane, b, before, x, y, z, val[c]);
+            }
+        }
+        for (int c = 0; c < NC; ++c) apron_copy(v + c * vplane, b, before);
+    }
+}
+
+// The per-cell terms of TV's dynamic lambda (C.2) at the NODE cells (cell_bits, plain brick
+// layout), into num, area and resid (plain brick layout; the other cells keep their zeros).
+__kernel void brick_lambda_terms(__global const REAL* restrict u, __global const REAL* restrict u0,
+                                 __global const REAL* restrict psi, const REAL inv_h,
+                                 const REAL eps_cells, const REAL e2, const int sx, const int sy,
+                                 const int sz, __global const uchar* restrict cell_bits,
+                                 __global REAL* restrict num, __global REAL* restrict area,
+                                 __global REAL* restrict resid, BRICK_ARGS)
+{
+    TILE_ARRAY(ut, TILE_CELLS(1));
+    TILE_ARRAY(u0t, TILE_CELLS(1));
+    TILE_STEPS(sx, sy, sz);
+    FOR_EACH_BRICK(b, BIT_NODE) {
+        load_tile(ut, u, nbr, b, 1);
+        load_tile(u0t, u0, nbr, b, 1);
+        __global const REAL* pt = psi + b * TILE_CELLS(2);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            const int k = b * BV + l;
+            if (!(cell_bits[k] & BIT_NODE)) continue;
+            const lambda_terms t = lambda_terms_cell(ut, u0t, TILE_AT(1, x, y, z), ex, ey, ez, pt,
+                                                     TILE_AT(2, x, y, z), psx, psxy, inv_h,
+                                                     eps_cells, e2);
+            num[k] = t.num;
+            area[k] = t.area;
+            resid[k] = t.resid;
+        }
+    }
+}
+
+// ---- Turk's reaction-diffusion (surface_heat.cl's turk_step) ---------------------------------
+// The two chemicals' tiles of halo 1; dir (ALONG) as brick_flow_step's, beta in the plain
+// brick layout.
+__kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* restrict v,
+                              __global const REAL* restrict psi, __global const REAL* restrict dir,
+                              __global const REAL* restrict beta, const REAL dt, const REAL da,
+                              const REAL db, const REAL s, const int sx, const int sy,
+                              const int sz, __global const uchar* restrict rows, BRICK_ARGS)
+{
+    TILE_ARRAY(ut, 2 * TILE_CELLS(1));
+    TILE_STEPS(sx, sy, sz);
+    const int dplane = (nbricks + 2) * TILE_CELLS(2), vplane = (nbricks + 2) * BVA;
+    FOR_EACH_BRICK(b, BIT_NODE) {
+        load_tile(ut, u, nbr, b, 1);
+        load_tile(ut + TILE_CELLS(1), u + plane, nbr, b, 1);
+        __global const REAL* pt = psi + b * TILE_CELLS(2);
+        __global const REAL* dirt = dir + b * TILE_CELLS(2);
+        int before[8];
+        bricks_before(nbr, b, before);
+        FOR_EACH_BRICK_CELL(l, x, y, z) {
+            if (!node_row(rows, b, y, z)) continue;
+            const REAL2 ab = turk_cell(ut, TILE_CELLS(1), TILE_AT(1, x, y, z), ex, ey, ez, pt, dirt,
+                                       dplane, TILE_AT(2, x, y, z), psx, psxy, beta[b * BV + l],
+                                       dt, da, db, s);
+            store_stepped(v, b, before, x, y, z, ab.x);
+            store_stepped(v + vplane, b, before, x, y, z, ab.y);
+        }
+        apron_copy(v, b, before);
+        apron_copy(v + vplane, b, before);
     }
 }
 
@@ -248,7 +337,20 @@ __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* 
         #pragma unroll
         for (int c = 0; c < NC; ++c) {
             __global const REAL* u = src + c * src_plane + b0;
-#if INTERP == 3
+#if LINE_FIELD
+            // line field: every node's vector turned to the side of floor(cp)'s node
+            const int ref = b0 + (NODES / 2 - 1) * (BXA * BYA + BXA + 1);
+            const NODE_WEIGHTS wx = node_weights(tx), wy = node_weights(ty), wz = node_weights(tz);
+            REAL acc = 0;
+            for (int a = 0; a < NODES; ++a)
+                for (int e = 0; e < NODES; ++e)
+                    for (int d = 0; d < NODES; ++d) {
+                        const int p = b0 + (a * BYA + e) * BXA + d;
+                        acc += line_sign(src, ref, p, src_plane) * (wz[a] * wy[e] * wx[d]) *
+                               u[p - b0];
+                    }
+            val[c] = acc;
+#elif INTERP == 3
             // 16 rows of 4 nodes at fixed strides in the node's brick and its apron, summed
             // as 4-vectors (as surface_extend.cl's extend_cp)
             const REAL4 wy = node_weights(ty), wz = node_weights(tz);

@@ -231,6 +231,14 @@ class BrickBand:
                    (-(-pz // bz), -(-py // by), -(-px // bx)), cla.to_device(q, nbr), None,
                    cla.zeros(q, n + 2, np.uint8), None, None)
 
+    @property
+    def cell_bits(self) -> cla.Array:
+        """mask_host on the device (per stored cell its band bits), uploaded when first asked
+        (TV's dynamic lambda sums over the nodes)."""
+        if getattr(self, "_cell_bits", None) is None:
+            self._cell_bits = cla.to_device(self.runtime.queue, self.mask_host)
+        return self._cell_bits
+
     def index_of(self, flat: np.ndarray, apron: int = 0) -> np.ndarray:
         """Brick-storage indices (int32) of cells given by flat padded indices, in the
         layout with bricks lengthened by `apron` (cells in bricks not stored land in the

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike
 
 from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
+from .bricks import APRON, EXT, REACH
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("bricks.cl", "surface_extend.cl", "surface_flows.cl", "surface_heat.cl",
@@ -114,11 +115,33 @@ def extend_defines(interp: int, nc: int, normalize: bool = False,
             "LINE_FIELD": int(line_field)}
 
 
+# Each flow's step kernel (file, name) in each band storage.
+STEP_KERNELS = {
+    "heat": {"lists": ("surface_heat.cl", "heat_step"),
+             "bricks": ("bricks.cl", "brick_heat_step")},
+    "flow": {"lists": ("surface_flows.cl", "flow_step"),
+             "bricks": ("bricks.cl", "brick_flow_step")},
+    "turk": {"lists": ("surface_heat.cl", "turk_step"),
+             "bricks": ("bricks.cl", "brick_turk_step")},
+}
+
+
+def make_flow(surf, u, normalize: bool = False, line_field: bool = False,
+              defines: dict | None = None):
+    """The device state of data u on `surf` in the surface's band storage (surf.storage):
+    a BandFlow on the band lists, a BrickFlow on the bricks. Both step with `step`, take
+    their fixed fields from `fixed` and give the result back the same way; `defines` are the
+    step kernels' (kernels/surface_flux.h)."""
+    cls = BrickFlow if surf.storage == "bricks" else BandFlow
+    return cls(surf, u, normalize=normalize, line_field=line_field, defines=defines)
+
+
 class BandFlow:
-    """Device state of data on a surface: `cur` (extended) and a scratch volume `tmp`."""
+    """Device state of data on a surface's band lists: `cur` (extended) and a scratch volume
+    `tmp`, dense volumes; a step runs over the node band's runs, cur -> tmp."""
 
     def __init__(self, surf, u, normalize: bool = False, extend: bool = True,
-                 line_field: bool = False):
+                 line_field: bool = False, defines: dict | None = None):
         self.surf = surf
         self.input = np.asarray(u)
         # band form (values at the band's cells only): no dense float64 copy on the way
@@ -132,6 +155,9 @@ class BandFlow:
         else:
             self.cur = g.upload(surf._as_channels(u))
         self.nc = self.cur.shape[0]
+        # the step kernels' defines, with the channel count
+        self.defines = {"NC": self.nc, **(defines or {})}
+        self.psi = surf.psi_dev
         self.normalize = normalize
         self.tmp = self.cur.copy()
         self._extend_kernel = g.kernel("surface_extend.cl", "extend_cp",
@@ -140,6 +166,31 @@ class BandFlow:
         self._stepped = False
         if extend:
             self.extend()
+
+    storage = "lists"
+
+    def kernel(self, filename: str, name: str, **defines):
+        """Kernel `name` of `filename` with the flow's defines."""
+        return self.surf.grid.kernel(filename, name, **{**self.defines, **defines})
+
+    def step_kernel(self, flow: str):
+        """The step kernel of `flow` (heat, flow, turk: STEP_KERNELS) in this storage."""
+        filename, name = STEP_KERNELS[flow][self.storage]
+        return self.kernel(filename, name)
+
+    def step(self, kernel, sides: int, *args, channels: int = 1) -> None:
+        """One step cur -> tmp over the node band's runs: kernel(cur, tmp, psi, *args, the
+        one-sided offsets of `sides`, the strides, the runs); then after_step."""
+        g = self.surf.grid
+        g.launch_runs(kernel, self.surf.step_runs, self.cur.data, self.tmp.data,
+                      self.psi.data, *args, *_offsets(g, sides), *g.strides(),
+                      channels=channels)
+        self.after_step()
+
+    def fixed(self, values: np.ndarray, halo: int = 0) -> cla.Array:
+        """A fixed field (channels, nz, ny, nx) on the device in this storage (a dense
+        volume; halo: what the bricks store around each brick)."""
+        return self.surf.grid.upload(values)
 
     def extend(self) -> None:
         """Re-extend cur along the normals over the whole band (through tmp; cur holds the
@@ -161,13 +212,27 @@ class BandFlow:
         self._extend(self.tmp, self.cur, s.reach_band, *s.reach_stencils)
         self._stepped = True
 
+    # ---- TV's dynamic lambda: per-cell terms of its surface integrals ----
+    @property
+    def terms_size(self) -> int:
+        """Entries of each array of lambda terms (one per node)."""
+        return self.surf.node_band.n
+
+    def lambda_terms(self, u0, terms, sides: int, eps: float) -> None:
+        """Enqueue the terms of (C.2) at every node (surface_flows.cl's tv_lambda_terms)."""
+        s = self.surf
+        g = s.grid
+        g.launch_list(self.kernel("surface_flows.cl", "tv_lambda_terms"),
+                      s.node_band, self.cur.data, u0.data, self.psi.data, *_lambda_scalars(s, eps),
+                      *_offsets(g, sides), *g.strides(), *(a.data for a in terms))
+
     def result(self) -> np.ndarray:
         if self._stepped:
             # tmp still holds the last step at every node: extend the whole band from it
             s = self.surf
             self._extend(self.tmp, self.cur, s.ext_band, s.cp_base, s.cp_frac)
             self._stepped = False
-        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        dtype = _result_dtype(self.input)
         if self.band_form:
             values = self.cur.get().reshape(self.nc, -1)[:, self.surf._band_cells_of()[1]]
             return (values[0] if self.input.ndim == 1 else values).astype(dtype)
@@ -179,11 +244,11 @@ class BandFlow:
 class BrickFlow:
     """BandFlow's state on the surface's bricks (bricks.py): `cur` (extended) and `tmp`,
     brick buffers; a flow steps cur -> tmp on the bricks holding nodes, then re-extends
-    tmp -> cur over the reach band (after_step), the whole band when it returns."""
+    tmp -> cur over the reach band (after_step), the whole band when it returns. The step
+    kernels and the re-extension come from one build of bricks.cl (`kernel`)."""
 
-    def __init__(self, surf, u, normalize: bool = False):
-        from .bricks import APRON, EXT
-
+    def __init__(self, surf, u, normalize: bool = False, line_field: bool = False,
+                 defines: dict | None = None):
         self.surf = surf
         self.input = np.asarray(u)
         self.band_form = surf._band_form_channels(self.input) is not None
@@ -195,21 +260,44 @@ class BrickFlow:
         else:
             self.padded = g.pad(surf._as_channels(u)).astype(g.dtype)
         self.nc = self.padded.shape[0]
+        self.defines = {**extend_defines(surf.interp, self.nc, normalize, line_field),
+                        **(defines or {})}
         self.cur = self.bricks.scatter(self.padded, g.dtype)
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
         self.src_plane = np.int32(self.tmp.size // self.nc)
-        self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp", INTERP=surf.interp,
-                                          NC=self.nc,
-                                          NORMALIZE=int(normalize))
+        self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp")
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
 
+    storage = "bricks"
+    step_kernel = BandFlow.step_kernel
+
     def kernel(self, filename: str, name: str, **defines):
-        """Kernel `name` of `filename` with the brick layout's defines (as Grid.kernel)."""
+        """Kernel `name` of `filename` with the brick layout's and the flow's defines."""
         s = self.surf
         return s.runtime.kernel(filename, name, s.grid.dtype, **self.bricks.defines(),
-                                GROUP_PER_BRICK=int(not s.runtime.is_cpu), **defines)
+                                GROUP_PER_BRICK=int(not s.runtime.is_cpu),
+                                **{**self.defines, **defines})
+
+    def step(self, kernel, sides: int, *args, channels: int = 1) -> None:
+        """One step cur -> tmp on the bricks holding nodes: kernel(cur, tmp, psi tiles, *args,
+        the one-sided directions of `sides`, the node rows, the brick tables); then
+        after_step."""
+        b = self.bricks
+        b.launch(kernel, self.cur.data, self.tmp.data, self.psi.data, *args, *_signs(sides),
+                 b.node_rows.data, channels=channels)
+        self.after_step()
+
+    def fixed(self, values: np.ndarray, halo: int = 0) -> cla.Array:
+        """A fixed field (channels, nz, ny, nx) on the bricks: the plain layout, or (halo > 0)
+        tiles with the cells within `halo` of each brick's faces, what a step reads around
+        a cell (psi's layout)."""
+        g = self.surf.grid
+        padded = g.pad(np.asarray(values, np.float64))
+        if halo:
+            return self.bricks.scatter_tiles(padded, g.dtype, halo)
+        return self.bricks.scatter(padded, g.dtype)
 
     def _extend(self, src, dst, which: int) -> None:
         n, target, base, frac = self.lists[which]
@@ -218,19 +306,27 @@ class BrickFlow:
                       self.src_plane, target.data)
 
     def after_step(self) -> None:
-        from .bricks import REACH
-
         self._extend(self.tmp, self.cur, REACH)
         self._stepped = True
 
-    def result(self) -> np.ndarray:
-        from .bricks import EXT
+    @property
+    def terms_size(self) -> int:
+        """Entries of each array of lambda terms (one per stored cell, zero off the nodes)."""
+        return self.bricks.plane
 
+    def lambda_terms(self, u0, terms, sides: int, eps: float) -> None:
+        """Enqueue the terms of (C.2) at every node (bricks.cl's brick_lambda_terms)."""
+        b = self.bricks
+        b.launch(self.kernel("bricks.cl", "brick_lambda_terms"), self.cur.data, u0.data,
+                 self.psi.data, *_lambda_scalars(self.surf, eps), *_signs(sides),
+                 b.cell_bits.data, *(a.data for a in terms))
+
+    def result(self) -> np.ndarray:
         if self._stepped:
             self._extend(self.tmp, self.cur, EXT)
             self._stepped = False
         g = self.surf.grid
-        dtype = self.input.dtype if np.issubdtype(self.input.dtype, np.floating) else np.float64
+        dtype = _result_dtype(self.input)
         if self.band_form:
             # the band's cells only: into a zero volume, read at the band
             gathered = self.bricks.gather(self.cur, np.zeros_like(self.padded), EXT)
@@ -239,6 +335,16 @@ class BrickFlow:
         out = g.interior(self.bricks.gather(self.cur, self.padded.copy(), EXT))
         out = out[0] if self.input.shape == self.surf.shape else out
         return out.astype(dtype)
+
+
+def _result_dtype(data: np.ndarray):
+    return data.dtype if np.issubdtype(data.dtype, np.floating) else np.float64
+
+
+def _lambda_scalars(surf, eps: float):
+    """inv_h, the smeared delta's half-width (cells) and e2 of the lambda terms' kernels."""
+    g = surf.grid
+    return g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2)
 
 
 def _signs(sides: int):
@@ -261,26 +367,11 @@ def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None,
     divergence throughout.
     """
     steps, dt = _check_time(t, dt, stability_limit(surf, "heat"), "heat flow")
-    g = surf.grid
-    r = g.scalar(dt / surf.spacing**2)
-    if getattr(surf, "_storage", "lists") == "bricks":
-        flow = BrickFlow(surf, u)
-        kernel = flow.kernel("bricks.cl", "brick_heat_step", WEIGHTED=int(bool(weighted)))
-        for n in progress_range(progress, steps, "surface heat", leave=False):
-            sides = _ALL_SIDES[n % 8] if alternate else 0
-            flow.bricks.launch(kernel, flow.cur.data, flow.tmp.data, flow.psi.data, r,
-                               *_signs(sides), flow.bricks.node_rows.data, channels=flow.nc)
-            flow.after_step()
-        return flow.result()
-    flow = BandFlow(surf, u)
-    kernel = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=int(bool(weighted)))
+    flow = make_flow(surf, u, defines={"WEIGHTED": int(bool(weighted))})
+    kernel = flow.step_kernel("heat")
+    r = surf.grid.scalar(dt / surf.spacing**2)
     for n in progress_range(progress, steps, "surface heat", leave=False):
-        sides = _ALL_SIDES[n % 8] if alternate else 0
-        g.launch_runs(
-            kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
-            *_offsets(g, sides), *g.strides(), channels=flow.nc,
-        )
-        flow.after_step()
+        flow.step(kernel, _ALL_SIDES[n % 8] if alternate else 0, r, channels=flow.nc)
     return flow.result()
 
 
@@ -293,17 +384,16 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     if sigma is not None and dt is None:
         limit *= 0.5  # room for the dynamic lambda to grow (capped on the device below)
     steps, dt = _check_time(t, dt, limit, flow_name)
-    flow = BandFlow(surf, u, normalize=harmonic, line_field=line_field)
+    defines = {"FLOW_P": p, "HARMONIC": int(harmonic),
+               "FIDELITY": int(fidelity is not None), "ALONG": int(direction is not None),
+               "WEIGHTED": int(bool(weighted)), "LINE_FIELD": int(bool(line_field))}
+    flow = make_flow(surf, u, normalize=harmonic, line_field=line_field, defines=defines)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
-    defines = {"NC": flow.nc, "FLOW_P": p, "HARMONIC": int(harmonic),
-               "FIDELITY": int(fidelity is not None),
-                   "ALONG": int(direction is not None), "WEIGHTED": int(bool(weighted)),
-                   "LINE_FIELD": int(bool(line_field))}
-    kernel = g.kernel("surface_flows.cl", "flow_step", **defines)
+    kernel = flow.step_kernel("flow")
     r = g.scalar(dt / h**p)
     e2 = g.scalar((h * eps) ** 2)
-    dir_dev = g.upload(direction) if direction is not None else surf.psi_dev
-    u0_dev = flow.cur.copy() if fidelity is not None else surf.psi_dev
+    dir_dev = flow.fixed(direction, halo=2) if direction is not None else flow.psi
+    u0_dev = flow.cur.copy() if fidelity is not None else flow.psi
     info = {"steps": steps, "dt": dt}
     lam_dev = cla.to_device(q, np.array([fidelity or 0.0], g.dtype))
     dynamic = None
@@ -311,68 +401,54 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         # lambda may grow to where dt is at the stability limit, no further
         lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
         dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
-                                 updates=-(-steps // lambda_every), correct=correct_lambda,
-                                 defines=defines)
+                                 updates=-(-steps // lambda_every), correct=correct_lambda)
     for n in progress_range(progress, steps, f"surface {flow_name}", leave=False):
         sides = _ALL_SIDES[n % 8] if alternate else 0
-        offsets = _offsets(g, sides)
         if dynamic is not None and n % lambda_every == 0:
-            dynamic.update(offsets, n // lambda_every)
-        g.launch_runs(
-            kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
-            dir_dev.data, u0_dev.data, r, g.scalar(dt), lam_dev.data, e2, *offsets,
-            *g.strides(),
-        )
-        flow.after_step()
+            dynamic.update(sides, n // lambda_every)
+        flow.step(kernel, sides, dir_dev.data, u0_dev.data, r, g.scalar(dt), lam_dev.data, e2)
     if dynamic is not None:
         info["lambda"] = dynamic.history()
-        info["residual_variance"] = _residual_variance(surf, flow.cur, u0_dev, dynamic.terms, eps,
-                                                       defines)
+        info["residual_variance"] = dynamic.residual_variance()
     return flow.result(), info
 
 
-def device_sum(grid, a, n: int, chunk: int = 2048, defines: dict | None = None) -> float:
-    """Sum of the first n entries of a device array: partial sums on the device. defines:
-    those of a flow's program of surface_flows.cl (chunk_sum reads none), to use its build."""
-    groups = max(1, -(-n // chunk))
-    partial = cla.empty(grid.runtime.queue, groups, grid.dtype)
-    grid.kernel("surface_flows.cl", "chunk_sum", **(defines or {}))(
-        grid.runtime.queue, *grid.runtime.items(groups), a.data, np.int32(n), np.int32(chunk),
-        partial.data)
-    return float(partial.get().astype(np.float64).sum())
-
-
 class _DynamicLambda:
-    """lambda of (C.2) kept on the device: each update enqueues the surface integrals, their
-    chunk sums and the new lambda (tv_lambda_update), with no read-back; the history of
-    lambda comes back once, at the end. Its kernels come from the flow's program of
-    surface_flows.cl (`defines`; they read none of them): no build of their own."""
+    """lambda of (C.2) kept on the device: each update enqueues the surface integrals' per-cell
+    terms (the flow's lambda_terms, in its storage), their chunk sums and the new lambda
+    (tv_lambda_update), with no read-back; the history of lambda comes back once, at the end.
+    Its kernels come with the flow's defines (they read none of them): on the lists, no
+    build of their own."""
 
     CHUNK = 2048
 
-    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates, correct=True,
-                 defines=None):
+    def __init__(self, surf, flow, u0_dev, lam_dev, eps, sigma, lam_max, updates, correct=True):
         g, q = surf.grid, surf.runtime.queue
-        self.defines = defines or {}
+        self.defines = flow.defines
         self.surf, self.flow, self.u0, self.lam, self.eps = surf, flow, u0_dev, lam_dev, eps
         self.sigma, self.lam_max, self.correct = sigma, lam_max, correct
-        n = surf.node_band.n
-        self.terms = [cla.empty(q, n, g.dtype) for _ in range(3)]
-        self.groups = max(1, -(-n // self.CHUNK))
+        self.n = flow.terms_size
+        # zeros: the bricks' terms are written at the nodes only
+        self.terms = [cla.zeros(q, self.n, g.dtype) for _ in range(3)]
+        self.groups = max(1, -(-self.n // self.CHUNK))
         self.partials = [cla.empty(q, self.groups, g.dtype) for _ in range(3)]
         self.slots = cla.zeros(q, max(updates, 1), g.dtype)
         self.capped = cla.zeros(q, 1, np.int32)
         self.state = cla.to_device(q, np.ones(1, g.dtype))  # the correction factor f
 
-    def update(self, offsets, slot: int) -> None:
+    def _sums(self, sides: int) -> None:
         s = self.surf
         g, q = s.grid, s.runtime.queue
-        _enqueue_lambda_terms(s, self.flow.cur, self.u0, self.terms, offsets, self.eps,
-                              self.defines)
-        for a, partial in zip(self.terms, self.partials, strict=False):
+        self.flow.lambda_terms(self.u0, self.terms, sides, self.eps)
+        for a, partial in zip(self.terms, self.partials, strict=True):
             g.kernel("surface_flows.cl", "chunk_sum", **self.defines)(
-                q, *s.runtime.items(self.groups), a.data, np.int32(s.node_band.n),
+                q, *s.runtime.items(self.groups), a.data, np.int32(self.n),
                 np.int32(self.CHUNK), partial.data)
+
+    def update(self, sides: int, slot: int) -> None:
+        s = self.surf
+        g, q = s.grid, s.runtime.queue
+        self._sums(sides)
         g.kernel("surface_flows.cl", "tv_lambda_update", **self.defines)(
             q, (1,), (1,), *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
@@ -389,29 +465,12 @@ class _DynamicLambda:
             )
         return [float(v) for v in self.slots.get()]
 
-
-def _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps, defines=None) -> None:
-    g = surf.grid
-    g.launch_list(
-        g.kernel("surface_flows.cl", "tv_lambda_terms", **(defines or {})), surf.node_band,
-        u_dev.data, u0_dev.data,
-                  surf.psi_dev.data,
-        g.scalar(1 / surf.spacing), g.scalar(1.5), g.scalar((surf.spacing * eps) ** 2),
-        *offsets, *g.strides(), *(a.data for a in terms),
-    )
-
-
-def _lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps, defines=None):
-    """The three surface integrals (num, area, residual) summed to host numbers."""
-    _enqueue_lambda_terms(surf, u_dev, u0_dev, terms, offsets, eps, defines)
-    return tuple(device_sum(surf.grid, a, surf.node_band.n, defines=defines) for a in terms)
-
-
-def _residual_variance(surf, u_dev, u0_dev, terms, eps, defines=None):
-    """Mean of (u - u0)^2 over the surface (smeared-delta quadrature)."""
-    _, area, resid = _lambda_terms(surf, u_dev, u0_dev, terms, _offsets(surf.grid, 0), eps,
-                                   defines)
-    return resid / area
+    def residual_variance(self) -> float:
+        """Mean of (u - u0)^2 over the surface (smeared-delta quadrature) for the flow's
+        current state (forward differences)."""
+        self._sums(0)
+        _, area, resid = (float(p.get().astype(np.float64).sum()) for p in self.partials)
+        return resid / area
 
 
 def tv(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *,
@@ -580,23 +639,21 @@ def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
     beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
     start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state,
                                                                                     np.float64)
-    flow = BandFlow(surf, start)
-    g = surf.grid
-    beta_dev = g.upload(beta[None])
-    dir_dev = surf.psi_dev
+    direction_field = None
     if direction is not None:
         d = np.asarray(direction, dtype=np.float64)
         if d.shape != (3,) + surf.shape:
             raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
         norm = np.sqrt((d**2).sum(axis=0))
-        dir_dev = g.upload(d / np.where(norm > 0, norm, 1))
-    kernel = g.kernel("surface_heat.cl", "turk_step", ALONG=int(direction is not None))
+        direction_field = d / np.where(norm > 0, norm, 1)
+    flow = make_flow(surf, start, defines={"ALONG": int(direction is not None)})
+    g = surf.grid
+    beta_dev = flow.fixed(beta[None])
+    dir_dev = flow.psi if direction_field is None else flow.fixed(direction_field, halo=2)
+    kernel = flow.step_kernel("turk")
     for n in progress_range(progress, int(iterations), "reaction-diffusion", leave=False):
-        offsets = _offsets(g, _ALL_SIDES[n % 8] if alternate else 0)
-        g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
-                      dir_dev.data, beta_dev.data, g.scalar(dt), g.scalar(p["da"]),
-                      g.scalar(p["db"]), g.scalar(p["s"]), *offsets, *g.strides())
-        flow.after_step()
+        flow.step(kernel, _ALL_SIDES[n % 8] if alternate else 0, dir_dev.data, beta_dev.data,
+                  g.scalar(dt), g.scalar(p["da"]), g.scalar(p["db"]), g.scalar(p["s"]))
     return flow.result()
 
 

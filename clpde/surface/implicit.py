@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 KERNEL_FILES = ("surface_band.cl", "surface_extend.cl", "surface_reinit.cl")
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
+STORAGES = ("lists", "bricks")
 # Farthest interpolation node from a point, in cells: the step band must contain them.
 _NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
 # Interpolation nodes per axis.
@@ -61,13 +62,15 @@ class ImplicitSurface:
     psi: (nz, ny, nx) volume, negative inside, in world units; spacing: grid spacing h;
     origin: world (x, y, z) of psi[0, 0, 0]. Points of cell (k, j, i) are
     origin + h * (i, j, k). band_width: the outer band's half-width in cells (default: the
-    narrowest the interpolation allows; `band=` is its deprecated old name).
+    narrowest the interpolation allows; `band=` is its deprecated old name). storage: the
+    flows' band storage, "lists" or "bricks" (see `storage`).
     """
 
     def __init__(self, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,
                  band_width: float | None = None, interpolation: str = "tricubic",
                  dtype: DTypeLike = np.float32, device: DeviceLike = None,
-                 band: float | None = None, _check_border: bool = True):
+                 band: float | None = None, storage: str = "lists",
+                 _check_border: bool = True):
         psi = np.asarray(psi)
         if psi.ndim != 3:
             raise InputError(f"psi must be a 3D (nz, ny, nx) volume, got shape {psi.shape}")
@@ -100,17 +103,26 @@ class ImplicitSurface:
         self._check_border = _check_border
         # psi, psi in cells and the band masks at the least; the bands' lists come on top
         check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
-        # the band storage of heat (the flow that has both): "lists" (band lists over the dense
-        # grid) or "bricks" (bricks.py); lists stay the default while bricks do not measure
-        # faster where surfaces are mostly run (benchmarks/brick_roofline.py: on PoCL, 2
-        # cores, 8x8x8 bricks took 0.81-0.96x the lists' time per step from 217^3 to 512^3,
-        # 1.16-1.81x at 64^3 and 128^3, and their host set-up is 4x the lists' at 512^3;
-        # docs/surfaces.md)
-        self._storage = "lists"
+        self.storage = storage
         self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
                            dtype=np.dtype(dtype))
         self._set_psi(psi.astype(np.float64, copy=True))
+
+    @property
+    def storage(self) -> str:
+        """Where the flows keep their data on the device: "lists" (the default), dense volumes
+        stepped over band lists, or "bricks", only the band's 8^3 bricks (bricks.py). Both run
+        the same scheme (kernels/surface_flux.h) and agree to rounding; bricks hold 3-6x less
+        memory and measure faster from about 200^3 up, lists below (docs/surfaces.md)."""
+        return self._storage
+
+    @storage.setter
+    def storage(self, value: str) -> None:
+        if value not in STORAGES:
+            raise InputError(f"storage must be one of {', '.join(map(repr, STORAGES))}, not "
+                             f"{value!r}")
+        self._storage = value
 
     def _set_psi(self, psi: np.ndarray) -> None:
         """(Re)build the device copy of psi, the two bands and the closest points."""
@@ -448,12 +460,13 @@ class ImplicitSurface:
         """Extend data off the surface, constant along the normals: by closest-point
         interpolation (one pass), or by the upwind PDE of section 4.2,
         u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
-        from .flows import BandFlow, extend_defines
+        from .flows import BandFlow, extend_defines, make_flow
 
         if method not in ("closest-point", "pde"):
             raise InputError(f"method must be 'closest-point' or 'pde', not {method!r}")
         if method == "closest-point":
-            return BandFlow(self, u).result()
+            return make_flow(self, u).result()
+        # the PDE runs on the band lists in either storage (a one-off, not a flow's step)
         flow = BandFlow(self, u, extend=False)
         g = self.grid
         r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1

@@ -72,7 +72,7 @@ def test_surface_heat_on_bricks(runtime, gpu_like):
     against a work-group per brick sharing a local tile (GPUs)."""
     def run(device):
         s = ImplicitSurface.sphere(1.0, 0.2, device=device)
-        s._storage = "bricks"
+        s.storage = "bricks"
         u = s.field(lambda x, y, z: x * y + z)
         return s.heat(u, 0.02), s.heat(u, 0.02, weighted=True)
 

@@ -15,6 +15,8 @@ KERNEL_DIR = ROOT / "kernels"
 # kernel("file.cl", "name" ...), new_kernel(...), program("file.cl" ...); and any lookup that
 # names no file first (a kernel name alone, or a variable), which the one signature forbids
 WITH_FILE = re.compile(r"""kernel\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']""")
+# a table's ("file.cl", "name") pairs, looked up through a variable (flows.STEP_KERNELS)
+PAIR = re.compile(r"""\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']\s*\)""")
 FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["'](\w+\.cl)["']""")
 NOT_LITERAL = re.compile(r"""\.(?:new_)?kernel\("""
                          r"""(?!\s*["']\w+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
@@ -44,7 +46,7 @@ def test_every_named_kernel_exists_in_its_file():
     missing = []
     checked = 0
     for path, text in _host_sources():
-        for filename, name in WITH_FILE.findall(text):
+        for filename, name in WITH_FILE.findall(text) + PAIR.findall(text):
             checked += 1
             if not (KERNEL_DIR / filename).is_file():
                 missing.append(f"{path.name}: kernel file {filename} does not exist")
@@ -74,7 +76,7 @@ def _declared_files(text: str):
 def test_each_module_declares_the_kernel_files_it_uses():
     wrong = []
     for path, text in _host_sources():
-        used = set(FILE_NAMED.findall(text))
+        used = set(FILE_NAMED.findall(text)) | {f for f, _ in PAIR.findall(text)}
         if not used:
             continue
         declared = _declared_files(text)

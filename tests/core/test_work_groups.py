@@ -68,9 +68,13 @@ def test_planar_and_inpainting(launches, rng):
 
 def test_surfaces_and_tracking(launches):
     for spacing in (0.2, 0.17):
-        surf = ImplicitSurface.sphere(spacing=spacing)
-        x, y, z = surf.coordinates()
-        surf.heat(x + 0 * y + 0 * z, 0.01)
+        for storage in ("lists", "bricks"):
+            surf = ImplicitSurface.sphere(spacing=spacing, storage=storage)
+            x, y, z = surf.coordinates()
+            u = np.broadcast_to(x + 0 * y + 0 * z, surf.shape)
+            surf.heat(u, 0.01)
+            surf.denoise_tv(u, sigma=0.1, t=0.002)
+            surf.reaction_diffusion(2)
     for n in (40, 52):
         yy, xx = np.mgrid[:n, :n]
         frames = [((xx - n / 2 - k) ** 2 + (yy - n / 2) ** 2 < (n / 5) ** 2).astype(np.float32)

@@ -45,7 +45,7 @@ def test_band_values_and_from_band_convert_both_ways(sphere, rng):
 @pytest.mark.parametrize("storage", ["lists", "bricks"])
 def test_flows_in_band_form_give_the_dense_results_at_the_band_bitwise(sphere, rng, storage):
     s = sphere
-    s._storage = storage
+    s.storage = storage
     try:
         u = rng.normal(size=s.shape)
         b = s.band_values(u)
@@ -53,7 +53,7 @@ def test_flows_in_band_form_give_the_dense_results_at_the_band_bitwise(sphere, r
         v = np.stack([u, -2 * u])
         assert np.array_equal(s.heat(s.band_values(v), 0.01), s.band_values(s.heat(v, 0.01)))
     finally:
-        s._storage = "lists"
+        s.storage = "lists"
     assert np.array_equal(s.denoise_tv(b, sigma=0.3, t=0.02),
                           s.band_values(s.denoise_tv(u, sigma=0.3, t=0.02)))
     assert np.array_equal(s.extend(b), s.band_values(s.extend(u)))

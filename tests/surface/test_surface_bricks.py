@@ -95,6 +95,7 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     psi_dev = bb.scatter_tiles(psi[None], np.float32, 2)
     dst = bb.scatter(np.zeros_like(u), np.float32, APRON)
     flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow.defines = {}
     flow.surf, flow.bricks = s, bb
     kernel = flow.kernel("bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
     bb.launch(kernel, src.data, dst.data, psi_dev.data, g.scalar(0.1), *flows._signs(sides),
@@ -140,6 +141,7 @@ def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, in
     src = bb.scatter(u, np.float32, APRON)
     dst = bb.scatter(np.zeros_like(u), np.float32)
     flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow.defines = {}
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)
     flow._extend_kernel = flow.kernel("bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc,
@@ -163,9 +165,9 @@ def test_heat_on_bricks_is_heat_on_lists(runtime, gpu_like, brick):
         u = np.broadcast_to(np.sin(3 * x) * y + z, s.shape)
         v = np.stack(np.broadcast_arrays(x, y * z, np.cos(z)))
         for data, options in ((u, {}), (v, {"alternate": False}), (u, {"weighted": True})):
-            s._storage = "bricks"
+            s.storage = "bricks"
             got = s.heat(data, 0.03, **options)
-            s._storage = "lists"
+            s.storage = "lists"
             expect = s.heat(data, 0.03, **options)
             np.testing.assert_allclose(got, expect, atol=2e-6)
             assert got.shape == data.shape
@@ -179,7 +181,7 @@ def test_heat_on_bricks_keeps_the_accuracy():
         s = ImplicitSurface.sphere(1.0, h)
         u = s.field(lambda x, y, z: x * y)
         for storage in ("bricks", "lists"):
-            s._storage = storage
+            s.storage = storage
             errors[storage, h] = np.abs(s.sample(s.heat(u, 0.1), pts) - xy_exact(pts, 0.1)).max()
     for h in (0.1, 0.05):
         assert errors["bricks", h] <= 1.05 * errors["lists", h], errors
