@@ -215,6 +215,39 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 // All NC channels per work-item (the flows couple them): u's tiles of halo 1, one per channel;
 // psi and dir (ALONG, 3 channels) in stored tiles of halo 2, dir's channel stride that of
 // the tiles; u0 (FIDELITY) in the plain brick layout. v as brick_heat_step writes it.
+// On CPUs each flux is computed once per brick, as brick_heat_step does (flow_fluxes), but
+// for line fields, whose fluxes depend on the updated cell (their signs turn to its vector).
+#define FLOW_CACHE (!GROUP_PER_BRICK && !LINE_FIELD)
+
+#if FLOW_CACHE
+// The fluxes of the flux cells (brick_fluxes' cells) into f ((channel, component) blocks of
+// FLUX_CELLS) and |P v|^2 there into g2.
+INLINE void flow_fluxes(REAL* f, REAL* g2, TILE const REAL* u, __global const REAL* p,
+                        __global const REAL* dir, const int dplane,
+                        __global const uchar* restrict rows, const int b, const int sx,
+                        const int sy, const int sz, const REAL e2)
+{
+    TILE_STEPS(sx, sy, sz);
+    const int lx = sx > 0 ? -1 : 0, ly = sy > 0 ? -1 : 0, lz = sz > 0 ? -1 : 0;
+    for (int fz = 0; fz <= BZ; ++fz)
+        for (int fy = 0; fy <= BY; ++fy) {
+            const int y = fy + ly, z = fz + lz;
+            if (!node_row(rows, b, y, z) && !node_row(rows, b, y + sy, z) &&
+                !node_row(rows, b, y, z + sz)) continue;
+            for (int fx = 0; fx <= BX; ++fx) {
+                const int x = fx + lx, j = TILE_AT(1, x, y, z);
+                const int k = (fz * (BY + 1) + fy) * FX + fx;
+                REAL w[NC][3];
+                g2[k] = flow_flux(u, TILE_CELLS(1), j, ex, ey, ez, p, dir, dplane,
+                                  TILE_AT(2, x, y, z), psx, psxy, e2, j, w);
+                #pragma unroll
+                for (int c = 0; c < NC; ++c)
+                    for (int a = 0; a < 3; ++a) f[(3 * c + a) * FLUX_CELLS + k] = w[c][a];
+            }
+        }
+}
+#endif
+
 __kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, __global const REAL* restrict dir,
                               __global const REAL* restrict u0, const REAL r, const REAL dt,
@@ -225,18 +258,48 @@ __kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* re
     TILE_ARRAY(ut, NC * TILE_CELLS(1));
     TILE_STEPS(sx, sy, sz);
     const int dplane = (nbricks + 2) * TILE_CELLS(2), vplane = (nbricks + 2) * BVA;
+#if FLOW_CACHE
+    REAL f[3 * NC * FLUX_CELLS], g2[FLUX_CELLS];
+    const int f0 = ((sz > 0) * (BY + 1) + (sy > 0)) * FX + (sx > 0);
+    const int fe[3] = {sx, sy * FX, sz * FXY};
+#endif
     FOR_EACH_BRICK(b, BIT_NODE) {
         for (int c = 0; c < NC; ++c) load_tile(ut + c * TILE_CELLS(1), u + c * plane, nbr, b, 1);
         __global const REAL* pt = psi + b * TILE_CELLS(2);
         __global const REAL* dirt = dir + b * TILE_CELLS(2);
         int before[8];
         bricks_before(nbr, b, before);
+#if FLOW_CACHE
+        flow_fluxes(f, g2, ut, pt, dirt, dplane, rows, b, sx, sy, sz, e2);
+#endif
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             if (!node_row(rows, b, y, z)) continue;
             const int i = TILE_AT(1, x, y, z);
             REAL val[NC];
+#if FLOW_CACHE
+            // flow_cell with the fluxes looked up
+            const int k = f0 + (z * (BY + 1) + y) * FX + x;
+#if WEIGHTED
+            const vec3r n = psi_normal(pt, TILE_AT(2, x, y, z), psx, psxy);
+            const REAL inv_len = RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);
+#else
+            const REAL inv_len = 1;
+#endif
+            #pragma unroll
+            for (int c = 0; c < NC; ++c) {
+                REAL div = 0;
+                for (int a = 0; a < 3; ++a) {
+                    const REAL* fa = f + (3 * c + a) * FLUX_CELLS;
+                    div += (a == 0 ? ONE_SIDED_SIGN(sx) : a == 1 ? ONE_SIDED_SIGN(sy)
+                                                                 : ONE_SIDED_SIGN(sz)) *
+                           (fa[k] - fa[k - fe[a]]);
+                }
+                val[c] = flow_update(ut[c * TILE_CELLS(1) + i], div, inv_len, g2[k], r);
+            }
+#else
             flow_cell(ut, TILE_CELLS(1), i, ex, ey, ez, pt, dirt, dplane, TILE_AT(2, x, y, z),
                       psx, psxy, e2, r, val);
+#endif
             #pragma unroll
             for (int c = 0; c < NC; ++c) {
 #if FIDELITY

@@ -203,6 +203,20 @@ INLINE REAL flow_flux(U_SPACE const REAL* restrict u, const int uplane, const in
     return g2;
 }
 
+// A channel's stepped value from its flux divergence `div`, the cell's 1 / |N| (1 unless
+// WEIGHTED) and |P v|^2 at the cell (g2, the harmonic maps' term).
+INLINE REAL flow_update(const REAL uc, const REAL div, const REAL inv_len, const REAL g2,
+                        const REAL r)
+{
+    REAL rate = div * inv_len;
+#if HARMONIC && FLOW_P == 2
+    rate += uc * g2;
+#elif HARMONIC
+    rate += uc * SQRT(g2);
+#endif
+    return uc + r * rate;
+}
+
 // The stepped values of every channel at cell i, fidelity not included: out[c] = u_c + r rate_c.
 INLINE void flow_cell(U_SPACE const REAL* restrict u, const int uplane, const int i, const int ex,
                       const int ey, const int ez, __global const REAL* restrict psi,
@@ -227,13 +241,7 @@ INLINE void flow_cell(U_SPACE const REAL* restrict u, const int uplane, const in
         const REAL div = ONE_SIDED_SIGN(ex) * (wc[c][0] - wx[c][0]) +
                          ONE_SIDED_SIGN(ey) * (wc[c][1] - wy[c][1]) +
                          ONE_SIDED_SIGN(ez) * (wc[c][2] - wz[c][2]);
-        REAL rate = div * inv_len;
-#if HARMONIC && FLOW_P == 2
-        rate += uc * g2;
-#elif HARMONIC
-        rate += uc * SQRT(g2);
-#endif
-        out[c] = uc + r * rate;
+        out[c] = flow_update(uc, div, inv_len, g2, r);
     }
 }
 

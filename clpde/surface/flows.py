@@ -525,14 +525,15 @@ def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
     if p not in (1, 2):
         raise InputError(f"p must be 1 or 2, not {p!r}")
     data = np.asarray(u, dtype=np.float64)
-    if data.ndim != 4:
-        raise InputError("harmonic maps need vector data (channels, nz, ny, nx), got shape "
-                         f"{data.shape}")
-    band = np.abs(surf.psi) < surf.outer * surf.spacing
+    band_form = data.ndim == 2 and surf._band_form_channels(data) is not None
+    if data.ndim != 4 and not band_form:
+        raise InputError("harmonic maps need vector data (channels, nz, ny, nx), or its band "
+                         f"form (channels, {surf.ext_band.n}), got shape {data.shape}")
     norm = np.sqrt((data**2).sum(axis=0))
-    if np.any(norm[band] == 0):
+    norm = norm if band_form else norm[np.abs(surf.psi) < surf.outer * surf.spacing]
+    if np.any(norm == 0):
         raise InputError("u has zero vectors in the band; harmonic maps need unit vectors")
-    if np.abs(norm[band] - 1).max() > 1e-3:
+    if np.abs(norm - 1).max() > 1e-3:
         warnings.warn("u is not made of unit vectors; normalising it", stacklevel=2)
     return _run(surf, u, t, dt, f"harmonic{p}", p=p, eps=eps, harmonic=True,
                 alternate=alternate, progress=progress, line_field=line_field)[0]
