@@ -118,43 +118,61 @@ INLINE bool node_row(__global const uchar* restrict rows, const int b, const int
     return y >= 0 && y < BY && z >= 0 && z < BZ && rows[b * BY * BZ + z * BY + y];
 }
 
-// ---- intrinsic heat flow (4.7) / (4.8), appendix E -----------------------------------------
-// The fluxes of a brick, each computed once (CPU path). A cell's divergence takes the flux at
-// the cell and at the cells one step back along each axis (i - ex, i - ey, i - ez), which
-// are the fluxes of its neighbours: per brick the fluxes of the brick's cells and of the one
-// layer of cells behind its low (sx, sy, sz > 0) or high faces, (BX + 1) (BY + 1) (BZ + 1)
-// of them, instead of four per cell (heat_div). The same heat_flux on the same cells, so the
-// same values; flux rows no updated row reads are skipped.
+// ---- flux tables (CPUs) ------------------------------------------------------------------
+// A cell's divergence takes the flux at the cell and at the cells one step back along each
+// axis (i - ex, i - ey, i - ez), which are the fluxes of its neighbours: on CPUs a step
+// computes the fluxes of a brick's cells and of the one layer of cells behind its low
+// (sx, sy, sz > 0) or high faces, (BX + 1) (BY + 1) (BZ + 1) of them, once each into a table,
+// instead of four per cell; the same functions on the same cells, so the same values. Flux
+// rows no node row reads are skipped.
 #define FX (BX + 1)
 #define FXY (FX * (BY + 1))
 #define FLUX_CELLS (FXY * (BZ + 1))
 
-// The fluxes of the cells (x, y, z), x in [lo, lo + BX] (lo = -1 for a forward gradient,
-// sx > 0, else 0; the same along y and z), into f: three components, FLUX_CELLS apart.
-INLINE void brick_fluxes(REAL* f, TILE const REAL* u, __global const REAL* p,
-                         __global const uchar* restrict rows, const int b, const int sx,
-                         const int sy, const int sz)
+// The flux cells  whose fluxes a node row reads, as loops setting (x, y, z),
+// the cell, and k, its place among the flux cells.
+#define FOR_EACH_FLUX_CELL(x, y, z, k)                                                    \
+    for (int fz = 0; fz <= BZ; ++fz)                                                      \
+        for (int fy = 0, y = fy - (sy > 0), z = fz - (sz > 0); fy <= BY; ++fy, ++y)       \
+            if (node_row(rows, b, y, z) || node_row(rows, b, y + sy, z) ||                \
+                node_row(rows, b, y, z + sz))                                             \
+                for (int fx = 0, x = -(sx > 0), k = (fz * (BY + 1) + fy) * FX; fx <= BX;   \
+                     ++fx, ++x, ++k)
+
+// The node cells of brick b (CPUs: rows without a node skipped whole; x innermost), with
+// l their place in the brick, i in u's tile, q in psi's, k among the flux cells.
+#define FOR_EACH_NODE_ROW_CELL(l, i, q, k)                                                \
+    for (int z = 0; z < BZ; ++z)                                                          \
+        for (int y = 0; y < BY; ++y)                                                      \
+            if (rows[b * BY * BZ + z * BY + y])                                           \
+                for (int x = 0, l = (z * BY + y) * BX, i = TILE_AT(1, 0, y, z),           \
+                     q = TILE_AT(2, 0, y, z), k = f0 + (z * (BY + 1) + y) * FX; x < BX;   \
+                     ++x, ++l, ++i, ++q, ++k)
+
+// A flux table's divergence at flux cell k (channel block fc: x, y, z components FLUX_CELLS
+// apart; fe: the steps one flux cell back).
+#define TABLE_DIV(fc, k)                                                                  \
+    (ONE_SIDED_SIGN(sx) * ((fc)[k] - (fc)[(k) - fe0]) +                                   \
+     ONE_SIDED_SIGN(sy) * ((fc)[FLUX_CELLS + (k)] - (fc)[FLUX_CELLS + (k) - fe1]) +       \
+     ONE_SIDED_SIGN(sz) * ((fc)[2 * FLUX_CELLS + (k)] - (fc)[2 * FLUX_CELLS + (k) - fe2]))
+
+// The flux table's offsets: the flux cell of brick cell (0, 0, 0) and the steps back.
+#define FLUX_TABLE_STEPS(sx, sy, sz)                                                      \
+    const int f0 = ((sz > 0) * (BY + 1) + (sy > 0)) * FX + (sx > 0);                      \
+    const int fe0 = (sx), fe1 = (sy) * FX, fe2 = (sz) * FXY
+
+// 1 / |N| at psi tile cell q (WEIGHTED), else 1.
+INLINE REAL inv_normal_length(__global const REAL* p, const int q, const int psx, const int psxy)
 {
-    TILE_STEPS(sx, sy, sz);
-    const int lx = sx > 0 ? -1 : 0, ly = sy > 0 ? -1 : 0, lz = sz > 0 ? -1 : 0;
-    for (int fz = 0; fz <= BZ; ++fz)
-        for (int fy = 0; fy <= BY; ++fy) {
-            const int y = fy + ly, z = fz + lz;
-            // rows y + sy, z + sz read this flux row one step back; row y, z itself too
-            if (!node_row(rows, b, y, z) && !node_row(rows, b, y + sy, z) &&
-                !node_row(rows, b, y, z + sz)) continue;
-            for (int fx = 0; fx <= BX; ++fx) {
-                const int x = fx + lx;
-                const vec3r w = heat_flux(u, TILE_AT(1, x, y, z), ex, ey, ez, p,
-                                          TILE_AT(2, x, y, z), psx, psxy);
-                const int k = (fz * (BY + 1) + fy) * FX + fx;
-                f[k] = w.x;
-                f[FLUX_CELLS + k] = w.y;
-                f[2 * FLUX_CELLS + k] = w.z;
-            }
-        }
+#if WEIGHTED
+    const vec3r n = psi_normal(p, q, psx, psxy);
+    return RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);
+#else
+    return 1;
+#endif
 }
 
+// ---- intrinsic heat flow (4.7) / (4.8), appendix E -----------------------------------------
 // psi: the psi tiles (BrickBand.scatter_tiles with halo 2: per brick its cells and those
 // within 2 of its faces). One explicit step v = u + r div(...) (r = dt / h^2) on the node
 // rows of the bricks holding a NODE cell, one channel per get_global_id(1). sx, sy, sz: the
@@ -167,13 +185,11 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
     const int chan = get_global_id(1) * plane;
     __global REAL* vc = v + get_global_id(1) * (nbricks + 2) * BVA;
     TILE_ARRAY(ut, TILE_CELLS(1));
+    TILE_STEPS(sx, sy, sz);
 #if !GROUP_PER_BRICK
     REAL f[3 * FLUX_CELLS];
-    // the flux cell of brick cell (0, 0, 0), and the flux offsets one step back along x, y, z
-    const int f0 = ((sz > 0) * (BY + 1) + (sy > 0)) * FX + (sx > 0);
-    const int fex = sx, fey = sy * FX, fez = sz * FXY;
+    FLUX_TABLE_STEPS(sx, sy, sz);
 #endif
-    TILE_STEPS(sx, sy, sz);
     FOR_EACH_BRICK(b, BIT_NODE) {
         load_tile(ut, u + chan, nbr, b, 1);
         __global const REAL* pt = psi + b * TILE_CELLS(2);
@@ -187,25 +203,18 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
                                                psxy));
         }
 #else
-        brick_fluxes(f, ut, pt, rows, b, sx, sy, sz);
-        for (int z = 0; z < BZ; ++z)
-            for (int y = 0; y < BY; ++y) {
-                if (!rows[b * BY * BZ + z * BY + y]) continue;
-                for (int x = 0; x < BX; ++x) {
-                    const int i = TILE_AT(1, x, y, z);
-                    const int k = f0 + (z * (BY + 1) + y) * FX + x;
-                    // heat_div's sum, with the fluxes looked up
-                    REAL div = ONE_SIDED_SIGN(sx) * (f[k] - f[k - fex]) +
-                               ONE_SIDED_SIGN(sy) * (f[FLUX_CELLS + k] - f[FLUX_CELLS + k - fey]) +
-                               ONE_SIDED_SIGN(sz) * (f[2 * FLUX_CELLS + k] -
-                                                     f[2 * FLUX_CELLS + k - fez]);
-#if WEIGHTED
-                    const vec3r n = psi_normal(pt, TILE_AT(2, x, y, z), psx, psxy);
-                    div *= RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);
-#endif
-                    store_stepped(vc, b, before, x, y, z, ut[i] + r * div);
-                }
-            }
+        FOR_EACH_FLUX_CELL(x, y, z, k) {
+            const vec3r w = heat_flux(ut, TILE_AT(1, x, y, z), ex, ey, ez, pt, TILE_AT(2, x, y, z),
+                                      psx, psxy);
+            f[k] = w.x;
+            f[FLUX_CELLS + k] = w.y;
+            f[2 * FLUX_CELLS + k] = w.z;
+        }
+        FOR_EACH_NODE_ROW_CELL(l, i, q, k) {
+            // heat_div, with the fluxes looked up
+            store_stepped(vc, b, before, x, y, z,
+                          ut[i] + r * TABLE_DIV(f, k) * inv_normal_length(pt, q, psx, psxy));
+        }
         apron_copy(vc, b, before);
 #endif
     }
@@ -219,34 +228,14 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 // for line fields, whose fluxes depend on the updated cell (their signs turn to its vector).
 #define FLOW_CACHE (!GROUP_PER_BRICK && !LINE_FIELD)
 
-#if FLOW_CACHE
-// The fluxes of the flux cells (brick_fluxes' cells) into f ((channel, component) blocks of
-// FLUX_CELLS) and |P v|^2 there into g2.
-INLINE void flow_fluxes(REAL* f, REAL* g2, TILE const REAL* u, __global const REAL* p,
-                        __global const REAL* dir, const int dplane,
-                        __global const uchar* restrict rows, const int b, const int sx,
-                        const int sy, const int sz, const REAL e2)
-{
-    TILE_STEPS(sx, sy, sz);
-    const int lx = sx > 0 ? -1 : 0, ly = sy > 0 ? -1 : 0, lz = sz > 0 ? -1 : 0;
-    for (int fz = 0; fz <= BZ; ++fz)
-        for (int fy = 0; fy <= BY; ++fy) {
-            const int y = fy + ly, z = fz + lz;
-            if (!node_row(rows, b, y, z) && !node_row(rows, b, y + sy, z) &&
-                !node_row(rows, b, y, z + sz)) continue;
-            for (int fx = 0; fx <= BX; ++fx) {
-                const int x = fx + lx, j = TILE_AT(1, x, y, z);
-                const int k = (fz * (BY + 1) + fy) * FX + fx;
-                REAL w[NC][3];
-                g2[k] = flow_flux(u, TILE_CELLS(1), j, ex, ey, ez, p, dir, dplane,
-                                  TILE_AT(2, x, y, z), psx, psxy, e2, j, w);
-                #pragma unroll
-                for (int c = 0; c < NC; ++c)
-                    for (int a = 0; a < 3; ++a) f[(3 * c + a) * FLUX_CELLS + k] = w[c][a];
-            }
-        }
-}
-#endif
+// A flow's stepped value of channel c with fidelity (C.1), stored in the apron layout.
+#define STORE_FLOW(c, val)                                                                \
+    {                                                                                     \
+        REAL out_ = (val);                                                                \
+        if (FIDELITY)                                                                     \
+            out_ -= dt * lambda[0] * (ut[(c) * TILE_CELLS(1) + i] - u0[(c) * plane + b * BV + l]); \
+        store_stepped(v + (c) * vplane, b, before, x, y, z, out_);                        \
+    }
 
 __kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, __global const REAL* restrict dir,
@@ -259,9 +248,9 @@ __kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* re
     TILE_STEPS(sx, sy, sz);
     const int dplane = (nbricks + 2) * TILE_CELLS(2), vplane = (nbricks + 2) * BVA;
 #if FLOW_CACHE
+    // the fluxes of the flux cells ((channel, component) blocks) and |P v|^2 there
     REAL f[3 * NC * FLUX_CELLS], g2[FLUX_CELLS];
-    const int f0 = ((sz > 0) * (BY + 1) + (sy > 0)) * FX + (sx > 0);
-    const int fe[3] = {sx, sy * FX, sz * FXY};
+    FLUX_TABLE_STEPS(sx, sy, sz);
 #endif
     FOR_EACH_BRICK(b, BIT_NODE) {
         for (int c = 0; c < NC; ++c) load_tile(ut + c * TILE_CELLS(1), u + c * plane, nbr, b, 1);
@@ -270,44 +259,37 @@ __kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* re
         int before[8];
         bricks_before(nbr, b, before);
 #if FLOW_CACHE
-        flow_fluxes(f, g2, ut, pt, dirt, dplane, rows, b, sx, sy, sz, e2);
-#endif
+        FOR_EACH_FLUX_CELL(x, y, z, k) {
+            const int j = TILE_AT(1, x, y, z);
+            REAL w[NC][3];
+            g2[k] = flow_flux(ut, TILE_CELLS(1), j, ex, ey, ez, pt, dirt, dplane,
+                              TILE_AT(2, x, y, z), psx, psxy, e2, j, w);
+            #pragma unroll
+            for (int c = 0; c < NC; ++c) {
+                f[3 * c * FLUX_CELLS + k] = w[c][0];
+                f[(3 * c + 1) * FLUX_CELLS + k] = w[c][1];
+                f[(3 * c + 2) * FLUX_CELLS + k] = w[c][2];
+            }
+        }
+        FOR_EACH_NODE_ROW_CELL(l, i, q, k) {
+            // flow_cell, with the fluxes looked up
+            const REAL inv_len = inv_normal_length(pt, q, psx, psxy);
+            #pragma unroll
+            for (int c = 0; c < NC; ++c)
+                STORE_FLOW(c, flow_update(ut[c * TILE_CELLS(1) + i],
+                                          TABLE_DIV(f + 3 * c * FLUX_CELLS, k), inv_len, g2[k], r));
+        }
+#else
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             if (!node_row(rows, b, y, z)) continue;
             const int i = TILE_AT(1, x, y, z);
             REAL val[NC];
-#if FLOW_CACHE
-            // flow_cell with the fluxes looked up
-            const int k = f0 + (z * (BY + 1) + y) * FX + x;
-#if WEIGHTED
-            const vec3r n = psi_normal(pt, TILE_AT(2, x, y, z), psx, psxy);
-            const REAL inv_len = RSQRT(n.x * n.x + n.y * n.y + n.z * n.z + (REAL)1e-30);
-#else
-            const REAL inv_len = 1;
-#endif
-            #pragma unroll
-            for (int c = 0; c < NC; ++c) {
-                REAL div = 0;
-                for (int a = 0; a < 3; ++a) {
-                    const REAL* fa = f + (3 * c + a) * FLUX_CELLS;
-                    div += (a == 0 ? ONE_SIDED_SIGN(sx) : a == 1 ? ONE_SIDED_SIGN(sy)
-                                                                 : ONE_SIDED_SIGN(sz)) *
-                           (fa[k] - fa[k - fe[a]]);
-                }
-                val[c] = flow_update(ut[c * TILE_CELLS(1) + i], div, inv_len, g2[k], r);
-            }
-#else
             flow_cell(ut, TILE_CELLS(1), i, ex, ey, ez, pt, dirt, dplane, TILE_AT(2, x, y, z),
                       psx, psxy, e2, r, val);
-#endif
             #pragma unroll
-            for (int c = 0; c < NC; ++c) {
-#if FIDELITY
-                val[c] -= dt * lambda[0] * (ut[c * TILE_CELLS(1) + i] - u0[c * plane + b * BV + l]);
-#endif
-                store_stepped(v + c * vplane, b, before, x, y, z, val[c]);
-            }
+            for (int c = 0; c < NC; ++c) STORE_FLOW(c, val[c]);
         }
+#endif
         for (int c = 0; c < NC; ++c) apron_copy(v + c * vplane, b, before);
     }
 }
@@ -343,7 +325,7 @@ __kernel void brick_lambda_terms(__global const REAL* restrict u, __global const
 
 // ---- Turk's reaction-diffusion (surface_heat.cl's turk_step) ---------------------------------
 // The two chemicals' tiles of halo 1; dir (ALONG) as brick_flow_step's, beta in the plain
-// brick layout.
+// brick layout. On CPUs both chemicals' fluxes are computed once per brick (flux tables).
 __kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, __global const REAL* restrict dir,
                               __global const REAL* restrict beta, const REAL dt, const REAL da,
@@ -353,6 +335,10 @@ __kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* re
     TILE_ARRAY(ut, 2 * TILE_CELLS(1));
     TILE_STEPS(sx, sy, sz);
     const int dplane = (nbricks + 2) * TILE_CELLS(2), vplane = (nbricks + 2) * BVA;
+#if !GROUP_PER_BRICK
+    REAL fa[3 * FLUX_CELLS], fb[3 * FLUX_CELLS];
+    FLUX_TABLE_STEPS(sx, sy, sz);
+#endif
     FOR_EACH_BRICK(b, BIT_NODE) {
         load_tile(ut, u, nbr, b, 1);
         load_tile(ut + TILE_CELLS(1), u + plane, nbr, b, 1);
@@ -360,11 +346,33 @@ __kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* re
         __global const REAL* dirt = dir + b * TILE_CELLS(2);
         int before[8];
         bricks_before(nbr, b, before);
+#if GROUP_PER_BRICK
         FOR_EACH_BRICK_CELL(l, x, y, z) {
             if (!node_row(rows, b, y, z)) continue;
             const REAL2 ab = turk_cell(ut, TILE_CELLS(1), TILE_AT(1, x, y, z), ex, ey, ez, pt, dirt,
                                        dplane, TILE_AT(2, x, y, z), psx, psxy, beta[b * BV + l],
                                        dt, da, db, s);
+#else
+        FOR_EACH_FLUX_CELL(x, y, z, k) {
+            const int j = TILE_AT(1, x, y, z), q = TILE_AT(2, x, y, z);
+#if ALONG
+            const vec3r wa = along_flux(ut, j, ex, ey, ez, pt, dirt, dplane, q, psx, psxy);
+#else
+            const vec3r wa = heat_flux(ut, j, ex, ey, ez, pt, q, psx, psxy);
+#endif
+            const vec3r wb = heat_flux(ut + TILE_CELLS(1), j, ex, ey, ez, pt, q, psx, psxy);
+            fa[k] = wa.x;
+            fa[FLUX_CELLS + k] = wa.y;
+            fa[2 * FLUX_CELLS + k] = wa.z;
+            fb[k] = wb.x;
+            fb[FLUX_CELLS + k] = wb.y;
+            fb[2 * FLUX_CELLS + k] = wb.z;
+        }
+        FOR_EACH_NODE_ROW_CELL(l, i, q, k) {
+            // turk_cell, with the fluxes looked up
+            const REAL2 ab = turk_update(ut[i], ut[TILE_CELLS(1) + i], TABLE_DIV(fa, k),
+                                         TABLE_DIV(fb, k), beta[b * BV + l], dt, da, db, s);
+#endif
             store_stepped(v, b, before, x, y, z, ab.x);
             store_stepped(v + vplane, b, before, x, y, z, ab.y);
         }

@@ -97,6 +97,16 @@ INLINE vec3r along_flux(U_SPACE const REAL* restrict u, const int j, const int e
     return out;
 }
 
+// The new (a, b) from the old and their diffusion terms.
+INLINE REAL2 turk_update(const REAL a, const REAL b, const REAL diff_a, const REAL diff_b,
+                         const REAL beta, const REAL dt, const REAL da, const REAL db,
+                         const REAL s)
+{
+    // b clamped at 0 by a select: fmax is an out-of-line call on PoCL (scalar loop)
+    const REAL nb = b + dt * (s * (a * b - b - beta) + db * diff_b);
+    return (REAL2)(a + dt * (s * (16 - a * b) + da * diff_a), nb > 0 ? nb : (REAL)0);
+}
+
 // The new (a, b) at cell i (u: a, then b `uplane` later).
 INLINE REAL2 turk_cell(U_SPACE const REAL* restrict u, const int uplane, const int i, const int ex,
                        const int ey, const int ez, __global const REAL* restrict psi,
@@ -118,9 +128,7 @@ INLINE REAL2 turk_cell(U_SPACE const REAL* restrict u, const int uplane, const i
     const REAL diff_a = heat_div(u, i, ex, ey, ez, psi, q, sx, sxy);
 #endif
     const REAL diff_b = heat_div(ub, i, ex, ey, ez, psi, q, sx, sxy);
-    // b clamped at 0 by a select: fmax is an out-of-line call on PoCL (scalar loop)
-    const REAL nb = b + dt * (s * (a * b - b - beta) + db * diff_b);
-    return (REAL2)(a + dt * (s * (16 - a * b) + da * diff_a), nb > 0 ? nb : (REAL)0);
+    return turk_update(a, b, diff_a, diff_b, beta, dt, da, db, s);
 }
 
 // ---- TV (4.10), harmonic maps (4.11, D.7), diffusion along a field (4.14, 4.15) ----------
