@@ -213,7 +213,7 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
         FOR_EACH_NODE_ROW_CELL(l, i, q, k) {
             // heat_div, with the fluxes looked up
             store_stepped(vc, b, before, x, y, z,
-                          ut[i] + r * TABLE_DIV(f, k) * inv_normal_length(pt, q, psx, psxy));
+                          ut[i] + r * (TABLE_DIV(f, k) * inv_normal_length(pt, q, psx, psxy)));
         }
         apron_copy(vc, b, before);
 #endif

@@ -19,7 +19,7 @@ from ..data import SURFACE_SHAPES as SHAPES
 from ..data import checker, colour_pattern, surface_noise, surface_shape
 from ..imagedata import InputError
 from ..runtime import get_runtime
-from ..surface.implicit import ImplicitSurface
+from ..surface.implicit import STORAGES, ImplicitSurface
 from ._common import (
     add_device_argument,
     add_output_folder_arguments,
@@ -66,6 +66,10 @@ def add_surface_parser(subparsers) -> None:
     parser.add_argument("--size", type=int, default=400,
                         help="picture size per view (default: 400)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument("--storage", choices=STORAGES, default="lists",
+                        help="the band's storage on the device: lists over the dense grid "
+                             "(default), or only the band's bricks (less memory; as fast from "
+                             "about 200 cells across)")
     add_device_argument(parser)
     parser.set_defaults(run=run_surface)
 
@@ -81,6 +85,7 @@ def run_surface(args) -> int:
         raise InputError("flowvis needs --direction major or minor")
     with grid_advice(args.resolution):
         surf = load_surface(args.mesh, args.resolution, device=args.device)
+    surf.storage = args.storage
     data = None
     if args.data != "pattern" and args.flow in DATA_FLOWS:
         data = mesh_colours(surf)

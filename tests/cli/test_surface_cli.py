@@ -160,3 +160,15 @@ def test_tv_default_flattens_the_squares_and_keeps_their_edges():
     tv, heat = noise_and_blur(run.after), noise_and_blur(surf.heat(run.before, t=h**2))
     assert tv[0] < 0.045 and tv[0] < 1.1 * heat[0]  # measured 0.032 and 0.037
     assert tv[1] < 0.5 * heat[1]  # measured 0.12 and 0.38
+
+
+def test_storage_bricks_gives_the_lists_pictures(tmp_path):
+    """--storage bricks: the same run in the band's bricks, the same result."""
+    for storage in ("lists", "bricks"):
+        assert main(["surface", "denoise", "sphere", "-o", str(tmp_path / storage),
+                     "--resolution", "24", "--size", "48", "--storage", storage]) == 0
+    lists = trimesh.load(tmp_path / "lists" / "result.ply", force="mesh")
+    bricks = trimesh.load(tmp_path / "bricks" / "result.ply", force="mesh")
+    np.testing.assert_allclose(bricks.visual.vertex_colors, lists.visual.vertex_colors, atol=1)
+    with pytest.raises(SystemExit):
+        main(["surface", "heat", "sphere", "-o", str(tmp_path / "x"), "--storage", "dense"])
