@@ -10,7 +10,9 @@ with its re-extension (and TV's lambda updates), the flow's step loop timed on i
 last; set-up, uploads and the read-back excluded) over --steps steps, lists and bricks
 alternated (A B A B) --repeats times, the ratio bricks / lists taken pairwise; the
 device memory of the flow's state (its buffers, not the surface's shared psi and lists);
-and the largest difference between the two storages' results over the largest value.
+the largest difference between the two storages' results over the largest value; and the
+yardsticks: a device copy of one padded float32 volume of the grid (best of 5), the step in
+those copies, and in ns per cell of the extension band.
 """
 
 from __future__ import annotations
@@ -89,12 +91,33 @@ def time_flow(call, u, steps):
     return 1e3 * LOOPS[-1], out
 
 
+def dense_copy_ms(surf) -> float:
+    """Best of 5 device copies of one padded float32 volume of the grid."""
+    import pyopencl as cl
+    import pyopencl.array as cla
+
+    q = surf.runtime.queue
+    a = cla.zeros(q, surf.grid.padded_shape, np.float32)
+    b = cla.empty_like(a)
+    best = np.inf
+    for _ in range(6):
+        q.finish()
+        start = time.perf_counter()
+        cl.enqueue_copy(q, b.data, a.data)
+        q.finish()
+        best = min(best, time.perf_counter() - start)
+    return 1e3 * best
+
+
 def run_size(n, names, steps, repeats):
     from clpde.surface import ImplicitSurface
 
     start = time.perf_counter()
     surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))
     build = time.perf_counter() - start
+    copy_ms = dense_copy_ms(surf)
+    print(f"{n:>4}^3: extension band {surf.ext_band.n} cells, a dense copy {copy_ms:.2f} ms",
+          flush=True)
     table = flows_for(surf)
     rows = []
     for name in names:
@@ -116,12 +139,16 @@ def run_size(n, names, steps, repeats):
         rows.append({"n": n, "flow": name, "channels": channels, "ms_lists": times["lists"],
                      "ms_bricks": times["bricks"], "ratio": ratios, "rel_diff": diff,
                      "mib_lists": mem["lists"], "mib_bricks": mem["bricks"],
-                     "band": surf.ext_band.n, "build_s": build})
+                     "band": surf.ext_band.n, "build_s": build, "copy_ms": copy_ms})
+        best = {k: min(times[k]) for k in times}
         print(f"{n:>4}^3 {name:>9} ({channels} ch): lists "
               f"{' '.join(f'{t:7.1f}' for t in times['lists'])} ms, bricks "
               f"{' '.join(f'{t:7.1f}' for t in times['bricks'])} ms, bricks/lists "
               f"{' '.join(f'{r:.2f}' for r in ratios)}; state {mem['lists']:.0f} / "
-              f"{mem['bricks']:.0f} MiB; results differ by {diff:.1e}", flush=True)
+              f"{mem['bricks']:.0f} MiB; results differ by {diff:.1e}; best step "
+              f"{best['lists'] / copy_ms:.1f} / {best['bricks'] / copy_ms:.1f} dense copies, "
+              f"{1e6 * best['lists'] / surf.ext_band.n:.1f} / "
+              f"{1e6 * best['bricks'] / surf.ext_band.n:.1f} ns per band cell", flush=True)
     return rows
 
 

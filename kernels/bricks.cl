@@ -129,8 +129,8 @@ INLINE bool node_row(__global const uchar* restrict rows, const int b, const int
 #define FXY (FX * (BY + 1))
 #define FLUX_CELLS (FXY * (BZ + 1))
 
-// The flux cells  whose fluxes a node row reads, as loops setting (x, y, z),
-// the cell, and k, its place among the flux cells.
+// The flux cells whose fluxes a node row reads, as loops setting (x, y, z), the cell, and k,
+// its place among the flux cells. These loops read the kernel's sx, sy, sz, rows and b.
 #define FOR_EACH_FLUX_CELL(x, y, z, k)                                                    \
     for (int fz = 0; fz <= BZ; ++fz)                                                      \
         for (int fy = 0, y = fy - (sy > 0), z = fz - (sz > 0); fy <= BY; ++fy, ++y)       \
@@ -224,7 +224,7 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
 // All NC channels per work-item (the flows couple them): u's tiles of halo 1, one per channel;
 // psi and dir (ALONG, 3 channels) in stored tiles of halo 2, dir's channel stride that of
 // the tiles; u0 (FIDELITY) in the plain brick layout. v as brick_heat_step writes it.
-// On CPUs each flux is computed once per brick, as brick_heat_step does (flow_fluxes), but
+// On CPUs each flux is computed once per brick into flux tables, as brick_heat_step does, but
 // for line fields, whose fluxes depend on the updated cell (their signs turn to its vector).
 #define FLOW_CACHE (!GROUP_PER_BRICK && !LINE_FIELD)
 
@@ -233,7 +233,8 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
     {                                                                                     \
         REAL out_ = (val);                                                                \
         if (FIDELITY)                                                                     \
-            out_ -= dt * lambda[0] * (ut[(c) * TILE_CELLS(1) + i] - u0[(c) * plane + b * BV + l]); \
+            out_ -= dt * lambda[0] *                                                      \
+                    (ut[(c) * TILE_CELLS(1) + i] - u0[(c) * plane + b * BV + l]);         \
         store_stepped(v + (c) * vplane, b, before, x, y, z, out_);                        \
     }
 

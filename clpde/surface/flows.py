@@ -140,6 +140,8 @@ class BandFlow:
     """Device state of data on a surface's band lists: `cur` (extended) and a scratch volume
     `tmp`, dense volumes; a step runs over the node band's runs, cur -> tmp."""
 
+    storage = "lists"
+
     def __init__(self, surf, u, normalize: bool = False, extend: bool = True,
                  line_field: bool = False, defines: dict | None = None):
         self.surf = surf
@@ -166,8 +168,6 @@ class BandFlow:
         self._stepped = False
         if extend:
             self.extend()
-
-    storage = "lists"
 
     def kernel(self, filename: str, name: str, **defines):
         """Kernel `name` of `filename` with the flow's defines."""
@@ -247,6 +247,9 @@ class BrickFlow:
     tmp -> cur over the reach band (after_step), the whole band when it returns. The step
     kernels and the re-extension come from one build of bricks.cl (`kernel`)."""
 
+    storage = "bricks"
+    step_kernel = BandFlow.step_kernel
+
     def __init__(self, surf, u, normalize: bool = False, line_field: bool = False,
                  defines: dict | None = None):
         self.surf = surf
@@ -269,9 +272,6 @@ class BrickFlow:
         self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp")
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
-
-    storage = "bricks"
-    step_kernel = BandFlow.step_kernel
 
     def kernel(self, filename: str, name: str, **defines):
         """Kernel `name` of `filename` with the brick layout's and the flow's defines."""
