@@ -11,7 +11,8 @@ memory. On the device:
   which the closest-point re-extension gathers, have each brick lengthened along x, y and z
   by an apron of APRON cells, copies of the next bricks' first ones, so a tricubic stencil
   never leaves the brick of its first node (the step writes both). psi, which is fixed, is
-  stored as tiles of halo 2 (`scatter_tiles`), what the heat step reads around a brick;
+  stored as tiles of halo 2 (`tiles`, gathered on the device from the surface's padded psi),
+  what the steps read around a brick;
 - `nbr`: per brick the indices of its 27 neighbours (itself in the middle, the sentinel where
   none is stored), for the step, which reads u with its neighbours' faces (no halo is
   stored for data), and for the aprons it writes;
@@ -36,6 +37,9 @@ import numpy as np
 import pyopencl.array as cla
 
 from ..runtime import ClpdeError
+
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
+KERNEL_FILES = ("brick_tiles.cl",)
 
 NODE, REACH, EXT = 1, 2, 4
 # Cells of the next brick's rows kept after each row of the re-extension's source (bricks.cl)
@@ -276,6 +280,24 @@ class BrickBand:
         _fill_bricks(out, flat, cells)
         self.runtime.check_alloc(out.nbytes, "brick tiles")
         return cla.to_device(self.runtime.queue, out)
+
+    def tiles(self, padded: cla.Array, halo: int) -> cla.Array:
+        """scatter_tiles of a device volume (channels, PZ, PY, PX), on the device
+        (kernels/brick_tiles.cl): psi's tiles without a host gather of the dense grid."""
+        rt, q = self.runtime, self.runtime.queue
+        nc = padded.shape[0]
+        bx, by, bz = self.brick
+        cells = (bx + 2 * halo) * (by + 2 * halo) * (bz + 2 * halo)
+        out = cla.zeros(q, (nc, self.nbricks + 2, cells), padded.dtype)
+        if self.nbricks:
+            rt.check_alloc(out.nbytes, "brick tiles")
+            coords = cla.to_device(q, np.ascontiguousarray(self.coords, np.int32))
+            pz, py, px = self.padded_shape
+            rt.kernel("brick_tiles.cl", "tiles_from_dense", padded.dtype, **self.defines())(
+                q, *rt.items(self.nbricks * cells, nc), padded.data, out.data, coords.data,
+                np.int32(self.nbricks), np.int32(halo), np.int32(px), np.int32(py),
+                np.int32(pz))
+        return out
 
     def scatter(self, padded: np.ndarray, dtype, apron: int = 0) -> cla.Array:
         """Device brick buffer (channels, nbricks + 2, BZ + apron, BY + apron, BX + apron)

@@ -161,7 +161,7 @@ class ImplicitSurface:
             stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
             bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, brick)
             # psi in tiles of halo 2, what the heat step reads around each brick
-            psi = bb.scatter_tiles(g.pad(self.psi[None], mode="linear"), g.dtype, 2)
+            psi = bb.tiles(self.psi_dev, 2)
             q = self.runtime.queue
 
             def stencils(band, base, frac):

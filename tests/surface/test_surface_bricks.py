@@ -6,6 +6,7 @@ on GPUs) and for the three brick sizes measured; and the heat flow on bricks aga
 same flow on the band lists."""
 
 import numpy as np
+import pyopencl.array as cla
 import pytest
 from reference import bricks as bref
 from reference import surface as ref
@@ -61,6 +62,27 @@ def test_layout_and_tables_match_reference(runtime, brick):
     np.testing.assert_array_equal(bb.mask_host, expect_bits)
     np.testing.assert_array_equal(bb.brick_bits.get(),
                                   np.bitwise_or.reduce(expect_bits.astype(np.uint8), axis=1))
+
+
+@pytest.mark.parametrize("brick", BRICK_SIZES)
+def test_tiles_on_the_device_are_the_hosts(runtime, rng, brick):
+    """BrickBand.tiles (a device volume's tiles, kernels/brick_tiles.cl) against scatter_tiles
+    (the host's) for two channels and two halos, with bricks in every corner of a grid whose
+    sides are no multiples of a brick's (tile cells outside the grid are zeros)."""
+    from clpde.surface.bricks import BrickBand
+
+    shape = (21, 19, 27)  # (PZ, PY, PX)
+    places = [-(-n // b) for n, b in zip(shape[::-1], brick, strict=True)]
+    coords = np.array([(x, y, z) for x in (0, places[0] - 1) for y in (0, places[1] - 1)
+                       for z in (0, places[2] - 1)] + [(1, 1, 1)], np.int32)
+    bb = BrickBand.from_coords(runtime, shape, coords, brick)
+    u = rng.standard_normal((2,) + shape).astype(np.float32)
+    for halo in (1, 2):
+        host = bb.scatter_tiles(u, np.float32, halo).get()
+        dev = bb.tiles(cla.to_device(runtime.queue, u), halo).get()
+        np.testing.assert_array_equal(dev, host)
+        assert (host[:, 1:-1] == 0).any()  # cells outside the grid
+        assert not host[:, 0].any() and not host[:, -1].any()
 
 
 @pytest.mark.parametrize("brick", BRICK_SIZES)
