@@ -19,7 +19,9 @@
 //   surface_reinit.cl  reinitialisation of psi to a signed distance
 //   surface_shape.cl   principal curvature directions
 //   surface_mesh.cl    mesh -> distance (exact point-triangle distances)
-//   bricks.cl          the heat flow and the re-extension on dense bricks
+//   surface_flux.h     the flows' per-cell arithmetic, shared by the lists' and the bricks'
+//   bricks.cl          every flow and the re-extension on dense bricks
+//   brick_tiles.cl     bricks' tiles of a device volume (psi's, once per psi)
 #ifndef CLPDE_SURFACE_H
 #define CLPDE_SURFACE_H
 
