@@ -382,6 +382,32 @@ __kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* re
     }
 }
 
+// ---- the apron layout of a plain brick buffer -----------------------------------------------
+// dst: src's bricks each lengthened by the first AX cells of the next bricks along x, y, z
+// (their combinations too), as the steps write it: the re-extension's source before a flow's
+// first step, made on the device from the plain layout (channel per get_global_id(1)), for
+// the bricks with a band cell (no stencil starts in the others). Next brick places not
+// stored read the sentinel's zeros (no stencil reaches them: every node's brick is stored).
+__kernel void brick_to_apron(__global const REAL* restrict src, __global REAL* restrict dst,
+                             BRICK_ARGS)
+{
+    __global const REAL* s = src + get_global_id(1) * plane;
+    __global REAL* d = dst + get_global_id(1) * (nbricks + 2) * BVA;
+    FOR_EACH_BRICK(b, 0xff) {
+        __global const int* nb = nbr + 27 * b;
+#if GROUP_PER_BRICK
+        for (int k = get_local_id(0); k < BVA; k += BV) {
+#else
+        for (int k = 0; k < BVA; ++k) {
+#endif
+            const int x = k % BXA, y = (k / BXA) % BYA, z = k / (BXA * BYA);
+            const int hx = x >= BX, hy = y >= BY, hz = z >= BZ;
+            const int from = nb[(hz + 1) * 9 + (hy + 1) * 3 + hx + 1];
+            d[b * BVA + k] = s[from * BV + ((z - hz * BZ) * BY + y - hy * BY) * BX + x - hx * BX];
+        }
+    }
+}
+
 // ---- closest-point re-extension --------------------------------------------------------------
 // dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface_extend.cl's
 // extend_cp (tricubic Lagrange, or trilinear) from stencils computed once per psi (psi is

@@ -257,17 +257,28 @@ class BrickFlow:
         self.band_form = surf._band_form_channels(self.input) is not None
         g = surf.grid
         self.bricks, self.psi, self.lists = surf._brick_band()
-        # cells off the band come back as they went in, through the device's precision
+        b = self.bricks
         if self.band_form:
-            self.padded = surf._padded_from_band(self.input)
+            # straight into the bricks' places of the band's cells: no dense volume
+            values = surf._checked_band_values(self.input)
+            self.nc = values.shape[0]
+            host = np.zeros((self.nc, b.plane), g.dtype)
+            host[:, self._band_places()] = values
+            b.runtime.check_alloc(host.nbytes, "brick volume")
+            self.cur = cla.to_device(surf.runtime.queue, host)
+            del host
         else:
+            # cells off the band come back as they went in, through the device's precision
             self.padded = g.pad(surf._as_channels(u)).astype(g.dtype)
-        self.nc = self.padded.shape[0]
+            self.nc = self.padded.shape[0]
+            self.cur = b.scatter(self.padded, g.dtype)
         self.defines = {**extend_defines(surf.interp, self.nc, normalize, line_field),
                         **(defines or {})}
-        self.cur = self.bricks.scatter(self.padded, g.dtype)
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
-        self.tmp = self.bricks.scatter(self.padded, g.dtype, APRON)
+        self.tmp = cla.zeros(surf.runtime.queue, (self.nc, (b.nbricks + 2) * _apron_cells(b)),
+                             g.dtype)
+        b.launch(self.kernel("bricks.cl", "brick_to_apron"), self.cur.data, self.tmp.data,
+                 channels=self.nc)
         self.src_plane = np.int32(self.tmp.size // self.nc)
         self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp")
         self._extend(self.tmp, self.cur, EXT)
@@ -299,6 +310,13 @@ class BrickFlow:
             return self.bricks.scatter_tiles(padded, g.dtype, halo)
         return self.bricks.scatter(padded, g.dtype)
 
+    def _band_places(self) -> np.ndarray:
+        """The brick-storage places (plain layout) of the band form's cells, once per psi."""
+        s = self.surf
+        if getattr(s, "_band_places", None) is None or s._band_places[0] is not self.bricks:
+            s._band_places = (self.bricks, self.bricks.index_of(s._band_cells_of()[1]))
+        return s._band_places[1]
+
     def _extend(self, src, dst, which: int) -> None:
         n, target, base, frac = self.lists[which]
         b = self.bricks
@@ -328,13 +346,17 @@ class BrickFlow:
         g = self.surf.grid
         dtype = _result_dtype(self.input)
         if self.band_form:
-            # the band's cells only: into a zero volume, read at the band
-            gathered = self.bricks.gather(self.cur, np.zeros_like(self.padded), EXT)
-            values = gathered.reshape(self.nc, -1)[:, self.surf._band_cells_of()[1]]
+            values = self.cur.get().reshape(self.nc, -1)[:, self._band_places()]
             return (values[0] if self.input.ndim == 1 else values).astype(dtype)
         out = g.interior(self.bricks.gather(self.cur, self.padded.copy(), EXT))
         out = out[0] if self.input.shape == self.surf.shape else out
         return out.astype(dtype)
+
+
+def _apron_cells(bricks) -> int:
+    """Cells of a brick lengthened by the apron along x, y and z."""
+    bx, by, bz = bricks.brick
+    return (bx + APRON) * (by + APRON) * (bz + APRON)
 
 
 def _result_dtype(data: np.ndarray):

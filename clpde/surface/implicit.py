@@ -141,6 +141,7 @@ class ImplicitSurface:
         self.cp_base, self.cp_frac = self._cp_stencils(self.ext_band, self.cp)
         self._narrow_bands()
         self._bricks = None  # built when a flow on bricks first needs them
+        self._band_places = None  # the band form's places in the bricks (flows.BrickFlow)
         self._band_cells = None  # the band form's cells (band_indices), built when asked
 
     def _brick_band(self):
@@ -596,14 +597,19 @@ class ImplicitSurface:
             return u.shape[0]
         return None
 
-    def _padded_from_band(self, u: np.ndarray) -> np.ndarray:
-        """Band-form data as a padded (channels, PZ, PY, PX) host volume in the grid's dtype,
-        zeros off the band (no flow reads them), checked as `_as_channels` checks."""
+    def _checked_band_values(self, u: np.ndarray) -> np.ndarray:
+        """Band-form data as (channels, n), checked as `_as_channels` checks."""
         if not np.issubdtype(u.dtype, np.number) or np.iscomplexobj(u):
             raise InputError(f"u must hold real numbers, not {u.dtype}")
         values = u.reshape(self._band_form_channels(u), -1)
         if not np.all(np.isfinite(values)):
             raise InputError("u contains NaN or infinite values in the band around the surface")
+        return values
+
+    def _padded_from_band(self, u: np.ndarray) -> np.ndarray:
+        """Band-form data as a padded (channels, PZ, PY, PX) host volume in the grid's dtype,
+        zeros off the band (no flow reads them), checked as `_as_channels` checks."""
+        values = self._checked_band_values(u)
         g = self.grid
         padded = np.zeros((values.shape[0], g.volume), g.dtype)
         padded[:, self._band_cells_of()[1]] = values

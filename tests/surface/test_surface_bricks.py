@@ -85,6 +85,37 @@ def test_tiles_on_the_device_are_the_hosts(runtime, rng, brick):
         assert not host[:, 0].any() and not host[:, -1].any()
 
 
+@pytest.mark.parametrize("geometry", ["cpu", "gpu"])
+@pytest.mark.parametrize("brick", BRICK_SIZES)
+def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometry, brick):
+    """brick_to_apron (plain -> apron layout on the device) against scatter with an apron
+    (the host's) in every brick with a band cell, wherever the apron's next brick is stored;
+    zeros where it is not (bricks without band cells are never read from this layout)."""
+    s = surface(runtime if geometry == "cpu" else gpu_like, brick)
+    bb, _, _ = s._brick_band()
+    u = rng.standard_normal((2,) + s.grid.padded_shape).astype(np.float32)
+    host = bb.scatter(u, np.float32, APRON).get()
+    dev = cla.zeros_like(bb.scatter(u, np.float32, APRON))
+    flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow.surf, flow.bricks, flow.defines = s, bb, {}
+    bb.launch(flow.kernel("bricks.cl", "brick_to_apron"), bb.scatter(u, np.float32).data,
+              dev.data, channels=2)
+    bx, by, bz = brick
+    shape = (2, bb.nbricks + 2, bz + APRON, by + APRON, bx + APRON)
+    host, dev = host.reshape(shape), dev.get().reshape(shape)
+    nbr, bits = bb.nbr.get(), bb.brick_bits.get()
+    assert bits[1 : bb.nbricks + 1].all() or not dev[:, bits == 0].any()
+    for i in np.flatnonzero(bits):
+        for hz in (0, 1):
+            for hy in (0, 1):
+                for hx in (0, 1):
+                    part = (slice(None), i, slice(hz * bz, None) if hz else slice(0, bz),
+                            slice(hy * by, None) if hy else slice(0, by),
+                            slice(hx * bx, None) if hx else slice(0, bx))
+                    stored = nbr[i, (hz + 1) * 9 + (hy + 1) * 3 + hx + 1] > 0
+                    np.testing.assert_array_equal(dev[part], host[part] if stored else 0)
+
+
 @pytest.mark.parametrize("brick", BRICK_SIZES)
 def test_scatter_and_gather_round_trip(runtime, rng, brick):
     s = surface(runtime, brick)
