@@ -259,18 +259,21 @@ class BrickFlow:
         self.bricks, self.psi, self.lists = surf._brick_band()
         b = self.bricks
         if self.band_form:
-            # straight into the bricks' places of the band's cells: no dense volume
             values = surf._checked_band_values(self.input)
             self.nc = values.shape[0]
+        else:
+            # cells off the band come back as they went in, through the device's precision
+            self.padded = g.pad(surf._as_channels(u)).astype(g.dtype)
+            self.nc = self.padded.shape[0]
+        _check_local_tiles(surf.runtime, b, max(self.nc, 2), g.dtype)
+        if self.band_form:
+            # straight into the bricks' places of the band's cells: no dense volume
             host = np.zeros((self.nc, b.plane), g.dtype)
             host[:, self._band_places()] = values
             b.runtime.check_alloc(host.nbytes, "brick volume")
             self.cur = cla.to_device(surf.runtime.queue, host)
             del host
         else:
-            # cells off the band come back as they went in, through the device's precision
-            self.padded = g.pad(surf._as_channels(u)).astype(g.dtype)
-            self.nc = self.padded.shape[0]
             self.cur = b.scatter(self.padded, g.dtype)
         self.defines = {**extend_defines(surf.interp, self.nc, normalize, line_field),
                         **(defines or {})}
@@ -351,6 +354,20 @@ class BrickFlow:
         out = g.interior(self.bricks.gather(self.cur, self.padded.copy(), EXT))
         out = out[0] if self.input.shape == self.surf.shape else out
         return out.astype(dtype)
+
+
+def _check_local_tiles(runtime, bricks, channels: int, dtype) -> None:
+    """On GPUs a brick's work-group holds a tile of halo 1 per channel in local memory: say
+    when the data has more channels than the device's local memory holds."""
+    if runtime.is_cpu:
+        return
+    bx, by, bz = bricks.brick
+    need = channels * (bx + 2) * (by + 2) * (bz + 2) * np.dtype(dtype).itemsize
+    have = runtime.device.local_mem_size
+    if need > have:
+        raise InputError(f"{channels} channels need {need} bytes of local memory a brick on "
+                         f"this device, which has {have}; use storage='lists' for this data, "
+                         "or fewer channels per call")
 
 
 def _apron_cells(bricks) -> int:

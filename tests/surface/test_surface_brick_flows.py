@@ -192,3 +192,13 @@ def test_storage_is_checked_and_kept_by_the_constructors():
         ImplicitSurface.sphere(1.0, 0.2, storage="dense")
     with pytest.raises(InputError, match="storage must be one of"):
         s.storage = "brick"
+
+
+def test_too_many_channels_for_a_gpus_local_tiles_is_a_clear_error(gpu_like):
+    """On GPUs a brick's tiles (one per channel) live in local memory; data with more channels
+    than it holds is refused with the way out, before anything is launched."""
+    s = ImplicitSurface.sphere(1.0, 0.2, device=gpu_like, storage="bricks")
+    many = 1 + gpu_like.device.local_mem_size // (10**3 * 4)  # 8^3 bricks' tiles of 10^3 cells
+    u = np.zeros((many,) + s.shape)
+    with pytest.raises(InputError, match="storage='lists'"):
+        s.tv(u, 0.001)
