@@ -36,7 +36,7 @@ from ._progress import progress_bar
 from ._state import DeviceLike, State, deprecated, renamed_keyword
 from .fields import Field, PingPong, check_fits
 from .imagedata import InputError, value_range
-from .levelset import LevelSet, signed_distance
+from .levelset import LAYOUTS, LevelSet, signed_distance
 from .runtime import get_runtime
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -233,8 +233,6 @@ class MorphingTracker:
         self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
         self.max_dt = max(float(max_dt), self.dt)
         self.reinit_iterations = int(reinit_iterations)
-        from .levelset import LAYOUTS
-
         if band_layout not in LAYOUTS:
             raise InputError(f"band_layout must be one of {', '.join(LAYOUTS)}, "
                              f"not {band_layout!r}")

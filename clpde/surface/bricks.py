@@ -166,6 +166,13 @@ class BrickBand:
         return (self.nbricks + 2) * self.cells_per_brick
 
     @property
+    def apron_plane(self) -> int:
+        """Channel stride of a brick buffer in the apron layout (bricks lengthened by APRON
+        cells along x, y and z; the sentinel included)."""
+        bx, by, bz = self.brick
+        return (self.nbricks + 2) * (bx + APRON) * (by + APRON) * (bz + APRON)
+
+    @property
     def stored_cells(self) -> int:
         return self.nbricks * self.cells_per_brick
 

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from .._progress import progress_range
 from .._validation import InputError, check_time_step, positive
-from .bricks import APRON, EXT, REACH
+from .bricks import EXT, REACH
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("bricks.cl", "surface_extend.cl", "surface_flows.cl", "surface_heat.cl",
@@ -278,11 +278,10 @@ class BrickFlow:
         self.defines = {**extend_defines(surf.interp, self.nc, normalize, line_field),
                         **(defines or {})}
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
-        self.tmp = cla.zeros(surf.runtime.queue, (self.nc, (b.nbricks + 2) * _apron_cells(b)),
-                             g.dtype)
+        self.tmp = cla.zeros(surf.runtime.queue, (self.nc, b.apron_plane), g.dtype)
         b.launch(self.kernel("bricks.cl", "brick_to_apron"), self.cur.data, self.tmp.data,
                  channels=self.nc)
-        self.src_plane = np.int32(self.tmp.size // self.nc)
+        self.src_plane = np.int32(b.apron_plane)
         self._extend_kernel = self.kernel("bricks.cl", "brick_extend_cp")
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
@@ -368,12 +367,6 @@ def _check_local_tiles(runtime, bricks, channels: int, dtype) -> None:
         raise InputError(f"{channels} channels need {need} bytes of local memory a brick on "
                          f"this device, which has {have}; use storage='lists' for this data, "
                          "or fewer channels per call")
-
-
-def _apron_cells(bricks) -> int:
-    """Cells of a brick lengthened by the apron along x, y and z."""
-    bx, by, bz = bricks.brick
-    return (bx + APRON) * (by + APRON) * (bz + APRON)
 
 
 def _result_dtype(data: np.ndarray):
@@ -474,21 +467,22 @@ class _DynamicLambda:
         self.slots = cla.zeros(q, max(updates, 1), g.dtype)
         self.capped = cla.zeros(q, 1, np.int32)
         self.state = cla.to_device(q, np.ones(1, g.dtype))  # the correction factor f
+        self._chunk_sum = g.kernel("surface_flows.cl", "chunk_sum", **self.defines)
+        self._update = g.kernel("surface_flows.cl", "tv_lambda_update", **self.defines)
 
     def _sums(self, sides: int) -> None:
         s = self.surf
-        g, q = s.grid, s.runtime.queue
+        q = s.runtime.queue
         self.flow.lambda_terms(self.u0, self.terms, sides, self.eps)
         for a, partial in zip(self.terms, self.partials, strict=True):
-            g.kernel("surface_flows.cl", "chunk_sum", **self.defines)(
-                q, *s.runtime.items(self.groups), a.data, np.int32(self.n),
-                np.int32(self.CHUNK), partial.data)
+            self._chunk_sum(q, *s.runtime.items(self.groups), a.data, np.int32(self.n),
+                            np.int32(self.CHUNK), partial.data)
 
     def update(self, sides: int, slot: int) -> None:
         s = self.surf
         g, q = s.grid, s.runtime.queue
         self._sums(sides)
-        g.kernel("surface_flows.cl", "tv_lambda_update", **self.defines)(
+        self._update(
             q, (1,), (1,), *(p.data for p in self.partials), np.int32(self.groups),
             g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
             g.scalar(self.lam_max), self.lam.data, self.state.data, self.slots.data,
