@@ -1,0 +1,65 @@
+"""The package's layout keeps its rules: arrows point down (no import cycles, counting imports
+inside functions; only ``clpde/__main__.py`` imports the command line), a small ground floor,
+and no module or function too long to read. Measured by benchmarks/layout_metrics.py."""
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+# targets the tree does not meet yet: strict, so each fails once met and its mark must go
+PENDING = pytest.mark.xfail(strict=True, reason="layout refactor not finished")
+
+
+@pytest.fixture(scope="module")
+def metrics():
+    spec = importlib.util.spec_from_file_location(
+        "layout_metrics", ROOT / "benchmarks" / "layout_metrics.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["layout_metrics"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_counter_sees_imports_inside_functions(metrics, tmp_path):
+    package = tmp_path / "clpde"
+    (package / "sub").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "a.py").write_text("def f():\n    from .sub import b\n")
+    (package / "sub" / "__init__.py").write_text("from . import b\n")
+    (package / "sub" / "b.py").write_text("from .. import a\n")
+    assert metrics.cycles(metrics.imports(tmp_path)) == [["clpde.a", "clpde.sub.b"]]
+
+
+@PENDING
+def test_no_import_cycles(metrics):
+    assert metrics.cycles(metrics.imports(ROOT)) == []
+
+
+@PENDING
+def test_only_main_imports_the_command_line(metrics):
+    assert metrics.measure(ROOT)["library_modules_importing_cli"] == []
+
+
+@PENDING
+def test_ground_floor_is_small(metrics):
+    top = metrics.measure(ROOT)["top_level_modules"]
+    assert len(top) <= metrics.MAX_TOP_LEVEL, top
+
+
+@PENDING
+def test_no_long_modules(metrics):
+    assert metrics.measure(ROOT)["modules_over_600_lines"] == []
+
+
+@PENDING
+def test_no_long_functions(metrics):
+    assert metrics.long_functions(ROOT) == []
+
+
+@PENDING
+def test_no_deprecation_shims(metrics):
+    assert metrics.shims(ROOT) == []
