@@ -44,37 +44,41 @@ def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+def _walk(node: ast.AST, in_function: bool = False, prefix: str = ""):
+    """(node, inside a function?, qualified name of the enclosing def) for every node."""
+    for child in ast.iter_child_nodes(node):
+        inner = in_function or isinstance(
+            child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda
+        )
+        name = prefix
+        if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            name = f"{prefix}.{child.name}"
+        yield child, inner, name
+        yield from _walk(child, inner, name)
+
+
 def imports(root: Path) -> dict[str, list[tuple[str, bool, int]]]:
     """Module -> [(imported clpde module, inside a function?, line)]."""
     mods = modules(root)
     edges: dict[str, list[tuple[str, bool, int]]] = {}
     for name, path in mods.items():
-        tree = ast.parse(path.read_text(), str(path))
         is_package = path.name == "__init__.py"
         found = []
-
-        def visit(node, in_function):
-            for child in ast.iter_child_nodes(node):
-                inner = in_function or isinstance(
-                    child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda
-                )
-                if isinstance(child, ast.Import):
-                    for alias in child.names:
-                        if alias.name.split(".")[0] == "clpde":
-                            target = alias.name
-                            while target not in mods and "." in target:
-                                target = target.rsplit(".", 1)[0]
-                            found.append((target, inner, child.lineno))
-                elif isinstance(child, ast.ImportFrom):
-                    base = _resolve(name, is_package, child)
-                    if base.split(".")[0] != "clpde":
-                        continue
-                    for alias in child.names:
-                        target = f"{base}.{alias.name}"
-                        found.append((target if target in mods else base, inner, child.lineno))
-                visit(child, inner)
-
-        visit(tree, False)
+        for node, inner, _ in _walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    if alias.name.split(".")[0] == "clpde":
+                        target = alias.name
+                        while target not in mods and "." in target:
+                            target = target.rsplit(".", 1)[0]
+                        found.append((target, inner, node.lineno))
+            elif isinstance(node, ast.ImportFrom):
+                base = _resolve(name, is_package, node)
+                if base.split(".")[0] != "clpde":
+                    continue
+                for alias in node.names:
+                    target = f"{base}.{alias.name}"
+                    found.append((target if target in mods else base, inner, node.lineno))
         edges[name] = [e for e in found if e[0] in mods]
     return edges
 
@@ -151,20 +155,11 @@ def long_functions(root: Path, limit: int = MAX_FUNCTION_LINES) -> list[tuple[st
     for name, path in modules(root).items():
         source = path.read_text()
         lines = source.splitlines()
-        tree = ast.parse(source)
-
-        def visit(node, prefix):
-            for child in ast.iter_child_nodes(node):
-                if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef):
-                    qual = f"{prefix}.{child.name}"
-                    n = code_lines(child, lines)
-                    if n > limit:
-                        out.append((qual, n))
-                    visit(child, qual)
-                elif isinstance(child, ast.ClassDef):
-                    visit(child, f"{prefix}.{child.name}")
-
-        visit(tree, name)
+        for node, _, qual in _walk(ast.parse(source), prefix=name):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                n = code_lines(node, lines)
+                if n > limit:
+                    out.append((qual, n))
     return sorted(out, key=lambda item: -item[1])
 
 
