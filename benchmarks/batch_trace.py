@@ -4,7 +4,7 @@
 
 Inpaints --photos 512x512 photos (those of benchmarks/batch.py) with `clpde batch` twice:
 on clpde's local cluster and on a plain Dask LocalCluster (Dask's worker settings, the
-"before" of clpde.batch.WORKER_CONFIG and of the preload's malloc settings), and the serial
+"before" of clpde.scale.cluster.WORKER_CONFIG and of the preload's malloc settings), and the serial
 loop in this process. Every process first inpaints one photo untimed (its kernels). For
 each, the CPU (user and system, from /proc) of each thread over the timed part, divided by
 the number of photos of the whole batch (so the rows add up to the CPU per photo), and the
@@ -60,7 +60,7 @@ def thread_cpu(main: str = "event loop") -> dict:
 
 def warm(photo, mask):
     import clpde
-    from clpde.io import read_image
+    from clpde.io.images import read_image
 
     clpde.inpaint(read_image(photo), read_image(mask) > 0, channel_axis=-1, progress=False)
 
@@ -96,12 +96,13 @@ def run_batch(photos, mask, workers, threads, plain: bool) -> None:
 
     from distributed import Client
 
-    batch = importlib.import_module("clpde.batch")
+    batch = importlib.import_module("clpde.scale.batch")
     out = Path(tempfile.mkdtemp(prefix="clpde-trace-"))
     if plain:
         cluster = dask_cluster(workers, threads)
     else:
-        cluster, workers, threads = batch.start_cluster(workers, threads)
+        cluster, workers, threads = importlib.import_module("clpde.scale.cluster").start_cluster(
+            workers, threads)
     with Client(cluster, set_as_default=False) as client:
         client.wait_for_workers(workers, timeout=120)
         client.run(warm, str(photos[0]), str(mask))
@@ -121,7 +122,7 @@ def run_batch(photos, mask, workers, threads, plain: bool) -> None:
 
 def run_serial(photos, mask) -> None:
     import clpde
-    from clpde.io import read_image, write_image
+    from clpde.io.images import read_image, write_image
 
     out = Path(tempfile.mkdtemp(prefix="clpde-trace-"))
     m = read_image(mask) > 0
@@ -141,7 +142,7 @@ def main():
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--threads", type=int, default=1, help="PoCL threads per worker")
     args = parser.parse_args()
-    from clpde.io import write_image
+    from clpde.io.images import write_image
 
     work = Path(tempfile.mkdtemp(prefix="clpde-trace-"))
     (work / "photos").mkdir()

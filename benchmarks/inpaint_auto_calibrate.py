@@ -62,7 +62,7 @@ def methods():
 
 def box_features(image, mask):
     """[(box, features)] for clpde.inpaint's boxes of this mask under the structure method."""
-    from clpde import inpainting
+    from clpde.inpainting import registry as inpainting
     from clpde.inpainting import boxes, choose
 
     module = inpainting.load("coherence")

@@ -132,7 +132,7 @@ def methods_figure(path):
     from scipy import ndimage
     from skimage import data
 
-    from clpde.inpainting import available
+    from clpde.inpainting.registry import available
 
     def around(mask, size, which=0):
         """A size x size box centred on the which-th component of the mask."""

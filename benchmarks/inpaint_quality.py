@@ -195,7 +195,7 @@ def _rate_residual(image, stencil):
 def _from_truth(image, mask, steps, **params):
     """PSNR in the slot after `steps` steps started from the exact image."""
     import clpde
-    from clpde.inpaint import InpaintParams, LevelSolver
+    from clpde.inpainting.api import InpaintParams, LevelSolver
 
     p = InpaintParams(tol=0, mean_tol=0, **params)
     solver = LevelSolver(clpde.get_runtime(), image[None] / 255.0, mask, p)
@@ -284,7 +284,7 @@ def methods(only=None):
     """{name: fn(image, mask)}: the clpde methods installed, then the peers."""
     import cv2
 
-    from clpde.inpainting import available
+    from clpde.inpainting.registry import available
 
     table = {}
     for name in available():

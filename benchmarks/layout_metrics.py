@@ -3,11 +3,13 @@ long modules and functions, deprecation shims.
 
     python benchmarks/layout_metrics.py [--root PATH] [--json OUT]
 
-Every import statement counts, wherever it sits (module level, inside functions, under
-TYPE_CHECKING): an import of ``clpde.a.b`` is an edge to module ``clpde.a.b`` and, for
-``from clpde.a import b``, to ``clpde.a.b`` when that is a module, else to ``clpde.a``'s
-``__init__``. A cycle is a strongly connected component of that graph with more than one module
-(or a module importing itself). tests/core/test_layout.py asserts the targets on these numbers.
+Every import statement that can run counts, wherever it sits (module level, inside functions):
+only imports under ``if TYPE_CHECKING:`` are left out, since they never run (they name types
+for annotations); they are counted apart. An import of ``clpde.a.b`` is an edge to module
+``clpde.a.b`` and, for ``from clpde.a import b``, to ``clpde.a.b`` when that is a module, else
+to ``clpde.a``'s ``__init__``. A cycle is a strongly connected component of that graph with
+more than one module (or a module importing itself). tests/core/test_layout.py asserts the
+targets on these numbers.
 """
 
 from __future__ import annotations
@@ -44,27 +46,41 @@ def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
-def _walk(node: ast.AST, in_function: bool = False, prefix: str = ""):
-    """(node, inside a function?, qualified name of the enclosing def) for every node."""
+def _type_checking(node: ast.AST) -> bool:
+    test = getattr(node, "test", None) if isinstance(node, ast.If) else None
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def _walk(node: ast.AST, in_function: bool = False, prefix: str = "", typing: bool = False):
+    """(node, inside a function?, qualified name of the enclosing def) for every node; with
+    typing=True only the nodes under ``if TYPE_CHECKING:``, else all others."""
     for child in ast.iter_child_nodes(node):
+        if _type_checking(child) and not typing:
+            continue
         inner = in_function or isinstance(
             child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda
         )
         name = prefix
         if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
             name = f"{prefix}.{child.name}"
-        yield child, inner, name
-        yield from _walk(child, inner, name)
+        if typing and _type_checking(child):
+            yield from _walk(child, inner, name, typing=False)
+            continue
+        if not typing:
+            yield child, inner, name
+        yield from _walk(child, inner, name, typing)
 
 
-def imports(root: Path) -> dict[str, list[tuple[str, bool, int]]]:
-    """Module -> [(imported clpde module, inside a function?, line)]."""
+def imports(root: Path, typing: bool = False) -> dict[str, list[tuple[str, bool, int]]]:
+    """Module -> [(imported clpde module, inside a function?, line)]; typing=True: the
+    imports under ``if TYPE_CHECKING:`` instead."""
     mods = modules(root)
     edges: dict[str, list[tuple[str, bool, int]]] = {}
     for name, path in mods.items():
         is_package = path.name == "__init__.py"
         found = []
-        for node, inner, _ in _walk(ast.parse(path.read_text(), str(path))):
+        for node, inner, _ in _walk(ast.parse(path.read_text(), str(path)), typing=typing):
             if isinstance(node, ast.Import):
                 for alias in node.names:
                     if alias.name.split(".")[0] == "clpde":
@@ -196,12 +212,15 @@ def measure(root: Path) -> dict:
         and not (m == "clpde.cli" or m.startswith("clpde.cli.") or m == "clpde.__main__")
     })
     inner = [(m, t, line) for m, es in edges.items() for t, f, line in es if f]
+    typing = [f"{m} -> {t}" for m, es in imports(root, typing=True).items() for t, _, _ in es]
     return {
         "modules": len(mods),
         "top_level_modules": top,
         "cycles": cycles(edges),
         "library_modules_importing_cli": cli_importers,
         "function_level_clpde_imports": len(inner),
+        "function_level_clpde_import_list": [f"{m}:{line} -> {t}" for m, t, line in inner],
+        "type_checking_imports": typing,
         "modules_over_600_lines": long_modules,
         "functions_over_100_code_lines": long_functions(root),
         "deprecation_shims": shims(root),
@@ -223,6 +242,8 @@ def main(argv=None) -> int:
     print(f"library modules importing clpde.cli: {len(result['library_modules_importing_cli'])} "
           + ", ".join(result["library_modules_importing_cli"]))
     print(f"function-level imports of clpde modules: {result['function_level_clpde_imports']}")
+    print(f"imports for annotations only (under TYPE_CHECKING, not counted above): "
+          f"{len(result['type_checking_imports'])} " + ", ".join(result["type_checking_imports"]))
     print(f"modules over {MAX_MODULE_LINES} lines: {len(result['modules_over_600_lines'])}")
     for m, n in result["modules_over_600_lines"]:
         print(f"    {m}: {n}")

@@ -27,7 +27,7 @@
    flow on an icosphere whose polar hole from_mesh closed, with and without reinitialising
    the cells of the hole's rim (section 5c).
 6. The band's two storages in one run: the band lists over the dense padded grid (kernels/
-   surface_heat.cl) and the dense bricks (kernels/bricks.cl) at each brick size, a heat step plus
+   surface_heat.cl) and the dense bricks (kernels/surface/bricks.cl) at each brick size, a heat step plus
    the re-extension of what the next step reads, on 64^3 to 256^3 grids (--storage-sizes;
    512 if memory allows): time per step against a device copy of the whole grid (the
    yardstick: at most one copy is the target), per band cell, and the effective bandwidth of
@@ -155,7 +155,7 @@ def _time_size(n, steps):
     surf = ImplicitSurface.sphere(1.0, spacing)
     g = surf.grid
     flow = BandFlow(surf, surf.field(lambda x, y, z: x * y))
-    kernel = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0)
+    kernel = g.kernel("surface/heat.cl", "heat_step", WEIGHTED=0)
     r = g.scalar(0.1)
     q = surf.runtime.queue
 
@@ -171,7 +171,7 @@ def _time_size(n, steps):
         q.finish()
         return (time.perf_counter() - start) / count
 
-    band_copy = g.kernel("surface_bench.cl", "band_copy")
+    band_copy = g.kernel("surface/bench.cl", "band_copy")
 
     def one_band_copy():
         g.launch_runs(band_copy, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data)
@@ -244,7 +244,7 @@ def _storage_size(n, steps, reps):
     import pyopencl.array as cla
 
     from clpde.surface import ImplicitSurface
-    from clpde.surface.bricks import BRICK_SIZES
+    from clpde.bricks import BRICK_SIZES
     from clpde.surface.flows import BandFlow, BrickFlow, _offsets, _signs
 
     surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))
@@ -253,7 +253,7 @@ def _storage_size(n, steps, reps):
     r = g.scalar(0.1)
     variants = {}
     flow = BandFlow(surf, u)
-    k_list = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0)
+    k_list = g.kernel("surface/heat.cl", "heat_step", WEIGHTED=0)
 
     def list_step():
         g.launch_runs(k_list, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
@@ -264,9 +264,9 @@ def _storage_size(n, steps, reps):
     variants["lists"] = (list_step, flow.after_step, g.volume, run_cells,
                          12 * run_cells + 8 * runs.n)
     for brick in BRICK_SIZES:
-        surf._brick = brick
+        surf.band.brick = brick
         bf = BrickFlow(surf, u)
-        k_brick = bf.kernel("bricks.cl", "brick_heat_step", WEIGHTED=0)
+        k_brick = bf.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=0)
 
         def brick_step(bf=bf, k=k_brick):
             bf.bricks.launch(k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0),
@@ -353,7 +353,7 @@ def _dense_runs(g, q):
     """Runs covering whole rows of the box, 2 cells in from its edges on every side."""
     import pyopencl.array as cla
 
-    from clpde.surface.grid3d import BandRuns
+    from clpde.grid3d import BandRuns
 
     zs, ys = np.meshgrid(np.arange(2, g.nz - 2), np.arange(2, g.ny - 2), indexing="ij")
     base = (zs.ravel() + g.ghost) * int(g.sxy) + (ys.ravel() + g.ghost) * int(g.sx) + g.ghost

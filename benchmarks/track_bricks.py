@@ -3,7 +3,7 @@
     python benchmarks/track_bricks.py [--json PATH] [--rounds N] [--steps N] [--device D]
 
 For each frame pair (the tracking benchmark's: a synthetic 64x64 sequence of
-tests/track/test_track.py and an MNI152 axial slice pair, 233x197, when nilearn's data files
+tests/tracking/test_track.py and an MNI152 axial slice pair, 233x197, when nilearn's data files
 are installed; then synthetic 176x144 (carphone's size), 512^2, 1024^2 and 2048^2 frames
 with a disc and a wavy blob) it times, per layout (lists, bricks 8x8, bricks 16x4):
 
@@ -84,8 +84,8 @@ class Case:
     """One layout's level set, features and kernels on one frame pair."""
 
     def __init__(self, runtime, frames, mask, label):
-        from clpde.levelset import LevelSet, signed_distance
-        from clpde.track import DISCREPANCIES, MorphingTracker, morph_kernel_name
+        from clpde.tracking.levelset import LevelSet, signed_distance
+        from clpde.tracking.contours import DISCREPANCIES, MorphingTracker, morph_kernel_name
 
         layout, grouped, tiled = label.split()[0], label.endswith(" wg"), label.endswith("tiled")
         self.tracker = MorphingTracker(frames, mask, band_layout=layout, device=runtime)
@@ -101,9 +101,9 @@ class Case:
             name = morph_kernel_name(ls, disc)
             if name == "morph_track_tiled" and not tiled:
                 name = "morph_track_bricks"
-            self.morph[disc] = ls.band_kernel("track_features.cl", name, NCH=1,
+            self.morph[disc] = ls.band_kernel("tracking/features.cl", name, NCH=1,
                                               DISC=DISCREPANCIES[disc], WIN=3)
-        self.reinit = ls.band_kernel("levelset.cl", "reinit_step_bricks" if ls.brick else
+        self.reinit = ls.band_kernel("tracking/levelset.cl", "reinit_step_bricks" if ls.brick else
                                      "reinit_step_list")
         ls.dilate_band()
         self.near = ls._cells(ls._near_mask)
@@ -182,7 +182,7 @@ def sequences():
 
 def whole_tracks(rt, rounds, layouts):
     """ms per frame of clpde.track with the default options, each layout in turn."""
-    from clpde.track import track
+    from clpde.tracking.contours import track
 
     out = {}
     for name, frames, first in sequences():

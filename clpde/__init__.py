@@ -4,16 +4,17 @@ from . import (
     data,  # test images and scenes, like skimage.data
     surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
 )
-from .batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
-from .imagedata import InputError
-from .inpaint import Inpainting, inpaint
-from .planar import FLOWS, PlanarFlow, diffuse, stability_limit
-from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
-from .rof import denoise_tv
-from .runtime import ClpdeError, KernelBuildError, NoDeviceError, devices, get_runtime, use_device
-from .track import MorphingTracker, track
+from .scale.batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
+from .errors import InputError
+from .inpainting.api import Inpainting, inpaint
+from .planar.flows import FLOWS, PlanarFlow, diffuse, stability_limit
+from .regions.tracker import track_region  # region tracking on deforming surfaces (section 2.2)
+from .planar.rof import denoise_tv
+from .errors import ClpdeError, KernelBuildError, NoDeviceError
+from ._version import __version__  # noqa: F401  (clpde.__version__)
+from .runtime import devices, get_runtime, use_device
+from .tracking.contours import MorphingTracker, track
 
-__version__ = "0.1.0"
 
 __all__ = [
     "FLOWS",

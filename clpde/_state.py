@@ -61,7 +61,7 @@ def renamed_keyword(new: str, new_value: Any, old: str, old_value: Any, default:
         return new_value
     _warn(f"{old}= is deprecated; use {new}=", 2)
     if new_value is not None and new_value is not default:
-        from ._validation import InputError
+        from .errors import InputError
 
         raise InputError(f"pass {new}= only ({old}= is its deprecated old name)")
     return old_value

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .imagedata import InputError
+from .errors import InputError
 
 __all__ = [
     "REGION_SCENES", "SURFACE_SHAPES", "RegionScene", "checker", "colour_pattern",

@@ -14,10 +14,11 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from .runtime import ClpdeError, Kernel, Runtime, _check_not_forked
+from .errors import ClpdeError
+from .runtime import Kernel, Runtime, _check_not_forked
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("fields.cl",)
+KERNEL_FILES = ("common/fields.cl",)
 
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
@@ -26,7 +27,7 @@ _REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 
 
 
 class BaseGrid(ABC):
-    """What the 2D and 3D grids share (Grid here, clpde.surface.grid3d.Grid3D): kernel
+    """What the 2D and 3D grids share (Grid here, clpde.grid3d.Grid3D): kernel
     lookups in the grid's dtype, scalars, the interior of padded arrays and launches over
     index lists. A subclass is a frozen dataclass with `runtime`, `dtype` and `ghost`, and
     says its interior's `shape` (slowest axis first), the cells of one padded channel
@@ -185,8 +186,8 @@ class Field:
         g = self.grid
         q = g.runtime.queue
         args = (self.data.data, np.int32(mode), g.scalar(value), *g.args(g.nx))
-        g.kernel("fields.cl", "fill_ghost_cols")(q, *g.runtime.items(g.ny, g.nc), *args)
-        g.kernel("fields.cl", "fill_ghost_rows")(q, *g.runtime.items(g.sx, g.nc), *args)
+        g.kernel("common/fields.cl", "fill_ghost_cols")(q, *g.runtime.items(g.ny, g.nc), *args)
+        g.kernel("common/fields.cl", "fill_ghost_rows")(q, *g.runtime.items(g.sx, g.nc), *args)
 
     def reduce(self, op: str, other: Field | None = None) -> np.ndarray:
         """A per-channel reduction over the interior, computed on the device.
@@ -197,7 +198,7 @@ class Field:
         g = self.grid
         partial = cla.empty(g.runtime.queue, (g.nc, g.ny), g.dtype)
         b = (other if other is not None else self).data.data
-        g.kernel("fields.cl", "row_reduce")(
+        g.kernel("common/fields.cl", "row_reduce")(
             g.runtime.queue, (1, g.ny, g.nc), (1, 1, 1),  # a fixed work-group (Runtime.items)
             self.data.data, b, np.int32(_REDUCE_OPS[op]), partial.data, *g.args(g.nx),
         )
@@ -248,14 +249,14 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     flat = mask.reshape(n)
 
     launch = runtime.items(nchunks)
-    runtime.kernel("fields.cl", "count_chunks")(q, *launch, flat.data, np.int32(n),
+    runtime.kernel("common/fields.cl", "count_chunks")(q, *launch, flat.data, np.int32(n),
                                                 np.int32(chunk), counts.data)
-    runtime.kernel("fields.cl", "exclusive_scan_serial")(q, (1,), (1,), counts.data,
+    runtime.kernel("common/fields.cl", "exclusive_scan_serial")(q, (1,), (1,), counts.data,
                                                          np.int32(nchunks), total.data)
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build
     indices = cla.empty(q, max(count, 1), np.int32)
     if count:
-        runtime.kernel("fields.cl", "write_chunks")(
+        runtime.kernel("common/fields.cl", "write_chunks")(
             q, *launch, flat.data, np.int32(n), np.int32(chunk), counts.data, indices.data
         )
     return IndexList(indices, count)

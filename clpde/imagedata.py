@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from ._validation import InputError, positive  # noqa: F401  (importable from here)
+from .errors import InputError
 
 
 @dataclass
@@ -144,3 +144,76 @@ def compute_dtype(image_dtype: DTypeLike, requested: DTypeLike | None = None) ->
     if requested not in (np.dtype(np.float32), np.dtype(np.float64)):
         raise InputError(f"precision must be float32 or float64, not {requested}")
     return requested
+
+
+def positive(name: str, value) -> float:
+    """A parameter that must be a finite positive number, as a float."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a positive number, not {value!r}") from None
+    if not np.isfinite(number) or number <= 0:
+        raise InputError(f"{name} must be a positive number, not {value!r}")
+    return number
+
+
+def check_steps(steps) -> int:
+    """A number of steps: a non-negative integer (bools are refused)."""
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+        raise InputError(f"steps must be a non-negative integer, not {steps!r}")
+    return int(steps)
+
+
+def check_time_step(dt, limit: float, what: str) -> float:
+    """An explicit scheme's time step: 0.8 of the stability `limit` when None, else a
+    positive number no larger than the limit. `what` names the scheme in the message."""
+    if dt is None:
+        return 0.8 * limit
+    dt = float(dt)
+    if not np.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt must be a positive number, not {dt}")
+    if dt > limit * (1 + 1e-9):
+        raise InputError(
+            f"dt={dt:g} is beyond the stability limit {limit:g} of the explicit {what} scheme; "
+            f"use dt <= {limit:g} (or leave dt=None for {0.8 * limit:g})"
+        )
+    return dt
+
+
+@dataclass
+class Channels:
+    """An image split into the channels a flow works on and an untouched alpha channel."""
+
+    colour: np.ndarray
+    channel_axis: int | None
+    alpha: np.ndarray | None
+    squeezed: bool
+
+    def join(self, result: np.ndarray) -> np.ndarray:
+        """The flow's result on `colour` back in the input's layout, alpha restored."""
+        result = np.asarray(result)
+        if self.squeezed:
+            result = result[..., np.newaxis]
+        if self.alpha is not None:
+            if result.ndim == 2:
+                result = result[..., np.newaxis]
+            result = np.concatenate([result, self.alpha[..., np.newaxis]], axis=-1)
+        return result
+
+
+def split_alpha(image: np.ndarray, name: str = "input") -> Channels:
+    """Greyscale (rows, cols) or colour (rows, cols, 1..4); 2 and 4 channels end in alpha."""
+    if image.ndim == 2:
+        return Channels(image, None, None, False)
+    if image.ndim != 3 or image.shape[-1] > 4:
+        raise InputError(
+            f"{name} has shape {image.shape}; expected a greyscale (rows, columns) or colour "
+            "(rows, columns, channels<=4) image (multi-page TIFF stacks are not supported)"
+        )
+    alpha = None
+    colour = image
+    if image.shape[-1] in (2, 4):
+        alpha, colour = image[..., -1], image[..., :-1]
+    if colour.shape[-1] == 1:
+        return Channels(colour[..., 0], None, alpha, alpha is None)
+    return Channels(colour, -1, alpha, False)

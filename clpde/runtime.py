@@ -1,7 +1,7 @@
 """OpenCL runtime: device choice, program building and caching, launch geometry.
 
 Everything that talks to pyopencl's platform layer lives here, so the flows only ask for
-``get_runtime(device).kernel("planar.cl", "heat_step")`` and launch it.
+``get_runtime(device).kernel("planar/planar.cl", "heat_step")`` and launch it.
 """
 
 from __future__ import annotations
@@ -17,25 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import ClpdeError, DeviceMemoryError, KernelBuildError, NoDeviceError
+
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("planar.cl",)
+KERNEL_FILES = ("planar/planar.cl",)
 ITEM_GROUP = 64  # the work-group of Runtime.items
-
-
-class ClpdeError(RuntimeError):
-    """Base class of clpde's own errors (device, build and input problems)."""
-
-
-class NoDeviceError(ClpdeError):
-    pass
-
-
-class KernelBuildError(ClpdeError):
-    pass
-
-
-class DeviceMemoryError(ClpdeError, MemoryError):
-    """A request that cannot fit the device's memory; the message gives the size and the way out."""
 
 
 MEMORY_WAY_OUT = ("use a smaller input (crop or downsample it) or process it in tiles, or "
@@ -57,7 +43,7 @@ def _find_kernel_dir() -> Path:
     # keeps them in the top-level kernels/ folder beside clpde/.
     here = Path(__file__).resolve().parent
     for candidate in (here / "kernels", here.parent / "kernels"):
-        if (candidate / "common.cl").is_file():
+        if (candidate / "common/common.cl").is_file():
             return candidate
     raise ClpdeError(f"clpde's OpenCL kernels were not found next to {here}; reinstall clpde")
 
@@ -219,7 +205,7 @@ def _probe(index: int) -> str | None:
     platform, device = _all_devices()[index]
     try:
         ctx = cl.Context([device])
-        cl.Program(ctx, (KERNEL_DIR / "probe.cl").read_text()).build()
+        cl.Program(ctx, (KERNEL_DIR / "common/probe.cl").read_text()).build()
         return None
     except cl.Error as exc:
         log = str(exc)
@@ -481,7 +467,10 @@ class Runtime:
             raise ClpdeError(f"kernels compute in float32 or float64, not {dtype}")
         # The #line directive makes compiler messages name the real file and line.
         source = f'#line 1 "{path}"\n' + path.read_text()
-        options = [f"-I{KERNEL_DIR}", f"-DREAL={real}", "-cl-std=CL1.2"]
+        # kernels/<capability>/<file> include shared code as "<capability>/<file>", and the
+        # ground floor's (kernels/common/) by its bare name
+        options = [f"-I{KERNEL_DIR}", f"-I{KERNEL_DIR / 'common'}", f"-DREAL={real}",
+                   "-cl-std=CL1.2"]
         if real == "double":
             options.append("-DREAL_IS_DOUBLE=1")
         if "portable computing language" in self.platform.name.lower():

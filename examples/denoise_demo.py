@@ -23,7 +23,7 @@ from skimage import data
 from skimage.metrics import peak_signal_noise_ratio
 
 import clpde
-from clpde.io import write_image
+from clpde.io.images import write_image
 
 
 def noisy_photo(sigma: float, seed: int = 0):

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from clpde.cli._inpaint_demo import run_demo
-from clpde.io import read_image, write_image
+from clpde.io.images import read_image, write_image
 
 FIGURE = Path(__file__).resolve().parent.parent / "docs" / "images" / "inpaint_astronaut.png"
 

@@ -14,7 +14,7 @@ from skimage import data
 import clpde
 from clpde.cli._inpaint_demo import side_by_side
 from clpde.data import damage_mask
-from clpde.io import write_image
+from clpde.io.images import write_image
 
 
 def main():

@@ -13,7 +13,7 @@ import numpy as np
 
 import clpde
 from clpde.cli._inpaint_demo import side_by_side
-from clpde.io import write_image
+from clpde.io.images import write_image
 
 
 def synthetic(n=128):

@@ -12,7 +12,7 @@ is read from the installed package, not copied into this repository.
 Writes track_carphone.png (the scored frames: old default on top, default below; red the
 tracked contour, green the hand-drawn one), track_carphone.gif (the default, every sixth
 frame) and track_hard_cases.png (the synthetic shadow, flicker and distractor sequences of
-tests/track/test_track.py, old default and default).
+tests/tracking/test_track.py, old default and default).
 """
 
 import argparse
@@ -25,7 +25,7 @@ from _output import add_output_arguments, output_folder
 from scipy import ndimage
 
 import clpde
-from clpde.io import write_gif, write_image
+from clpde.io.images import write_gif, write_image
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent

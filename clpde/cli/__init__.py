@@ -15,8 +15,8 @@ import warnings
 
 import pyopencl as cl
 
-from .. import __version__
-from ..runtime import ClpdeError
+from .._version import __version__
+from ..errors import ClpdeError, error_message
 from . import batch, denoise, devices, diffuse, inpaint, regions, surface, track
 
 SUBCOMMANDS = [
@@ -42,13 +42,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _message(exc: BaseException) -> str:
-    if isinstance(exc, OSError) and exc.strerror:
-        where = f": {exc.filename}" if exc.filename else ""
-        return f"{exc.strerror}{where}"
-    return str(exc) or type(exc).__name__
-
-
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """Warnings as one line for the command line's user, without the source location."""
     print(f"clpde: warning: {message}", file=sys.stderr)
@@ -71,7 +64,7 @@ def main(argv=None) -> int:
             warnings.showwarning = _show_warning
             return args.run(args)
     except (ClpdeError, OSError, cl.Error) as exc:
-        print(f"clpde: error: {_message(exc)}", file=sys.stderr)
+        print(f"clpde: error: {error_message(exc)}", file=sys.stderr)
         return ERROR_STATUS
     except KeyboardInterrupt:
         print("clpde: interrupted; nothing was written", file=sys.stderr)

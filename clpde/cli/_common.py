@@ -10,21 +10,15 @@ import contextlib
 import re
 import sys
 import warnings
-from dataclasses import dataclass
 
-import numpy as np
 
 from .._progress import on_terminal as show_progress  # noqa: F401  (the subcommands' name)
-from ..imagedata import InputError
-from ..io import (
+from ..errors import InputError
+from ..imagedata import Channels, split_alpha  # noqa: F401  (the subcommands' names)
+from ..io.images import (
     check_not_overwriting_input,
     check_output_folder,
-    check_writable,
-    image_format,
-    read_image,
-    write_image,
 )
-from ..runtime import get_runtime
 
 
 def add_device_argument(parser) -> None:
@@ -88,67 +82,10 @@ def grid_advice(resolution: int):
         warnings.warn(text, w.category, stacklevel=3)
 
 
-def load_input(args, *extra_inputs, allow_nan: bool = False) -> np.ndarray:
-    """Check the device and the output path, then read IN; all before any work is done.
-    NaN pixels are refused with the command that fills them, unless allow_nan."""
-    get_runtime(args.device)  # an unknown device fails here, before reading anything
-    check_not_overwriting_input([args.input, *extra_inputs], args.output)
-    image_format(args.output)
-    image = read_image(args.input)
-    if image.dtype == bool:  # 1-bit files: compute on 0/255 and write 8-bit
-        image = image.astype(np.uint8) * 255
-    if not allow_nan and np.issubdtype(image.dtype, np.floating):
-        bad = int((~np.isfinite(image)).sum())
-        if bad:
-            raise InputError(
-                f"{args.input} has {bad} NaN or infinite values; fill them first with "
-                f"`clpde inpaint {args.input} nan -o FILLED.tif`, then use FILLED.tif")
-    check_writable(args.output, image.dtype, image.shape)
-    return image
-
-
-@dataclass
-class Channels:
-    """An image split into the channels a flow works on and an untouched alpha channel."""
-
-    colour: np.ndarray
-    channel_axis: int | None
-    alpha: np.ndarray | None
-    squeezed: bool
-
-    def join(self, result: np.ndarray) -> np.ndarray:
-        """The flow's result on `colour` back in the input's layout, alpha restored."""
-        result = np.asarray(result)
-        if self.squeezed:
-            result = result[..., np.newaxis]
-        if self.alpha is not None:
-            if result.ndim == 2:
-                result = result[..., np.newaxis]
-            result = np.concatenate([result, self.alpha[..., np.newaxis]], axis=-1)
-        return result
-
-
-def split_alpha(image: np.ndarray, name: str = "input") -> Channels:
-    """Greyscale (rows, cols) or colour (rows, cols, 1..4); 2 and 4 channels end in alpha."""
-    if image.ndim == 2:
-        return Channels(image, None, None, False)
-    if image.ndim != 3 or image.shape[-1] > 4:
-        raise InputError(
-            f"{name} has shape {image.shape}; expected a greyscale (rows, columns) or colour "
-            "(rows, columns, channels<=4) image (multi-page TIFF stacks are not supported)"
-        )
-    alpha = None
-    colour = image
-    if image.shape[-1] in (2, 4):
-        alpha, colour = image[..., -1], image[..., :-1]
-    if colour.shape[-1] == 1:
-        return Channels(colour[..., 0], None, alpha, alpha is None)
-    return Channels(colour, -1, alpha, False)
-
-
-def save_output(args, result: np.ndarray) -> None:
-    write_image(args.output, result)
-    print(f"wrote {args.output}", file=sys.stderr)
+def report(lines) -> None:
+    """A task's report (clpde.scale.tasks), one line each on stderr."""
+    for line in lines:
+        print(line, file=sys.stderr)
 
 
 def param_check(args, flow: str, allowed: dict) -> None:

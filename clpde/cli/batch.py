@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import sys
+
+from ..errors import InputError
+from . import denoise, diffuse, inpaint, surface, track
 
 FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage errors
 
 
 def add_batch_parser(subparsers) -> None:
-    from ..batch import COMMANDS, MANIFEST
+    from ..scale.batch import COMMANDS, MANIFEST
 
     parser = subparsers.add_parser(
         "batch", help="run inpaint, denoise, diffuse, track or surface over many files",
@@ -56,15 +61,52 @@ def add_batch_parser(subparsers) -> None:
     parser.set_defaults(run=run_batch)
 
 
-def run_batch(args) -> int:
-    from ..batch import batch, result_table
+# COMMAND's positional arguments, as placeholders: only its options are read from the parse
+_PLACEHOLDERS = {"inpaint": ["IN", "MASK", "-o", "OUT"], "track": ["IN", "--init", "MASK", "-o",
+                                                                    "OUT"],
+                 "surface": ["heat", "MESH", "-o", "OUT"], "denoise": ["IN", "OUT"],
+                 "diffuse": ["IN", "OUT"]}
 
-    argv = list(getattr(args, "extra", []))
+
+# each command's parser and the keywords of its task from the parsed flags
+_COMMANDS = {"inpaint": (inpaint.add_inpaint_parser, inpaint.task_options),
+             "denoise": (denoise.add_denoise_parser, denoise.task_options),
+             "diffuse": (diffuse.add_diffuse_parser, diffuse.task_options),
+             "track": (track.add_track_parser, track.task_options),
+             "surface": (surface.add_surface_parser, surface.task_options)}
+
+
+def command_options(command: str, argv: list[str]) -> dict:
+    """COMMAND's own flags (`clpde COMMAND --help`), checked by its parser before any work,
+    as the keywords of its task (clpde.scale.tasks.TASKS)."""
+    add_parser, task_options = _COMMANDS[command]
+    parser = argparse.ArgumentParser(prog="clpde")
+    add_parser(parser.add_subparsers(dest="command"))
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            parsed = parser.parse_args([command, *_PLACEHOLDERS[command], *argv])
+    except SystemExit:
+        lines = [ln for ln in err.getvalue().splitlines() if ln.strip()]
+        detail = lines[-1].split("error: ", 1)[-1] if lines else "invalid options"
+        raise InputError(f"clpde {command}: {detail}") from None
+    options = task_options(parsed)
+    if command == "surface":  # the flow is batch's --flow
+        del options["flow"]
+    if command in ("track", "surface"):  # each output folder is new: the batch replaces it
+        del options["overwrite"]
+    return options
+
+
+def run_batch(args) -> int:
+    from ..scale.batch import batch, result_table
+
+    options = command_options(args.batch_command, list(getattr(args, "extra", [])))
     try:
         result = batch(args.batch_command, args.inputs, args.output, mask=args.mask,
                        masks=args.masks, workers=args.workers, threads=args.threads,
                        scheduler=args.scheduler, flow=args.flow, tile=args.tile, force=args.force,
-                       argv=argv)
+                       **options)
     except KeyboardInterrupt:
         print(f"clpde batch: interrupted; {args.output} holds complete outputs only (a rerun "
               "continues where this one stopped)", file=sys.stderr)

@@ -1,13 +1,9 @@
-"""`clpde denoise`: total-variation (ROF) denoising (clpde.rof)."""
+"""`clpde denoise`: total-variation (ROF) denoising (clpde.planar.rof)."""
 
 from __future__ import annotations
 
-import sys
-
-import numpy as np
-
-from ..imagedata import InputError
-from ._common import add_image_arguments, load_input, save_output, show_progress, split_alpha
+from ..scale.tasks import TASKS
+from ._common import add_image_arguments, report, show_progress
 
 
 def add_denoise_parser(subparsers) -> None:
@@ -33,24 +29,13 @@ def add_denoise_parser(subparsers) -> None:
     parser.set_defaults(run=run_denoise)
 
 
-def run_denoise(args) -> int:
-    from ..rof import denoise_tv
+def task_options(args) -> dict:
+    """The denoise task's keywords from the parsed flags (clpde.scale.tasks.denoise_file)."""
+    return {"sigma": args.sigma, "weight": args.weight, "method": args.method, "eps": args.eps,
+            "max_steps": args.max_steps, "device": args.device}
 
-    if args.eps is not None and args.method != "gradient":
-        raise InputError("--eps applies to --method gradient only")
-    image = load_input(args)
-    parts = split_alpha(image, args.input)
-    options = {"method": args.method}
-    if args.eps is not None:
-        options["eps"] = args.eps
-    if args.max_steps is not None:
-        options["max_steps"] = args.max_steps
-    result, info = denoise_tv(parts.colour, sigma=args.sigma, weight=args.weight,
-                              channel_axis=parts.channel_axis, device=args.device,
-                              progress=show_progress(), return_info=True, **options)
-    save_output(args, parts.join(result))
-    state = "converged" if info.converged else "stopped at --max-steps"
-    residual = float(np.sqrt(np.mean(info.residual_variance)))
-    print(f"denoise: {info.steps} {args.method} iterations ({state}), residual std "
-          f"{residual:.4g}", file=sys.stderr)
+
+def run_denoise(args) -> int:
+    report(TASKS["denoise"](args.input, args.output, progress=show_progress(),
+                            **task_options(args)))
     return 0

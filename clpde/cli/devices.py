@@ -6,7 +6,8 @@ import json
 import os
 from dataclasses import asdict, replace
 
-from ..runtime import ClpdeError, devices, get_runtime
+from ..errors import ClpdeError
+from ..runtime import devices, get_runtime
 from ._common import add_device_argument
 
 

@@ -2,19 +2,12 @@
 
 from __future__ import annotations
 
-from ._common import (
-    add_image_arguments,
-    load_input,
-    param_check,
-    save_output,
-    show_progress,
-    split_alpha,
-)
+from ..planar.flows import FLOW_PARAMS, FLOWS
+from ..scale.tasks import TASKS
+from ._common import add_image_arguments, param_check, report, show_progress
 
 
 def add_diffuse_parser(subparsers) -> None:
-    from ..planar import FLOWS
-
     parser = subparsers.add_parser(
         "diffuse", help="run a planar diffusion flow on an image",
         description="Run heat, Perona-Malik, TV or curvature diffusion for a number of "
@@ -36,17 +29,16 @@ def add_diffuse_parser(subparsers) -> None:
     parser.set_defaults(run=run_diffuse)
 
 
-def run_diffuse(args) -> int:
-    from ..planar import FLOW_PARAMS, diffuse
+def task_options(args) -> dict:
+    """The diffuse task's keywords from the parsed flags (clpde.scale.tasks.diffuse_file)."""
+    return {"flow": args.flow, "steps": args.steps, "dt": args.dt, "kappa": args.kappa,
+            "edge": args.edge, "eps": args.eps, "device": args.device}
 
+
+def run_diffuse(args) -> int:
     param_check(args, args.flow, {option: tuple(f for f, params in FLOW_PARAMS.items()
                                                 if option in params)
                                   for option in ("kappa", "edge", "eps")})
-    image = load_input(args)
-    parts = split_alpha(image, args.input)
-    params = {k: getattr(args, k) for k in ("kappa", "edge", "eps") if getattr(args, k) is not None}
-    result = diffuse(parts.colour, args.flow, steps=args.steps, dt=args.dt,
-                     channel_axis=parts.channel_axis, device=args.device,
-                     progress=show_progress(), **params)
-    save_output(args, parts.join(result))
+    report(TASKS["diffuse"](args.input, args.output, progress=show_progress(),
+                            **task_options(args)))
     return 0

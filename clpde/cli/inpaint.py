@@ -2,23 +2,22 @@
 
 from __future__ import annotations
 
-import os
 import sys
+from pathlib import Path
 
-import numpy as np
 
-from ..imagedata import InputError
-from ..io import MASK_RULE, check_not_overwriting_input, read_image, read_mask
+from ..errors import InputError
+from ..film.restore import inpaint_sequence
+from ..io.images import MASK_RULE
+from ..io.video import is_video
 from ..runtime import get_runtime
-from ..video import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
+from ..scale.tasks import TASKS, TRANSPORT_OPTIONS
 from ._common import (
     OUTPUT_FOLDER_RULE,
     add_device_argument,
     check_output_folder_args,
-    load_input,
-    save_output,
+    report,
     show_progress,
-    split_alpha,
 )
 
 
@@ -72,7 +71,7 @@ def add_inpaint_parser(subparsers) -> None:
                         help="colour model (default: channels)")
     parser.add_argument("--levels", type=int, default=None,
                         help="multiresolution levels (default: chosen from the mask)")
-    from ..inpainting import METHODS
+    from ..inpainting.registry import METHODS
 
     parser.add_argument("--method", choices=("auto", *METHODS), default=None,
                         help="inpainting method (default: auto, coherence transport where "
@@ -84,32 +83,18 @@ def add_inpaint_parser(subparsers) -> None:
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
                              "to the observed pixel) instead of bright = inpaint")
     add_device_argument(parser)
-    add_sequence_arguments(parser)  # a video or an image folder: clpde/video.py
+    add_sequence_arguments(parser)  # a video or an image folder: clpde/io/video.py
     parser.set_defaults(run=run_inpaint)
 
 
-def _read_soft_mask(path, shape) -> np.ndarray:
-    """The mask's grey level over its dtype's range as a float degree of damage in [0, 1]
-    (a colour mask: its brightest colour channel; an alpha channel is ignored)."""
-    mask = read_image(path)
-    if mask.ndim == 3:
-        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
-        mask = mask[..., :channels].max(axis=-1)
-    if mask.shape != tuple(shape):
-        raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
-                         f"is {shape[1]}x{shape[0]}; give a mask of the same size")
-    if np.issubdtype(mask.dtype, np.integer):
-        return mask.astype(np.float32) / np.iinfo(mask.dtype).max
-    return np.clip(mask.astype(np.float32), 0, 1)
-
-
-TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
+def task_options(args) -> dict:
+    """The inpaint task's keywords from the parsed flags (clpde.scale.tasks.inpaint_file)."""
+    return {"method": args.method, "colour": args.colour, "levels": args.levels,
+            "soft_mask": args.soft_mask, "gif": args.gif, "gif_every": args.gif_every,
+            **{name: getattr(args, name) for name in TRANSPORT_OPTIONS}, "device": args.device}
 
 
 def run_inpaint(args) -> int:
-    from ..inpaint import inpaint
-    from ..io import write_gif
-
     if prepare_sequence_args(args):  # a film or a folder of frames, over Dask workers
         return run_sequence_inpaint(args)
     if args.gif_every < 1:
@@ -131,77 +116,59 @@ def run_inpaint(args) -> int:
     if args.overwrite:
         raise InputError("--overwrite is for --demo's output folder; an output image is "
                          "always replaced")
-    if args.gif:
-        check_not_overwriting_input([args.input, args.mask], args.gif)
-        if not str(args.gif).lower().endswith(".gif"):
-            raise InputError(f"--gif {args.gif}: the animation must be a .gif file")
-        folder = os.path.dirname(os.path.abspath(args.gif))
-        if not os.path.isdir(folder):
-            raise InputError(f"the folder {folder} for --gif does not exist; create it first")
-    nan_mask = args.mask.lower() == "nan" and not os.path.exists(args.mask)
-    image = load_input(args, *([] if nan_mask else [args.mask]), allow_nan=True)
-    finite = (np.isfinite(image) if np.issubdtype(image.dtype, np.floating)
-              else np.ones(image.shape, bool))
-    finite = finite.all(axis=-1) if finite.ndim == 3 else finite
-    if nan_mask:
-        if finite.all():
-            raise InputError(f"{args.input} has no NaN pixels to fill (MASK 'nan'); give a mask "
-                             "image of the pixels to inpaint")
-        mask = ~finite
-    else:
-        if args.soft_mask:
-            mask = _read_soft_mask(args.mask, image.shape[:2])
-        else:
-            mask = read_mask(args.mask, image.shape[:2])
-        if not finite[~(mask > 0)].all():
-            raise InputError(
-                f"{args.input} has {int((~finite[~(mask > 0)]).sum())} NaN pixels outside the mask "
-                f"{args.mask}; paint them into the mask, or give 'nan' as MASK to fill exactly "
-                "the NaN pixels")
-    parts = split_alpha(image, args.input)
-    method = args.method
-    if method is None and args.gif:
-        method = "transport"  # the evolution the GIF shows is the thesis scheme's
-    options = {"channel_axis": parts.channel_axis, "colour": args.colour,
-               "levels": args.levels, "device": args.device, "progress": show_progress(),
-               "return_info": True, "method": method}
-    # only the transport options given, so that the default method can be chosen by them
-    options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
-                    if getattr(args, name) is not None})
-    if args.gif:
-        result, info = inpaint(parts.colour, mask, snapshots=args.gif_every, **options)
-    else:
-        result, info = inpaint(parts.colour, mask, **options)
-    save_output(args, parts.join(result))
-    if args.gif:
-        frames = evolution_frames(parts.colour, [s.image for s in info.snapshots])
-        write_gif(args.gif, frames, duration=0.25)
-        print(f"wrote {args.gif} ({len(frames)} frames: the damaged image, then every "
-              f"{args.gif_every} steps from the start fill to the result)", file=sys.stderr)
-    state = "converged" if info.converged else "stopped at --max-steps"
-    steps = f"{info.steps} steps ({state}), {info.levels} level(s), " \
-        if info.method == "transport" else ""
-    print(f"inpaint: {int((mask > 0).sum())} pixels, method {info.method}, {steps}"
-          f"{len(info.boxes)} box(es), {info.seconds:.2f} s", file=sys.stderr)
+    report(TASKS["inpaint"](args.input, args.output, mask=args.mask, progress=show_progress(),
+                            **task_options(args)))
     return 0
 
 
-def evolution_frames(damaged, states) -> list[np.ndarray]:
-    """The GIF's frames as uint8: the damaged image first (its region shown as it came, NaN
-    as black), then the states; all on one intensity scale (the result's range for floats),
-    consecutive equal frames merged, since a GIF cannot show them apart."""
-    frames = [np.asarray(damaged), *(np.asarray(s) for s in states)]
-    result = frames[-1]
-    if np.issubdtype(result.dtype, np.floating):
-        finite = result[np.isfinite(result)]
-        lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-        scale = hi - lo if hi > lo else 1.0
-        frames = [np.nan_to_num((f.astype(np.float64) - lo) / scale, nan=0.0, posinf=1.0,
-                                neginf=0.0) for f in frames]
-    from ..io import _frame_to_uint8
+# ---- `clpde inpaint VIDEO --mask MASK -o OUT.mp4` ------------------------------------------------
+def add_sequence_arguments(parser) -> None:
+    """The options of `clpde inpaint` for a video or an image folder."""
+    group = parser.add_argument_group(
+        "films and frame folders", "IMAGE may be a video or a folder of images; MASK (or "
+        "--mask) one image or a folder of per-frame masks; -o a video or a folder")
+    group.add_argument("--mask", dest="mask_option", metavar="MASK", default=None,
+                       help="the mask, as an option (same as the MASK argument)")
+    group.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="local Dask workers for the frames (default: one per core)")
+    group.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="use a running Dask cluster, e.g. tcp://HOST:8786")
+    group.add_argument("--frames-per-task", type=int, default=4, metavar="K",
+                       help="frames sent to a worker at a time (default: 4)")
 
-    out = []
-    for frame in map(_frame_to_uint8, frames):
-        if not out or not np.array_equal(frame, out[-1]):
-            out.append(frame)
-    return out
+
+def prepare_sequence_args(args) -> bool:
+    """Fold --mask into MASK; True when IMAGE is a video or a folder of frames."""
+    option = getattr(args, "mask_option", None)
+    if option is not None:
+        if args.mask is not None:
+            raise InputError("give the mask once: as MASK or as --mask")
+        args.mask = option
+    source = args.input
+    sequence = bool(source) and (Path(source).is_dir() or is_video(source))
+    if not sequence and (getattr(args, "workers", None) or getattr(args, "scheduler", None)):
+        raise InputError("--workers and --scheduler apply to a video or a folder of frames; "
+                         "for many image files use `clpde batch inpaint`")
+    return sequence
+
+
+def run_sequence_inpaint(args) -> int:
+    if args.gif or args.demo:
+        raise InputError("--gif and --demo apply to one image, not a video or frame folder")
+    if not args.mask:
+        raise InputError("give the mask: clpde inpaint VIDEO --mask MASK -o OUT.mp4")
+    if args.workers is not None and args.scheduler is not None:
+        raise InputError("give --workers or --scheduler, not both")
+    # as for one image: only the options given, so that the default method is chosen by them
+    options = {"colour": args.colour, "levels": args.levels, "device": args.device,
+               "method": args.method}
+    options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
+                    if getattr(args, name) is not None})
+    result = inpaint_sequence(args.input, args.mask, args.output, workers=args.workers,
+                              scheduler=args.scheduler, frames_per_task=args.frames_per_task,
+                              overwrite=getattr(args, "overwrite", False),
+                              overwrite_option="--overwrite", **options)
+    print(f"inpaint: {result.frames} frames at {float(result.rate):.3f} fps in "
+          f"{result.seconds:.1f} s on {result.workers} worker(s); wrote {result.output}",
+          file=sys.stderr)
+    return 0

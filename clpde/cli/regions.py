@@ -14,8 +14,8 @@ import numpy as np
 
 from ..data import REGION_SCENES as SCENES
 from ..data import RegionScene, region_scene
-from ..imagedata import InputError
-from ..regions import track_region
+from ..errors import InputError
+from ..regions.tracker import track_region
 from ..runtime import get_runtime
 from ._common import (
     add_device_argument,
@@ -24,7 +24,7 @@ from ._common import (
     grid_advice,
     show_progress,
 )
-from .surface import encloses_volume
+from ..surface.runs import encloses_volume
 
 FLOWS = ("gaussian", "mean-curvature", "morph-sphere")
 
@@ -223,7 +223,7 @@ def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions"
     2.5x smaller than RGB). OUTDIR is created if missing; an existing one must be empty, or
     with overwrite=True hold only clpde's kinds of output files, and is then replaced as a
     whole (clpde.io.output_folder). Returns the paths written."""
-    from ..io import output_folder
+    from ..io.images import output_folder
 
     with output_folder(outdir, overwrite) as staging:
         written = _write_frame_files(frames, str(staging), size, views, stem)
@@ -235,7 +235,7 @@ def _write_frame_files(frames, outdir, size, views, stem):
 
     from PIL import Image
 
-    from ..io import write_bytes
+    from ..io.images import write_bytes
     from ..surface.render import export_mesh, render_mesh
 
     written = []

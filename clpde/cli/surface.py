@@ -1,34 +1,19 @@
-"""`clpde surface`: a chapter-4 flow on the implicit surface of a mesh (clpde.surface).
-
-Besides the subcommand: the chapter-4 flows as ready-made runs on a shape or a user's mesh
-(`load_surface`, `run_flow`), returning the data before and after on the surface, written
-as pictures (PNG) and a coloured mesh (PLY, GLB) into an output folder (`write_run`); the
-examples use them too. The demonstration data is in clpde.data."""
+"""`clpde surface`: a chapter-4 flow on the implicit surface of a mesh (clpde.surface); the
+runs themselves are clpde.surface.runs'."""
 
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
-import warnings
-from dataclasses import dataclass
-
-import numpy as np
-
 from ..data import SURFACE_SHAPES as SHAPES
-from ..data import checker, colour_pattern, surface_noise, surface_shape
-from ..imagedata import InputError
-from ..runtime import get_runtime
-from ..surface.implicit import STORAGES, ImplicitSurface
+from ..scale.tasks import TASKS
+from ..surface.implicit import STORAGES
+from ..surface.runs import FLOWS
 from ._common import (
     add_device_argument,
     add_output_folder_arguments,
-    check_output_folder_args,
     grid_advice,
+    report,
     show_progress,
 )
-
-FLOWS = ("heat", "tv", "denoise", "chroma", "reaction-diffusion", "flowvis", "curvature")
 
 
 def add_surface_parser(subparsers) -> None:
@@ -74,260 +59,17 @@ def add_surface_parser(subparsers) -> None:
     parser.set_defaults(run=run_surface)
 
 
+def task_options(args) -> dict:
+    """The surface task's keywords from the parsed flags (clpde.scale.tasks.surface_file)."""
+    return {"flow": args.flow, "resolution": args.resolution, "t": args.t,
+            "iterations": args.iterations, "sigma": args.sigma, "data": args.data,
+            "direction": args.direction, "size": args.size, "seed": args.seed,
+            "storage": args.storage, "overwrite": args.overwrite, "device": args.device}
+
+
 def run_surface(args) -> int:
-    get_runtime(args.device)
-    check_output_folder_args(args, [args.mesh])
-    if args.resolution < 16:
-        raise InputError(f"--resolution must be at least 16, not {args.resolution}")
-    if args.size < 16:
-        raise InputError(f"--size must be at least 16, not {args.size}")
-    if args.direction == "none" and args.flow == "flowvis":
-        raise InputError("flowvis needs --direction major or minor")
     with grid_advice(args.resolution):
-        surf = load_surface(args.mesh, args.resolution, device=args.device)
-    surf.storage = args.storage
-    data = None
-    if args.data != "pattern" and args.flow in DATA_FLOWS:
-        data = mesh_colours(surf)
-        if data is None and args.data == "mesh":
-            raise InputError(f"{args.mesh} has no vertex colours; use --data pattern")
-    run = run_flow(surf, args.flow, t=args.t, iterations=args.iterations, sigma=args.sigma,
-                   seed=args.seed, direction=args.direction, data=data, progress=show_progress())
-    written = write_run(run, args.output, size=args.size, overwrite=args.overwrite)
-    print(f"surface {args.flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
-          f"{surf.ext_band.n} cells; wrote {len(written)} files to {args.output}", file=sys.stderr)
+        lines = TASKS["surface"](args.mesh, args.output, progress=show_progress(),
+                                 **task_options(args))
+    report(lines)
     return 0
-
-
-def load_surface(mesh, resolution=96, device=None) -> ImplicitSurface:
-    """A generated shape by name (clpde.data.SURFACE_SHAPES) or a mesh file / Trimesh,
-    at about `resolution` cells across."""
-    if isinstance(mesh, str) and mesh in SHAPES:
-        return surface_shape(mesh, resolution, device=device)
-    if isinstance(mesh, str) and not os.path.exists(mesh):
-        raise InputError(f"{mesh!r} is neither a mesh file nor one of the shapes "
-                         f"{', '.join(SHAPES)}")
-    with encloses_volume(mesh):
-        return ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
-
-
-@contextlib.contextmanager
-def encloses_volume(mesh):
-    """Say why a mesh gives psi without a zero level set (psi, from the winding number,
-    never changes sign on the grid): an open sheet has no inside, and a closed shape
-    thinner than the spacing has no grid cell inside."""
-    try:
-        yield
-    except InputError as exc:
-        if "no zero level set" not in str(exc):
-            raise
-        from ..surface.mesh_sdf import load_mesh
-
-        name = f"the mesh {mesh}" if isinstance(mesh, (str, os.PathLike)) else "the mesh"
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the watertightness warning was already given
-            closed = load_mesh(mesh).is_watertight
-        if closed:
-            raise InputError(f"no grid cell lies inside {name}: it is thinner than the grid's "
-                             "spacing; use a finer grid (a larger resolution, --resolution "
-                             "on the command line)") from None
-        raise InputError(f"{name} encloses no volume (an open sheet, not a closed surface), "
-                         "so it has no inside and outside to work between; give a closed "
-                         "(watertight) mesh, or close its holes first") from None
-
-
-@dataclass
-class SurfaceRun:
-    flow: str
-    surface: ImplicitSurface
-    before: np.ndarray | None  # None: the bare surface
-    after: np.ndarray
-    note: str
-    label: str = ""  # what a scalar `after` is, for its colour bar
-    span: float = 0.0  # least width of a scalar's colour scale, so near-constants look flat
-
-
-def mesh_colours(surf):
-    """The vertex colours of the mesh `surf` was built from, carried to the band as RGB in
-    [0, 1], shape (3, nz, ny, nx); None when the mesh has none (or all vertices alike)."""
-    mesh = getattr(surf, "mesh", None)
-    if mesh is None or getattr(mesh.visual, "kind", None) != "vertex":
-        return None
-    rgb = np.asarray(mesh.visual.vertex_colors)[:, :3]
-    if len(rgb) != len(mesh.vertices) or np.all(rgb == rgb[0]):
-        return None
-    return surf.field_from_mesh(rgb / 255.0)
-
-
-DATA_FLOWS = ("heat", "tv", "denoise", "chroma")  # the flows that can take the user's colours
-
-
-def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, direction="major",
-             data=None, progress=None) -> SurfaceRun:
-    """Run one of FLOWS with the thesis' settings; returns the data before and after.
-
-    data: the user's values on the band (e.g. mesh_colours(surf)) for heat, tv, denoise and
-    chroma, processed as they are (sigma is then their noise level for denoise). Without
-    it these flows make the figures' demonstration data: a checkerboard or a colour pattern,
-    with noise of sigma added for tv, denoise and chroma."""
-    rng = np.random.default_rng(seed)
-    h = surf.spacing
-    size = h * max(surf.shape)
-    if data is not None:
-        return _run_on_data(surf, flow, np.asarray(data), t, sigma, progress)
-    if flow == "heat":  # Figure 4.3: intrinsic isotropic diffusion of an image
-        before = checker(surf)
-        t = 2e-4 * size**2 if t is None else t
-        return SurfaceRun(flow, surf, before, surf.heat(before, t=t, progress=progress),
-                          f"heat flow to t={t:g}")
-    if flow == "tv":  # Figure 4.4 right: anisotropic diffusion without a stopping term
-        before = checker(surf) + surface_noise(surf, sigma, rng)
-        t = tv_time(sigma, h) if t is None else t
-        return SurfaceRun(flow, surf, before, surf.tv(before, t=t, progress=progress),
-                          f"TV flow to t={t:g}")
-    if flow == "denoise":  # Figure 4.4 middle: TV with fidelity and dynamic lambda
-        before = checker(surf) + surface_noise(surf, sigma, rng)
-        t = 40 * h**2 if t is None else t
-        after, info = surf.denoise_tv(before, sigma=sigma, t=t, return_info=True, progress=progress)
-        return SurfaceRun(flow, surf, before, after,
-                          f"TV denoising, sigma={sigma:g}: residual variance "
-                          f"{info.residual_variance:.4g} (sigma^2 = {sigma**2:.4g})")
-    if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by TV
-        clean = colour_pattern(surf)
-        before = np.clip(clean + surface_noise(surf, sigma, rng, channels=3), 0.01, 1)
-        t = 4 * h**2 if t is None else t
-        return SurfaceRun(flow, surf, before, surf.denoise_colour(before, t=t, progress=progress),
-                          f"chroma harmonic map p=1 and brightness TV flow to t={t:g}")
-    if flow in ("reaction-diffusion", "flowvis", "curvature"):
-        major, minor, curv = surf.principal_directions()
-        field = {"major": major, "minor": minor}.get(direction)
-        if field is None:
-            raise InputError(f"direction must be 'major' or 'minor', not {direction!r}")
-        if flow == "curvature":
-            mean, scale = _mean_curvature(surf, 0.5 * (curv[0] + curv[1]), progress)
-            note = "mean curvature (principal curvatures / 2)"
-            if scale:
-                note += f", averaged along the surface over {scale:.3g} (the mesh's edge length)"
-            # a sphere's curvature is one value: a scale of at least half its size keeps
-            # the last percent of discretisation error from filling the colour ramp
-            typical = float(np.median(np.abs(mean[np.abs(surf.psi) < surf.spacing])))
-            return SurfaceRun(flow, surf, None, mean, note, "mean curvature", 0.5 * typical)
-        if flow == "flowvis":  # Figure 4.8: noise diffused along a principal direction
-            before = surf.field(lambda x, y, z: 0 * x) + rng.random(surf.shape)
-            t = 10 * h**2 if t is None else t
-            after = surf.diffuse_along(before, field, t=t, progress=progress)
-            return SurfaceRun(flow, surf, before, after,
-                              f"noise diffused along the {direction} principal direction to "
-                              f"t={t:g}")
-        iterations = 4000 if iterations is None else iterations
-        along = field if direction != "none" else None
-        ab = surf.reaction_diffusion(iterations, direction=along, seed=seed, progress=progress)
-        return SurfaceRun(flow, surf, np.full(surf.shape, 4.0), ab[0],
-                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations, "
-                          "diffusion of a "
-                          f"along the {direction} direction" if along is not None else
-                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations",
-                          "chemical a")
-    raise InputError(f"unknown surface flow {flow!r}; choose one of {', '.join(FLOWS)}")
-
-
-def tv_time(sigma, h):
-    """How long TV flow (no fidelity) runs by default: sigma * h. TV flow moves a level set at
-    its curvature, so a bump of contrast c and width w flattens in a time of about c * w:
-    noise of deviation sigma at the grid's scale goes in sigma * h, while the checkerboard's
-    squares, a hundred times larger, keep their flat values and sharp edges. (40 h^2, the
-    earlier default, is 8 sigma h at 96 cells: it rounded the squares into blobs, which
-    looked like heat.) On the torus at 48 and 96 cells, sigma 0.15: noise left in the
-    squares 0.03 and 0.026 with 12% and 7% of the edge cells at mid values, against heat's
-    0.035-0.037 with 29-38%."""
-    return float(sigma) * h
-
-
-def _mean_curvature(surf, mean, progress=None):
-    """(mean curvature, smoothing scale or 0). A mesh's psi is the distance to its flat
-    triangles, whose curvature sits on their edges and vertices: the values seen at the
-    grid's scale are spikes along the tessellation. Averaging them along the surface by
-    heat flow over a width sigma of at least two cells, or the mesh's median edge length
-    if longer (t = sigma^2 / 2), leaves the curvature of the shape the mesh samples (an
-    icosphere's spread drops from 70% of its mean to under 2%). Analytic shapes are kept
-    as computed."""
-    mesh = getattr(surf, "mesh", None)
-    if mesh is None:
-        return mean, 0.0
-    sigma = max(2.0 * surf.spacing, float(np.median(mesh.edges_unique_length)))
-    return surf.heat(mean, t=0.5 * sigma**2, progress=progress), sigma
-
-
-def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
-    h = surf.spacing
-    if flow not in DATA_FLOWS:
-        raise InputError(f"the {flow} flow makes its own data; only {', '.join(DATA_FLOWS)} take "
-                         "yours")
-    if flow == "chroma" and data.shape[:1] != (3,):
-        raise InputError("chroma denoising needs colour (3-channel) data")
-    if flow == "heat":
-        t = 2e-4 * (h * max(surf.shape)) ** 2 if t is None else t
-        return SurfaceRun(flow, surf, data, surf.heat(data, t=t, progress=progress),
-                          f"heat flow of the mesh's data to t={t:g}")
-    if flow == "tv":
-        t = tv_time(sigma, h) if t is None else t
-        return SurfaceRun(flow, surf, data, surf.tv(data, t=t, progress=progress),
-                          f"TV flow of the mesh's data to t={t:g}")
-    if flow == "denoise":
-        t = 40 * h**2 if t is None else t
-        after, info = surf.denoise_tv(data, sigma=sigma, t=t, return_info=True, progress=progress)
-        return SurfaceRun(flow, surf, data, after,
-                          f"TV denoising of the mesh's data for noise sigma={sigma:g}: residual "
-                          f"variance {info.residual_variance:.4g}")
-    t = 4 * h**2 if t is None else t
-    return SurfaceRun(flow, surf, data, surf.denoise_colour(data, t=t, progress=progress),
-                      "the mesh's colours: chroma harmonic map p=1 and brightness TV flow to "
-                      f"t={t:g}")
-
-
-def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400,
-              overwrite=False) -> list:
-    """before.png, after.png, result.ply and result.glb (after, coloured) in the folder
-    outdir, created if missing; an existing one must be empty, or with overwrite=True hold
-    only clpde's kinds of output files, and is then replaced as a whole
-    (clpde.io.output_folder). Returns the paths."""
-    from ..io import output_folder
-
-    with output_folder(outdir, overwrite) as staging:
-        names = _write_run_files(run, staging, views, size)
-    return [os.path.join(outdir, n) for n in names]
-
-
-def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
-    from ..surface.render import export_mesh, render_mesh, scalar_range, to_mesh, with_colour_bar
-
-    written = []
-    after = to_mesh(run.surface, run.after)
-    scalar = run.after.ndim == 3
-    lo = hi = None
-    if scalar:  # one colour scale (the result's) for both pictures, shown by a colour bar
-        lo, hi = scalar_range(after.vertex_attributes["u"])
-        if hi - lo < run.span:
-            middle = 0.5 * (lo + hi)
-            lo, hi = middle - 0.5 * run.span, middle + 0.5 * run.span
-        after = to_mesh(run.surface, run.after, vmin=lo, vmax=hi)
-    before = to_mesh(run.surface, run.before, vmin=lo, vmax=hi)
-    for name, mesh in (("before", before), ("after", after)):
-        image = np.concatenate([render_mesh(mesh, size, a, e) for a, e in views], axis=1)
-        if scalar and (name == "after" or run.before is not None):
-            image = with_colour_bar(image, lo, hi, label=run.label)
-        write_png(os.path.join(outdir, f"{name}.png"), image)
-        written.append(f"{name}.png")
-    for ext in ("ply", "glb"):
-        export_mesh(after, os.path.join(outdir, f"result.{ext}"))
-        written.append(f"result.{ext}")
-    return written
-
-
-def write_png(path, image) -> None:
-    """An RGB(A) uint8 picture as a PNG file, written atomically."""
-    import imageio.v3 as iio
-
-    from ..io import write_bytes
-
-    write_bytes(path, iio.imwrite("<bytes>", image, extension=".png"))

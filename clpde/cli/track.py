@@ -2,17 +2,9 @@
 
 from __future__ import annotations
 
-import sys
-
-from ..imagedata import InputError
-from ..io import MASK_RULE
-from ..runtime import get_runtime
-from ._common import (
-    add_device_argument,
-    add_output_folder_arguments,
-    check_output_folder_args,
-    show_progress,
-)
+from ..io.images import MASK_RULE
+from ..scale.tasks import TASKS
+from ._common import add_device_argument, add_output_folder_arguments, report, show_progress
 
 
 def add_track_parser(subparsers) -> None:
@@ -72,71 +64,18 @@ def add_track_parser(subparsers) -> None:
     parser.set_defaults(run=run_track)
 
 
+def task_options(args) -> dict:
+    """The track task's keywords from the parsed flags (clpde.scale.tasks.track_file)."""
+    return {"features": args.features, "colour": args.colour, "discrepancy": args.discrepancy,
+            "motion": args.motion, "shape_weight": args.shape_weight,
+            "equalize": "none" if args.no_equalize else args.equalize,
+            "smooth": not args.no_smooth, "max_iterations": args.max_iterations,
+            "min_size": args.min_size, "frames": args.frames, "gif": not args.no_gif,
+            "mp4": args.mp4, "low_confidence": args.low_confidence,
+            "overwrite": args.overwrite, "device": args.device}
+
+
 def run_track(args) -> int:
-    from ..sequence_io import read_frames, read_mask, to_grey, write_tracking
-    from ..track import track
-
-    get_runtime(args.device)
-    check_output_folder_args(args, [args.input, args.init])
-    if args.mp4:
-        from ..track_features import require_av
-
-        require_av()
-    if args.shape_weight < 0:
-        raise InputError(f"--shape-weight must be at least 0, not {args.shape_weight}")
-    if args.low_confidence <= 0:
-        raise InputError(f"--low-confidence must be positive, not {args.low_confidence}")
-    frames = read_frames(args.input, grey=not args.colour)
-    if args.frames is not None:
-        if args.frames < 1:
-            raise InputError(f"--frames must be at least 1, not {args.frames}")
-        frames = frames[: args.frames]
-    mask = read_mask(args.init, frames.shape[1:3])
-    equalize = False if args.no_equalize or args.equalize == "none" else args.equalize
-    masks, residuals = track(
-        frames, mask, features=args.features, colour=args.colour, discrepancy=args.discrepancy,
-        motion=None if args.motion == "none" else args.motion, shape_weight=args.shape_weight,
-        equalize=equalize, smooth=not args.no_smooth, max_iterations=args.max_iterations,
-        min_size=args.min_size, device=args.device, progress=show_progress(),
-        return_discrepancy=True)
-    grey = to_grey(frames) if frames.ndim == 4 else frames
-    written = write_tracking(args.output, grey, masks, gif=not args.no_gif,
-                             overwrite=args.overwrite)
-    if args.mp4:
-        written.append(_write_mp4(args.output, grey, masks))
-    print(f"track: {len(masks)} frames; wrote {len(written)} files to {args.output}",
-          file=sys.stderr)
-    low = low_confidence_frames(residuals, args.low_confidence)
-    if low:
-        print(f"track: low confidence (final discrepancy above {args.low_confidence:g}x the "
-              f"median) in frames {', '.join(map(str, low))}", file=sys.stderr)
+    report(TASKS["track"](args.input, args.output, mask=args.init, progress=show_progress(),
+                          **task_options(args)))
     return 0
-
-
-def low_confidence_frames(residuals, factor: float) -> list[int]:
-    """Frames (after the first) whose final discrepancy exceeds factor x the median."""
-    import numpy as np
-
-    later = np.asarray(residuals[1:], float)
-    if later.size == 0:
-        return []
-    median = float(np.median(later))
-    return [int(k) + 1 for k in np.nonzero(later > factor * max(median, 1e-12))[0]]
-
-
-def _write_mp4(outdir, frames, masks):
-    """overlay.mp4 beside the GIF, written under a temporary name and then moved in."""
-    import os
-    from pathlib import Path
-
-    from ..sequence_io import overlay
-    from ..track_features import write_mp4
-
-    final = Path(outdir) / "overlay.mp4"
-    tmp = final.with_name(".overlay.mp4.part")
-    try:
-        write_mp4(tmp, [overlay(f, m) for f, m in zip(frames, masks, strict=False)])
-        os.replace(tmp, final)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return final

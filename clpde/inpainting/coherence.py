@@ -36,11 +36,11 @@ import numpy as np
 import pyopencl.array as cla
 from scipy import ndimage
 
-from ..imagedata import InputError
+from ..errors import InputError
 from .poisson import box_around
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("coherence.cl",)
+KERNEL_FILES = ("inpainting/coherence.cl",)
 
 DEFAULTS = dict(epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0)
 
@@ -136,12 +136,12 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     buf_r = cla.to_device(q, taps_r.astype(dt))
     rs, rr = np.int32(len(taps_s) // 2), np.int32(len(taps_r) // 2)
     defines = dict(MAX_CHANNELS=nc)
-    k_rows = runtime.kernel("coherence.cl", "ct_smooth_rows", dt, **defines)
-    k_cols = runtime.kernel("coherence.cl", "ct_smooth_cols", dt, **defines)
-    k_products = runtime.kernel("coherence.cl", "ct_products", dt, **defines)
-    k_tensor = runtime.kernel("coherence.cl", "ct_tensor_rows", dt, **defines)
-    k_fill = runtime.kernel("coherence.cl", "ct_fill", dt, **defines)
-    k_mark = runtime.kernel("coherence.cl", "ct_mark", dt, **defines)
+    k_rows = runtime.kernel("inpainting/coherence.cl", "ct_smooth_rows", dt, **defines)
+    k_cols = runtime.kernel("inpainting/coherence.cl", "ct_smooth_cols", dt, **defines)
+    k_products = runtime.kernel("inpainting/coherence.cl", "ct_products", dt, **defines)
+    k_tensor = runtime.kernel("inpainting/coherence.cl", "ct_tensor_rows", dt, **defines)
+    k_fill = runtime.kernel("inpainting/coherence.cl", "ct_fill", dt, **defines)
+    k_mark = runtime.kernel("inpainting/coherence.cl", "ct_mark", dt, **defines)
     grid, local, xrun = runtime.grid_launch(nx, ny, 1)
     dims = (np.int32(nx), np.int32(ny))
     run = (*dims, np.int32(xrun))

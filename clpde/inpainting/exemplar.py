@@ -51,7 +51,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from .._progress import progress_bar
-from ..imagedata import InputError
+from ..errors import InputError
 from . import stitch as _stitch
 
 DEFAULTS = {
@@ -83,7 +83,7 @@ DEFAULTS = {
     # vote, so that the field takes the lattice's phase whatever the seed
     "lattice": True,
 }
-KERNEL_FILES = ("patchmatch.cl",)
+KERNEL_FILES = ("inpainting/patchmatch.cl",)
 
 
 def MARGIN(omega=None, search=DEFAULTS["search"], **_params) -> int:
@@ -220,14 +220,14 @@ class _Level:
         self.hole = hole
         defines = {"PATCH": patch, "NCH_MAX": self.nch}
         rt, dt = runtime, self.dtype
-        self.k_pass = rt.kernel("patchmatch.cl", "pm_pass", dt, **defines)
-        self.k_score = rt.kernel("patchmatch.cl", "pm_score", dt, **defines)
-        self.k_vote = rt.kernel("patchmatch.cl", "pm_vote", dt, **defines)
-        self.k_copy = rt.kernel("patchmatch.cl", "pm_copy_centre", dt, **defines)
-        self.k_offsets = rt.kernel("patchmatch.cl", "pm_offsets", dt, **defines)
+        self.k_pass = rt.kernel("inpainting/patchmatch.cl", "pm_pass", dt, **defines)
+        self.k_score = rt.kernel("inpainting/patchmatch.cl", "pm_score", dt, **defines)
+        self.k_vote = rt.kernel("inpainting/patchmatch.cl", "pm_vote", dt, **defines)
+        self.k_copy = rt.kernel("inpainting/patchmatch.cl", "pm_copy_centre", dt, **defines)
+        self.k_offsets = rt.kernel("inpainting/patchmatch.cl", "pm_offsets", dt, **defines)
         self.ncolour = self.nch if ncolour is None else ncolour  # planes before the features
         self.chw_colour = None  # try_offsets' weights: the colours only, made when first used
-        self.k_cohere = rt.kernel("patchmatch.cl", "pm_coherence", dt, **defines)
+        self.k_cohere = rt.kernel("inpainting/patchmatch.cl", "pm_coherence", dt, **defines)
 
         self.valid = _valid_sources(hole, self.r)
         self.valid_idx = np.flatnonzero(self.valid)

@@ -42,12 +42,13 @@ import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
-from .._validation import InputError, positive
-from ..runtime import ClpdeError
+from ..errors import InputError
+from ..imagedata import positive
+from ..errors import ClpdeError
 from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("navier_stokes.cl",)
+KERNEL_FILES = ("inpainting/navier_stokes.cl",)
 
 MARGIN = 3  # the biharmonic start reads two pixels past the hole; L I on the ring, one more
 
@@ -89,9 +90,9 @@ class NavierStokesSolver:
         self.ring_list = DeviceList(runtime, np.flatnonzero(ring))
         self.partial = cla.zeros(q, (nc, self.omega_list.items), dt)
         self.partial_sum = cla.zeros(q, (nc, self.omega_list.items), dt)
-        k_lap = runtime.kernel("navier_stokes.cl", "ns_laplacian", dt)
-        k_step = runtime.kernel("navier_stokes.cl", "ns_vorticity_step", dt)
-        k_change = runtime.kernel("navier_stokes.cl", "ns_change", dt)
+        k_lap = runtime.kernel("inpainting/navier_stokes.cl", "ns_laplacian", dt)
+        k_step = runtime.kernel("inpainting/navier_stokes.cl", "ns_vorticity_step", dt)
+        k_change = runtime.kernel("inpainting/navier_stokes.cl", "ns_change", dt)
         dims = (np.int32(nx), np.int32(ny))
         self.dt = 0.9 / (1.0 + 4.0 * nu)
         self._laplacian_ring = self.ring_list.bind(runtime, k_lap, nc,

@@ -23,11 +23,11 @@ import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
-from ..imagedata import InputError
-from ..runtime import ClpdeError
+from ..errors import InputError
+from ..errors import ClpdeError
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("poisson.cl",)
+KERNEL_FILES = ("inpainting/poisson.cl",)
 
 KINDS = ("harmonic", "biharmonic")
 MARGIN = 2  # the biharmonic stencil reaches two pixels past the hole
@@ -106,11 +106,11 @@ class Multigrid:
         s = dtype.type
         bi = np.int32(kind == "biharmonic")
         sign = -1.0 if kind == "harmonic" else 1.0
-        k_smooth = runtime.kernel("poisson.cl", "mg_smooth", dtype)
-        k_scale = runtime.kernel("poisson.cl", "mg_scale", dtype)
-        k_residual = runtime.kernel("poisson.cl", "mg_residual", dtype)
-        k_restrict = runtime.kernel("poisson.cl", "mg_restrict", dtype)
-        k_prolong = runtime.kernel("poisson.cl", "mg_prolong", dtype)
+        k_smooth = runtime.kernel("inpainting/poisson.cl", "mg_smooth", dtype)
+        k_scale = runtime.kernel("inpainting/poisson.cl", "mg_scale", dtype)
+        k_residual = runtime.kernel("inpainting/poisson.cl", "mg_residual", dtype)
+        k_restrict = runtime.kernel("inpainting/poisson.cl", "mg_restrict", dtype)
+        k_prolong = runtime.kernel("inpainting/poisson.cl", "mg_prolong", dtype)
         levels = [(omega.shape, *level0)]
         om = omega
         self.buffers = []  # bound kernels hold no references: keep the buffers alive
@@ -202,9 +202,9 @@ class PoissonSolver:
         ng = o.items
         self.rr = [zeros((nc, ng)), zeros((nc, ng))]
         self.pq = zeros((nc, ng))
-        k_op = runtime.kernel("poisson.cl", "operator_axpy_dot", dt)
-        k_update = runtime.kernel("poisson.cl", "cg_update", dt)
-        k_direction = runtime.kernel("poisson.cl", "cg_direction", dt)
+        k_op = runtime.kernel("inpainting/poisson.cl", "operator_axpy_dot", dt)
+        k_update = runtime.kernel("inpainting/poisson.cl", "cg_update", dt)
+        k_direction = runtime.kernel("inpainting/poisson.cl", "cg_direction", dt)
         dims = (np.int32(nx), np.int32(ny))
         s = dt.type
         order = 1 if kind == "harmonic" else 2
@@ -230,7 +230,7 @@ class PoissonSolver:
             self.mg = Multigrid(runtime, omega, kind, nc, dt, (o, self.r, self.z, tmp, res))
             self.rz = [zeros((nc, ng)), zeros((nc, ng))]
             self.rr_now = zeros((nc, ng))
-            k_dot = runtime.kernel("poisson.cl", "dot_partial", dt)
+            k_dot = runtime.kernel("inpainting/poisson.cl", "dot_partial", dt)
             self._pcg_residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr_now)]
             self._pcg_update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
                                        self.p.data, self.qv.data, self.rz[a].data, self.pq.data,

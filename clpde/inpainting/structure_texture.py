@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from ..imagedata import InputError
+from ..errors import InputError
 from . import exemplar
 
 # tv_weight 1.5 (relative to the known span), measured over seeds 0-2 through clpde.inpaint:
@@ -39,7 +39,7 @@ def MARGIN(omega=None, search=exemplar.DEFAULTS["search"], **_params) -> int:
 def _structure_solver(name):
     """solve(data, omega, runtime, ...) of the structure method, or a call of clpde.inpaint."""
     try:
-        from . import load  # the method registry (issue 14), once present
+        from .registry import load  # the method registry (issue 14), once present
     except ImportError:
         load = None
     if load is not None:
@@ -53,7 +53,7 @@ def _structure_solver(name):
         raise InputError(f"structure method {name!r} is not available in this installation")
 
     def via_inpaint(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None):
-        from ..inpaint import inpaint
+        from .api import inpaint
 
         out = inpaint(np.moveaxis(data, 0, -1), omega, channel_axis=-1, device=runtime,
                       dtype=np.float64 if np.dtype(dtype) == np.float64 else None,
@@ -76,7 +76,7 @@ def decompose(data, omega, runtime, tv_weight: float):
 
     tv_weight is relative to the known pixels' span (ROF's weight is in the image's units):
     the split of a * f + b is then a * u + b and a * v, whatever the image's contrast."""
-    from ..rof import denoise_tv
+    from ..planar.rof import denoise_tv
 
     lo, hi = known_range(data, omega)
     idx = ndimage.distance_transform_edt(omega, return_distances=False, return_indices=True)

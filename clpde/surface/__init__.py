@@ -14,7 +14,7 @@ from .flows import (
     stability_limit,
     tv,
 )
-from .grid3d import Grid3D
+from ..grid3d import Grid3D
 from .implicit import INTERPOLATIONS, ImplicitSurface
 from .render import colormap, export_mesh, render, render_mesh, to_mesh
 

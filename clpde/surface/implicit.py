@@ -25,18 +25,21 @@ from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_range
 from .._state import DeviceLike, renamed_keyword
-from .._validation import InputError
-from .._validation import positive as _positive
+from ..errors import InputError
+from ..imagedata import positive as _positive
 from ..fields import check_fits, compact
 from ..runtime import get_runtime
-from .bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
-from .grid3d import Grid3D
+from ..grid3d import Grid3D
+from . import flows as _flows
+from . import render as _render
+from .band import Band, BandFlow, extend_defines, make_flow
+from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
 
 if TYPE_CHECKING:
     from .flows import SurfaceDenoiseInfo
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface_band.cl", "surface_extend.cl", "surface_reinit.cl")
+KERNEL_FILES = ("surface/band.cl", "surface/extend.cl", "surface/reinit.cl")
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 STORAGES = ("lists", "bricks")
@@ -104,7 +107,6 @@ class ImplicitSurface:
         # psi, psi in cells and the band masks at the least; the bands' lists come on top
         check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
         self.storage = storage
-        self._brick = DEFAULT_BRICK
         self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
                            dtype=np.dtype(dtype))
         self._set_psi(psi.astype(np.float64, copy=True))
@@ -113,7 +115,7 @@ class ImplicitSurface:
     def storage(self) -> str:
         """Where the flows keep their data on the device: "lists" (the default), dense volumes
         stepped over band lists, or "bricks", only the band's 8^3 bricks (bricks.py). Every
-        flow runs in both, through the same per-cell code (kernels/surface_flux.h), with the
+        flow runs in both, through the same per-cell code (kernels/surface/flux.h), with the
         same results. On CPUs the bricks took 0.65-1.05x the lists' time a step and 12-71%
         less memory from 217^3 on, up to 1.5x the time below (docs/surfaces.md)."""
         return self._storage
@@ -140,58 +142,18 @@ class ImplicitSurface:
         self.cp = self._closest_points(self.ext_band)
         self.cp_base, self.cp_frac = self._cp_stencils(self.ext_band, self.cp)
         self._narrow_bands()
-        self._bricks = None  # built when a flow on bricks first needs them
-        self._band_places = None  # the band form's places in the bricks (flows.BrickFlow)
-        self._band_cells = None  # the band form's cells (band_indices), built when asked
-
-    def _brick_band(self):
-        """(BrickBand, psi's tiles on it, {EXT, REACH: re-extension lists}) of the band in dense
-        bricks (bricks.py), built once per psi.
-
-        Stored: every brick holding a cell a brick kernel reads, the cells of the extension
-        and reach bands with their psi neighbours (closest points) and the nodes with psi two
-        cells away along each axis (the fluxes one cell back)."""
-        brick = tuple(getattr(self, "_brick", DEFAULT_BRICK))
-        if getattr(self, "_bricks", None) is None or self._bricks[0].brick != brick:
-            g = self.grid
-            bits = np.zeros(g.padded_shape, np.uint8)
-            flat = bits.reshape(-1)
-            for band, bit in ((self.node_band, NODE), (self.reach_band, REACH),
-                              (self.ext_band, EXT)):
-                flat[band.indices.get()[: band.n]] |= bit
-            stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
-            bb = BrickBand.build(self.runtime, g.padded_shape, stored, bits, brick)
-            # psi in tiles of halo 2, what the heat step reads around each brick
-            psi = bb.tiles(self.psi_dev, 2)
-            q = self.runtime.queue
-
-            def stencils(band, base, frac):
-                # targets as brick-storage indices and first nodes as node codes, in the
-                # order of the nodes, so consecutive entries gather from the same bricks
-                # (10-20% faster than in the targets' order, 128^3 and 217^3)
-                target = bb.index_of(band.indices.get()[: band.n])
-                first = bb.node_code(base.get()[: band.n])
-                order = np.argsort(first, kind="stable")
-                first = first[order]
-                offsets = np.ascontiguousarray(frac.get()[:, : band.n][:, order])
-                return (band.n, cla.to_device(q, target[order]), cla.to_device(q, first),
-                        cla.to_device(q, offsets))
-
-            lists = {EXT: stencils(self.ext_band, self.cp_base, self.cp_frac),
-                     REACH: stencils(self.reach_band, *self.reach_stencils)}
-            self._bricks = (bb, psi, lists)
-        return self._bricks
+        self.band = Band(self)  # data on this psi's band (band.py)
 
     def _narrow_bands(self) -> None:
         """node_band, its runs, reach_band and reach_band's closest-point stencils."""
         g, q = self.grid, self.runtime.queue
         nodes = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface_band.cl", "mark_nodes"), self.ext_band,
+        g.launch_list(g.kernel("surface/band.cl", "mark_nodes"), self.ext_band,
                       self.cp_base.data, nodes.data, *g.strides(), np.int32(_NODES[self.interp]))
         self.node_band = compact(self.runtime, nodes)
         self.step_runs = g.runs(self.node_band)
         reach = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface_band.cl", "mark_stencil"), self.node_band, reach.data,
+        g.launch_list(g.kernel("surface/band.cl", "mark_stencil"), self.node_band, reach.data,
                       *g.strides())
         self.reach_band = compact(self.runtime, reach)
         self.reach_stencils = self._cp_stencils(self.reach_band,
@@ -229,8 +191,6 @@ class ImplicitSurface:
         cells whose closest mesh point lies on a hole's rim are reinitialised, so psi is a
         distance across the sheet too. The mesh passed in is not modified; one that is not
         watertight gets a warning."""
-        from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
-
         band_width = renamed_keyword("band_width", band_width, "band", band)
         mesh = load_mesh(mesh)
         outer = band_width
@@ -381,7 +341,7 @@ class ImplicitSurface:
         n = max(band.n, 1)
         cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
         g.launch_list(
-            g.kernel("surface_band.cl", "closest_points"), band, self.psi_dev.data,
+            g.kernel("surface/band.cl", "closest_points"), band, self.psi_dev.data,
             g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
         )
         return cp
@@ -395,7 +355,7 @@ class ImplicitSurface:
         base = cla.empty(q, n, np.int32)
         frac = cla.empty(q, (3, n), g.dtype)
         g.launch_list(
-            g.kernel("surface_band.cl", "cp_stencils"), band, *(c.data for c in cp),
+            g.kernel("surface/band.cl", "cp_stencils"), band, *(c.data for c in cp),
             *g.strides(), *g.padded_dims(), np.int32(self.interp), base.data, frac.data,
         )
         return base, frac
@@ -450,7 +410,7 @@ class ImplicitSurface:
         everywhere = g.band(self.psi_dev, np.inf)
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
-        kernel = g.kernel("surface_reinit.cl", "reinit_step")
+        kernel = g.kernel("surface/reinit.cl", "reinit_step")
         for _ in progress_range(progress, steps, "reinitialise", leave=False):
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
@@ -462,8 +422,6 @@ class ImplicitSurface:
         """Extend data off the surface, constant along the normals: by closest-point
         interpolation (one pass), or by the upwind PDE of section 4.2,
         u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
-        from .flows import BandFlow, extend_defines, make_flow
-
         if method not in ("closest-point", "pde"):
             raise InputError(f"method must be 'closest-point' or 'pde', not {method!r}")
         if method == "closest-point":
@@ -474,7 +432,7 @@ class ImplicitSurface:
         r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1
         steps = int(np.ceil(2 * self.outer / r)) if iterations is None else int(iterations)
         defines = extend_defines(self.interp, flow.nc)  # the re-extension's program
-        kernel = g.kernel("surface_extend.cl", "extend_pde_step", **defines)
+        kernel = g.kernel("surface/extend.cl", "extend_pde_step", **defines)
         for _ in range(steps):
             g.launch_list(kernel, self.ext_band, flow.cur.data, flow.tmp.data, self.psi_dev.data,
                           g.scalar(r), g.scalar(self.spacing), *g.strides())
@@ -500,18 +458,6 @@ class ImplicitSurface:
         return np.array(out, dtype=dtype)
 
     # ---- the band form: data at the extension band's cells only ------------------------------
-    def _band_cells_of(self) -> tuple[np.ndarray, np.ndarray]:
-        """(flat indices into `shape`, flat padded indices) of the extension band's cells."""
-        if getattr(self, "_band_cells", None) is None:
-            g = self.grid
-            padded = self.ext_band.indices.get()[: self.ext_band.n].astype(np.int64)
-            z, rest = np.divmod(padded, g.sxy)
-            y, x = np.divmod(rest, g.sx)
-            _, ny, nx = self.shape
-            flat = ((z - g.ghost) * ny + (y - g.ghost)) * nx + (x - g.ghost)
-            self._band_cells = (flat, padded)
-        return self._band_cells
-
     def band_indices(self) -> np.ndarray:
         """Flat (C-order) indices into `shape` of the extension band's cells, increasing.
 
@@ -529,11 +475,11 @@ class ImplicitSurface:
         >>> bool(np.allclose(s.heat(u, 0.01), s.band_values(s.heat(s.from_band(u), 0.01))))
         True
         """
-        return self._band_cells_of()[0].copy()
+        return self.band.cells()[0].copy()
 
     def band_coordinates(self) -> np.ndarray:
         """World (x, y, z) of the extension band's cells, shape (n, 3), in band-form order."""
-        flat = self._band_cells_of()[0]
+        flat = self.band.cells()[0]
         _, ny, nx = self.shape
         z, rest = np.divmod(flat, ny * nx)
         y, x = np.divmod(rest, nx)
@@ -542,7 +488,7 @@ class ImplicitSurface:
     def band_closest_points(self) -> np.ndarray:
         """World closest points x - psi grad psi / |grad psi| of the extension band's cells,
         shape (n, 3) (central differences, as `closest_points_host`, at the band only)."""
-        flat = self._band_cells_of()[0]
+        flat = self.band.cells()[0]
         p = self.psi.reshape(-1)
         _, ny, nx = self.shape
         grad = [(p[flat + s] - p[flat - s]) / (2 * self.spacing) for s in (1, nx, nx * ny)]
@@ -568,9 +514,9 @@ class ImplicitSurface:
         band's cells, dtype kept."""
         u = np.asarray(u)
         if u.shape == self.shape:
-            return u.reshape(-1)[self._band_cells_of()[0]]
+            return u.reshape(-1)[self.band.cells()[0]]
         if u.ndim == 4 and u.shape[1:] == self.shape:
-            return u.reshape(u.shape[0], -1)[:, self._band_cells_of()[0]]
+            return u.reshape(u.shape[0], -1)[:, self.band.cells()[0]]
         raise InputError(f"u must have the surface's grid shape {self.shape} (or (channels,) + "
                          f"that), got {u.shape}")
 
@@ -578,64 +524,15 @@ class ImplicitSurface:
         """Band-form values as a dense volume (`shape`, or (channels,) + `shape`), `fill` off
         the band, dtype kept (floats; others become float64)."""
         v = np.asarray(values)
-        nc = self._band_form_channels(v)
+        nc = self.band.form_channels(v)
         if nc is None:
             raise InputError(f"values must have shape ({self.ext_band.n},) or (channels, "
                              f"{self.ext_band.n}) (the band form), got {v.shape}")
         dtype = v.dtype if np.issubdtype(v.dtype, np.floating) else np.float64
         out = np.full((nc, int(np.prod(self.shape))), fill, dtype)
-        out[:, self._band_cells_of()[0]] = v.reshape(nc, -1)
+        out[:, self.band.cells()[0]] = v.reshape(nc, -1)
         out = out.reshape((nc,) + self.shape)
         return out[0] if v.ndim == 1 else out
-
-    def _band_form_channels(self, u: np.ndarray) -> int | None:
-        """Channels of band-form data (shape (n,) or (channels, n)), None for other shapes."""
-        n = self.ext_band.n
-        if u.ndim == 1 and u.shape[0] == n:
-            return 1
-        if u.ndim == 2 and u.shape[1] == n:
-            return u.shape[0]
-        return None
-
-    def _checked_band_values(self, u: np.ndarray) -> np.ndarray:
-        """Band-form data as (channels, n), checked as `_as_channels` checks."""
-        if not np.issubdtype(u.dtype, np.number) or np.iscomplexobj(u):
-            raise InputError(f"u must hold real numbers, not {u.dtype}")
-        values = u.reshape(self._band_form_channels(u), -1)
-        if not np.all(np.isfinite(values)):
-            raise InputError("u contains NaN or infinite values in the band around the surface")
-        return values
-
-    def _padded_from_band(self, u: np.ndarray) -> np.ndarray:
-        """Band-form data as a padded (channels, PZ, PY, PX) host volume in the grid's dtype,
-        zeros off the band (no flow reads them), checked as `_as_channels` checks."""
-        values = self._checked_band_values(u)
-        g = self.grid
-        padded = np.zeros((values.shape[0], g.volume), g.dtype)
-        padded[:, self._band_cells_of()[1]] = values
-        return padded.reshape((values.shape[0],) + g.padded_shape)
-
-    def _as_channels(self, u, what="u"):
-        """(nc, nz, ny, nx) float64 copy of scalar or channel-first vector data."""
-        u = np.asarray(u)
-        if u.shape == self.shape:
-            data = u[None]
-        elif u.ndim == 4 and u.shape[1:] == self.shape:
-            data = u
-        else:
-            raise InputError(
-                f"{what} must have the surface's grid shape {self.shape} (or (channels,) + that "
-                f"for vector data), got {u.shape}; flows also take the band form, shape "
-                f"({self.ext_band.n},) or (channels, {self.ext_band.n}) (band_values)"
-            )
-        if not np.issubdtype(u.dtype, np.number) or np.iscomplexobj(u):
-            raise InputError(f"{what} must hold real numbers, not {u.dtype}")
-        data = data.astype(np.float64)
-        band = np.abs(self.psi) < self.outer * self.spacing
-        if not np.all(np.isfinite(data[:, band])):
-            raise InputError(f"{what} contains NaN or infinite values in the band around the "
-                             "surface")
-        return data
 
     def world_to_index(self, points: ArrayLike) -> np.ndarray:
         """(n, 3) world points to padded index coordinates (3, n)."""
@@ -653,8 +550,8 @@ class ImplicitSurface:
 
         Points must lie within the interpolation reach of the surface (on it, typically)."""
         u = np.asarray(u)
-        band_form = self._band_form_channels(u) is not None
-        data = self._padded_from_band(u) if band_form else self._as_channels(u)
+        band_form = self.band.form_channels(u) is not None
+        data = self.band.padded_from(u) if band_form else self.band.as_channels(u)
         scalar = u.ndim == (1 if band_form else 3)
         idx = self.world_to_index(points)
         code = _interp_code(interpolation)
@@ -682,13 +579,11 @@ class ImplicitSurface:
         return out[0] if scalar else out.T
 
     def _sample_raw(self, dev: cla.Array, idx: np.ndarray, nc: int, code: int) -> np.ndarray:
-        from .flows import extend_defines
-
         g, q = self.grid, self.runtime.queue
         n = idx.shape[1]
         pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
         out = cla.empty(q, (nc, n), g.dtype)
-        g.kernel("surface_extend.cl", "sample_points", **extend_defines(code, nc))(
+        g.kernel("surface/extend.cl", "sample_points", **extend_defines(code, nc))(
             q, *self.runtime.items(n), dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
             out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
         )
@@ -697,72 +592,50 @@ class ImplicitSurface:
     # ---- flows ---------------------------------------------------------------------------------
     def heat(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
         """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u for time t; see flows.heat."""
-        from .flows import heat
-
-        return heat(self, u, t, dt=dt, **options)
+        return _flows.heat(self, u, t, dt=dt, **options)
 
     def tv(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
         """Intrinsic anisotropic (total variation) flow (4.10); see flows.tv."""
-        from .flows import tv
-
-        return tv(self, u, t, dt, **options)
+        return _flows.tv(self, u, t, dt, **options)
 
     def denoise_tv(self, u: ArrayLike, sigma: float | None = None, t: float = 1.0, **options: Any,
                    ) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
         """TV denoising with fidelity and dynamic lambda (C.1, C.2); see flows.denoise_tv."""
-        from .flows import denoise_tv
-
-        return denoise_tv(self, u, sigma, t, **options)
+        return _flows.denoise_tv(self, u, sigma, t, **options)
 
     def harmonic_map(self, u: ArrayLike, t: float, p: int = 2, **options: Any) -> np.ndarray:
         """Harmonic map flow of unit vectors (4.11, D.7); see flows.harmonic_map."""
-        from .flows import harmonic_map
-
-        return harmonic_map(self, u, t, p, **options)
+        return _flows.harmonic_map(self, u, t, p, **options)
 
     def denoise_colour(self, rgb: ArrayLike, t: float, **options: Any) -> np.ndarray:
         """Colour denoising as in Figure 4.6: chroma by harmonic map, brightness by a scalar
         flow; see flows.denoise_colour."""
-        from .flows import denoise_colour
-
-        return denoise_colour(self, rgb, t, **options)
+        return _flows.denoise_colour(self, rgb, t, **options)
 
     def diffuse_along(self, u: ArrayLike, direction: ArrayLike, t: float,
                       **options: Any) -> np.ndarray:
         """Diffusion along a tangent field (4.15); see flows.diffuse_along."""
-        from .flows import diffuse_along
-
-        return diffuse_along(self, u, direction, t, **options)
+        return _flows.diffuse_along(self, u, direction, t, **options)
 
     def principal_directions(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(major, minor, curvatures) of the surface; see flows.principal_directions."""
-        from .flows import principal_directions
-
-        return principal_directions(self)
+        return _flows.principal_directions(self)
 
     def reaction_diffusion(self, iterations: int, **options: Any) -> np.ndarray:
         """Turk's reaction-diffusion texture (4.12-4.14); see flows.reaction_diffusion."""
-        from .flows import reaction_diffusion
-
-        return reaction_diffusion(self, iterations, **options)
+        return _flows.reaction_diffusion(self, iterations, **options)
 
     def to_mesh(self, u: ArrayLike | None = None, **options: Any) -> object:
         """Marching-cubes mesh of the surface with u as vertex colours; see render.to_mesh."""
-        from .render import to_mesh
-
-        return to_mesh(self, u, **options)
+        return _render.to_mesh(self, u, **options)
 
     def render(self, u: ArrayLike | None = None, path: str | None = None,
                **options: Any) -> np.ndarray:
         """PNG picture(s) of u on the surface; see render.render."""
-        from .render import render
-
-        return render(self, u, path, **options)
+        return _render.render(self, u, path, **options)
 
     def stability_limit(self, flow: str = "heat", eps: float = 1.0, lam: float = 0.0) -> float:
-        from .flows import stability_limit
-
-        return stability_limit(self, flow, eps, lam)
+        return _flows.stability_limit(self, flow, eps, lam)
 
 
 def _torus_sdf(big: float, small: float, shift: float):

@@ -32,11 +32,12 @@ import warnings
 
 import numpy as np
 
-from .._validation import InputError, positive
+from ..errors import InputError
+from ..imagedata import positive
 from .winding import WindingNumbers
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface_mesh.cl",)
+KERNEL_FILES = ("surface/mesh.cl",)
 
 
 def load_mesh(mesh):
@@ -399,7 +400,7 @@ def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
     dist = cla.empty(q, max(idx.size, 1), np.float32)
     cpt = cla.empty(q, 3 * max(idx.size, 1), np.float32)
     nbr_dev = cla.to_device(q, _edge_neighbours(mesh))
-    kernel = rt.kernel("surface_mesh.cl", "mesh_refine")
+    kernel = rt.kernel("surface/mesh.cl", "mesh_refine")
     for _ in range(max(1, int(passes))):
         kernel(q, *rt.items(idx.size), cells.data, np.int32(idx.size), faces[0].data,
                faces[1].data, dist.data, cpt.data, tri_dev.data, nbr_dev.data, np.int32(nx),

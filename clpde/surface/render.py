@@ -12,8 +12,8 @@ import os
 
 import numpy as np
 
-from .._validation import InputError
-from ..io import write_bytes
+from ..errors import InputError
+from ..io.images import write_bytes
 
 # A perceptually ordered colour ramp (dark blue -> teal -> green -> yellow), sampled at nine
 # stops and interpolated linearly: enough for pseudo-colour pictures of scalar data.

@@ -1,4 +1,4 @@
-"""Generalized winding numbers of triangle meshes on the device (kernels/winding.cl): about
+"""Generalized winding numbers of triangle meshes on the device (kernels/surface/winding.cl): about
 1 inside a closed mesh, 0 outside, near 1/2 across a hole. mesh_sdf uses them to give
 meshes with holes the right sign."""
 
@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..imagedata import InputError
+from ..errors import InputError
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("winding.cl",)
+KERNEL_FILES = ("surface/winding.cl",)
 
 
 def _morton_order(points: np.ndarray) -> np.ndarray:
@@ -26,7 +26,7 @@ def _morton_order(points: np.ndarray) -> np.ndarray:
 
 class WindingNumbers:
     """Generalized winding numbers w(p) of a triangle mesh, evaluated on the device
-    (kernels/winding.cl): about 1 inside, 0 outside, near 1/2 across a hole.
+    (kernels/surface/winding.cl): about 1 inside, 0 outside, near 1/2 across a hole.
 
     triangles: (faces, 3, 3) in the units the points will come in (grid cells relative to the
     grid origin for mesh_to_sdf). The triangles are sorted along a Morton curve into clusters
@@ -72,7 +72,7 @@ class WindingNumbers:
         self._clu = cla.to_device(q, np.ascontiguousarray(clu, dtype=np.float32).reshape(-1))
         self._tri = cla.to_device(q, np.ascontiguousarray(tri, dtype=np.float32).reshape(-1))
         self._chunk = 64 if self.rt.is_cpu else 1
-        self._kernel = self.rt.kernel("winding.cl", "winding_number", CHUNK=self._chunk)
+        self._kernel = self.rt.kernel("surface/winding.cl", "winding_number", CHUNK=self._chunk)
 
     def __call__(self, points, exact=False, beta=2.0, tile=8.0) -> np.ndarray:
         """w at points (n, 3), float64 (computed in float32). exact=True sums every triangle."""

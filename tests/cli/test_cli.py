@@ -11,7 +11,7 @@ import pytest
 
 import clpde
 from clpde.cli import SUBCOMMANDS, main
-from clpde.io import read_image, write_image
+from clpde.io.images import read_image, write_image
 
 
 @pytest.fixture

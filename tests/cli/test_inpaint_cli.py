@@ -9,7 +9,7 @@ import pytest
 import clpde
 from clpde.cli import _inpaint_demo as inpaint_demo
 from clpde.cli import main
-from clpde.io import read_image, write_image
+from clpde.io.images import read_image, write_image
 
 
 @pytest.fixture

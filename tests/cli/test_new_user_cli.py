@@ -10,7 +10,7 @@ import pytest
 
 import clpde
 from clpde.cli import main
-from clpde.io import read_image, write_image
+from clpde.io.images import read_image, write_image
 
 
 def _one_error_line(capsys):

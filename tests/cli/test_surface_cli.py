@@ -114,7 +114,7 @@ def test_every_scalar_render_has_a_colour_bar(tmp_path):
 
 
 def test_curvature_of_a_mesh_shows_its_shape_not_its_triangles(tmp_path):
-    from clpde.cli.surface import load_surface, run_flow
+    from clpde.surface.runs import load_surface, run_flow
     from clpde.surface.render import to_mesh
 
     path = tmp_path / "ico.ply"
@@ -143,7 +143,7 @@ def test_tv_default_flattens_the_squares_and_keeps_their_edges():
     squares into blobs). Against heat that leaves as much noise, it keeps the edges sharp."""
     from scipy import ndimage
 
-    from clpde.cli.surface import load_surface, run_flow
+    from clpde.surface.runs import load_surface, run_flow
     from clpde.data import checker
 
     surf = load_surface("torus", 48)

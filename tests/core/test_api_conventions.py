@@ -87,7 +87,7 @@ def test_deprecation_points_at_the_callers_line():
 
 
 def test_reinitialize_is_the_spelling_reinitialise_deprecated(runtime):
-    from clpde.levelset import LevelSet
+    from clpde.tracking.levelset import LevelSet
 
     y, x = np.mgrid[:32, :32]
     u0 = 2.0 * (np.hypot(x - 15.5, y - 16.2) - 8.0)
@@ -99,7 +99,7 @@ def test_reinitialize_is_the_spelling_reinitialise_deprecated(runtime):
 
 
 def test_band_width_is_the_spelling_band_deprecated():
-    from clpde.regions import RegionTracker
+    from clpde.regions.tracker import RegionTracker
     from clpde.surface import ImplicitSurface
 
     assert ImplicitSurface.sphere(1.0, 0.1, band_width=6.0).outer == 6.0
@@ -140,7 +140,7 @@ def test_inpaint_names_the_transport_options_with_their_defaults():
     import dataclasses
     import inspect
 
-    from clpde.inpaint import _TRANSPORT_ARGS, InpaintParams, inpaint
+    from clpde.inpainting.api import _TRANSPORT_ARGS, InpaintParams, inpaint
 
     signature = inspect.signature(inpaint).parameters
     fields = {f.name: f.default for f in dataclasses.fields(InpaintParams)}
@@ -149,7 +149,7 @@ def test_inpaint_names_the_transport_options_with_their_defaults():
 
 
 def test_inpaint_return_shapes():
-    from clpde.inpaint import InpaintInfo
+    from clpde.inpainting.api import InpaintInfo
 
     image = _square()
     mask = np.zeros(image.shape, bool)
@@ -164,7 +164,7 @@ def test_inpaint_return_shapes():
 
 
 def test_tiled_forms_take_dtype():
-    from clpde import tiled
+    from clpde.planar import tiled
 
     image = np.random.default_rng(1).random((40, 40))
     new = tiled.diffuse(image, "tv", steps=4, chunks=16, dtype=np.float64)

@@ -9,9 +9,9 @@ import importlib
 
 import pytest
 
-MODULES = ["clpde.data", "clpde.planar", "clpde.rof", "clpde.imagedata", "clpde.io",
-           "clpde.surface.implicit",
-           "clpde.colour", "clpde.runtime", "clpde.inpaint", "clpde.track"]
+MODULES = ["clpde.data", "clpde.planar.flows", "clpde.planar.rof", "clpde.imagedata",
+           "clpde.io.images", "clpde.surface.implicit", "clpde.inpainting.colour", "clpde.runtime",
+           "clpde.inpainting.api", "clpde.tracking.contours"]
 
 
 @pytest.mark.parametrize("name", MODULES)

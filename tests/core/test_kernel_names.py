@@ -1,6 +1,6 @@
 """Every kernel that the host code asks for by name exists in the kernel file it names.
 
-A kernel is looked up by strings (`runtime.kernel("inpaint.cl", "transport_step")`), so a
+A kernel is looked up by strings (`runtime.kernel("inpainting/transport.cl", "transport_step")`), so a
 renamed or removed kernel would only fail when that code path runs; this test reads the
 sources instead and fails at once.
 """
@@ -14,14 +14,14 @@ KERNEL_DIR = ROOT / "kernels"
 
 # kernel("file.cl", "name" ...), new_kernel(...), program("file.cl" ...); and any lookup that
 # names no file first (a kernel name alone, or a variable), which the one signature forbids
-WITH_FILE = re.compile(r"""kernel\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']""")
+WITH_FILE = re.compile(r"""kernel\(\s*["']([\w/]+\.cl)["']\s*,\s*["'](\w+)["']""")
 # a table's ("file.cl", "name") pairs, looked up through a variable (flows.STEP_KERNELS)
-PAIR = re.compile(r"""\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']\s*\)""")
-FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["'](\w+\.cl)["']""")
+PAIR = re.compile(r"""\(\s*["']([\w/]+\.cl)["']\s*,\s*["'](\w+)["']\s*\)""")
+FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["']([\w/]+\.cl)["']""")
 NOT_LITERAL = re.compile(r"""\.(?:new_)?kernel\("""
-                         r"""(?!\s*["']\w+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
+                         r"""(?!\s*["'][\w/]+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
 DEFINED = re.compile(r"__kernel\s+(?:__attribute__\s*\(\(.*?\)\)\s*)?void\s+(\w+)", re.S)
-INCLUDE = re.compile(r'#include\s+"([\w.]+)"')
+INCLUDE = re.compile(r'#include\s+"([\w./]+)"')
 
 
 def _kernels_in(filename: str, seen=None) -> set[str]:
@@ -30,7 +30,11 @@ def _kernels_in(filename: str, seen=None) -> set[str]:
     if filename in seen:
         return set()
     seen.add(filename)
-    text = (KERNEL_DIR / filename).read_text()
+    # the runtime's include path: kernels/, then kernels/common/
+    path = KERNEL_DIR / filename
+    if not path.is_file():
+        path = KERNEL_DIR / "common" / filename
+    text = path.read_text()
     names = set(DEFINED.findall(text))
     for included in INCLUDE.findall(text):
         names |= _kernels_in(included, seen)
@@ -59,7 +63,7 @@ def test_every_named_kernel_exists_in_its_file():
 
 
 def test_every_lookup_names_its_file_and_kernel_as_literals():
-    """`g.kernel("surface_heat.cl", "heat_step")`: grepping a kernel's name lands on its lookups."""
+    """`g.kernel("surface/heat.cl", "heat_step")`: grepping a kernel's name lands on its lookups."""
     loose = [f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
              for path, text in _host_sources() for m in NOT_LITERAL.finditer(text)]
     assert not loose, "kernel lookups without a literal file and kernel name:\n" + "\n".join(loose)

@@ -51,7 +51,8 @@ def test_wheel_ships_kernels_and_runs_outside_the_checkout(tmp_path):
     (wheel,) = wheels.glob("clpde-*.whl")
 
     names = set(zipfile.ZipFile(wheel).namelist())
-    kernels = sorted(p.name for p in (src / "kernels").iterdir() if p.is_file())
+    kernels = sorted(p.relative_to(src / "kernels").as_posix()
+                     for p in (src / "kernels").rglob("*") if p.is_file())
     assert any(k.endswith(".cl") for k in kernels), "no kernels/*.cl in the checkout"
     missing = [k for k in kernels if f"clpde/kernels/{k}" not in names]
     assert not missing, (

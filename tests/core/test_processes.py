@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import clpde
-from clpde.regions import RegionTracker
+from clpde.regions.tracker import RegionTracker
 from clpde.surface import ImplicitSurface
 
 TIMEOUT = 120  # seconds: a hang fails the test instead of blocking the suite

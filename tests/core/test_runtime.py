@@ -10,7 +10,7 @@ import pytest
 import clpde
 from clpde import runtime as rt_mod
 from clpde.fields import Field, Grid
-from clpde.runtime import ClpdeError, KernelBuildError, NoDeviceError
+from clpde.errors import ClpdeError, KernelBuildError, NoDeviceError
 
 
 def test_devices_lists_every_device_and_marks_the_one_in_use():
@@ -71,15 +71,17 @@ def test_no_platform_names_the_fix(monkeypatch):
 
 
 def test_kernels_are_built_once_and_reused(runtime):
-    k1 = runtime.kernel("planar.cl", "heat_step")
-    k2 = runtime.kernel("planar.cl", "heat_step")
+    k1 = runtime.kernel("planar/planar.cl", "heat_step")
+    k2 = runtime.kernel("planar/planar.cl", "heat_step")
     assert k1 is k2
-    assert runtime.program("planar.cl") is runtime.program("planar.cl")
-    assert runtime.program("planar.cl", EDGE_STOP=1) is not runtime.program("planar.cl")
+    assert runtime.program("planar/planar.cl") is runtime.program("planar/planar.cl")
+    assert runtime.program("planar/planar.cl", EDGE_STOP=1) is not runtime.program("planar/planar.cl")
 
 
 def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
-    (tmp_path / "common.cl").write_text((rt_mod.KERNEL_DIR / "common.cl").read_text())
+    (tmp_path / "common").mkdir()
+    (tmp_path / "common" / "common.cl").write_text(
+        (rt_mod.KERNEL_DIR / "common" / "common.cl").read_text())
     (tmp_path / "broken.cl").write_text(
         '#include "common.cl"\n\n'
         "__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n"
@@ -142,7 +144,7 @@ def test_kernels_launch_under_the_runtime_lock_and_pickle_by_name():
     import pickle
 
     runtime = rt_mod.get_runtime("cpu")
-    k = runtime.kernel("fields.cl", "fill_ghost_rows")
+    k = runtime.kernel("common/fields.cl", "fill_ghost_rows")
     assert isinstance(k, rt_mod.Kernel) and k._lock is runtime.lock
     assert k.function_name == "fill_ghost_rows"  # attributes reach pyopencl's kernel
     assert pickle.loads(pickle.dumps(k)) is k  # same process: the cached kernel

@@ -8,8 +8,8 @@ import pytest
 from skimage import color, data, img_as_float
 
 import clpde
-from clpde.imagedata import InputError
-from clpde.rof import estimate_sigma
+from clpde.errors import InputError
+from clpde.planar.rof import estimate_sigma
 
 IMAGES = {
     "camera": lambda: img_as_float(data.camera()),

@@ -7,7 +7,7 @@ from skimage import data
 
 import clpde
 from clpde.fields import Field, Grid
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 
 
 def structured(ny=40, nx=56):
@@ -25,7 +25,7 @@ def device_step(runtime, kernel_name, u, *args, defines=None, extra_fields=()):
     grid = Grid(runtime, nx, ny, nc)
     cur = Field.from_host(grid, u)
     nxt = Field.from_host(grid, np.zeros_like(u))
-    kernel = grid.kernel("planar.cl", kernel_name, **(defines or {}))
+    kernel = grid.kernel("planar/planar.cl", kernel_name, **(defines or {}))
     buffers = [f.data.data for f in extra_fields]
     grid.launch(kernel, cur.data.data, nxt.data.data, *buffers, *args)
     return nxt.to_host(), grid
@@ -259,7 +259,7 @@ def test_steps_write_their_own_mirror_ghosts(runtime, rng, geometry, ghost):
     cur = Field.from_host(grid, rng.random((nc, ny, nx)))
     nxt = Field.from_host(grid, np.full((nc, ny, nx), np.nan))
     nxt.data.fill(np.nan)
-    kernel = grid.kernel("planar.cl", "heat_step")
+    kernel = grid.kernel("planar/planar.cl", "heat_step")
     if geometry == "cpu-rows":
         gsize, lsize, xrun = (1, ny, nc), (1, 1, 1), nx
     else:

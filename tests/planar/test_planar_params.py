@@ -6,8 +6,8 @@ import pytest
 
 import clpde
 from clpde.cli import main
-from clpde.imagedata import InputError
-from clpde.io import write_image
+from clpde.errors import InputError
+from clpde.io.images import write_image
 
 
 @pytest.mark.parametrize("flow, params, words", [
@@ -24,7 +24,7 @@ def test_unused_parameters_are_refused(flow, params, words):
 
 def test_used_parameters_still_work_and_cli_agrees(tmp_path, capsys):
     image = np.random.default_rng(0).integers(0, 255, (6, 7)).astype(np.uint8)
-    for flow, params in clpde.planar.FLOW_PARAMS.items():
+    for flow, params in clpde.planar.flows.FLOW_PARAMS.items():
         given = {"kappa": 0.1, "edge": "rational", "eps": 0.1, "weight": np.ones((6, 7))}
         assert clpde.diffuse(image, flow, steps=1, **{p: given[p] for p in params}).shape == (6, 7)
     write_image(tmp_path / "in.png", image)

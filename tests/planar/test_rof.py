@@ -49,7 +49,7 @@ def test_dual_step_matches_reference(runtime, rng, nc, ny, nx, kind):
     bufs = [cla.to_device(q, a.reshape(nc, grid.plane, 2)) for a in (p, p_old)]
     p_new = cla.zeros(q, (nc, grid.plane, 2), np.float32)
     f_dev, lam_dev = cla.to_device(q, f), cla.to_device(q, lam)
-    grid.launch(grid.kernel("rof.cl", "rof_dual_step"), bufs[0].data, bufs[1].data, p_new.data,
+    grid.launch(grid.kernel("planar/rof.cl", "rof_dual_step"), bufs[0].data, bufs[1].data, p_new.data,
                 f_dev.data, lam_dev.data, np.float32(beta))
     got = p_new.get().reshape(shape)
     want = ref.dual_step(p.astype(float), p_old.astype(float), f.astype(float), lam, beta)
@@ -68,7 +68,7 @@ def test_dual_rows_and_lambda_match_reference(runtime, rng, nc, ny, nx):
     p_dev, f_dev, lam_dev = (cla.to_device(q, a) for a in (p.reshape(nc, grid.plane, 2), f, lam))
     u_dev = cla.to_device(q, u_before)
     partial = cla.empty(q, nc * 3 * ny, np.float32)
-    grid.launch(grid.kernel("rof.cl", "rof_dual_rows"), p_dev.data, f_dev.data, lam_dev.data,
+    grid.launch(grid.kernel("planar/rof.cl", "rof_dual_rows"), p_dev.data, f_dev.data, lam_dev.data,
                 u_dev.data, partial.data)
     u_want, sums_want = ref.dual_rows(p.astype(float), f.astype(float), lam,
                                       u_before[:, 1:-1, 1:-1].astype(float))
@@ -80,7 +80,7 @@ def test_dual_rows_and_lambda_match_reference(runtime, rng, nc, ny, nx):
     if nc > 1:
         sigma2[-1] = np.inf  # a channel whose lambda is held
     inv = cla.to_device(q, (1 / (nx * ny * sigma2)).astype(np.float32))
-    grid.kernel("rof.cl", "rof_dual_lambda")(q, (nc,), None, partial.data, lam_dev.data,
+    grid.kernel("planar/rof.cl", "rof_dual_lambda")(q, (nc,), None, partial.data, lam_dev.data,
                                              np.int32(ny), inv.data, np.float32(1e-6))
     np.testing.assert_allclose(lam_dev.get(), ref.dual_lambda(sums_want[:, 0], lam, nx * ny,
                                                               sigma2, 1e-6), rtol=1e-4)
@@ -97,17 +97,17 @@ def test_gradient_kernels_match_reference(runtime, rng, kind):
     lam = np.array([4.0, 9.0], np.float32)
     lam_dev = cla.to_device(runtime.queue, lam)
     eps, dt = 0.05, 0.01
-    grid.launch(grid.kernel("planar.cl", "rof_step"), cur.data.data, nxt.data.data,
+    grid.launch(grid.kernel("planar/planar.cl", "rof_step"), cur.data.data, nxt.data.data,
                 orig.data.data, lam_dev.data, np.float32(dt), np.float32(eps * eps))
     want = ref.rof_step(ref.pad_neumann(u), ref.pad_neumann(u0), lam, dt, eps)
     np.testing.assert_allclose(nxt.to_host(), want, atol=1e-5)
 
     partial = cla.empty(runtime.queue, (nc, ny), np.float32)
-    grid.launch(grid.kernel("planar.cl", "rof_lambda_rows"), cur.data.data, orig.data.data,
+    grid.launch(grid.kernel("planar/planar.cl", "rof_lambda_rows"), cur.data.data, orig.data.data,
                 partial.data, np.float32(eps * eps))
     sigma2 = 0.01
     for c in range(nc):
-        grid.kernel("planar.cl", "rof_lambda_finish")(
+        grid.kernel("planar/planar.cl", "rof_lambda_finish")(
             runtime.queue, (1,), None, partial.data, lam_dev.data, np.int32(ny),
             np.float32(1 / (nx * ny * sigma2)), global_offset=(c,))
     want_lam = ref.rof_lambda(ref.pad_neumann(u), ref.pad_neumann(u0), eps, sigma2)
@@ -243,7 +243,8 @@ def test_bad_images_raise():
         clpde.denoise_tv(np.ones((0, 4)), sigma=0.1)
 
 
-def test_reexported_from_planar():
-    from clpde.planar import DenoiseInfo, denoise_tv
+def test_exported_from_planar():
+    from clpde.planar import denoise_tv
+    from clpde.planar.rof import DenoiseInfo
 
-    assert denoise_tv is clpde.denoise_tv and DenoiseInfo.__module__ == "clpde.rof"
+    assert denoise_tv is clpde.denoise_tv and DenoiseInfo.__module__ == "clpde.planar.rof"

@@ -1,4 +1,4 @@
-"""NumPy references of the brick storage (clpde/surface/bricks.py, kernels/bricks.cl).
+"""NumPy references of the brick storage (clpde/bricks.py, kernels/surface/bricks.cl).
 
 Written brick by brick with plain loops, independently of bricks.py's vectorised build: the
 layout (bricks 1..n in Morton order, brick 0 the sentinel, x fastest inside a brick, rows

@@ -1,4 +1,4 @@
-"""NumPy references of kernels/levelset.cl and track_features.cl: the same discrete
+"""NumPy references of kernels/tracking/levelset.cl and track_features.cl: the same discrete
 formulas on padded arrays.
 
 2D arrays are (ny + 4, nx + 4) with a two-cell ghost layer; each function returns values on
@@ -121,7 +121,7 @@ def signed_distance(mask):
     return np.where(mask, 0.5 - inside, outside - 0.5)
 
 
-# ---- kernels/track_features.cl ---------------------------------------------------------
+# ---- kernels/tracking/features.cl ---------------------------------------------------------
 
 def local_contrast(img, r, eps, scale):
     """(ny, nx) -> scale (I - mean) / sqrt(var + eps^2) over (2r+1)^2 boxes, edge repeated."""

@@ -1,4 +1,4 @@
-"""NumPy references of kernels/patchmatch.cl: the patch distance and the patch vote."""
+"""NumPy references of kernels/inpainting/patchmatch.cl: the patch distance and the patch vote."""
 
 from __future__ import annotations
 

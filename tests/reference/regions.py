@@ -1,4 +1,4 @@
-"""NumPy references of kernels/regions.cl: the same discrete formulas over a band.
+"""NumPy references of kernels/regions/regions.cl: the same discrete formulas over a band.
 
 Volumes are flat padded arrays (channels * plane values, plane = one padded channel); `band`
 holds flat padded indices of channel 0, `sx`/`sxy` the row and slab strides, as on the device.

@@ -1,4 +1,4 @@
-"""NumPy references of the ROF kernels (kernels/rof.cl), the same discrete formulas.
+"""NumPy references of the ROF kernels (kernels/planar/rof.cl), the same discrete formulas.
 
 Padded layout as in planar.py: f is (nc, ny + 2, nx + 2) with mirrored ghosts; the dual field
 p is (nc, ny + 2, nx + 2, 2) with (px, py) interleaved, ghosts as rof.cl keeps them.

@@ -65,7 +65,7 @@ def interpolate(u_pad, points, order=3):
 
 def cp_stencils(points, padded_shape, order=3):
     """Flat padded index of each point's first interpolation node, and the point's offsets
-    (3, n) from floor(point): what kernels/surface_band.cl's cp_stencils stores per band cell."""
+    (3, n) from floor(point): what kernels/surface/band.cl's cp_stencils stores per band cell."""
     pz, py, px = padded_shape
     x0, _ = _axis_weights(points[0], px, order)
     y0, _ = _axis_weights(points[1], py, order)

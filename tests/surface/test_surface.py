@@ -6,10 +6,11 @@ import pyopencl.array as cla
 import pytest
 from reference import surface as ref
 
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows
+from clpde.surface import band as surface_band
 from clpde.surface.exact import exp3z_exact, sphere_points
-from clpde.surface.flows import _offsets
+from clpde.surface.band import _offsets
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +72,7 @@ def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc
               np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape)):
         src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
         dst = cla.zeros_like(src)
-        kernel = g.kernel("surface_extend.cl", "extend_cp", INTERP=order, NC=nc,
+        kernel = g.kernel("surface/extend.cl", "extend_cp", INTERP=order, NC=nc,
                           NORMALIZE=int(normalize), LINE_FIELD=int(lines))
         g.launch_list(kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
                       *g.strides())
@@ -125,7 +126,7 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         src = cla.to_device(q, u32)
         dst = cla.zeros_like(src)
         offsets = _offsets(g, sides)
-        kernel = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=int(weighted))
+        kernel = g.kernel("surface/heat.cl", "heat_step", WEIGHTED=int(weighted))
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, psi_dev.data, g.scalar(0.1),
                       *offsets, *g.strides(), channels=u.shape[0])
         band = band_host(s.node_band)
@@ -165,16 +166,16 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
     if flow == "heat":
         u = np.broadcast_to(np.sin(3 * x) * y + z, s.shape)
         got = s.heat(u, 0.02)
-        kernel, nc, normalize = g.kernel("surface_heat.cl", "heat_step", WEIGHTED=0), 1, False
+        kernel, nc, normalize = g.kernel("surface/heat.cl", "heat_step", WEIGHTED=0), 1, False
     else:
         v = np.stack(np.broadcast_arrays(x + 0.3 * y, np.cos(2 * y), z + 0.5))
         u = v / np.sqrt((v**2).sum(axis=0))
         got = s.harmonic_map(u, 0.02)
-        kernel = g.kernel("surface_flows.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0,
+        kernel = g.kernel("surface/flows.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0,
                           ALONG=0, WEIGHTED=0)
         nc, normalize = 3, True
     steps, dt = flows._check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
-    whole = flows.BandFlow(s, u, normalize=normalize)
+    whole = surface_band.BandFlow(s, u, normalize=normalize)
     r = g.scalar(dt / s.spacing**2)
     full_runs = g.runs(s.step_band)
     for n in range(steps):
@@ -184,7 +185,7 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
         else:
             lam = cla.zeros(s.runtime.queue, 1, g.dtype)
             args += (s.psi_dev.data, s.psi_dev.data, r, g.scalar(dt), lam.data, g.scalar(1))
-        g.launch_runs(kernel, full_runs, *args, *flows._offsets(g, n % 8), *g.strides(),
+        g.launch_runs(kernel, full_runs, *args, *surface_band._offsets(g, n % 8), *g.strides(),
                       channels=1 if flow != "heat" else nc)
         whole._extend(whole.tmp, whole.cur, s.ext_band, s.cp_base, s.cp_frac)
     expect = g.download(whole.cur)

@@ -4,7 +4,7 @@ band's cells only, taken and returned by the flows in place of dense volumes."""
 import numpy as np
 import pytest
 
-from clpde._validation import InputError
+from clpde.errors import InputError
 from clpde.surface import ImplicitSurface
 
 

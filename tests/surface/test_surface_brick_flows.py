@@ -1,5 +1,5 @@
 """Every surface flow on the band's bricks (ImplicitSurface(storage="bricks"),
-kernels/bricks.cl): the brick kernels of TV / harmonic maps / diffusion along a field, Turk's
+kernels/surface/bricks.cl): the brick kernels of TV / harmonic maps / diffusion along a field, Turk's
 reaction-diffusion and TV's dynamic lambda against the numpy references of the same discrete
 scheme, read through the brick layout, in both launch geometries (a work-item walking whole
 bricks, as on CPUs; a work-group per brick, as on GPUs); then every flow of the public API
@@ -12,10 +12,11 @@ from reference import bricks as bref
 from reference import surface as ref
 from test_surface_flows import CASES
 
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 from clpde.runtime import Runtime
-from clpde.surface import ImplicitSurface, flows
-from clpde.surface.bricks import APRON, NODE
+from clpde.surface import ImplicitSurface
+from clpde.surface import band as surface_band
+from clpde.bricks import APRON, NODE
 
 
 @pytest.fixture(scope="module")
@@ -38,10 +39,10 @@ def band_host(band):
 
 def brick_flow(s, nc, **defines):
     """A BrickFlow shell on s's bricks (no data), for its kernels and layouts."""
-    flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
     flow.surf = s
-    flow.bricks, flow.psi, flow.lists = s._brick_band()
-    flow.defines = {**flows.extend_defines(s.interp, nc), **defines}
+    flow.bricks, flow.psi, flow.lists = s.band.bricks()
+    flow.defines = {**surface_band.extend_defines(s.interp, nc), **defines}
     return flow
 
 
@@ -56,7 +57,7 @@ def stepped_at(dst, nc, cells, s, bb):
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_brick_flow_step_matches_reference(spheres, rng, geometry, case):
     s = spheres[geometry]
-    g, bb = s.grid, s._brick_band()[0]
+    g, bb = s.grid, s.band.bricks()[0]
     opts = dict(CASES[case])
     nc = opts.pop("nc")
     weighted = opts.get("WEIGHTED", 0)
@@ -74,12 +75,12 @@ def test_brick_flow_step_matches_reference(spheres, rng, geometry, case):
               bb.scatter_tiles(psi, np.float32, 2).data,
               bb.scatter_tiles(direction, np.float32, 2).data, bb.scatter(u0, np.float32).data,
               g.scalar(r), g.scalar(dt), cla.to_device(q, np.float32([lam])).data, g.scalar(e2),
-              *flows._signs(sides), bb.node_rows.data)
+              *surface_band._signs(sides), bb.node_rows.data)
     node = band_host(s.node_band)
     f32 = np.float32
     expect = ref.flow_step(
         u, psi.astype(f32).astype(np.float64), node, r, dt, lam, e2,
-        [int(o) for o in flows._offsets(g, sides)], flow_p=opts["FLOW_P"],
+        [int(o) for o in surface_band._offsets(g, sides)], flow_p=opts["FLOW_P"],
         harmonic=bool(opts["HARMONIC"]), u0_pad=u0 if opts["FIDELITY"] else None,
         direction=direction.astype(f32).astype(np.float64) if opts["ALONG"] else None,
         weighted=bool(weighted), line_field=bool(opts.get("LINE_FIELD", 0)))
@@ -90,7 +91,7 @@ def test_brick_flow_step_matches_reference(spheres, rng, geometry, case):
 @pytest.mark.parametrize("geometry", ["cpu", "gpu"])
 def test_brick_turk_step_matches_reference(spheres, rng, geometry):
     s = spheres[geometry]
-    g, bb = s.grid, s._brick_band()[0]
+    g, bb = s.grid, s.band.bricks()[0]
     u = (4 + rng.standard_normal((2,) + g.padded_shape)).astype(np.float32).astype(np.float64)
     beta = (12 + 0.1 * rng.uniform(-1, 1, g.padded_shape)).astype(np.float32)
     d = rng.standard_normal((3,) + g.padded_shape)
@@ -104,9 +105,9 @@ def test_brick_turk_step_matches_reference(spheres, rng, geometry):
                   bb.scatter_tiles(psi, np.float32, 2).data,
                   bb.scatter_tiles(d, np.float32, 2).data,
                   bb.scatter(beta[None], np.float32).data, g.scalar(1.0), g.scalar(0.125),
-                  g.scalar(1 / 32), g.scalar(0.0125), *flows._signs(2), bb.node_rows.data)
+                  g.scalar(1 / 32), g.scalar(0.0125), *surface_band._signs(2), bb.node_rows.data)
         expect = ref.turk_step(u, psi[0].astype(np.float32).astype(np.float64), node, beta, 1.0,
-                               0.125, 1 / 32, 0.0125, [int(o) for o in flows._offsets(g, 2)],
+                               0.125, 1 / 32, 0.0125, [int(o) for o in surface_band._offsets(g, 2)],
                                d if along else None)
         np.testing.assert_allclose(stepped_at(dst, 2, node, s, bb), expect, atol=3e-5)
 
@@ -115,7 +116,7 @@ def test_brick_turk_step_matches_reference(spheres, rng, geometry):
 def test_brick_lambda_terms_match_reference(spheres, rng, geometry):
     """The terms at every node, zero at every other stored cell."""
     s = spheres[geometry]
-    g, bb = s.grid, s._brick_band()[0]
+    g, bb = s.grid, s.band.bricks()[0]
     u = rng.standard_normal((1,) + g.padded_shape).astype(np.float32).astype(np.float64)
     u0 = (u + 0.2 * rng.standard_normal(u.shape)).astype(np.float32).astype(np.float64)
     flow = brick_flow(s, 1, FLOW_P=1, FIDELITY=1)
@@ -125,7 +126,7 @@ def test_brick_lambda_terms_match_reference(spheres, rng, geometry):
     node = band_host(s.node_band)
     psi = g.pad(s.psi[None], mode="linear").astype(np.float32)
     expect = ref.tv_lambda_terms(u, u0, psi, node, 1 / s.spacing, 1.5, (s.spacing * 0.5) ** 2,
-                                 [int(o) for o in flows._offsets(g, 3)])
+                                 [int(o) for o in surface_band._offsets(g, 3)])
     coords = [tuple(c) for c in bb.coords]
     index = bref.brick_index(node, g.padded_shape, coords, bb.brick)
     for got, want in zip(terms, expect, strict=True):
@@ -186,7 +187,7 @@ def test_every_flow_on_bricks_is_the_flow_on_lists(spheres, geometry, name):
 def test_storage_is_checked_and_kept_by_the_constructors():
     s = ImplicitSurface.sphere(1.0, 0.2, center=(0.5, 0, 0), storage="bricks")
     assert s.storage == "bricks"
-    assert isinstance(flows.make_flow(s, s.field(lambda x, y, z: x)), flows.BrickFlow)
+    assert isinstance(surface_band.make_flow(s, s.field(lambda x, y, z: x)), surface_band.BrickFlow)
     assert ImplicitSurface.sphere(1.0, 0.2).storage == "lists"
     with pytest.raises(InputError, match="storage must be one of 'lists', 'bricks'"):
         ImplicitSurface.sphere(1.0, 0.2, storage="dense")

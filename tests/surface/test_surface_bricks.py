@@ -1,4 +1,4 @@
-"""The band in dense bricks (clpde/surface/bricks.py, kernels/bricks.cl): the layout and its
+"""The band in dense bricks (clpde/bricks.py, kernels/surface/bricks.cl): the layout and its
 tables against a loop-by-loop numpy reference, each brick kernel against the dense numpy
 reference of the same discrete scheme read through that layout, in both launch geometries
 (a work-item walking whole bricks, as on CPUs; a work-group per brick with a local tile, as
@@ -12,8 +12,9 @@ from reference import bricks as bref
 from reference import surface as ref
 
 from clpde.runtime import Runtime
-from clpde.surface import ImplicitSurface, flows
-from clpde.surface.bricks import APRON, BRICK_SIZES, EXT, NODE, REACH
+from clpde.surface import ImplicitSurface
+from clpde.surface import band as surface_band
+from clpde.bricks import APRON, BRICK_SIZES, EXT, NODE, REACH
 from clpde.surface.exact import sphere_points, xy_exact
 
 
@@ -30,14 +31,14 @@ def band_host(band):
 
 def surface(device, brick, h=0.2):
     s = ImplicitSurface.sphere(1.0, h, device=device)
-    s._brick = brick
+    s.band.brick = brick
     return s
 
 
 @pytest.mark.parametrize("brick", BRICK_SIZES)
 def test_layout_and_tables_match_reference(runtime, brick):
     s = surface(runtime, brick)
-    bb, psi, _ = s._brick_band()
+    bb, psi, _ = s.band.bricks()
     g = s.grid
     # what is stored: every cell a kernel reads
     node, reach, ext = (band_host(b) for b in (s.node_band, s.reach_band, s.ext_band))
@@ -66,10 +67,10 @@ def test_layout_and_tables_match_reference(runtime, brick):
 
 @pytest.mark.parametrize("brick", BRICK_SIZES)
 def test_tiles_on_the_device_are_the_hosts(runtime, rng, brick):
-    """BrickBand.tiles (a device volume's tiles, kernels/brick_tiles.cl) against scatter_tiles
+    """BrickBand.tiles (a device volume's tiles, kernels/bricks/tiles.cl) against scatter_tiles
     (the host's) for two channels and two halos, with bricks in every corner of a grid whose
     sides are no multiples of a brick's (tile cells outside the grid are zeros)."""
-    from clpde.surface.bricks import BrickBand
+    from clpde.bricks import BrickBand
 
     shape = (21, 19, 27)  # (PZ, PY, PX)
     places = [-(-n // b) for n, b in zip(shape[::-1], brick, strict=True)]
@@ -92,13 +93,13 @@ def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometr
     (the host's) in every brick with a band cell, wherever the apron's next brick is stored;
     zeros where it is not (bricks without band cells are never read from this layout)."""
     s = surface(runtime if geometry == "cpu" else gpu_like, brick)
-    bb, _, _ = s._brick_band()
+    bb, _, _ = s.band.bricks()
     u = rng.standard_normal((2,) + s.grid.padded_shape).astype(np.float32)
     host = bb.scatter(u, np.float32, APRON).get()
     dev = cla.zeros_like(bb.scatter(u, np.float32, APRON))
-    flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
     flow.surf, flow.bricks, flow.defines = s, bb, {}
-    bb.launch(flow.kernel("bricks.cl", "brick_to_apron"), bb.scatter(u, np.float32).data,
+    bb.launch(flow.kernel("surface/bricks.cl", "brick_to_apron"), bb.scatter(u, np.float32).data,
               dev.data, channels=2)
     bx, by, bz = brick
     shape = (2, bb.nbricks + 2, bz + APRON, by + APRON, bx + APRON)
@@ -119,7 +120,7 @@ def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometr
 @pytest.mark.parametrize("brick", BRICK_SIZES)
 def test_scatter_and_gather_round_trip(runtime, rng, brick):
     s = surface(runtime, brick)
-    bb, _, _ = s._brick_band()
+    bb, _, _ = s.band.bricks()
     g = s.grid
     u = rng.standard_normal((2,) + g.padded_shape).astype(np.float32)
     for apron in (0, APRON):
@@ -139,7 +140,7 @@ def test_scatter_and_gather_round_trip(runtime, rng, brick):
 def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, weighted, sides):
     s = surface(runtime if geometry == "cpu" else gpu_like, brick)
     g = s.grid
-    bb, _, _ = s._brick_band()
+    bb, _, _ = s.band.bricks()
     coords = [tuple(c) for c in bb.coords]
     # psi scaled by a non-distance factor exercises the |N| weights of eq. (4.7)
     psi = s.psi_dev.get().astype(np.float64) * (1.5 if weighted else 1.0)
@@ -147,14 +148,14 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     src = bb.scatter(u, np.float32)
     psi_dev = bb.scatter_tiles(psi[None], np.float32, 2)
     dst = bb.scatter(np.zeros_like(u), np.float32, APRON)
-    flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
     flow.defines = {}
     flow.surf, flow.bricks = s, bb
-    kernel = flow.kernel("bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
-    bb.launch(kernel, src.data, dst.data, psi_dev.data, g.scalar(0.1), *flows._signs(sides),
+    kernel = flow.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
+    bb.launch(kernel, src.data, dst.data, psi_dev.data, g.scalar(0.1), *surface_band._signs(sides),
               bb.node_rows.data, channels=2)
     node = band_host(s.node_band)
-    offsets = [int(o) for o in flows._offsets(g, sides)]
+    offsets = [int(o) for o in surface_band._offsets(g, sides)]
     expect = ref.heat_step(u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets,
                            weighted)
     got = dst.get().reshape(2, -1)[:, bref.brick_index(node, g.padded_shape, coords, brick, APRON)]
@@ -186,18 +187,18 @@ def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, in
                                      order, nc, normalize):
     device = runtime if geometry == "cpu" else gpu_like
     s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation, device=device)
-    s._brick = brick
+    s.band.brick = brick
     g = s.grid
-    bb, _, lists = s._brick_band()
+    bb, _, lists = s.band.bricks()
     coords = [tuple(c) for c in bb.coords]
     u = rng.standard_normal((nc,) + g.padded_shape).astype(np.float32).astype(np.float64)
     src = bb.scatter(u, np.float32, APRON)
     dst = bb.scatter(np.zeros_like(u), np.float32)
-    flow = flows.BrickFlow.__new__(flows.BrickFlow)
+    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
     flow.defines = {}
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)
-    flow._extend_kernel = flow.kernel("bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc,
+    flow._extend_kernel = flow.kernel("surface/bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc,
                                       NORMALIZE=int(normalize))
     for which, band in ((EXT, s.ext_band), (REACH, s.reach_band)):
         flow._extend(src, dst, which)
@@ -246,7 +247,7 @@ def test_heat_on_bricks_keeps_the_accuracy():
 def test_brick_cells_index_every_cell_and_mark_those_outside(rng, brick, apron, halo):
     """_brick_cells (the index arithmetic of scatter, tiles and the layout) against a cell by
     cell loop, with bricks on every face and corner of the grid, where cells fall outside."""
-    from clpde.surface.bricks import _brick_cells
+    from clpde.bricks import _brick_cells
 
     shape = (21, 19, 27)  # (PZ, PY, PX): no side a multiple of a brick's
     bx, by, bz = brick

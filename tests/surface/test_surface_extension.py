@@ -6,7 +6,7 @@ import pyopencl.array as cla
 import pytest
 from reference import surface as ref
 
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 from clpde.surface import ImplicitSurface
 
 
@@ -32,7 +32,7 @@ def test_extend_pde_step_matches_reference(sphere, rng):
     for u in (rng.standard_normal((2,) + g.padded_shape), structured):
         u32 = np.ascontiguousarray(u, np.float32)
         src, dst = cla.to_device(q, u32), cla.zeros(q, u.shape, np.float32)
-        g.launch_list(g.kernel("surface_extend.cl", "extend_pde_step", NC=u.shape[0]), s.ext_band,
+        g.launch_list(g.kernel("surface/extend.cl", "extend_pde_step", NC=u.shape[0]), s.ext_band,
                       src.data, dst.data,
                       s.psi_dev.data, g.scalar(0.5), g.scalar(s.spacing), *g.strides())
         band = band_host(s.ext_band)
@@ -48,7 +48,7 @@ def test_reinit_step_matches_reference(sphere, rng):
     phi = (phi0 + 0.01 * rng.standard_normal(phi0.shape)).astype(np.float32)
     everywhere = g.band(s.psi_dev, np.inf)
     out = cla.to_device(q, phi)
-    g.launch_list(g.kernel("surface_reinit.cl", "reinit_step"), everywhere,
+    g.launch_list(g.kernel("surface/reinit.cl", "reinit_step"), everywhere,
                   cla.to_device(q, phi).data, out.data,
                   cla.to_device(q, phi0).data, g.scalar(0.3), g.scalar(1 / s.spacing), *g.strides())
     band = band_host(everywhere)

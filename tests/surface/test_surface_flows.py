@@ -6,9 +6,9 @@ import pyopencl.array as cla
 import pytest
 from reference import surface as ref
 
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows
-from clpde.surface.flows import _offsets
+from clpde.surface.band import _offsets
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +62,7 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
         src, dst = dev(u32), cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 6)
-        kernel = g.kernel("surface_flows.cl", "flow_step", NC=nc, **opts)
+        kernel = g.kernel("surface/flows.cl", "flow_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
         g.launch_runs(kernel, s.step_runs, src.data, dst.data, dev(psi).data, dev(direction).data,
                       dev(u0).data, g.scalar(r), g.scalar(dt), dev([lam]).data, g.scalar(e2),
@@ -86,7 +86,7 @@ def test_lambda_terms_match_reference(sphere02, rng):
     u0 = (u + 0.2 * rng.standard_normal(u.shape)).astype(np.float32)
     terms = [cla.empty(q, s.step_band.n, np.float32) for _ in range(3)]
     offsets = _offsets(g, 3)
-    g.launch_list(g.kernel("surface_flows.cl", "tv_lambda_terms"), s.step_band,
+    g.launch_list(g.kernel("surface/flows.cl", "tv_lambda_terms"), s.step_band,
                   cla.to_device(q, u).data, cla.to_device(q, u0).data, s.psi_dev.data,
                   g.scalar(1 / s.spacing), g.scalar(1.5), g.scalar(0.01), *offsets, *g.strides(),
                   *(t.data for t in terms))
@@ -98,7 +98,7 @@ def test_lambda_terms_match_reference(sphere02, rng):
     # chunk_sum's partial sums (TV's dynamic lambda adds them on the device)
     n, chunk = s.step_band.n, 64
     partial = cla.empty(q, -(-n // chunk), np.float32)
-    g.kernel("surface_flows.cl", "chunk_sum")(q, *s.runtime.items(partial.size), terms[1].data,
+    g.kernel("surface/flows.cl", "chunk_sum")(q, *s.runtime.items(partial.size), terms[1].data,
                                               np.int32(n), np.int32(chunk), partial.data)
     assert partial.get().sum() == pytest.approx(want_sum := expect[1].sum(), rel=1e-4)
     # the smeared delta integrates to the sphere's area: sum(delta) h^2 = 4 pi
@@ -119,7 +119,7 @@ def test_lambda_update_on_the_device(runtime, rng):
     (with the capped flag), written to lambda[0] and history[slot]; the correction factor f
     moves by residual / sigma^2 (limited) once the residual passes half of sigma^2."""
     q = runtime.queue
-    kernel = runtime.kernel("surface_flows.cl", "tv_lambda_update", np.float64)
+    kernel = runtime.kernel("surface/flows.cl", "tv_lambda_update", np.float64)
     num, area = rng.normal(size=37), rng.uniform(0.5, 1.0, 37)
     cases = [(-2.0, 1e9, 0.1, 1.0), (2.0, 1e9, 0.1, 1.0), (-2.0, 1.0, 0.1, 1.0),  # f stays 1
              (-2.0, 1e9, 1.2, 1.0), (-2.0, 1e9, 0.7, 2.0), (-2.0, 1e9, 4.0, 9.5)]  # f moves

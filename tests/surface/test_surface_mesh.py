@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, render, to_mesh
 from clpde.surface.mesh_sdf import grid_for_mesh, mesh_to_sdf
 from clpde.surface.render import colormap, export_mesh

@@ -5,9 +5,9 @@ import pyopencl.array as cla
 import pytest
 from reference import surface as ref
 
-from clpde.imagedata import InputError
+from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows
-from clpde.surface.flows import _offsets
+from clpde.surface.band import _offsets
 
 
 def band_host(band):
@@ -26,7 +26,7 @@ def test_principal_directions_kernel_matches_reference(torus):
     band = s.ext_band
     dirs = cla.empty(q, (6, band.n), np.float32)
     curv = cla.empty(q, (2, band.n), np.float32)
-    g.launch_list(g.kernel("surface_shape.cl", "principal_directions"), band, s.psi_dev.data,
+    g.launch_list(g.kernel("surface/shape.cl", "principal_directions"), band, s.psi_dev.data,
                   g.scalar(1 / s.spacing),
                   dirs.data, curv.data, *g.strides())
     want_dirs, want_curv = ref.principal_directions(s.psi_dev.get(), band_host(band), 1 / s.spacing)
@@ -68,7 +68,7 @@ def test_turk_step_matches_reference(rng):
     for along in (False, True):
         dst = cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 2)
-        g.launch_runs(g.kernel("surface_heat.cl", "turk_step", ALONG=int(along)), s.step_runs,
+        g.launch_runs(g.kernel("surface/heat.cl", "turk_step", ALONG=int(along)), s.step_runs,
                       cla.to_device(q, u).data,
                       dst.data, s.psi_dev.data, cla.to_device(q, d).data,
                       cla.to_device(q, beta).data,

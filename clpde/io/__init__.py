@@ -1,0 +1,6 @@
+"""Files in and out: images (images.py), frame sequences (frames.py) and video (video.py,
+needs PyAV). Every writer writes atomically; readers keep the file's dtype."""
+
+from .images import read_image, read_mask, write_gif, write_image
+
+__all__ = ["read_image", "read_mask", "write_gif", "write_image"]

@@ -1,0 +1,281 @@
+"""Planar diffusion flows: heat, Perona-Malik, total variation, curvature, and ROF denoising.
+
+`PlanarFlow` keeps the state on the device and enqueues steps back to back; `diffuse` and
+`denoise_tv` are the one-call forms on numpy arrays.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
+
+from .._progress import is_long_run, progress_bar
+from .._state import State, renamed_keyword
+from ..errors import InputError
+from ..imagedata import check_steps, check_time_step, positive
+from ..fields import Field, Grid, PingPong, check_fits
+from ..imagedata import to_kernel_layout
+from ..runtime import get_runtime
+
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
+KERNEL_FILES = ("planar/planar.cl",)
+
+FLOWS = ("heat", "perona-malik", "tv", "curvature")
+# TV's regularisation of |grad u| on [0, 1] data: about one grey level of 8-bit data, so
+# that only gradients below it (noise, quantisation) are smoothed like heat while every
+# visible edge moves as TV: regions flatten and edges stay. At 0.05 (12 grey levels) most of
+# a photo's gradients were below eps and TV flow blurred it more than heat did.
+TV_EPS = 0.005
+# The parameters each flow takes besides dt; any other is refused rather than ignored.
+FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge"), "tv": ("eps",),
+               "curvature": ("eps", "weight")}
+
+
+def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
+    """Largest stable explicit time step of a planar flow (unit grid spacing).
+
+    Parameters
+    ----------
+    flow : {'heat', 'perona-malik', 'tv', 'curvature', 'rof'}
+        The flow; 'rof' is denoise_tv's gradient method (TV flow with fidelity).
+    eps : float
+        TV's regularisation of |grad u| (needed by 'tv' and 'rof').
+    lam : float
+        The fidelity weight lambda of 'rof'.
+
+    Returns
+    -------
+    float
+        1/4 for heat, Perona-Malik and curvature flow; 1 / (4/eps + lam) for TV and ROF,
+        whose face coefficients reach 1/eps. `diffuse` runs at 0.8 of it by default.
+
+    Examples
+    --------
+    >>> from clpde import stability_limit
+    >>> stability_limit("heat")
+    0.25
+    >>> stability_limit("tv", eps=0.01)
+    0.0025
+    """
+    if flow in ("heat", "perona-malik", "curvature"):
+        return 0.25
+    if flow in ("tv", "rof"):
+        eps = positive("eps", eps)
+        if not np.isfinite(lam) or lam < 0:
+            raise InputError(f"lam must be a number >= 0, not {lam!r}")
+        return 1.0 / (4.0 / eps + lam)
+    raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
+
+
+@dataclass
+class FlowState(State):
+    """One yielded state of a running flow: steps and time so far, the image like the input."""
+
+    step: int
+    time: float
+    image: np.ndarray
+    info: dict = field(default_factory=dict)
+
+
+class PlanarFlow:
+    """A planar flow whose state stays on the device between calls.
+
+    Parameters are those of `diffuse` (without `steps`): the image, the flow, the time step
+    and the flow's own parameters. `run` enqueues steps, `iterate` yields a `FlowState`
+    every few steps, `result` copies the current state back as an array like the input.
+
+    Attributes
+    ----------
+    steps_done : int
+        Steps run so far.
+    time : float
+        The flow's time, steps_done * dt.
+    dt : float
+        The time step (0.8 of `stability_limit` unless given).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde import PlanarFlow
+    >>> image = np.zeros((32, 32), np.uint8)
+    >>> image[8:24, 8:24] = 200
+    >>> flow = PlanarFlow(image, "tv")
+    >>> [state.step for state in flow.iterate(steps=300, every=100)]
+    [100, 200, 300]
+    >>> flow.result().dtype, flow.steps_done
+    (dtype('uint8'), 300)
+    """
+
+    def __init__(self, image: ArrayLike, flow: str = "heat", *, dt: float | None = None,
+                 channel_axis: int | None = None, device: str | int | None = None,
+                 dtype: DTypeLike | None = None, kappa: float | None = None,
+                 edge: str | None = None, eps: float | None = None,
+                 weight: ArrayLike | None = None, precision: DTypeLike | None = None):
+        if flow not in FLOWS:
+            raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
+        given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight}
+        for name, value in given.items():
+            if value is not None and name not in FLOW_PARAMS[flow]:
+                users = [f for f, params in FLOW_PARAMS.items() if name in params]
+                raise InputError(f"{name} applies to the {' and '.join(users)} flow"
+                                 f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+        kappa = 0.05 if kappa is None else kappa
+        edge = "exp" if edge is None else edge
+        self.runtime = get_runtime(device)
+        dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
+        # two fields (ping-pong) and the curvature flow's one-channel weight
+        def fits(shape):
+            check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None),
+                       dtype=dtype)
+
+        data, self.layout = to_kernel_layout(image, channel_axis, fits=fits)
+        nc, ny, nx = data.shape
+        self.grid = Grid(self.runtime, nx, ny, nc, 1, dtype)
+        self.flow = flow
+        self.steps_done = 0
+        self.time = 0.0
+        self.pair = PingPong(Field.from_host(self.grid, data))
+        self._setup(flow, dt, kappa, edge, eps, weight)
+
+    def _setup(self, flow, dt, kappa, edge, eps, weight):
+        g = self.grid
+        if flow == "heat":
+            self.dt = check_time_step(dt, stability_limit(flow), "heat")
+            kernel = g.kernel("planar/planar.cl", "heat_step")
+            self._extra = ()
+        elif flow == "perona-malik":
+            if edge not in ("exp", "rational"):
+                raise InputError(f"edge must be 'exp' or 'rational', not {edge!r}")
+            kappa = positive("kappa", kappa)
+            self.dt = check_time_step(dt, stability_limit(flow), "Perona-Malik")
+            kernel = g.kernel("planar/planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational"))
+            self._extra = (g.scalar(1.0 / kappa**2),)
+        elif flow == "tv":
+            eps = positive("eps", TV_EPS if eps is None else eps)
+            self.dt = check_time_step(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
+            kernel = g.kernel("planar/planar.cl", "tv_step")
+            self._extra = (g.scalar(eps * eps),)
+        else:  # curvature
+            eps = 1e-10 if eps is None else float(eps)
+            self.dt = check_time_step(dt, stability_limit(flow), "curvature")
+            if weight is None:
+                kernel = g.kernel("planar/planar.cl", "curvature_step")
+                weight_buf = self.pair.cur.data.data  # unread when HAS_WEIGHT is 0
+            else:
+                weight = np.asarray(weight, np.float64)
+                if weight.shape != (g.ny, g.nx) or not np.isfinite(weight).all():
+                    raise InputError(
+                        f"weight must be a finite ({g.ny}, {g.nx}) array, got shape {weight.shape}"
+                    )
+                wgrid = Grid(self.runtime, g.nx, g.ny, 1, 1, g.dtype)
+                self._weight = Field.from_host(wgrid, weight[np.newaxis])
+                weight_buf = self._weight.data.data
+                kernel = g.kernel("planar/planar.cl", "curvature_step", HAS_WEIGHT=1)
+            self._extra = (weight_buf, g.scalar(0), g.scalar(eps))
+        self._kernel = kernel
+
+    def _enqueue_step(self):
+        g = self.grid
+        if self.flow == "curvature":  # the weight buffer comes before dt
+            args = (self._extra[0], g.scalar(self.dt), self._extra[2])
+        else:
+            args = (g.scalar(self.dt), *self._extra)
+        g.launch(self._kernel, self.pair.cur.data.data, self.pair.nxt.data.data, *args)
+        self.pair.swap()
+        self.steps_done += 1
+        self.time += self.dt
+
+    def run(self, steps: int, progress: bool | None = None) -> PlanarFlow:
+        """Enqueue `steps` steps; the host only waits to move the progress bar."""
+        steps = check_steps(steps)
+        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step",
+                           long_run=is_long_run(steps, self.grid.nx * self.grid.ny * self.grid.nc))
+        chunk = 50
+        with bar:
+            for start in range(0, steps, chunk):
+                for _ in range(min(chunk, steps - start)):
+                    self._enqueue_step()
+                if not bar.disable:
+                    self.runtime.queue.finish()
+                    bar.update(min(chunk, steps - start))
+        return self
+
+    def iterate(self, steps: int, every: int) -> Iterator[FlowState]:
+        """Run `steps` steps, yielding a FlowState every `every` steps (and at the end)."""
+        steps = check_steps(steps)
+        every = max(1, int(every))
+        done = 0
+        while done < steps:
+            n = min(every, steps - done)
+            self.run(n, progress=False)
+            done += n
+            yield FlowState(self.steps_done, self.time, self.result())
+
+    def result(self) -> np.ndarray:
+        """The current state as an array like the input (one device-to-host copy)."""
+        return self.layout.restore(self.pair.cur.to_host())
+
+
+def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
+            channel_axis: int | None = None, device: str | int | None = None, *,
+            progress: bool | None = None, dtype: DTypeLike | None = None,
+            precision: DTypeLike | None = None, **params: ArrayLike | float | str) -> np.ndarray:
+    """Run a planar diffusion flow for `steps` explicit steps.
+
+    Parameters
+    ----------
+    image : (rows, columns) or (rows, columns, channels) array
+        Integer or float data, never modified; channels need `channel_axis`.
+    flow : {'heat', 'perona-malik', 'tv', 'curvature'}
+        'heat' (u_t = Lap u), 'perona-malik' (params kappa, edge='exp'|'rational'),
+        'tv' (u_t = div(grad u / |grad u|_eps), param eps, default TV_EPS = 0.005) or
+        'curvature' (u_t = g kappa |grad u|, params weight=g, eps). Data is scaled to
+        [0, 1] internally, so kappa and eps are in those units.
+    steps : int
+        Explicit time steps.
+    dt : float, optional
+        The time step; 0.8 of `stability_limit` by default, and a larger one than the
+        limit is an error.
+    channel_axis : int, optional
+        The axis of the channels of a colour image, each diffused on its own.
+    device : str or int, optional
+        An OpenCL device ('cpu', 'gpu', an index or a name part; see `clpde.devices`).
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    dtype : {float32, float64}, optional
+        The device's arithmetic (float32 by default).
+    precision : {float32, float64}, optional
+        Deprecated old name of `dtype`.
+    **params
+        The flow's parameters named above; one that the flow does not take is an error.
+
+    Returns
+    -------
+    ndarray
+        The result, with the input's shape and dtype.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> image = np.zeros((32, 32), np.uint8)
+    >>> image[8:24, 8:24] = 200
+    >>> smooth = clpde.diffuse(image, "heat", steps=20)
+    >>> smooth.shape, smooth.dtype
+    ((32, 32), dtype('uint8'))
+    >>> centre, corner, outside = (int(smooth[p]) for p in ((16, 16), (8, 8), (16, 4)))
+    >>> centre > 190, 0 < outside < corner < 100  # the square's edges blur outwards
+    (True, True)
+    """
+    unknown = sorted(set(params) - {p for names in FLOW_PARAMS.values() for p in names})
+    if unknown:
+        listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())
+        raise InputError(f"diffuse takes no parameter {unknown[0]!r}; the flows take ({listed})")
+    dtype = renamed_keyword("dtype", dtype, "precision", precision)
+    state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
+                       dtype=dtype, **params)
+    return state.run(steps, progress).result()
+

@@ -1,0 +1,7 @@
+"""Regions tracked on deforming surfaces (thesis section 2.2): the tracker, its brick storage
+and the region meshes."""
+
+from . import bricks  # noqa: F401  (adds the "bricks" storage to tracker.STORAGE_CLASSES)
+from .tracker import RegionTracker, region_tracker, track_region
+
+__all__ = ["RegionTracker", "region_tracker", "track_region"]

@@ -1,0 +1,736 @@
+"""Region tracking on deforming level-set surfaces (thesis section 2.2), in 3D.
+
+The surface S is the zero level set of Phi; each tracked region R is where an auxiliary
+function Phi-hat is negative on S, so its boundary is S and Phi-hat = 0 intersected. Both
+evolve on the same grid, in a narrow band around S, with kernels/regions/regions.cl:
+
+    Phi_t     = V |grad Phi|                                  (upwind, slope-limited)
+    Phi-hat_t = V (N_Phi . N_Phi-hat) |grad Phi-hat|           (the projected velocity)
+
+and are reinitialised to signed distances once the surface may have moved a cell or two
+(every few steps at the CFL limit, rarely for slow flows). V comes from beta, the outward
+normal speed of S: a constant, the mean curvature (kappa = k1 + k2, mean curvature flow), the
+positive part of the Gaussian curvature (towards the centres of curvature, so folds
+flatten), morphing toward a target shape, or a user array, fixed or re-sampled in time
+(a callable beta(x, y, z, t): sampled at the middle of every block of `reinit_every` steps).
+Rigid translations are given as a velocity vector instead: then Phi-hat moves with the
+projection of the full velocity on its normal (for a normal speed that is the thesis'
+beta N_Phi . N_Phi-hat; tangential motion of S is only known when the velocity is given).
+
+At saved times the host reads the level sets back: marching cubes of Phi = 0, Phi-hat
+sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
+from tqdm.auto import tqdm  # (the bars' type)
+
+from .._progress import progress_bar
+from .._state import DeviceLike, State, renamed_keyword
+from ..fields import IndexList, check_fits, compact
+from ..errors import InputError
+from ..imagedata import positive as _positive
+from .mesh import along_normals, functions_from_mask, region_colours, split_regions, surface_mesh
+from ..runtime import get_runtime
+from ..grid3d import Grid3D
+
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
+KERNEL_FILES = ("regions/regions.cl",)
+
+# storage name -> tracker class; each storage module adds its own (regions/bricks.py: "bricks"),
+# and the package's __init__ imports them all
+STORAGE_CLASSES: dict[str, type] = {}
+SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
+GHOST = 3
+# Pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3)). Six Heun iterations
+# of 0.45 (2.7 cells of pseudo-time) correct the band as well as eight of 0.3 did, for 25%
+# less work; with less pseudo-time (5 x 0.45, 6 x 0.3) an expanding sphere's outer band
+# lagged and its area drifted (0.04-0.6% where 0.02% is the norm at h = 0.025).
+REINIT_DT = 0.45
+# Extension of the Phi-hat along the surface's normals before each reinitialisation: the
+# cells within EXTEND_FROM[0] cells of the surface are kept (they fix Phi-hat on the
+# surface, so the regions), those beyond EXTEND_FROM[1] cells take the values carried out
+# from them. 6 upwind steps of 0.5 (CFL 0.5 sqrt(3) < 1) carry values 3 cells out, about
+# twice the 1.6 cells the surface moves between two reinitialisations at most: the
+# reinitialisation band's outer cells were reached by earlier extensions, and the Phi-hat
+# stay close to constant along the normals in between (the projected flow keeps them so).
+# 10 steps (5 cells), as before, cost 4 more sweeps of the reinitialisation band for
+# little: benchmarks/regions.py's cap errors changed by 0.03% at most, except at h = 0.1
+# (-0.23% to -0.10%); with 4 steps the grown sphere's cap (t = 1.2) drifted by 0.075%.
+# Phi-hat stays constant along the normals, meeting the surface at right angles (see
+# regions_mesh.along_normals for why), and cells that enter the band as the surface moves
+# get values from the surface, not stale ones.
+EXTEND_DT = 0.5
+EXTEND_ITERATIONS = 6
+EXTEND_FROM = (0.8, 1.5)
+# When the surface moved only part of the tracker's reinit_distance since the last
+# reinitialisation (a slow flow, or a block cut short at a saved time), that part of the
+# iterations, but at least these: 2 Heun iterations (0.9 cells of pseudo-time) and 4
+# extension steps (2 cells). At 256^3 a curvature flow moves 0.004 cells a step, so the
+# reinitialisation after 32 steps takes 2 + 4 instead of 6 + 6; the tests' curvature
+# flows and caps moved by 0.02% at most (benchmarks/regions.py, docs/regions.md).
+MIN_REINIT_ITERATIONS = 2
+MIN_EXTEND_ITERATIONS = 4
+
+__all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_region"]
+
+
+@dataclass
+class RegionFrame(State):
+    """The surface and its regions at one saved time."""
+
+    time: float
+    mesh: object  # trimesh.Trimesh with per-vertex region colours
+    face_labels: np.ndarray  # region index of each face, -1 outside every region
+    boundaries: list = field(default_factory=list)  # (k, 3) points on each region's boundary
+    phi: np.ndarray | None = None  # world-unit level sets, (nz, ny, nx)
+    phihat: np.ndarray | None = None  # (regions, nz, ny, nx)
+    step: int = 0  # the tracker's steps so far
+
+    def area(self, label: int | None = None) -> float:
+        """Area of region `label` (of the whole surface when None)."""
+        areas = self.mesh.area_faces
+        return float(areas.sum() if label is None else areas[self.face_labels == label].sum())
+
+    def area_fraction(self, label: int = 0) -> float:
+        return self.area(label) / self.area()
+
+
+
+class RegionTracker:
+    """Phi and the Phi-hats on the device, stepped together over a narrow band.
+
+    phi: (nz, ny, nx) signed distance (world units, negative inside); phihat: (L, nz, ny, nx)
+    auxiliary functions. speed: one of SPEEDS with `scale` converting it to grid units, or
+    velocity (cells per unit time) for rigid translation. band_width: half-width in cells of the
+    band that is stepped; reinitialisation covers the band dilated by `reinit_ring` cells.
+    Steps go in blocks of `reinit_every`; after a block the level sets are reinitialised
+    once the surface may have moved `reinit_every * cfl` cells since the last time (every
+    block at the CFL limit; far less often for slow flows: see advance).
+    aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
+    speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
+    This class stores the band as index lists over dense padded volumes (storage "lists");
+    `region_tracker(..., storage=...)` builds the class that STORAGE_CLASSES names.
+    """
+
+    def __init__(self, phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
+                 speed: str = "constant", scale: float = 0.0, aux: np.ndarray | None = None,
+                 velocity: ArrayLike | None = None, band_width: float = 5.0,
+                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
+                 reinit_ring: int = 3, max_speed: float | None = None,
+                 aux_at: Callable[[float], np.ndarray] | None = None, device: DeviceLike = None,
+                 dtype: DTypeLike = np.float32, band: float | None = None):
+        self.h = float(spacing)
+        self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
+        self.runtime = get_runtime(device)
+        nz, ny, nx = phi.shape
+        self.grid = Grid3D(self.runtime, nx, ny, nz, ghost=GHOST, dtype=np.dtype(dtype))
+        self.nc = 1 + len(phihat)
+        self.mode = SPEEDS[speed]
+        self.scale = float(scale)
+        self.velocity = None if velocity is None else np.asarray(velocity, np.float64)
+        self.width = float(renamed_keyword("band_width", band_width, "band", band, 5.0))
+        self.reinit_every = int(reinit_every)
+        self.reinit_iterations = int(reinit_iterations)
+        self.reinit_ring = int(reinit_ring)
+        if not 0 <= self.reinit_ring <= GHOST:
+            raise InputError(f"reinit_ring must lie in 0..{GHOST} cells, not {reinit_ring!r}")
+        self.cfl = float(cfl)
+        self.aux_at = aux_at
+        if aux_at is not None and (speed != "array" or velocity is not None):
+            raise InputError("a time-dependent speed (aux_at) needs speed='array' and no velocity")
+        if aux_at is not None and aux is None:
+            aux = aux_at(0.0)
+        # region functions constant along the surface's normals: the extension before each
+        # reinitialisation keeps them so, and would otherwise move an oblique one's zero on
+        # the surface once (a plane cutting a sphere at 60 degrees: the cap grew 1.6%)
+        phihat = along_normals(phi, self.h, np.asarray(phihat, np.float64))
+        cells = np.concatenate([phi[None], phihat]) / self.h
+        self._setup(cells, aux if aux is None else aux / (self.h if speed == "morph" else 1.0))
+        self.time = 0.0
+        self.steps = 0
+        self.reinits = 0
+        # reinitialise when the surface may have moved this many cells since the last time:
+        # reinit_every full steps at the CFL limit (a slower flow, like a curvature flow on a
+        # fine grid, moves far less per step and needs it far less often)
+        self.reinit_distance = self.reinit_every * self.cfl
+        self._moved = 0.0  # bound on the cells the surface moved since the last one
+        self._vmax = 0.0  # the speed bound (cells per unit time) of the last stable_dt
+        self.rebuild()
+        self.reinitialize(4 * self.reinit_iterations)
+
+    def _setup(self, cells: np.ndarray, aux: np.ndarray | None) -> None:
+        """The level sets `cells` (channels, nz, ny, nx; grid units) and the auxiliary
+        volume (aux, or None) on the device, with the work buffers and the kernels."""
+        g, q = self.grid, self.runtime.queue
+        # cur, nxt, ls0 and stage of every level set, the speed, aux and two masks
+        check_fits(self.runtime, (self.nc,) + tuple(cells.shape[1:]), "region tracking",
+                   4 + 2.5 / self.nc, ghost=GHOST, dtype=g.dtype)
+        # ghosts continue distances linearly: stencils near the border stay meaningful
+        self.cur = g.upload(cells, mode="linear")
+        self.nxt = self.cur.copy()
+        self.ls0 = self.cur.copy()
+        self.stage = self.cur.copy()
+        self.speed = cla.zeros(q, g.padded_shape, g.dtype)
+        self.aux = g.upload(aux[None]) if aux is not None else self.speed
+        self._flag = cla.zeros(q, 1, np.int32)
+        self._mask = cla.zeros(q, g.padded_shape, np.uint8)
+        self._mask2 = cla.zeros(q, g.padded_shape, np.uint8)
+        rt, mode = self.runtime, self.mode
+        self._k = {
+            "region_speed": rt.kernel("regions/regions.cl", "region_speed", g.dtype, SPEED=mode),
+            "region_euler": rt.kernel("regions/regions.cl", "region_euler", g.dtype, SPEED=mode,
+                                      NC=self.nc),
+            "region_heun": rt.kernel("regions/regions.cl", "region_heun", g.dtype, SPEED=mode,
+                                     NC=self.nc),
+            "advect_step": rt.kernel("regions/regions.cl", "advect_step", g.dtype, SPEED=mode),
+            "reinit3d_targets": rt.kernel("regions/regions.cl", "reinit3d_targets", g.dtype,
+                                          SPEED=mode),
+            "reinit3d_step_pre": rt.kernel("regions/regions.cl", "reinit3d_step_pre", g.dtype,
+                                           SPEED=mode),
+            "reinit3d_heun_pre": rt.kernel("regions/regions.cl", "reinit3d_heun_pre", g.dtype,
+                                           SPEED=mode),
+            "band_near_border": rt.kernel("regions/regions.cl", "band_near_border", g.dtype, SPEED=mode),
+            "band_max_abs": rt.kernel("regions/regions.cl", "band_max_abs", g.dtype, SPEED=mode),
+            "heun_average": rt.kernel("regions/regions.cl", "heun_average", g.dtype, SPEED=mode),
+            "region_band_mask": rt.kernel("regions/regions.cl", "region_band_mask", g.dtype, SPEED=mode),
+            "dilate_mask": rt.kernel("regions/regions.cl", "dilate_mask", g.dtype, SPEED=mode),
+            "extend_outer": rt.kernel("regions/regions.cl", "extend_outer", g.dtype, SPEED=mode),
+            "copy_runs": rt.kernel("regions/regions.cl", "copy_runs", g.dtype, SPEED=mode),
+        }
+
+    # ---- bands ---------------------------------------------------------------------------
+    def rebuild(self) -> None:
+        """Bands from the current Phi. The work buffers nxt and ls0 must equal cur outside
+        the reinitialisation band: every write lands in it (reinitialize syncs it)."""
+        g = self.grid
+        self.step_band, self.reinit_band = self._bands()
+        # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs).
+        # The step's runs are lengthened to whole vectors (16 cells) where the row allows:
+        # the extra cells lie outside the band, where band_cutoff is exactly 0, so their
+        # values stay as they are (2/3 of the time per stage measured at 256^3, runs of 20
+        # cells on average). The reinitialisation's runs are lengthened the same way: its
+        # kernels read the band's mask (_reinit_mask) and keep the values of the cells
+        # outside it, which the syncs copy unchanged (the work buffers equal cur there).
+        self.step_runs = g.runs(self.step_band, pad=16)
+        self.reinit_runs = g.runs(self.reinit_band, pad=16)
+        # max |V| of each work-item of region_euler and region_heun (see stable_dt)
+        (items,), _, _ = self.runtime.list_launch(max(self.step_runs.n, 1))
+        self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
+        self._stats_fresh = False
+        if self.step_band.n == 0:
+            raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
+                             "track for a shorter time")
+        with self.runtime.lock:  # pyopencl's fill kernel is shared by every thread
+            self._flag.fill(0)
+        g.launch_list(self._k["band_near_border"], self.reinit_band, self._flag.data,
+                      np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), np.int32(g.ghost),
+                      np.int32(1), *g.strides())
+        if self._flag.get()[0]:
+            raise InputError(
+                f"the surface came within {self.width + self.reinit_ring + 1:.0f} cells of the "
+                f"volume's border at t = {self.time:g}: pad phi (and the other volumes) with "
+                f"more cells"
+            )
+
+    def _bands(self) -> tuple[IndexList, IndexList]:
+        """The step band (interior cells with |Phi| < width cells) and the reinitialisation
+        band (the step band dilated by reinit_ring cells, a cube), compacted on the device.
+        Each launch writes every interior cell of its mask and the masks' ghost entries stay
+        0 from their allocation, so nothing is cleared (clearing a 256^3 mask cost 48 ms)."""
+        g, q = self.grid, self.runtime.queue
+        dims = (np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), *g.strides(), np.int32(g.ghost))
+        launch = self.runtime.items(g.ny, g.nz)
+        self._k["region_band_mask"](q, *launch, self.cur.data, self._mask.data,
+                                    g.scalar(self.width), *dims)
+        step = compact(self.runtime, self._mask)
+        src, dst = self._mask, self._mask2
+        for stride in (1, g.sx, g.sxy) if self.reinit_ring else ():
+            self._k["dilate_mask"](q, *launch, src.data, dst.data,
+                                   np.int32(stride), np.int32(self.reinit_ring), *dims)
+            src, dst = dst, src
+        self._reinit_mask = src  # the reinitialisation band's mask, read by its kernels
+        return step, compact(self.runtime, src)
+
+    def reinitialize(self, iterations: int | None = None,
+                     extension: int | None = None) -> None:
+        """Every level set back to a signed distance in the reinitialisation band:
+        `iterations` Heun iterations (default reinit_iterations) after `extension` steps of
+        the Phi-hat's extension along the normals (default EXTEND_ITERATIONS; none when
+        iterations is 0)."""
+        g = self.grid
+        its = self.reinit_iterations if iterations is None else int(iterations)
+        ext = EXTEND_ITERATIONS if extension is None else int(extension)
+        band, k = self.reinit_runs, self._k
+        # the band holds every cell written since the last sync (steps write the step band,
+        # inside it), so syncing it keeps the work buffers equal to cur everywhere. The
+        # extension's first sweep writes every Phi-hat channel of nxt on the band, so only
+        # Phi's is copied; nxt is written anew by the first reinitialisation stage after.
+        self._sync(self.nxt, channels=1)
+        keep, full = (g.scalar(d) for d in EXTEND_FROM)
+        for _ in range(ext if its else 0):
+            g.launch_runs(k["extend_outer"], band, self.cur.data, self._reinit_mask.data,
+                          self.nxt.data,
+                          g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
+            self.cur, self.nxt = self.nxt, self.cur
+        self._sync(self.ls0)
+        # the subcell fix's targets depend on ls0 alone: computed once into stage (free
+        # here: a step writes it before reading it), they save a third of each sweep
+        target = self.stage
+        if its:
+            g.launch_runs(k["reinit3d_targets"], band, self.ls0.data, self._reinit_mask.data,
+                          target.data,
+                          *g.strides(), channels=self.nc)
+        for _ in range(its):
+            # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a
+            # sphere's interface drifted 0.3 cells in 40 reinitialisations). The second
+            # stage averages in place (reinit3d_heun_pre): no third buffer, no averaging
+            # sweep. Bit for bit reinit3d_step and reinit3d_heun.
+            g.launch_runs(k["reinit3d_step_pre"], band, self.cur.data, self.ls0.data,
+                          target.data, self.nxt.data, g.scalar(REINIT_DT), *g.strides(),
+                          channels=self.nc)
+            g.launch_runs(k["reinit3d_heun_pre"], band, self.cur.data, self.nxt.data,
+                          self.ls0.data, target.data, g.scalar(REINIT_DT), *g.strides(),
+                          channels=self.nc)
+        # the next bands may leave cells of this one: nxt and ls0 must equal cur there (stage
+        # is read only where a step has written it first, so it needs no sync)
+        self._sync(self.ls0, self.nxt)
+        self.rebuild()
+        self.reinits += 1
+        self._moved = 0.0
+
+    def _sync(self, *buffers, channels=None) -> None:
+        """Copy cur into the buffers on the reinitialisation band (every channel, or the
+        first `channels`)."""
+        for dst in buffers:
+            self.grid.launch_runs(self._k["copy_runs"], self.reinit_runs, self.cur.data,
+                                  dst.data, channels=self.nc if channels is None else channels)
+
+    # ---- time steps ------------------------------------------------------------------------
+    def _compute_speed(self) -> None:
+        g = self.grid
+        g.launch_runs(self._k["region_speed"], self.step_runs, self.cur.data, self.aux.data,
+                      self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
+
+    def stable_dt(self) -> float:
+        """Largest stable step (grid units) for the current speeds: one device read. After
+        a step, the speeds its two stages met (no sweep); else computed from Phi."""
+        if self.velocity is not None:
+            fastest = float(np.abs(self.velocity).sum())
+            self._vmax = fastest
+            return self.cfl / fastest if fastest > 0 else np.inf
+        vmax = self._speed_bound()
+        self._vmax = vmax
+        dt = self.cfl / vmax if vmax > 0 else np.inf
+        # curvature flows are parabolic: explicit steps need dt ~ h^2 / (6 diffusivity)
+        if self.mode == 1:
+            dt = min(dt, 1.0 / (6.0 * abs(self.scale)))
+        elif self.mode == 2 and vmax > 0:
+            dt = min(dt, 1.0 / (6.0 * np.sqrt(abs(self.scale) * vmax)))
+        return dt
+
+    def _speed_bound(self) -> float:
+        """max |V| over the step band (cells per unit time)."""
+        if self._stats_fresh:
+            return float(self._stats.get().max())
+        self._compute_speed()
+        return self._band_max(self.speed)
+
+    def _band_max(self, volume) -> float:
+        """max |volume| over the step band, reduced per work-item on the device."""
+        (gsize,), _, _ = self.runtime.list_launch(self.step_band.n)
+        out = cla.zeros(self.runtime.queue, gsize, self.grid.dtype)
+        self.grid.launch_list(self._k["band_max_abs"], self.step_band, volume.data, out.data)
+        return float(out.get().max())
+
+    def _cutoff(self):
+        """Speeds fade out between these |Phi| (cells): the band's outer 2 cells."""
+        return self.grid.scalar(self.width - 2.0), self.grid.scalar(self.width)
+
+    def _advect(self, src, dst, dt) -> None:
+        """dst = src + dt L(src) on the step band for a rigid motion (velocity)."""
+        g, u = self.grid, self.velocity
+        g.launch_runs(self._k["advect_step"], self.step_runs, src.data, dst.data,
+                      g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
+                      *self._cutoff(), *g.strides(), channels=self.nc)
+
+    def _stage(self, name, src, dst, dt) -> None:
+        """One Euler stage of every level set over the step band, the speed computed from
+        src in the same sweep: region_euler, or region_heun (Heun's averaging into dst)."""
+        g = self.grid
+        g.launch_runs(self._k[name], self.step_runs, src.data, self.aux.data, dst.data,
+                      self._stats.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
+                      g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
+
+    def step(self, dt: float) -> None:
+        """One Heun (TVD Runge-Kutta 2) step of every level set."""
+        g = self.grid
+        if self.velocity is None:
+            # two fused sweeps: cur -> nxt, then cur <- (cur + nxt + dt L(nxt)) / 2 in place
+            self._stage("region_euler", self.cur, self.nxt, dt)
+            self._stage("region_heun", self.nxt, self.cur, dt)
+            self._stats_fresh = True
+        else:
+            self._advect(self.cur, self.nxt, dt)
+            self._advect(self.nxt, self.stage, dt)
+            g.launch_runs(self._k["heun_average"], self.step_runs, self.cur.data,
+                          self.stage.data, self.cur.data, channels=self.nc)
+        self.time += dt
+        self.steps += 1
+
+    def advance(self, until: float, bar: tqdm | None = None) -> None:
+        """Step to time `until` (the speeds' time unit), reinitialising when needed.
+
+        Steps go in blocks of `reinit_every`. After a block, the level sets are
+        reinitialised when the surface may have moved `reinit_distance` cells since the
+        last time (the speed bound times the time stepped: reinit_every steps at the CFL
+        limit), at `until`, and after every block of a time-dependent speed (aux_at). That
+        speed is sampled once per block, at its middle (the midpoint rule: second order in
+        the block's length), and held for the block."""
+        dt = self.stable_dt()
+        while self.time < until - 1e-12:
+            self._check_step_count(until, dt)
+            steps = [dt] * self.reinit_every
+            if self.aux_at is not None:
+                steps, dt = self._sample_block(until, dt)
+            for dt_k in steps:
+                step = min(dt_k, until - self.time)
+                if step <= 1e-12:
+                    break
+                self.step(step)
+                self._moved += self._vmax * step
+                if bar is not None:
+                    bar.update(step)
+            done = self.time >= until - 1e-12
+            if (self.aux_at is not None or self._moved >= self.reinit_distance * (1 - 1e-6)
+                    or (done and self._moved > 0)):
+                self._reinitialize_for(self._moved / self.reinit_distance)
+            dt = self.stable_dt()
+
+    def _reinitialize_for(self, share: float) -> None:
+        """Reinitialise with `share` (<= 1) of the full iterations, at least the minimum:
+        the surface moved that share of reinit_distance since the last time."""
+        def part(full, least):
+            return min(full, max(least, int(np.ceil(full * min(1.0, share) - 1e-6))))
+
+        self.reinitialize(part(self.reinit_iterations, MIN_REINIT_ITERATIONS),
+                          part(EXTEND_ITERATIONS, MIN_EXTEND_ITERATIONS))
+
+    def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
+                keep_volumes: bool = False, palette: ArrayLike | None = None,
+                partition: bool = False, bar: tqdm | None = None) -> Iterator[RegionFrame]:
+        """Advance to each of `times` (ascending) in turn, yielding the RegionFrame there
+        (see `make_frame`); `bar` is a tqdm bar counting time."""
+        for when in times:
+            self.advance(when, bar)
+            yield make_frame(self, when, origin, keep_volumes, palette, partition)
+
+    MAX_STEPS = 100_000
+
+    def _check_step_count(self, until, dt) -> None:
+        """Refuse a run that would take forever: a speed that a singularity makes huge
+        (the curvature at the centre of a sphere a few cells wide, a crease) gives a stable
+        step of ~1e-7 and millions of steps (found by fuzzing: it looked like a hang)."""
+        needed = (until - self.time) / dt
+        if needed > self.MAX_STEPS:
+            raise InputError(
+                f"the speed's stable time step is {dt:.3g}, so reaching t = {until:g} takes "
+                f"{needed:.3g} steps (more than {self.MAX_STEPS}); the curvature of a shape a "
+                "few cells wide or of a crease makes the speed huge: pass max_speed= to clamp "
+                "|beta|, use a finer grid, or a shorter t"
+            )
+
+    def _sample_block(self, until, guess):
+        """Upload the time-dependent speed for the next block and return its steps.
+
+        The block's length depends on the speed (its stable step) and the speed on the
+        block's middle time, so the length only shrinks until a stable step fits: start
+        from `guess` (the stable step at the last sample, infinite for a zero speed), sample
+        at the middle, and shorten to reinit_every stable steps of that sample if needed."""
+        n = self.reinit_every
+        left = until - self.time
+        span = min(left, n * guess)
+        for _ in range(8):
+            self.set_aux(self.aux_at(self.time + 0.5 * span))
+            dt = self.stable_dt()
+            if n * dt >= span * (1 - 1e-9):
+                break
+            span = n * dt
+        else:  # still shrinking: keep the last sample, with its own stable step
+            span = min(span, n * dt)
+        return [span / n] * n, dt
+
+    def set_aux(self, values: ArrayLike) -> None:
+        """Replace the auxiliary volume (nz, ny, nx) on the device (speed='array': the speed)."""
+        g = self.grid
+        padded = g.pad(np.asarray(values, np.float64)[None], "edge")
+        self.aux.set(np.ascontiguousarray(padded, g.dtype))
+        self._stats_fresh = False  # the speeds changed
+
+    def volumes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(Phi, Phi-hats) in world units on the host."""
+        data = self.grid.download(self.cur).astype(np.float64) * self.h
+        return data[0], data[1:]
+
+
+STORAGE_CLASSES["lists"] = RegionTracker
+
+
+def region_tracker(phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
+                   storage: str = "lists", **options) -> RegionTracker:
+    """The tracker of `storage` ("lists" or "bricks"; the bricks take brick=(BX, BY, BZ) too)
+    on these level sets, built with RegionTracker's options."""
+    if storage not in STORAGE_CLASSES:
+        raise InputError(f"storage must be one of {tuple(STORAGE_CLASSES)}, not {storage!r}")
+    return STORAGE_CLASSES[storage](phi, phihat, spacing, **options)
+
+
+def _region_functions(phi, region, spacing, origin, mesh=None):
+    """Phi-hat volumes (L, nz, ny, nx) from the `region` input (a vertex mask or labels refer
+    to `mesh`, by default the starting mesh of phi), and whether they partition the surface
+    (integer labels: every point lies in one region)."""
+    region_arr = region if isinstance(region, (list, tuple)) else [region]
+    arrays = [np.asarray(r) for r in region_arr]
+    if all(a.shape == phi.shape for a in arrays):
+        out = np.stack([a.astype(np.float64) for a in arrays])
+        if not np.all(np.isfinite(out)):
+            raise InputError("the region functions contain NaN or infinite values")
+        return out, False
+    if len(arrays) == 1 and arrays[0].ndim == 1:
+        marks = arrays[0]
+        if mesh is None:
+            mesh = surface_mesh(phi, spacing, origin)
+            if len(marks) != len(mesh.vertices):
+                raise InputError(
+                    f"a vertex mask needs one entry per vertex of the starting mesh "
+                    f"(clpde.regions.surface_mesh(phi, spacing) has {len(mesh.vertices)}), got "
+                    f"{len(marks)}; or pass mesh= the mesh whose vertices it marks")
+        else:
+            mesh = _as_trimesh(mesh)
+            if len(marks) != len(mesh.vertices):
+                raise InputError(f"a vertex mask needs one entry per vertex of mesh= "
+                                 f"({len(mesh.vertices)} vertices), got {len(marks)}")
+        if marks.dtype == bool:
+            masks = [marks]
+        elif np.issubdtype(marks.dtype, np.integer):
+            values = np.unique(marks)
+            if len(values) < 2:
+                raise InputError("vertex labels need at least two different values")
+            masks = [marks == v for v in values]
+        else:
+            raise InputError("a vertex mask must be bool (one region) or integer labels, not "
+                             f"{marks.dtype}")
+        partition = marks.dtype != bool
+        return functions_from_mask(phi, spacing, origin, mesh, masks), partition
+    raise InputError(
+        f"region must be a vertex mask/labels of the starting mesh (1-D), an implicit function of "
+        f"phi's shape {phi.shape}, or a list of such functions; got shape(s) "
+        f"{[a.shape for a in arrays]}"
+    )
+
+
+def _as_trimesh(mesh):
+    """A trimesh.Trimesh from a Trimesh or a (vertices, faces) pair (not copied)."""
+    import trimesh
+
+    if isinstance(mesh, trimesh.Trimesh):
+        return mesh
+    try:
+        vertices, faces = mesh
+        return trimesh.Trimesh(np.asarray(vertices, np.float64), np.asarray(faces), process=False)
+    except (TypeError, ValueError):
+        raise InputError("mesh must be a trimesh.Trimesh or a (vertices, faces) pair") from None
+
+
+def _time_dependent(beta) -> bool:
+    """True for a callable taking (x, y, z, t), False for one taking (x, y, z)."""
+    try:
+        params = inspect.signature(beta).parameters.values()
+    except (TypeError, ValueError):  # builtins without a signature: f(x, y, z)
+        return False
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 4
+
+
+def _beta_array(values, shape, when="") -> np.ndarray:
+    """A user's beta (number or array) as an array of phi's shape, checked."""
+    arr = np.asarray(values, np.float64)
+    try:
+        arr = np.broadcast_to(arr, shape)
+    except ValueError:
+        raise InputError(f"a beta array{when} must have phi's shape {shape}, got "
+                         f"{arr.shape}") from None
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"beta{when} contains NaN or infinite values")
+    return arr
+
+
+def _speed_setup(beta, target, weight, h, shape, coords):
+    """(speed name, scale, aux array, aux as a function of time or None) for RegionTracker
+    from the user's beta."""
+    if isinstance(beta, str):
+        if beta == "mean-curvature":
+            return "mean-curvature", weight / h**2, None, None
+        if beta == "gaussian":
+            return "gaussian", weight / h**3, None, None
+        if beta == "morph":
+            if target is None:
+                raise InputError("beta='morph' needs target=: the target shape's signed distance "
+                                 "volume")
+            target = np.asarray(target, np.float64)
+            if target.shape != shape:
+                raise InputError(f"target must have phi's shape {shape}, got {target.shape}")
+            return "morph", weight, target, None
+        raise InputError(f"beta must be a number, an array, a callable or one of "
+                         f"'mean-curvature', 'gaussian', 'morph'; not {beta!r}")
+    if callable(beta):
+        if _time_dependent(beta):
+            def beta_at(t):
+                return _beta_array(beta(*coords, t), shape, f" (the callable at t = {t:g})")
+
+            return "array", -weight / h, beta_at(0.0), beta_at
+        beta = _beta_array(beta(*coords), shape, " (the callable's result)")
+    arr = np.asarray(beta, np.float64)
+    if arr.ndim == 0:
+        if not np.isfinite(arr):
+            raise InputError(f"beta must be finite, not {beta!r}")
+        return "constant", -weight * float(arr) / h, None, None
+    if arr.shape != shape:
+        raise InputError(f"a beta array must have phi's shape {shape}, got {arr.shape}")
+    return "array", -weight / h, _beta_array(arr, shape), None
+
+
+def track_region(phi: ArrayLike, region: ArrayLike | list,
+                 beta: float | str | ArrayLike | Callable = 1.0, t: float = 1.0,
+                 spacing: float = 1.0, saves: int | Iterable[float] = 1, *,
+                 origin: ArrayLike = (0.0, 0.0, 0.0), mesh: object = None,
+                 palette: ArrayLike | None = None, target: ArrayLike | None = None,
+                 velocity: ArrayLike | None = None, weight: float = 1.0, band_width: float = 5.0,
+                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
+                 max_speed: float | None = None, keep_volumes: bool = False,
+                 device: DeviceLike = None, dtype: DTypeLike = np.float32,
+                 progress: bool | None = None, band: float | None = None,
+                 storage: str = "lists") -> list[RegionFrame]:
+    """Track regions painted on a surface while the surface deforms (thesis section 2.2).
+
+    phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
+    level-set functions are reinitialised first), with grid spacing `spacing` and world
+    (x, y, z) of phi[0, 0, 0] at `origin`.
+    region: a bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
+    origin)`, or of `mesh=`, any mesh of the same surface in world coordinates: the one phi
+    was made from, say), integer vertex labels (one region per label), an implicit function
+    Phi-hat of phi's shape (the region is where Phi-hat < 0 on the surface; off the surface it is
+    replaced by its value at the closest surface point, which keeps the region and tracks
+    its boundary more accurately), or a list of such functions.
+    beta: outward normal speed of the surface: a number, 'mean-curvature' (speed -weight
+    (k1 + k2): mean curvature flow), 'gaussian' (speed -weight max(K, 0) sign(k1 + k2): elliptic
+    parts move toward their centres of curvature, so folds flatten), 'morph' (speed
+    toward target=, a signed distance volume: -weight (target - phi)), an array of phi's
+    shape, a callable f(x, y, z) giving one (world coordinates, broadcastable arrays), or a
+    time-dependent callable f(x, y, z, t) (four positional parameters): re-evaluated and
+    re-uploaded once per block of `reinit_every` steps, at the block's middle time, and held
+    for the block (the midpoint rule; the block shrinks until the sampled speed's stable
+    step fits). velocity=(vx, vy, vz): translate instead.
+    t: final time; saves: number of saved intervals (frames at t * k / saves, k = 0..saves)
+    or a sequence of times in [0, t]. max_speed: clamp |beta| (world units) where the
+    curvature of creases finer than the grid would otherwise set a tiny time step.
+
+    palette: (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
+    clpde's palette; where no region is, grey).
+
+    storage: "lists" (dense padded volumes on the device, the band as index lists) or
+    "bricks" (dense bricks of the band only, kept up on the device: memory in proportion to
+    the band; see clpde.regions.bricks and docs/regions.md for the measurements).
+
+    Returns a RegionFrame per saved time: mesh (trimesh, per-vertex region colours),
+    face_labels, boundary points, and (keep_volumes=True) the level sets.
+    """
+    phi = np.asarray(phi)
+    if phi.ndim != 3 or min(phi.shape) < 8:
+        raise InputError("phi must be a 3D (nz, ny, nx) volume with at least 8 cells a side, got "
+                         f"{phi.shape}")
+    if not np.issubdtype(phi.dtype, np.number) or not np.all(np.isfinite(phi)):
+        raise InputError("phi must hold finite real numbers")
+    phi = phi.astype(np.float64)
+    if not (phi.min() < 0 < phi.max()):
+        raise InputError("phi never changes sign: it has no surface to track regions on")
+    limit = np.sqrt(np.finfo(np.dtype(dtype)).max)  # squared gradients must not overflow
+    if np.abs(phi).max() > limit:
+        raise InputError(f"phi reaches {np.abs(phi).max():.3g}, beyond what {np.dtype(dtype)} "
+                         f"arithmetic squares ({limit:.3g}); phi is a distance: rescale it")
+    h = _positive("spacing", spacing)
+    t_end = float(t)
+    if not np.isfinite(t_end) or t_end < 0:
+        raise InputError(f"t must be a non-negative time, not {t!r}")
+    origin = np.asarray(origin, np.float64).reshape(3)
+    if np.ndim(saves) == 0:
+        n = int(saves)
+        if n < 1:
+            raise InputError(f"saves must be at least 1, not {saves!r}")
+        times = [t_end * k / n for k in range(n + 1)]
+    else:
+        times = sorted(float(s) for s in saves)
+        if not times or times[0] < 0 or times[-1] > t_end + 1e-12:
+            raise InputError(f"save times must lie in [0, t={t_end:g}], got {saves!r}")
+    phihat, partition = _region_functions(phi, region, h, origin, mesh)
+    nz, ny, nx = phi.shape
+    coords = (origin[0] + h * np.arange(nx)[None, None, :],
+              origin[1] + h * np.arange(ny)[None, :, None],
+              origin[2] + h * np.arange(nz)[:, None, None])
+    if velocity is not None:
+        vel = np.asarray(velocity, np.float64).reshape(-1)
+        if vel.shape != (3,) or not np.all(np.isfinite(vel)):
+            raise InputError("velocity must be three finite numbers (vx, vy, vz), got "
+                             f"{velocity!r}")
+        speed, scale, aux, aux_at, vel = "constant", 0.0, None, None, vel / h
+    else:
+        speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
+        vel = None
+    tracker = region_tracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
+                            band_width=renamed_keyword("band_width", band_width, "band", band, 5.0),
+                            reinit_every=reinit_every,
+                            reinit_iterations=reinit_iterations, cfl=cfl,
+                            max_speed=None if max_speed is None else _positive("max_speed",
+                                                                               max_speed) / h,
+                            aux_at=aux_at, device=device, dtype=dtype, storage=storage)
+    # the bar counts simulated time, so it prints rounded times rather than step counts
+    time_format = "{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
+    with progress_bar(progress, t_end, "track regions", leave=False, unit="time",
+                      bar_format=time_format) as bar:
+        return list(tracker.iterate(times, origin=origin, keep_volumes=keep_volumes,
+                                    palette=palette, partition=partition, bar=bar))
+
+
+def make_frame(tracker: RegionTracker, time: float, origin: ArrayLike, keep_volumes: bool = False,
+               palette: ArrayLike | None = None, partition: bool = False) -> RegionFrame:
+    """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region (with partition,
+    every face in one: slivers where the labels' boundaries part by rounding go to the
+    nearest region)."""
+    import trimesh
+    from scipy.ndimage import map_coordinates
+
+    phi, phihat = tracker.volumes()
+    h = tracker.h
+    if not (phi.min() < 0 < phi.max()):  # gone between two band rebuilds
+        raise InputError(f"the surface vanished by t = {time:g} (Phi has no zero level set "
+                         "left on the grid); track for a shorter time")
+    mesh = surface_mesh(phi, h, origin)
+    idx = ((np.asarray(mesh.vertices) - origin) / h)[:, ::-1].T  # (z, y, x) index coordinates
+    vals = np.stack([map_coordinates(p, idx, order=1, mode="nearest") for p in phihat], axis=1)
+    verts, faces, labels, boundaries = split_regions(mesh.vertices, vals, mesh.faces, partition)
+    vertex_label = np.full(len(verts), -1)
+    vertex_label[faces.reshape(-1)] = np.repeat(labels, 3)
+    rgb = region_colours(vertex_label, palette)
+    colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8),
+                              np.full((len(rgb), 1), 255, np.uint8)], 1)
+    out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
+    return RegionFrame(time, out, labels, boundaries,
+                       phi if keep_volumes else None, phihat if keep_volumes else None,
+                       tracker.steps)

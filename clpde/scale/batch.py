@@ -1,0 +1,488 @@
+"""Batches of files over Dask's distributed scheduler (``clpde batch``, ``clpde.batch``).
+
+One task per input: a worker runs the same code as the single-file command (``clpde
+inpaint``, ``denoise``, ``diffuse``, ``track`` or ``surface``) on a path and writes its output
+atomically into OUTDIR. Only paths, option strings and small result records travel between
+the client and the workers; every worker process builds its own OpenCL runtime on first use
+(clpde.runtime caches it per process), so nothing holding an OpenCL object is pickled.
+
+By default a ``distributed.LocalCluster`` is started on this machine: spawned worker
+processes, one Python thread each, and PoCL's thread count per worker set (through
+POCL_MAX_PTHREAD_COUNT, before OpenCL loads in the worker) so that workers x threads =
+cores. On a machine with GPUs there is one worker per GPU instead, pinned to it through
+CLPDE_DEVICE and advertising the resource ``GPU=1`` that every task asks for. Give
+``scheduler="tcp://HOST:8786"`` to use a cluster started with ``dask scheduler`` and
+``dask worker`` instead; the inputs and OUTDIR must then be at the same paths on every
+machine (a shared file system).
+
+Nothing is lost: OUTDIR/clpde-manifest.json records, for every output written, the hash of
+its input (and mask) and the options; a rerun skips the outputs whose record matches. A
+worker that dies has its task run elsewhere by the scheduler. A failing input is reported
+by name in the result and does not stop the others. Ctrl-C cancels the batch, stops the
+cluster it started and removes any temporary file a stopped worker left behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import inspect
+import io
+import json
+import os
+import platform
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .._version import __version__
+from ..errors import InputError, error_message
+from ..io.images import IMAGE_FORMATS, PathLike, atomic_output, replace_folder
+from .cluster import connect, wants_gpu
+from .tasks import TASKS
+
+COMMANDS = tuple(TASKS)  # inpaint, denoise, diffuse, track, surface
+FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
+MASKED = ("inpaint", "track")  # commands that take a mask per input (track: --init)
+TILED = ("diffuse", "denoise")
+MANIFEST = "clpde-manifest.json"
+MANIFEST_EVERY_S = 1.0
+
+
+# ---- results ------------------------------------------------------------------------------
+@dataclass
+class TaskResult:
+    """One input's outcome: status 'done', 'skipped' (complete from an earlier run) or
+    'failed' (error says why); seconds is the worker's time on it."""
+
+    input: str
+    output: str
+    status: str
+    error: str | None = None
+    seconds: float = 0.0
+    worker: str | None = None
+
+
+@dataclass
+class BatchResult:
+    """The outcome of a batch: one TaskResult per input, in the order of the inputs."""
+
+    results: list[TaskResult]
+    seconds: float = 0.0
+    cluster_seconds: float = 0.0  # time to start (or join) the cluster
+    workers: int = 0
+    threads: int | None = None  # PoCL threads per worker, when clpde started the cluster
+
+    def _with(self, status):
+        return [r for r in self.results if r.status == status]
+
+    @property
+    def done(self) -> list[TaskResult]:
+        return self._with("done")
+
+    @property
+    def skipped(self) -> list[TaskResult]:
+        return self._with("skipped")
+
+    @property
+    def failed(self) -> list[TaskResult]:
+        return self._with("failed")
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+    def __iter__(self):
+        return iter(self.results)
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+
+# ---- the tasks, as they run on a worker -------------------------------------------------------
+def _options(command: str, options: dict, flow) -> dict:
+    """The task's keyword options: `flow` is surface's flow and diffuse's; unknown names are
+    an InputError (before any work), with the task's own names."""
+    options = dict(options)
+    if flow is not None:
+        options["flow"] = flow
+    task = TASKS[command]
+    accepted = [n for n, p in inspect.signature(task).parameters.items()
+                if p.kind is p.KEYWORD_ONLY and n not in ("mask", "progress")]
+    unknown = sorted(set(options) - set(accepted))
+    if unknown:
+        raise InputError(f"batch {command}: unknown option(s) {', '.join(unknown)}; its options "
+                         f"are {', '.join(accepted)}")
+    return options
+
+
+def run_task(spec: dict) -> dict:
+    """Run one input's task on this process (a worker); a record of what happened.
+
+    Errors are caught and returned, so a bad input is reported instead of retried; only a
+    dying worker makes the scheduler run the task again, elsewhere.
+    """
+    start = time.perf_counter()
+    record = {"worker": f"{platform.node()}:{os.getpid()}"}
+    try:
+        output = spec["output"]
+        if spec["mask_error"]:
+            raise InputError(spec["mask_error"])
+        # The task's messages and progress bars are the client's business, not the
+        # worker's terminal: capture them (tqdm then sees no terminal and draws nothing).
+        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+            if spec["command"] in FOLDER_OUTPUTS:
+                _run_into_folder(spec, output)
+            else:
+                _run(spec, output)
+        record.update(status="done", output_sha256=_hash_path(output))
+    except Exception as exc:  # noqa: BLE001  (any failure is this input's, reported by name)
+        record.update(status="failed", error=error_message(exc))
+    record["seconds"] = time.perf_counter() - start
+    return record
+
+
+def _run(spec: dict, output: str) -> None:
+    options = dict(spec["options"])
+    if spec["command"] in MASKED:
+        options["mask"] = spec["mask"]
+    if spec["command"] in TILED:
+        options["tile"] = True if spec["tile"] else None  # None: when the device needs it
+    TASKS[spec["command"]](spec["input"], output, progress=False, **options)
+
+
+def _run_into_folder(spec: dict, output: str) -> None:
+    """Commands that write a folder: into a staging folder beside it, then renamed in, so
+    that the output folder is either complete or absent."""
+    final = Path(output)
+    staging = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{final.name}.", suffix=".part"))
+    try:
+        _run(spec, str(staging))
+        replace_folder(staging, final)  # a rerun with other options: the old result goes only now
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+# ---- hashes and the manifest ------------------------------------------------------------------
+def _hash_path(path) -> str | None:
+    """sha256 of a file, or of a folder's files (names and contents, sorted); None if absent."""
+    path = Path(path)
+    if path.is_file():
+        files = [path]
+    elif path.is_dir():
+        files = sorted(p for p in path.rglob("*") if p.is_file())
+    else:
+        return None
+    digest = hashlib.sha256()
+    for p in files:
+        if path.is_dir():
+            digest.update(p.relative_to(path).as_posix().encode() + b"\0")
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+    return digest.hexdigest()
+
+
+def _read_manifest(outdir: Path) -> dict:
+    path = outdir / MANIFEST
+    if not path.is_file():
+        return {}
+    try:
+        data = json.loads(path.read_text())
+        return dict(data.get("outputs", {}))
+    except (OSError, ValueError, AttributeError):
+        return {}  # unreadable: every output is redone, which is safe
+
+
+def _write_manifest(outdir: Path, records: dict) -> None:
+    data = {"clpde": __version__, "outputs": dict(sorted(records.items()))}
+    with atomic_output(outdir / MANIFEST) as tmp:
+        tmp.write_text(json.dumps(data, indent=1) + "\n")
+
+
+def _sweep_temporaries(outdir: Path, names) -> None:
+    """Remove the temporary files and folders that killed workers left for these outputs."""
+    for name in names:
+        for stray in outdir.glob(f".{name}.*.part"):
+            if stray.is_dir():
+                shutil.rmtree(stray, ignore_errors=True)
+            else:
+                with contextlib.suppress(OSError):
+                    stray.unlink()
+
+
+# ---- planning the tasks on the client ---------------------------------------------------------
+def _find_mask(masks_dir: Path, source: Path) -> Path | None:
+    """The mask named like its image: the same file name, or the same stem as any image."""
+    same = masks_dir / source.name
+    if same.is_file():
+        return same
+    for suffix in IMAGE_FORMATS:
+        candidate = masks_dir / f"{source.stem}{suffix}"
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dict]:
+    if command not in COMMANDS:
+        raise InputError(f"unknown batch command {command!r}; choose one of {', '.join(COMMANDS)}")
+    if not inputs:
+        raise InputError("give at least one input")
+    if command in MASKED:
+        if (mask is None) == (masks is None):
+            what = "--init mask" if command == "track" else "mask"
+            raise InputError(f"batch {command} needs one {what}: --mask FILE (one for all "
+                             "inputs) or --masks DIR (one per input, named like it)")
+    elif mask is not None or masks is not None:
+        raise InputError(f"--mask and --masks apply to inpaint and track, not {command}")
+    if tile and command not in TILED:
+        raise InputError(f"--tile applies to diffuse and denoise, not {command}")
+    if command == "surface" and not options.get("flow"):
+        raise InputError("batch surface needs --flow FLOW (heat, tv, denoise, ...)")
+    if masks is not None and not Path(masks).is_dir():
+        raise InputError(f"--masks {masks} is not a folder; give the folder of masks")
+    if mask is not None and not Path(mask).is_file():
+        raise InputError(f"mask {mask} does not exist")
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"output {outdir} exists and is not a folder")
+    specs, names = [], {}
+    for item in inputs:
+        source = Path(item)
+        (name,) = _output_names(command, [source])
+        if not name or name == MANIFEST:
+            raise InputError(f"input {source} gives no usable output name")
+        if name in names:
+            raise InputError(f"inputs {names[name]} and {source} would both write {outdir / name}; "
+                             "rename one or run them into separate folders")
+        names[name] = source
+        if outdir.resolve() == source.resolve().parent and command not in FOLDER_OUTPUTS:
+            raise InputError(f"output folder {outdir} holds the input {source}; clpde never "
+                             "overwrites its inputs, choose another folder")
+        mask_path, mask_error = mask, None
+        if masks is not None:
+            found = _find_mask(Path(masks), source)
+            mask_path = str(found) if found else None
+            if found is None:
+                mask_error = f"no mask for {source.name} in {masks} (expected {source.name})"
+        specs.append({"command": command, "input": str(source), "output": str(outdir / name),
+                      "name": name, "mask": None if mask_path is None else str(mask_path),
+                      "mask_error": mask_error, "options": dict(options), "tile": bool(tile)})
+    return specs
+
+
+def _output_names(command, inputs) -> list[str]:
+    return [Path(p).stem if command in FOLDER_OUTPUTS else Path(p).name for p in inputs]
+
+
+def _fingerprint(spec: dict) -> dict:
+    """What makes an output what it is: the inputs' contents and the command line."""
+    digest = _hash_path(spec["input"])
+    if digest is None and spec["command"] == "surface":  # a shape name (sphere, torus...)
+        digest = hashlib.sha256(f"shape:{spec['input']}".encode()).hexdigest()
+    return {"command": spec["command"], "options": _fingerprint_options(spec),
+            "tile": spec["tile"], "input_sha256": digest,
+            "mask_sha256": None if spec["mask"] is None else _hash_path(spec["mask"])}
+
+
+def _fingerprint_options(spec: dict) -> dict:
+    """The task's options with its defaults filled in, as strings (so that the command line's
+    flags and Python's keywords for the same run match); the device and progress left out."""
+    task = TASKS[spec["command"]]
+    params = inspect.signature(task).parameters
+    values = {n: p.default for n, p in params.items()
+              if p.kind is p.KEYWORD_ONLY and n not in ("mask", "device", "progress", "tile")}
+    values.update({k: v for k, v in spec["options"].items() if k in values})
+    # numbers as floats: tol=0 from Python and --tol 0 (a float) are the same run
+    return {k: repr(float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v)
+            for k, v in sorted(values.items())}
+
+
+def _is_complete(record: dict | None, fingerprint: dict, output: str) -> bool:
+    if not record or any(record.get(k) != v for k, v in fingerprint.items()):
+        return False
+    if fingerprint["input_sha256"] is None:
+        return False
+    return record.get("output_sha256") is not None and record["output_sha256"] == _hash_path(output)
+
+
+# ---- the batch --------------------------------------------------------------------------------
+class _Progress:
+    """One bar over the batch: done, running, failed (and skipped), redrawn on each event."""
+
+    def __init__(self, total: int, skipped: int, enabled):
+        from .._progress import progress_bar
+
+        self.bar = progress_bar(enabled, total, "clpde batch", initial=skipped, unit="file",
+                                dynamic_ncols=True)
+        self.failed = 0
+        self.skipped = skipped
+
+    def update(self, running: int, failed_now: bool) -> None:
+        self.failed += failed_now
+        self.bar.update(1)
+        self.bar.set_postfix_str(f"running {running}, failed {self.failed}"
+                                 + (f", skipped {self.skipped}" if self.skipped else ""),
+                                 refresh=True)
+
+    def note(self, line: str) -> None:
+        self.bar.write(line, file=sys.stderr)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+class BatchFutures:
+    """A batch submitted to a cluster: its futures, and results() to wait for them, record
+    them in the manifest and get the BatchResult."""
+
+    def __init__(self, client, specs, futures, prepared, manifest, outdir, start):
+        self.client, self.specs, self.futures = client, specs, futures
+        self._prepared, self._manifest, self._outdir = prepared, manifest, outdir
+        self._start = start
+
+    def results(self, progress=None) -> BatchResult:
+        from distributed import as_completed
+
+        results = dict(self._prepared)
+        pending = {f.key: (i, f) for i, f in self.futures}
+        bar = _Progress(len(self.specs), len(results), progress)
+        saved_at, unsaved = float("-inf"), 0  # the first output is recorded at once
+        workers = self.client.scheduler_info()["workers"].values()
+        slots = sum(w.get("nthreads", 1) for w in workers)  # tasks that can run at once
+        try:
+            for future in as_completed([f for _, f in self.futures], loop=self.client.loop):
+                index, _ = pending.pop(future.key)
+                spec = self.specs[index]
+                try:
+                    record = future.result()
+                except Exception as exc:  # noqa: BLE001  (e.g. KilledWorker too often)
+                    record = {"status": "failed", "error": error_message(exc), "seconds": 0.0}
+                result = TaskResult(spec["input"], spec["output"], record["status"],
+                                    record.get("error"), record.get("seconds", 0.0),
+                                    record.get("worker"))
+                results[index] = result
+                if result.status == "done":
+                    self._manifest[spec["name"]] = {
+                        **spec["fingerprint"], "input": spec["input"], "mask": spec["mask"],
+                        "output_sha256": record["output_sha256"],
+                        "seconds": round(result.seconds, 4)}
+                    unsaved += 1
+                    # Rewriting the whole manifest per output would make a large batch
+                    # quadratic: at most once a second, and at the end or on an interrupt.
+                    if time.monotonic() - saved_at >= MANIFEST_EVERY_S:
+                        _write_manifest(self._outdir, self._manifest)
+                        saved_at, unsaved = time.monotonic(), 0
+                else:
+                    bar.note(f"clpde batch: {spec['input']} failed: {result.error}")
+                bar.update(min(len(pending), slots), result.status == "failed")
+        except BaseException:
+            self.client.cancel([f for _, f in self.futures], force=True)
+            raise
+        finally:
+            if unsaved:
+                _write_manifest(self._outdir, self._manifest)
+            bar.close()
+        # A worker killed while writing leaves its temporary file; its task ran again elsewhere.
+        _sweep_temporaries(self._outdir, [s["name"] for s in self.specs])
+        ordered = [results[i] for i in range(len(self.specs))]
+        return BatchResult(ordered, seconds=time.perf_counter() - self._start)
+
+
+
+def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=None,
+           tile=False, force=False, **options) -> BatchFutures:
+    """Submit a batch to `client`'s cluster without waiting: a BatchFutures (its .futures,
+    and .results() to wait). The arguments are those of batch()."""
+    start = time.perf_counter()
+    outdir = Path(output_dir)
+    specs = _plan(command, list(inputs), outdir, mask, masks,
+                  _options(command, options, flow) if command in TASKS else options, tile)
+    outdir.mkdir(parents=True, exist_ok=True)
+    _sweep_temporaries(outdir, [s["name"] for s in specs])
+    manifest = _read_manifest(outdir)
+    prepared, futures = {}, []
+    resources = {"GPU": 1} if wants_gpu(client) else None
+    for index, spec in enumerate(specs):
+        spec["fingerprint"] = _fingerprint(spec)
+        if spec["fingerprint"]["input_sha256"] is None and not spec["mask_error"]:
+            spec["mask_error"] = f"input {spec['input']} does not exist"
+        if not force and _is_complete(manifest.get(spec["name"]), spec["fingerprint"],
+                                      spec["output"]):
+            prepared[index] = TaskResult(spec["input"], spec["output"], "skipped")
+            continue
+        task = {k: v for k, v in spec.items() if k != "fingerprint"}
+        key = f"clpde-{command}-{spec['name']}-{hashlib.sha1(os.urandom(8)).hexdigest()[:8]}"
+        futures.append((index, client.submit(run_task, task, key=key, pure=False,
+                                             resources=resources)))
+    return BatchFutures(client, specs, futures, prepared, manifest, outdir, start)
+
+
+def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
+          mask: PathLike | None = None, masks: PathLike | None = None,
+          workers: int | None = None, threads: int | None = None, scheduler: str | None = None,
+          client: Any = None, flow: str | None = None, tile: bool = False, force: bool = False,
+          futures: bool = False, progress: bool | None = None,
+          **options: Any) -> BatchResult | BatchFutures:
+    """Run `command` ('inpaint', 'denoise', 'diffuse', 'track' or 'surface') on every input,
+    over Dask workers, writing one output per input into the folder `output_dir`.
+
+    Options are the keywords of the command's task (clpde.scale.tasks.TASKS: ``steps=50,
+    flow="tv"``), the Python spelling of the command's flags. inpaint takes ``mask`` (one mask
+    for every input) or ``masks`` (a folder with a mask named like each input); track takes
+    its first-frame mask the same way; surface needs ``flow``. diffuse and denoise run tiled
+    (bitwise equal to an untiled run) with ``tile=True``, or by themselves when an image is
+    larger than the device's largest allocation.
+
+    The cluster: ``workers``/``threads`` for a local one (default: workers x PoCL threads =
+    cores, or one worker per GPU), ``scheduler="tcp://host:8786"`` to join one, or an open
+    ``client``. A rerun skips outputs that the manifest shows complete (``force=True`` redoes
+    them). Returns a BatchResult; with ``futures=True`` (which needs ``client``) a
+    BatchFutures at once, whose .results() waits.
+    """
+    if futures:
+        if client is None:
+            raise InputError("futures=True needs an open distributed.Client as client=; "
+                             "without one, batch() waits and returns the results")
+        return submit(command, inputs, output_dir, client=client, mask=mask, masks=masks,
+                      flow=flow, tile=tile, force=force, **options)
+    inputs = list(inputs)
+    # Bad options fail here, before a cluster is started.
+    _plan(command, inputs, Path(output_dir), mask, masks,
+          _options(command, options, flow) if command in TASKS else options, tile)
+    device = options.get("device")
+    try:
+        with connect(workers, scheduler, client, threads, device=device,
+                     tasks=len(inputs)) as (live, info):
+            run = submit(command, inputs, output_dir, client=live, mask=mask, masks=masks,
+                         flow=flow, tile=tile, force=force, **options)
+            result = run.results(progress)
+    except BaseException:
+        # Ctrl-C or a lost scheduler: the cluster started here is gone by now, so the
+        # temporary files of the tasks it was running can go too; complete outputs stay.
+        if Path(output_dir).is_dir():
+            _sweep_temporaries(Path(output_dir), _output_names(command, inputs))
+        raise
+    result.cluster_seconds = info.get("seconds", 0.0)
+    result.workers, result.threads = info["workers"], info["threads"]
+    return result
+
+
+def result_table(result: BatchResult) -> str:
+    """One line per failure and a summary line, as the command line prints them."""
+    lines = [f"  {r.input}: {r.error}" for r in result.failed]
+    summary = (f"clpde batch: {len(result.done)} done, {len(result.skipped)} skipped, "
+               f"{len(result.failed)} failed in {result.seconds:.1f} s on {result.workers} "
+               f"worker(s)")
+    if result.failed:
+        return "\n".join([summary, "failed:", *lines])
+    return summary
+
+
+__all__ = ["BatchFutures", "BatchResult", "TaskResult", "batch", "submit"]

@@ -1,0 +1,564 @@
+"""Morphing active contours (thesis section 2.1): carry contours through frames or slices.
+
+For each pair of consecutive frames (I1, I2) the features F1 = L(I1) and F2 = L(I2) (the
+frames themselves, or their edge maps, used inside a band around the contour) drive the
+coupled system (2.3)-(2.6):
+
+    F1_t = beta |grad F1|,   u_t = beta (N_F1 . N_u) |grad u|,   beta = F2 - F1,
+
+so the contour, the zero level set of u, moves with the projection of F1's morphing velocity
+on its own normal. u starts as the signed distance to the first mask's boundary; the band
+follows the zero level set and is rebuilt, with u reinitialised on the device, whenever the
+front nears its edge. Each frame stops when the contour has stopped moving or after a cap;
+its result starts the next frame. Topology changes need no special handling.
+
+For real video (issue 18) the features may be contrast-invariant (features='contrast':
+local contrast normalisation), colour (colour=True: every channel enters the discrepancy)
+or the user's own maps (an array per frame or a callable); the discrepancy may be a local
+normalised cross-correlation ('ncc') or a Huber difference instead of F2 - F1; a motion
+model (motion='velocity' or 'kalman', clpde.tracking.features.MotionFilter) shifts the level
+set and F1 by the predicted displacement before each frame's evolution; shape_weight pulls
+the contour towards that predicted start where the features say nothing; and each frame
+reports its final discrepancy in the band (TrackState.discrepancy), a confidence measure.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import pyopencl.array as cla
+from numpy.typing import ArrayLike, DTypeLike
+
+from .._progress import progress_bar
+from .._state import DeviceLike, State, deprecated, renamed_keyword
+from ..fields import Field, PingPong, check_fits
+from ..errors import InputError
+from ..imagedata import value_range
+from .levelset import LAYOUTS, LevelSet, signed_distance
+from ..runtime import get_runtime
+
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
+KERNEL_FILES = ("tracking/levelset.cl", "tracking/features.cl")
+
+FEATURES = ("intensity", "edges", "contrast")
+DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2}
+MOTIONS = (None, "velocity", "kalman")
+CFL = 0.5  # largest distance in pixels a level set moves in one step
+# Rebuild when the front comes this close to the band's outer ring. Between two checks
+# (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
+# the band unnoticed while NEAR_EDGE >= check_every * CFL.
+NEAR_EDGE = 1.0
+
+
+@dataclass
+class TrackState(State):
+    """One frame's result: its boolean mask, the level set u (negative inside) and how the
+    morphing went (iterations, whether it stopped on its own, band rebuilds)."""
+
+    index: int
+    mask: np.ndarray
+    level_set: np.ndarray
+    iterations: int = 0
+    converged: bool = True
+    rebuilds: int = 0
+    info: dict = field(default_factory=dict)
+    discrepancy: float = 0.0  # final mean |beta| in the band (lower: the frames agree)
+    displacement: tuple = (0.0, 0.0)  # (dy, dx) the motion model shifted the start by
+
+    @property
+    def step(self) -> int:
+        """The frame's index: how far along the sequence the run is."""
+        return self.index
+
+    @property
+    def time(self) -> None:
+        """None: frames have indices, not times."""
+        return None
+
+
+def _check_frames(frames) -> list[np.ndarray]:
+    if isinstance(frames, np.ndarray):
+        if frames.ndim not in (3, 4) or (frames.ndim == 4 and frames.shape[-1] not in (3, 4)):
+            raise InputError(
+                f"frames must be a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence "
+                f"of frames, got an array of shape {frames.shape}"
+            )
+        items = list(frames)
+    else:
+        try:
+            items = [np.asarray(f) for f in frames]
+        except TypeError:
+            raise InputError("frames must be a (T, H, W) array or a sequence of 2-D "
+                             "arrays") from None
+    if not items:
+        raise InputError("frames is empty: give at least one frame")
+    for k, f in enumerate(items):
+        if not (f.ndim == 2 or (f.ndim == 3 and f.shape[-1] in (3, 4))):
+            raise InputError(f"frame {k} has shape {f.shape}; every frame must be 2-D (grey) "
+                             f"or (H, W, 3) colour")
+        if f.shape != items[0].shape:
+            raise InputError(
+                f"frame {k} is {f.shape[1]}x{f.shape[0]} but frame 0 is "
+                f"{items[0].shape[1]}x{items[0].shape[0]}; all frames must have one size"
+                + ("" if f.shape[:2] != items[0].shape[:2] else " and kind (grey or colour)")
+            )
+        if f.dtype == bool or not (np.issubdtype(f.dtype, np.integer)
+                                   or np.issubdtype(f.dtype, np.floating)):
+            raise InputError(f"frame {k} has dtype {f.dtype}; expected integers or floats")
+        if np.issubdtype(f.dtype, np.floating) and not np.isfinite(f).all():
+            raise InputError(f"frame {k} contains NaN or infinite values")
+    return items
+
+
+def _check_mask(mask, shape) -> np.ndarray:
+    mask = np.asarray(mask)
+    if mask.ndim == 3 and mask.shape[-1] in (3, 4):  # a colour mask image: any nonzero colour
+        mask = mask[..., :3].any(axis=-1)
+    if mask.shape != shape:
+        raise InputError(
+            f"the first mask is {mask.shape[-1]}x{mask.shape[0]} (shape {mask.shape}) but the "
+            f"frames are {shape[1]}x{shape[0]}; draw the mask on the first frame at its size"
+        )
+    mask = mask > 0 if mask.dtype != bool else mask
+    if not mask.any():
+        raise InputError("the first mask is empty: mark the object to follow in the first frame")
+    if mask.all():
+        raise InputError("the first mask covers the whole frame: leave the background unmarked")
+    return mask
+
+
+def _user_features(features, frames: list[np.ndarray]) -> np.ndarray:
+    """The user's feature maps as a (T, C, H, W) float64 array scaled to [0, 1] over the
+    whole sequence (one scale for all frames keeps F2 - F1 meaningful)."""
+    shape = frames[0].shape[:2]
+    if callable(features):
+        try:
+            maps = [np.asarray(features(f), np.float64) for f in frames]
+        except InputError:
+            raise
+        except Exception as exc:
+            raise InputError(f"the features callable failed on a frame: {exc}") from exc
+    else:
+        maps = features
+    try:
+        stack = np.stack([np.asarray(m, np.float64) for m in maps])
+    except ValueError:
+        raise InputError("the feature maps must all have one shape") from None
+    if len(stack) != len(frames):
+        raise InputError(f"{len(stack)} feature maps for {len(frames)} frames: give one per frame")
+    if stack.shape[1:3] == shape:
+        stack = stack[:, np.newaxis] if stack.ndim == 3 else np.moveaxis(stack, -1, 1)
+    if stack.ndim != 4 or stack.shape[2:] != shape:
+        raise InputError(
+            f"feature maps of shape {stack.shape[1:]} do not fit frames of {shape[1]}x{shape[0]}: "
+            "give (H, W) or (H, W, C) per frame")
+    if not np.isfinite(stack).all():
+        raise InputError("the feature maps contain NaN or infinite values")
+    lo, hi = float(stack.min()), float(stack.max())
+    return (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
+
+
+class MorphingTracker:
+    """The object form of `track`: iterate to get each frame's mask and level set in turn.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> yy, xx = np.mgrid[:48, :48]
+    >>> frames = np.stack([((yy - 24) ** 2 + (xx - 16 - 3 * t) ** 2 < 64).astype(np.float32)
+    ...                    for t in range(3)])
+    >>> tracker = MorphingTracker(frames, frames[0] > 0.5)
+    >>> [state.mask.shape for state in tracker.iterate()]     # show(state.mask, ...)
+    [(48, 48), (48, 48), (48, 48)]
+    """
+
+    def __init__(self, frames: ArrayLike, first_mask: ArrayLike, *,
+                 features: str | ArrayLike | Callable = "intensity", colour: bool = False,
+                 discrepancy: str = "ncc", motion: str | None = "kalman",
+                 shape_weight: float = 0.0, equalize: bool | str = False,
+                 smooth: bool = True, smooth_steps: int = 5,
+                 smooth_kappa: float = 0.08, band_width: float = 3.0,
+                 max_iterations: int = 40, tol: float = 0.02, check_every: int = 2,
+                 dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
+                 min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
+                 ncc_radius: int = 3,
+                 huber_delta: float = 0.05, search_radius: int = 6, band_layout: str = "lists",
+                 device: DeviceLike = None,
+                 dtype: DTypeLike | None = None, precision: DTypeLike | None = None):
+        self.frames = _check_frames(frames)
+        self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
+        self._user = None
+        if callable(features) or not isinstance(features, str):
+            self._user = _user_features(features, self.frames)
+            features = "user"
+        elif features not in FEATURES:
+            raise InputError(f"features must be one of {', '.join(FEATURES)}, an array of maps "
+                             f"per frame or a callable, not {features!r}")
+        if discrepancy not in DISCREPANCIES:
+            raise InputError(f"discrepancy must be one of {', '.join(DISCREPANCIES)}, "
+                             f"not {discrepancy!r}")
+        if motion not in MOTIONS:
+            raise InputError(f"motion must be None, 'velocity' or 'kalman', not {motion!r}")
+        if not 0 < dt <= 0.5:
+            raise InputError(f"dt={dt} is outside (0, 0.5], the stable range of the upwind scheme")
+        if max_iterations < 1 or check_every < 1:
+            raise InputError("max_iterations and check_every must be at least 1")
+        if check_every * CFL > NEAR_EDGE:
+            raise InputError(
+                f"check_every={check_every} lets the front move {check_every * CFL:g} pixels "
+                f"between checks, more than the band's {NEAR_EDGE:g}-pixel safety margin; "
+                f"use check_every <= {int(NEAR_EDGE / CFL)}")
+        if not 1 <= int(ncc_radius) <= 4:
+            raise InputError(f"ncc_radius must be 1 to 4 pixels, not {ncc_radius}")
+        if not 1 <= int(contrast_radius) <= 16:
+            raise InputError(f"contrast_radius must be 1 to 16 pixels, not {contrast_radius}")
+        if shape_weight < 0 or huber_delta <= 0 or search_radius < 0 or contrast_eps <= 0:
+            raise InputError("shape_weight and search_radius must be >= 0, huber_delta and "
+                             "contrast_eps > 0")
+        self.features, self.discrepancy, self.motion = features, discrepancy, motion
+        self.shape_weight = float(shape_weight)
+        self.contrast_radius, self.ncc_radius = int(contrast_radius), int(ncc_radius)
+        self.contrast_eps = float(contrast_eps)
+        self.huber_delta, self.search_radius = float(huber_delta), int(search_radius)
+        if equalize is True:
+            equalize = "match"
+        if equalize not in (False, None, "match", "global"):
+            raise InputError(f"equalize must be 'match', 'global' or False, not {equalize!r}")
+        self.equalize, self.smooth = equalize or False, bool(smooth)
+        self.smooth_steps, self.smooth_kappa = int(smooth_steps), float(smooth_kappa)
+        self.band_width = float(band_width)
+        self.max_iterations, self.tol = int(max_iterations), float(tol)
+        self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
+        self.max_dt = max(float(max_dt), self.dt)
+        self.reinit_iterations = int(reinit_iterations)
+        if band_layout not in LAYOUTS:
+            raise InputError(f"band_layout must be one of {', '.join(LAYOUTS)}, "
+                             f"not {band_layout!r}")
+        self.band_layout = band_layout
+        self.runtime = get_runtime(device)
+        self.dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
+        # a frame's level set (three fields, three masks, index lists) and its features
+        from .levelset import GHOST, MARGIN
+
+        check_fits(self.runtime, (1,) + self.frames[0].shape, "tracking", 10,
+                   ghost=GHOST + MARGIN, dtype=self.dtype)
+        stack = np.stack([f.astype(np.float64) for f in self.frames])
+        if stack.ndim == 4:  # colour: all channels, or grey (Rec. 601 luma)
+            stack = (np.moveaxis(stack[..., :3], -1, 1) if colour else
+                     (stack[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis])
+        else:
+            stack = stack[:, np.newaxis]
+        lo, hi = float(stack.min()), float(stack.max())
+        value_range(lo, hi, "frames")  # refuses a span that overflows float64
+        self._scaled = (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
+        self.channels = (self._user if self._user is not None else self._scaled).shape[1]
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    # ---- pre-processing and features ---------------------------------------------------
+    def prepared(self, index: int) -> np.ndarray:
+        """Frame `index` after pre-processing (histogram equalisation, anisotropic
+        smoothing), in [0, 1], as (C, H, W); the user's feature maps as given (scaled)."""
+        if self._user is not None:
+            return self._user[index]
+        img = self._scaled[index]
+        if self.equalize == "match" and index > 0:
+            # Equalise the grey levels across the sequence: each frame gets the first
+            # frame's histogram, as beta = F2 - F1 compares grey values directly.
+            img = np.stack([match_histogram(c, r) for c,
+                            r in zip(img, self._scaled[0], strict=False)])
+        elif self.equalize == "global":
+            from skimage.exposure import equalize_hist
+
+            img = np.stack([equalize_hist(c) for c in img])
+        if self.smooth and self.smooth_steps > 0:
+            from ..planar.flows import diffuse
+
+            # The rational edge-stopping function: as anisotropic as the exponential one
+            # and about 3x faster on PoCL, where exp() does not vectorise.
+            img = np.stack([diffuse(c, "perona-malik", steps=self.smooth_steps,
+                                    kappa=self.smooth_kappa, edge="rational",
+                                    device=self.runtime, progress=False) for c in img])
+        return np.asarray(img, np.float64)
+
+    def _feature_field(self, image: np.ndarray, ls: LevelSet) -> Field:
+        grid = replace(ls.grid, nc=self.channels)
+        f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
+        if self.features in ("edges", "contrast"):
+            out = Field.empty(grid)
+            if self.features == "edges":
+                grid.launch(grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data,
+                            out.data.data)
+            else:
+                # Scaled by 1/4: normalised values of about +-2 become F2 - F1 of the
+                # order of the [0, 1] grey levels, for which tol and dt are set.
+                grid.launch(grid.kernel("tracking/features.cl", "local_contrast"), f.data.data,
+                            out.data.data, np.int32(self.contrast_radius),
+                            grid.scalar(self.contrast_eps**2), grid.scalar(0.25))
+            out.fill_ghosts()
+            f = out
+        return f
+
+    def _match_features(self, image: np.ndarray) -> np.ndarray:
+        """(C, H, W) local contrast normalisation of a prepared frame, for matching."""
+        from .features import local_contrast
+
+        return local_contrast(image, self.contrast_radius)
+
+    # ---- the morphing of one frame pair ------------------------------------------------
+    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field, discrepancy=None):
+        """Run the coupled system on one frame pair; returns (iterations, converged,
+        final mean |beta| in the band).
+
+        The time step adapts at each check to the largest stable one: the level sets move
+        at most CFL pixels per step (dt (|beta| + lam w) <= CFL), F1's relaxation towards
+        F2 does not overshoot (dt |grad F1| <= 1) nor does u's towards the prior
+        (dt lam <= 1/2). It restarts from `dt` whenever the band changes.
+        """
+        g = ls.grid
+        q = self.runtime.queue
+        discrepancy = discrepancy or self.discrepancy
+        kernel = ls.band_kernel("tracking/features.cl", morph_kernel_name(ls, discrepancy),
+                                NCH=self.channels, DISC=DISCREPANCIES[discrepancy],
+                                WIN=self.ncc_radius)
+        pair = PingPong(f1)
+        lam = self.shape_weight
+        delta = self.huber_delta if discrepancy == "huber" else 0.02
+        consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), g.scalar(lam),
+                  g.scalar(delta), np.int32(g.sx), np.int32(g.plane))
+        dt_cap = self.max_dt if lam == 0 else min(self.max_dt, 0.5 / lam)
+        first_dt = min(self.dt, dt_cap)
+        stats = None
+        dt = first_dt
+        converged = False
+        iterations = 0
+        residual = 0.0
+        while iterations < self.max_iterations:
+            if ls.band.n == 0:  # the contour vanished from the frame
+                converged = True
+                break
+            if stats is None:
+                parts = ls.band_parts()
+                stats = cla.zeros(q, 5 * parts + 1, g.dtype)
+            ls.launch_band(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
+                           f2.data.data, ls.band_mask.data, prior.data.data, ls.u.nxt.data.data,
+                           pair.nxt.data.data, stats.data, g.scalar(dt), *consts)
+            ls.u.swap()
+            pair.swap()
+            iterations += 1
+            if iterations % self.check_every == 0 or iterations == self.max_iterations:
+                # One small read every few steps: speed, stability maxima and edge flag.
+                values = stats.get()
+                fastest, beta_max, grad_max = (values[k * parts:(k + 1) * parts].max()
+                                               for k in range(3))
+                residual = float(values[3 * parts:4 * parts].sum()
+                                 / max(values[4 * parts:5 * parts].sum(), 1))
+                if fastest < self.tol:
+                    converged = True
+                    break
+                if values[5 * parts]:
+                    ls.rebuild(self.reinit_iterations)
+                    pair.nxt.assign(pair.cur)  # the band moved: both copies agree outside it
+                    stats = None
+                    dt = first_dt
+                else:
+                    speed = beta_max + lam * self.band_width
+                    dt = float(min(dt_cap, CFL / max(speed, 1e-6), 1.0 / max(grad_max, 1e-6)))
+        return iterations, converged, residual
+
+    # ---- iteration ---------------------------------------------------------------------
+    @deprecated("iterate", "__iter__")
+    def __iter__(self) -> Iterator[TrackState]:
+        """Deprecated: iterate over `tracker.iterate()`."""
+
+    def iterate(self) -> Iterator[TrackState]:
+        """Track frame after frame, yielding each one's TrackState (frame 0's first)."""
+        from .features import MotionFilter, shift_image
+
+        mask = self.first_mask
+        u = signed_distance(mask)
+        yield TrackState(0, mask.copy(), u.astype(np.float32))
+        if len(self.frames) == 1:
+            return
+        ls = LevelSet(self.runtime, u, self.band_width, self.dtype, layout=self.band_layout)
+        # The shape pull's target; without it the kernel multiplies it by 0, so any finite
+        # buffer of the grid will do.
+        prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
+        prepared_prev = self.prepared(0)
+        motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
+        feats_prev = None
+        fresh = True  # u is a signed distance with a band around its zero set
+        for t in range(1, len(self.frames)):
+            prepared = self.prepared(t)
+            f2 = self._feature_field(prepared, ls)
+            shift = (0.0, 0.0)
+            if motion is not None:
+                # Matched on contrast-normalised frames, whatever the morphing compares:
+                # a shadow or a flicker does not move the measured displacement.
+                feats = self._match_features(prepared)
+                if feats_prev is None:
+                    feats_prev = self._match_features(prepared_prev)
+                shift = motion.predict(feats_prev, feats, mask)
+                feats_prev = feats
+                if max(abs(shift[0]), abs(shift[1])) < 0.25:
+                    # Below the matching's precision; shifting would only blur F1.
+                    shift = (0.0, 0.0)
+                else:
+                    # Start from the predicted place: u and F1 move together, so the
+                    # morphing only has to explain what the displacement does not.
+                    u = shift_image(ls.values(), shift)
+                    ls.assign(u)
+                    prepared_prev = np.stack([shift_image(c, shift) for c in prepared_prev])
+                    fresh = False
+            f1 = self._feature_field(prepared_prev, ls)
+            if not fresh:  # a frame without rebuilds may have bent u away from a distance
+                ls.rebuild(self.reinit_iterations)
+            if self.shape_weight:
+                prior.assign(ls.u.cur)
+            rebuilds0 = ls.rebuilds
+            iterations, converged, residual = self._morph(ls, f1, f2, prior)
+            fresh = ls.rebuilds > rebuilds0
+            u = ls.values()
+            new_mask = u < 0
+            if self.min_size > 0:
+                cleaned = self._clean(new_mask)
+                if (cleaned != new_mask).any() and cleaned.any() and not cleaned.all():
+                    new_mask = cleaned
+                    u = signed_distance(new_mask)
+                    ls.assign(u)
+                    fresh = True
+            if motion is not None:
+                motion.observe(mask, new_mask)
+            mask = new_mask
+            yield TrackState(t, mask, u.astype(np.float32), iterations, converged,
+                             ls.rebuilds - rebuilds0, discrepancy=residual,
+                             displacement=tuple(float(s) for s in shift))
+            prepared_prev = prepared
+
+    def _clean(self, mask: np.ndarray) -> np.ndarray:
+        """Post-processing: drop components and fill holes smaller than min_size pixels."""
+        return _drop_small(~_drop_small(~mask, self.min_size), self.min_size)
+
+
+def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
+    """The morphing step's kernel for the band's layout: with bricks walked by one
+    work-item, the NCC slides its window sums over each brick (morph_track_tiled: 1.0-1.45x
+    the cell-by-cell sums, measured in docs/tracking.md; equal to rounding)."""
+    if ls.brick is None:
+        return "morph_track"
+    if discrepancy == "ncc" and not ls.group_per_brick:
+        return "morph_track_tiled"
+    return "morph_track_bricks"
+
+
+def match_histogram(image: np.ndarray, reference: np.ndarray, levels: int = 4096) -> np.ndarray:
+    """Histogram specification of data in [0, 1]: the grey-level map that gives `image` the
+    grey-level distribution of `reference`, on `levels` quantisation levels (equal values
+    stay equal)."""
+    def quantise(a):
+        return np.minimum((np.asarray(a) * levels).astype(np.int64), levels - 1)
+
+    q = quantise(image)
+    src = np.bincount(q.ravel(), minlength=levels).astype(np.float64)
+    ref = np.bincount(quantise(reference).ravel(), minlength=levels).astype(np.float64)
+    src_cdf = (np.cumsum(src) - 0.5 * src) / src.sum()  # each level at its mid-rank
+    ref_cdf = (np.cumsum(ref) - 0.5 * ref) / ref.sum()
+    present = ref > 0
+    centres = (np.arange(levels) + 0.5) / levels
+    mapping = np.interp(src_cdf, ref_cdf[present], centres[present])
+    return mapping[q]
+
+
+def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
+    """The mask without its 8-connected components of fewer than min_size pixels."""
+    from scipy import ndimage
+
+    labels, _ = ndimage.label(mask, structure=np.ones((3, 3)))
+    sizes = np.bincount(labels.ravel())
+    keep = sizes >= min_size
+    keep[0] = False
+    return keep[labels]
+
+
+def track(frames: ArrayLike, first_mask: ArrayLike, *,
+          features: str | ArrayLike | Callable = "intensity", equalize: bool | str = False,
+          smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
+          max_iterations: int = 40, tol: float = 0.02, min_size: int = 0,
+          device: DeviceLike = None, progress: bool | None = None,
+          return_level_sets: bool = False, return_discrepancy: bool = False,
+          **options: Any) -> np.ndarray | tuple[np.ndarray, ...]:
+    """Follow the object marked in the first frame through a sequence (thesis section 2.1).
+
+    frames: a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence of T such frames
+    (any int or float dtype). first_mask: (H, W) boolean (or nonzero) mask of the object
+    in frame 0; it may hold several pieces, and pieces may split or merge on the way.
+
+    features: 'intensity' (the frames themselves, after pre-processing), 'edges'
+    (gradient-magnitude edge maps), 'contrast' (local contrast normalisation over a
+    (2 contrast_radius + 1)^2 box: invariant to local changes of brightness and contrast),
+    or the user's own maps: a (T, H, W[, C]) array or a list of T maps, or a callable
+    taking a frame and returning its (H, W[, C]) map (scaled to [0, 1] over the sequence;
+    no pre-processing). colour=True puts every channel of colour frames in the
+    discrepancy (default: grey, Rec. 601 luma). discrepancy: 'difference' (F2 - F1, the
+    thesis), 'ncc' (steepest ascent of the local normalised cross-correlation over a
+    (2 ncc_radius + 1)^2 window) or 'huber' (F2 - F1 clipped at huber_delta). motion:
+    None, 'velocity' (the previous frames' displacement, damped) or 'kalman' (a constant-
+    velocity Kalman filter fed by matching the object's features between frames, within
+    search_radius pixels of the prediction) shifts each frame's start. shape_weight
+    (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
+    band_layout: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
+    same results, bit for bit, except the NCC's window sums, equal to rounding; measured
+    no faster on CPUs, docs/tracking.md).
+
+    equalize / smooth: the thesis' pre-processing, on by default. equalize='match' (or
+    True) gives every frame the first frame's grey-level histogram (histogram
+    specification); 'global' equalises each frame's histogram flat
+    (skimage.exposure.equalize_hist), which squeezes a large uniform background into a
+    narrow grey range and costs accuracy (measured: IoU 0.80 instead of 0.99 on a clean
+    translating disc); False skips it. smooth: Perona-Malik smoothing, `smooth_steps`
+    steps. band_width: half-width w of the band in pixels. Each frame runs the coupled
+    system until the contour's top speed falls below `tol` pixels per unit time or
+    `max_iterations`. min_size > 0 removes components and holes smaller than that many
+    pixels from each result (post-processing), and the next frame starts from the cleaned
+    mask.
+
+    Returns a (T, H, W) boolean array (frame 0 is the given mask); with return_level_sets,
+    also the (T, H, W) float32 level sets (negative inside); with return_discrepancy,
+    also the (T,) final mean |beta| in each frame's band (0 for frame 0), whose high
+    values mark frames of low confidence.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> yy, xx = np.mgrid[:48, :48]
+    >>> frames = np.stack([((yy - 24) ** 2 + (xx - 16 - 3 * t) ** 2 < 64).astype(np.float32)
+    ...                    for t in range(4)])                 # a disc moving right
+    >>> masks = clpde.track(frames, frames[0] > 0.5)
+    >>> masks.shape, masks.dtype
+    ((4, 48, 48), dtype('bool'))
+    >>> bool((masks[-1] == (frames[-1] > 0.5)).mean() > 0.99)   # found in the last frame
+    True
+    """
+    tracker = MorphingTracker(frames, first_mask, features=features, equalize=equalize,
+                              smooth=smooth, smooth_steps=smooth_steps, band_width=band_width,
+                              max_iterations=max_iterations, tol=tol, min_size=min_size,
+                              device=device, **options)
+    n = len(tracker)
+    height, width = tracker.first_mask.shape
+    masks = np.zeros((n, height, width), bool)
+    levels = np.zeros((n, height, width), np.float32) if return_level_sets else None
+    residuals = np.zeros(n)
+    for state in progress_bar(progress, n, "clpde track", iterable=tracker.iterate(),
+                              unit="frame", long_run=n >= 20):
+        masks[state.index] = state.mask
+        residuals[state.index] = state.discrepancy
+        if levels is not None:
+            levels[state.index] = state.level_set
+    out = (masks,) + ((levels,) if return_level_sets else ()) + (
+        (residuals,) if return_discrepancy else ())
+    return out[0] if len(out) == 1 else out

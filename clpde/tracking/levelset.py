@@ -1,0 +1,277 @@
+"""2D level-set machinery on the device: signed distance start, narrow band, reinitialisation.
+
+A `LevelSet` holds u on a ghost-padded grid (ghost width 2 for the slope-limited upwind
+stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w kept as a compacted index
+list built on the device, and a PDE reinitialisation with Russo and Smereka's subcell fix
+that keeps the zero level set in place. The morphing flow of clpde.track steps u inside the
+band; other level-set flows can do the same.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyopencl.array as cla
+
+from .._state import deprecated
+from ..fields import Field, Grid, PingPong, compact, index_list
+from ..errors import InputError
+
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
+KERNEL_FILES = ("tracking/levelset.cl",)
+
+GHOST = 2
+MARGIN = 2  # frozen cells around the caller's grid (see LevelSet)
+REACH = 3  # a rebuild reinitialises the band dilated by this many cells (<= MARGIN + GHOST - 1)
+REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
+# How the band's work is laid out (docs/tracking.md, "2D bricks, measured"): a list of
+# cells, or bricks of BX x BY cells of the frame (kernels/bricks/bricks2d.h).
+LAYOUTS = {"lists": None, "bricks8x8": (8, 8), "bricks16x4": (16, 4)}
+
+
+@dataclass
+class BrickSet:
+    """The bricks of the movable region holding a cell where `mask` is nonzero (their
+    indices bx + nbx by, in increasing order, built on the device)."""
+
+    ids: cla.Array
+    n: int
+    mask: cla.Array
+
+
+def signed_distance(mask) -> np.ndarray:
+    """Signed Euclidean distance to a mask's boundary: negative inside, positive outside.
+
+    The boundary lies halfway between a pixel of the mask and its outside neighbour, so
+    `signed_distance(mask) < 0` gives the mask back exactly.
+    """
+    from scipy import ndimage
+
+    mask = np.asarray(mask, bool)
+    if mask.ndim != 2:
+        raise InputError(f"the mask must be 2-D, got shape {mask.shape}")
+    if not mask.any():
+        raise InputError("the mask is empty: mark at least one pixel of the object to follow")
+    if mask.all():
+        raise InputError("the mask covers the whole image, so it has no boundary to follow; "
+                         "leave the background unmarked")
+    inside = ndimage.distance_transform_edt(mask)
+    outside = ndimage.distance_transform_edt(~mask)
+    return np.where(mask, 0.5 - inside, outside - 0.5)
+
+
+class LevelSet:
+    """A 2D level set u on the device with its narrow band.
+
+    The grid is the caller's (ny, nx) grid with a frozen margin of MARGIN cells added on
+    every side, holding edge-replicated values (`pad` does the same for data fields on this
+    grid). Band and reinitialisation kernels update only the cells inside the margin, so
+    their stencils never reach the ghosts and no ghost refresh is needed between steps:
+    each step is a single kernel launch.
+
+    band_width w: the band holds the cells with |u| < w; its outer ring (w - 1 <= |u| < w)
+    is the edge a flow watches to ask for a rebuild.
+    """
+
+    def __init__(self, runtime, u0, band_width: float = 3.0, dtype=np.float32,
+                 layout: str = "lists", group_per_brick: bool | None = None):
+        if layout not in LAYOUTS:
+            raise InputError(f"layout must be one of {', '.join(LAYOUTS)}, not {layout!r}")
+        self.layout, self.brick = layout, LAYOUTS[layout]
+        # GPUs take a brick per work-group; forced either way only to test both on a CPU.
+        self.group_per_brick = (not runtime.is_cpu if group_per_brick is None
+                                else bool(group_per_brick))
+        u0 = np.asarray(u0, np.float64)
+        if u0.ndim != 2:
+            raise InputError(f"the level set must be 2-D, got shape {u0.shape}")
+        if band_width < 2:
+            raise InputError(f"band_width must be at least 2 pixels, not {band_width}")
+        self.shape = u0.shape
+        ny, nx = u0.shape
+        self.runtime = runtime
+        self.grid = Grid(runtime, nx + 2 * MARGIN, ny + 2 * MARGIN, 1, GHOST, np.dtype(dtype))
+        self.band_width = float(band_width)
+        self.u = PingPong(Field.from_host(self.grid, self.pad(u0)[np.newaxis]))
+        self._phi0 = Field.empty(self.grid)
+        inner = np.zeros((self.grid.ny, self.grid.nx), bool)
+        inner[MARGIN:-MARGIN, MARGIN:-MARGIN] = True
+        if self.brick is None:
+            self.active = index_list(self.grid, inner)
+        else:
+            padded = np.zeros(self.grid.padded_shape[1:], np.uint8)
+            self.grid.interior(padded)[...] = inner
+            self.active = self._cells(cla.to_device(runtime.queue, padded))
+        # Ghost entries stay 0 (mark_band writes the interior only).
+        self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
+        self._near_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
+        self._near_rows = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
+        self.band = None
+        self.rebuilds = 0
+        self.build_band()
+
+    @staticmethod
+    def pad(values: np.ndarray) -> np.ndarray:
+        """(ny, nx) data to the level set's grid: the frozen margin replicates the edge."""
+        return np.pad(np.asarray(values, np.float64), MARGIN, mode="edge")
+
+    def assign(self, u) -> None:
+        """Replace u by new (ny, nx) values (a signed distance, e.g. a shifted one) in the
+        same device buffers, and rebuild the band around its zero set."""
+        u = np.asarray(u, np.float64)
+        if u.shape != self.shape:
+            raise InputError(f"the level set must have shape {self.shape}, got {u.shape}")
+        padded = np.zeros(self.grid.padded_shape, self.grid.dtype)
+        self.grid.interior(padded)[0] = self.pad(u)
+        self.u.cur.data.set(padded)
+        self.u.cur.fill_ghosts()
+        self.build_band()
+
+    # ---- band --------------------------------------------------------------------------
+    def build_band(self) -> None:
+        """Mark |u| < w on the device and compact it into the band's index list."""
+        g = self.grid
+        g.launch(g.kernel("tracking/levelset.cl", "mark_band"), self.u.cur.data.data,
+                 self.band_mask.data, g.scalar(self.band_width), np.int32(MARGIN))
+        self.band = self._cells(self.band_mask)
+        # Cells outside the band are never written by band kernels: make both buffers agree
+        # there so swapping never brings back stale values.
+        self.u.nxt.assign(self.u.cur)
+
+    def rebuild(self, iterations: int | None = None) -> None:
+        """Reinitialise u near the front, then rebuild the band around its zero set.
+
+        The region reinitialised is the current band dilated by REACH cells. The front is
+        still inside the band when a rebuild is asked for, so this region holds every cell
+        within REACH of the front: those the new band can take in. Cells farther out keep
+        older values, correct in sign and no closer to the front than they really are, and
+        are corrected at a later rebuild before the band reaches them.
+        """
+        self.dilate_band()
+        self.reinitialize(iterations, cells=self._cells(self._near_mask))
+        self.build_band()
+        self.rebuilds += 1
+
+    def dilate_band(self) -> None:
+        """Mark the movable cells within REACH cells of the band (into _near_mask)."""
+        g = self.grid
+        g.launch(g.kernel("tracking/levelset.cl", "dilate_band_rows"), self.band_mask.data,
+                 self._near_rows.data, np.int32(REACH))
+        g.launch(g.kernel("tracking/levelset.cl", "dilate_band_cols"), self._near_rows.data,
+                 self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
+
+    # ---- reinitialisation --------------------------------------------------------------
+    @deprecated("reinitialize", "reinitialise")
+    def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT,
+                     cells=None, subcell_fix: bool = True) -> None:
+        """Deprecated spelling of `reinitialize`."""
+
+    def reinitialize(self, iterations: int | None = None, dt: float = REINIT_DT,
+                     cells=None, subcell_fix: bool = True) -> None:
+        """PDE reinitialisation with the Russo-Smereka subcell fix at the front, of the
+        given cells (an IndexList; default: every cell inside the frozen margin).
+
+        Information travels one cell per 1/dt iterations, so the default count corrects u
+        out to the band's width plus two cells beyond the front. subcell_fix=False runs the
+        plain Godunov scheme everywhere (it moves the front; for comparisons).
+        """
+        if iterations is None:
+            iterations = int(np.ceil((self.band_width + 2) / dt))
+        cells = self.active if cells is None else cells
+        g = self.grid
+        plain = {} if subcell_fix else {"PLAIN_REINIT": 1}
+        bricks = self.brick is not None
+        kernel = self.band_kernel("tracking/levelset.cl", "reinit_step_bricks" if bricks
+                                  else "reinit_step_list", **plain)
+        self._phi0.assign(self.u.cur)
+        self.u.nxt.assign(self.u.cur)  # cells left out are the same in both buffers
+        for _ in range(iterations):
+            args = (self.u.cur.data.data, self._phi0.data.data, self.u.nxt.data.data)
+            if bricks:
+                self.launch_band(kernel, cells, *args, cells.mask.data, g.scalar(dt))
+            else:
+                self.launch_band(kernel, cells, *args, g.scalar(dt), np.int32(g.sx))
+            self.u.swap()
+
+    # ---- the band's layout -------------------------------------------------------------
+    def _brick_geometry(self):
+        """(nbx, nby, x0, y0, x1, y1): the bricks over the movable region, its padded
+        corners."""
+        bx, by = self.brick
+        g = self.grid
+        x0, y0 = g.ghost + MARGIN, g.ghost + MARGIN
+        x1, y1 = g.ghost + g.nx - MARGIN, g.ghost + g.ny - MARGIN
+        return -(-(x1 - x0) // bx), -(-(y1 - y0) // by), x0, y0, x1, y1
+
+    def _cells(self, mask: cla.Array):
+        """The cells where a padded device mask is nonzero, in this layout."""
+        if self.brick is None:
+            return compact(self.runtime, mask)
+        nbx, nby, *corners = self._brick_geometry()
+        flags = cla.empty(self.runtime.queue, nbx * nby, np.uint8)
+        self.band_kernel("tracking/levelset.cl", "mark_bricks")(
+            self.runtime.queue, *self.runtime.items(nbx * nby), mask.data, flags.data,
+            np.int32(nbx), np.int32(nby), *(np.int32(c) for c in corners),
+            np.int32(self.grid.sx))
+        ids = compact(self.runtime, flags)
+        return BrickSet(ids.indices, ids.n, mask)
+
+    def band_kernel(self, filename: str, name: str, **defines):
+        """A kernel of the band's layout: list kernels as they are, brick kernels built for
+        this brick size and launch geometry."""
+        if self.brick is not None:
+            defines.update(BX=self.brick[0], BY=self.brick[1],
+                           GROUP_PER_BRICK=int(self.group_per_brick))
+        return self.grid.kernel(filename, name, **defines)
+
+    def _brick_launch(self, n: int):
+        """(global size, local size, bricks per work-item) for n bricks."""
+        cells = self.brick[0] * self.brick[1]
+        if self.group_per_brick:
+            return n * cells, cells, 1
+        items, per = self.runtime.brick_items(n)
+        return items, 1, per
+
+    def band_parts(self, cells=None) -> int:
+        """How many work-items a band launch over `cells` (default: the band) has: the
+        length of its per-work-item statistics."""
+        cells = self.band if cells is None else cells
+        if self.brick is None:
+            return self.runtime.list_launch(max(cells.n, 1))[0][0]
+        return self._brick_launch(max(cells.n, 1))[0]
+
+    def launch_band(self, kernel, cells, *args):
+        """Run a band kernel (band_kernel's) over `cells` (the band, or a BrickSet / IndexList
+        of this layout)."""
+        if cells.n == 0:
+            return None
+        if self.brick is None:
+            return self.grid.launch_list(kernel, cells, *args)
+        gsize, lsize, per = self._brick_launch(cells.n)
+        nbx, _, *corners = self._brick_geometry()
+        return kernel(self.runtime.queue, (gsize,), (lsize,), *args, cells.ids.data,
+                      np.int32(cells.n), np.int32(nbx), *(np.int32(c) for c in corners),
+                      np.int32(self.grid.sx), np.int32(per))
+
+    def stored_cells(self) -> int:
+        """Cells the band's launches visit: the band's cells, or its bricks' cells."""
+        if self.brick is None:
+            return self.band.n
+        return self.band.n * self.brick[0] * self.brick[1]
+
+    # ---- results -----------------------------------------------------------------------
+    def crop(self, padded: np.ndarray) -> np.ndarray:
+        return padded[..., MARGIN:-MARGIN, MARGIN:-MARGIN]
+
+    def values(self) -> np.ndarray:
+        """u on the caller's (ny, nx) grid, float64."""
+        return self.crop(self.u.cur.to_host()[0]).astype(np.float64)
+
+    def inside(self) -> np.ndarray:
+        """The region u < 0 as a boolean (ny, nx) mask."""
+        return self.values() < 0
+
+    def band_cells(self) -> np.ndarray:
+        """The band as a boolean (ny, nx) mask (for inspection and tests)."""
+        g = self.grid
+        return self.crop(g.interior(self.band_mask.get()[np.newaxis])[0]) > 0
