@@ -13,6 +13,7 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
+from .errors import InputError
 from .runtime import Runtime
 
 __all__ = ["DeviceLike", "State", "deprecated", "renamed_keyword"]
@@ -61,7 +62,6 @@ def renamed_keyword(new: str, new_value: Any, old: str, old_value: Any, default:
         return new_value
     _warn(f"{old}= is deprecated; use {new}=", 2)
     if new_value is not None and new_value is not default:
-        from .errors import InputError
 
         raise InputError(f"pass {new}= only ({old}= is its deprecated old name)")
     return old_value

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .surface import ImplicitSurface
 
 __all__ = [
     "REGION_SCENES", "SURFACE_SHAPES", "RegionScene", "checker", "colour_pattern",
@@ -210,7 +211,6 @@ def surface_shape(name: str, resolution: int = 96, device=None):
     >>> surf.spacing
     0.08333333333333333
     """
-    from .surface import ImplicitSurface
 
     if name not in SURFACE_SHAPES:
         raise InputError(f"shape must be one of {', '.join(SURFACE_SHAPES)}, not {name!r}")

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cla
 
-from .fields import BaseGrid, IndexList, compact
 from .errors import ClpdeError
+from .fields import BaseGrid, IndexList, compact
 from .runtime import Runtime
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).

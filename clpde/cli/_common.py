@@ -11,7 +11,6 @@ import re
 import sys
 import warnings
 
-
 from .._progress import on_terminal as show_progress  # noqa: F401  (the subcommands' name)
 from ..errors import InputError
 from ..imagedata import Channels, split_alpha  # noqa: F401  (the subcommands' names)

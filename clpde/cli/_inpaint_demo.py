@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ..data import damaged_astronaut
+from ..inpainting.api import inpaint
+from ..io.images import check_output_folder, output_folder, write_image
 
 
 def side_by_side(*images: np.ndarray, gap: int = 6) -> np.ndarray:
@@ -24,8 +26,6 @@ def run_demo(outdir, device=None, progress=None, overwrite: bool = False) -> lis
     """Damage the photo, inpaint it and write the PNGs into the folder `outdir`; returns the
     paths. The folder is created if missing; an existing one must be empty, or with
     overwrite=True hold only clpde's kinds of output files (clpde.io.output_folder)."""
-    from ..inpainting.api import inpaint
-    from ..io.images import check_output_folder, output_folder, write_image
 
     outdir = Path(outdir)
     check_output_folder(outdir, overwrite)

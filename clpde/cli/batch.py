@@ -8,13 +8,13 @@ import io
 import sys
 
 from ..errors import InputError
+from ..scale.batch import COMMANDS, MANIFEST, batch, result_table
 from . import denoise, diffuse, inpaint, surface, track
 
 FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage errors
 
 
 def add_batch_parser(subparsers) -> None:
-    from ..scale.batch import COMMANDS, MANIFEST
 
     parser = subparsers.add_parser(
         "batch", help="run inpaint, denoise, diffuse, track or surface over many files",
@@ -99,7 +99,6 @@ def command_options(command: str, argv: list[str]) -> dict:
 
 
 def run_batch(args) -> int:
-    from ..scale.batch import batch, result_table
 
     options = command_options(args.batch_command, list(getattr(args, "extra", [])))
     try:

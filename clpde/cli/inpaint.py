@@ -5,9 +5,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-
 from ..errors import InputError
 from ..film.restore import inpaint_sequence
+from ..inpainting.registry import METHODS
 from ..io.images import MASK_RULE
 from ..io.video import is_video
 from ..runtime import get_runtime
@@ -19,6 +19,7 @@ from ._common import (
     report,
     show_progress,
 )
+from ._inpaint_demo import run_demo
 
 
 def add_inpaint_parser(subparsers) -> None:
@@ -71,7 +72,6 @@ def add_inpaint_parser(subparsers) -> None:
                         help="colour model (default: channels)")
     parser.add_argument("--levels", type=int, default=None,
                         help="multiresolution levels (default: chosen from the mask)")
-    from ..inpainting.registry import METHODS
 
     parser.add_argument("--method", choices=("auto", *METHODS), default=None,
                         help="inpainting method (default: auto, coherence transport where "
@@ -100,7 +100,6 @@ def run_inpaint(args) -> int:
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
     if args.demo:
-        from ._inpaint_demo import run_demo
 
         if args.input or args.mask or args.gif:
             raise InputError(

@@ -15,8 +15,12 @@ import numpy as np
 from ..data import REGION_SCENES as SCENES
 from ..data import RegionScene, region_scene
 from ..errors import InputError
+from ..io.images import output_folder, write_bytes
 from ..regions.tracker import track_region
 from ..runtime import get_runtime
+from ..surface import ImplicitSurface
+from ..surface.render import export_mesh, render_mesh
+from ..surface.runs import encloses_volume
 from ._common import (
     add_device_argument,
     add_output_folder_arguments,
@@ -24,7 +28,6 @@ from ._common import (
     grid_advice,
     show_progress,
 )
-from ..surface.runs import encloses_volume
 
 FLOWS = ("gaussian", "mean-curvature", "morph-sphere")
 
@@ -153,7 +156,6 @@ def mesh_scene(path, flow="gaussian", resolution=96, t=None, regions="auto") -> 
     curvature, or morphing to a sphere, with regions from its vertex colours (one region per
     flat colour: regions='colours', or 'auto' when it has some) or else the sign of its
     Gaussian curvature (regions='curvature')."""
-    from ..surface import ImplicitSurface
 
     if flow not in FLOWS:
         raise InputError(f"flow must be one of {', '.join(FLOWS)}, not {flow!r}")
@@ -223,7 +225,6 @@ def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions"
     2.5x smaller than RGB). OUTDIR is created if missing; an existing one must be empty, or
     with overwrite=True hold only clpde's kinds of output files, and is then replaced as a
     whole (clpde.io.output_folder). Returns the paths written."""
-    from ..io.images import output_folder
 
     with output_folder(outdir, overwrite) as staging:
         written = _write_frame_files(frames, str(staging), size, views, stem)
@@ -235,8 +236,6 @@ def _write_frame_files(frames, outdir, size, views, stem):
 
     from PIL import Image
 
-    from ..io.images import write_bytes
-    from ..surface.render import export_mesh, render_mesh
 
     written = []
     rows = []

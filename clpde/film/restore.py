@@ -16,10 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._progress import progress_bar
 from ..errors import InputError
 from ..imagedata import split_alpha
 from ..inpainting.api import inpaint
-from ..io.images import read_image, write_image
+from ..io.images import check_output_folder, read_image, read_mask, write_image
 from ..io.video import (
     READ_SUFFIXES,
     VIDEO_FORMATS,
@@ -29,6 +30,7 @@ from ..io.video import (
     iter_video,
     video_info,
 )
+from ..scale.cluster import connect
 
 
 class _Sequence:
@@ -114,8 +116,6 @@ def inpaint_sequence(source, mask, output, *, workers=None, threads=None, schedu
     Options are clpde.inpaint's (max_steps, tol, dt, ...). An output folder follows
     clpde's folder rule: new or empty, or with `overwrite` one holding only clpde's kinds
     of output files (frames of the same names are replaced)."""
-    from ..io.images import read_mask
-    from ..scale.cluster import connect
 
     if frames_per_task < 1:
         raise InputError(f"frames per task must be at least 1, not {frames_per_task}")
@@ -130,7 +130,6 @@ def inpaint_sequence(source, mask, output, *, workers=None, threads=None, schedu
     mask_of = _masks_for(mask, sequence.count)
     start = time.perf_counter()
     if not to_video:
-        from .images import check_output_folder
 
         check_output_folder(output, overwrite, option=overwrite_option)
         output.mkdir(exist_ok=True)
@@ -156,7 +155,6 @@ def _pipeline(client, sequence, mask_of, writer, output, per_task, options, prog
               read_mask) -> int:
     """Read, send in batches, and write in order, with a bounded number of batches in
     flight (memory stays proportional to the workers, not to the film)."""
-    from .._progress import progress_bar
 
     resources = None
     workers = client.scheduler_info()["workers"].values()

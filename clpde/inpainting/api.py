@@ -62,11 +62,9 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 from scipy import ndimage
 
-from . import multiresolution as mr
 from .._progress import progress_bar
 from .._state import DeviceLike, State, deprecated, renamed_keyword
-from ..imagedata import positive
-from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
+from ..errors import ClpdeError, InputError
 from ..fields import Field, Grid, PingPong, check_fits, index_list
 from ..imagedata import (
     ImageLayout,
@@ -74,11 +72,15 @@ from ..imagedata import (
     check_channel_axis,
     compute_dtype,
     integer_range,
+    positive,
     value_range,
 )
-from ..errors import InputError
-from ..errors import ClpdeError
 from ..runtime import get_runtime
+from . import boxes, choose, exemplar, poisson
+from . import multiresolution as mr
+from . import registry as inpainting
+from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
+from .registry import margin, soft
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("common/fields.cl", "inpainting/transport.cl", "planar/planar.cl")
@@ -611,7 +613,6 @@ class TransportRun:
         if fill == "zero":
             return np.zeros_like(data)
         if fill == "biharmonic":
-            from . import poisson  # conjugate gradients on the device
 
             return poisson.fill(data, omega, get_runtime(self.device), "biharmonic",
                                 dtype=self.dtype)
@@ -650,7 +651,6 @@ class Inpainting:
                  dtype: DTypeLike | None = None, progress: bool | None = None,
                  method: str | None = None, boxes: bool = True, seed: int | None = None,
                  precision: DTypeLike | None = None, **params: Any):
-        from . import registry as inpainting
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
             image, mask, channel_axis, alpha)
@@ -696,7 +696,6 @@ class Inpainting:
     @property
     def module(self):
         """The method's module (looked up, not stored, so that the object pickles)."""
-        from . import registry as inpainting
 
         return inpainting.load(self.method)
 
@@ -724,8 +723,6 @@ class Inpainting:
         view[: self.ncolour, y0:y1, x0:x1][:, omega] = values.astype(self.layout.dtype)
 
     def _boxes(self):
-        from . import boxes
-        from .registry import margin
 
         ny, nx = self.mask.shape
         if not self.boxes:
@@ -743,7 +740,6 @@ class Inpainting:
         """Run to the end, yielding an InpaintState at the start of the finest level, every
         `every` steps there (rounded to whole check intervals) and at the end. Coarser
         levels run without yielding. Afterwards `result` and `info` are set."""
-        from .registry import soft
 
         start = time.perf_counter()
         out = self.image.copy()
@@ -770,7 +766,6 @@ class Inpainting:
             fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
             method, options, part = self.method, {}, None
             if self.auto:
-                from . import choose
 
                 depth = choose.hole_depth(omega)  # both measures need it
                 method, options = choose.pick(choose.features(data, omega, depth), self.method)
@@ -833,7 +828,6 @@ class Inpainting:
         with every masked pixel there unknown; returns the box's part. With `part` (the
         box's pixels to fill) and `filled` (the box already filled by the structure
         method), the box's other masked pixels count as known, with their filled values."""
-        from . import exemplar
 
         y0, y1, x0, x1 = box
         ny, nx = self.mask.shape
@@ -862,7 +856,6 @@ def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=Fals
     first installed of inpainting.AUTO (docs/inpainting.md has the measurements), which
     each box may trade for the exemplar (inpainting/choose.py). per_box=True returns
     "auto" itself in that case."""
-    from . import registry as inpainting
 
     if method is None:  # levels too: the transport's multiresolution
         transport_only = {"levels", *InpaintParams.__dataclass_fields__}

@@ -52,7 +52,9 @@ from scipy import ndimage
 
 from .._progress import progress_bar
 from ..errors import InputError
+from . import coherence
 from . import stitch as _stitch
+from .choose import MIN_PERIODICITY, lattice_offsets, periodicity
 
 DEFAULTS = {
     "patch": 7,  # patch side, odd
@@ -375,7 +377,6 @@ class _Level:
 def _periodic(colour: np.ndarray, hole: np.ndarray) -> bool:
     """Whether the hole's near surroundings repeat (choose.periodicity, on the hole's box
     grown by 24 px)."""
-    from .choose import MIN_PERIODICITY, periodicity
 
     near = _box(hole, 24)
     return periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY
@@ -383,7 +384,6 @@ def _periodic(colour: np.ndarray, hole: np.ndarray) -> bool:
 
 def _lattice_offsets(lv: _Level, colour: np.ndarray, hole: np.ndarray):
     """The lags at which this level's known colours repeat, on the device; None if none."""
-    from .choose import lattice_offsets
 
     lags = lattice_offsets(colour, hole)
     return cla.to_device(lv.q, np.ascontiguousarray(lags, np.int32)) if lags.size else None
@@ -465,7 +465,6 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     else:
         sw = float(structure)
     if sw > 0:
-        from . import coherence
 
         filled = coherence.solve(colour, hole, runtime, dtype=dtype, **_guide_params(hole))
         guides = sw * filled if guides is None else np.concatenate([guides, sw * filled])

@@ -42,9 +42,8 @@ import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
-from ..errors import InputError
+from ..errors import ClpdeError, InputError
 from ..imagedata import positive
-from ..errors import ClpdeError
 from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).

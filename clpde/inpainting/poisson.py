@@ -23,8 +23,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
-from ..errors import InputError
-from ..errors import ClpdeError
+from ..errors import ClpdeError, InputError
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("inpainting/poisson.cl",)

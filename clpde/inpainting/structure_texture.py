@@ -19,7 +19,9 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
+from ..planar.rof import denoise_tv
 from . import exemplar
+from .registry import load
 
 # tv_weight 1.5 (relative to the known span), measured over seeds 0-2 through clpde.inpaint:
 # periodic 24.98 / 34.57 / 44.20 dB at 1 / 1.5 / 2, texture 19.14 / 19.20 / 19.18, thick
@@ -37,30 +39,16 @@ def MARGIN(omega=None, search=exemplar.DEFAULTS["search"], **_params) -> int:
 
 
 def _structure_solver(name):
-    """solve(data, omega, runtime, ...) of the structure method, or a call of clpde.inpaint."""
-    try:
-        from .registry import load  # the method registry (issue 14), once present
-    except ImportError:
-        load = None
-    if load is not None:
-        for method in ([name] if name else list(STRUCTURE_METHODS)):
-            try:
-                return load(method).solve
-            except InputError:
-                if name:
-                    raise
-    if name:
-        raise InputError(f"structure method {name!r} is not available in this installation")
-
-    def via_inpaint(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None):
-        from .api import inpaint
-
-        out = inpaint(np.moveaxis(data, 0, -1), omega, channel_axis=-1, device=runtime,
-                      dtype=np.float64 if np.dtype(dtype) == np.float64 else None,
-                      progress=progress)
-        return np.moveaxis(out, -1, 0)
-
-    return via_inpaint
+    """solve(data, omega, runtime, ...) of the structure method `name`, or of the first of
+    STRUCTURE_METHODS that is installed."""
+    for method in ([name] if name else list(STRUCTURE_METHODS)):
+        try:
+            return load(method).solve
+        except InputError:
+            if name:
+                raise
+    raise InputError(f"none of the structure methods {', '.join(STRUCTURE_METHODS)} is "
+                     "available in this installation")
 
 
 def known_range(data, omega):
@@ -76,8 +64,6 @@ def decompose(data, omega, runtime, tv_weight: float):
 
     tv_weight is relative to the known pixels' span (ROF's weight is in the image's units):
     the split of a * f + b is then a * u + b and a * v, whatever the image's contrast."""
-    from ..planar.rof import denoise_tv
-
     lo, hi = known_range(data, omega)
     idx = ndimage.distance_transform_edt(omega, return_distances=False, return_indices=True)
     filled = data[:, idx[0], idx[1]]

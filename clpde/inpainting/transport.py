@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import multiresolution as mr
+from .api import GHOST, InpaintParams, TransportRun
+
 DESCRIPTION = ("transport of smoothness along the isophotes, interleaved with anisotropic "
                "diffusion (thesis ch. 3)")
 SOFT_MASK = True
 
 
 def _levels(omega, levels):
-    from . import multiresolution as mr
 
     return levels if levels is not None else mr.auto_levels(omega)
 
@@ -19,7 +21,6 @@ def _reach(params) -> int:
     """Pixels outside Omega that one level reads: the band Omega-epsilon plus the diffusion
     stencil, the pre-smoothing's reach, the transport's two-cell stencil and the
     biharmonic start's two cells."""
-    from .api import GHOST, InpaintParams
 
     p = InpaintParams(**{k: v for k,
                          v in params.items() if k in InpaintParams.__dataclass_fields__})
@@ -39,7 +40,6 @@ def MARGIN(omega, levels=None, **params) -> int:
 
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, fidelity=None,
           levels=None, **params):
-    from .api import TransportRun
 
     run = TransportRun(runtime, data, omega, params, levels=levels, dtype=dtype,
                        progress=progress, fidelity=fidelity)

@@ -15,9 +15,8 @@ from numpy.typing import ArrayLike, DTypeLike
 from .._progress import is_long_run, progress_bar
 from .._state import State, renamed_keyword
 from ..errors import InputError
-from ..imagedata import check_steps, check_time_step, positive
 from ..fields import Field, Grid, PingPong, check_fits
-from ..imagedata import to_kernel_layout
+from ..imagedata import check_steps, check_time_step, positive, to_kernel_layout
 from ..runtime import get_runtime
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).

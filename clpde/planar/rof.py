@@ -24,11 +24,10 @@ from numpy.typing import ArrayLike, DTypeLike
 from .._progress import is_long_run, progress_bar
 from .._state import renamed_keyword
 from ..errors import InputError
-from ..imagedata import check_steps, check_time_step, positive
 from ..fields import Field, Grid, PingPong, check_fits
-from ..imagedata import compute_dtype, to_kernel_layout
-from .flows import stability_limit
+from ..imagedata import check_steps, check_time_step, compute_dtype, positive, to_kernel_layout
 from ..runtime import get_runtime
+from .flows import stability_limit
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("planar/planar.cl", "planar/rof.cl")

@@ -18,11 +18,12 @@ from __future__ import annotations
 import numpy as np
 
 from .._state import renamed_keyword
-from ..imagedata import check_steps
 from ..errors import InputError
-from ..imagedata import compute_dtype, to_kernel_layout
-from .flows import FLOWS, PlanarFlow
+from ..fields import Field, Grid, PingPong
+from ..imagedata import check_steps, compute_dtype, positive, to_kernel_layout
 from ..runtime import get_runtime
+from .flows import FLOWS, PlanarFlow
+from .rof import _primal_dual
 
 RADIUS = 1  # every planar.cl and rof.cl step reads the 3x3 neighbourhood only
 # Tiled denoise_tv runs exactly `steps` iterations; a tolerance no change falls below.
@@ -33,7 +34,6 @@ class _ScaledFlow(PlanarFlow):
     """A PlanarFlow on data already in the kernels' layout and [0, 1] scale."""
 
     def __init__(self, data, flow, dt, device, precision, params):
-        from ..fields import Field, Grid, PingPong
 
         self.runtime = get_runtime(device)
         nc, ny, nx = data.shape
@@ -50,8 +50,6 @@ def _tile_diffuse(block, flow, steps, dt, device, precision, params):
 
 
 def _tile_denoise(block, lam, steps, check_every, device, precision):
-    from ..fields import Grid
-    from .rof import _primal_dual
 
     runtime = get_runtime(device)
     nc, ny, nx = block.shape
@@ -102,7 +100,6 @@ def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chu
     """clpde.denoise_tv (primal-dual, given weight) for exactly `steps` iterations, tile by
     tile; bitwise equal to ``clpde.denoise_tv(image, weight=weight, max_steps=steps,
     tol=1e-300, check_every=check_every)``."""
-    from ..imagedata import positive
 
     steps = check_steps(steps)
     data, layout = to_kernel_layout(image, channel_axis)

@@ -29,6 +29,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
 
+from ..bricks import DEFAULT_BRICK, BrickBand
 from ..errors import InputError
 from .tracker import (
     EXTEND_DT,
@@ -38,7 +39,6 @@ from .tracker import (
     STORAGE_CLASSES,
     RegionTracker,
 )
-from ..bricks import DEFAULT_BRICK, BrickBand
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions/bricks.cl",)

@@ -34,12 +34,12 @@ from tqdm.auto import tqdm  # (the bars' type)
 
 from .._progress import progress_bar
 from .._state import DeviceLike, State, renamed_keyword
-from ..fields import IndexList, check_fits, compact
 from ..errors import InputError
-from ..imagedata import positive as _positive
-from .mesh import along_normals, functions_from_mask, region_colours, split_regions, surface_mesh
-from ..runtime import get_runtime
+from ..fields import IndexList, check_fits, compact
 from ..grid3d import Grid3D
+from ..imagedata import positive as _positive
+from ..runtime import get_runtime
+from .mesh import along_normals, functions_from_mask, region_colours, split_regions, surface_mesh
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions/regions.cl",)

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .._progress import progress_bar
 from .._version import __version__
 from ..errors import InputError, error_message
 from ..io.images import IMAGE_FORMATS, PathLike, atomic_output, replace_folder
@@ -317,7 +318,6 @@ class _Progress:
     """One bar over the batch: done, running, failed (and skipped), redrawn on each event."""
 
     def __init__(self, total: int, skipped: int, enabled):
-        from .._progress import progress_bar
 
         self.bar = progress_bar(enabled, total, "clpde batch", initial=skipped, unit="file",
                                 dynamic_ncols=True)

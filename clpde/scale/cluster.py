@@ -9,6 +9,7 @@ import os
 import time
 
 from ..errors import InputError
+from ..runtime import _build_problem, devices
 
 
 def dask_setup(worker) -> None:
@@ -75,7 +76,6 @@ def _gpu_indices(device) -> list[int]:
     if device is not None and str(device).strip().lower() != "gpu":
         return []  # a device was chosen: every worker uses it
     try:
-        from ..runtime import _build_problem, devices
 
         return [d.index for d in devices() if d.type == "gpu" and _build_problem(d.index) is None]
     except Exception:  # noqa: BLE001  (no OpenCL here: the workers use their default device)

@@ -18,7 +18,10 @@ import numpy as np
 from .._progress import on_terminal
 from ..errors import InputError
 from ..imagedata import split_alpha
+from ..inpainting.api import inpaint
+from ..io import frames as frame_io
 from ..io.images import (
+    _frame_to_uint8,
     check_not_overwriting_input,
     check_output_folder,
     check_writable,
@@ -28,7 +31,13 @@ from ..io.images import (
     write_gif,
     write_image,
 )
+from ..planar import tiled
+from ..planar.flows import diffuse
+from ..planar.rof import denoise_tv
 from ..runtime import get_runtime
+from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
+from ..tracking.contours import track
+from ..tracking.features import require_av, write_mp4
 
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
 
@@ -63,8 +72,6 @@ def diffuse_file(input, output, *, flow: str = "heat", steps: int = 100, dt=None
     """`clpde diffuse`: a planar flow (clpde.diffuse) on the image `input`, written to
     `output`. tile: run in tiles (bitwise equal) when True, or by itself when the image
     exceeds the device's largest allocation (None); False never."""
-    from ..planar.flows import diffuse
-
     params = {k: v for k, v in (("kappa", kappa), ("edge", edge), ("eps", eps)) if v is not None}
     if tile is not False and _run_tiled("diffuse", input, output, tile, device, flow=flow,
                                         steps=steps, dt=dt, params=params):
@@ -82,8 +89,6 @@ def denoise_file(input, output, *, sigma=None, weight=None, method: str = "prima
                  progress=None) -> list[str]:
     """`clpde denoise`: TV denoising (clpde.denoise_tv) of the image `input`, written to
     `output`. tile: as for diffuse_file (tiles need weight, max_steps and primal-dual)."""
-    from ..planar.rof import denoise_tv
-
     if eps is not None and method != "gradient":
         raise InputError("--eps applies to --method gradient only")
     if tile is not False and _run_tiled("denoise", input, output, tile, device, weight=weight,
@@ -109,22 +114,19 @@ def denoise_file(input, output, *, sigma=None, weight=None, method: str = "prima
 def _run_tiled(command, input, output, force, device, **options) -> bool:
     """Run diffuse / denoise in tiles when asked (force) or needed (the image exceeds the
     device); False when the untiled run should go ahead."""
-    from ..planar.tiled import denoise_tv, device_chunks, diffuse, exceeds_device
-    from ..planar.tiled import may_exceed_device
-
-    if not (force or may_exceed_device(input, device)):  # the header rules most images out
+    if not (force or tiled.may_exceed_device(input, device)):  # the header rules most images out
         return False
     image = read_input(input, output, device=device)
     parts = split_alpha(image, input)
     channels = 1 if parts.channel_axis is None else parts.colour.shape[-1]
     factor = 2 if command == "diffuse" else 4  # denoise: f, u and a two-component dual field
-    needed = exceeds_device(parts.colour.shape, channels * factor // 2, device)
+    needed = tiled.exceeds_device(parts.colour.shape, channels * factor // 2, device)
     if not (force or needed):
         return False
     if command == "diffuse":
         steps = options["steps"]
-        chunks = 256 if not needed else device_chunks(channels, steps, device)
-        result = diffuse(parts.colour, options["flow"], steps=steps, dt=options["dt"],
+        chunks = 256 if not needed else tiled.device_chunks(channels, steps, device)
+        result = tiled.diffuse(parts.colour, options["flow"], steps=steps, dt=options["dt"],
                          channel_axis=parts.channel_axis, device=device, chunks=chunks,
                          **options["params"])
     else:
@@ -132,8 +134,8 @@ def _run_tiled(command, input, output, force, device, **options) -> bool:
         if weight is None or options["method"] != "primal-dual" or max_steps is None:
             raise InputError("tiled denoise needs --weight W and --max-steps N (a fixed "
                              "iteration count) with --method primal-dual")
-        chunks = 256 if not needed else device_chunks(channels, max_steps, device, 4)
-        result = denoise_tv(parts.colour, weight, max_steps, channel_axis=parts.channel_axis,
+        chunks = 256 if not needed else tiled.device_chunks(channels, max_steps, device, 4)
+        result = tiled.denoise_tv(parts.colour, weight, max_steps, channel_axis=parts.channel_axis,
                             device=device, chunks=chunks)
     write_image(output, parts.join(result))
     return True
@@ -184,8 +186,6 @@ def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", 
     pixels, for mask 'nan'), written to `output`; gif: also the evolution as a GIF (the
     transport's, every gif_every steps). Options are clpde.inpaint's; only the transport
     options given are passed, so that the default method is chosen by them."""
-    from ..inpainting.api import inpaint
-
     if gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {gif_every}")
     if gif:
@@ -231,8 +231,6 @@ def evolution_frames(damaged, states) -> list[np.ndarray]:
     """The GIF's frames as uint8: the damaged image first (its region shown as it came, NaN
     as black), then the states; all on one intensity scale (the result's range for floats),
     consecutive equal frames merged, since a GIF cannot show them apart."""
-    from ..io.images import _frame_to_uint8
-
     frames = [np.asarray(damaged), *(np.asarray(s) for s in states)]
     result = frames[-1]
     if np.issubdtype(result.dtype, np.floating):
@@ -258,34 +256,29 @@ def track_file(input, output, *, mask, features: str = "intensity", colour: bool
     """`clpde track`: the object marked by the image `mask` in the first frame of `input`
     (a video, an image folder or a multi-page TIFF) followed through it (clpde.track); the
     folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4)."""
-    from ..io.frames import read_frames, read_mask, to_grey, write_tracking
-    from ..tracking.contours import track
-
     get_runtime(device)
     check_not_overwriting_input([input, mask], output)
     check_output_folder(output, overwrite, option="--overwrite")
     if mp4:
-        from ..tracking.features import require_av
-
         require_av()
     if shape_weight < 0:
         raise InputError(f"--shape-weight must be at least 0, not {shape_weight}")
     if low_confidence <= 0:
         raise InputError(f"--low-confidence must be positive, not {low_confidence}")
-    images = read_frames(input, grey=not colour)
+    images = frame_io.read_frames(input, grey=not colour)
     if frames is not None:
         if frames < 1:
             raise InputError(f"--frames must be at least 1, not {frames}")
         images = images[:frames]
-    first = read_mask(mask, images.shape[1:3])
+    first = frame_io.read_mask(mask, images.shape[1:3])
     masks, residuals = track(
         images, first, features=features, colour=colour, discrepancy=discrepancy,
         motion=None if motion == "none" else motion, shape_weight=shape_weight,
         equalize=False if equalize == "none" else equalize, smooth=smooth,
         max_iterations=max_iterations, min_size=min_size, device=device,
         progress=_progress(progress), return_discrepancy=True)
-    grey = to_grey(images) if images.ndim == 4 else images
-    written = write_tracking(output, grey, masks, gif=gif, overwrite=overwrite)
+    grey = frame_io.to_grey(images) if images.ndim == 4 else images
+    written = frame_io.write_tracking(output, grey, masks, gif=gif, overwrite=overwrite)
     if mp4:
         written.append(_write_mp4(output, grey, masks))
     lines = [f"track: {len(masks)} frames; wrote {len(written)} files to {output}"]
@@ -307,13 +300,10 @@ def low_confidence_frames(residuals, factor: float) -> list[int]:
 
 def _write_mp4(outdir, frames, masks):
     """overlay.mp4 beside the GIF, written under a temporary name and then moved in."""
-    from ..io.frames import overlay
-    from ..tracking.features import write_mp4
-
     final = Path(outdir) / "overlay.mp4"
     tmp = final.with_name(".overlay.mp4.part")
     try:
-        write_mp4(tmp, [overlay(f, m) for f, m in zip(frames, masks, strict=False)])
+        write_mp4(tmp, [frame_io.overlay(f, m) for f, m in zip(frames, masks, strict=False)])
         os.replace(tmp, final)
     finally:
         tmp.unlink(missing_ok=True)
@@ -327,8 +317,6 @@ def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iter
     """`clpde surface`: one of clpde.surface.runs.FLOWS on the surface of the mesh `input`
     (a file, or a shape name of clpde.data.SURFACE_SHAPES); the folder `output` gets the
     pictures before and after and the coloured result as PLY and GLB."""
-    from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
-
     get_runtime(device)
     check_not_overwriting_input([input], output)
     check_output_folder(output, overwrite, option="--overwrite")

@@ -1,5 +1,6 @@
 """PDEs on implicit surfaces (thesis chapter 4): data on a narrow band around psi = 0."""
 
+from ..grid3d import Grid3D
 from .flows import (
     THESIS_FIG_4_7,
     TURK,
@@ -14,7 +15,6 @@ from .flows import (
     stability_limit,
     tv,
 )
-from ..grid3d import Grid3D
 from .implicit import INTERPOLATIONS, ImplicitSurface
 from .render import colormap, export_mesh, render, render_mesh, to_mesh
 

@@ -26,10 +26,10 @@ from numpy.typing import ArrayLike, DTypeLike
 from .._progress import progress_range
 from .._state import DeviceLike, renamed_keyword
 from ..errors import InputError
-from ..imagedata import positive as _positive
 from ..fields import check_fits, compact
-from ..runtime import get_runtime
 from ..grid3d import Grid3D
+from ..imagedata import positive as _positive
+from ..runtime import get_runtime
 from . import flows as _flows
 from . import render as _render
 from .band import Band, BandFlow, extend_defines, make_flow

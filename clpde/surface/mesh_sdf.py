@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..imagedata import positive
+from ..runtime import get_runtime
 from .winding import WindingNumbers
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -388,7 +389,6 @@ def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
     closest points) with distances and points in world units."""
     import pyopencl.array as cla
 
-    from ..runtime import get_runtime
 
     rt = get_runtime(device)
     q = rt.queue

@@ -15,7 +15,10 @@ import numpy as np
 from ..data import SURFACE_SHAPES as SHAPES
 from ..data import checker, colour_pattern, surface_noise, surface_shape
 from ..errors import InputError
+from ..io.images import output_folder, write_bytes
 from .implicit import ImplicitSurface
+from .mesh_sdf import load_mesh
+from .render import export_mesh, render_mesh, scalar_range, to_mesh, with_colour_bar
 
 FLOWS = ("heat", "tv", "denoise", "chroma", "reaction-diffusion", "flowvis", "curvature")
 
@@ -42,7 +45,6 @@ def encloses_volume(mesh):
     except InputError as exc:
         if "no zero level set" not in str(exc):
             raise
-        from .mesh_sdf import load_mesh
 
         name = f"the mesh {mesh}" if isinstance(mesh, (str, os.PathLike)) else "the mesh"
         with warnings.catch_warnings():
@@ -212,7 +214,6 @@ def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), s
     outdir, created if missing; an existing one must be empty, or with overwrite=True hold
     only clpde's kinds of output files, and is then replaced as a whole
     (clpde.io.output_folder). Returns the paths."""
-    from ..io.images import output_folder
 
     with output_folder(outdir, overwrite) as staging:
         names = _write_run_files(run, staging, views, size)
@@ -220,7 +221,6 @@ def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), s
 
 
 def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
-    from .render import export_mesh, render_mesh, scalar_range, to_mesh, with_colour_bar
 
     written = []
     after = to_mesh(run.surface, run.after)
@@ -249,6 +249,5 @@ def write_png(path, image) -> None:
     """An RGB(A) uint8 picture as a PNG file, written atomically."""
     import imageio.v3 as iio
 
-    from ..io.images import write_bytes
 
     write_bytes(path, iio.imwrite("<bytes>", image, extension=".png"))

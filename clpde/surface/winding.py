@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..runtime import get_runtime
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("surface/winding.cl",)
@@ -40,7 +41,6 @@ class WindingNumbers:
     def __init__(self, triangles, cluster=64, device=None):
         import pyopencl.array as cla
 
-        from ..runtime import get_runtime
 
         tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
         if len(tri) == 0:

@@ -34,11 +34,13 @@ from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_bar
 from .._state import DeviceLike, State, deprecated, renamed_keyword
-from ..fields import Field, PingPong, check_fits
 from ..errors import InputError
+from ..fields import Field, PingPong, check_fits
 from ..imagedata import value_range
-from .levelset import LAYOUTS, LevelSet, signed_distance
+from ..planar.flows import diffuse
 from ..runtime import get_runtime
+from .features import MotionFilter, local_contrast, shift_image
+from .levelset import GHOST, LAYOUTS, MARGIN, LevelSet, signed_distance
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("tracking/levelset.cl", "tracking/features.cl")
@@ -241,7 +243,6 @@ class MorphingTracker:
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
-        from .levelset import GHOST, MARGIN
 
         check_fits(self.runtime, (1,) + self.frames[0].shape, "tracking", 10,
                    ghost=GHOST + MARGIN, dtype=self.dtype)
@@ -276,7 +277,6 @@ class MorphingTracker:
 
             img = np.stack([equalize_hist(c) for c in img])
         if self.smooth and self.smooth_steps > 0:
-            from ..planar.flows import diffuse
 
             # The rational edge-stopping function: as anisotropic as the exponential one
             # and about 3x faster on PoCL, where exp() does not vectorise.
@@ -305,7 +305,6 @@ class MorphingTracker:
 
     def _match_features(self, image: np.ndarray) -> np.ndarray:
         """(C, H, W) local contrast normalisation of a prepared frame, for matching."""
-        from .features import local_contrast
 
         return local_contrast(image, self.contrast_radius)
 
@@ -377,7 +376,6 @@ class MorphingTracker:
 
     def iterate(self) -> Iterator[TrackState]:
         """Track frame after frame, yielding each one's TrackState (frame 0's first)."""
-        from .features import MotionFilter, shift_image
 
         mask = self.first_mask
         u = signed_distance(mask)

@@ -15,8 +15,8 @@ import numpy as np
 import pyopencl.array as cla
 
 from .._state import deprecated
-from ..fields import Field, Grid, PingPong, compact, index_list
 from ..errors import InputError
+from ..fields import Field, Grid, PingPong, compact, index_list
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("tracking/levelset.cl",)
