@@ -205,9 +205,9 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
     dask_defaults the one of dask_cluster."""
     from distributed import Client
 
+    from clpde.film.restore import inpaint_sequence
     from clpde.scale.batch import batch
     from clpde.scale.cluster import start_cluster
-    from clpde.film.restore import inpaint_sequence
 
     start = time.perf_counter()
     if dask_defaults:
@@ -280,8 +280,8 @@ def main():
     if args.quick:
         args.photos, args.frames, args.empty, args.repeat = 20, 40, 30, 1
 
-    from clpde.scale.cluster import cores
     from clpde.io.images import write_image
+    from clpde.scale.cluster import cores
 
     n = cores()
     work = Path(tempfile.mkdtemp(prefix="clpde-batch-bench-"))

@@ -62,8 +62,8 @@ def methods():
 
 def box_features(image, mask):
     """[(box, features)] for clpde.inpaint's boxes of this mask under the structure method."""
-    from clpde.inpainting import registry as inpainting
     from clpde.inpainting import boxes, choose
+    from clpde.inpainting import registry as inpainting
 
     module = inpainting.load("coherence")
     data = image.astype(np.float64) / 255.0

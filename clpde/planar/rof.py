@@ -22,7 +22,6 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import is_long_run, progress_bar
-from .._state import renamed_keyword
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong, check_fits
 from ..imagedata import check_steps, check_time_step, compute_dtype, positive, to_kernel_layout
@@ -67,7 +66,7 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
                tol: float | None = None, check_every: int | None = None,
                eps: float | None = None, dt: float | None = None,
                lambda_every: int | None = None, progress: bool | None = None,
-               dtype: DTypeLike | None = None, precision: DTypeLike | None = None,
+               dtype: DTypeLike | None = None,
                return_info: bool = False) -> np.ndarray | tuple[np.ndarray, DenoiseInfo]:
     """Total-variation denoising (Rudin-Osher-Fatemi), run on the device to convergence.
 
@@ -104,7 +103,7 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
         The axis of the channels of a colour image, each denoised with its own lambda.
     method : {'primal-dual', 'gradient'}
     device, progress, dtype
-        As for `clpde.diffuse` (`precision` is the deprecated old name of `dtype`).
+        As for `clpde.diffuse`.
     max_steps, tol, check_every, eps, dt, lambda_every
         The stopping test and the gradient method's parameters, as above.
     return_info : bool
@@ -134,7 +133,7 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if sigma is not None and weight is not None:
         raise InputError("give sigma (the noise level) or weight (the strength), not both")
-    precision = renamed_keyword("dtype", dtype, "precision", precision)
+    precision = dtype
     runtime = get_runtime(device)
     # primal-dual: f, u and three dual fields of two components each; gradient: four fields
     def fits(shape):
@@ -303,7 +302,8 @@ def _relative_change(sums: np.ndarray, nc: int, ny: int) -> float:
 
 def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_every,
               lambda_every, progress):
-    """The thesis's gradient descent (kernels/planar/planar.cl); returns (u, steps, converged, lambda)."""
+    """The thesis's gradient descent (kernels/planar/planar.cl); returns (u, steps, converged,
+    lambda)."""
     q = grid.runtime.queue
     nc, ny, nx = grid.nc, grid.ny, grid.nx
     if lam0 is None:

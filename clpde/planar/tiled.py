@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._state import renamed_keyword
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong
 from ..imagedata import check_steps, compute_dtype, positive, to_kernel_layout
@@ -77,7 +76,7 @@ def _chunked(data: np.ndarray, chunks, depth: int, func, **kwargs) -> np.ndarray
 
 
 def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=None,
-            device=None, *, chunks=256, dtype=None, precision=None, **params) -> np.ndarray:
+            device=None, *, chunks=256, dtype=None, **params) -> np.ndarray:
     """clpde.diffuse run tile by tile: the same result, bit for bit, in chunks x chunks tiles
     (each with a margin of `steps` cells), for images larger than the device allows.
     The curvature flow's per-pixel ``weight`` is not supported here."""
@@ -90,13 +89,13 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     runtime = get_runtime(device)
     out = _chunked(data, chunks, steps * RADIUS, _tile_diffuse, flow=flow, steps=steps, dt=dt,
                    device=runtime.index,
-                   precision=renamed_keyword("dtype", dtype, "precision", precision),
+                   precision=dtype,
                    params=params)
     return layout.restore(out)
 
 
 def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chunks=256,
-               check_every: int = 5, dtype=None, precision=None) -> np.ndarray:
+               check_every: int = 5, dtype=None) -> np.ndarray:
     """clpde.denoise_tv (primal-dual, given weight) for exactly `steps` iterations, tile by
     tile; bitwise equal to ``clpde.denoise_tv(image, weight=weight, max_steps=steps,
     tol=1e-300, check_every=check_every)``."""
@@ -109,7 +108,7 @@ def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chu
     # u = f + div(p)/lambda adds one more cell to the iterations' reach.
     out = _chunked(data, chunks, steps * RADIUS + 1, _tile_denoise, lam=lam, steps=steps,
                    check_every=max(1, int(check_every)), device=runtime.index,
-                   precision=renamed_keyword("dtype", dtype, "precision", precision))
+                   precision=dtype)
     return layout.restore(out)
 
 

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, DTypeLike
 from tqdm.auto import tqdm  # (the bars' type)
 
 from .._progress import progress_bar
-from .._state import DeviceLike, State, renamed_keyword
+from .._state import DeviceLike, State
 from ..errors import InputError
 from ..fields import IndexList, check_fits, compact
 from ..grid3d import Grid3D
@@ -126,7 +126,7 @@ class RegionTracker:
                  reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
                  reinit_ring: int = 3, max_speed: float | None = None,
                  aux_at: Callable[[float], np.ndarray] | None = None, device: DeviceLike = None,
-                 dtype: DTypeLike = np.float32, band: float | None = None):
+                 dtype: DTypeLike = np.float32):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -136,7 +136,7 @@ class RegionTracker:
         self.mode = SPEEDS[speed]
         self.scale = float(scale)
         self.velocity = None if velocity is None else np.asarray(velocity, np.float64)
-        self.width = float(renamed_keyword("band_width", band_width, "band", band, 5.0))
+        self.width = float(5.0 if band_width is None else band_width)
         self.reinit_every = int(reinit_every)
         self.reinit_iterations = int(reinit_iterations)
         self.reinit_ring = int(reinit_ring)
@@ -197,10 +197,12 @@ class RegionTracker:
                                            SPEED=mode),
             "reinit3d_heun_pre": rt.kernel("regions/regions.cl", "reinit3d_heun_pre", g.dtype,
                                            SPEED=mode),
-            "band_near_border": rt.kernel("regions/regions.cl", "band_near_border", g.dtype, SPEED=mode),
+            "band_near_border": rt.kernel("regions/regions.cl", "band_near_border", g.dtype,
+                                          SPEED=mode),
             "band_max_abs": rt.kernel("regions/regions.cl", "band_max_abs", g.dtype, SPEED=mode),
             "heun_average": rt.kernel("regions/regions.cl", "heun_average", g.dtype, SPEED=mode),
-            "region_band_mask": rt.kernel("regions/regions.cl", "region_band_mask", g.dtype, SPEED=mode),
+            "region_band_mask": rt.kernel("regions/regions.cl", "region_band_mask", g.dtype,
+                                          SPEED=mode),
             "dilate_mask": rt.kernel("regions/regions.cl", "dilate_mask", g.dtype, SPEED=mode),
             "extend_outer": rt.kernel("regions/regions.cl", "extend_outer", g.dtype, SPEED=mode),
             "copy_runs": rt.kernel("regions/regions.cl", "copy_runs", g.dtype, SPEED=mode),
@@ -616,8 +618,7 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                  reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
                  max_speed: float | None = None, keep_volumes: bool = False,
                  device: DeviceLike = None, dtype: DTypeLike = np.float32,
-                 progress: bool | None = None, band: float | None = None,
-                 storage: str = "lists") -> list[RegionFrame]:
+                 progress: bool | None = None, storage: str = "lists") -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
@@ -694,7 +695,7 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
         speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
         vel = None
     tracker = region_tracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
-                            band_width=renamed_keyword("band_width", band_width, "band", band, 5.0),
+                            band_width=5.0 if band_width is None else band_width,
                             reinit_every=reinit_every,
                             reinit_iterations=reinit_iterations, cfl=cfl,
                             max_speed=None if max_speed is None else _positive("max_speed",

@@ -116,7 +116,8 @@ class Band:
             data = u
         else:
             raise InputError(
-                f"{what} must have the surface's grid shape {self.surf.shape} (or (channels,) + that "
+                f"{what} must have the surface's grid shape {self.surf.shape} (or (channels,) + "
+                f"that "
                 f"for vector data), got {u.shape}; flows also take the band form, shape "
                 f"({self.surf.ext_band.n},) or (channels, {self.surf.ext_band.n}) (band_values)"
             )
@@ -160,16 +161,6 @@ STEP_KERNELS = {
     "turk": {"lists": ("surface/heat.cl", "turk_step"),
              "bricks": ("surface/bricks.cl", "brick_turk_step")},
 }
-
-
-def make_flow(surf, u, normalize: bool = False, line_field: bool = False,
-              defines: dict | None = None):
-    """The device state of data u on `surf` in the surface's band storage (surf.storage):
-    a BandFlow on the band lists, a BrickFlow on the bricks. Both step with `step`, take
-    their fixed fields from `fixed` and give the result back the same way; `defines` are the
-    step kernels' (kernels/surface/flux.h)."""
-    cls = BrickFlow if surf.storage == "bricks" else BandFlow
-    return cls(surf, u, normalize=normalize, line_field=line_field, defines=defines)
 
 
 class BandFlow:
@@ -417,3 +408,17 @@ def _signs(sides: int):
     """One-sided directions (+1 forward gradient, -1 backward) along x, y, z for a choice
     of sides (bits x, y, z), as the brick kernels take them."""
     return tuple(np.int32(-1 if (sides >> a) & 1 else 1) for a in range(3))
+
+
+# storage name -> the device state of a flow's data in it (ImplicitSurface.storage)
+FLOW_STATES = {"lists": BandFlow, "bricks": BrickFlow}
+
+
+def make_flow(surf, u, normalize: bool = False, line_field: bool = False,
+              defines: dict | None = None):
+    """The device state of data u on `surf` in the surface's band storage (surf.storage):
+    a BandFlow on the band lists, a BrickFlow on the bricks. Both step with `step`, take
+    their fixed fields from `fixed` and give the result back the same way; `defines` are the
+    step kernels' (kernels/surface/flux.h)."""
+    return FLOW_STATES[surf.storage](surf, u, normalize=normalize, line_field=line_field,
+                                     defines=defines)

@@ -35,9 +35,7 @@ class SurfaceDenoiseInfo:
 
     steps: time steps run, of length dt; lam_history: the dynamic lambda after each of its
     updates (every 10 steps; None for a fixed lam); residual_variance: mean (u - u0)^2 over
-    the surface (None for a fixed lam). ``info["key"]`` with the old dict's keys ("steps",
-    "dt", "lambda", "residual_variance") still works for one release, with a
-    DeprecationWarning.
+    the surface (None for a fixed lam).
     """
 
     steps: int
@@ -50,17 +48,6 @@ class SurfaceDenoiseInfo:
         """The final lambda (None for a fixed lam)."""
         return self.lam_history[-1] if self.lam_history else None
 
-    _KEYS = {"steps": "steps", "dt": "dt", "lambda": "lam_history",
-             "residual_variance": "residual_variance"}
-
-    def __getitem__(self, key: str):
-        warnings.warn("denoise_tv's info is a SurfaceDenoiseInfo now; use its attributes "
-                      f"(info.{self._KEYS.get(key, key)}) instead of info[{key!r}]",
-                      DeprecationWarning, stacklevel=2)
-        value = getattr(self, self._KEYS[key]) if key in self._KEYS else None
-        if value is None:  # the old dict had no such key
-            raise KeyError(key)
-        return value
 
 
 # One-sided difference choices per axis: bit set = backward gradient (forward divergence).

@@ -24,7 +24,7 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_range
-from .._state import DeviceLike, renamed_keyword
+from .._state import DeviceLike
 from ..errors import InputError
 from ..fields import check_fits, compact
 from ..grid3d import Grid3D
@@ -32,7 +32,7 @@ from ..imagedata import positive as _positive
 from ..runtime import get_runtime
 from . import flows as _flows
 from . import render as _render
-from .band import Band, BandFlow, extend_defines, make_flow
+from .band import FLOW_STATES, Band, BandFlow, extend_defines, make_flow
 from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
 
 if TYPE_CHECKING:
@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 KERNEL_FILES = ("surface/band.cl", "surface/extend.cl", "surface/reinit.cl")
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
-STORAGES = ("lists", "bricks")
+STORAGES = tuple(FLOW_STATES)  # "lists", "bricks"
 # Farthest interpolation node from a point, in cells: the step band must contain them.
 _NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
 # Interpolation nodes per axis.
@@ -65,14 +65,14 @@ class ImplicitSurface:
     psi: (nz, ny, nx) volume, negative inside, in world units; spacing: grid spacing h;
     origin: world (x, y, z) of psi[0, 0, 0]. Points of cell (k, j, i) are
     origin + h * (i, j, k). band_width: the outer band's half-width in cells (default: the
-    narrowest the interpolation allows; `band=` is its deprecated old name). storage: the
+    narrowest the interpolation allows). storage: the
     flows' band storage, "lists" or "bricks" (see `storage`).
     """
 
     def __init__(self, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,
                  band_width: float | None = None, interpolation: str = "tricubic",
                  dtype: DTypeLike = np.float32, device: DeviceLike = None,
-                 band: float | None = None, storage: str = "lists",
+                 storage: str = "lists",
                  _check_border: bool = True):
         psi = np.asarray(psi)
         if psi.ndim != 3:
@@ -95,7 +95,6 @@ class ImplicitSurface:
         self.interp = _interp_code(interpolation)
         self.inner = _NODE_REACH[self.interp] + 0.04
         min_outer = self.inner + np.sqrt(2.0) + 0.04
-        band_width = renamed_keyword("band_width", band_width, "band", band)
         self.outer = min_outer if band_width is None else _positive("band_width", band_width)
         if self.outer < min_outer:
             raise InputError(
@@ -180,8 +179,7 @@ class ImplicitSurface:
 
     @classmethod
     def from_mesh(cls, mesh: object, spacing: float | None = None, resolution: int = 128, *,
-                  band_width: float | None = None, band: float | None = None,
-                  **options: Any) -> ImplicitSurface:
+                  band_width: float | None = None, **options: Any) -> ImplicitSurface:
         """A surface from a triangle mesh (trimesh.Trimesh or any file trimesh loads).
 
         spacing defaults to the bounding box's longest side / resolution. The distance is exact
@@ -191,7 +189,6 @@ class ImplicitSurface:
         cells whose closest mesh point lies on a hole's rim are reinitialised, so psi is a
         distance across the sheet too. The mesh passed in is not modified; one that is not
         watertight gets a warning."""
-        band_width = renamed_keyword("band_width", band_width, "band", band)
         mesh = load_mesh(mesh)
         outer = band_width
         if outer is None:

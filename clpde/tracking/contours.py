@@ -33,14 +33,14 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_bar
-from .._state import DeviceLike, State, deprecated, renamed_keyword
+from .._state import DeviceLike, State
 from ..errors import InputError
 from ..fields import Field, PingPong, check_fits
 from ..imagedata import value_range
 from ..planar.flows import diffuse
 from ..runtime import get_runtime
 from .features import MotionFilter, local_contrast, shift_image
-from .levelset import GHOST, LAYOUTS, MARGIN, LevelSet, signed_distance
+from .levelset import GHOST, MARGIN, STORAGES, LevelSet, signed_distance
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("tracking/levelset.cl", "tracking/features.cl")
@@ -187,9 +187,9 @@ class MorphingTracker:
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
                  ncc_radius: int = 3,
-                 huber_delta: float = 0.05, search_radius: int = 6, band_layout: str = "lists",
+                 huber_delta: float = 0.05, search_radius: int = 6, storage: str = "lists",
                  device: DeviceLike = None,
-                 dtype: DTypeLike | None = None, precision: DTypeLike | None = None):
+                 dtype: DTypeLike | None = None):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
         self._user = None
@@ -236,12 +236,11 @@ class MorphingTracker:
         self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
         self.max_dt = max(float(max_dt), self.dt)
         self.reinit_iterations = int(reinit_iterations)
-        if band_layout not in LAYOUTS:
-            raise InputError(f"band_layout must be one of {', '.join(LAYOUTS)}, "
-                             f"not {band_layout!r}")
-        self.band_layout = band_layout
+        if storage not in STORAGES:
+            raise InputError(f"storage must be one of {', '.join(STORAGES)}, not {storage!r}")
+        self.storage = storage
         self.runtime = get_runtime(device)
-        self.dtype = np.dtype(renamed_keyword("dtype", dtype, "precision", precision) or np.float32)
+        self.dtype = np.dtype(dtype or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
 
         check_fits(self.runtime, (1,) + self.frames[0].shape, "tracking", 10,
@@ -370,10 +369,6 @@ class MorphingTracker:
         return iterations, converged, residual
 
     # ---- iteration ---------------------------------------------------------------------
-    @deprecated("iterate", "__iter__")
-    def __iter__(self) -> Iterator[TrackState]:
-        """Deprecated: iterate over `tracker.iterate()`."""
-
     def iterate(self) -> Iterator[TrackState]:
         """Track frame after frame, yielding each one's TrackState (frame 0's first)."""
 
@@ -382,7 +377,7 @@ class MorphingTracker:
         yield TrackState(0, mask.copy(), u.astype(np.float32))
         if len(self.frames) == 1:
             return
-        ls = LevelSet(self.runtime, u, self.band_width, self.dtype, layout=self.band_layout)
+        ls = LevelSet(self.runtime, u, self.band_width, self.dtype, storage=self.storage)
         # The shape pull's target; without it the kernel multiplies it by 0, so any finite
         # buffer of the grid will do.
         prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
@@ -443,7 +438,7 @@ class MorphingTracker:
 
 
 def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
-    """The morphing step's kernel for the band's layout: with bricks walked by one
+    """The morphing step's kernel for the band's storage: with bricks walked by one
     work-item, the NCC slides its window sums over each brick (morph_track_tiled: 1.0-1.45x
     the cell-by-cell sums, measured in docs/tracking.md; equal to rounding)."""
     if ls.brick is None:
@@ -508,7 +503,7 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     velocity Kalman filter fed by matching the object's features between frames, within
     search_radius pixels of the prediction) shifts each frame's start. shape_weight
     (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
-    band_layout: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
+    storage: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
     same results, bit for bit, except the NCC's window sums, equal to rounding; measured
     no faster on CPUs, docs/tracking.md).
 

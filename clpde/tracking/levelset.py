@@ -1,7 +1,8 @@
 """2D level-set machinery on the device: signed distance start, narrow band, reinitialisation.
 
 A `LevelSet` holds u on a ghost-padded grid (ghost width 2 for the slope-limited upwind
-stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w kept as a compacted index
+stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w kept as a compacted
+index
 list built on the device, and a PDE reinitialisation with Russo and Smereka's subcell fix
 that keeps the zero level set in place. The morphing flow of clpde.track steps u inside the
 band; other level-set flows can do the same.
@@ -14,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cla
 
-from .._state import deprecated
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong, compact, index_list
 
@@ -27,7 +27,8 @@ REACH = 3  # a rebuild reinitialises the band dilated by this many cells (<= MAR
 REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
 # How the band's work is laid out (docs/tracking.md, "2D bricks, measured"): a list of
 # cells, or bricks of BX x BY cells of the frame (kernels/bricks/bricks2d.h).
-LAYOUTS = {"lists": None, "bricks8x8": (8, 8), "bricks16x4": (16, 4)}
+# storage name -> brick shape (None: the band as a list of cells)
+STORAGES = {"lists": None, "bricks8x8": (8, 8), "bricks16x4": (16, 4)}
 
 
 @dataclass
@@ -75,10 +76,10 @@ class LevelSet:
     """
 
     def __init__(self, runtime, u0, band_width: float = 3.0, dtype=np.float32,
-                 layout: str = "lists", group_per_brick: bool | None = None):
-        if layout not in LAYOUTS:
-            raise InputError(f"layout must be one of {', '.join(LAYOUTS)}, not {layout!r}")
-        self.layout, self.brick = layout, LAYOUTS[layout]
+                 storage: str = "lists", group_per_brick: bool | None = None):
+        if storage not in STORAGES:
+            raise InputError(f"storage must be one of {', '.join(STORAGES)}, not {storage!r}")
+        self.storage, self.brick = storage, STORAGES[storage]
         # GPUs take a brick per work-group; forced either way only to test both on a CPU.
         self.group_per_brick = (not runtime.is_cpu if group_per_brick is None
                                 else bool(group_per_brick))
@@ -161,11 +162,6 @@ class LevelSet:
                  self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
 
     # ---- reinitialisation --------------------------------------------------------------
-    @deprecated("reinitialize", "reinitialise")
-    def reinitialise(self, iterations: int | None = None, dt: float = REINIT_DT,
-                     cells=None, subcell_fix: bool = True) -> None:
-        """Deprecated spelling of `reinitialize`."""
-
     def reinitialize(self, iterations: int | None = None, dt: float = REINIT_DT,
                      cells=None, subcell_fix: bool = True) -> None:
         """PDE reinitialisation with the Russo-Smereka subcell fix at the front, of the
@@ -193,7 +189,7 @@ class LevelSet:
                 self.launch_band(kernel, cells, *args, g.scalar(dt), np.int32(g.sx))
             self.u.swap()
 
-    # ---- the band's layout -------------------------------------------------------------
+    # ---- the band's storage -------------------------------------------------------------
     def _brick_geometry(self):
         """(nbx, nby, x0, y0, x1, y1): the bricks over the movable region, its padded
         corners."""
@@ -204,7 +200,7 @@ class LevelSet:
         return -(-(x1 - x0) // bx), -(-(y1 - y0) // by), x0, y0, x1, y1
 
     def _cells(self, mask: cla.Array):
-        """The cells where a padded device mask is nonzero, in this layout."""
+        """The cells where a padded device mask is nonzero, in this storage."""
         if self.brick is None:
             return compact(self.runtime, mask)
         nbx, nby, *corners = self._brick_geometry()
@@ -217,7 +213,7 @@ class LevelSet:
         return BrickSet(ids.indices, ids.n, mask)
 
     def band_kernel(self, filename: str, name: str, **defines):
-        """A kernel of the band's layout: list kernels as they are, brick kernels built for
+        """A kernel of the band's storage: list kernels as they are, brick kernels built for
         this brick size and launch geometry."""
         if self.brick is not None:
             defines.update(BX=self.brick[0], BY=self.brick[1],
@@ -242,7 +238,7 @@ class LevelSet:
 
     def launch_band(self, kernel, cells, *args):
         """Run a band kernel (band_kernel's) over `cells` (the band, or a BrickSet / IndexList
-        of this layout)."""
+        of this storage)."""
         if cells.n == 0:
             return None
         if self.brick is None:

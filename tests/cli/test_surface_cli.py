@@ -114,8 +114,8 @@ def test_every_scalar_render_has_a_colour_bar(tmp_path):
 
 
 def test_curvature_of_a_mesh_shows_its_shape_not_its_triangles(tmp_path):
-    from clpde.surface.runs import load_surface, run_flow
     from clpde.surface.render import to_mesh
+    from clpde.surface.runs import load_surface, run_flow
 
     path = tmp_path / "ico.ply"
     trimesh.creation.icosphere(3, radius=2.0).export(path)
@@ -143,8 +143,8 @@ def test_tv_default_flattens_the_squares_and_keeps_their_edges():
     squares into blobs). Against heat that leaves as much noise, it keeps the edges sharp."""
     from scipy import ndimage
 
-    from clpde.surface.runs import load_surface, run_flow
     from clpde.data import checker
+    from clpde.surface.runs import load_surface, run_flow
 
     surf = load_surface("torus", 48)
     h = surf.spacing

@@ -1,5 +1,5 @@
-"""The API's shared shapes: one iteration verb yielding a State, and the old names as
-deprecated aliases giving the same results."""
+"""The API's shared shapes: one iteration verb yielding a State, one keyword for each choice
+(dtype=, storage=, band_width=), and the old names gone: they are refused, not aliased."""
 
 import warnings
 
@@ -22,29 +22,26 @@ def test_planar_iterate_yields_states():
     assert [s.step for s in states] == [3, 6] and states[-1].time > 0
 
 
-def test_inpainting_iterate_and_deprecated_states():
+def test_inpainting_iterates_and_has_no_other_verb():
     image = _square()
     mask = np.zeros(image.shape, bool)
     mask[10:14, 4:20] = True
-    new = list(clpde.Inpainting(image, mask, max_steps=20).iterate(every=10))
-    with pytest.warns(DeprecationWarning, match="iterate"):
-        old = list(clpde.Inpainting(image, mask, max_steps=20).states(every=10))
-    assert all(isinstance(s, State) and s.time is None for s in new)
-    assert [s.step for s in new] == [s.step for s in old]
-    assert all(np.array_equal(a.image, b.image) for a, b in zip(new, old, strict=True))
+    run = clpde.Inpainting(image, mask, max_steps=20)
+    states = list(run.iterate(every=10))
+    assert all(isinstance(s, State) and s.time is None for s in states)
+    assert [s.step for s in states] == [10, 20] and not hasattr(run, "states")
 
 
-def test_tracker_iterate_and_deprecated_iter():
+def test_tracker_iterates_and_is_not_itself_iterable():
     yy, xx = np.mgrid[:32, :32]
     frames = np.stack([((yy - 16) ** 2 + (xx - 12 - 2 * k) ** 2 < 36).astype(np.float32)
                        for k in range(2)])
     tracker = clpde.MorphingTracker(frames, frames[0] > 0, max_iterations=6)
-    new = list(tracker.iterate())
-    with pytest.warns(DeprecationWarning, match="iterate"):
-        old = list(tracker)
-    assert all(isinstance(s, State) for s in new)
-    assert [s.step for s in new] == [s.index for s in new] == [0, 1]
-    assert all(np.array_equal(a.level_set, b.level_set) for a, b in zip(new, old, strict=True))
+    states = list(tracker.iterate())
+    assert all(isinstance(s, State) for s in states)
+    assert [s.step for s in states] == [s.index for s in states] == [0, 1]
+    with pytest.raises(TypeError):
+        iter(tracker)
 
 
 def test_new_names_warn_nothing():
@@ -53,70 +50,62 @@ def test_new_names_warn_nothing():
         list(clpde.PlanarFlow(_square(), "heat").iterate(steps=2, every=1))
 
 
-def test_dtype_everywhere_precision_deprecated():
+def test_dtype_everywhere_and_precision_gone():
     image = np.random.default_rng(0).random((16, 16))
     new = clpde.diffuse(image, steps=3, dtype=np.float64)
-    with pytest.warns(DeprecationWarning, match="precision= is deprecated; use dtype="):
-        old = clpde.diffuse(image, steps=3, precision=np.float64)
-    assert np.array_equal(new, old)
     assert not np.array_equal(new, clpde.diffuse(image, steps=3))  # float32 differs
-    new = clpde.denoise_tv(image, weight=0.2, max_steps=5, dtype=np.float64)
-    with pytest.warns(DeprecationWarning):
-        old = clpde.denoise_tv(image, weight=0.2, max_steps=5, precision=np.float64)
-    assert np.array_equal(new, old)
+    assert clpde.denoise_tv(image, weight=0.2, max_steps=5, dtype=np.float64).dtype == np.float64
     mask = np.zeros(image.shape, bool)
     mask[6:10, 6:10] = True
     assert clpde.Inpainting(image, mask, dtype=np.float64).dtype == np.float64
-    with pytest.warns(DeprecationWarning):
-        assert clpde.Inpainting(image, mask, precision=np.float64).dtype == np.float64
     frames = np.stack([image, image])
     assert clpde.MorphingTracker(frames, mask, dtype=np.float64).dtype == np.float64
-    with pytest.warns(DeprecationWarning):
-        assert clpde.MorphingTracker(frames, mask, precision=np.float64).dtype == np.float64
+    with pytest.raises(clpde.InputError, match="precision"):
+        clpde.diffuse(image, steps=3, precision=np.float64)
+    for call in (lambda: clpde.denoise_tv(image, weight=0.2, precision=np.float64),
+                 lambda: clpde.MorphingTracker(frames, mask, precision=np.float64)):
+        with pytest.raises(TypeError, match="precision"):
+            call()
 
 
-def test_dtype_and_precision_together_is_an_error():
-    with pytest.warns(DeprecationWarning), pytest.raises(clpde.InputError, match="dtype= only"):
-        clpde.diffuse(np.zeros((8, 8)), steps=1, dtype=np.float64, precision=np.float64)
-
-
-def test_deprecation_points_at_the_callers_line():
-    with pytest.warns(DeprecationWarning) as caught:
-        clpde.diffuse(np.zeros((8, 8)), steps=1, precision=np.float64)
-    assert caught[0].filename == __file__
-
-
-def test_reinitialize_is_the_spelling_reinitialise_deprecated(runtime):
+def test_reinitialize_is_the_one_spelling(runtime):
     from clpde.tracking.levelset import LevelSet
 
     y, x = np.mgrid[:32, :32]
     u0 = 2.0 * (np.hypot(x - 15.5, y - 16.2) - 8.0)
-    new, old = LevelSet(runtime, u0, band_width=3.0), LevelSet(runtime, u0, band_width=3.0)
-    new.reinitialize(iterations=10)
-    with pytest.warns(DeprecationWarning, match="reinitialize"):
-        old.reinitialise(iterations=10)
-    assert np.array_equal(new.values(), old.values())
+    level_set = LevelSet(runtime, u0, band_width=3.0)
+    level_set.reinitialize(iterations=10)
+    assert not hasattr(level_set, "reinitialise")
 
 
-def test_band_width_is_the_spelling_band_deprecated():
+def test_band_width_is_the_one_spelling():
     from clpde.regions.tracker import RegionTracker
     from clpde.surface import ImplicitSurface
 
     assert ImplicitSurface.sphere(1.0, 0.1, band_width=6.0).outer == 6.0
-    with pytest.warns(DeprecationWarning, match="band= is deprecated; use band_width="):
-        assert ImplicitSurface.sphere(1.0, 0.1, band=6.0).outer == 6.0
+    with pytest.raises(TypeError, match="band"):
+        ImplicitSurface.sphere(1.0, 0.1, band=6.0)
     h = 1 / 32
     ax = (np.arange(32) - 15.5) * h
     z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
     phi, phihat = np.sqrt(x**2 + y**2 + z**2) - 0.2, (0.05 - z)[None]
     assert RegionTracker(phi, phihat, h, band_width=4.0).width == 4.0
-    with pytest.warns(DeprecationWarning, match="band_width"):
-        assert RegionTracker(phi, phihat, h, band=4.0).width == 4.0
-    with pytest.warns(DeprecationWarning), pytest.raises(clpde.InputError, match="only"):
-        RegionTracker(phi, phihat, h, band_width=3.0, band=4.0)
+    with pytest.raises(TypeError, match="band"):
+        RegionTracker(phi, phihat, h, band=4.0)
 
 
-def test_surface_denoise_info_is_a_dataclass_with_deprecated_keys():
+def test_storage_is_the_one_keyword_for_band_storage():
+    from clpde.tracking.levelset import STORAGES
+
+    assert set(STORAGES) == {"lists", "bricks8x8", "bricks16x4"}
+    frames = np.zeros((2, 16, 16), np.float32)
+    frames[:, 4:12, 4:12] = 1
+    for old in ({"band_layout": "lists"}, {"layout": "lists"}):
+        with pytest.raises(TypeError):
+            clpde.MorphingTracker(frames, frames[0] > 0, **old)
+
+
+def test_surface_denoise_info_is_a_dataclass():
     from clpde.surface import ImplicitSurface, SurfaceDenoiseInfo
 
     surf = ImplicitSurface.sphere(1.0, 0.1)
@@ -125,14 +114,10 @@ def test_surface_denoise_info_is_a_dataclass_with_deprecated_keys():
     _, info = surf.denoise_tv(noisy, sigma=0.05, t=0.02, return_info=True)
     assert isinstance(info, SurfaceDenoiseInfo) and info.steps > 0 and info.dt > 0
     assert len(info.lam_history) == -(-info.steps // 10) and info.lam == info.lam_history[-1]
-    with pytest.warns(DeprecationWarning, match="info.residual_variance"):
-        assert info["residual_variance"] == info.residual_variance
-    with pytest.warns(DeprecationWarning):
-        assert info["lambda"] is info.lam_history and info["steps"] == info.steps
     _, fixed = surf.denoise_tv(noisy, lam=1.0, t=0.02, return_info=True)
     assert fixed.lam_history is None and fixed.residual_variance is None
-    with pytest.warns(DeprecationWarning), pytest.raises(KeyError):
-        fixed["lambda"]  # the old dict had no such key for a fixed lambda
+    with pytest.raises(TypeError):
+        info["lambda"]
 
 
 def test_inpaint_names_the_transport_options_with_their_defaults():
@@ -140,7 +125,8 @@ def test_inpaint_names_the_transport_options_with_their_defaults():
     import dataclasses
     import inspect
 
-    from clpde.inpainting.api import _TRANSPORT_ARGS, InpaintParams, inpaint
+    from clpde.inpainting.api import inpaint
+    from clpde.inpainting.transport import _TRANSPORT_ARGS, InpaintParams
 
     signature = inspect.signature(inpaint).parameters
     fields = {f.name: f.default for f in dataclasses.fields(InpaintParams)}
@@ -168,7 +154,4 @@ def test_tiled_forms_take_dtype():
 
     image = np.random.default_rng(1).random((40, 40))
     new = tiled.diffuse(image, "tv", steps=4, chunks=16, dtype=np.float64)
-    with pytest.warns(DeprecationWarning):
-        old = tiled.diffuse(image, "tv", steps=4, chunks=16, precision=np.float64)
-    assert np.array_equal(new, old)
     assert np.array_equal(new, clpde.diffuse(image, "tv", steps=4, dtype=np.float64))

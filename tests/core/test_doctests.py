@@ -1,7 +1,7 @@
 """The docstrings' examples run, and print what they say (numpydoc `Examples` sections).
 
 Only the modules listed here are collected: a global --doctest-modules would import every
-module, the deprecated aliases and the command-line package included.
+module, the command-line package included.
 """
 
 import doctest

@@ -2,8 +2,8 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 
-from clpde.fields import Field, Grid, PingPong, compact, index_list
 from clpde.errors import ClpdeError
+from clpde.fields import Field, Grid, PingPong, compact, index_list
 
 
 @pytest.mark.parametrize("ghost", [1, 2])
@@ -101,7 +101,8 @@ def test_list_kernel_touches_only_listed_cells(runtime, rng):
     src = Field.from_host(grid, rng.random((2, ny, nx)))
     dst = Field.from_host(grid, np.zeros((2, ny, nx)))
     lst = index_list(grid, mask)
-    grid.launch_list(grid.kernel("common/fields.cl", "copy_listed"), lst, src.data.data, dst.data.data)
+    grid.launch_list(grid.kernel("common/fields.cl", "copy_listed"), lst, src.data.data,
+                     dst.data.data)
     out = dst.to_host()
     expected = np.where(mask[None], src.to_host(), 0)
     np.testing.assert_array_equal(out, expected)

@@ -1,8 +1,8 @@
 """Every kernel that the host code asks for by name exists in the kernel file it names.
 
-A kernel is looked up by strings (`runtime.kernel("inpainting/transport.cl", "transport_step")`), so a
-renamed or removed kernel would only fail when that code path runs; this test reads the
-sources instead and fails at once.
+A kernel is looked up by strings (`runtime.kernel("inpainting/transport.cl",
+"inpaint_transport")`), so a renamed or removed kernel would only fail when that code path
+runs; this test reads the sources instead and fails at once.
 """
 
 import ast

@@ -80,7 +80,7 @@ def test_surfaces_and_tracking(launches):
         frames = [((xx - n / 2 - k) ** 2 + (yy - n / 2) ** 2 < (n / 5) ** 2).astype(np.float32)
                   for k in range(2)]
         for layout in ("lists", "bricks8x8"):
-            clpde.track(frames, frames[0] > 0.5, max_iterations=5, band_layout=layout)
+            clpde.track(frames, frames[0] > 0.5, max_iterations=5, storage=layout)
     for n in (32, 40):
         h = 2.0 / n
         ax = (np.arange(n) - n / 2 + 0.5) * h

@@ -5,8 +5,8 @@ import pytest
 
 import clpde
 from clpde.inpainting import multiresolution as mr
-from clpde.inpainting.colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from clpde.inpainting.api import Inpainting
+from clpde.inpainting.colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 
 
 def _edge_image(n=48, angle=0.35, width=1.5):

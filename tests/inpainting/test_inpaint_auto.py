@@ -4,8 +4,8 @@
 import numpy as np
 
 import clpde
-from clpde.inpainting import registry as inpainting
 from clpde.inpainting import choose
+from clpde.inpainting import registry as inpainting
 
 
 def _textured(ny=160, nx=200, seed=0):

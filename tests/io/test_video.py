@@ -11,8 +11,8 @@ pytest.importorskip("distributed")
 
 import clpde  # noqa: E402
 from clpde.cli import main  # noqa: E402
-from clpde.io.images import read_image, write_image  # noqa: E402
 from clpde.film.restore import inpaint_sequence
+from clpde.io.images import read_image, write_image  # noqa: E402
 from clpde.io.video import VideoWriter, read_video, video_info, write_video
 
 

@@ -6,8 +6,8 @@ from reference import planar as ref
 from skimage import data
 
 import clpde
-from clpde.fields import Field, Grid
 from clpde.errors import InputError
+from clpde.fields import Field, Grid
 
 
 def structured(ny=40, nx=56):

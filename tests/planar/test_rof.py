@@ -49,7 +49,8 @@ def test_dual_step_matches_reference(runtime, rng, nc, ny, nx, kind):
     bufs = [cla.to_device(q, a.reshape(nc, grid.plane, 2)) for a in (p, p_old)]
     p_new = cla.zeros(q, (nc, grid.plane, 2), np.float32)
     f_dev, lam_dev = cla.to_device(q, f), cla.to_device(q, lam)
-    grid.launch(grid.kernel("planar/rof.cl", "rof_dual_step"), bufs[0].data, bufs[1].data, p_new.data,
+    grid.launch(grid.kernel("planar/rof.cl", "rof_dual_step"), bufs[0].data, bufs[1].data,
+                p_new.data,
                 f_dev.data, lam_dev.data, np.float32(beta))
     got = p_new.get().reshape(shape)
     want = ref.dual_step(p.astype(float), p_old.astype(float), f.astype(float), lam, beta)

@@ -1,4 +1,5 @@
-"""NumPy references of the inpainting kernels (kernels/inpainting/transport.cl): the same discrete formulas.
+"""NumPy references of the inpainting kernels (kernels/inpainting/transport.cl): the same
+discrete formulas.
 
 Arrays are padded (nc, ny + 2, nx + 2) with Neumann ghosts (tests.reference.planar.pad_neumann);
 masks are (ny, nx). Each step returns the new interior (nc, ny, nx); cells off the kernel's

@@ -7,11 +7,11 @@ import pytest
 from reference import regions as ref
 
 import clpde
-from clpde.fields import compact
 from clpde.errors import InputError
-from clpde.regions.tracker import split_regions, surface_mesh, track_region
-from clpde.regions.mesh import along_normals
+from clpde.fields import compact
 from clpde.grid3d import Grid3D
+from clpde.regions.mesh import along_normals
+from clpde.regions.tracker import split_regions, surface_mesh, track_region
 
 # ---- kernels vs numpy references ----------------------------------------------------------
 

@@ -12,10 +12,10 @@ import pytest
 pytest.importorskip("distributed")
 
 import clpde  # noqa: E402
-from clpde.scale.batch import MANIFEST, batch  # noqa: E402
-from clpde.scale.cluster import plan_workers, start_cluster  # noqa: E402
 from clpde.cli import main  # noqa: E402
 from clpde.io.images import read_image, write_image  # noqa: E402
+from clpde.scale.batch import MANIFEST, batch  # noqa: E402
+from clpde.scale.cluster import plan_workers, start_cluster  # noqa: E402
 
 
 @pytest.fixture(scope="module")

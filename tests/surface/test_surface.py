@@ -9,8 +9,8 @@ from reference import surface as ref
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows
 from clpde.surface import band as surface_band
-from clpde.surface.exact import exp3z_exact, sphere_points
 from clpde.surface.band import _offsets
+from clpde.surface.exact import exp3z_exact, sphere_points
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,6 @@
 """Every surface flow on the band's bricks (ImplicitSurface(storage="bricks"),
-kernels/surface/bricks.cl): the brick kernels of TV / harmonic maps / diffusion along a field, Turk's
+kernels/surface/bricks.cl): the brick kernels of TV / harmonic maps / diffusion along a field,
+Turk's
 reaction-diffusion and TV's dynamic lambda against the numpy references of the same discrete
 scheme, read through the brick layout, in both launch geometries (a work-item walking whole
 bricks, as on CPUs; a work-group per brick, as on GPUs); then every flow of the public API
@@ -12,11 +13,11 @@ from reference import bricks as bref
 from reference import surface as ref
 from test_surface_flows import CASES
 
+from clpde.bricks import APRON, NODE
 from clpde.errors import InputError
 from clpde.runtime import Runtime
 from clpde.surface import ImplicitSurface
 from clpde.surface import band as surface_band
-from clpde.bricks import APRON, NODE
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,10 @@ import pytest
 from reference import bricks as bref
 from reference import surface as ref
 
+from clpde.bricks import APRON, BRICK_SIZES, EXT, NODE, REACH
 from clpde.runtime import Runtime
 from clpde.surface import ImplicitSurface
 from clpde.surface import band as surface_band
-from clpde.bricks import APRON, BRICK_SIZES, EXT, NODE, REACH
 from clpde.surface.exact import sphere_points, xy_exact
 
 
@@ -198,7 +198,8 @@ def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, in
     flow.defines = {}
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)
-    flow._extend_kernel = flow.kernel("surface/bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc,
+    flow._extend_kernel = flow.kernel("surface/bricks.cl", "brick_extend_cp", INTERP=s.interp,
+                                      NC=nc,
                                       NORMALIZE=int(normalize))
     for which, band in ((EXT, s.ext_band), (REACH, s.reach_band)):
         flow._extend(src, dst, which)

@@ -15,9 +15,9 @@ import pytest
 from reference import levelset as ref
 
 from clpde.fields import Field, PingPong
-from clpde.tracking.levelset import LevelSet, signed_distance
 from clpde.runtime import Runtime
 from clpde.tracking.contours import MorphingTracker, morph_kernel_name
+from clpde.tracking.levelset import LevelSet, signed_distance
 
 BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True),
           ("bricks16x4", True)]
@@ -28,7 +28,7 @@ def _level_set(runtime, layout, group=None, shape=(45, 61)):
     y, x = np.mgrid[:ny, :nx]
     # Two blobs, one near the frame's corner: bricks cut short at the movable region's edge.
     u = np.minimum(np.hypot(x - 20.3, y - 19.6) - 9, np.hypot(x - 54, y - 40) - 5)
-    return LevelSet(runtime, u, 3.0, np.float32, layout=layout, group_per_brick=group)
+    return LevelSet(runtime, u, 3.0, np.float32, storage=layout, group_per_brick=group)
 
 
 def _features(ls, rng, channels):
@@ -163,7 +163,7 @@ def test_tracker_with_bricks_is_the_tracker_with_lists(runtime, layout):
     frames = _frames()
 
     def run(band_layout, device=runtime, discrepancy="ncc"):
-        return list(MorphingTracker(frames, frames[0] > 0.5, band_layout=band_layout,
+        return list(MorphingTracker(frames, frames[0] > 0.5, storage=band_layout,
                                     motion=None, discrepancy=discrepancy,
                                     device=device).iterate())
 
@@ -186,8 +186,8 @@ def test_tracker_with_bricks_is_the_tracker_with_lists(runtime, layout):
         assert np.mean(b.mask != a.mask) < 1e-3
 
 
-def test_unknown_layout_is_refused(runtime):
-    with pytest.raises(Exception, match="band_layout must be one of"):
-        MorphingTracker(_frames(2), _frames(2)[0] > 0.5, band_layout="bricks4x4")
-    with pytest.raises(Exception, match="layout must be one of"):
-        LevelSet(runtime, signed_distance(_frames(1)[0] > 0.5), layout="runs")
+def test_unknown_storage_is_refused(runtime):
+    with pytest.raises(Exception, match="storage must be one of"):
+        MorphingTracker(_frames(2), _frames(2)[0] > 0.5, storage="bricks4x4")
+    with pytest.raises(Exception, match="storage must be one of"):
+        LevelSet(runtime, signed_distance(_frames(1)[0] > 0.5), storage="runs")

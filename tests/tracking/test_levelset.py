@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from reference import levelset as ref
 
-from clpde.fields import Field, Grid, index_list
 from clpde.errors import InputError
+from clpde.fields import Field, Grid, index_list
 from clpde.tracking.levelset import LevelSet, signed_distance
 
 
@@ -61,7 +61,8 @@ def test_mark_band_and_gradient_magnitude_match_reference(runtime, rng):
     img = rng.random((17, 23))
     f = _field(grid, img)
     out = f.copy()
-    grid.launch(grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data, out.data.data)
+    grid.launch(grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data,
+                out.data.data)
     np.testing.assert_allclose(out.to_host()[0], ref.gradient_magnitude(_padded(f)), atol=1e-6)
 
 
