@@ -161,8 +161,8 @@ def curvature_accuracy(storage=None):
 def cap_accuracy(h, device=None, storage="lists"):
     from scipy.ndimage import map_coordinates
 
-    from clpde.regions.mesh import split_regions
-    from clpde.regions.tracker import surface_mesh, track_region
+    from clpde.regions.mesh import split_regions, surface_mesh
+    from clpde.regions.tracker import track_region
 
     margin = 10 * h
     ax = np.arange(-1.15 - margin, 1.15 + margin + 0.5 * h, h)

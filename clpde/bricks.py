@@ -1,7 +1,7 @@
 """Narrow-band storage in dense bricks (kernels/surface/bricks.cl).
 
 The padded grid of a Grid3D is cut into bricks of BX x BY x BZ cells (a compile-time size:
-8x8x8, 8x4x4 and 4x4x4 were measured, see docs/surfaces.md). Only the bricks the band needs
+8x8x8, 8x4x4 and 4x4x4 were measured, see docs/surface_storage.md). Only the bricks the band needs
 are stored, in Morton order of their brick coordinates, so bricks near in space are near in
 memory. On the device:
 
@@ -45,7 +45,7 @@ NODE, REACH, EXT = 1, 2, 4
 # Cells of the next brick's rows kept after each row of the re-extension's source (bricks.cl)
 APRON = 3
 # Sizes measured (benchmarks/surface_accuracy.py --sections 6); the default was the fastest
-# from 64^3 to 256^3, and its aprons cost the least memory (docs/surfaces.md).
+# from 64^3 to 256^3, and its aprons cost the least memory (docs/surface_storage.md).
 BRICK_SIZES = ((4, 4, 4), (8, 4, 4), (8, 8, 8))
 DEFAULT_BRICK = (8, 8, 8)
 

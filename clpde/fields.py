@@ -7,6 +7,7 @@ ghost layer is refreshed by `Field.fill_ghosts` between steps.
 
 from __future__ import annotations
 
+import copyreg
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -15,7 +16,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 
 from .errors import ClpdeError
-from .runtime import Kernel, Runtime, _check_not_forked
+from .runtime import Kernel, Runtime, _check_not_forked, _runtime_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("common/fields.cl",)
@@ -271,3 +272,41 @@ def index_list(grid: Grid, mask: np.ndarray) -> IndexList:
     padded = np.zeros(grid.padded_shape[1:], np.uint8)
     padded[g : g + grid.ny, g : g + grid.nx] = mask
     return compact(grid.runtime, cla.to_device(grid.runtime.queue, padded))
+
+
+# ---- pickling ----------------------------------------------------------------------------
+# Device buffers pickle as their bytes, read back from the device, and arrays as views of
+# their buffers (pickle's memo keeps two references to one buffer one buffer); the runtime
+# pickles as its device's name and is rebuilt where the object is unpickled. So clpde's
+# objects that hold device state (PlanarFlow, ImplicitSurface, ...) pickle by value.
+
+
+def _reduce_buffer(buf: cl.Buffer):
+    runtime = _runtime_of(buf)
+    host = np.empty(buf.size, np.uint8)
+    cl.enqueue_copy(runtime.queue, host, buf)  # in order: after every enqueued step
+    return _receive_buffer, (runtime, host)
+
+
+def _receive_buffer(runtime: Runtime, host: np.ndarray) -> cl.Buffer:
+    buf = cl.Buffer(runtime.ctx, cl.mem_flags.READ_WRITE, max(host.size, 1))
+    cl.enqueue_copy(runtime.queue, buf, host)
+    return buf
+
+
+def _reduce_array(a):
+    return _receive_array, (_runtime_of(a), a.shape, a.dtype, a.strides, a.offset, a.base_data)
+
+
+def _receive_array(runtime: Runtime, shape, dtype, strides, offset, base):
+    return cla.Array(runtime.queue, shape, dtype, strides=strides, data=base, offset=offset)
+
+
+def _register_picklers() -> None:
+    copyreg.pickle(cl.Buffer, _reduce_buffer)
+    copyreg.pickle(cla.Array, _reduce_array)
+    copyreg.pickle(cl.CommandQueue, lambda q: (getattr, (_runtime_of(q), "queue")))
+    copyreg.pickle(cl.Context, lambda c: (getattr, (_runtime_of(c), "ctx")))
+
+
+_register_picklers()

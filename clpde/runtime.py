@@ -6,7 +6,6 @@ Everything that talks to pyopencl's platform layer lives here, so the flows only
 
 from __future__ import annotations
 
-import copyreg
 import os
 import pickle
 import tempfile
@@ -523,8 +522,7 @@ class Runtime:
 
         The work-group is fixed, ITEM_GROUP items along the first axis, and the global size
         rounded up to it: PoCL compiles a kernel anew for every work-group size it meets, and
-        the one it picks by itself follows the global size (measured: each new image size
-        cost 0.75 s of ghost-fill builds, each new band length 0.25 s of compaction builds).
+        the one it picks by itself follows the global size (docs/reliability.md has the cost).
         """
         return (-(-n // ITEM_GROUP) * ITEM_GROUP, *rest), (ITEM_GROUP,) + (1,) * len(rest)
 
@@ -545,8 +543,8 @@ class Runtime:
 
 # ---- processes ------------------------------------------------------------------------------
 # OpenCL drivers do not survive fork(): PoCL's worker threads stay in the parent, so a child
-# that enqueues anything, even on a fresh context, waits forever (measured: a fork pool of
-# diffuse calls hung). A forked child therefore gets a clear error instead, unless its
+# that enqueues anything, even on a fresh context, waits forever (a fork pool of diffuse
+# calls hung). A forked child therefore gets a clear error instead, unless its
 # parent never touched OpenCL, in which case it starts its own runtimes as usual.
 _used_opencl = False  # this process has asked OpenCL for its devices
 _forked_from: int | None = None  # the parent whose OpenCL state a forked child inherited
@@ -593,10 +591,8 @@ if hasattr(os, "register_at_fork"):
 
 
 # ---- pickling by value --------------------------------------------------------------------------
-# Device buffers pickle as their bytes, read back from the device, and arrays as views of
-# their buffers (pickle's memo keeps two references to one buffer one buffer); the runtime
-# pickles as its device's name and is rebuilt where the object is unpickled. So clpde's
-# objects that hold device state (PlanarFlow, ImplicitSurface, ...) pickle by value.
+# The runtime pickles as its device's name and is rebuilt where the object is unpickled;
+# device buffers and arrays pickle by value (fields.py registers how).
 
 
 def _receive_runtime(platform_name: str, device_name: str) -> Runtime:
@@ -615,38 +611,3 @@ def _runtime_of(obj) -> Runtime:
             return runtime
     raise pickle.PicklingError(f"cannot pickle {type(obj).__name__} of a context clpde did not "
                                "make")
-
-
-def _reduce_buffer(buf: cl.Buffer):
-    runtime = _runtime_of(buf)
-    host = np.empty(buf.size, np.uint8)
-    cl.enqueue_copy(runtime.queue, host, buf)  # in order: after every enqueued step
-    return _receive_buffer, (runtime, host)
-
-
-def _receive_buffer(runtime: Runtime, host: np.ndarray) -> cl.Buffer:
-    buf = cl.Buffer(runtime.ctx, cl.mem_flags.READ_WRITE, max(host.size, 1))
-    cl.enqueue_copy(runtime.queue, buf, host)
-    return buf
-
-
-def _reduce_array(a):
-    return _receive_array, (_runtime_of(a), a.shape, a.dtype, a.strides, a.offset, a.base_data)
-
-
-def _receive_array(runtime: Runtime, shape, dtype, strides, offset, base):
-    import pyopencl.array as cla
-
-    return cla.Array(runtime.queue, shape, dtype, strides=strides, data=base, offset=offset)
-
-
-def _register_picklers() -> None:
-    import pyopencl.array as cla
-
-    copyreg.pickle(cl.Buffer, _reduce_buffer)
-    copyreg.pickle(cla.Array, _reduce_array)
-    copyreg.pickle(cl.CommandQueue, lambda q: (getattr, (_runtime_of(q), "queue")))
-    copyreg.pickle(cl.Context, lambda c: (getattr, (_runtime_of(c), "ctx")))
-
-
-_register_picklers()

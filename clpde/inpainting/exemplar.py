@@ -400,6 +400,46 @@ def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
 # ---------------------------------------------------------------------------------------
 
 
+def _guides(data, colour, hole, box, runtime, dtype, guide, structure, lattice):
+    """(guide planes of the box or None, whether its surroundings are periodic): the user's
+    guide, and the coherence fill of the hole weighted by `structure` (automatic: 1, or 0
+    where the surroundings repeat)."""
+    guides = None
+    if guide is not None:
+        guide = np.asarray(guide, np.float64)
+        guide = guide[None] if guide.ndim == 2 else guide
+        if guide.shape[1:] != data.shape[1:]:
+            raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
+                             f"{data.shape[2]}) planes known everywhere, the hole included")
+        guides = guide[(slice(None),) + box]
+    periodic = _periodic(colour, hole) if structure is None or lattice else False
+    if structure is None:
+        # Automatic: the guide, unless the surroundings repeat (periodic texture, stripes),
+        # where copies can be exact and a smooth fill would pull them away (choose.py).
+        sw = 0.0 if periodic else 1.0
+    else:
+        sw = float(structure)
+    if sw > 0:
+        filled = coherence.solve(colour, hole, runtime, dtype=dtype, **_guide_params(hole))
+        guides = sw * filled if guides is None else np.concatenate([guides, sw * filled])
+    return guides, periodic
+
+
+def _pyramid(colour, hole, guides, patch, nlevels):
+    """[(colour, hole, guides)] from fine to coarse, while a level has sources to copy."""
+    r = patch // 2
+    pyramid = [(colour, hole, guides)]
+    for _ in range(nlevels - 1):
+        c, h, g = pyramid[-1]
+        c, h = _downsample(c, h)
+        if min(h.shape) < patch + 2 or not _valid_sources(h, r).any():
+            break  # a level with nothing to copy from would only guess
+        if g is not None:  # guides are known everywhere: plain 2 x 2 means
+            g = _downsample(g, np.zeros(g.shape[1:], bool))[0]
+        pyramid.append((c, h, g))
+    return pyramid
+
+
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
           patch=DEFAULTS["patch"], search=DEFAULTS["search"], iterations=DEFAULTS["iterations"],
           fine_iterations=DEFAULTS["fine_iterations"],
@@ -449,25 +489,8 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     hole = omega[box]
     colour = np.asarray(data[(slice(None),) + box], np.float64).copy()
     colour[:, hole] = 0  # values there are unknown, may be NaN, and are never read
-    guides = None
-    if guide is not None:
-        guide = np.asarray(guide, np.float64)
-        guide = guide[None] if guide.ndim == 2 else guide
-        if guide.shape[1:] != data.shape[1:]:
-            raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
-                             f"{data.shape[2]}) planes known everywhere, the hole included")
-        guides = guide[(slice(None),) + box]
-    periodic = _periodic(colour, hole) if structure is None or lattice else False
-    if structure is None:
-        # Automatic: the guide, unless the surroundings repeat (periodic texture, stripes),
-        # where copies can be exact and a smooth fill would pull them away (choose.py).
-        sw = 0.0 if periodic else 1.0
-    else:
-        sw = float(structure)
-    if sw > 0:
-
-        filled = coherence.solve(colour, hole, runtime, dtype=dtype, **_guide_params(hole))
-        guides = sw * filled if guides is None else np.concatenate([guides, sw * filled])
+    guides, periodic = _guides(data, colour, hole, box, runtime, dtype, guide, structure,
+                               lattice)
     if min(hole.shape) < patch + 2:
         raise InputError(
             f"the region around the hole ({hole.shape[0]}x{hole.shape[1]} px) is smaller than "
@@ -475,15 +498,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         )
 
     nlevels = p["levels"] or _levels_for(hole, r, hole.shape)
-    pyramid = [(colour, hole, guides)]
-    for _ in range(nlevels - 1):
-        c, h, g = pyramid[-1]
-        c, h = _downsample(c, h)
-        if min(h.shape) < patch + 2 or not _valid_sources(h, r).any():
-            break  # a level with nothing to copy from would only guess
-        if g is not None:  # guides are known everywhere: plain 2 x 2 means
-            g = _downsample(g, np.zeros(g.shape[1:], bool))[0]
-        pyramid.append((c, h, g))
+    pyramid = _pyramid(colour, hole, guides, patch, nlevels)
 
     # Automatic feature weight: 1 when the hole needs a pyramid. A hole thin enough for one
     # level (text, scratches) has most of each target patch known, so colours alone tell

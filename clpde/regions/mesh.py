@@ -153,3 +153,60 @@ def region_colours(labels, palette=None) -> np.ndarray:
     inside = labels >= 0
     rgb[inside] = colours[labels[inside] % len(colours)]
     return rgb
+
+
+def _region_functions(phi, region, spacing, origin, mesh=None):
+    """Phi-hat volumes (L, nz, ny, nx) from the `region` input (a vertex mask or labels refer
+    to `mesh`, by default the starting mesh of phi), and whether they partition the surface
+    (integer labels: every point lies in one region)."""
+    region_arr = region if isinstance(region, (list, tuple)) else [region]
+    arrays = [np.asarray(r) for r in region_arr]
+    if all(a.shape == phi.shape for a in arrays):
+        out = np.stack([a.astype(np.float64) for a in arrays])
+        if not np.all(np.isfinite(out)):
+            raise InputError("the region functions contain NaN or infinite values")
+        return out, False
+    if len(arrays) == 1 and arrays[0].ndim == 1:
+        marks = arrays[0]
+        if mesh is None:
+            mesh = surface_mesh(phi, spacing, origin)
+            if len(marks) != len(mesh.vertices):
+                raise InputError(
+                    f"a vertex mask needs one entry per vertex of the starting mesh "
+                    f"(clpde.regions.surface_mesh(phi, spacing) has {len(mesh.vertices)}), got "
+                    f"{len(marks)}; or pass mesh= the mesh whose vertices it marks")
+        else:
+            mesh = _as_trimesh(mesh)
+            if len(marks) != len(mesh.vertices):
+                raise InputError(f"a vertex mask needs one entry per vertex of mesh= "
+                                 f"({len(mesh.vertices)} vertices), got {len(marks)}")
+        if marks.dtype == bool:
+            masks = [marks]
+        elif np.issubdtype(marks.dtype, np.integer):
+            values = np.unique(marks)
+            if len(values) < 2:
+                raise InputError("vertex labels need at least two different values")
+            masks = [marks == v for v in values]
+        else:
+            raise InputError("a vertex mask must be bool (one region) or integer labels, not "
+                             f"{marks.dtype}")
+        partition = marks.dtype != bool
+        return functions_from_mask(phi, spacing, origin, mesh, masks), partition
+    raise InputError(
+        f"region must be a vertex mask/labels of the starting mesh (1-D), an implicit function of "
+        f"phi's shape {phi.shape}, or a list of such functions; got shape(s) "
+        f"{[a.shape for a in arrays]}"
+    )
+
+
+def _as_trimesh(mesh):
+    """A trimesh.Trimesh from a Trimesh or a (vertices, faces) pair (not copied)."""
+    import trimesh
+
+    if isinstance(mesh, trimesh.Trimesh):
+        return mesh
+    try:
+        vertices, faces = mesh
+        return trimesh.Trimesh(np.asarray(vertices, np.float64), np.asarray(faces), process=False)
+    except (TypeError, ValueError):
+        raise InputError("mesh must be a trimesh.Trimesh or a (vertices, faces) pair") from None

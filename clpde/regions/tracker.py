@@ -23,9 +23,7 @@ sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
 
 from __future__ import annotations
 
-import inspect
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
 
 import numpy as np
 import pyopencl.array as cla
@@ -33,13 +31,15 @@ from numpy.typing import ArrayLike, DTypeLike
 from tqdm.auto import tqdm  # (the bars' type)
 
 from .._progress import progress_bar
-from .._state import DeviceLike, State
+from .._state import DeviceLike
 from ..errors import InputError
 from ..fields import IndexList, check_fits, compact
 from ..grid3d import Grid3D
 from ..imagedata import positive as _positive
 from ..runtime import get_runtime
-from .mesh import along_normals, functions_from_mask, region_colours, split_regions, surface_mesh
+from .frames import RegionFrame, make_frame
+from .mesh import _region_functions, along_normals
+from .speed import _speed_setup
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions/regions.cl",)
@@ -79,29 +79,7 @@ EXTEND_FROM = (0.8, 1.5)
 MIN_REINIT_ITERATIONS = 2
 MIN_EXTEND_ITERATIONS = 4
 
-__all__ = ["SPEEDS", "RegionFrame", "RegionTracker", "surface_mesh", "track_region"]
-
-
-@dataclass
-class RegionFrame(State):
-    """The surface and its regions at one saved time."""
-
-    time: float
-    mesh: object  # trimesh.Trimesh with per-vertex region colours
-    face_labels: np.ndarray  # region index of each face, -1 outside every region
-    boundaries: list = field(default_factory=list)  # (k, 3) points on each region's boundary
-    phi: np.ndarray | None = None  # world-unit level sets, (nz, ny, nx)
-    phihat: np.ndarray | None = None  # (regions, nz, ny, nx)
-    step: int = 0  # the tracker's steps so far
-
-    def area(self, label: int | None = None) -> float:
-        """Area of region `label` (of the whole surface when None)."""
-        areas = self.mesh.area_faces
-        return float(areas.sum() if label is None else areas[self.face_labels == label].sum())
-
-    def area_fraction(self, label: int = 0) -> float:
-        return self.area(label) / self.area()
-
+__all__ = ["SPEEDS", "RegionTracker", "region_tracker", "track_region"]
 
 
 class RegionTracker:
@@ -494,121 +472,6 @@ def region_tracker(phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
     return STORAGE_CLASSES[storage](phi, phihat, spacing, **options)
 
 
-def _region_functions(phi, region, spacing, origin, mesh=None):
-    """Phi-hat volumes (L, nz, ny, nx) from the `region` input (a vertex mask or labels refer
-    to `mesh`, by default the starting mesh of phi), and whether they partition the surface
-    (integer labels: every point lies in one region)."""
-    region_arr = region if isinstance(region, (list, tuple)) else [region]
-    arrays = [np.asarray(r) for r in region_arr]
-    if all(a.shape == phi.shape for a in arrays):
-        out = np.stack([a.astype(np.float64) for a in arrays])
-        if not np.all(np.isfinite(out)):
-            raise InputError("the region functions contain NaN or infinite values")
-        return out, False
-    if len(arrays) == 1 and arrays[0].ndim == 1:
-        marks = arrays[0]
-        if mesh is None:
-            mesh = surface_mesh(phi, spacing, origin)
-            if len(marks) != len(mesh.vertices):
-                raise InputError(
-                    f"a vertex mask needs one entry per vertex of the starting mesh "
-                    f"(clpde.regions.surface_mesh(phi, spacing) has {len(mesh.vertices)}), got "
-                    f"{len(marks)}; or pass mesh= the mesh whose vertices it marks")
-        else:
-            mesh = _as_trimesh(mesh)
-            if len(marks) != len(mesh.vertices):
-                raise InputError(f"a vertex mask needs one entry per vertex of mesh= "
-                                 f"({len(mesh.vertices)} vertices), got {len(marks)}")
-        if marks.dtype == bool:
-            masks = [marks]
-        elif np.issubdtype(marks.dtype, np.integer):
-            values = np.unique(marks)
-            if len(values) < 2:
-                raise InputError("vertex labels need at least two different values")
-            masks = [marks == v for v in values]
-        else:
-            raise InputError("a vertex mask must be bool (one region) or integer labels, not "
-                             f"{marks.dtype}")
-        partition = marks.dtype != bool
-        return functions_from_mask(phi, spacing, origin, mesh, masks), partition
-    raise InputError(
-        f"region must be a vertex mask/labels of the starting mesh (1-D), an implicit function of "
-        f"phi's shape {phi.shape}, or a list of such functions; got shape(s) "
-        f"{[a.shape for a in arrays]}"
-    )
-
-
-def _as_trimesh(mesh):
-    """A trimesh.Trimesh from a Trimesh or a (vertices, faces) pair (not copied)."""
-    import trimesh
-
-    if isinstance(mesh, trimesh.Trimesh):
-        return mesh
-    try:
-        vertices, faces = mesh
-        return trimesh.Trimesh(np.asarray(vertices, np.float64), np.asarray(faces), process=False)
-    except (TypeError, ValueError):
-        raise InputError("mesh must be a trimesh.Trimesh or a (vertices, faces) pair") from None
-
-
-def _time_dependent(beta) -> bool:
-    """True for a callable taking (x, y, z, t), False for one taking (x, y, z)."""
-    try:
-        params = inspect.signature(beta).parameters.values()
-    except (TypeError, ValueError):  # builtins without a signature: f(x, y, z)
-        return False
-    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
-    return len(positional) >= 4
-
-
-def _beta_array(values, shape, when="") -> np.ndarray:
-    """A user's beta (number or array) as an array of phi's shape, checked."""
-    arr = np.asarray(values, np.float64)
-    try:
-        arr = np.broadcast_to(arr, shape)
-    except ValueError:
-        raise InputError(f"a beta array{when} must have phi's shape {shape}, got "
-                         f"{arr.shape}") from None
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"beta{when} contains NaN or infinite values")
-    return arr
-
-
-def _speed_setup(beta, target, weight, h, shape, coords):
-    """(speed name, scale, aux array, aux as a function of time or None) for RegionTracker
-    from the user's beta."""
-    if isinstance(beta, str):
-        if beta == "mean-curvature":
-            return "mean-curvature", weight / h**2, None, None
-        if beta == "gaussian":
-            return "gaussian", weight / h**3, None, None
-        if beta == "morph":
-            if target is None:
-                raise InputError("beta='morph' needs target=: the target shape's signed distance "
-                                 "volume")
-            target = np.asarray(target, np.float64)
-            if target.shape != shape:
-                raise InputError(f"target must have phi's shape {shape}, got {target.shape}")
-            return "morph", weight, target, None
-        raise InputError(f"beta must be a number, an array, a callable or one of "
-                         f"'mean-curvature', 'gaussian', 'morph'; not {beta!r}")
-    if callable(beta):
-        if _time_dependent(beta):
-            def beta_at(t):
-                return _beta_array(beta(*coords, t), shape, f" (the callable at t = {t:g})")
-
-            return "array", -weight / h, beta_at(0.0), beta_at
-        beta = _beta_array(beta(*coords), shape, " (the callable's result)")
-    arr = np.asarray(beta, np.float64)
-    if arr.ndim == 0:
-        if not np.isfinite(arr):
-            raise InputError(f"beta must be finite, not {beta!r}")
-        return "constant", -weight * float(arr) / h, None, None
-    if arr.shape != shape:
-        raise InputError(f"a beta array must have phi's shape {shape}, got {arr.shape}")
-    return "array", -weight / h, _beta_array(arr, shape), None
-
-
 def track_region(phi: ArrayLike, region: ArrayLike | list,
                  beta: float | str | ArrayLike | Callable = 1.0, t: float = 1.0,
                  spacing: float = 1.0, saves: int | Iterable[float] = 1, *,
@@ -707,31 +570,3 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                       bar_format=time_format) as bar:
         return list(tracker.iterate(times, origin=origin, keep_volumes=keep_volumes,
                                     palette=palette, partition=partition, bar=bar))
-
-
-def make_frame(tracker: RegionTracker, time: float, origin: ArrayLike, keep_volumes: bool = False,
-               palette: ArrayLike | None = None, partition: bool = False) -> RegionFrame:
-    """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region (with partition,
-    every face in one: slivers where the labels' boundaries part by rounding go to the
-    nearest region)."""
-    import trimesh
-    from scipy.ndimage import map_coordinates
-
-    phi, phihat = tracker.volumes()
-    h = tracker.h
-    if not (phi.min() < 0 < phi.max()):  # gone between two band rebuilds
-        raise InputError(f"the surface vanished by t = {time:g} (Phi has no zero level set "
-                         "left on the grid); track for a shorter time")
-    mesh = surface_mesh(phi, h, origin)
-    idx = ((np.asarray(mesh.vertices) - origin) / h)[:, ::-1].T  # (z, y, x) index coordinates
-    vals = np.stack([map_coordinates(p, idx, order=1, mode="nearest") for p in phihat], axis=1)
-    verts, faces, labels, boundaries = split_regions(mesh.vertices, vals, mesh.faces, partition)
-    vertex_label = np.full(len(verts), -1)
-    vertex_label[faces.reshape(-1)] = np.repeat(labels, 3)
-    rgb = region_colours(vertex_label, palette)
-    colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8),
-                              np.full((len(rgb), 1), 255, np.uint8)], 1)
-    out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
-    return RegionFrame(time, out, labels, boundaries,
-                       phi if keep_volumes else None, phihat if keep_volumes else None,
-                       tracker.steps)

@@ -6,14 +6,101 @@ into the other's members.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pyopencl.array as cla
 
 from ..bricks import DEFAULT_BRICK, EXT, NODE, REACH, BrickBand, dilate_axes
 from ..errors import InputError
+from ..fields import compact
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("surface/bricks.cl", "surface/extend.cl", "surface/flows.cl", "surface/heat.cl")
+
+
+# Interpolation nodes per axis.
+_NODES = {3: 4, 1: 2}
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, stacklevel=3)
+
+
+# ---- the band's construction, once per psi (ImplicitSurface._set_psi) ----------------------
+def narrow_bands(surf) -> None:
+    """node_band, its runs, reach_band and reach_band's closest-point stencils."""
+    g, q = surf.grid, surf.runtime.queue
+    nodes = cla.zeros(q, g.padded_shape, np.uint8)
+    g.launch_list(g.kernel("surface/band.cl", "mark_nodes"), surf.ext_band,
+                  surf.cp_base.data, nodes.data, *g.strides(), np.int32(_NODES[surf.interp]))
+    surf.node_band = compact(surf.runtime, nodes)
+    surf.step_runs = g.runs(surf.node_band)
+    reach = cla.zeros(q, g.padded_shape, np.uint8)
+    g.launch_list(g.kernel("surface/band.cl", "mark_stencil"), surf.node_band, reach.data,
+                  *g.strides())
+    surf.reach_band = compact(surf.runtime, reach)
+    surf.reach_stencils = cp_stencils(surf, surf.reach_band,
+                                            closest_points(surf, surf.reach_band))
+
+def closest_points(surf, band):
+    """Closest points of a band's cells, padded index units, on the device."""
+    g, q = surf.grid, surf.runtime.queue
+    n = max(band.n, 1)
+    cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
+    g.launch_list(
+        g.kernel("surface/band.cl", "closest_points"), band, surf.psi_dev.data,
+        g.scalar(1.0 / surf.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
+    )
+    return cp
+
+def cp_stencils(surf, band, cp):
+    """Per band cell: the flat index of its closest point's first interpolation node and
+    the point's offsets (3, n) from floor(cp), on the device (psi is fixed, so the
+    re-extension after each step only gathers and weighs)."""
+    g, q = surf.grid, surf.runtime.queue
+    n = max(band.n, 1)
+    base = cla.empty(q, n, np.int32)
+    frac = cla.empty(q, (3, n), g.dtype)
+    g.launch_list(
+        g.kernel("surface/band.cl", "cp_stencils"), band, *(c.data for c in cp),
+        *g.strides(), *g.padded_dims(), np.int32(surf.interp), base.data, frac.data,
+    )
+    return base, frac
+
+def check_band_clear_of_border(surf) -> None:
+    """Band cells must keep 2 cells from the volume's border, so that every stencil
+    and interpolation node stays inside the padded buffer's meaningful values."""
+    band = np.abs(surf.psi) < surf.outer * surf.spacing
+    if not band.any():
+        raise InputError("the band is empty: the spacing is too coarse for this surface")
+    m = 2
+    edge = np.ones_like(band)
+    edge[m:-m, m:-m, m:-m] = False
+    if np.any(band & edge):
+        raise InputError(
+            f"the band around the surface (|psi| < {surf.outer:.1f} cells) reaches within "
+            f"{m} cells of the volume's border: pad psi by {int(np.ceil(surf.outer)) + m} "
+            "cells a side (e.g. from_function with larger bounds)"
+        )
+    if surf.step_band.n == 0:
+        raise InputError("the band is empty: the spacing is too coarse for this surface")
+    # a medial axis (|grad psi| far from 1) inside the band means thin features are
+    # resolved by too few cells: the flows still run but lose accuracy there
+    # central differences at the band's cells only (a whole-volume gradient would take
+    # three float64 volumes); band cells are 2 cells from the border, checked above
+    cells = np.flatnonzero(band)
+    p = surf.psi.reshape(-1)
+    _, ny, nx = surf.shape
+    diffs = [p[cells + s] - p[cells - s] for s in (1, nx, nx * ny)]
+    slope = np.sqrt(sum(d**2 for d in diffs)) / (2 * surf.spacing)
+    bad = float(np.mean(slope < 0.5))
+    if bad > 0:
+        _warn(
+            f"the grid is too coarse for this shape's thinnest features: {100 * bad:.2f}% "
+            "of the band lies on a medial axis (|grad psi| < 0.5); use a finer spacing "
+            f"(below {surf.spacing / 2:g}) or a narrower band"
+        )
 
 
 class Band:

@@ -15,7 +15,6 @@ The steps themselves run on two narrower lists cut to what they need (same resul
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -26,10 +25,11 @@ from numpy.typing import ArrayLike, DTypeLike
 from .._progress import progress_range
 from .._state import DeviceLike
 from ..errors import InputError
-from ..fields import check_fits, compact
+from ..fields import check_fits
 from ..grid3d import Grid3D
 from ..imagedata import positive as _positive
 from ..runtime import get_runtime
+from . import band as band_setup
 from . import flows as _flows
 from . import render as _render
 from .band import FLOW_STATES, Band, BandFlow, extend_defines, make_flow
@@ -45,8 +45,6 @@ INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 STORAGES = tuple(FLOW_STATES)  # "lists", "bricks"
 # Farthest interpolation node from a point, in cells: the step band must contain them.
 _NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
-# Interpolation nodes per axis.
-_NODES = {3: 4, 1: 2}
 
 
 def _interp_code(interpolation: str) -> int:
@@ -116,7 +114,7 @@ class ImplicitSurface:
         stepped over band lists, or "bricks", only the band's 8^3 bricks (bricks.py). Every
         flow runs in both, through the same per-cell code (kernels/surface/flux.h), with the
         same results. On CPUs the bricks took 0.65-1.05x the lists' time a step and 12-71%
-        less memory from 217^3 on, up to 1.5x the time below (docs/surfaces.md)."""
+        less memory from 217^3 on, up to 1.5x the time below (docs/surface_storage.md)."""
         return self._storage
 
     @storage.setter
@@ -137,26 +135,11 @@ class ImplicitSurface:
         self.step_band = self.grid.band(psi_cells, self.inner)
         self.ext_band = self.grid.band(psi_cells, self.outer)
         if self._check_border:
-            self._check_band_clear_of_border()
-        self.cp = self._closest_points(self.ext_band)
-        self.cp_base, self.cp_frac = self._cp_stencils(self.ext_band, self.cp)
-        self._narrow_bands()
+            band_setup.check_band_clear_of_border(self)
+        self.cp = band_setup.closest_points(self, self.ext_band)
+        self.cp_base, self.cp_frac = band_setup.cp_stencils(self, self.ext_band, self.cp)
+        band_setup.narrow_bands(self)
         self.band = Band(self)  # data on this psi's band (band.py)
-
-    def _narrow_bands(self) -> None:
-        """node_band, its runs, reach_band and reach_band's closest-point stencils."""
-        g, q = self.grid, self.runtime.queue
-        nodes = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface/band.cl", "mark_nodes"), self.ext_band,
-                      self.cp_base.data, nodes.data, *g.strides(), np.int32(_NODES[self.interp]))
-        self.node_band = compact(self.runtime, nodes)
-        self.step_runs = g.runs(self.node_band)
-        reach = cla.zeros(q, g.padded_shape, np.uint8)
-        g.launch_list(g.kernel("surface/band.cl", "mark_stencil"), self.node_band, reach.data,
-                      *g.strides())
-        self.reach_band = compact(self.runtime, reach)
-        self.reach_stencils = self._cp_stencils(self.reach_band,
-                                                self._closest_points(self.reach_band))
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
@@ -173,7 +156,7 @@ class ImplicitSurface:
             scale = _slope_at_surface(psi, spacing) if psi.ndim == 3 else 1.0
             surf = cls(psi / scale, spacing, origin, _check_border=False, **options)
             surf.reinitialize()
-            surf._check_band_clear_of_border()
+            band_setup.check_band_clear_of_border(surf)
             return surf
         return cls(psi, spacing, origin, **options)
 
@@ -331,65 +314,6 @@ class ImplicitSurface:
         x, y, z = self.coordinates()
         d = self.psi / norm
         return x - d * g[2], y - d * g[1], z - d * g[0]
-
-    def _closest_points(self, band):
-        """Closest points of a band's cells, padded index units, on the device."""
-        g, q = self.grid, self.runtime.queue
-        n = max(band.n, 1)
-        cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
-        g.launch_list(
-            g.kernel("surface/band.cl", "closest_points"), band, self.psi_dev.data,
-            g.scalar(1.0 / self.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
-        )
-        return cp
-
-    def _cp_stencils(self, band, cp):
-        """Per band cell: the flat index of its closest point's first interpolation node and
-        the point's offsets (3, n) from floor(cp), on the device (psi is fixed, so the
-        re-extension after each step only gathers and weighs)."""
-        g, q = self.grid, self.runtime.queue
-        n = max(band.n, 1)
-        base = cla.empty(q, n, np.int32)
-        frac = cla.empty(q, (3, n), g.dtype)
-        g.launch_list(
-            g.kernel("surface/band.cl", "cp_stencils"), band, *(c.data for c in cp),
-            *g.strides(), *g.padded_dims(), np.int32(self.interp), base.data, frac.data,
-        )
-        return base, frac
-
-    def _check_band_clear_of_border(self) -> None:
-        """Band cells must keep 2 cells from the volume's border, so that every stencil
-        and interpolation node stays inside the padded buffer's meaningful values."""
-        band = np.abs(self.psi) < self.outer * self.spacing
-        if not band.any():
-            raise InputError("the band is empty: the spacing is too coarse for this surface")
-        m = 2
-        edge = np.ones_like(band)
-        edge[m:-m, m:-m, m:-m] = False
-        if np.any(band & edge):
-            raise InputError(
-                f"the band around the surface (|psi| < {self.outer:.1f} cells) reaches within "
-                f"{m} cells of the volume's border: pad psi by {int(np.ceil(self.outer)) + m} "
-                "cells a side (e.g. from_function with larger bounds)"
-            )
-        if self.step_band.n == 0:
-            raise InputError("the band is empty: the spacing is too coarse for this surface")
-        # a medial axis (|grad psi| far from 1) inside the band means thin features are
-        # resolved by too few cells: the flows still run but lose accuracy there
-        # central differences at the band's cells only (a whole-volume gradient would take
-        # three float64 volumes); band cells are 2 cells from the border, checked above
-        cells = np.flatnonzero(band)
-        p = self.psi.reshape(-1)
-        _, ny, nx = self.shape
-        diffs = [p[cells + s] - p[cells - s] for s in (1, nx, nx * ny)]
-        slope = np.sqrt(sum(d**2 for d in diffs)) / (2 * self.spacing)
-        bad = float(np.mean(slope < 0.5))
-        if bad > 0:
-            _warn(
-                f"the grid is too coarse for this shape's thinnest features: {100 * bad:.2f}% "
-                "of the band lies on a medial axis (|grad psi| < 0.5); use a finer spacing "
-                f"(below {self.spacing / 2:g}) or a narrower band"
-            )
 
     def reinitialize(self, iterations: int | None = None,
                      progress: bool | None = None) -> ImplicitSurface:
@@ -641,10 +565,6 @@ def _torus_sdf(big: float, small: float, shift: float):
         return np.sqrt(ring**2 + z**2) - small
 
     return sdf
-
-
-def _warn(message: str) -> None:
-    warnings.warn(message, stacklevel=3)
 
 
 def _slope_at_surface(psi: np.ndarray, spacing: float) -> float:

@@ -59,11 +59,9 @@ def test_no_long_modules(metrics):
     assert metrics.measure(ROOT)["modules_over_600_lines"] == []
 
 
-@PENDING
 def test_no_long_functions(metrics):
     assert metrics.long_functions(ROOT) == []
 
 
-@PENDING
 def test_no_deprecation_shims(metrics):
     assert metrics.shims(ROOT) == []

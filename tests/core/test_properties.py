@@ -279,7 +279,7 @@ def test_track_region(phi, data):
     elif region_kind == "shape":
         region = np.zeros(phi.shape[:2])
     else:
-        from clpde.regions.tracker import surface_mesh
+        from clpde.regions.mesh import surface_mesh
 
         try:
             n = len(surface_mesh(np.asarray(phi, np.float64), 1.0, (0, 0, 0)).vertices)

@@ -10,7 +10,8 @@ from scipy.ndimage import binary_dilation
 
 from clpde.errors import InputError
 from clpde.regions.bricks import BIT_REINIT, BIT_STEP
-from clpde.regions.tracker import RegionTracker, make_frame, region_tracker, track_region
+from clpde.regions.frames import make_frame
+from clpde.regions.tracker import RegionTracker, region_tracker, track_region
 
 N = 32  # grid cells a side of the kernels' tests
 

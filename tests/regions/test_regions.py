@@ -10,8 +10,8 @@ import clpde
 from clpde.errors import InputError
 from clpde.fields import compact
 from clpde.grid3d import Grid3D
-from clpde.regions.mesh import along_normals
-from clpde.regions.tracker import split_regions, surface_mesh, track_region
+from clpde.regions.mesh import along_normals, split_regions, surface_mesh
+from clpde.regions.tracker import track_region
 
 # ---- kernels vs numpy references ----------------------------------------------------------
 
@@ -335,7 +335,8 @@ def test_reinitialisation_keeps_an_oblique_region():
     """A static sphere cut by a plane at 60 degrees, reinitialised 20 times: the cap stays
     (with the plane not first made constant along the normals, the extension before each
     reinitialisation moved the cut once, by 1.6% of the cap's area)."""
-    from clpde.regions.tracker import RegionTracker, make_frame
+    from clpde.regions.frames import make_frame
+    from clpde.regions.tracker import RegionTracker
 
     h = 1 / 64
     ax = (np.arange(64) - 31.5) * h
