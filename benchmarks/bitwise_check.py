@@ -7,8 +7,8 @@
 Float inputs, so no rounding to uint8 hides a difference: inpainting by transport (both
 stencils, the quartic root, both rotations, a soft mask, double precision, damage on the
 border for the ghost kernels), Navier-Stokes and coherence inpainting (the CG sums), heat and
-TV with the dynamic lambda on a sphere (the chunk sums). Issue 12's kernel-header moves were
-checked with it.
+TV with the dynamic lambda on a sphere (the chunk sums). The kernels' move into
+folders was checked with it.
 """
 
 import sys

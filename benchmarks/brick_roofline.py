@@ -1,4 +1,4 @@
-"""What bounds a heat step plus its re-extension on the band, lists against bricks (issue 16).
+"""What bounds a heat step plus its re-extension on the band, lists against bricks.
 
     python benchmarks/brick_roofline.py [--n 217] [--steps 10] [--reps 5] [--json PATH]
 

@@ -181,7 +181,7 @@ def ssim_in_mask(result, truth, mask):
     return float(full[mask].mean())
 
 
-# ---- item 1: why oblique isophotes fail ----------------------------------------------------
+# ---- why oblique isophotes fail ----------------------------------------------------
 def _rate_residual(image, stencil):
     """max |I_t| of one transport step on the exact image, away from the border (numpy
     reference of the kernel, tests/reference/inpaint.py)."""
@@ -208,7 +208,7 @@ def _from_truth(image, mask, steps, **params):
 
 def diagnose():
     """Experiments on a straight edge and on sharp stripes crossing a 6-pixel slot at 0, 30,
-    45, 60 and 90 degrees: PSNR in the slot for the candidates of issue 14 (the start, the
+    45, 60 and 90 degrees: PSNR in the slot for the candidates (the start, the
     stopping rule, the pre-smoothing, the diffusion interleave, the stencil), the residual
     of the exact image, and the drift of a run started from the exact image."""
     from skimage.restoration import inpaint_biharmonic
@@ -490,7 +490,7 @@ def main(argv=None):
     parser.add_argument("--no-huge", action="store_true", help="skip the 20000x20000 row")
     parser.add_argument("--methods", nargs="*", default=None, help="only these methods")
     parser.add_argument("--diagnose", action="store_true",
-                        help="only the experiments on oblique isophotes (issue 14, item 1)")
+                        help="only the experiments on oblique isophotes")
     args = parser.parse_args(argv)
     import clpde
 

@@ -1,4 +1,4 @@
-"""Benchmark cases for texture inpainting (issue 15), shared with benchmarks/inpaint_quality.py.
+"""Benchmark cases for texture inpainting, shared with benchmarks/inpaint_quality.py.
 
     from inpaint_texture_cases import texture_cases, edge_energy
 

@@ -108,7 +108,7 @@ def clpde_method(name):
         import clpde
 
         axis = -1 if np.asarray(image).ndim == 3 else None
-        try:  # the dispatcher of issue 14 (clpde.inpaint(..., method=...)), once merged
+        try:  # the dispatcher (clpde.inpaint(..., method=...)), once merged
             return clpde.inpaint(image, mask, channel_axis=axis, method=name)
         except TypeError:
             pass

@@ -6,7 +6,7 @@
 A sphere of radius 0.7 on a 40^3 grid (spacing 0.08, float32) with two regions (a cap and
 a half), moved three ways: expansion at speed 0.5, a translation, mean-curvature flow; three
 frames each. Saved per frame: the level sets Phi and Phi-hat (keep_volumes), the face labels
-and the mesh's vertices. kernels/common/extend.h (issue 16) was checked with it.
+and the mesh's vertices. kernels/common/extend.h was checked with it.
 """
 
 import sys

@@ -1,4 +1,4 @@
-"""A big sphere on this machine: memory and time of a heat flow in band form (issue 16).
+"""A big sphere on this machine: memory and time of a heat flow in band form.
 
     python benchmarks/surface_big.py [--n 512] [--steps 20] [--storage lists,bricks]
 

@@ -10,7 +10,7 @@ weighted, not alternating), TV with a fixed and a dynamic lambda, harmonic maps 
 line fields), colour denoising, diffusion along a field, principal directions, Turk's
 reaction-diffusion (plain and along), extension by the PDE, reinitialisation, sampling
 (tricubic and trilinear), trilinear surfaces, double precision and a surface from a mesh
-(mesh_refine). kernels/surface.cl's split (issue 12) was checked with it.
+(mesh_refine). kernels/surface.cl's split was checked with it.
 """
 
 import sys

@@ -96,7 +96,7 @@ def boundary_f(pred, true):
 
 # ---- methods ---------------------------------------------------------------------------
 
-# The thesis' method as it was the default before issue 18, each new option on its own,
+# The thesis' method as it was the old default, each new option on its own,
 # and the default now. Every configuration is spelled out in full, so the table keeps its
 # meaning when the defaults change.
 OLD_DEFAULT = {

@@ -19,9 +19,9 @@ import time
 import numpy as np
 from _output import add_output_arguments, output_folder
 
-from clpde.surface.runs import load_surface, tv_time, write_png
 from clpde.data import checker, colour_pattern, surface_noise
 from clpde.surface import ImplicitSurface, render_mesh, to_mesh
+from clpde.surface.runs import load_surface, tv_time, write_png
 
 
 def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):

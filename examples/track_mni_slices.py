@@ -17,8 +17,8 @@ import numpy as np
 from _output import add_output_arguments, output_folder
 
 import clpde
-from clpde.io.images import write_image
 from clpde.io.frames import overlay
+from clpde.io.images import write_image
 
 
 def mni_slices(start: int, count: int):

@@ -82,9 +82,36 @@ class FlowState(State):
 class PlanarFlow:
     """A planar flow whose state stays on the device between calls.
 
-    Parameters are those of `diffuse` (without `steps`): the image, the flow, the time step
-    and the flow's own parameters. `run` enqueues steps, `iterate` yields a `FlowState`
-    every few steps, `result` copies the current state back as an array like the input.
+    `run` enqueues steps, `iterate` yields a `FlowState` every few steps, `result` copies
+    the current state back as an array like the input.
+
+    Parameters
+    ----------
+    image : array_like
+        Greyscale (rows, cols) or colour image (with `channel_axis`), any int or float dtype.
+    flow : {'heat', 'perona-malik', 'tv', 'curvature'}
+        The flow, as for `diffuse`.
+    dt : float, optional
+        Time step; 0.8 of the flow's stability limit by default.
+    channel_axis : int, optional
+        The axis of the colour channels; None for a greyscale image.
+    device : str or int, optional
+        The OpenCL device, as for `clpde.use_device`; the default device if None.
+    dtype : {float32, float64}, optional
+        The device's arithmetic (float32 by default).
+    kappa : float, optional
+        Perona-Malik's edge threshold, intensities in [0, 1] (0.05 by default).
+    edge : {'exp', 'rational'}, optional
+        Perona-Malik's edge-stopping function ('exp' by default).
+    eps : float, optional
+        Regularisation of |grad u| for 'tv' and 'curvature', intensities in [0, 1].
+    weight : array_like, optional
+        The curvature flow's speed g, an array of the image's (rows, cols).
+
+    Raises
+    ------
+    InputError
+        For an unknown flow, a parameter the flow does not take, or an unusable image.
 
     Attributes
     ----------

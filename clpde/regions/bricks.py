@@ -1,4 +1,4 @@
-"""Region tracking on the narrow band in dense bricks, kept up on the device (issue 16).
+"""Region tracking on the narrow band in dense bricks, kept up on the device.
 
 `region_tracker(..., storage="bricks")` builds a BrickRegionTracker: the same scheme as the
 lists' tracker (regions.py, kernels/regions/regions.cl), with every level set (Phi and the

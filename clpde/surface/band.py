@@ -16,7 +16,8 @@ from ..errors import InputError
 from ..fields import compact
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface/bricks.cl", "surface/extend.cl", "surface/flows.cl", "surface/heat.cl")
+KERNEL_FILES = ("surface/band.cl", "surface/bricks.cl", "surface/extend.cl", "surface/flows.cl",
+                "surface/heat.cl")
 
 
 # Interpolation nodes per axis.

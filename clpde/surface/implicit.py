@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from .flows import SurfaceDenoiseInfo
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface/band.cl", "surface/extend.cl", "surface/reinit.cl")
+KERNEL_FILES = ("surface/extend.cl", "surface/reinit.cl")
 
 INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 STORAGES = tuple(FLOW_STATES)  # "lists", "bricks"

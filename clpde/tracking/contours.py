@@ -12,7 +12,7 @@ follows the zero level set and is rebuilt, with u reinitialised on the device, w
 front nears its edge. Each frame stops when the contour has stopped moving or after a cap;
 its result starts the next frame. Topology changes need no special handling.
 
-For real video (issue 18) the features may be contrast-invariant (features='contrast':
+For real video the features may be contrast-invariant (features='contrast':
 local contrast normalisation), colour (colour=True: every channel enters the discrepancy)
 or the user's own maps (an array per frame or a callable); the discrepancy may be a local
 normalised cross-correlation ('ncc') or a Huber difference instead of F2 - F1; a motion

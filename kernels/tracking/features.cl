@@ -1,4 +1,4 @@
-// Features and discrepancies for tracking real video (clpde.track, issue 18): local
+// Features and discrepancies for tracking real video (clpde.track): local
 // contrast normalisation of a frame, and the generalised morphing step over the band with
 // several feature channels, a choice of discrepancy and a pull towards a prior level set,
 // over a list of band cells (morph_track) or over bricks (bricks2d.h: morph_track_bricks,

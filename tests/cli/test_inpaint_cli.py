@@ -106,7 +106,7 @@ def test_method_and_soft_mask(tmp_path, damaged, capsys):
 
 
 def test_demo_puts_its_psnr_beside_the_peers(tmp_path, monkeypatch, capsys):
-    """Issue 11: the demo's PSNR had nothing to compare it with."""
+    """the demo's PSNR had nothing to compare it with."""
     full = inpaint_demo.damaged_astronaut
     monkeypatch.setattr(inpaint_demo, "damaged_astronaut",
                         lambda: tuple(a[:96, :96] for a in full()))

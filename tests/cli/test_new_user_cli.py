@@ -1,4 +1,4 @@
-"""What a new user hit (issue 11), through the command line: each case as the user typed it,
+"""What a new user hit, through the command line: each case as the user typed it,
 with a one-line `clpde: error: ...` (or warning) that gives command-line advice."""
 
 import itertools

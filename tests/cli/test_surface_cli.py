@@ -139,7 +139,7 @@ def test_curvature_of_a_mesh_shows_its_shape_not_its_triangles(tmp_path):
 
 
 def test_tv_default_flattens_the_squares_and_keeps_their_edges():
-    """Issue 11: TV flow on a surface looked like heat (its default time rounded the
+    """TV flow on a surface looked like heat (its default time rounded the
     squares into blobs). Against heat that leaves as much noise, it keeps the edges sharp."""
     from scipy import ndimage
 

@@ -10,6 +10,7 @@ import pytest
 
 import clpde
 from clpde import InputError
+from clpde.inpainting import boxes as box_clusters
 from clpde.inpainting import registry as inpainting
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -24,7 +25,7 @@ def _photo_like(ny=120, nx=160, seed=0):
     return np.clip(np.round(image * 255), 0, 255).astype(np.uint8)
 
 
-# ---- item 1: oblique isophotes ---------------------------------------------------------------
+# ---- oblique isophotes ---------------------------------------------------------------
 @pytest.mark.parametrize("angle", [30, 60])
 def test_oblique_straight_edge_is_continued_across_a_slot(angle):
     image, mask = edge_case(angle, size=64)
@@ -49,7 +50,7 @@ def test_isotropic_stencil_keeps_oblique_stripes_closer_to_a_steady_state():
     assert isotropic < central / 3, (isotropic, central)
 
 
-# ---- item 7: boxes ------------------------------------------------------------------------------
+# ---- boxes ------------------------------------------------------------------------------
 def _two_holes(shape=(120, 160)):
     mask = np.zeros(shape, bool)
     mask[20:26, 10:70] = True  # a scratch: one level
@@ -76,10 +77,10 @@ def test_box_clusters_follow_the_margin():
     mask[50:52, 50:60] = True
     mask[50:52, 66:80] = True  # 6 px away: within the margin, the same box
     mask[150:160, 250:260] = True
-    boxes = inpainting.boxes.boxes(mask, lambda crop: 9)
+    boxes = box_clusters.boxes(mask, lambda crop: 9)
     assert len(boxes) == 2
     assert boxes[0] == (41, 61, 41, 89) and boxes[1] == (141, 169, 241, 269)
-    assert inpainting.boxes.boxes(mask, lambda crop: None) == [(0, 200, 0, 300)]
+    assert box_clusters.boxes(mask, lambda crop: None) == [(0, 200, 0, 300)]
 
 
 def test_memory_follows_the_damage():
@@ -103,7 +104,7 @@ def test_memory_follows_the_damage():
     assert large < 1.1 * small + 1e6 and large < 20e6, (small, large)
 
 
-# ---- item 6: soft masks -------------------------------------------------------------------------
+# ---- soft masks -------------------------------------------------------------------------
 def test_soft_masks():
     image, hard = _photo_like(), _two_holes()
     assert np.array_equal(clpde.inpaint(image, np.zeros(image.shape), progress=False), image)

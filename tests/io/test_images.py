@@ -160,7 +160,7 @@ def test_unwritable_folder_error_names_the_output(tmp_path, monkeypatch):
         write_image(tmp_path / "out.png", np.zeros((3, 3), np.uint8))
 
 
-# ---- masks (issue 11, item 3) -------------------------------------------------------------
+# ---- masks -------------------------------------------------------------
 def _strokes(shape=(120, 160)):
     """Thin text-like strokes over about 2.5% of the pixels, as a damage mask."""
     mask = np.zeros(shape, bool)
@@ -224,7 +224,7 @@ def test_colour_and_uniform_masks(tmp_path):
         read_mask(tmp_path / "w.png", (4, 6))
 
 
-# ---- large and empty files (issue 11, item 5) -------------------------------------------
+# ---- large and empty files -------------------------------------------
 def test_large_images_are_not_blocked_by_pillows_bomb_limit(tmp_path, monkeypatch):
     from PIL import Image
 

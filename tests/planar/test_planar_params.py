@@ -1,4 +1,4 @@
-"""Parameters a planar flow does not use are refused, not ignored (issue 11, item 7), in the
+"""Parameters a planar flow does not use are refused, not ignored, in the
 library and on the command line alike."""
 
 import numpy as np
@@ -34,7 +34,7 @@ def test_used_parameters_still_work_and_cli_agrees(tmp_path, capsys):
 
 
 def test_tv_defaults_flatten_regions_and_keep_edges_where_heat_blurs():
-    """Issue 11: with eps = 0.05 TV flow blurred the camera more than heat. With the
+    """with eps = 0.05 TV flow blurred the camera more than heat. With the
     default, 200 steps leave more flat pixels than heat's 50 steps and edges about three
     times sharper (half-size camera: flat share 0.62 vs 0.50, 99th percentile of |grad u|
     0.19 vs 0.054; eps = 0.05 gave 0.52 and 0.039)."""

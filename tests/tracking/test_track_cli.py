@@ -96,7 +96,7 @@ def test_grey_conversion_and_polygons():
 
 
 def test_an_output_folder_holds_one_runs_files_only(tmp_path, sequence, capsys):
-    """Issue 11: a short run after a long one into the same folder left the long run's files.
+    """a short run after a long one into the same folder left the long run's files.
     Now a non-empty folder is refused, and --overwrite replaces it as a whole."""
     stack, mask, _frames8, truth = sequence
     out = tmp_path / "out"
