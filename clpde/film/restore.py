@@ -20,12 +20,12 @@ from .._progress import progress_bar
 from ..errors import InputError
 from ..imagedata import split_alpha
 from ..inpainting.api import inpaint
+from ..io.frames import image_files
 from ..io.images import check_output_folder, read_image, read_mask, write_image
 from ..io.video import (
     READ_SUFFIXES,
     VIDEO_FORMATS,
     VideoWriter,
-    image_files,
     is_video,
     iter_video,
     video_info,

@@ -1,11 +1,11 @@
 """Frame sequences in and tracking results out.
 
-Reading: a video file (through imageio with the PyAV or ffmpeg backend: pip install
-"clpde[video]"), a folder of images (sorted by name, numbers in natural order) or a
-multi-page TIFF stack. Writing: one mask PNG per frame, an overlay GIF with the contours
-drawn on the frames, and the contours as polygons per frame (JSON). Every file is written
-atomically, and `write_tracking` writes a whole result folder so that a failure leaves no
-partial set of files behind.
+Reading: a video file (through io/video.py's reader: pip install "clpde[video]"), a folder
+of images (sorted by name, numbers in natural order) or a multi-page TIFF stack. Writing:
+one mask PNG per frame, an overlay GIF with the contours drawn on the frames, and the
+contours as polygons per frame (JSON). Every file is written atomically, and
+`write_tracking` writes a whole result folder so that a failure leaves no partial set of
+files behind.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 from .images import IMAGE_FORMATS, atomic_output, output_folder, read_image, write_gif, write_image
-from .images import read_mask as _read_mask
+from .video import read_video
 
 VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".webm", ".mpg", ".mpeg", ".m4v", ".ogv"}
 TIFF_SUFFIXES = {".tif", ".tiff"}
@@ -38,33 +38,9 @@ def to_grey(frames: np.ndarray) -> np.ndarray:
     return luma.astype(frames.dtype)
 
 
-def _video_plugins() -> list[str]:
-    """The imageio plugins that can decode video here: PyAV first, then ffmpeg."""
-    import importlib.util
-
-    found = []
-    if importlib.util.find_spec("av") is not None:
-        found.append("pyav")
-    if importlib.util.find_spec("imageio_ffmpeg") is not None:
-        found.append("FFMPEG")
-    return found
-
-
 def _read_video(path: Path) -> np.ndarray:
-    import imageio.v3 as iio
-
-    plugins = _video_plugins()
-    if not plugins:
-        raise InputError(
-            f"cannot read the video {path}: no video backend is installed; "
-            'pip install "clpde[video]" (PyAV), or imageio-ffmpeg'
-        )
-    try:
-        return np.asarray(iio.imread(path, plugin=plugins[0]))
-    except Exception as exc:  # noqa: BLE001  (decoders raise many types: all mean unreadable)
-        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise InputError(f"cannot read {path} as a video (damaged, or not a video?): "
-                         f"{detail}") from None
+    """The frames of a video file, through clpde's one video reader (io/video.py)."""
+    return read_video(path)[0]
 
 
 def _read_tiff_stack(path: Path) -> np.ndarray:
@@ -85,14 +61,23 @@ def _read_tiff_stack(path: Path) -> np.ndarray:
     return data
 
 
-def _read_folder(path: Path) -> np.ndarray:
-    files = sorted((p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
-                   key=_natural_key)
+def image_files(folder) -> list[Path]:
+    """The images of a folder, sorted by name with numbers in natural order: the frames of a
+    sequence (tracking's input, a film's frames or masks)."""
+    folder = Path(folder)
+    files = sorted(
+        (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
+        key=_natural_key)
     if not files:
         raise InputError(
-            f"the folder {path} holds no images (.png, .tif/.tiff, .jpg/.jpeg); put the frames "
-            "there, named so that they sort in order (frame_001.png, frame_002.png, ...)"
+            f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg); put the "
+            "frames there, named so that they sort in order (frame_001.png, frame_002.png, ...)"
         )
+    return files
+
+
+def _read_folder(path: Path) -> np.ndarray:
+    files = image_files(path)
     frames = [read_image(p) for p in files]
     for p, f in zip(files, frames, strict=False):
         if f.shape[:2] != frames[0].shape[:2]:
@@ -135,17 +120,6 @@ def read_frames(path, grey: bool = True) -> np.ndarray:
     if frames.ndim not in (3, 4) or frames.shape[0] == 0:
         raise InputError(f"{path} gave frames of shape {frames.shape}; expected (T, H, W)")
     return frames
-
-
-def read_mask(path, shape=None) -> np.ndarray:
-    """A mask image as a boolean array, sized as the frames (clpde.io.read_mask's rule)."""
-    if shape is None:
-        return _read_mask(path)
-    try:
-        return _read_mask(path, shape, what="the frames")
-    except InputError as exc:  # name the fix for a tracking mask
-        raise InputError(str(exc).replace("give a mask of the same size",
-                                          "draw the mask on the first frame at its size")) from None
 
 
 # ---- results ---------------------------------------------------------------------------

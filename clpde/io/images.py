@@ -356,7 +356,7 @@ MASK_RULE = ("grey masks are cut half-way between their darkest and brightest va
 
 
 def read_mask(path: PathLike, shape: Sequence[int] | None = None, *,
-              what: str = "the image") -> np.ndarray:
+              what: str = "the image", fix: str = "give a mask of the same size") -> np.ndarray:
     """A mask image file as a boolean array: True where the mask is bright.
 
     Pixels brighter than half-way between the file's darkest and brightest values are inside
@@ -364,7 +364,8 @@ def read_mask(path: PathLike, shape: Sequence[int] | None = None, *,
     are read by their brightest colour channel, an alpha channel is ignored. Warns when the
     file is in a lossy format (JPEG blurs a mask's edges into grey ringing) or has more than
     two levels, since either means the threshold decides the edge. `shape` (rows, columns),
-    if given, is the size it must have; `what` names the image it must match in the error.
+    if given, is the size it must have; `what` names the image it must match in the error,
+    and `fix` the way out.
     """
     import warnings
 
@@ -376,7 +377,7 @@ def read_mask(path: PathLike, shape: Sequence[int] | None = None, *,
     if shape is not None and mask.shape != tuple(shape):
         verb = "are" if what.endswith("s") else "is"
         raise InputError(f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but "
-                         f"{what} {verb} {shape[1]}x{shape[0]}; give a mask of the same size")
+                         f"{what} {verb} {shape[1]}x{shape[0]}; {fix}")
     if mask.dtype == bool:
         return mask.copy()
     if np.issubdtype(mask.dtype, np.floating) and not np.isfinite(mask).all():

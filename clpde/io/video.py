@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .images import IMAGE_FORMATS, atomic_output
+from .images import atomic_output
 
 VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi",
                  ".m4v": "mp4"}
@@ -30,12 +30,13 @@ def is_video(path) -> bool:
     return Path(path).suffix.lower() in READ_SUFFIXES
 
 
-def _av():
+def require_av():
+    """PyAV, or a clear error naming the fix."""
     try:
         import av
     except ImportError:
         raise InputError(
-            'reading and writing video needs PyAV: pip install "clpde[batch]"'
+            'reading and writing video needs PyAV: pip install "clpde[video]"'
         ) from None
     return av
 
@@ -50,7 +51,7 @@ class VideoInfo:
 
 
 def video_info(path) -> VideoInfo:
-    av = _av()
+    av = require_av()
     with _open_input(av, path) as container:
         stream = container.streams.video[0]
         width, height = _stored_size(container, stream)
@@ -92,7 +93,7 @@ def _stored_size(container, stream) -> tuple[int, int]:
 
 def iter_video(path):
     """The frames of a video as (rows, columns, 3) uint8 RGB arrays, in display order."""
-    av = _av()
+    av = require_av()
     with _open_input(av, path) as container:
         stream = container.streams.video[0]
         width, height = _stored_size(container, stream)
@@ -141,7 +142,8 @@ class VideoWriter:
         self.threads = threads
         self._atomic = atomic_output(path)
         self._tmp = self._atomic.__enter__()
-        self._container = _av().open(str(self._tmp), mode="w", format=VIDEO_FORMATS[suffix])
+        self._container = require_av().open(str(self._tmp), mode="w",
+                                            format=VIDEO_FORMATS[suffix])
         self._stream = None
         self.count = 0
         # The frames as given, before the (lossy) encoder: what a film restored over
@@ -163,7 +165,7 @@ class VideoWriter:
         self._stream = stream
 
     def write(self, frame: np.ndarray) -> None:
-        av = _av()
+        av = require_av()
         frame = np.asarray(frame)
         if frame.ndim == 2:
             frame = np.repeat(frame[..., np.newaxis], 3, axis=-1)
@@ -225,19 +227,3 @@ def write_video(path, frames, rate, *, threads: int = 1) -> Path:
         for frame in frames:
             writer.write(frame)
     return Path(path)
-
-
-# ---- frame sequences: a video or a folder of images ------------------------------------------
-def _natural_key(path: Path):
-    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", path.name)]
-
-
-def image_files(folder) -> list[Path]:
-    folder = Path(folder)
-    files = sorted(
-        (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
-        key=_natural_key,
-    )
-    if not files:
-        raise InputError(f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg)")
-    return files

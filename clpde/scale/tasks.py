@@ -31,15 +31,16 @@ from ..io.images import (
     write_gif,
     write_image,
 )
+from ..io.video import require_av, write_video
 from ..planar import tiled
 from ..planar.flows import diffuse
 from ..planar.rof import denoise_tv
 from ..runtime import get_runtime
 from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
 from ..tracking.contours import track
-from ..tracking.features import require_av, write_mp4
 
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
+OVERLAY_RATE = 10  # frames per second of the tracking overlay
 
 
 def read_input(path, output, *others, device=None, allow_nan: bool = False) -> np.ndarray:
@@ -270,7 +271,8 @@ def track_file(input, output, *, mask, features: str = "intensity", colour: bool
         if frames < 1:
             raise InputError(f"--frames must be at least 1, not {frames}")
         images = images[:frames]
-    first = frame_io.read_mask(mask, images.shape[1:3])
+    first = read_mask(mask, images.shape[1:3], what="the frames",
+                      fix="draw the mask on the first frame at its size")
     masks, residuals = track(
         images, first, features=features, colour=colour, discrepancy=discrepancy,
         motion=None if motion == "none" else motion, shape_weight=shape_weight,
@@ -299,14 +301,10 @@ def low_confidence_frames(residuals, factor: float) -> list[int]:
 
 
 def _write_mp4(outdir, frames, masks):
-    """overlay.mp4 beside the GIF, written under a temporary name and then moved in."""
+    """overlay.mp4 beside the GIF, by the one video writer (io/video.py, atomic)."""
     final = Path(outdir) / "overlay.mp4"
-    tmp = final.with_name(".overlay.mp4.part")
-    try:
-        write_mp4(tmp, [frame_io.overlay(f, m) for f, m in zip(frames, masks, strict=False)])
-        os.replace(tmp, final)
-    finally:
-        tmp.unlink(missing_ok=True)
+    write_video(final, [frame_io.overlay(f, m) for f, m in zip(frames, masks, strict=False)],
+                OVERLAY_RATE)
     return final
 
 

@@ -15,11 +15,7 @@ MotionFilter predicts the object's displacement from one frame to the next:
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-
-from ..errors import InputError
 
 
 def shift_image(image: np.ndarray, shift) -> np.ndarray:
@@ -152,38 +148,3 @@ class MotionFilter:
         c1 = np.array(np.nonzero(after)).mean(axis=1)
         # What the morphing moved plus the shift it started from.
         self.v = (c1 - c0)
-
-
-def require_av():
-    """PyAV, or a clear error naming the fix."""
-    try:
-        import av
-    except ImportError:
-        raise InputError("the MP4 overlay needs PyAV: pip install av (or clpde[video])") from None
-    return av
-
-
-def write_mp4(path, pictures, fps: float = 10.0) -> Path:
-    """Write RGB uint8 pictures (T, H, W, 3) as an H.264 MP4 through PyAV. Odd sizes are
-    padded by one black row or column (yuv420p needs even sizes), never rescaled."""
-    av = require_av()
-    path = Path(path)
-    pictures = [np.asarray(p, np.uint8) for p in pictures]
-    if not pictures:
-        raise InputError("no frames to write")
-    h, w = pictures[0].shape[:2]
-    ph, pw = h + h % 2, w + w % 2
-    from fractions import Fraction
-
-    with av.open(str(path), "w", format="mp4") as container:
-        stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))
-        stream.width, stream.height, stream.pix_fmt = pw, ph, "yuv420p"
-        stream.options = {"crf": "18"}
-        for picture in pictures:
-            padded = np.zeros((ph, pw, 3), np.uint8)
-            padded[:h, :w] = picture[..., :3]
-            for packet in stream.encode(av.VideoFrame.from_ndarray(padded, format="rgb24")):
-                container.mux(packet)
-        for packet in stream.encode():
-            container.mux(packet)
-    return path
