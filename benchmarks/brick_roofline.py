@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-# flops a cell of the heat step does (surface_heat.cl's heat_div, unweighted): four fluxes,
+# flops a cell of the heat step does (surface/heat.cl's heat_div, unweighted): four fluxes,
 # each 3 one-sided differences, psi's central normal (3 differences, 3 products), |N|^2 (5),
 # the projection (5 for the dot, 1 division, 6 for v - s N), then the divergence (6) and the
 # update (2): 4 * 26 + 8

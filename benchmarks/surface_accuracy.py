@@ -27,7 +27,7 @@
    flow on an icosphere whose polar hole from_mesh closed, with and without reinitialising
    the cells of the hole's rim (section 5c).
 6. The band's two storages in one run: the band lists over the dense padded grid (kernels/
-   surface_heat.cl) and the dense bricks (kernels/surface/bricks.cl) at each brick size, a heat
+   surface/heat.cl) and the dense bricks (kernels/surface/bricks.cl) at each brick size, a heat
    step plus
    the re-extension of what the next step reads, on 64^3 to 256^3 grids (--storage-sizes;
    512 if memory allows): time per step against a device copy of the whole grid (the

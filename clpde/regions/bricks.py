@@ -207,7 +207,7 @@ class BrickRegionTracker(RegionTracker):
                              "track for a shorter time")
         if self._upkeep(words):
             coords_dev = self._coords_on_device()
-        # the work buffers equal cur on every brick no kernel writes (see region_bricks.cl)
+        # the work buffers equal cur on every brick no kernel writes (see regions/bricks.cl)
         cl.enqueue_copy(q, self.nxt.data, self.cur.data)
         self._mask = cla.zeros(q, self.bricks.plane, np.uint8)
         with self.runtime.lock:

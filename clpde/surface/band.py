@@ -233,7 +233,7 @@ def _offsets(grid, sides: int):
 
 def extend_defines(interp: int, nc: int, normalize: bool = False,
                    line_field: bool = False) -> dict:
-    """The defines of surface_extend.cl's program: every lookup in that file passes all of
+    """The defines of surface/extend.cl's program: every lookup in that file passes all of
     them (the ones a kernel ignores at their defaults), so a flow's re-extension, sampling
     and the extension PDE share one build."""
     return {"INTERP": interp, "NC": nc, "NORMALIZE": int(normalize),
@@ -334,7 +334,7 @@ class BandFlow:
         return self.surf.node_band.n
 
     def lambda_terms(self, u0, terms, sides: int, eps: float) -> None:
-        """Enqueue the terms of (C.2) at every node (surface_flows.cl's tv_lambda_terms)."""
+        """Enqueue the terms of (C.2) at every node (surface/flows.cl's tv_lambda_terms)."""
         s = self.surf
         g = s.grid
         g.launch_list(self.kernel("surface/flows.cl", "tv_lambda_terms"),

@@ -1,5 +1,5 @@
 // Dense bricks of a narrow band (clpde/bricks.py), shared by bricks.cl (the
-// surface flows) and region_bricks.cl (region tracking): the brick size, the launch
+// surface flows) and regions/bricks.cl (region tracking): the brick size, the launch
 // geometry, the tiles a kernel copies a brick and its neighbours' faces into, and the loops
 // over bricks and their cells. A brick holds BX x BY x BZ cells (BV in all), x fastest; a
 // quantity is one buffer (channels, nbricks + 2, BV); brick 0 stands for every brick place

@@ -72,7 +72,7 @@ inline void mirror_ghosts(__global REAL* v, const int row0, const int x0, const 
     const int chan = get_global_id(1) * plane
 
 // Kernels over the runs of a 3D band (stretches of consecutive band cells along x, built by
-// surface_band.cl's band_run_* kernels, clpde.grid3d.BandRuns) take these arguments after
+// surface/band.cl's band_run_* kernels, clpde.grid3d.BandRuns) take these arguments after
 // their own: the runs' cell ranges, their number, the channel stride and runs per work-item.
 // On CPUs a work-item walks whole runs, whose cells are consecutive in memory, so the cell
 // loop vectorises with contiguous loads (a list's gathers keep it scalar); on GPUs every

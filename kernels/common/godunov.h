@@ -1,5 +1,5 @@
 // Upwind level-set stencils shared by the level-set kernels (levelset.cl and
-// track_features.cl in 2D, regions.cl and surface_reinit.cl in 3D): the sign function,
+// tracking/features.cl in 2D, regions.cl and surface/reinit.cl in 3D): the sign function,
 // minmod, slope-limited one-sided differences (second-order ENO, Osher-Sethian) and the
 // Godunov gradient norm for u_t = V |grad u|. Unit grid spacing (godunov_axis takes any
 // differences); `sx` is the row stride, `sxy` the slab stride. Include after common.cl.
@@ -7,7 +7,7 @@
 #define CLPDE_GODUNOV_H
 
 // The address space of the fields the stencil functions here, in reinit.h and in extend.h
-// read: __global volumes by default; region_bricks.cl defines it as its tiles' (private on
+// read: __global volumes by default; regions/bricks.cl defines it as its tiles' (private on
 // CPUs) before including them, so the brick kernels run the same functions on a tile.
 #ifndef LS_SPACE
 #define LS_SPACE __global

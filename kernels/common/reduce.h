@@ -24,7 +24,7 @@
     const int row = get_global_id(2) * plane + (y + G) * sx + G
 
 // The second pass on the device: the sum of `n` partials starting at `partial`, in order
-// (row partials here; also box_lists.cl's per-item partials and surface_flows.cl's chunk sums).
+// (row partials here; also box_lists.cl's per-item partials and surface/flows.cl's chunk sums).
 inline REAL sum_rows(__global const REAL* restrict partial, const int n)
 {
     REAL acc = 0;

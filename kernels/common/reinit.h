@@ -1,5 +1,5 @@
 // PDE reinitialisation of a level set to a signed distance, shared by levelset.cl (2D),
-// regions.cl (3D) and surface_reinit.cl (3D bands, world units): explicit Godunov steps of
+// regions.cl (3D) and surface/reinit.cl (3D bands, world units): explicit Godunov steps of
 //     u_t + S(u0) (|grad u| - 1) = 0,
 // with Russo and Smereka's subcell fix at the cells beside the interface (u0 changes sign
 // towards one of their 4 or 6 neighbours): there u relaxes towards D = u0 / |grad u0|, the
@@ -35,7 +35,7 @@ INLINE REAL godunov_update(const REAL p, const REAL sgn, const REAL norm, const 
     return p - dt * sgn * (norm - 1);
 }
 
-// godunov_update for a field in world units (surface_reinit.cl): `norm` the upwind norm in
+// godunov_update for a field in world units (surface/reinit.cl): `norm` the upwind norm in
 // grid units, r = dt / h. The same step as godunov_update(p, sgn, norm * inv_h, r / inv_h),
 // but rounded as the surface's reinitialisation always has (dividing by inv_h last), so that
 // its results stay bit for bit what they were.

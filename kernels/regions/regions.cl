@@ -121,7 +121,7 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
 // steepest slope still guards against flat central estimates at kinks. Cells whose slope is
 // already within SUBCELL_TOL of 1 are kept as they are: the relaxation's O(h^2) bias,
 // repeated every few steps, otherwise grows.
-// (SUBCELL_TOL and SUBCELL_STEEP: regions.h, which region_bricks.cl shares.)
+// (SUBCELL_TOL and SUBCELL_STEEP: regions.h, which regions/bricks.cl shares.)
 #define REINIT3D_UPDATE(u, u0, i, dt)                                                      \
     reinit_update_3d(u, u0, i, sx, sxy, dt, (REAL)SUBCELL_STEEP, (REAL)SUBCELL_TOL)
 

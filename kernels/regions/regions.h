@@ -1,5 +1,5 @@
 // The per-cell arithmetic of region tracking (thesis section 2.2), shared by regions.cl
-// (padded volumes, band runs) and region_bricks.cl (brick tiles): the speeds, the coupled
+// (padded volumes, band runs) and regions/bricks.cl (brick tiles): the speeds, the coupled
 // step of a level set, the narrow band's cut-off and the extension's velocity. Fields are
 // LS_SPACE pointers (godunov.h) with row stride sx and slab stride sxy; channel c of a
 // cell i lies at c * plane + i. Include after common.cl, godunov.h and extend.h.

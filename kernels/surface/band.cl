@@ -77,7 +77,7 @@ __kernel void closest_points(__global const REAL* restrict psi, const REAL inv_h
 
 // The first interpolation node along one axis for position p (index units): floor(p) - 1 of
 // 4 nodes (interp 3, tricubic) or floor(p) of 2 (trilinear), clamped into [0, n - nodes] so
-// a read never leaves the volume (surface_extend.cl's axis_weights).
+// a read never leaves the volume (surface/extend.cl's axis_weights).
 INLINE int first_node(const REAL p, const int n, const int interp)
 {
     return interp == 3 ? clamp((int)floor(p) - 1, 0, n - 4) : clamp((int)floor(p), 0, n - 2);
@@ -86,7 +86,7 @@ INLINE int first_node(const REAL p, const int n, const int interp)
 // The interpolation stencil of each closest point, computed once (psi is fixed): the flat
 // padded index of its first node (x0, y0, z0) in base[k] and its position relative to
 // floor(p) in frac[k], frac[nlist + k], frac[2 nlist + k]. The same nodes and weights as
-// surface_extend.cl's interpolate(); the re-extension then needs no floor, clamp or index
+// surface/extend.cl's interpolate(); the re-extension then needs no floor, clamp or index
 // arithmetic.
 __kernel void cp_stencils(__global const REAL* restrict cpx, __global const REAL* restrict cpy,
                           __global const REAL* restrict cpz, const int sx, const int sxy,

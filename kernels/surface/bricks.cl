@@ -1,6 +1,6 @@
 // The narrow band in dense bricks (clpde/bricks.py): kernels of the surface flows
 // (heat, TV, harmonic maps, diffusion along a field, Turk's reaction-diffusion, TV's dynamic
-// lambda) and the closest-point re-extension, with surface_flux.h's per-cell arithmetic, the
+// lambda) and the closest-point re-extension, with surface/flux.h's per-cell arithmetic, the
 // band lists' own.
 //
 // A brick holds BX x BY x BZ cells (BV in all), x fastest; a quantity is one buffer
@@ -10,7 +10,7 @@
 //
 // Launch geometry (GROUP_PER_BRICK): on CPUs (0) one work-item walks whole bricks, from a
 // private tile; on GPUs (1) one work-group of BV work-items takes a brick, one cell each,
-// from a tile in local memory. The arithmetic is the same (and is surface_heat.cl's): the
+// from a tile in local memory. The arithmetic is the same (and is surface/heat.cl's): the
 // results agree to rounding.
 #include "common.cl"
 #include "surface/surface.h"
@@ -220,7 +220,7 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
     }
 }
 
-// ---- TV, harmonic maps, diffusion along a field (surface_flows.cl's flow_step) -------------
+// ---- TV, harmonic maps, diffusion along a field (surface/flows.cl's flow_step) -------------
 // All NC channels per work-item (the flows couple them): u's tiles of halo 1, one per channel;
 // psi and dir (ALONG, 3 channels) in stored tiles of halo 2, dir's channel stride that of
 // the tiles; u0 (FIDELITY) in the plain brick layout. v as brick_heat_step writes it.
@@ -324,7 +324,7 @@ __kernel void brick_lambda_terms(__global const REAL* restrict u, __global const
     }
 }
 
-// ---- Turk's reaction-diffusion (surface_heat.cl's turk_step) ---------------------------------
+// ---- Turk's reaction-diffusion (surface/heat.cl's turk_step) ---------------------------------
 // The two chemicals' tiles of halo 1; dir (ALONG) as brick_flow_step's, beta in the plain
 // brick layout. On CPUs both chemicals' fluxes are computed once per brick (flux tables).
 __kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* restrict v,
@@ -409,7 +409,7 @@ __kernel void brick_to_apron(__global const REAL* restrict src, __global REAL* r
 }
 
 // ---- closest-point re-extension --------------------------------------------------------------
-// dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface_extend.cl's
+// dst(x) = src(cp(x)) for the listed cells (all NC channels), interpolated as surface/extend.cl's
 // extend_cp (tricubic Lagrange, or trilinear) from stencils computed once per psi (psi is
 // fixed): per entry k the brick-storage index of the target cell (`list`, plain layout),
 // the stencil's first node (x0, y0, z0) as its brick and place there (BrickBand.node_code),
@@ -450,7 +450,7 @@ __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* 
             val[c] = acc;
 #elif INTERP == 3
             // 16 rows of 4 nodes at fixed strides in the node's brick and its apron, summed
-            // as 4-vectors (as surface_extend.cl's extend_cp)
+            // as 4-vectors (as surface/extend.cl's extend_cp)
             const REAL4 wy = node_weights(ty), wz = node_weights(tz);
             REAL4 acc = 0;
             for (int a = 0; a < 4; ++a) {

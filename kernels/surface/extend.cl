@@ -57,7 +57,7 @@ INLINE void interpolate(__global const REAL* restrict u, const REAL px, const RE
 }
 
 // Whole-band closest-point re-extension: dst(x) = src(cp(x)) for every band cell, all NC
-// channels, from the stencils of surface_band.cl's cp_stencils. With NORMALIZE the NC-vector is rescaled to
+// channels, from the stencils of surface/band.cl's cp_stencils. With NORMALIZE the NC-vector is rescaled to
 // unit length (harmonic maps). Tricubic: the 4 nodes of a row are contiguous, so each of
 // the 16 rows is one 4-wide load, summed with the y-z weights; one dot product with the x
 // weights at the end.

@@ -9,7 +9,7 @@
 #include "surface/flux.h"
 
 // ---- the other band flows, one work-item per cell handling all NC channels ----------------
-// (the fluxes and the stepped values: surface_flux.h's flow_cell, shared with the bricks). The
+// (the fluxes and the stepped values: surface/flux.h's flow_cell, shared with the bricks). The
 // step is flow_cell's v_c minus dt lambda (u_c - u0_c) (FIDELITY, C.1). lambda is a one-value
 // device buffer, so the dynamic lambda (tv_lambda_update) never visits the host.
 #ifndef FIDELITY

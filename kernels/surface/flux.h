@@ -1,5 +1,5 @@
 // The per-cell arithmetic of the surface flows (appendix E's one-sided scheme), shared by the
-// band lists' kernels on dense volumes (surface_heat.cl, surface_flows.cl) and the bricks'
+// band lists' kernels on dense volumes (surface/heat.cl, surface/flows.cl) and the bricks'
 // on tiles (bricks.cl), so both storages run the same scheme. Include after surface.h.
 //
 // u is read at cell j of its array, with the signed one-sided offsets ex, ey, ez (+-1, +-sx,

@@ -6,7 +6,7 @@
 #include "surface/flux.h"
 
 // ---- intrinsic heat flow (4.7) / (4.8), discretised as in appendix E -----------------------
-// (the flux and its divergence: surface_flux.h, shared with the bricks' kernels).
+// (the flux and its divergence: surface/flux.h, shared with the bricks' kernels).
 // One explicit step v = u + r * div(...) over the band (r = dt / h^2), every channel.
 __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                         __global const REAL* restrict psi, const REAL r, const int ex,
@@ -17,7 +17,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
     }
 }
 
-// ---- reaction-diffusion (Turk), eqs. (4.12)-(4.14), in grid units (turk_cell: surface_flux.h)
+// ---- reaction-diffusion (Turk), eqs. (4.12)-(4.14), in grid units (turk_cell: surface/flux.h)
 __kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict v,
                         __global const REAL* restrict psi, __global const REAL* restrict dir,
                         __global const REAL* restrict beta, const REAL dt, const REAL da,

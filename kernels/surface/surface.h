@@ -8,20 +8,20 @@
 // the ghost layer by construction.
 //
 // Accuracy: data is kept constant along the normals by closest-point re-extension of the whole
-// band after every step (surface_extend.cl). Without it the 2001 scheme drifts off the surface
+// band after every step (surface/extend.cl). Without it the 2001 scheme drifts off the surface
 // and its error grows under refinement.
 //
 // The files, one family each (thesis chapter 4, appendices B-E):
-//   surface_band.cl    the bands, their runs, closest points and their stencils (once per psi)
-//   surface_extend.cl  closest-point re-extension, sampling, extension by the PDE
-//   surface_heat.cl    the heat flow (4.7, 4.8) and Turk's reaction-diffusion
-//   surface_flows.cl   TV, harmonic maps, diffusion along a field; TV's dynamic lambda
-//   surface_reinit.cl  reinitialisation of psi to a signed distance
-//   surface_shape.cl   principal curvature directions
-//   surface_mesh.cl    mesh -> distance (exact point-triangle distances)
-//   surface_flux.h     the flows' per-cell arithmetic, shared by the lists' and the bricks'
+//   surface/band.cl    the bands, their runs, closest points and their stencils (once per psi)
+//   surface/extend.cl  closest-point re-extension, sampling, extension by the PDE
+//   surface/heat.cl    the heat flow (4.7, 4.8) and Turk's reaction-diffusion
+//   surface/flows.cl   TV, harmonic maps, diffusion along a field; TV's dynamic lambda
+//   surface/reinit.cl  reinitialisation of psi to a signed distance
+//   surface/shape.cl   principal curvature directions
+//   surface/mesh.cl    mesh -> distance (exact point-triangle distances)
+//   surface/flux.h     the flows' per-cell arithmetic, shared by the lists' and the bricks'
 //   bricks.cl          every flow and the re-extension on dense bricks
-//   brick_tiles.cl     bricks' tiles of a device volume (psi's, once per psi)
+//   bricks/tiles.cl     bricks' tiles of a device volume (psi's, once per psi)
 #ifndef CLPDE_SURFACE_H
 #define CLPDE_SURFACE_H
 

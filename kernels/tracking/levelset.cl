@@ -1,6 +1,6 @@
 // Level-set machinery on ghost-padded 2D fields (ghost width 2, unit grid spacing): narrow
 // band marking, PDE reinitialisation with the Russo-Smereka subcell fix and the edge map.
-// The coupled morphing / tracking step of thesis eqs. (2.3)-(2.6) is track_features.cl's
+// The coupled morphing / tracking step of thesis eqs. (2.3)-(2.6) is tracking/features.cl's
 // morph_track (one channel, DISC 0, lam = 0).
 //
 // The shared stencils and the reinitialisation's update live in godunov.h and reinit.h

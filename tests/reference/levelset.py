@@ -1,4 +1,4 @@
-"""NumPy references of kernels/tracking/levelset.cl and track_features.cl: the same discrete
+"""NumPy references of kernels/tracking/levelset.cl and tracking/features.cl: the same discrete
 formulas on padded arrays.
 
 2D arrays are (ny + 4, nx + 4) with a two-cell ghost layer; each function returns values on
@@ -87,7 +87,7 @@ def gradient_magnitude(p):
 
 def morph_step(pu, pf1, f2, band, dt, eps_f, eps_u, near):
     """One coupled step of thesis eqs. (2.3)-(2.6), written from the equations (the kernel
-    is track_features.cl's morph_track with one channel, DISC 0 and lam = 0); returns
+    is tracking/features.cl's morph_track with one channel, DISC 0 and lam = 0); returns
     (u_new, f1_new, (max |du/dt|, max |beta|, max |grad F1|), hit) over the band cells.
 
     Cells outside the band keep their values, as the kernel leaves them untouched.
