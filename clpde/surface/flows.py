@@ -56,7 +56,36 @@ _ALL_SIDES = tuple(range(8))
 
 def stability_limit(surf: ImplicitSurface, flow: str = "heat", eps: float = 1.0,
                     lam: float = 0.0) -> float:
-    """Largest stable explicit time step (world time units) of a flow on `surf`."""
+    """Largest stable explicit time step (world time units) of a flow on `surf`.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface (its grid spacing sets the limit).
+    flow : {'heat', 'tv', 'harmonic2', 'harmonic1', 'along'}
+        The flow.
+    eps : float, optional
+        The regularisation of |grad u| of 'tv' and 'harmonic1'.
+    lam : float, optional
+        The fidelity weight of a TV denoising step.
+
+    Returns
+    -------
+    float
+        The largest stable dt.
+
+    Raises
+    ------
+    InputError
+        For an unknown flow.
+
+    Examples
+    --------
+    >>> from clpde.surface import ImplicitSurface, stability_limit
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> round(stability_limit(s, "heat"), 6)
+    0.001667
+    """
     h2 = surf.spacing**2
     if flow in ("heat", "harmonic2", "along"):
         # |N| P_N has norm <= |N| and the one-sided div is minus the transpose of the
@@ -94,11 +123,47 @@ def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None,
 
     Appendix E's scheme (one-sided gradient, projection on the tangent plane with N from
     central differences of psi, the complementary one-sided divergence), explicit Euler
-    steps, whole-band closest-point re-extension after each step. By default the step cycles
-    through the eight forward/backward combinations, as appendix E suggests: both variants
-    converge at second order, the alternating one with 2.5-3x smaller errors on the sphere
-    (benchmarks/surface_accuracy.py); alternate=False keeps forward gradient / backward
-    divergence throughout.
+    steps, whole-band closest-point re-extension after each step.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+    u : array_like
+        Data on the surface: dense (the grid's shape, or (channels,) + it) or in band form
+        (`surf.band_indices()`); returned in kind.
+    t : float
+        The evolution time (world units).
+    dt : float, optional
+        The time step; 0.8 of `stability_limit` by default, never beyond it.
+    weighted : bool, optional
+        Eq. (4.7), the flux weighted by |grad psi|, instead of (4.8).
+    alternate : bool, optional
+        Cycle the step through the eight forward/backward combinations, as appendix E
+        suggests (smaller errors, docs/surface.md); False keeps forward gradient / backward
+        divergence throughout.
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+
+    Returns
+    -------
+    ndarray
+        u after time t, in u's form and float dtype.
+
+    Raises
+    ------
+    InputError
+        For data of another shape, non-finite values in the band or an unstable dt.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.surface import ImplicitSurface, heat
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> u = s.field(lambda x, y, z: z)
+    >>> smooth = heat(s, u, 0.05)
+    >>> smooth.shape == u.shape, smooth.dtype
+    (True, dtype('float64'))
     """
     steps, dt = _check_time(t, dt, stability_limit(surf, "heat"), "heat flow")
     flow = make_flow(surf, u, defines={"WEIGHTED": int(bool(weighted))})

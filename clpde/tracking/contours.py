@@ -486,43 +486,66 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
           **options: Any) -> np.ndarray | tuple[np.ndarray, ...]:
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
-    frames: a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence of T such frames
-    (any int or float dtype). first_mask: (H, W) boolean (or nonzero) mask of the object
-    in frame 0; it may hold several pieces, and pieces may split or merge on the way.
+    Parameters
+    ----------
+    frames : array_like
+        A (T, H, W) grey or (T, H, W, 3) colour array, or a sequence of T such frames (any
+        int or float dtype).
+    first_mask : array_like
+        (H, W) boolean (or nonzero) mask of the object in frame 0; it may hold several
+        pieces, and pieces may split or merge on the way.
+    features : {'intensity', 'edges', 'contrast'} or array_like or callable, optional
+        What the frames are compared by: the frames themselves (after pre-processing),
+        gradient-magnitude edge maps, local contrast normalisation over a
+        (2 contrast_radius + 1)^2 box (invariant to local changes of light), or the user's
+        own maps: a (T, H, W[, C]) array, a list of T maps, or a callable taking a frame
+        and returning its map (scaled to [0, 1] over the sequence; no pre-processing).
+    equalize : bool or {'match', 'global'}, optional
+        Grey-level equalisation across frames: 'match' (or True) gives every frame the
+        first frame's histogram, 'global' equalises each flat (costs accuracy on large
+        uniform backgrounds, docs/tracking.md), False skips it.
+    smooth : bool, optional
+        Perona-Malik pre-smoothing of the frames (True by default).
+    smooth_steps : int, optional
+        Its number of steps.
+    band_width : float, optional
+        Half-width of the narrow band in pixels.
+    max_iterations : int, optional
+        Cap of morphing iterations per frame.
+    tol : float, optional
+        Each frame runs until the contour's top speed falls below `tol` pixels per unit
+        time (or `max_iterations`).
+    min_size : int, optional
+        When > 0, components and holes smaller than this many pixels are removed from each
+        result, and the next frame starts from the cleaned mask.
+    device : str or int or Runtime, optional
+        The OpenCL device, as for `clpde.use_device`.
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    return_level_sets : bool, optional
+        Also return the (T, H, W) float32 level sets (negative inside).
+    return_discrepancy : bool, optional
+        Also return the (T,) final mean |beta| in each frame's band (0 for frame 0), whose
+        high values mark frames of low confidence.
+    **options
+        MorphingTracker's other options: colour (every channel in the discrepancy),
+        discrepancy ('difference', the thesis; 'ncc'; 'huber'), motion (None, 'velocity',
+        'kalman'), shape_weight, storage ('lists', 'bricks8x8' or 'bricks16x4': the same
+        results), contrast_radius, ncc_radius, huber_delta, search_radius, dtype.
 
-    features: 'intensity' (the frames themselves, after pre-processing), 'edges'
-    (gradient-magnitude edge maps), 'contrast' (local contrast normalisation over a
-    (2 contrast_radius + 1)^2 box: invariant to local changes of brightness and contrast),
-    or the user's own maps: a (T, H, W[, C]) array or a list of T maps, or a callable
-    taking a frame and returning its (H, W[, C]) map (scaled to [0, 1] over the sequence;
-    no pre-processing). colour=True puts every channel of colour frames in the
-    discrepancy (default: grey, Rec. 601 luma). discrepancy: 'difference' (F2 - F1, the
-    thesis), 'ncc' (steepest ascent of the local normalised cross-correlation over a
-    (2 ncc_radius + 1)^2 window) or 'huber' (F2 - F1 clipped at huber_delta). motion:
-    None, 'velocity' (the previous frames' displacement, damped) or 'kalman' (a constant-
-    velocity Kalman filter fed by matching the object's features between frames, within
-    search_radius pixels of the prediction) shifts each frame's start. shape_weight
-    (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
-    storage: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
-    same results, bit for bit, except the NCC's window sums, equal to rounding; measured
-    no faster on CPUs, docs/tracking.md).
+    Returns
+    -------
+    masks : ndarray of bool
+        (T, H, W); frame 0 is the given mask.
+    level_sets : ndarray of float32
+        Only with `return_level_sets`.
+    discrepancy : ndarray
+        Only with `return_discrepancy`.
 
-    equalize / smooth: the thesis' pre-processing, on by default. equalize='match' (or
-    True) gives every frame the first frame's grey-level histogram (histogram
-    specification); 'global' equalises each frame's histogram flat
-    (skimage.exposure.equalize_hist), which squeezes a large uniform background into a
-    narrow grey range and costs accuracy (measured: IoU 0.80 instead of 0.99 on a clean
-    translating disc); False skips it. smooth: Perona-Malik smoothing, `smooth_steps`
-    steps. band_width: half-width w of the band in pixels. Each frame runs the coupled
-    system until the contour's top speed falls below `tol` pixels per unit time or
-    `max_iterations`. min_size > 0 removes components and holes smaller than that many
-    pixels from each result (post-processing), and the next frame starts from the cleaned
-    mask.
-
-    Returns a (T, H, W) boolean array (frame 0 is the given mask); with return_level_sets,
-    also the (T, H, W) float32 level sets (negative inside); with return_discrepancy,
-    also the (T,) final mean |beta| in each frame's band (0 for frame 0), whose high
-    values mark frames of low confidence.
+    Raises
+    ------
+    InputError
+        For frames, a mask or options that cannot be used; the message names the fix.
 
     Examples
     --------

@@ -10,8 +10,9 @@ import importlib
 import pytest
 
 MODULES = ["clpde.data", "clpde.planar.flows", "clpde.planar.rof", "clpde.imagedata",
-           "clpde.io.images", "clpde.surface.implicit", "clpde.inpainting.colour", "clpde.runtime",
-           "clpde.inpainting.api", "clpde.tracking.contours"]
+           "clpde.io.images", "clpde.surface.implicit", "clpde.surface.flows",
+           "clpde.inpainting.colour", "clpde.runtime", "clpde.inpainting.api",
+           "clpde.tracking.contours"]
 
 
 @pytest.mark.parametrize("name", MODULES)
