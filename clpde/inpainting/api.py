@@ -461,83 +461,105 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
                                 | tuple[np.ndarray, list[InpaintState]]):
     """Fill the masked region of an image.
 
-    image: 2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8,
-        uint16, other integers or floats of any range (scaled to [0, 1] internally).
-    mask: (rows, columns) array. bool or integer: nonzero where to inpaint. float: the
-        degree of damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity
-        (1 - m) to its observed value (a soft mask; NaN or values outside [0, 1] are an
-        error). None fills the NaN pixels of a float image.
-    method: 'auto' (per box of the mask: the exemplar where the surroundings repeat, or
-        on the parts of the hole at least 6 px thick in surroundings with detail, else
-        coherence transport where installed, else the transport; calibrated on the
-        benchmark, docs/inpainting_texture.md; info.box_methods names each box's,
-        info.box_exemplar_pixels counts the exemplar's pixels), 'transport'
-        (the thesis's scheme, options below), 'coherence', 'navier-stokes', 'exemplar'
-        (texture, periodic patterns), 'structure-texture' (clpde.inpainting.available()
-        lists what is installed). None, the default, is 'auto', or 'transport' when any
-        transport option below is given. Options of methods other than 'transport' go in
-        **options.
-    boxes: solve each connected component of the mask, or cluster of nearby components,
-        in its own box grown by the method's margin (True), so that time and memory follow
-        the damage; False solves the whole image at once. Results agree (bit for bit where
-        each run takes the same number of steps; each box stops on its own).
-    seed: for methods with randomness.
+    Parameters
+    ----------
+    image : array_like
+        2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8, uint16,
+        other integers or floats of any range (scaled to [0, 1] internally).
+    mask : array_like, optional
+        (rows, columns). bool or integer: nonzero where to inpaint. float: the degree of
+        damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity (1 - m)
+        to its observed value (a soft mask, applied after every A + B cycle of the
+        transport, after the fill for other methods). None fills the NaN pixels of a float
+        image.
+    channel_axis : int, optional
+        The axis of the channels; None for a greyscale image.
+    dt : float, optional
+        Transport: the time step.
+    transport_steps : int, optional
+        Transport: A, the transport steps of a cycle.
+    diffusion_steps : int, optional
+        Transport: B, the anisotropic diffusion steps of a cycle.
+    diffusion_dt : float, optional
+        Transport: the diffusion's time step (<= 0.25; appendix A's code uses 0.2, the text
+        0.1).
+    epsilon : float, optional
+        Transport: width of the band Omega-epsilon around Omega (>= 2 pixels).
+    presmooth : int, optional
+        Transport: steps of anisotropic diffusion of the box before the loop.
+    scaling : {'none', 'quartic-root'}, optional
+        Transport: eq. (3.6) as printed, or appendix A's sign(I_t) |I_t|^(1/4) on its
+        0..255 scale, which keeps faint structures moving but never settles (the run then
+        usually ends at max_steps).
+    rotation : {'ccw', 'cw'}, optional
+        Transport: the rotation of the gradient (the steady state is the same).
+    max_steps : int, optional
+        Transport: steps per level at most.
+    tol : float, optional
+        Transport: stop once the largest change inside Omega over `check_every` cycles is
+        below it ([0, 1] units; 0 turns the test off).
+    mean_tol : float, optional
+        Transport: stop once the mean change there is below it (the test that ends runs on
+        photos, where a few pixels never settle; docs/inpainting.md).
+    check_every : int, optional
+        Transport: cycles of A + B steps between the checks, made on the device.
+    levels : int, optional
+        Resolution levels; None picks them per box from the mask's thickness
+        (multiresolution.auto_levels).
+    colour : {'channels', 'rho-phi-psi'}, optional
+        Every channel on its own, or the luminance-chroma model of thesis Figure 3.7 (3
+        colour channels; any method).
+    alpha : bool, optional
+        Treat the last channel as alpha, passed through untouched; None means yes for
+        4-channel images.
+    fill : {'biharmonic', 'diffusion', 'mean', 'zero'}, optional
+        Transport: the start inside Omega on the coarsest level (the best PSNR on photos
+        comes early, so the start matters; docs/inpainting.md compares them).
+    keep_band : bool, optional
+        Transport: reset the known pixels of Omega-epsilon after each diffusion batch, or
+        let the diffusion keep smoothing them (False).
+    device : str or int or Runtime, optional
+        The OpenCL device, as for `clpde.use_device`.
+    dtype : {float32, float64}, optional
+        The device's arithmetic (float32 by default).
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    snapshots : int, optional
+        Also keep the intermediate states (InpaintState) every N steps of the finest level.
+    return_info : bool, optional
+        Also return an InpaintInfo (steps taken, whether it converged, the boxes, ...).
+    method : str, optional
+        'auto' (per box of the mask: the exemplar where the surroundings repeat, or on the
+        parts of the hole at least 6 px thick in surroundings with detail, else coherence
+        transport where installed, else the transport; docs/inpainting_texture.md;
+        info.box_methods names each box's), 'transport' (the thesis's scheme, the options
+        above), 'coherence', 'navier-stokes', 'exemplar' (texture, periodic patterns) or
+        'structure-texture' (`clpde.inpainting.available()` lists what is installed).
+        None is 'auto', or 'transport' when a transport option is given.
+    boxes : bool, optional
+        Solve each connected component of the mask, or cluster of nearby components, in
+        its own box grown by the method's margin, so that time and memory follow the
+        damage; False solves the whole image at once (the same results, bit for bit where
+        each run takes the same number of steps).
+    seed : int, optional
+        For methods with randomness.
+    **options
+        The other methods' options, and the transport's `stencil` ('isotropic', Scharr's
+        derivatives, or appendix A's 'central') and `coarse_start` ('corrected' or
+        'upsampled').
 
-    method="transport" options (thesis chapter 3):
-    dt, transport_steps, diffusion_steps: the time step and the A / B schedule (0.1, 15, 2).
-    diffusion_dt: time step of the interleaved anisotropic diffusion (<= 0.25; appendix A's
-        code uses 0.2, the text 0.1).
-    epsilon: width of the band Omega-epsilon around Omega (>= 2 pixels).
-    presmooth: steps of anisotropic diffusion of the box before the loop.
-    scaling: 'none' uses eq. (3.6) as printed; 'quartic-root' applies sign(I_t) |I_t|^(1/4)
-        to the transport update as appendix A's code does, on its 0..255 scale. The root
-        keeps faint structures moving but never settles (the largest change stays near
-        dt |I_t|^(1/4)), so with it the run usually ends at max_steps.
-    rotation: 'ccw' or 'cw' rotation of the gradient (the steady state is the same).
-    max_steps, tol, mean_tol, check_every: stop after max_steps steps per level, or once,
-        over check_every cycles of A + B steps, the largest change inside Omega is below
-        tol or the mean change there is below mean_tol (in [0, 1] units; 0 turns a test
-        off), checked on the device. On photos the largest change rarely settles: a few
-        dozen pixels next to the border cycle as the limiter's branch flips with the sign
-        of beta, and isophotes closed inside Omega keep drifting, while the mean change
-        falls steadily; the mean test (4e-4) also stops near the best PSNR on photos, which
-        slowly falls afterwards as texture of the border is carried inwards.
-    levels: number of resolution levels; None picks it per box from the mask's thickness
-        (1 for half-widths up to 8 px, else 2: multiresolution.auto_levels, measured).
-    colour: 'channels' inpaints every channel independently; 'rho-phi-psi' inpaints the
-        luminance-chroma model of thesis Figure 3.7 (3 colour channels; any method).
-    alpha: treat the last channel as alpha, which passes through untouched; None means yes
-        for 4-channel images.
-    fill: start inside Omega (on the coarsest level): 'biharmonic', 'diffusion' (the
-        harmonic fill, iterated on the device), 'mean' or 'zero'. The steady state hardly
-        depends on it (thesis 3.3.3), but the best PSNR on photos comes early, so the start
-        matters: the biharmonic one is 0.3-0.5 dB better than the harmonic one on the
-        benchmark's text and scratch masks and needs fewer steps.
-    keep_band: reset the known pixels of Omega-epsilon after each diffusion batch (True), or
-        let the diffusion keep smoothing them cycle after cycle (False).
-    stencil: 'isotropic' (default) takes grad I in N and delta L (eqs. 3.7, 3.9) with
-        Scharr's derivatives; 'central' with appendix A's central differences, whose
-        discrete delta L and N are not parallel on sharp isophotes at 30 or 60 degrees, so
-        that oblique stripes bleed (docs/inpainting.md: +1.6 to +3.8 dB on stripes at
-        30-60 degrees; about 2x the time per step).
-    coarse_start: with levels > 1, the start of a finer level: 'corrected' (the upsampled
-        coarse result plus the extension of its mismatch with the known border pixels, so
-        that no seam is left) or 'upsampled' (the upsampled coarse result as it is).
-    A soft mask's fidelity acts after every A + B cycle on the finest level: a pixel of
-        damage m is moved (1 - m) of the way back to its observed value.
-    snapshots: an integer N: also keep the intermediate states (InpaintState) every N steps
-        of the finest level.
-    return_info: also return an InpaintInfo (steps taken, whether it converged, ...).
-    dtype: the device's arithmetic, float32 (default) or float64. device, progress: as for
-        `clpde.diffuse`.
+    Returns
+    -------
+    image : ndarray
+        The input's shape and dtype, equal to it bit for bit outside the mask; by default
+        alone, `(image, info)` with return_info (info.snapshots then holds the states, if
+        asked for), `(image, [InpaintState, ...])` with snapshots and without return_info.
+        `Inpainting` is the object form with the same keywords.
 
-    Returns one of three shapes (a public contract, kept as it is):
-    - `image` by default;
-    - `(image, info)` with return_info (then info.snapshots holds the states, if asked for);
-    - `(image, [InpaintState, ...])` with snapshots and without return_info.
-    `image` has the input's shape and dtype, and equals it bit for bit outside the mask.
-    `Inpainting` is the object form with the same keywords: `iterate(every)` yields the
-    states, and `result` and `info` are set at the end.
+    Raises
+    ------
+    InputError
+        For an image, mask, method or option that cannot be used; the message names the fix.
 
     Examples
     --------
