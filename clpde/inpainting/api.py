@@ -211,9 +211,43 @@ class SolveRun:
 class Inpainting:
     """Inpainting whose intermediate states can be watched.
 
-    The keyword arguments are those of `inpaint` (its docstring has them and the return
-    shapes). Intermediate states come from method="transport" only; other methods yield
-    their start and their result.
+    `iterate(every)` yields the states (from method="transport" only; other methods yield
+    their start and their result); afterwards `result` and `info` are set. `run()` runs to
+    the end and returns the result.
+
+    Parameters
+    ----------
+    image : array_like
+        As for `inpaint`.
+    mask : array_like, optional
+        As for `inpaint`.
+    channel_axis : int, optional
+        As for `inpaint`.
+    alpha : bool, optional
+        As for `inpaint`.
+    colour : {'channels', 'rho-phi-psi'}, optional
+        As for `inpaint`.
+    levels : int, optional
+        As for `inpaint`.
+    device : str or int or Runtime, optional
+        As for `inpaint`.
+    dtype : {float32, float64}, optional
+        As for `inpaint`.
+    progress : bool, optional
+        As for `inpaint`.
+    method : str, optional
+        As for `inpaint`.
+    boxes : bool, optional
+        As for `inpaint`.
+    seed : int, optional
+        As for `inpaint`.
+    **params
+        The method's options, as `inpaint`'s (the transport's dt, max_steps, tol, ...).
+
+    Raises
+    ------
+    InputError
+        For an image, mask, method or option that cannot be used.
 
     Examples
     --------

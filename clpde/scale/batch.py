@@ -433,18 +433,62 @@ def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
     """Run `command` ('inpaint', 'denoise', 'diffuse', 'track' or 'surface') on every input,
     over Dask workers, writing one output per input into the folder `output_dir`.
 
-    Options are the keywords of the command's task (clpde.scale.tasks.TASKS: ``steps=50,
-    flow="tv"``), the Python spelling of the command's flags. inpaint takes ``mask`` (one mask
-    for every input) or ``masks`` (a folder with a mask named like each input); track takes
-    its first-frame mask the same way; surface needs ``flow``. diffuse and denoise run tiled
-    (bitwise equal to an untiled run) with ``tile=True``, or by themselves when an image is
-    larger than the device's largest allocation.
+    A rerun skips outputs that the manifest (OUTDIR/clpde-manifest.json) shows complete. A
+    failing input is reported by name in the result and does not stop the others.
 
-    The cluster: ``workers``/``threads`` for a local one (default: workers x PoCL threads =
-    cores, or one worker per GPU), ``scheduler="tcp://host:8786"`` to join one, or an open
-    ``client``. A rerun skips outputs that the manifest shows complete (``force=True`` redoes
-    them). Returns a BatchResult; with ``futures=True`` (which needs ``client``) a
-    BatchFutures at once, whose .results() waits.
+    Parameters
+    ----------
+    command : {'inpaint', 'denoise', 'diffuse', 'track', 'surface'}
+        The task of `clpde.scale.tasks.TASKS` to run on each input.
+    inputs : iterable of path
+        The input files (surface: meshes or shape names).
+    output_dir : path
+        The output folder, created if missing.
+    mask : path, optional
+        inpaint: one mask for every input; track: the first-frame mask.
+    masks : path, optional
+        A folder with a mask named like each input (instead of `mask`).
+    workers : int, optional
+        Local worker processes (default: workers x PoCL threads = cores, or one per GPU).
+    threads : int, optional
+        PoCL threads per local worker.
+    scheduler : str, optional
+        The address of a running cluster to join, e.g. "tcp://host:8786".
+    client : distributed.Client, optional
+        An open client to use instead.
+    flow : str, optional
+        surface: the flow (needed); diffuse: the flow.
+    tile : bool, optional
+        diffuse, denoise: run in tiles (bitwise equal to untiled); tiles are used by
+        themselves when an image exceeds the device's largest allocation.
+    force : bool, optional
+        Redo outputs that the manifest shows complete.
+    futures : bool, optional
+        Return a BatchFutures at once (needs `client`), whose .results() waits.
+    progress : bool, optional
+        Draw a progress bar; by default on a terminal.
+    **options
+        The keywords of the command's task (``steps=50``, ``max_steps=2000``), the Python
+        spelling of its flags.
+
+    Returns
+    -------
+    BatchResult or BatchFutures
+        One TaskResult per input, in order (done, skipped or failed, with the reason).
+
+    Raises
+    ------
+    InputError
+        For an unknown command or option, missing masks, or outputs that would collide;
+        before any cluster is started.
+
+    Examples
+    --------
+    >>> import clpde
+    >>> clpde.batch("diffuse", [], "out")
+    Traceback (most recent call last):
+    ...
+    clpde.errors.InputError: give at least one input
     """
     if futures:
         if client is None:
