@@ -53,6 +53,11 @@ def read_image(path: PathLike) -> np.ndarray:
             import tifffile
 
             image = tifffile.imread(path)
+        elif kind == "PNG" and _png_bit_depth(path) == 16:
+            # Pillow reads 16-bit colour PNGs as 8-bit: libpng's decoder keeps the 16 bits.
+            import imagecodecs
+
+            image = imagecodecs.png_decode(path.read_bytes())
         else:
             import imageio.v3 as iio
 
@@ -67,6 +72,18 @@ def read_image(path: PathLike) -> np.ndarray:
             f"cannot read {path} as a {kind} image (damaged, or another format?): {detail}"
         ) from None
     return np.asarray(image)
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_bit_depth(path: Path) -> int | None:
+    """The bit depth in a PNG file's header (its IHDR chunk comes first), None if not a PNG."""
+    with open(path, "rb") as f:
+        head = f.read(26)
+    if len(head) < 26 or not head.startswith(_PNG_SIGNATURE) or head[12:16] != b"IHDR":
+        return None
+    return head[24]
 
 
 @contextlib.contextmanager
@@ -97,8 +114,8 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
-        png = dtype in (np.dtype(np.uint8),
-                        np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
+        png = dtype in (np.dtype(np.uint8), np.dtype(np.uint16)) or (dtype == bool
+                                                                      and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
             f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
@@ -109,9 +126,10 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
                 f"{path}: PNG stores 8- or 16-bit integers, not {dtype}; write a .tif file "
                 "to keep the values exactly"
             )
-        if dtype == np.uint16 and channels != 1:
+        if dtype == bool and channels != 1:
             raise InputError(
-                f"{path}: 16-bit colour PNG is not supported; write a .tif file instead"
+                f"{path}: PNG stores 1-bit images as greyscale only, not {channels} bool "
+                "channels; convert with image.astype(np.uint8) * 255, or write a .tif file"
             )
     folder = path.parent
     if not folder.is_dir():
@@ -161,8 +179,9 @@ def _default_file_mode(path: Path) -> int:
 def write_image(path: PathLike, array: ArrayLike) -> Path:
     """Write `array` to a PNG, TIFF or JPEG file (chosen by extension), atomically.
 
-    The dtype is kept as the format allows: PNG holds uint8 (any channels) and 16-bit
-    greyscale, JPEG 8-bit greyscale or RGB, TIFF any integer or float dtype.
+    The dtype is kept as the format allows: PNG holds uint8 and uint16 (1 to 4 channels) and
+    1-bit greyscale (bool), JPEG 8-bit greyscale or RGB, TIFF any integer, float or bool
+    dtype.
 
     Examples
     --------
@@ -185,9 +204,17 @@ def write_image(path: PathLike, array: ArrayLike) -> Path:
         if kind == "TIFF":
             import tifffile
 
-            photometric = "rgb" if array.ndim == 3 and array.shape[-1] in (3, 4) else "minisblack"
-            extra = ("unassalpha",) if array.ndim == 3 and array.shape[-1] == 4 else None
-            tifffile.imwrite(tmp, array, photometric=photometric, extrasamples=extra)
+            # RGB photometry packs bool samples into bits wrongly: bool stays greyscale samples.
+            rgb = array.ndim == 3 and array.shape[-1] in (3, 4) and array.dtype != bool
+            extra = ("unassalpha",) if rgb and array.shape[-1] == 4 else None
+            tifffile.imwrite(tmp, array, photometric="rgb" if rgb else "minisblack",
+                             extrasamples=extra)
+        elif kind == "PNG" and array.dtype == np.uint16 and array.ndim == 3 \
+                and array.shape[-1] > 1:
+            # Pillow cannot write 16-bit colour: libpng's encoder, at zlib level 1 as below.
+            import imagecodecs
+
+            tmp.write_bytes(imagecodecs.png_encode(array, level=1))
         else:
             import imageio.v3 as iio
 

@@ -52,7 +52,7 @@ def test_jpeg_round_trip_is_close(tmp_path):
 
 @pytest.mark.parametrize("name, dtype, shape, words", [
     ("a.png", np.float32, (4, 4), "PNG stores"),
-    ("a.png", np.uint16, (4, 4, 3), "16-bit colour PNG"),
+    ("a.png", bool, (4, 4, 3), "1-bit images as greyscale only"),
     ("a.jpg", np.uint8, (4, 4, 4), "JPEG"),
     ("a.bmp", np.uint8, (4, 4), "unsupported image format"),
     ("a.png", np.uint8, (4, 4, 5), "at most 4 channels"),
