@@ -5,7 +5,7 @@ from . import (
     surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
 )
 from .batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
-from .imagedata import InputError
+from .imagedata import InputError, grow_mask
 from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, diffuse, stability_limit
 from .regions import track_region  # region tracking on deforming surfaces (section 2.2)
@@ -30,6 +30,7 @@ __all__ = [
     "devices",
     "diffuse",
     "get_runtime",
+    "grow_mask",
     "inpaint",
     "stability_limit",
     "surface",
@@ -37,3 +38,20 @@ __all__ = [
     "track_region",
     "use_device",
 ]
+
+# The submodules that are public API besides the names above (`clpde.io.read_image`,
+# `clpde.inpainting.available()`); the others stay importable (`import clpde.rof`) but are
+# left out of dir(clpde), so that it lists what a user calls, as scikit-image's does.
+PUBLIC_MODULES = ("data", "inpainting", "io", "surface")
+
+
+def __getattr__(name: str):
+    if name in PUBLIC_MODULES:  # loaded on first use, as `import clpde.inpainting` would
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*__all__, *PUBLIC_MODULES, "__version__"})

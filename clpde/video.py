@@ -485,7 +485,8 @@ def run_sequence_inpaint(args) -> int:
 
     # as for one image: only the options given, so that the default method is chosen by them
     options = {"colour": args.colour, "levels": args.levels, "device": args.device,
-               "method": args.method}
+               "method": args.method, "grow": getattr(args, "grow", 0),
+               "seed": getattr(args, "seed", None)}
     options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
                     if getattr(args, name) is not None})
     result = inpaint_sequence(args.input, args.mask, args.output, workers=args.workers,

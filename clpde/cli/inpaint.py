@@ -24,12 +24,17 @@ from ._common import (
 
 def add_inpaint_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "inpaint", help="fill a masked region by continuing the isophotes (thesis ch. 3)",
-        description="Inpaint the pixels where MASK is nonzero (thesis chapter 3): smoothness "
-                    "is transported along the isophotes arriving at the region, interleaved "
-                    "with anisotropic diffusion, until a steady state. Colour images are "
-                    "inpainted per channel (or in the rho, sin phi, sin psi model); an alpha "
-                    "channel is kept as is. --demo damages a bundled photo and restores it.",
+        "inpaint", help="fill a masked region of an image (structure and texture)",
+        description="Fill the pixels where MASK is white. The default method, auto, chooses "
+                    "per region of the mask: the exemplar (patches copied from the "
+                    "surroundings) where they repeat, and on the thick parts of holes in "
+                    "detailed surroundings; coherence transport (isophotes continued into the "
+                    "hole) elsewhere (docs/inpainting.md). --method transport is the thesis's "
+                    "scheme (chapter 3): smoothness transported along the isophotes, "
+                    "interleaved with anisotropic diffusion, to a steady state; its options "
+                    "are marked 'transport:' below. Colour images are inpainted per channel "
+                    "(or in the rho, sin phi, sin psi model); an alpha channel is kept as is. "
+                    "--demo damages a bundled photo and restores it.",
     )
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
     parser.add_argument("mask", metavar="MASK", nargs="?",
@@ -79,6 +84,12 @@ def add_inpaint_parser(subparsers) -> None:
                              "installed, the best on the benchmark, docs/inpainting.md; "
                              "'transport', the thesis's scheme, when one of its options "
                              "above or --gif is given)")
+    parser.add_argument("--grow", type=float, default=0, metavar="PX",
+                        help="grow the mask by a disc of PX pixels first, to take in a "
+                             "damage's blurred rim (default: 0)")
+    parser.add_argument("--seed", type=int, default=None, metavar="N",
+                        help="the random search's seed of the exemplar method (the same seed "
+                             "gives the same result; default: 0)")
     parser.add_argument("--soft-mask", action="store_true",
                         help="read MASK's grey levels as the degree of damage (black 0 = "
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
@@ -164,7 +175,7 @@ def run_inpaint(args) -> int:
         method = "transport"  # the evolution the GIF shows is the thesis scheme's
     options = {"channel_axis": parts.channel_axis, "colour": args.colour,
                "levels": args.levels, "device": args.device, "progress": show_progress(),
-               "return_info": True, "method": method}
+               "return_info": True, "method": method, "grow": args.grow, "seed": args.seed}
     # only the transport options given, so that the default method can be chosen by them
     options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
                     if getattr(args, name) is not None})
@@ -178,10 +189,13 @@ def run_inpaint(args) -> int:
         write_gif(args.gif, frames, duration=0.25)
         print(f"wrote {args.gif} ({len(frames)} frames: the damaged image, then every "
               f"{args.gif_every} steps from the start fill to the result)", file=sys.stderr)
+    if info.method is None:  # the empty mask's warning has said why
+        print("inpaint: 0 pixels to fill; wrote an unchanged copy", file=sys.stderr)
+        return 0
     state = "converged" if info.converged else "stopped at --max-steps"
     steps = f"{info.steps} steps ({state}), {info.levels} level(s), " \
         if info.method == "transport" else ""
-    print(f"inpaint: {int((mask > 0).sum())} pixels, method {info.method}, {steps}"
+    print(f"inpaint: {info.omega_pixels} pixels, method {info.method}, {steps}"
           f"{len(info.boxes)} box(es), {info.seconds:.2f} s", file=sys.stderr)
     return 0
 
