@@ -898,7 +898,8 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
             dtype: DTypeLike | None = None, progress: bool | None = None,
             snapshots: int | None = None, return_info: bool = False, method: str | None = None,
             boxes: bool = True, seed: int | None = None, grow: float = 0,
-            precision: DTypeLike | None = None, **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
+            precision: DTypeLike | None = None,
+            **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
                                 | tuple[np.ndarray, list[InpaintState]]):
     """Fill the masked region of an image.
 

@@ -114,8 +114,8 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
-        png = dtype in (np.dtype(np.uint8), np.dtype(np.uint16)) or (dtype == bool
-                                                                      and channels == 1)
+        png = dtype.kind == "u" and dtype.itemsize <= 2 or (dtype.kind == "b"
+                                                            and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
             f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
@@ -126,7 +126,7 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
                 f"{path}: PNG stores 8- or 16-bit integers, not {dtype}; write a .tif file "
                 "to keep the values exactly"
             )
-        if dtype == bool and channels != 1:
+        if dtype.kind == "b" and channels != 1:
             raise InputError(
                 f"{path}: PNG stores 1-bit images as greyscale only, not {channels} bool "
                 "channels; convert with image.astype(np.uint8) * 255, or write a .tif file"

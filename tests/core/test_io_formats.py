@@ -17,7 +17,7 @@ SHAPES = [(5, 6), (5, 6, 1), (5, 6, 2), (5, 6, 3), (5, 6, 4)]
 
 def _image(rng, dtype, shape):
     dtype = np.dtype(dtype)
-    if dtype == bool:
+    if dtype.kind == "b":
         return rng.random(shape) > 0.5
     if dtype.kind == "f":
         return (rng.random(shape) * 100 - 50).astype(dtype)
