@@ -44,6 +44,6 @@ def check_time_step(dt, limit: float, what: str) -> float:
     if dt > limit * (1 + 1e-9):
         raise InputError(
             f"dt={dt:g} is beyond the stability limit {limit:g} of the explicit {what} scheme; "
-            f"use dt <= {limit:g} (or leave dt=None for {0.8 * limit:g})"
+            f"use dt <= {limit:g}, or leave dt out for the default {0.8 * limit:g}"
         )
     return dt

@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from .imagedata import InputError
-from .io import IMAGE_FORMATS, PathLike, atomic_output, replace_folder
+from .io import IMAGE_FORMATS, PathLike, atomic_output, check_folder_writable, replace_folder
 
 COMMANDS = ("inpaint", "denoise", "diffuse", "track", "surface")
 FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
@@ -316,6 +316,29 @@ def _command_options(command, argv, options, flow):
     return argv, flow
 
 
+def expand_inputs(inputs: Iterable[PathLike]) -> list[str]:
+    """The inputs, with any pattern (``*``, ``?``, ``[``) that names no existing file
+    expanded as a shell would (sorted): a quoted pattern, or one from Python. A pattern
+    that matches nothing is an error, before anything is created: the shell passes such a
+    pattern on as it is, and it names no file."""
+    import glob
+
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    out = []
+    for item in inputs:
+        text = os.fspath(item)
+        if any(c in text for c in "*?[") and not os.path.exists(text):
+            found = sorted(glob.glob(text))
+            if not found:
+                raise InputError(f"the pattern {text} matches no file; check the folder and "
+                                 "the spelling")
+            out += found
+        else:
+            out.append(text)
+    return out
+
+
 def _plan(command, inputs, outdir: Path, mask, masks, argv, flow, tile) -> list[dict]:
     if command not in COMMANDS:
         raise InputError(f"unknown batch command {command!r}; choose one of {', '.join(COMMANDS)}")
@@ -338,6 +361,10 @@ def _plan(command, inputs, outdir: Path, mask, masks, argv, flow, tile) -> list[
         raise InputError(f"mask {mask} does not exist")
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"output {outdir} exists and is not a folder")
+    existing = outdir  # the folder, or the nearest folder above it that mkdir writes into
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    check_folder_writable(existing, f"the output folder {outdir}")
     specs, names = [], {}
     for item in inputs:
         source = Path(item)
@@ -622,7 +649,7 @@ def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=N
     start = time.perf_counter()
     outdir = Path(output_dir)
     argv, flow = _command_options(command, argv, options, flow)
-    specs = _plan(command, list(inputs), outdir, mask, masks, argv, flow, tile)
+    specs = _plan(command, expand_inputs(inputs), outdir, mask, masks, argv, flow, tile)
     outdir.mkdir(parents=True, exist_ok=True)
     _sweep_temporaries(outdir, [s["name"] for s in specs])
     manifest = _read_manifest(outdir)
@@ -671,7 +698,7 @@ def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
                              "without one, batch() waits and returns the results")
         return submit(command, inputs, output_dir, client=client, mask=mask, masks=masks,
                       flow=flow, tile=tile, force=force, argv=argv, **options)
-    inputs = list(inputs)
+    inputs = expand_inputs(inputs)
     # Bad options fail here, before a cluster is started.
     _plan(command, inputs, Path(output_dir), mask, masks,
           *_command_options(command, argv, options, flow), tile)

@@ -67,9 +67,14 @@ def read_image(path: PathLike) -> np.ndarray:
         raise InputError(f"{path} is too large to read into this computer's memory; crop or "
                          "downscale it first") from None
     except Exception as exc:  # noqa: BLE001  (readers raise many types: all mean unreadable)
-        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(".")
+        # imageio's "`pillow` can not handle the given uri" names its plugin, not the file's
+        # problem: only the readers' own words (such as "image file is truncated") are kept.
+        detail = "" if "can not handle" in detail or "cannot identify" in detail \
+            else f" ({detail})"
         raise InputError(
-            f"cannot read {path} as a {kind} image (damaged, or another format?): {detail}"
+            f"cannot read {path}: not a {kind} image, or a damaged one{detail}; clpde reads "
+            ".png, .tif/.tiff and .jpg/.jpeg image files"
         ) from None
     return np.asarray(image)
 
@@ -99,6 +104,36 @@ def _no_pixel_limit():
         yield
     finally:
         Image.MAX_IMAGE_PIXELS = limit
+
+
+def check_folder_writable(folder: PathLike, what: str) -> None:
+    """Raise InputError unless a file can be created in `folder` (`what` names the output
+    in the message). A file is made and removed, since permission bits alone do not tell:
+    root ignores them, while a read-only mount, an immutable folder or sysfs refuse root."""
+    folder = Path(folder) if str(folder) else Path(".")
+    try:
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".clpde-", suffix=".part")
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise InputError(f"cannot write {what}: the folder {folder} is not writable ({reason}); "
+                         "choose a folder you can write to") from None
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(probe)
+
+
+def check_output_file(path: PathLike) -> Path:
+    """Raise InputError, before any work, unless `path` can be written as an image file:
+    a known extension, not a folder, in an existing folder that can be written to."""
+    path = Path(path)
+    image_format(path)
+    if path.is_dir():
+        raise InputError(f"output {path} is a folder, not a file name")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise InputError(f"output folder {folder} does not exist; create it first")
+    check_folder_writable(folder, str(path))
+    return path
 
 
 def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> None:
@@ -131,11 +166,7 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
                 f"{path}: PNG stores 1-bit images as greyscale only, not {channels} bool "
                 "channels; convert with image.astype(np.uint8) * 255, or write a .tif file"
             )
-    folder = path.parent
-    if not folder.is_dir():
-        raise InputError(f"output folder {folder} does not exist; create it first")
-    if path.is_dir():
-        raise InputError(f"output {path} is a folder, not a file name")
+    check_output_file(path)
 
 
 @contextlib.contextmanager
@@ -318,10 +349,12 @@ def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
     if not parent.is_dir():
         raise InputError(f"the folder {parent} for the output {outdir} does not exist; "
                          "create it first")
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
+    # the run is staged beside the folder and renamed in: the parent is written to
+    check_folder_writable(parent, f"the output folder {outdir}")
     if not outdir.exists():
         return outdir
-    if not outdir.is_dir():
-        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
     entries = sorted(outdir.iterdir())
     if not entries:
         return outdir

@@ -9,7 +9,6 @@ Errors print one line `clpde: error: ...` on stderr and exit with status 2, writ
 
 from __future__ import annotations
 
-import argparse
 import sys
 import warnings
 
@@ -18,6 +17,7 @@ import pyopencl as cl
 from .. import __version__
 from ..runtime import ClpdeError
 from . import batch, denoise, devices, diffuse, inpaint, regions, surface, track
+from ._common import Parser
 
 SUBCOMMANDS = [
     devices.add_devices_parser,
@@ -32,8 +32,8 @@ SUBCOMMANDS = [
 ERROR_STATUS = 2
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> Parser:
+    parser = Parser(
         prog="clpde", description="PDE image processing on OpenCL devices (GPU or CPU).")
     parser.add_argument("--version", action="version", version=f"clpde {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)

@@ -6,6 +6,7 @@ atomically, and colour images are processed per channel with any alpha channel k
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import re
 import sys
@@ -18,13 +19,23 @@ from .._progress import on_terminal as show_progress  # noqa: F401  (the subcomm
 from ..imagedata import InputError
 from ..io import (
     check_not_overwriting_input,
+    check_output_file,
     check_output_folder,
     check_writable,
-    image_format,
     read_image,
     write_image,
 )
 from ..runtime import get_runtime
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse's parser with its usage errors on one line, as every other error of the
+    command line: `clpde inpaint: error: ...; see `clpde inpaint --help``, exit status 2
+    (argparse's own prints the whole usage first). Its subcommands' parsers are of this
+    class too (argparse makes them of the parent's)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}; see `{self.prog} --help`\n")
 
 
 def add_device_argument(parser) -> None:
@@ -93,7 +104,7 @@ def load_input(args, *extra_inputs, allow_nan: bool = False) -> np.ndarray:
     NaN pixels are refused with the command that fills them, unless allow_nan."""
     get_runtime(args.device)  # an unknown device fails here, before reading anything
     check_not_overwriting_input([args.input, *extra_inputs], args.output)
-    image_format(args.output)
+    check_output_file(args.output)  # before reading: a large input takes a while
     image = read_image(args.input)
     if image.dtype == bool:  # 1-bit files: compute on 0/255 and write 8-bit
         image = image.astype(np.uint8) * 255

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
+
+from ._common import Parser
 
 FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage errors
 
@@ -73,7 +74,7 @@ def run_batch(args) -> int:
     return FAILED_STATUS if result.failed else 0
 
 
-class _BatchParser(argparse.ArgumentParser):
+class _BatchParser(Parser):
     """Keeps the options that `clpde batch` does not know as args.extra, for COMMAND's own
     parser (which checks them before any work), instead of refusing them."""
 

@@ -8,7 +8,13 @@ import sys
 import numpy as np
 
 from ..imagedata import InputError
-from ..io import MASK_RULE, check_not_overwriting_input, read_image, read_mask
+from ..io import (
+    MASK_RULE,
+    check_folder_writable,
+    check_not_overwriting_input,
+    read_image,
+    read_mask,
+)
 from ..runtime import get_runtime
 from ..video import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 from ._common import (
@@ -149,6 +155,7 @@ def run_inpaint(args) -> int:
         folder = os.path.dirname(os.path.abspath(args.gif))
         if not os.path.isdir(folder):
             raise InputError(f"the folder {folder} for --gif does not exist; create it first")
+        check_folder_writable(folder, args.gif)
     nan_mask = args.mask.lower() == "nan" and not os.path.exists(args.mask)
     image = load_input(args, *([] if nan_mask else [args.mask]), allow_nan=True)
     finite = (np.isfinite(image) if np.issubdtype(image.dtype, np.floating)
