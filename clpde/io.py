@@ -245,7 +245,7 @@ def write_image(path: PathLike, array: ArrayLike) -> Path:
             # Pillow cannot write 16-bit colour: libpng's encoder, at zlib level 1 as below.
             import imagecodecs
 
-            tmp.write_bytes(imagecodecs.png_encode(array, level=1))
+            tmp.write_bytes(imagecodecs.png_encode(np.ascontiguousarray(array), level=1))
         else:
             import imageio.v3 as iio
 
