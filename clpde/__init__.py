@@ -1,5 +1,8 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
+# First: importing it turns Ctrl-C into one line while the libraries below load (a second).
+from . import _interrupt  # noqa: F401  # isort: skip
+
 from . import (
     data,  # test images and scenes, like skimage.data
     surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
