@@ -131,6 +131,8 @@ def run_inpaint(args) -> int:
         return run_sequence_inpaint(args)
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
+    if not np.isfinite(args.grow) or args.grow < 0:
+        raise InputError(f"--grow must be a number of pixels >= 0, not {args.grow:g}")
     if args.demo:
         from ._inpaint_demo import run_demo
 
