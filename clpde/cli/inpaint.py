@@ -82,7 +82,8 @@ def add_inpaint_parser(subparsers) -> None:
     parser.add_argument("--colour", choices=("channels", "rho-phi-psi"), default="channels",
                         help="colour model (default: channels)")
     parser.add_argument("--levels", type=int, default=None,
-                        help="multiresolution levels (default: chosen from the mask)")
+                        help="transport: multiresolution levels (default: chosen from the "
+                             "mask)")
     from ..inpainting import METHODS
 
     parser.add_argument("--method", choices=("auto", *METHODS), default=None,
