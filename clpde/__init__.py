@@ -1,11 +1,15 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
+# First: importing it turns Ctrl-C into one line while the libraries below load (a second).
+from . import _interrupt  # noqa: F401  # isort: skip
+
 from . import (
     data,  # test images and scenes, like skimage.data
     surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
 )
 from ._version import __version__  # noqa: F401  (clpde.__version__)
 from .errors import ClpdeError, InputError, KernelBuildError, NoDeviceError
+from .imagedata import grow_mask
 from .inpainting.api import Inpainting, inpaint
 from .planar.flows import FLOWS, PlanarFlow, diffuse, stability_limit
 from .planar.rof import denoise_tv
@@ -29,6 +33,7 @@ __all__ = [
     "devices",
     "diffuse",
     "get_runtime",
+    "grow_mask",
     "inpaint",
     "stability_limit",
     "surface",
@@ -36,3 +41,20 @@ __all__ = [
     "track_region",
     "use_device",
 ]
+
+# The submodules that are public API besides the names above (`clpde.io.read_image`,
+# `clpde.inpainting.available()`); the others stay importable (`import clpde.rof`) but are
+# left out of dir(clpde), so that it lists what a user calls, as scikit-image's does.
+PUBLIC_MODULES = ("data", "inpainting", "io", "surface")
+
+
+def __getattr__(name: str):
+    if name in PUBLIC_MODULES:  # loaded on first use, as `import clpde.inpainting` would
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*__all__, *PUBLIC_MODULES, "__version__"})

@@ -1,4 +1,5 @@
-"""When clpde draws a progress bar: the one policy of the library and the command line.
+"""Long runs: when clpde draws a progress bar (the one policy of the library and the command
+line), and the states a run yields.
 
 ``progress=True`` always draws one, ``False`` never, and ``None`` (the default) decides:
 only on a terminal (bars go to stderr), and, where the caller says how long the run is,
@@ -44,3 +45,18 @@ def progress_range(progress: bool | None, steps: int, desc: str, *, long_run: bo
                    **options) -> tqdm:
     """range(steps) under a tqdm bar drawn by the policy of `bar_disabled`."""
     return tqdm(range(steps), desc=desc, disable=bar_disabled(progress, long_run), **options)
+
+
+# Every object that runs for long (PlanarFlow, Inpainting, MorphingTracker, RegionTracker)
+# has one iteration verb, `iterate`, yielding `State`s: each has `step` (how far the run has
+# got, in its own unit) and `time` (its time, or None where the run has none).
+class State:
+    """Base of the states a long run yields.
+
+    Subclasses are dataclasses and each has `step` (int: flow steps, steps on an
+    inpainting level, a frame's index) and `time` (float, or None for runs without one).
+    """
+
+    __slots__ = ()
+    step: int
+    time: float | None

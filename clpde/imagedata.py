@@ -31,6 +31,8 @@ class ImageLayout:
             values = values[0]
         else:
             values = np.moveaxis(values, 0, self.channel_axis)
+        if self.dtype == bool:  # a binary image stays binary: cut at one half
+            return values > 0.5
         if np.issubdtype(self.dtype, np.integer):
             info = np.iinfo(self.dtype)
             values = np.clip(np.rint(values), info.min, info.max)
@@ -60,15 +62,18 @@ def check_channel_axis(ndim: int, channel_axis: int | None) -> int | None:
 
 
 def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> np.ndarray:
-    """`image` as an array of integers or floats, neither empty nor (unless allow_nan)
-    holding NaN or infinite values; `name` names it in the error."""
+    """`image` as an array of bools, integers or floats, neither empty nor (unless allow_nan)
+    holding NaN or infinite values; `name` names it in the error.
+
+    A bool image is a binary one: the flows compute on it as 0/1 and return bool again,
+    True where the result is above one half (ImageLayout.restore), as a thresholded
+    level-set would."""
     array = np.asarray(image)
-    if array.dtype == bool or not (
-        np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)
-    ):
+    if not (array.dtype == bool or np.issubdtype(array.dtype, np.integer)
+            or np.issubdtype(array.dtype, np.floating)):
         raise InputError(
-            f"{name} has dtype {array.dtype}; expected unsigned or signed integers or floats "
-            "(convert with image.astype(np.float32))"
+            f"{name} has dtype {array.dtype}; expected bools, unsigned or signed integers or "
+            "floats (convert with image.astype(np.float32))"
         )
     if array.size == 0:
         raise InputError(f"{name} is empty (shape {array.shape})")
@@ -83,7 +88,10 @@ def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> 
 
 
 def integer_range(dtype: DTypeLike) -> tuple[float, float]:
-    """(offset, scale) mapping an integer dtype's whole range to [0, 1] (uint8: 0, 255)."""
+    """(offset, scale) mapping an integer dtype's whole range to [0, 1] (uint8: 0, 255;
+    bool: 0, 1)."""
+    if np.dtype(dtype) == bool:
+        return 0.0, 1.0
     info = np.iinfo(dtype)
     return float(info.min), float(info.max) - float(info.min)
 
@@ -103,8 +111,9 @@ def to_kernel_layout(image: ArrayLike, channel_axis: int | None = None,
                      name: str = "image", fits=None) -> tuple[np.ndarray, ImageLayout]:
     """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
 
-    Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1); float images by
-    their own minimum and maximum, so a flow's parameters mean the same for any input range.
+    Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1; bool is 0/1);
+    float images by their own minimum and maximum, so a flow's parameters mean the same for
+    any input range.
     fits(shape), given, may refuse the (nc, ny, nx) shape before any conversion.
 
     Examples
@@ -124,7 +133,7 @@ def to_kernel_layout(image: ArrayLike, channel_axis: int | None = None,
     if fits is not None:
         rest = tuple(n for i, n in enumerate(array.shape) if i != axis)
         fits((1,) + array.shape if axis is None else (array.shape[axis],) + rest)
-    if np.issubdtype(array.dtype, np.integer):
+    if array.dtype == bool or np.issubdtype(array.dtype, np.integer):
         offset, scale = integer_range(array.dtype)
     else:
         offset, scale = value_range(float(array.min()), float(array.max()), name)
@@ -175,7 +184,7 @@ def check_time_step(dt, limit: float, what: str) -> float:
     if dt > limit * (1 + 1e-9):
         raise InputError(
             f"dt={dt:g} is beyond the stability limit {limit:g} of the explicit {what} scheme; "
-            f"use dt <= {limit:g} (or leave dt=None for {0.8 * limit:g})"
+            f"use dt <= {limit:g}, or leave dt out for the default {0.8 * limit:g}"
         )
     return dt
 
@@ -217,3 +226,77 @@ def split_alpha(image: np.ndarray, name: str = "input") -> Channels:
     if colour.shape[-1] == 1:
         return Channels(colour[..., 0], None, alpha, alpha is None)
     return Channels(colour, -1, alpha, False)
+
+
+def grow_mask(mask: ArrayLike, px: float) -> np.ndarray:
+    """Grow a mask by a disc of radius `px` pixels: every pixel within `px` of the mask's
+    support joins it.
+
+    A scanned scratch or a thresholded mask often misses the damage's blurred rim, which
+    the inpainting then copies inwards; growing the mask by a pixel or two takes the rim in.
+
+    Parameters
+    ----------
+    mask : array_like, shape (rows, columns)
+        bool (True = in the mask), integer (nonzero = in, e.g. a 0/255 mask) or float (a
+        soft mask: the degree of damage in [0, 1], nonzero = in its support).
+    px : float
+        The disc's radius in pixels, >= 0: a pixel joins when its distance to the nearest
+        pixel of the support is at most `px`. 0 returns a copy.
+
+    Returns
+    -------
+    numpy.ndarray
+        A new array of the mask's shape and dtype. The pixels already in the support keep
+        their values; the grown ring gets True (bool), the support's largest value (integer:
+        255 for a 0/255 mask) or 1.0 (float: fully damaged).
+
+    Raises
+    ------
+    InputError
+        If `px` is negative or not a finite number, or the mask is not a 2-D bool, integer
+        or float array with finite values.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> dot = np.zeros((5, 5), bool)
+    >>> dot[2, 2] = True
+    >>> clpde.grow_mask(dot, 1).astype(int)
+    array([[0, 0, 0, 0, 0],
+           [0, 0, 1, 0, 0],
+           [0, 1, 1, 1, 0],
+           [0, 0, 1, 0, 0],
+           [0, 0, 0, 0, 0]])
+    >>> soft = np.array([[0.0, 0.0, 0.5, 0.0]])
+    >>> clpde.grow_mask(soft, 1)
+    array([[0. , 1. , 0.5, 1. ]])
+    """
+    from scipy import ndimage
+
+    if isinstance(px, bool) or not isinstance(px, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(px) or px < 0:
+        raise InputError(f"the mask's growth must be a number of pixels >= 0, not {px!r}")
+    m = np.asarray(mask)
+    if m.ndim != 2:
+        raise InputError(f"a mask is a 2-D (rows, columns) array, not shape {m.shape}")
+    if not (m.dtype == bool or np.issubdtype(m.dtype, np.integer)
+            or np.issubdtype(m.dtype, np.floating)):
+        raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array")
+    if np.issubdtype(m.dtype, np.floating) and not np.isfinite(m).all():
+        raise InputError("mask contains NaN or infinite values; a float mask is the degree of "
+                         "damage in [0, 1]")
+    out = m.copy()
+    support = m != 0
+    if px == 0 or not support.any():
+        return out
+    # The exact Euclidean distance of every pixel to the support, so the ring is a true disc.
+    ring = (ndimage.distance_transform_edt(~support) <= px) & ~support
+    if m.dtype == bool:
+        out[ring] = True
+    elif np.issubdtype(m.dtype, np.integer):
+        out[ring] = m[support].max()
+    else:
+        out[ring] = 1.0
+    return out

@@ -252,6 +252,7 @@ _chosen_spec = None
 _runtimes: dict[int, Runtime] = {}
 
 
+
 def use_device(spec: str | int | Runtime | None) -> Runtime:
     """Make ``spec`` the default device of every later call in this process.
 
@@ -549,6 +550,11 @@ class Runtime:
 _used_opencl = False  # this process has asked OpenCL for its devices
 _forked_from: int | None = None  # the parent whose OpenCL state a forked child inherited
 
+
+
+# What every `device=` takes: a name part ('cpu', 'gpu', ...), an index, a Runtime, or None
+# for the default choice (see clpde.devices).
+DeviceLike = str | int | Runtime | None
 
 def _fork_message() -> str:
     return (

@@ -9,15 +9,16 @@ Errors print one line `clpde: error: ...` on stderr and exit with status 2, writ
 
 from __future__ import annotations
 
-import argparse
 import sys
 import warnings
 
 import pyopencl as cl
 
+from .. import _interrupt
 from .._version import __version__
 from ..errors import ClpdeError, error_message
 from . import batch, denoise, devices, diffuse, inpaint, regions, surface, track
+from ._common import Parser
 
 SUBCOMMANDS = [
     devices.add_devices_parser,
@@ -32,8 +33,8 @@ SUBCOMMANDS = [
 ERROR_STATUS = 2
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> Parser:
+    parser = Parser(
         prog="clpde", description="PDE image processing on OpenCL devices (GPU or CPU).")
     parser.add_argument("--version", action="version", version=f"clpde {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -48,15 +49,17 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def main(argv=None) -> int:
-    """Run the command line; returns the exit status (0, or 2 on any error)."""
-    parser = build_parser()
+    """Run the command line; returns the exit status (0, or 2 on any error, 130 when
+    interrupted)."""
+    _interrupt.restore()  # from here on, Ctrl-C is the KeyboardInterrupt caught below
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help, --version and usage errors
-        if exc.code is None:
-            return 0
-        return exc.code if isinstance(exc.code, int) else ERROR_STATUS
-    try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version and usage errors
+            if exc.code is None:
+                return 0
+            return exc.code if isinstance(exc.code, int) else ERROR_STATUS
         with warnings.catch_warnings():
             # Deprecations speak to Python code, not to the command line's user (Python
             # hides them outside __main__ too).
@@ -67,5 +70,13 @@ def main(argv=None) -> int:
         print(f"clpde: error: {error_message(exc)}", file=sys.stderr)
         return ERROR_STATUS
     except KeyboardInterrupt:
-        print("clpde: interrupted; nothing was written", file=sys.stderr)
-        return 130
+        print(_interrupt.LINE, file=sys.stderr)
+        return _interrupt.EXIT_STATUS
+
+
+def run() -> None:
+    """The `clpde` program: main() on sys.argv, exiting with its status; a Ctrl-C after
+    main() has returned is ignored while Python exits."""
+    status = main()
+    _interrupt.ignore()
+    sys.exit(status)

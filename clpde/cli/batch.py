@@ -10,6 +10,7 @@ import sys
 from ..errors import InputError
 from ..scale.batch import COMMANDS, MANIFEST, batch, result_table
 from . import denoise, diffuse, inpaint, surface, track
+from ._common import Parser
 
 FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage errors
 
@@ -114,7 +115,7 @@ def run_batch(args) -> int:
     return FAILED_STATUS if result.failed else 0
 
 
-class _BatchParser(argparse.ArgumentParser):
+class _BatchParser(Parser):
     """Keeps the options that `clpde batch` does not know as args.extra, for COMMAND's own
     parser (which checks them before any work), instead of refusing them."""
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
 from ..film.restore import inpaint_sequence
 from ..inpainting.registry import METHODS
@@ -24,12 +26,17 @@ from ._inpaint_demo import run_demo
 
 def add_inpaint_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "inpaint", help="fill a masked region by continuing the isophotes (thesis ch. 3)",
-        description="Inpaint the pixels where MASK is nonzero (thesis chapter 3): smoothness "
-                    "is transported along the isophotes arriving at the region, interleaved "
-                    "with anisotropic diffusion, until a steady state. Colour images are "
-                    "inpainted per channel (or in the rho, sin phi, sin psi model); an alpha "
-                    "channel is kept as is. --demo damages a bundled photo and restores it.",
+        "inpaint", help="fill a masked region of an image (structure and texture)",
+        description="Fill the pixels where MASK is white. The default method, auto, chooses "
+                    "per region of the mask: the exemplar (patches copied from the "
+                    "surroundings) where they repeat, and on the thick parts of holes in "
+                    "detailed surroundings; coherence transport (isophotes continued into the "
+                    "hole) elsewhere (docs/inpainting.md). --method transport is the thesis's "
+                    "scheme (chapter 3): smoothness transported along the isophotes, "
+                    "interleaved with anisotropic diffusion, to a steady state; its options "
+                    "are marked 'transport:' below. Colour images are inpainted per channel "
+                    "(or in the rho, sin phi, sin psi model); an alpha channel is kept as is. "
+                    "--demo damages a bundled photo and restores it.",
     )
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
     parser.add_argument("mask", metavar="MASK", nargs="?",
@@ -71,13 +78,20 @@ def add_inpaint_parser(subparsers) -> None:
     parser.add_argument("--colour", choices=("channels", "rho-phi-psi"), default="channels",
                         help="colour model (default: channels)")
     parser.add_argument("--levels", type=int, default=None,
-                        help="multiresolution levels (default: chosen from the mask)")
+                        help="transport: multiresolution levels (default: chosen from the "
+                             "mask)")
 
     parser.add_argument("--method", choices=("auto", *METHODS), default=None,
                         help="inpainting method (default: auto, coherence transport where "
                              "installed, the best on the benchmark, docs/inpainting.md; "
                              "'transport', the thesis's scheme, when one of its options "
                              "above or --gif is given)")
+    parser.add_argument("--grow", type=float, default=0, metavar="PX",
+                        help="grow the mask by a disc of PX pixels first, to take in a "
+                             "damage's blurred rim (default: 0)")
+    parser.add_argument("--seed", type=int, default=None, metavar="N",
+                        help="the random search's seed of the exemplar method (the same seed "
+                             "gives the same result; default: 0)")
     parser.add_argument("--soft-mask", action="store_true",
                         help="read MASK's grey levels as the degree of damage (black 0 = "
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
@@ -91,6 +105,7 @@ def task_options(args) -> dict:
     """The inpaint task's keywords from the parsed flags (clpde.scale.tasks.inpaint_file)."""
     return {"method": args.method, "colour": args.colour, "levels": args.levels,
             "soft_mask": args.soft_mask, "gif": args.gif, "gif_every": args.gif_every,
+            "grow": args.grow, "seed": args.seed,
             **{name: getattr(args, name) for name in TRANSPORT_OPTIONS}, "device": args.device}
 
 
@@ -99,6 +114,8 @@ def run_inpaint(args) -> int:
         return run_sequence_inpaint(args)
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
+    if not np.isfinite(args.grow) or args.grow < 0:
+        raise InputError(f"--grow must be a number of pixels >= 0, not {args.grow:g}")
     if args.demo:
 
         if args.input or args.mask or args.gif:

@@ -15,7 +15,9 @@ boxes, for every inpainting method alike.
 from __future__ import annotations
 
 import inspect
+import sys
 import time
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -23,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._state import DeviceLike, State
+from .._progress import State
 from ..errors import InputError
 from ..fields import check_fits
 from ..imagedata import (
@@ -31,10 +33,11 @@ from ..imagedata import (
     as_image,
     check_channel_axis,
     compute_dtype,
+    grow_mask,
     integer_range,
     value_range,
 )
-from ..runtime import get_runtime
+from ..runtime import DeviceLike, get_runtime
 from . import boxes, choose, exemplar, transport
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
@@ -71,7 +74,7 @@ class InpaintInfo:
     band_pixels: int = 0
     seconds: float = 0.0
     snapshots: list = field(default_factory=list)
-    method: str = "transport"
+    method: str | None = "transport"  # None: the mask was empty, nothing was run
     boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved
     box_methods: list = field(default_factory=list)  # the method that solved each box
     # omega pixels of each box that the exemplar filled (under method="auto" a box named
@@ -155,7 +158,7 @@ def _prepare(image, mask, channel_axis, alpha):
             "the alpha channel (the last one) holds NaN or infinite values, and only the colour "
             "channels are inpainted; fix the alpha channel first, or pass alpha=False"
         )
-    if np.issubdtype(array.dtype, np.integer):
+    if array.dtype == bool or np.issubdtype(array.dtype, np.integer):
         offset, scale = integer_range(array.dtype)
     else:
         where = finite & ~omega if omega.any() and not omega.all() else finite
@@ -241,6 +244,8 @@ class Inpainting:
         As for `inpaint`.
     seed : int, optional
         As for `inpaint`.
+    grow : float, optional
+        As for `inpaint`.
     **params
         The method's options, as `inpaint`'s (the transport's dt, max_steps, tol, ...).
 
@@ -266,10 +271,19 @@ class Inpainting:
                  colour: str = "channels", levels: int | None = None, device: DeviceLike = None,
                  dtype: DTypeLike | None = None, progress: bool | None = None,
                  method: str | None = None, boxes: bool = True, seed: int | None = None,
-                 **params: Any):
+                 grow: float = 0, **params: Any):
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
             image, mask, channel_axis, alpha)
+        if self.softness is not None:  # a soft mask grows its support, fully damaged
+            self.softness = grow_mask(self.softness, grow)
+            self.mask = self.softness > 0
+        else:
+            self.mask = grow_mask(self.mask, grow)
+        if not self.mask.any():
+            warnings.warn("the mask is empty, so nothing was filled and the image comes back "
+                          "unchanged; was the mask inverted or saved blank?", UserWarning,
+                          stacklevel=_caller_level())
         ncolour = self.planes.shape[0] - int(self.alpha)
         _check_colour(colour, ncolour)
         if self.mask.all():
@@ -332,7 +346,9 @@ class Inpainting:
         y0, y1, x0, x1 = box
         colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
         values = colour[:, omega] * self.layout.scale + self.layout.offset
-        if np.issubdtype(self.layout.dtype, np.integer):
+        if self.layout.dtype == bool:  # a binary image stays binary: cut at one half
+            values = values > 0.5
+        elif np.issubdtype(self.layout.dtype, np.integer):
             info = np.iinfo(self.layout.dtype)
             values = np.clip(np.rint(values), info.min, info.max)
         view = out[np.newaxis] if self.layout.channel_axis is None else np.moveaxis(
@@ -358,7 +374,7 @@ class Inpainting:
         out = self.image.copy()
         if not self.mask.any():
             self.result = out
-            self.info = InpaintInfo(0, True, 0)
+            self.info = InpaintInfo(0, True, 0, method=None)
             yield InpaintState(0, 0, self.result)
             return
         runtime = get_runtime(self.device)
@@ -490,7 +506,7 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
             fill: str = "biharmonic", keep_band: bool = True, device: DeviceLike = None,
             dtype: DTypeLike | None = None, progress: bool | None = None,
             snapshots: int | None = None, return_info: bool = False, method: str | None = None,
-            boxes: bool = True, seed: int | None = None,
+            boxes: bool = True, seed: int | None = None, grow: float = 0,
             **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
                                 | tuple[np.ndarray, list[InpaintState]]):
     """Fill the masked region of an image.
@@ -499,7 +515,8 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
     ----------
     image : array_like
         2-D greyscale, or 3-D with `channel_axis` (any number of channels); uint8, uint16,
-        other integers or floats of any range (scaled to [0, 1] internally).
+        other integers or floats of any range (scaled to [0, 1] internally), or bool (a
+        binary image: filled as 0/1 and cut at one half, so it comes back bool).
     mask : array_like, optional
         (rows, columns). bool or integer: nonzero where to inpaint. float: the degree of
         damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity (1 - m)
@@ -577,6 +594,10 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         each run takes the same number of steps).
     seed : int, optional
         For methods with randomness.
+    grow : float, optional
+        Grow the mask by a disc of this radius in pixels first (`clpde.grow_mask`; a soft
+        mask's grown ring is fully damaged), to take in a damage's blurred rim. 0: as given.
+        An empty mask (nothing to fill) warns and returns a copy, with ``info.method`` None.
     **options
         The other methods' options, and the transport's `stencil` ('isotropic', Scharr's
         derivatives, or appendix A's 'central') and `coarse_start` ('corrected' or
@@ -625,7 +646,7 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
     params.update(options)
     job = Inpainting(image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour,
                      levels=levels, device=device, dtype=dtype, progress=progress,
-                     method=method, boxes=boxes, seed=seed, **params)
+                     method=method, boxes=boxes, seed=seed, grow=grow, **params)
     states = list(job.iterate(every=snapshots))
     if snapshots:
         job.info.snapshots = states
@@ -634,6 +655,15 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
     if snapshots:
         return job.result, states
     return job.result
+
+
+def _caller_level() -> int:
+    """The warnings' stacklevel of the first caller outside this module (inpaint() or
+    Inpainting() alike), counted from the function that calls this one."""
+    level, frame = 1, sys._getframe(1)
+    while frame is not None and frame.f_code.co_filename == __file__:
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 def _same(value, default) -> bool:

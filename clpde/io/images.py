@@ -53,6 +53,11 @@ def read_image(path: PathLike) -> np.ndarray:
             import tifffile
 
             image = tifffile.imread(path)
+        elif kind == "PNG" and _png_bit_depth(path) == 16:
+            # Pillow reads 16-bit colour PNGs as 8-bit: libpng's decoder keeps the 16 bits.
+            import imagecodecs
+
+            image = imagecodecs.png_decode(path.read_bytes())
         else:
             import imageio.v3 as iio
 
@@ -62,11 +67,28 @@ def read_image(path: PathLike) -> np.ndarray:
         raise InputError(f"{path} is too large to read into this computer's memory; crop or "
                          "downscale it first") from None
     except Exception as exc:  # noqa: BLE001  (readers raise many types: all mean unreadable)
-        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(".")
+        # imageio's "`pillow` can not handle the given uri" names its plugin, not the file's
+        # problem: only the readers' own words (such as "image file is truncated") are kept.
+        detail = "" if "can not handle" in detail or "cannot identify" in detail \
+            else f" ({detail})"
         raise InputError(
-            f"cannot read {path} as a {kind} image (damaged, or another format?): {detail}"
+            f"cannot read {path}: not a {kind} image, or a damaged one{detail}; clpde reads "
+            ".png, .tif/.tiff and .jpg/.jpeg image files"
         ) from None
     return np.asarray(image)
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_bit_depth(path: Path) -> int | None:
+    """The bit depth in a PNG file's header (its IHDR chunk comes first), None if not a PNG."""
+    with open(path, "rb") as f:
+        head = f.read(26)
+    if len(head) < 26 or not head.startswith(_PNG_SIGNATURE) or head[12:16] != b"IHDR":
+        return None
+    return head[24]
 
 
 @contextlib.contextmanager
@@ -84,6 +106,36 @@ def _no_pixel_limit():
         Image.MAX_IMAGE_PIXELS = limit
 
 
+def check_folder_writable(folder: PathLike, what: str) -> None:
+    """Raise InputError unless a file can be created in `folder` (`what` names the output
+    in the message). A file is made and removed, since permission bits alone do not tell:
+    root ignores them, while a read-only mount, an immutable folder or sysfs refuse root."""
+    folder = Path(folder) if str(folder) else Path(".")
+    try:
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".clpde-", suffix=".part")
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise InputError(f"cannot write {what}: the folder {folder} is not writable ({reason}); "
+                         "choose a folder you can write to") from None
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(probe)
+
+
+def check_output_file(path: PathLike) -> Path:
+    """Raise InputError, before any work, unless `path` can be written as an image file:
+    a known extension, not a folder, in an existing folder that can be written to."""
+    path = Path(path)
+    image_format(path)
+    if path.is_dir():
+        raise InputError(f"output {path} is a folder, not a file name")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise InputError(f"output folder {folder} does not exist; create it first")
+    check_folder_writable(folder, str(path))
+    return path
+
+
 def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> None:
     """Raise InputError, before any work is done, if `path` cannot hold such an image."""
     path = Path(path)
@@ -97,8 +149,8 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
-        png = dtype in (np.dtype(np.uint8),
-                        np.dtype(bool)) or (dtype == np.uint16 and channels == 1)
+        png = dtype.kind == "u" and dtype.itemsize <= 2 or (dtype.kind == "b"
+                                                            and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
             f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
@@ -109,15 +161,12 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
                 f"{path}: PNG stores 8- or 16-bit integers, not {dtype}; write a .tif file "
                 "to keep the values exactly"
             )
-        if dtype == np.uint16 and channels != 1:
+        if dtype.kind == "b" and channels != 1:
             raise InputError(
-                f"{path}: 16-bit colour PNG is not supported; write a .tif file instead"
+                f"{path}: PNG stores 1-bit images as greyscale only, not {channels} bool "
+                "channels; convert with image.astype(np.uint8) * 255, or write a .tif file"
             )
-    folder = path.parent
-    if not folder.is_dir():
-        raise InputError(f"output folder {folder} does not exist; create it first")
-    if path.is_dir():
-        raise InputError(f"output {path} is a folder, not a file name")
+    check_output_file(path)
 
 
 @contextlib.contextmanager
@@ -161,8 +210,9 @@ def _default_file_mode(path: Path) -> int:
 def write_image(path: PathLike, array: ArrayLike) -> Path:
     """Write `array` to a PNG, TIFF or JPEG file (chosen by extension), atomically.
 
-    The dtype is kept as the format allows: PNG holds uint8 (any channels) and 16-bit
-    greyscale, JPEG 8-bit greyscale or RGB, TIFF any integer or float dtype.
+    The dtype is kept as the format allows: PNG holds uint8 and uint16 (1 to 4 channels) and
+    1-bit greyscale (bool), JPEG 8-bit greyscale or RGB, TIFF any integer, float or bool
+    dtype.
 
     Examples
     --------
@@ -185,9 +235,17 @@ def write_image(path: PathLike, array: ArrayLike) -> Path:
         if kind == "TIFF":
             import tifffile
 
-            photometric = "rgb" if array.ndim == 3 and array.shape[-1] in (3, 4) else "minisblack"
-            extra = ("unassalpha",) if array.ndim == 3 and array.shape[-1] == 4 else None
-            tifffile.imwrite(tmp, array, photometric=photometric, extrasamples=extra)
+            # RGB photometry packs bool samples into bits wrongly: bool stays greyscale samples.
+            rgb = array.ndim == 3 and array.shape[-1] in (3, 4) and array.dtype != bool
+            extra = ("unassalpha",) if rgb and array.shape[-1] == 4 else None
+            tifffile.imwrite(tmp, array, photometric="rgb" if rgb else "minisblack",
+                             extrasamples=extra)
+        elif kind == "PNG" and array.dtype == np.uint16 and array.ndim == 3 \
+                and array.shape[-1] > 1:
+            # Pillow cannot write 16-bit colour: libpng's encoder, at zlib level 1 as below.
+            import imagecodecs
+
+            tmp.write_bytes(imagecodecs.png_encode(np.ascontiguousarray(array), level=1))
         else:
             import imageio.v3 as iio
 
@@ -291,10 +349,12 @@ def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
     if not parent.is_dir():
         raise InputError(f"the folder {parent} for the output {outdir} does not exist; "
                          "create it first")
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
+    # the run is staged beside the folder and renamed in: the parent is written to
+    check_folder_writable(parent, f"the output folder {outdir}")
     if not outdir.exists():
         return outdir
-    if not outdir.is_dir():
-        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
     entries = sorted(outdir.iterdir())
     if not entries:
         return outdir

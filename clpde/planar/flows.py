@@ -12,8 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import is_long_run, progress_bar
-from .._state import State
+from .._progress import State, is_long_run, progress_bar
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong, check_fits
 from ..imagedata import check_steps, check_time_step, positive, to_kernel_layout

@@ -10,7 +10,7 @@ import trimesh
 from numpy.typing import ArrayLike
 from scipy.ndimage import map_coordinates
 
-from .._state import State
+from .._progress import State
 from ..errors import InputError
 from .mesh import region_colours, split_regions, surface_mesh
 

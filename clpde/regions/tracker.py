@@ -31,12 +31,11 @@ from numpy.typing import ArrayLike, DTypeLike
 from tqdm.auto import tqdm  # (the bars' type)
 
 from .._progress import progress_bar
-from .._state import DeviceLike
 from ..errors import InputError
 from ..fields import IndexList, check_fits, compact
 from ..grid3d import Grid3D
 from ..imagedata import positive as _positive
-from ..runtime import get_runtime
+from ..runtime import DeviceLike, get_runtime
 from .frames import RegionFrame, make_frame
 from .mesh import _region_functions, along_normals
 from .speed import _speed_setup

@@ -43,7 +43,13 @@ from typing import Any
 from .._progress import progress_bar
 from .._version import __version__
 from ..errors import InputError, error_message
-from ..io.images import IMAGE_FORMATS, PathLike, atomic_output, replace_folder
+from ..io.images import (
+    IMAGE_FORMATS,
+    PathLike,
+    atomic_output,
+    check_folder_writable,
+    replace_folder,
+)
 from .cluster import connect, wants_gpu
 from .tasks import TASKS
 
@@ -231,6 +237,29 @@ def _find_mask(masks_dir: Path, source: Path) -> Path | None:
     return None
 
 
+def expand_inputs(inputs: Iterable[PathLike]) -> list[str]:
+    """The inputs, with any pattern (``*``, ``?``, ``[``) that names no existing file
+    expanded as a shell would (sorted): a quoted pattern, or one from Python. A pattern
+    that matches nothing is an error, before anything is created: the shell passes such a
+    pattern on as it is, and it names no file."""
+    import glob
+
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    out = []
+    for item in inputs:
+        text = os.fspath(item)
+        if any(c in text for c in "*?[") and not os.path.exists(text):
+            found = sorted(glob.glob(text))
+            if not found:
+                raise InputError(f"the pattern {text} matches no file; check the folder and "
+                                 "the spelling")
+            out += found
+        else:
+            out.append(text)
+    return out
+
+
 def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dict]:
     if command not in COMMANDS:
         raise InputError(f"unknown batch command {command!r}; choose one of {', '.join(COMMANDS)}")
@@ -253,6 +282,10 @@ def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dic
         raise InputError(f"mask {mask} does not exist")
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"output {outdir} exists and is not a folder")
+    existing = outdir  # the folder, or the nearest folder above it that mkdir writes into
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    check_folder_writable(existing, f"the output folder {outdir}")
     specs, names = [], {}
     for item in inputs:
         source = Path(item)
@@ -402,7 +435,7 @@ def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=N
     and .results() to wait). The arguments are those of batch()."""
     start = time.perf_counter()
     outdir = Path(output_dir)
-    specs = _plan(command, list(inputs), outdir, mask, masks,
+    specs = _plan(command, expand_inputs(inputs), outdir, mask, masks,
                   _options(command, options, flow) if command in TASKS else options, tile)
     outdir.mkdir(parents=True, exist_ok=True)
     _sweep_temporaries(outdir, [s["name"] for s in specs])
@@ -496,7 +529,7 @@ def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
                              "without one, batch() waits and returns the results")
         return submit(command, inputs, output_dir, client=client, mask=mask, masks=masks,
                       flow=flow, tile=tile, force=force, **options)
-    inputs = list(inputs)
+    inputs = expand_inputs(inputs)
     # Bad options fail here, before a cluster is started.
     _plan(command, inputs, Path(output_dir), mask, masks,
           _options(command, options, flow) if command in TASKS else options, tile)

@@ -8,6 +8,7 @@ import contextlib
 import os
 import time
 
+from .._interrupt import children_stderr, held
 from ..errors import InputError
 from ..runtime import _build_problem, devices
 
@@ -168,14 +169,39 @@ def connect(workers=None, scheduler=None, client=None, threads=None, *, device=N
         finally:
             client.close()
         return
-    cluster, n, per_worker = start_cluster(workers, threads, device=device, tasks=tasks)
-    try:
-        client = Client(cluster, set_as_default=False)
+    # Ctrl-C is held while the cluster starts and stops (clpde/_interrupt.py): a cluster
+    # stopped half-started, or workers interrupted while they start, print pages of
+    # tracebacks; it arrives once the cluster is up (or down) again.
+    with held() as state:
         try:
-            client.wait_for_workers(n, timeout=120)
-            info.update(workers=n, threads=per_worker, seconds=time.perf_counter() - start)
-            yield client, info
-        finally:
+            with children_stderr(state):
+                cluster, n, per_worker = start_cluster(workers, threads, device=device,
+                                                       tasks=tasks)
+        except Exception:
+            if state.pressed.is_set():  # a worker that Ctrl-C stopped while it started
+                raise KeyboardInterrupt from None
+            raise
+        client = None
+        try:
+            client = Client(cluster, set_as_default=False)
+            if not state.pressed.is_set():
+                client.wait_for_workers(n, timeout=120)
+        except BaseException:
+            _close(client, cluster)
+            raise
+        if state.pressed.is_set():
+            _close(client, cluster)  # then held() raises KeyboardInterrupt
+    try:
+        info.update(workers=n, threads=per_worker, seconds=time.perf_counter() - start)
+        yield client, info
+    finally:
+        with held(state):
+            _close(client, cluster)
+
+
+def _close(client, cluster) -> None:
+    try:
+        if client is not None:
             client.close()
     finally:
         cluster.close()

@@ -22,10 +22,11 @@ from ..inpainting.api import inpaint
 from ..io import frames as frame_io
 from ..io.images import (
     _frame_to_uint8,
+    check_folder_writable,
     check_not_overwriting_input,
+    check_output_file,
     check_output_folder,
     check_writable,
-    image_format,
     read_image,
     read_mask,
     write_gif,
@@ -48,7 +49,7 @@ def read_input(path, output, *others, device=None, allow_nan: bool = False) -> n
     work is done. NaN pixels are refused with the command that fills them, unless allow_nan."""
     get_runtime(device)  # an unknown device fails here, before reading anything
     check_not_overwriting_input([path, *others], output)
-    image_format(output)
+    check_output_file(output)  # before reading: a large input takes a while
     image = read_image(path)
     if image.dtype == bool:  # 1-bit files: compute on 0/255 and write 8-bit
         image = image.astype(np.uint8) * 255
@@ -181,8 +182,8 @@ def _inpaint_mask(input, mask, image, soft_mask: bool):
 
 def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", levels=None,
                  soft_mask: bool = False, gif=None, gif_every: int = 100, dt=None,
-                 scaling=None, max_steps=None, tol=None, mean_tol=None, device=None,
-                 progress=None) -> list[str]:
+                 scaling=None, max_steps=None, tol=None, mean_tol=None, grow: float = 0,
+                 seed=None, device=None, progress=None) -> list[str]:
     """`clpde inpaint`: fill the image `input` where the image `mask` is set (or its NaN
     pixels, for mask 'nan'), written to `output`; gif: also the evolution as a GIF (the
     transport's, every gif_every steps). Options are clpde.inpaint's; only the transport
@@ -196,6 +197,7 @@ def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", 
         folder = os.path.dirname(os.path.abspath(gif))
         if not os.path.isdir(folder):
             raise InputError(f"the folder {folder} for --gif does not exist; create it first")
+        check_folder_writable(folder, gif)
     nan_mask = str(mask).lower() == "nan" and not os.path.exists(mask)
     image = read_input(input, output, *([] if nan_mask else [mask]), device=device,
                        allow_nan=True)
@@ -205,7 +207,7 @@ def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", 
         method = "transport"  # the evolution the GIF shows is the thesis scheme's
     options = {"channel_axis": parts.channel_axis, "colour": colour, "levels": levels,
                "device": device, "progress": _progress(progress), "return_info": True,
-               "method": method}
+               "method": method, "grow": grow, "seed": seed}
     given = {"dt": dt, "scaling": scaling, "max_steps": max_steps, "tol": tol,
              "mean_tol": mean_tol}
     options.update({name: value for name, value in given.items() if value is not None})
@@ -220,10 +222,13 @@ def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", 
         write_gif(gif, frames, duration=0.25)
         lines.append(f"wrote {gif} ({len(frames)} frames: the damaged image, then every "
                      f"{gif_every} steps from the start fill to the result)")
+    if info.method is None:  # the empty mask's warning has said why
+        lines.append("inpaint: 0 pixels to fill; wrote an unchanged copy")
+        return lines
     state = "converged" if info.converged else "stopped at --max-steps"
     steps = f"{info.steps} steps ({state}), {info.levels} level(s), " \
         if info.method == "transport" else ""
-    lines.append(f"inpaint: {int((omega > 0).sum())} pixels, method {info.method}, {steps}"
+    lines.append(f"inpaint: {info.omega_pixels} pixels, method {info.method}, {steps}"
                  f"{len(info.boxes)} box(es), {info.seconds:.2f} s")
     return lines
 

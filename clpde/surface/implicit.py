@@ -23,12 +23,11 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_range
-from .._state import DeviceLike
 from ..errors import InputError
 from ..fields import check_fits
 from ..grid3d import Grid3D
 from ..imagedata import positive as _positive
-from ..runtime import get_runtime
+from ..runtime import DeviceLike, get_runtime
 from . import band as band_setup
 from . import flows as _flows
 from . import render as _render

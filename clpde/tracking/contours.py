@@ -32,13 +32,12 @@ import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import progress_bar
-from .._state import DeviceLike, State
+from .._progress import State, progress_bar
 from ..errors import InputError
 from ..fields import Field, PingPong, check_fits
 from ..imagedata import value_range
 from ..planar.flows import diffuse
-from ..runtime import get_runtime
+from ..runtime import DeviceLike, get_runtime
 from .features import MotionFilter, local_contrast, shift_image
 from .levelset import GHOST, MARGIN, STORAGES, LevelSet, signed_distance
 

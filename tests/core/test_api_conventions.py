@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import clpde
-from clpde._state import State
+from clpde._progress import State
 
 
 def _square():
