@@ -51,6 +51,10 @@ def run_denoise(args) -> int:
     save_output(args, parts.join(result))
     state = "converged" if info.converged else "stopped at --max-steps"
     residual = float(np.sqrt(np.mean(info.residual_variance)))
+    noise = ""
+    if info.sigma is not None:
+        levels = ", ".join(f"{s:.4g}" for s in np.atleast_1d(info.sigma))
+        noise = f", noise sigma {'estimated' if info.sigma_estimated else 'given'} {levels}"
     print(f"denoise: {info.steps} {args.method} iterations ({state}), residual std "
-          f"{residual:.4g}", file=sys.stderr)
+          f"{residual:.4g}{noise}", file=sys.stderr)
     return 0
