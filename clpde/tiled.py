@@ -40,7 +40,7 @@ class _ScaledFlow(PlanarFlow):
         self.flow, self.steps_done, self.time = flow, 0, 0.0
         self.pair = PingPong(Field.from_host(self.grid, data))
         self._setup(flow, dt, params.get("kappa", 0.05), params.get("edge", "exp"),
-                    params.get("eps"), None)
+                    params.get("eps"), None, params.get("presmooth"))
 
 
 def _tile_diffuse(block, flow, steps, dt, device, precision, params):
@@ -48,14 +48,15 @@ def _tile_diffuse(block, flow, steps, dt, device, precision, params):
     return state.run(steps, progress=False).pair.cur.to_host().astype(np.float64)
 
 
-def _tile_denoise(block, lam, steps, check_every, device, precision):
+def _tile_denoise(block, lam, steps, check_every, device, precision, vectorial=False):
     from .fields import Grid
     from .rof import _primal_dual
 
     runtime = get_runtime(device)
     nc, ny, nx = block.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(block.dtype, precision))
-    u, *_ = _primal_dual(grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False)
+    u, *_ = _primal_dual(grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False,
+                         vectorial)
     return u
 
 
@@ -89,7 +90,13 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     steps = check_steps(steps)
     data, layout = to_kernel_layout(image, channel_axis)
     runtime = get_runtime(device)
-    out = _chunked(data, chunks, steps * RADIUS, _tile_diffuse, flow=flow, steps=steps, dt=dt,
+    # Catte's Gaussian reads `radius` more cells on each side before every step
+    radius = RADIUS
+    if params.get("presmooth") is not None:
+        from .planar import gaussian_weights
+
+        radius += len(gaussian_weights(float(params["presmooth"]))) - 1
+    out = _chunked(data, chunks, steps * radius, _tile_diffuse, flow=flow, steps=steps, dt=dt,
                    device=runtime.index,
                    precision=renamed_keyword("dtype", dtype, "precision", precision),
                    params=params)
@@ -97,10 +104,12 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
 
 
 def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chunks=256,
-               check_every: int = 5, dtype=None, precision=None) -> np.ndarray:
+               check_every: int = 5, dtype=None, precision=None,
+               vectorial: bool | None = None) -> np.ndarray:
     """clpde.denoise_tv (primal-dual, given weight) for exactly `steps` iterations, tile by
     tile; bitwise equal to ``clpde.denoise_tv(image, weight=weight, max_steps=steps,
-    tol=1e-300, check_every=check_every)``."""
+    tol=1e-300, check_every=check_every, vectorial=vectorial)`` (vectorial by default for
+    several channels, as there: its coupling is per cell, so the reach is the same)."""
     from .imagedata import positive
 
     steps = check_steps(steps)
@@ -109,7 +118,9 @@ def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chu
     lam = weight_unit / positive("weight", weight)
     runtime = get_runtime(device)
     # u = f + div(p)/lambda adds one more cell to the iterations' reach.
+    vectorial = data.shape[0] > 1 if vectorial is None else bool(vectorial)
     out = _chunked(data, chunks, steps * RADIUS + 1, _tile_denoise, lam=lam, steps=steps,
+                   vectorial=vectorial,
                    check_every=max(1, int(check_every)), device=runtime.index,
                    precision=renamed_keyword("dtype", dtype, "precision", precision))
     return layout.restore(out)
@@ -167,7 +178,7 @@ def run_tiled_command(args, force: bool = False) -> bool:
     if not (force or needed):
         return False
     if command == "diffuse":
-        params = {k: getattr(args, k) for k in ("kappa", "edge", "eps")
+        params = {k: getattr(args, k) for k in ("kappa", "edge", "eps", "presmooth")
                   if getattr(args, k) is not None}
         chunks = 256 if not needed else device_chunks(channels, args.steps, args.device)
         result = diffuse(parts.colour, args.flow, steps=args.steps, dt=args.dt,
@@ -179,6 +190,7 @@ def run_tiled_command(args, force: bool = False) -> bool:
                              "iteration count) with --method primal-dual")
         chunks = 256 if not needed else device_chunks(channels, args.max_steps, args.device, 4)
         result = denoise_tv(parts.colour, args.weight, args.max_steps,
-                            channel_axis=parts.channel_axis, device=args.device, chunks=chunks)
+                            channel_axis=parts.channel_axis, device=args.device, chunks=chunks,
+                            vectorial=False if getattr(args, "per_channel", False) else None)
     save_output(args, parts.join(result))
     return True

@@ -26,6 +26,9 @@ def add_denoise_parser(subparsers) -> None:
     parser.add_argument("--method", choices=("primal-dual", "gradient"), default="primal-dual",
                         help="primal-dual (exact TV, default) or gradient (the thesis's "
                              "explicit scheme)")
+    parser.add_argument("--per-channel", action="store_true",
+                        help="colour: TV of each channel on its own (default: colour-coupled "
+                             "TV, whose channels keep their edges in the same places)")
     parser.add_argument("--eps", type=float, default=None,
                         help="--method gradient: regularisation of |grad u| (default 0.02)")
     parser.add_argument("--max-steps", type=int, default=None,
@@ -41,6 +44,8 @@ def run_denoise(args) -> int:
     image = load_input(args)
     parts = split_alpha(image, args.input)
     options = {"method": args.method}
+    if args.per_channel:
+        options["vectorial"] = False
     if args.eps is not None:
         options["eps"] = args.eps
     if args.max_steps is not None:

@@ -29,6 +29,10 @@ def add_diffuse_parser(subparsers) -> None:
                         help="Perona-Malik edge threshold, intensities in [0, 1] (default 0.05)")
     parser.add_argument("--edge", choices=("exp", "rational"), default=None,
                         help="Perona-Malik edge-stopping function (default: exp)")
+    parser.add_argument("--presmooth", type=float, default=None,
+                        help="Perona-Malik: read the edge-stopping function from the image "
+                             "smoothed by a Gaussian of this many pixels (the regularised "
+                             "flow of Catte et al.; isolated noise spikes then diffuse too)")
     parser.add_argument("--eps", type=float, default=None,
                         help="TV / curvature regularisation of |grad u|, intensities in [0, 1] "
                              "(TV default 0.005, about one 8-bit grey level: regions flatten, "
@@ -41,10 +45,11 @@ def run_diffuse(args) -> int:
 
     param_check(args, args.flow, {option: tuple(f for f, params in FLOW_PARAMS.items()
                                                 if option in params)
-                                  for option in ("kappa", "edge", "eps")})
+                                  for option in ("kappa", "edge", "eps", "presmooth")})
     image = load_input(args)
     parts = split_alpha(image, args.input)
-    params = {k: getattr(args, k) for k in ("kappa", "edge", "eps") if getattr(args, k) is not None}
+    params = {k: getattr(args, k) for k in ("kappa", "edge", "eps", "presmooth")
+              if getattr(args, k) is not None}
     result = diffuse(parts.colour, args.flow, steps=args.steps, dt=args.dt,
                      channel_axis=parts.channel_axis, device=args.device,
                      progress=show_progress(), **params)

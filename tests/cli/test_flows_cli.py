@@ -28,3 +28,29 @@ def test_denoise_prints_the_noise_level_it_estimated(noisy_png, tmp_path, capsys
 def test_denoise_with_weight_prints_no_noise_level(noisy_png, tmp_path, capsys):
     assert main(["denoise", str(noisy_png), str(tmp_path / "out.png"), "--weight", "0.1"]) == 0
     assert "noise sigma" not in capsys.readouterr().err
+
+
+def test_diffuse_presmooth_matches_the_library(noisy_png, tmp_path):
+    import clpde
+    from clpde.io import read_image
+
+    out = tmp_path / "pm.png"
+    assert main(["diffuse", str(noisy_png), str(out), "--flow", "perona-malik", "--steps", "20",
+                 "--presmooth", "1.5"]) == 0
+    want = clpde.diffuse(read_image(noisy_png), "perona-malik", steps=20, presmooth=1.5)
+    np.testing.assert_array_equal(read_image(out), want)
+    assert main(["diffuse", str(noisy_png), str(out), "--flow", "heat", "--presmooth", "1"]) == 2
+
+
+def test_denoise_per_channel_option(tmp_path, capsys):
+    import clpde
+    from clpde.io import read_image
+
+    rgb = np.random.default_rng(2).integers(0, 255, (24, 28, 3), dtype=np.uint8)
+    Image.fromarray(rgb).save(tmp_path / "in.png")
+    for flag, vectorial in (([], True), (["--per-channel"], False)):
+        out = tmp_path / f"out{len(flag)}.png"
+        assert main(["denoise", str(tmp_path / "in.png"), str(out), "--weight", "0.1",
+                     *flag]) == 0
+        want = clpde.denoise_tv(rgb, weight=0.1, channel_axis=-1, vectorial=vectorial)
+        np.testing.assert_array_equal(read_image(out), want)
