@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from ._progress import is_long_run, progress_bar
+from ._progress import progress_bar
 from ._state import State, renamed_keyword
 from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong, check_fits
@@ -265,8 +265,7 @@ class PlanarFlow:
     def run(self, steps: int, progress: bool | None = None) -> PlanarFlow:
         """Enqueue `steps` steps; the host only waits to move the progress bar."""
         steps = check_steps(steps)
-        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step",
-                           long_run=is_long_run(steps, self.grid.nx * self.grid.ny * self.grid.nc))
+        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step")
         chunk = 50
         with bar:
             for start in range(0, steps, chunk):

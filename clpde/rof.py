@@ -21,7 +21,7 @@ import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
-from ._progress import is_long_run, progress_bar
+from ._progress import progress_bar
 from ._state import renamed_keyword
 from ._validation import InputError, check_steps, check_time_step, positive
 from .fields import Field, Grid, PingPong, check_fits
@@ -310,8 +310,7 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
             inv_n_sigma2 = cla.to_device(q, inv.astype(grid.dtype))
     t, beta = 1.0, 0.0
     steps, converged = 0, False
-    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="it",
-                       long_run=is_long_run(max_steps, grid.nx * grid.ny * grid.nc))
+    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="it")
     with bar:
         while steps < max_steps and not converged:
             for _ in range(min(check_every, max_steps - steps)):
@@ -380,8 +379,7 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
 
     steps = 0
     converged = False
-    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="step",
-                       long_run=is_long_run(max_steps, grid.nx * grid.ny * grid.nc))
+    bar = progress_bar(progress, max_steps, "clpde denoise_tv", unit="step")
     with bar:
         while steps < max_steps:
             if sigma2 is not None and steps % lambda_every == 0:
