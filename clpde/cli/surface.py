@@ -255,7 +255,33 @@ def _mean_curvature(surf, mean, progress=None):
     if mesh is None:
         return mean, 0.0
     sigma = max(2.0 * surf.spacing, float(np.median(mesh.edges_unique_length)))
+    warn_if_too_coarse(mesh, sigma)
     return surf.heat(mean, t=0.5 * sigma**2, progress=progress), sigma
+
+
+# The averaging width, as a share of the mesh's bounding-box diagonal, above which the
+# averaged curvature no longer tells the shape's parts apart: wider than about a sixth of
+# the shape, one average covers a face and the edges around it (the shares of common
+# meshes are in docs/surface.md).
+COARSE_SHARE = 0.15
+
+
+def warn_if_too_coarse(mesh, sigma: float) -> bool:
+    """Warn (UserWarning) when the curvature's averaging width `sigma` (the mesh's median
+    edge length, or two cells) spans more than COARSE_SHARE of the mesh's size: the mesh
+    then has too few vertices to say where its curvature lies, and the average spreads the
+    curvature of its edges and corners over its faces. Returns whether it warned."""
+    diagonal = float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
+    share = sigma / max(diagonal, 1e-300)
+    if share <= COARSE_SHARE:
+        return False
+    warnings.warn(
+        f"the mesh is too coarse for curvature: {len(mesh.faces)} faces, so the curvature "
+        f"is averaged over {sigma:.3g} ({share:.0%} of its size), which spreads its edges' "
+        "and corners' curvature over its faces (flat faces do not read 0); give a finer "
+        "mesh (e.g. trimesh's mesh.subdivide_to_size) for curvature", UserWarning,
+        stacklevel=3)
+    return True
 
 
 def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
