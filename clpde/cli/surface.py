@@ -66,6 +66,11 @@ def add_surface_parser(subparsers) -> None:
     parser.add_argument("--size", type=int, default=400,
                         help="picture size per view (default: 400)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument("--on", choices=("input", "remesh"), default=None,
+                        help="the mesh the results are written on: 'input', the mesh file "
+                             "given, with the values sampled at its own vertices (the default "
+                             "for a mesh file), or 'remesh', a marching-cubes mesh of the "
+                             "surface (the default, and the only choice, for a named shape)")
     parser.add_argument("--storage", choices=STORAGES, default="lists",
                         help="the band's storage on the device: lists over the dense grid "
                              "(default), or only the band's bricks (less memory; as fast from "
@@ -93,7 +98,12 @@ def run_surface(args) -> int:
             raise InputError(f"{args.mesh} has no vertex colours; use --data pattern")
     run = run_flow(surf, args.flow, t=args.t, iterations=args.iterations, sigma=args.sigma,
                    seed=args.seed, direction=args.direction, data=data, progress=show_progress())
-    written = write_run(run, args.output, size=args.size, overwrite=args.overwrite)
+    on_input = (args.on or "input") == "input" and getattr(surf, "mesh", None) is not None
+    if args.on == "input" and not on_input:
+        raise InputError(f"--on input needs a mesh file; {args.mesh!r} is a generated shape, "
+                         "whose results are written on a marching-cubes mesh (--on remesh)")
+    written = write_run(run, args.output, size=args.size, overwrite=args.overwrite,
+                        on_input=on_input)
     print(f"surface {args.flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
           f"{surf.ext_band.n} cells; wrote {len(written)} files to {args.output}", file=sys.stderr)
     return 0
@@ -312,23 +322,40 @@ def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
 
 
 def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400,
-              overwrite=False) -> list:
+              overwrite=False, on_input=False) -> list:
     """before.png, after.png, result.ply and result.glb (after, coloured) in the folder
     outdir, created if missing; an existing one must be empty, or with overwrite=True hold
     only clpde's kinds of output files, and is then replaced as a whole
-    (clpde.io.output_folder). Returns the paths."""
+    (clpde.io.output_folder). on_input: the meshes are the one the surface was made from,
+    with the values sampled at its vertices (render.on_mesh); else marching-cubes meshes
+    of the surface. The pictures are titled and scalar ones carry their colour scale.
+    Returns the paths."""
     from ..io import output_folder
 
     with output_folder(outdir, overwrite) as staging:
-        names = _write_run_files(run, staging, views, size)
+        names = _write_run_files(run, staging, views, size, on_input)
     return [os.path.join(outdir, n) for n in names]
 
 
-def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
-    from ..surface.render import export_mesh, render_mesh, scalar_range, to_mesh, with_colour_bar
+def _write_run_files(run: SurfaceRun, outdir, views, size, on_input=False) -> list:
+    from ..surface.render import (
+        export_mesh,
+        on_mesh,
+        render_mesh,
+        scalar_range,
+        to_mesh,
+        with_colour_bar,
+        with_title,
+    )
+
+    def make(u, **options):
+        if on_input:
+            return on_mesh(run.surface, u, **options) if u is not None else \
+                run.surface.mesh.copy()
+        return to_mesh(run.surface, u, **options)
 
     written = []
-    after = to_mesh(run.surface, run.after)
+    after = make(run.after)
     scalar = run.after.ndim == 3
     lo = hi = None
     if scalar:  # one colour scale (the result's) for both pictures, shown by a colour bar
@@ -336,10 +363,15 @@ def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
         if hi - lo < run.span:
             middle = 0.5 * (lo + hi)
             lo, hi = middle - 0.5 * run.span, middle + 0.5 * run.span
-        after = to_mesh(run.surface, run.after, vmin=lo, vmax=hi)
-    before = to_mesh(run.surface, run.before, vmin=lo, vmax=hi)
+        after = make(run.after, vmin=lo, vmax=hi)
+    before = make(run.before, vmin=lo, vmax=hi)
+    where = (f"on the input mesh ({len(after.vertices)} vertices)" if on_input else
+             f"on a marching-cubes mesh ({len(after.vertices)} vertices)")
+    titles = {"before": f"before: the {run.flow} flow's input, {where}",
+              "after": f"after: {run.note}"}
     for name, mesh in (("before", before), ("after", after)):
         image = np.concatenate([render_mesh(mesh, size, a, e) for a, e in views], axis=1)
+        image = with_title(image, titles[name])
         if scalar and (name == "after" or run.before is not None):
             image = with_colour_bar(image, lo, hi, label=run.label)
         write_png(os.path.join(outdir, f"{name}.png"), image)
