@@ -106,6 +106,15 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
 
+def _check_flow_params(flow: str, given: dict) -> None:
+    """Refuse a parameter the flow does not take, rather than ignore it."""
+    for name, value in given.items():
+        if value is not None and name not in FLOW_PARAMS[flow]:
+            users = [f for f, params in FLOW_PARAMS.items() if name in params]
+            raise InputError(f"{name} applies to the {' and '.join(users)} flow"
+                             f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+
+
 @dataclass
 class DiffuseInfo:
     """What a `diffuse` run did: the steps run, the time step, the flow's time reached
@@ -165,13 +174,8 @@ class PlanarFlow:
                  presmooth: float | None = None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
-        given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight,
-                 "presmooth": presmooth}
-        for name, value in given.items():
-            if value is not None and name not in FLOW_PARAMS[flow]:
-                users = [f for f, params in FLOW_PARAMS.items() if name in params]
-                raise InputError(f"{name} applies to the {' and '.join(users)} flow"
-                                 f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+        _check_flow_params(flow, {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight,
+                                  "presmooth": presmooth})
         kappa = 0.05 if kappa is None else kappa
         edge = "exp" if edge is None else edge
         self.runtime = get_runtime(device)
@@ -360,9 +364,19 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
         listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())
         raise InputError(f"diffuse takes no parameter {unknown[0]!r}; the flows take ({listed})")
     dtype = renamed_keyword("dtype", dtype, "precision", precision)
-    state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
-                       dtype=dtype, **params)
-    result = state.run(steps, progress).result()
+    from . import tiled
+
+    if tiled.is_large(image) and flow in FLOWS:
+        # one channel at a time, converted and restored in strips: the same numbers in a
+        # fraction of the memory (tiled.diffuse_by_channel)
+        _check_flow_params(flow, params)
+        steps = check_steps(steps)
+        result, state = tiled.diffuse_by_channel(image, flow, steps, dt, channel_axis, device,
+                                                 dtype, progress, params)
+    else:
+        state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
+                           dtype=dtype, **params)
+        result = state.run(steps, progress).result()
     if not return_info:
         return result
     eps = params.get("eps")

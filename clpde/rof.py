@@ -166,6 +166,14 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
         check_fits(runtime, shape, "TV denoising", 8, dtype=compute_dtype(None, precision),
                    largest=2)
 
+    from . import tiled
+
+    if method == "primal-dual" and tiled.is_large(image):
+        if eps is not None or dt is not None or lambda_every is not None:
+            raise InputError("eps, dt and lambda_every belong to method='gradient'; the "
+                             "primal-dual method uses exact TV and needs none of them")
+        return _denoise_large(image, sigma, weight, channel_axis, runtime, precision,
+                              max_steps, tol, check_every, progress, vectorial, return_info)
     data, layout = to_kernel_layout(image, channel_axis, fits=fits)
     nc, ny, nx = data.shape
     if vectorial is None:
@@ -227,6 +235,53 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
     residual = ((u - data) ** 2).mean(axis=(1, 2)) * layout.scale**2
     return out, DenoiseInfo(steps, converged, lam / weight_unit, residual, method, noise,
                             weight is None and sigma is None)
+
+
+def _denoise_large(image, sigma, weight, channel_axis, runtime, precision, max_steps, tol,
+                   check_every, progress, vectorial, return_info):
+    """denoise_tv's primal-dual run on an image of more than tiled.LARGE_VALUES values: in
+    overlapping tiles, converting and restoring a block at a time (see
+    tiled.denoise_large), so memory stays bounded whatever the image's size."""
+    from . import tiled
+
+    scaled = tiled._Scaled(image, channel_axis)
+    layout, nc = scaled.layout, scaled.nc
+    vectorial = nc > 1 if vectorial is None else bool(vectorial) and nc > 1
+    defaults = _DEFAULTS["primal-dual"]
+    max_steps = check_steps(defaults["max_steps"] if max_steps is None else max_steps)
+    tol = positive("tol", defaults["tol"] if tol is None else tol)
+    check_every = max(1, int(defaults["check_every"] if check_every is None else check_every))
+    weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
+    mean, var = tiled.channel_moments(scaled)
+    if weight is not None:
+        lam0 = np.full(nc, min(weight_unit / positive("weight", weight), 1e30))
+        sigma2 = noise = None
+    else:
+        if sigma is None:
+            sig = tiled.noise_std_by_strips(scaled)
+        else:
+            sig = np.full(nc, positive("sigma", sigma) / layout.scale)
+        sigma2 = np.maximum(sig, 1e-6) ** 2
+        noise = np.sqrt(sigma2) * layout.scale
+        if vectorial:
+            sigma2 = np.full(nc, sigma2.mean())
+        lam0 = None
+    dtype = compute_dtype(None, precision)
+    out, steps, converged, lam, residual = tiled.denoise_large(
+        scaled, dtype, runtime, lam0, sigma2, max_steps, tol, check_every, progress, vectorial)
+    if sigma2 is not None:
+        # as in denoise_tv: noise beyond a channel's own spread leaves only its mean
+        spread = sigma2 >= var
+        if vectorial:
+            spread[:] = sigma2.mean() >= var.mean()
+        for c in np.flatnonzero(spread):
+            scaled.out_channels[c] = scaled.restore_value(mean[c])
+            residual[c] = var[c]
+        lam = np.where(spread, 0.0, lam)
+    if not return_info:
+        return out
+    return out, DenoiseInfo(steps, converged, lam / weight_unit, residual * layout.scale**2,
+                            "primal-dual", noise, weight is None and sigma is None)
 
 
 # The difference of two discrete Laplacians (Immerkaer 1996): it annihilates constant, linear

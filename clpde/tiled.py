@@ -194,3 +194,218 @@ def run_tiled_command(args, force: bool = False) -> bool:
                             vectorial=False if getattr(args, "per_channel", False) else None)
     save_output(args, parts.join(result))
     return True
+
+
+# ---- large images in bounded memory: the untiled API's own paths ------------------------
+# clpde.diffuse and clpde.denoise_tv take these paths for images of more values than this
+# (channels x rows x columns): below it the whole image in float64 and its device fields
+# cost little; above it they cost tens of times the image (a 6000 x 4000 colour photo:
+# several GB), and these paths keep to a fixed budget whatever the image's size.
+LARGE_VALUES = 1 << 22
+# Rows converted or restored at a time: float64 temporaries of a strip, not of the image.
+_STRIP_ROWS = 256
+# denoise_tv's tiles: the kept core, and the margin on each side of it. A margin of 64
+# keeps every kept pixel at least 64 px from a tile border that is not the image's own;
+# the per-pixel stopping test makes a part of an image converge as it would on its own,
+# so pixels that far in match the whole image's result (tests/planar/test_rof.py checks
+# 60 px in).
+TILE_CORE = 1024
+TILE_MARGIN = 64
+# With sigma, lambda is fitted on the image's central region of at most this many values.
+LAMBDA_SAMPLE_VALUES = LARGE_VALUES
+
+
+class _Scaled:
+    """An image's channels, converted to the kernels' [0, 1] float64 on demand, a block at
+    a time, with the whole image's offset and scale (as to_kernel_layout converts it: the
+    same arithmetic per value, so the same numbers), and restored into an output array of
+    the input's shape and dtype."""
+
+    def __init__(self, image, channel_axis):
+        from .imagedata import (
+            ImageLayout,
+            as_image,
+            check_channel_axis,
+            integer_range,
+            value_range,
+        )
+
+        array = as_image(image)
+        axis = check_channel_axis(array.ndim, channel_axis)
+        if np.issubdtype(array.dtype, np.integer):
+            offset, scale = integer_range(array.dtype)
+        else:
+            offset, scale = value_range(float(array.min()), float(array.max()))
+        self.array = array
+        self.channels = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
+        self.nc, self.ny, self.nx = self.channels.shape
+        if min(self.ny, self.nx) < 1:
+            raise InputError(f"image has no pixels (shape {array.shape})")
+        self.layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
+        self._strip = ImageLayout((), array.dtype, None, offset, scale)
+        self.out = np.empty_like(array)
+        self.out_channels = (self.out[np.newaxis] if axis is None
+                             else np.moveaxis(self.out, axis, 0))
+
+    def block(self, rows: slice, cols: slice, channel=None) -> np.ndarray:
+        """(nc, h, w) float64 of one block (all channels, or one)."""
+        c = slice(None) if channel is None else slice(channel, channel + 1)
+        data = self.channels[c, rows, cols]
+        return (data.astype(np.float64) - self.layout.offset) / self.layout.scale
+
+    def restore_value(self, value: float):
+        """One kernel value restored as an output value."""
+        return self._strip.restore(np.full((1, 1, 1), value))[0, 0]
+
+    def restore(self, values: np.ndarray, rows: slice, cols: slice, channel=None) -> None:
+        """Write (nc, h, w) kernel values (or (h, w) of one channel) into the output, strip
+        by strip, with ImageLayout.restore's arithmetic."""
+        values = values.reshape((-1,) + values.shape[-2:])
+        channels = range(self.nc) if channel is None else [channel]
+        for k, c in enumerate(channels):
+            for r in range(0, values.shape[1], _STRIP_ROWS):
+                part = values[k, r:r + _STRIP_ROWS]
+                start = rows.start + r
+                self.out_channels[c, start:start + part.shape[0], cols] = \
+                    self._strip.restore(part[np.newaxis])
+
+
+def is_large(image, channel_axis=None) -> bool:
+    """Whether an image has more values than LARGE_VALUES (channels included)."""
+    return int(np.prod(np.shape(image))) > LARGE_VALUES
+
+
+def diffuse_by_channel(image, flow, steps, dt, channel_axis, device, precision, progress,
+                       params):
+    """clpde.diffuse one channel at a time, converting and restoring in strips: bit for bit
+    the whole-image result (every flow of planar.cl acts on each channel alone, with the
+    same arithmetic per cell), in the memory of one channel's two device fields.
+    Returns (result, the last channel's flow)."""
+    from .fields import Field, Grid, PingPong
+
+    scaled = _Scaled(image, channel_axis)
+    runtime = get_runtime(device)
+    dtype = np.dtype(precision or np.float32)
+    grid = Grid(runtime, scaled.nx, scaled.ny, 1, 1, dtype)
+    state = None
+    for c in range(scaled.nc):
+        padded = np.zeros(grid.padded_shape, dtype)
+        for r in range(0, scaled.ny, _STRIP_ROWS):
+            rows = slice(r, min(r + _STRIP_ROWS, scaled.ny))
+            padded[0, 1 + rows.start:1 + rows.stop, 1:-1] = scaled.block(rows, slice(None), c)[0]
+        field = Field.empty(grid)
+        field.data.set(padded)
+        del padded
+        field.fill_ghosts("neumann")
+        state = _ChannelFlow(runtime, grid, PingPong(field), flow, dt, params)
+        state.run(steps, progress=progress)
+        out = state.pair.cur.data.get()[0, 1:-1, 1:-1]
+        scaled.restore(out, slice(0, scaled.ny), slice(None), c)
+        state.pair = None  # frees this channel's device fields before the next
+    return scaled.out, state
+
+
+class _ChannelFlow(PlanarFlow):
+    """A PlanarFlow over one channel's field, already uploaded."""
+
+    def __init__(self, runtime, grid, pair, flow, dt, params):
+        self.runtime, self.grid, self.pair = runtime, grid, pair
+        self.flow, self.steps_done, self.time = flow, 0, 0.0
+        self._setup(flow, dt, params.get("kappa", 0.05), params.get("edge", "exp"),
+                    params.get("eps"), params.get("weight"), params.get("presmooth"))
+
+
+def noise_std_by_strips(scaled: _Scaled) -> np.ndarray:
+    """rof._noise_std of each channel, from the residual computed a strip at a time: the
+    same float64 values (each residual value reads the same nine numbers in the same order),
+    so the same median, without the whole image's float64 copy and its temporaries."""
+    from .rof import _MAD_TO_STD, _NOISE_MASK
+
+    ny, nx = scaled.ny, scaled.nx
+    if ny < 3 or nx < 3:
+        raise InputError(f"an image of {nx}x{ny} pixels is too small to estimate its noise "
+                         "from; give sigma or weight")
+    sig = np.empty(scaled.nc)
+    for c in range(scaled.nc):
+        residual = np.empty((ny - 2, nx - 2))
+        for r in range(0, ny - 2, _STRIP_ROWS):
+            stop = min(r + _STRIP_ROWS, ny - 2)
+            u = scaled.block(slice(r, stop + 2), slice(None), c)[0]
+            h = stop - r
+            residual[r:stop] = sum(_NOISE_MASK[i, j] * u[i:h + i, j:nx - 2 + j]
+                                   for i in range(3) for j in range(3))
+        np.abs(residual, out=residual)
+        sig[c] = float(np.median(residual)) * _MAD_TO_STD / 6.0
+    return sig
+
+
+def _spans(n: int, core: int, margin: int):
+    """(kept, read) slices along one axis: kept cores of `core` cells, each read with
+    `margin` more on each side where the image has them."""
+    for start in range(0, n, core):
+        stop = min(start + core, n)
+        yield slice(start, stop), slice(max(0, start - margin), min(n, stop + margin))
+
+
+def denoise_large(scaled: _Scaled, grid_dtype, runtime, lam0, sigma2, max_steps, tol,
+                  check_every, progress, vectorial):
+    """denoise_tv of a large image in overlapping tiles (TILE_CORE kept, TILE_MARGIN read on
+    each side), each run to its own convergence with one lambda per channel for the whole
+    image. With sigma, lambda is first fitted (the dynamic update) on the central region
+    of the image of LAMBDA_SAMPLE_VALUES values, then held for every tile.
+
+    Not bit for bit the whole-image run: a tile's pixels see the image only to TILE_MARGIN
+    beyond its core and stop by their own convergence; the fitted lambda is that of the
+    central region, not of the whole image. Returns (result, steps (the most a tile ran),
+    converged (every tile), lambda, residual variance per channel in [0, 1] units)."""
+    from .fields import Grid
+    from .rof import _primal_dual
+
+    nc, ny, nx = scaled.nc, scaled.ny, scaled.nx
+    lam = np.asarray(lam0, np.float64) if lam0 is not None else None
+    if sigma2 is not None:
+        side = int(np.sqrt(LAMBDA_SAMPLE_VALUES / nc))
+        h, w = min(ny, side), min(nx, side)
+        rows = slice((ny - h) // 2, (ny - h) // 2 + h)
+        cols = slice((nx - w) // 2, (nx - w) // 2 + w)
+        sample = scaled.block(rows, cols)
+        grid = Grid(runtime, w, h, nc, 1, grid_dtype)
+        _, _, _, lam = _primal_dual(grid, sample, 1.0 / np.sqrt(sigma2), sigma2, max_steps,
+                                    tol, check_every, False, vectorial)
+        del sample
+    steps_max, converged = 0, True
+    sq = np.zeros(nc)
+    tiles = [(ky, kx, ry, rx) for ky, ry in _spans(ny, TILE_CORE, TILE_MARGIN)
+             for kx, rx in _spans(nx, TILE_CORE, TILE_MARGIN)]
+    from ._progress import progress_bar
+
+    with progress_bar(progress, len(tiles), "clpde denoise_tv", unit="tile") as bar:
+        for ky, kx, ry, rx in tiles:
+            block = scaled.block(ry, rx)
+            grid = Grid(runtime, block.shape[2], block.shape[1], nc, 1, grid_dtype)
+            u, steps, done, _ = _primal_dual(grid, block, lam, None, max_steps, tol,
+                                             check_every, False, vectorial)
+            keep = (slice(None), slice(ky.start - ry.start, ky.stop - ry.start),
+                    slice(kx.start - rx.start, kx.stop - rx.start))
+            sq += ((u[keep] - block[keep]) ** 2).sum(axis=(1, 2))
+            scaled.restore(u[keep], ky, kx)
+            steps_max, converged = max(steps_max, steps), converged and done
+            bar.update(1)
+    return scaled.out, steps_max, converged, lam, sq / (ny * nx)
+
+
+def channel_moments(scaled: _Scaled) -> tuple[np.ndarray, np.ndarray]:
+    """(mean, variance) of each channel in [0, 1] units, summed a strip at a time."""
+    mean, var = np.empty(scaled.nc), np.empty(scaled.nc)
+    n = scaled.ny * scaled.nx
+    for c in range(scaled.nc):
+        total = 0.0
+        for r in range(0, scaled.ny, _STRIP_ROWS):
+            total += float(scaled.block(slice(r, r + _STRIP_ROWS), slice(None), c).sum())
+        mean[c] = total / n
+        sq = 0.0
+        for r in range(0, scaled.ny, _STRIP_ROWS):
+            block = scaled.block(slice(r, r + _STRIP_ROWS), slice(None), c)
+            sq += float(((block - mean[c]) ** 2).sum())
+        var[c] = sq / n
+    return mean, var
