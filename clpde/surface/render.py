@@ -218,8 +218,20 @@ def view_rotation(azimuth=30.0, elevation=20.0) -> np.ndarray:
     return rx @ to_cam @ rz.T
 
 
-def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0)):
-    """(size, size, 3) uint8 picture of a mesh with vertex colours (grey if none)."""
+def view_box(meshes, azimuth=30.0, elevation=20.0):
+    """(centre, span) in the picture plane that holds every mesh of `meshes` seen from this
+    view: given to render_mesh as `box`, several pictures share one scale and position."""
+    rot = view_rotation(azimuth, elevation)
+    cams = [np.asarray(m.vertices, np.float64) @ rot[:2].T for m in meshes]
+    lo = np.min([c.min(axis=0) for c in cams], axis=0)
+    hi = np.max([c.max(axis=0) for c in cams], axis=0)
+    return 0.5 * (lo + hi), float((hi - lo).max())
+
+
+def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0),
+                box=None):
+    """(size, size, 3) uint8 picture of a mesh with vertex colours (grey if none). box:
+    (centre, span) of the picture plane to show (view_box), by default the mesh's own."""
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if len(faces) == 0:
@@ -233,9 +245,11 @@ def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1
     else:
         colours = np.asarray(colours)[:, :3] / 255.0
     cam = verts @ view_rotation(azimuth, elevation).T
-    lo, hi = cam[:, :2].min(axis=0), cam[:, :2].max(axis=0)
-    scale = 0.92 * size / max((hi - lo).max(), 1e-12)
-    centre = 0.5 * (lo + hi)
+    if box is None:
+        lo, hi = cam[:, :2].min(axis=0), cam[:, :2].max(axis=0)
+        box = (0.5 * (lo + hi), float((hi - lo).max()))
+    centre = np.asarray(box[0], np.float64)
+    scale = 0.92 * size / max(float(box[1]), 1e-12)
     px = (cam[:, :2] - centre) * scale + size / 2
     tri_px = px[faces]
     tri_cam = cam[faces]
