@@ -108,7 +108,7 @@ def cases(grid: Grid, rng):
     curv_w = k("planar/planar.cl", "curvature_step", HAS_WEIGHT=1)
     rof = k("planar/planar.cl", "rof_step")
     lam_rows = k("planar/planar.cl", "rof_lambda_rows")
-    partial = cla.empty(q, 3 * grid.ny, np.float32)
+    partial = cla.empty(q, 4 * grid.ny, np.float32)
 
     dual = [cla.to_device(q, (0.3 * rng.standard_normal((1, grid.plane, 2))).astype(f32))
             for _ in range(3)]

@@ -2,24 +2,35 @@
 line), and the states a run yields.
 
 ``progress=True`` always draws one, ``False`` never, and ``None`` (the default) decides:
-only on a terminal (bars go to stderr), and, where the caller says how long the run is,
-only for a long one.
+only on a terminal (bars go to stderr), and only once the run has lasted `DELAY_S` seconds,
+so that short runs print nothing and long ones show their progress on any device. The
+delay is measured, not predicted from a cell-update count: the same count takes seconds on
+a GPU and minutes on a CPU.
+
+Device work is enqueued asynchronously, so a bar over enqueued steps would race to its end
+and then wait in silence. Given the device `queue`, `progress_range` waits for the queue
+every few steps, as many as take about `SYNC_S` seconds, so the bar moves with the work
+actually done.
 """
 
 from __future__ import annotations
 
 import sys
+import time
+from collections.abc import Iterator
 
 from tqdm.auto import tqdm
 
-# The automatic bar of a grid flow waits for runs of more cell updates than this (seconds of
-# work on a GPU): shorter ones would only flash a bar, and reading it costs a queue wait.
-LONG_RUN_CELL_UPDATES = 2e9
+# Seconds a run with progress=None lasts before its bar appears.
+DELAY_S = 2.0
+# Seconds of device work between the waits that move a bar (see progress_range).
+SYNC_S = 0.25
 
 
 def is_long_run(steps: int, cells: int) -> bool:
-    """Whether `steps` steps over `cells` cells make a run long enough for an automatic bar."""
-    return steps * cells > LONG_RUN_CELL_UPDATES
+    """Kept for callers that still pass ``long_run``: every run may be long, the bar's delay
+    decides (see the module's docstring)."""
+    return True
 
 
 def on_terminal() -> bool:
@@ -35,16 +46,44 @@ def bar_disabled(progress: bool | None, long_run: bool = True) -> bool | None:
     return not progress
 
 
+def _delay(progress: bool | None) -> float:
+    return DELAY_S if progress is None else 0.0
+
+
 def progress_bar(progress: bool | None, total: int, desc: str, *, long_run: bool = True,
                  **options) -> tqdm:
-    """A tqdm bar over `total` units, drawn by the policy of `bar_disabled`."""
+    """A tqdm bar over `total` units, drawn by the policy of `bar_disabled` and, with
+    progress=None, only after `DELAY_S` seconds."""
+    options.setdefault("delay", _delay(progress))
     return tqdm(total=total, desc=desc, disable=bar_disabled(progress, long_run), **options)
 
 
 def progress_range(progress: bool | None, steps: int, desc: str, *, long_run: bool = True,
-                   **options) -> tqdm:
-    """range(steps) under a tqdm bar drawn by the policy of `bar_disabled`."""
-    return tqdm(range(steps), desc=desc, disable=bar_disabled(progress, long_run), **options)
+                   queue=None, **options) -> Iterator[int]:
+    """range(steps) under a bar drawn by the policy of `progress_bar`.
+
+    With the device's `queue`, the loop waits for the queue after a batch of steps whose
+    size adapts so that a batch takes about `SYNC_S` seconds (only while a bar may be
+    drawn): the bar then counts steps done, not steps enqueued.
+    """
+    bar = progress_bar(progress, steps, desc, long_run=long_run, **options)
+    with bar:
+        if bar.disable or queue is None:
+            for n in range(steps):
+                yield n
+                bar.update(1)
+            return
+        batch, pending, start = 1, 0, time.perf_counter()
+        for n in range(steps):
+            yield n
+            pending += 1
+            if pending >= batch or n == steps - 1:
+                queue.finish()
+                now = time.perf_counter()
+                per_step = (now - start) / pending
+                batch = max(1, min(1000, int(SYNC_S / max(per_step, 1e-6))))
+                bar.update(pending)
+                pending, start = 0, now
 
 
 # Every object that runs for long (PlanarFlow, Inpainting, MorphingTracker, RegionTracker)

@@ -22,6 +22,9 @@ def add_denoise_parser(subparsers) -> None:
     parser.add_argument("--method", choices=("primal-dual", "gradient"), default="primal-dual",
                         help="primal-dual (exact TV, default) or gradient (the thesis's "
                              "explicit scheme)")
+    parser.add_argument("--per-channel", action="store_true",
+                        help="colour: TV of each channel on its own (default: colour-coupled "
+                             "TV, whose channels keep their edges in the same places)")
     parser.add_argument("--eps", type=float, default=None,
                         help="--method gradient: regularisation of |grad u| (default 0.02)")
     parser.add_argument("--max-steps", type=int, default=None,
@@ -32,7 +35,8 @@ def add_denoise_parser(subparsers) -> None:
 def task_options(args) -> dict:
     """The denoise task's keywords from the parsed flags (clpde.scale.tasks.denoise_file)."""
     return {"sigma": args.sigma, "weight": args.weight, "method": args.method, "eps": args.eps,
-            "max_steps": args.max_steps, "device": args.device}
+            "max_steps": args.max_steps, "per_channel": args.per_channel,
+            "device": args.device}
 
 
 def run_denoise(args) -> int:

@@ -22,6 +22,10 @@ def add_diffuse_parser(subparsers) -> None:
                         help="Perona-Malik edge threshold, intensities in [0, 1] (default 0.05)")
     parser.add_argument("--edge", choices=("exp", "rational"), default=None,
                         help="Perona-Malik edge-stopping function (default: exp)")
+    parser.add_argument("--presmooth", type=float, default=None,
+                        help="Perona-Malik: read the edge-stopping function from the image "
+                             "smoothed by a Gaussian of this many pixels (the regularised "
+                             "flow of Catte et al.; isolated noise spikes then diffuse too)")
     parser.add_argument("--eps", type=float, default=None,
                         help="TV / curvature regularisation of |grad u|, intensities in [0, 1] "
                              "(TV default 0.005, about one 8-bit grey level: regions flatten, "
@@ -32,13 +36,14 @@ def add_diffuse_parser(subparsers) -> None:
 def task_options(args) -> dict:
     """The diffuse task's keywords from the parsed flags (clpde.scale.tasks.diffuse_file)."""
     return {"flow": args.flow, "steps": args.steps, "dt": args.dt, "kappa": args.kappa,
-            "edge": args.edge, "eps": args.eps, "device": args.device}
+            "edge": args.edge, "eps": args.eps, "presmooth": args.presmooth,
+            "device": args.device}
 
 
 def run_diffuse(args) -> int:
     param_check(args, args.flow, {option: tuple(f for f, params in FLOW_PARAMS.items()
                                                 if option in params)
-                                  for option in ("kappa", "edge", "eps")})
+                                  for option in ("kappa", "edge", "eps", "presmooth")})
     report(TASKS["diffuse"](args.input, args.output, progress=show_progress(),
                             **task_options(args)))
     return 0

@@ -51,6 +51,11 @@ def add_surface_parser(subparsers) -> None:
     parser.add_argument("--size", type=int, default=400,
                         help="picture size per view (default: 400)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument("--on", choices=("input", "remesh"), default=None,
+                        help="the mesh the results are written on: 'input', the mesh file "
+                             "given, with the values sampled at its own vertices (the default "
+                             "for a mesh file), or 'remesh', a marching-cubes mesh of the "
+                             "surface (the default, and the only choice, for a named shape)")
     parser.add_argument("--storage", choices=STORAGES, default="lists",
                         help="the band's storage on the device: lists over the dense grid "
                              "(default), or only the band's bricks (less memory; as fast from "
@@ -64,7 +69,8 @@ def task_options(args) -> dict:
     return {"flow": args.flow, "resolution": args.resolution, "t": args.t,
             "iterations": args.iterations, "sigma": args.sigma, "data": args.data,
             "direction": args.direction, "size": args.size, "seed": args.seed,
-            "storage": args.storage, "overwrite": args.overwrite, "device": args.device}
+            "storage": args.storage, "on": args.on, "overwrite": args.overwrite,
+            "device": args.device}
 
 
 def run_surface(args) -> int:

@@ -12,14 +12,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import State, is_long_run, progress_bar
+from .._progress import State, progress_bar
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong, check_fits
 from ..imagedata import check_steps, check_time_step, positive, to_kernel_layout
 from ..runtime import get_runtime
+from . import bounded
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("planar/planar.cl",)
+KERNEL_FILES = ("planar/planar.cl", "planar/catte.cl")
 
 FLOWS = ("heat", "perona-malik", "tv", "curvature")
 # TV's regularisation of |grad u| on [0, 1] data: about one grey level of 8-bit data, so
@@ -28,8 +29,45 @@ FLOWS = ("heat", "perona-malik", "tv", "curvature")
 # a photo's gradients were below eps and TV flow blurred it more than heat did.
 TV_EPS = 0.005
 # The parameters each flow takes besides dt; any other is refused rather than ignored.
-FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge"), "tv": ("eps",),
+FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge", "presmooth"), "tv": ("eps",),
                "curvature": ("eps", "weight")}
+
+
+def gaussian_weights(presmooth: float) -> np.ndarray:
+    """The one-sided weights w[0..r] of a sampled Gaussian of standard deviation `presmooth`
+    pixels, r = ceil(3 presmooth), normalised so that w[0] + 2 (w[1] + ... + w[r]) = 1
+    (kernels/planar/catte.cl's gauss_rows and gauss_cols). presmooth = 0 gives [1]: no
+    smoothing.
+
+    Parameters
+    ----------
+    presmooth : float
+        The standard deviation in pixels, 0 or more.
+
+    Returns
+    -------
+    ndarray
+        The r + 1 weights (float64).
+
+    Raises
+    ------
+    InputError
+        For a negative or non-finite presmooth.
+
+    Examples
+    --------
+    >>> from clpde.planar import gaussian_weights
+    >>> w = gaussian_weights(1.0)
+    >>> len(w), round(float(w[0] + 2 * w[1:].sum()), 12)
+    (4, 1.0)
+    """
+    if not np.isfinite(presmooth) or presmooth < 0:
+        raise InputError(f"presmooth must be a number >= 0 (pixels), not {presmooth!r}")
+    if presmooth == 0:
+        return np.ones(1)
+    radius = int(np.ceil(3 * presmooth))
+    w = np.exp(-0.5 * (np.arange(radius + 1) / presmooth) ** 2)
+    return w / (w[0] + 2 * w[1:].sum())
 
 
 def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
@@ -66,6 +104,27 @@ def stability_limit(flow: str, eps: float = 0.0, lam: float = 0.0) -> float:
             raise InputError(f"lam must be a number >= 0, not {lam!r}")
         return 1.0 / (4.0 / eps + lam)
     raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
+
+
+def _check_flow_params(flow: str, given: dict) -> None:
+    """Refuse a parameter the flow does not take, rather than ignore it."""
+    for name, value in given.items():
+        if value is not None and name not in FLOW_PARAMS[flow]:
+            users = [f for f, params in FLOW_PARAMS.items() if name in params]
+            raise InputError(f"{name} applies to the {' and '.join(users)} flow"
+                             f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+
+
+@dataclass
+class DiffuseInfo:
+    """What a `diffuse` run did: the steps run, the time step, the flow's time reached
+    (steps * dt), the flow and the largest stable time step (`stability_limit`)."""
+
+    steps: int
+    dt: float
+    time: float
+    flow: str
+    stability_limit: float
 
 
 @dataclass
@@ -138,22 +197,19 @@ class PlanarFlow:
                  channel_axis: int | None = None, device: str | int | None = None,
                  dtype: DTypeLike | None = None, kappa: float | None = None,
                  edge: str | None = None, eps: float | None = None,
-                 weight: ArrayLike | None = None):
+                 weight: ArrayLike | None = None, presmooth: float | None = None):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
-        given = {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight}
-        for name, value in given.items():
-            if value is not None and name not in FLOW_PARAMS[flow]:
-                users = [f for f, params in FLOW_PARAMS.items() if name in params]
-                raise InputError(f"{name} applies to the {' and '.join(users)} flow"
-                                 f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+        _check_flow_params(flow, {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight,
+                                  "presmooth": presmooth})
         kappa = 0.05 if kappa is None else kappa
         edge = "exp" if edge is None else edge
         self.runtime = get_runtime(device)
         dtype = np.dtype(dtype or np.float32)
         # two fields (ping-pong) and the curvature flow's one-channel weight
         def fits(shape):
-            check_fits(self.runtime, shape, f"the {flow} flow", 2 + (weight is not None),
+            check_fits(self.runtime, shape, f"the {flow} flow",
+                       2 + (weight is not None) + 2 * (presmooth is not None),
                        dtype=dtype)
 
         data, self.layout = to_kernel_layout(image, channel_axis, fits=fits)
@@ -163,10 +219,11 @@ class PlanarFlow:
         self.steps_done = 0
         self.time = 0.0
         self.pair = PingPong(Field.from_host(self.grid, data))
-        self._setup(flow, dt, kappa, edge, eps, weight)
+        self._setup(flow, dt, kappa, edge, eps, weight, presmooth)
 
-    def _setup(self, flow, dt, kappa, edge, eps, weight):
+    def _setup(self, flow, dt, kappa, edge, eps, weight, presmooth=None):
         g = self.grid
+        self._smooth = None
         if flow == "heat":
             self.dt = check_time_step(dt, stability_limit(flow), "heat")
             kernel = g.kernel("planar/planar.cl", "heat_step")
@@ -179,6 +236,18 @@ class PlanarFlow:
             kernel = g.kernel("planar/planar.cl", "perona_malik_step",
                               EDGE_STOP=int(edge == "rational"))
             self._extra = (g.scalar(1.0 / kappa**2),)
+            if presmooth is not None:
+                # Catte et al.'s regularisation: the diffusivity from a smoothed copy
+                import pyopencl.array as cla
+
+                w = gaussian_weights(float(presmooth))
+                self.presmooth_radius = len(w) - 1
+                defines = {"EDGE_STOP": int(edge == "rational")}
+                kernel = g.kernel("planar/catte.cl", "perona_malik_catte_step", **defines)
+                self._smooth = (g.kernel("planar/catte.cl", "gauss_rows"),
+                                g.kernel("planar/catte.cl", "gauss_cols"),
+                                cla.to_device(self.runtime.queue, w.astype(g.dtype)),
+                                np.int32(len(w) - 1), Field.empty(g), Field.empty(g))
         elif flow == "tv":
             eps = positive("eps", TV_EPS if eps is None else eps)
             self.dt = check_time_step(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
@@ -209,6 +278,16 @@ class PlanarFlow:
             args = (self._extra[0], g.scalar(self.dt), self._extra[2])
         else:
             args = (g.scalar(self.dt), *self._extra)
+        if self._smooth is not None:
+            rows, cols, w, radius, tmp, smooth = self._smooth
+            g.launch(rows, self.pair.cur.data.data, tmp.data.data, w.data, radius)
+            g.launch(cols, tmp.data.data, smooth.data.data, w.data, radius)
+            g.launch(self._kernel, self.pair.cur.data.data, smooth.data.data,
+                     self.pair.nxt.data.data, *args)
+            self.pair.swap()
+            self.steps_done += 1
+            self.time += self.dt
+            return
         g.launch(self._kernel, self.pair.cur.data.data, self.pair.nxt.data.data, *args)
         self.pair.swap()
         self.steps_done += 1
@@ -217,8 +296,7 @@ class PlanarFlow:
     def run(self, steps: int, progress: bool | None = None) -> PlanarFlow:
         """Enqueue `steps` steps; the host only waits to move the progress bar."""
         steps = check_steps(steps)
-        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step",
-                           long_run=is_long_run(steps, self.grid.nx * self.grid.ny * self.grid.nc))
+        bar = progress_bar(progress, steps, f"clpde {self.flow}", unit="step")
         chunk = 50
         with bar:
             for start in range(0, steps, chunk):
@@ -248,7 +326,8 @@ class PlanarFlow:
 def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
             channel_axis: int | None = None, device: str | int | None = None, *,
             progress: bool | None = None, dtype: DTypeLike | None = None,
-            **params: ArrayLike | float | str) -> np.ndarray:
+            return_info: bool = False,
+            **params: ArrayLike | float | str) -> np.ndarray | tuple[np.ndarray, DiffuseInfo]:
     """Run a planar diffusion flow for `steps` explicit steps.
 
     Parameters
@@ -256,7 +335,10 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
     image : (rows, columns) or (rows, columns, channels) array
         Integer or float data, never modified; channels need `channel_axis`.
     flow : {'heat', 'perona-malik', 'tv', 'curvature'}
-        'heat' (u_t = Lap u), 'perona-malik' (params kappa, edge='exp'|'rational'),
+        'heat' (u_t = Lap u), 'perona-malik' (params kappa, edge='exp'|'rational' and
+        presmooth: the regularised form of Catte et al., whose diffusivity reads the
+        gradient of the image smoothed by a Gaussian of `presmooth` pixels, so that
+        isolated noise spikes diffuse too; presmooth=0 is the plain flow),
         'tv' (u_t = div(grad u / |grad u|_eps), param eps, default TV_EPS = 0.005) or
         'curvature' (u_t = g kappa |grad u|, params weight=g, eps). Data is scaled to
         [0, 1] internally, so kappa and eps are in those units.
@@ -273,13 +355,21 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
         Draw a progress bar; by default only for long runs on a terminal.
     dtype : {float32, float64}, optional
         The device's arithmetic (float32 by default).
+    return_info : bool
+        Also return a `DiffuseInfo` (steps, dt, time reached, flow, stability limit).
     **params
         The flow's parameters named above; one that the flow does not take is an error.
 
     Returns
     -------
-    ndarray
+    ndarray, or (ndarray, DiffuseInfo) with return_info
         The result, with the input's shape and dtype.
+
+    Raises
+    ------
+    InputError
+        For bad images, an unknown flow, a parameter the flow does not take or an unstable
+        time step, before any work.
 
     Examples
     --------
@@ -298,7 +388,59 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
     if unknown:
         listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())
         raise InputError(f"diffuse takes no parameter {unknown[0]!r}; the flows take ({listed})")
-    state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
-                       dtype=dtype, **params)
-    return state.run(steps, progress).result()
+    if bounded.is_large(image) and flow in FLOWS:
+        # one channel at a time, converted and restored in strips: the same numbers in a
+        # fraction of the memory (diffuse_by_channel)
+        _check_flow_params(flow, params)
+        steps = check_steps(steps)
+        result, state = diffuse_by_channel(image, flow, steps, dt, channel_axis, device,
+                                                 dtype, progress, params)
+    else:
+        state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
+                           dtype=dtype, **params)
+        result = state.run(steps, progress).result()
+    if not return_info:
+        return result
+    eps = params.get("eps")
+    limit = stability_limit(flow, TV_EPS if eps is None and flow == "tv" else (eps or 0.0))
+    return result, DiffuseInfo(state.steps_done, state.dt, state.time, flow, limit)
 
+
+# ---- large images: one channel at a time (bounded.py) --------------------------------------
+def diffuse_by_channel(image, flow, steps, dt, channel_axis, device, precision, progress,
+                       params):
+    """clpde.diffuse one channel at a time, converting and restoring in strips: bit for bit
+    the whole-image result (every flow of planar.cl acts on each channel alone, with the
+    same arithmetic per cell), in the memory of one channel's two device fields.
+    Returns (result, the last channel's flow)."""
+
+    scaled = bounded.Scaled(image, channel_axis)
+    runtime = get_runtime(device)
+    dtype = np.dtype(precision or np.float32)
+    grid = Grid(runtime, scaled.nx, scaled.ny, 1, 1, dtype)
+    state = None
+    for c in range(scaled.nc):
+        padded = np.zeros(grid.padded_shape, dtype)
+        for r in range(0, scaled.ny, bounded.STRIP_ROWS):
+            rows = slice(r, min(r + bounded.STRIP_ROWS, scaled.ny))
+            padded[0, 1 + rows.start:1 + rows.stop, 1:-1] = scaled.block(rows, slice(None), c)[0]
+        field = Field.empty(grid)
+        field.data.set(padded)
+        del padded
+        field.fill_ghosts("neumann")
+        state = _ChannelFlow(runtime, grid, PingPong(field), flow, dt, params)
+        state.run(steps, progress=progress)
+        out = state.pair.cur.data.get()[0, 1:-1, 1:-1]
+        scaled.restore(out, slice(0, scaled.ny), slice(None), c)
+        state.pair = None  # frees this channel's device fields before the next
+    return scaled.out, state
+
+
+class _ChannelFlow(PlanarFlow):
+    """A PlanarFlow over one channel's field, already uploaded."""
+
+    def __init__(self, runtime, grid, pair, flow, dt, params):
+        self.runtime, self.grid, self.pair = runtime, grid, pair
+        self.flow, self.steps_done, self.time = flow, 0, 0.0
+        self._setup(flow, dt, params.get("kappa", 0.05), params.get("edge", "exp"),
+                    params.get("eps"), params.get("weight"), params.get("presmooth"))

@@ -19,9 +19,14 @@ import numpy as np
 
 from ..errors import InputError
 from ..fields import Field, Grid, PingPong
-from ..imagedata import check_steps, compute_dtype, positive, to_kernel_layout
+from ..imagedata import (
+    check_steps,
+    compute_dtype,
+    positive,
+    to_kernel_layout,
+)
 from ..runtime import get_runtime
-from .flows import FLOWS, PlanarFlow
+from .flows import FLOWS, PlanarFlow, gaussian_weights
 from .rof import _primal_dual
 
 RADIUS = 1  # every planar.cl and rof.cl step reads the 3x3 neighbourhood only
@@ -40,7 +45,7 @@ class _ScaledFlow(PlanarFlow):
         self.flow, self.steps_done, self.time = flow, 0, 0.0
         self.pair = PingPong(Field.from_host(self.grid, data))
         self._setup(flow, dt, params.get("kappa", 0.05), params.get("edge", "exp"),
-                    params.get("eps"), None)
+                    params.get("eps"), None, params.get("presmooth"))
 
 
 def _tile_diffuse(block, flow, steps, dt, device, precision, params):
@@ -48,12 +53,13 @@ def _tile_diffuse(block, flow, steps, dt, device, precision, params):
     return state.run(steps, progress=False).pair.cur.to_host().astype(np.float64)
 
 
-def _tile_denoise(block, lam, steps, check_every, device, precision):
+def _tile_denoise(block, lam, steps, check_every, device, precision, vectorial=False):
 
     runtime = get_runtime(device)
     nc, ny, nx = block.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(block.dtype, precision))
-    u, *_ = _primal_dual(grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False)
+    u, *_ = _primal_dual(grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False,
+                         vectorial)
     return u
 
 
@@ -87,7 +93,11 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     steps = check_steps(steps)
     data, layout = to_kernel_layout(image, channel_axis)
     runtime = get_runtime(device)
-    out = _chunked(data, chunks, steps * RADIUS, _tile_diffuse, flow=flow, steps=steps, dt=dt,
+    # Catte's Gaussian reads `radius` more cells on each side before every step
+    radius = RADIUS
+    if params.get("presmooth") is not None:
+        radius += len(gaussian_weights(float(params["presmooth"]))) - 1
+    out = _chunked(data, chunks, steps * radius, _tile_diffuse, flow=flow, steps=steps, dt=dt,
                    device=runtime.index,
                    precision=dtype,
                    params=params)
@@ -95,10 +105,12 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
 
 
 def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chunks=256,
-               check_every: int = 5, dtype=None) -> np.ndarray:
+               check_every: int = 5, dtype=None, precision=None,
+               vectorial: bool | None = None) -> np.ndarray:
     """clpde.denoise_tv (primal-dual, given weight) for exactly `steps` iterations, tile by
     tile; bitwise equal to ``clpde.denoise_tv(image, weight=weight, max_steps=steps,
-    tol=1e-300, check_every=check_every)``."""
+    tol=1e-300, check_every=check_every, vectorial=vectorial)`` (vectorial by default for
+    several channels, as there: its coupling is per cell, so the reach is the same)."""
 
     steps = check_steps(steps)
     data, layout = to_kernel_layout(image, channel_axis)
@@ -106,7 +118,9 @@ def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chu
     lam = weight_unit / positive("weight", weight)
     runtime = get_runtime(device)
     # u = f + div(p)/lambda adds one more cell to the iterations' reach.
+    vectorial = data.shape[0] > 1 if vectorial is None else bool(vectorial)
     out = _chunked(data, chunks, steps * RADIUS + 1, _tile_denoise, lam=lam, steps=steps,
+                   vectorial=vectorial,
                    check_every=max(1, int(check_every)), device=runtime.index,
                    precision=dtype)
     return layout.restore(out)

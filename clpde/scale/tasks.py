@@ -69,12 +69,13 @@ def _progress(progress):
 
 # ---- images ------------------------------------------------------------------------------------
 def diffuse_file(input, output, *, flow: str = "heat", steps: int = 100, dt=None, kappa=None,
-                 edge=None, eps=None, device=None, tile: bool = False,
+                 edge=None, eps=None, presmooth=None, device=None, tile: bool = False,
                  progress=None) -> list[str]:
     """`clpde diffuse`: a planar flow (clpde.diffuse) on the image `input`, written to
     `output`. tile: run in tiles (bitwise equal) when True, or by itself when the image
     exceeds the device's largest allocation (None); False never."""
-    params = {k: v for k, v in (("kappa", kappa), ("edge", edge), ("eps", eps)) if v is not None}
+    params = {k: v for k, v in (("kappa", kappa), ("edge", edge), ("eps", eps),
+                                ("presmooth", presmooth)) if v is not None}
     if tile is not False and _run_tiled("diffuse", input, output, tile, device, flow=flow,
                                         steps=steps, dt=dt, params=params):
         return [f"wrote {output}"]
@@ -87,8 +88,8 @@ def diffuse_file(input, output, *, flow: str = "heat", steps: int = 100, dt=None
 
 
 def denoise_file(input, output, *, sigma=None, weight=None, method: str = "primal-dual",
-                 eps=None, max_steps=None, device=None, tile: bool = False,
-                 progress=None) -> list[str]:
+                 eps=None, max_steps=None, per_channel: bool = False, device=None,
+                 tile: bool = False, progress=None) -> list[str]:
     """`clpde denoise`: TV denoising (clpde.denoise_tv) of the image `input`, written to
     `output`. tile: as for diffuse_file (tiles need weight, max_steps and primal-dual)."""
     if eps is not None and method != "gradient":
@@ -99,6 +100,8 @@ def denoise_file(input, output, *, sigma=None, weight=None, method: str = "prima
     image = read_input(input, output, device=device)
     parts = split_alpha(image, input)
     options = {"method": method}
+    if per_channel:
+        options["vectorial"] = False
     if eps is not None:
         options["eps"] = eps
     if max_steps is not None:
@@ -109,8 +112,12 @@ def denoise_file(input, output, *, sigma=None, weight=None, method: str = "prima
     write_image(output, parts.join(result))
     state = "converged" if info.converged else "stopped at --max-steps"
     residual = float(np.sqrt(np.mean(info.residual_variance)))
+    noise = ""
+    if info.sigma is not None:
+        levels = ", ".join(f"{s:.4g}" for s in np.atleast_1d(info.sigma))
+        noise = f", noise sigma {'estimated' if info.sigma_estimated else 'given'} {levels}"
     return [f"wrote {output}", f"denoise: {info.steps} {method} iterations ({state}), "
-            f"residual std {residual:.4g}"]
+            f"residual std {residual:.4g}{noise}"]
 
 
 def _run_tiled(command, input, output, force, device, **options) -> bool:
@@ -315,7 +322,7 @@ def _write_mp4(outdir, frames, masks):
 
 def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iterations=None,
                  sigma: float = 0.15, data: str = "auto", direction: str = "major",
-                 size: int = 400, seed: int = 0, storage: str = "lists",
+                 size: int = 400, seed: int = 0, storage: str = "lists", on=None,
                  overwrite: bool = False, device=None, progress=None) -> list[str]:
     """`clpde surface`: one of clpde.surface.runs.FLOWS on the surface of the mesh `input`
     (a file, or a shape name of clpde.data.SURFACE_SHAPES); the folder `output` gets the
@@ -331,6 +338,11 @@ def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iter
         raise InputError("flowvis needs --direction major or minor")
     surf = load_surface(input, resolution, device=device)
     surf.storage = storage
+    # the results go on the user's own mesh (its vertices' values) unless asked otherwise
+    on_input = (on or "input") == "input" and getattr(surf, "mesh", None) is not None
+    if on == "input" and not on_input:
+        raise InputError(f"--on input needs a mesh file; {input!r} is a generated shape, "
+                         "whose results are written on a marching-cubes mesh (--on remesh)")
     values = None
     if data != "pattern" and flow in DATA_FLOWS:
         values = mesh_colours(surf)
@@ -338,7 +350,7 @@ def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iter
             raise InputError(f"{input} has no vertex colours; use --data pattern")
     run = run_flow(surf, flow, t=t, iterations=iterations, sigma=sigma, seed=seed,
                    direction=direction, data=values, progress=_progress(progress))
-    written = write_run(run, output, size=size, overwrite=overwrite)
+    written = write_run(run, output, size=size, overwrite=overwrite, on_input=on_input)
     return [f"surface {flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
             f"{surf.ext_band.n} cells; wrote {len(written)} files to {output}"]
 

@@ -169,7 +169,8 @@ def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None,
     flow = make_flow(surf, u, defines={"WEIGHTED": int(bool(weighted))})
     kernel = flow.step_kernel("heat")
     r = surf.grid.scalar(dt / surf.spacing**2)
-    for n in progress_range(progress, steps, "surface heat", leave=False):
+    for n in progress_range(progress, steps, "surface heat", leave=False,
+                            queue=surf.grid.runtime.queue):
         flow.step(kernel, _ALL_SIDES[n % 8] if alternate else 0, r, channels=flow.nc)
     return flow.result()
 
@@ -201,7 +202,8 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
         lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
         dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
                                  updates=-(-steps // lambda_every), correct=correct_lambda)
-    for n in progress_range(progress, steps, f"surface {flow_name}", leave=False):
+    for n in progress_range(progress, steps, f"surface {flow_name}", leave=False,
+                            queue=surf.grid.runtime.queue):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         if dynamic is not None and n % lambda_every == 0:
             dynamic.update(sides, n // lambda_every)
@@ -452,7 +454,8 @@ def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
     beta_dev = flow.fixed(beta[None])
     dir_dev = flow.psi if direction_field is None else flow.fixed(direction_field, halo=2)
     kernel = flow.step_kernel("turk")
-    for n in progress_range(progress, int(iterations), "reaction-diffusion", leave=False):
+    for n in progress_range(progress, int(iterations), "reaction-diffusion", leave=False,
+                            queue=surf.grid.runtime.queue):
         flow.step(kernel, _ALL_SIDES[n % 8] if alternate else 0, dir_dev.data, beta_dev.data,
                   g.scalar(dt), g.scalar(p["da"]), g.scalar(p["db"]), g.scalar(p["s"]))
     return flow.result()

@@ -331,7 +331,8 @@ class ImplicitSurface:
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
         kernel = g.kernel("surface/reinit.cl", "reinit_step")
-        for _ in progress_range(progress, steps, "reinitialise", leave=False):
+        for _ in progress_range(progress, steps, "reinitialise", leave=False,
+                                queue=g.runtime.queue):
             g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
                           g.scalar(1 / self.spacing), *g.strides())
             cur, nxt = nxt, cur

@@ -48,19 +48,81 @@ def to_mesh(surf, u=None, *, vmin=None, vmax=None, interpolation="tricubic"):
     # skimage orients faces for ascending values (psi grows outwards): flip to point out
     mesh = trimesh.Trimesh(vertices, faces[:, ::-1], process=False)
     if u is not None:
-        values = surf.sample(u, vertices, interpolation)
-        mesh.vertex_attributes["u"] = values
-        if values.ndim == 1:
-            rgb = colormap(values, vmin, vmax)
-        elif values.shape[1] == 3:
-            rgb = np.clip(values, 0, 1)
-        else:
-            raise InputError(f"to_mesh colours scalar or 3-channel data, not {values.shape[1]} "
-                             "channels")
-        mesh.visual.vertex_colors = np.concatenate(
-            [np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], axis=1
-        )
+        _colour_vertices(mesh, surf.sample(u, vertices, interpolation), vmin, vmax, "to_mesh")
     return mesh
+
+
+def _colour_vertices(mesh, values, vmin, vmax, what):
+    """Store sampled values on a mesh: as vertex attributes ('u' for scalars, 'u0', 'u1',
+    ... per channel; a PLY keeps them as vertex properties) and as vertex colours."""
+    if values.ndim == 1:
+        mesh.vertex_attributes["u"] = values
+        rgb = colormap(values, vmin, vmax)
+    elif values.shape[1] == 3:
+        for c in range(3):
+            mesh.vertex_attributes[f"u{c}"] = values[:, c]
+        rgb = np.clip(values, 0, 1)
+    else:
+        raise InputError(f"{what} colours scalar or 3-channel data, not {values.shape[1]} "
+                         "channels")
+    mesh.visual.vertex_colors = np.concatenate(
+        [np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], axis=1
+    )
+
+
+def on_mesh(surf, u, mesh=None, *, vmin=None, vmax=None, interpolation="tricubic"):
+    """The user's own mesh with u sampled at its vertices: a copy of `mesh` (by default
+    the one `surf` was made from, ImplicitSurface.from_mesh) whose vertex attributes and
+    colours hold u's values there, as `to_mesh` stores them on a marching-cubes mesh.
+
+    The band holds u extended off the surface along its normals, and the mesh's vertices
+    lie on the surface (psi = 0 there, psi being the distance to that mesh), so sampling
+    the band at the vertices (`ImplicitSurface.sample`, tricubic by default, or 'trilinear')
+    reads u on the surface with no remeshing: the mesh keeps its vertices, faces and order.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface u lives on.
+    u : array
+        Data on surf's grid or band (scalar or 3 channels).
+    mesh : trimesh.Trimesh, optional
+        A mesh whose vertices lie within the band (default: surf's own).
+    vmin, vmax : float, optional
+        The colour ramp's ends for scalar data (default: the data's range).
+    interpolation : str
+        As for `ImplicitSurface.sample`.
+
+    Returns
+    -------
+    trimesh.Trimesh
+        The copy, with vertex_attributes 'u' (or 'u0'..'u2') and vertex colours.
+
+    Raises
+    ------
+    InputError
+        When surf was not made from a mesh and none is given, or for data of other than
+        1 or 3 channels.
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh
+    >>> from clpde.surface import ImplicitSurface
+    >>> from clpde.surface.render import on_mesh
+    >>> ball = trimesh.creation.icosphere(2)
+    >>> surf = ImplicitSurface.from_mesh(ball, resolution=24)
+    >>> result = on_mesh(surf, surf.field(lambda x, y, z: z))
+    >>> len(result.vertices) == len(ball.vertices)
+    True
+    """
+    mesh = getattr(surf, "mesh", None) if mesh is None else mesh
+    if mesh is None:
+        raise InputError("this surface was not made from a mesh: give mesh=, or use to_mesh "
+                         "for a marching-cubes mesh of its zero level set")
+    result = mesh.copy()
+    values = surf.sample(u, np.asarray(result.vertices, np.float64), interpolation)
+    _colour_vertices(result, values, vmin, vmax, "on_mesh")
+    return result
 
 
 def export_mesh(mesh, path) -> None:
@@ -113,6 +175,25 @@ def colour_bar(width: int, vmin: float, vmax: float, *, label: str = "") -> np.n
     return np.asarray(canvas)
 
 
+def title_height(width: int) -> int:
+    """The height of `with_title`'s strip over a picture `width` pixels wide."""
+    return max(20, min(36, int(width) // 14))
+
+
+def with_title(image, text: str) -> np.ndarray:
+    """`image` with a white strip above it holding `text` (black, left-aligned)."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    image = np.asarray(image)
+    width = image.shape[1]
+    height = title_height(width)
+    font = ImageFont.load_default(size=max(10, height // 2))
+    canvas = Image.new("RGB", (width, height), (255, 255, 255))
+    ImageDraw.Draw(canvas).text((max(4, height // 4), height / 2), text, fill=(0, 0, 0),
+                                font=font, anchor="lm")
+    return np.concatenate([np.asarray(canvas)[..., :image.shape[2]], image], axis=0)
+
+
 def with_colour_bar(image, vmin: float, vmax: float, *, label: str = "") -> np.ndarray:
     """`image` with a colour bar from vmin to vmax below it."""
     image = np.asarray(image)
@@ -137,8 +218,20 @@ def view_rotation(azimuth=30.0, elevation=20.0) -> np.ndarray:
     return rx @ to_cam @ rz.T
 
 
-def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0)):
-    """(size, size, 3) uint8 picture of a mesh with vertex colours (grey if none)."""
+def view_box(meshes, azimuth=30.0, elevation=20.0):
+    """(centre, span) in the picture plane that holds every mesh of `meshes` seen from this
+    view: given to render_mesh as `box`, several pictures share one scale and position."""
+    rot = view_rotation(azimuth, elevation)
+    cams = [np.asarray(m.vertices, np.float64) @ rot[:2].T for m in meshes]
+    lo = np.min([c.min(axis=0) for c in cams], axis=0)
+    hi = np.max([c.max(axis=0) for c in cams], axis=0)
+    return 0.5 * (lo + hi), float((hi - lo).max())
+
+
+def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0),
+                box=None):
+    """(size, size, 3) uint8 picture of a mesh with vertex colours (grey if none). box:
+    (centre, span) of the picture plane to show (view_box), by default the mesh's own."""
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if len(faces) == 0:
@@ -152,9 +245,11 @@ def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1
     else:
         colours = np.asarray(colours)[:, :3] / 255.0
     cam = verts @ view_rotation(azimuth, elevation).T
-    lo, hi = cam[:, :2].min(axis=0), cam[:, :2].max(axis=0)
-    scale = 0.92 * size / max((hi - lo).max(), 1e-12)
-    centre = 0.5 * (lo + hi)
+    if box is None:
+        lo, hi = cam[:, :2].min(axis=0), cam[:, :2].max(axis=0)
+        box = (0.5 * (lo + hi), float((hi - lo).max()))
+    centre = np.asarray(box[0], np.float64)
+    scale = 0.92 * size / max(float(box[1]), 1e-12)
     px = (cam[:, :2] - centre) * scale + size / 2
     tri_px = px[faces]
     tri_cam = cam[faces]

@@ -18,7 +18,15 @@ from ..errors import InputError
 from ..io.images import output_folder, write_bytes
 from .implicit import ImplicitSurface
 from .mesh_sdf import load_mesh
-from .render import export_mesh, render_mesh, scalar_range, to_mesh, with_colour_bar
+from .render import (
+    export_mesh,
+    on_mesh,
+    render_mesh,
+    scalar_range,
+    to_mesh,
+    with_colour_bar,
+    with_title,
+)
 
 FLOWS = ("heat", "tv", "denoise", "chroma", "reaction-diffusion", "flowvis", "curvature")
 
@@ -154,6 +162,31 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
     raise InputError(f"unknown surface flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
 
+# The averaging width, as a share of the mesh's bounding-box diagonal, above which the
+# averaged curvature no longer tells the shape's parts apart: wider than about a sixth of
+# the shape, one average covers a face and the edges around it (the shares of common
+# meshes are in docs/surface.md).
+COARSE_SHARE = 0.15
+
+
+def warn_if_too_coarse(mesh, sigma: float) -> bool:
+    """Warn (UserWarning) when the curvature's averaging width `sigma` (the mesh's median
+    edge length, or two cells) spans more than COARSE_SHARE of the mesh's size: the mesh
+    then has too few vertices to say where its curvature lies, and the average spreads the
+    curvature of its edges and corners over its faces. Returns whether it warned."""
+    diagonal = float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
+    share = sigma / max(diagonal, 1e-300)
+    if share <= COARSE_SHARE:
+        return False
+    warnings.warn(
+        f"the mesh is too coarse for curvature: {len(mesh.faces)} faces, so the curvature "
+        f"is averaged over {sigma:.3g} ({share:.0%} of its size), which spreads its edges' "
+        "and corners' curvature over its faces (flat faces do not read 0); give a finer "
+        "mesh (e.g. trimesh's mesh.subdivide_to_size) for curvature", UserWarning,
+        stacklevel=3)
+    return True
+
+
 def tv_time(sigma, h):
     """How long TV flow (no fidelity) runs by default: sigma * h. TV flow moves a level set at
     its curvature, so a bump of contrast c and width w flattens in a time of about c * w:
@@ -178,6 +211,7 @@ def _mean_curvature(surf, mean, progress=None):
     if mesh is None:
         return mean, 0.0
     sigma = max(2.0 * surf.spacing, float(np.median(mesh.edges_unique_length)))
+    warn_if_too_coarse(mesh, sigma)
     return surf.heat(mean, t=0.5 * sigma**2, progress=progress), sigma
 
 
@@ -209,21 +243,28 @@ def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
 
 
 def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400,
-              overwrite=False) -> list:
+              overwrite=False, on_input=False) -> list:
     """before.png, after.png, result.ply and result.glb (after, coloured) in the folder
     outdir, created if missing; an existing one must be empty, or with overwrite=True hold
     only clpde's kinds of output files, and is then replaced as a whole
-    (clpde.io.output_folder). Returns the paths."""
-
+    (clpde.io.output_folder). on_input: the meshes are the one the surface was made from,
+    with the values sampled at its vertices (render.on_mesh); else marching-cubes meshes
+    of the surface. The pictures are titled and scalar ones carry their colour scale.
+    Returns the paths."""
     with output_folder(outdir, overwrite) as staging:
-        names = _write_run_files(run, staging, views, size)
+        names = _write_run_files(run, staging, views, size, on_input)
     return [os.path.join(outdir, n) for n in names]
 
 
-def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
+def _write_run_files(run: SurfaceRun, outdir, views, size, on_input=False) -> list:
+    def make(u, **options):
+        if on_input:
+            return on_mesh(run.surface, u, **options) if u is not None else \
+                run.surface.mesh.copy()
+        return to_mesh(run.surface, u, **options)
 
     written = []
-    after = to_mesh(run.surface, run.after)
+    after = make(run.after)
     scalar = run.after.ndim == 3
     lo = hi = None
     if scalar:  # one colour scale (the result's) for both pictures, shown by a colour bar
@@ -231,10 +272,15 @@ def _write_run_files(run: SurfaceRun, outdir, views, size) -> list:
         if hi - lo < run.span:
             middle = 0.5 * (lo + hi)
             lo, hi = middle - 0.5 * run.span, middle + 0.5 * run.span
-        after = to_mesh(run.surface, run.after, vmin=lo, vmax=hi)
-    before = to_mesh(run.surface, run.before, vmin=lo, vmax=hi)
+        after = make(run.after, vmin=lo, vmax=hi)
+    before = make(run.before, vmin=lo, vmax=hi)
+    where = (f"on the input mesh ({len(after.vertices)} vertices)" if on_input else
+             f"on a marching-cubes mesh ({len(after.vertices)} vertices)")
+    titles = {"before": f"before: the {run.flow} flow's input, {where}",
+              "after": f"after: {run.note}"}
     for name, mesh in (("before", before), ("after", after)):
         image = np.concatenate([render_mesh(mesh, size, a, e) for a, e in views], axis=1)
+        image = with_title(image, titles[name])
         if scalar and (name == "after" or run.before is not None):
             image = with_colour_bar(image, lo, hi, label=run.label)
         write_png(os.path.join(outdir, f"{name}.png"), image)

@@ -75,10 +75,13 @@ __kernel void rof_dual_step(__global const REAL* restrict p, __global const REAL
 }
 
 // Every K iterations, per interior row (work-item (0, y, c)): the primal image
-// u = f + div(p)/lambda written into `u`, and three partial sums written to
-// partial[(c * 3 + k) * ny + y]: k = 0 sum (div p)^2, 1 sum (u - u_before)^2, 2 sum u^2.
-// The first feeds lambda (rof_dual_lambda) and the residual |u - f|^2 = sum (div p)^2 /
-// lambda^2; the other two give the relative change since the last call, the stopping test.
+// u = f + div(p)/lambda written into `u`, and four row partials written to
+// partial[(c * 4 + k) * ny + y]: k = 0 sum (div p)^2, 1 sum (u - u_before)^2, 2 sum u^2,
+// 3 max |u - u_before|. The first feeds lambda (rof_dual_lambda) and the residual
+// |u - f|^2 = sum (div p)^2 / lambda^2. The stopping test reads the largest change of any
+// pixel (k = 3), not a sum over the image: a sum normalised by the image's size lets the
+// many pixels that settle early (smooth areas of a large image) hide the few still moving,
+// so the same pixels would stop at a different point depending on what surrounds them.
 __kernel void rof_dual_rows(__global const REAL* restrict p, __global const REAL* restrict f,
                             __global const REAL* restrict lambda, __global REAL* restrict u,
                             __global REAL* restrict partial, GRID_ARGS)
@@ -87,18 +90,21 @@ __kernel void rof_dual_rows(__global const REAL* restrict p, __global const REAL
     ROW_OF_ITEM(y, row);
     const int c = get_global_id(2);
     const REAL inv_lam = (REAL)1 / lambda[c];
-    REAL sum_dd = 0, sum_du = 0, sum_uu = 0;
+    REAL sum_dd = 0, sum_du = 0, sum_uu = 0, max_du = 0;
     for (int i = row; i < row + nx; ++i) {
         const REAL d = p[2 * i] - p[2 * (i - 1)] + p[2 * i + 1] - p[2 * (i - sx) + 1];
         const REAL v = f[i] + d * inv_lam;
+        const REAL du = FABS(v - u[i]);
         sum_dd += d * d;
-        sum_du += SQR(v - u[i]);
+        sum_du += du * du;
         sum_uu += v * v;
+        max_du = MAX_SEL(max_du, du);
         u[i] = v;
     }
-    partial[(c * 3 + 0) * ny + y] = sum_dd;
-    partial[(c * 3 + 1) * ny + y] = sum_du;
-    partial[(c * 3 + 2) * ny + y] = sum_uu;
+    partial[(c * 4 + 0) * ny + y] = sum_dd;
+    partial[(c * 4 + 1) * ny + y] = sum_du;
+    partial[(c * 4 + 2) * ny + y] = sum_uu;
+    partial[(c * 4 + 3) * ny + y] = max_du;
 }
 
 // Dynamic lambda (thesis eq. C.2 in this dual form). At the minimiser div p = lambda (u - f);
@@ -115,5 +121,88 @@ __kernel void rof_dual_lambda(__global const REAL* restrict partial,
 {
     const int c = get_global_id(0);
     if (inv_n_sigma2[c] == 0) return;
-    lambda[c] = fmax(lam_min, sum_rows(partial + c * 3 * ny, ny) * inv_n_sigma2[c] / lambda[c]);
+    lambda[c] = fmax(lam_min, sum_rows(partial + c * 4 * ny, ny) * inv_n_sigma2[c] / lambda[c]);
+}
+
+// Colour-coupled (vectorial) TV: min_u sum_cells sqrt(sum_c |grad u_c|^2) + lambda/2 |u - f|^2,
+// one lambda for all channels. Its dual is the same per-channel FGP step, except that the
+// projection acts on the whole cell's vector (px_c, py_c)_c at once, onto the unit ball of
+// R^(2 nc): an edge present in one channel then lets every channel keep its edge there, and
+// no channel is flattened alone into a blotch of another colour.
+//
+// One work-item per row (the launch's channel range is 1); the channels, nch of them, are
+// walked inside, `plane` apart. Two passes over the channels per cell: the first sums the
+// squared norm, the second recomputes the unprojected step and writes it scaled. Recomputing
+// costs arithmetic but no private array sized by the channel count, which OpenCL C cannot
+// declare at run time. lambda[0] is the shared lambda.
+inline REAL dual_step_x(__global const REAL* restrict p, __global const REAL* restrict p_old,
+                        __global const REAL* restrict f, const REAL lam, const REAL beta,
+                        const int i, const int sx, REAL* ay_out)
+{
+    const REAL qx = QX(i), qx_w = QX(i - 1), qx_e = QX(i + 1);
+    const REAL qx_n = QX(i + sx), qx_nw = QX(i + sx - 1);
+    const REAL qy = QY(i), qy_s = QY(i - sx), qy_e = QY(i + 1);
+    const REAL qy_se = QY(i + 1 - sx), qy_n = QY(i + sx);
+    const REAL w = lam * f[i] + (qx - qx_w + qy - qy_s);
+    const REAL w_e = lam * f[i + 1] + (qx_e - qx + qy_e - qy_se);
+    const REAL w_n = lam * f[i + sx] + (qx_n - qx_nw + qy_n - qy);
+    *ay_out = qy + (REAL)0.125 * (w_n - w);
+    return qx + (REAL)0.125 * (w_e - w);
+}
+
+__kernel void rof_dual_step_vec(__global const REAL* restrict p,
+                                __global const REAL* restrict p_old, __global REAL* restrict p_new,
+                                __global const REAL* restrict f,
+                                __global const REAL* restrict lambda, const REAL beta,
+                                const int nch, GRID_ARGS)
+{
+    const int y = get_global_id(1);
+    if (y >= ny) return;
+    const REAL lam = lambda[0];
+    const int x0 = get_global_id(0) * xrun;
+    const int x1 = min(x0 + xrun, nx);
+    const int row = (y + G) * sx + G;
+    for (int i = row + x0; i < row + x1; ++i) {
+        REAL norm2 = 0;
+        for (int c = 0; c < nch; ++c) {
+            REAL ay;
+            const REAL ax = dual_step_x(p, p_old, f, lam, beta, c * plane + i, sx, &ay);
+            norm2 += ax * ax + ay * ay;
+        }
+        const REAL shrink = RSQRT(norm2 > 1 ? norm2 : (REAL)1);
+        for (int c = 0; c < nch; ++c) {
+            REAL ay;
+            const int j = c * plane + i;
+            const REAL ax = dual_step_x(p, p_old, f, lam, beta, j, sx, &ay);
+            p_new[2 * j] = ax * shrink;
+            p_new[2 * j + 1] = ay * shrink;
+        }
+    }
+    // The reflected ghosts of every channel, as in rof_dual_step.
+    for (int c = 0; c < nch; ++c) {
+        const int crow = c * plane + row;
+        if (x0 <= nx - 2 && nx - 2 < x1) p_new[2 * (crow + nx)] = -p_new[2 * (crow + nx - 2)];
+        if (x0 < nx && x1 == nx) p_new[2 * (crow + nx) + 1] = p_new[2 * (crow + nx - 1) + 1];
+        if (y == ny - 1)
+            for (int i = crow + x0; i < crow + x1; ++i) p_new[2 * (i + sx)] = p_new[2 * i];
+        if (y == ny - 2)
+            for (int i = crow + x0; i < crow + x1; ++i)
+                p_new[2 * (i + 2 * sx) + 1] = -p_new[2 * i + 1];
+    }
+}
+
+// Dynamic lambda of the vectorial model: the per-channel rule of rof_dual_lambda with the
+// sums taken over all channels, lambda_new = sum_c sum (div p_c)^2 / (lambda N nc sigma^2),
+// sigma^2 the channels' mean noise variance (inv_n_sigma2 = 1 / (N nc sigma^2)). One
+// work-item; the shared lambda is written to every channel's entry, since rof_dual_rows
+// reads lambda per channel.
+__kernel void rof_dual_lambda_vec(__global const REAL* restrict partial,
+                                  __global REAL* restrict lambda, const int ny, const int nch,
+                                  const REAL inv_n_sigma2, const REAL lam_min)
+{
+    if (get_global_id(0) != 0 || inv_n_sigma2 == 0) return;
+    REAL total = 0;
+    for (int c = 0; c < nch; ++c) total += sum_rows(partial + c * 4 * ny, ny);
+    const REAL lam = fmax(lam_min, total * inv_n_sigma2 / lambda[0]);
+    for (int c = 0; c < nch; ++c) lambda[c] = lam;
 }

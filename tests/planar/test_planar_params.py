@@ -25,7 +25,8 @@ def test_unused_parameters_are_refused(flow, params, words):
 def test_used_parameters_still_work_and_cli_agrees(tmp_path, capsys):
     image = np.random.default_rng(0).integers(0, 255, (6, 7)).astype(np.uint8)
     for flow, params in clpde.planar.flows.FLOW_PARAMS.items():
-        given = {"kappa": 0.1, "edge": "rational", "eps": 0.1, "weight": np.ones((6, 7))}
+        given = {"kappa": 0.1, "edge": "rational", "eps": 0.1, "weight": np.ones((6, 7)),
+                 "presmooth": 1.0}
         assert clpde.diffuse(image, flow, steps=1, **{p: given[p] for p in params}).shape == (6, 7)
     write_image(tmp_path / "in.png", image)
     assert main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--kappa",

@@ -92,3 +92,39 @@ def curvature_speed(p, eps):
 def curvature_step(p, dt, eps, weight=None):
     g = 1.0 if weight is None else weight[None]
     return p[:, 1:-1, 1:-1] + dt * g * curvature_speed(p, eps)
+
+
+# ---- kernels/planar/catte.cl -----------------------------------------------------------
+def gauss_smooth(u, w):
+    """gauss_rows then gauss_cols on (nc, ny, nx): the separable convolution with one-sided
+    weights w[0..r], mirrored at the border (index -1 reads 0)."""
+    r = len(w) - 1
+
+    def along(a, axis):
+        n = a.shape[axis]
+        idx = np.arange(n)
+        out = w[0] * a
+        for k in range(1, r + 1):
+            def mirror(j):
+                for _ in range(8):
+                    j = np.where(j < 0, -j - 1, np.where(j >= n, 2 * n - j - 1, j))
+                return np.clip(j, 0, n - 1)
+            out = out + w[k] * (np.take(a, mirror(idx - k), axis=axis) +
+                                np.take(a, mirror(idx + k), axis=axis))
+        return out
+
+    return along(along(u, 2), 1)
+
+
+def perona_malik_catte_step(p, ps, dt, kappa, edge="exp"):
+    """perona_malik_catte_step: p and ps padded (u and its smoothed copy)."""
+    c, e, w, n, s, *_ = _shifts(p)
+    cs, es, ws, ns, ss, *_ = _shifts(ps)
+
+    def flux(d, ds):
+        if edge == "exp":
+            return d * np.exp(-((ds / kappa) ** 2))
+        return d / (1 + (ds / kappa) ** 2)
+
+    return c + dt * (flux(e - c, es - cs) + flux(w - c, ws - cs) + flux(n - c, ns - cs) +
+                     flux(s - c, ss - cs))
