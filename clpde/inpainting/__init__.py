@@ -44,6 +44,7 @@ METHODS = {
     "navier-stokes": "clpde.inpainting.navier_stokes",
     "exemplar": "clpde.inpainting.exemplar",
     "structure-texture": "clpde.inpainting.structure_texture",
+    "spectral": "clpde.inpainting.spectral",
 }
 
 # method=None: "auto", except that a call giving any of the transport's own options
