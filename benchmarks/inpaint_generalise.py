@@ -177,6 +177,15 @@ def warm_up(found):
                 fn(np.where(mask[..., None] if image.ndim == 3 else mask, 0, image), mask, case)
 
 
+def interleaved(cases):
+    """The halves alternating, so that a run cut short still covers both."""
+    halves = [[c for c in cases if c.half == h] for h in ("test", "calibration")]
+    out = []
+    for i in range(max(map(len, halves))):
+        out += [h[i] for h in halves if i < len(h)]
+    return out
+
+
 def score(case, result, name, seconds, truth=None):
     c = case if truth is None else corpus.Case(case.name, case.source, case.half, case.damage,
                                                truth, case.mask, "uint8")
@@ -319,7 +328,7 @@ def main(argv=None):
             found = {k: v for k, v in found.items() if k in keep}
         print("methods:", ", ".join(found))
         warm_up(found)
-        cases = [c for c in corpus.build(args.quick) if c.half in halves]
+        cases = interleaved([c for c in corpus.build(args.quick) if c.half in halves])
         print(f"{len(cases)} cases")
         log_path = args.log or args.json.with_suffix(".log.jsonl")
         log_path.parent.mkdir(parents=True, exist_ok=True)

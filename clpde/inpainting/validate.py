@@ -71,6 +71,13 @@ def _fill(name, data, omega, runtime, dtype, seed, params):
     return np.asarray(solved, np.float64)
 
 
+def _groups(labels, count):
+    """[indices of `labels` equal to each label 0..count], by one sort."""
+    order = np.argsort(labels, kind="stable")
+    bounds = np.searchsorted(labels[order], np.arange(count + 2))
+    return [order[bounds[k]:bounds[k + 1]] for k in range(count + 1)]
+
+
 def _weights(fills, truth):
     """Non-negative weights summing to one that minimise |sum_k w_k fills_k - truth|^2
     (fills: (k, n), truth: (n,))."""
@@ -106,18 +113,19 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
     near = dist <= ring
     clusters, count = ndimage.label(near, np.ones((3, 3), bool))
     out = np.array(data, np.float64, copy=True)
-    stack = np.stack([fills[n] for n in names])  # (k, c, ny, nx)
+    stack = np.stack([fills[n][:, omega] for n in names])  # (k, c, n): the hole's fills
     hole_label = clusters[omega]
+    members = _groups(hole_label, count)
     choices = [None] * count
     vote = np.zeros(count + 1, bool)
     for lab in range(1, count + 1):
-        sel = hole_label == lab
-        if not sel.any():
+        sel = members[lab]
+        if not sel.size:
             continue
-        values = stack[:, :, omega][:, :, sel]  # (k, c, n)
+        values = stack[:, :, sel]
         spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
         if len(names) == 1 or spread < AGREE:
-            choices[lab - 1] = {"pixels": int(sel.sum()), "why": "candidates agree",
+            choices[lab - 1] = {"pixels": int(sel.size), "why": "candidates agree",
                                 "chosen": names[0], "weights": {names[0]: 1.0},
                                 "spread": float(spread)}
         else:
@@ -126,18 +134,18 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
     if vote.any():
         ring_mask = near & known & vote[clusters]
         ring_pixels = int(ring_mask.sum())
-        if ring_mask.all() or not (known & ~ring_mask).any():
+        if not (known & ~ring_mask).any():
             ring_mask = np.zeros_like(ring_mask)  # nothing would be left to fill from
         hidden = omega | ring_mask
         tests = np.stack([_fill(n, data, hidden, runtime, dtype, seed, params)[:, ring_mask]
                           for n in names]) if ring_mask.any() else None
         truth = data[:, ring_mask] if ring_mask.any() else None
-        ring_label = clusters[ring_mask]
+        ring_members = _groups(clusters[ring_mask], count)
         for lab in np.flatnonzero(vote):
-            sel_ring = ring_label == lab
-            sel = hole_label == lab
-            if tests is None or not sel_ring.any():
-                choices[lab - 1] = {"pixels": int(sel.sum()), "why": "no ring to test on",
+            sel_ring = ring_members[lab]
+            pixels = int(members[lab].size)
+            if tests is None or not sel_ring.size:
+                choices[lab - 1] = {"pixels": pixels, "why": "no ring to test on",
                                     "chosen": names[0], "weights": {names[0]: 1.0}}
                 continue
             f = tests[:, :, sel_ring].reshape(len(names), -1)
@@ -148,7 +156,7 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
             else:
                 w = np.zeros(len(names))
                 w[int(np.argmin(rmse))] = 1.0
-            choices[lab - 1] = {"pixels": int(sel.sum()), "why": "ring vote",
+            choices[lab - 1] = {"pixels": pixels, "why": "ring vote",
                                 "chosen": names[int(np.argmax(w))],
                                 "weights": {n: float(x) for n, x in zip(names, w, strict=True)
                                             if x > 0},
@@ -161,7 +169,7 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
             for n, w in ch["weights"].items():
                 weights[names.index(n), lab] = w
     per_pixel = weights[:, hole_label]  # (k, n)
-    out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack[:, :, omega])
+    out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack)
     report = {"candidates": names, "ring": ring, "ring_pixels": ring_pixels,
               "choices": [c for c in choices if c is not None]}
     return out, report
