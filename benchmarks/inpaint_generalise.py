@@ -2,7 +2,8 @@
 one run, on both halves of benchmarks/inpaint_corpus.py's corpus.
 
     python benchmarks/inpaint_generalise.py [--quick] [--half test|calibration|both]
-                                            [--only NAME,...] [--json PATH] [--log PATH]
+                                            [--only NAME,...] [--skip NAME,...] [--json PATH]
+                                            [--log PATH] [--from-log LOG ...]
 
 Methods (every peer's settings fixed before any result was looked at):
 
@@ -313,19 +314,23 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="one case per class and half")
     parser.add_argument("--half", choices=("test", "calibration", "both"), default="both")
     parser.add_argument("--only", default=None, help="comma-separated method names")
+    parser.add_argument("--skip", default=None, help="comma-separated method names")
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--log", type=Path, default=None, help="JSON lines, one per result")
-    parser.add_argument("--from-log", type=Path, default=None,
-                        help="summarise an earlier run's log instead of running")
+    parser.add_argument("--from-log", type=Path, nargs="+", default=None,
+                        help="summarise earlier runs' logs instead of running (a run split "
+                             "by --only / --skip is summarised from its parts)")
     args = parser.parse_args(argv)
     halves = ("test", "calibration") if args.half == "both" else (args.half,)
     if args.from_log:
-        rows = [json.loads(line) for line in args.from_log.read_text().splitlines() if line]
+        rows = [json.loads(line) for path in args.from_log
+                for line in path.read_text().splitlines() if line]
     else:
         found = methods()
         if args.only:
-            keep = set(args.only.split(",")) | {"default", "biharmonic"}
-            found = {k: v for k, v in found.items() if k in keep}
+            found = {k: v for k, v in found.items() if k in args.only.split(",")}
+        if args.skip:
+            found = {k: v for k, v in found.items() if k not in args.skip.split(",")}
         print("methods:", ", ".join(found))
         warm_up(found)
         cases = interleaved([c for c in corpus.build(args.quick) if c.half in halves])
