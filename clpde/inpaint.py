@@ -838,9 +838,9 @@ class Inpainting:
 def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=False) -> str:
     """The method to run. None is "auto", unless `params` holds one of the transport's own
     options (InpaintParams), when it is "transport" (the thesis's scheme); "auto" is the
-    first installed of inpainting.AUTO (docs/inpainting.md has the measurements), which
-    each box may trade for the exemplar (inpainting/choose.py). per_box=True returns
-    "auto" itself in that case."""
+    first installed of inpainting.AUTO, which takes the options given, while each cluster
+    of damage is filled by the self-validated choice (inpainting/validate.py).
+    per_box=True returns "auto" itself in that case."""
     from . import inpainting
 
     if method is None:  # levels too: the transport's multiresolution
@@ -875,11 +875,12 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         degree of damage in [0, 1], 1 unknown, 0 known; a pixel in between keeps a fidelity
         (1 - m) to its observed value (a soft mask; NaN or values outside [0, 1] are an
         error). None fills the NaN pixels of a float image.
-    method: 'auto' (per box of the mask: the exemplar where the surroundings repeat, or
-        on the parts of the hole at least 6 px thick in surroundings with detail, else
-        coherence transport where installed, else the transport; calibrated on the
-        benchmark, docs/inpainting_texture.md; info.box_methods names each box's,
-        info.box_exemplar_pixels counts the exemplar's pixels), 'transport'
+    method: 'auto' (self-validated, per cluster of damage: the candidate methods of
+        clpde/inpainting/validate.py fill the hole; where they disagree, a ring of known
+        pixels around the cluster is hidden and filled too, and the blend of the
+        candidates that fits that ring best fills the cluster; info.choices says what
+        chose what and why, info.box_methods names each box's methods by share),
+        'transport'
         (the thesis's scheme, options below), 'coherence', 'navier-stokes', 'exemplar'
         (texture, periodic patterns), 'structure-texture' (clpde.inpainting.available()
         lists what is installed). None, the default, is 'auto', or 'transport' when any
