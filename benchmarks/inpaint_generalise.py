@@ -242,6 +242,9 @@ def summarise(rows, halves):
                 per[m] = {"psnr": _mean(r["psnr"] for r in rs),
                           "ssim": _mean(r["ssim"] for r in rs),
                           "seconds": float(np.nansum([r["seconds"] for r in rs])), "n": len(rs)}
+            if "default" not in per or not any(p in per for p in peers):
+                out[half][damage] = {"methods": per}  # a partial run: the methods' means only
+                continue
             by_case = {}
             for r in sel:
                 by_case.setdefault(r["case"], {})[r["method"]] = r["psnr"]
@@ -289,7 +292,7 @@ def print_tables(summary, halves):
           f"{'worst dB':>15s}  {'default s':>13s} {'x biharm.':>13s} {'x FSR-fast':>13s}")
     for d in corpus.CLASSES:
         s = [summary[h].get(d) for h in halves]
-        if not all(s):
+        if not all(s) or not all("lead" in x for x in s):
             continue
 
         def j(f, s=s):
@@ -304,7 +307,8 @@ def print_tables(summary, halves):
               f"{j(lambda x: format(x['time_vs_fsr_fast'], '.3f')):>13s}")
     for h in halves:
         worst = [(summary[h][d]["worst"]["margin"], d, summary[h][d]["worst"]["case"],
-                  summary[h][d]["worst"]["peer"]) for d in corpus.CLASSES if d in summary[h]]
+                  summary[h][d]["worst"]["peer"]) for d in corpus.CLASSES
+                 if "worst" in summary[h].get(d, {})]
         print(f"worst cases ({h}): " + "; ".join(f"{d} {c} {m:+.2f} vs {p}"
                                                    for m, d, c, p in worst))
 
