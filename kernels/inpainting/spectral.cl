@@ -25,13 +25,15 @@
 // weights, so that later picks can correct earlier ones), and updates R in the frequency
 // domain: R(l) -= gamma (c W(l - k) + conj(c) W(l + k)). R is kept on the half plane
 // kx in [0, L/2] only (R(-l) = conj(R(l)) for a real residual); W on the whole plane.
-// The loop stops after `iterations` picks or once a pick's reduction falls below `stop`
+// The scores' factors, R on the half plane and the picks live in T once the transforms are
+// done (2 MAXK + 5 MAXH <= 4 MAXL^2). The loop stops after `iterations` picks or once a pick's reduction falls below `stop`
 // times the first one's.
 #include "common.cl"
 
 #define SPECTRAL_MAXL 32    // largest extended block (local memory: 8 L^2 reals)
 #define SPECTRAL_MAXK 512   // most picks per block
 #define SPECTRAL_GROUP 64
+#define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
 
 INLINE int spectral_wrap(const int v, const int L) { const int r = v % L; return r < 0 ? r + L : r; }
 
@@ -48,7 +50,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL best[SPECTRAL_GROUP];
     __local int best_at[SPECTRAL_GROUP];
     __local REAL pick_c[2];
-    __local int pick_k[1];
+    __local int pick_k[2];
+    __local short half_y[SPECTRAL_MAXH], half_x[SPECTRAL_MAXH];
     __local int picks[SPECTRAL_MAXK];
     __local REAL sums[9 * SPECTRAL_GROUP];
     __local REAL fit[3];
@@ -135,7 +138,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, k = i - m * L;
         REAL ar = 0, ai = 0, wr = 0, wi = 0;
-        for (int n = 0, t = 0; n < L; ++n, t = (t + k) % L) {
+        for (int n = 0, t = 0; n < L; ++n, t = t + k < L ? t + k : t + k - L) {
             const REAL a = X[m * L + n], w = X[LL + m * L + n];
             const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
             ar += a * c;
@@ -153,7 +156,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int ky = i / L, kx = i - ky * L;
         REAL rr = 0, ri = 0, wr = 0, wi = 0;
-        for (int m = 0, t = 0; m < L; ++m, t = (t + ky) % L) {
+        for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
             const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
             const int q = m * L + kx;
             rr += T[q] * c + T[LL + q] * s;
@@ -168,10 +171,46 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     }
     barrier(CLK_LOCAL_MEM_FENCE);
 
+    // the half plane, compacted: candidate j is (ky, kx) = (j / H, j % H); its score is
+    // qa R_re^2 + qb R_re R_im + qc R_im^2, the pair's error reduction times the prior
     const REAL W0 = X[2 * LL];
     const int H = L / 2 + 1;
     const int NH = L * H;
+    __local REAL* const coef_r = T;
+    __local REAL* const coef_i = T + SPECTRAL_MAXK;
+    __local REAL* const qa = T + 2 * SPECTRAL_MAXK;
+    __local REAL* const qb = qa + SPECTRAL_MAXH;
+    __local REAL* const qc = qb + SPECTRAL_MAXH;
+    __local REAL* const rre = qc + SPECTRAL_MAXH;
+    __local REAL* const rim = rre + SPECTRAL_MAXH;
     const REAL inv_kmax = (REAL)1 / ((REAL)0.5 * (REAL)L * sqrt((REAL)2));
+    for (int j = lid; j < NH; j += SPECTRAL_GROUP) {
+        const int ky = j / H, kx = j - ky * H;
+        const int idx = ky * L + kx;
+        half_y[j] = (short)ky;
+        half_x[j] = (short)kx;
+        rre[j] = X[idx];
+        rim[j] = X[LL + idx];
+        const REAL fy = (REAL)(ky <= L / 2 ? ky : ky - L);
+        const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
+        const REAL prior = alpha == 0 ? (REAL)1 : pow((REAL)1 - nu, alpha);
+        const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L, k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
+        if (!(W0 > 0)) {
+            qa[j] = qb[j] = qc[j] = 0;
+        } else if (k2y == 0 && k2x == 0) {  // self-conjugate: one real coefficient
+            qa[j] = prior / W0;
+            qb[j] = qc[j] = 0;
+        } else {
+            const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+            const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
+            const REAL pd = prior / den;
+            qa[j] = 2 * (W0 - vr) * pd;
+            qb[j] = -4 * vi * pd;
+            qc[j] = 2 * (W0 + vr) * pd;
+        }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+
     REAL first_gain = 0;  // item 0's
     int count = 0;
     if (W0 > 0) {
@@ -179,23 +218,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             REAL bs = -1;
             int bi = 0;
             for (int j = lid; j < NH; j += SPECTRAL_GROUP) {
-                const int ky = j / H, kx = j - ky * H;
-                const int idx = ky * L + kx;
-                const REAL rr = X[idx], ri = X[LL + idx];
-                const int k2 = ((2 * ky) % L) * L + (2 * kx) % L;
-                REAL gain;
-                if (k2 == 0) {
-                    gain = rr * rr / W0;
-                } else {
-                    const REAL vr = X[2 * LL + k2], vi = X[3 * LL + k2];
-                    const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
-                    const REAL cr = (rr * W0 - (vr * rr + vi * ri)) / den;
-                    const REAL ci = (ri * W0 - (vi * rr - vr * ri)) / den;
-                    gain = 2 * (cr * rr + ci * ri);
-                }
-                const REAL fy = (REAL)(ky <= L / 2 ? ky : ky - L);
-                const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
-                const REAL score = gain * pow((REAL)1 - nu, alpha);
+                const REAL rr = rre[j], ri = rim[j];
+                const REAL score = (qa[j] * rr + qb[j] * ri) * rr + qc[j] * ri * ri;
                 if (score > bs) {
                     bs = score;
                     bi = j;
@@ -212,16 +236,16 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         top = best[q];
                         j = best_at[q];
                     }
-                const int ky = j / H, kx = j - ky * H;
-                const int idx = ky * L + kx;
-                const REAL rr = X[idx], ri = X[LL + idx];
-                const int k2 = ((2 * ky) % L) * L + (2 * kx) % L;
+                const int ky = half_y[j], kx = half_x[j];
+                const REAL rr = rre[j], ri = rim[j];
+                const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L;
+                const int k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
                 REAL cr, ci = 0, gain;
-                if (k2 == 0) {
+                if (k2y == 0 && k2x == 0) {
                     cr = rr / W0;
                     gain = rr * cr;
                 } else {
-                    const REAL vr = X[2 * LL + k2], vi = X[3 * LL + k2];
+                    const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
                     const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
                     cr = (rr * W0 - (vr * rr + vi * ri)) / den;
                     ci = (ri * W0 - (vi * rr - vr * ri)) / den;
@@ -231,12 +255,14 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 if (!(gain > 0) || gain < stop * first_gain) {
                     pick_k[0] = -1;
                 } else {
-                    pick_k[0] = idx;
+                    const bool self = k2y == 0 && k2x == 0;
+                    pick_k[0] = ky * L + kx;
+                    pick_k[1] = self;
                     pick_c[0] = gamma * cr;
                     pick_c[1] = gamma * ci;
-                    picks[it] = k2 == 0 ? -1 - idx : idx;
-                    T[it] = gamma * cr;
-                    T[SPECTRAL_MAXK + it] = gamma * ci;
+                    picks[it] = self ? -1 - (ky * L + kx) : ky * L + kx;
+                    coef_r[it] = gamma * cr;
+                    coef_i[it] = gamma * ci;
                 }
             }
             barrier(CLK_LOCAL_MEM_FENCE);
@@ -245,21 +271,26 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             count = it + 1;
             const int ky = k / L, kx = k - ky * L;
             const REAL cr = pick_c[0], ci = pick_c[1];
-            const bool self = ((2 * ky) % L) == 0 && ((2 * kx) % L) == 0;
+            const int self = pick_k[1];
             for (int j = lid; j < NH; j += SPECTRAL_GROUP) {
-                const int ly = j / H, lx = j - ly * H;
-                const int idx = ly * L + lx;
-                const int dm = spectral_wrap(ly - ky, L) * L + spectral_wrap(lx - kx, L);
+                const int ly = half_y[j], lx = half_x[j];
+                int dy = ly - ky, dx = lx - kx;
+                dy += dy < 0 ? L : 0;
+                dx += dx < 0 ? L : 0;
+                const int dm = dy * L + dx;
                 const REAL ar = X[2 * LL + dm], ai = X[3 * LL + dm];
                 REAL ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;  // c W(l - k)
                 if (!self) {
-                    const int dp = spectral_wrap(ly + ky, L) * L + spectral_wrap(lx + kx, L);
+                    int sy = ly + ky, sx = lx + kx;
+                    sy -= sy >= L ? L : 0;
+                    sx -= sx >= L ? L : 0;
+                    const int dp = sy * L + sx;
                     const REAL pr = X[2 * LL + dp], pi = X[3 * LL + dp];
                     ur += cr * pr + ci * pi;  // conj(c) W(l + k)
                     ui += cr * pi - ci * pr;
                 }
-                X[idx] -= ur;
-                X[LL + idx] -= ui;
+                rre[j] -= ur;
+                rim[j] -= ui;
             }
             barrier(CLK_LOCAL_MEM_FENCE);
         }
@@ -279,7 +310,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             const int k = code < 0 ? -1 - code : code;
             const int ky = k / L, kx = k - ky * L;
             const int e = (ky * m + kx * n) % L;
-            const REAL cr = T[t], ci = T[SPECTRAL_MAXK + t];
+            const REAL cr = coef_r[t], ci = coef_i[t];
             g += code < 0 ? cr * tw[e] : 2 * (cr * tw[e] - ci * tw[SPECTRAL_MAXL + e]);
         }
         plane[p] = g;
