@@ -3,8 +3,10 @@
 // around it, and the block's missing pixels are taken from the model.
 //
 // One work-group of SPECTRAL_GROUP items fits one (block, channel): group (g, c) takes block
-// blocks[first + g] of channel c; a block is 4 ints (row, column, B, L), its B x B pixels
-// from (row, column), its extended window L x L (L even, L - B even, L <= SPECTRAL_MAXL). The blocks of one launch (a wave) are independent: no
+// blocks[first + g] of channel c; a block is 5 ints (row, column, B, L, copy), its B x B pixels
+// from (row, column), its extended window L x L (L even, L - B even, L <= SPECTRAL_MAXL), in
+// copy `copy` of the image (img: copies x nc planes; wave_of: one plane per copy; copies are
+// the fills on differently offset block grids, averaged afterwards). The blocks of one launch (a wave) are independent: no
 // block's extended window holds pixels that another block of the wave writes, so they are
 // written in place into `img`.
 //
@@ -40,7 +42,7 @@ INLINE int spectral_wrap(const int v, const int L) { const int r = v % L; return
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
 void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      __global const int* blocks, const int first, const int wave,
-                     const int nx, const int ny, const REAL rho,
+                     const int nx, const int ny, const int nc, const REAL rho,
                      const REAL delta, const REAL gamma, const REAL alpha,
                      const int iterations, const REAL stop, const int detrend)
 {
@@ -58,12 +60,14 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
 
     const int lid = get_local_id(0);
     const int blk = first + get_group_id(0);
-    const int by = blocks[4 * blk], bx = blocks[4 * blk + 1];
-    const int B = blocks[4 * blk + 2], L = blocks[4 * blk + 3];
+    const int by = blocks[5 * blk], bx = blocks[5 * blk + 1];
+    const int B = blocks[5 * blk + 2], L = blocks[5 * blk + 3];
+    const int copy = blocks[5 * blk + 4];
+    wave_of += (size_t)copy * nx * ny;
     const int LL = L * L;
     const int b = (L - B) / 2;
     const int oy = by - b, ox = bx - b;
-    __global REAL* plane = img + (size_t)get_group_id(1) * nx * ny;
+    __global REAL* plane = img + ((size_t)copy * nc + get_group_id(1)) * nx * ny;
     const REAL two_pi_l = (REAL)6.283185307179586 / (REAL)L;
 
     for (int j = lid; j < L; j += SPECTRAL_GROUP) {
@@ -299,7 +303,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     for (int i = lid; i < B * B; i += SPECTRAL_GROUP) {
         const int u = i / B, v = i - u * B;
         const int y = by + u, x = bx + v;
-        if (y >= ny || x >= nx) continue;
+        if (y < 0 || x < 0 || y >= ny || x >= nx) continue;
         const int p = y * nx + x;
         if (wave_of[p] != wave) continue;
         const int m = b + u, n = b + v;

@@ -39,8 +39,9 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
     else:
         data = np.stack([_photo_like(ny, nx, seed=c) * (1 - 0.2 * c) for c in range(nc)])
     mask = _scratches(ny, nx)
-    for split in (0.0, 0.6):  # one block size, and blocks cut where little is known
-        options = dict(SMALL, split=split)
+    # one block size; blocks cut where little is known; two grids averaged
+    for extra in (dict(split=0.0), dict(split=0.6), dict(split=0.3, shifts=2)):
+        options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
         want = ref.fill(data, mask, **options)
         diff = np.abs(got - want)[:, mask]
@@ -53,8 +54,9 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
 
 def test_plan_matches_reference_plan():
     mask = _scratches(60, 70, seed=3)
-    for split in (0.0, 0.5, 0.8):
-        options = dict(block=16, min_block=4, border=8, split=split, delta=0.5)
+    mask[0:3, 10:20] = True  # damage at the image's edge: shifted grids start before it
+    for split, shift in ((0.0, (0, 0)), (0.5, (0, 0)), (0.8, (0, 0)), (0.5, (8, 8)), (0.5, (0, 8))):
+        options = dict(block=16, min_block=4, border=8, split=split, delta=0.5, shift=shift)
         crop, blocks, waves, wave_of = spectral.plan(mask, **options)
         crop_r, blocks_r, waves_r, wave_of_r = ref.plan(mask, **options)
         assert tuple(crop) == tuple(crop_r)
