@@ -270,11 +270,14 @@ def shifts_of(shifts: int, block: int) -> list:
 
 def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, border=8,
          split=0.5, rho=0.8, delta=0.5, gamma=0.5, alpha=1.0, iterations=100, stop=0.0,
-         colour="pca", detrend=True, shifts=1, timings=None):
+         colour="pca", detrend=True, shifts=1, cutoff=1.5, timings=None):
     """Frequency-selective fill of (channels, rows, cols) float data; see the module
     docstring. `timings`, a dict, receives the seconds spent planning, building, uploading,
     running the waves and reading back, and the counts of blocks and waves."""
     _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop, colour)
+    if not (np.isfinite(cutoff) and cutoff > 0):
+        raise InputError(f"cutoff must be a number > 0 (a share of the Nyquist frequency), not "
+                         f"{cutoff!r}")
     if shifts not in (1, 2, 4):
         raise InputError(f"shifts must be 1, 2 or 4 (block grids averaged), not {shifts!r}")
     data = np.asarray(data)
@@ -338,10 +341,10 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
     s = real.type
     ny, nx = hole.shape
     for w in range(len(order)):
-        kernel(q, (len(order[w]) * GROUP, nc), (GROUP, 1), img, waves_buf, blocks_buf,
+        kernel(q, (len(order[w]) * GROUP,), (GROUP,), img, waves_buf, blocks_buf,
                np.int32(starts[w]), np.int32(w), np.int32(nx), np.int32(ny), np.int32(nc),
                s(rho), s(delta), s(gamma), s(alpha), np.int32(iterations), s(stop),
-               np.int32(bool(detrend)))
+               np.int32(bool(detrend)), s(cutoff))
     q.finish()
     t["waves"] = time.perf_counter() - t0
 
@@ -358,7 +361,7 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
 
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=16,
           min_block=4, border=8, split=0.5, rho=0.8, delta=0.5, gamma=0.5, alpha=1.0,
-          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=1):
+          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=1, cutoff=1.5):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
     Options: block (largest block, even), min_block (smallest, block halved), border (the
@@ -369,8 +372,10 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, b
     block), stop (end a block once a pick lowers the error less than this share of the
     first one), colour ('pca': decorrelated channels, 'channels': as given), detrend (fit
     a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
-    by half a block, whose fills are averaged).
+    by half a block, whose fills are averaged), cutoff (the candidate frequencies: |k| at most
+    this share of the Nyquist frequency; 1.5 takes all).
     """
     return fill(data, omega, runtime, dtype=dtype, block=block, min_block=min_block,
                 border=border, split=split, rho=rho, delta=delta, gamma=gamma, alpha=alpha,
-                iterations=iterations, stop=stop, colour=colour, detrend=detrend, shifts=shifts)
+                iterations=iterations, stop=stop, colour=colour, detrend=detrend, shifts=shifts,
+                cutoff=cutoff)

@@ -40,7 +40,7 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         data = np.stack([_photo_like(ny, nx, seed=c) * (1 - 0.2 * c) for c in range(nc)])
     mask = _scratches(ny, nx)
     # one block size; blocks cut where little is known; two grids averaged
-    for extra in (dict(split=0.0), dict(split=0.6), dict(split=0.3, shifts=2)):
+    for extra in (dict(split=0.0), dict(split=0.6), dict(split=0.3, shifts=2, cutoff=0.8)):
         options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
         want = ref.fill(data, mask, **options)

@@ -5,7 +5,7 @@ transforms, a Python loop for the greedy picks), in float64."""
 import numpy as np
 
 
-def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True):
+def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True, cutoff=1.5):
     """The model of one window: values and weight (L, L) -> the model's (L, L) values."""
     L = values.shape[0]
     centre = (L - 1) / 2
@@ -30,6 +30,7 @@ def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True):
     fy = np.where(ky <= L // 2, ky, ky - L)
     nu = np.minimum(np.sqrt(fy ** 2 + kx ** 2) / (0.5 * L * np.sqrt(2)), 1.0)
     prior = (1 - nu) ** alpha
+    candidate = fy ** 2 + kx ** 2 <= (cutoff * 0.5 * L) ** 2
     self_conj = ((2 * ky) % L == 0) & ((2 * kx) % L == 0)
     V = W[(2 * ky) % L, (2 * kx) % L]
     den = np.maximum(W0 ** 2 - np.abs(V) ** 2, 1e-3 * W0 ** 2)
@@ -39,7 +40,8 @@ def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True):
         r = R[:, :H]
         c_pair = (r * W0 - V * np.conj(r)) / den
         gain = np.where(self_conj, r.real ** 2 / W0, 2 * (np.conj(c_pair) * r).real)
-        j = int(np.argmax((gain * prior).ravel()))  # the first of equal scores, as the kernel
+        # the first of equal scores, as the kernel
+        j = int(np.argmax(np.where(candidate, gain * prior, -np.inf).ravel()))
         a, b = divmod(j, H)
         g = gain[a, b]
         if first is None:
@@ -125,7 +127,7 @@ def plan(omega, *, block, min_block, border, split, delta, shift=(0, 0)):
 
 def fill(data, omega, *, block=16, min_block=4, border=8, split=0.5, rho=0.8, delta=0.5,
          gamma=0.5, alpha=1.0, iterations=100, stop=0.0, colour="pca", detrend=True,
-         shifts=1):
+         shifts=1, cutoff=1.5):
     """The whole fill of (channels, rows, cols) float data, float64: every block grid's fill
     on its own, then their average."""
     out = np.array(data, np.float64)
@@ -175,7 +177,7 @@ def fill(data, omega, *, block=16, min_block=4, border=8, split=0.5, rho=0.8, de
                 for c in range(nc):
                     values = np.where(weight > 0, work[c, yc, xc], 0.0)
                     model = fit_block(values, weight, iterations=iterations, gamma=gamma,
-                                      alpha=alpha, stop=stop, detrend=detrend)
+                                      alpha=alpha, stop=stop, detrend=detrend, cutoff=cutoff)
                     work[c, yc[target], xc[target]] = model[target]
         fills.append(work)
     filled = np.einsum("ji,jyx->iyx", axes, np.mean(fills, 0)) + mean[:, None, None]
