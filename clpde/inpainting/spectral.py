@@ -58,8 +58,6 @@ MAXK = 512  # its SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP
 COLOURS = ("pca", "channels")
 
-DEFAULTS = dict(block=16, min_block=4, border=8, split=0.5, rho=0.8, delta=0.5, gamma=0.5,
-                alpha=1.0, iterations=100, stop=0.0, colour="pca")
 
 
 def _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop,
@@ -107,8 +105,8 @@ def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
     return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
 
 
-def plan(omega: np.ndarray, *, block: int = 16, min_block: int = 4, border: int = 8,
-         split: float = 0.5, delta: float = 0.5, shift: tuple = (0, 0)):
+def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int = 12,
+         split: float = 0.3, delta: float = 0.5, shift: tuple = (0, 0)):
     """The blocks and their waves for a mask.
 
     Parameters
@@ -268,9 +266,9 @@ def shifts_of(shifts: int, block: int) -> list:
     return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
 
 
-def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, border=8,
-         split=0.5, rho=0.8, delta=0.5, gamma=0.5, alpha=1.0, iterations=100, stop=0.0,
-         colour="pca", detrend=True, shifts=1, cutoff=1.5, timings=None):
+def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border=12,
+         split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0, iterations=100, stop=0.0,
+         colour="pca", detrend=True, shifts=2, cutoff=1.5, timings=None):
     """Frequency-selective fill of (channels, rows, cols) float data; see the module
     docstring. `timings`, a dict, receives the seconds spent planning, building, uploading,
     running the waves and reading back, and the counts of blocks and waves."""
@@ -359,9 +357,9 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
     return out
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=16,
-          min_block=4, border=8, split=0.5, rho=0.8, delta=0.5, gamma=0.5, alpha=1.0,
-          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=1, cutoff=1.5):
+def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=8,
+          min_block=4, border=12, split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0,
+          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
     Options: block (largest block, even), min_block (smallest, block halved), border (the
