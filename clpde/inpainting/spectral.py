@@ -260,6 +260,19 @@ def colour_axes(data: np.ndarray, known: np.ndarray):
 # The fill
 
 
+def block_iterations(blocks, hole, iterations: int, per_pixel: float) -> np.ndarray:
+    """Each block's most picks: `iterations`, or with per_pixel > 0, per_pixel picks for each
+    of its hole pixels (at least 4), whichever is fewer: a speck needs fewer terms than a
+    block-wide hole."""
+    if per_pixel <= 0:
+        return np.full(len(blocks), iterations, np.int32)
+    pad = MAXL
+    sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
+    y, x, s = blocks[:, 0] + pad - 1, blocks[:, 1] + pad - 1, blocks[:, 2]
+    holes = sat[y + s, x + s] - sat[y, x + s] - sat[y + s, x] + sat[y, x]
+    return np.minimum(iterations, np.maximum(4, np.ceil(per_pixel * holes))).astype(np.int32)
+
+
 def shifts_of(shifts: int, block: int) -> list:
     """The block grids' offsets: 1, 2 (a half block diagonally) or 4 (every half block)."""
     h = block // 2
@@ -268,7 +281,7 @@ def shifts_of(shifts: int, block: int) -> list:
 
 def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border=12,
          split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0, iterations=100, stop=0.0,
-         colour="pca", detrend=True, shifts=2, cutoff=1.5, timings=None):
+         colour="pca", detrend=True, shifts=2, cutoff=1.5, per_pixel=0.0, timings=None):
     """Frequency-selective fill of (channels, rows, cols) float data; see the module
     docstring. `timings`, a dict, receives the seconds spent planning, building, uploading,
     running the waves and reading back, and the counts of blocks and waves."""
@@ -276,6 +289,8 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border
     if not (np.isfinite(cutoff) and cutoff > 0):
         raise InputError(f"cutoff must be a number > 0 (a share of the Nyquist frequency), not "
                          f"{cutoff!r}")
+    if not (np.isfinite(per_pixel) and per_pixel >= 0):
+        raise InputError(f"per_pixel must be a number >= 0, not {per_pixel!r}")
     if shifts not in (1, 2, 4):
         raise InputError(f"shifts must be 1, 2 or 4 (block grids averaged), not {shifts!r}")
     data = np.asarray(data)
@@ -313,9 +328,11 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border
     for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
         wave_of[c, cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0] = w_of
         moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
+        picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
         for w, (first, count) in enumerate(waves):
             rows = np.concatenate([moved[first:first + count],
-                                   np.full((count, 1), c, np.int32)], 1)
+                                   np.full((count, 1), c, np.int32),
+                                   picks[first:first + count, None]], 1)
             per_wave.setdefault(w, []).append(rows)
     order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
     all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
@@ -341,7 +358,7 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border
     for w in range(len(order)):
         kernel(q, (len(order[w]) * GROUP,), (GROUP,), img, waves_buf, blocks_buf,
                np.int32(starts[w]), np.int32(w), np.int32(nx), np.int32(ny), np.int32(nc),
-               s(rho), s(delta), s(gamma), s(alpha), np.int32(iterations), s(stop),
+               s(rho), s(delta), s(gamma), s(alpha), s(stop),
                np.int32(bool(detrend)), s(cutoff))
     q.finish()
     t["waves"] = time.perf_counter() - t0
@@ -359,7 +376,8 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border
 
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=8,
           min_block=4, border=12, split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0,
-          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5):
+          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5,
+          per_pixel=0.0):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
     Options: block (largest block, even), min_block (smallest, block halved), border (the
@@ -371,9 +389,10 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, b
     first one), colour ('pca': decorrelated channels, 'channels': as given), detrend (fit
     a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
     by half a block, whose fills are averaged), cutoff (the candidate frequencies: |k| at most
-    this share of the Nyquist frequency; 1.5 takes all).
+    this share of the Nyquist frequency; 1.5 takes all), per_pixel (> 0: a block's picks are
+    at most this many per hole pixel in it, at least 4).
     """
     return fill(data, omega, runtime, dtype=dtype, block=block, min_block=min_block,
                 border=border, split=split, rho=rho, delta=delta, gamma=gamma, alpha=alpha,
                 iterations=iterations, stop=stop, colour=colour, detrend=detrend, shifts=shifts,
-                cutoff=cutoff)
+                cutoff=cutoff, per_pixel=per_pixel)

@@ -3,7 +3,7 @@
 // around it, and the block's missing pixels are taken from the model.
 //
 // One work-group of SPECTRAL_GROUP items fits one block, every channel in turn: group g takes
-// blocks[first + g], 5 ints (row, column, B, L, copy): its B x B pixels from (row, column),
+// blocks[first + g], 6 ints (row, column, B, L, copy, picks): its B x B pixels from (row, column),
 // its extended window L x L (L even, L - B even, L <= SPECTRAL_MAXL), in copy `copy` of the
 // image (img: copies x nc planes of ny x nx; wave_of: one plane per copy; the copies are the
 // fills on differently offset block grids, averaged afterwards). The blocks of one launch (a
@@ -30,7 +30,7 @@
 // Candidates: the half plane kx in [0, L/2] (R(-l) = conj(R(l)) for a real residual) with
 // |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
 // the candidates and their scores' factors depend on the weights alone: once per block.
-// The loop stops after `iterations` picks or once a pick's reduction falls below `stop` times
+// The loop stops after the block's most picks or once a pick's reduction falls below `stop` times
 // the first one's.
 //
 // Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
@@ -47,7 +47,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      __global const int* blocks, const int first, const int wave,
                      const int nx, const int ny, const int nc, const REAL rho,
                      const REAL delta, const REAL gamma, const REAL alpha,
-                     const int iterations, const REAL stop, const int detrend,
+                     const REAL stop, const int detrend,
                      const REAL cutoff)
 {
     __local REAL X[4 * SPECTRAL_MAXL * SPECTRAL_MAXL];
@@ -64,9 +64,9 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
 
     const int lid = get_local_id(0);
     const int blk = first + get_group_id(0);
-    const int by = blocks[5 * blk], bx = blocks[5 * blk + 1];
-    const int B = blocks[5 * blk + 2], L = blocks[5 * blk + 3];
-    const int copy = blocks[5 * blk + 4];
+    const int by = blocks[6 * blk], bx = blocks[6 * blk + 1];
+    const int B = blocks[6 * blk + 2], L = blocks[6 * blk + 3];
+    const int copy = blocks[6 * blk + 4], iterations = blocks[6 * blk + 5];
     __global const int* state = wave_of + (size_t)copy * nx * ny;
     const int LL = L * L;
     const int H = L / 2 + 1;

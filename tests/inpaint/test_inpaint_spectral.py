@@ -40,7 +40,8 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         data = np.stack([_photo_like(ny, nx, seed=c) * (1 - 0.2 * c) for c in range(nc)])
     mask = _scratches(ny, nx)
     # one block size; blocks cut where little is known; two grids averaged
-    for extra in (dict(split=0.0), dict(split=0.6), dict(split=0.3, shifts=2, cutoff=0.8)):
+    for extra in (dict(split=0.0), dict(split=0.6), dict(split=0.3, shifts=2, cutoff=0.8),
+                  dict(per_pixel=0.5)):
         options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
         want = ref.fill(data, mask, **options)

@@ -127,7 +127,7 @@ def plan(omega, *, block, min_block, border, split, delta, shift=(0, 0)):
 
 def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, delta=0.5,
          gamma=0.7, alpha=1.0, iterations=100, stop=0.0, colour="pca", detrend=True,
-         shifts=2, cutoff=1.5):
+         shifts=2, cutoff=1.5, per_pixel=0.0):
     """The whole fill of (channels, rows, cols) float data, float64: every block grid's fill
     on its own, then their average."""
     out = np.array(data, np.float64)
@@ -160,6 +160,11 @@ def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, de
         for wave, members in enumerate(waves):
             for i in members:
                 y, x, s = blocks[i]
+                picks = iterations
+                if per_pixel > 0:
+                    holes = (wave_of_crop[max(y, 0):max(y + s, 0), max(x, 0):max(x + s, 0)]
+                             >= 0).sum()
+                    picks = int(min(iterations, max(4, np.ceil(per_pixel * holes))))
                 y, x = y + cy0 - y0, x + cx0 - x0
                 L = s + 2 * border
                 centre = (L - 1) / 2
@@ -176,7 +181,7 @@ def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, de
                     (n >= border) & (n < border + s)
                 for c in range(nc):
                     values = np.where(weight > 0, work[c, yc, xc], 0.0)
-                    model = fit_block(values, weight, iterations=iterations, gamma=gamma,
+                    model = fit_block(values, weight, iterations=picks, gamma=gamma,
                                       alpha=alpha, stop=stop, detrend=detrend, cutoff=cutoff)
                     work[c, yc[target], xc[target]] = model[target]
         fills.append(work)
