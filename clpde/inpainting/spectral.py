@@ -40,7 +40,6 @@ import time
 
 import numpy as np
 import pyopencl as cl
-from scipy import ndimage
 
 from ..imagedata import InputError
 
@@ -59,8 +58,6 @@ MAXK = 512  # its SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP
 COLOURS = ("pca", "channels")
 
-DEFAULTS = dict(block=16, min_block=4, border=8, split=0.5, rho=0.8, delta=0.5, gamma=0.5,
-                alpha=1.0, iterations=100, stop=0.0, colour="pca")
 
 
 def _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop,
@@ -108,8 +105,8 @@ def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
     return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
 
 
-def plan(omega: np.ndarray, *, block: int = 16, min_block: int = 4, border: int = 8,
-         split: float = 0.5, delta: float = 0.5):
+def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int = 12,
+         split: float = 0.3, delta: float = 0.5, shift: tuple = (0, 0)):
     """The blocks and their waves for a mask.
 
     Parameters
@@ -118,13 +115,16 @@ def plan(omega: np.ndarray, *, block: int = 16, min_block: int = 4, border: int 
         bool (rows, cols), True where to fill.
     block, min_block, border, split, delta : int, int, int, float, float
         As for `solve`.
+    shift : tuple
+        (rows, columns) by which the block grid starts before the damage's bounding box.
 
     Returns
     -------
     crop : tuple
         (y0, y1, x0, x1), the part of the image that the windows reach.
     blocks : np.ndarray
-        int32 (n, 4): row, column (in the crop), size B, window L of each block, wave by wave.
+        int32 (n, 4): row, column (in the crop; < 0 where a block starts before the image),
+        size B, window L of each block, wave by wave.
     waves : list
         (first, count) of each wave in `blocks`.
     wave_of : np.ndarray
@@ -134,19 +134,21 @@ def plan(omega: np.ndarray, *, block: int = 16, min_block: int = 4, border: int 
     rows, cols = np.flatnonzero(omega.any(1)), np.flatnonzero(omega.any(0))
     if rows.size == 0:
         return (0, 0, 0, 0), np.zeros((0, 4), np.int32), [], np.zeros((0, 0), np.int32)
-    gy = -(-(rows[-1] + 1 - rows[0]) // block)
-    gx = -(-(cols[-1] + 1 - cols[0]) // block)
-    cy0, cx0 = max(0, rows[0] - border), max(0, cols[0] - border)
-    cy1 = min(ny, rows[0] + gy * block + border)
-    cx1 = min(nx, cols[0] + gx * block + border)
+    gy0, gx0 = rows[0] - shift[0], cols[0] - shift[1]  # the block grid's origin (may be < 0)
+    gy = -(-(rows[-1] + 1 - gy0) // block)
+    gx = -(-(cols[-1] + 1 - gx0) // block)
+    cy0, cx0 = max(0, gy0 - border), max(0, gx0 - border)
+    cy1 = min(ny, gy0 + gy * block + border)
+    cx1 = min(nx, gx0 + gx * block + border)
     hole = omega[cy0:cy1, cx0:cx1]
-    oy, ox = rows[0] - cy0, cols[0] - cx0  # the block grid's origin in the crop
+    oy, ox = gy0 - cy0, gx0 - cx0  # the block grid's origin in the crop
     # the hole on the grid of the smallest blocks (cells), padded to whole top blocks
     cell = min_block
     ncy, ncx = gy * (block // cell), gx * (block // cell)
     grid = np.zeros((ncy * cell, ncx * cell), bool)
-    part = hole[oy:oy + ncy * cell, ox:ox + ncx * cell]
-    grid[:part.shape[0], :part.shape[1]] = part
+    ya, xa = max(0, -oy), max(0, -ox)  # grid rows and columns above / left of the image
+    part = hole[oy + ya:oy + ncy * cell, ox + xa:ox + ncx * cell]
+    grid[ya:ya + part.shape[0], xa:xa + part.shape[1]] = part
     cells = grid.reshape(ncy, cell, ncx, cell).any((1, 3))
     known = (~hole).astype(np.float64)
 
@@ -179,37 +181,59 @@ def plan(omega: np.ndarray, *, block: int = 16, min_block: int = 4, border: int 
     for i, (a, b, s) in enumerate(found):
         label[a:a + s, b:b + s] = i
     reach = -(-border // cell)  # cells a window reaches beyond its block
-    foot = np.ones((2 * reach + 1, 2 * reach + 1), bool)
+    py, px, ps = oy + fy * cell, ox + fx * cell, fs * cell
+    # neighbours: j's pixels lie in i's window (and i's in j's: the relation is symmetric);
+    # neighbours never share a wave, and a filled block adds to its neighbours' scores
+    pi, pj = [], []
+    for i, (a, b, s) in enumerate(found):
+        near = np.unique(label[max(0, a - reach):a + s + reach, max(0, b - reach):b + s + reach])
+        near = near[(near >= 0) & (near != i)]
+        pi.append(np.full(near.size, i))
+        pj.append(near)
+    pi, pj = np.concatenate(pi).astype(np.int64), np.concatenate(pj).astype(np.int64)
+    pad = border + MAXL + 1
+    hole_sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
 
-    weight = known.copy()
-    wave_of = np.where(hole, -2, -1).astype(np.int32)
+    def count(sat, y0, y1, x0, x1):  # sum over rows [y0, y1), columns [x0, x1) of the crop
+        y1, x1 = np.maximum(y1, y0), np.maximum(x1, x0)
+        a_y, a_x, b_y, b_x = y0 + pad - 1, x0 + pad - 1, y1 + pad - 1, x1 + pad - 1
+        return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
+
+    known_sat = np.pad((~hole).astype(np.int64), pad).cumsum(0).cumsum(1)
+    known_n = count(known_sat, py - border, py + ps + border, px - border, px + ps + border)
+    # hole pixels of j inside i's window: they count delta once j is filled
+    overlap = count(hole_sat, np.maximum(py[pj], py[pi] - border),
+                    np.minimum(py[pj] + ps[pj], py[pi] + ps[pi] + border),
+                    np.maximum(px[pj], px[pi] - border),
+                    np.minimum(px[pj] + ps[pj], px[pi] + ps[pi] + border))
+    area = (ps + 2 * border) ** 2
+    filled_n = np.zeros(n, np.int64)
+    block_wave = np.full(n, -1, np.int64)
     pending = np.ones(n, bool)
     order, waves = [], []
-    py, px, ps = oy + fy * cell, ox + fx * cell, fs * cell
     while pending.any():
         idx = np.flatnonzero(pending)
-        area = (ps[idx] + 2 * border) ** 2
-        score = _window_sums(weight, border, py[idx], px[idx], ps[idx]) / area
+        score = (known_n[idx] + delta * filled_n[idx]) / area[idx]
         # unique ranks: the larger score first, then the lower index
-        rank = np.empty(n, np.int64)
+        rank = np.full(n, -1, np.int64)
         rank[idx[np.lexsort((-idx, score))]] = np.arange(idx.size)
-        rank_cells = np.where(label >= 0, np.where(pending[label], rank[np.maximum(label, 0)],
-                                                   -1), -1)
-        near = ndimage.maximum_filter(rank_cells, footprint=foot, mode="constant", cval=-1)
-        top = ndimage.maximum(near, labels=label + 1, index=idx + 1)
-        chosen = idx[(np.asarray(top) == rank[idx]) & ((score > 0) | (score.max() <= 0))]
-        wave = len(waves)
+        live = pending[pi] & pending[pj]
+        pi, pj, overlap = pi[live], pj[live], overlap[live]
+        best_near = np.full(n, -1, np.int64)
+        np.maximum.at(best_near, pi, rank[pj])
+        ok = (score > 0) | (score.max() <= 0)
+        chosen = idx[(rank[idx] > best_near[idx]) & ok]
+        block_wave[chosen] = len(waves)
         waves.append((len(order), chosen.size))
-        for i in chosen:
-            y, x, s = py[i], px[i], ps[i]
-            win = wave_of[y:y + s, x:x + s]
-            fresh = win == -2
-            win[fresh] = wave
-            weight[y:y + s, x:x + s][fresh] = delta
         order.extend(chosen.tolist())
         pending[chosen] = False
+        done = ~pending[pj]
+        np.add.at(filled_n, pi[done], overlap[done])
     order = np.array(order, np.int64)
     blocks = np.stack([py[order], px[order], ps[order], ps[order] + 2 * border], 1)
+    wave_of = np.full(hole.shape, -1, np.int32)
+    hy, hx = np.nonzero(hole)
+    wave_of[hy, hx] = block_wave[label[(hy - oy) // cell, (hx - ox) // cell]]
     return (cy0, cy1, cx0, cx1), blocks.astype(np.int32), waves, wave_of
 
 
@@ -236,13 +260,39 @@ def colour_axes(data: np.ndarray, known: np.ndarray):
 # The fill
 
 
-def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, border=8,
-         split=0.5, rho=0.8, delta=0.5, gamma=0.5, alpha=1.0, iterations=100, stop=0.0,
-         colour="pca", detrend=True, timings=None):
+def block_iterations(blocks, hole, iterations: int, per_pixel: float) -> np.ndarray:
+    """Each block's most picks: `iterations`, or with per_pixel > 0, per_pixel picks for each
+    of its hole pixels (at least 4), whichever is fewer: a speck needs fewer terms than a
+    block-wide hole."""
+    if per_pixel <= 0:
+        return np.full(len(blocks), iterations, np.int32)
+    pad = MAXL
+    sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
+    y, x, s = blocks[:, 0] + pad - 1, blocks[:, 1] + pad - 1, blocks[:, 2]
+    holes = sat[y + s, x + s] - sat[y, x + s] - sat[y + s, x] + sat[y, x]
+    return np.minimum(iterations, np.maximum(4, np.ceil(per_pixel * holes))).astype(np.int32)
+
+
+def shifts_of(shifts: int, block: int) -> list:
+    """The block grids' offsets: 1, 2 (a half block diagonally) or 4 (every half block)."""
+    h = block // 2
+    return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
+
+
+def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border=12,
+         split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0, iterations=100, stop=0.0,
+         colour="pca", detrend=True, shifts=2, cutoff=1.5, per_pixel=0.0, timings=None):
     """Frequency-selective fill of (channels, rows, cols) float data; see the module
     docstring. `timings`, a dict, receives the seconds spent planning, building, uploading,
     running the waves and reading back, and the counts of blocks and waves."""
     _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop, colour)
+    if not (np.isfinite(cutoff) and cutoff > 0):
+        raise InputError(f"cutoff must be a number > 0 (a share of the Nyquist frequency), not "
+                         f"{cutoff!r}")
+    if not (np.isfinite(per_pixel) and per_pixel >= 0):
+        raise InputError(f"per_pixel must be a number >= 0, not {per_pixel!r}")
+    if shifts not in (1, 2, 4):
+        raise InputError(f"shifts must be 1, 2 or 4 (block grids averaged), not {shifts!r}")
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, np.float64, copy=True)
@@ -253,12 +303,18 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
                          "mark only the damaged region")
     t = {} if timings is None else timings
     t0 = time.perf_counter()
-    crop, blocks, waves, wave_of = plan(omega, block=block, min_block=min_block, border=border,
-                                        split=split, delta=delta)
-    y0, y1, x0, x1 = crop
+    plans = [plan(omega, block=block, min_block=min_block, border=border, split=split,
+                  delta=delta, shift=sh) for sh in shifts_of(shifts, block)]
+    # every grid's copy of the image is one crop, the union of theirs; the copies' waves run
+    # together (wave w of every grid in launch w), each block in its own copy
+    y0 = min(p[0][0] for p in plans)
+    y1 = max(p[0][1] for p in plans)
+    x0 = min(p[0][2] for p in plans)
+    x1 = max(p[0][3] for p in plans)
     part = out[:, y0:y1, x0:x1]
     hole = omega[y0:y1, x0:x1]
     nc = part.shape[0]
+    ncopy = len(plans)
     if colour == "pca" and nc > 1:
         mean, axes = colour_axes(part, ~hole)
     else:
@@ -266,7 +322,21 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
     work = np.einsum("ij,jyx->iyx", axes, part - mean[:, None, None])
     work[:, hole] = 0.0  # unknown values never enter (their weight is 0), NaN must not either
     real = np.dtype(dtype)
-    host = np.ascontiguousarray(work, real)
+    host = np.ascontiguousarray(np.broadcast_to(work, (ncopy,) + work.shape), real)
+    wave_of = np.full((ncopy,) + hole.shape, -1, np.int32)
+    per_wave = {}
+    for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
+        wave_of[c, cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0] = w_of
+        moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
+        picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
+        for w, (first, count) in enumerate(waves):
+            rows = np.concatenate([moved[first:first + count],
+                                   np.full((count, 1), c, np.int32),
+                                   picks[first:first + count, None]], 1)
+            per_wave.setdefault(w, []).append(rows)
+    order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
+    all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
+    starts = np.cumsum([0] + [len(o) for o in order])
     t["plan"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -277,20 +347,19 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
     t0 = time.perf_counter()
     mf = cl.mem_flags
     img = cl.Buffer(runtime.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host)
-    waves_buf = cl.Buffer(runtime.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR,
-                          hostbuf=np.ascontiguousarray(wave_of, np.int32))
-    blocks_buf = cl.Buffer(runtime.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR,
-                           hostbuf=np.ascontiguousarray(blocks, np.int32))
+    waves_buf = cl.Buffer(runtime.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=wave_of)
+    blocks_buf = cl.Buffer(runtime.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=all_blocks)
     q.finish()
     t["upload"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     s = real.type
     ny, nx = hole.shape
-    for w, (first, count) in enumerate(waves):
-        kernel(q, (count * GROUP, nc), (GROUP, 1), img, waves_buf, blocks_buf, np.int32(first),
-               np.int32(w), np.int32(nx), np.int32(ny), s(rho), s(delta), s(gamma), s(alpha),
-               np.int32(iterations), s(stop), np.int32(bool(detrend)))
+    for w in range(len(order)):
+        kernel(q, (len(order[w]) * GROUP,), (GROUP,), img, waves_buf, blocks_buf,
+               np.int32(starts[w]), np.int32(w), np.int32(nx), np.int32(ny), np.int32(nc),
+               s(rho), s(delta), s(gamma), s(alpha), s(stop),
+               np.int32(bool(detrend)), s(cutoff))
     q.finish()
     t["waves"] = time.perf_counter() - t0
 
@@ -298,15 +367,17 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=16, min_block=4, borde
     cl.enqueue_copy(q, host, img)
     q.finish()
     t["readback"] = time.perf_counter() - t0
-    t["blocks"], t["launches"] = len(blocks), len(waves)
-    filled = np.einsum("ji,jyx->iyx", axes, host.astype(np.float64)) + mean[:, None, None]
+    t["blocks"], t["launches"] = len(all_blocks), len(order)
+    model = host.astype(np.float64).mean(0)  # the grids' average
+    filled = np.einsum("ji,jyx->iyx", axes, model) + mean[:, None, None]
     part[:, hole] = filled[:, hole]
     return out
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=16,
-          min_block=4, border=8, split=0.5, rho=0.8, delta=0.5, gamma=0.5, alpha=1.0,
-          iterations=100, stop=0.0, colour="pca", detrend=True):
+def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=8,
+          min_block=4, border=12, split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0,
+          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5,
+          per_pixel=0.0):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
     Options: block (largest block, even), min_block (smallest, block halved), border (the
@@ -316,8 +387,12 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, b
     coefficient taken), alpha (the low-frequency prior's power), iterations (most picks per
     block), stop (end a block once a pick lowers the error less than this share of the
     first one), colour ('pca': decorrelated channels, 'channels': as given), detrend (fit
-    a plane to each window first and model the rest).
+    a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
+    by half a block, whose fills are averaged), cutoff (the candidate frequencies: |k| at most
+    this share of the Nyquist frequency; 1.5 takes all), per_pixel (> 0: a block's picks are
+    at most this many per hole pixel in it, at least 4).
     """
     return fill(data, omega, runtime, dtype=dtype, block=block, min_block=min_block,
                 border=border, split=split, rho=rho, delta=delta, gamma=gamma, alpha=alpha,
-                iterations=iterations, stop=stop, colour=colour, detrend=detrend)
+                iterations=iterations, stop=stop, colour=colour, detrend=detrend, shifts=shifts,
+                cutoff=cutoff, per_pixel=per_pixel)
