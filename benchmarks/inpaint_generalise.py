@@ -2,7 +2,8 @@
 one run, on both halves of benchmarks/inpaint_corpus.py's corpus.
 
     python benchmarks/inpaint_generalise.py [--quick] [--half test|calibration|both]
-                                            [--only NAME,...] [--skip NAME,...] [--json PATH]
+                                            [--only NAME,...] [--skip NAME,...] [--slice A:B]
+                                            [--json PATH]
                                             [--log PATH] [--from-log LOG ...]
 
 Methods (every peer's settings fixed before any result was looked at):
@@ -319,6 +320,8 @@ def main(argv=None):
     parser.add_argument("--half", choices=("test", "calibration", "both"), default="both")
     parser.add_argument("--only", default=None, help="comma-separated method names")
     parser.add_argument("--skip", default=None, help="comma-separated method names")
+    parser.add_argument("--slice", default=None,
+                        help="START:STOP of the (interleaved) cases: a run split by cases")
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--log", type=Path, default=None, help="JSON lines, one per result")
     parser.add_argument("--from-log", type=Path, nargs="+", default=None,
@@ -327,8 +330,13 @@ def main(argv=None):
     args = parser.parse_args(argv)
     halves = ("test", "calibration") if args.half == "both" else (args.half,)
     if args.from_log:
-        rows = [json.loads(line) for path in args.from_log
-                for line in path.read_text().splitlines() if line]
+        rows, seen = [], set()
+        for path in args.from_log:  # a (case, method) met twice: the first log's row
+            for line in path.read_text().splitlines():
+                row = json.loads(line) if line else None
+                if row and (row["case"], row["method"]) not in seen:
+                    seen.add((row["case"], row["method"]))
+                    rows.append(row)
     else:
         found = methods()
         if args.only:
@@ -338,6 +346,9 @@ def main(argv=None):
         print("methods:", ", ".join(found))
         warm_up(found)
         cases = interleaved([c for c in corpus.build(args.quick) if c.half in halves])
+        if args.slice:
+            start, stop = (int(v) if v else None for v in args.slice.split(":"))
+            cases = cases[start:stop]
         print(f"{len(cases)} cases")
         log_path = args.log or args.json.with_suffix(".log.jsonl")
         log_path.parent.mkdir(parents=True, exist_ok=True)
