@@ -7,12 +7,18 @@ steadier figure on a shared machine; PoCL compiles in the calling process). Case
 
 - `planar` (the default): clpde.diffuse (heat, 2 steps) and clpde.denoise_tv (sigma 0.1) on
   a 64 x 64 float32 image;
+- `inpaint`: clpde.inpaint's default on a colour photo (chelsea's top left 150 x 225),
+  then on a grey one (camera's 256 x 256), each with text and four 12 px blobs; repeat
+  calls of both are timed at the end, new sizes are crops of 0.4, 0.45 and 0.35 of the
+  photos' sides;
 - `surface`: a unit sphere at spacing 0.1, its heat flow (t = 0.01) and a TV denoising with
   the dynamic lambda (sigma 0.3, t = 0.01).
 
-After the first calls the same calls run again on three other sizes (images of 61, 80 and
+The import is counted in the first calls' wall time. After the first calls the same calls
+run again on three other sizes (images of 61, 80 and
 97 pixels a side; spheres at spacing 0.09, 0.11 and 0.12), in the same process: *new sizes*
-is their mean wall time, the cost of meeting an input size for the first time once the
+is their mean wall time, each followed by the same size again (the ratio of the two sums is
+printed), the cost of meeting an input size for the first time once the
 programs are built (PoCL builds a kernel again for each new work-group size; see
 tests/core/test_work_groups.py).
 
@@ -20,7 +26,7 @@ With --other PATH the same runs are made with PYTHONPATH=PATH as well, alternati
 checkout's, so that both meet the same load: `--other /path/to/main` compares a branch with
 main.
 
-    python benchmarks/cold_build.py [--case planar|surface] [--runs 5] [--device cpu]
+    python benchmarks/cold_build.py [--case planar|surface|inpaint] [--runs 5] [--device cpu]
                                     [--other PATH] [--json PATH]
 """
 
@@ -39,8 +45,10 @@ ROOT = Path(__file__).resolve().parent.parent
 
 ONE_RUN = r"""
 import json, sys, time
+wall_import = time.perf_counter()
 import numpy as np
 import clpde
+wall_import = time.perf_counter() - wall_import
 from clpde import runtime
 
 built = []
@@ -51,7 +59,27 @@ def timed(self, filename, dtype, defines):
     built.append([filename, np.dtype(dtype).name, dict(defines), time.perf_counter() - start])
     return program
 runtime.Runtime._build = timed
+def inpaint_calls(size):
+    # a colour photo, then a grey one, each with text and blobs, at `size` (a scale)
+    from skimage import data as skd
+    from clpde.data import damage_mask
+    from scipy import ndimage
+    out = []
+    for photo in (skd.chelsea(), skd.camera()):
+        ny, nx = int(photo.shape[0] * size), int(photo.shape[1] * size)  # a crop
+        image = np.ascontiguousarray(photo[:ny, :nx])
+        mask = damage_mask((ny, nx), seed=3, text=True, scratches=False)
+        yy, xx = np.mgrid[0:ny, 0:nx]
+        for k in range(4):
+            mask |= np.hypot(yy - ny * (0.2 + 0.2 * k), xx - nx * (0.8 - 0.15 * k)) < 6
+        start = time.perf_counter()
+        clpde.inpaint(image, mask, channel_axis=-1 if image.ndim == 3 else None,
+                      progress=False, device=sys.argv[1])
+        out.append(time.perf_counter() - start)
+    return out
 def calls(size):
+    if sys.argv[2] == "inpaint":
+        return inpaint_calls(size)
     if sys.argv[2] == "planar":
         image = np.random.default_rng(0).random((size, size)).astype(np.float32)
         clpde.diffuse(image, "heat", steps=2, device=sys.argv[1])
@@ -62,16 +90,28 @@ def calls(size):
         u = np.random.default_rng(0).normal(size=surf.shape)
         surf.heat(u, 0.01)
         surf.denoise_tv(u, sigma=0.3, t=0.01)
-first, later = (64, (61, 80, 97)) if sys.argv[2] == "planar" else (0.1, (0.09, 0.11, 0.12))
+first, later = {"planar": (64, (61, 80, 97)), "surface": (0.1, (0.09, 0.11, 0.12)),
+                "inpaint": (0.5, (0.4, 0.45, 0.35))}[sys.argv[2]]
 wall, cpu = time.perf_counter(), time.process_time()
-calls(first)
-wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-new = []
-for size in later:
+parts = calls(first)
+wall, cpu = wall_import + time.perf_counter() - wall, time.process_time() - cpu
+n_first = len(built)
+new, again = [], []
+for size in later:  # a size met for the first time, then the same size again
     start = time.perf_counter()
     calls(size)
     new.append(time.perf_counter() - start)
-print(json.dumps({"programs": built, "wall": wall, "cpu": cpu, "new_sizes": sum(new) / len(new)}))
+    start = time.perf_counter()
+    calls(size)
+    again.append(time.perf_counter() - start)
+result = {"programs": built, "wall": wall, "cpu": cpu, "new_sizes": sum(new) / len(new),
+          "new_size_ratio": sum(new) / sum(again), "import": wall_import,
+          "new_size_programs": built[n_first:]}
+if sys.argv[2] == "inpaint":
+    start = time.perf_counter()
+    repeat = calls(first)
+    result.update(first_calls=parts, repeat_calls=repeat, repeat=time.perf_counter() - start)
+print(json.dumps(result))
 """
 
 
@@ -87,7 +127,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--device", default="cpu")
-    parser.add_argument("--case", choices=("planar", "surface"), default="planar")
+    parser.add_argument("--case", choices=("planar", "surface", "inpaint"), default="planar")
     parser.add_argument("--other", type=Path, default=None,
                         help="another checkout to time alternately (e.g. main's)")
     parser.add_argument("--json", type=Path, default=None)
@@ -110,6 +150,21 @@ def main():
                          "first_calls_s": wall, "cpu_s": cpu, "new_sizes_s": new,
                          "runs": results}
         print(f"{name:14s} {programs:40s} {build:8.3f} {wall:14.3f} {cpu:6.3f} {new:12.3f}")
+        ratio = statistics.median(r["new_size_ratio"] for r in results)
+        summary[name]["new_size_ratio"] = ratio
+        print(f"    a new size over the same size again: {ratio:.2f}x; programs built for new "
+              f"sizes: {len(results[0]['new_size_programs'])}; import "
+              f"{statistics.median(r['import'] for r in results):.2f} s")
+        if args.case == "inpaint":
+            first = [statistics.median(r["first_calls"][i] for r in results) for i in (0, 1)]
+            rep = [statistics.median(r["repeat_calls"][i] for r in results) for i in (0, 1)]
+            imp = statistics.median(r["import"] for r in results)
+            extra = imp + sum(first) - sum(rep)
+            summary[name].update(first_colour_s=first[0], first_grey_s=first[1],
+                                 repeat_colour_s=rep[0], repeat_grey_s=rep[1], extra_s=extra)
+            print(f"    first colour {first[0]:.2f} s (repeat {rep[0]:.2f}), first grey "
+                  f"{first[1]:.2f} s (repeat {rep[1]:.2f}): import + first calls - repeats = "
+                  f"{extra:.2f} s; {len(results[0]['programs'])} programs")
         for i, prog in enumerate(results[0]["programs"]):
             times = statistics.median(r["programs"][i][3] for r in results
                                       if len(r["programs"]) > i)

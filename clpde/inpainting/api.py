@@ -38,7 +38,7 @@ from ..imagedata import (
     value_range,
 )
 from ..runtime import DeviceLike, get_runtime
-from . import boxes, choose, exemplar, transport
+from . import boxes, transport, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .registry import margin, soft
@@ -80,6 +80,9 @@ class InpaintInfo:
     # omega pixels of each box that the exemplar filled (under method="auto" a box named
     # "<structure>+exemplar" had only its thick parts refilled by the exemplar)
     box_exemplar_pixels: list = field(default_factory=list)
+    # method="auto": per box, what the self-validation chose for each cluster of damage, and
+    # why (inpainting/validate.py's report)
+    choices: list = field(default_factory=list)
 
 
 # ---------------------------------------------------------------------------------------
@@ -297,10 +300,9 @@ class Inpainting:
             raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
         given = {**params, **({} if levels is None else {"levels": levels})}
         self.method = choose_method(self.mask, method, given)
-        # "auto" picks per box between this structure method and the exemplar
-        # (inpainting/choose.py); the options given are the structure method's.
-        self.auto = choose_method(self.mask, method, given, per_box=True) == "auto" and \
-            "exemplar" in inpainting.available()
+        # "auto" votes per cluster of damage among inpainting/validate.py's candidates; the
+        # options given are this structure method's.
+        self.auto = choose_method(self.mask, method, given, per_box=True) == "auto"
         if self.method == "transport":
             self.p = transport_params(params)
             transport.check_params(self.p)
@@ -360,6 +362,9 @@ class Inpainting:
         ny, nx = self.mask.shape
         if not self.boxes:
             return [(0, ny, 0, nx)]
+        if self.auto:  # every candidate, and the ring it is scored on, fits in the box
+            reach = validate.margin()
+            return boxes.boxes(self.mask, lambda crop: reach)
         align = getattr(self.module, "ALIGN", None)
         return boxes.boxes(
             self.mask, lambda crop: margin(self.module, crop, self.params),
@@ -392,29 +397,16 @@ class Inpainting:
             damage = None if self.softness is None else np.asarray(
                 self.softness[y0:y1, x0:x1], np.float64)
             fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
-            method, options, part = self.method, {}, None
             if self.auto:
-
-                depth = choose.hole_depth(omega)  # both measures need it
-                method, options = choose.pick(choose.features(data, omega, depth), self.method)
-                if method == "exemplar" and options.get("structure"):
-                    # the thick-hole rule: only the thick components go to the exemplar, in
-                    # a second pass after the structure method has filled the whole box
-                    # (text and scratches cost the exemplar 10x the time for no gain)
-                    part = choose.exemplar_part(omega, depth)
-                    if np.array_equal(part, omega):
-                        part = None
-                    else:
-                        method, part = self.method, part if part.any() else None
-            info.box_methods.append(method if part is None else f"{method}+exemplar")
-            by_exemplar = omega if method == "exemplar" else part
-            info.box_exemplar_pixels.append(0 if by_exemplar is None else int(by_exemplar.sum()))
-            if method == "exemplar" and method != self.method:
-                solved = self._exemplar_box(runtime, box, data, options)
+                # the self-validated choice among the candidates (inpainting/validate.py)
+                solved = self._voted_box(runtime, data, omega, info)
                 if damage is not None:
                     solved = np.where(omega, damage * solved + (1 - damage) * data, data)
                 info.levels = max(info.levels, 1)
             else:
+                info.box_methods.append(self.method)
+                info.box_exemplar_pixels.append(int(omega.sum()) if self.method == "exemplar"
+                                                else 0)
                 run = self._run(runtime, data, omega, fidelity, damage)
                 for steps, change, solved in run.states(every):
                     self._write(out, box, solved, omega)
@@ -426,12 +418,6 @@ class Inpainting:
                 if run.steps_per_level:
                     info.steps_per_level = run.steps_per_level
                 info.band_pixels += run.band_pixels
-            if part is not None:
-                thick = self._exemplar_box(runtime, box, data, options, part=part,
-                                           filled=solved)
-                if damage is not None:
-                    thick = damage * thick + (1 - damage) * data
-                solved = np.where(part, thick, solved)
             self._write(out, box, solved, omega)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
@@ -450,27 +436,19 @@ class Inpainting:
         return SolveRun(self.module, data, omega, runtime, damage, fidelity, dtype=self.dtype,
                         progress=self.progress, seed=self.seed, **self.params)
 
-    def _exemplar_box(self, runtime, box, data, options, part=None, filled=None):
-        """The exemplar's fill of a box that auto gave it: solved in the box grown by the
-        exemplar's search region (the structure method's box is too small to copy from),
-        with every masked pixel there unknown; returns the box's part. With `part` (the
-        box's pixels to fill) and `filled` (the box already filled by the structure
-        method), the box's other masked pixels count as known, with their filled values."""
-
-        y0, y1, x0, x1 = box
-        ny, nx = self.mask.shape
-        m = exemplar.MARGIN()
-        big = (max(0, y0 - m), min(ny, y1 + m), max(0, x0 - m), min(nx, x1 + m))
-        big_data = self._box_data(big)
-        hole = np.array(self.mask[big[0]:big[1], big[2]:big[3]], bool)
-        inner = (slice(y0 - big[0], y1 - big[0]), slice(x0 - big[2], x1 - big[2]))
-        if part is not None:
-            big_data[(slice(None),) + inner] = filled
-            hole[inner] = part
-        solved = exemplar.solve(big_data, hole, runtime, dtype=self.dtype,
-                                progress=self.progress, seed=self.seed, **options)
-        solved = np.asarray(solved, np.float64)[(slice(None),) + inner]
-        return np.where(self.mask[y0:y1, x0:x1], solved, data)
+    def _voted_box(self, runtime, data, omega, info):
+        """The box filled by the self-validated choice (inpainting/validate.py); what chose
+        what, and why, goes to info.choices."""
+        params = {self.method: self.params} if self.params else {}
+        solved, report = validate.choose(data, omega, runtime, dtype=self.dtype, seed=self.seed,
+                                         params=params)
+        info.choices.append(report)
+        by = {}
+        for choice in report["choices"]:
+            by[choice["chosen"]] = by.get(choice["chosen"], 0) + choice["pixels"]
+        info.box_methods.append("+".join(sorted(by, key=by.get, reverse=True)))
+        info.box_exemplar_pixels.append(by.get("exemplar", 0))
+        return solved
 
     def run(self) -> np.ndarray:
         for _ in self.iterate():
@@ -481,9 +459,9 @@ class Inpainting:
 def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=False) -> str:
     """The method to run. None is "auto", unless `params` holds one of the transport's own
     options (InpaintParams), when it is "transport" (the thesis's scheme); "auto" is the
-    first installed of inpainting.AUTO (docs/inpainting.md has the measurements), which
-    each box may trade for the exemplar (inpainting/choose.py). per_box=True returns
-    "auto" itself in that case."""
+    first installed of inpainting.AUTO, which takes the options given, while each cluster
+    of damage is filled by the self-validated choice (inpainting/validate.py).
+    per_box=True returns "auto" itself in that case."""
 
     if method is None:  # levels too: the transport's multiresolution
         transport_only = {"levels", *InpaintParams.__dataclass_fields__}
@@ -580,12 +558,14 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
     return_info : bool, optional
         Also return an InpaintInfo (steps taken, whether it converged, the boxes, ...).
     method : str, optional
-        'auto' (per box of the mask: the exemplar where the surroundings repeat, or on the
-        parts of the hole at least 6 px thick in surroundings with detail, else coherence
-        transport where installed, else the transport; docs/inpainting_texture.md;
-        info.box_methods names each box's), 'transport' (the thesis's scheme, the options
-        above), 'coherence', 'navier-stokes', 'exemplar' (texture, periodic patterns) or
-        'structure-texture' (`clpde.inpainting.available()` lists what is installed).
+        'auto' (self-validated, per cluster of damage: the candidate methods of
+        clpde/inpainting/validate.py fill the hole; where they disagree, a ring of known
+        pixels around the cluster is hidden and filled too, and the blend of the candidates
+        that fits that ring best fills the cluster; info.choices says what chose what and
+        why, info.box_methods names each box's methods by share), 'transport' (the thesis's
+        scheme, the options above), 'coherence', 'navier-stokes', 'exemplar' (texture,
+        periodic patterns), 'structure-texture' or 'spectral' (a sparse Fourier model of
+        each block; `clpde.inpainting.available()` lists what is installed).
         None is 'auto', or 'transport' when a transport option is given.
     boxes : bool, optional
         Solve each connected component of the mask, or cluster of nearby components, in

@@ -1,12 +1,7 @@
-"""What `method="auto"` runs on each box of the mask: a structure method or the exemplar.
-
-A diffusion or transport continues the smooth part of the border into the hole; patches
-bring back texture. Which wins depends on the hole and its surroundings, which are measured
-on the host, in proportion to the box:
+"""Measures of a hole's surroundings, on the host, in proportion to the box:
 
 - ``radius``: the hole's half-thickness, the largest distance of a hole pixel to the known
-  ones (Euclidean). Thin holes (text, scratches) are filled well by a structure method from
-  the pixels a few steps away; patches have little to add there.
+  ones (Euclidean).
 - ``texture``: how much fine texture surrounds the hole. On the ring of known pixels within
   RING pixels of the hole, the grey image minus its local mean (a normalised Gaussian of
   the known pixels, sigma SMOOTH, so that the hole's values never count) leaves the detail
@@ -16,26 +11,11 @@ on the host, in proportion to the box:
   pixels (normalised over the pixels both copies know, by FFTs); ``periodicity`` is the
   largest correlation, 1 for a pattern that repeats exactly (a periodic texture, stripes,
   a straight edge), near 0 for stochastic texture and most photos.
+- ``lattice_offsets``: the lags at which the known pixels repeat exactly.
 
-The rule (`pick`): surroundings that repeat (periodicity >= MIN_PERIODICITY) go to the
-exemplar whatever the hole's size, without a structure guide (a copy can be exact there,
-and the guide, a smooth fill, would pull it away); holes at least MIN_RADIUS thick in
-surroundings with some detail (texture >= MIN_TEXTURE) go to the exemplar with the
-structure guide, but only on their thick components (`exemplar_part`: where the hole is
-that thick, in components of the hole that are mostly so), the structure method filling
-the rest of the box first; the others (text, scratches, smooth surroundings, bold strokes
-that are thick only where they cross) stay with the structure method. Measured by
-benchmarks/inpaint_auto_calibrate.py on 50 cases (docs/inpainting_texture.md has the
-table): the texture threshold is a guard for smooth
-surroundings (sky, a clock's face: the structure fill is 1-2 dB better there), on a plateau
-from 0.005 to 0.008; at 0.01 and above it loses 0.4 dB on 20-30 px blobs in photos, where
-the patch fill wins even on moderately textured ground. The periodicity threshold lies on
-a plateau from 0.85 to 0.9 (at 0.8 the structure class loses 0.4 dB, at 0.95 1.9 dB: a
-curved edge across a thin slot repeats at 0.83, a straight one at 60 degrees at 0.86).
-Per component rather than per box: on `clpde.data.damaged_astronaut()` (bold text and
-scratches in one box) the exemplar cost 10x coherence's time for 0.25 dB, which it owed to
-the strokes, not to their few thick spots; on text plus 20-30 px blobs in one box it gains
-0.6 dB over the whole box to the exemplar (benchmarks/inpaint_auto_parts.py).
+The exemplar uses the periodicity and the lattice (inpainting/exemplar.py). What
+`method="auto"` fills each cluster of damage with is no longer a rule on these measures but
+measured on the damage itself: inpainting/validate.py.
 """
 
 from __future__ import annotations
@@ -47,11 +27,9 @@ from scipy import ndimage
 RING = 8  # width of the ring of known pixels around the hole that is measured, in pixels
 SMOOTH = 2.0  # sigma of the local mean removed before measuring the texture, in pixels
 LAGS = (6, 32)  # the lags (chessboard distance, pixels) over which periodicity is sought
-# The rule's thresholds (benchmarks/inpaint_auto_calibrate.py):
-MIN_RADIUS = 6.0  # holes thinner than this stay with the structure method
-MIN_PERIODICITY = 0.85  # surroundings that repeat this well are copied without a guide
-MIN_TEXTURE = 0.005  # rms detail (in [0, 1]) below which surroundings count as smooth
-MIN_SHARE = 0.5  # a component of the hole thick over less than this share is a stroke
+# surroundings that repeat this well are copied by the exemplar without a structure guide
+# (docs/inpainting_texture.md: a plateau from 0.85 to 0.9)
+MIN_PERIODICITY = 0.85
 
 
 def _detail(data: np.ndarray, known: np.ndarray):
@@ -155,54 +133,3 @@ def features(data: np.ndarray, omega: np.ndarray, depth: np.ndarray | None = Non
     texture = float(np.sqrt(np.mean(detail[ring].astype(np.float64) ** 2))) if ring.any() else 0.0
     return {"radius": float(depth.max()), "texture": texture,
             "periodicity": _periodicity(detail, ok)}
-
-
-def exemplar_part(omega: np.ndarray, depth: np.ndarray | None = None) -> np.ndarray:
-    """The pixels of ``omega`` that the thick-hole rule gives to the exemplar (module
-    docstring): the parts where the hole is at least MIN_RADIUS thick, in the connected
-    components of the hole that are mostly such parts.
-
-    The thick parts are the discs of radius MIN_RADIUS around the core pixels (depth >=
-    MIN_RADIUS), which lie inside the hole, plus the pieces of the hole left over next to
-    them that hold fewer than MIN_RADIUS**2 pixels (a blob's corners, the gap between two
-    discs). A component of the hole (8-connected) whose thick parts are under MIN_SHARE of
-    its pixels is a stroke that is thick in places (bold text, a scratch through a letter)
-    and stays with the structure method as a whole; in the others only the thick parts go
-    to the exemplar, the strokes that touch them stay with the structure method.
-    ``depth``: hole_depth(omega), if the caller has it already."""
-    omega = np.asarray(omega, bool)
-    depth = hole_depth(omega) if depth is None else depth
-    core = depth >= MIN_RADIUS
-    if not core.any():
-        return np.zeros_like(omega)
-    # the disc test on the core's bounding box grown by the radius: cost follows the core
-    ys, xs = np.nonzero(core)
-    m = int(np.ceil(MIN_RADIUS)) + 1
-    y0, y1 = max(0, ys.min() - m), min(omega.shape[0], ys.max() + m + 1)
-    x0, x1 = max(0, xs.min() - m), min(omega.shape[1], xs.max() + m + 1)
-    part = np.zeros_like(omega)
-    near = ndimage.distance_transform_edt(~core[y0:y1, x0:x1]) < MIN_RADIUS
-    part[y0:y1, x0:x1] = near & omega[y0:y1, x0:x1]
-    rest, count = ndimage.label(omega & ~part)
-    if count:
-        sizes = np.bincount(rest.ravel(), minlength=count + 1)
-        touching = np.zeros(count + 1, bool)
-        touching[rest[ndimage.binary_dilation(part, np.ones((3, 3), bool))]] = True
-        join = touching & (sizes < MIN_RADIUS ** 2)
-        join[0] = False
-        part |= join[rest]
-    comps, count = ndimage.label(omega, np.ones((3, 3), bool))
-    share = np.bincount(comps[part], minlength=count + 1) / np.maximum(
-        np.bincount(comps.ravel(), minlength=count + 1), 1)
-    share[0] = 0
-    return part & (share >= MIN_SHARE)[comps]
-
-
-def pick(measured: dict, structure: str):
-    """(method, options) for one box: the exemplar (with or without the structure guide) or
-    ``structure``, by the rule of the module docstring."""
-    if measured["periodicity"] >= MIN_PERIODICITY:
-        return "exemplar", {"structure": 0.0}
-    if measured["radius"] >= MIN_RADIUS and measured["texture"] >= MIN_TEXTURE:
-        return "exemplar", {"structure": 1.0}
-    return structure, {}

@@ -135,7 +135,9 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     buf_s = cla.to_device(q, taps_s.astype(dt))
     buf_r = cla.to_device(q, taps_r.astype(dt))
     rs, rr = np.int32(len(taps_s) // 2), np.int32(len(taps_r) // 2)
-    defines = dict(MAX_CHANNELS=nc)
+    # the channel count is an argument; the define only sizes a private array, rounded up
+    # so that grey and colour images (and anything up to 4 channels) share one program
+    defines = dict(MAX_CHANNELS=max(4, 1 << (nc - 1).bit_length()))
     k_rows = runtime.kernel("inpainting/coherence.cl", "ct_smooth_rows", dt, **defines)
     k_cols = runtime.kernel("inpainting/coherence.cl", "ct_smooth_cols", dt, **defines)
     k_products = runtime.kernel("inpainting/coherence.cl", "ct_products", dt, **defines)

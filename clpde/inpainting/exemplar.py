@@ -220,7 +220,9 @@ class _Level:
         self.nout = self.nch if nout is None else nout  # planes the votes fill; then guides
         self.r = patch // 2
         self.hole = hole
-        defines = {"PATCH": patch, "NCH_MAX": self.nch}
+        # the plane count is an argument; NCH_MAX only sizes a private array, rounded up so
+        # that grey and colour images, with or without guides, share one program
+        defines = {"PATCH": patch, "NCH_MAX": max(8, 1 << (self.nch - 1).bit_length())}
         rt, dt = runtime, self.dtype
         self.k_pass = rt.kernel("inpainting/patchmatch.cl", "pm_pass", dt, **defines)
         self.k_score = rt.kernel("inpainting/patchmatch.cl", "pm_score", dt, **defines)

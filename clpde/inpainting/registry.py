@@ -48,16 +48,14 @@ METHODS = {
     "navier-stokes": "clpde.inpainting.navier_stokes",
     "exemplar": "clpde.inpainting.exemplar",
     "structure-texture": "clpde.inpainting.structure_texture",
+    "spectral": "clpde.inpainting.spectral",
 }
 
 # method=None: "auto", except that a call giving any of the transport's own options
 # (InpaintParams: dt, max_steps, tol, ...) runs the transport, so such calls keep their meaning.
-# method="auto": per box, the exemplar where choose.py's rule says it wins (repeating
-# surroundings; the thick parts of holes with detail around), else the first of these
-# that is installed. Measured (docs/inpainting.md, one run of benchmarks/inpaint_quality.py
-# with every method): coherence transport is the best of the structure methods on text,
-# scratches, thick holes and the structure class, 0.3 dB behind the transport on 20-30 px
-# blobs.
+# method="auto": each cluster of damage is filled by the self-validated choice among
+# validate.py's candidates; the options a call gives go to the first of these that is
+# installed.
 AUTO = ("coherence", "transport")
 COMMON = ("dtype", "progress", "seed")  # keywords every solve takes, passed by the dispatch
 

@@ -1,0 +1,172 @@
+"""Self-validation: what `method="auto"` fills each cluster of damage with, measured there.
+
+Which method fills a hole best depends on the hole and on what surrounds it, and a rule
+fitted to named cases learns those cases. Here each box of damage measures it instead:
+
+1. Every candidate method fills the box's hole.
+2. The hole's pixels are grouped into clusters: the connected components of the hole grown
+   by the ring's width (so components closer than two ring widths share one cluster, and
+   one ring). Where the candidates' fills of a cluster agree (their largest RMS difference
+   from the cluster's mean fill is below AGREE, half an 8-bit quantisation step), any of
+   them will do: the cheapest is taken and no vote is run there.
+3. For the clusters that disagree, a ring of known pixels around them (within RING pixels
+   of the hole) is hidden as well, and every candidate fills the grown hole once. Its error
+   on the ring, whose truth is known, is its score in that cluster.
+4. Each cluster gets the blend of the candidates' fills whose weights, non-negative and
+   summing to one, minimise the ring's squared error (a least-squares fit over a handful of
+   weights, on hundreds of ring pixels; `blend=False` keeps the single best candidate).
+
+The candidate set and the ring's width are the module's only parameters; both were chosen
+on the calibration half of benchmarks/inpaint_corpus.py's corpus
+(benchmarks/inpaint_validate_calibrate.py), and nothing else was fitted. `choices` in the
+returned report says, per cluster, what was chosen, with which weights, and why.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage, optimize
+
+from . import poisson
+from .registry import available, load
+from .registry import margin as method_margin
+
+# The candidates, cheapest first (the first one fills clusters where all agree), and the
+# width of the ring of known pixels hidden to score them: chosen on the calibration half.
+CANDIDATES = ("biharmonic", "coherence", "exemplar", "spectral")
+RING = 3
+AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
+
+
+def _solver(name):
+    """solve(data, omega, runtime, dtype=, seed=) of a candidate; None if not installed."""
+    if name == "biharmonic":
+        return poisson.solve
+    if name not in available():
+        return None
+    return load(name).solve
+
+
+def candidates(names=None) -> list:
+    """The installed candidates among `names` (default CANDIDATES), in order."""
+    return [n for n in (CANDIDATES if names is None else names) if _solver(n) is not None]
+
+
+def margin(names=None, ring: int = RING) -> int:
+    """Known pixels the vote reads around a hole: the widest candidate's margin plus the
+    ring."""
+    reach = 2
+    for name in candidates(names):
+        if name in available():
+            reach = max(reach, method_margin(load(name), None, {}) or 0)
+    return reach + ring
+
+
+def _fill(name, data, omega, runtime, dtype, seed, params):
+    solved = _solver(name)(data, omega, runtime, dtype=dtype, seed=seed,
+                           **params.get(name, {}))
+    return np.asarray(solved, np.float64)
+
+
+def _groups(labels, count):
+    """[indices of `labels` equal to each label 0..count], by one sort."""
+    order = np.argsort(labels, kind="stable")
+    bounds = np.searchsorted(labels[order], np.arange(count + 2))
+    return [order[bounds[k]:bounds[k + 1]] for k in range(count + 1)]
+
+
+def _weights(fills, truth):
+    """Non-negative weights summing to one that minimise |sum_k w_k fills_k - truth|^2
+    (fills: (k, n), truth: (n,))."""
+    k = fills.shape[0]
+    if k == 1:
+        return np.ones(1)
+    # eliminate the sum constraint: w_last = 1 - sum(others); bounded least squares
+    a = (fills[:-1] - fills[-1]).T
+    b = truth - fills[-1]
+    res = optimize.lsq_linear(a, b, bounds=(0, 1))
+    w = np.append(res.x, 1 - res.x.sum())
+    if w[-1] < 0:  # the bounds allow sum(others) > 1: renormalise the rare overshoot
+        w = np.clip(w, 0, None)
+        w /= w.sum()
+    return w
+
+
+def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = True,
+           dtype=np.float32, seed=None, params=None):
+    """Fill omega in data ((channels, rows, cols) in [0, 1]) by the self-validated choice
+    among the candidates (module docstring).
+
+    Returns (filled, report): filled has data's shape, equal to data outside omega;
+    report is {"candidates": [...], "choices": [{"pixels", "why", "weights", "ring_rmse",
+    "chosen"} per cluster], "ring_pixels": int}.
+    """
+    params = params or {}
+    omega = np.asarray(omega, bool)
+    names = candidates(names)
+    fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
+    known = ~omega
+    dist = ndimage.distance_transform_edt(known)  # 0 in the hole
+    near = dist <= ring
+    clusters, count = ndimage.label(near, np.ones((3, 3), bool))
+    out = np.array(data, np.float64, copy=True)
+    stack = np.stack([fills[n][:, omega] for n in names])  # (k, c, n): the hole's fills
+    hole_label = clusters[omega]
+    members = _groups(hole_label, count)
+    choices = [None] * count
+    vote = np.zeros(count + 1, bool)
+    for lab in range(1, count + 1):
+        sel = members[lab]
+        if not sel.size:
+            continue
+        values = stack[:, :, sel]
+        spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
+        if len(names) == 1 or spread < AGREE:
+            choices[lab - 1] = {"pixels": int(sel.size), "why": "candidates agree",
+                                "chosen": names[0], "weights": {names[0]: 1.0},
+                                "spread": float(spread)}
+        else:
+            vote[lab] = True
+    ring_pixels = 0
+    if vote.any():
+        ring_mask = near & known & vote[clusters]
+        ring_pixels = int(ring_mask.sum())
+        if not (known & ~ring_mask).any():
+            ring_mask = np.zeros_like(ring_mask)  # nothing would be left to fill from
+        hidden = omega | ring_mask
+        tests = np.stack([_fill(n, data, hidden, runtime, dtype, seed, params)[:, ring_mask]
+                          for n in names]) if ring_mask.any() else None
+        truth = data[:, ring_mask] if ring_mask.any() else None
+        ring_members = _groups(clusters[ring_mask], count)
+        for lab in np.flatnonzero(vote):
+            sel_ring = ring_members[lab]
+            pixels = int(members[lab].size)
+            if tests is None or not sel_ring.size:
+                choices[lab - 1] = {"pixels": pixels, "why": "no ring to test on",
+                                    "chosen": names[0], "weights": {names[0]: 1.0}}
+                continue
+            f = tests[:, :, sel_ring].reshape(len(names), -1)
+            t = truth[:, sel_ring].reshape(-1)
+            rmse = np.sqrt(((f - t) ** 2).mean(axis=1))
+            if blend:
+                w = _weights(f, t)
+            else:
+                w = np.zeros(len(names))
+                w[int(np.argmin(rmse))] = 1.0
+            choices[lab - 1] = {"pixels": pixels, "why": "ring vote",
+                                "chosen": names[int(np.argmax(w))],
+                                "weights": {n: float(x) for n, x in zip(names, w, strict=True)
+                                            if x > 0},
+                                "ring_rmse": {n: float(x) for n, x in zip(names, rmse,
+                                                                          strict=True)}}
+    # assemble: each cluster's hole pixels from its weights
+    weights = np.zeros((len(names), count + 1))
+    for lab, ch in enumerate(choices, start=1):
+        if ch is not None:
+            for n, w in ch["weights"].items():
+                weights[names.index(n), lab] = w
+    per_pixel = weights[:, hole_label]  # (k, n)
+    out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack)
+    report = {"candidates": names, "ring": ring, "ring_pixels": ring_pixels,
+              "choices": [c for c in choices if c is not None]}
+    return out, report

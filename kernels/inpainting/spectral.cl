@@ -1,0 +1,360 @@
+// Frequency-selective inpainting: each block of the damage is modelled as a sparse sum of
+// 2-D Fourier basis functions, fitted greedily to the known pixels of an extended block
+// around it, and the block's missing pixels are taken from the model.
+//
+// One work-group of SPECTRAL_GROUP items fits one block, every channel in turn: group g takes
+// blocks[first + g], 6 ints (row, column, B, L, copy, picks): its B x B pixels from (row, column),
+// its extended window L x L (L even, L - B even, L <= SPECTRAL_MAXL), in copy `copy` of the
+// image (img: copies x nc planes of ny x nx; wave_of: one plane per copy; the copies are the
+// fills on differently offset block grids, averaged afterwards). The blocks of one launch (a
+// wave) are independent: no block's window holds pixels that another block of the wave
+// writes, so they are written in place into `img`.
+//
+// Window: the block's B x B pixels in the middle, (L - B) / 2 on each side. A pixel's weight
+// is w = s rho^d, d its distance to the window's centre, s = 1 for a known pixel, delta for a
+// hole pixel that an earlier wave filled (wave_of[p] < wave), 0 for the rest and outside the
+// image. wave_of[p] is -1 for known pixels.
+//
+// Model: a weighted least-squares plane (detrend = 1: a ramp is not periodic, and a sum of
+// Fourier functions would need many terms for it) plus a sum of pairs
+// c_k phi_k + conj(c_k) phi_-k, phi_k(x) = exp(2 pi i k.x / L). With the weighted residual's
+// transform R(k) = sum_x w (f - g) exp(-2 pi i k.x / L) and the weight's transform W(k), the
+// best real pair (k, -k) alone has the coefficient
+//     c = (R(k) W(0) - W(2k) conj(R(k))) / (W(0)^2 - |W(2k)|^2)
+// and lowers the weighted squared error by 2 Re(conj(c) R(k)); for a self-conjugate k
+// (2k = 0 mod L), c = R(k) / W(0) (real) and the reduction R(k)^2 / W(0). Each iteration takes
+// the candidate k with the largest reduction times the prior (1 - |k| / |k|max)^alpha, adds
+// gamma c (gamma < 1 makes up for the basis functions not being orthogonal under the weights,
+// so that later picks can correct earlier ones), and updates R in the frequency domain:
+// R(l) -= gamma (c W(l - k) + conj(c) W(l + k)).
+// Candidates: the half plane kx in [0, L/2] (R(-l) = conj(R(l)) for a real residual) with
+// |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
+// the candidates and their scores' factors depend on the weights alone: once per block.
+// The loop stops after the block's most picks or once a pick's reduction falls below `stop` times
+// the first one's.
+//
+// Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
+// picks' coefficients | qa, qb, qc, R re, R im on the candidates).
+#include "common.cl"
+
+#define SPECTRAL_MAXL 32    // largest window
+#define SPECTRAL_MAXK 512   // most picks per block
+#define SPECTRAL_GROUP 64
+#define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
+
+__kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
+void spectral_blocks(__global REAL* img, __global const int* wave_of,
+                     __global const int* blocks, const int first, const int wave,
+                     const int nx, const int ny, const int nc, const REAL rho,
+                     const REAL delta, const REAL gamma, const REAL alpha,
+                     const REAL stop, const int detrend,
+                     const REAL cutoff)
+{
+    __local REAL X[4 * SPECTRAL_MAXL * SPECTRAL_MAXL];
+    __local REAL T[2 * SPECTRAL_MAXH + 5 * SPECTRAL_MAXH];
+    __local REAL tw[2 * SPECTRAL_MAXL];  // cos, sin of 2 pi j / L
+    __local REAL best[SPECTRAL_GROUP];
+    __local int best_at[SPECTRAL_GROUP];
+    __local REAL pick_c[2];
+    __local int pick_k[2];
+    __local short half_y[SPECTRAL_MAXH], half_x[SPECTRAL_MAXH];
+    __local int picks[SPECTRAL_MAXK];
+    __local REAL sums[9 * SPECTRAL_GROUP];
+    __local REAL fit[3];
+
+    const int lid = get_local_id(0);
+    const int blk = first + get_group_id(0);
+    const int by = blocks[6 * blk], bx = blocks[6 * blk + 1];
+    const int B = blocks[6 * blk + 2], L = blocks[6 * blk + 3];
+    const int copy = blocks[6 * blk + 4], iterations = blocks[6 * blk + 5];
+    __global const int* state = wave_of + (size_t)copy * nx * ny;
+    const int LL = L * L;
+    const int H = L / 2 + 1;
+    const int b = (L - B) / 2;
+    const int oy = by - b, ox = bx - b;
+    const REAL two_pi_l = (REAL)6.283185307179586 / (REAL)L;
+    const REAL centre = (REAL)0.5 * (REAL)(L - 1);
+    const REAL log_rho = log(rho);
+    __local REAL* const rows = T;                 // row transforms; then the picks' coefficients
+    __local REAL* const coef_r = T;
+    __local REAL* const coef_i = T + SPECTRAL_MAXK;
+    __local REAL* const qa = T + 2 * SPECTRAL_MAXH;
+    __local REAL* const qb = qa + SPECTRAL_MAXH;
+    __local REAL* const qc = qb + SPECTRAL_MAXH;
+    __local REAL* const rre = qc + SPECTRAL_MAXH;
+    __local REAL* const rim = rre + SPECTRAL_MAXH;
+
+    for (int j = lid; j < L; j += SPECTRAL_GROUP) {
+        REAL c;
+        const REAL s = sincos(two_pi_l * (REAL)j, &c);
+        tw[j] = c;
+        tw[SPECTRAL_MAXL + j] = s;
+    }
+    // the weights, X[LL, 2 LL)
+    for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
+        const int m = i / L, n = i - m * L;
+        const int y = oy + m, x = ox + n;
+        REAL w = 0;
+        if (y >= 0 && y < ny && x >= 0 && x < nx) {
+            const int s = state[y * nx + x];
+            w = s < 0 ? (REAL)1 : (s < wave ? delta : (REAL)0);
+            if (w > 0) {
+                const REAL dy = (REAL)m - centre, dx = (REAL)n - centre;
+                w *= exp(log_rho * sqrt(dx * dx + dy * dy));
+            }
+        }
+        X[LL + i] = w;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    // W: rows (whole plane) into T[0, 2 LL), then columns into X[2 LL, 4 LL)
+    for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
+        const int m = i / L, k = i - m * L;
+        REAL wr = 0, wi = 0;
+        for (int n = 0, t = 0; n < L; ++n, t = t + k < L ? t + k : t + k - L) {
+            const REAL w = X[LL + m * L + n];
+            wr += w * tw[t];
+            wi -= w * tw[SPECTRAL_MAXL + t];
+        }
+        T[i] = wr;
+        T[LL + i] = wi;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
+        const int ky = i / L, kx = i - ky * L;
+        REAL wr = 0, wi = 0;
+        for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
+            const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
+            const int q = m * L + kx;
+            wr += T[q] * c + T[LL + q] * s;
+            wi += T[LL + q] * c - T[q] * s;
+        }
+        X[2 * LL + i] = wr;
+        X[3 * LL + i] = wi;
+    }
+    // the candidates, row by row
+    if (lid == 0) {
+        const REAL limit = cutoff * (REAL)0.5 * (REAL)L;
+        int count_h = 0;
+        for (int ky = 0; ky < L; ++ky) {
+            const int fy = ky <= L / 2 ? ky : ky - L;
+            for (int kx = 0; kx < H; ++kx)
+                if ((REAL)(fy * fy + kx * kx) <= limit * limit) {
+                    half_y[count_h] = (short)ky;
+                    half_x[count_h] = (short)kx;
+                    ++count_h;
+                }
+        }
+        pick_k[0] = count_h;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    const int NC = pick_k[0];
+    const REAL W0 = X[2 * LL];
+    // each candidate's score is qa R_re^2 + qb R_re R_im + qc R_im^2: the pair's error
+    // reduction times the prior
+    const REAL inv_kmax = (REAL)1 / ((REAL)0.5 * (REAL)L * sqrt((REAL)2));
+    for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
+        const int ky = half_y[j], kx = half_x[j];
+        const REAL fy = (REAL)(ky <= L / 2 ? ky : ky - L);
+        const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
+        const REAL prior = alpha == 0 ? (REAL)1 : pow((REAL)1 - nu, alpha);
+        const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L, k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
+        if (!(W0 > 0)) {
+            qa[j] = qb[j] = qc[j] = 0;
+        } else if (k2y == 0 && k2x == 0) {  // self-conjugate: one real coefficient
+            qa[j] = prior / W0;
+            qb[j] = qc[j] = 0;
+        } else {
+            const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+            const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
+            const REAL pd = prior / den;
+            qa[j] = 2 * (W0 - vr) * pd;
+            qb[j] = -4 * vi * pd;
+            qc[j] = 2 * (W0 + vr) * pd;
+        }
+    }
+
+    for (int ch = 0; ch < nc; ++ch) {
+        __global REAL* plane = img + ((size_t)copy * nc + ch) * nx * ny;
+        // the plane through the window: weighted least squares, u and v the centred
+        // coordinates over L
+        REAL acc[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};  // w, wu, wv, wuu, wuv, wvv, wf, wfu, wfv
+        for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
+            const REAL w = X[LL + i];
+            const int m = i / L, n = i - m * L;
+            const REAL f = w > 0 ? plane[(oy + m) * nx + ox + n] : (REAL)0;
+            const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
+            const REAL wf = w * f;
+            acc[0] += w; acc[1] += w * u; acc[2] += w * v;
+            acc[3] += w * u * u; acc[4] += w * u * v; acc[5] += w * v * v;
+            acc[6] += wf; acc[7] += wf * u; acc[8] += wf * v;
+            X[i] = f;
+        }
+        for (int q = 0; q < 9; ++q) sums[q * SPECTRAL_GROUP + lid] = acc[q];
+        barrier(CLK_LOCAL_MEM_FENCE);  // also: the last channel's picks are no longer read
+        if (lid == 0) {
+            REAL t[9];
+            for (int q = 0; q < 9; ++q) {
+                REAL a = 0;
+                for (int j = 0; j < SPECTRAL_GROUP; ++j) a += sums[q * SPECTRAL_GROUP + j];
+                t[q] = a;
+            }
+            // normal equations for (c0, cu, cv); a small ridge on the slopes keeps windows
+            // whose known pixels lie on a line solvable
+            const REAL ridge = (REAL)1e-3 * t[0];
+            const REAL a00 = t[0], a01 = t[1], a02 = t[2];
+            const REAL a11 = t[3] + ridge, a12 = t[4], a22 = t[5] + ridge;
+            const REAL c0 = a11 * a22 - a12 * a12, c1 = a02 * a12 - a01 * a22;
+            const REAL c2 = a01 * a12 - a02 * a11;
+            const REAL det = a00 * c0 + a01 * c1 + a02 * c2;
+            if (detrend && t[0] > 0 && det > 0) {
+                const REAL b0 = t[6], b1 = t[7], b2 = t[8];
+                const REAL d11 = a00 * a22 - a02 * a02, d12 = a01 * a02 - a00 * a12;
+                const REAL d22 = a00 * a11 - a01 * a01;
+                fit[0] = (c0 * b0 + c1 * b1 + c2 * b2) / det;
+                fit[1] = (c1 * b0 + d11 * b1 + d12 * b2) / det;
+                fit[2] = (c2 * b0 + d12 * b1 + d22 * b2) / det;
+            } else {
+                fit[0] = fit[1] = fit[2] = 0;
+            }
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+        for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
+            const int m = i / L, n = i - m * L;
+            const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
+            X[i] = X[LL + i] * (X[i] - (fit[0] + fit[1] * u + fit[2] * v));
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+        // R: rows on the half plane into rows[0, 2 L H), then the candidates' columns
+        for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
+            const int m = i / H, k = i - m * H;
+            REAL ar = 0, ai = 0;
+            for (int n = 0, t = 0; n < L; ++n, t = t + k < L ? t + k : t + k - L) {
+                const REAL a = X[m * L + n];
+                ar += a * tw[t];
+                ai -= a * tw[SPECTRAL_MAXL + t];
+            }
+            rows[i] = ar;
+            rows[L * H + i] = ai;
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+        for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
+            const int ky = half_y[j], kx = half_x[j];
+            REAL rr = 0, ri = 0;
+            for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
+                const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
+                const REAL ar = rows[m * H + kx], ai = rows[L * H + m * H + kx];
+                rr += ar * c + ai * s;
+                ri += ai * c - ar * s;
+            }
+            rre[j] = rr;
+            rim[j] = ri;
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+
+        REAL first_gain = 0;  // item 0's
+        int count = 0;
+        if (W0 > 0) {
+            for (int it = 0; it < iterations; ++it) {
+                REAL bs = -1;
+                int bi = 0;
+                for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
+                    const REAL rr = rre[j], ri = rim[j];
+                    const REAL score = (qa[j] * rr + qb[j] * ri) * rr + qc[j] * ri * ri;
+                    if (score > bs) {
+                        bs = score;
+                        bi = j;
+                    }
+                }
+                best[lid] = bs;
+                best_at[lid] = bi;
+                barrier(CLK_LOCAL_MEM_FENCE);
+                if (lid == 0) {
+                    REAL top = best[0];
+                    int j = best_at[0];
+                    for (int q = 1; q < SPECTRAL_GROUP; ++q)
+                        if (best[q] > top || (best[q] == top && best_at[q] < j)) {
+                            top = best[q];
+                            j = best_at[q];
+                        }
+                    const int ky = half_y[j], kx = half_x[j];
+                    const REAL rr = rre[j], ri = rim[j];
+                    const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L;
+                    const int k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
+                    const bool self = k2y == 0 && k2x == 0;
+                    REAL cr, ci = 0, gain;
+                    if (self) {
+                        cr = rr / W0;
+                        gain = rr * cr;
+                    } else {
+                        const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+                        const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi),
+                                              (REAL)1e-3 * W0 * W0);
+                        cr = (rr * W0 - (vr * rr + vi * ri)) / den;
+                        ci = (ri * W0 - (vi * rr - vr * ri)) / den;
+                        gain = 2 * (cr * rr + ci * ri);
+                    }
+                    if (it == 0) first_gain = gain;
+                    if (!(gain > 0) || gain < stop * first_gain) {
+                        pick_k[0] = -1;
+                    } else {
+                        pick_k[0] = ky * L + kx;
+                        pick_k[1] = self;
+                        pick_c[0] = gamma * cr;
+                        pick_c[1] = gamma * ci;
+                        picks[it] = self ? -1 - (ky * L + kx) : ky * L + kx;
+                        coef_r[it] = gamma * cr;
+                        coef_i[it] = gamma * ci;
+                    }
+                }
+                barrier(CLK_LOCAL_MEM_FENCE);
+                const int k = pick_k[0];
+                if (k < 0) break;
+                count = it + 1;
+                const int ky = k / L, kx = k - ky * L;
+                const REAL cr = pick_c[0], ci = pick_c[1];
+                const int self = pick_k[1];
+                for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
+                    const int ly = half_y[j], lx = half_x[j];
+                    int dy = ly - ky, dx = lx - kx;
+                    dy += dy < 0 ? L : 0;
+                    dx += dx < 0 ? L : 0;
+                    const int dm = dy * L + dx;
+                    const REAL ar = X[2 * LL + dm], ai = X[3 * LL + dm];
+                    REAL ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;  // c W(l - k)
+                    if (!self) {
+                        int sy = ly + ky, sx = lx + kx;
+                        sy -= sy >= L ? L : 0;
+                        sx -= sx >= L ? L : 0;
+                        const int dp = sy * L + sx;
+                        const REAL pr = X[2 * LL + dp], pi = X[3 * LL + dp];
+                        ur += cr * pr + ci * pi;  // conj(c) W(l + k)
+                        ui += cr * pi - ci * pr;
+                    }
+                    rre[j] -= ur;
+                    rim[j] -= ui;
+                }
+                barrier(CLK_LOCAL_MEM_FENCE);
+            }
+        }
+        // the block's pixels that this wave fills, from the model
+        for (int i = lid; i < B * B; i += SPECTRAL_GROUP) {
+            const int u = i / B, v = i - u * B;
+            const int y = by + u, x = bx + v;
+            if (y < 0 || x < 0 || y >= ny || x >= nx) continue;
+            const int p = y * nx + x;
+            if (state[p] != wave) continue;
+            const int m = b + u, n = b + v;
+            REAL g = fit[0] + fit[1] * (((REAL)m - centre) / (REAL)L)
+                     + fit[2] * (((REAL)n - centre) / (REAL)L);
+            for (int t = 0; t < count; ++t) {
+                const int code = picks[t];
+                const int k = code < 0 ? -1 - code : code;
+                const int ky = k / L, kx = k - ky * L;
+                const int e = (ky * m + kx * n) % L;
+                const REAL cr = coef_r[t], ci = coef_i[t];
+                g += code < 0 ? cr * tw[e] : 2 * (cr * tw[e] - ci * tw[SPECTRAL_MAXL + e]);
+            }
+            plane[p] = g;
+        }
+    }
+}
