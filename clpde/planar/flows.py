@@ -56,7 +56,7 @@ def gaussian_weights(presmooth: float) -> np.ndarray:
 
     Examples
     --------
-    >>> from clpde.planar import gaussian_weights
+    >>> from clpde.planar.flows import gaussian_weights
     >>> w = gaussian_weights(1.0)
     >>> len(w), round(float(w[0] + 2 * w[1:].sum()), 12)
     (4, 1.0)
@@ -165,6 +165,10 @@ class PlanarFlow:
         Regularisation of |grad u| for 'tv' and 'curvature', intensities in [0, 1].
     weight : array_like, optional
         The curvature flow's speed g, an array of the image's (rows, cols).
+    presmooth : float, optional
+        Perona-Malik: read the edge-stopping function from the image smoothed by a
+        Gaussian of this many pixels (the regularised flow of Catte et al.; isolated noise
+        spikes then diffuse too). None: the plain flow.
 
     Raises
     ------

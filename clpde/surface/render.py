@@ -230,8 +230,37 @@ def view_box(meshes, azimuth=30.0, elevation=20.0):
 
 def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0),
                 box=None):
-    """(size, size, 3) uint8 picture of a mesh with vertex colours (grey if none). box:
-    (centre, span) of the picture plane to show (view_box), by default the mesh's own."""
+    """A picture of a mesh with its vertex colours (light grey where it has none).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The mesh to draw.
+    size : int
+        The picture's width and height in pixels.
+    azimuth, elevation : float
+        The viewing direction in degrees.
+    background : tuple of float
+        The background's RGB in [0, 1].
+    box : tuple, optional
+        (centre, span) of the picture plane to show (`view_box`), so that several meshes
+        share one scale; by default the mesh's own.
+
+    Returns
+    -------
+    (size, size, 3) uint8 ndarray
+
+    Raises
+    ------
+    InputError
+        For a mesh without triangles.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> render_mesh(trimesh.creation.icosphere(1), size=32).shape
+    (32, 32, 3)
+    """
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if len(faces) == 0:
