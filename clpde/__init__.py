@@ -1,6 +1,6 @@
 """clpde: PDE-based image processing (inpainting, diffusion, level sets) as OpenCL kernels."""
 
-# First: importing it turns Ctrl-C into one line while the libraries below load (a second).
+# First: importing it turns Ctrl-C into one line while the libraries below load.
 from . import _interrupt  # noqa: F401  # isort: skip
 
 from . import (

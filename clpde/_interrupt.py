@@ -4,7 +4,7 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: clpde
 the Dask workers it spawns. Three moments need care, beyond the command's own handler
 (clpde.cli.main prints one line and exits 130):
 
-- while Python loads clpde and its libraries (about a second), before main() runs:
+- while Python loads clpde and its libraries, before main() runs:
   `quiet_while_loading`, run when this module is imported (clpde/__init__.py imports it
   first), turns Ctrl-C into the line and exit status 130 when clpde runs as the command;
 - while a local Dask cluster starts or stops: `held` notes Ctrl-C and raises it as

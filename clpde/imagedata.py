@@ -273,11 +273,7 @@ def grow_mask(mask: ArrayLike, px: float) -> np.ndarray:
     >>> clpde.grow_mask(soft, 1)
     array([[0. , 1. , 0.5, 1. ]])
     """
-    from scipy import ndimage
-
-    if isinstance(px, bool) or not isinstance(px, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(px) or px < 0:
-        raise InputError(f"the mask's growth must be a number of pixels >= 0, not {px!r}")
+    px = growth(px)
     m = np.asarray(mask)
     if m.ndim != 2:
         raise InputError(f"a mask is a 2-D (rows, columns) array, not shape {m.shape}")
@@ -291,12 +287,47 @@ def grow_mask(mask: ArrayLike, px: float) -> np.ndarray:
     support = m != 0
     if px == 0 or not support.any():
         return out
-    # The exact Euclidean distance of every pixel to the support, so the ring is a true disc.
-    ring = (ndimage.distance_transform_edt(~support) <= px) & ~support
     if m.dtype == bool:
-        out[ring] = True
+        value = True
     elif np.issubdtype(m.dtype, np.integer):
-        out[ring] = m[support].max()
+        value = m[support].max()
     else:
-        out[ring] = 1.0
+        value = 1.0
+    _grow_into(out, support, px, value)
     return out
+
+
+def growth(px) -> float:
+    """A mask's growth in pixels, checked: a finite number >= 0 (bools refused)."""
+    if isinstance(px, bool) or not isinstance(px, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(px) or px < 0:
+        raise InputError(f"the mask's growth must be a number of pixels >= 0, not {px!r}")
+    return float(px)
+
+
+_GROW_ROWS = 256  # rows per strip: the distance transform's memory follows the strip
+
+
+def _grow_into(out: np.ndarray, support: np.ndarray, px: float, value) -> None:
+    """Set `value` on the pixels within Euclidean distance `px` of `support`, not in it.
+
+    Strip by strip, each taken with `px` rows above and below and cropped to the columns
+    near the support: a pixel's nearest support pixel within `px` lies in those rows, so
+    the distances are exact, while the transform's arrays (16 bytes a pixel) stay the
+    size of a strip, not of the image, and strips far from the mask cost nothing."""
+    from scipy import ndimage
+
+    ny, nx = support.shape
+    reach = int(np.floor(px))
+    rows = np.flatnonzero(support.any(axis=1))
+    for y0 in range(max(0, rows[0] - reach), min(ny, rows[-1] + reach + 1), _GROW_ROWS):
+        y1 = min(y0 + _GROW_ROWS, ny)
+        a, b = max(0, y0 - reach), min(ny, y1 + reach)
+        cols = np.flatnonzero(support[a:b].any(axis=0))
+        if cols.size == 0:
+            continue
+        c0, c1 = max(0, cols[0] - reach), min(nx, cols[-1] + reach + 1)
+        block = support[a:b, c0:c1]
+        near = ndimage.distance_transform_edt(~block)[y0 - a:y1 - a] <= px
+        ring = near & ~block[y0 - a:y1 - a]
+        out[y0:y1, c0:c1][ring] = value

@@ -34,6 +34,7 @@ from ..imagedata import (
     check_channel_axis,
     compute_dtype,
     grow_mask,
+    growth,
     integer_range,
     value_range,
 )
@@ -278,11 +279,12 @@ class Inpainting:
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
             image, mask, channel_axis, alpha)
-        if self.softness is not None:  # a soft mask grows its support, fully damaged
-            self.softness = grow_mask(self.softness, grow)
-            self.mask = self.softness > 0
-        else:
-            self.mask = grow_mask(self.mask, grow)
+        if growth(grow) > 0:  # (no copy of the mask otherwise: it may be image-sized)
+            if self.softness is not None:  # a soft mask grows its support, fully damaged
+                self.softness = grow_mask(self.softness, grow)
+                self.mask = self.softness > 0
+            else:
+                self.mask = grow_mask(self.mask, grow)
         if not self.mask.any():
             warnings.warn("the mask is empty, so nothing was filled and the image comes back "
                           "unchanged; was the mask inverted or saved blank?", UserWarning,

@@ -172,30 +172,30 @@ def connect(workers=None, scheduler=None, client=None, threads=None, *, device=N
     # Ctrl-C is held while the cluster starts and stops (clpde/_interrupt.py): a cluster
     # stopped half-started, or workers interrupted while they start, print pages of
     # tracebacks; it arrives once the cluster is up (or down) again.
-    with held() as state:
-        try:
-            with children_stderr(state):
-                cluster, n, per_worker = start_cluster(workers, threads, device=device,
-                                                       tasks=tasks)
-        except Exception:
-            if state.pressed.is_set():  # a worker that Ctrl-C stopped while it started
-                raise KeyboardInterrupt from None
-            raise
-        client = None
-        try:
+    cluster = client = None
+    try:
+        with held() as state:
+            try:
+                with children_stderr(state):
+                    cluster, n, per_worker = start_cluster(workers, threads, device=device,
+                                                           tasks=tasks)
+            except Exception:
+                if state.pressed.is_set():  # a worker that Ctrl-C stopped while it started
+                    raise KeyboardInterrupt from None
+                raise
             client = Client(cluster, set_as_default=False)
             if not state.pressed.is_set():
                 client.wait_for_workers(n, timeout=120)
-        except BaseException:
+        # (held() raises a Ctrl-C that came meanwhile here, into the clean-up below)
+    except BaseException:
+        with held():
             _close(client, cluster)
-            raise
-        if state.pressed.is_set():
-            _close(client, cluster)  # then held() raises KeyboardInterrupt
+        raise
     try:
         info.update(workers=n, threads=per_worker, seconds=time.perf_counter() - start)
         yield client, info
     finally:
-        with held(state):
+        with held():
             _close(client, cluster)
 
 
@@ -204,7 +204,8 @@ def _close(client, cluster) -> None:
         if client is not None:
             client.close()
     finally:
-        cluster.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def wants_gpu(client) -> bool:

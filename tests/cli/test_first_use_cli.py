@@ -269,6 +269,16 @@ def test_grow_of_a_pixel_is_a_disc(radius):
     assert clpde.grow_mask is grow_mask
 
 
+@pytest.mark.parametrize("radius", [1, 4.5, 13])
+def test_grow_is_exact_across_its_strips(rng, radius):
+    from scipy import ndimage
+
+    mask = rng.random((700, 90)) < 0.002  # strips of 256 rows: the disc crosses them
+    mask[255, 40] = mask[256, 70] = mask[0, 0] = mask[699, 89] = True
+    np.testing.assert_array_equal(grow_mask(mask, radius),
+                                  ndimage.distance_transform_edt(~mask) <= radius)
+
+
 def test_grow_keeps_soft_values_and_gives_the_ring_full_damage():
     soft = np.zeros((9, 9), np.float32)
     soft[4, 3:6] = [0.25, 0.5, 1.0]
@@ -378,8 +388,10 @@ def test_bool_images_are_binary_in_and_out():
 # ---- Ctrl-C at any moment ------------------------------------------------------------------------
 def _interrupt(argv, cwd, when):
     """Run `python -m clpde ARGV` in its own process group and send the whole group SIGINT,
-    as a terminal's Ctrl-C does: `when` is seconds after the start, or "workers" for the
-    moment the first Dask worker process exists (the cluster is starting)."""
+    as a terminal's Ctrl-C does: when "loading", the moment numpy is loaded (clpde's
+    package is loading: it loads numpy after its Ctrl-C handler; before, Python itself is
+    starting, which no program can quiet), or "workers", the moment the first Dask worker
+    process exists (the cluster is starting)."""
     import psutil
 
     env = dict(os.environ, PYTHONPATH=str(ROOT))
@@ -387,18 +399,18 @@ def _interrupt(argv, cwd, when):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
-        if when == "workers":
-            deadline = time.monotonic() + 120
-            while time.monotonic() < deadline and proc.poll() is None:
-                children = psutil.Process(proc.pid).children(recursive=True)
-                if any("spawn_main" in " ".join(c.cmdline()) for c in children
-                       if c.is_running()):
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:
+            process = psutil.Process(proc.pid)
+            if when == "workers":
+                if any("spawn_main" in " ".join(c.cmdline())
+                       for c in process.children(recursive=True) if c.is_running()):
                     break
-                time.sleep(0.02)
-            else:
-                pytest.fail("no Dask worker was started")
+            elif any("_multiarray_umath" in m.path for m in process.memory_maps()):
+                break
+            time.sleep(0.01)
         else:
-            time.sleep(when)
+            pytest.fail(f"the moment {when!r} did not come")
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=120)
     finally:
@@ -426,7 +438,7 @@ def film_inputs(tmp_path):
 
 
 def test_ctrl_c_while_clpde_loads_is_one_line(film_inputs):
-    _interrupt(["diffuse", "in.png", "out.png"], film_inputs, 0.2)
+    _interrupt(["diffuse", "in.png", "out.png"], film_inputs, "loading")
     assert not (film_inputs / "out.png").exists()
 
 
