@@ -63,7 +63,7 @@ from numpy.typing import ArrayLike, DTypeLike
 from scipy import ndimage
 
 from . import multiresolution as mr
-from ._progress import progress_bar
+from ._progress import Progress, progress_bar
 from ._state import DeviceLike, State, deprecated, renamed_keyword
 from ._validation import positive
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
@@ -646,7 +646,7 @@ class Inpainting:
     def __init__(self, image: ArrayLike, mask: ArrayLike | None = None, *,
                  channel_axis: int | None = None, alpha: bool | None = None,
                  colour: str = "channels", levels: int | None = None, device: DeviceLike = None,
-                 dtype: DTypeLike | None = None, progress: bool | None = None,
+                 dtype: DTypeLike | None = None, progress: Progress = None,
                  method: str | None = None, boxes: bool = True, seed: int | None = None,
                  precision: DTypeLike | None = None, **params: Any):
         from . import inpainting
@@ -759,6 +759,14 @@ class Inpainting:
         for y0, y1, x0, x1 in boxes:
             check_fits(runtime, (self.ncolour, y1 - y0, x1 - x0), "inpainting",
                        4 + 4 / self.ncolour, ghost=GHOST, dtype=self.dtype)
+        # A callable progress hears masked pixels done over all to do, once per box; the
+        # methods' own step counts would mix units, so inside a box they only repeat the
+        # last figure (which is where a caller's cancel gets its chance to raise).
+        report = self.progress if callable(self.progress) else None
+        done, total = 0, int(sum(self.mask[y0:y1, x0:x1].astype(bool).sum()
+                                 for y0, y1, x0, x1 in boxes))
+        inner = self.progress if report is None else (lambda *_: report(done, total))
+        self._inner_progress = inner
         for box in boxes:
             y0, y1, x0, x1 = box
             omega = np.array(self.mask[y0:y1, x0:x1], bool)
@@ -791,7 +799,7 @@ class Inpainting:
                 info.levels = max(info.levels, 1)
             elif self.method == "transport":
                 run = TransportRun(runtime, data, omega, self.p, levels=self.levels,
-                                   dtype=self.dtype, progress=self.progress, fidelity=fidelity)
+                                   dtype=self.dtype, progress=inner, fidelity=fidelity)
                 for steps, change, solved in run.states(every):
                     self._write(out, box, solved, omega)
                     yield InpaintState(0, info.steps + steps, out.copy(), change)
@@ -804,7 +812,7 @@ class Inpainting:
             else:
                 extra = {"fidelity": fidelity} if soft_mask and fidelity is not None else {}
                 solved = self.module.solve(data, omega, runtime, dtype=self.dtype,
-                                           progress=self.progress, seed=self.seed,
+                                           progress=inner, seed=self.seed,
                                            **self.params, **extra)
                 solved = np.asarray(solved, np.float64)
                 if damage is not None and not soft_mask:
@@ -819,6 +827,9 @@ class Inpainting:
             self._write(out, box, solved, omega)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
+            if report is not None:
+                done += int(omega.sum())
+                report(done, total)
         self.result = out
         self.info = info
         info.seconds = time.perf_counter() - start
@@ -844,7 +855,7 @@ class Inpainting:
             big_data[(slice(None),) + inner] = filled
             hole[inner] = part
         solved = exemplar.solve(big_data, hole, runtime, dtype=self.dtype,
-                                progress=self.progress, seed=self.seed, **options)
+                                progress=self._inner_progress, seed=self.seed, **options)
         solved = np.asarray(solved, np.float64)[(slice(None),) + inner]
         return np.where(self.mask[y0:y1, x0:x1], solved, data)
 
@@ -881,7 +892,7 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
             tol: float = 1e-4, mean_tol: float = 4e-4, check_every: int = 2,
             levels: int | None = None, colour: str = "channels", alpha: bool | None = None,
             fill: str = "biharmonic", keep_band: bool = True, device: DeviceLike = None,
-            dtype: DTypeLike | None = None, progress: bool | None = None,
+            dtype: DTypeLike | None = None, progress: Progress = None,
             snapshots: int | None = None, return_info: bool = False, method: str | None = None,
             boxes: bool = True, seed: int | None = None, precision: DTypeLike | None = None,
             **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
