@@ -115,7 +115,8 @@ class RunWidget(Container):
                 raise Cancelled
             self._relay.moved.emit(float(done or 0), float(total or 0))
 
-        worker = create_worker(function, progress)
+        # errors are ours to report (_failed); napari would re-raise them in the event loop
+        worker = create_worker(function, progress, _ignore_errors=True)
         worker.returned.connect(on_result)
         worker.errored.connect(self._failed)
         worker.finished.connect(self._finished)

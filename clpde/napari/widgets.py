@@ -201,7 +201,7 @@ class DenoiseWidget(RunWidget):
                                   max=1e6, step=0.5)
         self.weight = FloatSpinBox(label="TV weight (0: from sigma)", value=0.0, min=0.0,
                                    max=1e6, step=0.01)
-        self.steps = SpinBox(label="flow steps", value=100, min=1, max=100000)
+        self.steps = SpinBox(label="flow steps", value=100, min=1, max=10_000_000)
         self.preview = CheckBox(label="preview the slice in view only", value=False)
         self.noise = Label(value="")
         self.extend([self.image, self.flow, self.sigma, self.weight, self.steps, self.preview,
