@@ -63,5 +63,8 @@ def torus() -> LayerData:
                                   minor_sections=32)
     rng = np.random.default_rng(0)
     values = mesh.vertices[:, 2] + 0.15 * rng.standard_normal(len(mesh.vertices))
-    return [((np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.int32),
-              values), {"name": "torus", "colormap": "viridis"}, "surface")]
+    # napari orders coordinates (z, y, x): reversed, with the faces' winding reversed too so
+    # that normals still point out, napari's default 3-D view looks down the torus's axis
+    vertices = np.asarray(mesh.vertices[:, ::-1], np.float32)
+    faces = np.asarray(mesh.faces[:, ::-1], np.int32)
+    return [((vertices, faces, values), {"name": "torus", "colormap": "viridis"}, "surface")]
