@@ -53,11 +53,12 @@ def read_film(path: str | list[str]) -> LayerData:
     -------
     list of (data, attributes, "image")
     """
-    from clpde.video import read_video
+    from clpde.film.container import FilmReader
 
     one = _one_path(path)
-    frames, rate = read_video(one)
-    meta = {"clpde_film": str(one), "frame_rate": float(rate)}
+    reader = FilmReader(one)
+    frames = np.stack(list(reader))
+    meta = {"clpde_film": str(one), "frame_rate": float(reader.info.rate)}
     return [(frames, {"name": Path(one).stem, "rgb": frames.ndim == 4,
                       "metadata": meta}, "image")]
 
