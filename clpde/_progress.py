@@ -11,15 +11,26 @@ Device work is enqueued asynchronously, so a bar over enqueued steps would race 
 and then wait in silence. Given the device `queue`, `progress_range` waits for the queue
 every few steps, as many as take about `SYNC_S` seconds, so the bar moves with the work
 actually done.
+
+``progress`` may also be a callable, ``progress(done, total)``: it is called instead of
+drawing a bar each time the run advances (``total`` is None when the length is unknown), and
+it may stop the run by raising any exception, which propagates to the caller. This is how a
+graphical front end (clpde's napari plugin) shows progress and cancels a run.
 """
 
 from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
 
 from tqdm.auto import tqdm
+
+from .errors import InputError
+
+# What every `progress=` argument of clpde accepts.
+Progress = bool | None | Callable[[float, float | None], Any]
 
 # Seconds a run with progress=None lasts before its bar appears.
 DELAY_S = 2.0
@@ -50,15 +61,65 @@ def _delay(progress: bool | None) -> float:
     return DELAY_S if progress is None else 0.0
 
 
-def progress_bar(progress: bool | None, total: int, desc: str, *, long_run: bool = True,
-                 **options) -> tqdm:
+class CallbackBar:
+    """The part of tqdm's interface that clpde's runs use, reporting to a callable.
+
+    Runs call ``update``; the callable hears ``(done, total)`` after each, and an exception it
+    raises (a cancel) leaves the run at once. ``disable`` is False so that runs which only
+    synchronise the device for a visible bar do so for the callable too.
+    """
+
+    disable = False
+
+    def __init__(self, callback: Callable, total: float | None = None,
+                 iterable: Iterable | None = None, initial: float = 0, **_options):
+        self.callback, self.total, self.iterable, self.n = callback, total, iterable, initial
+
+    def update(self, n: float = 1) -> None:
+        self.n += n
+        self.callback(self.n, self.total)
+
+    def __iter__(self) -> Iterator:
+        for item in self.iterable:
+            yield item
+            self.update(1)
+
+    def __enter__(self) -> CallbackBar:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        pass
+
+    def set_postfix_str(self, *_args, **_kwargs) -> None:
+        pass
+
+    def write(self, text: str) -> None:
+        print(text, file=sys.stderr)
+
+
+def check_progress(progress: Progress) -> None:
+    """One clear line for a `progress` argument that is neither a flag nor a callable."""
+    if progress is not None and not isinstance(progress, bool) and not callable(progress):
+        raise InputError(f"progress must be True, False, None or a callable "
+                         f"progress(done, total), not {progress!r}")
+
+
+def progress_bar(progress: Progress, total: float | None, desc: str, *, long_run: bool = True,
+                 **options) -> tqdm | CallbackBar:
     """A tqdm bar over `total` units, drawn by the policy of `bar_disabled` and, with
-    progress=None, only after `DELAY_S` seconds."""
+    progress=None, only after `DELAY_S` seconds; a `CallbackBar` when `progress` is a
+    callable."""
+    check_progress(progress)
+    if callable(progress):
+        return CallbackBar(progress, total, **options)
     options.setdefault("delay", _delay(progress))
     return tqdm(total=total, desc=desc, disable=bar_disabled(progress, long_run), **options)
 
 
-def progress_range(progress: bool | None, steps: int, desc: str, *, long_run: bool = True,
+def progress_range(progress: Progress, steps: int, desc: str, *, long_run: bool = True,
                    queue=None, **options) -> Iterator[int]:
     """range(steps) under a bar drawn by the policy of `progress_bar`.
 

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import State
+from .._progress import Progress, State
 from ..errors import InputError
 from ..fields import check_fits
 from ..imagedata import (
@@ -273,7 +273,7 @@ class Inpainting:
     def __init__(self, image: ArrayLike, mask: ArrayLike | None = None, *,
                  channel_axis: int | None = None, alpha: bool | None = None,
                  colour: str = "channels", levels: int | None = None, device: DeviceLike = None,
-                 dtype: DTypeLike | None = None, progress: bool | None = None,
+                 dtype: DTypeLike | None = None, progress: Progress = None,
                  method: str | None = None, boxes: bool = True, seed: int | None = None,
                  grow: float = 0, **params: Any):
 
@@ -392,6 +392,14 @@ class Inpainting:
         for y0, y1, x0, x1 in boxes:
             check_fits(runtime, (self.ncolour, y1 - y0, x1 - x0), "inpainting",
                        4 + 4 / self.ncolour, ghost=GHOST, dtype=self.dtype)
+        # A callable progress hears masked pixels done over all to do, once per box; the
+        # methods' own step counts would mix units, so inside a box they only repeat the
+        # last figure (which is where a caller's cancel gets its chance to raise).
+        report = self.progress if callable(self.progress) else None
+        done, total = 0, sum(int(np.count_nonzero(self.mask[y0:y1, x0:x1]))
+                             for y0, y1, x0, x1 in boxes)
+        self._inner_progress = self.progress if report is None else (
+            lambda *_: report(done, total))
         for box in boxes:
             y0, y1, x0, x1 = box
             omega = np.array(self.mask[y0:y1, x0:x1], bool)
@@ -423,6 +431,9 @@ class Inpainting:
             self._write(out, box, solved, omega)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
+            if report is not None:
+                done += int(omega.sum())
+                report(done, total)
         self.result = out
         self.info = info
         info.seconds = time.perf_counter() - start
@@ -433,10 +444,11 @@ class Inpainting:
         """The method's run on one box: its own `run` when it has one (states along the
         way), else its `solve` as one step (registry.py has the protocol)."""
         if hasattr(self.module, "run"):
-            return self.module.run(data, omega, runtime, dtype=self.dtype, progress=self.progress,
+            return self.module.run(data, omega, runtime, dtype=self.dtype,
+                                   progress=self._inner_progress,
                                    seed=self.seed, fidelity=fidelity, **self.params)
         return SolveRun(self.module, data, omega, runtime, damage, fidelity, dtype=self.dtype,
-                        progress=self.progress, seed=self.seed, **self.params)
+                        progress=self._inner_progress, seed=self.seed, **self.params)
 
     def _voted_box(self, runtime, data, omega, info):
         """The box filled by the self-validated choice (inpainting/validate.py); what chose
@@ -484,7 +496,7 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
             tol: float = 1e-4, mean_tol: float = 4e-4, check_every: int = 2,
             levels: int | None = None, colour: str = "channels", alpha: bool | None = None,
             fill: str = "biharmonic", keep_band: bool = True, device: DeviceLike = None,
-            dtype: DTypeLike | None = None, progress: bool | None = None,
+            dtype: DTypeLike | None = None, progress: Progress = None,
             snapshots: int | None = None, return_info: bool = False, method: str | None = None,
             boxes: bool = True, seed: int | None = None, grow: float = 0,
             **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
@@ -553,8 +565,10 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         The OpenCL device, as for `clpde.use_device`.
     dtype : {float32, float64}, optional
         The device's arithmetic (float32 by default).
-    progress : bool, optional
-        Draw a progress bar; by default only for long runs on a terminal.
+    progress : bool or callable, optional
+        Draw a progress bar; by default only for long runs on a terminal. A callable
+        ``progress(done, total)`` hears the masked pixels filled so far and in all, after
+        each box, and may stop the run by raising.
     snapshots : int, optional
         Also keep the intermediate states (InpaintState) every N steps of the finest level.
     return_info : bool, optional

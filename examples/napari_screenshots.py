@@ -1,0 +1,106 @@
+"""Screenshots of each napari widget after a run on the sample data, for the README.
+
+Run under a display (a virtual one will do):  xvfb-run -a python examples/napari_screenshots.py
+Writes docs/images/napari/<widget>.png.
+"""
+
+import time
+from pathlib import Path
+
+import napari
+import numpy as np
+from qtpy.QtWidgets import QApplication
+
+from clpde.napari import samples, widgets
+
+OUT = Path(__file__).resolve().parents[1] / "docs" / "images" / "napari"
+
+
+def finish(widget, app):
+    while widget.worker is not None:
+        app.processEvents()
+        time.sleep(0.01)
+    for _ in range(20):
+        app.processEvents()
+
+
+def shoot(viewer, app, name, angles=None):
+    viewer.window._qt_window.resize(1500, 820)
+    viewer.reset_view()
+    if angles is not None:
+        viewer.camera.angles = angles
+        viewer.camera.zoom *= 0.55  # reset_view frames the grid's flat extent, not the turn
+    for _ in range(20):
+        app.processEvents()
+    OUT.mkdir(parents=True, exist_ok=True)
+    viewer.screenshot(str(OUT / f"{name}.png"), canvas_only=False, flash=False)
+    print("wrote", OUT / f"{name}.png")
+
+
+def add(viewer, layer_data):
+    return [getattr(viewer, f"add_{kind}")(data, **attrs) for data, attrs, kind in layer_data]
+
+
+def inpaint(app):
+    viewer = napari.Viewer(title="clpde: inpaint")
+    image, labels = add(viewer, samples.damaged_astronaut())
+    w = widgets.InpaintWidget(viewer)
+    viewer.window.add_dock_widget(w, name="clpde inpaint")
+    w.image.value, w.mask.value = image, labels
+    w.run()
+    finish(w, app)
+    labels.visible = False
+    viewer.grid.enabled = True  # the damaged photo beside the result
+    shoot(viewer, app, "inpaint")
+    viewer.close()
+
+
+def denoise(app):
+    viewer = napari.Viewer(title="clpde: denoise")
+    rng = np.random.default_rng(0)
+    photo, _, _ = samples.clpde.data.damaged_astronaut()
+    grey = photo[20:276, 100:356].mean(axis=2).astype(np.float32) / 255
+    noisy = np.clip(grey + rng.normal(0, 0.08, grey.shape), 0, 1).astype(np.float32)
+    layer = viewer.add_image(noisy, name="noisy")
+    w = widgets.DenoiseWidget(viewer)
+    viewer.window.add_dock_widget(w, name="clpde denoise")
+    w.image.value, w.flow.value = layer, "tv-denoise"
+    w.run()
+    finish(w, app)
+    viewer.grid.enabled = True
+    shoot(viewer, app, "denoise")
+    viewer.close()
+
+
+def track(app):
+    viewer = napari.Viewer(title="clpde: track")
+    image, labels = add(viewer, samples.tracking_sequence())
+    w = widgets.TrackWidget(viewer)
+    viewer.window.add_dock_widget(w, name="clpde track")
+    w.image.value, w.labels.value = image, labels
+    viewer.dims.set_current_step(0, 0)  # the object is drawn on the first frame
+    w.run()
+    finish(w, app)
+    labels.visible = False
+    viewer.dims.set_current_step(0, 12)
+    shoot(viewer, app, "track")
+    viewer.close()
+
+
+def surface(app):
+    viewer = napari.Viewer(title="clpde: surface flows", ndisplay=3)
+    layer, = add(viewer, samples.torus())
+    w = widgets.SurfaceWidget(viewer)
+    viewer.window.add_dock_widget(w, name="clpde surface")
+    w.surface.value, w.flow.value, w.amount.value, w.resolution.value = layer, "heat", 0.05, 64
+    w.run()
+    finish(w, app)
+    viewer.grid.enabled = True  # the noisy values beside the smoothed ones
+    shoot(viewer, app, "surface")
+    viewer.close()
+
+
+if __name__ == "__main__":
+    app = QApplication.instance() or QApplication([])
+    for make in (inpaint, denoise, track, surface):
+        make(app)
