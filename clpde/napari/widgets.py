@@ -68,8 +68,8 @@ def inpaint_planes(image: np.ndarray, mask: np.ndarray, channel_axis: int | None
     out = np.array(image, copy=True)
     planes = [i for i in range(spatial[0]) if np.any(mask[i])]
     for k, i in enumerate(planes):
-        out[i] = inpaint_planes(image[i], mask[i], channel_axis, lambda *_: progress(
-            k, len(planes)), **options)
+        out[i] = inpaint_planes(image[i], mask[i], channel_axis,
+                                lambda *_, k=k: progress(k, len(planes)), **options)
         progress(k + 1, len(planes))
     return out
 
@@ -157,7 +157,7 @@ class InpaintWidget(RunWidget):
         margin = 24 + int(self.grow.value)
         lo = np.maximum(changed.min(axis=0) - margin, 0)
         hi = np.minimum(changed.max(axis=0) + margin + 1, mask.shape)
-        box = tuple(slice(a, b) for a, b in zip(lo, hi))
+        box = tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))
         method = self._method()
         result = self.viewer.layers[name]
 
@@ -344,7 +344,7 @@ def propagate_labels(frames: np.ndarray, seeds: np.ndarray, start: int, directio
                                        progress=lambda d, _t, base=done: progress(base + d,
                                                                                   total))
             done += len(order)
-            for index, mask in zip(order, masks):
+            for index, mask in zip(order, masks, strict=True):
                 out[index][mask & (out[index] == 0)] = label
             confidence[order] = np.minimum(confidence[order], score)
     return out, confidence

@@ -17,7 +17,6 @@ if MISSING is not None:
 
 from qtpy.QtCore import QThreadPool, QTimer  # noqa: E402
 
-import clpde  # noqa: E402
 from clpde.napari import readers, widgets  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]

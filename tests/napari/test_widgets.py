@@ -3,7 +3,6 @@ into a layer, gives the library call's array."""
 
 import numpy as np
 import pytest
-
 from qt_check import MISSING
 
 if MISSING is not None:
