@@ -16,7 +16,8 @@ from magicgui.widgets import CheckBox, ComboBox, FloatSpinBox, Label, SpinBox
 from napari.layers import Image, Labels, Shapes, Surface
 
 import clpde
-from clpde.inpainting import available as available_methods
+from clpde.inpainting.registry import available as available_methods
+from clpde.planar.rof import estimate_sigma
 
 from ._runner import RunWidget, current_index, layer_choices
 
@@ -216,7 +217,7 @@ class DenoiseWidget(RunWidget):
             self.noise.value = ""
             return
         image, channel_axis = self._plane(layer, preview=True)
-        sigma = clpde.rof.estimate_sigma(image, channel_axis=channel_axis)
+        sigma = estimate_sigma(image, channel_axis=channel_axis)
         self.noise.value = f"estimated noise sigma: {np.round(sigma, 3)}"
 
     def _plane(self, layer: Image, preview: bool) -> tuple[np.ndarray, int | None]:
