@@ -31,7 +31,8 @@ def _gaps(obj, name: str) -> list[str]:
     documented = {part.strip().lstrip("*") for entry in doc["Parameters"]
                   for part in entry.name.split(",")}
     out = [f"{name}({p.name})" for p in inspect.signature(target).parameters.values()
-           if p.name not in ("self", "cls") and p.name not in documented]
+           if p.name not in ("self", "cls") and not p.name.startswith("_")
+           and p.name not in documented]
     if not inspect.isclass(obj):
         out += [f"{name}:{section}" for section in ("Returns", "Examples") if not doc[section]]
     return out
