@@ -325,7 +325,7 @@ def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
     if p not in (1, 2):
         raise InputError(f"p must be 1 or 2, not {p!r}")
     data = np.asarray(u, dtype=np.float64)
-    band_form = data.ndim == 2 and surf._band_form_channels(data) is not None
+    band_form = data.ndim == 2 and surf.band.form_channels(data) is not None
     if data.ndim != 4 and not band_form:
         raise InputError("harmonic maps need vector data (channels, nz, ny, nx), or its band "
                          f"form (channels, {surf.ext_band.n}), got shape {data.shape}")
