@@ -9,11 +9,18 @@ vectorised and good enough for figures of smooth data on surfaces.
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InputError
 from ..io.images import write_bytes
+
+if TYPE_CHECKING:  # annotations only: trimesh is imported where a mesh is made
+    import trimesh
+
+    from .implicit import ImplicitSurface
 
 # A perceptually ordered colour ramp (dark blue -> teal -> green -> yellow), sampled at nine
 # stops and interpolated linearly: enough for pseudo-colour pictures of scalar data.
@@ -24,7 +31,8 @@ _RAMP = np.array([
 ])
 
 
-def colormap(values, vmin=None, vmax=None) -> np.ndarray:
+def colormap(values: ArrayLike, vmin: float | None = None,
+             vmax: float | None = None) -> np.ndarray:
     """(n, 3) RGB in [0, 1] for scalar values, mapped through the colour ramp."""
     v = np.asarray(values, dtype=np.float64)
     lo = np.nanmin(v) if vmin is None else vmin
@@ -35,7 +43,8 @@ def colormap(values, vmin=None, vmax=None) -> np.ndarray:
     return _RAMP[i] * (1 - f) + _RAMP[i + 1] * f
 
 
-def to_mesh(surf, u=None, *, vmin=None, vmax=None, interpolation="tricubic"):
+def to_mesh(surf: ImplicitSurface, u: ArrayLike | None = None, *, vmin: float | None = None,
+            vmax: float | None = None, interpolation: str = "tricubic") -> trimesh.Trimesh:
     """Marching cubes of psi = 0 as a trimesh.Trimesh, with u sampled at the vertices as
     vertex colours: scalars through the colour ramp, 3-channel data as RGB (clipped to
     [0, 1]). The sampled values are kept in mesh.vertex_attributes['u']."""
@@ -63,7 +72,7 @@ def to_mesh(surf, u=None, *, vmin=None, vmax=None, interpolation="tricubic"):
     return mesh
 
 
-def export_mesh(mesh, path) -> None:
+def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     """Write a mesh as PLY, GLB, OBJ or STL (by extension), atomically."""
     path = os.fspath(path)
     ext = os.path.splitext(path)[1].lower().lstrip(".")
@@ -137,7 +146,9 @@ def view_rotation(azimuth=30.0, elevation=20.0) -> np.ndarray:
     return rx @ to_cam @ rz.T
 
 
-def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0)):
+def render_mesh(mesh: trimesh.Trimesh, size: int = 512, azimuth: float = 30.0,
+                elevation: float = 20.0,
+                background: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> np.ndarray:
     """(size, size, 3) uint8 picture of a mesh with vertex colours (grey if none)."""
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
@@ -193,8 +204,11 @@ def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1
     return np.rint(255 * np.clip(image, 0, 1)).reshape(size, size, 3).astype(np.uint8)
 
 
-def render(surf_or_mesh, u=None, path=None, *, views=((30.0, 20.0),), size=512, vmin=None,
-           vmax=None, colour_bar: bool = True):
+def render(surf_or_mesh: ImplicitSurface | trimesh.Trimesh, u: ArrayLike | None = None,
+           path: str | os.PathLike | None = None, *,
+           views: tuple[tuple[float, float], ...] = ((30.0, 20.0),), size: int = 512,
+           vmin: float | None = None, vmax: float | None = None,
+           colour_bar: bool = True) -> np.ndarray:
     """Picture(s) of data on a surface (an ImplicitSurface with u, or a trimesh.Trimesh).
 
     views: (azimuth, elevation) pairs in degrees, placed side by side. Scalar data gets a
