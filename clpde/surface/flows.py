@@ -33,9 +33,16 @@ if TYPE_CHECKING:
 class SurfaceDenoiseInfo:
     """What a surface denoise_tv run did (the surface's counterpart of clpde.DenoiseInfo).
 
-    steps: time steps run, of length dt; lam_history: the dynamic lambda after each of its
-    updates (every 10 steps; None for a fixed lam); residual_variance: mean (u - u0)^2 over
-    the surface (None for a fixed lam).
+    Parameters
+    ----------
+    steps : int
+        Time steps run.
+    dt : float
+        Their length.
+    lam_history : list of float, optional
+        The dynamic lambda after each of its updates (every 10 steps; None for a fixed lam).
+    residual_variance : float, optional
+        Mean (u - u0)^2 over the surface (None for a fixed lam).
     """
 
     steps: int
@@ -471,11 +478,33 @@ def principal_directions(surf: ImplicitSurface,
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Principal curvature directions and curvatures of the surface, extended along normals.
 
-    Returns (major, minor, curvatures): two (3, nz, ny, nx) unit tangent fields (major = the
-    larger curvature) and a (2, nz, ny, nx) array (larger, smaller), computed at every cell of
-    the extension band (constant along normals for a distance function). Directions are
-    defined up to sign, which the flows along them ignore (the flux (d.Pv)d is even in d);
-    sample them at nodes rather than interpolating across sign flips. Zeros off the band."""
+    Directions are defined up to sign, which the flows along them ignore (the flux (d.Pv)d is
+    even in d); sample them at nodes rather than interpolating across sign flips.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+
+    Returns
+    -------
+    major, minor : ndarray
+        (3, nz, ny, nx) unit tangent fields (major = the larger curvature), computed at every
+        cell of the extension band (constant along normals for a distance function); zeros
+        off the band.
+    curvatures : ndarray
+        (2, nz, ny, nx): the larger and the smaller principal curvature.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.surface import ImplicitSurface, principal_directions
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> major, minor, curvatures = principal_directions(s)
+    >>> on = np.abs(s.psi) < 0.05
+    >>> bool(np.allclose(curvatures[:, on], 1.0, atol=0.1))   # a unit sphere: k1 = k2 = 1
+    True
+    """
     g, q = surf.grid, surf.runtime.queue
     band = surf.ext_band
     n = max(band.n, 1)

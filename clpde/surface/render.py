@@ -33,7 +33,26 @@ _RAMP = np.array([
 
 def colormap(values: ArrayLike, vmin: float | None = None,
              vmax: float | None = None) -> np.ndarray:
-    """(n, 3) RGB in [0, 1] for scalar values, mapped through the colour ramp."""
+    """RGB colours of scalar values, mapped through clpde's colour ramp.
+
+    Parameters
+    ----------
+    values : array_like
+        (n,) scalars (NaN allowed).
+    vmin, vmax : float, optional
+        The values mapped to the ramp's ends (default: the values' finite range).
+
+    Returns
+    -------
+    ndarray
+        (n, 3) RGB in [0, 1].
+
+    Examples
+    --------
+    >>> from clpde.surface import colormap
+    >>> colormap([0.0, 0.5, 1.0]).shape
+    (3, 3)
+    """
     v = np.asarray(values, dtype=np.float64)
     lo = np.nanmin(v) if vmin is None else vmin
     hi = np.nanmax(v) if vmax is None else vmax
