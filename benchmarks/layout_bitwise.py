@@ -2,7 +2,7 @@
 path, saved for a bitwise check across the package's re-rooming (the other three *_bitwise.py
 scripts cover the transport, the flows and the surfaces).
 
-    PYTHONPATH=<old tree> python benchmarks/layout_bitwise.py save out/lbit/a
+    PYTHONPATH=<old tree> python benchmarks/layout_bitwise.py save out/lbit/a [video]
     PYTHONPATH=<new tree> python benchmarks/layout_bitwise.py save out/lbit/b
     python benchmarks/layout_bitwise.py compare out/lbit/a out/lbit/b
 
@@ -10,6 +10,8 @@ The script runs against either tree: where a function moved or a keyword was ren
 takes whichever spelling the tree has. The film is inpainted by the film path's per-task
 function (what a Dask worker runs on its frames) and written by the video writer; the
 check compares the frames (before encoding, the writer's own digest) and the file's bytes.
+A film is also read by the tracker's frame reader and tracked (`save DIR video`: that part
+alone).
 """
 
 import hashlib
@@ -111,6 +113,22 @@ def _film(res: dict, out: Path) -> None:
                                             np.uint8)
 
 
+def _tracking_video(res: dict, out: Path) -> None:
+    """A film read by the tracker's frame reader, and tracked."""
+    import clpde
+
+    read_frames = _first("clpde.io.frames:read_frames", "clpde.sequence_io:read_frames")
+    writer = _first("clpde.io.video:VideoWriter", "clpde.video:VideoWriter")
+    frames, first = _sequence()
+    path = out / "track.mp4"
+    with writer(path, 25) as w:
+        for frame in frames:
+            w.write(np.repeat((np.clip(frame, 0, 1) * 255).astype(np.uint8)[..., None], 3, -1))
+    grey = read_frames(path)
+    res["track_video_frames"] = grey
+    res["track_video_masks"] = clpde.track(grey, first, progress=False)
+
+
 def save(out: Path) -> None:
     import clpde
 
@@ -118,9 +136,13 @@ def save(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     print("saving results of", clpde.__file__)
     res: dict = {}
-    for part in (_inpainting, _tracking, _regions):
-        part(res)
-    _film(res, out)
+    parts = sys.argv[3].split(",") if len(sys.argv) > 3 else ["all"]
+    if parts == ["all"]:
+        for part in (_inpainting, _tracking, _regions):
+            part(res)
+        _film(res, out)
+    if "all" in parts or "video" in parts:
+        _tracking_video(res, out)
     for name, value in res.items():
         np.save(out / f"{name}.npy", np.asarray(value))
 
@@ -136,7 +158,7 @@ def compare(a: Path, b: Path) -> int:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["save"] and len(sys.argv) == 3:
+    if sys.argv[1:2] == ["save"] and len(sys.argv) in (3, 4):
         save(Path(sys.argv[2]))
     elif sys.argv[1:2] == ["compare"] and len(sys.argv) == 4:
         sys.exit(compare(Path(sys.argv[2]), Path(sys.argv[3])) > 0)

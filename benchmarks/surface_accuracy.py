@@ -149,7 +149,7 @@ def _time_size(n, steps):
     import pyopencl.array as cla
 
     from clpde.surface import ImplicitSurface
-    from clpde.surface.flows import BandFlow, _offsets
+    from clpde.surface.band import BandFlow, _offsets
 
     # from_function pads the unit sphere's box by 8 cells a side: n cells in all
     spacing = 2.0 / (n - 17)
@@ -246,7 +246,7 @@ def _storage_size(n, steps, reps):
 
     from clpde.bricks import BRICK_SIZES
     from clpde.surface import ImplicitSurface
-    from clpde.surface.flows import BandFlow, BrickFlow, _offsets, _signs
+    from clpde.surface.band import BandFlow, BrickFlow, _offsets, _signs
 
     surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))
     g, q = surf.grid, surf.runtime.queue

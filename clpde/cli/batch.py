@@ -92,7 +92,7 @@ def command_options(command: str, argv: list[str]) -> dict:
         detail = lines[-1].split("error: ", 1)[-1] if lines else "invalid options"
         raise InputError(f"clpde {command}: {detail}") from None
     options = task_options(parsed)
-    if command == "surface":  # the flow is batch's --flow
+    if command in ("surface", "diffuse"):  # the flow is batch's own --flow
         del options["flow"]
     if command in ("track", "surface"):  # each output folder is new: the batch replaces it
         del options["overwrite"]

@@ -483,37 +483,90 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
                  progress: bool | None = None, storage: str = "lists") -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
-    phi: (nz, ny, nx) signed distance of the surface (world units, negative inside; other
-    level-set functions are reinitialised first), with grid spacing `spacing` and world
-    (x, y, z) of phi[0, 0, 0] at `origin`.
-    region: a bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
-    origin)`, or of `mesh=`, any mesh of the same surface in world coordinates: the one phi
-    was made from, say), integer vertex labels (one region per label), an implicit function
-    Phi-hat of phi's shape (the region is where Phi-hat < 0 on the surface; off the surface it is
-    replaced by its value at the closest surface point, which keeps the region and tracks
-    its boundary more accurately), or a list of such functions.
-    beta: outward normal speed of the surface: a number, 'mean-curvature' (speed -weight
-    (k1 + k2): mean curvature flow), 'gaussian' (speed -weight max(K, 0) sign(k1 + k2): elliptic
-    parts move toward their centres of curvature, so folds flatten), 'morph' (speed
-    toward target=, a signed distance volume: -weight (target - phi)), an array of phi's
-    shape, a callable f(x, y, z) giving one (world coordinates, broadcastable arrays), or a
-    time-dependent callable f(x, y, z, t) (four positional parameters): re-evaluated and
-    re-uploaded once per block of `reinit_every` steps, at the block's middle time, and held
-    for the block (the midpoint rule; the block shrinks until the sampled speed's stable
-    step fits). velocity=(vx, vy, vz): translate instead.
-    t: final time; saves: number of saved intervals (frames at t * k / saves, k = 0..saves)
-    or a sequence of times in [0, t]. max_speed: clamp |beta| (world units) where the
-    curvature of creases finer than the grid would otherwise set a tiny time step.
+    Parameters
+    ----------
+    phi : array_like
+        (nz, ny, nx) signed distance of the surface (world units, negative inside; other
+        level-set functions are reinitialised first).
+    region : array_like or list
+        A bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
+        origin)`, or of `mesh`), integer vertex labels (one region per label), an implicit
+        function Phi-hat of phi's shape (the region is where Phi-hat < 0 on the surface;
+        off the surface it is replaced by its value at the closest surface point), or a
+        list of such functions.
+    beta : float or str or array_like or callable, optional
+        Outward normal speed of the surface: a number; 'mean-curvature' (speed -weight
+        (k1 + k2)); 'gaussian' (speed -weight max(K, 0) sign(k1 + k2): folds flatten);
+        'morph' (toward `target`: -weight (target - phi)); an array of phi's shape; a
+        callable f(x, y, z) (world coordinates); or f(x, y, z, t), re-evaluated once per
+        block of `reinit_every` steps at the block's middle time (the midpoint rule).
+    t : float, optional
+        The final time.
+    spacing : float, optional
+        The grid spacing of phi (world units).
+    saves : int or iterable of float, optional
+        The number of saved intervals (frames at t * k / saves, k = 0..saves), or a
+        sequence of times in [0, t].
+    origin : array_like, optional
+        World (x, y, z) of phi[0, 0, 0].
+    mesh : trimesh.Trimesh, optional
+        Any mesh of the same surface in world coordinates (the one phi was made from, say)
+        that a vertex mask or labels in `region` refer to.
+    palette : array_like, optional
+        (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
+        clpde's palette; grey where no region is).
+    target : array_like, optional
+        The signed distance volume that beta='morph' moves toward.
+    velocity : array_like, optional
+        (vx, vy, vz): translate the surface instead of moving it by beta.
+    weight : float, optional
+        The factor of the curvature and morph speeds.
+    band_width : float, optional
+        Half-width in cells of the band that is stepped.
+    reinit_every : int, optional
+        Steps per block; the level sets are reinitialised once the surface may have moved
+        that many CFL steps.
+    reinit_iterations : int, optional
+        Iterations of a reinitialisation.
+    cfl : float, optional
+        The CFL number of the steps.
+    max_speed : float, optional
+        Clamp |beta| (world units) where creases finer than the grid would set a tiny step.
+    keep_volumes : bool, optional
+        Keep the level sets Phi and Phi-hat in each frame.
+    device : str or int or Runtime, optional
+        The OpenCL device, as for `clpde.use_device`.
+    dtype : {float32, float64}, optional
+        The device's arithmetic.
+    progress : bool, optional
+        Draw a progress bar (of simulated time); by default only on a terminal.
+    storage : {'lists', 'bricks'}, optional
+        Dense padded volumes with the band as index lists, or dense bricks of the band only
+        (memory in proportion to the band; docs/regions.md).
 
-    palette: (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
-    clpde's palette; where no region is, grey).
+    Returns
+    -------
+    list of RegionFrame
+        One per saved time: the mesh (trimesh, per-vertex region colours), face_labels,
+        boundary points and (keep_volumes) the level sets.
 
-    storage: "lists" (dense padded volumes on the device, the band as index lists) or
-    "bricks" (dense bricks of the band only, kept up on the device: memory in proportion to
-    the band; see clpde.regions.bricks and docs/regions.md for the measurements).
+    Raises
+    ------
+    InputError
+        For a phi without a surface, regions or speeds that cannot be used, or a surface
+        that reaches the volume's border.
 
-    Returns a RegionFrame per saved time: mesh (trimesh, per-vertex region colours),
-    face_labels, boundary points, and (keep_volumes=True) the level sets.
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> ax = (np.arange(40) - 19.5) * 0.1
+    >>> z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
+    >>> phi = np.sqrt(x**2 + y**2 + z**2) - 0.6
+    >>> frames = clpde.track_region(phi, 0.2 - z, beta=0.5, t=0.2, spacing=0.1,
+    ...                             origin=(ax[0],) * 3, progress=False)
+    >>> len(frames), frames[-1].area() > frames[0].area()
+    (2, True)
     """
     phi = np.asarray(phi)
     if phi.ndim != 3 or min(phi.shape) < 8:

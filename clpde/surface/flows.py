@@ -33,9 +33,16 @@ if TYPE_CHECKING:
 class SurfaceDenoiseInfo:
     """What a surface denoise_tv run did (the surface's counterpart of clpde.DenoiseInfo).
 
-    steps: time steps run, of length dt; lam_history: the dynamic lambda after each of its
-    updates (every 10 steps; None for a fixed lam); residual_variance: mean (u - u0)^2 over
-    the surface (None for a fixed lam).
+    Parameters
+    ----------
+    steps : int
+        Time steps run.
+    dt : float
+        Their length.
+    lam_history : list of float, optional
+        The dynamic lambda after each of its updates (every 10 steps; None for a fixed lam).
+    residual_variance : float, optional
+        Mean (u - u0)^2 over the surface (None for a fixed lam).
     """
 
     steps: int
@@ -278,8 +285,45 @@ class _DynamicLambda:
 def tv(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *,
        eps: float = 1.0, weighted: bool = False, alternate: bool = True,
        progress: bool | None = None) -> np.ndarray:
-    """Intrinsic anisotropic (total variation) flow (4.10) for time t; eps (world gradient
-    units) regularises |P grad u| so the explicit step stays bounded (dt <= h^2 eps / 6)."""
+    """Intrinsic anisotropic (total variation) flow (4.10) for time t.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+    u : array_like
+        Data on the surface, dense or in band form (as for `heat`); returned in kind.
+    t : float
+        The evolution time.
+    dt : float, optional
+        The time step; 0.8 of `stability_limit` by default.
+    eps : float, optional
+        Regularisation of |P grad u| (world gradient units), so that the explicit step stays
+        bounded (dt <= h^2 eps / 6).
+    weighted : bool, optional
+        The flux weighted by |grad psi|, as for `heat`.
+    alternate : bool, optional
+        Cycle the one-sided differences, as for `heat`.
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+
+    Returns
+    -------
+    ndarray
+        u after time t, in u's form.
+
+    Raises
+    ------
+    InputError
+        For data of another shape, non-finite values in the band or an unstable dt.
+
+    Examples
+    --------
+    >>> from clpde.surface import ImplicitSurface, tv
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> tv(s, s.field(lambda x, y, z: z), 0.01).shape == s.shape
+    True
+    """
     return _run(surf, u, t, dt, "tv", p=1, eps=eps, weighted=weighted, alternate=alternate,
                 progress=progress)[0]
 
@@ -290,14 +334,57 @@ def denoise_tv(surf: ImplicitSurface, u: ArrayLike, sigma: float | None = None, 
                return_info: bool = False) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
     """TV denoising on the surface with a fidelity term (C.1).
 
-    Give the noise level sigma for the dynamic lambda of (C.2) (updated on the device every
-    10 steps, never read back while stepping; capped, with a warning, where it would make
-    dt unstable), or a fixed lam. The discrete (C.2) settles at a residual variance of
-    1.2-1.6 sigma^2 for noise at the grid's scale; correct_lambda (default) scales it by a
-    factor that moves until the residual variance is sigma^2, the constraint (C.2) comes
-    from (kernels/surface/flows.cl, tv_lambda_update); correct_lambda=False is the plain formula.
-    With return_info, also returns a SurfaceDenoiseInfo with the residual variance (mean of
-    (u - u0)^2 over the surface) and the lambda history."""
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+    u : array_like
+        Noisy data on the surface, dense or in band form (as for `heat`).
+    sigma : float, optional
+        The noise level, for the dynamic lambda of (C.2): updated on the device every 10
+        steps, never read back while stepping, capped (with a warning) where it would make
+        dt unstable. Give it or `lam`.
+    t : float, optional
+        The evolution time.
+    dt : float, optional
+        The time step; 0.8 of `stability_limit` by default.
+    lam : float, optional
+        A fixed fidelity weight instead of `sigma`.
+    eps : float, optional
+        Regularisation of |P grad u|, as for `tv`.
+    alternate : bool, optional
+        Cycle the one-sided differences, as for `heat`.
+    correct_lambda : bool, optional
+        Scale the dynamic lambda by a factor that moves until the residual variance is
+        sigma^2, the constraint (C.2) comes from (the discrete (C.2) alone settles above it,
+        docs/surface.md); False is the plain formula (kernels/surface/flows.cl,
+        tv_lambda_update).
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    return_info : bool, optional
+        Also return a SurfaceDenoiseInfo: steps, dt, the lambda history and the residual
+        variance (mean of (u - u0)^2 over the surface).
+
+    Returns
+    -------
+    ndarray or (ndarray, SurfaceDenoiseInfo)
+        The denoised data in u's form (and the info with return_info).
+
+    Raises
+    ------
+    InputError
+        Unless exactly one of sigma and lam is given; for data that cannot be used.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.surface import ImplicitSurface, denoise_tv
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> noisy = s.field(lambda x, y, z: z) + 0.1 * np.random.default_rng(0).normal(size=s.shape)
+    >>> clean, info = denoise_tv(s, noisy, sigma=0.1, t=0.01, return_info=True)
+    >>> clean.shape == s.shape, info.steps > 0
+    (True, True)
+    """
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
     if sigma is not None:
@@ -327,7 +414,7 @@ def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
     if p not in (1, 2):
         raise InputError(f"p must be 1 or 2, not {p!r}")
     data = np.asarray(u, dtype=np.float64)
-    band_form = data.ndim == 2 and surf._band_form_channels(data) is not None
+    band_form = data.ndim == 2 and surf.band.form_channels(data) is not None
     if data.ndim != 4 and not band_form:
         raise InputError("harmonic maps need vector data (channels, nz, ny, nx), or its band "
                          f"form (channels, {surf.ext_band.n}), got shape {data.shape}")
@@ -393,11 +480,33 @@ def principal_directions(surf: ImplicitSurface,
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Principal curvature directions and curvatures of the surface, extended along normals.
 
-    Returns (major, minor, curvatures): two (3, nz, ny, nx) unit tangent fields (major = the
-    larger curvature) and a (2, nz, ny, nx) array (larger, smaller), computed at every cell of
-    the extension band (constant along normals for a distance function). Directions are
-    defined up to sign, which the flows along them ignore (the flux (d.Pv)d is even in d);
-    sample them at nodes rather than interpolating across sign flips. Zeros off the band."""
+    Directions are defined up to sign, which the flows along them ignore (the flux (d.Pv)d is
+    even in d); sample them at nodes rather than interpolating across sign flips.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+
+    Returns
+    -------
+    major, minor : ndarray
+        (3, nz, ny, nx) unit tangent fields (major = the larger curvature), computed at every
+        cell of the extension band (constant along normals for a distance function); zeros
+        off the band.
+    curvatures : ndarray
+        (2, nz, ny, nx): the larger and the smaller principal curvature.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.surface import ImplicitSurface, principal_directions
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> major, minor, curvatures = principal_directions(s)
+    >>> on = np.abs(s.psi) < 0.05
+    >>> bool(np.allclose(curvatures[:, on], 1.0, atol=0.1))   # a unit sphere: k1 = k2 = 1
+    True
+    """
     g, q = surf.grid, surf.runtime.queue
     band = surf.ext_band
     n = max(band.n, 1)

@@ -59,11 +59,41 @@ def _interp_code(interpolation: str) -> int:
 class ImplicitSurface:
     """A closed surface given as the zero level set of a signed distance function psi.
 
-    psi: (nz, ny, nx) volume, negative inside, in world units; spacing: grid spacing h;
-    origin: world (x, y, z) of psi[0, 0, 0]. Points of cell (k, j, i) are
-    origin + h * (i, j, k). band_width: the outer band's half-width in cells (default: the
-    narrowest the interpolation allows). storage: the
-    flows' band storage, "lists" or "bricks" (see `storage`).
+    Points of cell (k, j, i) are origin + h * (i, j, k). The flows (heat, tv, denoise_tv,
+    ...) run on a narrow band around psi = 0; `from_mesh`, `from_function`, `sphere`,
+    `torus` and `double_torus` build one from other descriptions.
+
+    Parameters
+    ----------
+    psi : array_like
+        (nz, ny, nx) signed distance, negative inside, in world units.
+    spacing : float
+        The grid spacing h.
+    origin : array_like, optional
+        World (x, y, z) of psi[0, 0, 0].
+    band_width : float, optional
+        The outer band's half-width in cells (default: the narrowest the interpolation
+        allows).
+    interpolation : {'tricubic', 'trilinear'}, optional
+        The closest-point interpolation of the re-extension.
+    dtype : {float32, float64}, optional
+        The device's arithmetic.
+    device : str or int or Runtime, optional
+        The OpenCL device, as for `clpde.use_device`.
+    storage : {'lists', 'bricks'}, optional
+        The flows' band storage (see `storage`): the same results.
+
+    Raises
+    ------
+    InputError
+        For a psi without a zero level set, non-finite values, a band too narrow for the
+        interpolation or reaching the volume's border.
+
+    Examples
+    --------
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> s.shape, s.storage
+    ((37, 37, 37), 'lists')
     """
 
     def __init__(self, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,

@@ -9,11 +9,18 @@ vectorised and good enough for figures of smooth data on surfaces.
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import InputError
 from ..io.images import write_bytes
+
+if TYPE_CHECKING:  # annotations only: trimesh is imported where a mesh is made
+    import trimesh
+
+    from .implicit import ImplicitSurface
 
 # A perceptually ordered colour ramp (dark blue -> teal -> green -> yellow), sampled at nine
 # stops and interpolated linearly: enough for pseudo-colour pictures of scalar data.
@@ -24,8 +31,28 @@ _RAMP = np.array([
 ])
 
 
-def colormap(values, vmin=None, vmax=None) -> np.ndarray:
-    """(n, 3) RGB in [0, 1] for scalar values, mapped through the colour ramp."""
+def colormap(values: ArrayLike, vmin: float | None = None,
+             vmax: float | None = None) -> np.ndarray:
+    """RGB colours of scalar values, mapped through clpde's colour ramp.
+
+    Parameters
+    ----------
+    values : array_like
+        (n,) scalars (NaN allowed).
+    vmin, vmax : float, optional
+        The values mapped to the ramp's ends (default: the values' finite range).
+
+    Returns
+    -------
+    ndarray
+        (n, 3) RGB in [0, 1].
+
+    Examples
+    --------
+    >>> from clpde.surface import colormap
+    >>> colormap([0.0, 0.5, 1.0]).shape
+    (3, 3)
+    """
     v = np.asarray(values, dtype=np.float64)
     lo = np.nanmin(v) if vmin is None else vmin
     hi = np.nanmax(v) if vmax is None else vmax
@@ -35,7 +62,8 @@ def colormap(values, vmin=None, vmax=None) -> np.ndarray:
     return _RAMP[i] * (1 - f) + _RAMP[i + 1] * f
 
 
-def to_mesh(surf, u=None, *, vmin=None, vmax=None, interpolation="tricubic"):
+def to_mesh(surf: ImplicitSurface, u: ArrayLike | None = None, *, vmin: float | None = None,
+            vmax: float | None = None, interpolation: str = "tricubic") -> trimesh.Trimesh:
     """Marching cubes of psi = 0 as a trimesh.Trimesh, with u sampled at the vertices as
     vertex colours: scalars through the colour ramp, 3-channel data as RGB (clipped to
     [0, 1]). The sampled values are kept in mesh.vertex_attributes['u']."""
@@ -125,7 +153,7 @@ def on_mesh(surf, u, mesh=None, *, vmin=None, vmax=None, interpolation="tricubic
     return result
 
 
-def export_mesh(mesh, path) -> None:
+def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     """Write a mesh as PLY, GLB, OBJ or STL (by extension), atomically."""
     path = os.fspath(path)
     ext = os.path.splitext(path)[1].lower().lstrip(".")
@@ -228,8 +256,10 @@ def view_box(meshes, azimuth=30.0, elevation=20.0):
     return 0.5 * (lo + hi), float((hi - lo).max())
 
 
-def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1.0, 1.0),
-                box=None):
+def render_mesh(mesh: trimesh.Trimesh, size: int = 512, azimuth: float = 30.0,
+                elevation: float = 20.0,
+                background: tuple[float, float, float] = (1.0, 1.0, 1.0),
+                box: tuple | None = None) -> np.ndarray:
     """A picture of a mesh with its vertex colours (light grey where it has none).
 
     Parameters
@@ -317,8 +347,11 @@ def render_mesh(mesh, size=512, azimuth=30.0, elevation=20.0, background=(1.0, 1
     return np.rint(255 * np.clip(image, 0, 1)).reshape(size, size, 3).astype(np.uint8)
 
 
-def render(surf_or_mesh, u=None, path=None, *, views=((30.0, 20.0),), size=512, vmin=None,
-           vmax=None, colour_bar: bool = True):
+def render(surf_or_mesh: ImplicitSurface | trimesh.Trimesh, u: ArrayLike | None = None,
+           path: str | os.PathLike | None = None, *,
+           views: tuple[tuple[float, float], ...] = ((30.0, 20.0),), size: int = 512,
+           vmin: float | None = None, vmax: float | None = None,
+           colour_bar: bool = True) -> np.ndarray:
     """Picture(s) of data on a surface (an ImplicitSurface with u, or a trimesh.Trimesh).
 
     views: (azimuth, elevation) pairs in degrees, placed side by side. Scalar data gets a

@@ -165,6 +165,75 @@ def _user_features(features, frames: list[np.ndarray]) -> np.ndarray:
 class MorphingTracker:
     """The object form of `track`: iterate to get each frame's mask and level set in turn.
 
+    Parameters
+    ----------
+    frames : array_like
+        As for `track`.
+    first_mask : array_like
+        As for `track`.
+    features : {'intensity', 'edges', 'contrast'} or array_like or callable, optional
+        As for `track`.
+    colour : bool, optional
+        Put every channel of colour frames in the discrepancy (default: grey, Rec. 601
+        luma).
+    discrepancy : {'ncc', 'difference', 'huber'}, optional
+        How F2 and F1 are compared: steepest ascent of the local normalised
+        cross-correlation over a (2 ncc_radius + 1)^2 window, F2 - F1 (the thesis), or F2 -
+        F1 clipped at huber_delta.
+    motion : {'kalman', 'velocity', None}, optional
+        Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
+        object's features (within search_radius pixels of the prediction), by the previous
+        displacement, or not at all.
+    shape_weight : float, optional
+        (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
+        nothing.
+    equalize : bool or {'match', 'global'}, optional
+        As for `track`.
+    smooth : bool, optional
+        As for `track`.
+    smooth_steps : int, optional
+        As for `track`.
+    smooth_kappa : float, optional
+        Perona-Malik's edge threshold of the pre-smoothing.
+    band_width : float, optional
+        As for `track`.
+    max_iterations : int, optional
+        As for `track`.
+    tol : float, optional
+        As for `track`.
+    check_every : int, optional
+        Iterations between the speed checks.
+    dt : float, optional
+        The morphing's time step (bounded by the CFL condition).
+    max_dt : float, optional
+        The largest time step the adaptive step may take.
+    reinit_iterations : int, optional
+        Reinitialisation iterations of the level set.
+    min_size : int, optional
+        As for `track`.
+    contrast_radius : int, optional
+        Half-width of the box of features='contrast'.
+    contrast_eps : float, optional
+        Regularisation of features='contrast' (intensities in [0, 1]).
+    ncc_radius : int, optional
+        Half-width of the NCC's window.
+    huber_delta : float, optional
+        The clipping of discrepancy='huber'.
+    search_radius : int, optional
+        The motion filter's search radius in pixels.
+    storage : {'lists', 'bricks8x8', 'bricks16x4'}, optional
+        The band as a list of cells or of bricks (the same results, bit for bit except the
+        NCC's window sums, equal to rounding; docs/tracking.md).
+    device : str or int or Runtime, optional
+        The OpenCL device, as for `clpde.use_device`.
+    dtype : {float32, float64}, optional
+        The device's arithmetic.
+
+    Raises
+    ------
+    InputError
+        For frames, a mask or options that cannot be used.
+
     Examples
     --------
     >>> import numpy as np

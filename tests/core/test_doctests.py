@@ -12,7 +12,8 @@ import pytest
 MODULES = ["clpde.data", "clpde.planar.flows", "clpde.planar.rof", "clpde.imagedata",
            "clpde.io.images", "clpde.surface.implicit", "clpde.surface.flows",
            "clpde.inpainting.colour", "clpde.runtime", "clpde.inpainting.api",
-           "clpde.tracking.contours", "clpde.scale.batch"]
+           "clpde.tracking.contours", "clpde.scale.batch",
+           "clpde.regions.tracker", "clpde.surface.render"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -31,7 +31,8 @@ def _gaps(obj, name: str) -> list[str]:
     documented = {part.strip().lstrip("*") for entry in doc["Parameters"]
                   for part in entry.name.split(",")}
     out = [f"{name}({p.name})" for p in inspect.signature(target).parameters.values()
-           if p.name not in ("self", "cls") and p.name not in documented]
+           if p.name not in ("self", "cls") and not p.name.startswith("_")
+           and p.name not in documented]
     if not inspect.isclass(obj):
         out += [f"{name}:{section}" for section in ("Returns", "Examples") if not doc[section]]
     return out
@@ -76,3 +77,26 @@ def test_public_docstrings_are_numpydoc_except_the_listed_gaps():
     assert not new, "public names or parameters without numpydoc docs:\n" + "\n".join(new)
     assert not closed, ("documented now: delete these lines from numpydoc_gaps.txt:\n"
                         + "\n".join(closed))
+
+
+def test_public_signatures_have_type_hints():
+    missing = []
+    for module in (clpde, clpde.surface):
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if inspect.isclass(obj):
+                if issubclass(obj, BaseException):
+                    continue
+                target = obj.__init__
+            elif inspect.isfunction(obj):
+                target = obj
+            else:
+                continue
+            signature = inspect.signature(target)
+            missing += [f"{module.__name__}.{name}({p.name})"
+                        for p in signature.parameters.values()
+                        if p.name not in ("self", "cls") and not p.name.startswith("_")
+                        and p.annotation is inspect.Parameter.empty]
+            if not inspect.isclass(obj) and signature.return_annotation is inspect.Signature.empty:
+                missing.append(f"{module.__name__}.{name} (return)")
+    assert not missing, "public signatures without type hints:\n" + "\n".join(missing)

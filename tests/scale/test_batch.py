@@ -166,7 +166,7 @@ def test_track_and_surface_batches_equal_serial_runs(client, tmp_path):
     init = tmp_path / "init.png"
     write_image(init, (((yy - 20) ** 2 + (xx - 15) ** 2 < 64) * 255).astype(np.uint8))
     result = batch("track", sequences, tmp_path / "tracks", mask=init, client=client,
-                   no_gif=True, max_iterations=10)
+                   gif=False, max_iterations=10)
     assert result.ok, result.failed
     _serial_cli(["track", str(sequences[1]), "--init", str(init), "-o", str(tmp_path / "one"),
                  "--no-gif", "--max-iterations", "10"])

@@ -73,3 +73,12 @@ def test_band_form_errors_name_the_shapes(sphere):
     bad[5] = np.nan
     with pytest.raises(InputError, match="NaN"):
         s.heat(bad, 0.01)
+
+
+def test_harmonic_maps_take_the_band_form(sphere):
+    s = sphere
+    v = s.field(lambda x, y, z: [x + 0 * y, y + 0 * z, z + 0 * x])
+    v /= np.sqrt((v**2).sum(0)) + 1e-12
+    v[:, np.abs(s.psi) > 0.5] = 1 / np.sqrt(3)
+    assert np.array_equal(s.harmonic_map(s.band_values(v), 0.005),
+                          s.band_values(s.harmonic_map(v, 0.005)))
