@@ -24,14 +24,24 @@ own and runs on the OpenCL device (kernels/inpainting/spectral.cl has the maths)
 - Order: blocks with the larger share of known pixels in their windows go first (filled
   pixels count delta); a wave is every pending block that comes first among the blocks its
   window touches, so the blocks of a wave are independent and run in one launch, one
-  work-group per (block, channel), in place. The order is planned on the host from the mask
-  alone before anything runs; the device never waits for the host between waves.
+  work-group per block (its channels in turn: the weights' transform and the candidates'
+  factors are shared), in place. The order is planned on the host from the mask alone
+  before anything runs; the device never waits for the host between waves.
+- Cycle spinning: `shifts` block grids, offset by half a block, are filled independently
+  (each in its own copy of the crop; their waves share launches) and averaged: the blocks'
+  seams and each grid's unlucky cuts average out.
 - Colour: several channels are fitted in a decorrelated basis (principal axes of the known
   pixels near the damage), each channel on its own, and turned back afterwards.
+- Programs: one (per dtype); image size, channel count, block sizes and every option are
+  kernel arguments, and the work-group size is fixed, so nothing is built per call.
 - Precision: the data stays float (float32, or float64 with dtype=float64) from the input's
   scaling to the output; nothing is quantised to 8 bits.
 - Only the damage's blocks are touched: the upload is the damage's bounding box grown by the
   border, and the kernel writes masked pixels only.
+
+Defaults (block 8, border 12, rho 0.6, gamma 0.7, split 0.3, two grids, 100 picks) were
+chosen on calibration photos only; the notes of that tuning and the measurements are in the
+project's benchmark (benchmarks/inpaint_spectral_quick.py).
 """
 
 from __future__ import annotations
