@@ -39,9 +39,8 @@ own and runs on the OpenCL device (kernels/inpainting/spectral.cl has the maths)
 - Only the damage's blocks are touched: the upload is the damage's bounding box grown by the
   border, and the kernel writes masked pixels only.
 
-Defaults (block 8, border 12, rho 0.6, gamma 0.7, split 0.3, two grids, 100 picks) were
-chosen on calibration photos only; the notes of that tuning and the measurements are in the
-project's benchmark (benchmarks/inpaint_spectral_quick.py).
+Defaults (block 8, border 12, rho 0.6, gamma 0.7, alpha 2, delta 1, split 0.3, two grids,
+100 picks) were chosen on calibration photos only, with benchmarks/inpaint_spectral_quick.py.
 """
 
 from __future__ import annotations
@@ -116,7 +115,7 @@ def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
 
 
 def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int = 12,
-         split: float = 0.3, delta: float = 0.5, shift: tuple = (0, 0)):
+         split: float = 0.3, delta: float = 1.0, shift: tuple = (0, 0)):
     """The blocks and their waves for a mask.
 
     Parameters
@@ -291,7 +290,7 @@ def shifts_of(shifts: int, block: int) -> list:
 
 def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, block: int = 8,
          min_block: int = 4, border: int = 12, split: float = 0.3, rho: float = 0.6,
-         delta: float = 0.5, gamma: float = 0.7, alpha: float = 1.0, iterations: int = 100,
+         delta: float = 1.0, gamma: float = 0.7, alpha: float = 2.0, iterations: int = 100,
          stop: float = 0.0, colour: str = "pca", detrend: bool = True, shifts: int = 2,
          cutoff: float = 1.5, per_pixel: float = 0.0, timings: dict | None = None) -> np.ndarray:
     """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
@@ -451,7 +450,7 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, bloc
 
 
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=8,
-          min_block=4, border=12, split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0,
+          min_block=4, border=12, split=0.3, rho=0.6, delta=1.0, gamma=0.7, alpha=2.0,
           iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5,
           per_pixel=0.0):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
