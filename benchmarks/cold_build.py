@@ -72,11 +72,13 @@ def inpaint_calls(size):
         yy, xx = np.mgrid[0:ny, 0:nx]
         for k in range(4):
             mask |= np.hypot(yy - ny * (0.2 + 0.2 * k), xx - nx * (0.8 - 0.15 * k)) < 6
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         clpde.inpaint(image, mask, channel_axis=-1 if image.ndim == 3 else None,
                       progress=False, device=sys.argv[1])
         out.append(time.perf_counter() - start)
+        cpu_calls.append(time.process_time() - cpu)
     return out
+cpu_calls = []
 def calls(size):
     if sys.argv[2] == "inpaint":
         return inpaint_calls(size)
@@ -109,8 +111,10 @@ result = {"programs": built, "wall": wall, "cpu": cpu, "new_sizes": sum(new) / l
           "new_size_programs": built[n_first:]}
 if sys.argv[2] == "inpaint":
     start = time.perf_counter()
+    n = len(cpu_calls)
     repeat = calls(first)
-    result.update(first_calls=parts, repeat_calls=repeat, repeat=time.perf_counter() - start)
+    result.update(first_calls=parts, repeat_calls=repeat, repeat=time.perf_counter() - start,
+                  first_cpu=cpu_calls[:2], repeat_cpu=cpu_calls[n:])
 print(json.dumps(result))
 """
 
@@ -162,6 +166,12 @@ def main():
             extra = imp + sum(first) - sum(rep)
             summary[name].update(first_colour_s=first[0], first_grey_s=first[1],
                                  repeat_colour_s=rep[0], repeat_grey_s=rep[1], extra_s=extra)
+            fc = [statistics.median(r["first_cpu"][i] for r in results) for i in (0, 1)]
+            rc = [statistics.median(r["repeat_cpu"][i] for r in results) for i in (0, 1)]
+            summary[name].update(first_cpu_s=fc, repeat_cpu_s=rc, extra_cpu_s=sum(fc) - sum(rc))
+            print(f"    CPU seconds: first colour {fc[0]:.2f} (repeat {rc[0]:.2f}), first grey "
+                  f"{fc[1]:.2f} (repeat {rc[1]:.2f}): first calls - repeats = "
+                  f"{sum(fc) - sum(rc):.2f} s of CPU")
             print(f"    first colour {first[0]:.2f} s (repeat {rep[0]:.2f}), first grey "
                   f"{first[1]:.2f} s (repeat {rep[1]:.2f}): import + first calls - repeats = "
                   f"{extra:.2f} s; {len(results[0]['programs'])} programs")

@@ -24,14 +24,23 @@ own and runs on the OpenCL device (kernels/inpainting/spectral.cl has the maths)
 - Order: blocks with the larger share of known pixels in their windows go first (filled
   pixels count delta); a wave is every pending block that comes first among the blocks its
   window touches, so the blocks of a wave are independent and run in one launch, one
-  work-group per (block, channel), in place. The order is planned on the host from the mask
-  alone before anything runs; the device never waits for the host between waves.
+  work-group per block (its channels in turn: the weights' transform and the candidates'
+  factors are shared), in place. The order is planned on the host from the mask alone
+  before anything runs; the device never waits for the host between waves.
+- Cycle spinning: `shifts` block grids, offset by half a block, are filled independently
+  (each in its own copy of the crop; their waves share launches) and averaged: the blocks'
+  seams and each grid's unlucky cuts average out.
 - Colour: several channels are fitted in a decorrelated basis (principal axes of the known
   pixels near the damage), each channel on its own, and turned back afterwards.
+- Programs: one (per dtype); image size, channel count, block sizes and every option are
+  kernel arguments, and the work-group size is fixed, so nothing is built per call.
 - Precision: the data stays float (float32, or float64 with dtype=float64) from the input's
   scaling to the output; nothing is quantised to 8 bits.
 - Only the damage's blocks are touched: the upload is the damage's bounding box grown by the
   border, and the kernel writes masked pixels only.
+
+Defaults (block 8, border 12, rho 0.6, gamma 0.7, alpha 2, delta 1, split 0.3, two grids,
+100 picks) were chosen on calibration photos only, with benchmarks/inpaint_spectral_quick.py.
 """
 
 from __future__ import annotations
@@ -106,7 +115,7 @@ def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
 
 
 def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int = 12,
-         split: float = 0.3, delta: float = 0.5, shift: tuple = (0, 0)):
+         split: float = 0.3, delta: float = 1.0, shift: tuple = (0, 0)):
     """The blocks and their waves for a mask.
 
     Parameters
@@ -279,12 +288,78 @@ def shifts_of(shifts: int, block: int) -> list:
     return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
 
 
-def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border=12,
-         split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0, iterations=100, stop=0.0,
-         colour="pca", detrend=True, shifts=2, cutoff=1.5, per_pixel=0.0, timings=None):
-    """Frequency-selective fill of (channels, rows, cols) float data; see the module
-    docstring. `timings`, a dict, receives the seconds spent planning, building, uploading,
-    running the waves and reading back, and the counts of blocks and waves."""
+def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, block: int = 8,
+         min_block: int = 4, border: int = 12, split: float = 0.3, rho: float = 0.6,
+         delta: float = 1.0, gamma: float = 0.7, alpha: float = 2.0, iterations: int = 100,
+         stop: float = 0.0, colour: str = "pca", detrend: bool = True, shifts: int = 2,
+         cutoff: float = 1.5, per_pixel: float = 0.0, timings: dict | None = None) -> np.ndarray:
+    """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
+    the method; `clpde.inpaint(..., method="spectral")` is the user's way in).
+
+    Parameters
+    ----------
+    data : np.ndarray
+        (channels, rows, cols) floats; values inside omega are ignored.
+    omega : np.ndarray
+        bool (rows, cols), True where to fill.
+    runtime : clpde.runtime.Runtime
+        The OpenCL device.
+    dtype : numpy dtype
+        The device's arithmetic, float32 or float64.
+    block, min_block : int
+        Largest and smallest block side (even; min_block is block halved zero or more times).
+    border : int
+        The window's reach beyond its block; block + 2 border <= 32.
+    split : float
+        A block whose window holds less than this share of known pixels is cut in four.
+    rho : float
+        Weight decay per pixel of distance from the window's centre, in (0, 1].
+    delta : float
+        Weight of pixels filled by earlier blocks, in [0, 1].
+    gamma : float
+        Share of each pick's coefficient taken, in (0, 1].
+    alpha : float
+        Power of the low-frequency prior (1 - |k| / |k|max)^alpha, >= 0.
+    iterations : int
+        Most picks per block and channel (<= 512).
+    stop : float
+        End a block once a pick lowers the error by less than this share of the first one's.
+    colour : str
+        'pca' fits the principal axes of the known colours, 'channels' the channels as given.
+    detrend : bool
+        Take a weighted least-squares plane out of each window before the Fourier picks.
+    shifts : int
+        1, 2 or 4 block grids, offset by half a block, whose fills are averaged.
+    cutoff : float
+        Candidate frequencies |k| <= cutoff x Nyquist; 1.5 takes all.
+    per_pixel : float
+        > 0: a block's picks are at most this many per hole pixel in it (at least 4).
+    timings : dict or None
+        Receives the seconds spent planning, building, uploading, running the waves and
+        reading back, and the counts of blocks and launches.
+
+    Returns
+    -------
+    np.ndarray
+        float64 array of data's shape, equal to data outside omega.
+
+    Raises
+    ------
+    InputError
+        For options out of range, or a mask that covers every pixel.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.runtime import get_runtime
+    >>> y, x = np.mgrid[0:48, 0:48]
+    >>> data = (0.2 + 0.5 * x / 48 + 0.1 * y / 48)[None]
+    >>> omega = np.zeros((48, 48), bool)
+    >>> omega[20:24, 8:40] = True
+    >>> out = fill(data, omega, get_runtime())
+    >>> bool(np.abs(out - data)[:, omega].max() < 0.02)
+    True
+    """
     _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop, colour)
     if not (np.isfinite(cutoff) and cutoff > 0):
         raise InputError(f"cutoff must be a number > 0 (a share of the Nyquist frequency), not "
@@ -375,7 +450,7 @@ def fill(data, omega, runtime, *, dtype=np.float32, block=8, min_block=4, border
 
 
 def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=8,
-          min_block=4, border=12, split=0.3, rho=0.6, delta=0.5, gamma=0.7, alpha=1.0,
+          min_block=4, border=12, split=0.3, rho=0.6, delta=1.0, gamma=0.7, alpha=2.0,
           iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5,
           per_pixel=0.0):
     """Registry entry point: frequency-selective inpainting (see the module docstring).

@@ -125,8 +125,8 @@ def plan(omega, *, block, min_block, border, split, delta, shift=(0, 0)):
     return (cy0, cy1, cx0, cx1), blocks, waves, wave_of
 
 
-def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, delta=0.5,
-         gamma=0.7, alpha=1.0, iterations=100, stop=0.0, colour="pca", detrend=True,
+def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, delta=1.0,
+         gamma=0.7, alpha=2.0, iterations=100, stop=0.0, colour="pca", detrend=True,
          shifts=2, cutoff=1.5, per_pixel=0.0):
     """The whole fill of (channels, rows, cols) float data, float64: every block grid's fill
     on its own, then their average."""
