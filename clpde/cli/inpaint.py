@@ -27,15 +27,16 @@ from ._inpaint_demo import run_demo
 def add_inpaint_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "inpaint", help="fill a masked region of an image (structure and texture)",
-        description="Fill the pixels where MASK is white. The default method, auto, chooses "
-                    "per region of the mask: the exemplar (patches copied from the "
-                    "surroundings) where they repeat, and on the thick parts of holes in "
-                    "detailed surroundings; coherence transport (isophotes continued into the "
-                    "hole) elsewhere (docs/inpainting.md). --method transport is the thesis's "
-                    "scheme (chapter 3): smoothness transported along the isophotes, "
-                    "interleaved with anisotropic diffusion, to a steady state; its options "
-                    "are marked 'transport:' below. Colour images are inpainted per channel "
-                    "(or in the rho, sin phi, sin psi model); an alpha channel is kept as is. "
+        description="Fill the pixels where MASK is white. The default method is coherence "
+                    "transport: isophotes continued into the hole, fast. --method auto is "
+                    "the self-validated choice: per cluster of damage, the candidate methods "
+                    "fill a hidden ring of known pixels too, and the blend that fits it best "
+                    "fills the hole (better, and several times slower; docs/inpainting.md). "
+                    "--method transport is the thesis's scheme (chapter 3): smoothness "
+                    "transported along the isophotes, interleaved with anisotropic diffusion, "
+                    "to a steady state; its options are marked 'transport:' below. Colour "
+                    "images are inpainted per channel (or in the rho, sin phi, sin psi "
+                    "model); an alpha channel is kept as is. "
                     "--demo damages a bundled photo and restores it.",
     )
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
@@ -82,10 +83,9 @@ def add_inpaint_parser(subparsers) -> None:
                              "mask)")
 
     parser.add_argument("--method", choices=("auto", *METHODS), default=None,
-                        help="inpainting method (default: auto, coherence transport where "
-                             "installed, the best on the benchmark, docs/inpainting.md; "
-                             "'transport', the thesis's scheme, when one of its options "
-                             "above or --gif is given)")
+                        help="inpainting method (default: coherence; 'transport', the "
+                             "thesis's scheme, when one of its options above or --gif is "
+                             "given; 'auto': the self-validated choice, docs/inpainting.md)")
     parser.add_argument("--grow", type=float, default=0, metavar="PX",
                         help="grow the mask by a disc of PX pixels first, to take in a "
                              "damage's blurred rim (default: 0)")

@@ -471,15 +471,15 @@ class Inpainting:
 
 
 def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=False) -> str:
-    """The method to run. None is "auto", unless `params` holds one of the transport's own
-    options (InpaintParams), when it is "transport" (the thesis's scheme); "auto" is the
-    first installed of inpainting.AUTO, which takes the options given, while each cluster
-    of damage is filled by the self-validated choice (inpainting/validate.py).
+    """The method to run. None is inpainting.DEFAULT, unless `params` holds one of the
+    transport's own options (InpaintParams), when it is "transport" (the thesis's scheme);
+    "auto" is the first installed of inpainting.AUTO, which takes the options given, while
+    each cluster of damage is filled by the self-validated choice (inpainting/validate.py).
     per_box=True returns "auto" itself in that case."""
 
     if method is None:  # levels too: the transport's multiresolution
         transport_only = {"levels", *InpaintParams.__dataclass_fields__}
-        method = "transport" if set(params) & transport_only else "auto"
+        method = "transport" if set(params) & transport_only else inpainting.DEFAULT
     if method == "auto" and per_box:
         return method
     if method == "auto":
@@ -582,7 +582,8 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
         scheme, the options above), 'coherence', 'navier-stokes', 'exemplar' (texture,
         periodic patterns), 'structure-texture' or 'spectral' (a sparse Fourier model of
         each block; `clpde.inpainting.available()` lists what is installed).
-        None is 'auto', or 'transport' when a transport option is given.
+        None (the default) is coherence transport, the fast structure method, or 'transport'
+        when a transport option is given.
     boxes : bool, optional
         Solve each connected component of the mask, or cluster of nearby components, in
         its own box grown by the method's margin, so that time and memory follow the

@@ -57,6 +57,10 @@ METHODS = {
 # validate.py's candidates; the options a call gives go to the first of these that is
 # installed.
 AUTO = ("coherence", "transport")
+# method=None: coherence transport. The self-validated vote ("auto") measured better on the
+# corpus's test half but 8-30x slower (docs/inpainting.md), too slow for a default that the
+# quickstart, the napari plugin and films run on every frame.
+DEFAULT = "coherence"
 COMMON = ("dtype", "progress", "seed")  # keywords every solve takes, passed by the dispatch
 
 

@@ -102,7 +102,8 @@ def test_auto_reports_its_choices_and_keeps_the_rest():
     image = _textured(96, 120)
     mask = _disc(image.shape, 40, 40, 9)
     mask[80:82, 20:100] = True
-    out, info = clpde.inpaint(image, mask, return_info=True, progress=False, seed=0)
+    out, info = clpde.inpaint(image, mask, method="auto", return_info=True, progress=False,
+                              seed=0)
     assert out.dtype == image.dtype and np.array_equal(out[~mask], image[~mask])
     assert len(info.choices) == len(info.boxes) == len(info.box_methods)
     choices = [c for report in info.choices for c in report["choices"]]
@@ -110,4 +111,5 @@ def test_auto_reports_its_choices_and_keeps_the_rest():
     for c in choices:
         assert c["why"] in ("ring vote", "candidates agree", "no ring to test on")
         assert sum(c["weights"].values()) == pytest.approx(1.0)
-    assert np.array_equal(out, clpde.inpaint(image, mask, progress=False, seed=0))
+    assert np.array_equal(out, clpde.inpaint(image, mask, method="auto", progress=False,
+                                             seed=0))
