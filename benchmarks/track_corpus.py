@@ -285,7 +285,7 @@ def corpus(half: str | None = None, classes=CLASSES, seqs: int = SEQS):
 def main():
     from scipy.ndimage import label
 
-    for name, (frames, masks, cls) in corpus().items():
+    for name, (frames, masks, _cls) in corpus().items():
         ious = [(m & masks[0]).sum() / (m | masks[0]).sum() for m in masks]
         pieces = [label(m)[1] for m in masks]
         print(f"{name:14s} {half_of(int(name.split('-')[1])):12s} {frames.shape} "

@@ -37,14 +37,19 @@ def add_track_parser(subparsers) -> None:
                              "(default: intensity)")
     parser.add_argument("--colour", action="store_true",
                         help="compare all colour channels, not grey only")
-    parser.add_argument("--discrepancy", choices=("ncc", "difference", "huber"), default="ncc",
-                        help="how F2 and F1 are compared: local normalised cross-correlation "
-                             "(ignores changes of light), F2 - F1 (the thesis; best on slices "
-                             "of a volume) or a Huber-clipped difference (default: ncc)")
-    parser.add_argument("--motion", choices=("kalman", "velocity", "none"), default="kalman",
-                        help="start each frame at the predicted displacement: a constant-"
-                             "velocity Kalman filter fed by matching the frames, the previous "
-                             "displacement, or none (default: kalman)")
+    parser.add_argument("--discrepancy", choices=("adaptive", "ncc", "difference", "huber"),
+                        default="adaptive",
+                        help="how F2 and F1 are compared: adaptive (correlation where a patch "
+                             "has contrast, difference where it is flat, plus a region term), "
+                             "local normalised cross-correlation (ignores changes of light), "
+                             "F2 - F1 (the thesis) or a Huber-clipped difference "
+                             "(default: adaptive)")
+    parser.add_argument("--motion", choices=("components", "kalman", "velocity", "none"),
+                        default="components",
+                        help="start each frame at the predicted displacement: each piece "
+                             "matched on its own, a constant-velocity Kalman filter fed by "
+                             "matching the frames, the previous displacement, or none "
+                             "(default: components)")
     parser.add_argument("--shape-weight", type=float, default=0.0, metavar="W",
                         help="pull the contour towards the predicted start where the frames "
                              "say nothing, against leaks (e.g. 0.02; default: 0)")
@@ -55,8 +60,9 @@ def add_track_parser(subparsers) -> None:
                         help="skip the histogram equalisation across frames (= --equalize none)")
     parser.add_argument("--no-smooth", action="store_true",
                         help="skip the anisotropic (Perona-Malik) pre-smoothing")
-    parser.add_argument("--max-iterations", type=int, default=40,
-                        help="cap of morphing iterations per frame (default: 40)")
+    parser.add_argument("--max-iterations", type=int, default=None,
+                        help="cap of morphing iterations per frame (default: 20 with the "
+                             "adaptive discrepancy, 40 with the others)")
     parser.add_argument("--min-size", type=int, default=0,
                         help="remove pieces and holes smaller than this many pixels (default: 0)")
     parser.add_argument("--frames", type=int, default=None, metavar="N",
@@ -65,14 +71,17 @@ def add_track_parser(subparsers) -> None:
     parser.add_argument("--mp4", action="store_true",
                         help="also write overlay.mp4 (H.264 through PyAV: pip install av; odd "
                              "sizes padded by a black row or column, never rescaled)")
-    parser.add_argument("--low-confidence", type=float, default=2.0, metavar="K",
-                        help="report frames whose final discrepancy in the band exceeds K "
-                             "times the sequence's median (default: 2)")
+    parser.add_argument("--low-confidence", type=float, default=None, metavar="T",
+                        help="list the frames whose confidence (0 to 1, calibrated on good "
+                             "and lost tracks) falls below T (default: the calibrated "
+                             "threshold, clpde.track_confidence.LOW_CONFIDENCE)")
     add_device_argument(parser)
     parser.set_defaults(run=run_track)
 
 
 def run_track(args) -> int:
+    import numpy as np
+
     from ..sequence_io import read_frames, read_mask, to_grey, write_tracking
     from ..track import track
 
@@ -84,8 +93,11 @@ def run_track(args) -> int:
         require_av()
     if args.shape_weight < 0:
         raise InputError(f"--shape-weight must be at least 0, not {args.shape_weight}")
-    if args.low_confidence <= 0:
-        raise InputError(f"--low-confidence must be positive, not {args.low_confidence}")
+    from ..track_confidence import LOW_CONFIDENCE
+
+    threshold = LOW_CONFIDENCE if args.low_confidence is None else args.low_confidence
+    if not 0 < threshold <= 1:
+        raise InputError(f"--low-confidence must be in (0, 1], not {threshold}")
     frames = read_frames(args.input, grey=not args.colour)
     if args.frames is not None:
         if args.frames < 1:
@@ -93,12 +105,12 @@ def run_track(args) -> int:
         frames = frames[: args.frames]
     mask = read_mask(args.init, frames.shape[1:3])
     equalize = False if args.no_equalize or args.equalize == "none" else args.equalize
-    masks, residuals = track(
+    masks, confidence = track(
         frames, mask, features=args.features, colour=args.colour, discrepancy=args.discrepancy,
         motion=None if args.motion == "none" else args.motion, shape_weight=args.shape_weight,
         equalize=equalize, smooth=not args.no_smooth, max_iterations=args.max_iterations,
         min_size=args.min_size, device=args.device, progress=show_progress(),
-        return_discrepancy=True)
+        return_confidence=True)
     grey = to_grey(frames) if frames.ndim == 4 else frames
     written = write_tracking(args.output, grey, masks, gif=not args.no_gif,
                              overwrite=args.overwrite)
@@ -106,22 +118,11 @@ def run_track(args) -> int:
         written.append(_write_mp4(args.output, grey, masks))
     print(f"track: {len(masks)} frames; wrote {len(written)} files to {args.output}",
           file=sys.stderr)
-    low = low_confidence_frames(residuals, args.low_confidence)
+    low = [int(k) for k in np.nonzero(np.asarray(confidence) < threshold)[0]]
     if low:
-        print(f"track: low confidence (final discrepancy above {args.low_confidence:g}x the "
-              f"median) in frames {', '.join(map(str, low))}", file=sys.stderr)
+        print(f"track: low confidence (below {threshold:g}) in frames "
+              f"{', '.join(map(str, low))}", file=sys.stderr)
     return 0
-
-
-def low_confidence_frames(residuals, factor: float) -> list[int]:
-    """Frames (after the first) whose final discrepancy exceeds factor x the median."""
-    import numpy as np
-
-    later = np.asarray(residuals[1:], float)
-    if later.size == 0:
-        return []
-    median = float(np.median(later))
-    return [int(k) + 1 for k in np.nonzero(later > factor * max(median, 1e-12))[0]]
 
 
 def _write_mp4(outdir, frames, masks):
