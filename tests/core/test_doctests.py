@@ -11,7 +11,8 @@ import pytest
 
 MODULES = ["clpde.data", "clpde.planar", "clpde.rof", "clpde.imagedata", "clpde.io",
            "clpde.surface.implicit",
-           "clpde.colour", "clpde.runtime", "clpde.inpaint", "clpde.track"]
+           "clpde.colour", "clpde.runtime", "clpde.inpaint", "clpde.track",
+           "clpde.track_confidence"]
 
 
 @pytest.mark.parametrize("name", MODULES)
