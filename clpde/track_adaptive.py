@@ -118,10 +118,14 @@ class ComponentMotion:
         cost of no shift.
     min_size : int
         Pieces smaller than this many pixels are not matched (they keep still).
+    max_pieces : int
+        With more pieces of min_size pixels than this, the mask is matched as one object.
     """
 
-    def __init__(self, radius: int = 6, gate: float = 0.05, min_size: int = 12):
+    def __init__(self, radius: int = 6, gate: float = 0.05, min_size: int = 12,
+                 max_pieces: int = 4):
         self.radius, self.gate, self.min_size = int(radius), float(gate), int(min_size)
+        self.max_pieces = int(max_pieces)
         self._labels = None
         self._velocities: dict[int, np.ndarray] = {}
 
@@ -139,6 +143,11 @@ class ComponentMotion:
         """[(piece mask, (dy, dx))] for each piece of `mask` (the previous frame's result),
         matched from prev_features to features ((C, H, W) each)."""
         labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
+        sizes = np.bincount(labels.ravel())[1:]
+        if (sizes >= self.min_size).sum() > self.max_pieces:
+            # Many pieces (a tissue in a slice, say): one match for all of them, as one
+            # object; matching each would cost a search per piece for little.
+            labels, n = mask.astype(np.int32), 1
         pieces = []
         velocities = {}
         for k in range(1, n + 1):
