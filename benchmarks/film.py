@@ -488,6 +488,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="two sequences per half")
     ap.add_argument("--no-calibration", action="store_true",
                     help="skip the threshold sweep (report the defaults only)")
+    ap.add_argument("--calibrate-only", action="store_true",
+                    help="the threshold sweep alone (to set the defaults from)")
     args = ap.parse_args()
     cal_specs = CALIBRATION[:2] if args.quick else CALIBRATION
     test_specs = TEST[:2] if args.quick else TEST
@@ -509,6 +511,13 @@ def main():
         c = calibrate(cal, args.device)
         result["calibration_sweep"] = c
         print("calibration sweep, chosen (best F1):", c["chosen"])
+        for kind in ("blotch", "scratch", "sdi"):
+            print(f"  {kind}: " + ", ".join(f"{k} P/R {v[0]:.2f}/{v[1]:.2f}"
+                                             for k, v in c[kind].items()))
+        if args.calibrate_only:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps(result, indent=1, default=float))
+            return
     result["calibration"] = evaluate(cal, args.device,
                                      result.get("calibration_sweep", {}).get(
                                          "chosen", {}).get("sdi_threshold", 10), "cal ")
