@@ -51,7 +51,7 @@ FIRST_PASS_FLOW = replace(FILM_FLOW, iterations=10)
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
 BLOTCH_THRESHOLD = 4.0  # noise units of the blotch score (films)
 SCRATCH_THRESHOLD = 5.0  # robust noise units of the line response
-PHOTO_SPECK_THRESHOLD = 6.0  # noise units of the top-hats (single images)
+PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
 COLUMN_HALF = 12  # rows each side of the scratch detector's column mean
 LINE_FLANK = 3  # the line response's flanks at 3 and 4 pixels: lines up to 5 px wide
@@ -185,15 +185,17 @@ def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: fl
 
 def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray,
                   search: int) -> np.ndarray:
-    """Drop the components of comp_mask (frame t) that reappear displaced in frames t - 1
-    and t + 1: a moving object the flow missed is found again nearby, a blotch is not.
+    """Drop the components of comp_mask (frame t) that reappear displaced in the frames
+    before and after: a moving object the flow missed is found again nearby, a blotch is
+    not.
 
     Each component, with a ring of two pixels for context, is matched within `search`
     pixels of its place in each neighbour. It moved if, at the best places, its own pixels
-    differ by less than MATCH_RATIO of their difference from the compensated neighbours,
-    in both neighbours, at displacements of opposite directions (steady motion; chance
-    matches of a blotch do not line up so). A film's first and last frames, with one
-    neighbour, need the match with its ring as well."""
+    differ by less than MATCH_RATIO of their difference from the compensated neighbours
+    (medians of squares),
+    in both neighbours, at places that one velocity explains (steady motion; chance
+    matches of a blotch do not line up so). The film's first and last frames use the next
+    two frames on their one side; a film of two frames needs the match of the ring too."""
     labels, n = ndimage.label(comp_mask)
     if n == 0:
         return comp_mask
@@ -206,11 +208,15 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
         own = labels[y0:y1, x0:x1] == idx
         region = ndimage.binary_dilation(own, iterations=2)
         r2 = resid[y0:y1, x0:x1] ** 2
-        e_own, e_region = float(r2[own].mean()), float(r2[region].mean())
+        # medians: a component may carry some clean pixels or a trail beside the object
+        e_own, e_region = float(np.median(r2[own])), float(r2[region].mean())
         templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
         th, tw = templ.shape
         found = []
-        for s in (t - 1, t + 1):
+        # the frames each side; at the film's ends the next two on the one side
+        pair = (t - 1, t + 1) if 0 < t < T - 1 else ((t + 1, t + 2) if t == 0 else
+                                                       (t - 1, t - 2))
+        for s in pair:
             if not 0 <= s < T:
                 continue
             wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
@@ -221,13 +227,14 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
             res = cv2.matchTemplate(win, templ, cv2.TM_SQDIFF, mask=region.astype(np.float32))
             my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
             diff = (templ - win[my:my + th, mx:mx + tw]) ** 2
-            found.append((float(diff[own].mean()), float(diff[region].mean()),
-                          np.array([my + wy0 - y0, mx + wx0 - x0], float)))
+            found.append((float(np.median(diff[own])), float(diff[region].mean()),
+                          np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t)))
         if not found or not all(f[0] < MATCH_RATIO * e_own for f in found):
             continue
         if len(found) == 2:
-            (_, _, d0), (_, _, d1) = found
-            moved = np.hypot(*(d0 + d1)) <= 3.0 and np.hypot(*d0) >= 1.0
+            # one velocity explains both places (displacements per frame of offset)
+            (_, _, v0), (_, _, v1) = found
+            moved = np.hypot(*(v0 - v1)) <= 3.0 and np.hypot(*v0) >= 1.0
         else:
             moved = found[0][1] < 2 * MATCH_RATIO * e_region
         keep[idx] = not moved
@@ -331,6 +338,14 @@ def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
         blotch = _hysteresis(a, 0.5 * blotch_threshold, blotch_threshold)
         blotch &= ~ndimage.binary_dilation(scratch)
         blotch = _motion_check(blotch, G, t, res[t], search)
+        # a tall thin "blotch" is a scratch the line detector missed (too short or faint
+        # for its run test in this frame)
+        labels, _ = ndimage.label(blotch)
+        for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+            h = sl[0].stop - sl[0].start
+            if h >= 0.5 * min_length and (labels[sl] == idx).sum() <= 4 * h:
+                scratch[sl] |= labels[sl] == idx
+                blotch[sl] &= labels[sl] != idx
         kinds[t][blotch] = BLOTCH
         kinds[t][scratch] = SCRATCH
     return kinds
@@ -350,7 +365,10 @@ def _spatial_lines(kern: _Kernels, G: np.ndarray, threshold: float,
 def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
            min_length: int, device) -> np.ndarray:
     ny, nx = G.shape
-    sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
+    # the grain's level from the image minus its 5x5 median: film grain is correlated over
+    # a pixel or two, which the finest-scale estimate of denoising misses
+    sigma = max(_robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")),
+                0.5 / 255)
     specks = np.zeros((ny, nx), bool)
     for rad in (1, 2, 4, 8):
         # at each scale, the components that stand out and fit in its disc: a speck, not
@@ -428,7 +446,7 @@ def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
     blotch_threshold : float, optional
         The blotch sensitivity: the score, in noise units, a blotch must reach somewhere
         (its region grows to half of it). Lower finds fainter dirt and more false alarms.
-        Default 4 for films, 6 for single images (the top-hat score).
+        Default 4 for films, 12 for single images (the top-hat score).
     scratch_threshold : float, optional
         The scratch sensitivity, in robust noise units of the line response (default 5).
     grow : float

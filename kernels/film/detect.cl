@@ -31,10 +31,11 @@ inline float median_of(float* a, const int n) {
 // r: I minus the median of the valid corrected neighbours (0 with none).
 // rp, rn: I minus the median of the valid earlier (later) neighbours, 0 with none: their
 //    means over small regions find blotches too faint to stand out pixel by pixel.
-// m: of the differences I - neighbour, the one of least magnitude (0 with none), the
-//    temporal residual the scratch detector reads: a scratch fixed on the film differs
-//    from every neighbour, while next to it, where one neighbour's own scratch lands, the
-//    other neighbours still agree with the frame, so no ghost line appears there.
+// m: of the differences I - neighbour, the second least in magnitude (the least with
+//    fewer than 3 neighbours; 0 with none), the temporal residual the scratch detector
+//    reads: a scratch fixed on the film differs from all neighbours but one (the nearest
+//    may still overlap it in a slow pan), while beside it, where one neighbour's own
+//    scratch lands, the others still agree with the frame, so no ghost line appears.
 __kernel void blotch_score(__global const float* I, __global const float* W,
                            __global const float* V, __global const float* gain,
                            __global const float* offset, __global const int* side,
@@ -66,10 +67,14 @@ __kernel void blotch_score(__global const float* I, __global const float* W,
         m[i] = 0.0f;
         return;
     }
-    float least = v - vals[0];
-    for (int p = 1; p < n; ++p)
-        if (fabs(v - vals[p]) < fabs(least)) least = v - vals[p];
-    m[i] = least;
+    // the two differences of least magnitude, first-come on ties
+    float least = v - vals[0], second = INFINITY;
+    for (int p = 1; p < n; ++p) {
+        const float dd = v - vals[p];
+        if (fabs(dd) < fabs(least)) { second = least; least = dd; }
+        else if (fabs(dd) < fabs(second)) second = dd;
+    }
+    m[i] = n >= 3 ? second : least;
     const float med = median_of(vals, n);
     r[i] = v - med;
     if (before == 0 || after == 0) {

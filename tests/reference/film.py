@@ -11,7 +11,7 @@ def _median(vals):
     return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
 
 
-def blotch_score(I, W, V, gain, offset, side, sigma, gamma):
+def blotch_score(I, W, V, gain, offset, side, sigma, gamma):  # noqa: E741
     """(z, r, m, rp, rn) as kernels/film/detect.cl's blotch_score."""
     ny, nx = I.shape
     out = [np.zeros((ny, nx)) for _ in range(5)]
@@ -31,7 +31,8 @@ def blotch_score(I, W, V, gain, offset, side, sigma, gamma):
             if not vals:
                 continue
             diffs = [v - w for w in vals]
-            m[y, x] = min(diffs, key=abs)  # the first of least magnitude, as the kernel
+            order = sorted(range(len(diffs)), key=lambda j: (abs(diffs[j]), j))
+            m[y, x] = diffs[order[1]] if len(diffs) >= 3 else diffs[order[0]]
             r[y, x] = v - _median(vals)
             if not pv or not nv:
                 continue
