@@ -50,7 +50,7 @@ CFL = 0.5  # largest distance in pixels a level set moves in one step
 # (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
 # the band unnoticed while NEAR_EDGE >= check_every * CFL.
 NEAR_EDGE = 1.0
-# The adaptive default's weights, chosen on the calibration half of
+# The adaptive discrepancy's weights, chosen on the calibration half of
 # benchmarks/track_corpus.py (benchmarks/tracking_generalise.py --calibrate).
 REGION_WEIGHT = 1.0  # the region term's largest speed, px per unit time
 CURVATURE = 0.3  # the curvature term's weight
@@ -186,7 +186,7 @@ class MorphingTracker:
 
     def __init__(self, frames: ArrayLike, first_mask: ArrayLike, *,
                  features: str | ArrayLike | Callable = "intensity", colour: bool = False,
-                 discrepancy: str = "adaptive", motion: str | None = "components",
+                 discrepancy: str = "ncc", motion: str | None = "kalman",
                  shape_weight: float = 0.0, equalize: bool | str = False,
                  smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
@@ -632,19 +632,20 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     or the user's own maps: a (T, H, W[, C]) array or a list of T maps, or a callable
     taking a frame and returning its (H, W[, C]) map (scaled to [0, 1] over the sequence;
     no pre-processing). colour=True puts every channel of colour frames in the
-    discrepancy (default: grey, Rec. 601 luma). discrepancy: 'adaptive' (the default:
-    per window, the NCC's steepest ascent where the window has contrast above the frame's
-    noise and F2 - F1 where it is flat, plus a region term of weight region_weight from
-    the foreground's and background's local statistics near the contour and a curvature
-    term of weight curvature; clpde.track_adaptive), 'difference' (F2 - F1, the
-    thesis), 'ncc' (steepest ascent of the local normalised cross-correlation over a
-    (2 ncc_radius + 1)^2 window) or 'huber' (F2 - F1 clipped at huber_delta). motion:
-    'components' (the default: each connected piece matched between the frames on its
-    own, the match kept only when it explains the frames better than no motion), None,
-    'velocity' (the previous frames' displacement, damped) or 'kalman' (a constant-
-    velocity Kalman filter fed by matching the object's features between frames, within
-    search_radius pixels of the prediction) shifts each frame's start. shape_weight
-    (>= 0, e.g. 0.05) pulls the contour towards that start where the features say nothing.
+    discrepancy (default: grey, Rec. 601 luma). discrepancy: 'ncc' (the default: steepest
+    ascent of the local normalised cross-correlation over a (2 ncc_radius + 1)^2 window),
+    'adaptive' (per window, the NCC's steepest ascent where the window has contrast above
+    the frame's noise and F2 - F1 where it is flat, plus a region term of weight
+    region_weight from the foreground's and background's local statistics near the contour
+    and a curvature term of weight curvature; clpde.track_adaptive; better on the
+    synthetic corpus, worse on real video and slices: docs/tracking.md), 'difference'
+    (F2 - F1, the thesis) or 'huber' (F2 - F1 clipped at huber_delta). motion: 'kalman'
+    (the default: a constant-velocity Kalman filter fed by matching the object's features
+    between frames, within search_radius pixels of the prediction), 'components' (each
+    connected piece matched between the frames on its own, the match kept only when it
+    explains the frames better than no motion), None or 'velocity' (the previous frames'
+    displacement, damped) shifts each frame's start. shape_weight (>= 0, e.g. 0.05) pulls
+    the contour towards that start where the features say nothing.
     band_layout: 'lists' (the band as a list of cells) or 'bricks8x8' / 'bricks16x4' (the
     same results, bit for bit, except the NCC's window sums, equal to rounding; measured
     no faster on CPUs, docs/tracking.md).

@@ -1,4 +1,5 @@
-"""The adaptive default of clpde.track: motion per connected component and a region term.
+"""The adaptive option of clpde.track (discrepancy='adaptive', motion='components'): motion
+per connected component and a region term.
 
 - `ComponentMotion` (motion='components'): each connected piece of the previous result is
   matched between the two frames on its own (`match_displacement`, coarse to fine), its

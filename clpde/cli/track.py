@@ -37,19 +37,19 @@ def add_track_parser(subparsers) -> None:
                              "(default: intensity)")
     parser.add_argument("--colour", action="store_true",
                         help="compare all colour channels, not grey only")
-    parser.add_argument("--discrepancy", choices=("adaptive", "ncc", "difference", "huber"),
-                        default="adaptive",
+    parser.add_argument("--discrepancy", choices=("ncc", "adaptive", "difference", "huber"),
+                        default="ncc",
                         help="how F2 and F1 are compared: adaptive (correlation where a patch "
                              "has contrast, difference where it is flat, plus a region term), "
                              "local normalised cross-correlation (ignores changes of light), "
                              "F2 - F1 (the thesis) or a Huber-clipped difference "
-                             "(default: adaptive)")
-    parser.add_argument("--motion", choices=("components", "kalman", "velocity", "none"),
-                        default="components",
-                        help="start each frame at the predicted displacement: each piece "
-                             "matched on its own, a constant-velocity Kalman filter fed by "
-                             "matching the frames, the previous displacement, or none "
-                             "(default: components)")
+                             "(default: ncc)")
+    parser.add_argument("--motion", choices=("kalman", "components", "velocity", "none"),
+                        default="kalman",
+                        help="start each frame at the predicted displacement: a "
+                             "constant-velocity Kalman filter fed by matching the frames, each "
+                             "piece matched on its own, the previous displacement, or none "
+                             "(default: kalman)")
     parser.add_argument("--shape-weight", type=float, default=0.0, metavar="W",
                         help="pull the contour towards the predicted start where the frames "
                              "say nothing, against leaks (e.g. 0.02; default: 0)")

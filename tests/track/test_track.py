@@ -124,12 +124,6 @@ def test_a_still_sequence_keeps_the_contour_and_stops_early():
     assert [s.index for s in states] == [0, 1, 2]
     for s in states[1:]:
         assert iou(s.mask, truth[0]) > 0.97
-        np.testing.assert_array_equal(s.level_set < 0, s.mask)
-    # The discrepancy alone comes to rest (the adaptive default's region term keeps the
-    # cells beside the contour in a balance that need not fall below tol: it runs its cap).
-    states = list(MorphingTracker(frames, truth[0], discrepancy="ncc").iterate())
-    for s in states[1:]:
-        assert iou(s.mask, truth[0]) > 0.97
         assert s.converged and s.iterations < 40
         # The level set is a signed distance near the front, negative inside.
         np.testing.assert_array_equal(s.level_set < 0, s.mask)
@@ -163,10 +157,8 @@ def test_post_processing_removes_small_components():
     frames, truth = synthetic_sequence("translate", frames=2, noise=0.03)
     first = truth[0].copy()
     first[2:4, 60:62] = True  # a speck that the flow keeps (flat image around it)
-    # The thesis' flow: the default's region and curvature terms remove such specks already.
-    thesis = {"discrepancy": "difference", "motion": None}
-    raw = track(frames, first, **thesis)
-    clean = track(frames, first, min_size=20, **thesis)
+    raw = track(frames, first)
+    clean = track(frames, first, min_size=20)
     assert label(raw[1]).max() == 2 and label(clean[1]).max() == 1
     assert iou(clean[1], truth[1]) > 0.9
 
@@ -214,12 +206,9 @@ def test_the_band_follows_a_front_that_moves_beyond_it():
 
 
 @pytest.mark.parametrize("kind", ["shadow", "flicker", "distractor"])
-def test_kalman_ncc_holds_under_shadow_flicker_and_a_distractor(kind):
-    # The previous default, chosen on these cases (docs/tracking.md measures the adaptive
-    # default on them beside it).
+def test_default_holds_under_shadow_flicker_and_a_distractor(kind):
     frames, truth = synthetic_sequence(kind, frames=8)
-    masks = track(frames, truth[0], motion="kalman", discrepancy="ncc")
-    scores = [iou(m, t) for m, t in zip(masks, truth, strict=False)]
+    scores = [iou(m, t) for m, t in zip(track(frames, truth[0]), truth, strict=False)]
     assert min(scores) >= 0.9, scores
     if kind == "shadow":  # the thesis' grey F2 - F1 alone is moved by the shadow
         old = track(frames, truth[0], discrepancy="difference", motion=None, equalize="match")

@@ -133,16 +133,19 @@ def test_component_motion_stops_with_the_object():
     assert got[2] == 0.0 and got[3] == 0.0  # no overshoot once it stops
 
 
-def test_default_tracks_stop_and_go():
+ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
+
+
+def test_adaptive_tracks_stop_and_go():
     positions = [16, 18, 21, 25, 25, 25, 20.5, 16, 11.5 + 4.5]
     frames, truth = _textured_disc(positions)
-    masks = track(frames, truth[0])
+    masks = track(frames, truth[0], **ADAPTIVE)
     scores = [_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)]
     assert min(scores) > 0.75, scores
     assert np.mean(scores) > 0.85, scores
 
 
-def test_default_tracks_a_split():
+def test_adaptive_tracks_a_split():
     y, x = np.mgrid[:64, :64] + 0.0
     rng = np.random.default_rng(1)
     frames, truth = [], []
@@ -154,7 +157,7 @@ def test_default_tracks_a_split():
         img = ndimage.gaussian_filter(0.3 + 0.4 * m, 1.0) + rng.normal(0, 0.06, m.shape)
         frames.append(np.clip(img, 0, 1))
         truth.append(m)
-    masks = track(np.array(frames), truth[0])
+    masks = track(np.array(frames), truth[0], **ADAPTIVE)
     scores = [_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)]
     assert min(scores) > 0.8, scores
     assert ndimage.label(masks[-1])[1] == 2
