@@ -9,6 +9,7 @@ from . import (
 )
 from ._version import __version__  # noqa: F401  (clpde.__version__)
 from .errors import ClpdeError, InputError, KernelBuildError, NoDeviceError
+from .film import detect_defects, inpaint_video
 from .imagedata import grow_mask
 from .inpainting.api import Inpainting, inpaint
 from .planar.flows import FLOWS, PlanarFlow, diffuse, stability_limit
@@ -30,11 +31,13 @@ __all__ = [
     "batch",
     "data",
     "denoise_tv",
+    "detect_defects",
     "devices",
     "diffuse",
     "get_runtime",
     "grow_mask",
     "inpaint",
+    "inpaint_video",
     "stability_limit",
     "surface",
     "track",

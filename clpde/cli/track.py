@@ -29,14 +29,19 @@ def add_track_parser(subparsers) -> None:
                              "(default: intensity)")
     parser.add_argument("--colour", action="store_true",
                         help="compare all colour channels, not grey only")
-    parser.add_argument("--discrepancy", choices=("ncc", "difference", "huber"), default="ncc",
-                        help="how F2 and F1 are compared: local normalised cross-correlation "
-                             "(ignores changes of light), F2 - F1 (the thesis; best on slices "
-                             "of a volume) or a Huber-clipped difference (default: ncc)")
-    parser.add_argument("--motion", choices=("kalman", "velocity", "none"), default="kalman",
-                        help="start each frame at the predicted displacement: a constant-"
-                             "velocity Kalman filter fed by matching the frames, the previous "
-                             "displacement, or none (default: kalman)")
+    parser.add_argument("--discrepancy", choices=("ncc", "adaptive", "difference", "huber"),
+                        default="ncc",
+                        help="how F2 and F1 are compared: adaptive (correlation where a patch "
+                             "has contrast, difference where it is flat, plus a region term), "
+                             "local normalised cross-correlation (ignores changes of light), "
+                             "F2 - F1 (the thesis) or a Huber-clipped difference "
+                             "(default: ncc)")
+    parser.add_argument("--motion", choices=("kalman", "components", "velocity", "none"),
+                        default="kalman",
+                        help="start each frame at the predicted displacement: a "
+                             "constant-velocity Kalman filter fed by matching the frames, each "
+                             "piece matched on its own, the previous displacement, or none "
+                             "(default: kalman)")
     parser.add_argument("--shape-weight", type=float, default=0.0, metavar="W",
                         help="pull the contour towards the predicted start where the frames "
                              "say nothing, against leaks (e.g. 0.02; default: 0)")
@@ -47,8 +52,9 @@ def add_track_parser(subparsers) -> None:
                         help="skip the histogram equalisation across frames (= --equalize none)")
     parser.add_argument("--no-smooth", action="store_true",
                         help="skip the anisotropic (Perona-Malik) pre-smoothing")
-    parser.add_argument("--max-iterations", type=int, default=40,
-                        help="cap of morphing iterations per frame (default: 40)")
+    parser.add_argument("--max-iterations", type=int, default=None,
+                        help="cap of morphing iterations per frame (default: 20 with the "
+                             "adaptive discrepancy, 40 with the others)")
     parser.add_argument("--min-size", type=int, default=0,
                         help="remove pieces and holes smaller than this many pixels (default: 0)")
     parser.add_argument("--frames", type=int, default=None, metavar="N",
@@ -57,9 +63,10 @@ def add_track_parser(subparsers) -> None:
     parser.add_argument("--mp4", action="store_true",
                         help="also write overlay.mp4 (H.264 through PyAV: pip install av; odd "
                              "sizes padded by a black row or column, never rescaled)")
-    parser.add_argument("--low-confidence", type=float, default=2.0, metavar="K",
-                        help="report frames whose final discrepancy in the band exceeds K "
-                             "times the sequence's median (default: 2)")
+    parser.add_argument("--low-confidence", type=float, default=None, metavar="T",
+                        help="list the frames whose confidence (0 to 1, calibrated on good "
+                             "and lost tracks) falls below T (default: the calibrated "
+                             "threshold, clpde.tracking.confidence.LOW_CONFIDENCE)")
     add_device_argument(parser)
     parser.set_defaults(run=run_track)
 

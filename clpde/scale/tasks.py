@@ -38,6 +38,7 @@ from ..planar.flows import diffuse
 from ..planar.rof import denoise_tv
 from ..runtime import get_runtime
 from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
+from ..tracking.confidence import LOW_CONFIDENCE
 from ..tracking.contours import track
 
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
@@ -262,9 +263,9 @@ def evolution_frames(damaged, states) -> list[np.ndarray]:
 # ---- folders of results --------------------------------------------------------------------
 def track_file(input, output, *, mask, features: str = "intensity", colour: bool = False,
                discrepancy: str = "ncc", motion: str = "kalman", shape_weight: float = 0.0,
-               equalize: str = "none", smooth: bool = True, max_iterations: int = 40,
+               equalize: str = "none", smooth: bool = True, max_iterations=None,
                min_size: int = 0, frames=None, gif: bool = True, mp4: bool = False,
-               low_confidence: float = 2.0, overwrite: bool = False, device=None,
+               low_confidence=None, overwrite: bool = False, device=None,
                progress=None) -> list[str]:
     """`clpde track`: the object marked by the image `mask` in the first frame of `input`
     (a video, an image folder or a multi-page TIFF) followed through it (clpde.track); the
@@ -276,8 +277,9 @@ def track_file(input, output, *, mask, features: str = "intensity", colour: bool
         require_av()
     if shape_weight < 0:
         raise InputError(f"--shape-weight must be at least 0, not {shape_weight}")
-    if low_confidence <= 0:
-        raise InputError(f"--low-confidence must be positive, not {low_confidence}")
+    threshold = LOW_CONFIDENCE if low_confidence is None else low_confidence
+    if not 0 < threshold <= 1:
+        raise InputError(f"--low-confidence must be in (0, 1], not {threshold}")
     images = frame_io.read_frames(input, grey=not colour)
     if frames is not None:
         if frames < 1:
@@ -285,31 +287,22 @@ def track_file(input, output, *, mask, features: str = "intensity", colour: bool
         images = images[:frames]
     first = read_mask(mask, images.shape[1:3], what="the frames",
                       fix="draw the mask on the first frame at its size")
-    masks, residuals = track(
+    masks, confidence = track(
         images, first, features=features, colour=colour, discrepancy=discrepancy,
         motion=None if motion == "none" else motion, shape_weight=shape_weight,
         equalize=False if equalize == "none" else equalize, smooth=smooth,
         max_iterations=max_iterations, min_size=min_size, device=device,
-        progress=_progress(progress), return_discrepancy=True)
+        progress=_progress(progress), return_confidence=True)
     grey = frame_io.to_grey(images) if images.ndim == 4 else images
     written = frame_io.write_tracking(output, grey, masks, gif=gif, overwrite=overwrite)
     if mp4:
         written.append(_write_mp4(output, grey, masks))
     lines = [f"track: {len(masks)} frames; wrote {len(written)} files to {output}"]
-    low = low_confidence_frames(residuals, low_confidence)
+    low = [int(k) for k in np.nonzero(np.asarray(confidence) < threshold)[0]]
     if low:
-        lines.append(f"track: low confidence (final discrepancy above {low_confidence:g}x the "
-                     f"median) in frames {', '.join(map(str, low))}")
+        lines.append(f"track: low confidence (below {threshold:g}) in frames "
+                     f"{', '.join(map(str, low))}")
     return lines
-
-
-def low_confidence_frames(residuals, factor: float) -> list[int]:
-    """Frames (after the first) whose final discrepancy exceeds factor x the median."""
-    later = np.asarray(residuals[1:], float)
-    if later.size == 0:
-        return []
-    median = float(np.median(later))
-    return [int(k) + 1 for k in np.nonzero(later > factor * max(median, 1e-12))[0]]
 
 
 def _write_mp4(outdir, frames, masks):

@@ -38,20 +38,32 @@ from ..fields import Field, PingPong, check_fits
 from ..imagedata import value_range
 from ..planar.flows import diffuse
 from ..runtime import DeviceLike, get_runtime
+from .adaptive import ComponentMotion, noise_variance, region_field
+from .confidence import track_confidence
 from .features import MotionFilter, local_contrast, shift_image
 from .levelset import GHOST, MARGIN, STORAGES, LevelSet, signed_distance
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("tracking/levelset.cl", "tracking/features.cl")
+KERNEL_FILES = ("tracking/levelset.cl", "tracking/features.cl", "tracking/adaptive.cl")
 
 FEATURES = ("intensity", "edges", "contrast")
-DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2}
-MOTIONS = (None, "velocity", "kalman")
+DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2, "adaptive": 3}
+MOTIONS = (None, "velocity", "kalman", "components")
 CFL = 0.5  # largest distance in pixels a level set moves in one step
 # Rebuild when the front comes this close to the band's outer ring. Between two checks
 # (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
 # the band unnoticed while NEAR_EDGE >= check_every * CFL.
 NEAR_EDGE = 1.0
+# The adaptive discrepancy's weights, chosen on the calibration half of
+# benchmarks/track_corpus.py (benchmarks/tracking_generalise.py --calibrate).
+REGION_WEIGHT = 1.0  # the region term's largest speed, px per unit time
+CURVATURE = 0.3  # the curvature term's weight
+ADAPTIVE_ITERATIONS = 20  # the cap of iterations per frame with the adaptive discrepancy
+REGION_SIGMA = 6.0  # px: the windows of the region term's local statistics
+REGION_SEPARATION = 0.5  # Bhattacharyya distance at which the region term has half weight
+DISCREPANCY_WEIGHT = 1.0  # the frame-to-frame discrepancy's share of the contour's speed
+CONTRAST_NOISE = 4.0  # the correlation takes over where a window's variance passes this x noise
+REGION_REFRESH = 10  # iterations between updates of the region term's statistics
 
 
 @dataclass
@@ -221,6 +233,12 @@ class MorphingTracker:
         The clipping of discrepancy='huber'.
     search_radius : int, optional
         The motion filter's search radius in pixels.
+    region_weight : float, optional
+        discrepancy='adaptive': the weight of the region term (the foreground's and
+        background's local statistics near the contour); None: the calibrated default.
+    curvature : float, optional
+        discrepancy='adaptive': the weight of the curvature term; None: the calibrated
+        default.
     storage : {'lists', 'bricks8x8', 'bricks16x4'}, optional
         The band as a list of cells or of bricks (the same results, bit for bit except the
         NCC's window sums, equal to rounding; docs/tracking.md).
@@ -251,11 +269,12 @@ class MorphingTracker:
                  shape_weight: float = 0.0, equalize: bool | str = False,
                  smooth: bool = True, smooth_steps: int = 5,
                  smooth_kappa: float = 0.08, band_width: float = 3.0,
-                 max_iterations: int = 40, tol: float = 0.02, check_every: int = 2,
+                 max_iterations: int | None = None, tol: float = 0.02, check_every: int = 2,
                  dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
                  min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
                  ncc_radius: int = 3,
                  huber_delta: float = 0.05, search_radius: int = 6, storage: str = "lists",
+                 region_weight: float | None = None, curvature: float | None = None,
                  device: DeviceLike = None,
                  dtype: DTypeLike | None = None):
         self.frames = _check_frames(frames)
@@ -271,9 +290,12 @@ class MorphingTracker:
             raise InputError(f"discrepancy must be one of {', '.join(DISCREPANCIES)}, "
                              f"not {discrepancy!r}")
         if motion not in MOTIONS:
-            raise InputError(f"motion must be None, 'velocity' or 'kalman', not {motion!r}")
+            raise InputError(f"motion must be None, 'velocity', 'kalman' or 'components', "
+                             f"not {motion!r}")
         if not 0 < dt <= 0.5:
             raise InputError(f"dt={dt} is outside (0, 0.5], the stable range of the upwind scheme")
+        if max_iterations is None:
+            max_iterations = ADAPTIVE_ITERATIONS if discrepancy == "adaptive" else 40
         if max_iterations < 1 or check_every < 1:
             raise InputError("max_iterations and check_every must be at least 1")
         if check_every * CFL > NEAR_EDGE:
@@ -288,6 +310,16 @@ class MorphingTracker:
         if shape_weight < 0 or huber_delta <= 0 or search_radius < 0 or contrast_eps <= 0:
             raise InputError("shape_weight and search_radius must be >= 0, huber_delta and "
                              "contrast_eps > 0")
+        adaptive = discrepancy == "adaptive"
+        region_weight = (REGION_WEIGHT if adaptive else 0.0) if region_weight is None \
+            else float(region_weight)
+        curvature = (CURVATURE if adaptive else 0.0) if curvature is None else float(curvature)
+        if region_weight < 0 or curvature < 0:
+            raise InputError("region_weight and curvature must be at least 0")
+        if not adaptive and (region_weight or curvature):
+            raise InputError("region_weight and curvature work with discrepancy='adaptive' "
+                             "only: drop them or use the adaptive discrepancy")
+        self.region_weight, self.curvature = region_weight, curvature
         self.features, self.discrepancy, self.motion = features, discrepancy, motion
         self.shape_weight = float(shape_weight)
         self.contrast_radius, self.ncc_radius = int(contrast_radius), int(ncc_radius)
@@ -376,7 +408,8 @@ class MorphingTracker:
         return local_contrast(image, self.contrast_radius)
 
     # ---- the morphing of one frame pair ------------------------------------------------
-    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field, discrepancy=None):
+    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field, discrepancy=None,
+               region: Field | None = None, noise2: float = 0.0, refresh=None):
         """Run the coupled system on one frame pair; returns (iterations, converged,
         final mean |beta| in the band).
 
@@ -388,15 +421,26 @@ class MorphingTracker:
         g = ls.grid
         q = self.runtime.queue
         discrepancy = discrepancy or self.discrepancy
-        kernel = ls.band_kernel("tracking/features.cl", morph_kernel_name(ls, discrepancy),
-                                NCH=self.channels, DISC=DISCREPANCIES[discrepancy],
-                                WIN=self.ncc_radius)
+        extra = ()
+        if discrepancy == "adaptive":
+            kernel = ls.band_kernel("tracking/adaptive.cl", "morph_adaptive" if ls.brick is None
+                                    else "morph_adaptive_bricks", NCH=self.channels,
+                                    WIN=self.ncc_radius)
+            extra = ((region if region is not None else ls.u.cur).data.data,
+                     g.scalar(CONTRAST_NOISE * noise2 + 1e-6), g.scalar(self.curvature),
+                     g.scalar(DISCREPANCY_WEIGHT))
+        else:
+            kernel = ls.band_kernel("tracking/features.cl", morph_kernel_name(ls, discrepancy),
+                                    NCH=self.channels, DISC=DISCREPANCIES[discrepancy],
+                                    WIN=self.ncc_radius)
         pair = PingPong(f1)
         lam = self.shape_weight
         delta = self.huber_delta if discrepancy == "huber" else 0.02
         consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), g.scalar(lam),
                   g.scalar(delta), np.int32(g.sx), np.int32(g.plane))
         dt_cap = self.max_dt if lam == 0 else min(self.max_dt, 0.5 / lam)
+        if discrepancy == "adaptive" and self.curvature > 0:
+            dt_cap = min(dt_cap, 0.2 / self.curvature)  # the explicit curvature term's limit
         first_dt = min(self.dt, dt_cap)
         stats = None
         dt = first_dt
@@ -407,12 +451,16 @@ class MorphingTracker:
             if ls.band.n == 0:  # the contour vanished from the frame
                 converged = True
                 break
+            if refresh is not None and iterations and iterations % REGION_REFRESH == 0:
+                # The region term's statistics follow the contour (as Chan-Vese's do).
+                region = refresh()
+                extra = (region.data.data,) + extra[1:]
             if stats is None:
                 parts = ls.band_parts()
                 stats = cla.zeros(q, 5 * parts + 1, g.dtype)
             ls.launch_band(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
                            f2.data.data, ls.band_mask.data, prior.data.data, ls.u.nxt.data.data,
-                           pair.nxt.data.data, stats.data, g.scalar(dt), *consts)
+                           pair.nxt.data.data, stats.data, g.scalar(dt), *consts, *extra)
             ls.u.swap()
             pair.swap()
             iterations += 1
@@ -450,7 +498,14 @@ class MorphingTracker:
         # buffer of the grid will do.
         prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
         prepared_prev = self.prepared(0)
-        motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
+        pieces_motion = None
+        if self.motion == "components":
+
+            pieces_motion, motion = ComponentMotion(self.search_radius), None
+        else:
+            motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
+        adaptive = self.discrepancy == "adaptive"
+        region = None
         feats_prev = None
         fresh = True  # u is a signed distance with a band around its zero set
         for t in range(1, len(self.frames)):
@@ -475,16 +530,59 @@ class MorphingTracker:
                     ls.assign(u)
                     prepared_prev = np.stack([shift_image(c, shift) for c in prepared_prev])
                     fresh = False
+            if pieces_motion is not None:
+
+                # Contrast-normalised as for the Kalman model, with eps raised to twice the
+                # noise so that a flat, noisy patch is not blown up into texture.
+
+                eps = max(self.contrast_eps, 2 * float(np.sqrt(noise_variance(prepared))))
+                feats = local_contrast(prepared, self.contrast_radius, eps)
+                if feats_prev is None:
+                    feats_prev = local_contrast(prepared_prev, self.contrast_radius, eps)
+                pieces = pieces_motion.predict(feats_prev, feats, mask)
+                feats_prev = feats
+                u_moved, prev_moved, moved = ComponentMotion.apply(ls.values(), prepared_prev,
+                                                                   pieces, self.band_width)
+                if moved and (u_moved < 0).any() and not (u_moved < 0).all():
+                    ls.assign(u_moved)
+                    prepared_prev = prev_moved
+                    fresh = False
+                    big = max(pieces, key=lambda p: p[0].sum())
+                    shift = big[1]
             f1 = self._feature_field(prepared_prev, ls)
+            noise2, refresh = 0.0, None
+            if adaptive:
+
+                features = prepared if self._user is None else self._user[t]
+                noise2 = noise_variance(features)
+
+                region = region if region is not None else Field.empty(ls.grid)
+
+                def refresh(features=features, noise2=noise2, region=region):
+                    speed = np.zeros(features.shape[-2:])
+                    if self.region_weight > 0:
+                        speed = self.region_weight * region_field(
+                            features, ls.values() < 0, REGION_SIGMA, REGION_SEPARATION, noise2)
+                    # Into the same buffer each time; band cells never read its ghosts.
+                    padded = np.zeros(ls.grid.padded_shape, ls.grid.dtype)
+                    ls.grid.interior(padded)[...] = ls.pad(speed)[np.newaxis]
+                    region.data.set(padded)
+                    return region
+
+                region = refresh()
+                if self.region_weight == 0:
+                    refresh = None
             if not fresh:  # a frame without rebuilds may have bent u away from a distance
                 ls.rebuild(self.reinit_iterations)
             if self.shape_weight:
                 prior.assign(ls.u.cur)
             rebuilds0 = ls.rebuilds
-            iterations, converged, residual = self._morph(ls, f1, f2, prior)
+            iterations, converged, residual = self._morph(ls, f1, f2, prior, region=region,
+                                                          noise2=noise2, refresh=refresh)
             fresh = ls.rebuilds > rebuilds0
             u = ls.values()
             new_mask = u < 0
+
             if self.min_size > 0:
                 cleaned = self._clean(new_mask)
                 if (cleaned != new_mask).any() and cleaned.any() and not cleaned.all():
@@ -499,6 +597,41 @@ class MorphingTracker:
                              ls.rebuilds - rebuilds0, discrepancy=residual,
                              displacement=tuple(float(s) for s in shift))
             prepared_prev = prepared
+
+    def confidence(self, masks: ArrayLike) -> np.ndarray:
+        """The confidence per frame of a track of these frames (clpde.tracking.confidence).
+
+        Parameters
+        ----------
+        masks : array_like
+            (T, H, W) boolean masks, one per frame (e.g. the states' masks in turn).
+
+        Returns
+        -------
+        numpy.ndarray
+            (T,) float64 in [0, 1]: the calibrated probability that each frame's contour
+            still holds its object (frame 0: 1). Below `LOW_CONFIDENCE`: flag it.
+
+        Raises
+        ------
+        InputError
+            If the masks do not match the frames' count and size.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> yy, xx = np.mgrid[:40, :40]
+        >>> frames = np.stack([np.hypot(yy - 20, xx - 14 - 2 * t) < 8 for t in range(3)]) * 0.6
+        >>> tracker = MorphingTracker(frames, frames[0] > 0.3)
+        >>> tracker.confidence([s.mask for s in tracker.iterate()]).shape
+        (3,)
+        """
+
+        masks = np.asarray(masks, bool)
+        if masks.shape != (len(self.frames),) + self.first_mask.shape:
+            raise InputError(f"confidence needs one ({self.first_mask.shape[0]}, "
+                             f"{self.first_mask.shape[1]}) mask per frame, got {masks.shape}")
+        return track_confidence(self._scaled.mean(axis=1), masks)
 
     def _clean(self, mask: np.ndarray) -> np.ndarray:
         """Post-processing: drop components and fill holes smaller than min_size pixels."""
@@ -548,10 +681,10 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
 def track(frames: ArrayLike, first_mask: ArrayLike, *,
           features: str | ArrayLike | Callable = "intensity", equalize: bool | str = False,
           smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
-          max_iterations: int = 40, tol: float = 0.02, min_size: int = 0,
+          max_iterations: int | None = None, tol: float = 0.02, min_size: int = 0,
           device: DeviceLike = None, progress: bool | None = None,
           return_level_sets: bool = False, return_discrepancy: bool = False,
-          **options: Any) -> np.ndarray | tuple[np.ndarray, ...]:
+          return_confidence: bool = False, **options: Any) -> np.ndarray | tuple[np.ndarray, ...]:
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
     Parameters
@@ -595,11 +728,18 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     return_discrepancy : bool, optional
         Also return the (T,) final mean |beta| in each frame's band (0 for frame 0), whose
         high values mark frames of low confidence.
+    return_confidence : bool, optional
+        Also return the (T,) confidence per frame in [0, 1] (see Returns).
     **options
         MorphingTracker's other options: colour (every channel in the discrepancy),
-        discrepancy ('difference', the thesis; 'ncc'; 'huber'), motion (None, 'velocity',
-        'kalman'), shape_weight, storage ('lists', 'bricks8x8' or 'bricks16x4': the same
-        results), contrast_radius, ncc_radius, huber_delta, search_radius, dtype.
+        discrepancy ('ncc', the default; 'difference', the thesis; 'huber'; 'adaptive':
+        NCC where a window has contrast above the noise, F2 - F1 where it is flat, plus a
+        region term of weight region_weight and a curvature term of weight curvature,
+        better on the synthetic corpus and worse on real video and slices,
+        docs/tracking.md), motion ('kalman', the default; None; 'velocity'; 'components':
+        each connected piece matched on its own), shape_weight, storage ('lists',
+        'bricks8x8' or 'bricks16x4': the same results), contrast_radius, ncc_radius,
+        huber_delta, search_radius, region_weight, curvature, dtype.
 
     Returns
     -------
@@ -614,6 +754,10 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     ------
     InputError
         For frames, a mask or options that cannot be used; the message names the fix.
+    confidence : ndarray
+        Only with `return_confidence`: (T,) in [0, 1] (clpde.tracking.confidence: a model
+        calibrated on good and lost tracks of the calibration half of
+        benchmarks/track_corpus.py); frames below LOW_CONFIDENCE are likely lost.
 
     Examples
     --------
@@ -644,5 +788,6 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
         if levels is not None:
             levels[state.index] = state.level_set
     out = (masks,) + ((levels,) if return_level_sets else ()) + (
-        (residuals,) if return_discrepancy else ())
+        (residuals,) if return_discrepancy else ()) + (
+        (tracker.confidence(masks),) if return_confidence else ())
     return out[0] if len(out) == 1 else out

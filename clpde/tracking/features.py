@@ -73,10 +73,11 @@ def _halve(a):
     return 0.25 * (a[..., ::2, ::2] + a[..., 1::2, ::2] + a[..., ::2, 1::2] + a[..., 1::2, 1::2])
 
 
-def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, centre, radius: int):
+def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, centre, radius: int,
+                       dilation: int = 3):
     """The (dy, dx) within about `radius` of `centre` minimising the mean absolute
-    difference between cur(x + d) and prev(x) over the mask dilated by 3 px (features
-    (C, H, W)); also returns the final cost map.
+    difference between cur(x + d) and prev(x) over the mask dilated by `dilation` px
+    (features (C, H, W)); also returns the final cost map.
 
     Coarse to fine: the search runs at half resolution over radius / 2, then at full
     resolution within one pixel of the coarse answer, and the best integer shift is
@@ -84,7 +85,7 @@ def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, cent
     moving 1.5 px per frame is not seen as 1 or 2)."""
     from scipy import ndimage
 
-    weight = ndimage.binary_dilation(mask, iterations=3)
+    weight = ndimage.binary_dilation(mask, iterations=dilation) if dilation > 0 else mask
     cy, cx = (round(c) for c in centre)
     coarse_w = _halve(weight[np.newaxis].astype(np.float64))[0] > 0.5
     if radius >= 2 and coarse_w.any() and min(mask.shape) >= 16:

