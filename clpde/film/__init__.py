@@ -1,0 +1,1 @@
+"""Film restoration: defect detection, temporal fill, films in and out, long films."""
