@@ -17,7 +17,7 @@ import pyopencl as cl
 
 from .. import __version__
 from ..runtime import ClpdeError
-from . import batch, denoise, devices, diffuse, inpaint, regions, surface, track
+from . import batch, denoise, devices, diffuse, inpaint, regions, restore, surface, track
 
 SUBCOMMANDS = [
     devices.add_devices_parser,
@@ -25,6 +25,7 @@ SUBCOMMANDS = [
     denoise.add_denoise_parser,
     track.add_track_parser,
     inpaint.add_inpaint_parser,
+    restore.add_restore_parser,
     surface.add_surface_parser,
     regions.add_regions_parser,
     batch.add_batch_parser,

@@ -1,0 +1,85 @@
+"""`clpde restore`: find the dirt and scratches of a film and fill them from the neighbouring
+frames (clpde.film.restore.restore_film), film in, film out."""
+
+from __future__ import annotations
+
+import sys
+
+from ..imagedata import InputError
+from ._common import add_device_argument
+
+
+def add_film_arguments(parser) -> None:
+    """The options of every film restoration (`clpde restore`; `clpde inpaint VIDEO` shares
+    the running ones)."""
+    group = parser.add_argument_group("running", "one process by default; Dask on request")
+    cluster = group.add_mutually_exclusive_group()
+    cluster.add_argument("--workers", type=int, default=None, metavar="N",
+                         help="restore on N local Dask worker processes, in chunks of frames")
+    cluster.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                         help="restore on a running Dask cluster, e.g. tcp://HOST:8786")
+    group.add_argument("--chunk-frames", type=int, default=None, metavar="K",
+                       help="frames per Dask task (rounded up to whole windows; default 64)")
+
+
+def add_restore_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "restore", help="find and fill a film's dust, dirt and scratches",
+        description="Detect the blotches and line scratches of FILM and fill them from the "
+                    "neighbouring frames after motion compensation (spatial inpainting where "
+                    "no neighbour sees the region). FILM is a film (.mp4, .mkv, .mov, .avi, "
+                    "...) or a folder of frames; OUT a film or a folder. A film keeps its "
+                    "audio (copied), subtitles, timestamps, frame rate, colour description "
+                    "and metadata. Memory stays bounded by a sliding window of frames.")
+    parser.add_argument("input", metavar="FILM", help="the film, or a folder of frames")
+    parser.add_argument("-o", "--output", metavar="OUT", required=True,
+                        help="the restored film (.mp4, .mkv, .mov, .avi) or a folder")
+    parser.add_argument("--mask", metavar="MASK", default=None,
+                        help="fill these masks instead of detecting: one image for every "
+                             "frame, or a folder of one per frame (in name order)")
+    parser.add_argument("--masks-out", metavar="DIR", default=None,
+                        help="write the masks filled, one PNG per frame (mask_00000.png, ...)")
+    parser.add_argument("--grow", type=float, default=0, metavar="PX",
+                        help="grow the masks by PX pixels (a lossy codec spreads damage 1-2 px "
+                             "past it; default 0)")
+    parser.add_argument("--overlay", metavar="OUT.mp4", default=None,
+                        help="also write a film of the detections drawn over the frames (red: "
+                             "blotches, yellow: line scratches)")
+    parser.add_argument("--codec", choices=("h264", "h265", "ffv1"), default=None,
+                        help="the output's codec: h264 (default), h265, or ffv1, lossless in "
+                             ".mkv (RGB planes: outside the masks the pixels are the input's); "
+                             "10-bit where the input has it")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace output folders (of clpde's kinds of files only)")
+    add_film_arguments(parser)
+    add_device_argument(parser)
+    parser.set_defaults(run=run_restore)
+
+
+def film_run_options(args) -> dict:
+    """The running options of a film restoration from the parsed arguments."""
+    if args.chunk_frames is not None and args.workers is None and args.scheduler is None:
+        raise InputError("--chunk-frames applies with --workers or --scheduler")
+    return {"workers": args.workers, "scheduler": args.scheduler,
+            "chunk_frames": args.chunk_frames}
+
+
+def report(command: str, result) -> None:
+    where = f"{result.workers} Dask worker(s)" if result.workers else "one process"
+    rate = result.frames / result.seconds if result.seconds else 0.0
+    print(f"{command}: {result.frames} frames ({rate:.2f} frames/s on {where}), "
+          f"{result.masked_pixels} pixels filled; wrote {result.output}", file=sys.stderr)
+
+
+def run_restore(args) -> int:
+    from ..film.restore import restore_film
+    from ..runtime import use_device
+
+    if args.device is not None:
+        use_device(args.device)
+    result = restore_film(args.input, args.output, mask=args.mask, masks_out=args.masks_out,
+                          grow=args.grow, overlay=args.overlay, codec=args.codec,
+                          overwrite=args.overwrite, overwrite_option="--overwrite",
+                          **film_run_options(args))
+    report("restore", result)
+    return 0
