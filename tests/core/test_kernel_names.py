@@ -14,12 +14,12 @@ KERNEL_DIR = ROOT / "kernels"
 
 # kernel("file.cl", "name" ...), new_kernel(...), program("file.cl" ...); and any lookup that
 # names no file first (a kernel name alone, or a variable), which the one signature forbids
-WITH_FILE = re.compile(r"""kernel\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']""")
+WITH_FILE = re.compile(r"""kernel\(\s*["']([\w/]+\.cl)["']\s*,\s*["'](\w+)["']""")
 # a table's ("file.cl", "name") pairs, looked up through a variable (flows.STEP_KERNELS)
-PAIR = re.compile(r"""\(\s*["'](\w+\.cl)["']\s*,\s*["'](\w+)["']\s*\)""")
-FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["'](\w+\.cl)["']""")
+PAIR = re.compile(r"""\(\s*["']([\w/]+\.cl)["']\s*,\s*["'](\w+)["']\s*\)""")
+FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["']([\w/]+\.cl)["']""")
 NOT_LITERAL = re.compile(r"""\.(?:new_)?kernel\("""
-                         r"""(?!\s*["']\w+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
+                         r"""(?!\s*["'][\w/]+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
 DEFINED = re.compile(r"__kernel\s+(?:__attribute__\s*\(\(.*?\)\)\s*)?void\s+(\w+)", re.S)
 INCLUDE = re.compile(r'#include\s+"([\w.]+)"')
 
