@@ -12,7 +12,7 @@ def add_batch_parser(subparsers) -> None:
     from ..batch import COMMANDS, MANIFEST
 
     parser = subparsers.add_parser(
-        "batch", help="run inpaint, denoise, diffuse, track or surface over many files",
+        "batch", help="run inpaint, denoise, diffuse, track, surface or restore over many files",
         description="Run COMMAND on every input over Dask workers, one output per input in "
                     "OUTDIR (images under their own name; track and surface results in a "
                     "folder named after the input). COMMAND's own options follow the inputs "
@@ -30,7 +30,7 @@ def add_batch_parser(subparsers) -> None:
                         help=" | ".join(COMMANDS))
     parser.add_argument("inputs", metavar="INPUT", nargs="+",
                         help="input files (images; track: videos, folders or TIFF stacks; "
-                             "surface: meshes)")
+                             "surface: meshes; restore: films)")
     parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
                         help="output folder (created if missing)")
     cluster = parser.add_mutually_exclusive_group()
@@ -43,9 +43,11 @@ def add_batch_parser(subparsers) -> None:
                         help="PoCL threads per local worker (default: cores / workers)")
     masks = parser.add_mutually_exclusive_group()
     masks.add_argument("--mask", metavar="MASK", default=None,
-                       help="inpaint: one mask for every input; track: the first-frame mask")
+                       help="inpaint: one mask for every input; track: the first-frame mask; "
+                            "restore: masks to fill instead of detecting")
     masks.add_argument("--masks", metavar="DIR", default=None,
-                       help="a folder with one mask per input, named like it")
+                       help="a folder with one mask per input, named like it (restore: or a "
+                            "folder of per-frame masks named like the film's stem)")
     parser.add_argument("--flow", default=None,
                         help="surface: the flow (heat, tv, ...); diffuse: passed to diffuse")
     parser.add_argument("--tile", action="store_true",

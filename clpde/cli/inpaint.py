@@ -10,7 +10,6 @@ import numpy as np
 from ..imagedata import InputError
 from ..io import MASK_RULE, check_not_overwriting_input, read_image, read_mask
 from ..runtime import get_runtime
-from ..video import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 from ._common import (
     OUTPUT_FOLDER_RULE,
     add_device_argument,
@@ -20,6 +19,7 @@ from ._common import (
     show_progress,
     split_alpha,
 )
+from .restore import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 
 
 def add_inpaint_parser(subparsers) -> None:
@@ -84,7 +84,7 @@ def add_inpaint_parser(subparsers) -> None:
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
                              "to the observed pixel) instead of bright = inpaint")
     add_device_argument(parser)
-    add_sequence_arguments(parser)  # a video or an image folder: clpde/video.py
+    add_sequence_arguments(parser)  # a film or a frame folder: clpde restore's path
     parser.set_defaults(run=run_inpaint)
 
 
@@ -110,7 +110,7 @@ def run_inpaint(args) -> int:
     from ..inpaint import inpaint
     from ..io import write_gif
 
-    if prepare_sequence_args(args):  # a film or a folder of frames, over Dask workers
+    if prepare_sequence_args(args):  # a film or a folder of frames: clpde restore's path
         return run_sequence_inpaint(args)
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")

@@ -83,3 +83,67 @@ def run_restore(args) -> int:
                           **film_run_options(args))
     report("restore", result)
     return 0
+
+
+# ---- `clpde inpaint VIDEO --mask MASK -o OUT`: the same restoration, given the masks ------------
+def add_sequence_arguments(parser) -> None:
+    """The options of `clpde inpaint` for a film or a folder of frames."""
+    group = parser.add_argument_group(
+        "films and frame folders", "IMAGE may be a film or a folder of frames, restored as "
+        "`clpde restore IMAGE --mask MASK` restores it; MASK (or --mask) one image or a folder "
+        "of per-frame masks; -o a film or a folder")
+    group.add_argument("--mask", dest="mask_option", metavar="MASK", default=None,
+                       help="the mask, as an option (same as the MASK argument)")
+    add_film_arguments(parser)
+
+
+def prepare_sequence_args(args) -> bool:
+    """Fold --mask into MASK; True when IMAGE is a film or a folder of frames."""
+    from pathlib import Path
+
+    from ..film.container import is_film
+
+    option = getattr(args, "mask_option", None)
+    if option is not None:
+        if args.mask is not None:
+            raise InputError("give the mask once: as MASK or as --mask")
+        args.mask = option
+    source = args.input
+    sequence = bool(source) and (Path(source).is_dir() or is_film(source))
+    if not sequence and any(getattr(args, name, None) is not None
+                            for name in ("workers", "scheduler", "chunk_frames")):
+        raise InputError("--workers, --scheduler and --chunk-frames apply to a film or a folder "
+                         "of frames; for many image files use `clpde batch inpaint`")
+    return sequence
+
+
+def _fill_options(args) -> dict:
+    """The inpainting options given for a film (those left at their defaults are not)."""
+    from .inpaint import TRANSPORT_OPTIONS
+
+    options = {name: getattr(args, name) for name in (*TRANSPORT_OPTIONS, "levels", "method")
+               if getattr(args, name) is not None}
+    if args.colour != "channels":
+        options["colour"] = args.colour
+    return options
+
+
+def run_sequence_inpaint(args) -> int:
+    """`clpde inpaint FILM --mask MASK -o OUT`: clpde.film's restoration with given masks,
+    the inpainting options given on the command line passed to the filler."""
+    from ..film.restore import restore_film
+    from ..runtime import use_device
+
+    fill_options = _fill_options(args)
+    if args.gif or args.demo:
+        raise InputError("--gif and --demo apply to one image, not a film or frame folder")
+    if not args.mask:
+        raise InputError("give the mask: clpde inpaint FILM --mask MASK -o OUT (or let "
+                         "`clpde restore FILM -o OUT` find the damage)")
+    if args.device is not None:
+        use_device(args.device)
+    result = restore_film(args.input, args.output, mask=args.mask,
+                          fill_options=fill_options or None, overwrite=args.overwrite,
+                          overwrite_option="--overwrite", **film_run_options(args))
+    report("inpaint", result)
+    return 0
