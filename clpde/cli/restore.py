@@ -118,14 +118,15 @@ def prepare_sequence_args(args) -> bool:
 
 
 def _fill_options(args) -> dict:
-    """The inpainting options given for a film (those left at their defaults are not)."""
+    """The inpainting options given for a film (those left at their defaults are not): for
+    clpde.inpaint where the neighbouring frames do not see the damage."""
     from .inpaint import TRANSPORT_OPTIONS
 
-    options = {name: getattr(args, name) for name in (*TRANSPORT_OPTIONS, "levels", "method")
+    spatial = {name: getattr(args, name) for name in (*TRANSPORT_OPTIONS, "levels", "method")
                if getattr(args, name) is not None}
     if args.colour != "channels":
-        options["colour"] = args.colour
-    return options
+        spatial["colour"] = args.colour
+    return {"spatial": spatial} if spatial else {}
 
 
 def run_sequence_inpaint(args) -> int:

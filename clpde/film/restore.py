@@ -262,7 +262,6 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
     like = src.reader.info if src.reader is not None else None
     digest = hashlib.sha256()
     masked = written = 0
-    bar = progress_bar(progress, src.count, "clpde restore", unit="frame")
     with contextlib.ExitStack() as stack:
         if to_film:
             writer = stack.enter_context(FilmWriter(output, like=like, codec=codec,
@@ -276,6 +275,7 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
             FilmWriter(overlay, like=like, rate=src.rate, copy_streams=False))
         # The overlay draws over the damaged frames: a second reader, in step.
         originals = None if overlay is None else iter(_Source(source))
+        bar = progress_bar(progress, src.count, "clpde restore", unit="frame")
         stack.callback(bar.close)
         use_dask = any(x is not None for x in (workers, threads, scheduler, client))
         cluster = stack.enter_context(_cluster(use_dask, workers, threads, scheduler, client))
