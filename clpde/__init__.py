@@ -5,6 +5,7 @@ from . import (
     surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
 )
 from .batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
+from .film import detect_defects, inpaint_video
 from .imagedata import InputError
 from .inpaint import Inpainting, inpaint
 from .planar import FLOWS, PlanarFlow, diffuse, stability_limit
@@ -27,10 +28,12 @@ __all__ = [
     "batch",
     "data",
     "denoise_tv",
+    "detect_defects",
     "devices",
     "diffuse",
     "get_runtime",
     "inpaint",
+    "inpaint_video",
     "stability_limit",
     "surface",
     "track",

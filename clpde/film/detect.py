@@ -1,0 +1,449 @@
+"""Finding film damage: blotches (dirt, dust) and line scratches, as masks.
+
+Films (T >= 2): each frame is compared with its motion-compensated neighbours, up to
+`radius` frames each side (kernels/film/detect.cl):
+
+- blotches: a pixel that lies outside the range of all its neighbours' values, with at
+  least one neighbour on each side valid (a blotch disagrees with both sides, an occlusion
+  or a revealed region with one side only), in noise units that grow with the neighbours'
+  disagreement among themselves (motion the flow does not follow). Flicker is taken out
+  by a per-neighbour gain and offset; the noise (grain) level is a robust estimate from
+  the temporal residual. Hysteresis keeps weak pixels joined to strong ones. A candidate
+  region that reappears displaced in the previous or next frame (block matching within
+  `search` pixels) is a moving object, not dirt, and is dropped.
+- line scratches: thin, near-vertical, long lines in the temporal residual (the frame
+  minus the median of its compensated neighbours), so that scene structure that moves
+  with the camera (poles, door frames, text) cancels: a column mean of the clamped
+  residual, a thin-line response across it in robust noise units, summed with the matching
+  response of the previous and next frames within a pixel of drift; kept where a vertical
+  run is long and most of its rows show the line.
+
+Single images (T = 1, a scanned photograph) use spatial cues only: specks that stand out
+from their neighbourhood at several scales (white and black morphological top-hats on
+discs of radius 2, 4 and 8, compact components only), and scratches from the same line
+detector run on the image minus its horizontal median.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import cv2
+import numpy as np
+import pyopencl.array as cla
+from numpy.typing import ArrayLike
+from scipy import ndimage
+
+from .._validation import InputError
+from ..rof import _noise_std
+from ..runtime import get_runtime
+from ._compensate import FILM_FLOW, Compensator
+from ._frames import check_grow, film_planes, grey
+
+# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
+KERNEL_FILES = ("film/detect.cl",)
+
+CLEAN, BLOTCH, SCRATCH = 0, 1, 2
+
+# The first pass's flows: cheaper, their errors only decide what the second pass masks.
+FIRST_PASS_FLOW = replace(FILM_FLOW, iterations=10)
+
+# Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
+BLOTCH_THRESHOLD = 4.0  # noise units of the blotch score (films)
+SCRATCH_THRESHOLD = 5.0  # robust noise units of the line response
+PHOTO_SPECK_THRESHOLD = 6.0  # noise units of the top-hats (single images)
+GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
+COLUMN_HALF = 12  # rows each side of the scratch detector's column mean
+LINE_FLANK = 3  # the line response's flanks at 3 and 4 pixels: lines up to 5 px wide
+RUN_SUPPORT = 0.4  # share of a scratch run's rows whose residual shows the line
+CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
+FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
+MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
+
+
+def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
+    """The connected regions of a > low that reach a > high somewhere."""
+    labels, n = ndimage.label(a > low)
+    strong = np.zeros(n + 1, bool)
+    strong[np.unique(labels[a > high])] = True
+    strong[0] = False
+    return strong[labels]
+
+
+def _window(t: int, T: int, radius: int) -> tuple[list[int], list[int]]:
+    """Neighbour offsets of frame t and their sides. At the film's ends, where one side is
+    missing, the nearer and farther neighbours of the other side stand for the two sides,
+    so a blotch must still disagree with two frames that agree with each other."""
+    offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
+    sides = [-1 if k < 0 else 1 for k in offs]
+    if len(set(sides)) == 1 and len(offs) >= 2:
+        near = sorted(offs, key=abs)
+        half = max(1, len(near) // 2)
+        sides = [-1 if k in near[:half] else 1 for k in offs]
+    return offs, sides
+
+
+def _robust_scale(a: np.ndarray) -> float:
+    a = a[np.isfinite(a)]
+    return float(1.4826 * np.median(np.abs(a - np.median(a)))) + 1e-9
+
+
+class _Kernels:
+    def __init__(self, rt):
+        self.rt = rt
+        self.blotch = rt.kernel("film/detect.cl", "blotch_score")
+        self.colmean = rt.kernel("film/detect.cl", "column_mean")
+        self.line = rt.kernel("film/detect.cl", "line_response")
+        self.cont = rt.kernel("film/detect.cl", "scratch_continuity")
+
+    def line_score(self, resid: cla.Array, lim: float) -> np.ndarray:
+        """The thin-line response of a residual plane, in its robust noise units."""
+        q = self.rt.queue
+        ny, nx = resid.shape
+        g, loc = self.rt.items(nx, ny)
+        col = cla.empty(q, (ny, nx), np.float32)
+        out = cla.empty(q, (ny, nx), np.float32)
+        self.colmean(q, g, loc, resid.data, col.data, np.int32(min(COLUMN_HALF, ny // 4)),
+                     np.float32(lim), np.int32(nx), np.int32(ny))
+        self.line(q, g, loc, col.data, out.data, np.int32(LINE_FLANK), np.int32(nx),
+                  np.int32(ny))
+        score = out.get()
+        return score / _robust_scale(score[:, LINE_FLANK + 1:nx - LINE_FLANK - 1])
+
+    def continuity(self, zs: np.ndarray) -> np.ndarray:
+        q = self.rt.queue
+        T, ny, nx = zs.shape
+        g, loc = self.rt.items(nx, ny)
+        dev = [cla.to_device(q, np.ascontiguousarray(z)) for z in zs]
+        out = np.empty_like(zs)
+        tmp = cla.empty(q, (ny, nx), np.float32)
+        for t in range(T):
+            prev, nxt = dev[max(t - 1, 0)], dev[min(t + 1, T - 1)]
+            self.cont(q, g, loc, prev.data, dev[t].data, nxt.data, np.int32(t > 0),
+                      np.int32(t < T - 1), tmp.data, np.int32(nx), np.int32(ny))
+            out[t] = tmp.get()
+        return out
+
+
+def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: float,
+                  min_length: int, lines: np.ndarray | None = None,
+                  signed: bool = False) -> np.ndarray:
+    """Long vertical runs of the line score above threshold whose rows mostly show the
+    line in the residual itself, with their adjacent columns above half the threshold.
+
+    lines, given: the frame's own signed thin lines (+1 bright, -1 dark); a run counts only
+    where the frame shows a line of its sign within a pixel (a scratch is a line in the
+    frame; the neighbours' scratches warped onto it leave ghost lines in the residual
+    only). signed: return +1 / -1 / 0 by the line's sign instead of a bool mask."""
+    ny, nx = zc.shape
+    out = np.zeros((ny, nx), np.int8)
+    for sgn in (1.0, -1.0):
+        s = sgn * zc
+        hit = s > threshold
+        if lines is not None:
+            own = ndimage.binary_dilation(lines == sgn, structure=np.ones((1, 3), bool))
+            hit &= own
+        if not hit.any():
+            continue
+        # bridge gaps of a few rows (a scratch fades in places)
+        hit = ndimage.binary_closing(hit, structure=np.ones((7, 1), bool)) | hit
+        labels, n = ndimage.label(hit, structure=np.array([[0, 1, 0]] * 3, bool))
+        if n == 0:
+            continue
+        sizes = np.bincount(labels.ravel())
+        shown = sgn * resid
+        shown3 = np.maximum(np.maximum(shown, np.roll(shown, 1, axis=1)),
+                            np.roll(shown, -1, axis=1))
+        support = np.bincount(labels.ravel(), weights=(shown3 > sigma).ravel())
+        good = (sizes >= min_length) & (support >= RUN_SUPPORT * sizes)
+        good[0] = False
+        core = good[labels]
+        if not core.any():
+            continue
+        wide = ndimage.binary_dilation(core, structure=np.ones((1, 3), bool))
+        out[core | (wide & (s > 0.5 * threshold))] = int(sgn)
+    return out if signed else out != 0
+
+
+def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray,
+                  search: int) -> np.ndarray:
+    """Drop the components of comp_mask (frame t) that reappear displaced in frame t - 1
+    or t + 1: a moving object the flow missed is found again nearby, a blotch is not."""
+    labels, n = ndimage.label(comp_mask)
+    if n == 0:
+        return comp_mask
+    T, ny, nx = G.shape
+    keep = np.ones(n + 1, bool)
+    keep[0] = False
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        y0, y1 = max(sl[0].start - 3, 0), min(sl[0].stop + 3, ny)
+        x0, x1 = max(sl[1].start - 3, 0), min(sl[1].stop + 3, nx)
+        region = ndimage.binary_dilation(labels[y0:y1, x0:x1] == idx, iterations=2)
+        area = region.sum()
+        e_comp = float((resid[y0:y1, x0:x1][region] ** 2).mean())
+        templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
+        weights = region.astype(np.float32)
+        best = np.inf
+        for s in (t - 1, t + 1):
+            if not 0 <= s < T:
+                continue
+            wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
+            wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
+            win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
+            if win.shape[0] < templ.shape[0] or win.shape[1] < templ.shape[1]:
+                continue
+            res = cv2.matchTemplate(win, templ, cv2.TM_SQDIFF, mask=weights)
+            # the compensated place itself is not a displaced match: exclude zero motion
+            # by requiring the match to beat the compensated error by MATCH_RATIO
+            best = min(best, float(res.min()) / area)
+        if best < MATCH_RATIO * e_comp:
+            keep[idx] = False
+    return keep[labels]
+
+
+def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of=None):
+    """Blotch scores, temporal residuals and noise levels of every frame against its
+    compensated neighbours; with line_of, also each frame's line score (its continuity
+    comes after)."""
+    ny, nx = comp.ny, comp.nx
+    q = comp.q
+    g, loc = comp.rt.items(nx, ny)
+    zb = np.empty((T, ny, nx), np.float32)
+    res = np.empty((T, ny, nx), np.float32)
+    zs = np.empty((T, ny, nx), np.float32) if line_of else None
+    least = np.empty((T, ny, nx), np.float32)
+    sigmas = np.empty(T)
+    z_dev = cla.empty(q, (ny, nx), np.float32)
+    r_dev = cla.empty(q, (ny, nx), np.float32)
+    m_dev = cla.empty(q, (ny, nx), np.float32)
+    for t in range(T):
+        offs, sides = _window(t, T, radius)
+        nb = comp.neighbours(t, offs, sides)
+        args = (comp.grey[t].data, nb.grey.data, nb.valid.data,
+                cla.to_device(q, nb.gain).data, cla.to_device(q, nb.offset).data,
+                cla.to_device(q, nb.side).data, np.int32(len(offs)))
+        kern.blotch(q, g, loc, *args, np.float32(1.0), np.float32(GAMMA), z_dev.data,
+                    r_dev.data, m_dev.data, np.int32(nx), np.int32(ny))
+        r = r_dev.get()
+        # the residual against the median of ~4 neighbours has about 1.16 times the
+        # frame's own noise deviation; a floor keeps noiseless synthetic frames sane
+        sigma = max(_robust_scale(r) / 1.16, 0.5 / 255)
+        kern.blotch(q, g, loc, *args, np.float32(sigma), np.float32(GAMMA), z_dev.data,
+                    r_dev.data, m_dev.data, np.int32(nx), np.int32(ny))
+        zb[t], res[t], least[t], sigmas[t] = z_dev.get(), r, m_dev.get(), sigma
+        if line_of:
+            zs[t] = kern.line_score(m_dev, 3.0 * sigma)
+    return zb, res, least, sigmas, zs
+
+
+def film_scores(G: np.ndarray, device, radius: int) -> dict:
+    """The per-pixel evidence of every frame: blotch scores zb, line scores with their
+    continuity zc, temporal residuals, noise levels and the frames' own signed thin lines
+    (the thresholds come after, in film_kinds)."""
+    T, ny, nx = G.shape
+    kern = _Kernels(get_runtime(device))
+    # Thin vertical lines of the frames themselves (scene lines and scratches alike) are
+    # kept out of the flows: a scratch fixed on the film would otherwise pull the flow
+    # around it to zero, and the compensated neighbours would show it too.
+    lines = np.zeros((T, ny, nx), np.int8)
+    for t in range(T):
+        lines[t] = _spatial_lines(kern, G[t], CANDIDATE_THRESHOLD, max(12, ny // 5))
+    near_line = np.stack([ndimage.binary_dilation(x != 0, structure=np.ones((1, 5), bool))
+                          for x in lines])
+    # A first, cheaper pass finds what stands out; the flows are then estimated again with
+    # it masked out, since a large blotch drags the flow around it even with a robust data
+    # term, and the neighbours warped by that flow disagree where they should agree.
+    comp = Compensator(G, device, weights=1.0 - near_line, params=FIRST_PASS_FLOW)
+    zb = _blotch_pass(comp, kern, T, radius)[0]
+    suspect = np.stack([ndimage.binary_dilation(_hysteresis(np.abs(z), FIRST_PASS_LEVEL,
+                                                            2 * FIRST_PASS_LEVEL))
+                        for z in zb])
+    # Each neighbour's own suspects are left out where they land: a neighbour's own blotch
+    # would otherwise pass for disagreement among the neighbours.
+    wide = np.stack([ndimage.binary_dilation(x) for x in suspect])
+    comp = Compensator(G, device, weights=1.0 - (near_line | wide), exclude=suspect)
+    zb, res, least, sigmas, zs = _blotch_pass(comp, kern, T, radius, line_of=True)
+    return {"zb": zb, "zc": kern.continuity(zs), "res": res, "least": least,
+            "sigma": sigmas, "lines": lines}
+
+
+def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
+               scratch_threshold: float, search: int, min_length: int) -> np.ndarray:
+    """Kinds (T, H, W) from film_scores' evidence and the thresholds."""
+    T, ny, nx = G.shape
+    zb, zc, res, sigmas = scores["zb"], scores["zc"], scores["res"], scores["sigma"]
+    kinds = np.zeros((T, ny, nx), np.int8)
+    for t in range(T):
+        scratch = _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold,
+                                min_length, scores["lines"][t])
+        blotch = _hysteresis(np.abs(zb[t]), 0.5 * blotch_threshold, blotch_threshold)
+        blotch &= ~ndimage.binary_dilation(scratch)
+        blotch = _motion_check(blotch, G, t, res[t], search)
+        kinds[t][blotch] = BLOTCH
+        kinds[t][scratch] = SCRATCH
+    return kinds
+
+
+def _spatial_lines(kern: _Kernels, G: np.ndarray, threshold: float,
+                   min_length: int) -> np.ndarray:
+    """Thin, long, near-vertical lines of one image from spatial cues alone, signed (+1
+    bright, -1 dark, 0 none): the line detector on the image minus its horizontal median."""
+    sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
+    resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
+    zs = kern.line_score(cla.to_device(kern.rt.queue, np.ascontiguousarray(resid, np.float32)),
+                         3.0 * sigma)
+    return _scratch_mask(zs, resid, sigma, threshold, min_length, signed=True)
+
+
+def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
+           min_length: int, device) -> np.ndarray:
+    ny, nx = G.shape
+    sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
+    score = np.zeros((ny, nx), np.float32)
+    for rad in (2, 4, 8):
+        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
+        white = cv2.morphologyEx(G, cv2.MORPH_TOPHAT, disc)
+        black = cv2.morphologyEx(G, cv2.MORPH_BLACKHAT, disc)
+        score = np.maximum(score, np.maximum(white, black) / sigma)
+    weak = score > 0.5 * speck_threshold
+    labels, n = ndimage.label(weak)
+    keep = np.zeros(n + 1, bool)
+    strong_ids = np.unique(labels[score > speck_threshold])
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        if idx not in strong_ids or sl is None:
+            continue
+        h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
+        area = int((labels[sl] == idx).sum())
+        # specks are compact and no larger than the largest disc: strokes and edges are not
+        keep[idx] = max(h, w) <= 3 * min(h, w) + 2 and area >= 0.3 * h * w and max(h, w) <= 20
+    specks = keep[labels]
+    resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
+    rt = get_runtime(device)
+    kern = _Kernels(rt)
+    zs = kern.line_score(cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)),
+                         3.0 * sigma)
+    scratch = _scratch_mask(zs, resid, sigma, scratch_threshold, min_length)
+    kinds = np.zeros((ny, nx), np.int8)
+    kinds[specks & ~scratch] = BLOTCH
+    kinds[scratch] = SCRATCH
+    return kinds[np.newaxis]
+
+
+def _grow_kinds(kinds: np.ndarray, px: float) -> np.ndarray:
+    if px <= 0:
+        return kinds
+    out = kinds.copy()
+    for t in range(kinds.shape[0]):
+        hit = kinds[t] > 0
+        if not hit.any():
+            continue
+        dist, (iy, ix) = ndimage.distance_transform_edt(~hit, return_indices=True)
+        ring = (dist <= px) & ~hit
+        out[t][ring] = kinds[t][iy[ring], ix[ring]]
+    return out
+
+
+def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
+                   blotch_threshold: float | None = None,
+                   scratch_threshold: float | None = None, grow: float = 0,
+                   radius: int = 2, search: int = 24, min_length: int | None = None,
+                   return_kinds: bool = False, device: str | int | None = None
+                   ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Find blotches (dirt, dust) and line scratches in film frames or a scanned photo.
+
+    For a film (two frames or more) every frame is compared with its motion-compensated
+    neighbours, `radius` frames each side (optical flow on the device): a blotch is a
+    region that disagrees with the neighbours on both sides while they agree with each
+    other, after a per-frame flicker correction, in units of the grain's level; regions
+    that reappear displaced in the next or previous frame (objects the flow missed) are
+    not blotches. A line scratch is a thin, near-vertical, long line in the frame minus
+    its compensated neighbours (scene lines moving with the camera cancel there), kept when
+    it is long and continues over consecutive frames. A scratch that moves exactly with
+    the scene (a static shot) cannot be told from scene structure this way.
+    A single image (2-D, or colour with channel_axis) uses spatial cues only: compact specks
+    that stand out at several scales (morphological top-hats) and long thin vertical lines.
+
+    Parameters
+    ----------
+    frames : array, (T, H, W) or (T, H, W, C); or one image (H, W) or (H, W, C)
+        Integer or float frames, never modified; colour is averaged to grey.
+    channel_axis : int, optional
+        The channel axis of colour frames (e.g. -1).
+    blotch_threshold : float, optional
+        The blotch sensitivity: the score, in noise units, a blotch must reach somewhere
+        (its region grows to half of it). Lower finds fainter dirt and more false alarms.
+        Default 4 for films, 6 for single images (the top-hat score).
+    scratch_threshold : float, optional
+        The scratch sensitivity, in robust noise units of the line response (default 5).
+    grow : float
+        Grow the found damage by a disc of this radius in pixels (0: as found); grown
+        pixels take the kind of the nearest damaged pixel.
+    radius : int
+        Neighbour frames each side that a frame is compared with (at least 2 recommended;
+        the film's ends use the frames on their one side).
+    search : int
+        How far, in pixels, a candidate region is searched for in the previous and next
+        frames to tell a moving object from a blotch.
+    min_length : int, optional
+        The shortest scratch in rows (default: 40% of the frame height, at least 24).
+    return_kinds : bool
+        Also return the kind of each pixel.
+    device : str or int, optional
+        As for `clpde.diffuse`.
+
+    Returns
+    -------
+    mask : bool ndarray (T, H, W), or (H, W) for one 2-D or colour image
+        True where damaged.
+    kinds : int8 ndarray of the same shape, with return_kinds
+        0 clean, 1 blotch, 2 line scratch.
+
+    Raises
+    ------
+    InputError
+        Frames of a shape or dtype clpde cannot use, or a bad parameter.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import clpde
+    >>> rng = np.random.default_rng(0)
+    >>> from scipy.ndimage import gaussian_filter
+    >>> scene = gaussian_filter(rng.random((64, 96)), 2)
+    >>> frames = np.stack([scene[:, t:t + 64] for t in range(5)])  # a pan
+    >>> frames[2, 30:36, 30:36] = 0.0  # a dark blotch on the middle frame
+    >>> mask = clpde.detect_defects(frames)
+    >>> bool(mask[2, 30:36, 30:36].all()), int(mask[[0, 1, 3, 4]].sum())
+    (True, 0)
+    """
+    planes, layout = film_planes(frames, channel_axis)
+    G = grey(planes)
+    T, ny, nx = G.shape
+    px = check_grow(grow)
+    for name, val in (("radius", radius), ("search", search)):
+        if not isinstance(val, (int, np.integer)) or val < 1:
+            raise InputError(f"{name} must be a positive integer, not {val!r}")
+    for name, val in (("blotch_threshold", blotch_threshold),
+                      ("scratch_threshold", scratch_threshold)):
+        if val is not None and not (np.isfinite(val) and val > 0):
+            raise InputError(f"{name} must be a positive number, not {val!r}")
+    if min_length is None:
+        min_length = max(24, int(0.4 * ny))
+    elif not isinstance(min_length, (int, np.integer)) or min_length < 1:
+        raise InputError(f"min_length must be a positive integer, not {min_length!r}")
+    sthr = SCRATCH_THRESHOLD if scratch_threshold is None else float(scratch_threshold)
+    if T == 1:
+        bthr = PHOTO_SPECK_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
+        kinds = _photo(G[0], bthr, sthr, int(min_length), device)
+    else:
+        bthr = BLOTCH_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
+        kinds = film_kinds(G, film_scores(G, device, int(radius)), bthr, sthr, int(search),
+                           int(min_length))
+    kinds = _grow_kinds(kinds, px)
+    if layout.photo:
+        kinds = kinds[0]
+    mask = kinds > 0
+    return (mask, kinds) if return_kinds else mask
+
+
+__all__ = ["BLOTCH", "CLEAN", "SCRATCH", "detect_defects"]
