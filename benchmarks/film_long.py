@@ -5,7 +5,7 @@
 
 The film is made here: 720x576 at 25 fps, H.264 with an AAC tone, a pan (bouncing, 1-2 px
 a frame, with a slow vertical drift) over a panorama of three scikit-image photos (coffee,
-chelsea, astronaut), with damage: 12 blotches a frame (dark and bright, 1-6 px radius, soft
+chelsea, astronaut), with damage: 12 blotches a PAL frame (the same density at other sizes) (dark and bright, 1-6 px radius, soft
 edges, 35-100 % opacity) and a 2-px vertical scratch that drifts and is present 50 frames
 out of 100. It is generated frame by frame, never held whole.
 
@@ -65,7 +65,7 @@ def damage(frame: np.ndarray, t: int, rng) -> tuple[np.ndarray, np.ndarray]:
     out = frame.astype(np.float32)
     mask = np.zeros(frame.shape[:2], bool)
     yy, xx = np.mgrid[-8:9, -8:9]
-    for _ in range(12):
+    for _ in range(max(1, round(12 * WIDTH * HEIGHT / (720 * 576)))):  # the density of PAL's 12
         r = rng.uniform(1, 6)
         y, x = rng.integers(10, HEIGHT - 10), rng.integers(10, WIDTH - 10)
         soft = np.clip((r + 1 - np.hypot(yy, xx)) / 2, 0, 1) * rng.uniform(0.35, 1.0)
@@ -74,7 +74,7 @@ def damage(frame: np.ndarray, t: int, rng) -> tuple[np.ndarray, np.ndarray]:
         patch += soft[..., None] * (value - patch)
         mask[y - 8: y + 9, x - 8: x + 9] |= soft > 0.05
     if (t // 50) % 2 == 0:
-        col = int(300 + 40 * np.sin(t / 40))
+        col = int(WIDTH * (0.42 + 0.055 * np.sin(t / 40)))
         out[:, col: col + 2] = np.minimum(out[:, col: col + 2] + 70, 255)
         mask[:, col: col + 2] = True
     return out.round().astype(np.uint8), mask
@@ -183,6 +183,9 @@ def main() -> None:
     parser.add_argument("--chunk-frames", type=int, default=64)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--modes", default="one,dask")
+    parser.add_argument("--size", default="720x576",
+                        help="frame size WxH (default PAL 720x576; smaller to show memory flat "
+                             "in length on long runs quickly)")
     parser.add_argument("--json", default=str(RESULTS))
     # the measured run itself
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
@@ -194,6 +197,8 @@ def main() -> None:
     if args.child:
         child(args)
         return
+    global WIDTH, HEIGHT
+    WIDTH, HEIGHT = (int(x) for x in args.size.lower().split("x"))
     lengths = [int(x) for x in args.lengths.split(",")] + ([3000] if args.full else [])
     rows = []
     with tempfile.TemporaryDirectory(prefix="film_long.") as tmp:
@@ -206,7 +211,7 @@ def main() -> None:
             made = time.perf_counter() - start
             for mode in args.modes.split(","):
                 out = tmp / f"out_{length}_{mode}.mp4"
-                row = {"length": length, "make_seconds": made,
+                row = {"length": length, "size": args.size, "make_seconds": made,
                        **measure(film, masks, out, mode, args)}
                 out.unlink()
                 rows.append(row)

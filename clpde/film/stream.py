@@ -22,6 +22,7 @@ window machinery can be run and tested with any of them.
 from __future__ import annotations
 
 import functools
+import inspect
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -354,6 +355,10 @@ def _call(function: Callable, frames: np.ndarray, *args, channel_axis=None, **op
     return function(frames, *args, channel_axis=channel_axis, **options)
 
 
+def _default(function: Callable, name: str) -> int:
+    return int(inspect.signature(function).parameters[name].default)
+
+
 def film_work(*, grow: float = 0, detect_options: dict | None = None,
               fill_options: dict | None = None) -> WindowWork:
     """clpde's film restoration as window work: clpde.detect_defects and clpde.inpaint_video.
@@ -371,14 +376,22 @@ def film_work(*, grow: float = 0, detect_options: dict | None = None,
     -------
     WindowWork
         With the detector's and filler's temporal reach.
+
+    Examples
+    --------
+    >>> film_work(grow=2).context(detecting=True)
+    6
     """
-    from . import detect as detect_module
-    from . import fill as fill_module
+    from .detect import detect_defects
+    from .fill import inpaint_video
 
     detect_options = {"return_kinds": True, "grow": grow, **(detect_options or {})}
-    detect = functools.partial(_call, detect_module.detect_defects, **detect_options)
-    fill = functools.partial(_call, fill_module.inpaint_video, **(fill_options or {}))
-    return WindowWork(fill=fill, detect=detect,
-                      fill_radius=int(getattr(fill_module, "TEMPORAL_RADIUS", 2)),
-                      detect_radius=int(getattr(detect_module, "TEMPORAL_RADIUS", 2)),
-                      grow=grow)
+    fill_options = dict(fill_options or {})
+    # The detector compares a frame with `radius` frames either side, and then reads the
+    # line scores of the frames either side of it (a scratch continues over frames), and
+    # the next and previous frames (a moving object reappears there): one frame further.
+    detect_radius = detect_options.get("radius", _default(detect_defects, "radius")) + 1
+    fill_radius = fill_options.get("radius", _default(inpaint_video, "radius"))
+    return WindowWork(fill=functools.partial(_call, inpaint_video, **fill_options),
+                      detect=functools.partial(_call, detect_defects, **detect_options),
+                      fill_radius=int(fill_radius), detect_radius=int(detect_radius), grow=grow)
