@@ -5,9 +5,9 @@
 
 The film is made here: 720x576 at 25 fps, H.264 with an AAC tone, a pan (bouncing, 1-2 px
 a frame, with a slow vertical drift) over a panorama of three scikit-image photos (coffee,
-chelsea, astronaut), with damage: 12 blotches a PAL frame (the same density at other sizes) (dark and bright, 1-6 px radius, soft
-edges, 35-100 % opacity) and a 2-px vertical scratch that drifts and is present 50 frames
-out of 100. It is generated frame by frame, never held whole.
+chelsea, astronaut), with damage: 12 blotches a PAL frame, the same density at other sizes
+(dark and bright, 1-6 px radius, soft edges, 35-100 % opacity) and a 2-px vertical scratch
+that drifts and is present 50 frames out of 100. It is generated frame by frame, never held whole.
 
 For each length (frames), ``clpde restore FILM -o OUT.mp4`` runs (through
 clpde.film.restore.restore_film) in a fresh process:
