@@ -1,5 +1,6 @@
-"""`clpde restore`, `clpde inpaint FILM --mask`, and `clpde batch restore`, with clpde's own
-detector and filler, on small films made with PyAV (32x24 px, 12 frames, AAC, mov_text)."""
+"""`clpde restore`, `clpde inpaint FILM --mask`, `clpde batch restore` and the window, with
+clpde's own detector and filler, on small films made with PyAV (32x24 px, 12 frames, AAC,
+mov_text)."""
 
 from __future__ import annotations
 
@@ -114,3 +115,36 @@ def test_batch_restore_takes_many_films(tmp_path, capsys):
         out = tmp_path / "out" / f"reel{k}.mp4"
         assert film_info(out).frames == 6
         assert packets(out, "audio") == packets(films[k], "audio")
+
+
+def test_the_window_gives_the_whole_film_at_once():
+    """Blocks of 4 frames, each with its context, give what clpde.detect_defects and
+    clpde.inpaint_video give on all 16 frames at once: the context covers their reach."""
+    import clpde
+    from clpde.film.stream import film_work, restore_stream
+
+    damaged, _ = damage(clean_frames(16))
+    masks, kinds = clpde.detect_defects(damaged, channel_axis=-1, grow=1, return_kinds=True)
+    filled = clpde.inpaint_video(damaged, masks, channel_axis=-1)
+    expected = np.where(masks[..., None], filled, damaged)
+    streamed = list(restore_stream(damaged, 16, film_work(grow=1), block=4))
+    assert masks.any()
+    assert np.array_equal(np.stack([m for _, m, _ in streamed]), masks)
+    assert np.array_equal(np.stack([k for _, _, k in streamed]), kinds)
+    assert np.array_equal(np.stack([r for r, _, _ in streamed]), expected)
+
+
+def test_restore_on_two_dask_workers_equals_one_process(tmp_path, film, capsys):
+    """clpde's own cluster (2 spawned workers, one PoCL thread each) in chunks of 4 frames
+    against this process: the same lossless film and masks."""
+    source, _ = film
+    runs = {"one": [], "two": ["--workers", "2", "--chunk-frames", "4"]}
+    for name, extra in runs.items():
+        assert main(["restore", str(source), "-o", str(tmp_path / f"{name}.mkv"), "--codec",
+                     "ffv1", "--masks-out", str(tmp_path / f"m_{name}"), *extra]) == 0
+    assert "2 Dask worker(s)" in capsys.readouterr().err
+    assert np.array_equal(decoded(tmp_path / "one.mkv"), decoded(tmp_path / "two.mkv"))
+    for t in range(T):
+        name = f"mask_{t:05d}.png"
+        assert (tmp_path / "m_one" / name).read_bytes() == \
+            (tmp_path / "m_two" / name).read_bytes()
