@@ -447,7 +447,9 @@ class FilmWriter:
         if (stream.width, stream.height) != (width, height):
             self._out.metadata[_SIZE_TAG] = f"clpde size={width}x{height}"
         stream.pix_fmt = pix_fmt
-        self._time_base = self.like.time_base if self.like else 1 / self.rate
+        # AVI counts frames, not time: its time base is one frame.
+        self._time_base = (1 / self.rate if self.format == "avi" or not self.like
+                           else self.like.time_base)
         cc.time_base = self._time_base
         stream.time_base = self._time_base
         options = {}
@@ -512,7 +514,11 @@ class FilmWriter:
         picture = picture.reformat(format=self._pix_fmt,
                                    dst_colorspace=self._colour["space"] or None,
                                    dst_color_range=self._colour["range"])
-        picture.pts = self.count if pts is None else int(pts)
+        if pts is None:
+            pts = self.count
+        elif self.like is not None and self._time_base != self.like.time_base:
+            pts = round(pts * self.like.time_base / self._time_base)
+        picture.pts = int(pts)
         picture.time_base = self._time_base
         if self.like is not None and self._side_packets is not None:
             self._mux_side(float(picture.pts * self._time_base))

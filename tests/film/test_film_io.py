@@ -361,3 +361,14 @@ def test_chunked_run_on_dask_equals_one_process(tmp_path, client):
     assert (found[3:9, 4:-4, 20].mean(axis=1) > 0.7).all()
     digest = hashlib.sha256(decoded(tmp_path / "one.mkv").tobytes()).hexdigest()
     assert digest == chunked.frames_sha256  # lossless: the file holds those frames
+
+
+def test_a_subtitle_the_container_cannot_take_is_dropped_with_a_warning(tmp_path, film):
+    source, maskdir, _ = film
+    with pytest.warns(UserWarning, match=r"subtitle stream 2 \(mov_text\) cannot go in a "
+                      r"\.avi file and was dropped; write \.mkv"):
+        out = restore_film(source, tmp_path / "out.avi", mask=maskdir, work=SPATIAL).output
+    info = film_info(out)
+    assert (info.frames, info.rate) == (T, 25)  # AVI counts frames: timestamps rescaled
+    assert packets(out, "subtitle") == []
+    assert [p for p, _ in packets(out, "audio")] == [p for p, _ in packets(source, "audio")]
