@@ -140,19 +140,24 @@ def child(args) -> None:
     mask = args.masks if args.work == "spatial" else None
     record = {"mode": args.mode}
     if args.mode == "one":
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         result = restore_film(args.film, args.out, mask=mask, work=work, block=args.block,
                               progress=False)
         record["seconds"] = time.perf_counter() - start
+        record["cpu_seconds"] = time.process_time() - cpu  # every thread of the process
     else:
         from clpde.batch import connect
 
         with connect(workers=args.workers, threads=1) as (client, info):
             record["cluster_seconds"] = info["seconds"]
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
+            before = client.run(time.process_time)
             result = restore_film(args.film, args.out, mask=mask, work=work, block=args.block,
                                   client=client, chunk_frames=args.chunk_frames, progress=False)
             record["seconds"] = time.perf_counter() - start
+            after = client.run(time.process_time)
+            record["worker_cpu_seconds"] = sorted(after[w] - before[w] for w in after)
+            record["cpu_seconds"] = time.process_time() - cpu + sum(record["worker_cpu_seconds"])
             record["worker_peak_mib"] = sorted(client.run(_peak_rss_mib).values())
     record.update(frames=result.frames, fps=result.frames / record["seconds"],
                   peak_mib=_peak_rss_mib(), masked_pixels=result.masked_pixels,
@@ -216,8 +221,9 @@ def main() -> None:
                 out.unlink()
                 rows.append(row)
                 workers = row.get("worker_peak_mib")
-                print(f"{length:5d} frames {mode:4s}: {row['fps']:6.2f} frames/s, "
-                      f"{row['seconds']:8.1f} s, peak {row['peak_mib']:7.0f} MiB"
+                print(f"{length:5d} frames {mode:4s}: {row['fps']:6.3f} frames/s, "
+                      f"{row['seconds']:8.1f} s, CPU {row['cpu_seconds']:8.1f} s, "
+                      f"peak {row['peak_mib']:7.0f} MiB"
                       + (f", workers {', '.join(f'{w:.0f}' for w in workers)} MiB"
                          if workers else ""), flush=True)
             film.unlink()
