@@ -11,7 +11,8 @@ import pytest
 
 MODULES = ["clpde.data", "clpde.planar", "clpde.rof", "clpde.imagedata", "clpde.io",
            "clpde.surface.implicit",
-           "clpde.colour", "clpde.runtime", "clpde.inpaint", "clpde.track"]
+           "clpde.colour", "clpde.runtime", "clpde.inpaint", "clpde.track",
+           "clpde.film.stream", "clpde.film.chunks", "clpde.film.container"]
 
 
 @pytest.mark.parametrize("name", MODULES)
