@@ -226,6 +226,10 @@ def main() -> None:
                       f"peak {row['peak_mib']:7.0f} MiB"
                       + (f", workers {', '.join(f'{w:.0f}' for w in workers)} MiB"
                          if workers else ""), flush=True)
+                # after every row: a run stopped early keeps what it measured
+                Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+                Path(args.json).write_text(json.dumps({"rows": rows, "args": vars(args)},
+                                                      indent=1) + "\n")
             film.unlink()
     summary = {}
     for mode in args.modes.split(","):
