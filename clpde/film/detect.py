@@ -49,8 +49,8 @@ CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 FIRST_PASS_FLOW = replace(FILM_FLOW, iterations=10)
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 4.0  # noise units of the blotch score (films)
-SCRATCH_THRESHOLD = 5.0  # robust noise units of the line response
+BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films)
+SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
 COLUMN_HALF = 12  # rows each side of the scratch detector's column mean
@@ -446,9 +446,9 @@ def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
     blotch_threshold : float, optional
         The blotch sensitivity: the score, in noise units, a blotch must reach somewhere
         (its region grows to half of it). Lower finds fainter dirt and more false alarms.
-        Default 4 for films, 12 for single images (the top-hat score).
+        Default 6 for films, 12 for single images (the top-hat score).
     scratch_threshold : float, optional
-        The scratch sensitivity, in robust noise units of the line response (default 5).
+        The scratch sensitivity, in robust noise units of the line response (default 3).
     grow : float
         Grow the found damage by a disc of this radius in pixels (0: as found); grown
         pixels take the kind of the nearest damaged pixel.
