@@ -28,11 +28,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import cv2
 import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
-from scipy import ndimage
+from scipy import ndimage, signal
+from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._validation import InputError
 from ..rof import _noise_std
@@ -183,6 +183,17 @@ def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: fl
     return out if signed else out != 0
 
 
+def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """Sum over the template of weight * (window - template)^2 at every placement that fits
+    (the 'valid' placements, top-left corners), by three correlations."""
+    w = win.astype(np.float64)
+    tpl = templ.astype(np.float64)
+    flip = (slice(None, None, -1), slice(None, None, -1))
+    a = signal.fftconvolve(w * w, weight[flip], mode="valid")
+    b = signal.fftconvolve(w, (weight * tpl)[flip], mode="valid")
+    return a - 2.0 * b + float((weight * tpl * tpl).sum())
+
+
 def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray,
                   search: int) -> np.ndarray:
     """Drop the components of comp_mask (frame t) that reappear displaced in the frames
@@ -224,7 +235,7 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
             win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
             if win.shape[0] < th or win.shape[1] < tw:
                 continue
-            res = cv2.matchTemplate(win, templ, cv2.TM_SQDIFF, mask=region.astype(np.float32))
+            res = _masked_ssd(win, templ, region.astype(np.float64))
             my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
             diff = (templ - win[my:my + th, mx:mx + tw]) ** 2
             found.append((float(np.median(diff[own])), float(diff[region].mean()),
@@ -373,9 +384,8 @@ def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
     for rad in (1, 2, 4, 8):
         # at each scale, the components that stand out and fit in its disc: a speck, not
         # a stroke, an edge or a broad bump
-        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
-        white = cv2.morphologyEx(G, cv2.MORPH_TOPHAT, disc)
-        black = cv2.morphologyEx(G, cv2.MORPH_BLACKHAT, disc)
+        white = white_tophat(G, footprint=disk(rad))
+        black = black_tophat(G, footprint=disk(rad))
         found = np.maximum(white, black) > speck_threshold * sigma
         labels, n = ndimage.label(found)
         keep = np.zeros(n + 1, bool)
