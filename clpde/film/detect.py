@@ -39,6 +39,7 @@ from ..rof import _noise_std
 from ..runtime import get_runtime
 from ._compensate import FILM_FLOW, Compensator
 from ._frames import check_grow, film_planes, grey
+from .lines import static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -60,6 +61,8 @@ CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
 REGION_HALF = 2  # the region evidence's square: 5x5
+HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
+STATIC_SCALE = 0.5  # the static-line detector's threshold per unit of scratch_threshold
 
 
 def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -337,16 +340,20 @@ def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
     T, ny, nx = G.shape
     zb, zc, res, sigmas = scores["zb"], scores["zc"], scores["res"], scores["sigma"]
     kinds = np.zeros((T, ny, nx), np.int8)
+    # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
+    # the frames' own thin lines that persist over neighbouring frames
+    still = (static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
+             if STATIC_SCALE > 0 else np.zeros((T, ny, nx), bool))
     for t in range(T):
         scratch = _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold,
-                                min_length)
+                                min_length) | still[t]
         # a pixel's evidence: its own score, or its region's where its own residual shows
         # the same sign beyond the noise (so a strong blotch's region score does not spill
         # past its edge)
         zr, r = scores["zr"][t], res[t]
         own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
         a = np.maximum(np.abs(zb[t]), np.where(own, np.abs(zr), 0.0))
-        blotch = _hysteresis(a, 0.5 * blotch_threshold, blotch_threshold)
+        blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
         blotch &= ~ndimage.binary_dilation(scratch)
         blotch = _motion_check(blotch, G, t, res[t], search)
         # a tall thin "blotch" is a scratch the line detector missed (too short or faint
