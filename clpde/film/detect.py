@@ -16,7 +16,9 @@ Films (T >= 2): each frame is compared with its motion-compensated neighbours, u
   with the camera (poles, door frames, text) cancels: a column mean of the clamped
   residual, a thin-line response across it in robust noise units, summed with the matching
   response of the previous and next frames within a pixel of drift; kept where a vertical
-  run is long and most of its rows show the line.
+  run is long and most of its rows show the line. Scratches that stay in place (a static
+  shot) leave no residual: the frames' own thin, long lines that persist over neighbouring
+  frames are added (clpde.film.lines).
 
 Single images (T = 1, a scanned photograph) use spatial cues only: specks that stand out
 from their neighbourhood at several scales (white and black morphological top-hats on
