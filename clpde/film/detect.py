@@ -16,29 +16,32 @@ Films (T >= 2): each frame is compared with its motion-compensated neighbours, u
   with the camera (poles, door frames, text) cancels: a column mean of the clamped
   residual, a thin-line response across it in robust noise units, summed with the matching
   response of the previous and next frames within a pixel of drift; kept where a vertical
-  run is long and most of its rows show the line.
+  run is long and most of its rows show the line. Scratches that stay in place (a static
+  shot) leave no residual: the frames' own thin, long lines that persist over neighbouring
+  frames are added (clpde.film.lines).
 
 Single images (T = 1, a scanned photograph) use spatial cues only: specks that stand out
 from their neighbourhood at several scales (white and black morphological top-hats on
-discs of radius 2, 4 and 8, compact components only), and scratches from the same line
-detector run on the image minus its horizontal median.
+discs of radius 1, 2, 4 and 8, compact components that step off their surroundings), and
+scratches from the same line detector run on the image minus its horizontal median.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-import cv2
 import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
-from scipy import ndimage
+from scipy import ndimage, signal
+from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._validation import InputError
 from ..rof import _noise_std
 from ..runtime import get_runtime
 from ._compensate import FILM_FLOW, Compensator
 from ._frames import check_grow, film_planes, grey
+from .lines import static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -49,16 +52,19 @@ CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 FIRST_PASS_FLOW = replace(FILM_FLOW, iterations=10)
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 4.0  # noise units of the blotch score (films)
-SCRATCH_THRESHOLD = 5.0  # robust noise units of the line response
-PHOTO_SPECK_THRESHOLD = 6.0  # noise units of the top-hats (single images)
+BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films)
+SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
+PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
 COLUMN_HALF = 12  # rows each side of the scratch detector's column mean
 LINE_FLANK = 3  # the line response's flanks at 3 and 4 pixels: lines up to 5 px wide
-RUN_SUPPORT = 0.4  # share of a scratch run's rows whose residual shows the line
+RUN_SUPPORT = 0.5  # share of a scratch run's rows whose residual shows the line
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
+REGION_HALF = 2  # the region evidence's square: 5x5
+HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
+STATIC_SCALE = 0.5  # the static-line detector's threshold per unit of scratch_threshold
 
 
 def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -95,6 +101,7 @@ class _Kernels:
         self.colmean = rt.kernel("film/detect.cl", "column_mean")
         self.line = rt.kernel("film/detect.cl", "line_response")
         self.cont = rt.kernel("film/detect.cl", "scratch_continuity")
+        self.box = rt.kernel("film/detect.cl", "box_mean")
 
     def line_score(self, resid: cla.Array, lim: float) -> np.ndarray:
         """The thin-line response of a residual plane, in its robust noise units."""
@@ -127,14 +134,16 @@ class _Kernels:
 
 def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: float,
                   min_length: int, lines: np.ndarray | None = None,
-                  signed: bool = False) -> np.ndarray:
+                  signed: bool = False, thin: bool = True) -> np.ndarray:
     """Long vertical runs of the line score above threshold whose rows mostly show the
     line in the residual itself, with their adjacent columns above half the threshold.
 
     lines, given: the frame's own signed thin lines (+1 bright, -1 dark); a run counts only
     where the frame shows a line of its sign within a pixel (a scratch is a line in the
     frame; the neighbours' scratches warped onto it leave ghost lines in the residual
-    only). signed: return +1 / -1 / 0 by the line's sign instead of a bool mask."""
+    only). signed: return +1 / -1 / 0 by the line's sign instead of a bool mask. thin:
+    require quiet flanks (a temporal residual is quiet beside a scratch; an image's own
+    texture is not, so the spatial detectors leave it out)."""
     ny, nx = zc.shape
     out = np.zeros((ny, nx), np.int8)
     for sgn in (1.0, -1.0):
@@ -154,21 +163,55 @@ def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: fl
         shown = sgn * resid
         shown3 = np.maximum(np.maximum(shown, np.roll(shown, 1, axis=1)),
                             np.roll(shown, -1, axis=1))
-        support = np.bincount(labels.ravel(), weights=(shown3 > sigma).ravel())
-        good = (sizes >= min_length) & (support >= RUN_SUPPORT * sizes)
+        support = np.bincount(labels.ravel(), weights=(shown3 > 2.0 * sigma).ravel())
+        # a scratch is thin: beside it, 3 to 5 columns away on both sides, the residual is
+        # quiet in most rows; an object the flow missed leaves a broad residual
+        quiet = np.ones((ny, nx), bool)
+        for off in (-5, -4, -3, 3, 4, 5):
+            quiet &= np.abs(np.roll(resid, off, axis=1)) < 2.0 * sigma
+        calm = np.bincount(labels.ravel(), weights=quiet.ravel())
+        good = (sizes >= min_length) & (support >= RUN_SUPPORT * np.maximum(sizes,
+                                                                          min_length))
+        if thin:
+            good &= calm >= RUN_SUPPORT * sizes
         good[0] = False
         core = good[labels]
         if not core.any():
             continue
+        # the column mean carries a run past the scratch's ends and the drift match
+        # beside it: keep the rows and columns whose own residual shows the line (gaps of
+        # a few rows bridged, as above)
+        shows = sgn * resid > sigma
+        rows = ndimage.binary_closing(shows, structure=np.ones((9, 1), bool)) | shows
         wide = ndimage.binary_dilation(core, structure=np.ones((1, 3), bool))
-        out[core | (wide & (s > 0.5 * threshold))] = int(sgn)
+        out[(core & rows) | (wide & (s > 0.5 * threshold) & shows)] = int(sgn)
     return out if signed else out != 0
+
+
+def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """Sum over the template of weight * (window - template)^2 at every placement that fits
+    (the 'valid' placements, top-left corners), by three correlations."""
+    w = win.astype(np.float64)
+    tpl = templ.astype(np.float64)
+    flip = (slice(None, None, -1), slice(None, None, -1))
+    a = signal.fftconvolve(w * w, weight[flip], mode="valid")
+    b = signal.fftconvolve(w, (weight * tpl)[flip], mode="valid")
+    return a - 2.0 * b + float((weight * tpl * tpl).sum())
 
 
 def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray,
                   search: int) -> np.ndarray:
-    """Drop the components of comp_mask (frame t) that reappear displaced in frame t - 1
-    or t + 1: a moving object the flow missed is found again nearby, a blotch is not."""
+    """Drop the components of comp_mask (frame t) that reappear displaced in the frames
+    before and after: a moving object the flow missed is found again nearby, a blotch is
+    not.
+
+    Each component, with a ring of two pixels for context, is matched within `search`
+    pixels of its place in each neighbour. It moved if, at the best places, its own pixels
+    differ by less than MATCH_RATIO of their difference from the compensated neighbours
+    (medians of squares),
+    in both neighbours, at places that one velocity explains (steady motion; chance
+    matches of a blotch do not line up so). The film's first and last frames use the next
+    two frames on their one side; a film of two frames needs the match of the ring too."""
     labels, n = ndimage.label(comp_mask)
     if n == 0:
         return comp_mask
@@ -178,26 +221,39 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
     for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
         y0, y1 = max(sl[0].start - 3, 0), min(sl[0].stop + 3, ny)
         x0, x1 = max(sl[1].start - 3, 0), min(sl[1].stop + 3, nx)
-        region = ndimage.binary_dilation(labels[y0:y1, x0:x1] == idx, iterations=2)
-        area = region.sum()
-        e_comp = float((resid[y0:y1, x0:x1][region] ** 2).mean())
+        own = labels[y0:y1, x0:x1] == idx
+        region = ndimage.binary_dilation(own, iterations=2)
+        r2 = resid[y0:y1, x0:x1] ** 2
+        # medians: a component may carry some clean pixels or a trail beside the object
+        e_own, e_region = float(np.median(r2[own])), float(r2[region].mean())
         templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
-        weights = region.astype(np.float32)
-        best = np.inf
-        for s in (t - 1, t + 1):
+        th, tw = templ.shape
+        found = []
+        # the frames each side; at the film's ends the next two on the one side
+        pair = (t - 1, t + 1) if 0 < t < T - 1 else ((t + 1, t + 2) if t == 0 else
+                                                       (t - 1, t - 2))
+        for s in pair:
             if not 0 <= s < T:
                 continue
             wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
             wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
             win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
-            if win.shape[0] < templ.shape[0] or win.shape[1] < templ.shape[1]:
+            if win.shape[0] < th or win.shape[1] < tw:
                 continue
-            res = cv2.matchTemplate(win, templ, cv2.TM_SQDIFF, mask=weights)
-            # the compensated place itself is not a displaced match: exclude zero motion
-            # by requiring the match to beat the compensated error by MATCH_RATIO
-            best = min(best, float(res.min()) / area)
-        if best < MATCH_RATIO * e_comp:
-            keep[idx] = False
+            res = _masked_ssd(win, templ, region.astype(np.float64))
+            my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
+            diff = (templ - win[my:my + th, mx:mx + tw]) ** 2
+            found.append((float(np.median(diff[own])), float(diff[region].mean()),
+                          np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t)))
+        if not found or not all(f[0] < MATCH_RATIO * e_own for f in found):
+            continue
+        if len(found) == 2:
+            # one velocity explains both places (displacements per frame of offset)
+            (_, _, v0), (_, _, v1) = found
+            moved = np.hypot(*(v0 - v1)) <= 3.0 and np.hypot(*v0) >= 1.0
+        else:
+            moved = found[0][1] < 2 * MATCH_RATIO * e_region
+        keep[idx] = not moved
     return keep[labels]
 
 
@@ -216,6 +272,8 @@ def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of
     z_dev = cla.empty(q, (ny, nx), np.float32)
     r_dev = cla.empty(q, (ny, nx), np.float32)
     m_dev = cla.empty(q, (ny, nx), np.float32)
+    sides_dev = [cla.empty(q, (ny, nx), np.float32) for _ in range(4)]
+    zr = np.empty((T, ny, nx), np.float32)
     for t in range(T):
         offs, sides = _window(t, T, radius)
         nb = comp.neighbours(t, offs, sides)
@@ -223,17 +281,28 @@ def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of
                 cla.to_device(q, nb.gain).data, cla.to_device(q, nb.offset).data,
                 cla.to_device(q, nb.side).data, np.int32(len(offs)))
         kern.blotch(q, g, loc, *args, np.float32(1.0), np.float32(GAMMA), z_dev.data,
-                    r_dev.data, m_dev.data, np.int32(nx), np.int32(ny))
+                    r_dev.data, m_dev.data, sides_dev[0].data, sides_dev[1].data,
+                    np.int32(nx), np.int32(ny))
         r = r_dev.get()
         # the residual against the median of ~4 neighbours has about 1.16 times the
         # frame's own noise deviation; a floor keeps noiseless synthetic frames sane
         sigma = max(_robust_scale(r) / 1.16, 0.5 / 255)
         kern.blotch(q, g, loc, *args, np.float32(sigma), np.float32(GAMMA), z_dev.data,
-                    r_dev.data, m_dev.data, np.int32(nx), np.int32(ny))
+                    r_dev.data, m_dev.data, sides_dev[0].data, sides_dev[1].data,
+                    np.int32(nx), np.int32(ny))
         zb[t], res[t], least[t], sigmas[t] = z_dev.get(), r, m_dev.get(), sigma
+        # region evidence: each side's residual averaged over 5x5, both of one sign, in the
+        # robust units of that average (which knows the grain's own correlation)
+        for src, dst in zip(sides_dev[:2], sides_dev[2:], strict=True):
+            kern.box(q, g, loc, src.data, dst.data, np.int32(REGION_HALF), np.int32(nx),
+                     np.int32(ny))
+        bp, bn = sides_dev[2].get(), sides_dev[3].get()
+        same = (np.sign(bp) == np.sign(bn)) & (bp != 0)
+        zr[t] = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / (
+            _robust_scale(bp))
         if line_of:
             zs[t] = kern.line_score(m_dev, 3.0 * sigma)
-    return zb, res, least, sigmas, zs
+    return zb, res, least, sigmas, zs, zr
 
 
 def film_scores(G: np.ndarray, device, radius: int) -> dict:
@@ -262,8 +331,8 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     # would otherwise pass for disagreement among the neighbours.
     wide = np.stack([ndimage.binary_dilation(x) for x in suspect])
     comp = Compensator(G, device, weights=1.0 - (near_line | wide), exclude=suspect)
-    zb, res, least, sigmas, zs = _blotch_pass(comp, kern, T, radius, line_of=True)
-    return {"zb": zb, "zc": kern.continuity(zs), "res": res, "least": least,
+    zb, res, least, sigmas, zs, zr = _blotch_pass(comp, kern, T, radius, line_of=True)
+    return {"zb": zb, "zr": zr, "zc": kern.continuity(zs), "res": res, "least": least,
             "sigma": sigmas, "lines": lines}
 
 
@@ -273,12 +342,30 @@ def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
     T, ny, nx = G.shape
     zb, zc, res, sigmas = scores["zb"], scores["zc"], scores["res"], scores["sigma"]
     kinds = np.zeros((T, ny, nx), np.int8)
+    # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
+    # the frames' own thin lines that persist over neighbouring frames
+    still = (static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
+             if STATIC_SCALE > 0 else np.zeros((T, ny, nx), bool))
     for t in range(T):
         scratch = _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold,
-                                min_length, scores["lines"][t])
-        blotch = _hysteresis(np.abs(zb[t]), 0.5 * blotch_threshold, blotch_threshold)
+                                min_length) | still[t]
+        # a pixel's evidence: its own score, or its region's where its own residual shows
+        # the same sign beyond the noise (so a strong blotch's region score does not spill
+        # past its edge)
+        zr, r = scores["zr"][t], res[t]
+        own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
+        a = np.maximum(np.abs(zb[t]), np.where(own, np.abs(zr), 0.0))
+        blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
         blotch &= ~ndimage.binary_dilation(scratch)
         blotch = _motion_check(blotch, G, t, res[t], search)
+        # a tall thin "blotch" is a scratch the line detector missed (too short or faint
+        # for its run test in this frame)
+        labels, _ = ndimage.label(blotch)
+        for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+            h = sl[0].stop - sl[0].start
+            if h >= 0.5 * min_length and (labels[sl] == idx).sum() <= 4 * h:
+                scratch[sl] |= labels[sl] == idx
+                blotch[sl] &= labels[sl] != idx
         kinds[t][blotch] = BLOTCH
         kinds[t][scratch] = SCRATCH
     return kinds
@@ -292,37 +379,43 @@ def _spatial_lines(kern: _Kernels, G: np.ndarray, threshold: float,
     resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
     zs = kern.line_score(cla.to_device(kern.rt.queue, np.ascontiguousarray(resid, np.float32)),
                          3.0 * sigma)
-    return _scratch_mask(zs, resid, sigma, threshold, min_length, signed=True)
+    return _scratch_mask(zs, resid, sigma, threshold, min_length, signed=True, thin=False)
 
 
 def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
            min_length: int, device) -> np.ndarray:
     ny, nx = G.shape
-    sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
-    score = np.zeros((ny, nx), np.float32)
-    for rad in (2, 4, 8):
-        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
-        white = cv2.morphologyEx(G, cv2.MORPH_TOPHAT, disc)
-        black = cv2.morphologyEx(G, cv2.MORPH_BLACKHAT, disc)
-        score = np.maximum(score, np.maximum(white, black) / sigma)
-    weak = score > 0.5 * speck_threshold
-    labels, n = ndimage.label(weak)
-    keep = np.zeros(n + 1, bool)
-    strong_ids = np.unique(labels[score > speck_threshold])
-    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        if idx not in strong_ids or sl is None:
-            continue
-        h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
-        area = int((labels[sl] == idx).sum())
-        # specks are compact and no larger than the largest disc: strokes and edges are not
-        keep[idx] = max(h, w) <= 3 * min(h, w) + 2 and area >= 0.3 * h * w and max(h, w) <= 20
-    specks = keep[labels]
+    # the grain's level from the image minus its 5x5 median: film grain is correlated over
+    # a pixel or two, which the finest-scale estimate of denoising misses
+    sigma = max(_robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")),
+                0.5 / 255)
+    specks = np.zeros((ny, nx), bool)
+    for rad in (1, 2, 4, 8):
+        # at each scale, the components that stand out and fit in its disc: a speck, not
+        # a stroke, an edge or a broad bump
+        white = white_tophat(G, footprint=disk(rad))
+        black = black_tophat(G, footprint=disk(rad))
+        found = np.maximum(white, black) > speck_threshold * sigma
+        labels, n = ndimage.label(found)
+        keep = np.zeros(n + 1, bool)
+        for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+            h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
+            area = int((labels[sl] == idx).sum())
+            if not (max(h, w) <= 2 * rad + 1 and max(h, w) <= 3 * min(h, w) + 1
+                    and area >= 0.3 * h * w):
+                continue
+            # a speck steps off its surroundings; a smooth bump fades into them
+            comp = labels == idx
+            ring = ndimage.binary_dilation(comp, iterations=2) & ~comp
+            step = abs(float(G[comp].mean()) - float(np.median(G[ring])))
+            keep[idx] = step > speck_threshold * sigma
+        specks |= keep[labels]
     resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
     rt = get_runtime(device)
     kern = _Kernels(rt)
     zs = kern.line_score(cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)),
                          3.0 * sigma)
-    scratch = _scratch_mask(zs, resid, sigma, scratch_threshold, min_length)
+    scratch = _scratch_mask(zs, resid, sigma, scratch_threshold, min_length, thin=False)
     kinds = np.zeros((ny, nx), np.int8)
     kinds[specks & ~scratch] = BLOTCH
     kinds[scratch] = SCRATCH
@@ -372,9 +465,9 @@ def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
     blotch_threshold : float, optional
         The blotch sensitivity: the score, in noise units, a blotch must reach somewhere
         (its region grows to half of it). Lower finds fainter dirt and more false alarms.
-        Default 4 for films, 6 for single images (the top-hat score).
+        Default 6 for films, 12 for single images (the top-hat score).
     scratch_threshold : float, optional
-        The scratch sensitivity, in robust noise units of the line response (default 5).
+        The scratch sensitivity, in robust noise units of the line response (default 3).
     grow : float
         Grow the found damage by a disc of this radius in pixels (0: as found); grown
         pixels take the kind of the nearest damaged pixel.

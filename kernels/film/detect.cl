@@ -6,6 +6,17 @@
 
 #define KMAX 8
 
+// The median of a[0 .. n), n >= 1, sorting a in place (insertion sort of <= KMAX values).
+inline float median_of(float* a, const int n) {
+    for (int p = 1; p < n; ++p) {
+        const float t = a[p];
+        int q = p - 1;
+        while (q >= 0 && a[q] > t) { a[q + 1] = a[q]; --q; }
+        a[q + 1] = t;
+    }
+    return (n & 1) ? a[n / 2] : 0.5f * (a[n / 2 - 1] + a[n / 2]);
+}
+
 // Blotch score against K motion-compensated neighbours W (already warped onto this frame),
 // each with a validity plane V (1 where its warped place is inside its frame and the flow is
 // trusted), a flicker gain and offset (neighbour -> this frame's brightness) and a side
@@ -18,21 +29,25 @@
 //    neighbours disagree with each other (a motion the flow does not follow, a deforming
 //    object) the scale grows and the pixel is not called a blotch on their disagreement.
 // r: I minus the median of the valid corrected neighbours (0 with none).
-// m: of the differences I - neighbour, the one of least magnitude (0 with none), the
-//    temporal residual the scratch detector reads: a scratch fixed on the film differs
-//    from every neighbour, while next to it, where one neighbour's own scratch lands, the
-//    other neighbours still agree with the frame, so no ghost line appears there.
+// rp, rn: I minus the median of the valid earlier (later) neighbours, 0 with none: their
+//    means over small regions find blotches too faint to stand out pixel by pixel.
+// m: of the differences I - neighbour, the second least in magnitude (the least with
+//    fewer than 3 neighbours; 0 with none), the temporal residual the scratch detector
+//    reads: a scratch fixed on the film differs from all neighbours but one (the nearest
+//    may still overlap it in a slow pan), while beside it, where one neighbour's own
+//    scratch lands, the others still agree with the frame, so no ghost line appears.
 __kernel void blotch_score(__global const float* I, __global const float* W,
                            __global const float* V, __global const float* gain,
                            __global const float* offset, __global const int* side,
                            const int K, const float sigma, const float gamma,
                            __global float* z, __global float* r, __global float* m,
+                           __global float* rp, __global float* rn,
                            const int nx, const int ny) {
     const int x = get_global_id(0), y = get_global_id(1);
     if (x >= nx || y >= ny) return;
     const int i = y * nx + x;
     const size_t plane = (size_t)nx * (size_t)ny;
-    float vals[KMAX];
+    float vals[KMAX], pv[KMAX], nv[KMAX];
     int n = 0, before = 0, after = 0;
     float lo = INFINITY, hi = -INFINITY;
     for (int k = 0; k < K && k < KMAX; ++k) {
@@ -41,26 +56,26 @@ __kernel void blotch_score(__global const float* I, __global const float* W,
         vals[n++] = w;
         lo = fmin(lo, w);
         hi = fmax(hi, w);
-        if (side[k] < 0) ++before; else ++after;
+        if (side[k] < 0) pv[before++] = w; else nv[after++] = w;
     }
     const float v = I[i];
+    rp[i] = before ? v - median_of(pv, before) : 0.0f;
+    rn[i] = after ? v - median_of(nv, after) : 0.0f;
     if (n == 0) {
         z[i] = 0.0f;
         r[i] = 0.0f;
         m[i] = 0.0f;
         return;
     }
-    float least = v - vals[0];
-    for (int p = 1; p < n; ++p)
-        if (fabs(v - vals[p]) < fabs(least)) least = v - vals[p];
-    m[i] = least;
-    for (int p = 1; p < n; ++p) {  // insertion sort of at most KMAX values
-        const float t = vals[p];
-        int q = p - 1;
-        while (q >= 0 && vals[q] > t) { vals[q + 1] = vals[q]; --q; }
-        vals[q + 1] = t;
+    // the two differences of least magnitude, first-come on ties
+    float least = v - vals[0], second = INFINITY;
+    for (int p = 1; p < n; ++p) {
+        const float dd = v - vals[p];
+        if (fabs(dd) < fabs(least)) { second = least; least = dd; }
+        else if (fabs(dd) < fabs(second)) second = dd;
     }
-    const float med = (n & 1) ? vals[n / 2] : 0.5f * (vals[n / 2 - 1] + vals[n / 2]);
+    m[i] = n >= 3 ? second : least;
+    const float med = median_of(vals, n);
     r[i] = v - med;
     if (before == 0 || after == 0) {
         z[i] = 0.0f;
@@ -143,4 +158,19 @@ __kernel void flow_inside(__global const float* u, __global const float* v,
     const float xs = (float)x + u[i], ys = (float)y + v[i];
     out[i] = (xs >= 0.0f && xs <= (float)(nx - 1) && ys >= 0.0f && ys <= (float)(ny - 1))
              ? 1.0f : 0.0f;
+}
+
+// Mean over the (2h + 1)^2 square around each pixel (clipped to the image).
+__kernel void box_mean(__global const float* src, __global float* dst, const int h,
+                       const int nx, const int ny) {
+    const int x = get_global_id(0), y = get_global_id(1);
+    if (x >= nx || y >= ny) return;
+    float s = 0.0f;
+    int n = 0;
+    for (int yy = max(y - h, 0); yy <= min(y + h, ny - 1); ++yy)
+        for (int xx = max(x - h, 0); xx <= min(x + h, nx - 1); ++xx) {
+            s += src[yy * nx + xx];
+            ++n;
+        }
+    dst[y * nx + x] = s / (float)n;
 }
