@@ -31,6 +31,7 @@ handed to the encoder.
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib.util
 import json
 import os
@@ -135,16 +136,21 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
     kernels = warm_up(kind, inputs[0], str(mask), options)
     start, cpu = time.perf_counter(), time.process_time()  # CPU: all the process's threads
     if kind == "video":
-        from clpde.io.video import VideoWriter, iter_video, video_info
+        import hashlib
 
-        with VideoWriter(out, video_info(inputs[0]).rate) as writer:
+        from clpde.film.container import FilmReader, FilmWriter
+
+        reader, digest = FilmReader(inputs[0]), hashlib.sha256()
+        with FilmWriter(out, like=reader.info) as writer:
             count = 0
-            for frame in iter_video(inputs[0]):
-                writer.write(clpde.inpaint(frame, m, channel_axis=-1, progress=False, **options))
+            for frame in reader:
+                frame = clpde.inpaint(frame, m, channel_axis=-1, progress=False, **options)
+                digest.update(frame.data)
+                writer.write(frame, pts=reader.timestamps.pop(0))
                 count += 1
         return {"seconds": time.perf_counter() - start, "tasks": count,
                 "cpu_seconds": time.process_time() - cpu, "kernel_seconds": kernels,
-                "frames_sha256": writer.frames_sha256}
+                "frames_sha256": digest.hexdigest()}
     for p in inputs:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
@@ -200,12 +206,21 @@ def dask_cluster(workers: int, threads: int):
         os.environ.update(saved)
 
 
+def _spatial_fill(frames, masks, channel_axis=None, options=None):
+    """clpde.inpaint frame by frame: the film path's filler for the serial loop's frames."""
+    import clpde
+
+    return np.stack([clpde.inpaint(f, m, channel_axis=channel_axis, progress=False, **options)
+                     for f, m in zip(frames, masks, strict=True)])
+
+
 def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
     """clpde batch (or the film pipeline) on a fresh local cluster: clpde's, or with
     dask_defaults the one of dask_cluster."""
     from distributed import Client
 
-    from clpde.film.restore import inpaint_sequence
+    from clpde.film.restore import restore_film
+    from clpde.film.stream import WindowWork
     from clpde.scale.batch import batch
     from clpde.scale.cluster import start_cluster
 
@@ -224,8 +239,10 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
             kernel_seconds = time.perf_counter() - kernels
             cpu = sum(client.run(_cpu_seconds).values()) + _cpu_seconds()
             if kind == "video":
-                result = inpaint_sequence(inputs[0], mask, out, client=client,
-                                          frames_per_task=8, progress=False, **options)
+                # clpde's film path with the frame-by-frame filler, as the serial loop
+                work = WindowWork(fill=functools.partial(_spatial_fill, options=options))
+                result = restore_film(inputs[0], out, mask=mask, client=client, work=work,
+                                      block=8, chunk_frames=8, progress=False)
                 seconds, tasks, task_seconds, longest = result.seconds, result.frames, None, None
                 frames_sha256 = result.frames_sha256
             else:

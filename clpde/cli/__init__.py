@@ -17,7 +17,7 @@ import pyopencl as cl
 from .. import _interrupt
 from .._version import __version__
 from ..errors import ClpdeError, error_message
-from . import batch, denoise, devices, diffuse, inpaint, regions, surface, track
+from . import batch, denoise, devices, diffuse, inpaint, regions, restore, surface, track
 from ._common import Parser
 
 SUBCOMMANDS = [
@@ -26,6 +26,7 @@ SUBCOMMANDS = [
     denoise.add_denoise_parser,
     track.add_track_parser,
     inpaint.add_inpaint_parser,
+    restore.add_restore_parser,
     surface.add_surface_parser,
     regions.add_regions_parser,
     batch.add_batch_parser,

@@ -9,7 +9,7 @@ import sys
 
 from ..errors import InputError
 from ..scale.batch import COMMANDS, MANIFEST, batch, result_table
-from . import denoise, diffuse, inpaint, surface, track
+from . import denoise, diffuse, inpaint, restore, surface, track
 from ._common import Parser
 
 FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage errors
@@ -18,7 +18,7 @@ FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage
 def add_batch_parser(subparsers) -> None:
 
     parser = subparsers.add_parser(
-        "batch", help="run inpaint, denoise, diffuse, track or surface over many files",
+        "batch", help="run inpaint, denoise, diffuse, track, surface or restore over many files",
         description="Run COMMAND on every input over Dask workers, one output per input in "
                     "OUTDIR (images under their own name; track and surface results in a "
                     "folder named after the input). COMMAND's own options follow the inputs "
@@ -36,7 +36,7 @@ def add_batch_parser(subparsers) -> None:
                         help=" | ".join(COMMANDS))
     parser.add_argument("inputs", metavar="INPUT", nargs="+",
                         help="input files (images; track: videos, folders or TIFF stacks; "
-                             "surface: meshes)")
+                             "surface: meshes; restore: films)")
     parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
                         help="output folder (created if missing)")
     cluster = parser.add_mutually_exclusive_group()
@@ -49,9 +49,11 @@ def add_batch_parser(subparsers) -> None:
                         help="PoCL threads per local worker (default: cores / workers)")
     masks = parser.add_mutually_exclusive_group()
     masks.add_argument("--mask", metavar="MASK", default=None,
-                       help="inpaint: one mask for every input; track: the first-frame mask")
+                       help="inpaint: one mask for every input; track: the first-frame mask; "
+                            "restore: masks to fill instead of detecting")
     masks.add_argument("--masks", metavar="DIR", default=None,
-                       help="a folder with one mask per input, named like it")
+                       help="a folder with one mask per input, named like it (restore: or a "
+                            "folder of per-frame masks named like the film's stem)")
     parser.add_argument("--flow", default=None,
                         help="surface: the flow (heat, tv, ...); diffuse: passed to diffuse")
     parser.add_argument("--tile", action="store_true",
@@ -66,7 +68,7 @@ def add_batch_parser(subparsers) -> None:
 _PLACEHOLDERS = {"inpaint": ["IN", "MASK", "-o", "OUT"], "track": ["IN", "--init", "MASK", "-o",
                                                                     "OUT"],
                  "surface": ["heat", "MESH", "-o", "OUT"], "denoise": ["IN", "OUT"],
-                 "diffuse": ["IN", "OUT"]}
+                 "diffuse": ["IN", "OUT"], "restore": ["IN", "-o", "OUT"]}
 
 
 # each command's parser and the keywords of its task from the parsed flags
@@ -74,7 +76,8 @@ _COMMANDS = {"inpaint": (inpaint.add_inpaint_parser, inpaint.task_options),
              "denoise": (denoise.add_denoise_parser, denoise.task_options),
              "diffuse": (diffuse.add_diffuse_parser, diffuse.task_options),
              "track": (track.add_track_parser, track.task_options),
-             "surface": (surface.add_surface_parser, surface.task_options)}
+             "surface": (surface.add_surface_parser, surface.task_options),
+             "restore": (restore.add_restore_parser, restore.task_options)}
 
 
 def command_options(command: str, argv: list[str]) -> dict:

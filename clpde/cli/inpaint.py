@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..film.restore import inpaint_sequence
 from ..inpainting.registry import METHODS
 from ..io.images import MASK_RULE
-from ..io.video import is_video
 from ..runtime import get_runtime
 from ..scale.tasks import TASKS, TRANSPORT_OPTIONS
 from ._common import (
@@ -22,6 +19,7 @@ from ._common import (
     show_progress,
 )
 from ._inpaint_demo import run_demo
+from .restore import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 
 
 def add_inpaint_parser(subparsers) -> None:
@@ -97,7 +95,7 @@ def add_inpaint_parser(subparsers) -> None:
                              "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
                              "to the observed pixel) instead of bright = inpaint")
     add_device_argument(parser)
-    add_sequence_arguments(parser)  # a video or an image folder: clpde/io/video.py
+    add_sequence_arguments(parser)  # a film or a frame folder: clpde restore's path
     parser.set_defaults(run=run_inpaint)
 
 
@@ -110,7 +108,7 @@ def task_options(args) -> dict:
 
 
 def run_inpaint(args) -> int:
-    if prepare_sequence_args(args):  # a film or a folder of frames, over Dask workers
+    if prepare_sequence_args(args):  # a film or a folder of frames: clpde restore's path
         return run_sequence_inpaint(args)
     if args.gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {args.gif_every}")
@@ -134,57 +132,4 @@ def run_inpaint(args) -> int:
                          "always replaced")
     report(TASKS["inpaint"](args.input, args.output, mask=args.mask, progress=show_progress(),
                             **task_options(args)))
-    return 0
-
-
-# ---- `clpde inpaint VIDEO --mask MASK -o OUT.mp4` ------------------------------------------------
-def add_sequence_arguments(parser) -> None:
-    """The options of `clpde inpaint` for a video or an image folder."""
-    group = parser.add_argument_group(
-        "films and frame folders", "IMAGE may be a video or a folder of images; MASK (or "
-        "--mask) one image or a folder of per-frame masks; -o a video or a folder")
-    group.add_argument("--mask", dest="mask_option", metavar="MASK", default=None,
-                       help="the mask, as an option (same as the MASK argument)")
-    group.add_argument("--workers", type=int, default=None, metavar="N",
-                       help="local Dask workers for the frames (default: one per core)")
-    group.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="use a running Dask cluster, e.g. tcp://HOST:8786")
-    group.add_argument("--frames-per-task", type=int, default=4, metavar="K",
-                       help="frames sent to a worker at a time (default: 4)")
-
-
-def prepare_sequence_args(args) -> bool:
-    """Fold --mask into MASK; True when IMAGE is a video or a folder of frames."""
-    option = getattr(args, "mask_option", None)
-    if option is not None:
-        if args.mask is not None:
-            raise InputError("give the mask once: as MASK or as --mask")
-        args.mask = option
-    source = args.input
-    sequence = bool(source) and (Path(source).is_dir() or is_video(source))
-    if not sequence and (getattr(args, "workers", None) or getattr(args, "scheduler", None)):
-        raise InputError("--workers and --scheduler apply to a video or a folder of frames; "
-                         "for many image files use `clpde batch inpaint`")
-    return sequence
-
-
-def run_sequence_inpaint(args) -> int:
-    if args.gif or args.demo:
-        raise InputError("--gif and --demo apply to one image, not a video or frame folder")
-    if not args.mask:
-        raise InputError("give the mask: clpde inpaint VIDEO --mask MASK -o OUT.mp4")
-    if args.workers is not None and args.scheduler is not None:
-        raise InputError("give --workers or --scheduler, not both")
-    # as for one image: only the options given, so that the default method is chosen by them
-    options = {"colour": args.colour, "levels": args.levels, "device": args.device,
-               "method": args.method}
-    options.update({name: getattr(args, name) for name in TRANSPORT_OPTIONS
-                    if getattr(args, name) is not None})
-    result = inpaint_sequence(args.input, args.mask, args.output, workers=args.workers,
-                              scheduler=args.scheduler, frames_per_task=args.frames_per_task,
-                              overwrite=getattr(args, "overwrite", False),
-                              overwrite_option="--overwrite", **options)
-    print(f"inpaint: {result.frames} frames at {float(result.rate):.3f} fps in "
-          f"{result.seconds:.1f} s on {result.workers} worker(s); wrote {result.output}",
-          file=sys.stderr)
     return 0

@@ -16,7 +16,9 @@ Films (T >= 2): each frame is compared with its motion-compensated neighbours, u
   with the camera (poles, door frames, text) cancels: a column mean of the clamped
   residual, a thin-line response across it in robust noise units, summed with the matching
   response of the previous and next frames within a pixel of drift; kept where a vertical
-  run is long and most of its rows show the line.
+  run is long and most of its rows show the line. Scratches that stay in place (a static
+  shot) leave no residual: the frames' own thin, long lines that persist over neighbouring
+  frames are added (clpde.film.lines).
 
 Single images (T = 1, a scanned photograph) use spatial cues only: specks that stand out
 from their neighbourhood at several scales (white and black morphological top-hats on
@@ -28,17 +30,18 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import cv2
 import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
-from scipy import ndimage
+from scipy import ndimage, signal
+from skimage.morphology import black_tophat, disk, white_tophat
 
 from ..errors import InputError
 from ..planar.rof import _noise_std
 from ..runtime import get_runtime
 from ._compensate import FILM_FLOW, Compensator
 from ._frames import check_grow, film_planes, grey
+from .lines import static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -49,8 +52,8 @@ CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 FIRST_PASS_FLOW = replace(FILM_FLOW, iterations=10)
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 4.0  # noise units of the blotch score (films)
-SCRATCH_THRESHOLD = 5.0  # robust noise units of the line response
+BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films)
+SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
 COLUMN_HALF = 12  # rows each side of the scratch detector's column mean
@@ -60,6 +63,8 @@ CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
 REGION_HALF = 2  # the region evidence's square: 5x5
+HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
+STATIC_SCALE = 0.5  # the static-line detector's threshold per unit of scratch_threshold
 
 
 def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -183,6 +188,17 @@ def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: fl
     return out if signed else out != 0
 
 
+def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """Sum over the template of weight * (window - template)^2 at every placement that fits
+    (the 'valid' placements, top-left corners), by three correlations."""
+    w = win.astype(np.float64)
+    tpl = templ.astype(np.float64)
+    flip = (slice(None, None, -1), slice(None, None, -1))
+    a = signal.fftconvolve(w * w, weight[flip], mode="valid")
+    b = signal.fftconvolve(w, (weight * tpl)[flip], mode="valid")
+    return a - 2.0 * b + float((weight * tpl * tpl).sum())
+
+
 def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray,
                   search: int) -> np.ndarray:
     """Drop the components of comp_mask (frame t) that reappear displaced in the frames
@@ -224,7 +240,7 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
             win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
             if win.shape[0] < th or win.shape[1] < tw:
                 continue
-            res = cv2.matchTemplate(win, templ, cv2.TM_SQDIFF, mask=region.astype(np.float32))
+            res = _masked_ssd(win, templ, region.astype(np.float64))
             my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
             diff = (templ - win[my:my + th, mx:mx + tw]) ** 2
             found.append((float(np.median(diff[own])), float(diff[region].mean()),
@@ -326,16 +342,20 @@ def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
     T, ny, nx = G.shape
     zb, zc, res, sigmas = scores["zb"], scores["zc"], scores["res"], scores["sigma"]
     kinds = np.zeros((T, ny, nx), np.int8)
+    # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
+    # the frames' own thin lines that persist over neighbouring frames
+    still = (static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
+             if STATIC_SCALE > 0 else np.zeros((T, ny, nx), bool))
     for t in range(T):
         scratch = _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold,
-                                min_length)
+                                min_length) | still[t]
         # a pixel's evidence: its own score, or its region's where its own residual shows
         # the same sign beyond the noise (so a strong blotch's region score does not spill
         # past its edge)
         zr, r = scores["zr"][t], res[t]
         own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
         a = np.maximum(np.abs(zb[t]), np.where(own, np.abs(zr), 0.0))
-        blotch = _hysteresis(a, 0.5 * blotch_threshold, blotch_threshold)
+        blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
         blotch &= ~ndimage.binary_dilation(scratch)
         blotch = _motion_check(blotch, G, t, res[t], search)
         # a tall thin "blotch" is a scratch the line detector missed (too short or faint
@@ -373,9 +393,8 @@ def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
     for rad in (1, 2, 4, 8):
         # at each scale, the components that stand out and fit in its disc: a speck, not
         # a stroke, an edge or a broad bump
-        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
-        white = cv2.morphologyEx(G, cv2.MORPH_TOPHAT, disc)
-        black = cv2.morphologyEx(G, cv2.MORPH_BLACKHAT, disc)
+        white = white_tophat(G, footprint=disk(rad))
+        black = black_tophat(G, footprint=disk(rad))
         found = np.maximum(white, black) > speck_threshold * sigma
         labels, n = ndimage.label(found)
         keep = np.zeros(n + 1, bool)
@@ -446,9 +465,9 @@ def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
     blotch_threshold : float, optional
         The blotch sensitivity: the score, in noise units, a blotch must reach somewhere
         (its region grows to half of it). Lower finds fainter dirt and more false alarms.
-        Default 4 for films, 12 for single images (the top-hat score).
+        Default 6 for films, 12 for single images (the top-hat score).
     scratch_threshold : float, optional
-        The scratch sensitivity, in robust noise units of the line response (default 5).
+        The scratch sensitivity, in robust noise units of the line response (default 3).
     grow : float
         Grow the found damage by a disc of this radius in pixels (0: as found); grown
         pixels take the kind of the nearest damaged pixel.

@@ -1,15 +1,21 @@
-"""Film restoration: inpaint every frame of a video (or a folder of images) over Dask workers.
+"""Restore a film or a folder of frames into a film or a folder: the path behind both
+``clpde restore`` and ``clpde inpaint VIDEO``.
 
-``clpde inpaint VIDEO --mask MASK -o OUT.mp4`` reads the frames with PyAV, sends them in
-batches to the workers (clpde.batch's cluster: a local one, or ``--scheduler``), and writes
-the restored frames in their order with the input's frame rate, atomically. MASK is one
-image for every frame or a folder of per-frame masks (in name order). A folder of images
-in gives a folder of images out, under the same names.
+The frames stream through clpde.film.stream's sliding window in this process, or through
+clpde.film.chunks on Dask's workers when a cluster is asked for; either way only a window
+(or a few chunks) of frames is in memory. Everything is checked before the first frame is
+read (the output's folder and codec, the masks' count and size), and every output (the film
+or folder, the masks folder, the overlay) appears only when complete: an error or Ctrl-C
+leaves none of them.
 """
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import re
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -18,201 +24,304 @@ import numpy as np
 
 from .._progress import progress_bar
 from ..errors import InputError
-from ..imagedata import split_alpha
-from ..inpainting.api import inpaint
-from ..io.frames import image_files
-from ..io.images import check_output_folder, read_image, read_mask, write_image
-from ..io.video import (
-    READ_SUFFIXES,
-    VIDEO_FORMATS,
-    VideoWriter,
-    is_video,
-    iter_video,
-    video_info,
+from ..io.images import (
+    IMAGE_FORMATS,
+    PathLike,
+    output_folder,
+    read_image,
+    read_mask,
+    write_image,
 )
 from ..scale.cluster import connect
+from .chunks import restore_chunked
+from .container import FORMATS, FilmReader, FilmWriter, check_film_output, is_film
+from .stream import DEFAULT_BLOCK, WindowWork, film_work, restore_stream
+
+# The overlay's colours per defect kind: given or unclassified masks, blotches, scratches.
+OVERLAY_COLOURS = {0: (255, 40, 40), 1: (255, 40, 40), 2: (255, 220, 0)}
+FOLDER_RATE = Fraction(25)  # a folder of frames states no rate
 
 
-class _Sequence:
-    """The frames of a video or of an image folder, read one at a time."""
-
-    def __init__(self, path):
-        self.path = Path(path)
-        if self.path.is_dir():
-            self.files = image_files(self.path)
-            self.count, self.rate = len(self.files), Fraction(25)
-        elif is_video(self.path):
-            info = video_info(self.path)
-            self.files, self.count, self.rate = None, info.frames, info.rate
-        else:
-            raise InputError(f"{self.path} is neither a video ({', '.join(sorted(READ_SUFFIXES))}) "
-                             "nor a folder of images")
-
-    def __iter__(self):
-        if self.files is None:
-            yield from iter_video(self.path)
-        else:
-            for p in self.files:
-                yield read_image(p)
-
-    def name(self, t: int) -> str:
-        """The file name of frame t in an output folder: the input's, or frame_00000.png..."""
-        return self.files[t].name if self.files is not None else f"frame_{t:05d}.png"
-
-
-def _masks_for(mask, count_hint: int):
-    """A function t -> mask path for frame t: one mask for all, or the t-th of a folder."""
-    mask = Path(mask)
-    if mask.is_dir():
-        files = image_files(mask)
-        if count_hint and len(files) != count_hint:
-            raise InputError(f"the mask folder {mask} holds {len(files)} masks for "
-                             f"{count_hint} frames; give one mask per frame (or one mask file)")
-
-        def pick(t):
-            if t >= len(files):
-                raise InputError(f"the mask folder {mask} has no mask for frame {t}")
-            return files[t]
-        return pick
-    if not mask.is_file():
-        raise InputError(f"mask {mask} does not exist")
-    return lambda t: mask
-
-
-# ---- the task on a worker ---------------------------------------------------------------------
-def inpaint_frames(frames, masks, options) -> list[np.ndarray]:
-    """Inpaint each frame (rows, columns[, channels]) where its boolean mask is set."""
-    out = []
-    for frame, mask in zip(frames, masks, strict=False):
-        if not mask.any():
-            out.append(frame)
-            continue
-        parts = split_alpha(frame)
-        result = inpaint(parts.colour, mask, channel_axis=parts.channel_axis, progress=False,
-                         **options)
-        out.append(parts.join(result).astype(frame.dtype))
-    return out
-
-
-# ---- the film restoration -------------------------------------------------------------------
 @dataclass
-class RestoreResult:
+class FilmResult:
+    """What a restoration did.
+
+    Attributes
+    ----------
+    output : Path
+        The restored film or folder.
+    frames : int
+        Frames restored.
+    rate : Fraction
+        Frames per second of the output.
+    seconds : float
+        Wall time of the whole run.
+    masked_pixels : int
+        Pixels filled, over all frames.
+    workers : int
+        Dask workers (0: this process).
+    frames_sha256 : str
+        SHA-256 of the restored frames in order (before any lossy encoder): what a run on
+        workers and one in a process agree on, bit for bit.
+    """
+
     output: Path
     frames: int
     rate: Fraction
     seconds: float
-    cluster_seconds: float
+    masked_pixels: int
     workers: int
-    frames_sha256: str | None = None  # a video's frames before encoding (VideoWriter's)
+    frames_sha256: str
 
 
-def inpaint_sequence(source, mask, output, *, workers=None, threads=None, scheduler=None,
-                     client=None, frames_per_task: int = 4, progress=None,
-                     overwrite: bool = False, overwrite_option: str = "overwrite=True",
-                     **options) -> RestoreResult:
-    """Inpaint every frame of `source` (a video or an image folder) where `mask` (an image,
-    or a folder of per-frame masks) is set, over Dask workers; write a video (`output`
-    ends in .mp4, .mkv, .mov, .avi) with the input's frame rate, or an image folder.
-    Options are clpde.inpaint's (max_steps, tol, dt, ...). An output folder follows
-    clpde's folder rule: new or empty, or with `overwrite` one holding only clpde's kinds
-    of output files (frames of the same names are replaced)."""
+def _natural_key(path: Path):
+    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", path.name)]
 
-    if frames_per_task < 1:
-        raise InputError(f"frames per task must be at least 1, not {frames_per_task}")
-    sequence = _Sequence(source)
-    output = Path(output)
-    to_video = output.suffix.lower() in VIDEO_FORMATS
-    if not to_video and output.suffix:
-        raise InputError(f"output {output}: give a video ({', '.join(sorted(VIDEO_FORMATS))}) "
-                         "or a folder for the restored frames")
-    if output.resolve() == sequence.path.resolve():
-        raise InputError(f"output {output} is the input; clpde never overwrites its inputs")
-    mask_of = _masks_for(mask, sequence.count)
+
+def _images(folder: Path) -> list[Path]:
+    files = sorted((p for p in folder.iterdir() if p.is_file()
+                    and p.suffix.lower() in IMAGE_FORMATS), key=_natural_key)
+    if not files:
+        raise InputError(f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg)")
+    return files
+
+
+class _Source:
+    """The frames of a film or of a folder of images, read one at a time."""
+
+    def __init__(self, path: PathLike) -> None:
+        self.path = Path(path)
+        self.reader = self.files = None
+        if self.path.is_dir():
+            self.files = _images(self.path)
+            self.count, self.rate = len(self.files), FOLDER_RATE
+            first = read_image(self.files[0])
+        elif is_film(self.path):
+            self.reader = FilmReader(self.path)
+            self.count, self.rate = self.reader.info.frames, self.reader.info.rate
+            first = np.zeros((self.reader.info.height, self.reader.info.width, 3),
+                             self.reader.info.dtype)
+        elif not self.path.exists():
+            raise InputError(f"input {self.path} does not exist")
+        else:
+            raise InputError(f"{self.path} is neither a film ({', '.join(sorted(FORMATS))}, ...) "
+                             "nor a folder of images")
+        self.shape, self.dtype = first.shape, first.dtype
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        if self.reader is not None:
+            yield from self.reader
+        else:
+            for path in self.files:
+                frame = read_image(path)
+                if frame.shape != self.shape or frame.dtype != self.dtype:
+                    raise InputError(f"{path} is {frame.shape} {frame.dtype}, frame 0 "
+                                     f"{self.shape} {self.dtype}; all frames need one size "
+                                     "and type")
+                yield frame
+
+    def name(self, t: int, dtype: np.dtype, channels: int) -> str:
+        """Frame t's file name in an output folder: the input's, else frame_00000.png."""
+        if self.files is not None:
+            return self.files[t].name
+        suffix = ".tif" if dtype != np.uint8 and channels > 1 else ".png"
+        return f"frame_{t:05d}{suffix}"
+
+
+def _mask_source(mask: PathLike, source: _Source) -> Iterator[np.ndarray]:
+    """One mask per frame: the same file for every frame, or the t-th of a folder. The
+    count and the first mask's size are checked at once, before any frame is read."""
+    mask = Path(mask)
+    shape = source.shape[:2]
+    if mask.is_dir():
+        files = _images(mask)
+        if len(files) != source.count:
+            raise InputError(f"the mask folder {mask} holds {len(files)} masks for "
+                             f"{source.count} frames; give one mask per frame (or one mask file)")
+        read_mask(files[0], shape, what="the frames")
+
+        def each():
+            for path in files:
+                yield read_mask(path, shape, what="the frames")
+        return each()
+    if not mask.is_file():
+        raise InputError(f"mask {mask} does not exist")
+    single = read_mask(mask, shape, what="the frames")
+
+    def same():
+        for _ in range(source.count):
+            yield single
+    return same()
+
+
+def _overlay_frame(frame: np.ndarray, mask: np.ndarray, kinds: np.ndarray | None) -> np.ndarray:
+    """The frame (as 8-bit RGB) with its masked pixels tinted by defect kind."""
+    if frame.dtype == np.uint16:
+        frame = (frame >> 8).astype(np.uint8)
+    elif frame.dtype != np.uint8:
+        frame = np.clip(np.nan_to_num(frame.astype(np.float64)) * 255, 0, 255).astype(np.uint8)
+    if frame.ndim == 2:
+        frame = np.repeat(frame[..., np.newaxis], 3, axis=-1)
+    out = frame[..., :3].astype(np.float32)
+    kinds = np.zeros(mask.shape, np.int8) if kinds is None else kinds
+    for kind, colour in OVERLAY_COLOURS.items():
+        where = mask & (kinds == kind)
+        out[where] = 0.35 * out[where] + 0.65 * np.asarray(colour, np.float32)
+    return out.round().astype(np.uint8)
+
+
+def _check_paths(source: _Source, output: Path, extras: list[Path | None]) -> None:
+    paths = [output, *[p for p in extras if p is not None]]
+    for path in paths:
+        if path.resolve() == source.path.resolve():
+            raise InputError(f"output {path} is the input; clpde never overwrites its inputs")
+    if len({p.resolve() for p in paths}) != len(paths):
+        raise InputError("the output, --masks-out and --overlay must be different paths")
+
+
+def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = None,
+                 masks_out: PathLike | None = None, grow: float = 0,
+                 overlay: PathLike | None = None, codec: str | None = None,
+                 work: WindowWork | None = None, detect_options: dict | None = None,
+                 fill_options: dict | None = None, block: int = DEFAULT_BLOCK,
+                 workers: int | None = None, threads: int | None = None,
+                 scheduler: str | None = None, client=None, chunk_frames: int | None = None,
+                 overwrite: bool = False, overwrite_option: str = "overwrite=True",
+                 progress: bool | None = None) -> FilmResult:
+    """Find the damage in a film and fill it from the neighbouring frames, film in, film out.
+
+    Parameters
+    ----------
+    source : str or PathLike
+        A film (.mp4, .mkv, .mov, .avi, ...) or a folder of frames (PNG, TIFF, JPEG).
+    output : str or PathLike
+        A film (.mp4, .mkv, .mov, .avi), or a folder for the frames.
+    mask : str or PathLike, optional
+        Masks to fill instead of detecting: one image for every frame, or a folder of one
+        per frame (in name order).
+    masks_out : str or PathLike, optional
+        A folder for the masks used, one PNG per frame (mask_00000.png, ...).
+    grow : float
+        Pixels by which the masks are grown (a lossy codec spreads damage past its edge).
+    overlay : str or PathLike, optional
+        A film of the frames with the masks drawn over them (red: blotches and given masks,
+        yellow: line scratches).
+    codec : {'h264', 'h265', 'ffv1'}, optional
+        The output film's codec (default h264; ffv1 is lossless, in .mkv).
+    work : WindowWork, optional
+        The detector and filler (default: clpde.detect_defects and clpde.inpaint_video).
+    detect_options, fill_options : dict, optional
+        Keywords for the default detector and filler.
+    block : int
+        Frames restored per window.
+    workers, threads, scheduler, client : optional
+        Run on Dask (clpde.batch.connect): a local cluster of `workers`, a running one at
+        `scheduler`, or an open `client`. None of them: this process.
+    chunk_frames : int, optional
+        Frames per Dask task (rounded up to whole blocks).
+    overwrite : bool
+        Replace an output folder (of clpde's kinds of files).
+    overwrite_option : str
+        How the caller spells `overwrite`, for messages.
+    progress : bool, optional
+        A progress bar in frames per second (None: on a terminal).
+
+    Returns
+    -------
+    FilmResult
+        The output, frame count, rate, time and digest of the restored frames.
+
+    Raises
+    ------
+    InputError
+        For a missing or unreadable input, a film without video or an interlaced one,
+        masks of the wrong count or size, an output that cannot be written, or an output
+        that is the input; nothing is written.
+
+    Examples
+    --------
+    >>> restore_film("dusty.mp4", "clean.mkv", codec="ffv1", grow=2)  # doctest: +SKIP
+    """
     start = time.perf_counter()
-    if not to_video:
+    src = _Source(source)
+    output = Path(output)
+    masks_out = None if masks_out is None else Path(masks_out)
+    overlay = None if overlay is None else Path(overlay)
+    to_film = output.suffix.lower() in FORMATS
+    if not to_film and output.suffix:
+        raise InputError(f"output {output}: give a film ({', '.join(sorted(FORMATS))}) or a "
+                         "folder for the restored frames")
+    _check_paths(src, output, [masks_out, overlay])
+    if to_film:
+        check_film_output(output, codec)
+    elif codec is not None:
+        raise InputError("--codec applies to a film output, not a folder of frames")
+    if overlay is not None:
+        check_film_output(overlay)
+    if grow < 0:
+        raise InputError(f"--grow must be >= 0 pixels, not {grow}")
+    given = None if mask is None else _mask_source(mask, src)
+    if work is None:
+        work = film_work(grow=grow, detect_options=detect_options, fill_options=fill_options)
+    elif grow and not work.grow:
+        work = WindowWork(work.fill, work.detect, work.fill_radius, work.detect_radius, grow)
+    if given is None and work.detect is None:
+        raise InputError("give the masks (--mask): this restoration has no detector")
+    like = src.reader.info if src.reader is not None else None
+    digest = hashlib.sha256()
+    masked = written = 0
+    with contextlib.ExitStack() as stack:
+        if to_film:
+            writer = stack.enter_context(FilmWriter(output, like=like, codec=codec,
+                                                    rate=src.rate))
+        else:
+            folder = stack.enter_context(output_folder(output, overwrite,
+                                                       option=overwrite_option))
+        mask_folder = None if masks_out is None else stack.enter_context(
+            output_folder(masks_out, overwrite, option=overwrite_option))
+        shown = None if overlay is None else stack.enter_context(
+            FilmWriter(overlay, like=like, rate=src.rate, copy_streams=False))
+        # The overlay draws over the damaged frames: a second reader, in step.
+        originals = None if overlay is None else iter(_Source(source))
+        bar = progress_bar(progress, src.count, "clpde restore", unit="frame")
+        stack.callback(bar.close)
+        use_dask = any(x is not None for x in (workers, threads, scheduler, client))
+        cluster = stack.enter_context(_cluster(use_dask, workers, threads, scheduler, client))
+        if cluster is None:
+            frames = restore_stream(src, src.count, work, masks=given, block=block)
+        else:
+            frames = restore_chunked(cluster, src, src.count, work, masks=given, block=block,
+                                     chunk_frames=chunk_frames)
+        stack.callback(frames.close)  # Ctrl-C: cancel the workers' chunks too
+        digits = max(5, len(str(src.count - 1)))
+        timestamps = src.reader.timestamps if src.reader is not None else None
+        for t, (frame, found, kinds) in enumerate(frames):
+            digest.update(np.ascontiguousarray(frame).data)
+            masked += int(found.sum())
+            pts = timestamps.pop(0) if timestamps else None
+            if to_film:
+                writer.write(frame, pts=pts)
+            else:
+                channels = frame.shape[-1] if frame.ndim == 3 else 1
+                write_image(folder / src.name(t, frame.dtype, channels), frame)
+            if mask_folder is not None:
+                write_image(mask_folder / f"mask_{t:0{digits}d}.png",
+                            found.astype(np.uint8) * 255)
+            if shown is not None:
+                shown.write(_overlay_frame(next(originals), found, kinds), pts=pts)
+            written += 1
+            bar.update(1)
+        workers_used = 0 if cluster is None else len(cluster.scheduler_info()["workers"])
+    if written != src.count:
+        raise InputError(f"restored {written} of {src.count} frames")
+    return FilmResult(output, written, src.rate, time.perf_counter() - start, masked,
+                      workers_used, digest.hexdigest())
 
-        check_output_folder(output, overwrite, option=overwrite_option)
-        output.mkdir(exist_ok=True)
-    writer = VideoWriter(output, sequence.rate) if to_video else None
-    written = 0
-    try:
-        with connect(workers, scheduler, client, threads, device=options.get("device"),
-                     tasks=max(1, sequence.count // frames_per_task)) as (live, info):
-            written = _pipeline(live, sequence, mask_of, writer, output, frames_per_task,
-                                options, progress, read_mask)
-        if writer is not None:
-            writer.close()
-    except BaseException:
-        if writer is not None:
-            writer.abort()
-        raise
-    return RestoreResult(output, written, sequence.rate, time.perf_counter() - start,
-                         info.get("seconds", 0.0), info["workers"],
-                         writer.frames_sha256 if writer is not None else None)
 
-
-def _pipeline(client, sequence, mask_of, writer, output, per_task, options, progress,
-              read_mask) -> int:
-    """Read, send in batches, and write in order, with a bounded number of batches in
-    flight (memory stays proportional to the workers, not to the film)."""
-
-    resources = None
-    workers = client.scheduler_info()["workers"].values()
-    if any("GPU" in (w.get("resources") or {}) for w in workers):
-        resources = {"GPU": 1}
-    window = max(2, 2 * len(workers))
-    bar = progress_bar(progress, sequence.count or None, "clpde inpaint", unit="frame")
-    pending, written, t = [], 0, 0
-    frames = iter(sequence)
-    mask_cache = {}
-
-    def masks_for(batch_frames, first):
-        out = []
-        for k, frame in enumerate(batch_frames):
-            path = mask_of(first + k)
-            key = (path, frame.shape[:2])
-            if key not in mask_cache:
-                if len(mask_cache) > 8:  # per-frame masks: keep only the latest few
-                    mask_cache.clear()
-                mask_cache[key] = read_mask(path, frame.shape[:2], what="the frames")
-            out.append(mask_cache[key])
-        return out
-
-    def drain(block: bool):
-        nonlocal written
-        while pending and (block or pending[0].done()):
-            for frame in pending.pop(0).result():
-                if writer is not None:
-                    writer.write(frame)
-                else:
-                    write_image(output / sequence.name(written), frame)
-                written += 1
-                bar.update(1)
-
-    try:
-        done = False
-        while not done:
-            chunk = []
-            for frame in frames:
-                chunk.append(frame)
-                if len(chunk) == per_task:
-                    break
-            done = len(chunk) < per_task
-            if chunk:
-                future = client.submit(inpaint_frames, chunk, masks_for(chunk, t), options,
-                                       pure=False, resources=resources)
-                pending.append(future)
-                t += len(chunk)
-            drain(block=False)
-            if len(pending) >= window:
-                pending[0].result()  # wait for the oldest batch (its error, if any, is raised)
-                drain(block=False)
-        drain(block=True)
-    except BaseException:
-        client.cancel(pending, force=True)
-        raise
-    finally:
-        bar.close()
-    if sequence.files is not None and written != len(sequence.files):
-        raise InputError(f"read {written} of {len(sequence.files)} frames")
-    return written
+@contextlib.contextmanager
+def _cluster(use: bool, workers, threads, scheduler, client):
+    if not use:
+        yield None
+        return
+    with connect(workers, scheduler, client, threads) as (live, _):
+        yield live

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from clpde.film.container import FilmReader
+
 FILM_SUFFIXES = (".mp4", ".mkv", ".avi", ".mov", ".m4v", ".webm")
 MESH_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".glb", ".gltf")
 
@@ -53,8 +55,6 @@ def read_film(path: str | list[str]) -> LayerData:
     -------
     list of (data, attributes, "image")
     """
-    from clpde.film.container import FilmReader
-
     one = _one_path(path)
     reader = FilmReader(one)
     frames = np.stack(list(reader))

@@ -56,6 +56,7 @@ from .tasks import TASKS
 COMMANDS = tuple(TASKS)  # inpaint, denoise, diffuse, track, surface
 FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
 MASKED = ("inpaint", "track")  # commands that take a mask per input (track: --init)
+MAY_MASK = ("restore",)  # commands that take a mask per input if given (restore: else detects)
 TILED = ("diffuse", "denoise")
 MANIFEST = "clpde-manifest.json"
 MANIFEST_EVERY_S = 1.0
@@ -230,6 +231,8 @@ def _find_mask(masks_dir: Path, source: Path) -> Path | None:
     same = masks_dir / source.name
     if same.is_file():
         return same
+    if (masks_dir / source.stem).is_dir():  # a film's folder of per-frame masks
+        return masks_dir / source.stem
     for suffix in IMAGE_FORMATS:
         candidate = masks_dir / f"{source.stem}{suffix}"
         if candidate.is_file():
@@ -270,15 +273,16 @@ def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dic
             what = "--init mask" if command == "track" else "mask"
             raise InputError(f"batch {command} needs one {what}: --mask FILE (one for all "
                              "inputs) or --masks DIR (one per input, named like it)")
-    elif mask is not None or masks is not None:
-        raise InputError(f"--mask and --masks apply to inpaint and track, not {command}")
+    elif (mask is not None or masks is not None) and command not in MAY_MASK:
+        raise InputError(f"--mask and --masks apply to inpaint, track and restore, not {command}")
     if tile and command not in TILED:
         raise InputError(f"--tile applies to diffuse and denoise, not {command}")
     if command == "surface" and not options.get("flow"):
         raise InputError("batch surface needs --flow FLOW (heat, tv, denoise, ...)")
     if masks is not None and not Path(masks).is_dir():
         raise InputError(f"--masks {masks} is not a folder; give the folder of masks")
-    if mask is not None and not Path(mask).is_file():
+    if mask is not None and not (Path(mask).is_file()
+                                 or (command in MAY_MASK and Path(mask).is_dir())):
         raise InputError(f"mask {mask} does not exist")
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"output {outdir} exists and is not a folder")

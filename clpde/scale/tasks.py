@@ -17,6 +17,7 @@ import numpy as np
 
 from .._progress import on_terminal
 from ..errors import InputError
+from ..film.restore import restore_film
 from ..imagedata import split_alpha
 from ..inpainting.api import inpaint
 from ..io import frames as frame_io
@@ -348,6 +349,20 @@ def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iter
             f"{surf.ext_band.n} cells; wrote {len(written)} files to {output}"]
 
 
+def restore_file(input, output, *, mask=None, masks_out=None, grow: float = 0, overlay=None,
+                 codec=None, overwrite: bool = False, device=None, progress=None) -> list[str]:
+    """`clpde restore` for one film or frame folder (clpde.film.restore.restore_film): the
+    damage found (or the masks given) filled from the neighbouring frames, film in, film
+    out, in this process."""
+    get_runtime(device)
+    result = restore_film(input, output, mask=mask, masks_out=masks_out, grow=grow,
+                          overlay=overlay, codec=codec, overwrite=overwrite,
+                          progress=_progress(progress))
+    rate = result.frames / result.seconds if result.seconds else 0.0
+    return [f"restore: {result.frames} frames ({rate:.2f} frames/s), "
+            f"{result.masked_pixels} pixels filled; wrote {result.output}"]
+
+
 # command -> its task; every task takes (input, output, **options) and returns its report
 TASKS: dict[str, Callable[..., list[str]]] = {
     "inpaint": inpaint_file,
@@ -355,4 +370,5 @@ TASKS: dict[str, Callable[..., list[str]]] = {
     "diffuse": diffuse_file,
     "track": track_file,
     "surface": surface_file,
+    "restore": restore_file,
 }

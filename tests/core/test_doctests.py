@@ -14,7 +14,8 @@ MODULES = ["clpde.data", "clpde.planar.flows", "clpde.planar.rof", "clpde.imaged
            "clpde.inpainting.colour", "clpde.runtime", "clpde.inpainting.api",
            "clpde.tracking.contours", "clpde.scale.batch",
            "clpde.regions.tracker", "clpde.surface.render",
-           "clpde.tracking.confidence"]
+           "clpde.tracking.confidence", "clpde.film.stream", "clpde.film.chunks",
+           "clpde.film.container"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -174,6 +174,25 @@ def test_scratch_found_and_scene_lines_not(runtime, rng):
     assert (mask & away).sum() <= 0.1 * truth.sum()  # the poles are not scratches
 
 
+def test_static_scratch_found_and_static_pole_not(runtime, rng):
+    """A still shot (grain only): a thin dark scratch that stays in place is found by its
+    own line in each frame; a pole (wider than a scratch) standing in the scene is not."""
+    scene = _scene(rng, 72, 96, sigma=3.0) * 0.5 + 0.25
+    scene[:, 20:26] = 0.9  # the pole, 6 px wide, in every frame at the same place
+    T = 6
+    frames = np.clip(scene + 0.01 * rng.standard_normal((T, 72, 96)), 0, 1).astype(np.float32)
+    dirty = frames.copy()
+    dirty[:, 6:66, 60] = 0.05
+    truth = np.zeros(frames.shape, bool)
+    truth[:, 6:66, 60] = True
+    mask, kinds = clpde.detect_defects(dirty, return_kinds=True, device=runtime)
+    assert ((kinds == SCRATCH) & truth).sum() >= 0.8 * truth.sum()
+    assert not mask[:, :, 17:29].any()  # the pole and its edges
+    away = np.ones(truth.shape, bool)
+    away[:, :, 58:63] = False
+    assert (mask & away).sum() <= 0.05 * truth.sum()
+
+
 def test_single_photo_specks_and_scratch(runtime, rng):
     photo = gaussian_filter(rng.random((96, 96)), 4)
     photo = (photo - photo.min()) / (photo.max() - photo.min()) * 0.6 + 0.2

@@ -120,7 +120,7 @@ def test_mesh_reader_keeps_the_mesh(tmp_path):
 
 def test_film_reader_gives_frames_and_the_source(tmp_path):
     pytest.importorskip("av")
-    from clpde.video import write_video
+    from clpde.io.video import write_video
 
     frames = np.zeros((5, 32, 48, 3), np.uint8)
     for t in range(5):
