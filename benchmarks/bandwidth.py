@@ -110,8 +110,10 @@ def cases(grid: Grid, rng):
     lam_rows = k("planar/planar.cl", "rof_lambda_rows")
     partial = cla.empty(q, 4 * grid.ny, np.float32)
 
-    dual = [cla.to_device(q, (0.3 * rng.standard_normal((1, grid.plane, 2))).astype(f32))
-            for _ in range(3)]
+    dual = [
+        cla.to_device(q, (0.3 * rng.standard_normal((1, grid.plane, 2))).astype(f32))
+        for _ in range(3)
+    ]
     dual_step = k("planar/rof.cl", "rof_dual_step")
     dual_rows = k("planar/rof.cl", "rof_dual_rows")
     dual_host = [d.get().reshape(1, grid.ny + 2, grid.sx, 2) for d in dual]
@@ -121,34 +123,68 @@ def cases(grid: Grid, rng):
         return lambda: kernel(q, (1, grid.ny, 1), local, *args, *grid.args(grid.nx))
 
     return [
-        Case("heat_step", 8, lambda: grid.launch(heat, ub, vb, f32(0.2)),
-             lambda: ref_planar.heat_step(pad, 0.2)),
-        Case("perona_malik_step exp", 8,
-             lambda: grid.launch(pm_exp, ub, vb, f32(0.2), f32(1 / 0.05**2)),
-             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "exp")),
-        Case("perona_malik_step rational", 8,
-             lambda: grid.launch(pm_rat, ub, vb, f32(0.2), f32(1 / 0.05**2)),
-             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "rational")),
-        Case("tv_step", 8, lambda: grid.launch(tv, ub, vb, f32(0.01), f32(0.05**2)),
-             lambda: ref_planar.tv_step(pad, 0.01, 0.05)),
-        Case("curvature_step", 8,
-             lambda: grid.launch(curv, ub, vb, ub, f32(0.2), f32(1e-10)),
-             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10)),
-        Case("curvature_step weighted", 12,
-             lambda: grid.launch(curv_w, ub, vb, weight.data.data, f32(0.2), f32(1e-10)),
-             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10, padw)),
-        Case("rof_step", 12,
-             lambda: grid.launch(rof, ub, vb, u0b, lam.data, f32(0.004), f32(0.02**2)),
-             lambda: ref_planar.rof_step(pad, pad0, [8.0], 0.004, 0.02)),
-        Case("rof_lambda_rows", 8, rows(lam_rows, ub, u0b, partial.data, f32(0.02**2)),
-             lambda: ref_planar.rof_lambda(pad, pad0, 0.02, 0.01)),
-        Case("rof_dual_step", 28,
-             lambda: grid.launch(dual_step, dual[0].data, dual[1].data, dual[2].data, u0b,
-                                 lam.data, f32(0.5)),
-             lambda: ref_rof.dual_step(dual_host[0], dual_host[1], pad0, [8.0], 0.5)),
-        Case("rof_dual_rows", 20,
-             rows(dual_rows, dual[0].data, u0b, lam.data, vb, partial.data),
-             lambda: ref_rof.dual_rows(dual_host[0], pad0, [8.0], host)),
+        Case(
+            "heat_step",
+            8,
+            lambda: grid.launch(heat, ub, vb, f32(0.2)),
+            lambda: ref_planar.heat_step(pad, 0.2),
+        ),
+        Case(
+            "perona_malik_step exp",
+            8,
+            lambda: grid.launch(pm_exp, ub, vb, f32(0.2), f32(1 / 0.05**2)),
+            lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "exp"),
+        ),
+        Case(
+            "perona_malik_step rational",
+            8,
+            lambda: grid.launch(pm_rat, ub, vb, f32(0.2), f32(1 / 0.05**2)),
+            lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "rational"),
+        ),
+        Case(
+            "tv_step",
+            8,
+            lambda: grid.launch(tv, ub, vb, f32(0.01), f32(0.05**2)),
+            lambda: ref_planar.tv_step(pad, 0.01, 0.05),
+        ),
+        Case(
+            "curvature_step",
+            8,
+            lambda: grid.launch(curv, ub, vb, ub, f32(0.2), f32(1e-10)),
+            lambda: ref_planar.curvature_step(pad, 0.2, 1e-10),
+        ),
+        Case(
+            "curvature_step weighted",
+            12,
+            lambda: grid.launch(curv_w, ub, vb, weight.data.data, f32(0.2), f32(1e-10)),
+            lambda: ref_planar.curvature_step(pad, 0.2, 1e-10, padw),
+        ),
+        Case(
+            "rof_step",
+            12,
+            lambda: grid.launch(rof, ub, vb, u0b, lam.data, f32(0.004), f32(0.02**2)),
+            lambda: ref_planar.rof_step(pad, pad0, [8.0], 0.004, 0.02),
+        ),
+        Case(
+            "rof_lambda_rows",
+            8,
+            rows(lam_rows, ub, u0b, partial.data, f32(0.02**2)),
+            lambda: ref_planar.rof_lambda(pad, pad0, 0.02, 0.01),
+        ),
+        Case(
+            "rof_dual_step",
+            28,
+            lambda: grid.launch(
+                dual_step, dual[0].data, dual[1].data, dual[2].data, u0b, lam.data, f32(0.5)
+            ),
+            lambda: ref_rof.dual_step(dual_host[0], dual_host[1], pad0, [8.0], 0.5),
+        ),
+        Case(
+            "rof_dual_rows",
+            20,
+            rows(dual_rows, dual[0].data, u0b, lam.data, vb, partial.data),
+            lambda: ref_rof.dual_rows(dual_host[0], pad0, [8.0], host),
+        ),
     ]
 
 
@@ -166,18 +202,30 @@ def measure_size(runtime, n, rng, numpy_budget):
     roof = max(copy_kernel_bw, enqueue_bw)
     which = "copy kernel" if copy_kernel_bw >= enqueue_bw else "enqueue_copy"
     ghost_t = device_time(q, lambda: b.fill_ghosts())
-    out = {"n": n, "copy_kernel_GBps": copy_kernel_bw / 1e9, "enqueue_copy_GBps": enqueue_bw / 1e9,
-           "roofline_GBps": roof / 1e9, "roofline_from": which,
-           "fill_ghosts_ms": ghost_t * 1e3, "kernels": []}
+    out = {
+        "n": n,
+        "copy_kernel_GBps": copy_kernel_bw / 1e9,
+        "enqueue_copy_GBps": enqueue_bw / 1e9,
+        "roofline_GBps": roof / 1e9,
+        "roofline_from": which,
+        "fill_ghosts_ms": ghost_t * 1e3,
+        "kernels": [],
+    }
     for case in cases(grid, rng):
         t = device_time(q, case.launch)
         t_np = host_time(case.numpy_step, numpy_budget)
         bw = case.bytes_per_cell * cells / t
-        out["kernels"].append({
-            "kernel": case.name, "bytes_per_cell": case.bytes_per_cell, "ms": t * 1e3,
-            "GBps": bw / 1e9, "fraction_of_copy": bw / roof,
-            "numpy_ms": t_np * 1e3, "speedup_vs_numpy": t_np / t,
-        })
+        out["kernels"].append(
+            {
+                "kernel": case.name,
+                "bytes_per_cell": case.bytes_per_cell,
+                "ms": t * 1e3,
+                "GBps": bw / 1e9,
+                "fraction_of_copy": bw / roof,
+                "numpy_ms": t_np * 1e3,
+                "speedup_vs_numpy": t_np / t,
+            }
+        )
     return out
 
 
@@ -196,50 +244,75 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cpu", help="clpde device (default cpu)")
     parser.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096])
-    parser.add_argument("--numpy-budget", type=float, default=2.0,
-                        help="seconds per NumPy timing (fewer repeats for slow steps)")
-    parser.add_argument("--json", default=os.path.join(ROOT, "benchmarks", "results",
-                                                       "bandwidth.json"))
+    parser.add_argument(
+        "--numpy-budget",
+        type=float,
+        default=2.0,
+        help="seconds per NumPy timing (fewer repeats for slow steps)",
+    )
+    parser.add_argument(
+        "--json", default=os.path.join(ROOT, "benchmarks", "results", "bandwidth.json")
+    )
     args = parser.parse_args(argv)
     runtime = clpde.get_runtime(args.device)
     rng = np.random.default_rng(0)
-    print(f"device: {runtime.device.name.strip()} ({runtime.platform.name.strip()}), "
-          f"{runtime.device.max_compute_units} compute units; load average "
-          f"{os.getloadavg()[0]:.1f} (other processes slow PoCL's threads)", flush=True)
+    print(
+        f"device: {runtime.device.name.strip()} ({runtime.platform.name.strip()}), "
+        f"{runtime.device.max_compute_units} compute units; load average "
+        f"{os.getloadavg()[0]:.1f} (other processes slow PoCL's threads)",
+        flush=True,
+    )
 
     sizes = []
     for n in args.sizes:
         res = measure_size(runtime, n, rng, args.numpy_budget)
         sizes.append(res)
-        print(f"\n{n} x {n} float32: copy kernel {res['copy_kernel_GBps']:.1f} GB/s, "
-              f"enqueue_copy {res['enqueue_copy_GBps']:.1f} GB/s -> roofline "
-              f"{res['roofline_GBps']:.1f} GB/s ({res['roofline_from']}); "
-              f"fill_ghosts {res['fill_ghosts_ms']:.3f} ms")
-        header = (f"  {'kernel':28s} {'B/cell':>6s} {'ms':>8s} {'GB/s':>6s} {'of copy':>7s} "
-                  f"{'numpy ms':>9s} {'x numpy':>8s}")
+        print(
+            f"\n{n} x {n} float32: copy kernel {res['copy_kernel_GBps']:.1f} GB/s, "
+            f"enqueue_copy {res['enqueue_copy_GBps']:.1f} GB/s -> roofline "
+            f"{res['roofline_GBps']:.1f} GB/s ({res['roofline_from']}); "
+            f"fill_ghosts {res['fill_ghosts_ms']:.3f} ms"
+        )
+        header = (
+            f"  {'kernel':28s} {'B/cell':>6s} {'ms':>8s} {'GB/s':>6s} {'of copy':>7s} "
+            f"{'numpy ms':>9s} {'x numpy':>8s}"
+        )
         print(header)
         for k in res["kernels"]:
-            print(f"  {k['kernel']:28s} {k['bytes_per_cell']:6d} {k['ms']:8.3f} "
-                  f"{k['GBps']:6.1f} {k['fraction_of_copy']:7.0%} "
-                  f"{k['numpy_ms']:9.1f} {k['speedup_vs_numpy']:7.1f}x", flush=True)
+            print(
+                f"  {k['kernel']:28s} {k['bytes_per_cell']:6d} {k['ms']:8.3f} "
+                f"{k['GBps']:6.1f} {k['fraction_of_copy']:7.0%} "
+                f"{k['numpy_ms']:9.1f} {k['speedup_vs_numpy']:7.1f}x",
+                flush=True,
+            )
 
     e2e = end_to_end(runtime)
     roof2048 = next((s["roofline_GBps"] for s in sizes if s["n"] == 2048), None)
     e2e["fraction_of_copy"] = e2e["GBps"] / roof2048 if roof2048 else None
     frac = f" = {e2e['fraction_of_copy']:.0%} of copy" if roof2048 else ""
-    print(f"\nend to end: diffuse(2048^2 float32, heat, 500 steps) {e2e['seconds']:.3f} s, "
-          f"{e2e['GBps']:.1f} GB/s{frac}")
-    print("(B/cell: bytes each step must read and write once; of copy: effective bandwidth / "
-          "roofline; x numpy: numpy reference time / kernel time)")
+    print(
+        f"\nend to end: diffuse(2048^2 float32, heat, 500 steps) {e2e['seconds']:.3f} s, "
+        f"{e2e['GBps']:.1f} GB/s{frac}"
+    )
+    print(
+        "(B/cell: bytes each step must read and write once; of copy: effective bandwidth / "
+        "roofline; x numpy: numpy reference time / kernel time)"
+    )
 
-    result = {"device": runtime.device.name.strip(), "platform": runtime.platform.name.strip(),
-              "compute_units": runtime.device.max_compute_units,
-              "host": platform.processor() or platform.machine(), "cpu_count": os.cpu_count(),
-              "load_average_1_5_15": list(os.getloadavg()), "sizes": sizes,
-              "end_to_end_heat": e2e}
+    result = {
+        "device": runtime.device.name.strip(),
+        "platform": runtime.platform.name.strip(),
+        "compute_units": runtime.device.max_compute_units,
+        "host": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "load_average_1_5_15": list(os.getloadavg()),
+        "sizes": sizes,
+        "end_to_end_heat": e2e,
+    }
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=os.path.dirname(os.path.abspath(args.json)),
-                                     delete=False, suffix=".tmp") as tmp:
+    with tempfile.NamedTemporaryFile(
+        "w", dir=os.path.dirname(os.path.abspath(args.json)), delete=False, suffix=".tmp"
+    ) as tmp:
         json.dump(result, tmp, indent=2)
     os.replace(tmp.name, args.json)
     print(f"wrote {args.json}")

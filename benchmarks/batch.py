@@ -56,7 +56,7 @@ def scratch_mask(height: int, width: int) -> np.ndarray:
         for d in range(2):
             keep = (y + d >= 0) & (y + d < height)
             mask[y[keep] + d, x[keep]] = True
-    mask[:, int(0.4 * width): int(0.4 * width) + 2] = True
+    mask[:, int(0.4 * width) : int(0.4 * width) + 2] = True
     return mask
 
 
@@ -65,8 +65,13 @@ def make_photos(folder: Path, count: int) -> list[Path]:
 
     from clpde.io.images import write_image
 
-    sources = [data.astronaut(), data.coffee(), data.chelsea(), data.rocket(),
-               np.stack([data.camera()] * 3, -1)]
+    sources = [
+        data.astronaut(),
+        data.coffee(),
+        data.chelsea(),
+        data.rocket(),
+        np.stack([data.camera()] * 3, -1),
+    ]
     rng = np.random.default_rng(0)
     paths = []
     for k in range(count):
@@ -75,7 +80,7 @@ def make_photos(folder: Path, count: int) -> list[Path]:
         big = transform.rescale(image, scale, channel_axis=-1, preserve_range=True, order=1)
         y = rng.integers(0, big.shape[0] - 511)
         x = rng.integers(0, big.shape[1] - 511)
-        crop = big[y:y + 512, x:x + 512].astype(np.uint8)
+        crop = big[y : y + 512, x : x + 512].astype(np.uint8)
         paths.append(folder / f"photo{k:03d}.png")
         write_image(paths[-1], crop[:, ::-1] if k % 2 else crop)
     return paths
@@ -148,9 +153,13 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
                 digest.update(frame.data)
                 writer.write(frame, pts=reader.timestamps.pop(0))
                 count += 1
-        return {"seconds": time.perf_counter() - start, "tasks": count,
-                "cpu_seconds": time.process_time() - cpu, "kernel_seconds": kernels,
-                "frames_sha256": digest.hexdigest()}
+        return {
+            "seconds": time.perf_counter() - start,
+            "tasks": count,
+            "cpu_seconds": time.process_time() - cpu,
+            "kernel_seconds": kernels,
+            "frames_sha256": digest.hexdigest(),
+        }
     for p in inputs:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
@@ -159,22 +168,32 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
         else:
             result = clpde.inpaint(image, m, channel_axis=axis, progress=False, **options)
         write_image(out / Path(p).name, result)
-    return {"seconds": time.perf_counter() - start, "tasks": len(inputs),
-            "cpu_seconds": time.process_time() - cpu, "kernel_seconds": kernels}
+    return {
+        "seconds": time.perf_counter() - start,
+        "tasks": len(inputs),
+        "cpu_seconds": time.process_time() - cpu,
+        "kernel_seconds": kernels,
+    }
 
 
 def run_serial(kind, inputs, mask, out, threads, options) -> dict:
     listing = out.parent / f"{out.name}.json"
     listing.write_text(json.dumps([str(p) for p in inputs]))
-    env = {**os.environ, "POCL_MAX_PTHREAD_COUNT": str(threads),
-           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    env = {
+        **os.environ,
+        "POCL_MAX_PTHREAD_COUNT": str(threads),
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
     here, opts = str(Path(__file__).parent), json.dumps(options)
-    code = ("import json, sys; from pathlib import Path; "
-            f"sys.path.insert(0, {here!r}); from batch import serial_loop; "
-            f"print(json.dumps(serial_loop({kind!r}, Path({str(listing)!r}), "
-            f"Path({str(mask)!r}), Path({str(out)!r}), json.loads({opts!r}))))")
-    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         check=True)
+    code = (
+        "import json, sys; from pathlib import Path; "
+        f"sys.path.insert(0, {here!r}); from batch import serial_loop; "
+        f"print(json.dumps(serial_loop({kind!r}, Path({str(listing)!r}), "
+        f"Path({str(mask)!r}), Path({str(out)!r}), json.loads({opts!r}))))"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
     return json.loads(run.stdout.strip().splitlines()[-1])
 
 
@@ -196,9 +215,15 @@ def dask_cluster(workers: int, threads: int):
     saved = dict(os.environ)
     try:
         with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
-            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                dashboard_address=":0", scheduler_kwargs={"dashboard": False},
-                                silence_logs=50, env={"POCL_MAX_PTHREAD_COUNT": str(threads)})
+            return LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                scheduler_kwargs={"dashboard": False},
+                silence_logs=50,
+                env={"POCL_MAX_PTHREAD_COUNT": str(threads)},
+            )
     finally:
         # The nanny puts MALLOC_TRIM_THRESHOLD_ into this process's environment before it
         # spawns a worker; the serial loops started later must not inherit it.
@@ -210,8 +235,12 @@ def _spatial_fill(frames, masks, channel_axis=None, options=None):
     """clpde.inpaint frame by frame: the film path's filler for the serial loop's frames."""
     import clpde
 
-    return np.stack([clpde.inpaint(f, m, channel_axis=channel_axis, progress=False, **options)
-                     for f, m in zip(frames, masks, strict=True)])
+    return np.stack(
+        [
+            clpde.inpaint(f, m, channel_axis=channel_axis, progress=False, **options)
+            for f, m in zip(frames, masks, strict=True)
+        ]
+    )
 
 
 def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=False) -> dict:
@@ -234,25 +263,41 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
             client.wait_for_workers(workers, timeout=120)
             cluster_seconds = time.perf_counter() - start
             kernels = time.perf_counter()
-            client.run(warm_up, kind, str(inputs[0]), None if mask is None else str(mask),
-                       options)
+            client.run(warm_up, kind, str(inputs[0]), None if mask is None else str(mask), options)
             kernel_seconds = time.perf_counter() - kernels
             cpu = sum(client.run(_cpu_seconds).values()) + _cpu_seconds()
             if kind == "video":
                 # clpde's film path with the frame-by-frame filler, as the serial loop
                 work = WindowWork(fill=functools.partial(_spatial_fill, options=options))
-                result = restore_film(inputs[0], out, mask=mask, client=client, work=work,
-                                      block=8, chunk_frames=8, progress=False)
+                result = restore_film(
+                    inputs[0],
+                    out,
+                    mask=mask,
+                    client=client,
+                    work=work,
+                    block=8,
+                    chunk_frames=8,
+                    progress=False,
+                )
                 seconds, tasks, task_seconds, longest = result.seconds, result.frames, None, None
                 frames_sha256 = result.frames_sha256
             else:
                 frames_sha256 = None
                 if kind == "empty":
-                    result = batch("diffuse", inputs, out, client=client, steps=1, force=True,
-                                   progress=False)
+                    result = batch(
+                        "diffuse", inputs, out, client=client, steps=1, force=True, progress=False
+                    )
                 else:
-                    result = batch("inpaint", inputs, out, mask=mask, client=client,
-                                   force=True, progress=False, **options)
+                    result = batch(
+                        "inpaint",
+                        inputs,
+                        out,
+                        mask=mask,
+                        client=client,
+                        force=True,
+                        progress=False,
+                        **options,
+                    )
                 assert result.ok, result.failed
                 seconds, tasks = result.seconds, len(result.results)
                 task_seconds = sum(r.seconds for r in result.results)
@@ -260,9 +305,16 @@ def run_batch(kind, inputs, mask, out, workers, threads, options, dask_defaults=
             cpu = sum(client.run(_cpu_seconds).values()) + _cpu_seconds() - cpu
     finally:
         cluster.close()
-    return {"seconds": seconds, "tasks": tasks, "cluster_seconds": cluster_seconds,
-            "kernel_seconds": kernel_seconds, "frames_sha256": frames_sha256,
-            "task_seconds": task_seconds, "longest_task_seconds": longest, "cpu_seconds": cpu}
+    return {
+        "seconds": seconds,
+        "tasks": tasks,
+        "cluster_seconds": cluster_seconds,
+        "kernel_seconds": kernel_seconds,
+        "frames_sha256": frames_sha256,
+        "task_seconds": task_seconds,
+        "longest_task_seconds": longest,
+        "cpu_seconds": cpu,
+    }
 
 
 def same_outputs(kind, a: Path, b: Path) -> bool:
@@ -270,7 +322,8 @@ def same_outputs(kind, a: Path, b: Path) -> bool:
         return a.read_bytes() == b.read_bytes()
     names = sorted(p.name for p in a.glob("*.png"))
     return names == sorted(p.name for p in b.glob("*.png")) and all(
-        (a / n).read_bytes() == (b / n).read_bytes() for n in names)
+        (a / n).read_bytes() == (b / n).read_bytes() for n in names
+    )
 
 
 def _label(mode, workers, threads, dask_defaults):
@@ -285,13 +338,22 @@ def main():
     parser.add_argument("--frames", type=int, default=120)
     parser.add_argument("--empty", type=int, default=100, help="tasks of the empty workload")
     parser.add_argument("--max-steps", type=int, default=3000)
-    parser.add_argument("--repeat", type=int, default=1,
-                        help="rounds over all configurations (A B A B); each row keeps its "
-                             "fastest run")
-    parser.add_argument("--quick", action="store_true",
-                        help="20 photos, 40 frames, 30 empty tasks, one round (about 2 minutes)")
-    parser.add_argument("--workloads", default="photos,carphone,empty",
-                        help="which to run, comma-separated (default: all three)")
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="rounds over all configurations (A B A B); each row keeps its fastest run",
+    )
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="20 photos, 40 frames, 30 empty tasks, one round (about 2 minutes)",
+    )
+    parser.add_argument(
+        "--workloads",
+        default="photos,carphone,empty",
+        help="which to run, comma-separated (default: all three)",
+    )
     parser.add_argument("--json", type=Path, default=RESULTS)
     args = parser.parse_args()
     if args.quick:
@@ -321,19 +383,28 @@ def main():
             tiny.append(work / "tiny" / f"t{k:03d}.png")
             write_image(tiny[-1], np.full((16, 16), k % 256, np.uint8))
         options = {"max_steps": args.max_steps}
-        workloads = [("photos", "images", photos, photo_mask),
-                     ("carphone", "video", [clip], video_mask),
-                     ("empty", "empty", tiny, None)]
+        workloads = [
+            ("photos", "images", photos, photo_mask),
+            ("carphone", "video", [clip], video_mask),
+            ("empty", "empty", tiny, None),
+        ]
         chosen = args.workloads.split(",")
         unknown = set(chosen) - {w[0] for w in workloads}
         if unknown:
-            parser.error(f"unknown workload(s) {', '.join(sorted(unknown))}; choose from "
-                         "photos, carphone, empty")
+            parser.error(
+                f"unknown workload(s) {', '.join(sorted(unknown))}; choose from "
+                "photos, carphone, empty"
+            )
         workloads = [w for w in workloads if w[0] in chosen]
         # (mode, workers, PoCL threads per worker, Dask's worker defaults)
-        configs = [("serial", 1, 1, False), ("serial", 1, n, False), ("batch", 1, 1, False),
-                   ("batch", 1, n, False), ("batch", 2, max(1, n // 2), False),
-                   ("batch", 2, max(1, n // 2), True)]
+        configs = [
+            ("serial", 1, 1, False),
+            ("serial", 1, n, False),
+            ("batch", 1, 1, False),
+            ("batch", 1, n, False),
+            ("batch", 2, max(1, n // 2), False),
+            ("batch", 2, max(1, n // 2), True),
+        ]
         load = os.getloadavg()[0]
         runs = {}
         for round_ in range(args.repeat):
@@ -352,8 +423,16 @@ def main():
                         r = run_serial(kind, inputs, mask, out, threads, options)
                         r.update(cluster_seconds=None, task_seconds=None)
                     else:
-                        r = run_batch(kind, inputs, mask, out, workers, threads, options,
-                                      dask_defaults=defaults)
+                        r = run_batch(
+                            kind,
+                            inputs,
+                            mask,
+                            out,
+                            workers,
+                            threads,
+                            options,
+                            dask_defaults=defaults,
+                        )
                     r["load_average"] = os.getloadavg()[0]
                     # the first configuration's outputs are the reference
                     reference = work / f"{name}-serial-1x1"
@@ -364,12 +443,14 @@ def main():
                         first = runs.get((name, configs[0]), [r])[0]
                         r["frames_equal"] = r["frames_sha256"] == first["frames_sha256"]
                     runs.setdefault((name, config), []).append(r)
-                    print(f"round {round_ + 1}: {name:9s} {_label(*config):40s} "
-                          f"{r['seconds']:7.2f} s wall  {1000 * r['cpu_seconds'] / r['tasks']:6.1f}"
-                          f" ms cpu/task  load {r['load_average']:.1f}"
-                          + ("" if r["equal"] is None else f"  equal {r['equal']}")
-                          + (f"  frames equal {r['frames_equal']}" if "frames_equal" in r else ""),
-                          flush=True)
+                    print(
+                        f"round {round_ + 1}: {name:9s} {_label(*config):40s} "
+                        f"{r['seconds']:7.2f} s wall  {1000 * r['cpu_seconds'] / r['tasks']:6.1f}"
+                        f" ms cpu/task  load {r['load_average']:.1f}"
+                        + ("" if r["equal"] is None else f"  equal {r['equal']}")
+                        + (f"  frames equal {r['frames_equal']}" if "frames_equal" in r else ""),
+                        flush=True,
+                    )
         rows = []
         for (name, config), done in runs.items():
             mode, workers, threads, defaults = config
@@ -379,50 +460,78 @@ def main():
             overhead = None
             if best["task_seconds"] is not None:  # wall: the workers' time outside tasks
                 overhead = (best["seconds"] * workers - best["task_seconds"]) / best["tasks"]
-            rows.append({
-                "workload": name, "configuration": _label(*config), "mode": mode,
-                "workers": workers, "threads": threads, "dask_defaults": defaults,
-                "tasks": best["tasks"], "seconds": best["seconds"],
-                "all_seconds": [run["seconds"] for run in done],
-                "per_second": best["tasks"] / best["seconds"],
-                "cluster_seconds": best["cluster_seconds"],
-                "kernel_seconds": best["kernel_seconds"],
-                "longest_task_seconds": best.get("longest_task_seconds"),
-                "cpu_per_task_s": cpu_task,
-                # cores the run received: its CPU over its wall time (2 = this whole machine)
-                "cores_used": best["cpu_seconds"] / best["seconds"],
-                "extra_cpu_per_task_s": cpu_task - serial_cpu,
-                "wall_overhead_per_task_s": overhead,
-                "load_average": [run["load_average"] for run in done],
-                "bitwise_equal_to_serial": (None if all(run["equal"] is None for run in done)
-                                            else all(run["equal"] for run in done)),
-                "frames_equal_to_serial": (all(run["frames_equal"] for run in done)
-                                           if "frames_equal" in best else None)})
+            rows.append(
+                {
+                    "workload": name,
+                    "configuration": _label(*config),
+                    "mode": mode,
+                    "workers": workers,
+                    "threads": threads,
+                    "dask_defaults": defaults,
+                    "tasks": best["tasks"],
+                    "seconds": best["seconds"],
+                    "all_seconds": [run["seconds"] for run in done],
+                    "per_second": best["tasks"] / best["seconds"],
+                    "cluster_seconds": best["cluster_seconds"],
+                    "kernel_seconds": best["kernel_seconds"],
+                    "longest_task_seconds": best.get("longest_task_seconds"),
+                    "cpu_per_task_s": cpu_task,
+                    # cores the run received: its CPU over its wall time (2 = this whole machine)
+                    "cores_used": best["cpu_seconds"] / best["seconds"],
+                    "extra_cpu_per_task_s": cpu_task - serial_cpu,
+                    "wall_overhead_per_task_s": overhead,
+                    "load_average": [run["load_average"] for run in done],
+                    "bitwise_equal_to_serial": (
+                        None
+                        if all(run["equal"] is None for run in done)
+                        else all(run["equal"] for run in done)
+                    ),
+                    "frames_equal_to_serial": (
+                        all(run["frames_equal"] for run in done) if "frames_equal" in best else None
+                    ),
+                }
+            )
         for r in rows:
-            base = next(b for b in rows if b["workload"] == r["workload"] and b["mode"] == "serial"
-                        and b["threads"] == n)
+            base = next(
+                b
+                for b in rows
+                if b["workload"] == r["workload"] and b["mode"] == "serial" and b["threads"] == n
+            )
             r["speedup_vs_serial_all_threads"] = r["per_second"] / base["per_second"]
-        print(f"\n{n} cores; load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at "
-              f"the end; {clip_name}; fastest of {args.repeat} round(s)\n")
-        print("| workload | configuration | wall (s) | throughput | speed-up | start (s) | "
-              "kernels (s) | cpu / task (ms) | extra cpu / task (ms) | cores used | "
-              "bitwise = serial |")
+        print(
+            f"\n{n} cores; load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at "
+            f"the end; {clip_name}; fastest of {args.repeat} round(s)\n"
+        )
+        print(
+            "| workload | configuration | wall (s) | throughput | speed-up | start (s) | "
+            "kernels (s) | cpu / task (ms) | extra cpu / task (ms) | cores used | "
+            "bitwise = serial |"
+        )
         print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
         for r in rows:
             unit = "fps" if r["workload"] == "carphone" else "/s"
-            equal = {None: "(reference)", True: "yes",
-                     False: "**no**"}[r["bitwise_equal_to_serial"]]
+            equal = {None: "(reference)", True: "yes", False: "**no**"}[
+                r["bitwise_equal_to_serial"]
+            ]
             if r["frames_equal_to_serial"] is not None and r["bitwise_equal_to_serial"] is not None:
                 equal += f" (frames: {'yes' if r['frames_equal_to_serial'] else '**no**'})"
             start = "-" if r["cluster_seconds"] is None else f"{r['cluster_seconds']:.1f}"
-            print(f"| {r['workload']} | {r['configuration']} | {r['seconds']:.2f} | "
-                  f"{r['per_second']:.2f} {unit} | {r['speedup_vs_serial_all_threads']:.2f}x | "
-                  f"{start} | {r['kernel_seconds']:.2f} | {1000 * r['cpu_per_task_s']:.1f} | "
-                  f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {r['cores_used']:.2f} | {equal} |")
-        result = {"cores": n, "load_average_at_start": load,
-                  "load_average_at_end": os.getloadavg()[0], "clip": clip_name,
-                  "photos": args.photos, "frames": args.frames, "repeat": args.repeat,
-                  "rows": rows}
+            print(
+                f"| {r['workload']} | {r['configuration']} | {r['seconds']:.2f} | "
+                f"{r['per_second']:.2f} {unit} | {r['speedup_vs_serial_all_threads']:.2f}x | "
+                f"{start} | {r['kernel_seconds']:.2f} | {1000 * r['cpu_per_task_s']:.1f} | "
+                f"{1000 * r['extra_cpu_per_task_s']:+.1f} | {r['cores_used']:.2f} | {equal} |"
+            )
+        result = {
+            "cores": n,
+            "load_average_at_start": load,
+            "load_average_at_end": os.getloadavg()[0],
+            "clip": clip_name,
+            "photos": args.photos,
+            "frames": args.frames,
+            "repeat": args.repeat,
+            "rows": rows,
+        }
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(result, indent=1))
         print(f"\nwrote {args.json}")

@@ -77,16 +77,19 @@ def difference(after: dict, before: dict) -> dict:
 
 
 def report(label: str, parts: list[tuple[str, dict]], count: int, wall: float) -> None:
-    print(f"\n{label}: {count / wall:.2f} photos/s ({wall:.1f} s wall, load "
-          f"{os.getloadavg()[0]:.1f})")
+    print(
+        f"\n{label}: {count / wall:.2f} photos/s ({wall:.1f} s wall, load {os.getloadavg()[0]:.1f})"
+    )
     total = 0.0
     for process, kinds in parts:
         for kind, value in sorted(kinds.items()):
             if kind == "faults":
                 continue
             total += value[0] + value[1]
-            print(f"  {process:10s} {kind:10s} user {1000 * value[0] / count:6.1f}  system "
-                  f"{1000 * value[1] / count:5.1f} ms/photo")
+            print(
+                f"  {process:10s} {kind:10s} user {1000 * value[0] / count:6.1f}  system "
+                f"{1000 * value[1] / count:5.1f} ms/photo"
+            )
         print(f"  {process:10s} {'faults':10s} {kinds['faults'] / count:8.0f} /photo")
     print(f"  total {1000 * total / count:.1f} ms of CPU per photo")
 
@@ -102,14 +105,16 @@ def run_batch(photos, mask, workers, threads, plain: bool) -> None:
         cluster = dask_cluster(workers, threads)
     else:
         cluster, workers, threads = importlib.import_module("clpde.scale.cluster").start_cluster(
-            workers, threads)
+            workers, threads
+        )
     with Client(cluster, set_as_default=False) as client:
         client.wait_for_workers(workers, timeout=120)
         client.run(warm, str(photos[0]), str(mask))
         before, client_before = client.run(thread_cpu), thread_cpu("main")
         start = time.perf_counter()
-        result = batch.batch("inpaint", photos, out, mask=mask, client=client, force=True,
-                             progress=False)
+        result = batch.batch(
+            "inpaint", photos, out, mask=mask, client=client, force=True, progress=False
+        )
         wall = time.perf_counter() - start
         after, client_after = client.run(thread_cpu), thread_cpu("main")
     cluster.close()
@@ -129,11 +134,14 @@ def run_serial(photos, mask) -> None:
     warm(photos[0], mask)
     before, start = thread_cpu("task"), time.perf_counter()
     for p in photos:
-        write_image(out / p.name, clpde.inpaint(read_image(p), m, channel_axis=-1,
-                                                progress=False))
+        write_image(out / p.name, clpde.inpaint(read_image(p), m, channel_axis=-1, progress=False))
     wall = time.perf_counter() - start
-    report("serial loop (this process)", [("serial", difference(thread_cpu("task"), before))],
-           len(photos), wall)
+    report(
+        "serial loop (this process)",
+        [("serial", difference(thread_cpu("task"), before))],
+        len(photos),
+        wall,
+    )
 
 
 def main():
@@ -149,8 +157,10 @@ def main():
     photos = make_photos(work / "photos", args.photos)
     mask = work / "mask.png"
     write_image(mask, scratch_mask(512, 512).astype("uint8") * 255)
-    print(f"{args.photos} photos of 512x512; POCL_MAX_PTHREAD_COUNT of the serial loop: "
-          f"{os.environ.get('POCL_MAX_PTHREAD_COUNT', 'PoCL default')}")
+    print(
+        f"{args.photos} photos of 512x512; POCL_MAX_PTHREAD_COUNT of the serial loop: "
+        f"{os.environ.get('POCL_MAX_PTHREAD_COUNT', 'PoCL default')}"
+    )
     run_batch(photos, mask, args.workers, args.threads, plain=False)
     run_batch(photos, mask, args.workers, args.threads, plain=True)
     run_serial(photos, mask)

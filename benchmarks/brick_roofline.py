@@ -70,16 +70,26 @@ def measure(n: int, steps: int, reps: int) -> dict:
     big = cla.zeros(q, g.volume, np.float32)
     big2 = cla.zeros_like(big)
     kernels = {
-        "dense step": lambda: g.launch_runs(k_list, dense, big.data, big2.data,
-                                            surf.psi_dev.data, r, *_offsets(g, 0),
-                                            *g.strides()),
-        "list step": lambda: g.launch_runs(k_list, runs, flow.cur.data, flow.tmp.data,
-                                           surf.psi_dev.data, r, *_offsets(g, 0), *g.strides()),
+        "dense step": lambda: g.launch_runs(
+            k_list, dense, big.data, big2.data, surf.psi_dev.data, r, *_offsets(g, 0), *g.strides()
+        ),
+        "list step": lambda: g.launch_runs(
+            k_list,
+            runs,
+            flow.cur.data,
+            flow.tmp.data,
+            surf.psi_dev.data,
+            r,
+            *_offsets(g, 0),
+            *g.strides(),
+        ),
         "list re-extension": flow.after_step,
-        "list band_copy": lambda: g.launch_runs(k_band_copy, runs, flow.cur.data, flow.tmp.data,
-                                                surf.psi_dev.data),
-        "brick step": lambda: bf.bricks.launch(k_brick, bf.cur.data, bf.tmp.data, bf.psi.data,
-                                               r, *_signs(0), bf.bricks.node_rows.data),
+        "list band_copy": lambda: g.launch_runs(
+            k_band_copy, runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data
+        ),
+        "brick step": lambda: bf.bricks.launch(
+            k_brick, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0), bf.bricks.node_rows.data
+        ),
         "brick re-extension": bf.after_step,
         "brick_copy": lambda: bf.bricks.launch(k_brick_copy, b_u.data, b_v.data, b_p.data),
     }
@@ -105,44 +115,88 @@ def measure(n: int, steps: int, reps: int) -> dict:
     t_copy = best["dense copy"]
     copy_gbs = 2 * a.nbytes / t_copy / 1e9
     run_cells = int((runs.end.get()[: runs.n] - runs.start.get()[: runs.n]).sum())
-    brick_cells = int(np.count_nonzero(bf.bricks.brick_bits.get()[1: bf.bricks.nbricks + 1] & 1))
+    brick_cells = int(np.count_nonzero(bf.bricks.brick_bits.get()[1 : bf.bricks.nbricks + 1] & 1))
     brick_cells *= bf.bricks.cells_per_brick
     visited = int(bf.bricks.node_rows.get().astype(np.int64).sum()) * 8
     reach = surf.reach_band.n
     # bytes each must move at least: the step reads u and psi and writes v per cell it
     # updates; the re-extension reads target, first node, 3 offsets and writes 1 (24 B)
-    cells = {"dense step": dense_cells, "list step": run_cells, "list band_copy": run_cells,
-             "brick step": visited,
-             "brick_copy": brick_cells, "list re-extension": reach, "brick re-extension": reach}
-    per_cell_bytes = {"dense step": 12, "list step": 12, "list band_copy": 12, "brick step": 12,
-                      "brick_copy": 12, "list re-extension": 24, "brick re-extension": 24}
-    flops = {"dense step": STEP_FLOPS, "list step": STEP_FLOPS, "brick step": STEP_FLOPS,
-             "list re-extension": EXT_FLOPS,
-             "brick re-extension": EXT_FLOPS, "list band_copy": 1, "brick_copy": 1}
+    cells = {
+        "dense step": dense_cells,
+        "list step": run_cells,
+        "list band_copy": run_cells,
+        "brick step": visited,
+        "brick_copy": brick_cells,
+        "list re-extension": reach,
+        "brick re-extension": reach,
+    }
+    per_cell_bytes = {
+        "dense step": 12,
+        "list step": 12,
+        "list band_copy": 12,
+        "brick step": 12,
+        "brick_copy": 12,
+        "list re-extension": 24,
+        "brick re-extension": 24,
+    }
+    flops = {
+        "dense step": STEP_FLOPS,
+        "list step": STEP_FLOPS,
+        "brick step": STEP_FLOPS,
+        "list re-extension": EXT_FLOPS,
+        "brick re-extension": EXT_FLOPS,
+        "list band_copy": 1,
+        "brick_copy": 1,
+    }
     rows = []
     for name in cells:
         t = best[name]
         nbytes = cells[name] * per_cell_bytes[name]
-        rows.append({"kernel": name, "ms": 1e3 * t, "x_copy": t / t_copy, "cells": cells[name],
-                     "ns_per_cell": 1e9 * t / cells[name], "bytes_per_cell": per_cell_bytes[name],
-                     "flops_per_cell": flops[name],
-                     "intensity": flops[name] / per_cell_bytes[name],
-                     "gbs": nbytes / t / 1e9, "gflops": cells[name] * flops[name] / t / 1e9,
-                     "bandwidth_floor_ms": 1e3 * nbytes / (copy_gbs * 1e9)})
-    out = {"grid": n, "padded_cells": g.volume, "ext_band": surf.ext_band.n,
-           "node_band": surf.node_band.n, "reach_band": reach, "run_cells": run_cells,
-           "brick_cells_with_nodes": brick_cells, "brick_rows_visited_cells": visited,
-           "nbricks": bf.bricks.nbricks, "stored_cells": bf.bricks.stored_cells,
-           "copy_ms": 1e3 * t_copy, "copy_gbs": copy_gbs, "rows": rows}
-    print(f"{n}^3: padded {g.volume} cells, extension band {surf.ext_band.n}, nodes "
-          f"{surf.node_band.n}, reach {reach}; dense copy {1e3 * t_copy:.2f} ms "
-          f"({copy_gbs:.1f} GB/s)")
-    print(f"{'kernel':>20} {'ms':>7} {'x copy':>7} {'cells':>9} {'ns/cell':>8} {'B/cell':>6} "
-          f"{'flop/cell':>9} {'GB/s':>6} {'GFLOP/s':>8} {'floor ms':>8}")
+        rows.append(
+            {
+                "kernel": name,
+                "ms": 1e3 * t,
+                "x_copy": t / t_copy,
+                "cells": cells[name],
+                "ns_per_cell": 1e9 * t / cells[name],
+                "bytes_per_cell": per_cell_bytes[name],
+                "flops_per_cell": flops[name],
+                "intensity": flops[name] / per_cell_bytes[name],
+                "gbs": nbytes / t / 1e9,
+                "gflops": cells[name] * flops[name] / t / 1e9,
+                "bandwidth_floor_ms": 1e3 * nbytes / (copy_gbs * 1e9),
+            }
+        )
+    out = {
+        "grid": n,
+        "padded_cells": g.volume,
+        "ext_band": surf.ext_band.n,
+        "node_band": surf.node_band.n,
+        "reach_band": reach,
+        "run_cells": run_cells,
+        "brick_cells_with_nodes": brick_cells,
+        "brick_rows_visited_cells": visited,
+        "nbricks": bf.bricks.nbricks,
+        "stored_cells": bf.bricks.stored_cells,
+        "copy_ms": 1e3 * t_copy,
+        "copy_gbs": copy_gbs,
+        "rows": rows,
+    }
+    print(
+        f"{n}^3: padded {g.volume} cells, extension band {surf.ext_band.n}, nodes "
+        f"{surf.node_band.n}, reach {reach}; dense copy {1e3 * t_copy:.2f} ms "
+        f"({copy_gbs:.1f} GB/s)"
+    )
+    print(
+        f"{'kernel':>20} {'ms':>7} {'x copy':>7} {'cells':>9} {'ns/cell':>8} {'B/cell':>6} "
+        f"{'flop/cell':>9} {'GB/s':>6} {'GFLOP/s':>8} {'floor ms':>8}"
+    )
     for row in rows:
-        print(f"{row['kernel']:>20} {row['ms']:7.2f} {row['x_copy']:7.2f} {row['cells']:9d} "
-              f"{row['ns_per_cell']:8.2f} {row['bytes_per_cell']:6d} {row['flops_per_cell']:9d} "
-              f"{row['gbs']:6.2f} {row['gflops']:8.2f} {row['bandwidth_floor_ms']:8.2f}")
+        print(
+            f"{row['kernel']:>20} {row['ms']:7.2f} {row['x_copy']:7.2f} {row['cells']:9d} "
+            f"{row['ns_per_cell']:8.2f} {row['bytes_per_cell']:6d} {row['flops_per_cell']:9d} "
+            f"{row['gbs']:6.2f} {row['gflops']:8.2f} {row['bandwidth_floor_ms']:8.2f}"
+        )
     return out
 
 

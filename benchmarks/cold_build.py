@@ -122,8 +122,14 @@ print(json.dumps(result))
 def one_run(pythonpath: Path, device: str, case: str) -> dict:
     with tempfile.TemporaryDirectory(prefix="clpde-cold-") as cache:
         env = dict(os.environ, POCL_CACHE_DIR=cache, PYTHONPATH=str(pythonpath))
-        out = subprocess.run([sys.executable, "-c", ONE_RUN, device, case], env=env, cwd=cache,
-                             capture_output=True, text=True, check=True).stdout
+        out = subprocess.run(
+            [sys.executable, "-c", ONE_RUN, device, case],
+            env=env,
+            cwd=cache,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
@@ -132,8 +138,12 @@ def main():
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--case", choices=("planar", "surface", "inpaint"), default="planar")
-    parser.add_argument("--other", type=Path, default=None,
-                        help="another checkout to time alternately (e.g. main's)")
+    parser.add_argument(
+        "--other",
+        type=Path,
+        default=None,
+        help="another checkout to time alternately (e.g. main's)",
+    )
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
     trees = {"this checkout": ROOT} | ({"other": args.other} if args.other else {})
@@ -141,8 +151,10 @@ def main():
     for _ in range(args.runs):
         for name, path in trees.items():
             runs[name].append(one_run(path, args.device, args.case))
-    print(f"{'tree':14s} {'programs built':40s} {'build s':>8s} {'first calls s':>14s} "
-          f"{'CPU s':>6s} {'new sizes s':>12s}   (medians of {args.runs} cold runs)")
+    print(
+        f"{'tree':14s} {'programs built':40s} {'build s':>8s} {'first calls s':>14s} "
+        f"{'CPU s':>6s} {'new sizes s':>12s}   (medians of {args.runs} cold runs)"
+    )
     summary = {}
     for name, results in runs.items():
         programs = ", ".join(p[0] for p in results[0]["programs"])
@@ -150,34 +162,52 @@ def main():
         wall = statistics.median(r["wall"] for r in results)
         cpu = statistics.median(r["cpu"] for r in results)
         new = statistics.median(r["new_sizes"] for r in results)
-        summary[name] = {"path": str(trees[name]), "programs": programs, "build_s": build,
-                         "first_calls_s": wall, "cpu_s": cpu, "new_sizes_s": new,
-                         "runs": results}
+        summary[name] = {
+            "path": str(trees[name]),
+            "programs": programs,
+            "build_s": build,
+            "first_calls_s": wall,
+            "cpu_s": cpu,
+            "new_sizes_s": new,
+            "runs": results,
+        }
         print(f"{name:14s} {programs:40s} {build:8.3f} {wall:14.3f} {cpu:6.3f} {new:12.3f}")
         ratio = statistics.median(r["new_size_ratio"] for r in results)
         summary[name]["new_size_ratio"] = ratio
-        print(f"    a new size over the same size again: {ratio:.2f}x; programs built for new "
-              f"sizes: {len(results[0]['new_size_programs'])}; import "
-              f"{statistics.median(r['import'] for r in results):.2f} s")
+        print(
+            f"    a new size over the same size again: {ratio:.2f}x; programs built for new "
+            f"sizes: {len(results[0]['new_size_programs'])}; import "
+            f"{statistics.median(r['import'] for r in results):.2f} s"
+        )
         if args.case == "inpaint":
             first = [statistics.median(r["first_calls"][i] for r in results) for i in (0, 1)]
             rep = [statistics.median(r["repeat_calls"][i] for r in results) for i in (0, 1)]
             imp = statistics.median(r["import"] for r in results)
             extra = imp + sum(first) - sum(rep)
-            summary[name].update(first_colour_s=first[0], first_grey_s=first[1],
-                                 repeat_colour_s=rep[0], repeat_grey_s=rep[1], extra_s=extra)
+            summary[name].update(
+                first_colour_s=first[0],
+                first_grey_s=first[1],
+                repeat_colour_s=rep[0],
+                repeat_grey_s=rep[1],
+                extra_s=extra,
+            )
             fc = [statistics.median(r["first_cpu"][i] for r in results) for i in (0, 1)]
             rc = [statistics.median(r["repeat_cpu"][i] for r in results) for i in (0, 1)]
             summary[name].update(first_cpu_s=fc, repeat_cpu_s=rc, extra_cpu_s=sum(fc) - sum(rc))
-            print(f"    CPU seconds: first colour {fc[0]:.2f} (repeat {rc[0]:.2f}), first grey "
-                  f"{fc[1]:.2f} (repeat {rc[1]:.2f}): first calls - repeats = "
-                  f"{sum(fc) - sum(rc):.2f} s of CPU")
-            print(f"    first colour {first[0]:.2f} s (repeat {rep[0]:.2f}), first grey "
-                  f"{first[1]:.2f} s (repeat {rep[1]:.2f}): import + first calls - repeats = "
-                  f"{extra:.2f} s; {len(results[0]['programs'])} programs")
+            print(
+                f"    CPU seconds: first colour {fc[0]:.2f} (repeat {rc[0]:.2f}), first grey "
+                f"{fc[1]:.2f} (repeat {rc[1]:.2f}): first calls - repeats = "
+                f"{sum(fc) - sum(rc):.2f} s of CPU"
+            )
+            print(
+                f"    first colour {first[0]:.2f} s (repeat {rep[0]:.2f}), first grey "
+                f"{first[1]:.2f} s (repeat {rep[1]:.2f}): import + first calls - repeats = "
+                f"{extra:.2f} s; {len(results[0]['programs'])} programs"
+            )
         for i, prog in enumerate(results[0]["programs"]):
-            times = statistics.median(r["programs"][i][3] for r in results
-                                      if len(r["programs"]) > i)
+            times = statistics.median(
+                r["programs"][i][3] for r in results if len(r["programs"]) > i
+            )
             print(f"    {prog[0]:22s} {prog[1]:8s} {times:6.3f} s  {prog[2]}")
     if args.json:
         args.json.write_text(json.dumps(summary, indent=1))

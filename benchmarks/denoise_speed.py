@@ -59,14 +59,16 @@ def best_time(fn, repeats):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cpu", help="clpde device (default cpu)")
-    parser.add_argument("--json", default=os.path.join(os.path.dirname(__file__), "results",
-                                                       "denoise_speed.json"))
+    parser.add_argument(
+        "--json", default=os.path.join(os.path.dirname(__file__), "results", "denoise_speed.json")
+    )
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args(argv)
 
     runtime = clpde.get_runtime(args.device)
     clean = img_as_float(data.camera())
     noisy = clean + np.random.default_rng(0).normal(0, SIGMA, clean.shape)
+
     def metrics(u):
         return {
             "psnr": float(peak_signal_noise_ratio(clean, u, data_range=1)),
@@ -82,8 +84,15 @@ def main(argv=None) -> int:
     cold = time.perf_counter() - start
     ours(sigma=SIGMA, method="gradient", max_steps=5)()  # builds the gradient kernels
 
-    exact, _ = clpde.denoise_tv(noisy, weight=0.1, tol=1e-7, max_steps=20000,
-                                dtype=np.float64, device=runtime, return_info=True)
+    exact, _ = clpde.denoise_tv(
+        noisy,
+        weight=0.1,
+        tol=1e-7,
+        max_steps=20000,
+        dtype=np.float64,
+        device=runtime,
+        return_info=True,
+    )
     # The configurations: (package, method, params, callable, note, error column, repeats).
     # Weight sweeps and the oracle step count are settled first, untimed.
     chambolle_sweep = {w: denoise_tv_chambolle(noisy, weight=w) for w in WEIGHTS}
@@ -98,31 +107,97 @@ def main(argv=None) -> int:
             break
     many = args.repeats
     configs = [
-        ("skimage", "chambolle", "weight=0.1", lambda: denoise_tv_chambolle(noisy, weight=0.1),
-         "default weight and stopping", True, many),
-        ("skimage", "chambolle", f"weight={best_w:g}",
-         lambda: denoise_tv_chambolle(noisy, weight=best_w), "best weight of the sweep", False,
-         many),
-        ("skimage", "chambolle", "weight=0.1, eps=1e-6",
-         lambda: denoise_tv_chambolle(noisy, weight=0.1, eps=1e-6, max_num_iter=5000),
-         "run to convergence", True, 1),
-        ("skimage", "bregman", f"weight={best_b:g}",
-         lambda: denoise_tv_bregman(noisy, weight=best_b), "best weight of the sweep", False,
-         many),
-        ("clpde", "primal-dual", f"sigma={SIGMA:g}", ours(sigma=SIGMA), "default settings",
-         False, many),
+        (
+            "skimage",
+            "chambolle",
+            "weight=0.1",
+            lambda: denoise_tv_chambolle(noisy, weight=0.1),
+            "default weight and stopping",
+            True,
+            many,
+        ),
+        (
+            "skimage",
+            "chambolle",
+            f"weight={best_w:g}",
+            lambda: denoise_tv_chambolle(noisy, weight=best_w),
+            "best weight of the sweep",
+            False,
+            many,
+        ),
+        (
+            "skimage",
+            "chambolle",
+            "weight=0.1, eps=1e-6",
+            lambda: denoise_tv_chambolle(noisy, weight=0.1, eps=1e-6, max_num_iter=5000),
+            "run to convergence",
+            True,
+            1,
+        ),
+        (
+            "skimage",
+            "bregman",
+            f"weight={best_b:g}",
+            lambda: denoise_tv_bregman(noisy, weight=best_b),
+            "best weight of the sweep",
+            False,
+            many,
+        ),
+        (
+            "clpde",
+            "primal-dual",
+            f"sigma={SIGMA:g}",
+            ours(sigma=SIGMA),
+            "default settings",
+            False,
+            many,
+        ),
         ("clpde", "primal-dual", "weight=0.1", ours(weight=0.1), "default stopping", True, many),
-        ("clpde", "primal-dual", "weight=0.1, tol=2e-2", ours(weight=0.1, tol=2e-2),
-         "a tolerance about as loose as chambolle's default", True, many),
-        ("clpde", "primal-dual", "weight=0.1, tol=5e-4", ours(weight=0.1, tol=5e-4),
-         "as accurate as chambolle run to convergence", True, many),
-        ("clpde", "primal-dual", f"weight={best_o:g}", ours(weight=best_o),
-         "best weight of the sweep", False, many),
-        ("clpde", "gradient", f"sigma={SIGMA:g}, eps=0.02", ours(sigma=SIGMA, method="gradient"),
-         "the thesis's scheme, default stopping", False, 1),
-        ("clpde", "primal-dual", f"weight=0.1, {oracle} steps",
-         ours(weight=0.1, max_steps=oracle, check_every=oracle),
-         "fewest iterations reaching chambolle's default PSNR (oracle)", True, many),
+        (
+            "clpde",
+            "primal-dual",
+            "weight=0.1, tol=2e-2",
+            ours(weight=0.1, tol=2e-2),
+            "a tolerance about as loose as chambolle's default",
+            True,
+            many,
+        ),
+        (
+            "clpde",
+            "primal-dual",
+            "weight=0.1, tol=5e-4",
+            ours(weight=0.1, tol=5e-4),
+            "as accurate as chambolle run to convergence",
+            True,
+            many,
+        ),
+        (
+            "clpde",
+            "primal-dual",
+            f"weight={best_o:g}",
+            ours(weight=best_o),
+            "best weight of the sweep",
+            False,
+            many,
+        ),
+        (
+            "clpde",
+            "gradient",
+            f"sigma={SIGMA:g}, eps=0.02",
+            ours(sigma=SIGMA, method="gradient"),
+            "the thesis's scheme, default stopping",
+            False,
+            1,
+        ),
+        (
+            "clpde",
+            "primal-dual",
+            f"weight=0.1, {oracle} steps",
+            ours(weight=0.1, max_steps=oracle, check_every=oracle),
+            "fewest iterations reaching chambolle's default PSNR (oracle)",
+            True,
+            many,
+        ),
     ]
     # Round robin: the machine may be shared, and interleaving lets every configuration meet
     # the same quiet and busy spells; each keeps its best time.
@@ -135,41 +210,62 @@ def main(argv=None) -> int:
                 best[k] = min(best[k], seconds)
     rows = []
     for (package, method, params, _fn, note, with_error, _), seconds, result in zip(
-            configs, best, results, strict=False):
+        configs, best, results, strict=False
+    ):
         image, info = result if package == "clpde" else (result, None)
         if info is not None and "sigma" in params:
             note += f"; lambda found {info.lam[0]:.3f} (weight {1 / info.lam[0]:.4f})"
         error = float(np.sqrt(np.mean((image - exact) ** 2))) if with_error else None
-        rows.append({"package": package, "method": method, "params": params,
-                     "seconds": seconds, "steps": info.steps if info else None,
-                     **metrics(image), "error": error, "note": note})
+        rows.append(
+            {
+                "package": package,
+                "method": method,
+                "params": params,
+                "seconds": seconds,
+                "steps": info.steps if info else None,
+                **metrics(image),
+                "error": error,
+                "note": note,
+            }
+        )
 
     reference = rows[0]["seconds"]
-    header = (f"{'package':8s} {'method':12s} {'params':24s} {'PSNR':>7s} {'SSIM':>6s} "
-              f"{'res.std':>7s} {'error':>7s} {'steps':>5s} {'ms':>8s} {'x chambolle':>11s}")
-    print(f"\ncamera 512x512 + N(0, {SIGMA}); device: {runtime.device.name.strip()} "
-          f"({runtime.platform.name.strip()}); first clpde call (build): {cold:.2f} s; "
-          f"load average {os.getloadavg()[0]:.1f}")
+    header = (
+        f"{'package':8s} {'method':12s} {'params':24s} {'PSNR':>7s} {'SSIM':>6s} "
+        f"{'res.std':>7s} {'error':>7s} {'steps':>5s} {'ms':>8s} {'x chambolle':>11s}"
+    )
+    print(
+        f"\ncamera 512x512 + N(0, {SIGMA}); device: {runtime.device.name.strip()} "
+        f"({runtime.platform.name.strip()}); first clpde call (build): {cold:.2f} s; "
+        f"load average {os.getloadavg()[0]:.1f}"
+    )
     print(header)
     print("-" * len(header))
     for r in rows:
         err = f"{r['error']:.1e}" if r["error"] is not None else "-"
         steps = str(r["steps"]) if r["steps"] is not None else "-"
-        print(f"{r['package']:8s} {r['method']:12s} {r['params']:24s} {r['psnr']:7.3f} "
-              f"{r['ssim']:6.3f} {r['residual_std']:7.4f} {err:>7s} {steps:>5s} "
-              f"{r['seconds'] * 1e3:8.1f} {reference / r['seconds']:10.2f}x")
+        print(
+            f"{r['package']:8s} {r['method']:12s} {r['params']:24s} {r['psnr']:7.3f} "
+            f"{r['ssim']:6.3f} {r['residual_std']:7.4f} {err:>7s} {steps:>5s} "
+            f"{r['seconds'] * 1e3:8.1f} {reference / r['seconds']:10.2f}x"
+        )
     print("(x chambolle: chambolle's default time divided by this row's; > 1 is faster)")
 
     result = {
         "image": "camera 512x512 float, + N(0, 0.1), seed 0",
-        "device": runtime.device.name.strip(), "platform": runtime.platform.name.strip(),
-        "host": platform.processor() or platform.machine(), "cpu_count": os.cpu_count(),
-        "first_call_seconds": cold, "load_average_1_5_15": list(os.getloadavg()),
-        "repeats": args.repeats, "rows": rows,
+        "device": runtime.device.name.strip(),
+        "platform": runtime.platform.name.strip(),
+        "host": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "first_call_seconds": cold,
+        "load_average_1_5_15": list(os.getloadavg()),
+        "repeats": args.repeats,
+        "rows": rows,
     }
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=os.path.dirname(os.path.abspath(args.json)),
-                                     delete=False, suffix=".tmp") as tmp:
+    with tempfile.NamedTemporaryFile(
+        "w", dir=os.path.dirname(os.path.abspath(args.json)), delete=False, suffix=".tmp"
+    ) as tmp:
         json.dump(result, tmp, indent=2)
     os.replace(tmp.name, args.json)
     print(f"wrote {args.json}")

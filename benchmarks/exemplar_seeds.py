@@ -40,17 +40,17 @@ def extra_cases() -> list[dict]:
     pats = {
         "dots9": 0.15 + 0.7 * (((x % 9) - 4) ** 2 + ((y % 9) - 4) ** 2 < 6),
         "ellipses17x11": 0.2 + 0.6 * (((x % 17) - 8) ** 2 / 25 + ((y % 11) - 5) ** 2 / 9 < 1),
-        "hex12": 0.2 + 0.6 * ((((x + (y // 12) % 2 * 6) % 12) - 6) ** 2 + ((y % 12) - 6) ** 2
-                              < 12),
+        "hex12": 0.2 + 0.6 * ((((x + (y // 12) % 2 * 6) % 12) - 6) ** 2 + ((y % 12) - 6) ** 2 < 12),
         # period (0, 20) exactly; along the stripes only approximately (30 degrees)
-        "stripes30": 0.1 + 0.8 * (np.sin(2 * np.pi * (x * np.cos(th) + y * np.sin(th)) / 10
-                                         + 0.3) > 0),
+        "stripes30": 0.1
+        + 0.8 * (np.sin(2 * np.pi * (x * np.cos(th) + y * np.sin(th)) / 10 + 0.3) > 0),
         "grid23": 0.3 + 0.5 * ((x % 23 < 3) | (y % 23 < 3)),
     }
     cases = []
     for i, (name, img) in enumerate(pats.items()):
-        cases.append({"name": name, "image": img, "mask": _holes(img.shape, (15, 25, 40),
-                                                                  seed=40 + i)})
+        cases.append(
+            {"name": name, "image": img, "mask": _holes(img.shape, (15, 25, 40), seed=40 + i)}
+        )
     dots = {c["name"]: c["image"] for c in texture_cases()}["dots"]
     mask = np.zeros(dots.shape, bool)
     mask[150:, 60:95] = True  # touches the bottom edge
@@ -64,8 +64,14 @@ def run(case, seed, lattice):
 
     axis = -1 if np.asarray(case["image"]).ndim == 3 else None
     t0, c0 = time.perf_counter(), time.process_time()
-    out = clpde.inpaint(case["image"], case["mask"], channel_axis=axis, method="exemplar",
-                        seed=seed, lattice=lattice)
+    out = clpde.inpaint(
+        case["image"],
+        case["mask"],
+        channel_axis=axis,
+        method="exemplar",
+        seed=seed,
+        lattice=lattice,
+    )
     return out, time.perf_counter() - t0, time.process_time() - c0
 
 
@@ -81,8 +87,12 @@ def check_solve(case):
     from clpde.runtime import get_runtime
 
     a = to_data(run(case, 0, True)[0])
-    b = to_data(from_data(exemplar.solve(to_data(case["image"]), case["mask"], get_runtime(),
-                                         seed=0), case["image"]))
+    b = to_data(
+        from_data(
+            exemplar.solve(to_data(case["image"]), case["mask"], get_runtime(), seed=0),
+            case["image"],
+        )
+    )
     return float(np.abs(a - b)[:, case["mask"]].max())
 
 
@@ -111,13 +121,26 @@ def main(argv=None):
             for lattice in (True, False):
                 out, wall, cpu = run(case, seed, lattice)
                 psnr, ssim, ee = scores(out, case["image"], case["mask"])
-                rows.append({"case": case["name"], "class": case["class"], "seed": seed,
-                             "lattice": lattice, "psnr": min(psnr, 99.0), "ssim": ssim,
-                             "edge_energy": ee, "wall": wall, "cpu": cpu})
+                rows.append(
+                    {
+                        "case": case["name"],
+                        "class": case["class"],
+                        "seed": seed,
+                        "lattice": lattice,
+                        "psnr": min(psnr, 99.0),
+                        "ssim": ssim,
+                        "edge_energy": ee,
+                        "wall": wall,
+                        "cpu": cpu,
+                    }
+                )
         for lattice in (False, True):
             rs = [r for r in rows if r["case"] == case["name"] and r["lattice"] == lattice]
-            print(f"  {case['name']:14s} lattice={lattice!s:5s} " +
-                  " ".join(f"{r['psnr']:5.1f}" for r in rs), flush=True)
+            print(
+                f"  {case['name']:14s} lattice={lattice!s:5s} "
+                + " ".join(f"{r['psnr']:5.1f}" for r in rs),
+                flush=True,
+            )
     print("\n| class | lattice | PSNR (capped 60) | SSIM | edge energy | wall s | CPU s |")
     print("|---|---|---|---|---|---|---|")
     for cls in dict.fromkeys(c["class"] for c in cases):
@@ -125,11 +148,15 @@ def main(argv=None):
             rs = [r for r in rows if r["class"] == cls and r["lattice"] == lattice]
             if not rs:
                 continue
-            m = {k: np.mean([min(r[k], 60.0) if k == "psnr" else r[k] for r in rs])
-                 for k in ("psnr", "ssim", "edge_energy", "wall", "cpu")}
-            print(f"| {cls} | {'on' if lattice else 'off'} | {m['psnr']:.2f} | "
-                  f"{m['ssim']:.4f} | {m['edge_energy']:.3f} | {m['wall']:.2f} | "
-                  f"{m['cpu']:.2f} |")
+            m = {
+                k: np.mean([min(r[k], 60.0) if k == "psnr" else r[k] for r in rs])
+                for k in ("psnr", "ssim", "edge_energy", "wall", "cpu")
+            }
+            print(
+                f"| {cls} | {'on' if lattice else 'off'} | {m['psnr']:.2f} | "
+                f"{m['ssim']:.4f} | {m['edge_energy']:.3f} | {m['wall']:.2f} | "
+                f"{m['cpu']:.2f} |"
+            )
     a.json.parent.mkdir(parents=True, exist_ok=True)
     a.json.write_text(json.dumps(rows, indent=1))
 

@@ -79,8 +79,13 @@ def _render(src: np.ndarray, T: int, pan=(0.0, 0.0), zoom=1.0, start=None, rng=N
         if src.ndim == 2:
             f = ndimage.map_coordinates(src, [sy, sx], order=3, mode="reflect")
         else:
-            f = np.stack([ndimage.map_coordinates(src[..., c], [sy, sx], order=3,
-                                                  mode="reflect") for c in range(3)], -1)
+            f = np.stack(
+                [
+                    ndimage.map_coordinates(src[..., c], [sy, sx], order=3, mode="reflect")
+                    for c in range(3)
+                ],
+                -1,
+            )
         frames.append(f)
     return np.clip(np.stack(frames), 0, 1)
 
@@ -90,12 +95,12 @@ def _add_object(frames, patch_src, rng, speed, radius=14):
     T = frames.shape[0]
     ph, pw = patch_src.shape[:2]
     py, px = rng.integers(radius, ph - radius), rng.integers(radius, pw - radius)
-    patch = patch_src[py - radius:py + radius + 1, px - radius:px + radius + 1]
+    patch = patch_src[py - radius : py + radius + 1, px - radius : px + radius + 1]
     if frames.ndim == 4 and patch.ndim == 2:
         patch = np.stack([patch] * 3, -1)
     if frames.ndim == 3 and patch.ndim == 3:
         patch = patch.mean(-1)
-    yy, xx = np.mgrid[-radius:radius + 1, -radius:radius + 1]
+    yy, xx = np.mgrid[-radius : radius + 1, -radius : radius + 1]
     alpha = np.clip(radius + 0.5 - np.hypot(yy, xx), 0, 1)
     angle = rng.uniform(0, 2 * np.pi)
     vy, vx = speed * np.sin(angle), speed * np.cos(angle)
@@ -145,7 +150,7 @@ def _carphone(T):
             if i >= 40:
                 frames.append(fr.to_ndarray(format="rgb24"))
     f = np.stack(frames).astype(np.float64) / 255.0
-    return f[:, 8:8 + H, :W]
+    return f[:, 8 : 8 + H, :W]
 
 
 # ---- damage -------------------------------------------------------------------------------
@@ -180,7 +185,7 @@ def damage(frames, rng, blotches=BLOTCHES_PER_FRAME, scratches=1):
             s = a.shape[0]
             y, x = rng.integers(0, H - s), rng.integers(0, W - s)
             opacity = rng.uniform(0.4, 1.0)
-            local = g[t, y:y + s, x:x + s].mean()
+            local = g[t, y : y + s, x : x + s].mean()
             kind = rng.random()
             if kind < 0.35:  # dark dirt
                 val = rng.uniform(0.0, 0.15)
@@ -192,7 +197,7 @@ def damage(frames, rng, blotches=BLOTCHES_PER_FRAME, scratches=1):
             sl = (t, slice(y, y + s), slice(x, x + s))
             aa = a if frames.ndim == 3 else a[..., None]
             out[sl] = (1 - aa) * out[sl] + aa * val
-            alpha[t, 0, y:y + s, x:x + s] = np.maximum(alpha[t, 0, y:y + s, x:x + s], a)
+            alpha[t, 0, y : y + s, x : x + s] = np.maximum(alpha[t, 0, y : y + s, x : x + s], a)
     yy = np.arange(H)
     for _ in range(scratches):
         t0 = int(rng.integers(0, max(T // 3, 1)))
@@ -206,10 +211,11 @@ def damage(frames, rng, blotches=BLOTCHES_PER_FRAME, scratches=1):
         ystart = rng.integers(0, H - length + 1)
         for t in range(t0, t1):
             x += rng.normal(0, 0.3)
-            along = strength * np.clip(1 + 0.3 * ndimage.gaussian_filter1d(
-                rng.standard_normal(H), 8) * 3, 0.3, 1.3)
+            along = strength * np.clip(
+                1 + 0.3 * ndimage.gaussian_filter1d(rng.standard_normal(H), 8) * 3, 0.3, 1.3
+            )
             along[:ystart] = 0
-            along[ystart + length:] = 0
+            along[ystart + length :] = 0
             xs = x + slope * (yy - H / 2)
             xx = np.arange(W)[None, :]
             a = along[:, None] * np.exp(-0.5 * ((xx - xs[:, None]) / width) ** 2)
@@ -266,8 +272,14 @@ def make(name, src_name, spec, T, seed):
     truth[(alpha[:, 1] >= 0.2) & visible] = 2
     # touched by the damage but not visibly: neither a hit nor a false alarm when found
     spare = ((alpha[:, 0] > 0.02) | (alpha[:, 1] > 0.02)) & (truth == 0)
-    return dict(name=name, clean=clean8, dirty=dirty8, truth=truth, spare=spare,
-                axis=None if clean8.ndim == 3 else -1)
+    return dict(
+        name=name,
+        clean=clean8,
+        dirty=dirty8,
+        truth=truth,
+        spare=spare,
+        axis=None if clean8.ndim == 3 else -1,
+    )
 
 
 # ---- scores ---------------------------------------------------------------------------------
@@ -295,8 +307,8 @@ def psnr(a, b, sel=None):
     d = a.astype(np.float64) - b.astype(np.float64)
     if sel is not None:
         d = d[sel] if d.ndim == sel.ndim else d[sel]
-    mse = float((d ** 2).mean()) if d.size else 0.0
-    return 10 * np.log10(255.0 ** 2 / max(mse, 1e-10))
+    mse = float((d**2).mean()) if d.size else 0.0
+    return 10 * np.log10(255.0**2 / max(mse, 1e-10))
 
 
 class Psnr:
@@ -310,14 +322,19 @@ class Psnr:
         d2 = (out.astype(np.float64) - clean.astype(np.float64)) ** 2
         if d2.ndim == 4:
             d2 = d2.mean(-1)
-        for key, sel in (("whole", np.ones_like(truth, bool)), ("blotch", truth == 1),
-                         ("scratch", truth == 2), ("damaged", truth > 0)):
+        for key, sel in (
+            ("whole", np.ones_like(truth, bool)),
+            ("blotch", truth == 1),
+            ("scratch", truth == 2),
+            ("damaged", truth > 0),
+        ):
             self.se[key] += float(d2[sel].sum())
             self.n[key] += int(sel.sum())
 
     def values(self):
-        return {k: 10 * np.log10(255.0 ** 2 / max(self.se[k] / max(self.n[k], 1), 1e-10))
-                for k in self.se}
+        return {
+            k: 10 * np.log10(255.0**2 / max(self.se[k] / max(self.n[k], 1), 1e-10)) for k in self.se
+        }
 
 
 # ---- peers ----------------------------------------------------------------------------------
@@ -397,17 +414,25 @@ def calibrate(seqs, device):
         "blotch": {f"{b}/grow{g}": table_b[(b, g)].pr() for b, g in table_b},
         "scratch": {f"{s}/grow{g}": table_s[(s, g)].pr() for s, g in table_s},
         "sdi": {str(s): table_sdi[s].pr() for s in table_sdi},
-        "chosen": {"blotch_threshold": best_b[0], "blotch_grow": best_b[1],
-                   "scratch_threshold": best_s[0], "scratch_grow": best_s[1],
-                   "sdi_threshold": best_sdi},
+        "chosen": {
+            "blotch_threshold": best_b[0],
+            "blotch_grow": best_b[1],
+            "scratch_threshold": best_s[0],
+            "scratch_grow": best_s[1],
+            "sdi_threshold": best_sdi,
+        },
     }
 
 
 def evaluate(seqs, device, sdi_threshold, label, det_kw):
     det_b, det_s, sdi_b = Counts(), Counts(), Counts()
     ours, ours_true = Psnr(), Psnr()
-    peers = {"clpde.inpaint, true masks": Psnr(), "OpenCV Telea, true masks": Psnr(),
-             "temporal median 3, true masks": Psnr(), "damaged input": Psnr()}
+    peers = {
+        "clpde.inpaint, true masks": Psnr(),
+        "OpenCV Telea, true masks": Psnr(),
+        "temporal median 3, true masks": Psnr(),
+        "damaged input": Psnr(),
+    }
     t_det = t_fill = 0.0
     frames = 0
     per_seq = []
@@ -417,8 +442,9 @@ def evaluate(seqs, device, sdi_threshold, label, det_kw):
         T = dirty.shape[0]
         frames += T
         t0 = time.perf_counter()
-        mask, kinds = clpde.detect_defects(dirty, channel_axis=axis, return_kinds=True,
-                                           device=device, **det_kw)
+        mask, kinds = clpde.detect_defects(
+            dirty, channel_axis=axis, return_kinds=True, device=device, **det_kw
+        )
         t1 = time.perf_counter()
         restored = clpde.inpaint_video(dirty, mask, channel_axis=axis, device=device)
         t2 = time.perf_counter()
@@ -428,14 +454,16 @@ def evaluate(seqs, device, sdi_threshold, label, det_kw):
         det_s.add(kinds == 2, truth == 2, ignore=spare)
         ours.add(restored, clean, truth)
         true_mask = (truth > 0) | spare  # the damage's whole support
-        ours_true.add(clpde.inpaint_video(dirty, true_mask, channel_axis=axis, device=device),
-                      clean, truth)
-        peers["clpde.inpaint, true masks"].add(spatial(dirty, true_mask, axis, "clpde"),
-                                               clean, truth)
-        peers["OpenCV Telea, true masks"].add(spatial(dirty, true_mask, axis, "telea"),
-                                              clean, truth)
-        peers["temporal median 3, true masks"].add(temporal_median3(dirty, true_mask),
-                                                   clean, truth)
+        ours_true.add(
+            clpde.inpaint_video(dirty, true_mask, channel_axis=axis, device=device), clean, truth
+        )
+        peers["clpde.inpaint, true masks"].add(
+            spatial(dirty, true_mask, axis, "clpde"), clean, truth
+        )
+        peers["OpenCV Telea, true masks"].add(
+            spatial(dirty, true_mask, axis, "telea"), clean, truth
+        )
+        peers["temporal median 3, true masks"].add(temporal_median3(dirty, true_mask), clean, truth)
         peers["damaged input"].add(dirty, clean, truth)
         planes, _ = film_planes(dirty, axis)
         sdi = sdi_scores(grey(planes)) * 255
@@ -443,22 +471,32 @@ def evaluate(seqs, device, sdi_threshold, label, det_kw):
         one_b, one_s = Counts(), Counts()
         one_b.add(kinds == 1, truth == 1, ignore=spare)
         one_s.add(kinds == 2, truth == 2, ignore=spare)
-        per_seq.append({"name": seq["name"], "blotch_pr": one_b.pr()[:2],
-                        "scratch_pr": one_s.pr()[:2],
-                        "psnr_whole": psnr(restored, clean),
-                        "blotch_px": int((truth == 1).sum()),
-                        "scratch_px": int((truth == 2).sum())})
-        print(f"  {label} {seq['name']:28s} blotch P/R {one_b.pr()[0]:.2f}/{one_b.pr()[1]:.2f}"
-              f"  scratch P/R {one_s.pr()[0]:.2f}/{one_s.pr()[1]:.2f}"
-              f"  PSNR {psnr(restored, clean):.2f} (input {psnr(dirty, clean):.2f})",
-              flush=True)
+        per_seq.append(
+            {
+                "name": seq["name"],
+                "blotch_pr": one_b.pr()[:2],
+                "scratch_pr": one_s.pr()[:2],
+                "psnr_whole": psnr(restored, clean),
+                "blotch_px": int((truth == 1).sum()),
+                "scratch_px": int((truth == 2).sum()),
+            }
+        )
+        print(
+            f"  {label} {seq['name']:28s} blotch P/R {one_b.pr()[0]:.2f}/{one_b.pr()[1]:.2f}"
+            f"  scratch P/R {one_s.pr()[0]:.2f}/{one_s.pr()[1]:.2f}"
+            f"  PSNR {psnr(restored, clean):.2f} (input {psnr(dirty, clean):.2f})",
+            flush=True,
+        )
     return {
         "detection": {"blotch": det_b.pr(), "scratch": det_s.pr(), "sdi_blotch": sdi_b.pr()},
-        "psnr": {"detect+inpaint_video": ours.values(),
-                 "inpaint_video, true masks": ours_true.values(),
-                 **{k: v.values() for k, v in peers.items()}},
+        "psnr": {
+            "detect+inpaint_video": ours.values(),
+            "inpaint_video, true masks": ours_true.values(),
+            **{k: v.values() for k, v in peers.items()},
+        },
         "seconds_per_frame": {"detect": t_det / frames, "fill": t_fill / frames},
-        "frames": frames, "sequences": per_seq,
+        "frames": frames,
+        "sequences": per_seq,
     }
 
 
@@ -481,8 +519,12 @@ def photo_sweep(seqs, thresholds):
         cb, cs = Counts(), Counts()
         for seq in seqs:
             img = seq["dirty"][0]
-            _, kinds = clpde.detect_defects(img, channel_axis=None if img.ndim == 2 else -1,
-                                            blotch_threshold=thr, return_kinds=True)
+            _, kinds = clpde.detect_defects(
+                img,
+                channel_axis=None if img.ndim == 2 else -1,
+                blotch_threshold=thr,
+                return_kinds=True,
+            )
             cb.add(kinds == 1, seq["truth"][0] == 1, ignore=seq["spare"][0])
             cs.add(kinds == 2, seq["truth"][0] == 2, ignore=seq["spare"][0])
         table[thr] = {"blotch": cb.pr(), "scratch": cs.pr()}
@@ -493,16 +535,22 @@ def print_half(name, res):
     d = res["detection"]
     print(f"\n## {name}: {res['frames']} frames of {W}x{H}")
     print("| detector | precision | recall | F1 |\n|---|---|---|---|")
-    for key, label in (("blotch", "detect_defects, blotches"),
-                       ("scratch", "detect_defects, line scratches"),
-                       ("sdi_blotch", "3-frame SDI (peer), blotches")):
+    for key, label in (
+        ("blotch", "detect_defects, blotches"),
+        ("scratch", "detect_defects, line scratches"),
+        ("sdi_blotch", "3-frame SDI (peer), blotches"),
+    ):
         p, r, f = d[key]
         print(f"| {label} | {p:.3f} | {r:.3f} | {f:.3f} |")
-    print("\n| restoration | PSNR whole | damaged px | blotch px | scratch px |\n"
-          "|---|---|---|---|---|")
+    print(
+        "\n| restoration | PSNR whole | damaged px | blotch px | scratch px |\n"
+        "|---|---|---|---|---|"
+    )
     for label, v in res["psnr"].items():
-        print(f"| {label} | {v['whole']:.2f} | {v['damaged']:.2f} | {v['blotch']:.2f} | "
-              f"{v['scratch']:.2f} |")
+        print(
+            f"| {label} | {v['whole']:.2f} | {v['damaged']:.2f} | {v['blotch']:.2f} | "
+            f"{v['scratch']:.2f} |"
+        )
     s = res["seconds_per_frame"]
     print(f"\nseconds per frame: detect {s['detect']:.2f}, fill {s['fill']:.2f}")
 
@@ -513,34 +561,58 @@ def main():
     ap.add_argument("--frames", type=int, default=10)
     ap.add_argument("--json", type=Path, default=RESULTS)
     ap.add_argument("--quick", action="store_true", help="two sequences per half")
-    ap.add_argument("--no-calibration", action="store_true",
-                    help="skip the threshold sweep (report the defaults only)")
-    ap.add_argument("--calibrate-only", action="store_true",
-                    help="the threshold sweep alone (to set the defaults from)")
+    ap.add_argument(
+        "--no-calibration",
+        action="store_true",
+        help="skip the threshold sweep (report the defaults only)",
+    )
+    ap.add_argument(
+        "--calibrate-only",
+        action="store_true",
+        help="the threshold sweep alone (to set the defaults from)",
+    )
     args = ap.parse_args()
     cal_specs = CALIBRATION[:2] if args.quick else CALIBRATION
     test_specs = TEST[:2] if args.quick else TEST
-    cal = [s for i, (n, src, sp) in enumerate(cal_specs)
-           if (s := make(n, src, sp, args.frames, 100 + i)) is not None]
-    test = [s for i, (n, src, sp) in enumerate(test_specs)
-            if (s := make(n, src, sp, args.frames, 200 + i)) is not None]
-    density = {k: float(np.mean([(s["truth"] == v).mean() for s in cal + test]))
-               for k, v in (("blotch", 1), ("scratch", 2))}
-    print(f"damage density (share of pixels): blotch {density['blotch']:.4f}, "
-          f"scratch {density['scratch']:.4f}; {BLOTCHES_PER_FRAME} blotches per frame")
-    clpde.detect_defects(cal[0]["dirty"][:3], channel_axis=cal[0]["axis"],
-                         device=args.device)  # builds the kernels, untimed
-    result = {"device": str(clpde.get_runtime(args.device)), "load": os.getloadavg(),
-              "density": density, "defaults": {
-                  "blotch_threshold": fdet.BLOTCH_THRESHOLD,
-                  "scratch_threshold": fdet.SCRATCH_THRESHOLD}}
+    cal = [
+        s
+        for i, (n, src, sp) in enumerate(cal_specs)
+        if (s := make(n, src, sp, args.frames, 100 + i)) is not None
+    ]
+    test = [
+        s
+        for i, (n, src, sp) in enumerate(test_specs)
+        if (s := make(n, src, sp, args.frames, 200 + i)) is not None
+    ]
+    density = {
+        k: float(np.mean([(s["truth"] == v).mean() for s in cal + test]))
+        for k, v in (("blotch", 1), ("scratch", 2))
+    }
+    print(
+        f"damage density (share of pixels): blotch {density['blotch']:.4f}, "
+        f"scratch {density['scratch']:.4f}; {BLOTCHES_PER_FRAME} blotches per frame"
+    )
+    clpde.detect_defects(
+        cal[0]["dirty"][:3], channel_axis=cal[0]["axis"], device=args.device
+    )  # builds the kernels, untimed
+    result = {
+        "device": str(clpde.get_runtime(args.device)),
+        "load": os.getloadavg(),
+        "density": density,
+        "defaults": {
+            "blotch_threshold": fdet.BLOTCH_THRESHOLD,
+            "scratch_threshold": fdet.SCRATCH_THRESHOLD,
+        },
+    }
     if not args.no_calibration:
         c = calibrate(cal, args.device)
         result["calibration_sweep"] = c
         print("calibration sweep, chosen (best F1):", c["chosen"])
         for kind in ("blotch", "scratch", "sdi"):
-            print(f"  {kind}: " + ", ".join(f"{k} P/R {v[0]:.2f}/{v[1]:.2f}"
-                                             for k, v in c[kind].items()))
+            print(
+                f"  {kind}: "
+                + ", ".join(f"{k} P/R {v[0]:.2f}/{v[1]:.2f}" for k, v in c[kind].items())
+            )
         if args.calibrate_only:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps(result, indent=1, default=float))
@@ -548,9 +620,15 @@ def main():
     chosen = result.get("calibration_sweep", {}).get("chosen", {})
     # the calibration's choice (the library's defaults are set to it; with
     # --no-calibration the defaults themselves)
-    det_kw = {} if not chosen else {"blotch_threshold": chosen["blotch_threshold"],
-                                    "scratch_threshold": chosen["scratch_threshold"],
-                                    "grow": chosen["blotch_grow"]}
+    det_kw = (
+        {}
+        if not chosen
+        else {
+            "blotch_threshold": chosen["blotch_threshold"],
+            "scratch_threshold": chosen["scratch_threshold"],
+            "grow": chosen["blotch_grow"],
+        }
+    )
     result["detect_options"] = det_kw
     print("detect_defects options:", det_kw or "defaults")
     sdi_thr = chosen.get("sdi_threshold", 14)
@@ -563,9 +641,10 @@ def main():
     result["photo"] = {
         "calibration_sweep": {str(k): v for k, v in sweep.items()},
         "calibration": photo_sweep(photo_cal, [fdet.PHOTO_SPECK_THRESHOLD])[
-            fdet.PHOTO_SPECK_THRESHOLD],
-        "test": photo_sweep(photo_test, [fdet.PHOTO_SPECK_THRESHOLD])[
-            fdet.PHOTO_SPECK_THRESHOLD]}
+            fdet.PHOTO_SPECK_THRESHOLD
+        ],
+        "test": photo_sweep(photo_test, [fdet.PHOTO_SPECK_THRESHOLD])[fdet.PHOTO_SPECK_THRESHOLD],
+    }
     print_half("Test (nothing tuned on these)", result["test"])
     print_half("Calibration", result["calibration"])
     ph = result["photo"]
@@ -574,9 +653,13 @@ def main():
     for half in ("test", "calibration"):
         b, sc = ph[half]["blotch"], ph[half]["scratch"]
         print(f"| {half} | {b[0]:.3f} | {b[1]:.3f} | {sc[0]:.3f} | {sc[1]:.3f} |")
-    print("calibration sweep of the speck threshold: " + ", ".join(
-        f"{k}: P/R {v['blotch'][0]:.2f}/{v['blotch'][1]:.2f}"
-        for k, v in ph["calibration_sweep"].items()))
+    print(
+        "calibration sweep of the speck threshold: "
+        + ", ".join(
+            f"{k}: P/R {v['blotch'][0]:.2f}/{v['blotch'][1]:.2f}"
+            for k, v in ph["calibration_sweep"].items()
+        )
+    )
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(result, indent=1, default=float))
     print(f"\nwrote {args.json}")

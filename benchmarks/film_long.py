@@ -58,7 +58,7 @@ def clean_frame(pano: np.ndarray, t: int) -> np.ndarray:
     x = int(1.5 * t) % (2 * span)
     x = x if x <= span else 2 * span - x  # bounce at the ends
     y = int(32 + 30 * np.sin(t / 90))
-    return pano[y: y + HEIGHT, x: x + WIDTH]
+    return pano[y : y + HEIGHT, x : x + WIDTH]
 
 
 def damage(frame: np.ndarray, t: int, rng) -> tuple[np.ndarray, np.ndarray]:
@@ -70,13 +70,13 @@ def damage(frame: np.ndarray, t: int, rng) -> tuple[np.ndarray, np.ndarray]:
         y, x = rng.integers(10, HEIGHT - 10), rng.integers(10, WIDTH - 10)
         soft = np.clip((r + 1 - np.hypot(yy, xx)) / 2, 0, 1) * rng.uniform(0.35, 1.0)
         value = 15.0 if rng.random() < 0.6 else 240.0
-        patch = out[y - 8: y + 9, x - 8: x + 9]
+        patch = out[y - 8 : y + 9, x - 8 : x + 9]
         patch += soft[..., None] * (value - patch)
-        mask[y - 8: y + 9, x - 8: x + 9] |= soft > 0.05
+        mask[y - 8 : y + 9, x - 8 : x + 9] |= soft > 0.05
     if (t // 50) % 2 == 0:
         col = int(WIDTH * (0.42 + 0.055 * np.sin(t / 40)))
-        out[:, col: col + 2] = np.minimum(out[:, col: col + 2] + 70, 255)
-        mask[:, col: col + 2] = True
+        out[:, col : col + 2] = np.minimum(out[:, col : col + 2] + 70, 255)
+        mask[:, col : col + 2] = True
     return out.round().astype(np.uint8), mask
 
 
@@ -105,8 +105,9 @@ def make_film(path: Path, frames: int, mask_dir: Path | None = None) -> None:
                 out.mux(packet)
             while samples < (t + 1) * 48000 // RATE:
                 tone = 0.2 * np.sin((samples + np.arange(1024)) * 2 * np.pi * 220 / 48000)
-                chunk = av.AudioFrame.from_ndarray(np.stack([tone, tone]).astype(np.float32),
-                                                   format="fltp", layout="stereo")
+                chunk = av.AudioFrame.from_ndarray(
+                    np.stack([tone, tone]).astype(np.float32), format="fltp", layout="stereo"
+                )
                 chunk.sample_rate, chunk.pts = 48000, samples
                 for packet in sound.encode(chunk):
                     out.mux(packet)
@@ -128,8 +129,12 @@ def _peak_rss_mib() -> float:
 def _spatial_fill(frames, masks, channel_axis=None):
     import clpde
 
-    return np.stack([clpde.inpaint(f, m, channel_axis=channel_axis) if m.any() else f
-                     for f, m in zip(frames, masks, strict=True)])
+    return np.stack(
+        [
+            clpde.inpaint(f, m, channel_axis=channel_axis) if m.any() else f
+            for f, m in zip(frames, masks, strict=True)
+        ]
+    )
 
 
 def child(args) -> None:
@@ -141,8 +146,9 @@ def child(args) -> None:
     record = {"mode": args.mode}
     if args.mode == "one":
         start, cpu = time.perf_counter(), time.process_time()
-        result = restore_film(args.film, args.out, mask=mask, work=work, block=args.block,
-                              progress=False)
+        result = restore_film(
+            args.film, args.out, mask=mask, work=work, block=args.block, progress=False
+        )
         record["seconds"] = time.perf_counter() - start
         record["cpu_seconds"] = time.process_time() - cpu  # every thread of the process
     else:
@@ -152,26 +158,60 @@ def child(args) -> None:
             record["cluster_seconds"] = info["seconds"]
             start, cpu = time.perf_counter(), time.process_time()
             before = client.run(time.process_time)
-            result = restore_film(args.film, args.out, mask=mask, work=work, block=args.block,
-                                  client=client, chunk_frames=args.chunk_frames, progress=False)
+            result = restore_film(
+                args.film,
+                args.out,
+                mask=mask,
+                work=work,
+                block=args.block,
+                client=client,
+                chunk_frames=args.chunk_frames,
+                progress=False,
+            )
             record["seconds"] = time.perf_counter() - start
             after = client.run(time.process_time)
             record["worker_cpu_seconds"] = sorted(after[w] - before[w] for w in after)
             record["cpu_seconds"] = time.process_time() - cpu + sum(record["worker_cpu_seconds"])
             record["worker_peak_mib"] = sorted(client.run(_peak_rss_mib).values())
-    record.update(frames=result.frames, fps=result.frames / record["seconds"],
-                  peak_mib=_peak_rss_mib(), masked_pixels=result.masked_pixels,
-                  frames_sha256=result.frames_sha256)
+    record.update(
+        frames=result.frames,
+        fps=result.frames / record["seconds"],
+        peak_mib=_peak_rss_mib(),
+        masked_pixels=result.masked_pixels,
+        frames_sha256=result.frames_sha256,
+    )
     print("RESULT " + json.dumps(record))
 
 
 def measure(film: Path, masks: Path, out: Path, mode: str, args) -> dict:
-    command = [sys.executable, __file__, "--child", "--mode", mode, "--film", str(film),
-               "--out", str(out), "--masks", str(masks), "--work", args.work,
-               "--block", str(args.block), "--chunk-frames", str(args.chunk_frames),
-               "--workers", str(args.workers)]
-    done = subprocess.run(command, capture_output=True, text=True, check=False,
-                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    command = [
+        sys.executable,
+        __file__,
+        "--child",
+        "--mode",
+        mode,
+        "--film",
+        str(film),
+        "--out",
+        str(out),
+        "--masks",
+        str(masks),
+        "--work",
+        args.work,
+        "--block",
+        str(args.block),
+        "--chunk-frames",
+        str(args.chunk_frames),
+        "--workers",
+        str(args.workers),
+    ]
+    done = subprocess.run(
+        command,
+        capture_output=True,
+        text=True,
+        check=False,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
     for line in done.stdout.splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[7:])
@@ -180,17 +220,23 @@ def measure(film: Path, masks: Path, out: Path, mode: str, args) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--lengths", default="150,300",
-                        help="film lengths in frames, comma-separated (default 150,300)")
+    parser.add_argument(
+        "--lengths",
+        default="150,300",
+        help="film lengths in frames, comma-separated (default 150,300)",
+    )
     parser.add_argument("--full", action="store_true", help="also run the 3000-frame film")
     parser.add_argument("--work", choices=("film", "spatial"), default="film")
     parser.add_argument("--block", type=int, default=16)
     parser.add_argument("--chunk-frames", type=int, default=64)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--modes", default="one,dask")
-    parser.add_argument("--size", default="720x576",
-                        help="frame size WxH (default PAL 720x576; smaller to show memory flat "
-                             "in length on long runs quickly)")
+    parser.add_argument(
+        "--size",
+        default="720x576",
+        help="frame size WxH (default PAL 720x576; smaller to show memory flat "
+        "in length on long runs quickly)",
+    )
     parser.add_argument("--json", default=str(RESULTS))
     # the measured run itself
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
@@ -216,20 +262,29 @@ def main() -> None:
             made = time.perf_counter() - start
             for mode in args.modes.split(","):
                 out = tmp / f"out_{length}_{mode}.mp4"
-                row = {"length": length, "size": args.size, "make_seconds": made,
-                       **measure(film, masks, out, mode, args)}
+                row = {
+                    "length": length,
+                    "size": args.size,
+                    "make_seconds": made,
+                    **measure(film, masks, out, mode, args),
+                }
                 out.unlink()
                 rows.append(row)
                 workers = row.get("worker_peak_mib")
-                print(f"{length:5d} frames {mode:4s}: {row['fps']:6.3f} frames/s, "
-                      f"{row['seconds']:8.1f} s, CPU {row['cpu_seconds']:8.1f} s, "
-                      f"peak {row['peak_mib']:7.0f} MiB"
-                      + (f", workers {', '.join(f'{w:.0f}' for w in workers)} MiB"
-                         if workers else ""), flush=True)
+                print(
+                    f"{length:5d} frames {mode:4s}: {row['fps']:6.3f} frames/s, "
+                    f"{row['seconds']:8.1f} s, CPU {row['cpu_seconds']:8.1f} s, "
+                    f"peak {row['peak_mib']:7.0f} MiB"
+                    + (
+                        f", workers {', '.join(f'{w:.0f}' for w in workers)} MiB" if workers else ""
+                    ),
+                    flush=True,
+                )
                 # after every row: a run stopped early keeps what it measured
                 Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-                Path(args.json).write_text(json.dumps({"rows": rows, "args": vars(args)},
-                                                      indent=1) + "\n")
+                Path(args.json).write_text(
+                    json.dumps({"rows": rows, "args": vars(args)}, indent=1) + "\n"
+                )
             film.unlink()
     summary = {}
     for mode in args.modes.split(","):
@@ -238,28 +293,33 @@ def main() -> None:
         summary[mode] = {
             "fps_longest": best["fps"],
             "peak_mib_by_length": {r["length"]: r["peak_mib"] for r in mine},
-            "worker_peak_mib_by_length": {r["length"]: r.get("worker_peak_mib")
-                                          for r in mine},
-            "seconds_3000": (best["seconds"] if best["length"] == 3000
-                             else 3000 / best["fps"]),
-            "seconds_3000_extrapolated": best["length"] != 3000}
+            "worker_peak_mib_by_length": {r["length"]: r.get("worker_peak_mib") for r in mine},
+            "seconds_3000": (best["seconds"] if best["length"] == 3000 else 3000 / best["fps"]),
+            "seconds_3000_extrapolated": best["length"] != 3000,
+        }
     if "one" in summary and "dask" in summary:
         for length in lengths:
             pair = {r["mode"]: r for r in rows if r["length"] == length}
             if {"one", "dask"} <= set(pair):
-                summary.setdefault("speedup_by_length", {})[length] = \
+                summary.setdefault("speedup_by_length", {})[length] = (
                     pair["dask"]["fps"] / pair["one"]["fps"]
-                summary.setdefault("bitwise_equal_by_length", {})[length] = \
+                )
+                summary.setdefault("bitwise_equal_by_length", {})[length] = (
                     pair["dask"]["frames_sha256"] == pair["one"]["frames_sha256"]
+                )
     print(json.dumps(summary, indent=1))
     for mode, s in summary.items():
         if isinstance(s, dict) and "seconds_3000" in s:
-            how = "extrapolated from the longest run" if s["seconds_3000_extrapolated"] \
+            how = (
+                "extrapolated from the longest run"
+                if s["seconds_3000_extrapolated"]
                 else "measured"
+            )
             print(f"{mode}: 3000 frames (2 min PAL) in {s['seconds_3000'] / 60:.1f} min ({how})")
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps({"rows": rows, "summary": summary,
-                                           "args": vars(args)}, indent=1) + "\n")
+    Path(args.json).write_text(
+        json.dumps({"rows": rows, "summary": summary, "args": vars(args)}, indent=1) + "\n"
+    )
 
 
 if __name__ == "__main__":

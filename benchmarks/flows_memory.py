@@ -56,16 +56,21 @@ def make_photo(path: Path) -> None:
     rng = np.random.default_rng(0)
     out = np.empty_like(big)
     for r in range(0, big.shape[0], 500):  # in strips: the noise's float64 stays small
-        part = big[r:r + 500].astype(np.float32) + rng.normal(0, 10, big[r:r + 500].shape)
-        out[r:r + 500] = np.clip(np.rint(part), 0, 255).astype(np.uint8)
+        part = big[r : r + 500].astype(np.float32) + rng.normal(0, 10, big[r : r + 500].shape)
+        out[r : r + 500] = np.clip(np.rint(part), 0, 255).astype(np.uint8)
     np.save(path, out)
 
 
 def run_case(checkout: Path, photo: Path, case: str, result: Path) -> tuple[float, float]:
     env = dict(os.environ, PYTHONPATH=str(checkout))
-    proc = subprocess.run([sys.executable, "-c", CHILD.format(call=CASES[case]), str(photo),
-                           str(result)],
-                          capture_output=True, text=True, env=env, cwd=checkout, check=False)
+    proc = subprocess.run(
+        [sys.executable, "-c", CHILD.format(call=CASES[case]), str(photo), str(result)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=checkout,
+        check=False,
+    )
     if proc.returncode != 0:
         raise SystemExit(f"{case} failed in {checkout}:\n{proc.stderr[-2000:]}")
     mib, seconds = proc.stdout.split()[-2:]
@@ -98,12 +103,16 @@ def main() -> None:
                 diff = float(np.abs(a - b).mean())
                 rows[case]["equal"] = same
                 rows[case]["mean_abs_diff"] = diff
-                print(f"{case:16s} results bit for bit equal: {same}; mean |diff| {diff:.4g}",
-                      flush=True)
+                print(
+                    f"{case:16s} results bit for bit equal: {same}; mean |diff| {diff:.4g}",
+                    flush=True,
+                )
     print("\ncase              " + "  ".join(f"{n:>24s}" for n in checkouts))
     for case, per in rows.items():
-        print(f"{case:16s}  " + "  ".join(f"{per[n][0]:8.0f} MiB {per[n][1]:8.1f} s     "
-                                          for n in checkouts))
+        print(
+            f"{case:16s}  "
+            + "  ".join(f"{per[n][0]:8.0f} MiB {per[n][1]:8.1f} s     " for n in checkouts)
+        )
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"peak_mib_and_seconds": rows}, indent=1))
 

@@ -45,12 +45,39 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-CALIBRATION_PHOTOS = ("astronaut", "coffee", "chelsea", "camera", "brick", "rocket",
-                      "immunohistochemistry", "gravel", "grass")
-CLASSES = ("text", "scratches", "craquelure", "dust", "blobs", "thick", "structure", "texture",
-           "periodic", "voids")
-PHOTO_CLASSES = ("text", "scratches", "craquelure", "dust", "blobs", "thick", "structure",
-                 "texture")
+CALIBRATION_PHOTOS = (
+    "astronaut",
+    "coffee",
+    "chelsea",
+    "camera",
+    "brick",
+    "rocket",
+    "immunohistochemistry",
+    "gravel",
+    "grass",
+)
+CLASSES = (
+    "text",
+    "scratches",
+    "craquelure",
+    "dust",
+    "blobs",
+    "thick",
+    "structure",
+    "texture",
+    "periodic",
+    "voids",
+)
+PHOTO_CLASSES = (
+    "text",
+    "scratches",
+    "craquelure",
+    "dust",
+    "blobs",
+    "thick",
+    "structure",
+    "texture",
+)
 CAP = 80.0  # dB: the PSNR of an exact fill
 CROP = 128  # side of every image in the corpus (crops keep a full run short)
 
@@ -112,7 +139,7 @@ def _skimage(name):
 def _crop(image, y, x, size=CROP):
     ny, nx = image.shape[:2]
     y, x = min(y, ny - size), min(x, nx - size)
-    return np.ascontiguousarray(image[y:y + size, x:x + size])
+    return np.ascontiguousarray(image[y : y + size, x : x + size])
 
 
 def _binned16(image, y, x, size=CROP):
@@ -148,7 +175,7 @@ def ridged(seed, size=CROP):
     z = np.zeros((size, size))
     amp = 1.0
     for octave in range(5):
-        n = 4 * 2 ** octave
+        n = 4 * 2**octave
         coarse = rng.normal(size=(n + 3, n + 3))
         fine = ndimage.zoom(coarse, size / n, order=3)[:size, :size]
         z += amp * (1 - np.abs(fine / (np.abs(fine).max() + 1e-9)))
@@ -200,16 +227,26 @@ def structure_image(seed, size=CROP):
 def _photo_crops():
     """(source, crop name, image) of the photos and microscopy; a few crops of the big ones."""
     crops = {
-        "astronaut": [(40, 170), (300, 300)], "coffee": [(60, 180), (220, 420)],
-        "chelsea": [(60, 140), (150, 300)], "camera": [(80, 200), (330, 60)],
-        "brick": [(100, 100)], "rocket": [(120, 200)], "immunohistochemistry": [(50, 50),
-                                                                               (300, 300)],
-        "gravel": [(200, 200)], "grass": [(120, 300)],
-        "cat": [(60, 120), (150, 280)], "clock": [(60, 120)], "coins": [(40, 30), (170, 230)],
-        "moon": [(100, 100), (340, 300)], "page": [(30, 100)], "text": [(20, 100)],
-        "colorwheel": [(100, 100)], "motorcycle": [(150, 200), (300, 480)], "retina": [(500, 400),
-                                                                                  (700, 700)],
-        "cell": [(200, 250)], "microaneurysms": [(0, 0)],
+        "astronaut": [(40, 170), (300, 300)],
+        "coffee": [(60, 180), (220, 420)],
+        "chelsea": [(60, 140), (150, 300)],
+        "camera": [(80, 200), (330, 60)],
+        "brick": [(100, 100)],
+        "rocket": [(120, 200)],
+        "immunohistochemistry": [(50, 50), (300, 300)],
+        "gravel": [(200, 200)],
+        "grass": [(120, 300)],
+        "cat": [(60, 120), (150, 280)],
+        "clock": [(60, 120)],
+        "coins": [(40, 30), (170, 230)],
+        "moon": [(100, 100), (340, 300)],
+        "page": [(30, 100)],
+        "text": [(20, 100)],
+        "colorwheel": [(100, 100)],
+        "motorcycle": [(150, 200), (300, 480)],
+        "retina": [(500, 400), (700, 700)],
+        "cell": [(200, 250)],
+        "microaneurysms": [(0, 0)],
         "hubble_deep_field": [(100, 150), (500, 600)],
     }
     names = {}
@@ -230,29 +267,57 @@ def sources():
         out.append((source, name, image, "uint8", classes))
     disp = _skimage("disparity")
     for k, (y, x) in enumerate([(120, 150), (300, 500)]):
-        out.append(("disparity", f"disparity-float-{k}", _crop(disp, y, x), "float",
-                    ("voids", "blobs")))
-    out.append(("disparity", "disparity-uint16", _as16(_crop(disp, 200, 300)), "uint16",
-                ("scratches", "blobs", "voids")))
-    out.append(("hubble_deep_field", "hubble-binned16", _binned16(_skimage("hubble_deep_field"),
-                                                                  200, 300), "uint16",
-                ("dust", "blobs", "text")))
-    out.append(("coffee", "coffee-binned16", _binned16(_skimage("coffee"), 0, 0, 100), "uint16",
-                ("dust", "blobs", "text")))
+        out.append(
+            ("disparity", f"disparity-float-{k}", _crop(disp, y, x), "float", ("voids", "blobs"))
+        )
+    out.append(
+        (
+            "disparity",
+            "disparity-uint16",
+            _as16(_crop(disp, 200, 300)),
+            "uint16",
+            ("scratches", "blobs", "voids"),
+        )
+    )
+    out.append(
+        (
+            "hubble_deep_field",
+            "hubble-binned16",
+            _binned16(_skimage("hubble_deep_field"), 200, 300),
+            "uint16",
+            ("dust", "blobs", "text"),
+        )
+    )
+    out.append(
+        (
+            "coffee",
+            "coffee-binned16",
+            _binned16(_skimage("coffee"), 0, 0, 100),
+            "uint16",
+            ("dust", "blobs", "text"),
+        )
+    )
     for seed in range(4):
-        out.append((f"fractal-{seed}", f"fractal-{seed}", fractal(seed), "float",
-                    ("voids", "scratches")))
-        out.append((f"ridged-{seed}", f"ridged-{seed}", ridged(seed + 10), "float",
-                    ("voids", "dust")))
-        out.append((f"periodic-{seed}", f"periodic-{seed}", periodic(seed), "uint8",
-                    ("periodic",)))
-        out.append((f"edges-{seed}", f"edges-{seed}", structure_image(seed), "uint8",
-                    ("structure", "blobs")))
+        out.append(
+            (f"fractal-{seed}", f"fractal-{seed}", fractal(seed), "float", ("voids", "scratches"))
+        )
+        out.append(
+            (f"ridged-{seed}", f"ridged-{seed}", ridged(seed + 10), "float", ("voids", "dust"))
+        )
+        out.append((f"periodic-{seed}", f"periodic-{seed}", periodic(seed), "uint8", ("periodic",)))
+        out.append(
+            (
+                f"edges-{seed}",
+                f"edges-{seed}",
+                structure_image(seed),
+                "uint8",
+                ("structure", "blobs"),
+            )
+        )
     out.append(("fractal-0", "fractal-0-uint16", _as16(fractal(0)), "uint16", ("text",)))
     out.append(("fractal-2", "fractal-2-uint16", _as16(fractal(2)), "uint16", ("text",)))
     for seed in range(4, 6):  # more periodic patterns: the class needs cases on both sides
-        out.append((f"periodic-{seed}", f"periodic-{seed}", periodic(seed), "uint8",
-                    ("periodic",)))
+        out.append((f"periodic-{seed}", f"periodic-{seed}", periodic(seed), "uint8", ("periodic",)))
     return out
 
 
@@ -283,8 +348,16 @@ def text_mask(shape, rng):
     y = int(rng.integers(12, 22))
     while y < ny - 4:
         line = " ".join(rng.choice(words, 2))
-        cv2.putText(mask, line, (int(rng.integers(0, nx // 6)), y), cv2.FONT_HERSHEY_SIMPLEX,
-                    scale, 1, thick, cv2.LINE_AA)
+        cv2.putText(
+            mask,
+            line,
+            (int(rng.integers(0, nx // 6)), y),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            scale,
+            1,
+            thick,
+            cv2.LINE_AA,
+        )
         y += int(rng.integers(22, 34))
     return mask > 0
 
@@ -298,7 +371,7 @@ def scratch_mask(shape, rng, count=6):
         p0 = rng.uniform([0, 0], [nx, ny])
         angle = rng.uniform(0, np.pi)
         t = np.linspace(-0.5, 0.5, 40)[:, None] * rng.uniform(0.6, 1.2) * nx
-        bend = rng.uniform(-0.15, 0.15) * t ** 2 / nx
+        bend = rng.uniform(-0.15, 0.15) * t**2 / nx
         d = np.array([np.cos(angle), np.sin(angle)])
         pts = p0 + t * d + bend * np.array([-d[1], d[0]])
         cv2.polylines(mask, [np.round(pts).astype(np.int32)], False, 1, int(rng.integers(1, 3)))
@@ -326,9 +399,13 @@ def dust_mask(shape, rng):
     ny, nx = shape
     mask = np.zeros(shape, bool)
     y, x = np.mgrid[0:ny, 0:nx]
-    count = int(rng.integers(120, 220) * ny * nx / 128 ** 2)
-    for cy, cx, r in zip(rng.uniform(0, ny, count), rng.uniform(0, nx, count),
-                         rng.uniform(0.5, 2.0, count), strict=True):
+    count = int(rng.integers(120, 220) * ny * nx / 128**2)
+    for cy, cx, r in zip(
+        rng.uniform(0, ny, count),
+        rng.uniform(0, nx, count),
+        rng.uniform(0.5, 2.0, count),
+        strict=True,
+    ):
         y0, y1, x0, x1 = int(cy - 3), int(cy + 4), int(cx - 3), int(cx + 4)
         sl = (slice(max(0, y0), max(0, y1)), slice(max(0, x0), max(0, x1)))
         mask[sl] |= np.hypot(y[sl] - cy, x[sl] - cx) <= r
@@ -422,8 +499,8 @@ def build(quick: bool = False) -> list[Case]:
 def psnr(case: Case, result) -> float:
     d = np.asarray(result, np.float64)[case.mask] - case.truth.astype(np.float64)[case.mask]
     # an exact fill scores CAP dB, so that it can be averaged
-    mse = max(float(np.mean(d ** 2)), case.peak ** 2 * 10 ** (-CAP / 10))
-    return float(10 * np.log10(case.peak ** 2 / mse))
+    mse = max(float(np.mean(d**2)), case.peak**2 * 10 ** (-CAP / 10))
+    return float(10 * np.log10(case.peak**2 / mse))
 
 
 def ssim(case: Case, result) -> float:
@@ -431,8 +508,9 @@ def ssim(case: Case, result) -> float:
 
     truth = case.truth.astype(np.float64)
     res = np.asarray(result, np.float64)
-    _, full = structural_similarity(truth, res, data_range=case.peak,
-                                    channel_axis=case.channel_axis, full=True)
+    _, full = structural_similarity(
+        truth, res, data_range=case.peak, channel_axis=case.channel_axis, full=True
+    )
     if full.ndim == 3:
         full = full.mean(axis=-1)
     return float(full[case.mask].mean())
@@ -444,15 +522,16 @@ def main():
     print(f"{len(images)} images, {len(cases)} cases")
     for half in ("calibration", "test"):
         srcs = sorted({c.source for c in cases if c.half == half})
-        n_img = len({c.name.split('/')[0] for c in cases if c.half == half})
+        n_img = len({c.name.split("/")[0] for c in cases if c.half == half})
         print(f"{half}: {n_img} images from {len(srcs)} sources: {', '.join(srcs)}")
         for d in CLASSES:
             n = sum(c.half == half and c.damage == d for c in cases)
             print(f"    {d:11s} {n:3d} cases")
     for name, c in images.items():
         if c.kind == "uint16":
-            print(f"{name}: share of pixels not a multiple of 257: "
-                  f"{sixteen_bit_content(c.truth):.3f}")
+            print(
+                f"{name}: share of pixels not a multiple of 257: {sixteen_bit_content(c.truth):.3f}"
+            )
     masks = {d: np.mean([c.mask.mean() for c in cases if c.damage == d]) for d in CLASSES}
     print("mean mask share per class:", {d: round(float(v), 3) for d, v in masks.items()})
 

@@ -83,8 +83,9 @@ def clpde_method(name):
         import clpde
 
         kw = {} if name == "default" else {"method": name}
-        return clpde.inpaint(image, mask, channel_axis=case.channel_axis, progress=False,
-                             seed=0, **kw)
+        return clpde.inpaint(
+            image, mask, channel_axis=case.channel_axis, progress=False, seed=0, **kw
+        )
 
     return run
 
@@ -92,8 +93,7 @@ def clpde_method(name):
 def biharmonic(image, mask, case):
     from skimage.restoration import inpaint_biharmonic
 
-    data = np.where(mask[..., None] if image.ndim == 3 else mask, 0,
-                    np.asarray(image, np.float64))
+    data = np.where(mask[..., None] if image.ndim == 3 else mask, 0, np.asarray(image, np.float64))
     return cast(inpaint_biharmonic(data, mask, channel_axis=case.channel_axis), image.dtype)
 
 
@@ -117,8 +117,14 @@ def fsr(flag_name):
         import cv2
 
         flag = getattr(cv2.xphoto, flag_name)
-        u8 = image if image.dtype == np.uint8 else to_u8(np.where(
-            mask[..., None] if image.ndim == 3 else mask, 0, np.nan_to_num(image)), case)
+        u8 = (
+            image
+            if image.dtype == np.uint8
+            else to_u8(
+                np.where(mask[..., None] if image.ndim == 3 else mask, 0, np.nan_to_num(image)),
+                case,
+            )
+        )
         known = np.where(mask, 0, 255).astype(np.uint8)
         dst = np.zeros_like(u8)
         cv2.xphoto.inpaint(u8, known, dst, flag)
@@ -172,10 +178,16 @@ def warm_up(found):
     mask[5, 3:20] = True
     for name, fn in found.items():
         if name.startswith("clpde") or name == "default":
-            for image in (grey, colour, grey.astype(np.uint16) * 200,
-                          grey.astype(np.float32)):
-                case = corpus.Case("warm", "warm", "none", "blobs", image, mask,
-                                   "uint8" if image.dtype == np.uint8 else "float")
+            for image in (grey, colour, grey.astype(np.uint16) * 200, grey.astype(np.float32)):
+                case = corpus.Case(
+                    "warm",
+                    "warm",
+                    "none",
+                    "blobs",
+                    image,
+                    mask,
+                    "uint8" if image.dtype == np.uint8 else "float",
+                )
                 fn(np.where(mask[..., None] if image.ndim == 3 else mask, 0, image), mask, case)
 
 
@@ -189,13 +201,24 @@ def interleaved(cases):
 
 
 def score(case, result, name, seconds, truth=None):
-    c = case if truth is None else corpus.Case(case.name, case.source, case.half, case.damage,
-                                               truth, case.mask, "uint8")
-    return {"case": case.name, "half": case.half, "damage": case.damage, "kind": case.kind,
-            "method": name, "psnr": corpus.psnr(c, result), "ssim": corpus.ssim(c, result),
-            "seconds": seconds,
-            "outside_kept": bool(np.array_equal(np.asarray(result)[~case.mask],
-                                                c.damaged()[~case.mask], equal_nan=True))}
+    c = (
+        case
+        if truth is None
+        else corpus.Case(case.name, case.source, case.half, case.damage, truth, case.mask, "uint8")
+    )
+    return {
+        "case": case.name,
+        "half": case.half,
+        "damage": case.damage,
+        "kind": case.kind,
+        "method": name,
+        "psnr": corpus.psnr(c, result),
+        "ssim": corpus.ssim(c, result),
+        "seconds": seconds,
+        "outside_kept": bool(
+            np.array_equal(np.asarray(result)[~case.mask], c.damaged()[~case.mask], equal_nan=True)
+        ),
+    }
 
 
 def run_case(case, found, log):
@@ -207,20 +230,36 @@ def run_case(case, found, log):
             result = fn(image, case.mask, case)
             rows.append(score(case, result, name, time.perf_counter() - start))
         except Exception as error:
-            rows.append({"case": case.name, "half": case.half, "damage": case.damage,
-                         "kind": case.kind, "method": name, "psnr": math.nan, "ssim": math.nan,
-                         "seconds": math.nan, "error": f"{type(error).__name__}: {error}"})
+            rows.append(
+                {
+                    "case": case.name,
+                    "half": case.half,
+                    "damage": case.damage,
+                    "kind": case.kind,
+                    "method": name,
+                    "psnr": math.nan,
+                    "ssim": math.nan,
+                    "seconds": math.nan,
+                    "error": f"{type(error).__name__}: {error}",
+                }
+            )
             traceback.print_exc()
     if case.kind != "uint8":  # the same on the 8-bit version of the data
         truth8 = to_u8(case.truth, case)
-        c8 = corpus.Case(case.name, case.source, case.half, case.damage, truth8, case.mask,
-                         "uint8")
+        c8 = corpus.Case(case.name, case.source, case.half, case.damage, truth8, case.mask, "uint8")
         for name in ("default", "fsr-fast", "fsr-best"):
             if name in found:
                 start = time.perf_counter()
                 result = found[name](c8.damaged(), case.mask, c8)
-                rows.append(score(case, result, f"{name} (8-bit data)",
-                                  time.perf_counter() - start, truth=truth8))
+                rows.append(
+                    score(
+                        case,
+                        result,
+                        f"{name} (8-bit data)",
+                        time.perf_counter() - start,
+                        truth=truth8,
+                    )
+                )
     for r in rows:
         log.write(json.dumps(r) + "\n")
     log.flush()
@@ -240,9 +279,12 @@ def summarise(rows, halves):
             per = {}
             for m in dict.fromkeys(r["method"] for r in sel):
                 rs = [r for r in sel if r["method"] == m]
-                per[m] = {"psnr": _mean(r["psnr"] for r in rs),
-                          "ssim": _mean(r["ssim"] for r in rs),
-                          "seconds": float(np.nansum([r["seconds"] for r in rs])), "n": len(rs)}
+                per[m] = {
+                    "psnr": _mean(r["psnr"] for r in rs),
+                    "ssim": _mean(r["ssim"] for r in rs),
+                    "seconds": float(np.nansum([r["seconds"] for r in rs])),
+                    "n": len(rs),
+                }
             if "default" not in per or not any(p in per for p in peers):
                 out[half][damage] = {"methods": per}  # a partial run: the methods' means only
                 continue
@@ -259,11 +301,15 @@ def summarise(rows, halves):
             bih = per.get("biharmonic", {}).get("seconds", math.nan)
             fsr_fast = per.get("fsr-fast", {}).get("seconds", math.nan)
             out[half][damage] = {
-                "methods": per, "cases": len(by_case), "default_wins": wins,
+                "methods": per,
+                "cases": len(by_case),
+                "default_wins": wins,
                 "worst": {"margin": worst[0], "case": worst[1], "peer": worst[2]},
-                "best_peer": best_peer[1], "lead": per["default"]["psnr"] - best_peer[0],
+                "best_peer": best_peer[1],
+                "lead": per["default"]["psnr"] - best_peer[0],
                 "time_vs_biharmonic": per["default"]["seconds"] / bih,
-                "time_vs_fsr_fast": per["default"]["seconds"] / fsr_fast}
+                "time_vs_fsr_fast": per["default"]["seconds"] / fsr_fast,
+            }
     return out
 
 
@@ -279,18 +325,23 @@ def print_tables(summary, halves):
         except KeyError:
             return "-"
 
-    methods_seen = list(dict.fromkeys(m for h in halves for d in summary[h].values()
-                                      for m in d["methods"]))
-    for key, fmt, title in (("psnr", ".2f", "mean PSNR in the hole, dB"),
-                            ("ssim", ".3f", "mean SSIM in the hole")):
+    methods_seen = list(
+        dict.fromkeys(m for h in halves for d in summary[h].values() for m in d["methods"])
+    )
+    for key, fmt, title in (
+        ("psnr", ".2f", "mean PSNR in the hole, dB"),
+        ("ssim", ".3f", "mean SSIM in the hole"),
+    ):
         print(f"\n{title} ({' / '.join(halves)})")
         print(f"{'method':26s}" + "".join(f"{d:>16s}" for d in corpus.CLASSES))
         for m in methods_seen:
             cells = [" / ".join(cell(h, d, m, key, fmt) for h in halves) for d in corpus.CLASSES]
             print(f"{m:26s}" + "".join(f"{c:>16s}" for c in cells))
     print(f"\nthe default per class ({' / '.join(halves)})")
-    print(f"{'class':11s} {'cases':>9s} {'wins':>9s} {'lead dB':>13s} {'best peer':>25s} "
-          f"{'worst dB':>15s}  {'default s':>13s} {'x biharm.':>13s} {'x FSR-fast':>13s}")
+    print(
+        f"{'class':11s} {'cases':>9s} {'wins':>9s} {'lead dB':>13s} {'best peer':>25s} "
+        f"{'worst dB':>15s}  {'default s':>13s} {'x biharm.':>13s} {'x FSR-fast':>13s}"
+    )
     for d in corpus.CLASSES:
         s = [summary[h].get(d) for h in halves]
         if not all(s) or not all("lead" in x for x in s):
@@ -299,19 +350,29 @@ def print_tables(summary, halves):
         def j(f, s=s):
             return " / ".join(f(x) for x in s)
 
-        print(f"{d:11s} {j(lambda x: str(x['cases'])):>9s} "
-              f"{j(lambda x: str(x['default_wins'])):>9s} "
-              f"{j(lambda x: format(x['lead'], '+.2f')):>13s} {j(lambda x: x['best_peer']):>25s} "
-              f"{j(lambda x: format(x['worst']['margin'], '+.2f')):>15s}  "
-              f"{j(lambda x: format(x['methods']['default']['seconds'], '.2f')):>13s} "
-              f"{j(lambda x: format(x['time_vs_biharmonic'], '.2f')):>13s} "
-              f"{j(lambda x: format(x['time_vs_fsr_fast'], '.3f')):>13s}")
+        print(
+            f"{d:11s} {j(lambda x: str(x['cases'])):>9s} "
+            f"{j(lambda x: str(x['default_wins'])):>9s} "
+            f"{j(lambda x: format(x['lead'], '+.2f')):>13s} {j(lambda x: x['best_peer']):>25s} "
+            f"{j(lambda x: format(x['worst']['margin'], '+.2f')):>15s}  "
+            f"{j(lambda x: format(x['methods']['default']['seconds'], '.2f')):>13s} "
+            f"{j(lambda x: format(x['time_vs_biharmonic'], '.2f')):>13s} "
+            f"{j(lambda x: format(x['time_vs_fsr_fast'], '.3f')):>13s}"
+        )
     for h in halves:
-        worst = [(summary[h][d]["worst"]["margin"], d, summary[h][d]["worst"]["case"],
-                  summary[h][d]["worst"]["peer"]) for d in corpus.CLASSES
-                 if "worst" in summary[h].get(d, {})]
-        print(f"worst cases ({h}): " + "; ".join(f"{d} {c} {m:+.2f} vs {p}"
-                                                   for m, d, c, p in worst))
+        worst = [
+            (
+                summary[h][d]["worst"]["margin"],
+                d,
+                summary[h][d]["worst"]["case"],
+                summary[h][d]["worst"]["peer"],
+            )
+            for d in corpus.CLASSES
+            if "worst" in summary[h].get(d, {})
+        ]
+        print(
+            f"worst cases ({h}): " + "; ".join(f"{d} {c} {m:+.2f} vs {p}" for m, d, c, p in worst)
+        )
 
 
 def main(argv=None):
@@ -320,13 +381,19 @@ def main(argv=None):
     parser.add_argument("--half", choices=("test", "calibration", "both"), default="both")
     parser.add_argument("--only", default=None, help="comma-separated method names")
     parser.add_argument("--skip", default=None, help="comma-separated method names")
-    parser.add_argument("--slice", default=None,
-                        help="START:STOP of the (interleaved) cases: a run split by cases")
+    parser.add_argument(
+        "--slice", default=None, help="START:STOP of the (interleaved) cases: a run split by cases"
+    )
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--log", type=Path, default=None, help="JSON lines, one per result")
-    parser.add_argument("--from-log", type=Path, nargs="+", default=None,
-                        help="summarise earlier runs' logs instead of running (a run split "
-                             "by --only / --skip is summarised from its parts)")
+    parser.add_argument(
+        "--from-log",
+        type=Path,
+        nargs="+",
+        default=None,
+        help="summarise earlier runs' logs instead of running (a run split "
+        "by --only / --skip is summarised from its parts)",
+    )
     args = parser.parse_args(argv)
     halves = ("test", "calibration") if args.half == "both" else (args.half,)
     if args.from_log:
@@ -357,8 +424,11 @@ def main(argv=None):
             for i, case in enumerate(cases):
                 start = time.perf_counter()
                 rows += run_case(case, found, log)
-                print(f"[{i + 1}/{len(cases)}] {case.name} ({case.half}) "
-                      f"{time.perf_counter() - start:.1f} s", flush=True)
+                print(
+                    f"[{i + 1}/{len(cases)}] {case.name} ({case.half}) "
+                    f"{time.perf_counter() - start:.1f} s",
+                    flush=True,
+                )
     summary = summarise(rows, halves)
     print_tables(summary, halves)
     args.json.parent.mkdir(parents=True, exist_ok=True)

@@ -60,9 +60,16 @@ def text_mask(shape, fraction=0.06, seed=0):
     words = ["coherence", "transport", "2007", "Navier", "Stokes", "fluid", "vorticity"]
     y = 30
     while mask.mean() < fraction and y < ny:
-        cv2.putText(mask, " ".join(rng.choice(words, 3)), (int(rng.integers(0, nx // 8)), y),
-                    cv2.FONT_HERSHEY_SIMPLEX, nx / 512 * 1.1, 1, max(1, round(nx / 512 * 3)),
-                    cv2.LINE_AA)
+        cv2.putText(
+            mask,
+            " ".join(rng.choice(words, 3)),
+            (int(rng.integers(0, nx // 8)), y),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            nx / 512 * 1.1,
+            1,
+            max(1, round(nx / 512 * 3)),
+            cv2.LINE_AA,
+        )
         y += int(34 * nx / 512)
     return mask > 0
 
@@ -95,7 +102,7 @@ def photos():
 
 def psnr(result, truth, mask):
     err = (np.asarray(result, float) - truth)[mask]
-    mse = float(np.mean(err ** 2))
+    mse = float(np.mean(err**2))
     return 10 * np.log10(1 / max(mse, 1e-12))
 
 
@@ -110,12 +117,14 @@ def methods(runtime):
             planes = image[None] if image.ndim == 2 else np.moveaxis(image, -1, 0)
             out = module.solve(planes, mask, runtime, **kw)
             return out[0] if image.ndim == 2 else np.moveaxis(out, 0, -1)
+
         return run
 
     def opencv(flag):
         def run(image, mask):
             u8 = np.clip(np.rint(image * 255), 0, 255).astype(np.uint8)
             return cv2.inpaint(u8, mask.astype(np.uint8), 3, flag).astype(float) / 255
+
         return run
 
     def skimage(image, mask):
@@ -159,17 +168,27 @@ def figure(path, runtime):
     from skimage.io import imsave
 
     table = methods(runtime)
-    names = ["clpde coherence", "clpde navier-stokes", "clpde biharmonic", "opencv NS",
-             "opencv Telea"]
+    names = [
+        "clpde coherence",
+        "clpde navier-stokes",
+        "clpde biharmonic",
+        "opencv NS",
+        "opencv Telea",
+    ]
     img = photos()[2][1][70:198, 200:328]
-    rows = [stripes(45, size=128), edge(30, size=128, slot=10),
-            (img, text_mask(img.shape[:2], fraction=0.08, seed=3))]
+    rows = [
+        stripes(45, size=128),
+        edge(30, size=128, slot=10),
+        (img, text_mask(img.shape[:2], fraction=0.08, seed=3)),
+    ]
     tiles = []
     for image, mask in rows:
         rgb = image if image.ndim == 3 else np.repeat(image[..., None], 3, -1)
         size = 256
+
         def fit(a):
             return np.kron(a, np.ones((2, 2, 1)))  # 128 px cases shown at 2x
+
         damaged = rgb.copy()
         damaged[mask] = [0.9, 0.1, 0.1]
         row = [fit(damaged)]
@@ -203,8 +222,10 @@ def main(argv=None):
         table = {k: v for k, v in table.items() if any(m in k for m in args.methods.split(","))}
     rows = []
     for kind, name, image, mask in cases(args.cases.split(",")):
-        line = f"{kind:10s} {name:16s} {image.shape[1]}x{image.shape[0]}" \
-               f"{'x3' if image.ndim == 3 else '  '} {100 * mask.mean():4.1f}%"
+        line = (
+            f"{kind:10s} {name:16s} {image.shape[1]}x{image.shape[0]}"
+            f"{'x3' if image.ndim == 3 else '  '} {100 * mask.mean():4.1f}%"
+        )
         for method, fn in table.items():
             fn(image, mask)  # warm-up: kernel builds
             best = np.inf
@@ -213,8 +234,17 @@ def main(argv=None):
                 out = fn(image, mask)
                 best = min(best, time.perf_counter() - t)
             p = psnr(out, image, mask)
-            rows.append(dict(kind=kind, case=name, method=method, psnr=p, seconds=best,
-                             shape=list(image.shape), mask_fraction=float(mask.mean())))
+            rows.append(
+                dict(
+                    kind=kind,
+                    case=name,
+                    method=method,
+                    psnr=p,
+                    seconds=best,
+                    shape=list(image.shape),
+                    mask_fraction=float(mask.mean()),
+                )
+            )
             line += f" | {method.split()[-1][:9]:9s} {p:5.1f} dB {best * 1e3:6.0f} ms"
         print(line, flush=True)
     print("\nMean PSNR in the hole (dB) and mean time (ms) per class:")
@@ -222,8 +252,10 @@ def main(argv=None):
         print(f"  {kind}:")
         for method in table:
             sel = [r for r in rows if r["kind"] == kind and r["method"] == method]
-            print(f"    {method:22s} {np.mean([r['psnr'] for r in sel]):6.2f} dB "
-                  f"{1e3 * np.mean([r['seconds'] for r in sel]):8.1f} ms")
+            print(
+                f"    {method:22s} {np.mean([r['psnr'] for r in sel]):6.2f} dB "
+                f"{1e3 * np.mean([r['seconds'] for r in sel]):8.1f} ms"
+            )
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(dict(device=str(runtime), rows=rows), indent=1))
     print(f"\nwrote {args.json} (device: {runtime})")

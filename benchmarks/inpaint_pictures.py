@@ -52,8 +52,10 @@ def _grid(rows, gap=4):
             parts += [np.pad(p, ((0, h - p.shape[0]), (0, gap), (0, 0)), constant_values=255)]
         lines.append(np.concatenate(parts, 1))
     w = max(line.shape[1] for line in lines)
-    lines = [np.pad(line, ((0, gap), (0, w - line.shape[1]), (0, 0)), constant_values=255)
-             for line in lines]
+    lines = [
+        np.pad(line, ((0, gap), (0, w - line.shape[1]), (0, 0)), constant_values=255)
+        for line in lines
+    ]
     return np.concatenate(lines, 0)
 
 
@@ -65,16 +67,25 @@ def _zoom(image, box, factor):
 
 def oblique(path):
     rows = []
-    for name, (image, mask) in (("stripes 30", stripes_case(30)), ("stripes 45", stripes_case(45)),
-                                ("rings", rings_case())):
+    for name, (image, mask) in (
+        ("stripes 30", stripes_case(30)),
+        ("stripes 45", stripes_case(45)),
+        ("rings", rings_case()),
+    ):
         if name == "rings":
             box = (40, 88, 20, 108)
         else:
             box = (40, 88, 24, 104)
-        results = [("damaged", image, None), ("biharmonic", run_biharmonic(image, mask), True),
-                   ("central (thesis)", run_clpde(image, mask, method="transport",
-                                                  stencil="central"), True),
-                   ("isotropic (default)", run_clpde(image, mask, method="transport"), True)]
+        results = [
+            ("damaged", image, None),
+            ("biharmonic", run_biharmonic(image, mask), True),
+            (
+                "central (thesis)",
+                run_clpde(image, mask, method="transport", stencil="central"),
+                True,
+            ),
+            ("isotropic (default)", run_clpde(image, mask, method="transport"), True),
+        ]
         row = []
         for label, out, score in results:
             shown = _damaged(out, mask) if score is None else out
@@ -92,11 +103,15 @@ def thick(path):
     ys, xs = np.nonzero(mask)
     box = (max(0, ys.min() - 40), ys.max() + 40, max(0, xs.min() - 40), xs.max() + 40)
     # the transport's multiresolution (docs/inpainting.md): its levels and coarse starts
-    results = [("damaged", _damaged(image, mask)),
-               ("1 level", run_clpde(image, mask, method="transport", levels=1)),
-               ("4 levels, upsampled start", run_clpde(image, mask, method="transport",
-                                                       levels=4, coarse_start="upsampled")),
-               ("2 levels, corrected (automatic)", run_clpde(image, mask, method="transport"))]
+    results = [
+        ("damaged", _damaged(image, mask)),
+        ("1 level", run_clpde(image, mask, method="transport", levels=1)),
+        (
+            "4 levels, upsampled start",
+            run_clpde(image, mask, method="transport", levels=4, coarse_start="upsampled"),
+        ),
+        ("2 levels, corrected (automatic)", run_clpde(image, mask, method="transport")),
+    ]
     row = []
     for label, out in results:
         text = label if label == "damaged" else f"{label} {psnr_in_mask(out, image, mask):.1f} dB"
@@ -114,15 +129,18 @@ def soft(path):
     damage = np.clip(1.6 - np.hypot((y - 90) / 45, (x - 100) / 70) * 1.6, 0, 1)
     damage = np.where(damage > 0.02, damage, 0.0)
     stain = np.array([230, 200, 120], float)
-    observed = np.round((1 - damage[..., None]) * truth + damage[...,
-                                                                 None] * stain).astype(np.uint8)
+    observed = np.round((1 - damage[..., None]) * truth + damage[..., None] * stain).astype(
+        np.uint8
+    )
     hard = run_clpde(observed, damage > 0)
     soft = run_clpde(observed, damage)
     region = damage > 0
-    row = [_label(observed, "stained (damage 0..1)"),
-           _label(hard, f"hard mask {psnr_in_mask(hard, truth, region):.1f} dB"),
-           _label(soft, f"soft mask {psnr_in_mask(soft, truth, region):.1f} dB"),
-           _label(truth, "original")]
+    row = [
+        _label(observed, "stained (damage 0..1)"),
+        _label(hard, f"hard mask {psnr_in_mask(hard, truth, region):.1f} dB"),
+        _label(soft, f"soft mask {psnr_in_mask(soft, truth, region):.1f} dB"),
+        _label(truth, "original"),
+    ]
     write(path, _grid([row]))
 
 
@@ -145,17 +163,20 @@ def methods_figure(path):
     camera, chelsea, coffee = data.camera(), data.chelsea(), data.coffee()
     stripes, slot = stripes_case(30)
     blobs, hole = blob_mask(chelsea.shape[:2]), thick_mask(coffee.shape[:2], 100)
-    cases = [("text", camera, text_mask(camera.shape), (150, 278, 170, 298), 2),
-             ("blobs", chelsea, blobs, around(blobs, 128, 1), 2),
-             ("stripes 30", stripes, slot, (32, 96, 32, 96), 4),
-             ("thick hole", coffee, hole, around(hole, 256), 1)]
+    cases = [
+        ("text", camera, text_mask(camera.shape), (150, 278, 170, 298), 2),
+        ("blobs", chelsea, blobs, around(blobs, 128, 1), 2),
+        ("stripes 30", stripes, slot, (32, 96, 32, 96), 4),
+        ("thick hole", coffee, hole, around(hole, 256), 1),
+    ]
     rows = []
     for name, image, mask, box, factor in cases:
         row = [_label(_zoom(_damaged(image, mask), box, factor), name)]
         for method in available():
             out = run_clpde(image, mask, method=method)
-            row.append(_label(_zoom(out, box, factor),
-                              f"{method} {psnr_in_mask(out, image, mask):.1f} dB"))
+            row.append(
+                _label(_zoom(out, box, factor), f"{method} {psnr_in_mask(out, image, mask):.1f} dB")
+            )
         row.append(_label(_zoom(image, box, factor), "original"))
         rows.append(row)
     write(path, _grid(rows))
@@ -173,9 +194,13 @@ if __name__ == "__main__":
     import argparse
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("out", nargs="?", type=Path,
-                        default=Path(__file__).resolve().parents[1] / "docs" / "images",
-                        help="folder for the pictures (default: docs/images)")
+    parser.add_argument(
+        "out",
+        nargs="?",
+        type=Path,
+        default=Path(__file__).resolve().parents[1] / "docs" / "images",
+        help="folder for the pictures (default: docs/images)",
+    )
     out = parser.parse_args().out
     oblique(out / "inpaint_oblique.png")
     thick(out / "inpaint_thick_levels.png")

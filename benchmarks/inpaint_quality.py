@@ -50,8 +50,16 @@ def text_mask(shape, fraction=0.10, seed=0):
     y = int(30 * scale)
     while mask.mean() < fraction and y < ny:
         line = " ".join(rng.choice(words, 3))
-        cv2.putText(mask, line, (int(rng.integers(0, nx // 8)), y), cv2.FONT_HERSHEY_SIMPLEX,
-                    scale, 1, thick, cv2.LINE_AA)
+        cv2.putText(
+            mask,
+            line,
+            (int(rng.integers(0, nx // 8)), y),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            scale,
+            1,
+            thick,
+            cv2.LINE_AA,
+        )
         y += int(34 * scale)
     return mask > 0
 
@@ -94,7 +102,7 @@ def thick_mask(shape, size, seed=3, square=True):
     cy, cx = int(rng.uniform(ny / 3, 2 * ny / 3)), int(rng.uniform(nx / 3, 2 * nx / 3))
     mask = np.zeros(shape, bool)
     if square:
-        mask[cy - size // 2: cy - size // 2 + size, cx - size // 2: cx - size // 2 + size] = True
+        mask[cy - size // 2 : cy - size // 2 + size, cx - size // 2 : cx - size // 2 + size] = True
     else:
         y, x = np.mgrid[0:ny, 0:nx]
         mask = np.hypot(y - cy, x - cx) <= size / 2
@@ -114,7 +122,7 @@ def stripes_case(angle_deg, size=128, period=16, slot=6):
     t = -(x - size / 2) * np.sin(a) + (y - size / 2) * np.cos(a)
     image = 0.15 + 0.7 * np.clip(0.5 + 2.0 * np.sin(2 * np.pi * t / period), 0, 1)
     mask = np.zeros((size, size), bool)
-    mask[:, size // 2 - slot // 2: size // 2 - slot // 2 + slot] = True
+    mask[:, size // 2 - slot // 2 : size // 2 - slot // 2 + slot] = True
     return _u8(image), mask
 
 
@@ -124,7 +132,7 @@ def edge_case(angle_deg, size=128, slot=6, width=1.0):
     a = np.deg2rad(angle_deg)
     t = -(x - size / 2) * np.sin(a) + (y - size / 2) * np.cos(a)
     mask = np.zeros((size, size), bool)
-    mask[:, size // 2 - slot // 2: size // 2 - slot // 2 + slot] = True
+    mask[:, size // 2 - slot // 2 : size // 2 - slot // 2 + slot] = True
     return _u8(0.2 + 0.6 / (1 + np.exp(-t / width))), mask
 
 
@@ -135,7 +143,7 @@ def rings_case(size=128, period=14, slot=6):
     r = np.hypot(y - size * 0.62, x - size / 2)
     image = 0.15 + 0.7 * np.clip(0.5 + 2.0 * np.sin(2 * np.pi * r / period), 0, 1)
     mask = np.zeros((size, size), bool)
-    mask[size // 2 - slot // 2: size // 2 - slot // 2 + slot, :] = True
+    mask[size // 2 - slot // 2 : size // 2 - slot // 2 + slot, :] = True
     return _u8(image), mask
 
 
@@ -145,7 +153,7 @@ def curved_edge_case(size=128, slot=8):
     r = np.hypot(y - size * 1.1, x - size / 2)
     image = 0.2 + 0.6 / (1 + np.exp(-(r - size * 0.75) / 1.2))
     mask = np.zeros((size, size), bool)
-    mask[:, size // 2 + 10: size // 2 + 10 + slot] = True
+    mask[:, size // 2 + 10 : size // 2 + 10 + slot] = True
     return _u8(image), mask
 
 
@@ -160,7 +168,7 @@ def t_junction_case(size=128, hole=14):
     image = ndimage.gaussian_filter(image, 0.7)
     mask = np.zeros((size, size), bool)
     c = size // 2
-    mask[c - hole // 2: c + hole - hole // 2, c - hole // 2: c + hole - hole // 2] = True
+    mask[c - hole // 2 : c + hole - hole // 2, c - hole // 2 : c + hole - hole // 2] = True
     return _u8(image), mask
 
 
@@ -235,12 +243,20 @@ def diagnose():
                 out = run_clpde(image, mask, levels=1, **options)
                 row[name] = psnr_in_mask(out, image, mask)
             rows.append(row)
-            print("| " + " | ".join([row["case"]] + [f"{row[k]:.1f}" for k in
-                                                     ["biharmonic", *variants]]) + " |", flush=True)
-    print("\nThe exact image: max |I_t| of one step (numpy reference), and the PSNR in the slot "
-          "after 300 / 3000 steps started from it (no pre-smoothing, no diffusion)\n")
-    print("| case | residual central | residual isotropic | central 300 / 3000 | "
-          "isotropic 300 / 3000 |")
+            print(
+                "| "
+                + " | ".join([row["case"]] + [f"{row[k]:.1f}" for k in ["biharmonic", *variants]])
+                + " |",
+                flush=True,
+            )
+    print(
+        "\nThe exact image: max |I_t| of one step (numpy reference), and the PSNR in the slot "
+        "after 300 / 3000 steps started from it (no pre-smoothing, no diffusion)\n"
+    )
+    print(
+        "| case | residual central | residual isotropic | central 300 / 3000 | "
+        "isotropic 300 / 3000 |"
+    )
     print("|---|---|---|---|---|")
     exact = []
     for kind, make in (("edge", edge_case), ("stripes", stripes_case)):
@@ -249,12 +265,17 @@ def diagnose():
             r = {"case": f"{kind}-{angle}"}
             for stencil in ("central", "isotropic"):
                 r[f"residual_{stencil}"] = _rate_residual(image, stencil)
-                r[f"drift_{stencil}"] = [_from_truth(image, mask, n, stencil=stencil, presmooth=0,
-                                                     diffusion_steps=0) for n in (300, 3000)]
+                r[f"drift_{stencil}"] = [
+                    _from_truth(image, mask, n, stencil=stencil, presmooth=0, diffusion_steps=0)
+                    for n in (300, 3000)
+                ]
             exact.append(r)
-            print(f"| {r['case']} | {r['residual_central']:.1e} | {r['residual_isotropic']:.1e} | "
-                  f"{r['drift_central'][0]:.1f} / {r['drift_central'][1]:.1f} | "
-                  f"{r['drift_isotropic'][0]:.1f} / {r['drift_isotropic'][1]:.1f} |", flush=True)
+            print(
+                f"| {r['case']} | {r['residual_central']:.1e} | {r['residual_isotropic']:.1e} | "
+                f"{r['drift_central'][0]:.1f} / {r['drift_central'][1]:.1f} | "
+                f"{r['drift_isotropic'][0]:.1f} / {r['drift_isotropic'][1]:.1f} |",
+                flush=True,
+            )
     return {"variants": rows, "exact": exact}
 
 
@@ -290,14 +311,17 @@ def methods(only=None):
     for name in available():
         table[name] = lambda im, m, name=name: run_clpde(im, m, method=name)
         if name == "transport":
-            table["transport-central"] = lambda im, m: run_clpde(im, m, method="transport",
-                                                                 stencil="central")
+            table["transport-central"] = lambda im, m: run_clpde(
+                im, m, method="transport", stencil="central"
+            )
     table["auto"] = lambda im, m: run_clpde(im, m, method="auto")
-    table.update({
-        "opencv-ns": lambda im, m: run_cv2(im, m, cv2.INPAINT_NS),
-        "opencv-telea": lambda im, m: run_cv2(im, m, cv2.INPAINT_TELEA),
-        "skimage-biharmonic": run_biharmonic,
-    })
+    table.update(
+        {
+            "opencv-ns": lambda im, m: run_cv2(im, m, cv2.INPAINT_NS),
+            "opencv-telea": lambda im, m: run_cv2(im, m, cv2.INPAINT_TELEA),
+            "skimage-biharmonic": run_biharmonic,
+        }
+    )
     if only:
         table = {k: v for k, v in table.items() if k in only}
     return table
@@ -350,9 +374,14 @@ def cases(quick=False):
     out.append(("structure", "rings", *rings_case()))
     out.append(("structure", "curved-edge", *curved_edge_case()))
     out.append(("structure", "t-junction", *t_junction_case()))
-    thick = [("coffee", 100, True), ("camera", 80, True), ("astronaut", 60, False),
-             ("chelsea", 70, True), ("rocket", 90, False)]
-    for name, size, square in (thick[:1] if quick else thick):
+    thick = [
+        ("coffee", 100, True),
+        ("camera", 80, True),
+        ("astronaut", 60, False),
+        ("chelsea", 70, True),
+        ("rocket", 90, False),
+    ]
+    for name, size, square in thick[:1] if quick else thick:
         image = getattr(data, name)()
         out.append(
             ("thick", f"{name}-{size}", image, thick_mask(image.shape[:2], size, square=square))
@@ -375,13 +404,24 @@ def quality(quick=False, only=None):
                 continue
             seconds = time.perf_counter() - start
             assert result.dtype == image.dtype and result.shape == image.shape
-            rows.append({"class": kind, "image": name, "method": method, "seconds": seconds,
-                         "psnr": psnr_in_mask(result, image, mask),
-                         "ssim": ssim_in_mask(result, image, mask),
-                         "edge_energy": edge_energy(result, image, mask),
-                         "coverage": float(mask.mean())})
-            print(f"  {kind:10s} {name:22s} {method:19s} PSNR {rows[-1]['psnr']:6.2f}  "
-                  f"SSIM {rows[-1]['ssim']:.3f}  {seconds:7.3f} s", file=sys.stderr, flush=True)
+            rows.append(
+                {
+                    "class": kind,
+                    "image": name,
+                    "method": method,
+                    "seconds": seconds,
+                    "psnr": psnr_in_mask(result, image, mask),
+                    "ssim": ssim_in_mask(result, image, mask),
+                    "edge_energy": edge_energy(result, image, mask),
+                    "coverage": float(mask.mean()),
+                }
+            )
+            print(
+                f"  {kind:10s} {name:22s} {method:19s} PSNR {rows[-1]['psnr']:6.2f}  "
+                f"SSIM {rows[-1]['ssim']:.3f}  {seconds:7.3f} s",
+                file=sys.stderr,
+                flush=True,
+            )
     return rows
 
 
@@ -426,19 +466,32 @@ def huge(n=20000, timeout=300, only=None):
     for method in names:
         code = HUGE.format(n=n, method=method)
         try:
-            done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                                  timeout=timeout, env=dict(os.environ))
+            done = subprocess.run(
+                [sys.executable, "-c", code],
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+                env=dict(os.environ),
+            )
         except subprocess.TimeoutExpired:
-            rows.append({"method": method, "seconds": None, "peak_gb": None,
-                         "note": f"over {timeout} s"})
+            rows.append(
+                {"method": method, "seconds": None, "peak_gb": None, "note": f"over {timeout} s"}
+            )
             continue
         if done.returncode != 0:
             last = (done.stderr.strip().splitlines() or [f"exit status {done.returncode}"])[-1]
             rows.append({"method": method, "seconds": None, "peak_gb": None, "note": last[:120]})
         else:
             seconds, peak, io = map(float, done.stdout.split())
-            rows.append({"method": method, "seconds": seconds, "peak_gb": peak,
-                         "input_plus_output_gb": io, "note": ""})
+            rows.append(
+                {
+                    "method": method,
+                    "seconds": seconds,
+                    "peak_gb": peak,
+                    "input_plus_output_gb": io,
+                    "note": "",
+                }
+            )
         print(f"  {n}x{n}: {rows[-1]}", file=sys.stderr, flush=True)
     return rows
 
@@ -452,24 +505,35 @@ def summarise(rows):
         groups.setdefault((r["class"], r["method"]), []).append(r)
     summary = []
     for (kind, method), rs in groups.items():
-        summary.append({"class": kind, "method": method, "n": len(rs),
-                        "psnr": float(np.mean([min(r["psnr"], PSNR_CAP) for r in rs])),
-                        "ssim": float(np.mean([r["ssim"] for r in rs])),
-                        "seconds": float(np.mean([r["seconds"] for r in rs])),
-                        "edge_energy": None if rs[0]["edge_energy"] is None else
-                        float(np.mean([r["edge_energy"] for r in rs]))})
+        summary.append(
+            {
+                "class": kind,
+                "method": method,
+                "n": len(rs),
+                "psnr": float(np.mean([min(r["psnr"], PSNR_CAP) for r in rs])),
+                "ssim": float(np.mean([r["ssim"] for r in rs])),
+                "seconds": float(np.mean([r["seconds"] for r in rs])),
+                "edge_energy": None
+                if rs[0]["edge_energy"] is None
+                else float(np.mean([r["edge_energy"] for r in rs])),
+            }
+        )
     return summary
 
 
 def print_table(summary, huge_rows):
-    print("Inpainting quality inside the mask (mean over the cases of each class; PSNR "
-          f"capped at {PSNR_CAP:g} dB)\n")
+    print(
+        "Inpainting quality inside the mask (mean over the cases of each class; PSNR "
+        f"capped at {PSNR_CAP:g} dB)\n"
+    )
     print("| class | method | cases | PSNR (dB) | SSIM | edge energy | time (s) |")
     print("|---|---|---|---|---|---|---|")
     for s in summary:
         energy = "-" if s["edge_energy"] is None else f"{s['edge_energy']:.2f}"
-        print(f"| {s['class']} | {s['method']} | {s['n']} | {s['psnr']:.2f} | {s['ssim']:.3f} | "
-              f"{energy} | {s['seconds']:.3f} |")
+        print(
+            f"| {s['class']} | {s['method']} | {s['n']} | {s['psnr']:.2f} | {s['ssim']:.3f} | "
+            f"{energy} | {s['seconds']:.3f} |"
+        )
     if huge_rows:
         print(
             "\n20000x20000 uint8, 20x50 mask (own process each; image + bool mask + output = "
@@ -489,8 +553,9 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="fewer photos, for a smoke test")
     parser.add_argument("--no-huge", action="store_true", help="skip the 20000x20000 row")
     parser.add_argument("--methods", nargs="*", default=None, help="only these methods")
-    parser.add_argument("--diagnose", action="store_true",
-                        help="only the experiments on oblique isophotes")
+    parser.add_argument(
+        "--diagnose", action="store_true", help="only the experiments on oblique isophotes"
+    )
     args = parser.parse_args(argv)
     import clpde
 
@@ -507,8 +572,13 @@ def main(argv=None):
     summary = summarise(rows)
     huge_rows = [] if args.no_huge else huge(only=args.methods)
     print_table(summary, huge_rows)
-    out = {"device": f"{device.name.strip()} ({device.platform.name.strip()})",
-           "cpu_count": os.cpu_count(), "rows": rows, "summary": summary, "huge": huge_rows}
+    out = {
+        "device": f"{device.name.strip()} ({device.platform.name.strip()})",
+        "cpu_count": os.cpu_count(),
+        "rows": rows,
+        "summary": summary,
+        "huge": huge_rows,
+    }
     path = Path(args.json)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(path.suffix + ".tmp")

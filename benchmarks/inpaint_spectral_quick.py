@@ -31,8 +31,17 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-CALIBRATION = ("astronaut", "coffee", "chelsea", "camera", "brick", "rocket",
-               "immunohistochemistry", "gravel", "grass")
+CALIBRATION = (
+    "astronaut",
+    "coffee",
+    "chelsea",
+    "camera",
+    "brick",
+    "rocket",
+    "immunohistochemistry",
+    "gravel",
+    "grass",
+)
 DAMAGE = ("text", "scratches", "blobs", "dust")
 PEERS = ("default", "fsr-fast", "fsr-best", "biharmonic")
 
@@ -49,7 +58,7 @@ def photo(name: str, size: int) -> np.ndarray:
     if size:
         ny, nx = image.shape[:2]
         y0, x0 = max(0, (ny - size) // 2), max(0, (nx - size) // 2)
-        image = image[y0:y0 + size, x0:x0 + size]
+        image = image[y0 : y0 + size, x0 : x0 + size]
     return np.ascontiguousarray(image)
 
 
@@ -74,23 +83,25 @@ def dust_mask(shape, seed=4):
     for _ in range(count):
         s = int(rng.integers(1, 5))
         cy, cx = int(rng.integers(0, ny - s)), int(rng.integers(0, nx - s))
-        mask[cy:cy + s, cx:cx + s] = True
+        mask[cy : cy + s, cx : cx + s] = True
     return mask
 
 
 def damage(kind: str, shape) -> np.ndarray:
     from inpaint_quality import scratch_mask, text_mask
 
-    return {"text": lambda: text_mask(shape, fraction=0.08),
-            "scratches": lambda: scratch_mask(shape),
-            "blobs": lambda: blob_mask(shape),
-            "dust": lambda: dust_mask(shape)}[kind]()
+    return {
+        "text": lambda: text_mask(shape, fraction=0.08),
+        "scratches": lambda: scratch_mask(shape),
+        "blobs": lambda: blob_mask(shape),
+        "dust": lambda: dust_mask(shape),
+    }[kind]()
 
 
 def psnr(result, truth, mask) -> float:
     err = (result.astype(np.float64) - truth)[mask]
-    mse = float(np.mean(err ** 2))
-    return 10 * np.log10(255.0 ** 2 / max(mse, 1e-12))
+    mse = float(np.mean(err**2))
+    return 10 * np.log10(255.0**2 / max(mse, 1e-12))
 
 
 def ssim(result, truth, mask) -> float:
@@ -172,19 +183,28 @@ def main(argv=None):
             t0 = time.perf_counter()
             out = run_peer(p, image, mask)
             dt = time.perf_counter() - t0
-            row["results"][p] = dict(psnr=psnr(out, image, mask), ssim=ssim(out, image, mask),
-                                     seconds=dt)
+            row["results"][p] = dict(
+                psnr=psnr(out, image, mask), ssim=ssim(out, image, mask), seconds=dt
+            )
         for i, options in enumerate(sweep):
             timings = {}
             t0 = time.perf_counter()
             out = run_spectral(image, mask, options, timings)
             dt = time.perf_counter() - t0
-            row["results"][f"spectral{i}"] = dict(psnr=psnr(out, image, mask),
-                                                 ssim=ssim(out, image, mask), seconds=dt,
-                                                 timings=timings, options=options)
+            row["results"][f"spectral{i}"] = dict(
+                psnr=psnr(out, image, mask),
+                ssim=ssim(out, image, mask),
+                seconds=dt,
+                timings=timings,
+                options=options,
+            )
         rows.append(row)
-        print(name, kind, " ".join(f"{k}={v['psnr']:.2f}/{v['seconds']:.2f}s"
-                                   for k, v in row["results"].items()), flush=True)
+        print(
+            name,
+            kind,
+            " ".join(f"{k}={v['psnr']:.2f}/{v['seconds']:.2f}s" for k, v in row["results"].items()),
+            flush=True,
+        )
     names = list(rows[0]["results"])
     print(f"\nmean PSNR in the mask (dB) / SSIM / total seconds, size {args.size}")
     print("damage     " + " ".join(f"{n:>22}" for n in names))
@@ -199,16 +219,21 @@ def main(argv=None):
         print(f"{kind:10} " + " ".join(f"{c:>22}" for c in cells))
     for i, options in enumerate(sweep):
         keys = ("plan", "build", "upload", "waves", "readback")
-        tot = {k: sum(r["results"][f"spectral{i}"]["timings"].get(k, 0) for r in rows)
-               for k in keys}
+        tot = {
+            k: sum(r["results"][f"spectral{i}"]["timings"].get(k, 0) for r in rows) for k in keys
+        }
         launches = sum(r["results"][f"spectral{i}"]["timings"].get("launches", 0) for r in rows)
         blocks = sum(r["results"][f"spectral{i}"]["timings"].get("blocks", 0) for r in rows)
-        print(f"spectral{i} {options}: " + ", ".join(f"{k} {v:.2f}s" for k, v in tot.items())
-              + f", {launches} launches, {blocks} blocks")
+        print(
+            f"spectral{i} {options}: "
+            + ", ".join(f"{k} {v:.2f}s" for k, v in tot.items())
+            + f", {launches} launches, {blocks} blocks"
+        )
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(dict(size=args.size, rows=rows), indent=1,
-                                              default=float))
+        Path(args.json).write_text(
+            json.dumps(dict(size=args.size, rows=rows), indent=1, default=float)
+        )
 
 
 if __name__ == "__main__":

@@ -34,8 +34,16 @@ def structure_texture(w, structure):
 
     def run(image, mask, seed):
         axis = -1 if image.ndim == 3 else None
-        return clpde.inpaint(image, mask, channel_axis=axis, method="structure-texture",
-                             tv_weight=w, seed=seed, **extra)
+        return clpde.inpaint(
+            image,
+            mask,
+            channel_axis=axis,
+            method="structure-texture",
+            tv_weight=w,
+            seed=seed,
+            **extra,
+        )
+
     return run
 
 
@@ -46,10 +54,10 @@ def exemplar_with_kappa(kappa):
     def run(image, mask, seed):
         saved, exemplar.GUIDE_KAPPA = exemplar.GUIDE_KAPPA, kappa
         try:
-            return from_data(exemplar.solve(to_data(image), mask, get_runtime(), seed=seed),
-                             image)
+            return from_data(exemplar.solve(to_data(image), mask, get_runtime(), seed=seed), image)
         finally:
             exemplar.GUIDE_KAPPA = saved
+
     return run
 
 
@@ -60,12 +68,19 @@ def main(argv=None):
     ap.add_argument("--guide-kappas", default="", help="comma-separated guide kappas")
     ap.add_argument("--classes", default="texture,periodic,thick")
     args = ap.parse_args(argv)
-    variants = {f"structure-texture tv_weight={w}" + (f" {args.structure}" if args.structure
-                                                      else ""):
-                structure_texture(float(w), args.structure)
-                for w in filter(None, args.tv_weights.split(","))}
-    variants.update({f"exemplar guide kappa={k}": exemplar_with_kappa(float(k))
-                     for k in filter(None, args.guide_kappas.split(","))})
+    variants = {
+        f"structure-texture tv_weight={w}"
+        + (f" {args.structure}" if args.structure else ""): structure_texture(
+            float(w), args.structure
+        )
+        for w in filter(None, args.tv_weights.split(","))
+    }
+    variants.update(
+        {
+            f"exemplar guide kappa={k}": exemplar_with_kappa(float(k))
+            for k in filter(None, args.guide_kappas.split(","))
+        }
+    )
     if not variants:
         ap.error("give --tv-weights or --guide-kappas")
     classes = args.classes.split(",")
@@ -74,11 +89,21 @@ def main(argv=None):
         if case["class"] not in classes:
             continue
         for name, run in variants.items():
-            vals = [[min(v, 60.0) for v in scores(run(case["image"], case["mask"], seed),
-                                                   case["image"], case["mask"])]
-                    for seed in SEEDS]
-            print(f"{case['name']:14s} {name:40s} PSNR %.2f SSIM %.3f energy %.2f"
-                  % tuple(np.mean(vals, 0)), file=sys.stderr, flush=True)
+            vals = [
+                [
+                    min(v, 60.0)
+                    for v in scores(
+                        run(case["image"], case["mask"], seed), case["image"], case["mask"]
+                    )
+                ]
+                for seed in SEEDS
+            ]
+            print(
+                f"{case['name']:14s} {name:40s} PSNR %.2f SSIM %.3f energy %.2f"
+                % tuple(np.mean(vals, 0)),
+                file=sys.stderr,
+                flush=True,
+            )
             means.setdefault((case["class"], name), []).append(np.mean(vals, 0))
     print("| class | variant | PSNR (dB) | SSIM | edge energy |\n|---|---|---|---|---|")
     for (cls, name), rows in means.items():

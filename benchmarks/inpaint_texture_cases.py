@@ -49,14 +49,18 @@ def _holes(shape, sizes, seed, shapes=("disc", "square")):
 def _periodic_patterns(n=192):
     y, x = np.mgrid[0:n, 0:n].astype(np.float64)
     grating = 0.5 + 0.4 * np.sin(2 * np.pi * (x / 16 + y / 24))
-    checker = ((x // 12 + y // 12) % 2)[..., None] * np.array([0.8, 0.2, 0.3]) + \
-        (1 - (x // 12 + y // 12) % 2)[..., None] * np.array([0.1, 0.5, 0.9])
+    checker = ((x // 12 + y // 12) % 2)[..., None] * np.array([0.8, 0.2, 0.3]) + (
+        1 - (x // 12 + y // 12) % 2
+    )[..., None] * np.array([0.1, 0.5, 0.9])
     dots = 0.15 + 0.7 * (((x % 14) - 7) ** 2 + ((y % 14) - 7) ** 2 < 16)
-    tiles = np.stack([
-        0.5 + 0.35 * np.sin(2 * np.pi * x / 20) * np.cos(2 * np.pi * y / 20),
-        0.5 + 0.35 * np.cos(2 * np.pi * (x + y) / 20),
-        0.3 + 0.4 * ((x % 20 < 4) | (y % 20 < 4)),
-    ], -1)
+    tiles = np.stack(
+        [
+            0.5 + 0.35 * np.sin(2 * np.pi * x / 20) * np.cos(2 * np.pi * y / 20),
+            0.5 + 0.35 * np.cos(2 * np.pi * (x + y) / 20),
+            0.3 + 0.4 * ((x % 20 < 4) | (y % 20 < 4)),
+        ],
+        -1,
+    )
     return {"grating": grating, "checker": checker, "dots": dots, "tiles": tiles}
 
 

@@ -119,6 +119,7 @@ def clpde_method(name):
         module = import_module("clpde.inpainting." + name.replace("-", "_"))
         out = module.solve(to_data(image), mask, get_runtime(), seed=0)
         return from_data(out, image)
+
     return run
 
 
@@ -127,8 +128,9 @@ def exemplar_nostitch(image, mask):
     from clpde.inpainting import exemplar
     from clpde.runtime import get_runtime
 
-    return from_data(exemplar.solve(to_data(image), mask, get_runtime(), seed=0, stitch=False),
-                     image)
+    return from_data(
+        exemplar.solve(to_data(image), mask, get_runtime(), seed=0, stitch=False), image
+    )
 
 
 def clpde_default(image, mask):
@@ -155,6 +157,7 @@ def opencv(flag):
         u8 = img if img.dtype == np.uint8 else np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
         out = cv2.inpaint(np.ascontiguousarray(u8), mask.astype(np.uint8), 3, flag)
         return out if img.dtype == np.uint8 else out.astype(np.float64) / 255
+
     return run
 
 
@@ -214,8 +217,9 @@ def scores(result, image, mask):
     r, t = to_data(result), to_data(image)
     mse = float(np.mean((r[:, mask] - t[:, mask]) ** 2))
     psnr = float("inf") if mse == 0 else 10 * np.log10(1 / mse)
-    _, ssim_map = structural_similarity(np.moveaxis(t, 0, -1), np.moveaxis(r, 0, -1),
-                                        data_range=1.0, channel_axis=-1, full=True)
+    _, ssim_map = structural_similarity(
+        np.moveaxis(t, 0, -1), np.moveaxis(r, 0, -1), data_range=1.0, channel_axis=-1, full=True
+    )
     ssim = float(ssim_map.mean(axis=-1)[hole_boxes(mask)].mean())
     return psnr, ssim, edge_energy(result, image, mask)
 
@@ -251,8 +255,11 @@ def boundary_steps(image, mask, width):
 
             b_out, b_in = block(1), block(1 - width)
             b_far_out, b_far_in = block(1 + width), block(1 - 2 * width)
-            for name, step in (("across", b_out - b_in), ("outside", b_far_out - b_out),
-                               ("inside", b_in - b_far_in)):
+            for name, step in (
+                ("across", b_out - b_in),
+                ("outside", b_far_out - b_out),
+                ("inside", b_in - b_far_in),
+            ):
                 total = float(np.abs(step).mean(0)[cross].sum())
                 if name == "across":
                     across += total
@@ -270,8 +277,9 @@ def _seam_ratio(image, mask, width):
 
 def seam_scores(result, image, mask):
     """(seam_edge, seam_ring): excess step at the boundary, width 1 and 2 (1 = none)."""
-    return tuple(_seam_ratio(result, mask, w) / max(_seam_ratio(image, mask, w), 1e-12)
-                 for w in (1, 2))
+    return tuple(
+        _seam_ratio(result, mask, w) / max(_seam_ratio(image, mask, w), 1e-12) for w in (1, 2)
+    )
 
 
 SOURCES = []  # (hole box, flat source index per hole pixel) per call of stitch.stitch
@@ -382,8 +390,10 @@ def far_seams(result, image, mask, smap):
         return None, None, None
     total = sum(int((mask & _shift(mask, 1, axis - 1)).sum()) for axis in (1, 2))
     far = sum(int(seam_pairs(mask, *smap, axis, FAR).sum()) for axis in (1, 2))
-    r8, r16 = (seam_inner(result, image, mask, smap, w, FAR, step_only=True)[0]
-               for w in (FAR_WIDTH, 2 * FAR_WIDTH))
+    r8, r16 = (
+        seam_inner(result, image, mask, smap, w, FAR, step_only=True)[0]
+        for w in (FAR_WIDTH, 2 * FAR_WIDTH)
+    )
     return r8, r16, far / max(total, 1)
 
 
@@ -402,8 +412,11 @@ def seam_controls(image, mask):
     img = np.asarray(image)
     border = ndimage.binary_dilation(mask, iterations=2) & ~mask
     const = img.copy()
-    const[mask] = np.rint(img[border].mean(0)).astype(img.dtype) if img.dtype == np.uint8 \
+    const[mask] = (
+        np.rint(img[border].mean(0)).astype(img.dtype)
+        if img.dtype == np.uint8
         else img[border].mean(0)
+    )
     rows, cols = np.nonzero(mask)
     h, w = np.ptp(rows) + 1, np.ptp(cols) + 1
     ny, nx = mask.shape
@@ -412,8 +425,7 @@ def seam_controls(image, mask):
     dx = int(1.5 * w) * (1 if cols.max() + int(1.5 * w) < nx else -1)
     shifted = img.copy()
     shifted[rows, cols] = img[np.clip(rows + dy, 0, ny - 1), np.clip(cols + dx, 0, nx - 1)]
-    return {"control: original": img, "control: constant": const,
-            "control: shifted copy": shifted}
+    return {"control: original": img, "control: constant": const, "control: shifted copy": shifted}
 
 
 def two_region_paste(image, mask):
@@ -452,19 +464,23 @@ def speed(ms):
     for name, fn in ms.items():
         t0, c0 = time.perf_counter(), time.process_time()
         fn(img, mask)
-        print(f"  {name:24s} {time.perf_counter() - t0:7.3f} s wall, "
-              f"{time.process_time() - c0:7.3f} s CPU")
+        print(
+            f"  {name:24s} {time.perf_counter() - t0:7.3f} s wall, "
+            f"{time.process_time() - c0:7.3f} s CPU"
+        )
     print("Same 40 px hole, growing image (exemplar's solve on (1, n, n) float data):")
     solve = import_module("clpde.inpainting.exemplar").solve
     tile = data.brick()
     for n in (256, 1024, 4096):
         big = np.tile(tile, (n // 512 + 1, n // 512 + 1))[None, :n, :n] / 255.0
         hole = np.zeros((n, n), bool)
-        hole[n // 2 - 20:n // 2 + 20, n // 2 - 20:n // 2 + 20] = True
+        hole[n // 2 - 20 : n // 2 + 20, n // 2 - 20 : n // 2 + 20] = True
         t0, c0 = time.perf_counter(), time.process_time()
         solve(big, hole, get_runtime(), seed=0)
-        print(f"  {n}x{n}: {time.perf_counter() - t0:.3f} s wall, "
-              f"{time.process_time() - c0:.3f} s CPU")
+        print(
+            f"  {n}x{n}: {time.perf_counter() - t0:.3f} s wall, "
+            f"{time.process_time() - c0:.3f} s CPU"
+        )
 
 
 def main(argv=None):
@@ -473,8 +489,9 @@ def main(argv=None):
     ap.add_argument("--only", default="", help="comma-separated case names")
     ap.add_argument("--methods", default="", help="comma-separated method names")
     ap.add_argument("--speed", action="store_true", help="also run the timing rows")
-    ap.add_argument("--seams", action="store_true",
-                    help="thick class only, with the seam scores and controls")
+    ap.add_argument(
+        "--seams", action="store_true", help="thick class only, with the seam scores and controls"
+    )
     args = ap.parse_args(argv)
     cases = texture_cases()
     if args.seams:
@@ -508,19 +525,32 @@ def main(argv=None):
                 exemplar_smap = smap
             psnr, ssim, energy = scores(result, case["image"], case["mask"])
             edge, ring = seam_scores(result, case["image"], case["mask"])
-            rows.append({"case": case["name"], "class": case["class"], "method": name,
-                         "psnr": psnr, "ssim": ssim, "edge_energy": energy, "seconds": seconds,
-                         "seam_edge": edge, "seam_ring": ring,
-                         "seam_inner": seam_inner(result, case["image"], case["mask"], smap)[0],
-                         "seam_pairs": seam_inner(result, case["image"], case["mask"], smap)[1],
-                         "seam_inner4": seam_inner(result, case["image"], case["mask"], smap,
-                                                   4)[0],
-                         "hole_fraction": float(case["mask"].mean())})
+            rows.append(
+                {
+                    "case": case["name"],
+                    "class": case["class"],
+                    "method": name,
+                    "psnr": psnr,
+                    "ssim": ssim,
+                    "edge_energy": energy,
+                    "seconds": seconds,
+                    "seam_edge": edge,
+                    "seam_ring": ring,
+                    "seam_inner": seam_inner(result, case["image"], case["mask"], smap)[0],
+                    "seam_pairs": seam_inner(result, case["image"], case["mask"], smap)[1],
+                    "seam_inner4": seam_inner(result, case["image"], case["mask"], smap, 4)[0],
+                    "hole_fraction": float(case["mask"].mean()),
+                }
+            )
             far8, far16, share = far_seams(result, case["image"], case["mask"], smap)
             rows[-1].update(seam_far=far8, seam_far16=far16, far_fraction=share)
-            print(f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
-                  f"SSIM {ssim:.3f} energy {energy:.2f} seam {edge:.2f}/{ring:.2f} "
-                  f"{seconds:7.3f} s", file=sys.stderr, flush=True)
+            print(
+                f"{case['class']:9s} {case['name']:14s} {name:24s} PSNR {psnr:6.2f} "
+                f"SSIM {ssim:.3f} energy {energy:.2f} seam {edge:.2f}/{ring:.2f} "
+                f"{seconds:7.3f} s",
+                file=sys.stderr,
+                flush=True,
+            )
         if case["class"] == "thick":
             for name, filled in seam_controls(case["image"], case["mask"]).items():
                 edge, ring = seam_scores(filled, case["image"], case["mask"])
@@ -528,22 +558,39 @@ def main(argv=None):
                     assert abs(edge - 1) < 1e-9 and abs(ring - 1) < 1e-9, (edge, ring)
                 else:
                     assert edge > 1.2 and ring > 1.2, (case["name"], name, edge, ring)
-                rows.append({"case": case["name"], "class": "thick", "method": name,
-                             "seam_edge": edge, "seam_ring": ring, "seam_inner": None})
+                rows.append(
+                    {
+                        "case": case["name"],
+                        "class": "thick",
+                        "method": name,
+                        "seam_edge": edge,
+                        "seam_ring": ring,
+                        "seam_inner": None,
+                    }
+                )
             if args.seams and exemplar_smap is not None:
                 paste = source_paste(case["image"], case["mask"], exemplar_smap)
                 inner, _ = seam_inner(paste, case["image"], case["mask"], exemplar_smap)
                 # weaker than the hard pastes above: many seams join near-alike patches
                 assert inner is not None and inner > 1.05, (case["name"], inner)
                 edge, ring = seam_scores(paste, case["image"], case["mask"])
-                far8, far16, share = far_seams(paste, case["image"], case["mask"],
-                                               exemplar_smap)
-                rows.append({"case": case["name"], "class": "thick",
-                             "method": "control: source paste", "seam_edge": edge,
-                             "seam_ring": ring, "seam_inner": inner,
-                             "seam_inner4": seam_inner(paste, case["image"], case["mask"],
-                                                       exemplar_smap, 4)[0],
-                             "seam_far": far8, "seam_far16": far16, "far_fraction": share})
+                far8, far16, share = far_seams(paste, case["image"], case["mask"], exemplar_smap)
+                rows.append(
+                    {
+                        "case": case["name"],
+                        "class": "thick",
+                        "method": "control: source paste",
+                        "seam_edge": edge,
+                        "seam_ring": ring,
+                        "seam_inner": inner,
+                        "seam_inner4": seam_inner(
+                            paste, case["image"], case["mask"], exemplar_smap, 4
+                        )[0],
+                        "seam_far": far8,
+                        "seam_far16": far16,
+                        "far_fraction": share,
+                    }
+                )
             if args.seams:
                 paste, smap = two_region_paste(case["image"], case["mask"])
                 far8, far16, share = far_seams(paste, case["image"], case["mask"], smap)
@@ -553,10 +600,19 @@ def main(argv=None):
                 # does on the mean of the cases only: main's check after the loop)
                 assert far16 is None or far16 > 1.2, (case["name"], far16)
                 edge, ring = seam_scores(paste, case["image"], case["mask"])
-                rows.append({"case": case["name"], "class": "thick",
-                             "method": "control: two-region paste", "seam_edge": edge,
-                             "seam_ring": ring, "seam_inner": None, "seam_far": far8,
-                             "seam_far16": far16, "far_fraction": share})
+                rows.append(
+                    {
+                        "case": case["name"],
+                        "class": "thick",
+                        "method": "control: two-region paste",
+                        "seam_edge": edge,
+                        "seam_ring": ring,
+                        "seam_inner": None,
+                        "seam_far": far8,
+                        "seam_far16": far16,
+                        "far_fraction": share,
+                    }
+                )
     if args.seams:
         pastes = [r["seam_far"] for r in rows if r["method"] == "control: two-region paste"]
         assert not pastes or np.mean(pastes) > 1.2, pastes
@@ -579,17 +635,27 @@ def seam_table(rows):
     def fmt(v, pct=False):
         return "-" if v is None else (f"{100 * v:.1f}%" if pct else f"{v:.2f}")
 
-    for keys, means in ((("seam_edge", "seam_ring", "seam_inner"),
-                         ("seam_edge", "seam_ring", "seam_inner", "seam_inner4")),
-                        (("seam_far", "seam_far16", "far_fraction"),
-                         ("seam_far", "seam_far16", "far_fraction"))):
-        print("\n| method | " + " | ".join(cases) + " | "
-              + " | ".join("mean " + k.replace("seam_", "") for k in means) + " |")
+    for keys, means in (
+        (
+            ("seam_edge", "seam_ring", "seam_inner"),
+            ("seam_edge", "seam_ring", "seam_inner", "seam_inner4"),
+        ),
+        (("seam_far", "seam_far16", "far_fraction"), ("seam_far", "seam_far16", "far_fraction")),
+    ):
+        print(
+            "\n| method | "
+            + " | ".join(cases)
+            + " | "
+            + " | ".join("mean " + k.replace("seam_", "") for k in means)
+            + " |"
+        )
         print("|---|" + "---|" * (len(cases) + len(means)))
         for name in names:
             rs = {r["case"]: r for r in thick if r["method"] == name}
-            cells = [" / ".join(fmt(rs[c].get(k), k == "far_fraction") for k in keys)
-                     if c in rs else "" for c in cases]
+            cells = [
+                " / ".join(fmt(rs[c].get(k), k == "far_fraction") for k in keys) if c in rs else ""
+                for c in cases
+            ]
             ms = []
             for k in means:
                 vs = [r[k] for r in rs.values() if r.get(k) is not None]
@@ -598,21 +664,26 @@ def seam_table(rows):
 
 
 def mean_table(rows, ms):
-    print("| class | method | cases | PSNR (dB) | SSIM | edge energy | seam edge | seam ring | "
-          "time (s) |")
+    print(
+        "| class | method | cases | PSNR (dB) | SSIM | edge energy | seam edge | seam ring | "
+        "time (s) |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     for cls in ("texture", "periodic", "thick"):
         for name in ms:
             rs = [r for r in rows if r["class"] == cls and r["method"] == name]
             if not rs:
                 continue
+
             # PSNR capped at 60 dB in the means: an exact fill is infinite.
             def mean(k, rs=rs):
                 return float(np.mean([min(r[k], 60.0) for r in rs]))
 
-            print(f"| {cls} | {name} | {len(rs)} | {mean('psnr'):.2f} | {mean('ssim'):.3f} | "
-                  f"{mean('edge_energy'):.2f} | {mean('seam_edge'):.2f} | "
-                  f"{mean('seam_ring'):.2f} | {mean('seconds'):.3f} |")
+            print(
+                f"| {cls} | {name} | {len(rs)} | {mean('psnr'):.2f} | {mean('ssim'):.3f} | "
+                f"{mean('edge_energy'):.2f} | {mean('seam_edge'):.2f} | "
+                f"{mean('seam_ring'):.2f} | {mean('seconds'):.3f} |"
+            )
 
 
 if __name__ == "__main__":

@@ -30,12 +30,16 @@ SUPERSET = ("biharmonic", "coherence", "transport", "navier-stokes", "exemplar",
 RINGS = (1, 2, 4)
 # the candidate sets tried: the cheap structure pair, then the texture and frequency models
 # added to it, then each of the slower PDE methods on top
-SETS = (("biharmonic", "coherence"), ("biharmonic", "coherence", "exemplar"),
-        ("biharmonic", "coherence", "spectral"),
-        ("biharmonic", "coherence", "exemplar", "spectral"),
-        ("biharmonic", "coherence", "transport", "exemplar", "spectral"),
-        ("biharmonic", "coherence", "navier-stokes", "exemplar", "spectral"),
-        ("biharmonic", "spectral"), ("biharmonic", "exemplar", "spectral"))
+SETS = (
+    ("biharmonic", "coherence"),
+    ("biharmonic", "coherence", "exemplar"),
+    ("biharmonic", "coherence", "spectral"),
+    ("biharmonic", "coherence", "exemplar", "spectral"),
+    ("biharmonic", "coherence", "transport", "exemplar", "spectral"),
+    ("biharmonic", "coherence", "navier-stokes", "exemplar", "spectral"),
+    ("biharmonic", "spectral"),
+    ("biharmonic", "exemplar", "spectral"),
+)
 RESULTS = Path(__file__).resolve().parent / "results" / "inpaint_validate_calibrate.json"
 
 
@@ -47,8 +51,12 @@ def main(argv=None):
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--every", type=int, default=1,
-                        help="every Nth case of the calibration half (a shorter run)")
+    parser.add_argument(
+        "--every",
+        type=int,
+        default=1,
+        help="every Nth case of the calibration half (a shorter run)",
+    )
     parser.add_argument("--json", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
     runtime = get_runtime()
@@ -57,8 +65,11 @@ def main(argv=None):
     original = validate._fill
 
     def memo(name, data, omega, runtime, dtype, seed, params):
-        key = (name, hashlib.sha1(np.packbits(omega).tobytes()).hexdigest(),
-               hashlib.sha1(data.tobytes()).hexdigest())
+        key = (
+            name,
+            hashlib.sha1(np.packbits(omega).tobytes()).hexdigest(),
+            hashlib.sha1(data.tobytes()).hexdigest(),
+        )
         if key not in cache:
             start = time.perf_counter()
             cache[key] = original(name, data, omega, runtime, dtype, seed, params)
@@ -66,9 +77,14 @@ def main(argv=None):
         return cache[key]
 
     validate._fill = memo
-    cases = [c for c in corpus.build(args.quick) if c.half == "calibration"][::args.every]
-    configs = [(subset, ring, blend) for subset in SETS if set(subset) <= set(names)
-               for ring in RINGS for blend in (True, False)]
+    cases = [c for c in corpus.build(args.quick) if c.half == "calibration"][:: args.every]
+    configs = [
+        (subset, ring, blend)
+        for subset in SETS
+        if set(subset) <= set(names)
+        for ring in RINGS
+        for blend in (True, False)
+    ]
     scores = {cfg: {} for cfg in configs}
     times = {cfg: 0.0 for cfg in configs}
     for i, case in enumerate(cases):
@@ -88,15 +104,15 @@ def main(argv=None):
                 return _orig(name, d, o, *a)
 
             validate._fill = tracking
-            filled, _ = validate.choose(data, case.mask, runtime, names=subset, ring=ring,
-                                        blend=blend, seed=0)
+            filled, _ = validate.choose(
+                data, case.mask, runtime, names=subset, ring=ring, blend=blend, seed=0
+            )
             validate._fill = orig_memo
             out = case.damaged().copy()
             job._write(out, (0, case.mask.shape[0], 0, case.mask.shape[1]), filled, case.mask)
             scores[cfg][case.name] = (case.damage, corpus.psnr(case, out))
             times[cfg] += sum(v for k, v in seconds.items() if k[:2] in set(used))
-        print(f"[{i + 1}/{len(cases)}] {case.name} {time.perf_counter() - start:.1f} s",
-              flush=True)
+        print(f"[{i + 1}/{len(cases)}] {case.name} {time.perf_counter() - start:.1f} s", flush=True)
     validate._fill = original
     table = []
     for cfg in configs:
@@ -104,18 +120,29 @@ def main(argv=None):
         for damage, p in scores[cfg].values():
             by_class.setdefault(damage, []).append(p)
         means = {d: float(np.mean(v)) for d, v in by_class.items()}
-        table.append({"candidates": list(cfg[0]), "ring": cfg[1], "blend": cfg[2],
-                      "score": float(np.mean(list(means.values()))), "classes": means,
-                      "seconds": times[cfg]})
+        table.append(
+            {
+                "candidates": list(cfg[0]),
+                "ring": cfg[1],
+                "blend": cfg[2],
+                "score": float(np.mean(list(means.values()))),
+                "classes": means,
+                "seconds": times[cfg],
+            }
+        )
     table.sort(key=lambda r: -r["score"])
     classes = [d for d in corpus.CLASSES if d in table[0]["classes"]]
-    print(f"\n{'candidates':52s} {'ring':>4s} {'blend':>5s} {'mean':>6s} {'s':>6s} "
-          + " ".join(f"{d[:7]:>7s}" for d in classes))
+    print(
+        f"\n{'candidates':52s} {'ring':>4s} {'blend':>5s} {'mean':>6s} {'s':>6s} "
+        + " ".join(f"{d[:7]:>7s}" for d in classes)
+    )
 
     def line(r):
-        return (f"{'+'.join(r['candidates']):52s} {r['ring']:4d} {str(r['blend']):>5s} "
-                f"{r['score']:6.2f} {r['seconds']:6.1f} "
-                + " ".join(f"{r['classes'][d]:7.2f}" for d in classes))
+        return (
+            f"{'+'.join(r['candidates']):52s} {r['ring']:4d} {str(r['blend']):>5s} "
+            f"{r['score']:6.2f} {r['seconds']:6.1f} "
+            + " ".join(f"{r['classes'][d]:7.2f}" for d in classes)
+        )
 
     for r in table[:15]:
         print(line(r))

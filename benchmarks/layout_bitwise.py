@@ -43,12 +43,19 @@ def _inpainting(res: dict) -> None:
     img = dam[100:196, 150:246].astype(np.float32) / 255
     m = mask[100:196, 150:246].copy()
     for method in ("exemplar", "structure-texture", "coherence", "navier-stokes"):
-        res[f"inpaint_{method}"] = clpde.inpaint(img, m, channel_axis=-1, method=method,
-                                                 seed=0, progress=False)
+        res[f"inpaint_{method}"] = clpde.inpaint(
+            img, m, channel_axis=-1, method=method, seed=0, progress=False
+        )
     res["inpaint_default"] = clpde.inpaint(img, m, channel_axis=-1, progress=False)
     res["inpaint_transport_colour"] = clpde.inpaint(
-        img, m, channel_axis=-1, method="transport", colour="rho-phi-psi", max_steps=40,
-        progress=False)
+        img,
+        m,
+        channel_axis=-1,
+        method="transport",
+        colour="rho-phi-psi",
+        max_steps=40,
+        progress=False,
+    )
     grey = img.mean(axis=-1).astype(np.float64)
     res["inpaint_uint16"] = clpde.inpaint((grey * 65535).astype(np.uint16), m, progress=False)
 
@@ -74,8 +81,14 @@ def _tracking(res: dict) -> None:
     for storage in ("lists", "bricks8x8", "bricks16x4"):
         masks = clpde.track(frames, first, progress=False, **{keyword: storage})
         res[f"track_{storage}"] = np.asarray(masks)
-    masks, level_sets = clpde.track(frames, first, progress=False, return_level_sets=True,
-                                    features="contrast", discrepancy="huber")
+    masks, level_sets = clpde.track(
+        frames,
+        first,
+        progress=False,
+        return_level_sets=True,
+        features="contrast",
+        discrepancy="huber",
+    )
     res["track_contrast_huber"], res["track_contrast_huber_phi"] = masks, level_sets
 
 
@@ -86,9 +99,18 @@ def _regions(res: dict) -> None:
     ax = (np.arange(n) - (n - 1) / 2) * h
     z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
     phi = (np.sqrt(x**2 + y**2 + z**2) - 0.7).astype(np.float32)
-    frames = clpde.track_region(phi, [(0.4 - z).astype(np.float32)], spacing=h, beta=0.5,
-                                t=0.2, saves=1, origin=(ax[0],) * 3, progress=False,
-                                keep_volumes=True, storage="bricks")
+    frames = clpde.track_region(
+        phi,
+        [(0.4 - z).astype(np.float32)],
+        spacing=h,
+        beta=0.5,
+        t=0.2,
+        saves=1,
+        origin=(ax[0],) * 3,
+        progress=False,
+        keep_volumes=True,
+        storage="bricks",
+    )
     for k, f in enumerate(frames):
         res[f"regions_bricks_{k}_phi"] = f.phi
         res[f"regions_bricks_{k}_labels"] = f.face_labels
@@ -109,8 +131,7 @@ def _film(res: dict, out: Path) -> None:
         for frame in filled:
             w.write(frame)
     res["film_frames_sha256"] = np.frombuffer(bytes.fromhex(w.frames_sha256), np.uint8)
-    res["film_file_sha256"] = np.frombuffer(hashlib.sha256(path.read_bytes()).digest(),
-                                            np.uint8)
+    res["film_file_sha256"] = np.frombuffer(hashlib.sha256(path.read_bytes()).digest(), np.uint8)
 
 
 def _tracking_video(res: dict, out: Path) -> None:

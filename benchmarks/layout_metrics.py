@@ -49,7 +49,8 @@ def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
 def _type_checking(node: ast.AST) -> bool:
     test = getattr(node, "test", None) if isinstance(node, ast.If) else None
     return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
-        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
 
 
 def _walk(node: ast.AST, in_function: bool = False, prefix: str = "", typing: bool = False):
@@ -153,8 +154,12 @@ def code_lines(node: ast.AST, lines: list[str]) -> int:
     """Lines of code of a function: not blank, not comment-only, not its docstring."""
     skip = set()
     body = getattr(node, "body", [])
-    if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
-            and isinstance(body[0].value.value, str):
+    if (
+        body
+        and isinstance(body[0], ast.Expr)
+        and isinstance(body[0].value, ast.Constant)
+        and isinstance(body[0].value.value, str)
+    ):
         skip = set(range(body[0].lineno, body[0].end_lineno + 1))
     start = min([node.lineno] + [d.lineno for d in getattr(node, "decorator_list", [])])
     count = 0
@@ -186,8 +191,11 @@ def shims(root: Path) -> list[str]:
     for name, path in modules(root).items():
         for number, line in enumerate(path.read_text().splitlines(), 1):
             code = line.split("#", 1)[0]
-            if "DeprecationWarning" in code and "simplefilter" not in code \
-                    and "filterwarnings" not in code:
+            if (
+                "DeprecationWarning" in code
+                and "simplefilter" not in code
+                and "filterwarnings" not in code
+            ):
                 out.append(f"{name}:{number}: DeprecationWarning")
             elif "@deprecated(" in code or "renamed_keyword(" in code and "def " not in code:
                 out.append(f"{name}:{number}: {code.strip()[:60]}")
@@ -198,19 +206,27 @@ def measure(root: Path) -> dict:
     mods = modules(root)
     edges = imports(root)
     top = sorted(
-        m for m, p in mods.items()
+        m
+        for m, p in mods.items()
         if m.count(".") == 1 and p.name not in ("__init__.py", "__main__.py")
     )
     long_modules = sorted(
-        ((m, len(p.read_text().splitlines())) for m, p in mods.items()
-         if len(p.read_text().splitlines()) > MAX_MODULE_LINES),
+        (
+            (m, len(p.read_text().splitlines()))
+            for m, p in mods.items()
+            if len(p.read_text().splitlines()) > MAX_MODULE_LINES
+        ),
         key=lambda item: -item[1],
     )
-    cli_importers = sorted({
-        m for m, es in edges.items() for t, _, _ in es
-        if (t == "clpde.cli" or t.startswith("clpde.cli."))
-        and not (m == "clpde.cli" or m.startswith("clpde.cli.") or m == "clpde.__main__")
-    })
+    cli_importers = sorted(
+        {
+            m
+            for m, es in edges.items()
+            for t, _, _ in es
+            if (t == "clpde.cli" or t.startswith("clpde.cli."))
+            and not (m == "clpde.cli" or m.startswith("clpde.cli.") or m == "clpde.__main__")
+        }
+    )
     inner = [(m, t, line) for m, es in edges.items() for t, f, line in es if f]
     typing = [f"{m} -> {t}" for m, es in imports(root, typing=True).items() for t, _, _ in es]
     return {
@@ -234,21 +250,29 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     result = measure(args.root)
     print(f"modules: {result['modules']}")
-    print(f"top-level modules ({len(result['top_level_modules'])}, target <= {MAX_TOP_LEVEL}): "
-          + ", ".join(m.split(".", 1)[1] for m in result["top_level_modules"]))
+    print(
+        f"top-level modules ({len(result['top_level_modules'])}, target <= {MAX_TOP_LEVEL}): "
+        + ", ".join(m.split(".", 1)[1] for m in result["top_level_modules"])
+    )
     print(f"import cycles (strongly connected components): {len(result['cycles'])}")
     for component in result["cycles"]:
         print("   ", " <-> ".join(component))
-    print(f"library modules importing clpde.cli: {len(result['library_modules_importing_cli'])} "
-          + ", ".join(result["library_modules_importing_cli"]))
+    print(
+        f"library modules importing clpde.cli: {len(result['library_modules_importing_cli'])} "
+        + ", ".join(result["library_modules_importing_cli"])
+    )
     print(f"function-level imports of clpde modules: {result['function_level_clpde_imports']}")
-    print(f"imports for annotations only (under TYPE_CHECKING, not counted above): "
-          f"{len(result['type_checking_imports'])} " + ", ".join(result["type_checking_imports"]))
+    print(
+        f"imports for annotations only (under TYPE_CHECKING, not counted above): "
+        f"{len(result['type_checking_imports'])} " + ", ".join(result["type_checking_imports"])
+    )
     print(f"modules over {MAX_MODULE_LINES} lines: {len(result['modules_over_600_lines'])}")
     for m, n in result["modules_over_600_lines"]:
         print(f"    {m}: {n}")
-    print(f"functions over {MAX_FUNCTION_LINES} code lines: "
-          f"{len(result['functions_over_100_code_lines'])}")
+    print(
+        f"functions over {MAX_FUNCTION_LINES} code lines: "
+        f"{len(result['functions_over_100_code_lines'])}"
+    )
     for m, n in result["functions_over_100_code_lines"]:
         print(f"    {m}: {n}")
     print(f"deprecation shims: {len(result['deprecation_shims'])}")

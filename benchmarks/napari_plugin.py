@@ -30,8 +30,9 @@ def wait(widget, app):
 
 
 def tick_rate(viewer, app, seconds=6.0):
-    layer = viewer.add_image(np.random.default_rng(0).random((512, 512)).astype(np.float32),
-                             name="noise")
+    layer = viewer.add_image(
+        np.random.default_rng(0).random((512, 512)).astype(np.float32), name="noise"
+    )
     w = widgets.DenoiseWidget(viewer)
     w.image.value, w.flow.value, w.steps.value = layer, "heat", 10_000_000
     ticks = []
@@ -47,8 +48,12 @@ def tick_rate(viewer, app, seconds=6.0):
     w.cancel()
     wait(w, app)
     gaps = np.diff(ticks)
-    return {"seconds": seconds, "ticks": len(ticks), "ticks_per_s": len(ticks) / seconds,
-            "longest_gap_ms": 1000 * float(gaps.max()) if len(gaps) else None}
+    return {
+        "seconds": seconds,
+        "ticks": len(ticks),
+        "ticks_per_s": len(ticks) / seconds,
+        "longest_gap_ms": 1000 * float(gaps.max()) if len(gaps) else None,
+    }
 
 
 def astronaut(viewer, app, repeats=5):
@@ -69,8 +74,12 @@ def astronaut(viewer, app, repeats=5):
         if k:  # the first run builds the programs
             times.append(elapsed)
             library.append(lib)
-    return {"widget_s_median": float(np.median(times)), "widget_s_min": float(min(times)),
-            "library_s_median": float(np.median(library)), "repeats": repeats}
+    return {
+        "widget_s_median": float(np.median(times)),
+        "widget_s_min": float(min(times)),
+        "library_s_median": float(np.median(library)),
+        "repeats": repeats,
+    }
 
 
 def main():
@@ -81,15 +90,20 @@ def main():
     speed = astronaut(viewer, app)
     viewer.close()
     print(f"device: {device}")
-    print(f"event loop during a run: {ticks['ticks_per_s']:.1f} ticks/s "
-          f"(longest gap {ticks['longest_gap_ms']:.0f} ms; target >= 10/s)")
-    print(f"astronaut mask -> result through the widget: {speed['widget_s_median']:.3f} s "
-          f"median (min {speed['widget_s_min']:.3f}); the library call alone "
-          f"{speed['library_s_median']:.3f} s (target < 1 s)")
+    print(
+        f"event loop during a run: {ticks['ticks_per_s']:.1f} ticks/s "
+        f"(longest gap {ticks['longest_gap_ms']:.0f} ms; target >= 10/s)"
+    )
+    print(
+        f"astronaut mask -> result through the widget: {speed['widget_s_median']:.3f} s "
+        f"median (min {speed['widget_s_min']:.3f}); the library call alone "
+        f"{speed['library_s_median']:.3f} s (target < 1 s)"
+    )
     out = Path(__file__).parent / "results"
     out.mkdir(exist_ok=True)
-    (out / "napari_plugin.json").write_text(json.dumps(
-        {"device": device, "event_loop": ticks, "astronaut": speed}, indent=1))
+    (out / "napari_plugin.json").write_text(
+        json.dumps({"device": device, "event_loop": ticks, "astronaut": speed}, indent=1)
+    )
 
 
 if __name__ == "__main__":

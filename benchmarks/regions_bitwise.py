@@ -25,13 +25,23 @@ def run() -> dict:
     z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
     phi = (np.sqrt(x**2 + y**2 + z**2) - 0.7).astype(np.float32)
     regions = [(0.4 - z).astype(np.float32), x.astype(np.float32) - 0.2]
-    motions = {"beta": dict(beta=0.5, t=0.3),
-               "vel": dict(velocity=np.array([0.3, 0.0, 0.1]), t=0.4),
-               "mc": dict(beta="mean-curvature", t=0.05, weight=0.5)}
+    motions = {
+        "beta": dict(beta=0.5, t=0.3),
+        "vel": dict(velocity=np.array([0.3, 0.0, 0.1]), t=0.4),
+        "mc": dict(beta="mean-curvature", t=0.05, weight=0.5),
+    }
     res = {}
     for tag, kw in motions.items():
-        frames = clpde.track_region(phi, regions, spacing=h, saves=2, origin=(ax[0],) * 3,
-                                    progress=False, keep_volumes=True, **kw)
+        frames = clpde.track_region(
+            phi,
+            regions,
+            spacing=h,
+            saves=2,
+            origin=(ax[0],) * 3,
+            progress=False,
+            keep_volumes=True,
+            **kw,
+        )
         for k, f in enumerate(frames):
             res[f"{tag}_{k}_phi"] = f.phi
             res[f"{tag}_{k}_phihat"] = f.phihat

@@ -72,8 +72,9 @@ def memory(device, calls: int) -> dict:
     work = {
         "diffuse": lambda: clpde.diffuse(small, "heat", steps=10, device=device),
         "denoise_tv": lambda: clpde.denoise_tv(small, 0.1, max_steps=20, device=device),
-        "inpaint": lambda: clpde.inpaint(hole_image, mask, max_steps=20, fill="mean",
-                                         device=device),
+        "inpaint": lambda: clpde.inpaint(
+            hole_image, mask, max_steps=20, fill="mean", device=device
+        ),
         "PlanarFlow": lambda: clpde.PlanarFlow(small, "tv", device=device).run(10).result(),
     }
     out = {}
@@ -108,8 +109,11 @@ def overhead(device, calls: int) -> dict:
         t0 = time.perf_counter()
         clpde.diffuse(image, "heat", steps=10, device=device)
         times.append(time.perf_counter() - t0)
-    return {"calls": calls, "median_ms": round(1e3 * statistics.median(times), 4),
-            "min_ms": round(1e3 * min(times), 4)}
+    return {
+        "calls": calls,
+        "median_ms": round(1e3 * statistics.median(times), 4),
+        "min_ms": round(1e3 * min(times), 4),
+    }
 
 
 def main(argv=None) -> None:
@@ -124,21 +128,31 @@ def main(argv=None) -> None:
     runtime = clpde.get_runtime(args.device)
     if args.mode == "overhead":
         result = overhead(args.device, args.calls or 2000)
-        print(f"diffuse 64x64, 10 steps: median {result['median_ms']} ms per call "
-              f"(min {result['min_ms']}) over {result['calls']} calls  [{clpde.__file__}]")
+        print(
+            f"diffuse 64x64, 10 steps: median {result['median_ms']} ms per call "
+            f"(min {result['min_ms']}) over {result['calls']} calls  [{clpde.__file__}]"
+        )
         return
     calls = args.calls or 1000
-    report = {"device": repr(runtime), "load_average": os.getloadavg(),
-              "threads": threads(args.device), "memory": memory(args.device, calls),
-              "overhead": overhead(args.device, 2000)}
+    report = {
+        "device": repr(runtime),
+        "load_average": os.getloadavg(),
+        "threads": threads(args.device),
+        "memory": memory(args.device, calls),
+        "overhead": overhead(args.device, 2000),
+    }
     t = report["threads"]
     print(f"device: {report['device']}; load average {report['load_average']}")
     print(f"threads: {t['differ']} of {t['results']} threaded heat results differ from serial")
-    print(f"memory over {calls} calls: {'call':<12} {'RSS growth':>11} {'objects left':>13} "
-          f"{'ms/call':>8}")
+    print(
+        f"memory over {calls} calls: {'call':<12} {'RSS growth':>11} {'objects left':>13} "
+        f"{'ms/call':>8}"
+    )
     for name, m in report["memory"].items():
-        print(f"{'':>24}{name:<12} {m['rss_growth_mib']:>8.2f} MiB {m['memory_objects_left']:>13} "
-              f"{m['ms_per_call']:>8.3f}")
+        print(
+            f"{'':>24}{name:<12} {m['rss_growth_mib']:>8.2f} MiB {m['memory_objects_left']:>13} "
+            f"{m['ms_per_call']:>8.3f}"
+        )
     o = report["overhead"]
     print(f"overhead: diffuse 64x64, 10 steps: median {o['median_ms']} ms per call")
     path = (

@@ -76,12 +76,26 @@ def convergence(spacings, t=0.1):
                 v = heat(surf, u, t, alternate=alternate)
                 seconds = time.perf_counter() - start
                 err = float(np.abs(surf.sample(v, pts) - exact(pts, t)).max())
-                rows.append({"case": name, "spacing": h, "alternate": alternate, "error": err,
-                                 "seconds": seconds, "step_band": surf.step_band.n,
-                                 "ext_band": surf.ext_band.n, "node_band": surf.node_band.n})
+                rows.append(
+                    {
+                        "case": name,
+                        "spacing": h,
+                        "alternate": alternate,
+                        "error": err,
+                        "seconds": seconds,
+                        "step_band": surf.step_band.n,
+                        "ext_band": surf.ext_band.n,
+                        "node_band": surf.node_band.n,
+                    }
+                )
     for row in rows:
-        prev = [r for r in rows if r["case"] == row["case"] and r["alternate"] == row["alternate"]
-                and r["spacing"] == 2 * row["spacing"]]
+        prev = [
+            r
+            for r in rows
+            if r["case"] == row["case"]
+            and r["alternate"] == row["alternate"]
+            and r["spacing"] == 2 * row["spacing"]
+        ]
         row["order"] = math.log2(prev[0]["error"] / row["error"]) if prev else None
     return rows
 
@@ -102,14 +116,17 @@ def cotangent_laplacian(vertices, faces):
         cols += [j, i]
         vals += [0.5 * cot, 0.5 * cot]
     tri_area = 0.5 * np.linalg.norm(
-        np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]],
-                 vertices[faces[:, 2]] - vertices[faces[:, 0]]),
+        np.cross(
+            vertices[faces[:, 1]] - vertices[faces[:, 0]],
+            vertices[faces[:, 2]] - vertices[faces[:, 0]],
+        ),
         axis=1,
     )
     for k in range(3):
         np.add.at(area, faces[:, k], tri_area / 3)
-    off = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                        shape=(n, n))
+    off = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    )
     stiffness = off - sp.diags(np.asarray(off.sum(axis=1)).ravel())
     return stiffness, area
 
@@ -135,8 +152,16 @@ def icosphere_heat(subdivisions, t=0.1):
             u = u + dt * (op @ u)
         seconds = time.perf_counter() - start
         err = float(np.abs(u - exact(v, t)).max())
-        rows.append({"case": name, "subdivisions": subdivisions, "vertices": len(v), "error": err,
-                         "steps": steps, "seconds": seconds})
+        rows.append(
+            {
+                "case": name,
+                "subdivisions": subdivisions,
+                "vertices": len(v),
+                "error": err,
+                "steps": steps,
+                "seconds": seconds,
+            }
+        )
     return rows
 
 
@@ -161,8 +186,16 @@ def _time_size(n, steps):
     q = surf.runtime.queue
 
     def one_step():
-        g.launch_runs(kernel, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
-                      *_offsets(g, 0), *g.strides())
+        g.launch_runs(
+            kernel,
+            surf.step_runs,
+            flow.cur.data,
+            flow.tmp.data,
+            surf.psi_dev.data,
+            r,
+            *_offsets(g, 0),
+            *g.strides(),
+        )
 
     def run(what, count):
         q.finish()
@@ -183,8 +216,16 @@ def _time_size(n, steps):
     dense_cells = int((dense.end.get() - dense.start.get()).sum())
 
     def one_dense_step():
-        g.launch_runs(kernel, dense, flow.cur.data, flow.tmp.data, surf.psi_dev.data, r,
-                      *_offsets(g, 0), *g.strides())
+        g.launch_runs(
+            kernel,
+            dense,
+            flow.cur.data,
+            flow.tmp.data,
+            surf.psi_dev.data,
+            r,
+            *_offsets(g, 0),
+            *g.strides(),
+        )
 
     run(one_step, 2)
     run(flow.after_step, 2)
@@ -204,6 +245,7 @@ def _time_size(n, steps):
     a = cla.empty(q, nbytes // 4, np.float32)
     a.fill(1.0)
     b = cla.zeros_like(a)
+
     def copy():
         cl.enqueue_copy(q, b.data, a.data)
 
@@ -211,32 +253,46 @@ def _time_size(n, steps):
     t_copy = run(copy, 5)
     copy_bw = 2 * nbytes / t_copy
     return {
-        "grid": list(surf.shape), "step_band": surf.step_band.n, "ext_band": surf.ext_band.n,
-        "node_band": surf.node_band.n, "reach_band": surf.reach_band.n, "runs": surf.step_runs.n,
-        "step_ms": 1e3 * t_step, "extend_ms": 1e3 * t_ext,
+        "grid": list(surf.shape),
+        "step_band": surf.step_band.n,
+        "ext_band": surf.ext_band.n,
+        "node_band": surf.node_band.n,
+        "reach_band": surf.reach_band.n,
+        "runs": surf.step_runs.n,
+        "step_ms": 1e3 * t_step,
+        "extend_ms": 1e3 * t_ext,
         "ns_per_cell": 1e9 * (t_step + t_ext) / surf.ext_band.n,
-        "step_gbs": b_step / t_step / 1e9, "extend_gbs": b_ext / t_ext / 1e9,
-        "band_copy_ms": 1e3 * t_band_copy, "band_copy_gbs": b_step / t_band_copy / 1e9,
-        "dense_step_ms": 1e3 * t_dense, "dense_step_gbs": 12 * dense_cells / t_dense / 1e9,
+        "step_gbs": b_step / t_step / 1e9,
+        "extend_gbs": b_ext / t_ext / 1e9,
+        "band_copy_ms": 1e3 * t_band_copy,
+        "band_copy_gbs": b_step / t_band_copy / 1e9,
+        "dense_step_ms": 1e3 * t_dense,
+        "dense_step_gbs": 12 * dense_cells / t_dense / 1e9,
         "copy_gbs": copy_bw / 1e9,
     }
 
 
 def storage_table(sizes, steps=10, reps=5):
-    print("\n6. band storage: lists over the dense grid against dense bricks (heat step + "
-          "re-extension"
-          f"\n   of the reach band; best of {reps} runs of {steps} steps, all variants "
-          "interleaved)")
-    print(f"{'grid':>9} {'storage':>8} {'ext band':>9} {'stored':>9} {'visited':>9} {'step ms':>8} "
-          f"{'ext ms':>7} "
-          f"{'x copy':>7} {'ns/cell':>8} {'useful GB/s':>11} {'stored GB/s':>11} {'copy GB/s':>9}")
+    print(
+        "\n6. band storage: lists over the dense grid against dense bricks (heat step + "
+        "re-extension"
+        f"\n   of the reach band; best of {reps} runs of {steps} steps, all variants "
+        "interleaved)"
+    )
+    print(
+        f"{'grid':>9} {'storage':>8} {'ext band':>9} {'stored':>9} {'visited':>9} {'step ms':>8} "
+        f"{'ext ms':>7} "
+        f"{'x copy':>7} {'ns/cell':>8} {'useful GB/s':>11} {'stored GB/s':>11} {'copy GB/s':>9}"
+    )
     rows = [row for n in sizes for row in _storage_size(n, steps, reps)]
-    print("   (stored: the padded grid's cells for the lists, the bricks' for bricks; visited: the "
-          "cells the\n"
-          "    step updates, the runs' or the bricks' rows holding a node; x copy: a step's time "
-          "over a device copy\n"
-          "    of the whole padded grid, float32; stored GB/s: the bytes the step and the "
-          "re-extension move)")
+    print(
+        "   (stored: the padded grid's cells for the lists, the bricks' for bricks; visited: the "
+        "cells the\n"
+        "    step updates, the runs' or the bricks' rows holding a node; x copy: a step's time "
+        "over a device copy\n"
+        "    of the whole padded grid, float32; stored GB/s: the bytes the step and the "
+        "re-extension move)"
+    )
     return rows
 
 
@@ -257,27 +313,46 @@ def _storage_size(n, steps, reps):
     k_list = g.kernel("surface/heat.cl", "heat_step", WEIGHTED=0)
 
     def list_step():
-        g.launch_runs(k_list, surf.step_runs, flow.cur.data, flow.tmp.data, surf.psi_dev.data,
-                      r, *_offsets(g, 0), *g.strides())
+        g.launch_runs(
+            k_list,
+            surf.step_runs,
+            flow.cur.data,
+            flow.tmp.data,
+            surf.psi_dev.data,
+            r,
+            *_offsets(g, 0),
+            *g.strides(),
+        )
 
     runs = surf.step_runs
     run_cells = int((runs.end.get()[: runs.n] - runs.start.get()[: runs.n]).sum())
-    variants["lists"] = (list_step, flow.after_step, g.volume, run_cells,
-                         12 * run_cells + 8 * runs.n)
+    variants["lists"] = (
+        list_step,
+        flow.after_step,
+        g.volume,
+        run_cells,
+        12 * run_cells + 8 * runs.n,
+    )
     for brick in BRICK_SIZES:
         surf.band.brick = brick
         bf = BrickFlow(surf, u)
         k_brick = bf.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=0)
 
         def brick_step(bf=bf, k=k_brick):
-            bf.bricks.launch(k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0),
-                             bf.bricks.node_rows.data)
+            bf.bricks.launch(
+                k, bf.cur.data, bf.tmp.data, bf.psi.data, r, *_signs(0), bf.bricks.node_rows.data
+            )
 
         bx, by, bz = brick
         visited = int(bf.bricks.node_rows.get().astype(np.int64).sum()) * bx  # rows with a node
         apron = (bx + 3) * (by + 3) * (bz + 3) / (bx * by * bz)  # the step writes the aprons too
-        variants["x".join(map(str, brick))] = (brick_step, bf.after_step, bf.bricks.stored_cells,
-                                               visited, int(visited * (8 + 4 * apron)))
+        variants["x".join(map(str, brick))] = (
+            brick_step,
+            bf.after_step,
+            bf.bricks.stored_cells,
+            visited,
+            int(visited * (8 + 4 * apron)),
+        )
     a = cla.empty(q, g.volume, np.float32)
     a.fill(1.0)
     b = cla.empty_like(a)
@@ -307,19 +382,30 @@ def _storage_size(n, steps, reps):
     rows = []
     for name, (_, _, stored, visited, step_bytes) in variants.items():
         ts, te = best[name]
-        row = {"grid": n, "storage": name, "ext_band": surf.ext_band.n,
-               "node_band": surf.node_band.n, "reach_band": surf.reach_band.n,
-               "stored_cells": stored, "visited_cells": visited, "step_ms": 1e3 * ts,
-               "extend_ms": 1e3 * te, "copy_ms": 1e3 * t_copy, "x_copy": (ts + te) / t_copy,
-               "ns_per_cell": 1e9 * (ts + te) / surf.ext_band.n,
-               "useful_gbs": useful / (ts + te) / 1e9,
-               "stored_gbs": (step_bytes + 24 * surf.reach_band.n) / (ts + te) / 1e9,
-               "copy_gbs": copy_gbs}
+        row = {
+            "grid": n,
+            "storage": name,
+            "ext_band": surf.ext_band.n,
+            "node_band": surf.node_band.n,
+            "reach_band": surf.reach_band.n,
+            "stored_cells": stored,
+            "visited_cells": visited,
+            "step_ms": 1e3 * ts,
+            "extend_ms": 1e3 * te,
+            "copy_ms": 1e3 * t_copy,
+            "x_copy": (ts + te) / t_copy,
+            "ns_per_cell": 1e9 * (ts + te) / surf.ext_band.n,
+            "useful_gbs": useful / (ts + te) / 1e9,
+            "stored_gbs": (step_bytes + 24 * surf.reach_band.n) / (ts + te) / 1e9,
+            "copy_gbs": copy_gbs,
+        }
         rows.append(row)
-        print(f"{n:>7}^3 {name:>8} {row['ext_band']:9d} {stored:9d} {visited:9d} "
-              f"{row['step_ms']:8.2f} "
-              f"{row['extend_ms']:7.2f} {row['x_copy']:7.2f} {row['ns_per_cell']:8.2f} "
-              f"{row['useful_gbs']:11.2f} {row['stored_gbs']:11.2f} {copy_gbs:9.2f}")
+        print(
+            f"{n:>7}^3 {name:>8} {row['ext_band']:9d} {stored:9d} {visited:9d} "
+            f"{row['step_ms']:8.2f} "
+            f"{row['extend_ms']:7.2f} {row['x_copy']:7.2f} {row['ns_per_cell']:8.2f} "
+            f"{row['useful_gbs']:11.2f} {row['stored_gbs']:11.2f} {copy_gbs:9.2f}"
+        )
     return rows
 
 
@@ -327,8 +413,10 @@ def storage_accuracy(spacings, t=0.1):
     from clpde.surface import ImplicitSurface
 
     pts = sphere_points(2000)
-    print("\n6b. heat flow on the unit sphere to t = 0.1 in both storages (max error through "
-          "surf.sample)")
+    print(
+        "\n6b. heat flow on the unit sphere to t = 0.1 in both storages (max error through "
+        "surf.sample)"
+    )
     print(f"{'case':6} {'h':>6} {'lists':>10} {'bricks':>10} {'ratio':>6} {'order':>6}")
     rows = []
     for h in spacings:
@@ -338,15 +426,25 @@ def storage_accuracy(spacings, t=0.1):
             err = {}
             for storage in ("lists", "bricks"):
                 surf.storage = storage
-                err[storage] = float(np.abs(surf.sample(surf.heat(u, t), pts) - exact(pts,
-                                                                                      t)).max())
+                err[storage] = float(
+                    np.abs(surf.sample(surf.heat(u, t), pts) - exact(pts, t)).max()
+                )
             prev = [r for r in rows if r["case"] == name and r["spacing"] == 2 * h]
             order = math.log2(prev[0]["bricks"] / err["bricks"]) if prev else None
-            rows.append({"case": name, "spacing": h, **err, "ratio": err["bricks"] / err["lists"],
-                         "order": order})
+            rows.append(
+                {
+                    "case": name,
+                    "spacing": h,
+                    **err,
+                    "ratio": err["bricks"] / err["lists"],
+                    "order": order,
+                }
+            )
             o = f"{order:.2f}" if order is not None else "-"
-            print(f"{name:6} {h:6.3f} {err['lists']:10.3e} {err['bricks']:10.3e} "
-                  f"{err['bricks'] / err['lists']:6.3f} {o:>6}")
+            print(
+                f"{name:6} {h:6.3f} {err['lists']:10.3e} {err['bricks']:10.3e} "
+                f"{err['bricks'] / err['lists']:6.3f} {o:>6}"
+            )
     return rows
 
 
@@ -389,20 +487,30 @@ def turk_wavelength(iterations=12000, radius_cells=25):
     power = degree_power(surf.sample(ab[0], pts), pts)
     l_star = int(np.argmax(power[1:]) + 1)
     measured = 2 * np.pi * radius_cells / np.sqrt(l_star * (l_star + 1))
-    return {"iterations": iterations, "radius_cells": radius_cells, "dominant_degree": l_star,
-                "measured_wavelength_cells": float(measured),
-                "predicted_wavelength_cells": flows.turk_linear_wavelength(),
-                "power": power.tolist(), "seconds": seconds, "band": surf.ext_band.n}
+    return {
+        "iterations": iterations,
+        "radius_cells": radius_cells,
+        "dominant_degree": l_star,
+        "measured_wavelength_cells": float(measured),
+        "predicted_wavelength_cells": flows.turk_linear_wavelength(),
+        "power": power.tolist(),
+        "seconds": seconds,
+        "band": surf.ext_band.n,
+    }
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--quick", action="store_true", help="coarse grids only (a smoke test)")
-    parser.add_argument("--sections", default="123456",
-                        help="which sections to run (default: 123456)")
-    parser.add_argument("--storage-sizes", default="64,128,217,256",
-                        help="grid sizes of section 6 (add 512 where memory allows)")
+    parser.add_argument(
+        "--sections", default="123456", help="which sections to run (default: 123456)"
+    )
+    parser.add_argument(
+        "--storage-sizes",
+        default="64,128,217,256",
+        help="grid sizes of section 6 (add 512 where memory allows)",
+    )
     args = parser.parse_args(argv)
     import clpde
 
@@ -418,11 +526,13 @@ def main(argv=None):
     if "4" in args.sections:
         rd = turk_wavelength(3000 if args.quick else 12000)
         results["turk"] = rd
-        print(f"\n4. Turk reaction-diffusion on a sphere of radius {rd['radius_cells']} cells, "
-              f"{rd['iterations']} iterations ({rd['seconds']:.0f} s, band {rd['band']} cells): "
-              f"dominant degree {rd['dominant_degree']}, wavelength "
-              f"{rd['measured_wavelength_cells']:.1f} "
-              f"cells; linear stability predicts {rd['predicted_wavelength_cells']:.1f} cells")
+        print(
+            f"\n4. Turk reaction-diffusion on a sphere of radius {rd['radius_cells']} cells, "
+            f"{rd['iterations']} iterations ({rd['seconds']:.0f} s, band {rd['band']} cells): "
+            f"dominant degree {rd['dominant_degree']}, wavelength "
+            f"{rd['measured_wavelength_cells']:.1f} "
+            f"cells; linear stability predicts {rd['predicted_wavelength_cells']:.1f} cells"
+        )
     if "5" in args.sections:
         results["mesh_sdf"] = mesh_sdf_table([64, 128] if args.quick else [64, 128, 256])
         results["mesh_sdf_holed"] = holed_mesh_table([64, 128])
@@ -443,15 +553,21 @@ def mesh_sdf_table(resolutions, sample=1500):
 
     from clpde.surface import ImplicitSurface
 
-    print("\n5. mesh -> signed distance: clpde from_mesh against trimesh.proximity.signed_distance"
-          f"\n   (trimesh timed on {sample} band cells, extrapolated to the band)")
-    meshes = {"torus 1/0.4": trimesh.creation.torus(1.0, 0.4, major_sections=96, minor_sections=48),
-              "icosphere 5": trimesh.creation.icosphere(subdivisions=5)}
+    print(
+        "\n5. mesh -> signed distance: clpde from_mesh against trimesh.proximity.signed_distance"
+        f"\n   (trimesh timed on {sample} band cells, extrapolated to the band)"
+    )
+    meshes = {
+        "torus 1/0.4": trimesh.creation.torus(1.0, 0.4, major_sections=96, minor_sections=48),
+        "icosphere 5": trimesh.creation.icosphere(subdivisions=5),
+    }
     rng = np.random.default_rng(0)
     rows = []
-    print(f"{'mesh':12} {'faces':>6} {'grid':>12} {'band':>8} {'clpde s':>8} {'ns/cell':>8} "
-          f"{'trimesh s (est.)':>16} {'ratio':>7} {'max |d| err':>11} {'sign diff':>9} "
-          f"{'flip-proof':>10}")
+    print(
+        f"{'mesh':12} {'faces':>6} {'grid':>12} {'band':>8} {'clpde s':>8} {'ns/cell':>8} "
+        f"{'trimesh s (est.)':>16} {'ratio':>7} {'max |d| err':>11} {'sign diff':>9} "
+        f"{'flip-proof':>10}"
+    )
     for name, mesh in meshes.items():
         flipped = mesh.copy()
         flipped.faces[::2] = flipped.faces[::2, ::-1]  # half the faces turned inside out
@@ -471,18 +587,31 @@ def mesh_sdf_table(resolutions, sample=1500):
             sign_diff = int(np.sum((ours < 0) != (theirs > 0)))
             again = ImplicitSurface.from_mesh(flipped, resolution=res)
             flip_proof = bool(np.array_equal(np.sign(again.psi), np.sign(surf.psi)))
-            row = {"mesh": name, "faces": len(mesh.faces), "grid": list(surf.shape),
-                   "band": len(band), "seconds": seconds, "ns_per_cell": 1e9 * seconds / len(band),
-                   "trimesh_seconds_estimate": t_theirs, "ratio": t_theirs / seconds,
-                   "max_abs_distance_error_cells": err, "sign_disagreements": sign_diff,
-                   "sample": len(pick), "flipped_faces_same_sign": flip_proof}
+            row = {
+                "mesh": name,
+                "faces": len(mesh.faces),
+                "grid": list(surf.shape),
+                "band": len(band),
+                "seconds": seconds,
+                "ns_per_cell": 1e9 * seconds / len(band),
+                "trimesh_seconds_estimate": t_theirs,
+                "ratio": t_theirs / seconds,
+                "max_abs_distance_error_cells": err,
+                "sign_disagreements": sign_diff,
+                "sample": len(pick),
+                "flipped_faces_same_sign": flip_proof,
+            }
             rows.append(row)
-            print(f"{name:12} {row['faces']:6d} {'x'.join(map(str, row['grid'])):>12} "
-                  f"{row['band']:8d} "
-                  f"{seconds:8.2f} {row['ns_per_cell']:8.0f} {t_theirs:16.1f} {row['ratio']:7.0f} "
-                  f"{err:11.1e} {sign_diff:9d} {flip_proof!s:>10}")
-    print("   (max |d| err: largest difference of |psi| from trimesh's exact distance, in cells;"
-          "\n    sign diff: sample cells whose side differs from trimesh's inside test)")
+            print(
+                f"{name:12} {row['faces']:6d} {'x'.join(map(str, row['grid'])):>12} "
+                f"{row['band']:8d} "
+                f"{seconds:8.2f} {row['ns_per_cell']:8.0f} {t_theirs:16.1f} {row['ratio']:7.0f} "
+                f"{err:11.1e} {sign_diff:9d} {flip_proof!s:>10}"
+            )
+    print(
+        "   (max |d| err: largest difference of |psi| from trimesh's exact distance, in cells;"
+        "\n    sign diff: sample cells whose side differs from trimesh's inside test)"
+    )
     return rows
 
 
@@ -495,20 +624,28 @@ def holed_mesh_table(resolutions, exact_points=3000):
     from clpde.surface.mesh_sdf import grid_for_mesh
     from clpde.surface.winding import WindingNumbers
 
-    print("\n5b. meshes with a hole many cells wide: from_mesh (sign by the winding number where "
-          "the\n"
-          "    flood fill leaks) and the winding number per point, two-level against the exact sum")
+    print(
+        "\n5b. meshes with a hole many cells wide: from_mesh (sign by the winding number where "
+        "the\n"
+        "    flood fill leaks) and the winding number per point, two-level against the exact sum"
+    )
     sphere = trimesh.creation.icosphere(subdivisions=5)
     torus = trimesh.creation.torus(1.0, 0.4, major_sections=96, minor_sections=48)
     cases = {  # mesh, centre of the removed cap, its radius, exact signed distance
         "icosphere 5": (sphere, [0, 0, 1], 0.25, lambda p: np.linalg.norm(p, axis=1) - 1),
-        "torus 1/0.4": (torus, [1.4, 0, 0], 0.25,
-                        lambda p: np.hypot(np.hypot(p[:, 0], p[:, 1]) - 1, p[:, 2]) - 0.4),
+        "torus 1/0.4": (
+            torus,
+            [1.4, 0, 0],
+            0.25,
+            lambda p: np.hypot(np.hypot(p[:, 0], p[:, 1]) - 1, p[:, 2]) - 0.4,
+        ),
     }
     rng = np.random.default_rng(1)
     rows = []
-    print(f"{'mesh':12} {'faces':>6} {'grid':>12} {'band':>8} {'from_mesh s':>11} {'sign err':>8} "
-          f"{'fast us/pt':>10} {'exact us/pt':>11} {'speed-up':>8} {'max |dw|':>9}")
+    print(
+        f"{'mesh':12} {'faces':>6} {'grid':>12} {'band':>8} {'from_mesh s':>11} {'sign err':>8} "
+        f"{'fast us/pt':>10} {'exact us/pt':>11} {'speed-up':>8} {'max |dw|':>9}"
+    )
     for name, (mesh, centre, radius, sdf) in cases.items():
         gone = np.linalg.norm(mesh.triangles_center - centre, axis=1) < radius
         holed = mesh.copy()
@@ -524,8 +661,9 @@ def holed_mesh_table(resolutions, exact_points=3000):
             cells = np.argwhere(surf._mesh_face >= 0)  # the band, (z, y, x)
             pts = surf.origin + cells[:, ::-1] * h
             # sign against the exact shape, away from the hole and from the surface itself
-            away = (np.linalg.norm(pts - centre,
-                                   axis=1) > radius + 3 * h) & (np.abs(sdf(pts)) > 0.01)
+            away = (np.linalg.norm(pts - centre, axis=1) > radius + 3 * h) & (
+                np.abs(sdf(pts)) > 0.01
+            )
             sign_err = int(np.sum((surf.psi[tuple(cells[away].T)] < 0) != (sdf(pts[away]) < 0)))
             origin, hg, _ = grid_for_mesh(holed, None, res, 8)
             wn = WindingNumbers((np.asarray(holed.triangles) - origin) / hg)
@@ -545,21 +683,33 @@ def holed_mesh_table(resolutions, exact_points=3000):
             w_exact = wn(sub, exact=True)
             t_exact = (time.perf_counter() - start) / len(sub)
             dw = float(np.abs(wn(sub) - w_exact).max())
-            row = {"mesh": name, "faces": len(holed.faces), "removed_faces": int(gone.sum()),
-                   "grid": list(surf.shape), "band": len(cells), "seconds": seconds,
-                   "sign_errors_away_from_hole": sign_err, "checked_cells": int(away.sum()),
-                   "winding_us_per_point_fast": 1e6 * t_fast,
-                   "winding_us_per_point_exact": 1e6 * t_exact,
-                   "exact_points": len(sub), "max_fast_minus_exact": dw}
+            row = {
+                "mesh": name,
+                "faces": len(holed.faces),
+                "removed_faces": int(gone.sum()),
+                "grid": list(surf.shape),
+                "band": len(cells),
+                "seconds": seconds,
+                "sign_errors_away_from_hole": sign_err,
+                "checked_cells": int(away.sum()),
+                "winding_us_per_point_fast": 1e6 * t_fast,
+                "winding_us_per_point_exact": 1e6 * t_exact,
+                "exact_points": len(sub),
+                "max_fast_minus_exact": dw,
+            }
             rows.append(row)
-            print(f"{name:12} {row['faces']:6d} {'x'.join(map(str, row['grid'])):>12} "
-                  f"{len(cells):8d} "
-                  f"{seconds:11.2f} {sign_err:8d} {1e6 * t_fast:10.2f} {1e6 * t_exact:11.1f} "
-                  f"{t_exact / t_fast:8.0f} {dw:9.1e}")
-    print("   (sign err: band cells farther than 3 cells from the hole and 0.01 from the surface "
-          "whose\n"
-          "    side differs from the exact shape's; max |dw|: two-level minus exact winding "
-          "number)")
+            print(
+                f"{name:12} {row['faces']:6d} {'x'.join(map(str, row['grid'])):>12} "
+                f"{len(cells):8d} "
+                f"{seconds:11.2f} {sign_err:8d} {1e6 * t_fast:10.2f} {1e6 * t_exact:11.1f} "
+                f"{t_exact / t_fast:8.0f} {dw:9.1e}"
+            )
+    print(
+        "   (sign err: band cells farther than 3 cells from the hole and 0.01 from the surface "
+        "whose\n"
+        "    side differs from the exact shape's; max |dw|: two-level minus exact winding "
+        "number)"
+    )
     return rows
 
 
@@ -592,13 +742,19 @@ def closed_hole_heat(resolution=40, t=0.1):
         origin, h, shape = grid_for_mesh(holed, None, resolution, int(np.ceil(patched.outer)) + 4)
         raw, _, _ = mesh_to_sdf(holed, origin, h, shape, patched.outer + 3.0)
         unpatched = ImplicitSurface(raw, h, origin)
-    row = {"closed": error(closed), "hole_closed_and_reinitialised": error(patched),
-           "hole_closed_jumping_psi": error(unpatched), "spacing": h}
-    print("\n5c. heat flow of xy to t = 0.1 on an icosphere with a polar hole (max error where z < "
-          "0.7):"
-          f"\n   closed mesh {row['closed']:.2e}; hole closed, rim reinitialised "
-          f"{row['hole_closed_and_reinitialised']:.2e}; hole closed, psi jumping across it "
-          f"{row['hole_closed_jumping_psi']:.2e} (h = {h:.3f})")
+    row = {
+        "closed": error(closed),
+        "hole_closed_and_reinitialised": error(patched),
+        "hole_closed_jumping_psi": error(unpatched),
+        "spacing": h,
+    }
+    print(
+        "\n5c. heat flow of xy to t = 0.1 on an icosphere with a polar hole (max error where z < "
+        "0.7):"
+        f"\n   closed mesh {row['closed']:.2e}; hole closed, rim reinitialised "
+        f"{row['hole_closed_and_reinitialised']:.2e}; hole closed, psi jumping across it "
+        f"{row['hole_closed_jumping_psi']:.2e} (h = {h:.3f})"
+    )
     return row
 
 
@@ -609,54 +765,70 @@ def accuracy(spacings, quick):
     for r in conv:
         order = f"{r['order']:.2f}" if r["order"] is not None else "-"
         scheme = "alternate" if r["alternate"] else "forward"
-        print(f"{r['case']:6} {scheme:10} {r['spacing']:6.3f} {r['ext_band']:8d} "
-              f"{r['error']:10.2e} {order:>6} {r['seconds']:7.2f}")
+        print(
+            f"{r['case']:6} {scheme:10} {r['spacing']:6.3f} {r['ext_band']:8d} "
+            f"{r['error']:10.2e} {order:>6} {r['seconds']:7.2f}"
+        )
 
     print("\n2. cotangent Laplacian on an icosphere, explicit Euler (error at the vertices)")
     cot = [row for s in ((3, 4) if quick else (3, 4, 5, 6, 7)) for row in icosphere_heat(s)]
     print(f"{'case':6} {'subdiv':>6} {'vertices':>8} {'steps':>6} {'error':>10} {'time s':>7}")
     for r in cot:
-        print(f"{r['case']:6} {r['subdivisions']:6d} {r['vertices']:8d} {r['steps']:6d} "
-              f"{r['error']:10.2e} {r['seconds']:7.2f}")
+        print(
+            f"{r['case']:6} {r['subdivisions']:6d} {r['vertices']:8d} {r['steps']:6d} "
+            f"{r['error']:10.2e} {r['seconds']:7.2f}"
+        )
 
-    print("\n   at equal numbers of unknowns (cotangent error interpolated log-log at the band's "
-          "size):")
+    print(
+        "\n   at equal numbers of unknowns (cotangent error interpolated log-log at the band's "
+        "size):"
+    )
     for r in conv:
         for name in ("node_band", "step_band", "ext_band"):
             rows = sorted((c["vertices"], c["error"]) for c in cot if c["case"] == r["case"])
             n, e = np.log([a for a, _ in rows]), np.log([b for _, b in rows])
             r[f"cot_error_at_{name}"] = float(np.exp(np.interp(np.log(r[name]), n, e)))
         scheme = "alternate" if r["alternate"] else "forward"
-        print(f"   {r['case']:6} {scheme:10} h={r['spacing']:.3f}: error / cotangent error = "
-              f"{r['error'] / r['cot_error_at_node_band']:.2f} (the nodes: the cells a step "
-              "updates), "
-              f"{r['error'] / r['cot_error_at_step_band']:.2f} (step band), "
-              f"{r['error'] / r['cot_error_at_ext_band']:.2f} (whole band)")
+        print(
+            f"   {r['case']:6} {scheme:10} h={r['spacing']:.3f}: error / cotangent error = "
+            f"{r['error'] / r['cot_error_at_node_band']:.2f} (the nodes: the cells a step "
+            "updates), "
+            f"{r['error'] / r['cot_error_at_step_band']:.2f} (step band), "
+            f"{r['error'] / r['cot_error_at_ext_band']:.2f} (whole band)"
+        )
 
     return {"convergence": conv, "cotangent": cot}
 
 
 def timing_table(sizes):
-    print("\n3. per-step time against band size (heat step on the nodes + re-extension of what the "
-          "step reads;"
-          "\n   ns/cell per cell of the whole extension band, the band a result covers)")
+    print(
+        "\n3. per-step time against band size (heat step on the nodes + re-extension of what the "
+        "step reads;"
+        "\n   ns/cell per cell of the whole extension band, the band a result covers)"
+    )
     timing = step_timing(sizes)
-    print(f"{'grid':>14} {'ext band':>9} {'nodes':>8} {'reach':>8} {'runs':>7} {'step ms':>8} "
-          f"{'ext ms':>7} "
-          f"{'ns/cell':>8} {'step GB/s':>9} {'ext GB/s':>8} {'band copy GB/s':>14} "
-          f"{'dense step GB/s':>15} "
-          f"{'copy GB/s':>9}")
+    print(
+        f"{'grid':>14} {'ext band':>9} {'nodes':>8} {'reach':>8} {'runs':>7} {'step ms':>8} "
+        f"{'ext ms':>7} "
+        f"{'ns/cell':>8} {'step GB/s':>9} {'ext GB/s':>8} {'band copy GB/s':>14} "
+        f"{'dense step GB/s':>15} "
+        f"{'copy GB/s':>9}"
+    )
     for r in timing:
-        print(f"{'x'.join(map(str, r['grid'])):>14} {r['ext_band']:9d} {r['node_band']:8d} "
-              f"{r['reach_band']:8d} "
-              f"{r['runs']:7d} {r['step_ms']:8.2f} {r['extend_ms']:7.2f} {r['ns_per_cell']:8.2f} "
-              f"{r['step_gbs']:9.2f} {r['extend_gbs']:8.2f} {r['band_copy_gbs']:14.2f} "
-              f"{r['dense_step_gbs']:15.2f} {r['copy_gbs']:9.2f}")
-    print("   (band copy: v = u + psi over the step's runs, the step's essential bytes with its "
-          "access\n"
-          "    pattern and no arithmetic: the band's own roofline; dense step: the heat step "
-          "over every\n"
-          "    cell of whole rows of the box, 12 bytes a cell: the stencil's own ceiling)")
+        print(
+            f"{'x'.join(map(str, r['grid'])):>14} {r['ext_band']:9d} {r['node_band']:8d} "
+            f"{r['reach_band']:8d} "
+            f"{r['runs']:7d} {r['step_ms']:8.2f} {r['extend_ms']:7.2f} {r['ns_per_cell']:8.2f} "
+            f"{r['step_gbs']:9.2f} {r['extend_gbs']:8.2f} {r['band_copy_gbs']:14.2f} "
+            f"{r['dense_step_gbs']:15.2f} {r['copy_gbs']:9.2f}"
+        )
+    print(
+        "   (band copy: v = u + psi over the step's runs, the step's essential bytes with its "
+        "access\n"
+        "    pattern and no arithmetic: the band's own roofline; dense step: the heat step "
+        "over every\n"
+        "    cell of whole rows of the box, 12 bytes a cell: the stencil's own ceiling)"
+    )
     return timing
 
 

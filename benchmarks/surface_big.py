@@ -40,17 +40,29 @@ def main():
     from clpde.surface.flows import stability_limit
 
     rt = clpde.get_runtime()
-    out = {"device": rt.device.name.strip(), "global_mem_gb": rt.global_mem / 2**30,
-           "max_alloc_gb": rt.max_alloc / 2**30, "n": args.n}
+    out = {
+        "device": rt.device.name.strip(),
+        "global_mem_gb": rt.global_mem / 2**30,
+        "max_alloc_gb": rt.max_alloc / 2**30,
+        "n": args.n,
+    }
     start = time.perf_counter()
     surf = ImplicitSurface.sphere(1.0, 2.0 / (args.n - 17))
-    out.update(shape=list(surf.shape), spacing=surf.spacing, ext_band=surf.ext_band.n,
-               node_band=surf.node_band.n, reach_band=surf.reach_band.n,
-               build_s=time.perf_counter() - start, rss_after_build_gb=rss_gb())
-    print(f"grid {surf.shape}, spacing {surf.spacing:.5f}, extension band {surf.ext_band.n}, "
-          f"built in {out['build_s']:.1f} s, peak RSS {out['rss_after_build_gb']:.2f} GB "
-          f"(PoCL reports {out['global_mem_gb']:.1f} GB device memory, "
-          f"{out['max_alloc_gb']:.1f} GB per buffer)")
+    out.update(
+        shape=list(surf.shape),
+        spacing=surf.spacing,
+        ext_band=surf.ext_band.n,
+        node_band=surf.node_band.n,
+        reach_band=surf.reach_band.n,
+        build_s=time.perf_counter() - start,
+        rss_after_build_gb=rss_gb(),
+    )
+    print(
+        f"grid {surf.shape}, spacing {surf.spacing:.5f}, extension band {surf.ext_band.n}, "
+        f"built in {out['build_s']:.1f} s, peak RSS {out['rss_after_build_gb']:.2f} GB "
+        f"(PoCL reports {out['global_mem_gb']:.1f} GB device memory, "
+        f"{out['max_alloc_gb']:.1f} GB per buffer)"
+    )
     u = surf.band_field(lambda x, y, z: x * y)
     dt = stability_limit(surf)
     pts = sphere_points(2000)
@@ -71,12 +83,20 @@ def main():
             many = min(many, time.perf_counter() - start)
         per_step = (many - one) / (args.steps - 1)
         err = float(np.abs(surf.sample(v, pts) - xy_exact(pts, t_total)).max())
-        results[storage] = {"setup_s": setup, "one_step_s": one, "steps_s": many,
-                            "ms_per_step": 1e3 * per_step, "error": err, "rss_gb": rss_gb()}
-        print(f"{storage:>7}: first call (set-up) {setup:.1f} s, a call of 1 step {one:.2f} s "
-              f"(upload, whole-band extensions, read-back), of {args.steps} steps {many:.2f} s: "
-              f"{1e3 * per_step:.0f} ms a step; xy error at t = {t_total:.2e}: {err:.2e}; "
-              f"peak RSS {rss_gb():.2f} GB")
+        results[storage] = {
+            "setup_s": setup,
+            "one_step_s": one,
+            "steps_s": many,
+            "ms_per_step": 1e3 * per_step,
+            "error": err,
+            "rss_gb": rss_gb(),
+        }
+        print(
+            f"{storage:>7}: first call (set-up) {setup:.1f} s, a call of 1 step {one:.2f} s "
+            f"(upload, whole-band extensions, read-back), of {args.steps} steps {many:.2f} s: "
+            f"{1e3 * per_step:.0f} ms a step; xy error at t = {t_total:.2e}: {err:.2e}; "
+            f"peak RSS {rss_gb():.2f} GB"
+        )
     out["storages"] = results
     if args.json:
         args.json.write_text(json.dumps(out, indent=1))

@@ -62,8 +62,9 @@ def save(out: Path) -> None:
     pts /= np.linalg.norm(pts, axis=1, keepdims=True)
     res["sample_cubic"] = s.sample(u, pts)
     res["sample_linear"] = s.sample(u, pts, interpolation="trilinear")
-    bumpy = ImplicitSurface.from_volume(s.psi * (1.3 + 0.2 * np.cos(3 * x)), 0.1, s.origin,
-                                        reinitialize=True)
+    bumpy = ImplicitSurface.from_volume(
+        s.psi * (1.3 + 0.2 * np.cos(3 * x)), 0.1, s.origin, reinitialize=True
+    )
     res["reinit"] = bumpy.psi
     t = ImplicitSurface.torus(1.0, 0.4, spacing=0.1, interpolation="trilinear")
     res["torus_linear_heat"] = t.heat(rng.normal(size=t.shape), 0.02)

@@ -37,8 +37,7 @@ def flows_for(surf):
         "heat": (1, lambda u, k: surf.heat(u, k * dt_heat, dt=dt_heat)),
         "tv": (1, lambda u, k: surf.tv(u, k * dt_tv, dt=dt_tv)),
         # the dynamic lambda updated every 10 steps, its sums in the step's time
-        "denoise": (1, lambda u, k: surf.denoise_tv(u, sigma=0.05, t=k * dt_tv / 2,
-                                                    dt=dt_tv / 2)),
+        "denoise": (1, lambda u, k: surf.denoise_tv(u, sigma=0.05, t=k * dt_tv / 2, dt=dt_tv / 2)),
         "harmonic": (3, lambda u, k: surf.harmonic_map(u, k * dt_tv, p=1, dt=dt_tv)),
         "along": (1, lambda u, k: surf.diffuse_along(u, direction, k * dt_heat, dt=dt_heat)),
         "turk": (2, lambda u, k: flows.reaction_diffusion(surf, k, state=u, dt=0.15)),
@@ -49,10 +48,19 @@ def band_data(surf, channels):
     if channels == 1:
         return surf.band_field(lambda x, y, z: x * y + np.sin(3 * z))
     if channels == 2:
-        return np.stack([surf.band_field(lambda x, y, z: 4 + 0.1 * x),
-                         surf.band_field(lambda x, y, z: 4 + 0.1 * y)])
-    v = np.stack([surf.band_field(lambda x, y, z: x + 0.2), surf.band_field(lambda x, y, z: y),
-                  surf.band_field(lambda x, y, z: z)])
+        return np.stack(
+            [
+                surf.band_field(lambda x, y, z: 4 + 0.1 * x),
+                surf.band_field(lambda x, y, z: 4 + 0.1 * y),
+            ]
+        )
+    v = np.stack(
+        [
+            surf.band_field(lambda x, y, z: x + 0.2),
+            surf.band_field(lambda x, y, z: y),
+            surf.band_field(lambda x, y, z: z),
+        ]
+    )
     return v / np.sqrt((v**2).sum(axis=0))
 
 
@@ -116,8 +124,10 @@ def run_size(n, names, steps, repeats):
     surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))
     build = time.perf_counter() - start
     copy_ms = dense_copy_ms(surf)
-    print(f"{n:>4}^3: extension band {surf.ext_band.n} cells, a dense copy {copy_ms:.2f} ms",
-          flush=True)
+    print(
+        f"{n:>4}^3: extension band {surf.ext_band.n} cells, a dense copy {copy_ms:.2f} ms",
+        flush=True,
+    )
     table = flows_for(surf)
     rows = []
     for name in names:
@@ -133,22 +143,39 @@ def run_size(n, names, steps, repeats):
                 ms, results[storage] = time_flow(call, u, steps)
                 times[storage].append(ms)
         ratios = [b / a for a, b in zip(times["lists"], times["bricks"], strict=True)]
-        diff = float(np.abs(results["bricks"] - results["lists"]).max() /
-                     max(1e-30, np.abs(results["lists"]).max()))
+        diff = float(
+            np.abs(results["bricks"] - results["lists"]).max()
+            / max(1e-30, np.abs(results["lists"]).max())
+        )
         mem = {s: state_bytes(surf, s, channels) / 2**20 for s in ("lists", "bricks")}
-        rows.append({"n": n, "flow": name, "channels": channels, "ms_lists": times["lists"],
-                     "ms_bricks": times["bricks"], "ratio": ratios, "rel_diff": diff,
-                     "mib_lists": mem["lists"], "mib_bricks": mem["bricks"],
-                     "band": surf.ext_band.n, "build_s": build, "copy_ms": copy_ms})
+        rows.append(
+            {
+                "n": n,
+                "flow": name,
+                "channels": channels,
+                "ms_lists": times["lists"],
+                "ms_bricks": times["bricks"],
+                "ratio": ratios,
+                "rel_diff": diff,
+                "mib_lists": mem["lists"],
+                "mib_bricks": mem["bricks"],
+                "band": surf.ext_band.n,
+                "build_s": build,
+                "copy_ms": copy_ms,
+            }
+        )
         best = {k: min(times[k]) for k in times}
-        print(f"{n:>4}^3 {name:>9} ({channels} ch): lists "
-              f"{' '.join(f'{t:7.1f}' for t in times['lists'])} ms, bricks "
-              f"{' '.join(f'{t:7.1f}' for t in times['bricks'])} ms, bricks/lists "
-              f"{' '.join(f'{r:.2f}' for r in ratios)}; state {mem['lists']:.0f} / "
-              f"{mem['bricks']:.0f} MiB; results differ by {diff:.1e}; best step "
-              f"{best['lists'] / copy_ms:.1f} / {best['bricks'] / copy_ms:.1f} dense copies, "
-              f"{1e6 * best['lists'] / surf.ext_band.n:.1f} / "
-              f"{1e6 * best['bricks'] / surf.ext_band.n:.1f} ns per band cell", flush=True)
+        print(
+            f"{n:>4}^3 {name:>9} ({channels} ch): lists "
+            f"{' '.join(f'{t:7.1f}' for t in times['lists'])} ms, bricks "
+            f"{' '.join(f'{t:7.1f}' for t in times['bricks'])} ms, bricks/lists "
+            f"{' '.join(f'{r:.2f}' for r in ratios)}; state {mem['lists']:.0f} / "
+            f"{mem['bricks']:.0f} MiB; results differ by {diff:.1e}; best step "
+            f"{best['lists'] / copy_ms:.1f} / {best['bricks'] / copy_ms:.1f} dense copies, "
+            f"{1e6 * best['lists'] / surf.ext_band.n:.1f} / "
+            f"{1e6 * best['bricks'] / surf.ext_band.n:.1f} ns per band cell",
+            flush=True,
+        )
     return rows
 
 
@@ -157,8 +184,9 @@ def main(argv=None):
     parser.add_argument("--sizes", type=int, nargs="+", default=[64, 128, 217, 256])
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--flows", nargs="+",
-                        default=["heat", "tv", "denoise", "harmonic", "along", "turk"])
+    parser.add_argument(
+        "--flows", nargs="+", default=["heat", "tv", "denoise", "harmonic", "along", "turk"]
+    )
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     import clpde
@@ -169,8 +197,7 @@ def main(argv=None):
     print(f"device: {rt.device.name.strip()}")
     rows = [row for n in args.sizes for row in run_size(n, args.flows, args.steps, args.repeats)]
     if args.json:
-        args.json.write_text(json.dumps({"device": rt.device.name.strip(), "rows": rows},
-                                        indent=1))
+        args.json.write_text(json.dumps({"device": rt.device.name.strip(), "rows": rows}, indent=1))
 
 
 if __name__ == "__main__":

@@ -89,8 +89,14 @@ class Case:
 
         layout, grouped, tiled = label.split()[0], label.endswith(" wg"), label.endswith("tiled")
         self.tracker = MorphingTracker(frames, mask, storage=layout, device=runtime)
-        self.ls = ls = LevelSet(runtime, signed_distance(mask), self.tracker.band_width,
-                                np.float32, storage=layout, group_per_brick=grouped or None)
+        self.ls = ls = LevelSet(
+            runtime,
+            signed_distance(mask),
+            self.tracker.band_width,
+            np.float32,
+            storage=layout,
+            group_per_brick=grouped or None,
+        )
         self.f1 = self.tracker._feature_field(self.tracker.prepared(0), ls)
         self.f2 = self.tracker._feature_field(self.tracker.prepared(1), ls)
         self.f1_out = self.f1.copy()
@@ -101,10 +107,12 @@ class Case:
             name = morph_kernel_name(ls, disc)
             if name == "morph_track_tiled" and not tiled:
                 name = "morph_track_bricks"
-            self.morph[disc] = ls.band_kernel("tracking/features.cl", name, NCH=1,
-                                              DISC=DISCREPANCIES[disc], WIN=3)
-        self.reinit = ls.band_kernel("tracking/levelset.cl", "reinit_step_bricks" if ls.brick else
-                                     "reinit_step_list")
+            self.morph[disc] = ls.band_kernel(
+                "tracking/features.cl", name, NCH=1, DISC=DISCREPANCIES[disc], WIN=3
+            )
+        self.reinit = ls.band_kernel(
+            "tracking/levelset.cl", "reinit_step_bricks" if ls.brick else "reinit_step_list"
+        )
         ls.dilate_band()
         self.near = ls._cells(ls._near_mask)
         self.stats = None
@@ -115,11 +123,26 @@ class Case:
 
     def step(self, disc):
         ls, g = self.ls, self.ls.grid
-        ls.launch_band(self.morph[disc], ls.band, ls.u.cur.data.data, self.f1.data.data,
-                       self.f2.data.data, ls.band_mask.data, ls.u.cur.data.data,
-                       ls.u.nxt.data.data, self.f1_out.data.data, self.stats.data,
-                       g.scalar(0.5), g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(1.0),
-                       g.scalar(0.0), g.scalar(0.02), np.int32(g.sx), np.int32(g.plane))
+        ls.launch_band(
+            self.morph[disc],
+            ls.band,
+            ls.u.cur.data.data,
+            self.f1.data.data,
+            self.f2.data.data,
+            ls.band_mask.data,
+            ls.u.cur.data.data,
+            ls.u.nxt.data.data,
+            self.f1_out.data.data,
+            self.stats.data,
+            g.scalar(0.5),
+            g.scalar(0.02**2),
+            g.scalar(1e-3**2),
+            g.scalar(1.0),
+            g.scalar(0.0),
+            g.scalar(0.02),
+            np.int32(g.sx),
+            np.int32(g.plane),
+        )
 
     def reinit_step(self):
         ls, g = self.ls, self.ls.grid
@@ -135,8 +158,11 @@ class Case:
     def cells(self):
         ls = self.ls
         visited = (self.near.n * ls.brick[0] * ls.brick[1]) if ls.brick else self.near.n
-        return {"band": int(ls.band_cells().sum()), "band visited": ls.stored_cells(),
-                "reinit region visited": int(visited)}
+        return {
+            "band": int(ls.band_cells().sum()),
+            "band visited": ls.stored_cells(),
+            "reinit region visited": int(visited),
+        }
 
 
 def timed(runtime, action, steps):
@@ -153,14 +179,21 @@ def timed(runtime, action, steps):
 def markdown(results) -> str:
     """The table of docs/tracking.md: CPU ms per launch, lists / 8x8 / 16x4 (then, for
     the NCC step, 8x8 and 16x4 tiled, when measured)."""
-    lines = ["| frames | band cells | visited 8x8 / 16x4 | step (NCC) | step (F2-F1) | "
-             "reinit iteration | rebuild |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| frames | band cells | visited 8x8 / 16x4 | step (NCC) | step (F2-F1) | "
+        "reinit iteration | rebuild |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for name, e in results["cases"].items():
         cells = e["lists"]["cells"]["band"]
         visited = " / ".join(str(e[lay]["cells"]["band visited"]) for lay in LAYOUTS[1:])
-        cols = [" / ".join(f"{e[lay]['ms'][a][1]:.2f}" for lay in
-                           LAYOUTS + (tuple(t for t in TILED if t in e) if a == "step" else ()))
-                for a in ("step", "step F2-F1", "reinit", "rebuild")]
+        cols = [
+            " / ".join(
+                f"{e[lay]['ms'][a][1]:.2f}"
+                for lay in LAYOUTS + (tuple(t for t in TILED if t in e) if a == "step" else ())
+            )
+            for a in ("step", "step F2-F1", "reinit", "rebuild")
+        ]
         lines.append(f"| {name} | {cells} | {visited} | " + " | ".join(cols) + " |")
     return "\n".join(lines)
 
@@ -169,8 +202,11 @@ def sequences():
     """Whole sequences for the end-to-end times: the tracking benchmark's."""
     from test_track import synthetic_sequence
 
-    yield "synthetic deform, 8 frames", synthetic_sequence("deform", frames=8)[0], \
-        synthetic_sequence("deform", frames=8)[1][0]
+    yield (
+        "synthetic deform, 8 frames",
+        synthetic_sequence("deform", frames=8)[0],
+        synthetic_sequence("deform", frames=8)[1][0],
+    )
     try:
         from tracking import mni_slices
 
@@ -195,10 +231,15 @@ def whole_tracks(rt, rounds, layouts):
                 track(frames, first, storage=lay, device=rt)
                 n = len(frames) - 1
                 times[lay].append(((time.perf_counter() - w) / n, (time.process_time() - c) / n))
-        out[name] = {lay: [1e3 * statistics.median(t[k] for t in times[lay]) for k in (0, 1)]
-                     for lay in layouts}
-        print(f"{name:34s} " + "  ".join(f"{lay} {m[0]:.1f}/{m[1]:.1f}"
-                                          for lay, m in out[name].items()) + "  ms/frame")
+        out[name] = {
+            lay: [1e3 * statistics.median(t[k] for t in times[lay]) for k in (0, 1)]
+            for lay in layouts
+        }
+        print(
+            f"{name:34s} "
+            + "  ".join(f"{lay} {m[0]:.1f}/{m[1]:.1f}" for lay, m in out[name].items())
+            + "  ms/frame"
+        )
     return out
 
 
@@ -208,22 +249,35 @@ def main(argv=None):
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--steps", type=int, default=40)
     parser.add_argument("--device", default="cpu")
-    parser.add_argument("--groups", action="store_true",
-                        help="also the work-group-per-brick geometry (GPUs') on this device")
-    parser.add_argument("--tiled", action="store_true",
-                        help="also bricks whose NCC step slides its window sums")
+    parser.add_argument(
+        "--groups",
+        action="store_true",
+        help="also the work-group-per-brick geometry (GPUs') on this device",
+    )
+    parser.add_argument(
+        "--tiled", action="store_true", help="also bricks whose NCC step slides its window sums"
+    )
     args = parser.parse_args(argv)
     layouts = LAYOUTS + (GROUPED if args.groups else ()) + (TILED if args.tiled else ())
     from clpde.runtime import get_runtime
 
     rt = get_runtime(args.device)
-    print(f"device: {rt.device.name.strip()} ({rt.device.platform.version.strip()}), "
-          f"{rt.device.max_compute_units} compute units")
-    actions = {"step": lambda c: c.step("ncc"), "step F2-F1": lambda c: c.step("difference"),
-               "reinit": Case.reinit_step, "rebuild": Case.rebuild}
+    print(
+        f"device: {rt.device.name.strip()} ({rt.device.platform.version.strip()}), "
+        f"{rt.device.max_compute_units} compute units"
+    )
+    actions = {
+        "step": lambda c: c.step("ncc"),
+        "step F2-F1": lambda c: c.step("difference"),
+        "reinit": Case.reinit_step,
+        "rebuild": Case.rebuild,
+    }
     results = {"device": rt.device.name.strip(), "cases": {}}
-    print(f"{'frames':26s} {'layout':13s} {'band':>7s} {'visited':>8s} "
-          + " ".join(f"{a + ' ms':>15s}" for a in actions) + "   (wall / CPU)")
+    print(
+        f"{'frames':26s} {'layout':13s} {'band':>7s} {'visited':>8s} "
+        + " ".join(f"{a + ' ms':>15s}" for a in actions)
+        + "   (wall / CPU)"
+    )
     for name, frames, mask in cases():
         built = {lay: Case(rt, frames, mask, lay) for lay in layouts}
         times = {lay: {a: [] for a in actions} for lay in layouts}
@@ -232,21 +286,30 @@ def main(argv=None):
                 for lay in layouts:  # A B C, then A B C again in the next round
                     steps = max(1, args.steps // 8) if action == "rebuild" else args.steps
                     times[lay][action].append(
-                        timed(rt, lambda c=built[lay], run=run: run(c), steps))
+                        timed(rt, lambda c=built[lay], run=run: run(c), steps)
+                    )
         entry = {}
         for lay in layouts:
             cells = built[lay].cells()
-            med = {a: [1e3 * statistics.median(t[k] for t in times[lay][a]) for k in (0, 1)]
-                   for a in actions}
+            med = {
+                a: [1e3 * statistics.median(t[k] for t in times[lay][a]) for k in (0, 1)]
+                for a in actions
+            }
             entry[lay] = {"cells": cells, "ms": med, "rounds": times[lay]}
-            print(f"{name:26s} {lay:13s} {cells['band']:7d} {cells['band visited']:8d} "
-                  + " ".join(f"{m[0]:7.3f}/{m[1]:7.3f}" for m in med.values()))
+            print(
+                f"{name:26s} {lay:13s} {cells['band']:7d} {cells['band visited']:8d} "
+                + " ".join(f"{m[0]:7.3f}/{m[1]:7.3f}" for m in med.values())
+            )
         for lay in layouts[1:]:
-            ratio = {a: [entry["lists"]["ms"][a][k] / entry[lay]["ms"][a][k] for k in (0, 1)]
-                     for a in actions}
+            ratio = {
+                a: [entry["lists"]["ms"][a][k] / entry[lay]["ms"][a][k] for k in (0, 1)]
+                for a in actions
+            }
             entry[lay]["speedup over lists"] = ratio
-            print(f"{'':26s} {lay + ' x':13s} {'':16s} "
-                  + " ".join(f"{r[0]:7.2f}/{r[1]:7.2f}" for r in ratio.values()))
+            print(
+                f"{'':26s} {lay + ' x':13s} {'':16s} "
+                + " ".join(f"{r[0]:7.2f}/{r[1]:7.2f}" for r in ratio.values())
+            )
         results["cases"][name] = entry
     print(markdown(results))
     print("whole tracks (default options), wall / CPU ms per frame:")

@@ -43,7 +43,7 @@ def _photo(rng, size):
     name = ("gravel", "grass", "brick")[int(rng.integers(3))]
     img = getattr(data, name)().astype(np.float64)
     y0, x0 = (int(rng.integers(0, 512 - s)) for s in size)
-    crop = img[y0:y0 + size[0], x0:x0 + size[1]]
+    crop = img[y0 : y0 + size[0], x0 : x0 + size[1]]
     return (crop - crop.mean()) / max(crop.std(), 1e-9)
 
 
@@ -64,8 +64,13 @@ def _star(rng, k=3):
     """Random star shape: radius factor per angle, 1 + sum of a few harmonics."""
     amps = rng.uniform(0.0, 0.18, k)
     phases = rng.uniform(0, 2 * np.pi, k)
-    return lambda th, t=0.0: 1 + sum(a * np.cos((j + 2) * th + p + 0.15 * t * (j + 1))
-                                     for j, (a, p) in enumerate(zip(amps, phases, strict=True)))
+    return lambda th, t=0.0: (
+        1
+        + sum(
+            a * np.cos((j + 2) * th + p + 0.15 * t * (j + 1))
+            for j, (a, p) in enumerate(zip(amps, phases, strict=True))
+        )
+    )
 
 
 def _shape(cy, cx, radius, star, t, sy=1.0, sx=1.0):
@@ -85,12 +90,14 @@ def _compose(ground, layers, noise, rng):
 
 def _sample(tex, cy, cx):
     """The object's texture carried with it: tex (2H x 2W) read at the object's frame."""
-    return ndimage.shift(tex, (cy - H, cx - W), order=1, mode="wrap")[H // 2:H // 2 + H,
-                                                                       W // 2:W // 2 + W]
+    return ndimage.shift(tex, (cy - H, cx - W), order=1, mode="wrap")[
+        H // 2 : H // 2 + H, W // 2 : W // 2 + W
+    ]
 
 
-def _moving(rng, centres, scales, ground_std, obj_offset, obj_std, noise, star=None,
-            radius=None, light=None):
+def _moving(
+    rng, centres, scales, ground_std, obj_offset, obj_std, noise, star=None, radius=None, light=None
+):
     """Frames and masks of one textured object along `centres` with `scales`."""
     star = star or _star(rng)
     radius = radius or rng.uniform(11, 14)
@@ -122,8 +129,10 @@ def seq_textured(seed):
     for t in range(n):
         centres.append((cy, cx))
         a = heading + turn * t
-        cy, cx = np.clip(cy + speed * np.sin(a), 18, H - 18), np.clip(cx + speed * np.cos(a),
-                                                                         18, W - 18)
+        cy, cx = (
+            np.clip(cy + speed * np.sin(a), 18, H - 18),
+            np.clip(cx + speed * np.cos(a), 18, W - 18),
+        )
     phase = rng.uniform(0, 2 * np.pi)
     scales = [1 + 0.2 * np.sin(0.6 * t + phase) for t in range(n)]
     offset = rng.choice([-1, 1]) * rng.uniform(0.12, 0.18)
@@ -144,13 +153,16 @@ def seq_two(seed):
         s = t / (n - 1)
         gap = 26 - 24 * s if merge else 2 + 24 * s  # centre distance beyond contact
         d = (20 + gap) / 2
-        c = [(H / 2 - d * np.sin(ang) + 3 * s, W / 2 - d * np.cos(ang)),
-             (H / 2 + d * np.sin(ang) - 3 * s, W / 2 + d * np.cos(ang))]
+        c = [
+            (H / 2 - d * np.sin(ang) + 3 * s, W / 2 - d * np.cos(ang)),
+            (H / 2 + d * np.sin(ang) - 3 * s, W / 2 + d * np.cos(ang)),
+        ]
         layers, truth = [], np.zeros((H, W), bool)
         for k in range(2):
             m = _shape(*c[k], 10.5, stars[k], t, sy=1.0, sx=1.25 - 0.15 * s * (k + 1))
-            obj = 0.5 + offs[k] * (1 if k == 0 else np.sign(offs[0])) + 0.08 * _sample(
-                texs[k], *c[k])
+            obj = (
+                0.5 + offs[k] * (1 if k == 0 else np.sign(offs[0])) + 0.08 * _sample(texs[k], *c[k])
+            )
             layers.append((m, obj))
             truth |= m
         frames.append(_compose(ground, layers, 0.06, rng))
@@ -170,8 +182,9 @@ def seq_stopgo(seed):
         centres.append((cy, cx))
     scales = [1.0] * len(centres)
     offset = rng.choice([-1, 1]) * rng.uniform(0.12, 0.16)
-    return _finish(*_moving(rng, centres, scales, 0.14, offset, 0.08, 0.04,
-                            radius=rng.uniform(10, 12)))
+    return _finish(
+        *_moving(rng, centres, scales, 0.14, offset, 0.08, 0.04, radius=rng.uniform(10, 12))
+    )
 
 
 def seq_light(seed):
@@ -241,7 +254,7 @@ def seq_flat(seed):
 def seq_slices(seed):
     rng = np.random.default_rng(7000 + seed)
     n = 12
-    z, y, x = np.mgrid[:n * 2, :H, :W] + 0.0
+    z, y, x = np.mgrid[: n * 2, :H, :W] + 0.0
     # Two lobes whose centres drift with z: they join (or part) along the stack.
     join = seed % 2 == 0
     field = np.full(z.shape, -np.inf)
@@ -261,9 +274,15 @@ def seq_slices(seed):
     return np.clip(img[::2], 0, 1), vol[::2]
 
 
-MAKERS = {"textured": seq_textured, "two": seq_two, "stopgo": seq_stopgo,
-          "light": seq_light, "distractor": seq_distractor, "flat": seq_flat,
-          "slices": seq_slices}
+MAKERS = {
+    "textured": seq_textured,
+    "two": seq_two,
+    "stopgo": seq_stopgo,
+    "light": seq_light,
+    "distractor": seq_distractor,
+    "flat": seq_flat,
+    "slices": seq_slices,
+}
 
 
 def half_of(seed: int) -> str:
@@ -288,9 +307,11 @@ def main():
     for name, (frames, masks, _cls) in corpus().items():
         ious = [(m & masks[0]).sum() / (m | masks[0]).sum() for m in masks]
         pieces = [label(m)[1] for m in masks]
-        print(f"{name:14s} {half_of(int(name.split('-')[1])):12s} {frames.shape} "
-              f"area {masks.sum((1, 2)).min()}-{masks.sum((1, 2)).max()} "
-              f"IoU with frame 0 down to {min(ious):.2f}, pieces {min(pieces)}-{max(pieces)}")
+        print(
+            f"{name:14s} {half_of(int(name.split('-')[1])):12s} {frames.shape} "
+            f"area {masks.sum((1, 2)).min()}-{masks.sum((1, 2)).max()} "
+            f"IoU with frame 0 down to {min(ious):.2f}, pieces {min(pieces)}-{max(pieces)}"
+        )
 
 
 if __name__ == "__main__":

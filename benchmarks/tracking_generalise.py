@@ -45,8 +45,12 @@ CALIBRATION = RESULTS / "track_calibration.json"
 ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
 MCV_GRID = {"iterations": (5, 20), "smoothing": (1, 2), "lambda2": (1.0, 2.0)}
 MGAC_GRID = {"iterations": (10, 50), "smoothing": (1, 2), "balloon": (-1, 0, 1)}
-CLPDE_GRID = {"motion": ("components", "kalman"), "region_weight": (0.5, 1.0),
-              "curvature": (0.1, 0.3), "max_iterations": (20, 40)}
+CLPDE_GRID = {
+    "motion": ("components", "kalman"),
+    "region_weight": (0.5, 1.0),
+    "curvature": (0.1, 0.3),
+    "max_iterations": (20, 40),
+}
 
 
 def run_clpde(frames, first, options=None):
@@ -60,8 +64,11 @@ def run_mcv(frames, first, iterations=20, smoothing=1, lambda2=1.0):
 
     out = [first]
     for k in range(1, len(frames)):
-        out.append(morphological_chan_vese(frames[k], iterations, init_level_set=out[-1],
-                                           smoothing=smoothing, lambda2=lambda2).astype(bool))
+        out.append(
+            morphological_chan_vese(
+                frames[k], iterations, init_level_set=out[-1], smoothing=smoothing, lambda2=lambda2
+            ).astype(bool)
+        )
     return np.array(out)
 
 
@@ -74,9 +81,11 @@ def run_mgac(frames, first, iterations=50, smoothing=1, balloon=0):
     out = [first]
     for k in range(1, len(frames)):
         edges = inverse_gaussian_gradient(frames[k])
-        out.append(morphological_geodesic_active_contour(
-            edges, iterations, init_level_set=out[-1], smoothing=smoothing,
-            balloon=balloon).astype(bool))
+        out.append(
+            morphological_geodesic_active_contour(
+                edges, iterations, init_level_set=out[-1], smoothing=smoothing, balloon=balloon
+            ).astype(bool)
+        )
     return np.array(out)
 
 
@@ -97,23 +106,29 @@ def class_means(data, method):
     for _name, (frames, truth, cls) in data.items():
         per.setdefault(cls, []).extend(scores(method(frames, truth[0]), truth)[0])
     return float(np.mean([np.mean(v) for v in per.values()])), {
-        c: (float(np.min(v)), float(np.mean(v))) for c, v in per.items()}
+        c: (float(np.min(v)), float(np.mean(v))) for c, v in per.items()
+    }
 
 
 def calibrate(only=None):
     data = corpus("calibration")
     out = json.loads(CALIBRATION.read_text()) if CALIBRATION.exists() else {}
-    for label, fn, spec in (("clpde", lambda f, m, **o: run_clpde(f, m, {**ADAPTIVE, **o}),
-                             CLPDE_GRID),
-                            ("MCV", run_mcv, MCV_GRID), ("MGAC", run_mgac, MGAC_GRID)):
+    for label, fn, spec in (
+        ("clpde", lambda f, m, **o: run_clpde(f, m, {**ADAPTIVE, **o}), CLPDE_GRID),
+        ("MCV", run_mcv, MCV_GRID),
+        ("MGAC", run_mgac, MGAC_GRID),
+    ):
         if only and label not in only:
             continue
         rows = []
         for params in grid(spec):
             mean, per = class_means(data, lambda f, m, p=params, fn=fn: fn(f, m, **p))
             rows.append({"params": params, "mean": mean, "per_class": per})
-            print(f"{label:6s} {params} mean of class means {mean:.3f}  " + " ".join(
-                f"{c}:{v[1]:.2f}" for c, v in per.items()), flush=True)
+            print(
+                f"{label:6s} {params} mean of class means {mean:.3f}  "
+                + " ".join(f"{c}:{v[1]:.2f}" for c, v in per.items()),
+                flush=True,
+            )
         best = max(rows, key=lambda r: r["mean"])
         out[label] = {"best": best["params"], "rows": rows}
         print(f"{label}: chosen {best['params']} ({best['mean']:.3f})", flush=True)
@@ -160,8 +175,15 @@ def track_sets(half, table):
     for _name, (frames, truth, cls) in corpus(half).items():
         for label, method in table.items():
             sets.append((frames, method(frames, truth[0]), truth, label, cls))
-        sets.append((frames, jumped(truth, int(rng.integers(3, len(truth) - 2)), rng), truth,
-                     "forced jump", cls))
+        sets.append(
+            (
+                frames,
+                jumped(truth, int(rng.integers(3, len(truth) - 2)), rng),
+                truth,
+                "forced jump",
+                cls,
+            )
+        )
     return sets
 
 
@@ -189,12 +211,17 @@ def calibrate_confidence():
     t_5 = float(np.quantile(good, 0.05))
     threshold = t_all if (good < t_all).mean() <= 0.05 else t_5
     print("weights", np.round(w, 3).tolist(), "threshold", round(threshold, 3))
-    print(f"calibration: lost {len(lost)} frames, flagged {(lost < threshold).mean():.3f}; "
-          f"good {len(good)}, flagged {(good < threshold).mean():.3f}")
+    print(
+        f"calibration: lost {len(lost)} frames, flagged {(lost < threshold).mean():.3f}; "
+        f"good {len(good)}, flagged {(good < threshold).mean():.3f}"
+    )
     RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "track_confidence.json").write_text(json.dumps(
-        {"weights": w.tolist(), "threshold": threshold, "lost": len(lost), "good": len(good)},
-        indent=2))
+    (RESULTS / "track_confidence.json").write_text(
+        json.dumps(
+            {"weights": w.tolist(), "threshold": threshold, "lost": len(lost), "good": len(good)},
+            indent=2,
+        )
+    )
 
 
 def confidence_report(half, sets):
@@ -203,10 +230,14 @@ def confidence_report(half, sets):
     x, iou = confidence_data(sets)
     conf = score(x)
     lost, good = iou < 0.5, iou > 0.9
-    return {"half": half, "lost_frames": int(lost.sum()), "good_frames": int(good.sum()),
-            "lost_flagged": float((conf[lost] < LOW_CONFIDENCE).mean()) if lost.any() else None,
-            "good_flagged": float((conf[good] < LOW_CONFIDENCE).mean()) if good.any() else None,
-            "threshold": LOW_CONFIDENCE}
+    return {
+        "half": half,
+        "lost_frames": int(lost.sum()),
+        "good_frames": int(good.sum()),
+        "lost_flagged": float((conf[lost] < LOW_CONFIDENCE).mean()) if lost.any() else None,
+        "good_flagged": float((conf[good] < LOW_CONFIDENCE).mean()) if good.any() else None,
+        "threshold": LOW_CONFIDENCE,
+    }
 
 
 def timing(repeats=3):
@@ -220,8 +251,9 @@ def timing(repeats=3):
     frames, masks = [], []
     for t in range(n):
         m = np.hypot((yy - 70) / 1.2, xx - 70 - 1.5 * t) < 30
-        frames.append(np.clip(np.where(m, ground + 0.15, ground)
-                              + rng.normal(0, 0.03, (h, w)), 0, 1))
+        frames.append(
+            np.clip(np.where(m, ground + 0.15, ground) + rng.normal(0, 0.03, (h, w)), 0, 1)
+        )
         masks.append(m)
     seqs = {"synthetic 176x144 x30": (np.array(frames), masks[0])}
     try:
@@ -243,16 +275,23 @@ def timing(repeats=3):
                 best[label] = min(best[label], time.perf_counter() - t0)
         out[name] = {k: 1000 * v / (len(f) - 1) for k, v in best.items()}
         out[name]["ratio"] = out[name]["adaptive"] / out[name]["default"]
-        print(f"{name}: default {out[name]['default']:.1f} ms/frame, adaptive "
-              f"{out[name]['adaptive']:.1f}, ratio {out[name]['ratio']:.2f}", flush=True)
+        print(
+            f"{name}: default {out[name]['default']:.1f} ms/frame, adaptive "
+            f"{out[name]['adaptive']:.1f}, ratio {out[name]['ratio']:.2f}",
+            flush=True,
+        )
     return out
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--calibrate", nargs="*", default=None, metavar="METHOD",
-                        help="choose parameters on the calibration half (clpde, MCV, MGAC; "
-                             "default: all)")
+    parser.add_argument(
+        "--calibrate",
+        nargs="*",
+        default=None,
+        metavar="METHOD",
+        help="choose parameters on the calibration half (clpde, MCV, MGAC; default: all)",
+    )
     parser.add_argument("--calibrate-confidence", action="store_true")
     parser.add_argument("--json", type=Path, default=RESULTS / "tracking_generalise.json")
     parser.add_argument("--no-timing", action="store_true")
@@ -276,16 +315,30 @@ def main(argv=None):
             per.setdefault(cls, {}).setdefault(label, {"J": [], "F": []})
             per[cls][label]["J"].extend(j)
             per[cls][label]["F"].extend(f)
-        rows = {c: {m: {"J_min": float(np.min(v["J"])), "J_mean": float(np.mean(v["J"])),
-                        "F_mean": float(np.mean(v["F"]))} for m, v in d.items()}
-                for c, d in per.items()}
+        rows = {
+            c: {
+                m: {
+                    "J_min": float(np.min(v["J"])),
+                    "J_mean": float(np.mean(v["J"])),
+                    "F_mean": float(np.mean(v["F"])),
+                }
+                for m, v in d.items()
+            }
+            for c, d in per.items()
+        }
         results["halves"][half] = {"classes": rows, "confidence": confidence_report(half, sets)}
         print(f"\n{half} half: min / mean IoU (J), mean boundary F")
         print(f"{'class':11s} " + " | ".join(f"{m:>27s}" for m in table))
         for c in CLASSES:
-            print(f"{c:11s} " + " | ".join(
-                f"{rows[c][m]['J_min']:.3f} / {rows[c][m]['J_mean']:.3f} / "
-                f"{rows[c][m]['F_mean']:.3f}".rjust(27) for m in table), flush=True)
+            print(
+                f"{c:11s} "
+                + " | ".join(
+                    f"{rows[c][m]['J_min']:.3f} / {rows[c][m]['J_mean']:.3f} / "
+                    f"{rows[c][m]['F_mean']:.3f}".rjust(27)
+                    for m in table
+                ),
+                flush=True,
+            )
         print("confidence:", results["halves"][half]["confidence"], flush=True)
     if not args.no_timing:
         results["timing"] = timing()

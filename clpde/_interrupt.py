@@ -113,8 +113,9 @@ def children_stderr(state: Held) -> Iterator[None]:
     sys.stderr.flush()
     os.dup2(write_end, 2)
     os.close(write_end)
-    threading.Thread(target=_forward, args=(read_end, saved, state), daemon=True,
-                     name="clpde-worker-stderr").start()
+    threading.Thread(
+        target=_forward, args=(read_end, saved, state), daemon=True, name="clpde-worker-stderr"
+    ).start()
     try:
         yield
     finally:
@@ -135,5 +136,6 @@ def _forward(read_end: int, target: int, state: Held) -> None:
     finally:
         os.close(read_end)
         os.close(target)
+
 
 quiet_while_loading()

@@ -71,8 +71,14 @@ class CallbackBar:
 
     disable = False
 
-    def __init__(self, callback: Callable, total: float | None = None,
-                 iterable: Iterable | None = None, initial: float = 0, **_options):
+    def __init__(
+        self,
+        callback: Callable,
+        total: float | None = None,
+        iterable: Iterable | None = None,
+        initial: float = 0,
+        **_options,
+    ):
         self.callback, self.total, self.iterable, self.n = callback, total, iterable, initial
 
     def update(self, n: float = 1) -> None:
@@ -103,12 +109,15 @@ class CallbackBar:
 def check_progress(progress: Progress) -> None:
     """One clear line for a `progress` argument that is neither a flag nor a callable."""
     if progress is not None and not isinstance(progress, bool) and not callable(progress):
-        raise InputError(f"progress must be True, False, None or a callable "
-                         f"progress(done, total), not {progress!r}")
+        raise InputError(
+            f"progress must be True, False, None or a callable "
+            f"progress(done, total), not {progress!r}"
+        )
 
 
-def progress_bar(progress: Progress, total: float | None, desc: str, *, long_run: bool = True,
-                 **options) -> tqdm | CallbackBar:
+def progress_bar(
+    progress: Progress, total: float | None, desc: str, *, long_run: bool = True, **options
+) -> tqdm | CallbackBar:
     """A tqdm bar over `total` units, drawn by the policy of `bar_disabled` and, with
     progress=None, only after `DELAY_S` seconds; a `CallbackBar` when `progress` is a
     callable."""
@@ -119,8 +128,9 @@ def progress_bar(progress: Progress, total: float | None, desc: str, *, long_run
     return tqdm(total=total, desc=desc, disable=bar_disabled(progress, long_run), **options)
 
 
-def progress_range(progress: Progress, steps: int, desc: str, *, long_run: bool = True,
-                   queue=None, **options) -> Iterator[int]:
+def progress_range(
+    progress: Progress, steps: int, desc: str, *, long_run: bool = True, queue=None, **options
+) -> Iterator[int]:
     """range(steps) under a bar drawn by the policy of `progress_bar`.
 
     With the device's `queue`, the loop waits for the queue after a batch of steps whose

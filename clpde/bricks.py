@@ -77,8 +77,14 @@ def _brick_cells(coords, brick, padded_shape, apron: int, halo: int = 0) -> np.n
     c = coords.astype(np.int64)
     z0, y0, x0 = c[:, 2] * bz - halo, c[:, 1] * by - halo, c[:, 0] * bx - halo
     out = ((z0 * py + y0) * px + x0)[:, None] + ((lz * py + ly) * px + lx)[None, :]
-    edge = np.flatnonzero((z0 < 0) | (y0 < 0) | (x0 < 0) | (z0 + bz + a > pz) |
-                          (y0 + by + a > py) | (x0 + bx + a > px))
+    edge = np.flatnonzero(
+        (z0 < 0)
+        | (y0 < 0)
+        | (x0 < 0)
+        | (z0 + bz + a > pz)
+        | (y0 + by + a > py)
+        | (x0 + bx + a > px)
+    )
     if edge.size:
         z, y, x = z0[edge, None] + lz, y0[edge, None] + ly, x0[edge, None] + lx
         inside = (z >= 0) & (y >= 0) & (x >= 0) & (z < pz) & (y < py) & (x < px)
@@ -181,13 +187,16 @@ class BrickBand:
         return {"BX": bx, "BY": by, "BZ": bz}
 
     @classmethod
-    def build(cls, runtime, padded_shape, stored: np.ndarray, bits: np.ndarray,
-              brick=DEFAULT_BRICK) -> BrickBand:
+    def build(
+        cls, runtime, padded_shape, stored: np.ndarray, bits: np.ndarray, brick=DEFAULT_BRICK
+    ) -> BrickBand:
         """Bricks holding every True cell of `stored` (padded grid), with per-cell `bits`."""
         bx, by, bz = (int(b) for b in brick)
         if min(bx, by, bz) < 4 or max(bx, by, bz) > 16:
-            raise ValueError("bricks need 4 to 16 cells a side (a tricubic stencil spans at most "
-                             "2 bricks; node_code keeps 4 bits an axis)")
+            raise ValueError(
+                "bricks need 4 to 16 cells a side (a tricubic stencil spans at most "
+                "2 bricks; node_code keeps 4 bits an axis)"
+            )
         pz, py, px = padded_shape
         # one brick place more than needed on each axis: a gather's "next brick" always exists
         mz, my, mx = -(-pz // bz) + 1, -(-py // by) + 1, -(-px // bx) + 1
@@ -216,14 +225,32 @@ class BrickBand:
         mask_host[1 : n + 1][valid] = flat_bits[cells[valid]]
         q = runtime.queue
         rows = (mask_host.reshape(n + 2, bz, by, bx) & NODE).any(axis=3).astype(np.uint8)
-        dev = {name: cla.to_device(q, np.ascontiguousarray(a)) for name, a in
-               (("nbr", nbr), ("bits", np.bitwise_or.reduce(mask_host, axis=1)), ("rows", rows))}
-        return cls(runtime, tuple(padded_shape), (bx, by, bz), coords, cells, (mz, my, mx),
-                   dev["nbr"], mask_host, dev["bits"], dev["rows"], bmap)
+        dev = {
+            name: cla.to_device(q, np.ascontiguousarray(a))
+            for name, a in (
+                ("nbr", nbr),
+                ("bits", np.bitwise_or.reduce(mask_host, axis=1)),
+                ("rows", rows),
+            )
+        }
+        return cls(
+            runtime,
+            tuple(padded_shape),
+            (bx, by, bz),
+            coords,
+            cells,
+            (mz, my, mx),
+            dev["nbr"],
+            mask_host,
+            dev["bits"],
+            dev["rows"],
+            bmap,
+        )
 
     @classmethod
-    def from_coords(cls, runtime, padded_shape, coords: np.ndarray,
-                    brick=DEFAULT_BRICK) -> BrickBand:
+    def from_coords(
+        cls, runtime, padded_shape, coords: np.ndarray, brick=DEFAULT_BRICK
+    ) -> BrickBand:
         """Bricks at the brick coordinates `coords` ((n, 3), x y z), put in Morton order,
         with the neighbour table found from the coordinates alone (brick_neighbours: work
         in proportion to the bricks, no map of the grid), for a band kept on the device
@@ -237,10 +264,19 @@ class BrickBand:
         nbr = np.zeros((n + 2, 27), np.int32)
         nbr[1 : n + 1] = brick_neighbours(coords)
         q = runtime.queue
-        return cls(runtime, tuple(padded_shape), tuple(int(b) for b in brick), coords,
-                   _brick_cells(coords, brick, padded_shape, 0),
-                   (-(-pz // bz), -(-py // by), -(-px // bx)), cla.to_device(q, nbr), None,
-                   cla.zeros(q, n + 2, np.uint8), None, None)
+        return cls(
+            runtime,
+            tuple(padded_shape),
+            tuple(int(b) for b in brick),
+            coords,
+            _brick_cells(coords, brick, padded_shape, 0),
+            (-(-pz // bz), -(-py // by), -(-px // bx)),
+            cla.to_device(q, nbr),
+            None,
+            cla.zeros(q, n + 2, np.uint8),
+            None,
+            None,
+        )
 
     @property
     def cell_bits(self) -> cla.Array:
@@ -271,8 +307,9 @@ class BrickBand:
         bx, by, bz = self.brick
         ax, ay, az = bx + apron, by + apron, bz + apron
         if (self.nbricks + 2) * ax * ay * az >= 2**31:
-            raise ClpdeError(f"{self.nbricks} bricks are more than 32-bit indices address; "
-                             "use a coarser grid")
+            raise ClpdeError(
+                f"{self.nbricks} bricks are more than 32-bit indices address; use a coarser grid"
+            )
         b, z, y, x = self._places(flat)
         return b * np.int32(ax * ay * az) + (z * np.int32(ay) + y) * np.int32(ax) + x
 
@@ -281,8 +318,10 @@ class BrickBand:
         bricks.cl's re-extension: brick << 12 | z << 8 | y << 4 | x, the node's place in its
         brick (a code, not an index, saves the kernel three divisions)."""
         if self.nbricks >= 2**19:
-            raise ClpdeError(f"{self.nbricks} bricks are more than the re-extension's node code "
-                             "holds (2^19); use a larger brick size")
+            raise ClpdeError(
+                f"{self.nbricks} bricks are more than the re-extension's node code "
+                "holds (2^19); use a larger brick size"
+            )
         b, z, y, x = self._places(flat)
         return (b << 12) | (z << 8) | (y << 4) | x
 
@@ -311,9 +350,17 @@ class BrickBand:
             coords = cla.to_device(q, np.ascontiguousarray(self.coords, np.int32))
             pz, py, px = self.padded_shape
             rt.kernel("bricks/tiles.cl", "tiles_from_dense", padded.dtype, **self.defines())(
-                q, *rt.items(self.nbricks * cells, nc), padded.data, out.data, coords.data,
-                np.int32(self.nbricks), np.int32(halo), np.int32(px), np.int32(py),
-                np.int32(pz))
+                q,
+                *rt.items(self.nbricks * cells, nc),
+                padded.data,
+                out.data,
+                coords.data,
+                np.int32(self.nbricks),
+                np.int32(halo),
+                np.int32(px),
+                np.int32(py),
+                np.int32(pz),
+            )
         return out
 
     def scatter(self, padded: np.ndarray, dtype, apron: int = 0) -> cla.Array:
@@ -324,11 +371,14 @@ class BrickBand:
         this one)."""
         flat = np.asarray(padded).reshape(padded.shape[0], -1)
         bx, by, bz = self.brick
-        cells = self.cells if apron == 0 else _brick_cells(self.coords, self.brick,
-                                                           self.padded_shape, apron)
-        out = np.zeros((flat.shape[0], self.nbricks + 2,
-                        (bx + apron) * (by + apron) * (bz + apron)),
-                       dtype)
+        cells = (
+            self.cells
+            if apron == 0
+            else _brick_cells(self.coords, self.brick, self.padded_shape, apron)
+        )
+        out = np.zeros(
+            (flat.shape[0], self.nbricks + 2, (bx + apron) * (by + apron) * (bz + apron)), dtype
+        )
         _fill_bricks(out, flat, cells)
         self.runtime.check_alloc(out.nbytes, "brick volume")
         return cla.to_device(self.runtime.queue, out)
@@ -347,8 +397,15 @@ class BrickBand:
         if n == 0:
             return None
         (gsize,), (lsize,), run = self.runtime.list_launch(n)
-        return kernel(self.runtime.queue, (gsize, 1), (lsize, 1), *args, np.int32(n),
-                      np.int32(self.plane), np.int32(run))
+        return kernel(
+            self.runtime.queue,
+            (gsize, 1),
+            (lsize, 1),
+            *args,
+            np.int32(n),
+            np.int32(self.plane),
+            np.int32(run),
+        )
 
     def launch(self, kernel, *args, channels: int = 1):
         """Run a brick kernel over every brick: on CPUs a work-item walks whole bricks
@@ -363,5 +420,14 @@ class BrickBand:
         else:
             per = 1
             gsize, lsize = (n * self.cells_per_brick, channels), (self.cells_per_brick, 1)
-        return kernel(rt.queue, gsize, lsize, *args, self.nbr.data, self.brick_bits.data,
-                      np.int32(n), np.int32(self.plane), np.int32(per))
+        return kernel(
+            rt.queue,
+            gsize,
+            lsize,
+            *args,
+            self.nbr.data,
+            self.brick_bits.data,
+            np.int32(n),
+            np.int32(self.plane),
+            np.int32(per),
+        )

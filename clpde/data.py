@@ -23,15 +23,25 @@ from .errors import InputError
 from .surface import ImplicitSurface
 
 __all__ = [
-    "REGION_SCENES", "SURFACE_SHAPES", "RegionScene", "checker", "colour_pattern",
-    "damage_mask", "damaged_astronaut", "region_scene", "surface_noise", "surface_shape",
+    "REGION_SCENES",
+    "SURFACE_SHAPES",
+    "RegionScene",
+    "checker",
+    "colour_pattern",
+    "damage_mask",
+    "damaged_astronaut",
+    "region_scene",
+    "surface_noise",
+    "surface_shape",
 ]
 
 
 # ---- inpainting -------------------------------------------------------------------------
 
-def damage_mask(shape: tuple[int, int], seed: int = 3, text: bool = True,
-                scratches: bool = True) -> np.ndarray:
+
+def damage_mask(
+    shape: tuple[int, int], seed: int = 3, text: bool = True, scratches: bool = True
+) -> np.ndarray:
     """Text and thin scratches over an image, as a boolean mask.
 
     Parameters
@@ -67,8 +77,14 @@ def damage_mask(shape: tuple[int, int], seed: int = 3, text: bool = True,
     font = ImageFont.load_default(size=size)
     lines = ["Summer 1984", "Houston, TX", "do not copy", "25.12.1984"]
     for k, line in enumerate(lines if text else []):
-        draw.text((nx // 20 + (k % 2) * nx // 6, ny // 10 + k * ny // 4.4), line, fill=255,
-                  font=font, stroke_width=max(1, size // 16), stroke_fill=255)
+        draw.text(
+            (nx // 20 + (k % 2) * nx // 6, ny // 10 + k * ny // 4.4),
+            line,
+            fill=255,
+            font=font,
+            stroke_width=max(1, size // 16),
+            stroke_fill=255,
+        )
     rng = np.random.default_rng(seed)
     for _ in range(6 if scratches else 0):  # scratches: gently curved, 1-2 pixels wide
         x0, y0 = rng.uniform(0, nx), rng.uniform(0, ny)
@@ -131,8 +147,12 @@ class RegionScene:
 def _axes(h, extent):
     """Grid coordinates covering [-e, e] per axis (x, y, z), broadcastable."""
     axes = [np.arange(-e, e + 0.5 * h, h) for e in extent]
-    return axes[0][None, None, :], axes[1][None, :, None], axes[2][:, None,
-                                                                   None], tuple(a[0] for a in axes)
+    return (
+        axes[0][None, None, :],
+        axes[1][None, :, None],
+        axes[2][:, None, None],
+        tuple(a[0] for a in axes),
+    )
 
 
 def _capsule(x, y, z, half, r):
@@ -180,17 +200,23 @@ def region_scene(name: str, spacing: float = 0.05) -> RegionScene:
         else:
             start, target = _two_spheres(x, y, z, 0.55, 0.45), _capsule(x, y, z, 0.6, 0.45)
             region = np.abs(x) - 0.35 + 0 * y + 0 * z  # the spheres' facing caps
+
         def b(a):
             return np.ascontiguousarray(np.broadcast_to(a, shape))
-        return RegionScene(b(start), b(region), h, origin,
-                           {"beta": "morph", "target": b(target), "t": 4.0})
+
+        return RegionScene(
+            b(start), b(region), h, origin, {"beta": "morph", "target": b(target), "t": 4.0}
+        )
     if name in ("cap-expand", "cap-translate"):
         shift = np.array([-0.25, 0.0, -0.1]) if name == "cap-translate" else np.zeros(3)
         x, y, z, origin = _axes(h, (1.4 + margin,) * 3)
         phi = np.sqrt((x - shift[0]) ** 2 + (y - shift[1]) ** 2 + (z - shift[2]) ** 2) - 0.9
         region = np.broadcast_to(0.45 + shift[2] - z, phi.shape)  # cap of angular radius 60 deg
-        options = ({"beta": 0.5, "t": 0.5} if name == "cap-expand"
-                   else {"velocity": (0.5, 0.0, 0.2), "t": 1.0})
+        options = (
+            {"beta": 0.5, "t": 0.5}
+            if name == "cap-expand"
+            else {"velocity": (0.5, 0.0, 0.2), "t": 1.0}
+        )
         return RegionScene(phi, np.ascontiguousarray(region), h, origin, options)
     raise InputError(f"scene must be one of {', '.join(REGION_SCENES)}, not {name!r}")
 
@@ -236,8 +262,9 @@ def checker(surf, cells: int = 6) -> np.ndarray:
     lo = surf.origin
     hi = surf.origin + surf.spacing * (np.array(surf.shape[::-1]) - 1)
     k = np.pi * cells / (hi - lo).max()
-    return surf.field(lambda x, y,
-                      z: 0.5 + 0.5 * np.sign(np.sin(k * x) * np.sin(k * y) * np.sin(k * z)))
+    return surf.field(
+        lambda x, y, z: 0.5 + 0.5 * np.sign(np.sin(k * x) * np.sin(k * y) * np.sin(k * z))
+    )
 
 
 def colour_pattern(surf) -> np.ndarray:
@@ -264,8 +291,9 @@ def colour_pattern(surf) -> np.ndarray:
     return surf.field(f)
 
 
-def surface_noise(surf, sigma: float, rng: np.random.Generator, channels: int | None = None
-                  ) -> np.ndarray:
+def surface_noise(
+    surf, sigma: float, rng: np.random.Generator, channels: int | None = None
+) -> np.ndarray:
     """Gaussian noise of standard deviation sigma on the surface, constant along its normals.
 
     Independent values per grid cell would not do: data on a surface is its values at the

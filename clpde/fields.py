@@ -23,8 +23,15 @@ KERNEL_FILES = ("common/fields.cl",)
 
 NEUMANN, DIRICHLET = 0, 1
 FLOAT32 = np.dtype(np.float32)
-_REDUCE_OPS = {"sum": 0, "sumsq": 1, "maxabsdiff": 2, "sumsqdiff": 3, "maxabs": 4, "min": 5,
-               "max": 6}
+_REDUCE_OPS = {
+    "sum": 0,
+    "sumsq": 1,
+    "maxabsdiff": 2,
+    "sumsqdiff": 3,
+    "maxabs": 4,
+    "min": 5,
+    "max": 6,
+}
 
 
 class BaseGrid(ABC):
@@ -63,8 +70,9 @@ class BaseGrid(ABC):
         g = self.ghost
         return padded[(Ellipsis,) + tuple(slice(g, g + n) for n in self.shape)]
 
-    def launch_list(self, kernel: Kernel, index_list: IndexList, *args,
-                    channels: int | None = None) -> cl.Event | None:
+    def launch_list(
+        self, kernel: Kernel, index_list: IndexList, *args, channels: int | None = None
+    ) -> cl.Event | None:
         """Run a LIST_RANGE kernel over the cells of an index list, `channels` work-items per
         cell (default `list_channels`)."""
         if index_list.n == 0:
@@ -72,8 +80,13 @@ class BaseGrid(ABC):
         channels = self.list_channels if channels is None else channels
         (gsize,), (lsize,), run = self.runtime.list_launch(index_list.n)
         return kernel(
-            self.runtime.queue, (gsize, channels), (lsize, 1), *args,
-            index_list.indices.data, np.int32(index_list.n), np.int32(self.channel_stride),
+            self.runtime.queue,
+            (gsize, channels),
+            (lsize, 1),
+            *args,
+            index_list.indices.data,
+            np.int32(index_list.n),
+            np.int32(self.channel_stride),
             np.int32(run),
         )
 
@@ -124,9 +137,15 @@ class Grid(BaseGrid):
         return kernel(self.runtime.queue, gsize, lsize, *args, *self.args(xrun), wait_for=wait_for)
 
 
-
-def check_fits(runtime: Runtime, shape, what: str, fields: float, ghost: int = 1,
-               dtype=FLOAT32, largest: float = 1.0) -> None:
+def check_fits(
+    runtime: Runtime,
+    shape,
+    what: str,
+    fields: float,
+    ghost: int = 1,
+    dtype=FLOAT32,
+    largest: float = 1.0,
+) -> None:
     """Refuse, before any work, a computation on (nc, ny, nx) data (or (nc, nz, ny, nx)
     volumes) that keeps about `fields` padded fields of that shape on the device, the
     largest buffer `largest` fields."""
@@ -153,13 +172,15 @@ class Field:
         return cls(grid, cla.empty(grid.runtime.queue, grid.padded_shape, grid.dtype))
 
     @classmethod
-    def from_host(cls, grid: Grid, values: np.ndarray, boundary: str = "neumann",
-                  value=0.0) -> Field:
+    def from_host(
+        cls, grid: Grid, values: np.ndarray, boundary: str = "neumann", value=0.0
+    ) -> Field:
         """Upload (nc, ny, nx) values and fill the ghosts."""
         values = np.asarray(values)
         if values.shape != (grid.nc, grid.ny, grid.nx):
-            raise ClpdeError(f"expected values of shape {(grid.nc, grid.ny, grid.nx)}, got "
-                             f"{values.shape}")
+            raise ClpdeError(
+                f"expected values of shape {(grid.nc, grid.ny, grid.nx)}, got {values.shape}"
+            )
         field = cls.empty(grid)
         padded = np.zeros(grid.padded_shape, grid.dtype)
         grid.interior(padded)[...] = values
@@ -200,8 +221,14 @@ class Field:
         partial = cla.empty(g.runtime.queue, (g.nc, g.ny), g.dtype)
         b = (other if other is not None else self).data.data
         g.kernel("common/fields.cl", "row_reduce")(
-            g.runtime.queue, (1, g.ny, g.nc), (1, 1, 1),  # a fixed work-group (Runtime.items)
-            self.data.data, b, np.int32(_REDUCE_OPS[op]), partial.data, *g.args(g.nx),
+            g.runtime.queue,
+            (1, g.ny, g.nc),
+            (1, 1, 1),  # a fixed work-group (Runtime.items)
+            self.data.data,
+            b,
+            np.int32(_REDUCE_OPS[op]),
+            partial.data,
+            *g.args(g.nx),
         )
         rows = partial.get().astype(np.float64)
         if op in ("maxabsdiff", "maxabs", "max"):
@@ -250,10 +277,12 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     flat = mask.reshape(n)
 
     launch = runtime.items(nchunks)
-    runtime.kernel("common/fields.cl", "count_chunks")(q, *launch, flat.data, np.int32(n),
-                                                np.int32(chunk), counts.data)
-    runtime.kernel("common/fields.cl", "exclusive_scan_serial")(q, (1,), (1,), counts.data,
-                                                         np.int32(nchunks), total.data)
+    runtime.kernel("common/fields.cl", "count_chunks")(
+        q, *launch, flat.data, np.int32(n), np.int32(chunk), counts.data
+    )
+    runtime.kernel("common/fields.cl", "exclusive_scan_serial")(
+        q, (1,), (1,), counts.data, np.int32(nchunks), total.data
+    )
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build
     indices = cla.empty(q, max(count, 1), np.int32)
     if count:

@@ -112,9 +112,16 @@ class Grid3D(BaseGrid):
         """Interior cells with |psi| < width (psi in the units of `width`), on the device."""
         mask = cla.zeros(self.runtime.queue, self.padded_shape, np.uint8)
         self.kernel("surface/band.cl", "band_mask")(
-            self.runtime.queue, *self.runtime.items(self.ny, self.nz), psi.data, mask.data,
-            self.scalar(width), np.int32(self.nx), np.int32(self.ny), np.int32(self.nz),
-            *self.strides(), np.int32(self.ghost),
+            self.runtime.queue,
+            *self.runtime.items(self.ny, self.nz),
+            psi.data,
+            mask.data,
+            self.scalar(width),
+            np.int32(self.nx),
+            np.int32(self.ny),
+            np.int32(self.nz),
+            *self.strides(),
+            np.int32(self.ghost),
         )
         return compact(self.runtime, mask)
 
@@ -128,16 +135,26 @@ class Grid3D(BaseGrid):
         else:
             flags = cla.empty(q, n, np.uint8)
             self.kernel("surface/band.cl", "band_run_starts")(
-                q, *self.runtime.items(n), band.indices.data, np.int32(n), flags.data)
+                q, *self.runtime.items(n), band.indices.data, np.int32(n), flags.data
+            )
             starts = compact(self.runtime, flags)
             offsets, nruns = starts.indices, starts.n
         start = cla.empty(q, max(nruns, 1), np.int32)
         end = cla.empty(q, max(nruns, 1), np.int32)
         if nruns:
             self.kernel("surface/band.cl", "band_run_bounds")(
-                q, *self.runtime.items(nruns), band.indices.data, offsets.data, np.int32(nruns),
-                np.int32(n), np.int32(pad), np.int32(self.nx), np.int32(self.sx),
-                np.int32(self.ghost), start.data, end.data,
+                q,
+                *self.runtime.items(nruns),
+                band.indices.data,
+                offsets.data,
+                np.int32(nruns),
+                np.int32(n),
+                np.int32(pad),
+                np.int32(self.nx),
+                np.int32(self.sx),
+                np.int32(self.ghost),
+                start.data,
+                end.data,
             )
         return BandRuns(band, start, end, nruns)
 
@@ -147,6 +164,13 @@ class Grid3D(BaseGrid):
             return None
         (gsize,), (lsize,), per_item = self.runtime.list_launch(runs.n)
         return kernel(
-            self.runtime.queue, (gsize, channels), (lsize, 1), *args, runs.start.data,
-            runs.end.data, np.int32(runs.n), np.int32(self.volume), np.int32(per_item),
+            self.runtime.queue,
+            (gsize, channels),
+            (lsize, 1),
+            *args,
+            runs.start.data,
+            runs.end.data,
+            np.int32(runs.n),
+            np.int32(self.volume),
+            np.int32(per_item),
         )

@@ -69,8 +69,11 @@ def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> 
     True where the result is above one half (ImageLayout.restore), as a thresholded
     level-set would."""
     array = np.asarray(image)
-    if not (array.dtype == bool or np.issubdtype(array.dtype, np.integer)
-            or np.issubdtype(array.dtype, np.floating)):
+    if not (
+        array.dtype == bool
+        or np.issubdtype(array.dtype, np.integer)
+        or np.issubdtype(array.dtype, np.floating)
+    ):
         raise InputError(
             f"{name} has dtype {array.dtype}; expected bools, unsigned or signed integers or "
             "floats (convert with image.astype(np.float32))"
@@ -107,8 +110,9 @@ def value_range(lo: float, hi: float, name: str = "image") -> tuple[float, float
     return lo, scale if hi > lo else 1.0
 
 
-def to_kernel_layout(image: ArrayLike, channel_axis: int | None = None,
-                     name: str = "image", fits=None) -> tuple[np.ndarray, ImageLayout]:
+def to_kernel_layout(
+    image: ArrayLike, channel_axis: int | None = None, name: str = "image", fits=None
+) -> tuple[np.ndarray, ImageLayout]:
     """(data, layout): data as float64 (nc, ny, nx) scaled to [0, 1], plus how to undo it.
 
     Integer images are scaled by their dtype's range (uint8 0..255 -> 0..1; bool is 0/1);
@@ -277,12 +281,14 @@ def grow_mask(mask: ArrayLike, px: float) -> np.ndarray:
     m = np.asarray(mask)
     if m.ndim != 2:
         raise InputError(f"a mask is a 2-D (rows, columns) array, not shape {m.shape}")
-    if not (m.dtype == bool or np.issubdtype(m.dtype, np.integer)
-            or np.issubdtype(m.dtype, np.floating)):
+    if not (
+        m.dtype == bool or np.issubdtype(m.dtype, np.integer) or np.issubdtype(m.dtype, np.floating)
+    ):
         raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array")
     if np.issubdtype(m.dtype, np.floating) and not np.isfinite(m).all():
-        raise InputError("mask contains NaN or infinite values; a float mask is the degree of "
-                         "damage in [0, 1]")
+        raise InputError(
+            "mask contains NaN or infinite values; a float mask is the degree of damage in [0, 1]"
+        )
     out = m.copy()
     support = m != 0
     if px == 0 or not support.any():
@@ -299,8 +305,12 @@ def grow_mask(mask: ArrayLike, px: float) -> np.ndarray:
 
 def growth(px) -> float:
     """A mask's growth in pixels, checked: a finite number >= 0 (bools refused)."""
-    if isinstance(px, bool) or not isinstance(px, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(px) or px < 0:
+    if (
+        isinstance(px, bool)
+        or not isinstance(px, (int, float, np.integer, np.floating))
+        or not np.isfinite(px)
+        or px < 0
+    ):
         raise InputError(f"the mask's growth must be a number of pixels >= 0, not {px!r}")
     return float(px)
 
@@ -328,6 +338,6 @@ def _grow_into(out: np.ndarray, support: np.ndarray, px: float, value) -> None:
             continue
         c0, c1 = max(0, cols[0] - reach), min(nx, cols[-1] + reach + 1)
         block = support[a:b, c0:c1]
-        near = ndimage.distance_transform_edt(~block)[y0 - a:y1 - a] <= px
-        ring = near & ~block[y0 - a:y1 - a]
+        near = ndimage.distance_transform_edt(~block)[y0 - a : y1 - a] <= px
+        ring = near & ~block[y0 - a : y1 - a]
         out[y0:y1, c0:c1][ring] = value

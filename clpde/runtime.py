@@ -23,8 +23,10 @@ KERNEL_FILES = ("planar/planar.cl",)
 ITEM_GROUP = 64  # the work-group of Runtime.items
 
 
-MEMORY_WAY_OUT = ("use a smaller input (crop or downsample it) or process it in tiles, or "
-                  "choose a device with more memory (clpde devices)")
+MEMORY_WAY_OUT = (
+    "use a smaller input (crop or downsample it) or process it in tiles, or "
+    "choose a device with more memory (clpde devices)"
+)
 
 
 def _mib(nbytes: float) -> str:
@@ -32,8 +34,7 @@ def _mib(nbytes: float) -> str:
 
 
 INSTALL_HINT = (
-    'install the CPU runtime with  pip install "clpde[pocl]"  '
-    "or your GPU vendor's OpenCL driver"
+    'install the CPU runtime with  pip install "clpde[pocl]"  or your GPU vendor\'s OpenCL driver'
 )
 
 
@@ -56,8 +57,9 @@ def _ensure_pocl_cache_dir() -> None:
     candidates = [current] if current else []
     candidates += [
         os.path.join(os.path.expanduser("~"), ".cache", "clpde", "pocl"),
-        os.path.join(tempfile.gettempdir(),
-                     f"clpde-pocl-{os.getuid() if hasattr(os, 'getuid') else 0}"),
+        os.path.join(
+            tempfile.gettempdir(), f"clpde-pocl-{os.getuid() if hasattr(os, 'getuid') else 0}"
+        ),
     ]
     for path in candidates:
         try:
@@ -216,8 +218,10 @@ def _probe(index: int) -> str | None:
             )
         else:
             first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
-            reason = (f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
-                      f"kernels: {first.strip()[:200]}")
+            reason = (
+                f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+                f"kernels: {first.strip()[:200]}"
+            )
         return reason
 
 
@@ -250,7 +254,6 @@ def _default_index() -> int:
 
 _chosen_spec = None
 _runtimes: dict[int, Runtime] = {}
-
 
 
 def use_device(spec: str | int | Runtime | None) -> Runtime:
@@ -469,8 +472,12 @@ class Runtime:
         source = f'#line 1 "{path}"\n' + path.read_text()
         # kernels/<capability>/<file> include shared code as "<capability>/<file>", and the
         # ground floor's (kernels/common/) by its bare name
-        options = [f"-I{KERNEL_DIR}", f"-I{KERNEL_DIR / 'common'}", f"-DREAL={real}",
-                   "-cl-std=CL1.2"]
+        options = [
+            f"-I{KERNEL_DIR}",
+            f"-I{KERNEL_DIR / 'common'}",
+            f"-DREAL={real}",
+            "-cl-std=CL1.2",
+        ]
         if real == "double":
             options.append("-DREAL_IS_DOUBLE=1")
         if "portable computing language" in self.platform.name.lower():
@@ -486,8 +493,9 @@ class Runtime:
         """Refuse an allocation the device cannot make, before trying it."""
         self.check_fits(nbytes, nbytes, f"the {what}")
 
-    def check_fits(self, total: int, largest: int, what: str,
-                   way_out: str = MEMORY_WAY_OUT) -> None:
+    def check_fits(
+        self, total: int, largest: int, what: str, way_out: str = MEMORY_WAY_OUT
+    ) -> None:
         """Refuse, before any work, a request whose buffers cannot fit the device: `total`
         bytes in all, the largest single buffer `largest` bytes."""
         _check_not_forked()
@@ -551,10 +559,10 @@ _used_opencl = False  # this process has asked OpenCL for its devices
 _forked_from: int | None = None  # the parent whose OpenCL state a forked child inherited
 
 
-
 # What every `device=` takes: a name part ('cpu', 'gpu', ...), an index, a Runtime, or None
 # for the default choice (see clpde.devices).
 DeviceLike = str | int | Runtime | None
+
 
 def _fork_message() -> str:
     return (
@@ -615,5 +623,6 @@ def _runtime_of(obj) -> Runtime:
     for runtime in list(_runtimes.values()):
         if runtime.ctx == ctx:
             return runtime
-    raise pickle.PicklingError(f"cannot pickle {type(obj).__name__} of a context clpde did not "
-                               "make")
+    raise pickle.PicklingError(
+        f"cannot pickle {type(obj).__name__} of a context clpde did not make"
+    )

@@ -7,11 +7,18 @@ DOCS = Path(__file__).resolve().parent.parent / "docs" / "images"
 
 
 def add_output_arguments(parser, default="out") -> None:
-    parser.add_argument("--out", type=Path, default=None,
-                        help=f"output folder, created if missing (default: {default}/)")
-    parser.add_argument("--docs", action="store_true",
-                        help=f"write the documentation pictures into {DOCS} instead, "
-                             "replacing the README's pictures")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help=f"output folder, created if missing (default: {default}/)",
+    )
+    parser.add_argument(
+        "--docs",
+        action="store_true",
+        help=f"write the documentation pictures into {DOCS} instead, "
+        "replacing the README's pictures",
+    )
     parser.set_defaults(default_out=Path(default))
 
 

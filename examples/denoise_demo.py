@@ -44,37 +44,52 @@ def side_by_side(*images, gap: int = 6) -> np.ndarray:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default="out", help="output folder (default: out)")
-    parser.add_argument("--sigma", type=float, default=0.1,
-                        help="noise level as a fraction of the range (default: 0.1)")
+    parser.add_argument(
+        "--sigma",
+        type=float,
+        default=0.1,
+        help="noise level as a fraction of the range (default: 0.1)",
+    )
     parser.add_argument("--device", default=None, help="OpenCL device (default: the default)")
-    parser.add_argument("--figure", default=None,
-                        help="also write the README's cropped before/after strip here")
+    parser.add_argument(
+        "--figure", default=None, help="also write the README's cropped before/after strip here"
+    )
     args = parser.parse_args(argv)
 
     runtime = clpde.get_runtime(args.device)
-    print(f"device: {runtime.device.name.strip()} ({runtime.type}, "
-          f"{runtime.platform.name.strip()})")
+    print(
+        f"device: {runtime.device.name.strip()} ({runtime.type}, {runtime.platform.name.strip()})"
+    )
     clean, noisy = noisy_photo(args.sigma)
 
     clpde.denoise_tv(noisy[:64, :64], sigma=args.sigma * 255, device=args.device, max_steps=20)
     start = time.perf_counter()  # timed after the warm-up above has built the kernels
-    denoised, info = clpde.denoise_tv(noisy, sigma=args.sigma * 255, device=args.device,
-                                      return_info=True)
+    denoised, info = clpde.denoise_tv(
+        noisy, sigma=args.sigma * 255, device=args.device, return_info=True
+    )
     seconds = time.perf_counter() - start
 
     psnr_noisy = peak_signal_noise_ratio(clean, noisy)
     psnr_denoised = peak_signal_noise_ratio(clean, denoised)
-    print(f"camera {clean.shape[1]}x{clean.shape[0]}, noise sigma {args.sigma:g} "
-          f"({args.sigma * 255:.1f} grey levels)")
+    print(
+        f"camera {clean.shape[1]}x{clean.shape[0]}, noise sigma {args.sigma:g} "
+        f"({args.sigma * 255:.1f} grey levels)"
+    )
     print(f"PSNR noisy {psnr_noisy:.2f} dB -> denoised {psnr_denoised:.2f} dB")
-    print(f"{info.steps} {info.method} iterations "
-          f"({'converged' if info.converged else 'max_steps reached'}) "
-          f"in {seconds:.2f} s; residual std {np.sqrt(info.residual_variance[0]):.1f} "
-          f"(target {args.sigma * 255:.1f})")
+    print(
+        f"{info.steps} {info.method} iterations "
+        f"({'converged' if info.converged else 'max_steps reached'}) "
+        f"in {seconds:.2f} s; residual std {np.sqrt(info.residual_variance[0]):.1f} "
+        f"(target {args.sigma * 255:.1f})"
+    )
 
     os.makedirs(args.out, exist_ok=True)
-    outputs = {"original.png": clean, "noisy.png": noisy, "denoised.png": denoised,
-               "denoise_before_after.png": side_by_side(noisy, denoised)}
+    outputs = {
+        "original.png": clean,
+        "noisy.png": noisy,
+        "denoised.png": denoised,
+        "denoise_before_after.png": side_by_side(noisy, denoised),
+    }
     for name, image in outputs.items():
         write_image(os.path.join(args.out, name), image)
     print(f"wrote {', '.join(outputs)} into {args.out}/")

@@ -21,10 +21,15 @@ FIGURE = Path(__file__).resolve().parent.parent / "docs" / "images" / "inpaint_a
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path, default=Path("out") / "inpaint_demo",
-                        help="output folder, replaced by each run (default: out/inpaint_demo)")
-    parser.add_argument("--docs", action="store_true",
-                        help=f"also write the README's picture {FIGURE}")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out") / "inpaint_demo",
+        help="output folder, replaced by each run (default: out/inpaint_demo)",
+    )
+    parser.add_argument(
+        "--docs", action="store_true", help=f"also write the README's picture {FIGURE}"
+    )
     args = parser.parse_args()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     written = run_demo(args.out, overwrite=True)

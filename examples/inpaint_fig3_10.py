@@ -22,8 +22,9 @@ def main():
     parser.add_argument("--out", default="out", help="output folder (default: out/)")
     args = parser.parse_args()
     photo = data.camera()[40:232, 170:362]  # the photographer's head and camera
-    mask = damage_mask(photo.shape, seed=5, text=False) | damage_mask(photo.shape, seed=8,
-                                                                      text=False)
+    mask = damage_mask(photo.shape, seed=5, text=False) | damage_mask(
+        photo.shape, seed=8, text=False
+    )
     damaged = np.where(mask, 255, photo).astype(np.uint8)
     panels = [damaged]
     for b in (0, 2, 15):

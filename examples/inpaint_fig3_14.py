@@ -29,8 +29,10 @@ def main():
     psnr = 10 * np.log10(255**2 / np.mean((result[mask].astype(float) - photo[mask]) ** 2))
     Path(args.out).mkdir(parents=True, exist_ok=True)
     path = write_image(Path(args.out) / "inpaint_fig3_14.png", side_by_side(damaged, result))
-    print(f"wrote {path}: {mask.mean():.1%} of the pixels, {info.steps} steps, "
-          f"{info.seconds:.1f} s, PSNR inside the mask {psnr:.2f} dB")
+    print(
+        f"wrote {path}: {mask.mean():.1%} of the pixels, {info.steps} steps, "
+        f"{info.seconds:.1f} s, PSNR inside the mask {psnr:.2f} dB"
+    )
 
 
 if __name__ == "__main__":

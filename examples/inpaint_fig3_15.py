@@ -27,8 +27,7 @@ def main():
     mask = damage_mask(photo.shape[:2], seed=11)
     damaged = photo.copy()
     damaged[mask] = 255
-    _, states = clpde.inpaint(damaged, mask, channel_axis=-1, snapshots=68, tol=0,
-                              mean_tol=0)
+    _, states = clpde.inpaint(damaged, mask, channel_axis=-1, snapshots=68, tol=0, mean_tol=0)
     chosen = [s for s in states if s.step in (0, 136, 680)] + [states[-1]]
     for s in chosen:
         mse = np.mean((s.image[mask].astype(float) - photo[mask]) ** 2)

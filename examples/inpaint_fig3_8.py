@@ -38,12 +38,15 @@ def main():
     # 0.046 after 3009).
     result, info = clpde.inpaint(image, omega, mean_tol=0, return_info=True)
     shown = np.where(omega, 1.0, image)
-    panel = side_by_side(*(np.rint(255 * np.kron(a, np.ones((2, 2)))).astype(np.uint8)
-                           for a in (shown, result)))
+    panel = side_by_side(
+        *(np.rint(255 * np.kron(a, np.ones((2, 2)))).astype(np.uint8) for a in (shown, result))
+    )
     Path(args.out).mkdir(parents=True, exist_ok=True)
     path = write_image(Path(args.out) / "inpaint_fig3_8.png", panel)
-    print(f"wrote {path}: {info.steps} steps on {info.levels} level(s), "
-          f"mean error in Omega {np.abs(result - image)[omega].mean():.3f}")
+    print(
+        f"wrote {path}: {info.steps} steps on {info.levels} level(s), "
+        f"mean error in Omega {np.abs(result - image)[omega].mean():.3f}"
+    )
 
 
 if __name__ == "__main__":

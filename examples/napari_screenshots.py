@@ -89,7 +89,7 @@ def track(app):
 
 def surface(app):
     viewer = napari.Viewer(title="clpde: surface flows", ndisplay=3)
-    layer, = add(viewer, samples.torus())
+    (layer,) = add(viewer, samples.torus())
     w = widgets.SurfaceWidget(viewer)
     viewer.window.add_dock_widget(w, name="clpde surface")
     w.surface.value, w.flow.value, w.amount.value, w.resolution.value = layer, "heat", 0.05, 64

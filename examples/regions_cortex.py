@@ -29,8 +29,9 @@ def fsaverage_white_left():
         import nibabel as nib
         import nilearn
     except ImportError:
-        raise SystemExit("this example needs the meshes inside nilearn: pip install nilearn "
-                         "nibabel") from None
+        raise SystemExit(
+            "this example needs the meshes inside nilearn: pip install nilearn nibabel"
+        ) from None
 
     folder = os.path.join(os.path.dirname(nilearn.__file__), "datasets", "data", "fsaverage5")
     surf = nib.load(os.path.join(folder, "white_left.gii.gz"))
@@ -63,25 +64,45 @@ def main():
     # the region: FreeSurfer's sulci, a mask over the vertices of the original mesh (mesh=).
     # weight h^3 makes the speed K+ in cells per unit time, with K in 1 / cells^2; creases
     # sharper than a 2-cell radius (K > 1/4) move at the speed of that radius
-    frames = track_region(phi, curv > 0, mesh=cortex, beta="gaussian", weight=h**3, t=args.t,
-                          spacing=h, saves=args.saves, origin=origin, max_speed=0.25 * h,
-                          progress=True, keep_volumes=True)
+    frames = track_region(
+        phi,
+        curv > 0,
+        mesh=cortex,
+        beta="gaussian",
+        weight=h**3,
+        t=args.t,
+        spacing=h,
+        saves=args.saves,
+        origin=origin,
+        max_speed=0.25 * h,
+        progress=True,
+        keep_volumes=True,
+    )
     seconds = time.perf_counter() - start
     meshes = Path("out") / "regions_cortex"  # git-ignored; replaced by each run
     meshes.parent.mkdir(exist_ok=True)
-    written = write_frames(frames, meshes, size=args.size, views=((-90.0, 10.0), (90.0, 10.0)),
-                           stem="cortex", overwrite=True)
+    written = write_frames(
+        frames,
+        meshes,
+        size=args.size,
+        views=((-90.0, 10.0), (90.0, 10.0)),
+        stem="cortex",
+        overwrite=True,
+    )
     shutil.copyfile(written[-1], out / "regions_cortex.png")
     print(f"wrote {out / 'regions_cortex.png'} and the meshes in {meshes}/")
     shares = ", ".join(f"{f.area_fraction(0):.3f}" for f in frames)
-    print(f"cortex: grid {'x'.join(map(str, phi.shape[::-1]))} (h = {h:.2f} mm), {seconds:.1f} s; "
-          f"sulcal (yellow) area fraction {shares}; surface area "
-          f"{', '.join(f'{f.area():.0f}' for f in frames)} mm^2")
+    print(
+        f"cortex: grid {'x'.join(map(str, phi.shape[::-1]))} (h = {h:.2f} mm), {seconds:.1f} s; "
+        f"sulcal (yellow) area fraction {shares}; surface area "
+        f"{', '.join(f'{f.area():.0f}' for f in frames)} mm^2"
+    )
     # the check of the tracking: the sulci stay the concave parts while the folds flatten
     for f in frames:
         yellow, grey = concave_shares(f, h, origin)
-        print(f"t = {f.time:g}: concave share of the yellow area {yellow:.2f}, of the rest "
-              f"{grey:.2f}")
+        print(
+            f"t = {f.time:g}: concave share of the yellow area {yellow:.2f}, of the rest {grey:.2f}"
+        )
 
 
 def concave_shares(frame, h, origin):
@@ -95,8 +116,10 @@ def concave_shares(frame, h, origin):
     at = ((frame.mesh.triangles_center - np.asarray(origin)) / h)[:, ::-1].T  # (z, y, x)
     concave = map_coordinates(mean, at, order=1) < 0
     area, inside = frame.mesh.area_faces, frame.face_labels == 0
-    return (area[inside & concave].sum() / area[inside].sum(),
-            area[~inside & concave].sum() / area[~inside].sum())
+    return (
+        area[inside & concave].sum() / area[inside].sum(),
+        area[~inside & concave].sum() / area[~inside].sum(),
+    )
 
 
 if __name__ == "__main__":

@@ -36,12 +36,20 @@ def main():
         frames = run_scene(scene, saves=args.saves)
         seconds = time.perf_counter() - start
         meshes = Path("out") / f"regions_{name}"  # git-ignored; replaced by each run
-        written = write_frames(frames, meshes, size=args.size,
-                               views=((30.0, 25.0), (-60.0, 35.0)), stem=name, overwrite=True)
+        written = write_frames(
+            frames,
+            meshes,
+            size=args.size,
+            views=((30.0, 25.0), (-60.0, 35.0)),
+            stem=name,
+            overwrite=True,
+        )
         shutil.copyfile(written[-1], out / f"regions_{name}.png")
         shares = ", ".join(f"{f.area_fraction(0):.3f}" for f in frames)
-        print(f"{name}: grid {'x'.join(map(str, scene.phi.shape[::-1]))}, {seconds:.1f} s; "
-              f"yellow area fraction {shares} at t = {', '.join(f'{f.time:g}' for f in frames)}")
+        print(
+            f"{name}: grid {'x'.join(map(str, scene.phi.shape[::-1]))}, {seconds:.1f} s; "
+            f"yellow area fraction {shares} at t = {', '.join(f'{f.time:g}' for f in frames)}"
+        )
 
 
 if __name__ == "__main__":

@@ -64,33 +64,42 @@ def main():
         sigma = 0.2
         noisy = checker(torus) + surface_noise(torus, sigma, np.random.default_rng(4))
         denoised, info = torus.denoise_tv(noisy, sigma=sigma, t=40 * h**2, return_info=True)
-        print(f"  TV denoising: residual variance {info.residual_variance:.4f}, "
-              f"sigma^2 = {sigma**2:.4f}")
+        print(
+            f"  TV denoising: residual variance {info.residual_variance:.4f}, "
+            f"sigma^2 = {sigma**2:.4f}"
+        )
         flowed = torus.tv(noisy, t=tv_time(sigma, h))  # flattens the noise, keeps the squares
-        save(out / "surface_fig4_4.png",
-             [picture(torus, x, size, vmin=0, vmax=1) for x in (noisy, denoised, flowed)])
+        save(
+            out / "surface_fig4_4.png",
+            [picture(torus, x, size, vmin=0, vmax=1) for x in (noisy, denoised, flowed)],
+        )
 
     if "4.6" in wanted:
         clean = colour_pattern(torus)
         noise = surface_noise(torus, 0.25, np.random.default_rng(6), channels=3)
         noisy = np.clip(clean + noise, 0.01, 1)
         restored = torus.denoise_colour(noisy, t=4 * h**2)
-        save(out / "surface_fig4_6.png",
-             [picture(torus, x, size) for x in (clean, noisy, restored)])
+        save(
+            out / "surface_fig4_6.png", [picture(torus, x, size) for x in (clean, noisy, restored)]
+        )
 
     if wanted & {"4.7", "4.8"}:
         major, minor, _ = genus2.principal_directions()
     if "4.7" in wanted:
         spots = genus2.reaction_diffusion(args.iterations, seed=1)[0]
         stripes = genus2.reaction_diffusion(args.iterations, direction=major, seed=1)[0]
-        save(out / "surface_fig4_7.png",
-             [picture(genus2, x, size, view=(20, 40)) for x in (spots, stripes)])
+        save(
+            out / "surface_fig4_7.png",
+            [picture(genus2, x, size, view=(20, 40)) for x in (spots, stripes)],
+        )
 
     if "4.8" in wanted:
         noise = genus2.field(lambda x, y, z: 0 * x) + np.random.default_rng(8).random(genus2.shape)
         g = genus2.spacing
-        panels = [picture(genus2, genus2.diffuse_along(noise, d, t=4 * g**2), size, view=(20, 40))
-                  for d in (major, minor)]
+        panels = [
+            picture(genus2, genus2.diffuse_along(noise, d, t=4 * g**2), size, view=(20, 40))
+            for d in (major, minor)
+        ]
         save(out / "surface_fig4_8.png", panels)
     print(f"all figures in {time.perf_counter() - start:.0f} s")
 
@@ -114,8 +123,9 @@ def figure_4_5(args, out, rng):
     major, _, _ = surf.principal_directions()
     smooth = surf.harmonic_map(major, t=4 * h, p=1, line_field=True)
     noise = surf.field(lambda x, y, z: 0 * x) + rng.random(surf.shape)
-    panels = [picture(surf, surf.diffuse_along(noise, d, t=10 * h**2), args.size)
-              for d in (major, smooth)]
+    panels = [
+        picture(surf, surf.diffuse_along(noise, d, t=10 * h**2), args.size) for d in (major, smooth)
+    ]
     save(out / "surface_fig4_5.png", panels)
 
 

@@ -64,18 +64,33 @@ def carphone_figure(out: Path):
         masks = clpde.track(frames, truth[0], **options)
         elapsed = time.perf_counter() - start
         j = [jaccard(masks[k], truth[k]) for k in scored]
-        print(f"{name:12s} mean J {np.mean(j):.3f} over frames {scored}: "
-              + " ".join(f"{v:.3f}" for v in j)
-              + f"  ({1000 * elapsed / (len(frames) - 1):.0f} ms per frame)")
-        rows.append(np.concatenate(
-            [outline(outline(to_rgb(frames[k]), truth[k], (40, 255, 40)), masks[k],
-                     (255, 40, 40)) for k in scored], axis=1))
+        print(
+            f"{name:12s} mean J {np.mean(j):.3f} over frames {scored}: "
+            + " ".join(f"{v:.3f}" for v in j)
+            + f"  ({1000 * elapsed / (len(frames) - 1):.0f} ms per frame)"
+        )
+        rows.append(
+            np.concatenate(
+                [
+                    outline(
+                        outline(to_rgb(frames[k]), truth[k], (40, 255, 40)), masks[k], (255, 40, 40)
+                    )
+                    for k in scored
+                ],
+                axis=1,
+            )
+        )
     write_image(out / "track_carphone.png", np.concatenate(rows, axis=0))
     # Every sixth frame of the default, cropped around the head, keeps the animation small.
     crop = (slice(0, 112), slice(8, 136))
-    write_gif(out / "track_carphone.gif",
-              [outline(to_rgb(f), m, (255, 40, 40))[crop]
-               for f, m in zip(frames[::6], masks[::6], strict=False)], duration=0.2)
+    write_gif(
+        out / "track_carphone.gif",
+        [
+            outline(to_rgb(f), m, (255, 40, 40))[crop]
+            for f, m in zip(frames[::6], masks[::6], strict=False)
+        ],
+        duration=0.2,
+    )
 
 
 def hard_cases_figure(out: Path):
@@ -88,12 +103,24 @@ def hard_cases_figure(out: Path):
         for options in (OLD, {}):
             masks = clpde.track(frames, truth[0], **options)
             worst = min(jaccard(m, t) for m, t in zip(masks[1:], truth[1:], strict=False))
-            print(f"{kind:10s} {'old default' if options else 'default':12s} "
-                  f"worst IoU {worst:.3f}")
-            row.append(np.concatenate(
-                [outline(outline(to_rgb(np.repeat(frames[k][..., None] * 255, 3, axis=-1)),
-                                 truth[k], (40, 255, 40)),
-                         masks[k], (255, 40, 40)) for k in (1, 4, 7)], axis=1))
+            print(f"{kind:10s} {'old default' if options else 'default':12s} worst IoU {worst:.3f}")
+            row.append(
+                np.concatenate(
+                    [
+                        outline(
+                            outline(
+                                to_rgb(np.repeat(frames[k][..., None] * 255, 3, axis=-1)),
+                                truth[k],
+                                (40, 255, 40),
+                            ),
+                            masks[k],
+                            (255, 40, 40),
+                        )
+                        for k in (1, 4, 7)
+                    ],
+                    axis=1,
+                )
+            )
         gap = np.full((row[0].shape[0], 6, 3), 255, np.uint8)
         panels.append(np.concatenate([row[0], gap, row[1]], axis=1))
     picture = np.concatenate(panels, axis=0)

@@ -31,8 +31,10 @@ def mni_slices(start: int, count: int):
     t1 = np.asarray(nibabel.load(data / "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz").dataobj)
     wm = np.asarray(nibabel.load(data / "mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz").dataobj)
     zs = range(start, start + count)
-    return (np.stack([t1[:, :, z].T[::-1] for z in zs]),
-            np.stack([wm[:, :, z].T[::-1] > 127 for z in zs]))
+    return (
+        np.stack([t1[:, :, z].T[::-1] for z in zs]),
+        np.stack([wm[:, :, z].T[::-1] > 127 for z in zs]),
+    )
 
 
 def main():

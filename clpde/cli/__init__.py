@@ -36,7 +36,8 @@ ERROR_STATUS = 2
 
 def build_parser() -> Parser:
     parser = Parser(
-        prog="clpde", description="PDE image processing on OpenCL devices (GPU or CPU).")
+        prog="clpde", description="PDE image processing on OpenCL devices (GPU or CPU)."
+    )
     parser.add_argument("--version", action="version", version=f"clpde {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for add_parser in SUBCOMMANDS:

@@ -33,31 +33,40 @@ class Parser(argparse.ArgumentParser):
 
 def add_device_argument(parser) -> None:
     parser.add_argument(
-        "--device", metavar="SPEC", default=None,
+        "--device",
+        metavar="SPEC",
+        default=None,
         help="OpenCL device: 'cpu', 'gpu', an index or a name substring from `clpde devices` "
-             "(default: $CLPDE_DEVICE, else a GPU if present, else the CPU)",
+        "(default: $CLPDE_DEVICE, else a GPU if present, else the CPU)",
     )
 
 
 def add_image_arguments(parser) -> None:
     """IN and OUT image paths and --device."""
     parser.add_argument("input", metavar="IN", help="input image (.png, .tif/.tiff, .jpg/.jpeg)")
-    parser.add_argument("output", metavar="OUT",
-                        help="output image; same formats; never the input file")
+    parser.add_argument(
+        "output", metavar="OUT", help="output image; same formats; never the input file"
+    )
     add_device_argument(parser)
 
 
-OUTPUT_FOLDER_RULE = ("created if missing (its parent must exist); it must be empty, "
-                      "unless --overwrite, which replaces it as a whole")
+OUTPUT_FOLDER_RULE = (
+    "created if missing (its parent must exist); it must be empty, "
+    "unless --overwrite, which replaces it as a whole"
+)
 
 
 def add_output_folder_arguments(parser, what: str = "output folder") -> None:
     """-o/--output OUTDIR and --overwrite, with the one rule of every folder-writing command."""
-    parser.add_argument("-o", "--output", metavar="OUTDIR", required=True,
-                        help=f"{what}: {OUTPUT_FOLDER_RULE}")
-    parser.add_argument("--overwrite", action="store_true",
-                        help="replace the output folder's contents (only a folder of clpde's "
-                             "kinds of output files: .png .gif .json .ply .glb .tif .jpg)")
+    parser.add_argument(
+        "-o", "--output", metavar="OUTDIR", required=True, help=f"{what}: {OUTPUT_FOLDER_RULE}"
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the output folder's contents (only a folder of clpde's "
+        "kinds of output files: .png .gif .json .ply .glb .tif .jpg)",
+    )
 
 
 def check_output_folder_args(args, inputs=()) -> None:
@@ -86,9 +95,11 @@ def grid_advice(resolution: int):
             share = re.search(r"([\d.]+)% of the band", text)
             if share and float(share.group(1)) < _COARSE_SHARE_SHOWN:
                 continue
-            text = re.sub(r"use a finer spacing \(below [^)]*\) or a narrower band",
-                          f"give a larger --resolution (such as {2 * resolution}, which halves "
-                          "the spacing)", text)
+            text = re.sub(
+                r"use a finer spacing \(below [^)]*\) or a narrower band",
+                f"give a larger --resolution (such as {2 * resolution}, which halves the spacing)",
+                text,
+            )
         warnings.warn(text, w.category, stacklevel=3)
 
 

@@ -30,22 +30,30 @@ def run_demo(outdir, device=None, progress=None, overwrite: bool = False) -> lis
     outdir = Path(outdir)
     check_output_folder(outdir, overwrite)
     original, damaged, mask = damaged_astronaut()
-    restored, info = inpaint(damaged, mask, channel_axis=-1, device=device, progress=progress,
-                             return_info=True)
+    restored, info = inpaint(
+        damaged, mask, channel_axis=-1, device=device, progress=progress, return_info=True
+    )
     written = []
     with output_folder(outdir, overwrite) as staging:
-        for name, image in (("original.png", original), ("damaged.png", damaged),
-                            ("mask.png", mask.astype(np.uint8) * 255), ("inpainted.png", restored),
-                            ("inpaint_before_after.png", side_by_side(damaged, restored))):
+        for name, image in (
+            ("original.png", original),
+            ("damaged.png", damaged),
+            ("mask.png", mask.astype(np.uint8) * 255),
+            ("inpainted.png", restored),
+            ("inpaint_before_after.png", side_by_side(damaged, restored)),
+        ):
             write_image(staging / name, image)
             written.append(outdir / name)
-    peers = ", ".join(f"{name} {value:.1f} dB" for name,
-                      value in peer_psnr(damaged, mask, original).items())
+    peers = ", ".join(
+        f"{name} {value:.1f} dB" for name, value in peer_psnr(damaged, mask, original).items()
+    )
     steps = f"{info.steps} steps, " if info.method == "transport" else ""
-    print(f"inpainted {mask.sum()} pixels ({100 * mask.mean():.1f}%) by {info.method}, {steps}"
-          f"{info.seconds:.1f} s; PSNR inside the mask "
-          f"{psnr_in_mask(restored, original, mask):.1f} "
-          f"dB (higher is closer to the original; on the same damage: {peers})")
+    print(
+        f"inpainted {mask.sum()} pixels ({100 * mask.mean():.1f}%) by {info.method}, {steps}"
+        f"{info.seconds:.1f} s; PSNR inside the mask "
+        f"{psnr_in_mask(restored, original, mask):.1f} "
+        f"dB (higher is closer to the original; on the same damage: {peers})"
+    )
     return written
 
 
@@ -61,8 +69,11 @@ def peer_psnr(damaged: np.ndarray, mask: np.ndarray, original: np.ndarray) -> di
     Telea and Navier-Stokes methods (radius 3). A figure of merit with something beside it."""
     from skimage.restoration import inpaint_biharmonic
 
-    fills = {"scikit-image biharmonic": lambda: np.clip(np.rint(
-        255 * inpaint_biharmonic(damaged, mask, channel_axis=-1)), 0, 255).astype(np.uint8)}
+    fills = {
+        "scikit-image biharmonic": lambda: np.clip(
+            np.rint(255 * inpaint_biharmonic(damaged, mask, channel_axis=-1)), 0, 255
+        ).astype(np.uint8)
+    }
     try:
         import cv2
     except ImportError:

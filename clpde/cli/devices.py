@@ -13,7 +13,8 @@ from ._common import add_device_argument
 
 def add_devices_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "devices", help="list OpenCL platforms and devices",
+        "devices",
+        help="list OpenCL platforms and devices",
         description="List every OpenCL device; '*' marks the one clpde uses.",
     )
     parser.add_argument("--json", action="store_true", help="print a JSON list instead")
@@ -38,13 +39,14 @@ def run_devices(args) -> int:
         for info in found:
             print(info.describe())
         if problem is None:
-            print("(* = the device in use; choose with --device, CLPDE_DEVICE or "
-                  "clpde.use_device)")
+            print("(* = the device in use; choose with --device, CLPDE_DEVICE or clpde.use_device)")
     if problem is not None:  # after the list, so that the fix can point at it
         env = os.environ.get("CLPDE_DEVICE")
         if env and "cannot compile" not in str(problem):
-            raise ClpdeError(f"CLPDE_DEVICE={env!r} matches none of the devices listed above, "
-                             "so every command would fail; set it to one of them (its index, "
-                             "'cpu', or part of its name) or unset it")
+            raise ClpdeError(
+                f"CLPDE_DEVICE={env!r} matches none of the devices listed above, "
+                "so every command would fail; set it to one of them (its index, "
+                "'cpu', or part of its name) or unset it"
+            )
         raise problem
     return 0

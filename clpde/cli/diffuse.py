@@ -9,41 +9,72 @@ from ._common import add_image_arguments, param_check, report, show_progress
 
 def add_diffuse_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "diffuse", help="run a planar diffusion flow on an image",
+        "diffuse",
+        help="run a planar diffusion flow on an image",
         description="Run heat, Perona-Malik, TV or curvature diffusion for a number of "
-                    "explicit steps. Colour images are processed per channel.",
+        "explicit steps. Colour images are processed per channel.",
     )
     add_image_arguments(parser)
     parser.add_argument("--flow", choices=FLOWS, default="heat", help="default: heat")
     parser.add_argument("--steps", type=int, default=100, help="explicit steps (default: 100)")
-    parser.add_argument("--dt", type=float, default=None,
-                        help="time step (default: 0.8 of the stability limit)")
-    parser.add_argument("--kappa", type=float, default=None,
-                        help="Perona-Malik edge threshold, intensities in [0, 1] (default 0.05)")
-    parser.add_argument("--edge", choices=("exp", "rational"), default=None,
-                        help="Perona-Malik edge-stopping function (default: exp)")
-    parser.add_argument("--presmooth", type=float, default=None,
-                        help="Perona-Malik: read the edge-stopping function from the image "
-                             "smoothed by a Gaussian of this many pixels (the regularised "
-                             "flow of Catte et al.; isolated noise spikes then diffuse too)")
-    parser.add_argument("--eps", type=float, default=None,
-                        help="TV / curvature regularisation of |grad u|, intensities in [0, 1] "
-                             "(TV default 0.005, about one 8-bit grey level: regions flatten, "
-                             "edges stay)")
+    parser.add_argument(
+        "--dt", type=float, default=None, help="time step (default: 0.8 of the stability limit)"
+    )
+    parser.add_argument(
+        "--kappa",
+        type=float,
+        default=None,
+        help="Perona-Malik edge threshold, intensities in [0, 1] (default 0.05)",
+    )
+    parser.add_argument(
+        "--edge",
+        choices=("exp", "rational"),
+        default=None,
+        help="Perona-Malik edge-stopping function (default: exp)",
+    )
+    parser.add_argument(
+        "--presmooth",
+        type=float,
+        default=None,
+        help="Perona-Malik: read the edge-stopping function from the image "
+        "smoothed by a Gaussian of this many pixels (the regularised "
+        "flow of Catte et al.; isolated noise spikes then diffuse too)",
+    )
+    parser.add_argument(
+        "--eps",
+        type=float,
+        default=None,
+        help="TV / curvature regularisation of |grad u|, intensities in [0, 1] "
+        "(TV default 0.005, about one 8-bit grey level: regions flatten, "
+        "edges stay)",
+    )
     parser.set_defaults(run=run_diffuse)
 
 
 def task_options(args) -> dict:
     """The diffuse task's keywords from the parsed flags (clpde.scale.tasks.diffuse_file)."""
-    return {"flow": args.flow, "steps": args.steps, "dt": args.dt, "kappa": args.kappa,
-            "edge": args.edge, "eps": args.eps, "presmooth": args.presmooth,
-            "device": args.device}
+    return {
+        "flow": args.flow,
+        "steps": args.steps,
+        "dt": args.dt,
+        "kappa": args.kappa,
+        "edge": args.edge,
+        "eps": args.eps,
+        "presmooth": args.presmooth,
+        "device": args.device,
+    }
 
 
 def run_diffuse(args) -> int:
-    param_check(args, args.flow, {option: tuple(f for f, params in FLOW_PARAMS.items()
-                                                if option in params)
-                                  for option in ("kappa", "edge", "eps", "presmooth")})
-    report(TASKS["diffuse"](args.input, args.output, progress=show_progress(),
-                            **task_options(args)))
+    param_check(
+        args,
+        args.flow,
+        {
+            option: tuple(f for f, params in FLOW_PARAMS.items() if option in params)
+            for option in ("kappa", "edge", "eps", "presmooth")
+        },
+    )
+    report(
+        TASKS["diffuse"](args.input, args.output, progress=show_progress(), **task_options(args))
+    )
     return 0

@@ -39,34 +39,52 @@ DEFAULT_FLOW = "morph-sphere"
 
 def add_regions_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "regions", help="track painted regions on a deforming surface (thesis 2.2)",
+        "regions",
+        help="track painted regions on a deforming surface (thesis 2.2)",
         description="Track regions on a surface that deforms by level sets (thesis section "
-                    "2.2). SCENE is one of " + ", ".join(SCENES) + " (Figure 2.7's toy cases "
-                    "and caps on a sphere), or a mesh file: its surface evolves by --flow, with "
-                    "regions from its vertex colours or the sign of its Gaussian curvature. "
-                    "Writes OUTDIR/regions_K.ply per saved time (per-vertex region colours) "
-                    "and OUTDIR/regions.png (saved times top to bottom).",
+        "2.2). SCENE is one of " + ", ".join(SCENES) + " (Figure 2.7's toy cases "
+        "and caps on a sphere), or a mesh file: its surface evolves by --flow, with "
+        "regions from its vertex colours or the sign of its Gaussian curvature. "
+        "Writes OUTDIR/regions_K.ply per saved time (per-vertex region colours) "
+        "and OUTDIR/regions.png (saved times top to bottom).",
     )
     parser.add_argument("scene", metavar="SCENE", help="scene name or mesh file")
     add_output_folder_arguments(parser)
-    parser.add_argument("--flow", choices=FLOWS, default=DEFAULT_FLOW,
-                        help="surface motion for a mesh file: morph-sphere (default) morphs it "
-                             "toward the sphere of its volume; mean-curvature shrinks it; "
-                             "gaussian moves it by the positive part of its Gaussian curvature "
-                             "(creases and folds). The grid grows to hold where the flow takes "
-                             "the surface; the output says how far it moved")
-    parser.add_argument("--regions", choices=("auto", "colours", "curvature"), default="auto",
-                        help="regions on a mesh file: one per flat vertex colour ('colours'), "
-                             "or where its Gaussian curvature is positive ('curvature'); "
-                             "'auto' (default) takes the colours when the mesh has them")
-    parser.add_argument("--spacing", type=float, default=0.05,
-                        help="grid spacing of the named scenes (default: 0.05)")
-    parser.add_argument("--resolution", type=int, default=96,
-                        help="grid cells across a mesh's longest side (default: 96)")
+    parser.add_argument(
+        "--flow",
+        choices=FLOWS,
+        default=DEFAULT_FLOW,
+        help="surface motion for a mesh file: morph-sphere (default) morphs it "
+        "toward the sphere of its volume; mean-curvature shrinks it; "
+        "gaussian moves it by the positive part of its Gaussian curvature "
+        "(creases and folds). The grid grows to hold where the flow takes "
+        "the surface; the output says how far it moved",
+    )
+    parser.add_argument(
+        "--regions",
+        choices=("auto", "colours", "curvature"),
+        default="auto",
+        help="regions on a mesh file: one per flat vertex colour ('colours'), "
+        "or where its Gaussian curvature is positive ('curvature'); "
+        "'auto' (default) takes the colours when the mesh has them",
+    )
+    parser.add_argument(
+        "--spacing",
+        type=float,
+        default=0.05,
+        help="grid spacing of the named scenes (default: 0.05)",
+    )
+    parser.add_argument(
+        "--resolution",
+        type=int,
+        default=96,
+        help="grid cells across a mesh's longest side (default: 96)",
+    )
     parser.add_argument("--t", type=float, default=None, help="final time (default: per scene)")
     parser.add_argument("--saves", type=int, default=4, help="saved intervals (default: 4)")
-    parser.add_argument("--size", type=int, default=256,
-                        help="picture size per view (default: 256)")
+    parser.add_argument(
+        "--size", type=int, default=256, help="picture size per view (default: 256)"
+    )
     add_device_argument(parser)
     parser.set_defaults(run=run_regions)
 
@@ -77,25 +95,38 @@ def run_regions(args) -> int:
     if args.size < 16:
         raise InputError(f"--size must be at least 16, not {args.size}")
     if args.scene not in SCENES and not os.path.exists(args.scene):
-        raise InputError(f"{args.scene!r} is neither a mesh file nor one of the scenes "
-                         f"{', '.join(SCENES)}")
+        raise InputError(
+            f"{args.scene!r} is neither a mesh file nor one of the scenes {', '.join(SCENES)}"
+        )
     if args.scene in SCENES:
         scene = region_scene(args.scene, args.spacing)
         if args.t is not None:
             scene.options["t"] = args.t
     else:
         if show_progress():  # the grid and the regions take a while before the steps begin
-            print(f"regions: building a grid of {args.resolution} cells across {args.scene} "
-                  "and its regions...", file=sys.stderr, flush=True)
+            print(
+                f"regions: building a grid of {args.resolution} cells across {args.scene} "
+                "and its regions...",
+                file=sys.stderr,
+                flush=True,
+            )
         with grid_advice(args.resolution):
             scene = mesh_scene(args.scene, args.flow, args.resolution, args.t, args.regions)
     frames = run_scene(scene, saves=args.saves, progress=show_progress(), device=args.device)
-    written = write_frames(frames, args.output, size=args.size,
-                           views=((30.0, 25.0), (-60.0, 35.0)), overwrite=args.overwrite)
+    written = write_frames(
+        frames,
+        args.output,
+        size=args.size,
+        views=((30.0, 25.0), (-60.0, 35.0)),
+        overwrite=args.overwrite,
+    )
     share = ", ".join(f"{f.area_fraction(0):.3f}" for f in frames)
-    print(f"regions {args.scene}: grid {'x'.join(map(str, scene.phi.shape[::-1]))}, region 0 "
-          f"area fraction {share} at t = {', '.join(f'{f.time:g}' for f in frames)}; wrote "
-          f"{len(written)} files to {args.output}", file=sys.stderr)
+    print(
+        f"regions {args.scene}: grid {'x'.join(map(str, scene.phi.shape[::-1]))}, region 0 "
+        f"area fraction {share} at t = {', '.join(f'{f.time:g}' for f in frames)}; wrote "
+        f"{len(written)} files to {args.output}",
+        file=sys.stderr,
+    )
     if args.scene not in SCENES:
         print(motion_report(scene, frames, args.flow), file=sys.stderr)
     return 0
@@ -107,24 +138,31 @@ def motion_report(scene: RegionScene, frames, flow: str) -> str:
     hardly moved, the measured reason and what to change."""
     mean, most = displacement_stats(scene, frames[-1], frames[0].mesh)
     diagonal = float(np.linalg.norm(np.ptp(np.asarray(frames[0].mesh.vertices), axis=0)))
-    line = (f"regions: the surface moved {mean / diagonal:.1%} of its size on average (mean "
-            f"vertex displacement / bounding-box diagonal), at most {most / scene.spacing:.2f} "
-            f"grid cells; area {frames[0].area():.4g} -> {frames[-1].area():.4g}")
+    line = (
+        f"regions: the surface moved {mean / diagonal:.1%} of its size on average (mean "
+        f"vertex displacement / bounding-box diagonal), at most {most / scene.spacing:.2f} "
+        f"grid cells; area {frames[0].area():.4g} -> {frames[-1].area():.4g}"
+    )
     if most / scene.spacing >= 1.0:
         return line
     if flow == "gaussian":
         curvature = frames[0].mesh.vertex_defects  # angle defects: Gaussian curvature x area
         share = float(np.mean(curvature > 1e-3)) if len(curvature) else 0.0
-        why = (f"--flow gaussian moves only where the Gaussian curvature is positive and large "
-               f"(creases, folds); here {share:.0%} of the vertices have a positive angle "
-               "defect and none is sharp enough to move it; --flow morph-sphere (the "
-               "default) moves any shape but a sphere, or give a larger --t")
+        why = (
+            f"--flow gaussian moves only where the Gaussian curvature is positive and large "
+            f"(creases, folds); here {share:.0%} of the vertices have a positive angle "
+            "defect and none is sharp enough to move it; --flow morph-sphere (the "
+            "default) moves any shape but a sphere, or give a larger --t"
+        )
     elif flow == "mean-curvature":
-        why = ("give a larger --t (a sphere of radius R shrinks by about 2t/R), or --flow "
-               "morph-sphere")
+        why = (
+            "give a larger --t (a sphere of radius R shrinks by about 2t/R), or --flow morph-sphere"
+        )
     else:
-        why = ("its shape is already within a cell of the sphere of its volume; --flow "
-               "mean-curvature with a larger --t shrinks it")
+        why = (
+            "its shape is already within a cell of the sphere of its volume; --flow "
+            "mean-curvature with a larger --t shrinks it"
+        )
     return f"{line}: it hardly moved. {why}"
 
 
@@ -166,7 +204,8 @@ def colour_labels(mesh):
         raise InputError(
             f"the mesh has {len(colours)} vertex colours; as regions it may have at most "
             f"{MAX_COLOUR_REGIONS} (paint each region in one flat colour), or use --regions "
-            "curvature")
+            "curvature"
+        )
     return labels.reshape(-1), colours / 255.0
 
 
@@ -194,8 +233,9 @@ def mesh_scene(path, flow=DEFAULT_FLOW, resolution=96, t=None, regions="auto") -
         except InputError as exc:  # shaded or photographed colours are no regions
             warnings.warn(f"{exc}; tracking the curvature-sign regions instead", stacklevel=2)
     if painted is None and regions == "colours":
-        raise InputError(f"{path} has no vertex colours to take regions from; use --regions "
-                         "curvature")
+        raise InputError(
+            f"{path} has no vertex colours to take regions from; use --regions curvature"
+        )
     if flow == "morph-sphere":
         # the sphere of the same volume around the shape's centroid: the volume must hold it
         # as well as the mesh, with the band's margin around both (a flat torus morphs into
@@ -203,34 +243,45 @@ def mesh_scene(path, flow=DEFAULT_FLOW, resolution=96, t=None, regions="auto") -
         x, y, z = surf.coordinates()
         inside = phi < 0
         weights = inside / inside.sum()
-        centre = np.array([float((np.broadcast_to(a, phi.shape) * weights).sum())
-                           for a in (x, y, z)])
+        centre = np.array(
+            [float((np.broadcast_to(a, phi.shape) * weights).sum()) for a in (x, y, z)]
+        )
         radius = float(np.cbrt(3 * inside.sum() * h**3 / (4 * np.pi)))
-        phi, origin = pad_to_hold(phi, h, origin, centre - radius, centre + radius,
-                                  MARGIN_CELLS)
+        phi, origin = pad_to_hold(phi, h, origin, centre - radius, centre + radius, MARGIN_CELLS)
     elif flow == "gaussian":
         # K+ flow moves at most max_speed * t: room for that on every side
-        phi, origin = pad_to_hold(phi, h, origin, *_bounds(surf.mesh),
-                                  MARGIN_CELLS + 0.25 * (60.0 if t is None else t))
+        phi, origin = pad_to_hold(
+            phi, h, origin, *_bounds(surf.mesh), MARGIN_CELLS + 0.25 * (60.0 if t is None else t)
+        )
     region = painted[0] if painted is not None else curvature_sign_regions(phi, h)
     if flow == "gaussian":
         # weight h^3: speed K+ in cells per unit time (K in 1 / cells^2); creases sharper
         # than a 2-cell radius move at that radius' speed
-        options = {"beta": "gaussian", "weight": h**3, "max_speed": 0.25 * h,
-                   "t": t if t is not None else 60.0}
+        options = {
+            "beta": "gaussian",
+            "weight": h**3,
+            "max_speed": 0.25 * h,
+            "t": t if t is not None else 60.0,
+        }
     elif flow == "mean-curvature":
         # about 15 curvature-limited steps' worth: a few cells of motion on curved parts.
         # Mean-curvature flow stays inside the starting bounding box: no padding needed.
         options = {"beta": "mean-curvature", "t": t if t is not None else 15 * h**2}
     else:
         nz, ny, nx = phi.shape
-        zz, yy, xx = np.meshgrid(*(origin[a] + h * np.arange(n)
-                                   for a, n in ((2, nz), (1, ny), (0, nx))),
-                                 indexing="ij", sparse=True)
-        target = np.sqrt((xx - centre[0]) ** 2 + (yy - centre[1]) ** 2 +
-                         (zz - centre[2]) ** 2) - radius
-        options = {"beta": "morph", "target": np.broadcast_to(target, phi.shape).copy(),
-                   "t": t if t is not None else 3.0}
+        zz, yy, xx = np.meshgrid(
+            *(origin[a] + h * np.arange(n) for a, n in ((2, nz), (1, ny), (0, nx))),
+            indexing="ij",
+            sparse=True,
+        )
+        target = (
+            np.sqrt((xx - centre[0]) ** 2 + (yy - centre[1]) ** 2 + (zz - centre[2]) ** 2) - radius
+        )
+        options = {
+            "beta": "morph",
+            "target": np.broadcast_to(target, phi.shape).copy(),
+            "t": t if t is not None else 3.0,
+        }
     if painted is not None:  # the regions keep the mesh's colours
         options["mesh"], options["palette"] = surf.mesh, painted[1]
     return RegionScene(phi, region, h, origin, options)
@@ -299,12 +350,19 @@ def displacement_stats(scene: RegionScene, frame, start=None) -> tuple[float, fl
 
 
 def run_scene(scene: RegionScene, saves=4, progress=None, device=None):
-    return track_region(scene.phi, scene.region, spacing=scene.spacing, saves=saves,
-                        origin=scene.origin, progress=progress, device=device, **scene.options)
+    return track_region(
+        scene.phi,
+        scene.region,
+        spacing=scene.spacing,
+        saves=saves,
+        origin=scene.origin,
+        progress=progress,
+        device=device,
+        **scene.options,
+    )
 
 
-def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions",
-                 overwrite=False):
+def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions", overwrite=False):
     """OUTDIR/<stem>_<k>.ply per frame and OUTDIR/<stem>.png: frames top to bottom, views
     side by side, as a 128-colour palette PNG (two shaded colours on white: no visible loss,
     2.5x smaller than RGB). OUTDIR is created if missing; an existing one must be empty, or
@@ -327,7 +385,6 @@ def _write_frame_files(frames, outdir, size, views, stem):
 
     from PIL import Image
 
-
     written = []
     rows = []
     # one scale and position per view for every row, so that growth and shrinking show
@@ -336,16 +393,25 @@ def _write_frame_files(frames, outdir, size, views, stem):
         path = os.path.join(outdir, f"{stem}_{k}.ply")
         export_mesh(frame.mesh, path)
         written.append(path)
-        row = np.concatenate([render_mesh(frame.mesh, size, a, e, box=box)
-                              for (a, e), box in zip(views, boxes, strict=True)], axis=1)
-        area = ", ".join(f"region {label}: {frame.area_fraction(label):.1%}"
-                         for label in range(_region_count(frame)))
-        rows.append(with_title(row, f"t = {frame.time:.4g}" + (f"   ({area} of the area)"
-                                                                if area else "")))
+        row = np.concatenate(
+            [
+                render_mesh(frame.mesh, size, a, e, box=box)
+                for (a, e), box in zip(views, boxes, strict=True)
+            ],
+            axis=1,
+        )
+        area = ", ".join(
+            f"region {label}: {frame.area_fraction(label):.1%}"
+            for label in range(_region_count(frame))
+        )
+        rows.append(
+            with_title(row, f"t = {frame.time:.4g}" + (f"   ({area} of the area)" if area else ""))
+        )
     picture = np.concatenate(rows, axis=0)
     path = os.path.join(outdir, f"{stem}.png")
     palette = Image.fromarray(np.ascontiguousarray(picture[..., :3])).quantize(
-        colors=128, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+        colors=128, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+    )
     data = io.BytesIO()
     palette.save(data, format="PNG", optimize=True)
     write_bytes(path, data.getvalue())

@@ -9,80 +9,137 @@ from ._common import add_device_argument, add_output_folder_arguments, report, s
 
 def add_track_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "track", help="follow an object through video frames or image slices",
+        "track",
+        help="follow an object through video frames or image slices",
         description="Morphing active contours (thesis section 2.1): the object marked in the "
-                    "first frame by --init is carried through the sequence. INPUT is a video, "
-                    "a folder of images or a multi-page TIFF; colour frames are made grey "
-                    "unless --colour. Frames whose final discrepancy is high are reported. "
-                    "Writes OUTDIR/mask_0000.png..., OUTDIR/overlay.gif and "
-                    "OUTDIR/contours.json (polygons per frame), and with --mp4 OUTDIR/overlay.mp4.",
+        "first frame by --init is carried through the sequence. INPUT is a video, "
+        "a folder of images or a multi-page TIFF; colour frames are made grey "
+        "unless --colour. Frames whose final discrepancy is high are reported. "
+        "Writes OUTDIR/mask_0000.png..., OUTDIR/overlay.gif and "
+        "OUTDIR/contours.json (polygons per frame), and with --mp4 OUTDIR/overlay.mp4.",
     )
     parser.add_argument("input", metavar="INPUT", help="video file, image folder or TIFF stack")
-    parser.add_argument("--init", metavar="MASK", required=True,
-                        help="mask image of the object in the first frame, white = inside ("
-                             + MASK_RULE + ")")
+    parser.add_argument(
+        "--init",
+        metavar="MASK",
+        required=True,
+        help="mask image of the object in the first frame, white = inside (" + MASK_RULE + ")",
+    )
     add_output_folder_arguments(parser)
-    parser.add_argument("--features", choices=("intensity", "edges", "contrast"),
-                        default="intensity",
-                        help="what the frames are compared by: grey levels, edge maps or local "
-                             "contrast normalisation (invariant to local light changes) "
-                             "(default: intensity)")
-    parser.add_argument("--colour", action="store_true",
-                        help="compare all colour channels, not grey only")
-    parser.add_argument("--discrepancy", choices=("ncc", "adaptive", "difference", "huber"),
-                        default="ncc",
-                        help="how F2 and F1 are compared: adaptive (correlation where a patch "
-                             "has contrast, difference where it is flat, plus a region term), "
-                             "local normalised cross-correlation (ignores changes of light), "
-                             "F2 - F1 (the thesis) or a Huber-clipped difference "
-                             "(default: ncc)")
-    parser.add_argument("--motion", choices=("kalman", "components", "velocity", "none"),
-                        default="kalman",
-                        help="start each frame at the predicted displacement: a "
-                             "constant-velocity Kalman filter fed by matching the frames, each "
-                             "piece matched on its own, the previous displacement, or none "
-                             "(default: kalman)")
-    parser.add_argument("--shape-weight", type=float, default=0.0, metavar="W",
-                        help="pull the contour towards the predicted start where the frames "
-                             "say nothing, against leaks (e.g. 0.02; default: 0)")
-    parser.add_argument("--equalize", choices=("none", "match", "global"), default="none",
-                        help="grey-level equalisation across frames: histogram matching to "
-                             "the first frame, flat equalisation, or none (default: none)")
-    parser.add_argument("--no-equalize", action="store_true",
-                        help="skip the histogram equalisation across frames (= --equalize none)")
-    parser.add_argument("--no-smooth", action="store_true",
-                        help="skip the anisotropic (Perona-Malik) pre-smoothing")
-    parser.add_argument("--max-iterations", type=int, default=None,
-                        help="cap of morphing iterations per frame (default: 20 with the "
-                             "adaptive discrepancy, 40 with the others)")
-    parser.add_argument("--min-size", type=int, default=0,
-                        help="remove pieces and holes smaller than this many pixels (default: 0)")
-    parser.add_argument("--frames", type=int, default=None, metavar="N",
-                        help="use only the first N frames")
+    parser.add_argument(
+        "--features",
+        choices=("intensity", "edges", "contrast"),
+        default="intensity",
+        help="what the frames are compared by: grey levels, edge maps or local "
+        "contrast normalisation (invariant to local light changes) "
+        "(default: intensity)",
+    )
+    parser.add_argument(
+        "--colour", action="store_true", help="compare all colour channels, not grey only"
+    )
+    parser.add_argument(
+        "--discrepancy",
+        choices=("ncc", "adaptive", "difference", "huber"),
+        default="ncc",
+        help="how F2 and F1 are compared: adaptive (correlation where a patch "
+        "has contrast, difference where it is flat, plus a region term), "
+        "local normalised cross-correlation (ignores changes of light), "
+        "F2 - F1 (the thesis) or a Huber-clipped difference "
+        "(default: ncc)",
+    )
+    parser.add_argument(
+        "--motion",
+        choices=("kalman", "components", "velocity", "none"),
+        default="kalman",
+        help="start each frame at the predicted displacement: a "
+        "constant-velocity Kalman filter fed by matching the frames, each "
+        "piece matched on its own, the previous displacement, or none "
+        "(default: kalman)",
+    )
+    parser.add_argument(
+        "--shape-weight",
+        type=float,
+        default=0.0,
+        metavar="W",
+        help="pull the contour towards the predicted start where the frames "
+        "say nothing, against leaks (e.g. 0.02; default: 0)",
+    )
+    parser.add_argument(
+        "--equalize",
+        choices=("none", "match", "global"),
+        default="none",
+        help="grey-level equalisation across frames: histogram matching to "
+        "the first frame, flat equalisation, or none (default: none)",
+    )
+    parser.add_argument(
+        "--no-equalize",
+        action="store_true",
+        help="skip the histogram equalisation across frames (= --equalize none)",
+    )
+    parser.add_argument(
+        "--no-smooth", action="store_true", help="skip the anisotropic (Perona-Malik) pre-smoothing"
+    )
+    parser.add_argument(
+        "--max-iterations",
+        type=int,
+        default=None,
+        help="cap of morphing iterations per frame (default: 20 with the "
+        "adaptive discrepancy, 40 with the others)",
+    )
+    parser.add_argument(
+        "--min-size",
+        type=int,
+        default=0,
+        help="remove pieces and holes smaller than this many pixels (default: 0)",
+    )
+    parser.add_argument(
+        "--frames", type=int, default=None, metavar="N", help="use only the first N frames"
+    )
     parser.add_argument("--no-gif", action="store_true", help="do not write overlay.gif")
-    parser.add_argument("--mp4", action="store_true",
-                        help="also write overlay.mp4 (H.264 through PyAV: pip install av; odd "
-                             "sizes padded by a black row or column, never rescaled)")
-    parser.add_argument("--low-confidence", type=float, default=None, metavar="T",
-                        help="list the frames whose confidence (0 to 1, calibrated on good "
-                             "and lost tracks) falls below T (default: the calibrated "
-                             "threshold, clpde.tracking.confidence.LOW_CONFIDENCE)")
+    parser.add_argument(
+        "--mp4",
+        action="store_true",
+        help="also write overlay.mp4 (H.264 through PyAV: pip install av; odd "
+        "sizes padded by a black row or column, never rescaled)",
+    )
+    parser.add_argument(
+        "--low-confidence",
+        type=float,
+        default=None,
+        metavar="T",
+        help="list the frames whose confidence (0 to 1, calibrated on good "
+        "and lost tracks) falls below T (default: the calibrated "
+        "threshold, clpde.tracking.confidence.LOW_CONFIDENCE)",
+    )
     add_device_argument(parser)
     parser.set_defaults(run=run_track)
 
 
 def task_options(args) -> dict:
     """The track task's keywords from the parsed flags (clpde.scale.tasks.track_file)."""
-    return {"features": args.features, "colour": args.colour, "discrepancy": args.discrepancy,
-            "motion": args.motion, "shape_weight": args.shape_weight,
-            "equalize": "none" if args.no_equalize else args.equalize,
-            "smooth": not args.no_smooth, "max_iterations": args.max_iterations,
-            "min_size": args.min_size, "frames": args.frames, "gif": not args.no_gif,
-            "mp4": args.mp4, "low_confidence": args.low_confidence,
-            "overwrite": args.overwrite, "device": args.device}
+    return {
+        "features": args.features,
+        "colour": args.colour,
+        "discrepancy": args.discrepancy,
+        "motion": args.motion,
+        "shape_weight": args.shape_weight,
+        "equalize": "none" if args.no_equalize else args.equalize,
+        "smooth": not args.no_smooth,
+        "max_iterations": args.max_iterations,
+        "min_size": args.min_size,
+        "frames": args.frames,
+        "gif": not args.no_gif,
+        "mp4": args.mp4,
+        "low_confidence": args.low_confidence,
+        "overwrite": args.overwrite,
+        "device": args.device,
+    }
 
 
 def run_track(args) -> int:
-    report(TASKS["track"](args.input, args.output, mask=args.init, progress=show_progress(),
-                          **task_options(args)))
+    report(
+        TASKS["track"](
+            args.input, args.output, mask=args.init, progress=show_progress(), **task_options(args)
+        )
+    )
     return 0

@@ -70,9 +70,17 @@ def match_moments(src: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
 class Compensator:
     """Device frames of one film and the flows between them."""
 
-    def __init__(self, grey: np.ndarray, device=None, *, colour: np.ndarray | None = None,
-                 masks: np.ndarray | None = None, weights: np.ndarray | None = None,
-                 exclude: np.ndarray | None = None, params: FlowParams = FILM_FLOW):
+    def __init__(
+        self,
+        grey: np.ndarray,
+        device=None,
+        *,
+        colour: np.ndarray | None = None,
+        masks: np.ndarray | None = None,
+        weights: np.ndarray | None = None,
+        exclude: np.ndarray | None = None,
+        params: FlowParams = FILM_FLOW,
+    ):
         """grey (T, H, W) and colour (T, C, H, W) frames in [0, 1]; masks (T, H, W) the
         known damage (masked out of the flows, and warped with the neighbours), or weights
         (T, H, W) the flows' confidence alone (1 trusted, 0 ignored); exclude (T, H, W),
@@ -84,25 +92,29 @@ class Compensator:
         self.T, self.ny, self.nx = grey.shape
         self.host_grey = grey
         self.grey = [cla.to_device(q, np.ascontiguousarray(g)) for g in grey]
-        self.colour = (None if colour is None else
-                       [cla.to_device(q, np.ascontiguousarray(c)) for c in colour])
+        self.colour = (
+            None if colour is None else [cla.to_device(q, np.ascontiguousarray(c)) for c in colour]
+        )
         self.masks = masks
         if masks is None:
             if weights is None:
                 ones = cla.to_device(q, np.ones((self.ny, self.nx), np.float32))
                 self.weights = [ones] * self.T
             else:
-                self.weights = [cla.to_device(q, np.ascontiguousarray(w, np.float32))
-                                for w in weights]
+                self.weights = [
+                    cla.to_device(q, np.ascontiguousarray(w, np.float32)) for w in weights
+                ]
             self.mask_dev = None
         else:
             # the flow's confidence: zero on the damage and one pixel around it (the rim a
             # codec or a soft edge spreads)
-            self.weights = [cla.to_device(q, (~grow(m > 0, 1.0)).astype(np.float32))
-                            for m in masks]
+            self.weights = [cla.to_device(q, (~grow(m > 0, 1.0)).astype(np.float32)) for m in masks]
             self.mask_dev = [cla.to_device(q, np.ascontiguousarray(m)) for m in masks]
-        self.exclude = (None if exclude is None else
-                        [cla.to_device(q, np.ascontiguousarray(e, np.float32)) for e in exclude])
+        self.exclude = (
+            None
+            if exclude is None
+            else [cla.to_device(q, np.ascontiguousarray(e, np.float32)) for e in exclude]
+        )
         self.levels = default_levels(self.ny, self.nx)
         self.k_inside = self.rt.kernel("film/detect.cl", "flow_inside")
 
@@ -118,8 +130,9 @@ class Compensator:
         nbytes = src.nbytes
         cl.enqueue_copy(self.q, stack.data, src.data, dst_offset=k * nbytes, byte_count=nbytes)
 
-    def neighbours(self, t: int, offsets: list[int], sides: list[int] | None = None,
-                   want_colour: bool = False) -> Neighbours:
+    def neighbours(
+        self, t: int, offsets: list[int], sides: list[int] | None = None, want_colour: bool = False
+    ) -> Neighbours:
         q, ny, nx = self.q, self.ny, self.nx
         K = len(offsets)
         grey = cla.empty(q, (K, ny, nx), np.float32)
@@ -131,16 +144,18 @@ class Compensator:
         g, loc = self.rt.items(nx, ny)
         for j, k in enumerate(offsets):
             s = t + k
-            u, v = self.solver.flow(self.grey[t], self._matched(s, t), self.weights[t],
-                                    self.weights[s], self.levels)
+            u, v = self.solver.flow(
+                self.grey[t], self._matched(s, t), self.weights[t], self.weights[s], self.levels
+            )
             wg = self.solver.warp(self.grey[s].reshape(1, ny, nx), u, v)
             self._put(grey, j, wg)
             inside = cla.empty(q, (ny, nx), np.float32)
             self.k_inside(q, g, loc, u.data, v.data, inside.data, np.int32(nx), np.int32(ny))
             if self.exclude is not None:
                 ex = self.solver.warp(self.exclude[s].reshape(1, ny, nx), u, v)
-                inside = cla.if_positive(ex.reshape(ny, nx) - np.float32(_CLEAN),
-                                         cla.zeros_like(inside), inside)
+                inside = cla.if_positive(
+                    ex.reshape(ny, nx) - np.float32(_CLEAN), cla.zeros_like(inside), inside
+                )
             self._put(valid, j, inside)
             if colour is not None:
                 self._put(colour, j, self.solver.warp(self.colour[s], u, v))
@@ -152,5 +167,6 @@ class Compensator:
             gains[j], offs[j] = fit_gain(self.host_grey[t], wg.get()[0], ok)
         if sides is None:
             sides = [-1 if k < 0 else 1 for k in offsets]
-        return Neighbours(list(offsets), grey, valid, gains, offs,
-                          np.asarray(sides, np.int32), colour, wmask)
+        return Neighbours(
+            list(offsets), grey, valid, gains, offs, np.asarray(sides, np.int32), colour, wmask
+        )

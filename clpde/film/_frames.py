@@ -27,8 +27,11 @@ class FilmLayout:
         values = np.asarray(planes, np.float64) * self.scale + self.offset
         if self.photo:
             values = values[0]  # (C, H, W)
-            values = values[0] if self.channel_axis is None else np.moveaxis(
-                values, 0, self.channel_axis)
+            values = (
+                values[0]
+                if self.channel_axis is None
+                else np.moveaxis(values, 0, self.channel_axis)
+            )
         elif self.channel_axis is None:
             values = values[:, 0]
         else:
@@ -39,8 +42,9 @@ class FilmLayout:
         return values.astype(self.dtype)
 
 
-def film_planes(frames: ArrayLike, channel_axis: int | None,
-                name: str = "frames") -> tuple[np.ndarray, FilmLayout]:
+def film_planes(
+    frames: ArrayLike, channel_axis: int | None, name: str = "frames"
+) -> tuple[np.ndarray, FilmLayout]:
     """(planes, layout): float32 (T, C, H, W) in [0, 1] and how to undo it.
 
     frames: (T, H, W), or (T, H, W, C) with channel_axis naming the channel axis (1, 2 or 3,
@@ -56,28 +60,35 @@ def film_planes(frames: ArrayLike, channel_axis: int | None,
         else:
             raise InputError(
                 f"{name} has {array.ndim} dimensions; give (frames, rows, columns), or "
-                "(frames, rows, columns, channels) with channel_axis=-1")
+                "(frames, rows, columns, channels) with channel_axis=-1"
+            )
         axis = None
     else:
         if array.ndim not in (3, 4) or not isinstance(channel_axis, (int, np.integer)):
             raise InputError(
                 f"channel_axis={channel_axis!r} needs (frames, rows, columns, channels) frames "
-                f"or one (rows, columns, channels) image, got {array.ndim} dimensions")
+                f"or one (rows, columns, channels) image, got {array.ndim} dimensions"
+            )
         if not -array.ndim <= channel_axis < array.ndim:
-            raise InputError(f"channel_axis={channel_axis} is outside {name}'s "
-                             f"{array.ndim} dimensions")
+            raise InputError(
+                f"channel_axis={channel_axis} is outside {name}'s {array.ndim} dimensions"
+            )
         axis = int(channel_axis) % array.ndim
         if array.ndim == 3:
             photo = True
             data = np.moveaxis(array, axis, 0)[np.newaxis]
         else:
             if axis == 0:
-                raise InputError("channel_axis=0 is the frames' axis; the channels are "
-                                 "usually the last axis (channel_axis=-1)")
+                raise InputError(
+                    "channel_axis=0 is the frames' axis; the channels are "
+                    "usually the last axis (channel_axis=-1)"
+                )
             data = np.moveaxis(array, axis, 1)
     if min(data.shape[2:]) < 8:
-        raise InputError(f"{name} of {data.shape[3]}x{data.shape[2]} pixels are too small; "
-                         "give frames of at least 8x8 pixels")
+        raise InputError(
+            f"{name} of {data.shape[3]}x{data.shape[2]} pixels are too small; "
+            "give frames of at least 8x8 pixels"
+        )
     if np.issubdtype(array.dtype, np.integer):
         info = np.iinfo(array.dtype)
         offset, scale = float(info.min), float(info.max) - float(info.min)
@@ -100,22 +111,28 @@ def film_masks(masks: ArrayLike, shape_thw: tuple, photo: bool) -> np.ndarray:
     t, h, w = shape_thw
     want = (h, w) if photo else (t, h, w)
     if m.dtype != bool and not np.issubdtype(m.dtype, np.number):
-        raise InputError(f"masks have dtype {m.dtype}; give bool or numeric masks "
-                         "(nonzero = damaged)")
+        raise InputError(
+            f"masks have dtype {m.dtype}; give bool or numeric masks (nonzero = damaged)"
+        )
     if m.shape != want:
         if not photo and m.ndim == 3 and m.shape[0] != t and m.shape[1:] == (h, w):
-            raise InputError(f"got {m.shape[0]} masks for {t} frames; give one (rows, "
-                             "columns) mask per frame")
-        raise InputError(f"masks have shape {m.shape} but the frames need {want}; give one "
-                         f"{h}x{w} (rows x columns) mask per frame")
+            raise InputError(
+                f"got {m.shape[0]} masks for {t} frames; give one (rows, columns) mask per frame"
+            )
+        raise InputError(
+            f"masks have shape {m.shape} but the frames need {want}; give one "
+            f"{h}x{w} (rows x columns) mask per frame"
+        )
     if photo:
         m = m[np.newaxis]
     if m.dtype == bool or np.issubdtype(m.dtype, np.integer):
         return (m != 0).astype(np.float32)
     lo, hi = float(m.min()), float(m.max())
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi > 1:
-        raise InputError(f"float masks must lie in [0, 1] (the degree of damage), found "
-                         f"[{lo:g}, {hi:g}]; rescale them or pass bool masks")
+        raise InputError(
+            f"float masks must lie in [0, 1] (the degree of damage), found "
+            f"[{lo:g}, {hi:g}]; rescale them or pass bool masks"
+        )
     return m.astype(np.float32)
 
 
@@ -131,7 +148,6 @@ def grow(mask: np.ndarray, px: float) -> np.ndarray:
 
 
 def check_grow(px) -> float:
-    if not isinstance(px, (int, float, np.integer, np.floating)) or not np.isfinite(px) \
-            or px < 0:
+    if not isinstance(px, (int, float, np.integer, np.floating)) or not np.isfinite(px) or px < 0:
         raise InputError(f"grow must be a number of pixels >= 0, not {px!r}")
     return float(px)

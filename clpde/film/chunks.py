@@ -46,16 +46,26 @@ def plan_chunks(blocks: list[Block], blocks_per_chunk: int) -> list[list[Block]]
     >>> [len(c) for c in plan_chunks(plan_blocks(10, 2, 1), 2)]
     [2, 2, 1]
     """
-    if isinstance(blocks_per_chunk, bool) or int(blocks_per_chunk) != blocks_per_chunk or \
-            blocks_per_chunk < 1:
+    if (
+        isinstance(blocks_per_chunk, bool)
+        or int(blocks_per_chunk) != blocks_per_chunk
+        or blocks_per_chunk < 1
+    ):
         raise InputError(f"a chunk must hold at least 1 block, not {blocks_per_chunk!r}")
-    return [blocks[k: k + blocks_per_chunk] for k in range(0, len(blocks), blocks_per_chunk)]
+    return [blocks[k : k + blocks_per_chunk] for k in range(0, len(blocks), blocks_per_chunk)]
 
 
-def restore_chunked(client, frames: Iterable[np.ndarray], count: int, work: WindowWork, *,
-                    masks: Iterable[np.ndarray] | None = None, block: int = DEFAULT_BLOCK,
-                    chunk_frames: int | None = None, in_flight: int | None = None
-                    ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
+def restore_chunked(
+    client,
+    frames: Iterable[np.ndarray],
+    count: int,
+    work: WindowWork,
+    *,
+    masks: Iterable[np.ndarray] | None = None,
+    block: int = DEFAULT_BLOCK,
+    chunk_frames: int | None = None,
+    in_flight: int | None = None,
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
     """Restore a film over a Dask cluster, yielding its frames in order.
 
     Parameters
@@ -107,8 +117,9 @@ def restore_chunked(client, frames: Iterable[np.ndarray], count: int, work: Wind
         for chunk, (window, window_masks) in zip(chunks, spans, strict=True):
             data = client.scatter(window, direct=False)
             given = None if window_masks is None else client.scatter(window_masks, direct=False)
-            pending.append(client.submit(run_chunk, work, data, given, chunk, pure=False,
-                                         resources=resources))
+            pending.append(
+                client.submit(run_chunk, work, data, given, chunk, pure=False, resources=resources)
+            )
             while len(pending) >= limit or (pending and pending[0].done()):
                 yield from _frames_of(pending.popleft())
         while pending:

@@ -45,9 +45,14 @@ _SIZE_RE = re.compile(r"clpde size=(\d+)x(\d+)")
 # Container metadata the muxer writes itself: copying it would record the input's muxer.
 _OWN_TAGS = {"major_brand", "minor_version", "compatible_brands", "encoder", "creation_time"}
 # Timed-text subtitles that carry the same text under another container's codec.
-_TEXT_CONVERSIONS = {("mov_text", "matroska"): "subrip", ("subrip", "mp4"): "mov_text",
-                     ("subrip", "mov"): "mov_text", ("text", "mp4"): "mov_text",
-                     ("text", "mov"): "mov_text", ("mov_text", "avi"): None}
+_TEXT_CONVERSIONS = {
+    ("mov_text", "matroska"): "subrip",
+    ("subrip", "mp4"): "mov_text",
+    ("subrip", "mov"): "mov_text",
+    ("text", "mp4"): "mov_text",
+    ("text", "mov"): "mov_text",
+    ("mov_text", "avi"): None,
+}
 
 
 def _av():
@@ -175,16 +180,32 @@ def film_info(path: PathLike) -> FilmInfo:
     if first is None:
         raise InputError(f"{path}: the first video frame cannot be decoded")
     if first.interlaced_frame:
-        raise InputError(f"{path} is interlaced (each frame holds two fields); deinterlace it "
-                         "first, e.g. ffmpeg -i IN -vf bwdif=mode=send_field OUT")
+        raise InputError(
+            f"{path} is interlaced (each frame holds two fields); deinterlace it "
+            "first, e.g. ffmpeg -i IN -vf bwdif=mode=send_field OUT"
+        )
     rate = stream.average_rate or stream.base_rate or stream.guessed_rate or 25
     fmt = av.VideoFormat(cc.pix_fmt or first.format.name)
     depth = max(c.bits for c in fmt.components)
-    colour = {"range": int(first.color_range), "space": int(first.colorspace),
-              "primaries": int(first.color_primaries), "trc": int(first.color_trc)}
-    return FilmInfo(Path(path), count, Fraction(rate), Fraction(stream.time_base), width,
-                    height, fmt.name, depth, colour, dict(container.metadata),
-                    dict(stream.metadata))
+    colour = {
+        "range": int(first.color_range),
+        "space": int(first.colorspace),
+        "primaries": int(first.color_primaries),
+        "trc": int(first.color_trc),
+    }
+    return FilmInfo(
+        Path(path),
+        count,
+        Fraction(rate),
+        Fraction(stream.time_base),
+        width,
+        height,
+        fmt.name,
+        depth,
+        colour,
+        dict(container.metadata),
+        dict(stream.metadata),
+    )
 
 
 def _to_rgb(frame, info: FilmInfo) -> np.ndarray:
@@ -192,8 +213,9 @@ def _to_rgb(frame, info: FilmInfo) -> np.ndarray:
     if frame.format.name in ("rgb24", "rgb48le") and frame.format.name == target:
         rgb = frame
     else:
-        rgb = frame.reformat(format=target, src_color_range=frame.color_range or None,
-                             dst_color_range="JPEG")
+        rgb = frame.reformat(
+            format=target, src_color_range=frame.color_range or None, dst_color_range="JPEG"
+        )
     # A copy of its own: PyAV's array shares the frame's buffer.
     return np.array(rgb.to_ndarray()[: info.height, : info.width])
 
@@ -236,8 +258,9 @@ class FilmReader:
             try:
                 for t, frame in enumerate(container.decode(stream)):
                     if frame.interlaced_frame:
-                        raise InputError(f"{self.info.path}: frame {t} is interlaced; "
-                                         "deinterlace the film first")
+                        raise InputError(
+                            f"{self.info.path}: frame {t} is interlaced; deinterlace the film first"
+                        )
                     pts = frame.pts if frame.pts is not None else (last + 1 if last else t)
                     last = pts
                     self.timestamps.append(pts)
@@ -284,8 +307,9 @@ def check_film_output(path: PathLike, codec: str | None = None) -> tuple[str, st
         raise InputError(f"{path}: lossless FFV1 goes in Matroska; name the output .mkv")
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
-        raise InputError(f"output folder {folder} does not exist (or is not a folder); "
-                         "create it first")
+        raise InputError(
+            f"output folder {folder} does not exist (or is not a folder); create it first"
+        )
     if path.is_dir():
         raise InputError(f"output {path} is a folder; give a film file name")
     try:  # writable at all? (a read-only folder or file system)
@@ -336,8 +360,16 @@ class FilmWriter:
     ...         writer.write(frame, pts=reader.timestamps.pop(0))
     """
 
-    def __init__(self, path: PathLike, like: FilmInfo | None = None, *, codec: str | None = None,
-                 rate: Fraction | None = None, crf: int = 17, copy_streams: bool = True) -> None:
+    def __init__(
+        self,
+        path: PathLike,
+        like: FilmInfo | None = None,
+        *,
+        codec: str | None = None,
+        rate: Fraction | None = None,
+        crf: int = 17,
+        copy_streams: bool = True,
+    ) -> None:
         av = _av()
         self.path = Path(path)
         self.format, self.codec = check_film_output(self.path, codec)
@@ -370,8 +402,10 @@ class FilmWriter:
             name = stream.codec_context.name if stream.codec_context else stream.codec.name
             if stream.type == "audio":
                 if name not in supported:
-                    raise InputError(f"{self.path}: the audio stream {stream.index} ({name}) "
-                                     f"cannot go in a {self.path.suffix} file; write .mkv")
+                    raise InputError(
+                        f"{self.path}: the audio stream {stream.index} ({name}) "
+                        f"cannot go in a {self.path.suffix} file; write .mkv"
+                    )
                 out = self._out.add_stream_from_template(stream)
                 self._map[stream.index] = (out, None)
             elif stream.type == "subtitle":
@@ -379,9 +413,12 @@ class FilmWriter:
                 if name not in supported:
                     convert = _TEXT_CONVERSIONS.get((name, self.format))
                     if convert is None or convert not in supported:
-                        warnings.warn(f"subtitle stream {stream.index} ({name}) cannot go in a "
-                                      f"{self.path.suffix} file and was dropped; write .mkv "
-                                      "to keep it", stacklevel=3)
+                        warnings.warn(
+                            f"subtitle stream {stream.index} ({name}) cannot go in a "
+                            f"{self.path.suffix} file and was dropped; write .mkv "
+                            "to keep it",
+                            stacklevel=3,
+                        )
                         continue
                     out = self._out.add_mux_stream(convert)
                     out.time_base = stream.time_base
@@ -390,8 +427,13 @@ class FilmWriter:
                 self._map[stream.index] = (out, (name, convert) if convert else None)
             else:
                 continue
-            out.metadata.update({k: v for k, v in stream.metadata.items()
-                                 if k in ("language", "title", "handler_name")})
+            out.metadata.update(
+                {
+                    k: v
+                    for k, v in stream.metadata.items()
+                    if k in ("language", "title", "handler_name")
+                }
+            )
             wanted.append(stream)
         if wanted:
             self._side_packets = side.demux(*wanted)
@@ -415,8 +457,7 @@ class FilmWriter:
                 self._pending = packet
             packet = self._pending
             when = packet.dts if packet.dts is not None else packet.pts
-            if until is not None and when is not None and \
-                    float(when * packet.time_base) > until:
+            if until is not None and when is not None and float(when * packet.time_base) > until:
                 return
             self._pending = None
             out, convert = self._map[packet.stream.index]
@@ -448,8 +489,9 @@ class FilmWriter:
             self._out.metadata[_SIZE_TAG] = f"clpde size={width}x{height}"
         stream.pix_fmt = pix_fmt
         # AVI counts frames, not time: its time base is one frame.
-        self._time_base = (1 / self.rate if self.format == "avi" or not self.like
-                           else self.like.time_base)
+        self._time_base = (
+            1 / self.rate if self.format == "avi" or not self.like else self.like.time_base
+        )
         cc.time_base = self._time_base
         stream.time_base = self._time_base
         options = {}
@@ -466,8 +508,10 @@ class FilmWriter:
         stream.options = options
         colour = self.like.colour if self.like else {}
         rgb = self.codec == "ffv1"
-        self._colour = {"space": 0 if rgb else (colour.get("space") or 1),
-                        "range": 2 if rgb else (colour.get("range") or 1)}
+        self._colour = {
+            "space": 0 if rgb else (colour.get("space") or 1),
+            "range": 2 if rgb else (colour.get("range") or 1),
+        }
         cc.colorspace = self._colour["space"]
         cc.color_range = self._colour["range"]
         if colour.get("primaries"):
@@ -475,8 +519,13 @@ class FilmWriter:
         if colour.get("trc"):
             cc.color_trc = colour["trc"]
         if self.like is not None:
-            stream.metadata.update({k: v for k, v in self.like.video_metadata.items()
-                                    if k in ("language", "title", "handler_name")})
+            stream.metadata.update(
+                {
+                    k: v
+                    for k, v in self.like.video_metadata.items()
+                    if k in ("language", "title", "handler_name")
+                }
+            )
         self._video = stream
         self._pix_fmt = pix_fmt
 
@@ -494,26 +543,38 @@ class FilmWriter:
         frame = np.asarray(frame)
         if frame.ndim == 2:
             frame = np.repeat(frame[..., np.newaxis], 3, axis=-1)
-        if frame.dtype not in (np.uint8, np.uint16) or frame.ndim != 3 or \
-                frame.shape[-1] not in (3, 4):
-            raise InputError(f"film frames must be 8- or 16-bit grey or RGB, not {frame.dtype} "
-                             f"of shape {frame.shape}")
+        if (
+            frame.dtype not in (np.uint8, np.uint16)
+            or frame.ndim != 3
+            or frame.shape[-1] not in (3, 4)
+        ):
+            raise InputError(
+                f"film frames must be 8- or 16-bit grey or RGB, not {frame.dtype} "
+                f"of shape {frame.shape}"
+            )
         frame = frame[..., :3]
         if self._video is None:
             self._start(frame)
         if frame.shape[:2] != self.size:
-            raise InputError(f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the film "
-                             f"{self.size[1]}x{self.size[0]}; all frames need one size")
+            raise InputError(
+                f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the film "
+                f"{self.size[1]}x{self.size[0]}; all frames need one size"
+            )
         stream = self._video
         if (stream.height, stream.width) != self.size:
-            frame = np.pad(frame, ((0, stream.height - self.size[0]),
-                                   (0, stream.width - self.size[1]), (0, 0)), mode="edge")
+            frame = np.pad(
+                frame,
+                ((0, stream.height - self.size[0]), (0, stream.width - self.size[1]), (0, 0)),
+                mode="edge",
+            )
         source = "rgb24" if frame.dtype == np.uint8 else "rgb48le"
         picture = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format=source)
         picture.color_range = 2  # RGB frames are full range
-        picture = picture.reformat(format=self._pix_fmt,
-                                   dst_colorspace=self._colour["space"] or None,
-                                   dst_color_range=self._colour["range"])
+        picture = picture.reformat(
+            format=self._pix_fmt,
+            dst_colorspace=self._colour["space"] or None,
+            dst_color_range=self._colour["range"],
+        )
         if pts is None:
             pts = self.count
         elif self.like is not None and self._time_base != self.like.time_base:
@@ -576,7 +637,7 @@ def _convert_text(packet, source: str, target: str):
     data = bytes(packet)
     if source == "mov_text":
         length = int.from_bytes(data[:2], "big") if len(data) >= 2 else 0
-        text = data[2: 2 + length]
+        text = data[2 : 2 + length]
         if not text:
             return None  # mov_text's empty samples mark gaps, which SubRip leaves implicit
     else:

@@ -110,12 +110,20 @@ class _Kernels:
         g, loc = self.rt.items(nx, ny)
         col = cla.empty(q, (ny, nx), np.float32)
         out = cla.empty(q, (ny, nx), np.float32)
-        self.colmean(q, g, loc, resid.data, col.data, np.int32(min(COLUMN_HALF, ny // 4)),
-                     np.float32(lim), np.int32(nx), np.int32(ny))
-        self.line(q, g, loc, col.data, out.data, np.int32(LINE_FLANK), np.int32(nx),
-                  np.int32(ny))
+        self.colmean(
+            q,
+            g,
+            loc,
+            resid.data,
+            col.data,
+            np.int32(min(COLUMN_HALF, ny // 4)),
+            np.float32(lim),
+            np.int32(nx),
+            np.int32(ny),
+        )
+        self.line(q, g, loc, col.data, out.data, np.int32(LINE_FLANK), np.int32(nx), np.int32(ny))
         score = out.get()
-        return score / _robust_scale(score[:, LINE_FLANK + 1:nx - LINE_FLANK - 1])
+        return score / _robust_scale(score[:, LINE_FLANK + 1 : nx - LINE_FLANK - 1])
 
     def continuity(self, zs: np.ndarray) -> np.ndarray:
         q = self.rt.queue
@@ -126,15 +134,33 @@ class _Kernels:
         tmp = cla.empty(q, (ny, nx), np.float32)
         for t in range(T):
             prev, nxt = dev[max(t - 1, 0)], dev[min(t + 1, T - 1)]
-            self.cont(q, g, loc, prev.data, dev[t].data, nxt.data, np.int32(t > 0),
-                      np.int32(t < T - 1), tmp.data, np.int32(nx), np.int32(ny))
+            self.cont(
+                q,
+                g,
+                loc,
+                prev.data,
+                dev[t].data,
+                nxt.data,
+                np.int32(t > 0),
+                np.int32(t < T - 1),
+                tmp.data,
+                np.int32(nx),
+                np.int32(ny),
+            )
             out[t] = tmp.get()
         return out
 
 
-def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: float,
-                  min_length: int, lines: np.ndarray | None = None,
-                  signed: bool = False, thin: bool = True) -> np.ndarray:
+def _scratch_mask(
+    zc: np.ndarray,
+    resid: np.ndarray,
+    sigma: float,
+    threshold: float,
+    min_length: int,
+    lines: np.ndarray | None = None,
+    signed: bool = False,
+    thin: bool = True,
+) -> np.ndarray:
     """Long vertical runs of the line score above threshold whose rows mostly show the
     line in the residual itself, with their adjacent columns above half the threshold.
 
@@ -161,8 +187,9 @@ def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: fl
             continue
         sizes = np.bincount(labels.ravel())
         shown = sgn * resid
-        shown3 = np.maximum(np.maximum(shown, np.roll(shown, 1, axis=1)),
-                            np.roll(shown, -1, axis=1))
+        shown3 = np.maximum(
+            np.maximum(shown, np.roll(shown, 1, axis=1)), np.roll(shown, -1, axis=1)
+        )
         support = np.bincount(labels.ravel(), weights=(shown3 > 2.0 * sigma).ravel())
         # a scratch is thin: beside it, 3 to 5 columns away on both sides, the residual is
         # quiet in most rows; an object the flow missed leaves a broad residual
@@ -170,8 +197,7 @@ def _scratch_mask(zc: np.ndarray, resid: np.ndarray, sigma: float, threshold: fl
         for off in (-5, -4, -3, 3, 4, 5):
             quiet &= np.abs(np.roll(resid, off, axis=1)) < 2.0 * sigma
         calm = np.bincount(labels.ravel(), weights=quiet.ravel())
-        good = (sizes >= min_length) & (support >= RUN_SUPPORT * np.maximum(sizes,
-                                                                          min_length))
+        good = (sizes >= min_length) & (support >= RUN_SUPPORT * np.maximum(sizes, min_length))
         if thin:
             good &= calm >= RUN_SUPPORT * sizes
         good[0] = False
@@ -199,8 +225,9 @@ def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.nd
     return a - 2.0 * b + float((weight * tpl * tpl).sum())
 
 
-def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray,
-                  search: int) -> np.ndarray:
+def _motion_check(
+    comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray, search: int
+) -> np.ndarray:
     """Drop the components of comp_mask (frame t) that reappear displaced in the frames
     before and after: a moving object the flow missed is found again nearby, a blotch is
     not.
@@ -230,8 +257,7 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
         th, tw = templ.shape
         found = []
         # the frames each side; at the film's ends the next two on the one side
-        pair = (t - 1, t + 1) if 0 < t < T - 1 else ((t + 1, t + 2) if t == 0 else
-                                                       (t - 1, t - 2))
+        pair = (t - 1, t + 1) if 0 < t < T - 1 else ((t + 1, t + 2) if t == 0 else (t - 1, t - 2))
         for s in pair:
             if not 0 <= s < T:
                 continue
@@ -242,9 +268,14 @@ def _motion_check(comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarra
                 continue
             res = _masked_ssd(win, templ, region.astype(np.float64))
             my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
-            diff = (templ - win[my:my + th, mx:mx + tw]) ** 2
-            found.append((float(np.median(diff[own])), float(diff[region].mean()),
-                          np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t)))
+            diff = (templ - win[my : my + th, mx : mx + tw]) ** 2
+            found.append(
+                (
+                    float(np.median(diff[own])),
+                    float(diff[region].mean()),
+                    np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t),
+                )
+            )
         if not found or not all(f[0] < MATCH_RATIO * e_own for f in found):
             continue
         if len(found) == 2:
@@ -277,29 +308,61 @@ def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of
     for t in range(T):
         offs, sides = _window(t, T, radius)
         nb = comp.neighbours(t, offs, sides)
-        args = (comp.grey[t].data, nb.grey.data, nb.valid.data,
-                cla.to_device(q, nb.gain).data, cla.to_device(q, nb.offset).data,
-                cla.to_device(q, nb.side).data, np.int32(len(offs)))
-        kern.blotch(q, g, loc, *args, np.float32(1.0), np.float32(GAMMA), z_dev.data,
-                    r_dev.data, m_dev.data, sides_dev[0].data, sides_dev[1].data,
-                    np.int32(nx), np.int32(ny))
+        args = (
+            comp.grey[t].data,
+            nb.grey.data,
+            nb.valid.data,
+            cla.to_device(q, nb.gain).data,
+            cla.to_device(q, nb.offset).data,
+            cla.to_device(q, nb.side).data,
+            np.int32(len(offs)),
+        )
+        kern.blotch(
+            q,
+            g,
+            loc,
+            *args,
+            np.float32(1.0),
+            np.float32(GAMMA),
+            z_dev.data,
+            r_dev.data,
+            m_dev.data,
+            sides_dev[0].data,
+            sides_dev[1].data,
+            np.int32(nx),
+            np.int32(ny),
+        )
         r = r_dev.get()
         # the residual against the median of ~4 neighbours has about 1.16 times the
         # frame's own noise deviation; a floor keeps noiseless synthetic frames sane
         sigma = max(_robust_scale(r) / 1.16, 0.5 / 255)
-        kern.blotch(q, g, loc, *args, np.float32(sigma), np.float32(GAMMA), z_dev.data,
-                    r_dev.data, m_dev.data, sides_dev[0].data, sides_dev[1].data,
-                    np.int32(nx), np.int32(ny))
+        kern.blotch(
+            q,
+            g,
+            loc,
+            *args,
+            np.float32(sigma),
+            np.float32(GAMMA),
+            z_dev.data,
+            r_dev.data,
+            m_dev.data,
+            sides_dev[0].data,
+            sides_dev[1].data,
+            np.int32(nx),
+            np.int32(ny),
+        )
         zb[t], res[t], least[t], sigmas[t] = z_dev.get(), r, m_dev.get(), sigma
         # region evidence: each side's residual averaged over 5x5, both of one sign, in the
         # robust units of that average (which knows the grain's own correlation)
         for src, dst in zip(sides_dev[:2], sides_dev[2:], strict=True):
-            kern.box(q, g, loc, src.data, dst.data, np.int32(REGION_HALF), np.int32(nx),
-                     np.int32(ny))
+            kern.box(
+                q, g, loc, src.data, dst.data, np.int32(REGION_HALF), np.int32(nx), np.int32(ny)
+            )
         bp, bn = sides_dev[2].get(), sides_dev[3].get()
         same = (np.sign(bp) == np.sign(bn)) & (bp != 0)
         zr[t] = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / (
-            _robust_scale(bp))
+            _robust_scale(bp)
+        )
         if line_of:
             zs[t] = kern.line_score(m_dev, 3.0 * sigma)
     return zb, res, least, sigmas, zs, zr
@@ -317,38 +380,60 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     lines = np.zeros((T, ny, nx), np.int8)
     for t in range(T):
         lines[t] = _spatial_lines(kern, G[t], CANDIDATE_THRESHOLD, max(12, ny // 5))
-    near_line = np.stack([ndimage.binary_dilation(x != 0, structure=np.ones((1, 5), bool))
-                          for x in lines])
+    near_line = np.stack(
+        [ndimage.binary_dilation(x != 0, structure=np.ones((1, 5), bool)) for x in lines]
+    )
     # A first, cheaper pass finds what stands out; the flows are then estimated again with
     # it masked out, since a large blotch drags the flow around it even with a robust data
     # term, and the neighbours warped by that flow disagree where they should agree.
     comp = Compensator(G, device, weights=1.0 - near_line, params=FIRST_PASS_FLOW)
     zb = _blotch_pass(comp, kern, T, radius)[0]
-    suspect = np.stack([ndimage.binary_dilation(_hysteresis(np.abs(z), FIRST_PASS_LEVEL,
-                                                            2 * FIRST_PASS_LEVEL))
-                        for z in zb])
+    suspect = np.stack(
+        [
+            ndimage.binary_dilation(_hysteresis(np.abs(z), FIRST_PASS_LEVEL, 2 * FIRST_PASS_LEVEL))
+            for z in zb
+        ]
+    )
     # Each neighbour's own suspects are left out where they land: a neighbour's own blotch
     # would otherwise pass for disagreement among the neighbours.
     wide = np.stack([ndimage.binary_dilation(x) for x in suspect])
     comp = Compensator(G, device, weights=1.0 - (near_line | wide), exclude=suspect)
     zb, res, least, sigmas, zs, zr = _blotch_pass(comp, kern, T, radius, line_of=True)
-    return {"zb": zb, "zr": zr, "zc": kern.continuity(zs), "res": res, "least": least,
-            "sigma": sigmas, "lines": lines}
+    return {
+        "zb": zb,
+        "zr": zr,
+        "zc": kern.continuity(zs),
+        "res": res,
+        "least": least,
+        "sigma": sigmas,
+        "lines": lines,
+    }
 
 
-def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
-               scratch_threshold: float, search: int, min_length: int) -> np.ndarray:
+def film_kinds(
+    G: np.ndarray,
+    scores: dict,
+    blotch_threshold: float,
+    scratch_threshold: float,
+    search: int,
+    min_length: int,
+) -> np.ndarray:
     """Kinds (T, H, W) from film_scores' evidence and the thresholds."""
     T, ny, nx = G.shape
     zb, zc, res, sigmas = scores["zb"], scores["zc"], scores["res"], scores["sigma"]
     kinds = np.zeros((T, ny, nx), np.int8)
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
-    still = (static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
-             if STATIC_SCALE > 0 else np.zeros((T, ny, nx), bool))
+    still = (
+        static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
+        if STATIC_SCALE > 0
+        else np.zeros((T, ny, nx), bool)
+    )
     for t in range(T):
-        scratch = _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold,
-                                min_length) | still[t]
+        scratch = (
+            _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length)
+            | still[t]
+        )
         # a pixel's evidence: its own score, or its region's where its own residual shows
         # the same sign beyond the noise (so a strong blotch's region score does not spill
         # past its edge)
@@ -371,24 +456,24 @@ def film_kinds(G: np.ndarray, scores: dict, blotch_threshold: float,
     return kinds
 
 
-def _spatial_lines(kern: _Kernels, G: np.ndarray, threshold: float,
-                   min_length: int) -> np.ndarray:
+def _spatial_lines(kern: _Kernels, G: np.ndarray, threshold: float, min_length: int) -> np.ndarray:
     """Thin, long, near-vertical lines of one image from spatial cues alone, signed (+1
     bright, -1 dark, 0 none): the line detector on the image minus its horizontal median."""
     sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
     resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
-    zs = kern.line_score(cla.to_device(kern.rt.queue, np.ascontiguousarray(resid, np.float32)),
-                         3.0 * sigma)
+    zs = kern.line_score(
+        cla.to_device(kern.rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma
+    )
     return _scratch_mask(zs, resid, sigma, threshold, min_length, signed=True, thin=False)
 
 
-def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
-           min_length: int, device) -> np.ndarray:
+def _photo(
+    G: np.ndarray, speck_threshold: float, scratch_threshold: float, min_length: int, device
+) -> np.ndarray:
     ny, nx = G.shape
     # the grain's level from the image minus its 5x5 median: film grain is correlated over
     # a pixel or two, which the finest-scale estimate of denoising misses
-    sigma = max(_robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")),
-                0.5 / 255)
+    sigma = max(_robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")), 0.5 / 255)
     specks = np.zeros((ny, nx), bool)
     for rad in (1, 2, 4, 8):
         # at each scale, the components that stand out and fit in its disc: a speck, not
@@ -401,8 +486,9 @@ def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
         for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
             h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
             area = int((labels[sl] == idx).sum())
-            if not (max(h, w) <= 2 * rad + 1 and max(h, w) <= 3 * min(h, w) + 1
-                    and area >= 0.3 * h * w):
+            if not (
+                max(h, w) <= 2 * rad + 1 and max(h, w) <= 3 * min(h, w) + 1 and area >= 0.3 * h * w
+            ):
                 continue
             # a speck steps off its surroundings; a smooth bump fades into them
             comp = labels == idx
@@ -413,8 +499,9 @@ def _photo(G: np.ndarray, speck_threshold: float, scratch_threshold: float,
     resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
     rt = get_runtime(device)
     kern = _Kernels(rt)
-    zs = kern.line_score(cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)),
-                         3.0 * sigma)
+    zs = kern.line_score(
+        cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma
+    )
     scratch = _scratch_mask(zs, resid, sigma, scratch_threshold, min_length, thin=False)
     kinds = np.zeros((ny, nx), np.int8)
     kinds[specks & ~scratch] = BLOTCH
@@ -436,12 +523,19 @@ def _grow_kinds(kinds: np.ndarray, px: float) -> np.ndarray:
     return out
 
 
-def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
-                   blotch_threshold: float | None = None,
-                   scratch_threshold: float | None = None, grow: float = 0,
-                   radius: int = 2, search: int = 24, min_length: int | None = None,
-                   return_kinds: bool = False, device: str | int | None = None
-                   ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+def detect_defects(
+    frames: ArrayLike,
+    *,
+    channel_axis: int | None = None,
+    blotch_threshold: float | None = None,
+    scratch_threshold: float | None = None,
+    grow: float = 0,
+    radius: int = 2,
+    search: int = 24,
+    min_length: int | None = None,
+    return_kinds: bool = False,
+    device: str | int | None = None,
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Find blotches (dirt, dust) and line scratches in film frames or a scanned photo.
 
     For a film (two frames or more) every frame is compared with its motion-compensated
@@ -516,8 +610,10 @@ def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
     for name, val in (("radius", radius), ("search", search)):
         if not isinstance(val, (int, np.integer)) or val < 1:
             raise InputError(f"{name} must be a positive integer, not {val!r}")
-    for name, val in (("blotch_threshold", blotch_threshold),
-                      ("scratch_threshold", scratch_threshold)):
+    for name, val in (
+        ("blotch_threshold", blotch_threshold),
+        ("scratch_threshold", scratch_threshold),
+    ):
         if val is not None and not (np.isfinite(val) and val > 0):
             raise InputError(f"{name} must be a positive number, not {val!r}")
     if min_length is None:
@@ -530,8 +626,9 @@ def detect_defects(frames: ArrayLike, *, channel_axis: int | None = None,
         kinds = _photo(G[0], bthr, sthr, int(min_length), device)
     else:
         bthr = BLOTCH_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
-        kinds = film_kinds(G, film_scores(G, device, int(radius)), bthr, sthr, int(search),
-                           int(min_length))
+        kinds = film_kinds(
+            G, film_scores(G, device, int(radius)), bthr, sthr, int(search), int(min_length)
+        )
     kinds = _grow_kinds(kinds, px)
     if layout.photo:
         kinds = kinds[0]

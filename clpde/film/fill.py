@@ -43,10 +43,18 @@ def _spatial(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
     return out[np.newaxis] if axis is None else np.moveaxis(out, -1, 0)
 
 
-def inpaint_video(frames: ArrayLike, masks: ArrayLike, *, channel_axis: int | None = None,
-                  radius: int = 3, grain: bool = True, seed: int = 0,
-                  spatial: dict | None = None, device: str | int | None = None,
-                  return_unfilled: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+def inpaint_video(
+    frames: ArrayLike,
+    masks: ArrayLike,
+    *,
+    channel_axis: int | None = None,
+    radius: int = 3,
+    grain: bool = True,
+    seed: int = 0,
+    spatial: dict | None = None,
+    device: str | int | None = None,
+    return_unfilled: bool = False,
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Fill damaged pixels of film frames from the neighbouring frames that see them clean.
 
     For each frame with damage, dense optical flow to each neighbour up to `radius` frames
@@ -127,12 +135,30 @@ def inpaint_video(frames: ArrayLike, masks: ArrayLike, *, channel_axis: int | No
             sigma = max(_noise_std(G[t].astype(np.float64)), 0.5 / 255)
             # nearer frames first on ties, then the earlier one
             dist = np.array([abs(k) + (0.5 if k > 0 else 0.0) for k in offs], np.float32)
-            k_fill(q, g, loc, comp.colour[t].data, comp.grey[t].data, comp.mask_dev[t].data,
-                   nb.colour.data, nb.grey.data, nb.mask.data, nb.valid.data,
-                   cla.to_device(q, nb.gain).data, cla.to_device(q, nb.offset).data,
-                   cla.to_device(q, dist).data, np.int32(len(offs)), np.int32(C),
-                   np.float32(sigma), np.int32(_RADIUS_MATCH), np.float32(_CLEAN),
-                   res.data, left.data, np.int32(nx), np.int32(ny))
+            k_fill(
+                q,
+                g,
+                loc,
+                comp.colour[t].data,
+                comp.grey[t].data,
+                comp.mask_dev[t].data,
+                nb.colour.data,
+                nb.grey.data,
+                nb.mask.data,
+                nb.valid.data,
+                cla.to_device(q, nb.gain).data,
+                cla.to_device(q, nb.offset).data,
+                cla.to_device(q, dist).data,
+                np.int32(len(offs)),
+                np.int32(C),
+                np.float32(sigma),
+                np.int32(_RADIUS_MATCH),
+                np.float32(_CLEAN),
+                res.data,
+                left.data,
+                np.int32(nx),
+                np.int32(ny),
+            )
             out[t] = res.get()
             unfilled[t] = left.get() > 0.5
     elif damaged:
@@ -148,8 +174,7 @@ def inpaint_video(frames: ArrayLike, masks: ArrayLike, *, channel_axis: int | No
         blend = soft * filled + (1.0 - soft) * planes[t]
         if grain:
             sigma = _noise_std(G[t].astype(np.float64))
-            blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(
-                np.float32)
+            blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
         out[t] = np.where(hole[np.newaxis], blend, out[t])
     restored = layout.restore(out)
     if return_unfilled:

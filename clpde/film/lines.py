@@ -50,8 +50,7 @@ def line_evidence(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     than the line stands off them), thin says where the profile is thin enough for a
     scratch, and profile is every pixel against the mean of its flanks, in the same
     units."""
-    s = ndimage.gaussian_filter1d(frame.astype(np.float32), SMOOTH_ROWS, axis=0,
-                                  mode="nearest")
+    s = ndimage.gaussian_filter1d(frame.astype(np.float32), SMOOTH_ROWS, axis=0, mode="nearest")
     left, right = _shift(s, -LINE_FLANK), _shift(s, LINE_FLANK)
     z = np.zeros_like(s)
     thin = np.zeros(s.shape, bool)
@@ -82,8 +81,12 @@ def static_scratches(G: np.ndarray, threshold: float, min_length: int) -> np.nda
     for sgn in (1.0, -1.0):
         cand = np.stack([(sgn * z > threshold) & thin for z, thin, _ in ev])
         # weaker evidence suffices in the other frames: the line must be there, not strong
-        seen = np.stack([ndimage.binary_dilation((sgn * z > 0.5 * threshold) & thin,
-                                                 structure=foot) for z, thin, _ in ev])
+        seen = np.stack(
+            [
+                ndimage.binary_dilation((sgn * z > 0.5 * threshold) & thin, structure=foot)
+                for z, thin, _ in ev
+            ]
+        )
         for t in range(T):
             others = [u for u in range(t - 2, t + 3) if u != t and 0 <= u < T]
             if len(others) < 2:
@@ -93,8 +96,9 @@ def static_scratches(G: np.ndarray, threshold: float, min_length: int) -> np.nda
             if not hit.any():
                 continue
             hit = ndimage.binary_closing(hit, structure=np.ones((BRIDGE_ROWS, 1), bool)) | hit
-            labels, n = ndimage.label(hit, structure=np.array([[1, 1, 1], [0, 1, 0],
-                                                               [1, 1, 1]], bool))
+            labels, n = ndimage.label(
+                hit, structure=np.array([[1, 1, 1], [0, 1, 0], [1, 1, 1]], bool)
+            )
             if n == 0:
                 continue
             keep = np.zeros(n + 1, bool)

@@ -79,8 +79,10 @@ def _natural_key(path: Path):
 
 
 def _images(folder: Path) -> list[Path]:
-    files = sorted((p for p in folder.iterdir() if p.is_file()
-                    and p.suffix.lower() in IMAGE_FORMATS), key=_natural_key)
+    files = sorted(
+        (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
+        key=_natural_key,
+    )
     if not files:
         raise InputError(f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg)")
     return files
@@ -99,13 +101,16 @@ class _Source:
         elif is_film(self.path):
             self.reader = FilmReader(self.path)
             self.count, self.rate = self.reader.info.frames, self.reader.info.rate
-            first = np.zeros((self.reader.info.height, self.reader.info.width, 3),
-                             self.reader.info.dtype)
+            first = np.zeros(
+                (self.reader.info.height, self.reader.info.width, 3), self.reader.info.dtype
+            )
         elif not self.path.exists():
             raise InputError(f"input {self.path} does not exist")
         else:
-            raise InputError(f"{self.path} is neither a film ({', '.join(sorted(FORMATS))}, ...) "
-                             "nor a folder of images")
+            raise InputError(
+                f"{self.path} is neither a film ({', '.join(sorted(FORMATS))}, ...) "
+                "nor a folder of images"
+            )
         self.shape, self.dtype = first.shape, first.dtype
 
     def __iter__(self) -> Iterator[np.ndarray]:
@@ -115,9 +120,11 @@ class _Source:
             for path in self.files:
                 frame = read_image(path)
                 if frame.shape != self.shape or frame.dtype != self.dtype:
-                    raise InputError(f"{path} is {frame.shape} {frame.dtype}, frame 0 "
-                                     f"{self.shape} {self.dtype}; all frames need one size "
-                                     "and type")
+                    raise InputError(
+                        f"{path} is {frame.shape} {frame.dtype}, frame 0 "
+                        f"{self.shape} {self.dtype}; all frames need one size "
+                        "and type"
+                    )
                 yield frame
 
     def name(self, t: int, dtype: np.dtype, channels: int) -> str:
@@ -136,13 +143,16 @@ def _mask_source(mask: PathLike, source: _Source) -> Iterator[np.ndarray]:
     if mask.is_dir():
         files = _images(mask)
         if len(files) != source.count:
-            raise InputError(f"the mask folder {mask} holds {len(files)} masks for "
-                             f"{source.count} frames; give one mask per frame (or one mask file)")
+            raise InputError(
+                f"the mask folder {mask} holds {len(files)} masks for "
+                f"{source.count} frames; give one mask per frame (or one mask file)"
+            )
         read_mask(files[0], shape, what="the frames")
 
         def each():
             for path in files:
                 yield read_mask(path, shape, what="the frames")
+
         return each()
     if not mask.is_file():
         raise InputError(f"mask {mask} does not exist")
@@ -151,6 +161,7 @@ def _mask_source(mask: PathLike, source: _Source) -> Iterator[np.ndarray]:
     def same():
         for _ in range(source.count):
             yield single
+
     return same()
 
 
@@ -179,15 +190,28 @@ def _check_paths(source: _Source, output: Path, extras: list[Path | None]) -> No
         raise InputError("the output, --masks-out and --overlay must be different paths")
 
 
-def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = None,
-                 masks_out: PathLike | None = None, grow: float = 0,
-                 overlay: PathLike | None = None, codec: str | None = None,
-                 work: WindowWork | None = None, detect_options: dict | None = None,
-                 fill_options: dict | None = None, block: int = DEFAULT_BLOCK,
-                 workers: int | None = None, threads: int | None = None,
-                 scheduler: str | None = None, client=None, chunk_frames: int | None = None,
-                 overwrite: bool = False, overwrite_option: str = "overwrite=True",
-                 progress: bool | None = None) -> FilmResult:
+def restore_film(
+    source: PathLike,
+    output: PathLike,
+    *,
+    mask: PathLike | None = None,
+    masks_out: PathLike | None = None,
+    grow: float = 0,
+    overlay: PathLike | None = None,
+    codec: str | None = None,
+    work: WindowWork | None = None,
+    detect_options: dict | None = None,
+    fill_options: dict | None = None,
+    block: int = DEFAULT_BLOCK,
+    workers: int | None = None,
+    threads: int | None = None,
+    scheduler: str | None = None,
+    client=None,
+    chunk_frames: int | None = None,
+    overwrite: bool = False,
+    overwrite_option: str = "overwrite=True",
+    progress: bool | None = None,
+) -> FilmResult:
     """Find the damage in a film and fill it from the neighbouring frames, film in, film out.
 
     Parameters
@@ -249,8 +273,10 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
     overlay = None if overlay is None else Path(overlay)
     to_film = output.suffix.lower() in FORMATS
     if not to_film and output.suffix:
-        raise InputError(f"output {output}: give a film ({', '.join(sorted(FORMATS))}) or a "
-                         "folder for the restored frames")
+        raise InputError(
+            f"output {output}: give a film ({', '.join(sorted(FORMATS))}) or a "
+            "folder for the restored frames"
+        )
     _check_paths(src, output, [masks_out, overlay])
     if to_film:
         check_film_output(output, codec)
@@ -272,15 +298,21 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
     masked = written = 0
     with contextlib.ExitStack() as stack:
         if to_film:
-            writer = stack.enter_context(FilmWriter(output, like=like, codec=codec,
-                                                    rate=src.rate))
+            writer = stack.enter_context(FilmWriter(output, like=like, codec=codec, rate=src.rate))
         else:
-            folder = stack.enter_context(output_folder(output, overwrite,
-                                                       option=overwrite_option))
-        mask_folder = None if masks_out is None else stack.enter_context(
-            output_folder(masks_out, overwrite, option=overwrite_option))
-        shown = None if overlay is None else stack.enter_context(
-            FilmWriter(overlay, like=like, rate=src.rate, copy_streams=False))
+            folder = stack.enter_context(output_folder(output, overwrite, option=overwrite_option))
+        mask_folder = (
+            None
+            if masks_out is None
+            else stack.enter_context(output_folder(masks_out, overwrite, option=overwrite_option))
+        )
+        shown = (
+            None
+            if overlay is None
+            else stack.enter_context(
+                FilmWriter(overlay, like=like, rate=src.rate, copy_streams=False)
+            )
+        )
         # The overlay draws over the damaged frames: a second reader, in step.
         originals = None if overlay is None else iter(_Source(source))
         bar = progress_bar(progress, src.count, "clpde restore", unit="frame")
@@ -290,8 +322,9 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
         if cluster is None:
             frames = restore_stream(src, src.count, work, masks=given, block=block)
         else:
-            frames = restore_chunked(cluster, src, src.count, work, masks=given, block=block,
-                                     chunk_frames=chunk_frames)
+            frames = restore_chunked(
+                cluster, src, src.count, work, masks=given, block=block, chunk_frames=chunk_frames
+            )
         stack.callback(frames.close)  # Ctrl-C: cancel the workers' chunks too
         digits = max(5, len(str(src.count - 1)))
         timestamps = src.reader.timestamps if src.reader is not None else None
@@ -305,8 +338,7 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
                 channels = frame.shape[-1] if frame.ndim == 3 else 1
                 write_image(folder / src.name(t, frame.dtype, channels), frame)
             if mask_folder is not None:
-                write_image(mask_folder / f"mask_{t:0{digits}d}.png",
-                            found.astype(np.uint8) * 255)
+                write_image(mask_folder / f"mask_{t:0{digits}d}.png", found.astype(np.uint8) * 255)
             if shown is not None:
                 shown.write(_overlay_frame(next(originals), found, kinds), pts=pts)
             written += 1
@@ -314,8 +346,15 @@ def restore_film(source: PathLike, output: PathLike, *, mask: PathLike | None = 
         workers_used = 0 if cluster is None else len(cluster.scheduler_info()["workers"])
     if written != src.count:
         raise InputError(f"restored {written} of {src.count} frames")
-    return FilmResult(output, written, src.rate, time.perf_counter() - start, masked,
-                      workers_used, digest.hexdigest())
+    return FilmResult(
+        output,
+        written,
+        src.rate,
+        time.perf_counter() - start,
+        masked,
+        workers_used,
+        digest.hexdigest(),
+    )
 
 
 @contextlib.contextmanager

@@ -78,8 +78,10 @@ Block(first=3, start=4, stop=5, last=5)]
         raise InputError(f"the block must be a whole number of frames >= 1, not {block!r}")
     if context < 0:
         raise InputError(f"the temporal context must be >= 0 frames, not {context!r}")
-    return [Block(max(0, s - context), s, min(count, s + block), min(count, s + block + context))
-            for s in range(0, count, block)]
+    return [
+        Block(max(0, s - context), s, min(count, s + block), min(count, s + block + context))
+        for s in range(0, count, block)
+    ]
 
 
 def grow_masks(masks: np.ndarray, pixels: float) -> np.ndarray:
@@ -163,8 +165,9 @@ def _expand(masks: np.ndarray, frames: np.ndarray) -> np.ndarray:
     return masks[..., np.newaxis] if frames.ndim == masks.ndim + 1 else masks
 
 
-def restore_window(work: WindowWork, frames: np.ndarray, masks: np.ndarray | None,
-                   block: Block) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def restore_window(
+    work: WindowWork, frames: np.ndarray, masks: np.ndarray | None, block: Block
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Restore one block from its window.
 
     Parameters
@@ -192,8 +195,10 @@ def restore_window(work: WindowWork, frames: np.ndarray, masks: np.ndarray | Non
     """
     n = block.last - block.first
     if len(frames) != n or (masks is not None and len(masks) != n):
-        raise InputError(f"a window of {n} frames got {len(frames)} frames"
-                         + ("" if masks is None else f" and {len(masks)} masks"))
+        raise InputError(
+            f"a window of {n} frames got {len(frames)} frames"
+            + ("" if masks is None else f" and {len(masks)} masks")
+        )
     axis = _channel_axis(frames)
     kinds = None
     if masks is None:
@@ -213,24 +218,32 @@ def restore_window(work: WindowWork, frames: np.ndarray, masks: np.ndarray | Non
     keep = slice(block.start - block.first, block.stop - block.first)
     inner = slice(keep.start - lo, keep.stop - lo)
     if masks[lo:hi].any():
-        filled = work.fill(np.ascontiguousarray(frames[lo:hi]),
-                           np.ascontiguousarray(masks[lo:hi]), channel_axis=axis)
+        filled = work.fill(
+            np.ascontiguousarray(frames[lo:hi]),
+            np.ascontiguousarray(masks[lo:hi]),
+            channel_axis=axis,
+        )
         filled = np.asarray(filled)
         if filled.shape != frames[lo:hi].shape:
-            raise InputError(f"the filler returned {filled.shape} for frames "
-                             f"{frames[lo:hi].shape}")
+            raise InputError(f"the filler returned {filled.shape} for frames {frames[lo:hi].shape}")
         # Pixels outside the masks stay the input's exactly, whatever the filler does there.
-        restored = np.where(_expand(masks[keep], frames), filled[inner].astype(frames.dtype),
-                            frames[keep])
+        restored = np.where(
+            _expand(masks[keep], frames), filled[inner].astype(frames.dtype), frames[keep]
+        )
     else:
         restored = frames[keep]
-    return (np.ascontiguousarray(restored), np.ascontiguousarray(masks[keep]),
-            None if kinds is None else np.ascontiguousarray(np.asarray(kinds, np.int8)[keep]))
+    return (
+        np.ascontiguousarray(restored),
+        np.ascontiguousarray(masks[keep]),
+        None if kinds is None else np.ascontiguousarray(np.asarray(kinds, np.int8)[keep]),
+    )
 
 
-def iter_spans(frames: Iterable[np.ndarray], spans: Iterable[tuple[int, int]],
-               masks: Iterable[np.ndarray] | None = None
-               ) -> Iterator[tuple[np.ndarray, np.ndarray | None]]:
+def iter_spans(
+    frames: Iterable[np.ndarray],
+    spans: Iterable[tuple[int, int]],
+    masks: Iterable[np.ndarray] | None = None,
+) -> Iterator[tuple[np.ndarray, np.ndarray | None]]:
     """The frames (and masks) of consecutive spans [a, b), read once from iterators.
 
     Parameters
@@ -271,20 +284,28 @@ def iter_spans(frames: Iterable[np.ndarray], spans: Iterable[tuple[int, int]],
                 raise InputError(f"the masks ended at frame {index}; give one mask per frame")
             size = frame.shape if size is None else size
             if frame.shape != size:
-                raise InputError(f"frame {index} is {frame.shape}, the film {size}; all frames "
-                                 "need one size")
+                raise InputError(
+                    f"frame {index} is {frame.shape}, the film {size}; all frames need one size"
+                )
             if index < a:  # before the span (a gap between spans): read past, never held
                 base += 1
                 continue
             held.append((frame, mask))
         window = [held[k] for k in range(b - a)]
-        yield (np.stack([f for f, _ in window]),
-               None if masks is None else np.stack([m for _, m in window]))
+        yield (
+            np.stack([f for f, _ in window]),
+            None if masks is None else np.stack([m for _, m in window]),
+        )
 
 
-def restore_stream(frames: Iterable[np.ndarray], count: int, work: WindowWork, *,
-                   masks: Iterable[np.ndarray] | None = None, block: int = DEFAULT_BLOCK
-                   ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
+def restore_stream(
+    frames: Iterable[np.ndarray],
+    count: int,
+    work: WindowWork,
+    *,
+    masks: Iterable[np.ndarray] | None = None,
+    block: int = DEFAULT_BLOCK,
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
     """Restore a film frame by frame in one process, holding one window at a time.
 
     Parameters
@@ -321,8 +342,9 @@ def restore_stream(frames: Iterable[np.ndarray], count: int, work: WindowWork, *
             yield restored[k], found[k], None if kinds is None else kinds[k]
 
 
-def run_chunk(work: WindowWork, frames: np.ndarray, masks: np.ndarray | None,
-              blocks: list[Block]) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def run_chunk(
+    work: WindowWork, frames: np.ndarray, masks: np.ndarray | None, blocks: list[Block]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Restore consecutive blocks from one array of frames (a chunk on a Dask worker).
 
     Parameters
@@ -345,9 +367,14 @@ def run_chunk(work: WindowWork, frames: np.ndarray, masks: np.ndarray | None,
     parts = []
     for blk in blocks:
         window = slice(blk.first - offset, blk.last - offset)
-        parts.append(restore_window(work, np.ascontiguousarray(frames[window]),
-                                    None if masks is None
-                                    else np.ascontiguousarray(masks[window]), blk))
+        parts.append(
+            restore_window(
+                work,
+                np.ascontiguousarray(frames[window]),
+                None if masks is None else np.ascontiguousarray(masks[window]),
+                blk,
+            )
+        )
     kinds = None if parts[0][2] is None else np.concatenate([p[2] for p in parts])
     return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]), kinds)
 
@@ -361,8 +388,9 @@ def _default(function: Callable, name: str) -> int:
     return int(inspect.signature(function).parameters[name].default)
 
 
-def film_work(*, grow: float = 0, detect_options: dict | None = None,
-              fill_options: dict | None = None) -> WindowWork:
+def film_work(
+    *, grow: float = 0, detect_options: dict | None = None, fill_options: dict | None = None
+) -> WindowWork:
     """clpde's film restoration as window work: clpde.detect_defects and clpde.inpaint_video.
 
     Parameters
@@ -391,6 +419,10 @@ def film_work(*, grow: float = 0, detect_options: dict | None = None,
     # the next and previous frames (a moving object reappears there): one frame further.
     detect_radius = detect_options.get("radius", _default(detect_defects, "radius")) + 1
     fill_radius = fill_options.get("radius", _default(inpaint_video, "radius"))
-    return WindowWork(fill=functools.partial(_call, inpaint_video, **fill_options),
-                      detect=functools.partial(_call, detect_defects, **detect_options),
-                      fill_radius=int(fill_radius), detect_radius=int(detect_radius), grow=grow)
+    return WindowWork(
+        fill=functools.partial(_call, inpaint_video, **fill_options),
+        detect=functools.partial(_call, detect_defects, **detect_options),
+        fill_radius=int(fill_radius),
+        detect_radius=int(detect_radius),
+        grow=grow,
+    )

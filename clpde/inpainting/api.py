@@ -96,8 +96,9 @@ def _as_mask(mask, shape_hw):
     A bool mask is used as is (no copy)."""
     m = np.asarray(mask)
     if m.dtype != bool and not (np.issubdtype(m.dtype, np.number)):
-        raise InputError(f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = "
-                         "inpaint)")
+        raise InputError(
+            f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = inpaint)"
+        )
     if m.ndim == 3 and m.shape[-1] == 1:
         m = m[..., 0]
     if m.shape != tuple(shape_hw):
@@ -111,12 +112,16 @@ def _as_mask(mask, shape_hw):
         return m != 0, None
     lo, hi = m.min(), m.max()  # NaN propagates into both
     if not (np.isfinite(lo) and np.isfinite(hi)):
-        raise InputError("mask contains NaN or infinite values; a float mask is the degree of "
-                         "damage in [0, 1] (0 keep, 1 inpaint)")
+        raise InputError(
+            "mask contains NaN or infinite values; a float mask is the degree of "
+            "damage in [0, 1] (0 keep, 1 inpaint)"
+        )
     if lo < 0 or hi > 1:
-        raise InputError(f"float mask values lie in [{lo:g}, {hi:g}], outside [0, 1]; a float mask "
-                         "is the degree of damage (0 keep, 1 inpaint): rescale it, or pass a bool "
-                         "mask (mask != 0)")
+        raise InputError(
+            f"float mask values lie in [{lo:g}, {hi:g}], outside [0, 1]; a float mask "
+            "is the degree of damage (0 keep, 1 inpaint): rescale it, or pass a bool "
+            "mask (mask != 0)"
+        )
     omega = m > 0
     soft = bool(((m > 0) & (m < 1)).any())
     return omega, (m if soft else None)
@@ -149,9 +154,11 @@ def _prepare(image, mask, channel_axis, alpha):
             )
         partly = None if softness is None else (softness > 0) & (softness < 1)
         if partly is not None and finite is not None and not finite[partly].all():
-            raise InputError("image has NaN or infinite pixels where the soft mask is below 1; "
-                             "a partly damaged pixel needs its observed value (set the mask to 1 "
-                             "there)")
+            raise InputError(
+                "image has NaN or infinite pixels where the soft mask is below 1; "
+                "a partly damaged pixel needs its observed value (set the mask to 1 "
+                "there)"
+            )
     nc = planes.shape[0]
     if alpha is None:
         alpha = axis is not None and nc == 4
@@ -209,8 +216,9 @@ class SolveRun:
         solved = self.module.solve(self.data, self.omega, self.runtime, **self.options, **extra)
         solved = np.asarray(solved, np.float64)
         if self.damage is not None and not soft_mask:
-            solved = np.where(self.omega, self.damage * solved + (1 - self.damage) * self.data,
-                              self.data)
+            solved = np.where(
+                self.omega, self.damage * solved + (1 - self.damage) * self.data, self.data
+            )
         self.solution = solved
         return iter(())
 
@@ -270,15 +278,28 @@ class Inpainting:
     (True, (32, 32), True)
     """
 
-    def __init__(self, image: ArrayLike, mask: ArrayLike | None = None, *,
-                 channel_axis: int | None = None, alpha: bool | None = None,
-                 colour: str = "channels", levels: int | None = None, device: DeviceLike = None,
-                 dtype: DTypeLike | None = None, progress: Progress = None,
-                 method: str | None = None, boxes: bool = True, seed: int | None = None,
-                 grow: float = 0, **params: Any):
+    def __init__(
+        self,
+        image: ArrayLike,
+        mask: ArrayLike | None = None,
+        *,
+        channel_axis: int | None = None,
+        alpha: bool | None = None,
+        colour: str = "channels",
+        levels: int | None = None,
+        device: DeviceLike = None,
+        dtype: DTypeLike | None = None,
+        progress: Progress = None,
+        method: str | None = None,
+        boxes: bool = True,
+        seed: int | None = None,
+        grow: float = 0,
+        **params: Any,
+    ):
 
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
-            image, mask, channel_axis, alpha)
+            image, mask, channel_axis, alpha
+        )
         if growth(grow) > 0:  # (no copy of the mask otherwise: it may be image-sized)
             if self.softness is not None:  # a soft mask grows its support, fully damaged
                 self.softness = grow_mask(self.softness, grow)
@@ -286,9 +307,12 @@ class Inpainting:
             else:
                 self.mask = grow_mask(self.mask, grow)
         if not self.mask.any():
-            warnings.warn("the mask is empty, so nothing was filled and the image comes back "
-                          "unchanged; was the mask inverted or saved blank?", UserWarning,
-                          stacklevel=_caller_level())
+            warnings.warn(
+                "the mask is empty, so nothing was filled and the image comes back "
+                "unchanged; was the mask inverted or saved blank?",
+                UserWarning,
+                stacklevel=_caller_level(),
+            )
         ncolour = self.planes.shape[0] - int(self.alpha)
         _check_colour(colour, ncolour)
         if self.mask.all():
@@ -296,9 +320,9 @@ class Inpainting:
                 "the mask covers every pixel, so nothing is known to inpaint from; "
                 "mark only the damaged region"
             )
-        if levels is not None and (isinstance(levels, bool) or not isinstance(levels,
-                                                                              (int, np.integer))
-                                   or levels < 1):
+        if levels is not None and (
+            isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 1
+        ):
             raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
         given = {**params, **({} if levels is None else {"levels": levels})}
         self.method = choose_method(self.mask, method, given)
@@ -355,8 +379,11 @@ class Inpainting:
         elif np.issubdtype(self.layout.dtype, np.integer):
             info = np.iinfo(self.layout.dtype)
             values = np.clip(np.rint(values), info.min, info.max)
-        view = out[np.newaxis] if self.layout.channel_axis is None else np.moveaxis(
-            out, self.layout.channel_axis, 0)
+        view = (
+            out[np.newaxis]
+            if self.layout.channel_axis is None
+            else np.moveaxis(out, self.layout.channel_axis, 0)
+        )
         view[: self.ncolour, y0:y1, x0:x1][:, omega] = values.astype(self.layout.dtype)
 
     def _boxes(self):
@@ -369,8 +396,10 @@ class Inpainting:
             return boxes.boxes(self.mask, lambda crop: reach)
         align = getattr(self.module, "ALIGN", None)
         return boxes.boxes(
-            self.mask, lambda crop: margin(self.module, crop, self.params),
-            (lambda crop: align(crop, **self.params)) if callable(align) else lambda crop: 1)
+            self.mask,
+            lambda crop: margin(self.module, crop, self.params),
+            (lambda crop: align(crop, **self.params)) if callable(align) else lambda crop: 1,
+        )
 
     def iterate(self, every: int | None = None) -> Iterator[InpaintState]:
         """Run to the end, yielding an InpaintState at the start of the finest level, every
@@ -390,22 +419,32 @@ class Inpainting:
         # Each box's finest level keeps the ping-pong pair, prev and known, the one-channel
         # weight and three index lists on the device: every box is checked before any work.
         for y0, y1, x0, x1 in boxes:
-            check_fits(runtime, (self.ncolour, y1 - y0, x1 - x0), "inpainting",
-                       4 + 4 / self.ncolour, ghost=GHOST, dtype=self.dtype)
+            check_fits(
+                runtime,
+                (self.ncolour, y1 - y0, x1 - x0),
+                "inpainting",
+                4 + 4 / self.ncolour,
+                ghost=GHOST,
+                dtype=self.dtype,
+            )
         # A callable progress hears masked pixels done over all to do, once per box; the
         # methods' own step counts would mix units, so inside a box they only repeat the
         # last figure (which is where a caller's cancel gets its chance to raise).
         report = self.progress if callable(self.progress) else None
-        done, total = 0, sum(int(np.count_nonzero(self.mask[y0:y1, x0:x1]))
-                             for y0, y1, x0, x1 in boxes)
-        self._inner_progress = self.progress if report is None else (
-            lambda *_: report(done, total))
+        done, total = (
+            0,
+            sum(int(np.count_nonzero(self.mask[y0:y1, x0:x1])) for y0, y1, x0, x1 in boxes),
+        )
+        self._inner_progress = self.progress if report is None else (lambda *_: report(done, total))
         for box in boxes:
             y0, y1, x0, x1 = box
             omega = np.array(self.mask[y0:y1, x0:x1], bool)
             data = self._box_data(box)
-            damage = None if self.softness is None else np.asarray(
-                self.softness[y0:y1, x0:x1], np.float64)
+            damage = (
+                None
+                if self.softness is None
+                else np.asarray(self.softness[y0:y1, x0:x1], np.float64)
+            )
             fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
             if self.auto:
                 # the self-validated choice among the candidates (inpainting/validate.py)
@@ -415,8 +454,9 @@ class Inpainting:
                 info.levels = max(info.levels, 1)
             else:
                 info.box_methods.append(self.method)
-                info.box_exemplar_pixels.append(int(omega.sum()) if self.method == "exemplar"
-                                                else 0)
+                info.box_exemplar_pixels.append(
+                    int(omega.sum()) if self.method == "exemplar" else 0
+                )
                 run = self._run(runtime, data, omega, fidelity, damage)
                 for steps, change, solved in run.states(every):
                     self._write(out, box, solved, omega)
@@ -444,18 +484,36 @@ class Inpainting:
         """The method's run on one box: its own `run` when it has one (states along the
         way), else its `solve` as one step (registry.py has the protocol)."""
         if hasattr(self.module, "run"):
-            return self.module.run(data, omega, runtime, dtype=self.dtype,
-                                   progress=self._inner_progress,
-                                   seed=self.seed, fidelity=fidelity, **self.params)
-        return SolveRun(self.module, data, omega, runtime, damage, fidelity, dtype=self.dtype,
-                        progress=self._inner_progress, seed=self.seed, **self.params)
+            return self.module.run(
+                data,
+                omega,
+                runtime,
+                dtype=self.dtype,
+                progress=self._inner_progress,
+                seed=self.seed,
+                fidelity=fidelity,
+                **self.params,
+            )
+        return SolveRun(
+            self.module,
+            data,
+            omega,
+            runtime,
+            damage,
+            fidelity,
+            dtype=self.dtype,
+            progress=self._inner_progress,
+            seed=self.seed,
+            **self.params,
+        )
 
     def _voted_box(self, runtime, data, omega, info):
         """The box filled by the self-validated choice (inpainting/validate.py); what chose
         what, and why, goes to info.choices."""
         params = {self.method: self.params} if self.params else {}
-        solved, report = validate.choose(data, omega, runtime, dtype=self.dtype, seed=self.seed,
-                                         params=params)
+        solved, report = validate.choose(
+            data, omega, runtime, dtype=self.dtype, seed=self.seed, params=params
+        )
         info.choices.append(report)
         by = {}
         for choice in report["choices"]:
@@ -489,18 +547,39 @@ def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=Fals
     return method
 
 
-def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: int | None = None,
-            dt: float = 0.1, transport_steps: int = 15, diffusion_steps: int = 2,
-            diffusion_dt: float = 0.1, epsilon: float = 3.0, presmooth: int = 1,
-            scaling: str = "none", rotation: str = "ccw", max_steps: int = 3000,
-            tol: float = 1e-4, mean_tol: float = 4e-4, check_every: int = 2,
-            levels: int | None = None, colour: str = "channels", alpha: bool | None = None,
-            fill: str = "biharmonic", keep_band: bool = True, device: DeviceLike = None,
-            dtype: DTypeLike | None = None, progress: Progress = None,
-            snapshots: int | None = None, return_info: bool = False, method: str | None = None,
-            boxes: bool = True, seed: int | None = None, grow: float = 0,
-            **options: Any) -> (np.ndarray | tuple[np.ndarray, InpaintInfo]
-                                | tuple[np.ndarray, list[InpaintState]]):
+def inpaint(
+    image: ArrayLike,
+    mask: ArrayLike | None = None,
+    *,
+    channel_axis: int | None = None,
+    dt: float = 0.1,
+    transport_steps: int = 15,
+    diffusion_steps: int = 2,
+    diffusion_dt: float = 0.1,
+    epsilon: float = 3.0,
+    presmooth: int = 1,
+    scaling: str = "none",
+    rotation: str = "ccw",
+    max_steps: int = 3000,
+    tol: float = 1e-4,
+    mean_tol: float = 4e-4,
+    check_every: int = 2,
+    levels: int | None = None,
+    colour: str = "channels",
+    alpha: bool | None = None,
+    fill: str = "biharmonic",
+    keep_band: bool = True,
+    device: DeviceLike = None,
+    dtype: DTypeLike | None = None,
+    progress: Progress = None,
+    snapshots: int | None = None,
+    return_info: bool = False,
+    method: str | None = None,
+    boxes: bool = True,
+    seed: int | None = None,
+    grow: float = 0,
+    **options: Any,
+) -> np.ndarray | tuple[np.ndarray, InpaintInfo] | tuple[np.ndarray, list[InpaintState]]:
     """Fill the masked region of an image.
 
     Parameters
@@ -635,18 +714,31 @@ def inpaint(image: ArrayLike, mask: ArrayLike | None = None, *, channel_axis: in
     """
     given = locals()  # the transport options are InpaintParams' fields, named alike here
     transport = {name: given[name] for name in _TRANSPORT_ARGS}
-    if snapshots is not None and (isinstance(snapshots, bool) or not isinstance(snapshots,
-                                                                                (int, np.integer))
-                                  or snapshots < 1):
+    if snapshots is not None and (
+        isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer)) or snapshots < 1
+    ):
         raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")
     # Only the transport options the caller changed are passed on: the defaults are those
     # of InpaintParams, and another method rejects a transport option it lacks by name.
     defaults = inspect.signature(inpaint).parameters
     params = {k: v for k, v in transport.items() if not _same(v, defaults[k].default)}
     params.update(options)
-    job = Inpainting(image, mask, channel_axis=channel_axis, alpha=alpha, colour=colour,
-                     levels=levels, device=device, dtype=dtype, progress=progress,
-                     method=method, boxes=boxes, seed=seed, grow=grow, **params)
+    job = Inpainting(
+        image,
+        mask,
+        channel_axis=channel_axis,
+        alpha=alpha,
+        colour=colour,
+        levels=levels,
+        device=device,
+        dtype=dtype,
+        progress=progress,
+        method=method,
+        boxes=boxes,
+        seed=seed,
+        grow=grow,
+        **params,
+    )
     states = list(job.iterate(every=snapshots))
     if snapshots:
         job.info.snapshots = states

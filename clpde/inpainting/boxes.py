@@ -22,7 +22,7 @@ def occupied_tiles(omega: np.ndarray, tile: int = TILE) -> np.ndarray:
     starts = np.arange(0, nx, tile)
     rows = []
     for r0 in range(0, ny, tile):
-        rows.append(np.logical_or.reduceat(omega[r0:r0 + tile].any(axis=0), starts))
+        rows.append(np.logical_or.reduceat(omega[r0 : r0 + tile].any(axis=0), starts))
     return np.array(rows, bool).reshape(len(rows), len(starts))
 
 
@@ -56,19 +56,28 @@ def boxes(omega: np.ndarray, margin_of, align_of=lambda crop: 1, tile: int = TIL
     labels, count = ndimage.label(occ, np.ones((3, 3), bool))
     found = []  # [tight box, grown box]
     for sl in ndimage.find_objects(labels):
-        tight = _bbox(omega, sl[0].start * tile, min(ny, sl[0].stop * tile),
-                      sl[1].start * tile, min(nx, sl[1].stop * tile))
+        tight = _bbox(
+            omega,
+            sl[0].start * tile,
+            min(ny, sl[0].stop * tile),
+            sl[1].start * tile,
+            min(nx, sl[1].stop * tile),
+        )
         if tight is None:
             continue
-        if margin_of(np.pad(omega[tight[0]:tight[1], tight[2]:tight[3]], 1)) is None:
+        if margin_of(np.pad(omega[tight[0] : tight[1], tight[2] : tight[3]], 1)) is None:
             return [(0, ny, 0, nx)]
         found.append([list(tight), _grown(omega, tight, margin_of, align_of)[0]])
     i = 0
     while i < len(found):
         grown = np.array([g for _, g in found])
         a = grown[i]
-        hit = (grown[:, 0] < a[1]) & (a[0] < grown[:, 1]) & (grown[:, 2] < a[3]) & (a[2] < grown[:,
-                                                                                                 3])
+        hit = (
+            (grown[:, 0] < a[1])
+            & (a[0] < grown[:, 1])
+            & (grown[:, 2] < a[3])
+            & (a[2] < grown[:, 3])
+        )
         hit[i] = False
         if not hit.any():
             i += 1
@@ -78,8 +87,12 @@ def boxes(omega: np.ndarray, margin_of, align_of=lambda crop: 1, tile: int = TIL
         tight = [tights[:, 0].min(), tights[:, 1].max(), tights[:, 2].min(), tights[:, 3].max()]
         box, align = _grown(omega, tight, margin_of, align_of)
         # the union keeps every grown rectangle of the group inside it
-        box = [min(box[0], grown[group, 0].min()), max(box[1], grown[group, 1].max()),
-               min(box[2], grown[group, 2].min()), max(box[3], grown[group, 3].max())]
+        box = [
+            min(box[0], grown[group, 0].min()),
+            max(box[1], grown[group, 1].max()),
+            min(box[2], grown[group, 2].min()),
+            max(box[3], grown[group, 3].max()),
+        ]
         box[0] -= box[0] % align
         box[2] -= box[2] % align
         found = [f for k, f in enumerate(found) if k not in set(group)] + [[tight, box]]

@@ -72,8 +72,9 @@ def _periodicity(detail, ok) -> float:
     return float(a.max())
 
 
-def lattice_offsets(data: np.ndarray, omega: np.ndarray, max_lag: int = 96,
-                    tol: float = 1e-3, limit: int = 96) -> np.ndarray:
+def lattice_offsets(
+    data: np.ndarray, omega: np.ndarray, max_lag: int = 96, tol: float = 1e-3, limit: int = 96
+) -> np.ndarray:
     """The lags (dx, dy), up to ``max_lag`` px, at which the known pixels of ``data``
     ((channels, rows, cols)) repeat exactly, up to ``tol``: the local minima of the mean
     squared difference between the known pixels and their shifts (over the pairs both
@@ -131,5 +132,8 @@ def features(data: np.ndarray, omega: np.ndarray, depth: np.ndarray | None = Non
     detail, ok = _detail(data, known)
     ring = known & (ndimage.distance_transform_edt(known) <= RING)
     texture = float(np.sqrt(np.mean(detail[ring].astype(np.float64) ** 2))) if ring.any() else 0.0
-    return {"radius": float(depth.max()), "texture": texture,
-            "periodicity": _periodicity(detail, ok)}
+    return {
+        "radius": float(depth.max()),
+        "texture": texture,
+        "periodicity": _periodicity(detail, ok),
+    }

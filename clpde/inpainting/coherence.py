@@ -57,8 +57,9 @@ def margin(epsilon=DEFAULTS["epsilon"], sigma=DEFAULTS["sigma"], rho=DEFAULTS["r
     return int(np.ceil(epsilon)) + len(gaussian_taps(sigma)) // 2 + len(gaussian_taps(rho)) // 2 + 1
 
 
-def MARGIN(omega=None, *, epsilon=DEFAULTS["epsilon"], sigma=DEFAULTS["sigma"],
-           rho=DEFAULTS["rho"], **_):
+def MARGIN(
+    omega=None, *, epsilon=DEFAULTS["epsilon"], sigma=DEFAULTS["sigma"], rho=DEFAULTS["rho"], **_
+):
     """The registry's margin: MARGIN(omega, **params) -> pixels (omega is not needed)."""
     return margin(epsilon, sigma, rho)
 
@@ -96,19 +97,35 @@ def shells(omega: np.ndarray, reach: int = 6) -> np.ndarray:
 
 
 def _offsets(reach: int):
-    return sorted((dy * dy + dx * dx, dy, dx) for dy in range(-reach, reach + 1)
-                  for dx in range(-reach, reach + 1) if 0 < dy * dy + dx * dx <= reach * reach)
+    return sorted(
+        (dy * dy + dx * dx, dy, dx)
+        for dy in range(-reach, reach + 1)
+        for dx in range(-reach, reach + 1)
+        if 0 < dy * dy + dx * dx <= reach * reach
+    )
 
 
-def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0,
-              dtype=np.float32, progress=None):
+def transport(
+    data,
+    omega,
+    runtime,
+    *,
+    epsilon=5.0,
+    kappa=25.0,
+    sigma=1.4,
+    rho=4.0,
+    dtype=np.float32,
+    progress=None,
+):
     """Coherence transport on (channels, rows, cols) data; returns the filled array."""
     _check(epsilon, kappa, sigma, rho)
     if not omega.any():
         return data.copy()
     if omega.all():
-        raise InputError("the mask covers every pixel, so nothing is known to inpaint from; "
-                         "mark only the damaged region")
+        raise InputError(
+            "the mask covers every pixel, so nothing is known to inpaint from; "
+            "mark only the damaged region"
+        )
     rows, cols = box_around(omega, margin(epsilon, sigma, rho))
     box_omega = omega[rows, cols]
     box = data[:, rows, cols]
@@ -157,8 +174,21 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
         args = (np.int32(first), np.int32(count))
         # a fixed work-group (Runtime.items): PoCL would compile anew for each shell's count
         launch = runtime.items(int(count))
-        k_fill(q, *launch, u.data, known.data, t.data, buf_r.data, rr, lst.data,
-               *args, dt.type(epsilon), dt.type(kappa), np.int32(nc), *dims)
+        k_fill(
+            q,
+            *launch,
+            u.data,
+            known.data,
+            t.data,
+            buf_r.data,
+            rr,
+            lst.data,
+            *args,
+            dt.type(epsilon),
+            dt.type(kappa),
+            np.int32(nc),
+            *dims,
+        )
         k_mark(q, *launch, known.data, lst.data, *args)
     out = np.array(data, copy=True)
     filled = u.get()
@@ -166,11 +196,30 @@ def transport(data, omega, runtime, *, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4
     return out
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, epsilon=5.0,
-          kappa=25.0, sigma=1.4, rho=4.0):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    epsilon=5.0,
+    kappa=25.0,
+    sigma=1.4,
+    rho=4.0,
+):
     """Registry entry point: coherence transport (see the module docstring)."""
     data = np.asarray(data)
-    out = transport(data.astype(np.float64, copy=False), np.asarray(omega, bool), runtime,
-                    epsilon=epsilon, kappa=kappa, sigma=sigma, rho=rho, dtype=dtype,
-                    progress=progress)
+    out = transport(
+        data.astype(np.float64, copy=False),
+        np.asarray(omega, bool),
+        runtime,
+        epsilon=epsilon,
+        kappa=kappa,
+        sigma=sigma,
+        rho=rho,
+        dtype=dtype,
+        progress=progress,
+    )
     return out.astype(data.dtype, copy=False)

@@ -98,8 +98,14 @@ def _params(params: dict) -> dict:
     patch = p["patch"]
     if not isinstance(patch, (int, np.integer)) or patch < 3 or patch % 2 == 0:
         raise InputError(f"patch must be an odd integer >= 3 (the patch side), not {patch!r}")
-    for name in ("search", "iterations", "fine_iterations", "passes", "onion_passes",
-                 "cohere_sweeps"):
+    for name in (
+        "search",
+        "iterations",
+        "fine_iterations",
+        "passes",
+        "onion_passes",
+        "cohere_sweeps",
+    ):
         v = p[name]
         if not isinstance(v, (int, np.integer)) or v < (0 if name == "search" else 1):
             raise InputError(f"{name} must be a positive integer, not {v!r}")
@@ -110,16 +116,19 @@ def _params(params: dict) -> dict:
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"confidence must be a number >= 1 (1 turns it off), not {g!r}")
     sw = p["structure"]
-    if sw is not None and (not isinstance(sw, (int, float, np.floating, np.integer))
-                           or not np.isfinite(sw) or sw < 0):
-        raise InputError(f"structure must be a weight >= 0 (0 turns it off) or None "
-                         f"(automatic), not {sw!r}")
+    if sw is not None and (
+        not isinstance(sw, (int, float, np.floating, np.integer)) or not np.isfinite(sw) or sw < 0
+    ):
+        raise InputError(
+            f"structure must be a weight >= 0 (0 turns it off) or None (automatic), not {sw!r}"
+        )
     g = p["cohere"]
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"cohere must be a number >= 1 (1 turns it off), not {g!r}")
     f = p["features"]
-    if f is not None and (not isinstance(f, (int, float, np.floating, np.integer))
-                          or not np.isfinite(f) or f < 0):
+    if f is not None and (
+        not isinstance(f, (int, float, np.floating, np.integer)) or not np.isfinite(f) or f < 0
+    ):
         raise InputError(f"features must be a weight >= 0 (0 turns them off), not {f!r}")
     return p
 
@@ -146,8 +155,10 @@ def _box(omega: np.ndarray, margin: int):
     rows = np.flatnonzero(omega.any(axis=1))
     cols = np.flatnonzero(omega.any(axis=0))
     ny, nx = omega.shape
-    return (slice(max(rows[0] - margin, 0), min(rows[-1] + 1 + margin, ny)),
-            slice(max(cols[0] - margin, 0), min(cols[-1] + 1 + margin, nx)))
+    return (
+        slice(max(rows[0] - margin, 0), min(rows[-1] + 1 + margin, ny)),
+        slice(max(cols[0] - margin, 0), min(cols[-1] + 1 + margin, nx)),
+    )
 
 
 def _downsample(img: np.ndarray, hole: np.ndarray):
@@ -210,9 +221,19 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
 
 
 class _Level:
-    def __init__(self, runtime, dtype, img: np.ndarray, hole: np.ndarray, weights, patch: int,
-                 nout: int | None = None, radius: int | None = None, confidence: float = 1.0,
-                 ncolour: int | None = None):
+    def __init__(
+        self,
+        runtime,
+        dtype,
+        img: np.ndarray,
+        hole: np.ndarray,
+        weights,
+        patch: int,
+        nout: int | None = None,
+        radius: int | None = None,
+        confidence: float = 1.0,
+        ncolour: int | None = None,
+    ):
         self.rt = runtime
         self.q = runtime.queue
         self.dtype = np.dtype(dtype)
@@ -301,11 +322,25 @@ class _Level:
         # dB, mean of 3 seeds) for 41% less CPU time on a 10% text mask.
         for j in range(passes):
             jump = (4, 2, 1)[j % 3]
-            self._launch(self.k_pass, n, self.img.data, self.d_use.data, np.int32(masked),
-                         self.d_valid.data, self.nnf[0].data, self.nnf[1].data, self.dist.data,
-                         lst.data, np.int32(n), *self._args(), np.int32(jump),
-                         np.int32(self.radius if j == 0 else 0), np.uint32(seed),
-                         np.uint32(counter[0]), np.int32(j == 0))
+            self._launch(
+                self.k_pass,
+                n,
+                self.img.data,
+                self.d_use.data,
+                np.int32(masked),
+                self.d_valid.data,
+                self.nnf[0].data,
+                self.nnf[1].data,
+                self.dist.data,
+                lst.data,
+                np.int32(n),
+                *self._args(),
+                np.int32(jump),
+                np.int32(self.radius if j == 0 else 0),
+                np.uint32(seed),
+                np.uint32(counter[0]),
+                np.int32(j == 0),
+            )
             counter[0] += 1
             self.nnf.reverse()
 
@@ -317,10 +352,20 @@ class _Level:
         for _ in range(sweeps):
             for parity in (0, 1):
                 cl.enqueue_copy(self.q, self.nnf[1].data, self.nnf[0].data)
-                self._launch(self.k_cohere, n, self.img.data, self.d_valid.data,
-                             self.nnf[1].data, self.nnf[0].data, self.dist.data, lst.data,
-                             np.int32(n), *self._args(), np.int32(parity),
-                             self.dtype.type(factor))
+                self._launch(
+                    self.k_cohere,
+                    n,
+                    self.img.data,
+                    self.d_valid.data,
+                    self.nnf[1].data,
+                    self.nnf[0].data,
+                    self.dist.data,
+                    lst.data,
+                    np.int32(n),
+                    *self._args(),
+                    np.int32(parity),
+                    self.dtype.type(factor),
+                )
 
     def try_offsets(self, offsets, targets=None, masked: bool = False) -> None:
         """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
@@ -328,17 +373,39 @@ class _Level:
         lst, n = self.targets if targets is None else targets
         if self.chw_colour is None:
             w = self.chw.get()
-            w[self.ncolour:] = 0
+            w[self.ncolour :] = 0
             self.chw_colour = cla.to_device(self.q, w)
-        self._launch(self.k_offsets, n, self.img.data, self.d_use.data, np.int32(masked),
-                     self.d_valid.data, self.nnf[0].data, self.dist.data, lst.data, np.int32(n),
-                     *self._args(), self.chw_colour.data, offsets.data,
-                     np.int32(offsets.size // 2))
+        self._launch(
+            self.k_offsets,
+            n,
+            self.img.data,
+            self.d_use.data,
+            np.int32(masked),
+            self.d_valid.data,
+            self.nnf[0].data,
+            self.dist.data,
+            lst.data,
+            np.int32(n),
+            *self._args(),
+            self.chw_colour.data,
+            offsets.data,
+            np.int32(offsets.size // 2),
+        )
 
     def score(self) -> None:
         lst, n = self.targets
-        self._launch(self.k_score, n, self.img.data, self.d_use.data, np.int32(0),
-                     self.nnf[0].data, self.dist.data, lst.data, np.int32(n), *self._args())
+        self._launch(
+            self.k_score,
+            n,
+            self.img.data,
+            self.d_use.data,
+            np.int32(0),
+            self.nnf[0].data,
+            self.dist.data,
+            lst.data,
+            np.int32(n),
+            *self._args(),
+        )
 
     def vote(self, best_only: bool = False, sigma2: float | None = None) -> float:
         if sigma2 is None:
@@ -347,10 +414,22 @@ class _Level:
             sigma2 = float(np.percentile(d, 75)) if d.size else 1.0
         sigma2 = 1.0 if sigma2 is None else sigma2
         hl, hn = self.holes
-        self._launch(self.k_vote, hn, self.img.data, self.nnf[0].data, self.dist.data,
-                     self.pen.data, hl.data,
-                     np.int32(hn), np.int32(self.W), np.int32(self.H), np.int32(self.nch),
-                     np.int32(self.nout), self.dtype.type(max(sigma2, 1e-10)), np.int32(best_only))
+        self._launch(
+            self.k_vote,
+            hn,
+            self.img.data,
+            self.nnf[0].data,
+            self.dist.data,
+            self.pen.data,
+            hl.data,
+            np.int32(hn),
+            np.int32(self.W),
+            np.int32(self.H),
+            np.int32(self.nch),
+            np.int32(self.nout),
+            self.dtype.type(max(sigma2, 1e-10)),
+            np.int32(best_only),
+        )
         return sigma2
 
     def onion_peel(self, rng, passes: int, seed: int, counter: list, offsets=None) -> None:
@@ -366,9 +445,18 @@ class _Level:
             self.patchmatch(passes, lst, True, seed, counter)
             if offsets is not None:
                 self.try_offsets(offsets, lst, masked=True)
-            self._launch(self.k_copy, lst[1], self.img.data, self.nnf[0].data, self.dist.data,
-                         lst[0].data, np.int32(lst[1]), np.int32(self.W), np.int32(self.H),
-                         np.int32(self.nout))
+            self._launch(
+                self.k_copy,
+                lst[1],
+                self.img.data,
+                self.nnf[0].data,
+                self.dist.data,
+                lst[0].data,
+                np.int32(lst[1]),
+                np.int32(self.W),
+                np.int32(self.H),
+                np.int32(self.nout),
+            )
             filled = filled | layer
         self.d_use.fill(1)
 
@@ -411,8 +499,10 @@ def _guides(data, colour, hole, box, runtime, dtype, guide, structure, lattice):
         guide = np.asarray(guide, np.float64)
         guide = guide[None] if guide.ndim == 2 else guide
         if guide.shape[1:] != data.shape[1:]:
-            raise InputError(f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
-                             f"{data.shape[2]}) planes known everywhere, the hole included")
+            raise InputError(
+                f"guide has shape {guide.shape}; give (planes, {data.shape[1]}, "
+                f"{data.shape[2]}) planes known everywhere, the hole included"
+            )
         guides = guide[(slice(None),) + box]
     periodic = _periodic(colour, hole) if structure is None or lattice else False
     if structure is None:
@@ -442,14 +532,31 @@ def _pyramid(colour, hole, guides, patch, nlevels):
     return pyramid
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
-          patch=DEFAULTS["patch"], search=DEFAULTS["search"], iterations=DEFAULTS["iterations"],
-          fine_iterations=DEFAULTS["fine_iterations"],
-          passes=DEFAULTS["passes"], features=DEFAULTS["features"], levels=None,
-          onion_passes=DEFAULTS["onion_passes"], sharpen=DEFAULTS["sharpen"],
-          confidence=DEFAULTS["confidence"], guide=None, stitch=DEFAULTS["stitch"],
-          structure=DEFAULTS["structure"], cohere=DEFAULTS["cohere"],
-          cohere_sweeps=DEFAULTS["cohere_sweeps"], lattice=DEFAULTS["lattice"]):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    patch=DEFAULTS["patch"],
+    search=DEFAULTS["search"],
+    iterations=DEFAULTS["iterations"],
+    fine_iterations=DEFAULTS["fine_iterations"],
+    passes=DEFAULTS["passes"],
+    features=DEFAULTS["features"],
+    levels=None,
+    onion_passes=DEFAULTS["onion_passes"],
+    sharpen=DEFAULTS["sharpen"],
+    confidence=DEFAULTS["confidence"],
+    guide=None,
+    stitch=DEFAULTS["stitch"],
+    structure=DEFAULTS["structure"],
+    cohere=DEFAULTS["cohere"],
+    cohere_sweeps=DEFAULTS["cohere_sweeps"],
+    lattice=DEFAULTS["lattice"],
+):
     """Fill ``omega`` in ``data`` ((channels, rows, cols) in [0, 1]) with patches of the rest.
 
     Parameters (all optional): patch (7), search (128 px of context around the hole's box),
@@ -469,11 +576,22 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     ``seed`` (default 0) fixes the random search.
     Returns a new array; only ``omega`` differs from ``data``.
     """
-    p = _params({"patch": patch, "search": search, "iterations": iterations,
-                 "fine_iterations": fine_iterations, "passes": passes,
-                 "features": features, "levels": levels, "onion_passes": onion_passes,
-                 "confidence": confidence, "structure": structure, "cohere": cohere,
-                 "cohere_sweeps": cohere_sweeps})
+    p = _params(
+        {
+            "patch": patch,
+            "search": search,
+            "iterations": iterations,
+            "fine_iterations": fine_iterations,
+            "passes": passes,
+            "features": features,
+            "levels": levels,
+            "onion_passes": onion_passes,
+            "confidence": confidence,
+            "structure": structure,
+            "cohere": cohere,
+            "cohere_sweeps": cohere_sweeps,
+        }
+    )
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, copy=True)
@@ -491,8 +609,7 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     hole = omega[box]
     colour = np.asarray(data[(slice(None),) + box], np.float64).copy()
     colour[:, hole] = 0  # values there are unknown, may be NaN, and are never read
-    guides, periodic = _guides(data, colour, hole, box, runtime, dtype, guide, structure,
-                               lattice)
+    guides, periodic = _guides(data, colour, hole, box, runtime, dtype, guide, structure, lattice)
     if min(hole.shape) < patch + 2:
         raise InputError(
             f"the region around the hole ({hole.shape[0]}x{hole.shape[1]} px) is smaller than "
@@ -519,8 +636,18 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         if g is not None:
             planes.append(g)
             w += [1.0] * len(g)
-        lv = _Level(runtime, dtype, np.concatenate(planes), h, w, patch, nout,
-                    radius=int(p["search"]), confidence=float(p["confidence"]), ncolour=nc)
+        lv = _Level(
+            runtime,
+            dtype,
+            np.concatenate(planes),
+            h,
+            w,
+            patch,
+            nout,
+            radius=int(p["search"]),
+            confidence=float(p["confidence"]),
+            ncolour=nc,
+        )
         # A level started from the coarser field needs fewer iterations than the coarsest;
         # so does a single level (a thin hole), whose onion peel is already at full
         # resolution: on a 10% text mask 3 iterations instead of 6 cost 0.3 dB and a third
@@ -554,8 +681,14 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
         if level == 0:
             result = lv.image()
             if stitch and sharpen:
-                src = _stitch.vote_sources(prev_nnf, lv.dist.get().reshape(h.shape),
-                                           lv.pen.get().reshape(h.shape), h, r, sigma2)
+                src = _stitch.vote_sources(
+                    prev_nnf,
+                    lv.dist.get().reshape(h.shape),
+                    lv.pen.get().reshape(h.shape),
+                    h,
+                    r,
+                    sigma2,
+                )
                 result[:nc] = _stitch.stitch(result[:nc], h, src, r)
     bar.close()
     filled = out[(slice(None),) + box]

@@ -58,8 +58,12 @@ def _check(nu, contrast, steps, max_iter, tol, cg_iterations, check_every):
     positive("contrast", contrast)
     if not np.isfinite(tol) or tol < 0:
         raise InputError(f"tol must be a number >= 0, not {tol!r}")
-    for name, v in (("steps", steps), ("max_iter", max_iter), ("cg_iterations", cg_iterations),
-                    ("check_every", check_every)):
+    for name, v in (
+        ("steps", steps),
+        ("max_iter", max_iter),
+        ("cg_iterations", cg_iterations),
+        ("check_every", check_every),
+    ):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise InputError(f"{name} must be an integer >= 1, not {v!r}")
 
@@ -67,15 +71,24 @@ def _check(nu, contrast, steps, max_iter, tol, cg_iterations, check_every):
 class NavierStokesSolver:
     """The coupled vorticity transport and Poisson solve on one box; state on the device."""
 
-    def __init__(self, runtime, box: np.ndarray, omega: np.ndarray, *, nu=0.05, contrast=0.2,
-                 dtype=np.float32):
+    def __init__(
+        self,
+        runtime,
+        box: np.ndarray,
+        omega: np.ndarray,
+        *,
+        nu=0.05,
+        contrast=0.2,
+        dtype=np.float32,
+    ):
         self.runtime = runtime
         dt = self.dtype = np.dtype(dtype)
         nc, ny, nx = box.shape
         self.nc, self.ny, self.nx = nc, ny, nx
         q = self.queue = runtime.queue
-        start = PoissonSolver(runtime, ring_mean_start(box, omega), omega, "biharmonic", dt,
-                              precondition=thick(omega))
+        start = PoissonSolver(
+            runtime, ring_mean_start(box, omega), omega, "biharmonic", dt, precondition=thick(omega)
+        )
         start.solve(tol=1e-4, max_iter=5000)
         # the Poisson solver owns the image: its u is I, its f the vorticity in the hole
         self.poisson = PoissonSolver(runtime, start.result(), omega, "harmonic", dt)
@@ -94,18 +107,36 @@ class NavierStokesSolver:
         k_change = runtime.kernel("inpainting/navier_stokes.cl", "ns_change", dt)
         dims = (np.int32(nx), np.int32(ny))
         self.dt = 0.9 / (1.0 + 4.0 * nu)
-        self._laplacian_ring = self.ring_list.bind(runtime, k_lap, nc,
-                                                   self.img.data, self.w.data, *dims)
-        laplacian_hole = self.omega_list.bind(runtime, k_lap, nc, self.img.data,
-                                              self.w.data, *dims)
+        self._laplacian_ring = self.ring_list.bind(
+            runtime, k_lap, nc, self.img.data, self.w.data, *dims
+        )
+        laplacian_hole = self.omega_list.bind(runtime, k_lap, nc, self.img.data, self.w.data, *dims)
         s = dt.type
-        self._steps = [self.omega_list.bind(runtime, k_step, nc, a.data,
-                                            b.data, c.data, s(self.dt), s(nu),
-                                            s(1.0 / contrast ** 2), *dims)
-                       for a, b, c in ((self.img, self.w, self.wn), (self.img, self.wn, self.w))]
-        self._change = self.omega_list.bind(runtime, k_change, nc, self.img.data,
-                                            self.prev.data, self.partial.data,
-                                            self.partial_sum.data, *dims)
+        self._steps = [
+            self.omega_list.bind(
+                runtime,
+                k_step,
+                nc,
+                a.data,
+                b.data,
+                c.data,
+                s(self.dt),
+                s(nu),
+                s(1.0 / contrast**2),
+                *dims,
+            )
+            for a, b, c in ((self.img, self.w, self.wn), (self.img, self.wn, self.w))
+        ]
+        self._change = self.omega_list.bind(
+            runtime,
+            k_change,
+            nc,
+            self.img.data,
+            self.prev.data,
+            self.partial.data,
+            self.partial_sum.data,
+            *dims,
+        )
         laplacian_hole()
         # both vorticity buffers hold the boundary values
         self._laplacian_ring()
@@ -128,11 +159,13 @@ class NavierStokesSolver:
         self._change()
         largest = float(self.partial.get().max())
         mean = float(self.partial_sum.get().astype(np.float64).sum()) / max(
-            self.omega_list.n * self.nc, 1)
+            self.omega_list.n * self.nc, 1
+        )
         return largest, mean
 
-    def run(self, *, steps=5, cg_iterations=10, max_iter=1000, tol=1e-4, mean_tol=1e-5,
-            check_every=10):
+    def run(
+        self, *, steps=5, cg_iterations=10, max_iter=1000, tol=1e-4, mean_tol=1e-5, check_every=10
+    ):
         """Iterate until the largest change of I in the hole over `check_every` iterations
         is below tol, or the mean change below mean_tol (0 turns a test off), or max_iter."""
         self.converged = False
@@ -156,9 +189,22 @@ class NavierStokesSolver:
         return self.w.get()
 
 
-def inpaint(data, omega, runtime, *, nu=0.05, contrast=0.2, steps=5, cg_iterations=10,
-            max_iter=1000, tol=1e-4, mean_tol=1e-5, check_every=10, dtype=np.float32,
-            return_solver=False):
+def inpaint(
+    data,
+    omega,
+    runtime,
+    *,
+    nu=0.05,
+    contrast=0.2,
+    steps=5,
+    cg_iterations=10,
+    max_iter=1000,
+    tol=1e-4,
+    mean_tol=1e-5,
+    check_every=10,
+    dtype=np.float32,
+    return_solver=False,
+):
     """Navier-Stokes inpainting of (channels, rows, cols) data in [0, 1]."""
     _check(nu, contrast, steps, max_iter, tol, cg_iterations, check_every)
     if not np.isfinite(mean_tol) or mean_tol < 0:
@@ -166,14 +212,28 @@ def inpaint(data, omega, runtime, *, nu=0.05, contrast=0.2, steps=5, cg_iteratio
     if not omega.any():
         return (data.copy(), None) if return_solver else data.copy()
     if omega.all():
-        raise InputError("the mask covers every pixel, so nothing is known to inpaint from; "
-                         "mark only the damaged region")
+        raise InputError(
+            "the mask covers every pixel, so nothing is known to inpaint from; "
+            "mark only the damaged region"
+        )
     rows, cols = box_around(omega, MARGIN)
     box_omega = omega[rows, cols]
-    solver = NavierStokesSolver(runtime, data[:, rows, cols].astype(np.float64), box_omega,
-                                nu=nu, contrast=contrast, dtype=dtype)
-    solver.run(steps=steps, cg_iterations=cg_iterations, max_iter=max_iter, tol=tol,
-               mean_tol=mean_tol, check_every=check_every)
+    solver = NavierStokesSolver(
+        runtime,
+        data[:, rows, cols].astype(np.float64),
+        box_omega,
+        nu=nu,
+        contrast=contrast,
+        dtype=dtype,
+    )
+    solver.run(
+        steps=steps,
+        cg_iterations=cg_iterations,
+        max_iter=max_iter,
+        tol=tol,
+        mean_tol=mean_tol,
+        check_every=check_every,
+    )
     solved = solver.result().astype(np.float64)
     known = ~omega
     for c in range(data.shape[0]):
@@ -186,13 +246,37 @@ def inpaint(data, omega, runtime, *, nu=0.05, contrast=0.2, steps=5, cg_iteratio
     return (out, solver) if return_solver else out
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, nu=0.05,
-          contrast=0.2, steps=5, cg_iterations=10, max_iter=1000, tol=1e-4, mean_tol=1e-5,
-          check_every=10):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    nu=0.05,
+    contrast=0.2,
+    steps=5,
+    cg_iterations=10,
+    max_iter=1000,
+    tol=1e-4,
+    mean_tol=1e-5,
+    check_every=10,
+):
     """Registry entry point: Navier-Stokes inpainting (see the module docstring)."""
     data = np.asarray(data)
-    out = inpaint(data.astype(np.float64, copy=False), np.asarray(omega, bool), runtime, nu=nu,
-                  contrast=contrast, steps=steps, cg_iterations=cg_iterations,
-                  max_iter=max_iter, tol=tol, mean_tol=mean_tol, check_every=check_every,
-                  dtype=dtype)
+    out = inpaint(
+        data.astype(np.float64, copy=False),
+        np.asarray(omega, bool),
+        runtime,
+        nu=nu,
+        contrast=contrast,
+        steps=steps,
+        cg_iterations=cg_iterations,
+        max_iter=max_iter,
+        tol=tol,
+        mean_tol=mean_tol,
+        check_every=check_every,
+        dtype=dtype,
+    )
     return out.astype(data.dtype, copy=False)

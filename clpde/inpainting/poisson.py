@@ -37,8 +37,10 @@ def box_around(omega: np.ndarray, margin: int):
     rows = np.flatnonzero(omega.any(axis=1))
     cols = np.flatnonzero(omega.any(axis=0))
     ny, nx = omega.shape
-    return (slice(max(rows[0] - margin, 0), min(rows[-1] + margin + 1, ny)),
-            slice(max(cols[0] - margin, 0), min(cols[-1] + margin + 1, nx)))
+    return (
+        slice(max(rows[0] - margin, 0), min(rows[-1] + margin + 1, ny)),
+        slice(max(cols[0] - margin, 0), min(cols[-1] + margin + 1, nx)),
+    )
 
 
 def item_geometry(runtime, n: int):
@@ -58,14 +60,23 @@ class DeviceList:
 
     def __init__(self, runtime, flat: np.ndarray):
         self.n = int(flat.size)
-        self.buf = cla.to_device(runtime.queue, np.ascontiguousarray(flat, np.int32)
-                                 if flat.size else np.zeros(1, np.int32))
-        self.gsize, self.lsize, self.chunk, self.stride, self.per, self.items = \
-            item_geometry(runtime, self.n)
+        self.buf = cla.to_device(
+            runtime.queue,
+            np.ascontiguousarray(flat, np.int32) if flat.size else np.zeros(1, np.int32),
+        )
+        self.gsize, self.lsize, self.chunk, self.stride, self.per, self.items = item_geometry(
+            runtime, self.n
+        )
 
     def args(self):
-        return (self.buf.data, np.int32(self.n), np.int32(self.chunk), np.int32(self.stride),
-                np.int32(self.per), np.int32(self.items))
+        return (
+            self.buf.data,
+            np.int32(self.n),
+            np.int32(self.chunk),
+            np.int32(self.stride),
+            np.int32(self.per),
+            np.int32(self.items),
+        )
 
     def bind(self, runtime, template: cl.Kernel, nc, *args):
         """A copy of a kernel with its arguments set once: launching it costs no argument
@@ -131,14 +142,16 @@ class Multigrid:
         self.levels = len(levels)
         self.launches = []
         self.runtime, self.nc = runtime, nc
-        out = self._cycle(levels, 0, kind, sign, bi, s, k_smooth, k_scale, k_residual,
-                          k_restrict, k_prolong)
+        out = self._cycle(
+            levels, 0, kind, sign, bi, s, k_smooth, k_scale, k_residual, k_restrict, k_prolong
+        )
         z, tmp = level0[2], level0[3]
         if out is tmp:  # the result must end in z
             self.launches.append(lambda: cl.enqueue_copy(q, z.data, tmp.data))
 
-    def _cycle(self, levels, depth, kind, sign, bi, s, k_smooth, k_scale, k_residual,
-               k_restrict, k_prolong):
+    def _cycle(
+        self, levels, depth, kind, sign, bi, s, k_smooth, k_scale, k_residual, k_restrict, k_prolong
+    ):
         (ny, nx), lst, b, x, y, r = levels[depth]
         launch = self.launches.append
         scale = sign * self.COARSE_SCALE[kind] ** depth
@@ -150,8 +163,11 @@ class Multigrid:
 
         def smooth(count, cur, other):
             for _ in range(count):
-                launch(lst.bind(rt, k_smooth, nc, cur.data, other.data, b.data,
-                                        s(scale), s(w), bi, *dims))
+                launch(
+                    lst.bind(
+                        rt, k_smooth, nc, cur.data, other.data, b.data, s(scale), s(w), bi, *dims
+                    )
+                )
                 cur, other = other, cur
             return cur, other
 
@@ -159,15 +175,25 @@ class Multigrid:
         cur, other = smooth(sweeps - 1, x, y)
         if last:
             return cur
-        launch(lst.bind(rt, k_residual, nc, cur.data, b.data, r.data, s(scale),
-                                bi, *dims))
+        launch(lst.bind(rt, k_residual, nc, cur.data, b.data, r.data, s(scale), bi, *dims))
         (cy, cx), clst, cb = levels[depth + 1][:3]
-        launch(clst.bind(rt, k_restrict, nc, r.data, cb.data, *dims,
-                                 np.int32(cx), np.int32(cy)))
-        coarse = self._cycle(levels, depth + 1, kind, sign, bi, s, k_smooth, k_scale, k_residual,
-                             k_restrict, k_prolong)
-        launch(lst.bind(rt, k_prolong, nc, cur.data, coarse.data, np.int32(cx),
-                                np.int32(cy), *dims))
+        launch(clst.bind(rt, k_restrict, nc, r.data, cb.data, *dims, np.int32(cx), np.int32(cy)))
+        coarse = self._cycle(
+            levels,
+            depth + 1,
+            kind,
+            sign,
+            bi,
+            s,
+            k_smooth,
+            k_scale,
+            k_residual,
+            k_restrict,
+            k_prolong,
+        )
+        launch(
+            lst.bind(rt, k_prolong, nc, cur.data, coarse.data, np.int32(cx), np.int32(cy), *dims)
+        )
         cur, other = smooth(sweeps, cur, other)
         return cur
 
@@ -184,8 +210,15 @@ class PoissonSolver:
     zero unless set. Other modules (Navier-Stokes) share `u` and set `f` between solves.
     """
 
-    def __init__(self, runtime, values: np.ndarray, omega: np.ndarray, kind="harmonic",
-                 dtype=np.float32, precondition=False):
+    def __init__(
+        self,
+        runtime,
+        values: np.ndarray,
+        omega: np.ndarray,
+        kind="harmonic",
+        dtype=np.float32,
+        precondition=False,
+    ):
         if kind not in KINDS:
             raise InputError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
         self.runtime, self.kind = runtime, kind
@@ -194,8 +227,10 @@ class PoissonSolver:
         q = self.queue = runtime.queue
         runtime.check_alloc(values.size * dt.itemsize)
         self.u = cla.to_device(q, np.ascontiguousarray(values, dt))
+
         def zeros(shape=values.shape):
             return cla.zeros(q, shape, dt)
+
         self.f, self.r, self.p, self.qv = zeros(), zeros(), zeros(), zeros()
         o = self.omega_list = DeviceList(runtime, np.flatnonzero(omega))
         ng = o.items
@@ -210,18 +245,54 @@ class PoissonSolver:
 
         def apply(src, dst, a, b, dot, partial):
             """dst = a L^order src + b f, and the partials of dot . dst."""
-            return o.bind(runtime, k_op, nc, src.data, dst.data, self.f.data, s(a), s(b),
-                          dot.data, partial.data, np.int32(order), *dims)
+            return o.bind(
+                runtime,
+                k_op,
+                nc,
+                src.data,
+                dst.data,
+                self.f.data,
+                s(a),
+                s(b),
+                dot.data,
+                partial.data,
+                np.int32(order),
+                *dims,
+            )
 
         # harmonic: A = -L, r = b - A u = L u - f; biharmonic: A = L L, r = f - L L u
         sign = 1 if kind == "harmonic" else -1
         self._residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr[0])]
         self._apply = [apply(self.p, self.qv, -sign, 0, self.p, self.pq)]
-        self._update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
-                               self.p.data, self.qv.data, self.rr[a].data, self.pq.data,
-                               self.rr[1 - a].data, *dims) for a in (0, 1)]
-        self._direction = [o.bind(runtime, k_direction, nc, self.p.data, self.r.data,
-                                  self.rr[a].data, self.rr[1 - a].data, *dims) for a in (0, 1)]
+        self._update = [
+            o.bind(
+                runtime,
+                k_update,
+                nc,
+                self.u.data,
+                self.r.data,
+                self.p.data,
+                self.qv.data,
+                self.rr[a].data,
+                self.pq.data,
+                self.rr[1 - a].data,
+                *dims,
+            )
+            for a in (0, 1)
+        ]
+        self._direction = [
+            o.bind(
+                runtime,
+                k_direction,
+                nc,
+                self.p.data,
+                self.r.data,
+                self.rr[a].data,
+                self.rr[1 - a].data,
+                *dims,
+            )
+            for a in (0, 1)
+        ]
         self.mg = None
         if precondition and o.n:
             self.z, tmp, res = zeros(), zeros(), zeros()
@@ -231,14 +302,39 @@ class PoissonSolver:
             self.rr_now = zeros((nc, ng))
             k_dot = runtime.kernel("inpainting/poisson.cl", "dot_partial", dt)
             self._pcg_residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr_now)]
-            self._pcg_update = [o.bind(runtime, k_update, nc, self.u.data, self.r.data,
-                                       self.p.data, self.qv.data, self.rz[a].data, self.pq.data,
-                                       self.rr_now.data, *dims) for a in (0, 1)]
-            self._pcg_dot = [o.bind(runtime, k_dot, nc, self.r.data, self.z.data,
-                                    self.rz[a].data, *dims) for a in (0, 1)]
-            self._pcg_direction = [o.bind(runtime, k_direction, nc, self.p.data, self.z.data,
-                                          self.rz[a].data, self.rz[1 - a].data, *dims)
-                                   for a in (0, 1)]
+            self._pcg_update = [
+                o.bind(
+                    runtime,
+                    k_update,
+                    nc,
+                    self.u.data,
+                    self.r.data,
+                    self.p.data,
+                    self.qv.data,
+                    self.rz[a].data,
+                    self.pq.data,
+                    self.rr_now.data,
+                    *dims,
+                )
+                for a in (0, 1)
+            ]
+            self._pcg_dot = [
+                o.bind(runtime, k_dot, nc, self.r.data, self.z.data, self.rz[a].data, *dims)
+                for a in (0, 1)
+            ]
+            self._pcg_direction = [
+                o.bind(
+                    runtime,
+                    k_direction,
+                    nc,
+                    self.p.data,
+                    self.z.data,
+                    self.rz[a].data,
+                    self.rz[1 - a].data,
+                    *dims,
+                )
+                for a in (0, 1)
+            ]
         self.iterations = 0
         self.residual = None
 
@@ -268,8 +364,10 @@ class PoissonSolver:
                 it += 1
             rr = self.rr_now.get().astype(np.float64).sum(axis=1)
             if not np.isfinite(rr).all():
-                raise ClpdeError("the conjugate-gradient solve diverged (a non-finite residual); "
-                                 "use dtype=np.float64")
+                raise ClpdeError(
+                    "the conjugate-gradient solve diverged (a non-finite residual); "
+                    "use dtype=np.float64"
+                )
             if np.all((rr <= tol * tol * rr0) | (rr <= atol * atol)):
                 break
         self.iterations += it
@@ -317,8 +415,10 @@ class PoissonSolver:
                 it += 1
             rr = self._rr(cur)
             if not np.isfinite(rr).all():
-                raise ClpdeError("the conjugate-gradient solve diverged (a non-finite residual); "
-                                 "use dtype=np.float64")
+                raise ClpdeError(
+                    "the conjugate-gradient solve diverged (a non-finite residual); "
+                    "use dtype=np.float64"
+                )
             if np.all((rr <= tol * tol * rr0) | (rr <= atol * atol)):
                 break
         # the next solve starts from rr[0]
@@ -352,12 +452,24 @@ THICK = 16  # half-width (pixels) from which the multigrid preconditioner pays o
 
 def thick(omega: np.ndarray, half_width: int = THICK) -> bool:
     """Whether some hole pixel lies more than about half_width pixels from the known ones."""
-    return bool(ndimage.minimum_filter(omega.view(np.uint8), size=2 * half_width + 1,
-                                       mode="constant").any())
+    return bool(
+        ndimage.minimum_filter(omega.view(np.uint8), size=2 * half_width + 1, mode="constant").any()
+    )
 
 
-def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dtype=np.float32,
-         tol=1e-5, max_iter=20000, start=None, clip=True, precondition="auto") -> np.ndarray:
+def fill(
+    data: np.ndarray,
+    omega: np.ndarray,
+    runtime,
+    kind="biharmonic",
+    *,
+    dtype=np.float32,
+    tol=1e-5,
+    max_iter=20000,
+    start=None,
+    clip=True,
+    precondition="auto",
+) -> np.ndarray:
     """The harmonic or biharmonic fill of omega, solved in the hole's box on the device.
 
     data: (channels, rows, cols) floats; only omega changes. start: optional first guess
@@ -375,8 +487,10 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dty
     if not omega.any():
         return data.copy()
     if omega.all():
-        raise InputError("the mask covers every pixel, so nothing is known to fill from; "
-                         "mark only the damaged region")
+        raise InputError(
+            "the mask covers every pixel, so nothing is known to fill from; "
+            "mark only the damaged region"
+        )
     rows, cols = box_around(omega, MARGIN)
     box_omega = omega[rows, cols]
     box = data[:, rows, cols].astype(np.float64)
@@ -400,9 +514,20 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, kind="biharmonic", *, dty
     return out
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
-          kind="biharmonic", tol=1e-5, max_iter=20000):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    kind="biharmonic",
+    tol=1e-5,
+    max_iter=20000,
+):
     """Registry entry point: the harmonic or biharmonic fill (see `fill`)."""
     data = np.asarray(data)
-    return fill(data, np.asarray(omega, bool), runtime, kind, dtype=dtype, tol=tol,
-                max_iter=max_iter).astype(data.dtype, copy=False)
+    return fill(
+        data, np.asarray(omega, bool), runtime, kind, dtype=dtype, tol=tol, max_iter=max_iter
+    ).astype(data.dtype, copy=False)

@@ -68,8 +68,9 @@ def load(name: str):
     """The module of method `name`, imported on first use; a clear error if unknown or
     missing from this installation."""
     if not isinstance(name, str) or name not in METHODS:
-        raise InputError(f"unknown inpainting method {name!r}; use one of {', '.join(METHODS)}"
-                         " or 'auto'")
+        raise InputError(
+            f"unknown inpainting method {name!r}; use one of {', '.join(METHODS)} or 'auto'"
+        )
     path = METHODS[name]
     try:
         return importlib.import_module(path)
@@ -104,9 +105,11 @@ def check_params(name: str, module, params: dict) -> None:
     accepted = {n for n, p in sig.parameters.items() if p.kind is p.KEYWORD_ONLY} - set(COMMON)
     unknown = sorted(set(params) - accepted)
     if unknown:
-        raise InputError(f"unknown inpainting option(s) {', '.join(unknown)} for method {name!r}; "
-                         f"its options are "
-                         f"{', '.join(sorted(accepted)) or 'none'}")
+        raise InputError(
+            f"unknown inpainting option(s) {', '.join(unknown)} for method {name!r}; "
+            f"its options are "
+            f"{', '.join(sorted(accepted)) or 'none'}"
+        )
 
 
 def margin(module, omega, params: dict):

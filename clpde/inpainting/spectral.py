@@ -55,8 +55,10 @@ from ..imagedata import InputError
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("inpainting/spectral.cl",)
 
-DESCRIPTION = ("frequency-selective: each block of the hole a sparse sum of Fourier basis "
-               "functions fitted to the known pixels around it")
+DESCRIPTION = (
+    "frequency-selective: each block of the hole a sparse sum of Fourier basis "
+    "functions fitted to the known pixels around it"
+)
 
 # None: the whole image is one call, so that every block of the damage, wherever it lies,
 # goes into the same few launches (one per wave) instead of a launch per component.
@@ -68,26 +70,37 @@ GROUP = 64  # its SPECTRAL_GROUP
 COLOURS = ("pca", "channels")
 
 
-
-def _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop,
-           colour):
-    for name, v in (("block", block), ("min_block", min_block), ("border", border),
-                    ("iterations", iterations)):
+def _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop, colour):
+    for name, v in (
+        ("block", block),
+        ("min_block", min_block),
+        ("border", border),
+        ("iterations", iterations),
+    ):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise InputError(f"{name} must be an integer >= 1, not {v!r}")
     if block % 2 or min_block % 2:
-        raise InputError(f"block and min_block must be even (the window's centre), not "
-                         f"{block} and {min_block}")
+        raise InputError(
+            f"block and min_block must be even (the window's centre), not {block} and {min_block}"
+        )
     if min_block > block or block % min_block or (block // min_block) & (block // min_block - 1):
-        raise InputError(f"min_block={min_block} must be block={block} halved zero or more "
-                         "times (blocks are split in four)")
+        raise InputError(
+            f"min_block={min_block} must be block={block} halved zero or more "
+            "times (blocks are split in four)"
+        )
     if block + 2 * border > MAXL:
-        raise InputError(f"block + 2 * border = {block + 2 * border} exceeds the largest window "
-                         f"{MAXL}; use a smaller block or border")
+        raise InputError(
+            f"block + 2 * border = {block + 2 * border} exceeds the largest window "
+            f"{MAXL}; use a smaller block or border"
+        )
     if iterations > MAXK:
         raise InputError(f"iterations={iterations} exceeds {MAXK}; use fewer")
-    for name, v, lo, hi in (("rho", rho, 0.0, 1.0), ("delta", delta, 0.0, 1.0),
-                            ("gamma", gamma, 0.0, 1.0), ("split", split, 0.0, 1.0)):
+    for name, v, lo, hi in (
+        ("rho", rho, 0.0, 1.0),
+        ("delta", delta, 0.0, 1.0),
+        ("gamma", gamma, 0.0, 1.0),
+        ("split", split, 0.0, 1.0),
+    ):
         if not (np.isfinite(v) and lo <= v <= hi) or (name in ("rho", "gamma") and v == 0):
             raise InputError(f"{name} must be a number in ({lo:g}, {hi:g}], not {v!r}")
     if not (np.isfinite(alpha) and alpha >= 0):
@@ -114,8 +127,16 @@ def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
     return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
 
 
-def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int = 12,
-         split: float = 0.3, delta: float = 1.0, shift: tuple = (0, 0)):
+def plan(
+    omega: np.ndarray,
+    *,
+    block: int = 8,
+    min_block: int = 4,
+    border: int = 12,
+    split: float = 0.3,
+    delta: float = 1.0,
+    shift: tuple = (0, 0),
+):
     """The blocks and their waves for a mask.
 
     Parameters
@@ -156,20 +177,23 @@ def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int =
     ncy, ncx = gy * (block // cell), gx * (block // cell)
     grid = np.zeros((ncy * cell, ncx * cell), bool)
     ya, xa = max(0, -oy), max(0, -ox)  # grid rows and columns above / left of the image
-    part = hole[oy + ya:oy + ncy * cell, ox + xa:ox + ncx * cell]
-    grid[ya:ya + part.shape[0], xa:xa + part.shape[1]] = part
+    part = hole[oy + ya : oy + ncy * cell, ox + xa : ox + ncx * cell]
+    grid[ya : ya + part.shape[0], xa : xa + part.shape[1]] = part
     cells = grid.reshape(ncy, cell, ncx, cell).any((1, 3))
     known = (~hole).astype(np.float64)
 
     # sizes: a block whose window holds less than `split` of known pixels is cut in four
     found = []  # (cell row, cell col, size in cells)
-    todo = [(i * (block // cell), j * (block // cell), block // cell)
-            for i in range(gy) for j in range(gx)]
+    todo = [
+        (i * (block // cell), j * (block // cell), block // cell)
+        for i in range(gy)
+        for j in range(gx)
+    ]
     while todo:
         cys = np.array([t[0] for t in todo])
         cxs = np.array([t[1] for t in todo])
         sz = np.array([t[2] for t in todo])
-        has = np.array([cells[a:a + s, b:b + s].any() for a, b, s in todo], bool)
+        has = np.array([cells[a : a + s, b : b + s].any() for a, b, s in todo], bool)
         area = (sz * cell + 2 * border) ** 2
         share = _window_sums(known, border, oy + cys * cell, ox + cxs * cell, sz * cell) / area
         nxt = []
@@ -188,14 +212,16 @@ def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int =
     fs = np.array([f[2] for f in found])
     label = np.full((ncy, ncx), -1, np.int64)  # which block owns each cell
     for i, (a, b, s) in enumerate(found):
-        label[a:a + s, b:b + s] = i
+        label[a : a + s, b : b + s] = i
     reach = -(-border // cell)  # cells a window reaches beyond its block
     py, px, ps = oy + fy * cell, ox + fx * cell, fs * cell
     # neighbours: j's pixels lie in i's window (and i's in j's: the relation is symmetric);
     # neighbours never share a wave, and a filled block adds to its neighbours' scores
     pi, pj = [], []
     for i, (a, b, s) in enumerate(found):
-        near = np.unique(label[max(0, a - reach):a + s + reach, max(0, b - reach):b + s + reach])
+        near = np.unique(
+            label[max(0, a - reach) : a + s + reach, max(0, b - reach) : b + s + reach]
+        )
         near = near[(near >= 0) & (near != i)]
         pi.append(np.full(near.size, i))
         pj.append(near)
@@ -211,10 +237,13 @@ def plan(omega: np.ndarray, *, block: int = 8, min_block: int = 4, border: int =
     known_sat = np.pad((~hole).astype(np.int64), pad).cumsum(0).cumsum(1)
     known_n = count(known_sat, py - border, py + ps + border, px - border, px + ps + border)
     # hole pixels of j inside i's window: they count delta once j is filled
-    overlap = count(hole_sat, np.maximum(py[pj], py[pi] - border),
-                    np.minimum(py[pj] + ps[pj], py[pi] + ps[pi] + border),
-                    np.maximum(px[pj], px[pi] - border),
-                    np.minimum(px[pj] + ps[pj], px[pi] + ps[pi] + border))
+    overlap = count(
+        hole_sat,
+        np.maximum(py[pj], py[pi] - border),
+        np.minimum(py[pj] + ps[pj], py[pi] + ps[pi] + border),
+        np.maximum(px[pj], px[pi] - border),
+        np.minimum(px[pj] + ps[pj], px[pi] + ps[pi] + border),
+    )
     area = (ps + 2 * border) ** 2
     filled_n = np.zeros(n, np.int64)
     block_wave = np.full(n, -1, np.int64)
@@ -288,11 +317,29 @@ def shifts_of(shifts: int, block: int) -> list:
     return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
 
 
-def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, block: int = 8,
-         min_block: int = 4, border: int = 12, split: float = 0.3, rho: float = 0.6,
-         delta: float = 1.0, gamma: float = 0.7, alpha: float = 2.0, iterations: int = 100,
-         stop: float = 0.0, colour: str = "pca", detrend: bool = True, shifts: int = 2,
-         cutoff: float = 1.5, per_pixel: float = 0.0, timings: dict | None = None) -> np.ndarray:
+def fill(
+    data: np.ndarray,
+    omega: np.ndarray,
+    runtime,
+    *,
+    dtype=np.float32,
+    block: int = 8,
+    min_block: int = 4,
+    border: int = 12,
+    split: float = 0.3,
+    rho: float = 0.6,
+    delta: float = 1.0,
+    gamma: float = 0.7,
+    alpha: float = 2.0,
+    iterations: int = 100,
+    stop: float = 0.0,
+    colour: str = "pca",
+    detrend: bool = True,
+    shifts: int = 2,
+    cutoff: float = 1.5,
+    per_pixel: float = 0.0,
+    timings: dict | None = None,
+) -> np.ndarray:
     """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
     the method; `clpde.inpaint(..., method="spectral")` is the user's way in).
 
@@ -362,8 +409,9 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, bloc
     """
     _check(block, min_block, border, split, rho, delta, gamma, alpha, iterations, stop, colour)
     if not (np.isfinite(cutoff) and cutoff > 0):
-        raise InputError(f"cutoff must be a number > 0 (a share of the Nyquist frequency), not "
-                         f"{cutoff!r}")
+        raise InputError(
+            f"cutoff must be a number > 0 (a share of the Nyquist frequency), not {cutoff!r}"
+        )
     if not (np.isfinite(per_pixel) and per_pixel >= 0):
         raise InputError(f"per_pixel must be a number >= 0, not {per_pixel!r}")
     if shifts not in (1, 2, 4):
@@ -374,12 +422,24 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, bloc
     if not omega.any():
         return out
     if omega.all():
-        raise InputError("the mask covers every pixel, so nothing is known to inpaint from; "
-                         "mark only the damaged region")
+        raise InputError(
+            "the mask covers every pixel, so nothing is known to inpaint from; "
+            "mark only the damaged region"
+        )
     t = {} if timings is None else timings
     t0 = time.perf_counter()
-    plans = [plan(omega, block=block, min_block=min_block, border=border, split=split,
-                  delta=delta, shift=sh) for sh in shifts_of(shifts, block)]
+    plans = [
+        plan(
+            omega,
+            block=block,
+            min_block=min_block,
+            border=border,
+            split=split,
+            delta=delta,
+            shift=sh,
+        )
+        for sh in shifts_of(shifts, block)
+    ]
     # every grid's copy of the image is one crop, the union of theirs; the copies' waves run
     # together (wave w of every grid in launch w), each block in its own copy
     y0 = min(p[0][0] for p in plans)
@@ -401,13 +461,18 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, bloc
     wave_of = np.full((ncopy,) + hole.shape, -1, np.int32)
     per_wave = {}
     for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
-        wave_of[c, cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0] = w_of
+        wave_of[c, cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = w_of
         moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
         picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
         for w, (first, count) in enumerate(waves):
-            rows = np.concatenate([moved[first:first + count],
-                                   np.full((count, 1), c, np.int32),
-                                   picks[first:first + count, None]], 1)
+            rows = np.concatenate(
+                [
+                    moved[first : first + count],
+                    np.full((count, 1), c, np.int32),
+                    picks[first : first + count, None],
+                ],
+                1,
+            )
             per_wave.setdefault(w, []).append(rows)
     order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
     all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
@@ -431,10 +496,26 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, bloc
     s = real.type
     ny, nx = hole.shape
     for w in range(len(order)):
-        kernel(q, (len(order[w]) * GROUP,), (GROUP,), img, waves_buf, blocks_buf,
-               np.int32(starts[w]), np.int32(w), np.int32(nx), np.int32(ny), np.int32(nc),
-               s(rho), s(delta), s(gamma), s(alpha), s(stop),
-               np.int32(bool(detrend)), s(cutoff))
+        kernel(
+            q,
+            (len(order[w]) * GROUP,),
+            (GROUP,),
+            img,
+            waves_buf,
+            blocks_buf,
+            np.int32(starts[w]),
+            np.int32(w),
+            np.int32(nx),
+            np.int32(ny),
+            np.int32(nc),
+            s(rho),
+            s(delta),
+            s(gamma),
+            s(alpha),
+            s(stop),
+            np.int32(bool(detrend)),
+            s(cutoff),
+        )
     q.finish()
     t["waves"] = time.perf_counter() - t0
 
@@ -449,10 +530,30 @@ def fill(data: np.ndarray, omega: np.ndarray, runtime, *, dtype=np.float32, bloc
     return out
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, block=8,
-          min_block=4, border=12, split=0.3, rho=0.6, delta=1.0, gamma=0.7, alpha=2.0,
-          iterations=100, stop=0.0, colour="pca", detrend=True, shifts=2, cutoff=1.5,
-          per_pixel=0.0):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    block=8,
+    min_block=4,
+    border=12,
+    split=0.3,
+    rho=0.6,
+    delta=1.0,
+    gamma=0.7,
+    alpha=2.0,
+    iterations=100,
+    stop=0.0,
+    colour="pca",
+    detrend=True,
+    shifts=2,
+    cutoff=1.5,
+    per_pixel=0.0,
+):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
     Options: block (largest block, even), min_block (smallest, block halved), border (the
@@ -467,7 +568,24 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, b
     this share of the Nyquist frequency; 1.5 takes all), per_pixel (> 0: a block's picks are
     at most this many per hole pixel in it, at least 4).
     """
-    return fill(data, omega, runtime, dtype=dtype, block=block, min_block=min_block,
-                border=border, split=split, rho=rho, delta=delta, gamma=gamma, alpha=alpha,
-                iterations=iterations, stop=stop, colour=colour, detrend=detrend, shifts=shifts,
-                cutoff=cutoff, per_pixel=per_pixel)
+    return fill(
+        data,
+        omega,
+        runtime,
+        dtype=dtype,
+        block=block,
+        min_block=min_block,
+        border=border,
+        split=split,
+        rho=rho,
+        delta=delta,
+        gamma=gamma,
+        alpha=alpha,
+        iterations=iterations,
+        stop=stop,
+        colour=colour,
+        detrend=detrend,
+        shifts=shifts,
+        cutoff=cutoff,
+        per_pixel=per_pixel,
+    )

@@ -32,8 +32,9 @@ from scipy import sparse
 from scipy.sparse import linalg as splinalg
 
 
-def vote_sources(nnf: np.ndarray, dist: np.ndarray, pen: np.ndarray, hole: np.ndarray, r: int,
-                 sigma2: float) -> np.ndarray:
+def vote_sources(
+    nnf: np.ndarray, dist: np.ndarray, pen: np.ndarray, hole: np.ndarray, r: int, sigma2: float
+) -> np.ndarray:
     """(src, oy, ox): the flat index of the source pixel of each hole pixel (in
     np.flatnonzero(hole) order), as pm_vote's best_only picks it (-1 where no covering
     patch has a finite distance), and the pixel's offset in the chosen patch.
@@ -122,8 +123,13 @@ def stitch(img: np.ndarray, hole: np.ndarray, sources, r: int) -> np.ndarray:
         cols.append(k[q_hole])
     r_, c_ = np.concatenate(rows), np.concatenate(cols)
     ids = np.arange(n)
-    A = sparse.csc_matrix((np.concatenate([diag, -np.ones(r_.size)]),
-                           (np.concatenate([ids, r_]), np.concatenate([ids, c_]))), shape=(n, n))
+    A = sparse.csc_matrix(
+        (
+            np.concatenate([diag, -np.ones(r_.size)]),
+            (np.concatenate([ids, r_]), np.concatenate([ids, c_])),
+        ),
+        shape=(n, n),
+    )
     try:
         solve = splinalg.factorized(A)
     except RuntimeError:  # a component with no known neighbour in the box: keep the fill

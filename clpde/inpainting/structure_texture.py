@@ -41,14 +41,16 @@ def MARGIN(omega=None, search=exemplar.DEFAULTS["search"], **_params) -> int:
 def _structure_solver(name):
     """solve(data, omega, runtime, ...) of the structure method `name`, or of the first of
     STRUCTURE_METHODS that is installed."""
-    for method in ([name] if name else list(STRUCTURE_METHODS)):
+    for method in [name] if name else list(STRUCTURE_METHODS):
         try:
             return load(method).solve
         except InputError:
             if name:
                 raise
-    raise InputError(f"none of the structure methods {', '.join(STRUCTURE_METHODS)} is "
-                     "available in this installation")
+    raise InputError(
+        f"none of the structure methods {', '.join(STRUCTURE_METHODS)} is "
+        "available in this installation"
+    )
 
 
 def known_range(data, omega):
@@ -67,15 +69,30 @@ def decompose(data, omega, runtime, tv_weight: float):
     lo, hi = known_range(data, omega)
     idx = ndimage.distance_transform_edt(omega, return_distances=False, return_indices=True)
     filled = data[:, idx[0], idx[1]]
-    u = denoise_tv(np.moveaxis(filled, 0, -1), weight=tv_weight * (hi - lo), channel_axis=-1,
-                   device=runtime, progress=False)
+    u = denoise_tv(
+        np.moveaxis(filled, 0, -1),
+        weight=tv_weight * (hi - lo),
+        channel_axis=-1,
+        device=runtime,
+        progress=False,
+    )
     u = np.moveaxis(np.asarray(u, np.float64), -1, 0)
     return u, filled - u
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
-          tv_weight=DEFAULTS["tv_weight"], guide=DEFAULTS["guide"], structure=None,
-          **exemplar_params):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    tv_weight=DEFAULTS["tv_weight"],
+    guide=DEFAULTS["guide"],
+    structure=None,
+    **exemplar_params,
+):
     """Fill ``omega``: TV structure by a structure method, texture by the exemplar method.
 
     tv_weight: the ROF weight relative to the known pixels' span (larger puts more into the
@@ -85,8 +102,11 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     Other keywords (patch, search, iterations, ...) go to the exemplar method.
     """
     for name, value in (("tv_weight", tv_weight), ("guide", guide)):
-        if not isinstance(value, (int, float, np.integer, np.floating)) or not np.isfinite(value) \
-                or value < (0 if name == "guide" else 1e-12):
+        if (
+            not isinstance(value, (int, float, np.integer, np.floating))
+            or not np.isfinite(value)
+            or value < (0 if name == "guide" else 1e-12)
+        ):
             wanted = "weight >= 0" if name == "guide" else "positive number"
             raise InputError(f"{name} must be a {wanted}, not {value!r}")
     data = np.asarray(data)
@@ -97,13 +117,23 @@ def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None,
     if "guide" in exemplar_params:
         raise InputError("guide is this method's weight of the structure; give a number")
     u, v = decompose(np.asarray(data, np.float64), omega, runtime, float(tv_weight))
-    u_filled = np.asarray(_structure_solver(structure)(u, omega, runtime, dtype=dtype,
-                                                      progress=progress, seed=seed), np.float64)
+    u_filled = np.asarray(
+        _structure_solver(structure)(u, omega, runtime, dtype=dtype, progress=progress, seed=seed),
+        np.float64,
+    )
     guide_planes = guide * u_filled if guide > 0 else None
     # the texture's own search is guided by u (above), not by a structure fill of v
     exemplar_params.setdefault("structure", 0.0)
-    v_filled = exemplar.solve(v, omega, runtime, dtype=dtype, progress=progress, seed=seed,
-                              guide=guide_planes, **exemplar_params)
+    v_filled = exemplar.solve(
+        v,
+        omega,
+        runtime,
+        dtype=dtype,
+        progress=progress,
+        seed=seed,
+        guide=guide_planes,
+        **exemplar_params,
+    )
     # the known range, not [0, 1]: the same clip for a float image alone and through
     # clpde.inpaint, which stretches it to [0, 1]
     total = np.clip(u_filled + v_filled, *known_range(data, omega))

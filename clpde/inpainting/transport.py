@@ -124,8 +124,9 @@ def check_params(p: InpaintParams) -> None:
     if p.rotation not in ROTATIONS:
         raise InputError(f"rotation must be 'ccw' or 'cw', not {p.rotation!r}")
     if p.coarse_start not in COARSE_STARTS:
-        raise InputError(f"coarse_start must be one of {', '.join(COARSE_STARTS)}, not "
-                         f"{p.coarse_start!r}")
+        raise InputError(
+            f"coarse_start must be one of {', '.join(COARSE_STARTS)}, not {p.coarse_start!r}"
+        )
     if p.stencil not in STENCILS:
         raise InputError(f"stencil must be one of {', '.join(STENCILS)}, not {p.stencil!r}")
     if p.fill not in FILLS:
@@ -139,8 +140,16 @@ def check_params(p: InpaintParams) -> None:
 class LevelSolver:
     """The inpainting loop on one resolution level; the state stays on the device."""
 
-    def __init__(self, runtime, data: np.ndarray, omega: np.ndarray, params: InpaintParams,
-                 dtype=np.float32, fidelity: np.ndarray | None = None, observed=None):
+    def __init__(
+        self,
+        runtime,
+        data: np.ndarray,
+        omega: np.ndarray,
+        params: InpaintParams,
+        dtype=np.float32,
+        fidelity: np.ndarray | None = None,
+        observed=None,
+    ):
         self.p = params
         nc, ny, nx = data.shape
         self.grid = g = Grid(runtime, nx, ny, nc, GHOST, np.dtype(dtype))
@@ -148,8 +157,9 @@ class LevelSolver:
         self.omega = omega
 
         dist = ndimage.distance_transform_edt(~omega)  # 0 in Omega
-        weight = np.where(dist < params.epsilon, 0.5 * (1 + np.cos(np.pi * dist / params.epsilon)),
-                          0)
+        weight = np.where(
+            dist < params.epsilon, 0.5 * (1 + np.cos(np.pi * dist / params.epsilon)), 0
+        )
         band = weight > 0
         self.omega_list = index_list(g, omega)
         self.band_list = index_list(g, band)
@@ -179,8 +189,9 @@ class LevelSolver:
         self.fidelity = None
         if fidelity is not None and (fidelity > 0).any():
             self.fidelity_list = index_list(g, fidelity > 0)
-            self.fidelity = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype),
-                                            fidelity[None])
+            self.fidelity = Field.from_host(
+                Grid(runtime, nx, ny, 1, GHOST, g.dtype), fidelity[None]
+            )
             self.observed = Field.from_host(g, observed)
             self.k_fidelity = g.kernel("inpainting/transport.cl", "inpaint_fidelity")
         self.sx = np.int32(g.sx)
@@ -193,22 +204,26 @@ class LevelSolver:
         then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
         a step's work on a small region)."""
         g = self.grid
-        defines = {"SCALING": SCALINGS.index(params.scaling),
-                   "STENCIL": STENCILS.index(params.stencil)}
+        defines = {
+            "SCALING": SCALINGS.index(params.scaling),
+            "STENCIL": STENCILS.index(params.stencil),
+        }
         bufs = (self.pair.cur.data.data, self.pair.nxt.data.data)
         self._buf_a = bufs[0]
 
         def bound(kernel, lst, *args):
             (gsize,), (lsize,), run = runtime.list_launch(max(lst.n, 1))
-            kernel.set_args(*args, lst.indices.data, np.int32(lst.n), np.int32(g.plane),
-                            np.int32(run))
+            kernel.set_args(
+                *args, lst.indices.data, np.int32(lst.n), np.int32(g.plane), np.int32(run)
+            )
             return kernel, (gsize, g.nc), (lsize, 1), lst.n
 
         def ghosts(buf):
             if not self.ghosts:
                 return None
-            kernel = runtime.new_kernel("inpainting/transport.cl", "inpaint_ghosts", g.dtype,
-                                        **defines)
+            kernel = runtime.new_kernel(
+                "inpainting/transport.cl", "inpaint_ghosts", g.dtype, **defines
+            )
             n = self.ghost_pairs.shape[0]
             kernel.set_args(buf, self.ghost_pairs.data, np.int32(n), np.int32(g.plane))
             return kernel, *runtime.items(n, g.nc), n
@@ -218,16 +233,35 @@ class LevelSolver:
         self._steps = {}
         for src, dst in (bufs, bufs[::-1]):
             self._steps[("transport", src.int_ptr)] = (
-                bound(runtime.new_kernel("inpainting/transport.cl", "inpaint_transport", g.dtype,
-                                         **defines),
-                      self.omega_list, src, dst, dt, self.rot, eps, self.sx),
-                ghosts(dst))
+                bound(
+                    runtime.new_kernel(
+                        "inpainting/transport.cl", "inpaint_transport", g.dtype, **defines
+                    ),
+                    self.omega_list,
+                    src,
+                    dst,
+                    dt,
+                    self.rot,
+                    eps,
+                    self.sx,
+                ),
+                ghosts(dst),
+            )
             self._steps[("diffusion", src.int_ptr)] = (
-                bound(runtime.new_kernel("inpainting/transport.cl", "inpaint_diffusion", g.dtype,
-                                         **defines),
-                      self.band_list, src, dst, self.weight.data.data, ddt,
-                      eps, self.sx),
-                ghosts(dst))
+                bound(
+                    runtime.new_kernel(
+                        "inpainting/transport.cl", "inpaint_diffusion", g.dtype, **defines
+                    ),
+                    self.band_list,
+                    src,
+                    dst,
+                    self.weight.data.data,
+                    ddt,
+                    eps,
+                    self.sx,
+                ),
+                ghosts(dst),
+            )
 
     def _enqueue_step(self, name: str) -> None:
         """One bound step from the current buffer into the other, ghosts refreshed, swap."""
@@ -258,8 +292,14 @@ class LevelSolver:
     def _fill_ghosts(self, field: Field) -> None:
         if self.ghosts:
             n = self.ghost_pairs.shape[0]
-            self.k_ghosts(self.q, *self.grid.runtime.items(n, self.grid.nc), field.data.data,
-                          self.ghost_pairs.data, np.int32(n), np.int32(self.grid.plane))
+            self.k_ghosts(
+                self.q,
+                *self.grid.runtime.items(n, self.grid.nc),
+                field.data.data,
+                self.ghost_pairs.data,
+                np.int32(n),
+                np.int32(self.grid.plane),
+            )
 
     # -- building blocks ---------------------------------------------------------------
     def _finish_step(self, field: Field) -> None:
@@ -281,8 +321,14 @@ class LevelSolver:
         g = self.grid
         kernel = g.kernel("planar/planar.cl", "curvature_step")
         for _ in range(steps):
-            g.launch(kernel, self.pair.cur.data.data, self.pair.nxt.data.data,
-                     self.pair.cur.data.data, g.scalar(self.p.diffusion_dt), g.scalar(1e-10))
+            g.launch(
+                kernel,
+                self.pair.cur.data.data,
+                self.pair.nxt.data.data,
+                self.pair.cur.data.data,
+                g.scalar(self.p.diffusion_dt),
+                g.scalar(1e-10),
+            )
             self.pair.nxt.fill_ghosts()
             self.pair.swap()
         if steps:
@@ -291,8 +337,13 @@ class LevelSolver:
 
     def harmonic_fill(self, iterations: int) -> None:
         for _ in range(iterations):
-            self.grid.launch_list(self.k_fill, self.omega_list, self.pair.cur.data.data,
-                                  self.pair.nxt.data.data, self.sx)
+            self.grid.launch_list(
+                self.k_fill,
+                self.omega_list,
+                self.pair.cur.data.data,
+                self.pair.nxt.data.data,
+                self.sx,
+            )
             self._finish_step(self.pair.nxt)
         self._sync(self.omega_list)
 
@@ -301,8 +352,9 @@ class LevelSolver:
         g, lst = self.grid, self.omega_list
         (gsize,), _, _ = g.runtime.list_launch(lst.n)
         partial = cla.empty(self.q, (g.nc, gsize), g.dtype)
-        g.launch_list(self.k_change, lst, self.pair.cur.data.data, self.prev.data.data,
-                      partial.data)
+        g.launch_list(
+            self.k_change, lst, self.pair.cur.data.data, self.prev.data.data, partial.data
+        )
         return float(partial.get().max())
 
     def mean_change(self) -> float:
@@ -310,8 +362,9 @@ class LevelSolver:
         g, lst = self.grid, self.omega_list
         (gsize,), _, _ = g.runtime.list_launch(lst.n)
         partial = cla.empty(self.q, (g.nc, gsize), g.dtype)
-        g.launch_list(self.k_sum_change, lst, self.pair.cur.data.data, self.prev.data.data,
-                      partial.data)
+        g.launch_list(
+            self.k_sum_change, lst, self.pair.cur.data.data, self.prev.data.data, partial.data
+        )
         return float(partial.get().astype(np.float64).sum()) / max(lst.n * g.nc, 1)
 
     def cycle(self) -> None:
@@ -322,8 +375,9 @@ class LevelSolver:
             self.diffusion_step()
         if self.p.diffusion_steps:
             if self.p.keep_band:
-                self.grid.launch_list(self.k_copy, self.ring_list, self.known.data.data,
-                                      self.pair.cur.data.data)
+                self.grid.launch_list(
+                    self.k_copy, self.ring_list, self.known.data.data, self.pair.cur.data.data
+                )
                 self._fill_ghosts(self.pair.cur)
             self._sync(self.band_list)
         self.apply_fidelity()
@@ -331,9 +385,14 @@ class LevelSolver:
 
     def apply_fidelity(self) -> None:
         if self.fidelity is not None:
-            self.grid.launch_list(self.k_fidelity, self.fidelity_list, self.pair.cur.data.data,
-                                  self.pair.nxt.data.data, self.observed.data.data,
-                                  self.fidelity.data.data)
+            self.grid.launch_list(
+                self.k_fidelity,
+                self.fidelity_list,
+                self.pair.cur.data.data,
+                self.pair.nxt.data.data,
+                self.observed.data.data,
+                self.fidelity.data.data,
+            )
 
     def run(self, max_steps: int, tol: float, mean_tol: float = 0.0):
         """Cycle until converged or max_steps; yields (steps, change) after every check
@@ -357,8 +416,9 @@ class LevelSolver:
                 yield self.steps, change
                 if self.converged:
                     return
-                self.grid.launch_list(self.k_copy, self.omega_list, self.pair.cur.data.data,
-                                      self.prev.data.data)
+                self.grid.launch_list(
+                    self.k_copy, self.omega_list, self.pair.cur.data.data, self.prev.data.data
+                )
         yield self.steps, None
 
     def result(self) -> np.ndarray:
@@ -371,9 +431,22 @@ class LevelSolver:
 
 # InpaintParams' fields that `inpaint` names in its signature (the others go in **options),
 # in the fields' order
-_TRANSPORT_ARGS = ("dt", "transport_steps", "diffusion_steps", "diffusion_dt", "epsilon",
-                   "presmooth", "scaling", "rotation", "max_steps", "tol", "mean_tol",
-                   "check_every", "fill", "keep_band")
+_TRANSPORT_ARGS = (
+    "dt",
+    "transport_steps",
+    "diffusion_steps",
+    "diffusion_dt",
+    "epsilon",
+    "presmooth",
+    "scaling",
+    "rotation",
+    "max_steps",
+    "tol",
+    "mean_tol",
+    "check_every",
+    "fill",
+    "keep_band",
+)
 
 
 def transport_params(params: dict) -> InpaintParams:
@@ -388,8 +461,18 @@ class TransportRun:
     coarsest level, one LevelSolver per level. `states(every)` yields (steps, change, data)
     on the finest level; afterwards `solution` and the counters are set."""
 
-    def __init__(self, runtime, data, omega, params, *, levels=None, dtype=np.float32,
-                 progress=None, fidelity=None):
+    def __init__(
+        self,
+        runtime,
+        data,
+        omega,
+        params,
+        *,
+        levels=None,
+        dtype=np.float32,
+        progress=None,
+        fidelity=None,
+    ):
         self.p = params if isinstance(params, InpaintParams) else transport_params(params)
         self.runtime, self.data, self.omega = runtime, data, omega
         self.device = runtime  # get_runtime(self.device) is this runtime
@@ -463,9 +546,9 @@ class TransportRun:
         if fill == "zero":
             return np.zeros_like(data)
         if fill == "biharmonic":
-
-            return poisson.fill(data, omega, get_runtime(self.device), "biharmonic",
-                                dtype=self.dtype)
+            return poisson.fill(
+                data, omega, get_runtime(self.device), "biharmonic", dtype=self.dtype
+            )
         # "diffusion": begin the Jacobi iterations from the nearest known value, which is
         # already close to the harmonic fill of a thin region.
         _, (iy, ix) = ndimage.distance_transform_edt(omega, return_indices=True)
@@ -475,8 +558,10 @@ class TransportRun:
 # ---------------------------------------------------------------------------------------
 # The method's interface (clpde.inpainting.registry)
 
-DESCRIPTION = ("transport of smoothness along the isophotes, interleaved with anisotropic "
-               "diffusion (thesis ch. 3)")
+DESCRIPTION = (
+    "transport of smoothness along the isophotes, interleaved with anisotropic "
+    "diffusion (thesis ch. 3)"
+)
 SOFT_MASK = True
 
 
@@ -490,8 +575,9 @@ def _reach(params) -> int:
     stencil, the pre-smoothing's reach, the transport's two-cell stencil and the
     biharmonic start's two cells."""
 
-    p = InpaintParams(**{k: v for k,
-                         v in params.items() if k in InpaintParams.__dataclass_fields__})
+    p = InpaintParams(
+        **{k: v for k, v in params.items() if k in InpaintParams.__dataclass_fields__}
+    )
     return int(np.ceil(p.epsilon)) + 1 + p.presmooth + GHOST + 2
 
 
@@ -506,19 +592,55 @@ def MARGIN(omega, levels=None, **params) -> int:
     return _reach(params) * scale + scale
 
 
-def run(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, fidelity=None,
-        levels=None, **params) -> TransportRun:
+def run(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    fidelity=None,
+    levels=None,
+    **params,
+) -> TransportRun:
     """The scheme's run on one box: `states(every)` yields (steps, change, data) on the
     finest level; afterwards `solution` and the counters are set."""
-    return TransportRun(runtime, data, omega, params, levels=levels, dtype=dtype,
-                        progress=progress, fidelity=fidelity)
+    return TransportRun(
+        runtime,
+        data,
+        omega,
+        params,
+        levels=levels,
+        dtype=dtype,
+        progress=progress,
+        fidelity=fidelity,
+    )
 
 
-def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, fidelity=None,
-          levels=None, **params):
+def solve(
+    data,
+    omega,
+    runtime,
+    *,
+    dtype=np.float32,
+    progress=None,
+    seed=None,
+    fidelity=None,
+    levels=None,
+    **params,
+):
     """The scheme's result on one box (registry.py's protocol)."""
-    scheme = run(data, omega, runtime, dtype=dtype, progress=progress, fidelity=fidelity,
-                 levels=levels, **params)
+    scheme = run(
+        data,
+        omega,
+        runtime,
+        dtype=dtype,
+        progress=progress,
+        fidelity=fidelity,
+        levels=levels,
+        **params,
+    )
     for _ in scheme.states():
         pass
     return scheme.solution

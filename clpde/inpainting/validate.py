@@ -65,8 +65,7 @@ def margin(names=None, ring: int = RING) -> int:
 
 
 def _fill(name, data, omega, runtime, dtype, seed, params):
-    solved = _solver(name)(data, omega, runtime, dtype=dtype, seed=seed,
-                           **params.get(name, {}))
+    solved = _solver(name)(data, omega, runtime, dtype=dtype, seed=seed, **params.get(name, {}))
     return np.asarray(solved, np.float64)
 
 
@@ -74,7 +73,7 @@ def _groups(labels, count):
     """[indices of `labels` equal to each label 0..count], by one sort."""
     order = np.argsort(labels, kind="stable")
     bounds = np.searchsorted(labels[order], np.arange(count + 2))
-    return [order[bounds[k]:bounds[k + 1]] for k in range(count + 1)]
+    return [order[bounds[k] : bounds[k + 1]] for k in range(count + 1)]
 
 
 def _weights(fills, truth):
@@ -94,8 +93,18 @@ def _weights(fills, truth):
     return w
 
 
-def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = True,
-           dtype=np.float32, seed=None, params=None):
+def choose(
+    data,
+    omega,
+    runtime,
+    *,
+    names=None,
+    ring: int = RING,
+    blend: bool = True,
+    dtype=np.float32,
+    seed=None,
+    params=None,
+):
     """Fill omega in data ((channels, rows, cols) in [0, 1]) by the self-validated choice
     among the candidates (module docstring).
 
@@ -124,9 +133,13 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
         values = stack[:, :, sel]
         spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
         if len(names) == 1 or spread < AGREE:
-            choices[lab - 1] = {"pixels": int(sel.size), "why": "candidates agree",
-                                "chosen": names[0], "weights": {names[0]: 1.0},
-                                "spread": float(spread)}
+            choices[lab - 1] = {
+                "pixels": int(sel.size),
+                "why": "candidates agree",
+                "chosen": names[0],
+                "weights": {names[0]: 1.0},
+                "spread": float(spread),
+            }
         else:
             vote[lab] = True
     ring_pixels = 0
@@ -136,16 +149,25 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
         if not (known & ~ring_mask).any():
             ring_mask = np.zeros_like(ring_mask)  # nothing would be left to fill from
         hidden = omega | ring_mask
-        tests = np.stack([_fill(n, data, hidden, runtime, dtype, seed, params)[:, ring_mask]
-                          for n in names]) if ring_mask.any() else None
+        tests = (
+            np.stack(
+                [_fill(n, data, hidden, runtime, dtype, seed, params)[:, ring_mask] for n in names]
+            )
+            if ring_mask.any()
+            else None
+        )
         truth = data[:, ring_mask] if ring_mask.any() else None
         ring_members = _groups(clusters[ring_mask], count)
         for lab in np.flatnonzero(vote):
             sel_ring = ring_members[lab]
             pixels = int(members[lab].size)
             if tests is None or not sel_ring.size:
-                choices[lab - 1] = {"pixels": pixels, "why": "no ring to test on",
-                                    "chosen": names[0], "weights": {names[0]: 1.0}}
+                choices[lab - 1] = {
+                    "pixels": pixels,
+                    "why": "no ring to test on",
+                    "chosen": names[0],
+                    "weights": {names[0]: 1.0},
+                }
                 continue
             f = tests[:, :, sel_ring].reshape(len(names), -1)
             t = truth[:, sel_ring].reshape(-1)
@@ -155,12 +177,13 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
             else:
                 w = np.zeros(len(names))
                 w[int(np.argmin(rmse))] = 1.0
-            choices[lab - 1] = {"pixels": pixels, "why": "ring vote",
-                                "chosen": names[int(np.argmax(w))],
-                                "weights": {n: float(x) for n, x in zip(names, w, strict=True)
-                                            if x > 0},
-                                "ring_rmse": {n: float(x) for n, x in zip(names, rmse,
-                                                                          strict=True)}}
+            choices[lab - 1] = {
+                "pixels": pixels,
+                "why": "ring vote",
+                "chosen": names[int(np.argmax(w))],
+                "weights": {n: float(x) for n, x in zip(names, w, strict=True) if x > 0},
+                "ring_rmse": {n: float(x) for n, x in zip(names, rmse, strict=True)},
+            }
     # assemble: each cluster's hole pixels from its weights
     weights = np.zeros((len(names), count + 1))
     for lab, ch in enumerate(choices, start=1):
@@ -169,6 +192,10 @@ def choose(data, omega, runtime, *, names=None, ring: int = RING, blend: bool = 
                 weights[names.index(n), lab] = w
     per_pixel = weights[:, hole_label]  # (k, n)
     out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack)
-    report = {"candidates": names, "ring": ring, "ring_pixels": ring_pixels,
-              "choices": [c for c in choices if c is not None]}
+    report = {
+        "candidates": names,
+        "ring": ring,
+        "ring_pixels": ring_pixels,
+        "choices": [c for c in choices if c is not None],
+    }
     return out, report

@@ -67,7 +67,8 @@ def image_files(folder) -> list[Path]:
     folder = Path(folder)
     files = sorted(
         (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
-        key=_natural_key)
+        key=_natural_key,
+    )
     if not files:
         raise InputError(
             f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg); put the "
@@ -124,14 +125,17 @@ def read_frames(path, grey: bool = True) -> np.ndarray:
 
 # ---- results ---------------------------------------------------------------------------
 
+
 def contour_polygons(mask) -> list[list[list[float]]]:
     """The boundaries of a boolean mask as closed polygons of (x, y) points, sub-pixel
     (half-way between inside and outside pixels)."""
     from skimage.measure import find_contours
 
     padded = np.pad(np.asarray(mask, np.float64), 1)
-    return [[[round(float(x) - 1, 3), round(float(y) - 1, 3)] for y, x in poly]
-            for poly in find_contours(padded, 0.5)]
+    return [
+        [[round(float(x) - 1, 3), round(float(y) - 1, 3)] for y, x in poly]
+        for poly in find_contours(padded, 0.5)
+    ]
 
 
 def overlay(frame, mask, colour=(255, 40, 40)) -> np.ndarray:
@@ -148,8 +152,9 @@ def overlay(frame, mask, colour=(255, 40, 40)) -> np.ndarray:
     return rgb
 
 
-def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float = 0.1,
-                   overwrite: bool = False) -> list[Path]:
+def write_tracking(
+    outdir, frames, masks, *, gif: bool = True, duration: float = 0.1, overwrite: bool = False
+) -> list[Path]:
     """Write mask_0000.png..., overlay.gif and contours.json into the folder `outdir`.
 
     The folder is created if missing; an existing one must be empty, or with overwrite=True
@@ -164,15 +169,19 @@ def write_tracking(outdir, frames, masks, *, gif: bool = True, duration: float =
             name = f"mask_{t:04d}.png"
             write_image(staging / name, mask.astype(np.uint8) * 255)
             names.append(name)
-        polygons = {"frames": [{"index": t, "polygons": contour_polygons(m)}
-                               for t, m in enumerate(masks)],
-                    "shape": list(masks.shape[1:]), "coordinates": "x, y in pixels"}
+        polygons = {
+            "frames": [{"index": t, "polygons": contour_polygons(m)} for t, m in enumerate(masks)],
+            "shape": list(masks.shape[1:]),
+            "coordinates": "x, y in pixels",
+        }
         with atomic_output(staging / "contours.json") as tmp:
             tmp.write_text(json.dumps(polygons))
         names.append("contours.json")
         if gif:
-            write_gif(staging / "overlay.gif",
-                      [overlay(f, m) for f, m in zip(frames, masks, strict=False)],
-                      duration=duration)
+            write_gif(
+                staging / "overlay.gif",
+                [overlay(f, m) for f, m in zip(frames, masks, strict=False)],
+                duration=duration,
+            )
             names.append("overlay.gif")
     return [Path(outdir) / n for n in names]

@@ -64,14 +64,14 @@ def read_image(path: PathLike) -> np.ndarray:
             with _no_pixel_limit():
                 image = iio.imread(path, plugin="pillow", extension=path.suffix.lower())
     except MemoryError:
-        raise InputError(f"{path} is too large to read into this computer's memory; crop or "
-                         "downscale it first") from None
+        raise InputError(
+            f"{path} is too large to read into this computer's memory; crop or downscale it first"
+        ) from None
     except Exception as exc:  # noqa: BLE001  (readers raise many types: all mean unreadable)
         detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0].rstrip(".")
         # imageio's "`pillow` can not handle the given uri" names its plugin, not the file's
         # problem: only the readers' own words (such as "image file is truncated") are kept.
-        detail = "" if "can not handle" in detail or "cannot identify" in detail \
-            else f" ({detail})"
+        detail = "" if "can not handle" in detail or "cannot identify" in detail else f" ({detail})"
         raise InputError(
             f"cannot read {path}: not a {kind} image, or a damaged one{detail}; clpde reads "
             ".png, .tif/.tiff and .jpg/.jpeg image files"
@@ -115,8 +115,10 @@ def check_folder_writable(folder: PathLike, what: str) -> None:
         fd, probe = tempfile.mkstemp(dir=folder, prefix=".clpde-", suffix=".part")
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
-        raise InputError(f"cannot write {what}: the folder {folder} is not writable ({reason}); "
-                         "choose a folder you can write to") from None
+        raise InputError(
+            f"cannot write {what}: the folder {folder} is not writable ({reason}); "
+            "choose a folder you can write to"
+        ) from None
     os.close(fd)
     with contextlib.suppress(OSError):
         os.unlink(probe)
@@ -149,8 +151,7 @@ def check_writable(path: PathLike, dtype: DTypeLike, shape: Sequence[int]) -> No
             "(rows, columns) or (rows, columns, channels) with at most 4 channels"
         )
     if kind == "JPEG" and (dtype != np.uint8 or channels not in (1, 3)):
-        png = dtype.kind == "u" and dtype.itemsize <= 2 or (dtype.kind == "b"
-                                                            and channels == 1)
+        png = dtype.kind == "u" and dtype.itemsize <= 2 or (dtype.kind == "b" and channels == 1)
         raise InputError(
             f"{path}: JPEG stores 8-bit greyscale or RGB only, not {dtype} with {channels} "
             f"channel(s); write a {'.png or .tif' if png else '.tif'} file instead"
@@ -238,10 +239,10 @@ def write_image(path: PathLike, array: ArrayLike) -> Path:
             # RGB photometry packs bool samples into bits wrongly: bool stays greyscale samples.
             rgb = array.ndim == 3 and array.shape[-1] in (3, 4) and array.dtype != bool
             extra = ("unassalpha",) if rgb and array.shape[-1] == 4 else None
-            tifffile.imwrite(tmp, array, photometric="rgb" if rgb else "minisblack",
-                             extrasamples=extra)
-        elif kind == "PNG" and array.dtype == np.uint16 and array.ndim == 3 \
-                and array.shape[-1] > 1:
+            tifffile.imwrite(
+                tmp, array, photometric="rgb" if rgb else "minisblack", extrasamples=extra
+            )
+        elif kind == "PNG" and array.dtype == np.uint16 and array.ndim == 3 and array.shape[-1] > 1:
             # Pillow cannot write 16-bit colour: libpng's encoder, at zlib level 1 as below.
             import imagecodecs
 
@@ -277,8 +278,9 @@ def _frame_to_uint8(frame) -> np.ndarray:
     return np.rint(scaled * 255).astype(np.uint8)
 
 
-def write_gif(path: PathLike, frames: Iterable[ArrayLike], duration: float = 0.1,
-              loop: int = 0) -> Path:
+def write_gif(
+    path: PathLike, frames: Iterable[ArrayLike], duration: float = 0.1, loop: int = 0
+) -> Path:
     """Write an animated GIF atomically.
 
     frames: a sequence of (rows, columns) or (rows, columns, 3|4) arrays of one shape;
@@ -305,8 +307,14 @@ def write_gif(path: PathLike, frames: Iterable[ArrayLike], duration: float = 0.1
     import imageio.v3 as iio
 
     with atomic_output(path) as tmp:
-        iio.imwrite(tmp, np.stack(frames), plugin="pillow", extension=".gif",
-                    duration=round(duration * 1000), loop=int(loop))
+        iio.imwrite(
+            tmp,
+            np.stack(frames),
+            plugin="pillow",
+            extension=".gif",
+            duration=round(duration * 1000),
+            loop=int(loop),
+        )
     return path
 
 
@@ -330,12 +338,23 @@ def check_not_overwriting_input(inputs: PathLike | Iterable[PathLike], output: P
 
 # ---- output folders ---------------------------------------------------------------------
 # What clpde writes into output folders; a folder holding anything else is never replaced.
-OUTPUT_SUFFIXES = {".png", ".gif", ".json", ".ply", ".glb", ".tif", ".tiff", ".jpg", ".jpeg",
-                   ".mp4"}
+OUTPUT_SUFFIXES = {
+    ".png",
+    ".gif",
+    ".json",
+    ".ply",
+    ".glb",
+    ".tif",
+    ".tiff",
+    ".jpg",
+    ".jpeg",
+    ".mp4",
+}
 
 
-def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
-                        option: str = "overwrite=True") -> Path:
+def check_output_folder(
+    outdir: PathLike, overwrite: bool = False, *, option: str = "overwrite=True"
+) -> Path:
     """Refuse, before any work, an output folder that a run could not replace as a whole.
 
     The rule of every command that writes a folder: the folder is created if missing (its
@@ -347,8 +366,9 @@ def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
     outdir = Path(outdir)
     parent = outdir.parent if str(outdir.parent) else Path(".")
     if not parent.is_dir():
-        raise InputError(f"the folder {parent} for the output {outdir} does not exist; "
-                         "create it first")
+        raise InputError(
+            f"the folder {parent} for the output {outdir} does not exist; create it first"
+        )
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
     # the run is staged beside the folder and renamed in: the parent is written to
@@ -361,19 +381,23 @@ def check_output_folder(outdir: PathLike, overwrite: bool = False, *,
     if not overwrite:
         raise InputError(
             f"output folder {outdir} is not empty ({len(entries)} entries); choose a new "
-            f"folder, or give {option} to replace its contents")
-    foreign = [e.name for e in entries
-               if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES]
+            f"folder, or give {option} to replace its contents"
+        )
+    foreign = [
+        e.name for e in entries if not e.is_file() or e.suffix.lower() not in OUTPUT_SUFFIXES
+    ]
     if foreign:
         raise InputError(
             f"output folder {outdir} holds {foreign[0]!r}, which clpde does not write, so it "
-            f"will not replace the folder even with {option}; choose another folder")
+            f"will not replace the folder even with {option}; choose another folder"
+        )
     return outdir
 
 
 @contextlib.contextmanager
-def output_folder(outdir: PathLike, overwrite: bool = False, *,
-                  option: str = "overwrite=True") -> Iterator[Path]:
+def output_folder(
+    outdir: PathLike, overwrite: bool = False, *, option: str = "overwrite=True"
+) -> Iterator[Path]:
     """Yield an empty staging folder beside `outdir`; on success it becomes `outdir` (the old
     folder, if any, is removed as a unit); on failure it is removed and `outdir` is left as
     it was. See check_output_folder for the rule."""
@@ -411,12 +435,19 @@ def _umask() -> int:
 
 # ---- masks ------------------------------------------------------------------------------
 LOSSY_FORMATS = ("JPEG",)
-MASK_RULE = ("grey masks are cut half-way between their darkest and brightest values (a "
-             "0/255 mask at 127.5); colour masks by their brightest channel; alpha is ignored")
+MASK_RULE = (
+    "grey masks are cut half-way between their darkest and brightest values (a "
+    "0/255 mask at 127.5); colour masks by their brightest channel; alpha is ignored"
+)
 
 
-def read_mask(path: PathLike, shape: Sequence[int] | None = None, *,
-              what: str = "the image", fix: str = "give a mask of the same size") -> np.ndarray:
+def read_mask(
+    path: PathLike,
+    shape: Sequence[int] | None = None,
+    *,
+    what: str = "the image",
+    fix: str = "give a mask of the same size",
+) -> np.ndarray:
     """A mask image file as a boolean array: True where the mask is bright.
 
     Pixels brighter than half-way between the file's darkest and brightest values are inside
@@ -436,24 +467,30 @@ def read_mask(path: PathLike, shape: Sequence[int] | None = None, *,
         mask = mask[..., :channels].max(axis=-1)
     if shape is not None and mask.shape != tuple(shape):
         verb = "are" if what.endswith("s") else "is"
-        raise InputError(f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but "
-                         f"{what} {verb} {shape[1]}x{shape[0]}; {fix}")
+        raise InputError(
+            f"the mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but "
+            f"{what} {verb} {shape[1]}x{shape[0]}; {fix}"
+        )
     if mask.dtype == bool:
         return mask.copy()
     if np.issubdtype(mask.dtype, np.floating) and not np.isfinite(mask).all():
-        raise InputError(f"the mask {path} contains NaN or infinite values; save it as a "
-                         "0/255 PNG")
+        raise InputError(f"the mask {path} contains NaN or infinite values; save it as a 0/255 PNG")
     lo, hi = mask.min(), mask.max()
     if lo == hi:
         return np.full(mask.shape, hi != 0)
     cut = (float(lo) + float(hi)) / 2
     levels = len(np.unique(mask))
     if image_format(path) in LOSSY_FORMATS:
-        warnings.warn(f"the mask {path} is a lossy {image_format(path)} file, whose edges "
-                      f"come out grey; read as inside above {cut:g} (half-way between its "
-                      f"darkest and brightest values); save masks as PNG", stacklevel=2)
+        warnings.warn(
+            f"the mask {path} is a lossy {image_format(path)} file, whose edges "
+            f"come out grey; read as inside above {cut:g} (half-way between its "
+            f"darkest and brightest values); save masks as PNG",
+            stacklevel=2,
+        )
     elif levels > 2:
-        warnings.warn(f"the mask {path} has {levels} grey levels, not two; read as inside "
-                      f"above {cut:g} (half-way between its darkest and brightest values)",
-                      stacklevel=2)
+        warnings.warn(
+            f"the mask {path} has {levels} grey levels, not two; read as inside "
+            f"above {cut:g} (half-way between its darkest and brightest values)",
+            stacklevel=2,
+        )
     return mask > cut

@@ -19,8 +19,7 @@ import numpy as np
 from ..errors import InputError
 from .images import atomic_output
 
-VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi",
-                 ".m4v": "mp4"}
+VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
 READ_SUFFIXES = set(VIDEO_FORMATS) | {".webm", ".mpg", ".mpeg", ".ogv"}
 _SIZE_TAG = "comment"  # container metadata: "clpde size=WxH" when the frames were padded
 _SIZE_RE = re.compile(r"clpde size=(\d+)x(\d+)")
@@ -136,14 +135,14 @@ class VideoWriter:
         if not path.parent.is_dir():
             raise InputError(f"output folder {path.parent} does not exist; create it first")
         if isinstance(threads, bool) or not isinstance(threads, int) or threads < 0:
-            raise InputError(f"threads must be a whole number >= 0 (0: FFmpeg's choice), "
-                             f"not {threads!r}")
+            raise InputError(
+                f"threads must be a whole number >= 0 (0: FFmpeg's choice), not {threads!r}"
+            )
         self.path, self.rate, self.crf, self.codec = path, Fraction(rate), crf, codec
         self.threads = threads
         self._atomic = atomic_output(path)
         self._tmp = self._atomic.__enter__()
-        self._container = require_av().open(str(self._tmp), mode="w",
-                                            format=VIDEO_FORMATS[suffix])
+        self._container = require_av().open(str(self._tmp), mode="w", format=VIDEO_FORMATS[suffix])
         self._stream = None
         self.count = 0
         # The frames as given, before the (lossy) encoder: what a film restored over
@@ -170,17 +169,23 @@ class VideoWriter:
         if frame.ndim == 2:
             frame = np.repeat(frame[..., np.newaxis], 3, axis=-1)
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[-1] not in (3, 4):
-            raise InputError(f"video frames must be 8-bit grey or RGB, not {frame.dtype} "
-                             f"of shape {frame.shape}")
+            raise InputError(
+                f"video frames must be 8-bit grey or RGB, not {frame.dtype} of shape {frame.shape}"
+            )
         frame = np.ascontiguousarray(frame[..., :3])
         if self._stream is None:
             self._start(*frame.shape[:2])
         if frame.shape[:2] != self.size:
-            raise InputError(f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the "
-                             f"film {self.size[1]}x{self.size[0]}; all frames need one size")
+            raise InputError(
+                f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the "
+                f"film {self.size[1]}x{self.size[0]}; all frames need one size"
+            )
         self._digest.update(frame.data)
-        pad = ((0, self._stream.height - frame.shape[0]), (0, self._stream.width - frame.shape[1]),
-               (0, 0))
+        pad = (
+            (0, self._stream.height - frame.shape[0]),
+            (0, self._stream.width - frame.shape[1]),
+            (0, 0),
+        )
         if any(p[1] for p in pad):
             frame = np.pad(frame, pad, mode="edge")
         picture = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="rgb24")

@@ -94,8 +94,19 @@ class FlowSolver:
             di = cla.empty(q, (cy, cx), np.float32)
             dw = cla.empty(q, (cy, cx), np.float32)
             g, loc = self._geometry(cy, cx)
-            self.k_down(q, g, loc, imgs[-1].data, ws[-1].data, di.data, dw.data,
-                        np.int32(px), np.int32(py), np.int32(cx), np.int32(cy))
+            self.k_down(
+                q,
+                g,
+                loc,
+                imgs[-1].data,
+                ws[-1].data,
+                di.data,
+                dw.data,
+                np.int32(px),
+                np.int32(py),
+                np.int32(cx),
+                np.int32(cy),
+            )
             imgs.append(di)
             ws.append(dw)
         return imgs, ws
@@ -121,8 +132,19 @@ class FlowSolver:
                 uf = cla.empty(q, (ly, lx), np.float32)
                 vf = cla.empty(q, (ly, lx), np.float32)
                 cy, cx = shapes[lev + 1]
-                self.k_up(q, g, loc, u.data, v.data, uf.data, vf.data, np.int32(cx),
-                          np.int32(cy), np.int32(lx), np.int32(ly))
+                self.k_up(
+                    q,
+                    g,
+                    loc,
+                    u.data,
+                    v.data,
+                    uf.data,
+                    vf.data,
+                    np.int32(cx),
+                    np.int32(cy),
+                    np.int32(lx),
+                    np.int32(ly),
+                )
                 u, v = uf, vf
             if lev == 0 and init is not None:
                 u, v = init[0].copy(), init[1].copy()
@@ -132,15 +154,42 @@ class FlowSolver:
             tmp = cla.empty(q, (ly, lx), np.float32)
             size = (np.int32(lx), np.int32(ly))
             for _ in range(p.warps):
-                self.k_lin(q, g, loc, P0[lev].data, P1[lev].data, W0[lev].data,
-                           W1[lev].data, u.data, v.data, Ix.data, Iy.data, It.data,
-                           wd.data, *size)
+                self.k_lin(
+                    q,
+                    g,
+                    loc,
+                    P0[lev].data,
+                    P1[lev].data,
+                    W0[lev].data,
+                    W1[lev].data,
+                    u.data,
+                    v.data,
+                    Ix.data,
+                    Iy.data,
+                    It.data,
+                    wd.data,
+                    *size,
+                )
                 for _ in range(p.iterations):
                     for parity in (0, 1):
-                        self.k_sor(q, g, loc, Ix.data, Iy.data, It.data, wd.data, u.data,
-                                   v.data, du.data, dv.data, np.float32(p.alpha ** 2),
-                                   np.float32(p.eps), np.float32(p.omega),
-                                   np.int32(parity), *size)
+                        self.k_sor(
+                            q,
+                            g,
+                            loc,
+                            Ix.data,
+                            Iy.data,
+                            It.data,
+                            wd.data,
+                            u.data,
+                            v.data,
+                            du.data,
+                            dv.data,
+                            np.float32(p.alpha**2),
+                            np.float32(p.eps),
+                            np.float32(p.omega),
+                            np.int32(parity),
+                            *size,
+                        )
                 self.k_accept(q, g, loc, u.data, v.data, du.data, dv.data, *size)
                 if p.median:
                     for comp in (u, v):
@@ -154,8 +203,7 @@ class FlowSolver:
         nc, ny, nx = src.shape
         out = cla.empty(q, src.shape, np.float32)
         g, loc = self.rt.items(nx, ny, nc)
-        self.k_warp(q, g, loc, src.data, u.data, v.data, out.data, np.int32(nx),
-                    np.int32(ny))
+        self.k_warp(q, g, loc, src.data, u.data, v.data, out.data, np.int32(nx), np.int32(ny))
         return out
 
 
@@ -163,16 +211,21 @@ def _grey_pair(frame0, frame1, channel_axis):
     a = as_image(frame0, "frame0")
     b = as_image(frame1, "frame1")
     if a.shape != b.shape:
-        raise InputError(f"frame0 has shape {a.shape} but frame1 {b.shape}; give two frames "
-                         "of the same size")
+        raise InputError(
+            f"frame0 has shape {a.shape} but frame1 {b.shape}; give two frames of the same size"
+        )
     if channel_axis is None:
         if a.ndim != 2:
-            raise InputError(f"frames of {a.ndim} dimensions need channel_axis (e.g. "
-                             "channel_axis=-1 for (rows, columns, channels))")
+            raise InputError(
+                f"frames of {a.ndim} dimensions need channel_axis (e.g. "
+                "channel_axis=-1 for (rows, columns, channels))"
+            )
     else:
         if a.ndim != 3:
-            raise InputError(f"channel_axis={channel_axis} needs (rows, columns, channels) "
-                             f"frames, got {a.ndim} dimensions")
+            raise InputError(
+                f"channel_axis={channel_axis} needs (rows, columns, channels) "
+                f"frames, got {a.ndim} dimensions"
+            )
         a = np.moveaxis(a, channel_axis, -1)
         b = np.moveaxis(b, channel_axis, -1)
     if np.issubdtype(a.dtype, np.integer):
@@ -193,18 +246,29 @@ def _weight(mask, shape, name):
         return np.ones(shape, np.float32)
     m = np.asarray(mask)
     if m.shape != shape:
-        raise InputError(f"{name} has shape {m.shape} but the frames are {shape}; give one "
-                         "(rows, columns) mask per frame")
+        raise InputError(
+            f"{name} has shape {m.shape} but the frames are {shape}; give one "
+            "(rows, columns) mask per frame"
+        )
     m = m.astype(np.float32)
     if not np.isfinite(m).all():
         raise InputError(f"{name} holds NaN or infinite values; give a bool or [0, 1] mask")
     return np.clip(1.0 - m, 0.0, 1.0).astype(np.float32)
 
 
-def optical_flow(frame0: ArrayLike, frame1: ArrayLike, *, mask0: ArrayLike | None = None,
-                 mask1: ArrayLike | None = None, levels: int | None = None,
-                 channel_axis: int | None = None, alpha: float = 0.03, warps: int = 4,
-                 iterations: int = 30, device: str | int | None = None) -> np.ndarray:
+def optical_flow(
+    frame0: ArrayLike,
+    frame1: ArrayLike,
+    *,
+    mask0: ArrayLike | None = None,
+    mask1: ArrayLike | None = None,
+    levels: int | None = None,
+    channel_axis: int | None = None,
+    alpha: float = 0.03,
+    warps: int = 4,
+    iterations: int = 30,
+    device: str | int | None = None,
+) -> np.ndarray:
     """Dense optical flow from frame0 to frame1, on the device, coarse to fine.
 
     The returned flow satisfies ``frame1[y + v, x + u] ~ frame0[y, x]`` with
@@ -270,16 +334,27 @@ def optical_flow(frame0: ArrayLike, frame1: ArrayLike, *, mask0: ArrayLike | Non
             raise InputError(f"{name} must be a positive integer, not {val!r}")
     if not (np.isfinite(alpha) and alpha > 0):
         raise InputError(f"alpha must be a positive number, not {alpha!r}")
-    solver = FlowSolver(device, FlowParams(alpha=float(alpha), warps=int(warps),
-                                           iterations=int(iterations)))
+    solver = FlowSolver(
+        device, FlowParams(alpha=float(alpha), warps=int(warps), iterations=int(iterations))
+    )
     q = solver.rt.queue
-    u, v = solver.flow(cla.to_device(q, g0), cla.to_device(q, g1), cla.to_device(q, w0),
-                       cla.to_device(q, w1), levels)
+    u, v = solver.flow(
+        cla.to_device(q, g0),
+        cla.to_device(q, g1),
+        cla.to_device(q, w0),
+        cla.to_device(q, w1),
+        levels,
+    )
     return np.stack([u.get(), v.get()], axis=-1).astype(np.float32)
 
 
-def warp(image: ArrayLike, flow: ArrayLike, *, channel_axis: int | None = None,
-         device: str | int | None = None) -> np.ndarray:
+def warp(
+    image: ArrayLike,
+    flow: ArrayLike,
+    *,
+    channel_axis: int | None = None,
+    device: str | int | None = None,
+) -> np.ndarray:
     """Backward-warp an image by a flow on the device: ``out[y, x] = image[y + v, x + u]``.
 
     Bicubic (Keys), with coordinates clamped to the image; with the flow `optical_flow` returns
@@ -323,8 +398,9 @@ def warp(image: ArrayLike, flow: ArrayLike, *, channel_axis: int | None = None,
         planes = arr[np.newaxis]
     else:
         if arr.ndim != 3:
-            raise InputError(f"channel_axis={channel_axis} needs a 3-D image, got "
-                             f"{arr.ndim} dimensions")
+            raise InputError(
+                f"channel_axis={channel_axis} needs a 3-D image, got {arr.ndim} dimensions"
+            )
         planes = np.moveaxis(arr, channel_axis, 0)
     nc, ny, nx = planes.shape
     f = np.asarray(flow, dtype=np.float32)
@@ -335,7 +411,10 @@ def warp(image: ArrayLike, flow: ArrayLike, *, channel_axis: int | None = None,
     solver = FlowSolver(device)
     q = solver.rt.queue
     src = cla.to_device(q, np.ascontiguousarray(planes, np.float32))
-    out = solver.warp(src, cla.to_device(q, np.ascontiguousarray(f[..., 0])),
-                      cla.to_device(q, np.ascontiguousarray(f[..., 1]))).get()
+    out = solver.warp(
+        src,
+        cla.to_device(q, np.ascontiguousarray(f[..., 0])),
+        cla.to_device(q, np.ascontiguousarray(f[..., 1])),
+    ).get()
     out = out[0] if channel_axis is None else np.moveaxis(out, 0, channel_axis)
     return out.astype(np.float64) if arr.dtype == np.float64 else out

@@ -48,8 +48,9 @@ def device_choices(_widget: Any = None) -> list[tuple[str, int | None]]:
 
 def layer_choices(viewer: napari.Viewer, *kinds: type) -> Callable[[Any], list]:
     """A ComboBox's choices: the viewer's layers of the given kinds, as (name, layer)."""
-    return lambda _widget=None: [(layer.name, layer) for layer in viewer.layers
-                                 if isinstance(layer, kinds)]
+    return lambda _widget=None: [
+        (layer.name, layer) for layer in viewer.layers if isinstance(layer, kinds)
+    ]
 
 
 class RunWidget(Container):
@@ -163,8 +164,9 @@ class RunWidget(Container):
         elif message not in ("done", "") and not message.endswith("..."):
             show_info(f"clpde: {message}")
 
-    def put_layer(self, data: np.ndarray, name: str, kind: str = "image",
-                  **options: Any) -> napari.layers.Layer:
+    def put_layer(
+        self, data: np.ndarray, name: str, kind: str = "image", **options: Any
+    ) -> napari.layers.Layer:
         """Replace the data of the layer called `name`, or add one of `kind`."""
         if name in self.viewer.layers:
             layer = self.viewer.layers[name]

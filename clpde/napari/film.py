@@ -19,18 +19,19 @@ from clpde.film.container import FilmWriter, film_info
 from ._runner import RunWidget, layer_choices
 
 
-def detect_film(frames: np.ndarray, channel_axis: int | None, grow: int,
-                progress: Callable) -> np.ndarray:
+def detect_film(
+    frames: np.ndarray, channel_axis: int | None, grow: int, progress: Callable
+) -> np.ndarray:
     """The defects of a film as labels: 1 blotch (dirt, dust), 2 line scratch."""
-    mask, kinds = clpde.detect_defects(frames, channel_axis=channel_axis, grow=grow,
-                                       return_kinds=True, progress=progress)
+    mask, kinds = clpde.detect_defects(
+        frames, channel_axis=channel_axis, grow=grow, return_kinds=True, progress=progress
+    )
     labels = kinds.astype(np.uint8)
     labels[mask & (labels == 0)] = 1  # grown pixels count with the blotches
     return labels
 
 
-def write_film(frames: np.ndarray, path: Path, source: str | None,
-               progress: Callable) -> Path:
+def write_film(frames: np.ndarray, path: Path, source: str | None, progress: Callable) -> Path:
     """Write frames as a film; with the film they came from, keep its timing, sound and
     subtitles (through clpde's film writer)."""
     like = film_info(source) if source else None
@@ -63,8 +64,7 @@ class FilmWidget(RunWidget):
         self.defects = ComboBox(label="defects", choices=layer_choices(v, Labels))
         self.grow = SpinBox(label="grow masks (px)", value=1, min=0, max=32)
         self.detect_button = PushButton(text="Detect defects")
-        self.output = FileEdit(label="write film to", mode="w",
-                               filter="*.mp4 *.mkv *.mov *.avi")
+        self.output = FileEdit(label="write film to", mode="w", filter="*.mp4 *.mkv *.mov *.avi")
         self.write_button = PushButton(text="Write restored film")
         self.extend([self.film, self.grow, self.detect_button, self.defects, self.output])
         self.finish_form()
@@ -79,8 +79,9 @@ class FilmWidget(RunWidget):
             raise clpde.InputError("choose a film layer (open an MP4, MKV or AVI file)")
         frames = np.asarray(layer.data)
         if frames.ndim != (4 if layer.rgb else 3):
-            raise clpde.InputError(f"a film layer has frames along its first axis; this one "
-                                   f"has shape {frames.shape}")
+            raise clpde.InputError(
+                f"a film layer has frames along its first axis; this one has shape {frames.shape}"
+            )
         return layer, frames, -1 if layer.rgb else None
 
     def detect(self) -> None:
@@ -101,15 +102,15 @@ class FilmWidget(RunWidget):
         layer, frames, channel_axis = self._frames()
         labels = self.defects.value
         if labels is None:
-            raise clpde.InputError("detect the defects first, or choose a Labels layer of "
-                                   "the film's damage")
+            raise clpde.InputError(
+                "detect the defects first, or choose a Labels layer of the film's damage"
+            )
         masks = np.asarray(labels.data) != 0
         name = f"{layer.name} restored"
         meta = dict(layer.metadata)
 
         def function(progress):
-            return clpde.inpaint_video(frames, masks, channel_axis=channel_axis,
-                                       progress=progress)
+            return clpde.inpaint_video(frames, masks, channel_axis=channel_axis, progress=progress)
 
         def show(out: np.ndarray) -> Any:
             restored = self.put_layer(out, name, rgb=layer.rgb)
@@ -133,5 +134,7 @@ class FilmWidget(RunWidget):
             self.say("choose a film file to write (.mp4, .mkv, .mov or .avi)", error=True)
             return
         source = layer.metadata.get("clpde_film")
-        self.start(lambda progress: write_film(frames, path, source, progress),
-                   lambda written: self.say(f"wrote {written}"))
+        self.start(
+            lambda progress: write_film(frames, path, source, progress),
+            lambda written: self.say(f"wrote {written}"),
+        )

@@ -59,8 +59,7 @@ def read_film(path: str | list[str]) -> LayerData:
     reader = FilmReader(one)
     frames = np.stack(list(reader))
     meta = {"clpde_film": str(one), "frame_rate": float(reader.info.rate)}
-    return [(frames, {"name": Path(one).stem, "rgb": frames.ndim == 4,
-                      "metadata": meta}, "image")]
+    return [(frames, {"name": Path(one).stem, "rgb": frames.ndim == 4, "metadata": meta}, "image")]
 
 
 def get_mesh_reader(path: str | list[str]) -> Callable[[str], LayerData] | None:
@@ -100,8 +99,9 @@ def read_mesh(path: str | list[str]) -> LayerData:
     one = _one_path(path)
     mesh = trimesh.load(one, force="mesh", process=False)
     attrs = getattr(mesh, "vertex_attributes", {}) or {}
-    values = next((np.asarray(attrs[k], np.float64) for k in ("value", "quality")
-                   if k in attrs), None)
+    values = next(
+        (np.asarray(attrs[k], np.float64) for k in ("value", "quality") if k in attrs), None
+    )
     if values is None or values.shape != (len(mesh.vertices),):
         values = np.asarray(mesh.vertices[:, 2], np.float64)
     data = (np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.int32), values)

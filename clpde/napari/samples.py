@@ -20,8 +20,10 @@ def damaged_astronaut() -> LayerData:
         The damaged photo (image) and its mask (labels, 1 where to fill).
     """
     _, damaged, mask = clpde.data.damaged_astronaut()
-    return [(damaged, {"name": "damaged astronaut", "rgb": True}, "image"),
-            (mask.astype(np.uint8), {"name": "damage", "opacity": 0.6}, "labels")]
+    return [
+        (damaged, {"name": "damaged astronaut", "rgb": True}, "image"),
+        (mask.astype(np.uint8), {"name": "damage", "opacity": 0.6}, "labels"),
+    ]
 
 
 def tracking_sequence(frames: int = 16, size: int = 96, seed: int = 0) -> LayerData:
@@ -45,8 +47,10 @@ def tracking_sequence(frames: int = 16, size: int = 96, seed: int = 0) -> LayerD
         stack[t] = np.where(inside, 0.75, ground) + rng.normal(0, 0.03, (size, size))
         if t == 0:
             labels[0][inside] = 1
-    return [(stack, {"name": "tracking sequence"}, "image"),
-            (labels, {"name": "objects"}, "labels")]
+    return [
+        (stack, {"name": "tracking sequence"}, "image"),
+        (labels, {"name": "objects"}, "labels"),
+    ]
 
 
 def torus() -> LayerData:
@@ -59,8 +63,9 @@ def torus() -> LayerData:
     """
     import trimesh
 
-    mesh = trimesh.creation.torus(major_radius=1.0, minor_radius=0.4, major_sections=64,
-                                  minor_sections=32)
+    mesh = trimesh.creation.torus(
+        major_radius=1.0, minor_radius=0.4, major_sections=64, minor_sections=32
+    )
     rng = np.random.default_rng(0)
     values = mesh.vertices[:, 2] + 0.15 * rng.standard_normal(len(mesh.vertices))
     # napari orders coordinates (z, y, x): reversed, with the faces' winding reversed too so

@@ -38,12 +38,15 @@ def mask_from_layer(layer: napari.layers.Layer, shape: tuple[int, ...]) -> np.nd
         data = np.asarray(layer.data)
         mask = np.clip(data, 0.0, 1.0) if data.dtype.kind == "f" else data != 0
     else:
-        raise clpde.InputError(f"a mask comes from a Labels, Shapes or Image layer, not "
-                               f"{type(layer).__name__}")
+        raise clpde.InputError(
+            f"a mask comes from a Labels, Shapes or Image layer, not {type(layer).__name__}"
+        )
     if mask.shape != tuple(shape):
-        raise clpde.InputError(f"the mask layer has shape {mask.shape} but the image's "
-                               f"pixels are {tuple(shape)}; paint the mask on a layer of the "
-                               "image's size")
+        raise clpde.InputError(
+            f"the mask layer has shape {mask.shape} but the image's "
+            f"pixels are {tuple(shape)}; paint the mask on a layer of the "
+            "image's size"
+        )
     return mask
 
 
@@ -58,19 +61,24 @@ def _spatial(layer: Image) -> tuple[tuple[int, ...], int | None]:
 # ---- inpaint -----------------------------------------------------------------------------
 
 
-def inpaint_planes(image: np.ndarray, mask: np.ndarray, channel_axis: int | None,
-                   progress: Callable, **options: Any) -> np.ndarray:
+def inpaint_planes(
+    image: np.ndarray,
+    mask: np.ndarray,
+    channel_axis: int | None,
+    progress: Callable,
+    **options: Any,
+) -> np.ndarray:
     """`clpde.inpaint` of a 2-D image, or of each plane of a stack (2-D + t or z) that has
     damage, with one progress figure over all planes."""
     spatial = mask.shape
     if len(spatial) == 2:
-        return clpde.inpaint(image, mask, channel_axis=channel_axis, progress=progress,
-                             **options)
+        return clpde.inpaint(image, mask, channel_axis=channel_axis, progress=progress, **options)
     out = np.array(image, copy=True)
     planes = [i for i in range(spatial[0]) if np.any(mask[i])]
     for k, i in enumerate(planes):
-        out[i] = inpaint_planes(image[i], mask[i], channel_axis,
-                                lambda *_, k=k: progress(k, len(planes)), **options)
+        out[i] = inpaint_planes(
+            image[i], mask[i], channel_axis, lambda *_, k=k: progress(k, len(planes)), **options
+        )
         progress(k + 1, len(planes))
     return out
 
@@ -108,8 +116,9 @@ class InpaintWidget(RunWidget):
     def _inputs(self) -> tuple[Image, np.ndarray, np.ndarray, int | None]:
         layer, mask_layer = self.image.value, self.mask.value
         if layer is None or mask_layer is None:
-            raise clpde.InputError("choose an image layer and a mask layer (paint the damage "
-                                   "on a Labels layer)")
+            raise clpde.InputError(
+                "choose an image layer and a mask layer (paint the damage on a Labels layer)"
+            )
         shape, channel_axis = _spatial(layer)
         mask = mask_from_layer(mask_layer, shape)
         if self.grow.value:
@@ -163,8 +172,9 @@ class InpaintWidget(RunWidget):
         result = self.viewer.layers[name]
 
         def function(progress):
-            return clpde.inpaint(image[box], mask[box], channel_axis=channel_axis,
-                                 method=method, progress=progress)
+            return clpde.inpaint(
+                image[box], mask[box], channel_axis=channel_axis, method=method, progress=progress
+            )
 
         def paste(out):
             data = np.array(result.data, copy=True)
@@ -198,15 +208,18 @@ class DenoiseWidget(RunWidget):
         v = napari_viewer
         self.image = ComboBox(label="image", choices=layer_choices(v, Image))
         self.flow = ComboBox(label="flow", choices=["tv-denoise", *clpde.FLOWS])
-        self.sigma = FloatSpinBox(label="noise sigma (0: estimate)", value=0.0, min=0.0,
-                                  max=1e6, step=0.5)
-        self.weight = FloatSpinBox(label="TV weight (0: from sigma)", value=0.0, min=0.0,
-                                   max=1e6, step=0.01)
+        self.sigma = FloatSpinBox(
+            label="noise sigma (0: estimate)", value=0.0, min=0.0, max=1e6, step=0.5
+        )
+        self.weight = FloatSpinBox(
+            label="TV weight (0: from sigma)", value=0.0, min=0.0, max=1e6, step=0.01
+        )
         self.steps = SpinBox(label="flow steps", value=100, min=1, max=10_000_000)
         self.preview = CheckBox(label="preview the slice in view only", value=False)
         self.noise = Label(value="")
-        self.extend([self.image, self.flow, self.sigma, self.weight, self.steps, self.preview,
-                     self.noise])
+        self.extend(
+            [self.image, self.flow, self.sigma, self.weight, self.steps, self.preview, self.noise]
+        )
         self.finish_form()
         self.image.changed.connect(self._show_noise)
         self._show_noise()
@@ -240,16 +253,19 @@ class DenoiseWidget(RunWidget):
 
         def one(plane, progress):
             if flow == "tv-denoise":
-                return clpde.denoise_tv(plane, sigma=sigma, weight=weight,
-                                        channel_axis=channel_axis, progress=progress)
-            return clpde.diffuse(plane, flow, steps=steps, channel_axis=channel_axis,
-                                 progress=progress)
+                return clpde.denoise_tv(
+                    plane, sigma=sigma, weight=weight, channel_axis=channel_axis, progress=progress
+                )
+            return clpde.diffuse(
+                plane, flow, steps=steps, channel_axis=channel_axis, progress=progress
+            )
 
         def function(progress):
             if data.ndim - (channel_axis is not None) == 2:
                 return one(data, progress)
-            return np.stack([one(plane, lambda *_, k=k: progress(k, len(data)))
-                             for k, plane in enumerate(data)])
+            return np.stack(
+                [one(plane, lambda *_, k=k: progress(k, len(data))) for k, plane in enumerate(data)]
+            )
 
         name = f"{layer.name} {flow}" + (" preview" if self.preview.value else "")
         return function, lambda out: self.put_layer(out, name, rgb=layer.rgb)
@@ -278,10 +294,10 @@ class TrackWidget(RunWidget):
         v = napari_viewer
         self.image = ComboBox(label="frames or slices", choices=layer_choices(v, Image))
         self.labels = ComboBox(label="labels", choices=layer_choices(v, Labels))
-        self.direction = ComboBox(label="direction",
-                                  choices=["both", "forwards", "backwards"])
-        self.threshold = FloatSpinBox(label="flag confidence below", value=0.5, min=0.0,
-                                      max=1.0, step=0.05)
+        self.direction = ComboBox(label="direction", choices=["both", "forwards", "backwards"])
+        self.threshold = FloatSpinBox(
+            label="flag confidence below", value=0.5, min=0.0, max=1.0, step=0.05
+        )
         self.confidence = Label(value="")
         self.extend([self.image, self.labels, self.direction, self.threshold, self.confidence])
         self.finish_form()
@@ -289,38 +305,48 @@ class TrackWidget(RunWidget):
     def work(self) -> tuple[Callable, Callable]:
         layer, labels_layer = self.image.value, self.labels.value
         if layer is None or labels_layer is None:
-            raise clpde.InputError("choose a stack (2-D + t or a z-stack) and a Labels layer "
-                                   "with the objects drawn on the slice in view")
+            raise clpde.InputError(
+                "choose a stack (2-D + t or a z-stack) and a Labels layer "
+                "with the objects drawn on the slice in view"
+            )
         frames = np.asarray(layer.data)
         if layer.rgb:
             frames = frames.mean(axis=-1)
         labels = np.asarray(labels_layer.data)
         if frames.ndim != 3 or labels.shape != frames.shape:
-            raise clpde.InputError(f"tracking needs a 3-D stack and a Labels layer of its "
-                                   f"shape; got {frames.shape} and {labels.shape}")
+            raise clpde.InputError(
+                f"tracking needs a 3-D stack and a Labels layer of its "
+                f"shape; got {frames.shape} and {labels.shape}"
+            )
         start = current_index(self.viewer)
         seeds = labels[start]
         ids = [int(i) for i in np.unique(seeds) if i != 0]
         if not ids:
-            raise clpde.InputError(f"no label drawn on slice {start}; draw the objects on "
-                                   "the slice in view, then run")
+            raise clpde.InputError(
+                f"no label drawn on slice {start}; draw the objects on the slice in view, then run"
+            )
         direction = self.direction.value
         name = f"{labels_layer.name} tracked"
         result = propagate_labels
-        return (lambda progress: result(frames, seeds, start, direction, progress),
-                lambda out: self._show(out, name))
+        return (
+            lambda progress: result(frames, seeds, start, direction, progress),
+            lambda out: self._show(out, name),
+        )
 
     def _show(self, out: tuple[np.ndarray, np.ndarray], name: str) -> None:
         tracked, confidence = out
         self.put_layer(tracked, name, kind="labels")
         low = np.flatnonzero(confidence < self.threshold.value)
         listed = ", ".join(str(i) for i in low[:20]) + (" ..." if len(low) > 20 else "")
-        self.confidence.value = (f"confidence min {confidence.min():.2f}; below "
-                                 f"{self.threshold.value:g}: {listed or 'none'}")
+        self.confidence.value = (
+            f"confidence min {confidence.min():.2f}; below "
+            f"{self.threshold.value:g}: {listed or 'none'}"
+        )
 
 
-def propagate_labels(frames: np.ndarray, seeds: np.ndarray, start: int, direction: str,
-                     progress: Callable) -> tuple[np.ndarray, np.ndarray]:
+def propagate_labels(
+    frames: np.ndarray, seeds: np.ndarray, start: int, direction: str, progress: Callable
+) -> tuple[np.ndarray, np.ndarray]:
     """Track each label of ``seeds`` (the labels on slice `start`) through `frames`.
 
     Returns the tracked labels (same shape as frames) and the per-frame confidence (the
@@ -341,9 +367,12 @@ def propagate_labels(frames: np.ndarray, seeds: np.ndarray, start: int, directio
             if len(order) < 2:
                 out[start][seeds == label] = label
                 continue
-            masks, score = clpde.track(frames[order], seeds == label, return_confidence=True,
-                                       progress=lambda d, _t, base=done: progress(base + d,
-                                                                                  total))
+            masks, score = clpde.track(
+                frames[order],
+                seeds == label,
+                return_confidence=True,
+                progress=lambda d, _t, base=done: progress(base + d, total),
+            )
             done += len(order)
             for index, mask in zip(order, masks, strict=True):
                 out[index][mask & (out[index] == 0)] = label
@@ -356,8 +385,15 @@ def propagate_labels(frames: np.ndarray, seeds: np.ndarray, start: int, directio
 SURFACE_FLOWS = ("heat", "tv", "reaction-diffusion")
 
 
-def run_surface_flow(vertices: np.ndarray, faces: np.ndarray, values: np.ndarray, flow: str,
-                     amount: float, resolution: int, progress: Callable) -> np.ndarray:
+def run_surface_flow(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    values: np.ndarray,
+    flow: str,
+    amount: float,
+    resolution: int,
+    progress: Callable,
+) -> np.ndarray:
     """A surface flow on the implicit surface of a mesh, read back at the mesh's vertices.
 
     `amount` is the flow's time (heat, tv) or its iterations (reaction-diffusion). Returns
@@ -396,8 +432,13 @@ class SurfaceWidget(RunWidget):
         v = napari_viewer
         self.surface = ComboBox(label="surface", choices=layer_choices(v, Surface))
         self.flow = ComboBox(label="flow", choices=list(SURFACE_FLOWS))
-        self.amount = FloatSpinBox(label="time (iterations for reaction-diffusion)",
-                                   value=0.05, min=0.0, max=1e6, step=0.01)
+        self.amount = FloatSpinBox(
+            label="time (iterations for reaction-diffusion)",
+            value=0.05,
+            min=0.0,
+            max=1e6,
+            step=0.01,
+        )
         self.resolution = SpinBox(label="grid resolution", value=64, min=16, max=512)
         self.extend([self.surface, self.flow, self.amount, self.resolution])
         self.finish_form()
@@ -409,19 +450,23 @@ class SurfaceWidget(RunWidget):
     def work(self) -> tuple[Callable, Callable]:
         layer = self.surface.value
         if layer is None:
-            raise clpde.InputError("choose a Surface layer (open a mesh file, or File > Open "
-                                   "Sample > clpde > torus)")
+            raise clpde.InputError(
+                "choose a Surface layer (open a mesh file, or File > Open Sample > clpde > torus)"
+            )
         vertices, faces = np.asarray(layer.data[0]), np.asarray(layer.data[1])
-        values = (np.asarray(layer.data[2], np.float64) if len(layer.data) > 2
-                  else np.zeros(len(vertices)))
+        values = (
+            np.asarray(layer.data[2], np.float64)
+            if len(layer.data) > 2
+            else np.zeros(len(vertices))
+        )
         if values.ndim != 1:
             values = values.reshape(-1, len(vertices))[-1]  # the last time point
         flow, amount, resolution = self.flow.value, self.amount.value, self.resolution.value
         name = f"{layer.name} {flow}"
 
         def function(progress):
-            return run_surface_flow(vertices, faces, values, flow, amount, resolution,
-                                    progress)
+            return run_surface_flow(vertices, faces, values, flow, amount, resolution, progress)
 
-        return function, lambda out: self.put_layer((vertices, faces, out), name,
-                                                     kind="surface", colormap="viridis")
+        return function, lambda out: self.put_layer(
+            (vertices, faces, out), name, kind="surface", colormap="viridis"
+        )

@@ -52,8 +52,7 @@ class Scaled:
         self.layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
         self._strip = ImageLayout((), array.dtype, None, offset, scale)
         self.out = np.empty_like(array)
-        self.out_channels = (self.out[np.newaxis] if axis is None
-                             else np.moveaxis(self.out, axis, 0))
+        self.out_channels = self.out[np.newaxis] if axis is None else np.moveaxis(self.out, axis, 0)
 
     def block(self, rows: slice, cols: slice, channel=None) -> np.ndarray:
         """(nc, h, w) float64 of one block (all channels, or one)."""
@@ -72,10 +71,11 @@ class Scaled:
         channels = range(self.nc) if channel is None else [channel]
         for k, c in enumerate(channels):
             for r in range(0, values.shape[1], STRIP_ROWS):
-                part = values[k, r:r + STRIP_ROWS]
+                part = values[k, r : r + STRIP_ROWS]
                 start = rows.start + r
-                self.out_channels[c, start:start + part.shape[0], cols] = \
-                    self._strip.restore(part[np.newaxis])
+                self.out_channels[c, start : start + part.shape[0], cols] = self._strip.restore(
+                    part[np.newaxis]
+                )
 
 
 def is_large(image, channel_axis=None) -> bool:

@@ -29,8 +29,12 @@ FLOWS = ("heat", "perona-malik", "tv", "curvature")
 # a photo's gradients were below eps and TV flow blurred it more than heat did.
 TV_EPS = 0.005
 # The parameters each flow takes besides dt; any other is refused rather than ignored.
-FLOW_PARAMS = {"heat": (), "perona-malik": ("kappa", "edge", "presmooth"), "tv": ("eps",),
-               "curvature": ("eps", "weight")}
+FLOW_PARAMS = {
+    "heat": (),
+    "perona-malik": ("kappa", "edge", "presmooth"),
+    "tv": ("eps",),
+    "curvature": ("eps", "weight"),
+}
 
 
 def gaussian_weights(presmooth: float) -> np.ndarray:
@@ -111,8 +115,10 @@ def _check_flow_params(flow: str, given: dict) -> None:
     for name, value in given.items():
         if value is not None and name not in FLOW_PARAMS[flow]:
             users = [f for f, params in FLOW_PARAMS.items() if name in params]
-            raise InputError(f"{name} applies to the {' and '.join(users)} flow"
-                             f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out")
+            raise InputError(
+                f"{name} applies to the {' and '.join(users)} flow"
+                f"{'s' if len(users) > 1 else ''}, not {flow}; leave it out"
+            )
 
 
 @dataclass
@@ -197,24 +203,41 @@ class PlanarFlow:
     (dtype('uint8'), 300)
     """
 
-    def __init__(self, image: ArrayLike, flow: str = "heat", *, dt: float | None = None,
-                 channel_axis: int | None = None, device: str | int | None = None,
-                 dtype: DTypeLike | None = None, kappa: float | None = None,
-                 edge: str | None = None, eps: float | None = None,
-                 weight: ArrayLike | None = None, presmooth: float | None = None):
+    def __init__(
+        self,
+        image: ArrayLike,
+        flow: str = "heat",
+        *,
+        dt: float | None = None,
+        channel_axis: int | None = None,
+        device: str | int | None = None,
+        dtype: DTypeLike | None = None,
+        kappa: float | None = None,
+        edge: str | None = None,
+        eps: float | None = None,
+        weight: ArrayLike | None = None,
+        presmooth: float | None = None,
+    ):
         if flow not in FLOWS:
             raise InputError(f"unknown flow {flow!r}; choose one of {', '.join(FLOWS)}")
-        _check_flow_params(flow, {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight,
-                                  "presmooth": presmooth})
+        _check_flow_params(
+            flow,
+            {"kappa": kappa, "edge": edge, "eps": eps, "weight": weight, "presmooth": presmooth},
+        )
         kappa = 0.05 if kappa is None else kappa
         edge = "exp" if edge is None else edge
         self.runtime = get_runtime(device)
         dtype = np.dtype(dtype or np.float32)
+
         # two fields (ping-pong) and the curvature flow's one-channel weight
         def fits(shape):
-            check_fits(self.runtime, shape, f"the {flow} flow",
-                       2 + (weight is not None) + 2 * (presmooth is not None),
-                       dtype=dtype)
+            check_fits(
+                self.runtime,
+                shape,
+                f"the {flow} flow",
+                2 + (weight is not None) + 2 * (presmooth is not None),
+                dtype=dtype,
+            )
 
         data, self.layout = to_kernel_layout(image, channel_axis, fits=fits)
         nc, ny, nx = data.shape
@@ -237,8 +260,9 @@ class PlanarFlow:
                 raise InputError(f"edge must be 'exp' or 'rational', not {edge!r}")
             kappa = positive("kappa", kappa)
             self.dt = check_time_step(dt, stability_limit(flow), "Perona-Malik")
-            kernel = g.kernel("planar/planar.cl", "perona_malik_step",
-                              EDGE_STOP=int(edge == "rational"))
+            kernel = g.kernel(
+                "planar/planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational")
+            )
             self._extra = (g.scalar(1.0 / kappa**2),)
             if presmooth is not None:
                 # Catte et al.'s regularisation: the diffusivity from a smoothed copy
@@ -248,10 +272,14 @@ class PlanarFlow:
                 self.presmooth_radius = len(w) - 1
                 defines = {"EDGE_STOP": int(edge == "rational")}
                 kernel = g.kernel("planar/catte.cl", "perona_malik_catte_step", **defines)
-                self._smooth = (g.kernel("planar/catte.cl", "gauss_rows"),
-                                g.kernel("planar/catte.cl", "gauss_cols"),
-                                cla.to_device(self.runtime.queue, w.astype(g.dtype)),
-                                np.int32(len(w) - 1), Field.empty(g), Field.empty(g))
+                self._smooth = (
+                    g.kernel("planar/catte.cl", "gauss_rows"),
+                    g.kernel("planar/catte.cl", "gauss_cols"),
+                    cla.to_device(self.runtime.queue, w.astype(g.dtype)),
+                    np.int32(len(w) - 1),
+                    Field.empty(g),
+                    Field.empty(g),
+                )
         elif flow == "tv":
             eps = positive("eps", TV_EPS if eps is None else eps)
             self.dt = check_time_step(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
@@ -286,8 +314,13 @@ class PlanarFlow:
             rows, cols, w, radius, tmp, smooth = self._smooth
             g.launch(rows, self.pair.cur.data.data, tmp.data.data, w.data, radius)
             g.launch(cols, tmp.data.data, smooth.data.data, w.data, radius)
-            g.launch(self._kernel, self.pair.cur.data.data, smooth.data.data,
-                     self.pair.nxt.data.data, *args)
+            g.launch(
+                self._kernel,
+                self.pair.cur.data.data,
+                smooth.data.data,
+                self.pair.nxt.data.data,
+                *args,
+            )
             self.pair.swap()
             self.steps_done += 1
             self.time += self.dt
@@ -327,11 +360,19 @@ class PlanarFlow:
         return self.layout.restore(self.pair.cur.to_host())
 
 
-def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | None = None,
-            channel_axis: int | None = None, device: str | int | None = None, *,
-            progress: bool | None = None, dtype: DTypeLike | None = None,
-            return_info: bool = False,
-            **params: ArrayLike | float | str) -> np.ndarray | tuple[np.ndarray, DiffuseInfo]:
+def diffuse(
+    image: ArrayLike,
+    flow: str = "heat",
+    steps: int = 100,
+    dt: float | None = None,
+    channel_axis: int | None = None,
+    device: str | int | None = None,
+    *,
+    progress: bool | None = None,
+    dtype: DTypeLike | None = None,
+    return_info: bool = False,
+    **params: ArrayLike | float | str,
+) -> np.ndarray | tuple[np.ndarray, DiffuseInfo]:
     """Run a planar diffusion flow for `steps` explicit steps.
 
     Parameters
@@ -397,11 +438,13 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
         # fraction of the memory (diffuse_by_channel)
         _check_flow_params(flow, params)
         steps = check_steps(steps)
-        result, state = diffuse_by_channel(image, flow, steps, dt, channel_axis, device,
-                                                 dtype, progress, params)
+        result, state = diffuse_by_channel(
+            image, flow, steps, dt, channel_axis, device, dtype, progress, params
+        )
     else:
-        state = PlanarFlow(image, flow, dt=dt, channel_axis=channel_axis, device=device,
-                           dtype=dtype, **params)
+        state = PlanarFlow(
+            image, flow, dt=dt, channel_axis=channel_axis, device=device, dtype=dtype, **params
+        )
         result = state.run(steps, progress).result()
     if not return_info:
         return result
@@ -411,8 +454,7 @@ def diffuse(image: ArrayLike, flow: str = "heat", steps: int = 100, dt: float | 
 
 
 # ---- large images: one channel at a time (bounded.py) --------------------------------------
-def diffuse_by_channel(image, flow, steps, dt, channel_axis, device, precision, progress,
-                       params):
+def diffuse_by_channel(image, flow, steps, dt, channel_axis, device, precision, progress, params):
     """clpde.diffuse one channel at a time, converting and restoring in strips: bit for bit
     the whole-image result (every flow of planar.cl acts on each channel alone, with the
     same arithmetic per cell), in the memory of one channel's two device fields.
@@ -427,7 +469,7 @@ def diffuse_by_channel(image, flow, steps, dt, channel_axis, device, precision, 
         padded = np.zeros(grid.padded_shape, dtype)
         for r in range(0, scaled.ny, bounded.STRIP_ROWS):
             rows = slice(r, min(r + bounded.STRIP_ROWS, scaled.ny))
-            padded[0, 1 + rows.start:1 + rows.stop, 1:-1] = scaled.block(rows, slice(None), c)[0]
+            padded[0, 1 + rows.start : 1 + rows.stop, 1:-1] = scaled.block(rows, slice(None), c)[0]
         field = Field.empty(grid)
         field.data.set(padded)
         del padded
@@ -446,5 +488,12 @@ class _ChannelFlow(PlanarFlow):
     def __init__(self, runtime, grid, pair, flow, dt, params):
         self.runtime, self.grid, self.pair = runtime, grid, pair
         self.flow, self.steps_done, self.time = flow, 0, 0.0
-        self._setup(flow, dt, params.get("kappa", 0.05), params.get("edge", "exp"),
-                    params.get("eps"), params.get("weight"), params.get("presmooth"))
+        self._setup(
+            flow,
+            dt,
+            params.get("kappa", 0.05),
+            params.get("edge", "exp"),
+            params.get("eps"),
+            params.get("weight"),
+            params.get("presmooth"),
+        )

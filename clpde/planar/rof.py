@@ -66,14 +66,25 @@ class DenoiseInfo:
     sigma_estimated: bool = False
 
 
-def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | None = None,
-               channel_axis: int | None = None, *, method: str = "primal-dual",
-               device: str | int | None = None, max_steps: int | None = None,
-               tol: float | None = None, check_every: int | None = None,
-               eps: float | None = None, dt: float | None = None,
-               lambda_every: int | None = None, progress: bool | None = None,
-               dtype: DTypeLike | None = None, vectorial: bool | None = None,
-               return_info: bool = False) -> np.ndarray | tuple[np.ndarray, DenoiseInfo]:
+def denoise_tv(
+    image: ArrayLike,
+    sigma: float | None = None,
+    weight: float | None = None,
+    channel_axis: int | None = None,
+    *,
+    method: str = "primal-dual",
+    device: str | int | None = None,
+    max_steps: int | None = None,
+    tol: float | None = None,
+    check_every: int | None = None,
+    eps: float | None = None,
+    dt: float | None = None,
+    lambda_every: int | None = None,
+    progress: bool | None = None,
+    dtype: DTypeLike | None = None,
+    vectorial: bool | None = None,
+    return_info: bool = False,
+) -> np.ndarray | tuple[np.ndarray, DenoiseInfo]:
     """Total-variation denoising (Rudin-Osher-Fatemi), run on the device to convergence.
 
     Solves min_u TV(u) + lambda/2 |u - u0|^2. For colour (several channels) TV is by
@@ -160,24 +171,42 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
         raise InputError("give sigma (the noise level) or weight (the strength), not both")
     precision = dtype
     runtime = get_runtime(device)
+
     # primal-dual: f, u and three dual fields of two components each; gradient: four fields
     def fits(shape):
-        check_fits(runtime, shape, "TV denoising", 8, dtype=compute_dtype(None, precision),
-                   largest=2)
+        check_fits(
+            runtime, shape, "TV denoising", 8, dtype=compute_dtype(None, precision), largest=2
+        )
 
     if method == "primal-dual" and bounded.is_large(image):
         if eps is not None or dt is not None or lambda_every is not None:
-            raise InputError("eps, dt and lambda_every belong to method='gradient'; the "
-                             "primal-dual method uses exact TV and needs none of them")
-        return _denoise_large(image, sigma, weight, channel_axis, runtime, precision,
-                              max_steps, tol, check_every, progress, vectorial, return_info)
+            raise InputError(
+                "eps, dt and lambda_every belong to method='gradient'; the "
+                "primal-dual method uses exact TV and needs none of them"
+            )
+        return _denoise_large(
+            image,
+            sigma,
+            weight,
+            channel_axis,
+            runtime,
+            precision,
+            max_steps,
+            tol,
+            check_every,
+            progress,
+            vectorial,
+            return_info,
+        )
     data, layout = to_kernel_layout(image, channel_axis, fits=fits)
     nc, ny, nx = data.shape
     if vectorial is None:
         vectorial = nc > 1 and method == "primal-dual"
     elif vectorial and method != "primal-dual":
-        raise InputError("vectorial TV is solved by method='primal-dual' only; leave "
-                         "vectorial out or set it to False for the gradient method")
+        raise InputError(
+            "vectorial TV is solved by method='primal-dual' only; leave "
+            "vectorial out or set it to False for the gradient method"
+        )
     vectorial = bool(vectorial) and nc > 1
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(data.dtype, precision))
     defaults = _DEFAULTS[method]
@@ -206,18 +235,31 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
 
     if method == "primal-dual":
         if eps is not None or dt is not None or lambda_every is not None:
-            raise InputError("eps, dt and lambda_every belong to method='gradient'; the "
-                             "primal-dual method uses exact TV and needs none of them")
+            raise InputError(
+                "eps, dt and lambda_every belong to method='gradient'; the "
+                "primal-dual method uses exact TV and needs none of them"
+            )
         if lam0 is None:
             # Start from weight = sigma, a good guess for natural images; the update corrects it.
             lam0 = 1.0 / np.sqrt(sigma2)
-        u, steps, converged, lam = _primal_dual(grid, data, lam0, sigma2, max_steps, tol,
-                                                check_every, progress, vectorial)
+        u, steps, converged, lam = _primal_dual(
+            grid, data, lam0, sigma2, max_steps, tol, check_every, progress, vectorial
+        )
     else:
         eps = positive("eps", 0.02 if eps is None else eps)
-        u, steps, converged, lam = _gradient(grid, data, lam0, sigma2, eps, dt, max_steps,
-                                             tol, check_every,
-                                             max(1, int(lambda_every or 5)), progress)
+        u, steps, converged, lam = _gradient(
+            grid,
+            data,
+            lam0,
+            sigma2,
+            eps,
+            dt,
+            max_steps,
+            tol,
+            check_every,
+            max(1, int(lambda_every or 5)),
+            progress,
+        )
     if sigma2 is not None:
         # Noise as large as the image's own spread: the only image that far from the data
         # is its mean (lambda -> 0), which the iterations approach only slowly.
@@ -230,12 +272,31 @@ def denoise_tv(image: ArrayLike, sigma: float | None = None, weight: float | Non
     if not return_info:
         return out
     residual = ((u - data) ** 2).mean(axis=(1, 2)) * layout.scale**2
-    return out, DenoiseInfo(steps, converged, lam / weight_unit, residual, method, noise,
-                            weight is None and sigma is None)
+    return out, DenoiseInfo(
+        steps,
+        converged,
+        lam / weight_unit,
+        residual,
+        method,
+        noise,
+        weight is None and sigma is None,
+    )
 
 
-def _denoise_large(image, sigma, weight, channel_axis, runtime, precision, max_steps, tol,
-                   check_every, progress, vectorial, return_info):
+def _denoise_large(
+    image,
+    sigma,
+    weight,
+    channel_axis,
+    runtime,
+    precision,
+    max_steps,
+    tol,
+    check_every,
+    progress,
+    vectorial,
+    return_info,
+):
     """denoise_tv's primal-dual run on an image of more than bounded.LARGE_VALUES values: in
     overlapping tiles, converting and restoring a block at a time (see
     denoise_large), so memory stays bounded whatever the image's size."""
@@ -263,7 +324,8 @@ def _denoise_large(image, sigma, weight, channel_axis, runtime, precision, max_s
         lam0 = None
     dtype = compute_dtype(None, precision)
     out, steps, converged, lam, residual = denoise_large(
-        scaled, dtype, runtime, lam0, sigma2, max_steps, tol, check_every, progress, vectorial)
+        scaled, dtype, runtime, lam0, sigma2, max_steps, tol, check_every, progress, vectorial
+    )
     if sigma2 is not None:
         # as in denoise_tv: noise beyond a channel's own spread leaves only its mean
         spread = sigma2 >= var
@@ -275,8 +337,15 @@ def _denoise_large(image, sigma, weight, channel_axis, runtime, precision, max_s
         lam = np.where(spread, 0.0, lam)
     if not return_info:
         return out
-    return out, DenoiseInfo(steps, converged, lam / weight_unit, residual * layout.scale**2,
-                            "primal-dual", noise, weight is None and sigma is None)
+    return out, DenoiseInfo(
+        steps,
+        converged,
+        lam / weight_unit,
+        residual * layout.scale**2,
+        "primal-dual",
+        noise,
+        weight is None and sigma is None,
+    )
 
 
 # The difference of two discrete Laplacians (Immerkaer 1996): it annihilates constant, linear
@@ -292,10 +361,13 @@ def _noise_std(u: np.ndarray) -> float:
     texture where the residual is large do not count as noise."""
     ny, nx = u.shape
     if ny < 3 or nx < 3:
-        raise InputError(f"an image of {nx}x{ny} pixels is too small to estimate its noise "
-                         "from; give sigma or weight")
-    r = sum(_NOISE_MASK[i, j] * u[i:ny - 2 + i, j:nx - 2 + j]
-            for i in range(3) for j in range(3))
+        raise InputError(
+            f"an image of {nx}x{ny} pixels is too small to estimate its noise "
+            "from; give sigma or weight"
+        )
+    r = sum(
+        _NOISE_MASK[i, j] * u[i : ny - 2 + i, j : nx - 2 + j] for i in range(3) for j in range(3)
+    )
     return float(np.median(np.abs(r))) * _MAD_TO_STD / 6.0
 
 
@@ -322,8 +394,9 @@ def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float |
     return sig if channel_axis is not None else float(sig[0])
 
 
-def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, progress,
-                 vectorial: bool = False):
+def _primal_dual(
+    grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, progress, vectorial: bool = False
+):
     """Fast projected gradient on the dual (kernels/planar/rof.cl); returns (u, steps, converged,
     lambda). vectorial: the colour-coupled model, one lambda shared by the channels (lam0
     and sigma2 then hold that value for every channel)."""
@@ -366,27 +439,60 @@ def _primal_dual(grid: Grid, data, lam0, sigma2, max_steps, tol, check_every, pr
             for _ in range(min(check_every, max_steps - steps)):
                 p_old, p, p_new = gens
                 if vectorial:
-                    cells.launch(step_k, p.data, p_old.data, p_new.data, f.data.data, lam.data,
-                                 grid.scalar(beta), np.int32(nc))
+                    cells.launch(
+                        step_k,
+                        p.data,
+                        p_old.data,
+                        p_new.data,
+                        f.data.data,
+                        lam.data,
+                        grid.scalar(beta),
+                        np.int32(nc),
+                    )
                 else:
-                    grid.launch(step_k, p.data, p_old.data, p_new.data, f.data.data, lam.data,
-                                grid.scalar(beta))
+                    grid.launch(
+                        step_k,
+                        p.data,
+                        p_old.data,
+                        p_new.data,
+                        f.data.data,
+                        lam.data,
+                        grid.scalar(beta),
+                    )
                 gens = [p, p_new, p_old]
                 t_next = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
                 beta, t = (t - 1.0) / t_next, t_next
                 steps += 1
             # u = f + div(p)/lambda and the check's row partials; only nc * 4 * ny numbers
             # come back to the host.
-            _launch_rows(grid, rows_k, gens[1].data, f.data.data, lam.data, u.data.data,
-                         partial.data)
+            _launch_rows(
+                grid, rows_k, gens[1].data, f.data.data, lam.data, u.data.data, partial.data
+            )
             converged = _largest_change(partial.get(), nc, ny) < tol * check_every
             if sigma2 is not None and not converged:
                 if vectorial:
-                    lambda_k(q, (1,), (1,), partial.data, lam.data, np.int32(ny), np.int32(nc),
-                             inv_vec, grid.scalar(_LAMBDA_MIN))
+                    lambda_k(
+                        q,
+                        (1,),
+                        (1,),
+                        partial.data,
+                        lam.data,
+                        np.int32(ny),
+                        np.int32(nc),
+                        inv_vec,
+                        grid.scalar(_LAMBDA_MIN),
+                    )
                 else:
-                    lambda_k(q, (nc,), (1,), partial.data, lam.data, np.int32(ny),
-                             inv_n_sigma2.data, grid.scalar(_LAMBDA_MIN))
+                    lambda_k(
+                        q,
+                        (nc,),
+                        (1,),
+                        partial.data,
+                        lam.data,
+                        np.int32(ny),
+                        inv_n_sigma2.data,
+                        grid.scalar(_LAMBDA_MIN),
+                    )
             bar.update(steps - bar.n)
     return u.to_host().astype(np.float64), steps, converged, lam.get().astype(np.float64)
 
@@ -406,8 +512,9 @@ def _largest_change(partials: np.ndarray, nc: int, ny: int) -> float:
     return float(partials.reshape(nc, 4, ny)[:, 3].max())
 
 
-def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_every,
-              lambda_every, progress):
+def _gradient(
+    grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_every, lambda_every, progress
+):
     """The thesis's gradient descent (kernels/planar/planar.cl); returns (u, steps, converged,
     lambda)."""
     q = grid.runtime.queue
@@ -436,15 +543,30 @@ def _gradient(grid: Grid, data, lam0, sigma2, eps, dt, max_steps, tol, check_eve
             if sigma2 is not None and steps % lambda_every == 0:
                 _launch_rows(grid, rows_k, pair.cur.data.data, u0.data.data, partial.data, eps2)
                 for c in range(nc):  # one work-item at channel c (sigma may differ)
-                    finish_k(q, (1,), (1,), partial.data, lam.data, np.int32(ny),
-                             grid.scalar(1.0 / (nx * ny * sigma2[c])), global_offset=(c,))
+                    finish_k(
+                        q,
+                        (1,),
+                        (1,),
+                        partial.data,
+                        lam.data,
+                        np.int32(ny),
+                        grid.scalar(1.0 / (nx * ny * sigma2[c])),
+                        global_offset=(c,),
+                    )
                 # (C.2) divides by sigma^2: lambda can jump at any update, and a step that
                 # was stable before it would blow up (found by fuzzing: 1e12 for sigma=1e-3)
                 top = min(float(np.nan_to_num(lam.get().max(), nan=0.0)), 1e30)
                 if dt > stability_limit("rof", eps, top):
                     dt = 0.8 * stability_limit("rof", eps, top)
-            grid.launch(step_k, pair.cur.data.data, pair.nxt.data.data, u0.data.data, lam.data,
-                        grid.scalar(dt), eps2)  # the step also refreshes the ghosts
+            grid.launch(
+                step_k,
+                pair.cur.data.data,
+                pair.nxt.data.data,
+                u0.data.data,
+                lam.data,
+                grid.scalar(dt),
+                eps2,
+            )  # the step also refreshes the ghosts
             pair.swap()
             steps += 1
             if steps % check_every == 0 or steps == max_steps:
@@ -465,8 +587,10 @@ def noise_std_by_strips(scaled: bounded.Scaled) -> np.ndarray:
 
     ny, nx = scaled.ny, scaled.nx
     if ny < 3 or nx < 3:
-        raise InputError(f"an image of {nx}x{ny} pixels is too small to estimate its noise "
-                         "from; give sigma or weight")
+        raise InputError(
+            f"an image of {nx}x{ny} pixels is too small to estimate its noise "
+            "from; give sigma or weight"
+        )
     sig = np.empty(scaled.nc)
     for c in range(scaled.nc):
         residual = np.empty((ny - 2, nx - 2))
@@ -474,15 +598,26 @@ def noise_std_by_strips(scaled: bounded.Scaled) -> np.ndarray:
             stop = min(r + bounded.STRIP_ROWS, ny - 2)
             u = scaled.block(slice(r, stop + 2), slice(None), c)[0]
             h = stop - r
-            residual[r:stop] = sum(_NOISE_MASK[i, j] * u[i:h + i, j:nx - 2 + j]
-                                   for i in range(3) for j in range(3))
+            residual[r:stop] = sum(
+                _NOISE_MASK[i, j] * u[i : h + i, j : nx - 2 + j] for i in range(3) for j in range(3)
+            )
         np.abs(residual, out=residual)
         sig[c] = float(np.median(residual)) * _MAD_TO_STD / 6.0
     return sig
 
 
-def denoise_large(scaled: bounded.Scaled, grid_dtype, runtime, lam0, sigma2, max_steps, tol,
-                  check_every, progress, vectorial):
+def denoise_large(
+    scaled: bounded.Scaled,
+    grid_dtype,
+    runtime,
+    lam0,
+    sigma2,
+    max_steps,
+    tol,
+    check_every,
+    progress,
+    vectorial,
+):
     """denoise_tv of a large image in overlapping tiles (bounded.TILE_CORE kept,
     bounded.TILE_MARGIN read on each side), each run to its own convergence with one lambda
     per channel for the whole image. With sigma, lambda is first fitted (the dynamic
@@ -503,23 +638,39 @@ def denoise_large(scaled: bounded.Scaled, grid_dtype, runtime, lam0, sigma2, max
         cols = slice((nx - w) // 2, (nx - w) // 2 + w)
         sample = scaled.block(rows, cols)
         grid = Grid(runtime, w, h, nc, 1, grid_dtype)
-        _, _, _, lam = _primal_dual(grid, sample, 1.0 / np.sqrt(sigma2), sigma2, max_steps,
-                                    tol, check_every, False, vectorial)
+        _, _, _, lam = _primal_dual(
+            grid,
+            sample,
+            1.0 / np.sqrt(sigma2),
+            sigma2,
+            max_steps,
+            tol,
+            check_every,
+            False,
+            vectorial,
+        )
         del sample
     steps_max, converged = 0, True
     sq = np.zeros(nc)
     core, margin = bounded.TILE_CORE, bounded.TILE_MARGIN
-    tiles = [(ky, kx, ry, rx) for ky, ry in bounded.spans(ny, core, margin)
-             for kx, rx in bounded.spans(nx, core, margin)]
+    tiles = [
+        (ky, kx, ry, rx)
+        for ky, ry in bounded.spans(ny, core, margin)
+        for kx, rx in bounded.spans(nx, core, margin)
+    ]
 
     with progress_bar(progress, len(tiles), "clpde denoise_tv", unit="tile") as bar:
         for ky, kx, ry, rx in tiles:
             block = scaled.block(ry, rx)
             grid = Grid(runtime, block.shape[2], block.shape[1], nc, 1, grid_dtype)
-            u, steps, done, _ = _primal_dual(grid, block, lam, None, max_steps, tol,
-                                             check_every, False, vectorial)
-            keep = (slice(None), slice(ky.start - ry.start, ky.stop - ry.start),
-                    slice(kx.start - rx.start, kx.stop - rx.start))
+            u, steps, done, _ = _primal_dual(
+                grid, block, lam, None, max_steps, tol, check_every, False, vectorial
+            )
+            keep = (
+                slice(None),
+                slice(ky.start - ry.start, ky.stop - ry.start),
+                slice(kx.start - rx.start, kx.stop - rx.start),
+            )
             sq += ((u[keep] - block[keep]) ** 2).sum(axis=(1, 2))
             scaled.restore(u[keep], ky, kx)
             steps_max, converged = max(steps_max, steps), converged and done

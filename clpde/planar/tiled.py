@@ -44,8 +44,15 @@ class _ScaledFlow(PlanarFlow):
         self.grid = Grid(self.runtime, nx, ny, nc, 1, np.dtype(precision or np.float32))
         self.flow, self.steps_done, self.time = flow, 0, 0.0
         self.pair = PingPong(Field.from_host(self.grid, data))
-        self._setup(flow, dt, params.get("kappa", 0.05), params.get("edge", "exp"),
-                    params.get("eps"), None, params.get("presmooth"))
+        self._setup(
+            flow,
+            dt,
+            params.get("kappa", 0.05),
+            params.get("edge", "exp"),
+            params.get("eps"),
+            None,
+            params.get("presmooth"),
+        )
 
 
 def _tile_diffuse(block, flow, steps, dt, device, precision, params):
@@ -58,8 +65,9 @@ def _tile_denoise(block, lam, steps, check_every, device, precision, vectorial=F
     runtime = get_runtime(device)
     nc, ny, nx = block.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(block.dtype, precision))
-    u, *_ = _primal_dual(grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False,
-                         vectorial)
+    u, *_ = _primal_dual(
+        grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False, vectorial
+    )
     return u
 
 
@@ -74,15 +82,31 @@ def _chunked(data: np.ndarray, chunks, depth: int, func, **kwargs) -> np.ndarray
     array = da.from_array(data, chunks=(data.shape[0], cy, cx))
     # map_overlap needs each chunk at least as large as the depth; it rechunks if not,
     # which changes only the tiling, never the result.
-    out = array.map_overlap(func, depth={0: 0, 1: depth, 2: depth}, boundary="none",
-                            dtype=np.float64, meta=np.empty((0, 0, 0)), **kwargs)
+    out = array.map_overlap(
+        func,
+        depth={0: 0, 1: depth, 2: depth},
+        boundary="none",
+        dtype=np.float64,
+        meta=np.empty((0, 0, 0)),
+        **kwargs,
+    )
     # One device per process: the tiles run one after another here, each on the device.
     with dask.config.set(scheduler="synchronous"):
         return out.compute()
 
 
-def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=None,
-            device=None, *, chunks=256, dtype=None, **params) -> np.ndarray:
+def diffuse(
+    image,
+    flow: str = "heat",
+    steps: int = 100,
+    dt=None,
+    channel_axis=None,
+    device=None,
+    *,
+    chunks=256,
+    dtype=None,
+    **params,
+) -> np.ndarray:
     """clpde.diffuse run tile by tile: the same result, bit for bit, in chunks x chunks tiles
     (each with a margin of `steps` cells), for images larger than the device allows.
     The curvature flow's per-pixel ``weight`` is not supported here."""
@@ -97,16 +121,34 @@ def diffuse(image, flow: str = "heat", steps: int = 100, dt=None, channel_axis=N
     radius = RADIUS
     if params.get("presmooth") is not None:
         radius += len(gaussian_weights(float(params["presmooth"]))) - 1
-    out = _chunked(data, chunks, steps * radius, _tile_diffuse, flow=flow, steps=steps, dt=dt,
-                   device=runtime.index,
-                   precision=dtype,
-                   params=params)
+    out = _chunked(
+        data,
+        chunks,
+        steps * radius,
+        _tile_diffuse,
+        flow=flow,
+        steps=steps,
+        dt=dt,
+        device=runtime.index,
+        precision=dtype,
+        params=params,
+    )
     return layout.restore(out)
 
 
-def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chunks=256,
-               check_every: int = 5, dtype=None, precision=None,
-               vectorial: bool | None = None) -> np.ndarray:
+def denoise_tv(
+    image,
+    weight,
+    steps: int,
+    channel_axis=None,
+    *,
+    device=None,
+    chunks=256,
+    check_every: int = 5,
+    dtype=None,
+    precision=None,
+    vectorial: bool | None = None,
+) -> np.ndarray:
     """clpde.denoise_tv (primal-dual, given weight) for exactly `steps` iterations, tile by
     tile; bitwise equal to ``clpde.denoise_tv(image, weight=weight, max_steps=steps,
     tol=1e-300, check_every=check_every, vectorial=vectorial)`` (vectorial by default for
@@ -119,10 +161,18 @@ def denoise_tv(image, weight, steps: int, channel_axis=None, *, device=None, chu
     runtime = get_runtime(device)
     # u = f + div(p)/lambda adds one more cell to the iterations' reach.
     vectorial = data.shape[0] > 1 if vectorial is None else bool(vectorial)
-    out = _chunked(data, chunks, steps * RADIUS + 1, _tile_denoise, lam=lam, steps=steps,
-                   vectorial=vectorial,
-                   check_every=max(1, int(check_every)), device=runtime.index,
-                   precision=dtype)
+    out = _chunked(
+        data,
+        chunks,
+        steps * RADIUS + 1,
+        _tile_denoise,
+        lam=lam,
+        steps=steps,
+        vectorial=vectorial,
+        check_every=max(1, int(check_every)),
+        device=runtime.index,
+        precision=dtype,
+    )
     return layout.restore(out)
 
 

@@ -65,8 +65,10 @@ class BrickRegionTracker(RegionTracker):
         g = self.grid
         reach = self.reinit_ring + 2
         if min(self.brick) < reach:
-            raise InputError(f"bricks need at least reinit_ring + 2 = {reach} cells a side, not "
-                             f"{self.brick}: use larger bricks or a smaller reinit_ring")
+            raise InputError(
+                f"bricks need at least reinit_ring + 2 = {reach} cells a side, not "
+                f"{self.brick}: use larger bricks or a smaller reinit_ring"
+            )
         # unstored places read as distances beyond every band (positive: the kernels only
         # need them outside the band), dense places of unstored bricks as FAR of their sign
         self.far = float(self.width + self.reinit_ring + 1)
@@ -75,11 +77,12 @@ class BrickRegionTracker(RegionTracker):
         pz, py, px = g.padded_shape
         self._places = (-(-pz // bz), -(-py // by), -(-px // bx))
         mid = padded[0][np.minimum(np.arange(self._places[0]) * bz + bz // 2, pz - 1)][
-            :, np.minimum(np.arange(self._places[1]) * by + by // 2, py - 1)][
-            :, :, np.minimum(np.arange(self._places[2]) * bx + bx // 2, px - 1)]
+            :, np.minimum(np.arange(self._places[1]) * by + by // 2, py - 1)
+        ][:, :, np.minimum(np.arange(self._places[2]) * bx + bx // 2, px - 1)]
         self._sign = np.where(mid < 0, -1, 1).astype(np.int8)  # (z, y, x) brick places
-        self.bricks = BrickBand.from_coords(self.runtime, g.padded_shape,
-                                            self._initial_coords(padded[0], reach), self.brick)
+        self.bricks = BrickBand.from_coords(
+            self.runtime, g.padded_shape, self._initial_coords(padded[0], reach), self.brick
+        )
         self.cur = self._scatter(padded)
         self.nxt = self.cur.copy()
         self.ls0 = self.cur.copy()
@@ -91,25 +94,33 @@ class BrickRegionTracker(RegionTracker):
         rt = self.runtime
         defines = dict(SPEED=self.mode, NC=self.nc, RING=self.reinit_ring, BX=bx, BY=by, BZ=bz)
         k = {}
-        k["region_brick_euler"] = rt.kernel("regions/bricks.cl", "region_brick_euler", g.dtype,
-                                            **defines)
-        k["region_brick_heun"] = rt.kernel("regions/bricks.cl", "region_brick_heun", g.dtype,
-                                           **defines)
-        k["region_brick_advect"] = rt.kernel("regions/bricks.cl", "region_brick_advect",
-                                             g.dtype, **defines)
-        k["region_brick_extend"] = rt.kernel("regions/bricks.cl", "region_brick_extend",
-                                             g.dtype, **defines)
-        k["region_brick_targets"] = rt.kernel("regions/bricks.cl", "region_brick_targets",
-                                              g.dtype, **defines)
-        k["region_brick_reinit_stage"] = rt.kernel("regions/bricks.cl",
-                                                   "region_brick_reinit_stage", g.dtype,
-                                                   **defines)
-        k["region_brick_band_mask"] = rt.kernel("regions/bricks.cl", "region_brick_band_mask",
-                                                g.dtype, **defines)
-        k["region_brick_flags"] = rt.kernel("regions/bricks.cl", "region_brick_flags", g.dtype,
-                                            **defines)
-        k["region_brick_remap"] = rt.kernel("regions/bricks.cl", "region_brick_remap", g.dtype,
-                                            **defines)
+        k["region_brick_euler"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_euler", g.dtype, **defines
+        )
+        k["region_brick_heun"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_heun", g.dtype, **defines
+        )
+        k["region_brick_advect"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_advect", g.dtype, **defines
+        )
+        k["region_brick_extend"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_extend", g.dtype, **defines
+        )
+        k["region_brick_targets"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_targets", g.dtype, **defines
+        )
+        k["region_brick_reinit_stage"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_reinit_stage", g.dtype, **defines
+        )
+        k["region_brick_band_mask"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_band_mask", g.dtype, **defines
+        )
+        k["region_brick_flags"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_flags", g.dtype, **defines
+        )
+        k["region_brick_remap"] = rt.kernel(
+            "regions/bricks.cl", "region_brick_remap", g.dtype, **defines
+        )
         self._k = k
 
     def _initial_coords(self, phi: np.ndarray, reach: int) -> np.ndarray:
@@ -134,8 +145,7 @@ class BrickRegionTracker(RegionTracker):
         and the sentinel brick at FAR."""
         b = self.bricks
         flat = padded.reshape(padded.shape[0], -1)
-        out = np.full((flat.shape[0], b.nbricks + 2, b.cells_per_brick), self.far,
-                      self.grid.dtype)
+        out = np.full((flat.shape[0], b.nbricks + 2, b.cells_per_brick), self.far, self.grid.dtype)
         valid = b.cells >= 0
         out[:, 1 : b.nbricks + 1][:, valid] = flat[:, b.cells[valid]]
         self.runtime.check_alloc(out.nbytes, "brick level sets")
@@ -159,8 +169,9 @@ class BrickRegionTracker(RegionTracker):
         channels = data.size // b.plane
         if signed:
             sign = self._sign.repeat(bz, 0).repeat(by, 1).repeat(bx, 2)[:pz, :py, :px]
-            dense = np.broadcast_to(self.far * sign.astype(np.float64),
-                                    (channels, pz, py, px)).copy()
+            dense = np.broadcast_to(
+                self.far * sign.astype(np.float64), (channels, pz, py, px)
+            ).copy()
         else:
             dense = np.full((channels, pz, py, px), self.far)
         host = data.get().reshape(channels, b.nbricks + 2, b.cells_per_brick)
@@ -186,25 +197,49 @@ class BrickRegionTracker(RegionTracker):
     def _launch(self, name: str, *args) -> None:
         items, per = self._geometry()
         b = self.bricks
-        self._k[name](self.runtime.queue, (items,), (1,), *args, b.nbr.data, b.brick_bits.data,
-                      np.int32(b.nbricks), np.int32(b.plane), np.int32(per))
+        self._k[name](
+            self.runtime.queue,
+            (items,),
+            (1,),
+            *args,
+            b.nbr.data,
+            b.brick_bits.data,
+            np.int32(b.nbricks),
+            np.int32(b.plane),
+            np.int32(per),
+        )
 
     # ---- bands and upkeep ---------------------------------------------------------------------
     def rebuild(self) -> None:
         """The upkeep (bricks added and dropped), then the band masks, from the current Phi."""
         g, q = self.grid, self.runtime.queue
-        dims = (g.scalar(self.width), np.int32(g.nx), np.int32(g.ny), np.int32(g.nz),
-                np.int32(g.ghost))
+        dims = (
+            g.scalar(self.width),
+            np.int32(g.nx),
+            np.int32(g.ny),
+            np.int32(g.nz),
+            np.int32(g.ghost),
+        )
         coords_dev = self._coords_on_device()
         flags = cla.empty(q, max(self.bricks.nbricks, 1), np.int32)
         items, per = self._geometry()
-        self._k["region_brick_flags"](q, (items,), (1,), self.cur.data, flags.data,
-                                      coords_dev.data, *dims, np.int32(self.bricks.nbricks),
-                                      np.int32(per))
+        self._k["region_brick_flags"](
+            q,
+            (items,),
+            (1,),
+            self.cur.data,
+            flags.data,
+            coords_dev.data,
+            *dims,
+            np.int32(self.bricks.nbricks),
+            np.int32(per),
+        )
         words = flags.get()[: self.bricks.nbricks]
         if not np.any(words & (1 << 13)):
-            raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
-                             "track for a shorter time")
+            raise InputError(
+                "the surface vanished (Phi has no zero level set left on the grid); "
+                "track for a shorter time"
+            )
         if self._upkeep(words):
             coords_dev = self._coords_on_device()
         # the work buffers equal cur on every brick no kernel writes (see regions/bricks.cl)
@@ -213,10 +248,20 @@ class BrickRegionTracker(RegionTracker):
         with self.runtime.lock:
             self._flag.fill(0)
         items, per = self._geometry()
-        self._k["region_brick_band_mask"](q, (items,), (1,), self.cur.data, self._mask.data,
-                                          self.bricks.brick_bits.data, coords_dev.data,
-                                          self._flag.data, *dims, self.bricks.nbr.data,
-                                          np.int32(self.bricks.nbricks), np.int32(per))
+        self._k["region_brick_band_mask"](
+            q,
+            (items,),
+            (1,),
+            self.cur.data,
+            self._mask.data,
+            self.bricks.brick_bits.data,
+            coords_dev.data,
+            self._flag.data,
+            *dims,
+            self.bricks.nbr.data,
+            np.int32(self.bricks.nbricks),
+            np.int32(per),
+        )
         self._stats = cla.zeros(q, 2 * items, g.dtype)
         self._stats_fresh = False
         if self._flag.get()[0]:
@@ -229,8 +274,9 @@ class BrickRegionTracker(RegionTracker):
     def _coords_on_device(self) -> cla.Array:
         """The bricks' coordinates, with zero rows for the sentinel and the spare brick."""
         zero = np.zeros((1, 3), np.int32)
-        return cla.to_device(self.runtime.queue,
-                             np.concatenate([zero, self.bricks.coords, zero]).astype(np.int32))
+        return cla.to_device(
+            self.runtime.queue, np.concatenate([zero, self.bricks.coords, zero]).astype(np.int32)
+        )
 
     def _upkeep(self, words: np.ndarray) -> bool:
         """Store exactly the bricks the flag words name; whether the set changed."""
@@ -249,9 +295,9 @@ class BrickRegionTracker(RegionTracker):
             return False
         gone = old[~kept]
         self._sign[gone[:, 2], gone[:, 1], gone[:, 0]] = np.where(
-            words[~kept] & (1 << SIGN_BIT), -1, 1)
-        band = BrickBand.from_coords(self.runtime, self.grid.padded_shape, cand[first],
-                                     self.brick)
+            words[~kept] & (1 << SIGN_BIT), -1, 1
+        )
+        band = BrickBand.from_coords(self.runtime, self.grid.padded_shape, cand[first], self.brick)
         # where each new brick's values come from: the old brick itself (kept), else the
         # brick that flagged it first and the direction from there
         place = band.coords
@@ -267,12 +313,21 @@ class BrickRegionTracker(RegionTracker):
         out = cla.empty(q, self.nc * band.plane, self.grid.dtype)
         self.runtime.check_alloc(out.nbytes, "brick level sets")
         items, per = self._geometry(band.nbricks)
-        self._k["region_brick_remap"](q, (items,), (1,), self.cur.data,
-                                      out.data, cla.to_device(q, src).data,
-                                      cla.to_device(q, dirs).data, self.grid.scalar(self.far),
-                                      self.grid.scalar(self.far), np.int32(self.bricks.plane),
-                                      np.int32(band.plane), np.int32(band.nbricks),
-                                      np.int32(per))
+        self._k["region_brick_remap"](
+            q,
+            (items,),
+            (1,),
+            self.cur.data,
+            out.data,
+            cla.to_device(q, src).data,
+            cla.to_device(q, dirs).data,
+            self.grid.scalar(self.far),
+            self.grid.scalar(self.far),
+            np.int32(self.bricks.plane),
+            np.int32(band.plane),
+            np.int32(band.nbricks),
+            np.int32(per),
+        )
         self.bricks = band
         self.cur = out
         self.nxt = cla.empty_like(out)
@@ -302,25 +357,37 @@ class BrickRegionTracker(RegionTracker):
         return tuple(o[gh:-gh, gh:-gh, gh:-gh] for o in out)
 
     # ---- reinitialisation and steps -----------------------------------------------------------
-    def reinitialize(self, iterations: int | None = None,
-                     extension: int | None = None) -> None:
+    def reinitialize(self, iterations: int | None = None, extension: int | None = None) -> None:
         g, q = self.grid, self.runtime.queue
         its = self.reinit_iterations if iterations is None else int(iterations)
         ext = EXTEND_ITERATIONS if extension is None else int(extension)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(ext if its else 0):
-            self._launch("region_brick_extend", self.cur.data, self._mask.data, self.nxt.data,
-                         g.scalar(EXTEND_DT), keep, full)
+            self._launch(
+                "region_brick_extend",
+                self.cur.data,
+                self._mask.data,
+                self.nxt.data,
+                g.scalar(EXTEND_DT),
+                keep,
+                full,
+            )
             self.cur, self.nxt = self.nxt, self.cur
         cl.enqueue_copy(q, self.ls0.data, self.cur.data)
         if its:
-            self._launch("region_brick_targets", self.ls0.data, self._mask.data,
-                         self.stage.data)
+            self._launch("region_brick_targets", self.ls0.data, self._mask.data, self.stage.data)
         for _ in range(its):
             for src, dst, second in ((self.cur, self.nxt, 0), (self.nxt, self.cur, 1)):
-                self._launch("region_brick_reinit_stage", src.data, self.ls0.data,
-                             self.stage.data, dst.data, self._mask.data, g.scalar(REINIT_DT),
-                             np.int32(second))
+                self._launch(
+                    "region_brick_reinit_stage",
+                    src.data,
+                    self.ls0.data,
+                    self.stage.data,
+                    dst.data,
+                    self._mask.data,
+                    g.scalar(REINIT_DT),
+                    np.int32(second),
+                )
         self.rebuild()
         self.reinits += 1
         self._moved = 0.0
@@ -334,15 +401,34 @@ class BrickRegionTracker(RegionTracker):
 
     def _stage(self, name, src, dst, dt) -> None:
         g = self.grid
-        self._launch(name, src.data, self.aux.data, dst.data, self._stats.data, self._mask.data,
-                     g.scalar(dt), g.scalar(1e-12), *self._cutoff(), g.scalar(self.scale),
-                     g.scalar(self.vmax))
+        self._launch(
+            name,
+            src.data,
+            self.aux.data,
+            dst.data,
+            self._stats.data,
+            self._mask.data,
+            g.scalar(dt),
+            g.scalar(1e-12),
+            *self._cutoff(),
+            g.scalar(self.scale),
+            g.scalar(self.vmax),
+        )
 
     def _advect(self, src, dst, dt, second) -> None:
         g, u = self.grid, self.velocity
-        self._launch("region_brick_advect", src.data, dst.data, self._mask.data, g.scalar(dt),
-                     g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]), *self._cutoff(),
-                     np.int32(second))
+        self._launch(
+            "region_brick_advect",
+            src.data,
+            dst.data,
+            self._mask.data,
+            g.scalar(dt),
+            g.scalar(u[0]),
+            g.scalar(u[1]),
+            g.scalar(u[2]),
+            *self._cutoff(),
+            np.int32(second),
+        )
 
     def step(self, dt: float) -> None:
         if self.velocity is None:

@@ -36,16 +36,24 @@ class RegionFrame(State):
         return self.area(label) / self.area()
 
 
-def make_frame(tracker, time: float, origin: ArrayLike, keep_volumes: bool = False,
-               palette: ArrayLike | None = None, partition: bool = False) -> RegionFrame:
+def make_frame(
+    tracker,
+    time: float,
+    origin: ArrayLike,
+    keep_volumes: bool = False,
+    palette: ArrayLike | None = None,
+    partition: bool = False,
+) -> RegionFrame:
     """The mesh of Phi = 0 split along each Phi-hat = 0, coloured by region (with partition,
     every face in one: slivers where the labels' boundaries part by rounding go to the
     nearest region)."""
     phi, phihat = tracker.volumes()
     h = tracker.h
     if not (phi.min() < 0 < phi.max()):  # gone between two band rebuilds
-        raise InputError(f"the surface vanished by t = {time:g} (Phi has no zero level set "
-                         "left on the grid); track for a shorter time")
+        raise InputError(
+            f"the surface vanished by t = {time:g} (Phi has no zero level set "
+            "left on the grid); track for a shorter time"
+        )
     mesh = surface_mesh(phi, h, origin)
     idx = ((np.asarray(mesh.vertices) - origin) / h)[:, ::-1].T  # (z, y, x) index coordinates
     vals = np.stack([map_coordinates(p, idx, order=1, mode="nearest") for p in phihat], axis=1)
@@ -53,9 +61,16 @@ def make_frame(tracker, time: float, origin: ArrayLike, keep_volumes: bool = Fal
     vertex_label = np.full(len(verts), -1)
     vertex_label[faces.reshape(-1)] = np.repeat(labels, 3)
     rgb = region_colours(vertex_label, palette)
-    colours = np.concatenate([np.rint(255 * rgb).astype(np.uint8),
-                              np.full((len(rgb), 1), 255, np.uint8)], 1)
+    colours = np.concatenate(
+        [np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], 1
+    )
     out = trimesh.Trimesh(verts, faces, vertex_colors=colours, process=False)
-    return RegionFrame(time, out, labels, boundaries,
-                       phi if keep_volumes else None, phihat if keep_volumes else None,
-                       tracker.steps)
+    return RegionFrame(
+        time,
+        out,
+        labels,
+        boundaries,
+        phi if keep_volumes else None,
+        phihat if keep_volumes else None,
+        tracker.steps,
+    )

@@ -11,10 +11,18 @@ import numpy as np
 from ..errors import InputError
 
 # Region colours: the thesis paints tracked regions yellow; further labels follow.
-PALETTE = np.array([
-    [0.98, 0.85, 0.15], [0.85, 0.25, 0.2], [0.2, 0.65, 0.35], [0.25, 0.45, 0.85],
-    [0.75, 0.4, 0.8], [0.95, 0.55, 0.15], [0.3, 0.75, 0.8], [0.6, 0.45, 0.3],
-])
+PALETTE = np.array(
+    [
+        [0.98, 0.85, 0.15],
+        [0.85, 0.25, 0.2],
+        [0.2, 0.65, 0.35],
+        [0.25, 0.45, 0.85],
+        [0.75, 0.4, 0.8],
+        [0.95, 0.55, 0.15],
+        [0.3, 0.75, 0.8],
+        [0.6, 0.45, 0.3],
+    ]
+)
 BACKGROUND = np.array([0.62, 0.66, 0.78])
 
 
@@ -28,8 +36,9 @@ def surface_mesh(phi, spacing=1.0, origin=(0.0, 0.0, 0.0)):
     phi = np.asarray(phi, dtype=np.float64)
     verts, faces, _, _ = marching_cubes(phi, 0.0, spacing=(float(spacing),) * 3)
     # marching_cubes gives (z, y, x); skimage orients faces for ascending values: flip them
-    return trimesh.Trimesh(verts[:, ::-1] + np.asarray(origin, np.float64), faces[:, ::-1],
-                           process=False)
+    return trimesh.Trimesh(
+        verts[:, ::-1] + np.asarray(origin, np.float64), faces[:, ::-1], process=False
+    )
 
 
 def functions_from_mask(phi, spacing, origin, mesh, masks) -> np.ndarray:
@@ -46,8 +55,10 @@ def functions_from_mask(phi, spacing, origin, mesh, masks) -> np.ndarray:
     nz, ny, nx = phi.shape
     z, y, x = np.meshgrid(np.arange(nz), np.arange(ny), np.arange(nx), indexing="ij")
     d = phi / norm
-    cp = np.stack([origin[0] + h * x - d * g[2], origin[1] + h * y - d * g[1],
-                   origin[2] + h * z - d * g[0]], axis=-1).reshape(-1, 3)
+    cp = np.stack(
+        [origin[0] + h * x - d * g[2], origin[1] + h * y - d * g[1], origin[2] + h * z - d * g[0]],
+        axis=-1,
+    ).reshape(-1, 3)
     verts = np.asarray(mesh.vertices)
     _, nearest = cKDTree(verts).query(cp)
     edges = np.asarray(mesh.edges_unique)
@@ -55,8 +66,10 @@ def functions_from_mask(phi, spacing, origin, mesh, masks) -> np.ndarray:
     for mask in masks:
         crossing = edges[mask[edges[:, 0]] != mask[edges[:, 1]]]
         if len(crossing) == 0:
-            raise InputError("a region mask has no boundary on the surface (it marks all or none "
-                             "of the vertices); mark some vertices, not all")
+            raise InputError(
+                "a region mask has no boundary on the surface (it marks all or none "
+                "of the vertices); mark some vertices, not all"
+            )
         # boundary points: the crossing edges' midpoints and quarter points
         a, b = verts[crossing[:, 0]], verts[crossing[:, 1]]
         points = np.concatenate([a + f * (b - a) for f in (0.25, 0.5, 0.75)])
@@ -110,8 +123,9 @@ def _split_once(verts, vals, faces, label):
     pac, vac = cut(a, c)
     n0, m = len(verts), len(f)
     ab, ac = n0 + np.arange(m), n0 + m + np.arange(m)
-    new = np.concatenate([np.stack([a, ab, ac], 1), np.stack([ab, b, c], 1),
-                          np.stack([ab, c, ac], 1)])
+    new = np.concatenate(
+        [np.stack([a, ab, ac], 1), np.stack([ab, b, c], 1), np.stack([ab, c, ac], 1)]
+    )
     verts = np.concatenate([verts, pab, pac])
     vals = np.concatenate([vals, vab, vac])
     return verts, vals, np.concatenate([faces[~mixed], new]), pab
@@ -136,8 +150,13 @@ def split_regions(verts, vals, faces, partition=False):
     labels = best if partition else np.where(centre[np.arange(len(faces)), best] < 0, best, -1)
     # one vertex per (position, label): merge cut points made twice by neighbouring faces
     scale = 1e7 / max(np.ptp(verts, axis=0).max(), 1e-300)
-    key = np.concatenate([np.rint(verts[faces].reshape(-1, 3) * scale).astype(np.int64),
-                          np.repeat(labels, 3)[:, None]], axis=1)
+    key = np.concatenate(
+        [
+            np.rint(verts[faces].reshape(-1, 3) * scale).astype(np.int64),
+            np.repeat(labels, 3)[:, None],
+        ],
+        axis=1,
+    )
     uniq, inverse = np.unique(key, axis=0, return_inverse=True)
     corner_pos = verts[faces].reshape(-1, 3)
     new_verts = np.zeros((len(uniq), 3))
@@ -174,12 +193,15 @@ def _region_functions(phi, region, spacing, origin, mesh=None):
                 raise InputError(
                     f"a vertex mask needs one entry per vertex of the starting mesh "
                     f"(clpde.regions.surface_mesh(phi, spacing) has {len(mesh.vertices)}), got "
-                    f"{len(marks)}; or pass mesh= the mesh whose vertices it marks")
+                    f"{len(marks)}; or pass mesh= the mesh whose vertices it marks"
+                )
         else:
             mesh = _as_trimesh(mesh)
             if len(marks) != len(mesh.vertices):
-                raise InputError(f"a vertex mask needs one entry per vertex of mesh= "
-                                 f"({len(mesh.vertices)} vertices), got {len(marks)}")
+                raise InputError(
+                    f"a vertex mask needs one entry per vertex of mesh= "
+                    f"({len(mesh.vertices)} vertices), got {len(marks)}"
+                )
         if marks.dtype == bool:
             masks = [marks]
         elif np.issubdtype(marks.dtype, np.integer):
@@ -188,8 +210,9 @@ def _region_functions(phi, region, spacing, origin, mesh=None):
                 raise InputError("vertex labels need at least two different values")
             masks = [marks == v for v in values]
         else:
-            raise InputError("a vertex mask must be bool (one region) or integer labels, not "
-                             f"{marks.dtype}")
+            raise InputError(
+                f"a vertex mask must be bool (one region) or integer labels, not {marks.dtype}"
+            )
         partition = marks.dtype != bool
         return functions_from_mask(phi, spacing, origin, mesh, masks), partition
     raise InputError(

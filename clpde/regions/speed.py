@@ -26,8 +26,9 @@ def _beta_array(values, shape, when="") -> np.ndarray:
     try:
         arr = np.broadcast_to(arr, shape)
     except ValueError:
-        raise InputError(f"a beta array{when} must have phi's shape {shape}, got "
-                         f"{arr.shape}") from None
+        raise InputError(
+            f"a beta array{when} must have phi's shape {shape}, got {arr.shape}"
+        ) from None
     if not np.all(np.isfinite(arr)):
         raise InputError(f"beta{when} contains NaN or infinite values")
     return arr
@@ -43,16 +44,20 @@ def _speed_setup(beta, target, weight, h, shape, coords):
             return "gaussian", weight / h**3, None, None
         if beta == "morph":
             if target is None:
-                raise InputError("beta='morph' needs target=: the target shape's signed distance "
-                                 "volume")
+                raise InputError(
+                    "beta='morph' needs target=: the target shape's signed distance volume"
+                )
             target = np.asarray(target, np.float64)
             if target.shape != shape:
                 raise InputError(f"target must have phi's shape {shape}, got {target.shape}")
             return "morph", weight, target, None
-        raise InputError(f"beta must be a number, an array, a callable or one of "
-                         f"'mean-curvature', 'gaussian', 'morph'; not {beta!r}")
+        raise InputError(
+            f"beta must be a number, an array, a callable or one of "
+            f"'mean-curvature', 'gaussian', 'morph'; not {beta!r}"
+        )
     if callable(beta):
         if _time_dependent(beta):
+
             def beta_at(t):
                 return _beta_array(beta(*coords, t), shape, f" (the callable at t = {t:g})")
 

@@ -97,13 +97,26 @@ class RegionTracker:
     `region_tracker(..., storage=...)` builds the class that STORAGE_CLASSES names.
     """
 
-    def __init__(self, phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
-                 speed: str = "constant", scale: float = 0.0, aux: np.ndarray | None = None,
-                 velocity: ArrayLike | None = None, band_width: float = 5.0,
-                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
-                 reinit_ring: int = 3, max_speed: float | None = None,
-                 aux_at: Callable[[float], np.ndarray] | None = None, device: DeviceLike = None,
-                 dtype: DTypeLike = np.float32):
+    def __init__(
+        self,
+        phi: np.ndarray,
+        phihat: np.ndarray,
+        spacing: float,
+        *,
+        speed: str = "constant",
+        scale: float = 0.0,
+        aux: np.ndarray | None = None,
+        velocity: ArrayLike | None = None,
+        band_width: float = 5.0,
+        reinit_every: int = 4,
+        reinit_iterations: int = 6,
+        cfl: float = 0.4,
+        reinit_ring: int = 3,
+        max_speed: float | None = None,
+        aux_at: Callable[[float], np.ndarray] | None = None,
+        device: DeviceLike = None,
+        dtype: DTypeLike = np.float32,
+    ):
         self.h = float(spacing)
         self.vmax = 1e30 if max_speed is None else float(max_speed)  # cells per unit time
         self.runtime = get_runtime(device)
@@ -148,8 +161,14 @@ class RegionTracker:
         volume (aux, or None) on the device, with the work buffers and the kernels."""
         g, q = self.grid, self.runtime.queue
         # cur, nxt, ls0 and stage of every level set, the speed, aux and two masks
-        check_fits(self.runtime, (self.nc,) + tuple(cells.shape[1:]), "region tracking",
-                   4 + 2.5 / self.nc, ghost=GHOST, dtype=g.dtype)
+        check_fits(
+            self.runtime,
+            (self.nc,) + tuple(cells.shape[1:]),
+            "region tracking",
+            4 + 2.5 / self.nc,
+            ghost=GHOST,
+            dtype=g.dtype,
+        )
         # ghosts continue distances linearly: stencils near the border stay meaningful
         self.cur = g.upload(cells, mode="linear")
         self.nxt = self.cur.copy()
@@ -163,23 +182,30 @@ class RegionTracker:
         rt, mode = self.runtime, self.mode
         self._k = {
             "region_speed": rt.kernel("regions/regions.cl", "region_speed", g.dtype, SPEED=mode),
-            "region_euler": rt.kernel("regions/regions.cl", "region_euler", g.dtype, SPEED=mode,
-                                      NC=self.nc),
-            "region_heun": rt.kernel("regions/regions.cl", "region_heun", g.dtype, SPEED=mode,
-                                     NC=self.nc),
+            "region_euler": rt.kernel(
+                "regions/regions.cl", "region_euler", g.dtype, SPEED=mode, NC=self.nc
+            ),
+            "region_heun": rt.kernel(
+                "regions/regions.cl", "region_heun", g.dtype, SPEED=mode, NC=self.nc
+            ),
             "advect_step": rt.kernel("regions/regions.cl", "advect_step", g.dtype, SPEED=mode),
-            "reinit3d_targets": rt.kernel("regions/regions.cl", "reinit3d_targets", g.dtype,
-                                          SPEED=mode),
-            "reinit3d_step_pre": rt.kernel("regions/regions.cl", "reinit3d_step_pre", g.dtype,
-                                           SPEED=mode),
-            "reinit3d_heun_pre": rt.kernel("regions/regions.cl", "reinit3d_heun_pre", g.dtype,
-                                           SPEED=mode),
-            "band_near_border": rt.kernel("regions/regions.cl", "band_near_border", g.dtype,
-                                          SPEED=mode),
+            "reinit3d_targets": rt.kernel(
+                "regions/regions.cl", "reinit3d_targets", g.dtype, SPEED=mode
+            ),
+            "reinit3d_step_pre": rt.kernel(
+                "regions/regions.cl", "reinit3d_step_pre", g.dtype, SPEED=mode
+            ),
+            "reinit3d_heun_pre": rt.kernel(
+                "regions/regions.cl", "reinit3d_heun_pre", g.dtype, SPEED=mode
+            ),
+            "band_near_border": rt.kernel(
+                "regions/regions.cl", "band_near_border", g.dtype, SPEED=mode
+            ),
             "band_max_abs": rt.kernel("regions/regions.cl", "band_max_abs", g.dtype, SPEED=mode),
             "heun_average": rt.kernel("regions/regions.cl", "heun_average", g.dtype, SPEED=mode),
-            "region_band_mask": rt.kernel("regions/regions.cl", "region_band_mask", g.dtype,
-                                          SPEED=mode),
+            "region_band_mask": rt.kernel(
+                "regions/regions.cl", "region_band_mask", g.dtype, SPEED=mode
+            ),
             "dilate_mask": rt.kernel("regions/regions.cl", "dilate_mask", g.dtype, SPEED=mode),
             "extend_outer": rt.kernel("regions/regions.cl", "extend_outer", g.dtype, SPEED=mode),
             "copy_runs": rt.kernel("regions/regions.cl", "copy_runs", g.dtype, SPEED=mode),
@@ -205,13 +231,23 @@ class RegionTracker:
         self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
         self._stats_fresh = False
         if self.step_band.n == 0:
-            raise InputError("the surface vanished (Phi has no zero level set left on the grid); "
-                             "track for a shorter time")
+            raise InputError(
+                "the surface vanished (Phi has no zero level set left on the grid); "
+                "track for a shorter time"
+            )
         with self.runtime.lock:  # pyopencl's fill kernel is shared by every thread
             self._flag.fill(0)
-        g.launch_list(self._k["band_near_border"], self.reinit_band, self._flag.data,
-                      np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), np.int32(g.ghost),
-                      np.int32(1), *g.strides())
+        g.launch_list(
+            self._k["band_near_border"],
+            self.reinit_band,
+            self._flag.data,
+            np.int32(g.nx),
+            np.int32(g.ny),
+            np.int32(g.nz),
+            np.int32(g.ghost),
+            np.int32(1),
+            *g.strides(),
+        )
         if self._flag.get()[0]:
             raise InputError(
                 f"the surface came within {self.width + self.reinit_ring + 1:.0f} cells of the "
@@ -227,19 +263,20 @@ class RegionTracker:
         g, q = self.grid, self.runtime.queue
         dims = (np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), *g.strides(), np.int32(g.ghost))
         launch = self.runtime.items(g.ny, g.nz)
-        self._k["region_band_mask"](q, *launch, self.cur.data, self._mask.data,
-                                    g.scalar(self.width), *dims)
+        self._k["region_band_mask"](
+            q, *launch, self.cur.data, self._mask.data, g.scalar(self.width), *dims
+        )
         step = compact(self.runtime, self._mask)
         src, dst = self._mask, self._mask2
         for stride in (1, g.sx, g.sxy) if self.reinit_ring else ():
-            self._k["dilate_mask"](q, *launch, src.data, dst.data,
-                                   np.int32(stride), np.int32(self.reinit_ring), *dims)
+            self._k["dilate_mask"](
+                q, *launch, src.data, dst.data, np.int32(stride), np.int32(self.reinit_ring), *dims
+            )
             src, dst = dst, src
         self._reinit_mask = src  # the reinitialisation band's mask, read by its kernels
         return step, compact(self.runtime, src)
 
-    def reinitialize(self, iterations: int | None = None,
-                     extension: int | None = None) -> None:
+    def reinitialize(self, iterations: int | None = None, extension: int | None = None) -> None:
         """Every level set back to a signed distance in the reinitialisation band:
         `iterations` Heun iterations (default reinit_iterations) after `extension` steps of
         the Phi-hat's extension along the normals (default EXTEND_ITERATIONS; none when
@@ -255,29 +292,60 @@ class RegionTracker:
         self._sync(self.nxt, channels=1)
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(ext if its else 0):
-            g.launch_runs(k["extend_outer"], band, self.cur.data, self._reinit_mask.data,
-                          self.nxt.data,
-                          g.scalar(EXTEND_DT), keep, full, *g.strides(), channels=self.nc - 1)
+            g.launch_runs(
+                k["extend_outer"],
+                band,
+                self.cur.data,
+                self._reinit_mask.data,
+                self.nxt.data,
+                g.scalar(EXTEND_DT),
+                keep,
+                full,
+                *g.strides(),
+                channels=self.nc - 1,
+            )
             self.cur, self.nxt = self.nxt, self.cur
         self._sync(self.ls0)
         # the subcell fix's targets depend on ls0 alone: computed once into stage (free
         # here: a step writes it before reading it), they save a third of each sweep
         target = self.stage
         if its:
-            g.launch_runs(k["reinit3d_targets"], band, self.ls0.data, self._reinit_mask.data,
-                          target.data,
-                          *g.strides(), channels=self.nc)
+            g.launch_runs(
+                k["reinit3d_targets"],
+                band,
+                self.ls0.data,
+                self._reinit_mask.data,
+                target.data,
+                *g.strides(),
+                channels=self.nc,
+            )
         for _ in range(its):
             # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a
             # sphere's interface drifted 0.3 cells in 40 reinitialisations). The second
             # stage averages in place (reinit3d_heun_pre): no third buffer, no averaging
             # sweep. Bit for bit reinit3d_step and reinit3d_heun.
-            g.launch_runs(k["reinit3d_step_pre"], band, self.cur.data, self.ls0.data,
-                          target.data, self.nxt.data, g.scalar(REINIT_DT), *g.strides(),
-                          channels=self.nc)
-            g.launch_runs(k["reinit3d_heun_pre"], band, self.cur.data, self.nxt.data,
-                          self.ls0.data, target.data, g.scalar(REINIT_DT), *g.strides(),
-                          channels=self.nc)
+            g.launch_runs(
+                k["reinit3d_step_pre"],
+                band,
+                self.cur.data,
+                self.ls0.data,
+                target.data,
+                self.nxt.data,
+                g.scalar(REINIT_DT),
+                *g.strides(),
+                channels=self.nc,
+            )
+            g.launch_runs(
+                k["reinit3d_heun_pre"],
+                band,
+                self.cur.data,
+                self.nxt.data,
+                self.ls0.data,
+                target.data,
+                g.scalar(REINIT_DT),
+                *g.strides(),
+                channels=self.nc,
+            )
         # the next bands may leave cells of this one: nxt and ls0 must equal cur there (stage
         # is read only where a step has written it first, so it needs no sync)
         self._sync(self.ls0, self.nxt)
@@ -289,14 +357,27 @@ class RegionTracker:
         """Copy cur into the buffers on the reinitialisation band (every channel, or the
         first `channels`)."""
         for dst in buffers:
-            self.grid.launch_runs(self._k["copy_runs"], self.reinit_runs, self.cur.data,
-                                  dst.data, channels=self.nc if channels is None else channels)
+            self.grid.launch_runs(
+                self._k["copy_runs"],
+                self.reinit_runs,
+                self.cur.data,
+                dst.data,
+                channels=self.nc if channels is None else channels,
+            )
 
     # ---- time steps ------------------------------------------------------------------------
     def _compute_speed(self) -> None:
         g = self.grid
-        g.launch_runs(self._k["region_speed"], self.step_runs, self.cur.data, self.aux.data,
-                      self.speed.data, g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
+        g.launch_runs(
+            self._k["region_speed"],
+            self.step_runs,
+            self.cur.data,
+            self.aux.data,
+            self.speed.data,
+            g.scalar(self.scale),
+            g.scalar(self.vmax),
+            *g.strides(),
+        )
 
     def stable_dt(self) -> float:
         """Largest stable step (grid units) for the current speeds: one device read. After
@@ -336,17 +417,38 @@ class RegionTracker:
     def _advect(self, src, dst, dt) -> None:
         """dst = src + dt L(src) on the step band for a rigid motion (velocity)."""
         g, u = self.grid, self.velocity
-        g.launch_runs(self._k["advect_step"], self.step_runs, src.data, dst.data,
-                      g.scalar(dt), g.scalar(u[0]), g.scalar(u[1]), g.scalar(u[2]),
-                      *self._cutoff(), *g.strides(), channels=self.nc)
+        g.launch_runs(
+            self._k["advect_step"],
+            self.step_runs,
+            src.data,
+            dst.data,
+            g.scalar(dt),
+            g.scalar(u[0]),
+            g.scalar(u[1]),
+            g.scalar(u[2]),
+            *self._cutoff(),
+            *g.strides(),
+            channels=self.nc,
+        )
 
     def _stage(self, name, src, dst, dt) -> None:
         """One Euler stage of every level set over the step band, the speed computed from
         src in the same sweep: region_euler, or region_heun (Heun's averaging into dst)."""
         g = self.grid
-        g.launch_runs(self._k[name], self.step_runs, src.data, self.aux.data, dst.data,
-                      self._stats.data, g.scalar(dt), g.scalar(1e-12), *self._cutoff(),
-                      g.scalar(self.scale), g.scalar(self.vmax), *g.strides())
+        g.launch_runs(
+            self._k[name],
+            self.step_runs,
+            src.data,
+            self.aux.data,
+            dst.data,
+            self._stats.data,
+            g.scalar(dt),
+            g.scalar(1e-12),
+            *self._cutoff(),
+            g.scalar(self.scale),
+            g.scalar(self.vmax),
+            *g.strides(),
+        )
 
     def step(self, dt: float) -> None:
         """One Heun (TVD Runge-Kutta 2) step of every level set."""
@@ -359,8 +461,14 @@ class RegionTracker:
         else:
             self._advect(self.cur, self.nxt, dt)
             self._advect(self.nxt, self.stage, dt)
-            g.launch_runs(self._k["heun_average"], self.step_runs, self.cur.data,
-                          self.stage.data, self.cur.data, channels=self.nc)
+            g.launch_runs(
+                self._k["heun_average"],
+                self.step_runs,
+                self.cur.data,
+                self.stage.data,
+                self.cur.data,
+                channels=self.nc,
+            )
         self.time += dt
         self.steps += 1
 
@@ -388,23 +496,36 @@ class RegionTracker:
                 if bar is not None:
                     bar.update(step)
             done = self.time >= until - 1e-12
-            if (self.aux_at is not None or self._moved >= self.reinit_distance * (1 - 1e-6)
-                    or (done and self._moved > 0)):
+            if (
+                self.aux_at is not None
+                or self._moved >= self.reinit_distance * (1 - 1e-6)
+                or (done and self._moved > 0)
+            ):
                 self._reinitialize_for(self._moved / self.reinit_distance)
             dt = self.stable_dt()
 
     def _reinitialize_for(self, share: float) -> None:
         """Reinitialise with `share` (<= 1) of the full iterations, at least the minimum:
         the surface moved that share of reinit_distance since the last time."""
+
         def part(full, least):
             return min(full, max(least, int(np.ceil(full * min(1.0, share) - 1e-6))))
 
-        self.reinitialize(part(self.reinit_iterations, MIN_REINIT_ITERATIONS),
-                          part(EXTEND_ITERATIONS, MIN_EXTEND_ITERATIONS))
+        self.reinitialize(
+            part(self.reinit_iterations, MIN_REINIT_ITERATIONS),
+            part(EXTEND_ITERATIONS, MIN_EXTEND_ITERATIONS),
+        )
 
-    def iterate(self, times: Iterable[float], *, origin: ArrayLike = (0.0, 0.0, 0.0),
-                keep_volumes: bool = False, palette: ArrayLike | None = None,
-                partition: bool = False, bar: tqdm | None = None) -> Iterator[RegionFrame]:
+    def iterate(
+        self,
+        times: Iterable[float],
+        *,
+        origin: ArrayLike = (0.0, 0.0, 0.0),
+        keep_volumes: bool = False,
+        palette: ArrayLike | None = None,
+        partition: bool = False,
+        bar: tqdm | None = None,
+    ) -> Iterator[RegionFrame]:
         """Advance to each of `times` (ascending) in turn, yielding the RegionFrame there
         (see `make_frame`); `bar` is a tqdm bar counting time."""
         for when in times:
@@ -462,8 +583,9 @@ class RegionTracker:
 STORAGE_CLASSES["lists"] = RegionTracker
 
 
-def region_tracker(phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
-                   storage: str = "lists", **options) -> RegionTracker:
+def region_tracker(
+    phi: np.ndarray, phihat: np.ndarray, spacing: float, *, storage: str = "lists", **options
+) -> RegionTracker:
     """The tracker of `storage` ("lists" or "bricks"; the bricks take brick=(BX, BY, BZ) too)
     on these level sets, built with RegionTracker's options."""
     if storage not in STORAGE_CLASSES:
@@ -471,16 +593,31 @@ def region_tracker(phi: np.ndarray, phihat: np.ndarray, spacing: float, *,
     return STORAGE_CLASSES[storage](phi, phihat, spacing, **options)
 
 
-def track_region(phi: ArrayLike, region: ArrayLike | list,
-                 beta: float | str | ArrayLike | Callable = 1.0, t: float = 1.0,
-                 spacing: float = 1.0, saves: int | Iterable[float] = 1, *,
-                 origin: ArrayLike = (0.0, 0.0, 0.0), mesh: object = None,
-                 palette: ArrayLike | None = None, target: ArrayLike | None = None,
-                 velocity: ArrayLike | None = None, weight: float = 1.0, band_width: float = 5.0,
-                 reinit_every: int = 4, reinit_iterations: int = 6, cfl: float = 0.4,
-                 max_speed: float | None = None, keep_volumes: bool = False,
-                 device: DeviceLike = None, dtype: DTypeLike = np.float32,
-                 progress: bool | None = None, storage: str = "lists") -> list[RegionFrame]:
+def track_region(
+    phi: ArrayLike,
+    region: ArrayLike | list,
+    beta: float | str | ArrayLike | Callable = 1.0,
+    t: float = 1.0,
+    spacing: float = 1.0,
+    saves: int | Iterable[float] = 1,
+    *,
+    origin: ArrayLike = (0.0, 0.0, 0.0),
+    mesh: object = None,
+    palette: ArrayLike | None = None,
+    target: ArrayLike | None = None,
+    velocity: ArrayLike | None = None,
+    weight: float = 1.0,
+    band_width: float = 5.0,
+    reinit_every: int = 4,
+    reinit_iterations: int = 6,
+    cfl: float = 0.4,
+    max_speed: float | None = None,
+    keep_volumes: bool = False,
+    device: DeviceLike = None,
+    dtype: DTypeLike = np.float32,
+    progress: bool | None = None,
+    storage: str = "lists",
+) -> list[RegionFrame]:
     """Track regions painted on a surface while the surface deforms (thesis section 2.2).
 
     Parameters
@@ -570,8 +707,9 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
     """
     phi = np.asarray(phi)
     if phi.ndim != 3 or min(phi.shape) < 8:
-        raise InputError("phi must be a 3D (nz, ny, nx) volume with at least 8 cells a side, got "
-                         f"{phi.shape}")
+        raise InputError(
+            f"phi must be a 3D (nz, ny, nx) volume with at least 8 cells a side, got {phi.shape}"
+        )
     if not np.issubdtype(phi.dtype, np.number) or not np.all(np.isfinite(phi)):
         raise InputError("phi must hold finite real numbers")
     phi = phi.astype(np.float64)
@@ -579,8 +717,10 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
         raise InputError("phi never changes sign: it has no surface to track regions on")
     limit = np.sqrt(np.finfo(np.dtype(dtype)).max)  # squared gradients must not overflow
     if np.abs(phi).max() > limit:
-        raise InputError(f"phi reaches {np.abs(phi).max():.3g}, beyond what {np.dtype(dtype)} "
-                         f"arithmetic squares ({limit:.3g}); phi is a distance: rescale it")
+        raise InputError(
+            f"phi reaches {np.abs(phi).max():.3g}, beyond what {np.dtype(dtype)} "
+            f"arithmetic squares ({limit:.3g}); phi is a distance: rescale it"
+        )
     h = _positive("spacing", spacing)
     t_end = float(t)
     if not np.isfinite(t_end) or t_end < 0:
@@ -597,28 +737,51 @@ def track_region(phi: ArrayLike, region: ArrayLike | list,
             raise InputError(f"save times must lie in [0, t={t_end:g}], got {saves!r}")
     phihat, partition = _region_functions(phi, region, h, origin, mesh)
     nz, ny, nx = phi.shape
-    coords = (origin[0] + h * np.arange(nx)[None, None, :],
-              origin[1] + h * np.arange(ny)[None, :, None],
-              origin[2] + h * np.arange(nz)[:, None, None])
+    coords = (
+        origin[0] + h * np.arange(nx)[None, None, :],
+        origin[1] + h * np.arange(ny)[None, :, None],
+        origin[2] + h * np.arange(nz)[:, None, None],
+    )
     if velocity is not None:
         vel = np.asarray(velocity, np.float64).reshape(-1)
         if vel.shape != (3,) or not np.all(np.isfinite(vel)):
-            raise InputError("velocity must be three finite numbers (vx, vy, vz), got "
-                             f"{velocity!r}")
+            raise InputError(
+                f"velocity must be three finite numbers (vx, vy, vz), got {velocity!r}"
+            )
         speed, scale, aux, aux_at, vel = "constant", 0.0, None, None, vel / h
     else:
         speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
         vel = None
-    tracker = region_tracker(phi, phihat, h, speed=speed, scale=scale, aux=aux, velocity=vel,
-                            band_width=5.0 if band_width is None else band_width,
-                            reinit_every=reinit_every,
-                            reinit_iterations=reinit_iterations, cfl=cfl,
-                            max_speed=None if max_speed is None else _positive("max_speed",
-                                                                               max_speed) / h,
-                            aux_at=aux_at, device=device, dtype=dtype, storage=storage)
+    tracker = region_tracker(
+        phi,
+        phihat,
+        h,
+        speed=speed,
+        scale=scale,
+        aux=aux,
+        velocity=vel,
+        band_width=5.0 if band_width is None else band_width,
+        reinit_every=reinit_every,
+        reinit_iterations=reinit_iterations,
+        cfl=cfl,
+        max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
+        aux_at=aux_at,
+        device=device,
+        dtype=dtype,
+        storage=storage,
+    )
     # the bar counts simulated time, so it prints rounded times rather than step counts
     time_format = "{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
-    with progress_bar(progress, t_end, "track regions", leave=False, unit="time",
-                      bar_format=time_format) as bar:
-        return list(tracker.iterate(times, origin=origin, keep_volumes=keep_volumes,
-                                    palette=palette, partition=partition, bar=bar))
+    with progress_bar(
+        progress, t_end, "track regions", leave=False, unit="time", bar_format=time_format
+    ) as bar:
+        return list(
+            tracker.iterate(
+                times,
+                origin=origin,
+                keep_volumes=keep_volumes,
+                palette=palette,
+                partition=partition,
+                bar=bar,
+            )
+        )

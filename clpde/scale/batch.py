@@ -120,12 +120,17 @@ def _options(command: str, options: dict, flow) -> dict:
     if flow is not None:
         options["flow"] = flow
     task = TASKS[command]
-    accepted = [n for n, p in inspect.signature(task).parameters.items()
-                if p.kind is p.KEYWORD_ONLY and n not in ("mask", "progress")]
+    accepted = [
+        n
+        for n, p in inspect.signature(task).parameters.items()
+        if p.kind is p.KEYWORD_ONLY and n not in ("mask", "progress")
+    ]
     unknown = sorted(set(options) - set(accepted))
     if unknown:
-        raise InputError(f"batch {command}: unknown option(s) {', '.join(unknown)}; its options "
-                         f"are {', '.join(accepted)}")
+        raise InputError(
+            f"batch {command}: unknown option(s) {', '.join(unknown)}; its options "
+            f"are {', '.join(accepted)}"
+        )
     return options
 
 
@@ -255,8 +260,9 @@ def expand_inputs(inputs: Iterable[PathLike]) -> list[str]:
         if any(c in text for c in "*?[") and not os.path.exists(text):
             found = sorted(glob.glob(text))
             if not found:
-                raise InputError(f"the pattern {text} matches no file; check the folder and "
-                                 "the spelling")
+                raise InputError(
+                    f"the pattern {text} matches no file; check the folder and the spelling"
+                )
             out += found
         else:
             out.append(text)
@@ -271,8 +277,10 @@ def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dic
     if command in MASKED:
         if (mask is None) == (masks is None):
             what = "--init mask" if command == "track" else "mask"
-            raise InputError(f"batch {command} needs one {what}: --mask FILE (one for all "
-                             "inputs) or --masks DIR (one per input, named like it)")
+            raise InputError(
+                f"batch {command} needs one {what}: --mask FILE (one for all "
+                "inputs) or --masks DIR (one per input, named like it)"
+            )
     elif (mask is not None or masks is not None) and command not in MAY_MASK:
         raise InputError(f"--mask and --masks apply to inpaint, track and restore, not {command}")
     if tile and command not in TILED:
@@ -281,8 +289,9 @@ def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dic
         raise InputError("batch surface needs --flow FLOW (heat, tv, denoise, ...)")
     if masks is not None and not Path(masks).is_dir():
         raise InputError(f"--masks {masks} is not a folder; give the folder of masks")
-    if mask is not None and not (Path(mask).is_file()
-                                 or (command in MAY_MASK and Path(mask).is_dir())):
+    if mask is not None and not (
+        Path(mask).is_file() or (command in MAY_MASK and Path(mask).is_dir())
+    ):
         raise InputError(f"mask {mask} does not exist")
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"output {outdir} exists and is not a folder")
@@ -297,21 +306,34 @@ def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dic
         if not name or name == MANIFEST:
             raise InputError(f"input {source} gives no usable output name")
         if name in names:
-            raise InputError(f"inputs {names[name]} and {source} would both write {outdir / name}; "
-                             "rename one or run them into separate folders")
+            raise InputError(
+                f"inputs {names[name]} and {source} would both write {outdir / name}; "
+                "rename one or run them into separate folders"
+            )
         names[name] = source
         if outdir.resolve() == source.resolve().parent and command not in FOLDER_OUTPUTS:
-            raise InputError(f"output folder {outdir} holds the input {source}; clpde never "
-                             "overwrites its inputs, choose another folder")
+            raise InputError(
+                f"output folder {outdir} holds the input {source}; clpde never "
+                "overwrites its inputs, choose another folder"
+            )
         mask_path, mask_error = mask, None
         if masks is not None:
             found = _find_mask(Path(masks), source)
             mask_path = str(found) if found else None
             if found is None:
                 mask_error = f"no mask for {source.name} in {masks} (expected {source.name})"
-        specs.append({"command": command, "input": str(source), "output": str(outdir / name),
-                      "name": name, "mask": None if mask_path is None else str(mask_path),
-                      "mask_error": mask_error, "options": dict(options), "tile": bool(tile)})
+        specs.append(
+            {
+                "command": command,
+                "input": str(source),
+                "output": str(outdir / name),
+                "name": name,
+                "mask": None if mask_path is None else str(mask_path),
+                "mask_error": mask_error,
+                "options": dict(options),
+                "tile": bool(tile),
+            }
+        )
     return specs
 
 
@@ -324,9 +346,13 @@ def _fingerprint(spec: dict) -> dict:
     digest = _hash_path(spec["input"])
     if digest is None and spec["command"] == "surface":  # a shape name (sphere, torus...)
         digest = hashlib.sha256(f"shape:{spec['input']}".encode()).hexdigest()
-    return {"command": spec["command"], "options": _fingerprint_options(spec),
-            "tile": spec["tile"], "input_sha256": digest,
-            "mask_sha256": None if spec["mask"] is None else _hash_path(spec["mask"])}
+    return {
+        "command": spec["command"],
+        "options": _fingerprint_options(spec),
+        "tile": spec["tile"],
+        "input_sha256": digest,
+        "mask_sha256": None if spec["mask"] is None else _hash_path(spec["mask"]),
+    }
 
 
 def _fingerprint_options(spec: dict) -> dict:
@@ -334,12 +360,17 @@ def _fingerprint_options(spec: dict) -> dict:
     flags and Python's keywords for the same run match); the device and progress left out."""
     task = TASKS[spec["command"]]
     params = inspect.signature(task).parameters
-    values = {n: p.default for n, p in params.items()
-              if p.kind is p.KEYWORD_ONLY and n not in ("mask", "device", "progress", "tile")}
+    values = {
+        n: p.default
+        for n, p in params.items()
+        if p.kind is p.KEYWORD_ONLY and n not in ("mask", "device", "progress", "tile")
+    }
     values.update({k: v for k, v in spec["options"].items() if k in values})
     # numbers as floats: tol=0 from Python and --tol 0 (a float) are the same run
-    return {k: repr(float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v)
-            for k, v in sorted(values.items())}
+    return {
+        k: repr(float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v)
+        for k, v in sorted(values.items())
+    }
 
 
 def _is_complete(record: dict | None, fingerprint: dict, output: str) -> bool:
@@ -356,17 +387,20 @@ class _Progress:
 
     def __init__(self, total: int, skipped: int, enabled):
 
-        self.bar = progress_bar(enabled, total, "clpde batch", initial=skipped, unit="file",
-                                dynamic_ncols=True)
+        self.bar = progress_bar(
+            enabled, total, "clpde batch", initial=skipped, unit="file", dynamic_ncols=True
+        )
         self.failed = 0
         self.skipped = skipped
 
     def update(self, running: int, failed_now: bool) -> None:
         self.failed += failed_now
         self.bar.update(1)
-        self.bar.set_postfix_str(f"running {running}, failed {self.failed}"
-                                 + (f", skipped {self.skipped}" if self.skipped else ""),
-                                 refresh=True)
+        self.bar.set_postfix_str(
+            f"running {running}, failed {self.failed}"
+            + (f", skipped {self.skipped}" if self.skipped else ""),
+            refresh=True,
+        )
 
     def note(self, line: str) -> None:
         self.bar.write(line, file=sys.stderr)
@@ -401,15 +435,23 @@ class BatchFutures:
                     record = future.result()
                 except Exception as exc:  # noqa: BLE001  (e.g. KilledWorker too often)
                     record = {"status": "failed", "error": error_message(exc), "seconds": 0.0}
-                result = TaskResult(spec["input"], spec["output"], record["status"],
-                                    record.get("error"), record.get("seconds", 0.0),
-                                    record.get("worker"))
+                result = TaskResult(
+                    spec["input"],
+                    spec["output"],
+                    record["status"],
+                    record.get("error"),
+                    record.get("seconds", 0.0),
+                    record.get("worker"),
+                )
                 results[index] = result
                 if result.status == "done":
                     self._manifest[spec["name"]] = {
-                        **spec["fingerprint"], "input": spec["input"], "mask": spec["mask"],
+                        **spec["fingerprint"],
+                        "input": spec["input"],
+                        "mask": spec["mask"],
                         "output_sha256": record["output_sha256"],
-                        "seconds": round(result.seconds, 4)}
+                        "seconds": round(result.seconds, 4),
+                    }
                     unsaved += 1
                     # Rewriting the whole manifest per output would make a large batch
                     # quadratic: at most once a second, and at the end or on an interrupt.
@@ -432,15 +474,32 @@ class BatchFutures:
         return BatchResult(ordered, seconds=time.perf_counter() - self._start)
 
 
-
-def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=None,
-           tile=False, force=False, **options) -> BatchFutures:
+def submit(
+    command,
+    inputs,
+    output_dir,
+    *,
+    client,
+    mask=None,
+    masks=None,
+    flow=None,
+    tile=False,
+    force=False,
+    **options,
+) -> BatchFutures:
     """Submit a batch to `client`'s cluster without waiting: a BatchFutures (its .futures,
     and .results() to wait). The arguments are those of batch()."""
     start = time.perf_counter()
     outdir = Path(output_dir)
-    specs = _plan(command, expand_inputs(inputs), outdir, mask, masks,
-                  _options(command, options, flow) if command in TASKS else options, tile)
+    specs = _plan(
+        command,
+        expand_inputs(inputs),
+        outdir,
+        mask,
+        masks,
+        _options(command, options, flow) if command in TASKS else options,
+        tile,
+    )
     outdir.mkdir(parents=True, exist_ok=True)
     _sweep_temporaries(outdir, [s["name"] for s in specs])
     manifest = _read_manifest(outdir)
@@ -450,23 +509,37 @@ def submit(command, inputs, output_dir, *, client, mask=None, masks=None, flow=N
         spec["fingerprint"] = _fingerprint(spec)
         if spec["fingerprint"]["input_sha256"] is None and not spec["mask_error"]:
             spec["mask_error"] = f"input {spec['input']} does not exist"
-        if not force and _is_complete(manifest.get(spec["name"]), spec["fingerprint"],
-                                      spec["output"]):
+        if not force and _is_complete(
+            manifest.get(spec["name"]), spec["fingerprint"], spec["output"]
+        ):
             prepared[index] = TaskResult(spec["input"], spec["output"], "skipped")
             continue
         task = {k: v for k, v in spec.items() if k != "fingerprint"}
         key = f"clpde-{command}-{spec['name']}-{hashlib.sha1(os.urandom(8)).hexdigest()[:8]}"
-        futures.append((index, client.submit(run_task, task, key=key, pure=False,
-                                             resources=resources)))
+        futures.append(
+            (index, client.submit(run_task, task, key=key, pure=False, resources=resources))
+        )
     return BatchFutures(client, specs, futures, prepared, manifest, outdir, start)
 
 
-def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
-          mask: PathLike | None = None, masks: PathLike | None = None,
-          workers: int | None = None, threads: int | None = None, scheduler: str | None = None,
-          client: Any = None, flow: str | None = None, tile: bool = False, force: bool = False,
-          futures: bool = False, progress: bool | None = None,
-          **options: Any) -> BatchResult | BatchFutures:
+def batch(
+    command: str,
+    inputs: Iterable[PathLike],
+    output_dir: PathLike,
+    *,
+    mask: PathLike | None = None,
+    masks: PathLike | None = None,
+    workers: int | None = None,
+    threads: int | None = None,
+    scheduler: str | None = None,
+    client: Any = None,
+    flow: str | None = None,
+    tile: bool = False,
+    force: bool = False,
+    futures: bool = False,
+    progress: bool | None = None,
+    **options: Any,
+) -> BatchResult | BatchFutures:
     """Run `command` ('inpaint', 'denoise', 'diffuse', 'track' or 'surface') on every input,
     over Dask workers, writing one output per input into the folder `output_dir`.
 
@@ -529,20 +602,51 @@ def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
     """
     if futures:
         if client is None:
-            raise InputError("futures=True needs an open distributed.Client as client=; "
-                             "without one, batch() waits and returns the results")
-        return submit(command, inputs, output_dir, client=client, mask=mask, masks=masks,
-                      flow=flow, tile=tile, force=force, **options)
+            raise InputError(
+                "futures=True needs an open distributed.Client as client=; "
+                "without one, batch() waits and returns the results"
+            )
+        return submit(
+            command,
+            inputs,
+            output_dir,
+            client=client,
+            mask=mask,
+            masks=masks,
+            flow=flow,
+            tile=tile,
+            force=force,
+            **options,
+        )
     inputs = expand_inputs(inputs)
     # Bad options fail here, before a cluster is started.
-    _plan(command, inputs, Path(output_dir), mask, masks,
-          _options(command, options, flow) if command in TASKS else options, tile)
+    _plan(
+        command,
+        inputs,
+        Path(output_dir),
+        mask,
+        masks,
+        _options(command, options, flow) if command in TASKS else options,
+        tile,
+    )
     device = options.get("device")
     try:
-        with connect(workers, scheduler, client, threads, device=device,
-                     tasks=len(inputs)) as (live, info):
-            run = submit(command, inputs, output_dir, client=live, mask=mask, masks=masks,
-                         flow=flow, tile=tile, force=force, **options)
+        with connect(workers, scheduler, client, threads, device=device, tasks=len(inputs)) as (
+            live,
+            info,
+        ):
+            run = submit(
+                command,
+                inputs,
+                output_dir,
+                client=live,
+                mask=mask,
+                masks=masks,
+                flow=flow,
+                tile=tile,
+                force=force,
+                **options,
+            )
             result = run.results(progress)
     except BaseException:
         # Ctrl-C or a lost scheduler: the cluster started here is gone by now, so the
@@ -558,9 +662,11 @@ def batch(command: str, inputs: Iterable[PathLike], output_dir: PathLike, *,
 def result_table(result: BatchResult) -> str:
     """One line per failure and a summary line, as the command line prints them."""
     lines = [f"  {r.input}: {r.error}" for r in result.failed]
-    summary = (f"clpde batch: {len(result.done)} done, {len(result.skipped)} skipped, "
-               f"{len(result.failed)} failed in {result.seconds:.1f} s on {result.workers} "
-               f"worker(s)")
+    summary = (
+        f"clpde batch: {len(result.done)} done, {len(result.skipped)} skipped, "
+        f"{len(result.failed)} failed in {result.seconds:.1f} s on {result.workers} "
+        f"worker(s)"
+    )
     if result.failed:
         return "\n".join([summary, "failed:", *lines])
     return summary

@@ -77,7 +77,6 @@ def _gpu_indices(device) -> list[int]:
     if device is not None and str(device).strip().lower() != "gpu":
         return []  # a device was chosen: every worker uses it
     try:
-
         return [d.index for d in devices() if d.type == "gpu" and _build_problem(d.index) is None]
     except Exception:  # noqa: BLE001  (no OpenCL here: the workers use their default device)
         return []
@@ -119,23 +118,45 @@ def start_cluster(workers=None, threads=None, *, device=None, tasks=None, gpus=N
             # One worker per GPU (or `workers` of them, spread round robin), each pinned
             # through clpde's device choice before it loads OpenCL.
             count = len(gpus) if workers is None else plan_workers(workers, 1)[0]
-            specs = {f"gpu{k}": {"cls": Nanny, "options": {
-                **common, "resources": {"GPU": 1}, "host": "127.0.0.1", "dashboard": False,
-                "env": {"CLPDE_DEVICE": str(gpus[k % len(gpus)]), "POCL_MAX_PTHREAD_COUNT": "1"}}}
-                for k in range(count)}
+            specs = {
+                f"gpu{k}": {
+                    "cls": Nanny,
+                    "options": {
+                        **common,
+                        "resources": {"GPU": 1},
+                        "host": "127.0.0.1",
+                        "dashboard": False,
+                        "env": {
+                            "CLPDE_DEVICE": str(gpus[k % len(gpus)]),
+                            "POCL_MAX_PTHREAD_COUNT": "1",
+                        },
+                    },
+                }
+                for k in range(count)
+            }
             cluster = SpecCluster(
-                workers=specs, scheduler={"cls": Scheduler, "options": {
-                    "dashboard": False, "dashboard_address": ":0", "host": "127.0.0.1"}},
-                silence_logs=50)
+                workers=specs,
+                scheduler={
+                    "cls": Scheduler,
+                    "options": {"dashboard": False, "dashboard_address": ":0", "host": "127.0.0.1"},
+                },
+                silence_logs=50,
+            )
             return cluster, count, None
         workers, threads = plan_workers(workers, threads, tasks)
         env = {"POCL_MAX_PTHREAD_COUNT": str(threads), "OMP_NUM_THREADS": "1"}
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               # No dashboard; its HTTP server (always started) on any
-                               # free port, so that clusters side by side do not clash.
-                               dashboard_address=":0", scheduler_kwargs={"dashboard": False},
-                               silence_logs=50, env=env,
-                               preload=["clpde.scale.cluster"])
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            # No dashboard; its HTTP server (always started) on any
+            # free port, so that clusters side by side do not clash.
+            dashboard_address=":0",
+            scheduler_kwargs={"dashboard": False},
+            silence_logs=50,
+            env=env,
+            preload=["clpde.scale.cluster"],
+        )
         return cluster, workers, threads
 
 
@@ -147,8 +168,10 @@ def connect(workers=None, scheduler=None, client=None, threads=None, *, device=N
 
     given = [x is not None for x in (scheduler, client)]
     if sum(given) > 1 or (any(given) and (workers is not None or threads is not None)):
-        raise InputError("give one of --workers/--threads (a local cluster), --scheduler "
-                         "ADDRESS (an existing cluster) or client")
+        raise InputError(
+            "give one of --workers/--threads (a local cluster), --scheduler "
+            "ADDRESS (an existing cluster) or client"
+        )
     start = time.perf_counter()
     info = {"workers": 0, "threads": None}
     if client is not None:
@@ -160,8 +183,10 @@ def connect(workers=None, scheduler=None, client=None, threads=None, *, device=N
         try:
             client = Client(scheduler, timeout="20s", set_as_default=False)
         except OSError as exc:
-            raise InputError(f"cannot reach the Dask scheduler at {scheduler}: {exc}; start "
-                             "one with `dask scheduler` (see docs/batch.md)") from None
+            raise InputError(
+                f"cannot reach the Dask scheduler at {scheduler}: {exc}; start "
+                "one with `dask scheduler` (see docs/batch.md)"
+            ) from None
         info["workers"] = len(client.scheduler_info()["workers"])
         info["seconds"] = time.perf_counter() - start
         try:
@@ -177,8 +202,9 @@ def connect(workers=None, scheduler=None, client=None, threads=None, *, device=N
         with held() as state:
             try:
                 with children_stderr(state):
-                    cluster, n, per_worker = start_cluster(workers, threads, device=device,
-                                                           tasks=tasks)
+                    cluster, n, per_worker = start_cluster(
+                        workers, threads, device=device, tasks=tasks
+                    )
             except Exception:
                 if state.pressed.is_set():  # a worker that Ctrl-C stopped while it started
                     raise KeyboardInterrupt from None

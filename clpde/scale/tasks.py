@@ -60,7 +60,8 @@ def read_input(path, output, *others, device=None, allow_nan: bool = False) -> n
         if bad:
             raise InputError(
                 f"{path} has {bad} NaN or infinite values; fill them first with "
-                f"`clpde inpaint {path} nan -o FILLED.tif`, then use FILLED.tif")
+                f"`clpde inpaint {path} nan -o FILLED.tif`, then use FILLED.tif"
+            )
     check_writable(output, image.dtype, image.shape)
     return image
 
@@ -70,34 +71,70 @@ def _progress(progress):
 
 
 # ---- images ------------------------------------------------------------------------------------
-def diffuse_file(input, output, *, flow: str = "heat", steps: int = 100, dt=None, kappa=None,
-                 edge=None, eps=None, presmooth=None, device=None, tile: bool = False,
-                 progress=None) -> list[str]:
+def diffuse_file(
+    input,
+    output,
+    *,
+    flow: str = "heat",
+    steps: int = 100,
+    dt=None,
+    kappa=None,
+    edge=None,
+    eps=None,
+    presmooth=None,
+    device=None,
+    tile: bool = False,
+    progress=None,
+) -> list[str]:
     """`clpde diffuse`: a planar flow (clpde.diffuse) on the image `input`, written to
     `output`. tile: run in tiles (bitwise equal) when True, or by itself when the image
     exceeds the device's largest allocation (None); False never."""
-    params = {k: v for k, v in (("kappa", kappa), ("edge", edge), ("eps", eps),
-                                ("presmooth", presmooth)) if v is not None}
-    if tile is not False and _run_tiled("diffuse", input, output, tile, device, flow=flow,
-                                        steps=steps, dt=dt, params=params):
+    params = {
+        k: v
+        for k, v in (("kappa", kappa), ("edge", edge), ("eps", eps), ("presmooth", presmooth))
+        if v is not None
+    }
+    if tile is not False and _run_tiled(
+        "diffuse", input, output, tile, device, flow=flow, steps=steps, dt=dt, params=params
+    ):
         return [f"wrote {output}"]
     image = read_input(input, output, device=device)
     parts = split_alpha(image, input)
-    result = diffuse(parts.colour, flow, steps=steps, dt=dt, channel_axis=parts.channel_axis,
-                     device=device, progress=_progress(progress), **params)
+    result = diffuse(
+        parts.colour,
+        flow,
+        steps=steps,
+        dt=dt,
+        channel_axis=parts.channel_axis,
+        device=device,
+        progress=_progress(progress),
+        **params,
+    )
     write_image(output, parts.join(result))
     return [f"wrote {output}"]
 
 
-def denoise_file(input, output, *, sigma=None, weight=None, method: str = "primal-dual",
-                 eps=None, max_steps=None, per_channel: bool = False, device=None,
-                 tile: bool = False, progress=None) -> list[str]:
+def denoise_file(
+    input,
+    output,
+    *,
+    sigma=None,
+    weight=None,
+    method: str = "primal-dual",
+    eps=None,
+    max_steps=None,
+    per_channel: bool = False,
+    device=None,
+    tile: bool = False,
+    progress=None,
+) -> list[str]:
     """`clpde denoise`: TV denoising (clpde.denoise_tv) of the image `input`, written to
     `output`. tile: as for diffuse_file (tiles need weight, max_steps and primal-dual)."""
     if eps is not None and method != "gradient":
         raise InputError("--eps applies to --method gradient only")
-    if tile is not False and _run_tiled("denoise", input, output, tile, device, weight=weight,
-                                        method=method, max_steps=max_steps):
+    if tile is not False and _run_tiled(
+        "denoise", input, output, tile, device, weight=weight, method=method, max_steps=max_steps
+    ):
         return [f"wrote {output}"]
     image = read_input(input, output, device=device)
     parts = split_alpha(image, input)
@@ -108,9 +145,16 @@ def denoise_file(input, output, *, sigma=None, weight=None, method: str = "prima
         options["eps"] = eps
     if max_steps is not None:
         options["max_steps"] = max_steps
-    result, info = denoise_tv(parts.colour, sigma=sigma, weight=weight,
-                              channel_axis=parts.channel_axis, device=device,
-                              progress=_progress(progress), return_info=True, **options)
+    result, info = denoise_tv(
+        parts.colour,
+        sigma=sigma,
+        weight=weight,
+        channel_axis=parts.channel_axis,
+        device=device,
+        progress=_progress(progress),
+        return_info=True,
+        **options,
+    )
     write_image(output, parts.join(result))
     state = "converged" if info.converged else "stopped at --max-steps"
     residual = float(np.sqrt(np.mean(info.residual_variance)))
@@ -118,8 +162,10 @@ def denoise_file(input, output, *, sigma=None, weight=None, method: str = "prima
     if info.sigma is not None:
         levels = ", ".join(f"{s:.4g}" for s in np.atleast_1d(info.sigma))
         noise = f", noise sigma {'estimated' if info.sigma_estimated else 'given'} {levels}"
-    return [f"wrote {output}", f"denoise: {info.steps} {method} iterations ({state}), "
-            f"residual std {residual:.4g}{noise}"]
+    return [
+        f"wrote {output}",
+        f"denoise: {info.steps} {method} iterations ({state}), residual std {residual:.4g}{noise}",
+    ]
 
 
 def _run_tiled(command, input, output, force, device, **options) -> bool:
@@ -137,17 +183,32 @@ def _run_tiled(command, input, output, force, device, **options) -> bool:
     if command == "diffuse":
         steps = options["steps"]
         chunks = 256 if not needed else tiled.device_chunks(channels, steps, device)
-        result = tiled.diffuse(parts.colour, options["flow"], steps=steps, dt=options["dt"],
-                         channel_axis=parts.channel_axis, device=device, chunks=chunks,
-                         **options["params"])
+        result = tiled.diffuse(
+            parts.colour,
+            options["flow"],
+            steps=steps,
+            dt=options["dt"],
+            channel_axis=parts.channel_axis,
+            device=device,
+            chunks=chunks,
+            **options["params"],
+        )
     else:
         weight, max_steps = options["weight"], options["max_steps"]
         if weight is None or options["method"] != "primal-dual" or max_steps is None:
-            raise InputError("tiled denoise needs --weight W and --max-steps N (a fixed "
-                             "iteration count) with --method primal-dual")
+            raise InputError(
+                "tiled denoise needs --weight W and --max-steps N (a fixed "
+                "iteration count) with --method primal-dual"
+            )
         chunks = 256 if not needed else tiled.device_chunks(channels, max_steps, device, 4)
-        result = tiled.denoise_tv(parts.colour, weight, max_steps, channel_axis=parts.channel_axis,
-                            device=device, chunks=chunks)
+        result = tiled.denoise_tv(
+            parts.colour,
+            weight,
+            max_steps,
+            channel_axis=parts.channel_axis,
+            device=device,
+            chunks=chunks,
+        )
     write_image(output, parts.join(result))
     return True
 
@@ -160,8 +221,10 @@ def _read_soft_mask(path, shape) -> np.ndarray:
         channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
         mask = mask[..., :channels].max(axis=-1)
     if mask.shape != tuple(shape):
-        raise InputError(f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
-                         f"is {shape[1]}x{shape[0]}; give a mask of the same size")
+        raise InputError(
+            f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
+            f"is {shape[1]}x{shape[0]}; give a mask of the same size"
+        )
     if np.issubdtype(mask.dtype, np.integer):
         return mask.astype(np.float32) / np.iinfo(mask.dtype).max
     return np.clip(mask.astype(np.float32), 0, 1)
@@ -169,13 +232,18 @@ def _read_soft_mask(path, shape) -> np.ndarray:
 
 def _inpaint_mask(input, mask, image, soft_mask: bool):
     """The mask to fill: the file `mask` (binary, or soft), or the NaN pixels for 'nan'."""
-    finite = (np.isfinite(image) if np.issubdtype(image.dtype, np.floating)
-              else np.ones(image.shape, bool))
+    finite = (
+        np.isfinite(image)
+        if np.issubdtype(image.dtype, np.floating)
+        else np.ones(image.shape, bool)
+    )
     finite = finite.all(axis=-1) if finite.ndim == 3 else finite
     if str(mask).lower() == "nan" and not os.path.exists(mask):
         if finite.all():
-            raise InputError(f"{input} has no NaN pixels to fill (MASK 'nan'); give a mask "
-                             "image of the pixels to inpaint")
+            raise InputError(
+                f"{input} has no NaN pixels to fill (MASK 'nan'); give a mask "
+                "image of the pixels to inpaint"
+            )
         return ~finite
     if soft_mask:
         omega = _read_soft_mask(mask, image.shape[:2])
@@ -185,14 +253,32 @@ def _inpaint_mask(input, mask, image, soft_mask: bool):
         raise InputError(
             f"{input} has {int((~finite[~(omega > 0)]).sum())} NaN pixels outside the mask "
             f"{mask}; paint them into the mask, or give 'nan' as MASK to fill exactly "
-            "the NaN pixels")
+            "the NaN pixels"
+        )
     return omega
 
 
-def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", levels=None,
-                 soft_mask: bool = False, gif=None, gif_every: int = 100, dt=None,
-                 scaling=None, max_steps=None, tol=None, mean_tol=None, grow: float = 0,
-                 seed=None, device=None, progress=None) -> list[str]:
+def inpaint_file(
+    input,
+    output,
+    *,
+    mask,
+    method=None,
+    colour: str = "channels",
+    levels=None,
+    soft_mask: bool = False,
+    gif=None,
+    gif_every: int = 100,
+    dt=None,
+    scaling=None,
+    max_steps=None,
+    tol=None,
+    mean_tol=None,
+    grow: float = 0,
+    seed=None,
+    device=None,
+    progress=None,
+) -> list[str]:
     """`clpde inpaint`: fill the image `input` where the image `mask` is set (or its NaN
     pixels, for mask 'nan'), written to `output`; gif: also the evolution as a GIF (the
     transport's, every gif_every steps). Options are clpde.inpaint's; only the transport
@@ -208,17 +294,23 @@ def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", 
             raise InputError(f"the folder {folder} for --gif does not exist; create it first")
         check_folder_writable(folder, gif)
     nan_mask = str(mask).lower() == "nan" and not os.path.exists(mask)
-    image = read_input(input, output, *([] if nan_mask else [mask]), device=device,
-                       allow_nan=True)
+    image = read_input(input, output, *([] if nan_mask else [mask]), device=device, allow_nan=True)
     omega = _inpaint_mask(input, mask, image, soft_mask)
     parts = split_alpha(image, input)
     if method is None and gif:
         method = "transport"  # the evolution the GIF shows is the thesis scheme's
-    options = {"channel_axis": parts.channel_axis, "colour": colour, "levels": levels,
-               "device": device, "progress": _progress(progress), "return_info": True,
-               "method": method, "grow": grow, "seed": seed}
-    given = {"dt": dt, "scaling": scaling, "max_steps": max_steps, "tol": tol,
-             "mean_tol": mean_tol}
+    options = {
+        "channel_axis": parts.channel_axis,
+        "colour": colour,
+        "levels": levels,
+        "device": device,
+        "progress": _progress(progress),
+        "return_info": True,
+        "method": method,
+        "grow": grow,
+        "seed": seed,
+    }
+    given = {"dt": dt, "scaling": scaling, "max_steps": max_steps, "tol": tol, "mean_tol": mean_tol}
     options.update({name: value for name, value in given.items() if value is not None})
     if gif:
         result, info = inpaint(parts.colour, omega, snapshots=gif_every, **options)
@@ -229,16 +321,23 @@ def inpaint_file(input, output, *, mask, method=None, colour: str = "channels", 
     if gif:
         frames = evolution_frames(parts.colour, [s.image for s in info.snapshots])
         write_gif(gif, frames, duration=0.25)
-        lines.append(f"wrote {gif} ({len(frames)} frames: the damaged image, then every "
-                     f"{gif_every} steps from the start fill to the result)")
+        lines.append(
+            f"wrote {gif} ({len(frames)} frames: the damaged image, then every "
+            f"{gif_every} steps from the start fill to the result)"
+        )
     if info.method is None:  # the empty mask's warning has said why
         lines.append("inpaint: 0 pixels to fill; wrote an unchanged copy")
         return lines
     state = "converged" if info.converged else "stopped at --max-steps"
-    steps = f"{info.steps} steps ({state}), {info.levels} level(s), " \
-        if info.method == "transport" else ""
-    lines.append(f"inpaint: {info.omega_pixels} pixels, method {info.method}, {steps}"
-                 f"{len(info.boxes)} box(es), {info.seconds:.2f} s")
+    steps = (
+        f"{info.steps} steps ({state}), {info.levels} level(s), "
+        if info.method == "transport"
+        else ""
+    )
+    lines.append(
+        f"inpaint: {info.omega_pixels} pixels, method {info.method}, {steps}"
+        f"{len(info.boxes)} box(es), {info.seconds:.2f} s"
+    )
     return lines
 
 
@@ -252,8 +351,10 @@ def evolution_frames(damaged, states) -> list[np.ndarray]:
         finite = result[np.isfinite(result)]
         lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
         scale = hi - lo if hi > lo else 1.0
-        frames = [np.nan_to_num((f.astype(np.float64) - lo) / scale, nan=0.0, posinf=1.0,
-                                neginf=0.0) for f in frames]
+        frames = [
+            np.nan_to_num((f.astype(np.float64) - lo) / scale, nan=0.0, posinf=1.0, neginf=0.0)
+            for f in frames
+        ]
     out = []
     for frame in map(_frame_to_uint8, frames):
         if not out or not np.array_equal(frame, out[-1]):
@@ -262,12 +363,28 @@ def evolution_frames(damaged, states) -> list[np.ndarray]:
 
 
 # ---- folders of results --------------------------------------------------------------------
-def track_file(input, output, *, mask, features: str = "intensity", colour: bool = False,
-               discrepancy: str = "ncc", motion: str = "kalman", shape_weight: float = 0.0,
-               equalize: str = "none", smooth: bool = True, max_iterations=None,
-               min_size: int = 0, frames=None, gif: bool = True, mp4: bool = False,
-               low_confidence=None, overwrite: bool = False, device=None,
-               progress=None) -> list[str]:
+def track_file(
+    input,
+    output,
+    *,
+    mask,
+    features: str = "intensity",
+    colour: bool = False,
+    discrepancy: str = "ncc",
+    motion: str = "kalman",
+    shape_weight: float = 0.0,
+    equalize: str = "none",
+    smooth: bool = True,
+    max_iterations=None,
+    min_size: int = 0,
+    frames=None,
+    gif: bool = True,
+    mp4: bool = False,
+    low_confidence=None,
+    overwrite: bool = False,
+    device=None,
+    progress=None,
+) -> list[str]:
     """`clpde track`: the object marked by the image `mask` in the first frame of `input`
     (a video, an image folder or a multi-page TIFF) followed through it (clpde.track); the
     folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4)."""
@@ -286,14 +403,28 @@ def track_file(input, output, *, mask, features: str = "intensity", colour: bool
         if frames < 1:
             raise InputError(f"--frames must be at least 1, not {frames}")
         images = images[:frames]
-    first = read_mask(mask, images.shape[1:3], what="the frames",
-                      fix="draw the mask on the first frame at its size")
+    first = read_mask(
+        mask,
+        images.shape[1:3],
+        what="the frames",
+        fix="draw the mask on the first frame at its size",
+    )
     masks, confidence = track(
-        images, first, features=features, colour=colour, discrepancy=discrepancy,
-        motion=None if motion == "none" else motion, shape_weight=shape_weight,
-        equalize=False if equalize == "none" else equalize, smooth=smooth,
-        max_iterations=max_iterations, min_size=min_size, device=device,
-        progress=_progress(progress), return_confidence=True)
+        images,
+        first,
+        features=features,
+        colour=colour,
+        discrepancy=discrepancy,
+        motion=None if motion == "none" else motion,
+        shape_weight=shape_weight,
+        equalize=False if equalize == "none" else equalize,
+        smooth=smooth,
+        max_iterations=max_iterations,
+        min_size=min_size,
+        device=device,
+        progress=_progress(progress),
+        return_confidence=True,
+    )
     grey = frame_io.to_grey(images) if images.ndim == 4 else images
     written = frame_io.write_tracking(output, grey, masks, gif=gif, overwrite=overwrite)
     if mp4:
@@ -301,23 +432,40 @@ def track_file(input, output, *, mask, features: str = "intensity", colour: bool
     lines = [f"track: {len(masks)} frames; wrote {len(written)} files to {output}"]
     low = [int(k) for k in np.nonzero(np.asarray(confidence) < threshold)[0]]
     if low:
-        lines.append(f"track: low confidence (below {threshold:g}) in frames "
-                     f"{', '.join(map(str, low))}")
+        lines.append(
+            f"track: low confidence (below {threshold:g}) in frames {', '.join(map(str, low))}"
+        )
     return lines
 
 
 def _write_mp4(outdir, frames, masks):
     """overlay.mp4 beside the GIF, by the one video writer (io/video.py, atomic)."""
     final = Path(outdir) / "overlay.mp4"
-    write_video(final, [frame_io.overlay(f, m) for f, m in zip(frames, masks, strict=False)],
-                OVERLAY_RATE)
+    write_video(
+        final, [frame_io.overlay(f, m) for f, m in zip(frames, masks, strict=False)], OVERLAY_RATE
+    )
     return final
 
 
-def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iterations=None,
-                 sigma: float = 0.15, data: str = "auto", direction: str = "major",
-                 size: int = 400, seed: int = 0, storage: str = "lists", on=None,
-                 overwrite: bool = False, device=None, progress=None) -> list[str]:
+def surface_file(
+    input,
+    output,
+    *,
+    flow: str,
+    resolution: int = 96,
+    t=None,
+    iterations=None,
+    sigma: float = 0.15,
+    data: str = "auto",
+    direction: str = "major",
+    size: int = 400,
+    seed: int = 0,
+    storage: str = "lists",
+    on=None,
+    overwrite: bool = False,
+    device=None,
+    progress=None,
+) -> list[str]:
     """`clpde surface`: one of clpde.surface.runs.FLOWS on the surface of the mesh `input`
     (a file, or a shape name of clpde.data.SURFACE_SHAPES); the folder `output` gets the
     pictures before and after and the coloured result as PLY and GLB."""
@@ -335,32 +483,66 @@ def surface_file(input, output, *, flow: str, resolution: int = 96, t=None, iter
     # the results go on the user's own mesh (its vertices' values) unless asked otherwise
     on_input = (on or "input") == "input" and getattr(surf, "mesh", None) is not None
     if on == "input" and not on_input:
-        raise InputError(f"--on input needs a mesh file; {input!r} is a generated shape, "
-                         "whose results are written on a marching-cubes mesh (--on remesh)")
+        raise InputError(
+            f"--on input needs a mesh file; {input!r} is a generated shape, "
+            "whose results are written on a marching-cubes mesh (--on remesh)"
+        )
     values = None
     if data != "pattern" and flow in DATA_FLOWS:
         values = mesh_colours(surf)
         if values is None and data == "mesh":
             raise InputError(f"{input} has no vertex colours; use --data pattern")
-    run = run_flow(surf, flow, t=t, iterations=iterations, sigma=sigma, seed=seed,
-                   direction=direction, data=values, progress=_progress(progress))
+    run = run_flow(
+        surf,
+        flow,
+        t=t,
+        iterations=iterations,
+        sigma=sigma,
+        seed=seed,
+        direction=direction,
+        data=values,
+        progress=_progress(progress),
+    )
     written = write_run(run, output, size=size, overwrite=overwrite, on_input=on_input)
-    return [f"surface {flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
-            f"{surf.ext_band.n} cells; wrote {len(written)} files to {output}"]
+    return [
+        f"surface {flow}: {run.note}; grid {'x'.join(map(str, surf.shape[::-1]))}, band "
+        f"{surf.ext_band.n} cells; wrote {len(written)} files to {output}"
+    ]
 
 
-def restore_file(input, output, *, mask=None, masks_out=None, grow: float = 0, overlay=None,
-                 codec=None, overwrite: bool = False, device=None, progress=None) -> list[str]:
+def restore_file(
+    input,
+    output,
+    *,
+    mask=None,
+    masks_out=None,
+    grow: float = 0,
+    overlay=None,
+    codec=None,
+    overwrite: bool = False,
+    device=None,
+    progress=None,
+) -> list[str]:
     """`clpde restore` for one film or frame folder (clpde.film.restore.restore_film): the
     damage found (or the masks given) filled from the neighbouring frames, film in, film
     out, in this process."""
     get_runtime(device)
-    result = restore_film(input, output, mask=mask, masks_out=masks_out, grow=grow,
-                          overlay=overlay, codec=codec, overwrite=overwrite,
-                          progress=_progress(progress))
+    result = restore_film(
+        input,
+        output,
+        mask=mask,
+        masks_out=masks_out,
+        grow=grow,
+        overlay=overlay,
+        codec=codec,
+        overwrite=overwrite,
+        progress=_progress(progress),
+    )
     rate = result.frames / result.seconds if result.seconds else 0.0
-    return [f"restore: {result.frames} frames ({rate:.2f} frames/s), "
-            f"{result.masked_pixels} pixels filled; wrote {result.output}"]
+    return [
+        f"restore: {result.frames} frames ({rate:.2f} frames/s), "
+        f"{result.masked_pixels} pixels filled; wrote {result.output}"
+    ]
 
 
 # command -> its task; every task takes (input, output, **options) and returns its report

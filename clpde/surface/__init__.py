@@ -19,9 +19,24 @@ from .implicit import INTERPOLATIONS, ImplicitSurface
 from .render import colormap, export_mesh, render, render_mesh, to_mesh
 
 __all__ = [
-    "INTERPOLATIONS", "THESIS_FIG_4_7", "TURK", "Grid3D", "ImplicitSurface", "colormap",
+    "INTERPOLATIONS",
+    "THESIS_FIG_4_7",
+    "TURK",
+    "Grid3D",
+    "ImplicitSurface",
+    "colormap",
     "SurfaceDenoiseInfo",
-    "denoise_colour", "denoise_tv", "diffuse_along", "export_mesh", "harmonic_map", "heat",
-           "principal_directions",
-    "reaction_diffusion", "render", "render_mesh", "stability_limit", "to_mesh", "tv",
+    "denoise_colour",
+    "denoise_tv",
+    "diffuse_along",
+    "export_mesh",
+    "harmonic_map",
+    "heat",
+    "principal_directions",
+    "reaction_diffusion",
+    "render",
+    "render_mesh",
+    "stability_limit",
+    "to_mesh",
+    "tv",
 ]

@@ -16,8 +16,13 @@ from ..errors import InputError
 from ..fields import compact
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface/band.cl", "surface/bricks.cl", "surface/extend.cl", "surface/flows.cl",
-                "surface/heat.cl")
+KERNEL_FILES = (
+    "surface/band.cl",
+    "surface/bricks.cl",
+    "surface/extend.cl",
+    "surface/flows.cl",
+    "surface/heat.cl",
+)
 
 
 # Interpolation nodes per axis.
@@ -33,16 +38,23 @@ def narrow_bands(surf) -> None:
     """node_band, its runs, reach_band and reach_band's closest-point stencils."""
     g, q = surf.grid, surf.runtime.queue
     nodes = cla.zeros(q, g.padded_shape, np.uint8)
-    g.launch_list(g.kernel("surface/band.cl", "mark_nodes"), surf.ext_band,
-                  surf.cp_base.data, nodes.data, *g.strides(), np.int32(_NODES[surf.interp]))
+    g.launch_list(
+        g.kernel("surface/band.cl", "mark_nodes"),
+        surf.ext_band,
+        surf.cp_base.data,
+        nodes.data,
+        *g.strides(),
+        np.int32(_NODES[surf.interp]),
+    )
     surf.node_band = compact(surf.runtime, nodes)
     surf.step_runs = g.runs(surf.node_band)
     reach = cla.zeros(q, g.padded_shape, np.uint8)
-    g.launch_list(g.kernel("surface/band.cl", "mark_stencil"), surf.node_band, reach.data,
-                  *g.strides())
+    g.launch_list(
+        g.kernel("surface/band.cl", "mark_stencil"), surf.node_band, reach.data, *g.strides()
+    )
     surf.reach_band = compact(surf.runtime, reach)
-    surf.reach_stencils = cp_stencils(surf, surf.reach_band,
-                                            closest_points(surf, surf.reach_band))
+    surf.reach_stencils = cp_stencils(surf, surf.reach_band, closest_points(surf, surf.reach_band))
+
 
 def closest_points(surf, band):
     """Closest points of a band's cells, padded index units, on the device."""
@@ -50,10 +62,17 @@ def closest_points(surf, band):
     n = max(band.n, 1)
     cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
     g.launch_list(
-        g.kernel("surface/band.cl", "closest_points"), band, surf.psi_dev.data,
-        g.scalar(1.0 / surf.spacing), cp[0].data, cp[1].data, cp[2].data, *g.strides(),
+        g.kernel("surface/band.cl", "closest_points"),
+        band,
+        surf.psi_dev.data,
+        g.scalar(1.0 / surf.spacing),
+        cp[0].data,
+        cp[1].data,
+        cp[2].data,
+        *g.strides(),
     )
     return cp
+
 
 def cp_stencils(surf, band, cp):
     """Per band cell: the flat index of its closest point's first interpolation node and
@@ -64,10 +83,17 @@ def cp_stencils(surf, band, cp):
     base = cla.empty(q, n, np.int32)
     frac = cla.empty(q, (3, n), g.dtype)
     g.launch_list(
-        g.kernel("surface/band.cl", "cp_stencils"), band, *(c.data for c in cp),
-        *g.strides(), *g.padded_dims(), np.int32(surf.interp), base.data, frac.data,
+        g.kernel("surface/band.cl", "cp_stencils"),
+        band,
+        *(c.data for c in cp),
+        *g.strides(),
+        *g.padded_dims(),
+        np.int32(surf.interp),
+        base.data,
+        frac.data,
     )
     return base, frac
+
 
 def check_band_clear_of_border(surf) -> None:
     """Band cells must keep 2 cells from the volume's border, so that every stencil
@@ -129,8 +155,7 @@ class Band:
             g = s.grid
             bits = np.zeros(g.padded_shape, np.uint8)
             flat = bits.reshape(-1)
-            for band, bit in ((s.node_band, NODE), (s.reach_band, REACH),
-                              (s.ext_band, EXT)):
+            for band, bit in ((s.node_band, NODE), (s.reach_band, REACH), (s.ext_band, EXT)):
                 flat[band.indices.get()[: band.n]] |= bit
             stored = dilate_axes(bits & NODE != 0, 2) | dilate_axes(bits & (REACH | EXT) != 0, 1)
             bb = BrickBand.build(s.runtime, g.padded_shape, stored, bits, brick)
@@ -147,11 +172,17 @@ class Band:
                 order = np.argsort(first, kind="stable")
                 first = first[order]
                 offsets = np.ascontiguousarray(frac.get()[:, : band.n][:, order])
-                return (band.n, cla.to_device(q, target[order]), cla.to_device(q, first),
-                        cla.to_device(q, offsets))
+                return (
+                    band.n,
+                    cla.to_device(q, target[order]),
+                    cla.to_device(q, first),
+                    cla.to_device(q, offsets),
+                )
 
-            lists = {EXT: stencils(s.ext_band, s.cp_base, s.cp_frac),
-                     REACH: stencils(s.reach_band, *s.reach_stencils)}
+            lists = {
+                EXT: stencils(s.ext_band, s.cp_base, s.cp_frac),
+                REACH: stencils(s.reach_band, *s.reach_stencils),
+            }
             self._bricks = (bb, psi, lists)
         return self._bricks
 
@@ -214,8 +245,9 @@ class Band:
         data = data.astype(np.float64)
         band = np.abs(self.surf.psi) < self.surf.outer * self.surf.spacing
         if not np.all(np.isfinite(data[:, band])):
-            raise InputError(f"{what} contains NaN or infinite values in the band around the "
-                             "surface")
+            raise InputError(
+                f"{what} contains NaN or infinite values in the band around the surface"
+            )
         return data
 
     def places(self, bricks) -> np.ndarray:
@@ -231,23 +263,27 @@ def _offsets(grid, sides: int):
     return tuple(np.int32(-s if (sides >> a) & 1 else s) for a, s in enumerate((1, sx, sxy)))
 
 
-def extend_defines(interp: int, nc: int, normalize: bool = False,
-                   line_field: bool = False) -> dict:
+def extend_defines(interp: int, nc: int, normalize: bool = False, line_field: bool = False) -> dict:
     """The defines of surface/extend.cl's program: every lookup in that file passes all of
     them (the ones a kernel ignores at their defaults), so a flow's re-extension, sampling
     and the extension PDE share one build."""
-    return {"INTERP": interp, "NC": nc, "NORMALIZE": int(normalize),
-            "LINE_FIELD": int(line_field)}
+    return {"INTERP": interp, "NC": nc, "NORMALIZE": int(normalize), "LINE_FIELD": int(line_field)}
 
 
 # Each flow's step kernel (file, name) in each band storage.
 STEP_KERNELS = {
-    "heat": {"lists": ("surface/heat.cl", "heat_step"),
-             "bricks": ("surface/bricks.cl", "brick_heat_step")},
-    "flow": {"lists": ("surface/flows.cl", "flow_step"),
-             "bricks": ("surface/bricks.cl", "brick_flow_step")},
-    "turk": {"lists": ("surface/heat.cl", "turk_step"),
-             "bricks": ("surface/bricks.cl", "brick_turk_step")},
+    "heat": {
+        "lists": ("surface/heat.cl", "heat_step"),
+        "bricks": ("surface/bricks.cl", "brick_heat_step"),
+    },
+    "flow": {
+        "lists": ("surface/flows.cl", "flow_step"),
+        "bricks": ("surface/bricks.cl", "brick_flow_step"),
+    },
+    "turk": {
+        "lists": ("surface/heat.cl", "turk_step"),
+        "bricks": ("surface/bricks.cl", "brick_turk_step"),
+    },
 }
 
 
@@ -257,8 +293,15 @@ class BandFlow:
 
     storage = "lists"
 
-    def __init__(self, surf, u, normalize: bool = False, extend: bool = True,
-                 line_field: bool = False, defines: dict | None = None):
+    def __init__(
+        self,
+        surf,
+        u,
+        normalize: bool = False,
+        extend: bool = True,
+        line_field: bool = False,
+        defines: dict | None = None,
+    ):
         self.surf = surf
         self.input = np.asarray(u)
         # band form (values at the band's cells only): no dense float64 copy on the way
@@ -277,9 +320,11 @@ class BandFlow:
         self.psi = surf.psi_dev
         self.normalize = normalize
         self.tmp = self.cur.copy()
-        self._extend_kernel = g.kernel("surface/extend.cl", "extend_cp",
-                                       **extend_defines(surf.interp, self.nc, normalize,
-                                                        line_field))
+        self._extend_kernel = g.kernel(
+            "surface/extend.cl",
+            "extend_cp",
+            **extend_defines(surf.interp, self.nc, normalize, line_field),
+        )
         self._stepped = False
         if extend:
             self.extend()
@@ -297,9 +342,17 @@ class BandFlow:
         """One step cur -> tmp over the node band's runs: kernel(cur, tmp, psi, *args, the
         one-sided offsets of `sides`, the strides, the runs); then after_step."""
         g = self.surf.grid
-        g.launch_runs(kernel, self.surf.step_runs, self.cur.data, self.tmp.data,
-                      self.psi.data, *args, *_offsets(g, sides), *g.strides(),
-                      channels=channels)
+        g.launch_runs(
+            kernel,
+            self.surf.step_runs,
+            self.cur.data,
+            self.tmp.data,
+            self.psi.data,
+            *args,
+            *_offsets(g, sides),
+            *g.strides(),
+            channels=channels,
+        )
         self.after_step()
 
     def fixed(self, values: np.ndarray, halo: int = 0) -> cla.Array:
@@ -317,8 +370,16 @@ class BandFlow:
 
     def _extend(self, src, dst, band, base, frac) -> None:
         g = self.surf.grid
-        g.launch_list(self._extend_kernel, band, src.data, dst.data, base.data, frac.data,
-                      *g.strides(), channels=1)
+        g.launch_list(
+            self._extend_kernel,
+            band,
+            src.data,
+            dst.data,
+            base.data,
+            frac.data,
+            *g.strides(),
+            channels=1,
+        )
 
     def after_step(self) -> None:
         """The step wrote tmp over the node band: extend it back into cur over the cells the
@@ -337,9 +398,17 @@ class BandFlow:
         """Enqueue the terms of (C.2) at every node (surface/flows.cl's tv_lambda_terms)."""
         s = self.surf
         g = s.grid
-        g.launch_list(self.kernel("surface/flows.cl", "tv_lambda_terms"),
-                      s.node_band, self.cur.data, u0.data, self.psi.data, *_lambda_scalars(s, eps),
-                      *_offsets(g, sides), *g.strides(), *(a.data for a in terms))
+        g.launch_list(
+            self.kernel("surface/flows.cl", "tv_lambda_terms"),
+            s.node_band,
+            self.cur.data,
+            u0.data,
+            self.psi.data,
+            *_lambda_scalars(s, eps),
+            *_offsets(g, sides),
+            *g.strides(),
+            *(a.data for a in terms),
+        )
 
     def result(self) -> np.ndarray:
         if self._stepped:
@@ -365,8 +434,14 @@ class BrickFlow:
     storage = "bricks"
     step_kernel = BandFlow.step_kernel
 
-    def __init__(self, surf, u, normalize: bool = False, line_field: bool = False,
-                 defines: dict | None = None):
+    def __init__(
+        self,
+        surf,
+        u,
+        normalize: bool = False,
+        line_field: bool = False,
+        defines: dict | None = None,
+    ):
         self.surf = surf
         self.input = np.asarray(u)
         self.band_form = surf.band.form_channels(self.input) is not None
@@ -390,12 +465,18 @@ class BrickFlow:
             del host
         else:
             self.cur = b.scatter(self.padded, g.dtype)
-        self.defines = {**extend_defines(surf.interp, self.nc, normalize, line_field),
-                        **(defines or {})}
+        self.defines = {
+            **extend_defines(surf.interp, self.nc, normalize, line_field),
+            **(defines or {}),
+        }
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = cla.zeros(surf.runtime.queue, (self.nc, b.apron_plane), g.dtype)
-        b.launch(self.kernel("surface/bricks.cl", "brick_to_apron"), self.cur.data, self.tmp.data,
-                 channels=self.nc)
+        b.launch(
+            self.kernel("surface/bricks.cl", "brick_to_apron"),
+            self.cur.data,
+            self.tmp.data,
+            channels=self.nc,
+        )
         self.src_plane = np.int32(b.apron_plane)
         self._extend_kernel = self.kernel("surface/bricks.cl", "brick_extend_cp")
         self._extend(self.tmp, self.cur, EXT)
@@ -404,17 +485,30 @@ class BrickFlow:
     def kernel(self, filename: str, name: str, **defines):
         """Kernel `name` of `filename` with the brick layout's and the flow's defines."""
         s = self.surf
-        return s.runtime.kernel(filename, name, s.grid.dtype, **self.bricks.defines(),
-                                GROUP_PER_BRICK=int(not s.runtime.is_cpu),
-                                **{**self.defines, **defines})
+        return s.runtime.kernel(
+            filename,
+            name,
+            s.grid.dtype,
+            **self.bricks.defines(),
+            GROUP_PER_BRICK=int(not s.runtime.is_cpu),
+            **{**self.defines, **defines},
+        )
 
     def step(self, kernel, sides: int, *args, channels: int = 1) -> None:
         """One step cur -> tmp on the bricks holding nodes: kernel(cur, tmp, psi tiles, *args,
         the one-sided directions of `sides`, the node rows, the brick tables); then
         after_step."""
         b = self.bricks
-        b.launch(kernel, self.cur.data, self.tmp.data, self.psi.data, *args, *_signs(sides),
-                 b.node_rows.data, channels=channels)
+        b.launch(
+            kernel,
+            self.cur.data,
+            self.tmp.data,
+            self.psi.data,
+            *args,
+            *_signs(sides),
+            b.node_rows.data,
+            channels=channels,
+        )
         self.after_step()
 
     def fixed(self, values: np.ndarray, halo: int = 0) -> cla.Array:
@@ -435,8 +529,16 @@ class BrickFlow:
     def _extend(self, src, dst, which: int) -> None:
         n, target, base, frac = self.lists[which]
         b = self.bricks
-        b.launch_list(self._extend_kernel, n, src.data, dst.data, base.data, frac.data,
-                      self.src_plane, target.data)
+        b.launch_list(
+            self._extend_kernel,
+            n,
+            src.data,
+            dst.data,
+            base.data,
+            frac.data,
+            self.src_plane,
+            target.data,
+        )
 
     def after_step(self) -> None:
         self._extend(self.tmp, self.cur, REACH)
@@ -450,9 +552,16 @@ class BrickFlow:
     def lambda_terms(self, u0, terms, sides: int, eps: float) -> None:
         """Enqueue the terms of (C.2) at every node (bricks.cl's brick_lambda_terms)."""
         b = self.bricks
-        b.launch(self.kernel("surface/bricks.cl", "brick_lambda_terms"), self.cur.data, u0.data,
-                 self.psi.data, *_lambda_scalars(self.surf, eps), *_signs(sides),
-                 b.cell_bits.data, *(a.data for a in terms))
+        b.launch(
+            self.kernel("surface/bricks.cl", "brick_lambda_terms"),
+            self.cur.data,
+            u0.data,
+            self.psi.data,
+            *_lambda_scalars(self.surf, eps),
+            *_signs(sides),
+            b.cell_bits.data,
+            *(a.data for a in terms),
+        )
 
     def result(self) -> np.ndarray:
         if self._stepped:
@@ -477,9 +586,11 @@ def _check_local_tiles(runtime, bricks, channels: int, dtype) -> None:
     need = channels * (bx + 2) * (by + 2) * (bz + 2) * np.dtype(dtype).itemsize
     have = runtime.device.local_mem_size
     if need > have:
-        raise InputError(f"{channels} channels need {need} bytes of local memory a brick on "
-                         f"this device, which has {have}; use storage='lists' for this data, "
-                         "or fewer channels per call")
+        raise InputError(
+            f"{channels} channels need {need} bytes of local memory a brick on "
+            f"this device, which has {have}; use storage='lists' for this data, "
+            "or fewer channels per call"
+        )
 
 
 def _result_dtype(data: np.ndarray):
@@ -502,11 +613,13 @@ def _signs(sides: int):
 FLOW_STATES = {"lists": BandFlow, "bricks": BrickFlow}
 
 
-def make_flow(surf, u, normalize: bool = False, line_field: bool = False,
-              defines: dict | None = None):
+def make_flow(
+    surf, u, normalize: bool = False, line_field: bool = False, defines: dict | None = None
+):
     """The device state of data u on `surf` in the surface's band storage (surf.storage):
     a BandFlow on the band lists, a BrickFlow on the bricks. Both step with `step`, take
     their fixed fields from `fixed` and give the result back the same way; `defines` are the
     step kernels' (kernels/surface/flux.h)."""
-    return FLOW_STATES[surf.storage](surf, u, normalize=normalize, line_field=line_field,
-                                     defines=defines)
+    return FLOW_STATES[surf.storage](
+        surf, u, normalize=normalize, line_field=line_field, defines=defines
+    )

@@ -14,8 +14,9 @@ def sphere_points(n: int = 1500) -> np.ndarray:
     i = np.arange(n) + 0.5
     polar = np.arccos(1 - 2 * i / n)
     azimuth = np.pi * (1 + 5**0.5) * i
-    return np.stack([np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar),
-                     np.cos(polar)], 1)
+    return np.stack(
+        [np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1
+    )
 
 
 def xy_exact(points: np.ndarray, t: float) -> np.ndarray:
@@ -26,10 +27,13 @@ def xy_exact(points: np.ndarray, t: float) -> np.ndarray:
 def exp3z_exact(z: np.ndarray, t: float, degree: int = 40) -> np.ndarray:
     """Heat flow of u = exp(3z) on the unit sphere: sum a_l P_l(z) exp(-l(l+1)t)."""
     nodes, weights = legendre.leggauss(80)
-    coef = np.array([
-        (2 * ell + 1) / 2 * np.sum(weights * np.exp(3 * nodes)
-                                   * legendre.legval(nodes, np.eye(degree)[ell]))
-        for ell in range(degree)
-    ])
+    coef = np.array(
+        [
+            (2 * ell + 1)
+            / 2
+            * np.sum(weights * np.exp(3 * nodes) * legendre.legval(nodes, np.eye(degree)[ell]))
+            for ell in range(degree)
+        ]
+    )
     decay = np.exp(-np.arange(degree) * (np.arange(degree) + 1) * t)
     return legendre.legval(z, coef * decay)

@@ -56,13 +56,13 @@ class SurfaceDenoiseInfo:
         return self.lam_history[-1] if self.lam_history else None
 
 
-
 # One-sided difference choices per axis: bit set = backward gradient (forward divergence).
 _ALL_SIDES = tuple(range(8))
 
 
-def stability_limit(surf: ImplicitSurface, flow: str = "heat", eps: float = 1.0,
-                    lam: float = 0.0) -> float:
+def stability_limit(
+    surf: ImplicitSurface, flow: str = "heat", eps: float = 1.0, lam: float = 0.0
+) -> float:
     """Largest stable explicit time step (world time units) of a flow on `surf`.
 
     Parameters
@@ -102,9 +102,7 @@ def stability_limit(surf: ImplicitSurface, flow: str = "heat", eps: float = 1.0,
     if flow in ("tv", "harmonic1"):
         # the flux gain 1/|P grad u|_eps is at most 1/eps
         return h2 * eps / 6.0 / (1 + h2 * eps * lam / 6.0)
-    raise InputError(
-        f"unknown surface flow {flow!r}; use heat, tv, harmonic2, harmonic1 or along"
-    )
+    raise InputError(f"unknown surface flow {flow!r}; use heat, tv, harmonic2, harmonic1 or along")
 
 
 def _check_time(t, dt, limit: float, what: str) -> tuple[int, float]:
@@ -123,9 +121,16 @@ def _check_time(t, dt, limit: float, what: str) -> tuple[int, float]:
     return steps, t / steps
 
 
-def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *,
-         weighted: bool = False, alternate: bool = True,
-         progress: bool | None = None) -> np.ndarray:
+def heat(
+    surf: ImplicitSurface,
+    u: ArrayLike,
+    t: float,
+    dt: float | None = None,
+    *,
+    weighted: bool = False,
+    alternate: bool = True,
+    progress: bool | None = None,
+) -> np.ndarray:
     """Intrinsic heat flow on `surf` for time t: eq. (4.8), or (4.7) with weighted=True.
 
     Appendix E's scheme (one-sided gradient, projection on the tangent plane with N from
@@ -176,24 +181,47 @@ def heat(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None,
     flow = make_flow(surf, u, defines={"WEIGHTED": int(bool(weighted))})
     kernel = flow.step_kernel("heat")
     r = surf.grid.scalar(dt / surf.spacing**2)
-    for n in progress_range(progress, steps, "surface heat", leave=False,
-                            queue=surf.grid.runtime.queue):
+    for n in progress_range(
+        progress, steps, "surface heat", leave=False, queue=surf.grid.runtime.queue
+    ):
         flow.step(kernel, _ALL_SIDES[n % 8] if alternate else 0, r, channels=flow.nc)
     return flow.result()
 
 
-def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=None,
-         fidelity=None, sigma=None, weighted=False, alternate=True, progress=None,
-         lambda_every=10, line_field=False, correct_lambda=True):
+def _run(
+    surf,
+    u,
+    t,
+    dt,
+    flow_name,
+    *,
+    p=2,
+    eps=1.0,
+    harmonic=False,
+    direction=None,
+    fidelity=None,
+    sigma=None,
+    weighted=False,
+    alternate=True,
+    progress=None,
+    lambda_every=10,
+    line_field=False,
+    correct_lambda=True,
+):
     """Shared driver of flow_step: returns (result, info dict)."""
     eps = positive("eps", eps)
     limit = stability_limit(surf, flow_name, eps, float(fidelity or 0.0))
     if sigma is not None and dt is None:
         limit *= 0.5  # room for the dynamic lambda to grow (capped on the device below)
     steps, dt = _check_time(t, dt, limit, flow_name)
-    defines = {"FLOW_P": p, "HARMONIC": int(harmonic),
-               "FIDELITY": int(fidelity is not None), "ALONG": int(direction is not None),
-               "WEIGHTED": int(bool(weighted)), "LINE_FIELD": int(bool(line_field))}
+    defines = {
+        "FLOW_P": p,
+        "HARMONIC": int(harmonic),
+        "FIDELITY": int(fidelity is not None),
+        "ALONG": int(direction is not None),
+        "WEIGHTED": int(bool(weighted)),
+        "LINE_FIELD": int(bool(line_field)),
+    }
     flow = make_flow(surf, u, normalize=harmonic, line_field=line_field, defines=defines)
     g, q, h = surf.grid, surf.runtime.queue, surf.spacing
     kernel = flow.step_kernel("flow")
@@ -207,10 +235,20 @@ def _run(surf, u, t, dt, flow_name, *, p=2, eps=1.0, harmonic=False, direction=N
     if sigma is not None:
         # lambda may grow to where dt is at the stability limit, no further
         lam_max = max(0.0, 1 / dt - 6 / (h**2 * eps))
-        dynamic = _DynamicLambda(surf, flow, u0_dev, lam_dev, eps, sigma, lam_max,
-                                 updates=-(-steps // lambda_every), correct=correct_lambda)
-    for n in progress_range(progress, steps, f"surface {flow_name}", leave=False,
-                            queue=surf.grid.runtime.queue):
+        dynamic = _DynamicLambda(
+            surf,
+            flow,
+            u0_dev,
+            lam_dev,
+            eps,
+            sigma,
+            lam_max,
+            updates=-(-steps // lambda_every),
+            correct=correct_lambda,
+        )
+    for n in progress_range(
+        progress, steps, f"surface {flow_name}", leave=False, queue=surf.grid.runtime.queue
+    ):
         sides = _ALL_SIDES[n % 8] if alternate else 0
         if dynamic is not None and n % lambda_every == 0:
             dynamic.update(sides, n // lambda_every)
@@ -251,18 +289,33 @@ class _DynamicLambda:
         q = s.runtime.queue
         self.flow.lambda_terms(self.u0, self.terms, sides, self.eps)
         for a, partial in zip(self.terms, self.partials, strict=True):
-            self._chunk_sum(q, *s.runtime.items(self.groups), a.data, np.int32(self.n),
-                            np.int32(self.CHUNK), partial.data)
+            self._chunk_sum(
+                q,
+                *s.runtime.items(self.groups),
+                a.data,
+                np.int32(self.n),
+                np.int32(self.CHUNK),
+                partial.data,
+            )
 
     def update(self, sides: int, slot: int) -> None:
         s = self.surf
         g, q = s.grid, s.runtime.queue
         self._sums(sides)
         self._update(
-            q, (1,), (1,), *(p.data for p in self.partials), np.int32(self.groups),
-            g.scalar(1 / (s.spacing * self.sigma**2)), g.scalar(self.correct / self.sigma**2),
-            g.scalar(self.lam_max), self.lam.data, self.state.data, self.slots.data,
-            np.int32(slot), self.capped.data,
+            q,
+            (1,),
+            (1,),
+            *(p.data for p in self.partials),
+            np.int32(self.groups),
+            g.scalar(1 / (s.spacing * self.sigma**2)),
+            g.scalar(self.correct / self.sigma**2),
+            g.scalar(self.lam_max),
+            self.lam.data,
+            self.state.data,
+            self.slots.data,
+            np.int32(slot),
+            self.capped.data,
         )
 
     def history(self) -> list[float]:
@@ -282,9 +335,17 @@ class _DynamicLambda:
         return resid / area
 
 
-def tv(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *,
-       eps: float = 1.0, weighted: bool = False, alternate: bool = True,
-       progress: bool | None = None) -> np.ndarray:
+def tv(
+    surf: ImplicitSurface,
+    u: ArrayLike,
+    t: float,
+    dt: float | None = None,
+    *,
+    eps: float = 1.0,
+    weighted: bool = False,
+    alternate: bool = True,
+    progress: bool | None = None,
+) -> np.ndarray:
     """Intrinsic anisotropic (total variation) flow (4.10) for time t.
 
     Parameters
@@ -324,14 +385,34 @@ def tv(surf: ImplicitSurface, u: ArrayLike, t: float, dt: float | None = None, *
     >>> tv(s, s.field(lambda x, y, z: z), 0.01).shape == s.shape
     True
     """
-    return _run(surf, u, t, dt, "tv", p=1, eps=eps, weighted=weighted, alternate=alternate,
-                progress=progress)[0]
+    return _run(
+        surf,
+        u,
+        t,
+        dt,
+        "tv",
+        p=1,
+        eps=eps,
+        weighted=weighted,
+        alternate=alternate,
+        progress=progress,
+    )[0]
 
 
-def denoise_tv(surf: ImplicitSurface, u: ArrayLike, sigma: float | None = None, t: float = 1.0,
-               dt: float | None = None, *, lam: float | None = None, eps: float = 1.0,
-               alternate: bool = True, correct_lambda: bool = True, progress: bool | None = None,
-               return_info: bool = False) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
+def denoise_tv(
+    surf: ImplicitSurface,
+    u: ArrayLike,
+    sigma: float | None = None,
+    t: float = 1.0,
+    dt: float | None = None,
+    *,
+    lam: float | None = None,
+    eps: float = 1.0,
+    alternate: bool = True,
+    correct_lambda: bool = True,
+    progress: bool | None = None,
+    return_info: bool = False,
+) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
     """TV denoising on the surface with a fidelity term (C.1).
 
     Parameters
@@ -390,17 +471,39 @@ def denoise_tv(surf: ImplicitSurface, u: ArrayLike, sigma: float | None = None, 
     if sigma is not None:
         sigma = positive("sigma", sigma)
     fidelity = 0.0 if sigma is not None else float(lam)
-    out, info = _run(surf, u, t, dt, "tv", p=1, eps=eps, fidelity=fidelity, sigma=sigma,
-                     alternate=alternate, progress=progress, correct_lambda=correct_lambda)
+    out, info = _run(
+        surf,
+        u,
+        t,
+        dt,
+        "tv",
+        p=1,
+        eps=eps,
+        fidelity=fidelity,
+        sigma=sigma,
+        alternate=alternate,
+        progress=progress,
+        correct_lambda=correct_lambda,
+    )
     if not return_info:
         return out
-    return out, SurfaceDenoiseInfo(info["steps"], info["dt"], info.get("lambda"),
-                                   info.get("residual_variance"))
+    return out, SurfaceDenoiseInfo(
+        info["steps"], info["dt"], info.get("lambda"), info.get("residual_variance")
+    )
 
 
-def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
-                 dt: float | None = None, *, eps: float = 1.0, alternate: bool = True,
-                 progress: bool | None = None, line_field: bool = False) -> np.ndarray:
+def harmonic_map(
+    surf: ImplicitSurface,
+    u: ArrayLike,
+    t: float,
+    p: int = 2,
+    dt: float | None = None,
+    *,
+    eps: float = 1.0,
+    alternate: bool = True,
+    progress: bool | None = None,
+    line_field: bool = False,
+) -> np.ndarray:
     """Harmonic map flow of unit vectors on the surface, (D.7) for p = 2 and (4.11) for
     p = 1, renormalised after every step. u: (channels, nz, ny, nx).
 
@@ -416,21 +519,43 @@ def harmonic_map(surf: ImplicitSurface, u: ArrayLike, t: float, p: int = 2,
     data = np.asarray(u, dtype=np.float64)
     band_form = data.ndim == 2 and surf.band.form_channels(data) is not None
     if data.ndim != 4 and not band_form:
-        raise InputError("harmonic maps need vector data (channels, nz, ny, nx), or its band "
-                         f"form (channels, {surf.ext_band.n}), got shape {data.shape}")
+        raise InputError(
+            "harmonic maps need vector data (channels, nz, ny, nx), or its band "
+            f"form (channels, {surf.ext_band.n}), got shape {data.shape}"
+        )
     norm = np.sqrt((data**2).sum(axis=0))
     norm = norm if band_form else norm[np.abs(surf.psi) < surf.outer * surf.spacing]
     if np.any(norm == 0):
         raise InputError("u has zero vectors in the band; harmonic maps need unit vectors")
     if np.abs(norm - 1).max() > 1e-3:
         warnings.warn("u is not made of unit vectors; normalising it", stacklevel=2)
-    return _run(surf, u, t, dt, f"harmonic{p}", p=p, eps=eps, harmonic=True,
-                alternate=alternate, progress=progress, line_field=line_field)[0]
+    return _run(
+        surf,
+        u,
+        t,
+        dt,
+        f"harmonic{p}",
+        p=p,
+        eps=eps,
+        harmonic=True,
+        alternate=alternate,
+        progress=progress,
+        line_field=line_field,
+    )[0]
 
 
-def denoise_colour(surf: ImplicitSurface, rgb: ArrayLike, t: float, dt: float | None = None, *,
-                   brightness: str = "tv", p: int = 1, eps: float = 1.0,
-                   alternate: bool = True, progress: bool | None = None) -> np.ndarray:
+def denoise_colour(
+    surf: ImplicitSurface,
+    rgb: ArrayLike,
+    t: float,
+    dt: float | None = None,
+    *,
+    brightness: str = "tv",
+    p: int = 1,
+    eps: float = 1.0,
+    alternate: bool = True,
+    progress: bool | None = None,
+) -> np.ndarray:
     """Colour data on the surface denoised as in Figure 4.6: the chroma (the RGB vector over
     its length, a unit vector) by the harmonic map flow of exponent p (4.11 for p = 1), the
     brightness (the length) separately by a scalar flow, "tv" (4.10, the default: it keeps
@@ -439,8 +564,9 @@ def denoise_colour(surf: ImplicitSurface, rgb: ArrayLike, t: float, dt: float | 
     (black) take the grey chroma, so they carry no direction."""
     data = np.asarray(rgb)
     if data.shape != (3,) + surf.shape:
-        raise InputError(f"rgb must have shape {(3,) + surf.shape} (channels first), got "
-                         f"{data.shape}")
+        raise InputError(
+            f"rgb must have shape {(3,) + surf.shape} (channels first), got {data.shape}"
+        )
     if brightness not in ("heat", "tv", None):
         raise InputError(f"brightness must be 'heat', 'tv' or None, not {brightness!r}")
     values = data.astype(np.float64)
@@ -448,8 +574,10 @@ def denoise_colour(surf: ImplicitSurface, rgb: ArrayLike, t: float, dt: float | 
     if not np.all(np.isfinite(values[:, band])):
         raise InputError("rgb has NaN or infinite values on the surface's band")
     if np.any(values[:, band] < 0):
-        raise InputError("rgb has negative values on the band; give colours as non-negative "
-                         "intensities (e.g. RGB in [0, 1])")
+        raise InputError(
+            "rgb has negative values on the band; give colours as non-negative "
+            "intensities (e.g. RGB in [0, 1])"
+        )
     length = np.sqrt((values**2).sum(axis=0))
     lit = length > 1e-6 * max(float(length[band].max()), 1e-300)
     chroma = np.where(lit, values / np.where(lit, length, 1), 1 / np.sqrt(3.0))
@@ -462,9 +590,16 @@ def denoise_colour(surf: ImplicitSurface, rgb: ArrayLike, t: float, dt: float | 
     return out.astype(data.dtype if np.issubdtype(data.dtype, np.floating) else np.float64)
 
 
-def diffuse_along(surf: ImplicitSurface, u: ArrayLike, direction: ArrayLike, t: float,
-                  dt: float | None = None, *, alternate: bool = True,
-                  progress: bool | None = None) -> np.ndarray:
+def diffuse_along(
+    surf: ImplicitSurface,
+    u: ArrayLike,
+    direction: ArrayLike,
+    t: float,
+    dt: float | None = None,
+    *,
+    alternate: bool = True,
+    progress: bool | None = None,
+) -> np.ndarray:
     """Anisotropic diffusion along a tangent field d (4.15): flow visualisation of d when u is
     noise. direction: (3, nz, ny, nx), normalised here."""
     d = np.asarray(direction, dtype=np.float64)
@@ -472,12 +607,14 @@ def diffuse_along(surf: ImplicitSurface, u: ArrayLike, direction: ArrayLike, t: 
         raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
     norm = np.sqrt((d**2).sum(axis=0))
     d = np.where(norm > 0, d / np.where(norm > 0, norm, 1), 0)
-    return _run(surf, u, t, dt, "along", p=2, direction=d, alternate=alternate,
-                progress=progress)[0]
+    return _run(surf, u, t, dt, "along", p=2, direction=d, alternate=alternate, progress=progress)[
+        0
+    ]
 
 
-def principal_directions(surf: ImplicitSurface,
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def principal_directions(
+    surf: ImplicitSurface,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Principal curvature directions and curvatures of the surface, extended along normals.
 
     Directions are defined up to sign, which the flows along them ignore (the flux (d.Pv)d is
@@ -512,8 +649,15 @@ def principal_directions(surf: ImplicitSurface,
     n = max(band.n, 1)
     dirs = cla.empty(q, (6, n), g.dtype)
     curv = cla.empty(q, (2, n), g.dtype)
-    g.launch_list(g.kernel("surface/shape.cl", "principal_directions"), band, surf.psi_dev.data,
-                  g.scalar(1 / surf.spacing), dirs.data, curv.data, *g.strides())
+    g.launch_list(
+        g.kernel("surface/shape.cl", "principal_directions"),
+        band,
+        surf.psi_dev.data,
+        g.scalar(1 / surf.spacing),
+        dirs.data,
+        curv.data,
+        *g.strides(),
+    )
     idx = band.indices.get()[: band.n]
     vol = np.zeros((8, g.volume))
     vol[:6, idx] = dirs.get()[:, : band.n]
@@ -523,15 +667,28 @@ def principal_directions(surf: ImplicitSurface,
 
 
 TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
-THESIS_FIG_4_7 = {"da": 1.0, "db": 0.0625, "s": 0.025, "beta": 12.0, "beta_spread": 0.1,
-                  "start": 4.0}
+THESIS_FIG_4_7 = {
+    "da": 1.0,
+    "db": 0.0625,
+    "s": 0.025,
+    "beta": 12.0,
+    "beta_spread": 0.1,
+    "start": 4.0,
+}
 
 
-def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
-                       direction: ArrayLike | None = None, dt: float | None = None,
-                       seed: int = 0, params: dict | None = None, alternate: bool = True,
-                       progress: bool | None = None,
-                       state: ArrayLike | None = None) -> np.ndarray:
+def reaction_diffusion(
+    surf: ImplicitSurface,
+    iterations: int,
+    *,
+    direction: ArrayLike | None = None,
+    dt: float | None = None,
+    seed: int = 0,
+    params: dict | None = None,
+    alternate: bool = True,
+    progress: bool | None = None,
+    state: ArrayLike | None = None,
+) -> np.ndarray:
     """Turk's two-chemical reaction-diffusion on the surface (4.12, 4.13; 4.14 with a tangent
     field `direction`), in grid units as Turk's own code: dt per iteration, diffusion rates
     in cells^2 per unit time, so patterns have the same size in cells on any surface.
@@ -549,8 +706,9 @@ def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
     dt = min(1.0, 0.9 * limit) if dt is None else check_time_step(dt, limit, what)
     rng = np.random.default_rng(seed)
     beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
-    start = np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state,
-                                                                                    np.float64)
+    start = (
+        np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)
+    )
     direction_field = None
     if direction is not None:
         d = np.asarray(direction, dtype=np.float64)
@@ -563,10 +721,19 @@ def reaction_diffusion(surf: ImplicitSurface, iterations: int, *,
     beta_dev = flow.fixed(beta[None])
     dir_dev = flow.psi if direction_field is None else flow.fixed(direction_field, halo=2)
     kernel = flow.step_kernel("turk")
-    for n in progress_range(progress, int(iterations), "reaction-diffusion", leave=False,
-                            queue=surf.grid.runtime.queue):
-        flow.step(kernel, _ALL_SIDES[n % 8] if alternate else 0, dir_dev.data, beta_dev.data,
-                  g.scalar(dt), g.scalar(p["da"]), g.scalar(p["db"]), g.scalar(p["s"]))
+    for n in progress_range(
+        progress, int(iterations), "reaction-diffusion", leave=False, queue=surf.grid.runtime.queue
+    ):
+        flow.step(
+            kernel,
+            _ALL_SIDES[n % 8] if alternate else 0,
+            dir_dev.data,
+            beta_dev.data,
+            g.scalar(dt),
+            g.scalar(p["da"]),
+            g.scalar(p["db"]),
+            g.scalar(p["s"]),
+        )
     return flow.result()
 
 

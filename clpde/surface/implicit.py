@@ -55,7 +55,6 @@ def _interp_code(interpolation: str) -> int:
     return code
 
 
-
 class ImplicitSurface:
     """A closed surface given as the zero level set of a signed distance function psi.
 
@@ -96,11 +95,19 @@ class ImplicitSurface:
     ((37, 37, 37), 'lists')
     """
 
-    def __init__(self, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,
-                 band_width: float | None = None, interpolation: str = "tricubic",
-                 dtype: DTypeLike = np.float32, device: DeviceLike = None,
-                 storage: str = "lists",
-                 _check_border: bool = True):
+    def __init__(
+        self,
+        psi: ArrayLike,
+        spacing: float,
+        origin: ArrayLike = (0.0, 0.0, 0.0),
+        *,
+        band_width: float | None = None,
+        interpolation: str = "tricubic",
+        dtype: DTypeLike = np.float32,
+        device: DeviceLike = None,
+        storage: str = "lists",
+        _check_border: bool = True,
+    ):
         psi = np.asarray(psi)
         if psi.ndim != 3:
             raise InputError(f"psi must be a 3D (nz, ny, nx) volume, got shape {psi.shape}")
@@ -109,11 +116,13 @@ class ImplicitSurface:
         if not np.issubdtype(psi.dtype, np.number) or np.iscomplexobj(psi):
             raise InputError(f"psi must hold real numbers, not {psi.dtype}")
         if not np.all(np.isfinite(psi)):
-            raise InputError("psi contains NaN or infinite values; fill them before building a "
-                             "surface")
+            raise InputError(
+                "psi contains NaN or infinite values; fill them before building a surface"
+            )
         if not (psi.min() < 0 < psi.max()):
-            raise InputError("psi has no zero level set (it never changes sign): no surface to "
-                             "work on")
+            raise InputError(
+                "psi has no zero level set (it never changes sign): no surface to work on"
+            )
         self.spacing = _positive("spacing", spacing)
         origin = np.asarray(origin, dtype=np.float64).reshape(-1)
         if origin.shape != (3,) or not np.all(np.isfinite(origin)):
@@ -133,8 +142,9 @@ class ImplicitSurface:
         # psi, psi in cells and the band masks at the least; the bands' lists come on top
         check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
         self.storage = storage
-        self.grid = Grid3D(self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3,
-                           dtype=np.dtype(dtype))
+        self.grid = Grid3D(
+            self.runtime, psi.shape[2], psi.shape[1], psi.shape[0], ghost=3, dtype=np.dtype(dtype)
+        )
         self._set_psi(psi.astype(np.float64, copy=True))
 
     @property
@@ -149,8 +159,9 @@ class ImplicitSurface:
     @storage.setter
     def storage(self, value: str) -> None:
         if value not in STORAGES:
-            raise InputError(f"storage must be one of {', '.join(map(repr, STORAGES))}, not "
-                             f"{value!r}")
+            raise InputError(
+                f"storage must be one of {', '.join(map(repr, STORAGES))}, not {value!r}"
+            )
         self._storage = value
 
     def _set_psi(self, psi: np.ndarray) -> None:
@@ -172,8 +183,15 @@ class ImplicitSurface:
 
     # ---- construction from shapes ----------------------------------------------------------
     @classmethod
-    def from_volume(cls, psi: ArrayLike, spacing: float, origin: ArrayLike = (0.0, 0.0, 0.0), *,
-                    reinitialize: bool = False, **options: Any) -> ImplicitSurface:
+    def from_volume(
+        cls,
+        psi: ArrayLike,
+        spacing: float,
+        origin: ArrayLike = (0.0, 0.0, 0.0),
+        *,
+        reinitialize: bool = False,
+        **options: Any,
+    ) -> ImplicitSurface:
         """A surface from a signed distance volume (nz, ny, nx) with the given spacing.
 
         reinitialize=True first turns any level-set function (negative inside) into a
@@ -190,8 +208,15 @@ class ImplicitSurface:
         return cls(psi, spacing, origin, **options)
 
     @classmethod
-    def from_mesh(cls, mesh: object, spacing: float | None = None, resolution: int = 128, *,
-                  band_width: float | None = None, **options: Any) -> ImplicitSurface:
+    def from_mesh(
+        cls,
+        mesh: object,
+        spacing: float | None = None,
+        resolution: int = 128,
+        *,
+        band_width: float | None = None,
+        **options: Any,
+    ) -> ImplicitSurface:
         """A surface from a triangle mesh (trimesh.Trimesh or any file trimesh loads).
 
         spacing defaults to the bounding box's longest side / resolution. The distance is exact
@@ -209,8 +234,9 @@ class ImplicitSurface:
         padding = int(np.ceil(outer)) + 4
         origin, h, shape = grid_for_mesh(mesh, spacing, resolution, padding)
         stats = {}
-        psi, face, cpoint = mesh_to_sdf(mesh, origin, h, shape, outer + 3.0,
-                                        device=options.get("device"), stats=stats)
+        psi, face, cpoint = mesh_to_sdf(
+            mesh, origin, h, shape, outer + 3.0, device=options.get("device"), stats=stats
+        )
         surf = cls(psi, h, origin, band_width=band_width, **options)
         rim = rim_cells(mesh, face, cpoint, h) if stats.get("leaked") else ()
         if len(rim):
@@ -220,8 +246,9 @@ class ImplicitSurface:
             # a reinitialised distance, the others keep their exact one
             cap = np.abs(surf.psi).max()  # what cells past the band hold
             patched = surf.psi.copy()
-            patched.reshape(-1)[rim] = np.clip(surf._reinitialized_psi().reshape(-1)[rim], -cap,
-                                               cap)
+            patched.reshape(-1)[rim] = np.clip(
+                surf._reinitialized_psi().reshape(-1)[rim], -cap, cap
+            )
             surf._set_psi(patched)
         surf.mesh = mesh
         surf._mesh_face = face
@@ -264,8 +291,9 @@ class ImplicitSurface:
         return out[0] if values.ndim == 1 else out
 
     @classmethod
-    def from_function(cls, sdf: Callable, bounds: tuple[ArrayLike, ArrayLike], spacing: float,
-                      **options: Any) -> ImplicitSurface:
+    def from_function(
+        cls, sdf: Callable, bounds: tuple[ArrayLike, ArrayLike], spacing: float, **options: Any
+    ) -> ImplicitSurface:
         """Sample a signed distance function sdf(x, y, z) on a box bounds = (lo, hi),
         padded by the band width plus interpolation room on every side."""
         h = _positive("spacing", spacing)
@@ -282,8 +310,13 @@ class ImplicitSurface:
         return cls(psi, h, lo, **options)
 
     @classmethod
-    def sphere(cls, radius: float = 1.0, spacing: float = 0.05,
-               center: ArrayLike = (0.0, 0.0, 0.0), **options: Any) -> ImplicitSurface:
+    def sphere(
+        cls,
+        radius: float = 1.0,
+        spacing: float = 0.05,
+        center: ArrayLike = (0.0, 0.0, 0.0),
+        **options: Any,
+    ) -> ImplicitSurface:
         r = _positive("radius", radius)
         c = np.asarray(center, dtype=np.float64)
 
@@ -293,8 +326,9 @@ class ImplicitSurface:
         return cls.from_function(sdf, (c - r, c + r), spacing, **options)
 
     @classmethod
-    def torus(cls, major: float = 1.0, minor: float = 0.4, spacing: float = 0.05,
-              **options: Any) -> ImplicitSurface:
+    def torus(
+        cls, major: float = 1.0, minor: float = 0.4, spacing: float = 0.05, **options: Any
+    ) -> ImplicitSurface:
         """Torus around the z axis: tube radius `minor` at distance `major` from the axis."""
         big, small = _positive("major", major), _positive("minor", minor)
         if small >= big:
@@ -303,8 +337,9 @@ class ImplicitSurface:
         return cls.from_function(_torus_sdf(big, small, 0.0), (-ext, ext), spacing, **options)
 
     @classmethod
-    def double_torus(cls, major: float = 0.8, minor: float = 0.3, spacing: float = 0.05,
-                     **options: Any) -> ImplicitSurface:
+    def double_torus(
+        cls, major: float = 0.8, minor: float = 0.3, spacing: float = 0.05, **options: Any
+    ) -> ImplicitSurface:
         """Genus-2 surface: the union of two overlapping tori side by side along x.
 
         min() of the two distances is exact outside and near the surface away from the seam
@@ -344,8 +379,9 @@ class ImplicitSurface:
         d = self.psi / norm
         return x - d * g[2], y - d * g[1], z - d * g[0]
 
-    def reinitialize(self, iterations: int | None = None,
-                     progress: bool | None = None) -> ImplicitSurface:
+    def reinitialize(
+        self, iterations: int | None = None, progress: bool | None = None
+    ) -> ImplicitSurface:
         """Turn psi into a signed distance function on the device (Sussman's PDE with
         Russo-Smereka's subcell fix), keeping its zero level set; rebuilds the bands."""
         self._set_psi(self._reinitialized_psi(iterations, progress))
@@ -361,15 +397,25 @@ class ImplicitSurface:
         phi0 = self.psi_dev
         cur, nxt = phi0.copy(), phi0.copy()
         kernel = g.kernel("surface/reinit.cl", "reinit_step")
-        for _ in progress_range(progress, steps, "reinitialise", leave=False,
-                                queue=g.runtime.queue):
-            g.launch_list(kernel, everywhere, cur.data, nxt.data, phi0.data, g.scalar(r),
-                          g.scalar(1 / self.spacing), *g.strides())
+        for _ in progress_range(
+            progress, steps, "reinitialise", leave=False, queue=g.runtime.queue
+        ):
+            g.launch_list(
+                kernel,
+                everywhere,
+                cur.data,
+                nxt.data,
+                phi0.data,
+                g.scalar(r),
+                g.scalar(1 / self.spacing),
+                *g.strides(),
+            )
             cur, nxt = nxt, cur
         return g.download(cur)[0].astype(np.float64)
 
-    def extend(self, u: ArrayLike, method: str = "closest-point",
-               iterations: int | None = None) -> np.ndarray:
+    def extend(
+        self, u: ArrayLike, method: str = "closest-point", iterations: int | None = None
+    ) -> np.ndarray:
         """Extend data off the surface, constant along the normals: by closest-point
         interpolation (one pass), or by the upwind PDE of section 4.2,
         u_t + sign(psi) grad u . grad psi / |grad psi| = 0, run to steady state in the band."""
@@ -385,11 +431,27 @@ class ImplicitSurface:
         defines = extend_defines(self.interp, flow.nc)  # the re-extension's program
         kernel = g.kernel("surface/extend.cl", "extend_pde_step", **defines)
         for _ in range(steps):
-            g.launch_list(kernel, self.ext_band, flow.cur.data, flow.tmp.data, self.psi_dev.data,
-                          g.scalar(r), g.scalar(self.spacing), *g.strides())
+            g.launch_list(
+                kernel,
+                self.ext_band,
+                flow.cur.data,
+                flow.tmp.data,
+                self.psi_dev.data,
+                g.scalar(r),
+                g.scalar(self.spacing),
+                *g.strides(),
+            )
             # cells outside the band keep their values in both buffers
-            g.launch_list(kernel, self.ext_band, flow.tmp.data, flow.cur.data, self.psi_dev.data,
-                          g.scalar(r), g.scalar(self.spacing), *g.strides())
+            g.launch_list(
+                kernel,
+                self.ext_band,
+                flow.tmp.data,
+                flow.cur.data,
+                self.psi_dev.data,
+                g.scalar(r),
+                g.scalar(self.spacing),
+                *g.strides(),
+            )
         return flow.result()
 
     # ---- data on the surface -----------------------------------------------------------------
@@ -468,8 +530,10 @@ class ImplicitSurface:
             return u.reshape(-1)[self.band.cells()[0]]
         if u.ndim == 4 and u.shape[1:] == self.shape:
             return u.reshape(u.shape[0], -1)[:, self.band.cells()[0]]
-        raise InputError(f"u must have the surface's grid shape {self.shape} (or (channels,) + "
-                         f"that), got {u.shape}")
+        raise InputError(
+            f"u must have the surface's grid shape {self.shape} (or (channels,) + "
+            f"that), got {u.shape}"
+        )
 
     def from_band(self, values: ArrayLike, fill: float = 0.0) -> np.ndarray:
         """Band-form values as a dense volume (`shape`, or (channels,) + `shape`), `fill` off
@@ -477,8 +541,10 @@ class ImplicitSurface:
         v = np.asarray(values)
         nc = self.band.form_channels(v)
         if nc is None:
-            raise InputError(f"values must have shape ({self.ext_band.n},) or (channels, "
-                             f"{self.ext_band.n}) (the band form), got {v.shape}")
+            raise InputError(
+                f"values must have shape ({self.ext_band.n},) or (channels, "
+                f"{self.ext_band.n}) (the band form), got {v.shape}"
+            )
         dtype = v.dtype if np.issubdtype(v.dtype, np.floating) else np.float64
         out = np.full((nc, int(np.prod(self.shape))), fill, dtype)
         out[:, self.band.cells()[0]] = v.reshape(nc, -1)
@@ -494,8 +560,9 @@ class ImplicitSurface:
             raise InputError("points contain NaN or infinite values")
         return ((p - self.origin) / self.spacing + self.grid.ghost).T
 
-    def sample(self, u: ArrayLike, points: ArrayLike,
-               interpolation: str = "tricubic") -> np.ndarray:
+    def sample(
+        self, u: ArrayLike, points: ArrayLike, interpolation: str = "tricubic"
+    ) -> np.ndarray:
         """Values of u at world points (n, 3): shape (n,) for scalar u, (n, channels) else.
         u may be dense or in band form (band_indices).
 
@@ -535,8 +602,17 @@ class ImplicitSurface:
         pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
         out = cla.empty(q, (nc, n), g.dtype)
         g.kernel("surface/extend.cl", "sample_points", **extend_defines(code, nc))(
-            q, *self.runtime.items(n), dev.data, pts[0].data, pts[1].data, pts[2].data, np.int32(n),
-            out.data, *g.strides(), *g.padded_dims(), np.int32(g.volume),
+            q,
+            *self.runtime.items(n),
+            dev.data,
+            pts[0].data,
+            pts[1].data,
+            pts[2].data,
+            np.int32(n),
+            out.data,
+            *g.strides(),
+            *g.padded_dims(),
+            np.int32(g.volume),
         )
         return out.get().astype(np.float64)
 
@@ -549,8 +625,13 @@ class ImplicitSurface:
         """Intrinsic anisotropic (total variation) flow (4.10); see flows.tv."""
         return _flows.tv(self, u, t, dt, **options)
 
-    def denoise_tv(self, u: ArrayLike, sigma: float | None = None, t: float = 1.0, **options: Any,
-                   ) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
+    def denoise_tv(
+        self,
+        u: ArrayLike,
+        sigma: float | None = None,
+        t: float = 1.0,
+        **options: Any,
+    ) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
         """TV denoising with fidelity and dynamic lambda (C.1, C.2); see flows.denoise_tv."""
         return _flows.denoise_tv(self, u, sigma, t, **options)
 
@@ -563,8 +644,9 @@ class ImplicitSurface:
         flow; see flows.denoise_colour."""
         return _flows.denoise_colour(self, rgb, t, **options)
 
-    def diffuse_along(self, u: ArrayLike, direction: ArrayLike, t: float,
-                      **options: Any) -> np.ndarray:
+    def diffuse_along(
+        self, u: ArrayLike, direction: ArrayLike, t: float, **options: Any
+    ) -> np.ndarray:
         """Diffusion along a tangent field (4.15); see flows.diffuse_along."""
         return _flows.diffuse_along(self, u, direction, t, **options)
 
@@ -580,8 +662,9 @@ class ImplicitSurface:
         """Marching-cubes mesh of the surface with u as vertex colours; see render.to_mesh."""
         return _render.to_mesh(self, u, **options)
 
-    def render(self, u: ArrayLike | None = None, path: str | None = None,
-               **options: Any) -> np.ndarray:
+    def render(
+        self, u: ArrayLike | None = None, path: str | None = None, **options: Any
+    ) -> np.ndarray:
         """PNG picture(s) of u on the surface; see render.render."""
         return _render.render(self, u, path, **options)
 

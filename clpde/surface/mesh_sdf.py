@@ -111,6 +111,7 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
     stats, a dict, receives the components of the flood fill, how many leaked, how many
     points had their winding number evaluated and the seconds the sign's check took."""
     from scipy import ndimage
+
     h = float(spacing)
     nz, ny, nx = shape
     total = nz * ny * nx
@@ -138,12 +139,32 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
     # (and where it leaked through a hole, replaced) by the winding number
     shell = udist <= 0.5 * h * (1 + 1e-6)
     labels, nlabels = ndimage.label(~shell)
-    border = np.unique(np.concatenate([
-        labels[0].ravel(), labels[-1].ravel(), labels[:, 0].ravel(), labels[:, -1].ravel(),
-        labels[:, :, 0].ravel(), labels[:, :, -1].ravel(),
-    ]))
-    inside, outside = _sign_by_winding(mesh, labels, nlabels, border[border > 0], idx, origin, h,
-                                       band_cells, device, stats, face=face, closest=cpt)
+    border = np.unique(
+        np.concatenate(
+            [
+                labels[0].ravel(),
+                labels[-1].ravel(),
+                labels[:, 0].ravel(),
+                labels[:, -1].ravel(),
+                labels[:, :, 0].ravel(),
+                labels[:, :, -1].ravel(),
+            ]
+        )
+    )
+    inside, outside = _sign_by_winding(
+        mesh,
+        labels,
+        nlabels,
+        border[border > 0],
+        idx,
+        origin,
+        h,
+        band_cells,
+        device,
+        stats,
+        face=face,
+        closest=cpt,
+    )
     del labels
     sign = np.where(inside, -1.0, 1.0)
     # shell cells: look one and a half cells further from the surface along x - cp
@@ -185,8 +206,9 @@ def rim_cells(mesh, face, closest_point, spacing) -> np.ndarray:
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     a, b = vertices[edges[..., 0]], vertices[edges[..., 1]]  # (n, 3 edges, 3)
     p = closest_point[near][:, None, :]
-    t = np.clip(((p - a) * (b - a)).sum(axis=2) / np.maximum(((b - a) ** 2).sum(axis=2), 1e-300), 0,
-                1)
+    t = np.clip(
+        ((p - a) * (b - a)).sum(axis=2) / np.maximum(((b - a) ** 2).sum(axis=2), 1e-300), 0, 1
+    )
     gap = np.linalg.norm(a + t[..., None] * (b - a) - p, axis=2)
     gap = np.where(on_boundary[rim_faces], gap, np.inf).min(axis=1)
     return cells[near][gap < 1e-3 * spacing]
@@ -247,8 +269,13 @@ def _face_sides(triangles, components, face, closest, centres, side_of, samples=
     normal = np.cross(b - a, c - a)
     # barycentric coordinates of the closest points (they lie in the triangle's plane)
     area2 = np.einsum("ij,ij->i", normal, normal)
-    bary = np.stack([np.einsum("ij,ij->i", np.cross(c - b, closest - b), normal),
-                     np.einsum("ij,ij->i", np.cross(a - c, closest - c), normal)], axis=1)
+    bary = np.stack(
+        [
+            np.einsum("ij,ij->i", np.cross(c - b, closest - b), normal),
+            np.einsum("ij,ij->i", np.cross(a - c, closest - c), normal),
+        ],
+        axis=1,
+    )
     bary /= np.maximum(area2, 1e-300)[:, None]
     interior = (bary.min(axis=1) > 1e-3) & (1 - bary.sum(axis=1) > 1e-3)
     offset = np.einsum("ij,ij->i", centres - closest, normal)
@@ -268,8 +295,21 @@ def _face_sides(triangles, components, face, closest, centres, side_of, samples=
     return decided, np.where(outward[part], below, ~below)
 
 
-def _sign_by_winding(mesh, labels, nlabels, border, idx, origin, h, band_cells, device, stats,
-                     samples=128, face=None, closest=None):
+def _sign_by_winding(
+    mesh,
+    labels,
+    nlabels,
+    border,
+    idx,
+    origin,
+    h,
+    band_cells,
+    device,
+    stats,
+    samples=128,
+    face=None,
+    closest=None,
+):
     """(inside, outside) volumes for the cells off the shell (labels > 0, the components of
     the flood fill; border: the labels touching the box's border).
 
@@ -317,7 +357,7 @@ def _sign_by_winding(mesh, labels, nlabels, border, idx, origin, h, band_cells, 
     for c in range(1, nlabels + 1):
         if boxes[c - 1] is None:
             continue
-        band_c = idx[by_label[bounds[c]:bounds[c + 1]]]
+        band_c = idx[by_label[bounds[c] : bounds[c + 1]]]
         cells = _cells_of(labels, boxes[c - 1], c, samples, rng)
         if band_c.size:
             cells = np.union1d(cells, rng.choice(band_c, min(samples, band_c.size), replace=False))
@@ -352,8 +392,13 @@ def _sign_by_winding(mesh, labels, nlabels, border, idx, origin, h, band_cells, 
             parts = _face_components(mesh)
             band_pos = np.flatnonzero(in_leaked)  # rows of closest (idx order)
             decided, local_in = _face_sides(
-                oriented, parts, face.reshape(-1)[cells], closest[band_pos],
-                origin + h * cell_xyz(cells), lambda k: side(cells[k]))
+                oriented,
+                parts,
+                face.reshape(-1)[cells],
+                closest[band_pos],
+                origin + h * cell_xyz(cells),
+                lambda k: side(cells[k]),
+            )
             cells_in[decided] = local_in[decided]
             todo = ~decided
             info["decided_by_faces"] = int(decided.sum())
@@ -389,7 +434,6 @@ def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
     closest points) with distances and points in world units."""
     import pyopencl.array as cla
 
-
     rt = get_runtime(device)
     q = rt.queue
     nz, ny, nx = shape
@@ -402,10 +446,21 @@ def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):
     nbr_dev = cla.to_device(q, _edge_neighbours(mesh))
     kernel = rt.kernel("surface/mesh.cl", "mesh_refine")
     for _ in range(max(1, int(passes))):
-        kernel(q, *rt.items(idx.size), cells.data, np.int32(idx.size), faces[0].data,
-               faces[1].data, dist.data, cpt.data, tri_dev.data, nbr_dev.data, np.int32(nx),
-               np.int32(ny),
-               np.int32(nz))
+        kernel(
+            q,
+            *rt.items(idx.size),
+            cells.data,
+            np.int32(idx.size),
+            faces[0].data,
+            faces[1].data,
+            dist.data,
+            cpt.data,
+            tri_dev.data,
+            nbr_dev.data,
+            np.int32(nx),
+            np.int32(ny),
+            np.int32(nz),
+        )
         faces.reverse()
     d = dist.get()[: idx.size].astype(np.float64) * h
     cp = origin + h * cpt.get()[: 3 * idx.size].reshape(-1, 3).astype(np.float64)

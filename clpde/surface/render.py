@@ -24,15 +24,22 @@ if TYPE_CHECKING:  # annotations only: trimesh is imported where a mesh is made
 
 # A perceptually ordered colour ramp (dark blue -> teal -> green -> yellow), sampled at nine
 # stops and interpolated linearly: enough for pseudo-colour pictures of scalar data.
-_RAMP = np.array([
-    [0.267, 0.005, 0.329], [0.278, 0.175, 0.483], [0.231, 0.322, 0.546], [0.173, 0.449, 0.558],
-    [0.128, 0.567, 0.551], [0.153, 0.680, 0.504], [0.361, 0.786, 0.388], [0.668, 0.862, 0.196],
-    [0.993, 0.906, 0.144],
-])
+_RAMP = np.array(
+    [
+        [0.267, 0.005, 0.329],
+        [0.278, 0.175, 0.483],
+        [0.231, 0.322, 0.546],
+        [0.173, 0.449, 0.558],
+        [0.128, 0.567, 0.551],
+        [0.153, 0.680, 0.504],
+        [0.361, 0.786, 0.388],
+        [0.668, 0.862, 0.196],
+        [0.993, 0.906, 0.144],
+    ]
+)
 
 
-def colormap(values: ArrayLike, vmin: float | None = None,
-             vmax: float | None = None) -> np.ndarray:
+def colormap(values: ArrayLike, vmin: float | None = None, vmax: float | None = None) -> np.ndarray:
     """RGB colours of scalar values, mapped through clpde's colour ramp.
 
     Parameters
@@ -62,8 +69,14 @@ def colormap(values: ArrayLike, vmin: float | None = None,
     return _RAMP[i] * (1 - f) + _RAMP[i + 1] * f
 
 
-def to_mesh(surf: ImplicitSurface, u: ArrayLike | None = None, *, vmin: float | None = None,
-            vmax: float | None = None, interpolation: str = "tricubic") -> trimesh.Trimesh:
+def to_mesh(
+    surf: ImplicitSurface,
+    u: ArrayLike | None = None,
+    *,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    interpolation: str = "tricubic",
+) -> trimesh.Trimesh:
     """Marching cubes of psi = 0 as a trimesh.Trimesh, with u sampled at the vertices as
     vertex colours: scalars through the colour ramp, 3-channel data as RGB (clipped to
     [0, 1]). The sampled values are kept in mesh.vertex_attributes['u']."""
@@ -91,8 +104,7 @@ def _colour_vertices(mesh, values, vmin, vmax, what):
             mesh.vertex_attributes[f"u{c}"] = values[:, c]
         rgb = np.clip(values, 0, 1)
     else:
-        raise InputError(f"{what} colours scalar or 3-channel data, not {values.shape[1]} "
-                         "channels")
+        raise InputError(f"{what} colours scalar or 3-channel data, not {values.shape[1]} channels")
     mesh.visual.vertex_colors = np.concatenate(
         [np.rint(255 * rgb).astype(np.uint8), np.full((len(rgb), 1), 255, np.uint8)], axis=1
     )
@@ -145,8 +157,10 @@ def on_mesh(surf, u, mesh=None, *, vmin=None, vmax=None, interpolation="tricubic
     """
     mesh = getattr(surf, "mesh", None) if mesh is None else mesh
     if mesh is None:
-        raise InputError("this surface was not made from a mesh: give mesh=, or use to_mesh "
-                         "for a marching-cubes mesh of its zero level set")
+        raise InputError(
+            "this surface was not made from a mesh: give mesh=, or use to_mesh "
+            "for a marching-cubes mesh of its zero level set"
+        )
     result = mesh.copy()
     values = surf.sample(u, np.asarray(result.vertices, np.float64), interpolation)
     _colour_vertices(result, values, vmin, vmax, "on_mesh")
@@ -217,9 +231,10 @@ def with_title(image, text: str) -> np.ndarray:
     height = title_height(width)
     font = ImageFont.load_default(size=max(10, height // 2))
     canvas = Image.new("RGB", (width, height), (255, 255, 255))
-    ImageDraw.Draw(canvas).text((max(4, height // 4), height / 2), text, fill=(0, 0, 0),
-                                font=font, anchor="lm")
-    return np.concatenate([np.asarray(canvas)[..., :image.shape[2]], image], axis=0)
+    ImageDraw.Draw(canvas).text(
+        (max(4, height // 4), height / 2), text, fill=(0, 0, 0), font=font, anchor="lm"
+    )
+    return np.concatenate([np.asarray(canvas)[..., : image.shape[2]], image], axis=0)
 
 
 def with_colour_bar(image, vmin: float, vmax: float, *, label: str = "") -> np.ndarray:
@@ -256,10 +271,14 @@ def view_box(meshes, azimuth=30.0, elevation=20.0):
     return 0.5 * (lo + hi), float((hi - lo).max())
 
 
-def render_mesh(mesh: trimesh.Trimesh, size: int = 512, azimuth: float = 30.0,
-                elevation: float = 20.0,
-                background: tuple[float, float, float] = (1.0, 1.0, 1.0),
-                box: tuple | None = None) -> np.ndarray:
+def render_mesh(
+    mesh: trimesh.Trimesh,
+    size: int = 512,
+    azimuth: float = 30.0,
+    elevation: float = 20.0,
+    background: tuple[float, float, float] = (1.0, 1.0, 1.0),
+    box: tuple | None = None,
+) -> np.ndarray:
     """A picture of a mesh with its vertex colours (light grey where it has none).
 
     Parameters
@@ -347,11 +366,17 @@ def render_mesh(mesh: trimesh.Trimesh, size: int = 512, azimuth: float = 30.0,
     return np.rint(255 * np.clip(image, 0, 1)).reshape(size, size, 3).astype(np.uint8)
 
 
-def render(surf_or_mesh: ImplicitSurface | trimesh.Trimesh, u: ArrayLike | None = None,
-           path: str | os.PathLike | None = None, *,
-           views: tuple[tuple[float, float], ...] = ((30.0, 20.0),), size: int = 512,
-           vmin: float | None = None, vmax: float | None = None,
-           colour_bar: bool = True) -> np.ndarray:
+def render(
+    surf_or_mesh: ImplicitSurface | trimesh.Trimesh,
+    u: ArrayLike | None = None,
+    path: str | os.PathLike | None = None,
+    *,
+    views: tuple[tuple[float, float], ...] = ((30.0, 20.0),),
+    size: int = 512,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    colour_bar: bool = True,
+) -> np.ndarray:
     """Picture(s) of data on a surface (an ImplicitSurface with u, or a trimesh.Trimesh).
 
     views: (azimuth, elevation) pairs in degrees, placed side by side. Scalar data gets a
@@ -361,9 +386,11 @@ def render(surf_or_mesh: ImplicitSurface | trimesh.Trimesh, u: ArrayLike | None 
     import imageio.v3 as iio
     import trimesh
 
-    mesh = surf_or_mesh if isinstance(surf_or_mesh, trimesh.Trimesh) else to_mesh(surf_or_mesh, u,
-                                                                                  vmin=vmin,
-                                                                                  vmax=vmax)
+    mesh = (
+        surf_or_mesh
+        if isinstance(surf_or_mesh, trimesh.Trimesh)
+        else to_mesh(surf_or_mesh, u, vmin=vmin, vmax=vmax)
+    )
     views = list(views)
     if not views:
         raise InputError("give at least one (azimuth, elevation) view")

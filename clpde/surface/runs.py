@@ -37,8 +37,9 @@ def load_surface(mesh, resolution=96, device=None) -> ImplicitSurface:
     if isinstance(mesh, str) and mesh in SHAPES:
         return surface_shape(mesh, resolution, device=device)
     if isinstance(mesh, str) and not os.path.exists(mesh):
-        raise InputError(f"{mesh!r} is neither a mesh file nor one of the shapes "
-                         f"{', '.join(SHAPES)}")
+        raise InputError(
+            f"{mesh!r} is neither a mesh file nor one of the shapes {', '.join(SHAPES)}"
+        )
     with encloses_volume(mesh):
         return ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
 
@@ -59,12 +60,16 @@ def encloses_volume(mesh):
             warnings.simplefilter("ignore")  # the watertightness warning was already given
             closed = load_mesh(mesh).is_watertight
         if closed:
-            raise InputError(f"no grid cell lies inside {name}: it is thinner than the grid's "
-                             "spacing; use a finer grid (a larger resolution, --resolution "
-                             "on the command line)") from None
-        raise InputError(f"{name} encloses no volume (an open sheet, not a closed surface), "
-                         "so it has no inside and outside to work between; give a closed "
-                         "(watertight) mesh, or close its holes first") from None
+            raise InputError(
+                f"no grid cell lies inside {name}: it is thinner than the grid's "
+                "spacing; use a finer grid (a larger resolution, --resolution "
+                "on the command line)"
+            ) from None
+        raise InputError(
+            f"{name} encloses no volume (an open sheet, not a closed surface), "
+            "so it has no inside and outside to work between; give a closed "
+            "(watertight) mesh, or close its holes first"
+        ) from None
 
 
 @dataclass
@@ -93,8 +98,18 @@ def mesh_colours(surf):
 DATA_FLOWS = ("heat", "tv", "denoise", "chroma")  # the flows that can take the user's colours
 
 
-def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, direction="major",
-             data=None, progress=None) -> SurfaceRun:
+def run_flow(
+    surf,
+    flow,
+    *,
+    t=None,
+    iterations=None,
+    sigma=0.15,
+    seed=0,
+    direction="major",
+    data=None,
+    progress=None,
+) -> SurfaceRun:
     """Run one of FLOWS with the thesis' settings; returns the data before and after.
 
     data: the user's values on the band (e.g. mesh_colours(surf)) for heat, tv, denoise and
@@ -109,26 +124,38 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
     if flow == "heat":  # Figure 4.3: intrinsic isotropic diffusion of an image
         before = checker(surf)
         t = 2e-4 * size**2 if t is None else t
-        return SurfaceRun(flow, surf, before, surf.heat(before, t=t, progress=progress),
-                          f"heat flow to t={t:g}")
+        return SurfaceRun(
+            flow, surf, before, surf.heat(before, t=t, progress=progress), f"heat flow to t={t:g}"
+        )
     if flow == "tv":  # Figure 4.4 right: anisotropic diffusion without a stopping term
         before = checker(surf) + surface_noise(surf, sigma, rng)
         t = tv_time(sigma, h) if t is None else t
-        return SurfaceRun(flow, surf, before, surf.tv(before, t=t, progress=progress),
-                          f"TV flow to t={t:g}")
+        return SurfaceRun(
+            flow, surf, before, surf.tv(before, t=t, progress=progress), f"TV flow to t={t:g}"
+        )
     if flow == "denoise":  # Figure 4.4 middle: TV with fidelity and dynamic lambda
         before = checker(surf) + surface_noise(surf, sigma, rng)
         t = 40 * h**2 if t is None else t
         after, info = surf.denoise_tv(before, sigma=sigma, t=t, return_info=True, progress=progress)
-        return SurfaceRun(flow, surf, before, after,
-                          f"TV denoising, sigma={sigma:g}: residual variance "
-                          f"{info.residual_variance:.4g} (sigma^2 = {sigma**2:.4g})")
+        return SurfaceRun(
+            flow,
+            surf,
+            before,
+            after,
+            f"TV denoising, sigma={sigma:g}: residual variance "
+            f"{info.residual_variance:.4g} (sigma^2 = {sigma**2:.4g})",
+        )
     if flow == "chroma":  # Figure 4.6: chroma by harmonic maps (p = 1), brightness by TV
         clean = colour_pattern(surf)
         before = np.clip(clean + surface_noise(surf, sigma, rng, channels=3), 0.01, 1)
         t = 4 * h**2 if t is None else t
-        return SurfaceRun(flow, surf, before, surf.denoise_colour(before, t=t, progress=progress),
-                          f"chroma harmonic map p=1 and brightness TV flow to t={t:g}")
+        return SurfaceRun(
+            flow,
+            surf,
+            before,
+            surf.denoise_colour(before, t=t, progress=progress),
+            f"chroma harmonic map p=1 and brightness TV flow to t={t:g}",
+        )
     if flow in ("reaction-diffusion", "flowvis", "curvature"):
         major, minor, curv = surf.principal_directions()
         field = {"major": major, "minor": minor}.get(direction)
@@ -147,18 +174,28 @@ def run_flow(surf, flow, *, t=None, iterations=None, sigma=0.15, seed=0, directi
             before = surf.field(lambda x, y, z: 0 * x) + rng.random(surf.shape)
             t = 10 * h**2 if t is None else t
             after = surf.diffuse_along(before, field, t=t, progress=progress)
-            return SurfaceRun(flow, surf, before, after,
-                              f"noise diffused along the {direction} principal direction to "
-                              f"t={t:g}")
+            return SurfaceRun(
+                flow,
+                surf,
+                before,
+                after,
+                f"noise diffused along the {direction} principal direction to t={t:g}",
+            )
         iterations = 4000 if iterations is None else iterations
         along = field if direction != "none" else None
         ab = surf.reaction_diffusion(iterations, direction=along, seed=seed, progress=progress)
-        return SurfaceRun(flow, surf, np.full(surf.shape, 4.0), ab[0],
-                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations, "
-                          "diffusion of a "
-                          f"along the {direction} direction" if along is not None else
-                          f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations",
-                          "chemical a")
+        return SurfaceRun(
+            flow,
+            surf,
+            np.full(surf.shape, 4.0),
+            ab[0],
+            f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations, "
+            "diffusion of a "
+            f"along the {direction} direction"
+            if along is not None
+            else f"reaction-diffusion (Figure 4.7's numbers), {iterations} iterations",
+            "chemical a",
+        )
     raise InputError(f"unknown surface flow {flow!r}; choose one of {', '.join(FLOWS)}")
 
 
@@ -182,8 +219,10 @@ def warn_if_too_coarse(mesh, sigma: float) -> bool:
         f"the mesh is too coarse for curvature: {len(mesh.faces)} faces, so the curvature "
         f"is averaged over {sigma:.3g} ({share:.0%} of its size), which spreads its edges' "
         "and corners' curvature over its faces (flat faces do not read 0); give a finer "
-        "mesh (e.g. trimesh's mesh.subdivide_to_size) for curvature", UserWarning,
-        stacklevel=3)
+        "mesh (e.g. trimesh's mesh.subdivide_to_size) for curvature",
+        UserWarning,
+        stacklevel=3,
+    )
     return True
 
 
@@ -218,32 +257,59 @@ def _mean_curvature(surf, mean, progress=None):
 def _run_on_data(surf, flow, data, t, sigma, progress) -> SurfaceRun:
     h = surf.spacing
     if flow not in DATA_FLOWS:
-        raise InputError(f"the {flow} flow makes its own data; only {', '.join(DATA_FLOWS)} take "
-                         "yours")
+        raise InputError(
+            f"the {flow} flow makes its own data; only {', '.join(DATA_FLOWS)} take yours"
+        )
     if flow == "chroma" and data.shape[:1] != (3,):
         raise InputError("chroma denoising needs colour (3-channel) data")
     if flow == "heat":
         t = 2e-4 * (h * max(surf.shape)) ** 2 if t is None else t
-        return SurfaceRun(flow, surf, data, surf.heat(data, t=t, progress=progress),
-                          f"heat flow of the mesh's data to t={t:g}")
+        return SurfaceRun(
+            flow,
+            surf,
+            data,
+            surf.heat(data, t=t, progress=progress),
+            f"heat flow of the mesh's data to t={t:g}",
+        )
     if flow == "tv":
         t = tv_time(sigma, h) if t is None else t
-        return SurfaceRun(flow, surf, data, surf.tv(data, t=t, progress=progress),
-                          f"TV flow of the mesh's data to t={t:g}")
+        return SurfaceRun(
+            flow,
+            surf,
+            data,
+            surf.tv(data, t=t, progress=progress),
+            f"TV flow of the mesh's data to t={t:g}",
+        )
     if flow == "denoise":
         t = 40 * h**2 if t is None else t
         after, info = surf.denoise_tv(data, sigma=sigma, t=t, return_info=True, progress=progress)
-        return SurfaceRun(flow, surf, data, after,
-                          f"TV denoising of the mesh's data for noise sigma={sigma:g}: residual "
-                          f"variance {info.residual_variance:.4g}")
+        return SurfaceRun(
+            flow,
+            surf,
+            data,
+            after,
+            f"TV denoising of the mesh's data for noise sigma={sigma:g}: residual "
+            f"variance {info.residual_variance:.4g}",
+        )
     t = 4 * h**2 if t is None else t
-    return SurfaceRun(flow, surf, data, surf.denoise_colour(data, t=t, progress=progress),
-                      "the mesh's colours: chroma harmonic map p=1 and brightness TV flow to "
-                      f"t={t:g}")
+    return SurfaceRun(
+        flow,
+        surf,
+        data,
+        surf.denoise_colour(data, t=t, progress=progress),
+        f"the mesh's colours: chroma harmonic map p=1 and brightness TV flow to t={t:g}",
+    )
 
 
-def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), size=400,
-              overwrite=False, on_input=False) -> list:
+def write_run(
+    run: SurfaceRun,
+    outdir,
+    *,
+    views=((30.0, 25.0), (210.0, 25.0)),
+    size=400,
+    overwrite=False,
+    on_input=False,
+) -> list:
     """before.png, after.png, result.ply and result.glb (after, coloured) in the folder
     outdir, created if missing; an existing one must be empty, or with overwrite=True hold
     only clpde's kinds of output files, and is then replaced as a whole
@@ -259,8 +325,7 @@ def write_run(run: SurfaceRun, outdir, *, views=((30.0, 25.0), (210.0, 25.0)), s
 def _write_run_files(run: SurfaceRun, outdir, views, size, on_input=False) -> list:
     def make(u, **options):
         if on_input:
-            return on_mesh(run.surface, u, **options) if u is not None else \
-                run.surface.mesh.copy()
+            return on_mesh(run.surface, u, **options) if u is not None else run.surface.mesh.copy()
         return to_mesh(run.surface, u, **options)
 
     written = []
@@ -274,10 +339,15 @@ def _write_run_files(run: SurfaceRun, outdir, views, size, on_input=False) -> li
             lo, hi = middle - 0.5 * run.span, middle + 0.5 * run.span
         after = make(run.after, vmin=lo, vmax=hi)
     before = make(run.before, vmin=lo, vmax=hi)
-    where = (f"on the input mesh ({len(after.vertices)} vertices)" if on_input else
-             f"on a marching-cubes mesh ({len(after.vertices)} vertices)")
-    titles = {"before": f"before: the {run.flow} flow's input, {where}",
-              "after": f"after: {run.note}"}
+    where = (
+        f"on the input mesh ({len(after.vertices)} vertices)"
+        if on_input
+        else f"on a marching-cubes mesh ({len(after.vertices)} vertices)"
+    )
+    titles = {
+        "before": f"before: the {run.flow} flow's input, {where}",
+        "after": f"after: {run.note}",
+    }
     for name, mesh in (("before", before), ("after", after)):
         image = np.concatenate([render_mesh(mesh, size, a, e) for a, e in views], axis=1)
         image = with_title(image, titles[name])
@@ -294,6 +364,5 @@ def _write_run_files(run: SurfaceRun, outdir, views, size, on_input=False) -> li
 def write_png(path, image) -> None:
     """An RGB(A) uint8 picture as a PNG file, written atomically."""
     import imageio.v3 as iio
-
 
     write_bytes(path, iio.imwrite("<bytes>", image, extension=".png"))

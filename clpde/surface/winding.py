@@ -41,7 +41,6 @@ class WindingNumbers:
     def __init__(self, triangles, cluster=64, device=None):
         import pyopencl.array as cla
 
-
         tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
         if len(tri) == 0:
             raise InputError("the mesh has no triangles")
@@ -56,16 +55,19 @@ class WindingNumbers:
         weight = np.add.reduceat(area, starts)
         count = np.diff(np.append(starts, nf))
         plain = np.add.reduceat(centroid, starts) / count[:, None]
-        weighted = np.add.reduceat(centroid * area[:, None], starts) / np.where(weight > 0, weight,
-                                                                                1)[:, None]
+        weighted = (
+            np.add.reduceat(centroid * area[:, None], starts)
+            / np.where(weight > 0, weight, 1)[:, None]
+        )
         centre = np.where((weight > 0)[:, None], weighted, plain)
         owner = np.repeat(np.arange(len(starts)), count)
         reach = np.linalg.norm(tri - centre[owner][:, None, :], axis=2).max(axis=1)
         self.radius = np.maximum.reduceat(reach, starts)
         self.centre = centre
         moment = np.einsum("fi,fj->fij", area_vec, centroid - centre[owner]).reshape(nf, 9)
-        clu = np.concatenate([centre, np.add.reduceat(area_vec, starts),
-                              np.add.reduceat(moment, starts)], axis=1)
+        clu = np.concatenate(
+            [centre, np.add.reduceat(area_vec, starts), np.add.reduceat(moment, starts)], axis=1
+        )
         self.nclusters = len(starts)
         self.triangles = tri
         self._cl_start = cla.to_device(q, np.append(starts, nf).astype(np.int32))
@@ -104,8 +106,10 @@ class WindingNumbers:
             if exact:
                 near = np.ones((t1 - t0, self.nclusters), dtype=bool)
             else:
-                gap = np.maximum(np.maximum(lo[t0:t1, None, :] - self.centre[None], 0),
-                                 self.centre[None] - hi[t0:t1, None, :])
+                gap = np.maximum(
+                    np.maximum(lo[t0:t1, None, :] - self.centre[None], 0),
+                    self.centre[None] - hi[t0:t1, None, :],
+                )
                 dist = np.linalg.norm(np.maximum(gap, 0), axis=2)
                 near = dist <= float(beta) * self.radius[None]
             r, c = np.nonzero(near)
@@ -134,12 +138,23 @@ class WindingNumbers:
 
         out = cla.empty(q, n, np.float32)
         nchunks = len(chunk_tile)
-        self._kernel(q, *self.rt.items(nchunks), dev(sorted_pts.reshape(-1), np.float32),
-                     dev(chunk_start), dev(chunk_end), dev(chunk_tile), np.int32(nchunks),
-                     dev(near_off), dev(near_cols),
-                     dev(far_off), dev(far_cols), self._cl_start.data, self._clu.data,
-                     self._tri.data,
-                     out.data)
+        self._kernel(
+            q,
+            *self.rt.items(nchunks),
+            dev(sorted_pts.reshape(-1), np.float32),
+            dev(chunk_start),
+            dev(chunk_end),
+            dev(chunk_tile),
+            np.int32(nchunks),
+            dev(near_off),
+            dev(near_cols),
+            dev(far_off),
+            dev(far_cols),
+            self._cl_start.data,
+            self._clu.data,
+            self._tri.data,
+            out.data,
+        )
         w = np.empty(n)
         w[order] = out.get()
         return w

@@ -68,9 +68,14 @@ def _blur_coarse(a: np.ndarray, sigma: float) -> np.ndarray:
     return np.repeat(np.repeat(blurred, 2, axis=0), 2, axis=1)[:h, :w]
 
 
-def region_field(image: np.ndarray, mask: np.ndarray, sigma: float = 6.0,
-                 separation: float = 0.5, noise: float | None = None,
-                 pool: float = 1.5) -> np.ndarray:
+def region_field(
+    image: np.ndarray,
+    mask: np.ndarray,
+    sigma: float = 6.0,
+    separation: float = 0.5,
+    noise: float | None = None,
+    pool: float = 1.5,
+) -> np.ndarray:
     """The region speed in [-1, 1] per pixel (positive: the pixel looks like the outside,
     the contour should shrink there), from (C, H, W) features and the start mask.
 
@@ -123,8 +128,9 @@ class ComponentMotion:
         With more pieces of min_size pixels than this, the mask is matched as one object.
     """
 
-    def __init__(self, radius: int = 6, gate: float = 0.05, min_size: int = 12,
-                 max_pieces: int = 4):
+    def __init__(
+        self, radius: int = 6, gate: float = 0.05, min_size: int = 12, max_pieces: int = 4
+    ):
         self.radius, self.gate, self.min_size = int(radius), float(gate), int(min_size)
         self.max_pieces = int(max_pieces)
         self._labels = None
@@ -139,8 +145,9 @@ class ComponentMotion:
             return np.zeros(2)
         return self._velocities.get(int(np.argmax(hits)), np.zeros(2))
 
-    def predict(self, prev_features: np.ndarray, features: np.ndarray,
-                mask: np.ndarray) -> list[tuple[np.ndarray, tuple[float, float]]]:
+    def predict(
+        self, prev_features: np.ndarray, features: np.ndarray, mask: np.ndarray
+    ) -> list[tuple[np.ndarray, tuple[float, float]]]:
         """[(piece mask, (dy, dx))] for each piece of `mask` (the previous frame's result),
         matched from prev_features to features ((C, H, W) each)."""
         labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
@@ -158,11 +165,13 @@ class ComponentMotion:
                 prior = self._prior(piece)
                 reach = int(np.ceil(np.abs(prior).max())) + 3
                 radius = max(self.radius, reach)
-                (dy, dx), _ = match_displacement(prev_features, features, piece, prior, radius,
-                                                  dilation=DILATION)
+                (dy, dx), _ = match_displacement(
+                    prev_features, features, piece, prior, radius, dilation=DILATION
+                )
                 d = _refine(prev_features, features, piece, np.array([dy, dx]))
-                if np.abs(d).max() < 0.25 or not _explains(prev_features, features, piece, d,
-                                                             self.gate):
+                if np.abs(d).max() < 0.25 or not _explains(
+                    prev_features, features, piece, d, self.gate
+                ):
                     d = np.zeros(2)  # the frames do not show the motion: drop it
             velocities[k] = d
             pieces.append((piece, (float(d[0]), float(d[1]))))
@@ -186,8 +195,7 @@ class ComponentMotion:
         out = np.array(image, np.float64, copy=True)
         reach = int(np.ceil(band)) + 4
         for piece, d in moved:
-            near = ndimage.binary_dilation(shift_image(piece * 1.0, d) > 0.5,
-                                           iterations=reach)
+            near = ndimage.binary_dilation(shift_image(piece * 1.0, d) > 0.5, iterations=reach)
             for c in range(out.shape[0]):
                 out[c][near] = shift_image(image[c], d)[near]
         return u_new, out, True
@@ -225,5 +233,4 @@ def _explains(prev, cur, piece, d, gate: float) -> bool:
     still = np.abs(cur - prev).sum(axis=0)[weight]
     gain = still - cost
     n_eff = max(weight.sum() / 4.0, 1.0)
-    return bool(gain.mean() > gate * still.mean()
-                and gain.mean() > 2 * gain.std() / np.sqrt(n_eff))
+    return bool(gain.mean() > gate * still.mean() and gain.mean() > 2 * gain.std() / np.sqrt(n_eff))

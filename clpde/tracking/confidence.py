@@ -29,8 +29,15 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-FEATURES = ("area_jump", "area_drift", "separation", "appearance", "fragments", "edge",
-            "discrepancy")
+FEATURES = (
+    "area_jump",
+    "area_drift",
+    "separation",
+    "appearance",
+    "fragments",
+    "edge",
+    "discrepancy",
+)
 # Logistic weights (intercept first, then FEATURES' order) and the flagging threshold,
 # fitted by benchmarks/tracking_generalise.py --calibrate-confidence.
 WEIGHTS = (1.772, -3.339, -4.371, 2.418, -0.7796, -1.428, -0.6542, 1.76)
@@ -56,8 +63,9 @@ def _bhattacharyya(a, b) -> float:
     if a is None or b is None:
         return 0.0
     (ma, va), (mb, vb) = a, b
-    return float(np.sum(0.25 * (ma - mb) ** 2 / (va + vb)
-                        + 0.5 * np.log((va + vb) / (2 * np.sqrt(va * vb)))))
+    return float(
+        np.sum(0.25 * (ma - mb) ** 2 / (va + vb) + 0.5 * np.log((va + vb) / (2 * np.sqrt(va * vb))))
+    )
 
 
 def _pieces(mask) -> int:
@@ -69,15 +77,24 @@ def separation(image, mask, ring: int = 6) -> float:
     """Bhattacharyya distance between the features (grey level, local standard deviation)
     inside and outside `mask` within `ring` px of its boundary; image (H, W) or (C, H, W)."""
     std = _standardised(image)
-    feats = np.stack([std, np.sqrt(np.maximum(ndimage.uniform_filter(std * std, 5)
-                                              - ndimage.uniform_filter(std, 5) ** 2, 0))])
+    feats = np.stack(
+        [
+            std,
+            np.sqrt(
+                np.maximum(
+                    ndimage.uniform_filter(std * std, 5) - ndimage.uniform_filter(std, 5) ** 2, 0
+                )
+            ),
+        ]
+    )
     mask = np.asarray(mask, bool)
     if not mask.any() or mask.all():
         return 0.0
     inside = ndimage.distance_transform_edt(mask)
     outside = ndimage.distance_transform_edt(~mask)
-    return _bhattacharyya(_stats(feats, mask & (inside <= ring)),
-                          _stats(feats, ~mask & (outside <= ring)))
+    return _bhattacharyya(
+        _stats(feats, mask & (inside <= ring)), _stats(feats, ~mask & (outside <= ring))
+    )
 
 
 def frame_features(frames, masks) -> np.ndarray:
@@ -85,9 +102,19 @@ def frame_features(frames, masks) -> np.ndarray:
     row 0 is zeros (the given mask)."""
     masks = np.asarray(masks, bool)
     std = [_standardised(f) for f in frames]
-    feats = [np.stack([s, np.sqrt(np.maximum(ndimage.uniform_filter(s * s, 5)
-                                             - ndimage.uniform_filter(s, 5) ** 2, 0))])
-             for s in std]
+    feats = [
+        np.stack(
+            [
+                s,
+                np.sqrt(
+                    np.maximum(
+                        ndimage.uniform_filter(s * s, 5) - ndimage.uniform_filter(s, 5) ** 2, 0
+                    )
+                ),
+            ]
+        )
+        for s in std
+    ]
     area0 = masks[0].sum() + 1.0
     ref = _stats(feats[0], masks[0])
     out = np.zeros((len(masks), len(FEATURES)))
@@ -106,15 +133,19 @@ def frame_features(frames, masks) -> np.ndarray:
         sep = _bhattacharyya(_stats(feats[t], ring_in), _stats(feats[t], ring_out))
         app = _bhattacharyya(_stats(feats[t], m), ref)
         grad = ndimage.gaussian_gradient_magnitude(std[t], 1.0)
-        edge = (grad[contour].mean() + 1e-3) / (grad[near].mean() + 1e-3) if contour.any() \
-            else 1.0
+        edge = (grad[contour].mean() + 1e-3) / (grad[near].mean() + 1e-3) if contour.any() else 1.0
         disc = float(np.abs(std[t] - std[t - 1])[near].mean()) if near.any() else 0.0
         base = np.median(history) if history else disc
         history.append(disc)
-        out[t] = (abs(np.log(area / area_prev)), abs(np.log(area / area0)),
-                  np.log(sep + 1e-3), np.log(app + 1e-3),
-                  abs(_pieces(m) - _pieces(prev)), np.log(edge),
-                  np.log((disc + 1e-3) / (base + 1e-3)))
+        out[t] = (
+            abs(np.log(area / area_prev)),
+            abs(np.log(area / area0)),
+            np.log(sep + 1e-3),
+            np.log(app + 1e-3),
+            abs(_pieces(m) - _pieces(prev)),
+            np.log(edge),
+            np.log((disc + 1e-3) / (base + 1e-3)),
+        )
     return out
 
 

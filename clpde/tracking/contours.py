@@ -104,22 +104,25 @@ def _check_frames(frames) -> list[np.ndarray]:
         try:
             items = [np.asarray(f) for f in frames]
         except TypeError:
-            raise InputError("frames must be a (T, H, W) array or a sequence of 2-D "
-                             "arrays") from None
+            raise InputError(
+                "frames must be a (T, H, W) array or a sequence of 2-D arrays"
+            ) from None
     if not items:
         raise InputError("frames is empty: give at least one frame")
     for k, f in enumerate(items):
         if not (f.ndim == 2 or (f.ndim == 3 and f.shape[-1] in (3, 4))):
-            raise InputError(f"frame {k} has shape {f.shape}; every frame must be 2-D (grey) "
-                             f"or (H, W, 3) colour")
+            raise InputError(
+                f"frame {k} has shape {f.shape}; every frame must be 2-D (grey) or (H, W, 3) colour"
+            )
         if f.shape != items[0].shape:
             raise InputError(
                 f"frame {k} is {f.shape[1]}x{f.shape[0]} but frame 0 is "
                 f"{items[0].shape[1]}x{items[0].shape[0]}; all frames must have one size"
                 + ("" if f.shape[:2] != items[0].shape[:2] else " and kind (grey or colour)")
             )
-        if f.dtype == bool or not (np.issubdtype(f.dtype, np.integer)
-                                   or np.issubdtype(f.dtype, np.floating)):
+        if f.dtype == bool or not (
+            np.issubdtype(f.dtype, np.integer) or np.issubdtype(f.dtype, np.floating)
+        ):
             raise InputError(f"frame {k} has dtype {f.dtype}; expected integers or floats")
         if np.issubdtype(f.dtype, np.floating) and not np.isfinite(f).all():
             raise InputError(f"frame {k} contains NaN or infinite values")
@@ -167,7 +170,8 @@ def _user_features(features, frames: list[np.ndarray]) -> np.ndarray:
     if stack.ndim != 4 or stack.shape[2:] != shape:
         raise InputError(
             f"feature maps of shape {stack.shape[1:]} do not fit frames of {shape[1]}x{shape[0]}: "
-            "give (H, W) or (H, W, C) per frame")
+            "give (H, W) or (H, W, C) per frame"
+        )
     if not np.isfinite(stack).all():
         raise InputError("the feature maps contain NaN or infinite values")
     lo, hi = float(stack.min()), float(stack.max())
@@ -263,20 +267,39 @@ class MorphingTracker:
     [(48, 48), (48, 48), (48, 48)]
     """
 
-    def __init__(self, frames: ArrayLike, first_mask: ArrayLike, *,
-                 features: str | ArrayLike | Callable = "intensity", colour: bool = False,
-                 discrepancy: str = "ncc", motion: str | None = "kalman",
-                 shape_weight: float = 0.0, equalize: bool | str = False,
-                 smooth: bool = True, smooth_steps: int = 5,
-                 smooth_kappa: float = 0.08, band_width: float = 3.0,
-                 max_iterations: int | None = None, tol: float = 0.02, check_every: int = 2,
-                 dt: float = 0.5, max_dt: float = 4.0, reinit_iterations: int = 5,
-                 min_size: int = 0, contrast_radius: int = 4, contrast_eps: float = 0.02,
-                 ncc_radius: int = 3,
-                 huber_delta: float = 0.05, search_radius: int = 6, storage: str = "lists",
-                 region_weight: float | None = None, curvature: float | None = None,
-                 device: DeviceLike = None,
-                 dtype: DTypeLike | None = None):
+    def __init__(
+        self,
+        frames: ArrayLike,
+        first_mask: ArrayLike,
+        *,
+        features: str | ArrayLike | Callable = "intensity",
+        colour: bool = False,
+        discrepancy: str = "ncc",
+        motion: str | None = "kalman",
+        shape_weight: float = 0.0,
+        equalize: bool | str = False,
+        smooth: bool = True,
+        smooth_steps: int = 5,
+        smooth_kappa: float = 0.08,
+        band_width: float = 3.0,
+        max_iterations: int | None = None,
+        tol: float = 0.02,
+        check_every: int = 2,
+        dt: float = 0.5,
+        max_dt: float = 4.0,
+        reinit_iterations: int = 5,
+        min_size: int = 0,
+        contrast_radius: int = 4,
+        contrast_eps: float = 0.02,
+        ncc_radius: int = 3,
+        huber_delta: float = 0.05,
+        search_radius: int = 6,
+        storage: str = "lists",
+        region_weight: float | None = None,
+        curvature: float | None = None,
+        device: DeviceLike = None,
+        dtype: DTypeLike | None = None,
+    ):
         self.frames = _check_frames(frames)
         self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
         self._user = None
@@ -284,14 +307,18 @@ class MorphingTracker:
             self._user = _user_features(features, self.frames)
             features = "user"
         elif features not in FEATURES:
-            raise InputError(f"features must be one of {', '.join(FEATURES)}, an array of maps "
-                             f"per frame or a callable, not {features!r}")
+            raise InputError(
+                f"features must be one of {', '.join(FEATURES)}, an array of maps "
+                f"per frame or a callable, not {features!r}"
+            )
         if discrepancy not in DISCREPANCIES:
-            raise InputError(f"discrepancy must be one of {', '.join(DISCREPANCIES)}, "
-                             f"not {discrepancy!r}")
+            raise InputError(
+                f"discrepancy must be one of {', '.join(DISCREPANCIES)}, not {discrepancy!r}"
+            )
         if motion not in MOTIONS:
-            raise InputError(f"motion must be None, 'velocity', 'kalman' or 'components', "
-                             f"not {motion!r}")
+            raise InputError(
+                f"motion must be None, 'velocity', 'kalman' or 'components', not {motion!r}"
+            )
         if not 0 < dt <= 0.5:
             raise InputError(f"dt={dt} is outside (0, 0.5], the stable range of the upwind scheme")
         if max_iterations is None:
@@ -302,23 +329,28 @@ class MorphingTracker:
             raise InputError(
                 f"check_every={check_every} lets the front move {check_every * CFL:g} pixels "
                 f"between checks, more than the band's {NEAR_EDGE:g}-pixel safety margin; "
-                f"use check_every <= {int(NEAR_EDGE / CFL)}")
+                f"use check_every <= {int(NEAR_EDGE / CFL)}"
+            )
         if not 1 <= int(ncc_radius) <= 4:
             raise InputError(f"ncc_radius must be 1 to 4 pixels, not {ncc_radius}")
         if not 1 <= int(contrast_radius) <= 16:
             raise InputError(f"contrast_radius must be 1 to 16 pixels, not {contrast_radius}")
         if shape_weight < 0 or huber_delta <= 0 or search_radius < 0 or contrast_eps <= 0:
-            raise InputError("shape_weight and search_radius must be >= 0, huber_delta and "
-                             "contrast_eps > 0")
+            raise InputError(
+                "shape_weight and search_radius must be >= 0, huber_delta and contrast_eps > 0"
+            )
         adaptive = discrepancy == "adaptive"
-        region_weight = (REGION_WEIGHT if adaptive else 0.0) if region_weight is None \
-            else float(region_weight)
+        region_weight = (
+            (REGION_WEIGHT if adaptive else 0.0) if region_weight is None else float(region_weight)
+        )
         curvature = (CURVATURE if adaptive else 0.0) if curvature is None else float(curvature)
         if region_weight < 0 or curvature < 0:
             raise InputError("region_weight and curvature must be at least 0")
         if not adaptive and (region_weight or curvature):
-            raise InputError("region_weight and curvature work with discrepancy='adaptive' "
-                             "only: drop them or use the adaptive discrepancy")
+            raise InputError(
+                "region_weight and curvature work with discrepancy='adaptive' "
+                "only: drop them or use the adaptive discrepancy"
+            )
         self.region_weight, self.curvature = region_weight, curvature
         self.features, self.discrepancy, self.motion = features, discrepancy, motion
         self.shape_weight = float(shape_weight)
@@ -343,12 +375,21 @@ class MorphingTracker:
         self.dtype = np.dtype(dtype or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
 
-        check_fits(self.runtime, (1,) + self.frames[0].shape, "tracking", 10,
-                   ghost=GHOST + MARGIN, dtype=self.dtype)
+        check_fits(
+            self.runtime,
+            (1,) + self.frames[0].shape,
+            "tracking",
+            10,
+            ghost=GHOST + MARGIN,
+            dtype=self.dtype,
+        )
         stack = np.stack([f.astype(np.float64) for f in self.frames])
         if stack.ndim == 4:  # colour: all channels, or grey (Rec. 601 luma)
-            stack = (np.moveaxis(stack[..., :3], -1, 1) if colour else
-                     (stack[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis])
+            stack = (
+                np.moveaxis(stack[..., :3], -1, 1)
+                if colour
+                else (stack[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis]
+            )
         else:
             stack = stack[:, np.newaxis]
         lo, hi = float(stack.min()), float(stack.max())
@@ -369,19 +410,30 @@ class MorphingTracker:
         if self.equalize == "match" and index > 0:
             # Equalise the grey levels across the sequence: each frame gets the first
             # frame's histogram, as beta = F2 - F1 compares grey values directly.
-            img = np.stack([match_histogram(c, r) for c,
-                            r in zip(img, self._scaled[0], strict=False)])
+            img = np.stack(
+                [match_histogram(c, r) for c, r in zip(img, self._scaled[0], strict=False)]
+            )
         elif self.equalize == "global":
             from skimage.exposure import equalize_hist
 
             img = np.stack([equalize_hist(c) for c in img])
         if self.smooth and self.smooth_steps > 0:
-
             # The rational edge-stopping function: as anisotropic as the exponential one
             # and about 3x faster on PoCL, where exp() does not vectorise.
-            img = np.stack([diffuse(c, "perona-malik", steps=self.smooth_steps,
-                                    kappa=self.smooth_kappa, edge="rational",
-                                    device=self.runtime, progress=False) for c in img])
+            img = np.stack(
+                [
+                    diffuse(
+                        c,
+                        "perona-malik",
+                        steps=self.smooth_steps,
+                        kappa=self.smooth_kappa,
+                        edge="rational",
+                        device=self.runtime,
+                        progress=False,
+                    )
+                    for c in img
+                ]
+            )
         return np.asarray(img, np.float64)
 
     def _feature_field(self, image: np.ndarray, ls: LevelSet) -> Field:
@@ -390,14 +442,22 @@ class MorphingTracker:
         if self.features in ("edges", "contrast"):
             out = Field.empty(grid)
             if self.features == "edges":
-                grid.launch(grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data,
-                            out.data.data)
+                grid.launch(
+                    grid.kernel("tracking/levelset.cl", "gradient_magnitude"),
+                    f.data.data,
+                    out.data.data,
+                )
             else:
                 # Scaled by 1/4: normalised values of about +-2 become F2 - F1 of the
                 # order of the [0, 1] grey levels, for which tol and dt are set.
-                grid.launch(grid.kernel("tracking/features.cl", "local_contrast"), f.data.data,
-                            out.data.data, np.int32(self.contrast_radius),
-                            grid.scalar(self.contrast_eps**2), grid.scalar(0.25))
+                grid.launch(
+                    grid.kernel("tracking/features.cl", "local_contrast"),
+                    f.data.data,
+                    out.data.data,
+                    np.int32(self.contrast_radius),
+                    grid.scalar(self.contrast_eps**2),
+                    grid.scalar(0.25),
+                )
             out.fill_ghosts()
             f = out
         return f
@@ -408,8 +468,17 @@ class MorphingTracker:
         return local_contrast(image, self.contrast_radius)
 
     # ---- the morphing of one frame pair ------------------------------------------------
-    def _morph(self, ls: LevelSet, f1: Field, f2: Field, prior: Field, discrepancy=None,
-               region: Field | None = None, noise2: float = 0.0, refresh=None):
+    def _morph(
+        self,
+        ls: LevelSet,
+        f1: Field,
+        f2: Field,
+        prior: Field,
+        discrepancy=None,
+        region: Field | None = None,
+        noise2: float = 0.0,
+        refresh=None,
+    ):
         """Run the coupled system on one frame pair; returns (iterations, converged,
         final mean |beta| in the band).
 
@@ -423,21 +492,38 @@ class MorphingTracker:
         discrepancy = discrepancy or self.discrepancy
         extra = ()
         if discrepancy == "adaptive":
-            kernel = ls.band_kernel("tracking/adaptive.cl", "morph_adaptive" if ls.brick is None
-                                    else "morph_adaptive_bricks", NCH=self.channels,
-                                    WIN=self.ncc_radius)
-            extra = ((region if region is not None else ls.u.cur).data.data,
-                     g.scalar(CONTRAST_NOISE * noise2 + 1e-6), g.scalar(self.curvature),
-                     g.scalar(DISCREPANCY_WEIGHT))
+            kernel = ls.band_kernel(
+                "tracking/adaptive.cl",
+                "morph_adaptive" if ls.brick is None else "morph_adaptive_bricks",
+                NCH=self.channels,
+                WIN=self.ncc_radius,
+            )
+            extra = (
+                (region if region is not None else ls.u.cur).data.data,
+                g.scalar(CONTRAST_NOISE * noise2 + 1e-6),
+                g.scalar(self.curvature),
+                g.scalar(DISCREPANCY_WEIGHT),
+            )
         else:
-            kernel = ls.band_kernel("tracking/features.cl", morph_kernel_name(ls, discrepancy),
-                                    NCH=self.channels, DISC=DISCREPANCIES[discrepancy],
-                                    WIN=self.ncc_radius)
+            kernel = ls.band_kernel(
+                "tracking/features.cl",
+                morph_kernel_name(ls, discrepancy),
+                NCH=self.channels,
+                DISC=DISCREPANCIES[discrepancy],
+                WIN=self.ncc_radius,
+            )
         pair = PingPong(f1)
         lam = self.shape_weight
         delta = self.huber_delta if discrepancy == "huber" else 0.02
-        consts = (g.scalar(0.02**2), g.scalar(1e-3**2), g.scalar(NEAR_EDGE), g.scalar(lam),
-                  g.scalar(delta), np.int32(g.sx), np.int32(g.plane))
+        consts = (
+            g.scalar(0.02**2),
+            g.scalar(1e-3**2),
+            g.scalar(NEAR_EDGE),
+            g.scalar(lam),
+            g.scalar(delta),
+            np.int32(g.sx),
+            np.int32(g.plane),
+        )
         dt_cap = self.max_dt if lam == 0 else min(self.max_dt, 0.5 / lam)
         if discrepancy == "adaptive" and self.curvature > 0:
             dt_cap = min(dt_cap, 0.2 / self.curvature)  # the explicit curvature term's limit
@@ -458,19 +544,34 @@ class MorphingTracker:
             if stats is None:
                 parts = ls.band_parts()
                 stats = cla.zeros(q, 5 * parts + 1, g.dtype)
-            ls.launch_band(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data,
-                           f2.data.data, ls.band_mask.data, prior.data.data, ls.u.nxt.data.data,
-                           pair.nxt.data.data, stats.data, g.scalar(dt), *consts, *extra)
+            ls.launch_band(
+                kernel,
+                ls.band,
+                ls.u.cur.data.data,
+                pair.cur.data.data,
+                f2.data.data,
+                ls.band_mask.data,
+                prior.data.data,
+                ls.u.nxt.data.data,
+                pair.nxt.data.data,
+                stats.data,
+                g.scalar(dt),
+                *consts,
+                *extra,
+            )
             ls.u.swap()
             pair.swap()
             iterations += 1
             if iterations % self.check_every == 0 or iterations == self.max_iterations:
                 # One small read every few steps: speed, stability maxima and edge flag.
                 values = stats.get()
-                fastest, beta_max, grad_max = (values[k * parts:(k + 1) * parts].max()
-                                               for k in range(3))
-                residual = float(values[3 * parts:4 * parts].sum()
-                                 / max(values[4 * parts:5 * parts].sum(), 1))
+                fastest, beta_max, grad_max = (
+                    values[k * parts : (k + 1) * parts].max() for k in range(3)
+                )
+                residual = float(
+                    values[3 * parts : 4 * parts].sum()
+                    / max(values[4 * parts : 5 * parts].sum(), 1)
+                )
                 if fastest < self.tol:
                     converged = True
                     break
@@ -500,7 +601,6 @@ class MorphingTracker:
         prepared_prev = self.prepared(0)
         pieces_motion = None
         if self.motion == "components":
-
             pieces_motion, motion = ComponentMotion(self.search_radius), None
         else:
             motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
@@ -531,7 +631,6 @@ class MorphingTracker:
                     prepared_prev = np.stack([shift_image(c, shift) for c in prepared_prev])
                     fresh = False
             if pieces_motion is not None:
-
                 # Contrast-normalised as for the Kalman model, with eps raised to twice the
                 # noise so that a flat, noisy patch is not blown up into texture.
 
@@ -541,8 +640,9 @@ class MorphingTracker:
                     feats_prev = local_contrast(prepared_prev, self.contrast_radius, eps)
                 pieces = pieces_motion.predict(feats_prev, feats, mask)
                 feats_prev = feats
-                u_moved, prev_moved, moved = ComponentMotion.apply(ls.values(), prepared_prev,
-                                                                   pieces, self.band_width)
+                u_moved, prev_moved, moved = ComponentMotion.apply(
+                    ls.values(), prepared_prev, pieces, self.band_width
+                )
                 if moved and (u_moved < 0).any() and not (u_moved < 0).all():
                     ls.assign(u_moved)
                     prepared_prev = prev_moved
@@ -552,7 +652,6 @@ class MorphingTracker:
             f1 = self._feature_field(prepared_prev, ls)
             noise2, refresh = 0.0, None
             if adaptive:
-
                 features = prepared if self._user is None else self._user[t]
                 noise2 = noise_variance(features)
 
@@ -562,7 +661,8 @@ class MorphingTracker:
                     speed = np.zeros(features.shape[-2:])
                     if self.region_weight > 0:
                         speed = self.region_weight * region_field(
-                            features, ls.values() < 0, REGION_SIGMA, REGION_SEPARATION, noise2)
+                            features, ls.values() < 0, REGION_SIGMA, REGION_SEPARATION, noise2
+                        )
                     # Into the same buffer each time; band cells never read its ghosts.
                     padded = np.zeros(ls.grid.padded_shape, ls.grid.dtype)
                     ls.grid.interior(padded)[...] = ls.pad(speed)[np.newaxis]
@@ -577,8 +677,9 @@ class MorphingTracker:
             if self.shape_weight:
                 prior.assign(ls.u.cur)
             rebuilds0 = ls.rebuilds
-            iterations, converged, residual = self._morph(ls, f1, f2, prior, region=region,
-                                                          noise2=noise2, refresh=refresh)
+            iterations, converged, residual = self._morph(
+                ls, f1, f2, prior, region=region, noise2=noise2, refresh=refresh
+            )
             fresh = ls.rebuilds > rebuilds0
             u = ls.values()
             new_mask = u < 0
@@ -593,9 +694,16 @@ class MorphingTracker:
             if motion is not None:
                 motion.observe(mask, new_mask)
             mask = new_mask
-            yield TrackState(t, mask, u.astype(np.float32), iterations, converged,
-                             ls.rebuilds - rebuilds0, discrepancy=residual,
-                             displacement=tuple(float(s) for s in shift))
+            yield TrackState(
+                t,
+                mask,
+                u.astype(np.float32),
+                iterations,
+                converged,
+                ls.rebuilds - rebuilds0,
+                discrepancy=residual,
+                displacement=tuple(float(s) for s in shift),
+            )
             prepared_prev = prepared
 
     def confidence(self, masks: ArrayLike) -> np.ndarray:
@@ -629,8 +737,10 @@ class MorphingTracker:
 
         masks = np.asarray(masks, bool)
         if masks.shape != (len(self.frames),) + self.first_mask.shape:
-            raise InputError(f"confidence needs one ({self.first_mask.shape[0]}, "
-                             f"{self.first_mask.shape[1]}) mask per frame, got {masks.shape}")
+            raise InputError(
+                f"confidence needs one ({self.first_mask.shape[0]}, "
+                f"{self.first_mask.shape[1]}) mask per frame, got {masks.shape}"
+            )
         return track_confidence(self._scaled.mean(axis=1), masks)
 
     def _clean(self, mask: np.ndarray) -> np.ndarray:
@@ -653,6 +763,7 @@ def match_histogram(image: np.ndarray, reference: np.ndarray, levels: int = 4096
     """Histogram specification of data in [0, 1]: the grey-level map that gives `image` the
     grey-level distribution of `reference`, on `levels` quantisation levels (equal values
     stay equal)."""
+
     def quantise(a):
         return np.minimum((np.asarray(a) * levels).astype(np.int64), levels - 1)
 
@@ -678,13 +789,25 @@ def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
     return keep[labels]
 
 
-def track(frames: ArrayLike, first_mask: ArrayLike, *,
-          features: str | ArrayLike | Callable = "intensity", equalize: bool | str = False,
-          smooth: bool = True, smooth_steps: int = 5, band_width: float = 3.0,
-          max_iterations: int | None = None, tol: float = 0.02, min_size: int = 0,
-          device: DeviceLike = None, progress: bool | None = None,
-          return_level_sets: bool = False, return_discrepancy: bool = False,
-          return_confidence: bool = False, **options: Any) -> np.ndarray | tuple[np.ndarray, ...]:
+def track(
+    frames: ArrayLike,
+    first_mask: ArrayLike,
+    *,
+    features: str | ArrayLike | Callable = "intensity",
+    equalize: bool | str = False,
+    smooth: bool = True,
+    smooth_steps: int = 5,
+    band_width: float = 3.0,
+    max_iterations: int | None = None,
+    tol: float = 0.02,
+    min_size: int = 0,
+    device: DeviceLike = None,
+    progress: bool | None = None,
+    return_level_sets: bool = False,
+    return_discrepancy: bool = False,
+    return_confidence: bool = False,
+    **options: Any,
+) -> np.ndarray | tuple[np.ndarray, ...]:
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
     Parameters
@@ -772,22 +895,36 @@ def track(frames: ArrayLike, first_mask: ArrayLike, *,
     >>> bool((masks[-1] == (frames[-1] > 0.5)).mean() > 0.99)   # found in the last frame
     True
     """
-    tracker = MorphingTracker(frames, first_mask, features=features, equalize=equalize,
-                              smooth=smooth, smooth_steps=smooth_steps, band_width=band_width,
-                              max_iterations=max_iterations, tol=tol, min_size=min_size,
-                              device=device, **options)
+    tracker = MorphingTracker(
+        frames,
+        first_mask,
+        features=features,
+        equalize=equalize,
+        smooth=smooth,
+        smooth_steps=smooth_steps,
+        band_width=band_width,
+        max_iterations=max_iterations,
+        tol=tol,
+        min_size=min_size,
+        device=device,
+        **options,
+    )
     n = len(tracker)
     height, width = tracker.first_mask.shape
     masks = np.zeros((n, height, width), bool)
     levels = np.zeros((n, height, width), np.float32) if return_level_sets else None
     residuals = np.zeros(n)
-    for state in progress_bar(progress, n, "clpde track", iterable=tracker.iterate(),
-                              unit="frame", long_run=n >= 20):
+    for state in progress_bar(
+        progress, n, "clpde track", iterable=tracker.iterate(), unit="frame", long_run=n >= 20
+    ):
         masks[state.index] = state.mask
         residuals[state.index] = state.discrepancy
         if levels is not None:
             levels[state.index] = state.level_set
-    out = (masks,) + ((levels,) if return_level_sets else ()) + (
-        (residuals,) if return_discrepancy else ()) + (
-        (tracker.confidence(masks),) if return_confidence else ())
+    out = (
+        (masks,)
+        + ((levels,) if return_level_sets else ())
+        + ((residuals,) if return_discrepancy else ())
+        + ((tracker.confidence(masks),) if return_confidence else ())
+    )
     return out[0] if len(out) == 1 else out

@@ -25,8 +25,9 @@ def shift_image(image: np.ndarray, shift) -> np.ndarray:
     return ndimage.shift(np.asarray(image, np.float64), shift, order=1, mode="nearest")
 
 
-def local_contrast(image: np.ndarray, radius: int = 4, eps: float = 0.02,
-                   scale: float = 0.25) -> np.ndarray:
+def local_contrast(
+    image: np.ndarray, radius: int = 4, eps: float = 0.02, scale: float = 0.25
+) -> np.ndarray:
     """scale (I - mean) / sqrt(var + eps^2) over (2 radius + 1)^2 boxes, per channel of
     (C, H, W) data, the edge repeated: kernels/tracking/features.cl's local_contrast on the
     host (separable box sums), used to match frames for the motion model."""
@@ -60,9 +61,10 @@ def _search(prev, cur, weight, centre, radius):
         for dx in range(cx - radius, cx + radius + 1):
             if x0 + dx < 0 or x1 + dx > w:
                 continue
-            window = cur[:, y0 + dy:y1 + dy, x0 + dx:x1 + dx]
+            window = cur[:, y0 + dy : y1 + dy, x0 + dx : x1 + dx]
             costs[dy - cy + radius, dx - cx + radius] = (
-                np.abs(window - template).sum(axis=0)[wt].sum() / total)
+                np.abs(window - template).sum(axis=0)[wt].sum() / total
+            )
     return costs
 
 
@@ -73,8 +75,9 @@ def _halve(a):
     return 0.25 * (a[..., ::2, ::2] + a[..., 1::2, ::2] + a[..., ::2, 1::2] + a[..., 1::2, 1::2])
 
 
-def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, centre, radius: int,
-                       dilation: int = 3):
+def match_displacement(
+    prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, centre, radius: int, dilation: int = 3
+):
     """The (dy, dx) within about `radius` of `centre` minimising the mean absolute
     difference between cur(x + d) and prev(x) over the mask dilated by `dilation` px
     (features (C, H, W)); also returns the final cost map.
@@ -106,8 +109,7 @@ def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, cent
     for axis in (0, 1):
         j = k[axis]
         if 0 < j < costs.shape[axis] - 1:
-            lo, mid, hi = (costs[(j + d, k[1]) if axis == 0 else (k[0], j + d)]
-                           for d in (-1, 0, 1))
+            lo, mid, hi = (costs[(j + d, k[1]) if axis == 0 else (k[0], j + d)] for d in (-1, 0, 1))
             curvature = lo - 2 * mid + hi
             if np.isfinite(curvature) and curvature > 0:
                 best[axis] += float(np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5))
@@ -117,8 +119,14 @@ def match_displacement(prev: np.ndarray, cur: np.ndarray, mask: np.ndarray, cent
 class MotionFilter:
     """The displacement model of clpde.track (motion='velocity' or 'kalman')."""
 
-    def __init__(self, kind: str, radius: int = 6, process: float = 1.0,
-                 measurement: float = 1.0, gate: float = 3.0):
+    def __init__(
+        self,
+        kind: str,
+        radius: int = 6,
+        process: float = 1.0,
+        measurement: float = 1.0,
+        gate: float = 3.0,
+    ):
         self.kind, self.radius = kind, int(radius)
         self.q, self.r, self.gate = float(process), float(measurement), float(gate)
         self.v = np.zeros(2)  # displacement per frame (dy, dx)
@@ -133,8 +141,11 @@ class MotionFilter:
         z, _ = match_displacement(prev_features, features, mask, prior_v, self.radius)
         z = np.array(z)
         innovation = z - prior_v
-        r = np.where(np.abs(innovation) > self.gate * np.sqrt(prior_p + self.r),
-                     (innovation / self.gate) ** 2, self.r)  # a jump: trust it less
+        r = np.where(
+            np.abs(innovation) > self.gate * np.sqrt(prior_p + self.r),
+            (innovation / self.gate) ** 2,
+            self.r,
+        )  # a jump: trust it less
         gain = prior_p / (prior_p + r)
         self.v = prior_v + gain * innovation
         self.p = (1 - gain) * prior_p
@@ -148,4 +159,4 @@ class MotionFilter:
         c0 = np.array(np.nonzero(before)).mean(axis=1)
         c1 = np.array(np.nonzero(after)).mean(axis=1)
         # What the morphing moved plus the shift it started from.
-        self.v = (c1 - c0)
+        self.v = c1 - c0

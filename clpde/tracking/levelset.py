@@ -55,8 +55,10 @@ def signed_distance(mask) -> np.ndarray:
     if not mask.any():
         raise InputError("the mask is empty: mark at least one pixel of the object to follow")
     if mask.all():
-        raise InputError("the mask covers the whole image, so it has no boundary to follow; "
-                         "leave the background unmarked")
+        raise InputError(
+            "the mask covers the whole image, so it has no boundary to follow; "
+            "leave the background unmarked"
+        )
     inside = ndimage.distance_transform_edt(mask)
     outside = ndimage.distance_transform_edt(~mask)
     return np.where(mask, 0.5 - inside, outside - 0.5)
@@ -75,14 +77,22 @@ class LevelSet:
     is the edge a flow watches to ask for a rebuild.
     """
 
-    def __init__(self, runtime, u0, band_width: float = 3.0, dtype=np.float32,
-                 storage: str = "lists", group_per_brick: bool | None = None):
+    def __init__(
+        self,
+        runtime,
+        u0,
+        band_width: float = 3.0,
+        dtype=np.float32,
+        storage: str = "lists",
+        group_per_brick: bool | None = None,
+    ):
         if storage not in STORAGES:
             raise InputError(f"storage must be one of {', '.join(STORAGES)}, not {storage!r}")
         self.storage, self.brick = storage, STORAGES[storage]
         # GPUs take a brick per work-group; forced either way only to test both on a CPU.
-        self.group_per_brick = (not runtime.is_cpu if group_per_brick is None
-                                else bool(group_per_brick))
+        self.group_per_brick = (
+            not runtime.is_cpu if group_per_brick is None else bool(group_per_brick)
+        )
         u0 = np.asarray(u0, np.float64)
         if u0.ndim != 2:
             raise InputError(f"the level set must be 2-D, got shape {u0.shape}")
@@ -132,8 +142,13 @@ class LevelSet:
     def build_band(self) -> None:
         """Mark |u| < w on the device and compact it into the band's index list."""
         g = self.grid
-        g.launch(g.kernel("tracking/levelset.cl", "mark_band"), self.u.cur.data.data,
-                 self.band_mask.data, g.scalar(self.band_width), np.int32(MARGIN))
+        g.launch(
+            g.kernel("tracking/levelset.cl", "mark_band"),
+            self.u.cur.data.data,
+            self.band_mask.data,
+            g.scalar(self.band_width),
+            np.int32(MARGIN),
+        )
         self.band = self._cells(self.band_mask)
         # Cells outside the band are never written by band kernels: make both buffers agree
         # there so swapping never brings back stale values.
@@ -156,14 +171,28 @@ class LevelSet:
     def dilate_band(self) -> None:
         """Mark the movable cells within REACH cells of the band (into _near_mask)."""
         g = self.grid
-        g.launch(g.kernel("tracking/levelset.cl", "dilate_band_rows"), self.band_mask.data,
-                 self._near_rows.data, np.int32(REACH))
-        g.launch(g.kernel("tracking/levelset.cl", "dilate_band_cols"), self._near_rows.data,
-                 self._near_mask.data, np.int32(REACH), np.int32(MARGIN))
+        g.launch(
+            g.kernel("tracking/levelset.cl", "dilate_band_rows"),
+            self.band_mask.data,
+            self._near_rows.data,
+            np.int32(REACH),
+        )
+        g.launch(
+            g.kernel("tracking/levelset.cl", "dilate_band_cols"),
+            self._near_rows.data,
+            self._near_mask.data,
+            np.int32(REACH),
+            np.int32(MARGIN),
+        )
 
     # ---- reinitialisation --------------------------------------------------------------
-    def reinitialize(self, iterations: int | None = None, dt: float = REINIT_DT,
-                     cells=None, subcell_fix: bool = True) -> None:
+    def reinitialize(
+        self,
+        iterations: int | None = None,
+        dt: float = REINIT_DT,
+        cells=None,
+        subcell_fix: bool = True,
+    ) -> None:
         """PDE reinitialisation with the Russo-Smereka subcell fix at the front, of the
         given cells (an IndexList; default: every cell inside the frozen margin).
 
@@ -177,8 +206,9 @@ class LevelSet:
         g = self.grid
         plain = {} if subcell_fix else {"PLAIN_REINIT": 1}
         bricks = self.brick is not None
-        kernel = self.band_kernel("tracking/levelset.cl", "reinit_step_bricks" if bricks
-                                  else "reinit_step_list", **plain)
+        kernel = self.band_kernel(
+            "tracking/levelset.cl", "reinit_step_bricks" if bricks else "reinit_step_list", **plain
+        )
         self._phi0.assign(self.u.cur)
         self.u.nxt.assign(self.u.cur)  # cells left out are the same in both buffers
         for _ in range(iterations):
@@ -206,9 +236,15 @@ class LevelSet:
         nbx, nby, *corners = self._brick_geometry()
         flags = cla.empty(self.runtime.queue, nbx * nby, np.uint8)
         self.band_kernel("tracking/levelset.cl", "mark_bricks")(
-            self.runtime.queue, *self.runtime.items(nbx * nby), mask.data, flags.data,
-            np.int32(nbx), np.int32(nby), *(np.int32(c) for c in corners),
-            np.int32(self.grid.sx))
+            self.runtime.queue,
+            *self.runtime.items(nbx * nby),
+            mask.data,
+            flags.data,
+            np.int32(nbx),
+            np.int32(nby),
+            *(np.int32(c) for c in corners),
+            np.int32(self.grid.sx),
+        )
         ids = compact(self.runtime, flags)
         return BrickSet(ids.indices, ids.n, mask)
 
@@ -216,8 +252,9 @@ class LevelSet:
         """A kernel of the band's storage: list kernels as they are, brick kernels built for
         this brick size and launch geometry."""
         if self.brick is not None:
-            defines.update(BX=self.brick[0], BY=self.brick[1],
-                           GROUP_PER_BRICK=int(self.group_per_brick))
+            defines.update(
+                BX=self.brick[0], BY=self.brick[1], GROUP_PER_BRICK=int(self.group_per_brick)
+            )
         return self.grid.kernel(filename, name, **defines)
 
     def _brick_launch(self, n: int):
@@ -245,9 +282,18 @@ class LevelSet:
             return self.grid.launch_list(kernel, cells, *args)
         gsize, lsize, per = self._brick_launch(cells.n)
         nbx, _, *corners = self._brick_geometry()
-        return kernel(self.runtime.queue, (gsize,), (lsize,), *args, cells.ids.data,
-                      np.int32(cells.n), np.int32(nbx), *(np.int32(c) for c in corners),
-                      np.int32(self.grid.sx), np.int32(per))
+        return kernel(
+            self.runtime.queue,
+            (gsize,),
+            (lsize,),
+            *args,
+            cells.ids.data,
+            np.int32(cells.n),
+            np.int32(nbx),
+            *(np.int32(c) for c in corners),
+            np.int32(self.grid.sx),
+            np.int32(per),
+        )
 
     def stored_cells(self) -> int:
         """Cells the band's launches visit: the band's cells, or its bricks' cells."""

@@ -46,8 +46,18 @@ def test_inpaint_keeps_a_16_bit_colour_png_at_16_bits(tmp_path, capsys):
     write_image(tmp_path / "rgb16.png", image)
     write_image(tmp_path / "mask.png", _square_mask())
     assert read_image(tmp_path / "rgb16.png").dtype == np.uint16
-    assert main(["inpaint", str(tmp_path / "rgb16.png"), str(tmp_path / "mask.png"), "-o",
-                 str(tmp_path / "out.tif")]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "rgb16.png"),
+                str(tmp_path / "mask.png"),
+                "-o",
+                str(tmp_path / "out.tif"),
+            ]
+        )
+        == 0
+    )
     out = read_image(tmp_path / "out.tif")
     assert out.dtype == np.uint16 and out.shape == image.shape
     inside = _square_mask() > 0
@@ -71,8 +81,18 @@ def test_an_empty_mask_warns_and_reports_no_method(tmp_path, capsys):
 
     write_image(tmp_path / "in.png", image)
     write_image(tmp_path / "empty.png", np.zeros(image.shape, np.uint8))
-    assert main(["inpaint", str(tmp_path / "in.png"), str(tmp_path / "empty.png"), "-o",
-                 str(tmp_path / "out.png")]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "in.png"),
+                str(tmp_path / "empty.png"),
+                "-o",
+                str(tmp_path / "out.png"),
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "clpde: warning: the mask is empty, so nothing was filled" in err
     assert "method" not in err and "0 pixels to fill" in err
@@ -96,7 +116,10 @@ def test_batch_expands_a_quoted_pattern(tmp_path):
     for name in ("b.png", "a.png", "c.tif"):
         write_image(tmp_path / name, np.zeros((4, 4), np.uint8))
     assert expand_inputs([tmp_path / "*.png", tmp_path / "c.tif"]) == [
-        str(tmp_path / "a.png"), str(tmp_path / "b.png"), str(tmp_path / "c.tif")]
+        str(tmp_path / "a.png"),
+        str(tmp_path / "b.png"),
+        str(tmp_path / "c.tif"),
+    ]
 
 
 # ---- the output is checked before any work ------------------------------------------------------
@@ -114,8 +137,14 @@ def read_only_folder(tmp_path):
         pass
     else:
         (folder / "probe").unlink()
-        immutable = subprocess.run(["chattr", "+i", str(folder)], capture_output=True,
-                                   check=False).returncode == 0 if shutil.which("chattr") else False
+        immutable = (
+            subprocess.run(
+                ["chattr", "+i", str(folder)], capture_output=True, check=False
+            ).returncode
+            == 0
+            if shutil.which("chattr")
+            else False
+        )
         if not immutable:
             folder.chmod(0o755)
             pytest.skip("cannot make a folder read-only here (root without chattr +i)")
@@ -127,14 +156,19 @@ def read_only_folder(tmp_path):
 
 def _never_compute(monkeypatch):
     """Make every computation fail loudly: a check that comes after it is too late."""
+
     def computed(*args, **kwargs):
         raise AssertionError("computed before the output was checked")
 
     # the command table's own names (clpde.scale.tasks), where the commands call them
-    for module, name in [("clpde.scale.tasks", "diffuse"), ("clpde.scale.tasks", "denoise_tv"),
-                         ("clpde.scale.tasks", "inpaint"), ("clpde.scale.tasks", "track"),
-                         ("clpde.scale.cluster", "start_cluster"),
-                         ("clpde.io.frames", "read_frames")]:
+    for module, name in [
+        ("clpde.scale.tasks", "diffuse"),
+        ("clpde.scale.tasks", "denoise_tv"),
+        ("clpde.scale.tasks", "inpaint"),
+        ("clpde.scale.tasks", "track"),
+        ("clpde.scale.cluster", "start_cluster"),
+        ("clpde.io.frames", "read_frames"),
+    ]:
         monkeypatch.setattr(importlib.import_module(module), name, computed)
 
 
@@ -146,8 +180,15 @@ def _commands(tmp_path, out_dir):
         "diffuse": ["diffuse", str(image), str(out_dir / "out.png"), "--steps", "1"],
         "denoise": ["denoise", str(image), str(out_dir / "out.png")],
         "inpaint": ["inpaint", str(image), str(mask), "-o", str(out_dir / "out.tif")],
-        "inpaint --gif": ["inpaint", str(image), str(mask), "-o", str(tmp_path / "o.tif"),
-                          "--gif", str(out_dir / "evolution.gif")],
+        "inpaint --gif": [
+            "inpaint",
+            str(image),
+            str(mask),
+            "-o",
+            str(tmp_path / "o.tif"),
+            "--gif",
+            str(out_dir / "evolution.gif"),
+        ],
         "track": ["track", str(image), "--init", str(mask), "-o", str(out_dir / "t")],
         "regions": ["regions", "merge", "-o", str(out_dir / "r")],
         "surface": ["surface", "heat", "sphere", "-o", str(out_dir / "s")],
@@ -155,13 +196,22 @@ def _commands(tmp_path, out_dir):
     }
 
 
-COMMANDS = ["diffuse", "denoise", "inpaint", "inpaint --gif", "track", "regions", "surface",
-            "batch"]
+COMMANDS = [
+    "diffuse",
+    "denoise",
+    "inpaint",
+    "inpaint --gif",
+    "track",
+    "regions",
+    "surface",
+    "batch",
+]
 
 
 @pytest.mark.parametrize("command", COMMANDS)
-def test_an_unwritable_output_folder_is_refused_before_any_work(tmp_path, read_only_folder,
-                                                                 monkeypatch, capsys, command):
+def test_an_unwritable_output_folder_is_refused_before_any_work(
+    tmp_path, read_only_folder, monkeypatch, capsys, command
+):
     argv = _commands(tmp_path, read_only_folder)[command]
     _never_compute(monkeypatch)
     assert main(argv) == 2
@@ -171,8 +221,7 @@ def test_an_unwritable_output_folder_is_refused_before_any_work(tmp_path, read_o
 
 
 @pytest.mark.parametrize("command", [c for c in COMMANDS if c != "batch"])  # batch: mkdir -p
-def test_a_missing_output_folder_is_refused_before_any_work(tmp_path, monkeypatch, capsys,
-                                                            command):
+def test_a_missing_output_folder_is_refused_before_any_work(tmp_path, monkeypatch, capsys, command):
     argv = _commands(tmp_path, tmp_path / "missing" / "deeper")[command]
     _never_compute(monkeypatch)
     assert main(argv) == 2
@@ -180,8 +229,7 @@ def test_a_missing_output_folder_is_refused_before_any_work(tmp_path, monkeypatc
     assert not (tmp_path / "missing").exists()
 
 
-def test_an_output_that_is_a_folder_or_of_no_known_format_is_refused(tmp_path, monkeypatch,
-                                                                     capsys):
+def test_an_output_that_is_a_folder_or_of_no_known_format_is_refused(tmp_path, monkeypatch, capsys):
     argv = _commands(tmp_path, tmp_path)
     _never_compute(monkeypatch)
     (tmp_path / "folder.png").mkdir()
@@ -192,15 +240,18 @@ def test_an_output_that_is_a_folder_or_of_no_known_format_is_refused(tmp_path, m
 
 
 # ---- help, docs and messages that agree with the code -------------------------------------------
-@pytest.mark.parametrize("argv", [
-    ["inpaint", "a.png"],                                  # -o missing
-    ["diffuse", "a.png", "b.png", "--steps", "x"],         # a bad value
-    ["denoise", "a.png", "b.png", "--sigma", "1", "--weight", "2"],  # exclusive options
-    ["inpaint", "a.png", "m.png", "-o", "o.png", "--method", "paint"],
-    ["batch", "inpaint"],
-    [],
-    ["no-such-command"],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["inpaint", "a.png"],  # -o missing
+        ["diffuse", "a.png", "b.png", "--steps", "x"],  # a bad value
+        ["denoise", "a.png", "b.png", "--sigma", "1", "--weight", "2"],  # exclusive options
+        ["inpaint", "a.png", "m.png", "-o", "o.png", "--method", "paint"],
+        ["batch", "inpaint"],
+        [],
+        ["no-such-command"],
+    ],
+)
 def test_usage_errors_are_one_line(capsys, argv):
     assert main(argv) == 2
     line = _error_line(capsys)
@@ -212,7 +263,7 @@ def test_inpaint_help_describes_the_default_method(capsys):
 
     assert main(["inpaint", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
-    description = text[text.index("Fill the pixels"):text.index("positional arguments")]
+    description = text[text.index("Fill the pixels") : text.index("positional arguments")]
     assert f"The default method is {DEFAULT} transport" in description
     # (argparse wraps lines after hyphens: "self- validated" once the lines are joined)
     assert "--method auto is the self-validated choice" in description.replace("- ", "-")
@@ -227,23 +278,24 @@ def _subparsers():
 
 def test_every_option_of_every_command_is_in_the_command_line_page():
     page = (ROOT / "docs" / "command-line.md").read_text()
-    sections = dict(re.findall(r"^### `clpde (\S+)`.*?\n(.*?)(?=^### |^## |\Z)", page,
-                               re.S | re.M))
+    sections = dict(re.findall(r"^### `clpde (\S+)`.*?\n(.*?)(?=^### |^## |\Z)", page, re.S | re.M))
     missing = []
     for name, sub in _subparsers().items():
         assert name in sections, f"docs/command-line.md has no section ### `clpde {name}`"
         for action in sub._actions:
             for option in action.option_strings:
-                if option.startswith("--") and option not in ("--help", "--device") and \
-                        not re.search(rf"`{re.escape(option)}[` ]", sections[name]):
+                if (
+                    option.startswith("--")
+                    and option not in ("--help", "--device")
+                    and not re.search(rf"`{re.escape(option)}[` ]", sections[name])
+                ):
                     missing.append(f"clpde {name} {option}")
     assert not missing, f"options missing from docs/command-line.md: {missing}"
 
 
 def test_time_step_messages_name_no_python_none(tmp_path, capsys):
     write_image(tmp_path / "in.png", np.eye(16, dtype=np.uint8) * 200)
-    assert main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--dt",
-                 "10"]) == 2
+    assert main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--dt", "10"]) == 2
     line = _error_line(capsys)
     assert "None" not in line and "stability limit" in line
 
@@ -276,8 +328,9 @@ def test_grow_is_exact_across_its_strips(rng, radius):
 
     mask = rng.random((700, 90)) < 0.002  # strips of 256 rows: the disc crosses them
     mask[255, 40] = mask[256, 70] = mask[0, 0] = mask[699, 89] = True
-    np.testing.assert_array_equal(grow_mask(mask, radius),
-                                  ndimage.distance_transform_edt(~mask) <= radius)
+    np.testing.assert_array_equal(
+        grow_mask(mask, radius), ndimage.distance_transform_edt(~mask) <= radius
+    )
 
 
 def test_grow_keeps_soft_values_and_gives_the_ring_full_damage():
@@ -323,15 +376,49 @@ def test_inpaint_grow_is_inpaint_of_the_grown_mask(tmp_path, capsys):
     write_image(tmp_path / "in.png", image)
     write_image(tmp_path / "mask.png", mask.astype(np.uint8) * 255)
     write_image(tmp_path / "grown.png", grown.astype(np.uint8) * 255)
-    assert main(["inpaint", str(tmp_path / "in.png"), str(tmp_path / "mask.png"), "-o",
-                 str(tmp_path / "a.png"), "--grow", "2"]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "in.png"),
+                str(tmp_path / "mask.png"),
+                "-o",
+                str(tmp_path / "a.png"),
+                "--grow",
+                "2",
+            ]
+        )
+        == 0
+    )
     assert f"inpaint: {int(grown.sum())} pixels" in capsys.readouterr().err
-    assert main(["inpaint", str(tmp_path / "in.png"), str(tmp_path / "grown.png"), "-o",
-                 str(tmp_path / "b.png")]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "in.png"),
+                str(tmp_path / "grown.png"),
+                "-o",
+                str(tmp_path / "b.png"),
+            ]
+        )
+        == 0
+    )
     np.testing.assert_array_equal(read_image(tmp_path / "a.png"), read_image(tmp_path / "b.png"))
     capsys.readouterr()
-    assert main(["inpaint", str(tmp_path / "in.png"), str(tmp_path / "mask.png"), "-o",
-                 str(tmp_path / "c.png"), "--grow", "-1"]) == 2
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "in.png"),
+                str(tmp_path / "mask.png"),
+                "-o",
+                str(tmp_path / "c.png"),
+                "--grow",
+                "-1",
+            ]
+        )
+        == 2
+    )
     assert "--grow must be a number of pixels >= 0, not -1" in _error_line(capsys)
 
 
@@ -343,12 +430,26 @@ def test_seed_on_the_command_line_is_the_exemplars_seed(tmp_path):
     write_image(tmp_path / "mask.png", mask.astype(np.uint8) * 255)
     outs = {}
     for seed in (1, 2):
-        assert main(["inpaint", str(tmp_path / "in.png"), str(tmp_path / "mask.png"), "-o",
-                     str(tmp_path / f"s{seed}.png"), "--method", "exemplar", "--seed",
-                     str(seed)]) == 0
+        assert (
+            main(
+                [
+                    "inpaint",
+                    str(tmp_path / "in.png"),
+                    str(tmp_path / "mask.png"),
+                    "-o",
+                    str(tmp_path / f"s{seed}.png"),
+                    "--method",
+                    "exemplar",
+                    "--seed",
+                    str(seed),
+                ]
+            )
+            == 0
+        )
         outs[seed] = read_image(tmp_path / f"s{seed}.png")
-        np.testing.assert_array_equal(outs[seed], clpde.inpaint(image, mask, method="exemplar",
-                                                                seed=seed))
+        np.testing.assert_array_equal(
+            outs[seed], clpde.inpaint(image, mask, method="exemplar", seed=seed)
+        )
     assert not np.array_equal(outs[1], outs[2])
 
 
@@ -356,8 +457,20 @@ def test_seed_on_the_command_line_is_the_exemplars_seed(tmp_path):
 def test_dir_lists_the_public_api_only():
     names = dir(clpde)
     assert names == sorted(set(clpde.__all__) | set(clpde.PUBLIC_MODULES) | {"__version__"})
-    for internal in ("rof", "planar", "runtime", "imagedata", "tiled", "fields", "levelset",
-                     "colour", "multiresolution", "regions_mesh", "_progress", "_state"):
+    for internal in (
+        "rof",
+        "planar",
+        "runtime",
+        "imagedata",
+        "tiled",
+        "fields",
+        "levelset",
+        "colour",
+        "multiresolution",
+        "regions_mesh",
+        "_progress",
+        "_state",
+    ):
         assert internal not in names
     for name in names:
         getattr(clpde, name)  # everything listed is there
@@ -396,16 +509,25 @@ def _interrupt(argv, cwd, when):
     import psutil
 
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-m", "clpde", *argv], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "clpde", *argv],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and proc.poll() is None:
             process = psutil.Process(proc.pid)
             if when == "workers":
-                if any("spawn_main" in " ".join(c.cmdline())
-                       for c in process.children(recursive=True) if c.is_running()):
+                if any(
+                    "spawn_main" in " ".join(c.cmdline())
+                    for c in process.children(recursive=True)
+                    if c.is_running()
+                ):
                     break
             elif any("_multiarray_umath" in m.path for m in process.memory_maps()):
                 break
@@ -445,8 +567,11 @@ def test_ctrl_c_while_clpde_loads_is_one_line(film_inputs):
 
 @pytest.mark.parametrize("command", ["batch", "film"])
 def test_ctrl_c_while_the_dask_cluster_starts_is_one_line(film_inputs, command):
-    argv = (["batch", "denoise", "in.png", "-o", "out", "--workers", "2"] if command == "batch"
-            else ["inpaint", "frames", "mask.png", "-o", "film.mp4", "--workers", "2"])
+    argv = (
+        ["batch", "denoise", "in.png", "-o", "out", "--workers", "2"]
+        if command == "batch"
+        else ["inpaint", "frames", "mask.png", "-o", "film.mp4", "--workers", "2"]
+    )
     line = _interrupt(argv, film_inputs, "workers")
     assert "interrupted" in line
     assert not (film_inputs / "film.mp4").exists()

@@ -10,8 +10,9 @@ from clpde.cli import main
 @pytest.fixture
 def noisy_png(tmp_path):
     rng = np.random.default_rng(5)
-    image = np.clip(128 + 40 * (np.arange(64)[None, :] > 32) + rng.normal(0, 12, (64, 64)),
-                    0, 255).astype(np.uint8)
+    image = np.clip(
+        128 + 40 * (np.arange(64)[None, :] > 32) + rng.normal(0, 12, (64, 64)), 0, 255
+    ).astype(np.uint8)
     path = tmp_path / "noisy.png"
     Image.fromarray(image).save(path)
     return path
@@ -35,8 +36,22 @@ def test_diffuse_presmooth_matches_the_library(noisy_png, tmp_path):
     from clpde.io import read_image
 
     out = tmp_path / "pm.png"
-    assert main(["diffuse", str(noisy_png), str(out), "--flow", "perona-malik", "--steps", "20",
-                 "--presmooth", "1.5"]) == 0
+    assert (
+        main(
+            [
+                "diffuse",
+                str(noisy_png),
+                str(out),
+                "--flow",
+                "perona-malik",
+                "--steps",
+                "20",
+                "--presmooth",
+                "1.5",
+            ]
+        )
+        == 0
+    )
     want = clpde.diffuse(read_image(noisy_png), "perona-malik", steps=20, presmooth=1.5)
     np.testing.assert_array_equal(read_image(out), want)
     assert main(["diffuse", str(noisy_png), str(out), "--flow", "heat", "--presmooth", "1"]) == 2
@@ -50,7 +65,6 @@ def test_denoise_per_channel_option(tmp_path, capsys):
     Image.fromarray(rgb).save(tmp_path / "in.png")
     for flag, vectorial in (([], True), (["--per-channel"], False)):
         out = tmp_path / f"out{len(flag)}.png"
-        assert main(["denoise", str(tmp_path / "in.png"), str(out), "--weight", "0.1",
-                     *flag]) == 0
+        assert main(["denoise", str(tmp_path / "in.png"), str(out), "--weight", "0.1", *flag]) == 0
         want = clpde.denoise_tv(rgb, weight=0.1, channel_axis=-1, vectorial=vectorial)
         np.testing.assert_array_equal(read_image(out), want)

@@ -42,9 +42,28 @@ def test_rgba_keeps_alpha_and_gif_shows_the_evolution(tmp_path, damaged):
     rgba = np.dstack([spoiled, 255 - spoiled, spoiled // 2, np.full_like(spoiled, 180)])
     write_image(tmp_path / "rgba.png", rgba)
     out, gif = tmp_path / "out.png", tmp_path / "evolution.gif"
-    assert main(["inpaint", str(tmp_path / "rgba.png"), str(maskfile), "-o", str(out),
-                 "--gif", str(gif), "--gif-every", "68", "--max-steps", "340", "--tol", "0",
-                 "--mean-tol", "0"]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "rgba.png"),
+                str(maskfile),
+                "-o",
+                str(out),
+                "--gif",
+                str(gif),
+                "--gif-every",
+                "68",
+                "--max-steps",
+                "340",
+                "--tol",
+                "0",
+                "--mean-tol",
+                "0",
+            ]
+        )
+        == 0
+    )
     result = read_image(out)
     assert result.shape == rgba.shape and np.array_equal(result[..., 3], rgba[..., 3])
     assert np.array_equal(result[~mask], rgba[~mask])
@@ -52,20 +71,27 @@ def test_rgba_keeps_alpha_and_gif_shows_the_evolution(tmp_path, damaged):
     assert frames.shape[0] >= 6 and frames.shape[1:3] == mask.shape
 
 
-@pytest.mark.parametrize("args,match", [
-    (["{photo}", "{small}", "-o", "{out}"], "same size"),
-    (["{photo}", "-o", "{out}"], "give IMAGE and MASK"),
-    (["{photo}", "{mask}", "-o", "{photo}"], ""),
-    (["{photo}", "{mask}", "-o", "{out}", "--gif", "{dir}/a.png"], ".gif"),
-    (["{photo}", "{mask}", "-o", "{out}", "--dt", "-1"], "dt"),
-    (["--demo", "{photo}", "-o", "{dir}/demo"], "--demo"),
-])
+@pytest.mark.parametrize(
+    "args,match",
+    [
+        (["{photo}", "{small}", "-o", "{out}"], "same size"),
+        (["{photo}", "-o", "{out}"], "give IMAGE and MASK"),
+        (["{photo}", "{mask}", "-o", "{photo}"], ""),
+        (["{photo}", "{mask}", "-o", "{out}", "--gif", "{dir}/a.png"], ".gif"),
+        (["{photo}", "{mask}", "-o", "{out}", "--dt", "-1"], "dt"),
+        (["--demo", "{photo}", "-o", "{dir}/demo"], "--demo"),
+    ],
+)
 def test_errors_write_nothing(tmp_path, damaged, capsys, args, match):
     photo, maskfile, *_ = damaged
     write_image(tmp_path / "small.png", np.zeros((5, 5), np.uint8))
-    names = {"photo": photo, "mask": maskfile, "small": tmp_path / "small.png",
-             "out": tmp_path / "out.png",
-                 "dir": tmp_path}
+    names = {
+        "photo": photo,
+        "mask": maskfile,
+        "small": tmp_path / "small.png",
+        "out": tmp_path / "out.png",
+        "dir": tmp_path,
+    }
     before = sorted(os.listdir(tmp_path))
     assert main(["inpaint", *[a.format(**names) for a in args]]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -76,20 +102,29 @@ def test_errors_write_nothing(tmp_path, damaged, capsys, args, match):
 def test_demo_writes_the_pictures(tmp_path, monkeypatch):
     # The real demo inpaints a 512x512 photo; a corner of it keeps the test fast.
     full = inpaint_demo.damaged_astronaut
-    monkeypatch.setattr(inpaint_demo, "damaged_astronaut",
-                        lambda: tuple(a[:96, :96] for a in full()))
+    monkeypatch.setattr(
+        inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full())
+    )
     out = tmp_path / "demo"
     assert main(["inpaint", "--demo", "-o", str(out)]) == 0
     names = sorted(os.listdir(out))
-    assert names == ["damaged.png", "inpaint_before_after.png", "inpainted.png", "mask.png",
-                     "original.png"]
-    original, damaged_, mask = (read_image(out / n) for n in ("original.png", "damaged.png",
-                                                              "mask.png"))
+    assert names == [
+        "damaged.png",
+        "inpaint_before_after.png",
+        "inpainted.png",
+        "mask.png",
+        "original.png",
+    ]
+    original, damaged_, mask = (
+        read_image(out / n) for n in ("original.png", "damaged.png", "mask.png")
+    )
     restored = read_image(out / "inpainted.png")
     mask = mask > 0
     assert mask.any() and np.array_equal(restored[~mask], damaged_[~mask])
-    assert np.abs(restored[mask].astype(float) - original[mask]).mean() < \
-        np.abs(damaged_[mask].astype(float) - original[mask]).mean() / 2
+    assert (
+        np.abs(restored[mask].astype(float) - original[mask]).mean()
+        < np.abs(damaged_[mask].astype(float) - original[mask]).mean() / 2
+    )
 
 
 def test_method_and_soft_mask(tmp_path, damaged, capsys):
@@ -97,8 +132,23 @@ def test_method_and_soft_mask(tmp_path, damaged, capsys):
     grey = (mask * 128).astype(np.uint8)  # about half damaged
     write_image(tmp_path / "soft.png", grey)
     out = tmp_path / "soft_out.png"
-    assert main(["inpaint", str(photo), str(tmp_path / "soft.png"), "-o", str(out),
-                 "--soft-mask", "--method", "transport", "--max-steps", "68"]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(photo),
+                str(tmp_path / "soft.png"),
+                "-o",
+                str(out),
+                "--soft-mask",
+                "--method",
+                "transport",
+                "--max-steps",
+                "68",
+            ]
+        )
+        == 0
+    )
     want = clpde.inpaint(spoiled, grey.astype(np.float32) / 255, method="transport", max_steps=68)
     np.testing.assert_array_equal(read_image(out), want)
     assert main(["inpaint", str(photo), str(maskfile), "-o", str(out), "--method", "paint"]) == 2
@@ -108,8 +158,9 @@ def test_method_and_soft_mask(tmp_path, damaged, capsys):
 def test_demo_puts_its_psnr_beside_the_peers(tmp_path, monkeypatch, capsys):
     """the demo's PSNR had nothing to compare it with."""
     full = inpaint_demo.damaged_astronaut
-    monkeypatch.setattr(inpaint_demo, "damaged_astronaut",
-                        lambda: tuple(a[:96, :96] for a in full()))
+    monkeypatch.setattr(
+        inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full())
+    )
     assert main(["inpaint", "--demo", "-o", str(tmp_path / "demo")]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert "PSNR inside the mask" in line and "scikit-image biharmonic" in line

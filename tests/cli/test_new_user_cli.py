@@ -52,17 +52,23 @@ def test_regions_rerun_holds_only_its_own_files(tmp_path, capsys):
         capsys
     )
     assert main([*args, "--saves", "1", "--overwrite"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["regions.png", "regions_0.ply",
-                                                     "regions_1.ply"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "regions.png",
+        "regions_0.ply",
+        "regions_1.ply",
+    ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging or old folder left
 
 
-@pytest.mark.parametrize("command", [
-    ["surface", "heat", "sphere"],
-    ["regions", "merge"],
-    ["inpaint", "--demo"],
-    ["track", "FRAMES", "--init", "MASK"],
-])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["surface", "heat", "sphere"],
+        ["regions", "merge"],
+        ["inpaint", "--demo"],
+        ["track", "FRAMES", "--init", "MASK"],
+    ],
+)
 def test_every_folder_command_has_one_rule(tmp_path, capsys, command):
     """Refused before any work: a non-empty folder without --overwrite, a folder with files
     clpde does not write even with it, and a missing parent (create it first)."""
@@ -70,8 +76,10 @@ def test_every_folder_command_has_one_rule(tmp_path, capsys, command):
     frames.mkdir()
     write_image(frames / "f1.png", np.zeros((8, 8), np.uint8))
     write_image(tmp_path / "mask.png", np.zeros((8, 8), np.uint8))
-    command = [str(frames) if a == "FRAMES" else str(tmp_path / "mask.png") if a == "MASK" else a
-               for a in command]
+    command = [
+        str(frames) if a == "FRAMES" else str(tmp_path / "mask.png") if a == "MASK" else a
+        for a in command
+    ]
     out = tmp_path / "out"
     out.mkdir()
     (out / "old.png").write_bytes(b"old")
@@ -94,8 +102,22 @@ def test_inpaint_reads_a_jpeg_mask_at_half_range_and_warns(noisy_png, tmp_path, 
     truth = np.zeros(image.shape, bool)
     truth[10:12, 5:40] = truth[25:27, 5:40] = True
     Image.fromarray(truth.astype(np.uint8) * 255).save(tmp_path / "mask.jpg", quality=75)
-    assert main(["inpaint", str(path), str(tmp_path / "mask.jpg"), "-o", str(tmp_path / "o.png"),
-                 "--max-steps", "20", "--levels", "1"]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(path),
+                str(tmp_path / "mask.jpg"),
+                "-o",
+                str(tmp_path / "o.png"),
+                "--max-steps",
+                "20",
+                "--levels",
+                "1",
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "clpde: warning: the mask" in err and "lossy JPEG" in err and ".py:" not in err
     filled = int(err.split("inpaint: ")[1].split()[0])
@@ -130,8 +152,12 @@ def nan_tiff(tmp_path):
 
 def test_inpaint_fills_nan_pixels_with_mask_nan(nan_tiff, tmp_path, capsys):
     path, image, holes = nan_tiff
-    assert main(["inpaint", str(path), "nan", "-o", str(tmp_path / "filled.tif"),
-                 "--max-steps", "200"]) == 0
+    assert (
+        main(
+            ["inpaint", str(path), "nan", "-o", str(tmp_path / "filled.tif"), "--max-steps", "200"]
+        )
+        == 0
+    )
     filled = read_image(tmp_path / "filled.tif")
     assert filled.dtype == np.float32 and np.isfinite(filled).all()
     np.testing.assert_array_equal(filled[~holes], image[~holes])
@@ -142,8 +168,9 @@ def test_inpaint_fills_nan_pixels_with_mask_nan(nan_tiff, tmp_path, capsys):
 def test_nan_pixels_get_command_line_advice(nan_tiff, tmp_path, capsys):
     path, _, _ = nan_tiff
     write_image(tmp_path / "none.png", np.zeros((24, 30), np.uint8))
-    assert main(["inpaint", str(path), str(tmp_path / "none.png"), "-o",
-                 str(tmp_path / "o.tif")]) == 2
+    assert (
+        main(["inpaint", str(path), str(tmp_path / "none.png"), "-o", str(tmp_path / "o.tif")]) == 2
+    )
     line = _one_error_line(capsys)
     assert "24 NaN pixels outside the mask" in line and "give 'nan' as MASK" in line
     assert "mask=None" not in line
@@ -160,8 +187,9 @@ def test_sixteen_bit_colour_to_jpeg_suggests_what_works(tmp_path, capsys):
     assert main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.jpg")]) == 2
     line = _one_error_line(capsys)
     assert "write a .png or .tif file instead" in line  # both keep 16-bit colour
-    assert main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.tif"), "--steps",
-                 "1"]) == 0
+    assert (
+        main(["diffuse", str(tmp_path / "deep.tif"), str(tmp_path / "o.tif"), "--steps", "1"]) == 0
+    )
 
 
 def test_mesh_messages(tmp_path, capsys):
@@ -172,13 +200,36 @@ def test_mesh_messages(tmp_path, capsys):
     sheet = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]])
     sheet.export(tmp_path / "sheet.ply")
     for command in (["surface", "heat"], ["regions"]):
-        assert main([*command, str(tmp_path / "sheet.ply"), "-o", str(tmp_path / "s"),
-                     "--resolution", "16"]) == 2
+        assert (
+            main(
+                [
+                    *command,
+                    str(tmp_path / "sheet.ply"),
+                    "-o",
+                    str(tmp_path / "s"),
+                    "--resolution",
+                    "16",
+                ]
+            )
+            == 2
+        )
         err = capsys.readouterr().err
         assert "encloses no volume (an open sheet" in err and "zero level set" not in err
     trimesh.creation.box([2, 2, 0.12]).export(tmp_path / "plate.ply")
-    assert main(["surface", "heat", str(tmp_path / "plate.ply"), "-o", str(tmp_path / "s"),
-                 "--resolution", "24"]) == 2
+    assert (
+        main(
+            [
+                "surface",
+                "heat",
+                str(tmp_path / "plate.ply"),
+                "-o",
+                str(tmp_path / "s"),
+                "--resolution",
+                "24",
+            ]
+        )
+        == 2
+    )
     assert "thinner than the grid's spacing" in _one_error_line(capsys)
     assert not (tmp_path / "s").exists()
 
@@ -187,8 +238,24 @@ def test_coarse_grid_warning_names_resolution(tmp_path, capsys):
     import trimesh
 
     trimesh.creation.box([2, 2, 0.12]).export(tmp_path / "plate.ply")
-    assert main(["surface", "heat", str(tmp_path / "plate.ply"), "-o", str(tmp_path / "s"),
-                 "--resolution", "32", "--size", "32", "--t", "1e-5"]) == 0
+    assert (
+        main(
+            [
+                "surface",
+                "heat",
+                str(tmp_path / "plate.ply"),
+                "-o",
+                str(tmp_path / "s"),
+                "--resolution",
+                "32",
+                "--size",
+                "32",
+                "--t",
+                "1e-5",
+            ]
+        )
+        == 0
+    )
     warning = [line for line in capsys.readouterr().err.splitlines() if "too coarse" in line]
     assert len(warning) == 1
     assert "give a larger --resolution (such as 64" in warning[0]
@@ -200,9 +267,11 @@ def test_negligible_coarse_grid_shares_are_not_shown():
 
     from clpde.cli._common import grid_advice
 
-    text = ("the grid is too coarse for this shape's thinnest features: {}% of the band lies on "
-            "a medial axis (|grad psi| < 0.5); use a finer spacing (below 0.0123) or a narrower "
-            "band")
+    text = (
+        "the grid is too coarse for this shape's thinnest features: {}% of the band lies on "
+        "a medial axis (|grad psi| < 0.5); use a finer spacing (below 0.0123) or a narrower "
+        "band"
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with grid_advice(50):
@@ -210,7 +279,9 @@ def test_negligible_coarse_grid_shares_are_not_shown():
             warnings.warn(text.format("2.50"), stacklevel=1)
             warnings.warn("something else", stacklevel=1)
     assert [str(w.message).split("; ")[-1] for w in caught] == [
-        "give a larger --resolution (such as 100, which halves the spacing)", "something else"]
+        "give a larger --resolution (such as 100, which halves the spacing)",
+        "something else",
+    ]
 
 
 # ---- 8. the inpainting GIF --------------------------------------------------------------------
@@ -226,9 +297,24 @@ def test_inpaint_gif_starts_from_the_damaged_image_and_counts_what_it_writes(tmp
     write_image(tmp_path / "d.png", damaged)
     write_image(tmp_path / "m.png", mask.astype(np.uint8) * 255)
     # converging early, the last states repeat: the count must be what the file holds
-    assert main(["inpaint", str(tmp_path / "d.png"), str(tmp_path / "m.png"), "-o",
-                 str(tmp_path / "o.png"), "--gif", str(tmp_path / "e.gif"), "--gif-every", "20",
-                 "--levels", "1"]) == 0
+    assert (
+        main(
+            [
+                "inpaint",
+                str(tmp_path / "d.png"),
+                str(tmp_path / "m.png"),
+                "-o",
+                str(tmp_path / "o.png"),
+                "--gif",
+                str(tmp_path / "e.gif"),
+                "--gif-every",
+                "20",
+                "--levels",
+                "1",
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     frames = iio.imread(tmp_path / "e.gif", index=None)
     frames = frames[..., 0] if frames.ndim == 4 else frames
@@ -245,19 +331,53 @@ def test_regions_says_when_the_surface_barely_moves(tmp_path, capsys, monkeypatc
 
     ball = trimesh.creation.icosphere(3, radius=1.0)
     cap = ball.vertices[:, 2] > 0.5
-    ball.visual.vertex_colors = np.where(cap[:, None], [[230, 200, 30, 255]],
-                                         [[110, 120, 170, 255]]).astype(np.uint8)
+    ball.visual.vertex_colors = np.where(
+        cap[:, None], [[230, 200, 30, 255]], [[110, 120, 170, 255]]
+    ).astype(np.uint8)
     ball.export(tmp_path / "painted.ply")
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)  # as on a terminal
-    assert main(["regions", str(tmp_path / "painted.ply"), "-o", str(tmp_path / "a"),
-                 "--resolution", "20", "--saves", "1", "--size", "16"]) == 0
+    assert (
+        main(
+            [
+                "regions",
+                str(tmp_path / "painted.ply"),
+                "-o",
+                str(tmp_path / "a"),
+                "--resolution",
+                "20",
+                "--saves",
+                "1",
+                "--size",
+                "16",
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert err.startswith("regions: building a grid of 20 cells")  # before the silent part
     # the default flow morphs towards the sphere of the same volume, which a ball already is
     assert "within a cell of the sphere of its volume" in err and "--flow mean-curvature" in err
     trimesh.creation.box([2.0, 1.0, 1.0]).export(tmp_path / "box.ply")
     monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
-    assert main(["regions", str(tmp_path / "box.ply"), "-o", str(tmp_path / "b"), "--flow",
-                 "morph-sphere", "--resolution", "20", "--saves", "1", "--size", "16",
-                 "--t", "1"]) == 0
+    assert (
+        main(
+            [
+                "regions",
+                str(tmp_path / "box.ply"),
+                "-o",
+                str(tmp_path / "b"),
+                "--flow",
+                "morph-sphere",
+                "--resolution",
+                "20",
+                "--saves",
+                "1",
+                "--size",
+                "16",
+                "--t",
+                "1",
+            ]
+        )
+        == 0
+    )
     assert "hardly moved" not in capsys.readouterr().err

@@ -36,8 +36,9 @@ def test_inpainting_iterates_and_has_no_other_verb():
 
 def test_tracker_iterates_and_is_not_itself_iterable():
     yy, xx = np.mgrid[:32, :32]
-    frames = np.stack([((yy - 16) ** 2 + (xx - 12 - 2 * k) ** 2 < 36).astype(np.float32)
-                       for k in range(2)])
+    frames = np.stack(
+        [((yy - 16) ** 2 + (xx - 12 - 2 * k) ** 2 < 36).astype(np.float32) for k in range(2)]
+    )
     tracker = clpde.MorphingTracker(frames, frames[0] > 0, max_iterations=6)
     states = list(tracker.iterate())
     assert all(isinstance(s, State) for s in states)
@@ -64,8 +65,10 @@ def test_dtype_everywhere_and_precision_gone():
     assert clpde.MorphingTracker(frames, mask, dtype=np.float64).dtype == np.float64
     with pytest.raises(clpde.InputError, match="precision"):
         clpde.diffuse(image, steps=3, precision=np.float64)
-    for call in (lambda: clpde.denoise_tv(image, weight=0.2, precision=np.float64),
-                 lambda: clpde.MorphingTracker(frames, mask, precision=np.float64)):
+    for call in (
+        lambda: clpde.denoise_tv(image, weight=0.2, precision=np.float64),
+        lambda: clpde.MorphingTracker(frames, mask, precision=np.float64),
+    ):
         with pytest.raises(TypeError, match="precision"):
             call()
 
@@ -111,8 +114,9 @@ def test_surface_denoise_info_is_a_dataclass():
     from clpde.surface import ImplicitSurface, SurfaceDenoiseInfo
 
     surf = ImplicitSurface.sphere(1.0, 0.1)
-    noisy = surf.field(lambda x, y, z: (z > 0).astype(float)) + 0.05 * np.sin(40 * surf.field(
-        lambda x, y, z: x))
+    noisy = surf.field(lambda x, y, z: (z > 0).astype(float)) + 0.05 * np.sin(
+        40 * surf.field(lambda x, y, z: x)
+    )
     _, info = surf.denoise_tv(noisy, sigma=0.05, t=0.02, return_info=True)
     assert isinstance(info, SurfaceDenoiseInfo) and info.steps > 0 and info.dt > 0
     assert len(info.lam_history) == -(-info.steps // 10) and info.lam == info.lam_history[-1]

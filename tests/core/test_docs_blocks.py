@@ -14,8 +14,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 # Pages that record earlier versions; their code shows the API of that time.
 HISTORY = "docs/history"  # pages of earlier versions: their code is of its time
-BLOCK = re.compile(r"(?:^<!--\s*skip:(?P<reason>[^>]*)-->\s*\n)?^```python\n(?P<code>.*?)^```",
-                   re.S | re.M)
+BLOCK = re.compile(
+    r"(?:^<!--\s*skip:(?P<reason>[^>]*)-->\s*\n)?^```python\n(?P<code>.*?)^```", re.S | re.M
+)
 
 
 def pages():
@@ -69,9 +70,11 @@ def run_blocks(page: Path, found) -> None:
 
 def test_a_deprecated_call_in_a_block_fails(tmp_path):
     page = tmp_path / "page.md"
-    page.write_text("<!-- skip: not run -->\n```python\nraise SystemExit\n```\n\n```python\n"
-                    "import warnings\n\nwarnings.warn_explicit('use iterate()', "
-                    "DeprecationWarning, 'clpde/x.py', 1, module='clpde.tracking')\n```\n")
+    page.write_text(
+        "<!-- skip: not run -->\n```python\nraise SystemExit\n```\n\n```python\n"
+        "import warnings\n\nwarnings.warn_explicit('use iterate()', "
+        "DeprecationWarning, 'clpde/x.py', 1, module='clpde.tracking')\n```\n"
+    )
     found = blocks(page)
     assert [reason for _, _, reason in found] == ["not run", None]
     with pytest.raises(DeprecationWarning, match="iterate"):

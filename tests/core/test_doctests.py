@@ -9,13 +9,26 @@ import importlib
 
 import pytest
 
-MODULES = ["clpde.data", "clpde.planar.flows", "clpde.planar.rof", "clpde.imagedata",
-           "clpde.io.images", "clpde.surface.implicit", "clpde.surface.flows",
-           "clpde.inpainting.colour", "clpde.runtime", "clpde.inpainting.api",
-           "clpde.tracking.contours", "clpde.scale.batch",
-           "clpde.regions.tracker", "clpde.surface.render",
-           "clpde.tracking.confidence", "clpde.film.stream", "clpde.film.chunks",
-           "clpde.film.container"]
+MODULES = [
+    "clpde.data",
+    "clpde.planar.flows",
+    "clpde.planar.rof",
+    "clpde.imagedata",
+    "clpde.io.images",
+    "clpde.surface.implicit",
+    "clpde.surface.flows",
+    "clpde.inpainting.colour",
+    "clpde.runtime",
+    "clpde.inpainting.api",
+    "clpde.tracking.contours",
+    "clpde.scale.batch",
+    "clpde.regions.tracker",
+    "clpde.surface.render",
+    "clpde.tracking.confidence",
+    "clpde.film.stream",
+    "clpde.film.chunks",
+    "clpde.film.container",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)
@@ -30,9 +43,21 @@ def test_every_public_function_listed_has_an_example():
     import clpde
     from clpde import data
 
-    named = [clpde.diffuse, clpde.denoise_tv, clpde.PlanarFlow, clpde.stability_limit,
-             clpde.devices, clpde.use_device, clpde.get_runtime, clpde.inpaint, clpde.track,
-             *(getattr(data, n) for n in data.__all__ if callable(getattr(data, n))
-               and not isinstance(getattr(data, n), type))]
+    named = [
+        clpde.diffuse,
+        clpde.denoise_tv,
+        clpde.PlanarFlow,
+        clpde.stability_limit,
+        clpde.devices,
+        clpde.use_device,
+        clpde.get_runtime,
+        clpde.inpaint,
+        clpde.track,
+        *(
+            getattr(data, n)
+            for n in data.__all__
+            if callable(getattr(data, n)) and not isinstance(getattr(data, n), type)
+        ),
+    ]
     missing = [f.__name__ for f in named if ">>>" not in (f.__doc__ or "")]
     assert not missing, f"no runnable example in the docstring of {', '.join(missing)}"

@@ -12,24 +12,58 @@ DOCS = EXAMPLES.parent / "docs" / "images"
 
 def _run(args, cwd):
     env = dict(os.environ, PYTHONPATH=str(EXAMPLES.parent))
-    return subprocess.run([sys.executable, *map(str, args)], cwd=cwd, env=env, capture_output=True,
-                          text=True, timeout=300, stdin=subprocess.DEVNULL, check=False)
+    return subprocess.run(
+        [sys.executable, *map(str, args)],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        stdin=subprocess.DEVNULL,
+        check=False,
+    )
 
 
 def test_an_example_creates_its_new_output_folder_and_leaves_the_docs_alone(tmp_path):
     docs_before = {p.name: p.stat().st_mtime_ns for p in DOCS.iterdir()}
-    run = _run([EXAMPLES / "regions_figure27.py", "--spacing", "0.1", "--saves", "1",
-                "--size", "32", "--out", "new/nested"], tmp_path)
+    run = _run(
+        [
+            EXAMPLES / "regions_figure27.py",
+            "--spacing",
+            "0.1",
+            "--saves",
+            "1",
+            "--size",
+            "32",
+            "--out",
+            "new/nested",
+        ],
+        tmp_path,
+    )
     assert run.returncode == 0, run.stderr
-    assert sorted(os.listdir(tmp_path / "new" / "nested")) == ["regions_merge.png",
-                                                               "regions_split.png"]
+    assert sorted(os.listdir(tmp_path / "new" / "nested")) == [
+        "regions_merge.png",
+        "regions_split.png",
+    ]
     assert sorted(os.listdir(tmp_path / "out" / "regions_split")) == [
-        "split.png", "split_0.ply", "split_1.ply"]
+        "split.png",
+        "split_0.ply",
+        "split_1.ply",
+    ]
     # a second run replaces its mesh folders instead of failing on them
-    assert _run([EXAMPLES / "regions_figure27.py", "--spacing", "0.1", "--saves", "1",
-                 "--size", "32"], tmp_path).returncode == 0
-    assert sorted(os.listdir(tmp_path / "out")) == ["regions_merge", "regions_merge.png",
-                                                    "regions_split", "regions_split.png"]
+    assert (
+        _run(
+            [EXAMPLES / "regions_figure27.py", "--spacing", "0.1", "--saves", "1", "--size", "32"],
+            tmp_path,
+        ).returncode
+        == 0
+    )
+    assert sorted(os.listdir(tmp_path / "out")) == [
+        "regions_merge",
+        "regions_merge.png",
+        "regions_split",
+        "regions_split.png",
+    ]
     assert {p.name: p.stat().st_mtime_ns for p in DOCS.iterdir()} == docs_before
 
 

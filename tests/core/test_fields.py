@@ -101,8 +101,9 @@ def test_list_kernel_touches_only_listed_cells(runtime, rng):
     src = Field.from_host(grid, rng.random((2, ny, nx)))
     dst = Field.from_host(grid, np.zeros((2, ny, nx)))
     lst = index_list(grid, mask)
-    grid.launch_list(grid.kernel("common/fields.cl", "copy_listed"), lst, src.data.data,
-                     dst.data.data)
+    grid.launch_list(
+        grid.kernel("common/fields.cl", "copy_listed"), lst, src.data.data, dst.data.data
+    )
     out = dst.to_host()
     expected = np.where(mask[None], src.to_host(), 0)
     np.testing.assert_array_equal(out, expected)

@@ -30,8 +30,9 @@ def test_launch_geometry_differs(runtime, gpu_like):
 def test_planar_flows_and_denoising(runtime, gpu_like, rng):
     image = rng.random((37, 53)).astype(np.float32)
     for flow in ("heat", "perona-malik", "tv", "curvature"):
-        cpu, gpu = _pair(runtime, gpu_like,
-                         lambda d, f=flow: clpde.diffuse(image, flow=f, steps=7, device=d))
+        cpu, gpu = _pair(
+            runtime, gpu_like, lambda d, f=flow: clpde.diffuse(image, flow=f, steps=7, device=d)
+        )
         np.testing.assert_allclose(gpu, cpu, atol=2e-6)
     cpu, gpu = _pair(runtime, gpu_like, lambda d: clpde.denoise_tv(image, sigma=0.1, device=d))
     np.testing.assert_allclose(gpu, cpu, atol=1e-4)
@@ -41,15 +42,17 @@ def test_inpainting(runtime, gpu_like, rng):
     y, x = np.mgrid[:48, :48]
     image = (0.5 + 0.4 * np.sin(x / 3.0)).astype(np.float32)
     mask = (np.abs(y - 24) < 3) & (np.abs(x - 20) < 12)
-    cpu, gpu = _pair(runtime, gpu_like,
-                     lambda d: clpde.inpaint(image, mask, max_steps=60, device=d))
+    cpu, gpu = _pair(
+        runtime, gpu_like, lambda d: clpde.inpaint(image, mask, max_steps=60, device=d)
+    )
     np.testing.assert_allclose(gpu, cpu, atol=1e-4)
 
 
 def test_morphing_tracker(runtime, gpu_like):
     y, x = np.mgrid[:40, :40]
-    frames = np.stack([((x - 14 - 2 * t) ** 2 + (y - 20) ** 2 < 64).astype(np.float32)
-                       for t in range(3)])
+    frames = np.stack(
+        [((x - 14 - 2 * t) ** 2 + (y - 20) ** 2 < 64).astype(np.float32) for t in range(3)]
+    )
     cpu, gpu = _pair(runtime, gpu_like, lambda d: clpde.track(frames, frames[0] > 0.5, device=d))
     assert np.mean(cpu != gpu) < 0.002
 
@@ -58,8 +61,13 @@ def test_surface_flows(runtime, gpu_like):
     def run(device):
         s = ImplicitSurface.sphere(1.0, 0.2, device=device)
         u = s.field(lambda x, y, z: x * y + z)
-        v = np.stack([s.field(lambda x, y, z: x + 0.2), s.field(lambda x, y, z: y),
-                      s.field(lambda x, y, z: z)])
+        v = np.stack(
+            [
+                s.field(lambda x, y, z: x + 0.2),
+                s.field(lambda x, y, z: y),
+                s.field(lambda x, y, z: z),
+            ]
+        )
         v /= np.sqrt((v**2).sum(axis=0))
         return s.heat(u, 0.02), s.harmonic_map(v, 0.01), s.denoise_tv(u, sigma=0.05, t=0.01)
 
@@ -70,6 +78,7 @@ def test_surface_flows(runtime, gpu_like):
 def test_surface_heat_on_bricks(runtime, gpu_like):
     """The band in dense bricks: a work-item walking whole bricks from a private tile (CPUs)
     against a work-group per brick sharing a local tile (GPUs)."""
+
     def run(device):
         s = ImplicitSurface.sphere(1.0, 0.2, device=device)
         s.storage = "bricks"
@@ -88,8 +97,9 @@ def test_mesh_to_signed_distance_with_a_hole(runtime, gpu_like):
     ball = trimesh.creation.icosphere(2)
     ball.update_faces(np.arange(len(ball.faces)) != 7)
     with pytest.warns(UserWarning, match="watertight"):
-        cpu, gpu = _pair(runtime, gpu_like,
-                         lambda d: ImplicitSurface.from_mesh(ball, resolution=40, device=d))
+        cpu, gpu = _pair(
+            runtime, gpu_like, lambda d: ImplicitSurface.from_mesh(ball, resolution=40, device=d)
+        )
     # the inside survived the hole: about the ball's volume
     assert (cpu.psi < 0).sum() * cpu.spacing**3 == pytest.approx(4 / 3 * np.pi, rel=0.05)
     np.testing.assert_allclose(gpu.psi, cpu.psi, atol=1e-6)
@@ -106,6 +116,7 @@ def test_region_tracking(runtime, gpu_like):
 
 
 def track_cap(phi, cap, h, origin, device):
-    frames = clpde.track_region(phi, cap, beta="mean-curvature", t=0.02, spacing=h,
-                                origin=(origin,) * 3, device=device)
+    frames = clpde.track_region(
+        phi, cap, beta="mean-curvature", t=0.02, spacing=h, origin=(origin,) * 3, device=device
+    )
     return frames[-1].area(0), frames[-1].area()

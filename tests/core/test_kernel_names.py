@@ -18,8 +18,10 @@ WITH_FILE = re.compile(r"""kernel\(\s*["']([\w/]+\.cl)["']\s*,\s*["'](\w+)["']""
 # a table's ("file.cl", "name") pairs, looked up through a variable (flows.STEP_KERNELS)
 PAIR = re.compile(r"""\(\s*["']([\w/]+\.cl)["']\s*,\s*["'](\w+)["']\s*\)""")
 FILE_NAMED = re.compile(r"""(?:kernel|program)\(\s*["']([\w/]+\.cl)["']""")
-NOT_LITERAL = re.compile(r"""\.(?:new_)?kernel\("""
-                         r"""(?!\s*["'][\w/]+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)""")
+NOT_LITERAL = re.compile(
+    r"""\.(?:new_)?kernel\("""
+    r"""(?!\s*["'][\w/]+\.cl["']\s*,\s*["']\w+["'])(?!\s*filename\b)"""
+)
 DEFINED = re.compile(r"__kernel\s+(?:__attribute__\s*\(\(.*?\)\)\s*)?void\s+(\w+)", re.S)
 INCLUDE = re.compile(r'#include\s+"([\w./]+)"')
 
@@ -60,19 +62,21 @@ def test_every_named_kernel_exists_in_its_file():
     assert not missing, "\n".join(missing)
 
 
-
-
 def test_every_lookup_names_its_file_and_kernel_as_literals():
     """`g.kernel("surface/heat.cl", "heat_step")`: grepping a kernel's name lands on its lookups."""
-    loose = [f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
-             for path, text in _host_sources() for m in NOT_LITERAL.finditer(text)]
+    loose = [
+        f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}"
+        for path, text in _host_sources()
+        for m in NOT_LITERAL.finditer(text)
+    ]
     assert not loose, "kernel lookups without a literal file and kernel name:\n" + "\n".join(loose)
 
 
 def _declared_files(text: str):
     for node in ast.parse(text).body:
         if isinstance(node, ast.Assign) and any(
-                isinstance(t, ast.Name) and t.id == "KERNEL_FILES" for t in node.targets):
+            isinstance(t, ast.Name) and t.id == "KERNEL_FILES" for t in node.targets
+        ):
             return set(ast.literal_eval(node.value))
     return None
 
@@ -85,6 +89,8 @@ def test_each_module_declares_the_kernel_files_it_uses():
             continue
         declared = _declared_files(text)
         if declared != used:
-            wrong.append(f"{path.relative_to(ROOT)}: KERNEL_FILES = {sorted(declared or ())}, "
-                         f"its lookups name {sorted(used)}")
+            wrong.append(
+                f"{path.relative_to(ROOT)}: KERNEL_FILES = {sorted(declared or ())}, "
+                f"its lookups name {sorted(used)}"
+            )
     assert not wrong, "\n".join(wrong)

@@ -29,8 +29,9 @@ def test_the_counter_sees_imports_inside_functions(metrics, tmp_path):
     (package / "sub").mkdir(parents=True)
     (package / "__init__.py").write_text("")
     (package / "a.py").write_text("def f():\n    from .sub import b\n")
-    (package / "c.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
-                                  "    from . import a\n")
+    (package / "c.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import a\n"
+    )
     (package / "sub" / "__init__.py").write_text("from . import b\n")
     (package / "sub" / "b.py").write_text("from .. import a, c\n")
     assert metrics.cycles(metrics.imports(tmp_path)) == [["clpde.a", "clpde.sub.b"]]

@@ -28,11 +28,14 @@ def _gaps(obj, name: str) -> list[str]:
         doc, target = FunctionDoc(obj), obj
     else:
         return []  # constants and modules
-    documented = {part.strip().lstrip("*") for entry in doc["Parameters"]
-                  for part in entry.name.split(",")}
-    out = [f"{name}({p.name})" for p in inspect.signature(target).parameters.values()
-           if p.name not in ("self", "cls") and not p.name.startswith("_")
-           and p.name not in documented]
+    documented = {
+        part.strip().lstrip("*") for entry in doc["Parameters"] for part in entry.name.split(",")
+    }
+    out = [
+        f"{name}({p.name})"
+        for p in inspect.signature(target).parameters.values()
+        if p.name not in ("self", "cls") and not p.name.startswith("_") and p.name not in documented
+    ]
     if not inspect.isclass(obj):
         out += [f"{name}:{section}" for section in ("Returns", "Examples") if not doc[section]]
     return out
@@ -75,8 +78,9 @@ def test_public_docstrings_are_numpydoc_except_the_listed_gaps():
     new = sorted(set(found) - set(listed))
     closed = sorted(set(listed) - set(found))
     assert not new, "public names or parameters without numpydoc docs:\n" + "\n".join(new)
-    assert not closed, ("documented now: delete these lines from numpydoc_gaps.txt:\n"
-                        + "\n".join(closed))
+    assert not closed, "documented now: delete these lines from numpydoc_gaps.txt:\n" + "\n".join(
+        closed
+    )
 
 
 def test_public_signatures_have_type_hints():
@@ -93,10 +97,13 @@ def test_public_signatures_have_type_hints():
             else:
                 continue
             signature = inspect.signature(target)
-            missing += [f"{module.__name__}.{name}({p.name})"
-                        for p in signature.parameters.values()
-                        if p.name not in ("self", "cls") and not p.name.startswith("_")
-                        and p.annotation is inspect.Parameter.empty]
+            missing += [
+                f"{module.__name__}.{name}({p.name})"
+                for p in signature.parameters.values()
+                if p.name not in ("self", "cls")
+                and not p.name.startswith("_")
+                and p.annotation is inspect.Parameter.empty
+            ]
             if not inspect.isclass(obj) and signature.return_annotation is inspect.Signature.empty:
                 missing.append(f"{module.__name__}.{name} (return)")
     assert not missing, "public signatures without type hints:\n" + "\n".join(missing)

@@ -16,9 +16,22 @@ REPO = Path(__file__).resolve().parents[2]
 
 def _pip(*args, cwd):
     run = subprocess.run(
-        [sys.executable, "-m", "pip", *args, "--no-deps", "--no-input", "--no-index",
-         "--disable-pip-version-check", "-q"],
-        cwd=cwd, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=180,
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            *args,
+            "--no-deps",
+            "--no-input",
+            "--no-index",
+            "--disable-pip-version-check",
+            "-q",
+        ],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=180,
         check=False,
     )
     assert run.returncode == 0, f"pip {' '.join(args)} failed:\n{run.stdout}\n{run.stderr}"
@@ -27,12 +40,21 @@ def _pip(*args, cwd):
 def _source_files() -> list[str]:
     """The files of clpde/ and kernels/ that git tracks (untracked work in progress is not
     part of the project yet); every file there when the sources are not a git checkout."""
-    run = subprocess.run(["git", "ls-files", "-z", "--", "clpde", "kernels"], cwd=REPO,
-                         capture_output=True, text=True, check=False)
+    run = subprocess.run(
+        ["git", "ls-files", "-z", "--", "clpde", "kernels"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     if run.returncode == 0 and run.stdout:
         return [name for name in run.stdout.split("\0") if name]
-    return [p.relative_to(REPO).as_posix() for folder in ("clpde", "kernels")
-            for p in (REPO / folder).rglob("*") if p.is_file() and "__pycache__" not in p.parts]
+    return [
+        p.relative_to(REPO).as_posix()
+        for folder in ("clpde", "kernels")
+        for p in (REPO / folder).rglob("*")
+        if p.is_file() and "__pycache__" not in p.parts
+    ]
 
 
 def _copy_sources(dest: Path) -> None:
@@ -51,16 +73,20 @@ def test_wheel_ships_kernels_and_runs_outside_the_checkout(tmp_path):
     (wheel,) = wheels.glob("clpde-*.whl")
 
     names = set(zipfile.ZipFile(wheel).namelist())
-    kernels = sorted(p.relative_to(src / "kernels").as_posix()
-                     for p in (src / "kernels").rglob("*") if p.is_file())
+    kernels = sorted(
+        p.relative_to(src / "kernels").as_posix()
+        for p in (src / "kernels").rglob("*")
+        if p.is_file()
+    )
     assert any(k.endswith(".cl") for k in kernels), "no kernels/*.cl in the checkout"
     missing = [k for k in kernels if f"clpde/kernels/{k}" not in names]
     assert not missing, (
         f"kernel files missing from the wheel: {missing}; add their pattern to "
         "[tool.setuptools.package-data] of pyproject.toml"
     )
-    modules = sorted(p.relative_to(src).as_posix() for p in (src / "clpde").rglob("*")
-                     if p.is_file())
+    modules = sorted(
+        p.relative_to(src).as_posix() for p in (src / "clpde").rglob("*") if p.is_file()
+    )
     missing = [m for m in modules if m not in names]
     assert not missing, (
         f"files missing from the wheel: {missing}; list every package under clpde/ in "
@@ -83,8 +109,14 @@ def test_wheel_ships_kernels_and_runs_outside_the_checkout(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "CLPDE_DEVICE")}
     env["PYTHONPATH"] = str(site)
     run = subprocess.run(
-        [sys.executable, "-c", script, str(site)], cwd=elsewhere, env=env,
-        capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=180, check=False,
+        [sys.executable, "-c", script, str(site)],
+        cwd=elsewhere,
+        env=env,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=180,
+        check=False,
     )
     assert run.returncode == 0, run.stdout + run.stderr
     assert run.stdout.startswith("ok")

@@ -24,8 +24,9 @@ TIMEOUT = 120  # seconds: a hang fails the test instead of blocking the suite
 
 def _script(body: str) -> subprocess.CompletedProcess:
     code = textwrap.dedent(body)
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False,
-                          timeout=TIMEOUT)
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False, timeout=TIMEOUT
+    )
 
 
 def test_fork_never_hangs():
@@ -85,8 +86,10 @@ def test_spawn_pool_gives_the_serial_results_and_carries_objects_by_value():
         spawned = pool.starmap(clpde.diffuse, [(im, "perona-malik", 6) for im in images])
         # the flow goes to a worker by value, takes 4 more steps there and comes back
         returned = pool.apply(operator.methodcaller("run", 4), (flow,))
-    assert all(np.array_equal(a, clpde.diffuse(im, "perona-malik", 6))
-               for a, im in zip(spawned, images, strict=False))
+    assert all(
+        np.array_equal(a, clpde.diffuse(im, "perona-malik", 6))
+        for a, im in zip(spawned, images, strict=False)
+    )
     assert returned.steps_done == 8
     assert np.array_equal(returned.result(), flow.run(4).result())
 
@@ -98,8 +101,9 @@ def _round_trip(obj):
 def test_planar_flow_pickles_by_value_mid_run_for_each_flow():
     image = _images(1)[0]
     for name in clpde.FLOWS:
-        params = {"weight": np.linspace(0, 1, 28)[None].repeat(20,
-                                                               0)} if name == "curvature" else {}
+        params = (
+            {"weight": np.linspace(0, 1, 28)[None].repeat(20, 0)} if name == "curvature" else {}
+        )
         flow = clpde.PlanarFlow(image, name, **params).run(3)
         copy = _round_trip(flow)
         assert copy.runtime is flow.runtime  # same process: the same runtime
@@ -116,8 +120,9 @@ def test_surface_tracker_inpainting_and_region_tracker_pickle_by_value():
     assert np.array_equal(_round_trip(surf).heat(u, t), surf.heat(u, t))
 
     yy, xx = np.mgrid[:32, :32]
-    frames = np.stack([((yy - 16) ** 2 + (xx - 12 - 2 * k) ** 2 < 36).astype(np.float32)
-                       for k in range(3)])
+    frames = np.stack(
+        [((yy - 16) ** 2 + (xx - 12 - 2 * k) ** 2 < 36).astype(np.float32) for k in range(3)]
+    )
     tracker = clpde.MorphingTracker(frames, frames[0] > 0, max_iterations=8)
     masks = [s.mask for s in _round_trip(tracker).iterate()]
     assert all(np.array_equal(a, s.mask) for a, s in zip(masks, tracker.iterate(), strict=False))
@@ -139,8 +144,9 @@ def test_surface_tracker_inpainting_and_region_tracker_pickle_by_value():
     regions.advance(0.1)
     copy.advance(0.1)
     assert copy.steps == regions.steps
-    assert all(np.array_equal(a, b) for a,
-               b in zip(copy.volumes(), regions.volumes(), strict=False))
+    assert all(
+        np.array_equal(a, b) for a, b in zip(copy.volumes(), regions.volumes(), strict=False)
+    )
 
 
 def test_device_objects_of_other_contexts_refuse_to_pickle():

@@ -61,8 +61,9 @@ def test_device_loop_counts_steps_done(runtime):
 
     a = cla.zeros(runtime.queue, 1 << 16, np.float32)
     seen = []
-    bar_range = _progress.progress_range(True, 30, "device loop", queue=runtime.queue,
-                                         file=sys.stdout)
+    bar_range = _progress.progress_range(
+        True, 30, "device loop", queue=runtime.queue, file=sys.stdout
+    )
     for _ in bar_range:
         a += 1.0
         seen.append(_)

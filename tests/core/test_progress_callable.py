@@ -62,7 +62,7 @@ def test_diffuse_reports_and_stops():
 def test_track_reports_per_frame_and_stops():
     frames = np.zeros((4, 40, 40), np.float32)
     for t in range(4):
-        frames[t, 10 + t:25 + t, 10:25] = 1.0
+        frames[t, 10 + t : 25 + t, 10:25] = 1.0
     first = frames[0] > 0.5
     calls = []
     masks = clpde.track(frames, first, progress=recorder(calls))

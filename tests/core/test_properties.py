@@ -24,9 +24,13 @@ from clpde.surface import ImplicitSurface
 EXAMPLES = int(os.environ.get("CLPDE_FUZZ_EXAMPLES", "200"))  # >= 200 in CI
 CAP_SECONDS = 30  # per example; a hang trips it
 # CI runs the same examples every time; asking for a number explores new ones
-SETTINGS = settings(max_examples=EXAMPLES, deadline=10_000, database=None,
-                    derandomize="CLPDE_FUZZ_EXAMPLES" not in os.environ,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+SETTINGS = settings(
+    max_examples=EXAMPLES,
+    deadline=10_000,
+    database=None,
+    derandomize="CLPDE_FUZZ_EXAMPLES" not in os.environ,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 
 DTYPES = [np.bool_, np.uint8, np.uint16, np.int32, np.float16, np.float32, np.float64]
 VALUES = ["random", "constant", "negative", "huge", "extreme", "nan", "inf"]
@@ -102,8 +106,11 @@ def images(draw, colour=True, min_side=1):
 
 @st.composite
 def masks(draw, hw):
-    kind = draw(st.sampled_from(["empty", "full", "border", "random", "soft", "uint8", "float",
-                                 "negative", "nan"]))
+    kind = draw(
+        st.sampled_from(
+            ["empty", "full", "border", "random", "soft", "uint8", "float", "negative", "nan"]
+        )
+    )
     rng = np.random.default_rng(draw(st.integers(0, 2**31)))
     m = rng.random(hw) < 0.3
     if kind == "empty":
@@ -178,16 +185,18 @@ def test_diffuse(example, flow, steps):
 
 
 @SETTINGS
-@given(images(), st.sampled_from([None, 0.05, 10.0, "weight"]),
-       st.sampled_from(["primal-dual", "gradient"]))
+@given(
+    images(),
+    st.sampled_from([None, 0.05, 10.0, "weight"]),
+    st.sampled_from(["primal-dual", "gradient"]),
+)
 # found by random runs: lambda overflowing float32; lambda jumping past the stable step
 @example((np.array([[2.1674681e38, -9.1803652e37]], np.float32), None), "weight", "primal-dual")
 @example((np.array([[0.6367, 0.2698]], np.float16), None), None, "gradient")
 def test_denoise_tv(example, sigma, method):
     image, axis = example
     options = {"weight": 0.1} if sigma == "weight" else {"sigma": sigma}
-    out = call(clpde.denoise_tv, image, channel_axis=axis, method=method, max_steps=6,
-               **options)
+    out = call(clpde.denoise_tv, image, channel_axis=axis, method=method, max_steps=6, **options)
     if out is not None:
         like_input(out, image)
 
@@ -198,15 +207,25 @@ def test_inpaint(example, data, levels, mask_none):
     image, axis = example
     hw = image.shape if axis is None else tuple(np.delete(image.shape, axis % 3))
     mask = None if mask_none else data.draw(masks(hw))
-    out = call(clpde.inpaint, image, mask, channel_axis=axis, max_steps=8, levels=levels,
-               fill=data.draw(st.sampled_from(["biharmonic", "diffusion", "mean", "zero"])))
+    out = call(
+        clpde.inpaint,
+        image,
+        mask,
+        channel_axis=axis,
+        max_steps=8,
+        levels=levels,
+        fill=data.draw(st.sampled_from(["biharmonic", "diffusion", "mean", "zero"])),
+    )
     if out is None:
         return
     assert out.shape == image.shape and out.dtype == image.dtype
     if mask is not None:
         keep = ~(np.asarray(mask) != 0)
-        keep = keep if axis is None else np.expand_dims(keep, axis % 3).repeat(
-            image.shape[axis % 3], axis % 3)
+        keep = (
+            keep
+            if axis is None
+            else np.expand_dims(keep, axis % 3).repeat(image.shape[axis % 3], axis % 3)
+        )
         assert np.array_equal(out[keep], image[keep], equal_nan=True), "known pixels changed"
     if np.issubdtype(out.dtype, np.floating):
         assert np.isfinite(out).all(), "an inpainted image with NaN or inf left"
@@ -220,16 +239,24 @@ def test_track(data, frames, features):
     kind = data.draw(st.sampled_from(VALUES))
     stack = fill(dtype, (frames,) + hw, kind, data.draw(st.integers(0, 2**31)))
     mask = data.draw(masks(hw))
-    out = call(clpde.track, stack, mask, features=features, max_iterations=3,
-               smooth_steps=data.draw(st.integers(0, 2)))
+    out = call(
+        clpde.track,
+        stack,
+        mask,
+        features=features,
+        max_iterations=3,
+        smooth_steps=data.draw(st.integers(0, 2)),
+    )
     if out is not None:
         assert out.shape == stack.shape and out.dtype == bool
 
 
 @SETTINGS
-@given(st.sampled_from(list(clpde.FLOWS) + ["rof", "nope"]),
-       st.sampled_from([0.0, -1.0, 1e-9, 0.05, 1.0, np.nan, np.inf]),
-       st.sampled_from([0.0, 1.0, -1.0, np.nan]))
+@given(
+    st.sampled_from(list(clpde.FLOWS) + ["rof", "nope"]),
+    st.sampled_from([0.0, -1.0, 1e-9, 0.05, 1.0, np.nan, np.inf]),
+    st.sampled_from([0.0, 1.0, -1.0, np.nan]),
+)
 def test_stability_limit(flow, eps, lam):
     limit = call(clpde.stability_limit, flow, eps, lam)
     if limit is not None:
@@ -256,8 +283,11 @@ def volumes(draw, min_side=4, max_side=9, sphere_sides=(16, 20)):
 
 
 @SETTINGS
-@given(volumes(), st.sampled_from([1.0] * 4 + [0.8, 0.0, -1.0, np.nan]),
-       st.sampled_from(["tricubic", "trilinear"]))
+@given(
+    volumes(),
+    st.sampled_from([1.0] * 4 + [0.8, 0.0, -1.0, np.nan]),
+    st.sampled_from(["tricubic", "trilinear"]),
+)
 def test_implicit_surface_and_heat(psi, spacing, interpolation):
     surf = call(ImplicitSurface, psi, spacing, interpolation=interpolation)
     if surf is None:

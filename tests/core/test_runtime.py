@@ -82,7 +82,8 @@ def test_kernels_are_built_once_and_reused(runtime):
 def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
     (tmp_path / "common").mkdir()
     (tmp_path / "common" / "common.cl").write_text(
-        (rt_mod.KERNEL_DIR / "common" / "common.cl").read_text())
+        (rt_mod.KERNEL_DIR / "common" / "common.cl").read_text()
+    )
     (tmp_path / "broken.cl").write_text(
         '#include "common.cl"\n\n'
         "__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n"
@@ -120,8 +121,14 @@ def test_unwritable_pocl_cache_dir_falls_back_to_a_writable_one(tmp_path):
     )
     env = {k: v for k, v in __import__("os").environ.items() if k != "CLPDE_DEVICE"}
     env["POCL_CACHE_DIR"] = str(blocker / "cache")
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         check=True, cwd=tmp_path)
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=tmp_path,
+    )
     count, path, warned = out.stdout.split()
     assert int(count) >= 1 and path != str(blocker / "cache") and int(warned) >= 1
 
@@ -179,8 +186,9 @@ def _calls():
     mask = np.zeros(image.shape, bool)
     mask[8:14, 10:20] = True
     yy, xx = np.mgrid[:24, :24]
-    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25)
-                       for k in range(2)]).astype(np.uint8)
+    frames = np.stack([((yy - 12) ** 2 + (xx - 9 - 2 * k) ** 2 < 25) for k in range(2)]).astype(
+        np.uint8
+    )
     phi, z = _sphere_phi()
     return {
         "diffuse": lambda: clpde.diffuse(image, "tv", steps=3),
@@ -214,8 +222,9 @@ def test_requests_that_cannot_fit_are_refused_before_any_allocation(name, monkey
 def test_a_huge_image_is_refused_without_converting_it():
     # 10^10 pixels that take no memory: the refusal must come before any float copy
     huge = np.broadcast_to(np.uint8(7), (100_000, 100_000))
-    with pytest.raises(rt_mod.DeviceMemoryError,
-                       match=r"the heat flow of 100000x100000 values needs"):
+    with pytest.raises(
+        rt_mod.DeviceMemoryError, match=r"the heat flow of 100000x100000 values needs"
+    ):
         clpde.diffuse(huge, steps=1)
 
 

@@ -50,7 +50,8 @@ def _check(seen):
 def _photo(n, rng):
     y, x = np.mgrid[:n, :n] / n
     return (0.5 + 0.3 * np.sin(9 * x) * np.cos(7 * y) + 0.05 * rng.random((n, n))).astype(
-        np.float32)
+        np.float32
+    )
 
 
 def test_planar_and_inpainting(launches, rng):
@@ -77,8 +78,10 @@ def test_surfaces_and_tracking(launches):
             surf.reaction_diffusion(2)
     for n in (40, 52):
         yy, xx = np.mgrid[:n, :n]
-        frames = [((xx - n / 2 - k) ** 2 + (yy - n / 2) ** 2 < (n / 5) ** 2).astype(np.float32)
-                  for k in range(2)]
+        frames = [
+            ((xx - n / 2 - k) ** 2 + (yy - n / 2) ** 2 < (n / 5) ** 2).astype(np.float32)
+            for k in range(2)
+        ]
         for layout in ("lists", "bricks8x8"):
             clpde.track(frames, frames[0] > 0.5, max_iterations=5, storage=layout)
     for n in (32, 40):
@@ -87,6 +90,5 @@ def test_surfaces_and_tracking(launches):
         z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
         phi = np.sqrt(x**2 + y**2 + z**2) - 0.4
         for storage in ("lists", "bricks"):
-            clpde.track_region(phi, z - 0.1, beta=0.5, t=0.01, spacing=h, saves=1,
-                               storage=storage)
+            clpde.track_region(phi, z - 0.1, beta=0.5, t=0.01, spacing=h, saves=1, storage=storage)
     _check(launches)

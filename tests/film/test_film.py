@@ -47,10 +47,23 @@ def test_blotch_kernel_matches_reference(runtime, rng):
     side = np.array([-1, -1, 1, 1], np.int32)
     outs = [cla.empty(q, (ny, nx), np.float32) for _ in range(5)]
     g, loc = runtime.items(nx, ny)
-    kern.blotch(q, g, loc, _dev(q, I).data, _dev(q, W).data, _dev(q, V).data,
-                _dev(q, gain).data, _dev(q, offset).data, _dev(q, side, np.int32).data,
-                np.int32(K), np.float32(0.05), np.float32(0.5), *(o.data for o in outs),
-                np.int32(nx), np.int32(ny))
+    kern.blotch(
+        q,
+        g,
+        loc,
+        _dev(q, I).data,
+        _dev(q, W).data,
+        _dev(q, V).data,
+        _dev(q, gain).data,
+        _dev(q, offset).data,
+        _dev(q, side, np.int32).data,
+        np.int32(K),
+        np.float32(0.05),
+        np.float32(0.5),
+        *(o.data for o in outs),
+        np.int32(nx),
+        np.int32(ny),
+    )
     want = ref.blotch_score(I, W, V, gain, offset, side, 0.05, 0.5)
     for got, exp in zip(outs, want, strict=True):
         np.testing.assert_allclose(got.get(), exp, atol=2e-5)
@@ -65,8 +78,17 @@ def test_line_kernels_match_reference(runtime, rng):
     src = rng.normal(size=(ny, nx))
     g, loc = runtime.items(nx, ny)
     col = cla.empty(q, (ny, nx), np.float32)
-    kern.colmean(q, g, loc, _dev(q, src).data, col.data, np.int32(4), np.float32(1.5),
-                 np.int32(nx), np.int32(ny))
+    kern.colmean(
+        q,
+        g,
+        loc,
+        _dev(q, src).data,
+        col.data,
+        np.int32(4),
+        np.float32(1.5),
+        np.int32(nx),
+        np.int32(ny),
+    )
     np.testing.assert_allclose(col.get(), ref.column_mean(src, 4, 1.5), atol=1e-5)
     line = cla.empty(q, (ny, nx), np.float32)
     kern.line(q, g, loc, _dev(q, src).data, line.data, np.int32(3), np.int32(nx), np.int32(ny))
@@ -102,9 +124,21 @@ def test_fill_kernel_matches_reference(runtime, rng):
     out = cla.empty(q, (C, ny, nx), np.float32)
     left = cla.empty(q, (ny, nx), np.float32)
     g, loc = runtime.items(nx, ny)
-    k_fill(q, g, loc, *(_dev(q, a).data for a in (F, G, M, W, Wg, MW, V, gain, offset, dist)),
-           np.int32(K), np.int32(C), np.float32(0.02), np.int32(2), np.float32(0.01),
-           out.data, left.data, np.int32(nx), np.int32(ny))
+    k_fill(
+        q,
+        g,
+        loc,
+        *(_dev(q, a).data for a in (F, G, M, W, Wg, MW, V, gain, offset, dist)),
+        np.int32(K),
+        np.int32(C),
+        np.float32(0.02),
+        np.int32(2),
+        np.float32(0.01),
+        out.data,
+        left.data,
+        np.int32(nx),
+        np.int32(ny),
+    )
     want, unfilled = ref.temporal_fill(F, G, M, W, Wg, MW, V, gain, offset, dist, 0.02, 2, 0.01)
     np.testing.assert_allclose(out.get(), want, atol=1e-5)
     np.testing.assert_array_equal(left.get(), unfilled)
@@ -151,9 +185,9 @@ def test_fast_object_is_not_a_blotch(runtime, rng):
     obj = np.zeros(frames.shape, bool)
     for t in range(6):
         y, x = 30, 14 + 9 * t
-        region = frames[t, y - 10:y + 11, x - 10:x + 11]
+        region = frames[t, y - 10 : y + 11, x - 10 : x + 11]
         region[disc] = patch[disc]
-        obj[t, y - 10:y + 11, x - 10:x + 11] = disc
+        obj[t, y - 10 : y + 11, x - 10 : x + 11] = disc
     mask = clpde.detect_defects(frames, device=runtime)
     assert (mask & obj).sum() <= 0.05 * obj.sum()
 
@@ -238,7 +272,7 @@ def test_temporal_fill_restores_a_translated_sequence(runtime, rng):
 
 def test_fill_colour_and_soft_masks(runtime, rng):
     base = _pan(_scene(rng), 5, step=(0.0, 1.5))
-    clean = (np.stack([base, base ** 2, 1 - base], axis=-1) * 65535).astype(np.uint16)
+    clean = (np.stack([base, base**2, 1 - base], axis=-1) * 65535).astype(np.uint16)
     dirty = clean.copy()
     dirty[2, 20:30, 30:40] = 0
     soft = np.zeros(base.shape, np.float32)

@@ -37,8 +37,9 @@ def clean_frames(count=T, height=H, width=W):
 
     photo = transform.resize(data.coffee(), (height * 2, width * 3), anti_aliasing=True)
     photo = (photo * 255).round().astype(np.uint8)
-    return np.stack([photo[height // 2: height // 2 + height, t: t + width]
-                     for t in range(count)])
+    return np.stack(
+        [photo[height // 2 : height // 2 + height, t : t + width] for t in range(count)]
+    )
 
 
 def damage(frames, seed=0):
@@ -49,7 +50,7 @@ def damage(frames, seed=0):
     for t in range(len(frames)):
         for _ in range(2):
             y, x = rng.integers(2, frames.shape[1] - 4), rng.integers(2, frames.shape[2] - 4)
-            masks[t, y: y + 3, x: x + 3] = True
+            masks[t, y : y + 3, x : x + 3] = True
         if 3 <= t <= 8:
             masks[t, 2:-2, 20] = True
     out[masks] = 0
@@ -57,8 +58,18 @@ def damage(frames, seed=0):
     return out, masks
 
 
-def make_film(path, frames, *, audio=True, subtitles=True, pix_fmt="yuv420p", codec="libx264",
-              rate=25, options=None, fmt=None):
+def make_film(
+    path,
+    frames,
+    *,
+    audio=True,
+    subtitles=True,
+    pix_fmt="yuv420p",
+    codec="libx264",
+    rate=25,
+    options=None,
+    fmt=None,
+):
     """Write `frames` (uint8 RGB, or uint16 for deep films) with an AAC tone and mov_text."""
     container = av.open(str(path), "w", format=fmt)
     video = container.add_stream(codec, rate=rate)
@@ -76,7 +87,8 @@ def make_film(path, frames, *, audio=True, subtitles=True, pix_fmt="yuv420p", co
     source = "rgb24" if frames.dtype == np.uint8 else "rgb48le"
     for t, frame in enumerate(frames):
         picture = av.VideoFrame.from_ndarray(frame, format=source).reformat(
-            format=pix_fmt, dst_colorspace=1, dst_color_range=1)
+            format=pix_fmt, dst_colorspace=1, dst_color_range=1
+        )
         picture.pts = t
         for packet in video.encode(picture):
             container.mux(packet)
@@ -84,8 +96,9 @@ def make_film(path, frames, *, audio=True, subtitles=True, pix_fmt="yuv420p", co
         n = len(frames) * 8000 // rate
         tone = (0.3 * np.sin(np.arange(n) * 2 * np.pi * 440 / 8000)).astype(np.float32)
         for k in range(0, n, 1024):
-            chunk = av.AudioFrame.from_ndarray(tone[None, k: k + 1024].copy(), format="fltp",
-                                               layout="mono")
+            chunk = av.AudioFrame.from_ndarray(
+                tone[None, k : k + 1024].copy(), format="fltp", layout="mono"
+            )
             chunk.sample_rate, chunk.pts = 8000, k
             for packet in sound.encode(chunk):
                 container.mux(packet)
@@ -110,8 +123,7 @@ def packets(path, kind):
         streams = [s for s in container.streams if s.type == kind]
         if not streams:
             return []
-        return [(bytes(p), float(p.pts * p.time_base)) for p in container.demux(streams)
-                if p.size]
+        return [(bytes(p), float(p.pts * p.time_base)) for p in container.demux(streams) if p.size]
 
 
 def decoded(path):
@@ -145,14 +157,18 @@ def spike_detect(frames, channel_axis=None):
     """Pixels darker or brighter than both neighbouring frames by more than 60 grey levels
     (at the film's first and last frames, than the one neighbour), and pixels brighter than
     their left and right neighbours by as much (a one-pixel scratch)."""
-    grey = frames.astype(np.float32).mean(axis=-1) if channel_axis is not None else \
-        frames.astype(np.float32)
+    grey = (
+        frames.astype(np.float32).mean(axis=-1)
+        if channel_axis is not None
+        else frames.astype(np.float32)
+    )
     masks = np.zeros(grey.shape, bool)
     for t in range(len(grey)):
         d = [grey[t] - grey[s] for s in (t - 1, t + 1) if 0 <= s < len(grey)]
         masks[t] = np.all([x > 60 for x in d], axis=0) | np.all([x < -60 for x in d], axis=0)
-    masks[:, :, 1:-1] |= (grey[:, :, 1:-1] - grey[:, :, :-2] > 60) & \
-        (grey[:, :, 1:-1] - grey[:, :, 2:] > 60)
+    masks[:, :, 1:-1] |= (grey[:, :, 1:-1] - grey[:, :, :-2] > 60) & (
+        grey[:, :, 1:-1] - grey[:, :, 2:] > 60
+    )
     return masks, masks.astype(np.int8)
 
 
@@ -161,8 +177,12 @@ WORK = WindowWork(fill=temporal_fill, detect=spike_detect, fill_radius=1, detect
 
 def spatial_fill(frames, masks, channel_axis=None):
     """clpde.inpaint frame by frame (the work before temporal filling existed)."""
-    return np.stack([clpde.inpaint(f, m, channel_axis=channel_axis, max_steps=200)
-                     if m.any() else f for f, m in zip(frames, masks, strict=True)])
+    return np.stack(
+        [
+            clpde.inpaint(f, m, channel_axis=channel_axis, max_steps=200) if m.any() else f
+            for f, m in zip(frames, masks, strict=True)
+        ]
+    )
 
 
 SPATIAL = WindowWork(fill=spatial_fill)
@@ -193,8 +213,12 @@ def test_window_results_do_not_depend_on_the_block_size():
     damaged, _ = damage(clean_frames())
     whole = [r for r, _, _ in restore_stream(damaged, T, WORK, block=T)]
     for block in (1, 2, 5):
-        assert all(np.array_equal(a, b) for a, (b, _, _) in
-                   zip(whole, restore_stream(damaged, T, WORK, block=block), strict=True))
+        assert all(
+            np.array_equal(a, b)
+            for a, (b, _, _) in zip(
+                whole, restore_stream(damaged, T, WORK, block=block), strict=True
+            )
+        )
 
 
 def test_sliding_window_holds_one_window():
@@ -218,8 +242,10 @@ def test_mp4_keeps_audio_subtitles_timing_colour_and_metadata(tmp_path, film):
     out = restore_film(source, tmp_path / "restored.mp4", mask=maskdir, work=SPATIAL).output
     assert packets(out, "audio") == packets(source, "audio")  # copied, packet for packet
     assert packets(out, "subtitle") == packets(source, "subtitle")
-    assert [p for p, _ in packets(out, "subtitle") if len(p) > 2] == [b"\x00\x04dust",
-                                                                      b"\x00\x0dand scratches"]
+    assert [p for p, _ in packets(out, "subtitle") if len(p) > 2] == [
+        b"\x00\x04dust",
+        b"\x00\x0dand scratches",
+    ]
     before, after = film_info(source), film_info(out)
     assert (after.frames, after.rate, after.width, after.height) == (T, 25, W, H)
     assert after.colour == before.colour and after.metadata["title"] == "a test film"
@@ -231,10 +257,10 @@ def test_mp4_keeps_audio_subtitles_timing_colour_and_metadata(tmp_path, film):
 def test_ffv1_is_lossless_outside_the_masks(tmp_path, film):
     source, maskdir, masks = film
     out = tmp_path / "restored.mkv"
-    result = restore_film(source, out, mask=maskdir, grow=1, masks_out=tmp_path / "masks",
-                          codec="ffv1", work=SPATIAL)
-    written = np.stack([read_image(tmp_path / "masks" / f"mask_{t:05d}.png") > 0
-                        for t in range(T)])
+    result = restore_film(
+        source, out, mask=maskdir, grow=1, masks_out=tmp_path / "masks", codec="ffv1", work=SPATIAL
+    )
+    written = np.stack([read_image(tmp_path / "masks" / f"mask_{t:05d}.png") > 0 for t in range(T)])
     restored, original = decoded(out), decoded(source)
     assert film_info(out).pix_fmt == "bgr0"  # RGB, no chroma subsampling
     assert np.array_equal(restored[~written], original[~written])
@@ -247,8 +273,14 @@ def test_ffv1_is_lossless_outside_the_masks(tmp_path, film):
 
 def test_masks_out_are_numbered_in_frame_order_and_grown(tmp_path, film):
     source, maskdir, masks = film
-    restore_film(source, tmp_path / "out.mp4", mask=maskdir, grow=1,
-                 masks_out=tmp_path / "masks", work=SPATIAL)
+    restore_film(
+        source,
+        tmp_path / "out.mp4",
+        mask=maskdir,
+        grow=1,
+        masks_out=tmp_path / "masks",
+        work=SPATIAL,
+    )
     names = sorted(p.name for p in (tmp_path / "masks").iterdir())
     assert names == [f"mask_{t:05d}.png" for t in range(T)]
     from scipy import ndimage
@@ -263,19 +295,26 @@ def test_ten_bit_films_stay_ten_bit(tmp_path):
     source = make_film(tmp_path / "deep.mp4", frames, pix_fmt="yuv420p10le", subtitles=False)
     masks = np.zeros((H, W), np.uint8)
     write_image(tmp_path / "m.png", masks)
-    lossless = restore_film(source, tmp_path / "deep.mkv", mask=tmp_path / "m.png",
-                            codec="ffv1", work=SPATIAL).output
+    lossless = restore_film(
+        source, tmp_path / "deep.mkv", mask=tmp_path / "m.png", codec="ffv1", work=SPATIAL
+    ).output
     assert film_info(lossless).pix_fmt == "gbrp16le"
     assert np.array_equal(decoded(lossless), decoded(source))
     assert decoded(source).dtype == np.uint16
-    h264 = restore_film(source, tmp_path / "deep_h264.mp4", mask=tmp_path / "m.png",
-                        work=SPATIAL).output
+    h264 = restore_film(
+        source, tmp_path / "deep_h264.mp4", mask=tmp_path / "m.png", work=SPATIAL
+    ).output
     assert film_info(h264).pix_fmt == "yuv420p10le"
 
 
 def test_interlaced_film_is_refused(tmp_path):
-    source = make_film(tmp_path / "fields.mp4", clean_frames(4), audio=False, subtitles=False,
-                       options={"flags": "+ildct+ilme", "x264-params": "interlaced=1"})
+    source = make_film(
+        tmp_path / "fields.mp4",
+        clean_frames(4),
+        audio=False,
+        subtitles=False,
+        options={"flags": "+ildct+ilme", "x264-params": "interlaced=1"},
+    )
     with pytest.raises(InputError, match="interlaced"):
         restore_film(source, tmp_path / "out.mp4", mask=None, work=WORK)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fields.mp4"]
@@ -302,8 +341,15 @@ def test_interrupt_leaves_nothing(tmp_path, film):
 
     work = WindowWork(fill=interrupted)
     with pytest.raises(KeyboardInterrupt):
-        restore_film(source, tmp_path / "out.mkv", mask=maskdir, masks_out=tmp_path / "m",
-                     overlay=tmp_path / "o.mp4", block=4, work=work)
+        restore_film(
+            source,
+            tmp_path / "out.mkv",
+            mask=maskdir,
+            masks_out=tmp_path / "m",
+            overlay=tmp_path / "o.mp4",
+            block=4,
+            work=work,
+        )
     assert list(tmp_path.iterdir()) == []
 
 
@@ -332,8 +378,9 @@ def client():
 
     # The window work lives in this test module, which the workers cannot import by name.
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                           dashboard_address=":0", silence_logs=50)
+    cluster = LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=50
+    )
     live = Client(cluster)
     yield live
     live.close()
@@ -346,10 +393,19 @@ def test_chunked_run_on_dask_equals_one_process(tmp_path, client):
     scratch of frames 3-8 across two of them (at frames 4 and 8)."""
     damaged, _ = damage(clean_frames(24))
     source = make_film(tmp_path / "long.mp4", damaged)
-    one = restore_film(source, tmp_path / "one.mkv", codec="ffv1", block=2,
-                       masks_out=tmp_path / "m1", work=WORK)
-    chunked = restore_film(source, tmp_path / "chunked.mkv", codec="ffv1", block=2,
-                           client=client, chunk_frames=4, masks_out=tmp_path / "m2", work=WORK)
+    one = restore_film(
+        source, tmp_path / "one.mkv", codec="ffv1", block=2, masks_out=tmp_path / "m1", work=WORK
+    )
+    chunked = restore_film(
+        source,
+        tmp_path / "chunked.mkv",
+        codec="ffv1",
+        block=2,
+        client=client,
+        chunk_frames=4,
+        masks_out=tmp_path / "m2",
+        work=WORK,
+    )
     assert chunked.workers == 2 and one.workers == 0
     assert chunked.frames_sha256 == one.frames_sha256
     assert np.array_equal(decoded(tmp_path / "one.mkv"), decoded(tmp_path / "chunked.mkv"))
@@ -365,8 +421,11 @@ def test_chunked_run_on_dask_equals_one_process(tmp_path, client):
 
 def test_a_subtitle_the_container_cannot_take_is_dropped_with_a_warning(tmp_path, film):
     source, maskdir, _ = film
-    with pytest.warns(UserWarning, match=r"subtitle stream 2 \(mov_text\) cannot go in a "
-                      r"\.avi file and was dropped; write \.mkv"):
+    with pytest.warns(
+        UserWarning,
+        match=r"subtitle stream 2 \(mov_text\) cannot go in a "
+        r"\.avi file and was dropped; write \.mkv",
+    ):
         out = restore_film(source, tmp_path / "out.avi", mask=maskdir, work=SPATIAL).output
     info = film_info(out)
     assert (info.frames, info.rate) == (T, 25)  # AVI counts frames: timestamps rescaled

@@ -40,8 +40,9 @@ def _only(tmp_path, *names):
 def test_inpaint_and_restore_with_masks_are_one_path(tmp_path, film, capsys):
     source, maskdir = film
     assert main(["inpaint", str(source), str(maskdir), "-o", str(tmp_path / "b.mp4")]) == 0
-    assert main(["restore", str(source), "--mask", str(maskdir), "-o",
-                 str(tmp_path / "a.mp4")]) == 0
+    assert (
+        main(["restore", str(source), "--mask", str(maskdir), "-o", str(tmp_path / "a.mp4")]) == 0
+    )
     assert (tmp_path / "a.mp4").read_bytes() == (tmp_path / "b.mp4").read_bytes()
     err = capsys.readouterr().err
     assert "restore: 12 frames" in err and "inpaint: 12 frames" in err
@@ -50,9 +51,22 @@ def test_inpaint_and_restore_with_masks_are_one_path(tmp_path, film, capsys):
 def test_restore_detects_writes_masks_overlay_and_keeps_audio(tmp_path, film, capsys):
     source, _ = film
     out = tmp_path / "clean.mkv"
-    status = main(["restore", str(source), "-o", str(out), "--codec", "ffv1", "--grow", "1",
-                   "--masks-out", str(tmp_path / "found"), "--overlay",
-                   str(tmp_path / "overlay.mp4")])
+    status = main(
+        [
+            "restore",
+            str(source),
+            "-o",
+            str(out),
+            "--codec",
+            "ffv1",
+            "--grow",
+            "1",
+            "--masks-out",
+            str(tmp_path / "found"),
+            "--overlay",
+            str(tmp_path / "overlay.mp4"),
+        ]
+    )
     assert status == 0, capsys.readouterr().err
     names = sorted(p.name for p in (tmp_path / "found").iterdir())
     assert names == [f"mask_{t:05d}.png" for t in range(T)]
@@ -75,8 +89,9 @@ def test_bad_inputs_fail_with_one_line_and_write_nothing(tmp_path, film, capsys)
     with av.open(str(sound_only), "w") as c:
         s = c.add_stream("aac", rate=8000)
         s.layout = "mono"
-        frame = av.AudioFrame.from_ndarray(np.zeros((1, 1024), np.float32), format="fltp",
-                                           layout="mono")
+        frame = av.AudioFrame.from_ndarray(
+            np.zeros((1, 1024), np.float32), format="fltp", layout="mono"
+        )
         frame.sample_rate, frame.pts = 8000, 0
         for p in [*s.encode(frame), *s.encode()]:
             c.mux(p)
@@ -85,13 +100,13 @@ def test_bad_inputs_fail_with_one_line_and_write_nothing(tmp_path, film, capsys)
     cases = [
         (["restore", str(source), "--mask", str(few), "-o", str(out)], "3 masks for 12 frames"),
         (["inpaint", str(source), "--mask", str(few), "-o", str(out)], "3 masks for 12 frames"),
-        (["restore", str(source), "--mask", str(tmp_path / "small.png"), "-o", str(out)],
-         "same size"),
+        (
+            ["restore", str(source), "--mask", str(tmp_path / "small.png"), "-o", str(out)],
+            "same size",
+        ),
         (["restore", str(sound_only), "-o", str(out)], "holds no video stream"),
-        (["restore", str(source), "-o", str(tmp_path / "afile" / "out.mp4")],
-         "does not exist"),
-        (["restore", str(source), "-o", str(tmp_path / "nowhere" / "out.mp4")],
-         "does not exist"),
+        (["restore", str(source), "-o", str(tmp_path / "afile" / "out.mp4")], "does not exist"),
+        (["restore", str(source), "-o", str(tmp_path / "nowhere" / "out.mp4")], "does not exist"),
         (["restore", str(source), "-o", str(out), "--codec", "ffv1"], "name the output .mkv"),
         (["restore", str(source), "-o", str(source)], "is the input"),
     ]
@@ -108,8 +123,21 @@ def test_batch_restore_takes_many_films(tmp_path, capsys):
     for k in range(2):
         damaged, _ = damage(clean_frames(6), seed=k)
         films.append(make_film(tmp_path / f"reel{k}.mp4", damaged, subtitles=False))
-    status = main(["batch", "restore", *map(str, films), "-o", str(tmp_path / "out"),
-                   "--workers", "2", "--threads", "1", "--grow", "1"])
+    status = main(
+        [
+            "batch",
+            "restore",
+            *map(str, films),
+            "-o",
+            str(tmp_path / "out"),
+            "--workers",
+            "2",
+            "--threads",
+            "1",
+            "--grow",
+            "1",
+        ]
+    )
     assert status == 0, capsys.readouterr().err
     for k in range(2):
         out = tmp_path / "out" / f"reel{k}.mp4"
@@ -140,11 +168,24 @@ def test_restore_on_two_dask_workers_equals_one_process(tmp_path, film, capsys):
     source, _ = film
     runs = {"one": [], "two": ["--workers", "2", "--chunk-frames", "4"]}
     for name, extra in runs.items():
-        assert main(["restore", str(source), "-o", str(tmp_path / f"{name}.mkv"), "--codec",
-                     "ffv1", "--masks-out", str(tmp_path / f"m_{name}"), *extra]) == 0
+        assert (
+            main(
+                [
+                    "restore",
+                    str(source),
+                    "-o",
+                    str(tmp_path / f"{name}.mkv"),
+                    "--codec",
+                    "ffv1",
+                    "--masks-out",
+                    str(tmp_path / f"m_{name}"),
+                    *extra,
+                ]
+            )
+            == 0
+        )
     assert "2 Dask worker(s)" in capsys.readouterr().err
     assert np.array_equal(decoded(tmp_path / "one.mkv"), decoded(tmp_path / "two.mkv"))
     for t in range(T):
         name = f"mask_{t:05d}.png"
-        assert (tmp_path / "m_one" / name).read_bytes() == \
-            (tmp_path / "m_two" / name).read_bytes()
+        assert (tmp_path / "m_one" / name).read_bytes() == (tmp_path / "m_two" / name).read_bytes()

@@ -51,8 +51,16 @@ def test_cw_and_ccw_rotations_reach_the_same_steady_state():
     runs = {}
     for rot in ("ccw", "cw"):
         early = clpde.inpaint(image, hole, rotation=rot, fill="mean", max_steps=68, tol=0)
-        final, info = clpde.inpaint(image, hole, rotation=rot, fill="mean", tol=1e-4, mean_tol=0,
-                                    max_steps=8000, return_info=True)
+        final, info = clpde.inpaint(
+            image,
+            hole,
+            rotation=rot,
+            fill="mean",
+            tol=1e-4,
+            mean_tol=0,
+            max_steps=8000,
+            return_info=True,
+        )
         assert info.converged
         runs[rot] = early, final
     early_gap = np.abs(runs["ccw"][0] - runs["cw"][0]).max()
@@ -100,9 +108,10 @@ def test_pyramid_geometry():
     up = mr.upsample(coarse, (7, 9))
     assert up.shape == (2, 7, 9)
     ramp = np.broadcast_to(np.arange(16.0), (1, 16, 16))
-    assert np.allclose(mr.upsample(mr.downsample(ramp, np.zeros((16, 16), bool))[0], (16, 16))[:, :,
-                                                                                               1:-1],
-                       ramp[:, :, 1:-1])
+    assert np.allclose(
+        mr.upsample(mr.downsample(ramp, np.zeros((16, 16), bool))[0], (16, 16))[:, :, 1:-1],
+        ramp[:, :, 1:-1],
+    )
 
 
 def test_convergence_check_stops_early_and_fixed_steps_run_fully():
@@ -132,8 +141,9 @@ def test_rho_phi_psi_round_trip():
 
 @pytest.mark.parametrize("colour", ["channels", "rho-phi-psi"])
 def test_colour_image_with_alpha(colour):
-    image = (np.stack([_edge_image(32), _edge_image(32, 1.2), 1 - _edge_image(32)],
-                      -1) * 255).astype(np.uint8)
+    image = (
+        np.stack([_edge_image(32), _edge_image(32, 1.2), 1 - _edge_image(32)], -1) * 255
+    ).astype(np.uint8)
     alpha = np.full((32, 32, 1), 200, np.uint8)
     rgba = np.concatenate([image, alpha], -1)
     hole = _disc(32, 16, 16, 4)
@@ -154,8 +164,9 @@ def test_any_number_of_channels_on_any_axis():
 
 
 # ---- the contract ---------------------------------------------------------------------------
-@pytest.mark.parametrize("dtype,scale", [(np.uint8, 255), (np.uint16, 65535), (np.float32, 1),
-                                         (np.float64, 300)])
+@pytest.mark.parametrize(
+    "dtype,scale", [(np.uint8, 255), (np.uint16, 65535), (np.float32, 1), (np.float64, 300)]
+)
 def test_dtype_preserved_and_bit_exact_outside_the_mask(dtype, scale):
     image = (_edge_image(32) * scale).astype(dtype)
     if dtype == np.float64:
@@ -210,25 +221,28 @@ def test_snapshots_and_object_form():
     assert job.info.steps == 68 and np.array_equal(job.result[~hole], image[~hole])
 
 
-@pytest.mark.parametrize("kwargs,match", [
-    ({"mask": np.zeros((5, 5), bool)}, "does not match"),
-    ({"mask": np.ones((8, 8), bool)}, "covers every pixel"),
-    ({"mask": np.array([["a"] * 8] * 8)}, "dtype"),
-    ({"mask": np.full((8, 8), np.nan)}, "NaN"),
-    ({"dt": 0}, "dt"),
-    ({"diffusion_dt": 0.5}, "stability"),
-    ({"epsilon": 1}, "epsilon"),
-    ({"scaling": "cube"}, "scaling"),
-    ({"rotation": "left"}, "rotation"),
-    ({"colour": "rho-phi-psi"}, "3 colour channels"),
-    ({"colour": "lab"}, "colour"),
-    ({"levels": 0}, "levels"),
-    ({"snapshots": 0}, "snapshots"),
-    ({"transport_steps": 0}, "transport_steps"),
-    ({"fill": "noise"}, "fill"),
-    ({"tol": -1}, "tol"),
-    ({"mean_tol": -1}, "mean_tol"),
-])
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        ({"mask": np.zeros((5, 5), bool)}, "does not match"),
+        ({"mask": np.ones((8, 8), bool)}, "covers every pixel"),
+        ({"mask": np.array([["a"] * 8] * 8)}, "dtype"),
+        ({"mask": np.full((8, 8), np.nan)}, "NaN"),
+        ({"dt": 0}, "dt"),
+        ({"diffusion_dt": 0.5}, "stability"),
+        ({"epsilon": 1}, "epsilon"),
+        ({"scaling": "cube"}, "scaling"),
+        ({"rotation": "left"}, "rotation"),
+        ({"colour": "rho-phi-psi"}, "3 colour channels"),
+        ({"colour": "lab"}, "colour"),
+        ({"levels": 0}, "levels"),
+        ({"snapshots": 0}, "snapshots"),
+        ({"transport_steps": 0}, "transport_steps"),
+        ({"fill": "noise"}, "fill"),
+        ({"tol": -1}, "tol"),
+        ({"mean_tol": -1}, "mean_tol"),
+    ],
+)
 def test_bad_inputs(kwargs, match):
     image = np.random.default_rng(0).random((8, 8))
     kwargs.setdefault("mask", _disc(8, 4, 4, 2))
@@ -253,8 +267,15 @@ def test_bad_images():
         Inpainting(np.zeros((8, 8)), mask, steps=3)
 
 
-@pytest.mark.parametrize("options", [{"fill": "biharmonic"}, {"fill": "zero", "levels": 1},
-                                     {"scaling": "quartic-root"}, {"keep_band": False}])
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"fill": "biharmonic"},
+        {"fill": "zero", "levels": 1},
+        {"scaling": "quartic-root"},
+        {"keep_band": False},
+    ],
+)
 def test_options_run_and_stay_close(options):
     image = _edge_image(32)
     hole = _disc(32, 16, 16, 4)

@@ -43,13 +43,24 @@ def _vote(image, mask, names=CHEAP):
 def _errors(image, mask, names=CHEAP):
     """Each candidate's true RMS error in the hole."""
     data = np.asarray(image, np.float64)[None]
-    return {n: float(np.sqrt(np.mean((validate._fill(n, data, mask, get_runtime(), np.float32,
-                                                      0, {})[0][mask] - image[mask]) ** 2)))
-            for n in names}
+    return {
+        n: float(
+            np.sqrt(
+                np.mean(
+                    (
+                        validate._fill(n, data, mask, get_runtime(), np.float32, 0, {})[0][mask]
+                        - image[mask]
+                    )
+                    ** 2
+                )
+            )
+        )
+        for n in names
+    }
 
 
 def _disc(shape, cy, cx, r):
-    y, x = np.mgrid[0:shape[0], 0:shape[1]]
+    y, x = np.mgrid[0 : shape[0], 0 : shape[1]]
     return np.hypot(y - cy, x - cx) <= r
 
 
@@ -102,8 +113,7 @@ def test_auto_reports_its_choices_and_keeps_the_rest():
     image = _textured(96, 120)
     mask = _disc(image.shape, 40, 40, 9)
     mask[80:82, 20:100] = True
-    out, info = clpde.inpaint(image, mask, method="auto", return_info=True, progress=False,
-                              seed=0)
+    out, info = clpde.inpaint(image, mask, method="auto", return_info=True, progress=False, seed=0)
     assert out.dtype == image.dtype and np.array_equal(out[~mask], image[~mask])
     assert len(info.choices) == len(info.boxes) == len(info.box_methods)
     choices = [c for report in info.choices for c in report["choices"]]
@@ -111,5 +121,4 @@ def test_auto_reports_its_choices_and_keeps_the_rest():
     for c in choices:
         assert c["why"] in ("ring vote", "candidates agree", "no ring to test on")
         assert sum(c["weights"].values()) == pytest.approx(1.0)
-    assert np.array_equal(out, clpde.inpaint(image, mask, method="auto", progress=False,
-                                             seed=0))
+    assert np.array_equal(out, clpde.inpaint(image, mask, method="auto", progress=False, seed=0))

@@ -32,7 +32,7 @@ def _case(ny, nx, channels, seed=0):
     image = base[..., None] + 0.05 * rng.standard_normal((ny, nx, channels))
     image = np.clip(np.round(255 * image), 0, 255).astype(np.uint8)
     mask = np.hypot(y - ny / 2, x - nx / 3) <= 5
-    mask[ny // 4, 3: nx - 3] = True  # a scratch: a second component, far enough apart
+    mask[ny // 4, 3 : nx - 3] = True  # a scratch: a second component, far enough apart
     return (image[..., 0] if channels == 1 else image), mask
 
 
@@ -43,13 +43,20 @@ def test_new_size_and_channel_count_build_nothing(fresh, method):
 
     def run(ny, nx, channels):
         image, mask = _case(ny, nx, channels)
-        clpde.inpaint(image, mask, channel_axis=-1 if channels > 1 else None, device=own,
-                      progress=False, seed=0, **kw)
+        clpde.inpaint(
+            image,
+            mask,
+            channel_axis=-1 if channels > 1 else None,
+            device=own,
+            progress=False,
+            seed=0,
+            **kw,
+        )
 
     run(48, 56, 3)
     first = list(built)
     assert first, "the first call builds its programs"
     run(61, 45, 3)  # a new size
-    assert built == first, built[len(first):]
+    assert built == first, built[len(first) :]
     run(52, 60, 1)  # grey after colour
-    assert built == first, built[len(first):]
+    assert built == first, built[len(first) :]

@@ -102,8 +102,9 @@ def test_margin_covers_what_it_reads(runtime):
     assert m == coherence.margin(4.0, 1.4, 3.0) == 4 + 5 + 9 + 1
     whole = coherence.transport(data, omega, runtime, epsilon=4.0, rho=3.0)
     rows, cols = slice(25 - m, 35 + m), slice(30 - m, 38 + m)
-    boxed = coherence.transport(data[:, rows, cols], omega[rows, cols], runtime, epsilon=4.0,
-                                rho=3.0)
+    boxed = coherence.transport(
+        data[:, rows, cols], omega[rows, cols], runtime, epsilon=4.0, rho=3.0
+    )
     np.testing.assert_allclose(boxed, whole[:, rows, cols], atol=1e-6)
 
 

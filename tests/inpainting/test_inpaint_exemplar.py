@@ -9,8 +9,9 @@ from clpde.inpainting import exemplar
 from tests.reference import patchmatch as ref
 
 
-def _level(runtime, seed=0, patch=5, shape=(21, 26), nch=3, dtype=np.float32, nout=None,
-           confidence=1.0):
+def _level(
+    runtime, seed=0, patch=5, shape=(21, 26), nch=3, dtype=np.float32, nout=None, confidence=1.0
+):
     rng = np.random.default_rng(seed)
     img = rng.random((nch,) + shape)
     hole = np.zeros(shape, bool)
@@ -29,9 +30,18 @@ def _score(lv, hole, masked, seed):
     if masked:
         use = ~hole & (np.random.default_rng(seed).random(hole.shape) < 0.7)
         lv.d_use.set(use.astype(np.uint8).ravel())
-    lv._launch(lv.k_score, lv.targets[1], lv.img.data, lv.d_use.data, np.int32(masked),
-               lv.nnf[0].data, lv.dist.data, lv.targets[0].data, np.int32(lv.targets[1]),
-               *lv._args())
+    lv._launch(
+        lv.k_score,
+        lv.targets[1],
+        lv.img.data,
+        lv.d_use.data,
+        np.int32(masked),
+        lv.nnf[0].data,
+        lv.dist.data,
+        lv.targets[0].data,
+        np.int32(lv.targets[1]),
+        *lv._args(),
+    )
     return use
 
 
@@ -46,9 +56,10 @@ def test_patch_distance_matches_reference(runtime, masked):
     np.testing.assert_allclose(got[finite], want[finite], rtol=2e-5, atol=1e-7)
 
 
-@pytest.mark.parametrize("best_only,nout,confidence",
-                         [(False, None, 1.0), (True, None, 1.0), (False, 2, 1.0),
-                          (False, None, 1.3), (True, None, 2.0)])
+@pytest.mark.parametrize(
+    "best_only,nout,confidence",
+    [(False, None, 1.0), (True, None, 1.0), (False, 2, 1.0), (False, None, 1.3), (True, None, 2.0)],
+)
 def test_vote_matches_reference(runtime, best_only, nout, confidence):
     lv, img, hole, w = _level(runtime, seed=3, nout=nout, confidence=confidence)
     lv.score()
@@ -57,6 +68,7 @@ def test_vote_matches_reference(runtime, best_only, nout, confidence):
     got = lv.image()
     # The confidence penalty: depth into the hole (Euclidean) times log(confidence).
     from scipy import ndimage
+
     pen = ndimage.distance_transform_edt(hole) * np.log(confidence)
     want = ref.vote(img, nnf, dist, hole, lv.r, 0.05, best_only, nout, pen)
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
@@ -80,13 +92,16 @@ def test_coherence_matches_reference(runtime):
     lv.score()
     nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
     lv.cohere(2, 1.5)
-    want_nnf, want_dist = ref.cohere(img, w, nnf, dist, lv.valid, lv.targets_mask, lv.r,
-                                     1.5, 2)
+    want_nnf, want_dist = ref.cohere(img, w, nnf, dist, lv.valid, lv.targets_mask, lv.r, 1.5, 2)
     got = lv.nnf_to_host()
     assert (got != nnf).any(2).sum() > 20  # the sweeps did move offsets
     assert np.array_equal(got, want_nnf)
-    np.testing.assert_allclose(lv.dist.get().reshape(hole.shape)[lv.targets_mask],
-                               want_dist[lv.targets_mask], rtol=2e-5, atol=1e-7)
+    np.testing.assert_allclose(
+        lv.dist.get().reshape(hole.shape)[lv.targets_mask],
+        want_dist[lv.targets_mask],
+        rtol=2e-5,
+        atol=1e-7,
+    )
 
 
 def _distinct_offsets(lv):
@@ -119,14 +134,24 @@ def test_coherence_joins_equally_good_copies(runtime):
 def test_try_offsets_matches_reference(runtime, masked):
     lv, img, hole, w = _level(runtime, seed=7, nout=2)  # plane 2 plays a texture feature
     lv.ncolour = 2
-    img[:2] = np.tile(img[:2, :, :5], (1, 1, 6))[:, :, :img.shape[2]]  # colours repeat by 5
+    img[:2] = np.tile(img[:2, :, :5], (1, 1, 6))[:, :, : img.shape[2]]  # colours repeat by 5
     lv.img.set(img.astype(np.float32))
     use = _score(lv, hole, masked, seed=2)
     nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
     lags = np.array([[5, 0], [-5, 0], [10, 0], [-10, 0], [3, 2], [0, -4]], np.int32)
     lv.try_offsets(cla.to_device(lv.q, lags), masked=masked)
-    want_nnf, want_dist = ref.try_offsets(img.astype(np.float32), w, [w[0], w[1], 0], nnf,
-                                          dist, lv.targets_mask, lv.valid, lags, lv.r, use)
+    want_nnf, want_dist = ref.try_offsets(
+        img.astype(np.float32),
+        w,
+        [w[0], w[1], 0],
+        nnf,
+        dist,
+        lv.targets_mask,
+        lv.valid,
+        lags,
+        lv.r,
+        use,
+    )
     assert np.array_equal(lv.nnf_to_host(), want_nnf)
     got = lv.dist.get().reshape(hole.shape)
     finite = np.isfinite(want_dist)
@@ -137,8 +162,8 @@ def test_try_offsets_matches_reference(runtime, masked):
 def _grid(n=192):
     y, x = np.mgrid[0:n, 0:n].astype(np.float64)
     img = (0.3 + 0.5 * ((x % 23 < 3) | (y % 23 < 3)))[None]  # 3 px lines, period 23
-    omega = (y - 36) ** 2 + (x - 163) ** 2 <= 20 ** 2
-    omega |= (y - 124) ** 2 + (x - 31) ** 2 <= 7.5 ** 2
+    omega = (y - 36) ** 2 + (x - 163) ** 2 <= 20**2
+    omega |= (y - 124) ** 2 + (x - 31) ** 2 <= 7.5**2
     omega |= (abs(y - 147) <= 12) & (abs(x - 57) <= 12)
     return img, omega
 
@@ -155,11 +180,13 @@ def test_periodic_pattern_exact_at_every_seed(runtime):
 
 def _periodic(n=112):
     y, x = np.mgrid[0:n, 0:n].astype(np.float64)
-    return np.stack([
-        0.5 + 0.4 * np.sin(2 * np.pi * x / 12) * np.cos(2 * np.pi * y / 16),
-        0.5 + 0.3 * np.sin(2 * np.pi * (x / 12 + y / 16)),
-        0.3 + 0.4 * ((x // 6 + y // 8) % 2),
-    ])
+    return np.stack(
+        [
+            0.5 + 0.4 * np.sin(2 * np.pi * x / 12) * np.cos(2 * np.pi * y / 16),
+            0.5 + 0.3 * np.sin(2 * np.pi * (x / 12 + y / 16)),
+            0.3 + 0.4 * ((x // 6 + y // 8) % 2),
+        ]
+    )
 
 
 def _psnr(a, b, mask):
@@ -245,8 +272,8 @@ def test_levels_follow_the_hole_thickness_not_a_few_crossings():
     # Thin strokes (3 px) that cross: one level, however deep the few crossing pixels are.
     thin = np.zeros((200, 200), bool)
     for k in range(20, 180, 12):
-        thin[k:k + 3, 10:190] = True
-        thin[10:190, k:k + 3] = True
+        thin[k : k + 3, 10:190] = True
+        thin[10:190, k : k + 3] = True
     thin[100:108, 100:108] = True  # one small blob, deeper than the strokes
     assert exemplar._levels_for(thin, 3, thin.shape) == 1
     thick = np.zeros((300, 300), bool)

@@ -16,10 +16,12 @@ def _inputs(kind, shape=(23, 31), nc=2, seed=0):
     if kind == "random":
         data = rng.random((nc, ny, nx))
     else:  # smooth structure: a ramp, a disc edge and a sinusoid
-        data = np.stack([
-            0.5 + 0.4 * np.tanh((np.hypot(x - 12.3, y - 9.1) - 6) / 1.5),
-            0.5 + 0.3 * np.sin(0.4 * x + 0.25 * y) + 0.01 * x,
-        ][:nc])
+        data = np.stack(
+            [
+                0.5 + 0.4 * np.tanh((np.hypot(x - 12.3, y - 9.1) - 6) / 1.5),
+                0.5 + 0.3 * np.sin(0.4 * x + 0.25 * y) + 0.01 * x,
+            ][:nc]
+        )
     omega = np.zeros(shape, bool)
     omega[5:12, 7:20] = True
     omega[15:, 25:] = True  # touches two borders: exercises the ghost refills
@@ -33,18 +35,29 @@ def _solver(data, omega, **params):
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])
-@pytest.mark.parametrize("scaling,rotation,stencil", [("none", "ccw", "central"),
-                                                      ("quartic-root", "cw", "central"),
-                                                      ("none", "ccw", "isotropic"),
-                                                      ("quartic-root", "cw", "isotropic")])
+@pytest.mark.parametrize(
+    "scaling,rotation,stencil",
+    [
+        ("none", "ccw", "central"),
+        ("quartic-root", "cw", "central"),
+        ("none", "ccw", "isotropic"),
+        ("quartic-root", "cw", "isotropic"),
+    ],
+)
 def test_transport_step_matches_reference(kind, scaling, rotation, stencil):
     data, omega = _inputs(kind)
     solver = _solver(data, omega, scaling=scaling, rotation=rotation, dt=0.1, stencil=stencil)
     solver.transport_step()
     got = solver.result()
     rot = 1.0 if rotation == "ccw" else -1.0
-    want = ref.transport_step(pad_neumann(data.astype(np.float32).astype(float)), omega, 0.1,
-                              rot=rot, scaling=scaling, stencil=stencil)
+    want = ref.transport_step(
+        pad_neumann(data.astype(np.float32).astype(float)),
+        omega,
+        0.1,
+        rot=rot,
+        scaling=scaling,
+        stencil=stencil,
+    )
     np.testing.assert_allclose(got, want, atol=2e-5)
     assert np.array_equal(got[:, ~omega], data.astype(np.float32)[:, ~omega])
     assert np.abs(got - data).max() > 1e-3  # the step did something

@@ -54,7 +54,7 @@ def test_isotropic_stencil_keeps_oblique_stripes_closer_to_a_steady_state():
 def _two_holes(shape=(120, 160)):
     mask = np.zeros(shape, bool)
     mask[20:26, 10:70] = True  # a scratch: one level
-    y, x = np.mgrid[0:shape[0], 0:shape[1]]
+    y, x = np.mgrid[0 : shape[0], 0 : shape[1]]
     mask |= np.hypot(y - 80, x - 120) <= 14  # a 28-pixel blob: several levels
     return mask
 
@@ -120,8 +120,9 @@ def test_soft_masks():
 
 def test_soft_mask_is_blended_for_methods_without_fidelity(monkeypatch):
     module = types.ModuleType("clpde_fake_method")
-    module.solve = lambda data, omega, runtime, *, dtype=None, progress=None, seed=None: (
-        np.where(omega, 1.0, data))
+    module.solve = lambda data, omega, runtime, *, dtype=None, progress=None, seed=None: np.where(
+        omega, 1.0, data
+    )
     module.MARGIN = 1
     monkeypatch.setitem(sys.modules, "clpde_fake_method", module)
     monkeypatch.setitem(inpainting.METHODS, "fake", "clpde_fake_method")
@@ -146,12 +147,15 @@ def test_methods_registry():
     assert info.choices and np.array_equal(auto[~mask], image[~mask])
     # the default is "auto", or the transport when one of the transport's options is given
     assert clpde.inpaint(image, mask, return_info=True, progress=False)[1].method == expected
-    assert clpde.inpaint(image, mask, dt=0.05, return_info=True,
-                         progress=False)[1].method == "transport"
+    assert (
+        clpde.inpaint(image, mask, dt=0.05, return_info=True, progress=False)[1].method
+        == "transport"
+    )
 
 
-@pytest.mark.parametrize("mask_value,match", [
-    (1.5, r"outside \[0, 1\]"), (-0.5, r"outside \[0, 1\]"), (np.nan, "NaN")])
+@pytest.mark.parametrize(
+    "mask_value,match", [(1.5, r"outside \[0, 1\]"), (-0.5, r"outside \[0, 1\]"), (np.nan, "NaN")]
+)
 def test_bad_soft_masks(mask_value, match):
     mask = np.zeros((20, 20))
     mask[5, 5] = mask_value

@@ -58,8 +58,17 @@ def test_steady_state(runtime, nu):
     # (nu = 0.01, 190 iterations); Lap I = w to 7e-7; mean |error| in the slot 0.015 and
     # 0.019 against the biharmonic fill's 0.025.
     image, mask = edge(30)
-    out, solver = ns.inpaint(image, mask, runtime, nu=nu, contrast=0.05, tol=1e-5, mean_tol=0,
-                             max_iter=3000, return_solver=True)
+    out, solver = ns.inpaint(
+        image,
+        mask,
+        runtime,
+        nu=nu,
+        contrast=0.05,
+        tol=1e-5,
+        mean_tol=0,
+        max_iter=3000,
+        return_solver=True,
+    )
     assert solver.converged
     rows, cols = poisson.box_around(mask, ns.MARGIN)
     m = mask[rows, cols]
@@ -78,8 +87,10 @@ def test_steady_state(runtime, nu):
     after = relative_rate(img, w)
     assert before > 0.2 and after < 1e-3
     # the edge is continued better than by the biharmonic start
-    assert np.abs(out - image)[:, mask].mean() < np.abs(poisson.solve(image, mask, runtime)
-                                                        - image)[:, mask].mean()
+    assert (
+        np.abs(out - image)[:, mask].mean()
+        < np.abs(poisson.solve(image, mask, runtime) - image)[:, mask].mean()
+    )
     assert np.array_equal(out[:, ~mask], image[:, ~mask])
 
 

@@ -24,8 +24,8 @@ def _scratches(ny, nx, seed=1):
     mask = np.zeros((ny, nx), bool)
     for _ in range(3):
         r = int(rng.integers(2, ny - 4))
-        mask[r:r + 2, int(rng.integers(0, nx // 2)):] = True
-    mask[int(ny * 0.3):int(ny * 0.3) + 9, int(nx * 0.6):int(nx * 0.6) + 11] = True  # a blob
+        mask[r : r + 2, int(rng.integers(0, nx // 2)) :] = True
+    mask[int(ny * 0.3) : int(ny * 0.3) + 9, int(nx * 0.6) : int(nx * 0.6) + 11] = True  # a blob
     return mask
 
 
@@ -40,8 +40,12 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         data = np.stack([_photo_like(ny, nx, seed=c) * (1 - 0.2 * c) for c in range(nc)])
     mask = _scratches(ny, nx)
     # one block size; blocks cut where little is known; two grids averaged
-    for extra in (dict(split=0.0), dict(split=0.6), dict(split=0.3, shifts=2, cutoff=0.8),
-                  dict(per_pixel=0.5)):
+    for extra in (
+        dict(split=0.0),
+        dict(split=0.6),
+        dict(split=0.3, shifts=2, cutoff=0.8),
+        dict(per_pixel=0.5),
+    ):
         options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
         want = ref.fill(data, mask, **options)
@@ -81,8 +85,19 @@ def test_basis_cosine_is_restored_almost_exactly(runtime, freq):
     mask = np.zeros((n, n), bool)
     mask[40:52, 30:60] = True
     mask[70:73, 5:90] = True
-    out = spectral.fill(image[None], mask, runtime, block=16, border=8, split=0.0, rho=0.8,
-                        gamma=0.5, shifts=1, iterations=60, detrend=False)[0]
+    out = spectral.fill(
+        image[None],
+        mask,
+        runtime,
+        block=16,
+        border=8,
+        split=0.0,
+        rho=0.8,
+        gamma=0.5,
+        shifts=1,
+        iterations=60,
+        detrend=False,
+    )[0]
     assert np.abs(out - image)[mask].max() < 1e-3
 
 

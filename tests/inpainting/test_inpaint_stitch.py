@@ -73,8 +73,17 @@ def test_vote_sources_are_what_the_best_only_vote_copies(runtime):
     nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
     pen = lv.pen.get().reshape(hole.shape)
     src, _, _ = stitch.vote_sources(nnf, dist, pen, hole, lv.r, 0.05)
-    want = ref.vote(img, nnf, dist, hole, lv.r, 0.05, True, None,
-                    ndimage.distance_transform_edt(hole) * np.log(1.3))
+    want = ref.vote(
+        img,
+        nnf,
+        dist,
+        hole,
+        lv.r,
+        0.05,
+        True,
+        None,
+        ndimage.distance_transform_edt(hole) * np.log(1.3),
+    )
     assert (src >= 0).all()
     np.testing.assert_allclose(img.reshape(2, -1)[:, src], want[:, hole], rtol=1e-6)
 
@@ -82,8 +91,7 @@ def test_vote_sources_are_what_the_best_only_vote_copies(runtime):
 def test_stitch_matches_the_dense_reference(runtime):
     lv, img, hole = _level(runtime)
     nnf, dist = lv.nnf_to_host(), lv.dist.get().reshape(hole.shape)
-    sources = stitch.vote_sources(nnf, dist, lv.pen.get().reshape(hole.shape), hole, lv.r,
-                                  0.05)
+    sources = stitch.vote_sources(nnf, dist, lv.pen.get().reshape(hole.shape), hole, lv.r, 0.05)
     filled = img.copy()
     filled[:, hole] = img.reshape(2, -1)[:, sources[0]]
     got = stitch.stitch(filled, hole, sources, lv.r)
@@ -106,5 +114,4 @@ def test_a_tone_jump_is_removed_and_exact_copies_stay():
     np.testing.assert_allclose(exact, img, atol=1e-12)
     jumped = img.copy()
     jumped[:, hole] += 0.2
-    np.testing.assert_allclose(stitch.stitch(jumped, hole, (src, zeros, zeros), 3), img,
-                               atol=1e-12)
+    np.testing.assert_allclose(stitch.stitch(jumped, hole, (src, zeros, zeros), 3), img, atol=1e-12)

@@ -39,8 +39,7 @@ def test_poisson_with_right_hand_side(runtime):
     data, omega = _case(seed=1, nc=1)
     rng = np.random.default_rng(3)
     f = 0.01 * rng.standard_normal(data.shape)
-    solver = poisson.PoissonSolver(runtime, poisson.ring_mean_start(data, omega), omega,
-                                   "harmonic")
+    solver = poisson.PoissonSolver(runtime, poisson.ring_mean_start(data, omega), omega, "harmonic")
     solver.f.set(f.astype(np.float32))
     solver.solve(tol=1e-7)
     got = solver.result()
@@ -113,8 +112,7 @@ def test_multigrid_preconditioned_cg(runtime, kind):
     for pre in (False, True):
         solver = poisson.PoissonSolver(runtime, start, omega, kind, precondition=pre)
         iterations[pre] = solver.solve(tol=1e-6, max_iter=20000)
-        np.testing.assert_allclose(solver.result(), ref.poisson_fill(data, omega, kind),
-                                   atol=2e-5)
+        np.testing.assert_allclose(solver.result(), ref.poisson_fill(data, omega, kind), atol=2e-5)
     assert solver.mg.levels >= 4
     assert iterations[True] * 3 < iterations[False]
     assert poisson.thick(omega) and not poisson.thick(omega[:20])
@@ -128,7 +126,8 @@ def test_double_precision_equals_sparse_solve(runtime, kind):
     data, omega = _case(seed=6)
     want = ref.poisson_fill(data, omega, kind)
     for pre in (False, True):
-        solver = poisson.PoissonSolver(runtime, poisson.ring_mean_start(data, omega), omega,
-                                       kind, np.float64, precondition=pre)
+        solver = poisson.PoissonSolver(
+            runtime, poisson.ring_mean_start(data, omega), omega, kind, np.float64, precondition=pre
+        )
         solver.solve(tol=1e-11, max_iter=20000)
         np.testing.assert_allclose(solver.result(), want, atol=1e-10)

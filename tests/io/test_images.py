@@ -22,16 +22,19 @@ def _image(rng, dtype, shape):
     return rng.integers(info.min, info.max, size=shape, endpoint=True).astype(dtype)
 
 
-@pytest.mark.parametrize("suffix, dtype, shape", [
-    (".png", np.uint8, (7, 9)),
-    (".png", np.uint8, (7, 9, 3)),
-    (".png", np.uint8, (7, 9, 4)),
-    (".png", np.uint16, (7, 9)),
-    (".tif", np.uint16, (7, 9, 3)),
-    (".tiff", np.float32, (7, 9)),
-    (".tif", np.float64, (7, 9, 4)),
-    (".tif", np.int16, (7, 9)),
-])
+@pytest.mark.parametrize(
+    "suffix, dtype, shape",
+    [
+        (".png", np.uint8, (7, 9)),
+        (".png", np.uint8, (7, 9, 3)),
+        (".png", np.uint8, (7, 9, 4)),
+        (".png", np.uint16, (7, 9)),
+        (".tif", np.uint16, (7, 9, 3)),
+        (".tiff", np.float32, (7, 9)),
+        (".tif", np.float64, (7, 9, 4)),
+        (".tif", np.int16, (7, 9)),
+    ],
+)
 def test_lossless_round_trip_keeps_dtype_and_values(tmp_path, rng, suffix, dtype, shape):
     image = _image(rng, dtype, shape)
     path = tmp_path / f"a{suffix}"
@@ -50,15 +53,17 @@ def test_jpeg_round_trip_is_close(tmp_path):
     assert np.abs(back.astype(int) - image).mean() < 3
 
 
-@pytest.mark.parametrize("name, dtype, shape, words", [
-    ("a.png", np.float32, (4, 4), "PNG stores"),
-    ("a.png", bool, (4, 4, 3), "1-bit images as greyscale only"),
-    ("a.jpg", np.uint8, (4, 4, 4), "JPEG"),
-    ("a.bmp", np.uint8, (4, 4), "unsupported image format"),
-    ("a.png", np.uint8, (4, 4, 5), "at most 4 channels"),
-])
-def test_unwritable_combinations_are_refused_and_write_nothing(tmp_path, name, dtype, shape,
-                                                               words):
+@pytest.mark.parametrize(
+    "name, dtype, shape, words",
+    [
+        ("a.png", np.float32, (4, 4), "PNG stores"),
+        ("a.png", bool, (4, 4, 3), "1-bit images as greyscale only"),
+        ("a.jpg", np.uint8, (4, 4, 4), "JPEG"),
+        ("a.bmp", np.uint8, (4, 4), "unsupported image format"),
+        ("a.png", np.uint8, (4, 4, 5), "at most 4 channels"),
+    ],
+)
+def test_unwritable_combinations_are_refused_and_write_nothing(tmp_path, name, dtype, shape, words):
     with pytest.raises(InputError, match=words):
         write_image(tmp_path / name, np.zeros(shape, dtype))
     assert os.listdir(tmp_path) == []
@@ -156,8 +161,9 @@ def test_unwritable_folder_error_names_the_output(tmp_path, monkeypatch):
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr(tempfile, "mkstemp", refuse)
-    with pytest.raises(InputError,
-                       match=r"cannot write .*out.png: .* not writable \(Permission denied\)"):
+    with pytest.raises(
+        InputError, match=r"cannot write .*out.png: .* not writable \(Permission denied\)"
+    ):
         write_image(tmp_path / "out.png", np.zeros((3, 3), np.uint8))
 
 
@@ -166,7 +172,7 @@ def _strokes(shape=(120, 160)):
     """Thin text-like strokes over about 2.5% of the pixels, as a damage mask."""
     mask = np.zeros(shape, bool)
     for k in range(6):
-        mask[15 + 18 * k: 17 + 18 * k, 10:150] = True
+        mask[15 + 18 * k : 17 + 18 * k, 10:150] = True
     mask[:, 80:82] = True
     return mask
 
@@ -188,12 +194,15 @@ def test_a_jpeg_mask_is_binarised_at_half_its_range_with_a_warning(tmp_path):
     assert (mask != truth).mean() < 0.002
 
 
-@pytest.mark.parametrize("levels, expected", [
-    ((0, 255), None),        # drawn masks read as drawn, without a warning
-    ((0, 1), None),          # a 0/1 label image too
-    ((10, 200), None),
-    ((0, 100, 255), "3 grey levels"),
-])
+@pytest.mark.parametrize(
+    "levels, expected",
+    [
+        ((0, 255), None),  # drawn masks read as drawn, without a warning
+        ((0, 1), None),  # a 0/1 label image too
+        ((10, 200), None),
+        ((0, 100, 255), "3 grey levels"),
+    ],
+)
 def test_grey_masks_cut_half_way(tmp_path, levels, expected):
     import warnings
 
@@ -205,8 +214,9 @@ def test_grey_masks_cut_half_way(tmp_path, levels, expected):
         warnings.simplefilter("always")
         mask = read_mask(tmp_path / "m.png")
     np.testing.assert_array_equal(mask, values > (levels[0] + levels[-1]) / 2)
-    assert [str(w.message) for w in caught if expected and expected in str(w.message)] or \
-        (expected is None and not caught)
+    assert [str(w.message) for w in caught if expected and expected in str(w.message)] or (
+        expected is None and not caught
+    )
 
 
 def test_colour_and_uniform_masks(tmp_path):

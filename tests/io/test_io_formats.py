@@ -10,8 +10,20 @@ import pytest
 from clpde.imagedata import InputError
 from clpde.io import read_image, write_image
 
-DTYPES = [bool, np.uint8, np.uint16, np.int8, np.int16, np.uint32, np.int32, np.int64,
-          np.uint64, np.float16, np.float32, np.float64]
+DTYPES = [
+    bool,
+    np.uint8,
+    np.uint16,
+    np.int8,
+    np.int16,
+    np.uint32,
+    np.int32,
+    np.int64,
+    np.uint64,
+    np.float16,
+    np.float32,
+    np.float64,
+]
 SHAPES = [(5, 6), (5, 6, 1), (5, 6, 2), (5, 6, 3), (5, 6, 4)]
 
 
@@ -24,8 +36,12 @@ def _image(rng, dtype, shape):
     info = np.iinfo(dtype)
     # the whole range, ends included (the largest value by hand: numpy's integers() cannot
     # draw up to 2**64 - 1)
-    values = rng.integers(max(info.min, -2**62), min(info.max, 2**62), size=shape,
-                          dtype=np.int64 if info.min < 0 else np.uint64).astype(dtype)
+    values = rng.integers(
+        max(info.min, -(2**62)),
+        min(info.max, 2**62),
+        size=shape,
+        dtype=np.int64 if info.min < 0 else np.uint64,
+    ).astype(dtype)
     flat = values.reshape(-1)
     flat[0], flat[-1] = info.min, info.max
     return values
@@ -66,12 +82,20 @@ def _png(array: np.ndarray) -> bytes:
     raw = b"".join(b"\0" + array[y].astype(">u2").tobytes() for y in range(rows))
 
     def chunk(kind, data):
-        return (struct.pack(">I", len(data)) + kind + data
-                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+        return (
+            struct.pack(">I", len(data))
+            + kind
+            + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+        )
 
     header = struct.pack(">IIBBBBB", cols, rows, 16, colour_type, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw))
-            + chunk(b"IEND", b""))
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"IDAT", zlib.compress(raw))
+        + chunk(b"IEND", b"")
+    )
 
 
 @pytest.mark.parametrize("channels", [1, 2, 3, 4])

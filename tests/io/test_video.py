@@ -25,7 +25,7 @@ def _film(height, width, count=30):
         frames.append(np.stack([red, green, blue], axis=-1).astype(np.uint8))
     clean = np.stack(frames)
     mask = np.zeros((height, width), bool)
-    mask[2:-2, width // 2 - 1: width // 2 + 1] = True
+    mask[2:-2, width // 2 - 1 : width // 2 + 1] = True
     damaged = clean.copy()
     damaged[:, mask] = 255
     return clean, damaged, mask
@@ -75,7 +75,11 @@ def test_film_bytes_do_not_depend_on_the_heap(tmp_path):
         env = {k: v for k, v in os.environ.items() if k != "MALLOC_PERTURB_"}
         if perturb:
             env["MALLOC_PERTURB_"] = perturb
-        subprocess.run([sys.executable, "-c", WRITE_FILM, str(tmp_path / name)], env=env,
-                       check=True, timeout=120)
+        subprocess.run(
+            [sys.executable, "-c", WRITE_FILM, str(tmp_path / name)],
+            env=env,
+            check=True,
+            timeout=120,
+        )
         files.append((tmp_path / name).read_bytes())
     assert files[0] == files[1]

@@ -31,16 +31,38 @@ def test_down_and_up_match_reference(solver, rng):
     ny2, nx2 = 12, 9
     d, dw = cla.empty(q, (ny2, nx2), np.float32), cla.empty(q, (ny2, nx2), np.float32)
     g, loc = _launch(solver, ny2, nx2)
-    solver.k_down(q, g, loc, _dev(q, src).data, _dev(q, w).data, d.data, dw.data,
-                  np.int32(nx), np.int32(ny), np.int32(nx2), np.int32(ny2))
+    solver.k_down(
+        q,
+        g,
+        loc,
+        _dev(q, src).data,
+        _dev(q, w).data,
+        d.data,
+        dw.data,
+        np.int32(nx),
+        np.int32(ny),
+        np.int32(nx2),
+        np.int32(ny2),
+    )
     rd, rw = ref.down(src, w)
     np.testing.assert_allclose(d.get(), rd, atol=1e-5)
     np.testing.assert_allclose(dw.get(), rw, atol=1e-6)
     u2, v2 = rng.normal(size=(ny2, nx2)), rng.normal(size=(ny2, nx2))
     u, v = cla.empty(q, (ny, nx), np.float32), cla.empty(q, (ny, nx), np.float32)
     g, loc = _launch(solver, ny, nx)
-    solver.k_up(q, g, loc, _dev(q, u2).data, _dev(q, v2).data, u.data, v.data,
-                np.int32(nx2), np.int32(ny2), np.int32(nx), np.int32(ny))
+    solver.k_up(
+        q,
+        g,
+        loc,
+        _dev(q, u2).data,
+        _dev(q, v2).data,
+        u.data,
+        v.data,
+        np.int32(nx2),
+        np.int32(ny2),
+        np.int32(nx),
+        np.int32(ny),
+    )
     ru, rv = ref.up(u2, v2, ny, nx)
     np.testing.assert_allclose(u.get(), ru, atol=1e-5)
     np.testing.assert_allclose(v.get(), rv, atol=1e-5)
@@ -55,8 +77,14 @@ def test_linearise_sor_median_warp_match_reference(solver, rng):
     size = (np.int32(nx), np.int32(ny))
     g, loc = _launch(solver, ny, nx)
     bufs = [cla.empty(q, (ny, nx), np.float32) for _ in range(4)]
-    solver.k_lin(q, g, loc, *(_dev(q, a).data for a in (I0, I1, w0, w1, u, v)),
-                 *(b.data for b in bufs), *size)
+    solver.k_lin(
+        q,
+        g,
+        loc,
+        *(_dev(q, a).data for a in (I0, I1, w0, w1, u, v)),
+        *(b.data for b in bufs),
+        *size,
+    )
     want = ref.linearise(I0, I1, w0, w1, u, v)
     for got, exp in zip(bufs, want, strict=True):
         np.testing.assert_allclose(got.get(), exp, atol=2e-5)
@@ -66,18 +94,34 @@ def test_linearise_sor_median_warp_match_reference(solver, rng):
     dIx, dIy, dIt, dwd, du_, dv_ = (_dev(q, a) for a in (Ix, Iy, It, wd, u, v))
     rdu, rdv = du0, dv0
     for parity in (0, 1, 0, 1):
-        solver.k_sor(q, g, loc, dIx.data, dIy.data, dIt.data, dwd.data, du_.data, dv_.data,
-                     du.data, dv.data, np.float32(0.03 ** 2), np.float32(0.01),
-                     np.float32(1.8), np.int32(parity), *size)
-        rdu, rdv = ref.sor_half(Ix, Iy, It, wd, u, v, rdu, rdv, 0.03 ** 2, 0.01, 1.8, parity)
+        solver.k_sor(
+            q,
+            g,
+            loc,
+            dIx.data,
+            dIy.data,
+            dIt.data,
+            dwd.data,
+            du_.data,
+            dv_.data,
+            du.data,
+            dv.data,
+            np.float32(0.03**2),
+            np.float32(0.01),
+            np.float32(1.8),
+            np.int32(parity),
+            *size,
+        )
+        rdu, rdv = ref.sor_half(Ix, Iy, It, wd, u, v, rdu, rdv, 0.03**2, 0.01, 1.8, parity)
     np.testing.assert_allclose(du.get(), rdu, atol=1e-4)
     np.testing.assert_allclose(dv.get(), rdv, atol=1e-4)
     out = cla.empty(q, (ny, nx), np.float32)
     solver.k_median(q, g, loc, du_.data, out.data, *size)
     np.testing.assert_allclose(out.get(), ref.median3(u), atol=1e-6)
     src = rng.random((3, ny, nx))
-    np.testing.assert_allclose(solver.warp(_dev(q, src), du_, dv_).get(),
-                               ref.warp(src, u, v), atol=1e-5)
+    np.testing.assert_allclose(
+        solver.warp(_dev(q, src), du_, dv_).get(), ref.warp(src, u, v), atol=1e-5
+    )
 
 
 def test_whole_solver_matches_reference(solver, rng):

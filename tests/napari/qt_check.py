@@ -8,10 +8,12 @@ aborts the whole process when its platform cannot start, so that is tried in a c
 import subprocess
 import sys
 
-NEEDS = ("pip install \"clpde[napari]\" and, on Debian or Ubuntu, apt-get install xvfb "
-         "libgl1-mesa-dri libegl1 libxkbcommon-x11-0 libxcb-icccm4 libxcb-image0 "
-         "libxcb-keysyms1 libxcb-randr0 libxcb-render-util0 libxcb-xinerama0 libxcb-shape0 "
-         "libxcb-cursor0 libfontconfig1 libdbus-1-3")
+NEEDS = (
+    'pip install "clpde[napari]" and, on Debian or Ubuntu, apt-get install xvfb '
+    "libgl1-mesa-dri libegl1 libxkbcommon-x11-0 libxcb-icccm4 libxcb-image0 "
+    "libxcb-keysyms1 libxcb-randr0 libxcb-render-util0 libxcb-xinerama0 libxcb-shape0 "
+    "libxcb-cursor0 libfontconfig1 libdbus-1-3"
+)
 
 PROBE = "from qtpy.QtWidgets import QApplication; QApplication([])"
 
@@ -24,8 +26,9 @@ def _missing() -> str | None:
     except ImportError as error:
         return f"napari's tests need napari, pytest-qt and pytest-xvfb ({error}): {NEEDS}"
     try:
-        started = subprocess.run([sys.executable, "-c", PROBE], capture_output=True,
-                                 text=True, timeout=60)
+        started = subprocess.run(
+            [sys.executable, "-c", PROBE], capture_output=True, text=True, timeout=60
+        )
     except subprocess.TimeoutExpired:
         return f"Qt did not start within 60 s: {NEEDS}"
     if started.returncode != 0:

@@ -29,8 +29,9 @@ def viewer(make_napari_viewer):
 
 def long_diffusion(viewer, steps=400_000):
     """A denoise widget set up for a run of several seconds on any device."""
-    layer = viewer.add_image(np.random.default_rng(0).random((128, 128)).astype(np.float32),
-                             name="noise")
+    layer = viewer.add_image(
+        np.random.default_rng(0).random((128, 128)).astype(np.float32), name="noise"
+    )
     w = widgets.DenoiseWidget(viewer)
     w.image.value, w.flow.value, w.steps.value = layer, "heat", steps
     return w
@@ -86,11 +87,11 @@ def test_no_opencl_driver_is_one_message_with_the_fix(tmp_path):
         print("STATUS:", w.status.value)
     """)
     # a vendors path that does not exist: the OpenCL loader then finds no platform at all
-    env = dict(os.environ, OCL_ICD_VENDORS=str(tmp_path / "no-vendors"),
-               PYTHONPATH=str(REPO))
+    env = dict(os.environ, OCL_ICD_VENDORS=str(tmp_path / "no-vendors"), PYTHONPATH=str(REPO))
     env.pop("CLPDE_DEVICE", None)
-    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
-                          text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300
+    )
     status = [line for line in done.stdout.splitlines() if line.startswith("STATUS:")]
     assert status, done.stderr[-2000:]
     assert "OpenCL" in status[0] and "pip install" in status[0], status[0]
@@ -102,7 +103,12 @@ def test_manifest_validates_with_imports():
     manifest = PluginManifest.from_file(REPO / "clpde" / "napari" / "napari.yaml")
     manifest.validate_imports()
     assert {w.display_name for w in manifest.contributions.widgets} >= {
-        "Inpaint", "Denoise and diffuse", "Track", "Film restoration", "Surface flows"}
+        "Inpaint",
+        "Denoise and diffuse",
+        "Track",
+        "Film restoration",
+        "Surface flows",
+    }
 
 
 def test_mesh_reader_keeps_the_mesh(tmp_path):
@@ -113,7 +119,7 @@ def test_mesh_reader_keeps_the_mesh(tmp_path):
     mesh.export(path)
     reader = readers.get_mesh_reader(str(path))
     assert reader is not None and readers.get_mesh_reader(str(tmp_path / "a.png")) is None
-    (data, attrs, kind), = reader(str(path))
+    ((data, attrs, kind),) = reader(str(path))
     assert kind == "surface" and len(data[0]) == len(mesh.vertices)
     np.testing.assert_array_equal(data[1], mesh.faces)
 
@@ -124,9 +130,9 @@ def test_film_reader_gives_frames_and_the_source(tmp_path):
 
     frames = np.zeros((5, 32, 48, 3), np.uint8)
     for t in range(5):
-        frames[t, :, 8 * t:8 * t + 8] = 200
+        frames[t, :, 8 * t : 8 * t + 8] = 200
     path = write_video(tmp_path / "clip.mp4", frames, 10)
-    (data, attrs, kind), = readers.get_film_reader(str(path))(str(path))
+    ((data, attrs, kind),) = readers.get_film_reader(str(path))(str(path))
     assert kind == "image" and data.shape == frames.shape
     assert attrs["metadata"]["clpde_film"] == str(path)
     assert np.abs(data.astype(int) - frames).mean() < 6  # H.264's loss only

@@ -32,8 +32,11 @@ def make_film(path, frames, rate=10, audio=True):
             t = np.arange(44100 * len(frames) // rate) / 44100
             tone = (0.2 * np.sin(2 * np.pi * 440 * t)).astype(np.float32)[None]
             for start in range(0, tone.shape[1], 1024):
-                chunk = av.AudioFrame.from_ndarray(np.ascontiguousarray(
-                    tone[:, start:start + 1024]), format="fltp", layout="mono")
+                chunk = av.AudioFrame.from_ndarray(
+                    np.ascontiguousarray(tone[:, start : start + 1024]),
+                    format="fltp",
+                    layout="mono",
+                )
                 chunk.sample_rate = 44100
                 for packet in sound.encode(chunk):
                     out.mux(packet)
@@ -56,16 +59,17 @@ def dusty_film(tmp_path):
     frames = np.repeat(frames[..., None], 3, axis=-1)
     for t in range(8):
         y, x = 10 + 3 * t, 20 + 4 * t % 40
-        frames[t, y:y + 4, x:x + 4] = 0  # a new speck of dirt on every frame
+        frames[t, y : y + 4, x : x + 4] = 0  # a new speck of dirt on every frame
     path = tmp_path / "dusty.mp4"
     make_film(path, frames)
     return path
 
 
-def test_film_widget_detects_restores_and_writes_with_sound(make_napari_viewer, qtbot,
-                                                             dusty_film, tmp_path):
+def test_film_widget_detects_restores_and_writes_with_sound(
+    make_napari_viewer, qtbot, dusty_film, tmp_path
+):
     viewer = make_napari_viewer()
-    (data, attrs, kind), = readers.read_film(str(dusty_film))
+    ((data, attrs, kind),) = readers.read_film(str(dusty_film))
     film = viewer.add_image(data, **attrs)
     w = FilmWidget(viewer)
     w.film.value = film
@@ -78,13 +82,14 @@ def test_film_widget_detects_restores_and_writes_with_sound(make_napari_viewer, 
     w.run()
     qtbot.waitUntil(lambda: w.worker is None, timeout=WAIT_MS)
     restored = viewer.layers["dusty restored"].data
-    np.testing.assert_array_equal(restored, clpde.inpaint_video(data, defects != 0,
-                                                                channel_axis=-1))
+    np.testing.assert_array_equal(
+        restored, clpde.inpaint_video(data, defects != 0, channel_axis=-1)
+    )
     out = tmp_path / "restored.mkv"
     w.output.value = out
     w.write()
     qtbot.waitUntil(lambda: w.worker is None, timeout=WAIT_MS)
     assert out.is_file(), w.status.value
     assert audio_packets(out) == audio_packets(dusty_film)
-    (back, _, _), = readers.read_film(str(out))
+    ((back, _, _),) = readers.read_film(str(out))
     np.testing.assert_array_equal(back, restored)  # FFV1 in Matroska is lossless

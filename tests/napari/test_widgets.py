@@ -45,8 +45,9 @@ def test_inpaint_widget_gives_the_library_result(viewer, qtbot):
 
 def test_inpaint_widget_grows_the_mask_and_takes_shapes_and_soft_masks(viewer, qtbot):
     image, _ = crop_astronaut(viewer, 96)
-    shapes = viewer.add_shapes([np.array([[20, 20], [20, 40], [40, 40], [40, 20]])],
-                               shape_type="polygon", name="box")
+    shapes = viewer.add_shapes(
+        [np.array([[20, 20], [20, 40], [40, 40], [40, 20]])], shape_type="polygon", name="box"
+    )
     w = widgets.InpaintWidget(viewer)
     w.image.value, w.mask.value, w.grow.value = image, shapes, 2
     run_and_wait(qtbot, w)
@@ -71,7 +72,7 @@ def test_inpaint_on_paint_reruns_the_stroke_box(viewer, qtbot):
     before = viewer.layers["damaged astronaut inpainted"].data.copy()
     # a stroke where nothing was painted yet
     free = np.argwhere(~np.asarray(labels.data[8:-8, 8:-8] != 0))[::97] + 8
-    y, x = next((y, x) for y, x in free if not labels.data[y - 4:y + 5, x - 4:x + 5].any())
+    y, x = next((y, x) for y, x in free if not labels.data[y - 4 : y + 5, x - 4 : x + 5].any())
     labels.brush_size = 5
     labels.paint((y, x), 1)
     assert w.worker is not None  # the stroke started a run at once
@@ -94,12 +95,14 @@ def test_denoise_widget_tv_and_flows(viewer, qtbot):
     assert "estimated noise" in w.noise.value
     w.flow.value, w.weight.value = "tv-denoise", 0.1
     run_and_wait(qtbot, w)
-    np.testing.assert_array_equal(viewer.layers["noisy tv-denoise"].data,
-                                  clpde.denoise_tv(noisy, weight=0.1))
+    np.testing.assert_array_equal(
+        viewer.layers["noisy tv-denoise"].data, clpde.denoise_tv(noisy, weight=0.1)
+    )
     w.flow.value, w.steps.value = "perona-malik", 30
     run_and_wait(qtbot, w)
-    np.testing.assert_array_equal(viewer.layers["noisy perona-malik"].data,
-                                  clpde.diffuse(noisy, "perona-malik", steps=30))
+    np.testing.assert_array_equal(
+        viewer.layers["noisy perona-malik"].data, clpde.diffuse(noisy, "perona-malik", steps=30)
+    )
 
 
 def test_denoise_preview_runs_on_the_slice_in_view(viewer, qtbot):
@@ -109,8 +112,9 @@ def test_denoise_preview_runs_on_the_slice_in_view(viewer, qtbot):
     w = widgets.DenoiseWidget(viewer)
     w.image.value, w.flow.value, w.steps.value, w.preview.value = layer, "heat", 10, True
     run_and_wait(qtbot, w)
-    np.testing.assert_array_equal(viewer.layers["stack heat preview"].data,
-                                  clpde.diffuse(stack[2], "heat", steps=10))
+    np.testing.assert_array_equal(
+        viewer.layers["stack heat preview"].data, clpde.diffuse(stack[2], "heat", steps=10)
+    )
 
 
 def test_track_widget_carries_two_labels_both_ways(viewer, qtbot):
@@ -130,8 +134,7 @@ def test_track_widget_carries_two_labels_both_ways(viewer, qtbot):
     w.image.value, w.labels.value = image, labels
     run_and_wait(qtbot, w)
     out = viewer.layers["objects tracked"].data
-    expected, confidence = widgets.propagate_labels(frames, truth[4], 4, "both",
-                                                    lambda *_: None)
+    expected, confidence = widgets.propagate_labels(frames, truth[4], 4, "both", lambda *_: None)
     np.testing.assert_array_equal(out, expected)
     for label in (1, 2):
         for t in range(8):
@@ -142,15 +145,14 @@ def test_track_widget_carries_two_labels_both_ways(viewer, qtbot):
 
 
 def test_surface_widget_values_on_the_users_mesh(viewer, qtbot):
-    ((vertices, faces, values), attrs, _), = samples.torus()
+    (((vertices, faces, values), attrs, _),) = samples.torus()
     layer = viewer.add_surface((vertices, faces, values), **attrs)
     w = widgets.SurfaceWidget(viewer)
     w.surface.value, w.flow.value, w.amount.value, w.resolution.value = layer, "heat", 0.02, 40
     run_and_wait(qtbot, w)
     out = viewer.layers["torus heat"].data
     assert out[0].shape == vertices.shape and out[2].shape == (len(vertices),)
-    expected = widgets.run_surface_flow(vertices, faces, values, "heat", 0.02, 40,
-                                        lambda *_: None)
+    expected = widgets.run_surface_flow(vertices, faces, values, "heat", 0.02, 40, lambda *_: None)
     np.testing.assert_allclose(out[2], expected, rtol=0, atol=1e-6)
     # the heat flow smooths: the noise's spread shrinks
     assert np.std(out[2] - vertices[:, 0]) < np.std(values - vertices[:, 0])

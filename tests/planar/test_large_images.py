@@ -19,21 +19,24 @@ def small_threshold(monkeypatch):
             monkeypatch.setattr(bounded, "TILE_CORE", core)
         if margin:
             monkeypatch.setattr(bounded, "TILE_MARGIN", margin)
+
     return lower
 
 
-@pytest.mark.parametrize("flow,params", [("heat", {}), ("perona-malik", {"presmooth": 1.0}),
-                                         ("tv", {}), ("curvature", {})])
+@pytest.mark.parametrize(
+    "flow,params",
+    [("heat", {}), ("perona-malik", {"presmooth": 1.0}), ("tv", {}), ("curvature", {})],
+)
 @pytest.mark.parametrize("kind", ["uint8", "float"])
 def test_diffuse_by_channel_is_bitwise_the_whole_run(small_threshold, flow, params, kind):
     rgb = data.astronaut()[::8, ::8]
     image = rgb if kind == "uint8" else img_as_float(rgb) * 3.0 - 1.0
-    whole, info = clpde.diffuse(image, flow, steps=9, channel_axis=-1, return_info=True,
-                                **params)
+    whole, info = clpde.diffuse(image, flow, steps=9, channel_axis=-1, return_info=True, **params)
     small_threshold()
     assert bounded.is_large(image)
-    parts, parts_info = clpde.diffuse(image, flow, steps=9, channel_axis=-1, return_info=True,
-                                      **params)
+    parts, parts_info = clpde.diffuse(
+        image, flow, steps=9, channel_axis=-1, return_info=True, **params
+    )
     assert parts.dtype == image.dtype
     np.testing.assert_array_equal(parts, whole)
     assert parts_info == info
@@ -42,8 +45,10 @@ def test_diffuse_by_channel_is_bitwise_the_whole_run(small_threshold, flow, para
 def test_diffuse_by_channel_grey_and_channel_first(small_threshold):
     grey = data.camera()[::8, ::8]
     first = np.stack([grey, grey[::-1]])
-    want = [clpde.diffuse(grey, "heat", steps=5),
-            clpde.diffuse(first, "heat", steps=5, channel_axis=0)]
+    want = [
+        clpde.diffuse(grey, "heat", steps=5),
+        clpde.diffuse(first, "heat", steps=5, channel_axis=0),
+    ]
     small_threshold()
     np.testing.assert_array_equal(clpde.diffuse(grey, "heat", steps=5), want[0])
     np.testing.assert_array_equal(clpde.diffuse(first, "heat", steps=5, channel_axis=0), want[1])
@@ -56,11 +61,13 @@ def test_tiled_denoise_matches_the_whole_image(small_threshold, rng, vectorial):
     clean = img_as_float(data.astronaut())[::2, ::2][:200, :230]
     noisy = np.clip(clean + 0.06 * rng.standard_normal(clean.shape), 0, 1)
     noisy = (255 * noisy).round().astype(np.uint8)
-    whole, info = clpde.denoise_tv(noisy, weight=0.1, channel_axis=-1, vectorial=vectorial,
-                                   return_info=True)
+    whole, info = clpde.denoise_tv(
+        noisy, weight=0.1, channel_axis=-1, vectorial=vectorial, return_info=True
+    )
     small_threshold(core=64, margin=64)
-    tiles, tiles_info = clpde.denoise_tv(noisy, weight=0.1, channel_axis=-1,
-                                         vectorial=vectorial, return_info=True)
+    tiles, tiles_info = clpde.denoise_tv(
+        noisy, weight=0.1, channel_axis=-1, vectorial=vectorial, return_info=True
+    )
     assert tiles.dtype == np.uint8 and tiles.shape == noisy.shape
     diff = np.abs(tiles.astype(float) - whole.astype(float)) / 255
     assert diff.mean() <= 0.002

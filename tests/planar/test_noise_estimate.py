@@ -32,8 +32,9 @@ def test_estimate_matches_the_added_noise(name, sigma):
 
 def test_estimate_in_uint8_units_and_per_channel():
     clean = data.astronaut().astype(np.float64)
-    noisy = np.clip(clean + np.random.default_rng(2).normal(0, [6, 12, 24], clean.shape),
-                    0, 255).astype(np.uint8)
+    noisy = np.clip(
+        clean + np.random.default_rng(2).normal(0, [6, 12, 24], clean.shape), 0, 255
+    ).astype(np.uint8)
     actual = (noisy - clean).std(axis=(0, 1))  # what clipping left of the noise
     np.testing.assert_allclose(estimate_sigma(noisy, channel_axis=-1), actual, rtol=0.1)
 

@@ -50,8 +50,14 @@ def test_heat_kernel_matches_reference(runtime, rng, kind):
 def test_perona_malik_kernel_matches_reference(runtime, rng, kind, edge):
     u = inputs(rng)[kind]
     kappa = 0.1
-    out, _ = device_step(runtime, "perona_malik_step", u, np.float32(0.2),
-                         np.float32(1 / kappa**2), defines={"EDGE_STOP": int(edge == "rational")})
+    out, _ = device_step(
+        runtime,
+        "perona_malik_step",
+        u,
+        np.float32(0.2),
+        np.float32(1 / kappa**2),
+        defines={"EDGE_STOP": int(edge == "rational")},
+    )
     expected = ref.perona_malik_step(ref.pad_neumann(u), 0.2, kappa, edge)
     np.testing.assert_allclose(out, expected, atol=3e-6)
 
@@ -74,12 +80,20 @@ def test_curvature_kernel_matches_reference(runtime, rng, kind, weighted):
     if weighted:
         wgrid = Grid(runtime, nx, ny, 1)
         wfield = Field.from_host(wgrid, weight[None])
-        out, _ = device_step(runtime, "curvature_step", u, np.float32(0.2), np.float32(eps),
-                             defines={"HAS_WEIGHT": 1}, extra_fields=(wfield,))
+        out, _ = device_step(
+            runtime,
+            "curvature_step",
+            u,
+            np.float32(0.2),
+            np.float32(eps),
+            defines={"HAS_WEIGHT": 1},
+            extra_fields=(wfield,),
+        )
     else:
         dummy = Field.from_host(Grid(runtime, nx, ny, 1), np.zeros((1, ny, nx)))
-        out, _ = device_step(runtime, "curvature_step", u, np.float32(0.2), np.float32(eps),
-                             extra_fields=(dummy,))
+        out, _ = device_step(
+            runtime, "curvature_step", u, np.float32(0.2), np.float32(eps), extra_fields=(dummy,)
+        )
     expected = ref.curvature_step(ref.pad_neumann(u), 0.2, eps, weight)
     np.testing.assert_allclose(out, expected, atol=5e-5)
 
@@ -96,6 +110,7 @@ def test_flow_steps_match_repeated_reference_steps(rng):
 
 
 # ---- mathematics ------------------------------------------------------------------------
+
 
 def test_gaussian_stays_gaussian_with_variance_growing_by_2t():
     n, s0 = 129, 4.0
@@ -116,8 +131,9 @@ def test_gaussian_stays_gaussian_with_variance_growing_by_2t():
     assert np.abs(out - gauss).max() / out.max() < 5e-3
 
 
-@pytest.mark.parametrize("flow,params", [("heat", {}), ("perona-malik", {"kappa": 0.1}),
-                                         ("tv", {"eps": 0.1})])
+@pytest.mark.parametrize(
+    "flow,params", [("heat", {}), ("perona-malik", {"kappa": 0.1}), ("tv", {"eps": 0.1})]
+)
 def test_mass_is_conserved_with_neumann_borders(rng, flow, params):
     u = rng.random((48, 40))
     out = clpde.diffuse(u, flow, steps=200, **params)
@@ -182,6 +198,7 @@ def test_zero_weight_freezes_curvature_flow(rng):
 
 # ---- API behaviour ------------------------------------------------------------------------
 
+
 def test_dtypes_and_shapes_are_preserved():
     img = data.astronaut()[::8, ::8]  # uint8 (64, 64, 3)
     out = clpde.diffuse(img, "heat", steps=5, channel_axis=-1)
@@ -218,8 +235,9 @@ def test_object_form_yields_states():
     assert states[-1].image.std() < states[0].image.std()
 
 
-@pytest.mark.parametrize("flow,limit", [("heat", 0.25), ("perona-malik", 0.25), ("curvature", 0.25),
-                                        ("tv", 0.0125)])
+@pytest.mark.parametrize(
+    "flow,limit", [("heat", 0.25), ("perona-malik", 0.25), ("curvature", 0.25), ("tv", 0.0125)]
+)
 def test_unstable_dt_is_an_error_stating_the_limit(flow, limit):
     params = {"eps": 0.05} if flow == "tv" else {}
     with pytest.raises(InputError, match=f"stability limit {limit:g}"):
@@ -264,9 +282,11 @@ def test_steps_write_their_own_mirror_ghosts(runtime, rng, geometry, ghost):
         gsize, lsize, xrun = (1, ny, nc), (1, 1, 1), nx
     else:
         gsize, lsize, xrun = (12, 8, nc), (4, 4, 1), 1  # rounded up past the interior
-    kernel(runtime.queue, gsize, lsize, cur.data.data, nxt.data.data, np.float32(0.2),
-           *grid.args(xrun))
+    kernel(
+        runtime.queue, gsize, lsize, cur.data.data, nxt.data.data, np.float32(0.2), *grid.args(xrun)
+    )
     padded = nxt.data.get()
-    expected = np.pad(grid.interior(padded), ((0, 0), (ghost, ghost), (ghost, ghost)),
-                      mode="symmetric")
+    expected = np.pad(
+        grid.interior(padded), ((0, 0), (ghost, ghost), (ghost, ghost)), mode="symmetric"
+    )
     np.testing.assert_array_equal(padded, expected)

@@ -10,13 +10,16 @@ from clpde.errors import InputError
 from clpde.io.images import write_image
 
 
-@pytest.mark.parametrize("flow, params, words", [
-    ("heat", {"kappa": 0.1}, "kappa applies to the perona-malik flow, not heat"),
-    ("heat", {"eps": 0.1}, "eps applies to the tv and curvature flows, not heat"),
-    ("tv", {"edge": "rational"}, "edge applies to the perona-malik flow, not tv"),
-    ("perona-malik", {"weight": np.ones((6, 7))}, "weight applies to the curvature flow"),
-    ("heat", {"sigma": 2}, "diffuse takes no parameter 'sigma'"),
-])
+@pytest.mark.parametrize(
+    "flow, params, words",
+    [
+        ("heat", {"kappa": 0.1}, "kappa applies to the perona-malik flow, not heat"),
+        ("heat", {"eps": 0.1}, "eps applies to the tv and curvature flows, not heat"),
+        ("tv", {"edge": "rational"}, "edge applies to the perona-malik flow, not tv"),
+        ("perona-malik", {"weight": np.ones((6, 7))}, "weight applies to the curvature flow"),
+        ("heat", {"sigma": 2}, "diffuse takes no parameter 'sigma'"),
+    ],
+)
 def test_unused_parameters_are_refused(flow, params, words):
     with pytest.raises(InputError, match=words):
         clpde.diffuse(np.zeros((6, 7)), flow, steps=1, **params)
@@ -25,12 +28,18 @@ def test_unused_parameters_are_refused(flow, params, words):
 def test_used_parameters_still_work_and_cli_agrees(tmp_path, capsys):
     image = np.random.default_rng(0).integers(0, 255, (6, 7)).astype(np.uint8)
     for flow, params in clpde.planar.flows.FLOW_PARAMS.items():
-        given = {"kappa": 0.1, "edge": "rational", "eps": 0.1, "weight": np.ones((6, 7)),
-                 "presmooth": 1.0}
+        given = {
+            "kappa": 0.1,
+            "edge": "rational",
+            "eps": 0.1,
+            "weight": np.ones((6, 7)),
+            "presmooth": 1.0,
+        }
         assert clpde.diffuse(image, flow, steps=1, **{p: given[p] for p in params}).shape == (6, 7)
     write_image(tmp_path / "in.png", image)
-    assert main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--kappa",
-                 "0.1"]) == 2
+    assert (
+        main(["diffuse", str(tmp_path / "in.png"), str(tmp_path / "o.png"), "--kappa", "0.1"]) == 2
+    )
     assert "--kappa applies to --flow perona-malik, not heat" in capsys.readouterr().err
 
 

@@ -49,9 +49,15 @@ def test_dual_step_matches_reference(runtime, rng, nc, ny, nx, kind):
     bufs = [cla.to_device(q, a.reshape(nc, grid.plane, 2)) for a in (p, p_old)]
     p_new = cla.zeros(q, (nc, grid.plane, 2), np.float32)
     f_dev, lam_dev = cla.to_device(q, f), cla.to_device(q, lam)
-    grid.launch(grid.kernel("planar/rof.cl", "rof_dual_step"), bufs[0].data, bufs[1].data,
-                p_new.data,
-                f_dev.data, lam_dev.data, np.float32(beta))
+    grid.launch(
+        grid.kernel("planar/rof.cl", "rof_dual_step"),
+        bufs[0].data,
+        bufs[1].data,
+        p_new.data,
+        f_dev.data,
+        lam_dev.data,
+        np.float32(beta),
+    )
     got = p_new.get().reshape(shape)
     want = ref.dual_step(p.astype(float), p_old.astype(float), f.astype(float), lam, beta)
     np.testing.assert_allclose(got, want, atol=2e-5, rtol=1e-5)
@@ -69,10 +75,17 @@ def test_dual_rows_and_lambda_match_reference(runtime, rng, nc, ny, nx):
     p_dev, f_dev, lam_dev = (cla.to_device(q, a) for a in (p.reshape(nc, grid.plane, 2), f, lam))
     u_dev = cla.to_device(q, u_before)
     partial = cla.empty(q, nc * 4 * ny, np.float32)
-    grid.launch(grid.kernel("planar/rof.cl", "rof_dual_rows"), p_dev.data, f_dev.data, lam_dev.data,
-                u_dev.data, partial.data)
-    u_want, sums_want = ref.dual_rows(p.astype(float), f.astype(float), lam,
-                                      u_before[:, 1:-1, 1:-1].astype(float))
+    grid.launch(
+        grid.kernel("planar/rof.cl", "rof_dual_rows"),
+        p_dev.data,
+        f_dev.data,
+        lam_dev.data,
+        u_dev.data,
+        partial.data,
+    )
+    u_want, sums_want = ref.dual_rows(
+        p.astype(float), f.astype(float), lam, u_before[:, 1:-1, 1:-1].astype(float)
+    )
     np.testing.assert_allclose(grid.interior(u_dev.get()), u_want, atol=1e-5, rtol=1e-5)
     rows = partial.get().reshape(nc, 4, ny)
     sums = np.concatenate([rows[:, :3].sum(axis=2), rows[:, 3:].max(axis=2)], axis=1)
@@ -82,10 +95,12 @@ def test_dual_rows_and_lambda_match_reference(runtime, rng, nc, ny, nx):
     if nc > 1:
         sigma2[-1] = np.inf  # a channel whose lambda is held
     inv = cla.to_device(q, (1 / (nx * ny * sigma2)).astype(np.float32))
-    grid.kernel("planar/rof.cl", "rof_dual_lambda")(q, (nc,), None, partial.data, lam_dev.data,
-                                             np.int32(ny), inv.data, np.float32(1e-6))
-    np.testing.assert_allclose(lam_dev.get(), ref.dual_lambda(sums_want[:, 0], lam, nx * ny,
-                                                              sigma2, 1e-6), rtol=1e-4)
+    grid.kernel("planar/rof.cl", "rof_dual_lambda")(
+        q, (nc,), None, partial.data, lam_dev.data, np.int32(ny), inv.data, np.float32(1e-6)
+    )
+    np.testing.assert_allclose(
+        lam_dev.get(), ref.dual_lambda(sums_want[:, 0], lam, nx * ny, sigma2, 1e-6), rtol=1e-4
+    )
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])
@@ -99,19 +114,38 @@ def test_gradient_kernels_match_reference(runtime, rng, kind):
     lam = np.array([4.0, 9.0], np.float32)
     lam_dev = cla.to_device(runtime.queue, lam)
     eps, dt = 0.05, 0.01
-    grid.launch(grid.kernel("planar/planar.cl", "rof_step"), cur.data.data, nxt.data.data,
-                orig.data.data, lam_dev.data, np.float32(dt), np.float32(eps * eps))
+    grid.launch(
+        grid.kernel("planar/planar.cl", "rof_step"),
+        cur.data.data,
+        nxt.data.data,
+        orig.data.data,
+        lam_dev.data,
+        np.float32(dt),
+        np.float32(eps * eps),
+    )
     want = ref.rof_step(ref.pad_neumann(u), ref.pad_neumann(u0), lam, dt, eps)
     np.testing.assert_allclose(nxt.to_host(), want, atol=1e-5)
 
     partial = cla.empty(runtime.queue, (nc, ny), np.float32)
-    grid.launch(grid.kernel("planar/planar.cl", "rof_lambda_rows"), cur.data.data, orig.data.data,
-                partial.data, np.float32(eps * eps))
+    grid.launch(
+        grid.kernel("planar/planar.cl", "rof_lambda_rows"),
+        cur.data.data,
+        orig.data.data,
+        partial.data,
+        np.float32(eps * eps),
+    )
     sigma2 = 0.01
     for c in range(nc):
         grid.kernel("planar/planar.cl", "rof_lambda_finish")(
-            runtime.queue, (1,), None, partial.data, lam_dev.data, np.int32(ny),
-            np.float32(1 / (nx * ny * sigma2)), global_offset=(c,))
+            runtime.queue,
+            (1,),
+            None,
+            partial.data,
+            lam_dev.data,
+            np.int32(ny),
+            np.float32(1 / (nx * ny * sigma2)),
+            global_offset=(c,),
+        )
     want_lam = ref.rof_lambda(ref.pad_neumann(u), ref.pad_neumann(u0), eps, sigma2)
     np.testing.assert_allclose(lam_dev.get(), want_lam, rtol=1e-4, atol=1e-6)
 
@@ -152,8 +186,10 @@ def test_weight_mode_matches_scikit_image_minimiser(rng):
     assert ref.rof_energy(u, f, lam) <= ref.rof_energy(ref.fgp(f, lam, 2000), f, lam) * (1 + 1e-4)
     # more weight, smoother result
     smoother = clpde.denoise_tv(noisy, weight=0.3)
+
     def tv(u):
         return np.abs(np.diff(u, axis=0)).sum() + np.abs(np.diff(u, axis=1)).sum()
+
     assert tv(smoother) < tv(ours) < tv(noisy)
 
 
@@ -181,18 +217,19 @@ def test_sigma_mode_finds_the_weight_with_that_residual(camera_noisy):
 def test_colour_is_denoised_per_channel(rng):
     clean = data.astronaut()[:96, :128]
     noisy = np.clip(clean + rng.normal(0, 20, clean.shape), 0, 255).astype(np.uint8)
-    out, info = clpde.denoise_tv(noisy, sigma=20, channel_axis=-1, tol=1e-4, return_info=True,
-                                 vectorial=False)
+    out, info = clpde.denoise_tv(
+        noisy, sigma=20, channel_axis=-1, tol=1e-4, return_info=True, vectorial=False
+    )
     assert out.dtype == np.uint8 and out.shape == noisy.shape
     assert info.lam.shape == (3,) and info.residual_variance.shape == (3,)
     for c in range(3):
-        alone, alone_info = clpde.denoise_tv(noisy[..., c], sigma=20, tol=1e-4,
-                                             return_info=True)
+        alone, alone_info = clpde.denoise_tv(noisy[..., c], sigma=20, tol=1e-4, return_info=True)
         assert np.abs(out[..., c].astype(int) - alone.astype(int)).max() <= 1
         np.testing.assert_allclose(info.lam[c], alone_info.lam[0], rtol=1e-3)
     # channel first gives the same
-    first = clpde.denoise_tv(np.moveaxis(noisy, -1, 0), sigma=20, channel_axis=0, tol=1e-4,
-                             vectorial=False)
+    first = clpde.denoise_tv(
+        np.moveaxis(noisy, -1, 0), sigma=20, channel_axis=0, tol=1e-4, vectorial=False
+    )
     assert np.abs(np.moveaxis(first, 0, -1).astype(int) - out.astype(int)).max() <= 1
 
 
@@ -217,21 +254,25 @@ def test_sigma_larger_than_the_image_spread_gives_the_mean(method):
     assert info.lam[0] == 0
     # a channel with less spread than sigma does not disturb the others
     pair = np.stack([flat, np.linspace(0, 1, 600).reshape(20, 30)], axis=-1)
-    out, info = clpde.denoise_tv(pair, sigma=0.05, channel_axis=-1, return_info=True,
-                                 vectorial=False)
+    out, info = clpde.denoise_tv(
+        pair, sigma=0.05, channel_axis=-1, return_info=True, vectorial=False
+    )
     assert np.isfinite(out).all() and info.lam[0] == 0 < info.lam[1]
     assert info.converged and info.steps < 200
 
 
-@pytest.mark.parametrize("kwargs,match", [
-    ({"sigma": 0.1, "weight": 0.1}, "not both"),
-    ({"sigma": -0.1}, "sigma must be a positive"),
-    ({"sigma": float("nan")}, "sigma must be a positive"),
-    ({"weight": 0}, "weight must be a positive"),
-    ({"sigma": 0.1, "method": "newton"}, "unknown method"),
-    ({"sigma": 0.1, "eps": 0.01}, "method='gradient'"),
-    ({"sigma": 0.1, "tol": -1}, "tol must be a positive"),
-])
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        ({"sigma": 0.1, "weight": 0.1}, "not both"),
+        ({"sigma": -0.1}, "sigma must be a positive"),
+        ({"sigma": float("nan")}, "sigma must be a positive"),
+        ({"weight": 0}, "weight must be a positive"),
+        ({"sigma": 0.1, "method": "newton"}, "unknown method"),
+        ({"sigma": 0.1, "eps": 0.01}, "method='gradient'"),
+        ({"sigma": 0.1, "tol": -1}, "tol must be a positive"),
+    ],
+)
 def test_bad_parameters_raise(kwargs, match):
     with pytest.raises(clpde.InputError, match=match):
         clpde.denoise_tv(np.random.default_rng(0).random((8, 8)), **kwargs)
@@ -271,7 +312,7 @@ def test_stopping_does_not_depend_on_the_image_size():
     large = rescale(img_as_float(data.camera()), 1.5, order=3)  # smooth at the pixel scale
     large = _unit(large + 0.03 * np.random.default_rng(3).standard_normal(large.shape))
     y0, x0 = 230, 230
-    crop = _unit(large[y0:y0 + 300, x0:x0 + 300].copy())
-    whole = clpde.denoise_tv(large, weight=0.1)[y0:y0 + 300, x0:x0 + 300]
+    crop = _unit(large[y0 : y0 + 300, x0 : x0 + 300].copy())
+    whole = clpde.denoise_tv(large, weight=0.1)[y0 : y0 + 300, x0 : x0 + 300]
     alone = clpde.denoise_tv(crop, weight=0.1)
     assert np.abs(whole - alone)[60:-60, 60:-60].mean() <= 0.002

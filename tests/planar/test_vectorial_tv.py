@@ -31,8 +31,16 @@ def test_vectorial_step_matches_reference(runtime, rng, nc, ny, nx):
     p_new = cla.zeros(q, (nc, grid.plane, 2), np.float32)
     f_dev = cla.to_device(q, f)
     lam_dev = cla.to_device(q, np.full(nc, lam, np.float32))
-    cells.launch(grid.kernel("planar/rof.cl", "rof_dual_step_vec"), bufs[0].data, bufs[1].data,
-                 p_new.data, f_dev.data, lam_dev.data, np.float32(beta), np.int32(nc))
+    cells.launch(
+        grid.kernel("planar/rof.cl", "rof_dual_step_vec"),
+        bufs[0].data,
+        bufs[1].data,
+        p_new.data,
+        f_dev.data,
+        lam_dev.data,
+        np.float32(beta),
+        np.int32(nc),
+    )
     want = ref.dual_step_vec(p.astype(float), p_old.astype(float), f.astype(float), lam, beta)
     np.testing.assert_allclose(p_new.get().reshape(shape), want, atol=2e-5, rtol=1e-5)
     # some cells were projected, others not: both branches are compared
@@ -49,8 +57,16 @@ def test_vectorial_lambda_matches_reference(runtime):
     lam_dev = cla.to_device(q, np.full(nc, 3.0, np.float32))
     n, sigma2 = 40 * ny, 0.004
     runtime.kernel("planar/rof.cl", "rof_dual_lambda_vec", np.float32)(
-        q, (1,), (1,), part_dev.data, lam_dev.data, np.int32(ny), np.int32(nc),
-        np.float32(1 / (n * nc * sigma2)), np.float32(1e-6))
+        q,
+        (1,),
+        (1,),
+        part_dev.data,
+        lam_dev.data,
+        np.int32(ny),
+        np.int32(nc),
+        np.float32(1 / (n * nc * sigma2)),
+        np.float32(1e-6),
+    )
     want = ref.dual_lambda_vec(partial[:, 0].sum(axis=1), 3.0, n, sigma2, 1e-6)
     np.testing.assert_allclose(lam_dev.get(), np.full(nc, want), rtol=1e-5)
 
@@ -58,8 +74,9 @@ def test_vectorial_lambda_matches_reference(runtime):
 def test_device_iterations_are_the_textbook_vectorial_fgp(rng):
     f = unit_rgb(rng, (13, 17, 3))
     for steps in (1, 3, 20):
-        got = clpde.denoise_tv(f, weight=0.2, channel_axis=-1, max_steps=steps, tol=1e-12,
-                               dtype=np.float64)
+        got = clpde.denoise_tv(
+            f, weight=0.2, channel_axis=-1, max_steps=steps, tol=1e-12, dtype=np.float64
+        )
         want = np.moveaxis(ref.fgp_vec(np.moveaxis(f, -1, 0), 5.0, steps), 0, -1)
         np.testing.assert_allclose(got, want, atol=1e-12)
 
@@ -70,10 +87,12 @@ def test_replicated_grey_is_grey_tv_with_scaled_weight(rng):
     grey = unit_rgb(rng, (40, 48))
     rgb = np.repeat(grey[..., None], 3, axis=-1)
     weight = 0.15
-    colour = clpde.denoise_tv(rgb, weight=weight, channel_axis=-1, tol=1e-6, max_steps=4000,
-                              dtype=np.float64)
-    alone = clpde.denoise_tv(grey, weight=weight / np.sqrt(3), tol=1e-6, max_steps=4000,
-                             dtype=np.float64)
+    colour = clpde.denoise_tv(
+        rgb, weight=weight, channel_axis=-1, tol=1e-6, max_steps=4000, dtype=np.float64
+    )
+    alone = clpde.denoise_tv(
+        grey, weight=weight / np.sqrt(3), tol=1e-6, max_steps=4000, dtype=np.float64
+    )
     for c in range(3):
         np.testing.assert_allclose(colour[..., c], alone, atol=2e-4)
 
@@ -103,8 +122,7 @@ def test_vectorial_edges_line_up_across_channels():
 def test_vectorial_sigma_fits_the_mean_noise_variance(rng):
     clean = img_as_float(data.astronaut())[::4, ::4]
     noisy = clean + 0.05 * rng.standard_normal(clean.shape)
-    out, info = clpde.denoise_tv(noisy, sigma=0.05, channel_axis=-1, tol=1e-5,
-                                 return_info=True)
+    out, info = clpde.denoise_tv(noisy, sigma=0.05, channel_axis=-1, tol=1e-5, return_info=True)
     assert np.ptp(info.lam) == 0  # one shared lambda
     np.testing.assert_allclose(info.residual_variance.mean(), 0.05**2, rtol=0.05)
     np.testing.assert_allclose(info.sigma, [0.05] * 3)
@@ -112,5 +130,6 @@ def test_vectorial_sigma_fits_the_mean_noise_variance(rng):
 
 def test_vectorial_refused_with_the_gradient_method():
     with pytest.raises(clpde.InputError, match="primal-dual"):
-        clpde.denoise_tv(np.zeros((8, 8, 3)), weight=0.1, channel_axis=-1, method="gradient",
-                         vectorial=True)
+        clpde.denoise_tv(
+            np.zeros((8, 8, 3)), weight=0.1, channel_axis=-1, method="gradient", vectorial=True
+        )

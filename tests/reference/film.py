@@ -48,7 +48,7 @@ def column_mean(src, h, lim):
     out = np.empty_like(src, dtype=float)
     for y in range(ny):
         y0, y1 = max(y - h, 0), min(y + h, ny - 1)
-        out[y] = c[y0:y1 + 1].mean(axis=0)
+        out[y] = c[y0 : y1 + 1].mean(axis=0)
     return out
 
 
@@ -64,7 +64,7 @@ def line_response(src, w):
 
 def _drift(other, sgn):
     p = np.pad(other, ((0, 0), (1, 1)), mode="edge")
-    return sgn * np.maximum.reduce([sgn * p[:, i:i + other.shape[1]] for i in range(3)])
+    return sgn * np.maximum.reduce([sgn * p[:, i : i + other.shape[1]] for i in range(3)])
 
 
 def scratch_continuity(zprev, z, znext, has_prev, has_next):
@@ -85,7 +85,7 @@ def box_mean(src, h):
     out = np.empty_like(src, dtype=float)
     for y in range(ny):
         for x in range(nx):
-            out[y, x] = src[max(y - h, 0):y + h + 1, max(x - h, 0):x + h + 1].mean()
+            out[y, x] = src[max(y - h, 0) : y + h + 1, max(x - h, 0) : x + h + 1].mean()
     return out
 
 

@@ -14,6 +14,7 @@ from scipy.sparse.linalg import spsolve
 
 def graph_laplacian_matrix(ny: int, nx: int) -> sp.csr_matrix:
     """L of the ny x nx pixel grid: (L u)(p) = sum over in-grid 4-neighbours q of u(q) - u(p)."""
+
     def path(n):
         main = -np.full(n, 2.0)
         main[0] = main[-1] = -1.0
@@ -100,13 +101,13 @@ def coherence_weights(j11, j12, j22, kappa):
     """Per pixel: the unit normal n = c-perp (eigenvector of the larger eigenvalue) and the
     guidance strength mu = kappa * ((l1 - l2) / (l1 + l2))^2."""
     tr = j11 + j22
-    d = np.sqrt((j11 - j22) ** 2 + 4 * j12 ** 2)
+    d = np.sqrt((j11 - j22) ** 2 + 4 * j12**2)
     l1, l2 = 0.5 * (tr + d), 0.5 * (tr - d)
     # eigenvector of l1: (j12, l1 - j11) or (l1 - j22, j12), whichever is longer
     a = np.stack([j12, l1 - j11])
     b = np.stack([l1 - j22, j12])
-    v = np.where((a ** 2).sum(0) >= (b ** 2).sum(0), a, b)
-    norm = np.sqrt((v ** 2).sum(0))
+    v = np.where((a**2).sum(0) >= (b**2).sum(0), a, b)
+    norm = np.sqrt((v**2).sum(0))
     v = np.where(norm > 0, v / np.maximum(norm, 1e-300), np.array([1.0, 0.0])[:, None, None])
     coh = np.where(tr > 1e-12, (l1 - l2) / np.maximum(l1 + l2, 1e-300), 0.0) ** 2
     return v[0], v[1], kappa * coh
@@ -130,8 +131,12 @@ def coherence_transport(data, omega, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0
     known = ~omega
     ny, nx = omega.shape
     r = int(np.floor(epsilon))
-    offsets = [(dy, dx) for dy in range(-r, r + 1) for dx in range(-r, r + 1)
-               if 0 < dy * dy + dx * dx <= epsilon * epsilon]
+    offsets = [
+        (dy, dx)
+        for dy in range(-r, r + 1)
+        for dx in range(-r, r + 1)
+        if 0 < dy * dy + dx * dx <= epsilon * epsilon
+    ]
     for s in range(1, shells.max() + 1):
         j11, j12, j22 = structure_tensor(out, known, sigma, rho)
         n1, n2, mu = coherence_weights(j11, j12, j22, kappa)
@@ -147,7 +152,7 @@ def coherence_transport(data, omega, epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0
                 if 0 <= yy < ny and 0 <= xx < nx and known[yy, xx]:
                     dist = np.sqrt(dx * dx + dy * dy)
                     along = n1[y, x] * dx + n2[y, x] * dy
-                    w = np.exp(-mu[y, x] ** 2 / (2 * epsilon ** 2) * along ** 2) / dist
+                    w = np.exp(-(mu[y, x] ** 2) / (2 * epsilon**2) * along**2) / dist
                     num += w * out[:, yy, xx]
                     den += w
                     num_iso += out[:, yy, xx] / dist
@@ -173,8 +178,10 @@ def ns_vorticity_step(img, w, omega, dt, nu, contrast):
     """One explicit step of w_t + v . grad w = nu div(g grad w) at the hole's pixels
     (first-order upwind transport, face fluxes g(|w_q - w_p|)(w_q - w_p))."""
     out = w.copy()
+
     def g(d):
         return 1 / (1 + (d / contrast) ** 2)
+
     for c in range(img.shape[0]):
         ie, iw, i_n, i_s = _neighbours(img[c])
         we, ww, wn, ws = _neighbours(w[c])

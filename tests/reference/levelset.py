@@ -81,8 +81,9 @@ def reinit_step(p, p0, dt, subcell_fix=True):
 
 
 def gradient_magnitude(p):
-    return 0.5 * np.sqrt((_view(p, 0, 1) - _view(p, 0, -1)) ** 2
-                         + (_view(p, 1, 0) - _view(p, -1, 0)) ** 2)
+    return 0.5 * np.sqrt(
+        (_view(p, 0, 1) - _view(p, 0, -1)) ** 2 + (_view(p, 1, 0) - _view(p, -1, 0)) ** 2
+    )
 
 
 def morph_step(pu, pf1, f2, band, dt, eps_f, eps_u, near):
@@ -106,8 +107,9 @@ def morph_step(pu, pf1, f2, band, dt, eps_f, eps_u, near):
     u_new = u + dt * rate
     inside = band > 0
     hit = bool(np.any((band == 2) & (np.abs(u_new) < near)))
-    maxima = tuple(float(np.abs(a[inside]).max()) if inside.any() else 0.0
-                   for a in (rate, beta, grad_f))
+    maxima = tuple(
+        float(np.abs(a[inside]).max()) if inside.any() else 0.0 for a in (rate, beta, grad_f)
+    )
     return np.where(inside, u_new, u), np.where(inside, f1_new, f1), maxima, hit
 
 
@@ -123,6 +125,7 @@ def signed_distance(mask):
 
 # ---- kernels/tracking/features.cl ---------------------------------------------------------
 
+
 def local_contrast(img, r, eps, scale):
     """(ny, nx) -> scale (I - mean) / sqrt(var + eps^2) over (2r+1)^2 boxes, edge repeated."""
     img = np.asarray(img, np.float64)
@@ -132,7 +135,7 @@ def local_contrast(img, r, eps, scale):
     s2 = np.zeros_like(img)
     for dy in range(2 * r + 1):
         for dx in range(2 * r + 1):
-            v = p[dy:dy + ny, dx:dx + nx]
+            v = p[dy : dy + ny, dx : dx + nx]
             s += v
             s2 += v * v
     n = (2 * r + 1) ** 2
@@ -155,7 +158,7 @@ def discrepancy(pf1, pf2, kind, delta, win=3):
     o = G + win
 
     def view(q, dy, dx):
-        return q[o + dy:o + dy + ny, o + dx:o + dx + nx]
+        return q[o + dy : o + dy + ny, o + dx : o + dx + nx]
 
     sums = np.zeros((5,) + f1.shape)
     for dy in range(-win, win + 1):
@@ -197,9 +200,13 @@ def morph_track(pu, pf1, pf2, band, prior, dt, eps_f, eps_u, near, lam, delta, k
     u_new = u + dt * rate
     inside = band > 0
     hit = bool(np.any((band == 2) & (np.abs(u_new) < near)))
-    maxima = (float(np.abs(rate[inside]).max()), float(np.max([b[inside] for b in betas])),
-              float(np.max([g[inside] for g in grads])))
+    maxima = (
+        float(np.abs(rate[inside]).max()),
+        float(np.max([b[inside] for b in betas])),
+        float(np.max([g[inside] for g in grads])),
+    )
     mean_beta = float((babs / len(pf1))[inside].mean())
-    f1_new = np.array([np.where(inside, f, _view(p1, 0, 0)) for f,
-                       p1 in zip(f1_new, pf1, strict=False)])
+    f1_new = np.array(
+        [np.where(inside, f, _view(p1, 0, 0)) for f, p1 in zip(f1_new, pf1, strict=False)]
+    )
     return np.where(inside, u_new, u), f1_new, maxima, mean_beta, hit

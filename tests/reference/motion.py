@@ -21,8 +21,12 @@ def sample_clamped(img, x, y):
 
 
 def keys_weights(t):
-    return [((-0.5 * t + 1.0) * t - 0.5) * t, (1.5 * t - 2.5) * t * t + 1.0,
-            ((-1.5 * t + 2.0) * t + 0.5) * t, (0.5 * t - 0.5) * t * t]
+    return [
+        ((-0.5 * t + 1.0) * t - 0.5) * t,
+        (1.5 * t - 2.5) * t * t + 1.0,
+        ((-1.5 * t + 2.0) * t + 0.5) * t,
+        (0.5 * t - 0.5) * t * t,
+    ]
 
 
 def sample_cubic(img, x, y):
@@ -83,8 +87,9 @@ def linearise(I0, I1, w0, w1, u, v):
     inside = (xs >= 0) & (xs <= nx - 1) & (ys >= 0) & (ys <= ny - 1)
     xi, yi, xmi, xpi, ymi, ypi = (a.astype(int) for a in (xx, yy, xm, xp, ym, yp))
     c0 = np.minimum.reduce([w0, w0[yi, xmi], w0[yi, xpi], w0[ymi, xi], w0[ypi, xi]])
-    c1 = np.minimum.reduce([sample_clamped(w1, xs + a, ys + b)
-                            for a, b in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))])
+    c1 = np.minimum.reduce(
+        [sample_clamped(w1, xs + a, ys + b) for a, b in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))]
+    )
     wd = np.where(inside, c0 * c1, 0.0)
     return 0.5 * (g0x + g1x), 0.5 * (g0y + g1y), It, wd
 
@@ -122,7 +127,7 @@ def sor_half(Ix, Iy, It, wd, u, v, du, dv, alpha2, eps, omega, parity):
 def median3(a):
     p = np.pad(a, 1, mode="edge")
     ny, nx = a.shape
-    stack = [p[dy:dy + ny, dx:dx + nx] for dy in range(3) for dx in range(3)]
+    stack = [p[dy : dy + ny, dx : dx + nx] for dy in range(3) for dx in range(3)]
     return np.median(np.stack(stack), axis=0)
 
 
@@ -133,8 +138,9 @@ def warp(src, u, v):
     return np.stack([sample_cubic(c, xx + u, yy + v) for c in src])
 
 
-def optical_flow(I0, I1, w0, w1, levels, alpha=0.03, eps=0.01, warps=4, iterations=30,
-                 omega=1.8, median=True):
+def optical_flow(
+    I0, I1, w0, w1, levels, alpha=0.03, eps=0.01, warps=4, iterations=30, omega=1.8, median=True
+):
     """The whole coarse-to-fine solver of clpde.motion.FlowSolver.flow."""
     P0, W0, P1, W1 = [I0], [w0], [I1], [w1]
     for _ in range(levels - 1):
@@ -156,8 +162,7 @@ def optical_flow(I0, I1, w0, w1, levels, alpha=0.03, eps=0.01, warps=4, iteratio
             Ix, Iy, It, wd = linearise(P0[lev], P1[lev], W0[lev], W1[lev], u, v)
             for _ in range(iterations):
                 for parity in (0, 1):
-                    du, dv = sor_half(Ix, Iy, It, wd, u, v, du, dv, alpha ** 2, eps, omega,
-                                      parity)
+                    du, dv = sor_half(Ix, Iy, It, wd, u, v, du, dv, alpha**2, eps, omega, parity)
             u, v = u + du, v + dv
             du, dv = np.zeros_like(u), np.zeros_like(v)
             if median:

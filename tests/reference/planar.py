@@ -105,12 +105,15 @@ def gauss_smooth(u, w):
         idx = np.arange(n)
         out = w[0] * a
         for k in range(1, r + 1):
+
             def mirror(j):
                 for _ in range(8):
                     j = np.where(j < 0, -j - 1, np.where(j >= n, 2 * n - j - 1, j))
                 return np.clip(j, 0, n - 1)
-            out = out + w[k] * (np.take(a, mirror(idx - k), axis=axis) +
-                                np.take(a, mirror(idx + k), axis=axis))
+
+            out = out + w[k] * (
+                np.take(a, mirror(idx - k), axis=axis) + np.take(a, mirror(idx + k), axis=axis)
+            )
         return out
 
     return along(along(u, 2), 1)
@@ -126,5 +129,6 @@ def perona_malik_catte_step(p, ps, dt, kappa, edge="exp"):
             return d * np.exp(-((ds / kappa) ** 2))
         return d / (1 + (ds / kappa) ** 2)
 
-    return c + dt * (flux(e - c, es - cs) + flux(w - c, ws - cs) + flux(n - c, ns - cs) +
-                     flux(s - c, ss - cs))
+    return c + dt * (
+        flux(e - c, es - cs) + flux(w - c, ws - cs) + flux(n - c, ns - cs) + flux(s - c, ss - cs)
+    )

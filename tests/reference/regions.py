@@ -167,7 +167,6 @@ def copy_runs(src, dst, band, nc, plane):
     return out
 
 
-
 def reinit_heun(acc, stage1, u0, band, dt, nc, plane, sx, sxy):
     """reinit3d_heun: acc with (acc + Euler step of stage1) / 2 on the band, every channel."""
     out = acc.copy()
@@ -178,8 +177,7 @@ def reinit_heun(acc, stage1, u0, band, dt, nc, plane, sx, sxy):
     return out
 
 
-def region_stages(ls, aux, start, band, dt, eps2, lo, hi, scale, mode, vmax, nc, plane, sx,
-                  sxy):
+def region_stages(ls, aux, start, band, dt, eps2, lo, hi, scale, mode, vmax, nc, plane, sx, sxy):
     """region_euler and region_heun: the speed from ls at the band cells (region_speed),
     then region_step's update of every channel. Returns (euler, heun, max |V|): euler =
     ls + dt L(ls) and heun = (start + ls + dt L(ls)) / 2 at the band cells, (nc, len(band)),

@@ -87,9 +87,15 @@ def dual_rows(p, f, lam, u_before):
     div = px[:, 1:-1, 1:-1] - px[:, 1:-1, :-2] + py[:, 1:-1, 1:-1] - py[:, :-2, 1:-1]
     lam = np.asarray(lam, float)[:, None, None]
     u = f[:, 1:-1, 1:-1] + div / lam
-    sums = np.stack([(div**2).sum(axis=(1, 2)), ((u - u_before) ** 2).sum(axis=(1, 2)),
-                     (u**2).sum(axis=(1, 2)), np.abs(u - u_before).max(axis=(1, 2))],
-                    axis=1)
+    sums = np.stack(
+        [
+            (div**2).sum(axis=(1, 2)),
+            ((u - u_before) ** 2).sum(axis=(1, 2)),
+            (u**2).sum(axis=(1, 2)),
+            np.abs(u - u_before).max(axis=(1, 2)),
+        ],
+        axis=1,
+    )
     return u, sums
 
 

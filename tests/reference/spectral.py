@@ -28,18 +28,18 @@ def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True, c
     H = L // 2 + 1
     ky, kx = np.meshgrid(np.arange(L), np.arange(H), indexing="ij")
     fy = np.where(ky <= L // 2, ky, ky - L)
-    nu = np.minimum(np.sqrt(fy ** 2 + kx ** 2) / (0.5 * L * np.sqrt(2)), 1.0)
+    nu = np.minimum(np.sqrt(fy**2 + kx**2) / (0.5 * L * np.sqrt(2)), 1.0)
     prior = (1 - nu) ** alpha
-    candidate = fy ** 2 + kx ** 2 <= (cutoff * 0.5 * L) ** 2
+    candidate = fy**2 + kx**2 <= (cutoff * 0.5 * L) ** 2
     self_conj = ((2 * ky) % L == 0) & ((2 * kx) % L == 0)
     V = W[(2 * ky) % L, (2 * kx) % L]
-    den = np.maximum(W0 ** 2 - np.abs(V) ** 2, 1e-3 * W0 ** 2)
+    den = np.maximum(W0**2 - np.abs(V) ** 2, 1e-3 * W0**2)
     m, n = np.mgrid[0:L, 0:L]
     first = None
     for _ in range(iterations):
         r = R[:, :H]
         c_pair = (r * W0 - V * np.conj(r)) / den
-        gain = np.where(self_conj, r.real ** 2 / W0, 2 * (np.conj(c_pair) * r).real)
+        gain = np.where(self_conj, r.real**2 / W0, 2 * (np.conj(c_pair) * r).real)
         # the first of equal scores, as the kernel
         j = int(np.argmax(np.where(candidate, gain * prior, -np.inf).ravel()))
         a, b = divmod(j, H)
@@ -85,7 +85,7 @@ def plan(omega, *, block, min_block, border, split, delta, shift=(0, 0)):
     while todo:
         nxt = []
         for y, x, s in todo:
-            if not hole[max(y, 0):max(y + s, 0), max(x, 0):max(x + s, 0)].any():
+            if not hole[max(y, 0) : max(y + s, 0), max(x, 0) : max(x + s, 0)].any():
                 continue
             if window_sum(known, y, x, s) / (s + 2 * border) ** 2 < split and s > min_block:
                 s2 = s // 2
@@ -100,18 +100,28 @@ def plan(omega, *, block, min_block, border, split, delta, shift=(0, 0)):
 
     def conflict(i, j):
         (ya, xa, sa), (yb, xb, sb) = blocks[i], blocks[j]
-        return (ya - border < yb + sb and yb < ya + sa + border
-                and xa - border < xb + sb and xb < xa + sa + border)
+        return (
+            ya - border < yb + sb
+            and yb < ya + sa + border
+            and xa - border < xb + sb
+            and xb < xa + sa + border
+        )
 
     while pending:
         # counts kept apart, so that equal scores stay equal in floating point
-        score = {i: (window_sum(known, *blocks[i]) + delta * window_sum(filled, *blocks[i]))
-                 / (blocks[i][2] + 2 * border) ** 2 for i in pending}
+        score = {
+            i: (window_sum(known, *blocks[i]) + delta * window_sum(filled, *blocks[i]))
+            / (blocks[i][2] + 2 * border) ** 2
+            for i in pending
+        }
         best = max(score.values())
         key = {i: (score[i], -i) for i in pending}
-        chosen = [i for i in sorted(pending)
-                  if (score[i] > 0 or best <= 0)
-                  and all(key[i] > key[j] for j in pending if j != i and conflict(i, j))]
+        chosen = [
+            i
+            for i in sorted(pending)
+            if (score[i] > 0 or best <= 0)
+            and all(key[i] > key[j] for j in pending if j != i and conflict(i, j))
+        ]
         # the host orders a wave's blocks by rank; the result does not depend on it
         wave = len(waves)
         for i in chosen:
@@ -125,16 +135,43 @@ def plan(omega, *, block, min_block, border, split, delta, shift=(0, 0)):
     return (cy0, cy1, cx0, cx1), blocks, waves, wave_of
 
 
-def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, delta=1.0,
-         gamma=0.7, alpha=2.0, iterations=100, stop=0.0, colour="pca", detrend=True,
-         shifts=2, cutoff=1.5, per_pixel=0.0):
+def fill(
+    data,
+    omega,
+    *,
+    block=8,
+    min_block=4,
+    border=12,
+    split=0.3,
+    rho=0.6,
+    delta=1.0,
+    gamma=0.7,
+    alpha=2.0,
+    iterations=100,
+    stop=0.0,
+    colour="pca",
+    detrend=True,
+    shifts=2,
+    cutoff=1.5,
+    per_pixel=0.0,
+):
     """The whole fill of (channels, rows, cols) float data, float64: every block grid's fill
     on its own, then their average."""
     out = np.array(data, np.float64)
     h2 = block // 2
     offsets = {1: [(0, 0)], 2: [(0, 0), (h2, h2)], 4: [(0, 0), (0, h2), (h2, 0), (h2, h2)]}
-    plans = [plan(omega, block=block, min_block=min_block, border=border, split=split,
-                  delta=delta, shift=sh) for sh in offsets[shifts]]
+    plans = [
+        plan(
+            omega,
+            block=block,
+            min_block=min_block,
+            border=border,
+            split=split,
+            delta=delta,
+            shift=sh,
+        )
+        for sh in offsets[shifts]
+    ]
     y0 = min(p[0][0] for p in plans)
     y1 = max(p[0][1] for p in plans)
     x0 = min(p[0][2] for p in plans)
@@ -156,14 +193,15 @@ def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, de
     for (cy0, cy1, cx0, cx1), blocks, waves, wave_of_crop in plans:
         work = start.copy()
         wave_of = np.full(hole.shape, -1)
-        wave_of[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0] = wave_of_crop
+        wave_of[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = wave_of_crop
         for wave, members in enumerate(waves):
             for i in members:
                 y, x, s = blocks[i]
                 picks = iterations
                 if per_pixel > 0:
-                    holes = (wave_of_crop[max(y, 0):max(y + s, 0), max(x, 0):max(x + s, 0)]
-                             >= 0).sum()
+                    holes = (
+                        wave_of_crop[max(y, 0) : max(y + s, 0), max(x, 0) : max(x + s, 0)] >= 0
+                    ).sum()
                     picks = int(min(iterations, max(4, np.ceil(per_pixel * holes))))
                 y, x = y + cy0 - y0, x + cx0 - x0
                 L = s + 2 * border
@@ -174,15 +212,30 @@ def fill(data, omega, *, block=8, min_block=4, border=12, split=0.3, rho=0.6, de
                 inside = (yy >= 0) & (yy < h) & (xx >= 0) & (xx < w)
                 yc, xc = np.clip(yy, 0, h - 1), np.clip(xx, 0, w - 1)
                 state = wave_of[yc, xc]
-                s_w = np.where(state == -1, 1.0,
-                               np.where((state >= 0) & (state < wave), delta, 0.0))
+                s_w = np.where(
+                    state == -1, 1.0, np.where((state >= 0) & (state < wave), delta, 0.0)
+                )
                 weight = np.where(inside, s_w * decay, 0.0)
-                target = inside & (state == wave) & (m >= border) & (m < border + s) & \
-                    (n >= border) & (n < border + s)
+                target = (
+                    inside
+                    & (state == wave)
+                    & (m >= border)
+                    & (m < border + s)
+                    & (n >= border)
+                    & (n < border + s)
+                )
                 for c in range(nc):
                     values = np.where(weight > 0, work[c, yc, xc], 0.0)
-                    model = fit_block(values, weight, iterations=picks, gamma=gamma,
-                                      alpha=alpha, stop=stop, detrend=detrend, cutoff=cutoff)
+                    model = fit_block(
+                        values,
+                        weight,
+                        iterations=picks,
+                        gamma=gamma,
+                        alpha=alpha,
+                        stop=stop,
+                        detrend=detrend,
+                        cutoff=cutoff,
+                    )
                     work[c, yc[target], xc[target]] = model[target]
         fills.append(work)
     filled = np.einsum("ji,jyx->iyx", axes, np.mean(fills, 0)) + mean[:, None, None]

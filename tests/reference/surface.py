@@ -34,12 +34,14 @@ def _axis_weights(p, n, order):
     f = np.floor(p)
     t = p - f
     if order == 3:
-        w = np.stack([
-            -t * (t - 1) * (t - 2) / 6,
-            (t + 1) * (t - 1) * (t - 2) / 2,
-            -(t + 1) * t * (t - 2) / 2,
-            (t + 1) * t * (t - 1) / 6,
-        ])
+        w = np.stack(
+            [
+                -t * (t - 1) * (t - 2) / 6,
+                (t + 1) * (t - 1) * (t - 2) / 2,
+                -(t + 1) * t * (t - 2) / 2,
+                (t + 1) * t * (t - 1) / 6,
+            ]
+        )
         first = np.clip(f.astype(int) - 1, 0, n - 4)
     else:
         w = np.stack([1 - t, t])
@@ -85,8 +87,13 @@ def node_cells(base, padded_shape, order=3):
 def stencil_cells(cells, padded_shape):
     """Sorted flat indices of the cells and their 6 face and 12 edge neighbours."""
     _pz, py, px = padded_shape
-    offsets = [dz * px * py + dy * px + dx for dz in (-1, 0, 1) for dy in (-1, 0, 1)
-               for dx in (-1, 0, 1) if abs(dx) + abs(dy) + abs(dz) <= 2]
+    offsets = [
+        dz * px * py + dy * px + dx
+        for dz in (-1, 0, 1)
+        for dy in (-1, 0, 1)
+        for dx in (-1, 0, 1)
+        if abs(dx) + abs(dy) + abs(dz) <= 2
+    ]
     return np.unique(cells[:, None] + np.array(offsets)[None, :])
 
 
@@ -164,19 +171,23 @@ def _line_sign(u_flat, plane, ref, cells):
     return np.where(dot < 0, -1.0, 1.0)
 
 
-def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direction=None,
-              ref=None):
+def flow_flux(
+    u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direction=None, ref=None
+):
     """flow_step's fluxes at cells j: list over channels of 3 components, and |P v|^2.
     With ref (line fields), every vector read is turned to the side of the one at ref."""
     n = _normal(p, j, sx, sxy)
     nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
     length = np.sqrt(nn) if weighted else 1.0
     nc = u_flat.size // plane
-    sign = (lambda cells: 1.0) if ref is None else (lambda cells: _line_sign(u_flat, plane, ref,
-                                                                             cells))
+    sign = (
+        (lambda cells: 1.0)
+        if ref is None
+        else (lambda cells: _line_sign(u_flat, plane, ref, cells))
+    )
     pv, g2 = [], 0.0
     for c in range(nc):
-        f = u_flat[c * plane:(c + 1) * plane]
+        f = u_flat[c * plane : (c + 1) * plane]
         fj = sign(j) * f[j]
         v = [np.sign(e) * (sign(j + e) * f[j + e] - fj) for e in offsets]
         s = (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / nn
@@ -194,8 +205,22 @@ def flow_flux(u_flat, p, j, offsets, sx, sxy, plane, e2, flow_p, weighted, direc
     return [[gain * x for x in w] for w in pv], g2
 
 
-def flow_step(u_pad, psi_pad, band, r, dt, lam, e2, offsets, flow_p=2, harmonic=False,
-              u0_pad=None, direction=None, weighted=False, line_field=False):
+def flow_step(
+    u_pad,
+    psi_pad,
+    band,
+    r,
+    dt,
+    lam,
+    e2,
+    offsets,
+    flow_p=2,
+    harmonic=False,
+    u0_pad=None,
+    direction=None,
+    weighted=False,
+    line_field=False,
+):
     """New band values (nc, n) of flow_step (TV, harmonic maps, flux along d, fidelity)."""
     nc, pz, py, px = u_pad.shape
     sx, sxy, plane = px, px * py, px * py * pz
@@ -204,8 +229,10 @@ def flow_step(u_pad, psi_pad, band, r, dt, lam, e2, offsets, flow_p=2, harmonic=
     d = None if direction is None else direction.ravel().astype(np.float64)
     ref = band if line_field else None
     wc, g2 = flow_flux(u, p, band, offsets, sx, sxy, plane, e2, flow_p, weighted, d, ref)
-    nb = [flow_flux(u, p, band - e, offsets, sx, sxy, plane, e2, flow_p, weighted, d, ref)[0]
-          for e in offsets]
+    nb = [
+        flow_flux(u, p, band - e, offsets, sx, sxy, plane, e2, flow_p, weighted, d, ref)[0]
+        for e in offsets
+    ]
     inv_len = 1.0
     if weighted:
         n = _normal(p, band, sx, sxy)
@@ -231,8 +258,9 @@ def tv_lambda_terms(u_pad, u0_pad, psi_pad, band, inv_h, eps_cells, e2, offsets)
     u, u0 = u_pad.ravel().astype(np.float64), u0_pad.ravel().astype(np.float64)
     p = psi_pad.ravel().astype(np.float64)
     d = p[band] * inv_h
-    delta = np.where(np.abs(d) < eps_cells, (1 + np.cos(np.pi * d / eps_cells)) / (2 * eps_cells),
-                     0)
+    delta = np.where(
+        np.abs(d) < eps_cells, (1 + np.cos(np.pi * d / eps_cells)) / (2 * eps_cells), 0
+    )
     n = _normal(p, band, sx, sxy)
     nn = n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30
     v = [np.sign(e) * (u[band + e] - u[band]) for e in offsets]
@@ -280,10 +308,14 @@ def reinit_step(phi_pad, phi0_pad, band, r, h):
     slope2 = 0.0
     gsum = 0.0
     for st in (1, sx, sxy):
-        sl = np.maximum.reduce([
-            np.abs(f0[band + st] - f0[band - st]) * 0.5, np.abs(f0[band + st] - p0),
-            np.abs(p0 - f0[band - st]), np.full(band.size, 1e-12),
-        ])
+        sl = np.maximum.reduce(
+            [
+                np.abs(f0[band + st] - f0[band - st]) * 0.5,
+                np.abs(f0[band + st] - p0),
+                np.abs(p0 - f0[band - st]),
+                np.full(band.size, 1e-12),
+            ]
+        )
         slope2 = slope2 + sl**2
         back = c - f[band - st]
         fwd = f[band + st] - c
@@ -316,8 +348,9 @@ def principal_directions(psi_pad, band, inv_h):
                 )
     absn = np.abs(n)
     e = np.zeros_like(n)
-    pick = np.where((absn[0] <= absn[1]) & (absn[0] <= absn[2]), 0,
-                    np.where(absn[1] <= absn[2], 1, 2))
+    pick = np.where(
+        (absn[0] <= absn[1]) & (absn[0] <= absn[2]), 0, np.where(absn[1] <= absn[2], 1, 2)
+    )
     e[pick, np.arange(i.size)] = 1
     ta = np.cross(n.T, e.T).T
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -16,8 +16,8 @@ def adaptive_beta(pf1, pf2, delta, noise2, win=3):
     sums = np.zeros((5,) + f1.shape)
     for dy in range(-win, win + 1):
         for dx in range(-win, win + 1):
-            a = q1[o + dy:o + dy + ny, o + dx:o + dx + nx]
-            b = q2[o + dy:o + dy + ny, o + dx:o + dx + nx]
+            a = q1[o + dy : o + dy + ny, o + dx : o + dx + nx]
+            b = q2[o + dy : o + dy + ny, o + dx : o + dx + nx]
             sums += np.array([a, b, a * a, b * b, a * b])
     n = (2 * win + 1) ** 2
     m1, m2 = sums[0] / n, sums[1] / n
@@ -31,8 +31,9 @@ def adaptive_beta(pf1, pf2, delta, noise2, win=3):
     return w * ncc + (1 - w) * (f2 - f1)
 
 
-def morph_adaptive(pu, pf1, pf2, band, prior, region, dt, eps_f, eps_u, near, lam, delta,
-                   noise2, mu, kd=1.0, win=3):
+def morph_adaptive(
+    pu, pf1, pf2, band, prior, region, dt, eps_f, eps_u, near, lam, delta, noise2, mu, kd=1.0, win=3
+):
     """One step over C channels: pf1, pf2 (C, ny+4, nx+4), region (ny, nx) interior values;
     returns (u_new, f1_new (C, ny, nx), (max |du/dt| where |u| < 1, max(|beta|, |S|),
     max |grad F1|), mean over band cells of the channels' mean |beta|, hit)."""
@@ -64,9 +65,13 @@ def morph_adaptive(pu, pf1, pf2, band, prior, region, dt, eps_f, eps_u, near, la
     hit = bool(np.any((band == 2) & (np.abs(u_new) < near)))
     beta_max = max(float(np.max([b[inside] for b in betas])), float(np.abs(speed[inside]).max()))
     front = inside & (np.abs(u) < 1)
-    maxima = (float(np.abs(rate[front]).max()) if front.any() else 0.0, beta_max,
-              float(np.max([g[inside] for g in grads])))
+    maxima = (
+        float(np.abs(rate[front]).max()) if front.any() else 0.0,
+        beta_max,
+        float(np.max([g[inside] for g in grads])),
+    )
     mean_beta = float((babs / len(pf1))[inside].mean())
-    f1_new = np.array([np.where(inside, f, _view(p1, 0, 0))
-                       for f, p1 in zip(f1_new, pf1, strict=True)])
+    f1_new = np.array(
+        [np.where(inside, f, _view(p1, 0, 0)) for f, p1 in zip(f1_new, pf1, strict=True)]
+    )
     return np.where(inside, u_new, u), f1_new, maxima, mean_beta, hit

@@ -57,8 +57,7 @@ def _tracker(speed="constant", scale=1.0, dtype=np.float64, nc=2):
     return region_tracker(phi, hats, h, speed=speed, scale=scale, storage="bricks", dtype=dtype)
 
 
-@pytest.mark.parametrize(("speed", "mode"), [("constant", 0), ("mean-curvature", 1),
-                                             ("morph", 3)])
+@pytest.mark.parametrize(("speed", "mode"), [("constant", 0), ("mean-curvature", 1), ("morph", 3)])
 def test_brick_stages_match_reference(runtime, rng, speed, mode):
     """region_brick_euler / _heun on random bricks: regions.cl's scheme at the step band's
     cells (tests/reference/regions.py), the other cells kept, max |V| per work-item."""
@@ -68,7 +67,7 @@ def test_brick_stages_match_reference(runtime, rng, speed, mode):
         tracker._aux_padded = rng.normal(size=(1,) + g.padded_shape)
         tracker._aux_to_bricks()
     ls, step, _ = _random_state(tracker, rng)
-    aux = (tracker.padded(tracker.aux, signed=False).reshape(-1) if mode == 3 else ls)
+    aux = tracker.padded(tracker.aux, signed=False).reshape(-1) if mode == 3 else ls
     # heun's out (the step's start) equals ls outside the step band, as the tracker keeps it
     start = rng.normal(size=(nc, g.volume))
     outside = np.ones(g.volume, bool)
@@ -77,8 +76,9 @@ def test_brick_stages_match_reference(runtime, rng, speed, mode):
     start_dev = tracker._scatter(start.reshape((nc,) + g.padded_shape))
     start = tracker.padded(start_dev, signed=False).reshape(-1)
     lo, hi = (float(v) for v in tracker._cutoff())
-    euler, heun, fastest = ref.region_stages(ls, aux, start, step, 0.3, 1e-12, lo, hi, 0.7,
-                                             mode, tracker.vmax, nc, g.volume, g.sx, g.sxy)
+    euler, heun, fastest = ref.region_stages(
+        ls, aux, start, step, 0.3, 1e-12, lo, hi, 0.7, mode, tracker.vmax, nc, g.volume, g.sx, g.sxy
+    )
     nxt = tracker.cur.copy()  # bricks without a step cell are not written
     tracker._stage("region_brick_euler", tracker.cur, nxt, 0.3)
     half = len(tracker._stats) // 2
@@ -116,8 +116,15 @@ def test_brick_reinit_and_extension_match_reference(runtime, rng):
 
     lo, hi = 0.8, 1.5
     out = u_dev.copy()
-    tracker._launch("region_brick_extend", u_dev.data, tracker._mask.data, out.data,
-                    g.scalar(0.5), g.scalar(lo), g.scalar(hi))
+    tracker._launch(
+        "region_brick_extend",
+        u_dev.data,
+        tracker._mask.data,
+        out.data,
+        g.scalar(0.5),
+        g.scalar(lo),
+        g.scalar(hi),
+    )
     got = dense(out)
     want = ref.extend_outer(u, band, 0.5, lo, hi, nc, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(got[1:, band], want, rtol=1e-9, atol=1e-9)
@@ -127,15 +134,31 @@ def test_brick_reinit_and_extension_match_reference(runtime, rng):
     target = cla.empty_like(u_dev)
     tracker._launch("region_brick_targets", u0_dev.data, tracker._mask.data, target.data)
     stage1 = u_dev.copy()
-    tracker._launch("region_brick_reinit_stage", u_dev.data, u0_dev.data, target.data,
-                    stage1.data, tracker._mask.data, g.scalar(dt), np.int32(0))
+    tracker._launch(
+        "region_brick_reinit_stage",
+        u_dev.data,
+        u0_dev.data,
+        target.data,
+        stage1.data,
+        tracker._mask.data,
+        g.scalar(dt),
+        np.int32(0),
+    )
     got = dense(stage1)
     want = ref.reinit_step(u, u0, band, dt, nc, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(got[:, band], want, rtol=1e-9, atol=1e-9)
     np.testing.assert_array_equal(got[:, other], u.reshape(nc, -1)[:, other])
     s1 = got.reshape(-1)
-    tracker._launch("region_brick_reinit_stage", stage1.data, u0_dev.data, target.data,
-                    u_dev.data, tracker._mask.data, g.scalar(dt), np.int32(1))
+    tracker._launch(
+        "region_brick_reinit_stage",
+        stage1.data,
+        u0_dev.data,
+        target.data,
+        u_dev.data,
+        tracker._mask.data,
+        g.scalar(dt),
+        np.int32(1),
+    )
     want = ref.reinit_heun(u, s1, u0, band, dt, nc, g.volume, g.sx, g.sxy)
     got = dense(u_dev).reshape(-1)
     idx = np.concatenate([band + c * g.volume for c in range(nc)])
@@ -166,8 +189,9 @@ def test_upkeep_follows_a_growing_then_shrinking_sphere(runtime):
     -0.061% from the exact quarter)."""
     phi, cap, h = _sphere(48, 4.0)
     lists = RegionTracker(phi, cap[None], h, speed="constant", scale=-1.0)
-    bricks = region_tracker(phi, cap[None], h, speed="constant", scale=-1.0, storage="bricks",
-                           brick=(5, 5, 5))
+    bricks = region_tracker(
+        phi, cap[None], h, speed="constant", scale=-1.0, storage="bricks", brick=(5, 5, 5)
+    )
     counts = [bricks.bricks.nbricks]
     for k in range(12):
         if k == 6:
@@ -194,9 +218,14 @@ def test_upkeep_follows_a_growing_then_shrinking_sphere(runtime):
     assert bricks.bricks.stored_cells < 0.5 * phi.size  # memory follows the band
 
 
-@pytest.mark.parametrize(("motion", "t"), [({"beta": 0.5}, 0.3),
-                                            ({"beta": "mean-curvature"}, 0.05),
-                                            ({"velocity": (0.3, 0.0, 0.1)}, 0.4)])
+@pytest.mark.parametrize(
+    ("motion", "t"),
+    [
+        ({"beta": 0.5}, 0.3),
+        ({"beta": "mean-curvature"}, 0.05),
+        ({"velocity": (0.3, 0.0, 0.1)}, 0.4),
+    ],
+)
 def test_bricks_track_a_cap_like_the_lists(motion, t):
     """A cap on a sphere of radius 0.7 (h = 0.08) under a constant outward speed, mean
     curvature flow and a translation: the frames' areas and cap shares agree with the
@@ -207,9 +236,20 @@ def test_bricks_track_a_cap_like_the_lists(motion, t):
     ax = (np.arange(n) - (n - 1) / 2) * h
     z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
     phi = np.sqrt(x**2 + y**2 + z**2) - 0.7
-    frames = {s: track_region(phi, 0.35 - z, t=t, spacing=h, saves=2, origin=(ax[0],) * 3,
-                              progress=False, storage=s, **motion)
-              for s in ("lists", "bricks")}
+    frames = {
+        s: track_region(
+            phi,
+            0.35 - z,
+            t=t,
+            spacing=h,
+            saves=2,
+            origin=(ax[0],) * 3,
+            progress=False,
+            storage=s,
+            **motion,
+        )
+        for s in ("lists", "bricks")
+    }
     for a, b in zip(frames["lists"], frames["bricks"], strict=True):
         assert a.step == b.step
         assert b.area() == pytest.approx(a.area(), rel=1e-5)

@@ -42,8 +42,9 @@ def _inputs(kind, rng, nc):
     nz, ny, nx = SHAPE
     if kind == "random":
         return rng.normal(size=(nc, nz, ny, nx))
-    z, y, x = np.meshgrid(np.arange(nz) - 4.2, np.arange(ny) - 4.6, np.arange(nx) - 5.1,
-                          indexing="ij")
+    z, y, x = np.meshgrid(
+        np.arange(nz) - 4.2, np.arange(ny) - 4.6, np.arange(nx) - 5.1, indexing="ij"
+    )
     sphere = np.sqrt(x**2 + y**2 + z**2) - 3.3
     planes = [0.8 * z + 0.3 * x - 0.5 * c for c in range(nc - 1)]
     return np.stack([sphere] + planes)
@@ -59,8 +60,16 @@ def test_region_speed_matches_reference(runtime, rng, kind, mode):
     data = _inputs(kind, rng, 2)
     g, (ls, aux), runs, (ls_h, aux_h) = _setup(runtime, [data[:1], data[1:]])
     speed = cla.zeros(runtime.queue, g.padded_shape, g.dtype)
-    g.launch_runs(_kernel(runtime, "region_speed", SPEED=mode), runs, ls.data, aux.data,
-                  speed.data, g.scalar(0.7), g.scalar(0.9), *g.strides())
+    g.launch_runs(
+        _kernel(runtime, "region_speed", SPEED=mode),
+        runs,
+        ls.data,
+        aux.data,
+        speed.data,
+        g.scalar(0.7),
+        g.scalar(0.9),
+        *g.strides(),
+    )
     idx = runs.band.indices.get().astype(np.int64)
     want = ref.region_speed(ls_h, aux_h, idx, 0.7, mode, g.sx, g.sxy, vmax=0.9)
     np.testing.assert_allclose(speed.get().reshape(-1)[idx], want, rtol=1e-9, atol=1e-9)
@@ -71,9 +80,19 @@ def test_region_step_matches_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 3)
     g, (ls, speed), runs, (ls_h, speed_h) = _setup(runtime, [data, rng.normal(size=(1,) + SHAPE)])
     out = ls.copy()
-    g.launch_runs(_kernel(runtime, "region_step"), runs, ls.data, speed.data, out.data,
-                  g.scalar(0.3), g.scalar(1e-12), g.scalar(1.0), g.scalar(2.5), *g.strides(),
-                  channels=3)
+    g.launch_runs(
+        _kernel(runtime, "region_step"),
+        runs,
+        ls.data,
+        speed.data,
+        out.data,
+        g.scalar(0.3),
+        g.scalar(1e-12),
+        g.scalar(1.0),
+        g.scalar(2.5),
+        *g.strides(),
+        channels=3,
+    )
     idx = runs.band.indices.get().astype(np.int64)
     want = ref.region_step(ls_h, speed_h, idx, 0.3, 1e-12, 1.0, 2.5, 3, g.volume, g.sx, g.sxy)
     got = out.get().reshape(3, -1)
@@ -90,19 +109,35 @@ def test_fused_stages_match_reference(runtime, rng, kind, mode, nc):
     work-item, Heun's average in place, and max |V| per work-item in stats."""
     data = _inputs(kind, rng, nc)
     g, (ls, aux, start), runs, (ls_h, aux_h, start_h) = _setup(
-        runtime, [data, rng.normal(size=(1,) + SHAPE), data + rng.normal(size=data.shape)])
+        runtime, [data, rng.normal(size=(1,) + SHAPE), data + rng.normal(size=data.shape)]
+    )
     idx = runs.band.indices.get().astype(np.int64)
-    args = (g.scalar(0.3), g.scalar(1e-12), g.scalar(1.0), g.scalar(2.5), g.scalar(0.7),
-            g.scalar(0.9), *g.strides())
+    args = (
+        g.scalar(0.3),
+        g.scalar(1e-12),
+        g.scalar(1.0),
+        g.scalar(2.5),
+        g.scalar(0.7),
+        g.scalar(0.9),
+        *g.strides(),
+    )
     (items,), _, _ = runtime.list_launch(runs.n)
     stats = cla.zeros(runtime.queue, 2 * items, g.dtype)
-    euler, heun, fastest = ref.region_stages(ls_h, aux_h, start_h, idx, 0.3, 1e-12, 1.0, 2.5,
-                                             0.7, mode, 0.9, nc, g.volume, g.sx, g.sxy)
+    euler, heun, fastest = ref.region_stages(
+        ls_h, aux_h, start_h, idx, 0.3, 1e-12, 1.0, 2.5, 0.7, mode, 0.9, nc, g.volume, g.sx, g.sxy
+    )
     outside = np.ones(g.volume, bool)
     outside[idx] = False
     for name, want, dst in (("region_euler", euler, ls.copy()), ("region_heun", heun, start)):
-        g.launch_runs(_kernel(runtime, name, SPEED=mode, NC=nc), runs, ls.data, aux.data,
-                      dst.data, stats.data, *args)
+        g.launch_runs(
+            _kernel(runtime, name, SPEED=mode, NC=nc),
+            runs,
+            ls.data,
+            aux.data,
+            dst.data,
+            stats.data,
+            *args,
+        )
         got = dst.get().reshape(nc, -1)
         np.testing.assert_allclose(got[:, idx], want, rtol=1e-9, atol=1e-9)
         before = ls_h if name == "region_euler" else start_h
@@ -113,18 +148,36 @@ def test_fused_stages_match_reference(runtime, rng, kind, mode, nc):
 @pytest.mark.parametrize("kind", ["random", "structured"])
 def test_advect_and_reinit_match_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 2)
-    g, (ls, ls0), runs, (ls_h, ls0_h) = _setup(runtime,
-                                               [data, data + 0.3 * rng.normal(size=data.shape)])
+    g, (ls, ls0), runs, (ls_h, ls0_h) = _setup(
+        runtime, [data, data + 0.3 * rng.normal(size=data.shape)]
+    )
     idx = runs.band.indices.get().astype(np.int64)
     out = ls.copy()
     vel = (0.4, -0.7, 0.2)
-    g.launch_runs(_kernel(runtime, "advect_step"), runs, ls.data, out.data, g.scalar(0.25),
-                  *(g.scalar(v) for v in vel), g.scalar(1.0), g.scalar(2.5), *g.strides(),
-                  channels=2)
+    g.launch_runs(
+        _kernel(runtime, "advect_step"),
+        runs,
+        ls.data,
+        out.data,
+        g.scalar(0.25),
+        *(g.scalar(v) for v in vel),
+        g.scalar(1.0),
+        g.scalar(2.5),
+        *g.strides(),
+        channels=2,
+    )
     want = ref.advect_step(ls_h, idx, 0.25, vel, 1.0, 2.5, 2, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(out.get().reshape(2, -1)[:, idx], want, rtol=1e-9, atol=1e-9)
-    g.launch_runs(_kernel(runtime, "reinit3d_step"), runs, ls.data, ls0.data, out.data,
-                  g.scalar(0.3), *g.strides(), channels=2)
+    g.launch_runs(
+        _kernel(runtime, "reinit3d_step"),
+        runs,
+        ls.data,
+        ls0.data,
+        out.data,
+        g.scalar(0.3),
+        *g.strides(),
+        channels=2,
+    )
     want = ref.reinit_step(ls_h, ls0_h, idx, 0.3, 2, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(out.get().reshape(2, -1)[:, idx], want, rtol=1e-9, atol=1e-9)
 
@@ -137,8 +190,16 @@ def test_reinit_heun_matches_reference(runtime, rng, kind):
     noisy = [data + s * rng.normal(size=data.shape) for s in (0.2, 0.3)]
     g, (acc, stage1, ls0), runs, (acc_h, stage1_h, ls0_h) = _setup(runtime, [data] + noisy)
     idx = runs.band.indices.get().astype(np.int64)
-    g.launch_runs(_kernel(runtime, "reinit3d_heun"), runs, acc.data, stage1.data, ls0.data,
-                  g.scalar(0.3), *g.strides(), channels=2)
+    g.launch_runs(
+        _kernel(runtime, "reinit3d_heun"),
+        runs,
+        acc.data,
+        stage1.data,
+        ls0.data,
+        g.scalar(0.3),
+        *g.strides(),
+        channels=2,
+    )
     want = ref.reinit_heun(acc_h, stage1_h, ls0_h, idx, 0.3, 2, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(acc.get().reshape(-1), want, rtol=1e-9, atol=1e-9)
 
@@ -159,19 +220,53 @@ def test_reinit_from_targets_is_bitwise_the_plain_reinit(runtime, rng, kind, dty
         return runtime.kernel("regions/regions.cl", name, dtype)
 
     target, plain, pre = u.copy(), u.copy(), u.copy()
-    g.launch_runs(kernel("reinit3d_targets"), runs, ls0.data, _inband(runtime, g, runs).data,
-                  target.data, *g.strides(), channels=2)
+    g.launch_runs(
+        kernel("reinit3d_targets"),
+        runs,
+        ls0.data,
+        _inband(runtime, g, runs).data,
+        target.data,
+        *g.strides(),
+        channels=2,
+    )
     dt = g.scalar(0.45)
-    g.launch_runs(kernel("reinit3d_step"), runs, u.data, ls0.data, plain.data, dt,
-                  *g.strides(), channels=2)
-    g.launch_runs(kernel("reinit3d_step_pre"), runs, u.data, ls0.data, target.data, pre.data,
-                  dt, *g.strides(), channels=2)
+    g.launch_runs(
+        kernel("reinit3d_step"), runs, u.data, ls0.data, plain.data, dt, *g.strides(), channels=2
+    )
+    g.launch_runs(
+        kernel("reinit3d_step_pre"),
+        runs,
+        u.data,
+        ls0.data,
+        target.data,
+        pre.data,
+        dt,
+        *g.strides(),
+        channels=2,
+    )
     np.testing.assert_array_equal(pre.get(), plain.get())
     acc_plain, acc_pre = u.copy(), u.copy()
-    g.launch_runs(kernel("reinit3d_heun"), runs, acc_plain.data, plain.data, ls0.data, dt,
-                  *g.strides(), channels=2)
-    g.launch_runs(kernel("reinit3d_heun_pre"), runs, acc_pre.data, pre.data, ls0.data,
-                  target.data, dt, *g.strides(), channels=2)
+    g.launch_runs(
+        kernel("reinit3d_heun"),
+        runs,
+        acc_plain.data,
+        plain.data,
+        ls0.data,
+        dt,
+        *g.strides(),
+        channels=2,
+    )
+    g.launch_runs(
+        kernel("reinit3d_heun_pre"),
+        runs,
+        acc_pre.data,
+        pre.data,
+        ls0.data,
+        target.data,
+        dt,
+        *g.strides(),
+        channels=2,
+    )
     np.testing.assert_array_equal(acc_pre.get(), acc_plain.get())
     idx = runs.band.indices.get().astype(np.int64)
     t = target.get().reshape(2, -1)[:, idx]
@@ -183,9 +278,18 @@ def test_extend_outer_matches_reference(runtime, rng, kind):
     data = _inputs(kind, rng, 3)
     g, (ls,), runs, (ls_h,) = _setup(runtime, [data])
     out = ls.copy()
-    g.launch_runs(_kernel(runtime, "extend_outer"), runs, ls.data,
-                  _inband(runtime, g, runs).data, out.data, g.scalar(0.5), g.scalar(0.5),
-                  g.scalar(2.0), *g.strides(), channels=2)
+    g.launch_runs(
+        _kernel(runtime, "extend_outer"),
+        runs,
+        ls.data,
+        _inband(runtime, g, runs).data,
+        out.data,
+        g.scalar(0.5),
+        g.scalar(0.5),
+        g.scalar(2.0),
+        *g.strides(),
+        channels=2,
+    )
     idx = runs.band.indices.get().astype(np.int64)
     want = ref.extend_outer(ls_h, idx, 0.5, 0.5, 2.0, 3, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(out.get().reshape(3, -1)[1:, idx], want, rtol=1e-9, atol=1e-9)
@@ -206,21 +310,57 @@ def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, 
     results = []
     for runs in (exact, padded):
         ext, target, stage, acc = u.copy(), u.copy(), u.copy(), u.copy()
-        g.launch_runs(_kernel(runtime, "extend_outer"), runs, u.data, inband.data, ext.data,
-                      g.scalar(0.5), g.scalar(0.5), g.scalar(2.0), *g.strides(), channels=1)
-        g.launch_runs(_kernel(runtime, "reinit3d_targets"), runs, ls0.data, inband.data,
-                      target.data, *g.strides(), channels=2)
-        g.launch_runs(_kernel(runtime, "reinit3d_step_pre"), runs, u.data, ls0.data,
-                      target.data, stage.data, dt, *g.strides(), channels=2)
-        g.launch_runs(_kernel(runtime, "reinit3d_heun_pre"), runs, acc.data, stage.data,
-                      ls0.data, target.data, dt, *g.strides(), channels=2)
+        g.launch_runs(
+            _kernel(runtime, "extend_outer"),
+            runs,
+            u.data,
+            inband.data,
+            ext.data,
+            g.scalar(0.5),
+            g.scalar(0.5),
+            g.scalar(2.0),
+            *g.strides(),
+            channels=1,
+        )
+        g.launch_runs(
+            _kernel(runtime, "reinit3d_targets"),
+            runs,
+            ls0.data,
+            inband.data,
+            target.data,
+            *g.strides(),
+            channels=2,
+        )
+        g.launch_runs(
+            _kernel(runtime, "reinit3d_step_pre"),
+            runs,
+            u.data,
+            ls0.data,
+            target.data,
+            stage.data,
+            dt,
+            *g.strides(),
+            channels=2,
+        )
+        g.launch_runs(
+            _kernel(runtime, "reinit3d_heun_pre"),
+            runs,
+            acc.data,
+            stage.data,
+            ls0.data,
+            target.data,
+            dt,
+            *g.strides(),
+            channels=2,
+        )
         idx = exact.band.indices.get()
         results.append([b.get().reshape(2, -1)[:, idx] for b in (ext, target, stage, acc)])
         outside = np.ones(g.volume, bool)
         outside[idx] = False
         for b in (ext, stage, acc):
-            np.testing.assert_array_equal(b.get().reshape(2, -1)[:, outside],
-                                          u_h.reshape(2, -1)[:, outside])
+            np.testing.assert_array_equal(
+                b.get().reshape(2, -1)[:, outside], u_h.reshape(2, -1)[:, outside]
+            )
     for a, b in zip(*results, strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -253,13 +393,22 @@ def test_curvatures_of_a_sphere(runtime):
     idx = runs.band.indices.get().astype(np.int64)
     radius = g.pad(r[None], "linear").reshape(-1)[idx]
     for mode, expect in ((1, 2 / radius), (2, 1 / radius**2)):
-        g.launch_runs(_kernel(runtime, "region_speed", SPEED=mode), runs, phi.data, phi.data,
-                      speed.data, g.scalar(1.0), g.scalar(1e30), *g.strides())
+        g.launch_runs(
+            _kernel(runtime, "region_speed", SPEED=mode),
+            runs,
+            phi.data,
+            phi.data,
+            speed.data,
+            g.scalar(1.0),
+            g.scalar(1e30),
+            *g.strides(),
+        )
         got = speed.get().reshape(-1)[idx]
         np.testing.assert_allclose(got, expect, rtol=0.03)
 
 
 # ---- mesh splitting ---------------------------------------------------------------------------
+
 
 def test_split_puts_the_boundary_on_the_zero():
     verts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
@@ -311,8 +460,9 @@ COS_CAP = 0.5  # cap z > 0.5 R: angular radius 60 degrees, area fraction 1/4
 
 @pytest.mark.parametrize("motion", ["expansion", "translation"])
 def test_cap_keeps_its_relative_area_and_angular_radius(motion):
-    phi, (_x, _y, z), origin = _sphere(42, 0.9,
-                                       (-0.25, 0.0, 0.0) if motion == "translation" else (0, 0, 0))
+    phi, (_x, _y, z), origin = _sphere(
+        42, 0.9, (-0.25, 0.0, 0.0) if motion == "translation" else (0, 0, 0)
+    )
     centre0 = np.array([-0.25, 0.0, 0.0]) if motion == "translation" else np.zeros(3)
     cap = COS_CAP * 0.9 - z  # region: z > 0.45
     if motion == "expansion":
@@ -376,7 +526,6 @@ def test_vertex_mask_input_tracks_like_an_implicit_region():
     assert frames[1].area_fraction(0) == pytest.approx(frames[0].area_fraction(0), rel=0.02)
 
 
-
 def test_vertex_labels_of_another_mesh_of_the_surface():
     """mesh=: a mask or labels given on any mesh of the surface (here an icosphere, as a user's
     mesh would be), with the regions' colours from palette=."""
@@ -386,8 +535,17 @@ def test_vertex_labels_of_another_mesh_of_the_surface():
     ball = trimesh.creation.icosphere(4, radius=0.8)
     labels = (ball.vertices[:, 2] > 0.4).astype(int)  # 1: the cap of angular radius 60 deg
     palette = [(0.2, 0.4, 0.8), (0.8, 0.2, 0.2)]
-    frames = track_region(phi, labels, beta=0.4, t=0.25, spacing=H, saves=1, origin=origin,
-                          mesh=(ball.vertices, ball.faces), palette=palette)
+    frames = track_region(
+        phi,
+        labels,
+        beta=0.4,
+        t=0.25,
+        spacing=H,
+        saves=1,
+        origin=origin,
+        mesh=(ball.vertices, ball.faces),
+        palette=palette,
+    )
     for frame in frames:
         assert frame.area_fraction(1) == pytest.approx(0.25, rel=0.03)
         assert frame.area_fraction(0) == pytest.approx(0.75, rel=0.01)
@@ -397,6 +555,7 @@ def test_vertex_labels_of_another_mesh_of_the_surface():
         track_region(phi, labels[:-1], spacing=H, origin=origin, mesh=ball)
     with pytest.raises(InputError, match="mesh must be"):
         track_region(phi, labels, spacing=H, origin=origin, mesh="ball.ply")
+
 
 # ---- Figure 2.7's toy cases: a region that splits, two that merge --------------------------------
 
@@ -439,9 +598,16 @@ def test_region_changes_topology_with_the_surface(case):
         start, target = _two_spheres(x, y, z, 0.55, 0.45), _capsule(x, y, z, 0.6, 0.45)
         region = np.abs(x) - 0.35 + 0 * y + 0 * z
         want = [2, 1]
-    frames = track_region(np.broadcast_to(start, shape), np.broadcast_to(region, shape),
-                          beta="morph", target=np.broadcast_to(target, shape), t=4.0,
-                          spacing=H, saves=1, origin=origin)
+    frames = track_region(
+        np.broadcast_to(start, shape),
+        np.broadcast_to(region, shape),
+        beta="morph",
+        target=np.broadcast_to(target, shape),
+        t=4.0,
+        spacing=H,
+        saves=1,
+        origin=origin,
+    )
     assert [_region_components(f) for f in frames] == want
     surfaces = [len(f.mesh.split(only_watertight=False)) for f in frames]
     assert surfaces[0] != surfaces[1]  # the surface itself changed topology too
@@ -466,8 +632,9 @@ def test_bad_input_is_named():
     with pytest.raises(InputError, match="beta"):
         track_region(phi, phi, beta="sideways", spacing=H, origin=origin)
     with pytest.raises(InputError, match="t = 0"):
-        track_region(phi, phi, beta=lambda x, y, z, t: np.inf * (t == 0) + 0 * x, spacing=H,
-                     origin=origin)
+        track_region(
+            phi, phi, beta=lambda x, y, z, t: np.inf * (t == 0) + 0 * x, spacing=H, origin=origin
+        )
     with pytest.raises(InputError, match="target"):
         track_region(phi, phi, beta="morph", spacing=H, origin=origin)
     with pytest.raises(InputError, match="border"):
@@ -488,10 +655,17 @@ def test_cli_writes_meshes_and_a_picture(tmp_path):
     from clpde.cli import main
 
     out = tmp_path / "out"
-    assert main(["regions", "merge", "-o", str(out), "--spacing", "0.1", "--saves", "1",
-                 "--size", "48"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["regions.png", "regions_0.ply",
-                                                     "regions_1.ply"]
+    assert (
+        main(
+            ["regions", "merge", "-o", str(out), "--spacing", "0.1", "--saves", "1", "--size", "48"]
+        )
+        == 0
+    )
+    assert sorted(p.name for p in out.iterdir()) == [
+        "regions.png",
+        "regions_0.ply",
+        "regions_1.ply",
+    ]
     import trimesh
 
     mesh = trimesh.load(out / "regions_1.ply", process=False)
@@ -500,10 +674,13 @@ def test_cli_writes_meshes_and_a_picture(tmp_path):
     assert main(["regions", "nowhere.obj", "-o", str(tmp_path / "x")]) == 2
 
 
-@pytest.mark.parametrize(("beta", "t", "radius"), [
-    ("mean-curvature", 0.05, np.sqrt(0.81 - 4 * 0.05)),  # dR/dt = -2/R
-    ("gaussian", 0.1, np.cbrt(0.729 - 3 * 0.1)),  # dR/dt = -1/R^2
-])
+@pytest.mark.parametrize(
+    ("beta", "t", "radius"),
+    [
+        ("mean-curvature", 0.05, np.sqrt(0.81 - 4 * 0.05)),  # dR/dt = -2/R
+        ("gaussian", 0.1, np.cbrt(0.729 - 3 * 0.1)),  # dR/dt = -1/R^2
+    ],
+)
 def test_curvature_flows_shrink_a_sphere_at_the_analytic_rate(beta, t, radius):
     phi, (_, _, z), origin = _sphere(40, 0.9)
     frames = track_region(phi, 0.45 - z, beta=beta, t=t, spacing=H, saves=1, origin=origin)
@@ -516,25 +693,31 @@ def test_curvature_flows_shrink_a_sphere_at_the_analytic_rate(beta, t, radius):
 def test_beta_array_and_callable_match_the_constant():
     phi, (_, _, z), origin = _sphere(32, 0.5)
     cap = 0.25 - z
-    runs = [track_region(phi, cap, beta=b, t=0.2, spacing=H, saves=1, origin=origin)[-1]
-            for b in (0.5, np.full(phi.shape, 0.5), lambda x, y, z: 0.5 + 0 * x)]
+    runs = [
+        track_region(phi, cap, beta=b, t=0.2, spacing=H, saves=1, origin=origin)[-1]
+        for b in (0.5, np.full(phi.shape, 0.5), lambda x, y, z: 0.5 + 0 * x)
+    ]
     areas = [f.area(0) for f in runs]
     np.testing.assert_allclose(areas, areas[0], rtol=1e-5)
     assert runs[0].area() == pytest.approx(4 * np.pi * 0.6**2, rel=0.02)  # 6 cells across
 
 
-@pytest.mark.parametrize(("beta", "radius"), [
-    (lambda x, y, z, t: t + 0 * x, lambda t: 0.6 + t**2 / 2),  # starts at zero speed
-    (lambda x, y, z, t: np.cos(np.pi * t) + 0 * x, lambda t: 0.6 + np.sin(np.pi * t) / np.pi),
-])
+@pytest.mark.parametrize(
+    ("beta", "radius"),
+    [
+        (lambda x, y, z, t: t + 0 * x, lambda t: 0.6 + t**2 / 2),  # starts at zero speed
+        (lambda x, y, z, t: np.cos(np.pi * t) + 0 * x, lambda t: 0.6 + np.sin(np.pi * t) / np.pi),
+    ],
+)
 def test_time_dependent_beta_moves_a_sphere_by_its_time_integral(beta, radius):
     """beta(x, y, z, t) uniform in space: the radius is R0 + integral of beta dt. Sampled at
     the middle of each block of 4 steps (about 0.16 time units here) the error stays near
     0.05 cells (the same as a constant speed's at this spacing); sampled at the blocks'
     starts it is 1-2 cells, and evaluated once (at t = 0) the cosine run would end 10 cells out."""
     phi, (_, _, z), origin = _sphere(40, 0.6)
-    frames = track_region(phi, 0.3 - z, beta=beta, t=1.0, spacing=H, saves=[0.5, 1.0],
-                          origin=origin)
+    frames = track_region(
+        phi, 0.3 - z, beta=beta, t=1.0, spacing=H, saves=[0.5, 1.0], origin=origin
+    )
     for frame in frames:
         got = np.sqrt(frame.area() / (4 * np.pi))
         assert got == pytest.approx(radius(frame.time), abs=0.15 * H)
@@ -551,8 +734,25 @@ def test_cli_tracks_curvature_sign_regions_on_a_mesh(tmp_path):
     path = tmp_path / "torus.ply"
     trimesh.creation.torus(1.0, 0.4).export(path)
     out = tmp_path / "out"
-    assert main(["regions", str(path), "-o", str(out), "--flow", "morph-sphere",
-                 "--resolution", "32", "--saves", "1", "--size", "32"]) == 0
+    assert (
+        main(
+            [
+                "regions",
+                str(path),
+                "-o",
+                str(out),
+                "--flow",
+                "morph-sphere",
+                "--resolution",
+                "32",
+                "--saves",
+                "1",
+                "--size",
+                "32",
+            ]
+        )
+        == 0
+    )
     # pieces cut along region boundaries add up to the surface's Euler characteristic:
     # the torus (0) became a sphere (2)
     euler = [trimesh.load(out / f"regions_{k}.ply", process=False).euler_number for k in (0, 1)]
@@ -571,8 +771,25 @@ def test_cli_tracks_the_regions_painted_on_a_mesh(tmp_path, capsys):
     path = tmp_path / "painted.ply"
     ball.export(path)
     out = tmp_path / "out"
-    assert main(["regions", str(path), "-o", str(out), "--flow", "mean-curvature",
-                 "--resolution", "32", "--saves", "1", "--size", "32"]) == 0
+    assert (
+        main(
+            [
+                "regions",
+                str(path),
+                "-o",
+                str(out),
+                "--flow",
+                "mean-curvature",
+                "--resolution",
+                "32",
+                "--saves",
+                "1",
+                "--size",
+                "32",
+            ]
+        )
+        == 0
+    )
     for k in (0, 1):
         frame = trimesh.load(out / f"regions_{k}.ply", process=False)
         colours = frame.visual.vertex_colors[:, :3]
@@ -580,18 +797,50 @@ def test_cli_tracks_the_regions_painted_on_a_mesh(tmp_path, capsys):
         # the cap (yellow) keeps its share of the area (1 - cos 60 deg) / 2 = 0.25
         yellow = np.all(colours[frame.faces[:, 0]] == (230, 200, 30), axis=1)
         assert frame.area_faces[yellow].sum() / frame.area == pytest.approx(0.25, rel=0.05)
-    ball.visual.vertex_colors = np.random.default_rng(0).integers(0, 255, (len(ball.vertices), 4),
-                                                                  dtype=np.uint8)
+    ball.visual.vertex_colors = np.random.default_rng(0).integers(
+        0, 255, (len(ball.vertices), 4), dtype=np.uint8
+    )
     ball.export(path)
-    assert main(["regions", str(path), "-o", str(out), "--resolution", "32", "--regions",
-                 "colours", "--overwrite"]) == 2
+    assert (
+        main(
+            [
+                "regions",
+                str(path),
+                "-o",
+                str(out),
+                "--resolution",
+                "32",
+                "--regions",
+                "colours",
+                "--overwrite",
+            ]
+        )
+        == 2
+    )
     assert "at most 8" in capsys.readouterr().err
     # by default such a mesh falls back to the curvature-sign regions, with a warning
-    assert main(["regions", str(path), "-o", str(out), "--flow", "mean-curvature",
-                 "--resolution", "24", "--saves", "1", "--size", "32", "--overwrite"]) == 0
+    assert (
+        main(
+            [
+                "regions",
+                str(path),
+                "-o",
+                str(out),
+                "--flow",
+                "mean-curvature",
+                "--resolution",
+                "24",
+                "--saves",
+                "1",
+                "--size",
+                "32",
+                "--overwrite",
+            ]
+        )
+        == 0
+    )
     assert "curvature-sign regions instead" in capsys.readouterr().err
     plain = tmp_path / "plain.ply"
     trimesh.creation.icosphere(2).export(plain)
-    assert main(["regions", str(plain), "-o", str(out), "--regions", "colours",
-                 "--overwrite"]) == 2
+    assert main(["regions", str(plain), "-o", str(out), "--regions", "colours", "--overwrite"]) == 2
     assert "no vertex colours" in capsys.readouterr().err

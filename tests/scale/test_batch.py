@@ -62,9 +62,12 @@ def serial_inpainted(photos):
     """clpde.inpaint on each photo, called directly (max_steps=300)."""
     paths, scratch = photos
     mask = read_image(scratch) > 0
-    return {p.name: clpde.inpaint(read_image(p), mask, max_steps=300,
-                                  channel_axis=-1 if read_image(p).ndim == 3 else None)
-            for p in paths}
+    return {
+        p.name: clpde.inpaint(
+            read_image(p), mask, max_steps=300, channel_axis=-1 if read_image(p).ndim == 3 else None
+        )
+        for p in paths
+    }
 
 
 def _serial_cli(argv):
@@ -118,8 +121,14 @@ def test_the_preload_fixes_malloc_under_dasks_environment():
     faults = {}
     for fix in ("", "from clpde.scale.cluster import _malloc_for_arrays\n_malloc_for_arrays()\n"):
         code = measure + fix + "print(_page_faults_of_temporaries())\n"
-        run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
-                             text=True, check=True, timeout=120)
+        run = subprocess.run(
+            [sys.executable, "-c", code],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=120,
+        )
         faults[bool(fix)] = int(run.stdout.split()[-1])
     assert faults[False] > 8000 and faults[True] < 2000, faults
 
@@ -149,8 +158,9 @@ def test_batch_equals_serial_calls(client, photos, serial_inpainted, tmp_path):
     for p in paths[:2]:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
-        assert np.array_equal(read_image(out / p.name),
-                              clpde.denoise_tv(image, weight=0.1, channel_axis=axis))
+        assert np.array_equal(
+            read_image(out / p.name), clpde.denoise_tv(image, weight=0.1, channel_axis=axis)
+        )
 
 
 def test_track_and_surface_batches_equal_serial_runs(client, tmp_path):
@@ -165,24 +175,61 @@ def test_track_and_surface_batches_equal_serial_runs(client, tmp_path):
         sequences.append(folder)
     init = tmp_path / "init.png"
     write_image(init, (((yy - 20) ** 2 + (xx - 15) ** 2 < 64) * 255).astype(np.uint8))
-    result = batch("track", sequences, tmp_path / "tracks", mask=init, client=client,
-                   gif=False, max_iterations=10)
+    result = batch(
+        "track",
+        sequences,
+        tmp_path / "tracks",
+        mask=init,
+        client=client,
+        gif=False,
+        max_iterations=10,
+    )
     assert result.ok, result.failed
-    _serial_cli(["track", str(sequences[1]), "--init", str(init), "-o", str(tmp_path / "one"),
-                 "--no-gif", "--max-iterations", "10"])
+    _serial_cli(
+        [
+            "track",
+            str(sequences[1]),
+            "--init",
+            str(init),
+            "-o",
+            str(tmp_path / "one"),
+            "--no-gif",
+            "--max-iterations",
+            "10",
+        ]
+    )
     for name in ("mask_0003.png", "contours.json"):
         assert (tmp_path / "tracks" / "seq1" / name).read_bytes() == (
             tmp_path / "one" / name
         ).read_bytes()
 
-    result = batch("surface", ["sphere"], tmp_path / "surfaces", flow="heat", client=client,
-                   resolution=16, size=32)
+    result = batch(
+        "surface",
+        ["sphere"],
+        tmp_path / "surfaces",
+        flow="heat",
+        client=client,
+        resolution=16,
+        size=32,
+    )
     assert result.ok, result.failed
-    _serial_cli(["surface", "heat", "sphere", "-o", str(tmp_path / "alone"), "--resolution", "16",
-                 "--size", "32"])
+    _serial_cli(
+        [
+            "surface",
+            "heat",
+            "sphere",
+            "-o",
+            str(tmp_path / "alone"),
+            "--resolution",
+            "16",
+            "--size",
+            "32",
+        ]
+    )
     for name in ("after.png", "result.ply"):
-        assert (tmp_path / "surfaces" / "sphere" / name).read_bytes() == \
-            (tmp_path / "alone" / name).read_bytes()
+        assert (tmp_path / "surfaces" / "sphere" / name).read_bytes() == (
+            tmp_path / "alone" / name
+        ).read_bytes()
     assert not list((tmp_path / "surfaces").glob(".*.part"))
 
 
@@ -215,8 +262,9 @@ def test_rerun_skips_complete_outputs_and_redoes_changed_ones(client, photos, tm
             channel_axis=-1 if read_image(copies[1]).ndim == 3 else None,
         ),
     )
-    assert [r.status for r in batch("diffuse", copies, out, client=client,
-                                    steps=21)] == ["done"] * 3
+    assert [r.status for r in batch("diffuse", copies, out, client=client, steps=21)] == [
+        "done"
+    ] * 3
 
 
 def test_failures_are_reported_by_name_and_do_not_stop_the_others(client, photos, tmp_path):
@@ -230,8 +278,9 @@ def test_failures_are_reported_by_name_and_do_not_stop_the_others(client, photos
     for p in (paths[0], small):
         (masks / p.name).write_bytes(scratch.read_bytes())  # 64x80: wrong for small.png
     out = tmp_path / "out"
-    result = batch("inpaint", [paths[0], bad, small, paths[2]], out, masks=masks, client=client,
-                   max_steps=50)
+    result = batch(
+        "inpaint", [paths[0], bad, small, paths[2]], out, masks=masks, client=client, max_steps=50
+    )
     status = {Path(r.input).name: r for r in result}
     assert status[paths[0].name].status == "done"
     assert status["broken.png"].status == "failed" and "broken.png" in status["broken.png"].error
@@ -246,8 +295,22 @@ def test_cli_exit_status_and_report(client, photos, tmp_path, capsys):
     bad.write_bytes(b"not a png")
     out = tmp_path / "out"
     address = client.scheduler.address
-    status = main(["batch", "diffuse", str(paths[0]), str(bad), "-o", str(out), "--scheduler",
-                   address, "--steps", "5", "--flow", "heat"])
+    status = main(
+        [
+            "batch",
+            "diffuse",
+            str(paths[0]),
+            str(bad),
+            "-o",
+            str(out),
+            "--scheduler",
+            address,
+            "--steps",
+            "5",
+            "--flow",
+            "heat",
+        ]
+    )
     err = capsys.readouterr().err
     assert status == 1 and "broken.png" in err and "1 done" in err and "1 failed" in err
     assert (out / paths[0].name).is_file()
@@ -321,8 +384,9 @@ def test_batch_tile_option_gives_the_untiled_result(client, photos, tmp_path):
     for p in paths[:2]:
         image = read_image(p)
         axis = -1 if image.ndim == 3 else None
-        assert np.array_equal(read_image(out / p.name),
-                              clpde.diffuse(image, steps=8, channel_axis=axis))
+        assert np.array_equal(
+            read_image(out / p.name), clpde.diffuse(image, steps=8, channel_axis=axis)
+        )
     with pytest.raises(clpde.InputError, match="--tile"):
         batch("inpaint", paths[:1], out, client=client, mask=paths[0], tile=True)
 
@@ -340,11 +404,31 @@ def test_ctrl_c_leaves_complete_outputs_only(client, tmp_path):
     write_image(mask, ((np.abs(yy - 48) < 3) * 255).astype(np.uint8))
     out = tmp_path / "out"
     slow = ["--max-steps", "4000", "--tol", "0", "--mean-tol", "0"]
-    command = [sys.executable, "-m", "clpde", "batch", "inpaint", *map(str, inputs), "-o", str(out),
-               "--mask", str(mask), "--workers", "1", "--threads", "1", *slow]
+    command = [
+        sys.executable,
+        "-m",
+        "clpde",
+        "batch",
+        "inpaint",
+        *map(str, inputs),
+        "-o",
+        str(out),
+        "--mask",
+        str(mask),
+        "--workers",
+        "1",
+        "--threads",
+        "1",
+        *slow,
+    ]
     # A terminal's Ctrl-C: SIGINT to the whole process group, client and workers alike.
-    proc = subprocess.Popen(command, start_new_session=True, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = subprocess.Popen(
+        command,
+        start_new_session=True,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     deadline = time.monotonic() + 90
     while not (out / MANIFEST).exists() and time.monotonic() < deadline:  # one recorded
         time.sleep(0.05)
@@ -360,7 +444,7 @@ def test_ctrl_c_leaves_complete_outputs_only(client, tmp_path):
         read_image(out / name)  # complete files
     # The rerun keeps what was recorded complete and does the rest (an output written but
     # not yet recorded when the batch stopped is redone).
-    rerun = batch("inpaint", inputs, out, mask=mask, client=client, max_steps=4000, tol=0,
-                  mean_tol=0)
+    rerun = batch(
+        "inpaint", inputs, out, mask=mask, client=client, max_steps=4000, tol=0, mean_tol=0
+    )
     assert rerun.ok and len(rerun.done) + len(rerun.skipped) == 8 and rerun.skipped
-

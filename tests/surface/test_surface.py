@@ -28,6 +28,7 @@ def band_host(band):
 
 # ---- kernels against references ------------------------------------------------------------
 
+
 def test_band_lists_match_reference(small_sphere):
     s = small_sphere
     psi_pad = s.psi_dev.get()[0].astype(np.float64)
@@ -52,8 +53,11 @@ def test_closest_points_match_reference(small_sphere):
 
 @pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
 def test_cp_stencils_match_reference(small_sphere, interpolation, order):
-    s = ImplicitSurface.sphere(1.0, 0.2,
-                               interpolation=interpolation) if order == 1 else small_sphere
+    s = (
+        ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation)
+        if order == 1
+        else small_sphere
+    )
     n = s.ext_band.n
     cp = np.stack([c.get()[:n] for c in s.cp]).astype(np.float64)
     base, frac = ref.cp_stencils(cp, s.grid.padded_shape, order)
@@ -62,24 +66,38 @@ def test_cp_stencils_match_reference(small_sphere, interpolation, order):
 
 
 @pytest.mark.parametrize("interpolation,order", [("tricubic", 3), ("trilinear", 1)])
-@pytest.mark.parametrize("nc,normalize,lines",
-                         [(1, False, False), (3, True, False), (3, True, True)])
+@pytest.mark.parametrize(
+    "nc,normalize,lines", [(1, False, False), (3, True, False), (3, True, True)]
+)
 def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc, normalize, lines):
-    s = ImplicitSurface.sphere(1.0, 0.2,
-                               interpolation=interpolation) if order == 1 else small_sphere
+    s = (
+        ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation)
+        if order == 1
+        else small_sphere
+    )
     g, q = s.grid, s.runtime.queue
-    for u in (padded_host(s, rng, nc),
-              np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape)):
+    for u in (
+        padded_host(s, rng, nc),
+        np.broadcast_to(np.linspace(-1, 2, g.padded_shape[2]), (nc,) + g.padded_shape),
+    ):
         src = cla.to_device(q, np.ascontiguousarray(u, np.float32))
         dst = cla.zeros_like(src)
-        kernel = g.kernel("surface/extend.cl", "extend_cp", INTERP=order, NC=nc,
-                          NORMALIZE=int(normalize), LINE_FIELD=int(lines))
-        g.launch_list(kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data,
-                      *g.strides())
+        kernel = g.kernel(
+            "surface/extend.cl",
+            "extend_cp",
+            INTERP=order,
+            NC=nc,
+            NORMALIZE=int(normalize),
+            LINE_FIELD=int(lines),
+        )
+        g.launch_list(
+            kernel, s.ext_band, src.data, dst.data, s.cp_base.data, s.cp_frac.data, *g.strides()
+        )
         band = band_host(s.ext_band)
         cp = np.stack([c.get()[: band.size] for c in s.cp]).astype(np.float64)
-        expect = ref.extend_cp(u.astype(np.float32).astype(np.float64), band, cp, order, normalize,
-                               line_field=lines)
+        expect = ref.extend_cp(
+            u.astype(np.float32).astype(np.float64), band, cp, order, normalize, line_field=lines
+        )
         got = dst.get().reshape(nc, -1)[:, band]
         np.testing.assert_allclose(got, expect, atol=5e-5 * np.abs(expect).max() + 1e-5)
 
@@ -87,13 +105,17 @@ def test_extend_cp_matches_reference(small_sphere, rng, interpolation, order, nc
 def test_tricubic_sample_is_exact_on_cubics(small_sphere):
     s = small_sphere
     x, y, z = s.coordinates()
+
     def cubic(x, y, z):
         return 0.3 * x**3 - x * y * z + 0.5 * z**2 * y + y - 0.2
+
     u = np.broadcast_to(cubic(x, y, z), s.shape)
     pts = sphere_points(300) * 1.01
     np.testing.assert_allclose(s.sample(u, pts), cubic(*pts.T), atol=2e-5)
+
     def linear(x, y, z):
         return 0.3 * x - 2 * y + z
+
     u = np.broadcast_to(linear(x, y, z), s.shape)
     np.testing.assert_allclose(s.sample(u, pts, "trilinear"), linear(*pts.T), atol=2e-5)
     # trilinear is not exact on the cubic: the test can tell the two apart
@@ -127,17 +149,34 @@ def test_heat_step_matches_reference(rng, weighted, sides):
         dst = cla.zeros_like(src)
         offsets = _offsets(g, sides)
         kernel = g.kernel("surface/heat.cl", "heat_step", WEIGHTED=int(weighted))
-        g.launch_runs(kernel, s.step_runs, src.data, dst.data, psi_dev.data, g.scalar(0.1),
-                      *offsets, *g.strides(), channels=u.shape[0])
+        g.launch_runs(
+            kernel,
+            s.step_runs,
+            src.data,
+            dst.data,
+            psi_dev.data,
+            g.scalar(0.1),
+            *offsets,
+            *g.strides(),
+            channels=u.shape[0],
+        )
         band = band_host(s.node_band)
-        expect = ref.heat_step(u32.astype(np.float64), psi.astype(np.float64), band, 0.1,
-                               [int(o) for o in offsets], weighted)
+        expect = ref.heat_step(
+            u32.astype(np.float64),
+            psi.astype(np.float64),
+            band,
+            0.1,
+            [int(o) for o in offsets],
+            weighted,
+        )
         out = dst.get().reshape(u.shape[0], -1)
         np.testing.assert_allclose(out[:, band], expect, atol=2e-5 * max(1, np.abs(expect).max()))
         # nothing is written outside the runs
         runs = s.step_runs
-        spans = [np.arange(a, b) for a,
-                 b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n], strict=False)]
+        spans = [
+            np.arange(a, b)
+            for a, b in zip(runs.start.get()[: runs.n], runs.end.get()[: runs.n], strict=False)
+        ]
         out[:, np.concatenate(spans)] = 0
         assert not out.any()
 
@@ -145,8 +184,9 @@ def test_heat_step_matches_reference(rng, weighted, sides):
 def test_node_and_reach_bands_match_reference(small_sphere):
     s = small_sphere
     g = s.grid
-    base, _ = ref.cp_stencils(np.stack([c.get()[: s.ext_band.n] for c in s.cp]).astype(np.float64),
-                              g.padded_shape, 3)
+    base, _ = ref.cp_stencils(
+        np.stack([c.get()[: s.ext_band.n] for c in s.cp]).astype(np.float64), g.padded_shape, 3
+    )
     nodes = ref.node_cells(base, g.padded_shape, 3)
     np.testing.assert_array_equal(band_host(s.node_band), nodes)
     np.testing.assert_array_equal(band_host(s.reach_band), ref.stencil_cells(nodes, g.padded_shape))
@@ -171,8 +211,16 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
         v = np.stack(np.broadcast_arrays(x + 0.3 * y, np.cos(2 * y), z + 0.5))
         u = v / np.sqrt((v**2).sum(axis=0))
         got = s.harmonic_map(u, 0.02)
-        kernel = g.kernel("surface/flows.cl", "flow_step", NC=3, FLOW_P=2, HARMONIC=1, FIDELITY=0,
-                          ALONG=0, WEIGHTED=0)
+        kernel = g.kernel(
+            "surface/flows.cl",
+            "flow_step",
+            NC=3,
+            FLOW_P=2,
+            HARMONIC=1,
+            FIDELITY=0,
+            ALONG=0,
+            WEIGHTED=0,
+        )
         nc, normalize = 3, True
     steps, dt = flows._check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
     whole = surface_band.BandFlow(s, u, normalize=normalize)
@@ -185,8 +233,14 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
         else:
             lam = cla.zeros(s.runtime.queue, 1, g.dtype)
             args += (s.psi_dev.data, s.psi_dev.data, r, g.scalar(dt), lam.data, g.scalar(1))
-        g.launch_runs(kernel, full_runs, *args, *surface_band._offsets(g, n % 8), *g.strides(),
-                      channels=1 if flow != "heat" else nc)
+        g.launch_runs(
+            kernel,
+            full_runs,
+            *args,
+            *surface_band._offsets(g, n % 8),
+            *g.strides(),
+            channels=1 if flow != "heat" else nc,
+        )
         whole._extend(whole.tmp, whole.cur, s.ext_band, s.cp_base, s.cp_frac)
     expect = g.download(whole.cur)
     expect = expect[0] if nc == 1 else expect
@@ -218,6 +272,7 @@ def test_band_runs_cover_the_band_in_row_stretches(small_sphere):
 
 # ---- the mathematics --------------------------------------------------------------------------
 
+
 def heat_error(h, f, exact, t=0.1, alternate=True):
     s = ImplicitSurface.sphere(1.0, h)
     v = s.heat(s.field(f), t=t, alternate=alternate)
@@ -228,6 +283,7 @@ def heat_error(h, f, exact, t=0.1, alternate=True):
 def test_heat_on_sphere_xy_converges_at_second_order():
     def exact(p, t):
         return np.exp(-6 * t) * p[:, 0] * p[:, 1]
+
     for alternate in (True, False):  # both one-sided variants of appendix E
         coarse = heat_error(0.1, lambda x, y, z: x * y, exact, alternate=alternate)
         fine = heat_error(0.05, lambda x, y, z: x * y, exact, alternate=alternate)
@@ -239,6 +295,7 @@ def test_heat_on_sphere_xy_converges_at_second_order():
 def test_heat_on_sphere_exp3z_converges_at_second_order():
     def exact(p, t):
         return exp3z_exact(p[:, 2], t)
+
     coarse = heat_error(0.1, lambda x, y, z: np.exp(3 * z), exact)
     fine = heat_error(0.05, lambda x, y, z: np.exp(3 * z), exact)
     order = np.log2(coarse / fine)
@@ -310,8 +367,9 @@ def test_bad_inputs_are_clear_errors():
     with pytest.raises(InputError, match="3D"):
         ImplicitSurface.from_volume(psi[0], 0.1)
     with pytest.raises(InputError, match="border"):
-        ImplicitSurface.from_volume(np.linalg.norm(np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j],
-                                                   axis=0) - 0.95, 0.1)
+        ImplicitSurface.from_volume(
+            np.linalg.norm(np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j], axis=0) - 0.95, 0.1
+        )
     s = ImplicitSurface.sphere(1.0, 0.2)
     with pytest.raises(InputError, match="shape"):
         s.heat(np.zeros((3, 3, 3)), t=0.1)

@@ -38,8 +38,11 @@ def test_band_values_and_from_band_convert_both_ways(sphere, rng):
     on = np.abs(s.psi) < s.outer * s.spacing
     assert np.array_equal(back[:, on], u[:, on]) and np.all(back[:, ~on] == 7.0)
     assert np.array_equal(s.band_values(u[0]), b[0])
-    assert np.allclose(s.band_field(lambda x, y, z: x * y),
-                       s.band_values(s.field(lambda x, y, z: x * y)), atol=1e-12)
+    assert np.allclose(
+        s.band_field(lambda x, y, z: x * y),
+        s.band_values(s.field(lambda x, y, z: x * y)),
+        atol=1e-12,
+    )
 
 
 @pytest.mark.parametrize("storage", ["lists", "bricks"])
@@ -54,8 +57,9 @@ def test_flows_in_band_form_give_the_dense_results_at_the_band_bitwise(sphere, r
         assert np.array_equal(s.heat(s.band_values(v), 0.01), s.band_values(s.heat(v, 0.01)))
     finally:
         s.storage = "lists"
-    assert np.array_equal(s.denoise_tv(b, sigma=0.3, t=0.02),
-                          s.band_values(s.denoise_tv(u, sigma=0.3, t=0.02)))
+    assert np.array_equal(
+        s.denoise_tv(b, sigma=0.3, t=0.02), s.band_values(s.denoise_tv(u, sigma=0.3, t=0.02))
+    )
     assert np.array_equal(s.extend(b), s.band_values(s.extend(u)))
     pts = rng.normal(size=(20, 3))
     pts /= np.linalg.norm(pts, axis=1, keepdims=True)
@@ -80,5 +84,6 @@ def test_harmonic_maps_take_the_band_form(sphere):
     v = s.field(lambda x, y, z: [x + 0 * y, y + 0 * z, z + 0 * x])
     v /= np.sqrt((v**2).sum(0)) + 1e-12
     v[:, np.abs(s.psi) > 0.5] = 1 / np.sqrt(3)
-    assert np.array_equal(s.harmonic_map(s.band_values(v), 0.005),
-                          s.band_values(s.harmonic_map(v, 0.005)))
+    assert np.array_equal(
+        s.harmonic_map(s.band_values(v), 0.005), s.band_values(s.harmonic_map(v, 0.005))
+    )

@@ -30,8 +30,10 @@ def gpu_like(runtime):
 @pytest.fixture(scope="module")
 def spheres(runtime, gpu_like):
     """A sphere on bricks per launch geometry."""
-    return {geometry: ImplicitSurface.sphere(1.0, 0.2, device=device, storage="bricks")
-            for geometry, device in (("cpu", runtime), ("gpu", gpu_like))}
+    return {
+        geometry: ImplicitSurface.sphere(1.0, 0.2, device=device, storage="bricks")
+        for geometry, device in (("cpu", runtime), ("gpu", gpu_like))
+    }
 
 
 def band_host(band):
@@ -72,19 +74,38 @@ def test_brick_flow_step_matches_reference(spheres, rng, geometry, case):
     q = s.runtime.queue
     r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
     sides = 6
-    bb.launch(flow.step_kernel("flow"), bb.scatter(u, np.float32).data, dst.data,
-              bb.scatter_tiles(psi, np.float32, 2).data,
-              bb.scatter_tiles(direction, np.float32, 2).data, bb.scatter(u0, np.float32).data,
-              g.scalar(r), g.scalar(dt), cla.to_device(q, np.float32([lam])).data, g.scalar(e2),
-              *surface_band._signs(sides), bb.node_rows.data)
+    bb.launch(
+        flow.step_kernel("flow"),
+        bb.scatter(u, np.float32).data,
+        dst.data,
+        bb.scatter_tiles(psi, np.float32, 2).data,
+        bb.scatter_tiles(direction, np.float32, 2).data,
+        bb.scatter(u0, np.float32).data,
+        g.scalar(r),
+        g.scalar(dt),
+        cla.to_device(q, np.float32([lam])).data,
+        g.scalar(e2),
+        *surface_band._signs(sides),
+        bb.node_rows.data,
+    )
     node = band_host(s.node_band)
     f32 = np.float32
     expect = ref.flow_step(
-        u, psi.astype(f32).astype(np.float64), node, r, dt, lam, e2,
-        [int(o) for o in surface_band._offsets(g, sides)], flow_p=opts["FLOW_P"],
-        harmonic=bool(opts["HARMONIC"]), u0_pad=u0 if opts["FIDELITY"] else None,
+        u,
+        psi.astype(f32).astype(np.float64),
+        node,
+        r,
+        dt,
+        lam,
+        e2,
+        [int(o) for o in surface_band._offsets(g, sides)],
+        flow_p=opts["FLOW_P"],
+        harmonic=bool(opts["HARMONIC"]),
+        u0_pad=u0 if opts["FIDELITY"] else None,
         direction=direction.astype(f32).astype(np.float64) if opts["ALONG"] else None,
-        weighted=bool(weighted), line_field=bool(opts.get("LINE_FIELD", 0)))
+        weighted=bool(weighted),
+        line_field=bool(opts.get("LINE_FIELD", 0)),
+    )
     got = stepped_at(dst, nc, node, s, bb)
     np.testing.assert_allclose(got, expect, atol=3e-5 * max(1, np.abs(expect).max()))
 
@@ -102,14 +123,32 @@ def test_brick_turk_step_matches_reference(spheres, rng, geometry):
     for along in (False, True):
         flow = brick_flow(s, 2, ALONG=int(along))
         dst = bb.scatter(np.zeros_like(u), np.float32, APRON)
-        bb.launch(flow.step_kernel("turk"), bb.scatter(u, np.float32).data, dst.data,
-                  bb.scatter_tiles(psi, np.float32, 2).data,
-                  bb.scatter_tiles(d, np.float32, 2).data,
-                  bb.scatter(beta[None], np.float32).data, g.scalar(1.0), g.scalar(0.125),
-                  g.scalar(1 / 32), g.scalar(0.0125), *surface_band._signs(2), bb.node_rows.data)
-        expect = ref.turk_step(u, psi[0].astype(np.float32).astype(np.float64), node, beta, 1.0,
-                               0.125, 1 / 32, 0.0125, [int(o) for o in surface_band._offsets(g, 2)],
-                               d if along else None)
+        bb.launch(
+            flow.step_kernel("turk"),
+            bb.scatter(u, np.float32).data,
+            dst.data,
+            bb.scatter_tiles(psi, np.float32, 2).data,
+            bb.scatter_tiles(d, np.float32, 2).data,
+            bb.scatter(beta[None], np.float32).data,
+            g.scalar(1.0),
+            g.scalar(0.125),
+            g.scalar(1 / 32),
+            g.scalar(0.0125),
+            *surface_band._signs(2),
+            bb.node_rows.data,
+        )
+        expect = ref.turk_step(
+            u,
+            psi[0].astype(np.float32).astype(np.float64),
+            node,
+            beta,
+            1.0,
+            0.125,
+            1 / 32,
+            0.0125,
+            [int(o) for o in surface_band._offsets(g, 2)],
+            d if along else None,
+        )
         np.testing.assert_allclose(stepped_at(dst, 2, node, s, bb), expect, atol=3e-5)
 
 
@@ -126,8 +165,16 @@ def test_brick_lambda_terms_match_reference(spheres, rng, geometry):
     flow.lambda_terms(bb.scatter(u0, np.float32), terms, 3, eps=0.5)
     node = band_host(s.node_band)
     psi = g.pad(s.psi[None], mode="linear").astype(np.float32)
-    expect = ref.tv_lambda_terms(u, u0, psi, node, 1 / s.spacing, 1.5, (s.spacing * 0.5) ** 2,
-                                 [int(o) for o in surface_band._offsets(g, 3)])
+    expect = ref.tv_lambda_terms(
+        u,
+        u0,
+        psi,
+        node,
+        1 / s.spacing,
+        1.5,
+        (s.spacing * 0.5) ** 2,
+        [int(o) for o in surface_band._offsets(g, 3)],
+    )
     coords = [tuple(c) for c in bb.coords]
     index = bref.brick_index(node, g.padded_shape, coords, bb.brick)
     for got, want in zip(terms, expect, strict=True):

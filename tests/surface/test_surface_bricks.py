@@ -61,8 +61,9 @@ def test_layout_and_tables_match_reference(runtime, brick):
         bits.reshape(-1)[cells] += bit
     expect_bits = bref.to_bricks(bits[None], coords, brick)[0].reshape(len(coords) + 2, -1)
     np.testing.assert_array_equal(bb.mask_host, expect_bits)
-    np.testing.assert_array_equal(bb.brick_bits.get(),
-                                  np.bitwise_or.reduce(expect_bits.astype(np.uint8), axis=1))
+    np.testing.assert_array_equal(
+        bb.brick_bits.get(), np.bitwise_or.reduce(expect_bits.astype(np.uint8), axis=1)
+    )
 
 
 @pytest.mark.parametrize("brick", BRICK_SIZES)
@@ -74,8 +75,16 @@ def test_tiles_on_the_device_are_the_hosts(runtime, rng, brick):
 
     shape = (21, 19, 27)  # (PZ, PY, PX)
     places = [-(-n // b) for n, b in zip(shape[::-1], brick, strict=True)]
-    coords = np.array([(x, y, z) for x in (0, places[0] - 1) for y in (0, places[1] - 1)
-                       for z in (0, places[2] - 1)] + [(1, 1, 1)], np.int32)
+    coords = np.array(
+        [
+            (x, y, z)
+            for x in (0, places[0] - 1)
+            for y in (0, places[1] - 1)
+            for z in (0, places[2] - 1)
+        ]
+        + [(1, 1, 1)],
+        np.int32,
+    )
     bb = BrickBand.from_coords(runtime, shape, coords, brick)
     u = rng.standard_normal((2,) + shape).astype(np.float32)
     for halo in (1, 2):
@@ -99,8 +108,12 @@ def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometr
     dev = cla.zeros_like(bb.scatter(u, np.float32, APRON))
     flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
     flow.surf, flow.bricks, flow.defines = s, bb, {}
-    bb.launch(flow.kernel("surface/bricks.cl", "brick_to_apron"), bb.scatter(u, np.float32).data,
-              dev.data, channels=2)
+    bb.launch(
+        flow.kernel("surface/bricks.cl", "brick_to_apron"),
+        bb.scatter(u, np.float32).data,
+        dev.data,
+        channels=2,
+    )
     bx, by, bz = brick
     shape = (2, bb.nbricks + 2, bz + APRON, by + APRON, bx + APRON)
     host, dev = host.reshape(shape), dev.get().reshape(shape)
@@ -110,9 +123,13 @@ def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometr
         for hz in (0, 1):
             for hy in (0, 1):
                 for hx in (0, 1):
-                    part = (slice(None), i, slice(hz * bz, None) if hz else slice(0, bz),
-                            slice(hy * by, None) if hy else slice(0, by),
-                            slice(hx * bx, None) if hx else slice(0, bx))
+                    part = (
+                        slice(None),
+                        i,
+                        slice(hz * bz, None) if hz else slice(0, bz),
+                        slice(hy * by, None) if hy else slice(0, by),
+                        slice(hx * bx, None) if hx else slice(0, bx),
+                    )
                     stored = nbr[i, (hz + 1) * 9 + (hy + 1) * 3 + hx + 1] > 0
                     np.testing.assert_array_equal(dev[part], host[part] if stored else 0)
 
@@ -152,12 +169,21 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     flow.defines = {}
     flow.surf, flow.bricks = s, bb
     kernel = flow.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
-    bb.launch(kernel, src.data, dst.data, psi_dev.data, g.scalar(0.1), *surface_band._signs(sides),
-              bb.node_rows.data, channels=2)
+    bb.launch(
+        kernel,
+        src.data,
+        dst.data,
+        psi_dev.data,
+        g.scalar(0.1),
+        *surface_band._signs(sides),
+        bb.node_rows.data,
+        channels=2,
+    )
     node = band_host(s.node_band)
     offsets = [int(o) for o in surface_band._offsets(g, sides)]
-    expect = ref.heat_step(u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets,
-                           weighted)
+    expect = ref.heat_step(
+        u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets, weighted
+    )
     got = dst.get().reshape(2, -1)[:, bref.brick_index(node, g.padded_shape, coords, brick, APRON)]
     np.testing.assert_allclose(got, expect, atol=2e-5 * max(1, np.abs(expect).max()))
     # the apron repeats the next bricks' first cells wherever both bricks were stepped
@@ -170,10 +196,16 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
         for hx, hy, hz in ((1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)):
             j = index.get((x + hx, y + hy, z + hz))
             if j and stepped[i] and stepped[j]:
-                mine = out[:, i, hz * bz: hz * bz + APRON if hz else bz,
-                           hy * by: hy * by + APRON if hy else by,
-                           hx * bx: hx * bx + APRON if hx else bx]
-                theirs = out[:, j, :APRON if hz else bz, :APRON if hy else by, :APRON if hx else bx]
+                mine = out[
+                    :,
+                    i,
+                    hz * bz : hz * bz + APRON if hz else bz,
+                    hy * by : hy * by + APRON if hy else by,
+                    hx * bx : hx * bx + APRON if hx else bx,
+                ]
+                theirs = out[
+                    :, j, : APRON if hz else bz, : APRON if hy else by, : APRON if hx else bx
+                ]
                 np.testing.assert_array_equal(mine, theirs)
                 checked += 1
     assert checked > 0
@@ -181,10 +213,12 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
 
 @pytest.mark.parametrize("geometry", ["cpu", "gpu"])
 @pytest.mark.parametrize("brick", BRICK_SIZES)
-@pytest.mark.parametrize("interpolation,order,nc,normalize",
-                         [("tricubic", 3, 3, True), ("trilinear", 1, 2, False)])
-def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, interpolation,
-                                     order, nc, normalize):
+@pytest.mark.parametrize(
+    "interpolation,order,nc,normalize", [("tricubic", 3, 3, True), ("trilinear", 1, 2, False)]
+)
+def test_extend_cp_matches_reference(
+    runtime, gpu_like, rng, geometry, brick, interpolation, order, nc, normalize
+):
     device = runtime if geometry == "cpu" else gpu_like
     s = ImplicitSurface.sphere(1.0, 0.2, interpolation=interpolation, device=device)
     s.band.brick = brick
@@ -198,9 +232,9 @@ def test_extend_cp_matches_reference(runtime, gpu_like, rng, geometry, brick, in
     flow.defines = {}
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)
-    flow._extend_kernel = flow.kernel("surface/bricks.cl", "brick_extend_cp", INTERP=s.interp,
-                                      NC=nc,
-                                      NORMALIZE=int(normalize))
+    flow._extend_kernel = flow.kernel(
+        "surface/bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc, NORMALIZE=int(normalize)
+    )
     for which, band in ((EXT, s.ext_band), (REACH, s.reach_band)):
         flow._extend(src, dst, which)
         cells = band_host(band)
@@ -253,10 +287,15 @@ def test_brick_cells_index_every_cell_and_mark_those_outside(rng, brick, apron, 
     shape = (21, 19, 27)  # (PZ, PY, PX): no side a multiple of a brick's
     bx, by, bz = brick
     places = [-(-n // b) for n, b in zip(shape[::-1], brick, strict=True)]
-    corners = [(x, y, z) for x in (0, places[0] - 1) for y in (0, places[1] - 1)
-               for z in (0, places[2] - 1)]
-    coords = np.array(corners + [tuple(rng.integers(0, p) for p in places) for _ in range(20)],
-                      np.int32)
+    corners = [
+        (x, y, z)
+        for x in (0, places[0] - 1)
+        for y in (0, places[1] - 1)
+        for z in (0, places[2] - 1)
+    ]
+    coords = np.array(
+        corners + [tuple(rng.integers(0, p) for p in places) for _ in range(20)], np.int32
+    )
     got = _brick_cells(coords, brick, shape, apron, halo)
     a = apron + 2 * halo
     for k, (cx, cy, cz) in enumerate(coords):

@@ -32,9 +32,16 @@ def test_extend_pde_step_matches_reference(sphere, rng):
     for u in (rng.standard_normal((2,) + g.padded_shape), structured):
         u32 = np.ascontiguousarray(u, np.float32)
         src, dst = cla.to_device(q, u32), cla.zeros(q, u.shape, np.float32)
-        g.launch_list(g.kernel("surface/extend.cl", "extend_pde_step", NC=u.shape[0]), s.ext_band,
-                      src.data, dst.data,
-                      s.psi_dev.data, g.scalar(0.5), g.scalar(s.spacing), *g.strides())
+        g.launch_list(
+            g.kernel("surface/extend.cl", "extend_pde_step", NC=u.shape[0]),
+            s.ext_band,
+            src.data,
+            dst.data,
+            s.psi_dev.data,
+            g.scalar(0.5),
+            g.scalar(s.spacing),
+            *g.strides(),
+        )
         band = band_host(s.ext_band)
         expect = ref.extend_pde_step(u32.astype(np.float64), s.psi_dev.get(), band, 0.5, s.spacing)
         got = dst.get().reshape(u.shape[0], -1)[:, band]
@@ -48,9 +55,16 @@ def test_reinit_step_matches_reference(sphere, rng):
     phi = (phi0 + 0.01 * rng.standard_normal(phi0.shape)).astype(np.float32)
     everywhere = g.band(s.psi_dev, np.inf)
     out = cla.to_device(q, phi)
-    g.launch_list(g.kernel("surface/reinit.cl", "reinit_step"), everywhere,
-                  cla.to_device(q, phi).data, out.data,
-                  cla.to_device(q, phi0).data, g.scalar(0.3), g.scalar(1 / s.spacing), *g.strides())
+    g.launch_list(
+        g.kernel("surface/reinit.cl", "reinit_step"),
+        everywhere,
+        cla.to_device(q, phi).data,
+        out.data,
+        cla.to_device(q, phi0).data,
+        g.scalar(0.3),
+        g.scalar(1 / s.spacing),
+        *g.strides(),
+    )
     band = band_host(everywhere)
     assert band.size == np.prod(s.shape)
     expect = ref.reinit_step(phi, phi0, band, 0.3, s.spacing)
@@ -64,7 +78,7 @@ def test_pde_extension_makes_data_constant_along_normals(h):
     r = radius(s)
     raw = np.broadcast_to(x * y + z, s.shape)  # varies along the normals
     with np.errstate(invalid="ignore", divide="ignore"):
-        exact = (x * y / r**2 + z / r)
+        exact = x * y / r**2 + z / r
     near = np.abs(r - 1) < 3.4 * h
     pde = s.extend(raw, method="pde")
     cp = s.extend(raw)

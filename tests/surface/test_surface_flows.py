@@ -37,8 +37,14 @@ CASES = {
     "harmonic1": {"nc": 3, "FLOW_P": 1, "HARMONIC": 1, "FIDELITY": 0, "ALONG": 0},
     "along": {"nc": 1, "FLOW_P": 2, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 1},
     "tv-weighted": {"nc": 1, "FLOW_P": 1, "HARMONIC": 0, "FIDELITY": 0, "ALONG": 0, "WEIGHTED": 1},
-    "harmonic1-lines": {"nc": 3, "FLOW_P": 1, "HARMONIC": 1, "FIDELITY": 0, "ALONG": 0,
-                        "LINE_FIELD": 1},
+    "harmonic1-lines": {
+        "nc": 3,
+        "FLOW_P": 1,
+        "HARMONIC": 1,
+        "FIDELITY": 0,
+        "ALONG": 0,
+        "LINE_FIELD": 1,
+    },
 }
 
 
@@ -50,13 +56,16 @@ def test_flow_step_matches_reference(sphere02, rng, case):
     nc = opts.pop("nc")
     weighted = opts.get("WEIGHTED", 0)
     x, y, _z = s.coordinates()
-    structured = np.stack([np.broadcast_to(np.sign(x - 0.1) + 0.3 * y * c,
-                                           s.shape) for c in range(nc)])
+    structured = np.stack(
+        [np.broadcast_to(np.sign(x - 0.1) + 0.3 * y * c, s.shape) for c in range(nc)]
+    )
     psi = s.psi_dev.get() * (1.3 if weighted else 1.0)
     direction = rng.standard_normal((3,) + g.padded_shape)
     direction /= np.sqrt((direction**2).sum(axis=0))
+
     def dev(a):
         return cla.to_device(q, np.ascontiguousarray(a, np.float32))
+
     for u in (rng.standard_normal((nc,) + g.padded_shape), g.pad(structured)):
         u32 = np.ascontiguousarray(u, np.float32)
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
@@ -64,16 +73,37 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         offsets = _offsets(g, 6)
         kernel = g.kernel("surface/flows.cl", "flow_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
-        g.launch_runs(kernel, s.step_runs, src.data, dst.data, dev(psi).data, dev(direction).data,
-                      dev(u0).data, g.scalar(r), g.scalar(dt), dev([lam]).data, g.scalar(e2),
-                      *offsets, *g.strides())
+        g.launch_runs(
+            kernel,
+            s.step_runs,
+            src.data,
+            dst.data,
+            dev(psi).data,
+            dev(direction).data,
+            dev(u0).data,
+            g.scalar(r),
+            g.scalar(dt),
+            dev([lam]).data,
+            g.scalar(e2),
+            *offsets,
+            *g.strides(),
+        )
         band = band_host(s.node_band)
         expect = ref.flow_step(
-            u32.astype(np.float64), psi.astype(np.float64), band, r, dt, lam, e2,
-            [int(o) for o in offsets], flow_p=opts["FLOW_P"], harmonic=bool(opts["HARMONIC"]),
+            u32.astype(np.float64),
+            psi.astype(np.float64),
+            band,
+            r,
+            dt,
+            lam,
+            e2,
+            [int(o) for o in offsets],
+            flow_p=opts["FLOW_P"],
+            harmonic=bool(opts["HARMONIC"]),
             u0_pad=u0.astype(np.float64) if opts["FIDELITY"] else None,
             direction=direction.astype(np.float32).astype(np.float64) if opts["ALONG"] else None,
-            weighted=bool(weighted), line_field=bool(opts.get("LINE_FIELD", 0)),
+            weighted=bool(weighted),
+            line_field=bool(opts.get("LINE_FIELD", 0)),
         )
         got = dst.get().reshape(nc, -1)[:, band]
         np.testing.assert_allclose(got, expect, atol=3e-5 * max(1, np.abs(expect).max()))
@@ -86,20 +116,31 @@ def test_lambda_terms_match_reference(sphere02, rng):
     u0 = (u + 0.2 * rng.standard_normal(u.shape)).astype(np.float32)
     terms = [cla.empty(q, s.step_band.n, np.float32) for _ in range(3)]
     offsets = _offsets(g, 3)
-    g.launch_list(g.kernel("surface/flows.cl", "tv_lambda_terms"), s.step_band,
-                  cla.to_device(q, u).data, cla.to_device(q, u0).data, s.psi_dev.data,
-                  g.scalar(1 / s.spacing), g.scalar(1.5), g.scalar(0.01), *offsets, *g.strides(),
-                  *(t.data for t in terms))
+    g.launch_list(
+        g.kernel("surface/flows.cl", "tv_lambda_terms"),
+        s.step_band,
+        cla.to_device(q, u).data,
+        cla.to_device(q, u0).data,
+        s.psi_dev.data,
+        g.scalar(1 / s.spacing),
+        g.scalar(1.5),
+        g.scalar(0.01),
+        *offsets,
+        *g.strides(),
+        *(t.data for t in terms),
+    )
     band = band_host(s.step_band)
-    expect = ref.tv_lambda_terms(u, u0, s.psi_dev.get(), band, 1 / s.spacing, 1.5, 0.01,
-                                 [int(o) for o in offsets])
+    expect = ref.tv_lambda_terms(
+        u, u0, s.psi_dev.get(), band, 1 / s.spacing, 1.5, 0.01, [int(o) for o in offsets]
+    )
     for got, want in zip(terms, expect, strict=False):
         np.testing.assert_allclose(got.get(), want, atol=2e-4 * max(1, np.abs(want).max()))
     # chunk_sum's partial sums (TV's dynamic lambda adds them on the device)
     n, chunk = s.step_band.n, 64
     partial = cla.empty(q, -(-n // chunk), np.float32)
-    g.kernel("surface/flows.cl", "chunk_sum")(q, *s.runtime.items(partial.size), terms[1].data,
-                                              np.int32(n), np.int32(chunk), partial.data)
+    g.kernel("surface/flows.cl", "chunk_sum")(
+        q, *s.runtime.items(partial.size), terms[1].data, np.int32(n), np.int32(chunk), partial.data
+    )
     assert partial.get().sum() == pytest.approx(want_sum := expect[1].sum(), rel=1e-4)
     # the smeared delta integrates to the sphere's area: sum(delta) h^2 = 4 pi
     assert want_sum * s.spacing**2 == pytest.approx(4 * np.pi, rel=0.03)
@@ -121,17 +162,40 @@ def test_lambda_update_on_the_device(runtime, rng):
     q = runtime.queue
     kernel = runtime.kernel("surface/flows.cl", "tv_lambda_update", np.float64)
     num, area = rng.normal(size=37), rng.uniform(0.5, 1.0, 37)
-    cases = [(-2.0, 1e9, 0.1, 1.0), (2.0, 1e9, 0.1, 1.0), (-2.0, 1.0, 0.1, 1.0),  # f stays 1
-             (-2.0, 1e9, 1.2, 1.0), (-2.0, 1e9, 0.7, 2.0), (-2.0, 1e9, 4.0, 9.5)]  # f moves
+    cases = [
+        (-2.0, 1e9, 0.1, 1.0),
+        (2.0, 1e9, 0.1, 1.0),
+        (-2.0, 1.0, 0.1, 1.0),  # f stays 1
+        (-2.0, 1e9, 1.2, 1.0),
+        (-2.0, 1e9, 0.7, 2.0),
+        (-2.0, 1e9, 4.0, 9.5),
+    ]  # f moves
     for shift, lam_max, resid_level, f0 in cases:
         n = num + shift
         resid = resid_level * area  # mean residual resid_level (sigma^2 = 1 / inv_sigma2 = 1)
-        lam, hist, capped = (cla.zeros(q, 1, np.float64), cla.zeros(q, 4, np.float64),
-                             cla.zeros(q, 1, np.int32))
+        lam, hist, capped = (
+            cla.zeros(q, 1, np.float64),
+            cla.zeros(q, 4, np.float64),
+            cla.zeros(q, 1, np.int32),
+        )
         state = cla.to_device(q, np.array([f0]))
-        kernel(q, (1,), None, cla.to_device(q, n).data, cla.to_device(q, area).data,
-               cla.to_device(q, resid).data, np.int32(37), np.float64(0.7), np.float64(1.0),
-               np.float64(lam_max), lam.data, state.data, hist.data, np.int32(2), capped.data)
+        kernel(
+            q,
+            (1,),
+            None,
+            cla.to_device(q, n).data,
+            cla.to_device(q, area).data,
+            cla.to_device(q, resid).data,
+            np.int32(37),
+            np.float64(0.7),
+            np.float64(1.0),
+            np.float64(lam_max),
+            lam.data,
+            state.data,
+            hist.data,
+            np.int32(2),
+            capped.data,
+        )
         want, want_f, want_capped = _lambda_update_reference(n, area, resid, 0.7, 1.0, lam_max, f0)
         assert lam.get()[0] == pytest.approx(want, rel=1e-12, abs=1e-15)
         assert state.get()[0] == pytest.approx(want_f, rel=1e-12)
@@ -183,8 +247,9 @@ def test_dynamic_lambda_is_corrected_for_grid_scale_noise():
     noisy = clean + cell_noise(s, sigma, np.random.default_rng(1))
     ratios = {}
     for correct in (False, True):
-        _, info = flows.denoise_tv(s, noisy, sigma=sigma, t=0.3, correct_lambda=correct,
-                                   return_info=True)
+        _, info = flows.denoise_tv(
+            s, noisy, sigma=sigma, t=0.3, correct_lambda=correct, return_info=True
+        )
         ratios[correct] = info.residual_variance / sigma**2
     assert ratios[False] > 1.2, ratios  # measured 1.34
     assert 0.95 < ratios[True] < 1.05, ratios
@@ -241,8 +306,9 @@ def test_harmonic_map_normalises_with_a_warning(sphere02):
 def test_colour_denoising_restores_colours_and_keeps_the_input(sphere05):
     """Figure 4.6: chroma by the p = 1 harmonic map, brightness by a scalar flow."""
     s = sphere05
-    clean = s.field(lambda x, y, z: [0.5 + 0.3 * np.tanh(6 * x), 0.5 + 0.3 * np.cos(2 * y),
-                                     0.4 + 0 * z])
+    clean = s.field(
+        lambda x, y, z: [0.5 + 0.3 * np.tanh(6 * x), 0.5 + 0.3 * np.cos(2 * y), 0.4 + 0 * z]
+    )
     noise = np.stack([surface_noise(s, 0.1, seed=10 + c) for c in range(3)])
     noisy = np.clip(clean + noise, 0, None).astype(np.float32)
     kept = noisy.copy()
@@ -304,8 +370,9 @@ def test_tv_stability_limit_is_enforced(sphere02):
     # at the limit, the dynamic lambda has no room to grow: capped at 0, with a warning
     noisy = s.field(lambda x, y, z: np.sin(40 * x))
     with pytest.warns(UserWarning, match="capped"):
-        _, info = flows.denoise_tv(s, noisy, sigma=0.01, t=20 * limit, dt=limit, eps=0.5,
-                                   return_info=True)
+        _, info = flows.denoise_tv(
+            s, noisy, sigma=0.01, t=20 * limit, dt=limit, eps=0.5, return_info=True
+        )
     assert max(info.lam_history) < 1e-6
 
 

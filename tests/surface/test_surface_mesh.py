@@ -23,7 +23,7 @@ def exact_mesh_distance(mesh, points):
     tri = np.asarray(mesh.triangles)
     best = np.full(len(points), np.inf)
     for p_idx in range(len(points)):
-        cp = closest_point(tri, np.repeat(points[p_idx:p_idx + 1], len(tri), 0))
+        cp = closest_point(tri, np.repeat(points[p_idx : p_idx + 1], len(tri), 0))
         best[p_idx] = np.linalg.norm(cp - points[p_idx], axis=1).min()
     return best
 
@@ -108,8 +108,7 @@ def test_to_mesh_export_and_render(tmp_path):
         export_mesh(mesh, tmp_path / f"s.{ext}")
         back = trimesh.load(tmp_path / f"s.{ext}", force="mesh")
         assert len(back.faces) == len(mesh.faces)
-    image = render(s, u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64,
-                   colour_bar=False)
+    image = render(s, u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64, colour_bar=False)
     assert image.shape == (64, 128, 3) and (tmp_path / "s.png").stat().st_size > 0
     # a sphere seen from the side fills a disk: about pi/4 * 0.92^2 of the square
     filled = (image[:, :64] != 255).any(axis=2).mean()
@@ -128,6 +127,7 @@ def test_colormap_ends():
 
 # ---- holes wider than a cell: the winding number ------------------------------------------
 
+
 def winding_reference(mesh, points):
     """Exact generalized winding number in float64: Van Oosterom-Strackee per triangle."""
     tri = np.asarray(mesh.triangles, dtype=np.float64)
@@ -136,8 +136,12 @@ def winding_reference(mesh, points):
         a, b, c = (tri[:, i] - p for i in range(3))
         la, lb, lc = (np.linalg.norm(v, axis=1) for v in (a, b, c))
         det = np.einsum("ij,ij->i", a, np.cross(b, c))
-        den = (la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", b, c) * la
-               + np.einsum("ij,ij->i", c, a) * lb)
+        den = (
+            la * lb * lc
+            + np.einsum("ij,ij->i", a, b) * lc
+            + np.einsum("ij,ij->i", b, c) * la
+            + np.einsum("ij,ij->i", c, a) * lb
+        )
         out[k] = np.arctan2(det, den).sum() / (2 * np.pi)
     return out
 
@@ -147,12 +151,13 @@ def test_winding_kernel_matches_the_exact_sum_and_its_far_field_approximation(rn
 
     small = trimesh.creation.icosphere(2, radius=1.0)
     pts = rng.uniform(-1.6, 1.6, (300, 3))
-    np.testing.assert_allclose(winding_number(small, pts, exact=True),
-                               winding_reference(small, pts),
-                               atol=1e-5)
+    np.testing.assert_allclose(
+        winding_number(small, pts, exact=True), winding_reference(small, pts), atol=1e-5
+    )
     mesh = trimesh.creation.icosphere(4, radius=1.0)
-    pts = np.concatenate([rng.uniform(-1.6, 1.6, (1500, 3)),
-                          mesh.vertices[:500] * rng.uniform(0.9, 1.1, (500, 1))])
+    pts = np.concatenate(
+        [rng.uniform(-1.6, 1.6, (1500, 3)), mesh.vertices[:500] * rng.uniform(0.9, 1.1, (500, 1))]
+    )
     exact = winding_number(mesh, pts, exact=True)
     np.testing.assert_allclose(exact[:300], winding_reference(mesh, pts[:300]), atol=1e-5)
     fast = winding_number(mesh, pts)  # two-level far field, beta = 2 (its documented bound)
@@ -199,6 +204,7 @@ def _check_sphere_sign(surf, removed=None, cells_away=2.0):
     assert np.all((psi[off_surface] < 0) == (r[off_surface] < 1))
     cap = np.abs(surf.psi).max()  # cells past the band hold the band's cap
     assert np.abs(psi - np.clip(r - 1, -cap, cap))[~near].max() < 0.01
+
 
 def test_hole_wider_than_cells_is_closed_by_the_winding_number():
     mesh = trimesh.creation.icosphere(4, radius=1.0)

@@ -13,16 +13,44 @@ from clpde.cli import main
 def test_curvature_warns_on_a_mesh_too_coarse_for_its_averaging(tmp_path, capsys):
     path = tmp_path / "box.ply"
     trimesh.creation.box().export(path)  # 12 faces: every edge as long as the box
-    assert main(["surface", "curvature", str(path), "-o", str(tmp_path / "box"),
-                 "--resolution", "16", "--size", "32"]) == 0
+    assert (
+        main(
+            [
+                "surface",
+                "curvature",
+                str(path),
+                "-o",
+                str(tmp_path / "box"),
+                "--resolution",
+                "16",
+                "--size",
+                "32",
+            ]
+        )
+        == 0
+    )
     assert "warning: the mesh is too coarse for curvature: 12 faces" in capsys.readouterr().err
 
 
 def test_curvature_on_a_fine_mesh_does_not_warn(tmp_path, capsys):
     path = tmp_path / "ball.ply"
     trimesh.creation.icosphere(3).export(path)
-    assert main(["surface", "curvature", str(path), "-o", str(tmp_path / "ball"),
-                 "--resolution", "16", "--size", "32"]) == 0
+    assert (
+        main(
+            [
+                "surface",
+                "curvature",
+                str(path),
+                "-o",
+                str(tmp_path / "ball"),
+                "--resolution",
+                "16",
+                "--size",
+                "32",
+            ]
+        )
+        == 0
+    )
     assert "too coarse" not in capsys.readouterr().err
 
 
@@ -39,8 +67,11 @@ def test_coarse_share_of_common_meshes():
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        for mesh in (trimesh.creation.icosphere(2), trimesh.creation.torus(1.0, 0.3),
-                     trimesh.creation.box().subdivide_to_size(0.1)):
+        for mesh in (
+            trimesh.creation.icosphere(2),
+            trimesh.creation.torus(1.0, 0.3),
+            trimesh.creation.box().subdivide_to_size(0.1),
+        ):
             sigma = float(np.median(mesh.edges_unique_length))
             assert not warn_if_too_coarse(mesh, sigma)
 
@@ -82,8 +113,10 @@ def test_cli_writes_results_on_the_input_mesh_by_default(tmp_path):
     path = tmp_path / "torus.ply"
     torus.export(path)
     out = tmp_path / "on"
-    assert main(["surface", "heat", str(path), "-o", str(out), "--resolution", "24",
-                 "--size", "48"]) == 0
+    assert (
+        main(["surface", "heat", str(path), "-o", str(out), "--resolution", "24", "--size", "48"])
+        == 0
+    )
     result = trimesh.load(out / "result.ply", process=False)
     assert len(result.vertices) == len(torus.vertices)
     ply = (out / "result.ply").read_bytes()
@@ -92,7 +125,23 @@ def test_cli_writes_results_on_the_input_mesh_by_default(tmp_path):
     after = iio.imread(out / "after.png")
     assert after.shape[0] > 48 + 20
     remesh = tmp_path / "remesh"
-    assert main(["surface", "heat", str(path), "-o", str(remesh), "--resolution", "24",
-                 "--size", "48", "--on", "remesh"]) == 0
+    assert (
+        main(
+            [
+                "surface",
+                "heat",
+                str(path),
+                "-o",
+                str(remesh),
+                "--resolution",
+                "24",
+                "--size",
+                "48",
+                "--on",
+                "remesh",
+            ]
+        )
+        == 0
+    )
     assert len(trimesh.load(remesh / "result.ply", process=False).vertices) != len(torus.vertices)
     assert main(["surface", "heat", "sphere", "-o", str(tmp_path / "s"), "--on", "input"]) == 2

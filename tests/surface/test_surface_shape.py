@@ -26,16 +26,22 @@ def test_principal_directions_kernel_matches_reference(torus):
     band = s.ext_band
     dirs = cla.empty(q, (6, band.n), np.float32)
     curv = cla.empty(q, (2, band.n), np.float32)
-    g.launch_list(g.kernel("surface/shape.cl", "principal_directions"), band, s.psi_dev.data,
-                  g.scalar(1 / s.spacing),
-                  dirs.data, curv.data, *g.strides())
+    g.launch_list(
+        g.kernel("surface/shape.cl", "principal_directions"),
+        band,
+        s.psi_dev.data,
+        g.scalar(1 / s.spacing),
+        dirs.data,
+        curv.data,
+        *g.strides(),
+    )
     want_dirs, want_curv = ref.principal_directions(s.psi_dev.get(), band_host(band), 1 / s.spacing)
     got = dirs.get()
     ok = np.all(np.isfinite(want_dirs), axis=0)  # the torus's core circle has no normal
     got, want_dirs, want_curv = got[:, ok], want_dirs[:, ok], want_curv[:, ok]
     # directions up to sign (atan2 on a near-tie may flip one): compare |cos| of the angle
     for first in (0, 3):
-        cos = np.abs((got[first:first + 3] * want_dirs[first:first + 3]).sum(axis=0))
+        cos = np.abs((got[first : first + 3] * want_dirs[first : first + 3]).sum(axis=0))
         assert np.quantile(cos, 0.999) > 0.999 and np.median(cos) > 0.99999
     np.testing.assert_allclose(curv.get()[:, ok], want_curv, rtol=1e-3, atol=2e-3)
 
@@ -43,8 +49,9 @@ def test_principal_directions_kernel_matches_reference(torus):
 def test_principal_curvatures_and_directions_of_a_torus():
     s = ImplicitSurface.torus(1.0, 0.4, spacing=0.05)
     major, minor, curv = flows.principal_directions(s)
-    pts = np.array([[1.4, 0, 0], [0, -1.4, 0], [0.6, 0, 0], [0, 1.0, 0.4],
-                    [-0.99, 0.99, 0.4 * 0 + 0.0]])
+    pts = np.array(
+        [[1.4, 0, 0], [0, -1.4, 0], [0.6, 0, 0], [0, 1.0, 0.4], [-0.99, 0.99, 0.4 * 0 + 0.0]]
+    )
     pts[4] = np.array([-1, 1, 0]) / np.sqrt(2) * 1.4
     k = s.sample(curv, pts)
     np.testing.assert_allclose(k[:, 0], 2.5, atol=0.02)  # around the tube: 1 / r
@@ -68,17 +75,34 @@ def test_turk_step_matches_reference(rng):
     for along in (False, True):
         dst = cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 2)
-        g.launch_runs(g.kernel("surface/heat.cl", "turk_step", ALONG=int(along)), s.step_runs,
-                      cla.to_device(q, u).data,
-                      dst.data, s.psi_dev.data, cla.to_device(q, d).data,
-                      cla.to_device(q, beta).data,
-                      g.scalar(1.0), g.scalar(0.125), g.scalar(1 / 32), g.scalar(0.0125),
-                      *offsets, *g.strides())
+        g.launch_runs(
+            g.kernel("surface/heat.cl", "turk_step", ALONG=int(along)),
+            s.step_runs,
+            cla.to_device(q, u).data,
+            dst.data,
+            s.psi_dev.data,
+            cla.to_device(q, d).data,
+            cla.to_device(q, beta).data,
+            g.scalar(1.0),
+            g.scalar(0.125),
+            g.scalar(1 / 32),
+            g.scalar(0.0125),
+            *offsets,
+            *g.strides(),
+        )
         band = band_host(s.node_band)
-        expect = ref.turk_step(u.astype(np.float64), s.psi_dev.get(), band, beta, 1.0, 0.125,
-                               1 / 32,
-                               0.0125, [int(o) for o in offsets],
-                               d.astype(np.float64) if along else None)
+        expect = ref.turk_step(
+            u.astype(np.float64),
+            s.psi_dev.get(),
+            band,
+            beta,
+            1.0,
+            0.125,
+            1 / 32,
+            0.0125,
+            [int(o) for o in offsets],
+            d.astype(np.float64) if along else None,
+        )
         np.testing.assert_allclose(dst.get().reshape(2, -1)[:, band], expect, atol=3e-5)
 
 

@@ -19,8 +19,7 @@ from clpde.runtime import Runtime
 from clpde.tracking.contours import MorphingTracker, morph_kernel_name
 from clpde.tracking.levelset import LevelSet, signed_distance
 
-BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True),
-          ("bricks16x4", True)]
+BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True), ("bricks16x4", True)]
 
 
 def _level_set(runtime, layout, group=None, shape=(45, 61)):
@@ -49,14 +48,32 @@ def _step(ls, f1, f2, prior, channels, disc, lam, name=None):
     parts = ls.band_parts()
     stats = cla.zeros(ls.runtime.queue, 5 * parts + 1, g.dtype)
     pair = PingPong(f1)
-    ls.launch_band(kernel, ls.band, ls.u.cur.data.data, pair.cur.data.data, f2.data.data,
-                   ls.band_mask.data, prior.data.data, ls.u.nxt.data.data, pair.nxt.data.data,
-                   stats.data, g.scalar(0.3), g.scalar(0.02**2), g.scalar(1e-3**2),
-                   g.scalar(1.0), g.scalar(lam), g.scalar(0.05), np.int32(g.sx),
-                   np.int32(g.plane))
+    ls.launch_band(
+        kernel,
+        ls.band,
+        ls.u.cur.data.data,
+        pair.cur.data.data,
+        f2.data.data,
+        ls.band_mask.data,
+        prior.data.data,
+        ls.u.nxt.data.data,
+        pair.nxt.data.data,
+        stats.data,
+        g.scalar(0.3),
+        g.scalar(0.02**2),
+        g.scalar(1e-3**2),
+        g.scalar(1.0),
+        g.scalar(lam),
+        g.scalar(0.05),
+        np.int32(g.sx),
+        np.int32(g.plane),
+    )
     s = stats.get()
-    summary = ([s[k * parts:(k + 1) * parts].max() for k in range(3)]
-               + [s[k * parts:(k + 1) * parts].sum() for k in (3, 4)] + [s[5 * parts]])
+    summary = (
+        [s[k * parts : (k + 1) * parts].max() for k in range(3)]
+        + [s[k * parts : (k + 1) * parts].sum() for k in (3, 4)]
+        + [s[5 * parts]]
+    )
     return ls.u.nxt.data.get(), pair.nxt.data.get(), np.array(summary)
 
 
@@ -68,14 +85,15 @@ def test_bricks_cover_the_band_and_nothing_else(runtime):
         tiles = np.zeros((-(-ny // by) * by, -(-nx // bx) * bx), bool)
         tiles[:ny, :nx] = band
         want = np.flatnonzero(tiles.reshape(-(-ny // by), by, -1, bx).any(axis=(1, 3)))
-        np.testing.assert_array_equal(ls.band.ids.get()[:ls.band.n], want)
+        np.testing.assert_array_equal(ls.band.ids.get()[: ls.band.n], want)
         assert ls.stored_cells() == want.size * bx * by >= band.sum()
 
 
 @pytest.mark.parametrize("layout,group", BRICKS)
 @pytest.mark.parametrize("disc,channels,lam", [(0, 1, 0.0), (1, 3, 0.1), (2, 2, 0.2)])
-def test_brick_step_is_bitwise_the_list_step_and_matches_reference(runtime, rng, layout, group,
-                                                                   disc, channels, lam):
+def test_brick_step_is_bitwise_the_list_step_and_matches_reference(
+    runtime, rng, layout, group, disc, channels, lam
+):
     lists = _level_set(runtime, "lists")
     bricks = _level_set(runtime, layout, group)
     f1, f2, prior = _features(lists, rng, channels)
@@ -94,14 +112,22 @@ def _check_reference(ls, got, f1, f2, prior, disc, lam):
     band = ls.grid.interior(ls.band_mask.get()[np.newaxis])[0]
     host = [a.data.get().astype(np.float64) for a in (f1, f2)]
     ref_u, ref_f1, maxima, mean, hit = ref.morph_track(
-        ls.u.cur.data.get()[0].astype(np.float64), *host, band,
-        prior.data.get()[0].astype(np.float64), 0.3, 0.02, 1e-3, 1.0, lam, 0.05,
-        {0: "difference", 1: "ncc", 2: "huber"}[disc])
+        ls.u.cur.data.get()[0].astype(np.float64),
+        *host,
+        band,
+        prior.data.get()[0].astype(np.float64),
+        0.3,
+        0.02,
+        1e-3,
+        1.0,
+        lam,
+        0.05,
+        {0: "difference", 1: "ncc", 2: "huber"}[disc],
+    )
     inside = band > 0
     interior = ls.grid.interior
     np.testing.assert_allclose(interior(got_u)[0][inside], ref_u[inside], atol=3e-5, rtol=1e-4)
-    np.testing.assert_allclose(interior(got_f1)[:, inside], ref_f1[:, inside], atol=3e-5,
-                               rtol=1e-4)
+    np.testing.assert_allclose(interior(got_f1)[:, inside], ref_f1[:, inside], atol=3e-5, rtol=1e-4)
     np.testing.assert_allclose(got_stats[:3], maxima, rtol=2e-4, atol=1e-6)
     np.testing.assert_allclose(got_stats[3] / got_stats[4], mean, rtol=2e-4)
     assert bool(got_stats[5]) == hit
@@ -116,8 +142,7 @@ def test_tiled_ncc_step_matches_the_list_step_to_rounding(runtime, rng, layout, 
     assert morph_kernel_name(bricks, "ncc") == "morph_track_tiled"
     f1, f2, prior = _features(lists, rng, channels)
     want_u, want_f1, want_stats = _step(lists, f1, f2, prior, channels, 1, lam)
-    got_u, got_f1, got_stats = _step(bricks, f1, f2, prior, channels, 1, lam,
-                                     "morph_track_tiled")
+    got_u, got_f1, got_stats = _step(bricks, f1, f2, prior, channels, 1, lam, "morph_track_tiled")
     np.testing.assert_allclose(got_u, want_u, atol=2e-5, rtol=1e-5)
     np.testing.assert_allclose(got_f1, want_f1, atol=2e-5, rtol=1e-5)
     np.testing.assert_allclose(got_stats[:4], want_stats[:4], rtol=1e-4)
@@ -126,13 +151,13 @@ def test_tiled_ncc_step_matches_the_list_step_to_rounding(runtime, rng, layout, 
     _check_reference(bricks, (got_u, got_f1, got_stats), f1, f2, prior, 1, lam)
     # Cells outside the band keep their values exactly.
     outside = bricks.grid.interior(bricks.band_mask.get()[np.newaxis]) == 0
-    np.testing.assert_array_equal(bricks.grid.interior(got_u)[outside],
-                                  bricks.grid.interior(bricks.u.cur.data.get())[outside])
+    np.testing.assert_array_equal(
+        bricks.grid.interior(got_u)[outside], bricks.grid.interior(bricks.u.cur.data.get())[outside]
+    )
 
 
 @pytest.mark.parametrize("layout,group", BRICKS)
-def test_brick_reinitialisation_is_bitwise_the_lists_and_matches_reference(runtime, layout,
-                                                                          group):
+def test_brick_reinitialisation_is_bitwise_the_lists_and_matches_reference(runtime, layout, group):
     lists, bricks = _level_set(runtime, "lists"), _level_set(runtime, layout, group)
     for ls in (lists, bricks):  # far from a distance: u scaled by 2.5
         ls.u.cur.data.set(2.5 * ls.u.cur.data.get())
@@ -154,8 +179,9 @@ def test_brick_reinitialisation_is_bitwise_the_lists_and_matches_reference(runti
 
 def _frames(n=6, size=72):
     y, x = np.mgrid[:size, :size]
-    return np.stack([((y - 36) ** 2 / 1.4 + (x - 22 - 4 * t) ** 2 < 150).astype(np.float32)
-                     for t in range(n)])
+    return np.stack(
+        [((y - 36) ** 2 / 1.4 + (x - 22 - 4 * t) ** 2 < 150).astype(np.float32) for t in range(n)]
+    )
 
 
 @pytest.mark.parametrize("layout", ["bricks8x8", "bricks16x4"])
@@ -163,9 +189,16 @@ def test_tracker_with_bricks_is_the_tracker_with_lists(runtime, layout):
     frames = _frames()
 
     def run(band_layout, device=runtime, discrepancy="ncc"):
-        return list(MorphingTracker(frames, frames[0] > 0.5, storage=band_layout,
-                                    motion=None, discrepancy=discrepancy,
-                                    device=device).iterate())
+        return list(
+            MorphingTracker(
+                frames,
+                frames[0] > 0.5,
+                storage=band_layout,
+                motion=None,
+                discrepancy=discrepancy,
+                device=device,
+            ).iterate()
+        )
 
     # Bit for bit where every cell sums its own window: F2 - F1 on the CPU geometry, and
     # the NCC in the GPU geometry (a work-group per brick), run on the CPU.

@@ -35,15 +35,27 @@ def test_reinit_step_matches_reference_on_grid_and_list(runtime, rng, kind):
     p, p0 = _field(grid, phi), _field(grid, phi * 1.3)
     want = ref.reinit_step(_padded(p), _padded(p0), 0.5)
     out = p.copy()
-    grid.launch(grid.kernel("tracking/levelset.cl", "reinit_step"), p.data.data, p0.data.data,
-                out.data.data, grid.scalar(0.5))
+    grid.launch(
+        grid.kernel("tracking/levelset.cl", "reinit_step"),
+        p.data.data,
+        p0.data.data,
+        out.data.data,
+        grid.scalar(0.5),
+    )
     np.testing.assert_allclose(out.to_host()[0], want, atol=2e-5, rtol=1e-5)
 
     chosen = rng.random((n, n)) < 0.3
     cells = index_list(grid, chosen)
     out = p.copy()
-    grid.launch_list(grid.kernel("tracking/levelset.cl", "reinit_step_list"), cells, p.data.data,
-                     p0.data.data, out.data.data, grid.scalar(0.5), np.int32(grid.sx))
+    grid.launch_list(
+        grid.kernel("tracking/levelset.cl", "reinit_step_list"),
+        cells,
+        p.data.data,
+        p0.data.data,
+        out.data.data,
+        grid.scalar(0.5),
+        np.int32(grid.sx),
+    )
     np.testing.assert_allclose(out.to_host()[0], np.where(chosen, want, phi), atol=2e-5, rtol=1e-5)
 
 
@@ -61,8 +73,9 @@ def test_mark_band_and_gradient_magnitude_match_reference(runtime, rng):
     img = rng.random((17, 23))
     f = _field(grid, img)
     out = f.copy()
-    grid.launch(grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data,
-                out.data.data)
+    grid.launch(
+        grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data, out.data.data
+    )
     np.testing.assert_allclose(out.to_host()[0], ref.gradient_magnitude(_padded(f)), atol=1e-6)
 
 
@@ -143,8 +156,15 @@ def test_plain_reinit_matches_reference_and_the_subcell_fix_is_more_accurate(run
     p, p0 = _field(grid, phi), _field(grid, phi * 1.3)
     out = p.copy()
     cells = index_list(grid, np.ones((n, n), bool))
-    grid.launch_list(grid.kernel("tracking/levelset.cl", "reinit_step_list", PLAIN_REINIT=1), cells,
-                     p.data.data, p0.data.data, out.data.data, grid.scalar(0.5), np.int32(grid.sx))
+    grid.launch_list(
+        grid.kernel("tracking/levelset.cl", "reinit_step_list", PLAIN_REINIT=1),
+        cells,
+        p.data.data,
+        p0.data.data,
+        out.data.data,
+        grid.scalar(0.5),
+        np.int32(grid.sx),
+    )
     want = ref.reinit_step(_padded(p), _padded(p0), 0.5, subcell_fix=False)
     np.testing.assert_allclose(out.to_host()[0], want, atol=2e-5, rtol=1e-5)
 

@@ -42,8 +42,9 @@ def hard_sequence(kind, n=64, frames=8, noise=0.04, seed=0):
         img = back.copy()
         if kind == "distractor":  # a still look-alike just below the disc's path
             other = np.hypot(x - 40, y - 52) < 10
-            img = np.where(ndimage.gaussian_filter(other * 1.0, 0.7) > 0.5,
-                           0.62 + 0.25 * coarse[:n, :n], img)
+            img = np.where(
+                ndimage.gaussian_filter(other * 1.0, 0.7) > 0.5, 0.62 + 0.25 * coarse[:n, :n], img
+            )
         edge = ndimage.gaussian_filter(inside * 1.0, 0.7)
         img = (1 - edge) * img + edge * obj
         if kind == "shadow":  # a soft-edged shadow sweeping from the left, 0.45x light
@@ -131,8 +132,7 @@ def test_a_still_sequence_keeps_the_contour_and_stops_early():
 
 def test_object_form_yields_masks_and_level_sets_and_edges_feature_tracks():
     frames, truth = synthetic_sequence("translate", frames=4, noise=0.03)
-    masks, levels = track((f for f in frames), truth[0], features="edges",
-                          return_level_sets=True)
+    masks, levels = track((f for f in frames), truth[0], features="edges", return_level_sets=True)
     assert levels.shape == masks.shape and levels.dtype == np.float32
     np.testing.assert_array_equal(levels[1:] < 0, masks[1:])
     # Edge maps peak on the contour, where their normal is undefined, so they follow the
@@ -145,8 +145,11 @@ def test_integer_frames_preprocessing_switches_and_inputs_untouched():
     frames, truth = synthetic_sequence("translate", frames=3, noise=0.03)
     frames8 = (frames * 255).astype(np.uint8)
     keep, mask = frames8.copy(), truth[0].astype(np.uint8) * 255
-    for options, least in (({}, 0.9), ({"equalize": False, "smooth": False}, 0.9),
-                           ({"equalize": "global"}, 0.8)):
+    for options, least in (
+        ({}, 0.9),
+        ({"equalize": False, "smooth": False}, 0.9),
+        ({"equalize": "global"}, 0.8),
+    ):
         masks = clpde.track(frames8, mask, **options)
         assert masks.shape == frames8.shape
         assert iou(masks[1], truth[1]) > least, options
@@ -188,8 +191,9 @@ def test_histogram_matching_gives_the_reference_distribution(rng):
     image = np.sqrt(rng.random((64, 64)))  # another distribution, another order
     matched = match_histogram(image, reference)
     percent = np.arange(1, 100)
-    np.testing.assert_allclose(np.percentile(matched, percent), np.percentile(reference, percent),
-                               atol=2e-3)
+    np.testing.assert_allclose(
+        np.percentile(matched, percent), np.percentile(reference, percent), atol=2e-3
+    )
     order = np.argsort(image.ravel())
     assert (np.diff(matched.ravel()[order]) >= 0).all()  # the map keeps the grey-level order
     flat = np.full((8, 8), 0.3)

@@ -27,9 +27,10 @@ def _inputs(rng, channels, ny=22, nx=27):
     return u, f1, f2
 
 
-@pytest.mark.parametrize("channels,lam,mu,noise2,kd", [(1, 0.0, 0.1, 0.004, 1.0),
-                                                       (3, 0.1, 0.0, 0.02, 0.5),
-                                                       (1, 0.0, 0.2, 1e-6, 0.0)])
+@pytest.mark.parametrize(
+    "channels,lam,mu,noise2,kd",
+    [(1, 0.0, 0.1, 0.004, 1.0), (3, 0.1, 0.0, 0.02, 0.5), (1, 0.0, 0.2, 1e-6, 0.0)],
+)
 def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise2, kd):
     u, f1, f2 = _inputs(rng, channels)
     ny, nx = u.shape
@@ -50,24 +51,56 @@ def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise
     stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
     dt, eps_f, eps_u, near, delta = 0.3, 0.02, 1e-3, 1.0, 0.02
     kernel = grid.kernel("tracking/adaptive.cl", "morph_adaptive", NCH=channels, WIN=3)
-    grid.launch_list(kernel, cells, fu.data.data, ff1.data.data, ff2.data.data, band_dev.data,
-                     fprior.data.data, u_out.data.data, f1_out.data.data, stats.data,
-                     grid.scalar(dt), grid.scalar(eps_f**2), grid.scalar(eps_u**2),
-                     grid.scalar(near), grid.scalar(lam), grid.scalar(delta),
-                     np.int32(grid.sx), np.int32(grid.plane), freg.data.data,
-                     grid.scalar(noise2), grid.scalar(mu), grid.scalar(kd))
+    grid.launch_list(
+        kernel,
+        cells,
+        fu.data.data,
+        ff1.data.data,
+        ff2.data.data,
+        band_dev.data,
+        fprior.data.data,
+        u_out.data.data,
+        f1_out.data.data,
+        stats.data,
+        grid.scalar(dt),
+        grid.scalar(eps_f**2),
+        grid.scalar(eps_u**2),
+        grid.scalar(near),
+        grid.scalar(lam),
+        grid.scalar(delta),
+        np.int32(grid.sx),
+        np.int32(grid.plane),
+        freg.data.data,
+        grid.scalar(noise2),
+        grid.scalar(mu),
+        grid.scalar(kd),
+    )
     want_u, want_f1, want_maxima, want_mean, want_hit = aref.morph_adaptive(
-        fu.data.get()[0].astype(np.float64), ff1.data.get().astype(np.float64),
-        ff2.data.get().astype(np.float64), band, fprior.data.get()[0].astype(np.float64),
-        freg.to_host()[0].astype(np.float64), dt, eps_f, eps_u, near, lam, delta, noise2, mu, kd)
+        fu.data.get()[0].astype(np.float64),
+        ff1.data.get().astype(np.float64),
+        ff2.data.get().astype(np.float64),
+        band,
+        fprior.data.get()[0].astype(np.float64),
+        freg.to_host()[0].astype(np.float64),
+        dt,
+        eps_f,
+        eps_u,
+        near,
+        lam,
+        delta,
+        noise2,
+        mu,
+        kd,
+    )
     inside = band > 0
     np.testing.assert_allclose(u_out.to_host()[0][inside], want_u[inside], atol=3e-5, rtol=1e-4)
-    np.testing.assert_allclose(f1_out.to_host()[:, inside], want_f1[:, inside], atol=3e-5,
-                               rtol=1e-4)
+    np.testing.assert_allclose(
+        f1_out.to_host()[:, inside], want_f1[:, inside], atol=3e-5, rtol=1e-4
+    )
     got = stats.get()
-    maxima = [got[k * gsize:(k + 1) * gsize].max() for k in range(3)]
+    maxima = [got[k * gsize : (k + 1) * gsize].max() for k in range(3)]
     np.testing.assert_allclose(maxima, want_maxima, rtol=2e-4, atol=1e-6)
-    mean = got[3 * gsize:4 * gsize].sum() / got[4 * gsize:5 * gsize].sum()
+    mean = got[3 * gsize : 4 * gsize].sum() / got[4 * gsize : 5 * gsize].sum()
     np.testing.assert_allclose(mean, want_mean, rtol=2e-4)
     assert bool(got[5 * gsize]) == want_hit
 
@@ -76,8 +109,7 @@ def test_adaptive_beta_is_the_difference_on_flat_patches_and_the_ncc_on_contrast
     flat1 = ref.pad(0.5 + 0.001 * rng.normal(size=(16, 16)))
     flat2 = ref.pad(0.6 + 0.001 * rng.normal(size=(16, 16)))
     beta = aref.adaptive_beta(flat1, flat2, 0.02, 0.01)
-    np.testing.assert_allclose(beta, ref.discrepancy(flat1, flat2, "difference", 0.02),
-                               atol=1e-3)
+    np.testing.assert_allclose(beta, ref.discrepancy(flat1, flat2, "difference", 0.02), atol=1e-3)
     tex1 = ref.pad(rng.random((16, 16)))
     tex2 = 0.5 * tex1 + 0.3  # a change of light over contrast: the correlation sees nothing
     beta = aref.adaptive_beta(tex1, tex2, 1e-4, 1e-6)
@@ -97,7 +129,7 @@ def test_region_field_points_the_contour_to_the_object(rng):
     img = (0.3 + 0.3 * obj + rng.normal(0, 0.05, obj.shape))[np.newaxis]
     start = np.hypot(y - 30, x - 32) < 12  # 2 px off
     speed = region_field(img, start)
-    ring = (np.abs(np.hypot(y - 30, x - 30) - 12) < 3)
+    ring = np.abs(np.hypot(y - 30, x - 30) - 12) < 3
     truth = np.where(obj, -1, 1)  # inside: grow (negative), outside: shrink
     assert (np.sign(speed) == truth)[ring].mean() > 0.85
     assert np.abs(speed).max() <= 1
@@ -113,8 +145,9 @@ def _textured_disc(positions, n=64, seed=0):
         m = np.hypot(y - 32, x - cx) < 10
         obj = 0.7 + 0.06 * ndimage.shift(tex, (0, cx), order=1, mode="wrap")[:n, :n]
         alpha = ndimage.gaussian_filter(m * 1.0, 0.7)
-        frames.append(np.clip((1 - alpha) * ground + alpha * obj
-                              + rng.normal(0, 0.03, (n, n)), 0, 1))
+        frames.append(
+            np.clip((1 - alpha) * ground + alpha * obj + rng.normal(0, 0.03, (n, n)), 0, 1)
+        )
         masks.append(m)
     return np.array(frames), np.array(masks)
 
@@ -127,8 +160,10 @@ def test_component_motion_stops_with_the_object():
     positions = [16, 19, 22, 22, 22]
     frames, masks = _textured_disc(positions)
     motion = ComponentMotion(6)
-    got = [motion.predict(frames[k][None], frames[k + 1][None], masks[k])[0][1][1]
-           for k in range(len(frames) - 1)]
+    got = [
+        motion.predict(frames[k][None], frames[k + 1][None], masks[k])[0][1][1]
+        for k in range(len(frames) - 1)
+    ]
     assert abs(got[0] - 3) < 0.5 and abs(got[1] - 3) < 0.5
     assert got[2] == 0.0 and got[3] == 0.0  # no overshoot once it stops
 
@@ -182,6 +217,7 @@ def test_return_confidence_with_the_tracker_and_other_outputs():
     tracker = MorphingTracker(frames, truth[0])
     conf = tracker.confidence([s.mask for s in tracker.iterate()])
     assert conf.shape == (3,)
-    masks, levels, residuals, conf2 = track(frames, truth[0], return_level_sets=True,
-                                            return_discrepancy=True, return_confidence=True)
+    masks, levels, residuals, conf2 = track(
+        frames, truth[0], return_level_sets=True, return_discrepancy=True, return_confidence=True
+    )
     assert levels.shape == masks.shape and residuals.shape == conf2.shape == (3,)

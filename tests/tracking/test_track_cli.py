@@ -106,10 +106,28 @@ def test_an_output_folder_holds_one_runs_files_only(tmp_path, sequence, capsys):
     assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2"]) == 2
     assert "give --overwrite" in capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == long_run  # untouched
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--frames", "2",
-                 "--overwrite"]) == 0
+    assert (
+        main(
+            [
+                "track",
+                str(stack),
+                "--init",
+                str(mask),
+                "-o",
+                str(out),
+                "--frames",
+                "2",
+                "--overwrite",
+            ]
+        )
+        == 0
+    )
     assert sorted(p.name for p in out.iterdir()) == [
-        "contours.json", "mask_0000.png", "mask_0001.png", "overlay.gif"]
+        "contours.json",
+        "mask_0000.png",
+        "mask_0001.png",
+        "overlay.gif",
+    ]
     assert (iio.imread(out / "mask_0000.png") > 0).sum() == truth[0].sum()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]  # no staging left
     # a folder with files clpde does not write is never replaced
@@ -141,8 +159,9 @@ def test_mp4_overlay_is_written_by_the_video_writer_not_rescaled(tmp_path, seque
     mask = tmp_path / "odd_mask.png"
     iio.imwrite(mask, truth[0][:63, :61].astype(np.uint8) * 255)
     out = tmp_path / "out"
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--mp4",
-                 "--no-gif"]) == 0
+    assert (
+        main(["track", str(stack), "--init", str(mask), "-o", str(out), "--mp4", "--no-gif"]) == 0
+    )
     with av.open(str(out / "overlay.mp4")) as container:
         stored = [f.to_ndarray(format="rgb24") for f in container.decode(video=0)]
     assert len(stored) == 4 and stored[0].shape == (64, 62, 3)  # padded for the encoder
@@ -154,29 +173,79 @@ def test_mp4_overlay_is_written_by_the_video_writer_not_rescaled(tmp_path, seque
     assert np.abs(grey - odd[0])[inside].mean() < 12
     assert not [p for p in out.iterdir() if p.name.endswith(".part")]
     # A second run replaces the folder, its MP4 included.
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--mp4",
-                 "--overwrite", "--frames", "2"]) == 0
+    assert (
+        main(
+            [
+                "track",
+                str(stack),
+                "--init",
+                str(mask),
+                "-o",
+                str(out),
+                "--mp4",
+                "--overwrite",
+                "--frames",
+                "2",
+            ]
+        )
+        == 0
+    )
     with av.open(str(out / "overlay.mp4")) as container:
         assert len(list(container.decode(video=0))) == 2
 
 
-def test_options_reach_the_tracker_and_low_confidence_frames_are_reported(tmp_path, sequence,
-                                                                          capsys):
+def test_options_reach_the_tracker_and_low_confidence_frames_are_reported(
+    tmp_path, sequence, capsys
+):
     stack, mask, frames8, truth = sequence
     bad = frames8.copy()
     bad[2] = np.random.default_rng(1).integers(0, 256, bad[2].shape)  # a broken frame
     broken = tmp_path / "broken.tif"
     tifffile.imwrite(broken, bad, photometric="minisblack")
     out = tmp_path / "out"
-    assert main(["track", str(broken), "--init", str(mask), "-o", str(out), "--no-gif",
-                 "--discrepancy", "difference", "--motion", "velocity", "--features",
-                 "contrast", "--equalize", "match", "--shape-weight", "0.01"]) == 0
+    assert (
+        main(
+            [
+                "track",
+                str(broken),
+                "--init",
+                str(mask),
+                "-o",
+                str(out),
+                "--no-gif",
+                "--discrepancy",
+                "difference",
+                "--motion",
+                "velocity",
+                "--features",
+                "contrast",
+                "--equalize",
+                "match",
+                "--shape-weight",
+                "0.01",
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "low confidence" in err and "frames 2" in err
     out = tmp_path / "out2"
     assert main(["track", str(stack), "--init", str(mask), "-o", str(out), "--no-gif"]) == 0
     assert "low confidence" not in capsys.readouterr().err
     assert iou(iio.imread(out / "mask_0003.png") > 0, truth[3]) >= 0.9
-    assert main(["track", str(stack), "--init", str(mask), "-o", str(tmp_path / "out3"),
-                 "--shape-weight", "-1"]) == 2
+    assert (
+        main(
+            [
+                "track",
+                str(stack),
+                "--init",
+                str(mask),
+                "-o",
+                str(tmp_path / "out3"),
+                "--shape-weight",
+                "-1",
+            ]
+        )
+        == 2
+    )
     assert "--shape-weight" in capsys.readouterr().err

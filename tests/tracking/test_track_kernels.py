@@ -18,14 +18,23 @@ def test_local_contrast_kernel_matches_reference_and_host_version(runtime, rng, 
     img = rng.random((2, ny, nx))
     grid = Grid(runtime, nx, ny, 2, 2, np.dtype(np.float32))
     f, out = Field.from_host(grid, img), Field.empty(grid)
-    grid.launch(grid.kernel("tracking/features.cl", "local_contrast"), f.data.data, out.data.data,
-                np.int32(radius), grid.scalar(0.02**2), grid.scalar(0.25))
+    grid.launch(
+        grid.kernel("tracking/features.cl", "local_contrast"),
+        f.data.data,
+        out.data.data,
+        np.int32(radius),
+        grid.scalar(0.02**2),
+        grid.scalar(0.25),
+    )
     want = np.array([ref.local_contrast(c, radius, 0.02, 0.25) for c in img])
     np.testing.assert_allclose(out.to_host(), want, atol=2e-5, rtol=1e-4)
     np.testing.assert_allclose(local_contrast(img, radius), want, atol=1e-10)
     # Invariance: a positive affine change of the grey levels leaves it (nearly) unchanged.
-    np.testing.assert_allclose(local_contrast(3 * img + 0.5, radius, eps=1e-6),
-                               local_contrast(img, radius, eps=1e-6), atol=1e-6)
+    np.testing.assert_allclose(
+        local_contrast(3 * img + 0.5, radius, eps=1e-6),
+        local_contrast(img, radius, eps=1e-6),
+        atol=1e-6,
+    )
 
 
 def _inputs(kind, rng, channels, ny=22, nx=27):
@@ -42,8 +51,9 @@ def _inputs(kind, rng, channels, ny=22, nx=27):
     return u, f1, f2
 
 
-def _run_morph_track(runtime, grid, band, fu, ff1, ff2, fprior, dt, eps_f, eps_u, near, lam,
-                     delta, channels, disc):
+def _run_morph_track(
+    runtime, grid, band, fu, ff1, ff2, fprior, dt, eps_f, eps_u, near, lam, delta, channels, disc
+):
     """One launch of morph_track over the cells where band > 0; returns (u_out, f1_out,
     stats, the launch's work-item count)."""
     padded_band = np.zeros(grid.padded_shape[1:], np.uint8)
@@ -54,20 +64,47 @@ def _run_morph_track(runtime, grid, band, fu, ff1, ff2, fprior, dt, eps_f, eps_u
     u_out, f1_out = fu.copy(), ff1.copy()
     (gsize,), _, _ = runtime.list_launch(cells.n)
     stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
-    kernel = grid.kernel("tracking/features.cl", "morph_track", NCH=channels,
-                         DISC={"difference": 0, "ncc": 1, "huber": 2}[disc], WIN=3)
-    grid.launch_list(kernel, cells, fu.data.data, ff1.data.data, ff2.data.data, band_dev.data,
-                     fprior.data.data, u_out.data.data, f1_out.data.data, stats.data,
-                     grid.scalar(dt), grid.scalar(eps_f**2), grid.scalar(eps_u**2),
-                     grid.scalar(near), grid.scalar(lam), grid.scalar(delta),
-                     np.int32(grid.sx), np.int32(grid.plane))
+    kernel = grid.kernel(
+        "tracking/features.cl",
+        "morph_track",
+        NCH=channels,
+        DISC={"difference": 0, "ncc": 1, "huber": 2}[disc],
+        WIN=3,
+    )
+    grid.launch_list(
+        kernel,
+        cells,
+        fu.data.data,
+        ff1.data.data,
+        ff2.data.data,
+        band_dev.data,
+        fprior.data.data,
+        u_out.data.data,
+        f1_out.data.data,
+        stats.data,
+        grid.scalar(dt),
+        grid.scalar(eps_f**2),
+        grid.scalar(eps_u**2),
+        grid.scalar(near),
+        grid.scalar(lam),
+        grid.scalar(delta),
+        np.int32(grid.sx),
+        np.int32(grid.plane),
+    )
     return u_out, f1_out, stats.get(), gsize
 
 
 @pytest.mark.parametrize("kind", ["random", "structured"])
-@pytest.mark.parametrize("disc,channels,lam", [("difference", 1, 0.0), ("ncc", 1, 0.0),
-                                               ("huber", 3, 0.0), ("ncc", 3, 0.1),
-                                               ("difference", 2, 0.2)])
+@pytest.mark.parametrize(
+    "disc,channels,lam",
+    [
+        ("difference", 1, 0.0),
+        ("ncc", 1, 0.0),
+        ("huber", 3, 0.0),
+        ("ncc", 3, 0.1),
+        ("difference", 2, 0.2),
+    ],
+)
 def test_morph_track_matches_reference(runtime, rng, kind, disc, channels, lam):
     u, f1, f2 = _inputs(kind, rng, channels)
     ny, nx = u.shape
@@ -81,19 +118,45 @@ def test_morph_track_matches_reference(runtime, rng, kind, disc, channels, lam):
     # NCC window of radius 3 stays inside the buffer.
     band = ref.mark_band(u, 3.0, margin=2)
     dt, eps_f, eps_u, near, delta = 0.3, 0.02, 1e-3, 1.0, 0.05
-    u_out, f1_out, got, gsize = _run_morph_track(runtime, grid, band, fu, ff1, ff2, fprior, dt,
-                                                 eps_f, eps_u, near, lam, delta, channels, disc)
+    u_out, f1_out, got, gsize = _run_morph_track(
+        runtime,
+        grid,
+        band,
+        fu,
+        ff1,
+        ff2,
+        fprior,
+        dt,
+        eps_f,
+        eps_u,
+        near,
+        lam,
+        delta,
+        channels,
+        disc,
+    )
     host = ff1.data.get().astype(np.float64), ff2.data.get().astype(np.float64)
     want_u, want_f1, want_maxima, want_mean, want_hit = ref.morph_track(
-        fu.data.get()[0].astype(np.float64), *host, band, fprior.data.get()[0].astype(np.float64),
-        dt, eps_f, eps_u, near, lam, delta, disc)
+        fu.data.get()[0].astype(np.float64),
+        *host,
+        band,
+        fprior.data.get()[0].astype(np.float64),
+        dt,
+        eps_f,
+        eps_u,
+        near,
+        lam,
+        delta,
+        disc,
+    )
     inside = band > 0
     np.testing.assert_allclose(u_out.to_host()[0][inside], want_u[inside], atol=3e-5, rtol=1e-4)
-    np.testing.assert_allclose(f1_out.to_host()[:, inside], want_f1[:, inside], atol=3e-5,
-                               rtol=1e-4)
-    maxima = [got[k * gsize:(k + 1) * gsize].max() for k in range(3)]
+    np.testing.assert_allclose(
+        f1_out.to_host()[:, inside], want_f1[:, inside], atol=3e-5, rtol=1e-4
+    )
+    maxima = [got[k * gsize : (k + 1) * gsize].max() for k in range(3)]
     np.testing.assert_allclose(maxima, want_maxima, rtol=2e-4, atol=1e-6)
-    mean = got[3 * gsize:4 * gsize].sum() / got[4 * gsize:5 * gsize].sum()
+    mean = got[3 * gsize : 4 * gsize].sum() / got[4 * gsize : 5 * gsize].sum()
     np.testing.assert_allclose(mean, want_mean, rtol=2e-4)
     assert bool(got[5 * gsize]) == want_hit
 
@@ -109,14 +172,16 @@ def test_morph_track_with_one_channel_is_the_thesis_step(runtime, rng, kind):
     fu, ff1, ff2 = (Field.from_host(grid, a.reshape(1, ny, nx)) for a in (u, f1, f2))
     band = ref.mark_band(u, 3.0)
     dt, eps_f, eps_u, near = 0.4, 0.02, 1e-3, 1.0
-    u_out, f1_out, got, gsize = _run_morph_track(runtime, grid, band, fu, ff1, ff2, fu, dt,
-                                                 eps_f, eps_u, near, 0.0, 0.0, 1, "difference")
+    u_out, f1_out, got, gsize = _run_morph_track(
+        runtime, grid, band, fu, ff1, ff2, fu, dt, eps_f, eps_u, near, 0.0, 0.0, 1, "difference"
+    )
     padded = [a.data.get()[0].astype(np.float64) for a in (fu, ff1, ff2)]
     want_u, want_f1, want_maxima, want_hit = ref.morph_step(
-        padded[0], padded[1], padded[2][2:-2, 2:-2], band, dt, eps_f, eps_u, near)
+        padded[0], padded[1], padded[2][2:-2, 2:-2], band, dt, eps_f, eps_u, near
+    )
     np.testing.assert_allclose(u_out.to_host()[0], want_u, atol=2e-5, rtol=1e-5)
     np.testing.assert_allclose(f1_out.to_host()[0], want_f1, atol=2e-5, rtol=1e-5)
-    maxima = [got[k * gsize:(k + 1) * gsize].max() for k in range(3)]
+    maxima = [got[k * gsize : (k + 1) * gsize].max() for k in range(3)]
     np.testing.assert_allclose(maxima, want_maxima, rtol=1e-4, atol=1e-6)
     assert bool(got[5 * gsize]) == want_hit
 
@@ -139,8 +204,9 @@ def test_match_displacement_finds_a_subpixel_shift(rng):
     mask[20:40, 25:45] = True
     for true in ((1.5, -2.0), (-3.0, 4.5), (0.0, 0.0)):
         moved = ndimage.shift(scene, true, order=3, mode="nearest")
-        (dy, dx), _ = match_displacement(local_contrast(scene[None]), local_contrast(moved[None]),
-                                         mask, (0, 0), 6)
+        (dy, dx), _ = match_displacement(
+            local_contrast(scene[None]), local_contrast(moved[None]), mask, (0, 0), 6
+        )
         assert abs(dy - true[0]) < 0.3 and abs(dx - true[1]) < 0.3, (true, dy, dx)
 
 
@@ -153,8 +219,10 @@ def test_kalman_filter_damps_a_jump():
     mask[22:38, 22:38] = True
     f = MotionFilter("kalman", radius=6)
     frames = [ndimage.shift(scene, (0, 1.0 * t), order=3, mode="nearest") for t in range(6)]
-    shifts = [f.predict(local_contrast(a[None]), local_contrast(b[None]), mask)[1]
-              for a, b in itertools.pairwise(frames)]
+    shifts = [
+        f.predict(local_contrast(a[None]), local_contrast(b[None]), mask)[1]
+        for a, b in itertools.pairwise(frames)
+    ]
     assert abs(shifts[-1] - 1.0) < 0.25  # it learns the constant velocity
     jump = ndimage.shift(frames[-1], (0, 5.0), order=3, mode="nearest")
     step = f.predict(local_contrast(frames[-1][None]), local_contrast(jump[None]), mask)[1]
