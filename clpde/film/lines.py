@@ -44,12 +44,33 @@ def _shift(a: np.ndarray, dx: int) -> np.ndarray:
 
 
 def line_evidence(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Signed thin-line evidence of one frame, (z, thin, profile): z is the line's
-    contrast against the worse of its two flanks in robust noise units at the line's centre
-    (positive bright, negative dark; zero off a centre or where the flanks disagree by more
-    than the line stands off them), thin says where the profile is thin enough for a
-    scratch, and profile is every pixel against the mean of its flanks, in the same
-    units."""
+    """Signed thin-line evidence of one frame.
+
+    Parameters
+    ----------
+    frame : numpy.ndarray
+        One grey frame (H, W), float.
+
+    Returns
+    -------
+    z : numpy.ndarray
+        (H, W) float32: the line's contrast against the worse of its two flanks, in robust
+        noise units of the profile, at a line's centre (positive bright, negative dark);
+        zero off a centre or where the flanks differ by more than the line stands off them.
+    thin : numpy.ndarray
+        (H, W) bool: where the profile is thin enough for a scratch.
+    profile : numpy.ndarray
+        (H, W) float32: every pixel against the mean of its flanks, in the same units.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.full((40, 30), 0.5, np.float32) + 0.01 * np.random.default_rng(0).random((40, 30))
+    >>> f[:, 15] = 0.1
+    >>> z, thin, _ = line_evidence(f)
+    >>> bool(z[20, 15] < -3 and thin[20, 15])
+    True
+    """
     s = ndimage.gaussian_filter1d(frame.astype(np.float32), SMOOTH_ROWS, axis=0, mode="nearest")
     left, right = _shift(s, -LINE_FLANK), _shift(s, LINE_FLANK)
     z = np.zeros_like(s)
@@ -72,8 +93,32 @@ def line_evidence(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def static_scratches(G: np.ndarray, threshold: float, min_length: int) -> np.ndarray:
-    """Bool (T, H, W): thin, long, near-vertical lines of the frames themselves that
-    persist over neighbouring frames (see the module's notes)."""
+    """Scratches that stay in place: thin, long, near-vertical lines of the frames
+    themselves that persist over neighbouring frames (see the module's notes).
+
+    Parameters
+    ----------
+    G : numpy.ndarray
+        Grey frames (T, H, W), float.
+    threshold : float
+        Robust noise units a line's centre must stand off its flanks.
+    min_length : int
+        Rows a run must span.
+
+    Returns
+    -------
+    numpy.ndarray
+        Bool (T, H, W), the scratches' pixels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> G = 0.5 + 0.01 * rng.standard_normal((5, 48, 40))
+    >>> G[:, 4:44, 20] = 0.1
+    >>> bool(static_scratches(G, 1.5, 24)[2, 4:44, 20].mean() > 0.8)
+    True
+    """
     T, ny, nx = G.shape
     ev = [line_evidence(G[t]) for t in range(T)]
     out = np.zeros((T, ny, nx), bool)
