@@ -102,5 +102,47 @@ def surface(app):
 
 if __name__ == "__main__":
     app = QApplication.instance() or QApplication([])
-    for make in (inpaint, denoise, track, surface):
+    for make in (inpaint, denoise, track, surface, film):
         make(app)
+
+
+def film(app):
+    """A short dusty pan (made here), its detected defects and the restored frames."""
+    import tempfile
+
+    import av
+
+    from clpde.data import damaged_astronaut
+    from clpde.napari.film import FilmWidget
+    from clpde.napari.readers import read_film
+
+    photo = damaged_astronaut()[0][100:260, 140:380]
+    rng = np.random.default_rng(0)
+    frames = np.stack([np.roll(photo, 3 * t, axis=1)[:, :200] for t in range(10)])
+    for t in range(10):  # dark dirt and bright dust, new on every frame
+        for _ in range(6):
+            y, x, r = rng.integers(8, 150), rng.integers(8, 190), rng.integers(2, 5)
+            frames[t, y - r:y + r, x - r:x + r] = 10 if rng.random() < 0.5 else 245
+    path = Path(tempfile.mkdtemp()) / "dusty.mp4"
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("libx264", rate=10)
+        stream.width, stream.height, stream.pix_fmt = 200, 160, "yuv420p"
+        stream.options = {"crf": "0"}
+        for frame in frames:
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(frame, format="rgb24")))
+        out.mux(stream.encode())
+    viewer = napari.Viewer(title="clpde: film restoration")
+    (data, attrs, _), = read_film(str(path))
+    layer = viewer.add_image(data, **attrs)
+    w = FilmWidget(viewer)
+    viewer.window.add_dock_widget(w, name="clpde film")
+    w.film.value = layer
+    w.detect()
+    finish(w, app)
+    w.run()
+    finish(w, app)
+    viewer.layers["dusty"].visible = True
+    viewer.grid.enabled = True
+    viewer.dims.set_current_step(0, 5)
+    shoot(viewer, app, "film")
+    viewer.close()

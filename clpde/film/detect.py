@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from scipy import ndimage, signal
 from skimage.morphology import black_tophat, disk, white_tophat
 
+from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..planar.rof import _noise_std
 from ..runtime import get_runtime
@@ -535,6 +536,7 @@ def detect_defects(
     min_length: int | None = None,
     return_kinds: bool = False,
     device: str | int | None = None,
+    progress: Progress = None,
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Find blotches (dirt, dust) and line scratches in film frames or a scanned photo.
 
@@ -577,6 +579,10 @@ def detect_defects(
         Also return the kind of each pixel.
     device : str or int, optional
         As for `clpde.diffuse`.
+    progress : bool or callable, optional
+        As for `clpde.inpaint`: a bar over the detection's two stages (the temporal scores,
+        then the kinds), or a callable ``progress(done, total)`` that may stop the run by
+        raising.
 
     Returns
     -------
@@ -626,9 +632,11 @@ def detect_defects(
         kinds = _photo(G[0], bthr, sthr, int(min_length), device)
     else:
         bthr = BLOTCH_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
-        kinds = film_kinds(
-            G, film_scores(G, device, int(radius)), bthr, sthr, int(search), int(min_length)
-        )
+        with progress_bar(progress, 2, "clpde detect_defects", unit="stage") as bar:
+            scores = film_scores(G, device, int(radius))
+            bar.update(1)
+            kinds = film_kinds(G, scores, bthr, sthr, int(search), int(min_length))
+            bar.update(1)
     kinds = _grow_kinds(kinds, px)
     if layout.photo:
         kinds = kinds[0]

@@ -17,6 +17,7 @@ import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
 
+from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..inpainting.api import inpaint
 from ..planar.rof import _noise_std
@@ -54,6 +55,7 @@ def inpaint_video(
     spatial: dict | None = None,
     device: str | int | None = None,
     return_unfilled: bool = False,
+    progress: Progress = None,
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Fill damaged pixels of film frames from the neighbouring frames that see them clean.
 
@@ -87,6 +89,9 @@ def inpaint_video(
         As for `clpde.diffuse`.
     return_unfilled : bool
         Also return the bool (T, H, W) mask of the pixels the spatial fill took.
+    progress : bool or callable, optional
+        As for `clpde.inpaint`: a bar over the frames, or a callable
+        ``progress(done, total)`` that may stop the run by raising.
 
     Returns
     -------
@@ -122,6 +127,8 @@ def inpaint_video(
     out = planes.copy()
     unfilled = np.zeros((T, ny, nx), bool)
     damaged = [t for t in range(T) if m[t].any()]
+    # temporal fills first, then the spatial fallback: one unit per damaged frame for each
+    bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
     if T > 1 and damaged:
         comp = Compensator(G, device, colour=planes, masks=m)
         rt, q = comp.rt, comp.q
@@ -161,10 +168,13 @@ def inpaint_video(
             )
             out[t] = res.get()
             unfilled[t] = left.get() > 0.5
+            bar.update(1)
     elif damaged:
         unfilled = m > 0
     rng = np.random.default_rng(seed)
     for t in range(T):
+        if t in damaged:
+            bar.update(1 if T > 1 else 2)
         if not unfilled[t].any():
             continue
         # one pixel more, so the spatial fill starts from pixels the frame holds clean
@@ -176,6 +186,7 @@ def inpaint_video(
             sigma = _noise_std(G[t].astype(np.float64))
             blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
         out[t] = np.where(hole[np.newaxis], blend, out[t])
+    bar.close()
     restored = layout.restore(out)
     if return_unfilled:
         return restored, (unfilled[0] if layout.photo else unfilled)

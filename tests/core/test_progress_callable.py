@@ -74,3 +74,18 @@ def test_track_reports_per_frame_and_stops():
 def test_bad_progress_is_one_clear_error():
     with pytest.raises(clpde.InputError, match="progress"):
         clpde.diffuse(np.zeros((8, 8), np.float32), "heat", steps=2, progress="yes")
+
+
+def test_film_functions_report_and_stop():
+    rng = np.random.default_rng(2)
+    frames = np.stack([np.roll(rng.random((32, 40)), t, axis=1) for t in range(5)])
+    frames = frames.astype(np.float32)
+    frames[2, 10:14, 10:14] = 0.0
+    calls = []
+    mask = clpde.detect_defects(frames, progress=recorder(calls))
+    assert calls[-1] == (2, 2)
+    calls = []
+    clpde.inpaint_video(frames, mask | (np.arange(5)[:, None, None] == 2), progress=recorder(calls))
+    assert calls and calls[-1][0] == calls[-1][1]
+    with pytest.raises(Stop):
+        clpde.detect_defects(frames, progress=stopper([]))
