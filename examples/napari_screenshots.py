@@ -1,19 +1,20 @@
-"""Screenshots of each napari widget after a run on the sample data, for the README.
+"""Screenshots of each napari widget after a run on the sample data.
 
-Run under a display (a virtual one will do):  xvfb-run -a python examples/napari_screenshots.py
-Writes docs/images/napari/<widget>.png.
+    python examples/napari_screenshots.py [--out out/napari_screenshots] [--docs]
+
+Needs clpde[napari] and a display (a virtual one will do: `xvfb-run -a python ...`).
+--docs writes them into docs/images/napari/ instead, for docs/napari.md and the README.
 """
 
+import argparse
 import time
 from pathlib import Path
 
-import napari
 import numpy as np
-from qtpy.QtWidgets import QApplication
 
-from clpde.napari import samples, widgets
-
-OUT = Path(__file__).resolve().parents[1] / "docs" / "images" / "napari"
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs" / "images" / "napari"
+OUT = ROOT / "out" / "napari_screenshots"  # set by main()
 
 
 def finish(widget, app):
@@ -100,12 +101,6 @@ def surface(app):
     viewer.close()
 
 
-if __name__ == "__main__":
-    app = QApplication.instance() or QApplication([])
-    for make in (inpaint, denoise, track, surface, film):
-        make(app)
-
-
 def film(app):
     """A short dusty pan (made here), its detected defects and the restored frames."""
     import tempfile
@@ -122,7 +117,7 @@ def film(app):
     for t in range(10):  # dark dirt and bright dust, new on every frame
         for _ in range(6):
             y, x, r = rng.integers(8, 150), rng.integers(8, 190), rng.integers(2, 5)
-            frames[t, y - r:y + r, x - r:x + r] = 10 if rng.random() < 0.5 else 245
+            frames[t, y - r : y + r, x - r : x + r] = 10 if rng.random() < 0.5 else 245
     path = Path(tempfile.mkdtemp()) / "dusty.mp4"
     with av.open(str(path), "w") as out:
         stream = out.add_stream("libx264", rate=10)
@@ -132,7 +127,7 @@ def film(app):
             out.mux(stream.encode(av.VideoFrame.from_ndarray(frame, format="rgb24")))
         out.mux(stream.encode())
     viewer = napari.Viewer(title="clpde: film restoration")
-    (data, attrs, _), = read_film(str(path))
+    ((data, attrs, _),) = read_film(str(path))
     layer = viewer.add_image(data, **attrs)
     w = FilmWidget(viewer)
     viewer.window.add_dock_widget(w, name="clpde film")
@@ -146,3 +141,30 @@ def film(app):
     viewer.dims.set_current_step(0, 5)
     shoot(viewer, app, "film")
     viewer.close()
+
+
+def main(argv=None) -> None:
+    global OUT, napari, samples, widgets
+    parser = argparse.ArgumentParser(description="Screenshots of clpde's napari widgets.")
+    parser.add_argument(
+        "--out", type=Path, default=OUT, help="output folder (default: out/napari_screenshots)"
+    )
+    parser.add_argument(
+        "--docs", action="store_true", help=f"write into {DOCS.relative_to(ROOT)} instead"
+    )
+    args = parser.parse_args(argv)
+    OUT = DOCS if args.docs else args.out
+    import napari as napari_module
+    from qtpy.QtWidgets import QApplication
+
+    from clpde.napari import samples as samples_module
+    from clpde.napari import widgets as widgets_module
+
+    napari, samples, widgets = napari_module, samples_module, widgets_module
+    app = QApplication.instance() or QApplication([])
+    for make in (inpaint, denoise, track, surface, film):
+        make(app)
+
+
+if __name__ == "__main__":
+    main()

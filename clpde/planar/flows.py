@@ -460,9 +460,14 @@ def diffuse_by_channel(image, flow, steps, dt, channel_axis, device, precision, 
     same arithmetic per cell), in the memory of one channel's two device fields.
     Returns (result, the last channel's flow)."""
 
-    scaled = bounded.Scaled(image, channel_axis)
     runtime = get_runtime(device)
     dtype = np.dtype(precision or np.float32)
+    shape = list(np.shape(image))
+    if channel_axis is not None:
+        del shape[channel_axis]
+    # refused before the output or any strip is allocated, as the whole-image path does
+    check_fits(runtime, (1, *shape[-2:]), f"the {flow} flow", 2, dtype=dtype)
+    scaled = bounded.Scaled(image, channel_axis)
     grid = Grid(runtime, scaled.nx, scaled.ny, 1, 1, dtype)
     state = None
     for c in range(scaled.nc):

@@ -374,13 +374,15 @@ def client():
     import sys
 
     import cloudpickle
-    from distributed import Client, LocalCluster
+    from distributed import Client
+
+    from clpde.scale.cluster import start_cluster
 
     # The window work lives in this test module, which the workers cannot import by name.
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    cluster = LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=50
-    )
+    # clpde's own cluster: a plain LocalCluster's nanny leaves MALLOC_TRIM_THRESHOLD_ in
+    # this process's environment, which later clusters' workers would inherit
+    cluster, _, _ = start_cluster(workers=2, threads=1)
     live = Client(cluster)
     yield live
     live.close()
