@@ -38,12 +38,6 @@ DELAY_S = 2.0
 SYNC_S = 0.25
 
 
-def is_long_run(steps: int, cells: int) -> bool:
-    """Kept for callers that still pass ``long_run``: every run may be long, the bar's delay
-    decides (see the module's docstring)."""
-    return True
-
-
 def on_terminal() -> bool:
     """Whether stderr, where the bars go, is a terminal (the command line's `progress`)."""
     return sys.stderr.isatty()

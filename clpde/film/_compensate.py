@@ -8,8 +8,8 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
+from ..imagedata import grow_mask
 from ..motion.flow import FlowParams, FlowSolver, default_levels
-from ._frames import grow
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -108,7 +108,9 @@ class Compensator:
         else:
             # the flow's confidence: zero on the damage and one pixel around it (the rim a
             # codec or a soft edge spreads)
-            self.weights = [cla.to_device(q, (~grow(m > 0, 1.0)).astype(np.float32)) for m in masks]
+            self.weights = [
+                cla.to_device(q, (~grow_mask(m > 0, 1.0)).astype(np.float32)) for m in masks
+            ]
             self.mask_dev = [cla.to_device(q, np.ascontiguousarray(m)) for m in masks]
         self.exclude = (
             None

@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import ndimage
 
 from ..errors import InputError
 from ..imagedata import as_image
@@ -134,20 +133,3 @@ def film_masks(masks: ArrayLike, shape_thw: tuple, photo: bool) -> np.ndarray:
             f"[{lo:g}, {hi:g}]; rescale them or pass bool masks"
         )
     return m.astype(np.float32)
-
-
-def grow(mask: np.ndarray, px: float) -> np.ndarray:
-    """A bool (H, W) mask grown by a disc: every pixel within `px` of it joins.
-
-    The same rule as clpde.grow_mask for bool masks; kept here, private, so that film
-    depends only on the ground floor of this branch (the lead may call grow_mask instead).
-    """
-    if px <= 0 or not mask.any():
-        return mask.copy()
-    return ndimage.distance_transform_edt(~mask) <= px
-
-
-def check_grow(px) -> float:
-    if not isinstance(px, (int, float, np.integer, np.floating)) or not np.isfinite(px) or px < 0:
-        raise InputError(f"grow must be a number of pixels >= 0, not {px!r}")
-    return float(px)

@@ -38,10 +38,11 @@ from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
+from ..imagedata import growth
 from ..planar.rof import _noise_std
 from ..runtime import get_runtime
 from ._compensate import FILM_FLOW, Compensator
-from ._frames import check_grow, film_planes, grey
+from ._frames import film_planes, grey
 from .lines import static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -612,7 +613,7 @@ def detect_defects(
     planes, layout = film_planes(frames, channel_axis)
     G = grey(planes)
     T, ny, nx = G.shape
-    px = check_grow(grow)
+    px = growth(grow)
     for name, val in (("radius", radius), ("search", search)):
         if not isinstance(val, (int, np.integer)) or val < 1:
             raise InputError(f"{name} must be a positive integer, not {val!r}")

@@ -19,10 +19,11 @@ from numpy.typing import ArrayLike
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
+from ..imagedata import grow_mask
 from ..inpainting.api import inpaint
 from ..planar.rof import _noise_std
 from ._compensate import Compensator
-from ._frames import film_masks, film_planes, grey, grow
+from ._frames import film_masks, film_planes, grey
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/fill.cl",)
@@ -178,7 +179,7 @@ def inpaint_video(
         if not unfilled[t].any():
             continue
         # one pixel more, so the spatial fill starts from pixels the frame holds clean
-        hole = grow(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
+        hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
         filled = _spatial(out[t], hole, options)
         soft = m[t][np.newaxis]
         blend = soft * filled + (1.0 - soft) * planes[t]

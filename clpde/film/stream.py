@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..imagedata import grow_mask
 from .detect import detect_defects
 from .fill import inpaint_video
 
@@ -105,16 +106,9 @@ def grow_masks(masks: np.ndarray, pixels: float) -> np.ndarray:
     >>> int(grow_masks(m, 1).sum())
     5
     """
-    from scipy import ndimage
-
     masks = np.asarray(masks, bool)
-    if pixels <= 0 or not masks.any():
-        return masks.copy()
     frames = masks.reshape((-1, *masks.shape[-2:]))
-    out = np.empty_like(frames)
-    for t, mask in enumerate(frames):
-        out[t] = ndimage.distance_transform_edt(~mask) <= pixels if mask.any() else mask
-    return out.reshape(masks.shape)
+    return np.stack([grow_mask(mask, pixels) for mask in frames]).reshape(masks.shape)
 
 
 @dataclass(frozen=True)

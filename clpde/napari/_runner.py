@@ -87,7 +87,8 @@ class RunWidget(Container):
 
     # ---- running ------------------------------------------------------------------------
     def run(self) -> None:
-        """Start this widget's work (subclasses implement `work` and `done`)."""
+        """Start this widget's work: its `work()` (every widget defines one) reads the form
+        and returns (a function of a progress callable, a callback for its result)."""
         try:
             job = self.work()
         except (clpde.ClpdeError, ValueError) as error:
@@ -96,10 +97,6 @@ class RunWidget(Container):
         if job is not None:
             self.start(*job)
 
-    def work(self) -> tuple[Callable, Callable] | None:
-        """The run: (function of a progress callable, callback with its result)."""
-        raise NotImplementedError
-
     def start(self, function: Callable, on_result: Callable) -> None:
         """Run ``function(progress)`` in a worker thread; ``on_result(result)`` gets its
         result on the GUI thread unless the run was cancelled or failed."""
@@ -107,7 +104,11 @@ class RunWidget(Container):
             self.say("a run is already going on; cancel it first")
             return
         if self.device.value is not None:
-            clpde.use_device(self.device.value)
+            try:
+                clpde.use_device(self.device.value)
+            except clpde.ClpdeError as error:
+                self.say(str(error), error=True)
+                return
         self._cancel.clear()
         self._bar = napari_progress(total=0, desc=self.title)
 
