@@ -143,10 +143,10 @@ def serial_loop(kind: str, listing: Path, mask: Path, out: Path, options: dict) 
     if kind == "video":
         import hashlib
 
-        from clpde.film.container import FilmReader, FilmWriter
+        from clpde.io.video import VideoReader, VideoWriter
 
-        reader, digest = FilmReader(inputs[0]), hashlib.sha256()
-        with FilmWriter(out, like=reader.info) as writer:
+        reader, digest = VideoReader(inputs[0]), hashlib.sha256()
+        with VideoWriter(out, like=reader.info) as writer:
             count = 0
             for frame in reader:
                 frame = clpde.inpaint(frame, m, channel_axis=-1, progress=False, **options)

@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
-from ..film.container import is_film
 from ..film.restore import restore_film
+from ..io.video import is_video
 from ..runtime import use_device
 from ..scale.tasks import TRANSPORT_OPTIONS
 from ._common import add_device_argument
@@ -181,7 +181,7 @@ def prepare_sequence_args(args) -> bool:
             raise InputError("give the mask once: as MASK or as --mask")
         args.mask = option
     source = args.input
-    sequence = bool(source) and (Path(source).is_dir() or is_film(source))
+    sequence = bool(source) and (Path(source).is_dir() or is_video(source))
     if not sequence and any(
         getattr(args, name, None) is not None for name in ("workers", "scheduler", "chunk_frames")
     ):

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import re
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -24,17 +23,11 @@ import numpy as np
 
 from .._progress import progress_bar
 from ..errors import InputError
-from ..io.images import (
-    IMAGE_FORMATS,
-    PathLike,
-    output_folder,
-    read_image,
-    read_mask,
-    write_image,
-)
+from ..io.frames import image_files
+from ..io.images import PathLike, output_folder, read_image, read_mask, write_image
+from ..io.video import FORMATS, VideoReader, VideoWriter, check_video_output, is_video
 from ..scale.cluster import connect
 from .chunks import restore_chunked
-from .container import FORMATS, FilmReader, FilmWriter, check_film_output, is_film
 from .stream import DEFAULT_BLOCK, WindowWork, film_work, restore_stream
 
 # The overlay's colours per defect kind: given or unclassified masks, blotches, scratches.
@@ -74,20 +67,6 @@ class FilmResult:
     frames_sha256: str
 
 
-def _natural_key(path: Path):
-    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", path.name)]
-
-
-def _images(folder: Path) -> list[Path]:
-    files = sorted(
-        (p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_FORMATS),
-        key=_natural_key,
-    )
-    if not files:
-        raise InputError(f"the folder {folder} holds no images (.png, .tif/.tiff, .jpg/.jpeg)")
-    return files
-
-
 class _Source:
     """The frames of a film or of a folder of images, read one at a time."""
 
@@ -95,11 +74,11 @@ class _Source:
         self.path = Path(path)
         self.reader = self.files = None
         if self.path.is_dir():
-            self.files = _images(self.path)
+            self.files = image_files(self.path)
             self.count, self.rate = len(self.files), FOLDER_RATE
             first = read_image(self.files[0])
-        elif is_film(self.path):
-            self.reader = FilmReader(self.path)
+        elif is_video(self.path):
+            self.reader = VideoReader(self.path)
             self.count, self.rate = self.reader.info.frames, self.reader.info.rate
             first = np.zeros(
                 (self.reader.info.height, self.reader.info.width, 3), self.reader.info.dtype
@@ -141,7 +120,7 @@ def _mask_source(mask: PathLike, source: _Source) -> Iterator[np.ndarray]:
     mask = Path(mask)
     shape = source.shape[:2]
     if mask.is_dir():
-        files = _images(mask)
+        files = image_files(mask)
         if len(files) != source.count:
             raise InputError(
                 f"the mask folder {mask} holds {len(files)} masks for "
@@ -181,13 +160,93 @@ def _overlay_frame(frame: np.ndarray, mask: np.ndarray, kinds: np.ndarray | None
     return out.round().astype(np.uint8)
 
 
-def _check_paths(source: _Source, output: Path, extras: list[Path | None]) -> None:
-    paths = [output, *[p for p in extras if p is not None]]
+def _check_outputs(
+    source: _Source,
+    output: Path,
+    masks_out: Path | None,
+    overlay: Path | None,
+    codec: str | None,
+    grow: float,
+) -> bool:
+    """Check every output before any frame is read; True when the output is a film."""
+    to_film = output.suffix.lower() in FORMATS
+    if not to_film and output.suffix:
+        raise InputError(
+            f"output {output}: give a film ({', '.join(sorted(FORMATS))}) or a "
+            "folder for the restored frames"
+        )
+    paths = [output, *[p for p in (masks_out, overlay) if p is not None]]
     for path in paths:
         if path.resolve() == source.path.resolve():
             raise InputError(f"output {path} is the input; clpde never overwrites its inputs")
     if len({p.resolve() for p in paths}) != len(paths):
         raise InputError("the output, --masks-out and --overlay must be different paths")
+    if to_film:
+        check_video_output(output, codec)
+    elif codec is not None:
+        raise InputError("--codec applies to a film output, not a folder of frames")
+    if overlay is not None:
+        check_video_output(overlay)
+    if grow < 0:
+        raise InputError(f"--grow must be >= 0 pixels, not {grow}")
+    return to_film
+
+
+class _Outputs:
+    """The restored film or folder, the masks folder and the overlay, written frame by frame
+    inside one ExitStack (so that an error or Ctrl-C leaves none of them)."""
+
+    def __init__(
+        self,
+        stack: contextlib.ExitStack,
+        source: _Source,
+        output: Path,
+        to_film: bool,
+        *,
+        codec: str | None,
+        masks_out: Path | None,
+        overlay: Path | None,
+        overwrite: bool,
+        option: str,
+    ) -> None:
+        self.source = source
+        like = source.reader.info if source.reader is not None else None
+        self.film = self.folder = self.masks = self.overlay = self.originals = None
+        if to_film:
+            self.film = stack.enter_context(
+                VideoWriter(output, source.rate, like=like, codec=codec)
+            )
+        else:
+            self.folder = stack.enter_context(output_folder(output, overwrite, option=option))
+        if masks_out is not None:
+            self.masks = stack.enter_context(output_folder(masks_out, overwrite, option=option))
+        if overlay is not None:
+            self.overlay = stack.enter_context(
+                VideoWriter(overlay, source.rate, like=like, copy_streams=False)
+            )
+            # The overlay draws over the damaged frames: a second reader, in step.
+            self.originals = iter(_Source(source.path))
+        self.digits = max(5, len(str(source.count - 1)))
+        self.digest = hashlib.sha256()
+        self.masked = self.written = 0
+
+    def write(self, frame: np.ndarray, found: np.ndarray, kinds: np.ndarray | None) -> None:
+        t = self.written
+        self.digest.update(np.ascontiguousarray(frame).data)
+        self.masked += int(found.sum())
+        timestamps = self.source.reader.timestamps if self.source.reader is not None else None
+        pts = timestamps.pop(0) if timestamps else None
+        if self.film is not None:
+            self.film.write(frame, pts=pts)
+        else:
+            channels = frame.shape[-1] if frame.ndim == 3 else 1
+            write_image(self.folder / self.source.name(t, frame.dtype, channels), frame)
+        if self.masks is not None:
+            name = f"mask_{t:0{self.digits}d}.png"
+            write_image(self.masks / name, found.astype(np.uint8) * 255)
+        if self.overlay is not None:
+            self.overlay.write(_overlay_frame(next(self.originals), found, kinds), pts=pts)
+        self.written += 1
 
 
 def restore_film(
@@ -271,21 +330,7 @@ def restore_film(
     output = Path(output)
     masks_out = None if masks_out is None else Path(masks_out)
     overlay = None if overlay is None else Path(overlay)
-    to_film = output.suffix.lower() in FORMATS
-    if not to_film and output.suffix:
-        raise InputError(
-            f"output {output}: give a film ({', '.join(sorted(FORMATS))}) or a "
-            "folder for the restored frames"
-        )
-    _check_paths(src, output, [masks_out, overlay])
-    if to_film:
-        check_film_output(output, codec)
-    elif codec is not None:
-        raise InputError("--codec applies to a film output, not a folder of frames")
-    if overlay is not None:
-        check_film_output(overlay)
-    if grow < 0:
-        raise InputError(f"--grow must be >= 0 pixels, not {grow}")
+    to_film = _check_outputs(src, output, masks_out, overlay, codec, grow)
     given = None if mask is None else _mask_source(mask, src)
     if work is None:
         work = film_work(grow=grow, detect_options=detect_options, fill_options=fill_options)
@@ -293,28 +338,18 @@ def restore_film(
         work = WindowWork(work.fill, work.detect, work.fill_radius, work.detect_radius, grow)
     if given is None and work.detect is None:
         raise InputError("give the masks (--mask): this restoration has no detector")
-    like = src.reader.info if src.reader is not None else None
-    digest = hashlib.sha256()
-    masked = written = 0
     with contextlib.ExitStack() as stack:
-        if to_film:
-            writer = stack.enter_context(FilmWriter(output, like=like, codec=codec, rate=src.rate))
-        else:
-            folder = stack.enter_context(output_folder(output, overwrite, option=overwrite_option))
-        mask_folder = (
-            None
-            if masks_out is None
-            else stack.enter_context(output_folder(masks_out, overwrite, option=overwrite_option))
+        outputs = _Outputs(
+            stack,
+            src,
+            output,
+            to_film,
+            codec=codec,
+            masks_out=masks_out,
+            overlay=overlay,
+            overwrite=overwrite,
+            option=overwrite_option,
         )
-        shown = (
-            None
-            if overlay is None
-            else stack.enter_context(
-                FilmWriter(overlay, like=like, rate=src.rate, copy_streams=False)
-            )
-        )
-        # The overlay draws over the damaged frames: a second reader, in step.
-        originals = None if overlay is None else iter(_Source(source))
         bar = progress_bar(progress, src.count, "clpde restore", unit="frame")
         stack.callback(bar.close)
         use_dask = any(x is not None for x in (workers, threads, scheduler, client))
@@ -326,34 +361,20 @@ def restore_film(
                 cluster, src, src.count, work, masks=given, block=block, chunk_frames=chunk_frames
             )
         stack.callback(frames.close)  # Ctrl-C: cancel the workers' chunks too
-        digits = max(5, len(str(src.count - 1)))
-        timestamps = src.reader.timestamps if src.reader is not None else None
-        for t, (frame, found, kinds) in enumerate(frames):
-            digest.update(np.ascontiguousarray(frame).data)
-            masked += int(found.sum())
-            pts = timestamps.pop(0) if timestamps else None
-            if to_film:
-                writer.write(frame, pts=pts)
-            else:
-                channels = frame.shape[-1] if frame.ndim == 3 else 1
-                write_image(folder / src.name(t, frame.dtype, channels), frame)
-            if mask_folder is not None:
-                write_image(mask_folder / f"mask_{t:0{digits}d}.png", found.astype(np.uint8) * 255)
-            if shown is not None:
-                shown.write(_overlay_frame(next(originals), found, kinds), pts=pts)
-            written += 1
+        for frame, found, kinds in frames:
+            outputs.write(frame, found, kinds)
             bar.update(1)
         workers_used = 0 if cluster is None else len(cluster.scheduler_info()["workers"])
-    if written != src.count:
-        raise InputError(f"restored {written} of {src.count} frames")
+    if outputs.written != src.count:
+        raise InputError(f"restored {outputs.written} of {src.count} frames")
     return FilmResult(
         output,
-        written,
+        outputs.written,
         src.rate,
         time.perf_counter() - start,
-        masked,
+        outputs.masked,
         workers_used,
-        digest.hexdigest(),
+        outputs.digest.hexdigest(),
     )
 
 

@@ -18,9 +18,8 @@ import numpy as np
 
 from ..errors import InputError
 from .images import IMAGE_FORMATS, atomic_output, output_folder, read_image, write_gif, write_image
-from .video import read_video
+from .video import READ_SUFFIXES, is_video, read_video
 
-VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".webm", ".mpg", ".mpeg", ".m4v", ".ogv"}
 TIFF_SUFFIXES = {".tif", ".tiff"}
 
 
@@ -36,11 +35,6 @@ def to_grey(frames: np.ndarray) -> np.ndarray:
         info = np.iinfo(frames.dtype)
         return np.clip(np.rint(luma), info.min, info.max).astype(frames.dtype)
     return luma.astype(frames.dtype)
-
-
-def _read_video(path: Path) -> np.ndarray:
-    """The frames of a video file, through clpde's one video reader (io/video.py)."""
-    return read_video(path)[0]
 
 
 def _read_tiff_stack(path: Path) -> np.ndarray:
@@ -104,12 +98,12 @@ def read_frames(path, grey: bool = True) -> np.ndarray:
         frames = _read_folder(path)
     elif path.suffix.lower() in TIFF_SUFFIXES:
         frames = _read_tiff_stack(path)
-    elif path.suffix.lower() in VIDEO_SUFFIXES:
-        frames = _read_video(path)
+    elif is_video(path):
+        frames = read_video(path)[0]
     else:
         raise InputError(
             f"{path}: unsupported input {path.suffix or '(no extension)'!r}; give a video "
-            f"({', '.join(sorted(VIDEO_SUFFIXES))}), a multi-page .tif or a folder of images"
+            f"({', '.join(sorted(READ_SUFFIXES))}), a multi-page .tif or a folder of images"
         )
     if frames.dtype == bool:
         frames = frames.astype(np.uint8) * 255

@@ -1,234 +1,672 @@
-"""Video files through PyAV: the one video reader and the one video writer of clpde.
+"""Video files through PyAV: clpde's one video reader and one video writer.
 
-H.264 in 4:2:0 needs even sizes: an odd-sized film is padded by one row or column (edge
-pixels repeated) for the encoder, and its size is kept in the file's metadata so that
-``read_video`` crops it back; frames are never rescaled.
+A video is read as RGB frames: 8-bit inputs as (rows, columns, 3) uint8, deeper ones (10-bit
+and up) as uint16 over the full 16-bit range. Decoding uses the video's own colour matrix
+and range, so the frames are what a player shows.
+
+A video is written with the frames' timestamps, the frame rate, and, when it restores an
+input (``like=``), that input's colour matrix, range, primaries and transfer, its metadata,
+and its audio and subtitle streams (clpde.io.side_streams). Codecs:
+
+- ``h264`` (default) and ``h265``: 4:2:0, 10-bit where the input has more than 8 bits;
+  4:2:0 needs even sizes, so an odd-sized video is padded by one row or column (edge pixels
+  repeated) and its size kept in the file's metadata, from which the reader crops it back;
+- ``ffv1``: lossless, in Matroska, storing the RGB planes (8- or 16-bit), so that the
+  written video decodes to exactly the RGB frames that were given to it.
+
+Interlaced input (frames made of two fields) is refused with one line: restoring it frame
+by frame would mix two instants. Writes are atomic: the file appears only when complete.
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
+import os
 import re
-from dataclasses import dataclass
+import tempfile
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from .images import atomic_output
+from .images import PathLike, atomic_output
+from .side_streams import SideStreams
 
-VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
-READ_SUFFIXES = set(VIDEO_FORMATS) | {".webm", ".mpg", ".mpeg", ".ogv"}
-_SIZE_TAG = "comment"  # container metadata: "clpde size=WxH" when the frames were padded
+FORMATS = {".mp4": "mp4", ".m4v": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi"}
+READ_SUFFIXES = set(FORMATS) | {".webm", ".mpg", ".mpeg", ".ogv", ".ts", ".mxf"}
+CODECS = {"h264": "libx264", "h265": "libx265", "ffv1": "ffv1"}
+LOSSLESS = ("ffv1",)
+# The writer pads odd sizes for 4:2:0 and keeps the true size in this tag.
+_SIZE_TAG = "comment"
 _SIZE_RE = re.compile(r"clpde size=(\d+)x(\d+)")
-
-
-def is_video(path) -> bool:
-    return Path(path).suffix.lower() in READ_SUFFIXES
+# Container metadata the muxer writes itself: copying it would record the input's muxer.
+_OWN_TAGS = {"major_brand", "minor_version", "compatible_brands", "encoder", "creation_time"}
+_STREAM_TAGS = ("language", "title", "handler_name")
 
 
 def require_av():
-    """PyAV, or a clear error naming the fix."""
+    """PyAV, or a clear error naming the fix.
+
+    Returns
+    -------
+    module
+        The ``av`` module.
+
+    Raises
+    ------
+    InputError
+        If PyAV is not installed.
+
+    Examples
+    --------
+    >>> require_av().__name__
+    'av'
+    """
     try:
         import av
     except ImportError:
-        raise InputError(
-            'reading and writing video needs PyAV: pip install "clpde[video]"'
-        ) from None
+        raise InputError('video needs PyAV: pip install "clpde[video]"') from None
     return av
 
 
-# ---- video files ------------------------------------------------------------------------------
+def is_video(path: PathLike) -> bool:
+    """Whether `path` names a video file (by its extension).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file name.
+
+    Returns
+    -------
+    bool
+        True for the extensions the reader takes (.mp4, .mkv, .mov, .avi, .webm, ...).
+
+    Examples
+    --------
+    >>> is_video("reel.MKV"), is_video("scan.png")
+    (True, False)
+    """
+    return Path(path).suffix.lower() in READ_SUFFIXES
+
+
+# ---- reading ------------------------------------------------------------------------------
 @dataclass
 class VideoInfo:
-    frames: int  # as the container states it (0 when unknown)
+    """What a video stream is, and the streams that travel with it.
+
+    Attributes
+    ----------
+    path : Path
+        The video file.
+    frames : int
+        The number of video frames (counted from the packets).
+    rate : Fraction
+        Frames per second.
+    time_base : Fraction
+        The unit of the video stream's timestamps.
+    width, height : int
+        The frames' size (before any padding the writer added for 4:2:0).
+    pix_fmt : str
+        The stored pixel format (e.g. ``yuv420p10le``).
+    depth : int
+        Bits per component of the stored pixels.
+    colour : dict
+        The colour matrix, range, primaries and transfer (FFmpeg's codes).
+    metadata : dict
+        The container's tags.
+    video_metadata : dict
+        The video stream's tags.
+    """
+
+    path: Path
+    frames: int
     rate: Fraction
+    time_base: Fraction
     width: int
     height: int
+    pix_fmt: str
+    depth: int
+    colour: dict = field(default_factory=dict)
+    metadata: dict = field(default_factory=dict)
+    video_metadata: dict = field(default_factory=dict)
 
-
-def video_info(path) -> VideoInfo:
-    av = require_av()
-    with _open_input(av, path) as container:
-        stream = container.streams.video[0]
-        width, height = _stored_size(container, stream)
-        return VideoInfo(int(stream.frames or 0), _rate(stream), width, height)
+    @property
+    def dtype(self) -> np.dtype:
+        """The frames' dtype: uint8 for 8-bit videos, uint16 for deeper ones."""
+        return np.dtype(np.uint8 if self.depth <= 8 else np.uint16)
 
 
 @contextlib.contextmanager
-def _open_input(av, path):
+def _open(path: PathLike):
+    av = require_av()
     path = Path(path)
     if not path.is_file():
-        raise InputError(f"input video {path} does not exist")
+        raise InputError(f"input film {path} does not exist")
     try:
         container = av.open(str(path))
     except Exception as exc:  # noqa: BLE001  (PyAV raises many types: all mean unreadable)
-        raise InputError(f"cannot read {path} as a video: {exc}") from None
+        detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise InputError(f"cannot read {path} as a film: {detail}") from None
     try:
         if not container.streams.video:
-            raise InputError(f"{path} holds no video stream")
+            raise InputError(f"{path} holds no video stream; give a film with pictures")
         yield container
     finally:
         container.close()
 
 
-def _rate(stream) -> Fraction:
-    rate = stream.average_rate or stream.base_rate or stream.guessed_rate
-    return Fraction(rate) if rate else Fraction(25)
-
-
-def _stored_size(container, stream) -> tuple[int, int]:
-    """The frames' size before padding (from our metadata), else the stream's."""
-    match = _SIZE_RE.search(container.metadata.get(_SIZE_TAG, ""))
+def _size(container, stream) -> tuple[int, int]:
     width, height = stream.codec_context.width, stream.codec_context.height
-    if match:
-        w, h = int(match.group(1)), int(match.group(2))
-        if w <= width and h <= height:
-            return w, h
+    match = _SIZE_RE.search(container.metadata.get(_SIZE_TAG, ""))
+    if match and int(match.group(1)) <= width and int(match.group(2)) <= height:
+        return int(match.group(1)), int(match.group(2))
     return width, height
 
 
-def iter_video(path):
-    """The frames of a video as (rows, columns, 3) uint8 RGB arrays, in display order."""
+def video_info(path: PathLike) -> VideoInfo:
+    """Read a video's description, and refuse what clpde cannot read.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video file.
+
+    Returns
+    -------
+    VideoInfo
+        Its frame count, rate, size, depth, colour and metadata.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist, cannot be read, holds no video stream or no frames, or
+        is interlaced.
+
+    Examples
+    --------
+    >>> video_info("film.mp4").frames  # doctest: +SKIP
+    3000
+    """
     av = require_av()
-    with _open_input(av, path) as container:
+    with _open(path) as container:
         stream = container.streams.video[0]
-        width, height = _stored_size(container, stream)
-        try:
-            for frame in container.decode(stream):
-                # An array of its own: PyAV's shares the frame's buffer, and a batch of
-                # frames waits (and is sent) while the next ones are decoded.
-                yield np.array(frame.to_ndarray(format="rgb24")[:height, :width])
-        except av.FFmpegError as exc:
-            raise InputError(f"cannot decode {path}: {exc}") from None
+        cc = stream.codec_context
+        width, height = _size(container, stream)
+        # The packets, not the header: MKV states no count, and MP4's may be an edit list's.
+        count = sum(1 for p in container.demux(stream) if p.size)
+        if count == 0:
+            raise InputError(f"{path} holds no video frames")
+        container.seek(0)
+        first = next(container.decode(stream), None)
+    if first is None:
+        raise InputError(f"{path}: the first video frame cannot be decoded")
+    if first.interlaced_frame:
+        raise InputError(
+            f"{path} is interlaced (each frame holds two fields); deinterlace it "
+            "first, e.g. ffmpeg -i IN -vf bwdif=mode=send_field OUT"
+        )
+    rate = stream.average_rate or stream.base_rate or stream.guessed_rate or 25
+    fmt = av.VideoFormat(cc.pix_fmt or first.format.name)
+    colour = {
+        "range": int(first.color_range),
+        "space": int(first.colorspace),
+        "primaries": int(first.color_primaries),
+        "trc": int(first.color_trc),
+    }
+    return VideoInfo(
+        Path(path),
+        count,
+        Fraction(rate),
+        Fraction(stream.time_base),
+        width,
+        height,
+        fmt.name,
+        max(c.bits for c in fmt.components),
+        colour,
+        dict(container.metadata),
+        dict(stream.metadata),
+    )
 
 
-def read_video(path) -> tuple[np.ndarray, Fraction]:
-    """(frames (T, rows, columns, 3) uint8, frame rate) of a video file."""
-    frames = list(iter_video(path))
-    if not frames:
-        raise InputError(f"{path} holds no frames")
-    return np.stack(frames), video_info(path).rate
+def _to_rgb(frame, info: VideoInfo) -> np.ndarray:
+    target = "rgb24" if info.depth <= 8 else "rgb48le"
+    if frame.format.name in ("rgb24", "rgb48le") and frame.format.name == target:
+        rgb = frame
+    else:
+        rgb = frame.reformat(
+            format=target, src_color_range=frame.color_range or None, dst_color_range="JPEG"
+        )
+    # A copy of its own: PyAV's array shares the frame's buffer, and frames wait (or travel
+    # to a worker) while the next ones are decoded.
+    return np.array(rgb.to_ndarray()[: info.height, : info.width])
+
+
+class VideoReader:
+    """A video's frames, decoded one at a time in display order, with their timestamps.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video file.
+
+    Attributes
+    ----------
+    info : VideoInfo
+        The video's description.
+    timestamps : list of int
+        The presentation timestamps of the frames read so far that the writer has not yet
+        taken (in ``info.time_base``); a restoration pops them in order.
+
+    Raises
+    ------
+    InputError
+        As :func:`video_info`; and a frame that cannot be decoded or is interlaced.
+
+    Examples
+    --------
+    >>> for frame in VideoReader("film.mp4"):  # doctest: +SKIP
+    ...     print(frame.shape, frame.dtype)
+    """
+
+    def __init__(self, path: PathLike) -> None:
+        self.info = video_info(path)
+        self.timestamps: list[int] = []
+
+    def __len__(self) -> int:
+        return self.info.frames
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        av = require_av()
+        with _open(self.info.path) as container:
+            stream = container.streams.video[0]
+            stream.thread_type = "AUTO"
+            last = None
+            try:
+                for t, frame in enumerate(container.decode(stream)):
+                    if frame.interlaced_frame:
+                        raise InputError(
+                            f"{self.info.path}: frame {t} is interlaced; deinterlace the film first"
+                        )
+                    pts = frame.pts if frame.pts is not None else (last + 1 if last else t)
+                    last = pts
+                    self.timestamps.append(pts)
+                    yield _to_rgb(frame, self.info)
+            except av.FFmpegError as exc:
+                raise InputError(f"cannot decode {self.info.path}: {exc}") from None
+
+
+def iter_video(path: PathLike) -> Iterator[np.ndarray]:
+    """The frames of a video, one at a time, as :class:`VideoReader` gives them.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video file.
+
+    Yields
+    ------
+    ndarray
+        (rows, columns, 3) RGB frames, uint8 (uint16 for deeper videos), in display order.
+
+    Examples
+    --------
+    >>> first = next(iter_video("film.mp4"))  # doctest: +SKIP
+    """
+    yield from VideoReader(path)
+
+
+def read_video(path: PathLike) -> tuple[np.ndarray, Fraction]:
+    """All the frames of a video, and its frame rate.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video file.
+
+    Returns
+    -------
+    (ndarray, Fraction)
+        The frames (T, rows, columns, 3), uint8 (uint16 for deeper videos), and the rate.
+
+    Raises
+    ------
+    InputError
+        As :class:`VideoReader`.
+
+    Examples
+    --------
+    >>> frames, rate = read_video("film.mp4")  # doctest: +SKIP
+    """
+    reader = VideoReader(path)
+    return np.stack(list(reader)), reader.info.rate
+
+
+# ---- writing ------------------------------------------------------------------------------
+def check_video_output(path: PathLike, codec: str | None = None) -> tuple[str, str]:
+    """Check, before any work, that a video can be written at `path` with `codec`.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video to write.
+    codec : {'h264', 'h265', 'ffv1'}, optional
+        The video codec (default h264).
+
+    Returns
+    -------
+    (str, str)
+        The container format and the codec's name.
+
+    Raises
+    ------
+    InputError
+        For an unknown container or codec, FFV1 outside Matroska, or a folder that does not
+        exist or is not writable.
+
+    Examples
+    --------
+    >>> check_video_output("out.mkv", "ffv1")
+    ('matroska', 'ffv1')
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in FORMATS:
+        raise InputError(f"{path}: write a film as one of {', '.join(sorted(FORMATS))}")
+    codec = codec or "h264"
+    if codec not in CODECS:
+        raise InputError(f"--codec {codec}: choose one of {', '.join(CODECS)}")
+    if codec == "ffv1" and FORMATS[suffix] != "matroska":
+        raise InputError(f"{path}: lossless FFV1 goes in Matroska; name the output .mkv")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise InputError(
+            f"output folder {folder} does not exist (or is not a folder); create it first"
+        )
+    if path.is_dir():
+        raise InputError(f"output {path} is a folder; give a film file name")
+    try:  # writable at all? (a read-only folder or file system)
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".part")
+    except OSError as exc:
+        raise InputError(f"cannot write {path}: {exc.strerror} in folder {folder}") from None
+    os.close(fd)
+    os.unlink(probe)
+    return FORMATS[suffix], codec
+
+
+def _pixel_format(codec: str, depth: int, dtype: np.dtype) -> str:
+    if codec == "ffv1":
+        return "bgr0" if dtype == np.uint8 else "gbrp16le"
+    return "yuv420p" if depth <= 8 else "yuv420p10le"
+
+
+def _encoder_options(codec: str, crf: int) -> dict:
+    if codec == "h264":
+        # x264's macroblock-tree reads memory it never initialised: the same frames would
+        # give other bytes run after run, and a film restored over workers would differ in
+        # bytes from one restored in a process (one thread, for the same reason).
+        return {"crf": str(crf), "x264-params": "mbtree=0"}
+    if codec == "h265":
+        return {"crf": str(crf), "x265-params": "log-level=error"}
+    return {"level": "3", "slicecrc": "1", "g": "1"}
+
+
+def _as_rgb(frame: np.ndarray) -> np.ndarray:
+    frame = np.asarray(frame)
+    if frame.ndim == 2:
+        frame = np.repeat(frame[..., np.newaxis], 3, axis=-1)
+    if frame.dtype not in (np.uint8, np.uint16) or frame.ndim != 3 or frame.shape[-1] not in (3, 4):
+        raise InputError(
+            f"film frames must be 8- or 16-bit grey or RGB, not {frame.dtype} "
+            f"of shape {frame.shape}"
+        )
+    return frame[..., :3]
 
 
 class VideoWriter:
-    """Frames into a video file with PyAV (H.264, 4:2:0), written atomically: the file
-    appears under its name only when close() succeeds; abort() (or an error in a with
-    block) leaves nothing.
+    """Frames into a video file; restored frames keep the input's timing, colour, sound and
+    text.
 
     Reproducible: the same frames give the same bytes, run after run and whatever ran in
-    the process before. x264's macroblock-tree rate control reads memory that it never
-    initialised (glibc's MALLOC_PERTURB_=1 alone changes a film from 105 to 124 kB), so
-    with it a film restored over workers and one restored serially differed in bytes with
-    the same frames; it is off (mbtree=0: 5% larger, 0.3 dB lower PSNR on the carphone clip
-    at crf 17). threads: the encoder's (0: FFmpeg's choice); x264's output depends on their
-    number, so the default 1 gives the same bytes on any machine.
+    the process before.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video to write (.mp4, .mov, .mkv, .avi); it appears only when :meth:`close`
+        succeeds.
+    rate : Fraction, optional
+        Frames per second (default: `like`'s, else 25).
+    like : VideoInfo, optional
+        The input video: its timestamps' unit, rate, colour description and metadata are
+        kept, and its audio and subtitle streams copied. None: a new video at `rate`.
+    codec : {'h264', 'h265', 'ffv1'}, optional
+        The video codec (default h264; ffv1 is lossless, in Matroska only).
+    crf : int
+        The quality of h264 and h265 (lower is better).
+    copy_streams : bool
+        Copy `like`'s audio and subtitle streams (default True).
+
+    Raises
+    ------
+    InputError
+        See :func:`check_video_output`; and an audio stream that the container cannot hold.
+
+    Examples
+    --------
+    >>> reader = VideoReader("in.mp4")  # doctest: +SKIP
+    >>> with VideoWriter("out.mkv", like=reader.info, codec="ffv1") as writer:  # doctest: +SKIP
+    ...     for frame in reader:
+    ...         writer.write(frame, pts=reader.timestamps.pop(0))
     """
 
-    def __init__(self, path, rate, *, crf: int = 17, codec: str = "libx264", threads: int = 1):
-        path = Path(path)
-        suffix = path.suffix.lower()
-        if suffix not in VIDEO_FORMATS:
-            raise InputError(f"{path}: write a video as one of {', '.join(sorted(VIDEO_FORMATS))}")
-        if not path.parent.is_dir():
-            raise InputError(f"output folder {path.parent} does not exist; create it first")
-        if isinstance(threads, bool) or not isinstance(threads, int) or threads < 0:
-            raise InputError(
-                f"threads must be a whole number >= 0 (0: FFmpeg's choice), not {threads!r}"
-            )
-        self.path, self.rate, self.crf, self.codec = path, Fraction(rate), crf, codec
-        self.threads = threads
-        self._atomic = atomic_output(path)
-        self._tmp = self._atomic.__enter__()
-        self._container = require_av().open(str(self._tmp), mode="w", format=VIDEO_FORMATS[suffix])
-        self._stream = None
-        self.count = 0
-        # The frames as given, before the (lossy) encoder: what a film restored over
-        # workers and one restored serially must agree on, bit for bit.
-        self._digest = hashlib.sha256()
-
-    def _start(self, height: int, width: int) -> None:
-        self.size = (height, width)
-        stream = self._container.add_stream(self.codec, rate=self.rate)
-        stream.width, stream.height = width + width % 2, height + height % 2
-        stream.pix_fmt = "yuv420p"
-        options = {"crf": str(self.crf)}
-        if self.codec == "libx264":  # its mbtree reads uninitialised memory (see above)
-            options["x264-params"] = "mbtree=0"
-        stream.options = options
-        stream.thread_count = self.threads
-        if (stream.width, stream.height) != (width, height):
-            self._container.metadata[_SIZE_TAG] = f"clpde size={width}x{height}"
-        self._stream = stream
-
-    def write(self, frame: np.ndarray) -> None:
+    def __init__(
+        self,
+        path: PathLike,
+        rate: Fraction | None = None,
+        *,
+        like: VideoInfo | None = None,
+        codec: str | None = None,
+        crf: int = 17,
+        copy_streams: bool = True,
+    ) -> None:
         av = require_av()
-        frame = np.asarray(frame)
-        if frame.ndim == 2:
-            frame = np.repeat(frame[..., np.newaxis], 3, axis=-1)
-        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[-1] not in (3, 4):
-            raise InputError(
-                f"video frames must be 8-bit grey or RGB, not {frame.dtype} of shape {frame.shape}"
+        self.path = Path(path)
+        self.format, self.codec = check_video_output(self.path, codec)
+        self.like, self.crf, self.count = like, crf, 0
+        self.rate = Fraction(rate) if rate else (like.rate if like else Fraction(25))
+        self._atomic = atomic_output(self.path)
+        self._tmp = self._atomic.__enter__()
+        self._side: SideStreams | None = None
+        try:
+            self._out = av.open(str(self._tmp), mode="w", format=self.format)
+            self._video = None
+            if like is not None:
+                for key, value in like.metadata.items():
+                    if key not in _OWN_TAGS and not (key == _SIZE_TAG and _SIZE_RE.search(value)):
+                        self._out.metadata[key] = value
+                if copy_streams:
+                    self._side = SideStreams.copy(like.path, self._out, self.path, self.format)
+        except BaseException:
+            self.abort()
+            raise
+
+    def _start(self, frame: np.ndarray) -> None:
+        height, width = frame.shape[:2]
+        depth = self.like.depth if self.like else (8 if frame.dtype == np.uint8 else 16)
+        pix_fmt = _pixel_format(self.codec, depth, frame.dtype)
+        stream = self._out.add_stream(CODECS[self.codec], rate=self.rate)
+        cc = stream.codec_context
+        self.size = (height, width)
+        pad = pix_fmt.startswith("yuv420")  # 4:2:0 needs even sizes: pad, crop on reading
+        stream.width = width + (width % 2 if pad else 0)
+        stream.height = height + (height % 2 if pad else 0)
+        if (stream.width, stream.height) != (width, height):
+            self._out.metadata[_SIZE_TAG] = f"clpde size={width}x{height}"
+        stream.pix_fmt = pix_fmt
+        # AVI counts frames, not time: its time base is one frame.
+        self._time_base = (
+            1 / self.rate if self.format == "avi" or not self.like else self.like.time_base
+        )
+        cc.time_base = self._time_base
+        stream.time_base = self._time_base
+        if self.codec != "ffv1":
+            cc.thread_count = 1
+        stream.options = _encoder_options(self.codec, self.crf)
+        colour = self.like.colour if self.like else {}
+        rgb = self.codec == "ffv1"
+        self._colour = {
+            "space": 0 if rgb else (colour.get("space") or 1),
+            "range": 2 if rgb else (colour.get("range") or 1),
+        }
+        cc.colorspace = self._colour["space"]
+        cc.color_range = self._colour["range"]
+        if colour.get("primaries"):
+            cc.color_primaries = colour["primaries"]
+        if colour.get("trc"):
+            cc.color_trc = colour["trc"]
+        if self.like is not None:
+            stream.metadata.update(
+                {k: v for k, v in self.like.video_metadata.items() if k in _STREAM_TAGS}
             )
-        frame = np.ascontiguousarray(frame[..., :3])
-        if self._stream is None:
-            self._start(*frame.shape[:2])
+        self._video = stream
+        self._pix_fmt = pix_fmt
+
+    def write(self, frame: np.ndarray, pts: int | None = None) -> None:
+        """Encode one RGB frame (uint8, or uint16 for deep videos) at timestamp `pts`.
+
+        Parameters
+        ----------
+        frame : ndarray
+            (rows, columns, 3) RGB, or (rows, columns) grey; every frame of one size.
+        pts : int, optional
+            Its presentation time in the input's time base (default: the next frame's).
+
+        Raises
+        ------
+        InputError
+            For a frame of another dtype, shape or size than the first.
+        """
+        av = require_av()
+        frame = _as_rgb(frame)
+        if self._video is None:
+            self._start(frame)
         if frame.shape[:2] != self.size:
             raise InputError(
-                f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the "
-                f"film {self.size[1]}x{self.size[0]}; all frames need one size"
+                f"frame {self.count} is {frame.shape[1]}x{frame.shape[0]}, the film "
+                f"{self.size[1]}x{self.size[0]}; all frames need one size"
             )
-        self._digest.update(frame.data)
-        pad = (
-            (0, self._stream.height - frame.shape[0]),
-            (0, self._stream.width - frame.shape[1]),
-            (0, 0),
+        stream = self._video
+        if (stream.height, stream.width) != self.size:
+            frame = np.pad(
+                frame,
+                ((0, stream.height - self.size[0]), (0, stream.width - self.size[1]), (0, 0)),
+                mode="edge",
+            )
+        source = "rgb24" if frame.dtype == np.uint8 else "rgb48le"
+        picture = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format=source)
+        picture.color_range = 2  # RGB frames are full range
+        picture = picture.reformat(
+            format=self._pix_fmt,
+            dst_colorspace=self._colour["space"] or None,
+            dst_color_range=self._colour["range"],
         )
-        if any(p[1] for p in pad):
-            frame = np.pad(frame, pad, mode="edge")
-        picture = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="rgb24")
-        picture.pts = self.count
-        for packet in self._stream.encode(picture):
-            self._container.mux(packet)
+        if pts is None:
+            pts = self.count
+        elif self.like is not None and self._time_base != self.like.time_base:
+            pts = round(pts * self.like.time_base / self._time_base)
+        picture.pts = int(pts)
+        picture.time_base = self._time_base
+        if self._side is not None:
+            self._side.mux_until(float(picture.pts * self._time_base))
+        for packet in stream.encode(picture):
+            self._out.mux(packet)
         self.count += 1
 
-    @property
-    def frames_sha256(self) -> str:
-        """SHA-256 of the RGB frames written so far (rows, columns, 3 uint8 each, in order)."""
-        return self._digest.hexdigest()
-
     def close(self) -> Path:
-        if self._stream is None:
+        """Flush the encoder and the side streams and put the video in place.
+
+        Returns
+        -------
+        Path
+            The written video.
+
+        Raises
+        ------
+        InputError
+            If no frame was written.
+        """
+        if self._video is None:
             self.abort()
             raise InputError(f"no frames to write to {self.path}")
-        for packet in self._stream.encode():
-            self._container.mux(packet)
-        self._container.close()
+        try:
+            for packet in self._video.encode():
+                self._out.mux(packet)
+            if self._side is not None:
+                self._side.mux_until(None)
+            self._out.close()
+            if self._side is not None:
+                self._side.close()
+        except BaseException:
+            self.abort()
+            raise
         self._atomic.__exit__(None, None, None)
         return self.path
 
     def abort(self) -> None:
-        with contextlib.suppress(Exception):
-            self._container.close()
+        """Stop and leave nothing behind."""
+        for closable in (getattr(self, "_out", None), self._side):
+            if closable is not None:
+                with contextlib.suppress(Exception):
+                    closable.close()
         with contextlib.suppress(BaseException):
             self._atomic.__exit__(KeyboardInterrupt, KeyboardInterrupt(), None)
 
-    def __enter__(self):
+    def __enter__(self) -> VideoWriter:
         return self
 
-    def __exit__(self, kind, value, tb):
+    def __exit__(self, kind, value, tb) -> None:
         if kind is None:
             self.close()
         else:
             self.abort()
 
 
-def write_video(path, frames, rate, *, threads: int = 1) -> Path:
-    """Write (T, rows, columns[, 3]) uint8 frames as a video at `rate` frames per second
-    (`threads`: the encoder's, see VideoWriter)."""
-    with VideoWriter(path, rate, threads=threads) as writer:
+def write_video(
+    path: PathLike, frames: Iterable[np.ndarray], rate: Fraction, *, codec: str | None = None
+) -> Path:
+    """Write frames as a new video at `rate` frames per second.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The video to write (.mp4, .mov, .mkv, .avi); written atomically.
+    frames : iterable of ndarray
+        (rows, columns[, 3]) uint8 or uint16 frames, all of one size.
+    rate : Fraction
+        Frames per second.
+    codec : {'h264', 'h265', 'ffv1'}, optional
+        The video codec (default h264).
+
+    Returns
+    -------
+    Path
+        The written video.
+
+    Raises
+    ------
+    InputError
+        As :class:`VideoWriter`; and no frames.
+
+    Examples
+    --------
+    >>> write_video("clip.mp4", np.zeros((3, 16, 16, 3), np.uint8), 25)  # doctest: +SKIP
+    PosixPath('clip.mp4')
+    """
+    with VideoWriter(path, rate, codec=codec) as writer:
         for frame in frames:
             writer.write(frame)
     return Path(path)

@@ -14,7 +14,7 @@ from magicgui.widgets import ComboBox, FileEdit, PushButton, SpinBox
 from napari.layers import Image, Labels
 
 import clpde
-from clpde.film.container import FilmWriter, film_info
+from clpde.io.video import VideoWriter, video_info
 
 from ._runner import RunWidget, layer_choices
 
@@ -34,8 +34,8 @@ def detect_film(
 def write_film(frames: np.ndarray, path: Path, source: str | None, progress: Callable) -> Path:
     """Write frames as a film; with the film they came from, keep its timing, sound and
     subtitles (through clpde's film writer)."""
-    like = film_info(source) if source else None
-    with FilmWriter(path, like=like, codec="ffv1" if path.suffix == ".mkv" else None) as out:
+    like = video_info(source) if source else None
+    with VideoWriter(path, like=like, codec="ffv1" if path.suffix == ".mkv" else None) as out:
         for t, frame in enumerate(frames):
             out.write(frame)
             progress(t + 1, len(frames))

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from clpde.film.container import FilmReader
+from clpde.io.video import VideoReader
 
 FILM_SUFFIXES = (".mp4", ".mkv", ".avi", ".mov", ".m4v", ".webm")
 MESH_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".glb", ".gltf")
@@ -56,7 +56,7 @@ def read_film(path: str | list[str]) -> LayerData:
     list of (data, attributes, "image")
     """
     one = _one_path(path)
-    reader = FilmReader(one)
+    reader = VideoReader(one)
     frames = np.stack(list(reader))
     meta = {"clpde_film": str(one), "frame_rate": float(reader.info.rate)}
     return [(frames, {"name": Path(one).stem, "rgb": frames.ndim == 4, "metadata": meta}, "image")]

@@ -27,7 +27,7 @@ MODULES = [
     "clpde.tracking.confidence",
     "clpde.film.stream",
     "clpde.film.chunks",
-    "clpde.film.container",
+    "clpde.io.video",
 ]
 
 

@@ -17,7 +17,7 @@ import pytest
 av = pytest.importorskip("av")
 
 import clpde  # noqa: E402
-from clpde.film.container import FilmReader, FilmWriter, film_info  # noqa: E402
+from clpde.io.video import VideoReader, VideoWriter, video_info  # noqa: E402
 from clpde.film.restore import restore_film  # noqa: E402
 from clpde.film.stream import (  # noqa: E402
     WindowWork,
@@ -127,7 +127,7 @@ def packets(path, kind):
 
 
 def decoded(path):
-    return np.stack(list(FilmReader(path)))
+    return np.stack(list(VideoReader(path)))
 
 
 # ---- real window work ---------------------------------------------------------------------
@@ -246,7 +246,7 @@ def test_mp4_keeps_audio_subtitles_timing_colour_and_metadata(tmp_path, film):
         b"\x00\x04dust",
         b"\x00\x0dand scratches",
     ]
-    before, after = film_info(source), film_info(out)
+    before, after = video_info(source), video_info(out)
     assert (after.frames, after.rate, after.width, after.height) == (T, 25, W, H)
     assert after.colour == before.colour and after.metadata["title"] == "a test film"
     with av.open(str(source)) as a, av.open(str(out)) as b:
@@ -262,7 +262,7 @@ def test_ffv1_is_lossless_outside_the_masks(tmp_path, film):
     )
     written = np.stack([read_image(tmp_path / "masks" / f"mask_{t:05d}.png") > 0 for t in range(T)])
     restored, original = decoded(out), decoded(source)
-    assert film_info(out).pix_fmt == "bgr0"  # RGB, no chroma subsampling
+    assert video_info(out).pix_fmt == "bgr0"  # RGB, no chroma subsampling
     assert np.array_equal(restored[~written], original[~written])
     assert (restored[written] != original[written]).any()
     assert result.masked_pixels == written.sum()
@@ -298,13 +298,13 @@ def test_ten_bit_films_stay_ten_bit(tmp_path):
     lossless = restore_film(
         source, tmp_path / "deep.mkv", mask=tmp_path / "m.png", codec="ffv1", work=SPATIAL
     ).output
-    assert film_info(lossless).pix_fmt == "gbrp16le"
+    assert video_info(lossless).pix_fmt == "gbrp16le"
     assert np.array_equal(decoded(lossless), decoded(source))
     assert decoded(source).dtype == np.uint16
     h264 = restore_film(
         source, tmp_path / "deep_h264.mp4", mask=tmp_path / "m.png", work=SPATIAL
     ).output
-    assert film_info(h264).pix_fmt == "yuv420p10le"
+    assert video_info(h264).pix_fmt == "yuv420p10le"
 
 
 def test_interlaced_film_is_refused(tmp_path):
@@ -322,7 +322,7 @@ def test_interlaced_film_is_refused(tmp_path):
 
 def test_writer_keeps_the_given_timestamps(tmp_path):
     frames = clean_frames(4)
-    with FilmWriter(tmp_path / "vfr.mkv", rate=25, codec="ffv1") as writer:
+    with VideoWriter(tmp_path / "vfr.mkv", rate=25, codec="ffv1") as writer:
         for pts, frame in zip((0, 1, 5, 6), frames, strict=True):
             writer.write(frame, pts=pts)
     with av.open(str(tmp_path / "vfr.mkv")) as c:
@@ -429,7 +429,7 @@ def test_a_subtitle_the_container_cannot_take_is_dropped_with_a_warning(tmp_path
         r"\.avi file and was dropped; write \.mkv",
     ):
         out = restore_film(source, tmp_path / "out.avi", mask=maskdir, work=SPATIAL).output
-    info = film_info(out)
+    info = video_info(out)
     assert (info.frames, info.rate) == (T, 25)  # AVI counts frames: timestamps rescaled
     assert packets(out, "subtitle") == []
     assert [p for p, _ in packets(out, "audio")] == [p for p, _ in packets(source, "audio")]

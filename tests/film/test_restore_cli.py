@@ -10,7 +10,7 @@ import pytest
 av = pytest.importorskip("av")
 
 from clpde.cli import main  # noqa: E402
-from clpde.film.container import film_info  # noqa: E402
+from clpde.io.video import video_info  # noqa: E402
 from clpde.io import read_image, write_image  # noqa: E402
 from tests.film.test_film_io import (  # noqa: E402
     T,
@@ -74,7 +74,7 @@ def test_restore_detects_writes_masks_overlay_and_keeps_audio(tmp_path, film, ca
     restored, original = decoded(out), decoded(source)
     assert np.array_equal(restored[~found], original[~found])  # lossless outside the masks
     assert [p for p, _ in packets(out, "audio")] == [p for p, _ in packets(source, "audio")]
-    assert film_info(tmp_path / "overlay.mp4").frames == T
+    assert video_info(tmp_path / "overlay.mp4").frames == T
 
 
 def test_bad_inputs_fail_with_one_line_and_write_nothing(tmp_path, film, capsys):
@@ -141,7 +141,7 @@ def test_batch_restore_takes_many_films(tmp_path, capsys):
     assert status == 0, capsys.readouterr().err
     for k in range(2):
         out = tmp_path / "out" / f"reel{k}.mp4"
-        assert film_info(out).frames == 6
+        assert video_info(out).frames == 6
         assert packets(out, "audio") == packets(films[k], "audio")
 
 
