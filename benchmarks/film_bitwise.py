@@ -10,8 +10,9 @@ coffee photo with blotches and a scratch, H.264 with an AAC tone and a mov_text 
 and a 10-bit one. Each is restored by ``restore_film`` into the outputs a user asks for
 (FFV1 in Matroska, H.264 in MP4, 10-bit, AVI, a folder of PNGs, the masks and the overlay),
 with clpde's own detector and filler once and a cheap window work otherwise; the check
-compares the restored frames' digest, every output file's bytes and the films read back by
-the frame readers (the tracker's `read_frames`, `read_video`). Files whose name starts with
+compares the restored frames' digest, every output file's bytes (a Matroska file's by its
+packets and tags: its muxer writes a random segment UID), every film's packets, and the
+films read back by the frame readers (the tracker's `read_frames`, `read_video`). Files whose name starts with
 ``picture_`` are pictures (the restoration's overlay and a film written by `write_video`),
 which a change of the one video writer may change; the compare lists them apart.
 
@@ -134,6 +135,32 @@ def _digest(path: Path) -> np.ndarray:
     return np.frombuffer(hashlib.sha256(path.read_bytes()).digest(), np.uint8)
 
 
+def _packets(path: Path) -> np.ndarray:
+    """SHA-256 over every packet of every stream (index, timestamps, bytes) and the tags:
+    Matroska files differ run to run in their bytes (the muxer writes a random segment UID),
+    so theirs are compared by content."""
+    import av
+
+    digest = hashlib.sha256()
+    with av.open(str(path)) as container:
+        digest.update(repr(sorted(container.metadata.items())).encode())
+        for stream in container.streams:
+            digest.update(
+                repr((stream.index, stream.type, sorted(stream.metadata.items()))).encode()
+            )
+        for packet in container.demux():
+            if packet.size:
+                digest.update(repr((packet.stream.index, packet.pts, packet.dts)).encode())
+                digest.update(bytes(packet))
+    return np.frombuffer(digest.digest(), np.uint8)
+
+
+def _film_digests(res: dict, name: str, path: Path) -> None:
+    res[f"{name}_packets"] = _packets(path)
+    if path.suffix != ".mkv":
+        res[f"{name}_file"] = _digest(path)
+
+
 def _film_reader(path):
     reader = _first("clpde.io.video:VideoReader", "clpde.film.container:FilmReader")
     return np.stack(list(reader(path)))
@@ -190,24 +217,27 @@ def save(out: Path) -> None:
             for f in sorted(output.iterdir()):
                 res[f"{name}_file_{f.name}"] = _digest(f)
         else:
-            res[f"{name}_file"] = _digest(output)
+            _film_digests(res, name, output)
             res[f"{name}_decoded"] = _film_reader(output)
     for f in sorted((out / "detected_masks").iterdir()):
         res[f"detected_ffv1_mask_{f.stem}"] = _digest(f)
-    res["picture_overlay_file"] = _digest(out / "picture_overlay.mp4")
+    _film_digests(res, "picture_overlay", out / "picture_overlay.mp4")
     # the frame readers: the film reader, read_video and the tracker's read_frames
     read_video = _first("clpde.io.video:read_video")
     read_frames = _first("clpde.io.frames:read_frames")
     for name, path in (("dusty", source), ("deep", deep)):
         res[f"reader_{name}"] = _film_reader(path)
     frames, rate = read_video(source)
-    res["read_video_dusty"], res["read_video_rate"] = frames, np.array([rate.numerator, rate.denominator])
+    res["read_video_dusty"], res["read_video_rate"] = (
+        frames,
+        np.array([rate.numerator, rate.denominator]),
+    )
     res["read_frames_grey"] = read_frames(source)
     res["read_frames_colour"] = read_frames(source, grey=False)
     # a film written by write_video (a picture: the tracker's overlay), read back
     write_video = _first("clpde.io.video:write_video")
     written = write_video(out / "picture_written.mp4", damaged, 10)
-    res["picture_written_file"] = _digest(written)
+    _film_digests(res, "picture_written", written)
     res["picture_written_read"] = read_frames(written, grey=False)
     for name, value in res.items():
         np.save(out / f"{name}.npy", np.asarray(value))
