@@ -12,9 +12,10 @@ and a 10-bit one. Each is restored by ``restore_film`` into the outputs a user a
 with clpde's own detector and filler once and a cheap window work otherwise; the check
 compares the restored frames' digest, every output file's bytes (a Matroska file's by its
 packets and tags: its muxer writes a random segment UID), every film's packets, and the
-films read back by the frame readers (the tracker's `read_frames`, `read_video`). Files whose name starts with
-``picture_`` are pictures (the restoration's overlay and a film written by `write_video`),
-which a change of the one video writer may change; the compare lists them apart.
+films read back by the frame readers (the tracker's `read_frames`, `read_video`). Files
+whose name starts with ``picture_`` are pictures (the restoration's overlay and a film
+written by `write_video`), which a change of the one video writer may change; the compare
+lists them apart.
 
 The script runs against either tree: where a function moved, it takes whichever spelling
 the tree has.

@@ -8,7 +8,9 @@ import io
 import sys
 
 from ..errors import InputError
-from ..scale.batch import COMMANDS, MANIFEST, batch, result_table
+from ..scale.batch import batch, result_table
+from ..scale.manifest import MANIFEST
+from ..scale.plan import COMMANDS
 from . import denoise, diffuse, inpaint, restore, surface, track
 from ._common import Parser
 

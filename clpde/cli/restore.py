@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..film.restore import restore_film
-from ..io.video import is_video
+from ..io.video_probe import is_video
 from ..runtime import use_device
 from ..scale.tasks import TRANSPORT_OPTIONS
 from ._common import add_device_argument

@@ -13,12 +13,10 @@ Films (T >= 2): each frame is compared with its motion-compensated neighbours, u
   `search` pixels) is a moving object, not dirt, and is dropped.
 - line scratches: thin, near-vertical, long lines in the temporal residual (the frame
   minus the median of its compensated neighbours), so that scene structure that moves
-  with the camera (poles, door frames, text) cancels: a column mean of the clamped
-  residual, a thin-line response across it in robust noise units, summed with the matching
-  response of the previous and next frames within a pixel of drift; kept where a vertical
-  run is long and most of its rows show the line. Scratches that stay in place (a static
-  shot) leave no residual: the frames' own thin, long lines that persist over neighbouring
-  frames are added (clpde.film.lines).
+  with the camera (poles, door frames, text) cancels: the line response of
+  clpde.film.lines, kept where a vertical run is long and most of its rows show the line.
+  Scratches that stay in place (a static shot) leave no residual: the frames' own thin,
+  long lines that persist over neighbouring frames are added (clpde.film.lines).
 
 Single images (T = 1, a scanned photograph) use spatial cues only: specks that stand out
 from their neighbourhood at several scales (white and black morphological top-hats on
@@ -39,11 +37,10 @@ from skimage.morphology import black_tophat, disk, white_tophat
 from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
-from ..planar.rof import _noise_std
 from ..runtime import get_runtime
 from ._compensate import FILM_FLOW, Compensator
 from ._frames import film_planes, grey
-from .lines import static_scratches
+from .lines import LineKernels, robust_scale, scratch_runs, spatial_lines, static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -58,9 +55,6 @@ BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films)
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
-COLUMN_HALF = 12  # rows each side of the scratch detector's column mean
-LINE_FLANK = 3  # the line response's flanks at 3 and 4 pixels: lines up to 5 px wide
-RUN_SUPPORT = 0.5  # share of a scratch run's rows whose residual shows the line
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
@@ -78,6 +72,15 @@ def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
     return strong[labels]
 
 
+class _Kernels(LineKernels):
+    """The line kernels and the blotch detector's own."""
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.blotch = rt.kernel("film/detect.cl", "blotch_score")
+        self.box = rt.kernel("film/detect.cl", "box_mean")
+
+
 def _window(t: int, T: int, radius: int) -> tuple[list[int], list[int]]:
     """Neighbour offsets of frame t and their sides. At the film's ends, where one side is
     missing, the nearer and farther neighbours of the other side stand for the two sides,
@@ -89,131 +92,6 @@ def _window(t: int, T: int, radius: int) -> tuple[list[int], list[int]]:
         half = max(1, len(near) // 2)
         sides = [-1 if k in near[:half] else 1 for k in offs]
     return offs, sides
-
-
-def _robust_scale(a: np.ndarray) -> float:
-    a = a[np.isfinite(a)]
-    return float(1.4826 * np.median(np.abs(a - np.median(a)))) + 1e-9
-
-
-class _Kernels:
-    def __init__(self, rt):
-        self.rt = rt
-        self.blotch = rt.kernel("film/detect.cl", "blotch_score")
-        self.colmean = rt.kernel("film/detect.cl", "column_mean")
-        self.line = rt.kernel("film/detect.cl", "line_response")
-        self.cont = rt.kernel("film/detect.cl", "scratch_continuity")
-        self.box = rt.kernel("film/detect.cl", "box_mean")
-
-    def line_score(self, resid: cla.Array, lim: float) -> np.ndarray:
-        """The thin-line response of a residual plane, in its robust noise units."""
-        q = self.rt.queue
-        ny, nx = resid.shape
-        g, loc = self.rt.items(nx, ny)
-        col = cla.empty(q, (ny, nx), np.float32)
-        out = cla.empty(q, (ny, nx), np.float32)
-        self.colmean(
-            q,
-            g,
-            loc,
-            resid.data,
-            col.data,
-            np.int32(min(COLUMN_HALF, ny // 4)),
-            np.float32(lim),
-            np.int32(nx),
-            np.int32(ny),
-        )
-        self.line(q, g, loc, col.data, out.data, np.int32(LINE_FLANK), np.int32(nx), np.int32(ny))
-        score = out.get()
-        return score / _robust_scale(score[:, LINE_FLANK + 1 : nx - LINE_FLANK - 1])
-
-    def continuity(self, zs: np.ndarray) -> np.ndarray:
-        q = self.rt.queue
-        T, ny, nx = zs.shape
-        g, loc = self.rt.items(nx, ny)
-        dev = [cla.to_device(q, np.ascontiguousarray(z)) for z in zs]
-        out = np.empty_like(zs)
-        tmp = cla.empty(q, (ny, nx), np.float32)
-        for t in range(T):
-            prev, nxt = dev[max(t - 1, 0)], dev[min(t + 1, T - 1)]
-            self.cont(
-                q,
-                g,
-                loc,
-                prev.data,
-                dev[t].data,
-                nxt.data,
-                np.int32(t > 0),
-                np.int32(t < T - 1),
-                tmp.data,
-                np.int32(nx),
-                np.int32(ny),
-            )
-            out[t] = tmp.get()
-        return out
-
-
-def _scratch_mask(
-    zc: np.ndarray,
-    resid: np.ndarray,
-    sigma: float,
-    threshold: float,
-    min_length: int,
-    lines: np.ndarray | None = None,
-    signed: bool = False,
-    thin: bool = True,
-) -> np.ndarray:
-    """Long vertical runs of the line score above threshold whose rows mostly show the
-    line in the residual itself, with their adjacent columns above half the threshold.
-
-    lines, given: the frame's own signed thin lines (+1 bright, -1 dark); a run counts only
-    where the frame shows a line of its sign within a pixel (a scratch is a line in the
-    frame; the neighbours' scratches warped onto it leave ghost lines in the residual
-    only). signed: return +1 / -1 / 0 by the line's sign instead of a bool mask. thin:
-    require quiet flanks (a temporal residual is quiet beside a scratch; an image's own
-    texture is not, so the spatial detectors leave it out)."""
-    ny, nx = zc.shape
-    out = np.zeros((ny, nx), np.int8)
-    for sgn in (1.0, -1.0):
-        s = sgn * zc
-        hit = s > threshold
-        if lines is not None:
-            own = ndimage.binary_dilation(lines == sgn, structure=np.ones((1, 3), bool))
-            hit &= own
-        if not hit.any():
-            continue
-        # bridge gaps of a few rows (a scratch fades in places)
-        hit = ndimage.binary_closing(hit, structure=np.ones((7, 1), bool)) | hit
-        labels, n = ndimage.label(hit, structure=np.array([[0, 1, 0]] * 3, bool))
-        if n == 0:
-            continue
-        sizes = np.bincount(labels.ravel())
-        shown = sgn * resid
-        shown3 = np.maximum(
-            np.maximum(shown, np.roll(shown, 1, axis=1)), np.roll(shown, -1, axis=1)
-        )
-        support = np.bincount(labels.ravel(), weights=(shown3 > 2.0 * sigma).ravel())
-        # a scratch is thin: beside it, 3 to 5 columns away on both sides, the residual is
-        # quiet in most rows; an object the flow missed leaves a broad residual
-        quiet = np.ones((ny, nx), bool)
-        for off in (-5, -4, -3, 3, 4, 5):
-            quiet &= np.abs(np.roll(resid, off, axis=1)) < 2.0 * sigma
-        calm = np.bincount(labels.ravel(), weights=quiet.ravel())
-        good = (sizes >= min_length) & (support >= RUN_SUPPORT * np.maximum(sizes, min_length))
-        if thin:
-            good &= calm >= RUN_SUPPORT * sizes
-        good[0] = False
-        core = good[labels]
-        if not core.any():
-            continue
-        # the column mean carries a run past the scratch's ends and the drift match
-        # beside it: keep the rows and columns whose own residual shows the line (gaps of
-        # a few rows bridged, as above)
-        shows = sgn * resid > sigma
-        rows = ndimage.binary_closing(shows, structure=np.ones((9, 1), bool)) | shows
-        wide = ndimage.binary_dilation(core, structure=np.ones((1, 3), bool))
-        out[(core & rows) | (wide & (s > 0.5 * threshold) & shows)] = int(sgn)
-    return out if signed else out != 0
 
 
 def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
@@ -337,7 +215,7 @@ def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of
         r = r_dev.get()
         # the residual against the median of ~4 neighbours has about 1.16 times the
         # frame's own noise deviation; a floor keeps noiseless synthetic frames sane
-        sigma = max(_robust_scale(r) / 1.16, 0.5 / 255)
+        sigma = max(robust_scale(r) / 1.16, 0.5 / 255)
         kern.blotch(
             q,
             g,
@@ -363,7 +241,7 @@ def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of
         bp, bn = sides_dev[2].get(), sides_dev[3].get()
         same = (np.sign(bp) == np.sign(bn)) & (bp != 0)
         zr[t] = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / (
-            _robust_scale(bp)
+            robust_scale(bp)
         )
         if line_of:
             zs[t] = kern.line_score(m_dev, 3.0 * sigma)
@@ -381,7 +259,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     # around it to zero, and the compensated neighbours would show it too.
     lines = np.zeros((T, ny, nx), np.int8)
     for t in range(T):
-        lines[t] = _spatial_lines(kern, G[t], CANDIDATE_THRESHOLD, max(12, ny // 5))
+        lines[t] = spatial_lines(kern, G[t], CANDIDATE_THRESHOLD, max(12, ny // 5))
     near_line = np.stack(
         [ndimage.binary_dilation(x != 0, structure=np.ones((1, 5), bool)) for x in lines]
     )
@@ -433,7 +311,7 @@ def film_kinds(
     )
     for t in range(T):
         scratch = (
-            _scratch_mask(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length)
+            scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length)
             | still[t]
         )
         # a pixel's evidence: its own score, or its region's where its own residual shows
@@ -458,24 +336,13 @@ def film_kinds(
     return kinds
 
 
-def _spatial_lines(kern: _Kernels, G: np.ndarray, threshold: float, min_length: int) -> np.ndarray:
-    """Thin, long, near-vertical lines of one image from spatial cues alone, signed (+1
-    bright, -1 dark, 0 none): the line detector on the image minus its horizontal median."""
-    sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
-    resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
-    zs = kern.line_score(
-        cla.to_device(kern.rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma
-    )
-    return _scratch_mask(zs, resid, sigma, threshold, min_length, signed=True, thin=False)
-
-
 def _photo(
     G: np.ndarray, speck_threshold: float, scratch_threshold: float, min_length: int, device
 ) -> np.ndarray:
     ny, nx = G.shape
     # the grain's level from the image minus its 5x5 median: film grain is correlated over
     # a pixel or two, which the finest-scale estimate of denoising misses
-    sigma = max(_robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")), 0.5 / 255)
+    sigma = max(robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")), 0.5 / 255)
     specks = np.zeros((ny, nx), bool)
     for rad in (1, 2, 4, 8):
         # at each scale, the components that stand out and fit in its disc: a speck, not
@@ -500,11 +367,11 @@ def _photo(
         specks |= keep[labels]
     resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
     rt = get_runtime(device)
-    kern = _Kernels(rt)
+    kern = LineKernels(rt)
     zs = kern.line_score(
         cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma
     )
-    scratch = _scratch_mask(zs, resid, sigma, scratch_threshold, min_length, thin=False)
+    scratch = scratch_runs(zs, resid, sigma, scratch_threshold, min_length, thin=False)
     kinds = np.zeros((ny, nx), np.int8)
     kinds[specks & ~scratch] = BLOTCH
     kinds[scratch] = SCRATCH

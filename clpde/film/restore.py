@@ -23,16 +23,16 @@ import numpy as np
 
 from .._progress import progress_bar
 from ..errors import InputError
-from ..io.frames import image_files
-from ..io.images import PathLike, output_folder, read_image, read_mask, write_image
-from ..io.video import FORMATS, VideoReader, VideoWriter, check_video_output, is_video
+from ..io.frames import FrameSource, image_files
+from ..io.images import PathLike, output_folder, read_mask, write_image
+from ..io.video import VideoWriter
+from ..io.video_probe import FORMATS, check_video_output
 from ..scale.cluster import connect
 from .chunks import restore_chunked
 from .stream import DEFAULT_BLOCK, WindowWork, film_work, restore_stream
 
 # The overlay's colours per defect kind: given or unclassified masks, blotches, scratches.
 OVERLAY_COLOURS = {0: (255, 40, 40), 1: (255, 40, 40), 2: (255, 220, 0)}
-FOLDER_RATE = Fraction(25)  # a folder of frames states no rate
 
 
 @dataclass
@@ -67,54 +67,15 @@ class FilmResult:
     frames_sha256: str
 
 
-class _Source:
-    """The frames of a film or of a folder of images, read one at a time."""
-
-    def __init__(self, path: PathLike) -> None:
-        self.path = Path(path)
-        self.reader = self.files = None
-        if self.path.is_dir():
-            self.files = image_files(self.path)
-            self.count, self.rate = len(self.files), FOLDER_RATE
-            first = read_image(self.files[0])
-        elif is_video(self.path):
-            self.reader = VideoReader(self.path)
-            self.count, self.rate = self.reader.info.frames, self.reader.info.rate
-            first = np.zeros(
-                (self.reader.info.height, self.reader.info.width, 3), self.reader.info.dtype
-            )
-        elif not self.path.exists():
-            raise InputError(f"input {self.path} does not exist")
-        else:
-            raise InputError(
-                f"{self.path} is neither a film ({', '.join(sorted(FORMATS))}, ...) "
-                "nor a folder of images"
-            )
-        self.shape, self.dtype = first.shape, first.dtype
-
-    def __iter__(self) -> Iterator[np.ndarray]:
-        if self.reader is not None:
-            yield from self.reader
-        else:
-            for path in self.files:
-                frame = read_image(path)
-                if frame.shape != self.shape or frame.dtype != self.dtype:
-                    raise InputError(
-                        f"{path} is {frame.shape} {frame.dtype}, frame 0 "
-                        f"{self.shape} {self.dtype}; all frames need one size "
-                        "and type"
-                    )
-                yield frame
-
-    def name(self, t: int, dtype: np.dtype, channels: int) -> str:
-        """Frame t's file name in an output folder: the input's, else frame_00000.png."""
-        if self.files is not None:
-            return self.files[t].name
-        suffix = ".tif" if dtype != np.uint8 and channels > 1 else ".png"
-        return f"frame_{t:05d}{suffix}"
+def _frame_name(source: FrameSource, t: int, dtype: np.dtype, channels: int) -> str:
+    """Frame t's file name in an output folder: the input's, else frame_00000.png."""
+    if source.files is not None:
+        return source.files[t].name
+    suffix = ".tif" if dtype != np.uint8 and channels > 1 else ".png"
+    return f"frame_{t:05d}{suffix}"
 
 
-def _mask_source(mask: PathLike, source: _Source) -> Iterator[np.ndarray]:
+def _mask_source(mask: PathLike, source: FrameSource) -> Iterator[np.ndarray]:
     """One mask per frame: the same file for every frame, or the t-th of a folder. The
     count and the first mask's size are checked at once, before any frame is read."""
     mask = Path(mask)
@@ -161,7 +122,7 @@ def _overlay_frame(frame: np.ndarray, mask: np.ndarray, kinds: np.ndarray | None
 
 
 def _check_outputs(
-    source: _Source,
+    source: FrameSource,
     output: Path,
     masks_out: Path | None,
     overlay: Path | None,
@@ -199,7 +160,7 @@ class _Outputs:
     def __init__(
         self,
         stack: contextlib.ExitStack,
-        source: _Source,
+        source: FrameSource,
         output: Path,
         to_film: bool,
         *,
@@ -225,7 +186,7 @@ class _Outputs:
                 VideoWriter(overlay, source.rate, like=like, copy_streams=False)
             )
             # The overlay draws over the damaged frames: a second reader, in step.
-            self.originals = iter(_Source(source.path))
+            self.originals = iter(FrameSource(source.path))
         self.digits = max(5, len(str(source.count - 1)))
         self.digest = hashlib.sha256()
         self.masked = self.written = 0
@@ -240,7 +201,7 @@ class _Outputs:
             self.film.write(frame, pts=pts)
         else:
             channels = frame.shape[-1] if frame.ndim == 3 else 1
-            write_image(self.folder / self.source.name(t, frame.dtype, channels), frame)
+            write_image(self.folder / _frame_name(self.source, t, frame.dtype, channels), frame)
         if self.masks is not None:
             name = f"mask_{t:0{self.digits}d}.png"
             write_image(self.masks / name, found.astype(np.uint8) * 255)
@@ -326,7 +287,7 @@ def restore_film(
     >>> restore_film("dusty.mp4", "clean.mkv", codec="ffv1", grow=2)  # doctest: +SKIP
     """
     start = time.perf_counter()
-    src = _Source(source)
+    src = FrameSource(source)
     output = Path(output)
     masks_out = None if masks_out is None else Path(masks_out)
     overlay = None if overlay is None else Path(overlay)

@@ -1,7 +1,9 @@
 """Frame sequences in and tracking results out.
 
-Reading: a video file (through io/video.py's reader: pip install "clpde[video]"), a folder
-of images (sorted by name, numbers in natural order) or a multi-page TIFF stack. Writing:
+Reading: a video file (through io/video.py's reader: pip install "clpde[video]") or a folder
+of images (sorted by name, numbers in natural order), one frame at a time (`FrameSource`, the
+frames of a film restoration) or all at once (`read_frames`, the tracker's), or a
+multi-page TIFF stack. Writing:
 one mask PNG per frame, an overlay GIF with the contours drawn on the frames, and the
 contours as polygons per frame (JSON). Every file is written atomically, and
 `write_tracking` writes a whole result folder so that a failure leaves no partial set of
@@ -12,15 +14,27 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Iterator
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from .images import IMAGE_FORMATS, atomic_output, output_folder, read_image, write_gif, write_image
-from .video import READ_SUFFIXES, is_video, read_video
+from .images import (
+    IMAGE_FORMATS,
+    PathLike,
+    atomic_output,
+    output_folder,
+    read_image,
+    write_gif,
+    write_image,
+)
+from .video import VideoReader
+from .video_probe import FORMATS, READ_SUFFIXES, is_video
 
 TIFF_SUFFIXES = {".tif", ".tiff"}
+FOLDER_RATE = Fraction(25)  # a folder of frames states no rate
 
 
 def _natural_key(path: Path):
@@ -71,21 +85,94 @@ def image_files(folder) -> list[Path]:
     return files
 
 
-def _read_folder(path: Path) -> np.ndarray:
-    files = image_files(path)
-    frames = [read_image(p) for p in files]
-    for p, f in zip(files, frames, strict=False):
-        if f.shape[:2] != frames[0].shape[:2]:
+class FrameSource:
+    """The frames of a video or of a folder of images, read one at a time, in order.
+
+    Only the frame being read is held: a film of any length streams through it. A folder's
+    images are sorted by name with numbers in natural order (`image_files`).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        A video file (.mp4, .mkv, .mov, .avi, ...) or a folder of images (PNG, TIFF, JPEG).
+
+    Attributes
+    ----------
+    path : Path
+        The video or folder.
+    count : int
+        The number of frames.
+    rate : Fraction
+        Frames per second (a folder states none: FOLDER_RATE).
+    shape : tuple of int
+        A frame's shape, (rows, columns) or (rows, columns, channels).
+    dtype : numpy.dtype
+        The frames' dtype (a video's: uint8, or uint16 for deeper ones).
+    reader : VideoReader or None
+        A video's reader: its description (``reader.info``) and the timestamps of the frames
+        read (``reader.timestamps``).
+    files : list of Path or None
+        A folder's images.
+
+    Raises
+    ------
+    InputError
+        For a path that does not exist, is neither a video nor a folder, or a folder without
+        images; while reading, a frame of another size, kind or dtype than the first.
+
+    Examples
+    --------
+    >>> for frame in FrameSource("scans/"):  # doctest: +SKIP
+    ...     print(frame.shape)
+    """
+
+    def __init__(self, path: PathLike) -> None:
+        self.path = Path(path)
+        self.reader = self.files = None
+        if self.path.is_dir():
+            self.files = image_files(self.path)
+            self.count, self.rate = len(self.files), FOLDER_RATE
+            first = read_image(self.files[0])
+        elif is_video(self.path):
+            self.reader = VideoReader(self.path)
+            info = self.reader.info
+            self.count, self.rate = info.frames, info.rate
+            first = np.zeros((info.height, info.width, 3), info.dtype)
+        elif not self.path.exists():
+            raise InputError(f"input {self.path} does not exist")
+        else:
             raise InputError(
-                f"{p.name} is {f.shape[1]}x{f.shape[0]} but {files[0].name} is "
-                f"{frames[0].shape[1]}x{frames[0].shape[0]}; all frames must have one size"
+                f"{self.path} is neither a video ({', '.join(sorted(FORMATS))}, ...) "
+                "nor a folder of images"
             )
-        if f.shape != frames[0].shape:
-            raise InputError(
-                f"{p.name} has shape {f.shape} but {files[0].name} has {frames[0].shape}; "
-                "mixed grey and colour frames: convert them to one kind"
-            )
-    return np.stack(frames)
+        self.shape, self.dtype = first.shape, first.dtype
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        if self.reader is not None:
+            yield from self.reader
+            return
+        first = self.files[0].name
+        for path in self.files:
+            frame = read_image(path)
+            if frame.shape[:2] != self.shape[:2]:
+                raise InputError(
+                    f"{path.name} is {frame.shape[1]}x{frame.shape[0]} but {first} is "
+                    f"{self.shape[1]}x{self.shape[0]}; all frames must have one size"
+                )
+            if frame.shape != self.shape:
+                raise InputError(
+                    f"{path.name} has shape {frame.shape} but {first} has {self.shape}; "
+                    "mixed grey and colour frames: convert them to one kind"
+                )
+            if frame.dtype != self.dtype:
+                raise InputError(
+                    f"{path.name} is {frame.dtype} but {first} is {self.dtype}; all "
+                    "frames need one type: convert them to one bit depth"
+                )
+            yield frame
 
 
 def read_frames(path, grey: bool = True) -> np.ndarray:
@@ -94,12 +181,10 @@ def read_frames(path, grey: bool = True) -> np.ndarray:
     path = Path(path)
     if not path.exists():
         raise InputError(f"input {path} does not exist")
-    if path.is_dir():
-        frames = _read_folder(path)
+    if path.is_dir() or is_video(path):
+        frames = np.stack(list(FrameSource(path)))
     elif path.suffix.lower() in TIFF_SUFFIXES:
         frames = _read_tiff_stack(path)
-    elif is_video(path):
-        frames = read_video(path)[0]
     else:
         raise InputError(
             f"{path}: unsupported input {path.suffix or '(no extension)'!r}; give a video "

@@ -14,7 +14,8 @@ from magicgui.widgets import ComboBox, FileEdit, PushButton, SpinBox
 from napari.layers import Image, Labels
 
 import clpde
-from clpde.io.video import VideoWriter, video_info
+from clpde.io.video import VideoWriter
+from clpde.io.video_probe import video_info
 
 from ._runner import RunWidget, layer_choices
 

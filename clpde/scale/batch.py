@@ -16,10 +16,12 @@ CLPDE_DEVICE and advertising the resource ``GPU=1`` that every task asks for. Gi
 machine (a shared file system).
 
 Nothing is lost: OUTDIR/clpde-manifest.json records, for every output written, the hash of
-its input (and mask) and the options; a rerun skips the outputs whose record matches. A
+its input (and mask) and the options (clpde.scale.manifest); a rerun skips the outputs whose
+record matches. A
 worker that dies has its task run elsewhere by the scheduler. A failing input is reported
 by name in the result and does not stop the others. Ctrl-C cancels the batch, stops the
-cluster it started and removes any temporary file a stopped worker left behind.
+cluster it started and removes any temporary file a stopped worker left behind. The tasks
+are planned and checked on the client before anything runs (clpde.scale.plan).
 """
 
 from __future__ import annotations
@@ -28,7 +30,6 @@ import contextlib
 import hashlib
 import inspect
 import io
-import json
 import os
 import platform
 import shutil
@@ -41,24 +42,30 @@ from pathlib import Path
 from typing import Any
 
 from .._progress import progress_bar
-from .._version import __version__
 from ..errors import InputError, error_message
 from ..io.images import (
-    IMAGE_FORMATS,
     PathLike,
-    atomic_output,
-    check_folder_writable,
     replace_folder,
 )
 from .cluster import connect, wants_gpu
+from .manifest import (
+    fingerprint,
+    hash_path,
+    is_complete,
+    read_manifest,
+    sweep_temporaries,
+    write_manifest,
+)
+from .plan import (
+    FOLDER_OUTPUTS,
+    MASKED,
+    TILED,
+    expand_inputs,
+    output_names,
+    plan_tasks,
+)
 from .tasks import TASKS
 
-COMMANDS = tuple(TASKS)  # inpaint, denoise, diffuse, track, surface
-FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem
-MASKED = ("inpaint", "track")  # commands that take a mask per input (track: --init)
-MAY_MASK = ("restore",)  # commands that take a mask per input if given (restore: else detects)
-TILED = ("diffuse", "denoise")
-MANIFEST = "clpde-manifest.json"
 MANIFEST_EVERY_S = 1.0
 
 
@@ -153,7 +160,7 @@ def run_task(spec: dict) -> dict:
                 _run_into_folder(spec, output)
             else:
                 _run(spec, output)
-        record.update(status="done", output_sha256=_hash_path(output))
+        record.update(status="done", output_sha256=hash_path(output))
     except Exception as exc:  # noqa: BLE001  (any failure is this input's, reported by name)
         record.update(status="failed", error=error_message(exc))
     record["seconds"] = time.perf_counter() - start
@@ -180,205 +187,6 @@ def _run_into_folder(spec: dict, output: str) -> None:
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-
-
-# ---- hashes and the manifest ------------------------------------------------------------------
-def _hash_path(path) -> str | None:
-    """sha256 of a file, or of a folder's files (names and contents, sorted); None if absent."""
-    path = Path(path)
-    if path.is_file():
-        files = [path]
-    elif path.is_dir():
-        files = sorted(p for p in path.rglob("*") if p.is_file())
-    else:
-        return None
-    digest = hashlib.sha256()
-    for p in files:
-        if path.is_dir():
-            digest.update(p.relative_to(path).as_posix().encode() + b"\0")
-        with open(p, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                digest.update(block)
-    return digest.hexdigest()
-
-
-def _read_manifest(outdir: Path) -> dict:
-    path = outdir / MANIFEST
-    if not path.is_file():
-        return {}
-    try:
-        data = json.loads(path.read_text())
-        return dict(data.get("outputs", {}))
-    except (OSError, ValueError, AttributeError):
-        return {}  # unreadable: every output is redone, which is safe
-
-
-def _write_manifest(outdir: Path, records: dict) -> None:
-    data = {"clpde": __version__, "outputs": dict(sorted(records.items()))}
-    with atomic_output(outdir / MANIFEST) as tmp:
-        tmp.write_text(json.dumps(data, indent=1) + "\n")
-
-
-def _sweep_temporaries(outdir: Path, names) -> None:
-    """Remove the temporary files and folders that killed workers left for these outputs."""
-    for name in names:
-        for stray in outdir.glob(f".{name}.*.part"):
-            if stray.is_dir():
-                shutil.rmtree(stray, ignore_errors=True)
-            else:
-                with contextlib.suppress(OSError):
-                    stray.unlink()
-
-
-# ---- planning the tasks on the client ---------------------------------------------------------
-def _find_mask(masks_dir: Path, source: Path) -> Path | None:
-    """The mask named like its image: the same file name, or the same stem as any image."""
-    same = masks_dir / source.name
-    if same.is_file():
-        return same
-    if (masks_dir / source.stem).is_dir():  # a film's folder of per-frame masks
-        return masks_dir / source.stem
-    for suffix in IMAGE_FORMATS:
-        candidate = masks_dir / f"{source.stem}{suffix}"
-        if candidate.is_file():
-            return candidate
-    return None
-
-
-def expand_inputs(inputs: Iterable[PathLike]) -> list[str]:
-    """The inputs, with any pattern (``*``, ``?``, ``[``) that names no existing file
-    expanded as a shell would (sorted): a quoted pattern, or one from Python. A pattern
-    that matches nothing is an error, before anything is created: the shell passes such a
-    pattern on as it is, and it names no file."""
-    import glob
-
-    if isinstance(inputs, (str, os.PathLike)):
-        inputs = [inputs]
-    out = []
-    for item in inputs:
-        text = os.fspath(item)
-        if any(c in text for c in "*?[") and not os.path.exists(text):
-            found = sorted(glob.glob(text))
-            if not found:
-                raise InputError(
-                    f"the pattern {text} matches no file; check the folder and the spelling"
-                )
-            out += found
-        else:
-            out.append(text)
-    return out
-
-
-def _plan(command, inputs, outdir: Path, mask, masks, options, tile) -> list[dict]:
-    if command not in COMMANDS:
-        raise InputError(f"unknown batch command {command!r}; choose one of {', '.join(COMMANDS)}")
-    if not inputs:
-        raise InputError("give at least one input")
-    if command in MASKED:
-        if (mask is None) == (masks is None):
-            what = "--init mask" if command == "track" else "mask"
-            raise InputError(
-                f"batch {command} needs one {what}: --mask FILE (one for all "
-                "inputs) or --masks DIR (one per input, named like it)"
-            )
-    elif (mask is not None or masks is not None) and command not in MAY_MASK:
-        raise InputError(f"--mask and --masks apply to inpaint, track and restore, not {command}")
-    if tile and command not in TILED:
-        raise InputError(f"--tile applies to diffuse and denoise, not {command}")
-    if command == "surface" and not options.get("flow"):
-        raise InputError("batch surface needs --flow FLOW (heat, tv, denoise, ...)")
-    if masks is not None and not Path(masks).is_dir():
-        raise InputError(f"--masks {masks} is not a folder; give the folder of masks")
-    if mask is not None and not (
-        Path(mask).is_file() or (command in MAY_MASK and Path(mask).is_dir())
-    ):
-        raise InputError(f"mask {mask} does not exist")
-    if outdir.exists() and not outdir.is_dir():
-        raise InputError(f"output {outdir} exists and is not a folder")
-    existing = outdir  # the folder, or the nearest folder above it that mkdir writes into
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
-    check_folder_writable(existing, f"the output folder {outdir}")
-    specs, names = [], {}
-    for item in inputs:
-        source = Path(item)
-        (name,) = _output_names(command, [source])
-        if not name or name == MANIFEST:
-            raise InputError(f"input {source} gives no usable output name")
-        if name in names:
-            raise InputError(
-                f"inputs {names[name]} and {source} would both write {outdir / name}; "
-                "rename one or run them into separate folders"
-            )
-        names[name] = source
-        if outdir.resolve() == source.resolve().parent and command not in FOLDER_OUTPUTS:
-            raise InputError(
-                f"output folder {outdir} holds the input {source}; clpde never "
-                "overwrites its inputs, choose another folder"
-            )
-        mask_path, mask_error = mask, None
-        if masks is not None:
-            found = _find_mask(Path(masks), source)
-            mask_path = str(found) if found else None
-            if found is None:
-                mask_error = f"no mask for {source.name} in {masks} (expected {source.name})"
-        specs.append(
-            {
-                "command": command,
-                "input": str(source),
-                "output": str(outdir / name),
-                "name": name,
-                "mask": None if mask_path is None else str(mask_path),
-                "mask_error": mask_error,
-                "options": dict(options),
-                "tile": bool(tile),
-            }
-        )
-    return specs
-
-
-def _output_names(command, inputs) -> list[str]:
-    return [Path(p).stem if command in FOLDER_OUTPUTS else Path(p).name for p in inputs]
-
-
-def _fingerprint(spec: dict) -> dict:
-    """What makes an output what it is: the inputs' contents and the command line."""
-    digest = _hash_path(spec["input"])
-    if digest is None and spec["command"] == "surface":  # a shape name (sphere, torus...)
-        digest = hashlib.sha256(f"shape:{spec['input']}".encode()).hexdigest()
-    return {
-        "command": spec["command"],
-        "options": _fingerprint_options(spec),
-        "tile": spec["tile"],
-        "input_sha256": digest,
-        "mask_sha256": None if spec["mask"] is None else _hash_path(spec["mask"]),
-    }
-
-
-def _fingerprint_options(spec: dict) -> dict:
-    """The task's options with its defaults filled in, as strings (so that the command line's
-    flags and Python's keywords for the same run match); the device and progress left out."""
-    task = TASKS[spec["command"]]
-    params = inspect.signature(task).parameters
-    values = {
-        n: p.default
-        for n, p in params.items()
-        if p.kind is p.KEYWORD_ONLY and n not in ("mask", "device", "progress", "tile")
-    }
-    values.update({k: v for k, v in spec["options"].items() if k in values})
-    # numbers as floats: tol=0 from Python and --tol 0 (a float) are the same run
-    return {
-        k: repr(float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v)
-        for k, v in sorted(values.items())
-    }
-
-
-def _is_complete(record: dict | None, fingerprint: dict, output: str) -> bool:
-    if not record or any(record.get(k) != v for k, v in fingerprint.items()):
-        return False
-    if fingerprint["input_sha256"] is None:
-        return False
-    return record.get("output_sha256") is not None and record["output_sha256"] == _hash_path(output)
 
 
 # ---- the batch --------------------------------------------------------------------------------
@@ -456,7 +264,7 @@ class BatchFutures:
                     # Rewriting the whole manifest per output would make a large batch
                     # quadratic: at most once a second, and at the end or on an interrupt.
                     if time.monotonic() - saved_at >= MANIFEST_EVERY_S:
-                        _write_manifest(self._outdir, self._manifest)
+                        write_manifest(self._outdir, self._manifest)
                         saved_at, unsaved = time.monotonic(), 0
                 else:
                     bar.note(f"clpde batch: {spec['input']} failed: {result.error}")
@@ -466,10 +274,10 @@ class BatchFutures:
             raise
         finally:
             if unsaved:
-                _write_manifest(self._outdir, self._manifest)
+                write_manifest(self._outdir, self._manifest)
             bar.close()
         # A worker killed while writing leaves its temporary file; its task ran again elsewhere.
-        _sweep_temporaries(self._outdir, [s["name"] for s in self.specs])
+        sweep_temporaries(self._outdir, [s["name"] for s in self.specs])
         ordered = [results[i] for i in range(len(self.specs))]
         return BatchResult(ordered, seconds=time.perf_counter() - self._start)
 
@@ -491,7 +299,7 @@ def submit(
     and .results() to wait). The arguments are those of batch()."""
     start = time.perf_counter()
     outdir = Path(output_dir)
-    specs = _plan(
+    specs = plan_tasks(
         command,
         expand_inputs(inputs),
         outdir,
@@ -501,15 +309,15 @@ def submit(
         tile,
     )
     outdir.mkdir(parents=True, exist_ok=True)
-    _sweep_temporaries(outdir, [s["name"] for s in specs])
-    manifest = _read_manifest(outdir)
+    sweep_temporaries(outdir, [s["name"] for s in specs])
+    manifest = read_manifest(outdir)
     prepared, futures = {}, []
     resources = {"GPU": 1} if wants_gpu(client) else None
     for index, spec in enumerate(specs):
-        spec["fingerprint"] = _fingerprint(spec)
+        spec["fingerprint"] = fingerprint(spec)
         if spec["fingerprint"]["input_sha256"] is None and not spec["mask_error"]:
             spec["mask_error"] = f"input {spec['input']} does not exist"
-        if not force and _is_complete(
+        if not force and is_complete(
             manifest.get(spec["name"]), spec["fingerprint"], spec["output"]
         ):
             prepared[index] = TaskResult(spec["input"], spec["output"], "skipped")
@@ -620,7 +428,7 @@ def batch(
         )
     inputs = expand_inputs(inputs)
     # Bad options fail here, before a cluster is started.
-    _plan(
+    plan_tasks(
         command,
         inputs,
         Path(output_dir),
@@ -652,7 +460,7 @@ def batch(
         # Ctrl-C or a lost scheduler: the cluster started here is gone by now, so the
         # temporary files of the tasks it was running can go too; complete outputs stay.
         if Path(output_dir).is_dir():
-            _sweep_temporaries(Path(output_dir), _output_names(command, inputs))
+            sweep_temporaries(Path(output_dir), output_names(command, inputs))
         raise
     result.cluster_seconds = info.get("seconds", 0.0)
     result.workers, result.threads = info["workers"], info["threads"]

@@ -32,10 +32,9 @@ def _malloc_for_arrays() -> None:
 
     Dask's nanny starts workers with MALLOC_TRIM_THRESHOLD_=65536, which also turns off
     glibc's adaptive mmap threshold: every numpy temporary over 128 kB is then mmapped,
-    page-faulted in and unmapped again, 10 000 extra page faults and 25-35 ms of system time
-    per 512x512 inpainting (docs/batch.md). These two settings bring it back to 1-2 ms,
-    whatever the worker's environment (a `dask worker` started by hand too). Not glibc:
-    nothing to do."""
+    page-faulted in and unmapped again, a cost in system time per task that these two
+    settings remove (measured in docs/batch.md), whatever the worker's environment (a
+    `dask worker` started by hand too). Not glibc: nothing to do."""
     import ctypes
 
     try:
@@ -82,18 +81,15 @@ def _gpu_indices(device) -> list[int]:
         return []
 
 
-# The local cluster's Dask settings, measured on 512x512 photo inpaintings (docs/batch.md):
+# The local cluster's Dask settings (each one's cost is measured in docs/batch.md):
 # - spawn: a forked OpenCL context is unusable.
 # - No MALLOC_TRIM_THRESHOLD_ (the nanny sets 65536 before spawning a worker): fixing any of
 #   glibc's malloc thresholds turns off its adaptive mmap threshold, so every large numpy
-#   temporary is mmapped, page-faulted in and unmapped again; that cost 25-35 ms of system
-#   time per task (10 000 extra page faults), a fifth of a task's CPU.
-# - No statistical profiler (it samples the task's stack every 10 ms for the dashboard,
-#   which clpde's clusters do not run): about 40 ms of CPU per second of a running task on
-#   the worker's event loop, 10-30 ms per task here.
-# - The event loops' health tick every 500 ms, not 20 ms: an idle 2-worker cluster then
-#   takes about 40 ms of CPU a second instead of 110 (client and scheduler 60 -> 20-30, each
-#   worker 20-38 -> 5-15), CPU that the tasks of a busy machine would otherwise lose.
+#   temporary is mmapped, page-faulted in and unmapped again, in system time on every task.
+# - No statistical profiler: it samples the running task's stack for the dashboard, which
+#   clpde's clusters do not run, at a cost in CPU on the worker's event loop.
+# - The event loops' health tick every 500 ms, not Dask's 20 ms: the idle ticks take CPU
+#   that the tasks of a busy machine would otherwise lose.
 WORKER_CONFIG = {
     "distributed.worker.multiprocessing-method": "spawn",
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,

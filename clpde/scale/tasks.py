@@ -33,7 +33,8 @@ from ..io.images import (
     write_gif,
     write_image,
 )
-from ..io.video import require_av, write_video
+from ..io.video import write_video
+from ..io.video_probe import require_av
 from ..planar import tiled
 from ..planar.flows import diffuse
 from ..planar.rof import denoise_tv

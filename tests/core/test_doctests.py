@@ -27,7 +27,7 @@ MODULES = [
     "clpde.tracking.confidence",
     "clpde.film.stream",
     "clpde.film.chunks",
-    "clpde.io.video",
+    "clpde.io.video_probe",
 ]
 
 

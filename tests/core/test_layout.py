@@ -64,9 +64,7 @@ LONG_MODULES = {
     "clpde.inpainting.exemplar",
     "clpde.surface.implicit",
     "clpde.planar.rof",
-    "clpde.scale.batch",
     "clpde.inpainting.transport",
-    "clpde.film.detect",
     "clpde.runtime",
     "clpde.surface.band",
 }

@@ -17,7 +17,6 @@ import pytest
 av = pytest.importorskip("av")
 
 import clpde  # noqa: E402
-from clpde.io.video import VideoReader, VideoWriter, video_info  # noqa: E402
 from clpde.film.restore import restore_film  # noqa: E402
 from clpde.film.stream import (  # noqa: E402
     WindowWork,
@@ -26,6 +25,8 @@ from clpde.film.stream import (  # noqa: E402
 )
 from clpde.imagedata import InputError  # noqa: E402
 from clpde.io import read_image, write_image  # noqa: E402
+from clpde.io.video import VideoReader, VideoWriter  # noqa: E402
+from clpde.io.video_probe import video_info  # noqa: E402
 
 T, H, W = 12, 24, 32
 

@@ -10,8 +10,8 @@ import pytest
 av = pytest.importorskip("av")
 
 from clpde.cli import main  # noqa: E402
-from clpde.io.video import video_info  # noqa: E402
 from clpde.io import read_image, write_image  # noqa: E402
+from clpde.io.video_probe import video_info  # noqa: E402
 from tests.film.test_film_io import (  # noqa: E402
     T,
     clean_frames,

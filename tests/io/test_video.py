@@ -1,4 +1,5 @@
-"""Video files through PyAV (clpde.io.video); films are restored by clpde.film (tests/film)."""
+"""Video files through PyAV (clpde.io.video, clpde.io.video_probe): the one reader and the one
+writer; films are restored by clpde.film (tests/film)."""
 
 from fractions import Fraction
 
@@ -7,11 +8,8 @@ import pytest
 
 pytest.importorskip("av")
 
-from clpde.io.video import (  # noqa: E402
-    read_video,
-    video_info,
-    write_video,
-)
+from clpde.io.video import read_video, write_video  # noqa: E402
+from clpde.io.video_probe import video_info  # noqa: E402
 
 
 def _film(height, width, count=30):

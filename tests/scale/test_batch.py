@@ -14,8 +14,9 @@ pytest.importorskip("distributed")
 import clpde  # noqa: E402
 from clpde.cli import main  # noqa: E402
 from clpde.io.images import read_image, write_image  # noqa: E402
-from clpde.scale.batch import MANIFEST, batch  # noqa: E402
+from clpde.scale.batch import batch  # noqa: E402
 from clpde.scale.cluster import plan_workers, start_cluster  # noqa: E402
+from clpde.scale.manifest import MANIFEST  # noqa: E402
 
 
 @pytest.fixture(scope="module")
