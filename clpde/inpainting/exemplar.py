@@ -138,9 +138,9 @@ def _params(params: dict) -> dict:
 
 # The structure guide's coherence for holes deeper than GUIDE_DEPTH px: a stronger pull
 # along the coherence direction (kappa 100 for the fill's 25), so that edges entering a
-# thick hole are carried further before the isotropic mean takes over. Seeds 0-2 of the
-# exemplar: thick 22.21 -> 22.36 dB (kappa 50: see docs, 200: 21.89), texture 20.48 ->
-# 20.62; thinner holes (text, scratches) keep the fill's defaults.
+# thick hole are carried further before the isotropic mean takes over; it scores higher on
+# the thick and texture cases (docs/inpainting_texture.md), while thinner holes (text,
+# scratches) keep the fill's defaults.
 GUIDE_DEPTH = 8
 GUIDE_KAPPA = 100.0
 

@@ -450,15 +450,15 @@ def fill(
 
     data: (channels, rows, cols) floats; only omega changes. start: optional first guess
     inside omega (same shape as data); by default each component's mean border value.
-    (A coarse-grid solution as the start does not cut the iterations: measured on a
-    100x100 hole, 3950 against 4000 to tol=1e-5.) clip: clip the result to each
+    (A coarse-grid solution as the start hardly cuts the iterations:
+    docs/inpainting_methods.md.) clip: clip the result to each
     channel's range over the known pixels, as scikit-image's inpaint_biharmonic does (the
     biharmonic fill overshoots next to sharp edges). precondition: conjugate gradients
     preconditioned by a multigrid V-cycle (`Multigrid`), True, False or "auto": where some
-    hole pixel lies more than THICK pixels from the known ones. On PoCL (2 cores) a V-cycle
-    costs about 8 plain iterations in launches, so it pays only on thick holes: a 100x100
-    hole takes 170 instead of 3840 iterations, 0.8 s instead of 2.4 s; text 40 instead of
-    150 iterations but 2.4 times the time.
+    hole pixel lies more than THICK pixels from the known ones. On PoCL a V-cycle costs
+    several plain iterations in launches, so it pays only on thick holes, where it cuts the
+    iterations many-fold; on text it cuts them too, but takes more time
+    (docs/inpainting_methods.md has the figures).
     """
     if not omega.any():
         return data.copy()

@@ -59,8 +59,8 @@ METHODS = {
 # installed.
 AUTO = ("coherence", "transport")
 # method=None: coherence transport. The self-validated vote ("auto") measured better on the
-# corpus's test half but 8-30x slower (docs/inpainting.md), too slow for a default that the
-# quickstart, the napari plugin and films run on every frame.
+# corpus's test half but many times slower (docs/inpainting.md), too slow for a default that
+# the quickstart, the napari plugin and films run on every frame.
 DEFAULT = "coherence"
 COMMON = ("dtype", "progress", "seed")  # keywords every solve takes, passed by the dispatch
 

@@ -23,8 +23,8 @@ How this implementation runs it (all on the OpenCL device):
   finer level starts from the upsampled result of the coarser one plus the extension of its
   mismatch with the known border (no seams). A smooth start that already matches the
   border cuts the number of steps several-fold compared with a constant start, and on
-  photos, where the best PSNR comes long before the steady state, the biharmonic start is
-  worth 0.3-0.5 dB (benchmarks/inpaint_quality.py).
+  photos, where the best PSNR comes long before the steady state, the biharmonic start
+  scores best (docs/inpainting_methods.md; benchmarks/inpaint_quality.py).
 - The derivatives of N and delta L are Scharr's (stencil="isotropic"); appendix A's central
   differences (stencil="central") are not isotropic enough for sharp oblique isophotes
   (docs/inpainting.md has the experiments).
@@ -41,7 +41,7 @@ How this implementation runs it (all on the OpenCL device):
   after `max_steps`). The mean test is the one that ends runs on photos, where a few pixels
   never settle (see `inpaint`'s docstring).
 - Multiresolution: one level for thin masks (half-width up to 8 px), two for thicker ones
-  (multiresolution.auto_levels has the measurements).
+  (docs/inpainting.md has the measurements).
 - The output equals the input bit for bit outside the mask.
 """
 
@@ -131,8 +131,8 @@ class LevelSolver:
 
     def _bind_step_kernels(self, runtime, params) -> None:
         """Kernel instances with every argument set, one per ping-pong direction: a step is
-        then a bare enqueue (pyopencl's argument handling costs ~0.1 ms per call, as much as
-        a step's work on a small region)."""
+        then a bare enqueue (pyopencl's per-call argument handling costs as much as a step's
+        work on a small region; docs/inpainting_methods.md)."""
         g = self.grid
         defines = {
             "SCALING": SCALINGS.index(params.scaling),
