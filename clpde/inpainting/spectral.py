@@ -37,7 +37,9 @@ own and runs on the OpenCL device (kernels/inpainting/spectral.cl has the maths)
 - Precision: the data stays float (float32, or float64 with dtype=float64) from the input's
   scaling to the output; nothing is quantised to 8 bits.
 - Only the damage's blocks are touched: the upload is the damage's bounding box grown by the
-  border, and the kernel writes masked pixels only.
+  border, and the kernel writes masked pixels only. `clpde.inpaint` solves each cluster of
+  damage in its own box, grown by MARGIN (a block plus the border), so that the host's float
+  copy follows the damage too; the blocks of one box share launches, one per wave.
 
 Defaults (block 8, border 12, rho 0.6, gamma 0.7, alpha 2, delta 1, split 0.3, two grids,
 100 picks) were chosen on calibration photos only, with benchmarks/inpaint_spectral_quick.py.
@@ -61,13 +63,21 @@ DESCRIPTION = (
     "functions fitted to the known pixels around it"
 )
 
-# None: the whole image is one call, so that every block of the damage, wherever it lies,
-# goes into the same few launches (one per wave) instead of a launch per component.
-MARGIN = None
-
-MAXK = 512  # its SPECTRAL_MAXK
+MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP
 COLOURS = ("pca", "channels")
+
+
+def MARGIN(omega=None, block: int = 8, border: int = 12, **_params) -> int:
+    """Known pixels the fill reads around a hole: the block grid starts up to half a block
+    before the hole's bounding box and ends less than a block after it, and each window
+    reaches `border` beyond its block. Solved in a box grown by this much (clpde.inpaint's
+    boxes), a hole's fill reads only its box, so that time and memory follow the damage,
+    not the image."""
+    for name, v in (("block", block), ("border", border)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise InputError(f"{name} must be an integer >= 1, not {v!r}")
+    return int(block) + int(border)
 
 
 def _check(
