@@ -172,8 +172,8 @@ def _grid(n=192):
 
 def test_periodic_pattern_exact_at_every_seed(runtime):
     # Between the lines a patch is flat and matches any phase; without the lattice's lags
-    # the field kept a wrong one at every seed (23.8-38.5 dB at seeds 0-4; the holes of
-    # benchmarks/exemplar_seeds.py's grid23; docs/inpainting_texture.md).
+    # the field kept a wrong one at every seed (the holes of benchmarks/exemplar_seeds.py's
+    # grid23; docs/inpainting_texture.md has the figures).
     img, omega = _grid()
     for seed in range(5):
         out = exemplar.solve(img, omega, runtime, seed=seed)
