@@ -1,5 +1,5 @@
 """The default inpainting against its fastest peers on the quickstart's photo, warm, in one
-process: the issue-14 target is the default's time at most scikit-image's biharmonic fill's
+process: the target is the default's time at most scikit-image's biharmonic fill's
 on a 512x512 colour photo with a 5-10% text mask.
 
     python benchmarks/inpaint_default_speed.py [--repeats 5]

@@ -203,7 +203,8 @@ def _rate_residual(image, stencil):
 def _from_truth(image, mask, steps, **params):
     """PSNR in the slot after `steps` steps started from the exact image."""
     import clpde
-    from clpde.inpainting.transport import InpaintParams, LevelSolver
+    from clpde.inpainting.transport import LevelSolver
+    from clpde.inpainting.transport_params import InpaintParams
 
     p = InpaintParams(tol=0, mean_tol=0, **params)
     solver = LevelSolver(clpde.get_runtime(), image[None] / 255.0, mask, p)

@@ -38,6 +38,16 @@ def add_inpaint_parser(subparsers) -> None:
         "model); an alpha channel is kept as is. "
         "--demo damages a bundled photo and restores it.",
     )
+    _add_input_output_arguments(parser)
+    _add_transport_arguments(parser)
+    _add_method_arguments(parser)
+    add_device_argument(parser)
+    add_sequence_arguments(parser)  # a film or a frame folder: clpde restore's path
+    parser.set_defaults(run=run_inpaint)
+
+
+def _add_input_output_arguments(parser) -> None:
+    """IMAGE, MASK, the output, the demo and the evolution's GIF."""
     parser.add_argument("input", metavar="IMAGE", nargs="?", help="image to restore")
     parser.add_argument(
         "mask",
@@ -78,6 +88,11 @@ def add_inpaint_parser(subparsers) -> None:
         metavar="N",
         help="steps between GIF frames (default: 100)",
     )
+
+
+def _add_transport_arguments(parser) -> None:
+    """The thesis's scheme's options (a call giving one runs method="transport"), and the
+    colour model and levels that it shares with other methods."""
     parser.add_argument(
         "--max-steps", type=int, default=None, help="transport: steps per level (default: 3000)"
     )
@@ -118,6 +133,9 @@ def add_inpaint_parser(subparsers) -> None:
         help="transport: multiresolution levels (default: chosen from the mask)",
     )
 
+
+def _add_method_arguments(parser) -> None:
+    """The method's choice and the options every method takes."""
     parser.add_argument(
         "--method",
         choices=("auto", *METHODS),
@@ -149,9 +167,6 @@ def add_inpaint_parser(subparsers) -> None:
         "keep, white = inpaint, grey = partly damaged: keeps a fidelity "
         "to the observed pixel) instead of bright = inpaint",
     )
-    add_device_argument(parser)
-    add_sequence_arguments(parser)  # a film or a frame folder: clpde restore's path
-    parser.set_defaults(run=run_inpaint)
 
 
 def task_options(args) -> dict:

@@ -1,5 +1,6 @@
-"""`clpde.inpaint` and `clpde.Inpainting`: the input handling, the method's choice and the
-boxes, for every inpainting method alike.
+"""`clpde.inpaint` and `clpde.Inpainting`: the method's choice and the boxes, for every
+inpainting method alike (the input's checks and scaling are inputs.py's; the states and the
+report of a run, runs.py's).
 
 - Methods: `method=` picks one of clpde.inpainting's modules through the registry
   (registry.py); the thesis's scheme is "transport" (transport.py), one method among the
@@ -19,208 +20,24 @@ import sys
 import time
 import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import Progress, State
+from .._progress import Progress
 from ..errors import InputError
 from ..fields import check_fits
-from ..imagedata import (
-    ImageLayout,
-    as_image,
-    check_channel_axis,
-    compute_dtype,
-    grow_mask,
-    growth,
-    integer_range,
-    value_range,
-)
+from ..imagedata import compute_dtype, grow_mask, growth
 from ..runtime import DeviceLike, get_runtime
-from . import boxes, transport, validate
+from . import boxes, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
-from .registry import margin, soft
-from .transport import _TRANSPORT_ARGS, GHOST, InpaintParams, transport_params
-
-COLOUR_MODELS = ("channels", "rho-phi-psi")
-
-
-@dataclass
-class InpaintState(State):
-    """One intermediate state: the whole image (in the input's layout and dtype)."""
-
-    level: int  # 0 is the finest
-    step: int  # steps taken on this level so far
-    image: np.ndarray
-    change: float | None = None  # largest change in Omega over the last check interval
-
-    @property
-    def time(self) -> None:
-        """None: inpainting mixes transport and diffusion steps, it has no single time."""
-        return None
-
-
-@dataclass
-class InpaintInfo:
-    """What a run did. `steps` counts transport plus diffusion steps on the finest level."""
-
-    steps: int
-    converged: bool
-    levels: int
-    steps_per_level: list = field(default_factory=list)  # fine to coarse
-    omega_pixels: int = 0
-    band_pixels: int = 0
-    seconds: float = 0.0
-    snapshots: list = field(default_factory=list)
-    method: str | None = "transport"  # None: the mask was empty, nothing was run
-    boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved
-    box_methods: list = field(default_factory=list)  # the method that solved each box
-    # omega pixels of each box that the exemplar filled (under method="auto" a box named
-    # "<structure>+exemplar" had only its thick parts refilled by the exemplar)
-    box_exemplar_pixels: list = field(default_factory=list)
-    # method="auto": per box, what the self-validation chose for each cluster of damage, and
-    # why (inpainting/validate.py's report)
-    choices: list = field(default_factory=list)
-
-
-# ---------------------------------------------------------------------------------------
-# Input handling
-
-
-def _as_mask(mask, shape_hw):
-    """(omega, softness): omega is a bool (rows, cols) array, True where anything is to be
-    filled; softness is None for a binary mask, else the float degree of damage in [0, 1].
-    A bool mask is used as is (no copy)."""
-    m = np.asarray(mask)
-    if m.dtype != bool and not (np.issubdtype(m.dtype, np.number)):
-        raise InputError(
-            f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = inpaint)"
-        )
-    if m.ndim == 3 and m.shape[-1] == 1:
-        m = m[..., 0]
-    if m.shape != tuple(shape_hw):
-        raise InputError(
-            f"mask shape {m.shape} does not match the image's height and width {tuple(shape_hw)}; "
-            "give a (rows, columns) mask of the same size as the image"
-        )
-    if m.dtype == bool:
-        return m, None
-    if not np.issubdtype(m.dtype, np.floating):
-        return m != 0, None
-    lo, hi = m.min(), m.max()  # NaN propagates into both
-    if not (np.isfinite(lo) and np.isfinite(hi)):
-        raise InputError(
-            "mask contains NaN or infinite values; a float mask is the degree of "
-            "damage in [0, 1] (0 keep, 1 inpaint)"
-        )
-    if lo < 0 or hi > 1:
-        raise InputError(
-            f"float mask values lie in [{lo:g}, {hi:g}], outside [0, 1]; a float mask "
-            "is the degree of damage (0 keep, 1 inpaint): rescale it, or pass a bool "
-            "mask (mask != 0)"
-        )
-    omega = m > 0
-    soft = bool(((m > 0) & (m < 1)).any())
-    return omega, (m if soft else None)
-
-
-def _prepare(image, mask, channel_axis, alpha):
-    """(array, planes view (nc, ny, nx), omega, softness, layout, alpha): validation and the
-    [0, 1] scaling, without a float copy of the image (boxes are converted one at a time)."""
-    array = as_image(image, allow_nan=True)
-    axis = check_channel_axis(array.ndim, channel_axis)
-    planes = array[np.newaxis] if axis is None else np.moveaxis(array, axis, 0)
-    floating = np.issubdtype(array.dtype, np.floating)
-    finite = np.isfinite(planes).all(axis=0) if floating else None
-    softness = None
-    if mask is None:
-        if finite is None:
-            raise InputError(
-                "mask=None fills the NaN pixels of a float image, but this image is "
-                f"{array.dtype}; "
-                "pass a mask (nonzero where to inpaint)"
-            )
-        omega = ~finite
-    else:
-        omega, softness = _as_mask(mask, planes.shape[1:])
-        if finite is not None and not finite[~omega].all():
-            raise InputError(
-                f"image has {int((~finite[~omega]).sum())} NaN or infinite pixels outside the "
-                "mask; "
-                "include them in the mask, or pass mask=None to fill every NaN pixel"
-            )
-        partly = None if softness is None else (softness > 0) & (softness < 1)
-        if partly is not None and finite is not None and not finite[partly].all():
-            raise InputError(
-                "image has NaN or infinite pixels where the soft mask is below 1; "
-                "a partly damaged pixel needs its observed value (set the mask to 1 "
-                "there)"
-            )
-    nc = planes.shape[0]
-    if alpha is None:
-        alpha = axis is not None and nc == 4
-    if alpha and nc < 2:
-        raise InputError("alpha=True needs at least two channels (the last one is the alpha)")
-    if alpha and finite is not None and not np.isfinite(planes[-1]).all():
-        raise InputError(
-            "the alpha channel (the last one) holds NaN or infinite values, and only the colour "
-            "channels are inpainted; fix the alpha channel first, or pass alpha=False"
-        )
-    if array.dtype == bool or np.issubdtype(array.dtype, np.integer):
-        offset, scale = integer_range(array.dtype)
-    else:
-        where = finite & ~omega if omega.any() and not omega.all() else finite
-        if where.any():
-            lo = float(np.min(planes, where=where[None], initial=np.inf))
-            hi = float(np.max(planes, where=where[None], initial=-np.inf))
-        else:
-            lo, hi = 0.0, 1.0
-        offset, scale = value_range(lo, hi)
-    layout = ImageLayout(array.shape, array.dtype, axis, offset, scale)
-    return array, planes, omega, softness, layout, bool(alpha)
-
-
-def _check_colour(colour: str, ncolour: int) -> None:
-    if colour not in COLOUR_MODELS:
-        raise InputError(f"colour must be one of {', '.join(COLOUR_MODELS)}, not {colour!r}")
-    if colour == "rho-phi-psi" and ncolour != 3:
-        raise InputError(
-            f"colour='rho-phi-psi' needs 3 colour channels (R, G, B), the image has {ncolour}; "
-            "use colour='channels'"
-        )
-
-
-# ---------------------------------------------------------------------------------------
-# The public object form and function
-
-
-class SolveRun:
-    """A method without states of its own (no `run`), run by its `solve` as one step: the
-    interface of the methods' runs (`states(every)`, then `solution` and the counters).
-    For a method without SOFT_MASK, a soft mask is applied afterwards, as
-    m * filled + (1 - m) * observed."""
-
-    steps, converged, levels, steps_per_level, band_pixels = 0, True, 1, [], 0
-
-    def __init__(self, module, data, omega, runtime, damage, fidelity, **options):
-        self.module, self.data, self.omega, self.runtime = module, data, omega, runtime
-        self.damage, self.fidelity, self.options = damage, fidelity, options
-        self.solution = None
-
-    def states(self, every=None):
-        soft_mask = soft(self.module)
-        extra = {"fidelity": self.fidelity} if soft_mask and self.fidelity is not None else {}
-        solved = self.module.solve(self.data, self.omega, self.runtime, **self.options, **extra)
-        solved = np.asarray(solved, np.float64)
-        if self.damage is not None and not soft_mask:
-            solved = np.where(
-                self.omega, self.damage * solved + (1 - self.damage) * self.data, self.data
-            )
-        self.solution = solved
-        return iter(())
+from .inputs import check_colour, prepare
+from .registry import choose_method, margin
+from .runs import InpaintInfo, InpaintState, SolveRun
+from .transport_params import _TRANSPORT_ARGS, GHOST, transport_params
+from .transport_params import check_params as check_transport_params
 
 
 class Inpainting:
@@ -297,7 +114,7 @@ class Inpainting:
         **params: Any,
     ):
 
-        self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = _prepare(
+        self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = prepare(
             image, mask, channel_axis, alpha
         )
         if growth(grow) > 0:  # (no copy of the mask otherwise: it may be image-sized)
@@ -314,7 +131,7 @@ class Inpainting:
                 stacklevel=_caller_level(),
             )
         ncolour = self.planes.shape[0] - int(self.alpha)
-        _check_colour(colour, ncolour)
+        check_colour(colour, ncolour)
         if self.mask.all():
             raise InputError(
                 "the mask covers every pixel, so nothing is known to inpaint from; "
@@ -331,8 +148,8 @@ class Inpainting:
         self.auto = choose_method(self.mask, method, given, per_box=True) == "auto"
         if self.method == "transport":
             self.p = transport_params(params)
-            transport.check_params(self.p)
-            _check_colour(colour, ncolour)
+            check_transport_params(self.p)
+            check_colour(colour, ncolour)
             if levels is not None:
                 params = dict(params, levels=levels)
         else:
@@ -526,25 +343,6 @@ class Inpainting:
         for _ in self.iterate():
             pass
         return self.result
-
-
-def choose_method(omega: np.ndarray, method: str | None, params=(), per_box=False) -> str:
-    """The method to run. None is inpainting.DEFAULT, unless `params` holds one of the
-    transport's own options (InpaintParams), when it is "transport" (the thesis's scheme);
-    "auto" is the first installed of inpainting.AUTO, which takes the options given, while
-    each cluster of damage is filled by the self-validated choice (inpainting/validate.py).
-    per_box=True returns "auto" itself in that case."""
-
-    if method is None:  # levels too: the transport's multiresolution
-        transport_only = {"levels", *InpaintParams.__dataclass_fields__}
-        method = "transport" if set(params) & transport_only else inpainting.DEFAULT
-    if method == "auto" and per_box:
-        return method
-    if method == "auto":
-        installed = inpainting.available()
-        return next(name for name in inpainting.AUTO if name in installed)
-    inpainting.load(method)  # a clear error for unknown or missing ones
-    return method
 
 
 def inpaint(

@@ -46,7 +46,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
@@ -55,6 +54,7 @@ from ..errors import InputError
 from . import coherence
 from . import stitch as _stitch
 from .choose import MIN_PERIODICITY, lattice_offsets, periodicity
+from .patchmatch import PatchMatchLevel, upsample_nnf, valid_sources
 
 DEFAULTS = {
     "patch": 7,  # patch side, odd
@@ -85,7 +85,6 @@ DEFAULTS = {
     # vote, so that the field takes the lattice's phase whatever the seed
     "lattice": True,
 }
-KERNEL_FILES = ("inpainting/patchmatch.cl",)
 
 
 def MARGIN(omega=None, search=DEFAULTS["search"], **_params) -> int:
@@ -139,9 +138,9 @@ def _params(params: dict) -> dict:
 
 # The structure guide's coherence for holes deeper than GUIDE_DEPTH px: a stronger pull
 # along the coherence direction (kappa 100 for the fill's 25), so that edges entering a
-# thick hole are carried further before the isotropic mean takes over. Seeds 0-2 of the
-# exemplar: thick 22.21 -> 22.36 dB (kappa 50: see docs, 200: 21.89), texture 20.48 ->
-# 20.62; thinner holes (text, scratches) keep the fill's defaults.
+# thick hole are carried further before the isotropic mean takes over; it scores higher on
+# the thick and texture cases (docs/inpainting_texture.md), while thinner holes (text,
+# scratches) keep the fill's defaults.
 GUIDE_DEPTH = 8
 GUIDE_KAPPA = 100.0
 
@@ -195,15 +194,6 @@ def texture_features(img: np.ndarray, hole: np.ndarray, patch: int) -> np.ndarra
     return out
 
 
-def _valid_sources(hole: np.ndarray, r: int) -> np.ndarray:
-    """Pixels whose whole patch lies in the box and in the known part."""
-    bad = ndimage.binary_dilation(hole, structure=np.ones((2 * r + 1, 2 * r + 1), bool))
-    valid = ~bad
-    valid[:r] = valid[-r:] = False
-    valid[:, :r] = valid[:, -r:] = False
-    return valid
-
-
 def _levels_for(hole: np.ndarray, r: int, shape) -> int:
     depth = ndimage.distance_transform_cdt(np.pad(hole, 1, constant_values=False), "chessboard")
     # The 99th percentile of the hole pixels' depth, not the maximum: a text mask's strokes
@@ -216,254 +206,6 @@ def _levels_for(hole: np.ndarray, r: int, shape) -> int:
     return levels
 
 
-# ---------------------------------------------------------------------------------------
-# One level on the device
-
-
-class _Level:
-    def __init__(
-        self,
-        runtime,
-        dtype,
-        img: np.ndarray,
-        hole: np.ndarray,
-        weights,
-        patch: int,
-        nout: int | None = None,
-        radius: int | None = None,
-        confidence: float = 1.0,
-        ncolour: int | None = None,
-    ):
-        self.rt = runtime
-        self.q = runtime.queue
-        self.dtype = np.dtype(dtype)
-        self.nch, self.H, self.W = img.shape
-        self.nout = self.nch if nout is None else nout  # planes the votes fill; then guides
-        self.r = patch // 2
-        self.hole = hole
-        # the plane count is an argument; NCH_MAX only sizes a private array, rounded up so
-        # that grey and colour images, with or without guides, share one program
-        defines = {"PATCH": patch, "NCH_MAX": max(8, 1 << (self.nch - 1).bit_length())}
-        rt, dt = runtime, self.dtype
-        self.k_pass = rt.kernel("inpainting/patchmatch.cl", "pm_pass", dt, **defines)
-        self.k_score = rt.kernel("inpainting/patchmatch.cl", "pm_score", dt, **defines)
-        self.k_vote = rt.kernel("inpainting/patchmatch.cl", "pm_vote", dt, **defines)
-        self.k_copy = rt.kernel("inpainting/patchmatch.cl", "pm_copy_centre", dt, **defines)
-        self.k_offsets = rt.kernel("inpainting/patchmatch.cl", "pm_offsets", dt, **defines)
-        self.ncolour = self.nch if ncolour is None else ncolour  # planes before the features
-        self.chw_colour = None  # try_offsets' weights: the colours only, made when first used
-        self.k_cohere = rt.kernel("inpainting/patchmatch.cl", "pm_coherence", dt, **defines)
-
-        self.valid = _valid_sources(hole, self.r)
-        self.valid_idx = np.flatnonzero(self.valid)
-        if self.valid_idx.size == 0:
-            raise InputError(
-                f"the hole leaves no {patch}x{patch} patch of known pixels to copy from; "
-                "use a smaller patch, a larger search region, or a structure method"
-            )
-        targets = ndimage.binary_dilation(hole, structure=np.ones((2 * self.r + 1,) * 2, bool))
-        self.targets_mask = targets
-        self.img = cla.to_device(self.q, np.ascontiguousarray(img, self.dtype))
-        depth = ndimage.distance_transform_edt(hole) if confidence != 1.0 else np.zeros(hole.shape)
-        self.pen = cla.to_device(self.q, (depth * math.log(confidence)).astype(self.dtype).ravel())
-        self.d_valid = cla.to_device(self.q, self.valid.astype(np.uint8).ravel())
-        self.d_use = cla.to_device(self.q, np.ones(self.H * self.W, np.uint8))
-        self.chw = cla.to_device(self.q, np.asarray(weights, self.dtype))
-        ident = np.stack(np.meshgrid(np.arange(self.W), np.arange(self.H)), -1).astype(np.int32)
-        self.nnf_host = ident.reshape(-1, 2).copy()
-        self.nnf = [cla.to_device(self.q, self.nnf_host), cla.to_device(self.q, self.nnf_host)]
-        self.dist = cla.to_device(self.q, np.full(self.H * self.W, np.inf, self.dtype))
-        self.targets = self._list(targets)
-        self.targets_idx = np.flatnonzero(targets)
-        self.holes = self._list(hole)
-        # The random search covers the search region (the margin around the hole), not the
-        # whole box: a text mask's box is the image, and samples farther than the margin
-        # cost 20% of a searching pass for no PSNR (measured on the texture and thick cases).
-        widest = max(self.W, self.H)
-        self.radius = max(1, min(widest, int(radius))) if radius else widest
-
-    def _list(self, mask: np.ndarray):
-        idx = np.flatnonzero(mask).astype(np.int32)
-        return cla.to_device(self.q, idx if idx.size else np.zeros(1, np.int32)), idx.size
-
-    def _launch(self, kernel, n, *args):
-        if n:
-            kernel(self.q, *self.rt.items(n), *args)  # a fixed work-group (Runtime.items)
-
-    def set_nnf(self, nnf: np.ndarray, rng) -> None:
-        """Upload a field for the targets, replacing sources that are not legal by random ones."""
-        nnf = nnf.reshape(-1, 2).copy()
-        t = np.flatnonzero(self.targets_mask)
-        sx, sy = nnf[t, 0], nnf[t, 1]
-        inside = (sx >= 0) & (sx < self.W) & (sy >= 0) & (sy < self.H)
-        ok = np.zeros(t.size, bool)
-        ok[inside] = self.valid[sy[inside], sx[inside]]
-        pick = self.valid_idx[rng.integers(0, self.valid_idx.size, int((~ok).sum()))]
-        bad = t[~ok]
-        nnf[bad, 0], nnf[bad, 1] = pick % self.W, pick // self.W
-        full = self.nnf_host.copy()
-        full[t] = nnf[t]
-        for buf in self.nnf:
-            buf.set(full)
-
-    def random_nnf(self, rng) -> None:
-        self.set_nnf(np.full((self.H * self.W, 2), -1, np.int32), rng)
-
-    def nnf_to_host(self) -> np.ndarray:
-        return self.nnf[0].get().reshape(self.H, self.W, 2)
-
-    def _args(self):
-        return (np.int32(self.W), np.int32(self.H), np.int32(self.nch), self.chw.data)
-
-    def patchmatch(self, passes: int, targets, masked: bool, seed: int, counter: list) -> None:
-        lst, n = targets
-        # The random search runs in the first pass only; the later ones propagate (jumps 2,
-        # 1) what it found. Measured: the same PSNR on the thick holes (19.91 against 19.88
-        # dB, mean of 3 seeds) for 41% less CPU time on a 10% text mask.
-        for j in range(passes):
-            jump = (4, 2, 1)[j % 3]
-            self._launch(
-                self.k_pass,
-                n,
-                self.img.data,
-                self.d_use.data,
-                np.int32(masked),
-                self.d_valid.data,
-                self.nnf[0].data,
-                self.nnf[1].data,
-                self.dist.data,
-                lst.data,
-                np.int32(n),
-                *self._args(),
-                np.int32(jump),
-                np.int32(self.radius if j == 0 else 0),
-                np.uint32(seed),
-                np.uint32(counter[0]),
-                np.int32(j == 0),
-            )
-            counter[0] += 1
-            self.nnf.reverse()
-
-    def cohere(self, sweeps: int, factor: float) -> None:
-        """ICM sweeps (red, then black) that let a target take a neighbour's offset when it
-        is within ``factor`` per agreeing neighbour (of 8) as good as its own
-        (pm_coherence; nnf[1] holds the field before each half-sweep)."""
-        lst, n = self.targets
-        for _ in range(sweeps):
-            for parity in (0, 1):
-                cl.enqueue_copy(self.q, self.nnf[1].data, self.nnf[0].data)
-                self._launch(
-                    self.k_cohere,
-                    n,
-                    self.img.data,
-                    self.d_valid.data,
-                    self.nnf[1].data,
-                    self.nnf[0].data,
-                    self.dist.data,
-                    lst.data,
-                    np.int32(n),
-                    *self._args(),
-                    np.int32(parity),
-                    self.dtype.type(factor),
-                )
-
-    def try_offsets(self, offsets, targets=None, masked: bool = False) -> None:
-        """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
-        list of (dx, dy)), keeping it when its colours are at least as close (pm_offsets)."""
-        lst, n = self.targets if targets is None else targets
-        if self.chw_colour is None:
-            w = self.chw.get()
-            w[self.ncolour :] = 0
-            self.chw_colour = cla.to_device(self.q, w)
-        self._launch(
-            self.k_offsets,
-            n,
-            self.img.data,
-            self.d_use.data,
-            np.int32(masked),
-            self.d_valid.data,
-            self.nnf[0].data,
-            self.dist.data,
-            lst.data,
-            np.int32(n),
-            *self._args(),
-            self.chw_colour.data,
-            offsets.data,
-            np.int32(offsets.size // 2),
-        )
-
-    def score(self) -> None:
-        lst, n = self.targets
-        self._launch(
-            self.k_score,
-            n,
-            self.img.data,
-            self.d_use.data,
-            np.int32(0),
-            self.nnf[0].data,
-            self.dist.data,
-            lst.data,
-            np.int32(n),
-            *self._args(),
-        )
-
-    def vote(self, best_only: bool = False, sigma2: float | None = None) -> float:
-        if sigma2 is None:
-            d = self.dist.get()[self.targets_idx]
-            d = d[np.isfinite(d)]
-            sigma2 = float(np.percentile(d, 75)) if d.size else 1.0
-        sigma2 = 1.0 if sigma2 is None else sigma2
-        hl, hn = self.holes
-        self._launch(
-            self.k_vote,
-            hn,
-            self.img.data,
-            self.nnf[0].data,
-            self.dist.data,
-            self.pen.data,
-            hl.data,
-            np.int32(hn),
-            np.int32(self.W),
-            np.int32(self.H),
-            np.int32(self.nch),
-            np.int32(self.nout),
-            self.dtype.type(max(sigma2, 1e-10)),
-            np.int32(best_only),
-        )
-        return sigma2
-
-    def onion_peel(self, rng, passes: int, seed: int, counter: list, offsets=None) -> None:
-        """Fill the hole shell by shell from its border, matching only known neighbours;
-        ``offsets``: lattice lags each shell's pixels also try (try_offsets)."""
-        self.random_nnf(rng)
-        depth = ndimage.distance_transform_cdt(self.hole, "chessboard")
-        filled = ~self.hole
-        for shell in range(1, int(depth.max()) + 1):
-            layer = depth == shell
-            self.d_use.set(filled.astype(np.uint8).ravel())
-            lst = self._list(layer)
-            self.patchmatch(passes, lst, True, seed, counter)
-            if offsets is not None:
-                self.try_offsets(offsets, lst, masked=True)
-            self._launch(
-                self.k_copy,
-                lst[1],
-                self.img.data,
-                self.nnf[0].data,
-                self.dist.data,
-                lst[0].data,
-                np.int32(lst[1]),
-                np.int32(self.W),
-                np.int32(self.H),
-                np.int32(self.nout),
-            )
-            filled = filled | layer
-        self.d_use.fill(1)
-
-    def image(self) -> np.ndarray:
-        return self.img.get()
-
-
 def _periodic(colour: np.ndarray, hole: np.ndarray) -> bool:
     """Whether the hole's near surroundings repeat (choose.periodicity, on the hole's box
     grown by 24 px)."""
@@ -472,19 +214,11 @@ def _periodic(colour: np.ndarray, hole: np.ndarray) -> bool:
     return periodicity(colour[(slice(None),) + near], hole[near]) >= MIN_PERIODICITY
 
 
-def _lattice_offsets(lv: _Level, colour: np.ndarray, hole: np.ndarray):
+def _lattice_offsets(lv: PatchMatchLevel, colour: np.ndarray, hole: np.ndarray):
     """The lags at which this level's known colours repeat, on the device; None if none."""
 
     lags = lattice_offsets(colour, hole)
     return cla.to_device(lv.q, np.ascontiguousarray(lags, np.int32)) if lags.size else None
-
-
-def _upsample_nnf(nnf_c: np.ndarray, shape) -> np.ndarray:
-    """A fine field from a coarse one: the source of 2p + e is 2 s(p) + e."""
-    H, W = shape
-    y, x = np.mgrid[0:H, 0:W]
-    c = nnf_c[np.minimum(y // 2, nnf_c.shape[0] - 1), np.minimum(x // 2, nnf_c.shape[1] - 1)]
-    return np.stack([2 * c[..., 0] + x % 2, 2 * c[..., 1] + y % 2], -1).astype(np.int32)
 
 
 # ---------------------------------------------------------------------------------------
@@ -524,7 +258,7 @@ def _pyramid(colour, hole, guides, patch, nlevels):
     for _ in range(nlevels - 1):
         c, h, g = pyramid[-1]
         c, h = _downsample(c, h)
-        if min(h.shape) < patch + 2 or not _valid_sources(h, r).any():
+        if min(h.shape) < patch + 2 or not valid_sources(h, r).any():
             break  # a level with nothing to copy from would only guess
         if g is not None:  # guides are known everywhere: plain 2 x 2 means
             g = _downsample(g, np.zeros(g.shape[1:], bool))[0]
@@ -602,8 +336,6 @@ def solve(
     seed = 0 if seed is None else int(seed)
     rng = np.random.default_rng(seed)
     patch = int(p["patch"])
-    r = patch // 2
-    nc = data.shape[0]
 
     box = _box(omega, MARGIN(omega, p["search"]))
     hole = omega[box]
@@ -615,82 +347,98 @@ def solve(
             f"the region around the hole ({hole.shape[0]}x{hole.shape[1]} px) is smaller than "
             f"a {patch}x{patch} patch; use a smaller patch"
         )
-
-    nlevels = p["levels"] or _levels_for(hole, r, hole.shape)
+    nlevels = p["levels"] or _levels_for(hole, patch // 2, hole.shape)
     pyramid = _pyramid(colour, hole, guides, patch, nlevels)
+    p.update(sharpen=bool(sharpen), stitch=stitch, lattice=lattice and periodic)
+    result = _descend(pyramid, runtime, dtype, p, rng, seed, progress)
+    filled = out[(slice(None),) + box]
+    filled[:, hole] = result[: data.shape[0]][:, hole].astype(out.dtype)
+    return out
 
+
+def _level(runtime, dtype, level, nc: int, fw: float, p: dict) -> PatchMatchLevel:
+    """A pyramid level (colour, hole, guides) on the device: its colours, the texture
+    features weighted by `fw` (their planes are filled by the votes too), then the guides,
+    which only enter the patch distance."""
+    c, h, g = level
+    patch = int(p["patch"])
+    planes, w = [c], [1.0] * nc
+    if fw > 0:
+        planes.append(texture_features(c, h, patch))
+        w += [fw * nc / 2] * 2
+    nout = sum(len(x) for x in planes)
+    if g is not None:
+        planes.append(g)
+        w += [1.0] * len(g)
+    return PatchMatchLevel(
+        runtime,
+        dtype,
+        np.concatenate(planes),
+        h,
+        w,
+        patch,
+        nout,
+        radius=int(p["search"]),
+        confidence=float(p["confidence"]),
+        ncolour=nc,
+    )
+
+
+def _descend(pyramid, runtime, dtype, p: dict, rng, seed: int, progress) -> np.ndarray:
+    """The finest level's planes, filled coarse to fine: the coarsest level starts by onion
+    peel, each finer one from the coarser field upsampled, then EM iterations (PatchMatch,
+    then vote); the last vote may be stitched (stitch.py)."""
+    nc = pyramid[0][0].shape[0]
     # Automatic feature weight: 1 when the hole needs a pyramid. A hole thin enough for one
     # level (text, scratches) has most of each target patch known, so colours alone tell
-    # texture from smooth: on a 10% text mask the features cost 25% of the time for 0.1 dB.
+    # texture from smooth, and the features would cost time for little gain.
     fw = float(p["features"]) if p["features"] is not None else (1.0 if len(pyramid) > 1 else 0.0)
     counter = [0]
     prev_nnf = None
     bar = progress_bar(progress, len(pyramid), "exemplar levels", leave=False)
     for level in range(len(pyramid) - 1, -1, -1):
-        c, h, g = pyramid[level]
-        planes, w = [c], [1.0] * nc
-        if fw > 0:
-            planes.append(texture_features(c, h, patch))
-            w += [fw * nc / 2] * 2
-        nout = sum(len(x) for x in planes)
-        if g is not None:
-            planes.append(g)
-            w += [1.0] * len(g)
-        lv = _Level(
-            runtime,
-            dtype,
-            np.concatenate(planes),
-            h,
-            w,
-            patch,
-            nout,
-            radius=int(p["search"]),
-            confidence=float(p["confidence"]),
-            ncolour=nc,
-        )
+        c, h, _ = pyramid[level]
+        lv = _level(runtime, dtype, pyramid[level], nc, fw, p)
         # A level started from the coarser field needs fewer iterations than the coarsest;
         # so does a single level (a thin hole), whose onion peel is already at full
-        # resolution: on a 10% text mask 3 iterations instead of 6 cost 0.3 dB and a third
-        # of the time.
+        # resolution (docs/inpainting_texture.md has the measurements).
         coarse_start = prev_nnf is None and len(pyramid) > 1
         its = int(p["iterations"] if coarse_start else p["fine_iterations"])
         # the lattice's lags: in the onion peel (the phase the levels start from) and before
         # the last vote (the sources the stitch reads); the levels between keep the phase
-        needed = lattice and periodic and (prev_nnf is None or level == 0)
+        needed = p["lattice"] and (prev_nnf is None or level == 0)
         offsets = _lattice_offsets(lv, c, h) if needed else None
         if prev_nnf is None:
             lv.onion_peel(rng, int(p["onion_passes"]), seed, counter, offsets)
             lv.set_nnf(lv.nnf_to_host(), rng)
         else:
-            lv.set_nnf(_upsample_nnf(prev_nnf, h.shape), rng)
+            lv.set_nnf(upsample_nnf(prev_nnf, h.shape), rng)
             lv.score()
             lv.vote()
         for it in range(its):
             lv.patchmatch(int(p["passes"]), lv.targets, False, seed, counter)
             last = level == 0 and it == its - 1
-            # Measured (thick holes, mean of seeds 0-2): at the last iteration only, the
-            # same as at every iteration of the finest level, for less time.
+            # At the last iteration only: as good as at every iteration of the finest level,
+            # for less time.
             if last and p["cohere"] > 1:
                 lv.cohere(int(p["cohere_sweeps"]), float(p["cohere"]))
             if offsets is not None and last:
                 # before the last vote, whose sources the stitch reads beyond their patches
                 lv.try_offsets(offsets)
-            sigma2 = lv.vote(best_only=bool(sharpen) and last)
+            sigma2 = lv.vote(best_only=p["sharpen"] and last)
         prev_nnf = lv.nnf_to_host()
         bar.update()
-        if level == 0:
-            result = lv.image()
-            if stitch and sharpen:
-                src = _stitch.vote_sources(
-                    prev_nnf,
-                    lv.dist.get().reshape(h.shape),
-                    lv.pen.get().reshape(h.shape),
-                    h,
-                    r,
-                    sigma2,
-                )
-                result[:nc] = _stitch.stitch(result[:nc], h, src, r)
     bar.close()
-    filled = out[(slice(None),) + box]
-    filled[:, hole] = result[:nc][:, hole].astype(out.dtype)
-    return out
+    result = lv.image()
+    if p["stitch"] and p["sharpen"]:
+        h, r = pyramid[0][1], int(p["patch"]) // 2
+        src = _stitch.vote_sources(
+            prev_nnf,
+            lv.dist.get().reshape(h.shape),
+            lv.pen.get().reshape(h.shape),
+            h,
+            r,
+            sigma2,
+        )
+        result[:nc] = _stitch.stitch(result[:nc], h, src, r)
+    return result

@@ -28,12 +28,10 @@ def auto_levels(omega: np.ndarray, target_half_width: float = 8.0) -> int:
     """One level for thin masks (half-width <= `target_half_width`: text, scratches), two
     for thicker ones.
 
-    Measured with the corrected coarse start (inpaint's coarse_start="corrected"), on the
-    benchmark's 20-30 px blobs over 7 photos and 60-100 px holes in 5 (mean PSNR in the
-    hole, levels 1 / 2 / 3 / 4): blobs 26.13 / 26.50 / 26.47 / 26.35 dB, thick holes
-    17.24 / 17.61 / 16.81 / 16.60 dB. More levels carry structure from further away but
-    blur it; two is the best on average for both (per image it ranges from -0.7 to
-    +1.8 dB against one level).
+    Chosen with the corrected coarse start (inpaint's coarse_start="corrected") on the
+    benchmark's blobs and thick holes: more levels carry structure from further away but
+    blur it, and two is the best on average for both, though not on every image
+    (docs/inpainting.md, Multiresolution, has the table).
     """
     width = hole_half_width(omega)
     return 1 if width <= target_half_width else MAX_AUTO_LEVELS

@@ -30,9 +30,9 @@ mean below `mean_tol` (on photos a few pixels keep moving while the rest has set
 
 Defaults (nu = 0.05, K = contrast = 0.2) from benchmarks/inpaint_methods_quick.py-style
 runs on two photos' scratches, edges at 30/60 degrees and stripes at 30/45 degrees across a
-slot: less diffusion (nu = 0.01, K = 0.05) continues edges better (+2.4 dB over the
-biharmonic start against +0.5) but takes 3-5 times the iterations and loses 0.7-1.9 dB on
-the photos, where NS stays below its own biharmonic start either way.
+slot: less diffusion (nu = 0.01, K = 0.05) continues edges better but takes several times
+the iterations and loses on the photos, where NS stays below its own biharmonic start
+either way (docs/inpainting_methods.md has the figures).
 """
 
 from __future__ import annotations

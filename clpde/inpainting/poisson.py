@@ -233,110 +233,86 @@ class PoissonSolver:
 
         self.f, self.r, self.p, self.qv = zeros(), zeros(), zeros(), zeros()
         o = self.omega_list = DeviceList(runtime, np.flatnonzero(omega))
-        ng = o.items
-        self.rr = [zeros((nc, ng)), zeros((nc, ng))]
-        self.pq = zeros((nc, ng))
-        k_op = runtime.kernel("inpainting/poisson.cl", "operator_axpy_dot", dt)
-        k_update = runtime.kernel("inpainting/poisson.cl", "cg_update", dt)
-        k_direction = runtime.kernel("inpainting/poisson.cl", "cg_direction", dt)
-        dims = (np.int32(nx), np.int32(ny))
-        s = dt.type
-        order = 1 if kind == "harmonic" else 2
+        self.rr = [zeros((nc, o.items)), zeros((nc, o.items))]
+        self.pq = zeros((nc, o.items))
+        self._k_update = runtime.kernel("inpainting/poisson.cl", "cg_update", dt)
+        self._k_direction = runtime.kernel("inpainting/poisson.cl", "cg_direction", dt)
+        self._bind_cg()
+        self.mg = None
+        if precondition and o.n:
+            self._bind_pcg(omega)
+        self.iterations = 0
+        self.residual = None
 
-        def apply(src, dst, a, b, dot, partial):
-            """dst = a L^order src + b f, and the partials of dot . dst."""
-            return o.bind(
-                runtime,
-                k_op,
-                nc,
-                src.data,
-                dst.data,
-                self.f.data,
-                s(a),
-                s(b),
-                dot.data,
-                partial.data,
-                np.int32(order),
-                *dims,
-            )
+    def _bind(self, kernel, *buffers):
+        """A launch of `kernel` over the hole's list, its arguments bound once."""
+        dims = (np.int32(self.nx), np.int32(self.ny))
+        return self.omega_list.bind(
+            self.runtime, kernel, self.nc, *(b.data for b in buffers), *dims
+        )
 
+    def _apply_launch(self, src, dst, a, b, dot, partial):
+        """dst = a L^order src + b f, and the partials of dot . dst (order 1 harmonic, 2
+        biharmonic)."""
+        s, order = self.dtype.type, 1 if self.kind == "harmonic" else 2
+        k_op = self.runtime.kernel("inpainting/poisson.cl", "operator_axpy_dot", self.dtype)
+        return self.omega_list.bind(
+            self.runtime,
+            k_op,
+            self.nc,
+            src.data,
+            dst.data,
+            self.f.data,
+            s(a),
+            s(b),
+            dot.data,
+            partial.data,
+            np.int32(order),
+            np.int32(self.nx),
+            np.int32(self.ny),
+        )
+
+    @property
+    def _sign(self) -> int:
         # harmonic: A = -L, r = b - A u = L u - f; biharmonic: A = L L, r = f - L L u
-        sign = 1 if kind == "harmonic" else -1
-        self._residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr[0])]
-        self._apply = [apply(self.p, self.qv, -sign, 0, self.p, self.pq)]
+        return 1 if self.kind == "harmonic" else -1
+
+    def _bind_cg(self) -> None:
+        """The plain conjugate gradients' launches, one per parity of the ping-ponged
+        residual norms rr."""
+        sign, rr = self._sign, self.rr
+        self._residual = [self._apply_launch(self.u, self.r, sign, -sign, self.r, rr[0])]
+        self._apply = [self._apply_launch(self.p, self.qv, -sign, 0, self.p, self.pq)]
         self._update = [
-            o.bind(
-                runtime,
-                k_update,
-                nc,
-                self.u.data,
-                self.r.data,
-                self.p.data,
-                self.qv.data,
-                self.rr[a].data,
-                self.pq.data,
-                self.rr[1 - a].data,
-                *dims,
-            )
+            self._bind(self._k_update, self.u, self.r, self.p, self.qv, rr[a], self.pq, rr[1 - a])
             for a in (0, 1)
         ]
         self._direction = [
-            o.bind(
-                runtime,
-                k_direction,
-                nc,
-                self.p.data,
-                self.r.data,
-                self.rr[a].data,
-                self.rr[1 - a].data,
-                *dims,
-            )
+            self._bind(self._k_direction, self.p, self.r, rr[a], rr[1 - a]) for a in (0, 1)
+        ]
+
+    def _bind_pcg(self, omega: np.ndarray) -> None:
+        """The multigrid preconditioner and the preconditioned recurrences' launches, which
+        carry r.z (rz) where plain CG carries r.r."""
+        nc, ng, dt, q = self.nc, self.omega_list.items, self.dtype, self.queue
+        self.z, tmp, res = (cla.zeros(q, self.u.shape, dt) for _ in range(3))
+        self._mg_buffers = (tmp, res)
+        self.mg = Multigrid(
+            self.runtime, omega, self.kind, nc, dt, (self.omega_list, self.r, self.z, tmp, res)
+        )
+        rz = self.rz = [cla.zeros(q, (nc, ng), dt), cla.zeros(q, (nc, ng), dt)]
+        self.rr_now = cla.zeros(q, (nc, ng), dt)
+        k_dot = self.runtime.kernel("inpainting/poisson.cl", "dot_partial", dt)
+        sign = self._sign
+        self._pcg_residual = [self._apply_launch(self.u, self.r, sign, -sign, self.r, self.rr_now)]
+        self._pcg_update = [
+            self._bind(self._k_update, self.u, self.r, self.p, self.qv, rz[a], self.pq, self.rr_now)
             for a in (0, 1)
         ]
-        self.mg = None
-        if precondition and o.n:
-            self.z, tmp, res = zeros(), zeros(), zeros()
-            self._mg_buffers = (tmp, res)
-            self.mg = Multigrid(runtime, omega, kind, nc, dt, (o, self.r, self.z, tmp, res))
-            self.rz = [zeros((nc, ng)), zeros((nc, ng))]
-            self.rr_now = zeros((nc, ng))
-            k_dot = runtime.kernel("inpainting/poisson.cl", "dot_partial", dt)
-            self._pcg_residual = [apply(self.u, self.r, sign, -sign, self.r, self.rr_now)]
-            self._pcg_update = [
-                o.bind(
-                    runtime,
-                    k_update,
-                    nc,
-                    self.u.data,
-                    self.r.data,
-                    self.p.data,
-                    self.qv.data,
-                    self.rz[a].data,
-                    self.pq.data,
-                    self.rr_now.data,
-                    *dims,
-                )
-                for a in (0, 1)
-            ]
-            self._pcg_dot = [
-                o.bind(runtime, k_dot, nc, self.r.data, self.z.data, self.rz[a].data, *dims)
-                for a in (0, 1)
-            ]
-            self._pcg_direction = [
-                o.bind(
-                    runtime,
-                    k_direction,
-                    nc,
-                    self.p.data,
-                    self.z.data,
-                    self.rz[a].data,
-                    self.rz[1 - a].data,
-                    *dims,
-                )
-                for a in (0, 1)
-            ]
-        self.iterations = 0
-        self.residual = None
+        self._pcg_dot = [self._bind(k_dot, self.r, self.z, rz[a]) for a in (0, 1)]
+        self._pcg_direction = [
+            self._bind(self._k_direction, self.p, self.z, rz[a], rz[1 - a]) for a in (0, 1)
+        ]
 
     def _solve_pcg(self, tol, max_iter, check_every, atol):
         """Conjugate gradients preconditioned by the multigrid V-cycle: the same
@@ -474,15 +450,15 @@ def fill(
 
     data: (channels, rows, cols) floats; only omega changes. start: optional first guess
     inside omega (same shape as data); by default each component's mean border value.
-    (A coarse-grid solution as the start does not cut the iterations: measured on a
-    100x100 hole, 3950 against 4000 to tol=1e-5.) clip: clip the result to each
+    (A coarse-grid solution as the start hardly cuts the iterations:
+    docs/inpainting_methods.md.) clip: clip the result to each
     channel's range over the known pixels, as scikit-image's inpaint_biharmonic does (the
     biharmonic fill overshoots next to sharp edges). precondition: conjugate gradients
     preconditioned by a multigrid V-cycle (`Multigrid`), True, False or "auto": where some
-    hole pixel lies more than THICK pixels from the known ones. On PoCL (2 cores) a V-cycle
-    costs about 8 plain iterations in launches, so it pays only on thick holes: a 100x100
-    hole takes 170 instead of 3840 iterations, 0.8 s instead of 2.4 s; text 40 instead of
-    150 iterations but 2.4 times the time.
+    hole pixel lies more than THICK pixels from the known ones. On PoCL a V-cycle costs
+    several plain iterations in launches, so it pays only on thick holes, where it cuts the
+    iterations many-fold; on text it cuts them too, but takes more time
+    (docs/inpainting_methods.md has the figures).
     """
     if not omega.any():
         return data.copy()

@@ -41,6 +41,7 @@ import importlib
 import inspect
 
 from ..errors import InputError
+from .transport_params import InpaintParams
 
 METHODS = {
     "transport": "clpde.inpainting.transport",
@@ -58,8 +59,8 @@ METHODS = {
 # installed.
 AUTO = ("coherence", "transport")
 # method=None: coherence transport. The self-validated vote ("auto") measured better on the
-# corpus's test half but 8-30x slower (docs/inpainting.md), too slow for a default that the
-# quickstart, the napari plugin and films run on every frame.
+# corpus's test half but many times slower (docs/inpainting.md), too slow for a default that
+# the quickstart, the napari plugin and films run on every frame.
 DEFAULT = "coherence"
 COMMON = ("dtype", "progress", "seed")  # keywords every solve takes, passed by the dispatch
 
@@ -123,3 +124,22 @@ def margin(module, omega, params: dict):
 
 def soft(module) -> bool:
     return bool(getattr(module, "SOFT_MASK", False))
+
+
+def choose_method(omega, method: str | None, params=(), per_box=False) -> str:
+    """The method to run. None is DEFAULT, unless `params` holds one of the transport's own
+    options (InpaintParams), when it is "transport" (the thesis's scheme); "auto" is the
+    first installed of AUTO, which takes the options given, while each cluster of damage is
+    filled by the self-validated choice (inpainting/validate.py). per_box=True returns
+    "auto" itself in that case."""
+
+    if method is None:  # levels too: the transport's multiresolution
+        transport_only = {"levels", *InpaintParams.__dataclass_fields__}
+        method = "transport" if set(params) & transport_only else DEFAULT
+    if method == "auto" and per_box:
+        return method
+    if method == "auto":
+        installed = available()
+        return next(name for name in AUTO if name in installed)
+    load(method)  # a clear error for unknown or missing ones
+    return method

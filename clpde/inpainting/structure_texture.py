@@ -23,13 +23,13 @@ from ..planar.rof import denoise_tv
 from . import exemplar
 from .registry import load
 
-# tv_weight 1.5 (relative to the known span), measured over seeds 0-2 through clpde.inpaint:
-# periodic 24.98 / 34.57 / 44.20 dB at 1 / 1.5 / 2, texture 19.14 / 19.20 / 19.18, thick
-# 20.86 / 20.94 / 20.75 (docs/inpainting_texture.md)
+# tv_weight 1.5 (relative to the known span): of 1, 1.5 and 2, the one that does best on the
+# texture and thick cases without giving up the periodic ones (docs/inpainting_texture.md
+# has the table)
 DEFAULTS = {"tv_weight": 1.5, "guide": 0.5, "structure": None}
 # The transport first: coherence's shells of a square hole meet on its diagonals and leave
-# creases there (the cup's rim as a V); measured over seeds 0-2 at tv_weight 1.5, transport
-# against coherence: periodic 36.38 / 34.57 dB, texture 19.38 / 19.20, thick 21.00 / 20.94.
+# creases there (the cup's rim as a V); the transport's structure scores higher on the
+# periodic, texture and thick cases (docs/inpainting_texture.md).
 STRUCTURE_METHODS = ("transport", "coherence")
 
 

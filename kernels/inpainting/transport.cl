@@ -56,10 +56,10 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* 
         // 3 across) for grad I in N and for delta L, and the 5-point L at the 3x3
         // neighbours (a 5x5 block less its corners). With central differences, the
         // discrete delta L and grad I of a sharp straight edge at 30 or 60 degrees are not
-        // parallel, so the exact image is no steady state (|I_t| up to 0.16 on sharp
-        // stripes); this stencil cuts that residual 2.5-4 fold (docs/inpainting.md).
-        // (written out, not as loops over private arrays: PoCL keeps those in memory, 40x
-        // slower)
+        // parallel, so the exact image is no steady state; this stencil cuts that residual
+        // several-fold (docs/inpainting.md has the residuals on sharp stripes and edges).
+        // (written out, not as loops over private arrays: PoCL keeps those in memory, many
+        // times slower; docs/inpainting_methods.md)
         const REAL c = u[i], e = u[i + 1], w = u[i - 1], n = u[i + sx], s = u[i - sx];
         const REAL ne = u[i + 1 + sx], nw = u[i - 1 + sx], se = u[i + 1 - sx], sw = u[i - 1 - sx];
         const REAL ee = u[i + 2], ww = u[i - 2], nn = u[i + 2 * sx], ss = u[i - 2 * sx];

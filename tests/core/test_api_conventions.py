@@ -132,7 +132,7 @@ def test_inpaint_names_the_transport_options_with_their_defaults():
     import inspect
 
     from clpde.inpainting.api import inpaint
-    from clpde.inpainting.transport import _TRANSPORT_ARGS, InpaintParams
+    from clpde.inpainting.transport_params import _TRANSPORT_ARGS, InpaintParams
 
     signature = inspect.signature(inpaint).parameters
     fields = {f.name: f.default for f in dataclasses.fields(InpaintParams)}

@@ -59,23 +59,15 @@ def test_ground_floor_is_small(metrics):
 LONG_MODULES = {
     "clpde.tracking.contours",
     "clpde.regions.tracker",
-    "clpde.inpainting.api",
     "clpde.surface.flows",
-    "clpde.inpainting.exemplar",
     "clpde.surface.implicit",
     "clpde.planar.rof",
-    "clpde.inpainting.transport",
     "clpde.runtime",
     "clpde.surface.band",
 }
 LONG_FUNCTIONS = {
-    "clpde.inpainting.spectral.fill",
-    "clpde.cli.inpaint.add_inpaint_parser",
-    "clpde.inpainting.exemplar.solve",
     "clpde.tracking.contours.MorphingTracker.__init__",
     "clpde.planar.rof.denoise_tv",
-    "clpde.inpainting.poisson.PoissonSolver.__init__",
-    "clpde.inpainting.spectral.plan",
     "clpde.surface.mesh_sdf._sign_by_winding",
     "clpde.cli.track.add_track_parser",
     "clpde.tracking.contours.MorphingTracker._morph",

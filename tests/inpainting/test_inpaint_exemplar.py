@@ -5,7 +5,7 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 
-from clpde.inpainting import exemplar
+from clpde.inpainting import exemplar, patchmatch
 from tests.reference import patchmatch as ref
 
 
@@ -18,7 +18,9 @@ def _level(
     hole[6:12, 8:15] = True
     hole[15:, 20:] = True  # touches two borders: clipped target patches
     weights = rng.uniform(0.5, 2.0, nch)
-    lv = exemplar._Level(runtime, dtype, img, hole, weights, patch, nout, confidence=confidence)
+    lv = patchmatch.PatchMatchLevel(
+        runtime, dtype, img, hole, weights, patch, nout, confidence=confidence
+    )
     lv.random_nnf(rng)
     return lv, img, hole, weights
 
@@ -118,7 +120,7 @@ def test_coherence_joins_equally_good_copies(runtime):
     img = img + 0.01 * rng.standard_normal((1, 64, 64))
     hole = np.zeros((64, 64), bool)
     hole[24:40, 24:40] = True
-    lv = exemplar._Level(runtime, np.float32, img, hole, [1.0], 5)
+    lv = patchmatch.PatchMatchLevel(runtime, np.float32, img, hole, [1.0], 5)
     lv.random_nnf(rng)
     lv.score()
     lv.patchmatch(6, lv.targets, False, seed=0, counter=[0])
@@ -170,8 +172,8 @@ def _grid(n=192):
 
 def test_periodic_pattern_exact_at_every_seed(runtime):
     # Between the lines a patch is flat and matches any phase; without the lattice's lags
-    # the field kept a wrong one at every seed (23.8-38.5 dB at seeds 0-4; the holes of
-    # benchmarks/exemplar_seeds.py's grid23; docs/inpainting_texture.md).
+    # the field kept a wrong one at every seed (the holes of benchmarks/exemplar_seeds.py's
+    # grid23; docs/inpainting_texture.md has the figures).
     img, omega = _grid()
     for seed in range(5):
         out = exemplar.solve(img, omega, runtime, seed=seed)

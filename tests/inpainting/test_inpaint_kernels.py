@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from clpde.inpainting.transport import InpaintParams, LevelSolver
+from clpde.inpainting.transport import LevelSolver
+from clpde.inpainting.transport_params import InpaintParams
 from clpde.runtime import get_runtime
 from tests.reference import inpaint as ref
 from tests.reference.planar import pad_neumann

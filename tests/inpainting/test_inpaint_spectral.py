@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import clpde
-from clpde.inpainting import spectral
+from clpde.inpainting import spectral, spectral_plan
 from tests.reference import spectral as ref
 
 SMALL = dict(block=8, min_block=4, border=4, iterations=12)
@@ -62,7 +62,7 @@ def test_plan_matches_reference_plan():
     mask[0:3, 10:20] = True  # damage at the image's edge: shifted grids start before it
     for split, shift in ((0.0, (0, 0)), (0.5, (0, 0)), (0.8, (0, 0)), (0.5, (8, 8)), (0.5, (0, 8))):
         options = dict(block=16, min_block=4, border=8, split=split, delta=0.5, shift=shift)
-        crop, blocks, waves, wave_of = spectral.plan(mask, **options)
+        crop, blocks, waves, wave_of = spectral_plan.plan(mask, **options)
         crop_r, blocks_r, waves_r, wave_of_r = ref.plan(mask, **options)
         assert tuple(crop) == tuple(crop_r)
         assert np.array_equal(wave_of, wave_of_r)
@@ -172,3 +172,42 @@ def test_bad_options_are_refused():
         clpde.inpaint(image, mask, method="spectral", block=32, border=8)
     with pytest.raises(clpde.InputError, match="rho"):
         clpde.inpaint(image, mask, method="spectral", rho=1.5)
+
+
+def test_small_holes_in_a_large_image_are_solved_in_small_boxes():
+    # Each hole's box is its bounding box grown by MARGIN (a block plus the border, what the
+    # fill reads), so only the boxes are converted and uploaded. A box that holds one hole
+    # gives the whole-image call's fill bit for bit, and a far hole changes nothing in it.
+    ny, nx = 240, 300
+    image = np.stack([_photo_like(ny, nx, seed=c) for c in range(3)], -1).astype(np.float32)
+    near, far = np.zeros((ny, nx), bool), np.zeros((ny, nx), bool)
+    near[60:66, 80:94] = True
+    far[190:197, 250:255] = True
+    both = near | far
+    margin = spectral.MARGIN(near)
+    assert margin == 8 + 12
+    out, info = clpde.inpaint(
+        image, both, channel_axis=-1, method="spectral", return_info=True, progress=False
+    )
+    assert info.boxes == [
+        (60 - margin, 66 + margin, 80 - margin, 94 + margin),
+        (190 - margin, min(ny, 197 + margin), 250 - margin, min(nx, 255 + margin)),
+    ]
+    assert np.array_equal(out[~both], image[~both])
+    for hole in (near, far):
+        alone = clpde.inpaint(
+            image, hole, channel_axis=-1, method="spectral", boxes=False, progress=False
+        )
+        assert np.array_equal(out[hole], alone[hole])
+    grey = image[..., 0]
+    boxed = clpde.inpaint(grey, near, method="spectral", progress=False)
+    whole = clpde.inpaint(grey, near, method="spectral", boxes=False, progress=False)
+    assert np.array_equal(boxed, whole)
+
+
+def test_margin_refuses_bad_block_sizes():
+    image = np.zeros((20, 20), np.uint8)
+    mask = np.zeros((20, 20), bool)
+    mask[5:8, 5:8] = True
+    with pytest.raises(clpde.InputError, match="border"):
+        clpde.inpaint(image, mask, method="spectral", border=None)

@@ -5,7 +5,7 @@ solve of the same equations written out pixel by pixel."""
 import numpy as np
 from scipy import ndimage
 
-from clpde.inpainting import exemplar, stitch
+from clpde.inpainting import patchmatch, stitch
 from tests.reference import patchmatch as ref
 
 
@@ -62,7 +62,7 @@ def _level(runtime, seed=4):
     hole = np.zeros(shape, bool)
     hole[7:14, 8:16] = True
     hole[17:, 21:] = True  # touches two borders
-    lv = exemplar._Level(runtime, np.float32, img, hole, [1.0, 1.0], 5, confidence=1.3)
+    lv = patchmatch.PatchMatchLevel(runtime, np.float32, img, hole, [1.0, 1.0], 5, confidence=1.3)
     lv.random_nnf(rng)
     lv.score()
     return lv, img, hole

@@ -66,8 +66,9 @@ def _grating(n=64):
 
 def test_through_inpaint_equals_solve_on_a_float_image(runtime):
     # clpde.inpaint maps a float image's known span to [0, 1]; the ROF weight used to be in
-    # absolute units, so the split (and the fill: 24.74 dB against 31.97 on the periodic
-    # class) changed with the image's contrast. It is relative to the span now.
+    # absolute units, so the split (and the fill, several dB on the periodic class:
+    # docs/inpainting_texture.md) changed with the image's contrast. It is relative to the
+    # span now.
     import clpde
 
     img, omega = _grating()

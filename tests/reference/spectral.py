@@ -1,6 +1,7 @@
-"""Numpy twin of kernels/inpainting/spectral.cl and of the plan in clpde/inpainting/spectral.py:
-the same frequency-selective fill, written plainly (loops over blocks, numpy's FFT for the
-transforms, a Python loop for the greedy picks), in float64."""
+"""Numpy twin of kernels/inpainting/spectral.cl and of the plan in
+clpde/inpainting/spectral_plan.py: the same frequency-selective fill, written plainly (loops
+over blocks, numpy's FFT for the transforms, a Python loop for the greedy picks), in
+float64."""
 
 import numpy as np
 

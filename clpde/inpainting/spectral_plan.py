@@ -1,0 +1,228 @@
+"""The plan of method="spectral" (spectral.py), made on the host from the mask alone before
+anything runs: the block grid over the damage, each block's size (a block whose window sees
+too few known pixels is cut in four), and the waves, the order in which the blocks are
+filled.
+
+- A wave is every pending block that comes first, by its share of known pixels in its window
+  (pixels filled by earlier blocks count `delta`), among the blocks its window touches. The
+  blocks of a wave are independent, so the device runs a wave in one launch and never waits
+  for the host between waves.
+- Sums over windows are read from summed-area tables, so the plan costs a few passes over
+  the damage's bounding box, not one per block.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+MAXL = 32  # kernels/inpainting/spectral.cl's SPECTRAL_MAXL: the widest window
+
+
+def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
+    """Sum of `weight` over each block's window (the block at (ys, xs), `sizes` wide, grown by
+    `border`; outside the array counts 0)."""
+    pad = border + MAXL + 1  # windows of blocks past the array's end stay inside
+    sat = np.pad(weight, pad).cumsum(0).cumsum(1)
+    # the window's rows [y - border, y + size + border) are pad's [a, b) with a = y - border +
+    # pad; sat is inclusive, so the sum is sat[b - 1] - sat[a - 1] (likewise for columns)
+    a_y, a_x = ys - border + pad - 1, xs - border + pad - 1
+    b_y, b_x = ys + sizes + border + pad - 1, xs + sizes + border + pad - 1
+    return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
+
+
+def _hole_cells(hole: np.ndarray, origin, cells_shape, cell: int) -> np.ndarray:
+    """Whether each cell (a smallest block) of the grid holds a hole pixel; the grid starts at
+    `origin` in the crop (rows and columns before the crop hold none)."""
+    oy, ox = origin
+    ncy, ncx = cells_shape
+    grid = np.zeros((ncy * cell, ncx * cell), bool)
+    ya, xa = max(0, -oy), max(0, -ox)  # grid rows and columns above / left of the image
+    part = hole[oy + ya : oy + ncy * cell, ox + xa : ox + ncx * cell]
+    grid[ya : ya + part.shape[0], xa : xa + part.shape[1]] = part
+    return grid.reshape(ncy, cell, ncx, cell).any((1, 3))
+
+
+def _block_sizes(cells, known, origin, tops, top: int, cell: int, border: int, split: float):
+    """[(cell row, cell column, size in cells)] of the blocks holding hole cells: the grid's
+    `tops` top blocks (`top` cells wide), each cut in four while its window holds less than
+    `split` of known pixels (down to one cell)."""
+    oy, ox = origin
+    found = []
+    todo = [(i * top, j * top, top) for i in range(tops[0]) for j in range(tops[1])]
+    while todo:
+        cys = np.array([t[0] for t in todo])
+        cxs = np.array([t[1] for t in todo])
+        sz = np.array([t[2] for t in todo])
+        has = np.array([cells[a : a + s, b : b + s].any() for a, b, s in todo], bool)
+        area = (sz * cell + 2 * border) ** 2
+        share = _window_sums(known, border, oy + cys * cell, ox + cxs * cell, sz * cell) / area
+        nxt = []
+        for (a, b, s), h, sh in zip(todo, has, share, strict=True):
+            if not h:
+                continue
+            if sh < split and s > 1:
+                h2 = s // 2
+                nxt += [(a, b, h2), (a, b + h2, h2), (a + h2, b, h2), (a + h2, b + h2, h2)]
+            else:
+                found.append((a, b, s))
+        todo = nxt
+    return found
+
+
+def _neighbours(found, label: np.ndarray, reach: int):
+    """(pi, pj): the pairs of blocks where j's pixels lie in i's window (and i's in j's: the
+    relation is symmetric); `label` says which block owns each cell, `reach` how many cells a
+    window reaches beyond its block."""
+    pi, pj = [], []
+    for i, (a, b, s) in enumerate(found):
+        near = np.unique(
+            label[max(0, a - reach) : a + s + reach, max(0, b - reach) : b + s + reach]
+        )
+        near = near[(near >= 0) & (near != i)]
+        pi.append(np.full(near.size, i))
+        pj.append(near)
+    return np.concatenate(pi).astype(np.int64), np.concatenate(pj).astype(np.int64)
+
+
+def _box_sums(sat, pad: int, y0, y1, x0, x1):
+    """Sums over rows [y0, y1), columns [x0, x1) of the crop from its summed-area table
+    (padded by `pad`); an empty range sums to 0."""
+    y1, x1 = np.maximum(y1, y0), np.maximum(x1, x0)
+    a_y, a_x, b_y, b_x = y0 + pad - 1, x0 + pad - 1, y1 + pad - 1, x1 + pad - 1
+    return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
+
+
+def _waves(hole, pixels, pairs, border: int, delta: float):
+    """(order, waves, block_wave): the blocks wave by wave, (first, count) of each wave in
+    `order`, and each block's wave. `pixels` is (rows, columns, sizes) of the blocks in the
+    crop; `pairs` their neighbours. Neighbours never share a wave, and a filled block adds
+    its hole pixels in a neighbour's window, times delta, to that neighbour's score."""
+    py, px, ps = pixels
+    pi, pj = pairs
+    n = len(py)
+    pad = border + MAXL + 1
+    hole_sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
+    known_sat = np.pad((~hole).astype(np.int64), pad).cumsum(0).cumsum(1)
+    known_n = _box_sums(
+        known_sat, pad, py - border, py + ps + border, px - border, px + ps + border
+    )
+    # hole pixels of j inside i's window: they count delta once j is filled
+    overlap = _box_sums(
+        hole_sat,
+        pad,
+        np.maximum(py[pj], py[pi] - border),
+        np.minimum(py[pj] + ps[pj], py[pi] + ps[pi] + border),
+        np.maximum(px[pj], px[pi] - border),
+        np.minimum(px[pj] + ps[pj], px[pi] + ps[pi] + border),
+    )
+    area = (ps + 2 * border) ** 2
+    filled_n = np.zeros(n, np.int64)
+    block_wave = np.full(n, -1, np.int64)
+    pending = np.ones(n, bool)
+    order, waves = [], []
+    while pending.any():
+        idx = np.flatnonzero(pending)
+        score = (known_n[idx] + delta * filled_n[idx]) / area[idx]
+        # unique ranks: the larger score first, then the lower index
+        rank = np.full(n, -1, np.int64)
+        rank[idx[np.lexsort((-idx, score))]] = np.arange(idx.size)
+        live = pending[pi] & pending[pj]
+        pi, pj, overlap = pi[live], pj[live], overlap[live]
+        best_near = np.full(n, -1, np.int64)
+        np.maximum.at(best_near, pi, rank[pj])
+        ok = (score > 0) | (score.max() <= 0)
+        chosen = idx[(rank[idx] > best_near[idx]) & ok]
+        block_wave[chosen] = len(waves)
+        waves.append((len(order), chosen.size))
+        order.extend(chosen.tolist())
+        pending[chosen] = False
+        done = ~pending[pj]
+        np.add.at(filled_n, pi[done], overlap[done])
+    return np.array(order, np.int64), waves, block_wave
+
+
+def plan(
+    omega: np.ndarray,
+    *,
+    block: int = 8,
+    min_block: int = 4,
+    border: int = 12,
+    split: float = 0.3,
+    delta: float = 1.0,
+    shift: tuple = (0, 0),
+):
+    """The blocks and their waves for a mask.
+
+    Parameters
+    ----------
+    omega : np.ndarray
+        bool (rows, cols), True where to fill.
+    block, min_block, border, split, delta : int, int, int, float, float
+        As for `clpde.inpainting.spectral.fill`.
+    shift : tuple
+        (rows, columns) by which the block grid starts before the damage's bounding box.
+
+    Returns
+    -------
+    crop : tuple
+        (y0, y1, x0, x1), the part of the image that the windows reach.
+    blocks : np.ndarray
+        int32 (n, 4): row, column (in the crop; < 0 where a block starts before the image),
+        size B, window L of each block, wave by wave.
+    waves : list
+        (first, count) of each wave in `blocks`.
+    wave_of : np.ndarray
+        int32 over the crop: -1 for known pixels, else the wave that fills the pixel.
+    """
+    ny, nx = omega.shape
+    rows, cols = np.flatnonzero(omega.any(1)), np.flatnonzero(omega.any(0))
+    if rows.size == 0:
+        return (0, 0, 0, 0), np.zeros((0, 4), np.int32), [], np.zeros((0, 0), np.int32)
+    gy0, gx0 = rows[0] - shift[0], cols[0] - shift[1]  # the block grid's origin (may be < 0)
+    gy = -(-(rows[-1] + 1 - gy0) // block)
+    gx = -(-(cols[-1] + 1 - gx0) // block)
+    cy0, cx0 = max(0, gy0 - border), max(0, gx0 - border)
+    cy1 = min(ny, gy0 + gy * block + border)
+    cx1 = min(nx, gx0 + gx * block + border)
+    hole = omega[cy0:cy1, cx0:cx1]
+    oy, ox = gy0 - cy0, gx0 - cx0  # the block grid's origin in the crop
+    # the hole on the grid of the smallest blocks (cells), padded to whole top blocks
+    cell, top = min_block, block // min_block
+    ncy, ncx = gy * top, gx * top
+    cells = _hole_cells(hole, (oy, ox), (ncy, ncx), cell)
+    known = (~hole).astype(np.float64)
+    found = _block_sizes(cells, known, (oy, ox), (gy, gx), top, cell, border, split)
+    fy = np.array([f[0] for f in found])
+    fx = np.array([f[1] for f in found])
+    fs = np.array([f[2] for f in found])
+    label = np.full((ncy, ncx), -1, np.int64)  # which block owns each cell
+    for i, (a, b, s) in enumerate(found):
+        label[a : a + s, b : b + s] = i
+    reach = -(-border // cell)  # cells a window reaches beyond its block
+    py, px, ps = oy + fy * cell, ox + fx * cell, fs * cell
+    pairs = _neighbours(found, label, reach)
+    order, waves, block_wave = _waves(hole, (py, px, ps), pairs, border, delta)
+    blocks = np.stack([py[order], px[order], ps[order], ps[order] + 2 * border], 1)
+    wave_of = np.full(hole.shape, -1, np.int32)
+    hy, hx = np.nonzero(hole)
+    wave_of[hy, hx] = block_wave[label[(hy - oy) // cell, (hx - ox) // cell]]
+    return (cy0, cy1, cx0, cx1), blocks.astype(np.int32), waves, wave_of
+
+
+def block_iterations(blocks, hole, iterations: int, per_pixel: float) -> np.ndarray:
+    """Each block's most picks: `iterations`, or with per_pixel > 0, per_pixel picks for each
+    of its hole pixels (at least 4), whichever is fewer: a speck needs fewer terms than a
+    block-wide hole."""
+    if per_pixel <= 0:
+        return np.full(len(blocks), iterations, np.int32)
+    pad = MAXL
+    sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
+    y, x, s = blocks[:, 0] + pad - 1, blocks[:, 1] + pad - 1, blocks[:, 2]
+    holes = sat[y + s, x + s] - sat[y, x + s] - sat[y + s, x] + sat[y, x]
+    return np.minimum(iterations, np.maximum(4, np.ceil(per_pixel * holes))).astype(np.int32)
+
+
+def shifts_of(shifts: int, block: int) -> list:
+    """The block grids' offsets: 1, 2 (a half block diagonally) or 4 (every half block)."""
+    h = block // 2
+    return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
