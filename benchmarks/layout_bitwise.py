@@ -1,20 +1,16 @@
-"""Results of the inpainting methods, contour tracking, region tracking in bricks and the film
-path, saved for a bitwise check across the package's re-rooming (the other three *_bitwise.py
-scripts cover the transport, the flows and the surfaces).
+"""Results of the inpainting methods, contour tracking and region tracking in bricks, saved
+for a bitwise check across the package's re-rooming (the other *_bitwise.py scripts cover the
+transport, the flows, the surfaces and, in film_bitwise.py, the film path).
 
     PYTHONPATH=<old tree> python benchmarks/layout_bitwise.py save out/lbit/a [video]
     PYTHONPATH=<new tree> python benchmarks/layout_bitwise.py save out/lbit/b
     python benchmarks/layout_bitwise.py compare out/lbit/a out/lbit/b
 
 The script runs against either tree: where a function moved or a keyword was renamed, it
-takes whichever spelling the tree has. The film is inpainted by the film path's per-task
-function (what a Dask worker runs on its frames) and written by the video writer; the
-check compares the frames (before encoding, the writer's own digest) and the file's bytes.
-A film is also read by the tracker's frame reader and tracked (`save DIR video`: that part
+takes whichever spelling the tree has. A film is also read by the tracker's frame reader and tracked (`save DIR video`: that part
 alone).
 """
 
-import hashlib
 import importlib
 import inspect
 import sys
@@ -116,24 +112,6 @@ def _regions(res: dict) -> None:
         res[f"regions_bricks_{k}_labels"] = f.face_labels
 
 
-def _film(res: dict, out: Path) -> None:
-    inpaint_frames = _first("clpde.film.restore:inpaint_frames", "clpde.video:inpaint_frames")
-    writer = _first("clpde.io.video:VideoWriter", "clpde.video:VideoWriter")
-    rng = np.random.default_rng(3)
-    frames = [(rng.random((34, 47, 3)) * 255).astype(np.uint8) for _ in range(3)]
-    mask = np.zeros((34, 47), bool)
-    mask[10:20, 12:30] = True
-    filled = inpaint_frames(frames, [mask] * 3, {"max_steps": 30})
-    for k, frame in enumerate(filled):
-        res[f"film_frame_{k}"] = frame
-    path = out / "film.mp4"
-    with writer(path, 25) as w:
-        for frame in filled:
-            w.write(frame)
-    res["film_frames_sha256"] = np.frombuffer(bytes.fromhex(w.frames_sha256), np.uint8)
-    res["film_file_sha256"] = np.frombuffer(hashlib.sha256(path.read_bytes()).digest(), np.uint8)
-
-
 def _tracking_video(res: dict, out: Path) -> None:
     """A film read by the tracker's frame reader, and tracked."""
     import clpde
@@ -161,7 +139,6 @@ def save(out: Path) -> None:
     if parts == ["all"]:
         for part in (_inpainting, _tracking, _regions):
             part(res)
-        _film(res, out)
     if "all" in parts or "video" in parts:
         _tracking_video(res, out)
     for name, value in res.items():
