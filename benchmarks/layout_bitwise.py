@@ -7,8 +7,8 @@ transport, the flows, the surfaces and, in film_bitwise.py, the film path).
     python benchmarks/layout_bitwise.py compare out/lbit/a out/lbit/b
 
 The script runs against either tree: where a function moved or a keyword was renamed, it
-takes whichever spelling the tree has. A film is also read by the tracker's frame reader and tracked (`save DIR video`: that part
-alone).
+takes whichever spelling the tree has. A film is also read by the tracker's frame reader
+and tracked (`save DIR video`: that part alone).
 """
 
 import importlib
