@@ -26,8 +26,10 @@ def add_inpaint_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "inpaint",
         help="fill a masked region of an image (structure and texture)",
-        description="Fill the pixels where MASK is white. The default method is coherence "
-        "transport: isophotes continued into the hole, fast. --method auto is "
+        description="Fill the pixels where MASK is white. The default method is spectral "
+        "(frequency-selective): each block of the hole a sparse sum of Fourier basis "
+        "functions fitted to the known pixels around it. --method coherence is "
+        "coherence transport, isophotes continued into the hole, fastest. --method auto is "
         "the self-validated choice: per cluster of damage, the candidate methods "
         "fill a hidden ring of known pixels too, and the blend that fits it best "
         "fills the hole (better, and several times slower; docs/inpainting.md). "

@@ -459,8 +459,7 @@ def inpaint(
         scheme, the options above), 'coherence', 'navier-stokes', 'exemplar' (texture,
         periodic patterns), 'structure-texture' or 'spectral' (a sparse Fourier model of
         each block; `clpde.inpainting.available()` lists what is installed).
-        None (the default) is coherence transport, the fast structure method, or 'transport'
-        when a transport option is given.
+        None (the default) is 'spectral', or 'transport' when a transport option is given.
     boxes : bool, optional
         Solve each connected component of the mask, or cluster of nearby components, in
         its own box grown by the method's margin, so that time and memory follow the

@@ -58,10 +58,12 @@ METHODS = {
 # validate.py's candidates; the options a call gives go to the first of these that is
 # installed.
 AUTO = ("coherence", "transport")
-# method=None: coherence transport. The self-validated vote ("auto") measured better on the
-# corpus's test half but many times slower (docs/inpainting.md), too slow for a default that
-# the quickstart, the napari plugin and films run on every frame.
-DEFAULT = "coherence"
+# method=None: the frequency-selective fill. Chosen on the calibration half of
+# benchmarks/inpaint_corpus.py's corpus among coherence, spectral and the self-validated votes,
+# as the candidate leading the best peer in the most classes within a time budget of
+# FSR-fast's, the strongest peer (docs/inpainting.md has the tables). The votes ("auto")
+# measured better still but several times slower than that budget.
+DEFAULT = "spectral"
 COMMON = ("dtype", "progress", "seed")  # keywords every solve takes, passed by the dispatch
 
 

@@ -145,8 +145,9 @@ def test_methods_registry():
     auto, info = clpde.inpaint(image, mask, method="auto", progress=False, return_info=True)
     assert info.method == expected  # the method that takes the options a call gives
     assert info.choices and np.array_equal(auto[~mask], image[~mask])
-    # the default is "auto", or the transport when one of the transport's options is given
-    assert clpde.inpaint(image, mask, return_info=True, progress=False)[1].method == expected
+    # the default is inpainting.DEFAULT, or the transport when one of its options is given
+    default = clpde.inpaint(image, mask, return_info=True, progress=False)[1].method
+    assert default == inpainting.DEFAULT
     assert (
         clpde.inpaint(image, mask, dt=0.05, return_info=True, progress=False)[1].method
         == "transport"
