@@ -44,7 +44,7 @@ def measure(n: int, steps: int, reps: int) -> dict:
 
     import clpde
     from clpde.surface import ImplicitSurface
-    from clpde.surface.band import BandFlow, BrickFlow, _offsets, _signs
+    from clpde.surface.storage import BandFlow, BrickFlow, _offsets, _signs
 
     rt = clpde.get_runtime()
     surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))

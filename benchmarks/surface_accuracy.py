@@ -174,7 +174,7 @@ def _time_size(n, steps):
     import pyopencl.array as cla
 
     from clpde.surface import ImplicitSurface
-    from clpde.surface.band import BandFlow, _offsets
+    from clpde.surface.storage import BandFlow, _offsets
 
     # from_function pads the unit sphere's box by 8 cells a side: n cells in all
     spacing = 2.0 / (n - 17)
@@ -302,7 +302,7 @@ def _storage_size(n, steps, reps):
 
     from clpde.bricks import BRICK_SIZES
     from clpde.surface import ImplicitSurface
-    from clpde.surface.band import BandFlow, BrickFlow, _offsets, _signs
+    from clpde.surface.storage import BandFlow, BrickFlow, _offsets, _signs
 
     surf = ImplicitSurface.sphere(1.0, 2.0 / (n - 17))
     g, q = surf.grid, surf.runtime.queue
@@ -476,12 +476,12 @@ def degree_power(values, points, lmax=40):
 
 
 def turk_wavelength(iterations=12000, radius_cells=25):
-    from clpde.surface import ImplicitSurface, flows
+    from clpde.surface import ImplicitSurface, textures
 
     h = 1.0 / radius_cells
     surf = ImplicitSurface.sphere(1.0, h)
     start = time.perf_counter()
-    ab = flows.reaction_diffusion(surf, iterations, seed=3, params=flows.TURK)
+    ab = textures.reaction_diffusion(surf, iterations, seed=3, params=textures.TURK)
     seconds = time.perf_counter() - start
     pts = sphere_points(3000)
     power = degree_power(surf.sample(ab[0], pts), pts)
@@ -492,7 +492,7 @@ def turk_wavelength(iterations=12000, radius_cells=25):
         "radius_cells": radius_cells,
         "dominant_degree": l_star,
         "measured_wavelength_cells": float(measured),
-        "predicted_wavelength_cells": flows.turk_linear_wavelength(),
+        "predicted_wavelength_cells": textures.turk_linear_wavelength(),
         "power": power.tolist(),
         "seconds": seconds,
         "band": surf.ext_band.n,
