@@ -358,7 +358,7 @@ def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float |
 
 
 def noise_std_by_strips(scaled: bounded.Scaled) -> np.ndarray:
-    """rof._noise_std of each channel, from the residual computed a strip at a time: the
+    """_noise_std of each channel, from the residual computed a strip at a time: the
     same float64 values (each residual value reads the same nine numbers in the same order),
     so the same median, without the whole image's float64 copy and its temporaries."""
 
