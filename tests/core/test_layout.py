@@ -65,7 +65,6 @@ LONG_MODULES = {
     "clpde.film.container",
     "clpde.inpainting.transport",
     "clpde.film.detect",
-    "clpde.runtime",
 }
 LONG_FUNCTIONS = {
     "clpde.inpainting.spectral.fill",
