@@ -74,7 +74,6 @@ LONG_FUNCTIONS = {
     "clpde.inpainting.poisson.PoissonSolver.__init__",
     "clpde.inpainting.spectral.plan",
     "clpde.film.restore.restore_film",
-    "clpde.surface.mesh_sdf._sign_by_winding",
     "clpde.cli.track.add_track_parser",
     "clpde.tracking.contours.MorphingTracker._morph",
     "clpde.regions.tracker.track_region",
