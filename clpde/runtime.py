@@ -414,7 +414,8 @@ class Runtime:
 
     # ---- programs -------------------------------------------------------------------------
     def program(self, filename: str, dtype=np.float32, **defines) -> cl.Program:
-        """Build kernels/<filename> once per (file, dtype, defines)."""
+        """Build kernels/<filename> once per (file, dtype, defines). An absolute path builds a
+        file of one's own (the benchmarks' kernels) with the same include path."""
         dtype = np.dtype(dtype)
         key = (filename, dtype.str, tuple(sorted(defines.items())))
         prog = self._programs.get(key)
