@@ -423,8 +423,49 @@ def diffuse_along(
     alternate: bool = True,
     progress: bool | None = None,
 ) -> np.ndarray:
-    """Anisotropic diffusion along a tangent field d (4.15): flow visualisation of d when u is
-    noise. direction: (3, nz, ny, nx), normalised here."""
+    """Anisotropic diffusion along a tangent field (4.15): a flow visualisation of the field
+    when u is noise.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+    u : array_like
+        Data on the surface, dense or in band form (as for `heat`); returned in kind.
+    direction : array_like
+        (3, nz, ny, nx) tangent field d along which u diffuses; normalised here (zero
+        vectors stay zero, and u does not diffuse there).
+    t : float
+        The evolution time (world units).
+    dt : float, optional
+        The time step; 0.8 of `stability_limit` ('along') by default.
+    alternate : bool, optional
+        Cycle the one-sided differences, as for `heat`.
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+
+    Returns
+    -------
+    ndarray
+        u after time t, in u's form and float dtype.
+
+    Raises
+    ------
+    InputError
+        For a direction or data of another shape, non-finite values in the band or an
+        unstable dt.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde.surface import ImplicitSurface, diffuse_along
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.2)
+    >>> x, y, z = s.coordinates()
+    >>> parallels = np.stack(np.broadcast_arrays(-y, x, 0 * z))
+    >>> noise = np.random.default_rng(0).uniform(size=s.shape)
+    >>> diffuse_along(s, noise, parallels, 0.01).shape == s.shape
+    True
+    """
     d = np.asarray(direction, dtype=np.float64)
     if d.shape != (3,) + surf.shape:
         raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
