@@ -339,9 +339,9 @@ def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float |
     channel (an array) when channel_axis is given.
 
     Robust estimate from the finest scale: the median absolute value of a Laplacian-difference
-    residual, scaled as for Gaussian white noise. Needs only numpy (no PyWavelets). Within a
-    few percent on photos with noise of 2% of the range and more; textured images read a
-    little high at low noise, as with any single-image estimate.
+    residual, scaled as for Gaussian white noise. Needs only numpy (no PyWavelets). Textured
+    images read a little high at low noise, as with any single-image estimate
+    (docs/planar.md has its accuracy).
 
     Examples
     --------

@@ -139,8 +139,8 @@ class ImplicitSurface:
         """Where the flows keep their data on the device: "lists" (the default), dense volumes
         stepped over band lists, or "bricks", only the band's 8^3 bricks (bricks.py). Every
         flow runs in both, through the same per-cell code (kernels/surface/flux.h), with the
-        same results. On CPUs the bricks took 0.65-1.05x the lists' time a step and 12-71%
-        less memory from 217^3 on, up to 1.5x the time below (docs/surface_storage.md)."""
+        same results; which is faster and how much memory each takes depends on the grid's
+        size (docs/surface_storage.md has the measurements)."""
         return self._storage
 
     @storage.setter

@@ -4,7 +4,7 @@ Magnitude: the unsigned distance to the mesh in the band. Points sampled every h
 the triangles mark the cells the surface crosses (keeping two crossing triangles per cell);
 a Euclidean distance transform gives every cell its nearest crossed cell, and the exact
 point-triangle distance to that cell's triangles is taken. Cells beyond the band get the
-band's cap, with their sign. (A k-d tree over the samples was measured 5-10x slower.)
+band's cap, with their sign. (A k-d tree over the samples was slower: docs/surface.md.)
 
 Sign: a flood fill, checked and repaired by the generalized winding number. The cells
 closer than half a cell to the mesh form a shell that no 6-connected path crosses where the
@@ -22,8 +22,8 @@ through 1/2, so the sign changes on a sheet spanning the hole; |psi| stays the d
 the mesh, there the distance to the hole's rim (ImplicitSurface.from_mesh reinitialises
 the cells whose closest point is on a rim: rim_cells). Shell cells take the side found one cell
 further along the direction from their closest point. (trimesh's own signed_distance, with
-rtree, took 6-50x longer on the band's cells at 64-256 cells across, and needs consistent
-orientation: benchmarks/surface_accuracy.py, section 5.)
+rtree, is slower on the band's cells and needs consistent orientation: docs/surface.md,
+measured by benchmarks/surface_accuracy.py, section 5.)
 """
 
 from __future__ import annotations
@@ -107,7 +107,7 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
     Returns (psi, closest_face, closest_point): closest_face is a volume, -1 off the band;
     closest_point has one row per band cell (where closest_face >= 0), in flat index order.
     Only the band's cells get per-cell closest points: a volume of them would take 24 bytes
-    a cell (0.5 GB at 275^3). The sign: the module's docstring; the winding numbers add a
+    a cell. The sign: the module's docstring; the winding numbers add a
     volume of labels and a few of booleans, and hold w for the cells they decide only.
     stats, a dict, receives the components of the flood fill, how many leaked, how many
     points had their winding number evaluated and the seconds the sign's check took."""
