@@ -11,6 +11,9 @@ Two solvers of   min_u TV(u) + lambda/2 |u - u0|^2,   both run entirely on the d
 
 With the noise level sigma given, lambda is updated on the device so that the residual
 variance tends to sigma^2 (the planar form of thesis eq. C.2), in both methods.
+
+This module checks the input and sets up the fidelity and the stopping test; the solvers'
+device loops are in rof_solvers.py.
 """
 
 from __future__ import annotations

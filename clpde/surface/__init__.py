@@ -1,4 +1,13 @@
-"""PDEs on implicit surfaces (thesis chapter 4): data on a narrow band around psi = 0."""
+"""PDEs on implicit surfaces (thesis chapter 4): data on a narrow band around psi = 0.
+
+The surface (implicit.py) is built from shapes, volumes or meshes (mesh_sdf.py, winding.py);
+its band and the band form of data are in band.py, the device state of a flow's data on the
+band lists or bricks in storage.py. The flows: flows.py (heat, TV, TV denoising, diffusion
+along a field; TV's dynamic lambda in dynamic_lambda.py), harmonic.py (harmonic maps and
+colour), textures.py (Turk's reaction-diffusion), curvature.py (principal directions);
+level_set.py reinitialises psi and extends data by PDE, sampling.py reads data at points,
+render.py draws and exports, runs.py holds the command line's ready-made runs.
+"""
 
 from ..grid3d import Grid3D
 from .band import INTERPOLATIONS

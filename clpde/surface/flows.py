@@ -4,6 +4,9 @@ Every step is two kernels: the flow's update over the interpolation nodes (cur -
 node band's runs), then the closest-point re-extension of every cell the next step reads
 (tmp -> cur, the reach band); the whole extension band is re-extended when a flow returns.
 State stays on the device from upload to the final read-back; no host round-trip per step.
+
+This module has the scalar flows (heat, TV, TV denoising, diffusion along a field) and the
+driver of the flow_step kernel (`step_flow`), which the harmonic maps (harmonic.py) share.
 """
 
 from __future__ import annotations
@@ -185,7 +188,7 @@ def heat(
     return flow.result()
 
 
-def run_flow(
+def step_flow(
     surf,
     u,
     t,
@@ -306,7 +309,7 @@ def tv(
     >>> tv(s, s.field(lambda x, y, z: z), 0.01).shape == s.shape
     True
     """
-    return run_flow(
+    return step_flow(
         surf,
         u,
         t,
@@ -392,7 +395,7 @@ def denoise_tv(
     if sigma is not None:
         sigma = positive("sigma", sigma)
     fidelity = 0.0 if sigma is not None else float(lam)
-    out, info = run_flow(
+    out, info = step_flow(
         surf,
         u,
         t,
@@ -471,6 +474,6 @@ def diffuse_along(
         raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
     norm = np.sqrt((d**2).sum(axis=0))
     d = np.where(norm > 0, d / np.where(norm > 0, norm, 1), 0)
-    return run_flow(
+    return step_flow(
         surf, u, t, dt, "along", p=2, direction=d, alternate=alternate, progress=progress
     )[0]

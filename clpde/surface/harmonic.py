@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InputError
-from .flows import heat, run_flow, tv
+from .flows import heat, step_flow, tv
 
 if TYPE_CHECKING:
     from .implicit import ImplicitSurface
@@ -101,7 +101,7 @@ def harmonic_map(
         raise InputError("u has zero vectors in the band; harmonic maps need unit vectors")
     if np.abs(norm - 1).max() > 1e-3:
         warnings.warn("u is not made of unit vectors; normalising it", stacklevel=2)
-    return run_flow(
+    return step_flow(
         surf,
         u,
         t,
