@@ -6,12 +6,12 @@
 The unit sphere on an n^3 grid (spacing 2 / (n - 17)), float32, data in the band form
 (values at the extension band's cells). For each flow and storage: the time of one step
 with its re-extension (and TV's lambda updates), the flow's step loop timed on its own
-(flows.progress_range wrapped: the queue finished before the first step and after the
-last; set-up, uploads and the read-back excluded) over --steps steps, lists and bricks
-alternated (A B A B) --repeats times, the ratio bricks / lists taken pairwise; the
-device memory of the flow's state (its buffers, not the surface's shared psi and lists);
-the largest difference between the two storages' results over the largest value; and the
-yardsticks: a device copy of one padded float32 volume of the grid (best of 5), the step in
+(the progress_range of flows.py and textures.py wrapped: the queue finished before the
+first step and after the last; set-up, uploads and the read-back excluded) over --steps
+steps, lists and bricks alternated (A B A B) --repeats times, the ratio bricks / lists
+taken pairwise; the device memory of the flow's state (its buffers, not the surface's shared
+psi and lists); the largest difference between the two storages' results over the largest value;
+and the yardsticks: a device copy of one padded float32 volume of the grid (best of 5), the step in
 those copies, and in ns per cell of the extension band.
 """
 
@@ -27,7 +27,7 @@ import numpy as np
 
 def flows_for(surf):
     """name -> (channels, call(u, steps)) for each flow, steps of its stable default dt."""
-    from clpde.surface import flows
+    from clpde.surface import textures
 
     x, y, z = surf.coordinates()
     direction = np.stack(np.broadcast_arrays(-y, x, 0 * z))  # along the parallels
@@ -40,7 +40,7 @@ def flows_for(surf):
         "denoise": (1, lambda u, k: surf.denoise_tv(u, sigma=0.05, t=k * dt_tv / 2, dt=dt_tv / 2)),
         "harmonic": (3, lambda u, k: surf.harmonic_map(u, k * dt_tv, p=1, dt=dt_tv)),
         "along": (1, lambda u, k: surf.diffuse_along(u, direction, k * dt_heat, dt=dt_heat)),
-        "turk": (2, lambda u, k: flows.reaction_diffusion(surf, k, state=u, dt=0.15)),
+        "turk": (2, lambda u, k: textures.reaction_diffusion(surf, k, state=u, dt=0.15)),
     }
 
 
@@ -66,11 +66,11 @@ def band_data(surf, channels):
 
 def state_bytes(surf, storage, channels):
     """Device bytes of a flow's state (cur, tmp; the bricks' psi tiles too)."""
-    from clpde.surface import flows
+    from clpde.surface import storage as band_storage
 
     surf.storage = storage
     u = band_data(surf, channels)
-    f = flows.make_flow(surf, u)
+    f = band_storage.make_flow(surf, u)
     total = f.cur.nbytes + f.tmp.nbytes
     if storage == "bricks":
         total += f.psi.nbytes
@@ -190,9 +190,9 @@ def main(argv=None):
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     import clpde
-    from clpde.surface import flows
+    from clpde.surface import flows, textures
 
-    flows.progress_range = timed_range
+    flows.progress_range = textures.progress_range = timed_range
     rt = clpde.get_runtime()
     print(f"device: {rt.device.name.strip()}")
     rows = [row for n in args.sizes for row in run_size(n, args.flows, args.steps, args.repeats)]

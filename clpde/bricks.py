@@ -1,7 +1,7 @@
 """Narrow-band storage in dense bricks (kernels/surface/bricks.cl).
 
 The padded grid of a Grid3D is cut into bricks of BX x BY x BZ cells (a compile-time size:
-8x8x8, 8x4x4 and 4x4x4 were measured, see docs/surface_storage.md). Only the bricks the band needs
+8x8x8, 8x4x4 and 4x4x4 were compared in docs/surface_storage.md). Only the bricks the band needs
 are stored, in Morton order of their brick coordinates, so bricks near in space are near in
 memory. On the device:
 
@@ -44,8 +44,8 @@ KERNEL_FILES = ("bricks/tiles.cl",)
 NODE, REACH, EXT = 1, 2, 4
 # Cells of the next brick's rows kept after each row of the re-extension's source (bricks.cl)
 APRON = 3
-# Sizes measured (benchmarks/surface_accuracy.py --sections 6); the default was the fastest
-# from 64^3 to 256^3, and its aprons cost the least memory (docs/surface_storage.md).
+# Sizes compared (benchmarks/surface_accuracy.py --sections 6); the default was the fastest
+# over the grids measured, and its aprons cost the least memory (docs/surface_storage.md).
 BRICK_SIZES = ((4, 4, 4), (8, 4, 4), (8, 8, 8))
 DEFAULT_BRICK = (8, 8, 8)
 
@@ -67,8 +67,8 @@ def _brick_cells(coords, brick, padded_shape, apron: int, halo: int = 0) -> np.n
     both sides (a = apron + 2 halo); -1 outside the grid.
 
     A brick's first cell plus each cell's offset (one int64 add per cell); the per-axis
-    tests run only for the bricks whose lengthened box leaves the grid (4x faster at 256^3
-    than testing every cell)."""
+    tests run only for the bricks whose lengthened box leaves the grid (faster than testing
+    every cell: docs/surface_storage.md)."""
     bx, by, bz = brick
     pz, py, px = padded_shape
     a = apron + 2 * halo
@@ -95,7 +95,7 @@ def _brick_cells(coords, brick, padded_shape, apron: int, halo: int = 0) -> np.n
 def _fill_bricks(out: np.ndarray, flat: np.ndarray, cells: np.ndarray) -> None:
     """out[:, 1 : nbricks + 1] = the values of flat (channels, cells) at `cells` (from
     _brick_cells), zero where a cell lies outside the grid. Gathers by np.take, one channel
-    at a time (boolean masks over every cell were 3x slower)."""
+    at a time (boolean masks over every cell were slower: docs/surface_storage.md)."""
     outside = np.nonzero(cells < 0)
     idx = np.where(cells < 0, 0, cells) if outside[0].size else cells
     for c in range(flat.shape[0]):
@@ -289,8 +289,8 @@ class BrickBand:
     def _places(self, flat: np.ndarray):
         """(brick, z, y, x) of cells given by flat padded indices: the brick-storage index of
         their brick (the sentinel, 0, where none is stored) and their place in it. int32
-        throughout: at 512^3 the int64 version's temporaries cost 1.5 s of first-touch page
-        faults a call, this one 0.17 s."""
+        throughout: on big grids the int64 version's temporaries cost many times more in
+        first-touch page faults (docs/surface_storage.md)."""
         _, py, px = self.padded_shape
         bx, by, bz = (np.int32(b) for b in self.brick)
         z, rem = np.divmod(np.asarray(flat, np.int32), np.int32(py * px))

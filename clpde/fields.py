@@ -8,6 +8,7 @@ ghost layer is refreshed by `Field.fill_ghosts` between steps.
 from __future__ import annotations
 
 import copyreg
+import pickle
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -15,8 +16,9 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
+from . import runtime as _runtime_state
 from .errors import ClpdeError
-from .runtime import Kernel, Runtime, _check_not_forked, _runtime_of
+from .runtime import Kernel, Runtime, _check_not_forked, get_runtime
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("common/fields.cl",)
@@ -310,6 +312,39 @@ def index_list(grid: Grid, mask: np.ndarray) -> IndexList:
 # objects that hold device state (PlanarFlow, ImplicitSurface, ...) pickle by value.
 
 
+def _reduce_runtime(runtime: Runtime):
+    # by device name: the process that unpickles builds (or reuses) its own runtime
+    return _receive_runtime, (runtime.platform.name.strip(), runtime.device.name.strip())
+
+
+def _receive_runtime(platform_name: str, device_name: str) -> Runtime:
+    with _runtime_state._lock:  # read at the call: a forked child has a lock of its own
+        for i, (p, d) in enumerate(_runtime_state._all_devices()):
+            if p.name.strip() == platform_name and d.name.strip() == device_name:
+                return get_runtime(i)
+    return get_runtime()  # that device is not here: the default one
+
+
+def _reduce_kernel(kernel: Kernel):
+    # by its lookup: the receiving process builds (or reuses) its own
+    return _receive_kernel, (kernel._runtime, *kernel._key)
+
+
+def _receive_kernel(runtime: Runtime, filename, name, dtype, defines) -> Kernel:
+    return runtime.kernel(filename, name, np.dtype(dtype), **dict(defines))
+
+
+def _runtime_of(obj) -> Runtime:
+    _check_not_forked()
+    ctx = obj.context
+    for runtime in list(_runtime_state._runtimes.values()):
+        if runtime.ctx == ctx:
+            return runtime
+    raise pickle.PicklingError(
+        f"cannot pickle {type(obj).__name__} of a context clpde did not make"
+    )
+
+
 def _reduce_buffer(buf: cl.Buffer):
     runtime = _runtime_of(buf)
     host = np.empty(buf.size, np.uint8)
@@ -332,6 +367,8 @@ def _receive_array(runtime: Runtime, shape, dtype, strides, offset, base):
 
 
 def _register_picklers() -> None:
+    copyreg.pickle(Runtime, _reduce_runtime)
+    copyreg.pickle(Kernel, _reduce_kernel)
     copyreg.pickle(cl.Buffer, _reduce_buffer)
     copyreg.pickle(cla.Array, _reduce_array)
     copyreg.pickle(cl.CommandQueue, lambda q: (getattr, (_runtime_of(q), "queue")))

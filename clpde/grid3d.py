@@ -38,7 +38,31 @@ class BandRuns:
 @dataclass(frozen=True)
 class Grid3D(BaseGrid):
     """Geometry of a padded 3D volume on one device (kernel, scalar, interior and
-    launch_list come from fields.BaseGrid; a list launch covers one channel unless told)."""
+    launch_list come from fields.BaseGrid; a list launch covers one channel unless told).
+
+    Parameters
+    ----------
+    runtime : Runtime
+        The device (`clpde.get_runtime`).
+    nx, ny, nz : int
+        The volume's cells along x, y and z (without the ghost cells).
+    ghost : int, optional
+        Ghost cells on each side of each axis.
+    dtype : numpy.dtype, optional
+        The device's arithmetic, float32 or float64.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clpde import get_runtime
+    >>> from clpde.surface import Grid3D
+    >>> g = Grid3D(get_runtime(), nx=8, ny=6, nz=4)
+    >>> g.shape, g.padded_shape
+    ((4, 6, 8), (10, 12, 14))
+    >>> volume = np.arange(4 * 6 * 8, dtype=np.float32).reshape(1, 4, 6, 8)
+    >>> bool(np.array_equal(g.download(g.upload(volume)), volume))
+    True
+    """
 
     runtime: Runtime
     nx: int

@@ -2,12 +2,13 @@
 
 Everything that talks to pyopencl's platform layer lives here, so the flows only ask for
 ``get_runtime(device).kernel("planar/planar.cl", "heat_step")`` and launch it.
+Runtimes and kernels pickle by their device's name and their lookup; fields.py registers
+how, beside the device buffers and arrays, which pickle by value.
 """
 
 from __future__ import annotations
 
 import os
-import pickle
 import tempfile
 import threading
 import warnings
@@ -380,13 +381,6 @@ class Kernel:
             raise AttributeError(name)
         return getattr(self.cl_kernel, name)
 
-    def __reduce__(self):
-        return (_receive_kernel, (self._runtime, *self._key))
-
-
-def _receive_kernel(runtime: Runtime, filename, name, dtype, defines) -> Kernel:
-    return runtime.kernel(filename, name, np.dtype(dtype), **dict(defines))
-
 
 class Runtime:
     """A device with its context, queue, built programs and launch geometry."""
@@ -409,10 +403,6 @@ class Runtime:
         # objects per context; re-entrant so that the caches may be filled under it.
         self.lock = threading.RLock()
 
-    def __reduce__(self):
-        # by device name: the process that unpickles builds (or reuses) its own runtime
-        return (_receive_runtime, (self.platform.name.strip(), self.device.name.strip()))
-
     def _forked(self) -> None:
         """In a forked child: every later launch raises (see _after_fork_in_child)."""
         self.lock = _ForkedLock()
@@ -424,7 +414,8 @@ class Runtime:
 
     # ---- programs -------------------------------------------------------------------------
     def program(self, filename: str, dtype=np.float32, **defines) -> cl.Program:
-        """Build kernels/<filename> once per (file, dtype, defines)."""
+        """Build kernels/<filename> once per (file, dtype, defines). An absolute path builds a
+        file of one's own (the benchmarks' kernels) with the same include path."""
         dtype = np.dtype(dtype)
         key = (filename, dtype.str, tuple(sorted(defines.items())))
         prog = self._programs.get(key)
@@ -602,27 +593,3 @@ def _after_fork_in_child() -> None:
 
 if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_after_fork_in_child)
-
-
-# ---- pickling by value --------------------------------------------------------------------------
-# The runtime pickles as its device's name and is rebuilt where the object is unpickled;
-# device buffers and arrays pickle by value (fields.py registers how).
-
-
-def _receive_runtime(platform_name: str, device_name: str) -> Runtime:
-    with _lock:
-        for i, (p, d) in enumerate(_all_devices()):
-            if p.name.strip() == platform_name and d.name.strip() == device_name:
-                return get_runtime(i)
-    return get_runtime()  # that device is not here: the default one
-
-
-def _runtime_of(obj) -> Runtime:
-    _check_not_forked()
-    ctx = obj.context
-    for runtime in list(_runtimes.values()):
-        if runtime.ctx == ctx:
-            return runtime
-    raise pickle.PicklingError(
-        f"cannot pickle {type(obj).__name__} of a context clpde did not make"
-    )

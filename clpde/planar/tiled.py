@@ -27,7 +27,7 @@ from ..imagedata import (
 )
 from ..runtime import get_runtime
 from .flows import FLOWS, PlanarFlow, gaussian_weights
-from .rof import _primal_dual
+from .rof_solvers import primal_dual
 
 RADIUS = 1  # every planar.cl and rof.cl step reads the 3x3 neighbourhood only
 # Tiled denoise_tv runs exactly `steps` iterations; a tolerance no change falls below.
@@ -65,7 +65,7 @@ def _tile_denoise(block, lam, steps, check_every, device, precision, vectorial=F
     runtime = get_runtime(device)
     nc, ny, nx = block.shape
     grid = Grid(runtime, nx, ny, nc, 1, compute_dtype(block.dtype, precision))
-    u, *_ = _primal_dual(
+    u, *_ = primal_dual(
         grid, block, np.full(nc, lam), None, steps, _NEVER, check_every, False, vectorial
     )
     return u

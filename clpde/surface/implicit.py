@@ -16,43 +16,30 @@ The steps themselves run on two narrower lists cut to what they need (same resul
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import progress_range
 from ..errors import InputError
 from ..fields import check_fits
 from ..grid3d import Grid3D
 from ..imagedata import positive as _positive
 from ..runtime import DeviceLike, get_runtime
 from . import band as band_setup
+from . import curvature as _curvature
 from . import flows as _flows
+from . import harmonic as _harmonic
 from . import render as _render
-from .band import FLOW_STATES, Band, BandFlow, extend_defines, make_flow
+from . import sampling as _sampling
+from . import textures as _textures
+from .band import NODE_REACH, Band, interp_code, values_as_array
+from .flows import SurfaceDenoiseInfo
+from .level_set import extend_by_pde, reinitialized_psi, slope_at_surface
 from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
+from .storage import FLOW_STATES, make_flow
 
-if TYPE_CHECKING:
-    from .flows import SurfaceDenoiseInfo
-
-# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("surface/extend.cl", "surface/reinit.cl")
-
-INTERPOLATIONS = {"tricubic": 3, "trilinear": 1}
 STORAGES = tuple(FLOW_STATES)  # "lists", "bricks"
-# Farthest interpolation node from a point, in cells: the step band must contain them.
-_NODE_REACH = {3: 2 * np.sqrt(3.0), 1: np.sqrt(3.0)}
-
-
-def _interp_code(interpolation: str) -> int:
-    code = INTERPOLATIONS.get(interpolation)
-    if code is None:
-        raise InputError(
-            f"interpolation must be one of {sorted(INTERPOLATIONS)}, not {interpolation!r}"
-        )
-    return code
 
 
 class ImplicitSurface:
@@ -128,8 +115,8 @@ class ImplicitSurface:
         if origin.shape != (3,) or not np.all(np.isfinite(origin)):
             raise InputError(f"origin must be three finite numbers (x, y, z), got {origin!r}")
         self.origin = origin
-        self.interp = _interp_code(interpolation)
-        self.inner = _NODE_REACH[self.interp] + 0.04
+        self.interp = interp_code(interpolation)
+        self.inner = NODE_REACH[self.interp] + 0.04
         min_outer = self.inner + np.sqrt(2.0) + 0.04
         self.outer = min_outer if band_width is None else _positive("band_width", band_width)
         if self.outer < min_outer:
@@ -152,8 +139,8 @@ class ImplicitSurface:
         """Where the flows keep their data on the device: "lists" (the default), dense volumes
         stepped over band lists, or "bricks", only the band's 8^3 bricks (bricks.py). Every
         flow runs in both, through the same per-cell code (kernels/surface/flux.h), with the
-        same results. On CPUs the bricks took 0.65-1.05x the lists' time a step and 12-71%
-        less memory from 217^3 on, up to 1.5x the time below (docs/surface_storage.md)."""
+        same results; which is faster and how much memory each takes depends on the grid's
+        size (docs/surface_storage.md has the measurements)."""
         return self._storage
 
     @storage.setter
@@ -200,7 +187,7 @@ class ImplicitSurface:
             psi = np.asarray(psi, dtype=np.float64)
             # rescale to unit slope at the surface first (the zero level set is kept), so
             # the bands are about right before the exact reinitialisation
-            scale = _slope_at_surface(psi, spacing) if psi.ndim == 3 else 1.0
+            scale = slope_at_surface(psi, spacing) if psi.ndim == 3 else 1.0
             surf = cls(psi / scale, spacing, origin, _check_border=False, **options)
             surf.reinitialize()
             band_setup.check_band_clear_of_border(surf)
@@ -229,8 +216,8 @@ class ImplicitSurface:
         mesh = load_mesh(mesh)
         outer = band_width
         if outer is None:
-            interp = _interp_code(options.get("interpolation", "tricubic"))
-            outer = _NODE_REACH[interp] + np.sqrt(2.0) + 0.08
+            interp = interp_code(options.get("interpolation", "tricubic"))
+            outer = NODE_REACH[interp] + np.sqrt(2.0) + 0.08
         padding = int(np.ceil(outer)) + 4
         origin, h, shape = grid_for_mesh(mesh, spacing, resolution, padding)
         stats = {}
@@ -246,9 +233,7 @@ class ImplicitSurface:
             # a reinitialised distance, the others keep their exact one
             cap = np.abs(surf.psi).max()  # what cells past the band hold
             patched = surf.psi.copy()
-            patched.reshape(-1)[rim] = np.clip(
-                surf._reinitialized_psi().reshape(-1)[rim], -cap, cap
-            )
+            patched.reshape(-1)[rim] = np.clip(reinitialized_psi(surf).reshape(-1)[rim], -cap, cap)
             surf._set_psi(patched)
         surf.mesh = mesh
         surf._mesh_face = face
@@ -384,34 +369,8 @@ class ImplicitSurface:
     ) -> ImplicitSurface:
         """Turn psi into a signed distance function on the device (Sussman's PDE with
         Russo-Smereka's subcell fix), keeping its zero level set; rebuilds the bands."""
-        self._set_psi(self._reinitialized_psi(iterations, progress))
+        self._set_psi(reinitialized_psi(self, iterations, progress))
         return self
-
-    def _reinitialized_psi(self, iterations=None, progress=None) -> np.ndarray:
-        """psi made a signed distance (see reinitialize), without touching the surface."""
-        g = self.grid
-        reach = self.outer + 4.0
-        r = 0.3
-        steps = int(np.ceil(reach / r)) if iterations is None else int(iterations)
-        everywhere = g.band(self.psi_dev, np.inf)
-        phi0 = self.psi_dev
-        cur, nxt = phi0.copy(), phi0.copy()
-        kernel = g.kernel("surface/reinit.cl", "reinit_step")
-        for _ in progress_range(
-            progress, steps, "reinitialise", leave=False, queue=g.runtime.queue
-        ):
-            g.launch_list(
-                kernel,
-                everywhere,
-                cur.data,
-                nxt.data,
-                phi0.data,
-                g.scalar(r),
-                g.scalar(1 / self.spacing),
-                *g.strides(),
-            )
-            cur, nxt = nxt, cur
-        return g.download(cur)[0].astype(np.float64)
 
     def extend(
         self, u: ArrayLike, method: str = "closest-point", iterations: int | None = None
@@ -423,36 +382,7 @@ class ImplicitSurface:
             raise InputError(f"method must be 'closest-point' or 'pde', not {method!r}")
         if method == "closest-point":
             return make_flow(self, u).result()
-        # the PDE runs on the band lists in either storage (a one-off, not a flow's step)
-        flow = BandFlow(self, u, extend=False)
-        g = self.grid
-        r = 0.5  # CFL: r (|a_x| + |a_y| + |a_z|) <= r sqrt(3) < 1
-        steps = int(np.ceil(2 * self.outer / r)) if iterations is None else int(iterations)
-        defines = extend_defines(self.interp, flow.nc)  # the re-extension's program
-        kernel = g.kernel("surface/extend.cl", "extend_pde_step", **defines)
-        for _ in range(steps):
-            g.launch_list(
-                kernel,
-                self.ext_band,
-                flow.cur.data,
-                flow.tmp.data,
-                self.psi_dev.data,
-                g.scalar(r),
-                g.scalar(self.spacing),
-                *g.strides(),
-            )
-            # cells outside the band keep their values in both buffers
-            g.launch_list(
-                kernel,
-                self.ext_band,
-                flow.tmp.data,
-                flow.cur.data,
-                self.psi_dev.data,
-                g.scalar(r),
-                g.scalar(self.spacing),
-                *g.strides(),
-            )
-        return flow.result()
+        return extend_by_pde(self, u, iterations)
 
     # ---- data on the surface -----------------------------------------------------------------
     def field(self, f: Callable, dtype: DTypeLike = np.float64) -> np.ndarray:
@@ -463,12 +393,7 @@ class ImplicitSurface:
         (vector data: result shape (channels,) + `shape`).
         """
         x, y, z = self.closest_points_host()
-        values = f(x, y, z)
-        if isinstance(values, (list, tuple)):
-            out = np.stack([np.broadcast_to(np.asarray(v, np.float64), self.shape) for v in values])
-        else:
-            out = np.broadcast_to(np.asarray(values, np.float64), self.shape)
-        return np.array(out, dtype=dtype)
+        return values_as_array(f(x, y, z), self.shape, dtype)
 
     # ---- the band form: data at the extension band's cells only ------------------------------
     def band_indices(self) -> np.ndarray:
@@ -492,73 +417,32 @@ class ImplicitSurface:
 
     def band_coordinates(self) -> np.ndarray:
         """World (x, y, z) of the extension band's cells, shape (n, 3), in band-form order."""
-        flat = self.band.cells()[0]
-        _, ny, nx = self.shape
-        z, rest = np.divmod(flat, ny * nx)
-        y, x = np.divmod(rest, nx)
-        return self.origin + self.spacing * np.stack([x, y, z], axis=1).astype(np.float64)
+        return self.band.coordinates()
 
     def band_closest_points(self) -> np.ndarray:
         """World closest points x - psi grad psi / |grad psi| of the extension band's cells,
         shape (n, 3) (central differences, as `closest_points_host`, at the band only)."""
-        flat = self.band.cells()[0]
-        p = self.psi.reshape(-1)
-        _, ny, nx = self.shape
-        grad = [(p[flat + s] - p[flat - s]) / (2 * self.spacing) for s in (1, nx, nx * ny)]
-        norm = np.sqrt(grad[0] ** 2 + grad[1] ** 2 + grad[2] ** 2)
-        norm[norm == 0] = 1.0
-        d = p[flat] / norm
-        return self.band_coordinates() - d[:, None] * np.stack(grad, axis=1)
+        return self.band.closest_points()
 
     def band_field(self, f: Callable, dtype: DTypeLike = np.float64) -> np.ndarray:
         """`field` in band form: f(x, y, z) at the band cells' closest points (1D arrays),
         shape (n,) for an array result or (channels, n) for a sequence of them."""
         cp = self.band_closest_points()
-        values = f(cp[:, 0], cp[:, 1], cp[:, 2])
-        n = cp.shape[0]
-        if isinstance(values, (list, tuple)):
-            out = np.stack([np.broadcast_to(np.asarray(v, np.float64), (n,)) for v in values])
-        else:
-            out = np.broadcast_to(np.asarray(values, np.float64), (n,))
-        return np.array(out, dtype=dtype)
+        return values_as_array(f(cp[:, 0], cp[:, 1], cp[:, 2]), (cp.shape[0],), dtype)
 
     def band_values(self, u: ArrayLike) -> np.ndarray:
         """Dense data (`shape`, or (channels,) + `shape`) in band form: its values at the
         band's cells, dtype kept."""
-        u = np.asarray(u)
-        if u.shape == self.shape:
-            return u.reshape(-1)[self.band.cells()[0]]
-        if u.ndim == 4 and u.shape[1:] == self.shape:
-            return u.reshape(u.shape[0], -1)[:, self.band.cells()[0]]
-        raise InputError(
-            f"u must have the surface's grid shape {self.shape} (or (channels,) + "
-            f"that), got {u.shape}"
-        )
+        return self.band.values(np.asarray(u))
 
     def from_band(self, values: ArrayLike, fill: float = 0.0) -> np.ndarray:
         """Band-form values as a dense volume (`shape`, or (channels,) + `shape`), `fill` off
         the band, dtype kept (floats; others become float64)."""
-        v = np.asarray(values)
-        nc = self.band.form_channels(v)
-        if nc is None:
-            raise InputError(
-                f"values must have shape ({self.ext_band.n},) or (channels, "
-                f"{self.ext_band.n}) (the band form), got {v.shape}"
-            )
-        dtype = v.dtype if np.issubdtype(v.dtype, np.floating) else np.float64
-        out = np.full((nc, int(np.prod(self.shape))), fill, dtype)
-        out[:, self.band.cells()[0]] = v.reshape(nc, -1)
-        out = out.reshape((nc,) + self.shape)
-        return out[0] if v.ndim == 1 else out
+        return self.band.dense(np.asarray(values), fill)
 
     def world_to_index(self, points: ArrayLike) -> np.ndarray:
         """(n, 3) world points to padded index coordinates (3, n)."""
-        p = np.asarray(points, dtype=np.float64)
-        if p.ndim != 2 or p.shape[1] != 3:
-            raise InputError(f"points must be an (n, 3) array of x, y, z, got shape {p.shape}")
-        if not np.all(np.isfinite(p)):
-            raise InputError("points contain NaN or infinite values")
-        return ((p - self.origin) / self.spacing + self.grid.ghost).T
+        return _sampling.world_to_index(self, points)
 
     def sample(
         self, u: ArrayLike, points: ArrayLike, interpolation: str = "tricubic"
@@ -567,54 +451,7 @@ class ImplicitSurface:
         u may be dense or in band form (band_indices).
 
         Points must lie within the interpolation reach of the surface (on it, typically)."""
-        u = np.asarray(u)
-        band_form = self.band.form_channels(u) is not None
-        data = self.band.padded_from(u) if band_form else self.band.as_channels(u)
-        scalar = u.ndim == (1 if band_form else 3)
-        idx = self.world_to_index(points)
-        code = _interp_code(interpolation)
-        g = self.grid
-        n = idx.shape[1]
-        if n == 0:
-            return np.zeros((0,) if data.shape[0] == 1 and scalar else (0, data.shape[0]))
-        lo = g.ghost
-        hi = np.array([g.nx, g.ny, g.nz]) + g.ghost - 1
-        if np.any(idx < lo - 1e-9) or np.any(idx.T > hi + 1e-9):
-            raise InputError("some points lie outside the surface's grid")
-        dist = np.abs(self._sample_raw(self.psi_dev, idx, 1, 1)[0]) / self.spacing
-        reach = self.outer - _NODE_REACH[code]
-        if np.any(dist > reach + 1e-6):
-            raise InputError(
-                f"some points lie {dist.max():.2f} cells from the surface; sample() reads "
-                f"data within {reach:.2f} cells of it (project the points onto the surface)"
-            )
-        if band_form:
-            self.runtime.check_alloc(data.nbytes, "surface volume")
-            dev = cla.to_device(self.runtime.queue, data)
-        else:
-            dev = g.upload(data)
-        out = self._sample_raw(dev, idx, data.shape[0], code)
-        return out[0] if scalar else out.T
-
-    def _sample_raw(self, dev: cla.Array, idx: np.ndarray, nc: int, code: int) -> np.ndarray:
-        g, q = self.grid, self.runtime.queue
-        n = idx.shape[1]
-        pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
-        out = cla.empty(q, (nc, n), g.dtype)
-        g.kernel("surface/extend.cl", "sample_points", **extend_defines(code, nc))(
-            q,
-            *self.runtime.items(n),
-            dev.data,
-            pts[0].data,
-            pts[1].data,
-            pts[2].data,
-            np.int32(n),
-            out.data,
-            *g.strides(),
-            *g.padded_dims(),
-            np.int32(g.volume),
-        )
-        return out.get().astype(np.float64)
+        return _sampling.sample(self, u, points, interpolation)
 
     # ---- flows ---------------------------------------------------------------------------------
     def heat(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
@@ -636,13 +473,13 @@ class ImplicitSurface:
         return _flows.denoise_tv(self, u, sigma, t, **options)
 
     def harmonic_map(self, u: ArrayLike, t: float, p: int = 2, **options: Any) -> np.ndarray:
-        """Harmonic map flow of unit vectors (4.11, D.7); see flows.harmonic_map."""
-        return _flows.harmonic_map(self, u, t, p, **options)
+        """Harmonic map flow of unit vectors (4.11, D.7); see harmonic.harmonic_map."""
+        return _harmonic.harmonic_map(self, u, t, p, **options)
 
     def denoise_colour(self, rgb: ArrayLike, t: float, **options: Any) -> np.ndarray:
         """Colour denoising as in Figure 4.6: chroma by harmonic map, brightness by a scalar
-        flow; see flows.denoise_colour."""
-        return _flows.denoise_colour(self, rgb, t, **options)
+        flow; see harmonic.denoise_colour."""
+        return _harmonic.denoise_colour(self, rgb, t, **options)
 
     def diffuse_along(
         self, u: ArrayLike, direction: ArrayLike, t: float, **options: Any
@@ -651,12 +488,12 @@ class ImplicitSurface:
         return _flows.diffuse_along(self, u, direction, t, **options)
 
     def principal_directions(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(major, minor, curvatures) of the surface; see flows.principal_directions."""
-        return _flows.principal_directions(self)
+        """(major, minor, curvatures) of the surface; see curvature.principal_directions."""
+        return _curvature.principal_directions(self)
 
     def reaction_diffusion(self, iterations: int, **options: Any) -> np.ndarray:
-        """Turk's reaction-diffusion texture (4.12-4.14); see flows.reaction_diffusion."""
-        return _flows.reaction_diffusion(self, iterations, **options)
+        """Turk's reaction-diffusion texture (4.12-4.14); see textures.reaction_diffusion."""
+        return _textures.reaction_diffusion(self, iterations, **options)
 
     def to_mesh(self, u: ArrayLike | None = None, **options: Any) -> object:
         """Marching-cubes mesh of the surface with u as vertex colours; see render.to_mesh."""
@@ -678,18 +515,3 @@ def _torus_sdf(big: float, small: float, shift: float):
         return np.sqrt(ring**2 + z**2) - small
 
     return sdf
-
-
-def _slope_at_surface(psi: np.ndarray, spacing: float) -> float:
-    """Median |grad psi| over the cells next to a sign change (1 if there are none)."""
-    g = np.gradient(psi, spacing)
-    slope = np.sqrt(g[0] ** 2 + g[1] ** 2 + g[2] ** 2)
-    near = np.zeros(psi.shape, bool)
-    for axis in range(3):
-        a = np.moveaxis(psi, axis, 0)
-        change = np.signbit(a[1:]) != np.signbit(a[:-1])
-        n = np.moveaxis(near, axis, 0)
-        n[1:] |= change
-        n[:-1] |= change
-    values = slope[near & (slope > 0)]
-    return float(np.median(values)) if values.size else 1.0

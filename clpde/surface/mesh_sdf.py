@@ -4,7 +4,7 @@ Magnitude: the unsigned distance to the mesh in the band. Points sampled every h
 the triangles mark the cells the surface crosses (keeping two crossing triangles per cell);
 a Euclidean distance transform gives every cell its nearest crossed cell, and the exact
 point-triangle distance to that cell's triangles is taken. Cells beyond the band get the
-band's cap, with their sign. (A k-d tree over the samples was measured 5-10x slower.)
+band's cap, with their sign. (A k-d tree over the samples was slower: docs/surface.md.)
 
 Sign: a flood fill, checked and repaired by the generalized winding number. The cells
 closer than half a cell to the mesh form a shell that no 6-connected path crosses where the
@@ -22,12 +22,13 @@ through 1/2, so the sign changes on a sheet spanning the hole; |psi| stays the d
 the mesh, there the distance to the hole's rim (ImplicitSurface.from_mesh reinitialises
 the cells whose closest point is on a rim: rim_cells). Shell cells take the side found one cell
 further along the direction from their closest point. (trimesh's own signed_distance, with
-rtree, took 6-50x longer on the band's cells at 64-256 cells across, and needs consistent
-orientation: benchmarks/surface_accuracy.py, section 5.)
+rtree, is slower on the band's cells and needs consistent orientation: docs/surface.md,
+measured by benchmarks/surface_accuracy.py, section 5.)
 """
 
 from __future__ import annotations
 
+import time
 import warnings
 
 import numpy as np
@@ -106,7 +107,7 @@ def mesh_to_sdf(mesh, origin, spacing, shape, band_cells, passes=3, device=None,
     Returns (psi, closest_face, closest_point): closest_face is a volume, -1 off the band;
     closest_point has one row per band cell (where closest_face >= 0), in flat index order.
     Only the band's cells get per-cell closest points: a volume of them would take 24 bytes
-    a cell (0.5 GB at 275^3). The sign: the module's docstring; the winding numbers add a
+    a cell. The sign: the module's docstring; the winding numbers add a
     volume of labels and a few of booleans, and hold w for the cells they decide only.
     stats, a dict, receives the components of the flood fill, how many leaked, how many
     points had their winding number evaluated and the seconds the sign's check took."""
@@ -295,6 +296,30 @@ def _face_sides(triangles, components, face, closest, centres, side_of, samples=
     return decided, np.where(outward[part], below, ~below)
 
 
+class _Winding:
+    """The winding number at cells of the grid (|w| > 1/2 is inside, so an inside-out mesh
+    works too), counting the points it is evaluated at in `info`."""
+
+    def __init__(self, wn: WindingNumbers, shape: tuple, info: dict):
+        self.wn, self.shape, self.info = wn, shape, info
+
+    def xyz(self, cells: np.ndarray) -> np.ndarray:
+        """Grid coordinates (x, y, z) of flat cell indices."""
+        z, rem = np.divmod(cells, self.shape[1] * self.shape[2])
+        y, x = np.divmod(rem, self.shape[2])
+        return np.stack([x, y, z], axis=1).astype(np.float64)
+
+    def inside(self, cells: np.ndarray) -> np.ndarray:
+        """|w| > 1/2 at flat cell indices."""
+        self.info["winding_points"] += len(cells)
+        return np.abs(self.wn(self.xyz(cells))) > 0.5
+
+    def inside_at(self, points: np.ndarray) -> np.ndarray:
+        """|w| > 1/2 at grid points (x, y, z)."""
+        self.info["winding_points"] += len(points)
+        return np.abs(self.wn(points)) > 0.5
+
+
 def _sign_by_winding(
     mesh,
     labels,
@@ -323,49 +348,17 @@ def _sign_by_winding(
     within 0.87 * spacing < band_cells, so the segment between them meets no triangle: w is
     smooth (harmonic) along it and the node's side is the cell's, except within the
     lattice's reach of the w = 1/2 sheet spanning a hole, where no side is right anyway."""
-    import time
-
-    from scipy import ndimage
-
     start = time.perf_counter()
     shape = labels.shape
-    flat_labels = labels.reshape(-1)
     is_border = np.zeros(nlabels + 1, dtype=bool)
     is_border[border] = True
     info = {"components": int(nlabels), "leaked": 0, "winding_points": 0}
     if nlabels == 0:
         return np.zeros(shape, dtype=bool), np.zeros(shape, dtype=bool)
     oriented = _oriented_triangles(mesh)
-    wn = WindingNumbers((oriented - origin) / h, device=device)
-
-    def cell_xyz(cells):  # grid coordinates (x, y, z) of flat cell indices
-        z, rem = np.divmod(cells, shape[1] * shape[2])
-        y, x = np.divmod(rem, shape[2])
-        return np.stack([x, y, z], axis=1).astype(np.float64)
-
-    def side(cells):  # |w| > 1/2 at flat cell indices: |w| so an inside-out mesh works too
-        info["winding_points"] += len(cells)
-        return np.abs(wn(cell_xyz(cells))) > 0.5
-
-    # samples of every component, band cells grouped by component
-    rng = np.random.default_rng(0)
-    band_label = flat_labels[idx]
-    by_label = np.argsort(band_label, kind="stable")
-    bounds = np.searchsorted(band_label[by_label], np.arange(nlabels + 2))
-    boxes = ndimage.find_objects(labels)
-    picks, owner = [], []
-    for c in range(1, nlabels + 1):
-        if boxes[c - 1] is None:
-            continue
-        band_c = idx[by_label[bounds[c] : bounds[c + 1]]]
-        cells = _cells_of(labels, boxes[c - 1], c, samples, rng)
-        if band_c.size:
-            cells = np.union1d(cells, rng.choice(band_c, min(samples, band_c.size), replace=False))
-        picks.append(cells)
-        owner.append(np.full(cells.size, c))
-    picks, owner = np.concatenate(picks), np.concatenate(owner)
-    votes_in = np.bincount(owner, weights=side(picks), minlength=nlabels + 1)
-    votes = np.bincount(owner, minlength=nlabels + 1)
+    winding = _Winding(WindingNumbers((oriented - origin) / h, device=device), shape, info)
+    band_label = labels.reshape(-1)[idx]
+    votes_in, votes = _component_votes(labels, nlabels, idx, band_label, samples, winding)
     some_in = votes_in > 0
     all_in = some_in & (votes_in == votes)
     leaked = (votes > 0) & ((is_border & some_in) | (some_in & ~all_in))
@@ -380,7 +373,6 @@ def _sign_by_winding(
     outside = klass == 0
     info["leaked"] = int(leaked.sum())
     if leaked.any():
-        flat_in, flat_out = inside.reshape(-1), outside.reshape(-1)
         # band cells of leaked components: by the side of their closest triangle's plane
         # where their closest point lies inside it (most of them), else by their own
         # winding number (closest points on edges, corners and the holes' rims)
@@ -389,44 +381,70 @@ def _sign_by_winding(
         cells_in = np.zeros(cells.size, dtype=bool)
         todo = np.ones(cells.size, dtype=bool)
         if face is not None and closest is not None and cells.size:
-            parts = _face_components(mesh)
-            band_pos = np.flatnonzero(in_leaked)  # rows of closest (idx order)
             decided, local_in = _face_sides(
                 oriented,
-                parts,
+                _face_components(mesh),
                 face.reshape(-1)[cells],
-                closest[band_pos],
-                origin + h * cell_xyz(cells),
-                lambda k: side(cells[k]),
+                closest[np.flatnonzero(in_leaked)],  # rows of closest (idx order)
+                origin + h * winding.xyz(cells),
+                lambda k: winding.inside(cells[k]),
             )
             cells_in[decided] = local_in[decided]
             todo = ~decided
             info["decided_by_faces"] = int(decided.sum())
-        cells_in[todo] = side(cells[todo])
-        flat_in[cells] = cells_in
-        flat_out[cells] = ~cells_in
+        cells_in[todo] = winding.inside(cells[todo])
+        inside.reshape(-1)[cells] = cells_in
+        outside.reshape(-1)[cells] = ~cells_in
         # cells beyond the band: the nearest node of a coarse lattice
         off_band = klass.reshape(-1) == 2
         off_band[idx] = False
         off_band = off_band.reshape(shape)
-        step = int(np.clip(np.floor(band_cells), 1, 4))
-        (sz, mz), (sy, my), (sx, mx) = (_node_starts(n, step) for n in shape)
-        needed = np.logical_or.reduceat(off_band, sz, axis=0)
-        needed = np.logical_or.reduceat(needed, sy, axis=1)
-        needed = np.logical_or.reduceat(needed, sx, axis=2)
-        nodes = np.argwhere(needed)
-        node_in = np.zeros(needed.shape, dtype=bool)
-        if len(nodes):
-            info["winding_points"] += len(nodes)
-            w = wn((step * nodes[:, ::-1]).astype(np.float64))
-            node_in[tuple(nodes.T)] = np.abs(w) > 0.5
-        up = node_in[np.ix_(mz, my, mx)]
+        up = _lattice_sides(off_band, band_cells, winding)
         inside[off_band] = up[off_band]
         outside[off_band] = ~up[off_band]
     info["seconds"] = time.perf_counter() - start
     if stats is not None:
         stats.update(info)
     return inside, outside
+
+
+def _component_votes(labels, nlabels, idx, band_label, samples, winding):
+    """(samples inside, samples) per label: random cells of each component's bounding box
+    and of its band cells (idx, labelled band_label), up to `samples` of each."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(0)
+    by_label = np.argsort(band_label, kind="stable")
+    bounds = np.searchsorted(band_label[by_label], np.arange(nlabels + 2))
+    boxes = ndimage.find_objects(labels)
+    picks, owner = [], []
+    for c in range(1, nlabels + 1):
+        if boxes[c - 1] is None:
+            continue
+        band_c = idx[by_label[bounds[c] : bounds[c + 1]]]
+        cells = _cells_of(labels, boxes[c - 1], c, samples, rng)
+        if band_c.size:
+            cells = np.union1d(cells, rng.choice(band_c, min(samples, band_c.size), replace=False))
+        picks.append(cells)
+        owner.append(np.full(cells.size, c))
+    picks, owner = np.concatenate(picks), np.concatenate(owner)
+    votes_in = np.bincount(owner, weights=winding.inside(picks), minlength=nlabels + 1)
+    return votes_in, np.bincount(owner, minlength=nlabels + 1)
+
+
+def _lattice_sides(off_band, band_cells, winding) -> np.ndarray:
+    """Inside or not for every cell, from the nearest node of a lattice of spacing
+    min(4, band_cells) cells; only the nodes next to `off_band` cells are evaluated."""
+    step = int(np.clip(np.floor(band_cells), 1, 4))
+    (sz, mz), (sy, my), (sx, mx) = (_node_starts(n, step) for n in off_band.shape)
+    needed = np.logical_or.reduceat(off_band, sz, axis=0)
+    needed = np.logical_or.reduceat(needed, sy, axis=1)
+    needed = np.logical_or.reduceat(needed, sx, axis=2)
+    nodes = np.argwhere(needed)
+    node_in = np.zeros(needed.shape, dtype=bool)
+    if len(nodes):
+        node_in[tuple(nodes.T)] = winding.inside_at((step * nodes[:, ::-1]).astype(np.float64))
+    return node_in[np.ix_(mz, my, mx)]
 
 
 def _refine_on_device(mesh, origin, h, shape, idx, face0, passes, device=None):

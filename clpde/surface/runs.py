@@ -232,9 +232,7 @@ def tv_time(sigma, h):
     noise of deviation sigma at the grid's scale goes in sigma * h, while the checkerboard's
     squares, a hundred times larger, keep their flat values and sharp edges. (40 h^2, the
     earlier default, is 8 sigma h at 96 cells: it rounded the squares into blobs, which
-    looked like heat.) On the torus at 48 and 96 cells, sigma 0.15: noise left in the
-    squares 0.03 and 0.026 with 12% and 7% of the edge cells at mid values, against heat's
-    0.035-0.037 with 29-38%."""
+    looked like heat; docs/surface.md compares the two.)"""
     return float(sigma) * h
 
 
@@ -243,8 +241,8 @@ def _mean_curvature(surf, mean, progress=None):
     triangles, whose curvature sits on their edges and vertices: the values seen at the
     grid's scale are spikes along the tessellation. Averaging them along the surface by
     heat flow over a width sigma of at least two cells, or the mesh's median edge length
-    if longer (t = sigma^2 / 2), leaves the curvature of the shape the mesh samples (an
-    icosphere's spread drops from 70% of its mean to under 2%). Analytic shapes are kept
+    if longer (t = sigma^2 / 2), leaves the curvature of the shape the mesh samples
+    (docs/surface.md has an icosphere's spread before and after). Analytic shapes are kept
     as computed."""
     mesh = getattr(surf, "mesh", None)
     if mesh is None:

@@ -34,9 +34,9 @@ class WindingNumbers:
     of `cluster` consecutive ones; `beta` sets the far field: a box of points (a tile of
     `tile` units) takes a cluster's second-order expansion where the box is farther than
     beta * (cluster radius) from the cluster's centre, the exact triangle sum otherwise.
-    With beta = 2 the expansion was within 0.035 of the exact sum (0.01-0.02 at the band
-    cells of a 20 480-face icosphere; beta = 3: within 0.006, at 1.5x the time), and
-    tests/surface/test_surface_mesh.py holds it to 0.05: deciding a side compares |w| with 1/2."""
+    beta = 2 keeps the expansion's error far below what deciding a side needs (|w| is
+    compared with 1/2; docs/surface.md has the errors and the cost of a larger beta), and
+    tests/surface/test_surface_mesh.py holds it to 0.05."""
 
     def __init__(self, triangles, cluster=64, device=None):
         import pyopencl.array as cla

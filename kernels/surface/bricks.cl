@@ -480,17 +480,3 @@ __kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* 
         for (int c = 0; c < NC; ++c) dst[c * plane + i] = val[c];
     }
 }
-
-// ---- the bricks' own roofline ------------------------------------------------------------------
-// v = u + psi over every cell of the bricks holding a NODE cell: the bytes a heat step must
-// move, with no stencil and no tile (benchmarks/surface_accuracy.py).
-__kernel void brick_copy(__global const REAL* restrict u, __global REAL* restrict v,
-                         __global const REAL* restrict psi, BRICK_ARGS)
-{
-    const int chan = get_global_id(1) * plane;
-    FOR_EACH_BRICK(b, BIT_NODE) {
-        FOR_EACH_BRICK_CELL(l, x, y, z) {
-            v[chan + b * BV + l] = u[chan + b * BV + l] + psi[b * BV + l];
-        }
-    }
-}

@@ -59,16 +59,9 @@ def test_ground_floor_is_small(metrics):
 LONG_MODULES = {
     "clpde.tracking.contours",
     "clpde.regions.tracker",
-    "clpde.surface.flows",
-    "clpde.surface.implicit",
-    "clpde.planar.rof",
-    "clpde.runtime",
-    "clpde.surface.band",
 }
 LONG_FUNCTIONS = {
     "clpde.tracking.contours.MorphingTracker.__init__",
-    "clpde.planar.rof.denoise_tv",
-    "clpde.surface.mesh_sdf._sign_by_winding",
     "clpde.cli.track.add_track_parser",
     "clpde.tracking.contours.MorphingTracker._morph",
     "clpde.regions.tracker.track_region",

@@ -8,9 +8,9 @@ from reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows
-from clpde.surface import band as surface_band
-from clpde.surface.band import _offsets
+from clpde.surface import storage as surface_storage
 from clpde.surface.exact import exp3z_exact, sphere_points
+from clpde.surface.storage import _offsets
 
 
 @pytest.fixture(scope="module")
@@ -222,8 +222,8 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
             WEIGHTED=0,
         )
         nc, normalize = 3, True
-    steps, dt = flows._check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
-    whole = surface_band.BandFlow(s, u, normalize=normalize)
+    steps, dt = flows.check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
+    whole = surface_storage.BandFlow(s, u, normalize=normalize)
     r = g.scalar(dt / s.spacing**2)
     full_runs = g.runs(s.step_band)
     for n in range(steps):
@@ -237,7 +237,7 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
             kernel,
             full_runs,
             *args,
-            *surface_band._offsets(g, n % 8),
+            *surface_storage._offsets(g, n % 8),
             *g.strides(),
             channels=1 if flow != "heat" else nc,
         )

@@ -17,7 +17,8 @@ from clpde.bricks import APRON, NODE
 from clpde.errors import InputError
 from clpde.runtime import Runtime
 from clpde.surface import ImplicitSurface
-from clpde.surface import band as surface_band
+from clpde.surface import storage as surface_storage
+from clpde.surface.band import extend_defines
 
 
 @pytest.fixture(scope="module")
@@ -42,10 +43,10 @@ def band_host(band):
 
 def brick_flow(s, nc, **defines):
     """A BrickFlow shell on s's bricks (no data), for its kernels and layouts."""
-    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
+    flow = surface_storage.BrickFlow.__new__(surface_storage.BrickFlow)
     flow.surf = s
     flow.bricks, flow.psi, flow.lists = s.band.bricks()
-    flow.defines = {**surface_band.extend_defines(s.interp, nc), **defines}
+    flow.defines = {**extend_defines(s.interp, nc), **defines}
     return flow
 
 
@@ -85,7 +86,7 @@ def test_brick_flow_step_matches_reference(spheres, rng, geometry, case):
         g.scalar(dt),
         cla.to_device(q, np.float32([lam])).data,
         g.scalar(e2),
-        *surface_band._signs(sides),
+        *surface_storage._signs(sides),
         bb.node_rows.data,
     )
     node = band_host(s.node_band)
@@ -98,7 +99,7 @@ def test_brick_flow_step_matches_reference(spheres, rng, geometry, case):
         dt,
         lam,
         e2,
-        [int(o) for o in surface_band._offsets(g, sides)],
+        [int(o) for o in surface_storage._offsets(g, sides)],
         flow_p=opts["FLOW_P"],
         harmonic=bool(opts["HARMONIC"]),
         u0_pad=u0 if opts["FIDELITY"] else None,
@@ -134,7 +135,7 @@ def test_brick_turk_step_matches_reference(spheres, rng, geometry):
             g.scalar(0.125),
             g.scalar(1 / 32),
             g.scalar(0.0125),
-            *surface_band._signs(2),
+            *surface_storage._signs(2),
             bb.node_rows.data,
         )
         expect = ref.turk_step(
@@ -146,7 +147,7 @@ def test_brick_turk_step_matches_reference(spheres, rng, geometry):
             0.125,
             1 / 32,
             0.0125,
-            [int(o) for o in surface_band._offsets(g, 2)],
+            [int(o) for o in surface_storage._offsets(g, 2)],
             d if along else None,
         )
         np.testing.assert_allclose(stepped_at(dst, 2, node, s, bb), expect, atol=3e-5)
@@ -173,7 +174,7 @@ def test_brick_lambda_terms_match_reference(spheres, rng, geometry):
         1 / s.spacing,
         1.5,
         (s.spacing * 0.5) ** 2,
-        [int(o) for o in surface_band._offsets(g, 3)],
+        [int(o) for o in surface_storage._offsets(g, 3)],
     )
     coords = [tuple(c) for c in bb.coords]
     index = bref.brick_index(node, g.padded_shape, coords, bb.brick)
@@ -235,7 +236,9 @@ def test_every_flow_on_bricks_is_the_flow_on_lists(spheres, geometry, name):
 def test_storage_is_checked_and_kept_by_the_constructors():
     s = ImplicitSurface.sphere(1.0, 0.2, center=(0.5, 0, 0), storage="bricks")
     assert s.storage == "bricks"
-    assert isinstance(surface_band.make_flow(s, s.field(lambda x, y, z: x)), surface_band.BrickFlow)
+    assert isinstance(
+        surface_storage.make_flow(s, s.field(lambda x, y, z: x)), surface_storage.BrickFlow
+    )
     assert ImplicitSurface.sphere(1.0, 0.2).storage == "lists"
     with pytest.raises(InputError, match="storage must be one of 'lists', 'bricks'"):
         ImplicitSurface.sphere(1.0, 0.2, storage="dense")

@@ -14,7 +14,7 @@ from reference import surface as ref
 from clpde.bricks import APRON, BRICK_SIZES, EXT, NODE, REACH
 from clpde.runtime import Runtime
 from clpde.surface import ImplicitSurface
-from clpde.surface import band as surface_band
+from clpde.surface import storage as surface_storage
 from clpde.surface.exact import sphere_points, xy_exact
 
 
@@ -106,7 +106,7 @@ def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometr
     u = rng.standard_normal((2,) + s.grid.padded_shape).astype(np.float32)
     host = bb.scatter(u, np.float32, APRON).get()
     dev = cla.zeros_like(bb.scatter(u, np.float32, APRON))
-    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
+    flow = surface_storage.BrickFlow.__new__(surface_storage.BrickFlow)
     flow.surf, flow.bricks, flow.defines = s, bb, {}
     bb.launch(
         flow.kernel("surface/bricks.cl", "brick_to_apron"),
@@ -165,7 +165,7 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     src = bb.scatter(u, np.float32)
     psi_dev = bb.scatter_tiles(psi[None], np.float32, 2)
     dst = bb.scatter(np.zeros_like(u), np.float32, APRON)
-    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
+    flow = surface_storage.BrickFlow.__new__(surface_storage.BrickFlow)
     flow.defines = {}
     flow.surf, flow.bricks = s, bb
     kernel = flow.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
@@ -175,12 +175,12 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
         dst.data,
         psi_dev.data,
         g.scalar(0.1),
-        *surface_band._signs(sides),
+        *surface_storage._signs(sides),
         bb.node_rows.data,
         channels=2,
     )
     node = band_host(s.node_band)
-    offsets = [int(o) for o in surface_band._offsets(g, sides)]
+    offsets = [int(o) for o in surface_storage._offsets(g, sides)]
     expect = ref.heat_step(
         u, psi.astype(np.float32).astype(np.float64), node, 0.1, offsets, weighted
     )
@@ -228,7 +228,7 @@ def test_extend_cp_matches_reference(
     u = rng.standard_normal((nc,) + g.padded_shape).astype(np.float32).astype(np.float64)
     src = bb.scatter(u, np.float32, APRON)
     dst = bb.scatter(np.zeros_like(u), np.float32)
-    flow = surface_band.BrickFlow.__new__(surface_band.BrickFlow)
+    flow = surface_storage.BrickFlow.__new__(surface_storage.BrickFlow)
     flow.defines = {}
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)

@@ -7,8 +7,8 @@ import pytest
 from reference import surface as ref
 
 from clpde.errors import InputError
-from clpde.surface import ImplicitSurface, flows
-from clpde.surface.band import _offsets
+from clpde.surface import ImplicitSurface, flows, harmonic
+from clpde.surface.storage import _offsets
 
 
 @pytest.fixture(scope="module")
@@ -279,7 +279,7 @@ def test_harmonic_maps_keep_unit_norm_and_smooth(sphere05, p, t):
     u = base + noise
     u /= np.sqrt((u**2).sum(axis=0))
     pts = unit_points(800)
-    v = flows.harmonic_map(s, u, t=t, p=p)
+    v = harmonic.harmonic_map(s, u, t=t, p=p)
     # unit vectors at every band node (the state); between nodes the interpolant of unit
     # vectors is not exactly unit, so check the nodes themselves
     nodes = np.abs(s.psi) < s.outer * s.spacing
@@ -297,10 +297,10 @@ def test_harmonic_map_normalises_with_a_warning(sphere02):
     s = sphere02
     u = s.field(lambda x, y, z: [2 + 0 * x, 0 * y, 0 * z])
     with pytest.warns(UserWarning, match="unit"):
-        v = flows.harmonic_map(s, u, t=0.001)
+        v = harmonic.harmonic_map(s, u, t=0.001)
     np.testing.assert_allclose(s.sample(v, unit_points(50)), [[1, 0, 0]] * 50, atol=1e-5)
     with pytest.raises(InputError, match="vector"):
-        flows.harmonic_map(s, u[0], t=0.001)
+        harmonic.harmonic_map(s, u[0], t=0.001)
 
 
 def test_colour_denoising_restores_colours_and_keeps_the_input(sphere05):

@@ -1,0 +1,150 @@
+"""Reaction-diffusion textures on a surface: Turk's two chemicals (4.12-4.14), stepped on the
+band like the flows."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._progress import progress_range
+from ..errors import InputError
+from ..imagedata import check_time_step
+from .flows import ALL_SIDES
+from .storage import make_flow
+
+if TYPE_CHECKING:
+    from .implicit import ImplicitSurface
+
+
+TURK = {"da": 1 / 8, "db": 1 / 32, "s": 0.2 / 16, "beta": 12.0, "beta_spread": 0.1, "start": 4.0}
+THESIS_FIG_4_7 = {
+    "da": 1.0,
+    "db": 0.0625,
+    "s": 0.025,
+    "beta": 12.0,
+    "beta_spread": 0.1,
+    "start": 4.0,
+}
+
+
+def reaction_diffusion(
+    surf: ImplicitSurface,
+    iterations: int,
+    *,
+    direction: ArrayLike | None = None,
+    dt: float | None = None,
+    seed: int = 0,
+    params: dict | None = None,
+    alternate: bool = True,
+    progress: bool | None = None,
+    state: ArrayLike | None = None,
+) -> np.ndarray:
+    """Turk's two-chemical reaction-diffusion on the surface: (4.12, 4.13), or (4.14) along a
+    tangent field.
+
+    It runs in grid units, as Turk's own code: dt per iteration, diffusion rates in cells^2
+    per unit time, so that patterns have the same size in cells on any surface. Turk's own
+    rates (TURK) sit at the edge of the Turing instability (at beta = 12 the fastest mode's
+    growth rate is 0): only the random spread of beta grows a pattern, and the anisotropic
+    flow (4.14) along a tube's short circles, where few wavelengths fit, stays flat with them.
+    docs/surface.md has the wavelengths measured with both sets of rates.
+
+    Parameters
+    ----------
+    surf : ImplicitSurface
+        The surface.
+    iterations : int
+        The number of time steps.
+    direction : array_like, optional
+        (3, nz, ny, nx) tangent field for the anisotropic flow (4.14); normalised here.
+    dt : float, optional
+        The time step in grid time units; by default 0.9 of the stability limit, at most 1.
+    seed : int, optional
+        The seed of beta's random spread.
+    params : dict, optional
+        The rates: keys da, db (diffusion rates of a and b), s, beta, beta_spread and start
+        (the chemicals' uniform start). Default: Figure 4.7's numbers (THESIS_FIG_4_7:
+        D1 = 1, D2 = 1/16, s = 0.025); TURK gives Turk's own (1/8, 1/32, s = 0.2/16, dt = 1).
+    alternate : bool, optional
+        Cycle the one-sided differences, as for `heat`.
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    state : array_like, optional
+        (2, nz, ny, nx) chemicals to continue from (a result of an earlier call); by default
+        both start at params['start'].
+
+    Returns
+    -------
+    ndarray
+        The (2, nz, ny, nx) chemicals (a, b) after the iterations.
+
+    Raises
+    ------
+    InputError
+        For a direction of another shape or an unstable dt.
+
+    Examples
+    --------
+    >>> from clpde.surface import TURK, ImplicitSurface, reaction_diffusion
+    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
+    >>> ab = reaction_diffusion(s, 20, params=TURK)
+    >>> ab.shape
+    (2, 37, 37, 37)
+    >>> more = reaction_diffusion(s, 20, params=TURK, state=ab)   # 20 more iterations
+    """
+    p = dict(THESIS_FIG_4_7 if params is None else params)
+    limit = 1.0 / (6.0 * max(p["da"], p["db"]))
+    what = f"reaction-diffusion (diffusion rate {max(p['da'], p['db']):g})"
+    dt = min(1.0, 0.9 * limit) if dt is None else check_time_step(dt, limit, what)
+    rng = np.random.default_rng(seed)
+    beta = p["beta"] + p["beta_spread"] * rng.uniform(-1, 1, surf.shape)
+    start = (
+        np.full((2,) + surf.shape, p["start"]) if state is None else np.asarray(state, np.float64)
+    )
+    direction_field = None
+    if direction is not None:
+        d = np.asarray(direction, dtype=np.float64)
+        if d.shape != (3,) + surf.shape:
+            raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")
+        norm = np.sqrt((d**2).sum(axis=0))
+        direction_field = d / np.where(norm > 0, norm, 1)
+    flow = make_flow(surf, start, defines={"ALONG": int(direction is not None)})
+    g = surf.grid
+    beta_dev = flow.fixed(beta[None])
+    dir_dev = flow.psi if direction_field is None else flow.fixed(direction_field, halo=2)
+    kernel = flow.step_kernel("turk")
+    for n in progress_range(
+        progress, int(iterations), "reaction-diffusion", leave=False, queue=surf.grid.runtime.queue
+    ):
+        flow.step(
+            kernel,
+            ALL_SIDES[n % 8] if alternate else 0,
+            dir_dev.data,
+            beta_dev.data,
+            g.scalar(dt),
+            g.scalar(p["da"]),
+            g.scalar(p["db"]),
+            g.scalar(p["s"]),
+        )
+    return flow.result()
+
+
+def turk_linear_wavelength(params: dict | None = None) -> float:
+    """Wavelength (cells) of the fastest-growing mode of Turk's system linearised about its
+    uniform state b = 16 - beta, a = 16 / b (planar linear stability analysis, grid units)."""
+    p = dict(TURK if params is None else params)
+    s, beta = p["s"], p["beta"]
+    b = 16.0 - beta  # a b = 16 and a b - b - beta = 0
+    a = 16.0 / b
+    k = np.linspace(1e-3, np.pi, 20000)  # wavenumber, radians per cell
+    k2 = k**2
+    # Jacobian [[-s b - Da k^2, -s a], [s b, s (a - 1) - Db k^2]]
+    j11 = -s * b - p["da"] * k2
+    j12 = -s * a
+    j21 = s * b
+    j22 = s * (a - 1) - p["db"] * k2
+    tr, det = j11 + j22, j11 * j22 - j12 * j21
+    growth = 0.5 * tr + np.sqrt(np.maximum(0.25 * tr**2 - det, 0))
+    return float(2 * np.pi / k[np.argmax(growth)])
