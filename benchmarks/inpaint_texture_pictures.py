@@ -4,7 +4,7 @@
 
 Writes inpaint_texture.png (texture cases) and inpaint_thick.png (thick holes in photos):
 one row per case, cropped around the holes: the damaged image (holes in black),
-biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (method="auto"),
+biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (method=None, spectral),
 the original.
 """
 
@@ -19,7 +19,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from inpaint_texture_cases import texture_cases  # noqa: E402
 from inpaint_texture_quick import biharmonic, clpde_method  # noqa: E402
 
-COLUMNS = ["damaged", "biharmonic", "exemplar", "structure-texture", "default (auto)", "original"]
+COLUMNS = ["damaged", "biharmonic", "exemplar", "structure-texture", "default (spectral)", "original"]
 
 
 def _rgb8(a):
@@ -46,7 +46,7 @@ def _row(case, pad=24, size=200):
         biharmonic(img, mask),
         clpde_method("exemplar")(img, mask),
         clpde_method("structure-texture")(img, mask),
-        clpde_method("auto")(img, mask),
+        clpde_method(None)(img, mask),
         img,
     ]
     out = []
