@@ -4,7 +4,7 @@
 
 Writes inpaint_texture.png (texture cases) and inpaint_thick.png (thick holes in photos):
 one row per case, cropped around the holes: the damaged image (holes in black),
-biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (method=None, spectral),
+biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (spectral),
 the original.
 """
 
@@ -19,7 +19,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from inpaint_texture_cases import texture_cases  # noqa: E402
 from inpaint_texture_quick import biharmonic, clpde_method  # noqa: E402
 
-COLUMNS = ["damaged", "biharmonic", "exemplar", "structure-texture", "default (spectral)", "original"]
+COLUMNS = [
+    "damaged",
+    "biharmonic",
+    "exemplar",
+    "structure-texture",
+    "default (spectral)",
+    "original",
+]
 
 
 def _rgb8(a):
