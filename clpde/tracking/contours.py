@@ -278,14 +278,16 @@ class MorphingTracker:
         for t in range(1, len(self.frames)):
             prepared = self.prepared(t)
             f2 = feature_field(prepared, ls, options)
+            # the frame's noise, for the adaptive discrepancy and the pieces' matching
+            noise2 = noise_variance(prepared) if adaptive or options.motion == "components" else 0.0
             shift = (0.0, 0.0)
             if prediction is not None:
-                prepared_prev, shift, moved = prediction.move(ls, prepared_prev, prepared, mask)
+                prepared_prev, shift, moved = prediction.move(
+                    ls, prepared_prev, prepared, mask, noise2
+                )
                 fresh = fresh and not moved
             f1 = feature_field(prepared_prev, ls, options)
-            noise2 = 0.0
             if region is not None:
-                noise2 = noise_variance(prepared)
                 region.start(ls, prepared, noise2)
             if not fresh:  # a frame without rebuilds may have bent u away from a distance
                 ls.rebuild(options.reinit_iterations)

@@ -39,15 +39,23 @@ class MotionPrediction:
         self._previous: np.ndarray | None = None  # the last frame's matching features
 
     def move(
-        self, ls: LevelSet, prepared_prev: np.ndarray, prepared: np.ndarray, mask: np.ndarray
+        self,
+        ls: LevelSet,
+        prepared_prev: np.ndarray,
+        prepared: np.ndarray,
+        mask: np.ndarray,
+        noise2: float | None = None,
     ) -> tuple[np.ndarray, tuple[float, float], bool]:
         """Predict the displacement from the previous frame to `prepared` (both (C, H, W))
-        of the previous result `mask`, and move the level set there.
+        of the previous result `mask`, and move the level set there. `noise2`: the noise
+        variance of `prepared`, if known (motion='components' needs it).
 
         Returns the previous frame's features moved with it, the displacement (dy, dx) (of
         the largest piece, with motion='components') and whether anything moved."""
         if self.pieces:
-            return self._move_pieces(ls, prepared_prev, prepared, mask)
+            if noise2 is None:
+                noise2 = noise_variance(prepared)
+            return self._move_pieces(ls, prepared_prev, prepared, mask, noise2)
         cr = self.options.contrast_radius
         features = local_contrast(prepared, cr)
         if self._previous is None:
@@ -60,11 +68,11 @@ class MotionPrediction:
         ls.assign(shift_image(ls.values(), shift))
         return np.stack([shift_image(c, shift) for c in prepared_prev]), shift, True
 
-    def _move_pieces(self, ls, prepared_prev, prepared, mask):
+    def _move_pieces(self, ls, prepared_prev, prepared, mask, noise2):
         # eps raised to twice the noise, so that a flat, noisy patch is not blown up into
         # texture.
         cr = self.options.contrast_radius
-        eps = max(self.options.contrast_eps, 2 * float(np.sqrt(noise_variance(prepared))))
+        eps = max(self.options.contrast_eps, 2 * float(np.sqrt(noise2)))
         features = local_contrast(prepared, cr, eps)
         if self._previous is None:
             self._previous = local_contrast(prepared_prev, cr, eps)

@@ -79,19 +79,20 @@ class RegionTerm:
         # Ghosts and the frozen margin too: band cells never read the ghosts, but they hold
         # finite values.
         self.field = Field(g, cla.zeros(rt.queue, g.padded_shape, g.dtype))
-        self._coarse = cla.to_device(rt.queue, gaussian_weights(sigma / 2, 3.0).astype(g.dtype))
-        self._pool = (
-            cla.to_device(rt.queue, gaussian_weights(pool, 4.0).astype(g.dtype))
-            if pool > 0
-            else None
-        )
+        coarse, pooling = gaussian_weights(sigma / 2, 3.0), gaussian_weights(max(pool, 1), 4.0)
+        rc, rp = (len(coarse) - 1) // 2, (len(pooling) - 1) // 2
+        self._coarse = cla.to_device(rt.queue, coarse.astype(g.dtype))
+        self._pool = cla.to_device(rt.queue, pooling.astype(g.dtype)) if pool > 0 else None
         self._feats = self._stats = self._work = None  # allocated with the first frame
         self._llr = self._llr_work = self._w = None
         self._noise2 = 0.0
         self._k = {
             "region_moments": rt.kernel("tracking/region.cl", "region_moments", g.dtype),
-            "blur_cols": rt.kernel("tracking/region.cl", "blur_cols", g.dtype),
-            "blur_rows": rt.kernel("tracking/region.cl", "blur_rows", g.dtype),
+            # the blurs' radius is a define: one build per Gaussian, whatever the frame size
+            "coarse_cols": rt.kernel("tracking/region.cl", "blur_cols", g.dtype, RADIUS=rc),
+            "coarse_rows": rt.kernel("tracking/region.cl", "blur_rows", g.dtype, RADIUS=rc),
+            "pool_cols": rt.kernel("tracking/region.cl", "blur_cols", g.dtype, RADIUS=rp),
+            "pool_rows": rt.kernel("tracking/region.cl", "blur_rows", g.dtype, RADIUS=rp),
             "region_llr": rt.kernel("tracking/region.cl", "region_llr", g.dtype),
             "region_speed": rt.kernel("tracking/region.cl", "region_speed", g.dtype),
         }
@@ -120,14 +121,14 @@ class RegionTerm:
         self._noise2 = float(noise2)
         self.update(ls)
 
-    def _blur(self, src, work, weights, nx, ny, planes) -> None:
-        """src blurred in place (through `work`): columns, then rows."""
-        radius = (weights.shape[0] - 1) // 2
+    def _blur(self, which, src, work, weights, nx, ny, planes) -> None:
+        """src blurred in place (through `work`) by the `which` Gaussian ('coarse' or
+        'pool'): columns, then rows."""
         launch = self.runtime.items(nx, ny, planes)
-        sizes = (np.int32(radius), np.int32(nx), np.int32(ny), np.int32(planes))
+        sizes = (np.int32(nx), np.int32(ny), np.int32(planes))
         q = self.runtime.queue
-        self._k["blur_cols"](q, *launch, src.data, work.data, weights.data, *sizes)
-        self._k["blur_rows"](q, *launch, work.data, src.data, weights.data, *sizes)
+        self._k[which + "_cols"](q, *launch, src.data, work.data, weights.data, *sizes)
+        self._k[which + "_rows"](q, *launch, work.data, src.data, weights.data, *sizes)
 
     def update(self, ls: LevelSet) -> None:
         """The field for the current contour (u < 0 inside), from u on the device."""
@@ -152,7 +153,7 @@ class RegionTerm:
             np.int32(g.sx),
         )
         planes = self._stats.shape[0]
-        self._blur(self._stats, self._work, self._coarse, self.nx2, self.ny2, planes)
+        self._blur("coarse", self._stats, self._work, self._coarse, self.nx2, self.ny2, planes)
         k["region_llr"](
             q,
             *self.runtime.items(self.nx, self.ny),
@@ -169,7 +170,7 @@ class RegionTerm:
             g.scalar(self.separation),
         )
         if self._pool is not None:
-            self._blur(self._llr, self._llr_work, self._pool, self.nx, self.ny, 1)
+            self._blur("pool", self._llr, self._llr_work, self._pool, self.nx, self.ny, 1)
         k["region_speed"](
             q,
             *self.runtime.items(g.nx, g.ny),

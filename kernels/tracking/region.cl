@@ -52,33 +52,43 @@ __kernel void region_moments(__global const REAL* restrict u, __global const REA
     }
 }
 
-// out = src blurred along columns (y) with weights w[-radius..radius] (w[0] at the centre is
-// w[radius]), the index clamped to [0, ny): `planes` planes of (ny, nx).
+// out = src blurred along columns (y) with weights w[0..2 RADIUS] (the centre at w[RADIUS]),
+// the index clamped to [0, ny): `planes` planes of (ny, nx). RADIUS is a define (it follows
+// from the Gaussian's sigma, not from the data's size), so the taps unroll; rows whose window
+// lies inside the plane take no clamps.
+#ifndef RADIUS
+#define RADIUS 9
+#endif
 __kernel void blur_cols(__global const REAL* restrict src, __global REAL* restrict out,
-                        __global const REAL* restrict w, const int radius, const int nx,
-                        const int ny, const int planes)
+                        __constant REAL* restrict w, const int nx, const int ny,
+                        const int planes)
 {
     const int x = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
     if (x >= nx || y >= ny || p >= planes) return;
-    __global const REAL* s = src + p * nx * ny;
+    __global const REAL* s = src + p * nx * ny + x;
     REAL acc = 0;
-    for (int k = -radius; k <= radius; ++k) {
-        const int yy = clamp(y + k, 0, ny - 1);
-        acc += w[k + radius] * s[yy * nx + x];
+    if (y >= RADIUS && y + RADIUS < ny) {
+        for (int k = 0; k <= 2 * RADIUS; ++k) acc += w[k] * s[(y + k - RADIUS) * nx];
+    } else {
+        for (int k = 0; k <= 2 * RADIUS; ++k) acc += w[k] * s[clamp(y + k - RADIUS, 0, ny - 1) * nx];
     }
     out[p * nx * ny + y * nx + x] = acc;
 }
 
 // out = src blurred along rows (x), as blur_cols.
 __kernel void blur_rows(__global const REAL* restrict src, __global REAL* restrict out,
-                        __global const REAL* restrict w, const int radius, const int nx,
-                        const int ny, const int planes)
+                        __constant REAL* restrict w, const int nx, const int ny,
+                        const int planes)
 {
     const int x = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
     if (x >= nx || y >= ny || p >= planes) return;
     __global const REAL* s = src + (p * ny + y) * nx;
     REAL acc = 0;
-    for (int k = -radius; k <= radius; ++k) acc += w[k + radius] * s[clamp(x + k, 0, nx - 1)];
+    if (x >= RADIUS && x + RADIUS < nx) {
+        for (int k = 0; k <= 2 * RADIUS; ++k) acc += w[k] * s[x + k - RADIUS];
+    } else {
+        for (int k = 0; k <= 2 * RADIUS; ++k) acc += w[k] * s[clamp(x + k - RADIUS, 0, nx - 1)];
+    }
     out[(p * ny + y) * nx + x] = acc;
 }
 
