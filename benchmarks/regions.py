@@ -58,7 +58,7 @@ def step_timing(n, flow, storage=None, radius=0.35, steps=STEPS, rounds=ROUNDS):
     import pyopencl as cl
     import pyopencl.array as cla
 
-    from clpde.regions.tracker import region_tracker as RegionTracker
+    from clpde.regions.api import region_tracker as RegionTracker
 
     h = 1.0 / n
     ax = (np.arange(n) - (n - 1) / 2) * h
@@ -150,7 +150,7 @@ def step_timing(n, flow, storage=None, radius=0.35, steps=STEPS, rounds=ROUNDS):
 
 def curvature_accuracy(storage=None):
     """Area and cap-share errors of the tests' curvature flows (h = 0.1)."""
-    from clpde.regions.tracker import track_region
+    from clpde.regions.api import track_region
 
     h = 0.1
     ax = np.arange(40) * h - 39 * h / 2
@@ -187,8 +187,8 @@ def curvature_accuracy(storage=None):
 def cap_accuracy(h, device=None, storage="lists"):
     from scipy.ndimage import map_coordinates
 
+    from clpde.regions.api import track_region
     from clpde.regions.mesh import split_regions, surface_mesh
-    from clpde.regions.tracker import track_region
 
     margin = 10 * h
     ax = np.arange(-1.15 - margin, 1.15 + margin + 0.5 * h, h)

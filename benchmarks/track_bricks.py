@@ -84,21 +84,24 @@ class Case:
     """One layout's level set, features and kernels on one frame pair."""
 
     def __init__(self, runtime, frames, mask, label):
-        from clpde.tracking.contours import DISCREPANCIES, MorphingTracker, morph_kernel_name
+        from clpde.tracking.contours import MorphingTracker
         from clpde.tracking.levelset import LevelSet, signed_distance
+        from clpde.tracking.morph import morph_kernel_name
+        from clpde.tracking.options import DISCREPANCIES
+        from clpde.tracking.preprocessing import feature_field
 
         layout, grouped, tiled = label.split()[0], label.endswith(" wg"), label.endswith("tiled")
         self.tracker = MorphingTracker(frames, mask, storage=layout, device=runtime)
         self.ls = ls = LevelSet(
             runtime,
             signed_distance(mask),
-            self.tracker.band_width,
+            self.tracker.options.band_width,
             np.float32,
             storage=layout,
             group_per_brick=grouped or None,
         )
-        self.f1 = self.tracker._feature_field(self.tracker.prepared(0), ls)
-        self.f2 = self.tracker._feature_field(self.tracker.prepared(1), ls)
+        self.f1 = feature_field(self.tracker.prepared(0), ls, self.tracker.options)
+        self.f2 = feature_field(self.tracker.prepared(1), ls, self.tracker.options)
         self.f1_out = self.f1.copy()
         # The tracker's kernels, but bricks without "tiled" sum the NCC's windows cell by
         # cell, as the lists do.

@@ -42,7 +42,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def synthetic(kind, frames):
-    from tests.track.test_track import synthetic_sequence
+    from tests.tracking.test_track import synthetic_sequence
 
     return synthetic_sequence(kind, frames=frames)
 
@@ -122,6 +122,9 @@ CONFIGS = {
     "clpde kalman+contrast": {"motion": "kalman", "features": "contrast", "equalize": False},
     "clpde new default": "default",  # = kalman + ncc, no equalisation
 }
+# The adaptive option (--adaptive), with the default's other options, as
+# benchmarks/tracking_generalise.py runs it.
+ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
 
 
 def run_clpde(frames, first, options):
@@ -129,6 +132,8 @@ def run_clpde(frames, first, options):
 
     if options == "default":
         return clpde.track(frames, first, progress=False)
+    if options == "adaptive":
+        return clpde.track(frames, first, progress=False, **ADAPTIVE)
     return clpde.track(frames, first, progress=False, **{**OLD_DEFAULT, **options})
 
 
@@ -237,14 +242,16 @@ def _front_shift(u, true):
 BASELINES = {"skimage MCV": run_mcv, "skimage MGAC": run_mgac, "static": run_static}
 
 
-def methods(only_default=False):
+def methods(only_default=False, adaptive=False, baselines=True):
     configs = (
         {k: CONFIGS[k] for k in ("clpde old default", "clpde new default")}
         if only_default
-        else CONFIGS
+        else dict(CONFIGS)
     )
+    if adaptive:
+        configs["clpde adaptive"] = "adaptive"
     table = {name: (lambda f, m, o=opts: run_clpde(f, m, o)) for name, opts in configs.items()}
-    return {**table, **BASELINES}
+    return {**table, **(BASELINES if baselines else {})}
 
 
 def evaluate(frames, truth, repeats=1, table=None):
@@ -296,6 +303,15 @@ def main(argv=None):
         help="clpde's old and new defaults only (with the baselines)",
     )
     parser.add_argument(
+        "--adaptive",
+        action="store_true",
+        help="also run the adaptive option (motion='components', discrepancy='adaptive') and "
+        "print its time per frame over the new default's, from the same run",
+    )
+    parser.add_argument(
+        "--no-baselines", action="store_true", help="skip scikit-image's snakes and 'static'"
+    )
+    parser.add_argument(
         "--repeats",
         type=int,
         default=None,
@@ -325,9 +341,9 @@ def main(argv=None):
     if args.only:
         loaders = {k: v for k, v in loaders.items() if any(o in k for o in args.only)}
     warm_frames, warm_truth = synthetic("translate", 2)
-    for opts in CONFIGS.values():  # warm-up: build the kernels of every configuration
+    for opts in [*CONFIGS.values(), "adaptive"]:  # warm-up: build every configuration's kernels
         run_clpde(warm_frames, warm_truth[0], opts)
-    table = methods(args.default_only)
+    table = methods(args.default_only, args.adaptive, not args.no_baselines)
     device = get_runtime().device.name.strip()
     results = {"device": device, "configs": {k: v for k, v in CONFIGS.items()}, "sequences": {}}
     print(f"device: {device}")
@@ -352,6 +368,12 @@ def main(argv=None):
                 f"{r['J_last']:7.3f} {r['ms_per_frame']:9.1f}",
                 flush=True,
             )
+        if "clpde adaptive" in rows:
+            ratio = (
+                rows["clpde adaptive"]["ms_per_frame"] / rows["clpde new default"]["ms_per_frame"]
+            )
+            results["sequences"][name]["adaptive_over_default"] = ratio
+            print(f"{name[:34]:34s} adaptive / new default time per frame: {ratio:.2f}x")
     real = [v for k, v in results["sequences"].items() if k.startswith("MNI")]
     if real:
         summary = {

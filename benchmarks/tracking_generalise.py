@@ -144,15 +144,26 @@ def chosen():
     return c["MCV"]["best"], c["MGAC"]["best"]
 
 
-def methods():
-    mcv, mgac = chosen()
-    return {
+def methods(only=None):
+    """{name: method} of the run, or of the names containing one of `only`'s substrings (the
+    peers' calibrated parameters are read only when a peer runs)."""
+    names = (
+        "clpde default (kalman+ncc)",
+        "clpde adaptive",
+        "clpde thesis (old default)",
+        "skimage MCV",
+        "skimage MGAC",
+    )
+    names = [n for n in names if not only or any(o in n for o in only)]
+    mcv, mgac = chosen() if any(n.startswith("skimage") for n in names) else ({}, {})
+    table = {
         "clpde default (kalman+ncc)": lambda f, m: run_clpde(f, m),
         "clpde adaptive": lambda f, m: run_clpde(f, m, ADAPTIVE),
         "clpde thesis (old default)": lambda f, m: run_clpde(f, m, OLD_DEFAULT),
         "skimage MCV": lambda f, m: run_mcv(f, m, **mcv),
         "skimage MGAC": lambda f, m: run_mgac(f, m, **mgac),
     }
+    return {n: table[n] for n in names}
 
 
 def jumped(truth, start, rng):
@@ -265,19 +276,30 @@ def timing(repeats=3):
         pass
     out = {}
     for name, (f, m) in seqs.items():
-        best = {"default": np.inf, "adaptive": np.inf}
+        # wall time, and the process's CPU time (the OpenCL device's threads included): on
+        # a machine shared with other jobs the CPU time varies less
+        best = {
+            "default": np.inf,
+            "adaptive": np.inf,
+            "default_cpu": np.inf,
+            "adaptive_cpu": np.inf,
+        }
         run_clpde(f[:2], m)
         run_clpde(f[:2], m, ADAPTIVE)
         for _ in range(repeats):
             for label, opts in (("default", None), ("adaptive", ADAPTIVE)):
-                t0 = time.perf_counter()
+                t0, c0 = time.perf_counter(), time.process_time()
                 run_clpde(f, m, opts)
                 best[label] = min(best[label], time.perf_counter() - t0)
+                best[label + "_cpu"] = min(best[label + "_cpu"], time.process_time() - c0)
         out[name] = {k: 1000 * v / (len(f) - 1) for k, v in best.items()}
         out[name]["ratio"] = out[name]["adaptive"] / out[name]["default"]
+        out[name]["ratio_cpu"] = out[name]["adaptive_cpu"] / out[name]["default_cpu"]
         print(
             f"{name}: default {out[name]['default']:.1f} ms/frame, adaptive "
-            f"{out[name]['adaptive']:.1f}, ratio {out[name]['ratio']:.2f}",
+            f"{out[name]['adaptive']:.1f}, ratio {out[name]['ratio']:.2f}; CPU time: default "
+            f"{out[name]['default_cpu']:.1f}, adaptive {out[name]['adaptive_cpu']:.1f}, ratio "
+            f"{out[name]['ratio_cpu']:.2f}",
             flush=True,
         )
     return out
@@ -295,6 +317,33 @@ def main(argv=None):
     parser.add_argument("--calibrate-confidence", action="store_true")
     parser.add_argument("--json", type=Path, default=RESULTS / "tracking_generalise.json")
     parser.add_argument("--no-timing", action="store_true")
+    parser.add_argument(
+        "--methods",
+        nargs="*",
+        default=None,
+        metavar="SUBSTRING",
+        help="run only the methods whose names contain one of these (e.g. adaptive)",
+    )
+    parser.add_argument(
+        "--halves",
+        nargs="*",
+        choices=("test", "calibration"),
+        default=("test", "calibration"),
+        help="the corpus halves to report (default: both)",
+    )
+    parser.add_argument(
+        "--save-masks",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="write each half's tracks to DIR/<half>.npz (to compare two trees' tracks)",
+    )
+    parser.add_argument(
+        "--timing-only", action="store_true", help="the time per frame only (no corpus)"
+    )
+    parser.add_argument(
+        "--repeats", type=int, default=3, help="timing runs per method, best kept (default: 3)"
+    )
     args = parser.parse_args(argv)
     if args.calibrate is not None:
         return calibrate(args.calibrate)
@@ -302,11 +351,17 @@ def main(argv=None):
         return calibrate_confidence()
     from clpde.runtime import get_runtime
 
-    table = methods()
+    table = {} if args.timing_only else methods(args.methods)
     results = {"device": get_runtime().device.name.strip(), "halves": {}}
     print(f"device: {results['device']}")
-    for half in ("test", "calibration"):
+    for half in () if args.timing_only else args.halves:
         sets = track_sets(half, table)
+        if args.save_masks:
+            args.save_masks.mkdir(parents=True, exist_ok=True)
+            np.savez_compressed(
+                args.save_masks / f"{half}.npz",
+                **{f"{k:03d} {label}": m for k, (_, m, _, label, _) in enumerate(sets)},
+            )
         per = {}
         for _frames, masks, truth, label, cls in sets:
             if label == "forced jump":
@@ -341,7 +396,7 @@ def main(argv=None):
             )
         print("confidence:", results["halves"][half]["confidence"], flush=True)
     if not args.no_timing:
-        results["timing"] = timing()
+        results["timing"] = timing(args.repeats)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(results, indent=2))
     print(f"wrote {args.json}")

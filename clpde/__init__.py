@@ -14,7 +14,7 @@ from .imagedata import grow_mask
 from .inpainting.api import Inpainting, inpaint
 from .planar.flows import FLOWS, PlanarFlow, diffuse, stability_limit
 from .planar.rof import denoise_tv
-from .regions.tracker import track_region  # region tracking on deforming surfaces (section 2.2)
+from .regions.api import track_region  # region tracking on deforming surfaces (section 2.2)
 from .runtime import devices, get_runtime, use_device
 from .scale.batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
 from .tracking.contours import MorphingTracker, track

@@ -44,7 +44,7 @@ def main():
     import trimesh
 
     from clpde.cli.regions import write_frames
-    from clpde.regions.tracker import track_region
+    from clpde.regions.api import track_region
     from clpde.surface import ImplicitSurface
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

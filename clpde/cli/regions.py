@@ -16,8 +16,8 @@ from ..data import REGION_SCENES as SCENES
 from ..data import RegionScene, region_scene
 from ..errors import InputError
 from ..io.images import output_folder, write_bytes
+from ..regions.api import track_region
 from ..regions.mesh import surface_mesh
-from ..regions.tracker import track_region
 from ..runtime import get_runtime
 from ..surface import ImplicitSurface
 from ..surface.render import export_mesh, render_mesh, view_box, with_title
@@ -365,9 +365,9 @@ def run_scene(scene: RegionScene, saves=4, progress=None, device=None):
 def write_frames(frames, outdir, size=256, views=((30.0, 20.0),), stem="regions", overwrite=False):
     """OUTDIR/<stem>_<k>.ply per frame and OUTDIR/<stem>.png: frames top to bottom, views
     side by side, as a 128-colour palette PNG (two shaded colours on white: no visible loss,
-    2.5x smaller than RGB). OUTDIR is created if missing; an existing one must be empty, or
-    with overwrite=True hold only clpde's kinds of output files, and is then replaced as a
-    whole (clpde.io.output_folder). Returns the paths written."""
+    smaller than RGB; docs/regions.md). OUTDIR is created if missing; an existing one must
+    be empty, or with overwrite=True hold only clpde's kinds of output files, and is then
+    replaced as a whole (clpde.io.output_folder). Returns the paths written."""
 
     with output_folder(outdir, overwrite) as staging:
         written = _write_frame_files(frames, str(staging), size, views, stem)

@@ -26,6 +26,16 @@ def add_track_parser(subparsers) -> None:
         help="mask image of the object in the first frame, white = inside (" + MASK_RULE + ")",
     )
     add_output_folder_arguments(parser)
+    _add_method_arguments(parser)
+    _add_preprocessing_arguments(parser)
+    _add_run_arguments(parser)
+    _add_report_arguments(parser)
+    add_device_argument(parser)
+    parser.set_defaults(run=run_track)
+
+
+def _add_method_arguments(parser) -> None:
+    """What the frames are compared by, and how the contour's start moves."""
     parser.add_argument(
         "--features",
         choices=("intensity", "edges", "contrast"),
@@ -64,6 +74,10 @@ def add_track_parser(subparsers) -> None:
         help="pull the contour towards the predicted start where the frames "
         "say nothing, against leaks (e.g. 0.02; default: 0)",
     )
+
+
+def _add_preprocessing_arguments(parser) -> None:
+    """The frames' equalisation and smoothing before the morphing."""
     parser.add_argument(
         "--equalize",
         choices=("none", "match", "global"),
@@ -79,6 +93,10 @@ def add_track_parser(subparsers) -> None:
     parser.add_argument(
         "--no-smooth", action="store_true", help="skip the anisotropic (Perona-Malik) pre-smoothing"
     )
+
+
+def _add_run_arguments(parser) -> None:
+    """How long each frame runs, and the clean-up of its result."""
     parser.add_argument(
         "--max-iterations",
         type=int,
@@ -92,6 +110,10 @@ def add_track_parser(subparsers) -> None:
         default=0,
         help="remove pieces and holes smaller than this many pixels (default: 0)",
     )
+
+
+def _add_report_arguments(parser) -> None:
+    """Which frames are used, and what is written and reported."""
     parser.add_argument(
         "--frames", type=int, default=None, metavar="N", help="use only the first N frames"
     )
@@ -111,8 +133,6 @@ def add_track_parser(subparsers) -> None:
         "and lost tracks) falls below T (default: the calibrated "
         "threshold, clpde.tracking.confidence.LOW_CONFIDENCE)",
     )
-    add_device_argument(parser)
-    parser.set_defaults(run=run_track)
 
 
 def task_options(args) -> dict:

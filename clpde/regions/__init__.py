@@ -2,6 +2,7 @@
 and the region meshes."""
 
 from . import bricks  # noqa: F401  (adds the "bricks" storage to tracker.STORAGE_CLASSES)
-from .tracker import RegionTracker, region_tracker, track_region
+from .api import region_tracker, track_region
+from .tracker import RegionTracker
 
 __all__ = ["RegionTracker", "region_tracker", "track_region"]

@@ -71,3 +71,23 @@ def _speed_setup(beta, target, weight, h, shape, coords):
     if arr.shape != shape:
         raise InputError(f"a beta array must have phi's shape {shape}, got {arr.shape}")
     return "array", -weight / h, _beta_array(arr, shape), None
+
+
+def surface_motion(beta, velocity, target, weight: float, h: float, shape, origin) -> tuple:
+    """(speed name, scale, aux, aux_at, velocity in cells per unit time or None) for
+    RegionTracker: a rigid translation when `velocity` is given, else the speed of beta
+    (the callables sampled at the world coordinates of phi's grid, `origin` and `h`)."""
+    if velocity is not None:
+        vel = np.asarray(velocity, np.float64).reshape(-1)
+        if vel.shape != (3,) or not np.all(np.isfinite(vel)):
+            raise InputError(
+                f"velocity must be three finite numbers (vx, vy, vz), got {velocity!r}"
+            )
+        return "constant", 0.0, None, None, vel / h
+    nz, ny, nx = shape
+    coords = (
+        origin[0] + h * np.arange(nx)[None, None, :],
+        origin[1] + h * np.arange(ny)[None, :, None],
+        origin[2] + h * np.arange(nz)[:, None, None],
+    )
+    return (*_speed_setup(beta, target, float(weight), h, shape, coords), None)

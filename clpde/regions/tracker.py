@@ -18,7 +18,9 @@ projection of the full velocity on its normal (for a normal speed that is the th
 beta N_Phi . N_Phi-hat; tangential motion of S is only known when the velocity is given).
 
 At saved times the host reads the level sets back: marching cubes of Phi = 0, Phi-hat
-sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero.
+sampled at the vertices, triangles straddling Phi-hat = 0 split along its zero (frames.py,
+mesh.py). This module holds the tracker on the device; api.py the user's entry point,
+`track_region`.
 """
 
 from __future__ import annotations
@@ -30,15 +32,12 @@ import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
 from tqdm.auto import tqdm  # (the bars' type)
 
-from .._progress import progress_bar
 from ..errors import InputError
 from ..fields import IndexList, check_fits, compact
 from ..grid3d import Grid3D
-from ..imagedata import positive as _positive
 from ..runtime import DeviceLike, get_runtime
 from .frames import RegionFrame, make_frame
-from .mesh import _region_functions, along_normals
-from .speed import _speed_setup
+from .mesh import along_normals
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions/regions.cl",)
@@ -49,9 +48,9 @@ STORAGE_CLASSES: dict[str, type] = {}
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
 GHOST = 3
 # Pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3)). Six Heun iterations
-# of 0.45 (2.7 cells of pseudo-time) correct the band as well as eight of 0.3 did, for 25%
-# less work; with less pseudo-time (5 x 0.45, 6 x 0.3) an expanding sphere's outer band
-# lagged and its area drifted (0.04-0.6% where 0.02% is the norm at h = 0.025).
+# of 0.45 (2.7 cells of pseudo-time) correct the band as well as eight of 0.3 did, for less
+# work; with less pseudo-time an expanding sphere's outer band lagged and its area drifted
+# (docs/regions.md, "The tracker's constants").
 REINIT_DT = 0.45
 # Extension of the Phi-hat along the surface's normals before each reinitialisation: the
 # cells within EXTEND_FROM[0] cells of the surface are kept (they fix Phi-hat on the
@@ -60,25 +59,23 @@ REINIT_DT = 0.45
 # twice the 1.6 cells the surface moves between two reinitialisations at most: the
 # reinitialisation band's outer cells were reached by earlier extensions, and the Phi-hat
 # stay close to constant along the normals in between (the projected flow keeps them so).
-# 10 steps (5 cells), as before, cost 4 more sweeps of the reinitialisation band for
-# little: benchmarks/regions.py's cap errors changed by 0.03% at most, except at h = 0.1
-# (-0.23% to -0.10%); with 4 steps the grown sphere's cap (t = 1.2) drifted by 0.075%.
-# Phi-hat stays constant along the normals, meeting the surface at right angles (see
-# regions_mesh.along_normals for why), and cells that enter the band as the surface moves
-# get values from the surface, not stale ones.
+# More steps cost sweeps of the reinitialisation band for little; fewer let the caps drift
+# (docs/regions.md). Phi-hat stays constant along the normals, meeting the surface at
+# right angles (see mesh.along_normals for why), and cells that enter the band as the
+# surface moves get values from the surface, not stale ones.
 EXTEND_DT = 0.5
 EXTEND_ITERATIONS = 6
 EXTEND_FROM = (0.8, 1.5)
 # When the surface moved only part of the tracker's reinit_distance since the last
 # reinitialisation (a slow flow, or a block cut short at a saved time), that part of the
 # iterations, but at least these: 2 Heun iterations (0.9 cells of pseudo-time) and 4
-# extension steps (2 cells). At 256^3 a curvature flow moves 0.004 cells a step, so the
-# reinitialisation after 32 steps takes 2 + 4 instead of 6 + 6; the tests' curvature
-# flows and caps moved by 0.02% at most (benchmarks/regions.py, docs/regions.md).
+# extension steps (2 cells). A curvature flow on a fine grid moves a small fraction of a
+# cell per step, so its reinitialisations shrink to these; the curvature flows and caps of
+# the tests moved within rounding of the full ones (docs/regions.md).
 MIN_REINIT_ITERATIONS = 2
 MIN_EXTEND_ITERATIONS = 4
 
-__all__ = ["SPEEDS", "RegionTracker", "region_tracker", "track_region"]
+__all__ = ["SPEEDS", "RegionTracker"]
 
 
 class RegionTracker:
@@ -95,6 +92,18 @@ class RegionTracker:
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     This class stores the band as index lists over dense padded volumes (storage "lists");
     `region_tracker(..., storage=...)` builds the class that STORAGE_CLASSES names.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ax = (np.arange(40) - 19.5) * 0.1
+    >>> z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
+    >>> phi = np.sqrt(x**2 + y**2 + z**2) - 0.6
+    >>> tracker = RegionTracker(phi, (0.2 - z)[None], 0.1, speed="constant", scale=-5.0)
+    >>> tracker.advance(0.1)                     # the sphere grows at 0.5 per unit time
+    >>> phi_now, phihats = tracker.volumes()
+    >>> bool(phi_now[20, 20, 14] < phi[20, 20, 14])
+    True
     """
 
     def __init__(
@@ -140,7 +149,7 @@ class RegionTracker:
             aux = aux_at(0.0)
         # region functions constant along the surface's normals: the extension before each
         # reinitialisation keeps them so, and would otherwise move an oblique one's zero on
-        # the surface once (a plane cutting a sphere at 60 degrees: the cap grew 1.6%)
+        # the surface once (a cap cut by an oblique plane grew; docs/regions.md)
         phihat = along_normals(phi, self.h, np.asarray(phihat, np.float64))
         cells = np.concatenate([phi[None], phihat]) / self.h
         self._setup(cells, aux if aux is None else aux / (self.h if speed == "morph" else 1.0))
@@ -220,10 +229,10 @@ class RegionTracker:
         # the stepping kernels walk runs of consecutive cells (vectorised loops on CPUs).
         # The step's runs are lengthened to whole vectors (16 cells) where the row allows:
         # the extra cells lie outside the band, where band_cutoff is exactly 0, so their
-        # values stay as they are (2/3 of the time per stage measured at 256^3, runs of 20
-        # cells on average). The reinitialisation's runs are lengthened the same way: its
-        # kernels read the band's mask (_reinit_mask) and keep the values of the cells
-        # outside it, which the syncs copy unchanged (the work buffers equal cur there).
+        # values stay as they are (faster stages, docs/regions.md). The reinitialisation's
+        # runs are lengthened the same way: its kernels read the band's mask (_reinit_mask)
+        # and keep the values of the cells outside it, which the syncs copy unchanged (the
+        # work buffers equal cur there).
         self.step_runs = g.runs(self.step_band, pad=16)
         self.reinit_runs = g.runs(self.reinit_band, pad=16)
         # max |V| of each work-item of region_euler and region_heun (see stable_dt)
@@ -259,7 +268,8 @@ class RegionTracker:
         """The step band (interior cells with |Phi| < width cells) and the reinitialisation
         band (the step band dilated by reinit_ring cells, a cube), compacted on the device.
         Each launch writes every interior cell of its mask and the masks' ghost entries stay
-        0 from their allocation, so nothing is cleared (clearing a 256^3 mask cost 48 ms)."""
+        0 from their allocation, so nothing is cleared (clearing a large mask costs a sweep
+        of the whole volume)."""
         g, q = self.grid, self.runtime.queue
         dims = (np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), *g.strides(), np.int32(g.ghost))
         launch = self.runtime.items(g.ny, g.nz)
@@ -581,207 +591,3 @@ class RegionTracker:
 
 
 STORAGE_CLASSES["lists"] = RegionTracker
-
-
-def region_tracker(
-    phi: np.ndarray, phihat: np.ndarray, spacing: float, *, storage: str = "lists", **options
-) -> RegionTracker:
-    """The tracker of `storage` ("lists" or "bricks"; the bricks take brick=(BX, BY, BZ) too)
-    on these level sets, built with RegionTracker's options."""
-    if storage not in STORAGE_CLASSES:
-        raise InputError(f"storage must be one of {tuple(STORAGE_CLASSES)}, not {storage!r}")
-    return STORAGE_CLASSES[storage](phi, phihat, spacing, **options)
-
-
-def track_region(
-    phi: ArrayLike,
-    region: ArrayLike | list,
-    beta: float | str | ArrayLike | Callable = 1.0,
-    t: float = 1.0,
-    spacing: float = 1.0,
-    saves: int | Iterable[float] = 1,
-    *,
-    origin: ArrayLike = (0.0, 0.0, 0.0),
-    mesh: object = None,
-    palette: ArrayLike | None = None,
-    target: ArrayLike | None = None,
-    velocity: ArrayLike | None = None,
-    weight: float = 1.0,
-    band_width: float = 5.0,
-    reinit_every: int = 4,
-    reinit_iterations: int = 6,
-    cfl: float = 0.4,
-    max_speed: float | None = None,
-    keep_volumes: bool = False,
-    device: DeviceLike = None,
-    dtype: DTypeLike = np.float32,
-    progress: bool | None = None,
-    storage: str = "lists",
-) -> list[RegionFrame]:
-    """Track regions painted on a surface while the surface deforms (thesis section 2.2).
-
-    Parameters
-    ----------
-    phi : array_like
-        (nz, ny, nx) signed distance of the surface (world units, negative inside; other
-        level-set functions are reinitialised first).
-    region : array_like or list
-        A bool mask over the vertices of the starting mesh (`surface_mesh(phi, spacing,
-        origin)`, or of `mesh`), integer vertex labels (one region per label), an implicit
-        function Phi-hat of phi's shape (the region is where Phi-hat < 0 on the surface;
-        off the surface it is replaced by its value at the closest surface point), or a
-        list of such functions.
-    beta : float or str or array_like or callable, optional
-        Outward normal speed of the surface: a number; 'mean-curvature' (speed -weight
-        (k1 + k2)); 'gaussian' (speed -weight max(K, 0) sign(k1 + k2): folds flatten);
-        'morph' (toward `target`: -weight (target - phi)); an array of phi's shape; a
-        callable f(x, y, z) (world coordinates); or f(x, y, z, t), re-evaluated once per
-        block of `reinit_every` steps at the block's middle time (the midpoint rule).
-    t : float, optional
-        The final time.
-    spacing : float, optional
-        The grid spacing of phi (world units).
-    saves : int or iterable of float, optional
-        The number of saved intervals (frames at t * k / saves, k = 0..saves), or a
-        sequence of times in [0, t].
-    origin : array_like, optional
-        World (x, y, z) of phi[0, 0, 0].
-    mesh : trimesh.Trimesh, optional
-        Any mesh of the same surface in world coordinates (the one phi was made from, say)
-        that a vertex mask or labels in `region` refer to.
-    palette : array_like, optional
-        (L, 3) RGB in [0, 1], the colour of each region in the frames' meshes (default:
-        clpde's palette; grey where no region is).
-    target : array_like, optional
-        The signed distance volume that beta='morph' moves toward.
-    velocity : array_like, optional
-        (vx, vy, vz): translate the surface instead of moving it by beta.
-    weight : float, optional
-        The factor of the curvature and morph speeds.
-    band_width : float, optional
-        Half-width in cells of the band that is stepped.
-    reinit_every : int, optional
-        Steps per block; the level sets are reinitialised once the surface may have moved
-        that many CFL steps.
-    reinit_iterations : int, optional
-        Iterations of a reinitialisation.
-    cfl : float, optional
-        The CFL number of the steps.
-    max_speed : float, optional
-        Clamp |beta| (world units) where creases finer than the grid would set a tiny step.
-    keep_volumes : bool, optional
-        Keep the level sets Phi and Phi-hat in each frame.
-    device : str or int or Runtime, optional
-        The OpenCL device, as for `clpde.use_device`.
-    dtype : {float32, float64}, optional
-        The device's arithmetic.
-    progress : bool, optional
-        Draw a progress bar (of simulated time); by default only on a terminal.
-    storage : {'lists', 'bricks'}, optional
-        Dense padded volumes with the band as index lists, or dense bricks of the band only
-        (memory in proportion to the band; docs/regions.md).
-
-    Returns
-    -------
-    list of RegionFrame
-        One per saved time: the mesh (trimesh, per-vertex region colours), face_labels,
-        boundary points and (keep_volumes) the level sets.
-
-    Raises
-    ------
-    InputError
-        For a phi without a surface, regions or speeds that cannot be used, or a surface
-        that reaches the volume's border.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> import clpde
-    >>> ax = (np.arange(40) - 19.5) * 0.1
-    >>> z, y, x = np.meshgrid(ax, ax, ax, indexing="ij")
-    >>> phi = np.sqrt(x**2 + y**2 + z**2) - 0.6
-    >>> frames = clpde.track_region(phi, 0.2 - z, beta=0.5, t=0.2, spacing=0.1,
-    ...                             origin=(ax[0],) * 3, progress=False)
-    >>> len(frames), frames[-1].area() > frames[0].area()
-    (2, True)
-    """
-    phi = np.asarray(phi)
-    if phi.ndim != 3 or min(phi.shape) < 8:
-        raise InputError(
-            f"phi must be a 3D (nz, ny, nx) volume with at least 8 cells a side, got {phi.shape}"
-        )
-    if not np.issubdtype(phi.dtype, np.number) or not np.all(np.isfinite(phi)):
-        raise InputError("phi must hold finite real numbers")
-    phi = phi.astype(np.float64)
-    if not (phi.min() < 0 < phi.max()):
-        raise InputError("phi never changes sign: it has no surface to track regions on")
-    limit = np.sqrt(np.finfo(np.dtype(dtype)).max)  # squared gradients must not overflow
-    if np.abs(phi).max() > limit:
-        raise InputError(
-            f"phi reaches {np.abs(phi).max():.3g}, beyond what {np.dtype(dtype)} "
-            f"arithmetic squares ({limit:.3g}); phi is a distance: rescale it"
-        )
-    h = _positive("spacing", spacing)
-    t_end = float(t)
-    if not np.isfinite(t_end) or t_end < 0:
-        raise InputError(f"t must be a non-negative time, not {t!r}")
-    origin = np.asarray(origin, np.float64).reshape(3)
-    if np.ndim(saves) == 0:
-        n = int(saves)
-        if n < 1:
-            raise InputError(f"saves must be at least 1, not {saves!r}")
-        times = [t_end * k / n for k in range(n + 1)]
-    else:
-        times = sorted(float(s) for s in saves)
-        if not times or times[0] < 0 or times[-1] > t_end + 1e-12:
-            raise InputError(f"save times must lie in [0, t={t_end:g}], got {saves!r}")
-    phihat, partition = _region_functions(phi, region, h, origin, mesh)
-    nz, ny, nx = phi.shape
-    coords = (
-        origin[0] + h * np.arange(nx)[None, None, :],
-        origin[1] + h * np.arange(ny)[None, :, None],
-        origin[2] + h * np.arange(nz)[:, None, None],
-    )
-    if velocity is not None:
-        vel = np.asarray(velocity, np.float64).reshape(-1)
-        if vel.shape != (3,) or not np.all(np.isfinite(vel)):
-            raise InputError(
-                f"velocity must be three finite numbers (vx, vy, vz), got {velocity!r}"
-            )
-        speed, scale, aux, aux_at, vel = "constant", 0.0, None, None, vel / h
-    else:
-        speed, scale, aux, aux_at = _speed_setup(beta, target, float(weight), h, phi.shape, coords)
-        vel = None
-    tracker = region_tracker(
-        phi,
-        phihat,
-        h,
-        speed=speed,
-        scale=scale,
-        aux=aux,
-        velocity=vel,
-        band_width=5.0 if band_width is None else band_width,
-        reinit_every=reinit_every,
-        reinit_iterations=reinit_iterations,
-        cfl=cfl,
-        max_speed=None if max_speed is None else _positive("max_speed", max_speed) / h,
-        aux_at=aux_at,
-        device=device,
-        dtype=dtype,
-        storage=storage,
-    )
-    # the bar counts simulated time, so it prints rounded times rather than step counts
-    time_format = "{l_bar}{bar}| t = {n:.4g}/{total:.4g} [{elapsed}<{remaining}]"
-    with progress_bar(
-        progress, t_end, "track regions", leave=False, unit="time", bar_format=time_format
-    ) as bar:
-        return list(
-            tracker.iterate(
-                times,
-                origin=origin,
-                keep_volumes=keep_volumes,
-                palette=palette,
-                partition=partition,
-                bar=bar,
-            )
-        )

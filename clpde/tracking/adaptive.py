@@ -7,14 +7,9 @@ per connected component and a region term.
   The prediction only places the search; the measurement decides, and a measured shift
   that does not explain the frames clearly better than no shift at all is dropped, so an
   object that stops is not carried on and a still slice stack is not shifted.
-- `region_field`: a Chan-Vese-like region term computed near the contour. The frame's
-  features (grey levels per channel and the local standard deviation, a texture measure)
-  are summarised inside and outside the current contour by Gaussian-weighted local means
-  and variances; each pixel gets Chan and Vese's comparison of its distances to the two
-  sides' means (normalised by their spread, summed over the features), squashed to
-  [-1, 1] and weighted by
-  how well the two sides separate there (their Bhattacharyya distance). Where the inside
-  and outside look alike the term fades and the frame-to-frame discrepancy decides.
+- `region_features`: what the region term (region_term.py, on the device) compares inside
+  and outside the contour: the grey levels per channel and a local standard deviation, a
+  texture measure.
 - `noise_variance`: the frame's noise level (median absolute deviation of the diagonal
   second difference), against which kernels/tracking/adaptive.cl decides where a patch has
   contrast enough for the correlation to mean something.
@@ -50,65 +45,11 @@ def _local_std(x: np.ndarray, size: int = 5) -> np.ndarray:
 
 
 def region_features(image: np.ndarray) -> np.ndarray:
-    """(K, H, W): each channel's grey level and the local (5x5) standard deviation of their
+    """(K, H, W): each channel's grey level and the local (3x3) standard deviation of their
     mean, the texture measure that tells a smooth look-alike from a rough object."""
     img = np.asarray(image, np.float64)
     grey = img.mean(axis=0)
     return np.concatenate([img, _local_std(grey, 3)[np.newaxis]])
-
-
-def _blur_coarse(a: np.ndarray, sigma: float) -> np.ndarray:
-    """Gaussian blur of (H, W) data computed at half resolution (2x2 means, sigma / 2)
-    and brought back by pixel repetition: the local statistics are smooth on the scale of
-    sigma, and this costs an eighth of the full-resolution blur."""
-    h, w = a.shape
-    padded = np.pad(a, ((0, h % 2), (0, w % 2)), mode="edge")
-    half = 0.25 * (padded[::2, ::2] + padded[1::2, ::2] + padded[::2, 1::2] + padded[1::2, 1::2])
-    blurred = ndimage.gaussian_filter(half, sigma / 2, mode="nearest", truncate=3.0)
-    return np.repeat(np.repeat(blurred, 2, axis=0), 2, axis=1)[:h, :w]
-
-
-def region_field(
-    image: np.ndarray,
-    mask: np.ndarray,
-    sigma: float = 6.0,
-    separation: float = 0.5,
-    noise: float | None = None,
-    pool: float = 1.5,
-) -> np.ndarray:
-    """The region speed in [-1, 1] per pixel (positive: the pixel looks like the outside,
-    the contour should shrink there), from (C, H, W) features and the start mask.
-
-    Local statistics: Gaussian windows of `sigma` px over the inside and the outside of
-    `mask` give each feature's local means and variances on either side. Per feature, as
-    Chan and Vese's term, L = ((f - mean_in)^2 - (f - mean_out)^2) / (var_in + var_out),
-    summed over the features and pooled over `pool` px; the speed is w tanh(L / 2), with
-    w = B / (B + separation), B the summed Bhattacharyya distance of the two sides'
-    Gaussians, times a factor that fades where one side has (almost) no pixels."""
-    feats = region_features(image)
-    m = np.asarray(mask, np.float64)
-    out = 1.0 - m
-    noise = noise_variance(image) if noise is None else noise
-
-    def blur(a):
-        return _blur_coarse(a, sigma)
-
-    a_in, a_out = blur(m), blur(out)
-    cover = np.clip(np.minimum(a_in, a_out) / 0.05, 0, 1)
-    a_in, a_out = np.maximum(a_in, 1e-6), np.maximum(a_out, 1e-6)
-    llr = np.zeros(m.shape)
-    bhat = np.zeros(m.shape)
-    for k, f in enumerate(feats):
-        floor = (0.25 * noise if k == len(feats) - 1 else noise) + 1e-4
-        mi, mo = blur(m * f) / a_in, blur(out * f) / a_out
-        vi = np.maximum(blur(m * f * f) / a_in - mi**2, 0) + floor
-        vo = np.maximum(blur(out * f * f) / a_out - mo**2, 0) + floor
-        llr += ((f - mi) ** 2 - (f - mo) ** 2) / (vi + vo)
-        bhat += 0.25 * (mi - mo) ** 2 / (vi + vo) + 0.5 * np.log((vi + vo) / (2 * np.sqrt(vi * vo)))
-    if pool > 0:  # pool the evidence of neighbouring pixels (they share the side)
-        llr = ndimage.gaussian_filter(llr, pool, mode="nearest")
-    weight = cover * bhat / (bhat + separation)
-    return weight * np.tanh(0.5 * np.clip(llr, -20, 20))
 
 
 class ComponentMotion:

@@ -20,50 +20,37 @@ model (motion='velocity' or 'kalman', clpde.tracking.features.MotionFilter) shif
 set and F1 by the predicted displacement before each frame's evolution; shape_weight pulls
 the contour towards that predicted start where the features say nothing; and each frame
 reports its final discrepancy in the band (TrackState.discrepancy), a confidence measure.
+
+This module holds the tracker and `track`; the steps live beside it: inputs.py checks the
+frames and masks, options.py the options, preprocessing.py prepares the frames and their
+features, prediction.py moves each frame's start by the motion model, morph.py runs the
+coupled system on one frame pair and region_term.py keeps the adaptive discrepancy's
+region term.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pyopencl.array as cla
 from numpy.typing import ArrayLike, DTypeLike
+from scipy import ndimage
 
 from .._progress import State, progress_bar
 from ..errors import InputError
-from ..fields import Field, PingPong, check_fits
-from ..imagedata import value_range
-from ..planar.flows import diffuse
+from ..fields import Field, check_fits
 from ..runtime import DeviceLike, get_runtime
-from .adaptive import ComponentMotion, noise_variance, region_field
+from .adaptive import noise_variance
 from .confidence import track_confidence
-from .features import MotionFilter, local_contrast, shift_image
-from .levelset import GHOST, MARGIN, STORAGES, LevelSet, signed_distance
-
-# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("tracking/levelset.cl", "tracking/features.cl", "tracking/adaptive.cl")
-
-FEATURES = ("intensity", "edges", "contrast")
-DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2, "adaptive": 3}
-MOTIONS = (None, "velocity", "kalman", "components")
-CFL = 0.5  # largest distance in pixels a level set moves in one step
-# Rebuild when the front comes this close to the band's outer ring. Between two checks
-# (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
-# the band unnoticed while NEAR_EDGE >= check_every * CFL.
-NEAR_EDGE = 1.0
-# The adaptive discrepancy's weights, chosen on the calibration half of
-# benchmarks/track_corpus.py (benchmarks/tracking_generalise.py --calibrate).
-REGION_WEIGHT = 1.0  # the region term's largest speed, px per unit time
-CURVATURE = 0.3  # the curvature term's weight
-ADAPTIVE_ITERATIONS = 20  # the cap of iterations per frame with the adaptive discrepancy
-REGION_SIGMA = 6.0  # px: the windows of the region term's local statistics
-REGION_SEPARATION = 0.5  # Bhattacharyya distance at which the region term has half weight
-DISCREPANCY_WEIGHT = 1.0  # the frame-to-frame discrepancy's share of the contour's speed
-CONTRAST_NOISE = 4.0  # the correlation takes over where a window's variance passes this x noise
-REGION_REFRESH = 10  # iterations between updates of the region term's statistics
+from .inputs import check_frames, check_mask, scaled_frames, user_features
+from .levelset import GHOST, MARGIN, LevelSet, signed_distance
+from .morph import morph_pair
+from .options import TrackOptions
+from .prediction import MotionPrediction
+from .preprocessing import feature_field, prepare_frame
+from .region_term import RegionTerm
 
 
 @dataclass
@@ -90,92 +77,6 @@ class TrackState(State):
     def time(self) -> None:
         """None: frames have indices, not times."""
         return None
-
-
-def _check_frames(frames) -> list[np.ndarray]:
-    if isinstance(frames, np.ndarray):
-        if frames.ndim not in (3, 4) or (frames.ndim == 4 and frames.shape[-1] not in (3, 4)):
-            raise InputError(
-                f"frames must be a (T, H, W) grey or (T, H, W, 3) colour array, or a sequence "
-                f"of frames, got an array of shape {frames.shape}"
-            )
-        items = list(frames)
-    else:
-        try:
-            items = [np.asarray(f) for f in frames]
-        except TypeError:
-            raise InputError(
-                "frames must be a (T, H, W) array or a sequence of 2-D arrays"
-            ) from None
-    if not items:
-        raise InputError("frames is empty: give at least one frame")
-    for k, f in enumerate(items):
-        if not (f.ndim == 2 or (f.ndim == 3 and f.shape[-1] in (3, 4))):
-            raise InputError(
-                f"frame {k} has shape {f.shape}; every frame must be 2-D (grey) or (H, W, 3) colour"
-            )
-        if f.shape != items[0].shape:
-            raise InputError(
-                f"frame {k} is {f.shape[1]}x{f.shape[0]} but frame 0 is "
-                f"{items[0].shape[1]}x{items[0].shape[0]}; all frames must have one size"
-                + ("" if f.shape[:2] != items[0].shape[:2] else " and kind (grey or colour)")
-            )
-        if f.dtype == bool or not (
-            np.issubdtype(f.dtype, np.integer) or np.issubdtype(f.dtype, np.floating)
-        ):
-            raise InputError(f"frame {k} has dtype {f.dtype}; expected integers or floats")
-        if np.issubdtype(f.dtype, np.floating) and not np.isfinite(f).all():
-            raise InputError(f"frame {k} contains NaN or infinite values")
-    return items
-
-
-def _check_mask(mask, shape) -> np.ndarray:
-    mask = np.asarray(mask)
-    if mask.ndim == 3 and mask.shape[-1] in (3, 4):  # a colour mask image: any nonzero colour
-        mask = mask[..., :3].any(axis=-1)
-    if mask.shape != shape:
-        raise InputError(
-            f"the first mask is {mask.shape[-1]}x{mask.shape[0]} (shape {mask.shape}) but the "
-            f"frames are {shape[1]}x{shape[0]}; draw the mask on the first frame at its size"
-        )
-    mask = mask > 0 if mask.dtype != bool else mask
-    if not mask.any():
-        raise InputError("the first mask is empty: mark the object to follow in the first frame")
-    if mask.all():
-        raise InputError("the first mask covers the whole frame: leave the background unmarked")
-    return mask
-
-
-def _user_features(features, frames: list[np.ndarray]) -> np.ndarray:
-    """The user's feature maps as a (T, C, H, W) float64 array scaled to [0, 1] over the
-    whole sequence (one scale for all frames keeps F2 - F1 meaningful)."""
-    shape = frames[0].shape[:2]
-    if callable(features):
-        try:
-            maps = [np.asarray(features(f), np.float64) for f in frames]
-        except InputError:
-            raise
-        except Exception as exc:
-            raise InputError(f"the features callable failed on a frame: {exc}") from exc
-    else:
-        maps = features
-    try:
-        stack = np.stack([np.asarray(m, np.float64) for m in maps])
-    except ValueError:
-        raise InputError("the feature maps must all have one shape") from None
-    if len(stack) != len(frames):
-        raise InputError(f"{len(stack)} feature maps for {len(frames)} frames: give one per frame")
-    if stack.shape[1:3] == shape:
-        stack = stack[:, np.newaxis] if stack.ndim == 3 else np.moveaxis(stack, -1, 1)
-    if stack.ndim != 4 or stack.shape[2:] != shape:
-        raise InputError(
-            f"feature maps of shape {stack.shape[1:]} do not fit frames of {shape[1]}x{shape[0]}: "
-            "give (H, W) or (H, W, C) per frame"
-        )
-    if not np.isfinite(stack).all():
-        raise InputError("the feature maps contain NaN or infinite values")
-    lo, hi = float(stack.min()), float(stack.max())
-    return (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
 
 
 class MorphingTracker:
@@ -300,81 +201,42 @@ class MorphingTracker:
         device: DeviceLike = None,
         dtype: DTypeLike | None = None,
     ):
-        self.frames = _check_frames(frames)
-        self.first_mask = _check_mask(first_mask, self.frames[0].shape[:2])
+        self.frames = check_frames(frames)
+        self.first_mask = check_mask(first_mask, self.frames[0].shape[:2])
         self._user = None
         if callable(features) or not isinstance(features, str):
-            self._user = _user_features(features, self.frames)
+            self._user = user_features(features, self.frames)
             features = "user"
-        elif features not in FEATURES:
-            raise InputError(
-                f"features must be one of {', '.join(FEATURES)}, an array of maps "
-                f"per frame or a callable, not {features!r}"
-            )
-        if discrepancy not in DISCREPANCIES:
-            raise InputError(
-                f"discrepancy must be one of {', '.join(DISCREPANCIES)}, not {discrepancy!r}"
-            )
-        if motion not in MOTIONS:
-            raise InputError(
-                f"motion must be None, 'velocity', 'kalman' or 'components', not {motion!r}"
-            )
-        if not 0 < dt <= 0.5:
-            raise InputError(f"dt={dt} is outside (0, 0.5], the stable range of the upwind scheme")
-        if max_iterations is None:
-            max_iterations = ADAPTIVE_ITERATIONS if discrepancy == "adaptive" else 40
-        if max_iterations < 1 or check_every < 1:
-            raise InputError("max_iterations and check_every must be at least 1")
-        if check_every * CFL > NEAR_EDGE:
-            raise InputError(
-                f"check_every={check_every} lets the front move {check_every * CFL:g} pixels "
-                f"between checks, more than the band's {NEAR_EDGE:g}-pixel safety margin; "
-                f"use check_every <= {int(NEAR_EDGE / CFL)}"
-            )
-        if not 1 <= int(ncc_radius) <= 4:
-            raise InputError(f"ncc_radius must be 1 to 4 pixels, not {ncc_radius}")
-        if not 1 <= int(contrast_radius) <= 16:
-            raise InputError(f"contrast_radius must be 1 to 16 pixels, not {contrast_radius}")
-        if shape_weight < 0 or huber_delta <= 0 or search_radius < 0 or contrast_eps <= 0:
-            raise InputError(
-                "shape_weight and search_radius must be >= 0, huber_delta and contrast_eps > 0"
-            )
-        adaptive = discrepancy == "adaptive"
-        region_weight = (
-            (REGION_WEIGHT if adaptive else 0.0) if region_weight is None else float(region_weight)
+        self.options = TrackOptions(
+            features=features,
+            colour=colour,
+            discrepancy=discrepancy,
+            motion=motion,
+            shape_weight=shape_weight,
+            equalize=equalize,
+            smooth=smooth,
+            smooth_steps=smooth_steps,
+            smooth_kappa=smooth_kappa,
+            band_width=band_width,
+            max_iterations=max_iterations,
+            tol=tol,
+            check_every=check_every,
+            dt=dt,
+            max_dt=max_dt,
+            reinit_iterations=reinit_iterations,
+            min_size=min_size,
+            contrast_radius=contrast_radius,
+            contrast_eps=contrast_eps,
+            ncc_radius=ncc_radius,
+            huber_delta=huber_delta,
+            search_radius=search_radius,
+            storage=storage,
+            region_weight=region_weight,
+            curvature=curvature,
         )
-        curvature = (CURVATURE if adaptive else 0.0) if curvature is None else float(curvature)
-        if region_weight < 0 or curvature < 0:
-            raise InputError("region_weight and curvature must be at least 0")
-        if not adaptive and (region_weight or curvature):
-            raise InputError(
-                "region_weight and curvature work with discrepancy='adaptive' "
-                "only: drop them or use the adaptive discrepancy"
-            )
-        self.region_weight, self.curvature = region_weight, curvature
-        self.features, self.discrepancy, self.motion = features, discrepancy, motion
-        self.shape_weight = float(shape_weight)
-        self.contrast_radius, self.ncc_radius = int(contrast_radius), int(ncc_radius)
-        self.contrast_eps = float(contrast_eps)
-        self.huber_delta, self.search_radius = float(huber_delta), int(search_radius)
-        if equalize is True:
-            equalize = "match"
-        if equalize not in (False, None, "match", "global"):
-            raise InputError(f"equalize must be 'match', 'global' or False, not {equalize!r}")
-        self.equalize, self.smooth = equalize or False, bool(smooth)
-        self.smooth_steps, self.smooth_kappa = int(smooth_steps), float(smooth_kappa)
-        self.band_width = float(band_width)
-        self.max_iterations, self.tol = int(max_iterations), float(tol)
-        self.check_every, self.dt, self.min_size = int(check_every), float(dt), int(min_size)
-        self.max_dt = max(float(max_dt), self.dt)
-        self.reinit_iterations = int(reinit_iterations)
-        if storage not in STORAGES:
-            raise InputError(f"storage must be one of {', '.join(STORAGES)}, not {storage!r}")
-        self.storage = storage
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(dtype or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
-
         check_fits(
             self.runtime,
             (1,) + self.frames[0].shape,
@@ -383,316 +245,70 @@ class MorphingTracker:
             ghost=GHOST + MARGIN,
             dtype=self.dtype,
         )
-        stack = np.stack([f.astype(np.float64) for f in self.frames])
-        if stack.ndim == 4:  # colour: all channels, or grey (Rec. 601 luma)
-            stack = (
-                np.moveaxis(stack[..., :3], -1, 1)
-                if colour
-                else (stack[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis]
-            )
-        else:
-            stack = stack[:, np.newaxis]
-        lo, hi = float(stack.min()), float(stack.max())
-        value_range(lo, hi, "frames")  # refuses a span that overflows float64
-        self._scaled = (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
+        self._scaled = scaled_frames(self.frames, colour)
         self.channels = (self._user if self._user is not None else self._scaled).shape[1]
 
     def __len__(self) -> int:
         return len(self.frames)
 
-    # ---- pre-processing and features ---------------------------------------------------
     def prepared(self, index: int) -> np.ndarray:
         """Frame `index` after pre-processing (histogram equalisation, anisotropic
         smoothing), in [0, 1], as (C, H, W); the user's feature maps as given (scaled)."""
         if self._user is not None:
             return self._user[index]
-        img = self._scaled[index]
-        if self.equalize == "match" and index > 0:
-            # Equalise the grey levels across the sequence: each frame gets the first
-            # frame's histogram, as beta = F2 - F1 compares grey values directly.
-            img = np.stack(
-                [match_histogram(c, r) for c, r in zip(img, self._scaled[0], strict=False)]
-            )
-        elif self.equalize == "global":
-            from skimage.exposure import equalize_hist
+        return prepare_frame(self._scaled, index, self.options, self.runtime)
 
-            img = np.stack([equalize_hist(c) for c in img])
-        if self.smooth and self.smooth_steps > 0:
-            # The rational edge-stopping function: as anisotropic as the exponential one
-            # and about 3x faster on PoCL, where exp() does not vectorise.
-            img = np.stack(
-                [
-                    diffuse(
-                        c,
-                        "perona-malik",
-                        steps=self.smooth_steps,
-                        kappa=self.smooth_kappa,
-                        edge="rational",
-                        device=self.runtime,
-                        progress=False,
-                    )
-                    for c in img
-                ]
-            )
-        return np.asarray(img, np.float64)
-
-    def _feature_field(self, image: np.ndarray, ls: LevelSet) -> Field:
-        grid = replace(ls.grid, nc=self.channels)
-        f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
-        if self.features in ("edges", "contrast"):
-            out = Field.empty(grid)
-            if self.features == "edges":
-                grid.launch(
-                    grid.kernel("tracking/levelset.cl", "gradient_magnitude"),
-                    f.data.data,
-                    out.data.data,
-                )
-            else:
-                # Scaled by 1/4: normalised values of about +-2 become F2 - F1 of the
-                # order of the [0, 1] grey levels, for which tol and dt are set.
-                grid.launch(
-                    grid.kernel("tracking/features.cl", "local_contrast"),
-                    f.data.data,
-                    out.data.data,
-                    np.int32(self.contrast_radius),
-                    grid.scalar(self.contrast_eps**2),
-                    grid.scalar(0.25),
-                )
-            out.fill_ghosts()
-            f = out
-        return f
-
-    def _match_features(self, image: np.ndarray) -> np.ndarray:
-        """(C, H, W) local contrast normalisation of a prepared frame, for matching."""
-
-        return local_contrast(image, self.contrast_radius)
-
-    # ---- the morphing of one frame pair ------------------------------------------------
-    def _morph(
-        self,
-        ls: LevelSet,
-        f1: Field,
-        f2: Field,
-        prior: Field,
-        discrepancy=None,
-        region: Field | None = None,
-        noise2: float = 0.0,
-        refresh=None,
-    ):
-        """Run the coupled system on one frame pair; returns (iterations, converged,
-        final mean |beta| in the band).
-
-        The time step adapts at each check to the largest stable one: the level sets move
-        at most CFL pixels per step (dt (|beta| + lam w) <= CFL), F1's relaxation towards
-        F2 does not overshoot (dt |grad F1| <= 1) nor does u's towards the prior
-        (dt lam <= 1/2). It restarts from `dt` whenever the band changes.
-        """
-        g = ls.grid
-        q = self.runtime.queue
-        discrepancy = discrepancy or self.discrepancy
-        extra = ()
-        if discrepancy == "adaptive":
-            kernel = ls.band_kernel(
-                "tracking/adaptive.cl",
-                "morph_adaptive" if ls.brick is None else "morph_adaptive_bricks",
-                NCH=self.channels,
-                WIN=self.ncc_radius,
-            )
-            extra = (
-                (region if region is not None else ls.u.cur).data.data,
-                g.scalar(CONTRAST_NOISE * noise2 + 1e-6),
-                g.scalar(self.curvature),
-                g.scalar(DISCREPANCY_WEIGHT),
-            )
-        else:
-            kernel = ls.band_kernel(
-                "tracking/features.cl",
-                morph_kernel_name(ls, discrepancy),
-                NCH=self.channels,
-                DISC=DISCREPANCIES[discrepancy],
-                WIN=self.ncc_radius,
-            )
-        pair = PingPong(f1)
-        lam = self.shape_weight
-        delta = self.huber_delta if discrepancy == "huber" else 0.02
-        consts = (
-            g.scalar(0.02**2),
-            g.scalar(1e-3**2),
-            g.scalar(NEAR_EDGE),
-            g.scalar(lam),
-            g.scalar(delta),
-            np.int32(g.sx),
-            np.int32(g.plane),
-        )
-        dt_cap = self.max_dt if lam == 0 else min(self.max_dt, 0.5 / lam)
-        if discrepancy == "adaptive" and self.curvature > 0:
-            dt_cap = min(dt_cap, 0.2 / self.curvature)  # the explicit curvature term's limit
-        first_dt = min(self.dt, dt_cap)
-        stats = None
-        dt = first_dt
-        converged = False
-        iterations = 0
-        residual = 0.0
-        while iterations < self.max_iterations:
-            if ls.band.n == 0:  # the contour vanished from the frame
-                converged = True
-                break
-            if refresh is not None and iterations and iterations % REGION_REFRESH == 0:
-                # The region term's statistics follow the contour (as Chan-Vese's do).
-                region = refresh()
-                extra = (region.data.data,) + extra[1:]
-            if stats is None:
-                parts = ls.band_parts()
-                stats = cla.zeros(q, 5 * parts + 1, g.dtype)
-            ls.launch_band(
-                kernel,
-                ls.band,
-                ls.u.cur.data.data,
-                pair.cur.data.data,
-                f2.data.data,
-                ls.band_mask.data,
-                prior.data.data,
-                ls.u.nxt.data.data,
-                pair.nxt.data.data,
-                stats.data,
-                g.scalar(dt),
-                *consts,
-                *extra,
-            )
-            ls.u.swap()
-            pair.swap()
-            iterations += 1
-            if iterations % self.check_every == 0 or iterations == self.max_iterations:
-                # One small read every few steps: speed, stability maxima and edge flag.
-                values = stats.get()
-                fastest, beta_max, grad_max = (
-                    values[k * parts : (k + 1) * parts].max() for k in range(3)
-                )
-                residual = float(
-                    values[3 * parts : 4 * parts].sum()
-                    / max(values[4 * parts : 5 * parts].sum(), 1)
-                )
-                if fastest < self.tol:
-                    converged = True
-                    break
-                if values[5 * parts]:
-                    ls.rebuild(self.reinit_iterations)
-                    pair.nxt.assign(pair.cur)  # the band moved: both copies agree outside it
-                    stats = None
-                    dt = first_dt
-                else:
-                    speed = beta_max + lam * self.band_width
-                    dt = float(min(dt_cap, CFL / max(speed, 1e-6), 1.0 / max(grad_max, 1e-6)))
-        return iterations, converged, residual
-
-    # ---- iteration ---------------------------------------------------------------------
     def iterate(self) -> Iterator[TrackState]:
         """Track frame after frame, yielding each one's TrackState (frame 0's first)."""
-
+        options = self.options
         mask = self.first_mask
         u = signed_distance(mask)
         yield TrackState(0, mask.copy(), u.astype(np.float32))
         if len(self.frames) == 1:
             return
-        ls = LevelSet(self.runtime, u, self.band_width, self.dtype, storage=self.storage)
+        ls = LevelSet(self.runtime, u, options.band_width, self.dtype, storage=options.storage)
         # The shape pull's target; without it the kernel multiplies it by 0, so any finite
         # buffer of the grid will do.
-        prior = Field.empty(ls.grid) if self.shape_weight else ls.u.cur
+        prior = Field.empty(ls.grid) if options.shape_weight else ls.u.cur
+        prediction = MotionPrediction(options) if options.motion else None
+        adaptive = options.discrepancy == "adaptive"
+        region = RegionTerm(ls, options.region_weight) if adaptive else None
         prepared_prev = self.prepared(0)
-        pieces_motion = None
-        if self.motion == "components":
-            pieces_motion, motion = ComponentMotion(self.search_radius), None
-        else:
-            motion = MotionFilter(self.motion, self.search_radius) if self.motion else None
-        adaptive = self.discrepancy == "adaptive"
-        region = None
-        feats_prev = None
         fresh = True  # u is a signed distance with a band around its zero set
         for t in range(1, len(self.frames)):
             prepared = self.prepared(t)
-            f2 = self._feature_field(prepared, ls)
+            f2 = feature_field(prepared, ls, options)
+            # the frame's noise, for the adaptive discrepancy and the pieces' matching
+            noise2 = noise_variance(prepared) if adaptive or options.motion == "components" else 0.0
             shift = (0.0, 0.0)
-            if motion is not None:
-                # Matched on contrast-normalised frames, whatever the morphing compares:
-                # a shadow or a flicker does not move the measured displacement.
-                feats = self._match_features(prepared)
-                if feats_prev is None:
-                    feats_prev = self._match_features(prepared_prev)
-                shift = motion.predict(feats_prev, feats, mask)
-                feats_prev = feats
-                if max(abs(shift[0]), abs(shift[1])) < 0.25:
-                    # Below the matching's precision; shifting would only blur F1.
-                    shift = (0.0, 0.0)
-                else:
-                    # Start from the predicted place: u and F1 move together, so the
-                    # morphing only has to explain what the displacement does not.
-                    u = shift_image(ls.values(), shift)
-                    ls.assign(u)
-                    prepared_prev = np.stack([shift_image(c, shift) for c in prepared_prev])
-                    fresh = False
-            if pieces_motion is not None:
-                # Contrast-normalised as for the Kalman model, with eps raised to twice the
-                # noise so that a flat, noisy patch is not blown up into texture.
-
-                eps = max(self.contrast_eps, 2 * float(np.sqrt(noise_variance(prepared))))
-                feats = local_contrast(prepared, self.contrast_radius, eps)
-                if feats_prev is None:
-                    feats_prev = local_contrast(prepared_prev, self.contrast_radius, eps)
-                pieces = pieces_motion.predict(feats_prev, feats, mask)
-                feats_prev = feats
-                u_moved, prev_moved, moved = ComponentMotion.apply(
-                    ls.values(), prepared_prev, pieces, self.band_width
+            if prediction is not None:
+                prepared_prev, shift, moved = prediction.move(
+                    ls, prepared_prev, prepared, mask, noise2
                 )
-                if moved and (u_moved < 0).any() and not (u_moved < 0).all():
-                    ls.assign(u_moved)
-                    prepared_prev = prev_moved
-                    fresh = False
-                    big = max(pieces, key=lambda p: p[0].sum())
-                    shift = big[1]
-            f1 = self._feature_field(prepared_prev, ls)
-            noise2, refresh = 0.0, None
-            if adaptive:
-                features = prepared if self._user is None else self._user[t]
-                noise2 = noise_variance(features)
-
-                region = region if region is not None else Field.empty(ls.grid)
-
-                def refresh(features=features, noise2=noise2, region=region):
-                    speed = np.zeros(features.shape[-2:])
-                    if self.region_weight > 0:
-                        speed = self.region_weight * region_field(
-                            features, ls.values() < 0, REGION_SIGMA, REGION_SEPARATION, noise2
-                        )
-                    # Into the same buffer each time; band cells never read its ghosts.
-                    padded = np.zeros(ls.grid.padded_shape, ls.grid.dtype)
-                    ls.grid.interior(padded)[...] = ls.pad(speed)[np.newaxis]
-                    region.data.set(padded)
-                    return region
-
-                region = refresh()
-                if self.region_weight == 0:
-                    refresh = None
+                fresh = fresh and not moved
+            f1 = feature_field(prepared_prev, ls, options)
+            if region is not None:
+                region.start(ls, prepared, noise2)
             if not fresh:  # a frame without rebuilds may have bent u away from a distance
-                ls.rebuild(self.reinit_iterations)
-            if self.shape_weight:
+                ls.rebuild(options.reinit_iterations)
+            if options.shape_weight:
                 prior.assign(ls.u.cur)
             rebuilds0 = ls.rebuilds
-            iterations, converged, residual = self._morph(
-                ls, f1, f2, prior, region=region, noise2=noise2, refresh=refresh
+            iterations, converged, residual = morph_pair(
+                ls, f1, f2, prior, options, self.channels, region, noise2
             )
             fresh = ls.rebuilds > rebuilds0
             u = ls.values()
             new_mask = u < 0
-
-            if self.min_size > 0:
+            if options.min_size > 0:
                 cleaned = self._clean(new_mask)
                 if (cleaned != new_mask).any() and cleaned.any() and not cleaned.all():
                     new_mask = cleaned
                     u = signed_distance(new_mask)
                     ls.assign(u)
                     fresh = True
-            if motion is not None:
-                motion.observe(mask, new_mask)
+            if prediction is not None:
+                prediction.observe(mask, new_mask)
             mask = new_mask
             yield TrackState(
                 t,
@@ -745,43 +361,11 @@ class MorphingTracker:
 
     def _clean(self, mask: np.ndarray) -> np.ndarray:
         """Post-processing: drop components and fill holes smaller than min_size pixels."""
-        return _drop_small(~_drop_small(~mask, self.min_size), self.min_size)
-
-
-def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
-    """The morphing step's kernel for the band's storage: with bricks walked by one
-    work-item, the NCC slides its window sums over each brick (morph_track_tiled: 1.0-1.45x
-    the cell-by-cell sums, measured in docs/tracking.md; equal to rounding)."""
-    if ls.brick is None:
-        return "morph_track"
-    if discrepancy == "ncc" and not ls.group_per_brick:
-        return "morph_track_tiled"
-    return "morph_track_bricks"
-
-
-def match_histogram(image: np.ndarray, reference: np.ndarray, levels: int = 4096) -> np.ndarray:
-    """Histogram specification of data in [0, 1]: the grey-level map that gives `image` the
-    grey-level distribution of `reference`, on `levels` quantisation levels (equal values
-    stay equal)."""
-
-    def quantise(a):
-        return np.minimum((np.asarray(a) * levels).astype(np.int64), levels - 1)
-
-    q = quantise(image)
-    src = np.bincount(q.ravel(), minlength=levels).astype(np.float64)
-    ref = np.bincount(quantise(reference).ravel(), minlength=levels).astype(np.float64)
-    src_cdf = (np.cumsum(src) - 0.5 * src) / src.sum()  # each level at its mid-rank
-    ref_cdf = (np.cumsum(ref) - 0.5 * ref) / ref.sum()
-    present = ref > 0
-    centres = (np.arange(levels) + 0.5) / levels
-    mapping = np.interp(src_cdf, ref_cdf[present], centres[present])
-    return mapping[q]
+        return _drop_small(~_drop_small(~mask, self.options.min_size), self.options.min_size)
 
 
 def _drop_small(mask: np.ndarray, min_size: int) -> np.ndarray:
     """The mask without its 8-connected components of fewer than min_size pixels."""
-    from scipy import ndimage
-
     labels, _ = ndimage.label(mask, structure=np.ones((3, 3)))
     sizes = np.bincount(labels.ravel())
     keep = sizes >= min_size

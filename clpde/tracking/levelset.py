@@ -24,6 +24,11 @@ KERNEL_FILES = ("tracking/levelset.cl",)
 GHOST = 2
 MARGIN = 2  # frozen cells around the caller's grid (see LevelSet)
 REACH = 3  # a rebuild reinitialises the band dilated by this many cells (<= MARGIN + GHOST - 1)
+CFL = 0.5  # largest distance in pixels a level set moves in one step
+# Rebuild when the front comes this close to the band's outer ring. Between two checks
+# (check_every steps) the front moves at most check_every * CFL pixels, so it cannot leave
+# the band unnoticed while NEAR_EDGE >= check_every * CFL.
+NEAR_EDGE = 1.0
 REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
 # How the band's work is laid out (docs/tracking.md, "2D bricks, measured"): a list of
 # cells, or bricks of BX x BY cells of the frame (kernels/bricks/bricks2d.h).

@@ -221,7 +221,7 @@ __kernel void band_max_abs(__global const REAL* restrict v, __global REAL* restr
 
 // Heun's (TVD Runge-Kutta 2) last stage, every channel: out = (u + stage2) / 2, where
 // stage2 is two Euler steps from u. Plain Euler with the slope-limited differences slowly
-// sharpens convex level sets (a translated sphere grew 1% in 10 steps); Heun does not.
+// sharpens convex level sets (a translated sphere grew; docs/regions.md); Heun does not.
 __kernel void heun_average(__global const REAL* restrict u, __global const REAL* restrict stage2,
                            __global REAL* restrict out, RUN_ARGS)
 {
@@ -280,10 +280,10 @@ __kernel void dilate_mask(__global const uchar* restrict src, __global uchar* re
 // passes lo = 0.8, hi = 1.5 cells: the cells that fix Phi-hat on the surface are kept).
 // Cells that enter the band as the surface moves hold stale Phi-hat values (from the start,
 // or from when they last left the band); the reinitialisation keeps every sign, so a stale
-// zero would stay and meet the surface when it arrives (an expanding sphere's cap gained
-// 0.7% that way). Extension replaces them by values carried out from the surface, and keeps
-// Phi-hat meeting the surface at right angles (a tilted Phi-hat, bent by the band's faded
-// edges, let a cap's boundary drift 0.1 cell per cell the surface moved).
+// zero would stay and meet the surface when it arrives (an expanding sphere's cap grew that
+// way). Extension replaces them by values carried out from the surface, and keeps Phi-hat
+// meeting the surface at right angles (a tilted Phi-hat, bent by the band's faded edges,
+// let a cap's boundary drift with the surface's motion; docs/regions.md).
 // Cells where `inband` is 0 (the runs' whole-vector padding) keep their values.
 __kernel void extend_outer(__global const REAL* restrict ls,
                            __global const uchar* restrict inband, __global REAL* restrict out,

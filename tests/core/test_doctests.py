@@ -27,6 +27,7 @@ MODULES = [
     "clpde.tracking.contours",
     "clpde.scale.batch",
     "clpde.regions.tracker",
+    "clpde.regions.api",
     "clpde.surface.render",
     "clpde.tracking.confidence",
     "clpde.film.stream",

@@ -9,9 +9,10 @@ from reference import regions as ref
 from scipy.ndimage import binary_dilation
 
 from clpde.errors import InputError
+from clpde.regions.api import region_tracker, track_region
 from clpde.regions.bricks import BIT_REINIT, BIT_STEP
 from clpde.regions.frames import make_frame
-from clpde.regions.tracker import RegionTracker, region_tracker, track_region
+from clpde.regions.tracker import RegionTracker
 
 N = 32  # grid cells a side of the kernels' tests
 

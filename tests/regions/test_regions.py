@@ -10,8 +10,8 @@ import clpde
 from clpde.errors import InputError
 from clpde.fields import compact
 from clpde.grid3d import Grid3D
+from clpde.regions.api import track_region
 from clpde.regions.mesh import along_normals, split_regions, surface_mesh
-from clpde.regions.tracker import track_region
 
 # ---- kernels vs numpy references ----------------------------------------------------------
 

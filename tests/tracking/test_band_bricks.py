@@ -16,8 +16,9 @@ from reference import levelset as ref
 
 from clpde.fields import Field, PingPong
 from clpde.runtime import Runtime
-from clpde.tracking.contours import MorphingTracker, morph_kernel_name
+from clpde.tracking.contours import MorphingTracker
 from clpde.tracking.levelset import LevelSet, signed_distance
+from clpde.tracking.morph import morph_kernel_name
 
 BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True), ("bricks16x4", True)]
 

@@ -185,7 +185,7 @@ def test_bad_inputs_get_clear_errors():
 
 
 def test_histogram_matching_gives_the_reference_distribution(rng):
-    from clpde.tracking.contours import match_histogram
+    from clpde.tracking.preprocessing import match_histogram
 
     reference = rng.beta(2, 5, (64, 64))
     image = np.sqrt(rng.random((64, 64)))  # another distribution, another order

@@ -1,5 +1,5 @@
 """The adaptive default of clpde.track: kernels/tracking/adaptive.cl against its numpy
-reference, the motion per component, the region term, the default on stop-and-go and split
+reference, the motion per component, the default on stop-and-go and split
 sequences, and the confidence per frame."""
 
 import numpy as np
@@ -10,7 +10,7 @@ from reference import track_adaptive as aref
 from scipy import ndimage
 
 from clpde.fields import Field, Grid, compact
-from clpde.tracking.adaptive import ComponentMotion, noise_variance, region_field
+from clpde.tracking.adaptive import ComponentMotion, noise_variance
 from clpde.tracking.confidence import LOW_CONFIDENCE, track_confidence
 from clpde.tracking.contours import MorphingTracker, track
 
@@ -121,18 +121,6 @@ def test_noise_variance_measures_white_noise(rng):
     smooth = np.sin(x / 9.0) + np.cos(y / 7.0)
     est = noise_variance(smooth + rng.normal(0, 0.1, smooth.shape))
     assert 0.8 * 0.01 < est < 1.2 * 0.01
-
-
-def test_region_field_points_the_contour_to_the_object(rng):
-    y, x = np.mgrid[:60, :60]
-    obj = np.hypot(y - 30, x - 30) < 12
-    img = (0.3 + 0.3 * obj + rng.normal(0, 0.05, obj.shape))[np.newaxis]
-    start = np.hypot(y - 30, x - 32) < 12  # 2 px off
-    speed = region_field(img, start)
-    ring = np.abs(np.hypot(y - 30, x - 30) - 12) < 3
-    truth = np.where(obj, -1, 1)  # inside: grow (negative), outside: shrink
-    assert (np.sign(speed) == truth)[ring].mean() > 0.85
-    assert np.abs(speed).max() <= 1
 
 
 def _textured_disc(positions, n=64, seed=0):
