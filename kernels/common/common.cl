@@ -95,7 +95,8 @@ inline void mirror_ghosts(__global REAL* v, const int row0, const int x0, const 
 #define INLINE inline __attribute__((always_inline))
 
 // PoCL compiles OpenCL's sqrt/rsqrt to library calls that its loop vectoriser cannot
-// widen (about 7x slower here); the compiler builtin becomes the vector instruction.
+// widen (docs/planar.md has the measured cost); the compiler builtin becomes the vector
+// instruction.
 // The host defines CLPDE_POCL on PoCL devices.
 #if defined(CLPDE_POCL) && defined(REAL_IS_DOUBLE)
 #define SQRT(x) __builtin_sqrt(x)
@@ -122,7 +123,7 @@ inline void mirror_ghosts(__global REAL* v, const int row0, const int x0, const 
 #endif
 
 // Likewise PoCL's exp is an out-of-line call (Perona-Malik's exponential edge-stopping ran
-// 100x slower than the heat step). On PoCL, float EXP is computed inline instead: x = k ln2
+// far slower than the heat step; docs/planar.md). On PoCL, float EXP is computed inline instead: x = k ln2
 // + r with |r| <= ln2/2 (k rounded by the 1.5 * 2^23 trick, ln2 split in two for an exact
 // k ln2), e^r by its degree-6 Taylor polynomial, 2^k written into the exponent bits. Within
 // 3 ulp of exp (relative error < 3e-7) for x in [-87, 88]; beyond, 0 below and e^88 above

@@ -11,7 +11,7 @@
 // py(x, y) on the face between (x, y) and (x, y + 1). They are stored interleaved, px of
 // padded cell i at p[2i] and py at p[2i + 1]: with separate px and py arrays the step kernel
 // has more pointers than PoCL's loop vectoriser will check for overlap, and runs scalar
-// (about 5x slower); interleaved pairs vectorise.
+// (docs/planar.md has the measured cost); interleaved pairs vectorise.
 //
 // Borders without branches in the cell loop: the ghost layer of p holds the reflection of p
 // about the border faces (px odd and py even across a vertical border, the converse across

@@ -75,7 +75,7 @@ INLINE void bricks_before(__global const int* restrict nbr, const int b, int bef
 
 // Store the stepped value of cell (x, y, z) of brick b (channel vc); on GPUs each work-item
 // copies its own value into the aprons it belongs to, on CPUs apron_copy does it after the
-// brick (in the cell loop these stores kept it from being vectorised, 3x slower).
+// brick (in the cell loop these stores kept it from being vectorised; docs/surface_storage.md).
 INLINE void store_stepped(__global REAL* restrict vc, const int b, const int before[8],
                           const int x, const int y, const int z, const REAL val)
 {
@@ -416,7 +416,7 @@ __kernel void brick_to_apron(__global const REAL* restrict src, __global REAL* r
 // and the closest point's offsets from floor(cp) (frac[k], frac[n + k], frac[2n + k]). src
 // is in the apron layout, so the whole stencil lies in the node's brick: fixed strides, as
 // on the dense grid. (Gathering across the neighbouring bricks instead, with rows picking
-// their brick, ran 3-4x slower; computing the closest points here from a psi tile cost more
+// their brick, ran slower (docs/surface_storage.md); computing the closest points here from a psi tile cost more
 // than the whole list re-extension on dense storage.)
 // (REAL4, LOAD4, node_weights and NODES: surface.h.)
 

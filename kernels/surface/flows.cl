@@ -74,10 +74,11 @@ __kernel void chunk_sum(__global const REAL* restrict a, const int n, const int 
 // lambda |u - u0|^2 = -integral (u - u0) div(...) makes (C.2)'s lambda give exactly that,
 // but the discrete one does not hold (one-sided differences of one side choice against a
 // flow cycling through eight, closest-point re-extension), and for noise at the grid's
-// scale the plain formula settled at 1.2-1.6 sigma^2. Once the residual has passed half of
-// sigma^2, each update multiplies f by residual / sigma^2, limited to [0.67, 1.5] per
-// update and f to [0.1, 10]: f stops moving only where the residual is sigma^2 (on a
-// sphere within 1-4% after t = 0.08, 40 updates). inv_sigma2 = 0 keeps f = 1: plain (C.2).
+// scale the plain formula settled above sigma^2 (docs/surface.md has the figures). Once
+// the residual has passed half of sigma^2, each update multiplies f by residual / sigma^2,
+// limited to [0.67, 1.5] per update and f to [0.1, 10]: f stops moving only where the
+// residual is sigma^2 (docs/surface.md measures how close on a sphere). inv_sigma2 = 0
+// keeps f = 1: plain (C.2).
 // One work-item: the partial sums are a few hundred numbers.
 __kernel void tv_lambda_update(__global const REAL* restrict num, __global const REAL* restrict area,
                                __global const REAL* restrict resid, const int groups,
