@@ -142,7 +142,7 @@ def _add_method_arguments(parser) -> None:
         "--method",
         choices=("auto", *METHODS),
         default=None,
-        help="inpainting method (default: coherence; 'transport', the "
+        help="inpainting method (default: spectral; 'transport', the "
         "thesis's scheme, when one of its options above or --gif is "
         "given; 'auto': the self-validated choice, docs/inpainting.md)",
     )

@@ -501,7 +501,7 @@ def inpaint(
     (dtype('uint8'), (48, 48))
     >>> bool((restored[~mask] == ramp[~mask]).all())   # untouched outside the mask
     True
-    >>> int(np.abs(restored.astype(int) - ramp).max()) <= 8    # coherence, the default
+    >>> int(np.abs(restored.astype(int) - ramp).max()) <= 8    # spectral, the default
     True
     >>> voted = clpde.inpaint(ramp, mask, method="auto")       # the self-validated choice
     >>> int(np.abs(voted.astype(int) - ramp).max()) <= 2
