@@ -3,7 +3,7 @@ one run, on both halves of benchmarks/inpaint_corpus.py's corpus.
 
     python benchmarks/inpaint_generalise.py [--quick] [--half test|calibration|both]
                                             [--only NAME,...] [--skip NAME,...] [--slice A:B]
-                                            [--json PATH]
+                                            [--extra NAME,...] [--json PATH]
                                             [--log PATH] [--from-log LOG ...]
 
 Methods (every peer's settings fixed before any result was looked at):
@@ -141,6 +141,48 @@ def patchmatch(image, mask, case):
     out = patch_match.inpaint(_rgb(u8), mask.astype(np.uint8), patch_size=3)
     out = out[..., 0] if image.ndim == 2 else out
     return out if image.dtype == np.uint8 else from_u8(out, case)
+
+
+# Columns run only when named in --extra: the self-validated vote and cheaper votes (their
+# candidate sets), and cheaper settings of the spectral default: the choices that
+# docs/inpainting.md reports on the calibration half.
+EXTRA = {
+    "clpde-auto": ("auto", {}, None),
+    "vote-cs": ("auto", {}, ("coherence", "spectral")),
+    "vote-bcs": ("auto", {}, ("biharmonic", "coherence", "spectral")),
+    "spec-s1-i100": ("spectral", {"shifts": 1}, None),
+    "spec-s2-i50": ("spectral", {"iterations": 50}, None),
+    "spec-s1-i50": ("spectral", {"shifts": 1, "iterations": 50}, None),
+    "spec-s2-stop01": ("spectral", {"stop": 0.01}, None),
+    "spec-s2-pp2": ("spectral", {"per_pixel": 2.0}, None),
+    "spec-s1-pp2": ("spectral", {"shifts": 1, "per_pixel": 2.0}, None),
+}
+
+
+def extra_method(name):
+    """A column of EXTRA: clpde.inpaint with its method, options and vote candidates."""
+    method, options, candidates = EXTRA[name]
+
+    def run(image, mask, case):
+        import clpde
+        from clpde.inpainting import validate
+
+        saved = validate.CANDIDATES
+        validate.CANDIDATES = candidates or saved
+        try:
+            return clpde.inpaint(
+                image,
+                mask,
+                channel_axis=case.channel_axis,
+                progress=False,
+                seed=0,
+                method=method,
+                **options,
+            )
+        finally:
+            validate.CANDIDATES = saved
+
+    return run
 
 
 def methods():
@@ -384,6 +426,9 @@ def main(argv=None):
     parser.add_argument(
         "--slice", default=None, help="START:STOP of the (interleaved) cases: a run split by cases"
     )
+    parser.add_argument(
+        "--extra", default="", help=f"comma-separated extra columns: {', '.join(EXTRA)}"
+    )
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--log", type=Path, default=None, help="JSON lines, one per result")
     parser.add_argument(
@@ -406,6 +451,7 @@ def main(argv=None):
                     rows.append(row)
     else:
         found = methods()
+        found.update({name: extra_method(name) for name in filter(None, args.extra.split(","))})
         if args.only:
             found = {k: v for k, v in found.items() if k in args.only.split(",")}
         if args.skip:
