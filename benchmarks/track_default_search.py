@@ -35,7 +35,9 @@ RESULTS = ROOT / "benchmarks" / "results"
 # Every candidate spelled out in full, so the table keeps its meaning when the defaults change.
 CURRENT = {"motion": "kalman", "discrepancy": "ncc"}  # the default before this search
 NO_TERMS = {"motion": "kalman", "discrepancy": "adaptive", "region_weight": 0.0, "curvature": 0.0}
-CN = "clpde.tracking.morph:CONTRAST_NOISE"  # the adaptive weight's noise factor, no terms
+CN = "clpde.tracking.morph:CONTRAST_NOISE"  # the adaptive weight's noise factor
+LIGHT = "clpde.tracking.contours:LIGHT_CHANGE"  # the light gate's threshold
+QUIET = "clpde.tracking.contours:QUIET_FACTOR"  # the noise factor's rise below it
 CANDIDATES = {
     "kalman+ncc (the default before)": CURRENT,
     "adaptive option (components+adaptive, region 1, curvature 0.3)": {
@@ -53,13 +55,38 @@ CANDIDATES = {
     "kalman+adaptive, region 0.25": {**NO_TERMS, "region_weight": 0.25, "max_iterations": 40},
     "kalman+adaptive, curvature 0.05": {**NO_TERMS, "curvature": 0.05, "max_iterations": 40},
     **{
-        f"kalman+adaptive, no terms, noise factor {cn}": {**NO_TERMS, "_patch": {CN: float(cn)}}
-        for cn in (1, 8, 16, 32, 64, 128, 256, 1024)
+        f"kalman+adaptive, no terms, noise factor {cn}, no light gate": {
+            **NO_TERMS,
+            "_patch": {CN: float(cn), QUIET: 1.0},
+        }
+        for cn in (1, 4, 16, 64, 128, 256, 1024)
     },
-    "kalman+adaptive, no terms, noise factor 4 (the default)": {**NO_TERMS, "max_iterations": 40},
-    "kalman+adaptive, no terms, noise factor 4, 20 it.": {**NO_TERMS, "max_iterations": 20},
-    "kalman+adaptive, no terms, noise factor 4, 60 it.": {**NO_TERMS, "max_iterations": 60},
-    "components+adaptive, no terms, noise factor 4": {**NO_TERMS, "motion": "components"},
+    **{
+        f"kalman+adaptive, no terms, light gate: change {change}, quiet factor {quiet}": {
+            **NO_TERMS,
+            "_patch": {LIGHT: change, QUIET: float(quiet)},
+        }
+        for change, quiet in (
+            (3.0, 4),
+            (4.5, 4),
+            (6.0, 4),
+            (3.0, 16),
+            (4.5, 16),
+            (6.0, 16),
+            (6.0, 32),
+            (3.0, 64),
+            (4.5, 64),
+            (6.0, 64),
+            (8.0, 64),
+            (4.5, 128),
+            (6.0, 128),
+            (6.0, 256),
+        )
+    },
+    "the default (kalman+adaptive, no terms, light gate 6.0 / 32)": {},
+    "the default, 20 it.": {"max_iterations": 20},
+    "the default, 60 it.": {"max_iterations": 60},
+    "the default with motion components": {"motion": "components"},
 }
 
 

@@ -42,7 +42,7 @@ from .._progress import State, progress_bar
 from ..errors import InputError
 from ..fields import Field, check_fits
 from ..runtime import DeviceLike, get_runtime
-from .adaptive import noise_variance
+from .adaptive import LIGHT_CHANGE, QUIET_FACTOR, background_change, noise_variance
 from .confidence import track_confidence
 from .inputs import check_frames, check_mask, scaled_frames, user_features
 from .levelset import GHOST, MARGIN, LevelSet, signed_distance
@@ -283,6 +283,12 @@ class MorphingTracker:
             f2 = feature_field(prepared, ls, options)
             # the frame's noise, for the adaptive discrepancy and the pieces' matching
             noise2 = noise_variance(prepared) if adaptive or options.motion == "components" else 0.0
+            # the adaptive weight's noise: raised on frames whose background changed no more
+            # than the noise explains, where the grey levels can be compared as they are
+            noise2_weight = noise2
+            if adaptive and not (options.region_weight or options.curvature):
+                change = background_change(prepared_prev, prepared, mask, noise2)
+                noise2_weight = noise2 * (QUIET_FACTOR if change < LIGHT_CHANGE else 1.0)
             shift = (0.0, 0.0)
             if prediction is not None:
                 prepared_prev, shift, moved = prediction.move(
@@ -298,7 +304,7 @@ class MorphingTracker:
                 prior.assign(ls.u.cur)
             rebuilds0 = ls.rebuilds
             iterations, converged, residual = morph_pair(
-                ls, f1, f2, prior, options, self.channels, region, noise2
+                ls, f1, f2, prior, options, self.channels, region, noise2_weight
             )
             fresh = ls.rebuilds > rebuilds0
             u = ls.values()

@@ -10,7 +10,12 @@ from reference import track_adaptive as aref
 from scipy import ndimage
 
 from clpde.fields import Field, Grid, compact
-from clpde.tracking.adaptive import ComponentMotion, noise_variance
+from clpde.tracking.adaptive import (
+    LIGHT_CHANGE,
+    ComponentMotion,
+    background_change,
+    noise_variance,
+)
 from clpde.tracking.confidence import LOW_CONFIDENCE, track_confidence
 from clpde.tracking.contours import MorphingTracker, track
 from clpde.tracking.options import CURVATURE, REGION_WEIGHT
@@ -151,6 +156,25 @@ def _textured_disc(positions, n=64, seed=0):
 
 def _iou(a, b):
     return (a & b).sum() / max((a | b).sum(), 1)
+
+
+def test_background_change_is_one_under_noise_and_large_under_a_flicker(rng):
+    y, x = np.mgrid[:80, :90]
+    ground = 0.5 + 0.2 * np.sin(x / 5.0) * np.cos(y / 7.0)
+    mask = np.hypot(y - 40, x - 45) < 12
+    sigma = 0.04
+    before = ground + rng.normal(0, sigma, ground.shape)
+    after = ground + rng.normal(0, sigma, ground.shape)
+    after[mask] += 0.3  # the object changes; it is left out
+    # two frames of white noise differ by 2 sigma / sqrt(pi) on average
+    assert abs(background_change(before, after, mask, sigma**2) - 1) < 0.05
+    flicker = 1.5 * after + 0.1
+    assert background_change(before, flicker, mask, sigma**2) > LIGHT_CHANGE
+    # the object's surroundings (8 px) are left out with it
+    near = ndimage.binary_dilation(mask, iterations=8) & ~mask
+    moved = after.copy()
+    moved[near] += 0.5
+    assert abs(background_change(before, moved, mask, sigma**2) - 1) < 0.05
 
 
 def test_component_motion_stops_with_the_object():
