@@ -120,11 +120,18 @@ CONFIGS = {
     "clpde kalman": {"motion": "kalman"},
     "clpde kalman+shape": {"motion": "kalman", "shape_weight": 0.02},
     "clpde kalman+contrast": {"motion": "kalman", "features": "contrast", "equalize": False},
-    "clpde new default": "default",  # = kalman + ncc, no equalisation
+    # the default before the adaptive discrepancy
+    "clpde kalman+ncc": {"motion": "kalman", "discrepancy": "ncc", "equalize": False},
+    "clpde new default": "default",  # = kalman + adaptive discrepancy, no equalisation
 }
 # The adaptive option (--adaptive), with the default's other options, as
 # benchmarks/tracking_generalise.py runs it.
-ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
+ADAPTIVE = {
+    "motion": "components",
+    "discrepancy": "adaptive",
+    "region_weight": 1.0,
+    "curvature": 0.3,
+}
 
 
 def run_clpde(frames, first, options):
@@ -244,7 +251,7 @@ BASELINES = {"skimage MCV": run_mcv, "skimage MGAC": run_mgac, "static": run_sta
 
 def methods(only_default=False, adaptive=False, baselines=True):
     configs = (
-        {k: CONFIGS[k] for k in ("clpde old default", "clpde new default")}
+        {k: CONFIGS[k] for k in ("clpde old default", "clpde kalman+ncc", "clpde new default")}
         if only_default
         else dict(CONFIGS)
     )
@@ -300,7 +307,8 @@ def main(argv=None):
     parser.add_argument(
         "--default-only",
         action="store_true",
-        help="clpde's old and new defaults only (with the baselines)",
+        help="clpde's old default, kalman+ncc (the default before) and the new default only "
+        "(with the baselines)",
     )
     parser.add_argument(
         "--adaptive",

@@ -5,9 +5,11 @@ test half and calibration half, with the peers in the same run.
     python benchmarks/tracking_generalise.py --calibrate-confidence
     python benchmarks/tracking_generalise.py [--json PATH]        # the tables
 
-Methods: clpde's default (motion='kalman', discrepancy='ncc'); the adaptive option
-(motion='components', discrepancy='adaptive': motion per component, adaptive discrepancy,
-region term, curvature); the thesis' method, the default before it (difference, no motion,
+Methods: clpde's default (motion='kalman', discrepancy='adaptive', no region or curvature
+term); the default before it (motion='kalman', discrepancy='ncc'); the adaptive option
+(motion='components', discrepancy='adaptive' with the region term and curvature weights
+REGION_WEIGHT and CURVATURE: motion per component, adaptive discrepancy, region term,
+curvature); the thesis' method, the default before it (difference, no motion,
 histogram matching); scikit-image's
 morphological_chan_vese (MCV) and morphological_geodesic_active_contour (MGAC), each frame
 started from the previous frame's result, their parameters chosen on the calibration half
@@ -39,10 +41,18 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from track_corpus import CLASSES, corpus  # noqa: E402
 from tracking import OLD_DEFAULT, boundary_f, jaccard  # noqa: E402
 
+from clpde.tracking.options import CURVATURE, REGION_WEIGHT  # noqa: E402
+
 RESULTS = ROOT / "benchmarks" / "results"
 CALIBRATION = RESULTS / "track_calibration.json"
 
-ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
+ADAPTIVE = {
+    "motion": "components",
+    "discrepancy": "adaptive",
+    "region_weight": REGION_WEIGHT,
+    "curvature": CURVATURE,
+}
+PREVIOUS_DEFAULT = {"motion": "kalman", "discrepancy": "ncc"}
 MCV_GRID = {"iterations": (5, 20), "smoothing": (1, 2), "lambda2": (1.0, 2.0)}
 MGAC_GRID = {"iterations": (10, 50), "smoothing": (1, 2), "balloon": (-1, 0, 1)}
 CLPDE_GRID = {
@@ -148,7 +158,8 @@ def methods(only=None):
     """{name: method} of the run, or of the names containing one of `only`'s substrings (the
     peers' calibrated parameters are read only when a peer runs)."""
     names = (
-        "clpde default (kalman+ncc)",
+        "clpde default (kalman+adaptive)",
+        "clpde previous default (kalman+ncc)",
         "clpde adaptive",
         "clpde thesis (old default)",
         "skimage MCV",
@@ -157,7 +168,8 @@ def methods(only=None):
     names = [n for n in names if not only or any(o in n for o in only)]
     mcv, mgac = chosen() if any(n.startswith("skimage") for n in names) else ({}, {})
     table = {
-        "clpde default (kalman+ncc)": lambda f, m: run_clpde(f, m),
+        "clpde default (kalman+adaptive)": lambda f, m: run_clpde(f, m),
+        "clpde previous default (kalman+ncc)": lambda f, m: run_clpde(f, m, PREVIOUS_DEFAULT),
         "clpde adaptive": lambda f, m: run_clpde(f, m, ADAPTIVE),
         "clpde thesis (old default)": lambda f, m: run_clpde(f, m, OLD_DEFAULT),
         "skimage MCV": lambda f, m: run_mcv(f, m, **mcv),

@@ -49,13 +49,13 @@ def _add_method_arguments(parser) -> None:
     )
     parser.add_argument(
         "--discrepancy",
-        choices=("ncc", "adaptive", "difference", "huber"),
-        default="ncc",
+        choices=("adaptive", "ncc", "difference", "huber"),
+        default="adaptive",
         help="how F2 and F1 are compared: adaptive (correlation where a patch "
-        "has contrast, difference where it is flat, plus a region term), "
+        "has contrast well above the noise, difference where it is flat or noisy), "
         "local normalised cross-correlation (ignores changes of light), "
         "F2 - F1 (the thesis) or a Huber-clipped difference "
-        "(default: ncc)",
+        "(default: adaptive)",
     )
     parser.add_argument(
         "--motion",
@@ -73,6 +73,22 @@ def _add_method_arguments(parser) -> None:
         metavar="W",
         help="pull the contour towards the predicted start where the frames "
         "say nothing, against leaks (e.g. 0.02; default: 0)",
+    )
+    parser.add_argument(
+        "--region-weight",
+        type=float,
+        default=None,
+        metavar="W",
+        help="with --discrepancy adaptive: a region term (inside and outside "
+        "statistics near the contour) of this weight (the adaptive option: 1.0 "
+        "with --motion components --curvature 0.3; default: off)",
+    )
+    parser.add_argument(
+        "--curvature",
+        type=float,
+        default=None,
+        metavar="W",
+        help="with --discrepancy adaptive: a curvature term of this weight (default: off)",
     )
 
 
@@ -101,8 +117,8 @@ def _add_run_arguments(parser) -> None:
         "--max-iterations",
         type=int,
         default=None,
-        help="cap of morphing iterations per frame (default: 20 with the "
-        "adaptive discrepancy, 40 with the others)",
+        help="cap of morphing iterations per frame (default: 20 with a "
+        "region or curvature term, 40 otherwise)",
     )
     parser.add_argument(
         "--min-size",
@@ -143,6 +159,8 @@ def task_options(args) -> dict:
         "discrepancy": args.discrepancy,
         "motion": args.motion,
         "shape_weight": args.shape_weight,
+        "region_weight": args.region_weight,
+        "curvature": args.curvature,
         "equalize": "none" if args.no_equalize else args.equalize,
         "smooth": not args.no_smooth,
         "max_iterations": args.max_iterations,

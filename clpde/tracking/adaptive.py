@@ -13,6 +13,8 @@ per connected component and a region term.
 - `noise_variance`: the frame's noise level (median absolute deviation of the diagonal
   second difference), against which kernels/tracking/adaptive.cl decides where a patch has
   contrast enough for the correlation to mean something.
+- `background_change`: how much a frame pair changed away from the object, against the
+  noise: the default's gate between comparing grey levels and the light-blind correlation.
 """
 
 from __future__ import annotations
@@ -27,6 +29,16 @@ from .levelset import signed_distance
 # boundary's contrast, little enough that a still background does not pull the match to 0.
 DILATION = 1
 
+# The default's light gate (discrepancy='adaptive' without the region and curvature terms),
+# chosen on the calibration half of benchmarks/track_corpus.py
+# (benchmarks/track_default_search.py): on a frame whose background changed by less than
+# LIGHT_CHANGE times what the noise explains (`background_change`), the light did not
+# change, so the grey levels compare as they are and the noise variance in the adaptive
+# weight is raised QUIET_FACTOR times, handing low-contrast windows to F2 - F1. Otherwise
+# the correlation keeps every window with contrast, blind to the light.
+LIGHT_CHANGE = 6.0
+QUIET_FACTOR = 32.0
+
 
 def noise_variance(image: np.ndarray) -> float:
     """Noise variance of (C, H, W) or (H, W) data: the squared MAD estimate of sigma from
@@ -37,6 +49,23 @@ def noise_variance(image: np.ndarray) -> float:
     d = 0.5 * (a[:, :-1, :-1] - a[:, 1:, :-1] - a[:, :-1, 1:] + a[:, 1:, 1:])
     sigma = 1.4826 * float(np.median(np.abs(d - np.median(d))))
     return sigma * sigma
+
+
+def background_change(
+    before: np.ndarray, after: np.ndarray, mask: np.ndarray, noise2: float, reach: int = 8
+) -> float:
+    """How much the frames changed away from the object, against the noise: the mean
+    |after - before| over the pixels farther than `reach` px from `mask`, over the mean
+    |difference| that the noise alone gives there (2 sigma / sqrt(pi) for two frames with
+    noise of variance `noise2`). About 1 where only noise changed; a change of light (a
+    flicker, a shadow) raises it. (C, H, W) or (H, W) frames; the channels' mean."""
+    a = np.asarray(before, np.float64).reshape((-1,) + mask.shape).mean(axis=0)
+    b = np.asarray(after, np.float64).reshape((-1,) + mask.shape).mean(axis=0)
+    away = ~ndimage.binary_dilation(mask, iterations=reach) if mask.any() else np.ones_like(mask)
+    if not away.any():
+        return 0.0
+    expected = 2.0 * np.sqrt(max(noise2, 0.0)) / np.sqrt(np.pi)
+    return float(np.abs(b - a)[away].mean() / max(expected, 1e-6))
 
 
 def _local_std(x: np.ndarray, size: int = 5) -> np.ndarray:

@@ -42,7 +42,7 @@ from .._progress import State, progress_bar
 from ..errors import InputError
 from ..fields import Field, check_fits
 from ..runtime import DeviceLike, get_runtime
-from .adaptive import noise_variance
+from .adaptive import LIGHT_CHANGE, QUIET_FACTOR, background_change, noise_variance
 from .confidence import track_confidence
 from .inputs import check_frames, check_mask, scaled_frames, user_features
 from .levelset import GHOST, MARGIN, LevelSet, signed_distance
@@ -93,14 +93,16 @@ class MorphingTracker:
     colour : bool, optional
         Put every channel of colour frames in the discrepancy (default: grey, Rec. 601
         luma).
-    discrepancy : {'ncc', 'difference', 'huber'}, optional
-        How F2 and F1 are compared: steepest ascent of the local normalised
-        cross-correlation over a (2 ncc_radius + 1)^2 window, F2 - F1 (the thesis), or F2 -
+    discrepancy : {'adaptive', 'ncc', 'difference', 'huber'}, optional
+        How F2 and F1 are compared: 'adaptive' (the default) blends the two below, the
+        correlation where a window has contrast well above the frame's noise and F2 - F1
+        where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
+        cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
         F1 clipped at huber_delta.
-    motion : {'kalman', 'velocity', None}, optional
+    motion : {'kalman', 'components', 'velocity', None}, optional
         Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction), by the previous
-        displacement, or not at all.
+        object's features (within search_radius pixels of the prediction), each connected
+        piece by its own match, by the previous displacement, or not at all.
     shape_weight : float, optional
         (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
         nothing.
@@ -140,10 +142,11 @@ class MorphingTracker:
         The motion filter's search radius in pixels.
     region_weight : float, optional
         discrepancy='adaptive': the weight of the region term (the foreground's and
-        background's local statistics near the contour); None: the calibrated default.
+        background's local statistics near the contour); None or 0: off. The adaptive
+        option's calibrated weight is `clpde.tracking.options.REGION_WEIGHT`.
     curvature : float, optional
-        discrepancy='adaptive': the weight of the curvature term; None: the calibrated
-        default.
+        discrepancy='adaptive': the weight of the curvature term; None or 0: off (the
+        adaptive option's: `clpde.tracking.options.CURVATURE`).
     storage : {'lists', 'bricks8x8', 'bricks16x4'}, optional
         The band as a list of cells or of bricks (the same results, bit for bit except the
         NCC's window sums, equal to rounding; docs/tracking.md).
@@ -175,7 +178,7 @@ class MorphingTracker:
         *,
         features: str | ArrayLike | Callable = "intensity",
         colour: bool = False,
-        discrepancy: str = "ncc",
+        discrepancy: str = "adaptive",
         motion: str | None = "kalman",
         shape_weight: float = 0.0,
         equalize: bool | str = False,
@@ -280,6 +283,12 @@ class MorphingTracker:
             f2 = feature_field(prepared, ls, options)
             # the frame's noise, for the adaptive discrepancy and the pieces' matching
             noise2 = noise_variance(prepared) if adaptive or options.motion == "components" else 0.0
+            # the adaptive weight's noise: raised on frames whose background changed no more
+            # than the noise explains, where the grey levels can be compared as they are
+            noise2_weight = noise2
+            if adaptive and not (options.region_weight or options.curvature):
+                change = background_change(prepared_prev, prepared, mask, noise2)
+                noise2_weight = noise2 * (QUIET_FACTOR if change < LIGHT_CHANGE else 1.0)
             shift = (0.0, 0.0)
             if prediction is not None:
                 prepared_prev, shift, moved = prediction.move(
@@ -295,7 +304,7 @@ class MorphingTracker:
                 prior.assign(ls.u.cur)
             rebuilds0 = ls.rebuilds
             iterations, converged, residual = morph_pair(
-                ls, f1, f2, prior, options, self.channels, region, noise2
+                ls, f1, f2, prior, options, self.channels, region, noise2_weight
             )
             fresh = ls.rebuilds > rebuilds0
             u = ls.values()
@@ -419,7 +428,8 @@ def track(
     band_width : float, optional
         Half-width of the narrow band in pixels.
     max_iterations : int, optional
-        Cap of morphing iterations per frame.
+        Cap of morphing iterations per frame (None: 40, or 20 with the region or curvature
+        term).
     tol : float, optional
         Each frame runs until the contour's top speed falls below `tol` pixels per unit
         time (or `max_iterations`).
@@ -439,14 +449,16 @@ def track(
         Also return the (T,) confidence per frame in [0, 1] (see Returns).
     **options
         MorphingTracker's other options: colour (every channel in the discrepancy),
-        discrepancy ('ncc', the default; 'difference', the thesis; 'huber'; 'adaptive':
-        NCC where a window has contrast above the noise, F2 - F1 where it is flat, plus a
-        region term of weight region_weight and a curvature term of weight curvature,
-        better on the synthetic corpus and worse on real video and slices,
-        docs/tracking.md), motion ('kalman', the default; None; 'velocity'; 'components':
-        each connected piece matched on its own), shape_weight, storage ('lists',
-        'bricks8x8' or 'bricks16x4': the same results), contrast_radius, ncc_radius,
-        huber_delta, search_radius, region_weight, curvature, dtype.
+        discrepancy ('adaptive', the default: NCC where a window has contrast well above
+        the noise, F2 - F1 where it is flat; 'ncc'; 'difference', the thesis; 'huber'),
+        motion ('kalman', the default; None; 'velocity'; 'components': each connected piece
+        matched on its own), shape_weight, storage ('lists', 'bricks8x8' or 'bricks16x4':
+        the same results), contrast_radius, ncc_radius, huber_delta, search_radius,
+        region_weight and curvature (with discrepancy='adaptive': a region term and a
+        curvature term, off by default; with motion='components' and the weights
+        REGION_WEIGHT and CURVATURE of clpde.tracking.options they make the adaptive
+        option, better on the synthetic corpus and worse on real video and slices,
+        docs/tracking.md), dtype.
 
     Returns
     -------

@@ -23,7 +23,9 @@ from .region_term import REGION_REFRESH, RegionTerm
 KERNEL_FILES = ("tracking/features.cl", "tracking/adaptive.cl")
 
 # The adaptive discrepancy's weights, chosen on the calibration half of
-# benchmarks/track_corpus.py (benchmarks/tracking_generalise.py --calibrate).
+# benchmarks/track_corpus.py (benchmarks/tracking_generalise.py --calibrate for the adaptive
+# option, benchmarks/track_default_search.py for the default, which also keeps the
+# correlation's hold under a shadow and a flicker: docs/tracking.md).
 CONTRAST_NOISE = 4.0  # the correlation takes over where a window's variance passes this x noise
 DISCREPANCY_WEIGHT = 1.0  # the frame-to-frame discrepancy's share of the contour's speed
 
@@ -58,11 +60,13 @@ def _step_kernel(
             WIN=options.ncc_radius,
         )
         return kernel, ()
+    terms = options.region_weight > 0 or options.curvature > 0
     kernel = ls.band_kernel(
         "tracking/adaptive.cl",
         "morph_adaptive" if ls.brick is None else "morph_adaptive_bricks",
         NCH=channels,
         WIN=options.ncc_radius,
+        FRONT_ONLY=int(terms),
     )
     extra = (
         (region.field if region is not None else ls.u.cur).data.data,

@@ -13,18 +13,21 @@ FEATURES = ("intensity", "edges", "contrast")
 # discrepancy -> the DISC define of kernels/tracking/features.cl (adaptive: its own kernel)
 DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2, "adaptive": 3}
 MOTIONS = (None, "velocity", "kalman", "components")
-# The adaptive discrepancy's defaults, chosen on the calibration half of
-# benchmarks/track_corpus.py (benchmarks/tracking_generalise.py --calibrate).
+# The adaptive option's weights (motion='components', discrepancy='adaptive' with these),
+# chosen on the calibration half of benchmarks/track_corpus.py
+# (benchmarks/tracking_generalise.py --calibrate). The default leaves both terms off: they
+# win the synthetic corpus but lose the real video and slices (docs/tracking.md).
 REGION_WEIGHT = 1.0  # the region term's largest speed, px per unit time
 CURVATURE = 0.3  # the curvature term's weight
-ADAPTIVE_ITERATIONS = 20  # the cap of iterations per frame with the adaptive discrepancy
+ADAPTIVE_ITERATIONS = 20  # the cap of iterations per frame with the region or curvature term
+ITERATIONS = 40  # the cap of iterations per frame otherwise
 
 
 @dataclass
 class TrackOptions:
     """MorphingTracker's keyword options (documented there), checked on construction:
-    `features` is 'user' for the user's own maps, `max_iterations`, `region_weight` and
-    `curvature` get their defaults for the discrepancy, `equalize` becomes 'match',
+    `features` is 'user' for the user's own maps, `region_weight` and `curvature` default
+    to 0 (off), `max_iterations` gets its default for the terms used, `equalize` becomes 'match',
     'global' or False. Raises InputError for options that cannot be used."""
 
     features: str
@@ -55,9 +58,9 @@ class TrackOptions:
 
     def __post_init__(self) -> None:
         self._check_choices()
+        self._check_adaptive()
         self._check_steps()
         self._check_sizes()
-        self._check_adaptive()
         self._normalise()
 
     def _check_choices(self) -> None:
@@ -81,8 +84,8 @@ class TrackOptions:
                 f"dt={self.dt} is outside (0, 0.5], the stable range of the upwind scheme"
             )
         if self.max_iterations is None:
-            adaptive = self.discrepancy == "adaptive"
-            self.max_iterations = ADAPTIVE_ITERATIONS if adaptive else 40
+            terms = self.region_weight > 0 or self.curvature > 0
+            self.max_iterations = ADAPTIVE_ITERATIONS if terms else ITERATIONS
         if self.max_iterations < 1 or self.check_every < 1:
             raise InputError("max_iterations and check_every must be at least 1")
         if self.check_every * CFL > NEAR_EDGE:
@@ -109,11 +112,8 @@ class TrackOptions:
 
     def _check_adaptive(self) -> None:
         adaptive = self.discrepancy == "adaptive"
-        if self.region_weight is None:
-            self.region_weight = REGION_WEIGHT if adaptive else 0.0
-        if self.curvature is None:
-            self.curvature = CURVATURE if adaptive else 0.0
-        self.region_weight, self.curvature = float(self.region_weight), float(self.curvature)
+        self.region_weight = float(self.region_weight or 0.0)
+        self.curvature = float(self.curvature or 0.0)
         if self.region_weight < 0 or self.curvature < 0:
             raise InputError("region_weight and curvature must be at least 0")
         if not adaptive and (self.region_weight or self.curvature):

@@ -8,6 +8,9 @@
 //   NCH   feature channels, planes `fplane` apart
 //   WIN   window radius of the correlation (band cells lie MARGIN + G = 4 cells inside the
 //         buffer, so WIN <= 4 reads stay inside it)
+//   FRONT_ONLY  1: the stopping test reads the speed at the cells next to the contour only
+//         (|u| < 1), for the region and curvature terms, which keep the band's outer cells
+//         moving; 0: at every band cell, as morph_track's test does
 #include "common.cl"
 #include "godunov.h"
 #include "bricks/bricks2d.h"
@@ -17,6 +20,9 @@
 #endif
 #ifndef WIN
 #define WIN 3
+#endif
+#ifndef FRONT_ONLY
+#define FRONT_ONLY 1
 #endif
 
 // beta of one channel at padded index i: w beta_ncc + (1 - w) (F2 - F1), where
@@ -94,9 +100,9 @@ INLINE void adaptive_cell(__global const REAL* restrict u, __global const REAL* 
     const REAL un = u[i] + dt * rate;
     u_out[i] = un;
     s->beta_max = FMAX(s->beta_max, FABS(speed));
-    // Whether the contour has stopped: the speed at the cells next to it (the region term
-    // keeps the band's outer cells moving towards their own balance).
-    if (FABS(u[i]) < (REAL)1) s->fastest = FMAX(s->fastest, FABS(rate));
+    // Whether the contour has stopped: with FRONT_ONLY, the speed at the cells next to it
+    // (the region term keeps the band's outer cells moving towards their own balance).
+    if (!FRONT_ONLY || FABS(u[i]) < (REAL)1) s->fastest = FMAX(s->fastest, FABS(rate));
     s->beta_sum += babs / NCH;
     s->cells += 1;
     s->touched |= (band[i] == 2) & (FABS(un) < near);

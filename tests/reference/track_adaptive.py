@@ -32,11 +32,28 @@ def adaptive_beta(pf1, pf2, delta, noise2, win=3):
 
 
 def morph_adaptive(
-    pu, pf1, pf2, band, prior, region, dt, eps_f, eps_u, near, lam, delta, noise2, mu, kd=1.0, win=3
+    pu,
+    pf1,
+    pf2,
+    band,
+    prior,
+    region,
+    dt,
+    eps_f,
+    eps_u,
+    near,
+    lam,
+    delta,
+    noise2,
+    mu,
+    kd=1.0,
+    win=3,
+    front_only=True,
 ):
     """One step over C channels: pf1, pf2 (C, ny+4, nx+4), region (ny, nx) interior values;
-    returns (u_new, f1_new (C, ny, nx), (max |du/dt| where |u| < 1, max(|beta|, |S|),
-    max |grad F1|), mean over band cells of the channels' mean |beta|, hit)."""
+    returns (u_new, f1_new (C, ny, nx), (max |du/dt| where |u| < 1 (front_only) or over the
+    band, max(|beta|, |S|), max |grad F1|), mean over band cells of the channels' mean
+    |beta|, hit)."""
     u = _view(pu, 0, 0)
     ux = 0.5 * (_view(pu, 0, 1) - _view(pu, 0, -1))
     uy = 0.5 * (_view(pu, 1, 0) - _view(pu, -1, 0))
@@ -64,7 +81,7 @@ def morph_adaptive(
     inside = band > 0
     hit = bool(np.any((band == 2) & (np.abs(u_new) < near)))
     beta_max = max(float(np.max([b[inside] for b in betas])), float(np.abs(speed[inside]).max()))
-    front = inside & (np.abs(u) < 1)
+    front = inside & (np.abs(u) < 1) if front_only else inside
     maxima = (
         float(np.abs(rate[front]).max()) if front.any() else 0.0,
         beta_max,

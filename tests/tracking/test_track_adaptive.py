@@ -1,6 +1,6 @@
-"""The adaptive default of clpde.track: kernels/tracking/adaptive.cl against its numpy
-reference, the motion per component, the default on stop-and-go and split
-sequences, and the confidence per frame."""
+"""The adaptive discrepancy of clpde.track: kernels/tracking/adaptive.cl against its numpy
+reference, the motion per component, the adaptive option and the default on stop-and-go and
+split sequences, and the confidence per frame."""
 
 import numpy as np
 import pyopencl.array as cla
@@ -10,9 +10,15 @@ from reference import track_adaptive as aref
 from scipy import ndimage
 
 from clpde.fields import Field, Grid, compact
-from clpde.tracking.adaptive import ComponentMotion, noise_variance
+from clpde.tracking.adaptive import (
+    LIGHT_CHANGE,
+    ComponentMotion,
+    background_change,
+    noise_variance,
+)
 from clpde.tracking.confidence import LOW_CONFIDENCE, track_confidence
 from clpde.tracking.contours import MorphingTracker, track
+from clpde.tracking.options import CURVATURE, REGION_WEIGHT
 
 
 def _inputs(rng, channels, ny=22, nx=27):
@@ -28,10 +34,15 @@ def _inputs(rng, channels, ny=22, nx=27):
 
 
 @pytest.mark.parametrize(
-    "channels,lam,mu,noise2,kd",
-    [(1, 0.0, 0.1, 0.004, 1.0), (3, 0.1, 0.0, 0.02, 0.5), (1, 0.0, 0.2, 1e-6, 0.0)],
+    "channels,lam,mu,noise2,kd,front_only",
+    [
+        (1, 0.0, 0.1, 0.004, 1.0, 1),
+        (3, 0.1, 0.0, 0.02, 0.5, 1),
+        (1, 0.0, 0.2, 1e-6, 0.0, 1),
+        (1, 0.0, 0.0, 0.5, 1.0, 0),
+    ],
 )
-def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise2, kd):
+def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise2, kd, front_only):
     u, f1, f2 = _inputs(rng, channels)
     ny, nx = u.shape
     grid = Grid(runtime, nx, ny, 1, 2, np.dtype(np.float32))
@@ -50,7 +61,9 @@ def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise
     (gsize,), _, _ = runtime.list_launch(cells.n)
     stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
     dt, eps_f, eps_u, near, delta = 0.3, 0.02, 1e-3, 1.0, 0.02
-    kernel = grid.kernel("tracking/adaptive.cl", "morph_adaptive", NCH=channels, WIN=3)
+    kernel = grid.kernel(
+        "tracking/adaptive.cl", "morph_adaptive", NCH=channels, WIN=3, FRONT_ONLY=front_only
+    )
     grid.launch_list(
         kernel,
         cells,
@@ -91,6 +104,7 @@ def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise
         noise2,
         mu,
         kd,
+        front_only=bool(front_only),
     )
     inside = band > 0
     np.testing.assert_allclose(u_out.to_host()[0][inside], want_u[inside], atol=3e-5, rtol=1e-4)
@@ -144,6 +158,25 @@ def _iou(a, b):
     return (a & b).sum() / max((a | b).sum(), 1)
 
 
+def test_background_change_is_one_under_noise_and_large_under_a_flicker(rng):
+    y, x = np.mgrid[:80, :90]
+    ground = 0.5 + 0.2 * np.sin(x / 5.0) * np.cos(y / 7.0)
+    mask = np.hypot(y - 40, x - 45) < 12
+    sigma = 0.04
+    before = ground + rng.normal(0, sigma, ground.shape)
+    after = ground + rng.normal(0, sigma, ground.shape)
+    after[mask] += 0.3  # the object changes; it is left out
+    # two frames of white noise differ by 2 sigma / sqrt(pi) on average
+    assert abs(background_change(before, after, mask, sigma**2) - 1) < 0.05
+    flicker = 1.5 * after + 0.1
+    assert background_change(before, flicker, mask, sigma**2) > LIGHT_CHANGE
+    # the object's surroundings (8 px) are left out with it
+    near = ndimage.binary_dilation(mask, iterations=8) & ~mask
+    moved = after.copy()
+    moved[near] += 0.5
+    assert abs(background_change(before, moved, mask, sigma**2) - 1) < 0.05
+
+
 def test_component_motion_stops_with_the_object():
     positions = [16, 19, 22, 22, 22]
     frames, masks = _textured_disc(positions)
@@ -156,19 +189,27 @@ def test_component_motion_stops_with_the_object():
     assert got[2] == 0.0 and got[3] == 0.0  # no overshoot once it stops
 
 
-ADAPTIVE = {"motion": "components", "discrepancy": "adaptive"}
+# The adaptive option: motion per piece, the adaptive discrepancy, region and curvature terms.
+ADAPTIVE = {
+    "motion": "components",
+    "discrepancy": "adaptive",
+    "region_weight": REGION_WEIGHT,
+    "curvature": CURVATURE,
+}
 
 
-def test_adaptive_tracks_stop_and_go():
+@pytest.mark.parametrize("options", [ADAPTIVE, {}], ids=["adaptive option", "default"])
+def test_adaptive_tracks_stop_and_go(options):
     positions = [16, 18, 21, 25, 25, 25, 20.5, 16, 11.5 + 4.5]
     frames, truth = _textured_disc(positions)
-    masks = track(frames, truth[0], **ADAPTIVE)
+    masks = track(frames, truth[0], **options)
     scores = [_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)]
     assert min(scores) > 0.75, scores
     assert np.mean(scores) > 0.85, scores
 
 
-def test_adaptive_tracks_a_split():
+@pytest.mark.parametrize("options", [ADAPTIVE, {}], ids=["adaptive option", "default"])
+def test_adaptive_tracks_a_split(options):
     y, x = np.mgrid[:64, :64] + 0.0
     rng = np.random.default_rng(1)
     frames, truth = [], []
@@ -180,7 +221,7 @@ def test_adaptive_tracks_a_split():
         img = ndimage.gaussian_filter(0.3 + 0.4 * m, 1.0) + rng.normal(0, 0.06, m.shape)
         frames.append(np.clip(img, 0, 1))
         truth.append(m)
-    masks = track(np.array(frames), truth[0], **ADAPTIVE)
+    masks = track(np.array(frames), truth[0], **options)
     scores = [_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)]
     assert min(scores) > 0.8, scores
     assert ndimage.label(masks[-1])[1] == 2
