@@ -44,7 +44,8 @@ RESULTS = Path(__file__).resolve().parent / "results" / "inpaint_validate_calibr
 
 
 def main(argv=None):
-    from clpde.inpainting import Inpainting, validate
+    from clpde import Inpainting
+    from clpde.inpainting import validate
     from clpde.runtime import get_runtime
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
