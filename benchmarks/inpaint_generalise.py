@@ -150,6 +150,7 @@ EXTRA = {
     "clpde-auto": ("auto", {}, None),
     "vote-cs": ("auto", {}, ("coherence", "spectral")),
     "vote-bcs": ("auto", {}, ("biharmonic", "coherence", "spectral")),
+    "vote-bs": ("auto", {}, ("biharmonic", "spectral")),
     "spec-s1-i100": ("spectral", {"shifts": 1}, None),
     "spec-s2-i50": ("spectral", {"iterations": 50}, None),
     "spec-s1-i50": ("spectral", {"shifts": 1, "iterations": 50}, None),
