@@ -79,13 +79,15 @@ class RegionTerm:
         # Ghosts and the frozen margin too: band cells never read the ghosts, but they hold
         # finite values.
         self.field = Field(g, cla.zeros(rt.queue, g.padded_shape, g.dtype))
+        self._feats = self._stats = self._work = None  # allocated with the first frame
+        self._llr = self._llr_work = self._w = None
+        self._noise2 = 0.0
+        if not self.follows:  # a field of zeros: nothing to build or upload
+            return
         coarse, pooling = gaussian_weights(sigma / 2, 3.0), gaussian_weights(max(pool, 1), 4.0)
         rc, rp = (len(coarse) - 1) // 2, (len(pooling) - 1) // 2
         self._coarse = cla.to_device(rt.queue, coarse.astype(g.dtype))
         self._pool = cla.to_device(rt.queue, pooling.astype(g.dtype)) if pool > 0 else None
-        self._feats = self._stats = self._work = None  # allocated with the first frame
-        self._llr = self._llr_work = self._w = None
-        self._noise2 = 0.0
         self._k = {
             "region_moments": rt.kernel("tracking/region.cl", "region_moments", g.dtype),
             # the blurs' radius is a define: one build per Gaussian, whatever the frame size
