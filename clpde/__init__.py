@@ -3,21 +3,31 @@
 # First: importing it turns Ctrl-C into one line while the libraries below load.
 from . import _interrupt  # noqa: F401  # isort: skip
 
-from . import (
-    data,  # test images and scenes, like skimage.data
-    surface,  # clpde.surface.ImplicitSurface and the chapter-4 flows
-)
 from ._version import __version__  # noqa: F401  (clpde.__version__)
 from .errors import ClpdeError, InputError, KernelBuildError, NoDeviceError
-from .film import detect_defects, inpaint_video
-from .imagedata import grow_mask
-from .inpainting.api import Inpainting, inpaint
-from .planar.flows import FLOWS, PlanarFlow, diffuse, stability_limit
-from .planar.rof import denoise_tv
-from .regions.api import track_region  # region tracking on deforming surfaces (section 2.2)
-from .runtime import devices, get_runtime, use_device
-from .scale.batch import batch  # many files over Dask workers (needs clpde[batch]; imported lazily)
-from .tracking.contours import MorphingTracker, track
+
+# Each public name and the module that holds it, imported on first use (as scikit-image's
+# lazy loader does): `import clpde` then costs the errors module, not scipy.signal (film),
+# trimesh (surfaces) and the rest, which every command would otherwise pay before it starts.
+_LAZY = {
+    "detect_defects": "film",
+    "inpaint_video": "film",
+    "grow_mask": "imagedata",
+    "Inpainting": "inpainting.api",
+    "inpaint": "inpainting.api",
+    "FLOWS": "planar.flows",
+    "PlanarFlow": "planar.flows",
+    "diffuse": "planar.flows",
+    "stability_limit": "planar.flows",
+    "denoise_tv": "planar.rof",
+    "track_region": "regions.api",  # region tracking on deforming surfaces (section 2.2)
+    "devices": "runtime",
+    "get_runtime": "runtime",
+    "use_device": "runtime",
+    "batch": "scale.batch",  # many files over Dask workers (needs clpde[batch])
+    "MorphingTracker": "tracking.contours",
+    "track": "tracking.contours",
+}
 
 __all__ = [
     "FLOWS",
@@ -46,15 +56,20 @@ __all__ = [
 ]
 
 # The submodules that are public API besides the names above (`clpde.io.read_image`,
-# `clpde.inpainting.available()`); the others stay importable (`import clpde.rof`) but are
-# left out of dir(clpde), so that it lists what a user calls, as scikit-image's does.
+# `clpde.inpainting.available()`, `clpde.data.astronaut_damaged()`,
+# `clpde.surface.ImplicitSurface`); the others stay importable (`import clpde.planar.rof`)
+# but are left out of dir(clpde), so that it lists what a user calls, as scikit-image's does.
 PUBLIC_MODULES = ("data", "inpainting", "io", "surface")
 
 
 def __getattr__(name: str):
-    if name in PUBLIC_MODULES:  # loaded on first use, as `import clpde.inpainting` would
-        import importlib
+    import importlib
 
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+        globals()[name] = value  # later lookups skip this function
+        return value
+    if name in PUBLIC_MODULES:  # as `import clpde.inpainting` would
         return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
