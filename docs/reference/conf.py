@@ -1,0 +1,18 @@
+"""Sphinx configuration of clpde's API reference (built by .ci/run with warnings as errors:
+python -m sphinx -W -b html docs/reference build/reference)."""
+
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))  # the checkout's clpde, as the tests import it
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # generate.py
+
+project = "clpde"
+extensions = ["sphinx.ext.autodoc", "numpydoc", "generate"]
+# numpydoc lists each class's members itself; autodoc's own member tables would repeat them.
+numpydoc_show_class_members = False
+autodoc_default_options = {"members": False}
+autodoc_typehints = "none"  # the numpydoc Parameters sections give the types
+html_theme = "alabaster"
+exclude_patterns = ["_build"]
