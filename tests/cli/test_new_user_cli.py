@@ -81,16 +81,17 @@ def test_every_folder_command_has_one_rule(tmp_path, capsys, command):
         for a in command
     ]
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "old.png").write_bytes(b"old")
+    folder = out / "inpaint_demo" if "--demo" in command else out  # the demo's own folder
+    folder.mkdir(parents=True)
+    (folder / "old.png").write_bytes(b"old")
     assert main([*command, "-o", str(out)]) == 2
     assert "give --overwrite" in _one_error_line(capsys)
-    (out / "notes.txt").write_text("mine")
+    (folder / "notes.txt").write_text("mine")
     assert main([*command, "-o", str(out), "--overwrite"]) == 2
     assert "'notes.txt', which clpde does not write" in _one_error_line(capsys)
     assert main([*command, "-o", str(tmp_path / "no" / "such")]) == 2
     assert "does not exist; create it first" in _one_error_line(capsys)
-    assert sorted(os.listdir(out)) == ["notes.txt", "old.png"]
+    assert sorted(os.listdir(folder)) == ["notes.txt", "old.png"]
     assert not (tmp_path / "no").exists()
 
 
