@@ -18,7 +18,7 @@ import numpy as np
 from .._progress import on_terminal
 from ..errors import InputError
 from ..film.restore import restore_film
-from ..imagedata import split_alpha
+from ..imagedata import mask_plane, split_alpha
 from ..inpainting.api import inpaint
 from ..io import frames as frame_io
 from ..io.images import (
@@ -217,10 +217,7 @@ def _run_tiled(command, input, output, force, device, **options) -> bool:
 def _read_soft_mask(path, shape) -> np.ndarray:
     """The mask's grey level over its dtype's range as a float degree of damage in [0, 1]
     (a colour mask: its brightest colour channel; an alpha channel is ignored)."""
-    mask = read_image(path)
-    if mask.ndim == 3:
-        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
-        mask = mask[..., :channels].max(axis=-1)
+    mask = mask_plane(read_image(path))
     if mask.shape != tuple(shape):
         raise InputError(
             f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
