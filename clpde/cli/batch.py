@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import io
 import sys
+import time
 
 from ..errors import InputError
 from ..scale.batch import batch, result_table
@@ -169,8 +170,19 @@ def run_batch(args) -> int:
             file=sys.stderr,
         )
         return 130
-    print(result_table(result), file=sys.stderr)
+    print(result_table(result, _since_start()), file=sys.stderr)
     return FAILED_STATUS if result.failed else 0
+
+
+def _since_start() -> float | None:
+    """Seconds since this process started, Python's start and imports included: the time
+    the user waited. psutil comes with Dask's distributed, which batches need."""
+    try:
+        import psutil
+
+        return time.time() - psutil.Process().create_time()
+    except Exception:  # noqa: BLE001  (no psutil, or no process table: the call's own time)
+        return None
 
 
 class _BatchParser(Parser):

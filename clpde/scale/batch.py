@@ -484,12 +484,14 @@ def batch(
     return result
 
 
-def result_table(result: BatchResult) -> str:
-    """One line per failure and a summary line, as the command line prints them."""
+def result_table(result: BatchResult, seconds: float | None = None) -> str:
+    """One line per failure and a summary line, as the command line prints them; `seconds`
+    (the command's whole time) in place of the batch call's, if given."""
     lines = [f"  {r.input}: {r.error}" for r in result.failed]
+    seconds = result.seconds if seconds is None else seconds
     summary = (
         f"clpde batch: {len(result.done)} done, {len(result.skipped)} skipped, "
-        f"{len(result.failed)} failed in {result.seconds:.1f} s"
+        f"{len(result.failed)} failed in {seconds:.1f} s"
         + (f" on {result.workers} worker(s)" if result.workers else " (no worker needed)")
     )
     if result.failed:

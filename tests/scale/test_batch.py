@@ -485,3 +485,28 @@ def test_an_interrupted_batch_leaves_no_empty_folder(client, photos, tmp_path, m
     with pytest.raises(KeyboardInterrupt):
         batch("diffuse", paths[:2], out, client=client, steps=5)
     assert out.is_dir()
+
+
+def test_the_command_reports_the_time_the_user_waited(client, photos, tmp_path):
+    """The summary's time is the command's own, from the process's start (Python's start
+    and imports included), not the batch call's."""
+    import re
+    import subprocess
+    import sys
+
+    paths, _ = photos
+    out = tmp_path / "out"
+    assert batch("diffuse", paths[:2], out, client=client, steps=5, flow="heat").ok
+    start = time.perf_counter()
+    run = subprocess.run(
+        [sys.executable, "-m", "clpde", "batch", "diffuse", *map(str, paths[:2]), "-o", str(out)]
+        + ["--steps", "5", "--flow", "heat"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
+    wall = time.perf_counter() - start
+    assert "0 done, 2 skipped" in run.stderr and "no worker needed" in run.stderr
+    reported = float(re.search(r"in ([\d.]+) s", run.stderr).group(1))
+    assert 0.8 * wall <= reported <= wall + 0.1
