@@ -51,6 +51,7 @@ from .options import TrackOptions
 from .prediction import MotionPrediction
 from .preprocessing import feature_field, prepare_frame
 from .region_term import RegionTerm
+from .follow import ObjectFollower
 
 
 @dataclass
@@ -179,7 +180,7 @@ class MorphingTracker:
         features: str | ArrayLike | Callable = "intensity",
         colour: bool = False,
         discrepancy: str = "adaptive",
-        motion: str | None = "kalman",
+        motion: str | None = "image",
         shape_weight: float = 0.0,
         equalize: bool | str = False,
         smooth: bool = True,
@@ -201,6 +202,7 @@ class MorphingTracker:
         storage: str = "lists",
         region_weight: float | None = None,
         curvature: float | None = None,
+        appearance: float | None = None,
         device: DeviceLike = None,
         dtype: DTypeLike | None = None,
     ):
@@ -236,6 +238,7 @@ class MorphingTracker:
             storage=storage,
             region_weight=region_weight,
             curvature=curvature,
+            appearance=appearance,
         )
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(dtype or np.float32)
@@ -250,6 +253,9 @@ class MorphingTracker:
         )
         self._scaled = scaled_frames(self.frames, colour)
         self.channels = (self._user if self._user is not None else self._scaled).shape[1]
+        # the appearance model's frames: colour where the footage has it
+        image = self.options.motion == "image"
+        self._looks = scaled_frames(self.frames, True) if image else None
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -273,9 +279,11 @@ class MorphingTracker:
         # The shape pull's target; without it the kernel multiplies it by 0, so any finite
         # buffer of the grid will do.
         prior = Field.empty(ls.grid) if options.shape_weight else ls.u.cur
-        prediction = MotionPrediction(options) if options.motion else None
+        image = options.motion == "image"
+        prediction = MotionPrediction(options) if options.motion and not image else None
         adaptive = options.discrepancy == "adaptive"
         region = RegionTerm(ls, options.region_weight) if adaptive else None
+        follow = ObjectFollower(self, ls) if image else None
         prepared_prev = self.prepared(0)
         fresh = True  # u is a signed distance with a band around its zero set
         for t in range(1, len(self.frames)):
@@ -290,6 +298,10 @@ class MorphingTracker:
                 change = background_change(prepared_prev, prepared, mask, noise2)
                 noise2_weight = noise2 * (QUIET_FACTOR if change < LIGHT_CHANGE else 1.0)
             shift = (0.0, 0.0)
+            if follow is not None:
+                prepared_prev, shift = follow.move(t, prepared_prev, prepared, mask)
+                region = follow.term or region
+                fresh = False
             if prediction is not None:
                 prepared_prev, shift, moved = prediction.move(
                     ls, prepared_prev, prepared, mask, noise2
@@ -318,6 +330,10 @@ class MorphingTracker:
                     fresh = True
             if prediction is not None:
                 prediction.observe(mask, new_mask)
+            if follow is not None:
+                cleaned = follow.observe(t, new_mask)
+                if (cleaned != new_mask).any():
+                    new_mask, u = cleaned, signed_distance(cleaned)
             mask = new_mask
             yield TrackState(
                 t,

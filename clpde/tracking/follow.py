@@ -1,0 +1,94 @@
+"""motion='image' (the default): each frame's contour starts where the image says the
+object went, and an appearance term keeps it on the object (appearance.py).
+
+Per frame: the object's motion from the previous frame (`appearance.object_motion`)
+carries the object's whole shape, hidden parts included, to its predicted place, where the
+morphing starts; the appearance model's log ratio there becomes the morphing's region
+speed; after the morphing, pieces far smaller than the object are dropped (a piece caught
+on an occluder) and the models learn the frame. The whole shape is the result, unless the
+result lost much of the prediction's area at once (the object went behind something): then
+the prediction is kept as the whole shape, so that the contour grows back where the object
+reappears.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from .appearance import AppearanceModel, AppearanceTerm, _warp, move_mask, object_motion
+from .levelset import LevelSet, signed_distance
+
+# A result keeping less than this share of the predicted area is taken as hidden in part.
+HIDDEN = 0.85
+# Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
+PIECE_SHARE, MIN_PIECE = 0.08, 10
+
+
+def _centroid(mask: np.ndarray) -> np.ndarray:
+    return np.array(ndimage.center_of_mass(mask)) if mask.any() else np.zeros(2)
+
+
+class ObjectFollower:
+    """The state of motion='image' over a track: the object's whole shape, its last
+    displacement, the appearance model and its term.
+
+    Parameters
+    ----------
+    tracker : MorphingTracker
+        The tracker (its options, its colour frames and its first mask).
+    ls : LevelSet
+        The tracker's level set.
+    """
+
+    def __init__(self, tracker, ls: LevelSet):
+        self.ls = ls
+        self.band = tracker.options.band_width
+        self.looks = tracker._looks
+        self.shape = tracker.first_mask.copy()
+        self.predicted = self.shape
+        self.velocity = np.zeros(2)
+        weight = tracker.options.appearance
+        self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
+        self.term = AppearanceTerm(ls, weight) if weight else None
+        if self.term is not None:
+            self.model.learn(self.model.bins(self.looks[0]), self.shape)
+        self._bins = None
+
+    def move(self, t, prepared_prev, prepared, mask):
+        """Predict frame t: move the level set to the whole shape's predicted place and set
+        the appearance term. Returns the previous frame's features moved with the object
+        (near it) and the displacement (dy, dx) of the object's centre."""
+        # matched in colour where the footage has it: a red object on a blue sky can have
+        # the sky's grey level
+        a = object_motion(self.looks[t - 1], self.looks[t], mask, self.velocity)
+        moved = move_mask(mask, a)
+        shift = _centroid(moved) - _centroid(mask) if moved.any() else np.zeros(2)
+        self.velocity = shift
+        predicted = move_mask(self.shape, a)
+        if not predicted.any():
+            predicted = moved if moved.any() else mask
+        self.predicted = predicted
+        self.ls.assign(signed_distance(predicted))
+        # F1: the previous frame carried with the object near its predicted place
+        near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
+        out = np.array(prepared_prev, np.float64, copy=True)
+        for c in range(out.shape[0]):
+            out[c][near] = _warp(prepared_prev[c], a)[near]
+        if self.term is not None:
+            self._bins = self.model.bins(self.looks[t])
+            self.term.set(self.model.log_ratio(self._bins, predicted))
+        return out, (float(shift[0]), float(shift[1]))
+
+    def observe(self, t, mask: np.ndarray) -> np.ndarray:
+        """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
+        labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
+        if n > 1:
+            sizes = np.bincount(labels.ravel())[1:]
+            keep = sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max())
+            mask = keep[labels - 1] & (labels > 0)
+        if self.term is not None and mask.any():
+            self.model.learn(self._bins, mask)
+        hidden = mask.sum() < HIDDEN * self.predicted.sum()
+        self.shape = (self.predicted | mask) if hidden else mask.copy()
+        return mask
