@@ -15,7 +15,7 @@ noise sigma 0.01; `grey` gives grey frames.
 
 Classes:
 
-- ``fast``: a curved path at 8-25 px a frame (the speed changes along the path).
+- ``fast``: an elliptic path at 10-26 px a frame (the speed changes along it).
 - ``pan``: the background pans 1-3 px a frame and dims to 55-70 % while the object moves
   2-6 px a frame (object and background lit alike).
 - ``deform``: the object turns (3-8 degrees a frame) and its outline deforms, moving
@@ -88,23 +88,19 @@ def _outline(ly, lx, radius, star, wobble):
 
 
 def _path(rng, speeds, margin=26):
-    """Centres along a curved path at the given speed per frame, bouncing off the frame's
-    edges (kept `margin` px inside)."""
-    y, x = rng.uniform(margin, H - margin), rng.uniform(margin, W - margin)
-    heading = rng.uniform(0, 2 * np.pi)
-    turn = rng.uniform(-0.35, 0.35)
-    out = [(y, x)]
-    for s in speeds[1:]:
-        heading += turn + rng.normal(0, 0.1)
-        ny, nx = y + s * np.sin(heading), x + s * np.cos(heading)
-        if not margin <= ny <= H - margin:
-            heading = -heading
-            ny = y + s * np.sin(heading)
-        if not margin <= nx <= W - margin:
-            heading = np.pi - heading
-            nx = x + s * np.cos(heading)
-        y, x = float(np.clip(ny, margin, H - margin)), float(np.clip(nx, margin, W - margin))
-        out.append((y, x))
+    """Centres along an ellipse about the frame's middle (a curved path that stays in the
+    frame, `margin` px inside), at the given speed per frame along it, from a random
+    place and in a random direction."""
+    ry = rng.uniform(0.6, 1.0) * (H / 2 - margin)
+    rx = rng.uniform(0.6, 1.0) * (W / 2 - margin)
+    cy, cx = H / 2 + rng.uniform(-3, 3), W / 2 + rng.uniform(-3, 3)
+    phase, sense = rng.uniform(0, 2 * np.pi), rng.choice([-1.0, 1.0])
+    out = []
+    for s in speeds:
+        # the arc length of a small step: the ellipse's speed at this phase
+        rate = np.hypot(ry * np.cos(phase), rx * np.sin(phase))
+        phase += sense * s / max(rate, 1.0)
+        out.append((cy + ry * np.sin(phase), cx + rx * np.cos(phase)))
     return out
 
 

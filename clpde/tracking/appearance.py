@@ -47,27 +47,35 @@ def _correlate(a: np.ndarray, b: np.ndarray, shape) -> np.ndarray:
 def match_shift(prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0)) -> np.ndarray:
     """(dy, dx), whole pixels, that best carries `prev` (C, H, W) under `weight` (H, W,
     0/1) onto `cur`: the masked normalised cross-correlation, highest over |shift| <=
-    reach, with a faint preference for shifts near `prior`."""
+    reach, with a faint preference for shifts near `prior`. `cur` is extended by its edge
+    values, so that an object partly out of the frame is still matched."""
     h, w = weight.shape
-    shape = (h + reach, w + reach)
+    r = int(reach)
+    shape = (h + 3 * r, w + 3 * r)
     n = weight.sum()
+    wp = np.zeros(shape)
+    wp[r : r + h, r : r + w] = weight
     score = np.zeros(shape)
     den_t = 0.0
     var_c = np.zeros(shape)
     for p, c in zip(prev, cur, strict=True):
-        t = (p - (p * weight).sum() / n) * weight
+        t = np.zeros(shape)
+        t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
         den_t += (t * t).sum()
-        s1 = _correlate(weight, c, shape)
-        s2 = _correlate(weight, c * c, shape)
+        cp = np.zeros(shape)
+        cp[: h + 2 * r, : w + 2 * r] = np.pad(c, r, mode="edge")
+        s1 = _correlate(wp, cp, shape)
+        s2 = _correlate(wp, cp * cp, shape)
         var_c += np.maximum(s2 - s1 * s1 / n, 0)
-        score += _correlate(t, c, shape)
+        score += _correlate(t, cp, shape)
     ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
+    # correlation index k is the shift k, negative shifts wrapped around
     dy = np.fft.fftfreq(shape[0], 1 / shape[0])[:, None]
     dx = np.fft.fftfreq(shape[1], 1 / shape[1])[None, :]
-    ncc -= 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
+    ncc = ncc - 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
     ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | (var_c < 1e-9 * n)] = -np.inf
     k = np.unravel_index(int(np.argmax(ncc)), shape)
-    return np.array([dy[k[0], 0], dx[0, k[1]]])
+    return np.array([float(dy[k[0], 0]), float(dx[0, k[1]])])
 
 
 def _warp(image, a, order=1):
@@ -90,31 +98,42 @@ def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: 
     # occluder's still edge
     rim = ndimage.binary_dilation(mask)
     d = match_shift(prev, cur, rim.astype(np.float64), reach, prior)
-    a = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
+    shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
-    # cur's coordinates), grey levels averaged over the channels
+    # cur's coordinates), the grey levels averaged over the channels; the affine part
+    # about the object's centre, so that turning and shifting are not confounded.
     gp, gc = prev.mean(axis=0), cur.mean(axis=0)
     yy, xx = np.mgrid[: gc.shape[0], : gc.shape[1]] + 0.0
     gy, gx = np.gradient(gp)
+    centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
+    a = shifted.copy()
+
+    def cost(a):
+        where = _warp(rim * 1.0, a, 1) > 0.5
+        return float(np.mean((_warp(gp, a)[where] - gc[where]) ** 2)) if where.any() else np.inf
+
+    start = cost(shifted)
     for _ in range(steps):
         where = _warp(rim * 1.0, a, 1) > 0.5
         if where.sum() < 12:
             break
-        y, x = yy[where], xx[where]
+        y, x = yy[where] - centre[0], xx[where] - centre[1]
         warped = _warp(gp, a)[where]
         wy, wx = _warp(gy, a)[where], _warp(gx, a)[where]
         r = warped - gc[where]
         jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
         jtj = jac.T @ jac
-        if np.linalg.cond(jtj) > 1e8:
-            break
-        step = np.linalg.solve(jtj, -jac.T @ r)
-        a = a + step.reshape(2, 3)
-        if np.abs(step[[2, 5]]).max() < 0.02:
+        jtj += 1e-3 * np.trace(jtj) / 6 * np.eye(6)  # a little damping
+        step = np.linalg.solve(jtj, -jac.T @ r).reshape(2, 3)
+        # a step in the centred parameters, back to frame coordinates
+        step[:, 2] -= step[:, :2] @ centre
+        a = a + step
+        if np.abs(step[:, :2]).max() < 1e-3 and np.abs(step[:, 2]).max() < 0.02:
             break
     lin = a[:, :2]
-    if not np.all(np.isfinite(a)) or not 0.8 < abs(np.linalg.det(lin)) < 1.25:
-        a = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])  # a wild fit: the shift only
+    sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
+    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or cost(a) > start:
+        a = shifted  # a wild or worse fit: the shift only
     return a
 
 
