@@ -96,7 +96,7 @@ def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: 
     `prior`: the last displacement (prev -> cur), which the search prefers among equals."""
     # the object and a 1 px rim (its edge's contrast); a wider rim takes in more of an
     # occluder's still edge
-    rim = ndimage.binary_dilation(mask)
+    rim = mask
     d = match_shift(prev, cur, rim.astype(np.float64), reach, prior)
     shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:

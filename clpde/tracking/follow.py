@@ -23,6 +23,9 @@ from .levelset import LevelSet, signed_distance
 HIDDEN = 0.85
 # Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
 PIECE_SHARE, MIN_PIECE = 0.08, 10
+# The start keeps the appearance's visible part of the prediction unless less than this
+# share of it remains.
+VISIBLE = 0.3
 
 
 def _centroid(mask: np.ndarray) -> np.ndarray:
@@ -54,6 +57,7 @@ class ObjectFollower:
         if self.term is not None:
             self.model.learn(self.model.bins(self.looks[0]), self.shape)
         self._bins = None
+        self._ratio = None  # the last frame's log ratio (surroundings over object)
 
     def move(self, t, prepared_prev, prepared, mask):
         """Predict frame t: move the level set to the whole shape's predicted place and set
@@ -61,7 +65,12 @@ class ObjectFollower:
         (near it) and the displacement (dy, dx) of the object's centre."""
         # matched in colour where the footage has it: a red object on a blue sky can have
         # the sky's grey level
-        a = object_motion(self.looks[t - 1], self.looks[t], mask, self.velocity)
+        # The object's pixels that look like it: a piece of an occluder or of the
+        # background the contour took in would pull the match to its own (lack of) motion.
+        pixels = mask & (self._ratio < 0) if self._ratio is not None else mask
+        if pixels.sum() < 0.3 * mask.sum():
+            pixels = mask
+        a = object_motion(self.looks[t - 1], self.looks[t], pixels, self.velocity)
         moved = move_mask(mask, a)
         shift = _centroid(moved) - _centroid(mask) if moved.any() else np.zeros(2)
         self.velocity = shift
@@ -69,16 +78,32 @@ class ObjectFollower:
         if not predicted.any():
             predicted = moved if moved.any() else mask
         self.predicted = predicted
-        self.ls.assign(signed_distance(predicted))
+        start = predicted
+        if self.term is not None:
+            self._bins = self.model.bins(self.looks[t])
+            self._ratio = self.model.log_ratio(self._bins, predicted)
+            self.term.set(self._ratio)
+            start = self._visible(predicted)
+        self.ls.assign(signed_distance(start))
         # F1: the previous frame carried with the object near its predicted place
         near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
         for c in range(out.shape[0]):
             out[c][near] = _warp(prepared_prev[c], a)[near]
-        if self.term is not None:
-            self._bins = self.model.bins(self.looks[t])
-            self.term.set(self.model.log_ratio(self._bins, predicted))
         return out, (float(shift[0]), float(shift[1]))
+
+    def _visible(self, predicted: np.ndarray) -> np.ndarray:
+        """The morphing's start: the predicted whole shape less what looks like the
+        surroundings there (an occluder, the background it moved off), so that the contour
+        need not carve a hidden strip out from the edge; the whole prediction where the
+        appearance tells too little (less than VISIBLE of it would remain)."""
+        looks = ndimage.gaussian_filter(self._ratio, 1.0) < 0
+        start = ndimage.binary_opening(predicted & looks)
+        labels, n = ndimage.label(start, structure=np.ones((3, 3)))
+        if n > 1:
+            sizes = np.bincount(labels.ravel())[1:]
+            start = (sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max()))[labels - 1] & (labels > 0)
+        return start if start.sum() >= VISIBLE * predicted.sum() else predicted
 
     def observe(self, t, mask: np.ndarray) -> np.ndarray:
         """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
