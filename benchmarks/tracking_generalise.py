@@ -74,9 +74,11 @@ def run_mcv(frames, first, iterations=20, smoothing=1, lambda2=1.0):
 
     out = [first]
     for k in range(1, len(frames)):
+        f = np.asarray(frames[k], np.float64)
+        grey = f @ np.array([0.299, 0.587, 0.114]) if f.ndim == 3 else f
         out.append(
             morphological_chan_vese(
-                frames[k], iterations, init_level_set=out[-1], smoothing=smoothing, lambda2=lambda2
+                grey, iterations, init_level_set=out[-1], smoothing=smoothing, lambda2=lambda2
             ).astype(bool)
         )
     return np.array(out)
@@ -96,6 +98,36 @@ def run_mgac(frames, first, iterations=50, smoothing=1, balloon=0):
                 edges, iterations, init_level_set=out[-1], smoothing=smoothing, balloon=balloon
             ).astype(bool)
         )
+    return np.array(out)
+
+
+def run_grabcut(frames, first, erode=3, ring=20, iterations=3):
+    """OpenCV's GrabCut frame by frame, seeded from the previous result: its erosion by
+    `erode` px sure foreground, the rest probable foreground, a `ring` px ring around it
+    probable background, everything farther sure background."""
+    import cv2
+    from scipy import ndimage
+
+    out = [first]
+    for k in range(1, len(frames)):
+        f = np.asarray(frames[k], np.float64)
+        img = np.repeat(f[..., None], 3, axis=2) if f.ndim == 2 else f[..., :3]
+        img = np.ascontiguousarray(np.clip(img * 255, 0, 255).astype(np.uint8))
+        prev = out[-1]
+        seed = np.full(prev.shape, cv2.GC_BGD, np.uint8)
+        seed[ndimage.binary_dilation(prev, iterations=ring)] = cv2.GC_PR_BGD
+        seed[prev] = cv2.GC_PR_FGD
+        seed[ndimage.binary_erosion(prev, iterations=erode)] = cv2.GC_FGD
+        if not prev.any():
+            out.append(prev)
+            continue
+        bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
+        try:
+            cv2.grabCut(img, seed, None, bgd, fgd, iterations, cv2.GC_INIT_WITH_MASK)
+        except cv2.error:  # no sure or probable pixels of one kind
+            out.append(prev)
+            continue
+        out.append((seed == cv2.GC_FGD) | (seed == cv2.GC_PR_FGD))
     return np.array(out)
 
 

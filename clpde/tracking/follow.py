@@ -23,6 +23,11 @@ from .levelset import LevelSet, signed_distance
 HIDDEN = 0.85
 # Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
 PIECE_SHARE, MIN_PIECE = 0.08, 10
+# The result stays within this many px of the predicted whole shape.
+GROW = 6
+# The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
+# within +-PRIOR_CAP.
+PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
 # The start keeps the appearance's visible part of the prediction unless less than this
 # share of it remains.
 VISIBLE = 0.3
@@ -81,7 +86,12 @@ class ObjectFollower:
         start = predicted
         if self.term is not None:
             self._bins = self.model.bins(self.looks[t])
-            self._ratio = self.model.log_ratio(self._bins, predicted)
+            # the appearance's evidence and the prediction's: the log prior odds of the
+            # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
+            # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as
+            # it is and only clear evidence carves it or grows it
+            prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
+            self._ratio = self.model.log_ratio(self._bins, predicted) + prior
             self.term.set(self._ratio)
             start = self._visible(predicted)
         self.ls.assign(signed_distance(start))
@@ -98,6 +108,7 @@ class ObjectFollower:
         need not carve a hidden strip out from the edge; the whole prediction where the
         appearance tells too little (less than VISIBLE of it would remain)."""
         looks = ndimage.gaussian_filter(self._ratio, 1.0) < 0
+
         start = ndimage.binary_opening(predicted & looks)
         labels, n = ndimage.label(start, structure=np.ones((3, 3)))
         if n > 1:
@@ -107,13 +118,18 @@ class ObjectFollower:
 
     def observe(self, t, mask: np.ndarray) -> np.ndarray:
         """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
+        # no farther than GROW px from the prediction: the motion is accounted for, and a
+        # frame's deformation is small; a leak along a look-alike stops there
+        mask = mask & ndimage.binary_dilation(self.predicted, iterations=GROW)
         labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
         if n > 1:
             sizes = np.bincount(labels.ravel())[1:]
             keep = sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max())
             mask = keep[labels - 1] & (labels > 0)
         if self.term is not None and mask.any():
-            self.model.learn(self._bins, mask)
+            # the object's model learns the pixels that did not look clearly like the
+            # surroundings: a strip of an occluder taken in by mistake is not learned
+            self.model.learn(self._bins, mask & (self._ratio < 1.0))
         hidden = mask.sum() < HIDDEN * self.predicted.sum()
         self.shape = (self.predicted | mask) if hidden else mask.copy()
         return mask
