@@ -31,6 +31,7 @@ from .levelset import LevelSet
 # The default's settings, chosen on the calibration halves of benchmarks/track_corpus.py
 # and benchmarks/track_photo_corpus.py (benchmarks/tracking_generalise.py).
 REACH = 32  # px: the widest shift per frame the correlation searches
+MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is kept
 APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time
 RING = (3, 16)  # px: the surroundings' ring around the predicted contour
 MEMORY = 0.5  # the object model's running mean: this share of the new frame's histogram
@@ -75,6 +76,7 @@ def match_shift(prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0)) -> np.n
     ncc = ncc - 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
     ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | (var_c < 1e-9 * n)] = -np.inf
     k = np.unravel_index(int(np.argmax(ncc)), shape)
+    match_shift.peak = float(ncc[k])  # the match's quality, read by object_motion
     return np.array([float(dy[k[0], 0]), float(dx[0, k[1]])])
 
 
@@ -98,6 +100,10 @@ def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: 
     # occluder's still edge
     rim = mask
     d = match_shift(prev, cur, rim.astype(np.float64), reach, prior)
+    if match_shift.peak < MATCH_FLOOR:
+        # nothing matches (the object went behind something): it keeps its velocity
+        d = np.asarray(prior, np.float64)
+        return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
     # cur's coordinates), the grey levels averaged over the channels; the affine part
@@ -108,19 +114,21 @@ def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: 
     centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
     a = shifted.copy()
 
+    # one set of pixels for every step and for the costs compared: cur's pixels where the
+    # shift puts the object
+    where = _warp(rim * 1.0, shifted, 1) > 0.5
+    if where.sum() < 12:
+        return shifted
+    y, x = yy[where] - centre[0], xx[where] - centre[1]
+    target = gc[where]
+
     def cost(a):
-        where = _warp(rim * 1.0, a, 1) > 0.5
-        return float(np.mean((_warp(gp, a)[where] - gc[where]) ** 2)) if where.any() else np.inf
+        return float(np.mean((_warp(gp, a)[where] - target) ** 2))
 
     start = cost(shifted)
     for _ in range(steps):
-        where = _warp(rim * 1.0, a, 1) > 0.5
-        if where.sum() < 12:
-            break
-        y, x = yy[where] - centre[0], xx[where] - centre[1]
-        warped = _warp(gp, a)[where]
+        r = _warp(gp, a)[where] - target
         wy, wx = _warp(gy, a)[where], _warp(gx, a)[where]
-        r = warped - gc[where]
         jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
         jtj = jac.T @ jac
         jtj += 1e-3 * np.trace(jtj) / 6 * np.eye(6)  # a little damping
@@ -132,7 +140,7 @@ def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: 
             break
     lin = a[:, :2]
     sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
-    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or cost(a) > start:
+    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < 0.95 * start:
         a = shifted  # a wild or worse fit: the shift only
     return a
 

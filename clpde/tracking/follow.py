@@ -62,7 +62,8 @@ class ObjectFollower:
         if self.term is not None:
             self.model.learn(self.model.bins(self.looks[0]), self.shape)
         self._bins = None
-        self._ratio = None  # the last frame's log ratio (surroundings over object)
+        self._ratio = None  # the last frame's log odds (surroundings over object)
+        self._looks_ratio = None  # the same from the looks alone
 
     def move(self, t, prepared_prev, prepared, mask):
         """Predict frame t: move the level set to the whole shape's predicted place and set
@@ -72,7 +73,7 @@ class ObjectFollower:
         # the sky's grey level
         # The object's pixels that look like it: a piece of an occluder or of the
         # background the contour took in would pull the match to its own (lack of) motion.
-        pixels = mask & (self._ratio < 0) if self._ratio is not None else mask
+        pixels = mask & (self._looks_ratio < 0) if self._looks_ratio is not None else mask
         if pixels.sum() < 0.3 * mask.sum():
             pixels = mask
         a = object_motion(self.looks[t - 1], self.looks[t], pixels, self.velocity)
@@ -91,7 +92,8 @@ class ObjectFollower:
             # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as
             # it is and only clear evidence carves it or grows it
             prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
-            self._ratio = self.model.log_ratio(self._bins, predicted) + prior
+            self._looks_ratio = self.model.log_ratio(self._bins, predicted)
+            self._ratio = self._looks_ratio + prior
             self.term.set(self._ratio)
             start = self._visible(predicted)
         self.ls.assign(signed_distance(start))
@@ -129,7 +131,7 @@ class ObjectFollower:
         if self.term is not None and mask.any():
             # the object's model learns the pixels that did not look clearly like the
             # surroundings: a strip of an occluder taken in by mistake is not learned
-            self.model.learn(self._bins, mask & (self._ratio < 1.0))
+            self.model.learn(self._bins, mask & (self._looks_ratio < 1.0))
         hidden = mask.sum() < HIDDEN * self.predicted.sum()
         self.shape = (self.predicted | mask) if hidden else mask.copy()
         return mask
