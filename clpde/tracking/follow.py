@@ -28,6 +28,8 @@ GROW = 6
 # The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
 # within +-PRIOR_CAP.
 PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
+# The motion's evidence (a hidden part does not move with the object) is capped at this.
+MOTION_CAP = 6.0
 # The start keeps the appearance's visible part of the prediction unless less than this
 # share of it remains.
 VISIBLE = 0.3
@@ -93,7 +95,7 @@ class ObjectFollower:
             # it is and only clear evidence carves it or grows it
             prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
             self._looks_ratio = self.model.log_ratio(self._bins, predicted)
-            self._ratio = self._looks_ratio + prior
+            self._ratio = self._looks_ratio + prior + self._motion_ratio(t, a, moved)
             self.term.set(self._ratio)
             start = self._visible(predicted)
         self.ls.assign(signed_distance(start))
@@ -103,6 +105,22 @@ class ObjectFollower:
         for c in range(out.shape[0]):
             out[c][near] = _warp(prepared_prev[c], a)[near]
         return out, (float(shift[0]), float(shift[1]))
+
+    def _motion_ratio(self, t, a, moved) -> np.ndarray:
+        """Log odds of 'not the object' from the motion: where the previous frame's visible
+        object, carried by the motion `a`, lands (`moved`), the new frame should show the
+        same colours; a large difference there says something hides the object (an
+        occluder's pixels do not move with it). The object's residual is taken as
+        Gaussian with the median's spread over `moved`, anything else as uniform; capped
+        at +-MOTION_CAP, 0 where the previous frame did not show the object."""
+        prev = self.looks[t - 1]
+        carried = np.stack([_warp(c, a) for c in prev])
+        r = ndimage.gaussian_filter(np.sqrt(((self.looks[t] - carried) ** 2).sum(axis=0)), 1.0)
+        if moved.sum() < 12:
+            return np.zeros(r.shape)
+        sigma = max(1.4826 * 1.5 * float(np.median(r[moved])), 0.03)
+        ratio = 0.5 * (r / sigma) ** 2 + np.log(sigma * np.sqrt(2 * np.pi))
+        return np.where(moved, np.clip(ratio, -MOTION_CAP, MOTION_CAP), 0.0)
 
     def _visible(self, predicted: np.ndarray) -> np.ndarray:
         """The morphing's start: the predicted whole shape less what looks like the
