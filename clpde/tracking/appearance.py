@@ -38,20 +38,21 @@ MEMORY = 0.5  # the object model's running mean: this share of the new frame's h
 BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
 
 
-def _correlate(a: np.ndarray, b: np.ndarray, shape) -> np.ndarray:
-    """Cross-correlation c[s] = sum_x a[x] b[x + s] for every shift, by FFT (zero padded)."""
-    fa = np.fft.rfft2(a, shape)
-    fb = np.fft.rfft2(b, shape)
-    return np.fft.irfft2(np.conj(fa) * fb, shape)
-
-
 def match_shift(prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0)) -> np.ndarray:
     """(dy, dx), whole pixels, that best carries `prev` (C, H, W) under `weight` (H, W,
     0/1) onto `cur`: the masked normalised cross-correlation, highest over |shift| <=
     reach, with a faint preference for shifts near `prior`. `cur` is extended by its edge
     values, so that an object partly out of the frame is still matched."""
-    h, w = weight.shape
     r = int(reach)
+    # the object's box in prev, and cur's pixels within reach of it (edge values beyond)
+    ys, xs = np.nonzero(weight)
+    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+    weight = weight[y0:y1, x0:x1]
+    prev = np.asarray(prev)[:, y0:y1, x0:x1]
+    cur = np.pad(np.asarray(cur), ((0, 0), (r, r), (r, r)), mode="edge")[
+        :, y0 : y1 + 2 * r, x0 : x1 + 2 * r
+    ]
+    h, w = weight.shape
     shape = (h + 3 * r, w + 3 * r)
     n = weight.sum()
     wp = np.zeros(shape)
@@ -59,16 +60,18 @@ def match_shift(prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0)) -> np.n
     score = np.zeros(shape)
     den_t = 0.0
     var_c = np.zeros(shape)
+    fw = np.conj(np.fft.rfft2(wp, shape))
     for p, c in zip(prev, cur, strict=True):
         t = np.zeros(shape)
         t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
         den_t += (t * t).sum()
         cp = np.zeros(shape)
-        cp[: h + 2 * r, : w + 2 * r] = np.pad(c, r, mode="edge")
-        s1 = _correlate(wp, cp, shape)
-        s2 = _correlate(wp, cp * cp, shape)
+        cp[: h + 2 * r, : w + 2 * r] = c
+        fc = np.fft.rfft2(cp, shape)
+        s1 = np.fft.irfft2(fw * fc, shape)
+        s2 = np.fft.irfft2(fw * np.fft.rfft2(cp * cp, shape), shape)
         var_c += np.maximum(s2 - s1 * s1 / n, 0)
-        score += _correlate(t, cp, shape)
+        score += np.fft.irfft2(np.conj(np.fft.rfft2(t, shape)) * fc, shape)
     ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
     # correlation index k is the shift k, negative shifts wrapped around
     dy = np.fft.fftfreq(shape[0], 1 / shape[0])[:, None]
@@ -122,13 +125,19 @@ def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: 
     y, x = yy[where] - centre[0], xx[where] - centre[1]
     target = gc[where]
 
+    pts = np.stack([yy[where], xx[where]])
+
+    def at(image, a):  # image read at A x for the pixels x of `where`
+        coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
+        return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+
     def cost(a):
-        return float(np.mean((_warp(gp, a)[where] - target) ** 2))
+        return float(np.mean((at(gp, a) - target) ** 2))
 
     start = cost(shifted)
     for _ in range(steps):
-        r = _warp(gp, a)[where] - target
-        wy, wx = _warp(gy, a)[where], _warp(gx, a)[where]
+        r = at(gp, a) - target
+        wy, wx = at(gy, a), at(gx, a)
         jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
         jtj = jac.T @ jac
         jtj += 1e-3 * np.trace(jtj) / 6 * np.eye(6)  # a little damping

@@ -44,6 +44,7 @@ from ..fields import Field, check_fits
 from ..runtime import DeviceLike, get_runtime
 from .adaptive import LIGHT_CHANGE, QUIET_FACTOR, background_change, noise_variance
 from .confidence import track_confidence
+from .follow import ObjectFollower
 from .inputs import check_frames, check_mask, scaled_frames, user_features
 from .levelset import GHOST, MARGIN, LevelSet, signed_distance
 from .morph import morph_pair
@@ -51,7 +52,6 @@ from .options import TrackOptions
 from .prediction import MotionPrediction
 from .preprocessing import feature_field, prepare_frame
 from .region_term import RegionTerm
-from .follow import ObjectFollower
 
 
 @dataclass

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .appearance import AppearanceModel, AppearanceTerm, _warp, move_mask, object_motion
+from .appearance import AppearanceModel, AppearanceTerm, move_mask, object_motion
 from .levelset import LevelSet, signed_distance
 
 # A result keeping less than this share of the predicted area is taken as hidden in part.
@@ -33,6 +33,14 @@ MOTION_CAP = 6.0
 # The start keeps the appearance's visible part of the prediction unless less than this
 # share of it remains.
 VISIBLE = 0.3
+
+
+def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """image read at A x for the pixels x of `where` (the affine map of object_motion):
+    the warp at the pixels needed only."""
+    pts = np.array(np.nonzero(where), np.float64)
+    coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
+    return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
 
 
 def _centroid(mask: np.ndarray) -> np.ndarray:
@@ -103,7 +111,7 @@ class ObjectFollower:
         near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
         for c in range(out.shape[0]):
-            out[c][near] = _warp(prepared_prev[c], a)[near]
+            out[c][near] = _at(prepared_prev[c], a, near)
         return out, (float(shift[0]), float(shift[1]))
 
     def _motion_ratio(self, t, a, moved) -> np.ndarray:
@@ -113,11 +121,14 @@ class ObjectFollower:
         occluder's pixels do not move with it). The object's residual is taken as
         Gaussian with the median's spread over `moved`, anything else as uniform; capped
         at +-MOTION_CAP, 0 where the previous frame did not show the object."""
-        prev = self.looks[t - 1]
-        carried = np.stack([_warp(c, a) for c in prev])
-        r = ndimage.gaussian_filter(np.sqrt(((self.looks[t] - carried) ** 2).sum(axis=0)), 1.0)
         if moved.sum() < 12:
-            return np.zeros(r.shape)
+            return np.zeros(moved.shape)
+        near = ndimage.binary_dilation(moved, iterations=2)
+        cur = self.looks[t][:, near]
+        carried = np.stack([_at(c, a, near) for c in self.looks[t - 1]])
+        r = np.zeros(moved.shape)
+        r[near] = np.sqrt(((cur - carried) ** 2).sum(axis=0))
+        r = ndimage.gaussian_filter(r, 1.0)
         sigma = max(1.4826 * 1.5 * float(np.median(r[moved])), 0.03)
         ratio = 0.5 * (r / sigma) ** 2 + np.log(sigma * np.sqrt(2 * np.pi))
         return np.where(moved, np.clip(ratio, -MOTION_CAP, MOTION_CAP), 0.0)
