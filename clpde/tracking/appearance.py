@@ -38,11 +38,14 @@ MEMORY = 0.5  # the object model's running mean: this share of the new frame's h
 BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
 
 
-def match_shift(prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0)) -> np.ndarray:
+def match_shift(
+    prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0), within: float | None = None
+) -> np.ndarray:
     """(dy, dx), whole pixels, that best carries `prev` (C, H, W) under `weight` (H, W,
     0/1) onto `cur`: the masked normalised cross-correlation, highest over |shift| <=
-    reach, with a faint preference for shifts near `prior`. `cur` is extended by its edge
-    values, so that an object partly out of the frame is still matched."""
+    reach, with a faint preference for shifts near `prior` (and, given `within`, no farther
+    than that from it). `cur` is extended by its edge values, so that an object partly out
+    of the frame is still matched."""
     r = int(reach)
     # the object's box in prev, and cur's pixels within reach of it (edge values beyond)
     ys, xs = np.nonzero(weight)
@@ -78,6 +81,8 @@ def match_shift(prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0)) -> np.n
     dx = np.fft.fftfreq(shape[1], 1 / shape[1])[None, :]
     ncc = ncc - 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
     ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | (var_c < 1e-9 * n)] = -np.inf
+    if within is not None:
+        ncc[(np.abs(dy - prior[0]) > within) | (np.abs(dx - prior[1]) > within)] = -np.inf
     k = np.unravel_index(int(np.argmax(ncc)), shape)
     match_shift.peak = float(ncc[k])  # the match's quality, read by object_motion
     return np.array([float(dy[k[0], 0]), float(dx[0, k[1]])])
@@ -95,15 +100,26 @@ def inverse(a: np.ndarray) -> np.ndarray:
     return np.column_stack([m, -m @ a[:, 2]])
 
 
-def object_motion(prev, cur, mask, prior=(0.0, 0.0), reach: int = REACH, steps: int = 6):
+def object_motion(
+    prev,
+    cur,
+    mask,
+    prior=(0.0, 0.0),
+    reach: int = REACH,
+    steps: int = 6,
+    floor=MATCH_FLOOR,
+    within=None,
+):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
-    `prior`: the last displacement (prev -> cur), which the search prefers among equals."""
+    `prior`: the last displacement (prev -> cur), which the search prefers among equals
+    and which stands when the correlation's peak is below `floor`; `within`: the largest
+    change of velocity searched (None: any shift within `reach`)."""
     # the object and a 1 px rim (its edge's contrast); a wider rim takes in more of an
     # occluder's still edge
     rim = mask
-    d = match_shift(prev, cur, rim.astype(np.float64), reach, prior)
-    if match_shift.peak < MATCH_FLOOR:
+    d = match_shift(prev, cur, rim.astype(np.float64), reach, prior, within)
+    if match_shift.peak < floor:
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])

@@ -180,7 +180,7 @@ class MorphingTracker:
         features: str | ArrayLike | Callable = "intensity",
         colour: bool = False,
         discrepancy: str = "adaptive",
-        motion: str | None = "image",
+        motion: str | None = "kalman",
         shape_weight: float = 0.0,
         equalize: bool | str = False,
         smooth: bool = True,
@@ -333,7 +333,9 @@ class MorphingTracker:
             if follow is not None:
                 cleaned = follow.observe(t, new_mask)
                 if (cleaned != new_mask).any():
-                    new_mask, u = cleaned, signed_distance(cleaned)
+                    # all hidden: an empty mask, u positive everywhere
+                    u = signed_distance(cleaned) if cleaned.any() else np.abs(u) + 1
+                    new_mask = cleaned
             mask = new_mask
             yield TrackState(
                 t,

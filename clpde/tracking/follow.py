@@ -16,11 +16,15 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .appearance import AppearanceModel, AppearanceTerm, move_mask, object_motion
+from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, move_mask, object_motion
 from .levelset import LevelSet, signed_distance
 
 # A result keeping less than this share of the predicted area is taken as hidden in part.
 HIDDEN = 0.85
+# The correlation's peak that overrides the velocity while the object is hidden in part.
+HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
+# The largest change of velocity (px a frame) searched while the object is hidden in part.
+HIDDEN_CHANGE = None  # chosen on the calibration half: 3 px lost one occlusion clip
 # Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
 PIECE_SHARE, MIN_PIECE = 0.08, 10
 # The result stays within this many px of the predicted whole shape.
@@ -86,13 +90,25 @@ class ObjectFollower:
         pixels = mask & (self._looks_ratio < 0) if self._looks_ratio is not None else mask
         if pixels.sum() < 0.3 * mask.sum():
             pixels = mask
-        a = object_motion(self.looks[t - 1], self.looks[t], pixels, self.velocity)
+        # Much of the object out of sight: what is left must match clearly to override
+        # the velocity (a sliver matches anywhere; a hidden object does not turn at once).
+        hidden = mask.sum() < HIDDEN * self.shape.sum()
+        floor = HIDDEN_FLOOR if hidden else MATCH_FLOOR
+        within = HIDDEN_CHANGE if hidden else None
+        if pixels.sum() >= MIN_PIECE:
+            a = object_motion(
+                self.looks[t - 1], self.looks[t], pixels, self.velocity, floor=floor, within=within
+            )
+        else:  # nothing in sight: the object keeps its velocity
+            a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
         moved = move_mask(mask, a)
-        shift = _centroid(moved) - _centroid(mask) if moved.any() else np.zeros(2)
+        # the velocity: where the motion takes the whole shape's centre
+        centre = _centroid(self.shape)
+        shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
         self.velocity = shift
         predicted = move_mask(self.shape, a)
-        if not predicted.any():
-            predicted = moved if moved.any() else mask
+        if not predicted.any():  # carried out of the frame: it stays where it was
+            predicted = self.shape
         self.predicted = predicted
         start = predicted
         if self.term is not None:
@@ -145,7 +161,7 @@ class ObjectFollower:
         if n > 1:
             sizes = np.bincount(labels.ravel())[1:]
             start = (sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max()))[labels - 1] & (labels > 0)
-        return start if start.sum() >= VISIBLE * predicted.sum() else predicted
+        return start if start.sum() >= max(VISIBLE * predicted.sum(), 1) else predicted
 
     def observe(self, t, mask: np.ndarray) -> np.ndarray:
         """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
