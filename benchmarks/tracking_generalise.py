@@ -425,7 +425,7 @@ def main(argv=None):
     global CORPUS
     CORPUS = track_photo_corpus if args.corpus == "photo" else track_corpus
     if args.corpus == "photo" and args.methods is None:
-        args.methods = ["default", "image", "MCV", "GrabCut"]
+        args.methods = ["default (kalman", "motion=image", "MCV", "GrabCut"]
     if args.calibrate is not None:
         return calibrate(args.calibrate)
     if args.calibrate_confidence:

