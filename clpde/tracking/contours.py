@@ -100,10 +100,13 @@ class MorphingTracker:
         where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
         cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
         F1 clipped at huber_delta.
-    motion : {'kalman', 'components', 'velocity', None}, optional
+    motion : {'kalman', 'image', 'components', 'velocity', None}, optional
         Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction), each connected
-        piece by its own match, by the previous displacement, or not at all.
+        object's features (within search_radius pixels of the prediction); 'image': moved
+        by the object's motion found in the image (a masked correlation over every shift
+        up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
+        through occlusions, with the appearance term on (clpde.tracking.follow); each
+        connected piece by its own match; by the previous displacement; or not at all.
     shape_weight : float, optional
         (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
         nothing.
@@ -148,6 +151,10 @@ class MorphingTracker:
     curvature : float, optional
         discrepancy='adaptive': the weight of the curvature term; None or 0: off (the
         adaptive option's: `clpde.tracking.options.CURVATURE`).
+    appearance : float, optional
+        With motion='image' (and the adaptive discrepancy): the largest speed of the
+        appearance term, the colour (grey without colour) and texture histograms of the
+        object against its surroundings (None: APPEARANCE_WEIGHT; 0: off).
     storage : {'lists', 'bricks8x8', 'bricks16x4'}, optional
         The band as a list of cells or of bricks (the same results, bit for bit except the
         NCC's window sums, equal to rounding; docs/tracking.md).
