@@ -6,9 +6,10 @@ image, and what it looks like against its surroundings.
   (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past),
   then Lucas-Kanade's Gauss-Newton steps on the six affine parameters over the object and
   a 2 px rim (turns, scaling). The object's own pixels decide, not the contour's past.
-  Measured against dense flow (docs/tracking.md): clpde.motion.optical_flow gets the
-  object's shift as well but costs 90-230 ms a frame pair here, OpenCV's DIS misses a
-  20 px shift by up to 8 px; this costs a few ms.
+  Measured against dense flow (benchmarks/track_motion_compare.py, docs/tracking.md): the
+  median of clpde.motion.optical_flow or of OpenCV's DIS over the object misses the
+  object's centre by more than 3 px on 8% and 12% of the frame pairs at 10-26 px a frame
+  (up to 13 and 17 px); this, by 0.37 px at most, at 45 ms a pair against the flow's 370.
 - `AppearanceModel`: GrabCut-like colour (grey where the footage has none) and texture
   histograms of the object (learned from each frame's result, a running mean) and of its
   surroundings (a ring around the predicted contour in the new frame), and their
