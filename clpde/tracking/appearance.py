@@ -1,4 +1,4 @@
-"""The default's motion and appearance (issue 35): where the object went, measured from the
+"""motion='image''s motion and appearance (issue 35): where the object went, measured from the
 image, and what it looks like against its surroundings.
 
 - `object_motion`: the previous mask's motion between two frames, an affine map found in
@@ -29,8 +29,8 @@ from scipy import ndimage
 from ..fields import Field
 from .levelset import LevelSet
 
-# The default's settings, chosen on the calibration halves of benchmarks/track_corpus.py
-# and benchmarks/track_photo_corpus.py (benchmarks/tracking_generalise.py).
+# motion='image''s settings, chosen on the calibration half of benchmarks/track_photo_corpus.py
+# (benchmarks/track_image_search.py).
 REACH = 32  # px: the widest shift per frame the correlation searches
 MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is kept
 APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time

@@ -1,4 +1,4 @@
-"""motion='image' (the default): each frame's contour starts where the image says the
+"""motion='image': each frame's contour starts where the image says the
 object went, and an appearance term keeps it on the object (appearance.py).
 
 Per frame: the object's motion from the previous frame (`appearance.object_motion`)
