@@ -44,6 +44,7 @@ from ..fields import Field, check_fits
 from ..runtime import DeviceLike, get_runtime
 from .adaptive import LIGHT_CHANGE, QUIET_FACTOR, background_change, noise_variance
 from .confidence import track_confidence
+from .follow import ObjectFollower
 from .inputs import check_frames, check_mask, scaled_frames, user_features
 from .levelset import GHOST, MARGIN, LevelSet, signed_distance
 from .morph import morph_pair
@@ -99,10 +100,13 @@ class MorphingTracker:
         where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
         cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
         F1 clipped at huber_delta.
-    motion : {'kalman', 'components', 'velocity', None}, optional
+    motion : {'kalman', 'image', 'components', 'velocity', None}, optional
         Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction), each connected
-        piece by its own match, by the previous displacement, or not at all.
+        object's features (within search_radius pixels of the prediction); 'image': moved
+        by the object's motion found in the image (a masked correlation over every shift
+        up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
+        through occlusions, with the appearance term on (clpde.tracking.follow); each
+        connected piece by its own match; by the previous displacement; or not at all.
     shape_weight : float, optional
         (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
         nothing.
@@ -147,6 +151,10 @@ class MorphingTracker:
     curvature : float, optional
         discrepancy='adaptive': the weight of the curvature term; None or 0: off (the
         adaptive option's: `clpde.tracking.options.CURVATURE`).
+    appearance : float, optional
+        With motion='image' (and the adaptive discrepancy): the largest speed of the
+        appearance term, the colour (grey without colour) and texture histograms of the
+        object against its surroundings (None: APPEARANCE_WEIGHT; 0: off).
     storage : {'lists', 'bricks8x8', 'bricks16x4'}, optional
         The band as a list of cells or of bricks (the same results, bit for bit except the
         NCC's window sums, equal to rounding; docs/tracking.md).
@@ -201,6 +209,7 @@ class MorphingTracker:
         storage: str = "lists",
         region_weight: float | None = None,
         curvature: float | None = None,
+        appearance: float | None = None,
         device: DeviceLike = None,
         dtype: DTypeLike | None = None,
     ):
@@ -236,6 +245,7 @@ class MorphingTracker:
             storage=storage,
             region_weight=region_weight,
             curvature=curvature,
+            appearance=appearance,
         )
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(dtype or np.float32)
@@ -250,6 +260,9 @@ class MorphingTracker:
         )
         self._scaled = scaled_frames(self.frames, colour)
         self.channels = (self._user if self._user is not None else self._scaled).shape[1]
+        # the appearance model's frames: colour where the footage has it
+        image = self.options.motion == "image"
+        self._looks = scaled_frames(self.frames, True) if image else None
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -273,9 +286,11 @@ class MorphingTracker:
         # The shape pull's target; without it the kernel multiplies it by 0, so any finite
         # buffer of the grid will do.
         prior = Field.empty(ls.grid) if options.shape_weight else ls.u.cur
-        prediction = MotionPrediction(options) if options.motion else None
+        image = options.motion == "image"
+        prediction = MotionPrediction(options) if options.motion and not image else None
         adaptive = options.discrepancy == "adaptive"
         region = RegionTerm(ls, options.region_weight) if adaptive else None
+        follow = ObjectFollower(self, ls) if image else None
         prepared_prev = self.prepared(0)
         fresh = True  # u is a signed distance with a band around its zero set
         for t in range(1, len(self.frames)):
@@ -290,6 +305,10 @@ class MorphingTracker:
                 change = background_change(prepared_prev, prepared, mask, noise2)
                 noise2_weight = noise2 * (QUIET_FACTOR if change < LIGHT_CHANGE else 1.0)
             shift = (0.0, 0.0)
+            if follow is not None:
+                prepared_prev, shift = follow.move(t, prepared_prev, prepared, mask)
+                region = follow.term or region
+                fresh = False
             if prediction is not None:
                 prepared_prev, shift, moved = prediction.move(
                     ls, prepared_prev, prepared, mask, noise2
@@ -318,6 +337,12 @@ class MorphingTracker:
                     fresh = True
             if prediction is not None:
                 prediction.observe(mask, new_mask)
+            if follow is not None:
+                cleaned = follow.observe(t, new_mask)
+                if (cleaned != new_mask).any():
+                    # all hidden: an empty mask, u positive everywhere
+                    u = signed_distance(cleaned) if cleaned.any() else np.abs(u) + 1
+                    new_mask = cleaned
             mask = new_mask
             yield TrackState(
                 t,

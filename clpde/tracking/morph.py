@@ -60,7 +60,7 @@ def _step_kernel(
             WIN=options.ncc_radius,
         )
         return kernel, ()
-    terms = options.region_weight > 0 or options.curvature > 0
+    terms = options.region_weight > 0 or options.curvature > 0 or options.appearance > 0
     kernel = ls.band_kernel(
         "tracking/adaptive.cl",
         "morph_adaptive" if ls.brick is None else "morph_adaptive_bricks",

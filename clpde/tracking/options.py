@@ -7,12 +7,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InputError
+from .appearance import APPEARANCE_WEIGHT
 from .levelset import CFL, NEAR_EDGE, STORAGES
 
 FEATURES = ("intensity", "edges", "contrast")
 # discrepancy -> the DISC define of kernels/tracking/features.cl (adaptive: its own kernel)
 DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2, "adaptive": 3}
-MOTIONS = (None, "velocity", "kalman", "components")
+MOTIONS = (None, "velocity", "kalman", "components", "image")
 # The adaptive option's weights (motion='components', discrepancy='adaptive' with these),
 # chosen on the calibration half of benchmarks/track_corpus.py
 # (benchmarks/tracking_generalise.py --calibrate). The default leaves both terms off: they
@@ -55,6 +56,7 @@ class TrackOptions:
     storage: str
     region_weight: float | None
     curvature: float | None
+    appearance: float | None = None
 
     def __post_init__(self) -> None:
         self._check_choices()
@@ -75,7 +77,8 @@ class TrackOptions:
             )
         if self.motion not in MOTIONS:
             raise InputError(
-                f"motion must be None, 'velocity', 'kalman' or 'components', not {self.motion!r}"
+                f"motion must be None, 'image', 'velocity', 'kalman' or 'components', "
+                f"not {self.motion!r}"
             )
 
     def _check_steps(self) -> None:
@@ -84,7 +87,7 @@ class TrackOptions:
                 f"dt={self.dt} is outside (0, 0.5], the stable range of the upwind scheme"
             )
         if self.max_iterations is None:
-            terms = self.region_weight > 0 or self.curvature > 0
+            terms = self.region_weight > 0 or self.curvature > 0 or self.appearance > 0
             self.max_iterations = ADAPTIVE_ITERATIONS if terms else ITERATIONS
         if self.max_iterations < 1 or self.check_every < 1:
             raise InputError("max_iterations and check_every must be at least 1")
@@ -116,6 +119,19 @@ class TrackOptions:
         self.curvature = float(self.curvature or 0.0)
         if self.region_weight < 0 or self.curvature < 0:
             raise InputError("region_weight and curvature must be at least 0")
+        # the appearance term (appearance.py): by default with motion='image' and the
+        # adaptive discrepancy, unless the region term takes its place
+        if self.appearance is None:
+            image = self.motion == "image" and adaptive and not self.region_weight
+            self.appearance = APPEARANCE_WEIGHT if image else 0.0
+        self.appearance = float(self.appearance)
+        if self.appearance < 0:
+            raise InputError("appearance must be at least 0")
+        if self.appearance and (not adaptive or self.region_weight):
+            raise InputError(
+                "appearance works with discrepancy='adaptive' and no region_weight: "
+                "drop one of them"
+            )
         if not adaptive and (self.region_weight or self.curvature):
             raise InputError(
                 "region_weight and curvature work with discrepancy='adaptive' "

@@ -1,0 +1,276 @@
+"""motion='image''s motion and appearance (issue 35): where the object went, measured from the
+image, and what it looks like against its surroundings.
+
+- `object_motion`: the previous mask's motion between two frames, an affine map found in
+  two steps: a masked normalised cross-correlation over every shift within `reach` px
+  (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past),
+  then Lucas-Kanade's Gauss-Newton steps on the six affine parameters over the object and
+  a 2 px rim (turns, scaling). The object's own pixels decide, not the contour's past.
+  Measured against dense flow (benchmarks/track_motion_compare.py, docs/tracking.md): the
+  median of clpde.motion.optical_flow or of OpenCV's DIS over the object misses the
+  object's centre by more than 3 px on 8% and 12% of the frame pairs at 10-26 px a frame
+  (up to 13 and 17 px); this, by 0.37 px at most, at 45 ms a pair against the flow's 370.
+- `AppearanceModel`: GrabCut-like colour (grey where the footage has none) and texture
+  histograms of the object (learned from each frame's result, a running mean) and of its
+  surroundings (a ring around the predicted contour in the new frame), and their
+  log-likelihood ratio per pixel.
+- `AppearanceTerm`: that ratio as the morphing's region speed (the field kernels/tracking/
+  adaptive.cl adds to the contour's speed), uploaded once per frame: the contour shrinks
+  where a pixel looks like the surroundings (a textured background it would leak into, an
+  occluder in front of the object) and grows where it looks like the object.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyopencl.array as cla
+from scipy import ndimage
+
+from ..fields import Field
+from .levelset import LevelSet
+
+# motion='image''s settings, chosen on the calibration half of benchmarks/track_photo_corpus.py
+# (benchmarks/track_image_search.py).
+REACH = 32  # px: the widest shift per frame the correlation searches
+MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is kept
+APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time
+RING = (3, 16)  # px: the surroundings' ring around the predicted contour
+MEMORY = 0.5  # the object model's running mean: this share of the new frame's histogram
+BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
+
+
+def match_shift(
+    prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0), within: float | None = None
+) -> np.ndarray:
+    """(dy, dx), whole pixels, that best carries `prev` (C, H, W) under `weight` (H, W,
+    0/1) onto `cur`: the masked normalised cross-correlation, highest over |shift| <=
+    reach, with a faint preference for shifts near `prior` (and, given `within`, no farther
+    than that from it). `cur` is extended by its edge values, so that an object partly out
+    of the frame is still matched."""
+    r = int(reach)
+    # the object's box in prev, and cur's pixels within reach of it (edge values beyond)
+    ys, xs = np.nonzero(weight)
+    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+    weight = weight[y0:y1, x0:x1]
+    prev = np.asarray(prev)[:, y0:y1, x0:x1]
+    cur = np.pad(np.asarray(cur), ((0, 0), (r, r), (r, r)), mode="edge")[
+        :, y0 : y1 + 2 * r, x0 : x1 + 2 * r
+    ]
+    h, w = weight.shape
+    shape = (h + 3 * r, w + 3 * r)
+    n = weight.sum()
+    wp = np.zeros(shape)
+    wp[r : r + h, r : r + w] = weight
+    score = np.zeros(shape)
+    den_t = 0.0
+    var_c = np.zeros(shape)
+    fw = np.conj(np.fft.rfft2(wp, shape))
+    for p, c in zip(prev, cur, strict=True):
+        t = np.zeros(shape)
+        t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
+        den_t += (t * t).sum()
+        cp = np.zeros(shape)
+        cp[: h + 2 * r, : w + 2 * r] = c
+        fc = np.fft.rfft2(cp, shape)
+        s1 = np.fft.irfft2(fw * fc, shape)
+        s2 = np.fft.irfft2(fw * np.fft.rfft2(cp * cp, shape), shape)
+        var_c += np.maximum(s2 - s1 * s1 / n, 0)
+        score += np.fft.irfft2(np.conj(np.fft.rfft2(t, shape)) * fc, shape)
+    ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
+    # correlation index k is the shift k, negative shifts wrapped around
+    dy = np.fft.fftfreq(shape[0], 1 / shape[0])[:, None]
+    dx = np.fft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    ncc = ncc - 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
+    ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | (var_c < 1e-9 * n)] = -np.inf
+    if within is not None:
+        ncc[(np.abs(dy - prior[0]) > within) | (np.abs(dx - prior[1]) > within)] = -np.inf
+    k = np.unravel_index(int(np.argmax(ncc)), shape)
+    match_shift.peak = float(ncc[k])  # the match's quality, read by object_motion
+    return np.array([float(dy[k[0], 0]), float(dx[0, k[1]])])
+
+
+def _warp(image, a, order=1):
+    """image (H, W) read at A x for every output pixel x: `a` (2, 3) maps output (y, x)
+    coordinates to input ones."""
+    return ndimage.affine_transform(image, a[:, :2], a[:, 2], order=order, mode="nearest")
+
+
+def inverse(a: np.ndarray) -> np.ndarray:
+    """The inverse of the affine map a (2, 3)."""
+    m = np.linalg.inv(a[:, :2])
+    return np.column_stack([m, -m @ a[:, 2]])
+
+
+def object_motion(
+    prev,
+    cur,
+    mask,
+    prior=(0.0, 0.0),
+    reach: int = REACH,
+    steps: int = 6,
+    floor=MATCH_FLOOR,
+    within=None,
+):
+    """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
+    ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
+    `prior`: the last displacement (prev -> cur), which the search prefers among equals
+    and which stands when the correlation's peak is below `floor`; `within`: the largest
+    change of velocity searched (None: any shift within `reach`)."""
+    # the object and a 1 px rim (its edge's contrast); a wider rim takes in more of an
+    # occluder's still edge
+    rim = mask
+    d = match_shift(prev, cur, rim.astype(np.float64), reach, prior, within)
+    if match_shift.peak < floor:
+        # nothing matches (the object went behind something): it keeps its velocity
+        d = np.asarray(prior, np.float64)
+        return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
+    shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
+    # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
+    # cur's coordinates), the grey levels averaged over the channels; the affine part
+    # about the object's centre, so that turning and shifting are not confounded.
+    gp, gc = prev.mean(axis=0), cur.mean(axis=0)
+    yy, xx = np.mgrid[: gc.shape[0], : gc.shape[1]] + 0.0
+    gy, gx = np.gradient(gp)
+    centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
+    a = shifted.copy()
+
+    # one set of pixels for every step and for the costs compared: cur's pixels where the
+    # shift puts the object
+    where = _warp(rim * 1.0, shifted, 1) > 0.5
+    if where.sum() < 12:
+        return shifted
+    y, x = yy[where] - centre[0], xx[where] - centre[1]
+    target = gc[where]
+
+    pts = np.stack([yy[where], xx[where]])
+
+    def at(image, a):  # image read at A x for the pixels x of `where`
+        coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
+        return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+
+    def cost(a):
+        return float(np.mean((at(gp, a) - target) ** 2))
+
+    start = cost(shifted)
+    for _ in range(steps):
+        r = at(gp, a) - target
+        wy, wx = at(gy, a), at(gx, a)
+        jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
+        jtj = jac.T @ jac
+        jtj += 1e-3 * np.trace(jtj) / 6 * np.eye(6)  # a little damping
+        step = np.linalg.solve(jtj, -jac.T @ r).reshape(2, 3)
+        # a step in the centred parameters, back to frame coordinates
+        step[:, 2] -= step[:, :2] @ centre
+        a = a + step
+        if np.abs(step[:, :2]).max() < 1e-3 and np.abs(step[:, 2]).max() < 0.02:
+            break
+    lin = a[:, :2]
+    sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
+    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < 0.95 * start:
+        a = shifted  # a wild or worse fit: the shift only
+    return a
+
+
+def move_mask(mask: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """The mask carried by the motion `a` (object_motion's map, cur -> prev coordinates)."""
+    return _warp(mask * 1.0, a, 1) > 0.5
+
+
+def _texture(grey: np.ndarray) -> np.ndarray:
+    mean = ndimage.uniform_filter(grey, 5)
+    return np.sqrt(np.maximum(ndimage.uniform_filter(grey * grey, 5) - mean * mean, 0))
+
+
+class AppearanceModel:
+    """Histograms of the object's and its surroundings' colour (or grey level) and texture.
+
+    Parameters
+    ----------
+    colour : bool
+        Whether the frames have colour (then three channels are binned; else the grey).
+    """
+
+    def __init__(self, colour: bool):
+        self.colour = colour
+        self.object: np.ndarray | None = None
+
+    def bins(self, frame: np.ndarray) -> np.ndarray:
+        """(H, W) bin index of every pixel of `frame` (C, H, W) in [0, 1]: its colour, or
+        grey level, and its local standard deviation (the texture), each frame's brightness
+        divided out, so that a dimming light does not move the object's bins."""
+        f = np.asarray(frame, np.float64)
+        f = 0.5 * f / max(float(f.mean()), 1e-3)
+        grey = f.mean(axis=0)
+        tex = np.clip((_texture(grey) / 0.12) ** 0.5 * BINS_TEXTURE, 0, BINS_TEXTURE - 1)
+        if self.colour and f.shape[0] >= 3:
+            q = np.clip(f[:3] * BINS_COLOUR, 0, BINS_COLOUR - 1).astype(np.int64)
+            colour = (q[0] * BINS_COLOUR + q[1]) * BINS_COLOUR + q[2]
+        else:
+            colour = np.clip(grey * BINS_GREY, 0, BINS_GREY - 1).astype(np.int64)
+        return colour * BINS_TEXTURE + tex.astype(np.int64)
+
+    @property
+    def size(self) -> int:
+        colours = BINS_COLOUR**3 if self.colour else BINS_GREY
+        return colours * BINS_TEXTURE
+
+    def _histogram(self, bins: np.ndarray, where: np.ndarray) -> np.ndarray:
+        h = np.bincount(bins[where], minlength=self.size).astype(np.float64)
+        shape = (BINS_COLOUR,) * 3 + (BINS_TEXTURE,) if self.colour else (BINS_GREY, BINS_TEXTURE)
+        # neighbouring bins share: a few hundred pixels do not fill a thousand bins
+        h = ndimage.gaussian_filter(h.reshape(shape), 0.7, mode="constant").ravel()
+        return (h + 0.5 / self.size) / (h.sum() + 0.5)
+
+    def learn(self, bins: np.ndarray, mask: np.ndarray) -> None:
+        """The object's histogram from its mask in a frame (`bins` of that frame), as a
+        running mean over the frames."""
+        inner = ndimage.binary_erosion(mask) if mask.sum() > 60 else mask
+        if inner.sum() < 4:
+            return
+        h = self._histogram(bins, inner)
+        self.object = h if self.object is None else (1 - MEMORY) * self.object + MEMORY * h
+
+    def log_ratio(self, bins: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """(H, W) log p(surroundings) / p(object) per pixel, the surroundings' histogram
+        taken from the ring RING around `predicted` in this frame."""
+        near = ndimage.binary_dilation(predicted, iterations=RING[0])
+        far = ndimage.binary_dilation(near, iterations=RING[1] - RING[0])
+        ring = far & ~near
+        if ring.sum() < 16 or self.object is None:
+            return np.zeros(bins.shape)
+        back = self._histogram(bins, ring)
+        return np.clip(np.log(back / self.object), -6, 6)[bins]
+
+
+class AppearanceTerm:
+    """The appearance's speed, weight tanh(log ratio / 2), as the morphing's region field:
+    the RegionTerm interface (field, follows, start, update) with a field fixed per frame.
+
+    Parameters
+    ----------
+    ls : LevelSet
+        The tracker's level set (its grid).
+    weight : float
+        The largest speed, px per unit time.
+    """
+
+    follows = False  # fixed for the frame: the morphing does not refresh it
+
+    def __init__(self, ls: LevelSet, weight: float):
+        g = ls.grid
+        self.weight = float(weight)
+        self.field = Field(g, cla.zeros(g.runtime.queue, g.padded_shape, g.dtype))
+        self._ls = ls
+
+    def set(self, log_ratio: np.ndarray) -> None:
+        """Upload this frame's field from the log-likelihood ratio (H, W)."""
+        g = self._ls.grid
+        padded = np.zeros(g.padded_shape, g.dtype)
+        g.interior(padded)[0] = self._ls.pad(self.weight * np.tanh(0.5 * log_ratio))
+        self.field.data.set(padded)
+
+    def start(self, ls, features, noise2) -> None:  # the RegionTerm interface: set() does it
+        return None
+
+    def update(self, ls) -> None:
+        return None

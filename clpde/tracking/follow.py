@@ -1,0 +1,182 @@
+"""motion='image': each frame's contour starts where the image says the
+object went, and an appearance term keeps it on the object (appearance.py).
+
+Per frame: the object's motion from the previous frame (`appearance.object_motion`)
+carries the object's whole shape, hidden parts included, to its predicted place, where the
+morphing starts; the appearance model's log ratio there becomes the morphing's region
+speed; after the morphing, pieces far smaller than the object are dropped (a piece caught
+on an occluder) and the models learn the frame. The whole shape is the result, unless the
+result lost much of the prediction's area at once (the object went behind something): then
+the prediction is kept as the whole shape, so that the contour grows back where the object
+reappears.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, move_mask, object_motion
+from .levelset import LevelSet, signed_distance
+
+# A result keeping less than this share of the predicted area is taken as hidden in part.
+HIDDEN = 0.85
+# The correlation's peak that overrides the velocity while the object is hidden in part.
+HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
+# The largest change of velocity (px a frame) searched while the object is hidden in part.
+HIDDEN_CHANGE = None  # chosen on the calibration half: 3 px lost one occlusion clip
+# Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
+PIECE_SHARE, MIN_PIECE = 0.08, 10
+# The result stays within this many px of the predicted whole shape.
+GROW = 6
+# The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
+# within +-PRIOR_CAP.
+PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
+# The motion's evidence (a hidden part does not move with the object) is capped at this.
+MOTION_CAP = 6.0
+# The start keeps the appearance's visible part of the prediction unless less than this
+# share of it remains.
+VISIBLE = 0.3
+
+
+def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """image read at A x for the pixels x of `where` (the affine map of object_motion):
+    the warp at the pixels needed only."""
+    pts = np.array(np.nonzero(where), np.float64)
+    coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
+    return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+
+
+def _centroid(mask: np.ndarray) -> np.ndarray:
+    return np.array(ndimage.center_of_mass(mask)) if mask.any() else np.zeros(2)
+
+
+class ObjectFollower:
+    """The state of motion='image' over a track: the object's whole shape, its last
+    displacement, the appearance model and its term.
+
+    Parameters
+    ----------
+    tracker : MorphingTracker
+        The tracker (its options, its colour frames and its first mask).
+    ls : LevelSet
+        The tracker's level set.
+    """
+
+    def __init__(self, tracker, ls: LevelSet):
+        self.ls = ls
+        self.band = tracker.options.band_width
+        self.looks = tracker._looks
+        self.shape = tracker.first_mask.copy()
+        self.predicted = self.shape
+        self.velocity = np.zeros(2)
+        weight = tracker.options.appearance
+        self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
+        self.term = AppearanceTerm(ls, weight) if weight else None
+        if self.term is not None:
+            self.model.learn(self.model.bins(self.looks[0]), self.shape)
+        self._bins = None
+        self._ratio = None  # the last frame's log odds (surroundings over object)
+        self._looks_ratio = None  # the same from the looks alone
+
+    def move(self, t, prepared_prev, prepared, mask):
+        """Predict frame t: move the level set to the whole shape's predicted place and set
+        the appearance term. Returns the previous frame's features moved with the object
+        (near it) and the displacement (dy, dx) of the object's centre."""
+        # matched in colour where the footage has it: a red object on a blue sky can have
+        # the sky's grey level
+        # The object's pixels that look like it: a piece of an occluder or of the
+        # background the contour took in would pull the match to its own (lack of) motion.
+        pixels = mask & (self._looks_ratio < 0) if self._looks_ratio is not None else mask
+        if pixels.sum() < 0.3 * mask.sum():
+            pixels = mask
+        # Much of the object out of sight: what is left must match clearly to override
+        # the velocity (a sliver matches anywhere; a hidden object does not turn at once).
+        hidden = mask.sum() < HIDDEN * self.shape.sum()
+        floor = HIDDEN_FLOOR if hidden else MATCH_FLOOR
+        within = HIDDEN_CHANGE if hidden else None
+        if pixels.sum() >= MIN_PIECE:
+            a = object_motion(
+                self.looks[t - 1], self.looks[t], pixels, self.velocity, floor=floor, within=within
+            )
+        else:  # nothing in sight: the object keeps its velocity
+            a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
+        moved = move_mask(mask, a)
+        # the velocity: where the motion takes the whole shape's centre
+        centre = _centroid(self.shape)
+        shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
+        self.velocity = shift
+        predicted = move_mask(self.shape, a)
+        if not predicted.any():  # carried out of the frame: it stays where it was
+            predicted = self.shape
+        self.predicted = predicted
+        start = predicted
+        if self.term is not None:
+            self._bins = self.model.bins(self.looks[t])
+            # the appearance's evidence and the prediction's: the log prior odds of the
+            # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
+            # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as
+            # it is and only clear evidence carves it or grows it
+            prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
+            self._looks_ratio = self.model.log_ratio(self._bins, predicted)
+            self._ratio = self._looks_ratio + prior + self._motion_ratio(t, a, moved)
+            self.term.set(self._ratio)
+            start = self._visible(predicted)
+        self.ls.assign(signed_distance(start))
+        # F1: the previous frame carried with the object near its predicted place
+        near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
+        out = np.array(prepared_prev, np.float64, copy=True)
+        for c in range(out.shape[0]):
+            out[c][near] = _at(prepared_prev[c], a, near)
+        return out, (float(shift[0]), float(shift[1]))
+
+    def _motion_ratio(self, t, a, moved) -> np.ndarray:
+        """Log odds of 'not the object' from the motion: where the previous frame's visible
+        object, carried by the motion `a`, lands (`moved`), the new frame should show the
+        same colours; a large difference there says something hides the object (an
+        occluder's pixels do not move with it). The object's residual is taken as
+        Gaussian with the median's spread over `moved`, anything else as uniform; capped
+        at +-MOTION_CAP, 0 where the previous frame did not show the object."""
+        if moved.sum() < 12:
+            return np.zeros(moved.shape)
+        near = ndimage.binary_dilation(moved, iterations=2)
+        cur = self.looks[t][:, near]
+        carried = np.stack([_at(c, a, near) for c in self.looks[t - 1]])
+        r = np.zeros(moved.shape)
+        r[near] = np.sqrt(((cur - carried) ** 2).sum(axis=0))
+        r = ndimage.gaussian_filter(r, 1.0)
+        sigma = max(1.4826 * 1.5 * float(np.median(r[moved])), 0.03)
+        ratio = 0.5 * (r / sigma) ** 2 + np.log(sigma * np.sqrt(2 * np.pi))
+        return np.where(moved, np.clip(ratio, -MOTION_CAP, MOTION_CAP), 0.0)
+
+    def _visible(self, predicted: np.ndarray) -> np.ndarray:
+        """The morphing's start: the predicted whole shape less what looks like the
+        surroundings there (an occluder, the background it moved off), so that the contour
+        need not carve a hidden strip out from the edge; the whole prediction where the
+        appearance tells too little (less than VISIBLE of it would remain)."""
+        looks = ndimage.gaussian_filter(self._ratio, 1.0) < 0
+
+        start = ndimage.binary_opening(predicted & looks)
+        labels, n = ndimage.label(start, structure=np.ones((3, 3)))
+        if n > 1:
+            sizes = np.bincount(labels.ravel())[1:]
+            start = (sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max()))[labels - 1] & (labels > 0)
+        return start if start.sum() >= max(VISIBLE * predicted.sum(), 1) else predicted
+
+    def observe(self, t, mask: np.ndarray) -> np.ndarray:
+        """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
+        # no farther than GROW px from the prediction: the motion is accounted for, and a
+        # frame's deformation is small; a leak along a look-alike stops there
+        mask = mask & ndimage.binary_dilation(self.predicted, iterations=GROW)
+        labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
+        if n > 1:
+            sizes = np.bincount(labels.ravel())[1:]
+            keep = sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max())
+            mask = keep[labels - 1] & (labels > 0)
+        if self.term is not None and mask.any():
+            # the object's model learns the pixels that did not look clearly like the
+            # surroundings: a strip of an occluder taken in by mistake is not learned
+            self.model.learn(self._bins, mask & (self._looks_ratio < 1.0))
+        hidden = mask.sum() < HIDDEN * self.predicted.sum()
+        self.shape = (self.predicted | mask) if hidden else mask.copy()
+        return mask

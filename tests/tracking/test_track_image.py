@@ -1,0 +1,111 @@
+"""Motion from the image and the appearance term (issue 35, motion='image'):
+a fast disc followed from the first frame, no leak into a textured background of the
+object's grey level and retreat behind an occluder."""
+
+import numpy as np
+from scipy import ndimage
+
+from clpde.tracking.appearance import match_shift, object_motion
+from clpde.tracking.contours import track
+
+H, W = 64, 96
+
+
+def _iou(a, b):
+    return (a & b).sum() / max((a | b).sum(), 1)
+
+
+def _texture(rng, scale, shape=(H, W)):
+    t = ndimage.gaussian_filter(rng.normal(size=shape), scale, mode="wrap")
+    return (t - t.mean()) / t.std()
+
+
+def _disc_frames(rng, centres, radius=9, colour=False, occluder=None):
+    """A textured disc moving over a textured ground: frames (T, H, W[, 3]) and the
+    visible truth."""
+    yy, xx = np.mgrid[:H, :W]
+    ground = 0.5 + 0.12 * _texture(rng, 1.0)
+    skin = _texture(rng, 1.5, (2 * H, 2 * W))
+    frames, truth = [], []
+    for cy, cx in centres:
+        disc = np.hypot(yy - cy, xx - cx) < radius
+        # the object's texture travels with it
+        inner = (
+            0.5
+            + 0.12
+            * ndimage.shift(skin, (cy - H, cx - W), order=1, mode="wrap")[
+                H // 2 : H // 2 + H, W // 2 : W // 2 + W
+            ]
+        )
+        if colour:  # the disc reddish, the ground greenish, at one grey level
+            g = np.stack([ground - 0.1, ground + 0.08, ground], -1)
+            o = np.stack([inner + 0.2, inner - 0.08, inner - 0.12], -1)
+            img = np.where(disc[..., None], o, g)
+        else:
+            img = np.where(disc, inner + 0.25, ground)
+        if occluder is not None:
+            img = np.where(occluder[..., None] if colour else occluder, 0.9, img)
+            disc = disc & ~occluder
+        frames.append(np.clip(img + rng.normal(0, 0.01, img.shape), 0, 1))
+        truth.append(disc)
+    return np.array(frames), np.array(truth)
+
+
+def test_match_shift_finds_a_25px_shift():
+    rng = np.random.default_rng(0)
+    a = rng.random((60, 80))
+    b = np.roll(a, (9, -24), (0, 1))
+    weight = np.zeros((60, 80))
+    weight[20:36, 30:50] = 1
+    assert match_shift(a[None], b[None], weight, 32).tolist() == [9.0, -24.0]
+
+
+def test_object_motion_recovers_a_turn():
+    rng = np.random.default_rng(1)
+    img = ndimage.gaussian_filter(rng.random((64, 64)), 1.5)
+    img = (img - img.min()) / np.ptp(img)
+    mask = np.hypot(*np.mgrid[-32:32, -32:32]) < 14
+    turned = ndimage.rotate(img, 6, reshape=False, order=3, mode="nearest")
+    a = object_motion(img[None], turned[None], mask)
+    angle = np.degrees(np.arctan2(a[0, 1], a[0, 0]))
+    assert abs(abs(angle) - 6) < 1.5
+
+
+def test_fast_disc_followed_from_the_first_frame():
+    # 25 px a frame from frame 1 on: no motion history to lean on
+    rng = np.random.default_rng(2)
+    centres = [
+        (
+            32,
+            14 + 25 * t * 0.9,
+        )
+        for t in range(4)
+    ]
+    centres = [(32 + 3 * t, x) for t, (_, x) in enumerate(centres)]
+    frames, truth = _disc_frames(rng, centres)
+    masks = track(frames, truth[0], motion="image", progress=False)
+    assert min(_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)) > 0.8
+
+
+def test_no_leak_into_a_textured_ground_of_the_same_grey():
+    # the disc and the ground differ in colour only: the colour model keeps the contour
+    rng = np.random.default_rng(3)
+    centres = [(32, 30 + 3 * t) for t in range(8)]
+    frames, truth = _disc_frames(rng, centres, colour=True)
+    masks = track(frames, truth[0], motion="image", progress=False)
+    assert masks[-1].sum() < 1.3 * truth[-1].sum()
+    assert min(_iou(m, t) for m, t in zip(masks[1:], truth[1:], strict=True)) > 0.8
+
+
+def test_retreats_behind_an_occluder():
+    # the disc slides behind a bar: the contour gives up the hidden part (truth: the
+    # visible part) instead of holding its shape over the bar
+    rng = np.random.default_rng(4)
+    bar = np.zeros((H, W), bool)
+    bar[:, 46:52] = True
+    centres = [(32, 24 + 4 * t) for t in range(7)]
+    frames, truth = _disc_frames(rng, centres, colour=True, occluder=bar)
+    masks = track(frames, truth[0], motion="image", progress=False)
+    for t in range(3, 6):
+        assert (masks[t] & bar).sum() <= 2
+        assert _iou(masks[t], truth[t]) > 0.9
