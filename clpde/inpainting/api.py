@@ -30,7 +30,7 @@ from ..errors import InputError
 from ..fields import check_fits
 from ..imagedata import compute_dtype, grow_mask, growth
 from ..runtime import DeviceLike, get_runtime
-from . import boxes, validate
+from . import bounds, boxes, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .inputs import check_colour, prepare
@@ -176,20 +176,23 @@ class Inpainting:
         return inpainting.load(self.method)
 
     # -- conversions between the user's image and the solved channels -----------------
-    def _box_data(self, box):
-        """The box's channels as float64 in [0, 1] (NaN -> 0), colour model applied."""
+    def _box_data(self, box, model=True):
+        """The box's channels as float64 in [0, 1] (NaN -> 0), colour model applied (unless
+        `model` is False)."""
         y0, y1, x0, x1 = box
         part = self.planes[: self.ncolour, y0:y1, x0:x1]
         data = (part.astype(np.float64) - self.layout.offset) / self.layout.scale
         if np.issubdtype(part.dtype, np.floating):
             data[~np.isfinite(data)] = 0.0
-        return rgb_to_rho_phi_psi(data) if self.colour == "rho-phi-psi" else data
+        return rgb_to_rho_phi_psi(data) if model and self.colour == "rho-phi-psi" else data
 
-    def _write(self, out, box, solved, omega):
-        """Omega's colour channels of the box from the solution (everything else of `out`
-        stays the input's, bit for bit)."""
+    def _write(self, out, box, solved, omega, damage=None):
+        """Omega's colour channels of the box from the solution, held within the range and
+        colours of the known pixels around each cluster (bounds.py); everything else of
+        `out` stays the input's, bit for bit."""
         y0, y1, x0, x1 = box
         colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
+        colour = bounds.limit(colour, self._box_data(box, model=False), omega, damage)
         values = colour[:, omega] * self.layout.scale + self.layout.offset
         if self.layout.dtype == bool:  # a binary image stays binary: cut at one half
             values = values > 0.5
@@ -276,7 +279,7 @@ class Inpainting:
                 )
                 run = self._run(runtime, data, omega, fidelity, damage)
                 for steps, change, solved in run.states(every):
-                    self._write(out, box, solved, omega)
+                    self._write(out, box, solved, omega, damage)
                     yield InpaintState(0, info.steps + steps, out.copy(), change)
                 solved = run.solution
                 info.steps = max(info.steps, run.steps)
@@ -285,7 +288,7 @@ class Inpainting:
                 if run.steps_per_level:
                     info.steps_per_level = run.steps_per_level
                 info.band_pixels += run.band_pixels
-            self._write(out, box, solved, omega)
+            self._write(out, box, solved, omega, damage)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
             if report is not None:
