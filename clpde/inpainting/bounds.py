@@ -30,11 +30,12 @@ from scipy.spatial import ConvexHull, QhullError
 RING = 4  # px: the width of the ring of known pixels that bounds a cluster's fill
 
 
-def limit(fill, data, omega, damage=None, ring: int = RING):
+def limit(fill, data, omega, damage=None, ring: int | None = None, hull: bool = True):
     """`fill` ((channels, rows, cols), a box's solution) with its hole pixels held within
     their cluster's ring (module docstring); `data` holds the known values (the hole's
     values are not read), `damage` a soft mask's degree of damage or None. Returns a new
     array; the known pixels are `fill`'s."""
+    ring = RING if ring is None else ring
     omega = np.asarray(omega, bool)
     out = np.array(fill, np.float64, copy=True)
     if not omega.any() or omega.all():
@@ -66,7 +67,7 @@ def limit(fill, data, omega, damage=None, ring: int = RING):
             lo_p = np.where(partly, np.minimum(lo_p, seen), lo_p)
             hi_p = np.where(partly, np.maximum(hi_p, seen), hi_p)
         np.clip(values[c], lo_p, hi_p, out=values[c])
-    if 2 <= nc <= 4:
+    if hull and 2 <= nc <= 4:
         _hull(values, known, owner, hole, count, partly)
     out[:, omega] = values
     return out

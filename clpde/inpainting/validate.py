@@ -37,6 +37,10 @@ from .registry import margin as method_margin
 # the sets and rings tried; docs and notes have the table)
 CANDIDATES = ("biharmonic", "coherence", "navier-stokes", "exemplar", "spectral")
 RING = 2
+# A cluster's weights are its own ring's fit pulled towards the fit of every voting ring of
+# the box, as if the box's ring added PRIOR values to the cluster's own: a speck of dust's
+# ring holds a few dozen values, too few to fit five weights on noise.
+PRIOR = 0.0
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
 
 
@@ -93,6 +97,16 @@ def _weights(fills, truth):
     return w
 
 
+def _fit(f, t, blend):
+    """The weights of the candidates' ring fills f ((k, n)) that fit the truth t ((n,)):
+    the least-squares blend, or the single best candidate."""
+    if blend:
+        return _weights(f, t)
+    w = np.zeros(f.shape[0])
+    w[int(np.argmin(((f - t) ** 2).mean(axis=1)))] = 1.0
+    return w
+
+
 def choose(
     data,
     omega,
@@ -101,6 +115,7 @@ def choose(
     names=None,
     ring: int = RING,
     blend: bool = True,
+    prior: float | None = None,
     dtype=np.float32,
     seed=None,
     params=None,
@@ -113,6 +128,7 @@ def choose(
     "chosen"} per cluster], "ring_pixels": int}.
     """
     params = params or {}
+    prior = PRIOR if prior is None else prior
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
@@ -158,6 +174,9 @@ def choose(
         )
         truth = data[:, ring_mask] if ring_mask.any() else None
         ring_members = _groups(clusters[ring_mask], count)
+        pooled = None
+        if tests is not None and prior > 0:  # the box's weights: every voting ring at once
+            pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
         for lab in np.flatnonzero(vote):
             sel_ring = ring_members[lab]
             pixels = int(members[lab].size)
@@ -172,11 +191,9 @@ def choose(
             f = tests[:, :, sel_ring].reshape(len(names), -1)
             t = truth[:, sel_ring].reshape(-1)
             rmse = np.sqrt(((f - t) ** 2).mean(axis=1))
-            if blend:
-                w = _weights(f, t)
-            else:
-                w = np.zeros(len(names))
-                w[int(np.argmin(rmse))] = 1.0
+            w = _fit(f, t, blend)
+            if pooled is not None:  # a small ring's own fit leans on the box's
+                w = pooled if np.isinf(prior) else (t.size * w + prior * pooled) / (t.size + prior)
             choices[lab - 1] = {
                 "pixels": pixels,
                 "why": "ring vote",

@@ -1,0 +1,104 @@
+"""Is `method="auto"`'s vote sound? Its result against its best candidate, case by case, for
+the ways of pooling the ring's evidence (clpde/inpainting/validate.py: PRIOR, blend, RING),
+on benchmarks/inpaint_corpus.py's corpus, the calibration half to choose, the test half
+beside it.
+
+    python benchmarks/inpaint_vote_rules.py [--half calibration|test|both] [--every N]
+
+Each case is one box (the whole 128 x 128 image); every candidate's fill of the hole and of
+each hidden ring is computed once (memoised) and every rule assembled from them. Printed
+per rule and half: the mean PSNR over the classes, the worst case's margin to the best
+single candidate (dB; the issue's bound: -0.2) and how many cases fall below -0.2 dB.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import inpaint_corpus as corpus  # noqa: E402
+
+PRIORS = (0.0, 30.0, 100.0, 300.0, 1000.0, float("inf"))
+RINGS = (2, 4)
+
+
+def main(argv=None):
+    from clpde import Inpainting
+    from clpde.inpainting import validate
+    from clpde.runtime import get_runtime
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--half", default="calibration")
+    parser.add_argument("--every", type=int, default=1)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args(argv)
+    runtime = get_runtime()
+    names = validate.candidates()
+    cache = {}
+    original = validate._fill
+
+    def memo(name, data, omega, runtime, dtype, seed, params):
+        key = (name, hashlib.sha1(np.packbits(omega).tobytes()).hexdigest())
+        if key not in cache:
+            cache[key] = original(name, data, omega, runtime, dtype, seed, params)
+        return cache[key]
+
+    validate._fill = memo
+    halves = ("calibration", "test") if args.half == "both" else (args.half,)
+    cases = [c for c in corpus.build(args.quick) if c.half in halves][:: args.every]
+    configs = [(r, b, p) for r in RINGS for b in (True, False) for p in PRIORS]
+    rows = []  # (half, damage, case, config or candidate, psnr)
+    for i, case in enumerate(cases):
+        cache.clear()
+        job = Inpainting(case.damaged(), case.mask, channel_axis=case.channel_axis)
+        box = (0, case.mask.shape[0], 0, case.mask.shape[1])
+        data = job._box_data(box)
+
+        def score(filled, case=case, job=job, box=box):
+            out = case.damaged().copy()
+            job._write(out, box, filled, case.mask)
+            return corpus.psnr(case, out)
+
+        single = {n: score(memo(n, data, case.mask, runtime, np.float32, 0, {})) for n in names}
+        best = max(single.values())
+        for n, p in single.items():
+            rows.append((case.half, case.damage, case.name, n, p, p - best))
+        for cfg in configs:
+            ring, blend, prior = cfg
+            filled, _ = validate.choose(
+                data, case.mask, runtime, ring=ring, blend=blend, prior=prior, seed=0
+            )
+            p = score(filled)
+            rows.append((case.half, case.damage, case.name, cfg, p, p - best))
+        print(f"[{i + 1}/{len(cases)}] {case.name}", flush=True)
+    validate._fill = original
+    for half in halves:
+        print(
+            f"\n{half}: rule (ring, blend, prior) | mean over classes | worst margin to the "
+            "best candidate | cases below -0.2 dB | per class mean"
+        )
+        keys = list(dict.fromkeys(r[3] for r in rows))
+        for k in keys:
+            sel = [r for r in rows if r[0] == half and r[3] == k]
+            if not sel:
+                continue
+            by = {}
+            for r in sel:
+                by.setdefault(r[1], []).append(r[4])
+            means = {d: np.mean(v) for d, v in by.items()}
+            worst = min(sel, key=lambda r: r[5])
+            below = sum(r[5] < -0.2 for r in sel)
+            print(
+                f"{str(k):28s} {np.mean(list(means.values())):7.2f} {worst[5]:+7.2f} "
+                f"({worst[2]}) {below:3d}  "
+                + " ".join(f"{d[:5]}={means[d]:.2f}" for d in corpus.CLASSES if d in means)
+            )
+
+
+if __name__ == "__main__":
+    main()
