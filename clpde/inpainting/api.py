@@ -187,12 +187,14 @@ class Inpainting:
         return rgb_to_rho_phi_psi(data) if model and self.colour == "rho-phi-psi" else data
 
     def _write(self, out, box, solved, omega, damage=None):
-        """Omega's colour channels of the box from the solution, held within the range and
-        colours of the known pixels around each cluster (bounds.py); everything else of
-        `out` stays the input's, bit for bit."""
+        """Omega's colour channels of the box from the solution, each held within the range
+        of the known pixels around its cluster (bounds.py; the colour hull is left to the
+        methods that need it, navier-stokes: its cost per cluster shows on dust, and on the
+        calibration half it gained nothing for the others); everything else of `out` stays
+        the input's, bit for bit."""
         y0, y1, x0, x1 = box
         colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
-        colour = bounds.limit(colour, self._box_data(box, model=False), omega, damage)
+        colour = bounds.limit(colour, self._box_data(box, model=False), omega, damage, hull=False)
         values = colour[:, omega] * self.layout.scale + self.layout.offset
         if self.layout.dtype == bool:  # a binary image stays binary: cut at one half
             values = values > 0.5

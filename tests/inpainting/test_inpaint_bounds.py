@@ -130,7 +130,7 @@ def test_limit_moves_a_colour_towards_the_ring_into_its_hull():
     omega[3:6, 3:6] = True
     fill = data.copy()
     fill[:, omega] = np.array([1.0, 0.0, 0.5])[:, None]  # far outside, in no channel's range
-    out = bounds.limit(fill, data, omega, ring=3)
+    out = bounds.limit(fill, data, omega, ring=3, hull=True)
     ring = ~omega & (ndimage.distance_transform_edt(~omega) <= 3)
     assert not _outside_hull(out[:, omega].T, data[:, ring].T, 1e-9).any()
     assert _outside_hull(fill[:, omega].T, data[:, ring].T, 1e-9).all()
