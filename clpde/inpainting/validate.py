@@ -41,6 +41,12 @@ RING = 2
 # the box, as if the box's ring added PRIOR values to the cluster's own: a speck of dust's
 # ring holds a few dozen values, too few to fit five weights on noise.
 PRIOR = 0.0
+# A ring as thin as RING tells how well a candidate fills a thin hole: a smooth fill always
+# wins there, and loses deep in a thick hole. Each cluster's ring is as wide as SCALE times
+# its hole's half-thickness (its deepest pixel's distance to the known ones), between RING
+# and RING_MAX pixels; SCALE 0: RING for every cluster.
+SCALE = 0.0
+RING_MAX = 8
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
 
 
@@ -58,9 +64,10 @@ def candidates(names=None) -> list:
     return [n for n in (CANDIDATES if names is None else names) if _solver(n) is not None]
 
 
-def margin(names=None, ring: int = RING) -> int:
+def margin(names=None, ring: int | None = None) -> int:
     """Known pixels the vote reads around a hole: the widest candidate's margin plus the
-    ring."""
+    widest ring."""
+    ring = (RING_MAX if SCALE > 0 else RING) if ring is None else ring
     reach = 2
     for name in candidates(names):
         if name in available():
@@ -116,6 +123,8 @@ def choose(
     ring: int = RING,
     blend: bool = True,
     prior: float | None = None,
+    scale: float | None = None,
+    thin: float = 0.0,
     dtype=np.float32,
     seed=None,
     params=None,
@@ -129,6 +138,7 @@ def choose(
     """
     params = params or {}
     prior = PRIOR if prior is None else prior
+    scale = SCALE if scale is None else scale
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
@@ -142,13 +152,22 @@ def choose(
     members = _groups(hole_label, count)
     choices = [None] * count
     vote = np.zeros(count + 1, bool)
+    depth = ndimage.distance_transform_edt(omega)  # each hole pixel's half-thickness
+    radius = np.asarray(ndimage.maximum(depth, clusters, np.arange(1, count + 1))).reshape(-1)
     for lab in range(1, count + 1):
         sel = members[lab]
         if not sel.size:
             continue
         values = stack[:, :, sel]
         spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
-        if len(names) == 1 or spread < AGREE:
+        if thin > 0 and radius[lab - 1] < thin:
+            choices[lab - 1] = {
+                "pixels": int(sel.size),
+                "why": "thin",
+                "chosen": names[-1],
+                "weights": {names[-1]: 1.0},
+            }
+        elif len(names) == 1 or spread < AGREE:
             choices[lab - 1] = {
                 "pixels": int(sel.size),
                 "why": "candidates agree",
@@ -160,7 +179,13 @@ def choose(
             vote[lab] = True
     ring_pixels = 0
     if vote.any():
-        ring_mask = near & known & vote[clusters]
+        # each known pixel belongs to the ring of its nearest hole pixel's cluster
+        _, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
+        owner = clusters[iy, ix]
+        width = np.full(count + 1, float(ring))
+        if scale > 0:
+            width[1:] = np.clip(np.ceil(scale * radius), ring, RING_MAX)
+        ring_mask = known & (dist <= width[owner]) & vote[owner]
         ring_pixels = int(ring_mask.sum())
         if not (known & ~ring_mask).any():
             ring_mask = np.zeros_like(ring_mask)  # nothing would be left to fill from
@@ -173,7 +198,7 @@ def choose(
             else None
         )
         truth = data[:, ring_mask] if ring_mask.any() else None
-        ring_members = _groups(clusters[ring_mask], count)
+        ring_members = _groups(owner[ring_mask], count)
         pooled = None
         if tests is not None and prior > 0:  # the box's weights: every voting ring at once
             pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
