@@ -35,6 +35,10 @@ DEFAULT_NAMES = ("biharmonic", "spectral")
 THINS = (0.0, 3.0, 6.0)
 
 
+def _bool(v):
+    return v in ("1", "True", "true")
+
+
 def main(argv=None):
     from clpde import Inpainting
     from clpde.inpainting import validate
@@ -45,6 +49,7 @@ def main(argv=None):
     parser.add_argument("--every", type=int, default=1)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--default", action="store_true", help="the default's vote (THINS)")
+    parser.add_argument("--rules", default=None, help="scale/blend/prior/thin/shift;...")
     parser.add_argument(
         "--json", type=Path, default=Path(__file__).resolve().parent / "results" / "vote_rules.json"
     )
@@ -68,9 +73,17 @@ def main(argv=None):
     validate._fill = memo
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = [c for c in corpus.build(args.quick) if c.half in halves][:: args.every]
-    configs = [(s, b, p, 0.0) for s in SCALES for b in (True, False) for p in PRIORS]
+    configs = [(s, b, p, 0.0, False) for s in SCALES for b in (True, False) for p in PRIORS]
+    configs += [(0.0, b, p, 0.0, True) for b in (True, False) for p in PRIORS]
+    if args.rules:  # a subset, as "scale/blend/prior/thin/shift;..."
+        configs = [
+            tuple(
+                t(v) for t, v in zip((float, _bool, float, float, _bool), c.split("/"), strict=True)
+            )
+            for c in args.rules.split(";")
+        ]
     if args.default:
-        configs = [(s, True, 300.0, t) for s in (0.0, 0.5) for t in THINS]
+        configs = [(s, True, 300.0, t, False) for s in (0.0, 0.5) for t in THINS]
     spent = {}
     rows = []  # (half, damage, case, config or candidate, psnr)
     for i, case in enumerate(cases):
@@ -94,7 +107,7 @@ def main(argv=None):
         for n, p in single.items():
             rows.append((case.half, case.damage, case.name, n, p, p - best))
         for cfg in configs:
-            scale, blend, prior, thin = cfg
+            scale, blend, prior, thin, shift = cfg
             used.clear()
             filled, _ = validate.choose(
                 data,
@@ -105,6 +118,7 @@ def main(argv=None):
                 blend=blend,
                 prior=prior,
                 thin=thin,
+                shift=shift,
                 seed=0,
             )
             spent[cfg] = spent.get(cfg, 0.0) + sum(seconds[k] for k in used)
@@ -116,8 +130,8 @@ def main(argv=None):
     args.json.write_text(json.dumps([[*r[:3], str(r[3]), *r[4:]] for r in rows]))
     for half in halves:
         print(
-            f"\n{half}: rule (scale, blend, prior, thin) | mean over classes | worst margin to the "
-            "best candidate | cases below -0.2 dB | per class mean"
+            f"\n{half}: rule (scale, blend, prior, thin, shift) | mean over classes | worst margin "
+            "to the best candidate | cases below -0.2 dB | per class mean"
         )
         keys = list(dict.fromkeys(r[3] for r in rows))
         for k in keys:

@@ -214,8 +214,7 @@ class Inpainting:
         if not self.boxes:
             return [(0, ny, 0, nx)]
         if self.auto:  # every candidate, and the ring it is scored on, fits in the box
-            reach = validate.margin()
-            return boxes.boxes(self.mask, lambda crop: reach)
+            return boxes.boxes(self.mask, lambda crop: validate.margin(crop=crop))
         align = getattr(self.module, "ALIGN", None)
         return boxes.boxes(
             self.mask,

@@ -47,6 +47,12 @@ PRIOR = 0.0
 # and RING_MAX pixels; SCALE 0: RING for every cluster.
 SCALE = 0.0
 RING_MAX = 8
+# SHIFT: the test region is not a ring but the cluster's own shape moved aside, clear of
+# the hole, by twice its half-thickness plus GAP px in each of the four directions: a test
+# of the same thickness as the hole (a ring around a 2 px scratch makes a 6 px one, where
+# the smooth fills catch up with the spectral one).
+SHIFT = False
+GAP = 3
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
 
 
@@ -64,10 +70,13 @@ def candidates(names=None) -> list:
     return [n for n in (CANDIDATES if names is None else names) if _solver(n) is not None]
 
 
-def margin(names=None, ring: int | None = None) -> int:
+def margin(names=None, ring: int | None = None, crop=None) -> int:
     """Known pixels the vote reads around a hole: the widest candidate's margin plus the
-    widest ring."""
+    widest ring (with SHIFT, the farthest shifted copy of the holes of `crop`, a mask)."""
     ring = (RING_MAX if SCALE > 0 else RING) if ring is None else ring
+    if SHIFT and crop is not None and np.any(crop):
+        deepest = float(ndimage.distance_transform_edt(np.pad(crop, 1)).max())
+        ring = max(ring, int(np.ceil(2 * deepest)) + GAP + 1)
     reach = 2
     for name in candidates(names):
         if name in available():
@@ -104,6 +113,26 @@ def _weights(fills, truth):
     return w
 
 
+def _shifted(omega, dist, clusters, members, radius, vote):
+    """The test pixels of each voting cluster (module docstring, SHIFT) as a label image:
+    the cluster's hole pixels moved by +-d along each axis, d = ceil(2 radius) + GAP, where
+    they land on known pixels at least 2 px from the hole, not taken by another copy."""
+    ny, nx = omega.shape
+    ys, xs = np.nonzero(omega)  # members[lab] index these (the hole in C order)
+    owner = np.zeros(omega.shape, np.int64)
+    free = ~omega & (dist >= 2)
+    for lab in np.flatnonzero(vote):
+        sel = members[lab]
+        d = int(np.ceil(2 * radius[lab - 1])) + GAP
+        for dy, dx in ((d, 0), (-d, 0), (0, d), (0, -d)):
+            y, x = ys[sel] + dy, xs[sel] + dx
+            keep = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
+            y, x = y[keep], x[keep]
+            ok = free[y, x] & (owner[y, x] == 0)
+            owner[y[ok], x[ok]] = lab
+    return owner
+
+
 def _fit(f, t, blend):
     """The weights of the candidates' ring fills f ((k, n)) that fit the truth t ((n,)):
     the least-squares blend, or the single best candidate."""
@@ -125,6 +154,7 @@ def choose(
     prior: float | None = None,
     scale: float | None = None,
     thin: float = 0.0,
+    shift: bool | None = None,
     dtype=np.float32,
     seed=None,
     params=None,
@@ -139,6 +169,7 @@ def choose(
     params = params or {}
     prior = PRIOR if prior is None else prior
     scale = SCALE if scale is None else scale
+    shift = SHIFT if shift is None else shift
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
@@ -179,13 +210,17 @@ def choose(
             vote[lab] = True
     ring_pixels = 0
     if vote.any():
-        # each known pixel belongs to the ring of its nearest hole pixel's cluster
-        _, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
-        owner = clusters[iy, ix]
-        width = np.full(count + 1, float(ring))
-        if scale > 0:
-            width[1:] = np.clip(np.ceil(scale * radius), ring, RING_MAX)
-        ring_mask = known & (dist <= width[owner]) & vote[owner]
+        if shift:
+            owner = _shifted(omega, dist, clusters, members, radius, vote)
+            ring_mask = owner > 0
+        else:
+            # each known pixel belongs to the ring of its nearest hole pixel's cluster
+            _, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
+            owner = clusters[iy, ix]
+            width = np.full(count + 1, float(ring))
+            if scale > 0:
+                width[1:] = np.clip(np.ceil(scale * radius), ring, RING_MAX)
+            ring_mask = known & (dist <= width[owner]) & vote[owner]
         ring_pixels = int(ring_mask.sum())
         if not (known & ~ring_mask).any():
             ring_mask = np.zeros_like(ring_mask)  # nothing would be left to fill from
