@@ -47,10 +47,10 @@ PRIOR = 0.0
 # and RING_MAX pixels; SCALE 0: RING for every cluster.
 SCALE = 0.0
 RING_MAX = 8
-# SHIFT: the test region is not a ring but the cluster's own shape moved aside, clear of
-# the hole, by twice its half-thickness plus GAP px in each of the four directions: a test
-# of the same thickness as the hole (a ring around a 2 px scratch makes a 6 px one, where
-# the smooth fills catch up with the spectral one).
+# SHIFT: a second test besides the ring: the cluster's own shape moved aside, clear of the
+# hole, by twice its half-thickness plus GAP px in each of the four directions, hidden and
+# filled: a test of the hole's own thickness (a ring around a 2 px scratch makes a 6 px
+# one, where the smooth fills catch up with the spectral one). Both tests' errors count.
 SHIFT = False
 GAP = 3
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
@@ -210,30 +210,35 @@ def choose(
             vote[lab] = True
     ring_pixels = 0
     if vote.any():
-        if shift:
-            owner = _shifted(omega, dist, clusters, members, radius, vote)
-            ring_mask = owner > 0
-        else:
-            # each known pixel belongs to the ring of its nearest hole pixel's cluster
-            _, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
-            owner = clusters[iy, ix]
-            width = np.full(count + 1, float(ring))
-            if scale > 0:
-                width[1:] = np.clip(np.ceil(scale * radius), ring, RING_MAX)
-            ring_mask = known & (dist <= width[owner]) & vote[owner]
-        ring_pixels = int(ring_mask.sum())
-        if not (known & ~ring_mask).any():
-            ring_mask = np.zeros_like(ring_mask)  # nothing would be left to fill from
-        hidden = omega | ring_mask
-        tests = (
-            np.stack(
-                [_fill(n, data, hidden, runtime, dtype, seed, params)[:, ring_mask] for n in names]
+        # each known pixel belongs to the ring of its nearest hole pixel's cluster
+        _, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
+        owner = clusters[iy, ix]
+        width = np.full(count + 1, float(ring))
+        if scale > 0:
+            width[1:] = np.clip(np.ceil(scale * radius), ring, RING_MAX)
+        owner = np.where(known & (dist <= width[owner]) & vote[owner], owner, 0)
+        owners = [owner]
+        if shift:  # and a second test: the clusters' shapes moved aside
+            owners.append(_shifted(omega, dist, clusters, members, radius, vote))
+        parts = []
+        for own in owners:
+            test_mask = own > 0
+            if not test_mask.any() or not (known & ~test_mask).any():
+                continue  # nothing to test on, or nothing left to fill from
+            hidden = omega | test_mask
+            fills_t = [_fill(n, data, hidden, runtime, dtype, seed, params) for n in names]
+            parts.append(
+                (
+                    np.stack([f[:, test_mask] for f in fills_t]),
+                    data[:, test_mask],
+                    own[test_mask],
+                )
             )
-            if ring_mask.any()
-            else None
-        )
-        truth = data[:, ring_mask] if ring_mask.any() else None
-        ring_members = _groups(owner[ring_mask], count)
+        ring_pixels = int(sum(p[2].size for p in parts))
+        tests = np.concatenate([p[0] for p in parts], axis=2) if parts else None
+        truth = np.concatenate([p[1] for p in parts], axis=1) if parts else None
+        test_owner = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0, int)
+        ring_members = _groups(test_owner, count)
         pooled = None
         if tests is not None and prior > 0:  # the box's weights: every voting ring at once
             pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
