@@ -40,12 +40,12 @@ RING = 2
 # A cluster's weights are its own ring's fit pulled towards the fit of every voting ring of
 # the box, as if the box's ring added PRIOR values to the cluster's own: a speck of dust's
 # ring holds a few dozen values, too few to fit five weights on noise.
-PRIOR = 0.0
+PRIOR = 300.0
 # A ring as thin as RING tells how well a candidate fills a thin hole: a smooth fill always
 # wins there, and loses deep in a thick hole. Each cluster's ring is as wide as SCALE times
 # its hole's half-thickness (its deepest pixel's distance to the known ones), between RING
 # and RING_MAX pixels; SCALE 0: RING for every cluster.
-SCALE = 0.0
+SCALE = 0.5
 RING_MAX = 8
 # SHIFT: a second test besides the ring: the cluster's own shape moved aside, clear of the
 # hole, by twice its half-thickness plus GAP px in each of the four directions, hidden and
