@@ -25,12 +25,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import Progress
+from .._progress import Progress, on_terminal
 from ..errors import InputError
 from ..fields import check_fits
 from ..imagedata import compute_dtype, grow_mask, growth
 from ..runtime import DeviceLike, get_runtime
-from . import bounds, boxes, validate
+from . import bounds, boxes, poisson, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .inputs import check_colour, prepare
@@ -235,6 +235,15 @@ class Inpainting:
             yield InpaintState(0, 0, self.result)
             return
         runtime = get_runtime(self.device)
+        built = runtime.build_seconds
+        if self._cold(runtime) and (
+            self.progress is True or (self.progress is None and on_terminal())
+        ):
+            # a first use builds the method's programs (seconds on a CPU device): say why
+            # it waits; the time is left out of info.seconds
+            print(
+                f"clpde: building kernels (once) for {self._what()}...", file=sys.stderr, flush=True
+            )
         info = InpaintInfo(0, True, 0, method=self.method)
         boxes = self._boxes()
         # Each box's finest level keeps the ping-pong pair, prev and known, the one-channel
@@ -297,9 +306,25 @@ class Inpainting:
                 report(done, total)
         self.result = out
         self.info = info
-        info.seconds = time.perf_counter() - start
+        info.build_seconds = runtime.build_seconds - built
+        info.seconds = time.perf_counter() - start - info.build_seconds
         if every:
             yield InpaintState(0, info.steps, self.result)
+
+    def _what(self) -> str:
+        return "method='auto'" if self.auto else f"method={self.method!r}"
+
+    def _cold(self, runtime) -> bool:
+        """Whether a program of the method (under auto: of every candidate) is not built yet
+        on this runtime in this dtype."""
+        names = validate.candidates() if self.auto else [self.method]
+        files = set()
+        for name in names:
+            module = poisson if name == "biharmonic" else inpainting.load(name)
+            files.update(getattr(module, "KERNEL_FILES", ()))
+        dt = np.dtype(self.dtype).str
+        built = {(key[0], key[1]) for key in list(runtime._programs)}
+        return any((f, dt) not in built for f in files)
 
     def _run(self, runtime, data, omega, fidelity, damage):
         """The method's run on one box: its own `run` when it has one (states along the
