@@ -92,8 +92,8 @@ def _outside_hull(colours, ring_colours, tol):
 
 def test_navier_stokes_colours_inside_the_neighbours_hull():
     """A colour photo with text: every filled colour inside the hull of its cluster's ring
-    colours (0.9 of a level allowed for the rounding), and each channel of the colour fill as good
-    as the same method on that channel alone (a grey image)."""
+    colours (0.9 of a level allowed for the rounding), and each channel of the colour fill
+    as good as the same method on that channel alone (a grey image)."""
     from skimage import data
 
     photo = np.ascontiguousarray(data.astronaut()[:96, 320:416])  # foliage-like texture
