@@ -50,11 +50,14 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--default", action="store_true", help="the default's vote (THINS)")
     parser.add_argument("--rules", default=None, help="scale/blend/prior/thin/shift;...")
+    parser.add_argument("--ring", type=int, default=None, help="validate.RING (the narrowest)")
     parser.add_argument(
         "--json", type=Path, default=Path(__file__).resolve().parent / "results" / "vote_rules.json"
     )
     args = parser.parse_args(argv)
     runtime = get_runtime()
+    if args.ring is not None:
+        validate.RING = args.ring
     names = validate.candidates(DEFAULT_NAMES if args.default else None)
     cache, seconds = {}, {}
     original = validate._fill
