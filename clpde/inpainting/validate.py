@@ -160,7 +160,7 @@ def choose(
     runtime,
     *,
     names=None,
-    ring: int = RING,
+    ring: int | None = None,
     blend: bool = True,
     prior: float | None = None,
     scale: float | None = None,
@@ -178,6 +178,7 @@ def choose(
     "chosen"} per cluster], "ring_pixels": int}.
     """
     params = params or {}
+    ring = RING if ring is None else ring
     prior = PRIOR if prior is None else prior
     scale = SCALE if scale is None else scale
     shift = SHIFT if shift is None else shift
