@@ -83,11 +83,36 @@ def clpde_method(name):
         import clpde
 
         kw = {} if name == "default" else {"method": name}
-        return clpde.inpaint(
-            image, mask, channel_axis=case.channel_axis, progress=False, seed=0, **kw
+        out, info = clpde.inpaint(
+            image,
+            mask,
+            channel_axis=case.channel_axis,
+            progress=False,
+            seed=0,
+            return_info=True,
+            **kw,
         )
+        CHOSEN[0] = _chosen(info)
+        return out
 
     return run
+
+
+CHOSEN = [None]  # what the last clpde call filled its hole with: {method: share of pixels}
+
+
+def _chosen(info):
+    """{method: share of the hole's pixels} of a clpde run (auto: from its votes' weights)."""
+    share = {}
+    if info.choices:
+        for report in info.choices:
+            for choice in report["choices"]:
+                for m, w in choice["weights"].items():
+                    share[m] = share.get(m, 0.0) + w * choice["pixels"]
+    else:
+        share[info.method] = float(max(info.omega_pixels, 1))
+    total = sum(share.values()) or 1.0
+    return {m: v / total for m, v in share.items()}
 
 
 def biharmonic(image, mask, case):
@@ -171,15 +196,18 @@ def extra_method(name):
         saved = validate.CANDIDATES
         validate.CANDIDATES = candidates or saved
         try:
-            return clpde.inpaint(
+            out, info = clpde.inpaint(
                 image,
                 mask,
                 channel_axis=case.channel_axis,
                 progress=False,
                 seed=0,
                 method=method,
+                return_info=True,
                 **options,
             )
+            CHOSEN[0] = _chosen(info)
+            return out
         finally:
             validate.CANDIDATES = saved
 
@@ -269,9 +297,12 @@ def run_case(case, found, log):
     image = case.damaged()
     for name, fn in found.items():
         start = time.perf_counter()
+        CHOSEN[0] = None
         try:
             result = fn(image, case.mask, case)
             rows.append(score(case, result, name, time.perf_counter() - start))
+            if CHOSEN[0] is not None:
+                rows[-1]["chosen"] = CHOSEN[0]
         except Exception as error:
             rows.append(
                 {
@@ -418,6 +449,56 @@ def print_tables(summary, halves):
         )
 
 
+def print_auto(rows, halves, name="clpde-auto"):
+    """Per class and half: what `name` filled the holes with (mean share of the pixels), and
+    its margin to its best candidate, case by case (the candidates: validate.CANDIDATES's
+    clpde columns, scikit-image's fill standing in for the device's biharmonic one)."""
+    from clpde.inpainting import validate
+
+    cols = {c: ("biharmonic" if c == "biharmonic" else f"clpde-{c}") for c in validate.CANDIDATES}
+    by_case = {}
+    for r in rows:
+        by_case.setdefault(r["case"], {})[r["method"]] = r
+    if not any(name in v for v in by_case.values()):
+        return
+    print(f"\n{name}: its choice and its margin to its best candidate ({' / '.join(halves)})")
+    print(f"{'class':11s} {'worst dB':>15s} {'cases < -0.2':>13s}  chosen (share of pixels)")
+    for d in corpus.CLASSES:
+        cells, shares = [], []
+        for h in halves:
+            margins, share = [], {}
+            for scores in by_case.values():
+                a = scores.get(name)
+                if not a or a["half"] != h or a["damage"] != d:
+                    continue
+                # (the default is the spectral fill: its column stands in when the spectral
+                # one was not run)
+                cand = [
+                    scores[c if c in scores or c != "clpde-spectral" else "default"]["psnr"]
+                    for c in cols.values()
+                    if c in scores or (c == "clpde-spectral" and "default" in scores)
+                ]
+                if cand:
+                    margins.append(a["psnr"] - max(cand))
+                for m, v in a.get("chosen", {}).items():
+                    share[m] = share.get(m, 0.0) + v
+            n = max(sum(share.values()), 1e-9)
+            shares.append(
+                ", ".join(
+                    f"{m} {v / n:.2f}"
+                    for m, v in sorted(share.items(), key=lambda x: -x[1])
+                    if v / n >= 0.01
+                )
+            )
+            cells.append(
+                (min(margins, default=math.nan), sum(m < -0.2 for m in margins), len(margins))
+            )
+        print(
+            f"{d:11s} {' / '.join(format(c[0], '+.2f') for c in cells):>15s} "
+            f"{' / '.join(f'{c[1]}/{c[2]}' for c in cells):>13s}  {' | '.join(shares)}"
+        )
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="one case per class and half")
@@ -478,6 +559,7 @@ def main(argv=None):
                 )
     summary = summarise(rows, halves)
     print_tables(summary, halves)
+    print_auto(rows, halves)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"summary": summary, "rows": rows}, indent=1))
     print(f"wrote {args.json}")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import tempfile
 import threading
+import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -397,6 +398,7 @@ class Runtime:
         self.ctx = cl.Context([device])
         self.queue = cl.CommandQueue(self.ctx)
         self._programs: dict[tuple, cl.Program] = {}
+        self.build_seconds = 0.0  # spent building programs so far (callers leave it out)
         self._kernels: dict[tuple, Kernel] = {}
         # Held while a kernel's arguments are set and it is enqueued (see Kernel), and
         # around pyopencl's own array kernels (Array.fill, arithmetic), which share kernel
@@ -423,7 +425,9 @@ class Runtime:
             with self.lock:  # one build per key, even when threads ask at once
                 prog = self._programs.get(key)
                 if prog is None:
+                    start = time.perf_counter()
                     prog = self._programs[key] = self._build(filename, dtype, defines)
+                    self.build_seconds += time.perf_counter() - start
         return prog
 
     def new_kernel(self, filename: str, name: str, dtype=np.float32, **defines) -> cl.Kernel:

@@ -25,12 +25,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from .._progress import Progress
+from .._progress import Progress, on_terminal
 from ..errors import InputError
 from ..fields import check_fits
 from ..imagedata import compute_dtype, grow_mask, growth
 from ..runtime import DeviceLike, get_runtime
-from . import boxes, validate
+from . import bounds, boxes, poisson, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .inputs import check_colour, prepare
@@ -176,20 +176,25 @@ class Inpainting:
         return inpainting.load(self.method)
 
     # -- conversions between the user's image and the solved channels -----------------
-    def _box_data(self, box):
-        """The box's channels as float64 in [0, 1] (NaN -> 0), colour model applied."""
+    def _box_data(self, box, model=True):
+        """The box's channels as float64 in [0, 1] (NaN -> 0), colour model applied (unless
+        `model` is False)."""
         y0, y1, x0, x1 = box
         part = self.planes[: self.ncolour, y0:y1, x0:x1]
         data = (part.astype(np.float64) - self.layout.offset) / self.layout.scale
         if np.issubdtype(part.dtype, np.floating):
             data[~np.isfinite(data)] = 0.0
-        return rgb_to_rho_phi_psi(data) if self.colour == "rho-phi-psi" else data
+        return rgb_to_rho_phi_psi(data) if model and self.colour == "rho-phi-psi" else data
 
-    def _write(self, out, box, solved, omega):
-        """Omega's colour channels of the box from the solution (everything else of `out`
-        stays the input's, bit for bit)."""
+    def _write(self, out, box, solved, omega, damage=None):
+        """Omega's colour channels of the box from the solution, each held within the range
+        of the known pixels around its cluster (bounds.py; the colour hull is left to the
+        methods that need it, navier-stokes: its cost per cluster shows on dust, and on the
+        calibration half it gained nothing for the others); everything else of `out` stays
+        the input's, bit for bit."""
         y0, y1, x0, x1 = box
         colour = rho_phi_psi_to_rgb(solved) if self.colour == "rho-phi-psi" else solved
+        colour = bounds.limit(colour, self._box_data(box, model=False), omega, damage, hull=False)
         values = colour[:, omega] * self.layout.scale + self.layout.offset
         if self.layout.dtype == bool:  # a binary image stays binary: cut at one half
             values = values > 0.5
@@ -209,8 +214,7 @@ class Inpainting:
         if not self.boxes:
             return [(0, ny, 0, nx)]
         if self.auto:  # every candidate, and the ring it is scored on, fits in the box
-            reach = validate.margin()
-            return boxes.boxes(self.mask, lambda crop: reach)
+            return boxes.boxes(self.mask, lambda crop: validate.margin(crop=crop))
         align = getattr(self.module, "ALIGN", None)
         return boxes.boxes(
             self.mask,
@@ -231,6 +235,15 @@ class Inpainting:
             yield InpaintState(0, 0, self.result)
             return
         runtime = get_runtime(self.device)
+        built = runtime.build_seconds
+        if self._cold(runtime) and (
+            self.progress is True or (self.progress is None and on_terminal())
+        ):
+            # a first use builds the method's programs (seconds on a CPU device): say why
+            # it waits; the time is left out of info.seconds
+            print(
+                f"clpde: building kernels (once) for {self._what()}...", file=sys.stderr, flush=True
+            )
         info = InpaintInfo(0, True, 0, method=self.method)
         boxes = self._boxes()
         # Each box's finest level keeps the ping-pong pair, prev and known, the one-channel
@@ -276,7 +289,7 @@ class Inpainting:
                 )
                 run = self._run(runtime, data, omega, fidelity, damage)
                 for steps, change, solved in run.states(every):
-                    self._write(out, box, solved, omega)
+                    self._write(out, box, solved, omega, damage)
                     yield InpaintState(0, info.steps + steps, out.copy(), change)
                 solved = run.solution
                 info.steps = max(info.steps, run.steps)
@@ -285,7 +298,7 @@ class Inpainting:
                 if run.steps_per_level:
                     info.steps_per_level = run.steps_per_level
                 info.band_pixels += run.band_pixels
-            self._write(out, box, solved, omega)
+            self._write(out, box, solved, omega, damage)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
             if report is not None:
@@ -293,9 +306,25 @@ class Inpainting:
                 report(done, total)
         self.result = out
         self.info = info
-        info.seconds = time.perf_counter() - start
+        info.build_seconds = runtime.build_seconds - built
+        info.seconds = time.perf_counter() - start - info.build_seconds
         if every:
             yield InpaintState(0, info.steps, self.result)
+
+    def _what(self) -> str:
+        return "method='auto'" if self.auto else f"method={self.method!r}"
+
+    def _cold(self, runtime) -> bool:
+        """Whether a program of the method (under auto: of every candidate) is not built yet
+        on this runtime in this dtype."""
+        names = validate.candidates() if self.auto else [self.method]
+        files = set()
+        for name in names:
+            module = poisson if name == "biharmonic" else inpainting.load(name)
+            files.update(getattr(module, "KERNEL_FILES", ()))
+        dt = np.dtype(self.dtype).str
+        built = {(key[0], key[1]) for key in list(runtime._programs)}
+        return any((f, dt) not in built for f in files)
 
     def _run(self, runtime, data, omega, fidelity, damage):
         """The method's run on one box: its own `run` when it has one (states along the

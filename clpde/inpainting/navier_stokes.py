@@ -44,6 +44,7 @@ from scipy import ndimage
 
 from ..errors import ClpdeError, InputError
 from ..imagedata import positive
+from . import bounds
 from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -234,13 +235,13 @@ def inpaint(
         mean_tol=mean_tol,
         check_every=check_every,
     )
-    solved = solver.result().astype(np.float64)
-    known = ~omega
-    for c in range(data.shape[0]):
-        # The recovered image obeys no maximum principle: on thick holes it can leave the
-        # known range far (below); clip as the biharmonic fill does.
-        plane = data[c][known]
-        np.clip(solved[c], plane.min(), plane.max(), out=solved[c])
+    # The recovered image obeys no maximum principle: the vorticity of a textured border,
+    # integrated into the hole, leaves the known range far, channel by channel, which shows
+    # as saturated false colours. Each cluster's fill is held within its ring's range, and
+    # its colours within the hull of the ring's colours (bounds.py).
+    solved = bounds.limit(
+        solver.result().astype(np.float64), data[:, rows, cols], box_omega, hull=True
+    )
     out = np.array(data, copy=True)
     out[:, rows, cols] = np.where(box_omega, solved, out[:, rows, cols])
     return (out, solver) if return_solver else out

@@ -37,7 +37,8 @@ class InpaintInfo:
     steps_per_level: list = field(default_factory=list)  # fine to coarse
     omega_pixels: int = 0
     band_pixels: int = 0
-    seconds: float = 0.0
+    seconds: float = 0.0  # the run's time, its programs' first builds left out
+    build_seconds: float = 0.0  # spent building OpenCL programs during the run (first use)
     snapshots: list = field(default_factory=list)
     method: str | None = "transport"  # None: the mask was empty, nothing was run
     boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved

@@ -60,3 +60,22 @@ def test_new_size_and_channel_count_build_nothing(fresh, method):
     assert built == first, built[len(first) :]
     run(52, 60, 1)  # grey after colour
     assert built == first, built[len(first) :]
+
+
+def test_first_use_says_it_builds_and_leaves_the_build_out_of_its_time(capsys):
+    """A runtime that has built nothing yet (a first use): the notice on stderr, the build's
+    seconds in info.build_seconds and not in info.seconds; the second call builds nothing
+    and says nothing."""
+    from clpde.runtime import Runtime, get_runtime
+
+    shared = get_runtime("cpu")
+    fresh = Runtime(shared.index, shared.platform, shared.device)
+    image = np.tile(np.linspace(0, 1, 40, dtype=np.float32), (40, 1))
+    mask = np.zeros((40, 40), bool)
+    mask[15:22, 10:30] = True
+    _, info = clpde.inpaint(image, mask, device=fresh, progress=True, return_info=True)
+    assert "building kernels (once)" in capsys.readouterr().err
+    assert info.build_seconds > 0 and fresh.build_seconds >= info.build_seconds
+    _, again = clpde.inpaint(image, mask, device=fresh, progress=True, return_info=True)
+    assert "building kernels" not in capsys.readouterr().err
+    assert again.build_seconds == 0
