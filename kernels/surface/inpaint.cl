@@ -1,4 +1,4 @@
-// Inpainting on implicit surfaces (clpde/surface/inpaint.py): data missing over part of the
+// Inpainting on implicit surfaces (clpde/surface/inpainting.py): data missing over part of the
 // surface is filled by a PDE written intrinsically (chapter 4), stepped over the hole's
 // cells only; the known cells hold their data, extended along the normals, throughout
 // (the Dirichlet condition). Defines: NC. Layout and conventions: surface.h.
@@ -24,7 +24,9 @@ INLINE REAL lb_cell(__global const REAL* restrict u, const int i,
 // u being the node values x re-extended over the hole's reach band (extend.cl's extend_cp:
 // the step starts from the extended value, not from x, else x - E x has growing modes).
 // mom = 0, gain = r is the explicit heat step. prev takes u; change[c * nlist + k] takes
-// |x_new - u|, which the host reads every so many steps to stop.
+// |u - prev|, the last step's change, which the host reads every so many steps to stop.
+// (Not |x_new - u|: at the steady state of the closest-point form, x differs from its own
+// re-extension E x by gain * LB(u), which is of the order of the scheme's error, not 0.)
 __kernel void inpaint_harmonic_step(__global const REAL* restrict u, __global REAL* restrict x,
                                     __global REAL* restrict prev,
                                     __global const REAL* restrict psi, const REAL mom,
@@ -36,9 +38,9 @@ __kernel void inpaint_harmonic_step(__global const REAL* restrict u, __global RE
     for (int k = k0; k < k1; ++k) {
         const int i = list[k];
         const REAL ui = u[chan + i];
-        const REAL step = mom * (ui - prev[chan + i]) + gain * lb_cell(u + chan, i, psi, sx, sxy);
-        x[chan + i] = ui + step;
+        const REAL moved = ui - prev[chan + i];
+        x[chan + i] = ui + mom * moved + gain * lb_cell(u + chan, i, psi, sx, sxy);
         prev[chan + i] = ui;
-        change[c * nlist + k] = FABS(step);
+        change[c * nlist + k] = FABS(moved);
     }
 }

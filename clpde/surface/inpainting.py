@@ -1,0 +1,404 @@
+"""Inpainting on implicit surfaces (thesis 5.3): data missing over part of a surface (vertex
+colours or a scalar on a mesh, or data on an ImplicitSurface's band) filled by a PDE written
+intrinsically, as chapter 4 writes the other flows.
+
+The hole is the set of band cells whose closest point lies in the missing region. Only its
+cells are stepped and re-extended (kernels/surface/inpaint.cl, extend.cl's extend_cp on the
+hole's share of the band lists); the known cells keep their data, extended along the
+normals, as the Dirichlet condition.
+
+- 'harmonic': the Laplace-Beltrami equation in the hole, appendix E's discrete operator
+  (the average of its two complementary one-sided choices), solved by Chebyshev's
+  semi-iterative method: its iterations grow as 1/h, not 1/h^2 as the heat flow's would.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pyopencl.array as cla
+
+from .._progress import progress_range
+from ..errors import InputError
+from ..fields import IndexList
+from .band import extend_defines
+from .implicit import ImplicitSurface
+from .mesh_sdf import load_mesh
+
+KERNEL_FILES = ("surface/inpaint.cl", "surface/extend.cl")
+METHODS = ("harmonic",)
+
+# Upper end of the spectrum of -LB (grid units) that Chebyshev's method assumes: the 7-point
+# Laplacian's is 12; the projection only lowers it, the tricubic re-extension may lift it a
+# little (docs/surface.md measures it by power iteration on a sphere and a torus).
+SPECTRUM_TOP = 13.0
+
+
+@dataclass
+class SurfaceInpaintInfo:
+    """What a surface inpainting run did.
+
+    Parameters
+    ----------
+    method : str
+        The method.
+    iterations : int
+        Steps run.
+    change : float
+        The error left, estimated from the last step's largest change at the hole's nodes
+        and Chebyshev's rate, relative to the known data's range (the run stops once it is
+        below tol).
+    hole_cells : int
+        Band cells in the hole.
+    seconds : float
+        Wall time of the fill on the device (upload to read-back).
+    """
+
+    method: str
+    iterations: int
+    change: float
+    hole_cells: int
+    seconds: float
+
+
+def _sub_list(q, indices: np.ndarray) -> IndexList:
+    return IndexList(cla.to_device(q, np.ascontiguousarray(indices, np.int32)), len(indices))
+
+
+class HoleLists:
+    """The hole's share of a surface's band lists, built once per (surface, hole): its nodes
+    (stepped), its reach cells and extension cells with their closest-point stencils
+    (re-extended)."""
+
+    def __init__(self, surf: ImplicitSurface, hole_padded: np.ndarray):
+        q = surf.runtime.queue
+
+        def select(band):
+            cells = band.indices.get()[: band.n]
+            return cells, hole_padded[cells]
+
+        nodes, keep = select(surf.node_band)
+        self.nodes = _sub_list(q, nodes[keep])
+        self.reach = self._stencils(q, surf.reach_band, *surf.reach_stencils, hole_padded)
+        self.ext = self._stencils(q, surf.ext_band, surf.cp_base, surf.cp_frac, hole_padded)
+
+    @staticmethod
+    def _stencils(q, band, base, frac, hole_padded):
+        cells = band.indices.get()[: band.n]
+        keep = hole_padded[cells]
+        sub_frac = np.ascontiguousarray(frac.get()[:, : band.n][:, keep])
+        return (
+            _sub_list(q, cells[keep]),
+            cla.to_device(q, np.ascontiguousarray(base.get()[: band.n][keep])),
+            cla.to_device(q, sub_frac if sub_frac.size else np.zeros((3, 1), sub_frac.dtype)),
+        )
+
+
+def _hole_area(surf: ImplicitSurface, hole_cells: int) -> float:
+    """The hole's area in grid units (cells^2): the band holds about 2 * outer cells along
+    each normal, so its cell count over that is the area it covers."""
+    return hole_cells / (2.0 * surf.outer)
+
+
+def chebyshev_bounds(surf: ImplicitSurface, hole_cells: int) -> tuple[float, float]:
+    """(a, b) bounding the spectrum of -LB on the hole (grid units): a from Faber-Krahn (no
+    region of the hole's area has a lower first Dirichlet eigenvalue than the disc's,
+    j0^2 pi / area), halved for curvature and the discrete boundary; b = SPECTRUM_TOP."""
+    area = max(_hole_area(surf, hole_cells), 1.0)
+    return 0.5 * 2.404825557695773**2 * math.pi / area, SPECTRUM_TOP
+
+
+def fill_band(
+    surf: ImplicitSurface,
+    values: np.ndarray,
+    hole: np.ndarray,
+    *,
+    method: str = "harmonic",
+    tol: float = 1e-5,
+    max_iterations: int | None = None,
+    check_every: int = 50,
+    progress: bool | None = None,
+) -> tuple[np.ndarray, SurfaceInpaintInfo]:
+    """The fill on the band: values (channels, n) in band form, hole (n,) bool; returns the
+    filled (channels, n) float64 and the info."""
+    if method not in METHODS:
+        raise InputError(f"unknown surface inpainting method {method!r}; use {', '.join(METHODS)}")
+    start = time.perf_counter()
+    g, q = surf.grid, surf.runtime.queue
+    nc, n = values.shape
+    values = np.array(values, dtype=np.float64)
+    known = ~hole
+    if not known.any():
+        raise InputError("every cell of the surface is missing: nothing to fill the hole from")
+    if not hole.any():
+        info = SurfaceInpaintInfo(method, 0, 0.0, 0, time.perf_counter() - start)
+        return values, info
+    lo, hi = values[:, known].min(axis=1), values[:, known].max(axis=1)
+    span = float(max((hi - lo).max(), 1e-30))
+    # start from the known data's mean: any start converges, Chebyshev's rate does not
+    # depend on it
+    values[:, hole] = values[:, known].mean(axis=1)[:, None]
+    padded_cells = surf.band.cells()[1]
+    hole_padded = np.zeros(g.volume, bool)
+    hole_padded[padded_cells[hole]] = True
+    lists = HoleLists(surf, hole_padded)
+    cur = cla.to_device(q, surf.band.padded_from(values))
+    x, prev = cur.copy(), cur.copy()
+    defines = {"NC": nc}
+    step = g.kernel("surface/inpaint.cl", "inpaint_harmonic_step", **defines)
+    extend = g.kernel("surface/extend.cl", "extend_cp", **extend_defines(surf.interp, nc))
+    change = cla.zeros(q, (nc, max(lists.nodes.n, 1)), g.dtype)
+    strides = g.strides()
+
+    def extend_to(band, base, frac, src, dst):
+        g.launch_list(extend, band, src.data, dst.data, base.data, frac.data, *strides)
+
+    def largest_change() -> float:
+        return float(change.get()[:, : lists.nodes.n].max()) / span
+
+    a, b = chebyshev_bounds(surf, int(hole.sum()))
+    theta, delta = (b + a) / 2, (b - a) / 2
+    sigma = theta / delta
+    # Chebyshev's error falls by rate = (sqrt(k) - 1) / (sqrt(k) + 1) a step, k = b / a: a
+    # step of size c leaves about c / (1 - rate) to go
+    kappa = b / a
+    rate = (math.sqrt(kappa) - 1) / (math.sqrt(kappa) + 1)
+    if max_iterations is None:
+        # the bound 2 rate^m down to tol, twice over for a's estimate
+        max_iterations = int(2 * math.ceil(math.log(tol / 2) / math.log(rate))) + check_every
+    rho = 1 / sigma
+    iterations, last = 0, float("inf")
+    for k in progress_range(progress, max_iterations, "surface inpaint", leave=False, queue=q):
+        if k == 0:
+            mom, gain = 0.0, 1 / theta
+        else:
+            rho_new = 1 / (2 * sigma - rho)
+            mom, gain = rho_new * rho, 2 * rho_new / delta
+            rho = rho_new
+        g.launch_list(
+            step,
+            lists.nodes,
+            cur.data,
+            x.data,
+            prev.data,
+            surf.psi_dev.data,
+            g.scalar(mom),
+            g.scalar(gain),
+            change.data,
+            *strides,
+            channels=nc,
+        )
+        extend_to(*lists.reach, x, cur)
+        iterations = k + 1
+        if iterations % check_every == 0:
+            last = largest_change() / (1 - rate)
+            if last < tol:
+                break
+    last = largest_change() / (1 - rate)
+    # the fill on the whole band's hole cells: their closest points' values from x
+    extend_to(*lists.ext, x, cur)
+    out = cur.get().reshape(nc, -1)[:, padded_cells]
+    out[:, known] = values[:, known]
+    info = SurfaceInpaintInfo(
+        method, iterations, last, int(hole.sum()), time.perf_counter() - start
+    )
+    return out.astype(np.float64), info
+
+
+def _surface_form(surf: ImplicitSurface, values, missing):
+    """(values (channels, n), hole (n,), restore) for data on a surface, dense or band form;
+    restore turns the filled band form back into the input's form."""
+    values = np.asarray(values)
+    missing = np.asarray(missing)
+    if missing.dtype != bool:
+        raise InputError(
+            f"missing must be a boolean array (True where data is missing), not {missing.dtype}"
+        )
+    if not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
+        raise InputError(f"values must hold real numbers, not {values.dtype}")
+    dtype = values.dtype if np.issubdtype(values.dtype, np.floating) else np.float64
+    band_form = surf.band.form_channels(values) is not None
+    if band_form:
+        if missing.shape != (surf.ext_band.n,):
+            raise InputError(
+                f"missing must have shape ({surf.ext_band.n},), the band form of values, got "
+                f"{missing.shape}"
+            )
+        vals, hole = values.reshape(-1, surf.ext_band.n), missing
+    else:
+        if missing.shape != surf.shape:
+            raise InputError(
+                f"missing must have the surface's grid shape {surf.shape}, got {missing.shape}"
+            )
+        vals = surf.band_values(values).reshape(-1, surf.ext_band.n)
+        hole = surf.band_values(missing)
+    known = ~hole
+    if not np.all(np.isfinite(vals[:, known])):
+        raise InputError("values contain NaN or infinite entries outside the missing region")
+    vals = np.where(hole[None], 0.0, vals)  # what the hole held is never read
+
+    def restore(out):
+        out = out.astype(dtype)
+        if band_form:
+            return out[0] if values.ndim == 1 else out
+        dense = np.array(values, dtype=dtype, copy=True)
+        flat = dense.reshape(-1, int(np.prod(surf.shape)))
+        flat[:, surf.band_indices()] = out
+        return dense
+
+    return vals, hole, restore
+
+
+def vertex_mask(missing, vertices: int) -> np.ndarray:
+    """A per-vertex boolean mask from a boolean mask or integer vertex indices."""
+    missing = np.asarray(missing)
+    if missing.dtype == bool:
+        if missing.shape != (vertices,):
+            raise InputError(
+                f"a boolean missing mask needs one entry per mesh vertex ({vertices}), got "
+                f"shape {missing.shape}"
+            )
+        return missing
+    if missing.ndim != 1 or not np.issubdtype(missing.dtype, np.integer):
+        raise InputError(
+            "missing must be a boolean mask with one entry per vertex, or a 1D array of "
+            f"integer vertex indices, not {missing.dtype} of shape {missing.shape}"
+        )
+    if missing.size and (missing.min() < 0 or missing.max() >= vertices):
+        raise InputError(
+            f"missing vertex indices must lie in 0..{vertices - 1}, got {missing.min()}.."
+            f"{missing.max()}"
+        )
+    mask = np.zeros(vertices, bool)
+    mask[missing] = True
+    return mask
+
+
+def mesh_values(mesh, values) -> np.ndarray:
+    """The data on a mesh's vertices: `values` (vertices,) or (vertices, channels) checked,
+    or the mesh's RGB vertex colours (uint8) when values is None."""
+    if values is None:
+        if getattr(mesh.visual, "kind", None) != "vertex":
+            raise InputError(
+                "the mesh has no vertex colours: give the values to fill (one per vertex; "
+                "--values FILE on the command line)"
+            )
+        return np.asarray(mesh.visual.vertex_colors)[:, :3]
+    values = np.asarray(values)
+    if values.ndim not in (1, 2) or values.shape[0] != len(mesh.vertices):
+        raise InputError(
+            f"values must have one row per mesh vertex ({len(mesh.vertices)}): shape "
+            f"(vertices,) or (vertices, channels), got {values.shape}"
+        )
+    if not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
+        raise InputError(f"values must hold real numbers, not {values.dtype}")
+    return values
+
+
+def inpaint(
+    mesh_or_surface,
+    values=None,
+    missing=None,
+    *,
+    method: str = "harmonic",
+    resolution: int = 128,
+    tol: float = 1e-5,
+    max_iterations: int | None = None,
+    device=None,
+    progress: bool | None = None,
+    return_info: bool = False,
+):
+    """Fill data missing over part of a surface by a PDE on the implicit surface.
+
+    Parameters
+    ----------
+    mesh_or_surface : trimesh.Trimesh, str, PathLike or ImplicitSurface
+        A closed mesh (or a file trimesh reads), whose implicit surface is built at
+        `resolution`; or an ImplicitSurface with the data on its band.
+    values : array_like, optional
+        On a mesh: (vertices,) or (vertices, channels), by default the mesh's RGB vertex
+        colours. On an ImplicitSurface: dense ((channels,) + shape) or band form.
+    missing : array_like
+        On a mesh: a boolean mask per vertex, or integer vertex indices. On an
+        ImplicitSurface: a boolean array of values' spatial form (the cells whose closest
+        point lies in the missing region).
+    method : {'harmonic'}, optional
+        'harmonic': Laplace-Beltrami u = 0 in the hole, the known data as the boundary
+        condition.
+    resolution : int, optional
+        Grid cells across a mesh's longest side.
+    tol : float, optional
+        Stop once the error left (a step's largest change in the hole over the iteration's
+        rate of convergence) is below tol times the known data's range.
+    max_iterations : int, optional
+        At most this many steps (default: twice Chebyshev's bound for tol).
+    device : str or int or Runtime, optional
+        The OpenCL device for a mesh's surface.
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    return_info : bool, optional
+        Also return a SurfaceInpaintInfo.
+
+    Returns
+    -------
+    ndarray or (ndarray, SurfaceInpaintInfo)
+        The values with the missing ones filled, in values' form and dtype (integers
+        rounded and clipped to their range); the known values are returned unchanged.
+
+    Raises
+    ------
+    InputError
+        For masks or values of another shape, nothing known or a mesh without colours
+        and no values.
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh
+    >>> from clpde.surface import inpaint
+    >>> ball = trimesh.creation.icosphere(3)
+    >>> z = ball.vertices[:, 2]
+    >>> filled = inpaint(ball, z, z < -0.7, resolution=32)
+    >>> bool(np.abs(filled - z).max() < 0.05)
+    True
+    """
+    if missing is None:
+        raise InputError("give missing: where the data is missing (a mask or vertex indices)")
+    options = dict(method=method, tol=tol, max_iterations=max_iterations, progress=progress)
+    if isinstance(mesh_or_surface, ImplicitSurface):
+        surf = mesh_or_surface
+        vals, hole, restore = _surface_form(surf, values, missing)
+        out, info = fill_band(surf, vals, hole, **options)
+        out = restore(out)
+        return (out, info) if return_info else out
+    from .runs import encloses_volume
+
+    mesh = load_mesh(mesh_or_surface)
+    data = mesh_values(mesh, values)
+    mask = vertex_mask(missing, len(mesh.vertices))
+    if not np.all(np.isfinite(data[~mask])):
+        raise InputError("values contain NaN or infinite entries at vertices not missing")
+    with encloses_volume(mesh_or_surface):
+        surf = ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
+    filled, info = fill_mesh(surf, data, mask, **options)
+    return (filled, info) if return_info else filled
+
+
+def fill_mesh(surf: ImplicitSurface, data: np.ndarray, mask: np.ndarray, **options):
+    """Vertex data with the masked vertices filled on `surf` (made from the mesh)."""
+    known_data = np.where(mask.reshape((-1,) + (1,) * (data.ndim - 1)), 0, data)
+    band = surf.band_values(surf.field_from_mesh(known_data.astype(np.float64)))
+    # a cell is in the hole when a missing vertex has a share in its value
+    hole = surf.band_values(surf.field_from_mesh(mask.astype(np.float64))) > 0
+    vals = band.reshape(-1, surf.ext_band.n)
+    out, info = fill_band(surf, vals, hole, **options)
+    filled = np.array(data, copy=True)
+    if mask.any():
+        sampled = surf.sample(out if data.ndim == 2 else out[0], surf.mesh.vertices[mask])
+        if np.issubdtype(data.dtype, np.integer):
+            limits = np.iinfo(data.dtype)
+            sampled = np.clip(np.rint(sampled), limits.min, limits.max)
+        filled[mask] = sampled.astype(filled.dtype)
+    return filled, info
