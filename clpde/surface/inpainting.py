@@ -201,12 +201,12 @@ def fill_band(
     last = largest_change() / (1 - rate)
     # the fill on the whole band's hole cells: their closest points' values from x
     extend_to(*lists.ext, x, cur)
-    out = cur.get().reshape(nc, -1)[:, padded_cells]
+    out = cur.get().reshape(nc, -1)[:, padded_cells].astype(np.float64)
     out[:, known] = values[:, known]
     info = SurfaceInpaintInfo(
         method, iterations, last, int(hole.sum()), time.perf_counter() - start
     )
-    return out.astype(np.float64), info
+    return out, info
 
 
 def _surface_form(surf: ImplicitSurface, values, missing):
