@@ -18,9 +18,11 @@ import math
 import os
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyopencl.array as cla
+from numpy.typing import ArrayLike
 
 from .._progress import progress_range
 from ..errors import InputError
@@ -28,6 +30,11 @@ from ..fields import IndexList
 from .band import extend_defines
 from .implicit import ImplicitSurface
 from .mesh_sdf import load_mesh
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from ..runtime import DeviceLike
 
 KERNEL_FILES = ("surface/inpaint.cl", "surface/extend.cl")
 METHODS = ("harmonic",)
@@ -300,18 +307,18 @@ def mesh_values(mesh, values) -> np.ndarray:
 
 
 def inpaint(
-    mesh_or_surface,
-    values=None,
-    missing=None,
+    mesh_or_surface: ImplicitSurface | trimesh.Trimesh | str | os.PathLike,
+    values: ArrayLike | None = None,
+    missing: ArrayLike | None = None,
     *,
     method: str = "harmonic",
     resolution: int = 128,
     tol: float = 1e-5,
     max_iterations: int | None = None,
-    device=None,
+    device: DeviceLike = None,
     progress: bool | None = None,
     return_info: bool = False,
-):
+) -> np.ndarray | tuple[np.ndarray, SurfaceInpaintInfo]:
     """Fill data missing over part of a surface by a PDE on the implicit surface.
 
     Parameters
