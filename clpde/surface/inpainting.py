@@ -37,7 +37,10 @@ if TYPE_CHECKING:
     from ..runtime import DeviceLike
 
 KERNEL_FILES = ("surface/inpaint.cl", "surface/extend.cl")
-METHODS = ("harmonic",)
+METHODS = ("harmonic", "transport")
+# The transport's schedule, the plane's (clpde/inpainting/transport_params.py): A transport
+# steps of dt, then B anisotropic diffusion steps of diffusion_dt, on data scaled to [0, 1].
+TRANSPORT = {"dt": 0.1, "transport_steps": 15, "diffusion_steps": 2, "diffusion_dt": 0.1}
 
 # Upper end of the spectrum of -LB (grid units) that Chebyshev's method assumes: the 7-point
 # Laplacian's is 12; the projection only lowers it, the tricubic re-extension may lift it a
@@ -128,6 +131,7 @@ def fill_band(
     tol: float = 1e-5,
     max_iterations: int | None = None,
     check_every: int = 50,
+    max_cycles: int = 200,
     progress: bool | None = None,
 ) -> tuple[np.ndarray, SurfaceInpaintInfo]:
     """The fill on the band: values (channels, n) in band form, hole (n,) bool; returns the
@@ -146,6 +150,9 @@ def fill_band(
         return values, info
     lo, hi = values[:, known].min(axis=1), values[:, known].max(axis=1)
     span = float(max((hi - lo).max(), 1e-30))
+    # on data scaled to [0, 1]: the tolerances are relative, and the transport's speed grows
+    # with the data's scale (the plane's transport scales its data so too)
+    values = (values - lo[:, None]) / span
     # start from the known data's mean: any start converges, Chebyshev's rate does not
     # depend on it
     values[:, hole] = values[:, known].mean(axis=1)[:, None]
@@ -165,7 +172,7 @@ def fill_band(
         g.launch_list(extend, band, src.data, dst.data, base.data, frac.data, *strides)
 
     def largest_change() -> float:
-        return float(change.get()[:, : lists.nodes.n].max()) / span
+        return float(change.get()[:, : lists.nodes.n].max())
 
     a, b = chebyshev_bounds(surf, int(hole.sum()))
     theta, delta = (b + a) / 2, (b - a) / 2
@@ -206,14 +213,103 @@ def fill_band(
             if last < tol:
                 break
     last = largest_change() / (1 - rate)
+    if method == "transport":
+        cycles, last = _transport(
+            surf,
+            lists,
+            cur,
+            x,
+            change,
+            nc,
+            padded_cells,
+            hole,
+            extend_to,
+            max_cycles,
+            tol,
+            progress,
+        )
+        iterations += cycles * (TRANSPORT["transport_steps"] + TRANSPORT["diffusion_steps"])
     # the fill on the whole band's hole cells: their closest points' values from x
     extend_to(*lists.ext, x, cur)
     out = cur.get().reshape(nc, -1)[:, padded_cells].astype(np.float64)
     out[:, known] = values[:, known]
+    out = out * span + lo[:, None]
     info = SurfaceInpaintInfo(
         method, iterations, last, int(hole.sum()), time.perf_counter() - start
     )
     return out, info
+
+
+def _zone(surf: ImplicitSurface, padded_cells, hole, cells: float) -> np.ndarray:
+    """Padded mask of the band cells whose closest point lies within `cells` grid cells of
+    a hole cell's closest point."""
+    from scipy.spatial import cKDTree
+
+    cp = surf.band_closest_points()
+    near = cKDTree(cp[hole]).query(cp, distance_upper_bound=cells * surf.spacing)[0]
+    zone = np.zeros(surf.grid.volume, bool)
+    zone[padded_cells[np.isfinite(near)]] = True
+    return zone
+
+
+def _transport(
+    surf, lists, cur, x, change, nc, padded_cells, hole, extend_to, max_cycles, tol, progress
+):
+    """The transport cycles from the harmonic fill in cur / x: (cycles, last change).
+
+    L is needed at the hole's nodes' neighbours: it is computed at the nodes within 9 cells
+    of the hole (lb_cell reads the reach band around them) and re-extended over the reach
+    cells within 3, which hold every neighbour of a hole node and whose closest points'
+    stencils stay within the 9."""
+    g, q = surf.grid, surf.runtime.queue
+    strides = g.strides()
+    lap_nodes = HoleLists(surf, _zone(surf, padded_cells, hole, 9.0)).nodes
+    lap_reach = HoleLists(surf, _zone(surf, padded_cells, hole, 3.0)).reach
+    lap, lap_ext = cla.zeros_like(cur), cla.zeros_like(cur)
+    kernel = {
+        name: g.kernel("surface/inpaint.cl", f"inpaint_{name}", NC=nc)
+        for name in ("lap", "transport_step", "diffusion_step")
+    }
+    dt, ddt = g.scalar(TRANSPORT["dt"]), g.scalar(TRANSPORT["diffusion_dt"])
+    eps2, e2 = g.scalar(1e-10), g.scalar(1e-8)
+    psi = surf.psi_dev.data
+    last = float("inf")
+    cycle = 0
+    for cycle in progress_range(progress, max_cycles, "surface transport", leave=False, queue=q):
+        for _ in range(TRANSPORT["transport_steps"]):
+            g.launch_list(kernel["lap"], lap_nodes, cur.data, lap.data, psi, *strides, channels=nc)
+            extend_to(*lap_reach, lap, lap_ext)
+            g.launch_list(
+                kernel["transport_step"],
+                lists.nodes,
+                cur.data,
+                x.data,
+                lap_ext.data,
+                psi,
+                dt,
+                eps2,
+                change.data,
+                *strides,
+                channels=nc,
+            )
+            extend_to(*lists.reach, x, cur)
+        for _ in range(TRANSPORT["diffusion_steps"]):
+            g.launch_list(
+                kernel["diffusion_step"],
+                lists.nodes,
+                cur.data,
+                x.data,
+                psi,
+                ddt,
+                e2,
+                *strides,
+                channels=1,
+            )
+            extend_to(*lists.reach, x, cur)
+        last = float(change.get()[:, : lists.nodes.n].max())
+        if last < tol:
+            break
+    return cycle + 1, last
 
 
 def _surface_form(surf: ImplicitSurface, values, missing):
