@@ -150,13 +150,17 @@ def fill_band(
         return values, info
     lo, hi = values[:, known].min(axis=1), values[:, known].max(axis=1)
     span = float(max((hi - lo).max(), 1e-30))
-    # on data scaled to [0, 1]: the tolerances are relative, and the transport's speed grows
-    # with the data's scale (the plane's transport scales its data so too)
-    values = (values - lo[:, None]) / span
-    # start from the known data's mean: any start converges, Chebyshev's rate does not
-    # depend on it
-    values[:, hole] = values[:, known].mean(axis=1)[:, None]
     padded_cells = surf.band.cells()[1]
+    # The data scaled by its range (the tolerances are relative, and the transport's speed
+    # grows with the data's scale, as in the plane) and shifted by the mean of the hole's
+    # rim, which is also the start in the hole: near the hole the values are then small,
+    # and float32 keeps more of their digits (shifted by the range's low end, the fill's
+    # error on a torus stalled at 2.5x its float64-limited value).
+    rim = _zone(surf, padded_cells, hole, 2.0)[padded_cells] & known
+    centre = values[:, rim if rim.any() else known].mean(axis=1)
+    given = values.copy()
+    values = (values - centre[:, None]) / span
+    values[:, hole] = 0.0
     hole_padded = np.zeros(g.volume, bool)
     hole_padded[padded_cells[hole]] = True
     lists = HoleLists(surf, hole_padded)
@@ -232,8 +236,8 @@ def fill_band(
     # the fill on the whole band's hole cells: their closest points' values from x
     extend_to(*lists.ext, x, cur)
     out = cur.get().reshape(nc, -1)[:, padded_cells].astype(np.float64)
-    out[:, known] = values[:, known]
-    out = out * span + lo[:, None]
+    out = out * span + centre[:, None]
+    out[:, known] = given[:, known]
     info = SurfaceInpaintInfo(
         method, iterations, last, int(hole.sum()), time.perf_counter() - start
     )
@@ -273,9 +277,9 @@ def _transport(
     dt, ddt = g.scalar(TRANSPORT["dt"]), g.scalar(TRANSPORT["diffusion_dt"])
     eps2, e2 = g.scalar(1e-10), g.scalar(1e-8)
     psi = surf.psi_dev.data
-    last = float("inf")
-    cycle = 0
-    for cycle in progress_range(progress, max_cycles, "surface transport", leave=False, queue=q):
+    last, cycles = float("inf"), 0
+    for _ in progress_range(progress, max_cycles, "surface transport", leave=False, queue=q):
+        cycles += 1
         for _ in range(TRANSPORT["transport_steps"]):
             g.launch_list(kernel["lap"], lap_nodes, cur.data, lap.data, psi, *strides, channels=nc)
             extend_to(*lap_reach, lap, lap_ext)
@@ -309,7 +313,7 @@ def _transport(
         last = float(change.get()[:, : lists.nodes.n].max())
         if last < tol:
             break
-    return cycle + 1, last
+    return cycles, last
 
 
 def _surface_form(surf: ImplicitSurface, values, missing):

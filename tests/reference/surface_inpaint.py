@@ -57,3 +57,61 @@ def harmonic_fill(u_pad, psi_pad, nodes, reach, reach_cp, ext, ext_cp, a, b, ste
         flat(cur)[:, reach] = ref.extend_cp(x, reach, reach_cp, order)
     flat(cur)[:, ext] = ref.extend_cp(x, ext, ext_cp, order)
     return cur
+
+
+def _central(f, cells, sx, sxy, half):
+    s = 0.5 if half else 1.0
+    return [s * (f[cells + e] - f[cells - e]) for e in (1, sx, sxy)]
+
+
+def _tangential(v, n):
+    s = v[0] * n[0] + v[1] * n[1] + v[2] * n[2]
+    return [v[a] - s * n[a] for a in range(3)]
+
+
+def _unit_normal(p, cells, sx, sxy):
+    n = ref._normal(p, cells, sx, sxy)
+    inv = 1 / np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2 + 1e-30)
+    return [c * inv for c in n]
+
+
+def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2):
+    """inpaint_transport_step at `nodes`: (new values, |change|), each (nc, n)."""
+    nc, _pz, py, px = u_pad.shape
+    sx, sxy = px, px * py
+    p = psi_pad.ravel().astype(np.float64)
+    n = _unit_normal(p, nodes, sx, sxy)
+    out, change = np.empty((nc, nodes.size)), np.empty((nc, nodes.size))
+    for c in range(nc):
+        f = u_pad[c].ravel().astype(np.float64)
+        lap = lap_pad[c].ravel().astype(np.float64)
+        g = _tangential(_central(f, nodes, sx, sxy, True), n)
+        dl = _tangential(_central(lap, nodes, sx, sxy, False), n)
+        t = np.cross(np.stack(n, 1), np.stack(g, 1))
+        beta = (np.stack(dl, 1) * t).sum(1) / np.sqrt(g[0] ** 2 + g[1] ** 2 + g[2] ** 2 + grad_eps2)
+        up = down = 0.0
+        for e in (1, sx, sxy):
+            back, fwd = f[nodes] - f[nodes - e], f[nodes + e] - f[nodes]
+            up = up + np.minimum(back, 0) ** 2 + np.maximum(fwd, 0) ** 2
+            down = down + np.maximum(back, 0) ** 2 + np.minimum(fwd, 0) ** 2
+        step = dt * beta * np.sqrt(np.where(beta > 0, up, down))
+        out[c] = f[nodes] + step
+        change[c] = np.abs(step)
+    return out, change
+
+
+def diffusion_step(u_pad, psi_pad, nodes, dt, e2):
+    """inpaint_diffusion_step at `nodes`: u + dt |P grad u| div(P grad u / |P grad u|_e),
+    the channels' joint gradient, the divergence the mean of the two one-sided choices."""
+    nc, _pz, py, px = u_pad.shape
+    sx, sxy = px, px * py
+    u = u_pad.reshape(nc, -1).astype(np.float64)[:, nodes]
+    fwd = ref.flow_step(u_pad, psi_pad, nodes, 1.0, 0.0, 0.0, e2, [1, sx, sxy], flow_p=1)
+    bwd = ref.flow_step(u_pad, psi_pad, nodes, 1.0, 0.0, 0.0, e2, [-1, -sx, -sxy], flow_p=1)
+    p = psi_pad.ravel().astype(np.float64)
+    n = _unit_normal(p, nodes, sx, sxy)
+    g2 = 0.0
+    for c in range(nc):
+        g = _tangential(_central(u_pad[c].ravel().astype(np.float64), nodes, sx, sxy, True), n)
+        g2 = g2 + g[0] ** 2 + g[1] ** 2 + g[2] ** 2
+    return u + dt * np.sqrt(g2) * 0.5 * ((fwd - u) + (bwd - u))

@@ -7,6 +7,7 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 import trimesh
+from scipy.spatial import cKDTree
 from reference import surface as ref
 from reference import surface_inpaint as iref
 
@@ -146,6 +147,98 @@ def test_harmonic_step_matches_reference(sphere02, rng):
     )
 
 
+def _launch(s, name, nc, cells, *args, channels):
+    from clpde.fields import IndexList
+
+    g = s.grid
+    lst = IndexList(cla.to_device(s.runtime.queue, cells.astype(np.int32)), len(cells))
+    g.launch_list(
+        g.kernel("surface/inpaint.cl", name, NC=nc), lst, *args, *g.strides(), channels=channels
+    )
+
+
+@pytest.mark.parametrize("nc", [1, 3])
+def test_transport_kernels_match_reference(sphere02, rng, nc):
+    s = sphere02
+    g, q = s.grid, s.runtime.queue
+    nodes = band_host(s.node_band)[::2]
+    x, y, z = s.coordinates()
+    # smooth data with structure (random data would make beta's sign a coin toss)
+    u = np.stack([np.broadcast_to(np.tanh(3 * (x + 0.4 * c * y) - z), s.shape) for c in range(nc)])
+    u = g.pad(u).astype(np.float32)
+    lap = rng.standard_normal(u.shape).astype(np.float32)
+    psi = s.psi_dev.get().astype(np.float64)
+    cur, lap_dev = cla.to_device(q, u), cla.to_device(q, lap)
+    # the Laplace-Beltrami operator
+    out = cla.zeros_like(cur)
+    _launch(s, "inpaint_lap", nc, nodes, cur.data, out.data, s.psi_dev.data, channels=nc)
+    want = iref.laplace_beltrami(u.astype(np.float64), psi, nodes)
+    np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=3e-5)
+    # a transport step
+    out = cla.zeros_like(cur)
+    change = cla.zeros(q, (nc, len(nodes)), np.float32)
+    _launch(
+        s,
+        "inpaint_transport_step",
+        nc,
+        nodes,
+        cur.data,
+        out.data,
+        lap_dev.data,
+        s.psi_dev.data,
+        g.scalar(0.1),
+        g.scalar(1e-10),
+        change.data,
+        channels=nc,
+    )
+    want, want_change = iref.transport_step(
+        u.astype(np.float64), lap.astype(np.float64), psi, nodes, 0.1, 1e-10
+    )
+    np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=5e-5)
+    np.testing.assert_allclose(change.get(), want_change, atol=5e-5)
+    assert want_change.max() > 1e-3  # the step moved
+    # an anisotropic diffusion step (all channels per work-item)
+    out = cla.zeros_like(cur)
+    _launch(
+        s,
+        "inpaint_diffusion_step",
+        nc,
+        nodes,
+        cur.data,
+        out.data,
+        s.psi_dev.data,
+        g.scalar(0.1),
+        g.scalar(1e-4),
+        channels=1,
+    )
+    want = iref.diffusion_step(u.astype(np.float64), psi, nodes, 0.1, 1e-4)
+    np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=5e-5)
+    assert np.abs(want - u.reshape(nc, -1)[:, nodes]).max() > 1e-3
+
+
+def test_transport_continues_an_edge_better_than_the_harmonic_fill():
+    """An edge (tanh across a great circle) through the hole: the transport carries it in
+    along its isophotes; the harmonic fill blurs it (measured mean errors 0.16 and 0.37 at
+    h = 0.05; here h = 0.1 and fewer cycles)."""
+    s = ImplicitSurface.sphere(1.0, spacing=0.1)
+
+    def f(x, y, z):
+        return np.tanh((x + 0.3 * y) / 0.15)
+
+    u = s.band_field(f)
+    cp = s.band_closest_points()
+    hole = np.linalg.norm(cp - np.array([0, 0, -1.0]), axis=1) < 0.6
+    pts = surface_points("sphere", seed=4)
+    pts = pts[np.linalg.norm(pts - np.array([0, 0, -1.0]), axis=1) < 0.55]
+    want = f(*pts.T)
+    errors = {}
+    for method in ("harmonic", "transport"):
+        out, info = fill_band(s, u[None], hole, method=method, max_cycles=60)
+        errors[method] = np.abs(s.sample(out[0], pts) - want).mean()
+        np.testing.assert_array_equal(out[0][~hole], u[~hole])
+    assert errors["transport"] < 0.7 * errors["harmonic"]
+
+
 def test_whole_fill_matches_reference(sphere02):
     """fill_band's driver (hole lists, stencil subsets, Chebyshev steps, final extension)
     against the numpy fill for a fixed number of steps."""
@@ -158,7 +251,9 @@ def test_whole_fill_matches_reference(sphere02):
     got, info = fill_band(s, u[None], hole, tol=0.0, max_iterations=steps)
     assert info.iterations == steps
     start = u.copy()
-    start[hole] = u[~hole].mean()
+    # the driver's start: the mean of the known cells within two cells of the hole
+    rim = ~hole & (cKDTree(cp[hole]).query(cp, distance_upper_bound=2 * s.spacing)[0] < np.inf)
+    start[hole] = u[rim].mean()
     u_pad = s.band.padded_from(start[None]).astype(np.float64)
     hole_pad = np.zeros(g.volume, bool)
     hole_pad[s.band.cells()[1][hole]] = True
@@ -184,7 +279,7 @@ def test_whole_fill_matches_reference(sphere02):
         steps,
     )
     want = want.reshape(-1)[s.band.cells()[1]]
-    np.testing.assert_allclose(got[0], np.where(hole, want, u), atol=2e-4)
+    np.testing.assert_allclose(got[0], np.where(hole, want, u), atol=3e-6)  # measured 4e-7
     assert np.abs(got[0][hole] - start[hole]).max() > 0.01  # the fill moved
 
 
