@@ -7,9 +7,9 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 import trimesh
-from scipy.spatial import cKDTree
 from reference import surface as ref
 from reference import surface_inpaint as iref
+from scipy.spatial import cKDTree
 
 from clpde.cli import main
 from clpde.errors import InputError
