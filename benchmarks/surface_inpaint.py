@@ -127,8 +127,7 @@ def cotangent_fill(v, f, values, mask):
     return out
 
 
-def smooth(v):
-    x, y, z = v.T
+def smooth(x, y, z):
     return np.sin(2 * x) * np.cos(1.5 * y) + 0.5 * z
 
 
@@ -187,6 +186,40 @@ def mesh_rows(quick):
     return rows
 
 
+def edge(h=0.05):
+    """An edge (tanh across a great circle) through a cap of the sphere: harmonic against
+    transport, mean and largest error in the cap."""
+    s = ImplicitSurface.sphere(1.0, spacing=h)
+
+    def f(x, y, z):
+        return np.tanh((x + 0.3 * y) / 0.08)
+
+    u = s.band_field(f)
+    cp = s.band_closest_points()
+    hole = np.linalg.norm(cp - np.array([0, 0, -1.0]), axis=1) < 0.6
+    pts = points("sphere", 40000)
+    pts = pts[np.linalg.norm(pts - np.array([0, 0, -1.0]), axis=1) < 0.55]
+    want = f(*pts.T)
+    rows = []
+    for method in ("harmonic", "transport"):
+        t0 = time.perf_counter()
+        out, info = inpaint(s, u, hole, method=method, return_info=True)
+        err = np.abs(s.sample(out, pts) - want)
+        rows.append(
+            dict(
+                method=method,
+                h=h,
+                steps=info.iterations,
+                change=info.change,
+                mean_error=float(err.mean()),
+                max_error=float(err.max()),
+                seconds=time.perf_counter() - t0,
+            )
+        )
+        print(json.dumps(rows[-1]), flush=True)
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--json")
@@ -196,6 +229,7 @@ def main():
     result = {
         "convergence": convergence("sphere", (0.1, 0.05, 0.025) + fine)
         + convergence("torus", (0.05, 0.025) + fine),
+        "edge": edge(),
         "meshes": mesh_rows(a.quick),
     }
     if a.json:
