@@ -44,7 +44,7 @@ TRANSPORT = {"dt": 0.1, "transport_steps": 15, "diffusion_steps": 2, "diffusion_
 
 # Upper end of the spectrum of -LB (grid units) that Chebyshev's method assumes: the 7-point
 # Laplacian's is 12; the projection only lowers it, the tricubic re-extension may lift it a
-# little (docs/surface.md measures it by power iteration on a sphere and a torus).
+# little (power iteration on a sphere gave 6.1-6.9: docs/surface.md).
 SPECTRUM_TOP = 13.0
 
 
