@@ -10,6 +10,11 @@ normals, as the Dirichlet condition.
 - 'harmonic': the Laplace-Beltrami equation in the hole, appendix E's discrete operator
   (the average of its two complementary one-sided choices), solved by Chebyshev's
   semi-iterative method: its iterations grow as 1/h, not 1/h^2 as the heat flow's would.
+- 'transport': from the harmonic fill, the thesis' transport of smoothness along isophotes
+  (chapter 3, appendix A) with every derivative projected on the tangent plane, cycled with
+  intrinsic curvature diffusion on the plane's schedule (TRANSPORT).
+
+The command line's run (`clpde surface inpaint`) is `inpaint_file`.
 """
 
 from __future__ import annotations
