@@ -633,7 +633,10 @@ def inpaint_file(
     verts = np.asarray(loaded.vertices, np.float64)
     direction = verts[mask].mean(axis=0) - verts.mean(axis=0) if mask.any() else np.ones(3)
     direction = direction / max(np.linalg.norm(direction), 1e-30)
-    a, e = _facing(direction)
+    # seen from above the hole's side when that side faces sideways (a torus seen edge-on
+    # shows little of it)
+    direction = direction + np.array([0.0, 0.0, 0.85]) * (1 - abs(direction[2]))
+    a, e = _facing(direction / np.linalg.norm(direction))
     views = ((a - 35.0, e), (a + 35.0, e))
     scalar = data.ndim == 1
     lo = hi = None
