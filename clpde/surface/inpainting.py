@@ -181,7 +181,7 @@ def fill_band(
         g.launch_list(extend, band, src.data, dst.data, base.data, frac.data, *strides)
 
     def largest_change() -> float:
-        return float(change.get()[:, : lists.nodes.n].max())
+        return float(change.get()[:, : lists.nodes.n].max(initial=0.0))
 
     a, b = chebyshev_bounds(surf, int(hole.sum()))
     theta, delta = (b + a) / 2, (b - a) / 2
@@ -190,7 +190,9 @@ def fill_band(
     # step of size c leaves about c / (1 - rate) to go
     kappa = b / a
     rate = (math.sqrt(kappa) - 1) / (math.sqrt(kappa) + 1)
-    if max_iterations is None:
+    if lists.nodes.n == 0:
+        max_iterations = 0  # a hole between the nodes: its cells are the known nodes' extension
+    elif max_iterations is None:
         # the bound 2 rate^m down to tol, twice over for a's estimate
         max_iterations = int(2 * math.ceil(math.log(tol / 2) / math.log(rate))) + check_every
     rho = 1 / sigma
@@ -222,7 +224,7 @@ def fill_band(
             if last < tol:
                 break
     last = largest_change() / (1 - rate)
-    if method == "transport":
+    if method == "transport" and lists.nodes.n:
         cycles, last = _transport(
             surf,
             lists,
@@ -315,7 +317,7 @@ def _transport(
                 channels=1,
             )
             extend_to(*lists.reach, x, cur)
-        last = float(change.get()[:, : lists.nodes.n].max())
+        last = float(change.get()[:, : lists.nodes.n].max(initial=0.0))
         if last < tol:
             break
     return cycles, last

@@ -367,6 +367,18 @@ def test_bad_inputs_say_what_to_do():
         inpaint(s, bad, np.zeros(u.shape, bool))
 
 
+def test_a_hole_with_no_nodes_is_filled_by_the_extension():
+    s = ImplicitSurface.sphere(1.0, 0.2)
+    u = s.band_field(lambda x, y, z: z)
+    cells = s.band.cells()[1]
+    nodes = set(band_host(s.node_band))
+    hole = np.zeros(u.shape, bool)
+    hole[next(k for k, c in enumerate(cells) if c not in nodes)] = True
+    for method in ("harmonic", "transport"):
+        out, info = inpaint(s, u, hole, method=method, return_info=True)
+        assert info.iterations == 0 and abs(out[hole][0] - u[hole][0]) < 0.02
+
+
 def test_dense_input_comes_back_dense_and_nan_in_the_hole_is_fine():
     s = ImplicitSurface.sphere(1.0, 0.2)
     u = s.field(sphere_harmonic)
