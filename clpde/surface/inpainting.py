@@ -225,8 +225,10 @@ def fill_band(
                 break
     last = largest_change() / (1 - rate)
     if method == "transport" and lists.nodes.n:
+        bounds = np.stack([values[:, known].min(axis=1), values[:, known].max(axis=1)], 1)
         cycles, last = _transport(
             surf,
+            bounds,
             lists,
             cur,
             x,
@@ -264,9 +266,22 @@ def _zone(surf: ImplicitSurface, padded_cells, hole, cells: float) -> np.ndarray
 
 
 def _transport(
-    surf, lists, cur, x, change, nc, padded_cells, hole, extend_to, max_cycles, tol, progress
+    surf,
+    bounds,
+    lists,
+    cur,
+    x,
+    change,
+    nc,
+    padded_cells,
+    hole,
+    extend_to,
+    max_cycles,
+    tol,
+    progress,
 ):
-    """The transport cycles from the harmonic fill in cur / x: (cycles, last change).
+    """The transport cycles from the harmonic fill in cur / x: (cycles, last change). bounds
+    (channels, 2): each channel's known range, to which the transport step is clamped.
 
     L is needed at the hole's nodes' neighbours: it is computed at the nodes within 9 cells
     of the hole (lb_cell reads the reach band around them) and re-extended over the reach
@@ -284,6 +299,7 @@ def _transport(
     dt, ddt = g.scalar(TRANSPORT["dt"]), g.scalar(TRANSPORT["diffusion_dt"])
     eps2, e2 = g.scalar(1e-10), g.scalar(1e-8)
     psi = surf.psi_dev.data
+    bounds_dev = cla.to_device(q, np.ascontiguousarray(bounds, g.dtype).reshape(-1))
     last, cycles = float("inf"), 0
     for _ in progress_range(progress, max_cycles, "surface transport", leave=False, queue=q):
         cycles += 1
@@ -299,6 +315,7 @@ def _transport(
                 psi,
                 dt,
                 eps2,
+                bounds_dev.data,
                 change.data,
                 *strides,
                 channels=nc,

@@ -88,15 +88,18 @@ INLINE vec3r tangential(const vec3r v, const vec3r n)
 // unit normal, and appendix A's slope-limited |grad u| on the three axes (the data is constant
 // along the normals, so the Cartesian gradient is the surface's). n x P grad u turns the
 // gradient a quarter counter-clockwise seen from outside: in the plane z = 0 with n = z it is
-// (-u_y, u_x), the plane's choice. x takes the stepped value, change |x - u|.
+// (-u_y, u_x), the plane's choice. x takes the stepped value, clamped to the channel's
+// [bounds[2c], bounds[2c + 1]], change |x - u|.
 __kernel void inpaint_transport_step(__global const REAL* restrict u, __global REAL* restrict x,
                                      __global const REAL* restrict lap,
                                      __global const REAL* restrict psi, const REAL dt,
-                                     const REAL grad_eps2, __global REAL* restrict change,
-                                     const int sx, const int sxy, LIST_ARGS)
+                                     const REAL grad_eps2, __global const REAL* restrict bounds,
+                                     __global REAL* restrict change, const int sx,
+                                     const int sxy, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
     const int ch = get_global_id(1);
+    const REAL lo = bounds[2 * ch], hi = bounds[2 * ch + 1];
     for (int k = k0; k < k1; ++k) {
         const int i = list[k];
         __global const REAL* uc = u + chan;
@@ -128,9 +131,12 @@ __kernel void inpaint_transport_step(__global const REAL* restrict u, __global R
                         SQR(NEG(zb)) + SQR(POS(zf));
         const REAL down = SQR(POS(xb)) + SQR(NEG(xf)) + SQR(POS(yb)) + SQR(NEG(yf)) +
                           SQR(POS(zb)) + SQR(NEG(zf));
-        const REAL step = dt * beta * SQRT(beta > 0 ? up : down);
-        x[chan + i] = c + step;
-        change[ch * nlist + k] = FABS(step);
+        // clamped to the known data's range (bounds[2c], bounds[2c + 1]): the transport, an
+        // upwinded Hamilton-Jacobi equation, keeps to it in the continuum, and where the
+        // normals are ill-defined (a mesh's sharp edges) the discrete one can leave it
+        const REAL next = clamp(c + dt * beta * SQRT(beta > 0 ? up : down), lo, hi);
+        x[chan + i] = next;
+        change[ch * nlist + k] = FABS(next - c);
     }
 }
 

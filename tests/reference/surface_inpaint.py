@@ -75,8 +75,9 @@ def _unit_normal(p, cells, sx, sxy):
     return [c * inv for c in n]
 
 
-def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2):
-    """inpaint_transport_step at `nodes`: (new values, |change|), each (nc, n)."""
+def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2, bounds):
+    """inpaint_transport_step at `nodes`: (new values, |change|), each (nc, n); bounds
+    (nc, 2) the range each channel is clamped to."""
     nc, _pz, py, px = u_pad.shape
     sx, sxy = px, px * py
     p = psi_pad.ravel().astype(np.float64)
@@ -95,8 +96,8 @@ def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2):
             up = up + np.minimum(back, 0) ** 2 + np.maximum(fwd, 0) ** 2
             down = down + np.maximum(back, 0) ** 2 + np.minimum(fwd, 0) ** 2
         step = dt * beta * np.sqrt(np.where(beta > 0, up, down))
-        out[c] = f[nodes] + step
-        change[c] = np.abs(step)
+        out[c] = np.clip(f[nodes] + step, *bounds[c])
+        change[c] = np.abs(out[c] - f[nodes])
     return out, change
 
 

@@ -174,7 +174,9 @@ def test_transport_kernels_match_reference(sphere02, rng, nc):
     _launch(s, "inpaint_lap", nc, nodes, cur.data, out.data, s.psi_dev.data, channels=nc)
     want = iref.laplace_beltrami(u.astype(np.float64), psi, nodes)
     np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=3e-5)
-    # a transport step
+    # a transport step, clamped to a range that cuts some of its values
+    limits = np.array([[-0.9, 0.8]] * nc)
+    bounds = cla.to_device(q, limits.astype(np.float32).reshape(-1))
     out = cla.zeros_like(cur)
     change = cla.zeros(q, (nc, len(nodes)), np.float32)
     _launch(
@@ -188,15 +190,17 @@ def test_transport_kernels_match_reference(sphere02, rng, nc):
         s.psi_dev.data,
         g.scalar(0.1),
         g.scalar(1e-10),
+        bounds.data,
         change.data,
         channels=nc,
     )
     want, want_change = iref.transport_step(
-        u.astype(np.float64), lap.astype(np.float64), psi, nodes, 0.1, 1e-10
+        u.astype(np.float64), lap.astype(np.float64), psi, nodes, 0.1, 1e-10, limits
     )
     np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=5e-5)
     np.testing.assert_allclose(change.get(), want_change, atol=5e-5)
     assert want_change.max() > 1e-3  # the step moved
+    assert np.isin(want, limits[0]).any()  # and the clamp cut some values
     # an anisotropic diffusion step (all channels per work-item)
     out = cla.zeros_like(cur)
     _launch(
