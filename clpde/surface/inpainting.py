@@ -315,6 +315,7 @@ def _transport(
                 psi,
                 dt,
                 eps2,
+                g.scalar((0.9 * surf.spacing) ** 2),
                 bounds_dev.data,
                 change.data,
                 *strides,

@@ -93,7 +93,8 @@ INLINE vec3r tangential(const vec3r v, const vec3r n)
 __kernel void inpaint_transport_step(__global const REAL* restrict u, __global REAL* restrict x,
                                      __global const REAL* restrict lap,
                                      __global const REAL* restrict psi, const REAL dt,
-                                     const REAL grad_eps2, __global const REAL* restrict bounds,
+                                     const REAL grad_eps2, const REAL min_slope2,
+                                     __global const REAL* restrict bounds,
                                      __global REAL* restrict change, const int sx,
                                      const int sxy, LIST_ARGS)
 {
@@ -134,7 +135,11 @@ __kernel void inpaint_transport_step(__global const REAL* restrict u, __global R
         // clamped to the known data's range (bounds[2c], bounds[2c + 1]): the transport, an
         // upwinded Hamilton-Jacobi equation, keeps to it in the continuum, and where the
         // normals are ill-defined (a mesh's sharp edges) the discrete one can leave it
-        const REAL next = clamp(c + dt * beta * SQRT(beta > 0 ? up : down), lo, hi);
+        // no transport where psi's slope is well below 1 (min_slope2: its square, times h^2):
+        // a kink of psi (a mesh's sharp edge, a medial axis) has no normal to project on
+        const REAL nn = SQR(n.x / inv) + SQR(n.y / inv) + SQR(n.z / inv);
+        const REAL rate = nn > min_slope2 ? beta * SQRT(beta > 0 ? up : down) : (REAL)0;
+        const REAL next = clamp(c + dt * rate, lo, hi);
         x[chan + i] = next;
         change[ch * nlist + k] = FABS(next - c);
     }

@@ -75,13 +75,15 @@ def _unit_normal(p, cells, sx, sxy):
     return [c * inv for c in n]
 
 
-def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2, bounds):
-    """inpaint_transport_step at `nodes`: (new values, |change|), each (nc, n); bounds
-    (nc, 2) the range each channel is clamped to."""
+def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2, min_slope2, bounds):
+    """inpaint_transport_step at `nodes`: (new values, |change|), each (nc, n); no step where
+    psi's central-difference gradient (times h) has a square below min_slope2; bounds (nc, 2)
+    the range each channel is clamped to."""
     nc, _pz, py, px = u_pad.shape
     sx, sxy = px, px * py
     p = psi_pad.ravel().astype(np.float64)
     n = _unit_normal(p, nodes, sx, sxy)
+    slope2 = sum(c**2 for c in ref._normal(p, nodes, sx, sxy))
     out, change = np.empty((nc, nodes.size)), np.empty((nc, nodes.size))
     for c in range(nc):
         f = u_pad[c].ravel().astype(np.float64)
@@ -95,7 +97,7 @@ def transport_step(u_pad, lap_pad, psi_pad, nodes, dt, grad_eps2, bounds):
             back, fwd = f[nodes] - f[nodes - e], f[nodes + e] - f[nodes]
             up = up + np.minimum(back, 0) ** 2 + np.maximum(fwd, 0) ** 2
             down = down + np.maximum(back, 0) ** 2 + np.minimum(fwd, 0) ** 2
-        step = dt * beta * np.sqrt(np.where(beta > 0, up, down))
+        step = dt * np.where(slope2 > min_slope2, beta * np.sqrt(np.where(beta > 0, up, down)), 0)
         out[c] = np.clip(f[nodes] + step, *bounds[c])
         change[c] = np.abs(out[c] - f[nodes])
     return out, change

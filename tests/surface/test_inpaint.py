@@ -174,33 +174,48 @@ def test_transport_kernels_match_reference(sphere02, rng, nc):
     _launch(s, "inpaint_lap", nc, nodes, cur.data, out.data, s.psi_dev.data, channels=nc)
     want = iref.laplace_beltrami(u.astype(np.float64), psi, nodes)
     np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=3e-5)
-    # a transport step, clamped to a range that cuts some of its values
+    # a transport step, clamped to a range that cuts some of its values; then with psi's
+    # slope lowered to 0.85 (below the 0.9 where a kink is assumed): no step, only the clamp
     limits = np.array([[-0.9, 0.8]] * nc)
     bounds = cla.to_device(q, limits.astype(np.float32).reshape(-1))
-    out = cla.zeros_like(cur)
-    change = cla.zeros(q, (nc, len(nodes)), np.float32)
-    _launch(
-        s,
-        "inpaint_transport_step",
-        nc,
-        nodes,
-        cur.data,
-        out.data,
-        lap_dev.data,
-        s.psi_dev.data,
-        g.scalar(0.1),
-        g.scalar(1e-10),
-        bounds.data,
-        change.data,
-        channels=nc,
-    )
-    want, want_change = iref.transport_step(
-        u.astype(np.float64), lap.astype(np.float64), psi, nodes, 0.1, 1e-10, limits
-    )
-    np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=5e-5)
-    np.testing.assert_allclose(change.get(), want_change, atol=5e-5)
-    assert want_change.max() > 1e-3  # the step moved
-    assert np.isin(want, limits[0]).any()  # and the clamp cut some values
+    for scale in (1.0, 0.85):
+        out = cla.zeros_like(cur)
+        change = cla.zeros(q, (nc, len(nodes)), np.float32)
+        psi_dev = cla.to_device(q, (psi * scale).astype(np.float32))
+        _launch(
+            s,
+            "inpaint_transport_step",
+            nc,
+            nodes,
+            cur.data,
+            out.data,
+            lap_dev.data,
+            psi_dev.data,
+            g.scalar(0.1),
+            g.scalar(1e-10),
+            g.scalar((0.9 * s.spacing) ** 2),
+            bounds.data,
+            change.data,
+            channels=nc,
+        )
+        want, want_change = iref.transport_step(
+            u.astype(np.float64),
+            lap.astype(np.float64),
+            psi * scale,
+            nodes,
+            0.1,
+            1e-10,
+            (0.9 * s.spacing) ** 2,
+            limits,
+        )
+        np.testing.assert_allclose(out.get().reshape(nc, -1)[:, nodes], want, atol=5e-5)
+        np.testing.assert_allclose(change.get(), want_change, atol=5e-5)
+        assert np.isin(want, limits[0]).any()  # the clamp cut some values
+        unmoved = np.clip(u.reshape(nc, -1)[:, nodes], -0.9, 0.8)
+        if scale == 1.0:
+            assert np.abs(want - unmoved).max() > 1e-3  # the step moved
+        else:
+            np.testing.assert_allclose(want, unmoved, atol=1e-7)
     # an anisotropic diffusion step (all channels per work-item)
     out = cla.zeros_like(cur)
     _launch(
