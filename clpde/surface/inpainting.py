@@ -44,7 +44,8 @@ if TYPE_CHECKING:
 KERNEL_FILES = ("surface/inpaint.cl", "surface/extend.cl")
 METHODS = ("harmonic", "transport")
 # The transport's schedule, the plane's (clpde/inpainting/transport_params.py): A transport
-# steps of dt, then B anisotropic diffusion steps of diffusion_dt, on data scaled to [0, 1].
+# steps of dt, then B anisotropic diffusion steps of diffusion_dt, on data scaled to a range
+# of 1 (the plane scales to [0, 1]; the transport's speed depends on the scale, not on a shift).
 TRANSPORT = {"dt": 0.1, "transport_steps": 15, "diffusion_steps": 2, "diffusion_dt": 0.1}
 
 # Upper end of the spectrum of -LB (grid units) that Chebyshev's method assumes: the 7-point
@@ -64,9 +65,10 @@ class SurfaceInpaintInfo:
     iterations : int
         Steps run.
     change : float
-        The error left, estimated from the last step's largest change at the hole's nodes
-        and Chebyshev's rate, relative to the known data's range (the run stops once it is
-        below tol).
+        'harmonic': the error left, estimated from the last step's largest change at the
+        hole's nodes and Chebyshev's rate, relative to the known data's range (the run stops
+        once it is below tol). 'transport': the last transport step's largest change,
+        relative to that range.
     hole_cells : int
         Band cells in the hole.
     seconds : float
