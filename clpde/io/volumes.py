@@ -183,7 +183,8 @@ def write_volume(
     like: VolumeInfo | None = None,
 ) -> Path:
     """Write a (Z, Y, X) or (Z, Y, X, C) volume to a NIfTI or multi-page TIFF file (by
-    extension), atomically, in its own dtype.
+    extension), atomically, in its own dtype (bool as uint8 in NIfTI, which has no 1-bit
+    type).
 
     Parameters
     ----------
@@ -267,7 +268,8 @@ def _nifti_image(path: Path, volume: np.ndarray, spacing: np.ndarray, like: Volu
     if affine is None:
         affine = np.diag([spacing[2], spacing[1], spacing[0], 1.0])
     try:
-        image = nib.Nifti1Image(data, affine, header)
+        # dtype given: nibabel refuses int64 otherwise (NIfTI holds it)
+        image = nib.Nifti1Image(data, affine, header, dtype=data.dtype)
     except Exception as exc:
         raise InputError(f"{path}: NIfTI cannot hold this volume: {exc}") from None
     image.set_data_dtype(data.dtype)

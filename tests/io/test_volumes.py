@@ -25,7 +25,9 @@ def _volume(rng, dtype, shape):
 
 
 @pytest.mark.parametrize("suffix", [".nii", ".nii.gz", ".tif"])
-@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.uint16, np.int32, np.float32, np.float64])
+@pytest.mark.parametrize(
+    "dtype", [np.uint8, np.int8, np.int16, np.uint16, np.int32, np.int64, np.float32, np.float64]
+)
 def test_round_trip_keeps_dtype_values_and_spacing(tmp_path, rng, suffix, dtype):
     vol = _volume(rng, dtype, (3, 5, 7))  # distinct sizes: a swapped axis would show
     path = write_volume(tmp_path / f"v{suffix}", vol, spacing=(2.5, 1.0, 0.5))
