@@ -295,8 +295,9 @@ def _transport(
     lap_reach = HoleLists(surf, _zone(surf, padded_cells, hole, 3.0)).reach
     lap, lap_ext = cla.zeros_like(cur), cla.zeros_like(cur)
     kernel = {
-        name: g.kernel("surface/inpaint.cl", f"inpaint_{name}", NC=nc)
-        for name in ("lap", "transport_step", "diffusion_step")
+        "lap": g.kernel("surface/inpaint.cl", "inpaint_lap", NC=nc),
+        "transport_step": g.kernel("surface/inpaint.cl", "inpaint_transport_step", NC=nc),
+        "diffusion_step": g.kernel("surface/inpaint.cl", "inpaint_diffusion_step", NC=nc),
     }
     dt, ddt = g.scalar(TRANSPORT["dt"]), g.scalar(TRANSPORT["diffusion_dt"])
     eps2, e2 = g.scalar(1e-10), g.scalar(1e-8)
