@@ -123,7 +123,12 @@ class Grid3D(BaseGrid):
                 f"expected values of shape (channels, {self.nz}, {self.ny}, {self.nx}), "
                 f"got {values.shape}"
             )
-        padded = np.ascontiguousarray(self.pad(values.astype(np.float64), mode), self.dtype)
+        # Values beyond the storage type's range (a far-away distance of 1e300) are clipped
+        # to its largest finite value rather than cast to inf, which would poison stencils.
+        big = float(np.finfo(self.dtype).max)
+        values = np.clip(values.astype(np.float64), -big, big)  # so the padding stays finite
+        padded = np.clip(self.pad(values, mode), -big, big)
+        padded = np.ascontiguousarray(padded, self.dtype)
         self.runtime.check_alloc(padded.nbytes, "surface volume")
         return cla.to_device(self.runtime.queue, padded)
 

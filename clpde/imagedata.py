@@ -61,6 +61,27 @@ def check_channel_axis(ndim: int, channel_axis: int | None) -> int | None:
     return int(channel_axis) % 3
 
 
+def refuse_path(value, name: str = "image") -> None:
+    """A file name where an array belongs gets the way to read the file, not a dtype."""
+    import os
+
+    if isinstance(value, (str, bytes, os.PathLike)):
+        raise InputError(
+            f"{name} is {os.fsdecode(value)!r}, a file name; pass an array (to read a file use "
+            "clpde.io.read_image)"
+        )
+
+
+def mask_plane(mask: np.ndarray) -> np.ndarray:
+    """The one plane of a mask, by one rule for arrays and files: a (rows, columns, channels)
+    colour mask counts by its brightest colour channel, and an alpha channel (the last of
+    two or four) is ignored; a (rows, columns) mask is returned as it is."""
+    if mask.ndim != 3 or mask.shape[-1] > 4:
+        return mask
+    colours = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
+    return mask[..., :colours].max(axis=-1)
+
+
 def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> np.ndarray:
     """`image` as an array of bools, integers or floats, neither empty nor (unless allow_nan)
     holding NaN or infinite values; `name` names it in the error.
@@ -68,6 +89,7 @@ def as_image(image: ArrayLike, name: str = "image", allow_nan: bool = False) -> 
     A bool image is a binary one: the flows compute on it as 0/1 and return bool again,
     True where the result is above one half (ImageLayout.restore), as a thresholded
     level-set would."""
+    refuse_path(image, name)
     array = np.asarray(image)
     if not (
         array.dtype == bool

@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from ..data import damaged_astronaut
+from ..errors import InputError
 from ..inpainting.api import inpaint
-from ..io.images import check_output_folder, output_folder, write_image
+from ..io.images import check_folder_writable, check_output_folder, output_folder, write_image
 
 
 def side_by_side(*images: np.ndarray, gap: int = 6) -> np.ndarray:
@@ -22,28 +23,63 @@ def side_by_side(*images: np.ndarray, gap: int = 6) -> np.ndarray:
     return np.concatenate(parts[:-1], axis=1)
 
 
-def run_demo(outdir, device=None, progress=None, overwrite: bool = False) -> list[Path]:
-    """Damage the photo, inpaint it and write the PNGs into the folder `outdir`; returns the
-    paths. The folder is created if missing; an existing one must be empty, or with
-    overwrite=True hold only clpde's kinds of output files (clpde.io.output_folder)."""
+DEMO_FOLDER = "inpaint_demo"  # the demo's own folder inside the output folder
+DEMO_FILES = (
+    "original.png",
+    "damaged.png",
+    "mask.png",
+    "inpainted.png",
+    "inpaint_before_after.png",
+)
 
+
+def check_demo_output(outdir, overwrite: bool = False) -> Path:
+    """The folder the demo writes, `outdir`/inpaint_demo, checked before any work.
+
+    `outdir` is created if missing (its parent must exist). The demo's folder follows
+    clpde.io.check_output_folder's rule, except that a folder holding only the demo's own
+    files (an earlier run's, from `clpde inpaint --demo` or examples/inpaint_demo.py alike)
+    is replaced without being asked."""
     outdir = Path(outdir)
-    check_output_folder(outdir, overwrite)
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"output {outdir} exists and is not a folder; choose a folder name")
+    folder = outdir / DEMO_FOLDER
+    if not outdir.exists():
+        parent = outdir.parent if str(outdir.parent) else Path(".")
+        if not parent.is_dir():
+            raise InputError(
+                f"the folder {parent} for the output {outdir} does not exist; create it first"
+            )
+        check_folder_writable(parent, f"the output folder {outdir}")
+        return folder
+    check_output_folder(folder, overwrite or _holds_only_the_demo(folder), option="--overwrite")
+    return folder
+
+
+def _holds_only_the_demo(folder: Path) -> bool:
+    return folder.is_dir() and all(e.is_file() and e.name in DEMO_FILES for e in folder.iterdir())
+
+
+def run_demo(outdir, device=None, progress=None, overwrite: bool = False) -> list[Path]:
+    """Damage the photo, inpaint it and write the PNGs into `outdir`/inpaint_demo; returns
+    the paths. `outdir` is created if missing; the rule for the demo's folder is
+    check_demo_output's (a rerun replaces its own files; anything else needs overwrite=True,
+    and then clpde.io.output_folder's rule)."""
+
+    folder = check_demo_output(outdir, overwrite)
     original, damaged, mask = damaged_astronaut()
     restored, info = inpaint(
         damaged, mask, channel_axis=-1, device=device, progress=progress, return_info=True
     )
+    pictures = (original, damaged, mask.astype(np.uint8) * 255, restored)
+    pictures += (side_by_side(damaged, restored),)
+    Path(outdir).mkdir(exist_ok=True)  # only now: an interrupted run leaves nothing behind
+    own = overwrite or _holds_only_the_demo(folder)
     written = []
-    with output_folder(outdir, overwrite) as staging:
-        for name, image in (
-            ("original.png", original),
-            ("damaged.png", damaged),
-            ("mask.png", mask.astype(np.uint8) * 255),
-            ("inpainted.png", restored),
-            ("inpaint_before_after.png", side_by_side(damaged, restored)),
-        ):
+    with output_folder(folder, own, option="--overwrite") as staging:
+        for name, image in zip(DEMO_FILES, pictures, strict=True):
             write_image(staging / name, image)
-            written.append(outdir / name)
+            written.append(folder / name)
     peers = ", ".join(
         f"{name} {value:.1f} dB" for name, value in peer_psnr(damaged, mask, original).items()
     )

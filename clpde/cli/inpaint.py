@@ -12,13 +12,11 @@ from ..io.images import MASK_RULE
 from ..runtime import get_runtime
 from ..scale.tasks import TASKS, TRANSPORT_OPTIONS
 from ._common import (
-    OUTPUT_FOLDER_RULE,
     add_device_argument,
-    check_output_folder_args,
     report,
     show_progress,
 )
-from ._inpaint_demo import run_demo
+from ._inpaint_demo import check_demo_output, run_demo
 from .restore import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
 
 
@@ -63,19 +61,21 @@ def _add_input_output_arguments(parser) -> None:
         "--output",
         metavar="OUT",
         required=True,
-        help="output image (with --demo: an output folder)",
+        help="output image (with --demo: the folder in which the demo's folder "
+        "inpaint_demo is written)",
     )
     parser.add_argument(
         "--demo",
         action="store_true",
-        help="inpaint a bundled damaged photo; writes PNGs into the folder OUT "
-        "(" + OUTPUT_FOLDER_RULE + ")",
+        help="inpaint a bundled damaged photo; writes PNGs into OUT/inpaint_demo, as "
+        "examples/inpaint_demo.py does (OUT is created if missing; a rerun replaces the "
+        "demo's own files)",
     )
     parser.add_argument(
         "--overwrite",
         action="store_true",
-        help="with --demo: replace the folder OUT's contents (only a folder of "
-        "clpde's kinds of output files)",
+        help="with --demo: replace OUT/inpaint_demo even if it holds other files "
+        "(only clpde's kinds of output files)",
     )
     parser.add_argument(
         "--gif",
@@ -200,11 +200,11 @@ def run_inpaint(args) -> int:
                 "--demo takes no IMAGE, MASK or --gif; it writes into the folder -o OUT"
             )
         get_runtime(args.device)
-        check_output_folder_args(args)
+        folder = check_demo_output(args.output, args.overwrite)
         written = run_demo(
             args.output, device=args.device, progress=show_progress(), overwrite=args.overwrite
         )
-        print(f"wrote {len(written)} files to {args.output}", file=sys.stderr)
+        print(f"wrote {len(written)} files to {folder}", file=sys.stderr)
         return 0
     if not args.input or not args.mask:
         raise InputError("give IMAGE and MASK (or --demo)")

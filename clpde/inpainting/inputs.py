@@ -14,6 +14,8 @@ from ..imagedata import (
     as_image,
     check_channel_axis,
     integer_range,
+    mask_plane,
+    refuse_path,
     value_range,
 )
 
@@ -23,14 +25,16 @@ COLOUR_MODELS = ("channels", "rho-phi-psi")
 def as_mask(mask, shape_hw):
     """(omega, softness): omega is a bool (rows, cols) array, True where anything is to be
     filled; softness is None for a binary mask, else the float degree of damage in [0, 1].
-    A bool mask is used as is (no copy)."""
+    A colour mask counts by its brightest colour channel, alpha ignored (mask_plane: the
+    command line's rule). A bool mask is used as is (no copy)."""
+    refuse_path(mask, "mask")
     m = np.asarray(mask)
     if m.dtype != bool and not (np.issubdtype(m.dtype, np.number)):
         raise InputError(
             f"mask has dtype {m.dtype}; give a bool or numeric array (nonzero = inpaint)"
         )
-    if m.ndim == 3 and m.shape[-1] == 1:
-        m = m[..., 0]
+    if m.ndim == 3 and m.shape[:2] == tuple(shape_hw):
+        m = mask_plane(m)
     if m.shape != tuple(shape_hw):
         raise InputError(
             f"mask shape {m.shape} does not match the image's height and width {tuple(shape_hw)}; "

@@ -218,13 +218,21 @@ def contour_polygons(mask) -> list[list[list[float]]]:
 
 
 def overlay(frame, mask, colour=(255, 40, 40)) -> np.ndarray:
-    """An RGB uint8 picture of a grey frame with the mask's boundary pixels in `colour`."""
+    """An RGB uint8 picture of a frame (grey, or colour with its channels last) with the
+    mask's boundary pixels in `colour`; the frame's range is stretched to 0..255, over all
+    its channels at once so that its colours keep their hue."""
     from scipy import ndimage
 
     frame = np.asarray(frame, np.float64)
+    if frame.ndim == 3:
+        frame = frame[..., :3]  # alpha is not shown
     lo, hi = float(frame.min()), float(frame.max())
-    grey = np.zeros_like(frame) if hi <= lo else (frame - lo) / (hi - lo)
-    rgb = np.repeat(np.rint(grey * 255).astype(np.uint8)[..., np.newaxis], 3, axis=-1)
+    scaled = np.zeros_like(frame) if hi <= lo else (frame - lo) / (hi - lo)
+    rgb = np.rint(scaled * 255).astype(np.uint8)
+    if rgb.ndim == 2:
+        rgb = np.repeat(rgb[..., np.newaxis], 3, axis=-1)
+    elif rgb.shape[-1] < 3:  # grey with alpha
+        rgb = np.repeat(rgb[..., :1], 3, axis=-1)
     mask = np.asarray(mask, bool)
     edge = mask & ~ndimage.binary_erosion(mask, border_value=1)
     rgb[edge] = colour

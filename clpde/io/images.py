@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
 from ..errors import InputError
+from ..imagedata import mask_plane
 
 PathLike = str | os.PathLike
 
@@ -436,8 +437,9 @@ def _umask() -> int:
 # ---- masks ------------------------------------------------------------------------------
 LOSSY_FORMATS = ("JPEG",)
 MASK_RULE = (
-    "grey masks are cut half-way between their darkest and brightest values (a "
-    "0/255 mask at 127.5); colour masks by their brightest channel; alpha is ignored"
+    "a pixel is inside where it is brighter than the mask's darkest value, soft "
+    "(anti-aliased) edges included; colour masks count by their brightest channel; alpha "
+    "is ignored; JPEG masks are cut half-way between their darkest and brightest values"
 )
 
 
@@ -450,21 +452,19 @@ def read_mask(
 ) -> np.ndarray:
     """A mask image file as a boolean array: True where the mask is bright.
 
-    Pixels brighter than half-way between the file's darkest and brightest values are inside
-    (a 0/255 or 0/1 mask reads as drawn; a uniform nonzero mask is all inside); colour masks
-    are read by their brightest colour channel, an alpha channel is ignored. Warns when the
-    file is in a lossy format (JPEG blurs a mask's edges into grey ringing) or has more than
-    two levels, since either means the threshold decides the edge. `shape` (rows, columns),
-    if given, is the size it must have; `what` names the image it must match in the error,
-    and `fix` the way out.
+    The rule of clpde.inpaint's arrays (nonzero = inside; colour by the brightest colour
+    channel, alpha ignored: clpde.imagedata.mask_plane), with the file's darkest value as
+    its zero: every pixel brighter than that is inside, so the grey, anti-aliased rim of
+    drawn letters is filled with them (a uniform nonzero mask is all inside). A mask with
+    more than two levels gets a warning that says so. A lossy file (JPEG) is cut half-way
+    between its darkest and brightest values instead, since its compression rings grey
+    around every edge, with a warning. `shape` (rows, columns), if given, is the size it
+    must have; `what` names the image it must match in the error, and `fix` the way out.
     """
     import warnings
 
     path = Path(path)
-    mask = read_image(path)
-    if mask.ndim == 3:
-        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
-        mask = mask[..., :channels].max(axis=-1)
+    mask = mask_plane(read_image(path))
     if shape is not None and mask.shape != tuple(shape):
         verb = "are" if what.endswith("s") else "is"
         raise InputError(
@@ -478,19 +478,22 @@ def read_mask(
     lo, hi = mask.min(), mask.max()
     if lo == hi:
         return np.full(mask.shape, hi != 0)
-    cut = (float(lo) + float(hi)) / 2
-    levels = len(np.unique(mask))
     if image_format(path) in LOSSY_FORMATS:
+        cut = (float(lo) + float(hi)) / 2
         warnings.warn(
             f"the mask {path} is a lossy {image_format(path)} file, whose edges "
             f"come out grey; read as inside above {cut:g} (half-way between its "
-            f"darkest and brightest values); save masks as PNG",
+            f"darkest and brightest values), which may leave the damage's rim: grow the "
+            f"mask by a pixel (--grow 1), and save masks as PNG",
             stacklevel=2,
         )
-    elif levels > 2:
+        return mask > cut
+    levels = len(np.unique(mask))
+    if levels > 2:
         warnings.warn(
-            f"the mask {path} has {levels} grey levels, not two; read as inside "
-            f"above {cut:g} (half-way between its darkest and brightest values)",
+            f"the mask {path} has {levels} grey levels, not two (soft, anti-aliased "
+            f"edges?): every pixel brighter than its darkest value {lo:g} is inside, the "
+            f"soft edges included",
             stacklevel=2,
         )
-    return mask > cut
+    return mask > lo

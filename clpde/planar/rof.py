@@ -119,11 +119,26 @@ def denoise_tv(
         The noise level or the strength, as above.
     channel_axis : int, optional
         The axis of the channels of a colour image.
-    method : {'primal-dual', 'gradient'}
-    device, progress, dtype
-        As for `clpde.diffuse`.
-    max_steps, tol, check_every, eps, dt, lambda_every
-        The stopping test and the gradient method's parameters, as above.
+    method : {'primal-dual', 'gradient'}, optional
+        The solver, as above (default 'primal-dual').
+    device : str or int, optional
+        An OpenCL device ('cpu', 'gpu', an index or a name part; see `clpde.devices`).
+    max_steps : int, optional
+        The cap on iterations, as above.
+    tol : float, optional
+        The stopping test's threshold on the largest change, on [0, 1] data, as above.
+    check_every : int, optional
+        Iterations between stopping tests (and primal-dual lambda updates), as above.
+    eps : float, optional
+        The gradient method's regularisation of |grad u|, on [0, 1] data (default 0.02).
+    dt : float, optional
+        The gradient method's time step (default: 0.8 of its stability limit).
+    lambda_every : int, optional
+        The gradient method's steps between lambda updates (default 5).
+    progress : bool, optional
+        Draw a progress bar; by default only for long runs on a terminal.
+    dtype : {float32, float64}, optional
+        The device's arithmetic (float32 by default).
     vectorial : bool, optional
         Colour-coupled TV with one lambda (True; the default for several channels with
         the primal-dual method) or each channel with its own TV and lambda (False; the

@@ -33,7 +33,9 @@ def surface_mesh(phi, spacing=1.0, origin=(0.0, 0.0, 0.0)):
     import trimesh
     from skimage.measure import marching_cubes
 
-    phi = np.asarray(phi, dtype=np.float64)
+    # marching_cubes works in float32: clip beyond its range rather than overflow to inf
+    big = float(np.finfo(np.float32).max)
+    phi = np.clip(np.asarray(phi, dtype=np.float64), -big, big)
     verts, faces, _, _ = marching_cubes(phi, 0.0, spacing=(float(spacing),) * 3)
     # marching_cubes gives (z, y, x); skimage orients faces for ascending values: flip them
     return trimesh.Trimesh(

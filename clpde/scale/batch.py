@@ -61,7 +61,6 @@ from .plan import (
     MASKED,
     TILED,
     expand_inputs,
-    output_names,
     plan_tasks,
 )
 from .tasks import TASKS
@@ -282,6 +281,63 @@ class BatchFutures:
         return BatchResult(ordered, seconds=time.perf_counter() - self._start)
 
 
+@dataclass
+class _Plan:
+    """A batch's tasks checked against the manifest, before any cluster: the specs, the
+    manifest read, the results of the outputs already complete and the tasks to run."""
+
+    command: str
+    outdir: Path
+    specs: list
+    manifest: dict
+    skipped: dict
+    pending: list
+
+
+def _plan(command, inputs, outdir, mask, masks, flow, tile, force, options) -> _Plan:
+    outdir = Path(outdir)
+    specs = plan_tasks(
+        command,
+        expand_inputs(inputs),
+        outdir,
+        mask,
+        masks,
+        _options(command, options, flow) if command in TASKS else options,
+        tile,
+    )
+    manifest = read_manifest(outdir)
+    skipped, pending = {}, []
+    for index, spec in enumerate(specs):
+        spec["fingerprint"] = fingerprint(spec)
+        if spec["fingerprint"]["input_sha256"] is None and not spec["mask_error"]:
+            spec["mask_error"] = f"input {spec['input']} does not exist"
+        if not force and is_complete(
+            manifest.get(spec["name"]), spec["fingerprint"], spec["output"]
+        ):
+            skipped[index] = TaskResult(spec["input"], spec["output"], "skipped")
+        else:
+            pending.append(index)
+    return _Plan(command, outdir, specs, manifest, skipped, pending)
+
+
+def _submit(plan: _Plan, client, start: float) -> BatchFutures:
+    plan.outdir.mkdir(parents=True, exist_ok=True)
+    sweep_temporaries(plan.outdir, [s["name"] for s in plan.specs])
+    resources = {"GPU": 1} if wants_gpu(client) else None
+    futures = []
+    for index in plan.pending:
+        spec = plan.specs[index]
+        task = {k: v for k, v in spec.items() if k != "fingerprint"}
+        name = f"clpde-{plan.command}-{spec['name']}"
+        key = f"{name}-{hashlib.sha1(os.urandom(8)).hexdigest()[:8]}"
+        futures.append(
+            (index, client.submit(run_task, task, key=key, pure=False, resources=resources))
+        )
+    return BatchFutures(
+        client, plan.specs, futures, plan.skipped, plan.manifest, plan.outdir, start
+    )
+
+
 def submit(
     command,
     inputs,
@@ -298,36 +354,8 @@ def submit(
     """Submit a batch to `client`'s cluster without waiting: a BatchFutures (its .futures,
     and .results() to wait). The arguments are those of batch()."""
     start = time.perf_counter()
-    outdir = Path(output_dir)
-    specs = plan_tasks(
-        command,
-        expand_inputs(inputs),
-        outdir,
-        mask,
-        masks,
-        _options(command, options, flow) if command in TASKS else options,
-        tile,
-    )
-    outdir.mkdir(parents=True, exist_ok=True)
-    sweep_temporaries(outdir, [s["name"] for s in specs])
-    manifest = read_manifest(outdir)
-    prepared, futures = {}, []
-    resources = {"GPU": 1} if wants_gpu(client) else None
-    for index, spec in enumerate(specs):
-        spec["fingerprint"] = fingerprint(spec)
-        if spec["fingerprint"]["input_sha256"] is None and not spec["mask_error"]:
-            spec["mask_error"] = f"input {spec['input']} does not exist"
-        if not force and is_complete(
-            manifest.get(spec["name"]), spec["fingerprint"], spec["output"]
-        ):
-            prepared[index] = TaskResult(spec["input"], spec["output"], "skipped")
-            continue
-        task = {k: v for k, v in spec.items() if k != "fingerprint"}
-        key = f"clpde-{command}-{spec['name']}-{hashlib.sha1(os.urandom(8)).hexdigest()[:8]}"
-        futures.append(
-            (index, client.submit(run_task, task, key=key, pure=False, resources=resources))
-        )
-    return BatchFutures(client, specs, futures, prepared, manifest, outdir, start)
+    plan = _plan(command, inputs, output_dir, mask, masks, flow, tile, force, options)
+    return _submit(plan, client, start)
 
 
 def batch(
@@ -426,44 +454,33 @@ def batch(
             force=force,
             **options,
         )
-    inputs = expand_inputs(inputs)
-    # Bad options fail here, before a cluster is started.
-    plan_tasks(
-        command,
-        inputs,
-        Path(output_dir),
-        mask,
-        masks,
-        _options(command, options, flow) if command in TASKS else options,
-        tile,
-    )
+    start = time.perf_counter()  # the time reported is the wall time of the whole call
+    outdir = Path(output_dir)
+    existed = outdir.exists()
+    # Bad options fail here, and the manifest is read, before a cluster is started: a rerun
+    # whose outputs are all complete starts none.
+    plan = _plan(command, inputs, outdir, mask, masks, flow, tile, force, options)
+    if not plan.pending:
+        skipped = [plan.skipped[i] for i in range(len(plan.specs))]
+        return BatchResult(skipped, seconds=time.perf_counter() - start)
     device = options.get("device")
     try:
-        with connect(workers, scheduler, client, threads, device=device, tasks=len(inputs)) as (
-            live,
-            info,
-        ):
-            run = submit(
-                command,
-                inputs,
-                output_dir,
-                client=live,
-                mask=mask,
-                masks=masks,
-                flow=flow,
-                tile=tile,
-                force=force,
-                **options,
-            )
-            result = run.results(progress)
+        with connect(
+            workers, scheduler, client, threads, device=device, tasks=len(plan.pending)
+        ) as (live, info):
+            result = _submit(plan, live, start).results(progress)
     except BaseException:
         # Ctrl-C or a lost scheduler: the cluster started here is gone by now, so the
-        # temporary files of the tasks it was running can go too; complete outputs stay.
-        if Path(output_dir).is_dir():
-            sweep_temporaries(Path(output_dir), output_names(command, inputs))
+        # temporary files of the tasks it was running can go too; complete outputs stay,
+        # and a folder this call created and left empty goes.
+        if outdir.is_dir():
+            sweep_temporaries(outdir, [s["name"] for s in plan.specs])
+            if not existed and not any(outdir.iterdir()):
+                outdir.rmdir()
         raise
     result.cluster_seconds = info.get("seconds", 0.0)
     result.workers, result.threads = info["workers"], info["threads"]
+    result.seconds = time.perf_counter() - start
     return result
 
 
@@ -472,8 +489,8 @@ def result_table(result: BatchResult) -> str:
     lines = [f"  {r.input}: {r.error}" for r in result.failed]
     summary = (
         f"clpde batch: {len(result.done)} done, {len(result.skipped)} skipped, "
-        f"{len(result.failed)} failed in {result.seconds:.1f} s on {result.workers} "
-        f"worker(s)"
+        f"{len(result.failed)} failed in {result.seconds:.1f} s"
+        + (f" on {result.workers} worker(s)" if result.workers else " (no worker needed)")
     )
     if result.failed:
         return "\n".join([summary, "failed:", *lines])

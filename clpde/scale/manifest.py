@@ -14,8 +14,11 @@ import contextlib
 import hashlib
 import inspect
 import json
+import numbers
 import shutil
 from pathlib import Path
+
+import numpy as np
 
 from .._version import __version__
 from ..io.images import atomic_output
@@ -86,8 +89,9 @@ def fingerprint(spec: dict) -> dict:
 
 
 def fingerprint_options(spec: dict) -> dict:
-    """The task's options with its defaults filled in, as strings (so that the command line's
-    flags and Python's keywords for the same run match); the device and progress left out."""
+    """The task's options with its defaults filled in, as JSON values (numbers as floats, so
+    that the command line's flags and Python's keywords for the same run match); the device
+    and progress left out."""
     task = TASKS[spec["command"]]
     params = inspect.signature(task).parameters
     values = {
@@ -97,10 +101,17 @@ def fingerprint_options(spec: dict) -> dict:
     }
     values.update({k: v for k, v in spec["options"].items() if k in values})
     # numbers as floats: tol=0 from Python and --tol 0 (a float) are the same run
-    return {
-        k: repr(float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v)
-        for k, v in sorted(values.items())
-    }
+    return {k: _json_value(v) for k, v in sorted(values.items())}
+
+
+def _json_value(value):
+    """`value` as it reads back from the manifest's JSON: numbers as floats (tol=0 from
+    Python and --tol 0 are the same run), tuples as lists, anything else as its text."""
+    if isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_):
+        return float(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return json.loads(json.dumps(value, default=str))
 
 
 def is_complete(record: dict | None, fingerprint: dict, output: str) -> bool:

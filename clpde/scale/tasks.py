@@ -18,7 +18,7 @@ import numpy as np
 from .._progress import on_terminal
 from ..errors import InputError
 from ..film.restore import restore_film
-from ..imagedata import split_alpha
+from ..imagedata import mask_plane, split_alpha
 from ..inpainting.api import inpaint
 from ..io import frames as frame_io
 from ..io.images import (
@@ -217,10 +217,7 @@ def _run_tiled(command, input, output, force, device, **options) -> bool:
 def _read_soft_mask(path, shape) -> np.ndarray:
     """The mask's grey level over its dtype's range as a float degree of damage in [0, 1]
     (a colour mask: its brightest colour channel; an alpha channel is ignored)."""
-    mask = read_image(path)
-    if mask.ndim == 3:
-        channels = mask.shape[-1] - 1 if mask.shape[-1] in (2, 4) else mask.shape[-1]
-        mask = mask[..., :channels].max(axis=-1)
+    mask = mask_plane(read_image(path))
     if mask.shape != tuple(shape):
         raise InputError(
             f"mask {path} is {mask.shape[1]}x{mask.shape[0]} pixels but the image "
@@ -401,11 +398,12 @@ def track_file(
     threshold = LOW_CONFIDENCE if low_confidence is None else low_confidence
     if not 0 < threshold <= 1:
         raise InputError(f"--low-confidence must be in (0, 1], not {threshold}")
-    images = frame_io.read_frames(input, grey=not colour)
+    shown = frame_io.read_frames(input, grey=False)  # the overlays show the frames' colours
     if frames is not None:
         if frames < 1:
             raise InputError(f"--frames must be at least 1, not {frames}")
-        images = images[:frames]
+        shown = shown[:frames]
+    images = frame_io.to_grey(shown) if shown.ndim == 4 and not colour else shown
     first = read_mask(
         mask,
         images.shape[1:3],
@@ -430,10 +428,9 @@ def track_file(
         progress=_progress(progress),
         return_confidence=True,
     )
-    grey = frame_io.to_grey(images) if images.ndim == 4 else images
-    written = frame_io.write_tracking(output, grey, masks, gif=gif, overwrite=overwrite)
+    written = frame_io.write_tracking(output, shown, masks, gif=gif, overwrite=overwrite)
     if mp4:
-        written.append(_write_mp4(output, grey, masks))
+        written.append(_write_mp4(output, shown, masks))
     lines = [f"track: {len(masks)} frames; wrote {len(written)} files to {output}"]
     low = [int(k) for k in np.nonzero(np.asarray(confidence) < threshold)[0]]
     if low:

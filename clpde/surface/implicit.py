@@ -82,6 +82,8 @@ class ImplicitSurface:
     ((37, 37, 37), 'lists')
     """
 
+    _check_border = True  # whether a new psi's band must be clear of the border (from_volume)
+
     def __init__(
         self,
         psi: ArrayLike,
@@ -93,7 +95,6 @@ class ImplicitSurface:
         dtype: DTypeLike = np.float32,
         device: DeviceLike = None,
         storage: str = "lists",
-        _check_border: bool = True,
     ):
         psi = np.asarray(psi)
         if psi.ndim != 3:
@@ -125,7 +126,6 @@ class ImplicitSurface:
                 f"use band_width >= {min_outer:.2f}"
             )
         self.runtime = get_runtime(device)
-        self._check_border = _check_border
         # psi, psi in cells and the band masks at the least; the bands' lists come on top
         check_fits(self.runtime, (1,) + psi.shape, "the surface", 3, ghost=3, dtype=dtype)
         self.storage = storage
@@ -188,7 +188,11 @@ class ImplicitSurface:
             # rescale to unit slope at the surface first (the zero level set is kept), so
             # the bands are about right before the exact reinitialisation
             scale = slope_at_surface(psi, spacing) if psi.ndim == 3 else 1.0
-            surf = cls(psi / scale, spacing, origin, _check_border=False, **options)
+            # a level-set function's band may reach the border until it is reinitialised:
+            # the border is checked after that
+            surf = cls.__new__(cls)
+            surf._check_border = False
+            surf.__init__(psi / scale, spacing, origin, **options)
             surf.reinitialize()
             band_setup.check_band_clear_of_border(surf)
             return surf

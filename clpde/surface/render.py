@@ -235,13 +235,27 @@ def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     write_bytes(path, data if isinstance(data, bytes) else data.encode())
 
 
-def _label_format(lo: float, hi: float):
-    """Labels with enough digits to tell the two ends apart."""
-    for digits in range(3, 8):
-        a, b = f"{lo:.{digits}g}", f"{hi:.{digits}g}"
-        if a != b or lo == hi:
-            return a, b
-    return a, b
+def _label_format(lo: float, hi: float) -> tuple[str, str]:
+    """The scale's two ends as labels, rounded to a thousandth of its span: data in [0, 1]
+    whose minimum is a round-off of -3e-6 reads 0 and 1, and the ends of a narrow range
+    still differ."""
+    span = hi - lo
+    if not (np.isfinite(span) and span > 0):
+        return f"{lo:.3g}", f"{hi:.3g}"
+    last = int(np.floor(np.log10(span))) - 2  # the decimal exponent of the last digit shown
+    step = 10.0**last
+
+    def text(value: float) -> str:
+        rounded = round(value / step) * step
+        if rounded == 0:
+            return "0"
+        if 1e-4 <= abs(rounded) < 1e6:  # plain decimals, without trailing zeros
+            plain = f"{rounded:.{max(0, -last)}f}"
+            return plain.rstrip("0").rstrip(".") if "." in plain else plain
+        digits = int(np.floor(np.log10(abs(rounded)))) - last + 1
+        return f"{rounded:.{min(max(digits, 1), 15)}g}"
+
+    return text(lo), text(hi)
 
 
 def colour_bar(width: int, vmin: float, vmax: float, *, label: str = "") -> np.ndarray:

@@ -47,6 +47,8 @@ def noise_variance(image: np.ndarray) -> float:
     a = np.asarray(image, np.float64)
     a = a.reshape((-1,) + a.shape[-2:])
     d = 0.5 * (a[:, :-1, :-1] - a[:, 1:, :-1] - a[:, :-1, 1:] + a[:, 1:, 1:])
+    if d.size == 0:  # one row or column: no 2x2 neighbourhood to estimate the noise from
+        return 0.0
     sigma = 1.4826 * float(np.median(np.abs(d - np.median(d))))
     return sigma * sigma
 

@@ -577,3 +577,29 @@ def test_ctrl_c_while_the_dask_cluster_starts_is_one_line(film_inputs, command):
     assert not (film_inputs / "film.mp4").exists()
     leftovers = [p.name for p in film_inputs.rglob("*.part")]
     assert not leftovers
+
+
+def test_the_command_line_page_says_what_the_parsers_say():
+    """docs/command-line.md's option lists are written from the parsers (their summaries,
+    choices and defaults), and every `--option {a,b}` choice list in the docs and the README
+    is the parser's own."""
+    from clpde.cli._options_doc import PAGE, options_markdown, page_section
+
+    page = PAGE.read_text()
+    assert page_section(page) == options_markdown(), (
+        "docs/command-line.md's options differ from the parsers: run "
+        "`python -m clpde.cli._options_doc`"
+    )
+    choices = {}
+    for sub in _subparsers().values():
+        for action in sub._actions:
+            for option in action.option_strings:
+                if action.choices:
+                    choices.setdefault(option, set()).add(",".join(action.choices))
+    stale = [
+        f"{name}: {option} {{{listed}}}"
+        for name in ("README.md", "docs/command-line.md", "docs/batch.md")
+        for option, listed in re.findall(r"(--[\w-]+) \{([^}]*)\}", (ROOT / name).read_text())
+        if listed not in choices.get(option, {listed})
+    ]
+    assert not stale, f"choice lists that differ from the parsers: {stale}"

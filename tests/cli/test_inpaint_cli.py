@@ -1,6 +1,7 @@
 """`clpde inpaint IMAGE MASK -o OUT [--gif ...]` and `clpde inpaint --demo -o OUTDIR`."""
 
 import os
+from pathlib import Path
 
 import imageio.v3 as iio
 import numpy as np
@@ -105,8 +106,8 @@ def test_demo_writes_the_pictures(tmp_path, monkeypatch):
     monkeypatch.setattr(
         inpaint_demo, "damaged_astronaut", lambda: tuple(a[:96, :96] for a in full())
     )
-    out = tmp_path / "demo"
-    assert main(["inpaint", "--demo", "-o", str(out)]) == 0
+    assert main(["inpaint", "--demo", "-o", str(tmp_path / "demo")]) == 0
+    out = tmp_path / "demo" / "inpaint_demo"
     names = sorted(os.listdir(out))
     assert names == [
         "damaged.png",
@@ -125,6 +126,36 @@ def test_demo_writes_the_pictures(tmp_path, monkeypatch):
         np.abs(restored[mask].astype(float) - original[mask]).mean()
         < np.abs(damaged_[mask].astype(float) - original[mask]).mean() / 2
     )
+
+
+def test_the_demo_script_and_the_command_share_one_folder_and_rerun(tmp_path, monkeypatch, capsys):
+    """The README's quickstart (examples/inpaint_demo.py) and its alternative (clpde inpaint
+    --demo -o out/) write the same files into out/inpaint_demo, after each other too."""
+    import runpy
+    import sys
+
+    full = inpaint_demo.damaged_astronaut
+    monkeypatch.setattr(
+        inpaint_demo, "damaged_astronaut", lambda: tuple(a[:64, :64] for a in full())
+    )
+    monkeypatch.chdir(tmp_path)
+    script = str(Path(__file__).resolve().parents[2] / "examples" / "inpaint_demo.py")
+    monkeypatch.setattr(sys, "argv", [script])
+
+    def listing():
+        return sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))
+
+    runpy.run_path(script, run_name="__main__")
+    first = listing()
+    assert first == ["out", "out/inpaint_demo"] + sorted(
+        f"out/inpaint_demo/{n}" for n in inpaint_demo.DEMO_FILES
+    )
+    assert main(["inpaint", "--demo", "-o", "out/"]) == 0
+    assert "wrote 5 files to out/inpaint_demo" in capsys.readouterr().err
+    assert listing() == first
+    assert main(["inpaint", "--demo", "-o", "out"]) == 0  # its own output again
+    runpy.run_path(script, run_name="__main__")
+    assert listing() == first
 
 
 def test_method_and_soft_mask(tmp_path, damaged, capsys):

@@ -81,16 +81,17 @@ def test_every_folder_command_has_one_rule(tmp_path, capsys, command):
         for a in command
     ]
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "old.png").write_bytes(b"old")
+    folder = out / "inpaint_demo" if "--demo" in command else out  # the demo's own folder
+    folder.mkdir(parents=True)
+    (folder / "old.png").write_bytes(b"old")
     assert main([*command, "-o", str(out)]) == 2
     assert "give --overwrite" in _one_error_line(capsys)
-    (out / "notes.txt").write_text("mine")
+    (folder / "notes.txt").write_text("mine")
     assert main([*command, "-o", str(out), "--overwrite"]) == 2
     assert "'notes.txt', which clpde does not write" in _one_error_line(capsys)
     assert main([*command, "-o", str(tmp_path / "no" / "such")]) == 2
     assert "does not exist; create it first" in _one_error_line(capsys)
-    assert sorted(os.listdir(out)) == ["notes.txt", "old.png"]
+    assert sorted(os.listdir(folder)) == ["notes.txt", "old.png"]
     assert not (tmp_path / "no").exists()
 
 
@@ -381,3 +382,62 @@ def test_regions_says_when_the_surface_barely_moves(tmp_path, capsys, monkeypatc
         == 0
     )
     assert "hardly moved" not in capsys.readouterr().err
+
+
+# ---- one mask rule for the API and the command line; anti-aliased masks -------------------
+def _lettered(tmp_path):
+    """A photo-like image and a mask of letters drawn with anti-aliasing (soft grey rims)."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    rng = np.random.default_rng(3)
+    yy, xx = np.mgrid[:48, :96]
+    image = np.clip(100 + 60 * np.sin(xx / 7) + rng.normal(0, 4, xx.shape), 0, 255)
+    image = np.stack([image, image[::-1], 255 - image], axis=-1).astype(np.uint8)
+    canvas = Image.new("L", (96, 48), 0)
+    ImageDraw.Draw(canvas).text((6, 8), "clpde", fill=255, font=ImageFont.load_default(size=28))
+    soft = np.asarray(canvas)
+    write_image(tmp_path / "photo.png", image)
+    return image, soft
+
+
+def test_an_rgb_mask_gets_the_same_fill_from_the_api_and_the_command_line(tmp_path, capsys):
+    image, soft = _lettered(tmp_path)
+    drawn = soft > 127
+    rgba = np.zeros((*drawn.shape, 4), np.uint8)
+    rgba[..., 3] = 255  # opaque: alpha is ignored
+    rgba[drawn, 0] = 230  # painted in red
+    write_image(tmp_path / "mask.png", rgba)
+    api = clpde.inpaint(image, rgba, channel_axis=-1)  # refused before: a (rows, cols, 4) mask
+    np.testing.assert_array_equal(api, clpde.inpaint(image, drawn, channel_axis=-1))
+    out = tmp_path / "out.png"
+    assert (
+        main(["inpaint", str(tmp_path / "photo.png"), str(tmp_path / "mask.png"), "-o", str(out)])
+        == 0
+    )
+    np.testing.assert_array_equal(read_image(out), api)
+
+
+def test_a_file_name_given_to_the_api_says_how_to_read_it(tmp_path):
+    image, soft = _lettered(tmp_path)
+    with pytest.raises(
+        clpde.InputError, match=r"pass an array \(to read a file use clpde.io.read_image\)"
+    ):
+        clpde.inpaint(str(tmp_path / "photo.png"), soft > 0)
+    with pytest.raises(clpde.InputError, match="mask is .*a file name; pass an array"):
+        clpde.inpaint(image, str(tmp_path / "mask.png"), channel_axis=-1)
+
+
+def test_an_anti_aliased_mask_fills_its_soft_rim_and_says_so(tmp_path, capsys):
+    image, soft = _lettered(tmp_path)
+    rim = (soft > 0) & (soft <= 127)
+    assert rim.sum() > 50  # the letters' anti-aliased edge, which a half-way cut left behind
+    write_image(tmp_path / "mask.png", soft)
+    out = tmp_path / "out.png"
+    assert (
+        main(["inpaint", str(tmp_path / "photo.png"), str(tmp_path / "mask.png"), "-o", str(out)])
+        == 0
+    )
+    err = capsys.readouterr().err
+    assert "grey levels" in err and "soft edges included" in err
+    # the API's rule for the same mask as an array: nonzero = inpaint
+    np.testing.assert_array_equal(read_image(out), clpde.inpaint(image, soft, channel_axis=-1))

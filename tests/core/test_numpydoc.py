@@ -107,3 +107,32 @@ def test_public_signatures_have_type_hints():
             if not inspect.isclass(obj) and signature.return_annotation is inspect.Signature.empty:
                 missing.append(f"{module.__name__}.{name} (return)")
     assert not missing, "public signatures without type hints:\n" + "\n".join(missing)
+
+
+def test_every_public_parameter_has_its_own_typed_entry_and_none_is_private():
+    """numpydoc's own validation: every parameter documented (PR01), nothing documented
+    that is not one (PR02), each with a type (PR04); and no private (_name) parameter in a
+    public signature, where a user would see it."""
+    from numpydoc.validate import validate
+
+    problems = []
+    for module in (clpde, clpde.surface):
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if inspect.isclass(obj) and issubclass(obj, BaseException):
+                continue
+            if not (inspect.isclass(obj) or inspect.isfunction(obj)):
+                continue
+            full = f"{module.__name__}.{name}"
+            problems += [
+                f"{full}: {code} {message}"
+                for code, message in validate(full)["errors"]
+                if code in ("PR01", "PR02", "PR04")
+            ]
+            target = obj.__init__ if inspect.isclass(obj) else obj
+            problems += [
+                f"{full}: private parameter {p}"
+                for p in inspect.signature(target).parameters
+                if p.startswith("_")
+            ]
+    assert not problems, "\n".join(problems)

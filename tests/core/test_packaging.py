@@ -132,3 +132,34 @@ def test_ci_runs_the_readme_test_command_verbatim():
     assert commands[1] in ci, f".ci/run must run the README's test command {commands[1]!r}"
     assert "set -euo pipefail" in ci
     assert os.access(REPO / ".ci" / "run", os.X_OK)
+
+
+def test_the_readme_test_command_says_why_tests_skip():
+    readme = (REPO / "README.md").read_text()
+    quickstart = readme.split("## Quickstart", 1)[1].split("```bash\n", 1)[1].split("```", 1)[0]
+    command = [line for line in quickstart.splitlines() if line.strip()][1]
+    assert command.endswith("python -m pytest -q -rs"), command  # -rs: the skip reasons
+
+
+def test_the_readme_says_where_the_kernel_cache_is_and_how_to_move_it(tmp_path):
+    """The README's paragraph on the kernel cache names the folder clpde really uses, and
+    the variable that moves it really moves it (in a fresh process: it is read at import)."""
+    readme = (REPO / "README.md").read_text()
+    assert "~/.cache/clpde/pocl" in readme and "POCL_CACHE_DIR=" in readme
+    assert "rm -rf ~/.cache/clpde ~/.cache/pyopencl" in readme
+    probe = "import os, clpde.runtime; print(os.environ['POCL_CACHE_DIR'])"
+    env = {k: v for k, v in os.environ.items() if k != "POCL_CACHE_DIR"}
+    for extra, expected in (
+        ({"HOME": str(tmp_path)}, tmp_path / ".cache" / "clpde" / "pocl"),
+        ({"POCL_CACHE_DIR": str(tmp_path / "moved")}, tmp_path / "moved"),
+    ):
+        run = subprocess.run(
+            [sys.executable, "-c", probe],
+            env={**env, **extra, "PYTHONPATH": str(REPO)},
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=True,
+        )
+        assert Path(run.stdout.strip()) == expected
+        assert expected.is_dir()

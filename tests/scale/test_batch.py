@@ -449,3 +449,39 @@ def test_ctrl_c_leaves_complete_outputs_only(client, tmp_path):
         "inpaint", inputs, out, mask=mask, client=client, max_steps=4000, tol=0, mean_tol=0
     )
     assert rerun.ok and len(rerun.done) + len(rerun.skipped) == 8 and rerun.skipped
+
+
+def test_time_is_the_calls_wall_time_and_a_complete_rerun_starts_no_cluster(photos, tmp_path):
+    import json
+
+    paths, _ = photos
+    out = tmp_path / "out"
+    start = time.perf_counter()
+    first = batch("denoise", paths[:2], out, workers=1, threads=1, max_steps=20)
+    wall = time.perf_counter() - start
+    assert first.ok and first.workers == 1
+    assert first.seconds >= 0.9 * wall  # the cluster's start and stop included
+    options = json.loads((out / MANIFEST).read_text())["outputs"][paths[0].name]["options"]
+    assert options["method"] == "primal-dual" and options["max_steps"] == 20.0
+    assert options["sigma"] is None  # JSON values, not Python's text ('primal-dual', None)
+    again = batch("denoise", paths[:2], out, workers=1, threads=1, max_steps=20)
+    assert [r.status for r in again] == ["skipped"] * 2
+    assert again.workers == 0  # every output was checked before any cluster was started
+
+
+def test_an_interrupted_batch_leaves_no_empty_folder(client, photos, tmp_path, monkeypatch):
+    from clpde.scale import batch as batch_module
+
+    def interrupted(self, progress=None):  # Ctrl-C before any output is complete
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(batch_module.BatchFutures, "results", interrupted)
+    paths, _ = photos
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        batch("diffuse", paths[:2], out, client=client, steps=5)
+    assert not out.exists()
+    out.mkdir()  # a folder that was there before stays
+    with pytest.raises(KeyboardInterrupt):
+        batch("diffuse", paths[:2], out, client=client, steps=5)
+    assert out.is_dir()

@@ -301,3 +301,18 @@ def test_face_sides_agree_with_the_winding_number(monkeypatch, variant):
     slow, _, _ = mesh_to_sdf(holed, origin, h, shape, 8.0)
     band = face >= 0
     np.testing.assert_array_equal(np.sign(fast[band]), np.sign(slow[band]))
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "labels"),
+    [
+        (-3.02e-06, 1.0, ("0", "1")),  # data in [0, 1] with a round-off below 0
+        (0.2, 0.2000001, ("0.2", "0.2000001")),  # a narrow range: its ends still differ
+        (-1.5, 2.25, ("-1.5", "2.25")),
+        (0.0, 12345.678, ("0", "12300")),
+    ],
+)
+def test_colour_bar_ends_are_rounded(lo, hi, labels):
+    from clpde.surface.render import _label_format
+
+    assert _label_format(lo, hi) == labels

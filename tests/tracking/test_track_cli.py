@@ -55,6 +55,24 @@ def test_a_folder_of_colour_images_is_read_in_natural_order(tmp_path, sequence):
     assert iou(iio.imread(out / "mask_0003.png") > 0, truth[3]) >= 0.9
 
 
+def test_overlays_of_colour_footage_are_in_colour(tmp_path, sequence):
+    pytest.importorskip("av")
+    _, mask, frames8, truth = sequence
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for t, f in enumerate(frames8):  # a warm tint: red strongest, blue weakest
+        tinted = np.stack([f, (0.6 * f).astype(np.uint8), (0.2 * f).astype(np.uint8)], -1)
+        iio.imwrite(folder / f"frame_{t}.png", tinted)
+    out = tmp_path / "out"
+    assert main(["track", str(folder), "--init", str(mask), "-o", str(out), "--mp4"]) == 0
+    assert iou(iio.imread(out / "mask_0003.png") > 0, truth[3]) >= 0.9
+    gif = iio.imread(out / "overlay.gif", index=None)[..., :3].astype(float)
+    pictures, _ = read_video(out / "overlay.mp4")
+    for picture in (gif[0], pictures[0].astype(float)):
+        bright = frames8[0] > 100  # where the tint shows: red well above blue
+        assert (picture[..., 0] - picture[..., 2])[bright].mean() > 60
+
+
 @pytest.mark.parametrize("problem", ["mask size", "empty mask", "frame sizes", "bad video"])
 def test_bad_input_is_a_clear_error_and_writes_nothing(tmp_path, sequence, capsys, problem):
     stack, mask, frames8, truth = sequence
