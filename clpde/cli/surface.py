@@ -4,8 +4,11 @@ runs themselves are clpde.surface.runs'."""
 from __future__ import annotations
 
 from ..data import SURFACE_SHAPES as SHAPES
+from ..errors import InputError
 from ..scale.tasks import TASKS
 from ..surface.implicit import STORAGES
+from ..surface.inpainting import METHODS as INPAINT_METHODS
+from ..surface.inpainting import inpaint_file
 from ..surface.runs import FLOWS
 from ._common import (
     add_device_argument,
@@ -26,9 +29,11 @@ def add_surface_parser(subparsers) -> None:
         "and the coloured result as OUTDIR/result.ply and OUTDIR/result.glb. "
         "Flows: heat (fig. 4.3), tv and denoise (fig. 4.4), chroma (colour "
         "denoising by harmonic maps, fig. 4.6), reaction-diffusion (fig. 4.7), "
-        "flowvis (fig. 4.8), curvature.",
+        "flowvis (fig. 4.8), curvature; inpaint fills the vertices a MASK file names "
+        "(--missing) from the mesh's vertex colours or a --values file.",
     )
-    parser.add_argument("flow", metavar="FLOW", choices=FLOWS, help=" | ".join(FLOWS))
+    choices = FLOWS + ("inpaint",)
+    parser.add_argument("flow", metavar="FLOW", choices=choices, help=" | ".join(choices))
     parser.add_argument("mesh", metavar="MESH", help="mesh file or shape name")
     add_output_folder_arguments(parser)
     parser.add_argument(
@@ -91,6 +96,24 @@ def add_surface_parser(subparsers) -> None:
         "(default), or only the band's bricks (less memory; as fast from "
         "about 200 cells across)",
     )
+    parser.add_argument(
+        "--missing",
+        metavar="MASK",
+        help="inpaint: the vertices to fill, a .npy file of booleans (one per vertex) or "
+        "of vertex indices, or a text file of vertex indices",
+    )
+    parser.add_argument(
+        "--values",
+        metavar="FILE",
+        help="inpaint: the data to fill, one row per vertex (a scalar or RGB), as .npy or "
+        "text; default: the mesh's vertex colours",
+    )
+    parser.add_argument(
+        "--method",
+        choices=INPAINT_METHODS,
+        default="harmonic",
+        help="inpaint: the PDE that fills the hole (default: harmonic)",
+    )
     add_device_argument(parser)
     parser.set_defaults(run=run_surface)
 
@@ -115,9 +138,33 @@ def task_options(args) -> dict:
 
 
 def run_surface(args) -> int:
+    if args.flow == "inpaint" or args.missing is not None:
+        return run_surface_inpaint(args)
     with grid_advice(args.resolution):
         lines = TASKS["surface"](
             args.mesh, args.output, progress=show_progress(), **task_options(args)
+        )
+    report(lines)
+    return 0
+
+
+def run_surface_inpaint(args) -> int:
+    if args.flow != "inpaint":
+        raise InputError(f"--missing is for the inpaint flow, not {args.flow}")
+    if args.missing is None:
+        raise InputError("surface inpaint needs --missing MASK: the vertices to fill")
+    with grid_advice(args.resolution):
+        lines = inpaint_file(
+            args.mesh,
+            args.output,
+            missing=args.missing,
+            values=args.values,
+            method=args.method,
+            resolution=args.resolution,
+            size=args.size,
+            overwrite=args.overwrite,
+            device=args.device,
+            progress=show_progress(),
         )
     report(lines)
     return 0
