@@ -257,6 +257,31 @@ def _stopping(method: str, max_steps, tol, check_every, defaults=None) -> tuple[
     return max_steps, tol, check_every
 
 
+# A given sigma above this many times the image's own noise estimate (its noisiest channel)
+# draws a warning: TV fitted to noise that is not there flattens detail (issue 33: sigma 3x the
+# estimate, 27.6 dB against 31.5 with the estimate).
+FAR_ABOVE = 2.0
+
+
+def _warn_if_far_above(sigma: float, estimate, scale: float) -> None:
+    """Warn when the given sigma is more than FAR_ABOVE times every channel's estimate."""
+    import warnings
+
+    try:
+        est = np.nan_to_num(np.asarray(estimate(), np.float64), nan=0.0) * scale
+    except InputError:  # too small to estimate from: nothing to compare with
+        return
+    if est.max() > 0 and sigma > FAR_ABOVE * est.max():
+        channels = ", ".join(f"{e:.3g}" for e in est)
+        warnings.warn(
+            f"sigma {sigma:g} is more than {FAR_ABOVE:g} times the noise estimated in the "
+            f"image ({channels}{' per channel' if est.size > 1 else ''}), so TV will smooth "
+            "away detail; leave sigma out to use the estimate, or give weight to choose the "
+            "strength",
+            stacklevel=4,
+        )
+
+
 @dataclass
 class _Fidelity:
     """The fidelity's start on the kernels' [0, 1] data, from sigma or weight: a fixed lam0
@@ -279,7 +304,11 @@ class _Fidelity:
             # capped where float32 ends: a weight that small next to the range changes nothing
             lam0 = np.full(nc, min(weight_unit / positive("weight", weight), 1e30))
             return cls(lam0, None, None, weight_unit, estimated)
-        sig = estimate() if sigma is None else np.full(nc, positive("sigma", sigma) / layout.scale)
+        if sigma is None:
+            sig = estimate()
+        else:
+            sig = np.full(nc, positive("sigma", sigma) / layout.scale)
+            _warn_if_far_above(sigma, estimate, layout.scale)
         sigma2 = np.maximum(sig, 1e-6) ** 2
         noise = np.sqrt(sigma2) * layout.scale  # per channel, before any sharing
         if vectorial:
