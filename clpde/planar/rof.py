@@ -263,8 +263,9 @@ def _stopping(method: str, max_steps, tol, check_every, defaults=None) -> tuple[
 FAR_ABOVE = 2.0
 
 
-def _warn_if_far_above(sigma: float, estimate, scale: float) -> None:
-    """Warn when the given sigma is more than FAR_ABOVE times every channel's estimate."""
+def _warn_if_far_above(sigma: float, estimate, scale: float, depth: int) -> None:
+    """Warn when the given sigma is more than FAR_ABOVE times every channel's estimate;
+    depth: the calls between denoise_tv and _Fidelity.of."""
     import warnings
 
     try:
@@ -278,7 +279,7 @@ def _warn_if_far_above(sigma: float, estimate, scale: float) -> None:
             f"image ({channels}{' per channel' if est.size > 1 else ''}), so TV will smooth "
             "away detail; leave sigma out to use the estimate, or give weight to choose the "
             "strength",
-            stacklevel=4,
+            stacklevel=4 + depth,
         )
 
 
@@ -295,7 +296,9 @@ class _Fidelity:
     estimated: bool
 
     @classmethod
-    def of(cls, sigma, weight, layout, nc: int, vectorial: bool, estimate) -> _Fidelity:
+    def of(
+        cls, sigma, weight, layout, nc: int, vectorial: bool, estimate, depth: int = 0
+    ) -> _Fidelity:
         # Float images are scaled by their own range for the kernels; skimage's weight is in
         # the image's units, so lambda on the kernels' [0, 1] data is scale / weight.
         weight_unit = 1.0 if np.issubdtype(layout.dtype, np.integer) else layout.scale
@@ -308,7 +311,7 @@ class _Fidelity:
             sig = estimate()
         else:
             sig = np.full(nc, positive("sigma", sigma) / layout.scale)
-            _warn_if_far_above(sigma, estimate, layout.scale)
+            _warn_if_far_above(sigma, estimate, layout.scale, depth)
         sigma2 = np.maximum(sig, 1e-6) ** 2
         noise = np.sqrt(sigma2) * layout.scale  # per channel, before any sharing
         if vectorial:
@@ -337,7 +340,7 @@ def _denoise_large(
     fit = _stopping("primal-dual", stopping[0], stopping[1], stopping[2])
     mean, var = bounded.channel_moments(scaled)
     fidelity = _Fidelity.of(
-        sigma, weight, layout, nc, vectorial, lambda: noise_std_by_strips(scaled)
+        sigma, weight, layout, nc, vectorial, lambda: noise_std_by_strips(scaled), depth=1
     )
     sigma2 = fidelity.sigma2
     dtype = compute_dtype(None, precision)

@@ -101,6 +101,7 @@ def test_tiled_denoise_spread_channel_gives_its_mean(small_threshold):
     assert info.lam[0] == 0
 
 
+@pytest.mark.filterwarnings("ignore:sigma .* is more than")  # far above the noise: on purpose
 @pytest.mark.parametrize("sigma", [2.0, 60.0, 250.0])
 def test_tiled_denoise_stops_within_its_cap_whatever_sigma(small_threshold, rng, sigma):
     """Issue 33 item 6: a large image's tiles stop by the looser test or at 50 iterations,
