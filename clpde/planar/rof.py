@@ -428,5 +428,7 @@ def noise_std_by_strips(scaled: bounded.Scaled) -> np.ndarray:
                 _NOISE_MASK[i, j] * u[i : h + i, j : nx - 2 + j] for i in range(3) for j in range(3)
             )
         np.abs(residual, out=residual)
-        sig[c] = float(np.median(residual)) * _MAD_TO_STD / 6.0
+        # in place: np.median would otherwise copy the whole residual (192 MB at 6000 x 4000)
+        sig[c] = float(np.median(residual, overwrite_input=True)) * _MAD_TO_STD / 6.0
+        del residual
     return sig
