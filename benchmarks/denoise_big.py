@@ -32,6 +32,9 @@ import time
 import numpy as np
 
 RUNS = ("cli", "clpde", "chambolle")
+# A child's peak RSS starts from its parent's at the fork (Linux keeps it across exec), so the
+# parent holds no large array while it starts the runs: the photo is made in a process of its
+# own and the PSNRs are computed after the last run.
 
 
 def make_photo(size: tuple[int, int], sigma: float, folder: str) -> tuple[str, str]:
@@ -102,22 +105,23 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--runs", default=",".join(RUNS), help="which runs, comma-separated")
     parser.add_argument("--json", default=None)
-    parser.add_argument("--worker", choices=RUNS, help=argparse.SUPPRESS)
+    parser.add_argument("--worker", choices=RUNS + ("make",), help=argparse.SUPPRESS)
     parser.add_argument("--paths", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    size = tuple(int(v) for v in args.size.lower().split("x"))
+    if args.worker == "make":
+        make_photo(size, args.sigma, args.paths[0])
+        return 0
     if args.worker:
         print(json.dumps(worker(args.worker, *args.paths, args.sigma)))
         return 0
 
-    size = tuple(int(v) for v in args.size.lower().split("x"))
     results = {run: [] for run in args.runs.split(",")}
     with tempfile.TemporaryDirectory() as folder:
-        clean, noisy = make_photo(size, args.sigma, folder)
-        print(
-            f"{size[0]}x{size[1]} RGB, noise sigma {args.sigma:g}, PSNR noisy "
-            f"{psnr(clean, noisy):.2f} dB",
-            flush=True,
-        )
+        make = [sys.executable, __file__, "--worker", "make", "--paths", folder, folder]
+        subprocess.run(make + ["--size", args.size, "--sigma", str(args.sigma)], check=True)
+        clean, noisy = (os.path.join(folder, f"{name}.png") for name in ("clean", "noisy"))
+        print(f"{size[0]}x{size[1]} RGB, noise sigma {args.sigma:g}", flush=True)
         for _ in range(args.repeats):
             for run in results:
                 out = os.path.join(folder, f"{run}.png")
@@ -129,13 +133,19 @@ def main(argv=None) -> int:
                     print(done.stderr, file=sys.stderr)
                     return 1
                 row = json.loads(done.stdout.strip().splitlines()[-1])
-                row["psnr"] = psnr(clean, out)
+                row["kept"] = f"{out[:-4]}-{len(results[run])}.png"
+                os.rename(out, row["kept"])
                 results[run].append(row)
                 print(
                     f"{run:10s} {row['seconds']:7.1f} s  peak RSS {row['peak_rss_mib']:6.0f} MiB"
-                    f"  PSNR {row['psnr']:.2f} dB  {row['said']}",
+                    f"  {row['said']}",
                     flush=True,
                 )
+        print(f"PSNR noisy      {psnr(clean, noisy):.2f} dB")
+        for run, rows in results.items():
+            for row in rows:
+                row["psnr"] = psnr(clean, row.pop("kept"))
+                print(f"PSNR {run:10s} {row['psnr']:.2f} dB")
     for run, rows in results.items():
         print(
             f"best {run:10s} {min(r['seconds'] for r in rows):7.1f} s, peak RSS "
