@@ -47,7 +47,8 @@ def add_denoise_parser(subparsers) -> None:
         "--max-steps",
         type=int,
         default=None,
-        help="iteration cap (default: 500 primal-dual, 2000 gradient)",
+        help="iteration cap (default: 500 primal-dual, 2000 gradient; images of over 2^22 "
+        "values run in tiles of at most 50 each)",
     )
     parser.set_defaults(run=run_denoise)
 

@@ -208,29 +208,23 @@ def gradient_descent(
 
 
 def primal_dual_in_tiles(
-    scaled: bounded.Scaled,
-    grid_dtype,
-    runtime,
-    lam0,
-    sigma2,
-    max_steps,
-    tol,
-    check_every,
-    progress,
-    vectorial,
+    scaled: bounded.Scaled, grid_dtype, runtime, lam0, sigma2, stopping, fit, progress, vectorial
 ):
     """denoise_tv of a large image in overlapping tiles (bounded.TILE_CORE kept,
-    bounded.TILE_MARGIN read on each side), each run to its own convergence with one lambda
-    per channel for the whole image. With sigma, lambda is first fitted (the dynamic
-    update) on the central region of the image of bounded.LAMBDA_SAMPLE_VALUES values, then
-    held for every tile.
+    bounded.TILE_MARGIN read on each side), each run to its own convergence or to its cap,
+    stopping = (max_steps, tol, check_every), with one lambda per channel for the whole
+    image. With sigma, lambda is first fitted (the dynamic update, stopping `fit`) on the
+    central region of the image of bounded.LAMBDA_SAMPLE_VALUES values, then held for every
+    tile.
 
     Not bit for bit the whole-image run: a tile's pixels see the image only to bounded.TILE_MARGIN
     beyond its core and stop by their own convergence; the fitted lambda is that of the
-    central region, not of the whole image. Returns (result, steps (the most a tile ran),
-    converged (every tile), lambda, residual variance per channel in [0, 1] units)."""
+    central region, not of the whole image. Progress: the fit's iterations, then the tiles.
+    Returns (result, steps (the most a tile ran), converged (every tile), lambda, residual
+    variance per channel in [0, 1] units)."""
 
     nc, ny, nx = scaled.nc, scaled.ny, scaled.nx
+    max_steps, tol, check_every = stopping
     lam = np.asarray(lam0, np.float64) if lam0 is not None else None
     if sigma2 is not None:
         side = int(np.sqrt(bounded.LAMBDA_SAMPLE_VALUES / nc))
@@ -239,17 +233,8 @@ def primal_dual_in_tiles(
         cols = slice((nx - w) // 2, (nx - w) // 2 + w)
         sample = scaled.block(rows, cols)
         grid = Grid(runtime, w, h, nc, 1, grid_dtype)
-        _, _, _, lam = primal_dual(
-            grid,
-            sample,
-            1.0 / np.sqrt(sigma2),
-            sigma2,
-            max_steps,
-            tol,
-            check_every,
-            False,
-            vectorial,
-        )
+        lam0 = 1.0 / np.sqrt(sigma2)
+        _, _, _, lam = primal_dual(grid, sample, lam0, sigma2, *fit, progress, vectorial)
         del sample
     steps_max, converged = 0, True
     sq = np.zeros(nc)

@@ -61,12 +61,14 @@ def test_tiled_denoise_matches_the_whole_image(small_threshold, rng, vectorial):
     clean = img_as_float(data.astronaut())[::2, ::2][:200, :230]
     noisy = np.clip(clean + 0.06 * rng.standard_normal(clean.shape), 0, 1)
     noisy = (255 * noisy).round().astype(np.uint8)
+    # the whole-image stopping test in both (large images default to a looser one)
+    stop = {"tol": 1e-3, "max_steps": 500}
     whole, info = clpde.denoise_tv(
-        noisy, weight=0.1, channel_axis=-1, vectorial=vectorial, return_info=True
+        noisy, weight=0.1, channel_axis=-1, vectorial=vectorial, return_info=True, **stop
     )
     small_threshold(core=64, margin=64)
     tiles, tiles_info = clpde.denoise_tv(
-        noisy, weight=0.1, channel_axis=-1, vectorial=vectorial, return_info=True
+        noisy, weight=0.1, channel_axis=-1, vectorial=vectorial, return_info=True, **stop
     )
     assert tiles.dtype == np.uint8 and tiles.shape == noisy.shape
     diff = np.abs(tiles.astype(float) - whole.astype(float)) / 255
@@ -97,3 +99,17 @@ def test_tiled_denoise_spread_channel_gives_its_mean(small_threshold):
     out, info = clpde.denoise_tv(flat, sigma=1.0, return_info=True)
     np.testing.assert_allclose(out, flat.mean(), atol=1e-12)
     assert info.lam[0] == 0
+
+
+@pytest.mark.filterwarnings("ignore:sigma .* is more than")  # far above the noise: on purpose
+@pytest.mark.parametrize("sigma", [2.0, 60.0, 250.0])
+def test_tiled_denoise_stops_within_its_cap_whatever_sigma(small_threshold, rng, sigma):
+    """Issue 33 item 6: a large image's tiles stop by the looser test or at 50 iterations,
+    whatever lambda the noise level makes (at tol 1e-3 and 500 they ran ~100 each)."""
+    clean = img_as_float(data.astronaut())[::2, ::2][:160, :180]
+    noisy = (255 * np.clip(clean + 0.04 * rng.standard_normal(clean.shape), 0, 1)).round()
+    noisy = noisy.astype(np.uint8)
+    small_threshold(core=96, margin=32)
+    out, info = clpde.denoise_tv(noisy, sigma=sigma, channel_axis=-1, return_info=True)
+    assert out.shape == noisy.shape and out.dtype == np.uint8
+    assert info.steps <= 50

@@ -52,3 +52,32 @@ def test_default_denoise_needs_no_pywavelets(monkeypatch):
 def test_too_small_to_estimate():
     with pytest.raises(InputError, match="give sigma or weight"):
         clpde.denoise_tv(np.zeros((2, 5)))
+
+
+@pytest.fixture
+def noisy_rgb():
+    """An 8-bit colour photo with noise of 10 grey levels (the estimate reads about 10)."""
+    clean = data.astronaut()[100:260, 100:260].astype(float)
+    noisy = clean + np.random.default_rng(2).normal(0, 10, clean.shape)
+    return np.clip(noisy, 0, 255).round().astype(np.uint8)
+
+
+def test_sigma_far_above_the_estimate_warns(noisy_rgb, recwarn):
+    """Issue 33 item 11: a given sigma more than twice every channel's estimate over-smooths;
+    denoise_tv says so, naming the estimates. Near the estimate it says nothing."""
+    with pytest.warns(UserWarning, match=r"sigma 25 is more than 2 times the noise estimated"):
+        clpde.denoise_tv(noisy_rgb, sigma=25, channel_axis=-1, max_steps=5)
+    clpde.denoise_tv(noisy_rgb, sigma=12, channel_axis=-1, max_steps=5)
+    assert not [w for w in recwarn if "estimated" in str(w.message)]
+
+
+def test_sigma_far_above_the_estimate_warns_on_the_command_line(noisy_rgb, tmp_path, capsys):
+    from clpde.cli import main
+    from clpde.io.images import write_image
+
+    path, out = tmp_path / "noisy.png", tmp_path / "out.png"
+    write_image(path, noisy_rgb)
+    assert main(["denoise", str(path), str(out), "--sigma", "30", "--max-steps", "5"]) == 0
+    err = capsys.readouterr().err
+    assert "clpde: warning: sigma 30 is more than 2 times the noise estimated" in err
+    assert "leave sigma out to use the estimate" in err
