@@ -82,7 +82,9 @@ def _blob(rng, r):
     yy, xx = np.mgrid[-h : h + 1, -h : h + 1].astype(float)
     ang = np.arctan2(yy, xx)
     # a radius that wanders with the angle (three harmonics), an ellipse's stretch
-    rad = r * (1 + sum(rng.uniform(-0.18, 0.18) * np.cos(k * ang + rng.uniform(0, 6)) for k in (2, 3, 5)))
+    rad = r * (
+        1 + sum(rng.uniform(-0.18, 0.18) * np.cos(k * ang + rng.uniform(0, 6)) for k in (2, 3, 5))
+    )
     stretch = rng.uniform(0.6, 1.0)
     th = rng.uniform(0, np.pi)
     u = xx * np.cos(th) + yy * np.sin(th)
@@ -142,7 +144,9 @@ def damage_clip(clean: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray, np.ndar
         for t in range(t0, t1):
             wob = 1.5 * np.sin(yy / H * rng.uniform(1, 3) + t * 0.3)
             xc = x0 + drift * (t - t0) + 0.02 * wob * W / 50
-            along = np.clip(1 + 0.35 * np.sin(yy / rng.uniform(15, 40) + rng.uniform(0, 6)), 0.3, 1.3)
+            along = np.clip(
+                1 + 0.35 * np.sin(yy / rng.uniform(15, 40) + rng.uniform(0, 6)), 0.3, 1.3
+            )
             xs = np.arange(W)[None, :]
             prof = np.exp(-0.5 * ((xs - xc[:, None]) / (0.5 * width)) ** 2)
             prof *= ((yy >= y0) & (yy < y1))[:, None] * along[:, None]
