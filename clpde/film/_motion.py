@@ -19,7 +19,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from ..motion.dis import DisFlow, to_u8
 from ._compensate import fit_gain
@@ -65,8 +64,15 @@ class FilmMotion:
             self._flows[key] = self.dis.flow(self.u8[t], self.u8[s])
         return self._flows[key]
 
-    def warp(self, image: np.ndarray, flow: np.ndarray, nearest: bool = False) -> np.ndarray:
-        return self.dis.warp(image, flow, nearest)
+    def warp(self, image: np.ndarray, flow: np.ndarray, mode: str = "cubic") -> np.ndarray:
+        return self.dis.warp(image, flow, mode)
+
+    def warped(self, t: int, s: int) -> np.ndarray:
+        """Frame s's grey brought onto frame t (kept: detection and trust both read it)."""
+        key = ("w", t, s)
+        if key not in self._flows:
+            self._flows[key] = self.warp(self.G[s], self.flow(t, s))
+        return self._flows[key]
 
     def inside(self, t: int, s: int) -> np.ndarray:
         f = self.flow(t, s)
@@ -77,7 +83,8 @@ class FilmMotion:
         """The largest gradient magnitude within 2 px: how much a flow error of one pixel
         changes a compensated value there."""
         gy, gx = np.gradient(image)
-        return ndimage.maximum_filter(np.hypot(gx, gy), size=5, mode="nearest")
+        mag = np.ascontiguousarray(np.hypot(gx, gy), np.float32)
+        return self.dis.cv2.dilate(mag, np.ones((5, 5), np.uint8), borderType=1)
 
     def trusted(self, t: int, k: int, partner: int, tol: float, fb: bool) -> np.ndarray:
         """Where neighbour t + k's compensated value is trusted: its match is inside, and the
@@ -86,7 +93,7 @@ class FilmMotion:
         within tol once multiplied by the local gradient (a flat region's flow may be
         loose, its compensated value is not)."""
         s, p = t + k, t + partner
-        w = self.warp(self.G[s], self.flow(t, s))
+        w = self.warped(t, s)
         tex = self.texture(w) + 1e-6
         err = self.loop_error(t, s, p)
         if fb:
@@ -97,24 +104,24 @@ class FilmMotion:
         return self.inside(t, s) & ((err <= loose) | (err * tex <= tol))
 
     def regional(self, err: np.ndarray) -> np.ndarray:
-        """The median of err over about 28 px around each pixel: damage disturbs the flow
+        """The median of err over about 20 px around each pixel: damage disturbs the flow
         over its own small area, and the flow of its surroundings stands for it there; an
         object the flow misses is inconsistent over its whole, larger area."""
         cv2 = self.dis.cv2
         small = cv2.resize(
             err, (max(self.nx // 4, 1), max(self.ny // 4, 1)), interpolation=cv2.INTER_AREA
         )
-        small = ndimage.median_filter(small, size=7, mode="nearest")
+        small = cv2.medianBlur(np.ascontiguousarray(small, np.float32), 5)
         return cv2.resize(small, (self.nx, self.ny), interpolation=cv2.INTER_LINEAR)
 
     def fb_error(self, t: int, s: int) -> np.ndarray:
         f = self.flow(t, s)
-        back = self.warp(self.flow(s, t), f)
+        back = self.warp(self.flow(s, t), f, "linear")
         return np.hypot(f[..., 0] + back[..., 0], f[..., 1] + back[..., 1])
 
     def loop_error(self, t: int, a: int, b: int) -> np.ndarray:
         fa, fb = self.flow(t, a), self.flow(t, b)
-        fab = self.warp(self.flow(a, b), fa)
+        fab = self.warp(self.flow(a, b), fa, "linear")
         return np.hypot(
             fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1]
         )
@@ -124,7 +131,7 @@ class FilmMotion:
         pixels whose match is inside (and fit_on, when given: pixels known clean)."""
         s = t + k
         f = self.flow(t, s)
-        w = self.warp(self.G[s], f)
+        w = self.warped(t, s)
         ok = self.inside(t, s)
         sel = ok if fit_on is None else ok & fit_on
         a, b = fit_gain(self.G[t], w, sel)

@@ -53,7 +53,6 @@ GAMMA = 2.0  # how much the neighbours' own disagreement raises the blotch scale
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
-END_MATCH_RATIO = 0.5  # the same at a film's first and last frames
 MOTION_TEXTURE = 3.0  # noise units of structure a region needs to be searched for
 REGION_HALF = 2  # the region evidence's square: 5x5
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
@@ -142,11 +141,16 @@ def _motion_check(
         th, tw = templ.shape
         # a flat spot (dirt is mostly flat) matches any dark or bright place of the
         # neighbours: only a region with structure of its own can be found again
-        if float(templ[own].std()) < MOTION_TEXTURE * sigma:
+        if robust_scale(templ[own]) < MOTION_TEXTURE * sigma:
+            continue
+        if not 0 < t < T - 1:
+            # a film's ends have one side only: ROD cannot tell an object the flow missed
+            # from damage there, and a region with structure of its own may be either
+            keep[idx] = False
             continue
         found = []
         # the frames each side; at the film's ends the next two on the one side
-        pair = (t - 1, t + 1) if 0 < t < T - 1 else ((t + 1, t + 2) if t == 0 else (t - 1, t - 2))
+        pair = (t - 1, t + 1)
         for s in pair:
             if not 0 <= s < T:
                 continue
@@ -167,10 +171,7 @@ def _motion_check(
             )
         # found in either neighbour, at any displacement (zero included: a flow that
         # wandered off a still region warps the wrong pixels onto it): not damage
-        # a film's ends have one side only: ROD cannot tell an object the flow missed from
-        # a blotch there, so a looser match suffices to call it motion
-        ratio = MATCH_RATIO if 0 < t < T - 1 else END_MATCH_RATIO
-        keep[idx] = not any(f[0] < ratio * e_own for f in found)
+        keep[idx] = not any(f[0] < MATCH_RATIO * e_own for f in found)
     return keep[labels]
 
 
@@ -400,6 +401,15 @@ def film_kinds(
                 blotch[sl] &= labels[sl] != idx
         kinds[t][blotch] = BLOTCH
         kinds[t][scratch] = SCRATCH
+    # a film's first and last frames see one side only: a scratch there must continue (within
+    # two columns) in the next frame in, which sees both sides
+    if T >= 3:
+        wide = np.ones((1, 5), bool)
+        for end, inner in ((0, 1), (T - 1, T - 2)):
+            lone = (kinds[end] == SCRATCH) & ~ndimage.binary_dilation(
+                kinds[inner] == SCRATCH, structure=wide
+            )
+            kinds[end][lone] = CLEAN
     return kinds
 
 

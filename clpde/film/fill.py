@@ -38,6 +38,7 @@ _RADIUS_MATCH = 4
 AGREE = 3.0  # noise units within which a neighbour matches the frame around the pixel
 PAIR = 3.0  # noise units within which two candidates agree on the pixel
 TRUST = 2.0  # noise units a flow inconsistency may move a compensated value
+CROP_MARGIN = 16  # pixels of context around the holes the spatial fill is given
 
 
 def _spatial(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
@@ -48,6 +49,24 @@ def _spatial(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
     out = np.asarray(out, np.float32)
     # inpaint scales a float image by its own range and returns that range: keep [0, 1]
     return out[np.newaxis] if axis is None else np.moveaxis(out, -1, 0)
+
+
+def _spatial_crops(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
+    """_spatial on crops around the holes (holes closer than 2 * CROP_MARGIN share one), so
+    a few small holes do not cost a whole frame's inpainting; the crops' margins give the
+    fill its context. Outside the holes the frame is returned as it was."""
+    out = frame.copy()
+    ny, nx = hole.shape
+    groups, _ = ndimage.label(ndimage.binary_dilation(hole, iterations=CROP_MARGIN))
+    for sl in ndimage.find_objects(groups):
+        y0, y1 = max(sl[0].start, 0), min(sl[0].stop, ny)
+        x0, x1 = max(sl[1].start, 0), min(sl[1].stop, nx)
+        box = (slice(None), slice(y0, y1), slice(x0, x1))
+        if min(y1 - y0, x1 - x0) < 8:  # too small for clpde.inpaint: the whole frame
+            return np.where(hole[None], _spatial(frame, hole, options), frame)
+        h = hole[y0:y1, x0:x1]
+        out[box] = np.where(h[None], _spatial(frame[box], h, options), frame[box])
+    return out
 
 
 def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -89,7 +108,7 @@ def _temporal(
     for k in offs:
         s = t + k
         f = motion.flow(t, s)
-        clean = motion.warp(m[s], f) <= _CLEAN
+        clean = motion.warp(m[s], f, "linear") <= _CLEAN
         ok = clean & motion.trusted(t, k, _partner(k, offs), TRUST * sigma, fb=one_sided)
         w = motion.warp(G[s], f)
         a, b = fit_gain(G[t], w, ok & ctx_t)
@@ -224,7 +243,7 @@ def inpaint_video(
             continue
         # one pixel more, so the spatial fill starts from pixels the frame holds clean
         hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
-        filled = _spatial(out[t], hole, options)
+        filled = _spatial_crops(out[t], hole, options)
         soft = m[t][np.newaxis]
         blend = soft * filled + (1.0 - soft) * planes[t]
         if grain:

@@ -67,23 +67,30 @@ class DisFlow:
     def __init__(self, preset: str = PRESET) -> None:
         self.cv2 = _cv2()
         self.dis = _dis(preset)
+        self._grid = None
 
     def flow(self, frame0: np.ndarray, frame1: np.ndarray) -> np.ndarray:
         """(H, W, 2) float32 flow from uint8 frame0 to uint8 frame1."""
         return self.dis.calc(frame0, frame1, None)
 
-    def warp(self, image: np.ndarray, flow: np.ndarray, nearest: bool = False) -> np.ndarray:
-        """``image[y + v, x + u]`` (bicubic, or nearest), coordinates clamped to the image;
-        image (H, W) or (H, W, C) float32."""
+    def warp(self, image: np.ndarray, flow: np.ndarray, mode: str = "cubic") -> np.ndarray:
+        """``image[y + v, x + u]``, coordinates clamped to the image; image (H, W) or
+        (H, W, C) float32. mode: 'cubic' for pictures, 'linear' for flows and masks,
+        'nearest'."""
         ny, nx = flow.shape[:2]
-        gx, gy = np.meshgrid(np.arange(nx, dtype=np.float32), np.arange(ny, dtype=np.float32))
-        mode = self.cv2.INTER_NEAREST if nearest else self.cv2.INTER_CUBIC
-        return self.cv2.remap(
+        if self._grid is None or self._grid[0].shape != (ny, nx):
+            self._grid = np.meshgrid(
+                np.arange(nx, dtype=np.float32), np.arange(ny, dtype=np.float32)
+            )
+        gx, gy = self._grid
+        cv2 = self.cv2
+        modes = {"cubic": cv2.INTER_CUBIC, "linear": cv2.INTER_LINEAR, "nearest": cv2.INTER_NEAREST}
+        return cv2.remap(
             image,
             gx + flow[..., 0],
             gy + flow[..., 1],
-            mode,
-            borderMode=self.cv2.BORDER_REPLICATE,
+            modes[mode],
+            borderMode=cv2.BORDER_REPLICATE,
         )
 
 

@@ -48,7 +48,7 @@ def test_blotches_found_at_the_ends_and_in_the_middle():
     clean = _people()
     dirty = clean.copy()
     yy, xx = np.mgrid[0:96, 0:160]
-    spots = {0: (30, 40), 4: (60, 110), 7: (70, 30)}
+    spots = {0: (75, 60), 4: (60, 110), 7: (70, 30)}
     for t, (y, x) in spots.items():
         disc = np.hypot(yy - y, xx - x) <= 4
         dirty[t][disc] = 10
