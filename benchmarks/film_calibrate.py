@@ -17,9 +17,9 @@ from film_corpus import corpus
 from clpde.film import detect as fdet
 from clpde.film._frames import film_planes, grey
 
-B_GRID = [4.0, 6.0, 8.0, 10.0]
-G_GRID = [0.25, 0.5, 1.0, 2.0]
-S_GRID = [2.0, 3.0, 4.0, 6.0]
+B_GRID = [6.0, 8.0, 10.0]
+G_GRID = [0.5, 1.0, 2.0]
+S_GRID = [3.0, 4.0]
 
 
 def main():

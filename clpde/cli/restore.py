@@ -133,6 +133,10 @@ def report(command: str, result) -> None:
         f"{result.masked_pixels} pixels filled; wrote {result.output}",
         file=sys.stderr,
     )
+    most = result.most_filled(5)
+    if most:
+        listed = ", ".join(f"{t} ({n} px)" for t, n in most)
+        print(f"{command}: frames with most pixels filled: {listed}", file=sys.stderr)
 
 
 def run_restore(args) -> int:

@@ -46,10 +46,10 @@ KERNEL_FILES = ("film/detect.cl",)
 CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films)
+BLOTCH_THRESHOLD = 10.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
-GAMMA = 2.0  # how much the neighbours' own disagreement raises the blotch scale
+GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion

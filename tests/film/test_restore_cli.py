@@ -46,6 +46,11 @@ def test_inpaint_and_restore_with_masks_are_one_path(tmp_path, film, capsys):
     assert (tmp_path / "a.mp4").read_bytes() == (tmp_path / "b.mp4").read_bytes()
     err = capsys.readouterr().err
     assert "restore: 12 frames" in err and "inpaint: 12 frames" in err
+    # the per-frame report: the frames with most pixels filled, counted from the masks
+    # (frames 3-8 carry the scratch as well as two blotches)
+    listed = err.split("frames with most pixels filled: ")[1].splitlines()[0]
+    frames = [int(part.split(" (")[0]) for part in listed.split(", ")]
+    assert len(frames) == 5 and set(frames) <= set(range(3, 9))
 
 
 def test_restore_detects_writes_masks_overlay_and_keeps_audio(tmp_path, film, capsys):
