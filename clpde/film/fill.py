@@ -154,6 +154,7 @@ def inpaint_video(
     seed: int = 0,
     spatial: dict | None = None,
     device: str | int | None = None,
+    keep: float = 0.0,
     return_unfilled: bool = False,
     progress: Progress = None,
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -187,6 +188,11 @@ def inpaint_video(
         Keyword arguments for `clpde.inpaint` where the neighbours do not help.
     device : str or int, optional
         As for `clpde.diffuse`.
+    keep : float
+        Pixels whose fill lies within `keep` noise deviations (the frame's grain level) of
+        their own value keep their own value: with detected masks, a pixel the fill would
+        barely change was most likely not damaged (do no harm). 0: fill every masked pixel.
+        `clpde restore` uses 3.
     return_unfilled : bool
         Also return the bool (T, H, W) mask of the pixels the spatial fill took.
     progress : bool or callable, optional
@@ -253,6 +259,11 @@ def inpaint_video(
             blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
         out[t] = np.where(hole[np.newaxis], blend, out[t])
     bar.close()
+    if keep > 0:
+        for t in damaged:
+            sigma = max(_noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+            close = np.abs(grey(out[t : t + 1])[0] - G[t]) <= keep * sigma
+            out[t] = np.where(close[None], planes[t], out[t])
     restored = layout.restore(out)
     if return_unfilled:
         return restored, (unfilled[0] if layout.photo else unfilled)
