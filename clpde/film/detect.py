@@ -64,7 +64,7 @@ TRUST = 2.0  # noise units a flow inconsistency may move a compensated value
 RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the neighbours
 RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
 RING_QUIET = 0.5  # share of the ring that is trusted and matches
-EDGE_SPREAD = 1.0  # pixels the flow may spread around a blotch (more: a motion boundary)
+EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
 
 
 def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
