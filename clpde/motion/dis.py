@@ -38,7 +38,7 @@ def _cv2():
     except ImportError as exc:  # pragma: no cover - the film extra installs it
         raise InputError(
             "film restoration needs OpenCV for its motion: pip install "
-            "opencv-python-headless (or clpde[video])"
+            "opencv-contrib-python-headless (or clpde[video])"
         ) from exc
     return cv2
 
