@@ -350,6 +350,43 @@ def restore_film(
     )
 
 
+def write_preview(
+    source: PathLike, output: PathLike, folder: PathLike, frames: list[int]
+) -> list[Path]:
+    """Before | after side by side for the given frames: one PNG per frame in `folder`
+    (preview_00012.png, ...), the input on the left and the restored frame on the right,
+    each written complete (an error leaves no partial image).
+
+    Parameters
+    ----------
+    source, output : str or PathLike
+        The film (or folder) restored and the restoration's output.
+    folder : str or PathLike
+        Where the pictures go (created if missing).
+    frames : list of int
+        Frame numbers (from 0).
+
+    Returns
+    -------
+    list of Path
+        The pictures written, in frame order.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    wanted = sorted(set(frames))
+    written = []
+    before = iter(FrameSource(source))
+    after = iter(FrameSource(output))
+    for t in range(max(wanted, default=-1) + 1):
+        a, b = next(before), next(after)
+        if t in wanted:
+            side = np.concatenate([a, b], axis=1)
+            path = folder / f"preview_{t:05d}.png"
+            write_image(path, side)
+            written.append(path)
+    return written
+
+
 @contextlib.contextmanager
 def _cluster(use: bool, workers, threads, scheduler, client):
     if not use:

@@ -194,3 +194,32 @@ def test_restore_on_two_dask_workers_equals_one_process(tmp_path, film, capsys):
     for t in range(T):
         name = f"mask_{t:05d}.png"
         assert (tmp_path / "m_one" / name).read_bytes() == (tmp_path / "m_two" / name).read_bytes()
+
+
+def test_preview_writes_before_and_after_of_the_most_filled_frames(tmp_path, film, capsys):
+    """--preview DIR: the 3 frames with most pixels filled, input left, output right."""
+    source, maskdir = film
+    out = tmp_path / "frames"
+    status = main(
+        [
+            "restore",
+            str(source),
+            "--mask",
+            str(maskdir),
+            "-o",
+            str(out),
+            "--preview",
+            str(tmp_path / "p"),
+        ]
+    )
+    assert status == 0, capsys.readouterr().err
+    pictures = sorted((tmp_path / "p").iterdir())
+    assert len(pictures) == 3
+    names = sorted(p.name for p in out.iterdir())
+    for picture in pictures:
+        t = int(picture.stem.split("_")[1])
+        assert 3 <= t <= 8  # the frames with the scratch as well as blotches
+        side = read_image(picture)
+        restored = read_image(out / names[t])
+        assert side.shape[1] == 2 * restored.shape[1]
+        assert np.array_equal(side[:, restored.shape[1] :], restored)
