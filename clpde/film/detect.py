@@ -52,7 +52,7 @@ PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
-MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
+MATCH_RATIO = 0.1  # a displaced match this much better than the compensated one: motion
 MOTION_TEXTURE = 3.0  # noise units of structure a region needs to be searched for
 REGION_HALF = 2  # the region evidence's square: 5x5
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
@@ -317,9 +317,9 @@ def _ring_check(
     (median residual within RING_LIMIT noise units). A blotch lies on a scene the flow
     follows; an object the flow missed, an occlusion or a deforming region does not, and
     there nothing is called a blotch (do no harm). Nor next to a motion boundary: where the
-    flow to either nearest neighbour spreads by more than EDGE_SPREAD px over a ring 3-6
+    flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
     px out, an occluded or revealed region would pass for damage (at a film's ends
-    nothing else tells them apart)."""
+    nothing else tells them apart); both flows, as damage disturbs the flow around it."""
     labels, n = ndimage.label(mask)
     if n == 0:
         return mask
@@ -342,10 +342,12 @@ def _ring_check(
         outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
             own, iterations=2
         )
-        spread = 0.0
+        # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
+        # flows around it too, but rarely both (the least spread decides)
+        spread = np.inf
         for f in flows[:, y0:y1, x0:x1][:, outer]:  # (pixels, 2) per neighbour
             lo, hi = np.percentile(f, [5, 95], axis=0)
-            spread = max(spread, float((hi - lo).max()))
+            spread = min(spread, float((hi - lo).max()))
         keep[idx] = spread <= EDGE_SPREAD
     return keep[labels]
 
