@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
-from ..film.restore import restore_film
+from ..film.restore import restore_film, write_preview
 from ..io.video_probe import is_video
 from ..runtime import use_device
 from ..scale.tasks import TRANSPORT_OPTIONS
@@ -96,6 +96,13 @@ def add_restore_parser(subparsers) -> None:
         "10-bit where the input has it",
     )
     parser.add_argument(
+        "--preview",
+        metavar="DIR",
+        default=None,
+        help="also write before|after pictures side by side (PNG) of the 3 frames with "
+        "most pixels filled into DIR",
+    )
+    parser.add_argument(
         "--overwrite",
         action="store_true",
         help="replace output folders (of clpde's kinds of files only)",
@@ -133,6 +140,10 @@ def report(command: str, result) -> None:
         f"{result.masked_pixels} pixels filled; wrote {result.output}",
         file=sys.stderr,
     )
+    most = result.most_filled(5)
+    if most:
+        listed = ", ".join(f"{t} ({n} px)" for t, n in most)
+        print(f"{command}: frames with most pixels filled: {listed}", file=sys.stderr)
 
 
 def run_restore(args) -> int:
@@ -151,6 +162,13 @@ def run_restore(args) -> int:
         **film_run_options(args),
     )
     report("restore", result)
+    if args.preview is not None:
+        frames = [t for t, _ in result.most_filled(3)] or [0]
+        pictures = write_preview(args.input, result.output, args.preview, frames)
+        print(
+            f"restore: wrote {len(pictures)} before|after pictures to {args.preview}",
+            file=sys.stderr,
+        )
     return 0
 
 

@@ -26,8 +26,6 @@ scratches from the same line detector run on the image minus its horizontal medi
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
@@ -38,29 +36,35 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
-from ._compensate import FILM_FLOW, Compensator
 from ._frames import film_planes, grey
-from .lines import LineKernels, robust_scale, scratch_runs, spatial_lines, static_scratches
+from ._motion import FilmMotion
+from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
 
 CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 
-# The first pass's flows: cheaper, their errors only decide what the second pass masks.
-FIRST_PASS_FLOW = replace(FILM_FLOW, iterations=10)
-
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films)
+BLOTCH_THRESHOLD = 10.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
-GAMMA = 0.5  # how much the neighbours' own disagreement raises the blotch scale
+GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
-MATCH_RATIO = 0.25  # a displaced match this much better than the compensated one: motion
+MATCH_RATIO = 0.1  # a displaced match this much better than the compensated one: motion
+MOTION_TEXTURE = 3.0  # noise units of structure a region needs to be searched for
 REGION_HALF = 2  # the region evidence's square: 5x5
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
-STATIC_SCALE = 0.5  # the static-line detector's threshold per unit of scratch_threshold
+STATIC_SCALE = 0.0  # the static-line detector, off: in a static shot it takes posts for scratches
+# The noise floor, 1.5 grey levels: 8-bit footage without grain (a codec's flat areas) has a
+# residual whose median deviation is 0, and a level or two of quantisation is not damage.
+SIGMA_FLOOR = 1.5 / 255
+TRUST = 2.0  # noise units a flow inconsistency may move a compensated value
+RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the neighbours
+RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
+RING_QUIET = 0.5  # share of the ring that is trusted and matches
+EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
 
 
 def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -106,11 +110,11 @@ def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.nd
 
 
 def _motion_check(
-    comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray, search: int
+    comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray, search: int, sigma: float
 ) -> np.ndarray:
-    """Drop the components of comp_mask (frame t) that reappear displaced in the frames
-    before and after: a moving object the flow missed is found again nearby, a blotch is
-    not.
+    """Drop the components of comp_mask (frame t) that are found in the frame before or
+    after: a moving object the flow missed is found again nearby (or in place, where the
+    flow wandered), a blotch is not.
 
     Each component, with a ring of two pixels for context, is matched within `search`
     pixels of its place in each neighbour. It moved if, at the best places, its own pixels
@@ -132,12 +136,21 @@ def _motion_check(
         region = ndimage.binary_dilation(own, iterations=2)
         r2 = resid[y0:y1, x0:x1] ** 2
         # medians: a component may carry some clean pixels or a trail beside the object
-        e_own, e_region = float(np.median(r2[own])), float(r2[region].mean())
+        e_own = float(np.median(r2[own]))
         templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
         th, tw = templ.shape
+        # a flat spot (dirt is mostly flat) matches any dark or bright place of the
+        # neighbours: only a region with structure of its own can be found again
+        if robust_scale(templ[own]) < MOTION_TEXTURE * sigma:
+            continue
+        if not 0 < t < T - 1:
+            # a film's ends have one side only: ROD cannot tell an object the flow missed
+            # from damage there, and a region with structure of its own may be either
+            keep[idx] = False
+            continue
         found = []
         # the frames each side; at the film's ends the next two on the one side
-        pair = (t - 1, t + 1) if 0 < t < T - 1 else ((t + 1, t + 2) if t == 0 else (t - 1, t - 2))
+        pair = (t - 1, t + 1)
         for s in pair:
             if not 0 <= s < T:
                 continue
@@ -156,138 +169,187 @@ def _motion_check(
                     np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t),
                 )
             )
-        if not found or not all(f[0] < MATCH_RATIO * e_own for f in found):
-            continue
-        if len(found) == 2:
-            # one velocity explains both places (displacements per frame of offset)
-            (_, _, v0), (_, _, v1) = found
-            moved = np.hypot(*(v0 - v1)) <= 3.0 and np.hypot(*v0) >= 1.0
-        else:
-            moved = found[0][1] < 2 * MATCH_RATIO * e_region
-        keep[idx] = not moved
+        # found in either neighbour, at any displacement (zero included: a flow that
+        # wandered off a still region warps the wrong pixels onto it): not damage
+        keep[idx] = not any(f[0] < MATCH_RATIO * e_own for f in found)
     return keep[labels]
 
 
-def _blotch_pass(comp: Compensator, kern: _Kernels, T: int, radius: int, line_of=None):
-    """Blotch scores, temporal residuals and noise levels of every frame against its
-    compensated neighbours; with line_of, also each frame's line score (its continuity
-    comes after)."""
-    ny, nx = comp.ny, comp.nx
-    q = comp.q
-    g, loc = comp.rt.items(nx, ny)
-    zb = np.empty((T, ny, nx), np.float32)
-    res = np.empty((T, ny, nx), np.float32)
-    zs = np.empty((T, ny, nx), np.float32) if line_of else None
-    least = np.empty((T, ny, nx), np.float32)
-    sigmas = np.empty(T)
-    z_dev = cla.empty(q, (ny, nx), np.float32)
-    r_dev = cla.empty(q, (ny, nx), np.float32)
-    m_dev = cla.empty(q, (ny, nx), np.float32)
-    sides_dev = [cla.empty(q, (ny, nx), np.float32) for _ in range(4)]
-    zr = np.empty((T, ny, nx), np.float32)
-    for t in range(T):
-        offs, sides = _window(t, T, radius)
-        nb = comp.neighbours(t, offs, sides)
-        args = (
-            comp.grey[t].data,
-            nb.grey.data,
-            nb.valid.data,
-            cla.to_device(q, nb.gain).data,
-            cla.to_device(q, nb.offset).data,
-            cla.to_device(q, nb.side).data,
-            np.int32(len(offs)),
-        )
-        kern.blotch(
-            q,
-            g,
-            loc,
-            *args,
-            np.float32(1.0),
-            np.float32(GAMMA),
-            z_dev.data,
-            r_dev.data,
-            m_dev.data,
-            sides_dev[0].data,
-            sides_dev[1].data,
-            np.int32(nx),
-            np.int32(ny),
-        )
-        r = r_dev.get()
-        # the residual against the median of ~4 neighbours has about 1.16 times the
-        # frame's own noise deviation; a floor keeps noiseless synthetic frames sane
-        sigma = max(robust_scale(r) / 1.16, 0.5 / 255)
-        kern.blotch(
-            q,
-            g,
-            loc,
-            *args,
-            np.float32(sigma),
-            np.float32(GAMMA),
-            z_dev.data,
-            r_dev.data,
-            m_dev.data,
-            sides_dev[0].data,
-            sides_dev[1].data,
-            np.int32(nx),
-            np.int32(ny),
-        )
-        zb[t], res[t], least[t], sigmas[t] = z_dev.get(), r, m_dev.get(), sigma
-        # region evidence: each side's residual averaged over 5x5, both of one sign, in the
-        # robust units of that average (which knows the grain's own correlation)
-        for src, dst in zip(sides_dev[:2], sides_dev[2:], strict=True):
-            kern.box(
-                q, g, loc, src.data, dst.data, np.int32(REGION_HALF), np.int32(nx), np.int32(ny)
-            )
-        bp, bn = sides_dev[2].get(), sides_dev[3].get()
-        same = (np.sign(bp) == np.sign(bn)) & (bp != 0)
-        zr[t] = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / (
-            robust_scale(bp)
-        )
-        if line_of:
-            zs[t] = kern.line_score(m_dev, 3.0 * sigma)
-    return zb, res, least, sigmas, zs, zr
+def _second_least(v: np.ndarray, vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Of the differences v - vals[k] over trusted k, the second least in magnitude (the
+    least with fewer than 3; 0 with none): the residual the scratch detector reads. A
+    scratch fixed on the film differs from every neighbour but perhaps the nearest in a slow
+    pan; beside it, where one neighbour's own scratch lands, the others agree: no ghost."""
+    d = np.where(ok, v[None] - vals, np.inf)
+    order = np.argsort(np.abs(d), axis=0, kind="stable")
+    n = ok.sum(0)
+    first = np.take_along_axis(d, order[:1], 0)[0]
+    second = np.take_along_axis(d, order[1:2], 0)[0] if len(vals) > 1 else first
+    out = np.where(n >= 3, second, first)
+    return np.where(n > 0, out, 0.0).astype(np.float32)
+
+
+def _box(a: np.ndarray, half: int) -> np.ndarray:
+    return ndimage.uniform_filter(a.astype(np.float32), 2 * half + 1, mode="nearest")
+
+
+def _median(vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """The median over k of vals[k] where ok[k] (NaN where none): a sort with the others
+    pushed to the end (np.nanmedian is far slower for a handful of values per pixel)."""
+    s = np.sort(np.where(ok, vals, np.inf), axis=0)
+    n = ok.sum(0)
+    lo = np.take_along_axis(s, np.maximum((n - 1) // 2, 0)[None], 0)[0]
+    hi = np.take_along_axis(s, np.maximum(n // 2, 0)[None], 0)[0]
+    out = 0.5 * (lo + hi)
+    return np.where(n > 0, out, np.nan).astype(np.float32)
+
+
+def _partner(k: int, offs: list[int]) -> int:
+    """The neighbour whose flow loop checks neighbour k's: the same distance on the other
+    side, else the nearest on the other side, else (a film's end) the other one on k's side."""
+    other = [o for o in offs if (o > 0) != (k > 0)]
+    if other:
+        return min(other, key=lambda o: (abs(abs(o) - abs(k)), abs(o)))
+    same = [o for o in offs if o != k]
+    return min(same, key=abs) if same else k
+
+
+def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
+    """Frame t's evidence against its compensated neighbours (numpy; see the module text).
+
+    d: how far the pixel lies outside the range of all trusted neighbours (signed), where
+        a trusted neighbour exists on each side (at the film's ends: the two sides of
+        _window); 0 elsewhere: an occluded, revealed or badly compensated pixel is never
+        called a blotch. spread: the trusted neighbours' range (film_kinds divides d by
+        sigma + GAMMA * (spread beyond 2 sigma)).
+    zr: the region evidence of faint blotches (5x5 means of each side's residual).
+    res: the frame minus the median of its trusted neighbours; least: the scratch residual;
+    trusted_both: where both sides have a trusted neighbour."""
+    G = motion.G
+    T, ny, nx = G.shape
+    offs, sides = _window(t, T, radius)
+    nbs = [motion.neighbour(t, k) for k in offs]
+    vals = np.stack([n.grey for n in nbs])
+    v = G[t]
+    # the grain's level from the residual against the neighbours inside the frame (robust:
+    # damage and flow failures are a minority)
+    inside = np.stack([motion.inside(t, t + k) for k in offs])
+    med0 = _median(vals, inside)
+    r0 = (v - med0)[inside.any(0)]
+    sigma = max(robust_scale(r0) / 1.16 if r0.size else 0.0, SIGMA_FLOOR)
+    # at a film's ends all neighbours lie on one side: an occluded pixel could find two
+    # that agree with each other, so the flow back must agree too
+    one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
+    ok = np.stack(
+        [motion.trusted(t, k, _partner(k, offs), TRUST * sigma, fb=one_sided) for k in offs]
+    )
+    side = np.asarray(sides)[:, None, None]
+    v = G[t]
+    inf = np.float32(np.inf)
+    lo = np.where(ok, vals, inf).min(0)
+    hi = np.where(ok, vals, -inf).max(0)
+    both = (ok & (side < 0)).any(0) & (ok & (side > 0)).any(0)
+    n_ok = ok.sum(0)
+    med = _median(vals, ok)
+    med_p = _median(vals, ok & (side < 0))
+    med_n = _median(vals, ok & (side > 0))
+    res = np.where(n_ok > 0, v - med, 0.0).astype(np.float32)
+    d = np.where(v > hi, v - hi, np.where(v < lo, v - lo, 0.0))
+    spread = np.where(n_ok > 0, hi - lo, 0.0)
+    rp = np.where(np.isfinite(med_p), v - med_p, 0.0)
+    rn = np.where(np.isfinite(med_n), v - med_n, 0.0)
+    med = np.where(np.isfinite(med), med, v)
+    bp, bn = _box(rp, REGION_HALF), _box(rn, REGION_HALF)
+    same = (np.sign(bp) == np.sign(bn)) & (bp != 0) & both
+    zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / max(
+        robust_scale(bp), SIGMA_FLOOR
+    )
+    return {
+        "d": np.where(both, d, 0.0).astype(np.float32),
+        "spread": spread.astype(np.float32),
+        "zr": zr.astype(np.float32),
+        "res": res,
+        "least": _second_least(v, vals, ok),
+        "sigma": sigma,
+        "both": both,
+        # the flows to the nearest neighbour each side: the ring check reads their spread
+        "flows": np.stack([motion.flow(t, t + k) for k in (-1, 1) if 0 <= t + k < T]),
+    }
 
 
 def film_scores(G: np.ndarray, device, radius: int) -> dict:
-    """The per-pixel evidence of every frame: blotch scores zb, line scores with their
-    continuity zc, temporal residuals, noise levels and the frames' own signed thin lines
-    (the thresholds come after, in film_kinds)."""
+    """The per-pixel evidence of every frame: blotch scores zb, region scores zr, line
+    scores with their continuity zc, temporal residuals, noise levels and where both sides
+    are trusted (the thresholds come after, in film_kinds)."""
     T, ny, nx = G.shape
-    kern = _Kernels(get_runtime(device))
-    # Thin vertical lines of the frames themselves (scene lines and scratches alike) are
-    # kept out of the flows: a scratch fixed on the film would otherwise pull the flow
-    # around it to zero, and the compensated neighbours would show it too.
-    lines = np.zeros((T, ny, nx), np.int8)
-    for t in range(T):
-        lines[t] = spatial_lines(kern, G[t], CANDIDATE_THRESHOLD, max(12, ny // 5))
-    near_line = np.stack(
-        [ndimage.binary_dilation(x != 0, structure=np.ones((1, 5), bool)) for x in lines]
-    )
-    # A first, cheaper pass finds what stands out; the flows are then estimated again with
-    # it masked out, since a large blotch drags the flow around it even with a robust data
-    # term, and the neighbours warped by that flow disagree where they should agree.
-    comp = Compensator(G, device, weights=1.0 - near_line, params=FIRST_PASS_FLOW)
-    zb = _blotch_pass(comp, kern, T, radius)[0]
-    suspect = np.stack(
+    kern = LineKernels(get_runtime(device))
+    motion = FilmMotion(G)
+    per = [frame_scores(motion, t, radius) for t in range(T)]
+    keys = ("d", "spread", "zr", "res", "least", "both")
+    stack = {key: np.stack([p[key] for p in per]) for key in keys}
+    stack["flows"] = [p["flows"] for p in per]
+    sigmas = np.array([p["sigma"] for p in per])
+    q = kern.rt.queue
+    zs = np.stack(
         [
-            ndimage.binary_dilation(_hysteresis(np.abs(z), FIRST_PASS_LEVEL, 2 * FIRST_PASS_LEVEL))
-            for z in zb
+            kern.line_score(cla.to_device(q, np.ascontiguousarray(stack["least"][t])), 3 * s)
+            for t, s in enumerate(sigmas)
         ]
     )
-    # Each neighbour's own suspects are left out where they land: a neighbour's own blotch
-    # would otherwise pass for disagreement among the neighbours.
-    wide = np.stack([ndimage.binary_dilation(x) for x in suspect])
-    comp = Compensator(G, device, weights=1.0 - (near_line | wide), exclude=suspect)
-    zb, res, least, sigmas, zs, zr = _blotch_pass(comp, kern, T, radius, line_of=True)
-    return {
-        "zb": zb,
-        "zr": zr,
-        "zc": kern.continuity(zs),
-        "res": res,
-        "least": least,
-        "sigma": sigmas,
-        "lines": lines,
-    }
+    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas}
+
+
+def _no_singletons(mask: np.ndarray) -> np.ndarray:
+    labels, n = ndimage.label(mask)
+    if n == 0:
+        return mask
+    sizes = np.bincount(labels.ravel())
+    keep = sizes >= 2
+    keep[0] = False
+    return keep[labels]
+
+
+def _ring_check(
+    mask: np.ndarray, both: np.ndarray, res: np.ndarray, sigma: float, flows: np.ndarray
+) -> np.ndarray:
+    """Keep the components of mask whose surroundings the motion explains: on a ring 2-4
+    px out, most pixels have a trusted neighbour on each side and the frame matches them
+    (median residual within RING_LIMIT noise units). A blotch lies on a scene the flow
+    follows; an object the flow missed, an occlusion or a deforming region does not, and
+    there nothing is called a blotch (do no harm). Nor next to a motion boundary: where the
+    flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
+    px out, an occluded or revealed region would pass for damage (at a film's ends
+    nothing else tells them apart); both flows, as damage disturbs the flow around it."""
+    labels, n = ndimage.label(mask)
+    if n == 0:
+        return mask
+    ny, nx = mask.shape
+    keep = np.zeros(n + 1, bool)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        y0, y1 = max(sl[0].start - 7, 0), min(sl[0].stop + 7, ny)
+        x0, x1 = max(sl[1].start - 7, 0), min(sl[1].stop + 7, nx)
+        own = labels[y0:y1, x0:x1] == idx
+        ring = ndimage.binary_dilation(own, iterations=4) & ~ndimage.binary_dilation(
+            own, iterations=1
+        )
+        ring &= labels[y0:y1, x0:x1] == 0
+        if ring.sum() < 4:
+            continue
+        trusted = both[y0:y1, x0:x1][ring]
+        quiet = np.abs(res[y0:y1, x0:x1][ring]) <= RING_LIMIT * sigma
+        if not (trusted.mean() >= RING_TRUSTED and (trusted & quiet).mean() >= RING_QUIET):
+            continue
+        outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
+            own, iterations=2
+        )
+        # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
+        # flows around it too, but rarely both (the least spread decides)
+        spread = np.inf
+        for f in flows[:, y0:y1, x0:x1][:, outer]:  # (pixels, 2) per neighbour
+            lo, hi = np.percentile(f, [5, 95], axis=0)
+            spread = min(spread, float((hi - lo).max()))
+        keep[idx] = spread <= EDGE_SPREAD
+    return keep[labels]
 
 
 def film_kinds(
@@ -297,10 +359,11 @@ def film_kinds(
     scratch_threshold: float,
     search: int,
     min_length: int,
+    gamma: float = GAMMA,
 ) -> np.ndarray:
     """Kinds (T, H, W) from film_scores' evidence and the thresholds."""
     T, ny, nx = G.shape
-    zb, zc, res, sigmas = scores["zb"], scores["zc"], scores["res"], scores["sigma"]
+    zc, res, sigmas = scores["zc"], scores["res"], scores["sigma"]
     kinds = np.zeros((T, ny, nx), np.int8)
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
@@ -317,12 +380,19 @@ def film_kinds(
         # a pixel's evidence: its own score, or its region's where its own residual shows
         # the same sign beyond the noise (so a strong blotch's region score does not spill
         # past its edge)
-        zr, r = scores["zr"][t], res[t]
+        # in noise units that grow with the neighbours' disagreement among themselves
+        # (pathological motion: the flow does not follow the scene there)
+        scale = sigmas[t] + gamma * np.maximum(scores["spread"][t] - 2 * sigmas[t], 0.0)
+        zb = scores["d"][t] / scale
+        zr, r = scores["zr"][t] * (sigmas[t] / scale), res[t]
         own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
-        a = np.maximum(np.abs(zb[t]), np.where(own, np.abs(zr), 0.0))
+        a = np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
         blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
         blotch &= ~ndimage.binary_dilation(scratch)
-        blotch = _motion_check(blotch, G, t, res[t], search)
+        # a lone pixel is within what a codec or the grain does: never a blotch worth a fill
+        blotch = _no_singletons(blotch)
+        blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
+        blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
         # a tall thin "blotch" is a scratch the line detector missed (too short or faint
         # for its run test in this frame)
         labels, _ = ndimage.label(blotch)
@@ -333,6 +403,15 @@ def film_kinds(
                 blotch[sl] &= labels[sl] != idx
         kinds[t][blotch] = BLOTCH
         kinds[t][scratch] = SCRATCH
+    # a film's first and last frames see one side only: a scratch there must continue (within
+    # two columns) in the next frame in, which sees both sides
+    if T >= 3:
+        wide = np.ones((1, 5), bool)
+        for end, inner in ((0, 1), (T - 1, T - 2)):
+            lone = (kinds[end] == SCRATCH) & ~ndimage.binary_dilation(
+                kinds[inner] == SCRATCH, structure=wide
+            )
+            kinds[end][lone] = CLEAN
     return kinds
 
 

@@ -13,26 +13,32 @@ they do not show as smooth patches.
 
 from __future__ import annotations
 
+import zlib
+
 import numpy as np
-import pyopencl.array as cla
 from numpy.typing import ArrayLike
+from scipy import ndimage
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import grow_mask
 from ..inpainting.api import inpaint
+from ..motion.dis import to_u8
 from ..planar.rof import _noise_std
-from ._compensate import Compensator
+from ._compensate import fit_gain
 from ._frames import film_masks, film_planes, grey
-
-# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("film/fill.cl",)
+from ._motion import FilmMotion
+from .detect import SIGMA_FLOOR, _partner
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
 # warp of a bool mask spreads it over a pixel's rim).
 _CLEAN = 0.01
 # The half width of the window on which neighbours are compared with the frame.
 _RADIUS_MATCH = 4
+AGREE = 3.0  # noise units within which a neighbour matches the frame around the pixel
+PAIR = 3.0  # noise units within which two candidates agree on the pixel
+TRUST = 2.0  # noise units a flow inconsistency may move a compensated value
+CROP_MARGIN = 16  # pixels of context around the holes the spatial fill is given
 
 
 def _spatial(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
@@ -45,16 +51,110 @@ def _spatial(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
     return out[np.newaxis] if axis is None else np.moveaxis(out, -1, 0)
 
 
+def _spatial_crops(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.ndarray:
+    """_spatial on crops around the holes (holes closer than 2 * CROP_MARGIN share one), so
+    a few small holes do not cost a whole frame's inpainting; the crops' margins give the
+    fill its context. Outside the holes the frame is returned as it was."""
+    out = frame.copy()
+    ny, nx = hole.shape
+    groups, _ = ndimage.label(ndimage.binary_dilation(hole, iterations=CROP_MARGIN))
+    for sl in ndimage.find_objects(groups):
+        y0, y1 = max(sl[0].start, 0), min(sl[0].stop, ny)
+        x0, x1 = max(sl[1].start, 0), min(sl[1].stop, nx)
+        box = (slice(None), slice(y0, y1), slice(x0, x1))
+        if min(y1 - y0, x1 - x0) < 8:  # too small for clpde.inpaint: the whole frame
+            return np.where(hole[None], _spatial(frame, hole, options), frame)
+        h = hole[y0:y1, x0:x1]
+        out[box] = np.where(h[None], _spatial(frame[box], h, options), frame[box])
+    return out
+
+
+def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """The grey frames with their damage filled roughly (OpenCV's Telea), for the flows
+    only: DIS cannot be told to ignore pixels, and a blotch would drag the flow around it."""
+    import cv2
+
+    out = G.copy()
+    for t in range(len(G)):
+        hole = m[t] > 0
+        if hole.any():
+            u8 = to_u8(G[t])
+            out[t] = cv2.inpaint(u8, hole.astype(np.uint8), 3, cv2.INPAINT_TELEA) / np.float32(255)
+    return out
+
+
+def _temporal(
+    motion: FilmMotion, planes: np.ndarray, m: np.ndarray, t: int, radius: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Frame t's damaged pixels from its neighbours where the motion is trusted; returns the
+    frame (C, H, W) and the pixels left to the spatial fill.
+
+    A neighbour is a candidate at a pixel where its match is trusted (clpde.film._motion:
+    inside, the flow loop consistent within the noise), clean in its own mask, and it agrees
+    with frame t on the clean pixels of the 9x9 window around (mean absolute difference
+    within AGREE noise units and 1.5 times the best). A pixel is filled only where at least
+    two candidates agree with each other (within PAIR noise units): one neighbour alone
+    could carry damage nobody found, and it would be copied in. Then the medoid's value is
+    copied, every channel from the same frame (its grain comes along); ties go to the
+    nearer frame, then the earlier."""
+    G = motion.G
+    T, C, ny, nx = planes.shape
+    hole = m[t] > 0
+    offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
+    sigma = max(_noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+    one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
+    vals, cols, cand, dist = [], [], [], []
+    ctx_t = ~grow_mask(hole, 1.0)
+    for k in offs:
+        s = t + k
+        f = motion.flow(t, s)
+        clean = motion.warp(m[s], f, "linear") <= _CLEAN
+        ok = clean & motion.trusted(t, k, _partner(k, offs), TRUST * sigma, fb=one_sided)
+        w = motion.warp(G[s], f)
+        a, b = fit_gain(G[t], w, ok & ctx_t)
+        wg = a * w + b
+        ctx = (ok & ctx_t).astype(np.float32)
+        num = ndimage.uniform_filter(np.abs(G[t] - wg) * ctx, 2 * _RADIUS_MATCH + 1)
+        den = ndimage.uniform_filter(ctx, 2 * _RADIUS_MATCH + 1)
+        e = np.where(den > 1e-3, num / np.maximum(den, 1e-6), np.inf)
+        vals.append(wg)
+        cols.append((a * motion.warp(np.moveaxis(planes[s], 0, -1), f) + b).reshape(ny, nx, C))
+        cand.append(ok & (e <= AGREE * sigma))
+        dist.append(abs(k) + (0.5 if k > 0 else 0.0))
+    vals, cand = np.stack(vals), np.stack(cand)
+    e_ok = cand
+    # agreement among the candidates: the medoid's cost, and how many agree with it
+    K = len(offs)
+    cost = np.full((K, ny, nx), np.inf, np.float32)
+    agree = np.zeros((K, ny, nx), np.int16)
+    for i in range(K):
+        diff = np.abs(vals[i][None] - vals)
+        c = np.where(e_ok, diff, 0.0).sum(0) + 1e-6 * dist[i]
+        cost[i] = np.where(e_ok[i], c, np.inf)
+        agree[i] = (e_ok & (diff <= PAIR * sigma)).sum(0)
+    best = np.argmin(cost, axis=0)
+    n_agree = np.take_along_axis(agree, best[None], 0)[0]
+    filled = hole & np.isfinite(cost.min(0)) & (n_agree >= 2)
+    out = planes[t].copy()
+    pick = np.stack(cols)  # (K, H, W, C)
+    chosen = np.take_along_axis(pick, best[None, ..., None], 0)[0]  # (H, W, C)
+    soft = m[t][..., None]
+    blend = soft * chosen + (1 - soft) * np.moveaxis(planes[t], 0, -1)
+    out = np.where(filled[None], np.moveaxis(blend, -1, 0), out)
+    return out.astype(np.float32), hole & ~filled
+
+
 def inpaint_video(
     frames: ArrayLike,
     masks: ArrayLike,
     *,
     channel_axis: int | None = None,
-    radius: int = 3,
+    radius: int = 2,
     grain: bool = True,
     seed: int = 0,
     spatial: dict | None = None,
     device: str | int | None = None,
+    keep: float = 0.0,
     return_unfilled: bool = False,
     progress: Progress = None,
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -88,6 +188,11 @@ def inpaint_video(
         Keyword arguments for `clpde.inpaint` where the neighbours do not help.
     device : str or int, optional
         As for `clpde.diffuse`.
+    keep : float
+        Pixels whose fill lies within `keep` noise deviations (the frame's grain level) of
+        their own value keep their own value: with detected masks, a pixel the fill would
+        barely change was most likely not damaged (do no harm). 0: fill every masked pixel.
+        `clpde restore` uses 3.
     return_unfilled : bool
         Also return the bool (T, H, W) mask of the pixels the spatial fill took.
     progress : bool or callable, optional
@@ -131,48 +236,12 @@ def inpaint_video(
     # temporal fills first, then the spatial fallback: one unit per damaged frame for each
     bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
     if T > 1 and damaged:
-        comp = Compensator(G, device, colour=planes, masks=m)
-        rt, q = comp.rt, comp.q
-        k_fill = rt.kernel("film/fill.cl", "temporal_fill")
-        g, loc = rt.items(nx, ny)
-        res = cla.empty(q, (C, ny, nx), np.float32)
-        left = cla.empty(q, (ny, nx), np.float32)
+        motion = FilmMotion(G, _rough(G, m))
         for t in damaged:
-            offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
-            nb = comp.neighbours(t, offs, want_colour=True)
-            sigma = max(_noise_std(G[t].astype(np.float64)), 0.5 / 255)
-            # nearer frames first on ties, then the earlier one
-            dist = np.array([abs(k) + (0.5 if k > 0 else 0.0) for k in offs], np.float32)
-            k_fill(
-                q,
-                g,
-                loc,
-                comp.colour[t].data,
-                comp.grey[t].data,
-                comp.mask_dev[t].data,
-                nb.colour.data,
-                nb.grey.data,
-                nb.mask.data,
-                nb.valid.data,
-                cla.to_device(q, nb.gain).data,
-                cla.to_device(q, nb.offset).data,
-                cla.to_device(q, dist).data,
-                np.int32(len(offs)),
-                np.int32(C),
-                np.float32(sigma),
-                np.int32(_RADIUS_MATCH),
-                np.float32(_CLEAN),
-                res.data,
-                left.data,
-                np.int32(nx),
-                np.int32(ny),
-            )
-            out[t] = res.get()
-            unfilled[t] = left.get() > 0.5
+            out[t], unfilled[t] = _temporal(motion, planes, m, t, radius)
             bar.update(1)
     elif damaged:
         unfilled = m > 0
-    rng = np.random.default_rng(seed)
     for t in range(T):
         if t in damaged:
             bar.update(1 if T > 1 else 2)
@@ -180,14 +249,21 @@ def inpaint_video(
             continue
         # one pixel more, so the spatial fill starts from pixels the frame holds clean
         hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
-        filled = _spatial(out[t], hole, options)
+        filled = _spatial_crops(out[t], hole, options)
         soft = m[t][np.newaxis]
         blend = soft * filled + (1.0 - soft) * planes[t]
         if grain:
             sigma = _noise_std(G[t].astype(np.float64))
+            # seeded by the frame itself, so a frame's grain is the same in any window
+            rng = np.random.default_rng([seed, zlib.crc32(np.ascontiguousarray(G[t]).data)])
             blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
         out[t] = np.where(hole[np.newaxis], blend, out[t])
     bar.close()
+    if keep > 0:
+        for t in damaged:
+            sigma = max(_noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+            close = np.abs(grey(out[t : t + 1])[0] - G[t]) <= keep * sigma
+            out[t] = np.where(close[None], planes[t], out[t])
     restored = layout.restore(out)
     if return_unfilled:
         return restored, (unfilled[0] if layout.photo else unfilled)

@@ -15,7 +15,7 @@ import contextlib
 import hashlib
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
@@ -56,6 +56,8 @@ class FilmResult:
     frames_sha256 : str
         SHA-256 of the restored frames in order (before any lossy encoder): what a run on
         workers and one in a process agree on, bit for bit.
+    filled_per_frame : list of int
+        Pixels filled in each frame, in frame order (the masks' counts).
     """
 
     output: Path
@@ -65,6 +67,12 @@ class FilmResult:
     masked_pixels: int
     workers: int
     frames_sha256: str
+    filled_per_frame: list = field(default_factory=list)
+
+    def most_filled(self, count: int = 5) -> list[tuple[int, int]]:
+        """The `count` frames with most pixels filled, as (frame, pixels), most first."""
+        order = sorted(range(len(self.filled_per_frame)), key=lambda t: -self.filled_per_frame[t])
+        return [(t, self.filled_per_frame[t]) for t in order[:count] if self.filled_per_frame[t]]
 
 
 def _frame_name(source: FrameSource, t: int, dtype: np.dtype, channels: int) -> str:
@@ -190,11 +198,13 @@ class _Outputs:
         self.digits = max(5, len(str(source.count - 1)))
         self.digest = hashlib.sha256()
         self.masked = self.written = 0
+        self.per_frame: list[int] = []
 
     def write(self, frame: np.ndarray, found: np.ndarray, kinds: np.ndarray | None) -> None:
         t = self.written
         self.digest.update(np.ascontiguousarray(frame).data)
-        self.masked += int(found.sum())
+        self.per_frame.append(int(found.sum()))
+        self.masked += self.per_frame[-1]
         timestamps = self.source.reader.timestamps if self.source.reader is not None else None
         pts = timestamps.pop(0) if timestamps else None
         if self.film is not None:
@@ -336,7 +346,45 @@ def restore_film(
         outputs.masked,
         workers_used,
         outputs.digest.hexdigest(),
+        outputs.per_frame,
     )
+
+
+def write_preview(
+    source: PathLike, output: PathLike, folder: PathLike, frames: list[int]
+) -> list[Path]:
+    """Before | after side by side for the given frames: one PNG per frame in `folder`
+    (preview_00012.png, ...), the input on the left and the restored frame on the right,
+    each written complete (an error leaves no partial image).
+
+    Parameters
+    ----------
+    source, output : str or PathLike
+        The film (or folder) restored and the restoration's output.
+    folder : str or PathLike
+        Where the pictures go (created if missing).
+    frames : list of int
+        Frame numbers (from 0).
+
+    Returns
+    -------
+    list of Path
+        The pictures written, in frame order.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    wanted = sorted(set(frames))
+    written = []
+    before = iter(FrameSource(source))
+    after = iter(FrameSource(output))
+    for t in range(max(wanted, default=-1) + 1):
+        a, b = next(before), next(after)
+        if t in wanted:
+            side = np.concatenate([a, b], axis=1)
+            path = folder / f"preview_{t:05d}.png"
+            write_image(path, side)
+            written.append(path)
+    return written
 
 
 @contextlib.contextmanager

@@ -34,7 +34,8 @@ from ..imagedata import grow_mask
 from .detect import detect_defects
 from .fill import inpaint_video
 
-DEFAULT_BLOCK = 16  # frames restored per window: the context re-read per block is 2R/block
+KEEP = 3.0  # inpaint_video's keep for detected masks (noise units)
+DEFAULT_BLOCK = 32  # frames restored per window: the context re-read per block is 2R/block
 
 
 @dataclass(frozen=True)
@@ -404,10 +405,11 @@ def film_work(
     Examples
     --------
     >>> film_work(grow=2).context(detecting=True)
-    6
+    5
     """
     detect_options = {"return_kinds": True, "grow": grow, **(detect_options or {})}
-    fill_options = dict(fill_options or {})
+    # detected masks: a pixel the fill would barely change keeps its value (do no harm)
+    fill_options = {"keep": KEEP, **(fill_options or {})}
     # The detector compares a frame with `radius` frames either side, and then reads the
     # line scores of the frames either side of it (a scratch continues over frames), and
     # the next and previous frames (a moving object reappears there): one frame further.

@@ -46,6 +46,11 @@ def test_inpaint_and_restore_with_masks_are_one_path(tmp_path, film, capsys):
     assert (tmp_path / "a.mp4").read_bytes() == (tmp_path / "b.mp4").read_bytes()
     err = capsys.readouterr().err
     assert "restore: 12 frames" in err and "inpaint: 12 frames" in err
+    # the per-frame report: the frames with most pixels filled, counted from the masks
+    # (frames 3-8 carry the scratch as well as two blotches)
+    listed = err.split("frames with most pixels filled: ")[1].splitlines()[0]
+    frames = [int(part.split(" (")[0]) for part in listed.split(", ")]
+    assert len(frames) == 5 and set(frames) <= set(range(3, 9))
 
 
 def test_restore_detects_writes_masks_overlay_and_keeps_audio(tmp_path, film, capsys):
@@ -149,11 +154,11 @@ def test_the_window_gives_the_whole_film_at_once():
     """Blocks of 4 frames, each with its context, give what clpde.detect_defects and
     clpde.inpaint_video give on all 16 frames at once: the context covers their reach."""
     import clpde
-    from clpde.film.stream import film_work, restore_stream
+    from clpde.film.stream import KEEP, film_work, restore_stream
 
     damaged, _ = damage(clean_frames(16))
     masks, kinds = clpde.detect_defects(damaged, channel_axis=-1, grow=1, return_kinds=True)
-    filled = clpde.inpaint_video(damaged, masks, channel_axis=-1)
+    filled = clpde.inpaint_video(damaged, masks, channel_axis=-1, keep=KEEP)
     expected = np.where(masks[..., None], filled, damaged)
     streamed = list(restore_stream(damaged, 16, film_work(grow=1), block=4))
     assert masks.any()
@@ -189,3 +194,32 @@ def test_restore_on_two_dask_workers_equals_one_process(tmp_path, film, capsys):
     for t in range(T):
         name = f"mask_{t:05d}.png"
         assert (tmp_path / "m_one" / name).read_bytes() == (tmp_path / "m_two" / name).read_bytes()
+
+
+def test_preview_writes_before_and_after_of_the_most_filled_frames(tmp_path, film, capsys):
+    """--preview DIR: the 3 frames with most pixels filled, input left, output right."""
+    source, maskdir = film
+    out = tmp_path / "frames"
+    status = main(
+        [
+            "restore",
+            str(source),
+            "--mask",
+            str(maskdir),
+            "-o",
+            str(out),
+            "--preview",
+            str(tmp_path / "p"),
+        ]
+    )
+    assert status == 0, capsys.readouterr().err
+    pictures = sorted((tmp_path / "p").iterdir())
+    assert len(pictures) == 3
+    names = sorted(p.name for p in out.iterdir())
+    for picture in pictures:
+        t = int(picture.stem.split("_")[1])
+        assert 3 <= t <= 8  # the frames with the scratch as well as blotches
+        side = read_image(picture)
+        restored = read_image(out / names[t])
+        assert side.shape[1] == 2 * restored.shape[1]
+        assert np.array_equal(side[:, restored.shape[1] :], restored)

@@ -1,0 +1,56 @@
+"""The film detector's defaults, chosen on the CALIBRATION half of benchmarks/film_corpus.py
+(tree, carphone) only: blotch threshold x GAMMA (how the neighbours' disagreement raises
+the scale) and the scratch threshold, from one evidence computation per clip.
+
+    python benchmarks/film_calibrate.py [--frames 12]
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+
+import numpy as np
+from film import Counts
+from film_corpus import corpus
+
+from clpde.film import detect as fdet
+from clpde.film._frames import film_planes, grey
+
+B_GRID = [6.0, 8.0, 10.0]
+G_GRID = [0.5, 1.0, 2.0]
+S_GRID = [3.0, 4.0]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--frames", type=int, default=12)
+    args = ap.parse_args()
+    blot = {k: Counts() for k in itertools.product(B_GRID, G_GRID)}
+    scr = {k: Counts() for k in S_GRID}
+    for c in corpus("calibration", frames=args.frames):
+        G = grey(film_planes(c["dirty"], -1)[0])
+        sc = fdet.film_scores(G, None, 2)
+        ml = max(24, int(0.4 * G.shape[1]))
+        tr, sp = c["truth"], c["spare"]
+        for b, g in blot:
+            k = fdet.film_kinds(G, sc, b, fdet.SCRATCH_THRESHOLD, 24, ml, gamma=g)
+            blot[(b, g)].add(k == 1, tr == 1, tr == 2, sp)
+        for s in scr:
+            k = fdet.film_kinds(G, sc, fdet.BLOTCH_THRESHOLD, s, 24, ml)
+            scr[s].add(k == 2, tr == 2, tr == 1, sp)
+        print("done", c["name"], flush=True)
+    print("blotch threshold, gamma: P/R")
+    for (b, g), cnt in blot.items():
+        p, r = cnt.pr()
+        print(f"  {b} {g}: {p:.3f}/{r:.3f}")
+    print("scratch threshold: P/R")
+    for s, cnt in scr.items():
+        p, r = cnt.pr()
+        print(f"  {s}: {p:.3f}/{r:.3f}")
+    best = max(blot, key=lambda k: (blot[k].pr()[0] >= 0.9, np.prod(blot[k].pr())))
+    print("chosen (precision >= 0.9 first, then P*R):", best)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,139 @@
+"""Motion-compensated neighbours of a film's frames, with the trust each warped pixel has.
+
+Flows come from DIS (clpde.motion.dis), computed once per ordered pair of frames and kept
+for the window. A neighbour's warped pixel is trusted where
+
+- its match lies inside the neighbour's frame;
+- the flows agree with each other: the loop through another neighbour (t -> a, a -> b
+  against t -> b: the neighbours agree along the motion, whatever frame t's own damage) and,
+  at a film's ends, the neighbour's flow back (forward-backward: an occluded or revealed
+  pixel has no consistent match); within a pixel or so, or within the noise once multiplied
+  by the local gradient.
+
+Everything depends only on the two frames of a pair, never on the rest of the window, so
+any window or chunk of a film gives the same values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..motion.dis import DisFlow, to_u8
+from ._compensate import fit_gain
+
+# Forward-backward tolerance in pixels: FB_ABS + FB_REL * |flow| (sub-pixel flows of
+# textureless regions disagree by a fraction of a pixel; fast motion by more).
+FB_ABS = 0.75
+FB_REL = 0.1
+
+
+@dataclass
+class Neighbour:
+    """Frame t + k brought onto frame t."""
+
+    k: int
+    grey: np.ndarray  # warped grey, flicker-corrected to frame t (H, W) float32
+    inside: np.ndarray  # (H, W) bool: the match lies inside the neighbour's frame
+    flow: np.ndarray  # (H, W, 2) from t to t + k
+    gain: float
+    offset: float
+
+
+class FilmMotion:
+    """DIS flows between the frames of one window, and their neighbours.
+
+    G: (T, H, W) float32 grey frames in [0, 1]; flow_grey, optional: the frames the flows
+    are estimated on (the damage filled in roughly), G by default.
+    """
+
+    def __init__(self, G: np.ndarray, flow_grey: np.ndarray | None = None) -> None:
+        self.G = G
+        self.T, self.ny, self.nx = G.shape
+        src = G if flow_grey is None else flow_grey
+        self.u8 = [to_u8(g) for g in src]
+        self.dis = DisFlow()
+        self._flows: dict = {}
+        gy, gx = np.mgrid[0 : self.ny, 0 : self.nx].astype(np.float32)
+        self.gx, self.gy = gx, gy
+
+    def flow(self, t: int, s: int) -> np.ndarray:
+        key = (t, s)
+        if key not in self._flows:
+            self._flows[key] = self.dis.flow(self.u8[t], self.u8[s])
+        return self._flows[key]
+
+    def warp(self, image: np.ndarray, flow: np.ndarray, mode: str = "cubic") -> np.ndarray:
+        return self.dis.warp(image, flow, mode)
+
+    def warped(self, t: int, s: int) -> np.ndarray:
+        """Frame s's grey brought onto frame t (kept: detection and trust both read it)."""
+        key = ("w", t, s)
+        if key not in self._flows:
+            self._flows[key] = self.warp(self.G[s], self.flow(t, s))
+        return self._flows[key]
+
+    def inside(self, t: int, s: int) -> np.ndarray:
+        f = self.flow(t, s)
+        xs, ys = self.gx + f[..., 0], self.gy + f[..., 1]
+        return (xs >= 0) & (xs <= self.nx - 1) & (ys >= 0) & (ys <= self.ny - 1)
+
+    def texture(self, image: np.ndarray) -> np.ndarray:
+        """The largest gradient magnitude within 2 px: how much a flow error of one pixel
+        changes a compensated value there."""
+        gy, gx = np.gradient(image)
+        mag = np.ascontiguousarray(np.hypot(gx, gy), np.float32)
+        return self.dis.cv2.dilate(mag, np.ones((5, 5), np.uint8), borderType=1)
+
+    def trusted(self, t: int, k: int, partner: int, tol: float, fb: bool) -> np.ndarray:
+        """Where neighbour t + k's compensated value is trusted: its match is inside, and the
+        flows' inconsistency (the loop through t + partner; with fb also t + k's flow back),
+        or its median around the pixel, is within FB_ABS + FB_REL * |flow| pixels, or
+        within tol once multiplied by the local gradient (a flat region's flow may be
+        loose, its compensated value is not)."""
+        s, p = t + k, t + partner
+        w = self.warped(t, s)
+        tex = self.texture(w) + 1e-6
+        err = self.loop_error(t, s, p)
+        if fb:
+            err = np.maximum(err, self.fb_error(t, s))
+        err = np.minimum(err, self.regional(err))
+        f = self.flow(t, s)
+        loose = FB_ABS + FB_REL * np.hypot(f[..., 0], f[..., 1])
+        return self.inside(t, s) & ((err <= loose) | (err * tex <= tol))
+
+    def regional(self, err: np.ndarray) -> np.ndarray:
+        """The median of err over about 20 px around each pixel: damage disturbs the flow
+        over its own small area, and the flow of its surroundings stands for it there; an
+        object the flow misses is inconsistent over its whole, larger area."""
+        cv2 = self.dis.cv2
+        small = cv2.resize(
+            err, (max(self.nx // 4, 1), max(self.ny // 4, 1)), interpolation=cv2.INTER_AREA
+        )
+        small = cv2.medianBlur(np.ascontiguousarray(small, np.float32), 5)
+        return cv2.resize(small, (self.nx, self.ny), interpolation=cv2.INTER_LINEAR)
+
+    def fb_error(self, t: int, s: int) -> np.ndarray:
+        f = self.flow(t, s)
+        back = self.warp(self.flow(s, t), f, "linear")
+        return np.hypot(f[..., 0] + back[..., 0], f[..., 1] + back[..., 1])
+
+    def loop_error(self, t: int, a: int, b: int) -> np.ndarray:
+        fa, fb = self.flow(t, a), self.flow(t, b)
+        fab = self.warp(self.flow(a, b), fa, "linear")
+        return np.hypot(
+            fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1]
+        )
+
+    def neighbour(self, t: int, k: int, fit_on: np.ndarray | None = None) -> Neighbour:
+        """Frame t + k warped onto t, its flicker (a gain and offset) fitted robustly on the
+        pixels whose match is inside (and fit_on, when given: pixels known clean)."""
+        s = t + k
+        f = self.flow(t, s)
+        w = self.warped(t, s)
+        ok = self.inside(t, s)
+        sel = ok if fit_on is None else ok & fit_on
+        a, b = fit_gain(self.G[t], w, sel)
+        grey = (a * w + b).astype(np.float32)
+        return Neighbour(k, grey, ok, f, a, b)
