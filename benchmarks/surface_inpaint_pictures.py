@@ -15,7 +15,7 @@ import numpy as np
 import trimesh
 
 from clpde.surface import inpaint
-from clpde.surface.inpainting import _facing, coloured
+from clpde.surface.inpaint_files import _facing, coloured
 from clpde.surface.render import render_mesh, with_title
 
 ORANGE, NAVY = np.array([0.95, 0.6, 0.15]), np.array([0.1, 0.15, 0.45])

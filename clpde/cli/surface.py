@@ -7,8 +7,8 @@ from ..data import SURFACE_SHAPES as SHAPES
 from ..errors import InputError
 from ..scale.tasks import TASKS
 from ..surface.implicit import STORAGES
+from ..surface.inpaint_files import inpaint_file
 from ..surface.inpainting import METHODS as INPAINT_METHODS
-from ..surface.inpainting import inpaint_file
 from ..surface.runs import FLOWS
 from ._common import (
     add_device_argument,

@@ -155,6 +155,61 @@ def _fit(f, t, blend):
     return w
 
 
+def _ring_tests(owners, names, data, omega, runtime, dtype, seed, params):
+    """Each candidate's fill of the test pixels (every owner map's pixels hidden beside the
+    hole), the true values there and their clusters: (k, c, m), (c, m), (m,); None, None
+    and an empty owner list where nothing could be tested."""
+    known = ~omega
+    parts = []
+    for own in owners:
+        test_mask = own > 0
+        if not test_mask.any() or not (known & ~test_mask).any():
+            continue  # nothing to test on, or nothing left to fill from
+        hidden = omega | test_mask
+        fills_t = [_fill(n, data, hidden, runtime, dtype, seed, params) for n in names]
+        parts.append(
+            (np.stack([f[:, test_mask] for f in fills_t]), data[:, test_mask], own[test_mask])
+        )
+    if not parts:
+        return None, None, np.zeros(0, int)
+    return (
+        np.concatenate([p[0] for p in parts], axis=2),
+        np.concatenate([p[1] for p in parts], axis=1),
+        np.concatenate([p[2] for p in parts]),
+    )
+
+
+def _settled(names, stack, members, radius, thin, count):
+    """The clusters decided without a vote (thin ones, and those whose candidates agree),
+    and which clusters vote: (choices, one per cluster or None), (vote, by label)."""
+    choices = [None] * count
+    vote = np.zeros(count + 1, bool)
+    for lab in range(1, count + 1):
+        sel = members[lab]
+        if not sel.size:
+            continue
+        values = stack[:, :, sel]
+        spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
+        if thin > 0 and radius[lab - 1] < thin:
+            choices[lab - 1] = {
+                "pixels": int(sel.size),
+                "why": "thin",
+                "chosen": names[-1],
+                "weights": {names[-1]: 1.0},
+            }
+        elif len(names) == 1 or spread < AGREE:
+            choices[lab - 1] = {
+                "pixels": int(sel.size),
+                "why": "candidates agree",
+                "chosen": names[0],
+                "weights": {names[0]: 1.0},
+                "spread": float(spread),
+            }
+        else:
+            vote[lab] = True
+    return choices, vote
+
+
 def choose(
     data,
     omega,
@@ -194,33 +249,9 @@ def choose(
     stack = np.stack([fills[n][:, omega] for n in names])  # (k, c, n): the hole's fills
     hole_label = clusters[omega]
     members = _groups(hole_label, count)
-    choices = [None] * count
-    vote = np.zeros(count + 1, bool)
     depth = ndimage.distance_transform_edt(omega)  # each hole pixel's half-thickness
     radius = np.asarray(ndimage.maximum(depth, clusters, np.arange(1, count + 1))).reshape(-1)
-    for lab in range(1, count + 1):
-        sel = members[lab]
-        if not sel.size:
-            continue
-        values = stack[:, :, sel]
-        spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
-        if thin > 0 and radius[lab - 1] < thin:
-            choices[lab - 1] = {
-                "pixels": int(sel.size),
-                "why": "thin",
-                "chosen": names[-1],
-                "weights": {names[-1]: 1.0},
-            }
-        elif len(names) == 1 or spread < AGREE:
-            choices[lab - 1] = {
-                "pixels": int(sel.size),
-                "why": "candidates agree",
-                "chosen": names[0],
-                "weights": {names[0]: 1.0},
-                "spread": float(spread),
-            }
-        else:
-            vote[lab] = True
+    choices, vote = _settled(names, stack, members, radius, thin, count)
     ring_pixels = 0
     if vote.any():
         # each known pixel belongs to the ring of its nearest hole pixel's cluster
@@ -233,24 +264,10 @@ def choose(
         owners = [owner]
         if shift:  # and a second test: the clusters' shapes moved aside
             owners.append(_shifted(omega, dist, clusters, members, radius, vote))
-        parts = []
-        for own in owners:
-            test_mask = own > 0
-            if not test_mask.any() or not (known & ~test_mask).any():
-                continue  # nothing to test on, or nothing left to fill from
-            hidden = omega | test_mask
-            fills_t = [_fill(n, data, hidden, runtime, dtype, seed, params) for n in names]
-            parts.append(
-                (
-                    np.stack([f[:, test_mask] for f in fills_t]),
-                    data[:, test_mask],
-                    own[test_mask],
-                )
-            )
-        ring_pixels = int(sum(p[2].size for p in parts))
-        tests = np.concatenate([p[0] for p in parts], axis=2) if parts else None
-        truth = np.concatenate([p[1] for p in parts], axis=1) if parts else None
-        test_owner = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0, int)
+        tests, truth, test_owner = _ring_tests(
+            owners, names, data, omega, runtime, dtype, seed, params
+        )
+        ring_pixels = int(test_owner.size)
         ring_members = _groups(test_owner, count)
         pooled = None
         if tests is not None and prior > 0:  # the box's weights: every voting ring at once

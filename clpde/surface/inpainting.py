@@ -34,7 +34,7 @@ from ..errors import InputError
 from ..fields import IndexList
 from .band import extend_defines
 from .implicit import ImplicitSurface
-from .mesh_sdf import load_mesh
+from .mesh_sdf import encloses_volume, load_mesh
 
 if TYPE_CHECKING:
     import trimesh
@@ -129,6 +129,50 @@ def chebyshev_bounds(surf: ImplicitSurface, hole_cells: int) -> tuple[float, flo
     return 0.5 * 2.404825557695773**2 * math.pi / area, SPECTRUM_TOP
 
 
+def _schedule(surf, hole_cells, nodes, tol, check_every, max_iterations):
+    """Chebyshev's centre and half-width of the spectrum, its rate, and the step cap."""
+    a, b = chebyshev_bounds(surf, hole_cells)
+    # Chebyshev's error falls by rate = (sqrt(k) - 1) / (sqrt(k) + 1) a step, k = b / a: a
+    # step of size c leaves about c / (1 - rate) to go
+    kappa = b / a
+    rate = (math.sqrt(kappa) - 1) / (math.sqrt(kappa) + 1)
+    if nodes == 0:
+        max_iterations = 0  # a hole between the nodes: its cells are the known nodes' extension
+    elif max_iterations is None:
+        # the bound 2 rate^m down to tol, twice over for a's estimate
+        max_iterations = int(2 * math.ceil(math.log(tol / 2) / math.log(rate))) + check_every
+    return (b + a) / 2, (b - a) / 2, rate, max_iterations
+
+
+def _centred(surf, values, hole, padded_cells):
+    """values scaled by their range and shifted by the mean of the hole's rim, with the
+    shift and the range."""
+    known = ~hole
+    lo, hi = values[:, known].min(axis=1), values[:, known].max(axis=1)
+    span = float(max((hi - lo).max(), 1e-30))
+    # The data scaled by its range (the tolerances are relative, and the transport's speed
+    # grows with the data's scale, as in the plane) and shifted by the mean of the hole's
+    # rim, which is also the start in the hole: near the hole the values are then small,
+    # and float32 keeps more of their digits (shifted by the range's low end, the fill's
+    # error on a torus stalled at 2.5x its float64-limited value).
+    rim = _zone(surf, padded_cells, hole, 2.0)[padded_cells] & known
+    centre = values[:, rim if rim.any() else known].mean(axis=1)
+    values = (values - centre[:, None]) / span
+    return values, centre, span
+
+
+def _chebyshev(theta: float, delta: float):
+    """(momentum, gain) of each Chebyshev semi-iterative step for a spectrum in
+    [theta - delta, theta + delta]; the three-term recurrence needs no stored history."""
+    sigma = theta / delta
+    rho = 1 / sigma
+    yield 0.0, 1 / theta
+    while True:
+        rho_new = 1 / (2 * sigma - rho)
+        yield rho_new * rho, 2 * rho_new / delta
+        rho = rho_new
+
+
 def fill_band(
     surf: ImplicitSurface,
     values: np.ndarray,
@@ -155,18 +199,9 @@ def fill_band(
     if not hole.any():
         info = SurfaceInpaintInfo(method, 0, 0.0, 0, time.perf_counter() - start)
         return values, info
-    lo, hi = values[:, known].min(axis=1), values[:, known].max(axis=1)
-    span = float(max((hi - lo).max(), 1e-30))
     padded_cells = surf.band.cells()[1]
-    # The data scaled by its range (the tolerances are relative, and the transport's speed
-    # grows with the data's scale, as in the plane) and shifted by the mean of the hole's
-    # rim, which is also the start in the hole: near the hole the values are then small,
-    # and float32 keeps more of their digits (shifted by the range's low end, the fill's
-    # error on a torus stalled at 2.5x its float64-limited value).
-    rim = _zone(surf, padded_cells, hole, 2.0)[padded_cells] & known
-    centre = values[:, rim if rim.any() else known].mean(axis=1)
     given = values.copy()
-    values = (values - centre[:, None]) / span
+    values, centre, span = _centred(surf, values, hole, padded_cells)
     values[:, hole] = 0.0
     hole_padded = np.zeros(g.volume, bool)
     hole_padded[padded_cells[hole]] = True
@@ -185,27 +220,12 @@ def fill_band(
     def largest_change() -> float:
         return float(change.get()[:, : lists.nodes.n].max(initial=0.0))
 
-    a, b = chebyshev_bounds(surf, int(hole.sum()))
-    theta, delta = (b + a) / 2, (b - a) / 2
-    sigma = theta / delta
-    # Chebyshev's error falls by rate = (sqrt(k) - 1) / (sqrt(k) + 1) a step, k = b / a: a
-    # step of size c leaves about c / (1 - rate) to go
-    kappa = b / a
-    rate = (math.sqrt(kappa) - 1) / (math.sqrt(kappa) + 1)
-    if lists.nodes.n == 0:
-        max_iterations = 0  # a hole between the nodes: its cells are the known nodes' extension
-    elif max_iterations is None:
-        # the bound 2 rate^m down to tol, twice over for a's estimate
-        max_iterations = int(2 * math.ceil(math.log(tol / 2) / math.log(rate))) + check_every
-    rho = 1 / sigma
+    theta, delta, rate, max_iterations = _schedule(
+        surf, int(hole.sum()), lists.nodes.n, tol, check_every, max_iterations
+    )
     iterations, last = 0, float("inf")
-    for k in progress_range(progress, max_iterations, "surface inpaint", leave=False, queue=q):
-        if k == 0:
-            mom, gain = 0.0, 1 / theta
-        else:
-            rho_new = 1 / (2 * sigma - rho)
-            mom, gain = rho_new * rho, 2 * rho_new / delta
-            rho = rho_new
+    steps = progress_range(progress, max_iterations, "surface inpaint", leave=False, queue=q)
+    for k, (mom, gain) in zip(steps, _chebyshev(theta, delta), strict=False):  # endless weights
         g.launch_list(
             step,
             lists.nodes,
@@ -513,8 +533,6 @@ def inpaint(
         out, info = fill_band(surf, vals, hole, **options)
         out = restore(out)
         return (out, info) if return_info else out
-    from .runs import encloses_volume
-
     mesh = load_mesh(mesh_or_surface)
     data = mesh_values(mesh, values)
     mask = vertex_mask(missing, len(mesh.vertices))
@@ -546,146 +564,3 @@ def fill_mesh(surf: ImplicitSurface, data: np.ndarray, mask: np.ndarray, **optio
 
 # ---- the command line's run: a mesh file, a mask file, pictures and the filled mesh --------
 MISSING_COLOUR = (0.55, 0.55, 0.55)  # the hole in the "before" picture
-
-
-def read_vertex_file(path, what: str, dtype=None) -> np.ndarray:
-    """A .npy array, or whitespace-separated numbers in a text file (.txt, .csv, ...)."""
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise InputError(f"{what} file {path} does not exist")
-    try:
-        if path.lower().endswith(".npy"):
-            return np.load(path, allow_pickle=False)
-        return np.loadtxt(
-            path, dtype=dtype, ndmin=1, delimiter="," if path.endswith(".csv") else None
-        )
-    except (ValueError, OSError) as exc:
-        raise InputError(f"cannot read {what} file {path}: {exc}") from None
-
-
-def read_missing(path, vertices: int) -> np.ndarray:
-    """The per-vertex mask of a MASK file: a .npy of booleans (one per vertex) or of
-    integer vertex indices, or a text file of vertex indices."""
-    data = read_vertex_file(path, "mask", dtype=np.int64)
-    if np.issubdtype(data.dtype, np.floating) and np.all(data == np.round(data)):
-        data = data.astype(np.int64)
-    return vertex_mask(data.reshape(-1) if data.ndim else data[None], vertices)
-
-
-def _facing(direction: np.ndarray) -> tuple[float, float]:
-    """(azimuth, elevation) of the view that looks at the surface from `direction`."""
-    from .render import view_rotation
-
-    best, view = -2.0, (30.0, 20.0)
-    for a in range(0, 360, 10):
-        for e in range(-80, 81, 10):
-            d = float(view_rotation(a, e)[2] @ direction)
-            if d > best:
-                best, view = d, (float(a), float(e))
-    return view
-
-
-def coloured(mesh, data: np.ndarray, mask: np.ndarray | None, lo=None, hi=None):
-    """A copy of mesh coloured by vertex data (RGB in 0..255 or 0..1, or a scalar through
-    the colour ramp), the masked vertices grey."""
-    from .render import colormap
-
-    out = mesh.copy()
-    if data.ndim == 1:
-        rgb = colormap(data, lo, hi)
-        out.vertex_attributes["u"] = data.astype(np.float64)
-    else:
-        rgb = data[:, :3].astype(np.float64)
-        rgb = rgb / 255.0 if np.issubdtype(data.dtype, np.integer) or rgb.max() > 1 else rgb
-    if mask is not None:
-        rgb[mask] = MISSING_COLOUR
-    alpha = np.full((len(rgb), 1), 255, np.uint8)
-    out.visual.vertex_colors = np.concatenate(
-        [np.rint(255 * np.clip(rgb, 0, 1)).astype(np.uint8), alpha], 1
-    )
-    return out
-
-
-def inpaint_file(
-    mesh,
-    output,
-    *,
-    missing,
-    values=None,
-    method: str = "harmonic",
-    resolution: int = 128,
-    size: int = 400,
-    overwrite: bool = False,
-    device=None,
-    progress=None,
-) -> list[str]:
-    """`clpde surface inpaint`: fill the vertices of `mesh` (a file) that the MASK file
-    `missing` names, from its vertex colours or the VALUES file `values`; writes
-    before.png, after.png (the hole grey before), result.ply and result.glb (the filled
-    colours, and a scalar as the vertex property 'u') into the folder `output`. Returns
-    report lines."""
-    from ..io.images import check_not_overwriting_input, check_output_folder, output_folder
-    from .render import export_mesh, render_mesh, with_colour_bar, with_title
-    from .runs import write_png
-
-    inputs = [mesh, missing] + ([values] if values is not None else [])
-    check_not_overwriting_input(inputs, output)
-    check_output_folder(output, overwrite, option="--overwrite")
-    if resolution < 16:
-        raise InputError(f"--resolution must be at least 16, not {resolution}")
-    if size < 16:
-        raise InputError(f"--size must be at least 16, not {size}")
-    if not os.path.isfile(os.fspath(mesh)):
-        raise InputError(f"mesh file {mesh} does not exist (inpaint needs a mesh file)")
-    loaded = load_mesh(mesh)
-    mask = read_missing(missing, len(loaded.vertices))
-    data = mesh_values(loaded, None if values is None else read_vertex_file(values, "values"))
-    if data.ndim == 2 and data.shape[1] not in (1, 3):
-        raise InputError(f"values have {data.shape[1]} channels; give a scalar or RGB per vertex")
-    data = data[:, 0] if data.ndim == 2 and data.shape[1] == 1 else data
-    filled, info = inpaint(
-        loaded,
-        data,
-        mask,
-        method=method,
-        resolution=resolution,
-        device=device,
-        progress=progress,
-        return_info=True,
-    )
-    verts = np.asarray(loaded.vertices, np.float64)
-    direction = verts[mask].mean(axis=0) - verts.mean(axis=0) if mask.any() else np.ones(3)
-    direction = direction / max(np.linalg.norm(direction), 1e-30)
-    # seen from above the hole's side when that side faces sideways (a torus seen edge-on
-    # shows little of it)
-    direction = direction + np.array([0.0, 0.0, 0.85]) * (1 - abs(direction[2]))
-    a, e = _facing(direction / np.linalg.norm(direction))
-    views = ((a - 35.0, e), (a + 35.0, e))
-    scalar = data.ndim == 1
-    lo = hi = None
-    if scalar:
-        lo, hi = float(filled.min()), float(filled.max())
-    pictures = {
-        "before": (
-            coloured(loaded, data, mask, lo, hi),
-            f"before: {int(mask.sum())} of {len(mask)} vertices missing (grey)",
-        ),
-        "after": (
-            coloured(loaded, filled, None, lo, hi),
-            f"after: {method} fill on the implicit surface ({info.iterations} steps)",
-        ),
-    }
-    with output_folder(output, overwrite) as staging:
-        for name, (m, title) in pictures.items():
-            image = np.concatenate([render_mesh(m, size, az, el) for az, el in views], axis=1)
-            image = with_title(image, title)
-            if scalar:
-                image = with_colour_bar(image, lo, hi, label="value")
-            write_png(os.path.join(staging, f"{name}.png"), image)
-        for ext in ("ply", "glb"):
-            export_mesh(pictures["after"][0], os.path.join(staging, f"result.{ext}"))
-    return [
-        f"filled {int(mask.sum())} vertices ({info.hole_cells} band cells) by the {method} "
-        f"fill in {info.iterations} steps, {info.seconds:.2f} s",
-        f"wrote {output}/before.png, after.png, result.ply, result.glb",
-    ]

@@ -28,6 +28,8 @@ measured by benchmarks/surface_accuracy.py, section 5.)
 
 from __future__ import annotations
 
+import contextlib
+import os
 import time
 import warnings
 
@@ -497,3 +499,31 @@ def _edge_neighbours(mesh) -> np.ndarray:
         keep = slot < 3
         table[both[keep, 0], slot[keep]] = both[keep, 1]
     return table.reshape(-1)
+
+
+@contextlib.contextmanager
+def encloses_volume(mesh):
+    """Say why a mesh gives psi without a zero level set (psi, from the winding number,
+    never changes sign on the grid): an open sheet has no inside, and a closed shape
+    thinner than the spacing has no grid cell inside."""
+    try:
+        yield
+    except InputError as exc:
+        if "no zero level set" not in str(exc):
+            raise
+
+        name = f"the mesh {mesh}" if isinstance(mesh, (str, os.PathLike)) else "the mesh"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the watertightness warning was already given
+            closed = load_mesh(mesh).is_watertight
+        if closed:
+            raise InputError(
+                f"no grid cell lies inside {name}: it is thinner than the grid's "
+                "spacing; use a finer grid (a larger resolution, --resolution "
+                "on the command line)"
+            ) from None
+        raise InputError(
+            f"{name} encloses no volume (an open sheet, not a closed surface), "
+            "so it has no inside and outside to work between; give a closed "
+            "(watertight) mesh, or close its holes first"
+        ) from None

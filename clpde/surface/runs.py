@@ -5,7 +5,6 @@ examples run them. The demonstration data is in clpde.data."""
 
 from __future__ import annotations
 
-import contextlib
 import os
 import warnings
 from dataclasses import dataclass
@@ -17,7 +16,7 @@ from ..data import checker, colour_pattern, surface_noise, surface_shape
 from ..errors import InputError
 from ..io.images import output_folder, write_bytes
 from .implicit import ImplicitSurface
-from .mesh_sdf import load_mesh
+from .mesh_sdf import encloses_volume
 from .render import (
     export_mesh,
     on_mesh,
@@ -42,34 +41,6 @@ def load_surface(mesh, resolution=96, device=None) -> ImplicitSurface:
         )
     with encloses_volume(mesh):
         return ImplicitSurface.from_mesh(mesh, resolution=resolution, device=device)
-
-
-@contextlib.contextmanager
-def encloses_volume(mesh):
-    """Say why a mesh gives psi without a zero level set (psi, from the winding number,
-    never changes sign on the grid): an open sheet has no inside, and a closed shape
-    thinner than the spacing has no grid cell inside."""
-    try:
-        yield
-    except InputError as exc:
-        if "no zero level set" not in str(exc):
-            raise
-
-        name = f"the mesh {mesh}" if isinstance(mesh, (str, os.PathLike)) else "the mesh"
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the watertightness warning was already given
-            closed = load_mesh(mesh).is_watertight
-        if closed:
-            raise InputError(
-                f"no grid cell lies inside {name}: it is thinner than the grid's "
-                "spacing; use a finer grid (a larger resolution, --resolution "
-                "on the command line)"
-            ) from None
-        raise InputError(
-            f"{name} encloses no volume (an open sheet, not a closed surface), "
-            "so it has no inside and outside to work between; give a closed "
-            "(watertight) mesh, or close its holes first"
-        ) from None
 
 
 @dataclass
