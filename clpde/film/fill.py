@@ -69,6 +69,23 @@ def _spatial_crops(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.nda
     return out
 
 
+def _neighbour_mean(planes: np.ndarray, m: np.ndarray, t: int, radius: int) -> np.ndarray:
+    """A frame marked damaged everywhere (dropped, burnt) whose neighbours the motion could
+    not align: the per-pixel mean of the neighbours within `radius` that are clean there,
+    the nearest first; a blurred stand-in is better than the damage, and none other exists."""
+    T = len(planes)
+    for r in range(1, radius + 1):
+        near = [u for u in range(t - r, t + r + 1) if u != t and 0 <= u < T]
+        clean = np.stack([m[u] == 0 for u in near])[:, None]
+        if clean.any(axis=0).all():
+            total = np.where(clean, planes[near], 0.0).sum(axis=0)
+            return (total / clean.sum(axis=0)).astype(planes.dtype)
+    raise InputError(
+        f"frame {t} is marked damaged everywhere and its neighbours within {radius} frames "
+        "are damaged too, so nothing is left to fill it from; check the masks or raise radius"
+    )
+
+
 def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
     """The grey frames with their damage filled roughly (OpenCV's Telea), for the flows
     only: DIS cannot be told to ignore pixels, and a blotch would drag the flow around it."""
@@ -249,7 +266,10 @@ def inpaint_video(
             continue
         # one pixel more, so the spatial fill starts from pixels the frame holds clean
         hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
-        filled = _spatial_crops(out[t], hole, options)
+        if hole.all():  # a lost frame: nothing in it to fill from spatially
+            filled = _neighbour_mean(planes, m, t, radius)
+        else:
+            filled = _spatial_crops(out[t], hole, options)
         soft = m[t][np.newaxis]
         blend = soft * filled + (1.0 - soft) * planes[t]
         if grain:

@@ -509,4 +509,6 @@ def test_the_command_reports_the_time_the_user_waited(client, photos, tmp_path):
     wall = time.perf_counter() - start
     assert "0 done, 2 skipped" in run.stderr and "no worker needed" in run.stderr
     reported = float(re.search(r"in ([\d.]+) s", run.stderr).group(1))
-    assert 0.8 * wall <= reported <= wall + 0.1
+    # the report covers the whole command, not a part of it (it once said 17.5 s of 47 s);
+    # loose bounds, since the interpreter's start is outside it and CI machines are loaded
+    assert 0.5 * wall - 0.5 <= reported <= wall + 0.2
