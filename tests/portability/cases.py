@@ -46,7 +46,9 @@ def _diffuse():
     import clpde
 
     image = _image()
-    return {flow: clpde.diffuse(image, flow, steps=2) for flow in clpde.FLOWS}
+    out = {flow: clpde.diffuse(image, flow, steps=2) for flow in clpde.FLOWS}
+    out["catte"] = clpde.diffuse(image, "perona-malik", steps=2, presmooth=1.0)
+    return out
 
 
 def _denoise():
@@ -56,6 +58,7 @@ def _denoise():
     return {
         "grey": clpde.denoise_tv(_image(), 0.1, max_steps=4),
         "rgb": clpde.denoise_tv(rgb, 0.1, max_steps=4, channel_axis=-1),
+        "gradient": clpde.denoise_tv(_image(), 0.1, max_steps=4, method="gradient"),
     }
 
 
@@ -85,16 +88,24 @@ def _surface(storage):
 
         phi, z = _sphere()
         s = ImplicitSurface(phi, 1.0, storage=storage)
-        return {"heat": s.heat(z, 0.2), "tv": s.tv(z, 0.1)}
+        return {
+            "heat": s.heat(z, 0.2),
+            "tv": s.tv(z, 0.1),
+            "denoise": s.denoise_tv(z, 0.05, t=0.1),
+            "turk": s.reaction_diffusion(2),
+        }
 
     return run
 
 
-def _track_region():
-    import clpde
+def _track_region(storage):
+    def run():
+        import clpde
 
-    phi, z = _sphere(n=28, r=4.0)  # tracking keeps 9 cells clear of the border
-    return {"region": clpde.track_region(phi, z, beta=0.5, t=0.1)}
+        phi, z = _sphere(n=28, r=4.0)  # tracking keeps 9 cells clear of the border
+        return {"region": clpde.track_region(phi, z, beta=0.5, t=0.1, storage=storage)}
+
+    return run
 
 
 def _film():
@@ -119,11 +130,18 @@ CASES = {
     "inpaint_navier_stokes": (_inpaint("navier-stokes", max_iter=4), False),
     "track_lists": (_track(), False),
     "track_bricks": (_track(storage="bricks8x8"), False),
+    "track_ncc_contrast": (_track(discrepancy="ncc", features="contrast"), False),
+    "track_huber_edges": (
+        _track(discrepancy="huber", features="edges", storage="bricks8x8"),
+        False,
+    ),
+    "track_region_term": (_track(region_weight=1.0, storage="bricks16x4"), False),
     "inpaint_spectral": (_inpaint("spectral", iterations=8, shifts=1), True),
     "inpaint_exemplar": (_inpaint("exemplar"), True),
     "surface_lists": (_surface("lists"), True),
     "surface_bricks": (_surface("bricks"), True),
-    "track_region": (_track_region, True),
+    "track_region_lists": (_track_region("lists"), True),
+    "track_region_bricks": (_track_region("bricks"), True),
     "film": (_film, True),
 }
 

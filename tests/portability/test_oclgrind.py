@@ -1,0 +1,100 @@
+"""clpde's kernels on a simulated OpenCL device: Oclgrind checks every memory access, and
+with --data-races every local and global access of a work-group, which PoCL (one work-item
+after another) cannot show. The device is a GPU to clpde (its launches take the GPU paths:
+a brick per work-group, 64 x 4 groups), with the OpenCL 1.2 minimum limits (32 KB local
+and 64 KB constant memory) and NVIDIA's 48 KB of local memory per kernel.
+
+Every case of cases.py runs whole under Oclgrind, in one child process per limit set, and
+must report no error and give PoCL's results within float tolerance. At 48 KB only the cases
+whose kernels hold local memory run again (the limit changes nothing else). The region
+trackers take minutes under the simulator: benchmarks/portability.py runs them, with every
+case at both limits.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import cases  # noqa: E402
+
+OCLGRIND = shutil.which("oclgrind")
+pytestmark = pytest.mark.skipif(
+    OCLGRIND is None,
+    reason="oclgrind is not installed (apt-get install oclgrind; .ci/run installs it)",
+)
+
+SWEEP_ONLY = ("track_region_lists", "track_region_bricks")  # minutes each under Oclgrind
+LOCAL_MEMORY_CASES = ("inpaint_spectral", "track_bricks", "track_region_term", "surface_bricks")
+LIMITS = {
+    "opencl-minimum": (32768, [n for n in cases.CASES if n not in SWEEP_ONLY]),
+    "nvidia-48k": (49152, list(LOCAL_MEMORY_CASES)),
+}
+TOLERANCE = 1e-4  # float32 rounding of a few hundred operations, in data scaled to [0, 1]
+
+
+def oclgrind_command(local_mem: int, quick: bool = False) -> list[str]:
+    """Oclgrind with its checks on, at `local_mem` bytes of local memory and the minimum
+    64 KB of constant memory. (Its --uninitialized plugin stops on sincos, which the
+    spectral kernel calls, in Oclgrind 21.10: left off; every other check is on.)"""
+    command = [OCLGRIND, "--data-races", "--check-api", "--max-errors", "20"]
+    command += ["--local-mem-size", str(local_mem), "--constant-mem-size", "65536"]
+    return command + (["--quick"] if quick else [])
+
+
+def run_under_oclgrind(out: Path, local_mem: int, names: list[str], timeout: float = 900):
+    """Run the named cases under Oclgrind; (exit status, its log, stdout)."""
+    log = out / "oclgrind.log"
+    env = dict(os.environ, PYTHONPATH=str(HERE.parents[1]))
+    env.pop("CLPDE_DEVICE", None)
+    env.pop("PYOPENCL_CTX", None)
+    command = oclgrind_command(local_mem) + ["--log", str(log)]
+    command += [sys.executable, str(HERE / "cases.py"), str(out), *names]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout)
+    text = log.read_text() if log.exists() else ""
+    return done.returncode, text, done.stdout + done.stderr
+
+
+@pytest.fixture(scope="module")
+def pocl_results():
+    results = {}
+
+    def get(name):
+        if name not in results:
+            results[name] = {k: np.asarray(v) for k, v in cases.CASES[name][0]().items()}
+        return results[name]
+
+    return get
+
+
+@pytest.mark.parametrize("limits", list(LIMITS))
+def test_kernels_run_clean_under_oclgrind(limits, tmp_path, pocl_results):
+    local_mem, names = LIMITS[limits]
+    status, log, output = run_under_oclgrind(tmp_path, local_mem, names)
+    assert status == 0, f"cases failed under Oclgrind:\n{output[-3000:]}"
+    assert log.strip() == "", f"Oclgrind reported:\n{log[:3000]}"
+    launched = json.loads((tmp_path / "kernels.json").read_text())
+    if limits == "opencl-minimum":  # the kernel Oclgrind could not find before
+        assert "tracking/adaptive.cl:morph_adaptive" in launched
+    for name in names:
+        got = np.load(tmp_path / f"{name}.npz")
+        want = pocl_results(name)
+        assert sorted(got.files) == sorted(want), name
+        for key, value in want.items():
+            if value.dtype == bool:
+                # a mask: the level sets behind it agree to rounding, so a pixel exactly
+                # on the contour may flip
+                assert np.mean(got[key] != value) <= 0.01, f"{name}/{key}"
+            else:
+                np.testing.assert_allclose(
+                    got[key], value, atol=TOLERANCE, err_msg=f"{name}/{key} differs from PoCL"
+                )
