@@ -34,7 +34,13 @@ pytestmark = pytest.mark.skipif(
 )
 
 SWEEP_ONLY = ("track_region_lists", "track_region_bricks")  # minutes each under Oclgrind
-LOCAL_MEMORY_CASES = ("inpaint_spectral", "track_bricks", "track_region_term", "surface_bricks")
+LOCAL_MEMORY_CASES = (
+    "inpaint_spectral",
+    "inpaint_spectral_f64",
+    "track_bricks",
+    "track_region_term",
+    "surface_bricks",
+)
 LIMITS = {
     "opencl-minimum": (32768, [n for n in cases.CASES if n not in SWEEP_ONLY]),
     "nvidia-48k": (49152, list(LOCAL_MEMORY_CASES)),
@@ -70,7 +76,7 @@ def pocl_results():
 
     def get(name):
         if name not in results:
-            results[name] = {k: np.asarray(v) for k, v in cases.CASES[name][0]().items()}
+            results[name] = {k: np.asarray(v) for k, v in cases.CASES[name]().items()}
         return results[name]
 
     return get
