@@ -27,13 +27,14 @@ import cases  # noqa: E402
 import test_oclgrind  # noqa: E402
 
 
+KERNEL = re.compile(r"__kernel\s+(?:__attribute__\(\(.*?\)\)\s*)?void\s+(\w+)")
+
+
 def library_kernels() -> set[str]:
     names = set()
     for path in (ROOT / "kernels").rglob("*.cl"):
         rel = path.relative_to(ROOT / "kernels").as_posix()
-        for m in re.finditer(
-            r"__kernel\s+(?:__attribute__\(\(.*?\)\)\s*)?void\s+(\w+)", path.read_text()
-        ):
+        for m in KERNEL.finditer(path.read_text()):
             names.add(f"{rel}:{m.group(1)}")
     return names
 
