@@ -26,7 +26,6 @@ sys.path.insert(0, str(ROOT / "tests" / "portability"))
 import cases  # noqa: E402
 import test_oclgrind  # noqa: E402
 
-
 KERNEL = re.compile(r"__kernel\s+(?:__attribute__\(\(.*?\)\)\s*)?void\s+(\w+)")
 
 
