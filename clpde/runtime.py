@@ -160,6 +160,11 @@ def _has_fp64(device: cl.Device) -> bool:
     return "cl_khr_fp64" in device.extensions or bool(getattr(device, "double_fp_config", 0))
 
 
+def _not_pocl(platform: cl.Platform) -> bool:
+    """Sort key that puts PoCL's devices before another runtime's of the same type."""
+    return "portable computing language" not in platform.name.lower()
+
+
 def _resolve(spec) -> int:
     """Index into _all_devices() of the device a spec names."""
     found = _all_devices()
@@ -176,7 +181,10 @@ def _resolve(spec) -> int:
         raise ClpdeError(f"device must be 'cpu', 'gpu', an index or a name substring, not {spec!r}")
     wanted = spec.strip().lower()
     if wanted in ("cpu", "gpu", "accelerator"):
-        of_type = [i for i, (_, d) in enumerate(found) if _type_name(d) == wanted]
+        of_type = sorted(
+            (i for i, (_, d) in enumerate(found) if _type_name(d) == wanted),
+            key=lambda i: _not_pocl(found[i][0]),
+        )
         # The first of that type whose compiler works; else the first, whose error then says why.
         for i in of_type:
             if _build_problem(i) is None:
@@ -370,7 +378,13 @@ def _default_index() -> int:
             ) from None
     found = _all_devices()
     order = [i for i, (_, d) in enumerate(found) if _type_name(d) == "gpu"]
-    order += [i for i in range(len(found)) if i not in order]
+    # Among CPU runtimes PoCL comes first, whatever order the ICD loader lists them in: the
+    # kernels are shaped for its vectoriser, and Intel's oneAPI runtime, the other one
+    # measured, was slower on the tracking and surface defaults (benchmarks/runtimes.py,
+    # docs/portability.md)
+    order += sorted(
+        (i for i in range(len(found)) if i not in order), key=lambda i: _not_pocl(found[i][0])
+    )
     problems = []
     for i in order:
         problem = _build_problem(i)
@@ -421,8 +435,8 @@ def get_runtime(device: str | int | Runtime | None = None) -> Runtime:
     ----------
     device : str, int, Runtime or None
         As for :func:`use_device`; None means use_device's choice, else CLPDE_DEVICE, else
-        PYOPENCL_CTX ("platform:device"), else a GPU, else a CPU, skipping devices whose
-        compiler cannot build a kernel.
+        PYOPENCL_CTX ("platform:device"), else a GPU, else a CPU (PoCL's before another
+        runtime's), skipping devices whose compiler cannot build a kernel.
 
     Returns
     -------
