@@ -57,17 +57,47 @@ def oclgrind_command(local_mem: int, quick: bool = False) -> list[str]:
     return command + (["--quick"] if quick else [])
 
 
-def run_under_oclgrind(out: Path, local_mem: int, names: list[str], timeout: float = 900):
-    """Run the named cases under Oclgrind; (exit status, its log, stdout)."""
-    log = out / "oclgrind.log"
+def start_under_oclgrind(out: Path, local_mem: int, names: list[str]) -> subprocess.Popen:
+    """Start the named cases under Oclgrind, writing into `out` (oclgrind.log, output.txt,
+    the cases' results)."""
     env = dict(os.environ, PYTHONPATH=str(HERE.parents[1]))
     env.pop("CLPDE_DEVICE", None)
     env.pop("PYOPENCL_CTX", None)
-    command = oclgrind_command(local_mem) + ["--log", str(log)]
+    command = oclgrind_command(local_mem) + ["--log", str(out / "oclgrind.log")]
     command += [sys.executable, str(HERE / "cases.py"), str(out), *names]
-    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout)
-    text = log.read_text() if log.exists() else ""
-    return done.returncode, text, done.stdout + done.stderr
+    with open(out / "output.txt", "w") as output:  # the child keeps its own handle
+        return subprocess.Popen(command, env=env, stdout=output, stderr=subprocess.STDOUT)
+
+
+def finish(process: subprocess.Popen, out: Path, timeout: float = 900):
+    """(exit status, Oclgrind's log, the cases' output) once `process` ends."""
+    try:
+        status = process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        status = process.wait()
+    log = out / "oclgrind.log"
+    return status, log.read_text() if log.exists() else "", (out / "output.txt").read_text()
+
+
+def run_under_oclgrind(out: Path, local_mem: int, names: list[str], timeout: float = 900):
+    """Run the named cases under Oclgrind; (exit status, its log, their output)."""
+    return finish(start_under_oclgrind(out, local_mem, names), out, timeout)
+
+
+@pytest.fixture(scope="module")
+def oclgrind_runs(tmp_path_factory):
+    """Both limit sets' runs, started at once (each is one process: two cores, half the
+    wall time)."""
+    runs = {}
+    for limits, (local_mem, names) in LIMITS.items():
+        out = tmp_path_factory.mktemp(limits)
+        runs[limits] = (start_under_oclgrind(out, local_mem, names), out)
+    yield runs
+    for process, _ in runs.values():
+        if process.poll() is None:
+            process.kill()
+            process.wait()
 
 
 @pytest.fixture(scope="module")
@@ -83,9 +113,12 @@ def pocl_results():
 
 
 @pytest.mark.parametrize("limits", list(LIMITS))
-def test_kernels_run_clean_under_oclgrind(limits, tmp_path, pocl_results):
-    local_mem, names = LIMITS[limits]
-    status, log, output = run_under_oclgrind(tmp_path, local_mem, names)
+def test_kernels_run_clean_under_oclgrind(limits, oclgrind_runs, pocl_results):
+    names = LIMITS[limits][1]
+    for name in names:  # PoCL's results, while Oclgrind runs
+        pocl_results(name)
+    process, tmp_path = oclgrind_runs[limits]
+    status, log, output = finish(process, tmp_path)
     assert status == 0, f"cases failed under Oclgrind:\n{output[-3000:]}"
     assert log.strip() == "", f"Oclgrind reported:\n{log[:3000]}"
     launched = json.loads((tmp_path / "kernels.json").read_text())
