@@ -137,3 +137,20 @@ def test_kernels_run_clean_under_oclgrind(limits, oclgrind_runs, pocl_results):
                 np.testing.assert_allclose(
                     got[key], value, atol=TOLERANCE, err_msg=f"{name}/{key} differs from PoCL"
                 )
+
+
+def test_bricks_too_large_for_the_work_group_are_refused_with_the_way_out(tmp_path):
+    # AMD's GPUs allow 256 work-items a group by default: a surface brick of 8x8x8 cells,
+    # one work-item each, cannot run there, and says so before any work
+    script = (
+        "import sys; sys.path.insert(0, sys.argv[1]); import cases\n"
+        "from clpde.errors import DeviceLimitError\n"
+        "try:\n    cases.CASES['surface_bricks']()\n"
+        "except DeviceLimitError as e:\n    print('refused:', e)\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(HERE.parents[1]))
+    command = [OCLGRIND, "--max-wgsize", "256", sys.executable, "-c", script, str(HERE)]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "refused: bricks of 8x8x8 cells run in work-groups of 512 items" in done.stdout
+    assert "at most 256; use storage='lists'" in done.stdout
