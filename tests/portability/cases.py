@@ -99,6 +99,7 @@ def _surface(storage):
             "tv": s.tv(z, 0.1),
             "denoise": s.denoise_tv(z, 0.05, t=0.1),
             "turk": s.reaction_diffusion(2),
+            **{f"principal_{i}": a for i, a in enumerate(s.principal_directions())},
         }
 
     return run
