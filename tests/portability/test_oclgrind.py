@@ -50,8 +50,11 @@ TOLERANCE = 1e-4  # float32 rounding of a few hundred operations, in data scaled
 
 def oclgrind_command(local_mem: int, quick: bool = False) -> list[str]:
     """Oclgrind with its checks on, at `local_mem` bytes of local memory and the minimum
-    64 KB of constant memory. (Its --uninitialized plugin stops on sincos, which the
-    spectral kernel calls, in Oclgrind 21.10: left off; every other check is on.)"""
+    64 KB of constant memory. Its --uninitialized plugin is left off: in Oclgrind 21.10 it
+    stops on sincos ("work item needed to access private memory"), which the spectral
+    kernel calls, and it takes buffers zeroed by clEnqueueFillBuffer (pyopencl's
+    array.zeros) for uninitialised. --check-api is off too: it reports pyopencl's own
+    probing (device queries, kernel names it tries). Every other check is on."""
     command = [OCLGRIND, "--data-races", "--max-errors", "20"]
     command += ["--local-mem-size", str(local_mem), "--constant-mem-size", "65536"]
     return command + (["--quick"] if quick else [])
