@@ -110,7 +110,8 @@ def _track_region(storage):
         import clpde
 
         phi, z = _sphere(n=28, r=4.0)  # tracking keeps 9 cells clear of the border
-        return {"region": clpde.track_region(phi, z, beta=0.5, t=0.1, storage=storage)}
+        frames = clpde.track_region(phi, z, beta=0.5, t=0.1, storage=storage, keep_volumes=True)
+        return {"phihat": frames[-1].phihat, "phi": frames[-1].phi}
 
     return run
 
