@@ -11,6 +11,7 @@ import numpy as np
 import pyopencl as cl
 
 from ..errors import ClpdeError
+from ..inpainting import spectral
 from ..runtime import _build_problem, devices, get_runtime
 from ._common import add_device_argument
 
@@ -36,8 +37,6 @@ def device_paths(index: int) -> list[str]:
     problem = _build_problem(index)
     if problem is not None:
         return [f"none: {problem}"]
-    from ..inpainting import spectral
-
     rt = get_runtime(index)
     lines = [
         "grids: one row per work-item"
