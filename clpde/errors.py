@@ -23,6 +23,11 @@ class DeviceMemoryError(ClpdeError, MemoryError):
     """A request that cannot fit the device's memory; the message gives the size and the way out."""
 
 
+class DeviceLimitError(ClpdeError):
+    """A kernel that cannot fit the device's limits (local memory, work-group size); the
+    message names the limit and the way out."""
+
+
 class InputError(ClpdeError, ValueError):
     """An input array or parameter that clpde cannot use; the message says how to fix it."""
 

@@ -13,7 +13,6 @@ import tempfile
 import threading
 import time
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -85,28 +84,7 @@ _ensure_pocl_cache_dir()
 
 import pyopencl as cl  # noqa: E402  (imported here: PoCL reads POCL_CACHE_DIR when the ICD loads)
 
-
-@dataclass(frozen=True)
-class DeviceInfo:
-    index: int
-    platform: str
-    name: str
-    type: str
-    compute_units: int
-    global_mem_bytes: int
-    max_alloc_bytes: int
-    fp64: bool
-    in_use: bool = False
-
-    def describe(self) -> str:
-        gib = 1024**3
-        mark = "*" if self.in_use else " "
-        return (
-            f"{mark} [{self.index}] {self.name} ({self.type}, {self.platform}): "
-            f"{self.compute_units} compute units, {self.global_mem_bytes / gib:.1f} GiB, "
-            f"largest allocation {self.max_alloc_bytes / gib:.2f} GiB, "
-            f"fp64 {'yes' if self.fp64 else 'no'}"
-        )
+from ._device import DeviceInfo, Kernel, group_problem, pyopencl_ctx, quietly  # noqa: E402
 
 
 def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
@@ -145,6 +123,11 @@ def _has_fp64(device: cl.Device) -> bool:
     return "cl_khr_fp64" in device.extensions or bool(getattr(device, "double_fp_config", 0))
 
 
+def _not_pocl(platform: cl.Platform) -> bool:
+    """Sort key that puts PoCL's devices before another runtime's of the same type."""
+    return "portable computing language" not in platform.name.lower()
+
+
 def _resolve(spec) -> int:
     """Index into _all_devices() of the device a spec names."""
     found = _all_devices()
@@ -161,7 +144,10 @@ def _resolve(spec) -> int:
         raise ClpdeError(f"device must be 'cpu', 'gpu', an index or a name substring, not {spec!r}")
     wanted = spec.strip().lower()
     if wanted in ("cpu", "gpu", "accelerator"):
-        of_type = [i for i, (_, d) in enumerate(found) if _type_name(d) == wanted]
+        of_type = sorted(
+            (i for i, (_, d) in enumerate(found) if _type_name(d) == wanted),
+            key=lambda i: _not_pocl(found[i][0]),
+        )
         # The first of that type whose compiler works; else the first, whose error then says why.
         for i in of_type:
             if _build_problem(i) is None:
@@ -208,23 +194,26 @@ def _probe(index: int) -> str | None:
     platform, device = _all_devices()[index]
     try:
         ctx = cl.Context([device])
-        cl.Program(ctx, (KERNEL_DIR / "common/probe.cl").read_text()).build()
-        return None
     except cl.Error as exc:
-        log = str(exc)
-        if "unknown target CPU" in log:
-            reason = (
-                f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
-                "its LLVM does not know this CPU; install your system's PoCL "
-                "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
-            )
-        else:
-            first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
-            reason = (
-                f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
-                f"kernels: {first.strip()[:200]}"
-            )
-        return reason
+        return f"{device.name.strip()} ({platform.name.strip()}) cannot be opened: {exc}"
+    source = (KERNEL_DIR / "common/probe.cl").read_text()
+    _, failure = quietly(lambda: cl.Program(ctx, source).build())
+    if failure is None:
+        return None
+    log = str(failure[0])
+    if "unknown target CPU" in log:
+        reason = (
+            f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
+            "its LLVM does not know this CPU; install your system's PoCL "
+            "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
+        )
+    else:
+        first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
+        reason = (
+            f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+            f"kernels: {first.strip()[:200]}"
+        )
+    return reason
 
 
 def _usable(index: int) -> int:
@@ -242,9 +231,25 @@ def _default_index() -> int:
             return _usable(_resolve(env))
         except ClpdeError as exc:
             raise ClpdeError(f"CLPDE_DEVICE={env!r}: {exc}") from None
+    # pyopencl's own setting, for users who already steer every pyopencl program with it
+    ctx = os.environ.get("PYOPENCL_CTX")
+    if ctx and ctx.strip():
+        try:
+            return _usable(pyopencl_ctx(ctx, _all_devices()))
+        except ClpdeError as exc:
+            raise ClpdeError(
+                f"PYOPENCL_CTX={ctx!r}: {exc}; set it to 'platform:device' indices from "
+                "`clpde devices`, or unset it"
+            ) from None
     found = _all_devices()
     order = [i for i, (_, d) in enumerate(found) if _type_name(d) == "gpu"]
-    order += [i for i in range(len(found)) if i not in order]
+    # Among CPU runtimes PoCL comes first, whatever order the ICD loader lists them in: the
+    # kernels are shaped for its vectoriser, and Intel's oneAPI runtime, the other one
+    # measured, was slower on the tracking and surface defaults (benchmarks/runtimes.py,
+    # docs/portability.md)
+    order += sorted(
+        (i for i in range(len(found)) if i not in order), key=lambda i: _not_pocl(found[i][0])
+    )
     problems = []
     for i in order:
         problem = _build_problem(i)
@@ -265,7 +270,8 @@ def use_device(spec: str | int | Runtime | None) -> Runtime:
     ----------
     spec : str, int, Runtime or None
         'cpu', 'gpu', an index from :func:`devices`, or a substring of a device's name.
-        None returns to the automatic choice (CLPDE_DEVICE, else a GPU, else a CPU).
+        None returns to the automatic choice (CLPDE_DEVICE, else PYOPENCL_CTX, else a GPU,
+        else a CPU).
 
     Returns
     -------
@@ -294,7 +300,8 @@ def get_runtime(device: str | int | Runtime | None = None) -> Runtime:
     ----------
     device : str, int, Runtime or None
         As for :func:`use_device`; None means use_device's choice, else CLPDE_DEVICE, else
-        a GPU, else a CPU, skipping devices whose compiler cannot build a kernel.
+        PYOPENCL_CTX ("platform:device"), else a GPU, else a CPU (PoCL's before another
+        runtime's), skipping devices whose compiler cannot build a kernel.
 
     Returns
     -------
@@ -353,34 +360,13 @@ def devices() -> list[DeviceInfo]:
             max_alloc_bytes=d.max_mem_alloc_size,
             fp64=_has_fp64(d),
             in_use=(i == current),
+            local_mem_bytes=d.local_mem_size,
+            max_group=d.max_work_group_size,
+            constant_mem_bytes=d.max_constant_buffer_size,
+            images=bool(d.image_support),
         )
         for i, (p, d) in enumerate(_all_devices())
     ]
-
-
-class Kernel:
-    """A pyopencl kernel whose launches hold the runtime's lock.
-
-    pyopencl's Kernel.__call__ sets the arguments on the shared kernel object and then
-    enqueues it; two threads in between would run one thread's step on the other's buffers.
-    Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
-    """
-
-    __slots__ = ("_key", "_lock", "_runtime", "cl_kernel")
-
-    def __init__(self, cl_kernel: cl.Kernel, runtime: Runtime, key: tuple):
-        self.cl_kernel = cl_kernel
-        self._lock = runtime.lock
-        self._runtime, self._key = runtime, key
-
-    def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
-        with self._lock:
-            return self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
-
-    def __getattr__(self, name):
-        if name == "cl_kernel":  # not set yet: no recursion through this method
-            raise AttributeError(name)
-        return getattr(self.cl_kernel, name)
 
 
 class Runtime:
@@ -477,11 +463,26 @@ class Runtime:
             options.append("-DREAL_IS_DOUBLE=1")
         if "portable computing language" in self.platform.name.lower():
             options.append("-DCLPDE_POCL=1")
+        if self.platform.name.strip() == "Oclgrind":
+            # Oclgrind (21.10, Debian's) cannot run the llvm.experimental.noalias.scope.decl
+            # intrinsic that inlining a helper with restrict parameters leaves in a kernel,
+            # and then reports the kernel as missing ("morph_adaptive was not found");
+            # restrict only licenses optimisations, so the simulator checks the kernels
+            # without it (Oclgrind issue 223).
+            options.append("-Drestrict=")
         options += [f"-D{k}={v}" for k, v in sorted(defines.items())]
-        try:
-            return cl.Program(self.ctx, source).build(options=options)
-        except cl.RuntimeError as exc:
-            raise KernelBuildError(f"building {path} failed:\n{exc}") from None
+        program, failure = quietly(lambda: cl.Program(self.ctx, source).build(options=options))
+        if failure is not None:
+            exc, output = failure
+            more = f"\n{output}" if output else ""
+            raise KernelBuildError(f"building {path} failed:\n{exc}{more}") from None
+        return program
+
+    # ---- work-group limits ----------------------------------------------------------------
+    def group_problem(self, kernel, group: int) -> str | None:
+        """Why `kernel` cannot run in work-groups of `group` items here (its local memory,
+        or the work-group size the device allows for it), or None when it can."""
+        return group_problem(self.device, kernel, group)
 
     # ---- memory ---------------------------------------------------------------------------
     def check_alloc(self, nbytes: int, what: str = "field") -> None:

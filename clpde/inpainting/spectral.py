@@ -52,6 +52,7 @@ import time
 import numpy as np
 import pyopencl as cl
 
+from ..errors import DeviceLimitError
 from ..imagedata import InputError
 from .spectral_plan import MAXL, block_iterations, plan, shifts_of
 
@@ -65,6 +66,10 @@ DESCRIPTION = (
 
 MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP
+# its SPECTRAL_SCRATCH: the REALs of one work-group's windows and transforms, which live in
+# global memory where local memory is too small (SPECTRAL_SPILL)
+SCRATCH = 4 * MAXL * MAXL + 7 * MAXL * (MAXL // 2 + 1)
+SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
 COLOURS = ("pca", "channels")
 
 
@@ -351,8 +356,13 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     rho, delta, gamma, alpha, stop, detrend, cutoff = options
     real = host.dtype
     t0 = time.perf_counter()
-    kernel = runtime.kernel("inpainting/spectral.cl", "spectral_blocks", real)
+    kernel, spill = fitting_kernel(runtime, real)
     t["build"] = time.perf_counter() - t0
+    # work-groups per launch: a whole wave, or as many as SCRATCH_BYTES of scratch hold
+    widest = int(np.diff(starts).max(initial=1))
+    per_launch = max(1, SCRATCH_BYTES // (SCRATCH * real.itemsize)) if spill else widest
+    scratch_bytes = min(per_launch, widest) * SCRATCH * real.itemsize if spill else real.itemsize
+    runtime.check_alloc(scratch_bytes, "spectral inpainting's scratch memory")
 
     q = runtime.queue
     t0 = time.perf_counter()
@@ -360,21 +370,27 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     img = cl.Buffer(runtime.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host)
     waves_buf = cl.Buffer(runtime.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=wave_of)
     blocks_buf = cl.Buffer(runtime.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=all_blocks)
+    scratch = cl.Buffer(runtime.ctx, mf.READ_WRITE, scratch_bytes)
     q.finish()
     t["upload"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     s = real.type
     nc, ny, nx = host.shape[1:]
-    for w in range(len(starts) - 1):
+    launches = [
+        (w, first, min(per_launch, int(starts[w + 1]) - first))
+        for w in range(len(starts) - 1)
+        for first in range(int(starts[w]), int(starts[w + 1]), per_launch)
+    ]
+    for w, first, count in launches:
         kernel(
             q,
-            (int(starts[w + 1] - starts[w]) * GROUP,),
+            (count * GROUP,),
             (GROUP,),
             img,
             waves_buf,
             blocks_buf,
-            np.int32(starts[w]),
+            np.int32(first),
             np.int32(w),
             np.int32(nx),
             np.int32(ny),
@@ -386,6 +402,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
             s(stop),
             np.int32(detrend),
             s(cutoff),
+            scratch,
         )
     q.finish()
     t["waves"] = time.perf_counter() - t0
@@ -394,7 +411,25 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     cl.enqueue_copy(q, host, img)
     q.finish()
     t["readback"] = time.perf_counter() - t0
-    t["blocks"], t["launches"] = len(all_blocks), len(starts) - 1
+    t["blocks"], t["launches"] = len(all_blocks), len(launches)
+
+
+def fitting_kernel(runtime, real) -> tuple:
+    """(spectral_blocks as it fits the device, whether it spills): each work-group's windows
+    in local memory, or, where the device has too little of it (the OpenCL minimum of 32 KB;
+    NVIDIA's 48 KB per kernel in double), in global scratch memory (SPECTRAL_SPILL; the same
+    arithmetic). Refused, before any work, where neither fits."""
+    problem = None
+    for spill in (0, 1):
+        defines = {"SPECTRAL_SPILL": 1} if spill else {}
+        kernel = runtime.kernel("inpainting/spectral.cl", "spectral_blocks", real, **defines)
+        problem = runtime.group_problem(kernel, GROUP)
+        if problem is None:
+            return kernel, bool(spill)
+    raise DeviceLimitError(
+        f"spectral inpainting cannot run on this device: {problem}; choose another device "
+        "(clpde devices) or another method (method='transport')"
+    )
 
 
 def solve(

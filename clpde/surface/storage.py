@@ -10,7 +10,7 @@ import numpy as np
 import pyopencl.array as cla
 
 from ..bricks import EXT, REACH
-from ..errors import InputError
+from ..errors import DeviceLimitError, InputError
 from .band import extend_defines
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -341,6 +341,12 @@ def _check_local_tiles(runtime, bricks, channels: int, dtype) -> None:
     if runtime.is_cpu:
         return
     bx, by, bz = bricks.brick
+    if bx * by * bz > runtime.device.max_work_group_size:  # a work-item a cell of the brick
+        raise DeviceLimitError(
+            f"bricks of {bx}x{by}x{bz} cells run in work-groups of {bx * by * bz} items, but "
+            f"{runtime.device.name.strip()} allows at most {runtime.device.max_work_group_size}; "
+            "use storage='lists'"
+        )
     need = channels * (bx + 2) * (by + 2) * (bz + 2) * np.dtype(dtype).itemsize
     have = runtime.device.local_mem_size
     if need > have:

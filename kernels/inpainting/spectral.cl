@@ -34,13 +34,31 @@
 // the first one's.
 //
 // Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
-// picks' coefficients | qa, qb, qc, R re, R im on the candidates).
+// picks' coefficients | qa, qb, qc, R re, R im on the candidates). X and T are 31 KB in
+// float, 62 KB in double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per
+// kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
+// too small) they live in `scratch`, SPECTRAL_SCRATCH REALs per work-group of global
+// memory, and the barriers fence global memory too; the arithmetic is the same.
 #include "common.cl"
 
 #define SPECTRAL_MAXL 32    // largest window
 #define SPECTRAL_MAXK 512   // most picks per block
 #define SPECTRAL_GROUP 64
 #define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
+#define SPECTRAL_XN (4 * SPECTRAL_MAXL * SPECTRAL_MAXL)
+#define SPECTRAL_TN (2 * SPECTRAL_MAXH + 5 * SPECTRAL_MAXH)
+#define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
+
+#ifndef SPECTRAL_SPILL
+#define SPECTRAL_SPILL 0
+#endif
+#if SPECTRAL_SPILL
+#define SPACE __global
+#define FENCE (CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE)
+#else
+#define SPACE __local
+#define FENCE CLK_LOCAL_MEM_FENCE
+#endif
 
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
 void spectral_blocks(__global REAL* img, __global const int* wave_of,
@@ -48,10 +66,15 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      const int nx, const int ny, const int nc, const REAL rho,
                      const REAL delta, const REAL gamma, const REAL alpha,
                      const REAL stop, const int detrend,
-                     const REAL cutoff)
+                     const REAL cutoff, __global REAL* scratch)
 {
-    __local REAL X[4 * SPECTRAL_MAXL * SPECTRAL_MAXL];
-    __local REAL T[2 * SPECTRAL_MAXH + 5 * SPECTRAL_MAXH];
+#if SPECTRAL_SPILL
+    __global REAL* const X = scratch + (size_t)get_group_id(0) * SPECTRAL_SCRATCH;
+    __global REAL* const T = X + SPECTRAL_XN;
+#else
+    __local REAL X[SPECTRAL_XN];
+    __local REAL T[SPECTRAL_TN];
+#endif
     __local REAL tw[2 * SPECTRAL_MAXL];  // cos, sin of 2 pi j / L
     __local REAL best[SPECTRAL_GROUP];
     __local int best_at[SPECTRAL_GROUP];
@@ -75,14 +98,14 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     const REAL two_pi_l = (REAL)6.283185307179586 / (REAL)L;
     const REAL centre = (REAL)0.5 * (REAL)(L - 1);
     const REAL log_rho = log(rho);
-    __local REAL* const rows = T;                 // row transforms; then the picks' coefficients
-    __local REAL* const coef_r = T;
-    __local REAL* const coef_i = T + SPECTRAL_MAXK;
-    __local REAL* const qa = T + 2 * SPECTRAL_MAXH;
-    __local REAL* const qb = qa + SPECTRAL_MAXH;
-    __local REAL* const qc = qb + SPECTRAL_MAXH;
-    __local REAL* const rre = qc + SPECTRAL_MAXH;
-    __local REAL* const rim = rre + SPECTRAL_MAXH;
+    SPACE REAL* const rows = T;                 // row transforms; then the picks' coefficients
+    SPACE REAL* const coef_r = T;
+    SPACE REAL* const coef_i = T + SPECTRAL_MAXK;
+    SPACE REAL* const qa = T + 2 * SPECTRAL_MAXH;
+    SPACE REAL* const qb = qa + SPECTRAL_MAXH;
+    SPACE REAL* const qc = qb + SPECTRAL_MAXH;
+    SPACE REAL* const rre = qc + SPECTRAL_MAXH;
+    SPACE REAL* const rim = rre + SPECTRAL_MAXH;
 
     for (int j = lid; j < L; j += SPECTRAL_GROUP) {
         REAL c;
@@ -105,7 +128,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         }
         X[LL + i] = w;
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
+    barrier(FENCE);
     // W: rows (whole plane) into T[0, 2 LL), then columns into X[2 LL, 4 LL)
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, k = i - m * L;
@@ -118,7 +141,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         T[i] = wr;
         T[LL + i] = wi;
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
+    barrier(FENCE);
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int ky = i / L, kx = i - ky * L;
         REAL wr = 0, wi = 0;
@@ -146,7 +169,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         }
         pick_k[0] = count_h;
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
+    barrier(FENCE);
     const int NC = pick_k[0];
     const REAL W0 = X[2 * LL];
     // each candidate's score is qa R_re^2 + qb R_re R_im + qc R_im^2: the pair's error
@@ -190,7 +213,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             X[i] = f;
         }
         for (int q = 0; q < 9; ++q) sums[q * SPECTRAL_GROUP + lid] = acc[q];
-        barrier(CLK_LOCAL_MEM_FENCE);  // also: the last channel's picks are no longer read
+        barrier(FENCE);  // also: the last channel's picks are no longer read
         if (lid == 0) {
             REAL t[9];
             for (int q = 0; q < 9; ++q) {
@@ -217,13 +240,13 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 fit[0] = fit[1] = fit[2] = 0;
             }
         }
-        barrier(CLK_LOCAL_MEM_FENCE);
+        barrier(FENCE);
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
             const int m = i / L, n = i - m * L;
             const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
             X[i] = X[LL + i] * (X[i] - (fit[0] + fit[1] * u + fit[2] * v));
         }
-        barrier(CLK_LOCAL_MEM_FENCE);
+        barrier(FENCE);
         // R: rows on the half plane into rows[0, 2 L H), then the candidates' columns
         for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
             const int m = i / H, k = i - m * H;
@@ -236,7 +259,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             rows[i] = ar;
             rows[L * H + i] = ai;
         }
-        barrier(CLK_LOCAL_MEM_FENCE);
+        barrier(FENCE);
         for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
             const int ky = half_y[j], kx = half_x[j];
             REAL rr = 0, ri = 0;
@@ -249,7 +272,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             rre[j] = rr;
             rim[j] = ri;
         }
-        barrier(CLK_LOCAL_MEM_FENCE);
+        barrier(FENCE);
 
         REAL first_gain = 0;  // item 0's
         int count = 0;
@@ -267,7 +290,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 }
                 best[lid] = bs;
                 best_at[lid] = bi;
-                barrier(CLK_LOCAL_MEM_FENCE);
+                barrier(FENCE);
                 if (lid == 0) {
                     REAL top = best[0];
                     int j = best_at[0];
@@ -306,7 +329,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         coef_i[it] = gamma * ci;
                     }
                 }
-                barrier(CLK_LOCAL_MEM_FENCE);
+                barrier(FENCE);
                 const int k = pick_k[0];
                 if (k < 0) break;
                 count = it + 1;
@@ -333,7 +356,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     rre[j] -= ur;
                     rim[j] -= ui;
                 }
-                barrier(CLK_LOCAL_MEM_FENCE);
+                barrier(FENCE);
             }
         }
         // the block's pixels that this wave fills, from the model

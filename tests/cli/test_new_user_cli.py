@@ -133,7 +133,8 @@ def test_devices_says_when_clpde_device_matches_nothing(monkeypatch, capsys):
     err = listed.err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("clpde: error: CLPDE_DEVICE='bogus' matches none")
     assert "unset it" in err[0]
-    assert len(listed.out.splitlines()) == len(clpde.devices())  # the list, nothing marked
+    heads = [line for line in listed.out.splitlines() if not line.startswith("      ")]
+    assert len(heads) == len(clpde.devices())  # the list (each device's paths below it)
     assert not [line for line in listed.out.splitlines() if line.startswith("*")]
     monkeypatch.delenv("CLPDE_DEVICE")
     assert main(["devices"]) == 0
