@@ -15,7 +15,6 @@ report of a run, runs.py's).
 
 from __future__ import annotations
 
-import inspect
 import sys
 import time
 import warnings
@@ -34,10 +33,7 @@ from . import bounds, boxes, poisson, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .inputs import check_colour, prepare
-from .registry import choose_method, margin
-from .runs import InpaintInfo, InpaintState, SolveRun
-from .transport_params import _TRANSPORT_ARGS, GHOST, transport_params
-from .transport_params import check_params as check_transport_params
+from .runs import InpaintInfo, InpaintState
 
 
 class Inpainting:
@@ -59,8 +55,6 @@ class Inpainting:
         As for `inpaint`.
     colour : {'channels', 'rho-phi-psi'}, optional
         As for `inpaint`.
-    levels : int, optional
-        As for `inpaint`.
     device : str or int or Runtime, optional
         As for `inpaint`.
     dtype : {float32, float64}, optional
@@ -69,14 +63,17 @@ class Inpainting:
         As for `inpaint`.
     method : str, optional
         As for `inpaint`.
+    options : options object, optional
+        As for `inpaint`.
     boxes : bool, optional
         As for `inpaint`.
     seed : int, optional
         As for `inpaint`.
     grow : float, optional
         As for `inpaint`.
-    **params
-        The method's options, as `inpaint`'s (the transport's dt, max_steps, tol, ...).
+    **overrides
+        As for `inpaint`: fields of the method's options (the transport's dt, max_steps,
+        tol, ...).
 
     Raises
     ------
@@ -103,17 +100,19 @@ class Inpainting:
         channel_axis: int | None = None,
         alpha: bool | None = None,
         colour: str = "channels",
-        levels: int | None = None,
         device: DeviceLike = None,
         dtype: DTypeLike | None = None,
         progress: Progress = None,
         method: str | None = None,
+        options: Any = None,
         boxes: bool = True,
         seed: int | None = None,
         grow: float = 0,
-        **params: Any,
+        **overrides: Any,
     ):
-
+        # the method and its options first: a bad option fails before the image is read
+        entry, self.options = inpainting.resolve(method, options, overrides)
+        self.method = entry.name
         self.image, self.planes, self.mask, self.softness, self.layout, self.alpha = prepare(
             image, mask, channel_axis, alpha
         )
@@ -130,39 +129,16 @@ class Inpainting:
                 UserWarning,
                 stacklevel=_caller_level(),
             )
-        ncolour = self.planes.shape[0] - int(self.alpha)
-        check_colour(colour, ncolour)
+        self.ncolour = self.planes.shape[0] - int(self.alpha)
+        check_colour(colour, self.ncolour)
         if self.mask.all():
             raise InputError(
                 "the mask covers every pixel, so nothing is known to inpaint from; "
                 "mark only the damaged region"
             )
-        if levels is not None and (
-            isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 1
-        ):
-            raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")
-        given = {**params, **({} if levels is None else {"levels": levels})}
-        self.method = choose_method(self.mask, method, given)
-        # "auto" votes per cluster of damage among inpainting/validate.py's candidates; the
-        # options given are this structure method's.
-        self.auto = choose_method(self.mask, method, given, per_box=True) == "auto"
-        if self.method == "transport":
-            self.p = transport_params(params)
-            check_transport_params(self.p)
-            check_colour(colour, ncolour)
-            if levels is not None:
-                params = dict(params, levels=levels)
-        else:
-            self.p = None
-            if levels is not None:
-                params = dict(params, levels=levels)
-            inpainting.check_params(self.method, self.module, params)
-        self.params = params
         self.boxes = bool(boxes)
         self.seed = seed
         self.colour = colour
-        self.ncolour = ncolour
-        self.levels = levels
         self.device = device
         self.dtype = compute_dtype(None, dtype)
         self.progress = progress
@@ -170,10 +146,9 @@ class Inpainting:
         self.info = None
 
     @property
-    def module(self):
-        """The method's module (looked up, not stored, so that the object pickles)."""
-
-        return inpainting.load(self.method)
+    def registered(self) -> inpainting.Method:
+        """The method as registered (looked up, not stored, so that the object pickles)."""
+        return inpainting.get(self.method)
 
     # -- conversions between the user's image and the solved channels -----------------
     def _box_data(self, box, model=True):
@@ -213,13 +188,11 @@ class Inpainting:
         ny, nx = self.mask.shape
         if not self.boxes:
             return [(0, ny, 0, nx)]
-        if self.auto:  # every candidate, and the ring it is scored on, fits in the box
-            return boxes.boxes(self.mask, lambda crop: validate.margin(crop=crop))
-        align = getattr(self.module, "ALIGN", None)
+        method, options = self.registered, self.options
         return boxes.boxes(
             self.mask,
-            lambda crop: margin(self.module, crop, self.params),
-            (lambda crop: align(crop, **self.params)) if callable(align) else lambda crop: 1,
+            lambda crop: method.reach(crop, options),
+            lambda crop: method.alignment(crop, options),
         )
 
     def iterate(self, every: int | None = None) -> Iterator[InpaintState]:
@@ -254,7 +227,7 @@ class Inpainting:
                 (self.ncolour, y1 - y0, x1 - x0),
                 "inpainting",
                 4 + 4 / self.ncolour,
-                ghost=GHOST,
+                ghost=self.registered.ghost,
                 dtype=self.dtype,
             )
         # A callable progress hears masked pixels done over all to do, once per box; the
@@ -276,28 +249,28 @@ class Inpainting:
                 else np.asarray(self.softness[y0:y1, x0:x1], np.float64)
             )
             fidelity = None if damage is None else np.where(omega, 1.0 - damage, 0.0)
-            if self.auto:
-                # the self-validated choice among the candidates (inpainting/validate.py)
-                solved = self._voted_box(runtime, data, omega, info)
-                if damage is not None:
-                    solved = np.where(omega, damage * solved + (1 - damage) * data, data)
-                info.levels = max(info.levels, 1)
-            else:
-                info.box_methods.append(self.method)
-                info.box_exemplar_pixels.append(
-                    int(omega.sum()) if self.method == "exemplar" else 0
-                )
-                run = self._run(runtime, data, omega, fidelity, damage)
-                for steps, change, solved in run.states(every):
-                    self._write(out, box, solved, omega, damage)
-                    yield InpaintState(0, info.steps + steps, out.copy(), change)
-                solved = run.solution
-                info.steps = max(info.steps, run.steps)
-                info.converged &= run.converged
-                info.levels = max(info.levels, run.levels)
-                if run.steps_per_level:
-                    info.steps_per_level = run.steps_per_level
-                info.band_pixels += run.band_pixels
+            run = self.registered.start(
+                data,
+                omega,
+                runtime,
+                self.options,
+                dtype=self.dtype,
+                progress=self._inner_progress,
+                seed=self.seed,
+                fidelity=fidelity,
+                damage=damage,
+            )
+            for steps, change, solved in run.states(every):
+                self._write(out, box, solved, omega, damage)
+                yield InpaintState(0, info.steps + steps, out.copy(), change)
+            solved = run.solution
+            info.steps = max(info.steps, run.steps)
+            info.converged &= run.converged
+            info.levels = max(info.levels, run.levels)
+            if run.steps_per_level:
+                info.steps_per_level = run.steps_per_level
+            info.band_pixels += run.band_pixels
+            self._record(info, omega, getattr(run, "report", None))
             self._write(out, box, solved, omega, damage)
             info.omega_pixels += int(omega.sum())
             info.boxes.append(box)
@@ -306,67 +279,45 @@ class Inpainting:
                 report(done, total)
         self.result = out
         self.info = info
+        info.chosen = _chosen(info, self.method)
         info.build_seconds = runtime.build_seconds - built
         info.seconds = time.perf_counter() - start - info.build_seconds
         if every:
             yield InpaintState(0, info.steps, self.result)
 
     def _what(self) -> str:
-        return "method='auto'" if self.auto else f"method={self.method!r}"
+        return f"method={self.method!r}"
 
     def _cold(self, runtime) -> bool:
         """Whether a program of the method (under auto: of every candidate) is not built yet
         on this runtime in this dtype."""
-        names = validate.candidates() if self.auto else [self.method]
+        if self.method == "auto":
+            names = validate.candidates(self.options.names)
+        else:
+            names = [self.method]
         files = set()
         for name in names:
-            module = poisson if name == "biharmonic" else inpainting.load(name)
-            files.update(getattr(module, "KERNEL_FILES", ()))
+            if name == "biharmonic":
+                files.update(poisson.KERNEL_FILES)
+            else:
+                files.update(inpainting.get(name).kernel_files)
         dt = np.dtype(self.dtype).str
         built = {(key[0], key[1]) for key in list(runtime._programs)}
         return any((f, dt) not in built for f in files)
 
-    def _run(self, runtime, data, omega, fidelity, damage):
-        """The method's run on one box: its own `run` when it has one (states along the
-        way), else its `solve` as one step (registry.py has the protocol)."""
-        if hasattr(self.module, "run"):
-            return self.module.run(
-                data,
-                omega,
-                runtime,
-                dtype=self.dtype,
-                progress=self._inner_progress,
-                seed=self.seed,
-                fidelity=fidelity,
-                **self.params,
-            )
-        return SolveRun(
-            self.module,
-            data,
-            omega,
-            runtime,
-            damage,
-            fidelity,
-            dtype=self.dtype,
-            progress=self._inner_progress,
-            seed=self.seed,
-            **self.params,
-        )
-
-    def _voted_box(self, runtime, data, omega, info):
-        """The box filled by the self-validated choice (inpainting/validate.py); what chose
-        what, and why, goes to info.choices."""
-        params = {self.method: self.params} if self.params else {}
-        solved, report = validate.choose(
-            data, omega, runtime, dtype=self.dtype, seed=self.seed, params=params
-        )
+    def _record(self, info, omega, report) -> None:
+        """The box's methods in info: the method's name, or under "auto" the candidates its
+        vote chose, by share of pixels (and what chose what, and why, in info.choices)."""
+        if report is None:
+            info.box_methods.append(self.method)
+            info.box_exemplar_pixels.append(int(omega.sum()) if self.method == "exemplar" else 0)
+            return
         info.choices.append(report)
         by = {}
         for choice in report["choices"]:
             by[choice["chosen"]] = by.get(choice["chosen"], 0) + choice["pixels"]
         info.box_methods.append("+".join(sorted(by, key=by.get, reverse=True)))
         info.box_exemplar_pixels.append(by.get("exemplar", 0))
-        return solved
 
     def run(self) -> np.ndarray:
         for _ in self.iterate():
@@ -379,33 +330,19 @@ def inpaint(
     mask: ArrayLike | None = None,
     *,
     channel_axis: int | None = None,
-    dt: float = 0.1,
-    transport_steps: int = 15,
-    diffusion_steps: int = 2,
-    diffusion_dt: float = 0.1,
-    epsilon: float = 3.0,
-    presmooth: int = 1,
-    scaling: str = "none",
-    rotation: str = "ccw",
-    max_steps: int = 3000,
-    tol: float = 1e-4,
-    mean_tol: float = 4e-4,
-    check_every: int = 2,
-    levels: int | None = None,
     colour: str = "channels",
     alpha: bool | None = None,
-    fill: str = "biharmonic",
-    keep_band: bool = True,
     device: DeviceLike = None,
     dtype: DTypeLike | None = None,
     progress: Progress = None,
     snapshots: int | None = None,
     return_info: bool = False,
     method: str | None = None,
+    options: Any = None,
     boxes: bool = True,
     seed: int | None = None,
     grow: float = 0,
-    **options: Any,
+    **overrides: Any,
 ) -> np.ndarray | tuple[np.ndarray, InpaintInfo] | tuple[np.ndarray, list[InpaintState]]:
     """Fill the masked region of an image.
 
@@ -423,50 +360,12 @@ def inpaint(
         image.
     channel_axis : int, optional
         The axis of the channels; None for a greyscale image.
-    dt : float, optional
-        Transport: the time step.
-    transport_steps : int, optional
-        Transport: A, the transport steps of a cycle.
-    diffusion_steps : int, optional
-        Transport: B, the anisotropic diffusion steps of a cycle.
-    diffusion_dt : float, optional
-        Transport: the diffusion's time step (<= 0.25; appendix A's code uses 0.2, the text
-        0.1).
-    epsilon : float, optional
-        Transport: width of the band Omega-epsilon around Omega (>= 2 pixels).
-    presmooth : int, optional
-        Transport: steps of anisotropic diffusion of the box before the loop.
-    scaling : {'none', 'quartic-root'}, optional
-        Transport: eq. (3.6) as printed, or appendix A's sign(I_t) |I_t|^(1/4) on its
-        0..255 scale, which keeps faint structures moving but never settles (the run then
-        usually ends at max_steps).
-    rotation : {'ccw', 'cw'}, optional
-        Transport: the rotation of the gradient (the steady state is the same).
-    max_steps : int, optional
-        Transport: steps per level at most.
-    tol : float, optional
-        Transport: stop once the largest change inside Omega over `check_every` cycles is
-        below it ([0, 1] units; 0 turns the test off).
-    mean_tol : float, optional
-        Transport: stop once the mean change there is below it (the test that ends runs on
-        photos, where a few pixels never settle; docs/inpainting.md).
-    check_every : int, optional
-        Transport: cycles of A + B steps between the checks, made on the device.
-    levels : int, optional
-        Resolution levels; None picks them per box from the mask's thickness
-        (multiresolution.auto_levels).
     colour : {'channels', 'rho-phi-psi'}, optional
         Every channel on its own, or the luminance-chroma model of thesis Figure 3.7 (3
         colour channels; any method).
     alpha : bool, optional
         Treat the last channel as alpha, passed through untouched; None means yes for
         4-channel images.
-    fill : {'biharmonic', 'diffusion', 'mean', 'zero'}, optional
-        Transport: the start inside Omega on the coarsest level (the best PSNR on photos
-        comes early, so the start matters; docs/inpainting.md compares them).
-    keep_band : bool, optional
-        Transport: reset the known pixels of Omega-epsilon after each diffusion batch, or
-        let the diffusion keep smoothing them (False).
     device : str or int or Runtime, optional
         The OpenCL device, as for `clpde.use_device`.
     dtype : {float32, float64}, optional
@@ -484,11 +383,19 @@ def inpaint(
         clpde/inpainting/validate.py fill the hole; where they disagree, a ring of known
         pixels around the cluster is hidden and filled too, and the blend of the candidates
         that fits that ring best fills the cluster; info.choices says what chose what and
-        why, info.box_methods names each box's methods by share), 'transport' (the thesis's
-        scheme, the options above), 'coherence', 'navier-stokes', 'exemplar' (texture,
-        periodic patterns), 'structure-texture' or 'spectral' (a sparse Fourier model of
-        each block; `clpde.inpainting.available()` lists what is installed).
-        None (the default) is 'spectral', or 'transport' when a transport option is given.
+        why, info.box_methods names each box's methods by share, info.chosen the candidate
+        with the largest share), 'transport' (the thesis's scheme), 'coherence',
+        'navier-stokes', 'exemplar' (texture, periodic patterns), 'structure-texture' or
+        'spectral' (a sparse Fourier model of each block;
+        `clpde.inpainting.available()` lists what is installed). None (the default) is the
+        method of `options`, else 'spectral', or 'transport' when one of its options is
+        among `overrides`.
+    options : options object, optional
+        The method's options, a frozen dataclass that holds their defaults and checks:
+        TransportOptions, SpectralOptions, CoherenceOptions, NavierStokesOptions,
+        ExemplarOptions, StructureTextureOptions or AutoOptions (each in its method's
+        module; `clpde.inpainting.options(method)` names the class). None: the
+        method's defaults.
     boxes : bool, optional
         Solve each connected component of the mask, or cluster of nearby components, in
         its own box grown by the method's margin, so that time and memory follow the
@@ -500,10 +407,11 @@ def inpaint(
         Grow the mask by a disc of this radius in pixels first (`clpde.grow_mask`; a soft
         mask's grown ring is fully damaged), to take in a damage's blurred rim. 0: as given.
         An empty mask (nothing to fill) warns and returns a copy, with ``info.method`` None.
-    **options
-        The other methods' options, and the transport's `stencil` ('isotropic', Scharr's
-        derivatives, or appendix A's 'central') and `coarse_start` ('corrected' or
-        'upsampled').
+    **overrides
+        Fields of the method's options that replace those of `options` (or of the
+        defaults), such as the transport's dt, max_steps, tol, mean_tol or levels
+        (`TransportOptions` documents them); checked once, with the options. A name the
+        method's options lack is an InputError that lists its options.
 
     Returns
     -------
@@ -537,33 +445,31 @@ def inpaint(
     True
     >>> len(info.box_methods)                           # one box of damage, one method
     1
+    >>> from clpde.inpainting import TransportOptions
+    >>> short = TransportOptions(max_steps=40)          # checked here, once
+    >>> out, info = clpde.inpaint(ramp, mask, options=short, return_info=True, tol=0)
+    >>> info.method, info.steps <= 40
+    ('transport', True)
     """
-    given = locals()  # the transport options are InpaintParams' fields, named alike here
-    transport = {name: given[name] for name in _TRANSPORT_ARGS}
     if snapshots is not None and (
         isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer)) or snapshots < 1
     ):
         raise InputError(f"snapshots must be a positive integer (every N steps), not {snapshots!r}")
-    # Only the transport options the caller changed are passed on: the defaults are those
-    # of InpaintParams, and another method rejects a transport option it lacks by name.
-    defaults = inspect.signature(inpaint).parameters
-    params = {k: v for k, v in transport.items() if not _same(v, defaults[k].default)}
-    params.update(options)
     job = Inpainting(
         image,
         mask,
         channel_axis=channel_axis,
         alpha=alpha,
         colour=colour,
-        levels=levels,
         device=device,
         dtype=dtype,
         progress=progress,
         method=method,
+        options=options,
         boxes=boxes,
         seed=seed,
         grow=grow,
-        **params,
+        **overrides,
     )
     states = list(job.iterate(every=snapshots))
     if snapshots:
@@ -584,5 +490,14 @@ def _caller_level() -> int:
     return level
 
 
-def _same(value, default) -> bool:
-    return type(value) is type(default) and value == default
+def _chosen(info: InpaintInfo, method: str) -> str:
+    """What filled the most pixels: under "auto" the candidate with the largest share of
+    the votes' weights times pixels, else the method itself."""
+    if method != "auto":
+        return method
+    share = {}
+    for report in info.choices:
+        for choice in report["choices"]:
+            for name, weight in choice["weights"].items():
+                share[name] = share.get(name, 0.0) + weight * choice["pixels"]
+    return max(share, key=share.get) if share else method

@@ -32,17 +32,51 @@ weight's exact form is worth checking against it.
 
 from __future__ import annotations
 
+from dataclasses import asdict, dataclass
+
 import numpy as np
 import pyopencl.array as cla
 from scipy import ndimage
 
 from ..errors import InputError
 from .poisson import box_around
+from .registry import register
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("inpainting/coherence.cl",)
 
-DEFAULTS = dict(epsilon=5.0, kappa=25.0, sigma=1.4, rho=4.0)
+
+@dataclass(frozen=True)
+class CoherenceOptions:
+    """method="coherence"'s options (the module docstring), checked on construction.
+
+    Parameters
+    ----------
+    epsilon : float
+        Radius of the disc of known pixels each pixel's mean reads (> 1.5).
+    kappa : float
+        Strength of the guidance along the coherence direction (0: isotropic).
+    sigma : float
+        The pre-smoothing's Gaussian width (> 0).
+    rho : float
+        The structure tensor's window width (> 0).
+    """
+
+    epsilon: float = 5.0
+    kappa: float = 25.0
+    sigma: float = 1.4
+    rho: float = 4.0
+
+    def __post_init__(self) -> None:
+        for name, low in (("epsilon", 1.5), ("sigma", 0.0), ("rho", 0.0)):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value <= low:
+                raise InputError(f"{name} must be a number > {low:g}, not {value!r}")
+        if not np.isfinite(self.kappa) or self.kappa < 0:
+            raise InputError(f"kappa must be a number >= 0, not {self.kappa!r}")
+
+
+DEFAULTS = asdict(CoherenceOptions())
 
 
 def gaussian_taps(s: float) -> np.ndarray:
@@ -65,11 +99,7 @@ def MARGIN(
 
 
 def _check(epsilon, kappa, sigma, rho):
-    for name, value, low in (("epsilon", epsilon, 1.5), ("sigma", sigma, 0.0), ("rho", rho, 0.0)):
-        if not np.isfinite(value) or value <= low:
-            raise InputError(f"{name} must be a number > {low:g}, not {value!r}")
-    if not np.isfinite(kappa) or kappa < 0:
-        raise InputError(f"kappa must be a number >= 0, not {kappa!r}")
+    CoherenceOptions(epsilon, kappa, sigma, rho)
 
 
 def shells(omega: np.ndarray, reach: int = 6) -> np.ndarray:
@@ -196,6 +226,11 @@ def transport(
     return out
 
 
+@register(
+    "coherence",
+    CoherenceOptions,
+    margin=lambda omega, o: margin(o.epsilon, o.sigma, o.rho),
+)
 def solve(
     data,
     omega,
@@ -204,10 +239,10 @@ def solve(
     dtype=np.float32,
     progress=None,
     seed=None,
-    epsilon=5.0,
-    kappa=25.0,
-    sigma=1.4,
-    rho=4.0,
+    epsilon=CoherenceOptions.epsilon,
+    kappa=CoherenceOptions.kappa,
+    sigma=CoherenceOptions.sigma,
+    rho=CoherenceOptions.rho,
 ):
     """Registry entry point: coherence transport (see the module docstring)."""
     data = np.asarray(data)

@@ -44,6 +44,7 @@ overlaps the hole, and the random search covers the box. The random numbers are 
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import pyopencl.array as cla
@@ -55,46 +56,59 @@ from . import coherence
 from . import stitch as _stitch
 from .choose import MIN_PERIODICITY, lattice_offsets, periodicity
 from .patchmatch import PatchMatchLevel, upsample_nnf, valid_sources
+from .registry import register
 
-DEFAULTS = {
-    "patch": 7,  # patch side, odd
-    "search": 128,  # search region around the hole's box, in pixels of the finest level
-    "iterations": 6,  # EM iterations (PatchMatch, then vote) at the coarsest level
-    "fine_iterations": 3,  # at each finer level, which starts from the coarser field
-    "passes": 3,  # PatchMatch passes per iteration (jumps 4, 2, 1)
-    "features": None,  # weight of the texture features in the distance; 0: off; None: automatic
-    "levels": None,  # pyramid levels; None chooses from the hole's thickness
-    "onion_passes": 4,  # PatchMatch passes per shell of the coarsest level's onion peel
-    "sharpen": True,  # the last vote takes the closest patch's value (else the weighted mean)
+
+@dataclass(frozen=True)
+class ExemplarOptions:
+    """method="exemplar"'s options (the module docstring; solve's docstring has their
+    meaning), checked on construction."""
+
+    patch: int = 7  # patch side, odd
+    search: int = 128  # search region around the hole's box, in pixels of the finest level
+    iterations: int = 6  # EM iterations (PatchMatch, then vote) at the coarsest level
+    fine_iterations: int = 3  # at each finer level, which starts from the coarser field
+    passes: int = 3  # PatchMatch passes per iteration (jumps 4, 2, 1)
+    # weight of the texture features in the distance; 0: off; None: automatic
+    features: float | None = None
+    levels: int | None = None  # pyramid levels; None chooses from the hole's thickness
+    onion_passes: int = 4  # PatchMatch passes per shell of the coarsest level's onion peel
+    sharpen: bool = True  # the last vote takes the closest patch's value (else the weighted mean)
     # vote weights times confidence**-depth into the hole (Wexler et al.); 1: off
-    "confidence": 1.3,
+    confidence: float = 1.3
     # re-solve the final fill from its sources' gradients (stitch.py), so copied regions
     # meet without a jump in tone
-    "stitch": True,
+    stitch: bool = True
     # weight of a structure guide: the coherence fill of the hole, compared in the patch
     # distance so that patches continue the edges that cross the hole; 0: none
     # None: automatic, 1 unless the hole's surroundings are periodic (choose.periodicity)
-    "structure": None,
+    structure: float | None = None
     # before the finest level's last vote, ICM sweeps over the offsets: a target takes a
     # neighbour's offset when its patch distance is within this factor per agreeing
     # neighbour of its own, so that copied regions are larger and seams fewer; 1: off
-    "cohere": 1.5,
-    "cohere_sweeps": 4,
+    cohere: float = 1.5
+    cohere_sweeps: int = 4
     # where the hole's surroundings are periodic (choose.periodicity), the targets also try
     # the lattice's lags (choose.lattice_offsets) in the onion peel and before the last
     # vote, so that the field takes the lattice's phase whatever the seed
-    "lattice": True,
-}
+    lattice: bool = True
+
+    def __post_init__(self) -> None:
+        _check(self)
 
 
-def MARGIN(omega=None, search=DEFAULTS["search"], **_params) -> int:
+def MARGIN(omega=None, search=ExemplarOptions.search, **_params) -> int:
     """Context pixels the method needs around a hole component: its search region."""
     return int(search)
 
 
 def _params(params: dict) -> dict:
-    p = {**DEFAULTS, **params}
-    patch = p["patch"]
+    """The options as a dict, checked (ExemplarOptions)."""
+    return asdict(ExemplarOptions(**params))
+
+
+def _check(p: ExemplarOptions) -> None:
+    patch = p.patch
     if not isinstance(patch, (int, np.integer)) or patch < 3 or patch % 2 == 0:
         raise InputError(f"patch must be an odd integer >= 3 (the patch side), not {patch!r}")
     for name in (
@@ -105,31 +119,33 @@ def _params(params: dict) -> dict:
         "onion_passes",
         "cohere_sweeps",
     ):
-        v = p[name]
+        v = getattr(p, name)
         if not isinstance(v, (int, np.integer)) or v < (0 if name == "search" else 1):
             raise InputError(f"{name} must be a positive integer, not {v!r}")
-    levels = p["levels"]
+    levels = p.levels
     if levels is not None and (not isinstance(levels, (int, np.integer)) or levels < 1):
         raise InputError(f"levels must be a positive integer or None (automatic), not {levels!r}")
-    g = p["confidence"]
+    g = p.confidence
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"confidence must be a number >= 1 (1 turns it off), not {g!r}")
-    sw = p["structure"]
+    sw = p.structure
     if sw is not None and (
         not isinstance(sw, (int, float, np.floating, np.integer)) or not np.isfinite(sw) or sw < 0
     ):
         raise InputError(
             f"structure must be a weight >= 0 (0 turns it off) or None (automatic), not {sw!r}"
         )
-    g = p["cohere"]
+    g = p.cohere
     if not isinstance(g, (int, float, np.floating, np.integer)) or not np.isfinite(g) or g < 1:
         raise InputError(f"cohere must be a number >= 1 (1 turns it off), not {g!r}")
-    f = p["features"]
+    f = p.features
     if f is not None and (
         not isinstance(f, (int, float, np.floating, np.integer)) or not np.isfinite(f) or f < 0
     ):
         raise InputError(f"features must be a weight >= 0 (0 turns them off), not {f!r}")
-    return p
+
+
+DEFAULTS = asdict(ExemplarOptions())
 
 
 # ---------------------------------------------------------------------------------------
@@ -266,6 +282,7 @@ def _pyramid(colour, hole, guides, patch, nlevels):
     return pyramid
 
 
+@register("exemplar", ExemplarOptions, margin=lambda omega, o: MARGIN(omega, o.search))
 def solve(
     data,
     omega,

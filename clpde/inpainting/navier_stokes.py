@@ -37,6 +37,8 @@ either way (docs/inpainting_methods.md has the figures).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
@@ -46,6 +48,7 @@ from ..errors import ClpdeError, InputError
 from ..imagedata import positive
 from . import bounds
 from .poisson import DeviceList, PoissonSolver, box_around, ring_mean_start, thick
+from .registry import register
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("inpainting/navier_stokes.cl",)
@@ -53,20 +56,51 @@ KERNEL_FILES = ("inpainting/navier_stokes.cl",)
 MARGIN = 3  # the biharmonic start reads two pixels past the hole; L I on the ring, one more
 
 
-def _check(nu, contrast, steps, max_iter, tol, cg_iterations, check_every):
-    if not np.isfinite(nu) or nu < 0:
-        raise InputError(f"nu must be a number >= 0, not {nu!r}")
-    positive("contrast", contrast)
-    if not np.isfinite(tol) or tol < 0:
-        raise InputError(f"tol must be a number >= 0, not {tol!r}")
-    for name, v in (
-        ("steps", steps),
-        ("max_iter", max_iter),
-        ("cg_iterations", cg_iterations),
-        ("check_every", check_every),
-    ):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-            raise InputError(f"{name} must be an integer >= 1, not {v!r}")
+@dataclass(frozen=True)
+class NavierStokesOptions:
+    """method="navier-stokes"'s options (the module docstring), checked on construction.
+
+    Parameters
+    ----------
+    nu : float
+        The vorticity's diffusion (>= 0).
+    contrast : float
+        The edge-stopping diffusion's contrast (> 0).
+    steps : int
+        Vorticity transport steps between Poisson solves.
+    cg_iterations : int
+        Conjugate-gradient iterations of each Poisson solve.
+    max_iter : int
+        Outer iterations at most.
+    tol : float
+        Stop once the largest change in the hole is below it (0: off).
+    mean_tol : float
+        Stop once the mean change in the hole is below it (0: off).
+    check_every : int
+        Outer iterations between the checks.
+    """
+
+    nu: float = 0.05
+    contrast: float = 0.2
+    steps: int = 5
+    cg_iterations: int = 10
+    max_iter: int = 1000
+    tol: float = 1e-4
+    mean_tol: float = 1e-5
+    check_every: int = 10
+
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.nu) or self.nu < 0:
+            raise InputError(f"nu must be a number >= 0, not {self.nu!r}")
+        positive("contrast", self.contrast)
+        for name in ("tol", "mean_tol"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value < 0:
+                raise InputError(f"{name} must be a number >= 0, not {value!r}")
+        for name in ("steps", "max_iter", "cg_iterations", "check_every"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise InputError(f"{name} must be an integer >= 1, not {v!r}")
 
 
 class NavierStokesSolver:
@@ -195,21 +229,19 @@ def inpaint(
     omega,
     runtime,
     *,
-    nu=0.05,
-    contrast=0.2,
-    steps=5,
-    cg_iterations=10,
-    max_iter=1000,
-    tol=1e-4,
-    mean_tol=1e-5,
-    check_every=10,
+    nu=NavierStokesOptions.nu,
+    contrast=NavierStokesOptions.contrast,
+    steps=NavierStokesOptions.steps,
+    cg_iterations=NavierStokesOptions.cg_iterations,
+    max_iter=NavierStokesOptions.max_iter,
+    tol=NavierStokesOptions.tol,
+    mean_tol=NavierStokesOptions.mean_tol,
+    check_every=NavierStokesOptions.check_every,
     dtype=np.float32,
     return_solver=False,
 ):
     """Navier-Stokes inpainting of (channels, rows, cols) data in [0, 1]."""
-    _check(nu, contrast, steps, max_iter, tol, cg_iterations, check_every)
-    if not np.isfinite(mean_tol) or mean_tol < 0:
-        raise InputError(f"mean_tol must be a number >= 0, not {mean_tol!r}")
+    NavierStokesOptions(nu, contrast, steps, cg_iterations, max_iter, tol, mean_tol, check_every)
     if not omega.any():
         return (data.copy(), None) if return_solver else data.copy()
     if omega.all():
@@ -247,6 +279,7 @@ def inpaint(
     return (out, solver) if return_solver else out
 
 
+@register("navier-stokes", NavierStokesOptions, margin=MARGIN)
 def solve(
     data,
     omega,
@@ -255,14 +288,14 @@ def solve(
     dtype=np.float32,
     progress=None,
     seed=None,
-    nu=0.05,
-    contrast=0.2,
-    steps=5,
-    cg_iterations=10,
-    max_iter=1000,
-    tol=1e-4,
-    mean_tol=1e-5,
-    check_every=10,
+    nu=NavierStokesOptions.nu,
+    contrast=NavierStokesOptions.contrast,
+    steps=NavierStokesOptions.steps,
+    cg_iterations=NavierStokesOptions.cg_iterations,
+    max_iter=NavierStokesOptions.max_iter,
+    tol=NavierStokesOptions.tol,
+    mean_tol=NavierStokesOptions.mean_tol,
+    check_every=NavierStokesOptions.check_every,
 ):
     """Registry entry point: Navier-Stokes inpainting (see the module docstring)."""
     data = np.asarray(data)

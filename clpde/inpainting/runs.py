@@ -9,7 +9,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._progress import State
-from .registry import soft
 
 
 @dataclass
@@ -41,6 +40,8 @@ class InpaintInfo:
     build_seconds: float = 0.0  # spent building OpenCL programs during the run (first use)
     snapshots: list = field(default_factory=list)
     method: str | None = "transport"  # None: the mask was empty, nothing was run
+    # method="auto": the method its votes chose most (by pixels), else the method itself
+    chosen: str | None = None
     boxes: list = field(default_factory=list)  # (y0, y1, x0, x1) of each box solved
     box_methods: list = field(default_factory=list)  # the method that solved each box
     # omega pixels of each box that the exemplar filled (under method="auto" a box named
@@ -52,22 +53,26 @@ class InpaintInfo:
 
 
 class SolveRun:
-    """A method without states of its own (no `run`), run by its `solve` as one step: the
-    interface of the methods' runs (`states(every)`, then `solution` and the counters).
-    For a method without SOFT_MASK, a soft mask is applied afterwards, as
-    m * filled + (1 - m) * observed."""
+    """A method without states of its own, run by its `solve` as one step: the interface
+    of the methods' runs (`states(every)`, then `solution` and the counters). For a method
+    without soft_mask, a soft mask is applied afterwards, as m * filled + (1 - m) * observed."""
 
     steps, converged, levels, steps_per_level, band_pixels = 0, True, 1, [], 0
 
-    def __init__(self, module, data, omega, runtime, damage, fidelity, **options):
-        self.module, self.data, self.omega, self.runtime = module, data, omega, runtime
-        self.damage, self.fidelity, self.options = damage, fidelity, options
+    def __init__(
+        self, method, data, omega, runtime, options, damage, fidelity, dtype, progress, seed
+    ):
+        self.method, self.data, self.omega, self.runtime = method, data, omega, runtime
+        self.options, self.damage, self.fidelity = options, damage, fidelity
+        self.common = {"dtype": dtype, "progress": progress, "seed": seed}
         self.solution = None
 
     def states(self, every=None):
-        soft_mask = soft(self.module)
+        soft_mask = self.method.soft_mask
         extra = {"fidelity": self.fidelity} if soft_mask and self.fidelity is not None else {}
-        solved = self.module.solve(self.data, self.omega, self.runtime, **self.options, **extra)
+        solved = self.method.call(
+            self.data, self.omega, self.runtime, self.options, **self.common, **extra
+        )
         solved = np.asarray(solved, np.float64)
         if self.damage is not None and not soft_mask:
             solved = np.where(

@@ -48,12 +48,14 @@ Defaults (block 8, border 12, rho 0.6, gamma 0.7, alpha 2, delta 1, split 0.3, t
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pyopencl as cl
 
 from ..errors import DeviceLimitError
 from ..imagedata import InputError
+from .registry import register
 from .spectral_plan import MAXL, block_iterations, plan, shifts_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -83,6 +85,46 @@ def MARGIN(omega=None, block: int = 8, border: int = 12, **_params) -> int:
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise InputError(f"{name} must be an integer >= 1, not {v!r}")
     return int(block) + int(border)
+
+
+@dataclass(frozen=True)
+class SpectralOptions:
+    """method="spectral"'s options (solve's docstring has their meaning), checked on
+    construction."""
+
+    block: int = 8
+    min_block: int = 4
+    border: int = 12
+    split: float = 0.3
+    rho: float = 0.6
+    delta: float = 1.0
+    gamma: float = 0.7
+    alpha: float = 2.0
+    iterations: int = 100
+    stop: float = 0.0
+    colour: str = "pca"
+    detrend: bool = True
+    shifts: int = 2
+    cutoff: float = 1.5
+    per_pixel: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check(
+            self.block,
+            self.min_block,
+            self.border,
+            self.split,
+            self.rho,
+            self.delta,
+            self.gamma,
+            self.alpha,
+            self.iterations,
+            self.stop,
+            self.colour,
+            self.cutoff,
+            self.per_pixel,
+            self.shifts,
+        )
 
 
 def _check(
@@ -432,6 +474,7 @@ def fitting_kernel(runtime, real) -> tuple:
     )
 
 
+@register("spectral", SpectralOptions, margin=lambda omega, o: MARGIN(omega, o.block, o.border))
 def solve(
     data,
     omega,
@@ -440,21 +483,21 @@ def solve(
     dtype=np.float32,
     progress=None,
     seed=None,
-    block=8,
-    min_block=4,
-    border=12,
-    split=0.3,
-    rho=0.6,
-    delta=1.0,
-    gamma=0.7,
-    alpha=2.0,
-    iterations=100,
-    stop=0.0,
-    colour="pca",
-    detrend=True,
-    shifts=2,
-    cutoff=1.5,
-    per_pixel=0.0,
+    block=SpectralOptions.block,
+    min_block=SpectralOptions.min_block,
+    border=SpectralOptions.border,
+    split=SpectralOptions.split,
+    rho=SpectralOptions.rho,
+    delta=SpectralOptions.delta,
+    gamma=SpectralOptions.gamma,
+    alpha=SpectralOptions.alpha,
+    iterations=SpectralOptions.iterations,
+    stop=SpectralOptions.stop,
+    colour=SpectralOptions.colour,
+    detrend=SpectralOptions.detrend,
+    shifts=SpectralOptions.shifts,
+    cutoff=SpectralOptions.cutoff,
+    per_pixel=SpectralOptions.per_pixel,
 ):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 

@@ -15,22 +15,70 @@ so that a texture patch is taken from where the structure looks alike.
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
+
 import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
 from ..planar.rof import denoise_tv
 from . import exemplar
-from .registry import load
+from .registry import METHODS, keywords, load, register
 
-# tv_weight 1.5 (relative to the known span): of 1, 1.5 and 2, the one that does best on the
-# texture and thick cases without giving up the periodic ones (docs/inpainting_texture.md
-# has the table)
-DEFAULTS = {"tv_weight": 1.5, "guide": 0.5, "structure": None}
 # The transport first: coherence's shells of a square hole meet on its diagonals and leave
 # creases there (the cup's rim as a V); the transport's structure scores higher on the
 # periodic, texture and thick cases (docs/inpainting_texture.md).
 STRUCTURE_METHODS = ("transport", "coherence")
+
+
+@dataclass(frozen=True)
+class StructureTextureOptions:
+    """method="structure-texture"'s options, checked on construction.
+
+    Parameters
+    ----------
+    tv_weight : float
+        The ROF weight relative to the known pixels' span (larger puts more into the
+        texture part); the result of a * data + b is a * result + b. 1.5: of 1, 1.5 and 2,
+        the one that does best on the texture and thick cases without giving up the
+        periodic ones (docs/inpainting_texture.md has the table).
+    guide : float
+        Weight of the filled structure in the texture's patch distance (0: none).
+    structure : str, optional
+        The structure method's name (default: transport, else coherence).
+    texture : ExemplarOptions
+        The exemplar's options for the texture part (its own structure guide off: the
+        filled structure guides it).
+    """
+
+    tv_weight: float = 1.5
+    guide: float = 0.5
+    structure: str | None = None
+    texture: exemplar.ExemplarOptions = exemplar.ExemplarOptions(structure=0.0)
+
+    def __post_init__(self) -> None:
+        for name in ("tv_weight", "guide"):
+            value = getattr(self, name)
+            if (
+                not isinstance(value, (int, float, np.integer, np.floating))
+                or not np.isfinite(value)
+                or value < (0 if name == "guide" else 1e-12)
+            ):
+                wanted = "weight >= 0" if name == "guide" else "positive number"
+                raise InputError(f"{name} must be a {wanted}, not {value!r}")
+        if self.structure is not None and self.structure not in METHODS:
+            raise InputError(
+                f"structure must be an inpainting method ({', '.join(STRUCTURE_METHODS)} "
+                f"suit it) or None, not {self.structure!r}"
+            )
+        if not isinstance(self.texture, exemplar.ExemplarOptions):
+            raise InputError(
+                f"texture must be an ExemplarOptions, not {type(self.texture).__name__}"
+            )
+
+
+DEFAULTS = {f.name: f.default for f in dataclasses.fields(StructureTextureOptions)}
 
 
 def MARGIN(omega=None, search=exemplar.DEFAULTS["search"], **_params) -> int:
@@ -80,6 +128,12 @@ def decompose(data, omega, runtime, tv_weight: float):
     return u, filled - u
 
 
+@register(
+    "structure-texture",
+    StructureTextureOptions,
+    margin=lambda omega, o: MARGIN(omega, o.texture.search),
+    ghost=2,  # its structure may be the transport's, whose grids have two ghost layers
+)
 def solve(
     data,
     omega,
@@ -88,34 +142,26 @@ def solve(
     dtype=np.float32,
     progress=None,
     seed=None,
-    tv_weight=DEFAULTS["tv_weight"],
-    guide=DEFAULTS["guide"],
-    structure=None,
+    tv_weight=StructureTextureOptions.tv_weight,
+    guide=StructureTextureOptions.guide,
+    structure=StructureTextureOptions.structure,
+    texture=None,
     **exemplar_params,
 ):
     """Fill ``omega``: TV structure by a structure method, texture by the exemplar method.
 
-    tv_weight: the ROF weight relative to the known pixels' span (larger puts more into the
-        texture part); the result of a * data + b is a * result + b.
-    guide: weight of the filled structure in the texture's patch distance (0: none).
-    structure: the structure method's name (default: transport, else coherence).
-    Other keywords (patch, search, iterations, ...) go to the exemplar method.
+    tv_weight, guide, structure, texture: StructureTextureOptions'. Other keywords
+    (patch, search, iterations, ...) go to the exemplar method, over `texture`'s.
     """
-    for name, value in (("tv_weight", tv_weight), ("guide", guide)):
-        if (
-            not isinstance(value, (int, float, np.integer, np.floating))
-            or not np.isfinite(value)
-            or value < (0 if name == "guide" else 1e-12)
-        ):
-            wanted = "weight >= 0" if name == "guide" else "positive number"
-            raise InputError(f"{name} must be a {wanted}, not {value!r}")
+    if "guide" in exemplar_params:
+        raise InputError("guide is this method's weight of the structure; give a number")
+    StructureTextureOptions(tv_weight, guide, structure)  # the checks
+    exemplar_params = {**(keywords(texture) if texture is not None else {}), **exemplar_params}
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
     out = np.array(data, copy=True)
     if not omega.any():
         return out
-    if "guide" in exemplar_params:
-        raise InputError("guide is this method's weight of the structure; give a number")
     u, v = decompose(np.asarray(data, np.float64), omega, runtime, float(tv_weight))
     u_filled = np.asarray(
         _structure_solver(structure)(u, omega, runtime, dtype=dtype, progress=progress, seed=seed),

@@ -58,7 +58,8 @@ from ..fields import Field, Grid, PingPong, index_list
 from ..runtime import get_runtime
 from . import multiresolution as mr
 from . import poisson
-from .transport_params import GHOST, SCALINGS, STENCILS, InpaintParams, transport_params
+from .registry import register
+from .transport_params import GHOST, SCALINGS, STENCILS, TransportOptions
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("common/fields.cl", "inpainting/transport.cl", "planar/planar.cl")
@@ -75,7 +76,7 @@ class LevelSolver:
         runtime,
         data: np.ndarray,
         omega: np.ndarray,
-        params: InpaintParams,
+        params: TransportOptions,
         dtype=np.float32,
         fidelity: np.ndarray | None = None,
         observed=None,
@@ -369,17 +370,16 @@ class TransportRun:
         runtime,
         data,
         omega,
-        params,
+        options: TransportOptions,
         *,
-        levels=None,
         dtype=np.float32,
         progress=None,
         fidelity=None,
     ):
-        self.p = params if isinstance(params, InpaintParams) else transport_params(params)
+        self.p = options
         self.runtime, self.data, self.omega = runtime, data, omega
         self.device = runtime  # get_runtime(self.device) is this runtime
-        self.levels = levels if levels is not None else mr.auto_levels(omega)
+        self.levels = _levels(omega, options)
         self.dtype, self.progress, self.fidelity = dtype, progress, fidelity
         self.solution = None
         self.steps = 0
@@ -468,31 +468,36 @@ DESCRIPTION = (
 SOFT_MASK = True
 
 
-def _levels(omega, levels):
+def _levels(omega, options: TransportOptions) -> int:
+    return options.levels if options.levels is not None else mr.auto_levels(omega)
 
-    return levels if levels is not None else mr.auto_levels(omega)
 
-
-def _reach(params) -> int:
+def _reach(options: TransportOptions) -> int:
     """Pixels outside Omega that one level reads: the band Omega-epsilon plus the diffusion
     stencil, the pre-smoothing's reach, the transport's two-cell stencil and the
     biharmonic start's two cells."""
-
-    p = InpaintParams(
-        **{k: v for k, v in params.items() if k in InpaintParams.__dataclass_fields__}
-    )
-    return int(np.ceil(p.epsilon)) + 1 + p.presmooth + GHOST + 2
+    return int(np.ceil(options.epsilon)) + 1 + options.presmooth + GHOST + 2
 
 
-def ALIGN(omega, levels=None, **params) -> int:
+def _align(omega, options: TransportOptions) -> int:
     """Boxes start on multiples of 2**(levels - 1), so that their pyramids coincide with
     the whole image's."""
-    return 2 ** (_levels(omega, levels) - 1)
+    return 2 ** (_levels(omega, options) - 1)
 
 
-def MARGIN(omega, levels=None, **params) -> int:
-    scale = 2 ** (_levels(omega, levels) - 1)
-    return _reach(params) * scale + scale
+def _margin(omega, options: TransportOptions) -> int:
+    scale = 2 ** (_levels(omega, options) - 1)
+    return _reach(options) * scale + scale
+
+
+def _states(
+    data, omega, runtime, options, *, dtype, progress, seed, fidelity, damage=None
+) -> TransportRun:
+    """The registry's run of one box (seed unused: the scheme is deterministic; a soft
+    mask acts through the fidelity)."""
+    return TransportRun(
+        runtime, data, omega, options, dtype=dtype, progress=progress, fidelity=fidelity
+    )
 
 
 def run(
@@ -504,23 +509,32 @@ def run(
     progress=None,
     seed=None,
     fidelity=None,
-    levels=None,
-    **params,
+    **options,
 ) -> TransportRun:
     """The scheme's run on one box: `states(every)` yields (steps, change, data) on the
-    finest level; afterwards `solution` and the counters are set."""
-    return TransportRun(
-        runtime,
+    finest level; afterwards `solution` and the counters are set. `options` are
+    TransportOptions' fields."""
+    return _states(
         data,
         omega,
-        params,
-        levels=levels,
+        runtime,
+        TransportOptions(**options),
         dtype=dtype,
         progress=progress,
+        seed=seed,
         fidelity=fidelity,
     )
 
 
+@register(
+    "transport",
+    TransportOptions,
+    margin=_margin,
+    align=_align,
+    soft_mask=True,
+    ghost=GHOST,
+    states=_states,
+)
 def solve(
     data,
     omega,
@@ -530,20 +544,11 @@ def solve(
     progress=None,
     seed=None,
     fidelity=None,
-    levels=None,
-    **params,
+    **options,
 ):
-    """The scheme's result on one box (registry.py's protocol)."""
-    scheme = run(
-        data,
-        omega,
-        runtime,
-        dtype=dtype,
-        progress=progress,
-        fidelity=fidelity,
-        levels=levels,
-        **params,
-    )
+    """The scheme's result on one box (registry.py's protocol); `options` are
+    TransportOptions' fields."""
+    scheme = run(data, omega, runtime, dtype=dtype, progress=progress, fidelity=fidelity, **options)
     for _ in scheme.states():
         pass
     return scheme.solution

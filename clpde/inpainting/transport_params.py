@@ -1,6 +1,5 @@
-"""The options of method="transport", the thesis's scheme (transport.py): their defaults
-(InpaintParams, as `clpde.inpaint` names them), their ranges (check_params) and the
-dispatch's conversion of a call's keywords (transport_params)."""
+"""The options of method="transport", the thesis's scheme (transport.py): TransportOptions,
+their defaults and their ranges, checked on construction."""
 
 from __future__ import annotations
 
@@ -20,7 +19,55 @@ GHOST = 2  # ghost layers: the transport stencil reaches two cells
 
 
 @dataclass(frozen=True)
-class InpaintParams:
+class TransportOptions:
+    """method="transport"'s options (thesis chapter 3), checked on construction.
+
+    Parameters
+    ----------
+    dt : float
+        The time step.
+    transport_steps : int
+        A, the transport steps of a cycle.
+    diffusion_steps : int
+        B, the anisotropic diffusion steps of a cycle.
+    diffusion_dt : float
+        The diffusion's time step (<= 0.25; appendix A's code uses 0.2, the text 0.1).
+    epsilon : float
+        Width of the band Omega-epsilon around Omega (>= 2 pixels).
+    presmooth : int
+        Steps of anisotropic diffusion of the box before the loop.
+    scaling : {'none', 'quartic-root'}
+        Eq. (3.6) as printed, or appendix A's sign(I_t) |I_t|^(1/4) on its 0..255 scale,
+        which keeps faint structures moving but never settles (the run then usually ends
+        at max_steps).
+    rotation : {'ccw', 'cw'}
+        The rotation of the gradient (the steady state is the same).
+    max_steps : int
+        Steps per level at most.
+    tol : float
+        Stop once the largest change inside Omega over `check_every` cycles is below it
+        ([0, 1] units; 0 turns the test off).
+    mean_tol : float
+        Stop once the mean change there is below it (the test that ends runs on photos,
+        where a few pixels never settle; docs/inpainting.md).
+    check_every : int
+        Cycles of A + B steps between the checks, made on the device.
+    fill : {'biharmonic', 'diffusion', 'mean', 'zero'}
+        The start inside Omega on the coarsest level (the best PSNR on photos comes early,
+        so the start matters; docs/inpainting.md compares them).
+    keep_band : bool
+        Reset the known pixels of Omega-epsilon after each diffusion batch, or let the
+        diffusion keep smoothing them (False).
+    stencil : {'isotropic', 'central'}
+        Scharr's derivatives, or appendix A's central differences.
+    coarse_start : {'corrected', 'upsampled'}
+        A finer level's start: the upsampled coarser result plus its mismatch with the
+        known border extended into Omega, or the upsampled result alone.
+    levels : int, optional
+        Resolution levels; None picks them per box from the mask's thickness
+        (multiresolution.auto_levels).
+    """
+
     dt: float = 0.1
     transport_steps: int = 15  # A
     diffusion_steps: int = 2  # B
@@ -37,9 +84,17 @@ class InpaintParams:
     keep_band: bool = True
     stencil: str = "isotropic"
     coarse_start: str = "corrected"
+    levels: int | None = None
+
+    def __post_init__(self) -> None:
+        _check(self)
 
 
-def check_params(p: InpaintParams) -> None:
+# The name the options had before they held the levels and their checks.
+InpaintParams = TransportOptions
+
+
+def _check(p: TransportOptions) -> None:
     """InputError for an option of the scheme out of its range."""
     positive("dt", p.dt)
     positive("diffusion_dt", p.diffusion_dt)
@@ -75,29 +130,8 @@ def check_params(p: InpaintParams) -> None:
     if p.fill not in FILLS:
         raise InputError(f"fill must be one of {', '.join(FILLS)}, not {p.fill!r}")
 
-
-# InpaintParams' fields that `inpaint` names in its signature (the others go in **options),
-# in the fields' order
-_TRANSPORT_ARGS = (
-    "dt",
-    "transport_steps",
-    "diffusion_steps",
-    "diffusion_dt",
-    "epsilon",
-    "presmooth",
-    "scaling",
-    "rotation",
-    "max_steps",
-    "tol",
-    "mean_tol",
-    "check_every",
-    "fill",
-    "keep_band",
-)
-
-
-def transport_params(params: dict) -> InpaintParams:
-    unknown = set(params) - set(InpaintParams.__dataclass_fields__)
-    if unknown:
-        raise InputError(f"unknown inpainting option(s): {', '.join(sorted(unknown))}")
-    return InpaintParams(**params)
+    levels = p.levels
+    if levels is not None and (
+        isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 1
+    ):
+        raise InputError(f"levels must be an integer >= 1 or None (automatic), not {levels!r}")

@@ -33,12 +33,14 @@ worst by 1.4 dB), against 25 (6.4 dB) before the prior and the widths.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy import ndimage, optimize
 
+from ..errors import InputError
 from . import poisson
-from .registry import available, load
-from .registry import margin as method_margin
+from .registry import METHODS, available, get, keywords, load, method_of, register
 
 # The candidates, cheapest first (the first one fills clusters where all agree), and the
 # narrowest ring of known pixels hidden to score them: chosen on the calibration half
@@ -82,9 +84,11 @@ def candidates(names=None) -> list:
     return [n for n in (CANDIDATES if names is None else names) if _solver(n) is not None]
 
 
-def margin(names=None, ring: int | None = None, crop=None) -> int:
-    """Known pixels the vote reads around a hole: the widest candidate's margin plus the
-    widest ring (with SHIFT, the farthest shifted copy of the holes of `crop`, a mask)."""
+def margin(names=None, ring: int | None = None, crop=None, options=()) -> int:
+    """Known pixels the vote reads around a hole: the widest candidate's margin (with its
+    options among `options`, else its defaults) plus the widest ring (with SHIFT, the
+    farthest shifted copy of the holes of `crop`, a mask)."""
+    given = _by_method(options)
     ring = (RING_MAX if SCALE > 0 else RING) if ring is None else ring
     if SHIFT and crop is not None and np.any(crop):
         deepest = float(ndimage.distance_transform_edt(np.pad(crop, 1)).max())
@@ -92,8 +96,15 @@ def margin(names=None, ring: int | None = None, crop=None) -> int:
     reach = 2
     for name in candidates(names):
         if name in available():
-            reach = max(reach, method_margin(load(name), None, {}) or 0)
+            method = get(name)
+            own = given.get(name) or method.options()
+            reach = max(reach, method.reach(None, own) or 0)
     return reach + ring
+
+
+def _by_method(options) -> dict:
+    """{method name: its options object} of a sequence of candidates' options."""
+    return {method_of(type(o)): o for o in options}
 
 
 def _fill(name, data, omega, runtime, dtype, seed, params):
@@ -311,3 +322,125 @@ def choose(
         "choices": [c for c in choices if c is not None],
     }
     return out, report
+
+
+# ---------------------------------------------------------------------------------------
+# method="auto" (clpde.inpainting.registry)
+
+
+@dataclass(frozen=True)
+class AutoOptions:
+    """method="auto"'s options: the vote's (choose's docstring), checked on construction.
+
+    Parameters
+    ----------
+    names : tuple of str, optional
+        The candidates, cheapest first (None: CANDIDATES).
+    ring : int, optional
+        The narrowest ring of known pixels hidden to score them (None: RING).
+    blend : bool
+        Fill each cluster with the best blend of the candidates (False: the best one).
+    prior : float, optional
+        The box's weight in each cluster's fit (None: PRIOR).
+    scale : float, optional
+        A cluster's ring width per pixel of its half-thickness (None: SCALE).
+    thin : float
+        Clusters at most this thick take the cheapest candidate without a vote.
+    shift : bool, optional
+        Also test on the cluster's shape moved aside (None: SHIFT).
+    options : tuple
+        Candidates' own options objects (such as CoherenceOptions(epsilon=4)), each for the
+        candidate whose class it is; the others keep their defaults.
+    """
+
+    names: tuple | None = None
+    ring: int | None = None
+    blend: bool = True
+    prior: float | None = None
+    scale: float | None = None
+    thin: float = 0.0
+    shift: bool | None = None
+    options: tuple = ()
+
+    def __post_init__(self) -> None:
+        known = ("biharmonic", *METHODS)
+        if self.names is not None and (
+            isinstance(self.names, str) or any(n not in known for n in self.names)
+        ):
+            raise InputError(
+                f"names must be a tuple of candidates among {', '.join(known)}, not {self.names!r}"
+            )
+        ring = self.ring
+        if ring is not None and (
+            isinstance(ring, bool) or not isinstance(ring, (int, np.integer)) or ring < 1
+        ):
+            raise InputError(f"ring must be an integer >= 1 or None, not {self.ring!r}")
+        for name in ("prior", "scale", "thin"):
+            value = getattr(self, name)
+            if value is not None and not value >= 0:  # NaN too; inf is allowed
+                raise InputError(f"{name} must be a number >= 0, not {value!r}")
+        names = CANDIDATES if self.names is None else self.names
+        for o in self.options:
+            owner = method_of(type(o))
+            if owner not in names:
+                raise InputError(
+                    f"options holds {type(o).__name__}, which is not a candidate's options; "
+                    f"give options of {', '.join(n for n in names if n in METHODS)}"
+                )
+
+
+class VoteRun:
+    """method="auto" on one box, as one step: `states(every)` runs the vote, after which
+    `solution`, `report` (choose's) and the counters are set. A soft mask is applied after
+    the vote, as m * filled + (1 - m) * observed."""
+
+    steps, converged, levels, steps_per_level, band_pixels = 0, True, 1, [], 0
+
+    def __init__(self, data, omega, runtime, options, dtype, seed, damage):
+        self.data, self.omega, self.runtime, self.options = data, omega, runtime, options
+        self.dtype, self.seed, self.damage = dtype, seed, damage
+        self.solution = self.report = None
+
+    def states(self, every=None):
+        o = self.options
+        params = {name: keywords(own) for name, own in _by_method(o.options).items()}
+        solved, self.report = choose(
+            self.data,
+            self.omega,
+            self.runtime,
+            names=o.names,
+            ring=o.ring,
+            blend=o.blend,
+            prior=o.prior,
+            scale=o.scale,
+            thin=o.thin,
+            shift=o.shift,
+            dtype=self.dtype,
+            seed=self.seed,
+            params=params,
+        )
+        if self.damage is not None:
+            solved = np.where(
+                self.omega, self.damage * solved + (1 - self.damage) * self.data, self.data
+            )
+        self.solution = solved
+        return iter(())
+
+
+def _vote_run(data, omega, runtime, options, *, dtype, progress, seed, fidelity, damage):
+    return VoteRun(data, omega, runtime, options, dtype, seed, damage)
+
+
+@register(
+    "auto",
+    AutoOptions,
+    margin=lambda omega, o: margin(o.names, crop=omega, options=o.options),
+    soft_mask=True,  # VoteRun blends a soft mask itself
+    states=_vote_run,
+    description="the self-validated choice among the candidates, per cluster of damage",
+)
+def solve(data, omega, runtime, *, dtype=np.float32, progress=None, seed=None, **options):
+    """The vote's fill of one box (registry.py's protocol); `options` are AutoOptions'."""
+    run = VoteRun(data, omega, runtime, AutoOptions(**options), dtype, seed, None)
+    run.states()
+    return run.solution
