@@ -63,7 +63,7 @@ from .plan import (
     expand_inputs,
     plan_tasks,
 )
-from .tasks import TASKS
+from .tasks import TASKS, TRANSPORT_OPTIONS, inpaint_options
 
 MANIFEST_EVERY_S = 1.0
 
@@ -136,6 +136,13 @@ def _options(command: str, options: dict, flow) -> dict:
         raise InputError(
             f"batch {command}: unknown option(s) {', '.join(unknown)}; its options "
             f"are {', '.join(accepted)}"
+        )
+    if command == "inpaint":  # the method's options, checked as the task builds them
+        inpaint_options(
+            options.get("method"),
+            gif=bool(options.get("gif")),
+            levels=options.get("levels"),
+            **{name: options.get(name) for name in TRANSPORT_OPTIONS},
         )
     return options
 

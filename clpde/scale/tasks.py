@@ -20,6 +20,7 @@ from ..errors import InputError
 from ..film.restore import restore_film
 from ..imagedata import mask_plane, split_alpha
 from ..inpainting.api import inpaint
+from ..inpainting.registry import resolve
 from ..io import frames as frame_io
 from ..io.images import (
     _frame_to_uint8,
@@ -43,6 +44,7 @@ from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, wri
 from ..tracking.confidence import LOW_CONFIDENCE
 from ..tracking.contours import track
 
+# the transport's options that the command line has flags for (and --levels)
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
 OVERLAY_RATE = 10  # frames per second of the tracking overlay
 
@@ -256,6 +258,29 @@ def _inpaint_mask(input, mask, image, soft_mask: bool):
     return omega
 
 
+def inpaint_options(
+    method=None,
+    *,
+    gif: bool = False,
+    levels=None,
+    dt=None,
+    scaling=None,
+    max_steps=None,
+    tol=None,
+    mean_tol=None,
+):
+    """The options object of `clpde inpaint` and `clpde batch inpaint` (the one place
+    they are built): the flags given (not None) among TRANSPORT_OPTIONS and levels override
+    the method's defaults, checked once. No method with --gif, or with a transport flag,
+    is the transport: the evolution a GIF shows is the thesis scheme's."""
+    flags = {"dt": dt, "scaling": scaling, "max_steps": max_steps, "tol": tol, "mean_tol": mean_tol}
+    flags["levels"] = levels
+    given = {name: value for name, value in flags.items() if value is not None}
+    if method is None and gif:
+        method = "transport"
+    return resolve(method, None, given)[1]
+
+
 def inpaint_file(
     input,
     output,
@@ -279,10 +304,20 @@ def inpaint_file(
 ) -> list[str]:
     """`clpde inpaint`: fill the image `input` where the image `mask` is set (or its NaN
     pixels, for mask 'nan'), written to `output`; gif: also the evolution as a GIF (the
-    transport's, every gif_every steps). Options are clpde.inpaint's; only the transport
-    options given are passed, so that the default method is chosen by them."""
+    transport's, every gif_every steps). The method's options are built by
+    inpaint_options (checked before the image is read); the others are clpde.inpaint's."""
     if gif_every < 1:
         raise InputError(f"--gif-every must be at least 1, not {gif_every}")
+    options = inpaint_options(
+        method,
+        gif=bool(gif),
+        levels=levels,
+        dt=dt,
+        scaling=scaling,
+        max_steps=max_steps,
+        tol=tol,
+        mean_tol=mean_tol,
+    )
     if gif:
         check_not_overwriting_input([input, mask], gif)
         if not str(gif).lower().endswith(".gif"):
@@ -295,25 +330,19 @@ def inpaint_file(
     image = read_input(input, output, *([] if nan_mask else [mask]), device=device, allow_nan=True)
     omega = _inpaint_mask(input, mask, image, soft_mask)
     parts = split_alpha(image, input)
-    if method is None and gif:
-        method = "transport"  # the evolution the GIF shows is the thesis scheme's
-    options = {
-        "channel_axis": parts.channel_axis,
-        "colour": colour,
-        "levels": levels,
-        "device": device,
-        "progress": _progress(progress),
-        "return_info": True,
-        "method": method,
-        "grow": grow,
-        "seed": seed,
-    }
-    given = {"dt": dt, "scaling": scaling, "max_steps": max_steps, "tol": tol, "mean_tol": mean_tol}
-    options.update({name: value for name, value in given.items() if value is not None})
-    if gif:
-        result, info = inpaint(parts.colour, omega, snapshots=gif_every, **options)
-    else:
-        result, info = inpaint(parts.colour, omega, **options)
+    result, info = inpaint(
+        parts.colour,
+        omega,
+        channel_axis=parts.channel_axis,
+        colour=colour,
+        device=device,
+        progress=_progress(progress),
+        return_info=True,
+        options=options,
+        grow=grow,
+        seed=seed,
+        snapshots=gif_every if gif else None,
+    )
     write_image(output, parts.join(result))
     lines = [f"wrote {output}"]
     if gif:
@@ -332,8 +361,9 @@ def inpaint_file(
         if info.method == "transport"
         else ""
     )
+    chosen = f" (mostly {info.chosen})" if info.method == "auto" else ""
     lines.append(
-        f"inpaint: {info.omega_pixels} pixels, method {info.method}, {steps}"
+        f"inpaint: {info.omega_pixels} pixels, method {info.method}{chosen}, {steps}"
         f"{len(info.boxes)} box(es), {info.seconds:.2f} s"
     )
     return lines
