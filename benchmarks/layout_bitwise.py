@@ -31,6 +31,15 @@ def _first(*paths):
     raise ImportError(f"none of {paths}")
 
 
+def _has_options() -> bool:
+    """Whether this tree's tracker takes its options as one TrackOptions (storage among them)."""
+    try:
+        from clpde.tracking.options import TrackOptions
+    except ImportError:
+        return False
+    return "storage" in getattr(TrackOptions, "__dataclass_fields__", {})
+
+
 def _inpainting(res: dict) -> None:
     import clpde
     from clpde.data import damaged_astronaut
@@ -73,7 +82,7 @@ def _tracking(res: dict) -> None:
 
     frames, first = _sequence()
     tracker_init = inspect.signature(clpde.MorphingTracker.__init__).parameters
-    keyword = "storage" if "storage" in tracker_init else "band_layout"
+    keyword = "storage" if "storage" in tracker_init or _has_options() else "band_layout"
     for storage in ("lists", "bricks8x8", "bricks16x4"):
         masks = clpde.track(frames, first, progress=False, **{keyword: storage})
         res[f"track_{storage}"] = np.asarray(masks)

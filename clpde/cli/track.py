@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ..io.images import MASK_RULE
 from ..scale.tasks import TASKS
+from ..tracking.options import ADAPTIVE_ITERATIONS, ITERATIONS, TrackOptions
 from ._common import add_device_argument, add_output_folder_arguments, report, show_progress
 
 
@@ -39,10 +40,10 @@ def _add_method_arguments(parser) -> None:
     parser.add_argument(
         "--features",
         choices=("intensity", "edges", "contrast"),
-        default="intensity",
+        default=TrackOptions.features,
         help="what the frames are compared by: grey levels, edge maps or local "
         "contrast normalisation (invariant to local light changes) "
-        "(default: intensity)",
+        f"(default: {TrackOptions.features})",
     )
     parser.add_argument(
         "--colour", action="store_true", help="compare all colour channels, not grey only"
@@ -50,31 +51,31 @@ def _add_method_arguments(parser) -> None:
     parser.add_argument(
         "--discrepancy",
         choices=("adaptive", "ncc", "difference", "huber"),
-        default="adaptive",
+        default=TrackOptions.discrepancy,
         help="how F2 and F1 are compared: adaptive (correlation where a patch "
         "has contrast well above the noise, difference where it is flat or noisy), "
         "local normalised cross-correlation (ignores changes of light), "
         "F2 - F1 (the thesis) or a Huber-clipped difference "
-        "(default: adaptive)",
+        f"(default: {TrackOptions.discrepancy})",
     )
     parser.add_argument(
         "--motion",
         choices=("kalman", "image", "components", "velocity", "none"),
-        default="kalman",
+        default=TrackOptions.motion,
         help="start each frame at the predicted displacement: a "
         "constant-velocity Kalman filter fed by matching the frames, the object's "
         "motion found in the image (any speed up to 32 px a frame, with a colour "
         "appearance term that keeps the contour off the background and occluders), each "
         "piece matched on its own, the previous displacement, or none "
-        "(default: kalman)",
+        f"(default: {TrackOptions.motion})",
     )
     parser.add_argument(
         "--shape-weight",
         type=float,
-        default=0.0,
+        default=TrackOptions.shape_weight,
         metavar="W",
         help="pull the contour towards the predicted start where the frames "
-        "say nothing, against leaks (e.g. 0.02; default: 0)",
+        f"say nothing, against leaks (e.g. 0.02; default: {TrackOptions.shape_weight:g})",
     )
     parser.add_argument(
         "--region-weight",
@@ -118,15 +119,16 @@ def _add_run_arguments(parser) -> None:
     parser.add_argument(
         "--max-iterations",
         type=int,
-        default=None,
-        help="cap of morphing iterations per frame (default: 20 with a "
-        "region or curvature term, 40 otherwise)",
+        default=TrackOptions.max_iterations,
+        help=f"cap of morphing iterations per frame (default: {ADAPTIVE_ITERATIONS} with a "
+        f"region or curvature term, {ITERATIONS} otherwise)",
     )
     parser.add_argument(
         "--min-size",
         type=int,
-        default=0,
-        help="remove pieces and holes smaller than this many pixels (default: 0)",
+        default=TrackOptions.min_size,
+        help="remove pieces and holes smaller than this many pixels "
+        f"(default: {TrackOptions.min_size})",
     )
 
 

@@ -43,6 +43,7 @@ from ..runtime import get_runtime
 from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
 from ..tracking.confidence import LOW_CONFIDENCE
 from ..tracking.contours import track
+from ..tracking.options import TrackOptions, track_options
 
 # the transport's options that the command line has flags for (and --levels)
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
@@ -396,17 +397,17 @@ def track_file(
     output,
     *,
     mask,
-    features: str = "intensity",
-    colour: bool = False,
-    discrepancy: str = "adaptive",
-    motion: str = "kalman",
-    shape_weight: float = 0.0,
-    region_weight=None,
-    curvature=None,
+    features: str = TrackOptions.features,
+    colour: bool = TrackOptions.colour,
+    discrepancy: str = TrackOptions.discrepancy,
+    motion: str = TrackOptions.motion,
+    shape_weight: float = TrackOptions.shape_weight,
+    region_weight=TrackOptions.region_weight,
+    curvature=TrackOptions.curvature,
     equalize: str = "none",
-    smooth: bool = True,
-    max_iterations=None,
-    min_size: int = 0,
+    smooth: bool = TrackOptions.smooth,
+    max_iterations=TrackOptions.max_iterations,
+    min_size: int = TrackOptions.min_size,
     frames=None,
     gif: bool = True,
     mp4: bool = False,
@@ -417,14 +418,29 @@ def track_file(
 ) -> list[str]:
     """`clpde track`: the object marked by the image `mask` in the first frame of `input`
     (a video, an image folder or a multi-page TIFF) followed through it (clpde.track); the
-    folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4)."""
+    folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4). The
+    tracker's options are built and checked first (TrackOptions: motion 'none' is None,
+    equalize 'none' is False)."""
+    if shape_weight < 0:
+        raise InputError(f"--shape-weight must be at least 0, not {shape_weight}")
+    options = track_options(
+        features=features,
+        colour=colour,
+        discrepancy=discrepancy,
+        motion=None if motion == "none" else motion,
+        shape_weight=shape_weight,
+        region_weight=region_weight,
+        curvature=curvature,
+        equalize=False if equalize == "none" else equalize,
+        smooth=smooth,
+        max_iterations=max_iterations,
+        min_size=min_size,
+    )
     get_runtime(device)
     check_not_overwriting_input([input, mask], output)
     check_output_folder(output, overwrite, option="--overwrite")
     if mp4:
         require_av()
-    if shape_weight < 0:
-        raise InputError(f"--shape-weight must be at least 0, not {shape_weight}")
     threshold = LOW_CONFIDENCE if low_confidence is None else low_confidence
     if not 0 < threshold <= 1:
         raise InputError(f"--low-confidence must be in (0, 1], not {threshold}")
@@ -443,17 +459,7 @@ def track_file(
     masks, confidence = track(
         images,
         first,
-        features=features,
-        colour=colour,
-        discrepancy=discrepancy,
-        motion=None if motion == "none" else motion,
-        shape_weight=shape_weight,
-        region_weight=region_weight,
-        curvature=curvature,
-        equalize=False if equalize == "none" else equalize,
-        smooth=smooth,
-        max_iterations=max_iterations,
-        min_size=min_size,
+        options=options,
         device=device,
         progress=_progress(progress),
         return_confidence=True,

@@ -30,7 +30,7 @@ region term.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,7 +48,7 @@ from .follow import ObjectFollower
 from .inputs import check_frames, check_mask, scaled_frames, user_features
 from .levelset import GHOST, MARGIN, LevelSet, signed_distance
 from .morph import morph_pair
-from .options import TrackOptions
+from .options import TrackOptions, track_options
 from .prediction import MotionPrediction
 from .preprocessing import feature_field, prepare_frame
 from .region_term import RegionTerm
@@ -89,79 +89,14 @@ class MorphingTracker:
         As for `track`.
     first_mask : array_like
         As for `track`.
-    features : {'intensity', 'edges', 'contrast'} or array_like or callable, optional
+    options : TrackOptions, optional
         As for `track`.
-    colour : bool, optional
-        Put every channel of colour frames in the discrepancy (default: grey, Rec. 601
-        luma).
-    discrepancy : {'adaptive', 'ncc', 'difference', 'huber'}, optional
-        How F2 and F1 are compared: 'adaptive' (the default) blends the two below, the
-        correlation where a window has contrast well above the frame's noise and F2 - F1
-        where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
-        cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
-        F1 clipped at huber_delta.
-    motion : {'kalman', 'image', 'components', 'velocity', None}, optional
-        Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction); 'image': moved
-        by the object's motion found in the image (a masked correlation over every shift
-        up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
-        through occlusions, with the appearance term on (clpde.tracking.follow); each
-        connected piece by its own match; by the previous displacement; or not at all.
-    shape_weight : float, optional
-        (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
-        nothing.
-    equalize : bool or {'match', 'global'}, optional
-        As for `track`.
-    smooth : bool, optional
-        As for `track`.
-    smooth_steps : int, optional
-        As for `track`.
-    smooth_kappa : float, optional
-        Perona-Malik's edge threshold of the pre-smoothing.
-    band_width : float, optional
-        As for `track`.
-    max_iterations : int, optional
-        As for `track`.
-    tol : float, optional
-        As for `track`.
-    check_every : int, optional
-        Iterations between the speed checks.
-    dt : float, optional
-        The morphing's time step (bounded by the CFL condition).
-    max_dt : float, optional
-        The largest time step the adaptive step may take.
-    reinit_iterations : int, optional
-        Reinitialisation iterations of the level set.
-    min_size : int, optional
-        As for `track`.
-    contrast_radius : int, optional
-        Half-width of the box of features='contrast'.
-    contrast_eps : float, optional
-        Regularisation of features='contrast' (intensities in [0, 1]).
-    ncc_radius : int, optional
-        Half-width of the NCC's window.
-    huber_delta : float, optional
-        The clipping of discrepancy='huber'.
-    search_radius : int, optional
-        The motion filter's search radius in pixels.
-    region_weight : float, optional
-        discrepancy='adaptive': the weight of the region term (the foreground's and
-        background's local statistics near the contour); None or 0: off. The adaptive
-        option's calibrated weight is `clpde.tracking.options.REGION_WEIGHT`.
-    curvature : float, optional
-        discrepancy='adaptive': the weight of the curvature term; None or 0: off (the
-        adaptive option's: `clpde.tracking.options.CURVATURE`).
-    appearance : float, optional
-        With motion='image' (and the adaptive discrepancy): the largest speed of the
-        appearance term, the colour (grey without colour) and texture histograms of the
-        object against its surroundings (None: APPEARANCE_WEIGHT; 0: off).
-    storage : {'lists', 'bricks8x8', 'bricks16x4'}, optional
-        The band as a list of cells or of bricks (the same results, bit for bit except the
-        NCC's window sums, equal to rounding; docs/tracking.md).
     device : str or int or Runtime, optional
         The OpenCL device, as for `clpde.use_device`.
     dtype : {float32, float64}, optional
         The device's arithmetic.
+    **overrides
+        As for `track`: fields of TrackOptions, and `features` as the user's own maps.
 
     Raises
     ------
@@ -184,69 +119,20 @@ class MorphingTracker:
         frames: ArrayLike,
         first_mask: ArrayLike,
         *,
-        features: str | ArrayLike | Callable = "intensity",
-        colour: bool = False,
-        discrepancy: str = "adaptive",
-        motion: str | None = "kalman",
-        shape_weight: float = 0.0,
-        equalize: bool | str = False,
-        smooth: bool = True,
-        smooth_steps: int = 5,
-        smooth_kappa: float = 0.08,
-        band_width: float = 3.0,
-        max_iterations: int | None = None,
-        tol: float = 0.02,
-        check_every: int = 2,
-        dt: float = 0.5,
-        max_dt: float = 4.0,
-        reinit_iterations: int = 5,
-        min_size: int = 0,
-        contrast_radius: int = 4,
-        contrast_eps: float = 0.02,
-        ncc_radius: int = 3,
-        huber_delta: float = 0.05,
-        search_radius: int = 6,
-        storage: str = "lists",
-        region_weight: float | None = None,
-        curvature: float | None = None,
-        appearance: float | None = None,
+        options: TrackOptions | None = None,
         device: DeviceLike = None,
         dtype: DTypeLike | None = None,
+        **overrides: Any,
     ):
         self.frames = check_frames(frames)
         self.first_mask = check_mask(first_mask, self.frames[0].shape[:2])
         self._user = None
-        if callable(features) or not isinstance(features, str):
+        features = overrides.get("features")
+        if features is not None and (callable(features) or not isinstance(features, str)):
             self._user = user_features(features, self.frames)
-            features = "user"
-        self.options = TrackOptions(
-            features=features,
-            colour=colour,
-            discrepancy=discrepancy,
-            motion=motion,
-            shape_weight=shape_weight,
-            equalize=equalize,
-            smooth=smooth,
-            smooth_steps=smooth_steps,
-            smooth_kappa=smooth_kappa,
-            band_width=band_width,
-            max_iterations=max_iterations,
-            tol=tol,
-            check_every=check_every,
-            dt=dt,
-            max_dt=max_dt,
-            reinit_iterations=reinit_iterations,
-            min_size=min_size,
-            contrast_radius=contrast_radius,
-            contrast_eps=contrast_eps,
-            ncc_radius=ncc_radius,
-            huber_delta=huber_delta,
-            search_radius=search_radius,
-            storage=storage,
-            region_weight=region_weight,
-            curvature=curvature,
-            appearance=appearance,
-        )
+            overrides["features"] = "user"
+        self.options = track_options(options, **overrides)
+        colour = self.options.colour
         self.runtime = get_runtime(device)
         self.dtype = np.dtype(dtype or np.float32)
         # a frame's level set (three fields, three masks, index lists) and its features
@@ -411,20 +297,14 @@ def track(
     frames: ArrayLike,
     first_mask: ArrayLike,
     *,
-    features: str | ArrayLike | Callable = "intensity",
-    equalize: bool | str = False,
-    smooth: bool = True,
-    smooth_steps: int = 5,
-    band_width: float = 3.0,
-    max_iterations: int | None = None,
-    tol: float = 0.02,
-    min_size: int = 0,
+    options: TrackOptions | None = None,
     device: DeviceLike = None,
+    dtype: DTypeLike | None = None,
     progress: bool | None = None,
     return_level_sets: bool = False,
     return_discrepancy: bool = False,
     return_confidence: bool = False,
-    **options: Any,
+    **overrides: Any,
 ) -> np.ndarray | tuple[np.ndarray, ...]:
     """Follow the object marked in the first frame through a sequence (thesis section 2.1).
 
@@ -436,33 +316,15 @@ def track(
     first_mask : array_like
         (H, W) boolean (or nonzero) mask of the object in frame 0; it may hold several
         pieces, and pieces may split or merge on the way.
-    features : {'intensity', 'edges', 'contrast'} or array_like or callable, optional
-        What the frames are compared by: the frames themselves (after pre-processing),
-        gradient-magnitude edge maps, local contrast normalisation over a
-        (2 contrast_radius + 1)^2 box (invariant to local changes of light), or the user's
-        own maps: a (T, H, W[, C]) array, a list of T maps, or a callable taking a frame
-        and returning its map (scaled to [0, 1] over the sequence; no pre-processing).
-    equalize : bool or {'match', 'global'}, optional
-        Grey-level equalisation across frames: 'match' (or True) gives every frame the
-        first frame's histogram, 'global' equalises each flat (costs accuracy on large
-        uniform backgrounds, docs/tracking.md), False skips it.
-    smooth : bool, optional
-        Perona-Malik pre-smoothing of the frames (True by default).
-    smooth_steps : int, optional
-        Its number of steps.
-    band_width : float, optional
-        Half-width of the narrow band in pixels.
-    max_iterations : int, optional
-        Cap of morphing iterations per frame (None: 40, or 20 with the region or curvature
-        term).
-    tol : float, optional
-        Each frame runs until the contour's top speed falls below `tol` pixels per unit
-        time (or `max_iterations`).
-    min_size : int, optional
-        When > 0, components and holes smaller than this many pixels are removed from each
-        result, and the next frame starts from the cleaned mask.
+    options : TrackOptions, optional
+        The tracker's options, one frozen object that holds their defaults and checks
+        (clpde.tracking.options.TrackOptions documents each: features, discrepancy, motion,
+        equalize, smooth, band_width, max_iterations, tol, min_size, storage, ...). None:
+        the defaults.
     device : str or int or Runtime, optional
         The OpenCL device, as for `clpde.use_device`.
+    dtype : {float32, float64}, optional
+        The device's arithmetic.
     progress : bool, optional
         Draw a progress bar; by default only for long runs on a terminal.
     return_level_sets : bool, optional
@@ -472,18 +334,16 @@ def track(
         high values mark frames of low confidence.
     return_confidence : bool, optional
         Also return the (T,) confidence per frame in [0, 1] (see Returns).
-    **options
-        MorphingTracker's other options: colour (every channel in the discrepancy),
-        discrepancy ('adaptive', the default: NCC where a window has contrast well above
-        the noise, F2 - F1 where it is flat; 'ncc'; 'difference', the thesis; 'huber'),
-        motion ('kalman', the default; None; 'velocity'; 'components': each connected piece
-        matched on its own), shape_weight, storage ('lists', 'bricks8x8' or 'bricks16x4':
-        the same results), contrast_radius, ncc_radius, huber_delta, search_radius,
-        region_weight and curvature (with discrepancy='adaptive': a region term and a
-        curvature term, off by default; with motion='components' and the weights
-        REGION_WEIGHT and CURVATURE of clpde.tracking.options they make the adaptive
-        option, better on the synthetic corpus and worse on real video and slices,
-        docs/tracking.md), dtype.
+    **overrides
+        Fields of TrackOptions that replace those of `options` (features='edges',
+        tol=0.01, motion='image', ...), checked once with them; a name TrackOptions lacks
+        is an InputError that lists its fields. `features` may also be the user's own
+        maps: a (T, H, W[, C]) array, a list of T maps, or a callable taking a frame and
+        returning its map (scaled to [0, 1] over the sequence; no pre-processing). With
+        motion='components', discrepancy='adaptive' and the weights REGION_WEIGHT and
+        CURVATURE of clpde.tracking.options, region_weight and curvature make the adaptive
+        option, better on the synthetic corpus and worse on real video and slices
+        (docs/tracking.md).
 
     Returns
     -------
@@ -517,18 +377,7 @@ def track(
     True
     """
     tracker = MorphingTracker(
-        frames,
-        first_mask,
-        features=features,
-        equalize=equalize,
-        smooth=smooth,
-        smooth_steps=smooth_steps,
-        band_width=band_width,
-        max_iterations=max_iterations,
-        tol=tol,
-        min_size=min_size,
-        device=device,
-        **options,
+        frames, first_mask, options=options, device=device, dtype=dtype, **overrides
     )
     n = len(tracker)
     height, width = tracker.first_mask.shape

@@ -70,7 +70,7 @@ class ObjectFollower:
         self.shape = tracker.first_mask.copy()
         self.predicted = self.shape
         self.velocity = np.zeros(2)
-        weight = tracker.options.appearance
+        weight = tracker.options.appearance_weight
         self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
         self.term = AppearanceTerm(ls, weight) if weight else None
         if self.term is not None:

@@ -60,7 +60,7 @@ def _step_kernel(
             WIN=options.ncc_radius,
         )
         return kernel, ()
-    terms = options.region_weight > 0 or options.curvature > 0 or options.appearance > 0
+    terms = options.region_weight > 0 or options.curvature > 0 or options.appearance_weight > 0
     kernel = ls.band_kernel(
         "tracking/adaptive.cl",
         "morph_adaptive" if ls.brick is None else "morph_adaptive_bricks",
@@ -81,7 +81,8 @@ def _largest_dt(options: TrackOptions) -> float:
     """The cap of the adaptive time step: F1's relaxation towards F2 must not overshoot,
     nor u's towards the prior (dt lam <= 1/2), nor the explicit curvature term."""
     lam = options.shape_weight
-    dt_cap = options.max_dt if lam == 0 else min(options.max_dt, 0.5 / lam)
+    max_dt = max(options.max_dt, options.dt)
+    dt_cap = max_dt if lam == 0 else min(max_dt, 0.5 / lam)
     if options.discrepancy == "adaptive" and options.curvature > 0:
         dt_cap = min(dt_cap, 0.2 / options.curvature)  # the explicit curvature term's limit
     return dt_cap
@@ -128,7 +129,7 @@ def morph_pair(
     converged = False
     iterations = 0
     residual = 0.0
-    while iterations < options.max_iterations:
+    while iterations < options.iterations:
         if ls.band.n == 0:  # the contour vanished from the frame
             converged = True
             break
@@ -156,7 +157,7 @@ def morph_pair(
         ls.u.swap()
         pair.swap()
         iterations += 1
-        if iterations % options.check_every == 0 or iterations == options.max_iterations:
+        if iterations % options.check_every == 0 or iterations == options.iterations:
             # One small read every few steps: speed, stability maxima and edge flag.
             values = stats.get()
             fastest, beta_max, grad_max = (
