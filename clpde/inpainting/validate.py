@@ -348,7 +348,7 @@ class AutoOptions:
         Clusters at most this thick take the cheapest candidate without a vote.
     shift : bool, optional
         Also test on the cluster's shape moved aside (None: SHIFT).
-    options : tuple
+    candidate_options : tuple
         Candidates' own options objects (such as CoherenceOptions(epsilon=4)), each for the
         candidate whose class it is; the others keep their defaults.
     """
@@ -360,7 +360,7 @@ class AutoOptions:
     scale: float | None = None
     thin: float = 0.0
     shift: bool | None = None
-    options: tuple = ()
+    candidate_options: tuple = ()
 
     def __post_init__(self) -> None:
         known = ("biharmonic", *METHODS)
@@ -380,12 +380,12 @@ class AutoOptions:
             if value is not None and not value >= 0:  # NaN too; inf is allowed
                 raise InputError(f"{name} must be a number >= 0, not {value!r}")
         names = CANDIDATES if self.names is None else self.names
-        for o in self.options:
+        for o in self.candidate_options:
             owner = method_of(type(o))
             if owner not in names:
                 raise InputError(
-                    f"options holds {type(o).__name__}, which is not a candidate's options; "
-                    f"give options of {', '.join(n for n in names if n in METHODS)}"
+                    f"candidate_options holds {type(o).__name__}, not a candidate's "
+                    f"options; give options of {', '.join(n for n in names if n in METHODS)}"
                 )
 
 
@@ -403,7 +403,7 @@ class VoteRun:
 
     def states(self, every=None):
         o = self.options
-        params = {name: keywords(own) for name, own in _by_method(o.options).items()}
+        params = {name: keywords(own) for name, own in _by_method(o.candidate_options).items()}
         solved, self.report = choose(
             self.data,
             self.omega,
@@ -434,7 +434,7 @@ def _vote_run(data, omega, runtime, options, *, dtype, progress, seed, fidelity,
 @register(
     "auto",
     AutoOptions,
-    margin=lambda omega, o: margin(o.names, crop=omega, options=o.options),
+    margin=lambda omega, o: margin(o.names, crop=omega, options=o.candidate_options),
     soft_mask=True,  # VoteRun blends a soft mask itself
     states=_vote_run,
     description="the self-validated choice among the candidates, per cluster of damage",

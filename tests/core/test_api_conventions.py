@@ -65,12 +65,11 @@ def test_dtype_everywhere_and_precision_gone():
     assert clpde.MorphingTracker(frames, mask, dtype=np.float64).dtype == np.float64
     with pytest.raises(clpde.InputError, match="precision"):
         clpde.diffuse(image, steps=3, precision=np.float64)
-    for call in (
-        lambda: clpde.denoise_tv(image, weight=0.2, precision=np.float64),
-        lambda: clpde.MorphingTracker(frames, mask, precision=np.float64),
-    ):
-        with pytest.raises(TypeError, match="precision"):
-            call()
+    with pytest.raises(TypeError, match="precision"):
+        clpde.denoise_tv(image, weight=0.2, precision=np.float64)
+    # the tracker's keywords are TrackOptions' fields: an unknown one is a clear InputError
+    with pytest.raises(clpde.InputError, match="unknown tracking option.*precision"):
+        clpde.MorphingTracker(frames, mask, precision=np.float64)
 
 
 def test_reinitialize_is_the_one_spelling(runtime):
@@ -106,7 +105,7 @@ def test_storage_is_the_one_keyword_for_band_storage():
     frames = np.zeros((2, 16, 16), np.float32)
     frames[:, 4:12, 4:12] = 1
     for old in ({"band_layout": "lists"}, {"layout": "lists"}):
-        with pytest.raises(TypeError):
+        with pytest.raises(clpde.InputError, match="unknown tracking option"):
             clpde.MorphingTracker(frames, frames[0] > 0, **old)
 
 
@@ -126,18 +125,27 @@ def test_surface_denoise_info_is_a_dataclass():
         info["lambda"]
 
 
-def test_inpaint_names_the_transport_options_with_their_defaults():
-    """inpaint's signature repeats InpaintParams' defaults: only changed ones are passed on."""
+def test_method_options_live_in_their_options_classes_only():
+    """inpaint's and track's signatures repeat no method option: the defaults are the
+    options classes' alone (one place each), and the keywords reach them as overrides."""
     import dataclasses
     import inspect
 
-    from clpde.inpainting.api import inpaint
-    from clpde.inpainting.transport_params import _TRANSPORT_ARGS, InpaintParams
+    from clpde.inpainting import registry
+    from clpde.inpainting.api import Inpainting, inpaint
+    from clpde.tracking.contours import MorphingTracker, track
+    from clpde.tracking.options import TrackOptions
 
-    signature = inspect.signature(inpaint).parameters
-    fields = {f.name: f.default for f in dataclasses.fields(InpaintParams)}
-    assert list(_TRANSPORT_ARGS) == [name for name in fields if name in signature]
-    assert all(signature[name].default == fields[name] for name in _TRANSPORT_ARGS)
+    for function in (inpaint, Inpainting.__init__):
+        names = set(inspect.signature(function).parameters)
+        for method in (*registry.available(), "auto"):
+            own = {f.name for f in dataclasses.fields(registry.options(method))}
+            # spectral's own colour and alpha share the image's keywords' names: they are
+            # reached through SpectralOptions
+            assert not own & names - {"colour", "alpha"}, (function, method, own & names)
+    for function in (track, MorphingTracker.__init__):
+        names = set(inspect.signature(function).parameters)
+        assert not {f.name for f in dataclasses.fields(TrackOptions)} & names
 
 
 def test_inpaint_return_shapes():
