@@ -392,6 +392,19 @@ def evolution_frames(damaged, states) -> list[np.ndarray]:
 
 
 # ---- folders of results --------------------------------------------------------------------
+def tracking_options(*, motion=TrackOptions.motion, equalize="none", **flags) -> TrackOptions:
+    """The TrackOptions of `clpde track` and `clpde batch track` (the one place they are
+    built from the flags): motion 'none' is None, equalize 'none' is False; `flags` are
+    TrackOptions' other fields."""
+    if flags.get("shape_weight", 0) < 0:
+        raise InputError(f"--shape-weight must be at least 0, not {flags['shape_weight']}")
+    return track_options(
+        motion=None if motion == "none" else motion,
+        equalize=False if equalize == "none" else equalize,
+        **flags,
+    )
+
+
 def track_file(
     input,
     output,
@@ -421,17 +434,15 @@ def track_file(
     folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4). The
     tracker's options are built and checked first (TrackOptions: motion 'none' is None,
     equalize 'none' is False)."""
-    if shape_weight < 0:
-        raise InputError(f"--shape-weight must be at least 0, not {shape_weight}")
-    options = track_options(
+    options = tracking_options(
         features=features,
         colour=colour,
         discrepancy=discrepancy,
-        motion=None if motion == "none" else motion,
+        motion=motion,
         shape_weight=shape_weight,
         region_weight=region_weight,
         curvature=curvature,
-        equalize=False if equalize == "none" else equalize,
+        equalize=equalize,
         smooth=smooth,
         max_iterations=max_iterations,
         min_size=min_size,
