@@ -52,6 +52,8 @@ from collections.abc import Callable
 from typing import Protocol
 
 from ..errors import InputError
+from .runs import SolveRun
+from .transport_params import TransportOptions
 
 METHODS = {
     "transport": "clpde.inpainting.transport",
@@ -116,8 +118,6 @@ class Registered:
         return int(self.align(omega, options) if callable(self.align) else self.align)
 
     def start(self, data, omega, runtime, options, *, dtype, progress, seed, fidelity, damage):
-        from .runs import SolveRun
-
         if self.states is not None:
             return self.states(
                 data,
@@ -255,8 +255,6 @@ def resolve(method: str | None = None, options=None, overrides: dict | None = No
             )
         method = owner
     elif method is None:
-        from .transport_params import TransportOptions
-
         method = "transport" if set(overrides) & _names(TransportOptions) else DEFAULT
     entry = get(method)
     names = _names(entry.options)

@@ -45,7 +45,6 @@ from ..tracking.confidence import LOW_CONFIDENCE
 from ..tracking.contours import track
 from ..tracking.options import TrackOptions, track_options
 
-# the transport's options that the command line has flags for (and --levels)
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
 OVERLAY_RATE = 10  # frames per second of the tracking overlay
 
@@ -270,13 +269,11 @@ def inpaint_options(
     tol=None,
     mean_tol=None,
 ):
-    """The options object of `clpde inpaint` and `clpde batch inpaint` (the one place
-    they are built): the flags given (not None) among TRANSPORT_OPTIONS and levels override
-    the method's defaults, checked once. No method with --gif, or with a transport flag,
-    is the transport: the evolution a GIF shows is the thesis scheme's."""
-    flags = {"dt": dt, "scaling": scaling, "max_steps": max_steps, "tol": tol, "mean_tol": mean_tol}
-    flags["levels"] = levels
-    given = {name: value for name, value in flags.items() if value is not None}
+    """The options object of `clpde inpaint` and batch (the one place they are built): the
+    flags given (not None) override the method's defaults, checked once. No method with
+    --gif (the evolution a GIF shows is the thesis scheme's) or a transport flag: transport."""
+    flags = dict(dt=dt, scaling=scaling, max_steps=max_steps, tol=tol, mean_tol=mean_tol)
+    given = {k: v for k, v in {**flags, "levels": levels}.items() if v is not None}
     if method is None and gif:
         method = "transport"
     return resolve(method, None, given)[1]
@@ -393,9 +390,8 @@ def evolution_frames(damaged, states) -> list[np.ndarray]:
 
 # ---- folders of results --------------------------------------------------------------------
 def tracking_options(*, motion=TrackOptions.motion, equalize="none", **flags) -> TrackOptions:
-    """The TrackOptions of `clpde track` and `clpde batch track` (the one place they are
-    built from the flags): motion 'none' is None, equalize 'none' is False; `flags` are
-    TrackOptions' other fields."""
+    """The TrackOptions of `clpde track` and batch (the one place they are built): motion
+    'none' is None, equalize 'none' is False; `flags` are TrackOptions' other fields."""
     if flags.get("shape_weight", 0) < 0:
         raise InputError(f"--shape-weight must be at least 0, not {flags['shape_weight']}")
     return track_options(
@@ -431,9 +427,7 @@ def track_file(
 ) -> list[str]:
     """`clpde track`: the object marked by the image `mask` in the first frame of `input`
     (a video, an image folder or a multi-page TIFF) followed through it (clpde.track); the
-    folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4). The
-    tracker's options are built and checked first (TrackOptions: motion 'none' is None,
-    equalize 'none' is False)."""
+    folder `output` gets the masks, contours.json and overlay.gif (and overlay.mp4)."""
     options = tracking_options(
         features=features,
         colour=colour,
