@@ -51,6 +51,26 @@ class DeviceInfo:
         )
 
 
+def type_name(device: cl.Device) -> str:
+    """'gpu', 'cpu', 'accelerator' or 'other'."""
+    if device.type & cl.device_type.GPU:
+        return "gpu"
+    if device.type & cl.device_type.CPU:
+        return "cpu"
+    if device.type & cl.device_type.ACCELERATOR:
+        return "accelerator"
+    return "other"
+
+
+def has_fp64(device: cl.Device) -> bool:
+    return "cl_khr_fp64" in device.extensions or bool(getattr(device, "double_fp_config", 0))
+
+
+def not_pocl(platform: cl.Platform) -> bool:
+    """Sort key that puts PoCL's devices before another runtime's of the same type."""
+    return "portable computing language" not in platform.name.lower()
+
+
 # ---- the compiler's own output ---------------------------------------------------------------
 # PoCL's compiler prints "1 error generated." (or "N warnings generated.") straight to the
 # process's stderr, and pyopencl turns any non-empty build log into a "Non-empty compiler
@@ -157,12 +177,12 @@ class Kernel:
     Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
     """
 
-    __slots__ = ("_key", "_lock", "_runtime", "cl_kernel")
+    __slots__ = ("_lock", "cl_kernel", "key", "runtime")
 
     def __init__(self, cl_kernel: cl.Kernel, runtime, key: tuple):
         self.cl_kernel = cl_kernel
         self._lock = runtime.lock
-        self._runtime, self._key = runtime, key
+        self.runtime, self.key = runtime, key
 
     def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
         with self._lock:
@@ -176,8 +196,8 @@ class Kernel:
         (The paths that need local memory or large work-groups check before any work;
         this is the net under every other launch.)"""
         group = int(np.prod(local_size)) if local_size else 0
-        problem = self._runtime.group_problem(self, group) if group else None
-        name = self._runtime.device.name.strip()
+        problem = self.runtime.group_problem(self, group) if group else None
+        name = self.runtime.device.name.strip()
         detail = problem or f"{name} refused kernel {self.cl_kernel.function_name}: {exc}"
         return DeviceLimitError(
             f"{detail}; choose another device (clpde devices, CLPDE_DEVICE) or a smaller "
@@ -210,3 +230,26 @@ def group_problem(device: cl.Device, kernel, group: int) -> str | None:
             f"allows at most {largest} for it"
         )
     return None
+
+
+def build_failure(platform: cl.Platform, device: cl.Device, source: str) -> str | None:
+    """Why `device` cannot build the OpenCL C program `source`, or None when it can."""
+    try:
+        ctx = cl.Context([device])
+    except cl.Error as exc:
+        return f"{device.name.strip()} ({platform.name.strip()}) cannot be opened: {exc}"
+    _, failure = quietly(lambda: cl.Program(ctx, source).build())
+    if failure is None:
+        return None
+    log = str(failure[0])
+    if "unknown target CPU" in log:
+        return (
+            f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
+            "its LLVM does not know this CPU; install your system's PoCL "
+            "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
+        )
+    first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
+    return (
+        f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+        f"kernels: {first.strip()[:200]}"
+    )
