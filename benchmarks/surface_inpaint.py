@@ -33,8 +33,11 @@ import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from clpde.data import surface_shape  # noqa: E402
-from clpde.surface import ImplicitSurface, to_mesh  # noqa: E402
+from clpde.surface import (  # noqa: E402
+    ImplicitSurface,
+    surface_shape,  # noqa: E402
+    to_mesh,
+)
 from clpde.surface.inpainting import fill_mesh, inpaint  # noqa: E402
 
 R, RT = 1.0, 0.4

@@ -1,4 +1,5 @@
-"""Narrow-band storage in dense bricks (kernels/surface/bricks.cl).
+"""Narrow-band storage in dense bricks (the layout kernels/bricks/bricks.h; the surfaces' and
+regions' steps on it are in their own kernels/surface/bricks.cl and kernels/regions/bricks.cl).
 
 The padded grid of a Grid3D is cut into bricks of BX x BY x BZ cells (a compile-time size:
 8x8x8, 8x4x4 and 4x4x4 were compared in docs/surface_storage.md). Only the bricks the band needs

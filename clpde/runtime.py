@@ -1,7 +1,8 @@
 """OpenCL runtime: device choice, program building and caching, launch geometry.
 
-Everything that talks to pyopencl's platform layer lives here, so the flows only ask for
-``get_runtime(device).kernel("planar/planar.cl", "heat_step")`` and launch it.
+Everything that talks to pyopencl's platform layer lives here, so the flows only ask for a
+kernel by its file under kernels/ and its name (the Runtime's ``kernel`` method) and
+launch it.
 Runtimes and kernels pickle by their device's name and their lookup; fields.py registers
 how, beside the device buffers and arrays, which pickle by value.
 """
@@ -19,8 +20,6 @@ import numpy as np
 
 from .errors import ClpdeError, DeviceMemoryError, KernelBuildError, NoDeviceError
 
-# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("planar/planar.cl",)
 ITEM_GROUP = 64  # the work-group of Runtime.items
 
 

@@ -12,7 +12,8 @@
 // and its error grows under refinement.
 //
 // The files, one family each (thesis chapter 4, appendices B-E):
-//   surface/band.cl    the bands, their runs, closest points and their stencils (once per psi)
+//   surface/band.cl    closest points and their stencils (once per psi; the bands and their
+//                      runs are common/grid3d.cl's)
 //   surface/extend.cl  closest-point re-extension, sampling, extension by the PDE
 //   surface/heat.cl    the heat flow (4.7, 4.8) and Turk's reaction-diffusion
 //   surface/flows.cl   TV, harmonic maps, diffusion along a field; TV's dynamic lambda
