@@ -394,7 +394,7 @@ class BrickBand:
         return into
 
     def launch_list(self, kernel, n: int, *args):
-        """Run a LIST_RANGE kernel (common.cl) over n entries."""
+        """Run a LIST_RANGE kernel (common.h) over n entries."""
         if n == 0:
             return None
         (gsize,), (lsize,), run = self.runtime.list_launch(n)

@@ -135,7 +135,7 @@ class Grid(BaseGrid):
         return (self.nc, self.ny + 2 * self.ghost, self.sx)
 
     def args(self, xrun: int) -> tuple:
-        """The GRID_ARGS of common.cl."""
+        """The GRID_ARGS of common.h."""
         return tuple(np.int32(v) for v in (self.nx, self.ny, self.sx, self.plane, self.ghost, xrun))
 
     def launch(self, kernel: Kernel, *args, wait_for=None) -> cl.Event:

@@ -14,6 +14,7 @@ import tempfile
 import threading
 import time
 import warnings
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -38,17 +39,10 @@ INSTALL_HINT = (
 )
 
 
-def _find_kernel_dir() -> Path:
-    # Installed wheels carry the kernels as the package clpde.kernels; a source checkout
-    # keeps them in the top-level kernels/ folder beside clpde/.
-    here = Path(__file__).resolve().parent
-    for candidate in (here / "kernels", here.parent / "kernels"):
-        if (candidate / "common/common.cl").is_file():
-            return candidate
-    raise ClpdeError(f"clpde's OpenCL kernels were not found next to {here}; reinstall clpde")
-
-
-KERNEL_DIR = _find_kernel_dir()
+# The kernels are the package clpde.kernels: in a wheel, kernels/ installed there; in a
+# source checkout, the same folder through the link clpde/kernels. The compiler reads them
+# (and their #includes) from a folder, so the package must be one on disk, not in a zip.
+KERNEL_DIR = Path(str(resources.files("clpde.kernels")))
 
 
 def _ensure_pocl_cache_dir() -> None:
@@ -84,6 +78,7 @@ _ensure_pocl_cache_dir()
 import pyopencl as cl  # noqa: E402  (imported here: PoCL reads POCL_CACHE_DIR when the ICD loads)
 
 from ._device import (  # noqa: E402
+    QUEUE_PROPERTIES,
     DeviceInfo,
     Kernel,
     build_failure,
@@ -95,11 +90,17 @@ from ._device import (  # noqa: E402
     type_name,
 )
 
+_found: list[tuple[cl.Platform, cl.Device]] = []  # the devices, listed once per process
+
 
 def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
+    """Every (platform, device), in the order the indices count; asked of OpenCL once
+    (every get_runtime() call needs the list, and the ICD loader takes milliseconds)."""
     global _used_opencl
     check_not_forked()
     _used_opencl = True
+    if _found:
+        return _found
     try:
         platforms = cl.get_platforms()
     except cl.Error as exc:  # PLATFORM_NOT_FOUND_KHR when no ICD is installed
@@ -115,7 +116,8 @@ def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
             f"OpenCL platforms exist but show no device (for PoCL, check that "
             f"POCL_CACHE_DIR={os.environ.get('POCL_CACHE_DIR')!r} is writable); {INSTALL_HINT}"
         )
-    return found
+    _found[:] = found
+    return _found
 
 
 def _resolve(spec) -> int:
@@ -368,7 +370,7 @@ class Runtime:
         self.global_mem = device.global_mem_size
         self.max_alloc = device.max_mem_alloc_size
         self.ctx = cl.Context([device])
-        self.queue = cl.CommandQueue(self.ctx)
+        self.queue = cl.CommandQueue(self.ctx, properties=QUEUE_PROPERTIES)
         self._programs: dict[tuple, cl.Program] = {}
         self.build_seconds = 0.0  # spent building programs so far (callers leave it out)
         self._kernels: dict[tuple, Kernel] = {}
@@ -580,6 +582,7 @@ def _after_fork_in_child() -> None:
         runtime._forked()
     _runtimes.clear()
     _build_problems.clear()
+    _found.clear()
 
 
 if hasattr(os, "register_at_fork"):

@@ -6,6 +6,7 @@ loads the ICD)."""
 
 from __future__ import annotations
 
+import atexit
 import os
 import re
 import sys
@@ -169,6 +170,60 @@ def pyopencl_ctx(spec: str, found: list) -> int:
     return on_it[_pick(dev, [found[i][1].name.strip() for i in on_it], "device")]
 
 
+# ---- per-kernel profiling (CLPDE_PROFILE=1) -------------------------------------------------
+# Every launch passes Kernel.__call__, so the device time of each kernel is summed there from
+# the OpenCL events (the queues are then made with profiling enabled, see QUEUE_PROPERTIES)
+# and printed at exit, slowest first. Off by default: reading an event's times waits for it.
+PROFILING = os.environ.get("CLPDE_PROFILE", "").strip() not in ("", "0")
+QUEUE_PROPERTIES = cl.command_queue_properties.PROFILING_ENABLE if PROFILING else 0
+_PENDING_LIMIT = 256  # launches held before their events are read (each holds a pyopencl event)
+
+
+class _Profile:
+    """Device seconds and launches per kernel, from the launches' events."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.pending: list[tuple[str, cl.Event]] = []
+        self.seconds: dict[str, float] = {}
+        self.launches: dict[str, int] = {}
+
+    def add(self, name: str, event) -> None:
+        with self.lock:
+            self.pending.append((name, event))
+            if len(self.pending) >= _PENDING_LIMIT:
+                self._read()
+
+    def _read(self) -> None:
+        for name, event in self.pending:
+            self.launches[name] = self.launches.get(name, 0) + 1
+            try:
+                event.wait()
+                elapsed = (event.profile.end - event.profile.start) * 1e-9
+            except (cl.Error, AttributeError):  # a queue made without profiling
+                continue
+            self.seconds[name] = self.seconds.get(name, 0.0) + elapsed
+        self.pending.clear()
+
+    def report(self, file=None) -> None:
+        with self.lock:
+            self._read()
+            if not self.launches:
+                return
+            total = sum(self.seconds.values())
+            lines = [f"clpde profile: {total:.3f} s of kernel time (CLPDE_PROFILE=1)"]
+            lines += [
+                f"  {self.seconds.get(n, 0.0):9.4f} s {self.launches[n]:8d} launches  {n}"
+                for n in sorted(self.launches, key=lambda n: -self.seconds.get(n, 0.0))
+            ]
+            print("\n".join(lines), file=file or sys.stderr)
+
+
+PROFILE = _Profile()
+if PROFILING:
+    atexit.register(PROFILE.report)
+
+
 class Kernel:
     """A pyopencl kernel whose launches hold the runtime's lock.
 
@@ -187,9 +242,12 @@ class Kernel:
     def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
         with self._lock:
             try:
-                return self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
+                event = self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
             except cl.Error as exc:
                 raise self._launch_error(exc, local_size) from None
+        if PROFILING:
+            PROFILE.add(f"{self.key[0]}:{self.key[1]}", event)
+        return event
 
     def _launch_error(self, exc: cl.Error, local_size) -> ClpdeError:
         """A launch the device refused, as clpde's error: which limit, and the way out.

@@ -1,7 +1,7 @@
 // A 3D grid's narrow band, once per level set (clpde/grid3d.py, which surfaces and regions
 // share): the band's mask and its runs along x. The ground floor's kernels: they include
 // only common/ headers.
-#include "common.cl"
+#include "common.h"
 
 // mask[i] = 1 where |psi| < width on interior cells of the padded volume. Work-item (y, z)
 // of the interior walks one row.
@@ -47,4 +47,4 @@ __kernel void band_run_bounds(__global const int* restrict list,
     end[r] = max(last, first + count);
 }
 
-// (RUN_ARGS and FOR_EACH_RUN_CELL, the loops over these runs, are in common.cl.)
+// (RUN_ARGS and FOR_EACH_RUN_CELL, the loops over these runs, are in common.h.)

@@ -3,7 +3,7 @@
 // stencils of those points, the interpolation nodes and the cells a step reads around
 // them. No defines: the interpolation order is an argument (these run once per psi), so one
 // program serves every surface. Layout and conventions: surface.h.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 
 // Closest points x - psi grad(psi) / |grad(psi)| of the band cells, in padded index units

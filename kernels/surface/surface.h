@@ -1,5 +1,5 @@
 // Helpers shared by the surface kernel files (surface_*.cl, bricks.cl). Include after
-// common.cl.
+// common.h.
 //
 // Volumes are ghost-padded 3D arrays, layout (channels, nz + 2G, ny + 2G, nx + 2G), x
 // fastest: `sx` is the row stride, `sxy` the slab stride and `plane` (LIST_ARGS) the channel
