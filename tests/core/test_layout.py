@@ -1,26 +1,21 @@
 """The package's layout keeps its rules: arrows point down (no import cycles, counting imports
 inside functions, between files and between folders; only ``clpde/__main__.py`` imports the
 command line; the ground floor imports no capability), a small ground floor,
-and no module or function too long to read. Measured by benchmarks/layout_metrics.py."""
+and no module or function too long to read. Measured by tests/cases/layout_metrics.py."""
 
-import importlib.util
-import sys
+import re
 from pathlib import Path
 
 import pytest
+
+from tests.cases import layout_metrics
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
 def metrics():
-    spec = importlib.util.spec_from_file_location(
-        "layout_metrics", ROOT / "benchmarks" / "layout_metrics.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["layout_metrics"] = module
-    spec.loader.exec_module(module)
-    return module
+    return layout_metrics
 
 
 def test_the_counter_sees_imports_inside_functions(metrics, tmp_path):
@@ -95,3 +90,19 @@ def test_no_function_over_100_lines_of_code(metrics):
 
 def test_no_deprecation_shims(metrics):
     assert metrics.shims(ROOT) == []
+
+
+# a path joined onto benchmarks/ (for sys.path or a spec) or an import of it
+BENCHMARKS_PATH = re.compile(r"""/ ["']benchmarks["']|^\s*(from|import) benchmarks\b""")
+
+
+def test_tests_do_not_import_benchmarks():
+    """Cases both use are in tests/cases/; a test that reached into benchmarks/ would break
+    with any benchmark's edit, and run its module-level set-up."""
+    reaching = [
+        f"{path.relative_to(ROOT)}:{number}"
+        for path in sorted((ROOT / "tests").rglob("*.py"))
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if BENCHMARKS_PATH.search(line)
+    ]
+    assert reaching == []

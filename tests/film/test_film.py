@@ -4,7 +4,7 @@ detect_defects / inpaint_video on small synthetic sequences."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import film as ref
+from tests.reference import film as ref
 from scipy.ndimage import gaussian_filter, shift
 
 import clpde

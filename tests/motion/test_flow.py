@@ -3,7 +3,7 @@
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import motion as ref
+from tests.reference import motion as ref
 from scipy.ndimage import gaussian_filter, shift
 
 from clpde import InputError

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from reference import planar as ref
+from tests.reference import planar as ref
 from skimage import data
 
 import clpde

@@ -5,7 +5,7 @@ against the lists', and the upkeep's bricks against the band the lists compute d
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import regions as ref
+from tests.reference import regions as ref
 from scipy.ndimage import binary_dilation
 
 from clpde.errors import InputError

@@ -4,7 +4,7 @@ tracked regions against geometry (caps on moving spheres, a region that splits, 
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import regions as ref
+from tests.reference import regions as ref
 
 import clpde
 from clpde.errors import InputError

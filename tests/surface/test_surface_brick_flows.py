@@ -9,8 +9,8 @@ on bricks against the same flow on the band lists."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import bricks as bref
-from reference import surface as ref
+from tests.reference import bricks as bref
+from tests.reference import surface as ref
 from test_surface_flows import CASES
 
 from clpde.bricks import APRON, NODE

@@ -8,8 +8,8 @@ same flow on the band lists."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import bricks as bref
-from reference import surface as ref
+from tests.reference import bricks as bref
+from tests.reference import surface as ref
 
 from clpde.bricks import APRON, BRICK_SIZES, EXT, NODE, REACH
 from clpde.runtime import Runtime

@@ -4,7 +4,7 @@ implicit surfaces: kernels against numpy references, flows against their mathema
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import surface as ref
+from tests.reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows, harmonic

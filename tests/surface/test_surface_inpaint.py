@@ -7,8 +7,8 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 import trimesh
-from reference import surface as ref
-from reference import surface_inpaint as iref
+from tests.reference import surface as ref
+from tests.reference import surface_inpaint as iref
 from scipy.spatial import cKDTree
 
 from clpde.cli import main

@@ -3,7 +3,7 @@
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import surface as ref
+from tests.reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, curvature, textures

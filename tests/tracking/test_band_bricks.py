@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import levelset as ref
+from tests.reference import levelset as ref
 
 from clpde.fields import Field, PingPong
 from clpde.runtime import Runtime

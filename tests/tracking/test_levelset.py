@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from reference import levelset as ref
+from tests.reference import levelset as ref
 
 from clpde.errors import InputError
 from clpde.fields import Field, Grid, index_list

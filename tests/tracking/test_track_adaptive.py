@@ -5,8 +5,8 @@ split sequences, and the confidence per frame."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import levelset as ref
-from reference import track_adaptive as aref
+from tests.reference import levelset as ref
+from tests.reference import track_adaptive as aref
 from scipy import ndimage
 
 from clpde.fields import Field, Grid, compact

@@ -4,7 +4,7 @@ reference against scipy's filters and the term's purpose."""
 
 import numpy as np
 import pytest
-from reference import track_region as rref
+from tests.reference import track_region as rref
 from scipy import ndimage
 
 from clpde.tracking.adaptive import noise_variance, region_features

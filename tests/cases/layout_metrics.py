@@ -1,7 +1,7 @@
 """How clpde's package is laid out, measured from its source: import cycles, top-level modules,
 long modules and functions, deprecation shims.
 
-    python benchmarks/layout_metrics.py [--root PATH] [--json OUT]
+    python tests/cases/layout_metrics.py [--root PATH] [--json OUT]
 
 Every import statement that can run counts, wherever it sits (module level, inside functions):
 only imports under ``if TYPE_CHECKING:`` are left out, since they never run (they name types
@@ -309,7 +309,7 @@ def measure(root: Path) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1])
+    parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[2])
     parser.add_argument("--json", type=Path, help="also write the numbers here")
     args = parser.parse_args(argv)
     result = measure(args.root)
