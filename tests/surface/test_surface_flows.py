@@ -4,11 +4,11 @@ implicit surfaces: kernels against numpy references, flows against their mathema
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from tests.reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows, harmonic
 from clpde.surface.storage import _offsets
+from tests.reference import surface as ref
 
 
 @pytest.fixture(scope="module")
