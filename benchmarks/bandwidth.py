@@ -8,7 +8,7 @@ For each size (1024^2, 2048^2, 4096^2 float32 by default), on one device:
 - every kernel's time per launch and its effective bandwidth: the bytes it must read and
   write once per step (e.g. 8 bytes per cell for heat in float32: read u, write v) divided by
   that time; its ratio to the roofline. The planar steps write their own ghost layer
-  (MIRROR_GHOSTS in kernels/common/common.cl), so one launch is a whole step; the time of a
+  (MIRROR_GHOSTS in kernels/common/common.h), so one launch is a whole step; the time of a
   separate ghost refill (Field.fill_ghosts, two thin launches) is shown for reference;
 - the same step in NumPy, timed with the numpy references of the same schemes
   (tests/reference/), and the speedup per step.

@@ -1,5 +1,5 @@
 """The ring that bounds each cluster's fill (clpde/inpainting/bounds.py's RING), chosen on the
-calibration half of benchmarks/inpaint_corpus.py's corpus, the test half beside it.
+calibration half of tests/cases/inpaint_corpus.py's corpus, the test half beside it.
 
     python benchmarks/inpaint_bounds_calibrate.py [--rings 1,2,4,8,0] [--methods default,...]
 
@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import inpaint_corpus as corpus  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.cases
+from tests.cases import inpaint_corpus as corpus  # noqa: E402
 
 
 def main(argv=None):

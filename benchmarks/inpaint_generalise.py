@@ -1,5 +1,5 @@
 """Does the inpainting default generalise? Every clpde method, the default and the peers, in
-one run, on both halves of benchmarks/inpaint_corpus.py's corpus.
+one run, on both halves of tests/cases/inpaint_corpus.py's corpus.
 
     python benchmarks/inpaint_generalise.py [--quick] [--half test|calibration|both]
                                             [--only NAME,...] [--skip NAME,...] [--slice A:B]
@@ -42,7 +42,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import inpaint_corpus as corpus  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.cases
+from tests.cases import inpaint_corpus as corpus  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "inpaint_generalise.json"
 PEERS = ("biharmonic", "opencv-ns", "opencv-telea", "fsr-fast", "fsr-best", "patchmatch")

@@ -16,12 +16,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from inpaint_quality import (  # noqa: E402
     psnr_in_mask,
-    rings_case,
     run_biharmonic,
     run_clpde,
-    stripes_case,
     thick_mask,
 )
+
+from tests.cases.inpaint_slots import rings_case, stripes_case  # noqa: E402
 
 
 def _rgb(image):

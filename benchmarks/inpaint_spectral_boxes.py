@@ -6,7 +6,7 @@ large image.
     python benchmarks/inpaint_spectral_boxes.py [--quick] [--big 4000] [--no-corpus] [--json PATH]
 
 Quality: the damaged astronaut (clpde.data.damaged_astronaut, 512x512 colour) and every case
-of benchmarks/inpaint_corpus.py (both halves, 128x128; nothing is chosen from them here: the
+of tests/cases/inpaint_corpus.py (both halves, 128x128; nothing is chosen from them here: the
 margin is the method's reach, not a fitted value). A box holding one hole gives the whole
 image's fill bit for bit; where a box holds a cluster of holes, the block grid starts at the
 cluster's corner instead of the whole damage's, and colour is decorrelated by the box's own
@@ -55,9 +55,8 @@ def _both(image, mask, axis):
 
 
 def quality(quick: bool) -> list[dict]:
-    import inpaint_corpus as corpus
-
     from clpde.data import damaged_astronaut
+    from tests.cases import inpaint_corpus as corpus
 
     rows = []
     original, damaged, mask = damaged_astronaut()

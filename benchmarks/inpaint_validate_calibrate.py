@@ -1,5 +1,5 @@
 """Calibration of the self-validated default (clpde/inpainting/validate.py) on the calibration
-half of benchmarks/inpaint_corpus.py's corpus, and nothing else.
+half of tests/cases/inpaint_corpus.py's corpus, and nothing else.
 
     python benchmarks/inpaint_validate_calibrate.py [--quick] [--every N] [--json PATH]
 
@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import inpaint_corpus as corpus  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.cases
+from tests.cases import inpaint_corpus as corpus  # noqa: E402
 
 SUPERSET = ("biharmonic", "coherence", "transport", "navier-stokes", "exemplar", "spectral")
 RINGS = (1, 2, 4)

@@ -1,6 +1,6 @@
 """Is `method="auto"`'s vote sound? Its result against its best candidate, case by case, for
 the ways of pooling the ring's evidence (clpde/inpainting/validate.py: PRIOR, blend, SCALE),
-on benchmarks/inpaint_corpus.py's corpus, the calibration half to choose, the test half
+on tests/cases/inpaint_corpus.py's corpus, the calibration half to choose, the test half
 beside it.
 
     python benchmarks/inpaint_vote_rules.py [--half calibration|test|both] [--every N]
@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import inpaint_corpus as corpus  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.cases
+from tests.cases import inpaint_corpus as corpus  # noqa: E402
 
 PRIORS = (0.0, 100.0, 300.0, float("inf"))
 SCALES = (0.0, 0.5, 1.0)  # the ring's width per cluster: SCALE x its half-thickness, 2..8

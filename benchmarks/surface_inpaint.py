@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -31,11 +30,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import trimesh
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-
-from clpde.data import surface_shape  # noqa: E402
-from clpde.surface import ImplicitSurface, to_mesh  # noqa: E402
-from clpde.surface.inpainting import fill_mesh, inpaint  # noqa: E402
+from clpde.surface import ImplicitSurface, surface_shape, to_mesh
+from clpde.surface.inpainting import fill_mesh, inpaint
 
 R, RT = 1.0, 0.4
 

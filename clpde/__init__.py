@@ -56,7 +56,7 @@ __all__ = [
 ]
 
 # The submodules that are public API besides the names above (`clpde.io.read_image`,
-# `clpde.inpainting.available()`, `clpde.data.astronaut_damaged()`,
+# `clpde.inpainting.available()`, `clpde.data.damaged_astronaut()`,
 # `clpde.surface.ImplicitSurface`); the others stay importable (`import clpde.planar.rof`)
 # but are left out of dir(clpde), so that it lists what a user calls, as scikit-image's does.
 PUBLIC_MODULES = ("data", "inpainting", "io", "surface")

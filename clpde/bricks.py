@@ -1,4 +1,5 @@
-"""Narrow-band storage in dense bricks (kernels/surface/bricks.cl).
+"""Narrow-band storage in dense bricks (the layout kernels/bricks/bricks.h; the surfaces' and
+regions' steps on it are in their own kernels/surface/bricks.cl and kernels/regions/bricks.cl).
 
 The padded grid of a Grid3D is cut into bricks of BX x BY x BZ cells (a compile-time size:
 8x8x8, 8x4x4 and 4x4x4 were compared in docs/surface_storage.md). Only the bricks the band needs
@@ -393,7 +394,7 @@ class BrickBand:
         return into
 
     def launch_list(self, kernel, n: int, *args):
-        """Run a LIST_RANGE kernel (common.cl) over n entries."""
+        """Run a LIST_RANGE kernel (common.h) over n entries."""
         if n == 0:
             return None
         (gsize,), (lsize,), run = self.runtime.list_launch(n)

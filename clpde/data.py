@@ -5,12 +5,14 @@ nothing is downloaded:
 
 - inpainting: `damaged_astronaut` (a photo with text and scratches painted over it) and
   `damage_mask` (such damage for any image size);
-- region tracking: `region_scene` (thesis Figure 2.7's toy cases and caps on a sphere);
-- surfaces: `surface_shape` (a sphere, torus or double torus as an ImplicitSurface) and the
-  data the chapter-4 figures put on it, `checker`, `colour_pattern` and `surface_noise`.
+- region tracking: `region_scene` (thesis Figure 2.7's toy cases and caps on a sphere).
 
-The command line's demonstrations (`clpde inpaint --demo`, `clpde regions`, `clpde surface`)
-and the examples take their data from here.
+The surfaces' sample shapes and the data the chapter-4 figures put on them are in
+clpde.surface (`surface_shape`, `checker`, `colour_pattern`, `surface_noise`): they are
+ImplicitSurfaces, and this module, on the ground floor, imports no capability.
+
+The command line's demonstrations (`clpde inpaint --demo`, `clpde regions`) and the examples
+take their data from here.
 """
 
 from __future__ import annotations
@@ -20,19 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .surface import ImplicitSurface
 
 __all__ = [
     "REGION_SCENES",
-    "SURFACE_SHAPES",
     "RegionScene",
-    "checker",
-    "colour_pattern",
     "damage_mask",
     "damaged_astronaut",
     "region_scene",
-    "surface_noise",
-    "surface_shape",
 ]
 
 
@@ -219,100 +215,3 @@ def region_scene(name: str, spacing: float = 0.05) -> RegionScene:
         )
         return RegionScene(phi, np.ascontiguousarray(region), h, origin, options)
     raise InputError(f"scene must be one of {', '.join(REGION_SCENES)}, not {name!r}")
-
-
-# ---- surfaces ---------------------------------------------------------------------------
-
-SURFACE_SHAPES = ("sphere", "torus", "double-torus")
-
-
-def surface_shape(name: str, resolution: int = 96, device=None):
-    """A generated shape as an `clpde.surface.ImplicitSurface`, about `resolution` cells
-    across: a unit sphere, a torus of radii 1 and 0.4, or a double torus.
-
-    Examples
-    --------
-    >>> from clpde.data import surface_shape
-    >>> surf = surface_shape("sphere", resolution=24)
-    >>> surf.spacing
-    0.08333333333333333
-    """
-
-    if name not in SURFACE_SHAPES:
-        raise InputError(f"shape must be one of {', '.join(SURFACE_SHAPES)}, not {name!r}")
-    spacing = {"sphere": 2.0, "torus": 2.8, "double-torus": 4.2}[name] / resolution
-    if name == "sphere":
-        return ImplicitSurface.sphere(1.0, spacing, device=device)
-    if name == "torus":
-        return ImplicitSurface.torus(1.0, 0.4, spacing=spacing, device=device)
-    return ImplicitSurface.double_torus(spacing=spacing, device=device)
-
-
-def checker(surf, cells: int = 6) -> np.ndarray:
-    """A 3D checkerboard of 0 and 1 seen on the surface, with squares about 1/cells of the
-    grid's size across (the data of thesis Figures 4.3 and 4.4).
-
-    Examples
-    --------
-    >>> from clpde.data import checker, surface_shape
-    >>> u = checker(surface_shape("sphere", resolution=24))
-    >>> float(u.min()), float(u.max())
-    (0.0, 1.0)
-    """
-    lo = surf.origin
-    hi = surf.origin + surf.spacing * (np.array(surf.shape[::-1]) - 1)
-    k = np.pi * cells / (hi - lo).max()
-    return surf.field(
-        lambda x, y, z: 0.5 + 0.5 * np.sign(np.sin(k * x) * np.sin(k * y) * np.sin(k * z))
-    )
-
-
-def colour_pattern(surf) -> np.ndarray:
-    """RGB stripes and blobs in [0.1, 0.9] on the surface, shape (3,) + surf.shape (the
-    data of thesis Figure 4.6).
-
-    Examples
-    --------
-    >>> from clpde.data import colour_pattern, surface_shape
-    >>> surf = surface_shape("sphere", resolution=24)
-    >>> rgb = colour_pattern(surf)
-    >>> rgb.shape == (3,) + surf.shape, bool(0.1 - 1e-9 <= rgb.min() and rgb.max() <= 0.9 + 1e-9)
-    (True, True)
-    """
-    size = surf.spacing * max(surf.shape)
-    k = 2 * np.pi * 3 / size
-
-    def f(x, y, z):
-        r = 0.5 + 0.4 * np.sign(np.sin(k * x))
-        g = 0.5 + 0.4 * np.cos(k * (y + z))
-        b = 0.5 + 0.4 * np.sin(0.7 * k * (x - z))
-        return [r, g, b]
-
-    return surf.field(f)
-
-
-def surface_noise(
-    surf, sigma: float, rng: np.random.Generator, channels: int | None = None
-) -> np.ndarray:
-    """Gaussian noise of standard deviation sigma on the surface, constant along its normals.
-
-    Independent values per grid cell would not do: data on a surface is its values at the
-    closest points, interpolated from several cells, which averages cell noise down (to
-    about half its variance with tricubic interpolation), so a flow told the noise is sigma
-    would remove more than the noise. Here the cell noise is extended from the closest
-    points and rescaled so that what a flow sees of it (its own extension of the data)
-    has deviation sigma on the cells nearest the surface.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from clpde.data import surface_noise, surface_shape
-    >>> surf = surface_shape("sphere", resolution=24)
-    >>> noise = surface_noise(surf, 0.1, np.random.default_rng(0))
-    >>> noise.shape == surf.shape
-    True
-    """
-    shape = surf.shape if channels is None else (channels,) + surf.shape
-    noise = surf.extend(rng.standard_normal(shape))
-    near = np.abs(surf.psi) < 0.5 * surf.spacing
-    return noise * (sigma / surf.extend(noise)[..., near].std())

@@ -16,9 +16,14 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from . import runtime as _runtime_state
 from .errors import ClpdeError
-from .runtime import Kernel, Runtime, _check_not_forked, get_runtime
+from .runtime import (
+    Kernel,
+    Runtime,
+    check_not_forked,
+    runtime_named,
+    runtime_of_context,
+)
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("common/fields.cl",)
@@ -130,7 +135,7 @@ class Grid(BaseGrid):
         return (self.nc, self.ny + 2 * self.ghost, self.sx)
 
     def args(self, xrun: int) -> tuple:
-        """The GRID_ARGS of common.cl."""
+        """The GRID_ARGS of common.h."""
         return tuple(np.int32(v) for v in (self.nx, self.ny, self.sx, self.plane, self.ghost, xrun))
 
     def launch(self, kernel: Kernel, *args, wait_for=None) -> cl.Event:
@@ -199,7 +204,7 @@ class Field:
 
     def to_host(self) -> np.ndarray:
         """The interior as an (nc, ny, nx) numpy array (one device-to-host copy)."""
-        _check_not_forked()  # a forked child would wait forever for the copy
+        check_not_forked()  # a forked child would wait forever for the copy
         return np.ascontiguousarray(self.grid.interior(self.data.get()))
 
     def fill_ghosts(self, boundary: str = "neumann", value=0.0) -> None:
@@ -314,20 +319,12 @@ def index_list(grid: Grid, mask: np.ndarray) -> IndexList:
 
 def _reduce_runtime(runtime: Runtime):
     # by device name: the process that unpickles builds (or reuses) its own runtime
-    return _receive_runtime, (runtime.platform.name.strip(), runtime.device.name.strip())
-
-
-def _receive_runtime(platform_name: str, device_name: str) -> Runtime:
-    with _runtime_state._lock:  # read at the call: a forked child has a lock of its own
-        for i, (p, d) in enumerate(_runtime_state._all_devices()):
-            if p.name.strip() == platform_name and d.name.strip() == device_name:
-                return get_runtime(i)
-    return get_runtime()  # that device is not here: the default one
+    return runtime_named, (runtime.platform.name.strip(), runtime.device.name.strip())
 
 
 def _reduce_kernel(kernel: Kernel):
     # by its lookup: the receiving process builds (or reuses) its own
-    return _receive_kernel, (kernel._runtime, *kernel._key)
+    return _receive_kernel, (kernel.runtime, *kernel.key)
 
 
 def _receive_kernel(runtime: Runtime, filename, name, dtype, defines) -> Kernel:
@@ -335,11 +332,9 @@ def _receive_kernel(runtime: Runtime, filename, name, dtype, defines) -> Kernel:
 
 
 def _runtime_of(obj) -> Runtime:
-    _check_not_forked()
-    ctx = obj.context
-    for runtime in list(_runtime_state._runtimes.values()):
-        if runtime.ctx == ctx:
-            return runtime
+    runtime = runtime_of_context(obj.context)
+    if runtime is not None:
+        return runtime
     raise pickle.PicklingError(
         f"cannot pickle {type(obj).__name__} of a context clpde did not make"
     )

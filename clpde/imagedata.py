@@ -363,3 +363,50 @@ def _grow_into(out: np.ndarray, support: np.ndarray, px: float, value) -> None:
         near = ndimage.distance_transform_edt(~block)[y0 - a : y1 - a] <= px
         ring = near & ~block[y0 - a : y1 - a]
         out[y0:y1, c0:c1][ring] = value
+
+
+# The difference of two discrete Laplacians (Immerkaer 1996): it annihilates constant, linear
+# and most of the quadratic content of an image, and turns white noise of deviation sigma
+# into values of deviation 6 sigma (the root of the sum of its squared weights, 36).
+NOISE_MASK = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
+MAD_TO_STD = 1.0 / 0.6744897501960817  # median |x| of a unit normal variable
+
+
+def noise_std(u: np.ndarray) -> float:
+    """Noise deviation of one 2-D channel: the median absolute value of its fine-scale
+    residual, as for a normal variable. The median, not the mean, so that the edges and
+    texture where the residual is large do not count as noise.
+
+    Denoising (clpde.planar.rof.estimate_sigma) and film restoration use it.
+    Tracking keeps its own estimator, clpde.tracking.adaptive.noise_variance (the MAD of a
+    2x2 diagonal difference, centred on its median, over all channels of a frame) on
+    purpose: the tracker's constants (CONTRAST_NOISE, QUIET_FACTOR, LIGHT_CHANGE) were chosen
+    on its values, so swapping the estimator would change every tracking result. Its 1.4826
+    and MAD_TO_STD are the same constant.
+
+    Parameters
+    ----------
+    u : ndarray
+        One channel, at least 3 x 3, as float64 for the exact result.
+
+    Returns
+    -------
+    float
+        The estimated standard deviation, in u's units.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> round(noise_std(rng.normal(0, 0.1, (256, 256))), 2)
+    0.1
+    """
+    ny, nx = u.shape
+    if ny < 3 or nx < 3:
+        raise InputError(
+            f"an image of {nx}x{ny} pixels is too small to estimate its noise "
+            "from; give sigma or weight"
+        )
+    r = sum(
+        NOISE_MASK[i, j] * u[i : ny - 2 + i, j : nx - 2 + j] for i in range(3) for j in range(3)
+    )
+    return float(np.median(np.abs(r))) * MAD_TO_STD / 6.0

@@ -1,7 +1,8 @@
 """OpenCL runtime: device choice, program building and caching, launch geometry.
 
-Everything that talks to pyopencl's platform layer lives here, so the flows only ask for
-``get_runtime(device).kernel("planar/planar.cl", "heat_step")`` and launch it.
+Everything that talks to pyopencl's platform layer lives here, so the flows only ask for a
+kernel by its file under kernels/ and its name (the Runtime's ``kernel`` method) and
+launch it.
 Runtimes and kernels pickle by their device's name and their lookup; fields.py registers
 how, beside the device buffers and arrays, which pickle by value.
 """
@@ -13,14 +14,13 @@ import tempfile
 import threading
 import time
 import warnings
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from .errors import ClpdeError, DeviceMemoryError, KernelBuildError, NoDeviceError
 
-# The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
-KERNEL_FILES = ("planar/planar.cl",)
 ITEM_GROUP = 64  # the work-group of Runtime.items
 
 
@@ -39,17 +39,10 @@ INSTALL_HINT = (
 )
 
 
-def _find_kernel_dir() -> Path:
-    # Installed wheels carry the kernels as the package clpde.kernels; a source checkout
-    # keeps them in the top-level kernels/ folder beside clpde/.
-    here = Path(__file__).resolve().parent
-    for candidate in (here / "kernels", here.parent / "kernels"):
-        if (candidate / "common/common.cl").is_file():
-            return candidate
-    raise ClpdeError(f"clpde's OpenCL kernels were not found next to {here}; reinstall clpde")
-
-
-KERNEL_DIR = _find_kernel_dir()
+# The kernels are the package clpde.kernels: in a wheel, kernels/ installed there; in a
+# source checkout, the same folder through the link clpde/kernels. The compiler reads them
+# (and their #includes) from a folder, so the package must be one on disk, not in a zip.
+KERNEL_DIR = Path(str(resources.files("clpde.kernels")))
 
 
 def _ensure_pocl_cache_dir() -> None:
@@ -84,13 +77,30 @@ _ensure_pocl_cache_dir()
 
 import pyopencl as cl  # noqa: E402  (imported here: PoCL reads POCL_CACHE_DIR when the ICD loads)
 
-from ._device import DeviceInfo, Kernel, group_problem, pyopencl_ctx, quietly  # noqa: E402
+from ._device import (  # noqa: E402
+    QUEUE_PROPERTIES,
+    DeviceInfo,
+    Kernel,
+    build_failure,
+    group_problem,
+    has_fp64,
+    not_pocl,
+    pyopencl_ctx,
+    quietly,
+    type_name,
+)
+
+_found: list[tuple[cl.Platform, cl.Device]] = []  # the devices, listed once per process
 
 
 def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
+    """Every (platform, device), in the order the indices count; asked of OpenCL once
+    (every get_runtime() call needs the list, and the ICD loader takes milliseconds)."""
     global _used_opencl
-    _check_not_forked()
+    check_not_forked()
     _used_opencl = True
+    if _found:
+        return _found
     try:
         platforms = cl.get_platforms()
     except cl.Error as exc:  # PLATFORM_NOT_FOUND_KHR when no ICD is installed
@@ -106,26 +116,8 @@ def _all_devices() -> list[tuple[cl.Platform, cl.Device]]:
             f"OpenCL platforms exist but show no device (for PoCL, check that "
             f"POCL_CACHE_DIR={os.environ.get('POCL_CACHE_DIR')!r} is writable); {INSTALL_HINT}"
         )
-    return found
-
-
-def _type_name(device: cl.Device) -> str:
-    if device.type & cl.device_type.GPU:
-        return "gpu"
-    if device.type & cl.device_type.CPU:
-        return "cpu"
-    if device.type & cl.device_type.ACCELERATOR:
-        return "accelerator"
-    return "other"
-
-
-def _has_fp64(device: cl.Device) -> bool:
-    return "cl_khr_fp64" in device.extensions or bool(getattr(device, "double_fp_config", 0))
-
-
-def _not_pocl(platform: cl.Platform) -> bool:
-    """Sort key that puts PoCL's devices before another runtime's of the same type."""
-    return "portable computing language" not in platform.name.lower()
+    _found[:] = found
+    return _found
 
 
 def _resolve(spec) -> int:
@@ -145,12 +137,12 @@ def _resolve(spec) -> int:
     wanted = spec.strip().lower()
     if wanted in ("cpu", "gpu", "accelerator"):
         of_type = sorted(
-            (i for i, (_, d) in enumerate(found) if _type_name(d) == wanted),
-            key=lambda i: _not_pocl(found[i][0]),
+            (i for i, (_, d) in enumerate(found) if type_name(d) == wanted),
+            key=lambda i: not_pocl(found[i][0]),
         )
         # The first of that type whose compiler works; else the first, whose error then says why.
         for i in of_type:
-            if _build_problem(i) is None:
+            if build_problem(i) is None:
                 return i
         if of_type:
             return of_type[0]
@@ -175,7 +167,7 @@ _lock = threading.RLock()
 _build_problems: dict[int, str | None] = {}
 
 
-def _build_problem(index: int) -> str | None:
+def build_problem(index: int) -> str | None:
     """Why device ``index`` cannot compile OpenCL C, or None when it can.
 
     An OpenCL platform can list a device whose compiler does not work: PoCL 3.0's LLVM 14
@@ -192,33 +184,12 @@ def _build_problem(index: int) -> str | None:
 def _probe(index: int) -> str | None:
     """Build a tiny program on device ``index``: None, or why it fails."""
     platform, device = _all_devices()[index]
-    try:
-        ctx = cl.Context([device])
-    except cl.Error as exc:
-        return f"{device.name.strip()} ({platform.name.strip()}) cannot be opened: {exc}"
-    source = (KERNEL_DIR / "common/probe.cl").read_text()
-    _, failure = quietly(lambda: cl.Program(ctx, source).build())
-    if failure is None:
-        return None
-    log = str(failure[0])
-    if "unknown target CPU" in log:
-        reason = (
-            f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
-            "its LLVM does not know this CPU; install your system's PoCL "
-            "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
-        )
-    else:
-        first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
-        reason = (
-            f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
-            f"kernels: {first.strip()[:200]}"
-        )
-    return reason
+    return build_failure(platform, device, (KERNEL_DIR / "common/probe.cl").read_text())
 
 
 def _usable(index: int) -> int:
     """``index`` itself, or an error saying why the device cannot run clpde's kernels."""
-    problem = _build_problem(index)
+    problem = build_problem(index)
     if problem is not None:
         raise NoDeviceError(problem)
     return index
@@ -242,17 +213,17 @@ def _default_index() -> int:
                 "`clpde devices`, or unset it"
             ) from None
     found = _all_devices()
-    order = [i for i, (_, d) in enumerate(found) if _type_name(d) == "gpu"]
+    order = [i for i, (_, d) in enumerate(found) if type_name(d) == "gpu"]
     # Among CPU runtimes PoCL comes first, whatever order the ICD loader lists them in: the
     # kernels are shaped for its vectoriser, and Intel's oneAPI runtime, the other one
     # measured, was slower on the tracking and surface defaults (benchmarks/runtimes.py,
     # docs/portability.md)
     order += sorted(
-        (i for i in range(len(found)) if i not in order), key=lambda i: _not_pocl(found[i][0])
+        (i for i in range(len(found)) if i not in order), key=lambda i: not_pocl(found[i][0])
     )
     problems = []
     for i in order:
-        problem = _build_problem(i)
+        problem = build_problem(i)
         if problem is None:
             return i
         problems.append(problem)
@@ -328,6 +299,23 @@ def get_runtime(device: str | int | Runtime | None = None) -> Runtime:
         return runtime
 
 
+def runtime_named(platform_name: str, device_name: str) -> Runtime:
+    """The runtime of the device so named, or the default one where this machine has no such
+    device: how a Runtime pickled by its device's name is received (see clpde.fields)."""
+    with _lock:
+        for i, (p, d) in enumerate(_all_devices()):
+            if p.name.strip() == platform_name and d.name.strip() == device_name:
+                return get_runtime(i)
+    return get_runtime()
+
+
+def runtime_of_context(ctx: cl.Context) -> Runtime | None:
+    """The runtime made in this process whose context is `ctx`, or None."""
+    check_not_forked()
+    with _lock:
+        return next((r for r in _runtimes.values() if r.ctx == ctx), None)
+
+
 def devices() -> list[DeviceInfo]:
     """Every OpenCL device on every platform, in the order the indices count.
 
@@ -354,11 +342,11 @@ def devices() -> list[DeviceInfo]:
             index=i,
             platform=p.name.strip(),
             name=d.name.strip(),
-            type=_type_name(d),
+            type=type_name(d),
             compute_units=d.max_compute_units,
             global_mem_bytes=d.global_mem_size,
             max_alloc_bytes=d.max_mem_alloc_size,
-            fp64=_has_fp64(d),
+            fp64=has_fp64(d),
             in_use=(i == current),
             local_mem_bytes=d.local_mem_size,
             max_group=d.max_work_group_size,
@@ -376,13 +364,13 @@ class Runtime:
         self.index = index
         self.platform = platform
         self.device = device
-        self.type = _type_name(device)
+        self.type = type_name(device)
         self.is_cpu = self.type == "cpu"
-        self.fp64 = _has_fp64(device)
+        self.fp64 = has_fp64(device)
         self.global_mem = device.global_mem_size
         self.max_alloc = device.max_mem_alloc_size
         self.ctx = cl.Context([device])
-        self.queue = cl.CommandQueue(self.ctx)
+        self.queue = cl.CommandQueue(self.ctx, properties=QUEUE_PROPERTIES)
         self._programs: dict[tuple, cl.Program] = {}
         self.build_seconds = 0.0  # spent building programs so far (callers leave it out)
         self._kernels: dict[tuple, Kernel] = {}
@@ -494,7 +482,7 @@ class Runtime:
     ) -> None:
         """Refuse, before any work, a request whose buffers cannot fit the device: `total`
         bytes in all, the largest single buffer `largest` bytes."""
-        _check_not_forked()
+        check_not_forked()
         name = self.device.name.strip()
         if largest > self.max_alloc:
             raise DeviceMemoryError(
@@ -570,7 +558,7 @@ def _fork_message() -> str:
     )
 
 
-def _check_not_forked() -> None:
+def check_not_forked() -> None:
     if _forked_from is not None:
         raise ClpdeError(_fork_message())
 
@@ -594,6 +582,7 @@ def _after_fork_in_child() -> None:
         runtime._forked()
     _runtimes.clear()
     _build_problems.clear()
+    _found.clear()
 
 
 if hasattr(os, "register_at_fork"):

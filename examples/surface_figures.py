@@ -19,8 +19,14 @@ import time
 import numpy as np
 from _output import add_output_arguments, output_folder
 
-from clpde.data import checker, colour_pattern, surface_noise
-from clpde.surface import ImplicitSurface, render_mesh, to_mesh
+from clpde.surface import (
+    ImplicitSurface,
+    checker,
+    colour_pattern,
+    render_mesh,
+    surface_noise,
+    to_mesh,
+)
 from clpde.surface.runs import load_surface, tv_time, write_png
 
 

@@ -2,7 +2,7 @@
 // step must move, with its access pattern and no arithmetic, in both band storages. They are
 // no part of the library: the benchmarks build this file by its path, with the runtime's
 // include path (kernels/, kernels/common/).
-#include "common.cl"
+#include "common.h"
 #include "bricks/bricks.h"
 
 #define BIT_NODE 1 // a node cell, as in surface/bricks.cl

@@ -6,6 +6,7 @@ loads the ICD)."""
 
 from __future__ import annotations
 
+import atexit
 import os
 import re
 import sys
@@ -49,6 +50,26 @@ class DeviceInfo:
             f"constant memory {self.constant_mem_bytes // 1024} KB, "
             f"images {'yes' if self.images else 'no'}"
         )
+
+
+def type_name(device: cl.Device) -> str:
+    """'gpu', 'cpu', 'accelerator' or 'other'."""
+    if device.type & cl.device_type.GPU:
+        return "gpu"
+    if device.type & cl.device_type.CPU:
+        return "cpu"
+    if device.type & cl.device_type.ACCELERATOR:
+        return "accelerator"
+    return "other"
+
+
+def has_fp64(device: cl.Device) -> bool:
+    return "cl_khr_fp64" in device.extensions or bool(getattr(device, "double_fp_config", 0))
+
+
+def not_pocl(platform: cl.Platform) -> bool:
+    """Sort key that puts PoCL's devices before another runtime's of the same type."""
+    return "portable computing language" not in platform.name.lower()
 
 
 # ---- the compiler's own output ---------------------------------------------------------------
@@ -149,6 +170,60 @@ def pyopencl_ctx(spec: str, found: list) -> int:
     return on_it[_pick(dev, [found[i][1].name.strip() for i in on_it], "device")]
 
 
+# ---- per-kernel profiling (CLPDE_PROFILE=1) -------------------------------------------------
+# Every launch passes Kernel.__call__, so the device time of each kernel is summed there from
+# the OpenCL events (the queues are then made with profiling enabled, see QUEUE_PROPERTIES)
+# and printed at exit, slowest first. Off by default: reading an event's times waits for it.
+PROFILING = os.environ.get("CLPDE_PROFILE", "").strip() not in ("", "0")
+QUEUE_PROPERTIES = cl.command_queue_properties.PROFILING_ENABLE if PROFILING else 0
+_PENDING_LIMIT = 256  # launches held before their events are read (each holds a pyopencl event)
+
+
+class _Profile:
+    """Device seconds and launches per kernel, from the launches' events."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.pending: list[tuple[str, cl.Event]] = []
+        self.seconds: dict[str, float] = {}
+        self.launches: dict[str, int] = {}
+
+    def add(self, name: str, event) -> None:
+        with self.lock:
+            self.pending.append((name, event))
+            if len(self.pending) >= _PENDING_LIMIT:
+                self._read()
+
+    def _read(self) -> None:
+        for name, event in self.pending:
+            self.launches[name] = self.launches.get(name, 0) + 1
+            try:
+                event.wait()
+                elapsed = (event.profile.end - event.profile.start) * 1e-9
+            except (cl.Error, AttributeError):  # a queue made without profiling
+                continue
+            self.seconds[name] = self.seconds.get(name, 0.0) + elapsed
+        self.pending.clear()
+
+    def report(self, file=None) -> None:
+        with self.lock:
+            self._read()
+            if not self.launches:
+                return
+            total = sum(self.seconds.values())
+            lines = [f"clpde profile: {total:.3f} s of kernel time (CLPDE_PROFILE=1)"]
+            lines += [
+                f"  {self.seconds.get(n, 0.0):9.4f} s {self.launches[n]:8d} launches  {n}"
+                for n in sorted(self.launches, key=lambda n: -self.seconds.get(n, 0.0))
+            ]
+            print("\n".join(lines), file=file or sys.stderr)
+
+
+PROFILE = _Profile()
+if PROFILING:
+    atexit.register(PROFILE.report)
+
+
 class Kernel:
     """A pyopencl kernel whose launches hold the runtime's lock.
 
@@ -157,27 +232,30 @@ class Kernel:
     Once enqueued, a launch keeps its arguments, so only the two calls need the lock.
     """
 
-    __slots__ = ("_key", "_lock", "_runtime", "cl_kernel")
+    __slots__ = ("_lock", "cl_kernel", "key", "runtime")
 
     def __init__(self, cl_kernel: cl.Kernel, runtime, key: tuple):
         self.cl_kernel = cl_kernel
         self._lock = runtime.lock
-        self._runtime, self._key = runtime, key
+        self.runtime, self.key = runtime, key
 
     def __call__(self, queue, global_size, local_size, *args, **kwargs) -> cl.Event:
         with self._lock:
             try:
-                return self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
+                event = self.cl_kernel(queue, global_size, local_size, *args, **kwargs)
             except cl.Error as exc:
                 raise self._launch_error(exc, local_size) from None
+        if PROFILING:
+            PROFILE.add(f"{self.key[0]}:{self.key[1]}", event)
+        return event
 
     def _launch_error(self, exc: cl.Error, local_size) -> ClpdeError:
         """A launch the device refused, as clpde's error: which limit, and the way out.
         (The paths that need local memory or large work-groups check before any work;
         this is the net under every other launch.)"""
         group = int(np.prod(local_size)) if local_size else 0
-        problem = self._runtime.group_problem(self, group) if group else None
-        name = self._runtime.device.name.strip()
+        problem = self.runtime.group_problem(self, group) if group else None
+        name = self.runtime.device.name.strip()
         detail = problem or f"{name} refused kernel {self.cl_kernel.function_name}: {exc}"
         return DeviceLimitError(
             f"{detail}; choose another device (clpde devices, CLPDE_DEVICE) or a smaller "
@@ -210,3 +288,26 @@ def group_problem(device: cl.Device, kernel, group: int) -> str | None:
             f"allows at most {largest} for it"
         )
     return None
+
+
+def build_failure(platform: cl.Platform, device: cl.Device, source: str) -> str | None:
+    """Why `device` cannot build the OpenCL C program `source`, or None when it can."""
+    try:
+        ctx = cl.Context([device])
+    except cl.Error as exc:
+        return f"{device.name.strip()} ({platform.name.strip()}) cannot be opened: {exc}"
+    _, failure = quietly(lambda: cl.Program(ctx, source).build())
+    if failure is None:
+        return None
+    log = str(failure[0])
+    if "unknown target CPU" in log:
+        return (
+            f"{device.name.strip()} ({platform.name.strip()}) cannot compile kernels: "
+            "its LLVM does not know this CPU; install your system's PoCL "
+            "(e.g. apt install pocl-opencl-icd) or the CPU vendor's OpenCL runtime"
+        )
+    first = next((ln for ln in log.splitlines() if "error" in ln.lower()), log)
+    return (
+        f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
+        f"kernels: {first.strip()[:200]}"
+    )

@@ -6,7 +6,6 @@ atomically, and colour images are processed per channel with any alpha channel k
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import re
 import sys
@@ -19,16 +18,6 @@ from ..io.images import (
     check_not_overwriting_input,
     check_output_folder,
 )
-
-
-class Parser(argparse.ArgumentParser):
-    """argparse's parser with its usage errors on one line, as every other error of the
-    command line: `clpde inpaint: error: ...; see `clpde inpaint --help``, exit status 2
-    (argparse's own prints the whole usage first). Its subcommands' parsers are of this
-    class too (argparse makes them of the parent's)."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message}; see `{self.prog} --help`\n")
 
 
 def add_device_argument(parser) -> None:

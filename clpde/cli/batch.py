@@ -13,7 +13,7 @@ from ..scale.batch import batch, result_table
 from ..scale.manifest import MANIFEST
 from ..scale.plan import COMMANDS
 from . import denoise, diffuse, inpaint, restore, surface, track
-from ._common import Parser
+from ._parser import Parser
 
 FAILED_STATUS = 1  # some inputs failed (the others were written); 2 stays usage errors
 

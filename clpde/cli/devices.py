@@ -12,7 +12,7 @@ import pyopencl as cl
 
 from ..errors import ClpdeError
 from ..inpainting import spectral
-from ..runtime import _build_problem, devices, get_runtime
+from ..runtime import build_problem, devices, get_runtime
 from ._common import add_device_argument
 
 
@@ -34,7 +34,7 @@ def device_paths(index: int) -> list[str]:
     """How clpde launches its kernels on device `index`, one line per choice that depends on
     the device: where it runs at all, the launch geometry, and the spectral fill's windows
     (in local memory, or in global memory where the device has too little local memory)."""
-    problem = _build_problem(index)
+    problem = build_problem(index)
     if problem is not None:
         return [f"none: {problem}"]
     rt = get_runtime(index)

@@ -3,13 +3,13 @@ runs themselves are clpde.surface.runs'."""
 
 from __future__ import annotations
 
-from ..data import SURFACE_SHAPES as SHAPES
 from ..errors import InputError
 from ..scale.tasks import TASKS
 from ..surface.implicit import STORAGES
 from ..surface.inpaint_files import inpaint_file
 from ..surface.inpainting import METHODS as INPAINT_METHODS
 from ..surface.runs import FLOWS
+from ..surface.shapes import SURFACE_SHAPES as SHAPES
 from ._common import (
     add_device_argument,
     add_output_folder_arguments,

@@ -21,10 +21,9 @@ from scipy import ndimage
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
-from ..imagedata import grow_mask
+from ..imagedata import grow_mask, noise_std
 from ..inpainting.api import inpaint
 from ..motion.dis import to_u8
-from ..planar.rof import _noise_std
 from ._compensate import fit_gain
 from ._frames import film_masks, film_planes, grey
 from ._motion import FilmMotion
@@ -118,7 +117,7 @@ def _temporal(
     T, C, ny, nx = planes.shape
     hole = m[t] > 0
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
-    sigma = max(_noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+    sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
     vals, cols, cand, dist = [], [], [], []
     ctx_t = ~grow_mask(hole, 1.0)
@@ -273,7 +272,7 @@ def inpaint_video(
         soft = m[t][np.newaxis]
         blend = soft * filled + (1.0 - soft) * planes[t]
         if grain:
-            sigma = _noise_std(G[t].astype(np.float64))
+            sigma = noise_std(G[t].astype(np.float64))
             # seeded by the frame itself, so a frame's grain is the same in any window
             rng = np.random.default_rng([seed, zlib.crc32(np.ascontiguousarray(G[t]).data)])
             blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
@@ -281,7 +280,7 @@ def inpaint_video(
     bar.close()
     if keep > 0:
         for t in damaged:
-            sigma = max(_noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+            sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
             close = np.abs(grey(out[t : t + 1])[0] - G[t]) <= keep * sigma
             out[t] = np.where(close[None], planes[t], out[t])
     restored = layout.restore(out)

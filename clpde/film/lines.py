@@ -36,7 +36,7 @@ import numpy as np
 import pyopencl.array as cla
 from scipy import ndimage
 
-from ..planar.rof import _noise_std
+from ..imagedata import noise_std
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -190,7 +190,7 @@ def spatial_lines(
 ) -> np.ndarray:
     """Thin, long, near-vertical lines of one image from spatial cues alone, signed (+1
     bright, -1 dark, 0 none): the line detector on the image minus its horizontal median."""
-    sigma = max(_noise_std(G.astype(np.float64)), 0.5 / 255)
+    sigma = max(noise_std(G.astype(np.float64)), 0.5 / 255)
     resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
     zs = kern.line_score(
         cla.to_device(kern.rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma

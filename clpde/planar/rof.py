@@ -25,7 +25,15 @@ from numpy.typing import ArrayLike, DTypeLike
 
 from ..errors import InputError
 from ..fields import Grid, check_fits
-from ..imagedata import check_steps, compute_dtype, positive, to_kernel_layout
+from ..imagedata import (
+    MAD_TO_STD,
+    NOISE_MASK,
+    check_steps,
+    compute_dtype,
+    noise_std,
+    positive,
+    to_kernel_layout,
+)
 from ..runtime import get_runtime
 from . import bounded
 from .rof_solvers import gradient_descent, primal_dual, primal_dual_in_tiles
@@ -222,7 +230,7 @@ def denoise_tv(
         layout,
         nc,
         vectorial,
-        lambda: np.nan_to_num(np.array([_noise_std(c) for c in data]), nan=0.0),
+        lambda: np.nan_to_num(np.array([noise_std(c) for c in data]), nan=0.0),
     )
     lam0, sigma2 = fit.lam0, fit.sigma2
     if method == "primal-dual":
@@ -375,29 +383,6 @@ def _denoise_large(
     return out, info
 
 
-# The difference of two discrete Laplacians (Immerkaer 1996): it annihilates constant, linear
-# and most of the quadratic content of an image, and turns white noise of deviation sigma
-# into values of deviation 6 sigma (the root of the sum of its squared weights, 36).
-_NOISE_MASK = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
-_MAD_TO_STD = 1.0 / 0.6744897501960817  # median |x| of a unit normal variable
-
-
-def _noise_std(u: np.ndarray) -> float:
-    """Noise deviation of one 2-D channel: the median absolute value of its fine-scale
-    residual, as for a normal variable. The median, not the mean, so that the edges and
-    texture where the residual is large do not count as noise."""
-    ny, nx = u.shape
-    if ny < 3 or nx < 3:
-        raise InputError(
-            f"an image of {nx}x{ny} pixels is too small to estimate its noise "
-            "from; give sigma or weight"
-        )
-    r = sum(
-        _NOISE_MASK[i, j] * u[i : ny - 2 + i, j : nx - 2 + j] for i in range(3) for j in range(3)
-    )
-    return float(np.median(np.abs(r))) * _MAD_TO_STD / 6.0
-
-
 def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float | np.ndarray:
     """The noise standard deviation of an image, in its own units (0..255 for uint8), per
     channel (an array) when channel_axis is given.
@@ -417,12 +402,12 @@ def estimate_sigma(image: ArrayLike, channel_axis: int | None = None) -> float |
     0.05
     """
     data, layout = to_kernel_layout(image, channel_axis)
-    sig = np.array([_noise_std(c) for c in data]) * layout.scale
+    sig = np.array([noise_std(c) for c in data]) * layout.scale
     return sig if channel_axis is not None else float(sig[0])
 
 
 def noise_std_by_strips(scaled: bounded.Scaled) -> np.ndarray:
-    """_noise_std of each channel, from the residual computed a strip at a time: the
+    """noise_std of each channel, from the residual computed a strip at a time: the
     same float64 values (each residual value reads the same nine numbers in the same order),
     so the same median, without the whole image's float64 copy and its temporaries."""
 
@@ -440,10 +425,10 @@ def noise_std_by_strips(scaled: bounded.Scaled) -> np.ndarray:
             u = scaled.block(slice(r, stop + 2), slice(None), c)[0]
             h = stop - r
             residual[r:stop] = sum(
-                _NOISE_MASK[i, j] * u[i : h + i, j : nx - 2 + j] for i in range(3) for j in range(3)
+                NOISE_MASK[i, j] * u[i : h + i, j : nx - 2 + j] for i in range(3) for j in range(3)
             )
         np.abs(residual, out=residual)
         # in place: np.median would otherwise copy the whole residual (192 MB at 6000 x 4000)
-        sig[c] = float(np.median(residual, overwrite_input=True)) * _MAD_TO_STD / 6.0
+        sig[c] = float(np.median(residual, overwrite_input=True)) * MAD_TO_STD / 6.0
         del residual
     return sig

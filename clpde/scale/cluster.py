@@ -10,7 +10,7 @@ import time
 
 from .._interrupt import children_stderr, held
 from ..errors import InputError
-from ..runtime import _build_problem, devices
+from ..runtime import build_problem, devices
 
 
 def dask_setup(worker) -> None:
@@ -76,7 +76,7 @@ def _gpu_indices(device) -> list[int]:
     if device is not None and str(device).strip().lower() != "gpu":
         return []  # a device was chosen: every worker uses it
     try:
-        return [d.index for d in devices() if d.type == "gpu" and _build_problem(d.index) is None]
+        return [d.index for d in devices() if d.type == "gpu" and build_problem(d.index) is None]
     except Exception:  # noqa: BLE001  (no OpenCL here: the workers use their default device)
         return []
 

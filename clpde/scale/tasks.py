@@ -510,7 +510,7 @@ def surface_file(
     progress=None,
 ) -> list[str]:
     """`clpde surface`: one of clpde.surface.runs.FLOWS on the surface of the mesh `input`
-    (a file, or a shape name of clpde.data.SURFACE_SHAPES); the folder `output` gets the
+    (a file, or a shape name of clpde.surface.SURFACE_SHAPES); the folder `output` gets the
     pictures before and after and the coloured result as PLY and GLB."""
     get_runtime(device)
     check_not_overwriting_input([input], output)

@@ -7,7 +7,8 @@ along a field; TV's dynamic lambda in dynamic_lambda.py), harmonic.py (harmonic 
 colour), textures.py (Turk's reaction-diffusion), curvature.py (principal directions),
 inpainting.py (filling missing data);
 level_set.py reinitialises psi and extends data by PDE, sampling.py reads data at points,
-render.py draws and exports, runs.py holds the command line's ready-made runs.
+render.py draws and exports, shapes.py makes sample shapes and their data, runs.py holds
+the command line's ready-made runs.
 """
 
 from ..grid3d import Grid3D
@@ -18,15 +19,19 @@ from .harmonic import denoise_colour, harmonic_map
 from .implicit import ImplicitSurface
 from .inpainting import SurfaceInpaintInfo, inpaint
 from .render import colormap, export_mesh, render, render_mesh, to_mesh
+from .shapes import SURFACE_SHAPES, checker, colour_pattern, surface_noise, surface_shape
 from .textures import THESIS_FIG_4_7, TURK, reaction_diffusion
 
 __all__ = [
     "INTERPOLATIONS",
+    "SURFACE_SHAPES",
     "THESIS_FIG_4_7",
     "TURK",
     "Grid3D",
     "ImplicitSurface",
+    "checker",
     "colormap",
+    "colour_pattern",
     "SurfaceDenoiseInfo",
     "SurfaceInpaintInfo",
     "denoise_colour",
@@ -41,6 +46,8 @@ __all__ = [
     "render",
     "render_mesh",
     "stability_limit",
+    "surface_noise",
+    "surface_shape",
     "to_mesh",
     "tv",
 ]

@@ -1,7 +1,7 @@
 """The chapter-4 flows as ready-made runs on a shape or a user's mesh (`load_surface`,
 `run_flow`), returning the data before and after on the surface, written as pictures (PNG)
 and a coloured mesh (PLY, GLB) into an output folder (`write_run`). `clpde surface` and the
-examples run them. The demonstration data is in clpde.data."""
+examples run them. The demonstration data is in shapes.py."""
 
 from __future__ import annotations
 
@@ -11,8 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data import SURFACE_SHAPES as SHAPES
-from ..data import checker, colour_pattern, surface_noise, surface_shape
 from ..errors import InputError
 from ..io.images import output_folder, write_bytes
 from .implicit import ImplicitSurface
@@ -26,12 +24,14 @@ from .render import (
     with_colour_bar,
     with_title,
 )
+from .shapes import SURFACE_SHAPES as SHAPES
+from .shapes import checker, colour_pattern, surface_noise, surface_shape
 
 FLOWS = ("heat", "tv", "denoise", "chroma", "reaction-diffusion", "flowvis", "curvature")
 
 
 def load_surface(mesh, resolution=96, device=None) -> ImplicitSurface:
-    """A generated shape by name (clpde.data.SURFACE_SHAPES) or a mesh file / Trimesh,
+    """A generated shape by name (clpde.surface.SURFACE_SHAPES) or a mesh file / Trimesh,
     at about `resolution` cells across."""
     if isinstance(mesh, str) and mesh in SHAPES:
         return surface_shape(mesh, resolution, device=device)

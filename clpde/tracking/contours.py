@@ -353,15 +353,15 @@ def track(
         Only with `return_level_sets`.
     discrepancy : ndarray
         Only with `return_discrepancy`.
+    confidence : ndarray
+        Only with `return_confidence`: (T,) in [0, 1] (clpde.tracking.confidence: a model
+        calibrated on good and lost tracks of the calibration half of
+        benchmarks/track_corpus.py); frames below LOW_CONFIDENCE are likely lost.
 
     Raises
     ------
     InputError
         For frames, a mask or options that cannot be used; the message names the fix.
-    confidence : ndarray
-        Only with `return_confidence`: (T,) in [0, 1] (clpde.tracking.confidence: a model
-        calibrated on good and lost tracks of the calibration half of
-        benchmarks/track_corpus.py); frames below LOW_CONFIDENCE are likely lost.
 
     Examples
     --------

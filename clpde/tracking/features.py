@@ -1,5 +1,5 @@
 """Helpers of clpde.track for real video: the motion model that starts each frame's
-evolution at the predicted place, and the MP4 overlay.
+evolution at the predicted place (the MP4 overlay is clpde.io.frames.overlay).
 
 MotionFilter predicts the object's displacement from one frame to the next:
 

@@ -3,7 +3,7 @@
 // geometry, the tiles a kernel copies a brick and its neighbours' faces into, and the loops
 // over bricks and their cells. A brick holds BX x BY x BZ cells (BV in all), x fastest; a
 // quantity is one buffer (channels, nbricks + 2, BV); brick 0 stands for every brick place
-// not stored. Include after common.cl.
+// not stored. Include after common.h.
 #ifndef CLPDE_BRICKS_H
 #define CLPDE_BRICKS_H
 

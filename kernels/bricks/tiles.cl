@@ -1,7 +1,7 @@
 // Brick tiles of a dense padded device volume (clpde/bricks.py, BrickBand.tiles):
 // psi's tiles of halo 2, built on the device from the surface's padded psi once per psi, so
 // the host never gathers them from a dense copy. Defines: BX, BY, BZ (bricks.h).
-#include "common.cl"
+#include "common.h"
 #include "bricks/bricks.h"
 
 // dst (channels, nbricks + 2, tile cells): tile cell t of stored brick b = 1..nbricks (brick

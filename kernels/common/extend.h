@@ -7,7 +7,7 @@
 // surface/extend.cl: the smoothed sign psi / sqrt(psi^2 + h^2), a 1e-30 guard, and the
 // product taken in another order), and scale the step differently (dt times a cutoff
 // weight, or r = dt / h), so each keeps those; the transport term is the part they share.
-// Unit grid spacing; `sx` is the row stride, `sxy` the slab stride. Include after common.cl.
+// Unit grid spacing; `sx` is the row stride, `sxy` the slab stride. Include after common.h.
 #ifndef CLPDE_EXTEND_H
 #define CLPDE_EXTEND_H
 

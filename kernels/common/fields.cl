@@ -1,5 +1,5 @@
 // Ghost filling, index-list compaction and row-wise reductions for padded fields.
-#include "common.cl"
+#include "common.h"
 #include "reduce.h"
 
 // Ghost columns left and right of every interior row. Neumann (mode 0) mirrors the field

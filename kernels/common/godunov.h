@@ -2,7 +2,7 @@
 // tracking/features.cl in 2D, regions.cl and surface/reinit.cl in 3D): the sign function,
 // minmod, slope-limited one-sided differences (second-order ENO, Osher-Sethian) and the
 // Godunov gradient norm for u_t = V |grad u|. Unit grid spacing (godunov_axis takes any
-// differences); `sx` is the row stride, `sxy` the slab stride. Include after common.cl.
+// differences); `sx` is the row stride, `sxy` the slab stride. Include after common.h.
 #ifndef CLPDE_GODUNOV_H
 #define CLPDE_GODUNOV_H
 

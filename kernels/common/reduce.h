@@ -1,7 +1,7 @@
 // Reductions over the interior of a padded field in two passes: one partial per interior
 // row and channel on the device (work-item (0, y, c), a loop along the row), then either
 // the host or one work-item per channel adds a channel's row partials. Include after
-// common.cl.
+// common.h.
 #ifndef CLPDE_REDUCE_H
 #define CLPDE_REDUCE_H
 
@@ -24,7 +24,7 @@
     const int row = get_global_id(2) * plane + (y + G) * sx + G
 
 // The second pass on the device: the sum of `n` partials starting at `partial`, in order
-// (row partials here; also box_lists.cl's per-item partials and surface/flows.cl's chunk sums).
+// (row partials here; also box_lists.h's per-item partials and surface/flows.cl's chunk sums).
 inline REAL sum_rows(__global const REAL* restrict partial, const int n)
 {
     REAL acc = 0;

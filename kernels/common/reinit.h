@@ -4,7 +4,7 @@
 // with Russo and Smereka's subcell fix at the cells beside the interface (u0 changes sign
 // towards one of their 4 or 6 neighbours): there u relaxes towards D = u0 / |grad u0|, the
 // distance to the interface estimated from u0 itself, so the zero level set does not move.
-// Unit grid spacing unless said otherwise. Include after common.cl and godunov.h.
+// Unit grid spacing unless said otherwise. Include after common.h and godunov.h.
 #ifndef CLPDE_REINIT_H
 #define CLPDE_REINIT_H
 

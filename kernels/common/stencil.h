@@ -1,5 +1,5 @@
 // Stencils of the planar schemes on the 3x3 neighbourhood of a cell of a padded field
-// (unit grid spacing, row stride sx). Include after common.cl.
+// (unit grid spacing, row stride sx). Include after common.h.
 #ifndef CLPDE_STENCIL_H
 #define CLPDE_STENCIL_H
 

@@ -18,7 +18,7 @@
 //   4. ct_mark: the shell's pixels become known.
 // Borders of the box: the smoothing sums are normalized, so pixels outside simply count as
 // unknown.
-#include "common.cl"
+#include "common.h"
 
 // The full-box passes walk runs of `xrun` pixels of one row (a whole row on CPUs, where
 // the innermost loops over x vectorise; one pixel on GPUs), tap by tap, accumulating into
@@ -167,7 +167,7 @@ __kernel void ct_fill(__global REAL* u, __global const REAL* known, __global con
                 if (known[jy] == 0) continue;
                 const REAL inv = RSQRT((REAL)d2);
                 const REAL along = n1 * dx + n2 * dy;
-                const REAL w = pass == 0 ? EXP(-g * along * along) * inv : inv;  // EXP: common.cl
+                const REAL w = pass == 0 ? EXP(-g * along * along) * inv : inv;  // EXP: common.h
                 den += w;
                 if (pass == 0) den_iso += inv;
                 for (int c = 0; c < nc; ++c) num[c] += w * u[c * plane + jy];

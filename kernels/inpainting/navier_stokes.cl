@@ -12,7 +12,7 @@
 //   div(g grad w) = sum over the four faces of g(|w_q - w_p|) (w_q - w_p),
 //                   g(s) = 1 / (1 + (s / K)^2)                (edge-stopping, Perona-Malik)
 // Stable for dt (|v_x| + |v_y| + 4 nu) <= 1; with I in [0, 1], |v_x| + |v_y| <= 1.
-#include "inpainting/box_lists.cl"
+#include "inpainting/box_lists.h"
 
 INLINE REAL ns_g(const REAL d, const REAL inv_k2) { return (REAL)1 / (1 + d * d * inv_k2); }
 

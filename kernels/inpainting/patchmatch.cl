@@ -22,7 +22,7 @@
 // where the hole has no values yet); otherwise every in-box pixel counts, and the sum stops
 // early once it exceeds the best distance so far.
 
-#include "common.cl"
+#include "common.h"
 
 #ifndef PATCH
 #define PATCH 7

@@ -10,8 +10,8 @@
 // with the known pixels moved to b. The CG vectors live on the whole box and are zero
 // off the hole (p, q) so that the operators can gather neighbours without tests for
 // membership; only the lists' cells are visited.
-// Work distribution and reductions: box_lists.cl.
-#include "inpainting/box_lists.cl"
+// Work distribution and reductions: box_lists.h.
+#include "inpainting/box_lists.h"
 #include "reduce.h"
 
 // (L L u)(i) directly from u: the 13-point stencil where all of it lies in the box, the

@@ -39,7 +39,7 @@
 // kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
 // too small) they live in `scratch`, SPECTRAL_SCRATCH REALs per work-group of global
 // memory, and the barriers fence global memory too; the arithmetic is the same.
-#include "common.cl"
+#include "common.h"
 
 #define SPECTRAL_MAXL 32    // largest window
 #define SPECTRAL_MAXK 512   // most picks per block

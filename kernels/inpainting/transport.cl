@@ -8,7 +8,7 @@
 //   band   = Omega-epsilon with g > 0    (where the anisotropic diffusion runs).
 // A kernel writes every cell of its list into `v`; cells off the list keep whatever `v`
 // held, so the host keeps both buffers of a ping-pong pair equal off the list.
-#include "common.cl"
+#include "common.h"
 #include "stencil.h"
 
 #ifndef STENCIL

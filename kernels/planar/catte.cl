@@ -10,7 +10,7 @@
 // r with weights w[0..r] (w[k] for offsets +-k), mirrored at the border (index -1 reads 0),
 // the same Neumann border as the flows' ghosts. Radius and weights are arguments, not
 // defines, so no new program is built per scale.
-#include "common.cl"
+#include "common.h"
 #include "stencil.h"
 
 inline int mirror_index(int k, const int n)

@@ -1,7 +1,7 @@
 // Explicit steps of the planar flows on ghost-padded fields (unit grid spacing).
 // Each step reads `u` and writes every interior cell of `v` and its mirror-image ghosts
 // (Neumann borders, MIRROR_GHOSTS), so the host only swaps the two before the next step.
-#include "common.cl"
+#include "common.h"
 #include "reduce.h"
 #include "stencil.h"
 
@@ -24,7 +24,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 inline REAL pm_flux(const REAL d, const REAL inv_k2)
 {
 #if EDGE_STOP == 0
-    return d * EXP(-d * d * inv_k2);  // EXP: inline on PoCL, see common.cl
+    return d * EXP(-d * d * inv_k2);  // EXP: inline on PoCL, see common.h
 #else
     return d / (1 + d * d * inv_k2);
 #endif

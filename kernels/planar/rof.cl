@@ -21,7 +21,7 @@
 // and never written; the others are written by the step kernel from values it has just
 // computed itself (one small epilogue per row), which saves four ghost-fill launches per
 // iteration; on PoCL a launch costs tens of microseconds, as much as a small image's step.
-#include "common.cl"
+#include "common.h"
 #include "reduce.h"
 
 // The extrapolated dual point q = p + beta (p - p_old), formed on the fly from the last two

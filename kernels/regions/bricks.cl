@@ -17,7 +17,7 @@
 // the kernels skip bricks without the bit they update, so the work follows the band.
 #define LS_SPACE __private
 #define GROUP_PER_BRICK 0
-#include "common.cl"
+#include "common.h"
 #include "godunov.h"
 #include "reinit.h"
 #include "extend.h"

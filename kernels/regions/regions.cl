@@ -11,7 +11,7 @@
 // Sign convention: u_t = V |grad u| (godunov.h's upwind norms); Phi is negative inside, so
 // V > 0 moves the surface inwards. The host passes V = -beta / h for an outward normal
 // speed beta.
-#include "common.cl"
+#include "common.h"
 #include "godunov.h"
 #include "reinit.h"
 #include "extend.h"

@@ -2,7 +2,7 @@
 // (padded volumes, band runs) and regions/bricks.cl (brick tiles): the speeds, the coupled
 // step of a level set, the narrow band's cut-off and the extension's velocity. Fields are
 // LS_SPACE pointers (godunov.h) with row stride sx and slab stride sxy; channel c of a
-// cell i lies at c * plane + i. Include after common.cl, godunov.h and extend.h.
+// cell i lies at c * plane + i. Include after common.h, godunov.h and extend.h.
 #ifndef CLPDE_REGIONS_H
 #define CLPDE_REGIONS_H
 

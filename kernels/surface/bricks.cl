@@ -12,7 +12,7 @@
 // private tile; on GPUs (1) one work-group of BV work-items takes a brick, one cell each,
 // from a tile in local memory. The arithmetic is the same (and is surface/heat.cl's): the
 // results agree to rounding.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 #include "bricks/bricks.h"
 // the flux functions read u from the brick's tile

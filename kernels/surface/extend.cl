@@ -1,7 +1,7 @@
 // Closest-point re-extension of data on a surface's band, sampling at points, and extension
 // along normals by the PDE of section 4.2 (clpde/surface/flows.py, implicit.py). Defines:
 // INTERP, NC, NORMALIZE, LINE_FIELD. Layout and conventions: surface.h.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 #include "extend.h"
 

@@ -3,7 +3,7 @@
 // Defines: NC, FLOW_P, HARMONIC, FIDELITY, ALONG, WEIGHTED, LINE_FIELD (the lambda kernels
 // use none: the host looks them up with its flow's defines, so they come from the same
 // program). Layout and conventions: surface.h.
-#include "common.cl"
+#include "common.h"
 #include "reduce.h"
 #include "surface/surface.h"
 #include "surface/flux.h"

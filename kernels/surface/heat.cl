@@ -1,7 +1,7 @@
 // The intrinsic heat flow (4.7, 4.8) and Turk's reaction-diffusion (4.12-4.14) over a
 // surface's band runs (clpde/surface/flows.py). Defines: WEIGHTED, ALONG. Layout and
 // conventions: surface.h.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 #include "surface/flux.h"
 

@@ -5,7 +5,7 @@
 // flux.h's TV flux (FLOW_P 1) for the transport's anisotropic diffusion; the harmonic fill
 // uses heat_div, which FLOW_P leaves alone.
 #define FLOW_P 1
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 #include "surface/flux.h"
 

@@ -1,6 +1,6 @@
 // Mesh -> distance (clpde/surface/mesh_sdf.py): exact point-triangle distances refined over
 // neighbouring cells. Define: WALK.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 
 // ---- mesh -> distance: exact point-triangle distances refined over neighbouring cells ------

@@ -1,6 +1,6 @@
 // Reinitialisation of a surface's psi to a signed distance (clpde/surface/implicit.py).
 // Layout and conventions: surface.h.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 #include "godunov.h"
 #include "reinit.h"

@@ -1,6 +1,6 @@
 // The surface's shape from psi (clpde/surface/flows.py): principal curvature directions.
 // Layout and conventions: surface.h.
-#include "common.cl"
+#include "common.h"
 #include "surface/surface.h"
 
 // ---- principal curvature directions ---------------------------------------------------------

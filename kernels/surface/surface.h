@@ -1,5 +1,5 @@
 // Helpers shared by the surface kernel files (surface_*.cl, bricks.cl). Include after
-// common.cl.
+// common.h.
 //
 // Volumes are ghost-padded 3D arrays, layout (channels, nz + 2G, ny + 2G, nx + 2G), x
 // fastest: `sx` is the row stride, `sxy` the slab stride and `plane` (LIST_ARGS) the channel
@@ -12,7 +12,8 @@
 // and its error grows under refinement.
 //
 // The files, one family each (thesis chapter 4, appendices B-E):
-//   surface/band.cl    the bands, their runs, closest points and their stencils (once per psi)
+//   surface/band.cl    closest points and their stencils (once per psi; the bands and their
+//                      runs are common/grid3d.cl's)
 //   surface/extend.cl  closest-point re-extension, sampling, extension by the PDE
 //   surface/heat.cl    the heat flow (4.7, 4.8) and Turk's reaction-diffusion
 //   surface/flows.cl   TV, harmonic maps, diffusion along a field; TV's dynamic lambda

@@ -19,7 +19,7 @@
 // same clusters and the innermost loop runs over points: it vectorises on CPUs.
 //
 // Coordinates are in grid cells relative to the grid origin, as mesh_refine's triangles.
-#include "common.cl"
+#include "common.h"
 
 // points per work-item (a chunk of one tile)
 #ifndef CHUNK

@@ -11,7 +11,7 @@
 //   FRONT_ONLY  1: the stopping test reads the speed at the cells next to the contour only
 //         (|u| < 1), for the region and curvature terms, which keep the band's outer cells
 //         moving; 0: at every band cell, as morph_track's test does
-#include "common.cl"
+#include "common.h"
 #include "godunov.h"
 #include "bricks/bricks2d.h"
 

@@ -10,7 +10,7 @@
 //         (2 WIN + 1)^2 window;  2: Huber, beta = clamp(F2 - F1, -delta, delta)
 //   WIN   window radius of DISC 1 (band cells lie MARGIN + G = 4 cells inside the buffer,
 //         so WIN <= 4 reads stay inside it)
-#include "common.cl"
+#include "common.h"
 #include "godunov.h"
 #include "bricks/bricks2d.h"
 

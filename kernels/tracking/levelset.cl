@@ -5,7 +5,7 @@
 //
 // The shared stencils and the reinitialisation's update live in godunov.h and reinit.h
 // (regions.cl uses them in 3D).
-#include "common.cl"
+#include "common.h"
 #include "godunov.h"
 #include "reinit.h"
 #include "bricks/bricks2d.h"

@@ -14,7 +14,7 @@
 //                    cover B / (B + separation), B the summed Bhattacharyya distance;
 //   (blur_cols, blur_rows again: L pooled over neighbouring pixels)
 //   region_speed     speed = scale weight tanh(L / 2) written into the level set's grid.
-#include "common.cl"
+#include "common.h"
 
 // 2 + 4K planes of (ny2, nx2): m, 1 - m, then per feature k: m f, (1 - m) f, m f^2,
 // (1 - m) f^2. u: the level set's padded buffer, the frame's (0, 0) at u[off], rows `sx`

@@ -1,6 +1,7 @@
 """The command line, run in-process on tiny images: results match the library, dtypes survive
 the files, inputs are never overwritten and nothing is written when a run fails."""
 
+import argparse
 import json
 import os
 import subprocess
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 import clpde
-from clpde.cli import SUBCOMMANDS, main
+from clpde.cli import SUBCOMMANDS, build_parser, main
 from clpde.io.images import read_image, write_image
 
 
@@ -34,10 +35,18 @@ def _one_error_line(capsys):
 
 
 def test_subcommands_are_registered():
-    names = [f.__name__ for f in SUBCOMMANDS]
-    assert {"add_devices_parser", "add_diffuse_parser", "add_denoise_parser"} <= set(names)
+    assert {"devices", "diffuse", "denoise"} <= set(SUBCOMMANDS)
     for command in ("devices", "diffuse", "denoise"):
         assert main([command, "--help"]) == 0
+
+
+def test_each_subcommands_summary_is_its_modules_own():
+    """`clpde --help` shows SUBCOMMANDS' one-line help without loading the modules: it must
+    say what each module's own parser says (`clpde COMMAND --help`, docs/command-line.md)."""
+    parser = build_parser()
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    assert {a.dest: a.help for a in action._choices_actions} == SUBCOMMANDS
+    assert list(action.choices) == list(SUBCOMMANDS)
 
 
 def test_devices_lists_and_marks_the_device_in_use(capsys):

@@ -216,7 +216,7 @@ def test_tv_default_flattens_the_squares_and_keeps_their_edges():
     squares into blobs). Against heat that leaves as much noise, it keeps the edges sharp."""
     from scipy import ndimage
 
-    from clpde.data import checker
+    from clpde.surface import checker
     from clpde.surface.runs import load_surface, run_flow
 
     surf = load_surface("torus", 48)

@@ -61,7 +61,8 @@ def _copy_sources(dest: Path) -> None:
     for name in ("pyproject.toml", "README.md", *_source_files()):
         target = dest / name
         target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(REPO / name, target)
+        # clpde/kernels is a link to kernels/ (how a checkout imports clpde.kernels): as a link
+        shutil.copy2(REPO / name, target, follow_symlinks=False)
 
 
 def test_wheel_ships_kernels_and_runs_outside_the_checkout(tmp_path):
@@ -101,6 +102,7 @@ def test_wheel_ships_kernels_and_runs_outside_the_checkout(tmp_path):
         "site = Path(sys.argv[1]).resolve()\n"
         "assert Path(clpde.__file__).resolve().is_relative_to(site), clpde.__file__\n"
         "assert r.KERNEL_DIR.resolve().is_relative_to(site), r.KERNEL_DIR\n"
+        "assert r.KERNEL_DIR == site / 'clpde' / 'kernels', r.KERNEL_DIR\n"
         "image = np.zeros((8, 8), np.float32); image[4, 4] = 1\n"
         "out = clpde.diffuse(image, 'heat', steps=3, device='cpu')\n"
         "assert out.dtype == np.float32 and abs(out.sum() - 1) < 1e-5 and out[4, 4] < 1\n"

@@ -1,3 +1,4 @@
+import os
 import subprocess
 import sys
 import textwrap
@@ -66,6 +67,7 @@ def test_no_platform_names_the_fix(monkeypatch):
         raise cl.LogicError("clGetPlatformIDs failed: PLATFORM_NOT_FOUND_KHR")
 
     monkeypatch.setattr(cl, "get_platforms", no_platforms)
+    monkeypatch.setattr(rt_mod, "_found", [])  # as in a process that has not listed them yet
     with pytest.raises(NoDeviceError, match=r'pip install "clpde\[pocl\]"'):
         rt_mod.get_runtime("cpu")
 
@@ -81,11 +83,11 @@ def test_kernels_are_built_once_and_reused(runtime):
 
 def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
     (tmp_path / "common").mkdir()
-    (tmp_path / "common" / "common.cl").write_text(
-        (rt_mod.KERNEL_DIR / "common" / "common.cl").read_text()
+    (tmp_path / "common" / "common.h").write_text(
+        (rt_mod.KERNEL_DIR / "common" / "common.h").read_text()
     )
     (tmp_path / "broken.cl").write_text(
-        '#include "common.cl"\n\n'
+        '#include "common.h"\n\n'
         "__kernel void k(__global REAL* u)\n{\n    u[0] = undefined_name;\n}\n"
     )
     monkeypatch.setattr(rt_mod, "KERNEL_DIR", tmp_path)
@@ -258,3 +260,37 @@ def test_a_failed_allocation_leaks_no_buffers(name, monkeypatch):
         with pytest.raises(cl.MemoryError):
             call()
         assert _live_buffers() == before, f"buffers left after allocation {fail_at} failed"
+
+
+def test_profile_prints_each_kernels_time_at_exit():
+    """CLPDE_PROFILE=1: at exit, one line per kernel with its device time and launches."""
+    code = (
+        "import numpy as np, clpde\n"
+        "clpde.diffuse(np.ones((16, 16), np.float32), 'heat', steps=7, device='cpu')\n"
+    )
+    env = {**os.environ, "CLPDE_PROFILE": "1"}
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    lines = out.stderr.splitlines()
+    assert any(line.startswith("clpde profile: ") for line in lines), out.stderr
+    heat = [line.split() for line in lines if line.endswith("planar/planar.cl:heat_step")]
+    assert len(heat) == 1 and heat[0][2] == "7" and float(heat[0][0]) >= 0, out.stderr
+    quiet = subprocess.run(
+        [sys.executable, "-c", code],
+        env={k: v for k, v in os.environ.items() if k != "CLPDE_PROFILE"},
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert "clpde profile" not in quiet.stderr
+
+
+def test_devices_are_listed_once(monkeypatch):
+    """get_runtime() and devices() ask OpenCL for the platforms once per process."""
+    rt_mod._all_devices()
+    calls = []
+    monkeypatch.setattr(rt_mod.cl, "get_platforms", lambda: calls.append(1) or [])
+    rt_mod.get_runtime("cpu")
+    rt_mod.devices()
+    assert calls == []

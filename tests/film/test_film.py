@@ -4,12 +4,12 @@ detect_defects / inpaint_video on small synthetic sequences."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import film as ref
 from scipy.ndimage import gaussian_filter, shift
 
 import clpde
 from clpde import InputError
 from clpde.film import BLOTCH, SCRATCH
+from tests.reference import film as ref
 
 
 def _dev(q, a, dtype=np.float32):

@@ -1,22 +1,14 @@
-"""The benchmark corpus (benchmarks/inpaint_corpus.py): deterministic, split by source."""
-
-import importlib.util
-import sys
-from pathlib import Path
+"""The benchmark corpus (tests/cases/inpaint_corpus.py): deterministic, split by source."""
 
 import numpy as np
 import pytest
 
-PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "inpaint_corpus.py"
+from tests.cases import inpaint_corpus
 
 
 @pytest.fixture(scope="module")
 def corpus():
-    spec = importlib.util.spec_from_file_location("inpaint_corpus", PATH)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return inpaint_corpus
 
 
 def test_split_is_deterministic(corpus):

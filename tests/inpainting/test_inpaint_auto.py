@@ -128,11 +128,7 @@ def test_vote_on_dust_is_not_below_its_best_candidate():
     """Hundreds of 1-4 px specks on a ridged float field: each speck's ring holds a few
     dozen values, on which five weights fitted alone chase noise (0.35 dB below the best
     candidate before the box's prior); the vote stays within 0.2 dB of its best candidate."""
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-    import inpaint_corpus as corpus
+    from tests.cases import inpaint_corpus as corpus
 
     field = corpus.ridged(12, 96).astype(np.float64)
     data = ((field - field.min()) / np.ptp(field))[None]

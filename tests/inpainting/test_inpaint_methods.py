@@ -4,7 +4,6 @@ import dataclasses
 import sys
 import tracemalloc
 import types
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,9 +12,7 @@ import clpde
 from clpde import InputError
 from clpde.inpainting import boxes as box_clusters
 from clpde.inpainting import registry as inpainting
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from inpaint_quality import edge_case, stripes_case  # noqa: E402
+from tests.cases.inpaint_slots import edge_case, stripes_case
 
 
 def _photo_like(ny=120, nx=160, seed=0):

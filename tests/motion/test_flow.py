@@ -3,11 +3,11 @@
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import motion as ref
 from scipy.ndimage import gaussian_filter, shift
 
 from clpde import InputError
 from clpde.motion import FlowParams, FlowSolver, optical_flow, warp
+from tests.reference import motion as ref
 
 
 def _dev(q, a):

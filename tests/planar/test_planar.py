@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
-from reference import planar as ref
 from skimage import data
 
 import clpde
 from clpde.errors import InputError
 from clpde.fields import Field, Grid
+from tests.reference import planar as ref
 
 
 def structured(ny=40, nx=56):

@@ -5,7 +5,6 @@ against the lists', and the upkeep's bricks against the band the lists compute d
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import regions as ref
 from scipy.ndimage import binary_dilation
 
 from clpde.errors import InputError
@@ -13,6 +12,7 @@ from clpde.regions.api import region_tracker, track_region
 from clpde.regions.bricks import BIT_REINIT, BIT_STEP
 from clpde.regions.frames import make_frame
 from clpde.regions.tracker import RegionTracker
+from tests.reference import regions as ref
 
 N = 32  # grid cells a side of the kernels' tests
 

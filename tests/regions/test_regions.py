@@ -4,7 +4,6 @@ tracked regions against geometry (caps on moving spheres, a region that splits, 
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import regions as ref
 
 import clpde
 from clpde.errors import InputError
@@ -12,6 +11,7 @@ from clpde.fields import compact
 from clpde.grid3d import Grid3D
 from clpde.regions.api import track_region
 from clpde.regions.mesh import along_normals, split_regions, surface_mesh
+from tests.reference import regions as ref
 
 # ---- kernels vs numpy references ----------------------------------------------------------
 

@@ -4,13 +4,13 @@ solutions on the unit sphere (second-order convergence measured through surf.sam
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows
 from clpde.surface import storage as surface_storage
 from clpde.surface.exact import exp3z_exact, sphere_points
 from clpde.surface.storage import _offsets
+from tests.reference import surface as ref
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,6 @@ on bricks against the same flow on the band lists."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import bricks as bref
-from reference import surface as ref
 from test_surface_flows import CASES
 
 from clpde.bricks import APRON, NODE
@@ -19,6 +17,8 @@ from clpde.runtime import Runtime
 from clpde.surface import ImplicitSurface
 from clpde.surface import storage as surface_storage
 from clpde.surface.band import extend_defines
+from tests.reference import bricks as bref
+from tests.reference import surface as ref
 
 
 @pytest.fixture(scope="module")

@@ -4,10 +4,10 @@ on the device: kernels against numpy references, results against the exact geome
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface
+from tests.reference import surface as ref
 
 
 def band_host(band):

@@ -4,11 +4,11 @@ implicit surfaces: kernels against numpy references, flows against their mathema
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, flows, harmonic
 from clpde.surface.storage import _offsets
+from tests.reference import surface as ref
 
 
 @pytest.fixture(scope="module")
@@ -239,7 +239,7 @@ def test_dynamic_lambda_is_corrected_for_grid_scale_noise():
     """Noise at the grid's scale (independent per cell, as carried to the surface by the
     closest-point extension): the plain (C.2) settles well above sigma^2, the corrected
     lambda at sigma^2."""
-    from clpde.data import surface_noise as cell_noise
+    from clpde.surface import surface_noise as cell_noise
 
     s = ImplicitSurface.sphere(1.0, 0.1)
     sigma = 0.1

@@ -7,14 +7,14 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 import trimesh
-from reference import surface as ref
-from reference import surface_inpaint as iref
 from scipy.spatial import cKDTree
 
 from clpde.cli import main
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, inpaint
 from clpde.surface.inpainting import chebyshev_bounds, fill_band
+from tests.reference import surface as ref
+from tests.reference import surface_inpaint as iref
 
 
 def band_host(band):

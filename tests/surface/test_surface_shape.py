@@ -3,11 +3,11 @@
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import surface as ref
 
 from clpde.errors import InputError
 from clpde.surface import ImplicitSurface, curvature, textures
 from clpde.surface.storage import _offsets
+from tests.reference import surface as ref
 
 
 def band_host(band):

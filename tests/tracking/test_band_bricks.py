@@ -12,13 +12,13 @@ from dataclasses import replace
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import levelset as ref
 
 from clpde.fields import Field, PingPong
 from clpde.runtime import Runtime
 from clpde.tracking.contours import MorphingTracker
 from clpde.tracking.levelset import LevelSet, signed_distance
 from clpde.tracking.morph import morph_kernel_name
+from tests.reference import levelset as ref
 
 BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True), ("bricks16x4", True)]
 

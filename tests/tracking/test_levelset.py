@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
-from reference import levelset as ref
 
 from clpde.errors import InputError
 from clpde.fields import Field, Grid, index_list
 from clpde.tracking.levelset import LevelSet, signed_distance
+from tests.reference import levelset as ref
 
 
 def _field(grid, values):

@@ -5,8 +5,6 @@ split sequences, and the confidence per frame."""
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import levelset as ref
-from reference import track_adaptive as aref
 from scipy import ndimage
 
 from clpde.fields import Field, Grid, compact
@@ -19,6 +17,8 @@ from clpde.tracking.adaptive import (
 from clpde.tracking.confidence import LOW_CONFIDENCE, track_confidence
 from clpde.tracking.contours import MorphingTracker, track
 from clpde.tracking.options import CURVATURE, REGION_WEIGHT
+from tests.reference import levelset as ref
+from tests.reference import track_adaptive as aref
 
 
 def _inputs(rng, channels, ny=22, nx=27):

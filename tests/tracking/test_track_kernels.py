@@ -6,10 +6,10 @@ import itertools
 import numpy as np
 import pyopencl.array as cla
 import pytest
-from reference import levelset as ref
 
 from clpde.fields import Field, Grid, compact
 from clpde.tracking.features import MotionFilter, local_contrast, match_displacement
+from tests.reference import levelset as ref
 
 
 @pytest.mark.parametrize("radius", [1, 4])

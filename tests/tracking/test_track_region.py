@@ -4,12 +4,12 @@ reference against scipy's filters and the term's purpose."""
 
 import numpy as np
 import pytest
-from reference import track_region as rref
 from scipy import ndimage
 
 from clpde.tracking.adaptive import noise_variance, region_features
 from clpde.tracking.levelset import MARGIN, LevelSet, signed_distance
 from clpde.tracking.region_term import RegionTerm, gaussian_weights
+from tests.reference import track_region as rref
 
 
 def _scene(rng, ny, nx, channels=1):

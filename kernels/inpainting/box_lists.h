@@ -9,7 +9,7 @@
 // does not depend on the scheduling.
 #ifndef BOX_LISTS_CL
 #define BOX_LISTS_CL
-#include "common.cl"
+#include "common.h"
 
 #define ITEM_ARGS __global const int* restrict list, const int n, const int chunk, \
                   const int stride, const int per, const int ng

@@ -1,7 +1,7 @@
 """How clpde's package is laid out, measured from its source: import cycles, top-level modules,
 long modules and functions, deprecation shims.
 
-    python benchmarks/layout_metrics.py [--root PATH] [--json OUT]
+    python tests/cases/layout_metrics.py [--root PATH] [--json OUT]
 
 Every import statement that can run counts, wherever it sits (module level, inside functions):
 only imports under ``if TYPE_CHECKING:`` are left out, since they never run (they name types
@@ -150,6 +150,68 @@ def cycles(edges: dict[str, list[tuple[str, bool, int]]]) -> list[list[str]]:
     return sorted(out)
 
 
+def unit(module: str) -> str:
+    """The package-level unit of a module: its capability's folder (clpde.surface for
+    clpde.surface.flows), or the ground-floor module itself (clpde.fields)."""
+    return ".".join(module.split(".")[:2])
+
+
+def package_imports(edges: dict[str, list[tuple[str, bool, int]]]):
+    """The import graph between units (see `unit`), in `imports`' form, for `cycles`: two
+    folders importing each other through different files are a cycle here, which the
+    file-level graph cannot see. The package's own __init__ (the lazy public API) is left
+    out: every unit is below it."""
+    out: dict[str, list[tuple[str, bool, int]]] = {}
+    for module, es in edges.items():
+        if module == "clpde":
+            continue
+        found = out.setdefault(unit(module), [])
+        found += [(unit(t), f, line) for t, f, line in es if unit(t) not in (unit(module), "clpde")]
+    return out
+
+
+# The ground floor: the top-level modules, and clpde._device (runtime's pyopencl helpers);
+# its kernels are in these folders of kernels/
+GROUND_FLOOR_PACKAGES = ("clpde._device",)
+GROUND_FLOOR_KERNELS = ("common", "bricks")
+
+
+def ground_floor(root: Path) -> list[str]:
+    mods = modules(root)
+    return sorted(
+        m
+        for m, p in mods.items()
+        if (m.count(".") == 1 and p.name not in ("__init__.py", "__main__.py"))
+        or m in GROUND_FLOOR_PACKAGES
+    )
+
+
+def ground_floor_reaching_up(root: Path) -> list[str]:
+    """'module -> capability' for each import of a capability by the ground floor, and
+    'module: kernels/FILE' for each kernel file a ground-floor module declares outside the
+    ground floor's kernel folders (its KERNEL_FILES)."""
+    floor = set(ground_floor(root))
+    mods = modules(root)
+    out = [
+        f"{m} -> {t}"
+        for m, es in imports(root).items()
+        if m in floor
+        for t, _, _ in es
+        if unit(t) not in floor
+    ]
+    for m in sorted(floor):
+        for node in ast.parse(mods[m].read_text()).body:
+            if isinstance(node, ast.Assign) and any(
+                isinstance(t, ast.Name) and t.id == "KERNEL_FILES" for t in node.targets
+            ):
+                out += [
+                    f"{m}: kernels/{f}"
+                    for f in ast.literal_eval(node.value)
+                    if f.split("/")[0] not in GROUND_FLOOR_KERNELS
+                ]
+    return sorted(set(out))
+
+
 def code_lines(node: ast.AST, lines: list[str]) -> int:
     """Lines of code of a function: not blank, not comment-only, not its docstring."""
     skip = set()
@@ -233,6 +295,8 @@ def measure(root: Path) -> dict:
         "modules": len(mods),
         "top_level_modules": top,
         "cycles": cycles(edges),
+        "package_cycles": cycles(package_imports(edges)),
+        "ground_floor_reaching_up": ground_floor_reaching_up(root),
         "library_modules_importing_cli": cli_importers,
         "function_level_clpde_imports": len(inner),
         "function_level_clpde_import_list": [f"{m}:{line} -> {t}" for m, t, line in inner],
@@ -245,7 +309,7 @@ def measure(root: Path) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1])
+    parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[2])
     parser.add_argument("--json", type=Path, help="also write the numbers here")
     args = parser.parse_args(argv)
     result = measure(args.root)
@@ -257,6 +321,13 @@ def main(argv=None) -> int:
     print(f"import cycles (strongly connected components): {len(result['cycles'])}")
     for component in result["cycles"]:
         print("   ", " <-> ".join(component))
+    print(f"package-level import cycles: {len(result['package_cycles'])}")
+    for component in result["package_cycles"]:
+        print("   ", " <-> ".join(component))
+    print(
+        f"ground floor reaching up: {len(result['ground_floor_reaching_up'])} "
+        + ", ".join(result["ground_floor_reaching_up"])
+    )
     print(
         f"library modules importing clpde.cli: {len(result['library_modules_importing_cli'])} "
         + ", ".join(result["library_modules_importing_cli"])
