@@ -3,7 +3,7 @@
 Flows come from DIS (clpde.motion.dis), computed once per ordered pair of frames and kept
 for the window. A neighbour's warped pixel is trusted where
 
-- its match lies inside the neighbour's frame;
+- its match lies inside the neighbour's frame, with the warp's whole stencil;
 - the flows agree with each other: the loop through another neighbour (t -> a, a -> b
   against t -> b: the neighbours agree along the motion, whatever frame t's own damage) and,
   at a film's ends, the neighbour's flow back (forward-backward: an occluded or revealed
@@ -75,9 +75,12 @@ class FilmMotion:
         return self._flows[key]
 
     def inside(self, t: int, s: int) -> np.ndarray:
+        """Where frame t's match in frame s keeps the whole cubic warp's stencil (the match's
+        pixel, one before and two after, in each direction) inside frame s: nearer the
+        edge, the warp reads the edge's pixels repeated, a value no frame holds."""
         f = self.flow(t, s)
         xs, ys = self.gx + f[..., 0], self.gy + f[..., 1]
-        return (xs >= 0) & (xs <= self.nx - 1) & (ys >= 0) & (ys <= self.ny - 1)
+        return (xs >= 1) & (xs < self.nx - 2) & (ys >= 1) & (ys < self.ny - 2)
 
     def texture(self, image: np.ndarray) -> np.ndarray:
         """The largest gradient magnitude within 2 px: how much a flow error of one pixel

@@ -338,3 +338,28 @@ def test_bad_input(runtime):
         clpde.detect_defects(np.zeros((2, 3, 32, 32)))
     with pytest.raises(InputError):
         clpde.detect_defects(np.zeros((4, 32, 32), complex))
+
+
+def test_the_self_check_refuses_a_repair_the_residual_does_not_explain():
+    """Two regions under the mask: a blotch (the frame is 0.3 off its neighbours, the repair
+    takes it back) is kept; a false alarm (the frame matches its neighbours within the
+    grain, the repair moves it by 0.1) is refused; a region without a trusted neighbour
+    may change by the noise only."""
+    from clpde.film.fill import _self_check
+
+    rng = np.random.default_rng(0)
+    sigma = 0.01
+    frame = 0.5 + sigma * rng.standard_normal((40, 60))
+    hole = np.zeros((40, 60), bool)
+    hole[5:12, 5:12] = hole[5:12, 30:37] = hole[25:32, 5:12] = True
+    resid2 = 2 * sigma**2 * rng.chisquare(1, frame.shape)  # grain only
+    frame[5:12, 5:12] += 0.3  # the blotch
+    resid2[5:12, 5:12] = (0.3 + sigma * rng.standard_normal((7, 7))) ** 2
+    resid2[25:32, 5:12] = np.inf  # no trusted neighbour
+    restored = frame.copy()
+    restored[5:12, 5:12] -= 0.3
+    restored[5:12, 30:37] += 0.1
+    restored[25:32, 5:12] += 0.005
+    refused = _self_check(restored, frame, hole, resid2, sigma)
+    assert not refused[5:12, 5:12].any() and not refused[25:32, 5:12].any()
+    assert refused[5:12, 30:37].all() and refused.sum() == 49
