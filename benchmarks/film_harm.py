@@ -2,7 +2,9 @@
 per half, PSNR whole / damaged pixels, harm (worst frame, worst end frame), frames made
 worse than their damaged input, and blotch and scratch precision / recall.
 
-    python benchmarks/film_harm.py [--frames 12]
+    PYTHONPATH=. python benchmarks/film_harm.py [--frames 12]
+
+(PYTHONPATH=.: from a checkout, the checkout's clpde rather than an installed one.)
 
 The quick check behind the do-no-harm changes of issue 34 (benchmarks/film.py has the full
 tables with the peers).

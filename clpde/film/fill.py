@@ -27,7 +27,7 @@ from ..motion.dis import to_u8
 from ..planar.rof import _noise_std
 from ._compensate import fit_gain
 from ._frames import film_masks, film_planes, grey
-from ._motion import FilmMotion
+from ._motion import FilmMotion, map_frames
 from .detect import SIGMA_FLOOR, _partner
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
@@ -288,9 +288,12 @@ def inpaint_video(
     bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
     if T > 1 and damaged:
         motion = FilmMotion(G, _rough(G, m))
-        for t in damaged:
-            out[t], unfilled[t], resid2[t] = _temporal(motion, planes, m, t, radius)
-            bar.update(1)
+        # the damaged frames in threads: each reads the shared flows and the input only
+        results = map_frames(
+            lambda t: _temporal(motion, planes, m, t, radius), damaged, done=bar.update
+        )
+        for t, (frame, left, r2) in zip(damaged, results, strict=True):
+            out[t], unfilled[t], resid2[t] = frame, left, r2
     elif damaged:
         unfilled = m > 0
     for t in range(T):
