@@ -3,6 +3,7 @@ frames (clpde.film.restore.restore_film), film in, film out."""
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -96,6 +97,15 @@ def add_restore_parser(subparsers) -> None:
         "10-bit where the input has it",
     )
     parser.add_argument(
+        "--frames",
+        type=frame_range,
+        default=None,
+        metavar="A:B",
+        help="restore only frames A to B (from 0, both included) to try a section; the "
+        "frames around it are read as context, so they come out as in a run of the whole "
+        "film (a section's film has no sound)",
+    )
+    parser.add_argument(
         "--preview",
         metavar="DIR",
         default=None,
@@ -112,6 +122,20 @@ def add_restore_parser(subparsers) -> None:
     parser.set_defaults(run=run_restore)
 
 
+def frame_range(text: str) -> tuple[int, int]:
+    """--frames A:B as (A, B), both included (checked against the film's length later)."""
+    first, sep, last = text.partition(":")
+    try:
+        span = (int(first), int(last))
+    except ValueError:
+        span = None
+    if not sep or span is None or span[0] < 0 or span[1] < span[0]:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a range of frames: give A:B, from 0, with A <= B (e.g. 0:23)"
+        )
+    return span
+
+
 def task_options(args) -> dict:
     """The restore task's keywords from the parsed flags (clpde.scale.tasks.restore_file):
     one film per task, in the worker's own process."""
@@ -122,6 +146,7 @@ def task_options(args) -> dict:
         "codec": args.codec,
         "overwrite": args.overwrite,
         "device": args.device,
+        "frames": args.frames,
     }
 
 
@@ -159,12 +184,13 @@ def run_restore(args) -> int:
         codec=args.codec,
         overwrite=args.overwrite,
         overwrite_option="--overwrite",
+        frames=args.frames,
         **film_run_options(args),
     )
     report("restore", result)
     if args.preview is not None:
-        frames = [t for t, _ in result.most_filled(3)] or [0]
-        pictures = write_preview(args.input, result.output, args.preview, frames)
+        frames = [t for t, _ in result.most_filled(3)] or [result.first]
+        pictures = write_preview(args.input, result.output, args.preview, frames, result.first)
         print(
             f"restore: wrote {len(pictures)} before|after pictures to {args.preview}",
             file=sys.stderr,

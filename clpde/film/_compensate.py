@@ -39,15 +39,20 @@ class Neighbours:
 
 def fit_gain(g: np.ndarray, w: np.ndarray, ok: np.ndarray) -> tuple[float, float]:
     """(a, b) with g ~ a * w + b on the pixels `ok`: least squares, then again on the pixels
-    within 2.5 robust deviations, so blotches and flow failures do not pull the fit."""
+    within 2.5 robust deviations, so blotches and flow failures do not pull the fit. The
+    line's least squares in closed form (covariance over variance), not a general solver."""
     gs, ws = g[ok][::3].astype(np.float64), w[ok][::3].astype(np.float64)
     if gs.size < 16 or ws.std() < 1e-6:
         return 1.0, 0.0
     a, b = 1.0, 0.0
     keep = np.ones(gs.size, bool)
     for _ in range(2):
-        A = np.stack([ws[keep], np.ones(keep.sum())], axis=1)
-        (a, b), *_ = np.linalg.lstsq(A, gs[keep], rcond=None)
+        wk, gk = ws[keep], gs[keep]
+        mw, mg = wk.mean(), gk.mean()
+        dw = wk - mw
+        var = float(dw @ dw)
+        a = float(dw @ (gk - mg)) / var if var > 0 else 1.0
+        b = mg - a * mw
         res = gs - (a * ws + b)
         mad = 1.4826 * np.median(np.abs(res - np.median(res))) + 1e-6
         keep = np.abs(res) < 2.5 * mad

@@ -3,7 +3,7 @@
 Flows come from DIS (clpde.motion.dis), computed once per ordered pair of frames and kept
 for the window. A neighbour's warped pixel is trusted where
 
-- its match lies inside the neighbour's frame;
+- its match lies inside the neighbour's frame, with the warp's whole stencil;
 - the flows agree with each other: the loop through another neighbour (t -> a, a -> b
   against t -> b: the neighbours agree along the motion, whatever frame t's own damage) and,
   at a film's ends, the neighbour's flow back (forward-backward: an occluded or revealed
@@ -11,11 +11,18 @@ for the window. A neighbour's warped pixel is trusted where
   by the local gradient.
 
 Everything depends only on the two frames of a pair, never on the rest of the window, so
-any window or chunk of a film gives the same values.
+any window or chunk of a film gives the same values, and the frames of a window can be
+worked on in threads (`map_frames`: OpenCV and numpy release the GIL) in any order: each
+thread has its own DIS instance, and each flow or warp is computed once, by the first
+thread that asks for it.
 """
 
 from __future__ import annotations
 
+import os
+import threading
+from collections.abc import Callable, Iterable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,6 +48,35 @@ class Neighbour:
     offset: float
 
 
+def map_frames(function: Callable, items: Iterable, done: Callable | None = None) -> list:
+    """[function(item) for item in items], in threads (one per CPU core): a window's frames
+    are independent once their flows are shared (FilmMotion), and OpenCV's and numpy's
+    work runs outside the GIL. The results come in the items' order; done(1), if given,
+    is called in this thread as each comes (a progress bar, which may stop the run by
+    raising: the frames not started are then cancelled)."""
+    items = list(items)
+    workers = min(len(items), os.cpu_count() or 1)
+    results = []
+    if workers <= 1:
+        for item in items:
+            results.append(function(item))
+            if done is not None:
+                done(1)
+        return results
+    with ThreadPoolExecutor(workers) as pool:
+        futures = [pool.submit(function, item) for item in items]
+        try:
+            for future in futures:
+                results.append(future.result())
+                if done is not None:
+                    done(1)
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
+    return results
+
+
 class FilmMotion:
     """DIS flows between the frames of one window, and their neighbours.
 
@@ -53,31 +89,52 @@ class FilmMotion:
         self.T, self.ny, self.nx = G.shape
         src = G if flow_grey is None else flow_grey
         self.u8 = [to_u8(g) for g in src]
-        self.dis = DisFlow()
-        self._flows: dict = {}
+        self._local = threading.local()
+        self._lock = threading.Lock()
+        self._kept: dict = {}
         gy, gx = np.mgrid[0 : self.ny, 0 : self.nx].astype(np.float32)
         self.gx, self.gy = gx, gy
 
+    @property
+    def dis(self) -> DisFlow:
+        """This thread's DIS instance (one instance's buffers are not for two threads)."""
+        dis = getattr(self._local, "dis", None)
+        if dis is None:
+            dis = self._local.dis = DisFlow()
+        return dis
+
+    def _once(self, key, compute: Callable) -> np.ndarray:
+        """compute() kept under key, computed once whichever thread asks first."""
+        with self._lock:
+            kept = self._kept.get(key)
+            mine = kept is None
+            if mine:
+                kept = self._kept[key] = Future()
+        if mine:
+            try:
+                kept.set_result(compute())
+            except BaseException as exc:
+                kept.set_exception(exc)
+                raise
+        return kept.result()
+
     def flow(self, t: int, s: int) -> np.ndarray:
-        key = (t, s)
-        if key not in self._flows:
-            self._flows[key] = self.dis.flow(self.u8[t], self.u8[s])
-        return self._flows[key]
+        return self._once((t, s), lambda: self.dis.flow(self.u8[t], self.u8[s]))
 
     def warp(self, image: np.ndarray, flow: np.ndarray, mode: str = "cubic") -> np.ndarray:
         return self.dis.warp(image, flow, mode)
 
     def warped(self, t: int, s: int) -> np.ndarray:
         """Frame s's grey brought onto frame t (kept: detection and trust both read it)."""
-        key = ("w", t, s)
-        if key not in self._flows:
-            self._flows[key] = self.warp(self.G[s], self.flow(t, s))
-        return self._flows[key]
+        return self._once(("w", t, s), lambda: self.warp(self.G[s], self.flow(t, s)))
 
     def inside(self, t: int, s: int) -> np.ndarray:
+        """Where frame t's match in frame s keeps the whole cubic warp's stencil (the match's
+        pixel, one before and two after, in each direction) inside frame s: nearer the
+        edge, the warp reads the edge's pixels repeated, a value no frame holds."""
         f = self.flow(t, s)
         xs, ys = self.gx + f[..., 0], self.gy + f[..., 1]
-        return (xs >= 0) & (xs <= self.nx - 1) & (ys >= 0) & (ys <= self.ny - 1)
+        return (xs >= 1) & (xs < self.nx - 2) & (ys >= 1) & (ys < self.ny - 2)
 
     def texture(self, image: np.ndarray) -> np.ndarray:
         """The largest gradient magnitude within 2 px: how much a flow error of one pixel

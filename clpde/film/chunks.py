@@ -65,6 +65,7 @@ def restore_chunked(
     block: int = DEFAULT_BLOCK,
     chunk_frames: int | None = None,
     in_flight: int | None = None,
+    span: tuple[int, int] | None = None,
 ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
     """Restore a film over a Dask cluster, yielding its frames in order.
 
@@ -86,6 +87,8 @@ def restore_chunked(
         Frames per chunk, rounded up to whole blocks (default: 4 blocks).
     in_flight : int, optional
         Chunks sent ahead of the one being written (default: twice the workers).
+    span : (int, int), optional
+        Restore only the frames [start, stop) (clpde.film.stream.plan_blocks).
 
     Yields
     ------
@@ -105,7 +108,7 @@ def restore_chunked(
     if chunk_frames is not None and (isinstance(chunk_frames, bool) or chunk_frames < 1):
         raise InputError(f"a chunk must hold at least 1 frame, not {chunk_frames!r}")
     detecting = masks is None
-    grid = plan_blocks(count, block, work.context(detecting))
+    grid = plan_blocks(count, block, work.context(detecting), span)
     per_chunk = 4 if chunk_frames is None else -(-int(chunk_frames) // block)
     chunks = plan_chunks(grid, per_chunk)
     workers = client.scheduler_info()["workers"].values()

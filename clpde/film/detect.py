@@ -37,7 +37,8 @@ from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
 from ._frames import film_planes, grey
-from ._motion import FilmMotion
+from ._motion import FilmMotion, map_frames
+from ._order import median, second_least
 from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -175,33 +176,8 @@ def _motion_check(
     return keep[labels]
 
 
-def _second_least(v: np.ndarray, vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
-    """Of the differences v - vals[k] over trusted k, the second least in magnitude (the
-    least with fewer than 3; 0 with none): the residual the scratch detector reads. A
-    scratch fixed on the film differs from every neighbour but perhaps the nearest in a slow
-    pan; beside it, where one neighbour's own scratch lands, the others agree: no ghost."""
-    d = np.where(ok, v[None] - vals, np.inf)
-    order = np.argsort(np.abs(d), axis=0, kind="stable")
-    n = ok.sum(0)
-    first = np.take_along_axis(d, order[:1], 0)[0]
-    second = np.take_along_axis(d, order[1:2], 0)[0] if len(vals) > 1 else first
-    out = np.where(n >= 3, second, first)
-    return np.where(n > 0, out, 0.0).astype(np.float32)
-
-
 def _box(a: np.ndarray, half: int) -> np.ndarray:
     return ndimage.uniform_filter(a.astype(np.float32), 2 * half + 1, mode="nearest")
-
-
-def _median(vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
-    """The median over k of vals[k] where ok[k] (NaN where none): a sort with the others
-    pushed to the end (np.nanmedian is far slower for a handful of values per pixel)."""
-    s = np.sort(np.where(ok, vals, np.inf), axis=0)
-    n = ok.sum(0)
-    lo = np.take_along_axis(s, np.maximum((n - 1) // 2, 0)[None], 0)[0]
-    hi = np.take_along_axis(s, np.maximum(n // 2, 0)[None], 0)[0]
-    out = 0.5 * (lo + hi)
-    return np.where(n > 0, out, np.nan).astype(np.float32)
 
 
 def _partner(k: int, offs: list[int]) -> int:
@@ -234,7 +210,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     # the grain's level from the residual against the neighbours inside the frame (robust:
     # damage and flow failures are a minority)
     inside = np.stack([motion.inside(t, t + k) for k in offs])
-    med0 = _median(vals, inside)
+    med0 = median(vals, inside)
     r0 = (v - med0)[inside.any(0)]
     sigma = max(robust_scale(r0) / 1.16 if r0.size else 0.0, SIGMA_FLOOR)
     # at a film's ends all neighbours lie on one side: an occluded pixel could find two
@@ -250,9 +226,9 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     hi = np.where(ok, vals, -inf).max(0)
     both = (ok & (side < 0)).any(0) & (ok & (side > 0)).any(0)
     n_ok = ok.sum(0)
-    med = _median(vals, ok)
-    med_p = _median(vals, ok & (side < 0))
-    med_n = _median(vals, ok & (side > 0))
+    med = median(vals, ok)
+    med_p = median(vals, ok & (side < 0))
+    med_n = median(vals, ok & (side > 0))
     res = np.where(n_ok > 0, v - med, 0.0).astype(np.float32)
     d = np.where(v > hi, v - hi, np.where(v < lo, v - lo, 0.0))
     spread = np.where(n_ok > 0, hi - lo, 0.0)
@@ -269,7 +245,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "spread": spread.astype(np.float32),
         "zr": zr.astype(np.float32),
         "res": res,
-        "least": _second_least(v, vals, ok),
+        "least": second_least(v, vals, ok),
         "sigma": sigma,
         "both": both,
         # the flows to the nearest neighbour each side: the ring check reads their spread
@@ -284,7 +260,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     T, ny, nx = G.shape
     kern = LineKernels(get_runtime(device))
     motion = FilmMotion(G)
-    per = [frame_scores(motion, t, radius) for t in range(T)]
+    per = map_frames(lambda t: frame_scores(motion, t, radius), range(T))
     keys = ("d", "spread", "zr", "res", "least", "both")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
@@ -352,6 +328,52 @@ def _ring_check(
     return keep[labels]
 
 
+def _frame_kinds(
+    G: np.ndarray,
+    scores: dict,
+    t: int,
+    still: np.ndarray,
+    blotch_threshold: float,
+    scratch_threshold: float,
+    search: int,
+    min_length: int,
+    gamma: float,
+) -> np.ndarray:
+    """Frame t's kinds (H, W) from film_scores' evidence (film_kinds, one frame)."""
+    zc, res, sigmas = scores["zc"], scores["res"], scores["sigma"]
+    scratch = (
+        scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length) | still
+    )
+    # a pixel's evidence: its own score, or its region's where its own residual shows
+    # the same sign beyond the noise (so a strong blotch's region score does not spill
+    # past its edge)
+    # in noise units that grow with the neighbours' disagreement among themselves
+    # (pathological motion: the flow does not follow the scene there)
+    scale = sigmas[t] + gamma * np.maximum(scores["spread"][t] - 2 * sigmas[t], 0.0)
+    zb = scores["d"][t] / scale
+    zr, r = scores["zr"][t] * (sigmas[t] / scale), res[t]
+    own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
+    a = np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
+    blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
+    blotch &= ~ndimage.binary_dilation(scratch)
+    # a lone pixel is within what a codec or the grain does: never a blotch worth a fill
+    blotch = _no_singletons(blotch)
+    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
+    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
+    # a tall thin "blotch" is a scratch the line detector missed (too short or faint
+    # for its run test in this frame)
+    labels, _ = ndimage.label(blotch)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        h = sl[0].stop - sl[0].start
+        if h >= 0.5 * min_length and (labels[sl] == idx).sum() <= 4 * h:
+            scratch[sl] |= labels[sl] == idx
+            blotch[sl] &= labels[sl] != idx
+    kinds = np.zeros(G.shape[1:], np.int8)
+    kinds[blotch] = BLOTCH
+    kinds[scratch] = SCRATCH
+    return kinds
+
+
 def film_kinds(
     G: np.ndarray,
     scores: dict,
@@ -363,8 +385,6 @@ def film_kinds(
 ) -> np.ndarray:
     """Kinds (T, H, W) from film_scores' evidence and the thresholds."""
     T, ny, nx = G.shape
-    zc, res, sigmas = scores["zc"], scores["res"], scores["sigma"]
-    kinds = np.zeros((T, ny, nx), np.int8)
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
     still = (
@@ -372,37 +392,13 @@ def film_kinds(
         if STATIC_SCALE > 0
         else np.zeros((T, ny, nx), bool)
     )
-    for t in range(T):
-        scratch = (
-            scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length)
-            | still[t]
+
+    def kinds_of(t: int) -> np.ndarray:
+        return _frame_kinds(
+            G, scores, t, still[t], blotch_threshold, scratch_threshold, search, min_length, gamma
         )
-        # a pixel's evidence: its own score, or its region's where its own residual shows
-        # the same sign beyond the noise (so a strong blotch's region score does not spill
-        # past its edge)
-        # in noise units that grow with the neighbours' disagreement among themselves
-        # (pathological motion: the flow does not follow the scene there)
-        scale = sigmas[t] + gamma * np.maximum(scores["spread"][t] - 2 * sigmas[t], 0.0)
-        zb = scores["d"][t] / scale
-        zr, r = scores["zr"][t] * (sigmas[t] / scale), res[t]
-        own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
-        a = np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
-        blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
-        blotch &= ~ndimage.binary_dilation(scratch)
-        # a lone pixel is within what a codec or the grain does: never a blotch worth a fill
-        blotch = _no_singletons(blotch)
-        blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
-        blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
-        # a tall thin "blotch" is a scratch the line detector missed (too short or faint
-        # for its run test in this frame)
-        labels, _ = ndimage.label(blotch)
-        for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-            h = sl[0].stop - sl[0].start
-            if h >= 0.5 * min_length and (labels[sl] == idx).sum() <= 4 * h:
-                scratch[sl] |= labels[sl] == idx
-                blotch[sl] &= labels[sl] != idx
-        kinds[t][blotch] = BLOTCH
-        kinds[t][scratch] = SCRATCH
+
+    kinds = np.stack(map_frames(kinds_of, range(T)))
     # a film's first and last frames see one side only: a scratch there must continue (within
     # two columns) in the next frame in, which sees both sides
     if T >= 3:

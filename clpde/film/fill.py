@@ -26,7 +26,7 @@ from ..inpainting.api import inpaint
 from ..motion.dis import to_u8
 from ._compensate import fit_gain
 from ._frames import film_masks, film_planes, grey
-from ._motion import FilmMotion
+from ._motion import FilmMotion, map_frames
 from .detect import SIGMA_FLOOR, _partner
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
@@ -101,9 +101,11 @@ def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 def _temporal(
     motion: FilmMotion, planes: np.ndarray, m: np.ndarray, t: int, radius: int
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame t's damaged pixels from its neighbours where the motion is trusted; returns the
-    frame (C, H, W) and the pixels left to the spatial fill.
+    frame (C, H, W), the pixels left to the spatial fill, and the squared residual of the
+    frame against its trusted, clean compensated neighbours (the smallest; inf where none
+    is trusted): what the data says the damage changed (`_self_check`).
 
     A neighbour is a candidate at a pixel where its match is trusted (clpde.film._motion:
     inside, the flow loop consistent within the noise), clean in its own mask, and it agrees
@@ -119,7 +121,7 @@ def _temporal(
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
     sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
-    vals, cols, cand, dist = [], [], [], []
+    vals, cols, cand, dist, trust = [], [], [], [], []
     ctx_t = ~grow_mask(hole, 1.0)
     for k in offs:
         s = t + k
@@ -136,8 +138,10 @@ def _temporal(
         vals.append(wg)
         cols.append((a * motion.warp(np.moveaxis(planes[s], 0, -1), f) + b).reshape(ny, nx, C))
         cand.append(ok & (e <= AGREE * sigma))
+        trust.append(ok)
         dist.append(abs(k) + (0.5 if k > 0 else 0.0))
     vals, cand = np.stack(vals), np.stack(cand)
+    resid2 = np.where(np.stack(trust), (G[t][None] - vals) ** 2, np.inf).min(0)
     e_ok = cand
     # agreement among the candidates: the medoid's cost, and how many agree with it
     K = len(offs)
@@ -157,7 +161,34 @@ def _temporal(
     soft = m[t][..., None]
     blend = soft * chosen + (1 - soft) * np.moveaxis(planes[t], 0, -1)
     out = np.where(filled[None], np.moveaxis(blend, -1, 0), out)
-    return out.astype(np.float32), hole & ~filled
+    return out.astype(np.float32), hole & ~filled, resid2
+
+
+def _self_check(
+    restored: np.ndarray, frame: np.ndarray, hole: np.ndarray, resid2: np.ndarray, sigma: float
+) -> np.ndarray:
+    """The regions of `hole` whose repair the data does not explain: where the mean squared
+    change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
+    against its compensated neighbours.
+
+    Derived from the noise, not fitted: on damage of amplitude d repaired right, D = -d plus
+    the repair's grain minus the frame's, E = d plus the frame's grain minus a neighbour's,
+    so both have the mean square d^2 + 2 sigma^2; on a pixel that was not damaged E^2 is
+    the 2 sigma^2 of two grainy values alone. So a repair may change a region by what the
+    residual shows plus as much again for the noise of a ratio of two means (E^2 >= 2
+    sigma^2: a region's mean E^2 is never below one noise pair); a region without a trusted
+    neighbour is granted the noise alone (E^2 = 2 sigma^2: no evidence of damage but the
+    detector's). Returns the bool (H, W) pixels whose repair is refused."""
+    resid2 = np.where(np.isfinite(resid2), resid2, 2 * sigma**2)
+    d2 = (restored - frame) ** 2
+    labels, n = ndimage.label(hole)
+    if n == 0:
+        return np.zeros(hole.shape, bool)
+    index = np.arange(1, n + 1)
+    mean_d2 = ndimage.mean(d2, labels, index)
+    mean_e2 = ndimage.mean(resid2, labels, index)
+    refuse = np.concatenate([[False], mean_d2 > 2 * mean_e2])
+    return refuse[labels]
 
 
 def inpaint_video(
@@ -207,8 +238,10 @@ def inpaint_video(
     keep : float
         Pixels whose fill lies within `keep` noise deviations (the frame's grain level) of
         their own value keep their own value: with detected masks, a pixel the fill would
-        barely change was most likely not damaged (do no harm). 0: fill every masked pixel.
-        `clpde restore` uses 3.
+        barely change was most likely not damaged (do no harm). And on a film, each region
+        of the mask whose repair changes it more than its residual against the trusted
+        neighbours explains (mean squares, D^2 > 2 E^2) keeps its own values. 0: fill every
+        masked pixel. `clpde restore` uses 3.
     return_unfilled : bool
         Also return the bool (T, H, W) mask of the pixels the spatial fill took.
     progress : bool or callable, optional
@@ -248,14 +281,18 @@ def inpaint_video(
     G = grey(planes)
     out = planes.copy()
     unfilled = np.zeros((T, ny, nx), bool)
+    resid2 = np.full((T, ny, nx), np.inf, np.float32)
     damaged = [t for t in range(T) if m[t].any()]
     # temporal fills first, then the spatial fallback: one unit per damaged frame for each
     bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
     if T > 1 and damaged:
         motion = FilmMotion(G, _rough(G, m))
-        for t in damaged:
-            out[t], unfilled[t] = _temporal(motion, planes, m, t, radius)
-            bar.update(1)
+        # the damaged frames in threads: each reads the shared flows and the input only
+        results = map_frames(
+            lambda t: _temporal(motion, planes, m, t, radius), damaged, done=bar.update
+        )
+        for t, (frame, left, r2) in zip(damaged, results, strict=True):
+            out[t], unfilled[t], resid2[t] = frame, left, r2
     elif damaged:
         unfilled = m > 0
     for t in range(T):
@@ -281,7 +318,11 @@ def inpaint_video(
     if keep > 0:
         for t in damaged:
             sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
-            close = np.abs(grey(out[t : t + 1])[0] - G[t]) <= keep * sigma
+            restored = grey(out[t : t + 1])[0]
+            close = np.abs(restored - G[t]) <= keep * sigma
+            if T > 1:
+                kept = np.where(close, G[t], restored)  # the repair as it will stand
+                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma)
             out[t] = np.where(close[None], planes[t], out[t])
     restored = layout.restore(out)
     if return_unfilled:

@@ -57,7 +57,9 @@ class FilmResult:
         SHA-256 of the restored frames in order (before any lossy encoder): what a run on
         workers and one in a process agree on, bit for bit.
     filled_per_frame : list of int
-        Pixels filled in each frame, in frame order (the masks' counts).
+        Pixels filled in each frame written, in frame order (the masks' counts).
+    first : int
+        The film's frame number of the first frame written (a section's start; else 0).
     """
 
     output: Path
@@ -68,11 +70,14 @@ class FilmResult:
     workers: int
     frames_sha256: str
     filled_per_frame: list = field(default_factory=list)
+    first: int = 0
 
     def most_filled(self, count: int = 5) -> list[tuple[int, int]]:
-        """The `count` frames with most pixels filled, as (frame, pixels), most first."""
-        order = sorted(range(len(self.filled_per_frame)), key=lambda t: -self.filled_per_frame[t])
-        return [(t, self.filled_per_frame[t]) for t in order[:count] if self.filled_per_frame[t]]
+        """The `count` frames with most pixels filled, as (frame number in the film, pixels),
+        most first."""
+        per = self.filled_per_frame
+        order = sorted(range(len(per)), key=lambda t: -per[t])
+        return [(self.first + t, per[t]) for t in order[:count] if per[t]]
 
 
 def _frame_name(source: FrameSource, t: int, dtype: np.dtype, channels: int) -> str:
@@ -177,13 +182,16 @@ class _Outputs:
         overlay: Path | None,
         overwrite: bool,
         option: str,
+        first: int = 0,
     ) -> None:
         self.source = source
+        self.first = first
         like = source.reader.info if source.reader is not None else None
         self.film = self.folder = self.masks = self.overlay = self.originals = None
         if to_film:
+            # A section starts at time 0, without the film's sound (it would be out of step).
             self.film = stack.enter_context(
-                VideoWriter(output, source.rate, like=like, codec=codec)
+                VideoWriter(output, source.rate, like=like, codec=codec, copy_streams=not first)
             )
         else:
             self.folder = stack.enter_context(output_folder(output, overwrite, option=option))
@@ -195,18 +203,26 @@ class _Outputs:
             )
             # The overlay draws over the damaged frames: a second reader, in step.
             self.originals = iter(FrameSource(source.path))
+            for _ in range(first):
+                next(self.originals)
         self.digits = max(5, len(str(source.count - 1)))
         self.digest = hashlib.sha256()
         self.masked = self.written = 0
         self.per_frame: list[int] = []
+        self.start_pts = 0
 
     def write(self, frame: np.ndarray, found: np.ndarray, kinds: np.ndarray | None) -> None:
-        t = self.written
+        t = self.first + self.written  # the frame's number in the film
         self.digest.update(np.ascontiguousarray(frame).data)
         self.per_frame.append(int(found.sum()))
         self.masked += self.per_frame[-1]
         timestamps = self.source.reader.timestamps if self.source.reader is not None else None
-        pts = timestamps.pop(0) if timestamps else None
+        if timestamps and self.written == 0 and self.first:
+            # the frames before a section were read past: drop their timestamps, and start
+            # the section at time 0
+            del timestamps[: self.first]
+            self.start_pts = timestamps[0]
+        pts = timestamps.pop(0) - self.start_pts if timestamps else None
         if self.film is not None:
             self.film.write(frame, pts=pts)
         else:
@@ -241,6 +257,7 @@ def restore_film(
     overwrite: bool = False,
     overwrite_option: str = "overwrite=True",
     progress: bool | None = None,
+    frames: tuple[int, int] | None = None,
 ) -> FilmResult:
     """Find the damage in a film and fill it from the neighbouring frames, film in, film out.
 
@@ -279,6 +296,10 @@ def restore_film(
         How the caller spells `overwrite`, for messages.
     progress : bool, optional
         A progress bar in frames per second (None: on a terminal).
+    frames : (int, int), optional
+        Restore only the frames first..last (from 0, both included) to try a section: the
+        frames outside it are read as context, so the section comes out as in a run of the
+        whole film. A section's film starts at time 0 and has no sound.
 
     Returns
     -------
@@ -289,8 +310,8 @@ def restore_film(
     ------
     InputError
         For a missing or unreadable input, a film without video or an interlaced one,
-        masks of the wrong count or size, an output that cannot be written, or an output
-        that is the input; nothing is written.
+        masks of the wrong count or size, an output that cannot be written, an output
+        that is the input, or `frames` outside the film; nothing is written.
 
     Examples
     --------
@@ -302,6 +323,7 @@ def restore_film(
     masks_out = None if masks_out is None else Path(masks_out)
     overlay = None if overlay is None else Path(overlay)
     to_film = _check_outputs(src, output, masks_out, overlay, codec, grow)
+    span = _section(frames, src.count)
     given = None if mask is None else _mask_source(mask, src)
     if work is None:
         work = film_work(grow=grow, detect_options=detect_options, fill_options=fill_options)
@@ -320,24 +342,32 @@ def restore_film(
             overlay=overlay,
             overwrite=overwrite,
             option=overwrite_option,
+            first=span[0],
         )
-        bar = progress_bar(progress, src.count, "clpde restore", unit="frame")
+        bar = progress_bar(progress, span[1] - span[0], "clpde restore", unit="frame")
         stack.callback(bar.close)
         use_dask = any(x is not None for x in (workers, threads, scheduler, client))
         cluster = stack.enter_context(_cluster(use_dask, workers, threads, scheduler, client))
         if cluster is None:
-            frames = restore_stream(src, src.count, work, masks=given, block=block)
+            restored = restore_stream(src, src.count, work, masks=given, block=block, span=span)
         else:
-            frames = restore_chunked(
-                cluster, src, src.count, work, masks=given, block=block, chunk_frames=chunk_frames
+            restored = restore_chunked(
+                cluster,
+                src,
+                src.count,
+                work,
+                masks=given,
+                block=block,
+                chunk_frames=chunk_frames,
+                span=span,
             )
-        stack.callback(frames.close)  # Ctrl-C: cancel the workers' chunks too
-        for frame, found, kinds in frames:
+        stack.callback(restored.close)  # Ctrl-C: cancel the workers' chunks too
+        for frame, found, kinds in restored:
             outputs.write(frame, found, kinds)
             bar.update(1)
         workers_used = 0 if cluster is None else len(cluster.scheduler_info()["workers"])
-    if outputs.written != src.count:
-        raise InputError(f"restored {outputs.written} of {src.count} frames")
+    if outputs.written != span[1] - span[0]:
+        raise InputError(f"restored {outputs.written} of {span[1] - span[0]} frames")
     return FilmResult(
         output,
         outputs.written,
@@ -347,11 +377,25 @@ def restore_film(
         workers_used,
         outputs.digest.hexdigest(),
         outputs.per_frame,
+        span[0],
     )
 
 
+def _section(frames: tuple[int, int] | None, count: int) -> tuple[int, int]:
+    """The frames [start, stop) to restore from `frames` = (first, last), both included."""
+    if frames is None:
+        return 0, count
+    first, last = (int(v) for v in frames)
+    if not 0 <= first <= last < count:
+        raise InputError(
+            f"frames {first}:{last} are not within the film's 0:{count - 1}; give "
+            f"--frames FIRST:LAST with 0 <= FIRST <= LAST <= {count - 1}"
+        )
+    return first, last + 1
+
+
 def write_preview(
-    source: PathLike, output: PathLike, folder: PathLike, frames: list[int]
+    source: PathLike, output: PathLike, folder: PathLike, frames: list[int], first: int = 0
 ) -> list[Path]:
     """Before | after side by side for the given frames: one PNG per frame in `folder`
     (preview_00012.png, ...), the input on the left and the restored frame on the right,
@@ -364,7 +408,9 @@ def write_preview(
     folder : str or PathLike
         Where the pictures go (created if missing).
     frames : list of int
-        Frame numbers (from 0).
+        Frame numbers in the film (from 0).
+    first : int
+        The film's frame number of the output's first frame (a section's start).
 
     Returns
     -------
@@ -377,7 +423,9 @@ def write_preview(
     written = []
     before = iter(FrameSource(source))
     after = iter(FrameSource(output))
-    for t in range(max(wanted, default=-1) + 1):
+    for _ in range(first):
+        next(before)
+    for t in range(first, max(wanted, default=-1) + 1):
         a, b = next(before), next(after)
         if t in wanted:
             side = np.concatenate([a, b], axis=1)

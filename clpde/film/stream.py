@@ -48,8 +48,10 @@ class Block:
     last: int
 
 
-def plan_blocks(count: int, block: int, context: int) -> list[Block]:
-    """The fixed grid of blocks over a film of `count` frames.
+def plan_blocks(
+    count: int, block: int, context: int, span: tuple[int, int] | None = None
+) -> list[Block]:
+    """The fixed grid of blocks over a film of `count` frames, or over a section of it.
 
     Parameters
     ----------
@@ -58,7 +60,11 @@ def plan_blocks(count: int, block: int, context: int) -> list[Block]:
     block : int
         Frames restored per window (the last block may be shorter).
     context : int
-        Frames of context read on each side of a block (clipped to the film).
+        Frames of context read on each side of a block (clipped to the film, not to the
+        section: a frame's result depends on its own window only, so a section's frames
+        come out as in a run of the whole film).
+    span : (int, int), optional
+        Restore only the frames [start, stop) (default: all).
 
     Returns
     -------
@@ -68,7 +74,7 @@ def plan_blocks(count: int, block: int, context: int) -> list[Block]:
     Raises
     ------
     InputError
-        If `block` is below 1 or `context` below 0.
+        If `block` is below 1, `context` below 0, or `span` not within the film.
 
     Examples
     --------
@@ -80,9 +86,14 @@ Block(first=3, start=4, stop=5, last=5)]
         raise InputError(f"the block must be a whole number of frames >= 1, not {block!r}")
     if context < 0:
         raise InputError(f"the temporal context must be >= 0 frames, not {context!r}")
+    start, stop = (0, count) if span is None else span
+    if span is not None and not 0 <= start < stop <= count:
+        raise InputError(f"frames {start}..{stop - 1} are not within the film's 0..{count - 1}")
     return [
-        Block(max(0, s - context), s, min(count, s + block), min(count, s + block + context))
-        for s in range(0, count, block)
+        Block(
+            max(0, s - context), s, min(stop, s + block), min(count, min(stop, s + block) + context)
+        )
+        for s in range(start, stop, block)
     ]
 
 
@@ -300,6 +311,7 @@ def restore_stream(
     *,
     masks: Iterable[np.ndarray] | None = None,
     block: int = DEFAULT_BLOCK,
+    span: tuple[int, int] | None = None,
 ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
     """Restore a film frame by frame in one process, holding one window at a time.
 
@@ -315,6 +327,9 @@ def restore_stream(
         Given masks, one per frame (then nothing is detected).
     block : int
         Frames restored per window (the grid: see the module's text).
+    span : (int, int), optional
+        Restore only the frames [start, stop): the frames before are read past, and the
+        section's frames come out as in a run of the whole film.
 
     Yields
     ------
@@ -329,7 +344,7 @@ def restore_stream(
     >>> [r.shape for r, _, _ in restore_stream(film, 3, work, masks=film > 0, block=2)]
     [(4, 4), (4, 4), (4, 4)]
     """
-    plan = plan_blocks(count, block, work.context(masks is None))
+    plan = plan_blocks(count, block, work.context(masks is None), span)
     spans = [(b.first, b.last) for b in plan]
     for blk, (window, window_masks) in zip(plan, iter_spans(frames, spans, masks), strict=True):
         restored, found, kinds = restore_window(work, window, window_masks, blk)

@@ -565,6 +565,7 @@ def restore_file(
     overwrite: bool = False,
     device=None,
     progress=None,
+    frames=None,
 ) -> list[str]:
     """`clpde restore` for one film or frame folder (clpde.film.restore.restore_film): the
     damage found (or the masks given) filled from the neighbouring frames, film in, film
@@ -580,6 +581,7 @@ def restore_file(
         codec=codec,
         overwrite=overwrite,
         progress=_progress(progress),
+        frames=frames,
     )
     rate = result.frames / result.seconds if result.seconds else 0.0
     return [

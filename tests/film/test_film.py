@@ -338,3 +338,68 @@ def test_bad_input(runtime):
         clpde.detect_defects(np.zeros((2, 3, 32, 32)))
     with pytest.raises(InputError):
         clpde.detect_defects(np.zeros((4, 32, 32), complex))
+
+
+def test_the_self_check_refuses_a_repair_the_residual_does_not_explain():
+    """Two regions under the mask: a blotch (the frame is 0.3 off its neighbours, the repair
+    takes it back) is kept; a false alarm (the frame matches its neighbours within the
+    grain, the repair moves it by 0.1) is refused; a region without a trusted neighbour
+    may change by the noise only."""
+    from clpde.film.fill import _self_check
+
+    rng = np.random.default_rng(0)
+    sigma = 0.01
+    frame = 0.5 + sigma * rng.standard_normal((40, 60))
+    hole = np.zeros((40, 60), bool)
+    hole[5:12, 5:12] = hole[5:12, 30:37] = hole[25:32, 5:12] = True
+    resid2 = 2 * sigma**2 * rng.chisquare(1, frame.shape)  # grain only
+    frame[5:12, 5:12] += 0.3  # the blotch
+    resid2[5:12, 5:12] = (0.3 + sigma * rng.standard_normal((7, 7))) ** 2
+    resid2[25:32, 5:12] = np.inf  # no trusted neighbour
+    restored = frame.copy()
+    restored[5:12, 5:12] -= 0.3
+    restored[5:12, 30:37] += 0.1
+    restored[25:32, 5:12] += 0.005
+    refused = _self_check(restored, frame, hole, resid2, sigma)
+    assert not refused[5:12, 5:12].any() and not refused[25:32, 5:12].any()
+    assert refused[5:12, 30:37].all() and refused.sum() == 49
+
+
+def test_order_statistics_match_a_sort(rng):
+    """The sorting network's median and the two least magnitudes against np.sort and a
+    stable argsort, with untrusted neighbours, ties and pixels with none trusted."""
+    from clpde.film._order import median, second_least
+
+    for K in (1, 2, 3, 4, 5):
+        vals = rng.random((K, 20, 30)).astype(np.float32)
+        vals[:, :4] = 0.5  # ties
+        ok = rng.random((K, 20, 30)) < 0.7
+        v = rng.random((20, 30)).astype(np.float32)
+        s = np.sort(np.where(ok, vals, np.inf), axis=0)
+        n = ok.sum(0)
+        lo = np.take_along_axis(s, np.maximum((n - 1) // 2, 0)[None], 0)[0]
+        hi = np.take_along_axis(s, np.maximum(n // 2, 0)[None], 0)[0]
+        expected = np.where(n > 0, 0.5 * (lo + hi), np.nan).astype(np.float32)
+        assert np.array_equal(median(vals, ok), expected, equal_nan=True)
+        d = np.where(ok, v[None] - vals, np.inf)
+        order = np.argsort(np.abs(d), axis=0, kind="stable")
+        first = np.take_along_axis(d, order[:1], 0)[0]
+        second = np.take_along_axis(d, order[1:2], 0)[0] if K > 1 else first
+        least = np.where(n > 0, np.where(n >= 3, second, first), 0.0).astype(np.float32)
+        assert np.array_equal(second_least(v, vals, ok), least)
+
+
+def test_threads_give_what_one_thread_gives(runtime, rng, monkeypatch):
+    """The window's frames are detected and filled in threads (one per core): the same
+    masks and frames, bit for bit, as one thread."""
+    import os
+
+    frames = _pan(_scene(rng), 6, grain=0.01, rng=rng)
+    frames, _ = _blotches(frames, rng)
+    runs = []
+    for cores in (1, 4):
+        monkeypatch.setattr(os, "cpu_count", lambda cores=cores: cores)
+        mask = clpde.detect_defects(frames)
+        runs.append((mask, clpde.inpaint_video(frames, mask, keep=3)))
+    assert runs[0][0].any()
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][1], runs[1][1])

@@ -223,3 +223,47 @@ def test_preview_writes_before_and_after_of_the_most_filled_frames(tmp_path, fil
         restored = read_image(out / names[t])
         assert side.shape[1] == 2 * restored.shape[1]
         assert np.array_equal(side[:, restored.shape[1] :], restored)
+
+
+def test_a_section_comes_out_as_in_the_whole_film(tmp_path, capsys):
+    """--frames 10:14 of a 24-frame film: the frames around the section are its context
+    (detection reads 3 frames either side, filling 2), so its frames and masks are those of
+    the whole film's run, bit for bit; they keep their numbers, the film starts at time 0
+    without sound, and a section outside the film is refused."""
+    damaged, _ = damage(clean_frames(24))
+    source = make_film(tmp_path / "long.mp4", damaged)
+    whole, part = tmp_path / "whole.mkv", tmp_path / "part"
+    masks = ["--masks-out", str(tmp_path / "m_whole")]
+    assert main(["restore", str(source), "-o", str(whole), "--codec", "ffv1", *masks]) == 0
+    argv = ["restore", str(source), "-o", str(part), "--frames", "10:14"]
+    assert main([*argv, "--masks-out", str(tmp_path / "m_part")]) == 0
+    err = capsys.readouterr().err
+    assert "restore: 5 frames" in err
+    names = [f"frame_{t:05d}.png" for t in range(10, 15)]
+    assert sorted(p.name for p in part.iterdir()) == names
+    section = np.stack([read_image(part / name) for name in names])
+    expected = decoded(whole)[10:15]
+    assert np.array_equal(section, expected)
+    assert not np.array_equal(section, decoded(source)[10:15])  # something was restored
+    for t in range(10, 15):
+        name = f"mask_{t:05d}.png"
+        assert (tmp_path / "m_part" / name).read_bytes() == (
+            tmp_path / "m_whole" / name
+        ).read_bytes()
+    film = tmp_path / "part.mp4"
+    assert main(["restore", str(source), "-o", str(film), "--frames", "20:23"]) == 0
+    with av.open(str(film)) as c:
+        assert [f.pts for f in c.decode(video=0)][0] == 0
+        assert not [s for s in c.streams if s.type == "audio"]
+    assert video_info(film).frames == 4
+    capsys.readouterr()
+    assert main(["restore", str(source), "-o", str(tmp_path / "x.mp4"), "--frames", "20:24"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "frames 20:24 are not within the film's 0:23" in err and "\n" not in err
+    assert not (tmp_path / "x.mp4").exists()
+
+
+def test_batch_passes_the_section_on():
+    from clpde.cli.batch import command_options
+
+    assert command_options("restore", ["--frames", "2:5"])["frames"] == (2, 5)

@@ -1,0 +1,68 @@
+"""Order statistics over a frame's few compensated neighbours, per pixel, where trusted.
+
+A frame has 2-4 neighbours: sorting K values per pixel along the stack's first (strided)
+axis with np.sort costs more than a sorting network of K(K-1)/2 elementwise minima and
+maxima over whole planes (5x less at 640x360, K = 4), and picking by index with
+take_along_axis more than a masked copy per plane.
+Both give exactly the sorted values, so the results are the same bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def sorted_planes(vals: np.ndarray) -> list[np.ndarray]:
+    """vals (K, H, W) sorted along K, as K planes (a sorting network: odd-even
+    transposition, K rounds of compare-exchange)."""
+    s = [v for v in vals]
+    K = len(s)
+    for r in range(K):
+        for i in range(r % 2, K - 1, 2):
+            s[i], s[i + 1] = np.minimum(s[i], s[i + 1]), np.maximum(s[i], s[i + 1])
+    return s
+
+
+def _pick(index: np.ndarray, planes: list[np.ndarray]) -> np.ndarray:
+    """planes[index[y, x]][y, x] (np.choose's result, by masked copies: faster)."""
+    out = planes[0].copy()
+    for k in range(1, len(planes)):
+        np.copyto(out, planes[k], where=index == k)
+    return out
+
+
+def median(vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """The median over k of vals[k] where ok[k] (NaN where none): the values not trusted
+    are pushed to the end as +inf, and the middle of the n trusted ones is taken."""
+    s = sorted_planes(np.where(ok, vals, np.inf))
+    n = ok.sum(0)
+    lo = _pick(np.maximum((n - 1) // 2, 0), s)
+    hi = _pick(np.maximum(n // 2, 0), s)
+    out = 0.5 * (lo + hi)
+    return np.where(n > 0, out, np.nan).astype(np.float32)
+
+
+def second_least(v: np.ndarray, vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Of the differences v - vals[k] over trusted k, the second least in magnitude (the
+    least with fewer than 3; 0 with none): the residual the scratch detector reads. A
+    scratch fixed on the film differs from every neighbour but perhaps the nearest in a slow
+    pan; beside it, where one neighbour's own scratch lands, the others agree: no ghost.
+    Ties go to the earlier neighbour."""
+    first = second = None
+    a1 = a2 = None
+    for k in range(len(vals)):
+        d = np.where(ok[k], v - vals[k], np.inf)
+        a = np.abs(d)
+        if first is None:
+            first, a1 = d, a
+            second, a2 = np.full_like(d, np.inf), np.full_like(a, np.inf)
+            continue
+        better = a < a1
+        between = ~better & (a < a2)
+        second = np.where(better, first, np.where(between, d, second))
+        a2 = np.where(better, a1, np.where(between, a, a2))
+        first = np.where(better, d, first)
+        a1 = np.where(better, a, a1)
+    n = ok.sum(0)
+    out = np.where(n >= 3, second, first) if len(vals) > 1 else first
+    return np.where(n > 0, out, 0.0).astype(np.float32)
