@@ -86,17 +86,17 @@ def tv_step(u, dt, eps, h):
 
 
 def gauss(u, weights):
-    """Separable Gaussian of weights w[0..r] (offsets +-k), mirrored at the border (-1 reads 0)."""
-    r = len(weights) - 1
-    for a in AXES:
+    """Separable Gaussian, weights[k] = w[0..r] for axis z, y, x (offsets +-j), mirrored at
+    the border (index -1 reads 0)."""
+    for a, w in zip(AXES, weights, strict=True):
         n = u.shape[a]
-        out = weights[0] * u
-        for k in range(1, r + 1):
+        out = w[0] * u
+        for k in range(1, len(w)):
             for s in (k, -k):
                 idx = np.arange(n) + s
                 for _ in range(8):
                     idx = np.where(idx < 0, -idx - 1, np.where(idx >= n, 2 * n - idx - 1, idx))
-                out = out + weights[k] * np.take(u, np.clip(idx, 0, n - 1), axis=a)
+                out = out + w[k] * np.take(u, np.clip(idx, 0, n - 1), axis=a)
         u = out
     return u
 
