@@ -64,6 +64,8 @@ def run_volume_inpaint(args) -> int:
         raise InputError(
             f"volumes are filled by the harmonic method only; leave out --method {args.method}"
         )
+    if args.gif or args.overwrite:
+        raise InputError("a volume's fill takes no --gif or --overwrite; leave them out")
     _check_output(args)
     volume, info, axis = _read(args.input)
     mask = read_volume(args.mask)

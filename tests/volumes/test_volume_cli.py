@@ -49,3 +49,13 @@ def test_diffuse_a_volume_and_refuse_an_image_output(ball, tmp_path, capsys):
     assert main(["diffuse", str(src), str(tmp_path / "d.tif"), "--flow", "tv"]) == 0
     assert main(["diffuse", str(src), str(tmp_path / "d.png")]) != 0
     assert "unsupported volume format" in capsys.readouterr().err
+
+
+def test_inpaint_a_volume_refuses_image_only_options(ball, tmp_path, capsys):
+    src = tmp_path / "vol.tif"
+    write_volume(src, ball)
+    args = ["inpaint", str(src), str(src), "-o", str(tmp_path / "o.tif")]
+    assert main([*args, "--gif", str(tmp_path / "e.gif")]) != 0
+    assert "no --gif" in capsys.readouterr().err
+    assert main([*args, "--method", "coherence"]) != 0
+    assert "harmonic method only" in capsys.readouterr().err
