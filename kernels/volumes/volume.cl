@@ -28,6 +28,16 @@
 // component across a far border face stays zero. One FGP iteration is two launches: w =
 // lambda f + div q (volume_dual_div), then p_new = P(q + tau grad w) (volume_dual_step),
 // q = p + beta (p - p_old) the extrapolated point, tau = 1 / (4 sum 1/h^2) >= 1 / |div|^2.
+// The row (y, z) and the run [x0, x1) of it this work-item walks; the loops over x are
+// innermost, under the channel loop, so that PoCL can vectorise them.
+#define ROW_RUN(y, z, row, x0, x1)                                        \
+    const int y = get_global_id(1), z = get_global_id(2);                 \
+    if (y >= ny || z >= nz) return;                                       \
+    const int n = nx * ny * nz, row = (z * ny + y) * nx;                  \
+    const int x0 = get_global_id(0) * xrun, x1 = min(x0 + xrun, nx)
+
+#define QV(a, j) (a[j] + beta * (a[j] - a##_old[j]))
+
 __kernel void volume_dual_div(__global const REAL* restrict p,
                               __global const REAL* restrict p_old,
                               __global const REAL* restrict f,
@@ -35,57 +45,79 @@ __kernel void volume_dual_div(__global const REAL* restrict p,
                               __global REAL* restrict w, const REAL ihx, const REAL ihy,
                               const REAL ihz, VOL_ARGS)
 {
-    FOR_EACH_VOXEL(i, x, y, z) {
-        for (int c = 0; c < nch; ++c) {
-            __global const REAL* pc = p + 3 * c * n;
-            __global const REAL* oc = p_old + 3 * c * n;
-            // the component behind the near border face is zero (no flux)
-            const REAL dx = (pc[i] + beta * (pc[i] - oc[i])) -
-                            (x > 0 ? pc[i - 1] + beta * (pc[i - 1] - oc[i - 1]) : 0);
-            const REAL dy = (pc[n + i] + beta * (pc[n + i] - oc[n + i])) -
-                            (y > 0 ? pc[n + i - nx] + beta * (pc[n + i - nx] - oc[n + i - nx])
-                                   : 0);
-            const int k = 2 * n + i, s = nx * ny;
-            const REAL dz = (pc[k] + beta * (pc[k] - oc[k])) -
-                            (z > 0 ? pc[k - s] + beta * (pc[k - s] - oc[k - s]) : 0);
-            w[c * n + i] = lambda[c] * f[c * n + i] + ihx * dx + ihy * dy + ihz * dz;
+    ROW_RUN(y, z, row, x0, x1);
+    const int s = nx * ny;
+    for (int c = 0; c < nch; ++c) {
+        __global const REAL* restrict px = p + 3 * c * n;
+        __global const REAL* restrict py = px + n;
+        __global const REAL* restrict pz = px + 2 * n;
+        __global const REAL* restrict px_old = p_old + 3 * c * n;
+        __global const REAL* restrict py_old = px_old + n;
+        __global const REAL* restrict pz_old = px_old + 2 * n;
+        const REAL lam = lambda[c];
+        // the component behind the near border face is zero (no flux): y and z per row,
+        // x by starting the run's loop after x = 0
+        const REAL fy = y > 0 ? 1 : 0, fz = z > 0 ? 1 : 0;
+        const int sy = y > 0 ? nx : 0, sz = z > 0 ? s : 0;
+        for (int x = x0; x < x1; ++x) {
+            const int i = row + x;
+            const REAL west = x > 0 ? QV(px, i - 1) : 0;
+            const REAL dx = QV(px, i) - west;
+            const REAL dy = QV(py, i) - fy * QV(py, i - sy);
+            const REAL dz = QV(pz, i) - fz * QV(pz, i - sz);
+            w[c * n + i] = lam * f[c * n + i] + ihx * dx + ihy * dy + ihz * dz;
         }
     }
 }
 
 // vectorial != 0: the projection acts on the voxel's whole (3 nch)-vector (colour-coupled TV);
-// 0: on each channel's 3-vector.
+// 0: on each channel's 3-vector. Cells in blocks of VOL_BLOCK along the row: per channel a
+// plain loop writes the unprojected step and adds its square to the block's norms, a last
+// loop scales (kernels/planar/rof.cl's rof_dual_step_vec, for the same vectorisation).
+#define VOL_BLOCK 64
 __kernel void volume_dual_step(__global const REAL* restrict p,
                                __global const REAL* restrict p_old,
                                __global const REAL* restrict w, __global REAL* restrict p_new,
                                const REAL beta, const REAL tau, const int vectorial,
                                const REAL ihx, const REAL ihy, const REAL ihz, VOL_ARGS)
 {
-    FOR_EACH_VOXEL(i, x, y, z) {
-        REAL norm2 = 0;
+    ROW_RUN(y, z, row, x0, x1);
+    // beyond the far border the gradient is zero: a zero factor on a difference read from
+    // the voxel itself
+    const REAL ty = y < ny - 1 ? tau * ihy : 0, tz = z < nz - 1 ? tau * ihz : 0;
+    const int sy = y < ny - 1 ? nx : 0, sz = z < nz - 1 ? nx * ny : 0;
+    REAL norm2[VOL_BLOCK];
+    for (int b = x0; b < x1; b += VOL_BLOCK) {
+        const int m = min(VOL_BLOCK, x1 - b);
+        for (int k = 0; k < m; ++k) norm2[k] = 0;
         for (int c = 0; c < nch; ++c) {
-            __global const REAL* pc = p + 3 * c * n;
-            __global const REAL* oc = p_old + 3 * c * n;
-            __global const REAL* wc = w + c * n;
-            __global REAL* nc = p_new + 3 * c * n;
-            const REAL gx = x < nx - 1 ? (wc[i + 1] - wc[i]) * ihx : 0;
-            const REAL gy = y < ny - 1 ? (wc[i + nx] - wc[i]) * ihy : 0;
-            const REAL gz = z < nz - 1 ? (wc[i + nx * ny] - wc[i]) * ihz : 0;
-            const REAL ax = pc[i] + beta * (pc[i] - oc[i]) + tau * gx;
-            const REAL ay = pc[n + i] + beta * (pc[n + i] - oc[n + i]) + tau * gy;
-            const REAL az = pc[2 * n + i] + beta * (pc[2 * n + i] - oc[2 * n + i]) + tau * gz;
-            const REAL a2 = ax * ax + ay * ay + az * az;
-            // per channel: projected now; vectorial: scaled below, once the norm is known
-            const REAL shrink = vectorial ? (REAL)1 : RSQRT(a2 > 1 ? a2 : (REAL)1);
-            nc[i] = ax * shrink;
-            nc[n + i] = ay * shrink;
-            nc[2 * n + i] = az * shrink;
-            norm2 += a2;
+            __global const REAL* restrict px = p + 3 * c * n;
+            __global const REAL* restrict py = px + n;
+            __global const REAL* restrict pz = px + 2 * n;
+            __global const REAL* restrict px_old = p_old + 3 * c * n;
+            __global const REAL* restrict py_old = px_old + n;
+            __global const REAL* restrict pz_old = px_old + 2 * n;
+            __global const REAL* restrict wc = w + c * n;
+            __global REAL* restrict nx_ = p_new + 3 * c * n;
+            for (int k = 0; k < m; ++k) {
+                const int x = b + k, i = row + x;
+                const int e = x < nx - 1 ? i + 1 : i;
+                const REAL ax = QV(px, i) + tau * ihx * (wc[e] - wc[i]);
+                const REAL ay = QV(py, i) + ty * (wc[i + sy] - wc[i]);
+                const REAL az = QV(pz, i) + tz * (wc[i + sz] - wc[i]);
+                const REAL a2 = ax * ax + ay * ay + az * az;
+                // per channel: projected now; vectorial: scaled below, once the norm is known
+                const REAL shrink = vectorial ? (REAL)1 : RSQRT(a2 > 1 ? a2 : (REAL)1);
+                nx_[i] = ax * shrink;
+                nx_[n + i] = ay * shrink;
+                nx_[2 * n + i] = az * shrink;
+                norm2[k] += a2;
+            }
         }
-        if (vectorial && norm2 > 1) {
-            const REAL shrink = RSQRT(norm2);
-            for (int k = 0; k < 3 * nch; ++k) p_new[k * n + i] *= shrink;
-        }
+        if (!vectorial) continue;
+        for (int k = 0; k < m; ++k) norm2[k] = RSQRT(norm2[k] > 1 ? norm2[k] : (REAL)1);
+        for (int c = 0; c < 3 * nch; ++c)
+            for (int k = 0; k < m; ++k) p_new[c * n + row + b + k] *= norm2[k];
     }
 }
 
