@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from ..io.volumes import is_volume_file
 from ..scale.tasks import TASKS
 from ._common import add_image_arguments, report, show_progress
+from .volumes import run_volume_denoise
 
 
 def add_denoise_parser(subparsers) -> None:
@@ -12,7 +14,8 @@ def add_denoise_parser(subparsers) -> None:
         help="total-variation (ROF) denoising",
         description="Rudin-Osher-Fatemi denoising run to a steady state. Give the noise level "
         "--sigma (image units: 0..255 for 8-bit) or the strength --weight; with "
-        "neither, sigma is estimated from the image.",
+        "neither, sigma is estimated from the image. A volume (.nii, .nii.gz, or a TIFF of several "
+        "pages) is denoised in 3D with its voxel spacing, into a volume file.",
     )
     add_image_arguments(parser)
     strength = parser.add_mutually_exclusive_group()
@@ -67,6 +70,8 @@ def task_options(args) -> dict:
 
 
 def run_denoise(args) -> int:
+    if is_volume_file(args.input):  # NIfTI or a TIFF of several pages: clpde.volumes
+        return run_volume_denoise(args)
     report(
         TASKS["denoise"](args.input, args.output, progress=show_progress(), **task_options(args))
     )

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from ..io.volumes import is_volume_file
 from ..planar.flows import FLOW_PARAMS, FLOWS
 from ..scale.tasks import TASKS
 from ._common import add_image_arguments, param_check, report, show_progress
+from .volumes import run_volume_diffuse
 
 
 def add_diffuse_parser(subparsers) -> None:
@@ -12,7 +14,8 @@ def add_diffuse_parser(subparsers) -> None:
         "diffuse",
         help="run a planar diffusion flow on an image",
         description="Run heat, Perona-Malik, TV or curvature diffusion for a number of "
-        "explicit steps. Colour images are processed per channel.",
+        "explicit steps. Colour images are processed per channel. A volume (.nii, .nii.gz, or a "
+        "TIFF of several pages) runs the 3D flow (heat, perona-malik or tv) with its spacing.",
     )
     add_image_arguments(parser)
     parser.add_argument("--flow", choices=FLOWS, default="heat", help="default: heat")
@@ -74,6 +77,10 @@ def run_diffuse(args) -> int:
             for option in ("kappa", "edge", "eps", "presmooth")
         },
     )
+    if is_volume_file(args.input):  # NIfTI or a TIFF of several pages: clpde.volumes
+        names = ("kappa", "edge", "eps", "presmooth")
+        params = {k: getattr(args, k) for k in names if getattr(args, k) is not None}
+        return run_volume_diffuse(args, args.flow, params)
     report(
         TASKS["diffuse"](args.input, args.output, progress=show_progress(), **task_options(args))
     )

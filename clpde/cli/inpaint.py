@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import InputError
 from ..inpainting.registry import METHODS
 from ..io.images import MASK_RULE
+from ..io.volumes import is_volume_file
 from ..runtime import get_runtime
 from ..scale.tasks import TASKS, TRANSPORT_OPTIONS
 from ._common import (
@@ -18,6 +19,7 @@ from ._common import (
 )
 from ._inpaint_demo import check_demo_output, run_demo
 from .restore import add_sequence_arguments, prepare_sequence_args, run_sequence_inpaint
+from .volumes import run_volume_inpaint
 
 
 def add_inpaint_parser(subparsers) -> None:
@@ -36,7 +38,9 @@ def add_inpaint_parser(subparsers) -> None:
         "to a steady state; its options are marked 'transport:' below. Colour "
         "images are inpainted per channel (or in the rho, sin phi, sin psi "
         "model); an alpha channel is kept as is. "
-        "--demo damages a bundled photo and restores it.",
+        "--demo damages a bundled photo and restores it. A volume (.nii, .nii.gz, or a TIFF "
+        "of several pages) with a volume MASK is filled by the 3D harmonic fill with its "
+        "voxel spacing, into a volume file.",
     )
     _add_input_output_arguments(parser)
     _add_transport_arguments(parser)
@@ -208,6 +212,8 @@ def run_inpaint(args) -> int:
         return 0
     if not args.input or not args.mask:
         raise InputError("give IMAGE and MASK (or --demo)")
+    if is_volume_file(args.input):  # NIfTI or a TIFF of several pages: clpde.volumes
+        return run_volume_inpaint(args)
     if args.overwrite:
         raise InputError(
             "--overwrite is for --demo's output folder; an output image is always replaced"

@@ -4,10 +4,11 @@ travel with it in side_streams.py; needs PyAV). Every writer writes atomically; 
 the file's dtype."""
 
 from .images import read_image, read_mask, write_gif, write_image
-from .volumes import VolumeInfo, read_volume, write_volume
+from .volumes import VolumeInfo, is_volume_file, read_volume, write_volume
 
 __all__ = [
     "VolumeInfo",
+    "is_volume_file",
     "read_image",
     "read_mask",
     "read_volume",

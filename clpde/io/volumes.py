@@ -55,6 +55,24 @@ def volume_format(path: PathLike) -> str:
     )
 
 
+def is_volume_file(path: PathLike) -> bool:
+    """Whether the command line should read `path` as a volume: a NIfTI file, or a TIFF file
+    of more than one page (a single-page TIFF is an image)."""
+    name = Path(path).name.lower()
+    if name.endswith((".nii", ".nii.gz")):
+        return True
+    if not name.endswith((".tif", ".tiff")) or not Path(path).is_file():
+        return False
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            series = tif.series[0]
+            return len(series.shape) - ("S" in series.axes) >= 3
+    except Exception:  # not a TIFF the volume reader could take: the image reader says why
+        return False
+
+
 def _nibabel():
     try:
         import nibabel

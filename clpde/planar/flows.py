@@ -17,6 +17,8 @@ from ..errors import InputError
 from ..fields import Field, Grid, PingPong, check_fits
 from ..imagedata import check_steps, check_time_step, positive, to_kernel_layout
 from ..runtime import get_runtime
+from ..volumes.flows import diffuse_volume
+from ..volumes.grid import is_volume
 from . import bounded
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -370,6 +372,7 @@ def diffuse(
     *,
     progress: bool | None = None,
     dtype: DTypeLike | None = None,
+    spacing: ArrayLike | None = None,
     return_info: bool = False,
     **params: ArrayLike | float | str,
 ) -> np.ndarray | tuple[np.ndarray, DiffuseInfo]:
@@ -400,6 +403,11 @@ def diffuse(
         Draw a progress bar; by default only for long runs on a terminal.
     dtype : {float32, float64}, optional
         The device's arithmetic (float32 by default).
+    spacing : (3,) array_like, optional
+        A volume's voxel size (z, y, x). (Z, Y, X) and (Z, Y, X, C) arrays are volumes
+        (a 3-D array without channel_axis is one, and spacing makes any array one),
+        diffused by `clpde.volumes` with heat, perona-malik (presmooth in spacing units)
+        or tv; curvature is refused.
     return_info : bool
         Also return a `DiffuseInfo` (steps, dt, time reached, flow, stability limit).
     **params
@@ -429,6 +437,13 @@ def diffuse(
     >>> centre > 190, 0 < outside < corner < 100  # the square's edges blur outwards
     (True, True)
     """
+    if is_volume(image, channel_axis, spacing):  # 3D: clpde/volumes/flows.py
+        result, dt, limit = diffuse_volume(
+            image, flow, steps, dt, channel_axis, device, spacing=spacing, progress=progress,
+            dtype=dtype, **params,
+        )  # fmt: skip
+        info = DiffuseInfo(int(steps), dt, int(steps) * dt, flow, limit)
+        return (result, info) if return_info else result
     unknown = sorted(set(params) - {p for names in FLOW_PARAMS.values() for p in names})
     if unknown:
         listed = "; ".join(f"{f}: {', '.join(p) or 'none'}" for f, p in FLOW_PARAMS.items())

@@ -35,6 +35,8 @@ from ..imagedata import (
     to_kernel_layout,
 )
 from ..runtime import get_runtime
+from ..volumes.grid import is_volume
+from ..volumes.tv import denoise_tv_volume
 from . import bounded
 from .rof_solvers import gradient_descent, primal_dual, primal_dual_in_tiles
 
@@ -92,6 +94,7 @@ def denoise_tv(
     progress: bool | None = None,
     dtype: DTypeLike | None = None,
     vectorial: bool | None = None,
+    spacing: ArrayLike | None = None,
     return_info: bool = False,
 ) -> np.ndarray | tuple[np.ndarray, DenoiseInfo]:
     """Total-variation denoising (Rudin-Osher-Fatemi), run on the device to convergence.
@@ -155,6 +158,10 @@ def denoise_tv(
         Draw a progress bar; by default only for long runs on a terminal.
     dtype : {float32, float64}, optional
         The device's arithmetic (float32 by default).
+    spacing : (3,) array_like, optional
+        A volume's voxel size (z, y, x), for (Z, Y, X) and (Z, Y, X, C) arrays (which
+        `clpde.volumes` denoises: TV of the physical gradient, primal-dual only); a 3-D
+        array without channel_axis is a volume, and giving spacing makes any array one.
     vectorial : bool, optional
         Colour-coupled TV with one lambda (True; the default for several channels with
         the primal-dual method) or each channel with its own TV and lambda (False; the
@@ -193,6 +200,17 @@ def denoise_tv(
     """
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    if is_volume(image, channel_axis, spacing):  # 3D: clpde/volumes/tv.py
+        if method != "primal-dual" or (eps, dt, lambda_every) != (None, None, None):
+            raise InputError("volumes are denoised by method='primal-dual' only; leave out "
+                             "method, eps, dt and lambda_every")  # fmt: skip
+        out, *run, noise = denoise_tv_volume(
+            image, sigma, weight, channel_axis, spacing=spacing, device=device,
+            max_steps=max_steps, tol=tol, check_every=check_every, progress=progress,
+            dtype=dtype, vectorial=vectorial,
+        )  # fmt: skip
+        info = DenoiseInfo(*run, method, noise, sigma is None and weight is None)
+        return (out, info) if return_info else out
     if sigma is not None and weight is not None:
         raise InputError("give sigma (the noise level) or weight (the strength), not both")
     precision = dtype

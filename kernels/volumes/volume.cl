@@ -1,0 +1,299 @@
+// 3D volumes: total-variation (ROF) denoising in the dual, explicit diffusion (heat,
+// Perona-Malik with Catte's pre-smoothing, TV flow) and the harmonic fill of holes, on
+// (channels, nz, ny, nx) fields stored without ghosts, x fastest, with voxel spacing
+// (hz, hy, hx) given as inverse spacings (ihz, ihy, ihx) and their squares.
+//
+// Borders are Neumann: a neighbour outside the volume is the voxel itself (a zero difference
+// across the border face), tested per voxel. Volumes are small next to the planar images'
+// hot loops, and the tests keep every kernel equal to tests/reference/volumes.py, which
+// writes the same scheme with numpy's slices.
+#include "common.cl"
+
+// Every volume kernel takes these after its own arguments: the size, the channels (walked
+// inside the kernel, `n` voxels apart) and the voxels each work-item walks along x (the
+// runtime's grid_launch: a whole row on CPUs, one voxel on GPUs).
+#define VOL_ARGS const int nx, const int ny, const int nz, const int nch, const int xrun
+
+#define FOR_EACH_VOXEL(i, x, y, z)                                        \
+    const int y = get_global_id(1), z = get_global_id(2);                 \
+    if (y >= ny || z >= nz) return;                                       \
+    const int n = nx * ny * nz;                                           \
+    const int x0_ = get_global_id(0) * xrun, x1_ = min(x0_ + xrun, nx);   \
+    for (int x = x0_, i = (z * ny + y) * nx + x0_; x < x1_; ++x, ++i)
+
+// ---- TV denoising: fast projected gradient on the dual (as kernels/planar/rof.cl) ---------
+//     min_u TV(u) + lambda/2 |u - f|^2,  u = f + div(p) / lambda,  |p| <= 1 per voxel,
+// grad the forward difference over the spacing (zero across the far border), div its
+// negative adjoint. p holds three planes per channel (px, py, pz) at p[(3c + k) n + i]; the
+// component across a far border face stays zero. One FGP iteration is two launches: w =
+// lambda f + div q (volume_dual_div), then p_new = P(q + tau grad w) (volume_dual_step),
+// q = p + beta (p - p_old) the extrapolated point, tau = 1 / (4 sum 1/h^2) >= 1 / |div|^2.
+// The row (y, z) and the run [x0, x1) of it this work-item walks; the loops over x are
+// innermost, under the channel loop, so that PoCL can vectorise them.
+#define ROW_RUN(y, z, row, x0, x1)                                        \
+    const int y = get_global_id(1), z = get_global_id(2);                 \
+    if (y >= ny || z >= nz) return;                                       \
+    const int n = nx * ny * nz, row = (z * ny + y) * nx;                  \
+    const int x0 = get_global_id(0) * xrun, x1 = min(x0 + xrun, nx)
+
+#define QV(a, j) (a[j] + beta * (a[j] - a##_old[j]))
+
+__kernel void volume_dual_div(__global const REAL* restrict p,
+                              __global const REAL* restrict p_old,
+                              __global const REAL* restrict f,
+                              __global const REAL* restrict lambda, const REAL beta,
+                              __global REAL* restrict w, const REAL ihx, const REAL ihy,
+                              const REAL ihz, VOL_ARGS)
+{
+    ROW_RUN(y, z, row, x0, x1);
+    const int s = nx * ny;
+    for (int c = 0; c < nch; ++c) {
+        __global const REAL* restrict px = p + 3 * c * n;
+        __global const REAL* restrict py = px + n;
+        __global const REAL* restrict pz = px + 2 * n;
+        __global const REAL* restrict px_old = p_old + 3 * c * n;
+        __global const REAL* restrict py_old = px_old + n;
+        __global const REAL* restrict pz_old = px_old + 2 * n;
+        const REAL lam = lambda[c];
+        // the component behind the near border face is zero (no flux): y and z per row,
+        // x by starting the run's loop after x = 0
+        const REAL fy = y > 0 ? 1 : 0, fz = z > 0 ? 1 : 0;
+        const int sy = y > 0 ? nx : 0, sz = z > 0 ? s : 0;
+        for (int x = x0; x < x1; ++x) {
+            const int i = row + x;
+            const REAL west = x > 0 ? QV(px, i - 1) : 0;
+            const REAL dx = QV(px, i) - west;
+            const REAL dy = QV(py, i) - fy * QV(py, i - sy);
+            const REAL dz = QV(pz, i) - fz * QV(pz, i - sz);
+            w[c * n + i] = lam * f[c * n + i] + ihx * dx + ihy * dy + ihz * dz;
+        }
+    }
+}
+
+// vectorial != 0: the projection acts on the voxel's whole (3 nch)-vector (colour-coupled TV);
+// 0: on each channel's 3-vector. Cells in blocks of VOL_BLOCK along the row: per channel a
+// plain loop writes the unprojected step and adds its square to the block's norms, a last
+// loop scales (kernels/planar/rof.cl's rof_dual_step_vec, for the same vectorisation).
+#define VOL_BLOCK 64
+__kernel void volume_dual_step(__global const REAL* restrict p,
+                               __global const REAL* restrict p_old,
+                               __global const REAL* restrict w, __global REAL* restrict p_new,
+                               const REAL beta, const REAL tau, const int vectorial,
+                               const REAL ihx, const REAL ihy, const REAL ihz, VOL_ARGS)
+{
+    ROW_RUN(y, z, row, x0, x1);
+    // beyond the far border the gradient is zero: a zero factor on a difference read from
+    // the voxel itself
+    const REAL ty = y < ny - 1 ? tau * ihy : 0, tz = z < nz - 1 ? tau * ihz : 0;
+    const int sy = y < ny - 1 ? nx : 0, sz = z < nz - 1 ? nx * ny : 0;
+    REAL norm2[VOL_BLOCK];
+    for (int b = x0; b < x1; b += VOL_BLOCK) {
+        const int m = min(VOL_BLOCK, x1 - b);
+        for (int k = 0; k < m; ++k) norm2[k] = 0;
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* restrict px = p + 3 * c * n;
+            __global const REAL* restrict py = px + n;
+            __global const REAL* restrict pz = px + 2 * n;
+            __global const REAL* restrict px_old = p_old + 3 * c * n;
+            __global const REAL* restrict py_old = px_old + n;
+            __global const REAL* restrict pz_old = px_old + 2 * n;
+            __global const REAL* restrict wc = w + c * n;
+            __global REAL* restrict nx_ = p_new + 3 * c * n;
+            for (int k = 0; k < m; ++k) {
+                const int x = b + k, i = row + x;
+                const int e = x < nx - 1 ? i + 1 : i;
+                const REAL ax = QV(px, i) + tau * ihx * (wc[e] - wc[i]);
+                const REAL ay = QV(py, i) + ty * (wc[i + sy] - wc[i]);
+                const REAL az = QV(pz, i) + tz * (wc[i + sz] - wc[i]);
+                const REAL a2 = ax * ax + ay * ay + az * az;
+                // per channel: projected now; vectorial: scaled below, once the norm is known
+                const REAL shrink = vectorial ? (REAL)1 : RSQRT(a2 > 1 ? a2 : (REAL)1);
+                nx_[i] = ax * shrink;
+                nx_[n + i] = ay * shrink;
+                nx_[2 * n + i] = az * shrink;
+                norm2[k] += a2;
+            }
+        }
+        if (!vectorial) continue;
+        for (int k = 0; k < m; ++k) norm2[k] = RSQRT(norm2[k] > 1 ? norm2[k] : (REAL)1);
+        for (int c = 0; c < 3 * nch; ++c)
+            for (int k = 0; k < m; ++k) p_new[c * n + row + b + k] *= norm2[k];
+    }
+}
+
+// Every check_every iterations, one work-item per row (0, y, z): u = w / lambda (w from
+// volume_dual_div with beta 0, so u = f + div(p) / lambda), and two partials per channel and
+// row, partial[(2c + k) nrows + row]: k = 0 the largest |u - u_before|, 1 sum (u - f)^2 (the
+// residual lambda is fitted with). Only these come back to the host.
+__kernel void volume_dual_primal(__global const REAL* restrict w,
+                                 __global const REAL* restrict f,
+                                 __global const REAL* restrict lambda, __global REAL* restrict u,
+                                 __global REAL* restrict partial, VOL_ARGS)
+{
+    const int y = get_global_id(1), z = get_global_id(2);
+    if (y >= ny || z >= nz) return;
+    const int n = nx * ny * nz, row = z * ny + y, nrows = ny * nz;
+    for (int c = 0; c < nch; ++c) {
+        const REAL inv_lam = (REAL)1 / lambda[c];
+        REAL largest = 0, sum = 0;
+        for (int i = c * n + row * nx; i < c * n + row * nx + nx; ++i) {
+            const REAL v = w[i] * inv_lam;
+            const REAL du = FABS(v - u[i]), r = v - f[i];
+            largest = du > largest ? du : largest;
+            sum += r * r;
+            u[i] = v;
+        }
+        partial[2 * c * nrows + row] = largest;
+        partial[(2 * c + 1) * nrows + row] = sum;
+    }
+}
+
+// ---- explicit diffusion -----------------------------------------------------------------
+// A neighbour's value along axis k, the voxel's own beyond the border (Neumann).
+#define EAST(u, i) (x < nx - 1 ? u[(i) + 1] : u[i])
+#define WEST(u, i) (x > 0 ? u[(i) - 1] : u[i])
+#define NORTH(u, i) (y < ny - 1 ? u[(i) + nx] : u[i])
+#define SOUTH(u, i) (y > 0 ? u[(i) - nx] : u[i])
+#define UP(u, i) (z < nz - 1 ? u[(i) + nx * ny] : u[i])
+#define DOWN(u, i) (z > 0 ? u[(i) - nx * ny] : u[i])
+
+// Heat u_t = Lap u, the seven-point Laplacian with spacing. Stable for
+// dt <= 1 / (2 sum 1/h^2).
+__kernel void volume_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
+                               const REAL dt, const REAL ihx2, const REAL ihy2,
+                               const REAL ihz2, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n;
+            const REAL m = uc[i];
+            v[c * n + i] = m + dt * (ihx2 * (EAST(uc, i) + WEST(uc, i) - 2 * m) +
+                                     ihy2 * (NORTH(uc, i) + SOUTH(uc, i) - 2 * m) +
+                                     ihz2 * (UP(uc, i) + DOWN(uc, i) - 2 * m));
+        }
+    }
+}
+
+// Perona-Malik u_t = div(g grad u) with g read per face from the difference of `us` across
+// it, as a gradient (over the spacing): us = u is the plain flow, us = G_s * u Catte's
+// regularised one. EDGE 0: g = exp(-(d/K)^2); 1: g = 1 / (1 + (d/K)^2). g <= 1, so the heat
+// step's limit holds.
+inline REAL pm_face(const REAL d, const REAL ds, const REAL inv_k2, const int edge)
+{
+    const REAL s2 = ds * ds * inv_k2;
+    return d * (edge == 0 ? EXP(-s2) : (REAL)1 / (1 + s2));
+}
+
+__kernel void volume_pm_step(__global const REAL* restrict u, __global const REAL* restrict us,
+                             __global REAL* restrict v, const REAL dt, const REAL inv_k2,
+                             const int edge, const REAL ihx, const REAL ihy, const REAL ihz,
+                             VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n;
+            __global const REAL* sc = us + c * n;
+            const REAL m = uc[i], s = sc[i];
+            const REAL fx = pm_face(EAST(uc, i) - m, (EAST(sc, i) - s) * ihx, inv_k2, edge) +
+                            pm_face(WEST(uc, i) - m, (WEST(sc, i) - s) * ihx, inv_k2, edge);
+            const REAL fy = pm_face(NORTH(uc, i) - m, (NORTH(sc, i) - s) * ihy, inv_k2, edge) +
+                            pm_face(SOUTH(uc, i) - m, (SOUTH(sc, i) - s) * ihy, inv_k2, edge);
+            const REAL fz = pm_face(UP(uc, i) - m, (UP(sc, i) - s) * ihz, inv_k2, edge) +
+                            pm_face(DOWN(uc, i) - m, (DOWN(sc, i) - s) * ihz, inv_k2, edge);
+            v[c * n + i] = m + dt * (ihx * ihx * fx + ihy * ihy * fy + ihz * ihz * fz);
+        }
+    }
+}
+
+// The TV flow u_t = div(grad u / |grad u|_eps) as div(g grad u) with g = 1 / |grad u|_eps per
+// voxel (forward differences), averaged onto each face by volume_tv_step. g <= 1/eps, so
+// dt <= eps / (2 sum 1/h^2) is stable.
+__kernel void volume_tv_conductance(__global const REAL* restrict u, __global REAL* restrict g,
+                                    const REAL eps2, const REAL ihx, const REAL ihy,
+                                    const REAL ihz, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n;
+            const REAL m = uc[i];
+            const REAL gx = (EAST(uc, i) - m) * ihx, gy = (NORTH(uc, i) - m) * ihy;
+            const REAL gz = (UP(uc, i) - m) * ihz;
+            g[c * n + i] = RSQRT(gx * gx + gy * gy + gz * gz + eps2);
+        }
+    }
+}
+
+__kernel void volume_tv_step(__global const REAL* restrict u, __global const REAL* restrict g,
+                             __global REAL* restrict v, const REAL dt, const REAL ihx2,
+                             const REAL ihy2, const REAL ihz2, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n;
+            __global const REAL* gc = g + c * n;
+            const REAL m = uc[i], h = gc[i];
+            // beyond the border the difference is zero, whatever the face's conductance
+            const REAL fx = (EAST(gc, i) + h) * (EAST(uc, i) - m) +
+                            (WEST(gc, i) + h) * (WEST(uc, i) - m);
+            const REAL fy = (NORTH(gc, i) + h) * (NORTH(uc, i) - m) +
+                            (SOUTH(gc, i) + h) * (SOUTH(uc, i) - m);
+            const REAL fz = (UP(gc, i) + h) * (UP(uc, i) - m) +
+                            (DOWN(gc, i) + h) * (DOWN(uc, i) - m);
+            v[c * n + i] = m + dt * (REAL)0.5 * (ihx2 * fx + ihy2 * fy + ihz2 * fz);
+        }
+    }
+}
+
+// One axis of a separable Gaussian (Catte's pre-smoothing): weights w[0..radius] for offsets
+// +-k, mirrored at the border (index -1 reads 0). axis 0 is x, 1 y, 2 z.
+inline int volume_mirror(int k, const int m)
+{
+    for (int pass = 0; pass < 8 && (k < 0 || k >= m); ++pass) k = k < 0 ? -k - 1 : 2 * m - k - 1;
+    return clamp(k, 0, m - 1);
+}
+
+__kernel void volume_gauss_axis(__global const REAL* restrict u, __global REAL* restrict v,
+                                __global const REAL* restrict w, const int radius,
+                                const int axis, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        const int pos = axis == 0 ? x : axis == 1 ? y : z;
+        const int len = axis == 0 ? nx : axis == 1 ? ny : nz;
+        const int stride = axis == 0 ? 1 : axis == 1 ? nx : nx * ny;
+        const int base = i - pos * stride;
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n + base;
+            REAL acc = w[0] * uc[pos * stride];
+            for (int k = 1; k <= radius; ++k)
+                acc += w[k] * (uc[volume_mirror(pos - k, len) * stride] +
+                               uc[volume_mirror(pos + k, len) * stride]);
+            v[c * n + i] = acc;
+        }
+    }
+}
+
+// ---- harmonic fill --------------------------------------------------------------------
+// One red-black SOR half-sweep of Lap u = 0 (seven points, with spacing) over the voxels of
+// `hole` whose parity (x + y + z) % 2 equals `colour`: u <- u + omega (mean - u), the mean
+// weighted by 1/h^2 over the neighbours inside the box (Neumann at the box's border; voxels
+// outside the hole hold the known values). In place: a colour's voxels read only the other's.
+__kernel void volume_harmonic_sweep(__global REAL* restrict u,
+                                    __global const uchar* restrict hole, const int colour,
+                                    const REAL omega, const REAL ihx2, const REAL ihy2,
+                                    const REAL ihz2, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        if (!hole[i] || ((x + y + z) & 1) != colour) continue;
+        for (int c = 0; c < nch; ++c) {
+            __global REAL* uc = u + c * n;
+            REAL sum = 0, weight = 0;
+            if (x > 0) { sum += ihx2 * uc[i - 1]; weight += ihx2; }
+            if (x < nx - 1) { sum += ihx2 * uc[i + 1]; weight += ihx2; }
+            if (y > 0) { sum += ihy2 * uc[i - nx]; weight += ihy2; }
+            if (y < ny - 1) { sum += ihy2 * uc[i + nx]; weight += ihy2; }
+            if (z > 0) { sum += ihz2 * uc[i - nx * ny]; weight += ihz2; }
+            if (z < nz - 1) { sum += ihz2 * uc[i + nx * ny]; weight += ihz2; }
+            uc[i] += omega * (sum / weight - uc[i]);
+        }
+    }
+}

@@ -1,0 +1,61 @@
+"""The command line on volumes: NIfTI and multi-page TIFF in, the same format out, with the
+file's spacing used and kept (clpde/cli/volumes.py)."""
+
+import numpy as np
+import pytest
+
+import clpde
+from clpde.cli import main
+from clpde.io import read_volume, write_volume
+from clpde.volumes import inpaint_volume
+
+pytest.importorskip("nibabel")
+
+
+@pytest.fixture
+def ball(rng):
+    z, y, x = np.indices((12, 14, 16))
+    clean = np.where((2 * (z - 6)) ** 2 + (y - 7) ** 2 + (x - 8) ** 2 < 30, 180, 40)
+    return np.clip(clean + rng.normal(0, 15, clean.shape), 0, 255).astype(np.uint8)
+
+
+def test_denoise_a_nifti_volume_with_its_spacing(ball, tmp_path):
+    src, out = tmp_path / "vol.nii.gz", tmp_path / "out.nii.gz"
+    write_volume(src, ball, spacing=(2, 1, 1))
+    assert main(["denoise", str(src), str(out), "--weight", "0.1"]) == 0
+    result, info = read_volume(out, with_info=True)
+    assert result.dtype == np.uint8 and info.spacing == (2.0, 1.0, 1.0)
+    expected = clpde.denoise_tv(ball, weight=0.1, spacing=(2, 1, 1))
+    assert np.abs(result.astype(int) - expected).max() <= 1
+    # the spacing was used: unit spacing gives another volume
+    assert np.abs(clpde.denoise_tv(ball, weight=0.1).astype(int) - result).max() > 2
+
+
+def test_inpaint_a_tiff_volume_with_a_tiff_mask(ball, tmp_path):
+    src, mask_file, out = tmp_path / "vol.tif", tmp_path / "mask.tif", tmp_path / "out.tif"
+    mask = np.zeros(ball.shape, bool)
+    mask[4:8, 5:9, 6:10] = True
+    write_volume(src, ball, spacing=(2, 1, 1))
+    write_volume(mask_file, mask.astype(np.uint8) * 255)
+    assert main(["inpaint", str(src), str(mask_file), "-o", str(out)]) == 0
+    result = read_volume(out)
+    assert (result == inpaint_volume(ball, mask, spacing=(2, 1, 1))).all()
+    assert (result[~mask] == ball[~mask]).all()
+
+
+def test_diffuse_a_volume_and_refuse_an_image_output(ball, tmp_path, capsys):
+    src = tmp_path / "vol.tif"
+    write_volume(src, ball)
+    assert main(["diffuse", str(src), str(tmp_path / "d.tif"), "--flow", "tv"]) == 0
+    assert main(["diffuse", str(src), str(tmp_path / "d.png")]) != 0
+    assert "unsupported volume format" in capsys.readouterr().err
+
+
+def test_inpaint_a_volume_refuses_image_only_options(ball, tmp_path, capsys):
+    src = tmp_path / "vol.tif"
+    write_volume(src, ball)
+    args = ["inpaint", str(src), str(src), "-o", str(tmp_path / "o.tif")]
+    assert main([*args, "--gif", str(tmp_path / "e.gif")]) != 0
+    assert "no --gif" in capsys.readouterr().err
+    assert main([*args, "--method", "coherence"]) != 0
+    assert "harmonic method only" in capsys.readouterr().err
