@@ -13,7 +13,7 @@ from .levelset import CFL, NEAR_EDGE, STORAGES
 FEATURES = ("intensity", "edges", "contrast")
 # discrepancy -> the DISC define of kernels/tracking/features.cl (adaptive: its own kernel)
 DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2, "adaptive": 3}
-MOTIONS = (None, "velocity", "kalman", "components", "image")
+MOTIONS = (None, "velocity", "kalman", "checked", "components", "image")
 # The adaptive option's weights (motion='components', discrepancy='adaptive' with these),
 # chosen on the calibration half of benchmarks/track_corpus.py
 # (benchmarks/tracking_generalise.py --calibrate). The default leaves both terms off: they
@@ -77,7 +77,7 @@ class TrackOptions:
             )
         if self.motion not in MOTIONS:
             raise InputError(
-                f"motion must be None, 'image', 'velocity', 'kalman' or 'components', "
+                f"motion must be None, 'checked', 'image', 'velocity', 'kalman' or 'components', "
                 f"not {self.motion!r}"
             )
 
