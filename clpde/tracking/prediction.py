@@ -18,7 +18,6 @@ filter restarts there (`MotionFilter.jump`).
 from __future__ import annotations
 
 import numpy as np
-
 from scipy import ndimage
 
 from .adaptive import ComponentMotion, noise_variance
