@@ -57,6 +57,7 @@ ADAPTIVE = {
 }
 PREVIOUS_DEFAULT = {"motion": "kalman", "discrepancy": "ncc"}
 IMAGE = {"motion": "image"}  # motion from the image and the appearance term (issue 35)
+CHECKED = {"motion": "checked"}  # the Kalman shift checked against a wide search (issue 35)
 # The peers' parameters on the photo corpus, chosen on its calibration half (MCV from
 # MCV_GRID, GrabCut's ring from 10, 20, 30 px: mean IoU 0.309 and 0.432 there)
 PHOTO_MCV = {"iterations": 20, "smoothing": 1, "lambda2": 1.0}
@@ -199,6 +200,7 @@ def methods(only=None):
     peers' calibrated parameters are read only when a peer runs)."""
     names = (
         "clpde default (kalman+adaptive)",
+        "clpde motion=checked",
         "clpde motion=image (appearance)",
         "clpde previous default (kalman+ncc)",
         "clpde adaptive",
@@ -214,6 +216,7 @@ def methods(only=None):
         mcv, mgac = chosen() if any(n.startswith("skimage") for n in names) else ({}, {})
     table = {
         "clpde default (kalman+adaptive)": lambda f, m: run_clpde(f, m),
+        "clpde motion=checked": lambda f, m: run_clpde(f, m, CHECKED),
         "clpde motion=image (appearance)": lambda f, m: run_clpde(f, m, IMAGE),
         "clpde previous default (kalman+ncc)": lambda f, m: run_clpde(f, m, PREVIOUS_DEFAULT),
         "clpde adaptive": lambda f, m: run_clpde(f, m, ADAPTIVE),
@@ -425,7 +428,7 @@ def main(argv=None):
     global CORPUS
     CORPUS = track_photo_corpus if args.corpus == "photo" else track_corpus
     if args.corpus == "photo" and args.methods is None:
-        args.methods = ["default (kalman", "motion=image", "MCV", "GrabCut"]
+        args.methods = ["default (kalman+", "motion=checked", "MCV", "GrabCut"]
     if args.calibrate is not None:
         return calibrate(args.calibrate)
     if args.calibrate_confidence:

@@ -122,7 +122,9 @@ class MotionPrediction:
             self._previous = local_contrast(prepared_prev, cr)
         shift = self.model.predict(self._previous, features, mask)
         if self.checked:
-            shift, jumped = checked_shift(self._previous, features, mask, shift)
+            shift, jumped = checked_shift(
+                self._previous, features, mask, shift, CHECK_REACH, CHECK_GAIN
+            )
             if jumped:
                 self.model.jump(shift)
         self._previous = features
