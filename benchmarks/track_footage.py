@@ -10,8 +10,9 @@ white) were made by background subtraction, not by hand: the camera does not mov
 median of every 5th frame of the whole video is the empty street; a pixel is the walker's
 where some channel differs from it by more than THRESHOLD grey levels, cleaned by an
 opening and a closing, holes filled, less the pixels within THRESHOLD of the street
-(the pole in front of the walker, the road between the legs), keeping the pieces (over 30 px) within NEAR px of the
-walker's previous mask (or the one holding the clip's seed point). They were then checked by eye on the contact sheet
+(the pole in front of the walker, the road between the legs), keeping the pieces (over 30
+px) within NEAR px of the walker's previous mask (or the one holding the clip's seed
+point). They were then checked by eye on the contact sheet
 (and frame by frame at 2x): each covers the walker, head to feet, with no other walker
 and not the pole in front of walker B at the clip's end; the soft shadow at the feet (the
 day is overcast) is in the masks for a few pixels.
