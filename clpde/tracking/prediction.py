@@ -28,8 +28,8 @@ from .options import TrackOptions
 
 # motion='checked''s settings, chosen on the calibration half of
 # benchmarks/track_photo_corpus.py (benchmarks/track_image_search.py, mean IoU over its 13
-# sequences: gain 0.6 / 0.7 / 0.8 / 0.9 / 1.0 gave 0.59 / 0.61 / 0.61 / 0.57 / 0.57, 0.7
-# highest; a reach of 24 or 40 px changed nothing).
+# sequences: gain 0.6 / 0.7 / 0.8 / 0.9 gave 0.586 / 0.613 / 0.606 / 0.576; 1.0 gave 0.572
+# on the 12 composites alone; a reach of 24 or 40 px changed nothing at gain 0.8).
 CHECK_REACH = 32  # px: the wide search's largest displacement per frame
 # the wide search's displacement replaces the filter's when its matching cost (mean
 # absolute difference of the features over the object) is below this share of the filter's
