@@ -369,7 +369,7 @@ def track_file(
     features: str = "intensity",
     colour: bool = False,
     discrepancy: str = "adaptive",
-    motion: str = "kalman",
+    motion: str = "checked",
     shape_weight: float = 0.0,
     region_weight=None,
     curvature=None,

@@ -100,9 +100,11 @@ class MorphingTracker:
         where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
         cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
         F1 clipped at huber_delta.
-    motion : {'kalman', 'image', 'components', 'velocity', None}, optional
+    motion : {'checked', 'kalman', 'image', 'components', 'velocity', None}, optional
         Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction); 'image': moved
+        object's features (within search_radius pixels of the prediction), its shift
+        checked against a wide search of the image (any shift up to 32 px; the default,
+        clpde.tracking.prediction.checked_shift); 'kalman': the filter alone; 'image': moved
         by the object's motion found in the image (a masked correlation over every shift
         up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
         through occlusions, with the appearance term on (clpde.tracking.follow); each
@@ -187,7 +189,7 @@ class MorphingTracker:
         features: str | ArrayLike | Callable = "intensity",
         colour: bool = False,
         discrepancy: str = "adaptive",
-        motion: str | None = "kalman",
+        motion: str | None = "checked",
         shape_weight: float = 0.0,
         equalize: bool | str = False,
         smooth: bool = True,
@@ -476,9 +478,10 @@ def track(
         MorphingTracker's other options: colour (every channel in the discrepancy),
         discrepancy ('adaptive', the default: NCC where a window has contrast well above
         the noise, F2 - F1 where it is flat; 'ncc'; 'difference', the thesis; 'huber'),
-        motion ('kalman', the default; None; 'velocity'; 'components': each connected piece
-        matched on its own), shape_weight, storage ('lists', 'bricks8x8' or 'bricks16x4':
-        the same results), contrast_radius, ncc_radius, huber_delta, search_radius,
+        motion ('checked', the default: the Kalman filter's shift checked against a wide
+        search of the image; 'kalman'; 'image'; None; 'velocity'; 'components': each
+        connected piece matched on its own), shape_weight, storage ('lists', 'bricks8x8'
+        or 'bricks16x4': the same results), contrast_radius, ncc_radius, huber_delta, search_radius,
         region_weight and curvature (with discrepancy='adaptive': a region term and a
         curvature term, off by default; with motion='components' and the weights
         REGION_WEIGHT and CURVATURE of clpde.tracking.options they make the adaptive
