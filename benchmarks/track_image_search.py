@@ -1,12 +1,14 @@
-"""How motion='image''s settings were chosen: each candidate over the calibration half of
-benchmarks/track_photo_corpus.py, mean IoU over its sequences (and the worst frame).
+"""How motion='image''s and motion='checked''s settings were chosen: each candidate over
+the calibration half of benchmarks/track_photo_corpus.py, mean IoU over its sequences (and
+the worst frame).
 
     python benchmarks/track_image_search.py "[{'fo.HIDDEN_FLOOR': 0.6}, {}]"
     python benchmarks/track_image_search.py "[{'opt_curvature': 0.3}]" [half] [classes]
+    python benchmarks/track_image_search.py "[{'opt_motion': 'checked', 'pr.CHECK_GAIN': 0.9}]"
 
 A candidate sets module constants (ap.NAME: clpde.tracking.appearance, fo.NAME:
-clpde.tracking.follow, mo.NAME: clpde.tracking.morph) or track options (opt_NAME); they
-stay set for the candidates after it in one run.
+clpde.tracking.follow, mo.NAME: clpde.tracking.morph, pr.NAME: clpde.tracking.prediction)
+or track options (opt_NAME); they stay set for the candidates after it in one run.
 """
 
 from __future__ import annotations
@@ -34,12 +36,13 @@ def main(argv=None):
     import clpde.tracking.appearance as ap
     import clpde.tracking.follow as fo
     import clpde.tracking.morph as mo
+    import clpde.tracking.prediction as pr
 
     argv = sys.argv[1:] if argv is None else argv
     candidates = ast.literal_eval(argv[0]) if argv else [{}]
     half = argv[1] if len(argv) > 1 else "calibration"
     data = corpus(half, classes=argv[2].split(",")) if len(argv) > 2 else corpus(half)
-    modules = {"ap": ap, "fo": fo, "mo": mo}
+    modules = {"ap": ap, "fo": fo, "mo": mo, "pr": pr}
     for candidate in candidates:
         options = {"motion": "image"}
         for key, value in candidate.items():

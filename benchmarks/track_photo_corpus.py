@@ -25,6 +25,9 @@ Classes:
 - ``clutter``: the object over a busy, many-coloured background (fruits, stuff,
   starry_night, baboon), 3-10 px a frame, turning slowly.
 - ``grey``: as ``fast`` and ``occlude`` alternately, but grey frames (no colour to lean on).
+- ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
+  9-26 px a frame (benchmarks/track_footage.py; clip 0 calibration, clip 1 test; their
+  masks by background subtraction, checked by eye).
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-CLASSES = ("fast", "pan", "deform", "occlude", "clutter", "grey")
+CLASSES = ("fast", "pan", "deform", "occlude", "clutter", "grey", "footage")
 SEQS = 4  # seeds 0, 2 calibration; 1, 3 test
 H, W, N = 112, 144, 16
 OPENCV = Path("/usr/share/doc/opencv-doc/examples/data")
@@ -252,6 +255,12 @@ def seq_grey(seed):
     return frames @ np.array([0.299, 0.587, 0.114]), masks
 
 
+def seq_footage(seed):
+    import track_footage
+
+    return track_footage.clip(seed)
+
+
 MAKERS = {
     "fast": seq_fast,
     "pan": seq_pan,
@@ -259,7 +268,9 @@ MAKERS = {
     "occlude": seq_occlude,
     "clutter": seq_clutter,
     "grey": seq_grey,
+    "footage": seq_footage,
 }
+FOOTAGE_CLIPS = 2  # the footage class' clips (seeds 0, 1)
 
 
 def half_of(seed: int) -> str:
@@ -272,6 +283,8 @@ def corpus(half: str | None = None, classes=CLASSES, seqs: int = SEQS):
     for cls in classes:
         for seed in range(seqs):
             if half is not None and half_of(seed) != half:
+                continue
+            if cls == "footage" and seed >= FOOTAGE_CLIPS:
                 continue
             frames, masks = MAKERS[cls](seed)
             out[f"{cls}-{seed}"] = (frames, masks, cls)

@@ -571,17 +571,9 @@ def restore_file(
     damage found (or the masks given) filled from the neighbouring frames, film in, film
     out, in this process."""
     get_runtime(device)
+    options = dict(mask=mask, masks_out=masks_out, grow=grow, overlay=overlay, codec=codec)
     result = restore_film(
-        input,
-        output,
-        mask=mask,
-        masks_out=masks_out,
-        grow=grow,
-        overlay=overlay,
-        codec=codec,
-        overwrite=overwrite,
-        progress=_progress(progress),
-        frames=frames,
+        input, output, overwrite=overwrite, progress=_progress(progress), frames=frames, **options
     )
     rate = result.frames / result.seconds if result.seconds else 0.0
     return [

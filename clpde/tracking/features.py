@@ -11,6 +11,9 @@ MotionFilter predicts the object's displacement from one frame to the next:
   (dilated by 3 pixels, so the boundary's context counts), searched within `radius`
   pixels of the prediction. An innovation beyond three standard deviations is a jump: its
   measurement noise is raised so the filter moves only part of the way (damping).
+
+With motion='checked' (clpde.tracking.prediction.checked_shift) a wide search of the image
+can overrule the filter; `MotionFilter.jump` then restarts it at the displacement found.
 """
 
 from __future__ import annotations
@@ -151,6 +154,14 @@ class MotionFilter:
         self.p = (1 - gain) * prior_p
         self.measured = z
         return tuple(float(v) for v in self.v)
+
+    def jump(self, displacement) -> None:
+        """Restart the filter at `displacement` (dy, dx), found by a check against the
+        image: its damping would otherwise take several frames to follow a fast object
+        that the search radius around the old velocity cannot reach."""
+        self.v = np.array(displacement, np.float64)
+        self.p = np.full(2, 4.0)
+        self.measured = self.v.copy()
 
     def observe(self, before, after) -> None:
         """After a frame: the velocity model learns the centroid's displacement."""

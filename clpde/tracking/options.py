@@ -14,7 +14,7 @@ from .levelset import CFL, NEAR_EDGE, STORAGES
 FEATURES = ("intensity", "edges", "contrast")
 # discrepancy -> the DISC define of kernels/tracking/features.cl (adaptive: its own kernel)
 DISCREPANCIES = {"difference": 0, "ncc": 1, "huber": 2, "adaptive": 3}
-MOTIONS = (None, "velocity", "kalman", "components", "image")
+MOTIONS = (None, "velocity", "kalman", "checked", "components", "image")
 # The adaptive option's weights (motion='components', discrepancy='adaptive' with these),
 # chosen on the calibration half of benchmarks/track_corpus.py
 # (benchmarks/tracking_generalise.py --calibrate). The default leaves both terms off: they
@@ -47,9 +47,11 @@ class TrackOptions:
         where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
         cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
         F1 clipped at huber_delta.
-    motion : {'kalman', 'image', 'components', 'velocity', None}
+    motion : {'checked', 'kalman', 'image', 'components', 'velocity', None}
         Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction); 'image': moved
+        object's features (within search_radius pixels of the prediction), its shift
+        checked against a wide search of the image (any shift up to 32 px; the default,
+        clpde.tracking.prediction.checked_shift); 'kalman': the filter alone; 'image': moved
         by the object's motion found in the image (a masked correlation over every shift
         up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
         through occlusions, with the appearance term on (clpde.tracking.follow); each
@@ -117,7 +119,7 @@ class TrackOptions:
     features: str = "intensity"
     colour: bool = False
     discrepancy: str = "adaptive"
-    motion: str | None = "kalman"
+    motion: str | None = "checked"
     shape_weight: float = 0.0
     equalize: bool | str = False
     smooth: bool = True
@@ -181,7 +183,7 @@ class TrackOptions:
             )
         if self.motion not in MOTIONS:
             raise InputError(
-                f"motion must be None, 'image', 'velocity', 'kalman' or 'components', "
+                f"motion must be None, 'checked', 'image', 'velocity', 'kalman' or 'components', "
                 f"not {self.motion!r}"
             )
 

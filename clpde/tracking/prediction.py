@@ -6,16 +6,76 @@ motion='velocity' or 'kalman' moves the whole contour by one displacement
 (`features.MotionFilter`); motion='components' moves each connected piece by its own
 (`adaptive.ComponentMotion`). Both match local-contrast-normalised frames, whatever the
 morphing compares: a shadow or a flicker does not move the measured displacement.
+
+motion='checked' is 'kalman' checked against the image (`checked_shift`): the filter only
+searches `search_radius` px around its last velocity and damps jumps, so an object that
+starts at, or speeds up to, more than that is lost at once; a wide search (a masked
+normalised cross-correlation over every shift within CHECK_REACH px) proposes a second
+displacement, and the one whose features match better wins. When the wide one wins, the
+filter restarts there (`MotionFilter.jump`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
 
 from .adaptive import ComponentMotion, noise_variance
-from .features import MotionFilter, local_contrast, shift_image
+from .appearance import MATCH_FLOOR, match_shift
+from .features import MotionFilter, local_contrast, match_displacement, shift_image
 from .levelset import LevelSet
 from .options import TrackOptions
+
+# motion='checked''s settings, chosen on the calibration half of
+# benchmarks/track_photo_corpus.py (benchmarks/track_image_search.py, mean IoU over its 13
+# sequences: gain 0.6 / 0.7 / 0.8 / 0.9 gave 0.586 / 0.613 / 0.606 / 0.576; 1.0 gave 0.572
+# on the 12 composites alone; a reach of 24 or 40 px changed nothing at gain 0.8).
+CHECK_REACH = 32  # px: the wide search's largest displacement per frame
+# the wide search's displacement replaces the filter's when its matching cost (mean
+# absolute difference of the features over the object) is below this share of the filter's
+CHECK_GAIN = 0.7
+
+
+def _cost(prev: np.ndarray, cur: np.ndarray, weight: np.ndarray, shift) -> float:
+    """Mean absolute difference of cur(x + shift) (bilinear, the edge repeated) and prev(x)
+    over the pixels x of `weight`, summed over the channels of (C, H, W) features."""
+    pts = np.array(np.nonzero(weight), np.float64)
+    moved = pts + np.asarray(shift, np.float64)[:, None]
+    total = 0.0
+    for p, c in zip(prev, cur, strict=True):
+        at = ndimage.map_coordinates(c, moved, order=1, mode="nearest")
+        total += float(np.abs(at - p[weight]).mean())
+    return total
+
+
+def checked_shift(
+    prev: np.ndarray,
+    cur: np.ndarray,
+    mask: np.ndarray,
+    shift,
+    reach: int = CHECK_REACH,
+    gain: float = CHECK_GAIN,
+) -> tuple[tuple[float, float], bool]:
+    """The filter's displacement `shift` (dy, dx) of the object `mask` from features `prev`
+    to `cur` (C, H, W), checked against a wide search of the image.
+
+    The wide search is the masked normalised cross-correlation over every whole-pixel
+    shift within `reach` px (`appearance.match_shift`, on the mask dilated by 3 px so that
+    the boundary's context counts), refined to sub-pixel within 2 px
+    (`features.match_displacement`). It replaces `shift` when its matching cost is below
+    `gain` times that of `shift`, and its correlation peak is a match at all (MATCH_FLOOR).
+
+    Returns the displacement and whether the wide search's replaced the filter's."""
+    if mask.sum() < 4 or mask.all():
+        return tuple(shift), False
+    weight = ndimage.binary_dilation(mask, iterations=3)
+    wide = match_shift(prev, cur, weight.astype(np.float64), reach, prior=shift)
+    if match_shift.peak < MATCH_FLOOR or np.abs(wide - np.round(shift)).max() <= 1:
+        return tuple(shift), False  # no match, or the filter's answer
+    wide, _ = match_displacement(prev, cur, mask, wide, 2)
+    if _cost(prev, cur, weight, wide) < gain * _cost(prev, cur, weight, shift):
+        return (float(wide[0]), float(wide[1])), True
+    return tuple(shift), False
 
 
 class MotionPrediction:
@@ -32,10 +92,12 @@ class MotionPrediction:
     def __init__(self, options: TrackOptions):
         self.options = options
         self.pieces = options.motion == "components"
+        self.checked = options.motion == "checked"
         if self.pieces:
             self.model = ComponentMotion(options.search_radius)
         else:
-            self.model = MotionFilter(options.motion, options.search_radius)
+            kind = "kalman" if self.checked else options.motion
+            self.model = MotionFilter(kind, options.search_radius)
         self._previous: np.ndarray | None = None  # the last frame's matching features
 
     def move(
@@ -61,6 +123,12 @@ class MotionPrediction:
         if self._previous is None:
             self._previous = local_contrast(prepared_prev, cr)
         shift = self.model.predict(self._previous, features, mask)
+        if self.checked:
+            shift, jumped = checked_shift(
+                self._previous, features, mask, shift, CHECK_REACH, CHECK_GAIN
+            )
+            if jumped:
+                self.model.jump(shift)
         self._previous = features
         if max(abs(shift[0]), abs(shift[1])) < 0.25:
             # Below the matching's precision; shifting would only blur F1.
