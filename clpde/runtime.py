@@ -196,6 +196,7 @@ def _usable(index: int) -> int:
 
 
 def _default_index() -> int:
+    check_not_forked()  # a forked child's error is not the setting's fault: raise it bare
     env = os.environ.get("CLPDE_DEVICE")
     if env:
         try:

@@ -60,12 +60,19 @@ def oclgrind_command(local_mem: int, quick: bool = False) -> list[str]:
     return command + (["--quick"] if quick else [])
 
 
-def start_under_oclgrind(out: Path, local_mem: int, names: list[str]) -> subprocess.Popen:
-    """Start the named cases under Oclgrind, writing into `out` (oclgrind.log, output.txt,
-    the cases' results)."""
+def oclgrind_env() -> dict:
+    """The environment of a run under Oclgrind: this tree first, and no device setting (a
+    suite run with CLPDE_DEVICE naming another runtime would not find it there)."""
     env = dict(os.environ, PYTHONPATH=str(HERE.parents[1]))
     env.pop("CLPDE_DEVICE", None)
     env.pop("PYOPENCL_CTX", None)
+    return env
+
+
+def start_under_oclgrind(out: Path, local_mem: int, names: list[str]) -> subprocess.Popen:
+    """Start the named cases under Oclgrind, writing into `out` (oclgrind.log, output.txt,
+    the cases' results)."""
+    env = oclgrind_env()
     command = oclgrind_command(local_mem) + ["--log", str(out / "oclgrind.log")]
     command += [sys.executable, str(HERE / "cases.py"), str(out), *names]
     with open(out / "output.txt", "w") as output:  # the child keeps its own handle
@@ -151,7 +158,7 @@ def test_bricks_too_large_for_the_work_group_are_refused_with_the_way_out(tmp_pa
         "try:\n    cases.CASES['surface_bricks']()\n"
         "except DeviceLimitError as e:\n    print('refused:', e)\n"
     )
-    env = dict(os.environ, PYTHONPATH=str(HERE.parents[1]))
+    env = oclgrind_env()
     command = [OCLGRIND, "--max-wgsize", "256", sys.executable, "-c", script, str(HERE)]
     done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
