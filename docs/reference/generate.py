@@ -1,7 +1,7 @@
 """Pages written at build time, so that the reference cannot drift from the code:
 
 - one page per public namespace (``clpde``, ``clpde.io``, ``clpde.surface``,
-  ``clpde.data``, ``clpde.inpainting``), an entry for every name in its ``__all__``;
+  ``clpde.data``, ``clpde.inpainting``, ``clpde.tracking``, ``clpde.volumes``), an entry for every name in its ``__all__``;
 - a gallery page per script in examples/: its docstring, the pictures it makes (those it
   names under docs/images/) and its source. Nothing is run.
 """
@@ -19,6 +19,8 @@ NAMESPACES = [
     ("clpde.io", "Files in and out: clpde.io"),
     ("clpde.surface", "PDEs on implicit surfaces: clpde.surface"),
     ("clpde.data", "Test images and scenes: clpde.data"),
+    ("clpde.tracking", "Tracking options: clpde.tracking"),
+    ("clpde.volumes", "3D volumes: clpde.volumes"),
 ]
 
 
@@ -43,10 +45,15 @@ def _namespace_page(module_name: str, title: str) -> str:
         f".. currentmodule:: {module_name}",
         "",
     ]
+    top = importlib.import_module("clpde")
     for name in sorted(module.__all__, key=str.lower):
-        directive = _directive(getattr(module, name))
+        obj = getattr(module, name)
+        directive = _directive(obj)
         if directive:  # submodules have pages of their own
-            lines += [f".. {directive}:: {name}", ""]
+            lines += [f".. {directive}:: {name}"]
+            if module is not top and getattr(top, name, None) is obj:
+                lines += ["   :no-index:"]  # indexed on the top-level page
+            lines += [""]
     return "\n".join(lines)
 
 
