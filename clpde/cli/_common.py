@@ -31,12 +31,26 @@ def add_device_argument(parser) -> None:
 
 
 def add_image_arguments(parser) -> None:
-    """IN and OUT image paths and --device."""
+    """IN and OUT paths (OUT given as the second word or as -o OUT) and --device."""
     parser.add_argument("input", metavar="IN", help="input image (.png, .tif/.tiff, .jpg/.jpeg)")
     parser.add_argument(
-        "output", metavar="OUT", help="output image; same formats; never the input file"
+        "output",
+        metavar="OUT",
+        nargs="?",
+        help="output image; same formats; never the input file",
+    )
+    parser.add_argument(
+        "-o", "--output", dest="output_flag", metavar="OUT", help="the output, as a flag"
     )
     add_device_argument(parser)
+
+
+def output_path(args) -> str:
+    """OUT of add_image_arguments, given once either way (one line otherwise)."""
+    if (args.output is None) == (args.output_flag is None):
+        given = "both OUT and -o" if args.output else "no output"
+        raise InputError(f"{given}: give the output once, as OUT or as -o OUT")
+    return args.output or args.output_flag
 
 
 OUTPUT_FOLDER_RULE = (

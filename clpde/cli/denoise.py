@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..io.volumes import is_volume_file
 from ..scale.tasks import TASKS
-from ._common import add_image_arguments, report, show_progress
+from ._common import add_image_arguments, output_path, report, show_progress
 from .volumes import run_volume_denoise
 
 
@@ -70,6 +70,7 @@ def task_options(args) -> dict:
 
 
 def run_denoise(args) -> int:
+    args.output = output_path(args)
     if is_volume_file(args.input):  # NIfTI or a TIFF of several pages: clpde.volumes
         return run_volume_denoise(args)
     report(

@@ -5,7 +5,7 @@ from __future__ import annotations
 from ..io.volumes import is_volume_file
 from ..planar.flows import FLOW_PARAMS, FLOWS
 from ..scale.tasks import TASKS
-from ._common import add_image_arguments, param_check, report, show_progress
+from ._common import add_image_arguments, output_path, param_check, report, show_progress
 from .volumes import run_volume_diffuse
 
 
@@ -69,6 +69,7 @@ def task_options(args) -> dict:
 
 
 def run_diffuse(args) -> int:
+    args.output = output_path(args)
     param_check(
         args,
         args.flow,

@@ -7,7 +7,7 @@
 // across the border face), tested per voxel. Volumes are small next to the planar images'
 // hot loops, and the tests keep every kernel equal to tests/reference/volumes.py, which
 // writes the same scheme with numpy's slices.
-#include "common.cl"
+#include "common.h"
 
 // Every volume kernel takes these after its own arguments: the size, the channels (walked
 // inside the kernel, `n` voxels apart) and the voxels each work-item walks along x (the

@@ -31,6 +31,22 @@ def test_denoise_a_nifti_volume_with_its_spacing(ball, tmp_path):
     assert np.abs(clpde.denoise_tv(ball, weight=0.1).astype(int) - result).max() > 2
 
 
+def test_the_output_as_a_flag_or_a_word_once(ball, tmp_path, capsys):
+    """`clpde denoise vol.nii.gz -o out.nii.gz` (the issue's form) is the positional form;
+    both or neither is one line."""
+    src = tmp_path / "vol.nii.gz"
+    write_volume(src, ball, spacing=(2, 1, 1))
+    word, flag = tmp_path / "word.nii.gz", tmp_path / "flag.nii.gz"
+    assert main(["denoise", str(src), str(word), "--weight", "0.1"]) == 0
+    assert main(["denoise", str(src), "-o", str(flag), "--weight", "0.1"]) == 0
+    assert np.array_equal(read_volume(word), read_volume(flag))
+    capsys.readouterr()
+    assert main(["denoise", str(src)]) == 2
+    assert main(["diffuse", str(src), str(word), "-o", str(flag)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2 and "as OUT or as -o OUT" in lines[0] and "both" in lines[1]
+
+
 def test_inpaint_a_tiff_volume_with_a_tiff_mask(ball, tmp_path):
     src, mask_file, out = tmp_path / "vol.tif", tmp_path / "mask.tif", tmp_path / "out.tif"
     mask = np.zeros(ball.shape, bool)
