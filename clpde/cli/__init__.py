@@ -82,10 +82,12 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def main(argv=None) -> int:
     """Run the command line; returns the exit status (0, or 2 on any error, 130 when
     interrupted)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # The command's module loads its libraries here: still under the loading handler, since
+    # a KeyboardInterrupt inside numpy's import comes out as an ImportError.
+    parser = build_parser(_command(argv))
     _interrupt.restore()  # from here on, Ctrl-C is the KeyboardInterrupt caught below
     try:
-        argv = sys.argv[1:] if argv is None else list(argv)
-        parser = build_parser(_command(argv))
         try:
             args = parser.parse_args(argv)
         except SystemExit as exc:  # --help, --version and usage errors
