@@ -1,6 +1,7 @@
-"""Harmonic inpainting of 3D volumes: the masked voxels are filled by the solution of
-Laplace's equation (seven points, with voxel spacing) whose boundary values are the known
-voxels around them, by red-black SOR (kernels/volumes/volume.cl).
+"""Inpainting of 3D volumes: the masked voxels are filled by the solution of Laplace's
+equation (seven points, with voxel spacing) whose boundary values are the known voxels
+around them, by red-black SOR (kernels/volumes/volume.cl), or by the biharmonic equation's,
+L(L u) = 0, by conjugate gradients from that harmonic fill (clpde/volumes/biharmonic.py).
 
 Memory and time follow the damage: each connected component of the mask is solved in its own
 box (its bounding box grown by one voxel), and each box starts from the solution of the same
@@ -17,12 +18,14 @@ from scipy import ndimage
 from ..errors import InputError
 from ..imagedata import compute_dtype, positive
 from ..runtime import get_runtime
+from .biharmonic import biharmonic_cg
 from .grid import VolumeGrid, check_spacing, to_volume_layout
 
 KERNEL_FILES = ("volumes/volume.cl",)
 
 CHECK_EVERY = 10  # sweeps between convergence tests
 COARSEST = 4  # boxes with a side of fewer voxels are solved without a coarser start
+METHODS = ("harmonic", "biharmonic")
 
 
 def inpaint_volume(
@@ -30,6 +33,7 @@ def inpaint_volume(
     mask,
     channel_axis: int | None = None,
     *,
+    method: str = "harmonic",
     spacing=None,
     device=None,
     tol: float = 1e-4,
@@ -37,7 +41,7 @@ def inpaint_volume(
     dtype=None,
 ) -> np.ndarray:
     """Fill the masked voxels of a (Z, Y, X) or (Z, Y, X, C) volume with the harmonic
-    (smoothest membrane) interpolation of the voxels around them.
+    (smoothest membrane) or biharmonic (thin plate) interpolation of the voxels around them.
 
     Parameters
     ----------
@@ -48,6 +52,10 @@ def inpaint_volume(
         True where the voxels are missing.
     channel_axis : int, optional
         The axis of the channels, each filled on its own.
+    method : {'harmonic', 'biharmonic'}, optional
+        Laplace's equation (the membrane; obeys the maximum principle), or the biharmonic
+        one (continues the gradients across the hole too, from two rings of known voxels),
+        solved from the harmonic fill.
     spacing : (3,) array_like, optional
         The voxel size (z, y, x); thick slices weigh their neighbours less.
     device : str or int, optional
@@ -56,7 +64,8 @@ def inpaint_volume(
         Stop a box when no voxel changed by more than tol (on [0, 1] data) per sweep over
         the last sweeps.
     max_sweeps : int, optional
-        The cap on SOR sweeps per box and level.
+        The cap on SOR sweeps per box and level, and on the biharmonic's conjugate-gradient
+        iterations per box and channel.
     dtype : {float32, float64}, optional
         The device's arithmetic.
 
@@ -68,7 +77,8 @@ def inpaint_volume(
     Raises
     ------
     InputError
-        For a mask of another shape, a mask that covers the whole volume, or bad spacing.
+        For a mask of another shape, a mask that covers the whole volume, bad spacing or an
+        unknown method.
 
     Examples
     --------
@@ -81,6 +91,8 @@ def inpaint_volume(
     >>> bool(np.abs(inpaint_volume(ramp, mask) - ramp).max() < 1e-3)
     True
     """
+    if method not in METHODS:
+        raise InputError(f"method must be one of {', '.join(METHODS)}, not {method!r}")
     h = check_spacing(spacing)
     data, layout = to_volume_layout(volume, channel_axis, spacing)
     hole = np.asarray(mask)
@@ -94,15 +106,18 @@ def inpaint_volume(
     tol = positive("tol", tol)
     grid_of = _GridMaker(get_runtime(device), compute_dtype(None, dtype))
     labels, count = ndimage.label(hole)
+    ring = 2 if method == "biharmonic" else 1  # the biharmonic stencil reaches two voxels
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         grown = tuple(
-            slice(max(0, s.start - 1), min(n, s.stop + 1))
+            slice(max(0, s.start - ring), min(n, s.stop + ring))
             for s, n in zip(box, hole.shape, strict=True)
         )
         mine = labels[grown] == k
         u = data[(slice(None),) + grown].copy()
         # the box's other masked voxels (another component's, reaching in) are unknowns too
         filled = _solve(grid_of, u, hole[grown], h, tol, int(max_sweeps))
+        if method == "biharmonic":
+            filled = biharmonic_cg(grid_of(u.shape, h), filled, hole[grown], int(max_sweeps))
         data[(slice(None),) + grown][:, mine] = filled[:, mine]
     # the known voxels exactly as given (the [0, 1] round trip of floats may round them)
     where = hole if layout.channel_axis is None else np.expand_dims(hole, layout.channel_axis)

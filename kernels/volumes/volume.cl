@@ -297,3 +297,62 @@ __kernel void volume_harmonic_sweep(__global REAL* restrict u,
         }
     }
 }
+
+// ---- biharmonic fill ------------------------------------------------------------------
+// v = L u, the seven-point Laplacian with spacing and Neumann borders (the box's: a neighbour
+// outside it is the voxel itself). masked != 0 keeps v only on the hole (zero elsewhere):
+// the conjugate gradients of clpde/volumes/biharmonic.py apply A = (L L) restricted to the
+// hole as L then masked L, on vectors that are zero off the hole.
+__kernel void volume_laplacian(__global const REAL* restrict u, __global REAL* restrict v,
+                               __global const uchar* restrict hole, const int masked,
+                               const REAL ihx2, const REAL ihy2, const REAL ihz2, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n;
+            const REAL m = uc[i];
+            const REAL lap = ihx2 * (EAST(uc, i) + WEST(uc, i) - 2 * m) +
+                             ihy2 * (NORTH(uc, i) + SOUTH(uc, i) - 2 * m) +
+                             ihz2 * (UP(uc, i) + DOWN(uc, i) - 2 * m);
+            v[c * n + i] = (masked && !hole[i]) ? (REAL)0 : lap;
+        }
+    }
+}
+
+// Conjugate gradients' vector work on one channel (nch 1), one work-item per row (0, y, z)
+// with its partial sum at partial[z ny + y] (only these come back to the host):
+// volume_cg_dot sums a b; volume_cg_step moves x += alpha p, r -= alpha ap and sums r r.
+__kernel void volume_cg_dot(__global const REAL* restrict a, __global const REAL* restrict b,
+                            __global REAL* restrict partial, VOL_ARGS)
+{
+    const int y = get_global_id(1), z = get_global_id(2);
+    if (y >= ny || z >= nz) return;
+    const int row = z * ny + y;
+    REAL sum = 0;
+    for (int i = row * nx; i < row * nx + nx; ++i) sum += a[i] * b[i];
+    partial[row] = sum;
+}
+
+__kernel void volume_cg_step(__global REAL* restrict x_, __global REAL* restrict r,
+                             __global const REAL* restrict p, __global const REAL* restrict ap,
+                             const REAL alpha, __global REAL* restrict partial, VOL_ARGS)
+{
+    const int y = get_global_id(1), z = get_global_id(2);
+    if (y >= ny || z >= nz) return;
+    const int row = z * ny + y;
+    REAL sum = 0;
+    for (int i = row * nx; i < row * nx + nx; ++i) {
+        x_[i] += alpha * p[i];
+        const REAL v = r[i] - alpha * ap[i];
+        r[i] = v;
+        sum += v * v;
+    }
+    partial[row] = sum;
+}
+
+// p = r + beta p, the next search direction.
+__kernel void volume_cg_direction(__global const REAL* restrict r, __global REAL* restrict p,
+                                  const REAL beta, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) { p[i] = r[i] + beta * p[i]; }
+}
