@@ -16,7 +16,7 @@ import pyopencl.array as cla
 
 from .grid import VolumeGrid
 
-RTOL = 1e-4  # stop when the residual's norm fell by this factor
+RTOL = 1e-3  # stop when the residual's norm fell by this factor (chosen on the calibration half)
 
 
 def biharmonic_cg(
