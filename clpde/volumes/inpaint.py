@@ -26,6 +26,9 @@ KERNEL_FILES = ("volumes/volume.cl",)
 CHECK_EVERY = 10  # sweeps between convergence tests
 COARSEST = 4  # boxes with a side of fewer voxels are solved without a coarser start
 METHODS = ("harmonic", "biharmonic")
+# the biharmonic CG stops when its residual fell by CG_TOL tol (1e-3 at the default tol:
+# chosen on the calibration half, where 1e-4 gave the same PSNR to 0.01 dB in twice the steps)
+CG_TOL = 10.0
 
 
 def inpaint_volume(
@@ -62,7 +65,8 @@ def inpaint_volume(
         An OpenCL device ('cpu', 'gpu', an index or a name part; see `clpde.devices`).
     tol : float, optional
         Stop a box when no voxel changed by more than tol (on [0, 1] data) per sweep over
-        the last sweeps.
+        the last sweeps; the biharmonic's conjugate gradients when their residual fell by
+        10 tol.
     max_sweeps : int, optional
         The cap on SOR sweeps per box and level, and on the biharmonic's conjugate-gradient
         iterations per box and channel.
@@ -117,7 +121,9 @@ def inpaint_volume(
         # the box's other masked voxels (another component's, reaching in) are unknowns too
         filled = _solve(grid_of, u, hole[grown], h, tol, int(max_sweeps))
         if method == "biharmonic":
-            filled = biharmonic_cg(grid_of(u.shape, h), filled, hole[grown], int(max_sweeps))
+            filled = biharmonic_cg(
+                grid_of(u.shape, h), filled, hole[grown], int(max_sweeps), CG_TOL * tol
+            )
         data[(slice(None),) + grown][:, mine] = filled[:, mine]
     # the known voxels exactly as given (the [0, 1] round trip of floats may round them)
     where = hole if layout.channel_axis is None else np.expand_dims(hole, layout.channel_axis)

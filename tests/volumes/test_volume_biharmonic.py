@@ -1,5 +1,5 @@
-"""3D biharmonic inpainting (clpde/volumes/biharmonic.py): the Laplacian kernel and the
-conjugate-gradient fill against the numpy reference's direct solve, a biharmonic quartic of
+"""3D biharmonic inpainting (clpde/volumes/biharmonic.py): the
+conjugate-gradient kernel's fill against the numpy reference's direct solve, a biharmonic quartic of
 physical coordinates filled exactly with thick slices (and not by the harmonic fill), and
 the method's name checked."""
 
@@ -18,23 +18,6 @@ H = (2.0, 1.0, 0.5)
 
 def _grid(shape):
     return VolumeGrid(get_runtime("cpu"), shape, np.dtype(np.float64), np.array(H))
-
-
-def test_laplacian_kernel_matches_the_reference(rng):
-    import pyopencl.array as cla
-
-    u = rng.random((2, 5, 6, 7))
-    hole = rng.random((5, 6, 7)) < 0.5
-    grid = _grid(u.shape)
-    rt = grid.runtime
-    lap = rt.kernel("volumes/volume.cl", "volume_laplacian", grid.dtype)
-    src = cla.to_device(rt.queue, u.reshape(-1))
-    dst = cla.empty_like(src)
-    mask = cla.to_device(rt.queue, hole.astype(np.uint8).reshape(-1))
-    for masked in (0, 1):
-        grid.launch(lap, src.data, dst.data, mask.data, np.int32(masked), *grid.inverse2)
-        want = ref.laplacian(u, H) * (hole if masked else 1)
-        np.testing.assert_allclose(dst.get().reshape(u.shape), want, atol=1e-10)
 
 
 def test_conjugate_gradients_reach_the_reference_fill(rng):
@@ -64,14 +47,14 @@ def test_a_biharmonic_polynomial_is_filled_exactly_with_thick_slices():
     mask = np.zeros(f.shape, bool)
     mask[3:9, 4:14, 4:20] = True
     mask[9, 15:16, 20:22] = True  # a second component, in its own box
-    out = inpaint_volume(f, mask, method="biharmonic", spacing=H, dtype=np.float64)
+    out = inpaint_volume(f, mask, method="biharmonic", spacing=H, tol=1e-8, dtype=np.float64)
     assert (out[~mask] == f[~mask]).all()
     assert np.abs(out - f).max() < 1e-5 * np.ptp(f)
     # the harmonic fill of the same holes is another function (Lap f != 0)
     harmonic = inpaint_volume(f, mask, spacing=H, tol=1e-8, dtype=np.float64)
     assert np.abs(harmonic - f).max() > 5e-4 * np.ptp(f)  # 50x the tolerance above
     # and so is the biharmonic fill without the spacing
-    wrong = inpaint_volume(f, mask, method="biharmonic", dtype=np.float64)
+    wrong = inpaint_volume(f, mask, method="biharmonic", tol=1e-8, dtype=np.float64)
     assert np.abs(wrong - f).max() > 5e-4 * np.ptp(f)
 
 
