@@ -29,6 +29,10 @@ METHODS = ("harmonic", "biharmonic")
 # the biharmonic CG stops when its residual fell by CG_TOL tol (1e-3 at the default tol:
 # chosen on the calibration half, where 1e-4 gave the same PSNR to 0.01 dB in twice the steps)
 CG_TOL = 10.0
+# ... from a harmonic start whose SOR stops at 0.1 per sweep (ten sweeps per level, on top of
+# the coarse grids' start): on the calibration half the same PSNR as a start at tol 1e-4,
+# to 0.01 dB, in about half the time
+START_TOL = 0.1
 
 
 def inpaint_volume(
@@ -119,7 +123,9 @@ def inpaint_volume(
         mine = labels[grown] == k
         u = data[(slice(None),) + grown].copy()
         # the box's other masked voxels (another component's, reaching in) are unknowns too
-        filled = _solve(grid_of, u, hole[grown], h, tol, int(max_sweeps))
+        # the biharmonic's start needs only the harmonic fill's shape: CG does the rest
+        start_tol = max(START_TOL, tol) if method == "biharmonic" else tol
+        filled = _solve(grid_of, u, hole[grown], h, start_tol, int(max_sweeps))
         if method == "biharmonic":
             filled = biharmonic_cg(
                 grid_of(u.shape, h), filled, hole[grown], int(max_sweeps), CG_TOL * tol
