@@ -19,6 +19,8 @@ import pyopencl.array as cla
 
 from .grid import VolumeGrid
 
+KERNEL_FILES = ("volumes/volume.cl",)
+
 GROUP = 128  # work-items of the one work-group that solves a box (a power of two)
 
 

@@ -40,7 +40,7 @@ def inpaint_volume(
     mask,
     channel_axis: int | None = None,
     *,
-    method: str = "harmonic",
+    method: str = "biharmonic",
     spacing=None,
     device=None,
     tol: float = 1e-4,
@@ -59,10 +59,10 @@ def inpaint_volume(
         True where the voxels are missing.
     channel_axis : int, optional
         The axis of the channels, each filled on its own.
-    method : {'harmonic', 'biharmonic'}, optional
-        Laplace's equation (the membrane; obeys the maximum principle), or the biharmonic
-        one (continues the gradients across the hole too, from two rings of known voxels),
-        solved from the harmonic fill.
+    method : {'biharmonic', 'harmonic'}, optional
+        The biharmonic equation (the default: continues the gradients across the hole too,
+        from two rings of known voxels; solved from a harmonic start), or Laplace's (the
+        membrane; obeys the maximum principle, no overshoot).
     spacing : (3,) array_like, optional
         The voxel size (z, y, x); thick slices weigh their neighbours less.
     device : str or int, optional
