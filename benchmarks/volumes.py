@@ -110,7 +110,7 @@ def inpaint_rows(name, clean, spacing, seed):
         (name, "clpde.volumes.inpaint_volume (biharmonic)", hole(bi), t_bi),
         (name, "skimage inpaint_biharmonic", hole(ref), t_ref),
     ]  # fmt: skip
-    return rows, damaged, ours, ref, mask
+    return rows, damaged, bi, ref, mask  # the default fill in the picture
 
 
 def table(rows, title):
@@ -127,7 +127,7 @@ def picture(path, clean, noisy, tv_ours, tv_ref, damaged, fill_ours, fill_ref):
     k = clean.shape[0] // 2 + 1
     panels = [
         ("clean", clean), ("noisy", noisy), ("clpde TV", tv_ours), ("skimage TV", tv_ref),
-        ("damaged", damaged), ("clpde harmonic", fill_ours), ("skimage biharmonic", fill_ref),
+        ("damaged", damaged), ("clpde biharmonic", fill_ours), ("skimage biharmonic", fill_ref),
     ]  # fmt: skip
     scale, label = 3, 18
     tiles = []
