@@ -59,10 +59,10 @@ def run_volume_diffuse(args, flow: str, params: dict) -> int:
 
 
 def run_volume_inpaint(args) -> int:
-    """`clpde inpaint VOLUME MASK -o OUT`: the harmonic fill, the mask a volume too."""
+    """`clpde inpaint VOLUME MASK -o OUT`: the biharmonic fill, the mask a volume too."""
     if args.method not in (None, "auto"):
         raise InputError(
-            f"volumes are filled by the harmonic method only; leave out --method {args.method}"
+            f"volumes are filled by the biharmonic method only; leave out --method {args.method}"
         )
     if args.gif or args.overwrite:
         raise InputError("a volume's fill takes no --gif or --overwrite; leave them out")
@@ -74,4 +74,4 @@ def run_volume_inpaint(args) -> int:
     out = inpaint_volume(
         volume, np.asarray(mask) > 0, channel_axis=axis, spacing=info.spacing, device=args.device
     )
-    return _done(args.output, out, info, "inpaint (volume, harmonic)")
+    return _done(args.output, out, info, "inpaint (volume, biharmonic)")

@@ -297,3 +297,87 @@ __kernel void volume_harmonic_sweep(__global REAL* restrict u,
         }
     }
 }
+
+// ---- biharmonic fill ------------------------------------------------------------------
+// L(L u) = 0 at the hole's voxels, L the seven-point Laplacian with spacing and Neumann
+// borders (the box's: a neighbour outside it is the voxel itself), solved for one channel
+// by conjugate gradients on A = (L L) restricted to the hole (symmetric positive definite),
+// from x the harmonic fill (clpde/volumes/biharmonic.py). The boxes are small and CG needs
+// two sums per iteration, so one work-group runs the whole solve: barriers instead of a
+// launch and a read-back per step. Work-item k takes the voxels k, k + G, k + 2G, ...
+inline REAL box_laplacian(__global const REAL* u, const int i, const int nx, const int ny,
+                          const int nz, const REAL ihx2, const REAL ihy2, const REAL ihz2)
+{
+    const int x = i % nx, y = (i / nx) % ny, z = i / (nx * ny);
+    const REAL m = u[i];
+    return ihx2 * (EAST(u, i) + WEST(u, i) - 2 * m) + ihy2 * (NORTH(u, i) + SOUTH(u, i) - 2 * m) +
+           ihz2 * (UP(u, i) + DOWN(u, i) - 2 * m);
+}
+
+// The work-group's sum of each item's v (sum[] holds G = a power of two entries).
+inline REAL group_sum(REAL v, __local REAL* sum)
+{
+    const int k = get_local_id(0), g = get_local_size(0);
+    sum[k] = v;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int w = g / 2; w > 0; w /= 2) {
+        if (k < w) sum[k] += sum[k + w];
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    const REAL total = sum[0];
+    barrier(CLK_LOCAL_MEM_FENCE);
+    return total;
+}
+
+#define BOTH_FENCES (CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE)
+#define LAP(u, i) box_laplacian(u, i, nx, ny, nz, ihx2, ihy2, ihz2)
+
+// x: the start, then the fill. r, p, t, ap: scratch of the box's size. Stops after
+// `iterations` or when |r|^2 fell below rtol2 times its start; steps[0] gets the count.
+__kernel void volume_biharmonic_cg(__global REAL* restrict x, __global REAL* restrict r,
+                                   __global REAL* restrict p, __global REAL* restrict t,
+                                   __global REAL* restrict ap,
+                                   __global const uchar* restrict hole, __local REAL* sum,
+                                   __global int* restrict steps, const int iterations,
+                                   const REAL rtol2, const REAL ihx2, const REAL ihy2,
+                                   const REAL ihz2, const int nx, const int ny, const int nz)
+{
+    const int n = nx * ny * nz, k0 = get_local_id(0), g = get_local_size(0);
+    for (int i = k0; i < n; i += g) t[i] = LAP(x, i);
+    barrier(BOTH_FENCES);
+    REAL acc = 0;
+    for (int i = k0; i < n; i += g) {
+        const REAL v = hole[i] ? -LAP(t, i) : (REAL)0;  // r = -A x: the correction's rhs
+        r[i] = v;
+        p[i] = v;
+        acc += v * v;
+    }
+    REAL rr = group_sum(acc, sum);
+    barrier(BOTH_FENCES);
+    const REAL stop = rtol2 * rr;
+    int step = 0;
+    for (; step < iterations && rr > stop && rr > 0; ++step) {
+        for (int i = k0; i < n; i += g) t[i] = LAP(p, i);
+        barrier(BOTH_FENCES);
+        acc = 0;
+        for (int i = k0; i < n; i += g) {
+            const REAL v = hole[i] ? LAP(t, i) : (REAL)0;
+            ap[i] = v;
+            acc += p[i] * v;
+        }
+        const REAL alpha = rr / group_sum(acc, sum);
+        acc = 0;
+        for (int i = k0; i < n; i += g) {
+            x[i] += alpha * p[i];
+            const REAL v = r[i] - alpha * ap[i];
+            r[i] = v;
+            acc += v * v;
+        }
+        const REAL rr_new = group_sum(acc, sum);
+        const REAL beta = rr_new / rr;
+        for (int i = k0; i < n; i += g) p[i] = r[i] + beta * p[i];
+        rr = rr_new;
+        barrier(BOTH_FENCES);  // p is read across items by the next L p
+    }
+    if (k0 == 0) steps[0] = step;
+}

@@ -123,3 +123,39 @@ def harmonic_sweeps(u, hole, omega, h, sweeps):
             update = hole & (parity == colour)
             u[:, update] += omega * (total[:, update] / weight[update] - u[:, update])
     return u
+
+
+def laplacian(u, h):
+    """The seven-point Laplacian with spacing, Neumann borders (the voxel's own value)."""
+    return sum((_shift(u, a, 1) + _shift(u, a, -1) - 2 * u) / h[k] ** 2 for k, a in enumerate(AXES))
+
+
+def biharmonic_fill(u, hole, h):
+    """The exact discrete biharmonic fill: L(L u) = 0 at the hole's voxels, L the box's
+    seven-point Laplacian with spacing and Neumann borders as a sparse matrix, solved
+    directly (scipy) for each channel of u (nc, nz, ny, nx); u is not modified."""
+    from scipy import sparse
+    from scipy.sparse.linalg import spsolve
+
+    def second(n, hk):
+        # 1D second difference; beyond the border the voxel itself (u_1 - u_0 at index 0)
+        d = sparse.diags([np.ones(n - 1), -2 * np.ones(n), np.ones(n - 1)], [-1, 0, 1]).tolil()
+        d[0, 0] = d[n - 1, n - 1] = -1
+        return d.tocsr() / hk**2
+
+    nz, ny, nx = hole.shape
+    eye = [sparse.identity(n, format="csr") for n in (nz, ny, nx)]
+    lap = (
+        sparse.kron(sparse.kron(second(nz, h[0]), eye[1]), eye[2])
+        + sparse.kron(sparse.kron(eye[0], second(ny, h[1])), eye[2])
+        + sparse.kron(sparse.kron(eye[0], eye[1]), second(nx, h[2]))
+    ).tocsr()
+    bi = (lap @ lap).tocsr()
+    unknown = hole.reshape(-1)
+    a = bi[unknown][:, unknown].tocsc()
+    out = u.copy()
+    for c in range(u.shape[0]):
+        flat = u[c].reshape(-1)
+        rhs = -(bi[unknown][:, ~unknown] @ flat[~unknown])
+        out[c].reshape(-1)[unknown] = spsolve(a, rhs)
+    return out

@@ -74,4 +74,4 @@ def test_inpaint_a_volume_refuses_image_only_options(ball, tmp_path, capsys):
     assert main([*args, "--gif", str(tmp_path / "e.gif")]) != 0
     assert "no --gif" in capsys.readouterr().err
     assert main([*args, "--method", "coherence"]) != 0
-    assert "harmonic method only" in capsys.readouterr().err
+    assert "biharmonic method only" in capsys.readouterr().err

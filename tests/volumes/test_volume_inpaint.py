@@ -37,11 +37,11 @@ def test_a_harmonic_function_is_filled_exactly_with_thick_slices():
     mask = np.zeros(f.shape, bool)
     mask[5:15, 6:18, 4:20] = True
     mask[2:4, 1:4, 1:5] = True  # a second component, in its own box
-    out = inpaint_volume(f, mask, spacing=H, tol=1e-8, dtype=np.float64)
+    out = inpaint_volume(f, mask, method="harmonic", spacing=H, tol=1e-8, dtype=np.float64)
     assert np.abs(out - f).max() < 1e-6 * np.ptp(f)
     assert (out[~mask] == f[~mask]).all()
     # the spacing matters: the unit-spacing fill of the same voxels is another function
-    wrong = inpaint_volume(f, mask, tol=1e-8, dtype=np.float64)
+    wrong = inpaint_volume(f, mask, method="harmonic", tol=1e-8, dtype=np.float64)
     assert np.abs(wrong - f).max() > 0.01 * np.ptp(f)
 
 
@@ -50,7 +50,7 @@ def test_channels_dtype_and_input_kept(rng):
     mask = np.zeros(vol.shape[:3], bool)
     mask[3:7, 4:8, 2:9] = True
     before = vol.copy()
-    out = inpaint_volume(vol, mask, channel_axis=-1)
+    out = inpaint_volume(vol, mask, channel_axis=-1, method="harmonic")
     assert out.dtype == np.uint16 and out.shape == vol.shape
     assert (vol == before).all() and (out[~mask] == vol[~mask]).all()
     lo, hi = vol[~mask].min(axis=0), vol[~mask].max(axis=0)
