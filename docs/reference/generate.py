@@ -1,7 +1,8 @@
 """Pages written at build time, so that the reference cannot drift from the code:
 
 - one page per public namespace (``clpde``, ``clpde.io``, ``clpde.surface``,
-  ``clpde.data``, ``clpde.inpainting``, ``clpde.tracking``, ``clpde.volumes``), an entry for every name in its ``__all__``;
+  ``clpde.data``, ``clpde.inpainting``, ``clpde.tracking``, ``clpde.volumes``), an entry
+  for every name in its ``__all__``;
 - a gallery page per script in examples/: its docstring, the pictures it makes (those it
   names under docs/images/) and its source. Nothing is run.
 """
