@@ -18,6 +18,7 @@ from napari.layers import Image, Labels, Shapes, Surface
 import clpde
 from clpde.inpainting.registry import available as available_methods
 from clpde.planar.rof import estimate_sigma
+from clpde.volumes import inpaint_volume
 
 from ._runner import RunWidget, current_index, layer_choices
 
@@ -48,6 +49,17 @@ def mask_from_layer(layer: napari.layers.Layer, shape: tuple[int, ...]) -> np.nd
             "image's size"
         )
     return mask
+
+
+def volume_spacing(layer: Image) -> tuple[float, float, float]:
+    """The (z, y, x) voxel size of a 3-D grey layer (its napari ``scale``), or one line
+    saying why the layer is no volume."""
+    if layer.rgb or np.ndim(layer.data) != 3:
+        raise clpde.InputError(
+            f"'whole volume (3D)' runs on a 3-D grey layer (Z, Y, X); {layer.name!r} has shape "
+            f"{np.shape(layer.data)}{' (rgb)' if layer.rgb else ''}: untick it for this layer"
+        )
+    return tuple(float(h) for h in layer.scale[-3:])
 
 
 def _spatial(layer: Image) -> tuple[tuple[int, ...], int | None]:
@@ -106,7 +118,8 @@ class InpaintWidget(RunWidget):
         self.method = ComboBox(label="method", choices=["default", *available_methods()])
         self.grow = SpinBox(label="grow mask (px)", value=0, min=0, max=64)
         self.live = CheckBox(label="inpaint on paint", value=False)
-        self.extend([self.image, self.mask, self.method, self.grow, self.live])
+        self.volume = CheckBox(label="whole volume (3D)", value=False)
+        self.extend([self.image, self.mask, self.method, self.grow, self.live, self.volume])
         self.finish_form()
         self.live.changed.connect(self._watch)
         self.mask.changed.connect(self._watch)
@@ -129,6 +142,8 @@ class InpaintWidget(RunWidget):
         return None if self.method.value == "default" else self.method.value
 
     def work(self) -> tuple[Callable, Callable]:
+        if self.volume.value:
+            return self._volume_work()
         layer, image, mask, channel_axis = self._inputs()
         method = self._method()
         name = f"{layer.name} inpainted"
@@ -137,6 +152,32 @@ class InpaintWidget(RunWidget):
             return inpaint_planes(image, mask, channel_axis, progress, method=method)
 
         return function, lambda out: self.put_layer(out, name, rgb=layer.rgb)
+
+    def _volume_work(self) -> tuple[Callable, Callable]:
+        """`clpde.volumes.inpaint_volume` of the whole 3-D layer, the mask a 3-D Labels
+        layer, the spacing the layer's scale."""
+        layer, mask_layer = self.image.value, self.mask.value
+        if layer is None or not isinstance(mask_layer, Labels):
+            raise clpde.InputError(
+                "a whole volume is filled from a 3-D Labels layer: choose the image and "
+                "a Labels layer painted on it"
+            )
+        spacing = volume_spacing(layer)
+        mask = mask_from_layer(mask_layer, np.shape(layer.data))
+        if self.grow.value or self._method() is not None:
+            raise clpde.InputError(
+                "a whole volume is filled by the biharmonic fill without growing the mask: "
+                "set the method to 'default' and grow to 0"
+            )
+        image, name = np.asarray(layer.data), f"{layer.name} inpainted"
+
+        def function(progress):
+            progress(0, 1)  # inpaint_volume reports no progress: cancel acts before it
+            out = inpaint_volume(image, mask, spacing=spacing)
+            progress(1, 1)
+            return out
+
+        return function, lambda out: self.put_layer(out, name, scale=layer.scale)
 
     # ---- inpaint on paint: re-run on the painted stroke's box only ----------------------
     def _watch(self, *_args: Any) -> None:
@@ -216,9 +257,11 @@ class DenoiseWidget(RunWidget):
         )
         self.steps = SpinBox(label="flow steps", value=100, min=1, max=10_000_000)
         self.preview = CheckBox(label="preview the slice in view only", value=False)
+        self.volume = CheckBox(label="whole volume (3D)", value=False)
         self.noise = Label(value="")
         self.extend(
-            [self.image, self.flow, self.sigma, self.weight, self.steps, self.preview, self.noise]
+            [self.image, self.flow, self.sigma, self.weight, self.steps]
+            + [self.preview, self.volume, self.noise]
         )
         self.finish_form()
         self.image.changed.connect(self._show_noise)
@@ -250,25 +293,41 @@ class DenoiseWidget(RunWidget):
         flow, steps = self.flow.value, int(self.steps.value)
         sigma = self.sigma.value or None
         weight = self.weight.value or None
+        # a volume's spacing sends the library calls down their 3-D path
+        spacing = volume_spacing(layer) if self.volume.value else None
+        if spacing is not None and self.preview.value:
+            raise clpde.InputError("untick either 'preview' or 'whole volume (3D)'")
 
         def one(plane, progress):
             if flow == "tv-denoise":
                 return clpde.denoise_tv(
-                    plane, sigma=sigma, weight=weight, channel_axis=channel_axis, progress=progress
+                    plane,
+                    sigma=sigma,
+                    weight=weight,
+                    channel_axis=channel_axis,
+                    spacing=spacing,
+                    progress=progress,
                 )
             return clpde.diffuse(
-                plane, flow, steps=steps, channel_axis=channel_axis, progress=progress
+                plane,
+                flow,
+                steps=steps,
+                channel_axis=channel_axis,
+                spacing=spacing,
+                progress=progress,
             )
 
         def function(progress):
-            if data.ndim - (channel_axis is not None) == 2:
+            if spacing is not None or data.ndim - (channel_axis is not None) == 2:
                 return one(data, progress)
             return np.stack(
                 [one(plane, lambda *_, k=k: progress(k, len(data))) for k, plane in enumerate(data)]
             )
 
         name = f"{layer.name} {flow}" + (" preview" if self.preview.value else "")
-        return function, lambda out: self.put_layer(out, name, rgb=layer.rgb)
+        name += " 3D" if spacing is not None else ""
+        scale = layer.scale if spacing is not None else None
+        return function, lambda out: self.put_layer(out, name, rgb=layer.rgb, scale=scale)
 
 
 # ---- tracking ----------------------------------------------------------------------------
