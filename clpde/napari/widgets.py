@@ -95,6 +95,14 @@ def inpaint_planes(
     return out
 
 
+def grow_planes(mask: np.ndarray, px: int) -> np.ndarray:
+    """`clpde.grow_mask` of a 2-D mask, or of each plane of a stack's (a stack's planes are
+    inpainted one by one, so each grows in its own plane)."""
+    if mask.ndim == 2:
+        return clpde.grow_mask(mask, px)
+    return np.stack([grow_planes(plane, px) for plane in mask])
+
+
 class InpaintWidget(RunWidget):
     """Fill the damage painted on a Labels, Shapes or (soft) Image layer.
 
@@ -135,7 +143,7 @@ class InpaintWidget(RunWidget):
         shape, channel_axis = _spatial(layer)
         mask = mask_from_layer(mask_layer, shape)
         if self.grow.value:
-            mask = clpde.grow_mask(mask, int(self.grow.value))
+            mask = grow_planes(mask, int(self.grow.value))
         return layer, np.asarray(layer.data), mask, channel_axis
 
     def _method(self) -> str | None:

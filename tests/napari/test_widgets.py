@@ -63,6 +63,19 @@ def test_inpaint_widget_grows_the_mask_and_takes_shapes_and_soft_masks(viewer, q
     np.testing.assert_array_equal(viewer.layers["damaged astronaut inpainted"].data, expected)
 
 
+def test_inpaint_widget_grows_a_stacks_mask_plane_by_plane(viewer, qtbot):
+    stack = np.random.default_rng(2).random((3, 40, 40)).astype(np.float32)
+    marks = np.zeros((3, 40, 40), np.uint8)
+    marks[1, 15:20, 10:30] = 1
+    image, labels = viewer.add_image(stack, name="stack"), viewer.add_labels(marks, name="m")
+    w = widgets.InpaintWidget(viewer)
+    w.image.value, w.mask.value, w.grow.value = image, labels, 2
+    run_and_wait(qtbot, w)
+    expected = stack.copy()
+    expected[1] = clpde.inpaint(stack[1], clpde.grow_mask(marks[1] != 0, 2))
+    np.testing.assert_array_equal(viewer.layers["stack inpainted"].data, expected)
+
+
 def test_inpaint_on_paint_reruns_the_stroke_box(viewer, qtbot):
     image, labels = crop_astronaut(viewer, 128)
     w = widgets.InpaintWidget(viewer)
