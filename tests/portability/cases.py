@@ -129,6 +129,28 @@ def _film():
 
 # Every case runs whole under Oclgrind: its --quick (the first and last work-groups of
 # each launch only) leaves results that later launches read half computed.
+def _volumes():
+    import clpde
+    from clpde.volumes import inpaint_volume
+
+    rng = np.random.default_rng(3)
+    vol = rng.random((6, 10, 12)).astype(np.float32)
+    mask = np.zeros(vol.shape, bool)
+    mask[2:4, 4:7, 4:8] = mask[5, 1:3, 1:3] = True
+    spacing = (2, 1, 1)
+    out = {
+        "tv": clpde.denoise_tv(vol, 0.1, spacing=spacing, max_steps=4),
+        "tv_rgb": clpde.denoise_tv(
+            np.stack([vol, vol[::-1]], -1), 0.1, channel_axis=-1, spacing=spacing, max_steps=4
+        ),
+        "catte": clpde.diffuse(vol, "perona-malik", steps=2, presmooth=1.0, spacing=spacing),
+    }
+    out |= {flow: clpde.diffuse(vol, flow, steps=2, spacing=spacing) for flow in ("heat", "tv")}
+    for method in ("harmonic", "biharmonic"):
+        out[method] = inpaint_volume(vol, mask, spacing=spacing, method=method)
+    return out
+
+
 CASES = {
     "diffuse": _diffuse,
     "denoise": _denoise,
@@ -148,6 +170,7 @@ CASES = {
     "track_region_lists": _track_region("lists"),
     "track_region_bricks": _track_region("bricks"),
     "film": _film,
+    "volumes": _volumes,
 }
 
 
