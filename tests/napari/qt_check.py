@@ -38,3 +38,13 @@ def _missing() -> str | None:
 
 
 MISSING = _missing()
+
+
+WAIT_MS = 240_000  # a widget's run on the CPU under load, with room to spare
+
+
+def run_and_wait(qtbot, widget):
+    """Start a widget's run and wait for its worker thread to finish."""
+    widget.run()
+    assert widget.worker is not None, widget.status.value
+    qtbot.waitUntil(lambda: widget.worker is None, timeout=WAIT_MS)

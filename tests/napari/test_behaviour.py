@@ -22,11 +22,6 @@ from clpde.napari import readers, widgets  # noqa: E402
 REPO = Path(__file__).resolve().parents[2]
 
 
-@pytest.fixture
-def viewer(make_napari_viewer):
-    return make_napari_viewer()
-
-
 def long_diffusion(viewer, steps=400_000):
     """A denoise widget set up for a run of several seconds on any device."""
     layer = viewer.add_image(

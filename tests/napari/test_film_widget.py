@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from qt_check import MISSING
+from qt_check import MISSING, WAIT_MS
 from scipy import ndimage
 
 if MISSING is not None:
@@ -13,8 +13,6 @@ av = pytest.importorskip("av")
 import clpde  # noqa: E402
 from clpde.napari import readers  # noqa: E402
 from clpde.napari.film import FilmWidget, detect_film  # noqa: E402
-
-WAIT_MS = 240_000
 
 
 def make_film(path, frames, rate=10, audio=True):

@@ -3,7 +3,7 @@ with the layer's scale as the voxel spacing, and gives their arrays."""
 
 import numpy as np
 import pytest
-from qt_check import MISSING
+from qt_check import MISSING, run_and_wait
 
 if MISSING is not None:
     pytest.skip(MISSING, allow_module_level=True)
@@ -12,19 +12,7 @@ import clpde  # noqa: E402
 from clpde.napari import widgets  # noqa: E402
 from clpde.volumes import inpaint_volume  # noqa: E402
 
-WAIT_MS = 240_000
 SPACING = (2.0, 1.0, 1.0)
-
-
-def run_and_wait(qtbot, widget):
-    widget.run()
-    assert widget.worker is not None, widget.status.value
-    qtbot.waitUntil(lambda: widget.worker is None, timeout=WAIT_MS)
-
-
-@pytest.fixture
-def viewer(make_napari_viewer):
-    return make_napari_viewer()
 
 
 def noisy_ball(shape=(8, 24, 24)):

@@ -3,26 +3,13 @@ into a layer, gives the library call's array."""
 
 import numpy as np
 import pytest
-from qt_check import MISSING
+from qt_check import MISSING, WAIT_MS, run_and_wait
 
 if MISSING is not None:
     pytest.skip(MISSING, allow_module_level=True)
 
 import clpde  # noqa: E402
 from clpde.napari import samples, widgets  # noqa: E402
-
-WAIT_MS = 240_000
-
-
-def run_and_wait(qtbot, widget):
-    widget.run()
-    assert widget.worker is not None, widget.status.value
-    qtbot.waitUntil(lambda: widget.worker is None, timeout=WAIT_MS)
-
-
-@pytest.fixture
-def viewer(make_napari_viewer):
-    return make_napari_viewer()
 
 
 def crop_astronaut(viewer, size=128):
