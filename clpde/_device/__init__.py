@@ -224,6 +224,15 @@ if PROFILING:
     atexit.register(PROFILE.report)
 
 
+def enqueue_bare(queue, kernel: cl.Kernel, global_size, local_size, filename: str) -> cl.Event:
+    """Enqueue a kernel instance whose arguments were set once (Runtime.new_kernel), counted
+    by the profiler as `filename:name` like every launch through Kernel."""
+    event = cl.enqueue_nd_range_kernel(queue, kernel, global_size, local_size)
+    if PROFILING:
+        PROFILE.add(f"{filename}:{kernel.function_name}", event)
+    return event
+
+
 class Kernel:
     """A pyopencl kernel whose launches hold the runtime's lock.
 

@@ -48,14 +48,13 @@ How this implementation runs it (all on the OpenCL device):
 from __future__ import annotations
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cla
 from scipy import ndimage
 
 from .._progress import progress_bar
 from ..errors import ClpdeError
 from ..fields import Field, Grid, PingPong, index_list
-from ..runtime import get_runtime
+from ..runtime import enqueue_bare, get_runtime
 from . import multiresolution as mr
 from . import poisson
 from .registry import register
@@ -199,7 +198,7 @@ class LevelSolver:
         step, ghosts = self._steps[(name, self.pair.cur.data.data.int_ptr)]
         for launch in (step, ghosts):
             if launch is not None and launch[3] > 0:
-                cl.enqueue_nd_range_kernel(self.q, launch[0], launch[1], launch[2])
+                enqueue_bare(self.q, *launch[:3], "inpainting/transport.cl")
         self.pair.swap()
 
     def _ghost_pairs(self, active: np.ndarray) -> cla.Array:

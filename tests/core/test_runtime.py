@@ -267,6 +267,8 @@ def test_profile_prints_each_kernels_time_at_exit():
     code = (
         "import numpy as np, clpde\n"
         "clpde.diffuse(np.ones((16, 16), np.float32), 'heat', steps=7, device='cpu')\n"
+        "hole = np.zeros((16, 16), bool); hole[6:9, 6:9] = True\n"
+        "clpde.inpaint(np.ones((16, 16), np.float32), hole, method='transport', device='cpu')\n"
     )
     env = {**os.environ, "CLPDE_PROFILE": "1"}
     out = subprocess.run(
@@ -276,6 +278,8 @@ def test_profile_prints_each_kernels_time_at_exit():
     assert any(line.startswith("clpde profile: ") for line in lines), out.stderr
     heat = [line.split() for line in lines if line.endswith("planar/planar.cl:heat_step")]
     assert len(heat) == 1 and heat[0][2] == "7" and float(heat[0][0]) >= 0, out.stderr
+    # transport's kernels set their arguments once and are enqueued bare: counted too
+    assert any(line.endswith("inpainting/transport.cl:inpaint_transport") for line in lines)
     quiet = subprocess.run(
         [sys.executable, "-c", code],
         env={k: v for k, v in os.environ.items() if k != "CLPDE_PROFILE"},
