@@ -1,4 +1,4 @@
-"""Inpainting: `clpde.inpaint` and `clpde.Inpainting` (api.py), the method registry
+"""Inpainting: `inpaint` and `Inpainting` (api.py; also `clpde.inpaint`), the method registry
 (registry.py) and one module per method, each with its frozen options class (imported on
 first use: ``from clpde.inpainting import SpectralOptions``)."""
 
@@ -6,8 +6,11 @@ import importlib
 
 from .registry import METHODS, Method, available, load, options, register
 
-# each method's options class -> its module (imported when the name is first asked for)
-_OPTIONS = {
+# the entry points and each method's options class -> its module (imported when the name is
+# first asked for: the registry alone stays light)
+_LAZY = {
+    "Inpainting": ".api",
+    "inpaint": ".api",
     "TransportOptions": ".transport_params",
     "SpectralOptions": ".spectral",
     "CoherenceOptions": ".coherence",
@@ -17,10 +20,10 @@ _OPTIONS = {
     "AutoOptions": ".validate",
 }
 
-__all__ = ["METHODS", "Method", "available", "load", "options", "register", *_OPTIONS]
+__all__ = ["METHODS", "Method", "available", "load", "options", "register", *_LAZY]
 
 
 def __getattr__(name):
-    if name in _OPTIONS:
-        return getattr(importlib.import_module(_OPTIONS[name], __name__), name)
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name], __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
