@@ -99,7 +99,7 @@ def test_band_width_is_the_one_spelling():
 
 
 def test_storage_is_the_one_keyword_for_band_storage():
-    from clpde.tracking.levelset import STORAGES
+    from clpde.tracking.storage import STORAGES
 
     assert set(STORAGES) == {"lists", "bricks8x8", "bricks16x4"}
     frames = np.zeros((2, 16, 16), np.float32)
