@@ -1,9 +1,9 @@
 """2D level-set machinery on the device: signed distance start, narrow band, reinitialisation.
 
 A `LevelSet` holds u on a ghost-padded grid (ghost width 2 for the slope-limited upwind
-stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w kept as a compacted
-index
-list built on the device, and a PDE reinitialisation with Russo and Smereka's subcell fix
+stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w built on the
+device in the storage `storage` names (storage.py: a compacted list of the cells, or the
+bricks that hold them), and a PDE reinitialisation with Russo and Smereka's subcell fix
 that keeps the zero level set in place. The morphing flow of clpde.track steps u inside the
 band; other level-set flows can do the same.
 """
