@@ -113,11 +113,9 @@ class Case:
             self.morph[disc] = ls.band_kernel(
                 "tracking/features.cl", name, NCH=1, DISC=DISCREPANCIES[disc], WIN=3
             )
-        self.reinit = ls.band_kernel(
-            "tracking/levelset.cl", "reinit_step_bricks" if ls.brick else "reinit_step_list"
-        )
+        self.reinit = ls.band_kernel("tracking/levelset.cl", ls.store.KERNELS["reinit"])
         ls.dilate_band()
-        self.near = ls._cells(ls._near_mask)
+        self.near = ls.store.cells(ls._near_mask)
         self.stats = None
         import pyopencl.array as cla
 
@@ -148,19 +146,16 @@ class Case:
         )
 
     def reinit_step(self):
-        ls, g = self.ls, self.ls.grid
+        ls = self.ls
         args = (ls.u.cur.data.data, ls.u.cur.data.data, ls.u.nxt.data.data)
-        if ls.brick:
-            ls.launch_band(self.reinit, self.near, *args, self.near.mask.data, g.scalar(0.5))
-        else:
-            ls.launch_band(self.reinit, self.near, *args, g.scalar(0.5), np.int32(g.sx))
+        ls.launch_band(self.reinit, self.near, *args, *ls.store.reinit_args(self.near, 0.5))
 
     def rebuild(self):
         self.ls.rebuild(5)
 
     def cells(self):
         ls = self.ls
-        visited = (self.near.n * ls.brick[0] * ls.brick[1]) if ls.brick else self.near.n
+        visited = ls.store.stored(self.near)
         return {
             "band": int(ls.band_cells().sum()),
             "band visited": ls.stored_cells(),

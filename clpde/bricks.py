@@ -1,5 +1,6 @@
-"""Narrow-band storage in dense bricks (the layout kernels/bricks/bricks.h; the surfaces' and
-regions' steps on it are in their own kernels/surface/bricks.cl and kernels/regions/bricks.cl).
+"""Narrow-band storage: the table each band user chooses its storage from (`StorageTable`),
+and dense bricks (the layout kernels/bricks/bricks.h; the surfaces' and regions' steps on it
+are in their own kernels/surface/bricks.cl and kernels/regions/bricks.cl).
 
 The padded grid of a Grid3D is cut into bricks of BX x BY x BZ cells (a compile-time size:
 8x8x8, 8x4x4 and 4x4x4 were compared in docs/surface_storage.md). Only the bricks the band needs
@@ -37,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cla
 
-from .errors import ClpdeError
+from .errors import ClpdeError, InputError
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("bricks/tiles.cl",)
@@ -49,6 +50,20 @@ APRON = 3
 # over the grids measured, and its aprons cost the least memory (docs/surface_storage.md).
 BRICK_SIZES = ((4, 4, 4), (8, 4, 4), (8, 8, 8))
 DEFAULT_BRICK = (8, 8, 8)
+
+
+class StorageTable(dict):
+    """Storage name -> the class that holds a band in it, one table per band user: tracking's
+    2D band (tracking/storage.py), a surface flow's data (surface/storage.py) and the region
+    tracker (regions/api.py). Each class of a table has the same interface as the others of
+    that table, so the user's code runs in any of them without asking which; `choose` is the
+    one check of a storage name."""
+
+    def choose(self, name: str):
+        """The class of storage `name`; an InputError naming the table's storages if none."""
+        if not isinstance(name, str) or name not in self:
+            raise InputError(f"storage must be one of {', '.join(map(repr, self))}, not {name!r}")
+        return self[name]
 
 
 def morton_key(bx: np.ndarray, by: np.ndarray, bz: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ from ..errors import InputError
 from ..film.restore import restore_film, write_preview
 from ..io.video_probe import is_video
 from ..runtime import use_device
+from ..scale.cluster import connect
 from ..scale.tasks import TRANSPORT_OPTIONS
 from ._common import add_device_argument
 
@@ -151,10 +152,14 @@ def task_options(args) -> dict:
 
 
 def film_run_options(args) -> dict:
-    """The running options of a film restoration from the parsed arguments."""
-    if args.chunk_frames is not None and args.workers is None and args.scheduler is None:
-        raise InputError("--chunk-frames applies with --workers or --scheduler")
-    return {"workers": args.workers, "scheduler": args.scheduler, "chunk_frames": args.chunk_frames}
+    """The running options of a film restoration from the parsed arguments: the Dask
+    cluster of --workers or --scheduler, which restore_film opens once it has checked the
+    inputs and outputs, and the chunks' size."""
+    if args.workers is None and args.scheduler is None:
+        if args.chunk_frames is not None:
+            raise InputError("--chunk-frames applies with --workers or --scheduler")
+        return {}
+    return {"cluster": connect(args.workers, args.scheduler), "chunk_frames": args.chunk_frames}
 
 
 def report(command: str, result) -> None:

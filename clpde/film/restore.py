@@ -27,7 +27,6 @@ from ..io.frames import FrameSource, image_files
 from ..io.images import PathLike, output_folder, read_mask, write_image
 from ..io.video import VideoWriter
 from ..io.video_probe import FORMATS, check_video_output
-from ..scale.cluster import connect
 from .chunks import restore_chunked
 from .stream import DEFAULT_BLOCK, WindowWork, film_work, restore_stream
 
@@ -249,9 +248,7 @@ def restore_film(
     detect_options: dict | None = None,
     fill_options: dict | None = None,
     block: int = DEFAULT_BLOCK,
-    workers: int | None = None,
-    threads: int | None = None,
-    scheduler: str | None = None,
+    cluster=None,
     client=None,
     chunk_frames: int | None = None,
     overwrite: bool = False,
@@ -285,9 +282,14 @@ def restore_film(
         Keywords for the default detector and filler.
     block : int
         Frames restored per window.
-    workers, threads, scheduler, client : optional
-        Run on Dask (clpde.batch.connect): a local cluster of `workers`, a running one at
-        `scheduler`, or an open `client`. None of them: this process.
+    cluster : context manager, optional
+        Run on Dask, on the client of the (client, info) pair this yields, entered once the
+        inputs and outputs are checked and left at the end: what
+        ``clpde.scale.cluster.connect(workers, scheduler)`` returns, a local cluster of
+        `workers` or a running one at `scheduler` (the command line's --workers and
+        --scheduler).
+    client : distributed.Client, optional
+        Run on Dask, on this open client (left open). Neither: this process.
     chunk_frames : int, optional
         Frames per Dask task (rounded up to whole blocks).
     overwrite : bool
@@ -331,6 +333,8 @@ def restore_film(
         work = WindowWork(work.fill, work.detect, work.fill_radius, work.detect_radius, grow)
     if given is None and work.detect is None:
         raise InputError("give the masks (--mask): this restoration has no detector")
+    if cluster is not None and client is not None:
+        raise InputError("give a cluster to open or an open client, not both")
     with contextlib.ExitStack() as stack:
         outputs = _Outputs(
             stack,
@@ -346,13 +350,13 @@ def restore_film(
         )
         bar = progress_bar(progress, span[1] - span[0], "clpde restore", unit="frame")
         stack.callback(bar.close)
-        use_dask = any(x is not None for x in (workers, threads, scheduler, client))
-        cluster = stack.enter_context(_cluster(use_dask, workers, threads, scheduler, client))
-        if cluster is None:
+        if cluster is not None:
+            client, _ = stack.enter_context(cluster)
+        if client is None:
             restored = restore_stream(src, src.count, work, masks=given, block=block, span=span)
         else:
             restored = restore_chunked(
-                cluster,
+                client,
                 src,
                 src.count,
                 work,
@@ -365,7 +369,7 @@ def restore_film(
         for frame, found, kinds in restored:
             outputs.write(frame, found, kinds)
             bar.update(1)
-        workers_used = 0 if cluster is None else len(cluster.scheduler_info()["workers"])
+        workers_used = 0 if client is None else len(client.scheduler_info()["workers"])
     if outputs.written != span[1] - span[0]:
         raise InputError(f"restored {outputs.written} of {span[1] - span[0]} frames")
     return FilmResult(
@@ -433,12 +437,3 @@ def write_preview(
             write_image(path, side)
             written.append(path)
     return written
-
-
-@contextlib.contextmanager
-def _cluster(use: bool, workers, threads, scheduler, client):
-    if not use:
-        yield None
-        return
-    with connect(workers, scheduler, client, threads) as (live, _):
-        yield live

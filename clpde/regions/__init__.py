@@ -1,7 +1,6 @@
 """Regions tracked on deforming surfaces (thesis section 2.2): the tracker, its brick storage
 and the region meshes."""
 
-from . import bricks  # noqa: F401  (adds the "bricks" storage to tracker.STORAGE_CLASSES)
 from .api import region_tracker, track_region
 from .tracker import RegionTracker
 

@@ -1,7 +1,7 @@
 """Region tracking's entry points: `track_region` (thesis section 2.2) checks the user's
 surface, regions, speed and times, builds the tracker and runs it to each saved time;
-`region_tracker` builds the tracker of a storage (tracker.STORAGE_CLASSES: the lists here,
-the bricks from bricks.py)."""
+`region_tracker` builds the tracker of a storage (STORAGE_CLASSES: the lists of tracker.py,
+the bricks of bricks.py)."""
 
 from __future__ import annotations
 
@@ -11,15 +11,20 @@ import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
 from .._progress import progress_bar
+from ..bricks import StorageTable
 from ..errors import InputError
 from ..imagedata import positive as _positive
 from ..runtime import DeviceLike
+from .bricks import BrickRegionTracker
 from .frames import RegionFrame
 from .mesh import _region_functions
 from .speed import surface_motion
-from .tracker import STORAGE_CLASSES, RegionTracker
+from .tracker import RegionTracker
 
 __all__ = ["region_tracker", "track_region"]
+
+# storage name -> the tracker that keeps the level sets in it; STORAGE_CLASSES.choose checks a name
+STORAGE_CLASSES = StorageTable(lists=RegionTracker, bricks=BrickRegionTracker)
 
 
 def region_tracker(
@@ -27,9 +32,7 @@ def region_tracker(
 ) -> RegionTracker:
     """The tracker of `storage` ("lists" or "bricks"; the bricks take brick=(BX, BY, BZ) too)
     on these level sets, built with RegionTracker's options."""
-    if storage not in STORAGE_CLASSES:
-        raise InputError(f"storage must be one of {tuple(STORAGE_CLASSES)}, not {storage!r}")
-    return STORAGE_CLASSES[storage](phi, phihat, spacing, **options)
+    return STORAGE_CLASSES.choose(storage)(phi, phihat, spacing, **options)
 
 
 def _checked_phi(phi: ArrayLike, dtype: DTypeLike) -> np.ndarray:

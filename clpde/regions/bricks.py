@@ -36,7 +36,6 @@ from .tracker import (
     EXTEND_FROM,
     EXTEND_ITERATIONS,
     REINIT_DT,
-    STORAGE_CLASSES,
     RegionTracker,
 )
 
@@ -440,6 +439,3 @@ class BrickRegionTracker(RegionTracker):
             self._advect(self.nxt, self.cur, dt, 1)
         self.time += dt
         self.steps += 1
-
-
-STORAGE_CLASSES["bricks"] = BrickRegionTracker

@@ -42,9 +42,6 @@ from .mesh import along_normals
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions/regions.cl",)
 
-# storage name -> tracker class; each storage module adds its own (regions/bricks.py: "bricks"),
-# and the package's __init__ imports them all
-STORAGE_CLASSES: dict[str, type] = {}
 SPEEDS = {"constant": 0, "mean-curvature": 1, "gaussian": 2, "morph": 3, "array": 4}
 GHOST = 3
 # Pseudo-time step of the 3D reinitialisation (stable below 1/sqrt(3)). Six Heun iterations
@@ -91,7 +88,7 @@ class RegionTracker:
     aux_at: for speed="array", a function of time giving aux (nz, ny, nx): a time-dependent
     speed, sampled once per block of `reinit_every` steps, at the block's middle (see advance).
     This class stores the band as index lists over dense padded volumes (storage "lists");
-    `region_tracker(..., storage=...)` builds the class that STORAGE_CLASSES names.
+    `region_tracker(..., storage=...)` builds the class that api.STORAGE_CLASSES names.
 
     Examples
     --------
@@ -588,6 +585,3 @@ class RegionTracker:
         """(Phi, Phi-hats) in world units on the host."""
         data = self.grid.download(self.cur).astype(np.float64) * self.h
         return data[0], data[1:]
-
-
-STORAGE_CLASSES["lists"] = RegionTracker

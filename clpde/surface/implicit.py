@@ -145,10 +145,7 @@ class ImplicitSurface:
 
     @storage.setter
     def storage(self, value: str) -> None:
-        if value not in STORAGES:
-            raise InputError(
-                f"storage must be one of {', '.join(map(repr, STORAGES))}, not {value!r}"
-            )
+        FLOW_STATES.choose(value)
         self._storage = value
 
     def _set_psi(self, psi: np.ndarray) -> None:

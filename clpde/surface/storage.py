@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cla
 
-from ..bricks import EXT, REACH
+from ..bricks import EXT, REACH, StorageTable
 from ..errors import DeviceLimitError, InputError
 from .band import extend_defines
 
@@ -373,8 +373,9 @@ def _signs(sides: int):
     return tuple(np.int32(-1 if (sides >> a) & 1 else 1) for a in range(3))
 
 
-# storage name -> the device state of a flow's data in it (ImplicitSurface.storage)
-FLOW_STATES = {"lists": BandFlow, "bricks": BrickFlow}
+# storage name -> the device state of a flow's data in it (ImplicitSurface.storage, checked
+# by FLOW_STATES.choose)
+FLOW_STATES = StorageTable(lists=BandFlow, bricks=BrickFlow)
 
 
 def make_flow(

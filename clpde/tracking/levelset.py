@@ -1,22 +1,21 @@
 """2D level-set machinery on the device: signed distance start, narrow band, reinitialisation.
 
 A `LevelSet` holds u on a ghost-padded grid (ghost width 2 for the slope-limited upwind
-stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w kept as a compacted
-index
-list built on the device, and a PDE reinitialisation with Russo and Smereka's subcell fix
+stencils of kernels/tracking/levelset.cl), a band of the cells with |u| < w built on the
+device in the storage `storage` names (storage.py: a compacted list of the cells, or the
+bricks that hold them), and a PDE reinitialisation with Russo and Smereka's subcell fix
 that keeps the zero level set in place. The morphing flow of clpde.track steps u inside the
 band; other level-set flows can do the same.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pyopencl.array as cla
 
 from ..errors import InputError
-from ..fields import Field, Grid, PingPong, compact, index_list
+from ..fields import Field, Grid, PingPong
+from .storage import STORAGES
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("tracking/levelset.cl",)
@@ -30,20 +29,6 @@ CFL = 0.5  # largest distance in pixels a level set moves in one step
 # the band unnoticed while NEAR_EDGE >= check_every * CFL.
 NEAR_EDGE = 1.0
 REINIT_DT = 0.5  # Godunov reinitialisation is stable for dt <= 1/sqrt(2) in 2D; keep margin
-# How the band's work is laid out (docs/tracking.md, "2D bricks, measured"): a list of
-# cells, or bricks of BX x BY cells of the frame (kernels/bricks/bricks2d.h).
-# storage name -> brick shape (None: the band as a list of cells)
-STORAGES = {"lists": None, "bricks8x8": (8, 8), "bricks16x4": (16, 4)}
-
-
-@dataclass
-class BrickSet:
-    """The bricks of the movable region holding a cell where `mask` is nonzero (their
-    indices bx + nbx by, in increasing order, built on the device)."""
-
-    ids: cla.Array
-    n: int
-    mask: cla.Array
 
 
 def signed_distance(mask) -> np.ndarray:
@@ -91,13 +76,7 @@ class LevelSet:
         storage: str = "lists",
         group_per_brick: bool | None = None,
     ):
-        if storage not in STORAGES:
-            raise InputError(f"storage must be one of {', '.join(STORAGES)}, not {storage!r}")
-        self.storage, self.brick = storage, STORAGES[storage]
-        # GPUs take a brick per work-group; forced either way only to test both on a CPU.
-        self.group_per_brick = (
-            not runtime.is_cpu if group_per_brick is None else bool(group_per_brick)
-        )
+        layout = STORAGES[storage]  # a name TrackOptions checked (StorageTable.choose)
         u0 = np.asarray(u0, np.float64)
         if u0.ndim != 2:
             raise InputError(f"the level set must be 2-D, got shape {u0.shape}")
@@ -108,16 +87,14 @@ class LevelSet:
         self.runtime = runtime
         self.grid = Grid(runtime, nx + 2 * MARGIN, ny + 2 * MARGIN, 1, GHOST, np.dtype(dtype))
         self.band_width = float(band_width)
+        # GPUs take a brick per work-group; forced either way only to test both on a CPU.
+        group = not runtime.is_cpu if group_per_brick is None else bool(group_per_brick)
+        self.storage, self.store = storage, layout(self.grid, MARGIN, group)
         self.u = PingPong(Field.from_host(self.grid, self.pad(u0)[np.newaxis]))
         self._phi0 = Field.empty(self.grid)
-        inner = np.zeros((self.grid.ny, self.grid.nx), bool)
-        inner[MARGIN:-MARGIN, MARGIN:-MARGIN] = True
-        if self.brick is None:
-            self.active = index_list(self.grid, inner)
-        else:
-            padded = np.zeros(self.grid.padded_shape[1:], np.uint8)
-            self.grid.interior(padded)[...] = inner
-            self.active = self._cells(cla.to_device(runtime.queue, padded))
+        inner = np.zeros(self.grid.padded_shape[1:], np.uint8)
+        self.grid.interior(inner)[MARGIN:-MARGIN, MARGIN:-MARGIN] = 1
+        self.active = self.store.cells(cla.to_device(runtime.queue, inner))
         # Ghost entries stay 0 (mark_band writes the interior only).
         self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self._near_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
@@ -154,7 +131,7 @@ class LevelSet:
             g.scalar(self.band_width),
             np.int32(MARGIN),
         )
-        self.band = self._cells(self.band_mask)
+        self.band = self.store.cells(self.band_mask)
         # Cells outside the band are never written by band kernels: make both buffers agree
         # there so swapping never brings back stale values.
         self.u.nxt.assign(self.u.cur)
@@ -169,7 +146,7 @@ class LevelSet:
         are corrected at a later rebuild before the band reaches them.
         """
         self.dilate_band()
-        self.reinitialize(iterations, cells=self._cells(self._near_mask))
+        self.reinitialize(iterations, cells=self.store.cells(self._near_mask))
         self.build_band()
         self.rebuilds += 1
 
@@ -208,103 +185,37 @@ class LevelSet:
         if iterations is None:
             iterations = int(np.ceil((self.band_width + 2) / dt))
         cells = self.active if cells is None else cells
-        g = self.grid
         plain = {} if subcell_fix else {"PLAIN_REINIT": 1}
-        bricks = self.brick is not None
-        kernel = self.band_kernel(
-            "tracking/levelset.cl", "reinit_step_bricks" if bricks else "reinit_step_list", **plain
-        )
+        kernel = self.band_kernel("tracking/levelset.cl", self.store.KERNELS["reinit"], **plain)
+        tail = self.store.reinit_args(cells, dt)
         self._phi0.assign(self.u.cur)
         self.u.nxt.assign(self.u.cur)  # cells left out are the same in both buffers
         for _ in range(iterations):
             args = (self.u.cur.data.data, self._phi0.data.data, self.u.nxt.data.data)
-            if bricks:
-                self.launch_band(kernel, cells, *args, cells.mask.data, g.scalar(dt))
-            else:
-                self.launch_band(kernel, cells, *args, g.scalar(dt), np.int32(g.sx))
+            self.launch_band(kernel, cells, *args, *tail)
             self.u.swap()
 
-    # ---- the band's storage -------------------------------------------------------------
-    def _brick_geometry(self):
-        """(nbx, nby, x0, y0, x1, y1): the bricks over the movable region, its padded
-        corners."""
-        bx, by = self.brick
-        g = self.grid
-        x0, y0 = g.ghost + MARGIN, g.ghost + MARGIN
-        x1, y1 = g.ghost + g.nx - MARGIN, g.ghost + g.ny - MARGIN
-        return -(-(x1 - x0) // bx), -(-(y1 - y0) // by), x0, y0, x1, y1
-
-    def _cells(self, mask: cla.Array):
-        """The cells where a padded device mask is nonzero, in this storage."""
-        if self.brick is None:
-            return compact(self.runtime, mask)
-        nbx, nby, *corners = self._brick_geometry()
-        flags = cla.empty(self.runtime.queue, nbx * nby, np.uint8)
-        self.band_kernel("tracking/levelset.cl", "mark_bricks")(
-            self.runtime.queue,
-            *self.runtime.items(nbx * nby),
-            mask.data,
-            flags.data,
-            np.int32(nbx),
-            np.int32(nby),
-            *(np.int32(c) for c in corners),
-            np.int32(self.grid.sx),
-        )
-        ids = compact(self.runtime, flags)
-        return BrickSet(ids.indices, ids.n, mask)
-
+    # ---- the band's storage (self.store: storage.py) ---------------------------------------
     def band_kernel(self, filename: str, name: str, **defines):
         """A kernel of the band's storage: list kernels as they are, brick kernels built for
         this brick size and launch geometry."""
-        if self.brick is not None:
-            defines.update(
-                BX=self.brick[0], BY=self.brick[1], GROUP_PER_BRICK=int(self.group_per_brick)
-            )
-        return self.grid.kernel(filename, name, **defines)
-
-    def _brick_launch(self, n: int):
-        """(global size, local size, bricks per work-item) for n bricks."""
-        cells = self.brick[0] * self.brick[1]
-        if self.group_per_brick:
-            return n * cells, cells, 1
-        items, per = self.runtime.brick_items(n)
-        return items, 1, per
+        return self.store.kernel(filename, name, **defines)
 
     def band_parts(self, cells=None) -> int:
         """How many work-items a band launch over `cells` (default: the band) has: the
         length of its per-work-item statistics."""
-        cells = self.band if cells is None else cells
-        if self.brick is None:
-            return self.runtime.list_launch(max(cells.n, 1))[0][0]
-        return self._brick_launch(max(cells.n, 1))[0]
+        return self.store.parts(self.band if cells is None else cells)
 
     def launch_band(self, kernel, cells, *args):
         """Run a band kernel (band_kernel's) over `cells` (the band, or a BrickSet / IndexList
         of this storage)."""
         if cells.n == 0:
             return None
-        if self.brick is None:
-            return self.grid.launch_list(kernel, cells, *args)
-        gsize, lsize, per = self._brick_launch(cells.n)
-        nbx, _, *corners = self._brick_geometry()
-        return kernel(
-            self.runtime.queue,
-            (gsize,),
-            (lsize,),
-            *args,
-            cells.ids.data,
-            np.int32(cells.n),
-            np.int32(nbx),
-            *(np.int32(c) for c in corners),
-            np.int32(self.grid.sx),
-            np.int32(per),
-        )
+        return self.store.launch(kernel, cells, *args)
 
     def stored_cells(self) -> int:
         """Cells the band's launches visit: the band's cells, or its bricks' cells."""
-        if self.brick is None:
-            return self.band.n
-        return self.band.n * self.brick[0] * self.brick[1]
+        return self.store.stored(self.band)
 
     # ---- results -----------------------------------------------------------------------
     def crop(self, padded: np.ndarray) -> np.ndarray:

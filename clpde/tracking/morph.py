@@ -31,14 +31,9 @@ DISCREPANCY_WEIGHT = 1.0  # the frame-to-frame discrepancy's share of the contou
 
 
 def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
-    """The morphing step's kernel for the band's storage: with bricks walked by one
-    work-item, the NCC slides its window sums over each brick (morph_track_tiled: faster
-    than the cell-by-cell sums, docs/tracking.md; equal to rounding)."""
-    if ls.brick is None:
-        return "morph_track"
-    if discrepancy == "ncc" and not ls.group_per_brick:
-        return "morph_track_tiled"
-    return "morph_track_bricks"
+    """The morphing step's kernel for the band's storage (tracking/storage.py: with bricks
+    walked by one work-item, the NCC's is morph_track_tiled)."""
+    return ls.store.morph_kernel(discrepancy)
 
 
 def _step_kernel(
@@ -63,7 +58,7 @@ def _step_kernel(
     terms = options.region_weight > 0 or options.curvature > 0 or options.appearance_weight > 0
     kernel = ls.band_kernel(
         "tracking/adaptive.cl",
-        "morph_adaptive" if ls.brick is None else "morph_adaptive_bricks",
+        ls.store.KERNELS["adaptive"],
         NCH=channels,
         WIN=options.ncc_radius,
         FRONT_ONLY=int(terms),

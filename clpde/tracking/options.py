@@ -9,7 +9,8 @@ from dataclasses import dataclass, fields, replace
 
 from ..errors import InputError
 from .appearance import APPEARANCE_WEIGHT
-from .levelset import CFL, NEAR_EDGE, STORAGES
+from .levelset import CFL, NEAR_EDGE
+from .storage import STORAGES
 
 FEATURES = ("intensity", "edges", "contrast")
 # discrepancy -> the DISC define of kernels/tracking/features.cl (adaptive: its own kernel)
@@ -254,8 +255,7 @@ class TrackOptions:
             raise InputError(f"equalize must be 'match', 'global' or False, not {self.equalize!r}")
         self._set("equalize", self.equalize or False)
         self._set("smooth", bool(self.smooth))
-        if self.storage not in STORAGES:
-            raise InputError(f"storage must be one of {', '.join(STORAGES)}, not {self.storage!r}")
+        STORAGES.choose(self.storage)
 
 
 def track_options(options: TrackOptions | None = None, **overrides) -> TrackOptions:

@@ -99,7 +99,7 @@ def test_band_width_is_the_one_spelling():
 
 
 def test_storage_is_the_one_keyword_for_band_storage():
-    from clpde.tracking.levelset import STORAGES
+    from clpde.tracking.storage import STORAGES
 
     assert set(STORAGES) == {"lists", "bricks8x8", "bricks16x4"}
     frames = np.zeros((2, 16, 16), np.float32)
@@ -107,6 +107,23 @@ def test_storage_is_the_one_keyword_for_band_storage():
     for old in ({"band_layout": "lists"}, {"layout": "lists"}):
         with pytest.raises(clpde.InputError, match="unknown tracking option"):
             clpde.MorphingTracker(frames, frames[0] > 0, **old)
+
+
+def test_every_band_storage_is_chosen_from_one_kind_of_table():
+    """Tracking, regions and surfaces take their storage's class from a StorageTable, whose
+    choose is the one check of a storage name: the same message in all three."""
+    from clpde.bricks import StorageTable
+    from clpde.regions.api import STORAGE_CLASSES
+    from clpde.surface.storage import FLOW_STATES
+    from clpde.tracking.storage import STORAGES
+
+    assert set(STORAGE_CLASSES) == set(FLOW_STATES) == {"lists", "bricks"}
+    for table in (STORAGES, STORAGE_CLASSES, FLOW_STATES):
+        assert isinstance(table, StorageTable)
+        assert table.choose("lists") is table["lists"]
+        for bad in ("octree", None):
+            with pytest.raises(clpde.InputError, match=r"^storage must be one of 'lists', .*"):
+                table.choose(bad)
 
 
 def test_surface_denoise_info_is_a_dataclass():

@@ -321,6 +321,26 @@ def test_interlaced_film_is_refused(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fields.mp4"]
 
 
+def test_the_cluster_opens_only_once_the_film_and_outputs_are_checked(tmp_path):
+    """restore_film enters the cluster it is given (clpde restore --workers N's) after its
+    checks: a bad output starts no Dask workers."""
+    import contextlib
+
+    opened = []
+
+    @contextlib.contextmanager
+    def cluster():
+        opened.append(True)
+        yield None, {}
+
+    source = make_film(tmp_path / "in.mp4", clean_frames(4), audio=False, subtitles=False)
+    with pytest.raises(InputError, match="is the input"):
+        restore_film(source, source, cluster=cluster(), work=WORK)
+    with pytest.raises(InputError, match="not both"):
+        restore_film(source, tmp_path / "out.mp4", cluster=cluster(), client=object(), work=WORK)
+    assert opened == []
+
+
 def test_writer_keeps_the_given_timestamps(tmp_path):
     frames = clean_frames(4)
     with VideoWriter(tmp_path / "vfr.mkv", rate=25, codec="ffv1") as writer:

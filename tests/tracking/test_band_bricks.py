@@ -16,7 +16,7 @@ import pytest
 from clpde.fields import Field, PingPong
 from clpde.runtime import Runtime
 from clpde.tracking.contours import MorphingTracker
-from clpde.tracking.levelset import LevelSet, signed_distance
+from clpde.tracking.levelset import LevelSet
 from clpde.tracking.morph import morph_kernel_name
 from tests.reference import levelset as ref
 
@@ -44,7 +44,7 @@ def _features(ls, rng, channels):
 
 def _step(ls, f1, f2, prior, channels, disc, lam, name=None):
     g = ls.grid
-    name = name or ("morph_track" if ls.brick is None else "morph_track_bricks")
+    name = name or ls.store.KERNELS["morph"]
     kernel = ls.band_kernel("tracking/features.cl", name, NCH=channels, DISC=disc, WIN=3)
     parts = ls.band_parts()
     stats = cla.zeros(ls.runtime.queue, 5 * parts + 1, g.dtype)
@@ -87,6 +87,7 @@ def test_bricks_cover_the_band_and_nothing_else(runtime):
         tiles[:ny, :nx] = band
         want = np.flatnonzero(tiles.reshape(-(-ny // by), by, -1, bx).any(axis=(1, 3)))
         np.testing.assert_array_equal(ls.band.ids.get()[: ls.band.n], want)
+        assert ls.store.brick == (bx, by)
         assert ls.stored_cells() == want.size * bx * by >= band.sum()
 
 
@@ -220,8 +221,6 @@ def test_tracker_with_bricks_is_the_tracker_with_lists(runtime, layout):
         assert np.mean(b.mask != a.mask) < 1e-3
 
 
-def test_unknown_storage_is_refused(runtime):
+def test_unknown_storage_is_refused():
     with pytest.raises(Exception, match="storage must be one of"):
         MorphingTracker(_frames(2), _frames(2)[0] > 0.5, storage="bricks4x4")
-    with pytest.raises(Exception, match="storage must be one of"):
-        LevelSet(runtime, signed_distance(_frames(1)[0] > 0.5), storage="runs")
