@@ -157,7 +157,7 @@ def on_mesh(surf, u, mesh=None, *, vmin=None, vmax=None, interpolation="tricubic
     mesh = getattr(surf, "mesh", None) if mesh is None else mesh
     if mesh is None:
         raise InputError(
-            "this surface was not made from a mesh: give mesh=, or use to_mesh "
+            "this surface was not made from a mesh: give mesh=, or use surf.to_mesh() "
             "for a marching-cubes mesh of its zero level set"
         )
     result = mesh.copy()
@@ -172,7 +172,8 @@ def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     Parameters
     ----------
     mesh : trimesh.Trimesh
-        The mesh, e.g. from `to_mesh`; a PLY keeps its vertex colours and attributes.
+        The mesh, e.g. from `ImplicitSurface.to_mesh`; a PLY keeps its vertex colours and
+        attributes.
     path : str or os.PathLike
         The file to write, ending in .ply, .glb, .obj or .stl.
 
@@ -188,8 +189,8 @@ def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     Examples
     --------
     >>> import os, tempfile
-    >>> from clpde.surface import ImplicitSurface, export_mesh, to_mesh
-    >>> mesh = to_mesh(ImplicitSurface.sphere(1.0, spacing=0.1))
+    >>> from clpde.surface import ImplicitSurface, export_mesh
+    >>> mesh = ImplicitSurface.sphere(1.0, spacing=0.1).to_mesh()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     export_mesh(mesh, os.path.join(folder, "sphere.ply"))
     ...     os.listdir(folder)
