@@ -7,13 +7,13 @@ Next to it: `inpaint` (on a surface or a mesh), the mesh tools that take a mesh
 
 The surface (implicit.py) is built from shapes, volumes or meshes (mesh_sdf.py, winding.py);
 its band and the band form of data are in band.py, the device state of a flow's data on the
-band lists or bricks in storage.py. The methods (flow_methods.py) call the flows: flows.py
-(heat, TV, TV denoising, diffusion along a field; TV's dynamic lambda in dynamic_lambda.py),
-harmonic.py (harmonic maps and colour), textures.py (Turk's reaction-diffusion),
-curvature.py (principal directions); inpainting.py fills missing data;
-level_set.py reinitialises psi and extends data by PDE, sampling.py reads data at points,
-render.py draws and exports, shapes.py makes sample shapes and their data, runs.py holds
-the command line's ready-made runs.
+band lists or bricks in storage.py. Its methods (flow_methods.py, shape_methods.py) call the
+implementations: flows.py (heat, TV, TV denoising, diffusion along a field; TV's dynamic
+lambda in dynamic_lambda.py), harmonic.py (harmonic maps and colour), textures.py (Turk's
+reaction-diffusion), curvature.py (principal directions), render.py (meshes, pictures,
+export). inpainting.py fills missing data, level_set.py reinitialises psi and extends data
+by PDE, sampling.py reads data at points, shapes.py makes sample shapes and their data,
+runs.py holds the command line's ready-made runs.
 """
 
 from ..grid3d import Grid3D

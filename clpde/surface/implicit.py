@@ -32,18 +32,19 @@ from .band import NODE_REACH, Band, interp_code, values_as_array
 from .flow_methods import FlowMethods
 from .level_set import extend_by_pde, reinitialized_psi, slope_at_surface
 from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
+from .shape_methods import ShapeMethods
 from .storage import FLOW_STATES, make_flow
 
 STORAGES = tuple(FLOW_STATES)  # "lists", "bricks"
 
 
-class ImplicitSurface(FlowMethods):
+class ImplicitSurface(FlowMethods, ShapeMethods):
     """A closed surface given as the zero level set of a signed distance function psi.
 
     Points of cell (k, j, i) are origin + h * (i, j, k). The flows on the surface are its
-    methods, their only public form (flow_methods.py): `heat`, `tv`, `denoise_tv`,
-    `diffuse_along`, `harmonic_map`, `denoise_colour`, `reaction_diffusion`,
-    `principal_directions`, `stability_limit`, and `to_mesh` and `render` for pictures. They
+    methods, their only public form (flow_methods.py, shape_methods.py): `heat`, `tv`,
+    `denoise_tv`, `diffuse_along`, `harmonic_map`, `denoise_colour`, `reaction_diffusion`,
+    `stability_limit`, `principal_directions`, and `to_mesh` and `render` for pictures. They
     run on a narrow band around psi = 0. `from_mesh`, `from_volume`, `from_function`,
     `sphere`, `torus` and `double_torus` build a surface from other descriptions.
 
@@ -304,6 +305,7 @@ class ImplicitSurface(FlowMethods):
         center: ArrayLike = (0.0, 0.0, 0.0),
         **options: Any,
     ) -> ImplicitSurface:
+        """Sphere of the given radius around `center` (world x, y, z)."""
         r = _positive("radius", radius)
         c = np.asarray(center, dtype=np.float64)
 
@@ -346,6 +348,7 @@ class ImplicitSurface(FlowMethods):
     # ---- geometry ----------------------------------------------------------------------------
     @property
     def shape(self) -> tuple[int, int, int]:
+        """The grid's (nz, ny, nx): the shape of psi and of dense scalar data."""
         return self.psi.shape
 
     def coordinates(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

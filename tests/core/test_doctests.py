@@ -17,6 +17,7 @@ MODULES = [
     "clpde.io.images",
     "clpde.surface.implicit",
     "clpde.surface.flow_methods",
+    "clpde.surface.shape_methods",
     "clpde.grid3d",
     "clpde.inpainting.colour",
     "clpde.runtime",

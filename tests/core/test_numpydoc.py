@@ -145,8 +145,9 @@ def test_the_flows_are_documented_methods_of_the_surface_only():
     from numpydoc.validate import validate
 
     from clpde.surface.flow_methods import FlowMethods
+    from clpde.surface.shape_methods import ShapeMethods
 
-    names = [name for name in vars(FlowMethods) if not name.startswith("_")]
+    names = [n for base in (FlowMethods, ShapeMethods) for n in vars(base) if n[0] != "_"]
     assert {"heat", "tv", "denoise_tv", "denoise_colour", "render"} <= set(names)
     problems = []
     for name in names:
