@@ -67,7 +67,6 @@ CASES = {
 
 def convergence(spacings, t=0.1):
     from clpde.surface import ImplicitSurface
-    from clpde.surface.flows import heat
 
     pts = sphere_points(2000)
     rows = []
@@ -77,7 +76,7 @@ def convergence(spacings, t=0.1):
             u = surf.field(f)
             for alternate in (False, True):
                 start = time.perf_counter()
-                v = heat(surf, u, t, alternate=alternate)
+                v = surf.heat(u, t, alternate=alternate)
                 seconds = time.perf_counter() - start
                 err = float(np.abs(surf.sample(v, pts) - exact(pts, t)).max())
                 rows.append(
@@ -485,7 +484,7 @@ def turk_wavelength(iterations=12000, radius_cells=25):
     h = 1.0 / radius_cells
     surf = ImplicitSurface.sphere(1.0, h)
     start = time.perf_counter()
-    ab = textures.reaction_diffusion(surf, iterations, seed=3, params=textures.TURK)
+    ab = surf.reaction_diffusion(iterations, seed=3, params=textures.TURK)
     seconds = time.perf_counter() - start
     pts = sphere_points(3000)
     power = degree_power(surf.sample(ab[0], pts), pts)

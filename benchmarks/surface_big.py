@@ -37,7 +37,6 @@ def main():
     import clpde
     from clpde.surface import ImplicitSurface
     from clpde.surface.exact import sphere_points, xy_exact
-    from clpde.surface.flows import stability_limit
 
     rt = clpde.get_runtime()
     out = {
@@ -64,7 +63,7 @@ def main():
         f"{out['max_alloc_gb']:.1f} GB per buffer)"
     )
     u = surf.band_field(lambda x, y, z: x * y)
-    dt = stability_limit(surf)
+    dt = surf.stability_limit()
     pts = sphere_points(2000)
     t_total = args.steps * dt
     results = {}

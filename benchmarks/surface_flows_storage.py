@@ -27,7 +27,6 @@ import numpy as np
 
 def flows_for(surf):
     """name -> (channels, call(u, steps)) for each flow, steps of its stable default dt."""
-    from clpde.surface import textures
 
     x, y, z = surf.coordinates()
     direction = np.stack(np.broadcast_arrays(-y, x, 0 * z))  # along the parallels
@@ -40,7 +39,7 @@ def flows_for(surf):
         "denoise": (1, lambda u, k: surf.denoise_tv(u, sigma=0.05, t=k * dt_tv / 2, dt=dt_tv / 2)),
         "harmonic": (3, lambda u, k: surf.harmonic_map(u, k * dt_tv, p=1, dt=dt_tv)),
         "along": (1, lambda u, k: surf.diffuse_along(u, direction, k * dt_heat, dt=dt_heat)),
-        "turk": (2, lambda u, k: textures.reaction_diffusion(surf, k, state=u, dt=0.15)),
+        "turk": (2, lambda u, k: surf.reaction_diffusion(k, state=u, dt=0.15)),
     }
 
 

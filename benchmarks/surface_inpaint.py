@@ -30,7 +30,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import trimesh
 
-from clpde.surface import ImplicitSurface, surface_shape, to_mesh
+from clpde.surface import ImplicitSurface, surface_shape
 from clpde.surface.inpainting import fill_mesh, inpaint
 
 R, RT = 1.0, 0.4
@@ -140,7 +140,7 @@ def meshes(quick):
         ),
     ]
     if not quick:
-        dt = to_mesh(surface_shape("double-torus", 96))
+        dt = surface_shape("double-torus", 96).to_mesh()
         c = dt.vertices[np.argmax(dt.vertices[:, 0])]
         out.append(("double torus (marching cubes, 96)", dt, smooth, c, 0.4))
     return out

@@ -25,13 +25,12 @@ from clpde.surface import (
     colour_pattern,
     render_mesh,
     surface_noise,
-    to_mesh,
 )
 from clpde.surface.runs import load_surface, tv_time, write_png
 
 
 def picture(surf, u, size, view=(35.0, 30.0), vmin=None, vmax=None):
-    return render_mesh(to_mesh(surf, u, vmin=vmin, vmax=vmax), size, *view)
+    return render_mesh(surf.to_mesh(u, vmin=vmin, vmax=vmax), size, *view)
 
 
 def save(path, panels):

@@ -17,35 +17,8 @@ if TYPE_CHECKING:
 def principal_directions(
     surf: ImplicitSurface,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Principal curvature directions and curvatures of the surface, extended along normals.
-
-    Directions are defined up to sign, which the flows along them ignore (the flux (d.Pv)d is
-    even in d); sample them at nodes rather than interpolating across sign flips.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-
-    Returns
-    -------
-    major, minor : ndarray
-        (3, nz, ny, nx) unit tangent fields (major = the larger curvature), computed at every
-        cell of the extension band (constant along normals for a distance function); zeros
-        off the band.
-    curvatures : ndarray
-        (2, nz, ny, nx): the larger and the smaller principal curvature.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from clpde.surface import ImplicitSurface, principal_directions
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> major, minor, curvatures = principal_directions(s)
-    >>> on = np.abs(s.psi) < 0.05
-    >>> bool(np.allclose(curvatures[:, on], 1.0, atol=0.1))   # a unit sphere: k1 = k2 = 1
-    True
-    """
+    """Principal curvature directions and curvatures of `surf` on the extension band:
+    the implementation of ImplicitSurface.principal_directions, which documents the results."""
     g, q = surf.grid, surf.runtime.queue
     band = surf.ext_band
     n = max(band.n, 1)

@@ -63,36 +63,8 @@ ALL_SIDES = tuple(range(8))
 def stability_limit(
     surf: ImplicitSurface, flow: str = "heat", eps: float = 1.0, lam: float = 0.0
 ) -> float:
-    """Largest stable explicit time step (world time units) of a flow on `surf`.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface (its grid spacing sets the limit).
-    flow : {'heat', 'tv', 'harmonic2', 'harmonic1', 'along'}
-        The flow.
-    eps : float, optional
-        The regularisation of |grad u| of 'tv' and 'harmonic1'.
-    lam : float, optional
-        The fidelity weight of a TV denoising step.
-
-    Returns
-    -------
-    float
-        The largest stable dt.
-
-    Raises
-    ------
-    InputError
-        For an unknown flow.
-
-    Examples
-    --------
-    >>> from clpde.surface import ImplicitSurface, stability_limit
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> round(stability_limit(s, "heat"), 6)
-    0.001667
-    """
+    """Largest stable explicit time step of a flow on `surf`; the public form is
+    ImplicitSurface.stability_limit, which documents it."""
     h2 = surf.spacing**2
     if flow in ("heat", "harmonic2", "along"):
         # |N| P_N has norm <= |N| and the one-sided div is minus the transpose of the
@@ -131,52 +103,8 @@ def heat(
     alternate: bool = True,
     progress: bool | None = None,
 ) -> np.ndarray:
-    """Intrinsic heat flow on `surf` for time t: eq. (4.8), or (4.7) with weighted=True.
-
-    Appendix E's scheme (one-sided gradient, projection on the tangent plane with N from
-    central differences of psi, the complementary one-sided divergence), explicit Euler
-    steps, whole-band closest-point re-extension after each step.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-    u : array_like
-        Data on the surface: dense (the grid's shape, or (channels,) + it) or in band form
-        (`surf.band_indices()`); returned in kind.
-    t : float
-        The evolution time (world units).
-    dt : float, optional
-        The time step; 0.8 of `stability_limit` by default, never beyond it.
-    weighted : bool, optional
-        Eq. (4.7), the flux weighted by |grad psi|, instead of (4.8).
-    alternate : bool, optional
-        Cycle the step through the eight forward/backward combinations, as appendix E
-        suggests (smaller errors, docs/surface.md); False keeps forward gradient / backward
-        divergence throughout.
-    progress : bool, optional
-        Draw a progress bar; by default only for long runs on a terminal.
-
-    Returns
-    -------
-    ndarray
-        u after time t, in u's form and float dtype.
-
-    Raises
-    ------
-    InputError
-        For data of another shape, non-finite values in the band or an unstable dt.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from clpde.surface import ImplicitSurface, heat
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> u = s.field(lambda x, y, z: z)
-    >>> smooth = heat(s, u, 0.05)
-    >>> smooth.shape == u.shape, smooth.dtype
-    (True, dtype('float64'))
-    """
+    """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u on `surf` for time t: the
+    implementation of ImplicitSurface.heat, which documents the parameters."""
     steps, dt = check_time(t, dt, stability_limit(surf, "heat"), "heat flow")
     flow = make_flow(surf, u, defines={"WEIGHTED": int(bool(weighted))})
     kernel = flow.step_kernel("heat")
@@ -270,45 +198,8 @@ def tv(
     alternate: bool = True,
     progress: bool | None = None,
 ) -> np.ndarray:
-    """Intrinsic anisotropic (total variation) flow (4.10) for time t.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-    u : array_like
-        Data on the surface, dense or in band form (as for `heat`); returned in kind.
-    t : float
-        The evolution time.
-    dt : float, optional
-        The time step; 0.8 of `stability_limit` by default.
-    eps : float, optional
-        Regularisation of |P grad u| (world gradient units), so that the explicit step stays
-        bounded (dt <= h^2 eps / 6).
-    weighted : bool, optional
-        The flux weighted by |grad psi|, as for `heat`.
-    alternate : bool, optional
-        Cycle the one-sided differences, as for `heat`.
-    progress : bool, optional
-        Draw a progress bar; by default only for long runs on a terminal.
-
-    Returns
-    -------
-    ndarray
-        u after time t, in u's form.
-
-    Raises
-    ------
-    InputError
-        For data of another shape, non-finite values in the band or an unstable dt.
-
-    Examples
-    --------
-    >>> from clpde.surface import ImplicitSurface, tv
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> tv(s, s.field(lambda x, y, z: z), 0.01).shape == s.shape
-    True
-    """
+    """Intrinsic anisotropic (total variation) flow (4.10): the implementation of
+    ImplicitSurface.tv, which documents the parameters."""
     return step_flow(
         surf,
         u,
@@ -337,59 +228,8 @@ def denoise_tv(
     progress: bool | None = None,
     return_info: bool = False,
 ) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
-    """TV denoising on the surface with a fidelity term (C.1).
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-    u : array_like
-        Noisy data on the surface, dense or in band form (as for `heat`).
-    sigma : float, optional
-        The noise level, for the dynamic lambda of (C.2): updated on the device every 10
-        steps, never read back while stepping, capped (with a warning) where it would make
-        dt unstable. Give it or `lam`.
-    t : float, optional
-        The evolution time.
-    dt : float, optional
-        The time step; 0.8 of `stability_limit` by default.
-    lam : float, optional
-        A fixed fidelity weight instead of `sigma`.
-    eps : float, optional
-        Regularisation of |P grad u|, as for `tv`.
-    alternate : bool, optional
-        Cycle the one-sided differences, as for `heat`.
-    correct_lambda : bool, optional
-        Scale the dynamic lambda by a factor that moves until the residual variance is
-        sigma^2, the constraint (C.2) comes from (the discrete (C.2) alone settles above it,
-        docs/surface.md); False is the plain formula (kernels/surface/flows.cl,
-        tv_lambda_update).
-    progress : bool, optional
-        Draw a progress bar; by default only for long runs on a terminal.
-    return_info : bool, optional
-        Also return a SurfaceDenoiseInfo: steps, dt, the lambda history and the residual
-        variance (mean of (u - u0)^2 over the surface).
-
-    Returns
-    -------
-    ndarray or (ndarray, SurfaceDenoiseInfo)
-        The denoised data in u's form (and the info with return_info).
-
-    Raises
-    ------
-    InputError
-        Unless exactly one of sigma and lam is given; for data that cannot be used.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from clpde.surface import ImplicitSurface, denoise_tv
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> noisy = s.field(lambda x, y, z: z) + 0.1 * np.random.default_rng(0).normal(size=s.shape)
-    >>> clean, info = denoise_tv(s, noisy, sigma=0.1, t=0.01, return_info=True)
-    >>> clean.shape == s.shape, info.steps > 0
-    (True, True)
-    """
+    """TV denoising with a fidelity term (C.1) and dynamic lambda (C.2): the implementation
+    of ImplicitSurface.denoise_tv, which documents the parameters."""
     if (sigma is None) == (lam is None):
         raise InputError("give exactly one of sigma (noise level, dynamic lambda) or lam (fixed)")
     if sigma is not None:
@@ -426,49 +266,8 @@ def diffuse_along(
     alternate: bool = True,
     progress: bool | None = None,
 ) -> np.ndarray:
-    """Anisotropic diffusion along a tangent field (4.15): a flow visualisation of the field
-    when u is noise.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-    u : array_like
-        Data on the surface, dense or in band form (as for `heat`); returned in kind.
-    direction : array_like
-        (3, nz, ny, nx) tangent field d along which u diffuses; normalised here (zero
-        vectors stay zero, and u does not diffuse there).
-    t : float
-        The evolution time (world units).
-    dt : float, optional
-        The time step; 0.8 of `stability_limit` ('along') by default.
-    alternate : bool, optional
-        Cycle the one-sided differences, as for `heat`.
-    progress : bool, optional
-        Draw a progress bar; by default only for long runs on a terminal.
-
-    Returns
-    -------
-    ndarray
-        u after time t, in u's form and float dtype.
-
-    Raises
-    ------
-    InputError
-        For a direction or data of another shape, non-finite values in the band or an
-        unstable dt.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from clpde.surface import ImplicitSurface, diffuse_along
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.2)
-    >>> x, y, z = s.coordinates()
-    >>> parallels = np.stack(np.broadcast_arrays(-y, x, 0 * z))
-    >>> noise = np.random.default_rng(0).uniform(size=s.shape)
-    >>> diffuse_along(s, noise, parallels, 0.01).shape == s.shape
-    True
-    """
+    """Anisotropic diffusion along a tangent field (4.15): the implementation of
+    ImplicitSurface.diffuse_along, which documents the parameters."""
     d = np.asarray(direction, dtype=np.float64)
     if d.shape != (3,) + surf.shape:
         raise InputError(f"direction must have shape {(3,) + surf.shape}, got {d.shape}")

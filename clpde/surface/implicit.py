@@ -27,27 +27,26 @@ from ..grid3d import Grid3D
 from ..imagedata import positive as _positive
 from ..runtime import DeviceLike, get_runtime
 from . import band as band_setup
-from . import curvature as _curvature
-from . import flows as _flows
-from . import harmonic as _harmonic
-from . import render as _render
 from . import sampling as _sampling
-from . import textures as _textures
 from .band import NODE_REACH, Band, interp_code, values_as_array
-from .flows import SurfaceDenoiseInfo
+from .flow_methods import FlowMethods
 from .level_set import extend_by_pde, reinitialized_psi, slope_at_surface
 from .mesh_sdf import grid_for_mesh, load_mesh, mesh_to_sdf, rim_cells
+from .shape_methods import ShapeMethods
 from .storage import FLOW_STATES, make_flow
 
 STORAGES = tuple(FLOW_STATES)  # "lists", "bricks"
 
 
-class ImplicitSurface:
+class ImplicitSurface(FlowMethods, ShapeMethods):
     """A closed surface given as the zero level set of a signed distance function psi.
 
-    Points of cell (k, j, i) are origin + h * (i, j, k). The flows (heat, tv, denoise_tv,
-    ...) run on a narrow band around psi = 0; `from_mesh`, `from_function`, `sphere`,
-    `torus` and `double_torus` build one from other descriptions.
+    Points of cell (k, j, i) are origin + h * (i, j, k). The flows on the surface are its
+    methods, their only public form (flow_methods.py, shape_methods.py): `heat`, `tv`,
+    `denoise_tv`, `diffuse_along`, `harmonic_map`, `denoise_colour`, `reaction_diffusion`,
+    `stability_limit`, `principal_directions`, and `to_mesh` and `render` for pictures. They
+    run on a narrow band around psi = 0. `from_mesh`, `from_volume`, `from_function`,
+    `sphere`, `torus` and `double_torus` build a surface from other descriptions.
 
     Parameters
     ----------
@@ -303,6 +302,7 @@ class ImplicitSurface:
         center: ArrayLike = (0.0, 0.0, 0.0),
         **options: Any,
     ) -> ImplicitSurface:
+        """Sphere of the given radius around `center` (world x, y, z)."""
         r = _positive("radius", radius)
         c = np.asarray(center, dtype=np.float64)
 
@@ -345,6 +345,7 @@ class ImplicitSurface:
     # ---- geometry ----------------------------------------------------------------------------
     @property
     def shape(self) -> tuple[int, int, int]:
+        """The grid's (nz, ny, nx): the shape of psi and of dense scalar data."""
         return self.psi.shape
 
     def coordinates(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -453,61 +454,6 @@ class ImplicitSurface:
 
         Points must lie within the interpolation reach of the surface (on it, typically)."""
         return _sampling.sample(self, u, points, interpolation)
-
-    # ---- flows ---------------------------------------------------------------------------------
-    def heat(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
-        """Intrinsic heat flow (4.8; 4.7 with weighted=True) of u for time t; see flows.heat."""
-        return _flows.heat(self, u, t, dt=dt, **options)
-
-    def tv(self, u: ArrayLike, t: float, dt: float | None = None, **options: Any) -> np.ndarray:
-        """Intrinsic anisotropic (total variation) flow (4.10); see flows.tv."""
-        return _flows.tv(self, u, t, dt, **options)
-
-    def denoise_tv(
-        self,
-        u: ArrayLike,
-        sigma: float | None = None,
-        t: float = 1.0,
-        **options: Any,
-    ) -> np.ndarray | tuple[np.ndarray, SurfaceDenoiseInfo]:
-        """TV denoising with fidelity and dynamic lambda (C.1, C.2); see flows.denoise_tv."""
-        return _flows.denoise_tv(self, u, sigma, t, **options)
-
-    def harmonic_map(self, u: ArrayLike, t: float, p: int = 2, **options: Any) -> np.ndarray:
-        """Harmonic map flow of unit vectors (4.11, D.7); see harmonic.harmonic_map."""
-        return _harmonic.harmonic_map(self, u, t, p, **options)
-
-    def denoise_colour(self, rgb: ArrayLike, t: float, **options: Any) -> np.ndarray:
-        """Colour denoising as in Figure 4.6: chroma by harmonic map, brightness by a scalar
-        flow; see harmonic.denoise_colour."""
-        return _harmonic.denoise_colour(self, rgb, t, **options)
-
-    def diffuse_along(
-        self, u: ArrayLike, direction: ArrayLike, t: float, **options: Any
-    ) -> np.ndarray:
-        """Diffusion along a tangent field (4.15); see flows.diffuse_along."""
-        return _flows.diffuse_along(self, u, direction, t, **options)
-
-    def principal_directions(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(major, minor, curvatures) of the surface; see curvature.principal_directions."""
-        return _curvature.principal_directions(self)
-
-    def reaction_diffusion(self, iterations: int, **options: Any) -> np.ndarray:
-        """Turk's reaction-diffusion texture (4.12-4.14); see textures.reaction_diffusion."""
-        return _textures.reaction_diffusion(self, iterations, **options)
-
-    def to_mesh(self, u: ArrayLike | None = None, **options: Any) -> object:
-        """Marching-cubes mesh of the surface with u as vertex colours; see render.to_mesh."""
-        return _render.to_mesh(self, u, **options)
-
-    def render(
-        self, u: ArrayLike | None = None, path: str | None = None, **options: Any
-    ) -> np.ndarray:
-        """PNG picture(s) of u on the surface; see render.render."""
-        return _render.render(self, u, path, **options)
-
-    def stability_limit(self, flow: str = "heat", eps: float = 1.0, lam: float = 0.0) -> float:
-        return _flows.stability_limit(self, flow, eps, lam)
 
 
 def _torus_sdf(big: float, small: float, shift: float):

@@ -77,40 +77,8 @@ def to_mesh(
     vmax: float | None = None,
     interpolation: str = "tricubic",
 ) -> trimesh.Trimesh:
-    """The surface as a triangle mesh (marching cubes of psi = 0), coloured by u.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-    u : array_like, optional
-        Data on the surface (dense or band form, scalar or 3-channel), sampled at the
-        vertices: scalars are coloured through the colour ramp (`colormap`) and kept in
-        ``mesh.vertex_attributes['u']``; 3-channel data is RGB (clipped to [0, 1]), kept as
-        'u0', 'u1', 'u2'. None leaves the mesh uncoloured.
-    vmin, vmax : float, optional
-        The scalar values mapped to the ramp's ends (default: the sampled values' range).
-    interpolation : {'tricubic', 'trilinear'}, optional
-        How u is sampled at the vertices (`ImplicitSurface.sample`).
-
-    Returns
-    -------
-    trimesh.Trimesh
-        The mesh, faces pointing out, in world coordinates.
-
-    Raises
-    ------
-    InputError
-        For data of another shape or with other than 1 or 3 channels.
-
-    Examples
-    --------
-    >>> from clpde.surface import ImplicitSurface, to_mesh
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> mesh = to_mesh(s, s.field(lambda x, y, z: z))
-    >>> mesh.is_watertight, mesh.vertex_attributes["u"].shape == (len(mesh.vertices),)
-    (True, True)
-    """
+    """The surface as a triangle mesh (marching cubes of psi = 0) coloured by u: the
+    implementation of ImplicitSurface.to_mesh, which documents the parameters."""
     import trimesh
     from skimage.measure import marching_cubes
 
@@ -189,7 +157,7 @@ def on_mesh(surf, u, mesh=None, *, vmin=None, vmax=None, interpolation="tricubic
     mesh = getattr(surf, "mesh", None) if mesh is None else mesh
     if mesh is None:
         raise InputError(
-            "this surface was not made from a mesh: give mesh=, or use to_mesh "
+            "this surface was not made from a mesh: give mesh=, or use surf.to_mesh() "
             "for a marching-cubes mesh of its zero level set"
         )
     result = mesh.copy()
@@ -204,7 +172,8 @@ def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     Parameters
     ----------
     mesh : trimesh.Trimesh
-        The mesh, e.g. from `to_mesh`; a PLY keeps its vertex colours and attributes.
+        The mesh, e.g. from `ImplicitSurface.to_mesh`; a PLY keeps its vertex colours and
+        attributes.
     path : str or os.PathLike
         The file to write, ending in .ply, .glb, .obj or .stl.
 
@@ -220,8 +189,8 @@ def export_mesh(mesh: trimesh.Trimesh, path: str | os.PathLike) -> None:
     Examples
     --------
     >>> import os, tempfile
-    >>> from clpde.surface import ImplicitSurface, export_mesh, to_mesh
-    >>> mesh = to_mesh(ImplicitSurface.sphere(1.0, spacing=0.1))
+    >>> from clpde.surface import ImplicitSurface, export_mesh
+    >>> mesh = ImplicitSurface.sphere(1.0, spacing=0.1).to_mesh()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     export_mesh(mesh, os.path.join(folder, "sphere.ply"))
     ...     os.listdir(folder)
@@ -449,43 +418,9 @@ def render(
     vmax: float | None = None,
     colour_bar: bool = True,
 ) -> np.ndarray:
-    """Picture(s) of data on a surface, side by side, written as PNG if a path is given.
-
-    Parameters
-    ----------
-    surf_or_mesh : ImplicitSurface or trimesh.Trimesh
-        The surface (drawn through `to_mesh` with u), or a mesh with its own colours.
-    u : array_like, optional
-        Data on the surface, as for `to_mesh` (ignored for a mesh).
-    path : str or os.PathLike, optional
-        A .png file to write the picture to, atomically.
-    views : sequence of (float, float), optional
-        (azimuth, elevation) pairs in degrees, one picture each, placed side by side.
-    size : int, optional
-        Each view's width and height in pixels.
-    vmin, vmax : float, optional
-        The scalar values mapped to the colour ramp's ends (default: the data's range).
-    colour_bar : bool, optional
-        Draw a colour bar with the value range below the views, for scalar data.
-
-    Returns
-    -------
-    ndarray
-        The (size [+ bar], size * len(views), 3) uint8 picture.
-
-    Raises
-    ------
-    InputError
-        For no views, a path not ending in .png, or data that `to_mesh` refuses.
-
-    Examples
-    --------
-    >>> from clpde.surface import ImplicitSurface, render
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> picture = render(s, s.field(lambda x, y, z: z), views=[(30, 20), (210, 20)], size=64)
-    >>> picture.shape[1:], picture.dtype
-    ((128, 3), dtype('uint8'))
-    """
+    """Picture(s) of data on a surface (drawn through `to_mesh`), or of a mesh with its own
+    colours, side by side, written as PNG if a path is given: the implementation of
+    ImplicitSurface.render, which documents the parameters."""
     import imageio.v3 as iio
     import trimesh
 

@@ -20,7 +20,6 @@ from .render import (
     on_mesh,
     render_mesh,
     scalar_range,
-    to_mesh,
     with_colour_bar,
     with_title,
 )
@@ -295,7 +294,7 @@ def _write_run_files(run: SurfaceRun, outdir, views, size, on_input=False) -> li
     def make(u, **options):
         if on_input:
             return on_mesh(run.surface, u, **options) if u is not None else run.surface.mesh.copy()
-        return to_mesh(run.surface, u, **options)
+        return run.surface.to_mesh(u, **options)
 
     written = []
     after = make(run.after)

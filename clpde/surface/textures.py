@@ -41,59 +41,8 @@ def reaction_diffusion(
     progress: bool | None = None,
     state: ArrayLike | None = None,
 ) -> np.ndarray:
-    """Turk's two-chemical reaction-diffusion on the surface: (4.12, 4.13), or (4.14) along a
-    tangent field.
-
-    It runs in grid units, as Turk's own code: dt per iteration, diffusion rates in cells^2
-    per unit time, so that patterns have the same size in cells on any surface. Turk's own
-    rates (TURK) sit at the edge of the Turing instability (at beta = 12 the fastest mode's
-    growth rate is 0): only the random spread of beta grows a pattern, and the anisotropic
-    flow (4.14) along a tube's short circles, where few wavelengths fit, stays flat with them.
-    docs/surface.md has the wavelengths measured with both sets of rates.
-
-    Parameters
-    ----------
-    surf : ImplicitSurface
-        The surface.
-    iterations : int
-        The number of time steps.
-    direction : array_like, optional
-        (3, nz, ny, nx) tangent field for the anisotropic flow (4.14); normalised here.
-    dt : float, optional
-        The time step in grid time units; by default 0.9 of the stability limit, at most 1.
-    seed : int, optional
-        The seed of beta's random spread.
-    params : dict, optional
-        The rates: keys da, db (diffusion rates of a and b), s, beta, beta_spread and start
-        (the chemicals' uniform start). Default: Figure 4.7's numbers (THESIS_FIG_4_7:
-        D1 = 1, D2 = 1/16, s = 0.025); TURK gives Turk's own (1/8, 1/32, s = 0.2/16, dt = 1).
-    alternate : bool, optional
-        Cycle the one-sided differences, as for `heat`.
-    progress : bool, optional
-        Draw a progress bar; by default only for long runs on a terminal.
-    state : array_like, optional
-        (2, nz, ny, nx) chemicals to continue from (a result of an earlier call); by default
-        both start at params['start'].
-
-    Returns
-    -------
-    ndarray
-        The (2, nz, ny, nx) chemicals (a, b) after the iterations.
-
-    Raises
-    ------
-    InputError
-        For a direction of another shape or an unstable dt.
-
-    Examples
-    --------
-    >>> from clpde.surface import TURK, ImplicitSurface, reaction_diffusion
-    >>> s = ImplicitSurface.sphere(1.0, spacing=0.1)
-    >>> ab = reaction_diffusion(s, 20, params=TURK)
-    >>> ab.shape
-    (2, 37, 37, 37)
-    >>> more = reaction_diffusion(s, 20, params=TURK, state=ab)   # 20 more iterations
-    """
+    """Turk's two-chemical reaction-diffusion (4.12-4.14) on `surf`: the implementation
+    of ImplicitSurface.reaction_diffusion, which documents the parameters."""
     p = dict(THESIS_FIG_4_7 if params is None else params)
     limit = 1.0 / (6.0 * max(p["da"], p["db"]))
     what = f"reaction-diffusion (diffusion rate {max(p['da'], p['db']):g})"

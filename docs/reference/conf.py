@@ -10,7 +10,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # generate.py
 
 project = "clpde"
 extensions = ["sphinx.ext.autodoc", "numpydoc", "generate"]
-# numpydoc lists each class's members itself; autodoc's own member tables would repeat them.
+# autodoc documents each class's methods in full (generate.py asks for :members:, the
+# surface's flows being ImplicitSurface's methods); numpydoc's summary tables would repeat them.
 numpydoc_show_class_members = False
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"  # the numpydoc Parameters sections give the types

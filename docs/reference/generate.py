@@ -2,7 +2,7 @@
 
 - one page per public namespace (``clpde``, ``clpde.io``, ``clpde.surface``,
   ``clpde.data``, ``clpde.inpainting``, ``clpde.tracking``, ``clpde.volumes``), an entry
-  for every name in its ``__all__``;
+  for every name in its ``__all__``, classes with their documented methods;
 - a gallery page per script in examples/: its docstring, the pictures it makes (those it
   names under docs/images/) and its source. Nothing is run.
 """
@@ -52,6 +52,10 @@ def _namespace_page(module_name: str, title: str) -> str:
         directive = _directive(obj)
         if directive:  # submodules have pages of their own
             lines += [f".. {directive}:: {name}"]
+            if directive == "autoclass":
+                # the methods in full: ImplicitSurface's are the surface flows' only public
+                # form, some from its base class (surface/flow_methods.py)
+                lines += ["   :members:", "   :inherited-members:"]
             if module is not top and getattr(top, name, None) is obj:
                 lines += ["   :no-index:"]  # indexed on the top-level page
             lines += [""]

@@ -144,7 +144,7 @@ def _bar(picture, size):
 
 def test_every_scalar_render_has_a_colour_bar(tmp_path):
     from clpde.surface import ImplicitSurface
-    from clpde.surface.render import _RAMP, render
+    from clpde.surface.render import _RAMP
 
     out = tmp_path / "heat"
     assert (
@@ -159,24 +159,23 @@ def test_every_scalar_render_has_a_colour_bar(tmp_path):
         assert (bar.sum(axis=1) < 0.3).any()
     surf = ImplicitSurface.sphere(1.0, 0.1)
     x, _, _ = surf.coordinates()
-    picture = render(surf, np.broadcast_to(x, surf.shape), size=96)
+    picture = surf.render(np.broadcast_to(x, surf.shape), size=96)
     assert picture.shape[0] > 96 and picture.shape[1] == 96
-    assert render(surf, np.broadcast_to(x, surf.shape), size=96, colour_bar=False).shape == (
+    assert surf.render(np.broadcast_to(x, surf.shape), size=96, colour_bar=False).shape == (
         96,
         96,
         3,
     )
-    assert render(surf, None, size=96).shape == (96, 96, 3)  # nothing to scale
+    assert surf.render(None, size=96).shape == (96, 96, 3)  # nothing to scale
 
 
 def test_curvature_of_a_mesh_shows_its_shape_not_its_triangles(tmp_path):
-    from clpde.surface.render import to_mesh
     from clpde.surface.runs import load_surface, run_flow
 
     path = tmp_path / "ico.ply"
     trimesh.creation.icosphere(3, radius=2.0).export(path)
     run = run_flow(load_surface(str(path), 40), "curvature")
-    values = to_mesh(run.surface, run.after).vertex_attributes["u"]
+    values = run.surface.to_mesh(run.after).vertex_attributes["u"]
     # a sphere of radius 2: mean curvature 1/2 everywhere (at the grid's scale the
     # triangles' edges and vertices gave 0 to 1.6, a spread of 70% of the mean)
     assert np.median(values) == pytest.approx(0.5, rel=0.03)

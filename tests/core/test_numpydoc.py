@@ -136,3 +136,37 @@ def test_every_public_parameter_has_its_own_typed_entry_and_none_is_private():
                 if p.startswith("_")
             ]
     assert not problems, "\n".join(problems)
+
+
+def test_the_flows_are_documented_methods_of_the_surface_only():
+    """The flows on a surface have one public form, ImplicitSurface's methods (issue 38):
+    those carry the complete numpydoc docs and type hints that public functions carry, and
+    clpde.surface has no function of the same name."""
+    from numpydoc.validate import validate
+
+    from clpde.surface.flow_methods import FlowMethods
+    from clpde.surface.shape_methods import ShapeMethods
+
+    names = [n for base in (FlowMethods, ShapeMethods) for n in vars(base) if n[0] != "_"]
+    assert {"heat", "tv", "denoise_tv", "denoise_colour", "render"} <= set(names)
+    problems = []
+    for name in names:
+        method = getattr(clpde.surface.ImplicitSurface, name)
+        full = f"clpde.surface.ImplicitSurface.{name}"
+        problems += _gaps(method, full)
+        problems += [
+            f"{full}: {code} {message}"
+            for code, message in validate(full)["errors"]
+            if code in ("PR01", "PR02", "PR04")
+        ]
+        signature = inspect.signature(method)
+        problems += [
+            f"{full}({p.name}) has no type hint"
+            for p in signature.parameters.values()
+            if p.name != "self" and p.annotation is inspect.Parameter.empty
+        ]
+        if signature.return_annotation is inspect.Signature.empty:
+            problems.append(f"{full} (return) has no type hint")
+        if name in clpde.surface.__all__ or inspect.isfunction(getattr(clpde.surface, name, None)):
+            problems.append(f"clpde.surface.{name} is a second public form of {full}")
+    assert not problems, "\n".join(problems)

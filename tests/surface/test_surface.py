@@ -222,7 +222,7 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
             WEIGHTED=0,
         )
         nc, normalize = 3, True
-    steps, dt = flows.check_time(0.02, None, flows.stability_limit(s, "heat"), "heat")
+    steps, dt = flows.check_time(0.02, None, s.stability_limit("heat"), "heat")
     whole = surface_storage.BandFlow(s, u, normalize=normalize)
     r = g.scalar(dt / s.spacing**2)
     full_runs = g.runs(s.step_band)

@@ -6,7 +6,7 @@ import pyopencl.array as cla
 import pytest
 
 from clpde.errors import InputError
-from clpde.surface import ImplicitSurface, flows, harmonic
+from clpde.surface import ImplicitSurface
 from clpde.surface.storage import _offsets
 from tests.reference import surface as ref
 
@@ -226,7 +226,7 @@ def test_tv_denoising_reaches_the_noise_variance(sphere05):
     noisy = clean + surface_noise(s, sigma)
     pts = unit_points(800)
     before = np.abs(s.sample(noisy, pts) - s.sample(clean, pts)).mean()
-    out, info = flows.denoise_tv(s, noisy, sigma=sigma, t=0.08, return_info=True)
+    out, info = s.denoise_tv(noisy, sigma=sigma, t=0.08, return_info=True)
     after = np.abs(s.sample(out, pts) - s.sample(clean, pts)).mean()
     assert after < 0.6 * before, (before, after)
     # the dynamic lambda drives the residual variance to sigma^2 (measured 0.986 sigma^2)
@@ -247,9 +247,7 @@ def test_dynamic_lambda_is_corrected_for_grid_scale_noise():
     noisy = clean + cell_noise(s, sigma, np.random.default_rng(1))
     ratios = {}
     for correct in (False, True):
-        _, info = flows.denoise_tv(
-            s, noisy, sigma=sigma, t=0.3, correct_lambda=correct, return_info=True
-        )
+        _, info = s.denoise_tv(noisy, sigma=sigma, t=0.3, correct_lambda=correct, return_info=True)
         ratios[correct] = info.residual_variance / sigma**2
     assert ratios[False] > 1.2, ratios  # measured 1.34
     assert 0.95 < ratios[True] < 1.05, ratios
@@ -260,7 +258,7 @@ def test_tv_keeps_edges_that_heat_smears(sphere05):
     step = s.field(lambda x, y, z: (z > 0).astype(float))
     t = 0.004
     pts = unit_points(2000)
-    after_tv = s.sample(flows.tv(s, step, t=t), pts)
+    after_tv = s.sample(s.tv(step, t=t), pts)
     after_heat = s.sample(s.heat(step, t=t), pts)
     exact = (pts[:, 2] > 0).astype(float)
     away = np.abs(pts[:, 2]) > 0.15
@@ -279,7 +277,7 @@ def test_harmonic_maps_keep_unit_norm_and_smooth(sphere05, p, t):
     u = base + noise
     u /= np.sqrt((u**2).sum(axis=0))
     pts = unit_points(800)
-    v = harmonic.harmonic_map(s, u, t=t, p=p)
+    v = s.harmonic_map(u, t=t, p=p)
     # unit vectors at every band node (the state); between nodes the interpolant of unit
     # vectors is not exactly unit, so check the nodes themselves
     nodes = np.abs(s.psi) < s.outer * s.spacing
@@ -297,10 +295,10 @@ def test_harmonic_map_normalises_with_a_warning(sphere02):
     s = sphere02
     u = s.field(lambda x, y, z: [2 + 0 * x, 0 * y, 0 * z])
     with pytest.warns(UserWarning, match="unit"):
-        v = harmonic.harmonic_map(s, u, t=0.001)
+        v = s.harmonic_map(u, t=0.001)
     np.testing.assert_allclose(s.sample(v, unit_points(50)), [[1, 0, 0]] * 50, atol=1e-5)
     with pytest.raises(InputError, match="vector"):
-        harmonic.harmonic_map(s, u[0], t=0.001)
+        s.harmonic_map(u[0], t=0.001)
 
 
 def test_colour_denoising_restores_colours_and_keeps_the_input(sphere05):
@@ -346,12 +344,12 @@ def test_diffusion_along_a_field_only_smooths_along_it(sphere05):
     d = s.field(lambda x, y, z: [-y, x, 0 * z])
     of_z = s.field(lambda x, y, z: z**2)
     pts = unit_points(500)
-    kept = s.sample(flows.diffuse_along(s, of_z, d, t=0.05), pts)
+    kept = s.sample(s.diffuse_along(of_z, d, t=0.05), pts)
     rho2 = 1 - pts[:, 2] ** 2
     ok = rho2 > 0.25  # away from the poles, where the field vanishes
     assert np.abs(kept - pts[:, 2] ** 2)[ok].max() < 2e-3
     of_x = s.field(lambda x, y, z: x * y)
-    moved = s.sample(flows.diffuse_along(s, of_x, d, t=0.05), pts)
+    moved = s.sample(s.diffuse_along(of_x, d, t=0.05), pts)
     # x y = r^2 sin(2 phi) / 2: pure azimuthal mode 2, decays as exp(-4 t / r^2) along the
     # circles of latitude (radius r = sqrt(1 - z^2))
     exact = pts[:, 0] * pts[:, 1] * np.exp(-4 * 0.05 / np.maximum(rho2, 1e-9))
@@ -362,17 +360,15 @@ def test_diffusion_along_a_field_only_smooths_along_it(sphere05):
 
 def test_tv_stability_limit_is_enforced(sphere02):
     s = sphere02
-    limit = flows.stability_limit(s, "tv", eps=0.5)
+    limit = s.stability_limit("tv", eps=0.5)
     with pytest.raises(InputError, match="stability limit"):
-        flows.tv(s, np.zeros(s.shape), t=0.01, dt=2 * limit, eps=0.5)
+        s.tv(np.zeros(s.shape), t=0.01, dt=2 * limit, eps=0.5)
     with pytest.raises(InputError, match="exactly one"):
-        flows.denoise_tv(s, np.zeros(s.shape))
+        s.denoise_tv(np.zeros(s.shape))
     # at the limit, the dynamic lambda has no room to grow: capped at 0, with a warning
     noisy = s.field(lambda x, y, z: np.sin(40 * x))
     with pytest.warns(UserWarning, match="capped"):
-        _, info = flows.denoise_tv(
-            s, noisy, sigma=0.01, t=20 * limit, dt=limit, eps=0.5, return_info=True
-        )
+        _, info = s.denoise_tv(noisy, sigma=0.01, t=20 * limit, dt=limit, eps=0.5, return_info=True)
     assert max(info.lam_history) < 1e-6
 
 

@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from clpde.errors import InputError
-from clpde.surface import ImplicitSurface, render, to_mesh
+from clpde.surface import ImplicitSurface
 from clpde.surface.mesh_sdf import grid_for_mesh, mesh_to_sdf
 from clpde.surface.render import colormap, export_mesh
 
@@ -95,7 +95,7 @@ def test_open_mesh_warns_and_bad_files_are_errors(tmp_path, icosphere):
 def test_to_mesh_export_and_render(tmp_path):
     s = ImplicitSurface.sphere(1.0, 0.1)
     u = s.field(lambda x, y, z: z)
-    mesh = to_mesh(s, u)
+    mesh = s.to_mesh(u)
     r = np.linalg.norm(mesh.vertices, axis=1)
     assert np.abs(r - 1).max() < 0.02
     np.testing.assert_allclose(mesh.vertex_attributes["u"], mesh.vertices[:, 2], atol=1e-3)
@@ -108,7 +108,7 @@ def test_to_mesh_export_and_render(tmp_path):
         export_mesh(mesh, tmp_path / f"s.{ext}")
         back = trimesh.load(tmp_path / f"s.{ext}", force="mesh")
         assert len(back.faces) == len(mesh.faces)
-    image = render(s, u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64, colour_bar=False)
+    image = s.render(u, tmp_path / "s.png", views=[(0, 0), (0, 90)], size=64, colour_bar=False)
     assert image.shape == (64, 128, 3) and (tmp_path / "s.png").stat().st_size > 0
     # a sphere seen from the side fills a disk: about pi/4 * 0.92^2 of the square
     filled = (image[:, :64] != 255).any(axis=2).mean()
@@ -117,7 +117,7 @@ def test_to_mesh_export_and_render(tmp_path):
     rows = np.flatnonzero((image[:, :64] != 255).any(axis=2).any(axis=1))
     assert image[rows[2], 32].sum() > image[rows[-3], 32].sum()
     with pytest.raises(InputError, match="png"):
-        render(s, u, tmp_path / "s.jpg")
+        s.render(u, tmp_path / "s.jpg")
 
 
 def test_colormap_ends():

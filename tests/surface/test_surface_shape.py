@@ -5,7 +5,7 @@ import pyopencl.array as cla
 import pytest
 
 from clpde.errors import InputError
-from clpde.surface import ImplicitSurface, curvature, textures
+from clpde.surface import ImplicitSurface, textures
 from clpde.surface.storage import _offsets
 from tests.reference import surface as ref
 
@@ -48,7 +48,7 @@ def test_principal_directions_kernel_matches_reference(torus):
 
 def test_principal_curvatures_and_directions_of_a_torus():
     s = ImplicitSurface.torus(1.0, 0.4, spacing=0.05)
-    major, minor, curv = curvature.principal_directions(s)
+    major, minor, curv = s.principal_directions()
     pts = np.array(
         [[1.4, 0, 0], [0, -1.4, 0], [0.6, 0, 0], [0, 1.0, 0.4], [-0.99, 0.99, 0.4 * 0 + 0.0]]
     )
@@ -109,12 +109,12 @@ def test_turk_step_matches_reference(rng):
 def test_turk_equilibrium_is_steady_and_noise_grows_a_pattern():
     s = ImplicitSurface.sphere(1.0, 0.1)
     flat = dict(textures.TURK, beta_spread=0.0)
-    ab = textures.reaction_diffusion(s, 50, params=flat)
+    ab = s.reaction_diffusion(50, params=flat)
     band = np.abs(s.psi) < 2 * s.spacing
     # a = b = 4 solves 16 - ab = 0 and ab - b - 12 = 0
     assert np.abs(ab[:, band] - 4).max() < 1e-4
     for params, iterations in ((textures.TURK, 1500), (None, 1500)):  # Turk's, Figure 4.7's
-        ab = textures.reaction_diffusion(s, iterations, params=params)
+        ab = s.reaction_diffusion(iterations, params=params)
         spread = ab[0, band].max() - ab[0, band].min()
         assert spread > 0.4  # Turing instability: the 0.1 irregularity in beta grew a pattern
         # b is clamped at 0 on the nodes; the tricubic re-extension may undershoot a little
@@ -125,7 +125,7 @@ def test_turk_equilibrium_is_steady_and_noise_grows_a_pattern():
 def test_turk_rejects_unstable_rates():
     s = ImplicitSurface.sphere(1.0, 0.2)
     with pytest.raises(InputError, match="stability limit"):
-        textures.reaction_diffusion(s, 1, params=textures.THESIS_FIG_4_7, dt=1.0)
+        s.reaction_diffusion(1, params=textures.THESIS_FIG_4_7, dt=1.0)
 
 
 def test_turk_linear_stability_wavelength():
