@@ -99,6 +99,7 @@ def inpaint_rows(name, clean, spacing, seed):
     damaged = np.where(mask, 0.0, clean)
     ours, t_ours = timed(lambda: inpaint_volume(damaged, mask, method="harmonic", spacing=spacing))
     bi, t_bi = timed(lambda: inpaint_volume(damaged, mask, method="biharmonic", spacing=spacing))
+    sp, t_sp = timed(lambda: inpaint_volume(damaged, mask, method="spectral", spacing=spacing))
     ref, t_ref = timed(lambda: inpaint_biharmonic(damaged, mask))
 
     def hole(v):
@@ -108,6 +109,7 @@ def inpaint_rows(name, clean, spacing, seed):
         (name, f"clpde.volumes.inpaint_volume (harmonic), {mask.mean():.1%} missing",
          hole(ours), t_ours),
         (name, "clpde.volumes.inpaint_volume (biharmonic)", hole(bi), t_bi),
+        (name, "clpde.volumes.inpaint_volume (spectral)", hole(sp), t_sp),
         (name, "skimage inpaint_biharmonic", hole(ref), t_ref),
     ]  # fmt: skip
     return rows, damaged, bi, ref, mask  # the default fill in the picture

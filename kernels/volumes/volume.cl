@@ -381,3 +381,80 @@ __kernel void volume_biharmonic_cg(__global REAL* restrict x, __global REAL* res
     }
     if (k0 == 0) steps[0] = step;
 }
+
+// ---- spectral fill: sparsity in 4 x 4 x 4 DCT blocks --------------------------------------
+// Every 4^3 block of the box (each corner, so every shift) that holds a hole voxel is taken
+// to its orthonormal DCT-II, its coefficients below `threshold` are zeroed (the mean is
+// kept), and it is taken back (volume_threshold_blocks, one work-item per block, into
+// out[64 b + j]); each hole voxel then becomes the mean of its blocks' values
+// (volume_average_blocks). The host lowers the threshold from launch pair to launch pair.
+// VOLUME_DCT4[4 k + m] = a_k cos(pi (2 m + 1) k / 8), a_0 = 1/2, a_k = 1/sqrt(2).
+__constant REAL VOLUME_DCT4[16] = {
+    0.5, 0.5, 0.5, 0.5,
+    0.6532814824381883, 0.2705980500730985, -0.2705980500730985, -0.6532814824381883,
+    0.5, -0.5, -0.5, 0.5,
+    0.2705980500730985, -0.6532814824381883, 0.6532814824381883, -0.2705980500730985};
+
+// The 4-point DCT (inverse != 0: its transpose, the inverse) of a block's 16 lines along the
+// axis whose index step is `stride` (1 x, 4 y, 16 z), in place.
+inline void volume_dct4_axis(REAL* a, const int stride, const int inverse)
+{
+    const int other1 = stride == 1 ? 4 : 1, other2 = stride == 16 ? 4 : 16;
+    for (int p = 0; p < 4; ++p) {
+        for (int q = 0; q < 4; ++q) {
+            const int base = p * other1 + q * other2;
+            REAL in[4];
+            for (int m = 0; m < 4; ++m) in[m] = a[base + m * stride];
+            for (int k = 0; k < 4; ++k) {
+                REAL acc = 0;
+                for (int m = 0; m < 4; ++m)
+                    acc += (inverse ? VOLUME_DCT4[4 * m + k] : VOLUME_DCT4[4 * k + m]) * in[m];
+                a[base + k * stride] = acc;
+            }
+        }
+    }
+}
+
+// corner[b]: the index of block b's first voxel in the (nz, ny, nx) box.
+__kernel void volume_threshold_blocks(__global const REAL* restrict u,
+                                      __global const int* restrict corner, const int blocks,
+                                      const REAL threshold, __global REAL* restrict out,
+                                      const int nx, const int ny)
+{
+    const int b = get_global_id(0);
+    if (b >= blocks) return;
+    const int c0 = corner[b];
+    REAL a[64];
+    for (int z = 0; z < 4; ++z)
+        for (int y = 0; y < 4; ++y)
+            for (int x = 0; x < 4; ++x) a[(z * 4 + y) * 4 + x] = u[c0 + (z * ny + y) * nx + x];
+    for (int s = 1; s <= 16; s *= 4) volume_dct4_axis(a, s, 0);
+    for (int j = 1; j < 64; ++j)
+        if (fabs(a[j]) < threshold) a[j] = 0;
+    for (int s = 1; s <= 16; s *= 4) volume_dct4_axis(a, s, 1);
+    for (int j = 0; j < 64; ++j) out[64 * b + j] = a[j];
+}
+
+// voxels[k]: the hole's voxel indices; block_of[i]: the block whose corner is voxel i, or -1.
+__kernel void volume_average_blocks(__global REAL* restrict u,
+                                    __global const int* restrict voxels, const int count,
+                                    __global const int* restrict block_of,
+                                    __global const REAL* restrict values, const int nx,
+                                    const int ny)
+{
+    const int k = get_global_id(0);
+    if (k >= count) return;
+    const int i = voxels[k], x = i % nx, y = (i / nx) % ny, z = i / (nx * ny);
+    REAL sum = 0;
+    int hits = 0;
+    for (int dz = 0; dz < 4 && dz <= z; ++dz)
+        for (int dy = 0; dy < 4 && dy <= y; ++dy)
+            for (int dx = 0; dx < 4 && dx <= x; ++dx) {
+                const int b = block_of[i - (dz * ny + dy) * nx - dx];
+                if (b >= 0) {
+                    sum += values[64 * b + (dz * 4 + dy) * 4 + dx];
+                    ++hits;
+                }
+            }
+    if (hits > 0) u[i] = sum / hits;
+}
