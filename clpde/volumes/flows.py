@@ -1,7 +1,9 @@
 """Explicit diffusion of 3D volumes (kernels/volumes/volume.cl): heat, Perona-Malik (with
-Catte's Gaussian pre-smoothing of the field its diffusivity reads) and the TV flow, with voxel
-spacing: every difference is a physical gradient, and the stability limit is
-1 / (2 sum 1/h^2) (times eps for TV). `clpde.diffuse` sends volumes here."""
+Catte's Gaussian pre-smoothing of the field its diffusivity reads), the TV flow and the
+level-set mean curvature flow, with voxel spacing: every difference is a physical gradient,
+and the stability limit is 1 / (2 sum 1/h^2) (times eps for TV; curvature's as heat's, as
+the planar flow's, since its diffusion across the level sets is at most the Laplacian's).
+`clpde.diffuse` sends volumes here."""
 
 from __future__ import annotations
 
@@ -16,9 +18,15 @@ from .grid import VolumeGrid, check_spacing, to_volume_layout
 
 KERNEL_FILES = ("volumes/volume.cl",)
 
-FLOWS = ("heat", "perona-malik", "tv")
-PARAMS = {"heat": (), "perona-malik": ("kappa", "edge", "presmooth"), "tv": ("eps",)}
+FLOWS = ("heat", "perona-malik", "tv", "curvature")
+PARAMS = {
+    "heat": (),
+    "perona-malik": ("kappa", "edge", "presmooth"),
+    "tv": ("eps",),
+    "curvature": ("eps",),
+}
 TV_EPS = 0.005  # as the planar flow's default (clpde.planar.flows.TV_EPS)
+CURVATURE_EPS = 1e-10  # added to |grad u|^2, as the planar curvature flow's default
 
 
 def stability_limit_volume(flow: str, spacing, eps: float = TV_EPS) -> float:
@@ -38,11 +46,6 @@ def gaussian_weights_1d(sigma: float) -> np.ndarray:
 
 
 def _check_params(flow: str, params: dict) -> dict:
-    if flow == "curvature":
-        raise InputError(
-            "the curvature flow is not built for volumes yet; use 'heat', 'perona-malik' or "
-            "'tv' (or diffuse each slice as a 2-D image)"
-        )
     if flow not in FLOWS:
         raise InputError(f"unknown flow {flow!r} for a volume; choose one of {', '.join(FLOWS)}")
     extra = sorted(set(params) - set(PARAMS[flow]))
@@ -61,6 +64,8 @@ def _check_params(flow: str, params: dict) -> dict:
         out["presmooth"] = presmooth
     if flow == "tv":
         out["eps"] = positive("eps", params.get("eps", TV_EPS))
+    if flow == "curvature":
+        out["eps"] = positive("eps", params.get("eps", CURVATURE_EPS))
     return out
 
 
@@ -103,10 +108,12 @@ def _run(grid: VolumeGrid, data, flow, steps, dt, p, progress) -> np.ndarray:
     rt, q = grid.runtime, grid.runtime.queue
     cur = cla.to_device(q, data.astype(grid.dtype).reshape(-1))
     nxt = cla.empty_like(cur)
-    aux = cla.empty_like(cur) if flow != "heat" else None
+    aux = cla.empty_like(cur) if flow in ("tv", "perona-malik") else None
     dts = grid.scalar(dt)
     if flow == "heat":
         step = rt.kernel("volumes/volume.cl", "volume_heat_step", grid.dtype)
+    elif flow == "curvature":
+        step = rt.kernel("volumes/volume.cl", "volume_curvature_step", grid.dtype)
     elif flow == "tv":
         cond = rt.kernel("volumes/volume.cl", "volume_tv_conductance", grid.dtype)
         step = rt.kernel("volumes/volume.cl", "volume_tv_step", grid.dtype)
@@ -126,6 +133,8 @@ def _run(grid: VolumeGrid, data, flow, steps, dt, p, progress) -> np.ndarray:
         for _ in range(steps):
             if flow == "heat":
                 grid.launch(step, cur.data, nxt.data, dts, *grid.inverse2)
+            elif flow == "curvature":
+                grid.launch(step, cur.data, nxt.data, dts, grid.scalar(p["eps"]), *grid.inverse)
             elif flow == "tv":
                 grid.launch(cond, cur.data, aux.data, eps2, *grid.inverse)
                 grid.launch(step, cur.data, aux.data, nxt.data, dts, *grid.inverse2)

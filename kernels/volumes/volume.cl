@@ -244,6 +244,43 @@ __kernel void volume_tv_step(__global const REAL* restrict u, __global const REA
     }
 }
 
+// Level-set mean curvature flow u_t = |grad u| div(grad u / |grad u|)
+//   = [(uyy + uzz) ux^2 + (uxx + uzz) uy^2 + (uxx + uyy) uz^2
+//      - 2 (ux uy uxy + ux uz uxz + uy uz uyz)] / (|grad u|^2 + eps),
+// central differences over the spacing (the planar curvature_step's, kernels/common/
+// stencil.h, in 3D); a neighbour beyond the border is the voxel's own index along that
+// axis, diagonal ones included (Neumann, as tests/reference/volumes.py's _shift).
+__kernel void volume_curvature_step(__global const REAL* restrict u, __global REAL* restrict v,
+                                    const REAL dt, const REAL eps, const REAL ihx,
+                                    const REAL ihy, const REAL ihz, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        const int xp = x < nx - 1 ? 1 : 0, xm = x > 0 ? -1 : 0;
+        const int yp = y < ny - 1 ? nx : 0, ym = y > 0 ? -nx : 0;
+        const int zp = z < nz - 1 ? nx * ny : 0, zm = z > 0 ? -nx * ny : 0;
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n + i;
+            const REAL m = uc[0];
+            const REAL ux = (REAL)0.5 * ihx * (uc[xp] - uc[xm]);
+            const REAL uy = (REAL)0.5 * ihy * (uc[yp] - uc[ym]);
+            const REAL uz = (REAL)0.5 * ihz * (uc[zp] - uc[zm]);
+            const REAL uxx = ihx * ihx * (uc[xp] - 2 * m + uc[xm]);
+            const REAL uyy = ihy * ihy * (uc[yp] - 2 * m + uc[ym]);
+            const REAL uzz = ihz * ihz * (uc[zp] - 2 * m + uc[zm]);
+            const REAL uxy = (REAL)0.25 * ihx * ihy *
+                             (uc[xp + yp] - uc[xm + yp] - uc[xp + ym] + uc[xm + ym]);
+            const REAL uxz = (REAL)0.25 * ihx * ihz *
+                             (uc[xp + zp] - uc[xm + zp] - uc[xp + zm] + uc[xm + zm]);
+            const REAL uyz = (REAL)0.25 * ihy * ihz *
+                             (uc[yp + zp] - uc[ym + zp] - uc[yp + zm] + uc[ym + zm]);
+            const REAL num = (uyy + uzz) * ux * ux + (uxx + uzz) * uy * uy +
+                             (uxx + uyy) * uz * uz -
+                             2 * (ux * uy * uxy + ux * uz * uxz + uy * uz * uyz);
+            v[c * n + i] = m + dt * num / (ux * ux + uy * uy + uz * uz + eps);
+        }
+    }
+}
+
 // One axis of a separable Gaussian (Catte's pre-smoothing): weights w[0..radius] for offsets
 // +-k, mirrored at the border (index -1 reads 0). axis 0 is x, 1 y, 2 z.
 inline int volume_mirror(int k, const int m)

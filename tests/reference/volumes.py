@@ -200,3 +200,25 @@ def spectral_fill(u, hole, levels):
         np.add.at(acc, (zz, yy, xx), dct4_blocks(coef, inverse=True))
         u[held] = acc[held] / hits[held]
     return u
+
+
+def curvature_step(u, dt, eps, h):
+    """Level-set mean curvature flow, central differences over the spacing, a neighbour
+    beyond the border the voxel's own index along that axis (diagonals included)."""
+    d1 = {a: (_shift(u, a, 1) - _shift(u, a, -1)) / (2 * h[k]) for k, a in enumerate(AXES)}
+    d2 = {a: (_shift(u, a, 1) - 2 * u + _shift(u, a, -1)) / h[k] ** 2 for k, a in enumerate(AXES)}
+
+    def mixed(a, b):
+        ka, kb = AXES.index(a), AXES.index(b)
+        s = [[_shift(_shift(u, a, i), b, j) for j in (1, -1)] for i in (1, -1)]
+        return (s[0][0] - s[1][0] - s[0][1] + s[1][1]) / (4 * h[ka] * h[kb])
+
+    z, y, x = AXES
+    gz, gy, gx = d1[z], d1[y], d1[x]
+    num = (
+        (d2[y] + d2[z]) * gx**2
+        + (d2[x] + d2[z]) * gy**2
+        + (d2[x] + d2[y]) * gz**2
+        - 2 * (gx * gy * mixed(x, y) + gx * gz * mixed(x, z) + gy * gz * mixed(y, z))
+    )
+    return u + dt * num / (gx**2 + gy**2 + gz**2 + eps)

@@ -26,6 +26,7 @@ H = (2.0, 1.0, 0.5)
         ("perona-malik", {"kappa": 0.3, "edge": "rational"}),
         ("perona-malik", {"kappa": 0.3, "presmooth": 1.0}),
         ("tv", {"eps": 0.1}),
+        ("curvature", {"eps": 1e-3}),
     ],
 )
 def test_kernels_match_the_reference(rng, flow, params):
@@ -41,6 +42,8 @@ def test_kernels_match_the_reference(rng, flow, params):
             u = ref.heat_step(u, dt, H)
         elif flow == "tv":
             u = ref.tv_step(u, dt, params["eps"], H)
+        elif flow == "curvature":
+            u = ref.curvature_step(u, dt, params["eps"], H)
         else:
             us = u
             if params.get("presmooth"):
@@ -107,7 +110,7 @@ def test_info_and_dtype(rng):
 @pytest.mark.parametrize(
     "kwargs,match",
     [
-        ({"flow": "curvature"}, "not built for volumes"),
+        ({"flow": "curvature", "weight": 1}, "no parameter 'weight'"),
         ({"flow": "heat", "kappa": 1}, "no parameter 'kappa'"),
         ({"flow": "heat", "dt": 1.0}, "stability limit"),
         ({"flow": "perona-malik", "edge": "tukey"}, "edge"),
