@@ -16,6 +16,7 @@ import numpy as np
 import pyopencl.array as cla
 from scipy import ndimage
 
+from .._progress import Progress, check_progress, progress_bar
 from ..errors import InputError
 from ..imagedata import compute_dtype, positive
 from ..runtime import get_runtime
@@ -51,6 +52,7 @@ def inpaint_volume(
     tol: float = 1e-4,
     max_sweeps: int = 5000,
     dtype=None,
+    progress: Progress = None,
 ) -> np.ndarray:
     """Fill the masked voxels of a (Z, Y, X) or (Z, Y, X, C) volume with the harmonic
     (smoothest membrane) or biharmonic (thin plate) interpolation of the voxels around them.
@@ -83,6 +85,10 @@ def inpaint_volume(
         iterations per box and channel.
     dtype : {float32, float64}, optional
         The device's arithmetic.
+    progress : bool or callable, optional
+        Draw a progress bar over the missing voxels, filled box by box; by default only
+        for long runs on a terminal. A callable ``progress(done, total)`` hears the voxels
+        filled so far and in all after each box (and may stop the fill by raising).
 
     Returns
     -------
@@ -119,30 +125,38 @@ def inpaint_volume(
     if hole.all():
         raise InputError("mask covers the whole volume: nothing to fill it from")
     tol = positive("tol", tol)
+    check_progress(progress)
     grid_of = _GridMaker(get_runtime(device), compute_dtype(None, dtype))
     labels, count = ndimage.label(hole)
     ring = RING[method]
-    for k, box in enumerate(ndimage.find_objects(labels), start=1):
-        grown = tuple(
-            slice(max(0, s.start - ring), min(n, s.stop + ring))
-            for s, n in zip(box, hole.shape, strict=True)
-        )
-        mine = labels[grown] == k
-        u = data[(slice(None),) + grown].copy()
-        # the box's other masked voxels (another component's, reaching in) are unknowns too
-        # the biharmonic's and spectral's start needs only the harmonic fill's shape
-        start_tol = tol if method == "harmonic" else max(START_TOL, tol)
-        filled = _solve(grid_of, u, hole[grown], h, start_tol, int(max_sweeps))
-        if method == "biharmonic":
-            filled = biharmonic_cg(
-                grid_of(u.shape, h), filled, hole[grown], int(max_sweeps), CG_TOL * tol
+    desc = f"clpde inpaint {method} (volume)"
+    with progress_bar(progress, int(hole.sum()), desc, unit="voxel") as bar:
+        for k, box in enumerate(ndimage.find_objects(labels), start=1):
+            grown = tuple(
+                slice(max(0, s.start - ring), min(n, s.stop + ring))
+                for s, n in zip(box, hole.shape, strict=True)
             )
-        elif method == "spectral":
-            filled = spectral_fill(grid_of(u.shape, h), filled, hole[grown], thresholds())
-        data[(slice(None),) + grown][:, mine] = filled[:, mine]
+            mine = labels[grown] == k
+            u = data[(slice(None),) + grown]
+            filled = _fill_box(grid_of, method, u.copy(), hole[grown], h, tol, int(max_sweeps))
+            u[:, mine] = filled[:, mine]
+            bar.update(int(mine.sum()))
     # the known voxels exactly as given (the [0, 1] round trip of floats may round them)
     where = hole if layout.channel_axis is None else np.expand_dims(hole, layout.channel_axis)
     return np.where(where, layout.restore(data), np.asarray(volume))
+
+
+def _fill_box(grid_of, method, u, hole, h, tol, max_sweeps) -> np.ndarray:
+    """u (nc, nz, ny, nx), a box, with its hole's voxels filled by `method`; every masked
+    voxel of the box (another component's too, reaching in) is an unknown."""
+    # the biharmonic's and spectral's start needs only the harmonic fill's shape
+    start_tol = tol if method == "harmonic" else max(START_TOL, tol)
+    filled = _solve(grid_of, u, hole, h, start_tol, max_sweeps)
+    if method == "biharmonic":
+        filled = biharmonic_cg(grid_of(u.shape, h), filled, hole, max_sweeps, CG_TOL * tol)
+    elif method == "spectral":
+        filled = spectral_fill(grid_of(u.shape, h), filled, hole, thresholds())
+    return filled
 
 
 class _GridMaker:
