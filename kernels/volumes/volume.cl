@@ -425,28 +425,35 @@ __kernel void volume_biharmonic_cg(__global REAL* restrict x, __global REAL* res
 // kept), and it is taken back (volume_threshold_blocks, one work-item per block, into
 // out[64 b + j]); each hole voxel then becomes the mean of its blocks' values
 // (volume_average_blocks). The host lowers the threshold from launch pair to launch pair.
-// VOLUME_DCT4[4 k + m] = a_k cos(pi (2 m + 1) k / 8), a_0 = 1/2, a_k = 1/sqrt(2).
-__constant REAL VOLUME_DCT4[16] = {
-    0.5, 0.5, 0.5, 0.5,
-    0.6532814824381883, 0.2705980500730985, -0.2705980500730985, -0.6532814824381883,
-    0.5, -0.5, -0.5, 0.5,
-    0.2705980500730985, -0.6532814824381883, 0.6532814824381883, -0.2705980500730985};
+// The orthonormal 4-point DCT-II, X_k = a_k sum_m cos(pi (2 m + 1) k / 8) x_m (a_0 = 1/2,
+// a_k = 1/sqrt(2)), as butterflies; C1 = cos(pi/8) / sqrt(2), C3 = cos(3 pi/8) / sqrt(2).
+#define VOLUME_C1 ((REAL)0.6532814824381883)
+#define VOLUME_C3 ((REAL)0.2705980500730985)
 
-// The 4-point DCT (inverse != 0: its transpose, the inverse) of a block's 16 lines along the
-// axis whose index step is `stride` (1 x, 4 y, 16 z), in place.
+// The transform (inverse != 0: its transpose, the inverse) of a block's 16 lines along the
+// axis whose index step is `stride` (1 x, 4 y, 16 z), in place. Inlined with constant
+// arguments, every index is a constant and the block stays in registers.
 inline void volume_dct4_axis(REAL* a, const int stride, const int inverse)
 {
     const int other1 = stride == 1 ? 4 : 1, other2 = stride == 16 ? 4 : 16;
     for (int p = 0; p < 4; ++p) {
         for (int q = 0; q < 4; ++q) {
-            const int base = p * other1 + q * other2;
-            REAL in[4];
-            for (int m = 0; m < 4; ++m) in[m] = a[base + m * stride];
-            for (int k = 0; k < 4; ++k) {
-                REAL acc = 0;
-                for (int m = 0; m < 4; ++m)
-                    acc += (inverse ? VOLUME_DCT4[4 * m + k] : VOLUME_DCT4[4 * k + m]) * in[m];
-                a[base + k * stride] = acc;
+            REAL* l = a + p * other1 + q * other2;
+            const REAL x0 = l[0], x1 = l[stride], x2 = l[2 * stride], x3 = l[3 * stride];
+            if (inverse) {
+                const REAL e0 = (REAL)0.5 * (x0 + x2), e1 = (REAL)0.5 * (x0 - x2);
+                const REAL o0 = VOLUME_C1 * x1 + VOLUME_C3 * x3;
+                const REAL o1 = VOLUME_C3 * x1 - VOLUME_C1 * x3;
+                l[0] = e0 + o0;
+                l[stride] = e1 + o1;
+                l[2 * stride] = e1 - o1;
+                l[3 * stride] = e0 - o0;
+            } else {
+                const REAL s0 = x0 + x3, s1 = x1 + x2, d0 = x0 - x3, d1 = x1 - x2;
+                l[0] = (REAL)0.5 * (s0 + s1);
+                l[stride] = VOLUME_C1 * d0 + VOLUME_C3 * d1;
+                l[2 * stride] = (REAL)0.5 * (s0 - s1);
+                l[3 * stride] = VOLUME_C3 * d0 - VOLUME_C1 * d1;
             }
         }
     }
@@ -465,10 +472,13 @@ __kernel void volume_threshold_blocks(__global const REAL* restrict u,
     for (int z = 0; z < 4; ++z)
         for (int y = 0; y < 4; ++y)
             for (int x = 0; x < 4; ++x) a[(z * 4 + y) * 4 + x] = u[c0 + (z * ny + y) * nx + x];
-    for (int s = 1; s <= 16; s *= 4) volume_dct4_axis(a, s, 0);
-    for (int j = 1; j < 64; ++j)
-        if (fabs(a[j]) < threshold) a[j] = 0;
-    for (int s = 1; s <= 16; s *= 4) volume_dct4_axis(a, s, 1);
+    volume_dct4_axis(a, 1, 0);
+    volume_dct4_axis(a, 4, 0);
+    volume_dct4_axis(a, 16, 0);
+    for (int j = 1; j < 64; ++j) a[j] = fabs(a[j]) < threshold ? (REAL)0 : a[j];
+    volume_dct4_axis(a, 1, 1);
+    volume_dct4_axis(a, 4, 1);
+    volume_dct4_axis(a, 16, 1);
     for (int j = 0; j < 64; ++j) out[64 * b + j] = a[j];
 }
 
