@@ -1,6 +1,6 @@
 """3D volumes against scikit-image (issue 39): TV denoising against
-skimage.restoration.denoise_tv_chambolle, and the harmonic and biharmonic fills against
-inpaint_biharmonic.
+skimage.restoration.denoise_tv_chambolle, and the harmonic, biharmonic and spectral (4^3 DCT
+blocks) fills against inpaint_biharmonic.
 
 Calibration half: the first frame of nibabel's test volume example4d.nii.gz (128 x 96 x 24
 voxels of 2 x 2 x 2.2 mm, an EPI frame); skimage's best TV weight is chosen there. Test half:
