@@ -80,6 +80,7 @@ def spectral_fill(grid: VolumeGrid, u: np.ndarray, hole: np.ndarray, levels) -> 
     block_of = np.full(hole.size, -1, np.int32)
     block_of[first] = np.arange(len(first), dtype=np.int32)
     voxels = np.flatnonzero(hole).astype(np.int32)
+    rt.check_alloc(64 * len(first) * grid.dtype.itemsize, "spectral fill's block values")
     blocks, count = np.int32(len(first)), np.int32(len(voxels))
     corner_dev = cla.to_device(q, first.astype(np.int32))
     block_dev = cla.to_device(q, block_of)
