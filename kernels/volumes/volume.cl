@@ -430,32 +430,49 @@ __kernel void volume_biharmonic_cg(__global REAL* restrict x, __global REAL* res
 #define VOLUME_C1 ((REAL)0.6532814824381883)
 #define VOLUME_C3 ((REAL)0.2705980500730985)
 
-// The transform (inverse != 0: its transpose, the inverse) of a block's 16 lines along the
-// axis whose index step is `stride` (1 x, 4 y, 16 z), in place. Inlined with constant
-// arguments, every index is a constant and the block stays in registers.
-inline void volume_dct4_axis(REAL* a, const int stride, const int inverse)
+#if REAL_IS_DOUBLE
+#define VOLUME_REAL4 double4
+#else
+#define VOLUME_REAL4 float4
+#endif
+
+// One 4-point transform of four values (forward: the DCT; else its inverse), as a macro
+// so that it serves rows of four x positions (the y and z transforms) and scalars (x).
+#define VOLUME_DCT4_FWD(T, a, b, c, d)                                                   \
+    {                                                                                    \
+        const T s0 = a + d, s1 = b + c, d0 = a - d, d1 = b - c;                          \
+        a = (REAL)0.5 * (s0 + s1);                                                       \
+        b = VOLUME_C1 * d0 + VOLUME_C3 * d1;                                             \
+        c = (REAL)0.5 * (s0 - s1);                                                       \
+        d = VOLUME_C3 * d0 - VOLUME_C1 * d1;                                             \
+    }
+#define VOLUME_DCT4_INV(T, a, b, c, d)                                                   \
+    {                                                                                    \
+        const T e0 = (REAL)0.5 * (a + c), e1 = (REAL)0.5 * (a - c);                      \
+        const T o0 = VOLUME_C1 * b + VOLUME_C3 * d, o1 = VOLUME_C3 * b - VOLUME_C1 * d;  \
+        a = e0 + o0;                                                                     \
+        b = e1 + o1;                                                                     \
+        c = e1 - o1;                                                                     \
+        d = e0 - o0;                                                                     \
+    }
+
+// The block as 16 rows r[4 z + y] of four x values: y and z transforms act on whole rows,
+// the x transform inside each row.
+inline void volume_dct4_block(VOLUME_REAL4* r, const int inverse)
 {
-    const int other1 = stride == 1 ? 4 : 1, other2 = stride == 16 ? 4 : 16;
-    for (int p = 0; p < 4; ++p) {
-        for (int q = 0; q < 4; ++q) {
-            REAL* l = a + p * other1 + q * other2;
-            const REAL x0 = l[0], x1 = l[stride], x2 = l[2 * stride], x3 = l[3 * stride];
-            if (inverse) {
-                const REAL e0 = (REAL)0.5 * (x0 + x2), e1 = (REAL)0.5 * (x0 - x2);
-                const REAL o0 = VOLUME_C1 * x1 + VOLUME_C3 * x3;
-                const REAL o1 = VOLUME_C3 * x1 - VOLUME_C1 * x3;
-                l[0] = e0 + o0;
-                l[stride] = e1 + o1;
-                l[2 * stride] = e1 - o1;
-                l[3 * stride] = e0 - o0;
-            } else {
-                const REAL s0 = x0 + x3, s1 = x1 + x2, d0 = x0 - x3, d1 = x1 - x2;
-                l[0] = (REAL)0.5 * (s0 + s1);
-                l[stride] = VOLUME_C1 * d0 + VOLUME_C3 * d1;
-                l[2 * stride] = (REAL)0.5 * (s0 - s1);
-                l[3 * stride] = VOLUME_C3 * d0 - VOLUME_C1 * d1;
-            }
-        }
+    for (int j = 0; j < 16; ++j) {
+        REAL a = r[j].x, b = r[j].y, c = r[j].z, d = r[j].w;
+        if (inverse) VOLUME_DCT4_INV(REAL, a, b, c, d) else VOLUME_DCT4_FWD(REAL, a, b, c, d)
+        r[j] = (VOLUME_REAL4)(a, b, c, d);
+    }
+    for (int z = 0; z < 4; ++z) {
+        VOLUME_REAL4* q = r + 4 * z;  // along y
+        if (inverse) VOLUME_DCT4_INV(VOLUME_REAL4, q[0], q[1], q[2], q[3])
+        else VOLUME_DCT4_FWD(VOLUME_REAL4, q[0], q[1], q[2], q[3])
+    }
+    for (int y = 0; y < 4; ++y) {  // along z
+        if (inverse) VOLUME_DCT4_INV(VOLUME_REAL4, r[y], r[4 + y], r[8 + y], r[12 + y])
+        else VOLUME_DCT4_FWD(VOLUME_REAL4, r[y], r[4 + y], r[8 + y], r[12 + y])
     }
 }
 
@@ -468,18 +485,15 @@ __kernel void volume_threshold_blocks(__global const REAL* restrict u,
     const int b = get_global_id(0);
     if (b >= blocks) return;
     const int c0 = corner[b];
-    REAL a[64];
-    for (int z = 0; z < 4; ++z)
-        for (int y = 0; y < 4; ++y)
-            for (int x = 0; x < 4; ++x) a[(z * 4 + y) * 4 + x] = u[c0 + (z * ny + y) * nx + x];
-    volume_dct4_axis(a, 1, 0);
-    volume_dct4_axis(a, 4, 0);
-    volume_dct4_axis(a, 16, 0);
-    for (int j = 1; j < 64; ++j) a[j] = fabs(a[j]) < threshold ? (REAL)0 : a[j];
-    volume_dct4_axis(a, 1, 1);
-    volume_dct4_axis(a, 4, 1);
-    volume_dct4_axis(a, 16, 1);
-    for (int j = 0; j < 64; ++j) out[64 * b + j] = a[j];
+    VOLUME_REAL4 r[16];
+    for (int j = 0; j < 16; ++j) r[j] = vload4(0, u + c0 + ((j >> 2) * ny + (j & 3)) * nx);
+    volume_dct4_block(r, 0);
+    const VOLUME_REAL4 zero = (VOLUME_REAL4)(0), t = (VOLUME_REAL4)(threshold);
+    const REAL mean = r[0].x;
+    for (int j = 0; j < 16; ++j) r[j] = select(r[j], zero, isless(fabs(r[j]), t));
+    r[0].x = mean;
+    volume_dct4_block(r, 1);
+    for (int j = 0; j < 16; ++j) vstore4(r[j], 0, out + 64 * b + 4 * j);
 }
 
 // voxels[k]: the hole's voxel indices; block_of[i]: the block whose corner is voxel i, or -1.
