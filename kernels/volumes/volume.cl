@@ -425,6 +425,7 @@ __kernel void volume_biharmonic_cg(__global REAL* restrict x, __global REAL* res
 // kept), and it is taken back (volume_threshold_blocks, one work-item per block, into
 // out[64 b + j]); each hole voxel then becomes the mean of its blocks' values
 // (volume_average_blocks). The host lowers the threshold from launch pair to launch pair.
+
 // The orthonormal 4-point DCT-II, X_k = a_k sum_m cos(pi (2 m + 1) k / 8) x_m (a_0 = 1/2,
 // a_k = 1/sqrt(2)), as butterflies; C1 = cos(pi/8) / sqrt(2), C3 = cos(3 pi/8) / sqrt(2).
 #define VOLUME_C1 ((REAL)0.6532814824381883)
