@@ -124,9 +124,9 @@ class _Slab:
         self.w = cla.empty(q, nc * self.n, g.dtype)
         self.partial = cla.empty(q, nc * 2 * g.shape[2] * g.shape[1], g.dtype)
         self.lam = cla.empty(q, nc, g.dtype)
-        kernel = lambda name: runtime.kernel("volumes/volume.cl", name, g.dtype)  # noqa: E731
-        self.div_k, self.step_k = kernel("volume_dual_div"), kernel("volume_dual_step")
-        self.primal_k = kernel("volume_dual_primal")
+        self.div_k = runtime.kernel("volumes/volume.cl", "volume_dual_div", g.dtype)
+        self.step_k = runtime.kernel("volumes/volume.cl", "volume_dual_step", g.dtype)
+        self.primal_k = runtime.kernel("volumes/volume.cl", "volume_dual_primal", g.dtype)
         self.tau = g.scalar(1.0 / (4.0 * sum(1.0 / s**2 for s in g.spacing)))
 
     def load(self, gens, u) -> None:
