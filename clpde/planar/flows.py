@@ -406,8 +406,8 @@ def diffuse(
     spacing : (3,) array_like, optional
         A volume's voxel size (z, y, x). (Z, Y, X) and (Z, Y, X, C) arrays are volumes
         (a 3-D array without channel_axis is one, and spacing makes any array one),
-        diffused by `clpde.volumes` with heat, perona-malik (presmooth in spacing units)
-        or tv; curvature is refused.
+        diffused by `clpde.volumes` with heat, perona-malik (presmooth in spacing units),
+        tv or curvature (eps only: no weight).
     return_info : bool
         Also return a `DiffuseInfo` (steps, dt, time reached, flow, stability limit).
     **params

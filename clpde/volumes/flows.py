@@ -1,7 +1,14 @@
 """Explicit diffusion of 3D volumes (kernels/volumes/volume.cl): heat, Perona-Malik (with
-Catte's Gaussian pre-smoothing of the field its diffusivity reads) and the TV flow, with voxel
-spacing: every difference is a physical gradient, and the stability limit is
-1 / (2 sum 1/h^2) (times eps for TV). `clpde.diffuse` sends volumes here."""
+Catte's Gaussian pre-smoothing of the field its diffusivity reads), the TV flow and the
+level-set mean curvature flow, with voxel spacing: every difference is a physical gradient,
+and the stability limit is 1 / (2 sum 1/h^2) (times eps for TV; curvature's as heat's, as
+the planar flow's, since its diffusion across the level sets is at most the Laplacian's).
+`clpde.diffuse` sends volumes here.
+
+A volume whose fields do not fit the device runs in slabs along z: each round uploads a slab
+with `ghost` planes of the volume on either side, runs as many steps as the ghost planes
+absorb (a step reads `reach` planes away, so the slab's cut faces spoil at most `reach`
+planes per step), and keeps the slab's own planes; the result is the untiled run's."""
 
 from __future__ import annotations
 
@@ -9,16 +16,25 @@ import numpy as np
 import pyopencl.array as cla
 
 from .._progress import progress_bar
-from ..errors import InputError
+from ..errors import DeviceMemoryError, InputError
 from ..imagedata import check_steps, compute_dtype, positive
 from ..runtime import get_runtime
 from .grid import VolumeGrid, check_spacing, to_volume_layout
 
 KERNEL_FILES = ("volumes/volume.cl",)
 
-FLOWS = ("heat", "perona-malik", "tv")
-PARAMS = {"heat": (), "perona-malik": ("kappa", "edge", "presmooth"), "tv": ("eps",)}
+FLOWS = ("heat", "perona-malik", "tv", "curvature")
+PARAMS = {
+    "heat": (),
+    "perona-malik": ("kappa", "edge", "presmooth"),
+    "tv": ("eps",),
+    "curvature": ("eps",),
+}
+FIELDS = 4  # device copies of the volume a flow holds (two states, two for Catte or TV)
+# Slabs: planes per slab upload, None to size them by the device's memory (tests force few)
+TILE_PLANES = None
 TV_EPS = 0.005  # as the planar flow's default (clpde.planar.flows.TV_EPS)
+CURVATURE_EPS = 1e-10  # added to |grad u|^2, as the planar curvature flow's default
 
 
 def stability_limit_volume(flow: str, spacing, eps: float = TV_EPS) -> float:
@@ -38,11 +54,6 @@ def gaussian_weights_1d(sigma: float) -> np.ndarray:
 
 
 def _check_params(flow: str, params: dict) -> dict:
-    if flow == "curvature":
-        raise InputError(
-            "the curvature flow is not built for volumes yet; use 'heat', 'perona-malik' or "
-            "'tv' (or diffuse each slice as a 2-D image)"
-        )
     if flow not in FLOWS:
         raise InputError(f"unknown flow {flow!r} for a volume; choose one of {', '.join(FLOWS)}")
     extra = sorted(set(params) - set(PARAMS[flow]))
@@ -61,6 +72,8 @@ def _check_params(flow: str, params: dict) -> dict:
         out["presmooth"] = presmooth
     if flow == "tv":
         out["eps"] = positive("eps", params.get("eps", TV_EPS))
+    if flow == "curvature":
+        out["eps"] = positive("eps", params.get("eps", CURVATURE_EPS))
     return out
 
 
@@ -93,20 +106,77 @@ def diffuse_volume(
             "give a smaller dt or leave it out"
         )
     data, layout = to_volume_layout(volume, channel_axis, spacing)
-    grid = VolumeGrid(get_runtime(device), data.shape, compute_dtype(None, dtype), h)
-    grid.check_fits(4, f"the 3D {flow} flow")
-    u = _run(grid, data, flow, steps, dt, p, progress)
+    runtime, real = get_runtime(device), compute_dtype(None, dtype)
+    planes = _planes_that_fit(runtime, data.shape, real)
+    with progress_bar(progress, steps, f"clpde diffuse {flow} (volume)", unit="step") as bar:
+        if planes >= data.shape[1]:
+            grid = VolumeGrid(runtime, data.shape, real, h)
+            u = _run(grid, data, flow, steps, dt, p, bar)
+        else:
+            u = _run_slabs(runtime, real, h, data, flow, steps, dt, p, bar, planes)
     return layout.restore(u), dt, limit
 
 
-def _run(grid: VolumeGrid, data, flow, steps, dt, p, progress) -> np.ndarray:
+def _planes_that_fit(runtime, shape, real) -> int:
+    """How many z planes of a (nc, nz, ny, nx) volume's FIELDS copies the device holds
+    (TILE_PLANES when set)."""
+    if TILE_PLANES is not None:
+        return int(TILE_PLANES)
+    nc, nz, ny, nx = shape
+    plane = nc * ny * nx * np.dtype(real).itemsize
+    return int(min(runtime.global_mem // (FIELDS * plane), runtime.max_alloc // plane))
+
+
+def _reach(flow: str, p: dict, h) -> int:
+    """Planes along z a step reads away: one for the stencils, two for TV (its conductance
+    is read at the neighbours), one plus the Gaussian's radius for Catte's pre-smoothing."""
+    if flow == "tv":
+        return 2
+    if flow == "perona-malik":
+        return 1 + len(gaussian_weights_1d(p["presmooth"] / h[0])) - 1
+    return 1
+
+
+def _run_slabs(runtime, real, h, data, flow, steps, dt, p, bar, planes) -> np.ndarray:
+    """`_run` over slabs along z that fit `planes` planes with their ghosts, in rounds."""
+    nz = data.shape[1]
+    reach = _reach(flow, p, h)
+    per_round = max(1, planes // (4 * reach))  # ghosts take at most half the upload
+    ghost = reach * per_round
+    own = planes - 2 * ghost
+    if own < 1:
+        raise DeviceMemoryError(
+            f"the 3D {flow} flow needs {2 * ghost + 1} planes of the volume on the device at "
+            f"once, but it holds {planes}; crop the volume in y or x"
+        )
+    u = data
+    done = 0
+    while done < steps:
+        k = min(per_round, steps - done)
+        out = np.empty_like(u)
+        for z0 in range(0, nz, own):
+            z1 = min(nz, z0 + own)
+            a, b = max(0, z0 - ghost), min(nz, z1 + ghost)
+            grid = VolumeGrid(runtime, (data.shape[0], b - a) + data.shape[2:], real, h)
+            slab = _run(grid, u[:, a:b], flow, k, dt, p, None)
+            out[:, z0:z1] = slab[:, z0 - a : z1 - a]
+        u, done = out, done + k
+        bar.update(k)
+    return u
+
+
+def _run(grid: VolumeGrid, data, flow, steps, dt, p, bar) -> np.ndarray:
+    """`steps` steps of the flow on `data`, on the device at once; `bar` (or None) hears
+    each step."""
     rt, q = grid.runtime, grid.runtime.queue
     cur = cla.to_device(q, data.astype(grid.dtype).reshape(-1))
     nxt = cla.empty_like(cur)
-    aux = cla.empty_like(cur) if flow != "heat" else None
+    aux = cla.empty_like(cur) if flow in ("tv", "perona-malik") else None
     dts = grid.scalar(dt)
     if flow == "heat":
         step = rt.kernel("volumes/volume.cl", "volume_heat_step", grid.dtype)
+    elif flow == "curvature":
+        step = rt.kernel("volumes/volume.cl", "volume_curvature_step", grid.dtype)
     elif flow == "tv":
         cond = rt.kernel("volumes/volume.cl", "volume_tv_conductance", grid.dtype)
         step = rt.kernel("volumes/volume.cl", "volume_tv_step", grid.dtype)
@@ -122,24 +192,26 @@ def _run(grid: VolumeGrid, data, flow, steps, dt, p, progress) -> np.ndarray:
             for hk in grid.spacing[::-1]
         ]
         tmp = cla.empty_like(cur) if p["presmooth"] > 0 else None
-    with progress_bar(progress, steps, f"clpde diffuse {flow} (volume)", unit="step") as bar:
-        for _ in range(steps):
-            if flow == "heat":
-                grid.launch(step, cur.data, nxt.data, dts, *grid.inverse2)
-            elif flow == "tv":
-                grid.launch(cond, cur.data, aux.data, eps2, *grid.inverse)
-                grid.launch(step, cur.data, aux.data, nxt.data, dts, *grid.inverse2)
-            else:
-                smooth = cur
-                if tmp is not None:
-                    src, dst = cur, aux
-                    for axis, w in enumerate(weights):
-                        grid.launch(gauss, src.data, dst.data, w.data, np.int32(w.size - 1),
-                                    np.int32(axis))  # fmt: skip
-                        src, dst = dst, (tmp if dst is aux else aux)
-                    smooth = src
-                grid.launch(step, cur.data, smooth.data, nxt.data, dts, inv_k2, edge,
-                            *grid.inverse)  # fmt: skip
-            cur, nxt = nxt, cur
+    for _ in range(steps):
+        if flow == "heat":
+            grid.launch(step, cur.data, nxt.data, dts, *grid.inverse2)
+        elif flow == "curvature":
+            grid.launch(step, cur.data, nxt.data, dts, grid.scalar(p["eps"]), *grid.inverse)
+        elif flow == "tv":
+            grid.launch(cond, cur.data, aux.data, eps2, *grid.inverse)
+            grid.launch(step, cur.data, aux.data, nxt.data, dts, *grid.inverse2)
+        else:
+            smooth = cur
+            if tmp is not None:
+                src, dst = cur, aux
+                for axis, w in enumerate(weights):
+                    grid.launch(gauss, src.data, dst.data, w.data, np.int32(w.size - 1),
+                                np.int32(axis))  # fmt: skip
+                    src, dst = dst, (tmp if dst is aux else aux)
+                smooth = src
+            grid.launch(step, cur.data, smooth.data, nxt.data, dts, inv_k2, edge,
+                        *grid.inverse)  # fmt: skip
+        cur, nxt = nxt, cur
+        if bar is not None:
             bar.update(1)
     return cur.get().astype(np.float64).reshape(data.shape)

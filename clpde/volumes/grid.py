@@ -101,16 +101,6 @@ class VolumeGrid:
     def scalar(self, value: float):
         return self.dtype.type(value)
 
-    def check_fits(self, fields: int, what: str) -> None:
-        """Refuse before any work when `fields` copies of the field cannot fit the device."""
-        nbytes = int(np.prod(self.shape)) * self.dtype.itemsize
-        self.runtime.check_fits(
-            fields * nbytes,
-            3 * nbytes,
-            what,
-            "crop the volume, or run it in slabs along z (tiling of volumes is not built yet)",
-        )
-
     def launch(self, kernel, *args) -> None:
         """Run a volume kernel over every voxel, channels walked inside."""
         nc, nz, ny, nx = self.shape

@@ -10,7 +10,7 @@ import numpy as np
 import pyopencl.array as cla
 
 from .._progress import progress_bar
-from ..errors import InputError
+from ..errors import DeviceMemoryError, InputError
 from ..imagedata import check_steps, compute_dtype, positive
 from ..runtime import get_runtime
 from .grid import VolumeGrid, check_spacing, to_volume_layout
@@ -22,6 +22,9 @@ KERNEL_FILES = ("volumes/volume.cl",)
 _NOISE_MASK = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
 _MAD_TO_STD = 1.0 / 0.6744897501960817
 _LAMBDA_MIN = 1e-6
+FIELDS = 14  # device copies of the volume: f, u, w and three generations of the 3-vector p
+# Slabs: planes per slab upload, None to size them by the device's memory (tests force few)
+TILE_PLANES = None
 
 
 def estimate_sigma_volume(data: np.ndarray) -> float:
@@ -90,11 +93,10 @@ def denoise_tv_volume(
             sigma2 = np.full(nc, sigma2.mean())
         lam0 = 1.0 / np.sqrt(sigma2)
     runtime = get_runtime(device)
-    grid = VolumeGrid(runtime, data.shape, compute_dtype(None, dtype), h)
-    grid.check_fits(14, "3D TV denoising")  # f, u, w, change and three generations of p
     u, steps, converged, lam = _fgp(
-        grid, data, lam0, sigma2, max_steps, tol, check_every, progress, vectorial
-    )
+        runtime, compute_dtype(None, dtype), h, data, lam0, sigma2, max_steps, tol, check_every,
+        progress, vectorial,
+    )  # fmt: skip
     if sigma2 is not None:
         # noise as large as a channel's own spread: only its mean is that far from the data
         var = data.reshape(nc, -1).var(axis=1)
@@ -106,42 +108,115 @@ def denoise_tv_volume(
     return layout.restore(u), steps, converged, lam / weight_unit, residual, noise
 
 
-def _fgp(grid: VolumeGrid, data, lam0, sigma2, max_steps, tol, check_every, progress, vectorial):
-    """Beck and Teboulle's fast projected gradient on the dual; (u, steps, converged, lambda)."""
-    rt, q = grid.runtime, grid.runtime.queue
-    nc = data.shape[0]
-    n = int(np.prod(data.shape[1:]))
-    f = cla.to_device(q, data.astype(grid.dtype).reshape(-1))
-    gens = [cla.zeros(q, 3 * nc * n, grid.dtype) for _ in range(3)]
-    w = cla.empty(q, nc * n, grid.dtype)
-    u = f.copy()
-    partial = cla.empty(q, nc * 2 * data.shape[2] * data.shape[1], grid.dtype)
-    primal_k = rt.kernel("volumes/volume.cl", "volume_dual_primal", grid.dtype)
+class _Slab:
+    """The FGP's device state over the planes [a, b) of the volume: f, u, the dual p in three
+    generations (p_old, p, p_new), w and lambda, and the steps that move it."""
+
+    def __init__(self, runtime, real, h, data, a, b):
+        self.a, self.b = a, b
+        nc = data.shape[0]
+        self.grid = VolumeGrid(runtime, (nc, b - a) + data.shape[2:], real, h)
+        self.n = int(np.prod(self.grid.shape[1:]))
+        q, g = runtime.queue, self.grid
+        self.f = cla.to_device(q, np.ascontiguousarray(data[:, a:b], g.dtype).reshape(-1))
+        self.u = self.f.copy()
+        self.gens = [cla.zeros(q, 3 * nc * self.n, g.dtype) for _ in range(3)]
+        self.w = cla.empty(q, nc * self.n, g.dtype)
+        self.partial = cla.empty(q, nc * 2 * g.shape[2] * g.shape[1], g.dtype)
+        self.lam = cla.empty(q, nc, g.dtype)
+        self.div_k = runtime.kernel("volumes/volume.cl", "volume_dual_div", g.dtype)
+        self.step_k = runtime.kernel("volumes/volume.cl", "volume_dual_step", g.dtype)
+        self.primal_k = runtime.kernel("volumes/volume.cl", "volume_dual_primal", g.dtype)
+        self.tau = g.scalar(1.0 / (4.0 * sum(1.0 / s**2 for s in g.spacing)))
+
+    def load(self, gens, u) -> None:
+        """The host's state (p's generations as (3 nc, nz, ny, nx), u as (nc, nz, ny, nx))."""
+        for dev, host in zip(self.gens, gens, strict=True):
+            dev.set(np.ascontiguousarray(host[:, self.a : self.b], self.grid.dtype).reshape(-1))
+        self.u.set(np.ascontiguousarray(u[:, self.a : self.b], self.grid.dtype).reshape(-1))
+
+    def store(self, gens, u, z0, z1) -> None:
+        """Planes [z0, z1) of the state into the host's arrays."""
+        own = slice(z0 - self.a, z1 - self.a)
+        shape = self.grid.shape
+        for dev, host in zip(self.gens, gens, strict=True):
+            host[:, z0:z1] = dev.get().reshape((3 * shape[0],) + shape[1:])[:, own]
+        u[:, z0:z1] = self.u.get().reshape(shape)[:, own]
+
+    def run(self, lam, betas, vectorial) -> np.ndarray:
+        """One FGP iteration per beta, then u = f + div(p) / lambda; the primal's partials
+        as (nc, 2, rows), rows (z, y) of this slab."""
+        g, inv = self.grid, self.grid.inverse
+        self.lam.set(np.asarray(lam, g.dtype))
+        for beta in betas:
+            p_old, p, p_new = self.gens
+            b = g.scalar(beta)
+            g.launch(self.div_k, p.data, p_old.data, self.f.data, self.lam.data, b, self.w.data,
+                     *inv)  # fmt: skip
+            g.launch(
+                self.step_k, p.data, p_old.data, self.w.data, p_new.data, b, self.tau,
+                np.int32(vectorial), *inv,
+            )  # fmt: skip
+            self.gens = [p, p_new, p_old]
+        p = self.gens[1]
+        zero = g.scalar(0)
+        g.launch(self.div_k, p.data, p.data, self.f.data, self.lam.data, zero, self.w.data, *inv)
+        return _primal(g, self.primal_k, self.w, self.f, self.lam, self.u, self.partial)
+
+
+def _slabs(nz: int, planes: int, ghost: int) -> list[tuple[int, int, int, int]]:
+    """(a, b, z0, z1): slabs of own planes [z0, z1) uploaded as [a, b), `ghost` planes more on
+    either side, at most `planes` in all; one slab when the volume fits."""
+    if planes >= nz:
+        return [(0, nz, 0, nz)]
+    own = planes - 2 * ghost
+    if own < 1:
+        raise DeviceMemoryError(
+            f"3D TV denoising needs {2 * ghost + 1} planes of the volume on the device at "
+            f"once, but it holds {planes}; crop the volume in y or x, or lower check_every"
+        )
+    return [
+        (max(0, z0 - ghost), min(nz, z0 + own + ghost), z0, min(nz, z0 + own))
+        for z0 in range(0, nz, own)
+    ]
+
+
+def _fgp(runtime, real, h, data, lam0, sigma2, max_steps, tol, check_every, progress, vectorial):
+    """Beck and Teboulle's fast projected gradient on the dual; (u, steps, converged, lambda).
+
+    A volume too large for the device runs in slabs along z, each round of check_every
+    iterations on each slab with check_every + 1 ghost planes (an iteration reads one plane
+    away, the primal one more), the state kept on the host between rounds; one slab stays
+    on the device throughout."""
+    nc, nz, ny, nx = data.shape
+    n = nz * ny * nx
+    slabs = _slabs(nz, _planes_that_fit(runtime, data.shape, real), check_every + 1)
+    whole = _Slab(runtime, real, h, data, 0, nz) if len(slabs) == 1 else None
+    gens = None if whole else [np.zeros((3 * nc, nz, ny, nx)) for _ in range(3)]
+    u = None if whole else data.copy()
     lam = np.asarray(lam0, np.float64).copy()
-    lam_dev = cla.to_device(q, lam.astype(grid.dtype))
-    div_k = rt.kernel("volumes/volume.cl", "volume_dual_div", grid.dtype)
-    step_k = rt.kernel("volumes/volume.cl", "volume_dual_step", grid.dtype)
-    inv = grid.inverse
-    tau = grid.scalar(1.0 / (4.0 * sum(1.0 / s**2 for s in grid.spacing)))
     t, beta, steps, converged = 1.0, 0.0, 0, False
     with progress_bar(progress, max_steps, "clpde denoise_tv (volume)", unit="it") as bar:
         while steps < max_steps and not converged:
+            betas = []
             for _ in range(min(check_every, max_steps - steps)):
-                p_old, p, p_new = gens
-                b = grid.scalar(beta)
-                grid.launch(div_k, p.data, p_old.data, f.data, lam_dev.data, b, w.data, *inv)
-                grid.launch(
-                    step_k, p.data, p_old.data, w.data, p_new.data, b, tau,
-                    np.int32(vectorial), *inv,
-                )  # fmt: skip
-                gens = [p, p_new, p_old]
+                betas.append(beta)
                 t_next = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * t * t))
                 beta, t = (t - 1.0) / t_next, t_next
                 steps += 1
-            # u = f + div(p) / lambda: w from p itself (beta 0), over lambda per channel
-            p = gens[1]
-            grid.launch(div_k, p.data, p.data, f.data, lam_dev.data, grid.scalar(0), w.data, *inv)
-            rows = _primal(grid, primal_k, w, f, lam_dev, u, partial)
+            if whole:
+                rows = whole.run(lam, betas, vectorial)
+            else:
+                # the round's results go to new arrays: a later slab's ghosts are the
+                # planes an earlier slab owns, as they were before the round
+                parts, new_gens, new_u = [], [np.empty_like(g) for g in gens], np.empty_like(u)
+                for a, b, z0, z1 in slabs:
+                    slab = _Slab(runtime, real, h, data, a, b)
+                    slab.load(gens, u)
+                    part = slab.run(lam, betas, vectorial)
+                    parts.append(part[:, :, (z0 - a) * ny : (z1 - a) * ny])
+                    slab.store(new_gens, new_u, z0, z1)
+                gens, u, rows = new_gens, new_u, np.concatenate(parts, axis=2)
             converged = float(rows[:, 0].max()) < tol * check_every
             if sigma2 is not None and not converged:
                 residual = rows[:, 1].sum(axis=1) / n
@@ -150,9 +225,20 @@ def _fgp(grid: VolumeGrid, data, lam0, sigma2, max_steps, tol, check_every, prog
                 else:
                     held = sigma2 >= data.reshape(nc, -1).var(axis=1)
                     lam = np.where(held, lam, np.maximum(_LAMBDA_MIN, lam * residual / sigma2))
-                lam_dev.set(lam.astype(grid.dtype))
             bar.update(steps - bar.n)
-    return u.get().astype(np.float64).reshape(data.shape), steps, converged, lam
+    if whole:
+        u = whole.u.get().astype(np.float64).reshape(data.shape)
+    return u, steps, converged, lam
+
+
+def _planes_that_fit(runtime, shape, real) -> int:
+    """How many z planes of the FIELDS device copies of a (nc, nz, ny, nx) volume the device
+    holds (TILE_PLANES when set)."""
+    if TILE_PLANES is not None:
+        return int(TILE_PLANES)
+    nc, nz, ny, nx = shape
+    plane = nc * ny * nx * np.dtype(real).itemsize
+    return int(min(runtime.global_mem // (FIELDS * plane), runtime.max_alloc // (3 * plane)))
 
 
 def _primal(grid: VolumeGrid, kernel, w, f, lam, u, partial) -> np.ndarray:

@@ -244,6 +244,43 @@ __kernel void volume_tv_step(__global const REAL* restrict u, __global const REA
     }
 }
 
+// Level-set mean curvature flow u_t = |grad u| div(grad u / |grad u|)
+//   = [(uyy + uzz) ux^2 + (uxx + uzz) uy^2 + (uxx + uyy) uz^2
+//      - 2 (ux uy uxy + ux uz uxz + uy uz uyz)] / (|grad u|^2 + eps),
+// central differences over the spacing (the planar curvature_step's, kernels/common/
+// stencil.h, in 3D); a neighbour beyond the border is the voxel's own index along that
+// axis, diagonal ones included (Neumann, as tests/reference/volumes.py's _shift).
+__kernel void volume_curvature_step(__global const REAL* restrict u, __global REAL* restrict v,
+                                    const REAL dt, const REAL eps, const REAL ihx,
+                                    const REAL ihy, const REAL ihz, VOL_ARGS)
+{
+    FOR_EACH_VOXEL(i, x, y, z) {
+        const int xp = x < nx - 1 ? 1 : 0, xm = x > 0 ? -1 : 0;
+        const int yp = y < ny - 1 ? nx : 0, ym = y > 0 ? -nx : 0;
+        const int zp = z < nz - 1 ? nx * ny : 0, zm = z > 0 ? -nx * ny : 0;
+        for (int c = 0; c < nch; ++c) {
+            __global const REAL* uc = u + c * n + i;
+            const REAL m = uc[0];
+            const REAL ux = (REAL)0.5 * ihx * (uc[xp] - uc[xm]);
+            const REAL uy = (REAL)0.5 * ihy * (uc[yp] - uc[ym]);
+            const REAL uz = (REAL)0.5 * ihz * (uc[zp] - uc[zm]);
+            const REAL uxx = ihx * ihx * (uc[xp] - 2 * m + uc[xm]);
+            const REAL uyy = ihy * ihy * (uc[yp] - 2 * m + uc[ym]);
+            const REAL uzz = ihz * ihz * (uc[zp] - 2 * m + uc[zm]);
+            const REAL uxy = (REAL)0.25 * ihx * ihy *
+                             (uc[xp + yp] - uc[xm + yp] - uc[xp + ym] + uc[xm + ym]);
+            const REAL uxz = (REAL)0.25 * ihx * ihz *
+                             (uc[xp + zp] - uc[xm + zp] - uc[xp + zm] + uc[xm + zm]);
+            const REAL uyz = (REAL)0.25 * ihy * ihz *
+                             (uc[yp + zp] - uc[ym + zp] - uc[yp + zm] + uc[ym + zm]);
+            const REAL num = (uyy + uzz) * ux * ux + (uxx + uzz) * uy * uy +
+                             (uxx + uyy) * uz * uz -
+                             2 * (ux * uy * uxy + ux * uz * uxz + uy * uz * uyz);
+            v[c * n + i] = m + dt * num / (ux * ux + uy * uy + uz * uz + eps);
+        }
+    }
+}
+
 // One axis of a separable Gaussian (Catte's pre-smoothing): weights w[0..radius] for offsets
 // +-k, mirrored at the border (index -1 reads 0). axis 0 is x, 1 y, 2 z.
 inline int volume_mirror(int k, const int m)
@@ -380,4 +417,106 @@ __kernel void volume_biharmonic_cg(__global REAL* restrict x, __global REAL* res
         barrier(BOTH_FENCES);  // p is read across items by the next L p
     }
     if (k0 == 0) steps[0] = step;
+}
+
+// ---- spectral fill: sparsity in 4 x 4 x 4 DCT blocks --------------------------------------
+// Every 4^3 block of the box (each corner, so every shift) that holds a hole voxel is taken
+// to its orthonormal DCT-II, its coefficients below `threshold` are zeroed (the mean is
+// kept), and it is taken back (volume_threshold_blocks, one work-item per block, into
+// out[64 b + j]); each hole voxel then becomes the mean of its blocks' values
+// (volume_average_blocks). The host lowers the threshold from launch pair to launch pair.
+
+// The orthonormal 4-point DCT-II, X_k = a_k sum_m cos(pi (2 m + 1) k / 8) x_m (a_0 = 1/2,
+// a_k = 1/sqrt(2)), as butterflies; C1 = cos(pi/8) / sqrt(2), C3 = cos(3 pi/8) / sqrt(2).
+#define VOLUME_C1 ((REAL)0.6532814824381883)
+#define VOLUME_C3 ((REAL)0.2705980500730985)
+
+#if REAL_IS_DOUBLE
+#define VOLUME_REAL4 double4
+#else
+#define VOLUME_REAL4 float4
+#endif
+
+// One 4-point transform of four values (forward: the DCT; else its inverse), as a macro
+// so that it serves rows of four x positions (the y and z transforms) and scalars (x).
+#define VOLUME_DCT4_FWD(T, a, b, c, d)                                                   \
+    {                                                                                    \
+        const T s0 = a + d, s1 = b + c, d0 = a - d, d1 = b - c;                          \
+        a = (REAL)0.5 * (s0 + s1);                                                       \
+        b = VOLUME_C1 * d0 + VOLUME_C3 * d1;                                             \
+        c = (REAL)0.5 * (s0 - s1);                                                       \
+        d = VOLUME_C3 * d0 - VOLUME_C1 * d1;                                             \
+    }
+#define VOLUME_DCT4_INV(T, a, b, c, d)                                                   \
+    {                                                                                    \
+        const T e0 = (REAL)0.5 * (a + c), e1 = (REAL)0.5 * (a - c);                      \
+        const T o0 = VOLUME_C1 * b + VOLUME_C3 * d, o1 = VOLUME_C3 * b - VOLUME_C1 * d;  \
+        a = e0 + o0;                                                                     \
+        b = e1 + o1;                                                                     \
+        c = e1 - o1;                                                                     \
+        d = e0 - o0;                                                                     \
+    }
+
+// The block as 16 rows r[4 z + y] of four x values: y and z transforms act on whole rows,
+// the x transform inside each row.
+inline void volume_dct4_block(VOLUME_REAL4* r, const int inverse)
+{
+    for (int j = 0; j < 16; ++j) {
+        REAL a = r[j].x, b = r[j].y, c = r[j].z, d = r[j].w;
+        if (inverse) VOLUME_DCT4_INV(REAL, a, b, c, d) else VOLUME_DCT4_FWD(REAL, a, b, c, d)
+        r[j] = (VOLUME_REAL4)(a, b, c, d);
+    }
+    for (int z = 0; z < 4; ++z) {
+        VOLUME_REAL4* q = r + 4 * z;  // along y
+        if (inverse) VOLUME_DCT4_INV(VOLUME_REAL4, q[0], q[1], q[2], q[3])
+        else VOLUME_DCT4_FWD(VOLUME_REAL4, q[0], q[1], q[2], q[3])
+    }
+    for (int y = 0; y < 4; ++y) {  // along z
+        if (inverse) VOLUME_DCT4_INV(VOLUME_REAL4, r[y], r[4 + y], r[8 + y], r[12 + y])
+        else VOLUME_DCT4_FWD(VOLUME_REAL4, r[y], r[4 + y], r[8 + y], r[12 + y])
+    }
+}
+
+// corner[b]: the index of block b's first voxel in the (nz, ny, nx) box.
+__kernel void volume_threshold_blocks(__global const REAL* restrict u,
+                                      __global const int* restrict corner, const int blocks,
+                                      const REAL threshold, __global REAL* restrict out,
+                                      const int nx, const int ny)
+{
+    const int b = get_global_id(0);
+    if (b >= blocks) return;
+    const int c0 = corner[b];
+    VOLUME_REAL4 r[16];
+    for (int j = 0; j < 16; ++j) r[j] = vload4(0, u + c0 + ((j >> 2) * ny + (j & 3)) * nx);
+    volume_dct4_block(r, 0);
+    const VOLUME_REAL4 zero = (VOLUME_REAL4)(0), t = (VOLUME_REAL4)(threshold);
+    const REAL mean = r[0].x;
+    for (int j = 0; j < 16; ++j) r[j] = select(r[j], zero, isless(fabs(r[j]), t));
+    r[0].x = mean;
+    volume_dct4_block(r, 1);
+    for (int j = 0; j < 16; ++j) vstore4(r[j], 0, out + 64 * b + 4 * j);
+}
+
+// voxels[k]: the hole's voxel indices; block_of[i]: the block whose corner is voxel i, or -1.
+__kernel void volume_average_blocks(__global REAL* restrict u,
+                                    __global const int* restrict voxels, const int count,
+                                    __global const int* restrict block_of,
+                                    __global const REAL* restrict values, const int nx,
+                                    const int ny)
+{
+    const int k = get_global_id(0);
+    if (k >= count) return;
+    const int i = voxels[k], x = i % nx, y = (i / nx) % ny, z = i / (nx * ny);
+    REAL sum = 0;
+    int hits = 0;
+    for (int dz = 0; dz < 4 && dz <= z; ++dz)
+        for (int dy = 0; dy < 4 && dy <= y; ++dy)
+            for (int dx = 0; dx < 4 && dx <= x; ++dx) {
+                const int b = block_of[i - (dz * ny + dy) * nx - dx];
+                if (b >= 0) {
+                    sum += values[64 * b + (dz * 4 + dy) * 4 + dx];
+                    ++hits;
+                }
+            }
+    if (hits > 0) u[i] = sum / hits;
 }

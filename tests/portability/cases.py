@@ -145,8 +145,9 @@ def _volumes():
         ),
         "catte": clpde.diffuse(vol, "perona-malik", steps=2, presmooth=1.0, spacing=spacing),
     }
-    out |= {flow: clpde.diffuse(vol, flow, steps=2, spacing=spacing) for flow in ("heat", "tv")}
-    for method in ("harmonic", "biharmonic"):
+    flows = ("heat", "tv", "curvature")
+    out |= {flow: clpde.diffuse(vol, flow, steps=2, spacing=spacing) for flow in flows}
+    for method in ("harmonic", "biharmonic", "spectral"):
         out[method] = inpaint_volume(vol, mask, spacing=spacing, method=method)
     return out
 

@@ -159,3 +159,66 @@ def biharmonic_fill(u, hole, h):
         rhs = -(bi[unknown][:, ~unknown] @ flat[~unknown])
         out[c].reshape(-1)[unknown] = spsolve(a, rhs)
     return out
+
+
+def dct4_blocks(blocks, inverse=False):
+    """The orthonormal 4-point DCT-II (or its inverse) along the last three axes."""
+    k, m = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
+    c = np.where(k == 0, 0.5, np.sqrt(0.5)) * np.cos(np.pi * (2 * m + 1) * k / 8)
+    t = c.T if inverse else c
+    return np.einsum("ai,bj,ck,...ijk->...abc", t, t, t, blocks)
+
+
+def spectral_fill(u, hole, levels):
+    """Iterative hard thresholding in every 4^3 block of the (nz, ny, nx) box u that holds a
+    hole voxel: per threshold, each block's DCT coefficients below it are zeroed (not the
+    mean), and each hole voxel becomes the mean of its blocks' values."""
+    u = np.array(u, np.float64)
+    nz, ny, nx = hole.shape
+    corners = [
+        (z, y, x)
+        for z in range(nz - 3)
+        for y in range(ny - 3)
+        for x in range(nx - 3)
+        if hole[z : z + 4, y : y + 4, x : x + 4].any()
+    ]
+    o = np.arange(4)
+    c = np.array(corners).reshape(-1, 3)
+    zz = c[:, 0, None, None, None] + o[:, None, None]
+    yy = c[:, 1, None, None, None] + o[None, :, None]
+    xx = c[:, 2, None, None, None] + o[None, None, :]
+    zz, yy, xx = np.broadcast_arrays(zz, yy, xx)
+    hits = np.zeros(u.shape)
+    np.add.at(hits, (zz, yy, xx), 1.0)
+    held = hole & (hits > 0)
+    for level in levels:
+        coef = dct4_blocks(u[zz, yy, xx])
+        mean = coef[:, 0, 0, 0].copy()
+        coef[np.abs(coef) < level] = 0
+        coef[:, 0, 0, 0] = mean
+        acc = np.zeros(u.shape)
+        np.add.at(acc, (zz, yy, xx), dct4_blocks(coef, inverse=True))
+        u[held] = acc[held] / hits[held]
+    return u
+
+
+def curvature_step(u, dt, eps, h):
+    """Level-set mean curvature flow, central differences over the spacing, a neighbour
+    beyond the border the voxel's own index along that axis (diagonals included)."""
+    d1 = {a: (_shift(u, a, 1) - _shift(u, a, -1)) / (2 * h[k]) for k, a in enumerate(AXES)}
+    d2 = {a: (_shift(u, a, 1) - 2 * u + _shift(u, a, -1)) / h[k] ** 2 for k, a in enumerate(AXES)}
+
+    def mixed(a, b):
+        ka, kb = AXES.index(a), AXES.index(b)
+        s = [[_shift(_shift(u, a, i), b, j) for j in (1, -1)] for i in (1, -1)]
+        return (s[0][0] - s[1][0] - s[0][1] + s[1][1]) / (4 * h[ka] * h[kb])
+
+    z, y, x = AXES
+    gz, gy, gx = d1[z], d1[y], d1[x]
+    num = (
+        (d2[y] + d2[z]) * gx**2
+        + (d2[x] + d2[z]) * gy**2
+        + (d2[x] + d2[y]) * gz**2
+        - 2 * (gx * gy * mixed(x, y) + gx * gz * mixed(x, z) + gy * gz * mixed(y, z))
+    )
+    return u + dt * num / (gx**2 + gy**2 + gz**2 + eps)

@@ -70,4 +70,4 @@ def test_channels_and_dtype_kept(rng):
 
 def test_an_unknown_method_gives_one_line():
     with pytest.raises(clpde.InputError, match="method must be one of"):
-        inpaint_volume(np.zeros((4, 5, 6)), np.zeros((4, 5, 6), bool), method="spectral")
+        inpaint_volume(np.zeros((4, 5, 6)), np.zeros((4, 5, 6), bool), method="transport")

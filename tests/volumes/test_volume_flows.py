@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import clpde
+from clpde.errors import DeviceMemoryError
 from clpde.volumes.flows import gaussian_weights_1d, stability_limit_volume
 from tests.reference import volumes as ref
 
@@ -26,6 +27,7 @@ H = (2.0, 1.0, 0.5)
         ("perona-malik", {"kappa": 0.3, "edge": "rational"}),
         ("perona-malik", {"kappa": 0.3, "presmooth": 1.0}),
         ("tv", {"eps": 0.1}),
+        ("curvature", {"eps": 1e-3}),
     ],
 )
 def test_kernels_match_the_reference(rng, flow, params):
@@ -41,6 +43,8 @@ def test_kernels_match_the_reference(rng, flow, params):
             u = ref.heat_step(u, dt, H)
         elif flow == "tv":
             u = ref.tv_step(u, dt, params["eps"], H)
+        elif flow == "curvature":
+            u = ref.curvature_step(u, dt, params["eps"], H)
         else:
             us = u
             if params.get("presmooth"):
@@ -107,7 +111,7 @@ def test_info_and_dtype(rng):
 @pytest.mark.parametrize(
     "kwargs,match",
     [
-        ({"flow": "curvature"}, "not built for volumes"),
+        ({"flow": "curvature", "weight": 1}, "no parameter 'weight'"),
         ({"flow": "heat", "kappa": 1}, "no parameter 'kappa'"),
         ({"flow": "heat", "dt": 1.0}, "stability limit"),
         ({"flow": "perona-malik", "edge": "tukey"}, "edge"),
@@ -116,3 +120,40 @@ def test_info_and_dtype(rng):
 def test_bad_volume_flows_give_one_line(kwargs, match):
     with pytest.raises(clpde.InputError, match=match):
         clpde.diffuse(np.zeros((4, 5, 6)), **kwargs)
+
+
+@pytest.mark.parametrize(
+    "flow,params",
+    [
+        ("heat", {}),
+        ("perona-malik", {"kappa": 0.3, "presmooth": 1.0}),
+        ("tv", {"eps": 0.1}),
+        ("curvature", {}),
+    ],
+)
+def test_slabs_equal_the_whole_volume(rng, monkeypatch, flow, params):
+    from clpde.volumes import flows
+
+    u0 = _unit(rng, (23, 6, 7, 2))
+    run = lambda: clpde.diffuse(  # noqa: E731
+        u0, flow, steps=7, spacing=H, channel_axis=-1, dtype=np.float64, **params
+    )
+    whole = run()
+    slabs = []
+    real_run = flows._run
+    monkeypatch.setattr(flows, "TILE_PLANES", 12)  # slabs of 12 planes with their ghosts
+    monkeypatch.setattr(
+        flows, "_run", lambda grid, *a: slabs.append(grid.shape) or real_run(grid, *a)
+    )
+    tiled = run()
+    assert len(slabs) > 4 and max(s[1] for s in slabs) <= 12  # several slabs and rounds
+    np.testing.assert_allclose(tiled, whole, atol=1e-12)
+    assert np.abs(whole - u0).max() > 0.05  # the flow moved it
+
+
+def test_too_few_planes_for_the_ghosts_are_refused(monkeypatch):
+    from clpde.volumes import flows
+
+    monkeypatch.setattr(flows, "TILE_PLANES", 2)
+    with pytest.raises(DeviceMemoryError, match="crop the volume"):
+        clpde.diffuse(np.random.default_rng(0).random((9, 5, 6)), "heat", steps=2)

@@ -67,3 +67,25 @@ def test_channels_dtype_and_input_kept(rng):
 def test_bad_masks_give_one_line(mask, match):
     with pytest.raises(clpde.InputError, match=match):
         inpaint_volume(np.zeros((4, 5, 6)), mask)
+
+
+def test_progress_hears_the_voxels_filled_box_by_box():
+    vol = np.indices((8, 9, 10)).sum(0) / 25.0
+    mask = np.zeros(vol.shape, bool)
+    mask[1:3, 1:3, 1:3] = True  # 8 voxels
+    mask[5:7, 5:8, 6:9] = True  # 18 voxels, another box
+    heard = []
+    out = inpaint_volume(vol, mask, progress=lambda done, total: heard.append((done, total)))
+    assert heard in ([(8, 26), (26, 26)], [(18, 26), (26, 26)])  # one call per box
+    np.testing.assert_array_equal(out, inpaint_volume(vol, mask, progress=False))
+
+    class Cancel(Exception):
+        pass
+
+    def cancel(done, total):
+        raise Cancel
+
+    with pytest.raises(Cancel):
+        inpaint_volume(vol, mask, progress=cancel)
+    with pytest.raises(clpde.InputError, match="progress must be"):
+        inpaint_volume(vol, mask, progress="yes")

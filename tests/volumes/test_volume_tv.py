@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import clpde
+from clpde.errors import DeviceMemoryError
 from clpde.volumes.tv import denoise_tv_volume
 from tests.reference import volumes as ref
 
@@ -117,3 +118,35 @@ def test_bad_volume_input_gives_one_line(image, kwargs, match):
 def test_a_colour_image_still_takes_the_planar_path(rng):
     image = _unit(rng, (16, 16, 3))
     assert clpde.denoise_tv(image, weight=0.1, channel_axis=-1).shape == (16, 16, 3)
+
+
+@pytest.mark.parametrize("channels", [1, 2])
+def test_slabs_equal_the_whole_volume(rng, monkeypatch, channels):
+    from clpde.volumes import tv
+
+    clean = np.zeros((21, 8, 9, channels))
+    clean[5:15, 2:6, 3:7] = 0.8
+    noisy = clean + 0.1 * rng.standard_normal(clean.shape)
+    axis = -1 if channels > 1 else None
+    vol = noisy if channels > 1 else noisy[..., 0]
+    run = lambda: denoise_tv_volume(  # noqa: E731
+        vol, spacing=(2, 1, 1), channel_axis=axis, dtype=np.float64
+    )
+    whole, steps, *_ = run()
+    made = []
+    real_slab = tv._Slab
+    monkeypatch.setattr(tv, "TILE_PLANES", 15)  # 3 own planes and 6 ghosts either side
+    monkeypatch.setattr(tv, "_Slab", lambda *a: made.append(a[4:]) or real_slab(*a))
+    tiled, tiled_steps, *_ = run()
+    assert len(set(made)) == 7 and len(made) > 7  # 7 slabs, several rounds
+    np.testing.assert_allclose(tiled, whole, atol=1e-9)
+    assert tiled_steps == steps > 5
+    assert np.abs(whole - vol).max() > 0.1  # it denoised
+
+
+def test_too_few_planes_for_the_ghosts_are_refused(monkeypatch):
+    from clpde.volumes import tv
+
+    monkeypatch.setattr(tv, "TILE_PLANES", 12)
+    with pytest.raises(DeviceMemoryError, match="lower check_every"):
+        clpde.denoise_tv(np.random.default_rng(0).random((20, 5, 6)), 0.1, spacing=(1, 1, 1))
