@@ -29,6 +29,7 @@ from ..errors import InputError
 from ..fields import check_fits
 from ..imagedata import compute_dtype, grow_mask, growth
 from ..runtime import DeviceLike, get_runtime
+from ..volumes.inpaint import inpaint_volume
 from . import bounds, boxes, poisson, validate
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
@@ -342,6 +343,7 @@ def inpaint(
     boxes: bool = True,
     seed: int | None = None,
     grow: float = 0,
+    spacing: ArrayLike | None = None,
     **overrides: Any,
 ) -> np.ndarray | tuple[np.ndarray, InpaintInfo] | tuple[np.ndarray, list[InpaintState]]:
     """Fill the masked region of an image.
@@ -407,6 +409,11 @@ def inpaint(
         Grow the mask by a disc of this radius in pixels first (`clpde.grow_mask`; a soft
         mask's grown ring is fully damaged), to take in a damage's blurred rim. 0: as given.
         An empty mask (nothing to fill) warns and returns a copy, with ``info.method`` None.
+    spacing : (3,) array_like, optional
+        Makes the input a (Z, Y, X) or (Z, Y, X, C) volume with this voxel size (z, y, x)
+        and `mask` a (Z, Y, X) one: filled by `clpde.volumes.inpaint_volume` (method
+        'biharmonic', the default, 'harmonic' or 'spectral'), which takes none of the
+        planar options (a 3-D array without spacing is a colour image here).
     **overrides
         Fields of the method's options that replace those of `options` (or of the
         defaults), such as the transport's dt, max_steps, tol, mean_tol or levels
@@ -451,6 +458,25 @@ def inpaint(
     >>> info.method, info.steps <= 40
     ('transport', True)
     """
+    if spacing is not None:
+        return _inpaint_volume(
+            image,
+            mask,
+            channel_axis,
+            method,
+            spacing,
+            device,
+            dtype,
+            progress,
+            {
+                "snapshots": snapshots,
+                "return_info": return_info,
+                "options": options,
+                "seed": seed,
+                "grow": grow,
+                **overrides,
+            },
+        )
     if snapshots is not None and (
         isinstance(snapshots, bool) or not isinstance(snapshots, (int, np.integer)) or snapshots < 1
     ):
@@ -479,6 +505,27 @@ def inpaint(
     if snapshots:
         return job.result, states
     return job.result
+
+
+def _inpaint_volume(image, mask, channel_axis, method, spacing, device, dtype, progress, rest):
+    """clpde.inpaint with `spacing`: a (Z, Y, X[, C]) volume, filled by clpde.volumes (whose
+    methods take none of the planar options)."""
+    given = sorted(k for k, v in rest.items() if v not in (None, False, 0))
+    if given:
+        raise InputError(
+            "options for images do not apply to volumes (spacing= makes the input one): leave "
+            f"out {', '.join(given)}; clpde.volumes.inpaint_volume lists a volume's options"
+        )
+    return inpaint_volume(
+        image,
+        mask,
+        channel_axis,
+        method=method or "biharmonic",
+        spacing=spacing,
+        device=device,
+        dtype=dtype,
+        progress=progress,
+    )
 
 
 def _caller_level() -> int:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import clpde
+from clpde.errors import InputError
 from clpde.runtime import get_runtime
 from clpde.volumes import inpaint_volume
 from clpde.volumes.grid import VolumeGrid
@@ -89,3 +90,17 @@ def test_progress_hears_the_voxels_filled_box_by_box():
         inpaint_volume(vol, mask, progress=cancel)
     with pytest.raises(clpde.InputError, match="progress must be"):
         inpaint_volume(vol, mask, progress="yes")
+
+
+def test_clpde_inpaint_with_spacing_fills_a_volume(rng):
+    """clpde.inpaint(volume, mask, spacing=...) is inpaint_volume's fill, method included;
+    the planar options are refused in one line instead of being ignored."""
+    volume = rng.random((8, 10, 12)).astype(np.float32)
+    mask = np.zeros(volume.shape, bool)
+    mask[3:5, 4:6, 4:8] = True
+    for method in (None, "harmonic"):
+        out = clpde.inpaint(volume, mask, spacing=(2, 1, 1), method=method)
+        expect = inpaint_volume(volume, mask, spacing=(2, 1, 1), method=method or "biharmonic")
+        assert out.dtype == volume.dtype and np.array_equal(out, expect)
+    with pytest.raises(InputError, match="leave out grow"):
+        clpde.inpaint(volume, mask, spacing=(1, 1, 1), grow=2)
