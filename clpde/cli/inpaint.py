@@ -39,8 +39,8 @@ def add_inpaint_parser(subparsers) -> None:
         "images are inpainted per channel (or in the rho, sin phi, sin psi "
         "model); an alpha channel is kept as is. "
         "--demo damages a bundled photo and restores it. A volume (.nii, .nii.gz, or a TIFF "
-        "of several pages) with a volume MASK is filled by the 3D harmonic fill with its "
-        "voxel spacing, into a volume file.",
+        "of several pages) with a volume MASK is filled by the 3D biharmonic fill (or --method "
+        "spectral) with its voxel spacing, into a volume file.",
     )
     _add_input_output_arguments(parser)
     _add_transport_arguments(parser)

@@ -59,11 +59,14 @@ def run_volume_diffuse(args, flow: str, params: dict) -> int:
 
 
 def run_volume_inpaint(args) -> int:
-    """`clpde inpaint VOLUME MASK -o OUT`: the biharmonic fill, the mask a volume too."""
-    if args.method not in (None, "auto"):
+    """`clpde inpaint VOLUME MASK -o OUT`: the biharmonic fill (or --method spectral, the 3D
+    blocks' model), the mask a volume too."""
+    if args.method not in (None, "auto", "spectral"):
         raise InputError(
-            f"volumes are filled by the biharmonic method only; leave out --method {args.method}"
+            "volumes are filled by the biharmonic fill (the default) or --method spectral; "
+            f"leave out --method {args.method}"
         )
+    method = "spectral" if args.method == "spectral" else "biharmonic"
     if args.gif or args.overwrite:
         raise InputError("a volume's fill takes no --gif or --overwrite; leave them out")
     _check_output(args)
@@ -72,6 +75,7 @@ def run_volume_inpaint(args) -> int:
     if mask.ndim == 4:  # a colour mask: by its brightest channel
         mask = mask.max(axis=-1)
     out = inpaint_volume(
-        volume, np.asarray(mask) > 0, channel_axis=axis, spacing=info.spacing, device=args.device
-    )
-    return _done(args.output, out, info, "inpaint (volume, biharmonic)")
+        volume, np.asarray(mask) > 0, channel_axis=axis, method=method, spacing=info.spacing,
+        device=args.device, progress=show_progress(),
+    )  # fmt: skip
+    return _done(args.output, out, info, f"inpaint (volume, {method})")

@@ -57,6 +57,13 @@ def test_inpaint_a_tiff_volume_with_a_tiff_mask(ball, tmp_path):
     result = read_volume(out)
     assert (result == inpaint_volume(ball, mask, spacing=(2, 1, 1))).all()
     assert (result[~mask] == ball[~mask]).all()
+    spectral = tmp_path / "spectral.tif"
+    assert (
+        main(["inpaint", str(src), str(mask_file), "-o", str(spectral), "--method", "spectral"])
+        == 0
+    )
+    expect = inpaint_volume(ball, mask, spacing=(2, 1, 1), method="spectral")
+    assert (read_volume(spectral) == expect).all()
 
 
 def test_diffuse_a_volume_and_refuse_an_image_output(ball, tmp_path, capsys):
@@ -74,4 +81,4 @@ def test_inpaint_a_volume_refuses_image_only_options(ball, tmp_path, capsys):
     assert main([*args, "--gif", str(tmp_path / "e.gif")]) != 0
     assert "no --gif" in capsys.readouterr().err
     assert main([*args, "--method", "coherence"]) != 0
-    assert "biharmonic method only" in capsys.readouterr().err
+    assert "or --method spectral; leave out --method coherence" in capsys.readouterr().err
