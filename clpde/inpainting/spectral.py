@@ -102,6 +102,7 @@ class SpectralOptions:
     alpha: float = 2.0
     iterations: int = 100
     stop: float = 0.0
+    floor: float = 0.0
     colour: str = "pca"
     detrend: bool = True
     shifts: int = 2
@@ -120,6 +121,7 @@ class SpectralOptions:
             self.alpha,
             self.iterations,
             self.stop,
+            self.floor,
             self.colour,
             self.cutoff,
             self.per_pixel,
@@ -138,6 +140,7 @@ def _check(
     alpha,
     iterations,
     stop,
+    floor,
     colour,
     cutoff,
     per_pixel,
@@ -180,6 +183,8 @@ def _check(
         raise InputError(f"alpha must be a number >= 0, not {alpha!r}")
     if not (np.isfinite(stop) and 0 <= stop < 1):
         raise InputError(f"stop must be a number in [0, 1), not {stop!r}")
+    if not (np.isfinite(floor) and floor >= 0):
+        raise InputError(f"floor must be a number >= 0 (a residual's RMS), not {floor!r}")
     if colour not in COLOURS:
         raise InputError(f"colour must be one of {', '.join(COLOURS)}, not {colour!r}")
     if not (np.isfinite(cutoff) and cutoff > 0):
@@ -231,6 +236,7 @@ def fill(
     alpha: float = 2.0,
     iterations: int = 100,
     stop: float = 0.0,
+    floor: float = 0.0,
     colour: str = "pca",
     detrend: bool = True,
     shifts: int = 2,
@@ -269,6 +275,10 @@ def fill(
         Most picks per block and channel (<= 512).
     stop : float
         End a block once a pick lowers the error by less than this share of the first one's.
+    floor : float
+        End a block's channel once the weighted RMS of its window's residual is at most
+        this, in the data's units (clpde.inpaint scales data to [0, 1]): picks past it fit
+        detail finer than the data's precision.
     colour : str
         'pca' fits the principal axes of the known colours, 'channels' the channels as given.
     detrend : bool
@@ -316,6 +326,7 @@ def fill(
         alpha,
         iterations,
         stop,
+        floor,
         colour,
         cutoff,
         per_pixel,
@@ -354,7 +365,7 @@ def fill(
     host = np.ascontiguousarray(np.broadcast_to(work, (len(plans),) + work.shape), real)
     table = _launch_table(plans, omega, (y0, x0), hole.shape, iterations, per_pixel)
     t["plan"] = time.perf_counter() - t0
-    options = (rho, delta, gamma, alpha, stop, bool(detrend), cutoff)
+    options = (rho, delta, gamma, alpha, stop, floor, bool(detrend), cutoff)
     _run_waves(runtime, host, table, options, t)
     model = host.astype(np.float64).mean(0)  # the grids' average
     filled = np.einsum("ji,jyx->iyx", axes, model) + mean[:, None, None]
@@ -395,7 +406,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     (one work-group per block) and read the copies back into `host`; `t` receives the
     seconds of each stage and the counts of blocks and launches."""
     wave_of, all_blocks, starts = table
-    rho, delta, gamma, alpha, stop, detrend, cutoff = options
+    rho, delta, gamma, alpha, stop, floor, detrend, cutoff = options
     real = host.dtype
     t0 = time.perf_counter()
     kernel, spill = fitting_kernel(runtime, real)
@@ -442,6 +453,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
             s(gamma),
             s(alpha),
             s(stop),
+            s(floor * floor),
             np.int32(detrend),
             s(cutoff),
             scratch,
@@ -493,6 +505,7 @@ def solve(
     alpha=SpectralOptions.alpha,
     iterations=SpectralOptions.iterations,
     stop=SpectralOptions.stop,
+    floor=SpectralOptions.floor,
     colour=SpectralOptions.colour,
     detrend=SpectralOptions.detrend,
     shifts=SpectralOptions.shifts,
@@ -507,7 +520,8 @@ def solve(
     distance), delta (weight of pixels filled earlier), gamma (share of each pick's
     coefficient taken), alpha (the low-frequency prior's power), iterations (most picks per
     block), stop (end a block once a pick lowers the error less than this share of the
-    first one), colour ('pca': decorrelated channels, 'channels': as given), detrend (fit
+    first one), floor (end a block's channel once its window's weighted residual RMS is at
+    most this, data in [0, 1]), colour ('pca': decorrelated channels, 'channels': as given), detrend (fit
     a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
     by half a block, whose fills are averaged), cutoff (the candidate frequencies: |k| at most
     this share of the Nyquist frequency; 1.5 takes all), per_pixel (> 0: a block's picks are
@@ -528,6 +542,7 @@ def solve(
         alpha=alpha,
         iterations=iterations,
         stop=stop,
+        floor=floor,
         colour=colour,
         detrend=detrend,
         shifts=shifts,
