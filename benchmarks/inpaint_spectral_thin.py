@@ -88,7 +88,9 @@ def main() -> None:
             row[1] += wall
             row[2] += cpu
         print(f"{case.name}: done", file=sys.stderr, flush=True)
-    print("| half | class | variant | PSNR | wall s | cpu s | wall / biharmonic | wall / FSR-fast |")
+    print(
+        "| half | class | variant | PSNR | wall s | cpu s | wall / biharmonic | wall / FSR-fast |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     table = []
     for half in halves:
