@@ -521,8 +521,8 @@ def solve(
     coefficient taken), alpha (the low-frequency prior's power), iterations (most picks per
     block), stop (end a block once a pick lowers the error less than this share of the
     first one), floor (end a block's channel once its window's weighted residual RMS is at
-    most this, data in [0, 1]), colour ('pca': decorrelated channels, 'channels': as given), detrend (fit
-    a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
+    most this, data in [0, 1]), colour ('pca': decorrelated channels, 'channels': as
+    given), detrend (fit a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
     by half a block, whose fills are averaged), cutoff (the candidate frequencies: |k| at most
     this share of the Nyquist frequency; 1.5 takes all), per_pixel (> 0: a block's picks are
     at most this many per hole pixel in it, at least 4).
