@@ -515,17 +515,17 @@ def solve(
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
     Options: block (largest block, even), min_block (smallest, block halved), border (the
-    window's reach beyond its block; block + 2 border <= 32), split (a block whose window
-    holds less known than this share is cut in four), rho (weight decay per pixel of
-    distance), delta (weight of pixels filled earlier), gamma (share of each pick's
-    coefficient taken), alpha (the low-frequency prior's power), iterations (most picks per
-    block), stop (end a block once a pick lowers the error less than this share of the
-    first one), floor (end a block's channel once its window's weighted residual RMS is at
-    most this, data in [0, 1]), colour ('pca': decorrelated channels, 'channels': as
-    given), detrend (fit a plane to each window first and model the rest), shifts (1, 2 or 4 block grids, offset
-    by half a block, whose fills are averaged), cutoff (the candidate frequencies: |k| at most
-    this share of the Nyquist frequency; 1.5 takes all), per_pixel (> 0: a block's picks are
-    at most this many per hole pixel in it, at least 4).
+    window's reach beyond its block; block + 2 border <= 32), split (a block whose window holds
+    less known than this share is cut in four), rho (weight decay per pixel of distance), delta
+    (weight of pixels filled earlier), gamma (share of each pick's coefficient taken), alpha
+    (the low-frequency prior's power), iterations (most picks per block), stop (end a block once
+    a pick lowers the error less than this share of the first one), floor (end a block's channel
+    once its window's weighted residual RMS is at most this, data in [0, 1]), colour ('pca':
+    decorrelated channels, 'channels': as given), detrend (fit a plane to each window first and
+    model the rest), shifts (1, 2 or 4 block grids, offset by half a block, whose fills are
+    averaged), cutoff (the candidate frequencies: |k| at most this share of the Nyquist
+    frequency; 1.5 takes all), per_pixel (> 0: a block's picks are at most this many per hole
+    pixel in it, at least 4).
     """
     return fill(
         data,
