@@ -52,6 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyopencl as cl
+from scipy import ndimage
 
 from ..errors import DeviceLimitError
 from ..imagedata import InputError
@@ -73,6 +74,9 @@ GROUP = 64  # its SPECTRAL_GROUP
 SCRATCH = 4 * MAXL * MAXL + 7 * MAXL * (MAXL // 2 + 1)
 SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
 COLOURS = ("pca", "channels")
+THIN = 4  # px: damage this thin (half-thickness) takes thin_border (text, cracks, dust)
+_y, _x = np.mgrid[-THIN : THIN + 1, -THIN : THIN + 1]
+DISC = _y**2 + _x**2 <= THIN**2  # a pixel of omega farther than THIN from known survives it
 
 
 def MARGIN(omega=None, block: int = 8, border: int = 12, **_params) -> int:
@@ -108,6 +112,7 @@ class SpectralOptions:
     shifts: int = 2
     cutoff: float = 1.5
     per_pixel: float = 0.0
+    thin_border: int = 0
 
     def __post_init__(self) -> None:
         _check(
@@ -126,6 +131,7 @@ class SpectralOptions:
             self.cutoff,
             self.per_pixel,
             self.shifts,
+            self.thin_border,
         )
 
 
@@ -145,6 +151,7 @@ def _check(
     cutoff,
     per_pixel,
     shifts,
+    thin_border=0,
 ):
     """InputError for an option of `fill` out of its range."""
     for name, v in (
@@ -193,6 +200,10 @@ def _check(
         )
     if not (np.isfinite(per_pixel) and per_pixel >= 0):
         raise InputError(f"per_pixel must be a number >= 0, not {per_pixel!r}")
+    if isinstance(thin_border, bool) or not isinstance(thin_border, (int, np.integer)):
+        raise InputError(f"thin_border must be an integer >= 0, not {thin_border!r}")
+    if not 0 <= thin_border <= border:
+        raise InputError(f"thin_border must be in [0, border={border}], not {thin_border}")
     if shifts not in (1, 2, 4):
         raise InputError(f"shifts must be 1, 2 or 4 (block grids averaged), not {shifts!r}")
 
@@ -242,6 +253,7 @@ def fill(
     shifts: int = 2,
     cutoff: float = 1.5,
     per_pixel: float = 0.0,
+    thin_border: int = 0,
     timings: dict | None = None,
 ) -> np.ndarray:
     """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
@@ -289,6 +301,9 @@ def fill(
         Candidate frequencies |k| <= cutoff x Nyquist; 1.5 takes all.
     per_pixel : float
         > 0: a block's picks are at most this many per hole pixel in it (at least 4).
+    thin_border : int
+        > 0: the border where the damage is thin (no pixel of omega farther than THIN from
+        a known one: text, scratches, cracks, dust), whose windows need less reach.
     timings : dict or None
         Receives the seconds spent planning, building, uploading, running the waves and
         reading back, and the counts of blocks and launches.
@@ -331,6 +346,7 @@ def fill(
         cutoff,
         per_pixel,
         shifts,
+        thin_border,
     )
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
@@ -344,6 +360,8 @@ def fill(
         )
     t = {} if timings is None else timings
     t0 = time.perf_counter()
+    if thin_border and thin(omega):
+        border = thin_border
     grid = {"block": block, "min_block": min_block, "border": border, "split": split}
     plans = [plan(omega, **grid, delta=delta, shift=sh) for sh in shifts_of(shifts, block)]
     # every grid's copy of the image is one crop, the union of theirs; the copies' waves run
@@ -371,6 +389,11 @@ def fill(
     filled = np.einsum("ji,jyx->iyx", axes, model) + mean[:, None, None]
     part[:, hole] = filled[:, hole]
     return out
+
+
+def thin(omega: np.ndarray) -> bool:
+    """Whether no pixel of omega lies farther than THIN from a known pixel."""
+    return not ndimage.binary_erosion(omega, DISC, border_value=1).any()
 
 
 def _launch_table(plans, omega, origin, shape, iterations: int, per_pixel: float):
@@ -511,6 +534,7 @@ def solve(
     shifts=SpectralOptions.shifts,
     cutoff=SpectralOptions.cutoff,
     per_pixel=SpectralOptions.per_pixel,
+    thin_border=SpectralOptions.thin_border,
 ):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
@@ -525,7 +549,8 @@ def solve(
     model the rest), shifts (1, 2 or 4 block grids, offset by half a block, whose fills are
     averaged), cutoff (the candidate frequencies: |k| at most this share of the Nyquist
     frequency; 1.5 takes all), per_pixel (> 0: a block's picks are at most this many per hole
-    pixel in it, at least 4).
+    pixel in it, at least 4), thin_border (> 0: the border where no damaged pixel lies farther
+    than THIN = 4 px from a known one).
     """
     return fill(
         data,
@@ -548,4 +573,5 @@ def solve(
         shifts=shifts,
         cutoff=cutoff,
         per_pixel=per_pixel,
+        thin_border=thin_border,
     )
