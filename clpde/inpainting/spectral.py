@@ -200,10 +200,12 @@ def _check(
         )
     if not (np.isfinite(per_pixel) and per_pixel >= 0):
         raise InputError(f"per_pixel must be a number >= 0, not {per_pixel!r}")
-    if isinstance(thin_border, bool) or not isinstance(thin_border, (int, np.integer)):
-        raise InputError(f"thin_border must be an integer >= 0, not {thin_border!r}")
-    if not 0 <= thin_border <= border:
-        raise InputError(f"thin_border must be in [0, border={border}], not {thin_border}")
+    if (
+        isinstance(thin_border, bool)
+        or not isinstance(thin_border, (int, np.integer))
+        or thin_border < 0
+    ):
+        raise InputError(f"thin_border must be an integer >= 0 (0: off), not {thin_border!r}")
     if shifts not in (1, 2, 4):
         raise InputError(f"shifts must be 1, 2 or 4 (block grids averaged), not {shifts!r}")
 
@@ -302,8 +304,8 @@ def fill(
     per_pixel : float
         > 0: a block's picks are at most this many per hole pixel in it (at least 4).
     thin_border : int
-        > 0: the border where the damage is thin (no pixel of omega farther than THIN from
-        a known one: text, scratches, cracks, dust), whose windows need less reach.
+        > 0: the border (at most `border`) where the damage is thin (no pixel of omega
+        farther than THIN from a known one: text, scratches, cracks, dust); 0: off.
     timings : dict or None
         Receives the seconds spent planning, building, uploading, running the waves and
         reading back, and the counts of blocks and launches.
@@ -361,7 +363,7 @@ def fill(
     t = {} if timings is None else timings
     t0 = time.perf_counter()
     if thin_border and thin(omega):
-        border = thin_border
+        border = min(border, thin_border)
     grid = {"block": block, "min_block": min_block, "border": border, "split": split}
     plans = [plan(omega, **grid, delta=delta, shift=sh) for sh in shifts_of(shifts, block)]
     # every grid's copy of the image is one crop, the union of theirs; the copies' waves run

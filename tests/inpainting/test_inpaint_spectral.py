@@ -212,3 +212,23 @@ def test_margin_refuses_bad_block_sizes():
     mask[5:8, 5:8] = True
     with pytest.raises(clpde.InputError, match="border"):
         clpde.inpaint(image, mask, method="spectral", border=None)
+
+
+def test_thin_damage_takes_the_thin_border_and_thick_damage_the_border(runtime):
+    rng = np.random.default_rng(5)
+    data = rng.random((1, 48, 56))
+    thin_mask = np.zeros((48, 56), bool)
+    thin_mask[20:23, 4:50] = True  # a scratch 3 px wide: every pixel 2 px from known
+    thick = thin_mask.copy()
+    thick[14:28, 30:44] = True  # a 14 px square on it: its centre is 7 px from known
+    assert spectral.thin(thin_mask) and not spectral.thin(thick)
+    options = dict(SMALL, border=8)
+    for mask, border in ((thin_mask, 3), (thick, 8)):
+        got = spectral.fill(data, mask, runtime, thin_border=3, **options)
+        want = spectral.fill(data, mask, runtime, **dict(options, border=border, thin_border=0))
+        assert np.array_equal(got, want)
+    # the other border's fill differs, so the comparison above can fail
+    other = spectral.fill(data, thin_mask, runtime, **dict(options, thin_border=0))
+    assert not np.array_equal(
+        other, spectral.fill(data, thin_mask, runtime, thin_border=3, **options)
+    )
