@@ -30,8 +30,12 @@
 // Candidates: the half plane kx in [0, L/2] (R(-l) = conj(R(l)) for a real residual) with
 // |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
 // the candidates and their scores' factors depend on the weights alone: once per block.
-// The loop stops after the block's most picks or once a pick's reduction falls below `stop` times
-// the first one's.
+// The loop stops after the block's most picks, once a pick's reduction falls below `stop` times
+// the first one's, or once the weighted squared residual E is at most floor2 W(0) (its weighted
+// mean square at most floor^2: the rest is finer than the data). E starts as
+// sum w (f - plane)^2 and a step gamma c lowers it by gamma (2 - gamma) times the pick's
+// reduction. Each item scores its own candidates as it updates them, so a pick costs one pass
+// over the candidates and two barriers.
 //
 // Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
 // picks' coefficients | qa, qb, qc, R re, R im on the candidates). X and T are 31 KB in
