@@ -233,3 +233,16 @@ def test_thin_damage_takes_the_thin_border_and_thick_damage_the_border(runtime):
     assert not np.array_equal(
         other, spectral.fill(data, thin_mask, runtime, thin_border=3, **options)
     )
+
+
+def test_one_grid_in_double_precision_runs():
+    # one grid's copy in float64 needs no conversion: the host's copy must still be its own
+    # writable array (a broadcast view of the data was read-only, and the read-back failed)
+    y, x = np.mgrid[0:24, 0:24]
+    image = 0.5 + 0.3 * np.sin(x / 4.0) * np.cos(y / 5.0)
+    mask = np.zeros((24, 24), bool)
+    mask[10:12, 3:20] = True
+    options = dict(method="spectral", shifts=1, iterations=5)
+    double = clpde.inpaint(image, mask, dtype=np.float64, **options)
+    single = clpde.inpaint(image, mask, **options)
+    assert np.abs(double - single).max() < 1e-4
