@@ -391,7 +391,7 @@ def fill(
     work[:, hole] = 0.0  # unknown values never enter (their weight is 0), NaN must not either
     real = np.dtype(dtype)
     # a writable copy: the device's result is read back into it
-    host = np.array(np.broadcast_to(work, (len(plans),) + work.shape), real)
+    host = np.array(np.broadcast_to(work, (len(plans),) + work.shape), real, order="C")
     table = _launch_table(plans, omega, (y0, x0), hole.shape, iterations, per_pixel)
     t["plan"] = time.perf_counter() - t0
     options = (rho, delta, gamma, alpha, stop, floor, bool(detrend), cutoff)
