@@ -154,7 +154,7 @@ def fill(
     alpha=2.0,
     iterations=100,
     stop=0.0,
-    floor=0.004,
+    floor=0.0,
     colour="pca",
     detrend=True,
     shifts=2,
