@@ -18,11 +18,17 @@ import numpy as np
 MAXL = 32  # kernels/inpainting/spectral.cl's SPECTRAL_MAXL: the widest window
 
 
-def _window_sums(weight: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
-    """Sum of `weight` over each block's window (the block at (ys, xs), `sizes` wide, grown by
-    `border`; outside the array counts 0)."""
+def _table(weight: np.ndarray, border: int) -> np.ndarray:
+    """The summed-area table of `weight` padded so that every window of _window_sums lies
+    inside it."""
     pad = border + MAXL + 1  # windows of blocks past the array's end stay inside
-    sat = np.pad(weight, pad).cumsum(0).cumsum(1)
+    return np.pad(weight, pad).cumsum(0).cumsum(1)
+
+
+def _window_sums(sat: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
+    """Sum of a weight over each block's window (the block at (ys, xs), `sizes` wide, grown
+    by `border`; outside the array counts 0), from the weight's _table `sat`."""
+    pad = border + MAXL + 1
     # the window's rows [y - border, y + size + border) are pad's [a, b) with a = y - border +
     # pad; sat is inclusive, so the sum is sat[b - 1] - sat[a - 1] (likewise for columns)
     a_y, a_x = ys - border + pad - 1, xs - border + pad - 1
@@ -48,14 +54,19 @@ def _block_sizes(cells, known, origin, tops, top: int, cell: int, border: int, s
     `split` of known pixels (down to one cell)."""
     oy, ox = origin
     found = []
+    sat = _table(known, border)
+    cells_sat = np.pad(cells.astype(np.int64), ((1, 0), (1, 0))).cumsum(0).cumsum(1)
     todo = [(i * top, j * top, top) for i in range(tops[0]) for j in range(tops[1])]
     while todo:
-        cys = np.array([t[0] for t in todo])
-        cxs = np.array([t[1] for t in todo])
-        sz = np.array([t[2] for t in todo])
-        has = np.array([cells[a : a + s, b : b + s].any() for a, b, s in todo], bool)
+        cys, cxs, sz = np.array(todo).T
+        has = (
+            cells_sat[cys + sz, cxs + sz]
+            - cells_sat[cys, cxs + sz]
+            - cells_sat[cys + sz, cxs]
+            + cells_sat[cys, cxs]
+        ) > 0
         area = (sz * cell + 2 * border) ** 2
-        share = _window_sums(known, border, oy + cys * cell, ox + cxs * cell, sz * cell) / area
+        share = _window_sums(sat, border, oy + cys * cell, ox + cxs * cell, sz * cell) / area
         nxt = []
         for (a, b, s), h, sh in zip(todo, has, share, strict=True):
             if not h:
@@ -69,18 +80,26 @@ def _block_sizes(cells, known, origin, tops, top: int, cell: int, border: int, s
     return found
 
 
-def _neighbours(found, label: np.ndarray, reach: int):
-    """(pi, pj): the pairs of blocks where j's pixels lie in i's window (and i's in j's: the
-    relation is symmetric); `label` says which block owns each cell, `reach` how many cells a
-    window reaches beyond its block."""
+def _neighbours(found, reach: int, chunk: int = 1024):
+    """(pi, pj): the pairs of blocks where j's cells lie in i's window (and i's in j's: the
+    relation is symmetric); `found` holds (cell row, cell column, size in cells) of each
+    block, `reach` is how many cells a window reaches beyond its block. Blocks are compared
+    `chunk` at a time against all, so that memory stays chunk x blocks."""
+    a, b, s = (np.array([f[k] for f in found], np.int64) for k in range(3))
     pi, pj = [], []
-    for i, (a, b, s) in enumerate(found):
-        near = np.unique(
-            label[max(0, a - reach) : a + s + reach, max(0, b - reach) : b + s + reach]
+    for c0 in range(0, len(found), chunk):
+        i = slice(c0, c0 + chunk)
+        near = (
+            (a[None, :] < (a[i] + s[i] + reach)[:, None])
+            & ((a[i] - reach)[:, None] < (a + s)[None, :])
+            & (b[None, :] < (b[i] + s[i] + reach)[:, None])
+            & ((b[i] - reach)[:, None] < (b + s)[None, :])
         )
-        near = near[(near >= 0) & (near != i)]
-        pi.append(np.full(near.size, i))
-        pj.append(near)
+        ii, jj = np.nonzero(near)
+        ii += c0
+        keep = ii != jj
+        pi.append(ii[keep])
+        pj.append(jj[keep])
     return np.concatenate(pi).astype(np.int64), np.concatenate(pj).astype(np.int64)
 
 
@@ -200,7 +219,7 @@ def plan(
         label[a : a + s, b : b + s] = i
     reach = -(-border // cell)  # cells a window reaches beyond its block
     py, px, ps = oy + fy * cell, ox + fx * cell, fs * cell
-    pairs = _neighbours(found, label, reach)
+    pairs = _neighbours(found, reach)
     order, waves, block_wave = _waves(hole, (py, px, ps), pairs, border, delta)
     blocks = np.stack([py[order], px[order], ps[order], ps[order] + 2 * border], 1)
     wave_of = np.full(hole.shape, -1, np.int32)

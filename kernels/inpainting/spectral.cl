@@ -30,8 +30,12 @@
 // Candidates: the half plane kx in [0, L/2] (R(-l) = conj(R(l)) for a real residual) with
 // |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
 // the candidates and their scores' factors depend on the weights alone: once per block.
-// The loop stops after the block's most picks or once a pick's reduction falls below `stop` times
-// the first one's.
+// The loop stops after the block's most picks, once a pick's reduction falls below `stop` times
+// the first one's, or once the weighted squared residual E is at most floor2 W(0) (its weighted
+// mean square at most floor^2: the rest is finer than the data). E starts as
+// sum w (f - plane)^2 and a step gamma c lowers it by gamma (2 - gamma) times the pick's
+// reduction. Each item scores its own candidates as it updates them, so a pick costs one pass
+// over the candidates and two barriers.
 //
 // Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
 // picks' coefficients | qa, qb, qc, R re, R im on the candidates). X and T are 31 KB in
@@ -65,7 +69,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      __global const int* blocks, const int first, const int wave,
                      const int nx, const int ny, const int nc, const REAL rho,
                      const REAL delta, const REAL gamma, const REAL alpha,
-                     const REAL stop, const int detrend,
+                     const REAL stop, const REAL floor2, const int detrend,
                      const REAL cutoff, __global REAL* scratch)
 {
 #if SPECTRAL_SPILL
@@ -241,11 +245,16 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             }
         }
         barrier(FENCE);
+        REAL e = 0;  // the weighted squared residual w (f - plane)^2 over the window
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
             const int m = i / L, n = i - m * L;
             const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
-            X[i] = X[LL + i] * (X[i] - (fit[0] + fit[1] * u + fit[2] * v));
+            const REAL r = X[i] - (fit[0] + fit[1] * u + fit[2] * v);
+            const REAL wr = X[LL + i] * r;
+            X[i] = wr;
+            e += wr * r;
         }
+        sums[lid] = e;  // lid 0 read the plane's sums before the barrier above
         barrier(FENCE);
         // R: rows on the half plane into rows[0, 2 L H), then the candidates' columns
         for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
@@ -260,6 +269,10 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             rows[L * H + i] = ai;
         }
         barrier(FENCE);
+        // each item keeps its candidates' best score (item lid owns j = lid mod GROUP, in the
+        // transform, in every pick's update and in the scores, so they need no barrier)
+        REAL bs = -1;
+        int bi = 0;
         for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
             const int ky = half_y[j], kx = half_x[j];
             REAL rr = 0, ri = 0;
@@ -271,27 +284,23 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             }
             rre[j] = rr;
             rim[j] = ri;
+            const REAL score = (qa[j] * rr + qb[j] * ri) * rr + qc[j] * ri * ri;
+            if (score > bs) {
+                bs = score;
+                bi = j;
+            }
         }
-        barrier(FENCE);
 
-        REAL first_gain = 0;  // item 0's
+        REAL first_gain = 0, energy = 0;  // item 0's: energy is the weighted squared error
         int count = 0;
         if (W0 > 0) {
             for (int it = 0; it < iterations; ++it) {
-                REAL bs = -1;
-                int bi = 0;
-                for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
-                    const REAL rr = rre[j], ri = rim[j];
-                    const REAL score = (qa[j] * rr + qb[j] * ri) * rr + qc[j] * ri * ri;
-                    if (score > bs) {
-                        bs = score;
-                        bi = j;
-                    }
-                }
                 best[lid] = bs;
                 best_at[lid] = bi;
                 barrier(FENCE);
                 if (lid == 0) {
+                    if (it == 0)
+                        for (int q = 0; q < SPECTRAL_GROUP; ++q) energy += sums[q];
                     REAL top = best[0];
                     int j = best_at[0];
                     for (int q = 1; q < SPECTRAL_GROUP; ++q)
@@ -317,7 +326,10 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         gain = 2 * (cr * rr + ci * ri);
                     }
                     if (it == 0) first_gain = gain;
-                    if (!(gain > 0) || gain < stop * first_gain) {
+                    // the residual already small (the weighted mean of its square at most
+                    // floor2), or a pick that would gain too little, ends the block's channel
+                    if (!(gain > 0) || gain < stop * first_gain
+                        || (floor2 > 0 && energy <= floor2 * W0)) {
                         pick_k[0] = -1;
                     } else {
                         pick_k[0] = ky * L + kx;
@@ -327,6 +339,9 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         picks[it] = self ? -1 - (ky * L + kx) : ky * L + kx;
                         coef_r[it] = gamma * cr;
                         coef_i[it] = gamma * ci;
+                        // a step gamma along the best pair lowers the error by
+                        // gamma (2 - gamma) times the full step's gain
+                        energy -= gamma * (2 - gamma) * gain;
                     }
                 }
                 barrier(FENCE);
@@ -336,6 +351,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const int ky = k / L, kx = k - ky * L;
                 const REAL cr = pick_c[0], ci = pick_c[1];
                 const int self = pick_k[1];
+                bs = -1;
+                bi = 0;
                 for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
                     const int ly = half_y[j], lx = half_x[j];
                     int dy = ly - ky, dx = lx - kx;
@@ -353,12 +370,21 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         ur += cr * pr + ci * pi;  // conj(c) W(l + k)
                         ui += cr * pi - ci * pr;
                     }
-                    rre[j] -= ur;
-                    rim[j] -= ui;
+                    const REAL rr = rre[j] - ur, ri = rim[j] - ui;
+                    rre[j] = rr;
+                    rim[j] = ri;
+                    // the next pick's score, as the update leaves R
+                    const REAL score = (qa[j] * rr + qb[j] * ri) * rr + qc[j] * ri * ri;
+                    if (score > bs) {
+                        bs = score;
+                        bi = j;
+                    }
                 }
-                barrier(FENCE);
+                // no barrier: best[] is next written after lid 0 has read it (the barrier
+                // above), and each item reads back only its own candidates
             }
         }
+        barrier(FENCE);  // the model's picks, as lid 0 wrote them
         // the block's pixels that this wave fills, from the model
         for (int i = lid; i < B * B; i += SPECTRAL_GROUP) {
             const int u = i / B, v = i - u * B;

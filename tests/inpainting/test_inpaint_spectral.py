@@ -45,6 +45,7 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         dict(split=0.6),
         dict(split=0.3, shifts=2, cutoff=0.8),
         dict(per_pixel=0.5),
+        dict(floor=0.05),  # high enough that most windows end early
     ):
         options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
@@ -97,6 +98,7 @@ def test_basis_cosine_is_restored_almost_exactly(runtime, freq):
         shifts=1,
         iterations=60,
         detrend=False,
+        floor=0.0,  # the maths alone: no stop once the residual is near the data's precision
     )[0]
     assert np.abs(out - image)[mask].max() < 1e-3
 
@@ -211,3 +213,36 @@ def test_margin_refuses_bad_block_sizes():
     mask[5:8, 5:8] = True
     with pytest.raises(clpde.InputError, match="border"):
         clpde.inpaint(image, mask, method="spectral", border=None)
+
+
+def test_thin_damage_takes_the_thin_border_and_thick_damage_the_border(runtime):
+    rng = np.random.default_rng(5)
+    data = rng.random((1, 48, 56))
+    thin_mask = np.zeros((48, 56), bool)
+    thin_mask[20:23, 4:50] = True  # a scratch 3 px wide: every pixel 2 px from known
+    thick = thin_mask.copy()
+    thick[14:28, 30:44] = True  # a 14 px square on it: its centre is 7 px from known
+    assert spectral.thin(thin_mask) and not spectral.thin(thick)
+    options = dict(SMALL, border=8)
+    for mask, border in ((thin_mask, 3), (thick, 8)):
+        got = spectral.fill(data, mask, runtime, thin_border=3, **options)
+        want = spectral.fill(data, mask, runtime, **dict(options, border=border, thin_border=0))
+        assert np.array_equal(got, want)
+    # the other border's fill differs, so the comparison above can fail
+    other = spectral.fill(data, thin_mask, runtime, **dict(options, thin_border=0))
+    assert not np.array_equal(
+        other, spectral.fill(data, thin_mask, runtime, thin_border=3, **options)
+    )
+
+
+def test_one_grid_in_double_precision_runs():
+    # one grid's copy in float64 needs no conversion: the host's copy must still be its own
+    # writable array (a broadcast view of the data was read-only, and the read-back failed)
+    y, x = np.mgrid[0:24, 0:24]
+    image = 0.5 + 0.3 * np.sin(x / 4.0) * np.cos(y / 5.0)
+    mask = np.zeros((24, 24), bool)
+    mask[10:12, 3:20] = True
+    options = dict(method="spectral", shifts=1, iterations=5)
+    double = clpde.inpaint(image, mask, dtype=np.float64, **options)
+    single = clpde.inpaint(image, mask, **options)
+    assert np.abs(double - single).max() < 1e-4

@@ -6,7 +6,9 @@ float64."""
 import numpy as np
 
 
-def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True, cutoff=1.5):
+def fit_block(
+    values, weight, *, iterations, gamma, alpha, stop, detrend=True, cutoff=1.5, floor=0.0
+):
     """The model of one window: values and weight (L, L) -> the model's (L, L) values."""
     L = values.shape[0]
     centre = (L - 1) / 2
@@ -20,6 +22,7 @@ def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True, c
         a = wb @ basis.T + np.diag([0, 1e-3 * total, 1e-3 * total])
         coef = np.linalg.solve(a, wb @ values.ravel())
         plane = (coef @ basis).reshape(L, L)
+    energy = float((weight * (values - plane) ** 2).sum())  # the weighted squared error
     R = np.fft.fft2(weight * (values - plane))  # sum w f exp(-2 pi i k.x / L), [ky, kx]
     W = np.fft.fft2(weight)
     W0 = W[0, 0].real
@@ -47,8 +50,9 @@ def fit_block(values, weight, *, iterations, gamma, alpha, stop, detrend=True, c
         g = gain[a, b]
         if first is None:
             first = g
-        if not g > 0 or g < stop * first:
+        if not g > 0 or g < stop * first or (floor > 0 and energy <= floor**2 * W0):
             break
+        energy -= gamma * (2 - gamma) * g  # a step gamma along the pair's best coefficient
         phase = np.exp(2j * np.pi * (a * m + b * n) / L)
         if self_conj[a, b]:
             c = gamma * r[a, b].real / W0
@@ -150,6 +154,7 @@ def fill(
     alpha=2.0,
     iterations=100,
     stop=0.0,
+    floor=0.0,
     colour="pca",
     detrend=True,
     shifts=2,
@@ -234,6 +239,7 @@ def fill(
                         gamma=gamma,
                         alpha=alpha,
                         stop=stop,
+                        floor=floor,
                         detrend=detrend,
                         cutoff=cutoff,
                     )
