@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyopencl.array as cla
+from scipy import fft as sfft
 from scipy import ndimage
 
 from ..fields import Field
@@ -63,29 +64,34 @@ def match_shift(
         :, y0 : y1 + 2 * r, x0 : x1 + 2 * r
     ]
     h, w = weight.shape
-    shape = (h + 3 * r, w + 3 * r)
+    # room for every shift within reach without wrapping, rounded up to a fast FFT length
+    shape = tuple(sfft.next_fast_len(n + 3 * r, real=True) for n in (h, w))
     n = weight.sum()
     wp = np.zeros(shape)
     wp[r : r + h, r : r + w] = weight
-    score = np.zeros(shape)
     den_t = 0.0
     var_c = np.zeros(shape)
-    fw = np.conj(np.fft.rfft2(wp, shape))
+    fw = np.conj(sfft.rfft2(wp, shape))
+    # the cross-correlations and the sums of squares summed over the channels before the
+    # inverse transforms (linear): 2 inverse transforms a frame, and one per channel
+    fscore, fsquares = 0.0, 0.0
     for p, c in zip(prev, cur, strict=True):
         t = np.zeros(shape)
         t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
         den_t += (t * t).sum()
         cp = np.zeros(shape)
         cp[: h + 2 * r, : w + 2 * r] = c
-        fc = np.fft.rfft2(cp, shape)
-        s1 = np.fft.irfft2(fw * fc, shape)
-        s2 = np.fft.irfft2(fw * np.fft.rfft2(cp * cp, shape), shape)
-        var_c += np.maximum(s2 - s1 * s1 / n, 0)
-        score += np.fft.irfft2(np.conj(np.fft.rfft2(t, shape)) * fc, shape)
+        fc = sfft.rfft2(cp, shape)
+        s1 = sfft.irfft2(fw * fc, shape)
+        var_c -= s1 * s1 / n
+        fsquares = fsquares + sfft.rfft2(cp * cp, shape)
+        fscore = fscore + np.conj(sfft.rfft2(t, shape)) * fc
+    var_c = np.maximum(var_c + sfft.irfft2(fw * fsquares, shape), 0)
+    score = sfft.irfft2(fscore, shape)
     ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
     # correlation index k is the shift k, negative shifts wrapped around
-    dy = np.fft.fftfreq(shape[0], 1 / shape[0])[:, None]
-    dx = np.fft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    dy = np.rint(np.fft.fftfreq(shape[0], 1 / shape[0]))[:, None]
+    dx = np.rint(np.fft.fftfreq(shape[1], 1 / shape[1]))[None, :]
     ncc = ncc - 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
     ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | (var_c < 1e-9 * n)] = -np.inf
     if within is not None:
