@@ -1,6 +1,6 @@
 """Overlays of test-half clips of benchmarks/track_photo_corpus.py for docs/tracking.md:
-per row one clip at four frames, motion='checked' (the default before, blue), the default
-(motion='image', red) and the truth (green); tiles cropped around the truth.
+per row one clip at four frames, the default (motion='checked', blue), motion='image' (red)
+and the truth (green); tiles cropped around the truth.
 
     python benchmarks/track_photo_pictures.py       # writes docs/images/track_photo_test.png
     python benchmarks/track_photo_pictures.py --checked  # docs/images/track_checked.png
@@ -83,15 +83,15 @@ def main():
     rows = []
     for cls, seed in CLIPS:
         frames, truth = MAKERS[cls](seed)
-        before = clpde.track(frames, truth[0], motion="checked", progress=False)
         default = clpde.track(frames, truth[0], progress=False)
+        image = clpde.track(frames, truth[0], motion="image", progress=False)
         colour = frames if frames.ndim == 4 else np.repeat(frames[..., None], 3, -1)
         tiles = []
         for t in FRAMES:
             img = colour[t].copy()
             _outline(img, truth[t], (0, 1, 0))
-            _outline(img, before[t], (0, 0.4, 1))
-            _outline(img, default[t], (1, 0, 0))
+            _outline(img, default[t], (0, 0.4, 1))
+            _outline(img, image[t], (1, 0, 0))
             tiles.append(_tile(img, ndimage.center_of_mass(truth[t])))
         rows.append(np.concatenate(tiles, 1))
     out = ROOT / "docs" / "images" / "track_photo_test.png"

@@ -23,10 +23,7 @@ def test_track_options_are_frozen_and_resolve_their_defaults():
     options = TrackOptions()
     with pytest.raises(dataclasses.FrozenInstanceError):
         options.tol = 0.1
-    # the default (motion='image') turns the appearance term on; other motions leave it off
-    assert options.motion == "image" and options.appearance_weight == APPEARANCE_WEIGHT
-    checked = TrackOptions(motion="checked")
-    assert checked.iterations == ITERATIONS and checked.appearance_weight == 0.0
+    assert options.iterations == ITERATIONS and options.appearance_weight == 0.0
     # replace re-resolves what depends on other fields
     region = dataclasses.replace(options, region_weight=1.0)
     assert region.max_iterations is None and region.iterations == ADAPTIVE_ITERATIONS
