@@ -13,7 +13,9 @@ image, and what it looks like against its surroundings.
 - `AppearanceModel`: GrabCut-like colour (grey where the footage has none) and texture
   histograms of the object (learned from each frame's result, a running mean) and of its
   surroundings (a ring around the predicted contour in the new frame), and their
-  log-likelihood ratio per pixel.
+  log-likelihood ratio per pixel, tempered by how well the two histograms separate in the
+  frame (a head in a dim car separates little: untempered, each frame's mild preference
+  moves the contour a little, and the moves add up to a leak).
 - `AppearanceTerm`: that ratio as the morphing's region speed (the field kernels/tracking/
   adaptive.cl adds to the contour's speed), uploaded once per frame: the contour shrinks
   where a pixel looks like the surroundings (a textured background it would leak into, an
