@@ -1,6 +1,6 @@
 """Overlays of test-half clips of benchmarks/track_photo_corpus.py for docs/tracking.md:
-per row one clip at four frames, the default (kalman + adaptive, blue), motion='image'
-(red) and the truth (green).
+per row one clip at four frames, the default (motion='checked', blue), motion='image' (red)
+and the truth (green); tiles cropped around the truth.
 
     python benchmarks/track_photo_pictures.py       # writes docs/images/track_photo_test.png
     python benchmarks/track_photo_pictures.py --checked  # docs/images/track_checked.png
@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from track_photo_corpus import MAKERS  # noqa: E402
 
-CLIPS = (("fast", 1), ("occlude", 1), ("clutter", 3), ("pan", 3))
+CLIPS = (("fast", 1), ("occlude", 1), ("clutter", 3), ("pan", 3), ("footage", 1))
 FRAMES = (1, 5, 10, 15)
 
 
@@ -92,7 +92,7 @@ def main():
             _outline(img, truth[t], (0, 1, 0))
             _outline(img, default[t], (0, 0.4, 1))
             _outline(img, image[t], (1, 0, 0))
-            tiles.append(np.pad(img, ((1, 1), (1, 1), (0, 0)), constant_values=1))
+            tiles.append(_tile(img, ndimage.center_of_mass(truth[t])))
         rows.append(np.concatenate(tiles, 1))
     out = ROOT / "docs" / "images" / "track_photo_test.png"
     picture = np.concatenate(rows, 0)

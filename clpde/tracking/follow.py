@@ -32,8 +32,6 @@ GROW = 6
 # The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
 # within +-PRIOR_CAP.
 PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
-# The motion's evidence (a hidden part does not move with the object) is capped at this.
-MOTION_CAP = 6.0
 # The start keeps the appearance's visible part of the prediction unless less than this
 # share of it remains.
 VISIBLE = 0.3
@@ -101,7 +99,6 @@ class ObjectFollower:
             )
         else:  # nothing in sight: the object keeps its velocity
             a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
-        moved = move_mask(mask, a)
         # the velocity: where the motion takes the whole shape's centre
         centre = _centroid(self.shape)
         shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
@@ -119,7 +116,10 @@ class ObjectFollower:
             # it is and only clear evidence carves it or grows it
             prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
             self._looks_ratio = self.model.log_ratio(self._bins, predicted)
-            self._ratio = self._looks_ratio + prior + self._motion_ratio(t, a, moved)
+            # (no evidence from the motion-compensated residual: a talking mouth or a
+            # turning face does not move with the object either, and on the calibration
+            # half, 0.827 -> 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
+            self._ratio = self._looks_ratio + prior
             self.term.set(self._ratio)
             start = self._visible(predicted)
         self.ls.assign(signed_distance(start))
@@ -129,25 +129,6 @@ class ObjectFollower:
         for c in range(out.shape[0]):
             out[c][near] = _at(prepared_prev[c], a, near)
         return out, (float(shift[0]), float(shift[1]))
-
-    def _motion_ratio(self, t, a, moved) -> np.ndarray:
-        """Log odds of 'not the object' from the motion: where the previous frame's visible
-        object, carried by the motion `a`, lands (`moved`), the new frame should show the
-        same colours; a large difference there says something hides the object (an
-        occluder's pixels do not move with it). The object's residual is taken as
-        Gaussian with the median's spread over `moved`, anything else as uniform; capped
-        at +-MOTION_CAP, 0 where the previous frame did not show the object."""
-        if moved.sum() < 12:
-            return np.zeros(moved.shape)
-        near = ndimage.binary_dilation(moved, iterations=2)
-        cur = self.looks[t][:, near]
-        carried = np.stack([_at(c, a, near) for c in self.looks[t - 1]])
-        r = np.zeros(moved.shape)
-        r[near] = np.sqrt(((cur - carried) ** 2).sum(axis=0))
-        r = ndimage.gaussian_filter(r, 1.0)
-        sigma = max(1.4826 * 1.5 * float(np.median(r[moved])), 0.03)
-        ratio = 0.5 * (r / sigma) ** 2 + np.log(sigma * np.sqrt(2 * np.pi))
-        return np.where(moved, np.clip(ratio, -MOTION_CAP, MOTION_CAP), 0.0)
 
     def _visible(self, predicted: np.ndarray) -> np.ndarray:
         """The morphing's start: the predicted whole shape less what looks like the

@@ -55,8 +55,10 @@ class TrackOptions:
         clpde.tracking.prediction.checked_shift); 'kalman': the filter alone; 'image': moved
         by the object's motion found in the image (a masked correlation over every shift
         up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
-        through occlusions, with the appearance term on (clpde.tracking.follow); each
-        connected piece by its own match; by the previous displacement; or not at all.
+        through occlusions, with the appearance term on, its evidence tempered by how well
+        the object's colours separate from its surroundings' in each frame
+        (clpde.tracking.follow); each connected piece by its own match; by the previous
+        displacement; or not at all.
     shape_weight : float
         (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
         nothing.

@@ -5,7 +5,7 @@ object's grey level and retreat behind an occluder."""
 import numpy as np
 from scipy import ndimage
 
-from clpde.tracking.appearance import match_shift, object_motion
+from clpde.tracking.appearance import AppearanceModel, match_shift, object_motion
 from clpde.tracking.contours import track
 
 H, W = 64, 96
@@ -109,3 +109,24 @@ def test_retreats_behind_an_occluder():
     for t in range(3, 6):
         assert (masks[t] & bar).sum() <= 2
         assert _iou(masks[t], truth[t]) > 0.9
+
+
+def test_appearance_evidence_fades_where_object_and_surroundings_look_alike():
+    # tempered by the separation of the two histograms: clear where the object stands
+    # apart, none where it looks like its surroundings (else each frame's mild preference
+    # moves the contour a little, and the moves add up to a leak)
+    rng = np.random.default_rng(5)
+    yy, xx = np.mgrid[:64, :64]
+    disc = np.hypot(yy - 32, xx - 32) < 12
+    near = ndimage.binary_dilation(disc, iterations=6) & ~disc
+    tex = _texture(rng, 1.0, (64, 64))
+    for frame, lo, hi in (
+        (np.where(disc, 0.7, 0.3) + 0.05 * tex, 3.0, 6.0),
+        (0.5 + 0.1 * tex, 0, 0.05),
+    ):
+        model = AppearanceModel(colour=False)
+        bins = model.bins(np.clip(frame, 0, 1)[None])
+        model.learn(bins, disc)
+        ratio = model.log_ratio(bins, disc)
+        assert lo <= np.abs(ratio[near]).mean() <= hi
+        assert lo <= np.abs(ratio[disc]).mean() <= hi
