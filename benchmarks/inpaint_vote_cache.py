@@ -38,7 +38,8 @@ CACHE = Path(__file__).resolve().parent / "results" / "vote_cache"
 def shifted(omega, direction):
     """The hole's clusters (components of the hole grown by 1 px) moved aside along one of
     four directions by twice their half-thickness plus GAP, where they land on known
-    pixels at least 2 px from the hole (validate._shifted, one direction)."""
+    pixels at least 2 px from the hole (validate._shifted, one direction): a label image,
+    each moved pixel labelled with its cluster (as `ndimage.label` of the grown hole)."""
     known = ~omega
     dist = ndimage.distance_transform_edt(known)
     clusters, count = ndimage.label(dist <= 1, np.ones((3, 3), bool))
@@ -51,10 +52,10 @@ def shifted(omega, direction):
     y, x = ys + dy * d, xs + dx * d
     ny, nx = omega.shape
     keep = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
-    out = np.zeros_like(omega)
-    y, x = y[keep], x[keep]
+    out = np.zeros(omega.shape, np.int64)
+    y, x, lab = y[keep], x[keep], lab[keep]
     ok = known[y, x] & (dist[y, x] >= 2)
-    out[y[ok], x[ok]] = True
+    out[y[ok], x[ok]] = lab[ok]
     return out
 
 
@@ -66,7 +67,7 @@ def masks(omega):
     for w in RINGS:
         out[f"ring{w}"] = omega | (known & (dist <= w))
     for k in SHIFTS:
-        test = shifted(omega, k)
+        test = shifted(omega, k) > 0
         if test.any():
             out[f"shift{k}"] = omega | test
     return out
@@ -80,12 +81,14 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--half", default="calibration")
     parser.add_argument("--every", type=int, default=1)
+    parser.add_argument("--offset", type=int, default=0, help="start at this case (with --every)")
     parser.add_argument("--only", default=None, help="comma-separated case names")
+    parser.add_argument("--masks", default=None, help="comma-separated tests (hole,ring1,..)")
     args = parser.parse_args(argv)
     runtime = get_runtime()
     names = validate.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
-    cases = [c for c in corpus.build() if c.half in halves][:: args.every]
+    cases = [c for c in corpus.build() if c.half in halves][args.offset :: args.every]
     if args.only:
         cases = [c for c in cases if c.name in args.only.split(",")]
     CACHE.mkdir(parents=True, exist_ok=True)
@@ -98,6 +101,8 @@ def main(argv=None):
         store = {"name": np.array(case.name)}
         start = time.perf_counter()
         for key, hidden in masks(case.mask).items():
+            if args.masks and key not in args.masks.split(","):
+                continue
             store[f"mask_{key}"] = hidden
             for n in names:
                 t0 = time.perf_counter()
@@ -107,9 +112,7 @@ def main(argv=None):
         tmp = path.with_suffix(".tmp.npz")
         np.savez_compressed(tmp, **store)
         tmp.replace(path)
-        print(
-            f"[{i + 1}/{len(cases)}] {case.name} {time.perf_counter() - start:.1f} s", flush=True
-        )
+        print(f"[{i + 1}/{len(cases)}] {case.name} {time.perf_counter() - start:.1f} s", flush=True)
 
 
 if __name__ == "__main__":
