@@ -314,7 +314,7 @@ def load(halves, names):
     return cases
 
 
-def real(half):
+def real(half, narrow=None):
     """validate.choose as it is (its ring fills made here; the hole's fills from the cache),
     case by case against the best single candidate; per class mean PSNR and the cases more
     than 0.2 dB below it."""
@@ -341,7 +341,7 @@ def real(half):
 
             validate._fill = cached
             start = time.perf_counter()
-            filled, _ = validate.choose(c.data, c.omega, runtime, seed=0)
+            filled, _ = validate.choose(c.data, c.omega, runtime, seed=0, narrow=narrow)
             validate._fill = original
             p = c.score(filled[:, c.omega])
             rows.append((c.case.damage, c.case.name, p, p - c.best))
@@ -351,7 +351,7 @@ def real(half):
             by.setdefault(d, []).append(p)
         below = sorted((m, n) for _, n, _, m in rows if m < -0.2)
         print(
-            f"\n{h}: validate.choose, mean over classes "
+            f"\n{h}: validate.choose (narrow={narrow}), mean over classes "
             f"{np.mean([np.mean(v) for v in by.values()]):.2f}, {len(below)} of {len(rows)} "
             "cases more than 0.2 dB below the best candidate: "
             + "; ".join(f"{n} {m:+.2f}" for m, n in below)
@@ -369,9 +369,10 @@ def main(argv=None):
     parser.add_argument(
         "--real", action="store_true", help="run validate.choose itself (its defaults)"
     )
+    parser.add_argument("--narrow", type=int, default=None, help="--real: choose's narrow")
     args = parser.parse_args(argv)
     if args.real:
-        return real(args.half)
+        return real(args.half, None if args.narrow is None else bool(args.narrow))
     names = validate.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = load(halves, names)

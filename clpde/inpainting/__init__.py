@@ -15,6 +15,7 @@ _OPTIONS = {
     "ExemplarOptions": ".exemplar",
     "StructureTextureOptions": ".structure_texture",
     "AutoOptions": ".validate",
+    "PickOptions": ".pick",
 }
 
 __all__ = ["METHODS", "Method", "available", "load", "options", "register", *_OPTIONS]
