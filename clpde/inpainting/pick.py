@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
+from ..errors import InputError
 from . import choose
 from .exemplar import ExemplarOptions
 from .registry import keywords, load, register
@@ -56,8 +57,6 @@ class PickOptions:
     periodicity: float = choose.MIN_PERIODICITY
 
     def __post_init__(self) -> None:
-        from ..errors import InputError
-
         if not isinstance(self.spectral, SpectralOptions):
             raise InputError(f"spectral must be SpectralOptions, not {self.spectral!r}")
         if not isinstance(self.exemplar, ExemplarOptions):
