@@ -18,6 +18,7 @@ _LAZY = {
     "ExemplarOptions": ".exemplar",
     "StructureTextureOptions": ".structure_texture",
     "AutoOptions": ".validate",
+    "PickOptions": ".pick",
 }
 
 __all__ = ["METHODS", "Method", "available", "load", "options", "register", *_LAZY]

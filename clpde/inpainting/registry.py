@@ -62,6 +62,7 @@ METHODS = {
     "exemplar": "clpde.inpainting.exemplar",
     "structure-texture": "clpde.inpainting.structure_texture",
     "spectral": "clpde.inpainting.spectral",
+    "pick": "clpde.inpainting.pick",
 }
 # method="auto": each cluster of damage is filled by the self-validated choice among
 # validate.py's candidates (a method of its own, registered there).

@@ -3,6 +3,7 @@
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 import clpde
 from clpde.inpainting import choose, validate
@@ -144,3 +145,29 @@ def test_vote_on_dust_is_not_below_its_best_candidate():
     )
     filled, _ = validate.choose(data, omega, runtime, seed=0)
     assert psnr(filled) >= best - 0.2
+
+
+def test_a_thick_cluster_votes_on_two_rings_and_takes_their_mean():
+    """A cluster thicker than 2 px votes on a ring of half its thickness and on a 1 px
+    ring, each hidden and filled on its own (validate.NARROW); its weights are the mean of
+    the two votes', which each vote alone (narrow=False; scale=0) reproduces."""
+    rng = np.random.default_rng(3)
+    image = ndimage.gaussian_filter(rng.standard_normal((64, 64)), 2)
+    image = 0.3 + 0.4 * (image - image.min()) / np.ptp(image)
+    mask = _disc(image.shape, 32, 32, 7)  # half-thickness 7: a 4 px ring and a 1 px one
+    data = image[None]
+    runtime = get_runtime()
+
+    def vote(**kw):
+        _, report = validate.choose(data, mask, runtime, names=CHEAP, seed=0, **kw)
+        (choice,) = report["choices"]
+        assert choice["why"] == "ring vote"
+        w = np.array([choice["weights"].get(n, 0.0) for n in CHEAP])
+        return w, report["ring_pixels"]
+
+    both, pixels = vote()
+    wide, wide_pixels = vote(narrow=False)
+    narrow, narrow_pixels = vote(scale=0.0)
+    assert pixels == wide_pixels + narrow_pixels and wide_pixels > narrow_pixels > 0
+    assert not np.allclose(wide, narrow)  # the two depths disagree here
+    assert np.allclose(both, (wide + narrow) / 2, atol=1e-9)

@@ -1,0 +1,89 @@
+"""method="pick" (clpde/inpainting/pick.py): the spectral fill, and the exemplar's on the
+clusters of damage whose surround is periodic."""
+
+import numpy as np
+import pytest
+
+import clpde
+from clpde.errors import InputError
+from clpde.inpainting import PickOptions, pick
+
+
+def _tiles(ny=96, nx=96, seed=0):
+    """Tiles of period 10 with sharp edges, a little noise: periodic surroundings."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:ny, 0:nx]
+    image = 0.25 + 0.5 * (((x // 5) + (y // 5)) % 2) + 0.02 * rng.standard_normal((ny, nx))
+    return np.clip(np.round(image * 255), 0, 255).astype(np.uint8)
+
+
+def _smooth(ny=96, nx=96, seed=0):
+    """A smooth random field (no period) as 8-bit data."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    field = ndimage.gaussian_filter(rng.standard_normal((ny, nx)), 6)
+    field = (field - field.min()) / np.ptp(field)
+    return np.round(40 + 170 * field).astype(np.uint8)
+
+
+def _disc(shape, cy, cx, r):
+    y, x = np.mgrid[0 : shape[0], 0 : shape[1]]
+    return np.hypot(y - cy, x - cx) <= r
+
+
+def _run(image, mask, method):
+    return clpde.inpaint(image, mask, method=method, progress=False, seed=0)
+
+
+def test_a_hole_in_a_periodic_pattern_is_copied_by_the_exemplar():
+    image = _tiles()
+    mask = _disc(image.shape, 48, 50, 9)
+    data = image[None] / 255.0
+    assert pick.periodic_clusters(data, mask).sum() == mask.sum()
+    picked, spectral = _run(image, mask, "pick"), _run(image, mask, "spectral")
+
+    def rmse(out):
+        return np.sqrt(np.mean((out[mask].astype(float) - image[mask]) ** 2))
+
+    # the spectral fill cannot continue the tiles across 2 periods; the exemplar copies them
+    # (from the spectral fill's box: method="exemplar" alone searches 128 px around), up to
+    # the noise, whose copy errs by sqrt(2) x 0.02 x 255 = 7.2 levels RMS
+    assert rmse(picked) < 8 < 0.7 * rmse(spectral), (rmse(picked), rmse(spectral))
+
+
+def test_elsewhere_it_is_the_spectral_fill_bit_for_bit():
+    image = _smooth()
+    mask = _disc(image.shape, 40, 40, 8)
+    mask[70:72, 10:90] = True  # and a scratch
+    assert not pick.periodic_clusters(image[None] / 255.0, mask).any()
+    assert np.array_equal(_run(image, mask, "pick"), _run(image, mask, "spectral"))
+
+
+def test_a_mixed_box_takes_each_cluster_from_its_method():
+    image = _tiles(96, 136)
+    image[:, 56:] = _smooth(96, 136)[:, 56:]  # the right part smooth, without a period
+    # each disc's measured window (its box grown by pick.WINDOW) on one side only
+    mask = _disc(image.shape, 40, 24, 7) | _disc(image.shape, 40, 108, 7)
+    periodic = pick.periodic_clusters(image[None] / 255.0, mask)
+    assert periodic[40, 24] and not periodic[40, 108]
+    out = _run(image, mask, "pick")
+    assert out.dtype == image.dtype and np.array_equal(out[~mask], image[~mask])
+    left = _disc(image.shape, 40, 24, 7)
+    error = np.abs(out[left].astype(int) - image[left]).mean()
+    spectral_error = np.abs(_run(image, mask, "spectral")[left].astype(int) - image[left]).mean()
+    assert error < 0.7 * spectral_error, (error, spectral_error)
+
+
+def test_a_thin_scratch_in_a_pattern_stays_spectral():
+    image = _tiles()
+    mask = np.zeros(image.shape, bool)
+    mask[40:42, 10:80] = True  # 2 px: half-thickness 1, below MIN_RADIUS
+    assert not pick.periodic_clusters(image[None] / 255.0, mask).any()
+
+
+def test_options_are_checked():
+    with pytest.raises(InputError, match="periodicity must be in"):
+        PickOptions(periodicity=1.5)
+    with pytest.raises(InputError, match="spectral must be SpectralOptions"):
+        PickOptions(spectral=3)
