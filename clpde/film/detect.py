@@ -26,10 +26,12 @@ scratches from the same line detector run on the image minus its horizontal medi
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
-from scipy import ndimage, signal
+from scipy import integrate, ndimage, optimize, signal, stats
 from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._progress import Progress, progress_bar
@@ -66,6 +68,36 @@ RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the n
 RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
 RING_QUIET = 0.5  # share of the ring that is trusted and matches
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
+# The neighbours' range that the grain alone explains: its quantile for K trusted neighbours
+# of one noise level (the range of K Gaussian samples); beyond it the spread counts as motion
+# the flow does not follow. 0.99: one pixel in a hundred of a well compensated frame.
+SPREAD_QUANTILE = 0.99
+# The deviation of a pixel's residual against the median of its neighbours, in units of the
+# grain's: the pixel's grain and the median's (of 2-4 neighbours with grain of their own).
+RESIDUAL_UNITS = 1.16
+
+
+@functools.cache
+def range_quantile(k: int, q: float = SPREAD_QUANTILE) -> float:
+    """The q-quantile of the range of k independent standard normal samples (0 for k < 2):
+    P(range <= r) = k * integral of phi(x) (Phi(x + r) - Phi(x))^(k-1) dx."""
+    if k < 2:
+        return 0.0
+
+    def cdf(r: float) -> float:
+        def f(x):
+            return stats.norm.pdf(x) * (stats.norm.cdf(x + r) - stats.norm.cdf(x)) ** (k - 1)
+
+        return k * integrate.quad(f, -10, 10)[0]
+
+    return float(optimize.brentq(lambda r: cdf(r) - q, 1e-6, 20.0))
+
+
+def spread_allowance(n_ok: np.ndarray, sigma: float) -> np.ndarray:
+    """Per pixel, the trusted neighbours' range the grain explains (range_quantile of their
+    count, in grey: each neighbour carries its own grain of level sigma)."""
+    table = np.array([range_quantile(k) for k in range(int(n_ok.max(initial=0)) + 1)])
+    return (table[n_ok] * sigma).astype(np.float32)
 
 
 def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -212,7 +244,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     inside = np.stack([motion.inside(t, t + k) for k in offs])
     med0 = median(vals, inside)
     r0 = (v - med0)[inside.any(0)]
-    sigma = max(robust_scale(r0) / 1.16 if r0.size else 0.0, SIGMA_FLOOR)
+    sigma = max(robust_scale(r0) / RESIDUAL_UNITS if r0.size else 0.0, SIGMA_FLOOR)
     # at a film's ends all neighbours lie on one side: an occluded pixel could find two
     # that agree with each other, so the flow back must agree too
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
@@ -248,6 +280,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "least": second_least(v, vals, ok),
         "sigma": sigma,
         "both": both,
+        "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
         "flows": np.stack([motion.flow(t, t + k) for k in (-1, 1) if 0 <= t + k < T]),
     }
@@ -261,7 +294,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     kern = LineKernels(get_runtime(device))
     motion = FilmMotion(G)
     per = map_frames(lambda t: frame_scores(motion, t, radius), range(T))
-    keys = ("d", "spread", "zr", "res", "least", "both")
+    keys = ("d", "spread", "zr", "res", "least", "both", "n")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
@@ -328,6 +361,52 @@ def _ring_check(
     return keep[labels]
 
 
+def blotch_evidence(scores: dict, t: int, gamma: float) -> np.ndarray:
+    """Frame t's blotch evidence per pixel (film_scores' evidence), in noise units that grow
+    with the neighbours' disagreement among themselves beyond what the grain explains
+    (pathological motion: the flow does not follow the scene there): the pixel's own
+    score, or its region's where its own residual shows the same sign beyond the noise (so
+    a strong blotch's region score does not spill past its edge)."""
+    sigma, r = scores["sigma"][t], scores["res"][t]
+    allowed = spread_allowance(scores["n"][t], sigma)
+    scale = sigma + gamma * np.maximum(scores["spread"][t] - allowed, 0.0)
+    zb = scores["d"][t] / scale
+    zr = scores["zr"][t] * (sigma / scale)
+    own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigma)
+    return np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
+
+
+def _local_noise_check(
+    mask: np.ndarray, a: np.ndarray, res: np.ndarray, sigma: float, threshold: float
+) -> np.ndarray:
+    """Keep the components of mask that stand out against the compensation error of their
+    own surroundings: the peak evidence, divided by the ring's (2-3 px out) residual level
+    in units of the grain's (the residual against the neighbours' median has a deviation
+    of RESIDUAL_UNITS sigma under grain alone; more where the flow is off), must still
+    reach the threshold. Flow and warp errors come in clusters, and a small region of them
+    lies among others; a blotch lies on a scene the neighbours compensate."""
+    labels, n = ndimage.label(mask)
+    if n == 0:
+        return mask
+    ny, nx = mask.shape
+    keep = np.zeros(n + 1, bool)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        y0, y1 = max(sl[0].start - 4, 0), min(sl[0].stop + 4, ny)
+        x0, x1 = max(sl[1].start - 4, 0), min(sl[1].stop + 4, nx)
+        lab = labels[y0:y1, x0:x1]
+        own = lab == idx
+        ring = ndimage.binary_dilation(own, iterations=3) & ~ndimage.binary_dilation(
+            own, iterations=1
+        )
+        ring &= lab == 0
+        if not ring.any():
+            continue
+        level = 1.4826 * float(np.median(np.abs(res[y0:y1, x0:x1][ring])))
+        local = max(1.0, level / (RESIDUAL_UNITS * sigma))
+        keep[idx] = float(a[y0:y1, x0:x1][own].max()) >= threshold * local
+    return keep[labels]
+
+
 def _frame_kinds(
     G: np.ndarray,
     scores: dict,
@@ -344,21 +423,13 @@ def _frame_kinds(
     scratch = (
         scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length) | still
     )
-    # a pixel's evidence: its own score, or its region's where its own residual shows
-    # the same sign beyond the noise (so a strong blotch's region score does not spill
-    # past its edge)
-    # in noise units that grow with the neighbours' disagreement among themselves
-    # (pathological motion: the flow does not follow the scene there)
-    scale = sigmas[t] + gamma * np.maximum(scores["spread"][t] - 2 * sigmas[t], 0.0)
-    zb = scores["d"][t] / scale
-    zr, r = scores["zr"][t] * (sigmas[t] / scale), res[t]
-    own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
-    a = np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
+    a, r = blotch_evidence(scores, t, gamma), res[t]
     blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
     blotch &= ~ndimage.binary_dilation(scratch)
     # a lone pixel is within what a codec or the grain does: never a blotch worth a fill
     blotch = _no_singletons(blotch)
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
+    blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
