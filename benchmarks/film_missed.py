@@ -21,6 +21,7 @@ import numpy as np
 from film_corpus import corpus
 from scipy import ndimage
 
+from clpde.film import _regions as regions
 from clpde.film import detect as fdet
 from clpde.film._frames import film_planes, grey
 from clpde.film.lines import scratch_runs
@@ -38,11 +39,11 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     out["scratch"] = b
     b = fdet._no_singletons(b)
     out["single"] = b
-    b = fdet._ring_check(b, sc["both"][t], r, sig[t], sc["flows"][t])
+    b = regions._ring_check(b, sc["both"][t], r, sig[t], sc["flows"][t])
     out["ring"] = b
-    b = fdet._local_noise_check(b, a, r, sig[t], bthr)
+    b = regions._local_noise_check(b, a, r, sig[t], bthr)
     out["local"] = b
-    b = fdet._motion_check(b, G, t, res[t], search, sig[t])
+    b = regions._motion_check(b, G, t, res[t], search, sig[t])
     out["motion"] = b
     return out
 
