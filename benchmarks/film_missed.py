@@ -9,7 +9,8 @@ neighbour on one side (no temporal evidence: the motion is not trusted there); e
 below the hysteresis's low level (split by the pixel's true change: faint < 15 grey
 levels, 15-30, > 30); a region that never reaches the high level; beside a scratch; a
 lone pixel; the ring check; the local noise check; the motion check (found again nearby);
-called a scratch.
+called a scratch. With --fill, the found blotch pixels the fill leaves as they were (its
+self-check refusing the repair, or keep) are counted too.
 """
 
 from __future__ import annotations
@@ -21,10 +22,12 @@ import numpy as np
 from film_corpus import corpus
 from scipy import ndimage
 
+import clpde
 from clpde.film import _regions as regions
 from clpde.film import detect as fdet
 from clpde.film._frames import film_planes, grey
 from clpde.film.lines import scratch_runs
+from clpde.film.stream import KEEP
 
 
 def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
@@ -52,9 +55,10 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--frames", type=int, default=12)
     ap.add_argument("--half", default="calibration")
+    ap.add_argument("--fill", action="store_true", help="also count found pixels left unfilled")
     args = ap.parse_args()
     total = Counter()
-    found_total = 0
+    found_total = kept_total = 0
     for c in corpus(args.half, frames=args.frames):
         G = grey(film_planes(c["dirty"], -1)[0])
         T, ny, nx = G.shape
@@ -63,6 +67,12 @@ def main():
             G, sc, fdet.BLOTCH_THRESHOLD, fdet.SCRATCH_THRESHOLD, 24, max(24, int(0.4 * ny))
         )
         amp = np.abs(c["dirty"].astype(int) - c["clean"].astype(int)).max(-1)
+        if args.fill:
+            # found, but left as it was by the fill: refused by its self-check (or changed by
+            # less than keep's noise units)
+            out = clpde.inpaint_video(c["dirty"], kinds > 0, channel_axis=-1, keep=KEEP)
+            same = (out == c["dirty"]).all(-1)
+            kept_total += int((same & (kinds == 1) & (c["truth"] == 1) & ~c["spare"]).sum())
         cnt = Counter()
         for t in range(T):
             gt = (c["truth"][t] == 1) & ~c["spare"][t]
@@ -101,6 +111,8 @@ def main():
         total += cnt
     n = sum(total.values())
     print(f"{args.half}: found {found_total}, missed {n}")
+    if args.fill:
+        print(f"  found but left unfilled by the fill (self-check, keep): {kept_total}")
     for k, v in sorted(total.items(), key=lambda kv: -kv[1]):
         print(f"  {k}: {v} ({100 * v / n:.1f}%)")
 

@@ -50,10 +50,10 @@ KERNEL_FILES = ("film/detect.cl",)
 CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 10.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
+BLOTCH_THRESHOLD = 8.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
-GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
+GAMMA = 0.5  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 REGION_HALF = 2  # the region evidence's square: 5x5
