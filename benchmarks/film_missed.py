@@ -36,7 +36,7 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     scratch = scratch_runs(zc[t], sc["least"][t], sig[t], sthr, min_length)
     a, r = fdet.blotch_evidence(sc, t, gamma), res[t]
     out = {"a": a, "low": a > fdet.HYSTERESIS_LOW * bthr}
-    b = fdet._hysteresis(a, fdet.HYSTERESIS_LOW * bthr, bthr)
+    b, a = fdet._regions_found(a, r, sc["region_noise"][t], bthr)
     out["hyst"] = b
     b = b & ~ndimage.binary_dilation(scratch)
     out["scratch"] = b

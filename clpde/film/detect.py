@@ -92,13 +92,28 @@ def spread_allowance(n_ok: np.ndarray, sigma: float) -> np.ndarray:
     return (table[n_ok] * sigma).astype(np.float32)
 
 
-def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
-    """The connected regions of a > low that reach a > high somewhere."""
-    labels, n = ndimage.label(a > low)
+def _regions_found(
+    a: np.ndarray, res: np.ndarray, region_noise: tuple[float, float], threshold: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blotch candidates and their evidence: the connected regions of a > the low level
+    (HYSTERESIS_LOW of the threshold) that reach the threshold somewhere (hysteresis), or,
+    a faint blotch, whose mean residual does as a whole: in noise units of a mean over the
+    region's n pixels, level * sqrt(area / n), with the residual's level and the grain's
+    correlation area measured on the frame (film_scores). The evidence returned is the
+    larger of the pixel's own and its region's."""
+    labels, n = ndimage.label(a > HYSTERESIS_LOW * threshold)
+    if n == 0:
+        return labels > 0, a
+    idx = np.arange(1, n + 1)
+    level, area = region_noise
+    size = ndimage.sum_labels(np.ones_like(a), labels, idx)
+    z = np.abs(ndimage.mean(res, labels, idx)) / (level * np.sqrt(area / size))
+    region = np.concatenate([[0.0], z]).astype(np.float32)[labels]
     strong = np.zeros(n + 1, bool)
-    strong[np.unique(labels[a > high])] = True
+    strong[np.unique(labels[a > threshold])] = True
+    strong[1:] |= z >= threshold
     strong[0] = False
-    return strong[labels]
+    return strong[labels], np.maximum(a, region)
 
 
 class _Kernels(LineKernels):
@@ -188,7 +203,12 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / max(
         robust_scale(bp), SIGMA_FLOOR
     )
+    # the residual's level and its grain's correlation area (pixels), measured on the frame:
+    # a region of n pixels has a mean residual whose deviation is level * sqrt(area / n)
+    level = max(robust_scale(res[both]), SIGMA_FLOOR) if both.any() else SIGMA_FLOOR
+    area = 25.0 * (robust_scale(_box(res, REGION_HALF)[both]) / level) ** 2 if both.any() else 1.0
     return {
+        "region_noise": (level, max(area, 1.0)),
         "d": np.where(both, d, 0.0).astype(np.float32),
         "spread": spread.astype(np.float32),
         "zr": zr.astype(np.float32),
@@ -213,6 +233,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     keys = ("d", "spread", "zr", "res", "least", "both", "n")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
+    stack["region_noise"] = [p["region_noise"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
     q = kern.rt.queue
     zs = np.stack(
@@ -266,7 +287,7 @@ def _frame_kinds(
         scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length) | still
     )
     a, r = blotch_evidence(scores, t, gamma), res[t]
-    blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
+    blotch, a = _regions_found(a, r, scores["region_noise"][t], blotch_threshold)
     blotch &= ~ndimage.binary_dilation(scratch)
     # a lone pixel is within what a codec or the grain does: never a blotch worth a fill
     blotch = _no_singletons(blotch)
