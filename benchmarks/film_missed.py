@@ -2,15 +2,16 @@
 benchmarks/film_corpus.py, with each truly damaged blotch pixel that is not called a blotch
 put down to the first stage that loses it.
 
-    PYTHONPATH=. python benchmarks/film_missed.py [--frames 12] [--half calibration]
+    PYTHONPATH=. python benchmarks/film_missed.py [--frames 12] [--half calibration] [--fill]
 
 Causes, in the detector's order: an end frame (its stages reported apart); no trusted
 neighbour on one side (no temporal evidence: the motion is not trusted there); evidence
 below the hysteresis's low level (split by the pixel's true change: faint < 15 grey
 levels, 15-30, > 30); a region that never reaches the high level; beside a scratch; a
-lone pixel; the ring check; the local noise check; the motion check (found again nearby);
-called a scratch. With --fill, the found blotch pixels the fill leaves as they were (its
-self-check refusing the repair, or keep) are counted too.
+region smaller than CELLS of the grain's correlation areas; the ring check; the local
+noise check; the motion check (found again nearby); called a scratch. With --fill, the
+found blotch pixels the fill leaves as they were (its self-check refusing the repair, or
+keep) are counted too.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     out["hyst"] = b
     b = b & ~ndimage.binary_dilation(scratch)
     out["scratch"] = b
-    b = fdet._no_singletons(b)
+    b = fdet._no_singletons(b, max(2.0, fdet.CELLS * sc["region_noise"][t][1]))
     out["single"] = b
     b = regions._ring_check(b, sc["both"][t], r, sig[t], sc["flows"][t])
     out["ring"] = b
@@ -95,7 +96,7 @@ def main():
             causes += [
                 ("region below high", ~st["hyst"]),
                 ("beside scratch", ~st["scratch"]),
-                ("lone pixel", ~st["single"]),
+                ("smaller than CELLS grain areas", ~st["single"]),
                 ("ring check", ~st["ring"]),
                 ("local noise check", ~st["local"]),
                 ("motion check", ~st["motion"]),
