@@ -50,10 +50,10 @@ KERNEL_FILES = ("film/detect.cl",)
 CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 7.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
+BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
-GAMMA = 0.5  # how much the neighbours' disagreement raises the blotch scale (calibrated)
+GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 REGION_HALF = 2  # the region evidence's square: 5x5
@@ -209,8 +209,13 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     )
     # the residual's level and its grain's correlation area (pixels), measured on the frame:
     # a region of n pixels has a mean residual whose deviation is level * sqrt(area / n)
-    level = max(robust_scale(res[both]), SIGMA_FLOOR) if both.any() else SIGMA_FLOOR
-    area = 25.0 * (robust_scale(_box(res, REGION_HALF)[both]) / level) ** 2 if both.any() else 1.0
+    # (footage without grain, its residual's level at the floor, has no grain to correlate:
+    # what correlates there is the codec's blocks and the flow's errors; one pixel)
+    raw = robust_scale(res[both]) if both.any() else 0.0
+    level = max(raw, SIGMA_FLOOR)
+    area = (
+        25.0 * (robust_scale(_box(res, REGION_HALF)[both]) / raw) ** 2 if raw > SIGMA_FLOOR else 1.0
+    )
     return {
         "region_noise": (level, max(area, 1.0)),
         "d": np.where(both, d, 0.0).astype(np.float32),

@@ -167,7 +167,7 @@ def _blotches(frames, rng, per_frame=3, value=None):
 def test_blotches_found(runtime, rng, step):
     frames = _pan(_scene(rng), 6, step=step, rng=rng, grain=0.01)
     dirty, truth = _blotches(frames, rng)
-    # the default threshold is 7 noise units (chosen on real footage's calibration half):
+    # the default threshold is 6 noise units (chosen on real footage's calibration half):
     # blotches that stand out of this grain (0.01) by 20 deviations are all to be found
     truth &= np.abs(dirty - frames) > 0.2
     mask, kinds = clpde.detect_defects(dirty, return_kinds=True, device=runtime)
