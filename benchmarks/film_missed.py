@@ -41,7 +41,7 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     out["hyst"] = b
     b = b & ~ndimage.binary_dilation(scratch)
     out["scratch"] = b
-    b = fdet._no_singletons(b, max(2.0, fdet.CELLS * sc["region_noise"][t][1]))
+    b = fdet._no_singletons(b, max(fdet.SMALLEST, fdet.CELLS * sc["region_noise"][t][1]))
     out["single"] = b
     b = regions._ring_check(b, sc["both"][t], r, sig[t], sc["flows"][t])
     out["ring"] = b

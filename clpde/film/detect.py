@@ -50,17 +50,20 @@ KERNEL_FILES = ("film/detect.cl",)
 CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 6.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
+BLOTCH_THRESHOLD = 7.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 REGION_HALF = 2  # the region evidence's square: 5x5
-# The smallest blotch, in the grain's correlation areas (measured per frame, film_scores):
-# a region of one or two cells is a clump of grain, of the codec or of a flow error as often
-# as damage (chosen on the calibration half: benchmarks/film_calibrate.py).
-CELLS = 3.0
+# The smallest blotch: SMALLEST pixels, and CELLS of the grain's correlation areas (measured
+# per frame, film_scores): a region of a pixel or two, or smaller than the grain's clumps, is
+# a clump of grain, of the codec or of a flow error as often as damage (CELLS chosen on the
+# calibration half: benchmarks/film_calibrate.py; 3 cells drop 3x3 blotches of an H.264 film,
+# whose codec noise correlates over 7-16 px).
+SMALLEST = 3
+CELLS = 1.0
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
 STATIC_SCALE = 0.0  # the static-line detector, off: in a static shot it takes posts for scratches
 # The noise floor, 1.5 grey levels: 8-bit footage without grain (a codec's flat areas) has a
@@ -300,7 +303,7 @@ def _frame_kinds(
     blotch &= ~ndimage.binary_dilation(scratch)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
     # blotch worth a fill
-    blotch = _no_singletons(blotch, max(2.0, CELLS * scores["region_noise"][t][1]))
+    blotch = _no_singletons(blotch, max(SMALLEST, CELLS * scores["region_noise"][t][1]))
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
