@@ -1,5 +1,6 @@
 """docs/images/film_people.png: before | after of walking people from the TEST half
-(vtest a of benchmarks/film_corpus.py), detect_defects + inpaint_video with the defaults.
+(vtest a of benchmarks/film_corpus.py), detect_defects + inpaint_video with the defaults
+and keep=KEEP, as `clpde restore`.
 
     python benchmarks/film_pictures.py
 """
@@ -13,6 +14,7 @@ import numpy as np
 from film_corpus import corpus
 
 import clpde
+from clpde.film.stream import KEEP
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "images" / "film_people.png"
 
@@ -21,7 +23,7 @@ def main():
     c = corpus("test", frames=12)[0]
     d = c["dirty"]
     mask = clpde.detect_defects(d, channel_axis=-1)
-    out = clpde.inpaint_video(d, mask, channel_axis=-1)
+    out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP)
     rows = []
     for t in (0, 6, 11):  # the first, a middle and the last frame
         crop = (slice(40, 200), slice(100, 380))

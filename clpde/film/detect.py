@@ -26,10 +26,12 @@ scratches from the same line detector run on the image minus its horizontal medi
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
-from scipy import ndimage, signal
+from scipy import integrate, ndimage, optimize, stats
 from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._progress import Progress, progress_bar
@@ -39,6 +41,7 @@ from ..runtime import get_runtime
 from ._frames import film_planes, grey
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
+from ._regions import RESIDUAL_UNITS, _local_noise_check, _motion_check, _ring_check
 from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -47,34 +50,77 @@ KERNEL_FILES = ("film/detect.cl",)
 CLEAN, BLOTCH, SCRATCH = 0, 1, 2
 
 # Defaults chosen on the calibration sequences of benchmarks/film.py (see docs/film.md).
-BLOTCH_THRESHOLD = 10.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
+BLOTCH_THRESHOLD = 7.0  # noise units of the blotch score (films): benchmarks/film_calibrate.py
 SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
 FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
-MATCH_RATIO = 0.1  # a displaced match this much better than the compensated one: motion
-MOTION_TEXTURE = 3.0  # noise units of structure a region needs to be searched for
 REGION_HALF = 2  # the region evidence's square: 5x5
+# The smallest blotch: SMALLEST pixels, and CELLS of the grain's correlation areas (measured
+# per frame, film_scores): a region of a pixel or two, or smaller than the grain's clumps, is
+# a clump of grain, of the codec or of a flow error as often as damage (CELLS chosen on the
+# calibration half: benchmarks/film_calibrate.py; 3 cells drop 3x3 blotches of an H.264 film,
+# whose codec noise correlates over 7-16 px).
+SMALLEST = 3
+CELLS = 1.0
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
 STATIC_SCALE = 0.0  # the static-line detector, off: in a static shot it takes posts for scratches
 # The noise floor, 1.5 grey levels: 8-bit footage without grain (a codec's flat areas) has a
 # residual whose median deviation is 0, and a level or two of quantisation is not damage.
 SIGMA_FLOOR = 1.5 / 255
 TRUST = 2.0  # noise units a flow inconsistency may move a compensated value
-RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the neighbours
-RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
-RING_QUIET = 0.5  # share of the ring that is trusted and matches
-EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
+# The neighbours' range that the grain alone explains: its quantile for K trusted neighbours
+# of one noise level (the range of K Gaussian samples); beyond it the spread counts as motion
+# the flow does not follow. 0.99: one pixel in a hundred of a well compensated frame.
+SPREAD_QUANTILE = 0.99
 
 
-def _hysteresis(a: np.ndarray, low: float, high: float) -> np.ndarray:
-    """The connected regions of a > low that reach a > high somewhere."""
-    labels, n = ndimage.label(a > low)
+@functools.cache
+def range_quantile(k: int, q: float = SPREAD_QUANTILE) -> float:
+    """The q-quantile of the range of k independent standard normal samples (0 for k < 2):
+    P(range <= r) = k * integral of phi(x) (Phi(x + r) - Phi(x))^(k-1) dx."""
+    if k < 2:
+        return 0.0
+
+    def cdf(r: float) -> float:
+        def f(x):
+            return stats.norm.pdf(x) * (stats.norm.cdf(x + r) - stats.norm.cdf(x)) ** (k - 1)
+
+        return k * integrate.quad(f, -10, 10)[0]
+
+    return float(optimize.brentq(lambda r: cdf(r) - q, 1e-6, 20.0))
+
+
+def spread_allowance(n_ok: np.ndarray, sigma: float) -> np.ndarray:
+    """Per pixel, the trusted neighbours' range the grain explains (range_quantile of their
+    count, in grey: each neighbour carries its own grain of level sigma)."""
+    table = np.array([range_quantile(k) for k in range(int(n_ok.max(initial=0)) + 1)])
+    return (table[n_ok] * sigma).astype(np.float32)
+
+
+def _regions_found(
+    a: np.ndarray, res: np.ndarray, region_noise: tuple[float, float], threshold: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blotch candidates and their evidence: the connected regions of a > the low level
+    (HYSTERESIS_LOW of the threshold) that reach the threshold somewhere (hysteresis), or,
+    a faint blotch, whose mean residual does as a whole: in noise units of a mean over the
+    region's n pixels, level * sqrt(area / n), with the residual's level and the grain's
+    correlation area measured on the frame (film_scores). The evidence returned is the
+    larger of the pixel's own and its region's."""
+    labels, n = ndimage.label(a > HYSTERESIS_LOW * threshold)
+    if n == 0:
+        return labels > 0, a
+    idx = np.arange(1, n + 1)
+    level, area = region_noise
+    size = ndimage.sum_labels(np.ones_like(a), labels, idx)
+    z = np.abs(ndimage.mean(res, labels, idx)) / (level * np.sqrt(area / size))
+    region = np.concatenate([[0.0], z]).astype(np.float32)[labels]
     strong = np.zeros(n + 1, bool)
-    strong[np.unique(labels[a > high])] = True
+    strong[np.unique(labels[a > threshold])] = True
+    strong[1:] |= z >= threshold
     strong[0] = False
-    return strong[labels]
+    return strong[labels], np.maximum(a, region)
 
 
 class _Kernels(LineKernels):
@@ -99,83 +145,6 @@ def _window(t: int, T: int, radius: int) -> tuple[list[int], list[int]]:
     return offs, sides
 
 
-def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    """Sum over the template of weight * (window - template)^2 at every placement that fits
-    (the 'valid' placements, top-left corners), by three correlations."""
-    w = win.astype(np.float64)
-    tpl = templ.astype(np.float64)
-    flip = (slice(None, None, -1), slice(None, None, -1))
-    a = signal.fftconvolve(w * w, weight[flip], mode="valid")
-    b = signal.fftconvolve(w, (weight * tpl)[flip], mode="valid")
-    return a - 2.0 * b + float((weight * tpl * tpl).sum())
-
-
-def _motion_check(
-    comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray, search: int, sigma: float
-) -> np.ndarray:
-    """Drop the components of comp_mask (frame t) that are found in the frame before or
-    after: a moving object the flow missed is found again nearby (or in place, where the
-    flow wandered), a blotch is not.
-
-    Each component, with a ring of two pixels for context, is matched within `search`
-    pixels of its place in each neighbour. It moved if, at the best places, its own pixels
-    differ by less than MATCH_RATIO of their difference from the compensated neighbours
-    (medians of squares),
-    in both neighbours, at places that one velocity explains (steady motion; chance
-    matches of a blotch do not line up so). The film's first and last frames use the next
-    two frames on their one side; a film of two frames needs the match of the ring too."""
-    labels, n = ndimage.label(comp_mask)
-    if n == 0:
-        return comp_mask
-    T, ny, nx = G.shape
-    keep = np.ones(n + 1, bool)
-    keep[0] = False
-    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        y0, y1 = max(sl[0].start - 3, 0), min(sl[0].stop + 3, ny)
-        x0, x1 = max(sl[1].start - 3, 0), min(sl[1].stop + 3, nx)
-        own = labels[y0:y1, x0:x1] == idx
-        region = ndimage.binary_dilation(own, iterations=2)
-        r2 = resid[y0:y1, x0:x1] ** 2
-        # medians: a component may carry some clean pixels or a trail beside the object
-        e_own = float(np.median(r2[own]))
-        templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
-        th, tw = templ.shape
-        # a flat spot (dirt is mostly flat) matches any dark or bright place of the
-        # neighbours: only a region with structure of its own can be found again
-        if robust_scale(templ[own]) < MOTION_TEXTURE * sigma:
-            continue
-        if not 0 < t < T - 1:
-            # a film's ends have one side only: ROD cannot tell an object the flow missed
-            # from damage there, and a region with structure of its own may be either
-            keep[idx] = False
-            continue
-        found = []
-        # the frames each side; at the film's ends the next two on the one side
-        pair = (t - 1, t + 1)
-        for s in pair:
-            if not 0 <= s < T:
-                continue
-            wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
-            wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
-            win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
-            if win.shape[0] < th or win.shape[1] < tw:
-                continue
-            res = _masked_ssd(win, templ, region.astype(np.float64))
-            my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
-            diff = (templ - win[my : my + th, mx : mx + tw]) ** 2
-            found.append(
-                (
-                    float(np.median(diff[own])),
-                    float(diff[region].mean()),
-                    np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t),
-                )
-            )
-        # found in either neighbour, at any displacement (zero included: a flow that
-        # wandered off a still region warps the wrong pixels onto it): not damage
-        keep[idx] = not any(f[0] < MATCH_RATIO * e_own for f in found)
-    return keep[labels]
-
-
 def _box(a: np.ndarray, half: int) -> np.ndarray:
     return ndimage.uniform_filter(a.astype(np.float32), 2 * half + 1, mode="nearest")
 
@@ -196,8 +165,9 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     d: how far the pixel lies outside the range of all trusted neighbours (signed), where
         a trusted neighbour exists on each side (at the film's ends: the two sides of
         _window); 0 elsewhere: an occluded, revealed or badly compensated pixel is never
-        called a blotch. spread: the trusted neighbours' range (film_kinds divides d by
-        sigma + GAMMA * (spread beyond 2 sigma)).
+        called a blotch. spread: the trusted neighbours' range, n: their count
+        (blotch_evidence divides d by sigma + GAMMA * (spread beyond what the grain
+        explains for n neighbours)).
     zr: the region evidence of faint blotches (5x5 means of each side's residual).
     res: the frame minus the median of its trusted neighbours; least: the scratch residual;
     trusted_both: where both sides have a trusted neighbour."""
@@ -212,7 +182,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     inside = np.stack([motion.inside(t, t + k) for k in offs])
     med0 = median(vals, inside)
     r0 = (v - med0)[inside.any(0)]
-    sigma = max(robust_scale(r0) / 1.16 if r0.size else 0.0, SIGMA_FLOOR)
+    sigma = max(robust_scale(r0) / RESIDUAL_UNITS if r0.size else 0.0, SIGMA_FLOOR)
     # at a film's ends all neighbours lie on one side: an occluded pixel could find two
     # that agree with each other, so the flow back must agree too
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
@@ -240,7 +210,17 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / max(
         robust_scale(bp), SIGMA_FLOOR
     )
+    # the residual's level and its grain's correlation area (pixels), measured on the frame:
+    # a region of n pixels has a mean residual whose deviation is level * sqrt(area / n)
+    # (footage without grain, its residual's level at the floor, has no grain to correlate:
+    # what correlates there is the codec's blocks and the flow's errors; one pixel)
+    raw = robust_scale(res[both]) if both.any() else 0.0
+    level = max(raw, SIGMA_FLOOR)
+    area = (
+        25.0 * (robust_scale(_box(res, REGION_HALF)[both]) / raw) ** 2 if raw > SIGMA_FLOOR else 1.0
+    )
     return {
+        "region_noise": (level, max(area, 1.0)),
         "d": np.where(both, d, 0.0).astype(np.float32),
         "spread": spread.astype(np.float32),
         "zr": zr.astype(np.float32),
@@ -248,6 +228,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "least": second_least(v, vals, ok),
         "sigma": sigma,
         "both": both,
+        "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
         "flows": np.stack([motion.flow(t, t + k) for k in (-1, 1) if 0 <= t + k < T]),
     }
@@ -261,9 +242,10 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     kern = LineKernels(get_runtime(device))
     motion = FilmMotion(G)
     per = map_frames(lambda t: frame_scores(motion, t, radius), range(T))
-    keys = ("d", "spread", "zr", "res", "least", "both")
+    keys = ("d", "spread", "zr", "res", "least", "both", "n")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
+    stack["region_noise"] = [p["region_noise"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
     q = kern.rt.queue
     zs = np.stack(
@@ -275,57 +257,29 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     return {**stack, "zc": kern.continuity(zs), "sigma": sigmas}
 
 
-def _no_singletons(mask: np.ndarray) -> np.ndarray:
+def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
     labels, n = ndimage.label(mask)
     if n == 0:
         return mask
     sizes = np.bincount(labels.ravel())
-    keep = sizes >= 2
+    keep = sizes >= smallest
     keep[0] = False
     return keep[labels]
 
 
-def _ring_check(
-    mask: np.ndarray, both: np.ndarray, res: np.ndarray, sigma: float, flows: np.ndarray
-) -> np.ndarray:
-    """Keep the components of mask whose surroundings the motion explains: on a ring 2-4
-    px out, most pixels have a trusted neighbour on each side and the frame matches them
-    (median residual within RING_LIMIT noise units). A blotch lies on a scene the flow
-    follows; an object the flow missed, an occlusion or a deforming region does not, and
-    there nothing is called a blotch (do no harm). Nor next to a motion boundary: where the
-    flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
-    px out, an occluded or revealed region would pass for damage (at a film's ends
-    nothing else tells them apart); both flows, as damage disturbs the flow around it."""
-    labels, n = ndimage.label(mask)
-    if n == 0:
-        return mask
-    ny, nx = mask.shape
-    keep = np.zeros(n + 1, bool)
-    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        y0, y1 = max(sl[0].start - 7, 0), min(sl[0].stop + 7, ny)
-        x0, x1 = max(sl[1].start - 7, 0), min(sl[1].stop + 7, nx)
-        own = labels[y0:y1, x0:x1] == idx
-        ring = ndimage.binary_dilation(own, iterations=4) & ~ndimage.binary_dilation(
-            own, iterations=1
-        )
-        ring &= labels[y0:y1, x0:x1] == 0
-        if ring.sum() < 4:
-            continue
-        trusted = both[y0:y1, x0:x1][ring]
-        quiet = np.abs(res[y0:y1, x0:x1][ring]) <= RING_LIMIT * sigma
-        if not (trusted.mean() >= RING_TRUSTED and (trusted & quiet).mean() >= RING_QUIET):
-            continue
-        outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
-            own, iterations=2
-        )
-        # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
-        # flows around it too, but rarely both (the least spread decides)
-        spread = np.inf
-        for f in flows[:, y0:y1, x0:x1][:, outer]:  # (pixels, 2) per neighbour
-            lo, hi = np.percentile(f, [5, 95], axis=0)
-            spread = min(spread, float((hi - lo).max()))
-        keep[idx] = spread <= EDGE_SPREAD
-    return keep[labels]
+def blotch_evidence(scores: dict, t: int, gamma: float) -> np.ndarray:
+    """Frame t's blotch evidence per pixel (film_scores' evidence), in noise units that grow
+    with the neighbours' disagreement among themselves beyond what the grain explains
+    (pathological motion: the flow does not follow the scene there): the pixel's own
+    score, or its region's where its own residual shows the same sign beyond the noise (so
+    a strong blotch's region score does not spill past its edge)."""
+    sigma, r = scores["sigma"][t], scores["res"][t]
+    allowed = spread_allowance(scores["n"][t], sigma)
+    scale = sigma + gamma * np.maximum(scores["spread"][t] - allowed, 0.0)
+    zb = scores["d"][t] / scale
+    zr = scores["zr"][t] * (sigma / scale)
+    own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigma)
+    return np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
 
 
 def _frame_kinds(
@@ -344,21 +298,14 @@ def _frame_kinds(
     scratch = (
         scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length) | still
     )
-    # a pixel's evidence: its own score, or its region's where its own residual shows
-    # the same sign beyond the noise (so a strong blotch's region score does not spill
-    # past its edge)
-    # in noise units that grow with the neighbours' disagreement among themselves
-    # (pathological motion: the flow does not follow the scene there)
-    scale = sigmas[t] + gamma * np.maximum(scores["spread"][t] - 2 * sigmas[t], 0.0)
-    zb = scores["d"][t] / scale
-    zr, r = scores["zr"][t] * (sigmas[t] / scale), res[t]
-    own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigmas[t])
-    a = np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
-    blotch = _hysteresis(a, HYSTERESIS_LOW * blotch_threshold, blotch_threshold)
+    a, r = blotch_evidence(scores, t, gamma), res[t]
+    blotch, a = _regions_found(a, r, scores["region_noise"][t], blotch_threshold)
     blotch &= ~ndimage.binary_dilation(scratch)
-    # a lone pixel is within what a codec or the grain does: never a blotch worth a fill
-    blotch = _no_singletons(blotch)
+    # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
+    # blotch worth a fill
+    blotch = _no_singletons(blotch, max(SMALLEST, CELLS * scores["region_noise"][t][1]))
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
+    blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)

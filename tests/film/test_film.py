@@ -167,7 +167,7 @@ def _blotches(frames, rng, per_frame=3, value=None):
 def test_blotches_found(runtime, rng, step):
     frames = _pan(_scene(rng), 6, step=step, rng=rng, grain=0.01)
     dirty, truth = _blotches(frames, rng)
-    # the default threshold is 10 noise units (chosen on real footage's calibration half):
+    # the default threshold is 7 noise units (chosen on real footage's calibration half):
     # blotches that stand out of this grain (0.01) by 20 deviations are all to be found
     truth &= np.abs(dirty - frames) > 0.2
     mask, kinds = clpde.detect_defects(dirty, return_kinds=True, device=runtime)
@@ -175,7 +175,10 @@ def test_blotches_found(runtime, rng, step):
     hit = (kinds == BLOTCH) & truth
     # 0.89 on the pan: the guards of do-no-harm drop a blotch whose flow is disturbed
     assert hit.sum() >= 0.85 * truth.sum()
-    assert (mask & ~truth).sum() <= 0.25 * truth.sum()
+    # 0.26 on the static scene (0.23 before the grain's range allowance of issue 34 lowered
+    # the scale where 4 neighbours spread as grain does): clean pixels beside these hard-edged
+    # discs, whose flow the discs disturb
+    assert (mask & ~truth).sum() <= 0.3 * truth.sum()
 
 
 def test_fast_object_is_not_a_blotch(runtime, rng):
@@ -196,11 +199,6 @@ def test_fast_object_is_not_a_blotch(runtime, rng):
     assert (mask & obj).sum() <= 0.05 * obj.sum()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 34: with DIS motion the scratch's flanks are not quiet enough in the "
-    "residual for scratch_runs; recall 0.11 here (was >= 0.8 with the device flow)",
-)
 def test_scratch_found_and_scene_lines_not(runtime, rng):
     """A panning scene with real vertical lines, and a dark scratch fixed on the film."""
     scene = _scene(rng, 160, 240)

@@ -1,0 +1,173 @@
+"""The film detector's checks per candidate region (clpde.film.detect): does the motion
+explain the region's surroundings (_ring_check), does it stand out against the
+compensation error around it (_local_noise_check), is it found again nearby in the frame
+before or after (_motion_check)? A region that fails one is not called a blotch: where the
+motion is not trusted, nothing is damage (do no harm)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage, signal
+
+from .lines import robust_scale
+
+MATCH_RATIO = 0.1  # a displaced match this much better than the compensated one: motion
+MOTION_TEXTURE = 3.0  # noise units of structure a region needs to be searched for
+RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the neighbours
+RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
+RING_QUIET = 0.5  # share of the ring that is trusted and matches
+EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
+# The deviation of a pixel's residual against the median of its neighbours, in units of the
+# grain's: the pixel's grain and the median's (of 2-4 neighbours with grain of their own).
+RESIDUAL_UNITS = 1.16
+
+
+def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """Sum over the template of weight * (window - template)^2 at every placement that fits
+    (the 'valid' placements, top-left corners), by three correlations."""
+    w = win.astype(np.float64)
+    tpl = templ.astype(np.float64)
+    flip = (slice(None, None, -1), slice(None, None, -1))
+    a = signal.fftconvolve(w * w, weight[flip], mode="valid")
+    b = signal.fftconvolve(w, (weight * tpl)[flip], mode="valid")
+    return a - 2.0 * b + float((weight * tpl * tpl).sum())
+
+
+def _motion_check(
+    comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray, search: int, sigma: float
+) -> np.ndarray:
+    """Drop the components of comp_mask (frame t) that are found in the frame before or
+    after: a moving object the flow missed is found again nearby (or in place, where the
+    flow wandered), a blotch is not.
+
+    Each component, with a ring of two pixels for context, is matched within `search`
+    pixels of its place in each neighbour. It moved if, at the best places, its own pixels
+    differ by less than MATCH_RATIO of their difference from the compensated neighbours
+    (medians of squares),
+    in both neighbours, at places that one velocity explains (steady motion; chance
+    matches of a blotch do not line up so). The film's first and last frames use the next
+    two frames on their one side; a film of two frames needs the match of the ring too."""
+    labels, n = ndimage.label(comp_mask)
+    if n == 0:
+        return comp_mask
+    T, ny, nx = G.shape
+    keep = np.ones(n + 1, bool)
+    keep[0] = False
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        y0, y1 = max(sl[0].start - 3, 0), min(sl[0].stop + 3, ny)
+        x0, x1 = max(sl[1].start - 3, 0), min(sl[1].stop + 3, nx)
+        own = labels[y0:y1, x0:x1] == idx
+        region = ndimage.binary_dilation(own, iterations=2)
+        r2 = resid[y0:y1, x0:x1] ** 2
+        # medians: a component may carry some clean pixels or a trail beside the object
+        e_own = float(np.median(r2[own]))
+        templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
+        th, tw = templ.shape
+        # a flat spot (dirt is mostly flat) matches any dark or bright place of the
+        # neighbours: only a region with structure of its own can be found again
+        if robust_scale(templ[own]) < MOTION_TEXTURE * sigma:
+            continue
+        if not 0 < t < T - 1:
+            # a film's ends have one side only: ROD cannot tell an object the flow missed
+            # from damage there, and a region with structure of its own may be either
+            keep[idx] = False
+            continue
+        found = []
+        # the frames each side; at the film's ends the next two on the one side
+        pair = (t - 1, t + 1)
+        for s in pair:
+            if not 0 <= s < T:
+                continue
+            wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
+            wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
+            win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
+            if win.shape[0] < th or win.shape[1] < tw:
+                continue
+            res = _masked_ssd(win, templ, region.astype(np.float64))
+            my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
+            diff = (templ - win[my : my + th, mx : mx + tw]) ** 2
+            found.append(
+                (
+                    float(np.median(diff[own])),
+                    float(diff[region].mean()),
+                    np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t),
+                )
+            )
+        # found in either neighbour, at any displacement (zero included: a flow that
+        # wandered off a still region warps the wrong pixels onto it): not damage
+        keep[idx] = not any(f[0] < MATCH_RATIO * e_own for f in found)
+    return keep[labels]
+
+
+def _ring_check(
+    mask: np.ndarray, both: np.ndarray, res: np.ndarray, sigma: float, flows: np.ndarray
+) -> np.ndarray:
+    """Keep the components of mask whose surroundings the motion explains: on a ring 2-4
+    px out, most pixels have a trusted neighbour on each side and the frame matches them
+    (median residual within RING_LIMIT noise units). A blotch lies on a scene the flow
+    follows; an object the flow missed, an occlusion or a deforming region does not, and
+    there nothing is called a blotch (do no harm). Nor next to a motion boundary: where the
+    flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
+    px out, an occluded or revealed region would pass for damage (at a film's ends
+    nothing else tells them apart); both flows, as damage disturbs the flow around it."""
+    labels, n = ndimage.label(mask)
+    if n == 0:
+        return mask
+    ny, nx = mask.shape
+    keep = np.zeros(n + 1, bool)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        y0, y1 = max(sl[0].start - 7, 0), min(sl[0].stop + 7, ny)
+        x0, x1 = max(sl[1].start - 7, 0), min(sl[1].stop + 7, nx)
+        own = labels[y0:y1, x0:x1] == idx
+        ring = ndimage.binary_dilation(own, iterations=4) & ~ndimage.binary_dilation(
+            own, iterations=1
+        )
+        ring &= labels[y0:y1, x0:x1] == 0
+        if ring.sum() < 4:
+            continue
+        trusted = both[y0:y1, x0:x1][ring]
+        quiet = np.abs(res[y0:y1, x0:x1][ring]) <= RING_LIMIT * sigma
+        if not (trusted.mean() >= RING_TRUSTED and (trusted & quiet).mean() >= RING_QUIET):
+            continue
+        outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
+            own, iterations=2
+        )
+        # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
+        # flows around it too, but rarely both (the least spread decides)
+        spread = np.inf
+        for f in flows[:, y0:y1, x0:x1][:, outer]:  # (pixels, 2) per neighbour
+            lo, hi = np.percentile(f, [5, 95], axis=0)
+            spread = min(spread, float((hi - lo).max()))
+        keep[idx] = spread <= EDGE_SPREAD
+    return keep[labels]
+
+
+def _local_noise_check(
+    mask: np.ndarray, a: np.ndarray, res: np.ndarray, sigma: float, threshold: float
+) -> np.ndarray:
+    """Keep the components of mask that stand out against the compensation error of their
+    own surroundings: the peak evidence, divided by the ring's (2-3 px out) residual level
+    in units of the grain's (the residual against the neighbours' median has a deviation
+    of RESIDUAL_UNITS sigma under grain alone; more where the flow is off), must still
+    reach the threshold. Flow and warp errors come in clusters, and a small region of them
+    lies among others; a blotch lies on a scene the neighbours compensate."""
+    labels, n = ndimage.label(mask)
+    if n == 0:
+        return mask
+    ny, nx = mask.shape
+    keep = np.zeros(n + 1, bool)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        y0, y1 = max(sl[0].start - 4, 0), min(sl[0].stop + 4, ny)
+        x0, x1 = max(sl[1].start - 4, 0), min(sl[1].stop + 4, nx)
+        lab = labels[y0:y1, x0:x1]
+        own = lab == idx
+        ring = ndimage.binary_dilation(own, iterations=3) & ~ndimage.binary_dilation(
+            own, iterations=1
+        )
+        ring &= lab == 0
+        if not ring.any():
+            continue
+        level = 1.4826 * float(np.median(np.abs(res[y0:y1, x0:x1][ring])))
+        local = max(1.0, level / (RESIDUAL_UNITS * sigma))
+        keep[idx] = float(a[y0:y1, x0:x1][own].max()) >= threshold * local
+    return keep[labels]
