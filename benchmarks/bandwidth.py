@@ -100,14 +100,14 @@ def cases(grid: Grid, rng):
     padw = weight.to_host()[0]
     ub, vb, u0b = u.data.data, v.data.data, u0.data.data
 
-    heat = k("planar/planar.cl", "heat_step")
-    pm_exp = k("planar/planar.cl", "perona_malik_step", EDGE_STOP=0)
-    pm_rat = k("planar/planar.cl", "perona_malik_step", EDGE_STOP=1)
-    tv = k("planar/planar.cl", "tv_step")
-    curv = k("planar/planar.cl", "curvature_step")
-    curv_w = k("planar/planar.cl", "curvature_step", HAS_WEIGHT=1)
-    rof = k("planar/planar.cl", "rof_step")
-    lam_rows = k("planar/planar.cl", "rof_lambda_rows")
+    heat = k("planar/planar.cl", "planar_heat_step")
+    pm_exp = k("planar/planar.cl", "planar_perona_malik_step", EDGE_STOP=0)
+    pm_rat = k("planar/planar.cl", "planar_perona_malik_step", EDGE_STOP=1)
+    tv = k("planar/planar.cl", "planar_tv_step")
+    curv = k("planar/planar.cl", "planar_curvature_step")
+    curv_w = k("planar/planar.cl", "planar_curvature_step", HAS_WEIGHT=1)
+    rof = k("planar/planar.cl", "planar_rof_step")
+    lam_rows = k("planar/planar.cl", "planar_rof_lambda_rows")
     partial = cla.empty(q, 4 * grid.ny, np.float32)
 
     dual = [
@@ -124,7 +124,7 @@ def cases(grid: Grid, rng):
 
     return [
         Case(
-            "heat_step",
+            "planar_heat_step",
             8,
             lambda: grid.launch(heat, ub, vb, f32(0.2)),
             lambda: ref_planar.heat_step(pad, 0.2),
@@ -142,13 +142,13 @@ def cases(grid: Grid, rng):
             lambda: ref_planar.perona_malik_step(pad, 0.2, 0.05, "rational"),
         ),
         Case(
-            "tv_step",
+            "planar_tv_step",
             8,
             lambda: grid.launch(tv, ub, vb, f32(0.01), f32(0.05**2)),
             lambda: ref_planar.tv_step(pad, 0.01, 0.05),
         ),
         Case(
-            "curvature_step",
+            "planar_curvature_step",
             8,
             lambda: grid.launch(curv, ub, vb, ub, f32(0.2), f32(1e-10)),
             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10),
@@ -160,13 +160,13 @@ def cases(grid: Grid, rng):
             lambda: ref_planar.curvature_step(pad, 0.2, 1e-10, padw),
         ),
         Case(
-            "rof_step",
+            "planar_rof_step",
             12,
             lambda: grid.launch(rof, ub, vb, u0b, lam.data, f32(0.004), f32(0.02**2)),
             lambda: ref_planar.rof_step(pad, pad0, [8.0], 0.004, 0.02),
         ),
         Case(
-            "rof_lambda_rows",
+            "planar_rof_lambda_rows",
             8,
             rows(lam_rows, ub, u0b, partial.data, f32(0.02**2)),
             lambda: ref_planar.rof_lambda(pad, pad0, 0.02, 0.01),
@@ -194,7 +194,7 @@ def measure_size(runtime, n, rng, numpy_budget):
     cells = n * n
     a = Field.from_host(grid, rng.random((1, n, n)).astype(np.float32))
     b = Field.empty(grid)
-    copy_k = grid.kernel("common/fields.cl", "copy_interior")
+    copy_k = grid.kernel("common/fields.cl", "fields_copy_interior")
     t_kernel = device_time(q, lambda: grid.launch(copy_k, a.data.data, b.data.data))
     t_enqueue = device_time(q, lambda: cl.enqueue_copy(q, b.data.data, a.data.data))
     copy_kernel_bw = 8 * cells / t_kernel

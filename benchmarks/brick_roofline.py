@@ -61,7 +61,7 @@ def measure(n: int, steps: int, reps: int) -> dict:
     runs = surf.step_runs
     surf.storage, surf.band.brick = "bricks", (8, 8, 8)
     bf = BrickFlow(surf, u)
-    k_brick = bf.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=0)
+    k_brick = bf.kernel("surface/bricks.cl", "bricks_heat_step", WEIGHTED=0)
     k_brick_copy = bf.kernel(ROOFLINE_CL, "brick_copy")
     b_u = cla.zeros(q, (bf.bricks.nbricks + 2) * bf.bricks.cells_per_brick, np.float32)
     b_v = cla.zeros_like(b_u)

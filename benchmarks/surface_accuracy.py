@@ -339,7 +339,7 @@ def _storage_size(n, steps, reps):
     for brick in BRICK_SIZES:
         surf.band.brick = brick
         bf = BrickFlow(surf, u)
-        k_brick = bf.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=0)
+        k_brick = bf.kernel("surface/bricks.cl", "bricks_heat_step", WEIGHTED=0)
 
         def brick_step(bf=bf, k=k_brick):
             bf.bricks.launch(

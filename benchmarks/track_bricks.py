@@ -108,8 +108,8 @@ class Case:
         self.morph = {}
         for disc in ("ncc", "difference"):
             name = morph_kernel_name(ls, disc)
-            if name == "morph_track_tiled" and not tiled:
-                name = "morph_track_bricks"
+            if name == "features_morph_track_tiled" and not tiled:
+                name = "features_morph_track_bricks"
             self.morph[disc] = ls.band_kernel(
                 "tracking/features.cl", name, NCH=1, DISC=DISCREPANCIES[disc], WIN=3
             )

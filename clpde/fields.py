@@ -215,8 +215,12 @@ class Field:
         g = self.grid
         q = g.runtime.queue
         args = (self.data.data, np.int32(mode), g.scalar(value), *g.args(g.nx))
-        g.kernel("common/fields.cl", "fill_ghost_cols")(q, *g.runtime.items(g.ny, g.nc), *args)
-        g.kernel("common/fields.cl", "fill_ghost_rows")(q, *g.runtime.items(g.sx, g.nc), *args)
+        g.kernel("common/fields.cl", "fields_fill_ghost_cols")(
+            q, *g.runtime.items(g.ny, g.nc), *args
+        )
+        g.kernel("common/fields.cl", "fields_fill_ghost_rows")(
+            q, *g.runtime.items(g.sx, g.nc), *args
+        )
 
     def reduce(self, op: str, other: Field | None = None) -> np.ndarray:
         """A per-channel reduction over the interior, computed on the device.
@@ -227,7 +231,7 @@ class Field:
         g = self.grid
         partial = cla.empty(g.runtime.queue, (g.nc, g.ny), g.dtype)
         b = (other if other is not None else self).data.data
-        g.kernel("common/fields.cl", "row_reduce")(
+        g.kernel("common/fields.cl", "fields_row_reduce")(
             g.runtime.queue,
             (1, g.ny, g.nc),
             (1, 1, 1),  # a fixed work-group (Runtime.items)
@@ -284,16 +288,16 @@ def compact(runtime: Runtime, mask: cla.Array) -> IndexList:
     flat = mask.reshape(n)
 
     launch = runtime.items(nchunks)
-    runtime.kernel("common/fields.cl", "count_chunks")(
+    runtime.kernel("common/fields.cl", "fields_count_chunks")(
         q, *launch, flat.data, np.int32(n), np.int32(chunk), counts.data
     )
-    runtime.kernel("common/fields.cl", "exclusive_scan_serial")(
+    runtime.kernel("common/fields.cl", "fields_exclusive_scan_serial")(
         q, (1,), (1,), counts.data, np.int32(nchunks), total.data
     )
     count = int(total.get()[0])  # the list's length sizes the launches: one read per build
     indices = cla.empty(q, max(count, 1), np.int32)
     if count:
-        runtime.kernel("common/fields.cl", "write_chunks")(
+        runtime.kernel("common/fields.cl", "fields_write_chunks")(
             q, *launch, flat.data, np.int32(n), np.int32(chunk), counts.data, indices.data
         )
     return IndexList(indices, count)

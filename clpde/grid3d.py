@@ -140,7 +140,7 @@ class Grid3D(BaseGrid):
     def band(self, psi: cla.Array, width: float) -> IndexList:
         """Interior cells with |psi| < width (psi in the units of `width`), on the device."""
         mask = cla.zeros(self.runtime.queue, self.padded_shape, np.uint8)
-        self.kernel("common/grid3d.cl", "band_mask")(
+        self.kernel("common/grid3d.cl", "grid3d_band_mask")(
             self.runtime.queue,
             *self.runtime.items(self.ny, self.nz),
             psi.data,
@@ -163,7 +163,7 @@ class Grid3D(BaseGrid):
             offsets, nruns, pad = cla.arange(q, 0, max(n, 1), dtype=np.int32), n, 1
         else:
             flags = cla.empty(q, n, np.uint8)
-            self.kernel("common/grid3d.cl", "band_run_starts")(
+            self.kernel("common/grid3d.cl", "grid3d_band_run_starts")(
                 q, *self.runtime.items(n), band.indices.data, np.int32(n), flags.data
             )
             starts = compact(self.runtime, flags)
@@ -171,7 +171,7 @@ class Grid3D(BaseGrid):
         start = cla.empty(q, max(nruns, 1), np.int32)
         end = cla.empty(q, max(nruns, 1), np.int32)
         if nruns:
-            self.kernel("common/grid3d.cl", "band_run_bounds")(
+            self.kernel("common/grid3d.cl", "grid3d_band_run_bounds")(
                 q,
                 *self.runtime.items(nruns),
                 band.indices.data,

@@ -123,7 +123,7 @@ class Compensator:
             else [cla.to_device(q, np.ascontiguousarray(e, np.float32)) for e in exclude]
         )
         self.levels = default_levels(self.ny, self.nx)
-        self.k_inside = self.rt.kernel("film/detect.cl", "flow_inside")
+        self.k_inside = self.rt.kernel("film/detect.cl", "detect_flow_inside")
 
     def _matched(self, s: int, t: int) -> cla.Array:
         """Frame s's grey with its mean and deviation matched to frame t's: flicker would

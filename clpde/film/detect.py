@@ -128,8 +128,8 @@ class _Kernels(LineKernels):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.blotch = rt.kernel("film/detect.cl", "blotch_score")
-        self.box = rt.kernel("film/detect.cl", "box_mean")
+        self.blotch = rt.kernel("film/detect.cl", "detect_blotch_score")
+        self.box = rt.kernel("film/detect.cl", "detect_box_mean")
 
 
 def _window(t: int, T: int, radius: int) -> tuple[list[int], list[int]]:

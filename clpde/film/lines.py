@@ -66,9 +66,9 @@ class LineKernels:
 
     def __init__(self, rt) -> None:
         self.rt = rt
-        self.colmean = rt.kernel("film/detect.cl", "column_mean")
-        self.line = rt.kernel("film/detect.cl", "line_response")
-        self.cont = rt.kernel("film/detect.cl", "scratch_continuity")
+        self.colmean = rt.kernel("film/detect.cl", "detect_column_mean")
+        self.line = rt.kernel("film/detect.cl", "detect_line_response")
+        self.cont = rt.kernel("film/detect.cl", "detect_scratch_continuity")
 
     def line_score(self, resid: cla.Array, lim: float) -> np.ndarray:
         """The thin-line response of a residual plane, in its robust noise units."""

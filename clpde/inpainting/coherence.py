@@ -185,12 +185,12 @@ def transport(
     # the channel count is an argument; the define only sizes a private array, rounded up
     # so that grey and colour images (and anything up to 4 channels) share one program
     defines = dict(MAX_CHANNELS=max(4, 1 << (nc - 1).bit_length()))
-    k_rows = runtime.kernel("inpainting/coherence.cl", "ct_smooth_rows", dt, **defines)
-    k_cols = runtime.kernel("inpainting/coherence.cl", "ct_smooth_cols", dt, **defines)
-    k_products = runtime.kernel("inpainting/coherence.cl", "ct_products", dt, **defines)
-    k_tensor = runtime.kernel("inpainting/coherence.cl", "ct_tensor_rows", dt, **defines)
-    k_fill = runtime.kernel("inpainting/coherence.cl", "ct_fill", dt, **defines)
-    k_mark = runtime.kernel("inpainting/coherence.cl", "ct_mark", dt, **defines)
+    k_rows = runtime.kernel("inpainting/coherence.cl", "coherence_smooth_rows", dt, **defines)
+    k_cols = runtime.kernel("inpainting/coherence.cl", "coherence_smooth_cols", dt, **defines)
+    k_products = runtime.kernel("inpainting/coherence.cl", "coherence_products", dt, **defines)
+    k_tensor = runtime.kernel("inpainting/coherence.cl", "coherence_tensor_rows", dt, **defines)
+    k_fill = runtime.kernel("inpainting/coherence.cl", "coherence_fill", dt, **defines)
+    k_mark = runtime.kernel("inpainting/coherence.cl", "coherence_mark", dt, **defines)
     grid, local, xrun = runtime.grid_launch(nx, ny, 1)
     dims = (np.int32(nx), np.int32(ny))
     run = (*dims, np.int32(xrun))

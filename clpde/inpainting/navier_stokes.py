@@ -137,9 +137,9 @@ class NavierStokesSolver:
         self.ring_list = DeviceList(runtime, np.flatnonzero(ring))
         self.partial = cla.zeros(q, (nc, self.omega_list.items), dt)
         self.partial_sum = cla.zeros(q, (nc, self.omega_list.items), dt)
-        k_lap = runtime.kernel("inpainting/navier_stokes.cl", "ns_laplacian", dt)
-        k_step = runtime.kernel("inpainting/navier_stokes.cl", "ns_vorticity_step", dt)
-        k_change = runtime.kernel("inpainting/navier_stokes.cl", "ns_change", dt)
+        k_lap = runtime.kernel("inpainting/navier_stokes.cl", "navier_stokes_laplacian", dt)
+        k_step = runtime.kernel("inpainting/navier_stokes.cl", "navier_stokes_vorticity_step", dt)
+        k_change = runtime.kernel("inpainting/navier_stokes.cl", "navier_stokes_change", dt)
         dims = (np.int32(nx), np.int32(ny))
         self.dt = 0.9 / (1.0 + 4.0 * nu)
         self._laplacian_ring = self.ring_list.bind(

@@ -76,14 +76,14 @@ class PatchMatchLevel:
         # that grey and colour images, with or without guides, share one program
         defines = {"PATCH": patch, "NCH_MAX": max(8, 1 << (self.nch - 1).bit_length())}
         rt, dt = runtime, self.dtype
-        self.k_pass = rt.kernel("inpainting/patchmatch.cl", "pm_pass", dt, **defines)
-        self.k_score = rt.kernel("inpainting/patchmatch.cl", "pm_score", dt, **defines)
-        self.k_vote = rt.kernel("inpainting/patchmatch.cl", "pm_vote", dt, **defines)
-        self.k_copy = rt.kernel("inpainting/patchmatch.cl", "pm_copy_centre", dt, **defines)
-        self.k_offsets = rt.kernel("inpainting/patchmatch.cl", "pm_offsets", dt, **defines)
+        self.k_pass = rt.kernel("inpainting/patchmatch.cl", "patchmatch_pass", dt, **defines)
+        self.k_score = rt.kernel("inpainting/patchmatch.cl", "patchmatch_score", dt, **defines)
+        self.k_vote = rt.kernel("inpainting/patchmatch.cl", "patchmatch_vote", dt, **defines)
+        self.k_copy = rt.kernel("inpainting/patchmatch.cl", "patchmatch_copy_centre", dt, **defines)
+        self.k_offsets = rt.kernel("inpainting/patchmatch.cl", "patchmatch_offsets", dt, **defines)
         self.ncolour = self.nch if ncolour is None else ncolour  # planes before the features
         self.chw_colour = None  # try_offsets' weights: the colours only, made when first used
-        self.k_cohere = rt.kernel("inpainting/patchmatch.cl", "pm_coherence", dt, **defines)
+        self.k_cohere = rt.kernel("inpainting/patchmatch.cl", "patchmatch_coherence", dt, **defines)
 
         self.valid = valid_sources(hole, self.r)
         self.valid_idx = np.flatnonzero(self.valid)

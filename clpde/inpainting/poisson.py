@@ -116,11 +116,11 @@ class Multigrid:
         s = dtype.type
         bi = np.int32(kind == "biharmonic")
         sign = -1.0 if kind == "harmonic" else 1.0
-        k_smooth = runtime.kernel("inpainting/poisson.cl", "mg_smooth", dtype)
-        k_scale = runtime.kernel("inpainting/poisson.cl", "mg_scale", dtype)
-        k_residual = runtime.kernel("inpainting/poisson.cl", "mg_residual", dtype)
-        k_restrict = runtime.kernel("inpainting/poisson.cl", "mg_restrict", dtype)
-        k_prolong = runtime.kernel("inpainting/poisson.cl", "mg_prolong", dtype)
+        k_smooth = runtime.kernel("inpainting/poisson.cl", "poisson_mg_smooth", dtype)
+        k_scale = runtime.kernel("inpainting/poisson.cl", "poisson_mg_scale", dtype)
+        k_residual = runtime.kernel("inpainting/poisson.cl", "poisson_mg_residual", dtype)
+        k_restrict = runtime.kernel("inpainting/poisson.cl", "poisson_mg_restrict", dtype)
+        k_prolong = runtime.kernel("inpainting/poisson.cl", "poisson_mg_prolong", dtype)
         levels = [(omega.shape, *level0)]
         om = omega
         self.buffers = []  # bound kernels hold no references: keep the buffers alive
@@ -235,8 +235,8 @@ class PoissonSolver:
         o = self.omega_list = DeviceList(runtime, np.flatnonzero(omega))
         self.rr = [zeros((nc, o.items)), zeros((nc, o.items))]
         self.pq = zeros((nc, o.items))
-        self._k_update = runtime.kernel("inpainting/poisson.cl", "cg_update", dt)
-        self._k_direction = runtime.kernel("inpainting/poisson.cl", "cg_direction", dt)
+        self._k_update = runtime.kernel("inpainting/poisson.cl", "poisson_cg_update", dt)
+        self._k_direction = runtime.kernel("inpainting/poisson.cl", "poisson_cg_direction", dt)
         self._bind_cg()
         self.mg = None
         if precondition and o.n:
@@ -255,7 +255,7 @@ class PoissonSolver:
         """dst = a L^order src + b f, and the partials of dot . dst (order 1 harmonic, 2
         biharmonic)."""
         s, order = self.dtype.type, 1 if self.kind == "harmonic" else 2
-        k_op = self.runtime.kernel("inpainting/poisson.cl", "operator_axpy_dot", self.dtype)
+        k_op = self.runtime.kernel("inpainting/poisson.cl", "poisson_operator_axpy_dot", self.dtype)
         return self.omega_list.bind(
             self.runtime,
             k_op,
@@ -302,7 +302,7 @@ class PoissonSolver:
         )
         rz = self.rz = [cla.zeros(q, (nc, ng), dt), cla.zeros(q, (nc, ng), dt)]
         self.rr_now = cla.zeros(q, (nc, ng), dt)
-        k_dot = self.runtime.kernel("inpainting/poisson.cl", "dot_partial", dt)
+        k_dot = self.runtime.kernel("inpainting/poisson.cl", "poisson_dot_partial", dt)
         sign = self._sign
         self._pcg_residual = [self._apply_launch(self.u, self.r, sign, -sign, self.r, self.rr_now)]
         self._pcg_update = [

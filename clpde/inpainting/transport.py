@@ -109,11 +109,13 @@ class LevelSolver:
         self.known = self.pair.cur.copy()
         self.weight = Field.from_host(Grid(runtime, nx, ny, 1, GHOST, g.dtype), weight[None])
 
-        self.k_fill = g.kernel("inpainting/transport.cl", "inpaint_fill")
-        self.k_copy = g.kernel("common/fields.cl", "copy_listed")  # keeps the pair equal off a list
-        self.k_change = g.kernel("inpainting/transport.cl", "inpaint_max_change")
-        self.k_sum_change = g.kernel("inpainting/transport.cl", "inpaint_sum_change")
-        self.k_ghosts = g.kernel("inpainting/transport.cl", "inpaint_ghosts")
+        self.k_fill = g.kernel("inpainting/transport.cl", "transport_fill")
+        self.k_copy = g.kernel(
+            "common/fields.cl", "fields_copy_listed"
+        )  # keeps the pair equal off a list
+        self.k_change = g.kernel("inpainting/transport.cl", "transport_max_change")
+        self.k_sum_change = g.kernel("inpainting/transport.cl", "transport_sum_change")
+        self.k_ghosts = g.kernel("inpainting/transport.cl", "transport_ghosts")
         # Soft masks: pixels of Omega with fidelity w > 0 are drawn back towards their
         # observed value by w after every cycle.
         self.fidelity = None
@@ -123,7 +125,7 @@ class LevelSolver:
                 Grid(runtime, nx, ny, 1, GHOST, g.dtype), fidelity[None]
             )
             self.observed = Field.from_host(g, observed)
-            self.k_fidelity = g.kernel("inpainting/transport.cl", "inpaint_fidelity")
+            self.k_fidelity = g.kernel("inpainting/transport.cl", "transport_fidelity")
         self.sx = np.int32(g.sx)
         self.rot = g.scalar(1.0 if params.rotation == "ccw" else -1.0)
         self.steps = 0
@@ -152,7 +154,7 @@ class LevelSolver:
             if not self.ghosts:
                 return None
             kernel = runtime.new_kernel(
-                "inpainting/transport.cl", "inpaint_ghosts", g.dtype, **defines
+                "inpainting/transport.cl", "transport_ghosts", g.dtype, **defines
             )
             n = self.ghost_pairs.shape[0]
             kernel.set_args(buf, self.ghost_pairs.data, np.int32(n), np.int32(g.plane))
@@ -165,7 +167,7 @@ class LevelSolver:
             self._steps[("transport", src.int_ptr)] = (
                 bound(
                     runtime.new_kernel(
-                        "inpainting/transport.cl", "inpaint_transport", g.dtype, **defines
+                        "inpainting/transport.cl", "transport_step", g.dtype, **defines
                     ),
                     self.omega_list,
                     src,
@@ -180,7 +182,7 @@ class LevelSolver:
             self._steps[("diffusion", src.int_ptr)] = (
                 bound(
                     runtime.new_kernel(
-                        "inpainting/transport.cl", "inpaint_diffusion", g.dtype, **defines
+                        "inpainting/transport.cl", "transport_diffusion", g.dtype, **defines
                     ),
                     self.band_list,
                     src,
@@ -249,7 +251,7 @@ class LevelSolver:
     def presmooth(self, steps: int) -> None:
         """Anisotropic diffusion of the whole image (planar.cl's curvature step)."""
         g = self.grid
-        kernel = g.kernel("planar/planar.cl", "curvature_step")
+        kernel = g.kernel("planar/planar.cl", "planar_curvature_step")
         for _ in range(steps):
             g.launch(
                 kernel,

@@ -80,7 +80,7 @@ class FlowSolver:
         self.k_sor = k("motion/flow.cl", "flow_sor")
         self.k_accept = k("motion/flow.cl", "flow_accept")
         self.k_median = k("motion/flow.cl", "flow_median3")
-        self.k_warp = k("motion/flow.cl", "warp_image")
+        self.k_warp = k("motion/flow.cl", "flow_warp_image")
         self._shape = None
 
     def _geometry(self, ny: int, nx: int, nc: int = 1):

@@ -255,7 +255,7 @@ class PlanarFlow:
         self._smooth = None
         if flow == "heat":
             self.dt = check_time_step(dt, stability_limit(flow), "heat")
-            kernel = g.kernel("planar/planar.cl", "heat_step")
+            kernel = g.kernel("planar/planar.cl", "planar_heat_step")
             self._extra = ()
         elif flow == "perona-malik":
             if edge not in ("exp", "rational"):
@@ -263,7 +263,7 @@ class PlanarFlow:
             kappa = positive("kappa", kappa)
             self.dt = check_time_step(dt, stability_limit(flow), "Perona-Malik")
             kernel = g.kernel(
-                "planar/planar.cl", "perona_malik_step", EDGE_STOP=int(edge == "rational")
+                "planar/planar.cl", "planar_perona_malik_step", EDGE_STOP=int(edge == "rational")
             )
             self._extra = (g.scalar(1.0 / kappa**2),)
             if presmooth is not None:
@@ -273,10 +273,10 @@ class PlanarFlow:
                 w = gaussian_weights(float(presmooth))
                 self.presmooth_radius = len(w) - 1
                 defines = {"EDGE_STOP": int(edge == "rational")}
-                kernel = g.kernel("planar/catte.cl", "perona_malik_catte_step", **defines)
+                kernel = g.kernel("planar/catte.cl", "catte_perona_malik_step", **defines)
                 self._smooth = (
-                    g.kernel("planar/catte.cl", "gauss_rows"),
-                    g.kernel("planar/catte.cl", "gauss_cols"),
+                    g.kernel("planar/catte.cl", "catte_gauss_rows"),
+                    g.kernel("planar/catte.cl", "catte_gauss_cols"),
                     cla.to_device(self.runtime.queue, w.astype(g.dtype)),
                     np.int32(len(w) - 1),
                     Field.empty(g),
@@ -285,13 +285,13 @@ class PlanarFlow:
         elif flow == "tv":
             eps = positive("eps", TV_EPS if eps is None else eps)
             self.dt = check_time_step(dt, stability_limit(flow, eps), f"TV (eps={eps:g})")
-            kernel = g.kernel("planar/planar.cl", "tv_step")
+            kernel = g.kernel("planar/planar.cl", "planar_tv_step")
             self._extra = (g.scalar(eps * eps),)
         else:  # curvature
             eps = 1e-10 if eps is None else float(eps)
             self.dt = check_time_step(dt, stability_limit(flow), "curvature")
             if weight is None:
-                kernel = g.kernel("planar/planar.cl", "curvature_step")
+                kernel = g.kernel("planar/planar.cl", "planar_curvature_step")
                 weight_buf = self.pair.cur.data.data  # unread when HAS_WEIGHT is 0
             else:
                 weight = np.asarray(weight, np.float64)
@@ -302,7 +302,7 @@ class PlanarFlow:
                 wgrid = Grid(self.runtime, g.nx, g.ny, 1, 1, g.dtype)
                 self._weight = Field.from_host(wgrid, weight[np.newaxis])
                 weight_buf = self._weight.data.data
-                kernel = g.kernel("planar/planar.cl", "curvature_step", HAS_WEIGHT=1)
+                kernel = g.kernel("planar/planar.cl", "planar_curvature_step", HAS_WEIGHT=1)
             self._extra = (weight_buf, g.scalar(0), g.scalar(eps))
         self._kernel = kernel
 

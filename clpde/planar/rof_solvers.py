@@ -158,9 +158,9 @@ def gradient_descent(
     previous = u0.copy()
     lam = cla.to_device(q, lam0.astype(grid.dtype))
     partial = cla.empty(q, (nc, ny), grid.dtype)
-    step_k = grid.kernel("planar/planar.cl", "rof_step")
-    rows_k = grid.kernel("planar/planar.cl", "rof_lambda_rows")
-    finish_k = grid.kernel("planar/planar.cl", "rof_lambda_finish")
+    step_k = grid.kernel("planar/planar.cl", "planar_rof_step")
+    rows_k = grid.kernel("planar/planar.cl", "planar_rof_lambda_rows")
+    finish_k = grid.kernel("planar/planar.cl", "planar_rof_lambda_finish")
     eps2 = grid.scalar(eps * eps)
 
     steps = 0

@@ -93,33 +93,19 @@ class BrickRegionTracker(RegionTracker):
         rt = self.runtime
         defines = dict(SPEED=self.mode, NC=self.nc, RING=self.reinit_ring, BX=bx, BY=by, BZ=bz)
         k = {}
-        k["region_brick_euler"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_euler", g.dtype, **defines
+        k["bricks_euler"] = rt.kernel("regions/bricks.cl", "bricks_euler", g.dtype, **defines)
+        k["bricks_heun"] = rt.kernel("regions/bricks.cl", "bricks_heun", g.dtype, **defines)
+        k["bricks_advect"] = rt.kernel("regions/bricks.cl", "bricks_advect", g.dtype, **defines)
+        k["bricks_extend"] = rt.kernel("regions/bricks.cl", "bricks_extend", g.dtype, **defines)
+        k["bricks_targets"] = rt.kernel("regions/bricks.cl", "bricks_targets", g.dtype, **defines)
+        k["bricks_reinit_stage"] = rt.kernel(
+            "regions/bricks.cl", "bricks_reinit_stage", g.dtype, **defines
         )
-        k["region_brick_heun"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_heun", g.dtype, **defines
+        k["bricks_band_mask"] = rt.kernel(
+            "regions/bricks.cl", "bricks_band_mask", g.dtype, **defines
         )
-        k["region_brick_advect"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_advect", g.dtype, **defines
-        )
-        k["region_brick_extend"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_extend", g.dtype, **defines
-        )
-        k["region_brick_targets"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_targets", g.dtype, **defines
-        )
-        k["region_brick_reinit_stage"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_reinit_stage", g.dtype, **defines
-        )
-        k["region_brick_band_mask"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_band_mask", g.dtype, **defines
-        )
-        k["region_brick_flags"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_flags", g.dtype, **defines
-        )
-        k["region_brick_remap"] = rt.kernel(
-            "regions/bricks.cl", "region_brick_remap", g.dtype, **defines
-        )
+        k["bricks_flags"] = rt.kernel("regions/bricks.cl", "bricks_flags", g.dtype, **defines)
+        k["bricks_remap"] = rt.kernel("regions/bricks.cl", "bricks_remap", g.dtype, **defines)
         self._k = k
 
     def _initial_coords(self, phi: np.ndarray, reach: int) -> np.ndarray:
@@ -222,7 +208,7 @@ class BrickRegionTracker(RegionTracker):
         coords_dev = self._coords_on_device()
         flags = cla.empty(q, max(self.bricks.nbricks, 1), np.int32)
         items, per = self._geometry()
-        self._k["region_brick_flags"](
+        self._k["bricks_flags"](
             q,
             (items,),
             (1,),
@@ -247,7 +233,7 @@ class BrickRegionTracker(RegionTracker):
         with self.runtime.lock:
             self._flag.fill(0)
         items, per = self._geometry()
-        self._k["region_brick_band_mask"](
+        self._k["bricks_band_mask"](
             q,
             (items,),
             (1,),
@@ -312,7 +298,7 @@ class BrickRegionTracker(RegionTracker):
         out = cla.empty(q, self.nc * band.plane, self.grid.dtype)
         self.runtime.check_alloc(out.nbytes, "brick level sets")
         items, per = self._geometry(band.nbricks)
-        self._k["region_brick_remap"](
+        self._k["bricks_remap"](
             q,
             (items,),
             (1,),
@@ -363,7 +349,7 @@ class BrickRegionTracker(RegionTracker):
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(ext if its else 0):
             self._launch(
-                "region_brick_extend",
+                "bricks_extend",
                 self.cur.data,
                 self._mask.data,
                 self.nxt.data,
@@ -374,11 +360,11 @@ class BrickRegionTracker(RegionTracker):
             self.cur, self.nxt = self.nxt, self.cur
         cl.enqueue_copy(q, self.ls0.data, self.cur.data)
         if its:
-            self._launch("region_brick_targets", self.ls0.data, self._mask.data, self.stage.data)
+            self._launch("bricks_targets", self.ls0.data, self._mask.data, self.stage.data)
         for _ in range(its):
             for src, dst, second in ((self.cur, self.nxt, 0), (self.nxt, self.cur, 1)):
                 self._launch(
-                    "region_brick_reinit_stage",
+                    "bricks_reinit_stage",
                     src.data,
                     self.ls0.data,
                     self.stage.data,
@@ -394,7 +380,7 @@ class BrickRegionTracker(RegionTracker):
     def _speed_bound(self) -> float:
         if not self._stats_fresh:
             # the Euler stage with dt = 0 writes the speeds' bound and nxt = cur (scratch)
-            self._stage("region_brick_euler", self.cur, self.nxt, 0.0)
+            self._stage("bricks_euler", self.cur, self.nxt, 0.0)
             return float(self._stats.get()[: len(self._stats) // 2].max())
         return float(self._stats.get().max())
 
@@ -417,7 +403,7 @@ class BrickRegionTracker(RegionTracker):
     def _advect(self, src, dst, dt, second) -> None:
         g, u = self.grid, self.velocity
         self._launch(
-            "region_brick_advect",
+            "bricks_advect",
             src.data,
             dst.data,
             self._mask.data,
@@ -431,8 +417,8 @@ class BrickRegionTracker(RegionTracker):
 
     def step(self, dt: float) -> None:
         if self.velocity is None:
-            self._stage("region_brick_euler", self.cur, self.nxt, dt)
-            self._stage("region_brick_heun", self.nxt, self.cur, dt)
+            self._stage("bricks_euler", self.cur, self.nxt, dt)
+            self._stage("bricks_heun", self.nxt, self.cur, dt)
             self._stats_fresh = True
         else:
             self._advect(self.cur, self.nxt, dt, 0)

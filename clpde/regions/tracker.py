@@ -185,36 +185,30 @@ class RegionTracker:
         self._flag = cla.zeros(q, 1, np.int32)
         self._mask = cla.zeros(q, g.padded_shape, np.uint8)
         self._mask2 = cla.zeros(q, g.padded_shape, np.uint8)
-        rt, mode = self.runtime, self.mode
+        rt, kw = self.runtime, {"dtype": g.dtype, "SPEED": self.mode}
         self._k = {
-            "region_speed": rt.kernel("regions/regions.cl", "region_speed", g.dtype, SPEED=mode),
-            "region_euler": rt.kernel(
-                "regions/regions.cl", "region_euler", g.dtype, SPEED=mode, NC=self.nc
+            "regions_speed": rt.kernel("regions/regions.cl", "regions_speed", **kw),
+            "regions_euler": rt.kernel("regions/regions.cl", "regions_euler", NC=self.nc, **kw),
+            "regions_heun": rt.kernel("regions/regions.cl", "regions_heun", NC=self.nc, **kw),
+            "regions_advect_step": rt.kernel("regions/regions.cl", "regions_advect_step", **kw),
+            "regions_reinit3d_targets": rt.kernel(
+                "regions/regions.cl", "regions_reinit3d_targets", **kw
             ),
-            "region_heun": rt.kernel(
-                "regions/regions.cl", "region_heun", g.dtype, SPEED=mode, NC=self.nc
+            "regions_reinit3d_step_pre": rt.kernel(
+                "regions/regions.cl", "regions_reinit3d_step_pre", **kw
             ),
-            "advect_step": rt.kernel("regions/regions.cl", "advect_step", g.dtype, SPEED=mode),
-            "reinit3d_targets": rt.kernel(
-                "regions/regions.cl", "reinit3d_targets", g.dtype, SPEED=mode
+            "regions_reinit3d_heun_pre": rt.kernel(
+                "regions/regions.cl", "regions_reinit3d_heun_pre", **kw
             ),
-            "reinit3d_step_pre": rt.kernel(
-                "regions/regions.cl", "reinit3d_step_pre", g.dtype, SPEED=mode
+            "regions_band_near_border": rt.kernel(
+                "regions/regions.cl", "regions_band_near_border", **kw
             ),
-            "reinit3d_heun_pre": rt.kernel(
-                "regions/regions.cl", "reinit3d_heun_pre", g.dtype, SPEED=mode
-            ),
-            "band_near_border": rt.kernel(
-                "regions/regions.cl", "band_near_border", g.dtype, SPEED=mode
-            ),
-            "band_max_abs": rt.kernel("regions/regions.cl", "band_max_abs", g.dtype, SPEED=mode),
-            "heun_average": rt.kernel("regions/regions.cl", "heun_average", g.dtype, SPEED=mode),
-            "region_band_mask": rt.kernel(
-                "regions/regions.cl", "region_band_mask", g.dtype, SPEED=mode
-            ),
-            "dilate_mask": rt.kernel("regions/regions.cl", "dilate_mask", g.dtype, SPEED=mode),
-            "extend_outer": rt.kernel("regions/regions.cl", "extend_outer", g.dtype, SPEED=mode),
-            "copy_runs": rt.kernel("regions/regions.cl", "copy_runs", g.dtype, SPEED=mode),
+            "regions_band_max_abs": rt.kernel("regions/regions.cl", "regions_band_max_abs", **kw),
+            "regions_heun_average": rt.kernel("regions/regions.cl", "regions_heun_average", **kw),
+            "regions_band_mask": rt.kernel("regions/regions.cl", "regions_band_mask", **kw),
+            "regions_dilate_mask": rt.kernel("regions/regions.cl", "regions_dilate_mask", **kw),
+            "regions_extend_outer": rt.kernel("regions/regions.cl", "regions_extend_outer", **kw),
+            "regions_copy_runs": rt.kernel("regions/regions.cl", "regions_copy_runs", **kw),
         }
 
     # ---- bands ---------------------------------------------------------------------------
@@ -244,7 +238,7 @@ class RegionTracker:
         with self.runtime.lock:  # pyopencl's fill kernel is shared by every thread
             self._flag.fill(0)
         g.launch_list(
-            self._k["band_near_border"],
+            self._k["regions_band_near_border"],
             self.reinit_band,
             self._flag.data,
             np.int32(g.nx),
@@ -270,13 +264,13 @@ class RegionTracker:
         g, q = self.grid, self.runtime.queue
         dims = (np.int32(g.nx), np.int32(g.ny), np.int32(g.nz), *g.strides(), np.int32(g.ghost))
         launch = self.runtime.items(g.ny, g.nz)
-        self._k["region_band_mask"](
+        self._k["regions_band_mask"](
             q, *launch, self.cur.data, self._mask.data, g.scalar(self.width), *dims
         )
         step = compact(self.runtime, self._mask)
         src, dst = self._mask, self._mask2
         for stride in (1, g.sx, g.sxy) if self.reinit_ring else ():
-            self._k["dilate_mask"](
+            self._k["regions_dilate_mask"](
                 q, *launch, src.data, dst.data, np.int32(stride), np.int32(self.reinit_ring), *dims
             )
             src, dst = dst, src
@@ -300,7 +294,7 @@ class RegionTracker:
         keep, full = (g.scalar(d) for d in EXTEND_FROM)
         for _ in range(ext if its else 0):
             g.launch_runs(
-                k["extend_outer"],
+                k["regions_extend_outer"],
                 band,
                 self.cur.data,
                 self._reinit_mask.data,
@@ -318,7 +312,7 @@ class RegionTracker:
         target = self.stage
         if its:
             g.launch_runs(
-                k["reinit3d_targets"],
+                k["regions_reinit3d_targets"],
                 band,
                 self.ls0.data,
                 self._reinit_mask.data,
@@ -332,7 +326,7 @@ class RegionTracker:
             # stage averages in place (reinit3d_heun_pre): no third buffer, no averaging
             # sweep. Bit for bit reinit3d_step and reinit3d_heun.
             g.launch_runs(
-                k["reinit3d_step_pre"],
+                k["regions_reinit3d_step_pre"],
                 band,
                 self.cur.data,
                 self.ls0.data,
@@ -343,7 +337,7 @@ class RegionTracker:
                 channels=self.nc,
             )
             g.launch_runs(
-                k["reinit3d_heun_pre"],
+                k["regions_reinit3d_heun_pre"],
                 band,
                 self.cur.data,
                 self.nxt.data,
@@ -365,7 +359,7 @@ class RegionTracker:
         first `channels`)."""
         for dst in buffers:
             self.grid.launch_runs(
-                self._k["copy_runs"],
+                self._k["regions_copy_runs"],
                 self.reinit_runs,
                 self.cur.data,
                 dst.data,
@@ -376,7 +370,7 @@ class RegionTracker:
     def _compute_speed(self) -> None:
         g = self.grid
         g.launch_runs(
-            self._k["region_speed"],
+            self._k["regions_speed"],
             self.step_runs,
             self.cur.data,
             self.aux.data,
@@ -414,7 +408,9 @@ class RegionTracker:
         """max |volume| over the step band, reduced per work-item on the device."""
         (gsize,), _, _ = self.runtime.list_launch(self.step_band.n)
         out = cla.zeros(self.runtime.queue, gsize, self.grid.dtype)
-        self.grid.launch_list(self._k["band_max_abs"], self.step_band, volume.data, out.data)
+        self.grid.launch_list(
+            self._k["regions_band_max_abs"], self.step_band, volume.data, out.data
+        )
         return float(out.get().max())
 
     def _cutoff(self):
@@ -425,7 +421,7 @@ class RegionTracker:
         """dst = src + dt L(src) on the step band for a rigid motion (velocity)."""
         g, u = self.grid, self.velocity
         g.launch_runs(
-            self._k["advect_step"],
+            self._k["regions_advect_step"],
             self.step_runs,
             src.data,
             dst.data,
@@ -462,14 +458,14 @@ class RegionTracker:
         g = self.grid
         if self.velocity is None:
             # two fused sweeps: cur -> nxt, then cur <- (cur + nxt + dt L(nxt)) / 2 in place
-            self._stage("region_euler", self.cur, self.nxt, dt)
-            self._stage("region_heun", self.nxt, self.cur, dt)
+            self._stage("regions_euler", self.cur, self.nxt, dt)
+            self._stage("regions_heun", self.nxt, self.cur, dt)
             self._stats_fresh = True
         else:
             self._advect(self.cur, self.nxt, dt)
             self._advect(self.nxt, self.stage, dt)
             g.launch_runs(
-                self._k["heun_average"],
+                self._k["regions_heun_average"],
                 self.step_runs,
                 self.cur.data,
                 self.stage.data,

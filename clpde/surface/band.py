@@ -57,7 +57,7 @@ def narrow_bands(surf) -> None:
     g, q = surf.grid, surf.runtime.queue
     nodes = cla.zeros(q, g.padded_shape, np.uint8)
     g.launch_list(
-        g.kernel("surface/band.cl", "mark_nodes"),
+        g.kernel("surface/band.cl", "band_mark_nodes"),
         surf.ext_band,
         surf.cp_base.data,
         nodes.data,
@@ -68,7 +68,7 @@ def narrow_bands(surf) -> None:
     surf.step_runs = g.runs(surf.node_band)
     reach = cla.zeros(q, g.padded_shape, np.uint8)
     g.launch_list(
-        g.kernel("surface/band.cl", "mark_stencil"), surf.node_band, reach.data, *g.strides()
+        g.kernel("surface/band.cl", "band_mark_stencil"), surf.node_band, reach.data, *g.strides()
     )
     surf.reach_band = compact(surf.runtime, reach)
     surf.reach_stencils = cp_stencils(surf, surf.reach_band, closest_points(surf, surf.reach_band))
@@ -80,7 +80,7 @@ def closest_points(surf, band):
     n = max(band.n, 1)
     cp = [cla.empty(q, n, g.dtype) for _ in range(3)]
     g.launch_list(
-        g.kernel("surface/band.cl", "closest_points"),
+        g.kernel("surface/band.cl", "band_closest_points"),
         band,
         surf.psi_dev.data,
         g.scalar(1.0 / surf.spacing),
@@ -101,7 +101,7 @@ def cp_stencils(surf, band, cp):
     base = cla.empty(q, n, np.int32)
     frac = cla.empty(q, (3, n), g.dtype)
     g.launch_list(
-        g.kernel("surface/band.cl", "cp_stencils"),
+        g.kernel("surface/band.cl", "band_cp_stencils"),
         band,
         *(c.data for c in cp),
         *g.strides(),

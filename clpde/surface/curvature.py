@@ -25,7 +25,7 @@ def principal_directions(
     dirs = cla.empty(q, (6, n), g.dtype)
     curv = cla.empty(q, (2, n), g.dtype)
     g.launch_list(
-        g.kernel("surface/shape.cl", "principal_directions"),
+        g.kernel("surface/shape.cl", "shape_principal_directions"),
         band,
         surf.psi_dev.data,
         g.scalar(1 / surf.spacing),

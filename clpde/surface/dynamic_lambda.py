@@ -33,8 +33,8 @@ class DynamicLambda:
         self.slots = cla.zeros(q, max(updates, 1), g.dtype)
         self.capped = cla.zeros(q, 1, np.int32)
         self.state = cla.to_device(q, np.ones(1, g.dtype))  # the correction factor f
-        self._chunk_sum = g.kernel("surface/flows.cl", "chunk_sum", **self.defines)
-        self._update = g.kernel("surface/flows.cl", "tv_lambda_update", **self.defines)
+        self._chunk_sum = g.kernel("surface/flows.cl", "flows_chunk_sum", **self.defines)
+        self._update = g.kernel("surface/flows.cl", "flows_tv_lambda_update", **self.defines)
 
     def _sums(self, sides: int) -> None:
         s = self.surf

@@ -71,7 +71,7 @@ def _sample_raw(
     n = idx.shape[1]
     pts = [cla.to_device(q, np.ascontiguousarray(idx[a], g.dtype)) for a in range(3)]
     out = cla.empty(q, (nc, n), g.dtype)
-    g.kernel("surface/extend.cl", "sample_points", **extend_defines(code, nc))(
+    g.kernel("surface/extend.cl", "extend_sample_points", **extend_defines(code, nc))(
         q,
         *surf.runtime.items(n),
         dev.data,

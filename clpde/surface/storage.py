@@ -32,15 +32,15 @@ def _offsets(grid, sides: int):
 STEP_KERNELS = {
     "heat": {
         "lists": ("surface/heat.cl", "heat_step"),
-        "bricks": ("surface/bricks.cl", "brick_heat_step"),
+        "bricks": ("surface/bricks.cl", "bricks_heat_step"),
     },
     "flow": {
-        "lists": ("surface/flows.cl", "flow_step"),
-        "bricks": ("surface/bricks.cl", "brick_flow_step"),
+        "lists": ("surface/flows.cl", "flows_step"),
+        "bricks": ("surface/bricks.cl", "bricks_flow_step"),
     },
     "turk": {
-        "lists": ("surface/heat.cl", "turk_step"),
-        "bricks": ("surface/bricks.cl", "brick_turk_step"),
+        "lists": ("surface/heat.cl", "heat_turk_step"),
+        "bricks": ("surface/bricks.cl", "bricks_turk_step"),
     },
 }
 
@@ -157,7 +157,7 @@ class BandFlow:
         s = self.surf
         g = s.grid
         g.launch_list(
-            self.kernel("surface/flows.cl", "tv_lambda_terms"),
+            self.kernel("surface/flows.cl", "flows_tv_lambda_terms"),
             s.node_band,
             self.cur.data,
             u0.data,
@@ -230,13 +230,13 @@ class BrickFlow:
         # the stepped values, in the layout the re-extension reads (bricks with an apron)
         self.tmp = cla.zeros(surf.runtime.queue, (self.nc, b.apron_plane), g.dtype)
         b.launch(
-            self.kernel("surface/bricks.cl", "brick_to_apron"),
+            self.kernel("surface/bricks.cl", "bricks_to_apron"),
             self.cur.data,
             self.tmp.data,
             channels=self.nc,
         )
         self.src_plane = np.int32(b.apron_plane)
-        self._extend_kernel = self.kernel("surface/bricks.cl", "brick_extend_cp")
+        self._extend_kernel = self.kernel("surface/bricks.cl", "bricks_extend_cp")
         self._extend(self.tmp, self.cur, EXT)
         self._stepped = False
 
@@ -311,7 +311,7 @@ class BrickFlow:
         """Enqueue the terms of (C.2) at every node (bricks.cl's brick_lambda_terms)."""
         b = self.bricks
         b.launch(
-            self.kernel("surface/bricks.cl", "brick_lambda_terms"),
+            self.kernel("surface/bricks.cl", "bricks_lambda_terms"),
             self.cur.data,
             u0.data,
             self.psi.data,

@@ -125,7 +125,7 @@ class LevelSet:
         """Mark |u| < w on the device and compact it into the band's index list."""
         g = self.grid
         g.launch(
-            g.kernel("tracking/levelset.cl", "mark_band"),
+            g.kernel("tracking/levelset.cl", "levelset_mark_band"),
             self.u.cur.data.data,
             self.band_mask.data,
             g.scalar(self.band_width),
@@ -154,13 +154,13 @@ class LevelSet:
         """Mark the movable cells within REACH cells of the band (into _near_mask)."""
         g = self.grid
         g.launch(
-            g.kernel("tracking/levelset.cl", "dilate_band_rows"),
+            g.kernel("tracking/levelset.cl", "levelset_dilate_band_rows"),
             self.band_mask.data,
             self._near_rows.data,
             np.int32(REACH),
         )
         g.launch(
-            g.kernel("tracking/levelset.cl", "dilate_band_cols"),
+            g.kernel("tracking/levelset.cl", "levelset_dilate_band_cols"),
             self._near_rows.data,
             self._near_mask.data,
             np.int32(REACH),

@@ -80,7 +80,7 @@ def feature_field(image: np.ndarray, ls: LevelSet, options: TrackOptions) -> Fie
     out = Field.empty(grid)
     if options.features == "edges":
         grid.launch(
-            grid.kernel("tracking/levelset.cl", "gradient_magnitude"),
+            grid.kernel("tracking/levelset.cl", "levelset_gradient_magnitude"),
             f.data.data,
             out.data.data,
         )
@@ -88,7 +88,7 @@ def feature_field(image: np.ndarray, ls: LevelSet, options: TrackOptions) -> Fie
         # Scaled by 1/4: normalised values of about +-2 become F2 - F1 of the
         # order of the [0, 1] grey levels, for which tol and dt are set.
         grid.launch(
-            grid.kernel("tracking/features.cl", "local_contrast"),
+            grid.kernel("tracking/features.cl", "features_local_contrast"),
             f.data.data,
             out.data.data,
             np.int32(options.contrast_radius),

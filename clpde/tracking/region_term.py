@@ -91,10 +91,10 @@ class RegionTerm:
         self._k = {
             "region_moments": rt.kernel("tracking/region.cl", "region_moments", g.dtype),
             # the blurs' radius is a define: one build per Gaussian, whatever the frame size
-            "coarse_cols": rt.kernel("tracking/region.cl", "blur_cols", g.dtype, RADIUS=rc),
-            "coarse_rows": rt.kernel("tracking/region.cl", "blur_rows", g.dtype, RADIUS=rc),
-            "pool_cols": rt.kernel("tracking/region.cl", "blur_cols", g.dtype, RADIUS=rp),
-            "pool_rows": rt.kernel("tracking/region.cl", "blur_rows", g.dtype, RADIUS=rp),
+            "coarse_cols": rt.kernel("tracking/region.cl", "region_blur_cols", g.dtype, RADIUS=rc),
+            "coarse_rows": rt.kernel("tracking/region.cl", "region_blur_rows", g.dtype, RADIUS=rc),
+            "pool_cols": rt.kernel("tracking/region.cl", "region_blur_cols", g.dtype, RADIUS=rp),
+            "pool_rows": rt.kernel("tracking/region.cl", "region_blur_rows", g.dtype, RADIUS=rp),
             "region_llr": rt.kernel("tracking/region.cl", "region_llr", g.dtype),
             "region_speed": rt.kernel("tracking/region.cl", "region_speed", g.dtype),
         }

@@ -33,7 +33,11 @@ class CellList:
     """The band as a compacted list of its cells (an IndexList): a work-item per cell."""
 
     # the band kernels of this storage: what each step is called in the .cl files
-    KERNELS = {"reinit": "reinit_step_list", "morph": "morph_track", "adaptive": "morph_adaptive"}
+    KERNELS = {
+        "reinit": "levelset_reinit_step_list",
+        "morph": "features_morph_track",
+        "adaptive": "adaptive_morph_adaptive",
+    }
 
     def __init__(self, grid, margin: int, group_per_brick: bool):
         self.grid, self.runtime, self.margin = grid, grid.runtime, margin
@@ -74,9 +78,9 @@ class Bricks(CellList):
     whole by one work-item (CPUs)."""
 
     KERNELS = {
-        "reinit": "reinit_step_bricks",
-        "morph": "morph_track_bricks",
-        "adaptive": "morph_adaptive_bricks",
+        "reinit": "levelset_reinit_step_bricks",
+        "morph": "features_morph_track_bricks",
+        "adaptive": "adaptive_morph_adaptive_bricks",
     }
     brick = (8, 8)
 
@@ -92,7 +96,7 @@ class Bricks(CellList):
     def cells(self, mask: cla.Array) -> BrickSet:
         nbx, nby, *corners = self._geometry()
         flags = cla.empty(self.runtime.queue, nbx * nby, np.uint8)
-        self.kernel("tracking/levelset.cl", "mark_bricks")(
+        self.kernel("tracking/levelset.cl", "levelset_mark_bricks")(
             self.runtime.queue,
             *self.runtime.items(nbx * nby),
             mask.data,
@@ -116,7 +120,7 @@ class Bricks(CellList):
         brick (morph_track_tiled: faster than the cell-by-cell sums, docs/tracking.md; equal
         to rounding)."""
         if discrepancy == "ncc" and not self.group_per_brick:
-            return "morph_track_tiled"
+            return "features_morph_track_tiled"
         return self.KERNELS["morph"]
 
     def reinit_args(self, cells, dt) -> tuple:

@@ -5,7 +5,7 @@
 // Ghost columns left and right of every interior row. Neumann (mode 0) mirrors the field
 // about the border face, so the normal difference across it is zero; Dirichlet (mode 1)
 // sets the ghosts to `value`. Work-item (y, c).
-__kernel void fill_ghost_cols(__global REAL* u, const int mode, const REAL value,
+__kernel void fields_fill_ghost_cols(__global REAL* u, const int mode, const REAL value,
                               GRID_ARGS)
 {
     const int y = get_global_id(0);
@@ -19,7 +19,7 @@ __kernel void fill_ghost_cols(__global REAL* u, const int mode, const REAL value
 
 // Ghost rows above and below, over the whole padded width (corners included); run after
 // fill_ghost_cols so corners mirror the already-filled column ghosts. Work-item (x, c).
-__kernel void fill_ghost_rows(__global REAL* u, const int mode, const REAL value,
+__kernel void fields_fill_ghost_rows(__global REAL* u, const int mode, const REAL value,
                               GRID_ARGS)
 {
     const int x = get_global_id(0);
@@ -32,7 +32,7 @@ __kernel void fill_ghost_rows(__global REAL* u, const int mode, const REAL value
 }
 
 // Copy the interior of `src` into `dst` (same geometry).
-__kernel void copy_interior(__global const REAL* restrict src, __global REAL* restrict dst,
+__kernel void fields_copy_interior(__global const REAL* restrict src, __global REAL* restrict dst,
                             GRID_ARGS)
 {
     FOR_EACH_CELL(i) dst[i] = src[i];
@@ -45,7 +45,7 @@ __kernel void copy_interior(__global const REAL* restrict src, __global REAL* re
 // whole work-groups (Runtime.items): the items past the last chunk return at once.
 #define NCHUNKS(n, chunk) max(1, ((n) + (chunk) - 1) / (chunk))
 
-__kernel void count_chunks(__global const uchar* restrict mask, const int n, const int chunk,
+__kernel void fields_count_chunks(__global const uchar* restrict mask, const int n, const int chunk,
                            __global int* restrict counts)
 {
     const int c = get_global_id(0);
@@ -56,7 +56,7 @@ __kernel void count_chunks(__global const uchar* restrict mask, const int n, con
     counts[c] = total;
 }
 
-__kernel void exclusive_scan_serial(__global int* counts, const int nchunks,
+__kernel void fields_exclusive_scan_serial(__global int* counts, const int nchunks,
                                     __global int* restrict total)
 {
     int running = 0;
@@ -68,7 +68,7 @@ __kernel void exclusive_scan_serial(__global int* counts, const int nchunks,
     total[0] = running;
 }
 
-__kernel void write_chunks(__global const uchar* restrict mask, const int n, const int chunk,
+__kernel void fields_write_chunks(__global const uchar* restrict mask, const int n, const int chunk,
                            __global const int* restrict offsets, __global int* restrict list)
 {
     const int c = get_global_id(0);
@@ -90,7 +90,7 @@ __kernel void write_chunks(__global const uchar* restrict mask, const int n, con
 
 // ---- reductions: one partial per interior row, combined on the host at check time ------
 // op 0: sum a, 1: sum a^2, 2: max |a - b|, 3: sum (a - b)^2, 4: max |a|, 5: min a, 6: max a
-__kernel void row_reduce(__global const REAL* restrict a, __global const REAL* restrict b,
+__kernel void fields_row_reduce(__global const REAL* restrict a, __global const REAL* restrict b,
                          const int op, __global REAL* restrict partial, GRID_ARGS)
 {
     REASSOCIATE_SUMS  // maxima and minima below: MAX_SEL / MIN_SEL (reduce.h)
@@ -124,7 +124,7 @@ __kernel void row_reduce(__global const REAL* restrict a, __global const REAL* r
 }
 
 // Copy the listed cells of `src` into `dst` (every channel); other cells keep their value.
-__kernel void copy_listed(__global const REAL* restrict src, __global REAL* restrict dst,
+__kernel void fields_copy_listed(__global const REAL* restrict src, __global REAL* restrict dst,
                           LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);

@@ -5,7 +5,7 @@
 
 // mask[i] = 1 where |psi| < width on interior cells of the padded volume. Work-item (y, z)
 // of the interior walks one row.
-__kernel void band_mask(__global const REAL* restrict psi, __global uchar* restrict mask,
+__kernel void grid3d_band_mask(__global const REAL* restrict psi, __global uchar* restrict mask,
                         const REAL width, const int nx, const int ny, const int nz,
                         const int sx, const int sxy, const int G)
 {
@@ -18,7 +18,7 @@ __kernel void band_mask(__global const REAL* restrict psi, __global uchar* restr
 // Band runs: maximal stretches of consecutive cells along x in a band list. flags[k] = 1
 // where entry k starts a run; the host compacts the flags into run offsets (the positions
 // of the run starts in the list).
-__kernel void band_run_starts(__global const int* restrict list, const int n,
+__kernel void grid3d_band_run_starts(__global const int* restrict list, const int n,
                               __global uchar* restrict flags)
 {
     const int k = get_global_id(0);
@@ -30,7 +30,7 @@ __kernel void band_run_starts(__global const int* restrict list, const int n,
 // its row's interior and the next run leave room: a vectorised loop then ends without a
 // scalar remainder (about as slow per cell as a whole vector). The extra cells' stepped
 // values are never read (re-extension reads only the band's nodes).
-__kernel void band_run_bounds(__global const int* restrict list,
+__kernel void grid3d_band_run_bounds(__global const int* restrict list,
                               __global const int* restrict offsets, const int nruns,
                               const int n, const int pad, const int nx, const int sx,
                               const int G, __global int* restrict start,

@@ -36,7 +36,7 @@ inline float median_of(float* a, const int n) {
 //    reads: a scratch fixed on the film differs from all neighbours but one (the nearest
 //    may still overlap it in a slow pan), while beside it, where one neighbour's own
 //    scratch lands, the others still agree with the frame, so no ghost line appears.
-__kernel void blotch_score(__global const float* I, __global const float* W,
+__kernel void detect_blotch_score(__global const float* I, __global const float* W,
                            __global const float* V, __global const float* gain,
                            __global const float* offset, __global const int* side,
                            const int K, const float sigma, const float gamma,
@@ -88,7 +88,7 @@ __kernel void blotch_score(__global const float* I, __global const float* W,
 // Mean over the rows y - h .. y + h (clipped to the image) of each column, of values clamped
 // to [-lim, lim]: a long vertical line keeps its contrast, noise and short structures shrink,
 // and a strong blotch counts no more than a faint line.
-__kernel void column_mean(__global const float* src, __global float* dst, const int h,
+__kernel void detect_column_mean(__global const float* src, __global float* dst, const int h,
                           const float lim, const int nx, const int ny) {
     const int x = get_global_id(0), y = get_global_id(1);
     if (x >= nx || y >= ny) return;
@@ -102,7 +102,7 @@ __kernel void column_mean(__global const float* src, __global float* dst, const 
 // w and w + 1 on each side (clamped), so lines up to about 2w - 1 pixels wide answer and
 // slow horizontal variation does not; no larger than the value itself, and zero where the
 // two disagree in sign (the input is a residual, zero where nothing stands out).
-__kernel void line_response(__global const float* src, __global float* dst, const int w,
+__kernel void detect_line_response(__global const float* src, __global float* dst, const int w,
                             const int nx, const int ny) {
     const int x = get_global_id(0), y = get_global_id(1);
     if (x >= nx || y >= ny) return;
@@ -132,7 +132,7 @@ inline float drift_match(__global const float* other, const int row, const int x
 // scores of the previous and next frames (has_prev / has_next say whether they exist), as
 // the larger of z alone and the normalised sum (z + z_prev + z_next) / sqrt(frames): a
 // scratch present in consecutive frames adds up, noise does not.
-__kernel void scratch_continuity(__global const float* zprev, __global const float* z,
+__kernel void detect_scratch_continuity(__global const float* zprev, __global const float* z,
                                  __global const float* znext, const int has_prev,
                                  const int has_next, __global float* out,
                                  const int nx, const int ny) {
@@ -150,7 +150,7 @@ __kernel void scratch_continuity(__global const float* zprev, __global const flo
 
 // 1 where the flow's target x + (u, v) lies inside the frame, else 0: a neighbour warped
 // from outside its frame shows clamped border pixels, not the scene.
-__kernel void flow_inside(__global const float* u, __global const float* v,
+__kernel void detect_flow_inside(__global const float* u, __global const float* v,
                           __global float* out, const int nx, const int ny) {
     const int x = get_global_id(0), y = get_global_id(1);
     if (x >= nx || y >= ny) return;
@@ -161,7 +161,7 @@ __kernel void flow_inside(__global const float* u, __global const float* v,
 }
 
 // Mean over the (2h + 1)^2 square around each pixel (clipped to the image).
-__kernel void box_mean(__global const float* src, __global float* dst, const int h,
+__kernel void detect_box_mean(__global const float* src, __global float* dst, const int h,
                        const int nx, const int ny) {
     const int x = get_global_id(0), y = get_global_id(1);
     if (x >= nx || y >= ny) return;

@@ -15,7 +15,7 @@
 // same neighbour, so the grain it carries comes along (a mean of neighbours would smooth
 // it); ties go to the nearer frame in time. The output blends m * fill + (1 - m) * frame.
 // Pixels no neighbour sees clean are left as they are and flagged in `unfilled`.
-__kernel void temporal_fill(__global const float* F, __global const float* G,
+__kernel void fill_temporal(__global const float* F, __global const float* G,
                             __global const float* M, __global const float* W,
                             __global const float* Wg, __global const float* MW,
                             __global const float* V, __global const float* gain,

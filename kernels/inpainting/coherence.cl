@@ -32,7 +32,7 @@
 
 // Row pass of a normalized Gaussian smoothing: planes c < nin of `out` get
 // sum_j taps_j weight(x+j) in_c(x+j), plane nin the weights' sum.
-__kernel void ct_smooth_rows(__global const REAL* in, __global const REAL* weight,
+__kernel void coherence_smooth_rows(__global const REAL* in, __global const REAL* weight,
                              __global REAL* out, __constant REAL* taps, const int r,
                              const int nin, const int nx, const int ny, const int xrun)
 {
@@ -51,7 +51,7 @@ __kernel void ct_smooth_rows(__global const REAL* in, __global const REAL* weigh
 
 // Column pass: out_c = (sum_j taps_j h_c(y+j)) / (sum_j taps_j h_nin(y+j)), 0 where the
 // weights vanish; plane nin of `out` keeps the weights' sum.
-__kernel void ct_smooth_cols(__global const REAL* h, __global REAL* out,
+__kernel void coherence_smooth_cols(__global const REAL* h, __global REAL* out,
                              __constant REAL* taps, const int r, const int nin,
                              const int nx, const int ny, const int xrun)
 {
@@ -73,7 +73,7 @@ __kernel void ct_smooth_cols(__global const REAL* h, __global REAL* out,
 
 // The gradient products of u_sigma (nc planes) summed over the channels, times `valid`
 // (the pixel and its four neighbours known): out planes J11, J12, J22, valid.
-__kernel void ct_products(__global const REAL* us, __global const REAL* known,
+__kernel void coherence_products(__global const REAL* us, __global const REAL* known,
                           __global REAL* out, const int nc, const int nx, const int ny,
                           const int xrun)
 {
@@ -101,7 +101,7 @@ __kernel void ct_products(__global const REAL* us, __global const REAL* known,
 }
 
 // The K_rho row pass of the four product planes.
-__kernel void ct_tensor_rows(__global const REAL* prod, __global REAL* out,
+__kernel void coherence_tensor_rows(__global const REAL* prod, __global REAL* out,
                              __constant REAL* taps, const int r, const int nx, const int ny,
                              const int xrun)
 {
@@ -118,7 +118,7 @@ __kernel void ct_tensor_rows(__global const REAL* prod, __global REAL* out,
 }
 
 // One shell: list entries [first, first + count) of `list` (flat indices y * nx + x).
-__kernel void ct_fill(__global REAL* u, __global const REAL* known, __global const REAL* t,
+__kernel void coherence_fill(__global REAL* u, __global const REAL* known, __global const REAL* t,
                       __constant REAL* taps, const int r, __global const int* list,
                       const int first, const int count, const REAL epsilon,
                       const REAL kappa, const int nc, const int nx, const int ny)
@@ -179,7 +179,7 @@ __kernel void ct_fill(__global REAL* u, __global const REAL* known, __global con
         for (int c = 0; c < nc; ++c) u[c * plane + i] = num[c] / den;
 }
 
-__kernel void ct_mark(__global REAL* known, __global const int* list, const int first,
+__kernel void coherence_mark(__global REAL* known, __global const int* list, const int first,
                       const int count)
 {
     const int k = get_global_id(0);

@@ -16,7 +16,7 @@
 
 INLINE REAL ns_g(const REAL d, const REAL inv_k2) { return (REAL)1 / (1 + d * d * inv_k2); }
 
-__kernel void ns_vorticity_step(__global const REAL* img, __global const REAL* w,
+__kernel void navier_stokes_vorticity_step(__global const REAL* img, __global const REAL* w,
                                 __global REAL* wn, const REAL dt, const REAL nu,
                                 const REAL inv_k2, const int nx, const int ny, ITEM_ARGS)
 {
@@ -39,7 +39,7 @@ __kernel void ns_vorticity_step(__global const REAL* img, __global const REAL* w
 
 // w = L I on a list (the known pixels around the hole: the vorticity's boundary values,
 // and the hole itself at the start).
-__kernel void ns_laplacian(__global const REAL* img, __global REAL* w, const int nx,
+__kernel void navier_stokes_laplacian(__global const REAL* img, __global REAL* w, const int nx,
                            const int ny, ITEM_ARGS)
 {
     FOR_ITEMS(k) {
@@ -49,7 +49,7 @@ __kernel void ns_laplacian(__global const REAL* img, __global REAL* w, const int
 }
 
 // Partial maxima and sums of |I - prev| over the list, then prev = I.
-__kernel void ns_change(__global const REAL* img, __global REAL* prev,
+__kernel void navier_stokes_change(__global const REAL* img, __global REAL* prev,
                         __global REAL* partial_max, __global REAL* partial_sum,
                         const int nx, const int ny, ITEM_ARGS)
 {

@@ -96,7 +96,7 @@ inline REAL patch_distance(const __global REAL* img, const __global uchar* use, 
 }
 
 // Distance of each target's current source (after a vote changed the image).
-__kernel void pm_score(const __global REAL* img, const __global uchar* use, const int masked,
+__kernel void patchmatch_score(const __global REAL* img, const __global uchar* use, const int masked,
                        const __global int2* nnf, __global REAL* dist,
                        const __global int* targets, const int ntargets,
                        const int W, const int H, const int nch, const __global REAL* chw)
@@ -108,7 +108,7 @@ __kernel void pm_score(const __global REAL* img, const __global uchar* use, cons
     dist[t] = patch_distance(img, use, masked, W, H, nch, chw, t % W, t / W, s.x, s.y, INFINITY);
 }
 
-__kernel void pm_pass(const __global REAL* img, const __global uchar* use, const int masked,
+__kernel void patchmatch_pass(const __global REAL* img, const __global uchar* use, const int masked,
                       const __global uchar* valid,
                       const __global int2* nnf_in, __global int2* nnf_out, __global REAL* dist,
                       const __global int* targets, const int ntargets,
@@ -164,7 +164,7 @@ __kernel void pm_pass(const __global REAL* img, const __global uchar* use, const
 // vote). Sources lie in the known part, so the hole can be written in place. Only the first
 // `nout` planes are written: planes after them are guides, known everywhere, that only enter
 // the distance.
-__kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __global REAL* dist,
+__kernel void patchmatch_vote(__global REAL* img, const __global int2* nnf, const __global REAL* dist,
                       const __global REAL* pen,
                       const __global int* holes, const int nholes, const int W, const int H,
                       const int nch, const int nout, const REAL sigma2, const int best_only)
@@ -214,7 +214,7 @@ __kernel void pm_vote(__global REAL* img, const __global int2* nnf, const __glob
 }
 
 // Onion-peel start: each pixel of the current layer takes the centre value of its source.
-__kernel void pm_copy_centre(__global REAL* img, const __global int2* nnf,
+__kernel void patchmatch_copy_centre(__global REAL* img, const __global int2* nnf,
                              const __global REAL* dist, const __global int* pixels,
                              const int npixels, const int W, const int H, const int nout)
 {
@@ -238,7 +238,7 @@ __kernel void pm_copy_centre(__global REAL* img, const __global int2* nnf,
 // the other's field and their own; a diagonal neighbour has the same parity, so its value
 // is read from the field before this half-sweep (a copy, nnf_in), and the result is the
 // same on every run.
-__kernel void pm_coherence(const __global REAL* img, const __global uchar* valid,
+__kernel void patchmatch_coherence(const __global REAL* img, const __global uchar* valid,
                            const __global int2* nnf_in, __global int2* nnf,
                            __global REAL* dist, const __global int* targets,
                            const int ntargets, const int W, const int H, const int nch,
@@ -295,7 +295,7 @@ __kernel void pm_coherence(const __global REAL* img, const __global uchar* valid
 // the patch are right too, whatever the seed's random search found. Colours only, because
 // the features of known pixels next to the hole are means over fewer pixels and do not
 // repeat with the pattern. `masked`: only the `use` pixels count, as in pm_pass.
-__kernel void pm_offsets(const __global REAL* img, const __global uchar* use, const int masked,
+__kernel void patchmatch_offsets(const __global REAL* img, const __global uchar* use, const int masked,
                          const __global uchar* valid, __global int2* nnf, __global REAL* dist,
                          const __global int* targets, const int ntargets,
                          const int W, const int H, const int nch, const __global REAL* chw,

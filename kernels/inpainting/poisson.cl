@@ -39,7 +39,7 @@ INLINE REAL bilaplacian(__global const REAL* u, const int chan, const int i, con
 
 // dst = a * L^order(src) + b * f on the list (order 1: the Laplacian, 2: the bilaplacian);
 // partial sums of dot * dst. (`dot` may be dst.)
-__kernel void operator_axpy_dot(__global const REAL* src, __global REAL* dst,
+__kernel void poisson_operator_axpy_dot(__global const REAL* src, __global REAL* dst,
                                 __global const REAL* f, const REAL a, const REAL b,
                                 __global const REAL* dot, __global REAL* partial,
                                 const int order, const int nx, const int ny, ITEM_ARGS)
@@ -59,7 +59,7 @@ __kernel void operator_axpy_dot(__global const REAL* src, __global REAL* dst,
 // x += alpha p, r -= alpha q with alpha = r.r / p.q (from the partials of both); writes
 // the partials of the new r.r into rr_new. A channel's sum of its partials is reduce.h's
 // sum_rows(partial + c * ng, ng): the same order in every item that needs it.
-__kernel void cg_update(__global REAL* x, __global REAL* r, __global const REAL* p,
+__kernel void poisson_cg_update(__global REAL* x, __global REAL* r, __global const REAL* p,
                         __global const REAL* q, __global const REAL* rr_old,
                         __global const REAL* pq, __global REAL* rr_new,
                         const int nx, const int ny, ITEM_ARGS)
@@ -78,7 +78,7 @@ __kernel void cg_update(__global REAL* x, __global REAL* r, __global const REAL*
 }
 
 // p = r + beta p with beta = new r.r / old r.r.
-__kernel void cg_direction(__global REAL* p, __global const REAL* r,
+__kernel void poisson_cg_direction(__global REAL* p, __global const REAL* r,
                            __global const REAL* rr_old, __global const REAL* rr_new,
                            const int nx, const int ny, ITEM_ARGS)
 {
@@ -100,7 +100,7 @@ INLINE REAL mg_op(__global const REAL* x, const int chan, const int i, const int
 }
 
 // y = x + w (b - s op(x)) on the list
-__kernel void mg_smooth(__global const REAL* x, __global REAL* y, __global const REAL* b,
+__kernel void poisson_mg_smooth(__global const REAL* x, __global REAL* y, __global const REAL* b,
                         const REAL s, const REAL w, const int bi, const int nx, const int ny,
                         ITEM_ARGS)
 {
@@ -111,14 +111,14 @@ __kernel void mg_smooth(__global const REAL* x, __global REAL* y, __global const
 }
 
 // x = w b (the first sweep, from zero)
-__kernel void mg_scale(__global const REAL* b, __global REAL* x, const REAL w, const int nx,
+__kernel void poisson_mg_scale(__global const REAL* b, __global REAL* x, const REAL w, const int nx,
                        const int ny, ITEM_ARGS)
 {
     FOR_ITEMS(k) { x[chan + list[k]] = w * b[chan + list[k]]; }
 }
 
 // r = b - s op(x)
-__kernel void mg_residual(__global const REAL* x, __global const REAL* b, __global REAL* r,
+__kernel void poisson_mg_residual(__global const REAL* x, __global const REAL* b, __global REAL* r,
                           const REAL s, const int bi, const int nx, const int ny, ITEM_ARGS)
 {
     FOR_ITEMS(k) {
@@ -130,7 +130,7 @@ __kernel void mg_residual(__global const REAL* x, __global const REAL* b, __glob
 // Coarse cell (Y, X) covers fine cells (2Y - 2 + {0, 1}, 2X - 2 + {0, 1}): the coarse box
 // has a ring of cells outside the hole all around. b_c = the sum of the children's r
 // (r is zero off the fine hole). The list is the coarse hole; nx, ny the coarse box.
-__kernel void mg_restrict(__global const REAL* r, __global REAL* bc, const int nxf,
+__kernel void poisson_mg_restrict(__global const REAL* r, __global REAL* bc, const int nxf,
                           const int nyf, const int nx, const int ny, ITEM_ARGS)
 {
     FOR_ITEMS(k) {
@@ -151,7 +151,7 @@ __kernel void mg_restrict(__global const REAL* r, __global REAL* bc, const int n
 }
 
 // x += the parent's value (piecewise-constant interpolation); the list is the fine hole.
-__kernel void mg_prolong(__global REAL* x, __global const REAL* xc, const int nxc,
+__kernel void poisson_mg_prolong(__global REAL* x, __global const REAL* xc, const int nxc,
                          const int nyc, const int nx, const int ny, ITEM_ARGS)
 {
     FOR_ITEMS(k) {
@@ -162,7 +162,7 @@ __kernel void mg_prolong(__global REAL* x, __global const REAL* xc, const int nx
 }
 
 // partial sums of a . b
-__kernel void dot_partial(__global const REAL* a, __global const REAL* b,
+__kernel void poisson_dot_partial(__global const REAL* a, __global const REAL* b,
                           __global REAL* partial, const int nx, const int ny, ITEM_ARGS)
 {
     REAL acc = 0;

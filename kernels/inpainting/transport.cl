@@ -34,7 +34,7 @@
 // beta > 0 it keeps the backward differences that are negative and the forward ones that
 // are positive, for beta < 0 the reverse (appendix A's code; eq. 3.11 as printed has
 // I_ybM where I_ybm belongs). rot = +1 rotates the gradient counter-clockwise, -1 clockwise.
-__kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void transport_step(__global const REAL* restrict u, __global REAL* restrict v,
                                 const REAL dt, const REAL rot, const REAL grad_eps2,
                                 const int sx, LIST_ARGS)
 {
@@ -93,7 +93,7 @@ __kernel void inpaint_transport(__global const REAL* restrict u, __global REAL* 
 // One step of the anisotropic diffusion (3.4), I_t = g kappa |grad I|, with appendix A's
 // central differences (stencil.h's curvature_speed). `g` is a one-channel plane: 1 in
 // Omega, falling smoothly to 0 at the edge of Omega-epsilon.
-__kernel void inpaint_diffusion(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void transport_diffusion(__global const REAL* restrict u, __global REAL* restrict v,
                                 __global const REAL* restrict g, const REAL dt, const REAL eps,
                                 const int sx, LIST_ARGS)
 {
@@ -106,7 +106,7 @@ __kernel void inpaint_diffusion(__global const REAL* restrict u, __global REAL* 
 }
 
 // Start inside Omega: one Jacobi step of Laplace's equation (the harmonic fill).
-__kernel void inpaint_fill(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void transport_fill(__global const REAL* restrict u, __global REAL* restrict v,
                            const int sx, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
@@ -118,7 +118,7 @@ __kernel void inpaint_fill(__global const REAL* restrict u, __global REAL* restr
 
 // Largest |a - b| over the listed cells: one partial per work-item, (channel, item) order.
 // The host reads the few partials at check time only.
-__kernel void inpaint_max_change(__global const REAL* restrict a, __global const REAL* restrict b,
+__kernel void transport_max_change(__global const REAL* restrict a, __global const REAL* restrict b,
                                  __global REAL* restrict partial, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
@@ -134,7 +134,7 @@ __kernel void inpaint_max_change(__global const REAL* restrict a, __global const
 // Sum of |a - b| over the listed cells: one partial per work-item, (channel, item) order.
 // The host adds the partials and divides by the list's length: the mean change in Omega,
 // which (unlike the largest) is not held up by a handful of pixels in a limit cycle.
-__kernel void inpaint_sum_change(__global const REAL* restrict a, __global const REAL* restrict b,
+__kernel void transport_sum_change(__global const REAL* restrict a, __global const REAL* restrict b,
                                  __global REAL* restrict partial, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
@@ -149,7 +149,7 @@ __kernel void inpaint_sum_change(__global const REAL* restrict a, __global const
 // Neumann ghosts, only where the lists reach the border: pairs (ghost, source) of padded
 // plane indices, the source being the ghost's mirror image across the border (as
 // Field.fill_ghosts does). One tiny launch instead of refilling the whole ghost frame.
-__kernel void inpaint_ghosts(__global REAL* u, __global const int2* restrict pairs,
+__kernel void transport_ghosts(__global REAL* u, __global const int2* restrict pairs,
                              const int npairs, const int plane)
 {
     const int k = get_global_id(0);
@@ -161,7 +161,7 @@ __kernel void inpaint_ghosts(__global REAL* u, __global const int2* restrict pai
 
 // Soft masks: u = v = u + w (obs - u) on the listed cells, w a one-channel plane in [0, 1)
 // (1 - the degree of damage). Written into both buffers of the pair, which stay equal.
-__kernel void inpaint_fidelity(__global REAL* restrict u, __global REAL* restrict v,
+__kernel void transport_fidelity(__global REAL* restrict u, __global REAL* restrict v,
                                __global const REAL* restrict obs, __global const REAL* restrict w,
                                LIST_ARGS)
 {

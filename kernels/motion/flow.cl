@@ -196,7 +196,7 @@ __kernel void flow_median3(__global const float* src, __global float* dst,
 
 // Backward warp of every channel: dst[c](x) = src[c](x + flow(x)), bicubic, clamped.
 // Global (nx rounded up, ny, channels).
-__kernel void warp_image(__global const float* src, __global const float* u,
+__kernel void flow_warp_image(__global const float* src, __global const float* u,
                          __global const float* v, __global float* dst,
                          const int nx, const int ny) {
     const int x = get_global_id(0), y = get_global_id(1), c = get_global_id(2);

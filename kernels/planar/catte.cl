@@ -21,7 +21,7 @@ inline int mirror_index(int k, const int n)
     return clamp(k, 0, n - 1);
 }
 
-__kernel void gauss_rows(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void catte_gauss_rows(__global const REAL* restrict u, __global REAL* restrict v,
                          __global const REAL* restrict w, const int radius, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -35,7 +35,7 @@ __kernel void gauss_rows(__global const REAL* restrict u, __global REAL* restric
     MIRROR_GHOSTS(v);
 }
 
-__kernel void gauss_cols(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void catte_gauss_cols(__global const REAL* restrict u, __global REAL* restrict v,
                          __global const REAL* restrict w, const int radius, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -62,7 +62,7 @@ inline REAL catte_flux(const REAL d, const REAL ds, const REAL inv_k2)
 #endif
 }
 
-__kernel void perona_malik_catte_step(__global const REAL* restrict u,
+__kernel void catte_perona_malik_step(__global const REAL* restrict u,
                                       __global const REAL* restrict us,
                                       __global REAL* restrict v, const REAL dt,
                                       const REAL inv_k2, GRID_ARGS)

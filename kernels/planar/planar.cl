@@ -6,7 +6,7 @@
 #include "stencil.h"
 
 // Heat flow u_t = Lap u (thesis eq. 4.1), five-point Laplacian. Stable for dt <= 1/4.
-__kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void planar_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                         const REAL dt, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -30,7 +30,7 @@ inline REAL pm_flux(const REAL d, const REAL inv_k2)
 #endif
 }
 
-__kernel void perona_malik_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void planar_perona_malik_step(__global const REAL* restrict u, __global REAL* restrict v,
                                 const REAL dt, const REAL inv_k2, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -43,7 +43,7 @@ __kernel void perona_malik_step(__global const REAL* restrict u, __global REAL* 
 
 // Anisotropic (total variation) flow u_t = div(grad u / |grad u|_eps) (thesis eq. 4.9).
 // Every face coefficient is at most 1/eps, so dt <= eps/4 is stable.
-__kernel void tv_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void planar_tv_step(__global const REAL* restrict u, __global REAL* restrict v,
                       const REAL dt, const REAL eps2, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -56,7 +56,7 @@ __kernel void tv_step(__global const REAL* restrict u, __global REAL* restrict v
 // Rudin-Osher-Fatemi: u_t = div(grad u / |grad u|_eps) - lambda_c (u - u0), lambda per
 // channel read from the device (it may be updated there, see rof_lambda_*).
 // Stable for dt <= 1 / (4/eps + lambda).
-__kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void planar_rof_step(__global const REAL* restrict u, __global REAL* restrict v,
                        __global const REAL* restrict u0, __global const REAL* restrict lambda,
                        const REAL dt, const REAL eps2, GRID_ARGS)
 {
@@ -73,7 +73,7 @@ __kernel void rof_step(__global const REAL* restrict u, __global REAL* restrict 
 // with the same face fluxes gives  lambda = -sum_faces p . grad(u - u0) / sum (u - u0)^2,
 // and the target sum (u - u0)^2 = N sigma^2 makes the residual variance tend to sigma^2.
 // Pass 1: one partial sum of p . grad(u - u0) per interior row.
-__kernel void rof_lambda_rows(__global const REAL* restrict u, __global const REAL* restrict u0,
+__kernel void planar_rof_lambda_rows(__global const REAL* restrict u, __global const REAL* restrict u0,
                               __global REAL* restrict partial, const REAL eps2, GRID_ARGS)
 {
     REASSOCIATE_SUMS
@@ -89,7 +89,7 @@ __kernel void rof_lambda_rows(__global const REAL* restrict u, __global const RE
 }
 
 // Pass 2: one work-item per channel sums its rows and sets lambda (never negative).
-__kernel void rof_lambda_finish(__global const REAL* restrict partial,
+__kernel void planar_rof_lambda_finish(__global const REAL* restrict partial,
                                 __global REAL* restrict lambda, const int ny,
                                 const REAL inv_n_sigma2)
 {
@@ -104,7 +104,7 @@ __kernel void rof_lambda_finish(__global const REAL* restrict partial,
 #define HAS_WEIGHT 0
 #endif
 
-__kernel void curvature_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void planar_curvature_step(__global const REAL* restrict u, __global REAL* restrict v,
                              __global const REAL* restrict g, const REAL dt, const REAL eps,
                              GRID_ARGS)
 {

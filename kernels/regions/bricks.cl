@@ -106,13 +106,13 @@ INLINE void brick_stage(__global const REAL* restrict ls, __global const REAL* r
 #define BRICK_STAGE_CALL(second)                                                           \
     brick_stage(ls, aux, out, stats, mask, dt, eps2, lo, hi, scale, vmax, second, nbr,     \
                 brick_bits, nbricks, plane, per_item)
-__kernel void region_brick_euler(BRICK_STAGE_ARGS) { BRICK_STAGE_CALL(0); }
-__kernel void region_brick_heun(BRICK_STAGE_ARGS) { BRICK_STAGE_CALL(1); }
+__kernel void bricks_euler(BRICK_STAGE_ARGS) { BRICK_STAGE_CALL(0); }
+__kernel void bricks_heun(BRICK_STAGE_ARGS) { BRICK_STAGE_CALL(1); }
 
 // Rigid motion (regions.cl's advect_step) as a Heun stage: second = 0 writes out = ls +
 // dt L(ls), second = 1 averages out = (out + ls + dt L(ls)) / 2 (the lists' heun_average
 // of the second stage, the same values).
-__kernel void region_brick_advect(__global const REAL* restrict ls, __global REAL* restrict out,
+__kernel void bricks_advect(__global const REAL* restrict ls, __global REAL* restrict out,
                                   __global const uchar* restrict mask, const REAL dt,
                                   const REAL ux, const REAL uy, const REAL uz, const REAL lo,
                                   const REAL hi, const int second, BRICK_ARGS)
@@ -139,7 +139,7 @@ __kernel void region_brick_advect(__global const REAL* restrict ls, __global REA
 // ---- reinitialisation (regions.cl's extend_outer, reinit3d_targets, _step_pre, _heun_pre) --
 // The extension of the Phi-hat along Phi's normals; Phi itself is copied (so out equals ls
 // on every brick written, and the host swaps the two).
-__kernel void region_brick_extend(__global const REAL* restrict ls,
+__kernel void bricks_extend(__global const REAL* restrict ls,
                                   __global const uchar* restrict mask,
                                   __global REAL* restrict out, const REAL dt, const REAL lo,
                                   const REAL hi, BRICK_ARGS)
@@ -166,7 +166,7 @@ __kernel void region_brick_extend(__global const REAL* restrict ls,
 }
 
 // The subcell fix's targets (reinit.h's subcell_target_3d), -INFINITY outside the band.
-__kernel void region_brick_targets(__global const REAL* restrict u0,
+__kernel void bricks_targets(__global const REAL* restrict u0,
                                    __global const uchar* restrict mask,
                                    __global REAL* restrict target, BRICK_ARGS)
 {
@@ -189,7 +189,7 @@ __kernel void region_brick_targets(__global const REAL* restrict u0,
 
 // A stage of the reinitialisation's Heun step: out = u + dt L(u) (the first), or averaged
 // in place, out <- (out + u + dt L(u)) / 2 (the second, u the first stage's result).
-__kernel void region_brick_reinit_stage(__global const REAL* restrict u,
+__kernel void bricks_reinit_stage(__global const REAL* restrict u,
                                         __global const REAL* restrict u0,
                                         __global const REAL* restrict target,
                                         __global REAL* restrict out,
@@ -230,7 +230,7 @@ INLINE int interior(__global const int* restrict coords, const int b, const int 
 // cells along x (shifts), y and z (ORs of rows) in turn: a cube, as dilate_mask's passes.
 #define MY (BY + 2 * RING)
 #define MZ (BZ + 2 * RING)
-__kernel void region_brick_band_mask(__global const REAL* restrict phi,
+__kernel void bricks_band_mask(__global const REAL* restrict phi,
                                      __global uchar* restrict mask, __global uchar* restrict bits,
                                      __global const int* restrict coords,
                                      __global int* restrict flag, const REAL width,
@@ -304,7 +304,7 @@ INLINE int axis_code(const int x, const int side)
     return 2 | (x < REACH) | ((x >= side - REACH) << 2);  // bit 0: -1, bit 1: 0, bit 2: +1
 }
 
-__kernel void region_brick_flags(__global const REAL* restrict phi, __global int* restrict flags,
+__kernel void bricks_flags(__global const REAL* restrict phi, __global int* restrict flags,
                                  __global const int* restrict coords, const REAL width,
                                  const int nx, const int ny, const int nz, const int G,
                                  const int nbricks, const int per_item)
@@ -338,7 +338,7 @@ __kernel void region_brick_flags(__global const REAL* restrict phi, __global int
 // brick's facing side, Phi replaced by `far` with its sign (beyond the step band: the
 // reinitialisations that follow bring the cells they reach to distances). Work-item 0
 // also fills the sentinel brick 0 of every channel with FAR.
-__kernel void region_brick_remap(__global const REAL* restrict old, __global REAL* restrict out,
+__kernel void bricks_remap(__global const REAL* restrict old, __global REAL* restrict out,
                                  __global const int* restrict src, __global const int* restrict dir,
                                  const REAL far, const REAL sentinel, const int old_plane,
                                  const int plane, const int nbricks, const int per_item)

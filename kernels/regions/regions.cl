@@ -17,7 +17,7 @@
 #include "extend.h"
 #include "regions/regions.h"
 
-__kernel void region_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
+__kernel void regions_speed(__global const REAL* restrict phi, __global const REAL* restrict aux,
                            __global REAL* restrict speed, const REAL scale, const REAL vmax,
                            const int sx, const int sxy, RUN_ARGS)
 {
@@ -29,7 +29,7 @@ __kernel void region_speed(__global const REAL* restrict phi, __global const REA
 // Channel c > 0: Phi-hat <- Phi-hat + dt V (N_Phi . N_Phi-hat) |grad Phi-hat|: the surface's
 // velocity projected on Phi-hat's normal, used on the whole band (the thesis' extension),
 // with central-difference normals; eps2 keeps them finite where a function is flat.
-__kernel void region_step(__global const REAL* restrict ls, __global const REAL* restrict speed,
+__kernel void regions_step(__global const REAL* restrict ls, __global const REAL* restrict speed,
                           __global REAL* restrict out, const REAL dt, const REAL eps2,
                           const REAL lo, const REAL hi, const int sx, const int sxy, RUN_ARGS)
 {
@@ -93,14 +93,14 @@ INLINE void region_stage(__global const REAL* restrict ls, __global const REAL* 
 #define REGION_STAGE_CALL(second)                                                          \
     region_stage(ls, aux, out, stats, dt, eps2, lo, hi, scale, vmax, sx, sxy, second,     \
                  run_start, run_end, nruns, plane, runs_per_item)
-__kernel void region_euler(REGION_STAGE_ARGS) { REGION_STAGE_CALL(0); }
-__kernel void region_heun(REGION_STAGE_ARGS) { REGION_STAGE_CALL(1); }
+__kernel void regions_euler(REGION_STAGE_ARGS) { REGION_STAGE_CALL(0); }
+__kernel void regions_heun(REGION_STAGE_ARGS) { REGION_STAGE_CALL(1); }
 
 // Rigid motion with velocity (ux, uy, uz) (cells per unit time), every channel:
 // u <- u - dt U . grad u with slope-limited upwind differences per axis. For Phi-hat this is
 // beta-hat |grad Phi-hat| with beta-hat = U . N_Phi-hat: the projection of the surface's full
 // velocity (not only its normal part) on Phi-hat's normal.
-__kernel void advect_step(__global const REAL* restrict ls, __global REAL* restrict out,
+__kernel void regions_advect_step(__global const REAL* restrict ls, __global REAL* restrict out,
                           const REAL dt, const REAL ux, const REAL uy, const REAL uz,
                           const REAL lo, const REAL hi, const int sx, const int sxy, RUN_ARGS)
 {
@@ -126,7 +126,7 @@ __kernel void advect_step(__global const REAL* restrict ls, __global REAL* restr
     reinit_update_3d(u, u0, i, sx, sxy, dt, (REAL)SUBCELL_STEEP, (REAL)SUBCELL_TOL)
 
 // Heun's first stage: out = u + dt L(u).
-__kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL* restrict u0,
+__kernel void regions_reinit3d_step(__global const REAL* restrict u, __global const REAL* restrict u0,
                             __global REAL* restrict out, const REAL dt, const int sx,
                             const int sxy, RUN_ARGS)
 {
@@ -140,7 +140,7 @@ __kernel void reinit3d_step(__global const REAL* restrict u, __global const REAL
 // where stage1 = acc + dt L(acc) (reinit3d_step). acc is read and written only at the cell
 // itself, so the update in place is race-free; fusing saved the averaging sweep and its
 // buffer (one read of three volumes per iteration instead of two sweeps).
-__kernel void reinit3d_heun(__global REAL* restrict acc, __global const REAL* restrict stage1,
+__kernel void regions_reinit3d_heun(__global REAL* restrict acc, __global const REAL* restrict stage1,
                             __global const REAL* restrict u0, const REAL dt, const int sx,
                             const int sxy, RUN_ARGS)
 {
@@ -157,7 +157,7 @@ __kernel void reinit3d_heun(__global REAL* restrict acc, __global const REAL* re
 // vectors like the step's: a cell outside the band gets the target -INFINITY, so both
 // stages keep its value (reinit3d_heun_pre's average of two equal values is exact), and
 // its stale neighbours are never used (at 256^3 a sweep took about 2/3 of the time).
-__kernel void reinit3d_targets(__global const REAL* restrict u0,
+__kernel void regions_reinit3d_targets(__global const REAL* restrict u0,
                                __global const uchar* restrict inband,
                                __global REAL* restrict target, const int sx, const int sxy,
                                RUN_ARGS)
@@ -169,7 +169,7 @@ __kernel void reinit3d_targets(__global const REAL* restrict u0,
     }
 }
 
-__kernel void reinit3d_step_pre(__global const REAL* restrict u, __global const REAL* restrict u0,
+__kernel void regions_reinit3d_step_pre(__global const REAL* restrict u, __global const REAL* restrict u0,
                                 __global const REAL* restrict target, __global REAL* restrict out,
                                 const REAL dt, const int sx, const int sxy, RUN_ARGS)
 {
@@ -179,7 +179,7 @@ __kernel void reinit3d_step_pre(__global const REAL* restrict u, __global const 
     }
 }
 
-__kernel void reinit3d_heun_pre(__global REAL* restrict acc, __global const REAL* restrict stage1,
+__kernel void regions_reinit3d_heun_pre(__global REAL* restrict acc, __global const REAL* restrict stage1,
                                 __global const REAL* restrict u0,
                                 __global const REAL* restrict target, const REAL dt,
                                 const int sx, const int sxy, RUN_ARGS)
@@ -193,7 +193,7 @@ __kernel void reinit3d_heun_pre(__global REAL* restrict acc, __global const REAL
 // ---- band safety ---------------------------------------------------------------------------
 // flag[0] = 1 when a band cell lies within `margin` cells of the interior's border (the host
 // then stops: the surface grew out of its volume).
-__kernel void band_near_border(__global int* restrict flag, const int nx, const int ny,
+__kernel void regions_band_near_border(__global int* restrict flag, const int nx, const int ny,
                                const int nz, const int G, const int margin, const int sx,
                                const int sxy, LIST_ARGS)
 {
@@ -210,7 +210,7 @@ __kernel void band_near_border(__global int* restrict flag, const int nx, const 
 
 // out[g] = max |v| over the band cells of work-item g (the host takes the maximum of these
 // few values: the largest speed, for the next stable time step).
-__kernel void band_max_abs(__global const REAL* restrict v, __global REAL* restrict out,
+__kernel void regions_band_max_abs(__global const REAL* restrict v, __global REAL* restrict out,
                            LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
@@ -222,7 +222,7 @@ __kernel void band_max_abs(__global const REAL* restrict v, __global REAL* restr
 // Heun's (TVD Runge-Kutta 2) last stage, every channel: out = (u + stage2) / 2, where
 // stage2 is two Euler steps from u. Plain Euler with the slope-limited differences slowly
 // sharpens convex level sets (a translated sphere grew; docs/regions.md); Heun does not.
-__kernel void heun_average(__global const REAL* restrict u, __global const REAL* restrict stage2,
+__kernel void regions_heun_average(__global const REAL* restrict u, __global const REAL* restrict stage2,
                            __global REAL* restrict out, RUN_ARGS)
 {
     FOR_EACH_RUN_CELL(i) {
@@ -234,7 +234,7 @@ __kernel void heun_average(__global const REAL* restrict u, __global const REAL*
 // dst = src on the band's cells, every channel. The host keeps its work buffers equal to
 // the level sets outside the band (every write lands in the band), so syncing the band
 // replaces copies of whole volumes (at 256^3 a volume copy cost as much as 2 Heun steps).
-__kernel void copy_runs(__global const REAL* restrict src, __global REAL* restrict dst, RUN_ARGS)
+__kernel void regions_copy_runs(__global const REAL* restrict src, __global REAL* restrict dst, RUN_ARGS)
 {
     FOR_EACH_RUN_CELL(i) {
         const int j = chan + i;
@@ -245,7 +245,7 @@ __kernel void copy_runs(__global const REAL* restrict src, __global REAL* restri
 // mask[i] = 1 where |Phi| < width on the interior cells (Phi: channel 0). Work-item (y, z)
 // of the interior walks one row. (The same test as surface.cl's band_mask, kept here so
 // this file builds on its own.)
-__kernel void region_band_mask(__global const REAL* restrict phi, __global uchar* restrict mask,
+__kernel void regions_band_mask(__global const REAL* restrict phi, __global uchar* restrict mask,
                                const REAL width, const int nx, const int ny, const int nz,
                                const int sx, const int sxy, const int G)
 {
@@ -261,7 +261,7 @@ __kernel void region_band_mask(__global const REAL* restrict phi, __global uchar
 // holds a stale value, possibly far too large, and a value test would keep it out (and
 // frozen) while the surface sweeps past it. reach <= G, so reads stay in the buffer (ghost
 // entries of the masks are 0).
-__kernel void dilate_mask(__global const uchar* restrict src, __global uchar* restrict dst,
+__kernel void regions_dilate_mask(__global const uchar* restrict src, __global uchar* restrict dst,
                           const int stride, const int reach, const int nx, const int ny,
                           const int nz, const int sx, const int sxy, const int G)
 {
@@ -285,7 +285,7 @@ __kernel void dilate_mask(__global const uchar* restrict src, __global uchar* re
 // meeting the surface at right angles (a tilted Phi-hat, bent by the band's faded edges,
 // let a cap's boundary drift with the surface's motion; docs/regions.md).
 // Cells where `inband` is 0 (the runs' whole-vector padding) keep their values.
-__kernel void extend_outer(__global const REAL* restrict ls,
+__kernel void regions_extend_outer(__global const REAL* restrict ls,
                            __global const uchar* restrict inband, __global REAL* restrict out,
                            const REAL dt, const REAL lo, const REAL hi, const int sx,
                            const int sxy, RUN_ARGS)

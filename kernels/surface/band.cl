@@ -8,7 +8,7 @@
 
 // Closest points x - psi grad(psi) / |grad(psi)| of the band cells, in padded index units
 // (grad by central differences; psi in grid units = world units / spacing).
-__kernel void closest_points(__global const REAL* restrict psi, const REAL inv_h,
+__kernel void band_closest_points(__global const REAL* restrict psi, const REAL inv_h,
                              __global REAL* restrict cpx, __global REAL* restrict cpy,
                              __global REAL* restrict cpz, const int sx, const int sxy,
                              LIST_ARGS)
@@ -40,7 +40,7 @@ INLINE int first_node(const REAL p, const int n, const int interp)
 // floor(p) in frac[k], frac[nlist + k], frac[2 nlist + k]. The same nodes and weights as
 // surface/extend.cl's interpolate(); the re-extension then needs no floor, clamp or index
 // arithmetic.
-__kernel void cp_stencils(__global const REAL* restrict cpx, __global const REAL* restrict cpy,
+__kernel void band_cp_stencils(__global const REAL* restrict cpx, __global const REAL* restrict cpy,
                           __global const REAL* restrict cpz, const int sx, const int sxy,
                           const int pnx, const int pny, const int pnz, const int interp,
                           __global int* restrict base, __global REAL* restrict frac, LIST_ARGS)
@@ -60,7 +60,7 @@ __kernel void cp_stencils(__global const REAL* restrict cpx, __global const REAL
 // The cells a step must update: the interpolation nodes of the band's closest points
 // (base from cp_stencils; `nodes` per axis, 4 or 2). Every other band cell's new value comes
 // from re-extension alone. Concurrent work-items may mark the same node: they all write 1.
-__kernel void mark_nodes(__global const int* restrict base, __global uchar* restrict mask,
+__kernel void band_mark_nodes(__global const int* restrict base, __global uchar* restrict mask,
                          const int sx, const int sxy, const int nodes, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
@@ -73,7 +73,7 @@ __kernel void mark_nodes(__global const int* restrict base, __global uchar* rest
 // The cells the steps read around the listed ones: the cell, its 6 face and 12 edge
 // neighbours (appendix E's one-sided stencils, over all eight side choices). These need
 // fresh re-extended values after every step.
-__kernel void mark_stencil(__global uchar* restrict mask, const int sx, const int sxy,
+__kernel void band_mark_stencil(__global uchar* restrict mask, const int sx, const int sxy,
                            LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);

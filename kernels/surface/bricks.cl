@@ -177,7 +177,7 @@ INLINE REAL inv_normal_length(__global const REAL* p, const int q, const int psx
 // within 2 of its faces). One explicit step v = u + r div(...) (r = dt / h^2) on the node
 // rows of the bricks holding a NODE cell, one channel per get_global_id(1). sx, sy, sz: the
 // one-sided directions (+1 forward gradient, -1 backward).
-__kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void bricks_heat_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, const REAL r, const int sx,
                               const int sy, const int sz, __global const uchar* restrict rows,
                               BRICK_ARGS)
@@ -238,7 +238,7 @@ __kernel void brick_heat_step(__global const REAL* restrict u, __global REAL* re
         store_stepped(v + (c) * vplane, b, before, x, y, z, out_);                        \
     }
 
-__kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void bricks_flow_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, __global const REAL* restrict dir,
                               __global const REAL* restrict u0, const REAL r, const REAL dt,
                               __global const REAL* restrict lambda, const REAL e2, const int sx,
@@ -297,7 +297,7 @@ __kernel void brick_flow_step(__global const REAL* restrict u, __global REAL* re
 
 // The per-cell terms of TV's dynamic lambda (C.2) at the NODE cells (cell_bits, plain brick
 // layout), into num, area and resid (plain brick layout; the other cells keep their zeros).
-__kernel void brick_lambda_terms(__global const REAL* restrict u, __global const REAL* restrict u0,
+__kernel void bricks_lambda_terms(__global const REAL* restrict u, __global const REAL* restrict u0,
                                  __global const REAL* restrict psi, const REAL inv_h,
                                  const REAL eps_cells, const REAL e2, const int sx, const int sy,
                                  const int sz, __global const uchar* restrict cell_bits,
@@ -327,7 +327,7 @@ __kernel void brick_lambda_terms(__global const REAL* restrict u, __global const
 // ---- Turk's reaction-diffusion (surface/heat.cl's turk_step) ---------------------------------
 // The two chemicals' tiles of halo 1; dir (ALONG) as brick_flow_step's, beta in the plain
 // brick layout. On CPUs both chemicals' fluxes are computed once per brick (flux tables).
-__kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void bricks_turk_step(__global const REAL* restrict u, __global REAL* restrict v,
                               __global const REAL* restrict psi, __global const REAL* restrict dir,
                               __global const REAL* restrict beta, const REAL dt, const REAL da,
                               const REAL db, const REAL s, const int sx, const int sy,
@@ -388,7 +388,7 @@ __kernel void brick_turk_step(__global const REAL* restrict u, __global REAL* re
 // first step, made on the device from the plain layout (channel per get_global_id(1)), for
 // the bricks with a band cell (no stencil starts in the others). Next brick places not
 // stored read the sentinel's zeros (no stencil reaches them: every node's brick is stored).
-__kernel void brick_to_apron(__global const REAL* restrict src, __global REAL* restrict dst,
+__kernel void bricks_to_apron(__global const REAL* restrict src, __global REAL* restrict dst,
                              BRICK_ARGS)
 {
     __global const REAL* s = src + get_global_id(1) * plane;
@@ -420,7 +420,7 @@ __kernel void brick_to_apron(__global const REAL* restrict src, __global REAL* r
 // than the whole list re-extension on dense storage.)
 // (REAL4, LOAD4, node_weights and NODES: surface.h.)
 
-__kernel void brick_extend_cp(__global const REAL* restrict src, __global REAL* restrict dst,
+__kernel void bricks_extend_cp(__global const REAL* restrict src, __global REAL* restrict dst,
                               __global const int* restrict base,
                               __global const REAL* restrict frac, const int src_plane,
                               LIST_ARGS)

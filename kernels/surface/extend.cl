@@ -120,7 +120,7 @@ __kernel void extend_cp(__global const REAL* restrict src, __global REAL* restri
 }
 
 // Values of u at arbitrary points (padded index units), out laid out (NC, npoints).
-__kernel void sample_points(__global const REAL* restrict u, __global const REAL* restrict px,
+__kernel void extend_sample_points(__global const REAL* restrict u, __global const REAL* restrict px,
                             __global const REAL* restrict py, __global const REAL* restrict pz,
                             const int npoints, __global REAL* restrict out, const int sx,
                             const int sxy, const int pnx, const int pny, const int pnz,

@@ -16,7 +16,7 @@
 #define FIDELITY 0
 #endif
 
-__kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void flows_step(__global const REAL* restrict u, __global REAL* restrict v,
                         __global const REAL* restrict psi, __global const REAL* restrict dir,
                         __global const REAL* restrict u0, const REAL r, const REAL dt,
                         __global const REAL* restrict lambda, const REAL e2, const int ex,
@@ -37,7 +37,7 @@ __kernel void flow_step(__global const REAL* restrict u, __global REAL* restrict
 }
 
 // The per-cell terms of TV's dynamic lambda (C.2) over the node band (lambda_terms_cell).
-__kernel void tv_lambda_terms(__global const REAL* restrict u, __global const REAL* restrict u0,
+__kernel void flows_tv_lambda_terms(__global const REAL* restrict u, __global const REAL* restrict u0,
                               __global const REAL* restrict psi, const REAL inv_h,
                               const REAL eps_cells, const REAL e2, const int ex, const int ey,
                               const int ez, const int sx, const int sxy,
@@ -57,7 +57,7 @@ __kernel void tv_lambda_terms(__global const REAL* restrict u, __global const RE
 
 // Partial sums of a band-length array: work-item g adds entries [g*chunk, (g+1)*chunk).
 // The host adds the few partials (band / chunk numbers).
-__kernel void chunk_sum(__global const REAL* restrict a, const int n, const int chunk,
+__kernel void flows_chunk_sum(__global const REAL* restrict a, const int n, const int chunk,
                         __global REAL* restrict partial)
 {
     const int g = get_global_id(0);
@@ -80,7 +80,7 @@ __kernel void chunk_sum(__global const REAL* restrict a, const int n, const int 
 // residual is sigma^2 (docs/surface.md measures how close on a sphere). inv_sigma2 = 0
 // keeps f = 1: plain (C.2).
 // One work-item: the partial sums are a few hundred numbers.
-__kernel void tv_lambda_update(__global const REAL* restrict num, __global const REAL* restrict area,
+__kernel void flows_tv_lambda_update(__global const REAL* restrict num, __global const REAL* restrict area,
                                __global const REAL* restrict resid, const int groups,
                                const REAL scale, const REAL inv_sigma2, const REAL lam_max,
                                __global REAL* restrict lambda, __global REAL* restrict state,

@@ -18,7 +18,7 @@ __kernel void heat_step(__global const REAL* restrict u, __global REAL* restrict
 }
 
 // ---- reaction-diffusion (Turk), eqs. (4.12)-(4.14), in grid units (turk_cell: surface/flux.h)
-__kernel void turk_step(__global const REAL* restrict u, __global REAL* restrict v,
+__kernel void heat_turk_step(__global const REAL* restrict u, __global REAL* restrict v,
                         __global const REAL* restrict psi, __global const REAL* restrict dir,
                         __global const REAL* restrict beta, const REAL dt, const REAL da,
                         const REAL db, const REAL s, const int ex, const int ey, const int ez,

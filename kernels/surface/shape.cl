@@ -10,7 +10,7 @@
 // negative inside). For a distance function the directions are constant along the normals,
 // so every band cell gets its own values, no interpolation. Outputs per band entry k: the major direction (larger curvature) in
 // dir[0..2][k], the minor in dir[3..5][k] and the curvatures in curv[0..1][k] (world units).
-__kernel void principal_directions(__global const REAL* restrict psi, const REAL inv_h,
+__kernel void shape_principal_directions(__global const REAL* restrict psi, const REAL inv_h,
                                    __global REAL* restrict dir, __global REAL* restrict curv,
                                    const int sx, const int sxy, LIST_ARGS)
 {

@@ -133,7 +133,7 @@ INLINE void adaptive_stats_store(__global REAL* restrict stats, const AdaptiveSt
     adaptive_cell(u, f1, f2, band, prior, u_out, f1_out, region, i, dt, eps_f2, eps_u2,   \
                   near, lam, delta, noise2, mu, kd, sx, fplane, &s)
 
-__kernel void morph_adaptive(ADAPTIVE_ARGS, LIST_ARGS)
+__kernel void adaptive_morph_adaptive(ADAPTIVE_ARGS, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
     AdaptiveStats s = {0, 0, 0, 0, 0, 0};
@@ -142,7 +142,7 @@ __kernel void morph_adaptive(ADAPTIVE_ARGS, LIST_ARGS)
 }
 
 // The same over the band's bricks (bricks2d.h), at the cells where band > 0.
-__kernel void morph_adaptive_bricks(ADAPTIVE_ARGS, BRICK2D_ARGS)
+__kernel void adaptive_morph_adaptive_bricks(ADAPTIVE_ARGS, BRICK2D_ARGS)
 {
     AdaptiveStats s = {0, 0, 0, 0, 0, 0};
     FOR_EACH_BRICK_CELL(i) {

@@ -29,7 +29,7 @@
 // around the cell, its coordinates clamped to the interior (the frame's edge repeats).
 // A local change of brightness and contrast, I -> a I + b with a > 0 slowly varying,
 // leaves it unchanged up to eps.
-__kernel void local_contrast(__global const REAL* restrict img, __global REAL* restrict out,
+__kernel void features_local_contrast(__global const REAL* restrict img, __global REAL* restrict out,
                              const int r, const REAL eps2, const REAL scale, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -190,7 +190,7 @@ INLINE void morph_stats_store(__global REAL* restrict stats, const MorphStats* s
     morph_cell(u, f1, f2, band, prior, u_out, f1_out, i, dt, eps_f2, eps_u2, near, lam,   \
                delta, sx, fplane, &s)
 
-__kernel void morph_track(MORPH_ARGS, LIST_ARGS)
+__kernel void features_morph_track(MORPH_ARGS, LIST_ARGS)
 {
     LIST_RANGE(k0, k1, chan);
     MorphStats s = {0, 0, 0, 0, 0, 0};
@@ -199,7 +199,7 @@ __kernel void morph_track(MORPH_ARGS, LIST_ARGS)
 }
 
 // The same step over the band's bricks (bricks2d.h), at the cells where band > 0.
-__kernel void morph_track_bricks(MORPH_ARGS, BRICK2D_ARGS)
+__kernel void features_morph_track_bricks(MORPH_ARGS, BRICK2D_ARGS)
 {
     MorphStats s = {0, 0, 0, 0, 0, 0};
     FOR_EACH_BRICK_CELL(i) {
@@ -213,7 +213,7 @@ __kernel void morph_track_bricks(MORPH_ARGS, BRICK2D_ARGS)
 // cell by cell: per brick row, each tile column's vertical sums are updated by one row in
 // and one out, then slid along the row. About 3x fewer reads and adds than 49 per cell; the
 // sums round differently from discrepancy's, so results agree with it to rounding only.
-__kernel void morph_track_tiled(MORPH_ARGS, BRICK2D_ARGS)
+__kernel void features_morph_track_tiled(MORPH_ARGS, BRICK2D_ARGS)
 {
     MorphStats s = {0, 0, 0, 0, 0, 0};
     const int b0 = get_global_id(0) * per_item, b1 = min(b0 + per_item, nbricks);

@@ -16,7 +16,7 @@
 // ring), 0 elsewhere and in the outer `margin` cells of the interior, which stay frozen
 // (they hold edge-replicated data, so band stencils never reach the ghosts and no ghost
 // refresh is needed between steps). Ghost entries of `band` are never written.
-__kernel void mark_band(__global const REAL* restrict u, __global uchar* restrict band,
+__kernel void levelset_mark_band(__global const REAL* restrict u, __global uchar* restrict band,
                         const REAL w, const int margin, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -34,7 +34,7 @@ __kernel void mark_band(__global const REAL* restrict u, __global uchar* restric
 // at most G + 1 cells past an interior row's end, into the next or previous ghost
 // column, where the band is 0), then dilate_band_cols along y, with the rows clamped to
 // the buffer. `rows` starts as zeros, so its ghost entries read as 0.
-__kernel void dilate_band_rows(__global const uchar* restrict band, __global uchar* restrict rows,
+__kernel void levelset_dilate_band_rows(__global const uchar* restrict band, __global uchar* restrict rows,
                                const int reach, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -44,7 +44,7 @@ __kernel void dilate_band_rows(__global const uchar* restrict band, __global uch
     }
 }
 
-__kernel void dilate_band_cols(__global const uchar* restrict rows, __global uchar* restrict near,
+__kernel void levelset_dilate_band_cols(__global const uchar* restrict rows, __global uchar* restrict near,
                                const int reach, const int margin, GRID_ARGS)
 {
     FOR_EACH_CELL(i) {
@@ -62,14 +62,14 @@ __kernel void dilate_band_cols(__global const uchar* restrict rows, __global uch
 // phi_t + S(phi0) (|grad phi| - 1) = 0, explicit Godunov steps; cells beside the interface
 // (phi0 changes sign towards a 4-neighbour) use Russo and Smereka's subcell fix as published
 // (reinit.h's reinit_update_2d), so the zero level set does not move.
-__kernel void reinit_step(__global const REAL* restrict phi, __global const REAL* restrict phi0,
+__kernel void levelset_reinit_step(__global const REAL* restrict phi, __global const REAL* restrict phi0,
                           __global REAL* restrict out, const REAL dt, GRID_ARGS)
 {
     FOR_EACH_CELL(i) out[i] = reinit_update_2d(phi, phi0, i, sx, dt);
 }
 
 // The same update over a compacted list of cells (a band).
-__kernel void reinit_step_list(__global const REAL* restrict phi,
+__kernel void levelset_reinit_step_list(__global const REAL* restrict phi,
                                __global const REAL* restrict phi0, __global REAL* restrict out,
                                const REAL dt, const int sx, LIST_ARGS)
 {
@@ -81,7 +81,7 @@ __kernel void reinit_step_list(__global const REAL* restrict phi,
 }
 
 // The same update over the bricks of a band (bricks2d.h), at the cells where cells > 0.
-__kernel void reinit_step_bricks(__global const REAL* restrict phi,
+__kernel void levelset_reinit_step_bricks(__global const REAL* restrict phi,
                                  __global const REAL* restrict phi0, __global REAL* restrict out,
                                  __global const uchar* restrict cells, const REAL dt,
                                  BRICK2D_ARGS)
@@ -93,7 +93,7 @@ __kernel void reinit_step_bricks(__global const REAL* restrict phi,
 
 // bricks[b] = 1 where brick b (bx + nbx by, over the movable region) holds a cell with
 // mask > 0: one work-item per brick.
-__kernel void mark_bricks(__global const uchar* restrict mask, __global uchar* restrict flags,
+__kernel void levelset_mark_bricks(__global const uchar* restrict mask, __global uchar* restrict flags,
                           const int nbx, const int nby, const int x0, const int y0,
                           const int x1, const int y1, const int rs)
 {
@@ -109,7 +109,7 @@ __kernel void mark_bricks(__global const uchar* restrict mask, __global uchar* r
 // ---- features --------------------------------------------------------------------------
 
 // Edge map |grad I| by central differences.
-__kernel void gradient_magnitude(__global const REAL* restrict img, __global REAL* restrict out,
+__kernel void levelset_gradient_magnitude(__global const REAL* restrict img, __global REAL* restrict out,
                                  GRID_ARGS)
 {
     FOR_EACH_CELL(i) {

@@ -59,7 +59,7 @@ __kernel void region_moments(__global const REAL* restrict u, __global const REA
 #ifndef RADIUS
 #define RADIUS 9
 #endif
-__kernel void blur_cols(__global const REAL* restrict src, __global REAL* restrict out,
+__kernel void region_blur_cols(__global const REAL* restrict src, __global REAL* restrict out,
                         __constant REAL* restrict w, const int nx, const int ny,
                         const int planes)
 {
@@ -76,7 +76,7 @@ __kernel void blur_cols(__global const REAL* restrict src, __global REAL* restri
 }
 
 // out = src blurred along rows (x), as blur_cols.
-__kernel void blur_rows(__global const REAL* restrict src, __global REAL* restrict out,
+__kernel void region_blur_rows(__global const REAL* restrict src, __global REAL* restrict out,
                         __constant REAL* restrict w, const int nx, const int ny,
                         const int planes)
 {

@@ -132,11 +132,11 @@ def read_only_folder(tmp_path):
     folder.chmod(0o555)
     immutable = False
     try:
-        (folder / "probe").touch()
+        (folder / "probe_double").touch()
     except OSError:
         pass
     else:
-        (folder / "probe").unlink()
+        (folder / "probe_double").unlink()
         immutable = (
             subprocess.run(
                 ["chattr", "+i", str(folder)], capture_output=True, check=False

@@ -102,7 +102,7 @@ def test_list_kernel_touches_only_listed_cells(runtime, rng):
     dst = Field.from_host(grid, np.zeros((2, ny, nx)))
     lst = index_list(grid, mask)
     grid.launch_list(
-        grid.kernel("common/fields.cl", "copy_listed"), lst, src.data.data, dst.data.data
+        grid.kernel("common/fields.cl", "fields_copy_listed"), lst, src.data.data, dst.data.data
     )
     out = dst.to_host()
     expected = np.where(mask[None], src.to_host(), 0)

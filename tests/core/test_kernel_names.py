@@ -1,7 +1,7 @@
 """Every kernel that the host code asks for by name exists in the kernel file it names.
 
 A kernel is looked up by strings (`runtime.kernel("inpainting/transport.cl",
-"inpaint_transport")`), so a renamed or removed kernel would only fail when that code path
+"transport_step")`), so a renamed or removed kernel would only fail when that code path
 runs; this test reads the sources instead and fails at once.
 """
 
@@ -93,4 +93,20 @@ def test_each_module_declares_the_kernel_files_it_uses():
                 f"{path.relative_to(ROOT)}: KERNEL_FILES = {sorted(declared or ())}, "
                 f"its lookups name {sorted(used)}"
             )
+    assert not wrong, "\n".join(wrong)
+
+
+def test_every_kernel_is_named_after_its_file():
+    """The naming rule `<file>_<verb>`: `planar_heat_step` is in planar.cl, and no two files
+    define the same kernel name, so a name in a profile or a log leads to one file."""
+    wrong, owner = [], {}
+    for path in sorted(KERNEL_DIR.rglob("*.cl")):
+        for name in DEFINED.findall(path.read_text()):
+            rel = path.relative_to(KERNEL_DIR).as_posix()
+            if not name.startswith(path.stem + "_"):
+                wrong.append(f"{rel}: {name} does not start with {path.stem}_")
+            if name in owner:
+                wrong.append(f"{rel}: {name} is also defined in {owner[name]}")
+            owner[name] = rel
+    assert len(owner) > 100, "the pattern no longer finds the kernels"
     assert not wrong, "\n".join(wrong)

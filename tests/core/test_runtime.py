@@ -73,8 +73,8 @@ def test_no_platform_names_the_fix(monkeypatch):
 
 
 def test_kernels_are_built_once_and_reused(runtime):
-    k1 = runtime.kernel("planar/planar.cl", "heat_step")
-    k2 = runtime.kernel("planar/planar.cl", "heat_step")
+    k1 = runtime.kernel("planar/planar.cl", "planar_heat_step")
+    k2 = runtime.kernel("planar/planar.cl", "planar_heat_step")
     assert k1 is k2
     assert runtime.program("planar/planar.cl") is runtime.program("planar/planar.cl")
     plain = runtime.program("planar/planar.cl")
@@ -155,9 +155,9 @@ def test_kernels_launch_under_the_runtime_lock_and_pickle_by_name():
     import pickle
 
     runtime = rt_mod.get_runtime("cpu")
-    k = runtime.kernel("common/fields.cl", "fill_ghost_rows")
+    k = runtime.kernel("common/fields.cl", "fields_fill_ghost_rows")
     assert isinstance(k, rt_mod.Kernel) and k._lock is runtime.lock
-    assert k.function_name == "fill_ghost_rows"  # attributes reach pyopencl's kernel
+    assert k.function_name == "fields_fill_ghost_rows"  # attributes reach pyopencl's kernel
     assert pickle.loads(pickle.dumps(k)) is k  # same process: the cached kernel
     assert pickle.loads(pickle.dumps(runtime)) is runtime
 
@@ -276,10 +276,10 @@ def test_profile_prints_each_kernels_time_at_exit():
     )
     lines = out.stderr.splitlines()
     assert any(line.startswith("clpde profile: ") for line in lines), out.stderr
-    heat = [line.split() for line in lines if line.endswith("planar/planar.cl:heat_step")]
+    heat = [line.split() for line in lines if line.endswith("planar/planar.cl:planar_heat_step")]
     assert len(heat) == 1 and heat[0][2] == "7" and float(heat[0][0]) >= 0, out.stderr
     # transport's kernels set their arguments once and are enqueued bare: counted too
-    assert any(line.endswith("inpainting/transport.cl:inpaint_transport") for line in lines)
+    assert any(line.endswith("inpainting/transport.cl:transport_step") for line in lines)
     quiet = subprocess.run(
         [sys.executable, "-c", code],
         env={k: v for k, v in os.environ.items() if k != "CLPDE_PROFILE"},

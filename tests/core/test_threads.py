@@ -119,7 +119,8 @@ def test_concurrent_first_use_builds_one_runtime_and_program():
         got = list(pool.map(lambda _: rt.get_runtime(), range(8)))
         kernels = list(
             pool.map(
-                lambda _: runtime.kernel("planar/planar.cl", "heat_step", HALO_TEST=3), range(8)
+                lambda _: runtime.kernel("planar/planar.cl", "planar_heat_step", HALO_TEST=3),
+                range(8),
             )
         )
     assert all(r is runtime for r in got)

@@ -105,7 +105,7 @@ def test_line_kernels_match_reference(runtime, rng):
 
 def test_fill_kernel_matches_reference(runtime, rng):
     q = runtime.queue
-    k_fill = runtime.kernel("film/fill.cl", "temporal_fill")
+    k_fill = runtime.kernel("film/fill.cl", "fill_temporal")
     C, ny, nx, K = 2, 11, 14, 3
     F = rng.random((C, ny, nx))
     G = F.mean(0)

@@ -21,14 +21,14 @@ def test_gaussian_passes_match_reference(runtime, rng, presmooth, ny, nx):
     wd = cla.to_device(runtime.queue, w.astype(np.float32))
     src, tmp, out = Field.from_host(grid, u), Field.empty(grid), Field.empty(grid)
     grid.launch(
-        grid.kernel("planar/catte.cl", "gauss_rows"),
+        grid.kernel("planar/catte.cl", "catte_gauss_rows"),
         src.data.data,
         tmp.data.data,
         wd.data,
         np.int32(len(w) - 1),
     )
     grid.launch(
-        grid.kernel("planar/catte.cl", "gauss_cols"),
+        grid.kernel("planar/catte.cl", "catte_gauss_cols"),
         tmp.data.data,
         out.data.data,
         wd.data,
@@ -48,7 +48,7 @@ def test_catte_step_matches_reference(runtime, rng, edge):
     us = ref.gauss_smooth(u, gaussian_weights(1.2))
     cur, smooth, nxt = Field.from_host(grid, u), Field.from_host(grid, us), Field.empty(grid)
     kappa, dt = 0.1, 0.2
-    k = grid.kernel("planar/catte.cl", "perona_malik_catte_step", EDGE_STOP=int(edge == "rational"))
+    k = grid.kernel("planar/catte.cl", "catte_perona_malik_step", EDGE_STOP=int(edge == "rational"))
     grid.launch(
         k, cur.data.data, smooth.data.data, nxt.data.data, np.float32(dt), np.float32(1 / kappa**2)
     )

@@ -41,7 +41,7 @@ def inputs(rng):
 @pytest.mark.parametrize("kind", ["random", "structured"])
 def test_heat_kernel_matches_reference(runtime, rng, kind):
     u = inputs(rng)[kind]
-    out, _ = device_step(runtime, "heat_step", u, np.float32(0.2))
+    out, _ = device_step(runtime, "planar_heat_step", u, np.float32(0.2))
     np.testing.assert_allclose(out, ref.heat_step(ref.pad_neumann(u), 0.2), atol=2e-6)
 
 
@@ -52,7 +52,7 @@ def test_perona_malik_kernel_matches_reference(runtime, rng, kind, edge):
     kappa = 0.1
     out, _ = device_step(
         runtime,
-        "perona_malik_step",
+        "planar_perona_malik_step",
         u,
         np.float32(0.2),
         np.float32(1 / kappa**2),
@@ -66,7 +66,7 @@ def test_perona_malik_kernel_matches_reference(runtime, rng, kind, edge):
 def test_tv_kernel_matches_reference(runtime, rng, kind):
     u = inputs(rng)[kind]
     eps = 0.05
-    out, _ = device_step(runtime, "tv_step", u, np.float32(0.01), np.float32(eps**2))
+    out, _ = device_step(runtime, "planar_tv_step", u, np.float32(0.01), np.float32(eps**2))
     np.testing.assert_allclose(out, ref.tv_step(ref.pad_neumann(u), 0.01, eps), atol=3e-6)
 
 
@@ -82,7 +82,7 @@ def test_curvature_kernel_matches_reference(runtime, rng, kind, weighted):
         wfield = Field.from_host(wgrid, weight[None])
         out, _ = device_step(
             runtime,
-            "curvature_step",
+            "planar_curvature_step",
             u,
             np.float32(0.2),
             np.float32(eps),
@@ -92,7 +92,12 @@ def test_curvature_kernel_matches_reference(runtime, rng, kind, weighted):
     else:
         dummy = Field.from_host(Grid(runtime, nx, ny, 1), np.zeros((1, ny, nx)))
         out, _ = device_step(
-            runtime, "curvature_step", u, np.float32(0.2), np.float32(eps), extra_fields=(dummy,)
+            runtime,
+            "planar_curvature_step",
+            u,
+            np.float32(0.2),
+            np.float32(eps),
+            extra_fields=(dummy,),
         )
     expected = ref.curvature_step(ref.pad_neumann(u), 0.2, eps, weight)
     np.testing.assert_allclose(out, expected, atol=5e-5)
@@ -277,7 +282,7 @@ def test_steps_write_their_own_mirror_ghosts(runtime, rng, geometry, ghost):
     cur = Field.from_host(grid, rng.random((nc, ny, nx)))
     nxt = Field.from_host(grid, np.full((nc, ny, nx), np.nan))
     nxt.data.fill(np.nan)
-    kernel = grid.kernel("planar/planar.cl", "heat_step")
+    kernel = grid.kernel("planar/planar.cl", "planar_heat_step")
     if geometry == "cpu-rows":
         gsize, lsize, xrun = (1, ny, nc), (1, 1, 1), nx
     else:

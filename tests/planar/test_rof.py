@@ -115,7 +115,7 @@ def test_gradient_kernels_match_reference(runtime, rng, kind):
     lam_dev = cla.to_device(runtime.queue, lam)
     eps, dt = 0.05, 0.01
     grid.launch(
-        grid.kernel("planar/planar.cl", "rof_step"),
+        grid.kernel("planar/planar.cl", "planar_rof_step"),
         cur.data.data,
         nxt.data.data,
         orig.data.data,
@@ -128,7 +128,7 @@ def test_gradient_kernels_match_reference(runtime, rng, kind):
 
     partial = cla.empty(runtime.queue, (nc, ny), np.float32)
     grid.launch(
-        grid.kernel("planar/planar.cl", "rof_lambda_rows"),
+        grid.kernel("planar/planar.cl", "planar_rof_lambda_rows"),
         cur.data.data,
         orig.data.data,
         partial.data,
@@ -136,7 +136,7 @@ def test_gradient_kernels_match_reference(runtime, rng, kind):
     )
     sigma2 = 0.01
     for c in range(nc):
-        grid.kernel("planar/planar.cl", "rof_lambda_finish")(
+        grid.kernel("planar/planar.cl", "planar_rof_lambda_finish")(
             runtime.queue,
             (1,),
             None,

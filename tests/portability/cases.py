@@ -155,7 +155,7 @@ def _volumes():
 CASES = {
     "diffuse": _diffuse,
     "denoise": _denoise,
-    "inpaint_transport": _inpaint("transport", max_steps=4),
+    "transport_step": _inpaint("transport", max_steps=4),
     "inpaint_coherence": _inpaint("coherence"),
     "inpaint_navier_stokes": _inpaint("navier-stokes", size=12, max_iter=1),
     "track_lists": _track(),

@@ -70,7 +70,7 @@ def test_a_kernel_that_fits_nowhere_is_refused_before_any_work(monkeypatch):
 
 def test_a_launch_the_device_refuses_is_clpdes_error_not_pyopencls():
     runtime = rt_mod.get_runtime()
-    kernel = runtime.kernel("planar/planar.cl", "heat_step")
+    kernel = runtime.kernel("planar/planar.cl", "planar_heat_step")
     u = cl.Buffer(runtime.ctx, cl.mem_flags.READ_WRITE, 4 * 64)
     too_many = 2 * runtime.device.max_work_group_size
     args = (np.float32(0.1), *(np.int32(a) for a in (4, 4, 6, 36, 1, 1)))

@@ -133,7 +133,7 @@ def test_kernels_run_clean_under_oclgrind(limits, oclgrind_runs, pocl_results):
     assert log.strip() == "", f"Oclgrind reported:\n{log[:3000]}"
     launched = json.loads((tmp_path / "kernels.json").read_text())
     if limits == "opencl-minimum":  # the kernel Oclgrind could not find before
-        assert "tracking/adaptive.cl:morph_adaptive" in launched
+        assert "tracking/adaptive.cl:adaptive_morph_adaptive" in launched
     for name in names:
         got = np.load(tmp_path / f"{name}.npz")
         want = pocl_results(name)

@@ -81,10 +81,10 @@ def test_brick_stages_match_reference(runtime, rng, speed, mode):
         ls, aux, start, step, 0.3, 1e-12, lo, hi, 0.7, mode, tracker.vmax, nc, g.volume, g.sx, g.sxy
     )
     nxt = tracker.cur.copy()  # bricks without a step cell are not written
-    tracker._stage("region_brick_euler", tracker.cur, nxt, 0.3)
+    tracker._stage("bricks_euler", tracker.cur, nxt, 0.3)
     half = len(tracker._stats) // 2
     assert tracker._stats.get()[:half].max() == pytest.approx(fastest, rel=1e-12)
-    tracker._stage("region_brick_heun", tracker.cur, start_dev, 0.3)
+    tracker._stage("bricks_heun", tracker.cur, start_dev, 0.3)
     other = np.ones(g.volume, bool)
     other[step] = False
     stored = np.zeros(g.volume, bool)
@@ -118,7 +118,7 @@ def test_brick_reinit_and_extension_match_reference(runtime, rng):
     lo, hi = 0.8, 1.5
     out = u_dev.copy()
     tracker._launch(
-        "region_brick_extend",
+        "bricks_extend",
         u_dev.data,
         tracker._mask.data,
         out.data,
@@ -133,10 +133,10 @@ def test_brick_reinit_and_extension_match_reference(runtime, rng):
     np.testing.assert_array_equal(got[0, stored], u.reshape(nc, -1)[0, stored])
 
     target = cla.empty_like(u_dev)
-    tracker._launch("region_brick_targets", u0_dev.data, tracker._mask.data, target.data)
+    tracker._launch("bricks_targets", u0_dev.data, tracker._mask.data, target.data)
     stage1 = u_dev.copy()
     tracker._launch(
-        "region_brick_reinit_stage",
+        "bricks_reinit_stage",
         u_dev.data,
         u0_dev.data,
         target.data,
@@ -151,7 +151,7 @@ def test_brick_reinit_and_extension_match_reference(runtime, rng):
     np.testing.assert_array_equal(got[:, other], u.reshape(nc, -1)[:, other])
     s1 = got.reshape(-1)
     tracker._launch(
-        "region_brick_reinit_stage",
+        "bricks_reinit_stage",
         stage1.data,
         u0_dev.data,
         target.data,

@@ -61,7 +61,7 @@ def test_region_speed_matches_reference(runtime, rng, kind, mode):
     g, (ls, aux), runs, (ls_h, aux_h) = _setup(runtime, [data[:1], data[1:]])
     speed = cla.zeros(runtime.queue, g.padded_shape, g.dtype)
     g.launch_runs(
-        _kernel(runtime, "region_speed", SPEED=mode),
+        _kernel(runtime, "regions_speed", SPEED=mode),
         runs,
         ls.data,
         aux.data,
@@ -81,7 +81,7 @@ def test_region_step_matches_reference(runtime, rng, kind):
     g, (ls, speed), runs, (ls_h, speed_h) = _setup(runtime, [data, rng.normal(size=(1,) + SHAPE)])
     out = ls.copy()
     g.launch_runs(
-        _kernel(runtime, "region_step"),
+        _kernel(runtime, "regions_step"),
         runs,
         ls.data,
         speed.data,
@@ -128,7 +128,7 @@ def test_fused_stages_match_reference(runtime, rng, kind, mode, nc):
     )
     outside = np.ones(g.volume, bool)
     outside[idx] = False
-    for name, want, dst in (("region_euler", euler, ls.copy()), ("region_heun", heun, start)):
+    for name, want, dst in (("regions_euler", euler, ls.copy()), ("regions_heun", heun, start)):
         g.launch_runs(
             _kernel(runtime, name, SPEED=mode, NC=nc),
             runs,
@@ -140,7 +140,7 @@ def test_fused_stages_match_reference(runtime, rng, kind, mode, nc):
         )
         got = dst.get().reshape(nc, -1)
         np.testing.assert_allclose(got[:, idx], want, rtol=1e-9, atol=1e-9)
-        before = ls_h if name == "region_euler" else start_h
+        before = ls_h if name == "regions_euler" else start_h
         np.testing.assert_array_equal(got[:, outside], before.reshape(nc, -1)[:, outside])
     assert stats.get().max() == pytest.approx(fastest, rel=1e-12)
 
@@ -155,7 +155,7 @@ def test_advect_and_reinit_match_reference(runtime, rng, kind):
     out = ls.copy()
     vel = (0.4, -0.7, 0.2)
     g.launch_runs(
-        _kernel(runtime, "advect_step"),
+        _kernel(runtime, "regions_advect_step"),
         runs,
         ls.data,
         out.data,
@@ -169,7 +169,7 @@ def test_advect_and_reinit_match_reference(runtime, rng, kind):
     want = ref.advect_step(ls_h, idx, 0.25, vel, 1.0, 2.5, 2, g.volume, g.sx, g.sxy)
     np.testing.assert_allclose(out.get().reshape(2, -1)[:, idx], want, rtol=1e-9, atol=1e-9)
     g.launch_runs(
-        _kernel(runtime, "reinit3d_step"),
+        _kernel(runtime, "regions_reinit3d_step"),
         runs,
         ls.data,
         ls0.data,
@@ -191,7 +191,7 @@ def test_reinit_heun_matches_reference(runtime, rng, kind):
     g, (acc, stage1, ls0), runs, (acc_h, stage1_h, ls0_h) = _setup(runtime, [data] + noisy)
     idx = runs.band.indices.get().astype(np.int64)
     g.launch_runs(
-        _kernel(runtime, "reinit3d_heun"),
+        _kernel(runtime, "regions_reinit3d_heun"),
         runs,
         acc.data,
         stage1.data,
@@ -221,7 +221,7 @@ def test_reinit_from_targets_is_bitwise_the_plain_reinit(runtime, rng, kind, dty
 
     target, plain, pre = u.copy(), u.copy(), u.copy()
     g.launch_runs(
-        kernel("reinit3d_targets"),
+        kernel("regions_reinit3d_targets"),
         runs,
         ls0.data,
         _inband(runtime, g, runs).data,
@@ -231,10 +231,17 @@ def test_reinit_from_targets_is_bitwise_the_plain_reinit(runtime, rng, kind, dty
     )
     dt = g.scalar(0.45)
     g.launch_runs(
-        kernel("reinit3d_step"), runs, u.data, ls0.data, plain.data, dt, *g.strides(), channels=2
+        kernel("regions_reinit3d_step"),
+        runs,
+        u.data,
+        ls0.data,
+        plain.data,
+        dt,
+        *g.strides(),
+        channels=2,
     )
     g.launch_runs(
-        kernel("reinit3d_step_pre"),
+        kernel("regions_reinit3d_step_pre"),
         runs,
         u.data,
         ls0.data,
@@ -247,7 +254,7 @@ def test_reinit_from_targets_is_bitwise_the_plain_reinit(runtime, rng, kind, dty
     np.testing.assert_array_equal(pre.get(), plain.get())
     acc_plain, acc_pre = u.copy(), u.copy()
     g.launch_runs(
-        kernel("reinit3d_heun"),
+        kernel("regions_reinit3d_heun"),
         runs,
         acc_plain.data,
         plain.data,
@@ -257,7 +264,7 @@ def test_reinit_from_targets_is_bitwise_the_plain_reinit(runtime, rng, kind, dty
         channels=2,
     )
     g.launch_runs(
-        kernel("reinit3d_heun_pre"),
+        kernel("regions_reinit3d_heun_pre"),
         runs,
         acc_pre.data,
         pre.data,
@@ -279,7 +286,7 @@ def test_extend_outer_matches_reference(runtime, rng, kind):
     g, (ls,), runs, (ls_h,) = _setup(runtime, [data])
     out = ls.copy()
     g.launch_runs(
-        _kernel(runtime, "extend_outer"),
+        _kernel(runtime, "regions_extend_outer"),
         runs,
         ls.data,
         _inband(runtime, g, runs).data,
@@ -311,7 +318,7 @@ def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, 
     for runs in (exact, padded):
         ext, target, stage, acc = u.copy(), u.copy(), u.copy(), u.copy()
         g.launch_runs(
-            _kernel(runtime, "extend_outer"),
+            _kernel(runtime, "regions_extend_outer"),
             runs,
             u.data,
             inband.data,
@@ -323,7 +330,7 @@ def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, 
             channels=1,
         )
         g.launch_runs(
-            _kernel(runtime, "reinit3d_targets"),
+            _kernel(runtime, "regions_reinit3d_targets"),
             runs,
             ls0.data,
             inband.data,
@@ -332,7 +339,7 @@ def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, 
             channels=2,
         )
         g.launch_runs(
-            _kernel(runtime, "reinit3d_step_pre"),
+            _kernel(runtime, "regions_reinit3d_step_pre"),
             runs,
             u.data,
             ls0.data,
@@ -343,7 +350,7 @@ def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, 
             channels=2,
         )
         g.launch_runs(
-            _kernel(runtime, "reinit3d_heun_pre"),
+            _kernel(runtime, "regions_reinit3d_heun_pre"),
             runs,
             acc.data,
             stage.data,
@@ -365,12 +372,12 @@ def test_reinit_and_extension_on_padded_runs_are_bitwise_the_same(runtime, rng, 
         np.testing.assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize("name", ["heun_average", "copy_runs"])
+@pytest.mark.parametrize("name", ["regions_heun_average", "regions_copy_runs"])
 def test_band_copies_match_reference(runtime, rng, name):
     data = _inputs("random", rng, 2)
     g, (a, b), runs, (a_h, b_h) = _setup(runtime, [data, rng.normal(size=data.shape)])
     idx = runs.band.indices.get().astype(np.int64)
-    if name == "heun_average":
+    if name == "regions_heun_average":
         out = b.copy()
         g.launch_runs(_kernel(runtime, name), runs, a.data, b.data, out.data, channels=2)
         want = ref.heun_average(a_h, b_h, b_h, idx, 2, g.volume)
@@ -394,7 +401,7 @@ def test_curvatures_of_a_sphere(runtime):
     radius = g.pad(r[None], "linear").reshape(-1)[idx]
     for mode, expect in ((1, 2 / radius), (2, 1 / radius**2)):
         g.launch_runs(
-            _kernel(runtime, "region_speed", SPEED=mode),
+            _kernel(runtime, "regions_speed", SPEED=mode),
             runs,
             phi.data,
             phi.data,

@@ -213,7 +213,7 @@ def test_narrow_bands_give_the_whole_band_scheme(small_sphere, flow):
         got = s.harmonic_map(u, 0.02)
         kernel = g.kernel(
             "surface/flows.cl",
-            "flow_step",
+            "flows_step",
             NC=3,
             FLOW_P=2,
             HARMONIC=1,

@@ -109,7 +109,7 @@ def test_apron_layout_on_the_device_is_the_hosts(runtime, gpu_like, rng, geometr
     flow = surface_storage.BrickFlow.__new__(surface_storage.BrickFlow)
     flow.surf, flow.bricks, flow.defines = s, bb, {}
     bb.launch(
-        flow.kernel("surface/bricks.cl", "brick_to_apron"),
+        flow.kernel("surface/bricks.cl", "bricks_to_apron"),
         bb.scatter(u, np.float32).data,
         dev.data,
         channels=2,
@@ -168,7 +168,7 @@ def test_heat_step_matches_reference(runtime, gpu_like, rng, geometry, brick, we
     flow = surface_storage.BrickFlow.__new__(surface_storage.BrickFlow)
     flow.defines = {}
     flow.surf, flow.bricks = s, bb
-    kernel = flow.kernel("surface/bricks.cl", "brick_heat_step", WEIGHTED=int(weighted))
+    kernel = flow.kernel("surface/bricks.cl", "bricks_heat_step", WEIGHTED=int(weighted))
     bb.launch(
         kernel,
         src.data,
@@ -233,7 +233,7 @@ def test_extend_cp_matches_reference(
     flow.surf, flow.bricks, flow.lists = s, bb, lists
     flow.src_plane = np.int32(src.size // nc)
     flow._extend_kernel = flow.kernel(
-        "surface/bricks.cl", "brick_extend_cp", INTERP=s.interp, NC=nc, NORMALIZE=int(normalize)
+        "surface/bricks.cl", "bricks_extend_cp", INTERP=s.interp, NC=nc, NORMALIZE=int(normalize)
     )
     for which, band in ((EXT, s.ext_band), (REACH, s.reach_band)):
         flow._extend(src, dst, which)

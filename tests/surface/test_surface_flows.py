@@ -71,7 +71,7 @@ def test_flow_step_matches_reference(sphere02, rng, case):
         u0 = u32 + np.float32(0.1) * rng.standard_normal(u.shape).astype(np.float32)
         src, dst = dev(u32), cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 6)
-        kernel = g.kernel("surface/flows.cl", "flow_step", NC=nc, **opts)
+        kernel = g.kernel("surface/flows.cl", "flows_step", NC=nc, **opts)
         r, dt, lam, e2 = 0.05, 0.01, 2.0, 0.04
         g.launch_runs(
             kernel,
@@ -117,7 +117,7 @@ def test_lambda_terms_match_reference(sphere02, rng):
     terms = [cla.empty(q, s.step_band.n, np.float32) for _ in range(3)]
     offsets = _offsets(g, 3)
     g.launch_list(
-        g.kernel("surface/flows.cl", "tv_lambda_terms"),
+        g.kernel("surface/flows.cl", "flows_tv_lambda_terms"),
         s.step_band,
         cla.to_device(q, u).data,
         cla.to_device(q, u0).data,
@@ -138,7 +138,7 @@ def test_lambda_terms_match_reference(sphere02, rng):
     # chunk_sum's partial sums (TV's dynamic lambda adds them on the device)
     n, chunk = s.step_band.n, 64
     partial = cla.empty(q, -(-n // chunk), np.float32)
-    g.kernel("surface/flows.cl", "chunk_sum")(
+    g.kernel("surface/flows.cl", "flows_chunk_sum")(
         q, *s.runtime.items(partial.size), terms[1].data, np.int32(n), np.int32(chunk), partial.data
     )
     assert partial.get().sum() == pytest.approx(want_sum := expect[1].sum(), rel=1e-4)
@@ -160,7 +160,7 @@ def test_lambda_update_on_the_device(runtime, rng):
     (with the capped flag), written to lambda[0] and history[slot]; the correction factor f
     moves by residual / sigma^2 (limited) once the residual passes half of sigma^2."""
     q = runtime.queue
-    kernel = runtime.kernel("surface/flows.cl", "tv_lambda_update", np.float64)
+    kernel = runtime.kernel("surface/flows.cl", "flows_tv_lambda_update", np.float64)
     num, area = rng.normal(size=37), rng.uniform(0.5, 1.0, 37)
     cases = [
         (-2.0, 1e9, 0.1, 1.0),

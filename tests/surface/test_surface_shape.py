@@ -27,7 +27,7 @@ def test_principal_directions_kernel_matches_reference(torus):
     dirs = cla.empty(q, (6, band.n), np.float32)
     curv = cla.empty(q, (2, band.n), np.float32)
     g.launch_list(
-        g.kernel("surface/shape.cl", "principal_directions"),
+        g.kernel("surface/shape.cl", "shape_principal_directions"),
         band,
         s.psi_dev.data,
         g.scalar(1 / s.spacing),
@@ -76,7 +76,7 @@ def test_turk_step_matches_reference(rng):
         dst = cla.zeros(q, u.shape, np.float32)
         offsets = _offsets(g, 2)
         g.launch_runs(
-            g.kernel("surface/heat.cl", "turk_step", ALONG=int(along)),
+            g.kernel("surface/heat.cl", "heat_turk_step", ALONG=int(along)),
             s.step_runs,
             cla.to_device(q, u).data,
             dst.data,

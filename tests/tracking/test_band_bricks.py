@@ -141,10 +141,12 @@ def test_tiled_ncc_step_matches_the_list_step_to_rounding(runtime, rng, layout, 
     # The NCC's window sums slid over each brick: the same sums, added in another order
     # (and with rows taken out again), so float32 rounding differs, by about 1e-6 here.
     lists, bricks = _level_set(runtime, "lists"), _level_set(runtime, layout)
-    assert morph_kernel_name(bricks, "ncc") == "morph_track_tiled"
+    assert morph_kernel_name(bricks, "ncc") == "features_morph_track_tiled"
     f1, f2, prior = _features(lists, rng, channels)
     want_u, want_f1, want_stats = _step(lists, f1, f2, prior, channels, 1, lam)
-    got_u, got_f1, got_stats = _step(bricks, f1, f2, prior, channels, 1, lam, "morph_track_tiled")
+    got_u, got_f1, got_stats = _step(
+        bricks, f1, f2, prior, channels, 1, lam, "features_morph_track_tiled"
+    )
     np.testing.assert_allclose(got_u, want_u, atol=2e-5, rtol=1e-5)
     np.testing.assert_allclose(got_f1, want_f1, atol=2e-5, rtol=1e-5)
     np.testing.assert_allclose(got_stats[:4], want_stats[:4], rtol=1e-4)

@@ -36,7 +36,7 @@ def test_reinit_step_matches_reference_on_grid_and_list(runtime, rng, kind):
     want = ref.reinit_step(_padded(p), _padded(p0), 0.5)
     out = p.copy()
     grid.launch(
-        grid.kernel("tracking/levelset.cl", "reinit_step"),
+        grid.kernel("tracking/levelset.cl", "levelset_reinit_step"),
         p.data.data,
         p0.data.data,
         out.data.data,
@@ -48,7 +48,7 @@ def test_reinit_step_matches_reference_on_grid_and_list(runtime, rng, kind):
     cells = index_list(grid, chosen)
     out = p.copy()
     grid.launch_list(
-        grid.kernel("tracking/levelset.cl", "reinit_step_list"),
+        grid.kernel("tracking/levelset.cl", "levelset_reinit_step_list"),
         cells,
         p.data.data,
         p0.data.data,
@@ -74,7 +74,9 @@ def test_mark_band_and_gradient_magnitude_match_reference(runtime, rng):
     f = _field(grid, img)
     out = f.copy()
     grid.launch(
-        grid.kernel("tracking/levelset.cl", "gradient_magnitude"), f.data.data, out.data.data
+        grid.kernel("tracking/levelset.cl", "levelset_gradient_magnitude"),
+        f.data.data,
+        out.data.data,
     )
     np.testing.assert_allclose(out.to_host()[0], ref.gradient_magnitude(_padded(f)), atol=1e-6)
 
@@ -157,7 +159,7 @@ def test_plain_reinit_matches_reference_and_the_subcell_fix_is_more_accurate(run
     out = p.copy()
     cells = index_list(grid, np.ones((n, n), bool))
     grid.launch_list(
-        grid.kernel("tracking/levelset.cl", "reinit_step_list", PLAIN_REINIT=1),
+        grid.kernel("tracking/levelset.cl", "levelset_reinit_step_list", PLAIN_REINIT=1),
         cells,
         p.data.data,
         p0.data.data,

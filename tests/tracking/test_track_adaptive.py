@@ -62,7 +62,11 @@ def test_morph_adaptive_matches_reference(runtime, rng, channels, lam, mu, noise
     stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
     dt, eps_f, eps_u, near, delta = 0.3, 0.02, 1e-3, 1.0, 0.02
     kernel = grid.kernel(
-        "tracking/adaptive.cl", "morph_adaptive", NCH=channels, WIN=3, FRONT_ONLY=front_only
+        "tracking/adaptive.cl",
+        "adaptive_morph_adaptive",
+        NCH=channels,
+        WIN=3,
+        FRONT_ONLY=front_only,
     )
     grid.launch_list(
         kernel,

@@ -19,7 +19,7 @@ def test_local_contrast_kernel_matches_reference_and_host_version(runtime, rng, 
     grid = Grid(runtime, nx, ny, 2, 2, np.dtype(np.float32))
     f, out = Field.from_host(grid, img), Field.empty(grid)
     grid.launch(
-        grid.kernel("tracking/features.cl", "local_contrast"),
+        grid.kernel("tracking/features.cl", "features_local_contrast"),
         f.data.data,
         out.data.data,
         np.int32(radius),
@@ -66,7 +66,7 @@ def _run_morph_track(
     stats = cla.zeros(runtime.queue, 5 * gsize + 1, np.float32)
     kernel = grid.kernel(
         "tracking/features.cl",
-        "morph_track",
+        "features_morph_track",
         NCH=channels,
         DISC={"difference": 0, "ncc": 1, "huber": 2}[disc],
         WIN=3,
