@@ -30,7 +30,7 @@ from film_corpus import corpus
 
 import clpde
 from clpde.film import detect as fdet
-from clpde.film._frames import film_planes, grey
+from clpde.film._planes import film_planes, grey
 from clpde.film.stream import KEEP
 from clpde.motion.dis import DisFlow, to_u8
 

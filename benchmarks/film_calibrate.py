@@ -16,7 +16,7 @@ from film import Counts
 from film_corpus import corpus
 
 from clpde.film import detect as fdet
-from clpde.film._frames import film_planes, grey
+from clpde.film._planes import film_planes, grey
 
 B_GRID = [6.0, 7.0, 8.0, 10.0]
 G_GRID = [0.5, 1.0, 2.0]

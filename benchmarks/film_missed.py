@@ -26,7 +26,7 @@ from scipy import ndimage
 import clpde
 from clpde.film import _regions as regions
 from clpde.film import detect as fdet
-from clpde.film._frames import film_planes, grey
+from clpde.film._planes import film_planes, grey
 from clpde.film.lines import scratch_runs
 from clpde.film.stream import KEEP
 

@@ -79,12 +79,12 @@ def route(radius, texture, period, rule):
 
 
 def main(argv=None):
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--half", default="calibration")
     args = parser.parse_args(argv)
-    names = validate.candidates()
+    names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     rows = []
     for c in load(halves, names):

@@ -192,10 +192,10 @@ def extra_method(name):
 
     def run(image, mask, case):
         import clpde
-        from clpde.inpainting import validate
+        from clpde.inpainting import auto
 
-        saved = validate.CANDIDATES
-        validate.CANDIDATES = candidates or saved
+        saved = auto.CANDIDATES
+        auto.CANDIDATES = candidates or saved
         try:
             out, info = clpde.inpaint(
                 image,
@@ -210,7 +210,7 @@ def extra_method(name):
             CHOSEN[0] = _chosen(info)
             return out
         finally:
-            validate.CANDIDATES = saved
+            auto.CANDIDATES = saved
 
     return run
 
@@ -452,11 +452,11 @@ def print_tables(summary, halves):
 
 def print_auto(rows, halves, name="clpde-auto"):
     """Per class and half: what `name` filled the holes with (mean share of the pixels), and
-    its margin to its best candidate, case by case (the candidates: validate.CANDIDATES's
+    its margin to its best candidate, case by case (the candidates: auto.CANDIDATES's
     clpde columns, scikit-image's fill standing in for the device's biharmonic one)."""
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
 
-    cols = {c: ("biharmonic" if c == "biharmonic" else f"clpde-{c}") for c in validate.CANDIDATES}
+    cols = {c: ("biharmonic" if c == "biharmonic" else f"clpde-{c}") for c in auto.CANDIDATES}
     by_case = {}
     for r in rows:
         by_case.setdefault(r["case"], {})[r["method"]] = r

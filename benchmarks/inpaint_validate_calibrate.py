@@ -1,4 +1,4 @@
-"""Calibration of the self-validated default (clpde/inpainting/validate.py) on the calibration
+"""Calibration of the self-validated default (clpde/inpainting/auto.py) on the calibration
 half of tests/cases/inpaint_corpus.py's corpus, and nothing else.
 
     python benchmarks/inpaint_validate_calibrate.py [--quick] [--every N] [--json PATH]
@@ -8,7 +8,7 @@ the ring's width (RINGS) and blend or pick. Each case's fills are computed once 
 candidate and hidden mask (memoised), so every configuration is then assembled from them.
 A configuration's score is its mean PSNR in the hole over the classes (each class weighs
 the same), and its time the sum of its candidates' fill times (both runs). The table lists
-the best configurations, and, for each candidate set, its best ring; validate.py's
+the best configurations, and, for each candidate set, its best ring; auto.py's
 CANDIDATES and RING are set from the chosen line by hand.
 """
 
@@ -46,7 +46,7 @@ RESULTS = Path(__file__).resolve().parent / "results" / "inpaint_validate_calibr
 
 def main(argv=None):
     from clpde import Inpainting
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
     from clpde.runtime import get_runtime
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -60,9 +60,9 @@ def main(argv=None):
     parser.add_argument("--json", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
     runtime = get_runtime()
-    names = validate.candidates(SUPERSET)
+    names = auto.candidates(SUPERSET)
     cache, seconds = {}, {}
-    original = validate._fill
+    original = auto._fill
 
     def memo(name, data, omega, runtime, dtype, seed, params):
         key = (
@@ -76,7 +76,7 @@ def main(argv=None):
             seconds[key] = time.perf_counter() - start
         return cache[key]
 
-    validate._fill = memo
+    auto._fill = memo
     cases = [c for c in corpus.build(args.quick) if c.half == "calibration"][:: args.every]
     configs = [
         (subset, ring, blend)
@@ -96,24 +96,24 @@ def main(argv=None):
         for cfg in configs:
             subset, ring, blend = cfg
             used = []
-            orig_memo = validate._fill
+            orig_memo = auto._fill
 
             def tracking(name, d, o, *a, _orig=orig_memo, _used=used):
                 key = (name, hashlib.sha1(np.packbits(o).tobytes()).hexdigest())
                 _used.append(key)
                 return _orig(name, d, o, *a)
 
-            validate._fill = tracking
-            filled, _ = validate.choose(
+            auto._fill = tracking
+            filled, _ = auto.choose(
                 data, case.mask, runtime, names=subset, ring=ring, blend=blend, seed=0
             )
-            validate._fill = orig_memo
+            auto._fill = orig_memo
             out = case.damaged().copy()
             job._write(out, (0, case.mask.shape[0], 0, case.mask.shape[1]), filled, case.mask)
             scores[cfg][case.name] = (case.damage, corpus.psnr(case, out))
             times[cfg] += sum(v for k, v in seconds.items() if k[:2] in set(used))
         print(f"[{i + 1}/{len(cases)}] {case.name} {time.perf_counter() - start:.1f} s", flush=True)
-    validate._fill = original
+    auto._fill = original
     table = []
     for cfg in configs:
         by_class = {}

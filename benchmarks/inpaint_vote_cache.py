@@ -5,7 +5,7 @@ per-cluster choices without filling again.
     python benchmarks/inpaint_vote_cache.py [--half calibration|test|both] [--every N]
 
 Per case of tests/cases/inpaint_corpus.py (each case one box, the whole image), every
-candidate of clpde/inpainting/validate.py fills:
+candidate of clpde/inpainting/auto.py fills:
 
 - "hole": the damage alone;
 - "ring<w>": the damage and the known pixels within w px of it (w in RINGS);
@@ -38,7 +38,7 @@ CACHE = Path(__file__).resolve().parent / "results" / "vote_cache"
 def shifted(omega, direction):
     """The hole's clusters (components of the hole grown by 1 px) moved aside along one of
     four directions by twice their half-thickness plus GAP, where they land on known
-    pixels at least 2 px from the hole (validate._shifted, one direction): a label image,
+    pixels at least 2 px from the hole (auto._shifted, one direction): a label image,
     each moved pixel labelled with its cluster (as `ndimage.label` of the grown hole)."""
     known = ~omega
     dist = ndimage.distance_transform_edt(known)
@@ -75,7 +75,7 @@ def masks(omega):
 
 def main(argv=None):
     from clpde import Inpainting
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
     from clpde.runtime import get_runtime
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -86,7 +86,7 @@ def main(argv=None):
     parser.add_argument("--masks", default=None, help="comma-separated tests (hole,ring1,..)")
     args = parser.parse_args(argv)
     runtime = get_runtime()
-    names = validate.candidates()
+    names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = [c for c in corpus.build() if c.half in halves][args.offset :: args.every]
     if args.only:
@@ -106,7 +106,7 @@ def main(argv=None):
             store[f"mask_{key}"] = hidden
             for n in names:
                 t0 = time.perf_counter()
-                fill = validate._fill(n, data, hidden, runtime, np.float32, 0, {})
+                fill = auto._fill(n, data, hidden, runtime, np.float32, 0, {})
                 store[f"sec_{key}_{n}"] = np.array(time.perf_counter() - t0)
                 store[f"fill_{key}_{n}"] = fill[:, hidden].astype(np.float32)
         tmp = path.with_suffix(".tmp.npz")

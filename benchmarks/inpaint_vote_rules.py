@@ -1,5 +1,5 @@
 """Is `method="auto"`'s vote sound? Its result against its best candidate, case by case, for
-the ways of pooling the ring's evidence (clpde/inpainting/validate.py: PRIOR, blend, SCALE),
+the ways of pooling the ring's evidence (clpde/inpainting/auto.py: PRIOR, blend, SCALE),
 on tests/cases/inpaint_corpus.py's corpus, the calibration half to choose, the test half
 beside it.
 
@@ -42,7 +42,7 @@ def _bool(v):
 
 def main(argv=None):
     from clpde import Inpainting
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
     from clpde.runtime import get_runtime
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -51,17 +51,17 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--default", action="store_true", help="the default's vote (THINS)")
     parser.add_argument("--rules", default=None, help="scale/blend/prior/thin/shift;...")
-    parser.add_argument("--ring", type=int, default=None, help="validate.RING (the narrowest)")
+    parser.add_argument("--ring", type=int, default=None, help="auto.RING (the narrowest)")
     parser.add_argument(
         "--json", type=Path, default=Path(__file__).resolve().parent / "results" / "vote_rules.json"
     )
     args = parser.parse_args(argv)
     runtime = get_runtime()
     if args.ring is not None:
-        validate.RING = args.ring
-    names = validate.candidates(DEFAULT_NAMES if args.default else None)
+        auto.RING = args.ring
+    names = auto.candidates(DEFAULT_NAMES if args.default else None)
     cache, seconds = {}, {}
-    original = validate._fill
+    original = auto._fill
 
     def memo(name, data, omega, runtime, dtype, seed, params):
         key = (name, hashlib.sha1(np.packbits(omega).tobytes()).hexdigest())
@@ -74,7 +74,7 @@ def main(argv=None):
 
     used = set()
 
-    validate._fill = memo
+    auto._fill = memo
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = [c for c in corpus.build(args.quick) if c.half in halves][:: args.every]
     configs = [(s, b, p, 0.0, False) for s in SCALES for b in (True, False) for p in PRIORS]
@@ -113,7 +113,7 @@ def main(argv=None):
         for cfg in configs:
             scale, blend, prior, thin, shift = cfg
             used.clear()
-            filled, _ = validate.choose(
+            filled, _ = auto.choose(
                 data,
                 case.mask,
                 runtime,
@@ -129,7 +129,7 @@ def main(argv=None):
             p = score(filled)
             rows.append((case.half, case.damage, case.name, cfg, p, p - best))
         print(f"[{i + 1}/{len(cases)}] {case.name}", flush=True)
-    validate._fill = original
+    auto._fill = original
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps([[*r[:3], str(r[3]), *r[4:]] for r in rows]))
     for half in halves:

@@ -8,7 +8,7 @@ against the best single candidate.
 A rule is: which test pixels score each cluster (its ring, as wide as SCALE x its
 half-thickness between 1 and 8 px and rounded up to a cached width; and/or its own shape
 moved aside, "shift"), blend or pick, and the prior that pulls each cluster's weights
-towards the box's (validate.py's PRIOR). Printed per rule and half: the mean PSNR over the
+towards the box's (auto.py's PRIOR). Printed per rule and half: the mean PSNR over the
 classes, the worst margin to the best candidate, and the cases more than 0.2 dB below it.
 """
 
@@ -111,10 +111,10 @@ class Case:
 
 
 def fit(f, t, blend):
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
 
     if blend:
-        return validate._weights(f, t)
+        return auto._weights(f, t)
     w = np.zeros(f.shape[0])
     w[int(np.argmin(((f - t) ** 2).mean(axis=1)))] = 1.0
     return w
@@ -239,7 +239,7 @@ def cross_validated(c, width, vote):
     single candidate scored on both, each test's blend scored on the other (errors relative
     to the best single candidate's on that test); the index of the single candidate that
     wins, or None where a blend does."""
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
 
     fr, tr = _pool(c.tests(width, True, False), vote)
     fs, ts = _pool(c.tests(width, False, True), vote)
@@ -248,7 +248,7 @@ def cross_validated(c, width, vote):
     er = ((fr - tr) ** 2).mean(axis=1)
     es = ((fs - ts) ** 2).mean(axis=1)
     rel = 0.5 * (er / er.min() + es / es.min())
-    wr, ws = validate._weights(fr, tr), validate._weights(fs, ts)
+    wr, ws = auto._weights(fr, tr), auto._weights(fs, ts)
     blend_r = ((ws @ fr - tr) ** 2).mean() / er.min()  # fitted on the shift, scored on the ring
     blend_s = ((wr @ fs - ts) ** 2).mean() / es.min()
     blend = 0.5 * (blend_r + blend_s)
@@ -315,18 +315,18 @@ def load(halves, names):
 
 
 def real(half, narrow=None):
-    """validate.choose as it is (its ring fills made here; the hole's fills from the cache),
+    """auto.choose as it is (its ring fills made here; the hole's fills from the cache),
     case by case against the best single candidate; per class mean PSNR and the cases more
     than 0.2 dB below it."""
     import time
 
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
     from clpde.runtime import get_runtime
 
     runtime = get_runtime()
-    names = validate.candidates()
+    names = auto.candidates()
     halves = ("calibration", "test") if half == "both" else (half,)
-    original = validate._fill
+    original = auto._fill
     for h in halves:
         rows = []
         for c in load((h,), names):
@@ -339,10 +339,10 @@ def real(half, narrow=None):
                     return out
                 return original(name, data, omega, *rest)
 
-            validate._fill = cached
+            auto._fill = cached
             start = time.perf_counter()
-            filled, _ = validate.choose(c.data, c.omega, runtime, seed=0, narrow=narrow)
-            validate._fill = original
+            filled, _ = auto.choose(c.data, c.omega, runtime, seed=0, narrow=narrow)
+            auto._fill = original
             p = c.score(filled[:, c.omega])
             rows.append((c.case.damage, c.case.name, p, p - c.best))
             print(f"{c.case.name} {p:.2f} {p - c.best:+.2f} {time.perf_counter() - start:.1f} s")
@@ -351,7 +351,7 @@ def real(half, narrow=None):
             by.setdefault(d, []).append(p)
         below = sorted((m, n) for _, n, _, m in rows if m < -0.2)
         print(
-            f"\n{h}: validate.choose (narrow={narrow}), mean over classes "
+            f"\n{h}: auto.choose (narrow={narrow}), mean over classes "
             f"{np.mean([np.mean(v) for v in by.values()]):.2f}, {len(below)} of {len(rows)} "
             "cases more than 0.2 dB below the best candidate: "
             + "; ".join(f"{n} {m:+.2f}" for m, n in below)
@@ -360,20 +360,18 @@ def real(half, narrow=None):
 
 
 def main(argv=None):
-    from clpde.inpainting import validate
+    from clpde.inpainting import auto
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--half", default="calibration")
     parser.add_argument("--rules", default=None, help="names of RULES, ';'-separated")
     parser.add_argument("--cases", action="store_true", help="list the cases below -0.2 dB")
-    parser.add_argument(
-        "--real", action="store_true", help="run validate.choose itself (its defaults)"
-    )
+    parser.add_argument("--real", action="store_true", help="run auto.choose itself (its defaults)")
     parser.add_argument("--narrow", type=int, default=None, help="--real: choose's narrow")
     args = parser.parse_args(argv)
     if args.real:
         return real(args.half, None if args.narrow is None else bool(args.narrow))
-    names = validate.candidates()
+    names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = load(halves, names)
     rules = RULES if not args.rules else {k: RULES[k] for k in args.rules.split(";")}

@@ -84,11 +84,11 @@ class Case:
     """One layout's level set, features and kernels on one frame pair."""
 
     def __init__(self, runtime, frames, mask, label):
-        from clpde.tracking.contours import MorphingTracker
         from clpde.tracking.levelset import LevelSet, signed_distance
         from clpde.tracking.morph import morph_kernel_name
         from clpde.tracking.options import DISCREPANCIES
         from clpde.tracking.preprocessing import feature_field
+        from clpde.tracking.tracker import MorphingTracker
 
         layout, grouped, tiled = label.split()[0], label.endswith(" wg"), label.endswith("tiled")
         self.tracker = MorphingTracker(frames, mask, storage=layout, device=runtime)
@@ -216,7 +216,7 @@ def sequences():
 
 def whole_tracks(rt, rounds, layouts):
     """ms per frame of clpde.track with the default options, each layout in turn."""
-    from clpde.tracking.contours import track
+    from clpde.tracking.tracker import track
 
     out = {}
     for name, frames, first in sequences():

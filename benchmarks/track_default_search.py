@@ -36,8 +36,8 @@ RESULTS = ROOT / "benchmarks" / "results"
 CURRENT = {"motion": "kalman", "discrepancy": "ncc"}  # the default before this search
 NO_TERMS = {"motion": "kalman", "discrepancy": "adaptive", "region_weight": 0.0, "curvature": 0.0}
 CN = "clpde.tracking.morph:CONTRAST_NOISE"  # the adaptive weight's noise factor
-LIGHT = "clpde.tracking.contours:LIGHT_CHANGE"  # the light gate's threshold
-QUIET = "clpde.tracking.contours:QUIET_FACTOR"  # the noise factor's rise below it
+LIGHT = "clpde.tracking.tracker:LIGHT_CHANGE"  # the light gate's threshold
+QUIET = "clpde.tracking.tracker:QUIET_FACTOR"  # the noise factor's rise below it
 CANDIDATES = {
     "kalman+ncc (the default before)": CURRENT,
     "adaptive option (components+adaptive, region 1, curvature 0.3)": {
@@ -98,7 +98,7 @@ def run(frames, first, options):
     import importlib
 
     import clpde
-    from clpde.tracking import contours
+    from clpde.tracking import tracker
 
     options = dict(options)
     saved = []
@@ -109,8 +109,8 @@ def run(frames, first, options):
         setattr(mod, name, value)
     region = options.pop("_region", None)
     if region:
-        saved.append((contours, "RegionTerm", contours.RegionTerm))
-        contours.RegionTerm = functools.partial(contours.RegionTerm, **region)
+        saved.append((tracker, "RegionTerm", tracker.RegionTerm))
+        tracker.RegionTerm = functools.partial(tracker.RegionTerm, **region)
     try:
         return clpde.track(frames, first, progress=False, **options)
     finally:

@@ -25,8 +25,8 @@ _LAZY = {
     "get_runtime": "runtime",
     "use_device": "runtime",
     "batch": "scale.batch",  # many files over Dask workers (needs clpde[batch])
-    "MorphingTracker": "tracking.contours",
-    "track": "tracking.contours",
+    "MorphingTracker": "tracking.tracker",
+    "track": "tracking.tracker",
 }
 
 __all__ = [

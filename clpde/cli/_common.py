@@ -107,7 +107,7 @@ def grid_advice(resolution: int):
 
 
 def report(lines) -> None:
-    """A task's report (clpde.scale.tasks), one line each on stderr."""
+    """A task's report (clpde.scale.file_tasks), one line each on stderr."""
     for line in lines:
         print(line, file=sys.stderr)
 

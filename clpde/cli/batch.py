@@ -125,7 +125,7 @@ _COMMANDS = {
 
 def command_options(command: str, argv: list[str]) -> dict:
     """COMMAND's own flags (`clpde COMMAND --help`), checked by its parser before any work,
-    as the keywords of its task (clpde.scale.tasks.TASKS)."""
+    as the keywords of its task (clpde.scale.file_tasks.TASKS)."""
     add_parser, task_options = _COMMANDS[command]
     parser = argparse.ArgumentParser(prog="clpde")
     add_parser(parser.add_subparsers(dest="command"))

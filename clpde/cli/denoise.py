@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..io.volumes import is_volume_file
-from ..scale.tasks import TASKS
+from ..scale.file_tasks import TASKS
 from ._common import add_image_arguments, output_path, report, show_progress
 from .volumes import run_volume_denoise
 
@@ -57,7 +57,7 @@ def add_denoise_parser(subparsers) -> None:
 
 
 def task_options(args) -> dict:
-    """The denoise task's keywords from the parsed flags (clpde.scale.tasks.denoise_file)."""
+    """The denoise task's keywords from the parsed flags (clpde.scale.file_tasks.denoise_file)."""
     return {
         "sigma": args.sigma,
         "weight": args.weight,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..io.volumes import is_volume_file
 from ..planar.flows import FLOW_PARAMS, FLOWS
-from ..scale.tasks import TASKS
+from ..scale.file_tasks import TASKS
 from ._common import add_image_arguments, output_path, param_check, report, show_progress
 from .volumes import run_volume_diffuse
 
@@ -55,7 +55,7 @@ def add_diffuse_parser(subparsers) -> None:
 
 
 def task_options(args) -> dict:
-    """The diffuse task's keywords from the parsed flags (clpde.scale.tasks.diffuse_file)."""
+    """The diffuse task's keywords from the parsed flags (clpde.scale.file_tasks.diffuse_file)."""
     return {
         "flow": args.flow,
         "steps": args.steps,

@@ -11,7 +11,7 @@ from ..inpainting.registry import METHODS
 from ..io.images import MASK_RULE
 from ..io.volumes import is_volume_file
 from ..runtime import get_runtime
-from ..scale.tasks import TASKS, TRANSPORT_OPTIONS
+from ..scale.file_tasks import TASKS, TRANSPORT_OPTIONS
 from ._common import (
     add_device_argument,
     report,
@@ -176,7 +176,7 @@ def _add_method_arguments(parser) -> None:
 
 
 def task_options(args) -> dict:
-    """The inpaint task's keywords from the parsed flags (clpde.scale.tasks.inpaint_file)."""
+    """The inpaint task's keywords from the parsed flags (clpde.scale.file_tasks.inpaint_file)."""
     return {
         "method": args.method,
         "colour": args.colour,

@@ -12,7 +12,7 @@ from ..film.restore import restore_film, write_preview
 from ..io.video_probe import is_video
 from ..runtime import use_device
 from ..scale.cluster import connect
-from ..scale.tasks import TRANSPORT_OPTIONS
+from ..scale.file_tasks import TRANSPORT_OPTIONS
 from ._common import add_device_argument
 
 
@@ -138,7 +138,7 @@ def frame_range(text: str) -> tuple[int, int]:
 
 
 def task_options(args) -> dict:
-    """The restore task's keywords from the parsed flags (clpde.scale.tasks.restore_file):
+    """The restore task's keywords from the parsed flags (clpde.scale.file_tasks.restore_file):
     one film per task, in the worker's own process."""
     return {
         "masks_out": args.masks_out,

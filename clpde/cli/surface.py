@@ -4,7 +4,7 @@ runs themselves are clpde.surface.runs'."""
 from __future__ import annotations
 
 from ..errors import InputError
-from ..scale.tasks import TASKS
+from ..scale.file_tasks import TASKS
 from ..surface.implicit import STORAGES
 from ..surface.inpaint_files import inpaint_file
 from ..surface.inpainting import METHODS as INPAINT_METHODS
@@ -119,7 +119,7 @@ def add_surface_parser(subparsers) -> None:
 
 
 def task_options(args) -> dict:
-    """The surface task's keywords from the parsed flags (clpde.scale.tasks.surface_file)."""
+    """The surface task's keywords from the parsed flags (clpde.scale.file_tasks.surface_file)."""
     return {
         "flow": args.flow,
         "resolution": args.resolution,

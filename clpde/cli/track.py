@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..io.images import MASK_RULE
-from ..scale.tasks import TASKS
+from ..scale.file_tasks import TASKS
 from ..tracking.options import ADAPTIVE_ITERATIONS, ITERATIONS, TrackOptions
 from ._common import add_device_argument, add_output_folder_arguments, report, show_progress
 
@@ -157,7 +157,7 @@ def _add_report_arguments(parser) -> None:
 
 
 def task_options(args) -> dict:
-    """The track task's keywords from the parsed flags (clpde.scale.tasks.track_file)."""
+    """The track task's keywords from the parsed flags (clpde.scale.file_tasks.track_file)."""
     return {
         "features": args.features,
         "colour": args.colour,

@@ -38,9 +38,9 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
-from ._frames import film_planes, grey
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
+from ._planes import film_planes, grey
 from ._regions import RESIDUAL_UNITS, _local_noise_check, _motion_check, _ring_check
 from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
 

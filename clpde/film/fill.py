@@ -25,8 +25,8 @@ from ..imagedata import grow_mask, noise_std
 from ..inpainting.api import inpaint
 from ..motion.dis import to_u8
 from ._compensate import fit_gain
-from ._frames import film_masks, film_planes, grey
 from ._motion import FilmMotion, map_frames
+from ._planes import film_masks, film_planes, grey
 from .detect import SIGMA_FLOOR, _partner
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear

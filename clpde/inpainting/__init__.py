@@ -17,7 +17,7 @@ _LAZY = {
     "NavierStokesOptions": ".navier_stokes",
     "ExemplarOptions": ".exemplar",
     "StructureTextureOptions": ".structure_texture",
-    "AutoOptions": ".validate",
+    "AutoOptions": ".auto",
     "PickOptions": ".pick",
 }
 

@@ -30,7 +30,7 @@ from ..fields import check_fits
 from ..imagedata import compute_dtype, grow_mask, growth
 from ..runtime import DeviceLike, get_runtime
 from ..volumes.inpaint import inpaint_volume
-from . import bounds, boxes, poisson, validate
+from . import auto, bounds, boxes, poisson
 from . import registry as inpainting
 from .colour import rgb_to_rho_phi_psi, rho_phi_psi_to_rgb
 from .inputs import check_colour, prepare
@@ -293,7 +293,7 @@ class Inpainting:
         """Whether a program of the method (under auto: of every candidate) is not built yet
         on this runtime in this dtype."""
         if self.method == "auto":
-            names = validate.candidates(self.options.names)
+            names = auto.candidates(self.options.names)
         else:
             names = [self.method]
         files = set()
@@ -382,7 +382,7 @@ def inpaint(
         Also return an InpaintInfo (steps taken, whether it converged, the boxes, ...).
     method : str, optional
         'auto' (self-validated, per cluster of damage: the candidate methods of
-        clpde/inpainting/validate.py fill the hole; where they disagree, a ring of known
+        clpde/inpainting/auto.py fill the hole; where they disagree, a ring of known
         pixels around the cluster is hidden and filled too, and the blend of the candidates
         that fits that ring best fills the cluster; info.choices says what chose what and
         why, info.box_methods names each box's methods by share, info.chosen the candidate

@@ -15,7 +15,7 @@
 
 The exemplar uses the periodicity and the lattice (inpainting/exemplar.py). What
 `method="auto"` fills each cluster of damage with is no longer a rule on these measures but
-measured on the damage itself: inpainting/validate.py.
+measured on the damage itself: inpainting/auto.py.
 """
 
 from __future__ import annotations

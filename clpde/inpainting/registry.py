@@ -65,8 +65,8 @@ METHODS = {
     "pick": "clpde.inpainting.pick",
 }
 # method="auto": each cluster of damage is filled by the self-validated choice among
-# validate.py's candidates (a method of its own, registered there).
-AUTO_MODULE = "clpde.inpainting.validate"
+# auto.py's candidates (a method of its own, registered there).
+AUTO_MODULE = "clpde.inpainting.auto"
 # method=None: the frequency-selective fill. Chosen on the calibration half of
 # benchmarks/inpaint_corpus.py's corpus among coherence, spectral and the self-validated votes,
 # as the candidate leading the best peer in the most classes within a time budget of

@@ -48,7 +48,7 @@ class InpaintInfo:
     # "<structure>+exemplar" had only its thick parts refilled by the exemplar)
     box_exemplar_pixels: list = field(default_factory=list)
     # method="auto": per box, what the self-validation chose for each cluster of damage, and
-    # why (inpainting/validate.py's report)
+    # why (inpainting/auto.py's report)
     choices: list = field(default_factory=list)
 
 

@@ -16,8 +16,8 @@ from ..errors import InputError
 from ..imagedata import positive as _positive
 from ..runtime import DeviceLike
 from .bricks import BrickRegionTracker
-from .frames import RegionFrame
 from .mesh import _region_functions
+from .region_frame import RegionFrame
 from .speed import surface_motion
 from .tracker import RegionTracker
 

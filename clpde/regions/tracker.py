@@ -36,8 +36,8 @@ from ..errors import InputError
 from ..fields import IndexList, check_fits, compact
 from ..grid3d import Grid3D
 from ..runtime import DeviceLike, get_runtime
-from .frames import RegionFrame, make_frame
 from .mesh import along_normals
+from .region_frame import RegionFrame, make_frame
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("regions/regions.cl",)

@@ -48,6 +48,7 @@ from ..io.images import (
     replace_folder,
 )
 from .cluster import connect, wants_gpu
+from .file_tasks import TASKS, TRANSPORT_OPTIONS, inpaint_options
 from .manifest import (
     fingerprint,
     hash_path,
@@ -63,7 +64,6 @@ from .plan import (
     expand_inputs,
     plan_tasks,
 )
-from .tasks import TASKS, TRANSPORT_OPTIONS, inpaint_options
 
 MANIFEST_EVERY_S = 1.0
 
@@ -392,7 +392,7 @@ def batch(
     Parameters
     ----------
     command : {'inpaint', 'denoise', 'diffuse', 'track', 'surface'}
-        The task of `clpde.scale.tasks.TASKS` to run on each input.
+        The task of `clpde.scale.file_tasks.TASKS` to run on each input.
     inputs : iterable of path
         The input files (surface: meshes or shape names).
     output_dir : path

@@ -22,7 +22,7 @@ import numpy as np
 
 from .._version import __version__
 from ..io.images import atomic_output
-from .tasks import TASKS
+from .file_tasks import TASKS
 
 MANIFEST = "clpde-manifest.json"
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..io.images import IMAGE_FORMATS, PathLike, check_folder_writable
+from .file_tasks import TASKS
 from .manifest import MANIFEST
-from .tasks import TASKS
 
 COMMANDS = tuple(TASKS)  # inpaint, denoise, diffuse, track, surface
 FOLDER_OUTPUTS = ("track", "surface")  # one output folder per input, named by its stem

@@ -2,7 +2,7 @@
 level-set storage, and the local features and motion it follows. Every option and its
 default lives in `TrackOptions`."""
 
-from .contours import MorphingTracker, track
 from .options import TrackOptions
+from .tracker import MorphingTracker, track
 
 __all__ = ["MorphingTracker", "TrackOptions", "track"]

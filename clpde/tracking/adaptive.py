@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .features import match_displacement, shift_image
 from .levelset import signed_distance
+from .motion_filter import match_displacement, shift_image
 
 # The pieces are matched over themselves and this many pixels around: enough for the
 # boundary's contrast, little enough that a still background does not pull the match to 0.

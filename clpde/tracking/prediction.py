@@ -22,8 +22,8 @@ from scipy import ndimage
 
 from .adaptive import ComponentMotion, noise_variance
 from .appearance import MATCH_FLOOR, match_shift
-from .features import MotionFilter, local_contrast, match_displacement, shift_image
 from .levelset import LevelSet
+from .motion_filter import MotionFilter, local_contrast, match_displacement, shift_image
 from .options import TrackOptions
 
 # motion='checked''s settings, chosen on the calibration half of

@@ -160,12 +160,12 @@ def _never_compute(monkeypatch):
     def computed(*args, **kwargs):
         raise AssertionError("computed before the output was checked")
 
-    # the command table's own names (clpde.scale.tasks), where the commands call them
+    # the command table's own names (clpde.scale.file_tasks), where the commands call them
     for module, name in [
-        ("clpde.scale.tasks", "diffuse"),
-        ("clpde.scale.tasks", "denoise_tv"),
-        ("clpde.scale.tasks", "inpaint"),
-        ("clpde.scale.tasks", "track"),
+        ("clpde.scale.file_tasks", "diffuse"),
+        ("clpde.scale.file_tasks", "denoise_tv"),
+        ("clpde.scale.file_tasks", "inpaint"),
+        ("clpde.scale.file_tasks", "track"),
         ("clpde.scale.cluster", "start_cluster"),
         ("clpde.io.frames", "read_frames"),
     ]:

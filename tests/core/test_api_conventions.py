@@ -150,8 +150,8 @@ def test_method_options_live_in_their_options_classes_only():
 
     from clpde.inpainting import registry
     from clpde.inpainting.api import Inpainting, inpaint
-    from clpde.tracking.contours import MorphingTracker, track
     from clpde.tracking.options import TrackOptions
+    from clpde.tracking.tracker import MorphingTracker, track
 
     for function in (inpaint, Inpainting.__init__):
         names = set(inspect.signature(function).parameters)

@@ -22,7 +22,7 @@ MODULES = [
     "clpde.inpainting.colour",
     "clpde.runtime",
     "clpde.inpainting.api",
-    "clpde.tracking.contours",
+    "clpde.tracking.tracker",
     "clpde.scale.batch",
     "clpde.regions.tracker",
     "clpde.regions.api",

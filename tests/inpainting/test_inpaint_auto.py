@@ -1,12 +1,12 @@
 """method="auto": the self-validated choice per cluster of damage
-(clpde/inpainting/validate.py), and the measures of choose.py that the exemplar uses."""
+(clpde/inpainting/auto.py), and the measures of choose.py that the exemplar uses."""
 
 import numpy as np
 import pytest
 from scipy import ndimage
 
 import clpde
-from clpde.inpainting import choose, validate
+from clpde.inpainting import auto, choose
 from clpde.runtime import get_runtime
 
 CHEAP = ("biharmonic", "coherence", "exemplar")  # the tests' candidates: quick ones
@@ -38,7 +38,7 @@ def test_features_of_a_disc_in_flat_periodic_and_stochastic_surroundings():
 
 def _vote(image, mask, names=CHEAP):
     data = np.asarray(image, np.float64)[None]
-    return validate.choose(data, mask, get_runtime(), names=names, seed=0)
+    return auto.choose(data, mask, get_runtime(), names=names, seed=0)
 
 
 def _errors(image, mask, names=CHEAP):
@@ -49,7 +49,7 @@ def _errors(image, mask, names=CHEAP):
             np.sqrt(
                 np.mean(
                     (
-                        validate._fill(n, data, mask, get_runtime(), np.float32, 0, {})[0][mask]
+                        auto._fill(n, data, mask, get_runtime(), np.float32, 0, {})[0][mask]
                         - image[mask]
                     )
                     ** 2
@@ -140,16 +140,15 @@ def test_vote_on_dust_is_not_below_its_best_candidate():
         return 10 * np.log10(1 / np.mean((filled[0][omega] - data[0][omega]) ** 2))
 
     best = max(
-        psnr(validate._fill(n, data, omega, runtime, np.float32, 0, {}))
-        for n in validate.candidates()
+        psnr(auto._fill(n, data, omega, runtime, np.float32, 0, {})) for n in auto.candidates()
     )
-    filled, _ = validate.choose(data, omega, runtime, seed=0)
+    filled, _ = auto.choose(data, omega, runtime, seed=0)
     assert psnr(filled) >= best - 0.2
 
 
 def test_a_thick_cluster_votes_on_two_rings_and_takes_their_mean():
     """A cluster thicker than 2 px votes on a ring of half its thickness and on a 1 px
-    ring, each hidden and filled on its own (validate.NARROW); its weights are the mean of
+    ring, each hidden and filled on its own (auto.NARROW); its weights are the mean of
     the two votes', which each vote alone (narrow=False; scale=0) reproduces."""
     rng = np.random.default_rng(3)
     image = ndimage.gaussian_filter(rng.standard_normal((64, 64)), 2)
@@ -159,7 +158,7 @@ def test_a_thick_cluster_votes_on_two_rings_and_takes_their_mean():
     runtime = get_runtime()
 
     def vote(**kw):
-        _, report = validate.choose(data, mask, runtime, names=CHEAP, seed=0, **kw)
+        _, report = auto.choose(data, mask, runtime, names=CHEAP, seed=0, **kw)
         (choice,) = report["choices"]
         assert choice["why"] == "ring vote"
         w = np.array([choice["weights"].get(n, 0.0) for n in CHEAP])

@@ -11,7 +11,7 @@ from clpde import InputError
 from clpde.cli.batch import command_options
 from clpde.inpainting import registry
 from clpde.inpainting.api import Inpainting
-from clpde.scale.tasks import TRANSPORT_OPTIONS, inpaint_options
+from clpde.scale.file_tasks import TRANSPORT_OPTIONS, inpaint_options
 
 METHODS = (*registry.available(), "auto")
 

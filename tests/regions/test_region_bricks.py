@@ -10,7 +10,7 @@ from scipy.ndimage import binary_dilation
 from clpde.errors import InputError
 from clpde.regions.api import region_tracker, track_region
 from clpde.regions.bricks import BIT_REINIT, BIT_STEP
-from clpde.regions.frames import make_frame
+from clpde.regions.region_frame import make_frame
 from clpde.regions.tracker import RegionTracker
 from tests.reference import regions as ref
 

@@ -492,7 +492,7 @@ def test_reinitialisation_keeps_an_oblique_region():
     """A static sphere cut by a plane at 60 degrees, reinitialised 20 times: the cap stays
     (with the plane not first made constant along the normals, the extension before each
     reinitialisation moved the cut once, by 1.6% of the cap's area)."""
-    from clpde.regions.frames import make_frame
+    from clpde.regions.region_frame import make_frame
     from clpde.regions.tracker import RegionTracker
 
     h = 1 / 64

@@ -15,9 +15,9 @@ import pytest
 
 from clpde.fields import Field, PingPong
 from clpde.runtime import Runtime
-from clpde.tracking.contours import MorphingTracker
 from clpde.tracking.levelset import LevelSet
 from clpde.tracking.morph import morph_kernel_name
+from clpde.tracking.tracker import MorphingTracker
 from tests.reference import levelset as ref
 
 BRICKS = [("bricks8x8", False), ("bricks16x4", False), ("bricks8x8", True), ("bricks16x4", True)]

@@ -7,7 +7,7 @@ from skimage.measure import label
 
 import clpde
 from clpde.errors import InputError
-from clpde.tracking.contours import MorphingTracker, track
+from clpde.tracking.tracker import MorphingTracker, track
 
 
 def _render(inside, rng, noise):

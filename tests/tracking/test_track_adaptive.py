@@ -15,8 +15,8 @@ from clpde.tracking.adaptive import (
     noise_variance,
 )
 from clpde.tracking.confidence import LOW_CONFIDENCE, track_confidence
-from clpde.tracking.contours import MorphingTracker, track
 from clpde.tracking.options import CURVATURE, REGION_WEIGHT
+from clpde.tracking.tracker import MorphingTracker, track
 from tests.reference import levelset as ref
 from tests.reference import track_adaptive as aref
 

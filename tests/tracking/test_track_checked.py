@@ -7,9 +7,9 @@ import pytest
 from scipy import ndimage
 
 from clpde.cli import main
-from clpde.tracking.contours import track
-from clpde.tracking.features import MotionFilter, local_contrast
+from clpde.tracking.motion_filter import MotionFilter, local_contrast
 from clpde.tracking.prediction import checked_shift
+from clpde.tracking.tracker import track
 
 H, W = 80, 176
 

@@ -6,7 +6,7 @@ import numpy as np
 from scipy import ndimage
 
 from clpde.tracking.appearance import AppearanceModel, match_shift, object_motion
-from clpde.tracking.contours import track
+from clpde.tracking.tracker import track
 
 H, W = 64, 96
 

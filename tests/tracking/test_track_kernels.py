@@ -1,5 +1,5 @@
 """kernels/tracking/features.cl against its numpy references (tests/reference/levelset.py),
-and the helpers of clpde.tracking.features."""
+and the helpers of clpde.tracking.motion_filter."""
 
 import itertools
 
@@ -8,7 +8,7 @@ import pyopencl.array as cla
 import pytest
 
 from clpde.fields import Field, Grid, compact
-from clpde.tracking.features import MotionFilter, local_contrast, match_displacement
+from clpde.tracking.motion_filter import MotionFilter, local_contrast, match_displacement
 from tests.reference import levelset as ref
 
 

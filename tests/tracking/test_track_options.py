@@ -9,7 +9,7 @@ import pytest
 import clpde
 from clpde import InputError
 from clpde.cli.batch import command_options
-from clpde.scale.tasks import tracking_options
+from clpde.scale.file_tasks import tracking_options
 from clpde.tracking.options import (
     ADAPTIVE_ITERATIONS,
     APPEARANCE_WEIGHT,

@@ -16,7 +16,7 @@ For real video the features may be contrast-invariant (features='contrast':
 local contrast normalisation), colour (colour=True: every channel enters the discrepancy)
 or the user's own maps (an array per frame or a callable); the discrepancy may be a local
 normalised cross-correlation ('ncc') or a Huber difference instead of F2 - F1; a motion
-model (motion='velocity' or 'kalman', clpde.tracking.features.MotionFilter) shifts the level
+model (motion='velocity' or 'kalman', clpde.tracking.motion_filter.MotionFilter) shifts the level
 set and F1 by the predicted displacement before each frame's evolution; shape_weight pulls
 the contour towards that predicted start where the features say nothing; and each frame
 reports its final discrepancy in the band (TrackState.discrepancy), a confidence measure.

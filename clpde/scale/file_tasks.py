@@ -42,8 +42,8 @@ from ..planar.rof import denoise_tv
 from ..runtime import get_runtime
 from ..surface.runs import DATA_FLOWS, load_surface, mesh_colours, run_flow, write_run
 from ..tracking.confidence import LOW_CONFIDENCE
-from ..tracking.contours import track
 from ..tracking.options import TrackOptions, track_options
+from ..tracking.tracker import track
 
 TRANSPORT_OPTIONS = ("dt", "scaling", "max_steps", "tol", "mean_tol")
 OVERLAY_RATE = 10  # frames per second of the tracking overlay
