@@ -180,10 +180,8 @@ class InpaintWidget(RunWidget):
         image, name = np.asarray(layer.data), f"{layer.name} inpainted"
 
         def function(progress):
-            progress(0, 1)  # inpaint_volume reports no progress: cancel acts before it
-            out = inpaint_volume(image, mask, spacing=spacing)
-            progress(1, 1)
-            return out
+            # progress(done, total) over the missing voxels, box by box; cancel raises in it
+            return inpaint_volume(image, mask, spacing=spacing, progress=progress)
 
         return function, lambda out: self.put_layer(out, name, scale=layer.scale)
 
