@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-import sys
 import warnings
 from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
+from bitwise import main
 
 T, H, W = 10, 24, 32
 
@@ -262,9 +262,4 @@ def compare(a: Path, b: Path) -> int:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["save"] and len(sys.argv) == 3:
-        save(Path(sys.argv[2]))
-    elif sys.argv[1:2] == ["compare"] and len(sys.argv) == 4:
-        sys.exit(compare(Path(sys.argv[2]), Path(sys.argv[3])) > 0)
-    else:
-        sys.exit(__doc__)
+    main(save, compare, __doc__)

@@ -18,6 +18,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from bitwise import main, same_arrays
 
 
 def _first(*paths):
@@ -155,19 +156,10 @@ def save(out: Path) -> None:
 
 
 def compare(a: Path, b: Path) -> int:
-    differ = 0
-    for p in sorted(a.glob("*.npy")):
-        x, y = np.load(p), np.load(b / p.name)
-        same = x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes()
-        differ += not same
-        print(f"{p.stem:32s} {str(x.dtype):8s} {str(x.shape):16s} bitwise equal: {same}")
+    n, differ = same_arrays(a, b)
+    print(f"{n} results, {differ} differ")
     return differ
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["save"] and len(sys.argv) in (3, 4):
-        save(Path(sys.argv[2]))
-    elif sys.argv[1:2] == ["compare"] and len(sys.argv) == 4:
-        sys.exit(compare(Path(sys.argv[2]), Path(sys.argv[3])) > 0)
-    else:
-        sys.exit(__doc__)
+    main(save, compare, __doc__)

@@ -13,11 +13,11 @@ reaction-diffusion (plain and along), extension by the PDE, reinitialisation, sa
 (mesh_refine). kernels/surface.cl's split was checked with it.
 """
 
-import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
+from bitwise import main, same_arrays
 
 
 def save(out: Path) -> None:
@@ -83,20 +83,10 @@ def save(out: Path) -> None:
 
 
 def compare(a: Path, b: Path) -> int:
-    differ = 0
-    for p in sorted(a.glob("*.npy")):
-        x, y = np.load(p), np.load(b / p.name)
-        same = x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes()
-        if not same:
-            differ += 1
-            diff = np.abs(x.astype(np.float64) - y).max() if x.shape == y.shape else "shape"
-            print(f"{p.stem}: DIFFERS (max {diff})")
-    print(f"{len(list(a.glob('*.npy')))} results, {differ} differ")
+    n, differ = same_arrays(a, b)
+    print(f"{n} results, {differ} differ")
     return differ
 
 
 if __name__ == "__main__":
-    if sys.argv[1] == "save":
-        save(Path(sys.argv[2]))
-    else:
-        sys.exit(1 if compare(Path(sys.argv[2]), Path(sys.argv[3])) else 0)
+    main(save, compare, __doc__)
