@@ -383,7 +383,7 @@ class BrickBand:
         """Device brick buffer (channels, nbricks + 2, BZ + apron, BY + apron, BX + apron)
         from padded (channels, PZ, PY, PX); the apron holds the first cells of the next brick
         places (the re-extension's source, whose stencils then never leave a brick). The flows
-        make their apron layout on the device (bricks.cl's brick_to_apron, tested against
+        make their apron layout on the device (bricks.cl's bricks_to_apron, tested against
         this one)."""
         flat = np.asarray(padded).reshape(padded.shape[0], -1)
         bx, by, bz = self.brick

@@ -21,7 +21,7 @@ overlaps the hole, of the distance to its nearest patch in the known part:
   pixel takes the centre of the patch that best matches its already known neighbours.
   A finer level starts from the coarser NNF, upsampled (offsets doubled), and a vote, so
   that its detail comes from real fine-scale patches.
-- Before that last vote, a few ICM sweeps over the offsets (pm_coherence): a pixel takes a
+- Before that last vote, a few ICM sweeps over the offsets (patchmatch_coherence): a pixel takes a
   neighbour's offset when its patch distance is within a small factor per agreeing
   neighbour of its own, so that copied regions are larger and their seams fewer.
 - Periodic surroundings (choose.periodicity): the lags at which the known part repeats

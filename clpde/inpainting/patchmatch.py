@@ -177,7 +177,7 @@ class PatchMatchLevel:
     def cohere(self, sweeps: int, factor: float) -> None:
         """ICM sweeps (red, then black) that let a target take a neighbour's offset when it
         is within ``factor`` per agreeing neighbour (of 8) as good as its own
-        (pm_coherence; nnf[1] holds the field before each half-sweep)."""
+        (patchmatch_coherence; nnf[1] holds the field before each half-sweep)."""
         lst, n = self.targets
         for _ in range(sweeps):
             for parity in (0, 1):
@@ -199,7 +199,7 @@ class PatchMatchLevel:
 
     def try_offsets(self, offsets, targets=None, masked: bool = False) -> None:
         """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
-        list of (dx, dy)), keeping it when its colours are at least as close (pm_offsets)."""
+        list of (dx, dy)), keeping it when its colours are at least as close (patchmatch_offsets)."""
         lst, n = self.targets if targets is None else targets
         if self.chw_colour is None:
             w = self.chw.get()

@@ -36,7 +36,7 @@ def vote_sources(
     nnf: np.ndarray, dist: np.ndarray, pen: np.ndarray, hole: np.ndarray, r: int, sigma2: float
 ) -> np.ndarray:
     """(src, oy, ox): the flat index of the source pixel of each hole pixel (in
-    np.flatnonzero(hole) order), as pm_vote's best_only picks it (-1 where no covering
+    np.flatnonzero(hole) order), as patchmatch_vote's best_only picks it (-1 where no covering
     patch has a finite distance), and the pixel's offset in the chosen patch.
 
     nnf: (H, W, 2) source centres (x, y); dist, pen: (H, W)."""

@@ -42,7 +42,7 @@ FLOW_PARAMS = {
 def gaussian_weights(presmooth: float) -> np.ndarray:
     """The one-sided weights w[0..r] of a sampled Gaussian of standard deviation `presmooth`
     pixels, r = ceil(3 presmooth), normalised so that w[0] + 2 (w[1] + ... + w[r]) = 1
-    (kernels/planar/catte.cl's gauss_rows and gauss_cols). presmooth = 0 gives [1]: no
+    (kernels/planar/catte.cl's catte_gauss_rows and catte_gauss_cols). presmooth = 0 gives [1]: no
     smoothing.
 
     Parameters

@@ -226,7 +226,7 @@ class RegionTracker:
         # work buffers equal cur there).
         self.step_runs = g.runs(self.step_band, pad=16)
         self.reinit_runs = g.runs(self.reinit_band, pad=16)
-        # max |V| of each work-item of region_euler and region_heun (see stable_dt)
+        # max |V| of each work-item of regions_euler and regions_heun (see stable_dt)
         (items,), _, _ = self.runtime.list_launch(max(self.step_runs.n, 1))
         self._stats = cla.zeros(self.runtime.queue, 2 * items, g.dtype)
         self._stats_fresh = False
@@ -323,8 +323,8 @@ class RegionTracker:
         for _ in range(its):
             # Heun steps: forward Euler with the slope-limited norm lets a mode grow (a
             # sphere's interface drifted 0.3 cells in 40 reinitialisations). The second
-            # stage averages in place (reinit3d_heun_pre): no third buffer, no averaging
-            # sweep. Bit for bit reinit3d_step and reinit3d_heun.
+            # stage averages in place (regions_reinit3d_heun_pre): no third buffer, no averaging
+            # sweep. Bit for bit regions_reinit3d_step and regions_reinit3d_heun.
             g.launch_runs(
                 k["regions_reinit3d_step_pre"],
                 band,
@@ -436,7 +436,7 @@ class RegionTracker:
 
     def _stage(self, name, src, dst, dt) -> None:
         """One Euler stage of every level set over the step band, the speed computed from
-        src in the same sweep: region_euler, or region_heun (Heun's averaging into dst)."""
+        src in the same sweep: regions_euler, or regions_heun (Heun's averaging into dst)."""
         g = self.grid
         g.launch_runs(
             self._k[name],

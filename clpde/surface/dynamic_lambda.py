@@ -14,7 +14,7 @@ KERNEL_FILES = ("surface/flows.cl",)
 class DynamicLambda:
     """lambda of (C.2) kept on the device: each update enqueues the surface integrals' per-cell
     terms (the flow's lambda_terms, in its storage), their chunk sums and the new lambda
-    (tv_lambda_update), with no read-back; the history of lambda comes back once, at the end.
+    (flows_tv_lambda_update), with no read-back; the history of lambda comes back once, at the end.
     Its kernels come with the flow's defines (they read none of them): on the lists, no
     build of their own."""
 

@@ -207,7 +207,7 @@ class FlowMethods:
             Scale the dynamic lambda by a factor that moves until the residual variance is
             sigma^2, the constraint (C.2) comes from (the discrete (C.2) alone settles above
             it, docs/surface.md); False is the plain formula (kernels/surface/flows.cl,
-            tv_lambda_update).
+            flows_tv_lambda_update).
         progress : bool, optional
             Draw a progress bar; by default only for long runs on a terminal.
         return_info : bool, optional

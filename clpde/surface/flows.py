@@ -6,7 +6,7 @@ node band's runs), then the closest-point re-extension of every cell the next st
 State stays on the device from upload to the final read-back; no host round-trip per step.
 
 This module has the scalar flows (heat, TV, TV denoising, diffusion along a field) and the
-driver of the flow_step kernel (`step_flow`), which the harmonic maps (harmonic.py) share.
+driver of the flows_step kernel (`step_flow`), which the harmonic maps (harmonic.py) share.
 """
 
 from __future__ import annotations
@@ -136,7 +136,7 @@ def step_flow(
     line_field=False,
     correct_lambda=True,
 ):
-    """Shared driver of flow_step: returns (result, info dict)."""
+    """Shared driver of flows_step: returns (result, info dict)."""
     eps = positive("eps", eps)
     limit = stability_limit(surf, flow_name, eps, float(fidelity or 0.0))
     if sigma is not None and dt is None:

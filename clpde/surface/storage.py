@@ -153,7 +153,7 @@ class BandFlow:
         return self.surf.node_band.n
 
     def lambda_terms(self, u0, terms, sides: int, eps: float) -> None:
-        """Enqueue the terms of (C.2) at every node (surface/flows.cl's tv_lambda_terms)."""
+        """Enqueue the terms of (C.2) at every node (surface/flows.cl's flows_tv_lambda_terms)."""
         s = self.surf
         g = s.grid
         g.launch_list(
@@ -308,7 +308,7 @@ class BrickFlow:
         return self.bricks.plane
 
     def lambda_terms(self, u0, terms, sides: int, eps: float) -> None:
-        """Enqueue the terms of (C.2) at every node (bricks.cl's brick_lambda_terms)."""
+        """Enqueue the terms of (C.2) at every node (bricks.cl's bricks_lambda_terms)."""
         b = self.bricks
         b.launch(
             self.kernel("surface/bricks.cl", "bricks_lambda_terms"),

@@ -95,7 +95,7 @@ class LevelSet:
         inner = np.zeros(self.grid.padded_shape[1:], np.uint8)
         self.grid.interior(inner)[MARGIN:-MARGIN, MARGIN:-MARGIN] = 1
         self.active = self.store.cells(cla.to_device(runtime.queue, inner))
-        # Ghost entries stay 0 (mark_band writes the interior only).
+        # Ghost entries stay 0 (levelset_mark_band writes the interior only).
         self.band_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self._near_mask = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)
         self._near_rows = cla.zeros(runtime.queue, self.grid.padded_shape[1:], np.uint8)

@@ -32,7 +32,7 @@ DISCREPANCY_WEIGHT = 1.0  # the frame-to-frame discrepancy's share of the contou
 
 def morph_kernel_name(ls: LevelSet, discrepancy: str) -> str:
     """The morphing step's kernel for the band's storage (tracking/storage.py: with bricks
-    walked by one work-item, the NCC's is morph_track_tiled)."""
+    walked by one work-item, the NCC's is features_morph_track_tiled)."""
     return ls.store.morph_kernel(discrepancy)
 
 
