@@ -199,7 +199,8 @@ class PatchMatchLevel:
 
     def try_offsets(self, offsets, targets=None, masked: bool = False) -> None:
         """Every target tries its pixel plus each of ``offsets`` (a device (n, 2) int32
-        list of (dx, dy)), keeping it when its colours are at least as close (patchmatch_offsets)."""
+        list of (dx, dy)), keeping it when its colours are at least as close
+        (patchmatch_offsets)."""
         lst, n = self.targets if targets is None else targets
         if self.chw_colour is None:
             w = self.chw.get()

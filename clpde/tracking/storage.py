@@ -117,8 +117,8 @@ class Bricks(CellList):
 
     def morph_kernel(self, discrepancy: str) -> str:
         """With bricks walked by one work-item, the NCC slides its window sums over each
-        brick (features_morph_track_tiled: faster than the cell-by-cell sums, docs/tracking.md; equal
-        to rounding)."""
+        brick (features_morph_track_tiled: faster than the cell-by-cell sums,
+        docs/tracking.md; equal to rounding)."""
         if discrepancy == "ncc" and not self.group_per_brick:
             return "features_morph_track_tiled"
         return self.KERNELS["morph"]
