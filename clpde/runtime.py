@@ -223,6 +223,10 @@ def _default_index() -> int:
     order += sorted(
         (i for i in range(len(found)) if i not in order), key=lambda i: not_pocl(found[i][0])
     )
+    if len(order) == 1:
+        # nothing to skip to: the probe (0.6 s of a cold start with PoCL) would only word the
+        # error, which a failing build asks it for then (Runtime._build)
+        return order[0]
     problems = []
     for i in order:
         problem = build_problem(i)
@@ -464,6 +468,9 @@ class Runtime:
         options += [f"-D{k}={v}" for k, v in sorted(defines.items())]
         program, failure = quietly(lambda: cl.Program(self.ctx, source).build(options=options))
         if failure is not None:
+            problem = build_problem(self.index)  # a compiler that builds nothing at all
+            if problem is not None:
+                raise NoDeviceError(problem)
             exc, output = failure
             more = f"\n{output}" if output else ""
             raise KernelBuildError(f"building {path} failed:\n{exc}{more}") from None

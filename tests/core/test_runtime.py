@@ -97,6 +97,34 @@ def test_build_failure_names_file_and_line(runtime, tmp_path, monkeypatch):
     assert "broken.cl" in message and ":5:" in message and "undefined_name" in message
 
 
+def test_a_compiler_that_builds_nothing_is_one_line_at_the_first_build(
+    runtime, tmp_path, monkeypatch
+):
+    """A failing build asks the probe (skipped when there was no other device to choose):
+    a compiler that builds nothing at all is NoDeviceError's one line, not a compiler log."""
+    (tmp_path / "broken.cl").write_text("__kernel void k(__global float* u) { u[0] = nope; }\n")
+    monkeypatch.setattr(rt_mod, "KERNEL_DIR", tmp_path)
+    problem = "Some CPU (PoCL) cannot compile kernels: unknown target CPU 'generic'"
+    monkeypatch.setattr(rt_mod, "build_problem", lambda index: problem)
+    with pytest.raises(NoDeviceError, match="cannot compile kernels"):
+        runtime.program("broken.cl")
+
+
+def test_one_device_is_chosen_without_probing_its_compiler(monkeypatch):
+    """The probe builds a program (0.6 s of a cold start with PoCL) only to skip a device
+    whose compiler fails when another one may work: with one device there is none."""
+    found = rt_mod._all_devices()[:1]
+    monkeypatch.setattr(rt_mod, "_all_devices", lambda: found)
+    monkeypatch.delenv("CLPDE_DEVICE", raising=False)
+    monkeypatch.delenv("PYOPENCL_CTX", raising=False)
+
+    def probe(index):
+        raise AssertionError("the only device was probed")
+
+    monkeypatch.setattr(rt_mod, "build_problem", probe)
+    assert rt_mod._default_index() == 0
+
+
 def test_missing_kernel_file(runtime):
     with pytest.raises(KernelBuildError, match="does not exist"):
         runtime.program("no_such_file.cl")
