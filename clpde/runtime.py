@@ -141,7 +141,10 @@ def _resolve(spec) -> int:
             (i for i, (_, d) in enumerate(found) if type_name(d) == wanted),
             key=lambda i: not_pocl(found[i][0]),
         )
-        # The first of that type whose compiler works; else the first, whose error then says why.
+        # The first of that type whose compiler works; else the first, whose error then says
+        # why. One of its type is not probed: nothing to skip to (a failing build asks).
+        if len(of_type) == 1:
+            return of_type[0]
         for i in of_type:
             if build_problem(i) is None:
                 return i
@@ -182,18 +185,13 @@ def build_problem(index: int) -> str | None:
         return _build_problems[index]
 
 
+PROBE_SOURCE = KERNEL_DIR / "common/probe.cl"  # fixed here: a test may point KERNEL_DIR elsewhere
+
+
 def _probe(index: int) -> str | None:
     """Build a tiny program on device ``index``: None, or why it fails."""
     platform, device = _all_devices()[index]
-    return build_failure(platform, device, (KERNEL_DIR / "common/probe.cl").read_text())
-
-
-def _usable(index: int) -> int:
-    """``index`` itself, or an error saying why the device cannot run clpde's kernels."""
-    problem = build_problem(index)
-    if problem is not None:
-        raise NoDeviceError(problem)
-    return index
+    return build_failure(platform, device, PROBE_SOURCE.read_text())
 
 
 def _default_index() -> int:
@@ -201,14 +199,14 @@ def _default_index() -> int:
     env = os.environ.get("CLPDE_DEVICE")
     if env:
         try:
-            return _usable(_resolve(env))
+            return _resolve(env)
         except ClpdeError as exc:
             raise ClpdeError(f"CLPDE_DEVICE={env!r}: {exc}") from None
     # pyopencl's own setting, for users who already steer every pyopencl program with it
     ctx = os.environ.get("PYOPENCL_CTX")
     if ctx and ctx.strip():
         try:
-            return _usable(pyopencl_ctx(ctx, _all_devices()))
+            return pyopencl_ctx(ctx, _all_devices())
         except ClpdeError as exc:
             raise ClpdeError(
                 f"PYOPENCL_CTX={ctx!r}: {exc}; set it to 'platform:device' indices from "
@@ -297,7 +295,8 @@ def get_runtime(device: str | int | Runtime | None = None) -> Runtime:
     if device is None:
         device = _chosen_spec
     with _lock:
-        index = _default_index() if device is None else _usable(_resolve(device))
+        # a named device is not probed: its first failing build asks (Runtime._build)
+        index = _default_index() if device is None else _resolve(device)
         runtime = _runtimes.get(index)
         if runtime is None:
             platform, dev = _all_devices()[index]
