@@ -48,56 +48,38 @@ def _tile(img, centre):
     return np.pad(np.pad(crop, pad, constant_values=1), ((1, 1), (1, 1), (0, 0)), constant_values=1)
 
 
-def checked_picture():
+def _picture(clips, blue: dict, red: dict, name: str) -> None:
+    """One row per (class, seed, frames) clip: truth green, clpde.track(**blue) blue and
+    clpde.track(**red) red, each frame a tile cropped around the truth; to docs/images/name."""
     from skimage.io import imsave
 
     import clpde
 
     rows = []
-    for cls, seed, chosen in CHECKED_CLIPS:
+    for cls, seed, chosen in clips:
         frames, truth = MAKERS[cls](seed)
-        kalman = clpde.track(frames, truth[0], motion="kalman", progress=False)
-        checked = clpde.track(frames, truth[0], motion="checked", progress=False)
+        first = clpde.track(frames, truth[0], progress=False, **blue)
+        second = clpde.track(frames, truth[0], progress=False, **red)
         colour = frames if frames.ndim == 4 else np.repeat(frames[..., None], 3, -1)
         tiles = []
         for t in chosen:
             img = colour[t].copy()
             _outline(img, truth[t], (0, 1, 0))
-            _outline(img, kalman[t], (0, 0.4, 1))
-            _outline(img, checked[t], (1, 0, 0))
+            _outline(img, first[t], (0, 0.4, 1))
+            _outline(img, second[t], (1, 0, 0))
             tiles.append(_tile(img, ndimage.center_of_mass(truth[t])))
         rows.append(np.concatenate(tiles, 1))
-    out = ROOT / "docs" / "images" / "track_checked.png"
+    out = ROOT / "docs" / "images" / name
     imsave(out, (np.clip(np.concatenate(rows, 0), 0, 1) * 255).astype(np.uint8))
     print(f"wrote {out}")
 
 
 def main():
-    from skimage.io import imsave
-
     if "--checked" in sys.argv[1:]:
-        return checked_picture()
-
-    import clpde
-
-    rows = []
-    for cls, seed in CLIPS:
-        frames, truth = MAKERS[cls](seed)
-        default = clpde.track(frames, truth[0], progress=False)
-        image = clpde.track(frames, truth[0], motion="image", progress=False)
-        colour = frames if frames.ndim == 4 else np.repeat(frames[..., None], 3, -1)
-        tiles = []
-        for t in FRAMES:
-            img = colour[t].copy()
-            _outline(img, truth[t], (0, 1, 0))
-            _outline(img, default[t], (0, 0.4, 1))
-            _outline(img, image[t], (1, 0, 0))
-            tiles.append(_tile(img, ndimage.center_of_mass(truth[t])))
-        rows.append(np.concatenate(tiles, 1))
-    out = ROOT / "docs" / "images" / "track_photo_test.png"
-    picture = np.concatenate(rows, 0)
-    imsave(out, (np.clip(picture, 0, 1) * 255).astype(np.uint8))
-    print(f"wrote {out}")
+        _picture(CHECKED_CLIPS, {"motion": "kalman"}, {"motion": "checked"}, "track_checked.png")
+    else:
+        clips = [(cls, seed, FRAMES) for cls, seed in CLIPS]
+        _picture(clips, {}, {"motion": "image"}, "track_photo_test.png")
 
 
 if __name__ == "__main__":
