@@ -23,7 +23,14 @@ def same_arrays(a: Path, b: Path, width: int = 40) -> tuple[int, int]:
     return len(paths), differ
 
 
-def main(save: Callable[[Path], None], compare: Callable[[Path, Path], int], doc: str) -> None:
+def compare_all(a: Path, b: Path) -> int:
+    """Every array of a against b's, then one summary line; the number that differ."""
+    n, differ = same_arrays(a, b)
+    print(f"{n} results, {differ} differ")
+    return differ
+
+
+def main(save: Callable[[Path], None], doc: str, compare=compare_all) -> None:
     """`python SCRIPT save DIR` or `python SCRIPT compare A B` (exit 1 when results differ)."""
     if sys.argv[1:2] == ["save"] and len(sys.argv) >= 3:  # (a part list may follow)
         save(Path(sys.argv[2]))

@@ -262,4 +262,4 @@ def compare(a: Path, b: Path) -> int:
 
 
 if __name__ == "__main__":
-    main(save, compare, __doc__)
+    main(save, __doc__, compare)

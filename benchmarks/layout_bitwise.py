@@ -18,7 +18,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from bitwise import main, same_arrays
+from bitwise import main
 
 
 def _first(*paths):
@@ -155,11 +155,5 @@ def save(out: Path) -> None:
         np.save(out / f"{name}.npy", np.asarray(value))
 
 
-def compare(a: Path, b: Path) -> int:
-    n, differ = same_arrays(a, b)
-    print(f"{n} results, {differ} differ")
-    return differ
-
-
 if __name__ == "__main__":
-    main(save, compare, __doc__)
+    main(save, __doc__)

@@ -16,7 +16,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from bitwise import main, same_arrays
+from bitwise import main
 
 STORAGES = ("lists", "bricks8x8", "bricks16x4")
 
@@ -63,11 +63,5 @@ def save(out: Path) -> None:
         np.save(out / f"levelset_{storage}_grouped_reinit.npy", ls.values())
 
 
-def compare(a: Path, b: Path) -> int:
-    n, differ = same_arrays(a, b)
-    print(f"{n} results, {differ} differ")
-    return differ
-
-
 if __name__ == "__main__":
-    main(save, compare, __doc__)
+    main(save, __doc__)
