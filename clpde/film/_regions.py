@@ -22,6 +22,25 @@ EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion 
 RESIDUAL_UNITS = 1.16
 
 
+def _components(labels: np.ndarray, pad: int):
+    """Each labelled component: (label, window: its box grown by pad px within the frame,
+    its own pixels in the window)."""
+    ny, nx = labels.shape
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        win = (
+            slice(max(sl[0].start - pad, 0), min(sl[0].stop + pad, ny)),
+            slice(max(sl[1].start - pad, 0), min(sl[1].stop + pad, nx)),
+        )
+        yield idx, win, labels[win] == idx
+
+
+def _ring(own: np.ndarray, labels_win: np.ndarray, inner: int, outer: int) -> np.ndarray:
+    """The pixels inner+1 to outer px from `own` that belong to no component."""
+    ring = ndimage.binary_dilation(own, iterations=outer)
+    ring &= ~ndimage.binary_dilation(own, iterations=inner)
+    return ring & (labels_win == 0)
+
+
 def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.ndarray:
     """Sum over the template of weight * (window - template)^2 at every placement that fits
     (the 'valid' placements, top-left corners), by three correlations."""
@@ -53,10 +72,8 @@ def _motion_check(
     T, ny, nx = G.shape
     keep = np.ones(n + 1, bool)
     keep[0] = False
-    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        y0, y1 = max(sl[0].start - 3, 0), min(sl[0].stop + 3, ny)
-        x0, x1 = max(sl[1].start - 3, 0), min(sl[1].stop + 3, nx)
-        own = labels[y0:y1, x0:x1] == idx
+    for idx, win, own in _components(labels, 3):
+        (y0, y1), (x0, x1) = (win[0].start, win[0].stop), (win[1].start, win[1].stop)
         region = ndimage.binary_dilation(own, iterations=2)
         r2 = resid[y0:y1, x0:x1] ** 2
         # medians: a component may carry some clean pixels or a trail beside the object
@@ -113,20 +130,13 @@ def _ring_check(
     labels, n = ndimage.label(mask)
     if n == 0:
         return mask
-    ny, nx = mask.shape
     keep = np.zeros(n + 1, bool)
-    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        y0, y1 = max(sl[0].start - 7, 0), min(sl[0].stop + 7, ny)
-        x0, x1 = max(sl[1].start - 7, 0), min(sl[1].stop + 7, nx)
-        own = labels[y0:y1, x0:x1] == idx
-        ring = ndimage.binary_dilation(own, iterations=4) & ~ndimage.binary_dilation(
-            own, iterations=1
-        )
-        ring &= labels[y0:y1, x0:x1] == 0
+    for idx, win, own in _components(labels, 7):
+        ring = _ring(own, labels[win], 1, 4)
         if ring.sum() < 4:
             continue
-        trusted = both[y0:y1, x0:x1][ring]
-        quiet = np.abs(res[y0:y1, x0:x1][ring]) <= RING_LIMIT * sigma
+        trusted = both[win][ring]
+        quiet = np.abs(res[win][ring]) <= RING_LIMIT * sigma
         if not (trusted.mean() >= RING_TRUSTED and (trusted & quiet).mean() >= RING_QUIET):
             continue
         outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
@@ -135,7 +145,7 @@ def _ring_check(
         # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
         # flows around it too, but rarely both (the least spread decides)
         spread = np.inf
-        for f in flows[:, y0:y1, x0:x1][:, outer]:  # (pixels, 2) per neighbour
+        for f in flows[(slice(None), *win)][:, outer]:  # (pixels, 2) per neighbour
             lo, hi = np.percentile(f, [5, 95], axis=0)
             spread = min(spread, float((hi - lo).max()))
         keep[idx] = spread <= EDGE_SPREAD
@@ -154,20 +164,12 @@ def _local_noise_check(
     labels, n = ndimage.label(mask)
     if n == 0:
         return mask
-    ny, nx = mask.shape
     keep = np.zeros(n + 1, bool)
-    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        y0, y1 = max(sl[0].start - 4, 0), min(sl[0].stop + 4, ny)
-        x0, x1 = max(sl[1].start - 4, 0), min(sl[1].stop + 4, nx)
-        lab = labels[y0:y1, x0:x1]
-        own = lab == idx
-        ring = ndimage.binary_dilation(own, iterations=3) & ~ndimage.binary_dilation(
-            own, iterations=1
-        )
-        ring &= lab == 0
+    for idx, win, own in _components(labels, 4):
+        ring = _ring(own, labels[win], 1, 3)
         if not ring.any():
             continue
-        level = 1.4826 * float(np.median(np.abs(res[y0:y1, x0:x1][ring])))
+        level = 1.4826 * float(np.median(np.abs(res[win][ring])))
         local = max(1.0, level / (RESIDUAL_UNITS * sigma))
-        keep[idx] = float(a[y0:y1, x0:x1][own].max()) >= threshold * local
+        keep[idx] = float(a[win][own].max()) >= threshold * local
     return keep[labels]
