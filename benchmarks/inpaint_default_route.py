@@ -13,7 +13,16 @@ detail image: grey minus its local mean over the known pixels):
 - radius: its half-thickness (px);
 - texture: RMS of the detail on the known pixels within 8 px of it;
 - periodicity: the largest autocorrelation of the detail (choose.LAGS) in a window of the
-  cluster's bounding box grown by WINDOW px (only for clusters at least 3 px thick).
+  cluster's bounding box grown by WINDOW px (only for clusters at least 3 px thick);
+- repeat: the same autocorrelation's value along two directions (choose.repeat: a straight
+  edge repeats along itself only), in the same window;
+- gap and separation: how clearly the cluster's border splits into two sides of distinct
+  colour (pick.edge_contrast).
+
+Rules (route): periodic clusters to the exemplar (by periodicity or repeat), smooth ones
+to biharmonic, edge clusters (gap and separation over thresholds) to a named candidate.
+`--clusters` also lists every cluster at least 3 px thick with its measures and each
+candidate's PSNR there.
 """
 
 from __future__ import annotations
@@ -32,12 +41,12 @@ from inpaint_vote_sound import load  # noqa: E402
 from tests.cases import inpaint_corpus as corpus  # noqa: E402
 
 WINDOW = 24
-OPTIONS = ("spectral", "biharmonic", "exemplar")
 
 
 def measures(c):
-    """Per cluster (label 1..count): radius, texture, periodicity (arrays)."""
-    from clpde.inpainting import choose
+    """Per cluster (label 1..count): {radius, texture, periodicity, repeat, gap,
+    separation} (arrays)."""
+    from clpde.inpainting import choose, pick
 
     known = ~c.omega
     detail, ok = choose._detail(c.data, known)
@@ -45,7 +54,7 @@ def measures(c):
     lab = np.arange(1, c.count + 1)
     sq = ndimage.mean(detail.astype(float) ** 2, np.where(ring, c.owner, 0), lab)
     texture = np.sqrt(np.nan_to_num(np.asarray(sq, float)))
-    period = np.zeros(c.count)
+    period, repeat = np.zeros(c.count), np.zeros(c.count)
     slices = ndimage.find_objects(c.clusters)
     for k, s in enumerate(slices):
         if s is None or c.radius[k] < 3:
@@ -53,7 +62,16 @@ def measures(c):
         y0, y1 = max(s[0].start - WINDOW, 0), s[0].stop + WINDOW
         x0, x1 = max(s[1].start - WINDOW, 0), s[1].stop + WINDOW
         period[k] = choose._periodicity(detail[y0:y1, x0:x1], ok[y0:y1, x0:x1])
-    return np.asarray(c.radius, float), texture, period
+        repeat[k] = choose.repeat(detail[y0:y1, x0:x1], ok[y0:y1, x0:x1])
+    gap, separation = pick.edge_contrast(c.data, c.omega)
+    return {
+        "radius": np.asarray(c.radius, float),
+        "texture": texture,
+        "periodicity": period,
+        "repeat": repeat,
+        "gap": gap,
+        "separation": separation,
+    }
 
 
 def outputs(c):
@@ -68,14 +86,46 @@ def outputs(c):
     return out
 
 
-def route(radius, texture, period, rule):
-    """The option index (into OPTIONS) per cluster."""
-    pick = np.zeros(radius.shape, int)
+def route(m, rule):
+    """The candidate's name per cluster (spectral unless a rule says otherwise)."""
+    pick = np.full(m["radius"].shape, "spectral", object)
     if rule.get("smooth") is not None:
-        pick[texture < rule["smooth"]] = 1
+        pick[m["texture"] < rule["smooth"]] = "biharmonic"
+    if rule.get("edge") is not None:
+        gap, sep, name = rule["edge"]
+        pick[(m["gap"] >= gap) & (m["separation"] >= sep) & (m["radius"] >= 3)] = name
+    if rule.get("oracle") is not None:  # the better of spectral and `oracle` by the truth
+        best = m["truth_" + rule["oracle"]] > m["truth_spectral"]
+        pick[best & (m["radius"] >= 3)] = rule["oracle"]
     if rule.get("period") is not None:
-        pick[(period >= rule["period"]) & (radius >= rule.get("min_radius", 3))] = 2
+        measure = m[rule.get("measure", "periodicity")]
+        pick[(measure >= rule["period"]) & (m["radius"] >= rule.get("min_radius", 3))] = "exemplar"
     return pick
+
+
+def cluster_psnr(c, outs, lab, name):
+    """PSNR of candidate `name` over cluster `lab`'s hole pixels."""
+    sel = c.omega & (c.clusters == lab)
+    d = outs[name][sel].astype(float) - c.case.truth[sel].astype(float)
+    return 10 * np.log10(c.case.peak**2 / max(np.mean(d**2), 1e-12))
+
+
+def rules():
+    out = {"spectral (today)": {}}
+    for p in (0.85, 0.9):
+        out[f"period >= {p}"] = {"period": p}
+        out[f"repeat >= {p}"] = {"period": p, "measure": "repeat"}
+    for name in ("biharmonic", "coherence", "navier-stokes"):
+        for gap in (0.05, 0.1, 0.2):
+            for sep in (2.5, 3.0, 4.0):
+                out[f"repeat .85, edge {gap} {sep} {name}"] = {
+                    "period": 0.85,
+                    "measure": "repeat",
+                    "edge": (gap, sep, name),
+                }
+    for name in ("biharmonic", "coherence", "navier-stokes", "exemplar"):
+        out[f"repeat .85, oracle {name}"] = {"period": 0.85, "measure": "repeat", "oracle": name}
+    return out
 
 
 def main(argv=None):
@@ -83,37 +133,42 @@ def main(argv=None):
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--half", default="calibration")
+    parser.add_argument("--clusters", action="store_true")
     args = parser.parse_args(argv)
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     rows = []
     for c in load(halves, names):
-        radius, texture, period = measures(c)
+        m = measures(c)
         outs = outputs(c)
-        rows.append((c, radius, texture, period, outs))
-    rules = {"spectral (today)": {}}
-    for p in (0.8, 0.85, 0.9, 0.95):
-        rules[f"period >= {p}"] = {"period": p}
-    for t in (0.002, 0.004, 0.008):
-        rules[f"texture < {t}"] = {"smooth": t}
-        rules[f"texture < {t}, period >= 0.9"] = {"smooth": t, "period": 0.9}
+        for n in names:  # each candidate's PSNR per cluster, for the oracle rules
+            m["truth_" + n] = np.array([cluster_psnr(c, outs, k + 1, n) for k in range(c.count)])
+        rows.append((c, m, outs))
+        if args.clusters:
+            for k in np.flatnonzero(m["radius"] >= 3):
+                ps = " ".join(f"{n[:5]}={cluster_psnr(c, outs, k + 1, n):5.1f}" for n in names)
+                print(
+                    f"{c.case.name:28s} {k + 1:3d} r={m['radius'][k]:4.1f} "
+                    f"per={m['periodicity'][k]:.2f} rep={m['repeat'][k]:.2f} "
+                    f"gap={m['gap'][k]:.3f} sep={m['separation'][k]:4.1f}  {ps}"
+                )
     for half in halves:
         sel = [r for r in rows if r[0].case.half == half]
         print(f"\n{half} ({len(sel)} cases): rule | mean over classes | per class")
-        for label, rule in rules.items():
+        for label, rule in rules().items():
             by = {}
-            for c, radius, texture, period, outs in sel:
-                pick = route(radius, texture, period, rule)
+            for c, m, outs in sel:
+                pick = route(m, rule)
                 img = outs["spectral"].copy()
                 lab = np.zeros(c.omega.shape, int)
                 lab[c.omega] = c.hole_label
-                for k, n in enumerate(OPTIONS):
-                    m = np.isin(lab, 1 + np.flatnonzero(pick == k)) & c.omega
-                    img[m] = outs[n][m]
+                for n in set(pick):
+                    chosen = np.isin(lab, 1 + np.flatnonzero(pick == n)) & c.omega
+                    img[chosen] = outs[n][chosen]
                 by.setdefault(c.case.damage, []).append(corpus.psnr(c.case, img))
             means = {d: np.mean(v) for d, v in by.items()}
             print(
-                f"{label:32s} {np.mean(list(means.values())):6.2f}  "
+                f"{label:44s} {np.mean(list(means.values())):6.2f}  "
                 + " ".join(f"{d[:5]}={means[d]:.2f}" for d in corpus.CLASSES if d in means)
             )
 

@@ -48,6 +48,14 @@ def periodicity(data: np.ndarray, omega: np.ndarray) -> float:
 
 
 def _periodicity(detail, ok) -> float:
+    lags, a = _autocorrelation(detail, ok)
+    return float(a.max()) if a.size else 0.0
+
+
+def _autocorrelation(detail, ok):
+    """The normalised autocorrelation of the detail over the known pixels: the lags (dy,
+    dx) of chessboard length within LAGS whose overlap holds at least a quarter of the known
+    pixels and some detail ((m, 2) ints), and the correlation at each ((m,))."""
     d = np.where(ok, detail, 0).astype(np.float32)
     k = ok.astype(np.float32)
     H, W = d.shape
@@ -60,16 +68,35 @@ def _periodicity(detail, ok) -> float:
         return sfft.irfft2(fa * np.conj(fb), shape)
 
     num, e1, e2, count = corr(fd, fd), corr(fd2, fk), corr(fk, fd2), corr(fk, fk)
-    ty = np.abs(sfft.fftfreq(shape[0], 1 / shape[0]))[:, None]
-    tx = np.abs(sfft.fftfreq(shape[1], 1 / shape[1]))[None, :]
-    lag = np.maximum(ty, tx)
+    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
+    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    ly, lx = np.broadcast_arrays(ty, tx)
+    lag = np.maximum(np.abs(ly), np.abs(lx))
     # lags whose overlap holds at least a quarter of the known pixels, and some detail
     use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
     use &= np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1)
-    if not use.any():
+    lags = np.stack([ly[use], lx[use]], -1).astype(np.int64)
+    return lags, num[use] / np.sqrt(e1[use] * e2[use])
+
+
+def repeat(detail, ok) -> float:
+    """How well the detail repeats along two directions: the autocorrelation's best lag's
+    value, or, if lower, the best value at a lag at least LAGS[0] px off the line through
+    the origin along that lag; 0 when too little is known.
+
+    A straight edge correlates with itself at every shift along it, as well as a periodic
+    pattern at its period (periodicity ~1 for both), but only along that one line: across
+    it the correlation falls and stays low. A periodic pattern repeats off that line too:
+    a lattice along its second vector, stripes along themselves or across at their period."""
+    lags, a = _autocorrelation(detail, ok)
+    if not a.size:
         return 0.0
-    a = num[use] / np.sqrt(e1[use] * e2[use])
-    return float(a.max())
+    best = int(np.argmax(a))
+    ly, lx = lags[best]
+    # distance of each lag from the line through the origin along the best one
+    off = np.abs(lags[:, 0] * lx - lags[:, 1] * ly) / np.hypot(ly, lx)
+    away = off >= LAGS[0]
+    return float(min(a[best], a[away].max())) if away.any() else 0.0
 
 
 def lattice_offsets(

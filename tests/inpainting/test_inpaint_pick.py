@@ -82,6 +82,25 @@ def test_a_thin_scratch_in_a_pattern_stays_spectral():
     assert not pick.periodic_clusters(image[None] / 255.0, mask).any()
 
 
+@pytest.mark.parametrize("angle", [0.0, 0.4, 1.1])
+def test_a_blob_on_a_straight_edge_is_not_taken_for_a_period(angle):
+    # a straight edge correlates with itself at every shift along it (periodicity ~1), but
+    # repeats along that one line only; a lattice or stripes also repeat off it
+    from clpde.inpainting import choose
+
+    y, x = np.mgrid[0:96, 0:96].astype(float)
+    t = (x - 48) * np.cos(angle) + (y - 48) * np.sin(angle)
+    image = np.round(255 * (0.3 + 0.4 / (1 + np.exp(-t / 0.8)))).astype(np.uint8)
+    mask = _disc(image.shape, 48, 48, 6)
+    data = image[None] / 255.0
+    detail, ok = choose._detail(data, ~mask)
+    assert choose._periodicity(detail, ok) > 0.95  # the old measure's false period
+    assert choose.repeat(detail, ok) < 0.5
+    assert not pick.periodic_clusters(data, mask).any()
+    stripes = np.round(255 * (0.5 + 0.4 * np.sin(2 * np.pi * t / 10))).astype(np.uint8)
+    assert pick.periodic_clusters(stripes[None] / 255.0, mask).sum() == mask.sum()
+
+
 def test_options_are_checked():
     with pytest.raises(InputError, match="periodicity must be in"):
         PickOptions(periodicity=1.5)
