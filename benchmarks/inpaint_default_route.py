@@ -97,10 +97,57 @@ def route(m, rule):
     if rule.get("oracle") is not None:  # the better of spectral and `oracle` by the truth
         best = m["truth_" + rule["oracle"]] > m["truth_spectral"]
         pick[best & (m["radius"] >= 3)] = rule["oracle"]
+    if rule.get("ring") is not None:  # `name` where its ring error is below spectral's
+        w, name, ratio, min_radius = rule["ring"]
+        key = f"ring{w}_{name}"
+        if key in m:
+            better = m[key] < ratio * m[f"ring{w}_spectral"]
+            if rule.get("edge_only"):
+                better &= (m["gap"] >= rule["edge_only"][0]) & (
+                    m["separation"] >= rule["edge_only"][1]
+                )
+            if rule.get("not_edge"):
+                better &= (m["gap"] < rule["not_edge"][0]) | (m["separation"] < rule["not_edge"][1])
+            pick[better & (m["radius"] >= min_radius)] = name
+    if rule.get("fit") is not None:  # biharmonic where it fits its ring almost exactly
+        w, q = rule["fit"]
+        if f"ring{w}_var" in m:
+            smooth = m[f"ring{w}_biharmonic"] < q * m[f"ring{w}_var"]
+            pick[smooth & (m["radius"] >= 3)] = "biharmonic"
     if rule.get("period") is not None:
         measure = m[rule.get("measure", "periodicity")]
         pick[(measure >= rule["period"]) & (m["radius"] >= rule.get("min_radius", 3))] = "exemplar"
     return pick
+
+
+def ring_errors(c, path):
+    """{f"ring{w}_{name}": each cluster's mean squared error on its ring of w px} from a
+    cache of ring fills (benchmarks/inpaint_vote_cache.py's file for this case), for the
+    candidates stored there."""
+    if not path.exists():
+        return {}
+    z = np.load(path)
+    out = {}
+    for w in (1, 2, 4, 8):
+        if f"mask_ring{w}" not in z.files:
+            continue
+        hidden = z[f"mask_ring{w}"]
+        index = np.full(hidden.shape, -1)
+        index[hidden] = np.arange(int(hidden.sum()))
+        sel = ~c.omega & (c.dist <= w)
+        owner = c.owner[sel]
+        count = np.maximum(np.bincount(owner, minlength=c.count + 1)[1:], 1)
+        t = c.data[:, sel]
+        mean = np.stack([np.bincount(owner, ch, minlength=c.count + 1)[1:] / count for ch in t])
+        sq = ((t - mean[:, np.maximum(owner - 1, 0)]) ** 2).sum(axis=0)
+        out[f"ring{w}_var"] = np.bincount(owner, sq, minlength=c.count + 1)[1:] / count / len(t)
+        for key in z.files:
+            if key.startswith(f"fill_ring{w}_"):
+                name = key[len(f"fill_ring{w}_") :]
+                sq = ((z[key][:, index[sel]] - c.data[:, sel]) ** 2).sum(axis=0)
+                err = np.bincount(owner, sq, minlength=c.count + 1)[1:]
+                out[f"ring{w}_{name}"] = err / count / c.data.shape[0]
+    return out
 
 
 def cluster_psnr(c, outs, lab, name):
@@ -115,6 +162,33 @@ def rules():
     for p in (0.85, 0.9):
         out[f"period >= {p}"] = {"period": p}
         out[f"repeat >= {p}"] = {"period": p, "measure": "repeat"}
+    for w in (1, 2, 4, 8):
+        for ratio in (1.0, 0.8, 0.5):
+            for r in (3, 5):
+                out[f"repeat .85, ring {w} < {ratio} x spectral, r >= {r}"] = {
+                    "period": 0.85,
+                    "measure": "repeat",
+                    "ring": (w, "biharmonic", ratio, r),
+                }
+    for w in (2, 4):
+        for gap, sep in ((0.1, 2.5), (0.1, 3.0), (0.2, 3.0)):
+            for ratio in (1.0, 0.8):
+                for how in ("edge_only", "not_edge"):
+                    out[f"repeat .85, ring {w} < {ratio}, {how} {gap} {sep}"] = {
+                        "period": 0.85,
+                        "measure": "repeat",
+                        "ring": (w, "biharmonic", ratio, 3),
+                        how: (gap, sep),
+                    }
+    for w in (1, 2, 4, 8):
+        for q in (0.001, 0.003, 0.01, 0.03):
+            out[f"repeat .85, biharmonic fits ring {w} to {q}"] = {
+                "period": 0.85,
+                "measure": "repeat",
+                "fit": (w, q),
+            }
+    for t in (0.002, 0.004, 0.008, 0.016):
+        out[f"repeat .85, texture < {t}"] = {"period": 0.85, "measure": "repeat", "smooth": t}
     for name in ("biharmonic", "coherence", "navier-stokes"):
         for gap in (0.05, 0.1, 0.2):
             for sep in (2.5, 3.0, 4.0):
@@ -134,12 +208,18 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--half", default="calibration")
     parser.add_argument("--clusters", action="store_true")
+    parser.add_argument("--rings", default=None, help="a folder of ring fills (ring rules)")
+    parser.add_argument("--classes", default=None, help="comma-separated classes only")
     args = parser.parse_args(argv)
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     rows = []
     for c in load(halves, names):
+        if args.classes and c.case.damage not in args.classes.split(","):
+            continue
         m = measures(c)
+        if args.rings:
+            m.update(ring_errors(c, Path(args.rings) / f"{c.case.name.replace('/', '_')}.npz"))
         outs = outputs(c)
         for n in names:  # each candidate's PSNR per cluster, for the oracle rules
             m["truth_" + n] = np.array([cluster_psnr(c, outs, k + 1, n) for k in range(c.count)])

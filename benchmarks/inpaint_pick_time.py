@@ -1,7 +1,7 @@
 """method="pick" against the spectral fill (today's default) on tests/cases/inpaint_corpus.py's
 corpus: mean PSNR in the hole and time per class, both halves (calibration / test).
 
-    python benchmarks/inpaint_pick_time.py [--runs 2] [--half both]
+    python benchmarks/inpaint_pick_time.py [--runs 2] [--half both] [--classes blobs,...] [--smooth]
 
 Per case each method runs `runs` times, interleaved (spectral, pick, spectral, pick, ...),
 after one warm-up call per method that builds the kernels; its time is the least of its
@@ -29,9 +29,14 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=2)
     parser.add_argument("--half", default="both")
+    parser.add_argument("--classes", default=None, help="comma-separated classes only")
+    parser.add_argument("--smooth", action="store_true", help="pick with its smooth vote")
     args = parser.parse_args(argv)
+    extra = {"pick": {"smooth": True} if args.smooth else {}, "spectral": {}}
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = [c for c in corpus.build() if c.half in halves]
+    if args.classes:
+        cases = [c for c in cases if c.damage in args.classes.split(",")]
     rows = []
     warm = cases[0]
     for m in METHODS:
@@ -42,6 +47,7 @@ def main(argv=None):
             method=m,
             progress=False,
             seed=0,
+            **extra[m],
         )
     for i, c in enumerate(cases):
         best = {m: np.inf for m in METHODS}
@@ -53,6 +59,7 @@ def main(argv=None):
                     c.mask,
                     channel_axis=c.channel_axis,
                     method=m,
+                    **extra[m],
                     return_info=True,
                     progress=False,
                     seed=0,

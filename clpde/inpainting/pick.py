@@ -1,5 +1,6 @@
 """method="pick": the spectral fill, except where a cluster of damage sits in a periodic
-pattern, which the exemplar copies instead.
+pattern, which the exemplar copies instead (and, with the smooth vote, where the biharmonic
+fill predicts a hidden ring around a cluster better).
 
 The spectral fill (spectral.py) leads on thin damage and photos but cannot continue a
 periodic pattern across a hole of several periods (issue 37: 7.85 dB behind FSR-best on the
@@ -15,21 +16,32 @@ every other takes the spectral fill. (The largest autocorrelation alone, choose.
 sent blobs on straight edges to the exemplar: -0.42 dB on the test half's blobs.) A box
 without such a cluster is filled by the spectral fill alone, exactly as method="spectral".
 
+The smooth vote (`smooth=True`, off by default): each other cluster at least MIN_RADIUS
+thick and not on a clear edge (edge_contrast: its border splits into two sides of distinct
+colour) is tested: a ring of RING known pixels around it is hidden, and a quick spectral
+fill (TEST) and the biharmonic fill predict it; where the biharmonic's error is below
+SMOOTH_RATIO times the spectral's, the biharmonic fill takes the cluster. On the corpus
+it gains on smooth fields and texture and ties elsewhere, but costs 2-3x the spectral
+fill's time on thick damage, against a budget of 1.2x: so it is opt-in. Clusters on a
+clear edge are left out because there the spectral fill, which continues the edge, beat
+the biharmonic one on the calibration half (sending them to the biharmonic fill lost up
+to 0.3 dB on the structure class).
+
 Chosen on the calibration half of tests/cases/inpaint_corpus.py's corpus
-(benchmarks/inpaint_default_route.py; docs/inpainting.md has both halves). A smooth route
-(the biharmonic fill where the surround has little texture) was measured there and gained
-nothing at any threshold, so it is not here.
+(benchmarks/inpaint_default_route.py, from cached fills; benchmarks/inpaint_pick_time.py
+runs it; docs/inpainting.md has both halves). A smooth route by the surround's texture
+alone (the biharmonic fill where it has little) gained nothing at any threshold.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
-from . import choose
+from . import choose, poisson
 from .exemplar import ExemplarOptions
 from .registry import keywords, load, register
 from .spectral import MARGIN as SPECTRAL_MARGIN
@@ -40,6 +52,17 @@ DESCRIPTION = "the spectral fill, and the exemplar's where a cluster sits in a p
 MIN_RADIUS = 3.0  # thinner clusters: the spectral fill (a scratch needs no period copied)
 WINDOW = 24  # px of surround measured around each cluster's bounding box
 BORDER = 2  # px of known pixels around a cluster whose colours tell an edge crossing it
+# The smooth vote (module docstring): a ring of RING px hidden around each thick cluster
+# that is neither periodic nor on a clear edge (EDGE_GAP, EDGE_SEPARATION: edge_contrast);
+# the biharmonic fill takes the cluster where its error on the ring is below SMOOTH_RATIO
+# times the spectral fill's. Chosen on the calibration half
+# (benchmarks/inpaint_default_route.py --rings): see the module docstring.
+RING = 4
+SMOOTH_RATIO = 0.8
+EDGE_GAP = 0.1
+EDGE_SEPARATION = 3.0
+TEST = {"shifts": 1, "iterations": 40}
+TEST_TOL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -53,12 +76,16 @@ class PickOptions:
     exemplar : ExemplarOptions
         The exemplar's options (on the periodic clusters).
     periodicity : float
-        A cluster whose surround's periodicity is at least this goes to the exemplar.
+        A cluster whose surround repeats at least this well goes to the exemplar.
+    smooth : bool
+        Let the biharmonic fill take the thick clusters whose ring it predicts better
+        (the smooth vote; False: the spectral fill keeps them).
     """
 
     spectral: SpectralOptions = field(default_factory=SpectralOptions)
     exemplar: ExemplarOptions = field(default_factory=ExemplarOptions)
     periodicity: float = choose.MIN_PERIODICITY
+    smooth: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.spectral, SpectralOptions):
@@ -67,6 +94,8 @@ class PickOptions:
             raise InputError(f"exemplar must be ExemplarOptions, not {self.exemplar!r}")
         if not 0 <= self.periodicity <= 1:  # NaN too
             raise InputError(f"periodicity must be in [0, 1], not {self.periodicity!r}")
+        if not isinstance(self.smooth, bool):
+            raise InputError(f"smooth must be True or False, not {self.smooth!r}")
 
 
 def clusters_of(omega):
@@ -145,6 +174,39 @@ def _margin(omega, o: PickOptions) -> int:
     return SPECTRAL_MARGIN(omega, o.spectral.block, o.spectral.border)
 
 
+def _ring_test(filled, omega, clusters, labels, runtime, common, spectral):
+    """The labels among `labels` whose ring (the known pixels within RING px, each its
+    nearest cluster's) the biharmonic fill predicts better than SMOOTH_RATIO times the
+    spectral fill does, both filling the clusters and their rings hidden at once in
+    `filled` (the box with every hole filled, so that the other clusters cost nothing)."""
+    known = ~omega
+    dist, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
+    owner = np.where(known & (dist <= RING), clusters[iy, ix], 0)
+    ring = np.isin(owner, labels)
+    if not ring.any() or not (known & ~ring).any():
+        return []
+    hidden = ring | (np.isin(clusters, labels) & omega)
+    truth = filled[:, ring]
+    errors = []
+    # the test's spectral fill is a cheaper one (TEST: one grid, fewer picks), and its
+    # biharmonic fill starts from it and stops at TEST_TOL: a ranking, not a result
+    quick = replace(spectral, **TEST)
+    guess = load("spectral").solve(filled, hidden, runtime, **common, **keywords(quick))
+    guess = np.asarray(guess, np.float64)
+    smooth = poisson.fill(
+        filled, hidden, runtime, "biharmonic", dtype=common["dtype"], tol=TEST_TOL, start=guess
+    )
+    for out in (guess, np.asarray(smooth, np.float64)):
+        sq = ((out[:, ring] - truth) ** 2).sum(axis=0)
+        errors.append(ndimage.sum(sq, owner[ring], labels))
+    spectral_error, smooth_error = (np.asarray(e, float).reshape(-1) for e in errors)
+    return [
+        lab
+        for lab, a, b in zip(labels, spectral_error, smooth_error, strict=True)
+        if b < SMOOTH_RATIO * a
+    ]
+
+
 @register("pick", PickOptions, margin=_margin)
 def solve(
     data,
@@ -157,6 +219,7 @@ def solve(
     spectral=None,
     exemplar=None,
     periodicity=choose.MIN_PERIODICITY,
+    smooth=False,
 ):
     """The picked fill of one box (module docstring; registry.py's protocol)."""
     spectral = SpectralOptions() if spectral is None else spectral
@@ -166,14 +229,29 @@ def solve(
     periodic = periodic_clusters(data, omega, periodicity)
     fill_spectral = load("spectral").solve
     if not periodic.any():
-        return fill_spectral(data, omega, runtime, **common, **keywords(spectral))
-    # the exemplar fills every hole (the others must not be copied from as if known) and
-    # keeps its fill of the periodic clusters; the spectral fill does the rest from those
-    out = load("exemplar").solve(data, omega, runtime, **common, **keywords(exemplar))
+        out = fill_spectral(data, omega, runtime, **common, **keywords(spectral))
+    else:
+        # the exemplar fills every hole (the others must not be copied from as if known)
+        # and keeps its fill of the periodic clusters; the spectral fill does the rest
+        out = load("exemplar").solve(data, omega, runtime, **common, **keywords(exemplar))
+        rest = omega & ~periodic
+        if rest.any():
+            out = fill_spectral(
+                np.asarray(out, np.float64), rest, runtime, **common, **keywords(spectral)
+            )
+    if not smooth:
+        return out
+    clusters, count, radius = clusters_of(omega)
+    gap, separation = edge_contrast(data, omega)
+    edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
+    in_period = np.zeros(count + 1, bool)
+    in_period[np.unique(clusters[periodic])] = True
+    labels = 1 + np.flatnonzero((radius >= MIN_RADIUS) & ~edge & ~in_period[1:])
+    if not labels.size:
+        return out
     out = np.asarray(out, np.float64)
-    rest = omega & ~periodic
-    if rest.any():
-        out = np.asarray(
-            fill_spectral(out, rest, runtime, **common, **keywords(spectral)), np.float64
-        )
+    chosen = _ring_test(out, omega, clusters, labels, runtime, common, spectral)
+    if chosen:
+        hole = np.isin(clusters, chosen) & omega
+        out = np.asarray(poisson.fill(out, hole, runtime, dtype=dtype, start=out), np.float64)
     return out

@@ -101,8 +101,65 @@ def test_a_blob_on_a_straight_edge_is_not_taken_for_a_period(angle):
     assert pick.periodic_clusters(stripes[None] / 255.0, mask).sum() == mask.sum()
 
 
+def _two_colours(angle=0.5, ny=96, nx=96):
+    """Two flat colours meeting on a straight edge through the centre, a little noise."""
+    rng = np.random.default_rng(1)
+    y, x = np.mgrid[0:ny, 0:nx].astype(float)
+    t = (x - nx / 2) * np.cos(angle) + (y - ny / 2) * np.sin(angle)
+    image = np.where((t < 0)[..., None], [60.0, 140.0, 60.0], [220.0, 170.0, 140.0])
+    image = image + rng.normal(0, 3, image.shape)
+    return np.clip(np.round(image), 0, 255).astype(np.uint8)
+
+
+def test_a_border_of_two_colours_reads_as_an_edge():
+    image = _two_colours()
+    mask = _disc(image.shape[:2], 48, 48, 7) | _disc(image.shape[:2], 15, 15, 7)
+    gap, separation = pick.edge_contrast(np.moveaxis(image, -1, 0) / 255.0, mask)
+    # cluster 1 (top left) sits in one flat colour: noise only; cluster 2 on the edge
+    assert separation[1] > 2 * max(separation[0], 1.8) and gap[1] > 0.3 > gap[0]
+    smooth = _smooth()
+    gap, separation = pick.edge_contrast(smooth[None] / 255.0, _disc(smooth.shape, 48, 48, 7))
+    assert separation[0] < pick.EDGE_SEPARATION
+
+
+def test_the_smooth_vote_gives_a_smooth_field_to_the_biharmonic_fill():
+    from scipy import ndimage
+
+    rng = np.random.default_rng(3)
+    field = ndimage.gaussian_filter(rng.standard_normal((96, 96)), 12)
+    image = ((field - field.min()) / np.ptp(field)).astype(np.float32)
+    mask = _disc(image.shape, 48, 48, 11)
+    out = {
+        name: clpde.inpaint(image, mask, method=m, progress=False, seed=0, **extra)
+        for name, m, extra in (
+            ("spectral", "spectral", {}),
+            ("pick", "pick", {}),
+            ("smooth", "pick", {"smooth": True}),
+        )
+    }
+    error = {k: np.sqrt(np.mean((v[mask] - image[mask]) ** 2)) for k, v in out.items()}
+    assert np.array_equal(out["pick"], out["spectral"])  # the vote is off by default
+    assert error["smooth"] < 0.7 * error["spectral"], error
+
+
+def test_the_smooth_vote_leaves_a_hole_on_an_edge_to_the_spectral_fill():
+    image = _two_colours()
+    mask = _disc(image.shape[:2], 48, 48, 7)
+    runs = [
+        clpde.inpaint(image, mask, channel_axis=-1, method="pick", progress=False, seed=0, **e)
+        for e in ({}, {"smooth": True})
+    ]
+    assert np.array_equal(*runs)
+    # and no side's colour is carried into the other: each hole pixel is near one of them
+    sides = np.array([[60, 140, 60], [220, 170, 140]], float)
+    near = np.abs(runs[0][mask].astype(float)[:, None] - sides[None]).max(axis=-1).min(axis=-1)
+    assert np.mean(near > 40) < 0.1
+
+
 def test_options_are_checked():
     with pytest.raises(InputError, match="periodicity must be in"):
         PickOptions(periodicity=1.5)
+    with pytest.raises(InputError, match="smooth must be True or False"):
+        PickOptions(smooth=1)
     with pytest.raises(InputError, match="spectral must be SpectralOptions"):
         PickOptions(spectral=3)
