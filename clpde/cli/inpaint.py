@@ -26,9 +26,10 @@ def add_inpaint_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "inpaint",
         help="fill a masked region of an image (structure and texture)",
-        description="Fill the pixels where MASK is white. The default method is spectral "
+        description="Fill the pixels where MASK is white. The default method is pick "
         "(frequency-selective): each block of the hole a sparse sum of Fourier basis "
-        "functions fitted to the known pixels around it. --method coherence is "
+        "functions fitted to the known pixels around it (--method spectral), except where "
+        "the hole sits in a periodic pattern, which the exemplar copies. --method coherence is "
         "coherence transport, isophotes continued into the hole, fastest. --method auto is "
         "the self-validated choice: per cluster of damage, the candidate methods "
         "fill a hidden ring of known pixels too, and the blend that fits it best "
@@ -146,9 +147,9 @@ def _add_method_arguments(parser) -> None:
         "--method",
         choices=("auto", *METHODS),
         default=None,
-        help="inpainting method (default: spectral; 'transport', the "
-        "thesis's scheme, when one of its options above or --gif is "
-        "given; 'auto': the self-validated choice, docs/inpainting.md)",
+        help="inpainting method (default: pick, the spectral fill with periodic patterns "
+        "copied; 'transport', the thesis's scheme, when one of its options above or --gif "
+        "is given; 'auto': the self-validated choice, docs/inpainting.md)",
     )
     parser.add_argument(
         "--grow",

@@ -388,15 +388,16 @@ def inpaint(
         why, info.box_methods names each box's methods by share, info.chosen the candidate
         with the largest share), 'transport' (the thesis's scheme), 'coherence',
         'navier-stokes', 'exemplar' (texture, periodic patterns), 'structure-texture' or
-        'spectral' (a sparse Fourier model of each block;
+        'spectral' (a sparse Fourier model of each block) or 'pick' (the spectral fill,
+        and the exemplar's on each cluster of damage in a periodic pattern;
         `clpde.inpainting.available()` lists what is installed). None (the default) is the
-        method of `options`, else 'spectral', or 'transport' when one of its options is
-        among `overrides`.
+        method of `options`, else 'pick', or 'transport' when one of its options is
+        among `overrides`, or 'spectral' when they are all the spectral fill's.
     options : options object, optional
         The method's options, a frozen dataclass that holds their defaults and checks:
         TransportOptions, SpectralOptions, CoherenceOptions, NavierStokesOptions,
-        ExemplarOptions, StructureTextureOptions or AutoOptions (each in its method's
-        module; `clpde.inpainting.options(method)` names the class). None: the
+        ExemplarOptions, StructureTextureOptions, PickOptions or AutoOptions (each in its
+        method's module; `clpde.inpainting.options(method)` names the class). None: the
         method's defaults.
     boxes : bool, optional
         Solve each connected component of the mask, or cluster of nearby components, in
@@ -445,7 +446,7 @@ def inpaint(
     (dtype('uint8'), (48, 48))
     >>> bool((restored[~mask] == ramp[~mask]).all())   # untouched outside the mask
     True
-    >>> int(np.abs(restored.astype(int) - ramp).max()) <= 8    # spectral, the default
+    >>> int(np.abs(restored.astype(int) - ramp).max()) <= 8    # pick, the default
     True
     >>> voted = clpde.inpaint(ramp, mask, method="auto")       # the self-validated choice
     >>> int(np.abs(voted.astype(int) - ramp).max()) <= 2

@@ -67,14 +67,18 @@ METHODS = {
 # method="auto": each cluster of damage is filled by the self-validated choice among
 # auto.py's candidates (a method of its own, registered there).
 AUTO_MODULE = "clpde.inpainting.auto"
-# method=None: the frequency-selective fill. Chosen on the calibration half of
-# benchmarks/inpaint_corpus.py's corpus among coherence, spectral and the self-validated votes,
-# as the candidate leading the best peer in the most classes within a time budget of
-# FSR-fast's, the strongest peer (docs/inpainting.md has the tables). The votes ("auto")
-# measured better still but several times slower than that budget. A call giving one of the
-# transport's own options (TransportOptions: dt, max_steps, tol, ...) and no method runs the
-# transport, so such calls keep their meaning.
-DEFAULT = "spectral"
+# method=None: "pick", the frequency-selective fill ("spectral") except on the clusters of
+# damage in a periodic surround, which the exemplar copies (pick.py). The spectral fill was
+# chosen on the calibration half of benchmarks/inpaint_corpus.py's corpus among coherence,
+# spectral and the self-validated votes, as the candidate leading the best peer in the most
+# classes within a time budget of FSR-fast's, the strongest peer; "pick" ties it in every
+# other class of both halves and gains ~31 dB on periodic patterns, at 1.05-1.09x its time
+# (docs/inpainting.md has the tables). The votes ("auto") measured better still but several
+# times slower than that budget. A call giving one of the transport's own options
+# (TransportOptions: dt, max_steps, tol, ...) and no method runs the transport, and one
+# giving the spectral fill's own options (SpectralOptions: iterations, block, ...) the
+# spectral fill, so such calls keep their meaning.
+DEFAULT = "pick"
 
 
 class Method(Protocol):
@@ -238,7 +242,8 @@ def resolve(method: str | None = None, options=None, overrides: dict | None = No
     """(the registered method, its validated options) for a call.
 
     `options` (a method's options object) names the method by its class; with neither, the
-    method is DEFAULT, or "transport" when `overrides` names one of the transport's options.
+    method is DEFAULT, or "transport" when `overrides` names one of the transport's options,
+    or "spectral" when they are all the spectral fill's.
     `overrides` replace fields of the options (dataclasses.replace, so the checks run once
     on the result); a name the method lacks is one clear InputError naming its options."""
     overrides = dict(overrides or {})
@@ -256,7 +261,12 @@ def resolve(method: str | None = None, options=None, overrides: dict | None = No
             )
         method = owner
     elif method is None:
-        method = "transport" if set(overrides) & _names(TransportOptions) else DEFAULT
+        if set(overrides) & _names(TransportOptions):
+            method = "transport"
+        elif overrides and set(overrides) <= _names(get("spectral").options):
+            method = "spectral"
+        else:
+            method = DEFAULT
     entry = get(method)
     names = _names(entry.options)
     unknown = sorted(set(overrides) - names)

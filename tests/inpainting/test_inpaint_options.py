@@ -64,7 +64,7 @@ def test_overrides_replace_the_options_and_unknown_ones_name_the_valid():
     b = clpde.inpaint(image, mask, method="transport", max_steps=30, tol=0, mean_tol=0)
     assert info.method == "transport" and 30 <= info.steps < 40 and np.array_equal(a, b)
     assert short.tol == 1e-4  # the given object is not modified
-    with pytest.raises(InputError, match=r"unknown inpainting option\(s\) radius .*'spectral'"):
+    with pytest.raises(InputError, match=r"unknown inpainting option\(s\) radius .*'pick'"):
         clpde.inpaint(image, mask, radius=3)
     with pytest.raises(InputError, match="its options are .*block"):
         clpde.inpaint(image, mask, method="spectral", max_steps=3)
@@ -78,6 +78,10 @@ def test_the_method_follows_the_options():
     assert registry.resolve()[0].name == registry.DEFAULT
     assert registry.resolve(overrides={"dt": 0.05})[0].name == "transport"
     assert registry.resolve(overrides={"levels": 2})[0].name == "transport"
+    # the default is "pick"; the spectral fill's own options with no method keep naming it
+    assert registry.DEFAULT == "pick"
+    assert registry.resolve(overrides={"iterations": 50})[0].name == "spectral"
+    assert registry.resolve(overrides={"periodicity": 0.9})[0].name == "pick"
     spectral = clpde.inpainting.SpectralOptions(iterations=50)
     entry, options = registry.resolve(options=spectral, overrides={"border": 8})
     assert entry.name == "spectral" and options == dataclasses.replace(spectral, border=8)
@@ -131,7 +135,7 @@ def _from_cli(argv):
 
 def test_the_command_line_and_python_build_the_same_options():
     T = clpde.inpainting.TransportOptions
-    assert _from_cli([]) == clpde.inpainting.SpectralOptions()
+    assert _from_cli([]) == clpde.inpainting.PickOptions()  # the default, "pick"
     assert _from_cli(["--max-steps", "50", "--tol", "0"]) == T(max_steps=50, tol=0.0)
     assert _from_cli(["--gif", "evolution.gif"]) == T()  # the evolution is the transport's
     assert _from_cli(["--method", "exemplar", "--levels", "2"]) == (
