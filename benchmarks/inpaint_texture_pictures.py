@@ -4,7 +4,7 @@
 
 Writes inpaint_texture.png (texture cases) and inpaint_thick.png (thick holes in photos):
 one row per case, cropped around the holes: the damaged image (holes in black),
-biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (spectral),
+biharmonic, clpde's exemplar, clpde's structure-texture, clpde's default (pick),
 the original.
 """
 
@@ -24,7 +24,7 @@ COLUMNS = [
     "biharmonic",
     "exemplar",
     "structure-texture",
-    "default (spectral)",
+    "default (pick)",
     "original",
 ]
 
