@@ -47,6 +47,10 @@ from .registry import keywords, load, register
 from .spectral import MARGIN as SPECTRAL_MARGIN
 from .spectral import SpectralOptions
 
+# The spectral fill's program, which every call builds (the first use's notice,
+# api._cold, reads it); the exemplar's and the biharmonic fill's only on some clusters.
+KERNEL_FILES = ("inpainting/spectral.cl",)
+
 DESCRIPTION = "the spectral fill, and the exemplar's where a cluster sits in a periodic pattern"
 
 MIN_RADIUS = 3.0  # thinner clusters: the spectral fill (a scratch needs no period copied)
