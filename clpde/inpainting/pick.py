@@ -16,7 +16,7 @@ every other takes the spectral fill. (The largest autocorrelation alone, choose.
 sent blobs on straight edges to the exemplar: -0.42 dB on the test half's blobs.) A box
 without such a cluster is filled by the spectral fill alone, exactly as method="spectral".
 
-The smooth vote (`smooth=True`, off by default): each other cluster at least MIN_RADIUS
+The smooth vote (`smooth=True`, off by default): each other cluster at least SMOOTH_RADIUS
 thick and not on a clear edge (edge_contrast: its border splits into two sides of distinct
 colour) is tested: a ring of RING known pixels around it is hidden, and the spectral
 fill and the biharmonic fill predict it; where the biharmonic's error is below
@@ -62,6 +62,7 @@ BORDER = 2  # px of known pixels around a cluster whose colours tell an edge cro
 # times the spectral fill's. Chosen on the calibration half
 # (benchmarks/inpaint_default_route.py --rings): see the module docstring.
 RING = 4
+SMOOTH_RADIUS = 3.0  # the thinnest cluster tested (half-thickness, px)
 SMOOTH_RATIO = 0.8
 EDGE_GAP = 0.1
 EDGE_SEPARATION = 3.0
@@ -246,7 +247,7 @@ def solve(
     edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
     in_period = np.zeros(count + 1, bool)
     in_period[np.unique(clusters[periodic])] = True
-    labels = 1 + np.flatnonzero((radius >= MIN_RADIUS) & ~edge & ~in_period[1:])
+    labels = 1 + np.flatnonzero((radius >= SMOOTH_RADIUS) & ~edge & ~in_period[1:])
     if not labels.size:
         return out
     out = np.asarray(out, np.float64)
