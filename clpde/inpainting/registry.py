@@ -72,7 +72,7 @@ AUTO_MODULE = "clpde.inpainting.auto"
 # chosen on the calibration half of benchmarks/inpaint_corpus.py's corpus among coherence,
 # spectral and the self-validated votes, as the candidate leading the best peer in the most
 # classes within a time budget of FSR-fast's, the strongest peer; "pick" ties it in every
-# other class of both halves and gains ~31 dB on periodic patterns, at 1.05-1.09x its time
+# other class of both halves and gains ~31 dB on periodic patterns, at 1.03-1.07x its time
 # (docs/inpainting.md has the tables). The votes ("auto") measured better still but several
 # times slower than that budget. A call giving one of the transport's own options
 # (TransportOptions: dt, max_steps, tol, ...) and no method runs the transport, and one
