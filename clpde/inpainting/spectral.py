@@ -66,7 +66,7 @@ from scipy import ndimage
 from ..errors import DeviceLimitError
 from ..imagedata import InputError
 from .registry import register
-from .spectral_plan import MAXL, block_iterations, plan, shifts_of
+from .spectral_plan import MAXL, block_iterations, minor_iterations, plan, shifts_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("inpainting/spectral.cl",)
@@ -77,10 +77,11 @@ DESCRIPTION = (
 )
 
 MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
-GROUP = 64  # its SPECTRAL_GROUP
+GROUP = 64  # its SPECTRAL_GROUP on GPUs (work_shape)
+CPU_VECTOR = 8  # its SPECTRAL_VW on CPUs: candidates per vector (8 and 16 ran alike)
 # its SPECTRAL_SCRATCH: the REALs of one work-group's windows and transforms, which live in
 # global memory where local memory is too small (SPECTRAL_SPILL)
-SCRATCH = 4 * MAXL * MAXL + 7 * MAXL * (MAXL // 2 + 1)
+SCRATCH = 4 * MAXL * MAXL + 8 * MAXL * (MAXL // 2 + 1)
 SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
 COLOURS = ("pca", "channels")
 THIN = 4  # px: damage this thin (half-thickness) takes thin_border (text, cracks, dust)
@@ -122,6 +123,7 @@ class SpectralOptions:
     cutoff: float = 1.5
     per_pixel: float = 0.0
     thin_border: int = 6
+    minor: float = 0.3
 
     def __post_init__(self) -> None:
         _check(
@@ -141,6 +143,7 @@ class SpectralOptions:
             self.per_pixel,
             self.shifts,
             self.thin_border,
+            self.minor,
         )
 
 
@@ -161,6 +164,7 @@ def _check(
     per_pixel,
     shifts,
     thin_border=0,
+    minor=1.0,
 ):
     """InputError for an option of `fill` out of its range."""
     for name, v in (
@@ -192,8 +196,9 @@ def _check(
         ("delta", delta, 0.0, 1.0),
         ("gamma", gamma, 0.0, 1.0),
         ("split", split, 0.0, 1.0),
+        ("minor", minor, 0.0, 1.0),
     ):
-        if not (np.isfinite(v) and lo <= v <= hi) or (name in ("rho", "gamma") and v == 0):
+        if not (np.isfinite(v) and lo <= v <= hi) or (name in ("rho", "gamma", "minor") and v == 0):
             raise InputError(f"{name} must be a number in ({lo:g}, {hi:g}], not {v!r}")
     if not (np.isfinite(alpha) and alpha >= 0):
         raise InputError(f"alpha must be a number >= 0, not {alpha!r}")
@@ -265,6 +270,7 @@ def fill(
     cutoff: float = 1.5,
     per_pixel: float = 0.0,
     thin_border: int = 6,
+    minor: float = 0.3,
     timings: dict | None = None,
 ) -> np.ndarray:
     """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
@@ -315,6 +321,9 @@ def fill(
     thin_border : int
         > 0: the border (at most `border`) where the damage is thin (no pixel of omega
         farther than THIN from a known one: text, scratches, cracks, dust); 0: off.
+    minor : float
+        Share of a block's picks that the channels after the first take, in (0, 1] (at
+        least one pick): with colour='pca' they hold the colours' smaller variances.
     timings : dict or None
         Receives the seconds spent planning, building, uploading, running the waves and
         reading back, and the counts of blocks and launches.
@@ -358,6 +367,7 @@ def fill(
         per_pixel,
         shifts,
         thin_border,
+        minor,
     )
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
@@ -393,7 +403,7 @@ def fill(
     real = np.dtype(dtype)
     # a writable copy: the device's result is read back into it
     host = np.array(np.broadcast_to(work, (len(plans),) + work.shape), real, order="C")
-    table = _launch_table(plans, omega, (y0, x0), hole.shape, iterations, per_pixel)
+    table = _launch_table(plans, omega, (y0, x0), hole.shape, (iterations, per_pixel, minor))
     t["plan"] = time.perf_counter() - t0
     options = (rho, delta, gamma, alpha, stop, floor, bool(detrend), cutoff)
     _run_waves(runtime, host, table, options, t)
@@ -408,11 +418,12 @@ def thin(omega: np.ndarray) -> bool:
     return not ndimage.binary_erosion(omega, DISC, border_value=1).any()
 
 
-def _launch_table(plans, omega, origin, shape, iterations: int, per_pixel: float):
+def _launch_table(plans, omega, origin, shape, picking):
     """(wave_of, blocks, starts) for the launches: each copy's waves over the union crop
     (at `origin`, of `shape`), and the blocks of every copy, wave by wave, as rows of
-    (row, column, size, window, copy, picks); wave w's blocks are blocks[starts[w]:
-    starts[w + 1]]."""
+    (row, column, size, window, copy, picks, minor picks); wave w's blocks are
+    blocks[starts[w]: starts[w + 1]]. `picking` is (iterations, per_pixel, minor)."""
+    iterations, per_pixel, minor = picking
     y0, x0 = origin
     wave_of = np.full((len(plans),) + tuple(shape), -1, np.int32)
     per_wave = {}
@@ -420,12 +431,14 @@ def _launch_table(plans, omega, origin, shape, iterations: int, per_pixel: float
         wave_of[c, cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = w_of
         moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
         picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
+        minor_picks = minor_iterations(picks, minor)
         for w, (first, count) in enumerate(waves):
             rows = np.concatenate(
                 [
                     moved[first : first + count],
                     np.full((count, 1), c, np.int32),
                     picks[first : first + count, None],
+                    minor_picks[first : first + count, None],
                 ],
                 1,
             )
@@ -444,7 +457,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     rho, delta, gamma, alpha, stop, floor, detrend, cutoff = options
     real = host.dtype
     t0 = time.perf_counter()
-    kernel, spill = fitting_kernel(runtime, real)
+    kernel, spill, group = fitting_kernel(runtime, real)
     t["build"] = time.perf_counter() - t0
     # work-groups per launch: a whole wave, or as many as SCRATCH_BYTES of scratch hold
     widest = int(np.diff(starts).max(initial=1))
@@ -473,8 +486,8 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     for w, first, count in launches:
         kernel(
             q,
-            (count * GROUP,),
-            (GROUP,),
+            (count * group,),
+            (group,),
             img,
             waves_buf,
             blocks_buf,
@@ -503,18 +516,29 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     t["blocks"], t["launches"] = len(all_blocks), len(launches)
 
 
+def work_shape(runtime) -> tuple:
+    """(SPECTRAL_GROUP, SPECTRAL_VW), the work-group's items and the candidates each item
+    updates at once: on GPUs GROUP items share a block's candidates one at a time; on CPUs
+    one item walks them in vectors of CPU_VECTOR (PoCL runs a work-group's items in turn, so
+    there items buy nothing, and its compiler leaves the scalar loop unvectorised)."""
+    return (1, CPU_VECTOR) if runtime.is_cpu else (GROUP, 1)
+
+
 def fitting_kernel(runtime, real) -> tuple:
-    """(spectral_blocks as it fits the device, whether it spills): each work-group's windows
-    in local memory, or, where the device has too little of it (the OpenCL minimum of 32 KB;
-    NVIDIA's 48 KB per kernel in double), in global scratch memory (SPECTRAL_SPILL; the same
-    arithmetic). Refused, before any work, where neither fits."""
+    """(spectral_blocks as it fits the device, whether it spills, its work-group size): each
+    work-group's windows in local memory, or, where the device has too little of it (the
+    OpenCL minimum of 32 KB; NVIDIA's 48 KB per kernel in double), in global scratch memory
+    (SPECTRAL_SPILL; the same arithmetic). Refused, before any work, where neither fits."""
     problem = None
+    group, vector = work_shape(runtime)
     for spill in (0, 1):
-        defines = {"SPECTRAL_SPILL": 1} if spill else {}
+        defines = {"SPECTRAL_GROUP": group, "SPECTRAL_VW": vector}
+        if spill:
+            defines["SPECTRAL_SPILL"] = 1
         kernel = runtime.kernel("inpainting/spectral.cl", "spectral_blocks", real, **defines)
-        problem = runtime.group_problem(kernel, GROUP)
+        problem = runtime.group_problem(kernel, group)
         if problem is None:
-            return kernel, bool(spill)
+            return kernel, bool(spill), group
     raise DeviceLimitError(
         f"spectral inpainting cannot run on this device: {problem}; choose another device "
         "(clpde devices) or another method (method='transport')"
@@ -547,6 +571,7 @@ def solve(
     cutoff=SpectralOptions.cutoff,
     per_pixel=SpectralOptions.per_pixel,
     thin_border=SpectralOptions.thin_border,
+    minor=SpectralOptions.minor,
 ):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
@@ -562,7 +587,8 @@ def solve(
     averaged), cutoff (the candidate frequencies: |k| at most this share of the Nyquist
     frequency; 1.5 takes all), per_pixel (> 0: a block's picks are at most this many per hole
     pixel in it, at least 4), thin_border (> 0: the border where no damaged pixel lies farther
-    than THIN = 4 px from a known one).
+    than THIN = 4 px from a known one), minor (share of the picks that the channels after the
+    first take: the principal axes of smaller variance).
     """
     return fill(
         data,
@@ -586,4 +612,5 @@ def solve(
         cutoff=cutoff,
         per_pixel=per_pixel,
         thin_border=thin_border,
+        minor=minor,
     )

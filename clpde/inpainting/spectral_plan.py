@@ -245,3 +245,10 @@ def shifts_of(shifts: int, block: int) -> list:
     """The block grids' offsets: 1, 2 (a half block diagonally) or 4 (every half block)."""
     h = block // 2
     return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
+
+
+def minor_iterations(picks: np.ndarray, minor: float) -> np.ndarray:
+    """Each block's most picks in the channels after the first: `minor` of its picks (at
+    least 1). In the principal-axis colour basis those channels hold the colours' smaller
+    variances, which fewer terms model as well."""
+    return np.maximum(1, np.rint(minor * picks)).astype(np.int32)

@@ -3,7 +3,8 @@
 // around it, and the block's missing pixels are taken from the model.
 //
 // One work-group of SPECTRAL_GROUP items fits one block, every channel in turn: group g takes
-// blocks[first + g], 6 ints (row, column, B, L, copy, picks): its B x B pixels from (row, column),
+// blocks[first + g], 7 ints (row, column, B, L, copy, picks, minor picks: those of the
+// channels after the first): its B x B pixels from (row, column),
 // its extended window L x L (L even, L - B even, L <= SPECTRAL_MAXL), in copy `copy` of the
 // image (img: copies x nc planes of ny x nx; wave_of: one plane per copy; the copies are the
 // fills on differently offset block grids, averaged afterwards). The blocks of one launch (a
@@ -47,10 +48,37 @@
 
 #define SPECTRAL_MAXL 32    // largest window
 #define SPECTRAL_MAXK 512   // most picks per block
+#ifndef SPECTRAL_GROUP
 #define SPECTRAL_GROUP 64
+#endif
+// candidates per vector in the picks' update (CPUs: 8 or 16; 1: one at a time, GPUs)
+#ifndef SPECTRAL_VW
+#define SPECTRAL_VW 1
+#endif
+#if SPECTRAL_VW > 1
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+#define REALV CAT(REAL, SPECTRAL_VW)
+#define INTV CAT(int, SPECTRAL_VW)
+#define CONVERT_INTV CAT(convert_int, SPECTRAL_VW)
+#define VLOAD CAT(vload, SPECTRAL_VW)
+#define VSTORE CAT(vstore, SPECTRAL_VW)
+// out = (p[idx.s0], p[idx.s1], ...): one lane at a time
+#define G2_(p, i, a, b) (p)[(i).a], (p)[(i).b]
+#if SPECTRAL_VW == 8
+#define GATHER(out, p, i) \
+    out = (REALV)(G2_(p, i, s0, s1), G2_(p, i, s2, s3), G2_(p, i, s4, s5), G2_(p, i, s6, s7))
+#elif SPECTRAL_VW == 16
+#define GATHER(out, p, i)                                                                   \
+    out = (REALV)(G2_(p, i, s0, s1), G2_(p, i, s2, s3), G2_(p, i, s4, s5), G2_(p, i, s6, s7), \
+                  G2_(p, i, s8, s9), G2_(p, i, sa, sb), G2_(p, i, sc, sd), G2_(p, i, se, sf))
+#else
+#error "SPECTRAL_VW must be 1, 8 or 16"
+#endif
+#endif
 #define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
 #define SPECTRAL_XN (4 * SPECTRAL_MAXL * SPECTRAL_MAXL)
-#define SPECTRAL_TN (2 * SPECTRAL_MAXH + 5 * SPECTRAL_MAXH)
+#define SPECTRAL_TN ((SPECTRAL_VW > 1 ? 8 : 7) * SPECTRAL_MAXH)
 #define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
 
 #ifndef SPECTRAL_SPILL
@@ -91,9 +119,10 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
 
     const int lid = get_local_id(0);
     const int blk = first + get_group_id(0);
-    const int by = blocks[6 * blk], bx = blocks[6 * blk + 1];
-    const int B = blocks[6 * blk + 2], L = blocks[6 * blk + 3];
-    const int copy = blocks[6 * blk + 4], iterations = blocks[6 * blk + 5];
+    const int by = blocks[7 * blk], bx = blocks[7 * blk + 1];
+    const int B = blocks[7 * blk + 2], L = blocks[7 * blk + 3];
+    const int copy = blocks[7 * blk + 4], iterations = blocks[7 * blk + 5];
+    const int minor_iterations = blocks[7 * blk + 6];
     __global const int* state = wave_of + (size_t)copy * nx * ny;
     const int LL = L * L;
     const int H = L / 2 + 1;
@@ -110,6 +139,9 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     SPACE REAL* const qc = qb + SPECTRAL_MAXH;
     SPACE REAL* const rre = qc + SPECTRAL_MAXH;
     SPACE REAL* const rim = rre + SPECTRAL_MAXH;
+#if SPECTRAL_VW > 1
+    SPACE REAL* const sc = rim + SPECTRAL_MAXH;  // the candidates' scores
+#endif
 
     for (int j = lid; j < L; j += SPECTRAL_GROUP) {
         REAL c;
@@ -172,6 +204,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 }
         }
         pick_k[0] = count_h;
+        // the vector pass's tail, up to a whole vector: updated, never scored
+        for (int j = count_h; j % SPECTRAL_VW; ++j) half_y[j] = half_x[j] = 0;
     }
     barrier(FENCE);
     const int NC = pick_k[0];
@@ -179,6 +213,9 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     // each candidate's score is qa R_re^2 + qb R_re R_im + qc R_im^2: the pair's error
     // reduction times the prior
     const REAL inv_kmax = (REAL)1 / ((REAL)0.5 * (REAL)L * sqrt((REAL)2));
+    const int padded = (NC + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW;
+    for (int j = NC + lid; j < padded; j += SPECTRAL_GROUP)  // the tail's: finite
+        qa[j] = qb[j] = qc[j] = rre[j] = rim[j] = 0;
     for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
         const int ky = half_y[j], kx = half_x[j];
         const REAL fy = (REAL)(ky <= L / 2 ? ky : ky - L);
@@ -294,7 +331,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REAL first_gain = 0, energy = 0;  // item 0's: energy is the weighted squared error
         int count = 0;
         if (W0 > 0) {
-            for (int it = 0; it < iterations; ++it) {
+            const int most = ch == 0 ? iterations : minor_iterations;
+            for (int it = 0; it < most; ++it) {
                 best[lid] = bs;
                 best_at[lid] = bi;
                 barrier(FENCE);
@@ -351,6 +389,51 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const int ky = k / L, kx = k - ky * L;
                 const REAL cr = pick_c[0], ci = pick_c[1];
                 const int self = pick_k[1];
+#if SPECTRAL_VW > 1
+                // CPUs: vectors of SPECTRAL_VW candidates (item lid takes vectors lid, lid +
+                // GROUP, ...), W's values gathered lane by lane, and the scores' argmax in a
+                // pass of its own: the scalar loop's running argmax kept the compiler from
+                // vectorising it. The same arithmetic.
+                const int nv = (NC + SPECTRAL_VW - 1) / SPECTRAL_VW;
+                for (int v = lid; v < nv; v += SPECTRAL_GROUP) {
+                    const int j0 = v * SPECTRAL_VW;
+                    const INTV ly = CONVERT_INTV(VLOAD(0, half_y + j0));
+                    const INTV lx = CONVERT_INTV(VLOAD(0, half_x + j0));
+                    INTV dy = ly - ky, dx = lx - kx;
+                    dy += select((INTV)0, (INTV)L, dy < 0);
+                    dx += select((INTV)0, (INTV)L, dx < 0);
+                    const INTV dm = dy * L + dx;
+                    REALV ar, ai;
+                    GATHER(ar, X + 2 * LL, dm);
+                    GATHER(ai, X + 3 * LL, dm);
+                    REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
+                    if (!self) {
+                        INTV sy = ly + ky, sx = lx + kx;
+                        sy -= select((INTV)0, (INTV)L, sy >= L);
+                        sx -= select((INTV)0, (INTV)L, sx >= L);
+                        const INTV dp = sy * L + sx;
+                        REALV pr, pi;
+                        GATHER(pr, X + 2 * LL, dp);
+                        GATHER(pi, X + 3 * LL, dp);
+                        ur += cr * pr + ci * pi;
+                        ui += cr * pi - ci * pr;
+                    }
+                    const REALV rr = VLOAD(0, rre + j0) - ur, ri = VLOAD(0, rim + j0) - ui;
+                    VSTORE(rr, 0, rre + j0);
+                    VSTORE(ri, 0, rim + j0);
+                    VSTORE((VLOAD(0, qa + j0) * rr + VLOAD(0, qb + j0) * ri) * rr
+                               + VLOAD(0, qc + j0) * ri * ri,
+                           0, sc + j0);
+                }
+                bs = -1;
+                bi = 0;
+                for (int v = lid; v < nv; v += SPECTRAL_GROUP)
+                    for (int j = v * SPECTRAL_VW; j < min(NC, v * SPECTRAL_VW + SPECTRAL_VW); ++j)
+                        if (sc[j] > bs) {
+                            bs = sc[j];
+                            bi = j;
+                        }
+#else
                 bs = -1;
                 bi = 0;
                 for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
@@ -380,6 +463,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         bi = j;
                     }
                 }
+#endif
                 // no barrier: best[] is next written after lid 0 has read it (the barrier
                 // above), and each item reads back only its own candidates
             }

@@ -46,6 +46,7 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         dict(split=0.3, shifts=2, cutoff=0.8),
         dict(per_pixel=0.5),
         dict(floor=0.05),  # high enough that most windows end early
+        dict(minor=1.0),  # every channel takes every pick
     ):
         options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
@@ -56,6 +57,21 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         assert np.quantile(diff, 0.95) < 1e-4, np.quantile(diff, 0.95)
         assert diff.mean() < 1e-3, diff.mean()
         assert np.array_equal(got[:, ~mask], data[:, ~mask])
+
+
+@pytest.mark.parametrize("shape", [(64, 1), (16, 8), (1, 16)])
+def test_every_work_group_shape_matches_numpy_reference(runtime, monkeypatch, shape):
+    # the GPUs' shape (64 items, one candidate at a time) and vectors shared by several
+    # items or walked by one, all on this device: the same fill
+    monkeypatch.setattr(spectral, "work_shape", lambda rt: shape)
+    data = np.stack([_photo_like(40, 48, seed=c) * (1 - 0.2 * c) for c in range(3)])
+    mask = _scratches(40, 48)
+    options = dict(SMALL, cutoff=0.8, minor=0.5)
+    got = spectral.fill(data, mask, runtime, **options)
+    want = ref.fill(data, mask, **options)
+    diff = np.abs(got - want)[:, mask]
+    assert np.quantile(diff, 0.95) < 1e-4, np.quantile(diff, 0.95)
+    assert diff.mean() < 1e-3, diff.mean()
 
 
 def test_plan_matches_reference_plan():
