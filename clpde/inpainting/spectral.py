@@ -65,6 +65,7 @@ from scipy import ndimage
 
 from ..errors import DeviceLimitError
 from ..imagedata import InputError
+from ..runtime import enqueue_bare
 from .registry import register
 from .spectral_plan import MAXL, block_iterations, minor_iterations, plan, shifts_of
 
@@ -483,29 +484,32 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
         for w in range(len(starts) - 1)
         for first in range(int(starts[w]), int(starts[w + 1]), per_launch)
     ]
+    # an instance of its own, its arguments set once: a launch sets only its first block and
+    # its wave (pyopencl's call sets all 17 each time)
+    bare = cl.Kernel(kernel.cl_kernel.program, "spectral_blocks")
+    bare.set_args(
+        img,
+        waves_buf,
+        blocks_buf,
+        np.int32(0),
+        np.int32(0),
+        np.int32(nx),
+        np.int32(ny),
+        np.int32(nc),
+        s(rho),
+        s(delta),
+        s(gamma),
+        s(alpha),
+        s(stop),
+        s(floor * floor),
+        np.int32(detrend),
+        s(cutoff),
+        scratch,
+    )
     for w, first, count in launches:
-        kernel(
-            q,
-            (count * group,),
-            (group,),
-            img,
-            waves_buf,
-            blocks_buf,
-            np.int32(first),
-            np.int32(w),
-            np.int32(nx),
-            np.int32(ny),
-            np.int32(nc),
-            s(rho),
-            s(delta),
-            s(gamma),
-            s(alpha),
-            s(stop),
-            s(floor * floor),
-            np.int32(detrend),
-            s(cutoff),
-            scratch,
-        )
+        bare.set_arg(3, np.int32(first))
+        bare.set_arg(4, np.int32(w))
+        enqueue_bare(q, bare, (count * group,), (group,), "inpainting/spectral.cl")
     q.finish()
     t["waves"] = time.perf_counter() - t0
 
