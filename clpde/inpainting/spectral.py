@@ -79,10 +79,14 @@ DESCRIPTION = (
 
 MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP on GPUs (work_shape)
-CPU_VECTOR = 8  # its SPECTRAL_VW on CPUs: candidates per vector (8 and 16 ran alike)
-# its SPECTRAL_SCRATCH: the REALs of one work-group's windows and transforms, which live in
-# global memory where local memory is too small (SPECTRAL_SPILL)
-SCRATCH = 4 * MAXL * MAXL + 8 * MAXL * (MAXL // 2 + 1)
+CPU_VECTOR = 8  # its SPECTRAL_VW on CPUs: candidates per vector (the only width it takes)
+# its SPECTRAL_SCRATCH with vectors (the larger): the REALs of one work-group's windows and
+# transforms (W's rows continued to 2 MAXL + 8, the candidates' rows in slots rounded up to
+# whole vectors), which live in global memory where local memory is too small
+# (SPECTRAL_SPILL)
+_SLOTS = MAXL * ((MAXL // 2 + CPU_VECTOR) // CPU_VECTOR * CPU_VECTOR)
+SCRATCH = 2 * MAXL * MAXL + 2 * MAXL * (2 * MAXL + CPU_VECTOR) + 2 * MAXL * (MAXL // 2 + 1)
+SCRATCH += 6 * _SLOTS
 SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
 COLOURS = ("pca", "channels")
 THIN = 4  # px: damage this thin (half-thickness) takes thin_border (text, cracks, dust)

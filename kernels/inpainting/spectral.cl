@@ -51,34 +51,26 @@
 #ifndef SPECTRAL_GROUP
 #define SPECTRAL_GROUP 64
 #endif
-// candidates per vector in the picks' update (CPUs: 8 or 16; 1: one at a time, GPUs)
+// candidates per vector in the picks' update: 8 on CPUs, 1 (one at a time) on GPUs
 #ifndef SPECTRAL_VW
 #define SPECTRAL_VW 1
 #endif
-#if SPECTRAL_VW > 1
+#if SPECTRAL_VW == 8
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
-#define REALV CAT(REAL, SPECTRAL_VW)
-#define INTV CAT(int, SPECTRAL_VW)
-#define CONVERT_INTV CAT(convert_int, SPECTRAL_VW)
-#define VLOAD CAT(vload, SPECTRAL_VW)
-#define VSTORE CAT(vstore, SPECTRAL_VW)
-// out = (p[idx.s0], p[idx.s1], ...): one lane at a time
-#define G2_(p, i, a, b) (p)[(i).a], (p)[(i).b]
-#if SPECTRAL_VW == 8
-#define GATHER(out, p, i) \
-    out = (REALV)(G2_(p, i, s0, s1), G2_(p, i, s2, s3), G2_(p, i, s4, s5), G2_(p, i, s6, s7))
-#elif SPECTRAL_VW == 16
-#define GATHER(out, p, i)                                                                   \
-    out = (REALV)(G2_(p, i, s0, s1), G2_(p, i, s2, s3), G2_(p, i, s4, s5), G2_(p, i, s6, s7), \
-                  G2_(p, i, s8, s9), G2_(p, i, sa, sb), G2_(p, i, sc, sd), G2_(p, i, se, sf))
-#else
-#error "SPECTRAL_VW must be 1, 8 or 16"
-#endif
+#define REALV CAT(REAL, 8)
+#elif SPECTRAL_VW != 1
+#error "SPECTRAL_VW must be 1 or 8"
 #endif
 #define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
-#define SPECTRAL_XN (4 * SPECTRAL_MAXL * SPECTRAL_MAXL)
-#define SPECTRAL_TN ((SPECTRAL_VW > 1 ? 8 : 7) * SPECTRAL_MAXH)
+// the candidates' slots: each row of the half plane rounded up to whole vectors
+#define SPECTRAL_SLOTS \
+    (SPECTRAL_MAXL * ((SPECTRAL_MAXL / 2 + SPECTRAL_VW) / SPECTRAL_VW * SPECTRAL_VW))
+// W's row stride: with vectors, each row goes on past L (W periodic), so that a vector's
+// W(l - k) and W(l + k) are SPECTRAL_VW consecutive values
+#define W_STRIDE(L) (SPECTRAL_VW > 1 ? 2 * (L) + SPECTRAL_VW : (L))
+#define SPECTRAL_XN (2 * SPECTRAL_MAXL * SPECTRAL_MAXL + 2 * SPECTRAL_MAXL * W_STRIDE(SPECTRAL_MAXL))
+#define SPECTRAL_TN (2 * SPECTRAL_MAXH + (SPECTRAL_VW > 1 ? 6 : 5) * SPECTRAL_SLOTS)
 #define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
 
 #ifndef SPECTRAL_SPILL
@@ -112,7 +104,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local int best_at[SPECTRAL_GROUP];
     __local REAL pick_c[2];
     __local int pick_k[2];
-    __local short half_y[SPECTRAL_MAXH], half_x[SPECTRAL_MAXH];
+    __local short half_y[SPECTRAL_SLOTS], half_x[SPECTRAL_SLOTS];
     __local int picks[SPECTRAL_MAXK];
     __local REAL sums[9 * SPECTRAL_GROUP];
     __local REAL fit[3];
@@ -135,13 +127,16 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     SPACE REAL* const coef_r = T;
     SPACE REAL* const coef_i = T + SPECTRAL_MAXK;
     SPACE REAL* const qa = T + 2 * SPECTRAL_MAXH;
-    SPACE REAL* const qb = qa + SPECTRAL_MAXH;
-    SPACE REAL* const qc = qb + SPECTRAL_MAXH;
-    SPACE REAL* const rre = qc + SPECTRAL_MAXH;
-    SPACE REAL* const rim = rre + SPECTRAL_MAXH;
+    SPACE REAL* const qb = qa + SPECTRAL_SLOTS;
+    SPACE REAL* const qc = qb + SPECTRAL_SLOTS;
+    SPACE REAL* const rre = qc + SPECTRAL_SLOTS;
+    SPACE REAL* const rim = rre + SPECTRAL_SLOTS;
 #if SPECTRAL_VW > 1
-    SPACE REAL* const sc = rim + SPECTRAL_MAXH;  // the candidates' scores
+    SPACE REAL* const sc = rim + SPECTRAL_SLOTS;  // the candidates' scores
 #endif
+    const int WS = W_STRIDE(L);
+    SPACE REAL* const wre = X + 2 * LL;  // W, rows WS apart
+    SPACE REAL* const wim = wre + L * WS;
 
     for (int j = lid; j < L; j += SPECTRAL_GROUP) {
         REAL c;
@@ -187,48 +182,54 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             wr += T[q] * c + T[LL + q] * s;
             wi += T[LL + q] * c - T[q] * s;
         }
-        X[2 * LL + i] = wr;
-        X[3 * LL + i] = wi;
+        wre[ky * WS + kx] = wr;
+        wim[ky * WS + kx] = wi;
     }
-    // the candidates, row by row
+    // the candidates, row by row (|k| <= limit: kx from 0 to the row's last), each row
+    // rounded up to whole vectors by slots that are never scored (half_x -1)
     if (lid == 0) {
         const REAL limit = cutoff * (REAL)0.5 * (REAL)L;
         int count_h = 0;
         for (int ky = 0; ky < L; ++ky) {
             const int fy = ky <= L / 2 ? ky : ky - L;
-            for (int kx = 0; kx < H; ++kx)
-                if ((REAL)(fy * fy + kx * kx) <= limit * limit) {
-                    half_y[count_h] = (short)ky;
-                    half_x[count_h] = (short)kx;
-                    ++count_h;
-                }
+            int n = 0;
+            while (n < H && (REAL)(fy * fy + n * n) <= limit * limit) ++n;
+            const int slots = (n + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW;
+            for (int kx = 0; kx < slots; ++kx) {
+                half_y[count_h] = (short)ky;
+                half_x[count_h] = (short)(kx < n ? kx : -1);
+                ++count_h;
+            }
         }
         pick_k[0] = count_h;
-        // the vector pass's tail, up to a whole vector: updated, never scored
-        for (int j = count_h; j % SPECTRAL_VW; ++j) half_y[j] = half_x[j] = 0;
     }
     barrier(FENCE);
+#if SPECTRAL_VW > 1
+    // W's rows continued past L, periodically (read by the picks' update only)
+    for (int i = lid; i < L * (WS - L); i += SPECTRAL_GROUP) {
+        const int y = i / (WS - L), x = L + i - y * (WS - L);
+        wre[y * WS + x] = wre[y * WS + x % L];
+        wim[y * WS + x] = wim[y * WS + x % L];
+    }
+#endif
     const int NC = pick_k[0];
-    const REAL W0 = X[2 * LL];
+    const REAL W0 = wre[0];
     // each candidate's score is qa R_re^2 + qb R_re R_im + qc R_im^2: the pair's error
     // reduction times the prior
     const REAL inv_kmax = (REAL)1 / ((REAL)0.5 * (REAL)L * sqrt((REAL)2));
-    const int padded = (NC + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW;
-    for (int j = NC + lid; j < padded; j += SPECTRAL_GROUP)  // the tail's: finite
-        qa[j] = qb[j] = qc[j] = rre[j] = rim[j] = 0;
     for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
         const int ky = half_y[j], kx = half_x[j];
         const REAL fy = (REAL)(ky <= L / 2 ? ky : ky - L);
         const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
         const REAL prior = alpha == 0 ? (REAL)1 : pow((REAL)1 - nu, alpha);
         const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L, k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
-        if (!(W0 > 0)) {
+        if (!(W0 > 0) || kx < 0) {  // kx < 0: a vector's spare slot
             qa[j] = qb[j] = qc[j] = 0;
         } else if (k2y == 0 && k2x == 0) {  // self-conjugate: one real coefficient
             qa[j] = prior / W0;
             qb[j] = qc[j] = 0;
         } else {
-            const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+            const REAL vr = wre[k2y * WS + k2x], vi = wim[k2y * WS + k2x];
             const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
             const REAL pd = prior / den;
             qa[j] = 2 * (W0 - vr) * pd;
@@ -312,6 +313,10 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         int bi = 0;
         for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
             const int ky = half_y[j], kx = half_x[j];
+            if (kx < 0) {  // a vector's spare slot: updated, never scored
+                rre[j] = rim[j] = 0;
+                continue;
+            }
             REAL rr = 0, ri = 0;
             for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
                 const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
@@ -356,7 +361,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         cr = rr / W0;
                         gain = rr * cr;
                     } else {
-                        const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+                        const REAL vr = wre[k2y * WS + k2x], vi = wim[k2y * WS + k2x];
                         const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi),
                                               (REAL)1e-3 * W0 * W0);
                         cr = (rr * W0 - (vr * rr + vi * ri)) / den;
@@ -390,46 +395,35 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const REAL cr = pick_c[0], ci = pick_c[1];
                 const int self = pick_k[1];
 #if SPECTRAL_VW > 1
-                // CPUs: vectors of SPECTRAL_VW candidates (item lid takes vectors lid, lid +
-                // GROUP, ...), W's values gathered lane by lane, and the scores' argmax in a
-                // pass of its own: the scalar loop's running argmax kept the compiler from
-                // vectorising it. The same arithmetic.
-                const int nv = (NC + SPECTRAL_VW - 1) / SPECTRAL_VW;
-                for (int v = lid; v < nv; v += SPECTRAL_GROUP) {
-                    const int j0 = v * SPECTRAL_VW;
-                    const INTV ly = CONVERT_INTV(VLOAD(0, half_y + j0));
-                    const INTV lx = CONVERT_INTV(VLOAD(0, half_x + j0));
-                    INTV dy = ly - ky, dx = lx - kx;
-                    dy += select((INTV)0, (INTV)L, dy < 0);
-                    dx += select((INTV)0, (INTV)L, dx < 0);
-                    const INTV dm = dy * L + dx;
-                    REALV ar, ai;
-                    GATHER(ar, X + 2 * LL, dm);
-                    GATHER(ai, X + 3 * LL, dm);
+                // CPUs: vectors of 8 candidates of one row (item lid takes vectors lid, lid +
+                // GROUP, ...), whose W(l - k) and W(l + k) are 8 consecutive values of W's
+                // continued rows, and the scores' argmax in a pass of its own (a running
+                // argmax kept the compiler from vectorising the loop). The same arithmetic.
+                for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
+                    const int j0 = 8 * v, ly = half_y[j0], lx = half_x[j0];
+                    const int dy = ly - ky < 0 ? ly - ky + L : ly - ky;
+                    const int dm = dy * WS + lx - kx + L;  // lanes (lx - kx + i) mod L
+                    const REALV ar = vload8(0, wre + dm), ai = vload8(0, wim + dm);
                     REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
                     if (!self) {
-                        INTV sy = ly + ky, sx = lx + kx;
-                        sy -= select((INTV)0, (INTV)L, sy >= L);
-                        sx -= select((INTV)0, (INTV)L, sx >= L);
-                        const INTV dp = sy * L + sx;
-                        REALV pr, pi;
-                        GATHER(pr, X + 2 * LL, dp);
-                        GATHER(pi, X + 3 * LL, dp);
+                        const int sy = ly + ky >= L ? ly + ky - L : ly + ky;
+                        const int dp = sy * WS + lx + kx;
+                        const REALV pr = vload8(0, wre + dp), pi = vload8(0, wim + dp);
                         ur += cr * pr + ci * pi;
                         ui += cr * pi - ci * pr;
                     }
-                    const REALV rr = VLOAD(0, rre + j0) - ur, ri = VLOAD(0, rim + j0) - ui;
-                    VSTORE(rr, 0, rre + j0);
-                    VSTORE(ri, 0, rim + j0);
-                    VSTORE((VLOAD(0, qa + j0) * rr + VLOAD(0, qb + j0) * ri) * rr
-                               + VLOAD(0, qc + j0) * ri * ri,
-                           0, sc + j0);
+                    const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
+                    vstore8(rr, 0, rre + j0);
+                    vstore8(ri, 0, rim + j0);
+                    vstore8((vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
+                                + vload8(0, qc + j0) * ri * ri,
+                            0, sc + j0);
                 }
                 bs = -1;
                 bi = 0;
-                for (int v = lid; v < nv; v += SPECTRAL_GROUP)
-                    for (int j = v * SPECTRAL_VW; j < min(NC, v * SPECTRAL_VW + SPECTRAL_VW); ++j)
-                        if (sc[j] > bs) {
+                for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP)
+                    for (int j = 8 * v; j < 8 * v + 8; ++j)
+                        if (half_x[j] >= 0 && sc[j] > bs) {
                             bs = sc[j];
                             bi = j;
                         }
@@ -441,15 +435,15 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     int dy = ly - ky, dx = lx - kx;
                     dy += dy < 0 ? L : 0;
                     dx += dx < 0 ? L : 0;
-                    const int dm = dy * L + dx;
-                    const REAL ar = X[2 * LL + dm], ai = X[3 * LL + dm];
+                    const int dm = dy * WS + dx;
+                    const REAL ar = wre[dm], ai = wim[dm];
                     REAL ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;  // c W(l - k)
                     if (!self) {
                         int sy = ly + ky, sx = lx + kx;
                         sy -= sy >= L ? L : 0;
                         sx -= sx >= L ? L : 0;
-                        const int dp = sy * L + sx;
-                        const REAL pr = X[2 * LL + dp], pi = X[3 * LL + dp];
+                        const int dp = sy * WS + sx;
+                        const REAL pr = wre[dp], pi = wim[dp];
                         ur += cr * pr + ci * pi;  // conj(c) W(l + k)
                         ui += cr * pi - ci * pr;
                     }
