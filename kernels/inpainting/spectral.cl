@@ -69,7 +69,8 @@
 // W's row stride: with vectors, each row goes on past L (W periodic), so that a vector's
 // W(l - k) and W(l + k) are SPECTRAL_VW consecutive values
 #define W_STRIDE(L) (SPECTRAL_VW > 1 ? 2 * (L) + SPECTRAL_VW : (L))
-#define SPECTRAL_XN (2 * SPECTRAL_MAXL * SPECTRAL_MAXL + 2 * SPECTRAL_MAXL * W_STRIDE(SPECTRAL_MAXL))
+#define SPECTRAL_XN \
+    (2 * SPECTRAL_MAXL * SPECTRAL_MAXL + 2 * SPECTRAL_MAXL * W_STRIDE(SPECTRAL_MAXL))
 #define SPECTRAL_TN (2 * SPECTRAL_MAXH + (SPECTRAL_VW > 1 ? 6 : 5) * SPECTRAL_SLOTS)
 #define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
 
