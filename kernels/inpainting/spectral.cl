@@ -71,7 +71,11 @@
 #define W_STRIDE(L) (SPECTRAL_VW > 1 ? 2 * (L) + SPECTRAL_VW : (L))
 #define SPECTRAL_XN \
     (2 * SPECTRAL_MAXL * SPECTRAL_MAXL + 2 * SPECTRAL_MAXL * W_STRIDE(SPECTRAL_MAXL))
-#define SPECTRAL_TN (2 * SPECTRAL_MAXH + (SPECTRAL_VW > 1 ? 6 : 5) * SPECTRAL_SLOTS)
+// T's first part: R's rows on the half plane (with vectors, each rounded up to whole
+// vectors), then the picks' coefficients
+#define SPECTRAL_T0 \
+    (SPECTRAL_VW > 1 ? 2 * SPECTRAL_MAXL * ((SPECTRAL_MAXL / 2 + 8) / 8 * 8) : 2 * SPECTRAL_MAXH)
+#define SPECTRAL_TN (SPECTRAL_T0 + (SPECTRAL_VW > 1 ? 6 : 5) * SPECTRAL_SLOTS)
 #define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
 
 #ifndef SPECTRAL_SPILL
@@ -101,6 +105,9 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL T[SPECTRAL_TN];
 #endif
     __local REAL tw[2 * SPECTRAL_MAXL];  // cos, sin of 2 pi j / L
+#if SPECTRAL_VW > 1
+    __local REAL twc[SPECTRAL_MAXL * SPECTRAL_MAXL], tws[SPECTRAL_MAXL * SPECTRAL_MAXL];
+#endif
     __local REAL best[SPECTRAL_GROUP];
     __local int best_at[SPECTRAL_GROUP];
     __local REAL pick_c[2];
@@ -127,7 +134,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     SPACE REAL* const rows = T;                 // row transforms; then the picks' coefficients
     SPACE REAL* const coef_r = T;
     SPACE REAL* const coef_i = T + SPECTRAL_MAXK;
-    SPACE REAL* const qa = T + 2 * SPECTRAL_MAXH;
+    SPACE REAL* const qa = T + SPECTRAL_T0;
     SPACE REAL* const qb = qa + SPECTRAL_SLOTS;
     SPACE REAL* const qc = qb + SPECTRAL_SLOTS;
     SPACE REAL* const rre = qc + SPECTRAL_SLOTS;
@@ -145,6 +152,18 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         tw[j] = c;
         tw[SPECTRAL_MAXL + j] = s;
     }
+#if SPECTRAL_VW > 1
+    // the rows' transforms in vectors of 8 frequencies: the twiddles as tables,
+    // twc[n CS + k] = cos(2 pi k n / L) (and tws, sin), rows rounded up to whole vectors
+    const int CS = (L + 7) / 8 * 8, HS = (H + 7) / 8 * 8;
+    barrier(FENCE);
+    for (int i = lid; i < L * CS; i += SPECTRAL_GROUP) {
+        const int n = i / CS, k = i - n * CS;
+        const int t = (k * n) % L;
+        twc[i] = tw[t];
+        tws[i] = tw[SPECTRAL_MAXL + t];
+    }
+#endif
     // the weights, X[LL, 2 LL)
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, n = i - m * L;
@@ -161,7 +180,35 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         X[LL + i] = w;
     }
     barrier(FENCE);
-    // W: rows (whole plane) into T[0, 2 LL), then columns into X[2 LL, 4 LL)
+    // W: rows (whole plane) into T, then columns into wre, wim
+#if SPECTRAL_VW > 1
+    // in vectors of 8 frequencies (rows CS apart in T): the same sums, in the same order
+    for (int i = lid; i < L * (CS / 8); i += SPECTRAL_GROUP) {
+        const int m = i / (CS / 8), k0 = 8 * (i - m * (CS / 8));
+        REALV wr = 0, wi = 0;
+        for (int n = 0; n < L; ++n) {
+            const REAL w = X[LL + m * L + n];
+            wr += w * vload8(0, twc + n * CS + k0);
+            wi -= w * vload8(0, tws + n * CS + k0);
+        }
+        vstore8(wr, 0, T + m * CS + k0);
+        vstore8(wi, 0, T + L * CS + m * CS + k0);
+    }
+    barrier(FENCE);
+    for (int i = lid; i < L * (CS / 8); i += SPECTRAL_GROUP) {
+        const int ky = i / (CS / 8), k0 = 8 * (i - ky * (CS / 8));
+        REALV wr = 0, wi = 0;
+        for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
+            const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
+            const REALV a = vload8(0, T + m * CS + k0), b = vload8(0, T + L * CS + m * CS + k0);
+            wr += a * c + b * s;
+            wi += b * c - a * s;
+        }
+        // lanes past L land in the rows' continuation, written after the next barrier
+        vstore8(wr, 0, wre + ky * WS + k0);
+        vstore8(wi, 0, wim + ky * WS + k0);
+    }
+#else
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, k = i - m * L;
         REAL wr = 0, wi = 0;
@@ -186,6 +233,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         wre[ky * WS + kx] = wr;
         wim[ky * WS + kx] = wi;
     }
+#endif
     // the candidates, row by row (|k| <= limit: kx from 0 to the row's last), each row
     // rounded up to whole vectors by slots that are never scored (half_x -1)
     if (lid == 0) {
@@ -295,7 +343,48 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         }
         sums[lid] = e;  // lid 0 read the plane's sums before the barrier above
         barrier(FENCE);
-        // R: rows on the half plane into rows[0, 2 L H), then the candidates' columns
+        // R: rows on the half plane into rows, then the candidates' columns
+        // each item keeps its candidates' best score (item lid owns j = lid mod GROUP, or with
+        // vectors the vectors lid mod GROUP, in the transform, in every pick's update and in
+        // the scores, so they need no barrier)
+        REAL bs = -1;
+        int bi = 0;
+#if SPECTRAL_VW > 1
+        // in vectors of 8 frequencies (rows HS apart): the same sums, in the same order
+        for (int i = lid; i < L * (HS / 8); i += SPECTRAL_GROUP) {
+            const int m = i / (HS / 8), k0 = 8 * (i - m * (HS / 8));
+            REALV ar = 0, ai = 0;
+            for (int n = 0; n < L; ++n) {
+                const REAL a = X[m * L + n];
+                ar += a * vload8(0, twc + n * CS + k0);
+                ai -= a * vload8(0, tws + n * CS + k0);
+            }
+            vstore8(ar, 0, rows + m * HS + k0);
+            vstore8(ai, 0, rows + L * HS + m * HS + k0);
+        }
+        barrier(FENCE);
+        for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
+            const int j0 = 8 * v, ky = half_y[j0], kx = half_x[j0];
+            REALV rr = 0, ri = 0;
+            for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
+                const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
+                const REALV ar = vload8(0, rows + m * HS + kx);
+                const REALV ai = vload8(0, rows + L * HS + m * HS + kx);
+                rr += ar * c + ai * s;
+                ri += ai * c - ar * s;
+            }
+            vstore8(rr, 0, rre + j0);
+            vstore8(ri, 0, rim + j0);
+            vstore8((vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
+                        + vload8(0, qc + j0) * ri * ri,
+                    0, sc + j0);
+            for (int j = j0; j < j0 + 8; ++j)
+                if (half_x[j] >= 0 && sc[j] > bs) {
+                    bs = sc[j];
+                    bi = j;
+                }
+        }
+#else
         for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
             const int m = i / H, k = i - m * H;
             REAL ar = 0, ai = 0;
@@ -308,16 +397,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             rows[L * H + i] = ai;
         }
         barrier(FENCE);
-        // each item keeps its candidates' best score (item lid owns j = lid mod GROUP, in the
-        // transform, in every pick's update and in the scores, so they need no barrier)
-        REAL bs = -1;
-        int bi = 0;
         for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
             const int ky = half_y[j], kx = half_x[j];
-            if (kx < 0) {  // a vector's spare slot: updated, never scored
-                rre[j] = rim[j] = 0;
-                continue;
-            }
             REAL rr = 0, ri = 0;
             for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
                 const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
@@ -333,6 +414,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 bi = j;
             }
         }
+#endif
 
         REAL first_gain = 0, energy = 0;  // item 0's: energy is the weighted squared error
         int count = 0;
