@@ -89,6 +89,38 @@
 #define FENCE CLK_LOCAL_MEM_FENCE
 #endif
 
+#if SPECTRAL_VW > 1
+// a vector's scores with its spare slots (half_x < 0) at -1, which never win
+#ifdef REAL_IS_DOUBLE
+#define SPARE_LOSES(score, half_x, j0) \
+    select((REALV)-1, (score), convert_long8(convert_int8(vload8(0, (half_x) + (j0))) >= 0))
+#else
+#define SPARE_LOSES(score, half_x, j0) \
+    select((REALV)-1, (score), convert_int8(vload8(0, (half_x) + (j0))) >= 0)
+#endif
+
+// (bs, bi): the largest of an item's scores sc (vectors lid, lid + GROUP, ... of nv), top
+// their lane-wise maximum, and the first slot that holds it; (-1, 0) where none exceeds -1.
+// The same choice as a running argmax (a larger score, or an equal one earlier, wins), in a
+// maximum the compiler vectorises and a search that ends at the first hit.
+inline void first_best(SPACE const REAL* sc, const int nv, const int lid, const REALV top,
+                       REAL* bs, int* bi)
+{
+    const REAL m = fmax(fmax(fmax(top.s0, top.s1), fmax(top.s2, top.s3)),
+                        fmax(fmax(top.s4, top.s5), fmax(top.s6, top.s7)));
+    *bs = -1;
+    *bi = 0;
+    if (!(m > -1)) return;
+    for (int v = lid; v < nv; v += SPECTRAL_GROUP)
+        for (int j = 8 * v; j < 8 * v + 8; ++j)
+            if (sc[j] == m) {
+                *bs = m;
+                *bi = j;
+                return;
+            }
+}
+#endif
+
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
 void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      __global const int* blocks, const int first, const int wave,
@@ -105,6 +137,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL T[SPECTRAL_TN];
 #endif
     __local REAL tw[2 * SPECTRAL_MAXL];  // cos, sin of 2 pi j / L
+    __local REAL uv[SPECTRAL_MAXL];      // the plane's coordinate (j - centre) / L
 #if SPECTRAL_VW > 1
     __local REAL twc[SPECTRAL_MAXL * SPECTRAL_MAXL], tws[SPECTRAL_MAXL * SPECTRAL_MAXL];
 #endif
@@ -151,6 +184,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         const REAL s = sincos(two_pi_l * (REAL)j, &c);
         tw[j] = c;
         tw[SPECTRAL_MAXL + j] = s;
+        uv[j] = ((REAL)j - centre) / (REAL)L;
     }
 #if SPECTRAL_VW > 1
     // the rows' transforms in vectors of 8 frequencies: the twiddles as tables,
@@ -296,7 +330,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             const REAL w = X[LL + i];
             const int m = i / L, n = i - m * L;
             const REAL f = w > 0 ? plane[(oy + m) * nx + ox + n] : (REAL)0;
-            const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
+            const REAL u = uv[m], v = uv[n];
             const REAL wf = w * f;
             acc[0] += w; acc[1] += w * u; acc[2] += w * v;
             acc[3] += w * u * u; acc[4] += w * u * v; acc[5] += w * v * v;
@@ -335,7 +369,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REAL e = 0;  // the weighted squared residual w (f - plane)^2 over the window
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
             const int m = i / L, n = i - m * L;
-            const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
+            const REAL u = uv[m], v = uv[n];
             const REAL r = X[i] - (fit[0] + fit[1] * u + fit[2] * v);
             const REAL wr = X[LL + i] * r;
             X[i] = wr;
@@ -363,6 +397,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             vstore8(ai, 0, rows + L * HS + m * HS + k0);
         }
         barrier(FENCE);
+        REALV top = -1;
         for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
             const int j0 = 8 * v, ky = half_y[j0], kx = half_x[j0];
             REALV rr = 0, ri = 0;
@@ -375,15 +410,13 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             }
             vstore8(rr, 0, rre + j0);
             vstore8(ri, 0, rim + j0);
-            vstore8((vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
-                        + vload8(0, qc + j0) * ri * ri,
-                    0, sc + j0);
-            for (int j = j0; j < j0 + 8; ++j)
-                if (half_x[j] >= 0 && sc[j] > bs) {
-                    bs = sc[j];
-                    bi = j;
-                }
+            const REALV score = (vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
+                                + vload8(0, qc + j0) * ri * ri;
+            const REALV kept = SPARE_LOSES(score, half_x, j0);
+            vstore8(kept, 0, sc + j0);
+            top = fmax(top, kept);
         }
+        first_best(sc, NC / 8, lid, top, &bs, &bi);
 #else
         for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
             const int m = i / H, k = i - m * H;
@@ -482,6 +515,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 // GROUP, ...), whose W(l - k) and W(l + k) are 8 consecutive values of W's
                 // continued rows, and the scores' argmax in a pass of its own (a running
                 // argmax kept the compiler from vectorising the loop). The same arithmetic.
+                REALV top = -1;
                 for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
                     const int j0 = 8 * v, ly = half_y[j0], lx = half_x[j0];
                     const int dy = ly - ky < 0 ? ly - ky + L : ly - ky;
@@ -498,18 +532,13 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
                     vstore8(rr, 0, rre + j0);
                     vstore8(ri, 0, rim + j0);
-                    vstore8((vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
-                                + vload8(0, qc + j0) * ri * ri,
-                            0, sc + j0);
+                    const REALV score = (vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
+                                        + vload8(0, qc + j0) * ri * ri;
+                    const REALV kept = SPARE_LOSES(score, half_x, j0);
+                    vstore8(kept, 0, sc + j0);
+                    top = fmax(top, kept);
                 }
-                bs = -1;
-                bi = 0;
-                for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP)
-                    for (int j = 8 * v; j < 8 * v + 8; ++j)
-                        if (half_x[j] >= 0 && sc[j] > bs) {
-                            bs = sc[j];
-                            bi = j;
-                        }
+                first_best(sc, NC / 8, lid, top, &bs, &bi);
 #else
                 bs = -1;
                 bi = 0;
@@ -554,8 +583,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             const int p = y * nx + x;
             if (state[p] != wave) continue;
             const int m = b + u, n = b + v;
-            REAL g = fit[0] + fit[1] * (((REAL)m - centre) / (REAL)L)
-                     + fit[2] * (((REAL)n - centre) / (REAL)L);
+            REAL g = fit[0] + fit[1] * uv[m] + fit[2] * uv[n];
             for (int t = 0; t < count; ++t) {
                 const int code = picks[t];
                 const int k = code < 0 ? -1 - code : code;
