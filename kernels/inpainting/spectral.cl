@@ -31,17 +31,27 @@
 // Candidates: the half plane kx in [0, L/2] (R(-l) = conj(R(l)) for a real residual) with
 // |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
 // the candidates and their scores' factors depend on the weights alone: once per block.
-// The loop stops after the block's most picks, once a pick's reduction falls below `stop` times
+// The loop stops after the block's most picks (the channels after the first: its minor picks),
+// once a pick's reduction falls below `stop` times
 // the first one's, or once the weighted squared residual E is at most floor2 W(0) (its weighted
 // mean square at most floor^2: the rest is finer than the data). E starts as
 // sum w (f - plane)^2 and a step gamma c lowers it by gamma (2 - gamma) times the pick's
 // reduction. Each item scores its own candidates as it updates them, so a pick costs one pass
 // over the candidates and two barriers.
 //
-// Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
-// picks' coefficients | qa, qb, qc, R re, R im on the candidates). X and T are 31 KB in
-// float, 62 KB in double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per
-// kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
+// Work-group shape (the host's work_shape): on GPUs SPECTRAL_GROUP = 64 items share a block's
+// candidates, one at a time (SPECTRAL_VW = 1). On CPUs (SPECTRAL_GROUP = 1, SPECTRAL_VW = 8)
+// one item walks them in vectors of 8: PoCL runs a work-group's items one after the other,
+// and its compiler left the scalar loops unvectorised. There the candidates lie in rows of
+// whole vectors (spare slots, half_x -1, are updated but never scored), W's rows continue
+// periodically past L, so that a vector's W(l - k) and W(l + k) are 8 consecutive values, and
+// the transforms take 8 frequencies at a time from twiddle tables. Each sum runs in the same
+// order as the scalar code's, so both shapes give the same fill bit for bit.
+//
+// Local memory: X = (w (f - plane), w | W re, W im, rows WS apart); T = (row transforms, or
+// the picks' coefficients | qa, qb, qc, R re, R im (and, with vectors, the scores) on the
+// candidates' slots). With one candidate at a time X and T are 31 KB in float, 62 KB in
+// double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
 // too small) they live in `scratch`, SPECTRAL_SCRATCH REALs per work-group of global
 // memory, and the barriers fence global memory too; the arithmetic is the same.
 #include "common.h"
