@@ -46,7 +46,8 @@
 // whole vectors (spare slots, half_x -1, are updated but never scored), W's rows continue
 // periodically past L, so that a vector's W(l - k) and W(l + k) are 8 consecutive values, and
 // the transforms take 8 frequencies at a time from twiddle tables. Each sum runs in the same
-// order as the scalar code's, so both shapes give the same fill bit for bit.
+// order as the scalar code's: with as many items, vectors give the scalar fill bit for bit
+// (the item count orders the plane's partial sums, a difference of rounding).
 //
 // Local memory: X = (w (f - plane), w | W re, W im, rows WS apart); T = (row transforms, or
 // the picks' coefficients | qa, qb, qc, R re, R im (and, with vectors, the scores) on the

@@ -74,6 +74,19 @@ def test_every_work_group_shape_matches_numpy_reference(runtime, monkeypatch, sh
     assert diff.mean() < 1e-3, diff.mean()
 
 
+@pytest.mark.parametrize("items", [1, 16])
+def test_vectors_give_the_scalar_fill_bit_for_bit(runtime, monkeypatch, items):
+    # the same sums in the same order: only the number of items (the plane's partial sums)
+    # may change the rounding
+    data = np.stack([_photo_like(40, 48, seed=c) * (1 - 0.2 * c) for c in range(3)])
+    mask = _scratches(40, 48)
+    fills = []
+    for vector in (1, 8):
+        monkeypatch.setattr(spectral, "work_shape", lambda rt, v=vector: (items, v))
+        fills.append(spectral.fill(data, mask, runtime, **dict(SMALL, cutoff=0.8)))
+    assert np.array_equal(fills[0], fills[1])
+
+
 def test_plan_matches_reference_plan():
     mask = _scratches(60, 70, seed=3)
     mask[0:3, 10:20] = True  # damage at the image's edge: shifted grids start before it
