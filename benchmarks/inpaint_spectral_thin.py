@@ -9,7 +9,10 @@ work slows them alike.
 
 Cases: tests/cases/inpaint_corpus.py's, of the damage classes given (the thin ones by
 default), on the half given. --variants '{"base": {}, "s1": {"shifts": 1}}' names option sets
-of clpde.inpaint(..., method="spectral", **options); the default runs the defaults alone.
+of clpde.inpaint(..., method="spectral", **options); the default runs the defaults alone. A
+variant's "work_shape": [items, vector] sets the kernel's work-group shape
+(spectral.work_shape): [64, 1], the GPUs', with "minor": 1 is the fill before issue 37's
+CPU path and minor picks, on any device.
 Per class and variant: mean PSNR in the hole, and the summed wall time and CPU time (the
 process's, all threads: on a loaded machine this is the steadier figure) of one warm call per
 case (the best of --repeats), with the ratios to biharmonic's and FSR-fast's. With
@@ -34,12 +37,25 @@ THIN = ("text", "scratches", "craquelure", "dust")
 
 
 def spectral(options):
+    """A run of method="spectral" with `options`; the key "work_shape": [items, vector]
+    runs the kernel in that work-group shape instead of the device's own (the GPUs' shape
+    [64, 1] on a CPU measures the CPUs' vector path against it)."""
+    options = dict(options)
+    shape = options.pop("work_shape", None)
+
     def run(image, mask, case):
         import clpde
+        from clpde.inpainting import spectral as module
 
-        return clpde.inpaint(
-            image, mask, channel_axis=case.channel_axis, method="spectral", **options
-        )
+        own = module.work_shape
+        if shape is not None:
+            module.work_shape = lambda runtime: tuple(shape)
+        try:
+            return clpde.inpaint(
+                image, mask, channel_axis=case.channel_axis, method="spectral", **options
+            )
+        finally:
+            module.work_shape = own
 
     return run
 

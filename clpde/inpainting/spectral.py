@@ -35,9 +35,11 @@ own and runs on the OpenCL device (kernels/inpainting/spectral.cl has the maths)
   (each in its own copy of the crop; their waves share launches) and averaged: the blocks'
   seams and each grid's unlucky cuts average out.
 - Colour: several channels are fitted in a decorrelated basis (principal axes of the known
-  pixels near the damage), each channel on its own, and turned back afterwards.
-- Programs: one (per dtype); image size, channel count, block sizes and every option are
-  kernel arguments, and the work-group size is fixed, so nothing is built per call.
+  pixels near the damage), each channel on its own, and turned back afterwards; the
+  channels after the first (the smaller variances) take `minor` of the picks.
+- Programs: one (per dtype and device); image size, channel count, block sizes and every
+  option are kernel arguments, and the work-group shape is the device's (work_shape: on
+  CPUs one item per block, its candidates in vectors of 8), so nothing is built per call.
 - Precision: the data stays float (float32, or float64 with dtype=float64) from the input's
   scaling to the output; nothing is quantised to 8 bits.
 - Only the damage's blocks are touched: the upload is the damage's bounding box grown by the
@@ -50,8 +52,9 @@ Defaults (block 8, border 12, rho 0.6, gamma 0.7, alpha 2, delta 1, split 0.3, t
 the thin border (6: where no damaged pixel is farther than THIN = 4 px from a known one, a
 20 px window instead of 32) on the calibration half of the corpus, with
 benchmarks/inpaint_spectral_thin.py: on thin damage it takes 2-3x less time at the same
-PSNR there. The floor is off: 0.004 (one 8-bit level) cost nothing on the calibration half
-but up to 2 dB on smooth images of the test half (errors themselves near one level).
+PSNR there; minor 0.3 likewise (every class of the calibration half within 0.015 dB). The
+floor is off: 0.004 (one 8-bit level) cost nothing on the calibration half but up to 2 dB
+on smooth images of the test half (errors themselves near one level).
 """
 
 from __future__ import annotations
@@ -65,8 +68,9 @@ from scipy import ndimage
 
 from ..errors import DeviceLimitError
 from ..imagedata import InputError
+from ..runtime import enqueue_bare
 from .registry import register
-from .spectral_plan import MAXL, block_iterations, plan, shifts_of
+from .spectral_plan import MAXL, launch_table, plan, shifts_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("inpainting/spectral.cl",)
@@ -77,10 +81,15 @@ DESCRIPTION = (
 )
 
 MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
-GROUP = 64  # its SPECTRAL_GROUP
-# its SPECTRAL_SCRATCH: the REALs of one work-group's windows and transforms, which live in
-# global memory where local memory is too small (SPECTRAL_SPILL)
-SCRATCH = 4 * MAXL * MAXL + 7 * MAXL * (MAXL // 2 + 1)
+GROUP = 64  # its SPECTRAL_GROUP on GPUs (work_shape)
+CPU_VECTOR = 8  # its SPECTRAL_VW on CPUs: candidates per vector (the only width it takes)
+# its SPECTRAL_SCRATCH with vectors (the larger): the REALs of one work-group's windows and
+# transforms (W's rows continued to 2 MAXL + 8; R's rows and the candidates' rows rounded up
+# to whole vectors), which live in global memory where local memory is too small
+# (SPECTRAL_SPILL)
+_ROW = (MAXL // 2 + CPU_VECTOR) // CPU_VECTOR * CPU_VECTOR  # a half plane's row, in vectors
+SCRATCH = 2 * MAXL * MAXL + 2 * MAXL * (2 * MAXL + CPU_VECTOR) + 2 * MAXL * _ROW
+SCRATCH += 6 * MAXL * _ROW
 SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
 COLOURS = ("pca", "channels")
 THIN = 4  # px: damage this thin (half-thickness) takes thin_border (text, cracks, dust)
@@ -122,6 +131,7 @@ class SpectralOptions:
     cutoff: float = 1.5
     per_pixel: float = 0.0
     thin_border: int = 6
+    minor: float = 0.3
 
     def __post_init__(self) -> None:
         _check(
@@ -141,6 +151,7 @@ class SpectralOptions:
             self.per_pixel,
             self.shifts,
             self.thin_border,
+            self.minor,
         )
 
 
@@ -161,6 +172,7 @@ def _check(
     per_pixel,
     shifts,
     thin_border=0,
+    minor=1.0,
 ):
     """InputError for an option of `fill` out of its range."""
     for name, v in (
@@ -192,8 +204,9 @@ def _check(
         ("delta", delta, 0.0, 1.0),
         ("gamma", gamma, 0.0, 1.0),
         ("split", split, 0.0, 1.0),
+        ("minor", minor, 0.0, 1.0),
     ):
-        if not (np.isfinite(v) and lo <= v <= hi) or (name in ("rho", "gamma") and v == 0):
+        if not (np.isfinite(v) and lo <= v <= hi) or (name in ("rho", "gamma", "minor") and v == 0):
             raise InputError(f"{name} must be a number in ({lo:g}, {hi:g}], not {v!r}")
     if not (np.isfinite(alpha) and alpha >= 0):
         raise InputError(f"alpha must be a number >= 0, not {alpha!r}")
@@ -265,6 +278,7 @@ def fill(
     cutoff: float = 1.5,
     per_pixel: float = 0.0,
     thin_border: int = 6,
+    minor: float = 0.3,
     timings: dict | None = None,
 ) -> np.ndarray:
     """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
@@ -315,6 +329,9 @@ def fill(
     thin_border : int
         > 0: the border (at most `border`) where the damage is thin (no pixel of omega
         farther than THIN from a known one: text, scratches, cracks, dust); 0: off.
+    minor : float
+        Share of a block's picks that the channels after the first take, in (0, 1] (at
+        least one pick): with colour='pca' they hold the colours' smaller variances.
     timings : dict or None
         Receives the seconds spent planning, building, uploading, running the waves and
         reading back, and the counts of blocks and launches.
@@ -358,6 +375,7 @@ def fill(
         per_pixel,
         shifts,
         thin_border,
+        minor,
     )
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
@@ -393,7 +411,7 @@ def fill(
     real = np.dtype(dtype)
     # a writable copy: the device's result is read back into it
     host = np.array(np.broadcast_to(work, (len(plans),) + work.shape), real, order="C")
-    table = _launch_table(plans, omega, (y0, x0), hole.shape, iterations, per_pixel)
+    table = launch_table(plans, omega, (y0, x0), hole.shape, (iterations, per_pixel, minor))
     t["plan"] = time.perf_counter() - t0
     options = (rho, delta, gamma, alpha, stop, floor, bool(detrend), cutoff)
     _run_waves(runtime, host, table, options, t)
@@ -408,34 +426,6 @@ def thin(omega: np.ndarray) -> bool:
     return not ndimage.binary_erosion(omega, DISC, border_value=1).any()
 
 
-def _launch_table(plans, omega, origin, shape, iterations: int, per_pixel: float):
-    """(wave_of, blocks, starts) for the launches: each copy's waves over the union crop
-    (at `origin`, of `shape`), and the blocks of every copy, wave by wave, as rows of
-    (row, column, size, window, copy, picks); wave w's blocks are blocks[starts[w]:
-    starts[w + 1]]."""
-    y0, x0 = origin
-    wave_of = np.full((len(plans),) + tuple(shape), -1, np.int32)
-    per_wave = {}
-    for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
-        wave_of[c, cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = w_of
-        moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
-        picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
-        for w, (first, count) in enumerate(waves):
-            rows = np.concatenate(
-                [
-                    moved[first : first + count],
-                    np.full((count, 1), c, np.int32),
-                    picks[first : first + count, None],
-                ],
-                1,
-            )
-            per_wave.setdefault(w, []).append(rows)
-    order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
-    all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
-    starts = np.cumsum([0] + [len(o) for o in order])
-    return wave_of, all_blocks, starts
-
-
 def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     """Upload the copies `host` ((copies, channels, rows, cols)), run one launch per wave
     (one work-group per block) and read the copies back into `host`; `t` receives the
@@ -444,7 +434,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     rho, delta, gamma, alpha, stop, floor, detrend, cutoff = options
     real = host.dtype
     t0 = time.perf_counter()
-    kernel, spill = fitting_kernel(runtime, real)
+    kernel, spill, group = fitting_kernel(runtime, real)
     t["build"] = time.perf_counter() - t0
     # work-groups per launch: a whole wave, or as many as SCRATCH_BYTES of scratch hold
     widest = int(np.diff(starts).max(initial=1))
@@ -470,29 +460,32 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
         for w in range(len(starts) - 1)
         for first in range(int(starts[w]), int(starts[w + 1]), per_launch)
     ]
+    # an instance of its own, its arguments set once: a launch sets only its first block and
+    # its wave (pyopencl's call sets all 17 each time)
+    bare = cl.Kernel(kernel.cl_kernel.program, "spectral_blocks")
+    bare.set_args(
+        img,
+        waves_buf,
+        blocks_buf,
+        np.int32(0),
+        np.int32(0),
+        np.int32(nx),
+        np.int32(ny),
+        np.int32(nc),
+        s(rho),
+        s(delta),
+        s(gamma),
+        s(alpha),
+        s(stop),
+        s(floor * floor),
+        np.int32(detrend),
+        s(cutoff),
+        scratch,
+    )
     for w, first, count in launches:
-        kernel(
-            q,
-            (count * GROUP,),
-            (GROUP,),
-            img,
-            waves_buf,
-            blocks_buf,
-            np.int32(first),
-            np.int32(w),
-            np.int32(nx),
-            np.int32(ny),
-            np.int32(nc),
-            s(rho),
-            s(delta),
-            s(gamma),
-            s(alpha),
-            s(stop),
-            s(floor * floor),
-            np.int32(detrend),
-            s(cutoff),
-            scratch,
-        )
+        bare.set_arg(3, np.int32(first))
+        bare.set_arg(4, np.int32(w))
+        enqueue_bare(q, bare, (count * group,), (group,), "inpainting/spectral.cl")
     q.finish()
     t["waves"] = time.perf_counter() - t0
 
@@ -503,18 +496,29 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     t["blocks"], t["launches"] = len(all_blocks), len(launches)
 
 
+def work_shape(runtime) -> tuple:
+    """(SPECTRAL_GROUP, SPECTRAL_VW), the work-group's items and the candidates each item
+    updates at once: on GPUs GROUP items share a block's candidates one at a time; on CPUs
+    one item walks them in vectors of CPU_VECTOR (PoCL runs a work-group's items in turn, so
+    there items buy nothing, and its compiler leaves the scalar loop unvectorised)."""
+    return (1, CPU_VECTOR) if runtime.is_cpu else (GROUP, 1)
+
+
 def fitting_kernel(runtime, real) -> tuple:
-    """(spectral_blocks as it fits the device, whether it spills): each work-group's windows
-    in local memory, or, where the device has too little of it (the OpenCL minimum of 32 KB;
-    NVIDIA's 48 KB per kernel in double), in global scratch memory (SPECTRAL_SPILL; the same
-    arithmetic). Refused, before any work, where neither fits."""
+    """(spectral_blocks as it fits the device, whether it spills, its work-group size): each
+    work-group's windows in local memory, or, where the device has too little of it (the
+    OpenCL minimum of 32 KB; NVIDIA's 48 KB per kernel in double), in global scratch memory
+    (SPECTRAL_SPILL; the same arithmetic). Refused, before any work, where neither fits."""
     problem = None
+    group, vector = work_shape(runtime)
     for spill in (0, 1):
-        defines = {"SPECTRAL_SPILL": 1} if spill else {}
+        defines = {"SPECTRAL_GROUP": group, "SPECTRAL_VW": vector}
+        if spill:
+            defines["SPECTRAL_SPILL"] = 1
         kernel = runtime.kernel("inpainting/spectral.cl", "spectral_blocks", real, **defines)
-        problem = runtime.group_problem(kernel, GROUP)
+        problem = runtime.group_problem(kernel, group)
         if problem is None:
-            return kernel, bool(spill)
+            return kernel, bool(spill), group
     raise DeviceLimitError(
         f"spectral inpainting cannot run on this device: {problem}; choose another device "
         "(clpde devices) or another method (method='transport')"
@@ -547,6 +551,7 @@ def solve(
     cutoff=SpectralOptions.cutoff,
     per_pixel=SpectralOptions.per_pixel,
     thin_border=SpectralOptions.thin_border,
+    minor=SpectralOptions.minor,
 ):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
@@ -562,7 +567,8 @@ def solve(
     averaged), cutoff (the candidate frequencies: |k| at most this share of the Nyquist
     frequency; 1.5 takes all), per_pixel (> 0: a block's picks are at most this many per hole
     pixel in it, at least 4), thin_border (> 0: the border where no damaged pixel lies farther
-    than THIN = 4 px from a known one).
+    than THIN = 4 px from a known one), minor (share of the picks that the channels after the
+    first take: the principal axes of smaller variance).
     """
     return fill(
         data,
@@ -586,4 +592,5 @@ def solve(
         cutoff=cutoff,
         per_pixel=per_pixel,
         thin_border=thin_border,
+        minor=minor,
     )

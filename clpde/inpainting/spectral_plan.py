@@ -228,6 +228,37 @@ def plan(
     return (cy0, cy1, cx0, cx1), blocks.astype(np.int32), waves, wave_of
 
 
+def launch_table(plans, omega, origin, shape, picking):
+    """(wave_of, blocks, starts) for the launches: each copy's waves over the union crop
+    (at `origin`, of `shape`), and the blocks of every copy, wave by wave, as rows of
+    (row, column, size, window, copy, picks, minor picks); wave w's blocks are
+    blocks[starts[w]: starts[w + 1]]. `picking` is (iterations, per_pixel, minor)."""
+    iterations, per_pixel, minor = picking
+    y0, x0 = origin
+    wave_of = np.full((len(plans),) + tuple(shape), -1, np.int32)
+    per_wave = {}
+    for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
+        wave_of[c, cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = w_of
+        moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
+        picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
+        minor_picks = minor_iterations(picks, minor)
+        for w, (first, count) in enumerate(waves):
+            rows = np.concatenate(
+                [
+                    moved[first : first + count],
+                    np.full((count, 1), c, np.int32),
+                    picks[first : first + count, None],
+                    minor_picks[first : first + count, None],
+                ],
+                1,
+            )
+            per_wave.setdefault(w, []).append(rows)
+    order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
+    all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
+    starts = np.cumsum([0] + [len(o) for o in order])
+    return wave_of, all_blocks, starts
+
+
 def block_iterations(blocks, hole, iterations: int, per_pixel: float) -> np.ndarray:
     """Each block's most picks: `iterations`, or with per_pixel > 0, per_pixel picks for each
     of its hole pixels (at least 4), whichever is fewer: a speck needs fewer terms than a
@@ -245,3 +276,10 @@ def shifts_of(shifts: int, block: int) -> list:
     """The block grids' offsets: 1, 2 (a half block diagonally) or 4 (every half block)."""
     h = block // 2
     return {1: [(0, 0)], 2: [(0, 0), (h, h)], 4: [(0, 0), (0, h), (h, 0), (h, h)]}[shifts]
+
+
+def minor_iterations(picks: np.ndarray, minor: float) -> np.ndarray:
+    """Each block's most picks in the channels after the first: `minor` of its picks (at
+    least 1). In the principal-axis colour basis those channels hold the colours' smaller
+    variances, which fewer terms model as well."""
+    return np.maximum(1, np.rint(minor * picks)).astype(np.int32)

@@ -3,7 +3,8 @@
 // around it, and the block's missing pixels are taken from the model.
 //
 // One work-group of SPECTRAL_GROUP items fits one block, every channel in turn: group g takes
-// blocks[first + g], 6 ints (row, column, B, L, copy, picks): its B x B pixels from (row, column),
+// blocks[first + g], 7 ints (row, column, B, L, copy, picks, minor picks: those of the
+// channels after the first): its B x B pixels from (row, column),
 // its extended window L x L (L even, L - B even, L <= SPECTRAL_MAXL), in copy `copy` of the
 // image (img: copies x nc planes of ny x nx; wave_of: one plane per copy; the copies are the
 // fills on differently offset block grids, averaged afterwards). The blocks of one launch (a
@@ -30,27 +31,62 @@
 // Candidates: the half plane kx in [0, L/2] (R(-l) = conj(R(l)) for a real residual) with
 // |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
 // the candidates and their scores' factors depend on the weights alone: once per block.
-// The loop stops after the block's most picks, once a pick's reduction falls below `stop` times
+// The loop stops after the block's most picks (the channels after the first: its minor picks),
+// once a pick's reduction falls below `stop` times
 // the first one's, or once the weighted squared residual E is at most floor2 W(0) (its weighted
 // mean square at most floor^2: the rest is finer than the data). E starts as
 // sum w (f - plane)^2 and a step gamma c lowers it by gamma (2 - gamma) times the pick's
 // reduction. Each item scores its own candidates as it updates them, so a pick costs one pass
 // over the candidates and two barriers.
 //
-// Local memory: X = (w (f - plane), w, W re, W im), L^2 each; T = (row transforms, or the
-// picks' coefficients | qa, qb, qc, R re, R im on the candidates). X and T are 31 KB in
-// float, 62 KB in double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per
-// kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
+// Work-group shape (the host's work_shape): on GPUs SPECTRAL_GROUP = 64 items share a block's
+// candidates, one at a time (SPECTRAL_VW = 1). On CPUs (SPECTRAL_GROUP = 1, SPECTRAL_VW = 8)
+// one item walks them in vectors of 8: PoCL runs a work-group's items one after the other,
+// and its compiler left the scalar loops unvectorised. There the candidates lie in rows of
+// whole vectors (spare slots, half_x -1, are updated but never scored), W's rows continue
+// periodically past L, so that a vector's W(l - k) and W(l + k) are 8 consecutive values, and
+// the transforms take 8 frequencies at a time from twiddle tables. Each sum runs in the same
+// order as the scalar code's: with as many items, vectors give the scalar fill bit for bit
+// (the item count orders the plane's partial sums, a difference of rounding).
+//
+// Local memory: X = (w (f - plane), w | W re, W im, rows WS apart); T = (row transforms, or
+// the picks' coefficients | qa, qb, qc, R re, R im (and, with vectors, the scores) on the
+// candidates' slots). With one candidate at a time X and T are 31 KB in float, 62 KB in
+// double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
 // too small) they live in `scratch`, SPECTRAL_SCRATCH REALs per work-group of global
 // memory, and the barriers fence global memory too; the arithmetic is the same.
 #include "common.h"
 
 #define SPECTRAL_MAXL 32    // largest window
 #define SPECTRAL_MAXK 512   // most picks per block
+#ifndef SPECTRAL_GROUP
 #define SPECTRAL_GROUP 64
+#endif
+// candidates per vector in the picks' update: 8 on CPUs, 1 (one at a time) on GPUs
+#ifndef SPECTRAL_VW
+#define SPECTRAL_VW 1
+#endif
+#if SPECTRAL_VW == 8
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+#define REALV CAT(REAL, 8)
+#elif SPECTRAL_VW != 1
+#error "SPECTRAL_VW must be 1 or 8"
+#endif
 #define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
-#define SPECTRAL_XN (4 * SPECTRAL_MAXL * SPECTRAL_MAXL)
-#define SPECTRAL_TN (2 * SPECTRAL_MAXH + 5 * SPECTRAL_MAXH)
+// the candidates' slots: each row of the half plane rounded up to whole vectors
+#define SPECTRAL_SLOTS \
+    (SPECTRAL_MAXL * ((SPECTRAL_MAXL / 2 + SPECTRAL_VW) / SPECTRAL_VW * SPECTRAL_VW))
+// W's row stride: with vectors, each row goes on past L (W periodic), so that a vector's
+// W(l - k) and W(l + k) are SPECTRAL_VW consecutive values
+#define W_STRIDE(L) (SPECTRAL_VW > 1 ? 2 * (L) + SPECTRAL_VW : (L))
+#define SPECTRAL_XN \
+    (2 * SPECTRAL_MAXL * SPECTRAL_MAXL + 2 * SPECTRAL_MAXL * W_STRIDE(SPECTRAL_MAXL))
+// T's first part: R's rows on the half plane (with vectors, each rounded up to whole
+// vectors), then the picks' coefficients
+#define SPECTRAL_T0 \
+    (SPECTRAL_VW > 1 ? 2 * SPECTRAL_MAXL * ((SPECTRAL_MAXL / 2 + 8) / 8 * 8) : 2 * SPECTRAL_MAXH)
+#define SPECTRAL_TN (SPECTRAL_T0 + (SPECTRAL_VW > 1 ? 6 : 5) * SPECTRAL_SLOTS)
 #define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
 
 #ifndef SPECTRAL_SPILL
@@ -63,6 +99,50 @@
 #define SPACE __local
 #define FENCE CLK_LOCAL_MEM_FENCE
 #endif
+
+#if SPECTRAL_VW > 1
+// a vector's scores with its spare slots (half_x < 0) at -1, which never win
+#ifdef REAL_IS_DOUBLE
+#define SPARE_LOSES(score, half_x, j0) \
+    select((REALV)-1, (score), convert_long8(convert_int8(vload8(0, (half_x) + (j0))) >= 0))
+#else
+#define SPARE_LOSES(score, half_x, j0) \
+    select((REALV)-1, (score), convert_int8(vload8(0, (half_x) + (j0))) >= 0)
+#endif
+
+// (bs, bi): the largest of an item's scores sc (vectors lid, lid + GROUP, ... of nv), top
+// their lane-wise maximum, and the first slot that holds it; (-1, 0) where none exceeds -1.
+// The same choice as a running argmax (a larger score, or an equal one earlier, wins), in a
+// maximum the compiler vectorises and a search that ends at the first hit.
+inline void first_best(SPACE const REAL* sc, const int nv, const int lid, const REALV top,
+                       REAL* bs, int* bi)
+{
+    const REAL m = fmax(fmax(fmax(top.s0, top.s1), fmax(top.s2, top.s3)),
+                        fmax(fmax(top.s4, top.s5), fmax(top.s6, top.s7)));
+    *bs = -1;
+    *bi = 0;
+    if (!(m > -1)) return;
+    for (int v = lid; v < nv; v += SPECTRAL_GROUP)
+        for (int j = 8 * v; j < 8 * v + 8; ++j)
+            if (sc[j] == m) {
+                *bs = m;
+                *bi = j;
+                return;
+            }
+}
+#endif
+
+// x^alpha, by multiplication where alpha is a whole number up to 8: pow (and pown) cost as
+// much as the rest of a block's set-up on PoCL's CPU device
+inline REAL power(const REAL x, const REAL alpha)
+{
+    if (alpha >= 0 && alpha <= 8 && alpha == (REAL)(int)alpha) {
+        REAL p = 1;
+        for (int i = 0; i < (int)alpha; ++i) p *= x;
+        return p;
+    }
+    return pow(x, alpha);
+}
 
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
 void spectral_blocks(__global REAL* img, __global const int* wave_of,
@@ -80,20 +160,25 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL T[SPECTRAL_TN];
 #endif
     __local REAL tw[2 * SPECTRAL_MAXL];  // cos, sin of 2 pi j / L
+    __local REAL uv[SPECTRAL_MAXL];      // the plane's coordinate (j - centre) / L
+#if SPECTRAL_VW > 1
+    __local REAL twc[SPECTRAL_MAXL * SPECTRAL_MAXL], tws[SPECTRAL_MAXL * SPECTRAL_MAXL];
+#endif
     __local REAL best[SPECTRAL_GROUP];
     __local int best_at[SPECTRAL_GROUP];
     __local REAL pick_c[2];
     __local int pick_k[2];
-    __local short half_y[SPECTRAL_MAXH], half_x[SPECTRAL_MAXH];
+    __local short half_y[SPECTRAL_SLOTS], half_x[SPECTRAL_SLOTS];
     __local int picks[SPECTRAL_MAXK];
     __local REAL sums[9 * SPECTRAL_GROUP];
     __local REAL fit[3];
 
     const int lid = get_local_id(0);
     const int blk = first + get_group_id(0);
-    const int by = blocks[6 * blk], bx = blocks[6 * blk + 1];
-    const int B = blocks[6 * blk + 2], L = blocks[6 * blk + 3];
-    const int copy = blocks[6 * blk + 4], iterations = blocks[6 * blk + 5];
+    const int by = blocks[7 * blk], bx = blocks[7 * blk + 1];
+    const int B = blocks[7 * blk + 2], L = blocks[7 * blk + 3];
+    const int copy = blocks[7 * blk + 4], iterations = blocks[7 * blk + 5];
+    const int minor_iterations = blocks[7 * blk + 6];
     __global const int* state = wave_of + (size_t)copy * nx * ny;
     const int LL = L * L;
     const int H = L / 2 + 1;
@@ -105,18 +190,37 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     SPACE REAL* const rows = T;                 // row transforms; then the picks' coefficients
     SPACE REAL* const coef_r = T;
     SPACE REAL* const coef_i = T + SPECTRAL_MAXK;
-    SPACE REAL* const qa = T + 2 * SPECTRAL_MAXH;
-    SPACE REAL* const qb = qa + SPECTRAL_MAXH;
-    SPACE REAL* const qc = qb + SPECTRAL_MAXH;
-    SPACE REAL* const rre = qc + SPECTRAL_MAXH;
-    SPACE REAL* const rim = rre + SPECTRAL_MAXH;
+    SPACE REAL* const qa = T + SPECTRAL_T0;
+    SPACE REAL* const qb = qa + SPECTRAL_SLOTS;
+    SPACE REAL* const qc = qb + SPECTRAL_SLOTS;
+    SPACE REAL* const rre = qc + SPECTRAL_SLOTS;
+    SPACE REAL* const rim = rre + SPECTRAL_SLOTS;
+#if SPECTRAL_VW > 1
+    SPACE REAL* const sc = rim + SPECTRAL_SLOTS;  // the candidates' scores
+#endif
+    const int WS = W_STRIDE(L);
+    SPACE REAL* const wre = X + 2 * LL;  // W, rows WS apart
+    SPACE REAL* const wim = wre + L * WS;
 
     for (int j = lid; j < L; j += SPECTRAL_GROUP) {
         REAL c;
         const REAL s = sincos(two_pi_l * (REAL)j, &c);
         tw[j] = c;
         tw[SPECTRAL_MAXL + j] = s;
+        uv[j] = ((REAL)j - centre) / (REAL)L;
     }
+#if SPECTRAL_VW > 1
+    // the rows' transforms in vectors of 8 frequencies: the twiddles as tables,
+    // twc[n CS + k] = cos(2 pi k n / L) (and tws, sin), rows rounded up to whole vectors
+    const int CS = (L + 7) / 8 * 8, HS = (H + 7) / 8 * 8;
+    barrier(FENCE);
+    for (int i = lid; i < L * CS; i += SPECTRAL_GROUP) {
+        const int n = i / CS, k = i - n * CS;
+        const int t = (k * n) % L;
+        twc[i] = tw[t];
+        tws[i] = tw[SPECTRAL_MAXL + t];
+    }
+#endif
     // the weights, X[LL, 2 LL)
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, n = i - m * L;
@@ -133,7 +237,35 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         X[LL + i] = w;
     }
     barrier(FENCE);
-    // W: rows (whole plane) into T[0, 2 LL), then columns into X[2 LL, 4 LL)
+    // W: rows (whole plane) into T, then columns into wre, wim
+#if SPECTRAL_VW > 1
+    // in vectors of 8 frequencies (rows CS apart in T): the same sums, in the same order
+    for (int i = lid; i < L * (CS / 8); i += SPECTRAL_GROUP) {
+        const int m = i / (CS / 8), k0 = 8 * (i - m * (CS / 8));
+        REALV wr = 0, wi = 0;
+        for (int n = 0; n < L; ++n) {
+            const REAL w = X[LL + m * L + n];
+            wr += w * vload8(0, twc + n * CS + k0);
+            wi -= w * vload8(0, tws + n * CS + k0);
+        }
+        vstore8(wr, 0, T + m * CS + k0);
+        vstore8(wi, 0, T + L * CS + m * CS + k0);
+    }
+    barrier(FENCE);
+    for (int i = lid; i < L * (CS / 8); i += SPECTRAL_GROUP) {
+        const int ky = i / (CS / 8), k0 = 8 * (i - ky * (CS / 8));
+        REALV wr = 0, wi = 0;
+        for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
+            const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
+            const REALV a = vload8(0, T + m * CS + k0), b = vload8(0, T + L * CS + m * CS + k0);
+            wr += a * c + b * s;
+            wi += b * c - a * s;
+        }
+        // lanes past L land in the rows' continuation, written after the next barrier
+        vstore8(wr, 0, wre + ky * WS + k0);
+        vstore8(wi, 0, wim + ky * WS + k0);
+    }
+#else
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, k = i - m * L;
         REAL wr = 0, wi = 0;
@@ -155,27 +287,39 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             wr += T[q] * c + T[LL + q] * s;
             wi += T[LL + q] * c - T[q] * s;
         }
-        X[2 * LL + i] = wr;
-        X[3 * LL + i] = wi;
+        wre[ky * WS + kx] = wr;
+        wim[ky * WS + kx] = wi;
     }
-    // the candidates, row by row
+#endif
+    // the candidates, row by row (|k| <= limit: kx from 0 to the row's last), each row
+    // rounded up to whole vectors by slots that are never scored (half_x -1)
     if (lid == 0) {
         const REAL limit = cutoff * (REAL)0.5 * (REAL)L;
         int count_h = 0;
         for (int ky = 0; ky < L; ++ky) {
             const int fy = ky <= L / 2 ? ky : ky - L;
-            for (int kx = 0; kx < H; ++kx)
-                if ((REAL)(fy * fy + kx * kx) <= limit * limit) {
-                    half_y[count_h] = (short)ky;
-                    half_x[count_h] = (short)kx;
-                    ++count_h;
-                }
+            int n = 0;
+            while (n < H && (REAL)(fy * fy + n * n) <= limit * limit) ++n;
+            const int slots = (n + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW;
+            for (int kx = 0; kx < slots; ++kx) {
+                half_y[count_h] = (short)ky;
+                half_x[count_h] = (short)(kx < n ? kx : -1);
+                ++count_h;
+            }
         }
         pick_k[0] = count_h;
     }
     barrier(FENCE);
+#if SPECTRAL_VW > 1
+    // W's rows continued past L, periodically (read by the picks' update only)
+    for (int i = lid; i < L * (WS - L); i += SPECTRAL_GROUP) {
+        const int y = i / (WS - L), x = L + i - y * (WS - L);
+        wre[y * WS + x] = wre[y * WS + x % L];
+        wim[y * WS + x] = wim[y * WS + x % L];
+    }
+#endif
     const int NC = pick_k[0];
-    const REAL W0 = X[2 * LL];
+    const REAL W0 = wre[0];
     // each candidate's score is qa R_re^2 + qb R_re R_im + qc R_im^2: the pair's error
     // reduction times the prior
     const REAL inv_kmax = (REAL)1 / ((REAL)0.5 * (REAL)L * sqrt((REAL)2));
@@ -183,15 +327,15 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         const int ky = half_y[j], kx = half_x[j];
         const REAL fy = (REAL)(ky <= L / 2 ? ky : ky - L);
         const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
-        const REAL prior = alpha == 0 ? (REAL)1 : pow((REAL)1 - nu, alpha);
+        const REAL prior = alpha == 0 ? (REAL)1 : power((REAL)1 - nu, alpha);
         const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L, k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
-        if (!(W0 > 0)) {
+        if (!(W0 > 0) || kx < 0) {  // kx < 0: a vector's spare slot
             qa[j] = qb[j] = qc[j] = 0;
         } else if (k2y == 0 && k2x == 0) {  // self-conjugate: one real coefficient
             qa[j] = prior / W0;
             qb[j] = qc[j] = 0;
         } else {
-            const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+            const REAL vr = wre[k2y * WS + k2x], vi = wim[k2y * WS + k2x];
             const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
             const REAL pd = prior / den;
             qa[j] = 2 * (W0 - vr) * pd;
@@ -209,7 +353,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             const REAL w = X[LL + i];
             const int m = i / L, n = i - m * L;
             const REAL f = w > 0 ? plane[(oy + m) * nx + ox + n] : (REAL)0;
-            const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
+            const REAL u = uv[m], v = uv[n];
             const REAL wf = w * f;
             acc[0] += w; acc[1] += w * u; acc[2] += w * v;
             acc[3] += w * u * u; acc[4] += w * u * v; acc[5] += w * v * v;
@@ -248,7 +392,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REAL e = 0;  // the weighted squared residual w (f - plane)^2 over the window
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
             const int m = i / L, n = i - m * L;
-            const REAL u = ((REAL)m - centre) / (REAL)L, v = ((REAL)n - centre) / (REAL)L;
+            const REAL u = uv[m], v = uv[n];
             const REAL r = X[i] - (fit[0] + fit[1] * u + fit[2] * v);
             const REAL wr = X[LL + i] * r;
             X[i] = wr;
@@ -256,7 +400,47 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         }
         sums[lid] = e;  // lid 0 read the plane's sums before the barrier above
         barrier(FENCE);
-        // R: rows on the half plane into rows[0, 2 L H), then the candidates' columns
+        // R: rows on the half plane into rows, then the candidates' columns
+        // each item keeps its candidates' best score (item lid owns j = lid mod GROUP, or with
+        // vectors the vectors lid mod GROUP, in the transform, in every pick's update and in
+        // the scores, so they need no barrier)
+        REAL bs = -1;
+        int bi = 0;
+#if SPECTRAL_VW > 1
+        // in vectors of 8 frequencies (rows HS apart): the same sums, in the same order
+        for (int i = lid; i < L * (HS / 8); i += SPECTRAL_GROUP) {
+            const int m = i / (HS / 8), k0 = 8 * (i - m * (HS / 8));
+            REALV ar = 0, ai = 0;
+            for (int n = 0; n < L; ++n) {
+                const REAL a = X[m * L + n];
+                ar += a * vload8(0, twc + n * CS + k0);
+                ai -= a * vload8(0, tws + n * CS + k0);
+            }
+            vstore8(ar, 0, rows + m * HS + k0);
+            vstore8(ai, 0, rows + L * HS + m * HS + k0);
+        }
+        barrier(FENCE);
+        REALV top = -1;
+        for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
+            const int j0 = 8 * v, ky = half_y[j0], kx = half_x[j0];
+            REALV rr = 0, ri = 0;
+            for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
+                const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
+                const REALV ar = vload8(0, rows + m * HS + kx);
+                const REALV ai = vload8(0, rows + L * HS + m * HS + kx);
+                rr += ar * c + ai * s;
+                ri += ai * c - ar * s;
+            }
+            vstore8(rr, 0, rre + j0);
+            vstore8(ri, 0, rim + j0);
+            const REALV score = (vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
+                                + vload8(0, qc + j0) * ri * ri;
+            const REALV kept = SPARE_LOSES(score, half_x, j0);
+            vstore8(kept, 0, sc + j0);
+            top = fmax(top, kept);
+        }
+        first_best(sc, NC / 8, lid, top, &bs, &bi);
+#else
         for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
             const int m = i / H, k = i - m * H;
             REAL ar = 0, ai = 0;
@@ -269,10 +453,6 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             rows[L * H + i] = ai;
         }
         barrier(FENCE);
-        // each item keeps its candidates' best score (item lid owns j = lid mod GROUP, in the
-        // transform, in every pick's update and in the scores, so they need no barrier)
-        REAL bs = -1;
-        int bi = 0;
         for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
             const int ky = half_y[j], kx = half_x[j];
             REAL rr = 0, ri = 0;
@@ -290,11 +470,13 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 bi = j;
             }
         }
+#endif
 
         REAL first_gain = 0, energy = 0;  // item 0's: energy is the weighted squared error
         int count = 0;
         if (W0 > 0) {
-            for (int it = 0; it < iterations; ++it) {
+            const int most = ch == 0 ? iterations : minor_iterations;
+            for (int it = 0; it < most; ++it) {
                 best[lid] = bs;
                 best_at[lid] = bi;
                 barrier(FENCE);
@@ -318,7 +500,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         cr = rr / W0;
                         gain = rr * cr;
                     } else {
-                        const REAL vr = X[2 * LL + k2y * L + k2x], vi = X[3 * LL + k2y * L + k2x];
+                        const REAL vr = wre[k2y * WS + k2x], vi = wim[k2y * WS + k2x];
                         const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi),
                                               (REAL)1e-3 * W0 * W0);
                         cr = (rr * W0 - (vr * rr + vi * ri)) / den;
@@ -351,6 +533,36 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const int ky = k / L, kx = k - ky * L;
                 const REAL cr = pick_c[0], ci = pick_c[1];
                 const int self = pick_k[1];
+#if SPECTRAL_VW > 1
+                // CPUs: vectors of 8 candidates of one row (item lid takes vectors lid, lid +
+                // GROUP, ...), whose W(l - k) and W(l + k) are 8 consecutive values of W's
+                // continued rows, and the scores' argmax in a pass of its own (a running
+                // argmax kept the compiler from vectorising the loop). The same arithmetic.
+                REALV top = -1;
+                for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
+                    const int j0 = 8 * v, ly = half_y[j0], lx = half_x[j0];
+                    const int dy = ly - ky < 0 ? ly - ky + L : ly - ky;
+                    const int dm = dy * WS + lx - kx + L;  // lanes (lx - kx + i) mod L
+                    const REALV ar = vload8(0, wre + dm), ai = vload8(0, wim + dm);
+                    REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
+                    if (!self) {
+                        const int sy = ly + ky >= L ? ly + ky - L : ly + ky;
+                        const int dp = sy * WS + lx + kx;
+                        const REALV pr = vload8(0, wre + dp), pi = vload8(0, wim + dp);
+                        ur += cr * pr + ci * pi;
+                        ui += cr * pi - ci * pr;
+                    }
+                    const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
+                    vstore8(rr, 0, rre + j0);
+                    vstore8(ri, 0, rim + j0);
+                    const REALV score = (vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
+                                        + vload8(0, qc + j0) * ri * ri;
+                    const REALV kept = SPARE_LOSES(score, half_x, j0);
+                    vstore8(kept, 0, sc + j0);
+                    top = fmax(top, kept);
+                }
+                first_best(sc, NC / 8, lid, top, &bs, &bi);
+#else
                 bs = -1;
                 bi = 0;
                 for (int j = lid; j < NC; j += SPECTRAL_GROUP) {
@@ -358,15 +570,15 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     int dy = ly - ky, dx = lx - kx;
                     dy += dy < 0 ? L : 0;
                     dx += dx < 0 ? L : 0;
-                    const int dm = dy * L + dx;
-                    const REAL ar = X[2 * LL + dm], ai = X[3 * LL + dm];
+                    const int dm = dy * WS + dx;
+                    const REAL ar = wre[dm], ai = wim[dm];
                     REAL ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;  // c W(l - k)
                     if (!self) {
                         int sy = ly + ky, sx = lx + kx;
                         sy -= sy >= L ? L : 0;
                         sx -= sx >= L ? L : 0;
-                        const int dp = sy * L + sx;
-                        const REAL pr = X[2 * LL + dp], pi = X[3 * LL + dp];
+                        const int dp = sy * WS + sx;
+                        const REAL pr = wre[dp], pi = wim[dp];
                         ur += cr * pr + ci * pi;  // conj(c) W(l + k)
                         ui += cr * pi - ci * pr;
                     }
@@ -380,6 +592,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         bi = j;
                     }
                 }
+#endif
                 // no barrier: best[] is next written after lid 0 has read it (the barrier
                 // above), and each item reads back only its own candidates
             }
@@ -393,8 +606,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             const int p = y * nx + x;
             if (state[p] != wave) continue;
             const int m = b + u, n = b + v;
-            REAL g = fit[0] + fit[1] * (((REAL)m - centre) / (REAL)L)
-                     + fit[2] * (((REAL)n - centre) / (REAL)L);
+            REAL g = fit[0] + fit[1] * uv[m] + fit[2] * uv[n];
             for (int t = 0; t < count; ++t) {
                 const int code = picks[t];
                 const int k = code < 0 ? -1 - code : code;

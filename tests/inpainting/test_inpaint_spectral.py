@@ -46,6 +46,7 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         dict(split=0.3, shifts=2, cutoff=0.8),
         dict(per_pixel=0.5),
         dict(floor=0.05),  # high enough that most windows end early
+        dict(minor=1.0),  # every channel takes every pick
     ):
         options = dict(SMALL, **extra)
         got = spectral.fill(data, mask, runtime, **options)
@@ -56,6 +57,34 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         assert np.quantile(diff, 0.95) < 1e-4, np.quantile(diff, 0.95)
         assert diff.mean() < 1e-3, diff.mean()
         assert np.array_equal(got[:, ~mask], data[:, ~mask])
+
+
+@pytest.mark.parametrize("shape", [(64, 1), (16, 8), (1, 8)])
+def test_every_work_group_shape_matches_numpy_reference(runtime, monkeypatch, shape):
+    # the GPUs' shape (64 items, one candidate at a time) and vectors shared by several
+    # items or walked by one, all on this device: the same fill
+    monkeypatch.setattr(spectral, "work_shape", lambda rt: shape)
+    data = np.stack([_photo_like(40, 48, seed=c) * (1 - 0.2 * c) for c in range(3)])
+    mask = _scratches(40, 48)
+    options = dict(SMALL, cutoff=0.8, minor=0.5)
+    got = spectral.fill(data, mask, runtime, **options)
+    want = ref.fill(data, mask, **options)
+    diff = np.abs(got - want)[:, mask]
+    assert np.quantile(diff, 0.95) < 1e-4, np.quantile(diff, 0.95)
+    assert diff.mean() < 1e-3, diff.mean()
+
+
+@pytest.mark.parametrize("items", [1, 16])
+def test_vectors_give_the_scalar_fill_bit_for_bit(runtime, monkeypatch, items):
+    # the same sums in the same order: only the number of items (the plane's partial sums)
+    # may change the rounding
+    data = np.stack([_photo_like(40, 48, seed=c) * (1 - 0.2 * c) for c in range(3)])
+    mask = _scratches(40, 48)
+    fills = []
+    for vector in (1, 8):
+        monkeypatch.setattr(spectral, "work_shape", lambda rt, v=vector: (items, v))
+        fills.append(spectral.fill(data, mask, runtime, **dict(SMALL, cutoff=0.8)))
+    assert np.array_equal(fills[0], fills[1])
 
 
 def test_plan_matches_reference_plan():

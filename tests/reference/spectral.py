@@ -160,6 +160,7 @@ def fill(
     shifts=2,
     cutoff=1.5,
     per_pixel=0.0,
+    minor=0.3,
 ):
     """The whole fill of (channels, rows, cols) float data, float64: every block grid's fill
     on its own, then their average."""
@@ -235,7 +236,8 @@ def fill(
                     model = fit_block(
                         values,
                         weight,
-                        iterations=picks,
+                        # the channels after the first take `minor` of the picks
+                        iterations=picks if c == 0 else max(1, int(np.rint(minor * picks))),
                         gamma=gamma,
                         alpha=alpha,
                         stop=stop,
