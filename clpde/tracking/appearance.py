@@ -36,6 +36,12 @@ from .levelset import LevelSet
 # (benchmarks/track_image_search.py).
 REACH = 32  # px: the widest shift per frame the correlation searches
 MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is kept
+# the affine fit replaces the sub-pixel shift only where its cost is below this share of
+# the shift's
+AFFINE_GAIN = 0.95
+# object_motion takes the light-blind features' shift where the frames' own correlation
+# there is within this of their best
+LIGHT_SLACK = 0.05
 APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time
 RING = (3, 16)  # px: the surroundings' ring around the predicted contour
 MEMORY = 0.5  # the object model's running mean: this share of the new frame's histogram
@@ -46,6 +52,11 @@ BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
 # carphone (J): 0.5 / 1 / 1.5 / 2 gave 0.850 / 0.851 / 0.857 / 0.838 and 0.820 / 0.850 /
 # 0.872 / 0.870; untempered, 0.847 and 0.6.
 SEPARATION = 1.5
+# The brightness divided out of the frames before binning: a Gaussian mean over this many
+# px (a shadow's or a spotlight's slow change of light), or the frame's mean (0).
+LIGHT_SCALE = 0.0
+LIGHT_MODE = "ratio"
+LIGHT_SPREAD = 0.15
 
 
 def match_shift(
@@ -115,6 +126,19 @@ def inverse(a: np.ndarray) -> np.ndarray:
     return np.column_stack([m, -m @ a[:, 2]])
 
 
+def _ncc_at(prev, cur, weight, d) -> float:
+    """The masked normalised cross-correlation of `prev` under `weight` with `cur` shifted
+    by the whole pixels d (dy, dx), the channels pooled as in match_shift (cur's edge
+    repeated)."""
+    pts = np.array(np.nonzero(weight))
+    at = np.clip(pts + np.asarray(d, np.int64)[:, None], 0, np.array(weight.shape)[:, None] - 1)
+    p = np.asarray(prev)[:, pts[0], pts[1]]
+    c = np.asarray(cur)[:, at[0], at[1]]
+    p = p - p.mean(axis=1, keepdims=True)
+    c = c - c.mean(axis=1, keepdims=True)
+    return float((p * c).sum() / np.sqrt(max((p * p).sum() * (c * c).sum(), 1e-12)))
+
+
 def object_motion(
     prev,
     cur,
@@ -124,20 +148,36 @@ def object_motion(
     steps: int = 6,
     floor=MATCH_FLOOR,
     within=None,
+    light=None,
 ):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
     `prior`: the last displacement (prev -> cur), which the search prefers among equals
     and which stands when the correlation's peak is below `floor`; `within`: the largest
-    change of velocity searched (None: any shift within `reach`)."""
-    # the object and a 1 px rim (its edge's contrast); a wider rim takes in more of an
-    # occluder's still edge
+    change of velocity searched (None: any shift within `reach`). `light`: the two frames'
+    light-blind features (local contrast), whose match is taken where the frames' own
+    correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
+    frames' own best, not this one)."""
+    # the object alone: a rim takes in more of an occluder's still edge
     rim = mask
-    d = match_shift(prev, cur, rim.astype(np.float64), reach, prior, within)
-    if match_shift.peak < floor:
+    weight = rim.astype(np.float64)
+    d = match_shift(prev, cur, weight, reach, prior, within)
+    peak = match_shift.peak
+    if light is not None and peak >= floor:
+        d_light = match_shift(light[0], light[1], weight, reach, prior, within)
+        if match_shift.peak >= floor and np.abs(d_light - d).max() > 0:
+            if _ncc_at(prev, cur, rim, d_light) >= peak - LIGHT_SLACK:
+                d = d_light
+    if peak < floor:
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
+    return _refine(prev, cur, rim, d, steps)
+
+
+def _refine(prev, cur, rim, d, steps):
+    """Lucas-Kanade from the whole-pixel shift d: first the sub-pixel shift, then the
+    affine map where it explains the object clearly better (AFFINE_GAIN)."""
     shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
     # cur's coordinates), the grey levels averaged over the channels; the affine part
@@ -146,42 +186,57 @@ def object_motion(
     yy, xx = np.mgrid[: gc.shape[0], : gc.shape[1]] + 0.0
     gy, gx = np.gradient(gp)
     centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
-    a = shifted.copy()
-
     # one set of pixels for every step and for the costs compared: cur's pixels where the
     # shift puts the object
     where = _warp(rim * 1.0, shifted, 1) > 0.5
     if where.sum() < 12:
         return shifted
     y, x = yy[where] - centre[0], xx[where] - centre[1]
-    target = gc[where]
-
     pts = np.stack([yy[where], xx[where]])
 
     def at(image, a):  # image read at A x for the pixels x of `where`
         coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
         return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
 
+    # cur's grey levels mapped onto prev's by the gain and offset over the object at the
+    # shift: a flicker's change of light is no motion
+    target = gc[where]
+    ref = at(gp, shifted)
+    target = (target - target.mean()) * (ref.std() / max(target.std(), 1e-6)) + ref.mean()
+
     def cost(a):
         return float(np.mean((at(gp, a) - target) ** 2))
 
+    def fit(a, columns):  # Gauss-Newton steps on the parameters `columns` of a
+        for _ in range(steps):
+            r = at(gp, a) - target
+            wy, wx = at(gy, a), at(gx, a)
+            jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])[:, columns]
+            jtj = jac.T @ jac
+            jtj += 1e-3 * np.trace(jtj) / len(columns) * np.eye(len(columns))  # a little damping
+            step = np.zeros(6)
+            step[columns] = np.linalg.solve(jtj, -jac.T @ r)
+            step = step.reshape(2, 3)
+            # a step in the centred parameters, back to frame coordinates
+            step[:, 2] -= step[:, :2] @ centre
+            a = a + step
+            if np.abs(step[:, :2]).max() < 1e-3 and np.abs(step[:, 2]).max() < 0.02:
+                break
+        return a
+
     start = cost(shifted)
-    for _ in range(steps):
-        r = at(gp, a) - target
-        wy, wx = at(gy, a), at(gx, a)
-        jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
-        jtj = jac.T @ jac
-        jtj += 1e-3 * np.trace(jtj) / 6 * np.eye(6)  # a little damping
-        step = np.linalg.solve(jtj, -jac.T @ r).reshape(2, 3)
-        # a step in the centred parameters, back to frame coordinates
-        step[:, 2] -= step[:, :2] @ centre
-        a = a + step
-        if np.abs(step[:, :2]).max() < 1e-3 and np.abs(step[:, 2]).max() < 0.02:
-            break
+    moved = fit(shifted, [2, 5])  # the sub-pixel shift
+    if not (np.all(np.isfinite(moved)) and np.abs(moved - shifted).max() < 1.5):
+        moved = shifted
+    if not cost(moved) < start:
+        moved = shifted
+    a = fit(moved, list(range(6)))
     lin = a[:, :2]
     sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
-    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < 0.95 * start:
-        a = shifted  # a wild or worse fit: the shift only
+    # the turn and scaling only where they explain the object clearly better than the
+    # shift: fitted to noise, a slight shrink each frame adds up to a lost object
+    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < AFFINE_GAIN * cost(moved):
+        a = moved
     return a
 
 
@@ -213,7 +268,16 @@ class AppearanceModel:
         grey level, and its local standard deviation (the texture), each frame's brightness
         divided out, so that a dimming light does not move the object's bins."""
         f = np.asarray(frame, np.float64)
-        f = 0.5 * f / max(float(f.mean()), 1e-3)
+        if LIGHT_MODE == "ratio":
+            f = 0.5 * f / max(float(f.mean()), 1e-3)
+        else:
+            grey = f.mean(axis=0)
+            if LIGHT_SCALE:
+                m = ndimage.gaussian_filter(grey, LIGHT_SCALE, mode="nearest")
+                v = ndimage.gaussian_filter(grey * grey, LIGHT_SCALE, mode="nearest") - m * m
+            else:
+                m, v = grey.mean(), grey.var()
+            f = 0.5 + LIGHT_SPREAD * (f - m) / np.sqrt(np.maximum(v, 1e-4))
         grey = f.mean(axis=0)
         tex = np.clip((_texture(grey) / 0.12) ** 0.5 * BINS_TEXTURE, 0, BINS_TEXTURE - 1)
         if self.colour and f.shape[0] >= 3:

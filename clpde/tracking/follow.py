@@ -16,8 +16,10 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, move_mask, object_motion
+from .adaptive import noise_variance
+from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, object_motion
 from .levelset import LevelSet, signed_distance
+from .motion_filter import local_contrast
 
 # A result keeping less than this share of the predicted area is taken as hidden in part.
 HIDDEN = 0.85
@@ -32,9 +34,25 @@ GROW = 6
 # The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
 # within +-PRIOR_CAP.
 PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
+# The prior's least log odds at the predicted contour: weaker evidence moves nothing.
+PRIOR_MARGIN = 0.0
 # The start keeps the appearance's visible part of the prediction unless less than this
 # share of it remains.
 VISIBLE = 0.3
+# The appearance's evidence is 0 within this many px of the predicted contour (rising to
+# full over the next px), where the frames' morphing places the boundary: a blurred edge's
+# pixels are in neither histogram, and their evidence would move a still contour.
+EDGE_FADE = -1.0
+# The motion is also matched on local-contrast-normalised frames over boxes of this
+# half-width (a shadow or a flicker does not move that match; object_motion's `light`);
+# 0: on the frames themselves only.
+MATCH_CONTRAST = 4
+# A frame pair whose difference near the unmoved object is below this many times the
+# noise's is still (`_change`).
+STILL_CHANGE = 2.0
+# The appearance's log ratio is averaged over a Gaussian of this many px: a textured
+# object's dark and bright pixels each look like something else, their mean like it.
+RATIO_SMOOTH = 0.0
 
 
 def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
@@ -43,6 +61,19 @@ def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
     pts = np.array(np.nonzero(where), np.float64)
     coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
     return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+
+
+def _warp_values(u: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """The level set u carried by the motion `a` (object_motion's map): u read at A x."""
+    return ndimage.affine_transform(u, a[:, :2], a[:, 2], order=1, mode="nearest")
+
+
+def _change(before: np.ndarray, after: np.ndarray, where: np.ndarray) -> float:
+    """The mean |after - before| over `where`, against what the noise alone gives there
+    (2 sigma / sqrt(pi) for two frames of noise variance sigma^2): about 1 where only noise
+    changed. (C, H, W) frames."""
+    expected = 2.0 * np.sqrt(noise_variance(after)) / np.sqrt(np.pi)
+    return float(np.abs(after - before).sum(axis=0)[where].mean() / max(expected, 1e-6))
 
 
 def _centroid(mask: np.ndarray) -> np.ndarray:
@@ -66,7 +97,10 @@ class ObjectFollower:
         self.band = tracker.options.band_width
         self.looks = tracker._looks
         self.shape = tracker.first_mask.copy()
+        # its level set (negative inside), carried with it: the contour's sub-pixel place
+        self.shape_u = signed_distance(self.shape)
         self.predicted = self.shape
+        self._predicted_u = self.shape_u
         self.velocity = np.zeros(2)
         weight = tracker.options.appearance_weight
         self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
@@ -74,6 +108,7 @@ class ObjectFollower:
         if self.term is not None:
             self.model.learn(self.model.bins(self.looks[0]), self.shape)
         self._bins = None
+        self._match_cache = {}
         self._ratio = None  # the last frame's log odds (surroundings over object)
         self._looks_ratio = None  # the same from the looks alone
 
@@ -94,8 +129,15 @@ class ObjectFollower:
         floor = HIDDEN_FLOOR if hidden else MATCH_FLOOR
         within = HIDDEN_CHANGE if hidden else None
         if pixels.sum() >= MIN_PIECE:
+            light = (self._light(t - 1), self._light(t)) if MATCH_CONTRAST else None
             a = object_motion(
-                self.looks[t - 1], self.looks[t], pixels, self.velocity, floor=floor, within=within
+                self.looks[t - 1],
+                self.looks[t],
+                pixels,
+                self.velocity,
+                floor=floor,
+                within=within,
+                light=light,
             )
         else:  # nothing in sight: the object keeps its velocity
             a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
@@ -103,32 +145,56 @@ class ObjectFollower:
         centre = _centroid(self.shape)
         shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
         self.velocity = shift
-        predicted = move_mask(self.shape, a)
-        if not predicted.any():  # carried out of the frame: it stays where it was
-            predicted = self.shape
-        self.predicted = predicted
-        start = predicted
-        if self.term is not None:
-            self._bins = self.model.bins(self.looks[t])
-            # the appearance's evidence and the prediction's: the log prior odds of the
-            # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
-            # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as
-            # it is and only clear evidence carves it or grows it
-            prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
-            self._looks_ratio = self.model.log_ratio(self._bins, predicted)
-            # (no evidence from the motion-compensated residual: a talking mouth or a
-            # turning face does not move with the object either, and on the calibration
-            # half, 0.827 -> 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
-            self._ratio = self._looks_ratio + prior
-            self.term.set(self._ratio)
-            start = self._visible(predicted)
-        self.ls.assign(signed_distance(start))
+        predicted_u = _warp_values(self.shape_u, a)
+        predicted = predicted_u < 0
+        if not predicted.any() or predicted.all():  # carried out of the frame: it stays
+            predicted, predicted_u = self.shape, self.shape_u
+        self.predicted, self._predicted_u = predicted, predicted_u
         # F1: the previous frame carried with the object near its predicted place
         near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
         for c in range(out.shape[0]):
             out[c][near] = _at(prepared_prev[c], a, near)
+        start = predicted
+        if self.term is not None:
+            # a still object in a still scene (no motion, and the frames differ near it by
+            # no more than the noise explains): nothing new for the appearance to say, and
+            # its evidence on a blurred edge's pixels would move the contour
+            moved = np.abs(a - [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).max() > 0.02
+            still = not moved and _change(out, prepared, near) < STILL_CHANGE
+            start = self._appearance(t, predicted, still)
+        self.ls.assign(predicted_u if start is predicted else signed_distance(start))
         return out, (float(shift[0]), float(shift[1]))
+
+    def _appearance(self, t, predicted, still):
+        """Set the appearance term of frame t around the predicted whole shape; returns the
+        morphing's start."""
+        self._bins = self.model.bins(self.looks[t])
+        # the appearance's evidence and the prediction's: the log prior odds of the
+        # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
+        # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
+        # and only clear evidence carves it or grows it
+        sd = signed_distance(predicted)
+        prior = np.clip(sd / PRIOR_SCALE + PRIOR_MARGIN * np.sign(sd), -PRIOR_CAP, PRIOR_CAP)
+        self._looks_ratio = self.model.log_ratio(self._bins, predicted)
+        fade = np.clip(np.abs(sd) - EDGE_FADE, 0, 1)
+        # (no evidence from the motion-compensated residual: a talking mouth or a turning
+        # face does not move with the object either, and on the calibration half, 0.827 ->
+        # 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
+        looks = self._looks_ratio
+        if RATIO_SMOOTH:
+            looks = ndimage.gaussian_filter(looks, RATIO_SMOOTH)
+        self._ratio = prior if still else looks * fade + prior
+        self.term.set(self._ratio)
+        return predicted if still else self._visible(predicted)
+
+    def _light(self, t):
+        """Frame t's light-blind features (local contrast) that the motion also matches."""
+        cached = self._match_cache.get(t)
+        if cached is None:
+            cached = local_contrast(self.looks[t], MATCH_CONTRAST)
+            self._match_cache = {t: cached}
+        return cached
 
     def _visible(self, predicted: np.ndarray) -> np.ndarray:
         """The morphing's start: the predicted whole shape less what looks like the
@@ -144,8 +210,9 @@ class ObjectFollower:
             start = (sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max()))[labels - 1] & (labels > 0)
         return start if start.sum() >= max(VISIBLE * predicted.sum(), 1) else predicted
 
-    def observe(self, t, mask: np.ndarray) -> np.ndarray:
-        """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
+    def observe(self, t, mask: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """After frame t's morphing (its mask and level set u): the mask cleaned of stray
+        pieces; the models learn."""
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
         mask = mask & ndimage.binary_dilation(self.predicted, iterations=GROW)
@@ -159,5 +226,12 @@ class ObjectFollower:
             # surroundings: a strip of an occluder taken in by mistake is not learned
             self.model.learn(self._bins, mask & (self._looks_ratio < 1.0))
         hidden = mask.sum() < HIDDEN * self.predicted.sum()
-        self.shape = (self.predicted | mask) if hidden else mask.copy()
+        if mask.any() and (mask == (u < 0)).all():
+            shape_u = np.asarray(u, np.float64)
+        else:
+            shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
+        if hidden:
+            shape_u = np.minimum(shape_u, self._predicted_u)
+        self.shape_u = shape_u
+        self.shape = shape_u < 0
         return mask
