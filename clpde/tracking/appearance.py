@@ -52,11 +52,6 @@ BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
 # carphone (J): 0.5 / 1 / 1.5 / 2 gave 0.850 / 0.851 / 0.857 / 0.838 and 0.820 / 0.850 /
 # 0.872 / 0.870; untempered, 0.847 and 0.6.
 SEPARATION = 1.5
-# The brightness divided out of the frames before binning: a Gaussian mean over this many
-# px (a shadow's or a spotlight's slow change of light), or the frame's mean (0).
-LIGHT_SCALE = 0.0
-LIGHT_MODE = "ratio"
-LIGHT_SPREAD = 0.15
 
 
 def match_shift(
@@ -268,16 +263,7 @@ class AppearanceModel:
         grey level, and its local standard deviation (the texture), each frame's brightness
         divided out, so that a dimming light does not move the object's bins."""
         f = np.asarray(frame, np.float64)
-        if LIGHT_MODE == "ratio":
-            f = 0.5 * f / max(float(f.mean()), 1e-3)
-        else:
-            grey = f.mean(axis=0)
-            if LIGHT_SCALE:
-                m = ndimage.gaussian_filter(grey, LIGHT_SCALE, mode="nearest")
-                v = ndimage.gaussian_filter(grey * grey, LIGHT_SCALE, mode="nearest") - m * m
-            else:
-                m, v = grey.mean(), grey.var()
-            f = 0.5 + LIGHT_SPREAD * (f - m) / np.sqrt(np.maximum(v, 1e-4))
+        f = 0.5 * f / max(float(f.mean()), 1e-3)
         grey = f.mean(axis=0)
         tex = np.clip((_texture(grey) / 0.12) ** 0.5 * BINS_TEXTURE, 0, BINS_TEXTURE - 1)
         if self.colour and f.shape[0] >= 3:
@@ -345,11 +331,12 @@ class AppearanceTerm:
         self.field = Field(g, cla.zeros(g.runtime.queue, g.padded_shape, g.dtype))
         self._ls = ls
 
-    def set(self, log_ratio: np.ndarray) -> None:
-        """Upload this frame's field from the log-likelihood ratio (H, W)."""
+    def set(self, log_ratio: np.ndarray, scale: float = 1.0) -> None:
+        """Upload this frame's field from the log-likelihood ratio (H, W), its speed
+        `scale` times the weight."""
         g = self._ls.grid
         padded = np.zeros(g.padded_shape, g.dtype)
-        g.interior(padded)[0] = self._ls.pad(self.weight * np.tanh(0.5 * log_ratio))
+        g.interior(padded)[0] = self._ls.pad(scale * self.weight * np.tanh(0.5 * log_ratio))
         self.field.data.set(padded)
 
     def start(self, ls, features, noise2) -> None:  # the RegionTerm interface: set() does it

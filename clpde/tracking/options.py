@@ -122,7 +122,7 @@ class TrackOptions:
     features: str = "intensity"
     colour: bool = False
     discrepancy: str = "adaptive"
-    motion: str | None = "image"
+    motion: str | None = "checked"
     shape_weight: float = 0.0
     equalize: bool | str = False
     smooth: bool = True
