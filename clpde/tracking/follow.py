@@ -120,7 +120,9 @@ def _ring_miss(prev, cur, a, predicted) -> float:
         return 1.0
     where = inner | ring
     res = np.zeros(where.shape)
-    res[where] = np.mean([np.abs(c[where] - _at(p, a, where)) for p, c in zip(prev, cur)], axis=0)
+    res[where] = np.mean(
+        [np.abs(c[where] - _at(p, a, where)) for p, c in zip(prev, cur, strict=True)], axis=0
+    )
     return float(np.median(res[ring]) / max(float(np.median(res[inner])), 1e-6))
 
 
