@@ -52,6 +52,7 @@ BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
 # carphone (J): 0.5 / 1 / 1.5 / 2 gave 0.850 / 0.851 / 0.857 / 0.838 and 0.820 / 0.850 /
 # 0.872 / 0.870; untempered, 0.847 and 0.6.
 SEPARATION = 1.5
+BRIGHT_TOP = 99
 
 
 def match_shift(
@@ -170,6 +171,24 @@ def object_motion(
     return _refine(prev, cur, rim, d, steps)
 
 
+def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
+    """(K, n): the images of `stack` (K, H, W) read at the points `coords` (2, n) by
+    bilinear interpolation, the edge repeated beyond the frame (ndimage.map_coordinates'
+    order=1, mode='nearest', the indices and weights found once for the K images)."""
+    k, h, w = stack.shape
+    y = np.clip(coords[0], 0, h - 1)
+    x = np.clip(coords[1], 0, w - 1)
+    y0 = np.minimum(np.floor(y).astype(np.int64), max(h - 2, 0))
+    x0 = np.minimum(np.floor(x).astype(np.int64), max(w - 2, 0))
+    fy, fx = y - y0, x - x0
+    dy, dx = (w if h > 1 else 0), (1 if w > 1 else 0)
+    flat = stack.reshape(k, -1)
+    i = y0 * w + x0
+    top = flat[:, i] * (1 - fx) + flat[:, i + dx] * fx
+    bottom = flat[:, i + dy] * (1 - fx) + flat[:, i + dy + dx] * fx
+    return top * (1 - fy) + bottom * fy
+
+
 def _refine(prev, cur, rim, d, steps):
     """Lucas-Kanade from the whole-pixel shift d: first the sub-pixel shift, then the
     affine map where it explains the object clearly better (AFFINE_GAIN)."""
@@ -189,23 +208,24 @@ def _refine(prev, cur, rim, d, steps):
     y, x = yy[where] - centre[0], xx[where] - centre[1]
     pts = np.stack([yy[where], xx[where]])
 
-    def at(image, a):  # image read at A x for the pixels x of `where`
-        coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
-        return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+    stack = np.stack([gp, gy, gx])
+
+    def at(a, k=1):  # the first k of gp, gy, gx read at A x for the pixels x of `where`
+        return bilinear(stack[:k], np.tensordot(a[:, :2], pts, 1) + a[:, 2:])
 
     # cur's grey levels mapped onto prev's by the gain and offset over the object at the
     # shift: a flicker's change of light is no motion
     target = gc[where]
-    ref = at(gp, shifted)
+    ref = at(shifted)[0]
     target = (target - target.mean()) * (ref.std() / max(target.std(), 1e-6)) + ref.mean()
 
     def cost(a):
-        return float(np.mean((at(gp, a) - target) ** 2))
+        return float(np.mean((at(a)[0] - target) ** 2))
 
-    def fit(a, columns):  # Gauss-Newton steps on the parameters `columns` of a
+    def fit(a, columns, steps=steps):  # Gauss-Newton steps on the parameters `columns` of a
         for _ in range(steps):
-            r = at(gp, a) - target
-            wy, wx = at(gy, a), at(gx, a)
+            r, wy, wx = at(a, 3)
+            r = r - target
             jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])[:, columns]
             jtj = jac.T @ jac
             jtj += 1e-3 * np.trace(jtj) / len(columns) * np.eye(len(columns))  # a little damping
@@ -220,7 +240,7 @@ def _refine(prev, cur, rim, d, steps):
         return a
 
     start = cost(shifted)
-    moved = fit(shifted, [2, 5])  # the sub-pixel shift
+    moved = fit(shifted, [2, 5], 3)  # the sub-pixel shift
     if not (np.all(np.isfinite(moved)) and np.abs(moved - shifted).max() < 1.5):
         moved = shifted
     if not cost(moved) < start:
@@ -263,7 +283,11 @@ class AppearanceModel:
         grey level, and its local standard deviation (the texture), each frame's brightness
         divided out, so that a dimming light does not move the object's bins."""
         f = np.asarray(frame, np.float64)
-        f = 0.5 * f / max(float(f.mean()), 1e-3)
+        if BRIGHT_TOP:
+            lo, hi = np.percentile(f.mean(axis=0), [100 - BRIGHT_TOP, BRIGHT_TOP])
+            f = 0.05 + 0.9 * (f - lo) / max(float(hi - lo), 1e-3)
+        else:
+            f = 0.5 * f / max(float(f.mean()), 1e-3)
         grey = f.mean(axis=0)
         tex = np.clip((_texture(grey) / 0.12) ** 0.5 * BINS_TEXTURE, 0, BINS_TEXTURE - 1)
         if self.colour and f.shape[0] >= 3:

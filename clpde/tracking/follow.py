@@ -17,7 +17,7 @@ import numpy as np
 from scipy import ndimage
 
 from .adaptive import noise_variance
-from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, object_motion
+from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, bilinear, object_motion
 from .levelset import LevelSet, signed_distance
 from .motion_filter import local_contrast
 
@@ -61,7 +61,7 @@ def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
     the warp at the pixels needed only."""
     pts = np.array(np.nonzero(where), np.float64)
     coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
-    return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+    return bilinear(np.asarray(image, np.float64)[np.newaxis], coords)[0]
 
 
 def _warp_values(u: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -261,7 +261,9 @@ class ObjectFollower:
         """Frame t's light-blind features (local contrast) that the motion also matches."""
         cached = self._match_cache.get(t)
         if cached is None:
-            cached = local_contrast(self.looks[t], MATCH_CONTRAST)
+            # of the grey levels: one correlation channel (the colour's is the frames' own
+            # match)
+            cached = local_contrast(self.looks[t].mean(axis=0, keepdims=True), MATCH_CONTRAST)
             # the frame pair in use: this frame and the one before
             self._match_cache = {k: v for k, v in self._match_cache.items() if k >= t - 1}
             self._match_cache[t] = cached
