@@ -42,6 +42,9 @@ AFFINE_GAIN = 0.95
 # object_motion takes the light-blind features' shift where the frames' own correlation
 # there is within this of their best
 LIGHT_SLACK = 0.05
+# ... unless the frames' own correlation peak is at least this: so clear a match leaves
+# nothing for a change of light to have moved (and one correlation a frame is saved)
+LIGHT_CLEAR = 0.9
 APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time
 RING = (3, 16)  # px: the surroundings' ring around the predicted contour
 MEMORY = 0.5  # the object model's running mean: this share of the new frame's histogram
@@ -153,13 +156,13 @@ def object_motion(
     change of velocity searched (None: any shift within `reach`). `light`: the two frames'
     light-blind features (local contrast), whose match is taken where the frames' own
     correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
-    frames' own best, not this one)."""
+    frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more."""
     # the object alone: a rim takes in more of an occluder's still edge
     rim = mask
     weight = rim.astype(np.float64)
     d = match_shift(prev, cur, weight, reach, prior, within)
     peak = match_shift.peak
-    if light is not None and peak >= floor:
+    if light is not None and floor <= peak < LIGHT_CLEAR:
         d_light = match_shift(light[0], light[1], weight, reach, prior, within)
         if match_shift.peak >= floor and np.abs(d_light - d).max() > 0:
             if _ncc_at(prev, cur, rim, d_light) >= peak - LIGHT_SLACK:
