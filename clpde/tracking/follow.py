@@ -1,14 +1,17 @@
-"""motion='image': each frame's contour starts where the image says the
+"""motion='image' (the default): each frame's contour starts where the image says the
 object went, and an appearance term keeps it on the object (appearance.py).
 
-Per frame: the object's motion from the previous frame (`appearance.object_motion`)
-carries the object's whole shape, hidden parts included, to its predicted place, where the
-morphing starts; the appearance model's log ratio there becomes the morphing's region
-speed; after the morphing, pieces far smaller than the object are dropped (a piece caught
-on an occluder) and the models learn the frame. The whole shape is the result, unless the
-result lost much of the prediction's area at once (the object went behind something): then
-the prediction is kept as the whole shape, so that the contour grows back where the object
-reappears.
+Per frame: the object's motion from the previous frame (`appearance.object_motion`, with a
+light-blind match on local contrast beside the frames' own) carries the object's whole
+shape, hidden parts included, as a level set (its contour's sub-pixel place kept) to its
+predicted place, where the morphing starts; the appearance model's log ratio there becomes
+the morphing's region speed, believed as far as it classified the last result (unless the
+background around the object moves otherwise than it, where the image term cannot hold the
+contour either), and not at all on a still frame; after the morphing, small pieces that
+split off a larger one are dropped (a piece caught on an occluder) and the models learn
+the frame. The whole shape is the result, unless the result lost much of the prediction's
+area at once (the object went behind something): then the prediction is kept as the whole
+shape, so that the contour grows back where the object reappears.
 """
 
 from __future__ import annotations
@@ -35,6 +38,9 @@ GROW = 6
 # within +-PRIOR_CAP.
 PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
 # The appearance's evidence is scaled by 1 - e / RELIABLE_ERROR (`_reliability`); 0: not.
+# RELIABLE_ERROR and RING_LO, RING_HI: chosen on the calibration half of
+# benchmarks/track_photo_corpus.py among the settings with which every promise of
+# tests/tracking holds (docs/tracking.md, "One default").
 RELIABLE_ERROR = 0.1
 # ... unless the image cannot hold the contour either: the previous frame carried by the
 # object's motion misses the current one in the ring 3-8 px around the object by more
