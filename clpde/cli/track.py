@@ -60,14 +60,14 @@ def _add_method_arguments(parser) -> None:
     )
     parser.add_argument(
         "--motion",
-        choices=("kalman", "checked", "image", "components", "velocity", "none"),
+        choices=("image", "checked", "kalman", "components", "velocity", "none"),
         default=TrackOptions.motion,
-        help="start each frame at the predicted displacement: a "
-        "constant-velocity Kalman filter fed by matching the frames, the same checked "
-        "against a wide search of the image (any speed up to 32 px a frame), the object's "
-        "motion found in the image (any speed up to 32 px a frame, with a colour "
-        "appearance term that keeps the contour off the background and occluders), each "
-        "piece matched on its own, the previous displacement, or none "
+        help="start each frame at the predicted displacement: the object's motion found "
+        "in the image (any speed up to 32 px a frame, with a colour appearance term that "
+        "keeps the contour off the background and occluders), a constant-velocity Kalman "
+        "filter fed by matching the frames checked against a wide search of the image, "
+        "the filter alone, each piece matched on its own, the previous displacement, or "
+        "none "
         f"(default: {TrackOptions.motion})",
     )
     parser.add_argument(

@@ -36,6 +36,15 @@ from .levelset import LevelSet
 # (benchmarks/track_image_search.py).
 REACH = 32  # px: the widest shift per frame the correlation searches
 MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is kept
+# the affine fit replaces the sub-pixel shift only where its cost is below this share of
+# the shift's
+AFFINE_GAIN = 0.95
+# object_motion takes the light-blind features' shift where the frames' own correlation
+# there is within this of their best
+LIGHT_SLACK = 0.05
+# ... unless the frames' own correlation peak is at least this: so clear a match leaves
+# nothing for a change of light to have moved (and one correlation a frame is saved)
+LIGHT_CLEAR = 0.9
 APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time
 RING = (3, 16)  # px: the surroundings' ring around the predicted contour
 MEMORY = 0.5  # the object model's running mean: this share of the new frame's histogram
@@ -46,6 +55,7 @@ BINS_COLOUR, BINS_GREY, BINS_TEXTURE = 8, 24, 4
 # carphone (J): 0.5 / 1 / 1.5 / 2 gave 0.850 / 0.851 / 0.857 / 0.838 and 0.820 / 0.850 /
 # 0.872 / 0.870; untempered, 0.847 and 0.6.
 SEPARATION = 1.5
+BRIGHT_TOP = 99
 
 
 def match_shift(
@@ -115,6 +125,19 @@ def inverse(a: np.ndarray) -> np.ndarray:
     return np.column_stack([m, -m @ a[:, 2]])
 
 
+def _ncc_at(prev, cur, weight, d) -> float:
+    """The masked normalised cross-correlation of `prev` under `weight` with `cur` shifted
+    by the whole pixels d (dy, dx), the channels pooled as in match_shift (cur's edge
+    repeated)."""
+    pts = np.array(np.nonzero(weight))
+    at = np.clip(pts + np.asarray(d, np.int64)[:, None], 0, np.array(weight.shape)[:, None] - 1)
+    p = np.asarray(prev)[:, pts[0], pts[1]]
+    c = np.asarray(cur)[:, at[0], at[1]]
+    p = p - p.mean(axis=1, keepdims=True)
+    c = c - c.mean(axis=1, keepdims=True)
+    return float((p * c).sum() / np.sqrt(max((p * p).sum() * (c * c).sum(), 1e-12)))
+
+
 def object_motion(
     prev,
     cur,
@@ -124,20 +147,54 @@ def object_motion(
     steps: int = 6,
     floor=MATCH_FLOOR,
     within=None,
+    light=None,
 ):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
     `prior`: the last displacement (prev -> cur), which the search prefers among equals
     and which stands when the correlation's peak is below `floor`; `within`: the largest
-    change of velocity searched (None: any shift within `reach`)."""
-    # the object and a 1 px rim (its edge's contrast); a wider rim takes in more of an
-    # occluder's still edge
+    change of velocity searched (None: any shift within `reach`). `light`: the two frames'
+    light-blind features (local contrast), whose match is taken where the frames' own
+    correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
+    frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more."""
+    # the object alone: a rim takes in more of an occluder's still edge
     rim = mask
-    d = match_shift(prev, cur, rim.astype(np.float64), reach, prior, within)
-    if match_shift.peak < floor:
+    weight = rim.astype(np.float64)
+    d = match_shift(prev, cur, weight, reach, prior, within)
+    peak = match_shift.peak
+    if light is not None and floor <= peak < LIGHT_CLEAR:
+        d_light = match_shift(light[0], light[1], weight, reach, prior, within)
+        if match_shift.peak >= floor and np.abs(d_light - d).max() > 0:
+            if _ncc_at(prev, cur, rim, d_light) >= peak - LIGHT_SLACK:
+                d = d_light
+    if peak < floor:
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
+    return _refine(prev, cur, rim, d, steps)
+
+
+def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
+    """(K, n): the images of `stack` (K, H, W) read at the points `coords` (2, n) by
+    bilinear interpolation, the edge repeated beyond the frame (ndimage.map_coordinates'
+    order=1, mode='nearest', the indices and weights found once for the K images)."""
+    k, h, w = stack.shape
+    y = np.clip(coords[0], 0, h - 1)
+    x = np.clip(coords[1], 0, w - 1)
+    y0 = np.minimum(np.floor(y).astype(np.int64), max(h - 2, 0))
+    x0 = np.minimum(np.floor(x).astype(np.int64), max(w - 2, 0))
+    fy, fx = y - y0, x - x0
+    dy, dx = (w if h > 1 else 0), (1 if w > 1 else 0)
+    flat = stack.reshape(k, -1)
+    i = y0 * w + x0
+    top = flat[:, i] * (1 - fx) + flat[:, i + dx] * fx
+    bottom = flat[:, i + dy] * (1 - fx) + flat[:, i + dy + dx] * fx
+    return top * (1 - fy) + bottom * fy
+
+
+def _refine(prev, cur, rim, d, steps):
+    """Lucas-Kanade from the whole-pixel shift d: first the sub-pixel shift, then the
+    affine map where it explains the object clearly better (AFFINE_GAIN)."""
     shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
     # cur's coordinates), the grey levels averaged over the channels; the affine part
@@ -146,42 +203,58 @@ def object_motion(
     yy, xx = np.mgrid[: gc.shape[0], : gc.shape[1]] + 0.0
     gy, gx = np.gradient(gp)
     centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
-    a = shifted.copy()
-
     # one set of pixels for every step and for the costs compared: cur's pixels where the
     # shift puts the object
     where = _warp(rim * 1.0, shifted, 1) > 0.5
     if where.sum() < 12:
         return shifted
     y, x = yy[where] - centre[0], xx[where] - centre[1]
-    target = gc[where]
-
     pts = np.stack([yy[where], xx[where]])
 
-    def at(image, a):  # image read at A x for the pixels x of `where`
-        coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
-        return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+    stack = np.stack([gp, gy, gx])
+
+    def at(a, k=1):  # the first k of gp, gy, gx read at A x for the pixels x of `where`
+        return bilinear(stack[:k], np.tensordot(a[:, :2], pts, 1) + a[:, 2:])
+
+    # cur's grey levels mapped onto prev's by the gain and offset over the object at the
+    # shift: a flicker's change of light is no motion
+    target = gc[where]
+    ref = at(shifted)[0]
+    target = (target - target.mean()) * (ref.std() / max(target.std(), 1e-6)) + ref.mean()
 
     def cost(a):
-        return float(np.mean((at(gp, a) - target) ** 2))
+        return float(np.mean((at(a)[0] - target) ** 2))
+
+    def fit(a, columns, steps=steps):  # Gauss-Newton steps on the parameters `columns` of a
+        for _ in range(steps):
+            r, wy, wx = at(a, 3)
+            r = r - target
+            jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])[:, columns]
+            jtj = jac.T @ jac
+            jtj += 1e-3 * np.trace(jtj) / len(columns) * np.eye(len(columns))  # a little damping
+            step = np.zeros(6)
+            step[columns] = np.linalg.solve(jtj, -jac.T @ r)
+            step = step.reshape(2, 3)
+            # a step in the centred parameters, back to frame coordinates
+            step[:, 2] -= step[:, :2] @ centre
+            a = a + step
+            if np.abs(step[:, :2]).max() < 1e-3 and np.abs(step[:, 2]).max() < 0.02:
+                break
+        return a
 
     start = cost(shifted)
-    for _ in range(steps):
-        r = at(gp, a) - target
-        wy, wx = at(gy, a), at(gx, a)
-        jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
-        jtj = jac.T @ jac
-        jtj += 1e-3 * np.trace(jtj) / 6 * np.eye(6)  # a little damping
-        step = np.linalg.solve(jtj, -jac.T @ r).reshape(2, 3)
-        # a step in the centred parameters, back to frame coordinates
-        step[:, 2] -= step[:, :2] @ centre
-        a = a + step
-        if np.abs(step[:, :2]).max() < 1e-3 and np.abs(step[:, 2]).max() < 0.02:
-            break
+    moved = fit(shifted, [2, 5], 3)  # the sub-pixel shift
+    if not (np.all(np.isfinite(moved)) and np.abs(moved - shifted).max() < 1.5):
+        moved = shifted
+    if not cost(moved) < start:
+        moved = shifted
+    a = fit(moved, list(range(6)))
     lin = a[:, :2]
     sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
-    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < 0.95 * start:
-        a = shifted  # a wild or worse fit: the shift only
+    # the turn and scaling only where they explain the object clearly better than the
+    # shift: fitted to noise, a slight shrink each frame adds up to a lost object
+    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < AFFINE_GAIN * cost(moved):
+        a = moved
     return a
 
 
@@ -213,7 +286,11 @@ class AppearanceModel:
         grey level, and its local standard deviation (the texture), each frame's brightness
         divided out, so that a dimming light does not move the object's bins."""
         f = np.asarray(frame, np.float64)
-        f = 0.5 * f / max(float(f.mean()), 1e-3)
+        if BRIGHT_TOP:
+            lo, hi = np.percentile(f.mean(axis=0), [100 - BRIGHT_TOP, BRIGHT_TOP])
+            f = 0.05 + 0.9 * (f - lo) / max(float(hi - lo), 1e-3)
+        else:
+            f = 0.5 * f / max(float(f.mean()), 1e-3)
         grey = f.mean(axis=0)
         tex = np.clip((_texture(grey) / 0.12) ** 0.5 * BINS_TEXTURE, 0, BINS_TEXTURE - 1)
         if self.colour and f.shape[0] >= 3:
@@ -281,11 +358,12 @@ class AppearanceTerm:
         self.field = Field(g, cla.zeros(g.runtime.queue, g.padded_shape, g.dtype))
         self._ls = ls
 
-    def set(self, log_ratio: np.ndarray) -> None:
-        """Upload this frame's field from the log-likelihood ratio (H, W)."""
+    def set(self, log_ratio: np.ndarray, scale: float = 1.0) -> None:
+        """Upload this frame's field from the log-likelihood ratio (H, W), its speed
+        `scale` times the weight."""
         g = self._ls.grid
         padded = np.zeros(g.padded_shape, g.dtype)
-        g.interior(padded)[0] = self._ls.pad(self.weight * np.tanh(0.5 * log_ratio))
+        g.interior(padded)[0] = self._ls.pad(scale * self.weight * np.tanh(0.5 * log_ratio))
         self.field.data.set(padded)
 
     def start(self, ls, features, noise2) -> None:  # the RegionTerm interface: set() does it

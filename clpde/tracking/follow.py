@@ -1,14 +1,17 @@
-"""motion='image': each frame's contour starts where the image says the
+"""motion='image' (the default): each frame's contour starts where the image says the
 object went, and an appearance term keeps it on the object (appearance.py).
 
-Per frame: the object's motion from the previous frame (`appearance.object_motion`)
-carries the object's whole shape, hidden parts included, to its predicted place, where the
-morphing starts; the appearance model's log ratio there becomes the morphing's region
-speed; after the morphing, pieces far smaller than the object are dropped (a piece caught
-on an occluder) and the models learn the frame. The whole shape is the result, unless the
-result lost much of the prediction's area at once (the object went behind something): then
-the prediction is kept as the whole shape, so that the contour grows back where the object
-reappears.
+Per frame: the object's motion from the previous frame (`appearance.object_motion`, with a
+light-blind match on local contrast beside the frames' own) carries the object's whole
+shape, hidden parts included, as a level set (its contour's sub-pixel place kept) to its
+predicted place, where the morphing starts; the appearance model's log ratio there becomes
+the morphing's region speed, believed as far as it classified the last result (unless the
+background around the object moves otherwise than it, where the image term cannot hold the
+contour either), and not at all on a still frame; after the morphing, small pieces that
+split off a larger one are dropped (a piece caught on an occluder) and the models learn
+the frame. The whole shape is the result, unless the result lost much of the prediction's
+area at once (the object went behind something): then the prediction is kept as the whole
+shape, so that the contour grows back where the object reappears.
 """
 
 from __future__ import annotations
@@ -16,8 +19,10 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, move_mask, object_motion
+from .adaptive import noise_variance
+from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, bilinear, object_motion
 from .levelset import LevelSet, signed_distance
+from .motion_filter import local_contrast
 
 # A result keeping less than this share of the predicted area is taken as hidden in part.
 HIDDEN = 0.85
@@ -32,9 +37,29 @@ GROW = 6
 # The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
 # within +-PRIOR_CAP.
 PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
+# The appearance's evidence is scaled by 1 - e / RELIABLE_ERROR (`_reliability`); 0: not.
+# RELIABLE_ERROR and RING_LO, RING_HI: chosen on the calibration half of
+# benchmarks/track_photo_corpus.py among the settings with which every promise of
+# tests/tracking holds (docs/tracking.md, "One default").
+RELIABLE_ERROR = 0.1
+# ... unless the image cannot hold the contour either: the previous frame carried by the
+# object's motion misses the current one in the ring 3-8 px around the object by more
+# than RING_LO times its miss over the object (the background moves otherwise); the doubt
+# fades out between RING_LO and RING_HI (`_ring_miss`). RING_HI 0: always doubted.
+RING_LO, RING_HI = 1.6, 2.0
+# The object's model learns the result's pixels whose log ratio is below this (a strip of
+# an occluder taken in by mistake is not learned).
+LEARN_BELOW = 1.0
 # The start keeps the appearance's visible part of the prediction unless less than this
 # share of it remains.
 VISIBLE = 0.3
+# The motion is also matched on local-contrast-normalised frames over boxes of this
+# half-width (a shadow or a flicker does not move that match; object_motion's `light`);
+# 0: on the frames themselves only.
+MATCH_CONTRAST = 4
+# A frame pair whose difference near the unmoved object is below this many times the
+# noise's is still (`_change`).
+STILL_CHANGE = 2.0
 
 
 def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
@@ -42,7 +67,77 @@ def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
     the warp at the pixels needed only."""
     pts = np.array(np.nonzero(where), np.float64)
     coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
-    return ndimage.map_coordinates(image, coords, order=1, mode="nearest")
+    return bilinear(np.asarray(image, np.float64)[np.newaxis], coords)[0]
+
+
+def _warp_values(u: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """The level set u carried by the motion `a` (object_motion's map): u read at A x."""
+    return ndimage.affine_transform(u, a[:, :2], a[:, 2], order=1, mode="nearest")
+
+
+def _reliability(ratio: np.ndarray, mask: np.ndarray) -> float:
+    """How far the appearance's log ratio can be believed, from how it classified a
+    frame's result: its error, the share of the mask's interior (2 px in) that looks like
+    the surroundings plus the share of the ring 2-8 px out that looks like the object, e;
+    1 - e / RELIABLE_ERROR, within [0, 1]. (A look-alike beside the object, a shadow over
+    it: its pixels look like something else, and the evidence would erode it.)"""
+    if not RELIABLE_ERROR:
+        return 1.0
+    inner = ndimage.binary_erosion(mask, iterations=2)
+    near = ndimage.binary_dilation(mask, iterations=2)
+    ring = ndimage.binary_dilation(near, iterations=6) & ~near
+    if not inner.any() or not ring.any():
+        return 1.0
+    error = float((ratio[inner] > 0).mean() + (ratio[ring] < 0).mean())
+    return float(np.clip(1 - error / RELIABLE_ERROR, 0, 1))
+
+
+def _drop_strays(mask: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    """The mask without its small pieces (below PIECE_SHARE of the largest, or MIN_PIECE
+    px) that split off a larger one: a small piece is kept only where it is all there is
+    of a piece of the predicted shape (a speck the object had all along), and dropped where
+    that piece also holds a larger one (a strip caught on an occluder)."""
+    labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
+    if n < 2:
+        return mask
+    sizes = np.bincount(labels.ravel())[1:]
+    small = sizes < max(MIN_PIECE, PIECE_SHARE * sizes.max())
+    if not small.any():
+        return mask
+    whole, _ = ndimage.label(predicted | mask, structure=np.ones((3, 3)))
+    # each piece's part of the whole (pieces lie within one part: the part holds them)
+    part = ndimage.maximum(whole, labels, np.arange(1, n + 1)).astype(np.int64)
+    big = np.zeros(part.max() + 1, bool)
+    big[part[~small]] = True
+    drop = small & big[part]
+    return mask & ~(drop[labels - 1] & (labels > 0))
+
+
+def _ring_miss(prev, cur, a, predicted) -> float:
+    """How badly the previous frame's features `prev` carried by the object's motion `a`
+    explain `cur` ((C, H, W), light-blind) in the ring 3-8 px around the predicted object,
+    against how well over the object (2 px in): the median absolute residuals' ratio. About
+    1 where the background moves with the object or is flat; large where it moves
+    otherwise, and the image term drags the contour off."""
+    inner = ndimage.binary_erosion(predicted, iterations=2)
+    near = ndimage.binary_dilation(predicted, iterations=3)
+    ring = ndimage.binary_dilation(near, iterations=5) & ~near
+    if inner.sum() < 8 or not ring.any():
+        return 1.0
+    where = inner | ring
+    res = np.zeros(where.shape)
+    res[where] = np.mean(
+        [np.abs(c[where] - _at(p, a, where)) for p, c in zip(prev, cur, strict=True)], axis=0
+    )
+    return float(np.median(res[ring]) / max(float(np.median(res[inner])), 1e-6))
+
+
+def _change(before: np.ndarray, after: np.ndarray, where: np.ndarray) -> float:
+    """The mean |after - before| over `where`, against what the noise alone gives there
+    (2 sigma / sqrt(pi) for two frames of noise variance sigma^2): about 1 where only noise
+    changed. (C, H, W) frames."""
+    expected = 2.0 * np.sqrt(noise_variance(after)) / np.sqrt(np.pi)
+    return float(np.abs(after - before).sum(axis=0)[where].mean() / max(expected, 1e-6))
 
 
 def _centroid(mask: np.ndarray) -> np.ndarray:
@@ -66,14 +161,21 @@ class ObjectFollower:
         self.band = tracker.options.band_width
         self.looks = tracker._looks
         self.shape = tracker.first_mask.copy()
+        # its level set (negative inside), carried with it: the contour's sub-pixel place
+        self.shape_u = signed_distance(self.shape)
         self.predicted = self.shape
+        self._predicted_u = self.shape_u
         self.velocity = np.zeros(2)
         weight = tracker.options.appearance_weight
         self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
         self.term = AppearanceTerm(ls, weight) if weight else None
+        self.reliability = 1.0  # the share of the appearance's evidence believed
         if self.term is not None:
-            self.model.learn(self.model.bins(self.looks[0]), self.shape)
+            bins = self.model.bins(self.looks[0])
+            self.model.learn(bins, self.shape)
+            self.reliability = _reliability(self.model.log_ratio(bins, self.shape), self.shape)
         self._bins = None
+        self._match_cache = {}
         self._ratio = None  # the last frame's log odds (surroundings over object)
         self._looks_ratio = None  # the same from the looks alone
 
@@ -94,8 +196,15 @@ class ObjectFollower:
         floor = HIDDEN_FLOOR if hidden else MATCH_FLOOR
         within = HIDDEN_CHANGE if hidden else None
         if pixels.sum() >= MIN_PIECE:
+            light = (self._light(t - 1), self._light(t)) if MATCH_CONTRAST else None
             a = object_motion(
-                self.looks[t - 1], self.looks[t], pixels, self.velocity, floor=floor, within=within
+                self.looks[t - 1],
+                self.looks[t],
+                pixels,
+                self.velocity,
+                floor=floor,
+                within=within,
+                light=light,
             )
         else:  # nothing in sight: the object keeps its velocity
             a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
@@ -103,32 +212,68 @@ class ObjectFollower:
         centre = _centroid(self.shape)
         shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
         self.velocity = shift
-        predicted = move_mask(self.shape, a)
-        if not predicted.any():  # carried out of the frame: it stays where it was
-            predicted = self.shape
-        self.predicted = predicted
-        start = predicted
-        if self.term is not None:
-            self._bins = self.model.bins(self.looks[t])
-            # the appearance's evidence and the prediction's: the log prior odds of the
-            # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
-            # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as
-            # it is and only clear evidence carves it or grows it
-            prior = np.clip(signed_distance(predicted) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
-            self._looks_ratio = self.model.log_ratio(self._bins, predicted)
-            # (no evidence from the motion-compensated residual: a talking mouth or a
-            # turning face does not move with the object either, and on the calibration
-            # half, 0.827 -> 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
-            self._ratio = self._looks_ratio + prior
-            self.term.set(self._ratio)
-            start = self._visible(predicted)
-        self.ls.assign(signed_distance(start))
+        predicted_u = _warp_values(self.shape_u, a)
+        predicted = predicted_u < 0
+        if not predicted.any() or predicted.all():  # carried out of the frame: it stays
+            predicted, predicted_u = self.shape, self.shape_u
+        self.predicted, self._predicted_u = predicted, predicted_u
         # F1: the previous frame carried with the object near its predicted place
         near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
         for c in range(out.shape[0]):
             out[c][near] = _at(prepared_prev[c], a, near)
+        start = predicted
+        if self.term is not None:
+            # a still object in a still scene (no motion, and the frames differ near it by
+            # no more than the noise explains): nothing new for the appearance to say, and
+            # its evidence on a blurred edge's pixels would move the contour
+            moved = np.abs(a - [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).max() > 0.02
+            still = not moved and _change(out, prepared, near) < STILL_CHANGE
+            start = self._appearance(t, a, predicted, still)
+        self.ls.assign(predicted_u if start is predicted else signed_distance(start))
         return out, (float(shift[0]), float(shift[1]))
+
+    def _appearance(self, t, a, predicted, still):
+        """Set the appearance term of frame t around the predicted whole shape; returns the
+        morphing's start."""
+        self._bins = self.model.bins(self.looks[t])
+        # the appearance's evidence and the prediction's: the log prior odds of the
+        # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
+        # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
+        # and only clear evidence carves it or grows it
+        sd = signed_distance(predicted)
+        prior = np.clip(sd / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
+        self._looks_ratio = self.model.log_ratio(self._bins, predicted)
+        # (no evidence from the motion-compensated residual: a talking mouth or a turning
+        # face does not move with the object either, and on the calibration half, 0.827 ->
+        # 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
+        trust = self._trust(t, a, predicted)
+        self._ratio = prior if still else trust * self._looks_ratio + prior
+        # doubted, the whole term yields to the image's (the prior alone would hold the
+        # contour at the predicted place against the frames' evidence)
+        self.term.set(self._ratio, trust)
+        return predicted if still else self._visible(predicted)
+
+    def _trust(self, t, a, predicted) -> float:
+        """The share of the appearance believed in frame t: its reliability on the last
+        result, unless the image term cannot hold the contour either (`_ring_miss`)."""
+        if self.reliability >= 1 or not RING_HI:
+            return self.reliability
+        miss = _ring_miss(self._light(t - 1), self._light(t), a, predicted)
+        doubt = float(np.clip((RING_HI - miss) / (RING_HI - RING_LO), 0, 1))
+        return 1 - doubt * (1 - self.reliability)
+
+    def _light(self, t):
+        """Frame t's light-blind features (local contrast) that the motion also matches."""
+        cached = self._match_cache.get(t)
+        if cached is None:
+            # of the grey levels: one correlation channel (the colour's is the frames' own
+            # match)
+            cached = local_contrast(self.looks[t].mean(axis=0, keepdims=True), MATCH_CONTRAST)
+            # the frame pair in use: this frame and the one before
+            self._match_cache = {k: v for k, v in self._match_cache.items() if k >= t - 1}
+            self._match_cache[t] = cached
+        return cached
 
     def _visible(self, predicted: np.ndarray) -> np.ndarray:
         """The morphing's start: the predicted whole shape less what looks like the
@@ -144,20 +289,26 @@ class ObjectFollower:
             start = (sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max()))[labels - 1] & (labels > 0)
         return start if start.sum() >= max(VISIBLE * predicted.sum(), 1) else predicted
 
-    def observe(self, t, mask: np.ndarray) -> np.ndarray:
-        """After frame t's morphing: its mask cleaned of stray pieces; the models learn."""
+    def observe(self, t, mask: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """After frame t's morphing (its mask and level set u): the mask cleaned of stray
+        pieces; the models learn."""
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
-        mask = mask & ndimage.binary_dilation(self.predicted, iterations=GROW)
-        labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
-        if n > 1:
-            sizes = np.bincount(labels.ravel())[1:]
-            keep = sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max())
-            mask = keep[labels - 1] & (labels > 0)
+        mask = _drop_strays(
+            mask & ndimage.binary_dilation(self.predicted, iterations=GROW), self.predicted
+        )
         if self.term is not None and mask.any():
+            self.reliability = _reliability(self._looks_ratio, mask)
             # the object's model learns the pixels that did not look clearly like the
             # surroundings: a strip of an occluder taken in by mistake is not learned
-            self.model.learn(self._bins, mask & (self._looks_ratio < 1.0))
+            self.model.learn(self._bins, mask & (self._looks_ratio < LEARN_BELOW))
         hidden = mask.sum() < HIDDEN * self.predicted.sum()
-        self.shape = (self.predicted | mask) if hidden else mask.copy()
+        if mask.any() and (mask == (u < 0)).all():
+            shape_u = np.asarray(u, np.float64)
+        else:
+            shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
+        if hidden:
+            shape_u = np.minimum(shape_u, self._predicted_u)
+        self.shape_u = shape_u
+        self.shape = shape_u < 0
         return mask

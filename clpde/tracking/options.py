@@ -48,17 +48,19 @@ class TrackOptions:
         where it is flat or noisy; 'ncc', the steepest ascent of the local normalised
         cross-correlation over a (2 ncc_radius + 1)^2 window; F2 - F1 (the thesis); or F2 -
         F1 clipped at huber_delta.
-    motion : {'checked', 'kalman', 'image', 'components', 'velocity', None}
-        Each frame's start: shifted by a constant-velocity Kalman filter fed by matching the
-        object's features (within search_radius pixels of the prediction), its shift
-        checked against a wide search of the image (any shift up to 32 px; the default,
-        clpde.tracking.prediction.checked_shift); 'kalman': the filter alone; 'image': moved
-        by the object's motion found in the image (a masked correlation over every shift
-        up to 32 px, then an affine fit; clpde.tracking.appearance), its whole shape kept
-        through occlusions, with the appearance term on, its evidence tempered by how well
-        the object's colours separate from its surroundings' in each frame
-        (clpde.tracking.follow); each connected piece by its own match; by the previous
-        displacement; or not at all.
+    motion : {'image', 'checked', 'kalman', 'components', 'velocity', None}
+        Each frame's start: 'image' (the default) moves it by the object's motion found in
+        the image (a masked correlation over every shift up to 32 px, of the frames and of
+        their light-blind local contrast, then a sub-pixel shift and, where it explains
+        the object clearly better, an affine fit; clpde.tracking.appearance), its whole
+        shape kept through occlusions, with the appearance term on, its evidence tempered
+        by how well the object's colours separate from its surroundings' and believed as
+        far as it classified the last result, unless the background moves otherwise than
+        the object (clpde.tracking.follow); 'checked': a constant-velocity Kalman filter
+        fed by matching the object's features (within search_radius pixels of the
+        prediction), its shift checked against a wide search of the image (any shift up to
+        32 px; clpde.tracking.prediction.checked_shift); 'kalman': the filter alone; each
+        connected piece by its own match; by the previous displacement; or not at all.
     shape_weight : float
         (>= 0, e.g. 0.05) pulls the contour towards the start where the features say
         nothing.
@@ -122,7 +124,7 @@ class TrackOptions:
     features: str = "intensity"
     colour: bool = False
     discrepancy: str = "adaptive"
-    motion: str | None = "checked"
+    motion: str | None = "image"
     shape_weight: float = 0.0
     equalize: bool | str = False
     smooth: bool = True

@@ -224,7 +224,7 @@ class MorphingTracker:
             if prediction is not None:
                 prediction.observe(mask, new_mask)
             if follow is not None:
-                cleaned = follow.observe(t, new_mask)
+                cleaned = follow.observe(t, new_mask, u)
                 if (cleaned != new_mask).any():
                     # all hidden: an empty mask, u positive everywhere
                     u = signed_distance(cleaned) if cleaned.any() else np.abs(u) + 1

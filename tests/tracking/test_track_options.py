@@ -20,15 +20,15 @@ from clpde.tracking.options import (
 
 
 def test_track_options_are_frozen_and_resolve_their_defaults():
-    options = TrackOptions()
+    options = TrackOptions(motion="checked")
     with pytest.raises(dataclasses.FrozenInstanceError):
         options.tol = 0.1
     assert options.iterations == ITERATIONS and options.appearance_weight == 0.0
     # replace re-resolves what depends on other fields
     region = dataclasses.replace(options, region_weight=1.0)
     assert region.max_iterations is None and region.iterations == ADAPTIVE_ITERATIONS
-    image = TrackOptions(motion="image")
-    assert image.appearance_weight == APPEARANCE_WEIGHT
+    image = TrackOptions()  # the default: motion='image'
+    assert image.motion == "image" and image.appearance_weight == APPEARANCE_WEIGHT
     assert image.iterations == ADAPTIVE_ITERATIONS
     assert TrackOptions(equalize=True).equalize == "match"
     assert TrackOptions(max_iterations=7).iterations == 7
