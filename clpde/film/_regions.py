@@ -7,7 +7,7 @@ motion is not trusted, nothing is damage (do no harm)."""
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage, signal
+from scipy import ndimage, signal, stats
 
 from .lines import robust_scale
 
@@ -17,6 +17,7 @@ RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the n
 RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
 RING_QUIET = 0.5  # share of the ring that is trusted and matches
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
+TAIL_REACH = 8  # px around a region whose residuals are its own surroundings' (tail check)
 # The deviation of a pixel's residual against the median of its neighbours, in units of the
 # grain's: the pixel's grain and the median's (of 2-4 neighbours with grain of their own).
 RESIDUAL_UNITS = 1.16
@@ -172,4 +173,37 @@ def _local_noise_check(
         level = 1.4826 * float(np.median(np.abs(res[win][ring])))
         local = max(1.0, level / (RESIDUAL_UNITS * sigma))
         keep[idx] = float(a[win][own].max()) >= threshold * local
+    return keep[labels]
+
+
+def _tail_check(
+    mask: np.ndarray, busy: np.ndarray, res: np.ndarray, area: float, valid: np.ndarray
+) -> np.ndarray:
+    """Keep the components of mask that the residual of their own surroundings does not
+    explain (heavy tails included: foliage, motion blur, a codec's blocks): with f the share
+    of the surroundings (3 to TAIL_REACH px out, outside `busy`, where `valid`) whose
+    |residual| reaches the region's median |residual|, and m = n / area the region's
+    independent cells (area: the grain's correlation area), the chance that at least half
+    of m such cells reach it, P(Bin(m, f) >= m / 2), must stay below n / (H W): at most one
+    region of n pixels per frame expected from the surroundings alone. Nothing fitted: the
+    region is measured against its own neighbourhood's distribution, and the frame's count
+    of places sets the bar (multiple testing). On the calibration half it takes the small
+    false alarms on textured, motion-blurred foliage that made frames worse than their
+    input (benchmarks/film_worse.py)."""
+    labels, n = ndimage.label(mask)
+    if n == 0:
+        return mask
+    keep = np.zeros(n + 1, bool)
+    for idx, win, own in _components(labels, TAIL_REACH):
+        around = ndimage.binary_dilation(own, iterations=TAIL_REACH)
+        around &= ~ndimage.binary_dilation(own, iterations=2) & ~busy[win] & valid[win]
+        if not around.any():
+            keep[idx] = True
+            continue
+        r = np.abs(res[win])
+        count = int(own.sum())
+        share = float((r[around] >= np.median(r[own])).mean())
+        cells = max(1, round(count / area))
+        chance = float(stats.binom.sf(np.ceil(cells / 2) - 1, cells, share))
+        keep[idx] = chance <= count / mask.size
     return keep[labels]

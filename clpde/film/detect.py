@@ -41,7 +41,13 @@ from ..runtime import get_runtime
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
 from ._planes import film_planes, grey
-from ._regions import RESIDUAL_UNITS, _local_noise_check, _motion_check, _ring_check
+from ._regions import (
+    RESIDUAL_UNITS,
+    _local_noise_check,
+    _motion_check,
+    _ring_check,
+    _tail_check,
+)
 from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -306,6 +312,9 @@ def _frame_kinds(
     blotch = _no_singletons(blotch, max(SMALLEST, CELLS * scores["region_noise"][t][1]))
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
+    # the surroundings' tail is read outside all candidates and their rims
+    busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
+    blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
