@@ -207,3 +207,80 @@ def _tail_check(
         chance = float(stats.binom.sf(np.ceil(cells / 2) - 1, cells, share))
         keep[idx] = chance <= count / mask.size
     return keep[labels]
+
+
+def _found_nearby(G: np.ndarray, t: int, frames, box, own: np.ndarray, search: int, bar: float):
+    """Whether the pixels `own` of frame t (in the window box) are found within `search` px,
+    at any displacement (zero included), in one of `frames`: the best placement of their
+    values alone (no context: a flat region is sought as such) differs from them by a mean
+    square below `bar`."""
+    T, ny, nx = G.shape
+    (y0, y1), (x0, x1) = box
+    templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
+    th, tw = templ.shape
+    weight = own.astype(np.float64)
+    for s in frames:
+        wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
+        wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
+        win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
+        if win.shape[0] < th or win.shape[1] < tw:
+            continue
+        ssd = _masked_ssd(win, templ, weight)
+        if float(ssd.min()) / own.sum() <= bar:
+            return True
+    return False
+
+
+def _spatial_blotches(
+    G: np.ndarray,
+    t: int,
+    z: np.ndarray,
+    sign: np.ndarray,
+    threshold: float,
+    low: float,
+    smallest: float,
+    sigma: float,
+    search: int,
+    taken: np.ndarray,
+) -> np.ndarray:
+    """Blotches where the motion is not trusted on both sides (occlusion, a failed flow
+    loop, non-rigid motion, a film's ends): z, the distance of each pixel outside the range
+    of ALL its neighbours' compensated values (trusted or not, wherever the match lies
+    inside), in noise units, and the frame's own surroundings must both say damage:
+
+    - temporal: the region (connected z > low, outside `taken`) has a median z of at least
+      `threshold` (more than half its pixels, not a peak: one-sided evidence is weaker);
+    - spatial: more than half its pixels lie outside the range (5th to 95th percentile) of
+      its ring (2-4 px out) by `threshold` noise units, on the side of its temporal sign:
+      an outlier against its own surroundings, as dirt is and an object's part seldom is;
+    - not found again: its values alone are not found within `search` px, at any
+      displacement, in the nearest frame each side (at a film's ends the two nearest on
+      its one side) closer than halfway between them and their ring's level (the nearer
+      class: mean square below a quarter of their contrast's): a moving object is there,
+      dirt is not.
+
+    Returns the bool mask of the regions kept (at least `smallest` px)."""
+    T, ny, nx = G.shape
+    labels, n = ndimage.label((z > low) & ~taken)
+    if n == 0:
+        return labels > 0
+    keep = np.zeros(n + 1, bool)
+    near = [s for s in (t - 1, t + 1) if 0 <= s < T]
+    if len(near) < 2:
+        near += [s for s in (t - 2, t + 2) if 0 <= s < T]
+    for idx, win, own in _components(labels, 4):
+        if own.sum() < smallest or np.median(z[win][own]) < threshold:
+            continue
+        ring = _ring(own, labels[win], 1, 4) & ~taken[win]
+        if ring.sum() < 4:
+            continue
+        g = G[t][win]
+        lo, hi = np.percentile(g[ring], [5, 95])
+        side = np.median(sign[win][own])
+        outside = (lo - g[own]) if side < 0 else (g[own] - hi)
+        if np.median(outside) < threshold * sigma:
+            continue
+        contrast = float(np.mean((g[own] - np.median(g[ring])) ** 2))
+        box = ((win[0].start, win[0].stop), (win[1].start, win[1].stop))
+        keep[idx] = not _found_nearby(G, t, near, box, own, search, contrast / 4)
+    return keep[labels]
