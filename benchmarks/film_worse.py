@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
 from film import psnr
 from film_corpus import corpus
 from scipy import ndimage
@@ -34,6 +35,8 @@ def main():
         e_out = ((out.astype(float) - clean) ** 2).mean(-1)
         e_in = ((dirty.astype(float) - clean) ** 2).mean(-1)
         T = len(dirty)
+        outside = (truth == 0) & ~c["spare"]
+        changed = np.abs(out.astype(int) - dirty.astype(int)).max(-1) > 10
         for t in range(T):
             worse = psnr(out[t], clean[t]) < psnr(dirty[t], clean[t]) - 1e-9
             labels, _ = ndimage.label(kinds[t] > 0)
@@ -44,11 +47,15 @@ def main():
                 if gain > 0:
                     true = float((truth[t][sl][own] > 0).mean())
                     rows.append((gain, int(own.sum()), true, int(kinds[t][sl][own].max()), sl))
+            harm = float((changed[t] & outside[t]).mean())
             if not (worse or rows):
                 continue
             end = " (end)" if t in (0, T - 1) else ""
             total = float((e_out[t] - e_in[t]).sum())
-            print(f"{c['name']} frame {t}{end}: worse {worse}, squared error change {total:+.0f}")
+            print(
+                f"{c['name']} frame {t}{end}: worse {worse}, harm {100 * harm:.2f}%, "
+                f"squared error change {total:+.0f}"
+            )
             for gain, n, true, kind, sl in sorted(rows, key=lambda r: -r[0])[:6]:
                 print(
                     f"    +{gain:.0f}: {n} px, {true:.2f} true, kind {kind}, "

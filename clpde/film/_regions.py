@@ -16,6 +16,9 @@ MOTION_TEXTURE = 3.0  # noise units of structure a region needs to be searched f
 RING_LIMIT = 3.0  # noise units within which a blotch's surroundings match the neighbours
 RING_TRUSTED = 0.6  # share of the ring with trusted motion on both sides
 RING_QUIET = 0.5  # share of the ring that is trusted and matches
+# px by which two displacements of a moving region may differ (integer placements of the
+# search, and a little acceleration) and still be one velocity
+STEADY = 2.0
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
 TAIL_REACH = 8  # px around a region whose residuals are its own surroundings' (tail check)
 # The deviation of a pixel's residual against the median of its neighbours, in units of the
@@ -73,7 +76,7 @@ def _motion_check(
     T, ny, nx = G.shape
     keep = np.ones(n + 1, bool)
     keep[0] = False
-    for idx, win, own in _components(labels, 3):
+    for idx, win, own in _components(labels, 4):
         (y0, y1), (x0, x1) = (win[0].start, win[0].stop), (win[1].start, win[1].stop)
         region = ndimage.binary_dilation(own, iterations=2)
         r2 = resid[y0:y1, x0:x1] ** 2
@@ -82,8 +85,15 @@ def _motion_check(
         templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
         th, tw = templ.shape
         # a flat spot (dirt is mostly flat) matches any dark or bright place of the
-        # neighbours: only a region with structure of its own can be found again
+        # neighbours: it is an object only where it is found again on both sides at places
+        # one steady velocity explains (a flat object the flow did not follow)
         if robust_scale(templ[own]) < MOTION_TEXTURE * sigma:
+            ring = _ring(own, labels[win], 1, 4)
+            if ring.sum() >= 4:
+                g = templ[own]
+                bar = float(np.mean((g - np.median(templ[ring])) ** 2)) / 4
+                box = ((y0, y1), (x0, x1))
+                keep[idx] = not _moves_steadily(G, t, box, own, search, bar)
             continue
         if not 0 < t < T - 1:
             # a film's ends have one side only: ROD cannot tell an object the flow missed
@@ -209,26 +219,57 @@ def _tail_check(
     return keep[labels]
 
 
-def _found_nearby(G: np.ndarray, t: int, frames, box, own: np.ndarray, search: int, bar: float):
-    """Whether the pixels `own` of frame t (in the window box) are found within `search` px,
-    at any displacement (zero included), in one of `frames`: the best placement of their
-    values alone (no context: a flat region is sought as such) differs from them by a mean
-    square below `bar`."""
+def _best_place(G: np.ndarray, t: int, s: int, box, own: np.ndarray, search: int):
+    """The best placement, within `search` px, of frame t's pixels `own` (in the window
+    box) in frame s, by their values alone (no context: a flat region is sought as such):
+    (the mean squared difference there, the displacement (dy, dx)); None if the window
+    does not fit."""
     T, ny, nx = G.shape
     (y0, y1), (x0, x1) = box
     templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
     th, tw = templ.shape
-    weight = own.astype(np.float64)
+    wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
+    wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
+    win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
+    if win.shape[0] < th or win.shape[1] < tw:
+        return None
+    ssd = _masked_ssd(win, templ, own.astype(np.float64))
+    my, mx = np.unravel_index(int(np.argmin(ssd)), ssd.shape)
+    return float(ssd[my, mx]) / own.sum(), np.array([my + wy0 - y0, mx + wx0 - x0], float)
+
+
+def _found_nearby(G: np.ndarray, t: int, frames, box, own: np.ndarray, search: int, bar: float):
+    """Whether the pixels `own` of frame t are found again (_best_place: mean square below
+    `bar`), at any displacement, zero included, in one of `frames`."""
     for s in frames:
-        wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
-        wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
-        win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
-        if win.shape[0] < th or win.shape[1] < tw:
-            continue
-        ssd = _masked_ssd(win, templ, weight)
-        if float(ssd.min()) / own.sum() <= bar:
+        best = _best_place(G, t, s, box, own, search)
+        if best is not None and best[0] <= bar:
             return True
     return False
+
+
+def _moves_steadily(G: np.ndarray, t: int, box, own: np.ndarray, search: int, bar: float):
+    """Whether a flat region of frame t is an object moving steadily: found again
+    (_best_place: mean square below `bar`) in the nearest frame each side (at a film's ends
+    the two nearest on its one side) at displacements that one velocity explains (within
+    STEADY px). Dirt is found so only by chance: a dark or bright place of the scene near
+    it lies at one displacement in both frames, and one velocity explains that only at
+    zero, where the place would hide the dirt."""
+    T = len(G)
+    frames = [s for s in (t - 1, t + 1, t - 2, t + 2) if 0 <= s < T]
+    sides = [s for s in frames if abs(s - t) == 1]
+    pair = sides if len(sides) == 2 else frames[:2]
+    velocities = []
+    for s in pair:
+        best = _best_place(G, t, s, box, own, search)
+        if best is None or best[0] > bar:
+            return False
+        velocities.append(best[1] / (s - t))
+    if len(velocities) < 2:
+        return bool(velocities)
+    # the farther frame's displacement against the one the nearer frame's velocity predicts
+    gap = np.abs(velocities[0] - velocities[1]) * max(abs(s - t) for s in pair)
+    return bool(gap.max() <= STEADY)
 
 
 def _spatial_blotches(
