@@ -50,7 +50,7 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     busy = ndimage.binary_dilation(b | scratch, iterations=2)
     b = regions._tail_check(b, busy, r, sc["region_noise"][t][1], sc["both"][t])
     out["tail"] = b
-    b = regions._motion_check(b, G, t, res[t], search, sig[t])
+    b = regions._motion_check(b, G, t, res[t], search, sig[t], bthr)
     out["motion"] = b
     return out
 

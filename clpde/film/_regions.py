@@ -57,19 +57,26 @@ def _masked_ssd(win: np.ndarray, templ: np.ndarray, weight: np.ndarray) -> np.nd
 
 
 def _motion_check(
-    comp_mask: np.ndarray, G: np.ndarray, t: int, resid: np.ndarray, search: int, sigma: float
+    comp_mask: np.ndarray,
+    G: np.ndarray,
+    t: int,
+    resid: np.ndarray,
+    search: int,
+    sigma: float,
+    threshold: float,
 ) -> np.ndarray:
     """Drop the components of comp_mask (frame t) that are found in the frame before or
     after: a moving object the flow missed is found again nearby (or in place, where the
     flow wandered), a blotch is not.
 
-    Each component, with a ring of two pixels for context, is matched within `search`
-    pixels of its place in each neighbour. It moved if, at the best places, its own pixels
-    differ by less than MATCH_RATIO of their difference from the compensated neighbours
-    (medians of squares),
-    in both neighbours, at places that one velocity explains (steady motion; chance
-    matches of a blotch do not line up so). The film's first and last frames use the next
-    two frames on their one side; a film of two frames needs the match of the ring too."""
+    A component with structure of its own (MOTION_TEXTURE noise units), with a ring of two
+    pixels for context, is matched within `search` pixels of its place in each neighbour;
+    it moved if, at the best place in either, its own pixels differ by less than
+    MATCH_RATIO of their difference from the compensated neighbours (medians of squares).
+    A flat one (dirt is mostly flat) moved if it is found on both sides at places one
+    steady velocity explains (_moves_steadily). At a film's first and last frames (one
+    side only) a component with structure is kept only where the frame's own surroundings
+    say damage at the blotch `threshold` (_spatially_damage)."""
     labels, n = ndimage.label(comp_mask)
     if n == 0:
         return comp_mask
@@ -97,8 +104,14 @@ def _motion_check(
             continue
         if not 0 < t < T - 1:
             # a film's ends have one side only: ROD cannot tell an object the flow missed
-            # from damage there, and a region with structure of its own may be either
-            keep[idx] = False
+            # from damage there, and a region with structure of its own may be either; the
+            # frame's own surroundings decide (the spatial evidence of _spatially_damage,
+            # at the blotch threshold)
+            ring = _ring(own, labels[win], 1, 4)
+            side = float(np.median(resid[win][own]))
+            keep[idx] = ring.sum() >= 4 and _spatially_damage(
+                G, t, win, own, ring, side, threshold * sigma, search
+            )
             continue
         found = []
         # the frames each side; at the film's ends the next two on the one side
@@ -252,9 +265,10 @@ def _moves_steadily(G: np.ndarray, t: int, box, own: np.ndarray, search: int, ba
     """Whether a flat region of frame t is an object moving steadily: found again
     (_best_place: mean square below `bar`) in the nearest frame each side (at a film's ends
     the two nearest on its one side) at displacements that one velocity explains (within
-    STEADY px). Dirt is found so only by chance: a dark or bright place of the scene near
-    it lies at one displacement in both frames, and one velocity explains that only at
-    zero, where the place would hide the dirt."""
+    STEADY px), other than standing still. Dirt is found so only by chance: a dark or
+    bright place of the scene near it lies at one displacement in both frames, and one
+    velocity explains that only at zero; and a region found in place on both sides, the
+    scene moving under it, is fixed to the film (a scratch, dust on the scanner's glass)."""
     T = len(G)
     frames = [s for s in (t - 1, t + 1, t - 2, t + 2) if 0 <= s < T]
     sides = [s for s in frames if abs(s - t) == 1]
@@ -269,7 +283,10 @@ def _moves_steadily(G: np.ndarray, t: int, box, own: np.ndarray, search: int, ba
         return bool(velocities)
     # the farther frame's displacement against the one the nearer frame's velocity predicts
     gap = np.abs(velocities[0] - velocities[1]) * max(abs(s - t) for s in pair)
-    return bool(gap.max() <= STEADY)
+    # found in place on both sides while the scene moves under it (else the flow had
+    # followed it): fixed to the film, as a scratch or dust on the scanner's glass is
+    still = np.abs(velocities[0]).max() < 1
+    return bool(gap.max() <= STEADY) and not still
 
 
 def _spatial_blotches(
@@ -306,22 +323,33 @@ def _spatial_blotches(
     if n == 0:
         return labels > 0
     keep = np.zeros(n + 1, bool)
-    near = [s for s in (t - 1, t + 1) if 0 <= s < T]
-    if len(near) < 2:
-        near += [s for s in (t - 2, t + 2) if 0 <= s < T]
     for idx, win, own in _components(labels, 4):
         if own.sum() < smallest or np.median(z[win][own]) < threshold:
             continue
         ring = _ring(own, labels[win], 1, 4) & ~taken[win]
         if ring.sum() < 4:
             continue
-        g = G[t][win]
-        lo, hi = np.percentile(g[ring], [5, 95])
         side = np.median(sign[win][own])
-        outside = (lo - g[own]) if side < 0 else (g[own] - hi)
-        if np.median(outside) < threshold * sigma:
-            continue
-        contrast = float(np.mean((g[own] - np.median(g[ring])) ** 2))
-        box = ((win[0].start, win[0].stop), (win[1].start, win[1].stop))
-        keep[idx] = not _found_nearby(G, t, near, box, own, search, contrast / 4)
+        keep[idx] = _spatially_damage(G, t, win, own, ring, side, threshold * sigma, search)
     return keep[labels]
+
+
+def _spatially_damage(G: np.ndarray, t: int, win, own, ring, side: float, bar: float, search: int):
+    """Whether a region (pixels `own` of frame t's window `win`, of temporal sign `side`)
+    is damage by the frame's own surroundings: more than half its pixels lie outside the
+    range (5th to 95th percentile) of its ring by `bar`, on that side, and its values alone
+    are not found again within `search` px in the nearest frame each side (at a film's ends
+    the two nearest on its one side) closer than halfway to their ring's level (a mean
+    square below a quarter of their contrast's: the nearer class)."""
+    T = len(G)
+    g = G[t][win]
+    lo, hi = np.percentile(g[ring], [5, 95])
+    outside = (lo - g[own]) if side < 0 else (g[own] - hi)
+    if np.median(outside) < bar:
+        return False
+    near = [s for s in (t - 1, t + 1) if 0 <= s < T]
+    if len(near) < 2:
+        near += [s for s in (t - 2, t + 2) if 0 <= s < T]
+    contrast = float(np.mean((g[own] - np.median(g[ring])) ** 2))
+    box = ((win[0].start, win[0].stop), (win[1].start, win[1].stop))
+    return not _found_nearby(G, t, near, box, own, search, contrast / 4)

@@ -350,7 +350,7 @@ def _frame_kinds(
     # the surroundings' tail is read outside all candidates and their rims
     busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
-    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
+    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
     blotch |= _untrusted(G, scores, t, blotch, scratch, blotch_threshold, smallest, search)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
