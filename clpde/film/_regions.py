@@ -19,6 +19,7 @@ RING_QUIET = 0.5  # share of the ring that is trusted and matches
 # px by which two displacements of a moving region may differ (integer placements of the
 # search, and a little acceleration) and still be one velocity
 STEADY = 2.0
+EDGE = 2  # px from the frame's border within which the warp's stencil leaves the frame
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
 TAIL_REACH = 8  # px around a region whose residuals are its own surroundings' (tail check)
 # The deviation of a pixel's residual against the median of its neighbours, in units of the
@@ -74,9 +75,12 @@ def _motion_check(
     it moved if, at the best place in either, its own pixels differ by less than
     MATCH_RATIO of their difference from the compensated neighbours (medians of squares).
     A flat one (dirt is mostly flat) moved if it is found on both sides at places one
-    steady velocity explains (_moves_steadily). At a film's first and last frames (one
-    side only) a component with structure is kept only where the frame's own surroundings
-    say damage at the blotch `threshold` (_spatially_damage)."""
+    steady velocity explains (_moves_steadily). Within EDGE px of the frame's border
+    (content enters and leaves there), and at a film's first and last frames (one side
+    only) for a component with structure, it is kept only where the frame's own
+    surroundings say damage at the blotch `threshold` (_spatially_damage). Flat ones at the
+    ends keep ROD's say: asking the spatial test of them too cost 4% of the calibration
+    half's blotch recall (0.601 -> 0.559) and no frame there got better."""
     labels, n = ndimage.label(comp_mask)
     if n == 0:
         return comp_mask
@@ -91,27 +95,29 @@ def _motion_check(
         e_own = float(np.median(r2[own]))
         templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
         th, tw = templ.shape
+        ring = _ring(own, labels[win], 1, 4)
+        ys, xs = np.nonzero(own)
+        edge = min(ys.min() + y0, xs.min() + x0, ny - 1 - ys.max() - y0, nx - 1 - xs.max() - x0)
+        flat = robust_scale(templ[own]) < MOTION_TEXTURE * sigma
+        if (not 0 < t < T - 1 and not flat) or edge < EDGE:
+            # at the frame's edge content enters and leaves (the flow there is extrapolated),
+            # and a film's ends have one side only: ROD cannot tell an object the flow
+            # missed from damage (a region with structure may be either); the frame's own
+            # surroundings decide (_spatially_damage, at the blotch threshold)
+            side = float(np.median(resid[win][own]))
+            keep[idx] = ring.sum() >= 4 and _spatially_damage(
+                G, t, win, own, ring, side, threshold * sigma, search
+            )
+            continue
         # a flat spot (dirt is mostly flat) matches any dark or bright place of the
         # neighbours: it is an object only where it is found again on both sides at places
         # one steady velocity explains (a flat object the flow did not follow)
-        if robust_scale(templ[own]) < MOTION_TEXTURE * sigma:
-            ring = _ring(own, labels[win], 1, 4)
+        if flat:
             if ring.sum() >= 4:
                 g = templ[own]
                 bar = float(np.mean((g - np.median(templ[ring])) ** 2)) / 4
                 box = ((y0, y1), (x0, x1))
                 keep[idx] = not _moves_steadily(G, t, box, own, search, bar)
-            continue
-        if not 0 < t < T - 1:
-            # a film's ends have one side only: ROD cannot tell an object the flow missed
-            # from damage there, and a region with structure of its own may be either; the
-            # frame's own surroundings decide (the spatial evidence of _spatially_damage,
-            # at the blotch threshold)
-            ring = _ring(own, labels[win], 1, 4)
-            side = float(np.median(resid[win][own]))
-            keep[idx] = ring.sum() >= 4 and _spatially_damage(
-                G, t, win, own, ring, side, threshold * sigma, search
-            )
             continue
         found = []
         # the frames each side; at the film's ends the next two on the one side
