@@ -112,3 +112,30 @@ def test_the_search_nearby_is_what_spares_the_moving_object(monkeypatch, rng, tr
     monkeypatch.setattr(regions, "_moves_steadily", lambda *a, **k: False)
     monkeypatch.setattr(regions, "_found_nearby", lambda *a, **k: False)
     assert clpde.detect_defects(frames)[1:-1].sum() > 0
+
+
+def test_spatial_blotches_come_out_the_same_in_any_window(monkeypatch, rng):
+    """Blotches found by the spatial path (the later side not trusted around them) on
+    several frames: blocks of 3 and 4 frames, each with its context, give the masks and
+    frames of one call on the whole film, bit for bit."""
+    from clpde.film.stream import film_work, restore_stream
+
+    count = 10
+    s = gaussian_filter(rng.random((NY, NX)), 2.0)
+    s = 0.3 + 0.4 * (s - s.min()) / (s.max() - s.min())
+    frames = np.clip(s + 0.01 * rng.standard_normal((count, NY, NX)), 0, 1)
+    dirty = np.rint(frames * 255).astype(np.uint8)
+    # apart (more than the 24 px searched) on consecutive frames: two like spots within
+    # reach of each other are one object that moved
+    spots = {2: (26, 30), 5: (40, 26), 6: (22, 56), 9: (40, 28)}
+    for t, (y, x) in spots.items():
+        dirty[t][_disc(y, x, 3.5)] = 5
+    _distrust(monkeypatch, (slice(16, 48), slice(20, 60)), {1})
+    masks, kinds = clpde.detect_defects(dirty, return_kinds=True)
+    assert all((kinds[t] == BLOTCH).any() for t in spots)
+    filled = clpde.inpaint_video(dirty, masks, keep=KEEP)
+    expected = np.where(masks, filled, dirty)
+    for block in (3, 4):
+        streamed = list(restore_stream(dirty, count, film_work(), block=block))
+        assert np.array_equal(np.stack([m for _, m, _ in streamed]), masks)
+        assert np.array_equal(np.stack([r for r, _, _ in streamed]), expected)
