@@ -9,9 +9,9 @@ neighbour on one side (no temporal evidence: the motion is not trusted there); e
 below the hysteresis's low level (split by the pixel's true change: faint < 15 grey
 levels, 15-30, > 30); a region that never reaches the high level; beside a scratch; a
 region smaller than CELLS of the grain's correlation areas; the ring check; the local
-noise check; the motion check (found again nearby); called a scratch. With --fill, the
-found blotch pixels the fill leaves as they were (its self-check refusing the repair, or
-keep) are counted too.
+noise check; the tail check; the motion check (found again nearby); called a scratch.
+With --fill, the found blotch pixels the fill leaves as they were (its self-check refusing
+the repair, or keep) are counted too.
 """
 
 from __future__ import annotations
@@ -47,7 +47,10 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     out["ring"] = b
     b = regions._local_noise_check(b, a, r, sig[t], bthr)
     out["local"] = b
-    b = regions._motion_check(b, G, t, res[t], search, sig[t])
+    busy = ndimage.binary_dilation(b | scratch, iterations=2)
+    b = regions._tail_check(b, busy, r, sc["region_noise"][t][1], sc["both"][t])
+    out["tail"] = b
+    b = regions._motion_check(b, G, t, res[t], search, sig[t], bthr)
     out["motion"] = b
     return out
 
@@ -99,6 +102,7 @@ def main():
                 ("smaller than CELLS grain areas", ~st["single"]),
                 ("ring check", ~st["ring"]),
                 ("local noise check", ~st["local"]),
+                ("tail check", ~st["tail"]),
                 ("motion check", ~st["motion"]),
                 ("called scratch", kinds[t] == 2),
                 ("other", np.ones_like(miss)),

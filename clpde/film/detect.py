@@ -41,7 +41,14 @@ from ..runtime import get_runtime
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
 from ._planes import film_planes, grey
-from ._regions import RESIDUAL_UNITS, _local_noise_check, _motion_check, _ring_check
+from ._regions import (
+    RESIDUAL_UNITS,
+    _local_noise_check,
+    _motion_check,
+    _ring_check,
+    _spatial_blotches,
+    _tail_check,
+)
 from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -202,6 +209,12 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     res = np.where(n_ok > 0, v - med, 0.0).astype(np.float32)
     d = np.where(v > hi, v - hi, np.where(v < lo, v - lo, 0.0))
     spread = np.where(n_ok > 0, hi - lo, 0.0)
+    # where the motion is not trusted on both sides: the distance outside the range of all
+    # the neighbours' compensated values, trusted or not (_spatial_blotches)
+    any_in = inside.any(0)
+    lo_a = np.where(inside, vals, inf).min(0)
+    hi_a = np.where(inside, vals, -inf).max(0)
+    d_any = np.where(any_in, np.where(v > hi_a, v - hi_a, np.where(v < lo_a, v - lo_a, 0.0)), 0.0)
     rp = np.where(np.isfinite(med_p), v - med_p, 0.0)
     rn = np.where(np.isfinite(med_n), v - med_n, 0.0)
     med = np.where(np.isfinite(med), med, v)
@@ -222,6 +235,8 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     return {
         "region_noise": (level, max(area, 1.0)),
         "d": np.where(both, d, 0.0).astype(np.float32),
+        "d_any": d_any.astype(np.float32),
+        "any_in": any_in,
         "spread": spread.astype(np.float32),
         "zr": zr.astype(np.float32),
         "res": res,
@@ -242,7 +257,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     kern = LineKernels(get_runtime(device))
     motion = FilmMotion(G)
     per = map_frames(lambda t: frame_scores(motion, t, radius), range(T))
-    keys = ("d", "spread", "zr", "res", "least", "both", "n")
+    keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]
@@ -282,6 +297,31 @@ def blotch_evidence(scores: dict, t: int, gamma: float) -> np.ndarray:
     return np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
 
 
+def _untrusted(
+    G: np.ndarray,
+    scores: dict,
+    t: int,
+    blotch: np.ndarray,
+    scratch: np.ndarray,
+    threshold: float,
+    smallest: float,
+    search: int,
+) -> np.ndarray:
+    """Frame t's blotches where a trusted neighbour is missing on one side (the motion is
+    not trusted there, or a film's end), found spatially and against all the neighbours'
+    compensated values (clpde.film._regions._spatial_blotches), then the tail check on
+    that distance; the fill takes them spatially (no two trusted candidates agree there)."""
+    sigma, d_any = scores["sigma"][t], scores["d_any"][t]
+    z = np.where(scores["both"][t], 0.0, np.abs(d_any) / sigma)
+    taken = ndimage.binary_dilation(blotch | scratch)
+    low = HYSTERESIS_LOW * threshold
+    sign = np.sign(d_any)
+    found = _spatial_blotches(G, t, z, sign, threshold, low, smallest, sigma, search, taken)
+    busy = ndimage.binary_dilation(found | taken, iterations=2)
+    area = scores["region_noise"][t][1]
+    return _tail_check(found, busy, d_any, area, scores["any_in"][t])
+
+
 def _frame_kinds(
     G: np.ndarray,
     scores: dict,
@@ -303,10 +343,15 @@ def _frame_kinds(
     blotch &= ~ndimage.binary_dilation(scratch)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
     # blotch worth a fill
-    blotch = _no_singletons(blotch, max(SMALLEST, CELLS * scores["region_noise"][t][1]))
+    smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
+    blotch = _no_singletons(blotch, smallest)
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
-    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t])
+    # the surroundings' tail is read outside all candidates and their rims
+    busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
+    blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
+    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
+    blotch |= _untrusted(G, scores, t, blotch, scratch, blotch_threshold, smallest, search)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
