@@ -42,7 +42,7 @@ from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
 from ._planes import film_planes, grey
 from ._regions import RESIDUAL_UNITS, _local_noise_check, _motion_check, _ring_check
-from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
+from .lines import LineKernels, film_scratches, robust_scale, scratch_runs
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -65,7 +65,6 @@ REGION_HALF = 2  # the region evidence's square: 5x5
 SMALLEST = 3
 CELLS = 1.0
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
-STATIC_SCALE = 0.0  # the static-line detector, off: in a static shot it takes posts for scratches
 # The noise floor, 1.5 grey levels: 8-bit footage without grain (a codec's flat areas) has a
 # residual whose median deviation is 0, and a level or two of quantisation is not damage.
 SIGMA_FLOOR = 1.5 / 255
@@ -334,11 +333,7 @@ def film_kinds(
     T, ny, nx = G.shape
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
-    still = (
-        static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
-        if STATIC_SCALE > 0
-        else np.zeros((T, ny, nx), bool)
-    )
+    still = film_scratches(G, scratch_threshold, min_length, scores["sigma"])
 
     def kinds_of(t: int) -> np.ndarray:
         return _frame_kinds(
