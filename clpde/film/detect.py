@@ -333,7 +333,7 @@ def film_kinds(
     T, ny, nx = G.shape
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
-    still = film_scratches(G, scratch_threshold, min_length, scores["sigma"])
+    still = film_scratches(G, scratch_threshold, min_length, scores["sigma"], scores["flows"])
 
     def kinds_of(t: int) -> np.ndarray:
         return _frame_kinds(

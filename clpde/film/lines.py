@@ -23,7 +23,8 @@ against the pixels 3-5 columns either side, with a roughly constant deviation al
 - Its mean over LINE_HALF rows either side, at most a column of wander: a line stands out
   where most rows show it, whatever they cross; texture's lines are short.
 - Continuity over frames: LINE_VOTES of the up-to-four frames within two show a line of the
-  same sign within LINE_DRIFT columns (a scratch drifts slowly; a scene line in a pan leaves).
+  same sign within LINE_DRIFT columns per frame apart (a scratch drifts slowly; a scene line
+  in a pan leaves).
 - Long and straight: runs bridged over gaps of up to LINE_GAP rows (where the scratch
   crosses an edge or a saturated area), covering at least min_length rows, LINE_COVER of
   them showing the line, with centres on a straight line (LINE_STRAIGHT of the rows within
@@ -62,7 +63,7 @@ LINE_MISS = 1.0  # a row without a thin line counts against the run by this
 LINE_HALF = 12  # rows either side of the windowed mean
 LINE_SCALE = 2.0 / 3.0  # the windowed mean's threshold, a share of scratch_threshold
 LINE_SEEN = 0.5  # share of that threshold a neighbouring frame's line needs
-LINE_DRIFT = 2  # columns a scratch may move between the frames compared (two apart)
+LINE_DRIFT = 1  # columns a scratch may move from one frame to the next
 LINE_VOTES = 2  # frames of the up-to-four within two that must show it
 LINE_GAP = 31  # rows bridged where a scratch crosses an edge or saturates
 LINE_COVER = 0.5  # share of a run's rows that show the line
@@ -71,7 +72,11 @@ LINE_STRAIGHT = 0.7  # share of the rows whose centre is within 1.5 px of the fi
 LINE_BAND = 0.9  # the mask's half width, a share of the width at half the peak
 LINE_REACH = 3.0  # ... at most this many pixels
 LINE_ENDS = 0.3  # the ends: rows whose deviation keeps this share of the line's median
-LINE_MOVES = 0.5  # the residual must show this share of the line's contrast (see notes)
+LINE_STILL = 0.1  # px per frame: a line drifting less against the scene is the scene's
+LINE_SLOPE_SE = 0.25  # ... or whose slope is less certain than this (do no harm)
+LINE_ADDITIVE = 0.5  # a still line whose deviation falls faster with its flanks' level
+LINE_PAN = 0.5  # px per frame: the scene's motion below which a shot is taken for still
+LINE_FLOW = (4, 8)  # the columns either side whose flow is the scene's motion at a line
 # The line response of a residual (the temporal detector's, and the spatial one's):
 COLUMN_HALF = 12  # rows each side of the column mean
 RESPONSE_FLANK = 3  # the response's flanks at 3 and 4 pixels: lines up to 5 px wide
@@ -225,7 +230,7 @@ def _profile_gain() -> float:
     return float(np.sqrt(np.sum(w**2) * (1.0 + 2.0 * n * (0.5 / n) ** 2)))
 
 
-def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray]:
+def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One frame's line evidence: per sign, the windowed mean of the rows' thin-line contrast
     at the columns where it peaks across x (0 elsewhere); and the profile.
 
@@ -243,15 +248,17 @@ def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray]:
         (2, H, W) float32: bright lines, then dark ones, in robust units.
     prof : numpy.ndarray
         (H, W) float32: each pixel against the mean of its flanks, in the same units.
+    flank : tuple of (numpy.ndarray, float)
+        The mean of the flanks (H, W) and the unit, in grey.
 
     Examples
     --------
     >>> import numpy as np
     >>> g = 0.5 + 0.01 * np.random.default_rng(0).standard_normal((60, 40))
     >>> g[:, 20] = 0.3
-    >>> m, prof = frame_lines(g, 0.01)
-    >>> bool(m[1, 30, 19:22].max() > 3 and m[0, 30, 19:22].max() == 0 and prof[30, 20] < -3)
-    True
+    >>> m, prof, _ = frame_lines(g, 0.01)
+    >>> int(np.argmax(m[1, 30])) in (19, 20, 21), bool(m[1, 30].max() > 3 and prof[30, 20] < -3)
+    (True, True)
     """
     s = ndimage.gaussian_filter1d(g.astype(np.float32), LINE_ROWS, axis=0, mode="nearest")
     a, b = LINE_FLANK
@@ -275,7 +282,7 @@ def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray]:
         m = ndimage.uniform_filter1d(r, 2 * LINE_HALF + 1, axis=0, mode="constant", cval=-LINE_MISS)
         peak = (m >= _shift(m, -1)) & (m > _shift(m, 1))
         out[i] = np.where(peak, m, 0.0)
-    return out, prof
+    return out, prof, (0.5 * (left + right), unit)
 
 
 def _runs(hit: np.ndarray, ps: np.ndarray, min_length: int) -> list[tuple[int, int, np.ndarray]]:
@@ -310,17 +317,15 @@ def _runs(hit: np.ndarray, ps: np.ndarray, min_length: int) -> list[tuple[int, i
     return runs
 
 
-def _band(ps: np.ndarray, y0: int, y1: int, fit: np.ndarray, min_length: int):
-    """A run's scratch: (first row, stop row, sub-pixel centre per row, half width,
-    contrast), its width and centre from the mean cross-profile along it, its ends where
-    its deviation keeps LINE_ENDS of its median; None where nothing long is left."""
-    ny, nx = ps.shape
-    yy = np.arange(y0, y1)
-    xc = np.polyval(fit, yy)
+def _centre(ps: np.ndarray, yy: np.ndarray, xc: np.ndarray, reach: int = 1):
+    """The line's mean cross-profile over rows yy about columns xc: (sub-pixel offset of its
+    centre from xc, width at half its peak, the peak), its peak sought within reach
+    columns of xc; None where nothing stands out there."""
+    nx = ps.shape[1]
     offs = np.arange(-6, 7)
     cols = np.clip(np.rint(xc).astype(int)[:, None] + offs, 0, nx - 1)
     mp = ps[yy[:, None], cols].mean(axis=0)
-    j = 5 + int(np.argmax(mp[5:8]))
+    j = 6 - reach + int(np.argmax(mp[6 - reach : 7 + reach]))
     if mp[j] <= 0:
         return None
     hm = 0.5 * mp[j]
@@ -332,8 +337,21 @@ def _band(ps: np.ndarray, y0: int, y1: int, fit: np.ndarray, min_length: int):
     # sub-pixel crossings of half the peak either side
     xl = lo - (mp[lo] - hm) / max(mp[lo] - mp[lo - 1], 1e-9) if lo > 0 else lo - 0.5
     xr = hi + (mp[hi] - hm) / max(mp[hi] - mp[hi + 1], 1e-9) if hi < 12 else hi + 0.5
-    cen = xc + 0.5 * (xl + xr) - 6
-    half = min(LINE_BAND * (xr - xl), LINE_REACH)
+    return 0.5 * (xl + xr) - 6 + (np.rint(xc) - xc).mean(), xr - xl, mp[j]
+
+
+def _band(ps: np.ndarray, y0: int, y1: int, fit: np.ndarray, min_length: int):
+    """A run's scratch: (first row, stop row, sub-pixel centre per row, half width,
+    contrast), its width and centre from the mean cross-profile along it, its ends where
+    its deviation keeps LINE_ENDS of its median; None where nothing long is left."""
+    nx = ps.shape[1]
+    yy = np.arange(y0, y1)
+    xc = np.polyval(fit, yy)
+    got = _centre(ps, yy, xc)
+    if got is None or got[1] > LINE_WIDTH + 0.5:
+        return None  # wider than a scratch: a post, a limb, an object's edge
+    cen = xc + got[0]
+    half = min(LINE_BAND * got[1], LINE_REACH)
     dev = ps[yy, np.clip(np.rint(cen).astype(int), 0, nx - 1)]
     on = ndimage.uniform_filter1d(dev, 9, mode="nearest") >= LINE_ENDS * np.median(dev)
     if not on.any():
@@ -342,6 +360,72 @@ def _band(ps: np.ndarray, y0: int, y1: int, fit: np.ndarray, min_length: int):
     if a1 - a0 < min_length:
         return None
     return y0 + a0, y0 + a1, cen[a0:a1], half, float(np.median(dev[a0:a1]))
+
+
+def _moves_with_scene(line: tuple, t: int, ev: list, scene_dx: float) -> bool:
+    """Whether a line of frame t keeps its place in the scene over the neighbouring frames
+    (up to two each side): its drift against where the scene's motion puts it, fitted
+    over those frames, is at most LINE_STILL px per frame. A post, a pole or a door frame
+    (in a still shot, a scratch that never moves is one too, to the eye and here).
+    scene_dx: the scene's motion along x at the line per frame (its flanks' flow)."""
+    sgn, y0, y1, cen, _, contrast = line
+    yy = np.arange(y0, y1)
+    ks, offs = [], []
+    for u in range(t - 2, t + 3):
+        if u == t or not 0 <= u < len(ev):
+            continue
+        got = _centre(sgn * ev[u][1], yy, cen + (u - t) * scene_dx, reach=2)
+        # the same line: as thin, and as strong within a factor of two (a frame before the
+        # scratch appears shows whatever the scene has there)
+        if got is not None and got[1] <= LINE_WIDTH + 0.5 and got[2] >= 0.5 * contrast:
+            ks.append(u - t)
+            offs.append(got[0])
+    if len(ks) < 2:
+        return False
+    k = np.asarray(ks, float)
+    return abs(float(np.dot(k, offs) / np.dot(k, k))) <= LINE_STILL
+
+
+def _scene_dx(flows: np.ndarray | None, t: int, T: int, yy: np.ndarray, cen: np.ndarray) -> float:
+    """The scene's motion along x per frame at a line: the median flow of the columns
+    LINE_FLOW px either side of it (the line's own flow may follow the line), forward to
+    t + 1 and backward from t - 1 averaged; 0 below LINE_PAN or without flows (a still
+    shot)."""
+    if flows is None:
+        return 0.0
+    ks = [k for k in (-1, 1) if 0 <= t + k < T]
+    nx = flows.shape[2]
+    a, b = LINE_FLOW
+    offs = np.r_[-b : -a + 1, a : b + 1]
+    cols = np.clip(np.rint(cen).astype(int)[:, None] + offs, 0, nx - 1)
+    per = [k * np.median(f[yy[:, None], cols, 0]) for k, f in zip(ks, flows, strict=True)]
+    dx = float(np.mean(per))
+    # below LINE_PAN the flow's own error (a few tenths of a pixel) is as large as a slow
+    # scratch's drift: a still shot
+    return dx if abs(dx) >= LINE_PAN else 0.0
+
+
+def _follows_content(line: tuple, prof: np.ndarray, flank: np.ndarray, unit: float) -> bool:
+    """Whether a line's deviation follows the content it crosses rather than keeping its
+    own: regressed on its flanks' level along it, a slope below -LINE_ADDITIVE (a post of
+    its own shade: its deviation is its shade minus the background's, a slope of -1), or
+    a slope too uncertain to tell (flanks of one level all along: do no harm). A scratch
+    adds to or takes from the picture (Kokaram's model): its deviation keeps its size
+    whatever it crosses."""
+    _, y0, y1, cen, _, _ = line
+    yy = np.arange(y0, y1)
+    xi = np.clip(np.rint(cen).astype(int), 0, flank.shape[1] - 1)
+    f = flank[yy, xi].astype(np.float64)
+    d = prof[yy, xi].astype(np.float64) * unit  # the deviation, signed, in grey
+    f, d = f - f.mean(), d - d.mean()
+    spread = float(np.sqrt(np.mean(f**2)))
+    if spread == 0.0:
+        return True
+    beta = float(np.mean(f * d)) / spread**2
+    # the slope's standard error, the rows counted in fours (the profile's row smoothing
+    # and the grain correlate neighbouring rows)
+    se = float(np.std(d - beta * f)) / (spread * np.sqrt(max(len(yy) / 4.0, 1.0)))
+    return beta < -LINE_ADDITIVE or se > LINE_SLOPE_SE
 
 
 def _beside_opposite(line: tuple, found: list) -> bool:
@@ -362,7 +446,11 @@ def _beside_opposite(line: tuple, found: list) -> bool:
 
 
 def film_scratches(
-    G: np.ndarray, threshold: float, min_length: int, grain: np.ndarray | None = None
+    G: np.ndarray,
+    threshold: float,
+    min_length: int,
+    grain: np.ndarray | None = None,
+    flows: list | None = None,
 ) -> np.ndarray:
     """Line scratches found in the frames themselves, confirmed over neighbouring frames
     (see the module's notes).
@@ -378,6 +466,10 @@ def film_scratches(
     grain : numpy.ndarray, optional
         The grain's deviation per frame (the film's noise model); default: each frame's
         own fine-scale estimate.
+    flows : list of numpy.ndarray, optional
+        Per frame, its flows to the previous and next frames that exist ((K, H, W, 2), x
+        first; the film detector's): the scene's motion at a line. Default: none (every
+        line is taken for one in a still shot).
 
     Returns
     -------
@@ -400,19 +492,25 @@ def film_scratches(
         grain = [noise_std(G[t].astype(np.float64)) for t in range(T)]
     ev = [frame_lines(G[t], float(grain[t])) for t in range(T)]
     level = LINE_SCALE * threshold
-    foot = np.ones((1, 2 * LINE_DRIFT + 1), bool)
+    # seen[dt - 1][u][sign]: frame u's lines, widened by the drift over dt frames
     seen = [
-        [ndimage.binary_dilation(m[i] > LINE_SEEN * level, structure=foot) for i in (0, 1)]
-        for m, _ in ev
+        [
+            [
+                ndimage.binary_dilation(m[i] > LINE_SEEN * level, structure=np.ones((1, w), bool))
+                for i in (0, 1)
+            ]
+            for m, *_ in ev
+        ]
+        for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
     ]
     out = np.zeros((T, ny, nx), bool)
     xs = np.arange(nx)[None, :]
     for t in range(T):
-        m, prof = ev[t]
+        m, prof, (flank, unit) = ev[t]
         others = [u for u in range(t - 2, t + 3) if u != t and 0 <= u < T]
         found = []
         for i, sgn in enumerate((1.0, -1.0)):
-            votes = sum(seen[u][i].astype(np.int8) for u in others)
+            votes = sum(seen[abs(u - t) - 1][u][i].astype(np.int8) for u in others)
             hit = (m[i] > level) & (votes >= min(LINE_VOTES, len(others)))
             if not hit.any():
                 continue
@@ -422,6 +520,10 @@ def film_scratches(
                     found.append((sgn, *band))
         for line in found:
             if _beside_opposite(line, found):
+                continue
+            yy = np.arange(line[1], line[2])
+            dx = _scene_dx(None if flows is None else flows[t], t, T, yy, line[3])
+            if _moves_with_scene(line, t, ev, dx) and _follows_content(line, prof, flank, unit):
                 continue
             _, y0, y1, cen, half, _ = line
             out[t, y0:y1] |= np.abs(xs - cen[:, None]) <= half
