@@ -75,6 +75,7 @@ LINE_ENDS = 0.3  # the ends: rows whose deviation keeps this share of the line's
 LINE_STILL = 0.1  # px per frame: a line drifting less against the scene is the scene's
 LINE_SLOPE_SE = 0.25  # ... or whose slope is less certain than this (do no harm)
 LINE_ADDITIVE = 0.5  # a still line whose deviation falls faster with its flanks' level
+LINE_RIGID = 1.0  # px: a line's halves may move apart by this much between frames
 LINE_PAN = 0.5  # px per frame: the scene's motion below which a shot is taken for still
 LINE_FLOW = (4, 8)  # the columns either side whose flow is the scene's motion at a line
 # The line response of a residual (the temporal detector's, and the spatial one's):
@@ -362,28 +363,53 @@ def _band(ps: np.ndarray, y0: int, y1: int, fit: np.ndarray, min_length: int):
     return y0 + a0, y0 + a1, cen[a0:a1], half, float(np.median(dev[a0:a1]))
 
 
-def _moves_with_scene(line: tuple, t: int, ev: list, scene_dx: float) -> bool:
-    """Whether a line of frame t keeps its place in the scene over the neighbouring frames
-    (up to two each side): its drift against where the scene's motion puts it, fitted
-    over those frames, is at most LINE_STILL px per frame. A post, a pole or a door frame
-    (in a still shot, a scratch that never moves is one too, to the eye and here).
-    scene_dx: the scene's motion along x at the line per frame (its flanks' flow)."""
+def _track(line: tuple, t: int, ev: list, scene_dx: float) -> list[tuple[int, list]]:
+    """The line's place in frame t and the frames up to two either side, against where the
+    scene's motion puts it: per frame u, (u - t, offsets in px of the whole line, its
+    upper half and its lower half, None where that part shows no such line)."""
     sgn, y0, y1, cen, _, contrast = line
     yy = np.arange(y0, y1)
-    ks, offs = [], []
+    mid = (y1 - y0) // 2
+    parts = (slice(None), slice(None, mid), slice(mid, None))
+    out = []
     for u in range(t - 2, t + 3):
-        if u == t or not 0 <= u < len(ev):
+        if not 0 <= u < len(ev):
             continue
-        got = _centre(sgn * ev[u][1], yy, cen + (u - t) * scene_dx, reach=2)
-        # the same line: as thin, and as strong within a factor of two (a frame before the
-        # scratch appears shows whatever the scene has there)
-        if got is not None and got[1] <= LINE_WIDTH + 0.5 and got[2] >= 0.5 * contrast:
-            ks.append(u - t)
-            offs.append(got[0])
-    if len(ks) < 2:
+        offs = []
+        for part in parts:
+            got = _centre(sgn * ev[u][1], yy[part], (cen + (u - t) * scene_dx)[part], reach=2)
+            # the same line: as thin, and as strong within a factor of two (a frame before
+            # the scratch appears shows whatever the scene has there)
+            ok = got is not None and got[1] <= LINE_WIDTH + 0.5 and got[2] >= 0.5 * contrast
+            offs.append(got[0] if ok else None)
+        out.append((u - t, offs))
+    return out
+
+
+def _rigid(track: list) -> bool:
+    """Whether a line's halves move as one from frame t to the others, within LINE_RIGID
+    px (a scratch does; a limb above a post, or two objects in a row, do not)."""
+    here = dict(track)[0]
+    if here[1] is None or here[2] is None:
+        return True
+    return all(
+        top is None or bottom is None or abs((top - here[1]) - (bottom - here[2])) <= LINE_RIGID
+        for _, (_, top, bottom) in track
+    )
+
+
+def _still(track: list) -> bool:
+    """Whether a line keeps its place in the scene: its drift against the scene's motion,
+    fitted over the frames, at most LINE_STILL px per frame (a post, a pole, a door frame;
+    in a still shot, a scratch that never moves is one too, to the eye and here)."""
+    seen = [(k, offs[0]) for k, offs in track if offs[0] is not None]
+    if dict(track)[0][0] is None or len(seen) < 3:
         return False
-    k = np.asarray(ks, float)
-    return abs(float(np.dot(k, offs) / np.dot(k, k))) <= LINE_STILL
+    ks = np.array([k for k, _ in seen], float)
+    offs = np.array([o for _, o in seen])
+    # the drift: the slope of the offsets over the frames (least squares)
+    ks, offs = ks - ks.mean(), offs - offs.mean()
+    return abs(float(np.dot(ks, offs) / np.dot(ks, ks))) <= LINE_STILL
 
 
 def _scene_dx(flows: np.ndarray | None, t: int, T: int, yy: np.ndarray, cen: np.ndarray) -> float:
@@ -503,28 +529,57 @@ def film_scratches(
         ]
         for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
     ]
+    kept = [_frame_scratches(t, ev, seen, level, min_length, flows) for t in range(T)]
     out = np.zeros((T, ny, nx), bool)
     xs = np.arange(nx)[None, :]
     for t in range(T):
-        m, prof, (flank, unit) = ev[t]
-        others = [u for u in range(t - 2, t + 3) if u != t and 0 <= u < T]
-        found = []
-        for i, sgn in enumerate((1.0, -1.0)):
-            votes = sum(seen[abs(u - t) - 1][u][i].astype(np.int8) for u in others)
-            hit = (m[i] > level) & (votes >= min(LINE_VOTES, len(others)))
-            if not hit.any():
-                continue
-            for y0, y1, fit in _runs(hit, sgn * prof, min_length):
-                band = _band(sgn * prof, y0, y1, fit, min_length)
-                if band is not None:
-                    found.append((sgn, *band))
-        for line in found:
-            if _beside_opposite(line, found):
-                continue
-            yy = np.arange(line[1], line[2])
-            dx = _scene_dx(None if flows is None else flows[t], t, T, yy, line[3])
-            if _moves_with_scene(line, t, ev, dx) and _follows_content(line, prof, flank, unit):
+        for line in kept[t]:
+            # confirmed: the previous or next frame has the line too (one frame's chance
+            # alignment of a limb, a post and an edge is not a scratch)
+            near = [u for u in (t - 1, t + 1) if 0 <= u < T]
+            if not any(_same_line(line, other) for u in near for other in kept[u]):
                 continue
             _, y0, y1, cen, half, _ = line
             out[t, y0:y1] |= np.abs(xs - cen[:, None]) <= half
     return out
+
+
+def _same_line(a: tuple, b: tuple) -> bool:
+    """Whether two frames' lines are one scratch: the same sign, and over half the rows of
+    the shorter, centres within LINE_DRIFT + 0.5 px."""
+    if a[0] != b[0]:
+        return False
+    lo, hi = max(a[1], b[1]), min(a[2], b[2])
+    if hi - lo < 0.5 * min(a[2] - a[1], b[2] - b[1]):
+        return False
+    gap = np.abs(a[3][lo - a[1] : hi - a[1]] - b[3][lo - b[1] : hi - b[1]])
+    return bool(np.median(gap) <= LINE_DRIFT + 0.5)
+
+
+def _frame_scratches(t: int, ev: list, seen: list, level: float, min_length: int, flows):
+    """Frame t's scratch lines (sign, first row, stop row, centre per row, half width,
+    contrast) before the confirmation by the frames beside it (film_scratches)."""
+    T = len(ev)
+    m, prof, (flank, unit) = ev[t]
+    others = [u for u in range(t - 2, t + 3) if u != t and 0 <= u < T]
+    found = []
+    for i, sgn in enumerate((1.0, -1.0)):
+        votes = sum(seen[abs(u - t) - 1][u][i].astype(np.int8) for u in others)
+        hit = (m[i] > level) & (votes >= min(LINE_VOTES, len(others)))
+        if not hit.any():
+            continue
+        for y0, y1, fit in _runs(hit, sgn * prof, min_length):
+            band = _band(sgn * prof, y0, y1, fit, min_length)
+            if band is not None:
+                found.append((sgn, *band))
+    kept = []
+    for line in found:
+        if _beside_opposite(line, found):
+            continue
+        yy = np.arange(line[1], line[2])
+        dx = _scene_dx(None if flows is None else flows[t], t, T, yy, line[3])
+        track = _track(line, t, ev, dx)
+        if not _rigid(track) or (_still(track) and _follows_content(line, prof, flank, unit)):
+            continue
+        kept.append(line)
+    return kept
