@@ -73,8 +73,7 @@ LINE_BAND = 0.9  # the mask's half width, a share of the width at half the peak
 LINE_REACH = 3.0  # ... at most this many pixels
 LINE_ENDS = 0.3  # the ends: rows whose deviation keeps this share of the line's median
 LINE_STILL = 0.1  # px per frame: a line drifting less against the scene is the scene's
-LINE_SLOPE_SE = 0.25  # ... or whose slope is less certain than this (do no harm)
-LINE_ADDITIVE = 0.5  # a still line whose deviation falls faster with its flanks' level
+LINE_ADDITIVE = 0.5  # a still line's slope on its flanks' level: nearer 0 (added) than -1
 LINE_RIGID = 1.0  # px: a line's halves may move apart by this much between frames
 LINE_PAN = 0.5  # px per frame: the scene's motion below which a shot is taken for still
 LINE_FLOW = (4, 8)  # the columns either side whose flow is the scene's motion at a line
@@ -433,11 +432,11 @@ def _scene_dx(flows: np.ndarray | None, t: int, T: int, yy: np.ndarray, cen: np.
 
 def _follows_content(line: tuple, prof: np.ndarray, flank: np.ndarray, unit: float) -> bool:
     """Whether a line's deviation follows the content it crosses rather than keeping its
-    own: regressed on its flanks' level along it, a slope below -LINE_ADDITIVE (a post of
-    its own shade: its deviation is its shade minus the background's, a slope of -1), or
-    a slope too uncertain to tell (flanks of one level all along: do no harm). A scratch
-    adds to or takes from the picture (Kokaram's model): its deviation keeps its size
-    whatever it crosses."""
+    own size. A scratch adds to or takes from the picture (Kokaram's model): regressed on
+    its flanks' level along it, its deviation has a slope of 0; a post of its own shade
+    has its shade minus the background's, a slope of -1. A line is the scene's unless
+    the slope's 95% interval lies within LINE_ADDITIVE of 0 (nearer 0 than -1): flanks
+    of one level all along, or a slope between, leave it to the scene (do no harm)."""
     _, y0, y1, cen, _, _ = line
     yy = np.arange(y0, y1)
     xi = np.clip(np.rint(cen).astype(int), 0, flank.shape[1] - 1)
@@ -451,7 +450,8 @@ def _follows_content(line: tuple, prof: np.ndarray, flank: np.ndarray, unit: flo
     # the slope's standard error, the rows counted in fours (the profile's row smoothing
     # and the grain correlate neighbouring rows)
     se = float(np.std(d - beta * f)) / (spread * np.sqrt(max(len(yy) / 4.0, 1.0)))
-    return beta < -LINE_ADDITIVE or se > LINE_SLOPE_SE
+    # a scratch only where the slope's 95% interval lies nearer 0 (added) than -1 (a shade)
+    return abs(beta) + 2.0 * se > LINE_ADDITIVE
 
 
 def _beside_opposite(line: tuple, found: list) -> bool:
