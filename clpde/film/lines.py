@@ -213,12 +213,12 @@ def scratch_runs(
     return out if signed else out != 0
 
 
-def _shift(a: np.ndarray, dx: int) -> np.ndarray:
-    """a moved by dx columns (a[..., x + dx] at x), edges repeated."""
-    if dx == 0:
-        return a
-    idx = np.clip(np.arange(a.shape[-1]) + dx, 0, a.shape[-1] - 1)
-    return a[..., idx]
+def _columns(a: np.ndarray, reach: int):
+    """A function of dx giving a moved by dx columns (a[:, x + dx] at x, edges repeated), for
+    |dx| <= reach: views of one padded copy."""
+    nx = a.shape[1]
+    padded = np.pad(a, ((0, 0), (reach, reach)), mode="edge")
+    return lambda dx: padded[:, reach + dx : reach + dx + nx]
 
 
 @functools.cache
@@ -262,25 +262,28 @@ def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray, np
     """
     s = ndimage.gaussian_filter1d(g.astype(np.float32), LINE_ROWS, axis=0, mode="nearest")
     a, b = LINE_FLANK
-    left = sum(_shift(s, -k) for k in range(a, b + 1)) / (b - a + 1)
-    right = sum(_shift(s, k) for k in range(a, b + 1)) / (b - a + 1)
+    at = _columns(s, b)
+    left = sum(at(-k) for k in range(a, b + 1)) / (b - a + 1)
+    right = sum(at(k) for k in range(a, b + 1)) / (b - a + 1)
     prof = s - 0.5 * (left + right)
-    inner = prof[:, b:-b] if prof.shape[1] > 2 * b + 2 else prof
-    # the unit: the profile's robust spread over the frame (lines are too few to move it;
-    # texture raises it, as it raises the lines it makes), at least the grain's
+    inner = prof[::2, b:-b:2] if prof.shape[1] > 2 * b + 2 else prof
+    # the unit: the profile's robust spread over the frame (every other row and column:
+    # lines are too few to move it; texture raises it, as it raises the lines it makes),
+    # at least the grain's
     unit = max(robust_scale(inner), _profile_gain() * grain)
     prof = prof / unit
+    near = _columns(prof, 3)
     out = np.zeros((2,) + s.shape, np.float32)
     for i, sgn in enumerate((1.0, -1.0)):
         # against the worse flank: an edge beside a line, or an edge alone, is no line
         c = (sgn * s - np.maximum(sgn * left, sgn * right)) / unit
-        above = sum(
-            (sgn * _shift(prof, k) > 0.5 * sgn * prof).astype(np.int8) for k in range(-3, 4)
-        )
+        half = 0.5 * sgn * prof
+        above = sum((sgn * near(k) > half).astype(np.int8) for k in range(-3, 4))
         r = np.where((c > 0) & (above <= LINE_WIDTH), np.minimum(c, LINE_CLIP), -LINE_MISS)
-        r = np.maximum(np.maximum(r, _shift(r, -1)), _shift(r, 1))  # a column of wander
+        r = ndimage.maximum_filter1d(r, 3, axis=1, mode="nearest")  # a column of wander
         m = ndimage.uniform_filter1d(r, 2 * LINE_HALF + 1, axis=0, mode="constant", cval=-LINE_MISS)
-        peak = (m >= _shift(m, -1)) & (m > _shift(m, 1))
+        beside = _columns(m, 1)
+        peak = (m >= beside(-1)) & (m > beside(1))
         out[i] = np.where(peak, m, 0.0)
     return out, prof, (0.5 * (left + right), unit)
 
@@ -289,8 +292,13 @@ def _runs(hit: np.ndarray, ps: np.ndarray, min_length: int) -> list[tuple[int, i
     """The long, straight, nearly vertical runs of a frame's line hits: (first row, stop
     row, the fitted line's (slope, intercept) in columns per row); ps: the profile, signed
     so that the line is positive."""
-    wide = ndimage.binary_dilation(hit, structure=np.ones((1, 3), bool))
-    closed = ndimage.binary_closing(wide, structure=np.ones((LINE_GAP, 1), bool)) | wide
+    wide = ndimage.maximum_filter1d(hit.view(np.uint8), 3, axis=1)
+    # gaps of up to LINE_GAP rows closed (a maximum, then a minimum along y)
+    closed = ndimage.minimum_filter1d(
+        ndimage.maximum_filter1d(wide, LINE_GAP, axis=0, mode="constant"), LINE_GAP, axis=0
+    )
+    closed = (closed | wide).view(bool)
+    wide = wide.view(bool)
     labels, _ = ndimage.label(closed, structure=np.ones((3, 3), bool))
     runs = []
     for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
@@ -522,7 +530,7 @@ def film_scratches(
     seen = [
         [
             [
-                ndimage.binary_dilation(m[i] > LINE_SEEN * level, structure=np.ones((1, w), bool))
+                ndimage.maximum_filter1d((m[i] > LINE_SEEN * level).view(np.uint8), w, axis=1)
                 for i in (0, 1)
             ]
             for m, *_ in ev
@@ -564,7 +572,7 @@ def _frame_scratches(t: int, ev: list, seen: list, level: float, min_length: int
     others = [u for u in range(t - 2, t + 3) if u != t and 0 <= u < T]
     found = []
     for i, sgn in enumerate((1.0, -1.0)):
-        votes = sum(seen[abs(u - t) - 1][u][i].astype(np.int8) for u in others)
+        votes = sum(seen[abs(u - t) - 1][u][i] for u in others)
         hit = (m[i] > level) & (votes >= min(LINE_VOTES, len(others)))
         if not hit.any():
             continue
