@@ -253,7 +253,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
             for t, s in enumerate(sigmas)
         ]
     )
-    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas}
+    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
 
 
 def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
@@ -333,7 +333,9 @@ def film_kinds(
     T, ny, nx = G.shape
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
-    still = film_scratches(G, scratch_threshold, min_length, scores["sigma"], scores["flows"])
+    still = film_scratches(
+        G, scratch_threshold, min_length, scores["sigma"], scores["flows"], scores["radius"]
+    )
 
     def kinds_of(t: int) -> np.ndarray:
         return _frame_kinds(

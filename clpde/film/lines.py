@@ -29,14 +29,28 @@ against the pixels 3-5 columns either side, with a roughly constant deviation al
   crosses an edge or a saturated area), covering at least min_length rows, LINE_COVER of
   them showing the line, with centres on a straight line (LINE_STRAIGHT of the rows within
   1.5 px) of slope at most LINE_SLOPE.
-- Static scene structure (posts, poles, door frames) is thin and straight too. Where the
-  film's temporal residual is given, a line whose contrast does not show in the residual
-  (its compensated neighbours carry it at the same place: it moves with the scene) is the
-  scene's and left alone; so is a scratch that stays exactly in place in a still shot,
-  which nothing tells from a pole (do no harm).
 - The mask: a band around the line's sub-pixel centre, as wide as its mean cross-profile
-  (LINE_BAND of the width at half the peak, at most LINE_REACH px each side), trimmed at
-  the ends to the rows where the deviation keeps LINE_ENDS of its median along the line.
+  (LINE_BAND of the width at half the peak, at most LINE_REACH px each side; a line
+  wider than LINE_WIDTH + 0.5 px is no scratch), trimmed at the ends to the rows where
+  the deviation keeps LINE_ENDS of its median along the line.
+- The gap between two scratches a few pixels apart is a line of the other sign to the
+  profile: a line beside a stronger one of the other sign is dropped.
+- Scene structure (posts, poles, door frames, limbs) is thin and straight too. The line is
+  followed into the frames up to two either side, where the scene's motion (the flow of
+  its flanks, LINE_FLOW px out; under LINE_PAN px a frame, a still shot) puts it:
+  its halves must move as one (within LINE_RIGID px: a limb above a post does not); a
+  line that keeps its place in the scene (drift at most LINE_STILL px a frame) is a
+  scratch only where its deviation is shown to be added to the picture rather than its
+  own shade against the background (the slope of its deviation on its flanks' level, 0
+  for a scratch and -1 for a post; `_follows_content`). A scratch that never moves, of
+  one shade, in a still shot is a post to the eye and here: left alone (do no harm).
+- Confirmed: a line is kept where the frame before or after has it too (within
+  LINE_DRIFT + 0.5 px); one frame's chance alignment of a limb, a post and an edge is not
+  a scratch.
+
+Frame t's lines read frames t - 3 .. t + 3 at most (the confirmation reads t +- 1's, which
+read up to two more), within the film detector's context (stream.py: radius + 1; with a
+radius of 1, frames one either side).
 
 Constants chosen on the calibration half of benchmarks/film_corpus.py (docs/film.md).
 """
@@ -370,8 +384,8 @@ def _band(ps: np.ndarray, y0: int, y1: int, fit: np.ndarray, min_length: int):
     return y0 + a0, y0 + a1, cen[a0:a1], half, float(np.median(dev[a0:a1]))
 
 
-def _track(line: tuple, t: int, ev: list, scene_dx: float) -> list[tuple[int, list]]:
-    """The line's place in frame t and the frames up to two either side, against where the
+def _track(line: tuple, t: int, ev: list, scene_dx: float, span: int) -> list[tuple[int, list]]:
+    """The line's place in frame t and the frames up to span either side, against where the
     scene's motion puts it: per frame u, (u - t, offsets in px of the whole line, its
     upper half and its lower half, None where that part shows no such line)."""
     sgn, y0, y1, cen, _, contrast = line
@@ -379,7 +393,7 @@ def _track(line: tuple, t: int, ev: list, scene_dx: float) -> list[tuple[int, li
     mid = (y1 - y0) // 2
     parts = (slice(None), slice(None, mid), slice(mid, None))
     out = []
-    for u in range(t - 2, t + 3):
+    for u in range(t - span, t + span + 1):
         if not 0 <= u < len(ev):
             continue
         offs = []
@@ -485,6 +499,7 @@ def film_scratches(
     min_length: int,
     grain: np.ndarray | None = None,
     flows: list | None = None,
+    radius: int = 2,
 ) -> np.ndarray:
     """Line scratches found in the frames themselves, confirmed over neighbouring frames
     (see the module's notes).
@@ -504,6 +519,10 @@ def film_scratches(
         Per frame, its flows to the previous and next frames that exist ((K, H, W, 2), x
         first; the film detector's): the scene's motion at a line. Default: none (every
         line is taken for one in a still shot).
+    radius : int
+        The film detector's radius: frames up to min(2, radius) either side confirm a line
+        and follow it, so that frame t's lines read frames t - radius - 1 .. t + radius + 1
+        only (the context a window of the film gives the detector: clpde.film.stream).
 
     Returns
     -------
@@ -537,7 +556,8 @@ def film_scratches(
         ]
         for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
     ]
-    kept = [_frame_scratches(t, ev, seen, level, min_length, flows) for t in range(T)]
+    span = min(2, radius)
+    kept = [_frame_scratches(t, ev, seen, level, min_length, flows, span) for t in range(T)]
     out = np.zeros((T, ny, nx), bool)
     xs = np.arange(nx)[None, :]
     for t in range(T):
@@ -564,12 +584,12 @@ def _same_line(a: tuple, b: tuple) -> bool:
     return bool(np.median(gap) <= LINE_DRIFT + 0.5)
 
 
-def _frame_scratches(t: int, ev: list, seen: list, level: float, min_length: int, flows):
+def _frame_scratches(t: int, ev: list, seen: list, level: float, min_length: int, flows, span: int):
     """Frame t's scratch lines (sign, first row, stop row, centre per row, half width,
     contrast) before the confirmation by the frames beside it (film_scratches)."""
     T = len(ev)
     m, prof, (flank, unit) = ev[t]
-    others = [u for u in range(t - 2, t + 3) if u != t and 0 <= u < T]
+    others = [u for u in range(t - span, t + span + 1) if u != t and 0 <= u < T]
     found = []
     for i, sgn in enumerate((1.0, -1.0)):
         votes = sum(seen[abs(u - t) - 1][u][i] for u in others)
@@ -586,7 +606,7 @@ def _frame_scratches(t: int, ev: list, seen: list, level: float, min_length: int
             continue
         yy = np.arange(line[1], line[2])
         dx = _scene_dx(None if flows is None else flows[t], t, T, yy, line[3])
-        track = _track(line, t, ev, dx)
+        track = _track(line, t, ev, dx, span)
         if not _rigid(track) or (_still(track) and _follows_content(line, prof, flank, unit)):
             continue
         kept.append(line)
