@@ -16,41 +16,28 @@ flat. This detector looks at each frame (after Kokaram's and Joyeux et al.'s lin
 scratch is a thin, nearly vertical, long line whose cross-profile is a narrow peak or dip
 against the pixels 3-5 columns either side, with a roughly constant deviation along it.
 
-- Per row, the line's contrast against the worse of its two flanks (an edge beside a line
-  is not a line), where the profile is thin (at most LINE_WIDTH columns above half its
-  peak), in robust units of the frame's profile (at least the grain's, from the noise
-  model); a row without a thin line there counts against it.
-- Its mean over LINE_HALF rows either side, at most a column of wander: a line stands out
-  where most rows show it, whatever they cross; texture's lines are short.
-- Continuity over frames: LINE_VOTES of the up-to-four frames within two show a line of the
-  same sign within LINE_DRIFT columns per frame apart (a scratch drifts slowly; a scene line
-  in a pan leaves).
-- Long and straight: runs bridged over gaps of up to LINE_GAP rows (where the scratch
-  crosses an edge or a saturated area), covering at least min_length rows, LINE_COVER of
-  them showing the line, with centres on a straight line (LINE_STRAIGHT of the rows within
-  1.5 px) of slope at most LINE_SLOPE.
-- The mask: a band around the line's sub-pixel centre, as wide as its mean cross-profile
-  (LINE_BAND of the width at half the peak, at most LINE_REACH px each side; a line
-  wider than LINE_WIDTH + 0.5 px is no scratch), trimmed at the ends to the rows where
-  the deviation keeps LINE_ENDS of its median along the line.
-- The gap between two scratches a few pixels apart is a line of the other sign to the
-  profile: a line beside a stronger one of the other sign is dropped.
-- Scene structure (posts, poles, door frames, limbs) is thin and straight too. The line is
-  followed into the frames up to two either side, where the scene's motion (the flow of
-  its flanks, LINE_FLOW px out; under LINE_PAN px a frame, a still shot) puts it:
-  its halves must move as one (within LINE_RIGID px: a limb above a post does not); a
-  line that keeps its place in the scene (drift at most LINE_STILL px a frame) is a
-  scratch only where its deviation is shown to be added to the picture rather than its
-  own shade against the background (the slope of its deviation on its flanks' level, 0
-  for a scratch and -1 for a post; `_follows_content`). A scratch that never moves, of
-  one shade, in a still shot is a post to the eye and here: left alone (do no harm).
-- Confirmed: a line is kept where the frame before or after has it too (within
-  LINE_DRIFT + 0.5 px); one frame's chance alignment of a limb, a post and an edge is not
-  a scratch.
+- Per row, the line's contrast against the worse of its flanks (an edge is no line), where
+  the profile is thin, in robust units of the frame's profile (at least the grain's, from
+  the noise model); its mean over LINE_HALF rows either side: texture's lines are short.
+- Continuity: LINE_VOTES of the frames within two show a line of the same sign within
+  LINE_DRIFT columns per frame apart (a scene line in a pan leaves that window).
+- Long and straight: runs bridged over gaps of LINE_GAP rows (an edge or a saturated area
+  crossed), at least min_length rows, centres on a nearly vertical straight line.
+- The mask: a band about the line's sub-pixel centre, as wide as its mean cross-profile
+  (a line wider than a scratch is none), trimmed at the ends to the rows whose deviation
+  keeps LINE_ENDS of its median; a line in the gap of a stronger one of the other sign
+  (two scratches a few pixels apart) is dropped.
+- Scene structure (posts, poles, limbs) is thin and straight too. The line is followed
+  into the frames either side, where the scene's motion (its flanks' flow) puts it: its
+  halves must move as one (a limb above a post does not); a line that keeps its place in
+  the scene is a scratch only where its deviation is shown to be added to the picture, not
+  its own shade against the background (`_follows_content`). A scratch that never moves,
+  of one shade, in a still shot is a post to the eye and here: left alone (do no harm).
+- Confirmed: the frame before or after has the line too (one frame's chance alignment of
+  a limb, a post and an edge is not a scratch).
 
-Frame t's lines read frames t - 3 .. t + 3 at most (the confirmation reads t +- 1's, which
-read up to two more), within the film detector's context (stream.py: radius + 1; with a
-radius of 1, frames one either side).
+Frame t's lines read frames t - radius - 1 .. t + radius + 1 at most, the film detector's
+context in a window (clpde.film.stream).
 
 Constants chosen on the calibration half of benchmarks/film_corpus.py (docs/film.md).
 """
