@@ -26,7 +26,7 @@ against the pixels 3-5 columns either side, with a roughly constant deviation al
 - The mask: a band about the line's sub-pixel centre, as wide as its mean cross-profile
   (a line wider than a scratch is none), trimmed at the ends to the rows whose deviation
   keeps LINE_ENDS of its median; a line in the gap of a stronger one of the other sign
-  (two scratches a few pixels apart) is dropped.
+  is dropped.
 - Scene structure (posts, poles, limbs) is thin and straight too. The line is followed
   into the frames either side, where the scene's motion (its flanks' flow) puts it: its
   halves must move as one (a limb above a post does not); a line that keeps its place in
@@ -35,10 +35,7 @@ against the pixels 3-5 columns either side, with a roughly constant deviation al
   of one shade, in a still shot is a post to the eye and here: left alone (do no harm).
 - Confirmed: the frame before or after has the line too (one frame's chance alignment of
   a limb, a post and an edge is not a scratch).
-
-Frame t's lines read frames t - radius - 1 .. t + radius + 1 at most, the film detector's
-context in a window (clpde.film.stream).
-
+Frame t's lines read frames t +- (radius + 1) at most: a window's context (film.stream).
 Constants chosen on the calibration half of benchmarks/film_corpus.py (docs/film.md).
 """
 
@@ -395,15 +392,18 @@ def _track(line: tuple, t: int, ev: list, scene_dx: float, span: int) -> list[tu
 
 
 def _rigid(track: list) -> bool:
-    """Whether a line's halves move as one from frame t to the others, within LINE_RIGID
-    px (a scratch does; a limb above a post, or two objects in a row, do not)."""
+    """Whether a line's halves move as one from frame t to the others: apart by more than
+    LINE_RIGID px in fewer than two frames (a limb above a post does not; one frame's half
+    may be caught by something passing by)."""
     here = dict(track)[0]
     if here[1] is None or here[2] is None:
         return True
-    return all(
-        top is None or bottom is None or abs((top - here[1]) - (bottom - here[2])) <= LINE_RIGID
+    apart = [
+        abs((top - here[1]) - (bottom - here[2])) > LINE_RIGID
         for _, (_, top, bottom) in track
-    )
+        if top is not None and bottom is not None
+    ]
+    return sum(apart) < 2
 
 
 def _still(track: list) -> bool:
@@ -464,9 +464,8 @@ def _follows_content(line: tuple, prof: np.ndarray, flank: np.ndarray, unit: flo
 
 
 def _beside_opposite(line: tuple, found: list) -> bool:
-    """Whether a line lies in the gap of a stronger line of the other sign: the gap between
-    two dark scratches a few pixels apart is a bright line to the profile, whose flanks are
-    the scratches."""
+    """Whether a line lies in the gap of a stronger line of the other sign (between two
+    scratches a few pixels apart the profile sees a line with the scratches as flanks)."""
     sgn, y0, y1, cen, _, contrast = line
     for osgn, o0, o1, ocen, _, ocontrast in found:
         if osgn == sgn or ocontrast < contrast:
@@ -560,8 +559,8 @@ def film_scratches(
 
 
 def _same_line(a: tuple, b: tuple) -> bool:
-    """Whether two frames' lines are one scratch: the same sign, and over half the rows of
-    the shorter, centres within LINE_DRIFT + 0.5 px."""
+    """Whether two frames' lines are one: one sign, over half the shorter one's rows,
+    centres within LINE_DRIFT + 0.5 px."""
     if a[0] != b[0]:
         return False
     lo, hi = max(a[1], b[1]), min(a[2], b[2])
