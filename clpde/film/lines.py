@@ -25,8 +25,7 @@ against the pixels 3-5 columns either side, with a roughly constant deviation al
   crossed), at least min_length rows, centres on a nearly vertical straight line.
 - The mask: a band about the line's sub-pixel centre, as wide as its mean cross-profile
   (a line wider than a scratch is none), trimmed at the ends to the rows whose deviation
-  keeps LINE_ENDS of its median; a line in the gap of a stronger one of the other sign
-  is dropped.
+  keeps LINE_ENDS of its median; a line between two of the other sign is their gap.
 - Scene structure (posts, poles, limbs) is thin and straight too. The line is followed
   into the frames either side, where the scene's motion (its flanks' flow) puts it: its
   halves must move as one (a limb above a post does not); a line that keeps its place in
@@ -463,20 +462,21 @@ def _follows_content(line: tuple, prof: np.ndarray, flank: np.ndarray, unit: flo
     return abs(beta) + 2.0 * se > LINE_ADDITIVE
 
 
-def _beside_opposite(line: tuple, found: list) -> bool:
-    """Whether a line lies in the gap of a stronger line of the other sign (between two
-    scratches a few pixels apart the profile sees a line with the scratches as flanks)."""
-    sgn, y0, y1, cen, _, contrast = line
-    for osgn, o0, o1, ocen, _, ocontrast in found:
-        if osgn == sgn or ocontrast < contrast:
-            continue
+def _in_gap(line: tuple, found: list) -> bool:
+    """Whether a line lies between two lines of the other sign, within LINE_FLANK[1] + 1 px
+    either side over half its rows: the gap of two scratches, seen with them for flanks."""
+    sgn, y0, y1, cen, _, _ = line
+    sides = set()
+    for osgn, o0, o1, ocen, _, _ in found:
         a, b = max(y0, o0), min(y1, o1)
-        if b <= a:
+        if osgn == sgn or b <= a:
             continue
-        close = np.abs(cen[a - y0 : b - y0] - ocen[a - o0 : b - o0]) <= LINE_FLANK[1] + 1
-        if close.sum() >= 0.5 * (y1 - y0):
-            return True
-    return False
+        gap = ocen[a - o0 : b - o0] - cen[a - y0 : b - y0]
+        for side in (-1, 1):
+            near = (side * gap > 0) & (side * gap <= LINE_FLANK[1] + 1)
+            if near.sum() >= 0.5 * (y1 - y0):
+                sides.add(side)
+    return len(sides) == 2
 
 
 def film_scratches(
@@ -588,7 +588,7 @@ def _frame_scratches(t: int, ev: list, seen: list, level: float, min_length: int
                 found.append((sgn, *band))
     kept = []
     for line in found:
-        if _beside_opposite(line, found):
+        if _in_gap(line, found):
             continue
         yy = np.arange(line[1], line[2])
         dx = _scene_dx(None if flows is None else flows[t], t, T, yy, line[3])
