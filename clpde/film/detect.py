@@ -49,7 +49,7 @@ from ._regions import (
     _spatial_blotches,
     _tail_check,
 )
-from .lines import LineKernels, robust_scale, scratch_runs, static_scratches
+from .lines import LineKernels, film_scratches, robust_scale, scratch_runs
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -72,7 +72,6 @@ REGION_HALF = 2  # the region evidence's square: 5x5
 SMALLEST = 3
 CELLS = 1.0
 HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
-STATIC_SCALE = 0.0  # the static-line detector, off: in a static shot it takes posts for scratches
 # The noise floor, 1.5 grey levels: 8-bit footage without grain (a codec's flat areas) has a
 # residual whose median deviation is 0, and a level or two of quantisation is not damage.
 SIGMA_FLOOR = 1.5 / 255
@@ -269,7 +268,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
             for t, s in enumerate(sigmas)
         ]
     )
-    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas}
+    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
 
 
 def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
@@ -379,10 +378,8 @@ def film_kinds(
     T, ny, nx = G.shape
     # scratches that stay in place (static shots, slow zooms) leave no temporal residual:
     # the frames' own thin lines that persist over neighbouring frames
-    still = (
-        static_scratches(G, STATIC_SCALE * scratch_threshold, min_length)
-        if STATIC_SCALE > 0
-        else np.zeros((T, ny, nx), bool)
+    still = film_scratches(
+        G, scratch_threshold, min_length, scores["sigma"], scores["flows"], scores["radius"]
     )
 
     def kinds_of(t: int) -> np.ndarray:
