@@ -100,12 +100,13 @@ def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _temporal(
-    motion: FilmMotion, planes: np.ndarray, m: np.ndarray, t: int, radius: int
+    motion: FilmMotion, planes: np.ndarray, hwc: np.ndarray, m: np.ndarray, t: int, radius: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame t's damaged pixels from its neighbours where the motion is trusted; returns the
     frame (C, H, W), the pixels left to the spatial fill, and the squared residual of the
     frame against its trusted, clean compensated neighbours (the smallest; inf where none
-    is trusted): what the data says the damage changed (`_self_check`).
+    is trusted): what the data says the damage changed (`_self_check`). hwc: the planes
+    as (T, H, W, C), the layout the warp reads.
 
     A neighbour is a candidate at a pixel where its match is trusted (clpde.film._motion:
     inside, the flow loop consistent within the noise), clean in its own mask, and it agrees
@@ -125,10 +126,9 @@ def _temporal(
     ctx_t = ~grow_mask(hole, 1.0)
     for k in offs:
         s = t + k
-        f = motion.flow(t, s)
-        clean = motion.warp(m[s], f, "linear") <= _CLEAN
+        clean = motion.warp(m[s], t, s, "linear") <= _CLEAN
         ok = clean & motion.trusted(t, k, _partner(k, offs), TRUST * sigma, fb=one_sided)
-        w = motion.warp(G[s], f)
+        w = motion.warped(t, s)  # kept by trusted
         a, b = fit_gain(G[t], w, ok & ctx_t)
         wg = a * w + b
         ctx = (ok & ctx_t).astype(np.float32)
@@ -136,7 +136,7 @@ def _temporal(
         den = ndimage.uniform_filter(ctx, 2 * _RADIUS_MATCH + 1)
         e = np.where(den > 1e-3, num / np.maximum(den, 1e-6), np.inf)
         vals.append(wg)
-        cols.append((a * motion.warp(np.moveaxis(planes[s], 0, -1), f) + b).reshape(ny, nx, C))
+        cols.append((a * motion.warp(hwc[s], t, s) + b).reshape(ny, nx, C))
         cand.append(ok & (e <= AGREE * sigma))
         trust.append(ok)
         dist.append(abs(k) + (0.5 if k > 0 else 0.0))
@@ -287,9 +287,10 @@ def inpaint_video(
     bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
     if T > 1 and damaged:
         motion = FilmMotion(G, _rough(G, m))
+        hwc = np.ascontiguousarray(np.moveaxis(planes, 1, -1))  # each frame warped 2-4 times
         # the damaged frames in threads: each reads the shared flows and the input only
         results = map_frames(
-            lambda t: _temporal(motion, planes, m, t, radius), damaged, done=bar.update
+            lambda t: _temporal(motion, planes, hwc, m, t, radius), damaged, done=bar.update
         )
         for t, (frame, left, r2) in zip(damaged, results, strict=True):
             out[t], unfilled[t], resid2[t] = frame, left, r2

@@ -387,6 +387,18 @@ def test_order_statistics_match_a_sort(rng):
         assert np.array_equal(second_least(v, vals, ok), least)
 
 
+def test_median_of_is_numpy_median(rng):
+    """The flicker fit's median (one partition) is np.median's value, odd and even counts,
+    with ties."""
+    from clpde.film._order import median_of
+
+    for n in (1, 2, 3, 10, 11, 1000, 1001):
+        x = rng.standard_normal(n)
+        x[: n // 3] = 0.25  # ties
+        rng.shuffle(x)
+        assert median_of(x) == float(np.median(x))
+
+
 def test_threads_give_what_one_thread_gives(runtime, rng, monkeypatch):
     """The window's frames are detected and filled in threads (one per core): the same
     masks and frames, bit for bit, as one thread."""
