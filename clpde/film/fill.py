@@ -100,13 +100,19 @@ def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _temporal(
-    motion: FilmMotion, planes: np.ndarray, hwc: np.ndarray, m: np.ndarray, t: int, radius: int
+    motion: FilmMotion,
+    planes: np.ndarray,
+    hwc: np.ndarray,
+    m: np.ndarray,
+    t: int,
+    radius: int,
+    noise: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame t's damaged pixels from its neighbours where the motion is trusted; returns the
     frame (C, H, W), the pixels left to the spatial fill, and the squared residual of the
     frame against its trusted, clean compensated neighbours (the smallest; inf where none
     is trusted): what the data says the damage changed (`_self_check`). hwc: the planes
-    as (T, H, W, C), the layout the warp reads.
+    as (T, H, W, C), the layout the warp reads; noise: frame t's grain level (noise_std).
 
     A neighbour is a candidate at a pixel where its match is trusted (clpde.film._motion:
     inside, the flow loop consistent within the noise), clean in its own mask, and it agrees
@@ -120,7 +126,7 @@ def _temporal(
     T, C, ny, nx = planes.shape
     hole = m[t] > 0
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
-    sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+    sigma = max(noise, SIGMA_FLOOR)
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
     vals, cols, cand, dist, trust = [], [], [], [], []
     ctx_t = ~grow_mask(hole, 1.0)
@@ -285,47 +291,58 @@ def inpaint_video(
     damaged = [t for t in range(T) if m[t].any()]
     # temporal fills first, then the spatial fallback: one unit per damaged frame for each
     bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
+    # each damaged frame's grain level, read by the temporal fill, the grain and the keep
+    levels = map_frames(lambda t: noise_std(G[t].astype(np.float64)), damaged)
+    noise = dict(zip(damaged, levels, strict=True))
     if T > 1 and damaged:
         motion = FilmMotion(G, _rough(G, m))
         hwc = np.ascontiguousarray(np.moveaxis(planes, 1, -1))  # each frame warped 2-4 times
         # the damaged frames in threads: each reads the shared flows and the input only
         results = map_frames(
-            lambda t: _temporal(motion, planes, hwc, m, t, radius), damaged, done=bar.update
+            lambda t: _temporal(motion, planes, hwc, m, t, radius, noise[t]),
+            damaged,
+            done=bar.update,
         )
         for t, (frame, left, r2) in zip(damaged, results, strict=True):
             out[t], unfilled[t], resid2[t] = frame, left, r2
     elif damaged:
         unfilled = m > 0
-    for t in range(T):
-        if t in damaged:
-            bar.update(1 if T > 1 else 2)
-        if not unfilled[t].any():
-            continue
-        # one pixel more, so the spatial fill starts from pixels the frame holds clean
-        hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
-        if hole.all():  # a lost frame: nothing in it to fill from spatially
-            filled = _neighbour_mean(planes, m, t, radius)
-        else:
-            filled = _spatial_crops(out[t], hole, options)
-        soft = m[t][np.newaxis]
-        blend = soft * filled + (1.0 - soft) * planes[t]
-        if grain:
-            sigma = noise_std(G[t].astype(np.float64))
-            # seeded by the frame itself, so a frame's grain is the same in any window
-            rng = np.random.default_rng([seed, zlib.crc32(np.ascontiguousarray(G[t]).data)])
-            blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
-        out[t] = np.where(hole[np.newaxis], blend, out[t])
-    bar.close()
-    if keep > 0:
-        for t in damaged:
-            sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
-            restored = grey(out[t : t + 1])[0]
+
+    def finish(t: int) -> np.ndarray:
+        """Frame t after the spatial fallback, its grain and the keep (one frame's inputs
+        and fill only: the frames run in threads)."""
+        frame = out[t]
+        if unfilled[t].any():
+            # one pixel more, so the spatial fill starts from pixels the frame holds clean
+            hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
+            if hole.all():  # a lost frame: nothing in it to fill from spatially
+                filled = _neighbour_mean(planes, m, t, radius)
+            else:
+                filled = _spatial_crops(frame, hole, options)
+            soft = m[t][np.newaxis]
+            blend = soft * filled + (1.0 - soft) * planes[t]
+            if grain:
+                # seeded by the frame itself, so a frame's grain is the same in any window
+                rng = np.random.default_rng([seed, zlib.crc32(np.ascontiguousarray(G[t]).data)])
+                blend = blend + (noise[t] * soft * rng.standard_normal((1, ny, nx))).astype(
+                    np.float32
+                )
+            frame = np.where(hole[np.newaxis], blend, frame)
+        if keep > 0:
+            sigma = max(noise[t], SIGMA_FLOOR)
+            restored = grey(frame[np.newaxis])[0]
             close = np.abs(restored - G[t]) <= keep * sigma
             if T > 1:
                 kept = np.where(close, G[t], restored)  # the repair as it will stand
                 close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma)
-            out[t] = np.where(close[None], planes[t], out[t])
-    restored = layout.restore(out)
+            frame = np.where(close[None], planes[t], frame)
+        return frame
+
+    done = bar.update if T > 1 else lambda n: bar.update(2 * n)  # no temporal stage
+    for t, frame in zip(damaged, map_frames(finish, damaged, done=done), strict=True):
+        out[t] = frame
+    bar.close()
+    restored = layout.restore_changed(out, planes)
     if return_unfilled:
         return restored, (unfilled[0] if layout.photo else unfilled)
     return restored
