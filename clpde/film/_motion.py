@@ -137,6 +137,21 @@ class FilmMotion:
         xs, ys = self.coords(t, s)
         return self.dis.remap(image, xs, ys, mode)
 
+    def warp_at(
+        self, image: np.ndarray, t: int, s: int, where: np.ndarray, mode: str = "cubic"
+    ) -> np.ndarray:
+        """warp(image, t, s, mode)[where], warping only those pixels: (n,) or (n, C). The
+        remap computes each pixel from its own coordinates, so the values are the whole
+        warp's; the coordinates are laid out in rows (OpenCV takes fewer than 32767)."""
+        xs, ys = self.coords(t, s)
+        n = int(where.sum())
+        width = 1024
+        pad = np.zeros(-n % width, np.float32)
+        px = np.concatenate([xs[where], pad]).reshape(-1, width)
+        py = np.concatenate([ys[where], pad]).reshape(-1, width)
+        out = self.dis.remap(image, px, py, mode)
+        return out.reshape(-1, *image.shape[2:])[:n]
+
     def warped(self, t: int, s: int) -> np.ndarray:
         """Frame s's grey brought onto frame t (kept: detection and trust both read it)."""
         return self._once(("w", t, s), lambda: self.warp(self.G[s], t, s))

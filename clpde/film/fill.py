@@ -128,6 +128,9 @@ def _temporal(
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
     sigma = max(noise, SIGMA_FLOOR)
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
+    # The fit and the agreement windows read the whole frame; the choice among the
+    # candidates only the damaged pixels: from here on, vectors over those (the same
+    # values as whole planes: every step is per pixel).
     vals, cols, cand, dist, trust = [], [], [], [], []
     ctx_t = ~grow_mask(hole, 1.0)
     for k in offs:
@@ -138,35 +141,37 @@ def _temporal(
         a, b = fit_gain(G[t], w, ok & ctx_t)
         wg = a * w + b
         ctx = (ok & ctx_t).astype(np.float32)
-        num = ndimage.uniform_filter(np.abs(G[t] - wg) * ctx, 2 * _RADIUS_MATCH + 1)
-        den = ndimage.uniform_filter(ctx, 2 * _RADIUS_MATCH + 1)
+        num = ndimage.uniform_filter(np.abs(G[t] - wg) * ctx, 2 * _RADIUS_MATCH + 1)[hole]
+        den = ndimage.uniform_filter(ctx, 2 * _RADIUS_MATCH + 1)[hole]
         e = np.where(den > 1e-3, num / np.maximum(den, 1e-6), np.inf)
-        vals.append(wg)
-        cols.append((a * motion.warp(hwc[s], t, s) + b).reshape(ny, nx, C))
-        cand.append(ok & (e <= AGREE * sigma))
-        trust.append(ok)
+        vals.append(wg[hole])
+        cols.append(a * motion.warp_at(hwc[s], t, s, hole) + b)  # (n, C)
+        cand.append(ok[hole] & (e <= AGREE * sigma))
+        trust.append(ok[hole])
         dist.append(abs(k) + (0.5 if k > 0 else 0.0))
-    vals, cand = np.stack(vals), np.stack(cand)
-    resid2 = np.where(np.stack(trust), (G[t][None] - vals) ** 2, np.inf).min(0)
+    vals, cand = np.stack(vals), np.stack(cand)  # (K, n)
+    resid2 = np.full((ny, nx), np.inf, np.float32)
+    resid2[hole] = np.where(np.stack(trust), (G[t][hole][None] - vals) ** 2, np.inf).min(0)
     e_ok = cand
     # agreement among the candidates: the medoid's cost, and how many agree with it
-    K = len(offs)
-    cost = np.full((K, ny, nx), np.inf, np.float32)
-    agree = np.zeros((K, ny, nx), np.int16)
+    K, n = vals.shape
+    cost = np.full((K, n), np.inf, np.float32)
+    agree = np.zeros((K, n), np.int16)
     for i in range(K):
         diff = np.abs(vals[i][None] - vals)
         c = np.where(e_ok, diff, 0.0).sum(0) + 1e-6 * dist[i]
         cost[i] = np.where(e_ok[i], c, np.inf)
         agree[i] = (e_ok & (diff <= PAIR * sigma)).sum(0)
     best = np.argmin(cost, axis=0)
-    n_agree = np.take_along_axis(agree, best[None], 0)[0]
-    filled = hole & np.isfinite(cost.min(0)) & (n_agree >= 2)
+    n_agree = agree[best, np.arange(n)]
+    filled_at = np.isfinite(cost.min(0)) & (n_agree >= 2)
+    chosen = np.stack(cols)[best, np.arange(n)]  # (n, C)
+    soft = m[t][hole][:, None]
+    blend = soft * chosen + (1 - soft) * planes[t][:, hole].T
     out = planes[t].copy()
-    pick = np.stack(cols)  # (K, H, W, C)
-    chosen = np.take_along_axis(pick, best[None, ..., None], 0)[0]  # (H, W, C)
-    soft = m[t][..., None]
-    blend = soft * chosen + (1 - soft) * np.moveaxis(planes[t], 0, -1)
-    out = np.where(filled[None], np.moveaxis(blend, -1, 0), out)
+    out[:, hole] = np.where(filled_at[None], blend.T, out[:, hole])
+    filled = np.zeros((ny, nx), bool)
+    filled[hole] = filled_at
     return out.astype(np.float32), hole & ~filled, resid2
 
 
