@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -21,7 +21,8 @@ class FilmLayout:
     photo: bool  # a single 2-D (or colour 3-D) image rather than a stack of frames
     offset: float
     scale: float
-    source: np.ndarray | None = None  # the user's frames, as given
+    # the user's frames, as given (not compared or printed: an array)
+    source: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def _values(self, planes: np.ndarray) -> np.ndarray:
         """Planes' values on the user's scale, in the user's dtype (rounded and clipped for
