@@ -10,6 +10,7 @@ import pyopencl.array as cla
 
 from ..imagedata import grow_mask
 from ..motion.flow import FlowParams, FlowSolver, default_levels
+from ._order import median_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -50,11 +51,14 @@ def fit_gain(g: np.ndarray, w: np.ndarray, ok: np.ndarray) -> tuple[float, float
         wk, gk = ws[keep], gs[keep]
         mw, mg = wk.mean(), gk.mean()
         dw = wk - mw
-        var = float(dw @ dw)
-        a = float(dw @ (gk - mg)) / var if var > 0 else 1.0
+        # numpy's own sums, not BLAS's dot: OpenBLAS splits a dot over its threads, which
+        # costs ~15 ms of waking them per call on a busy 2-core machine (0.02 ms on one)
+        # and makes the sum, so the film's result, depend on the thread count
+        var = float(np.sum(dw * dw))
+        a = float(np.sum(dw * (gk - mg))) / var if var > 0 else 1.0
         b = mg - a * mw
         res = gs - (a * ws + b)
-        mad = 1.4826 * np.median(np.abs(res - np.median(res))) + 1e-6
+        mad = 1.4826 * median_of(np.abs(res - median_of(res))) + 1e-6
         keep = np.abs(res) < 2.5 * mad
         if keep.sum() < 16:
             break

@@ -121,20 +121,51 @@ class FilmMotion:
     def flow(self, t: int, s: int) -> np.ndarray:
         return self._once((t, s), lambda: self.dis.flow(self.u8[t], self.u8[s]))
 
-    def warp(self, image: np.ndarray, flow: np.ndarray, mode: str = "cubic") -> np.ndarray:
-        return self.dis.warp(image, flow, mode)
+    def coords(self, t: int, s: int) -> tuple[np.ndarray, np.ndarray]:
+        """(x + u, y + v): where frame t's pixels lie in frame s (kept: every warp along
+        flow (t, s), and `inside`, read them)."""
+
+        def compute():
+            f = self.flow(t, s)
+            return self.gx + f[..., 0], self.gy + f[..., 1]
+
+        return self._once(("c", t, s), compute)
+
+    def warp(self, image: np.ndarray, t: int, s: int, mode: str = "cubic") -> np.ndarray:
+        """An image on frame s's grid (a frame, a mask, a flow; (H, W) or (H, W, C) float32)
+        brought onto frame t along flow (t, s): DisFlow.warp's values."""
+        xs, ys = self.coords(t, s)
+        return self.dis.remap(image, xs, ys, mode)
+
+    def warp_at(
+        self, image: np.ndarray, t: int, s: int, where: np.ndarray, mode: str = "cubic"
+    ) -> np.ndarray:
+        """warp(image, t, s, mode)[where], warping only those pixels: (n,) or (n, C). The
+        remap computes each pixel from its own coordinates, so the values are the whole
+        warp's; the coordinates are laid out in rows (OpenCV takes fewer than 32767)."""
+        xs, ys = self.coords(t, s)
+        n = int(where.sum())
+        width = 1024
+        pad = np.zeros(-n % width, np.float32)
+        px = np.concatenate([xs[where], pad]).reshape(-1, width)
+        py = np.concatenate([ys[where], pad]).reshape(-1, width)
+        out = self.dis.remap(image, px, py, mode)
+        return out.reshape(-1, *image.shape[2:])[:n]
 
     def warped(self, t: int, s: int) -> np.ndarray:
         """Frame s's grey brought onto frame t (kept: detection and trust both read it)."""
-        return self._once(("w", t, s), lambda: self.warp(self.G[s], self.flow(t, s)))
+        return self._once(("w", t, s), lambda: self.warp(self.G[s], t, s))
 
     def inside(self, t: int, s: int) -> np.ndarray:
         """Where frame t's match in frame s keeps the whole cubic warp's stencil (the match's
         pixel, one before and two after, in each direction) inside frame s: nearer the
-        edge, the warp reads the edge's pixels repeated, a value no frame holds."""
-        f = self.flow(t, s)
-        xs, ys = self.gx + f[..., 0], self.gy + f[..., 1]
-        return (xs >= 1) & (xs < self.nx - 2) & (ys >= 1) & (ys < self.ny - 2)
+        edge, the warp reads the edge's pixels repeated, a value no frame holds (kept)."""
+
+        def compute():
+            xs, ys = self.coords(t, s)
+            return (xs >= 1) & (xs < self.nx - 2) & (ys >= 1) & (ys < self.ny - 2)
+
+        return self._once(("in", t, s), compute)
 
     def texture(self, image: np.ndarray) -> np.ndarray:
         """The largest gradient magnitude within 2 px: how much a flow error of one pixel
@@ -173,12 +204,12 @@ class FilmMotion:
 
     def fb_error(self, t: int, s: int) -> np.ndarray:
         f = self.flow(t, s)
-        back = self.warp(self.flow(s, t), f, "linear")
+        back = self.warp(self.flow(s, t), t, s, "linear")
         return np.hypot(f[..., 0] + back[..., 0], f[..., 1] + back[..., 1])
 
     def loop_error(self, t: int, a: int, b: int) -> np.ndarray:
         fa, fb = self.flow(t, a), self.flow(t, b)
-        fab = self.warp(self.flow(a, b), fa, "linear")
+        fab = self.warp(self.flow(a, b), t, a, "linear")
         return np.hypot(
             fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1]
         )

@@ -12,6 +12,17 @@ from __future__ import annotations
 import numpy as np
 
 
+def median_of(x: np.ndarray) -> np.floating:
+    """np.median of a 1-D float array without NaNs, the same value and type (a scalar of
+    x's dtype): one partition at the middle and the largest of the lower half (np.median
+    partitions at two places, 5x the time on the ~80k values of a flicker fit)."""
+    h = x.size // 2
+    part = np.partition(x, h)
+    if x.size % 2:
+        return part[h]
+    return (part[:h].max() + part[h]) / 2
+
+
 def sorted_planes(vals: np.ndarray) -> list[np.ndarray]:
     """vals (K, H, W) sorted along K, as K planes (a sorting network: odd-even
     transposition, K rounds of compare-exchange)."""
@@ -31,13 +42,19 @@ def _pick(index: np.ndarray, planes: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+def _count(ok: np.ndarray) -> np.ndarray:
+    """How many of ok's planes are True per pixel, as uint16 (a stack holds a few frames;
+    numpy's default int64 sum costs 7x the time)."""
+    return ok.sum(0, dtype=np.uint16)
+
+
 def median(vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """The median over k of vals[k] where ok[k] (NaN where none): the values not trusted
     are pushed to the end as +inf, and the middle of the n trusted ones is taken."""
     s = sorted_planes(np.where(ok, vals, np.inf))
-    n = ok.sum(0)
-    lo = _pick(np.maximum((n - 1) // 2, 0), s)
-    hi = _pick(np.maximum(n // 2, 0), s)
+    n = _count(ok)
+    lo = _pick((np.maximum(n, 1) - 1) >> 1, s)  # (n - 1) // 2, 0 for none
+    hi = _pick(n >> 1, s)
     out = 0.5 * (lo + hi)
     return np.where(n > 0, out, np.nan).astype(np.float32)
 
@@ -63,6 +80,6 @@ def second_least(v: np.ndarray, vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
         a2 = np.where(better, a1, np.where(between, a, a2))
         first = np.where(better, d, first)
         a1 = np.where(better, a, a1)
-    n = ok.sum(0)
+    n = _count(ok)
     out = np.where(n >= 3, second, first) if len(vals) > 1 else first
     return np.where(n > 0, out, 0.0).astype(np.float32)

@@ -100,12 +100,19 @@ def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _temporal(
-    motion: FilmMotion, planes: np.ndarray, m: np.ndarray, t: int, radius: int
+    motion: FilmMotion,
+    planes: np.ndarray,
+    hwc: np.ndarray,
+    m: np.ndarray,
+    t: int,
+    radius: int,
+    noise: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame t's damaged pixels from its neighbours where the motion is trusted; returns the
     frame (C, H, W), the pixels left to the spatial fill, and the squared residual of the
     frame against its trusted, clean compensated neighbours (the smallest; inf where none
-    is trusted): what the data says the damage changed (`_self_check`).
+    is trusted): what the data says the damage changed (`_self_check`). hwc: the planes
+    as (T, H, W, C), the layout the warp reads; noise: frame t's grain level (noise_std).
 
     A neighbour is a candidate at a pixel where its match is trusted (clpde.film._motion:
     inside, the flow loop consistent within the noise), clean in its own mask, and it agrees
@@ -119,48 +126,52 @@ def _temporal(
     T, C, ny, nx = planes.shape
     hole = m[t] > 0
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
-    sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
+    sigma = max(noise, SIGMA_FLOOR)
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
+    # The fit and the agreement windows read the whole frame; the choice among the
+    # candidates only the damaged pixels: from here on, vectors over those (the same
+    # values as whole planes: every step is per pixel).
     vals, cols, cand, dist, trust = [], [], [], [], []
     ctx_t = ~grow_mask(hole, 1.0)
     for k in offs:
         s = t + k
-        f = motion.flow(t, s)
-        clean = motion.warp(m[s], f, "linear") <= _CLEAN
+        clean = motion.warp(m[s], t, s, "linear") <= _CLEAN
         ok = clean & motion.trusted(t, k, _partner(k, offs), TRUST * sigma, fb=one_sided)
-        w = motion.warp(G[s], f)
+        w = motion.warped(t, s)  # kept by trusted
         a, b = fit_gain(G[t], w, ok & ctx_t)
         wg = a * w + b
         ctx = (ok & ctx_t).astype(np.float32)
-        num = ndimage.uniform_filter(np.abs(G[t] - wg) * ctx, 2 * _RADIUS_MATCH + 1)
-        den = ndimage.uniform_filter(ctx, 2 * _RADIUS_MATCH + 1)
+        num = ndimage.uniform_filter(np.abs(G[t] - wg) * ctx, 2 * _RADIUS_MATCH + 1)[hole]
+        den = ndimage.uniform_filter(ctx, 2 * _RADIUS_MATCH + 1)[hole]
         e = np.where(den > 1e-3, num / np.maximum(den, 1e-6), np.inf)
-        vals.append(wg)
-        cols.append((a * motion.warp(np.moveaxis(planes[s], 0, -1), f) + b).reshape(ny, nx, C))
-        cand.append(ok & (e <= AGREE * sigma))
-        trust.append(ok)
+        vals.append(wg[hole])
+        cols.append(a * motion.warp_at(hwc[s], t, s, hole) + b)  # (n, C)
+        cand.append(ok[hole] & (e <= AGREE * sigma))
+        trust.append(ok[hole])
         dist.append(abs(k) + (0.5 if k > 0 else 0.0))
-    vals, cand = np.stack(vals), np.stack(cand)
-    resid2 = np.where(np.stack(trust), (G[t][None] - vals) ** 2, np.inf).min(0)
+    vals, cand = np.stack(vals), np.stack(cand)  # (K, n)
+    resid2 = np.full((ny, nx), np.inf, np.float32)
+    resid2[hole] = np.where(np.stack(trust), (G[t][hole][None] - vals) ** 2, np.inf).min(0)
     e_ok = cand
     # agreement among the candidates: the medoid's cost, and how many agree with it
-    K = len(offs)
-    cost = np.full((K, ny, nx), np.inf, np.float32)
-    agree = np.zeros((K, ny, nx), np.int16)
+    K, n = vals.shape
+    cost = np.full((K, n), np.inf, np.float32)
+    agree = np.zeros((K, n), np.int16)
     for i in range(K):
         diff = np.abs(vals[i][None] - vals)
         c = np.where(e_ok, diff, 0.0).sum(0) + 1e-6 * dist[i]
         cost[i] = np.where(e_ok[i], c, np.inf)
         agree[i] = (e_ok & (diff <= PAIR * sigma)).sum(0)
     best = np.argmin(cost, axis=0)
-    n_agree = np.take_along_axis(agree, best[None], 0)[0]
-    filled = hole & np.isfinite(cost.min(0)) & (n_agree >= 2)
+    n_agree = agree[best, np.arange(n)]
+    filled_at = np.isfinite(cost.min(0)) & (n_agree >= 2)
+    chosen = np.stack(cols)[best, np.arange(n)]  # (n, C)
+    soft = m[t][hole][:, None]
+    blend = soft * chosen + (1 - soft) * planes[t][:, hole].T
     out = planes[t].copy()
-    pick = np.stack(cols)  # (K, H, W, C)
-    chosen = np.take_along_axis(pick, best[None, ..., None], 0)[0]  # (H, W, C)
-    soft = m[t][..., None]
-    blend = soft * chosen + (1 - soft) * np.moveaxis(planes[t], 0, -1)
-    out = np.where(filled[None], np.moveaxis(blend, -1, 0), out)
+    out[:, hole] = np.where(filled_at[None], blend.T, out[:, hole])
+    filled = np.zeros((ny, nx), bool)
+    filled[hole] = filled_at
     return out.astype(np.float32), hole & ~filled, resid2
 
 
@@ -285,46 +296,58 @@ def inpaint_video(
     damaged = [t for t in range(T) if m[t].any()]
     # temporal fills first, then the spatial fallback: one unit per damaged frame for each
     bar = progress_bar(progress, 2 * len(damaged), "clpde inpaint_video", unit="frame")
+    # each damaged frame's grain level, read by the temporal fill, the grain and the keep
+    levels = map_frames(lambda t: noise_std(G[t].astype(np.float64)), damaged)
+    noise = dict(zip(damaged, levels, strict=True))
     if T > 1 and damaged:
         motion = FilmMotion(G, _rough(G, m))
+        hwc = np.ascontiguousarray(np.moveaxis(planes, 1, -1))  # each frame warped 2-4 times
         # the damaged frames in threads: each reads the shared flows and the input only
         results = map_frames(
-            lambda t: _temporal(motion, planes, m, t, radius), damaged, done=bar.update
+            lambda t: _temporal(motion, planes, hwc, m, t, radius, noise[t]),
+            damaged,
+            done=bar.update,
         )
         for t, (frame, left, r2) in zip(damaged, results, strict=True):
             out[t], unfilled[t], resid2[t] = frame, left, r2
     elif damaged:
         unfilled = m > 0
-    for t in range(T):
-        if t in damaged:
-            bar.update(1 if T > 1 else 2)
-        if not unfilled[t].any():
-            continue
-        # one pixel more, so the spatial fill starts from pixels the frame holds clean
-        hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
-        if hole.all():  # a lost frame: nothing in it to fill from spatially
-            filled = _neighbour_mean(planes, m, t, radius)
-        else:
-            filled = _spatial_crops(out[t], hole, options)
-        soft = m[t][np.newaxis]
-        blend = soft * filled + (1.0 - soft) * planes[t]
-        if grain:
-            sigma = noise_std(G[t].astype(np.float64))
-            # seeded by the frame itself, so a frame's grain is the same in any window
-            rng = np.random.default_rng([seed, zlib.crc32(np.ascontiguousarray(G[t]).data)])
-            blend = blend + (sigma * soft * rng.standard_normal((1, ny, nx))).astype(np.float32)
-        out[t] = np.where(hole[np.newaxis], blend, out[t])
-    bar.close()
-    if keep > 0:
-        for t in damaged:
-            sigma = max(noise_std(G[t].astype(np.float64)), SIGMA_FLOOR)
-            restored = grey(out[t : t + 1])[0]
+
+    def finish(t: int) -> np.ndarray:
+        """Frame t after the spatial fallback, its grain and the keep (one frame's inputs
+        and fill only: the frames run in threads)."""
+        frame = out[t]
+        if unfilled[t].any():
+            # one pixel more, so the spatial fill starts from pixels the frame holds clean
+            hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
+            if hole.all():  # a lost frame: nothing in it to fill from spatially
+                filled = _neighbour_mean(planes, m, t, radius)
+            else:
+                filled = _spatial_crops(frame, hole, options)
+            soft = m[t][np.newaxis]
+            blend = soft * filled + (1.0 - soft) * planes[t]
+            if grain:
+                # seeded by the frame itself, so a frame's grain is the same in any window
+                rng = np.random.default_rng([seed, zlib.crc32(np.ascontiguousarray(G[t]).data)])
+                blend = blend + (noise[t] * soft * rng.standard_normal((1, ny, nx))).astype(
+                    np.float32
+                )
+            frame = np.where(hole[np.newaxis], blend, frame)
+        if keep > 0:
+            sigma = max(noise[t], SIGMA_FLOOR)
+            restored = grey(frame[np.newaxis])[0]
             close = np.abs(restored - G[t]) <= keep * sigma
             if T > 1:
                 kept = np.where(close, G[t], restored)  # the repair as it will stand
                 close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma)
-            out[t] = np.where(close[None], planes[t], out[t])
-    restored = layout.restore(out)
+            frame = np.where(close[None], planes[t], frame)
+        return frame
+
+    done = bar.update if T > 1 else lambda n: bar.update(2 * n)  # no temporal stage
+    for t, frame in zip(damaged, map_frames(finish, damaged, done=done), strict=True):
+        out[t] = frame
+    bar.close()
+    restored = layout.restore_changed(out, planes)
     if return_unfilled:
         return restored, (unfilled[0] if layout.photo else unfilled)
     return restored

@@ -47,6 +47,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from ..imagedata import noise_std
+from ._order import median_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -83,7 +84,9 @@ RUN_SUPPORT = 0.5  # share of a scratch run's rows whose residual shows the line
 def robust_scale(a: np.ndarray) -> float:
     """The median absolute deviation of a's finite values, as a Gaussian's deviation."""
     a = a[np.isfinite(a)]
-    return float(1.4826 * np.median(np.abs(a - np.median(a)))) + 1e-9
+    if a.size == 0:
+        return float(1.4826 * np.median(a)) + 1e-9  # NaN, as ever
+    return float(1.4826 * median_of(np.abs(a - median_of(a)))) + 1e-9
 
 
 class LineKernels:

@@ -87,15 +87,15 @@ class DisFlow:
                 np.arange(nx, dtype=np.float32), np.arange(ny, dtype=np.float32)
             )
         gx, gy = self._grid
+        return self.remap(image, gx + flow[..., 0], gy + flow[..., 1], mode)
+
+    def remap(self, image: np.ndarray, xs: np.ndarray, ys: np.ndarray, mode: str = "cubic"):
+        """``image[ys, xs]`` interpolated, coordinates clamped to the image (`warp` with the
+        coordinates x + u, y + v already formed: several images warped by one flow share
+        them)."""
         cv2 = self.cv2
         modes = {"cubic": cv2.INTER_CUBIC, "linear": cv2.INTER_LINEAR, "nearest": cv2.INTER_NEAREST}
-        return cv2.remap(
-            image,
-            gx + flow[..., 0],
-            gy + flow[..., 1],
-            modes[mode],
-            borderMode=cv2.BORDER_REPLICATE,
-        )
+        return cv2.remap(image, xs, ys, modes[mode], borderMode=cv2.BORDER_REPLICATE)
 
 
 def dis_flow(frame0: np.ndarray, frame1: np.ndarray) -> np.ndarray:

@@ -389,6 +389,41 @@ def test_order_statistics_match_a_sort(rng):
         assert np.array_equal(second_least(v, vals, ok), least)
 
 
+def test_median_of_is_numpy_median(rng):
+    """The flicker fit's median (one partition) is np.median's value, odd and even counts,
+    with ties."""
+    from clpde.film._order import median_of
+
+    for n in (1, 2, 3, 10, 11, 1000, 1001):
+        for dtype in (np.float64, np.float32):
+            x = rng.standard_normal(n).astype(dtype)
+            x[: n // 3] = 0.25  # ties
+            rng.shuffle(x)
+            got, want = median_of(x), np.median(x)
+            assert got == want and type(got) is type(want)
+
+
+def test_restore_of_changed_pixels_is_the_whole_restore(rng):
+    """The fill converts back only the pixels it changed: every value of 8- and 16-bit
+    integer frames (grey and colour, channels on any axis) comes back as restore gives it,
+    and float frames, whose round trip is not exact, take the whole restore."""
+    from clpde.film._planes import film_planes
+
+    cases = [
+        (np.arange(256, dtype=np.uint8).reshape(4, 8, 8), None),
+        (np.arange(65536, dtype=np.uint16).reshape(16, 64, 64), None),
+        (np.arange(-32768, 32768, dtype=np.int16).reshape(16, 32, 32, 4), -1),
+        (rng.integers(0, 256, (3, 3, 8, 9), dtype=np.uint8), 1),
+        (rng.random((3, 8, 9, 3)).astype(np.float32), -1),
+    ]
+    for frames, axis in cases:
+        planes, layout = film_planes(frames, axis)
+        out = planes.copy()
+        out[1, :, 2:5, 3] = rng.random((out.shape[1], 3), dtype=np.float32)
+        assert np.array_equal(layout.restore_changed(out, planes), layout.restore(out))
+        assert np.array_equal(layout.restore_changed(planes, planes), layout.restore(planes))
+
+
 def test_threads_give_what_one_thread_gives(runtime, rng, monkeypatch):
     """The window's frames are detected and filled in threads (one per core): the same
     masks and frames, bit for bit, as one thread."""
