@@ -5,34 +5,27 @@ fitted to named cases learns those cases. Here each box of damage measures it in
 
 1. Every candidate method fills the box's hole.
 2. The hole's pixels are grouped into clusters: the connected components of the hole grown
-   by the ring's width (so components closer than two ring widths share one cluster, and
-   one ring). Where the candidates' fills of a cluster agree (their largest RMS difference
-   from the cluster's mean fill is below AGREE, half an 8-bit quantisation step), any of
-   them will do: the cheapest is taken and no vote is run there.
-3. For the clusters that disagree, a ring of known pixels around them is hidden as well,
-   and every candidate fills the grown hole once. Its error on the ring, whose truth is
-   known, is its score in that cluster. Each cluster's ring is as wide as SCALE times its
-   hole's half-thickness, between RING and RING_MAX px: a thin ring around a thick hole
-   only tells which fill is smoothest near the border. With NARROW a second ring, RING px
-   around every cluster, is hidden and filled on its own too: a wide ring makes the hole
-   thicker than it is, a narrow one tests only the border, and the hole's pixels lie at
-   every depth between.
-4. Each cluster gets the blend of the candidates' fills whose weights, non-negative and
-   summing to one, minimise the ring's squared error (a least-squares fit over a handful of
-   weights; `blend=False` keeps the single best candidate), pulled towards the weights
-   that fit every voting ring of the box at once, as if those added PRIOR values to the
-   cluster's own: a speck of dust's ring holds a few dozen values, too few for five
-   weights. With two rings, each votes so, and the cluster takes the mean of the weights.
+   by 1 px (so components 2 px apart share one cluster). Where the candidates' fills of a
+   cluster agree (their largest RMS difference from the cluster's mean fill is below AGREE,
+   half an 8-bit quantisation step), any of them will do: the cheapest is taken and no vote
+   is run there.
+3. For the clusters that disagree, DECOYS copies of the cluster's own shape are placed on
+   known pixels nearby, clear of the damage, the box's edge and each other
+   (clpde/inpainting/decoys.py), and every candidate fills the hole and all decoys at once.
+   A decoy has the hole's thickness at every pixel, so a candidate's error there is a
+   sample of its error in the hole itself (a ring hidden around the hole is not: a thin
+   one rewards fills good next to the border, a wide one penalises the texture methods).
+4. Each cluster's score per candidate is its mean squared error over the cluster's decoys,
+   pulled towards the same over every voting cluster's decoys of the box, as if those
+   added PRIOR values to the cluster's own (a speck of dust's decoys hold a few dozen
+   values). The lowest score wins, unless the default candidate (DEFAULT) is within TIE
+   standard errors of it across the cluster's decoys (their paired differences): then the
+   default, the method measured best on average, keeps the cluster.
 
-The candidate set, the ring's widths, the prior and blend or pick are the module's
-parameters; all were chosen on the calibration half of benchmarks/inpaint_corpus.py's
-corpus (benchmarks/inpaint_validate_calibrate.py for the candidates,
-benchmarks/inpaint_vote_rules.py and benchmarks/inpaint_vote_sound.py for the rest;
+The candidate set, the decoys' count, the prior and the tie were chosen on the calibration
+half of tests/cases/inpaint_corpus.py's corpus (benchmarks/inpaint_vote_sound.py;
 docs/inpainting.md has the tables), and nothing else was fitted. `choices` in the returned
-report says, per cluster, what was chosen, with which weights, and why. The vote is not
-yet sound on every case: on the calibration half 11 of 62 cases fall more than 0.2 dB
-below their best candidate (the worst by 2.1 dB; their shortfalls sum to 5.7 dB, 7.8
-with the wide ring alone), against 25 (6.4 dB) before the prior and the widths.
+report says, per cluster, what was chosen and why, with the candidates' decoy errors.
 """
 
 from __future__ import annotations
@@ -40,50 +33,27 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage, optimize
+from scipy import ndimage
 
 from ..errors import InputError
+from . import decoys as decoy_module
 from . import poisson
 from .registry import METHODS, available, get, keywords, load, method_of, register
 
-# The candidates, cheapest first (the first one fills clusters where all agree), and the
-# narrowest ring of known pixels hidden to score them: chosen on the calibration half
-# (the candidates: benchmarks/inpaint_validate_calibrate.py --quick, the best mean PSNR over
-# the classes; RING: benchmarks/inpaint_vote_rules.py --ring 1 against 2, fewer cases below
-# the best candidate, 11 of 62 against 18; docs/inpainting.md has the tables)
+# The candidates, cheapest first (the first one fills clusters where all agree), chosen on
+# the calibration half (benchmarks/inpaint_validate_calibrate.py --quick, the best mean PSNR
+# over the classes; docs/inpainting.md has the tables); DEFAULT keeps a cluster where the
+# decoys cannot tell it from the best (the best mean over the classes alone).
 CANDIDATES = ("biharmonic", "coherence", "navier-stokes", "exemplar", "spectral")
-RING = 1
-# A cluster's weights are its own ring's fit pulled towards the fit of every voting ring of
-# the box, as if the box's ring added PRIOR values to the cluster's own: a speck of dust's
-# ring holds a few dozen values, too few to fit five weights on noise.
+DEFAULT = "spectral"
+# Decoys per cluster (decoys.py).
+DECOYS = decoy_module.COUNT
+# A cluster's scores are its own decoys' errors pulled towards the box's, as if the box's
+# decoys added PRIOR values to the cluster's own.
 PRIOR = 300.0
-# A ring as thin as RING tells how well a candidate fills a thin hole: a smooth fill always
-# wins there, and loses deep in a thick hole. Each cluster's ring is as wide as SCALE times
-# its hole's half-thickness (its deepest pixel's distance to the known ones), between RING
-# and RING_MAX pixels; SCALE 0: RING for every cluster.
-SCALE = 0.5
-RING_MAX = 8
-# NARROW: a second test beside that ring: a ring of RING px around every cluster, its own
-# fill; each cluster's weights are the mean of the two tests' votes. The narrow ring
-# favours the fills that are good near the border (smooth ones), the wide ring those good
-# deeper in (the texture ones); neither alone is unbiased for a hole's pixels, which lie
-# at every depth from 1 px to its half-thickness. Chosen on the calibration half
-# (benchmarks/inpaint_vote_sound.py, docs/inpainting.md): assembled from cached fills, 9
-# of 62 cases more than 0.2 dB below the best candidate, against 12 with the wide ring
-# alone and 10 with RING alone; run as it is, 11 either way, the shortfalls summing to
-# 5.7 dB against 7.8, and the mean over the classes 32.77 dB against 32.69.
-NARROW = True
-# SHIFT: a second test besides the ring: the cluster's own shape moved aside, clear of the
-# hole, by twice its half-thickness plus GAP px in each of DIRECTIONS (each its own fill),
-# hidden and filled: a test of the hole's own thickness (a ring around a 2 px scratch makes a 6 px
-# one, where the smooth fills catch up with the spectral one). Both tests' errors count.
-# Off: on the calibration half it gained on thin damage and texture but misled the vote on
-# periodic patterns (-12 dB in that class) at 1.85x the fills' time; measured again one
-# direction per fill (benchmarks/inpaint_vote_sound.py), it misleads the vote where holes
-# sit on edges (the copy lands on flat content: edges-0/blobs -7 to -9 dB).
-SHIFT = False
-GAP = 3
-DIRECTIONS = ((1, 0), (0, -1))  # down and left, each its own fill
+# The best candidate replaces the default only where its lead exceeds TIE standard errors
+# of the decoys' paired differences (clusters with fewer than two decoys: any lead).
+TIE = 1.0
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
 
 
@@ -101,22 +71,23 @@ def candidates(names=None) -> list:
     return [n for n in (CANDIDATES if names is None else names) if _solver(n) is not None]
 
 
-def margin(names=None, ring: int | None = None, crop=None, options=()) -> int:
+def margin(names=None, crop=None, options=()) -> int:
     """Known pixels the vote reads around a hole: the widest candidate's margin (with its
-    options among `options`, else its defaults) plus the widest ring (with SHIFT, the
-    farthest shifted copy of the holes of `crop`, a mask)."""
+    options among `options`, else its defaults) plus the decoys' reach around the largest
+    cluster of `crop` (a mask)."""
     given = _by_method(options)
-    ring = (RING_MAX if SCALE > 0 else RING) if ring is None else ring
-    if SHIFT and crop is not None and np.any(crop):
-        deepest = float(ndimage.distance_transform_edt(np.pad(crop, 1)).max())
-        ring = max(ring, int(np.ceil(2 * deepest)) + GAP + 1)
+    size = 1
+    if crop is not None and np.any(crop):
+        labels, _ = ndimage.label(np.asarray(crop, bool), np.ones((3, 3), bool))
+        size = max(max(s.stop - s.start for s in sl) for sl in ndimage.find_objects(labels))
     reach = 2
     for name in candidates(names):
         if name in available():
             method = get(name)
             own = given.get(name) or method.options()
             reach = max(reach, method.reach(None, own) or 0)
-    return reach + ring
+    d = decoy_module
+    return reach + max(d.WINDOW * size, d.MIN_WINDOW) + size + d.GAP
 
 
 def _by_method(options) -> dict:
@@ -136,79 +107,7 @@ def _groups(labels, count):
     return [order[bounds[k] : bounds[k + 1]] for k in range(count + 1)]
 
 
-def _weights(fills, truth):
-    """Non-negative weights summing to one that minimise |sum_k w_k fills_k - truth|^2
-    (fills: (k, n), truth: (n,))."""
-    k = fills.shape[0]
-    if k == 1:
-        return np.ones(1)
-    # eliminate the sum constraint: w_last = 1 - sum(others); bounded least squares
-    a = (fills[:-1] - fills[-1]).T
-    b = truth - fills[-1]
-    res = optimize.lsq_linear(a, b, bounds=(0, 1))
-    w = np.append(res.x, 1 - res.x.sum())
-    if w[-1] < 0:  # the bounds allow sum(others) > 1: renormalise the rare overshoot
-        w = np.clip(w, 0, None)
-        w /= w.sum()
-    return w
-
-
-def _shifted(omega, dist, members, radius, vote, direction):
-    """The test pixels of each voting cluster (module docstring, SHIFT) moved one way, as a
-    label image: the cluster's hole pixels moved by d = ceil(2 radius) + GAP along
-    `direction` ((dy, dx), unit steps), where they land on known pixels at least 2 px from
-    the hole, not taken by another cluster's copy."""
-    ny, nx = omega.shape
-    ys, xs = np.nonzero(omega)  # members[lab] index these (the hole in C order)
-    owner = np.zeros(omega.shape, np.int64)
-    free = ~omega & (dist >= 2)
-    dy, dx = direction
-    for lab in np.flatnonzero(vote):
-        sel = members[lab]
-        d = int(np.ceil(2 * radius[lab - 1])) + GAP
-        y, x = ys[sel] + dy * d, xs[sel] + dx * d
-        keep = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
-        y, x = y[keep], x[keep]
-        ok = free[y, x] & (owner[y, x] == 0)
-        owner[y[ok], x[ok]] = lab
-    return owner
-
-
-def _fit(f, t, blend):
-    """The weights of the candidates' ring fills f ((k, n)) that fit the truth t ((n,)):
-    the least-squares blend, or the single best candidate."""
-    if blend:
-        return _weights(f, t)
-    w = np.zeros(f.shape[0])
-    w[int(np.argmin(((f - t) ** 2).mean(axis=1)))] = 1.0
-    return w
-
-
-def _ring_tests(owners, names, data, omega, runtime, dtype, seed, params):
-    """Each candidate's fill of the test pixels (every owner map's pixels hidden beside the
-    hole), the true values there and their clusters: (k, c, m), (c, m), (m,); None, None
-    and an empty owner list where nothing could be tested."""
-    known = ~omega
-    parts = []
-    for own in owners:
-        test_mask = own > 0
-        if not test_mask.any() or not (known & ~test_mask).any():
-            continue  # nothing to test on, or nothing left to fill from
-        hidden = omega | test_mask
-        fills_t = [_fill(n, data, hidden, runtime, dtype, seed, params) for n in names]
-        parts.append(
-            (np.stack([f[:, test_mask] for f in fills_t]), data[:, test_mask], own[test_mask])
-        )
-    if not parts:
-        return None, None, np.zeros(0, int)
-    return (
-        np.concatenate([p[0] for p in parts], axis=2),
-        np.concatenate([p[1] for p in parts], axis=1),
-        np.concatenate([p[2] for p in parts]),
-    )
-
-
-def _settled(names, stack, members, radius, thin, count):
+def _settled(names, stack, members, thin, radius, count):
     """The clusters decided without a vote (thin ones, and those whose candidates agree),
     and which clusters vote: (choices, one per cluster or None), (vote, by label)."""
     choices = [None] * count
@@ -220,48 +119,52 @@ def _settled(names, stack, members, radius, thin, count):
         values = stack[:, :, sel]
         spread = np.sqrt(((values - values.mean(axis=0)) ** 2).mean(axis=(1, 2))).max()
         if thin > 0 and radius[lab - 1] < thin:
-            choices[lab - 1] = {
-                "pixels": int(sel.size),
-                "why": "thin",
-                "chosen": names[-1],
-                "weights": {names[-1]: 1.0},
-            }
+            why, chosen = "thin", names[-1]
         elif len(names) == 1 or spread < AGREE:
-            choices[lab - 1] = {
-                "pixels": int(sel.size),
-                "why": "candidates agree",
-                "chosen": names[0],
-                "weights": {names[0]: 1.0},
-                "spread": float(spread),
-            }
+            why, chosen = "candidates agree", names[0]
         else:
             vote[lab] = True
+            continue
+        choices[lab - 1] = {
+            "pixels": int(sel.size),
+            "why": why,
+            "chosen": chosen,
+            "weights": {chosen: 1.0},
+        }
     return choices, vote
 
 
-def _votes(tests, vote, count, names, blend, prior):
-    """{cluster: (weights, ring RMSE per candidate)} of one test (_ring_tests' result):
-    each voting cluster's fit on its own test pixels, pulled towards the box's fit over
-    every cluster's by `prior` (module docstring)."""
-    tests, truth, test_owner = tests
-    if tests is None:
-        return {}
-    ring_members = _groups(test_owner, count)
-    pooled = None
-    if prior > 0:  # the box's weights: every voting ring at once
-        pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
-    out = {}
-    for lab in np.flatnonzero(vote):
-        sel = ring_members[lab]
-        if not sel.size:
-            continue
-        f = tests[:, :, sel].reshape(len(names), -1)
-        t = truth[:, sel].reshape(-1)
-        w = _fit(f, t, blend)
-        if pooled is not None:  # a small ring's own fit leans on the box's
-            w = pooled if np.isinf(prior) else (t.size * w + prior * pooled) / (t.size + prior)
-        out[lab] = (w, np.sqrt(((f - t) ** 2).mean(axis=1)))
-    return out
+def _decoy_errors(names, data, omega, owner, index, runtime, dtype, seed, params):
+    """Each candidate's squared error summed per decoy, with the decoys' value counts:
+    sse (k, d) and values (d,), and each decoy's cluster (d,), where the decoys are the
+    distinct (owner, index) pairs."""
+    test = owner > 0
+    hidden = omega | test
+    key = owner[test] * (int(index.max()) + 1) + index[test]
+    ids, inverse = np.unique(key, return_inverse=True)
+    truth = data[:, test]
+    sse = np.zeros((len(names), ids.size))
+    for k, n in enumerate(names):
+        err = ((_fill(n, data, hidden, runtime, dtype, seed, params)[:, test] - truth) ** 2).sum(0)
+        sse[k] = np.bincount(inverse, err, ids.size)
+    values = np.bincount(inverse, minlength=ids.size) * data.shape[0]
+    return sse, values.astype(float), ids // (int(index.max()) + 1)
+
+
+def _decide(names, sse, values, of, lab, pooled, prior, tie):
+    """One cluster's choice from its decoys (module docstring, 4): (index, why, scores)."""
+    mine = of == lab
+    n = values[mine].sum()
+    own = sse[:, mine].sum(axis=1) / n
+    score = own if pooled is None else (n * own + prior * pooled) / (n + prior)
+    best = int(np.argmin(score))
+    default = names.index(DEFAULT) if DEFAULT in names else len(names) - 1
+    if best != default and mine.sum() >= 2:
+        per = sse[:, mine] / values[mine]  # (k, decoys): each decoy's mean squared error
+        diff = per[default] - per[best]
+        if diff.mean() <= tie * diff.std(ddof=1) / np.sqrt(diff.size):
+            return default, "decoys tie: default", score
+    return best, "decoy vote", score
 
 
 def choose(
@@ -270,13 +173,10 @@ def choose(
     runtime,
     *,
     names=None,
-    ring: int | None = None,
-    blend: bool = True,
+    decoys: int | None = None,
     prior: float | None = None,
-    scale: float | None = None,
+    tie: float | None = None,
     thin: float = 0.0,
-    shift: bool | None = None,
-    narrow: bool | None = None,
     dtype=np.float32,
     seed=None,
     params=None,
@@ -285,70 +185,58 @@ def choose(
     among the candidates (module docstring).
 
     Returns (filled, report): filled has data's shape, equal to data outside omega;
-    report is {"candidates": [...], "choices": [{"pixels", "why", "weights", "ring_rmse",
-    "chosen"} per cluster], "ring_pixels": int}; with two rings (`narrow`), the weights
-    are the mean of their votes', ring_rmse the wide ring's and ring_pixels both rings'.
+    report is {"candidates": [...], "choices": [{"pixels", "why", "weights", "chosen",
+    "decoy_rmse"} per cluster], "decoy_pixels": int}.
     """
     params = params or {}
-    ring = RING if ring is None else ring
+    decoys = DECOYS if decoys is None else decoys
     prior = PRIOR if prior is None else prior
-    scale = SCALE if scale is None else scale
-    shift = SHIFT if shift is None else shift
-    narrow = NARROW if narrow is None else narrow
+    tie = TIE if tie is None else tie
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
     known = ~omega
     dist = ndimage.distance_transform_edt(known)  # 0 in the hole
-    near = dist <= ring
-    clusters, count = ndimage.label(near, np.ones((3, 3), bool))
+    clusters, count = ndimage.label(dist <= 1, np.ones((3, 3), bool))
     out = np.array(data, np.float64, copy=True)
     stack = np.stack([fills[n][:, omega] for n in names])  # (k, c, n): the hole's fills
     hole_label = clusters[omega]
     members = _groups(hole_label, count)
     depth = ndimage.distance_transform_edt(omega)  # each hole pixel's half-thickness
     radius = np.asarray(ndimage.maximum(depth, clusters, np.arange(1, count + 1))).reshape(-1)
-    choices, vote = _settled(names, stack, members, radius, thin, count)
-    ring_pixels = 0
+    choices, vote = _settled(names, stack, members, thin, radius, count)
+    decoy_pixels = 0
     if vote.any():
-        # each known pixel belongs to the ring of its nearest hole pixel's cluster
-        _, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
-        nearest = clusters[iy, ix]
-        # the rings' widths: SCALE x the half-thickness, and (NARROW) RING px for every
-        # cluster; each is its own test, and the cluster's weights the mean of their votes
-        widths = []
-        if scale > 0:
-            widths.append(np.clip(np.ceil(scale * radius), ring, RING_MAX))
-        if scale <= 0 or (narrow and np.any(widths[0] > ring)):
-            widths.append(np.full(count, float(ring)))
-        votes = []
-        for k, width in enumerate(widths):
-            owner = nearest * (known & (dist <= np.append(0, width)[nearest]) & vote[nearest])
-            owners = [owner]
-            if shift and k == 0:  # and more tests: the clusters' shapes moved aside
-                owners += [_shifted(omega, dist, members, radius, vote, d) for d in DIRECTIONS]
-            tests = _ring_tests(owners, names, data, omega, runtime, dtype, seed, params)
-            ring_pixels += int(tests[2].size)
-            votes.append(_votes(tests, vote, count, names, blend, prior))
-        for lab in np.flatnonzero(vote):
-            cast = [v[lab] for v in votes if lab in v]
+        voting = np.flatnonzero(vote)
+        order = voting[np.argsort([-members[lab].size for lab in voting], kind="stable")]
+        owner, index = decoy_module.place(omega, clusters, order, decoys)
+        decoy_pixels = int((owner > 0).sum())
+        sse = values = of = pooled = None
+        if decoy_pixels and (known & (owner == 0)).any():
+            sse, values, of = _decoy_errors(
+                names, data, omega, owner, index, runtime, dtype, seed, params
+            )
+            if prior > 0:  # the box's scores: every voting cluster's decoys at once
+                pooled = sse.sum(axis=1) / values.sum()
+        for lab in voting:
             pixels = int(members[lab].size)
-            if not cast:
-                choices[lab - 1] = {
-                    "pixels": pixels,
-                    "why": "no ring to test on",
-                    "chosen": names[0],
-                    "weights": {names[0]: 1.0},
-                }
-                continue
-            w = np.mean([c[0] for c in cast], axis=0)
+            if sse is None or not np.any(of == lab):
+                k, why, score = len(names) - 1, "no decoy fits", None
+                if pooled is not None:  # the box's decoys speak for it
+                    k, why, score = int(np.argmin(pooled)), "the box's decoys", pooled
+                elif DEFAULT in names:
+                    k = names.index(DEFAULT)
+            else:
+                k, why, score = _decide(names, sse, values, of, lab, pooled, prior, tie)
             choices[lab - 1] = {
                 "pixels": pixels,
-                "why": "ring vote",
-                "chosen": names[int(np.argmax(w))],
-                "weights": {n: float(x) for n, x in zip(names, w, strict=True) if x > 0},
-                "ring_rmse": {n: float(x) for n, x in zip(names, cast[0][1], strict=True)},
+                "why": why,
+                "chosen": names[k],
+                "weights": {names[k]: 1.0},
             }
+            if score is not None:
+                rmse = np.sqrt(score)
+                choices[lab - 1]["decoy_rmse"] = dict(zip(names, rmse.tolist(), strict=True))
     # assemble: each cluster's hole pixels from its weights
     weights = np.zeros((len(names), count + 1))
     for lab, ch in enumerate(choices, start=1):
@@ -359,8 +247,7 @@ def choose(
     out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack)
     report = {
         "candidates": names,
-        "ring": ring,
-        "ring_pixels": ring_pixels,
+        "decoy_pixels": decoy_pixels,
         "choices": [c for c in choices if c is not None],
     }
     return out, report
@@ -378,34 +265,26 @@ class AutoOptions:
     ----------
     names : tuple of str, optional
         The candidates, cheapest first (None: CANDIDATES).
-    ring : int, optional
-        The narrowest ring of known pixels hidden to score them (None: RING).
-    blend : bool
-        Fill each cluster with the best blend of the candidates (False: the best one).
+    decoys : int, optional
+        Decoys (copies of a cluster's shape on known pixels nearby) per cluster (None:
+        DECOYS).
     prior : float, optional
-        The box's weight in each cluster's fit (None: PRIOR).
-    scale : float, optional
-        A cluster's ring width per pixel of its half-thickness (None: SCALE).
+        The box's weight in each cluster's scores, in values (None: PRIOR).
+    tie : float, optional
+        The standard errors by which the best candidate must lead the default on the
+        decoys to replace it (None: TIE).
     thin : float
-        Clusters at most this thick take the cheapest candidate without a vote.
-    shift : bool, optional
-        Also test on the cluster's shape moved aside (None: SHIFT).
-    narrow : bool, optional
-        Also vote on a ring of `ring` px around every cluster, and average the two votes'
-        weights (None: NARROW).
+        Clusters at most this thick take the last candidate without a vote.
     candidate_options : tuple
         Candidates' own options objects (such as CoherenceOptions(epsilon=4)), each for the
         candidate whose class it is; the others keep their defaults.
     """
 
     names: tuple | None = None
-    ring: int | None = None
-    blend: bool = True
+    decoys: int | None = None
     prior: float | None = None
-    scale: float | None = None
+    tie: float | None = None
     thin: float = 0.0
-    shift: bool | None = None
-    narrow: bool | None = None
     candidate_options: tuple = ()
 
     def __post_init__(self) -> None:
@@ -416,12 +295,12 @@ class AutoOptions:
             raise InputError(
                 f"names must be a tuple of candidates among {', '.join(known)}, not {self.names!r}"
             )
-        ring = self.ring
-        if ring is not None and (
-            isinstance(ring, bool) or not isinstance(ring, (int, np.integer)) or ring < 1
+        count = self.decoys
+        if count is not None and (
+            isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1
         ):
-            raise InputError(f"ring must be an integer >= 1 or None, not {self.ring!r}")
-        for name in ("prior", "scale", "thin"):
+            raise InputError(f"decoys must be an integer >= 1 or None, not {self.decoys!r}")
+        for name in ("prior", "tie", "thin"):
             value = getattr(self, name)
             if value is not None and not value >= 0:  # NaN too; inf is allowed
                 raise InputError(f"{name} must be a number >= 0, not {value!r}")
@@ -455,13 +334,10 @@ class VoteRun:
             self.omega,
             self.runtime,
             names=o.names,
-            ring=o.ring,
-            blend=o.blend,
+            decoys=o.decoys,
             prior=o.prior,
-            scale=o.scale,
+            tie=o.tie,
             thin=o.thin,
-            shift=o.shift,
-            narrow=o.narrow,
             dtype=self.dtype,
             seed=self.seed,
             params=params,

@@ -1,0 +1,97 @@
+"""Decoy holes: copies of a cluster of damage's own shape, placed on known pixels nearby,
+on which `method="auto"` scores its candidates (clpde/inpainting/auto.py).
+
+A ring of known pixels hidden around a hole tests a fill at the ring's depth, not at the
+hole's: a thin ring rewards the fills that are good next to the border, a wide one makes
+the hole thicker than it is. A copy of the hole's own shape, moved onto known pixels
+nearby, has the hole's thickness at every pixel, so every candidate's error on it is a
+sample of its error in the hole itself, whatever the shape.
+
+Each copy is the cluster's hole pixels translated on a grid of steps one cluster size plus
+GAP apart (nearest first, within WINDOW cluster sizes but at least MIN_WINDOW px), kept
+where at least KEEP of its pixels land on known pixels more than GAP px from the damage,
+from the box's edge and from every decoy placed before (the pixels that do not are
+dropped: a long scratch or a crack network cannot be copied whole, but its thickness can).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+# Decoys per cluster; the spread of the candidates' errors across them is what tells a
+# real difference from chance (auto.py).
+COUNT = 4
+# Known pixels between a decoy and the damage, the box's edge or another decoy.
+GAP = 3
+# How far decoys may lie from their cluster, in cluster sizes (its bounding box's longer
+# side), and at least MIN_WINDOW px: near enough to share its surroundings.
+WINDOW = 3
+MIN_WINDOW = 24
+# The least share of a cluster's pixels a decoy keeps (the rest land on damage or off
+# the box).
+KEEP = 0.5
+
+
+def _offsets(h, w, reach):
+    """Grid translations (dy, dx) of a (h, w) shape, steps h + GAP + 1 and w + GAP + 1 (so
+    that copies on the grid never touch), within `reach` px, nearest first, (0, 0) out."""
+    sy, sx = h + GAP + 1, w + GAP + 1
+    ky, kx = reach // sy, reach // sx
+    iy, ix = np.mgrid[-ky : ky + 1, -kx : kx + 1]
+    dy, dx = (iy * sy).ravel(), (ix * sx).ravel()
+    order = np.argsort(np.hypot(dy, dx), kind="stable")[1:]  # the first is (0, 0)
+    return dy[order], dx[order]
+
+
+def place(omega, labels, order, count=COUNT):
+    """Decoys of the clusters `order` (labels of the hole's pixels in `labels`, an int
+    image), tried in that order: a label image (0: no decoy), each decoy pixel labelled
+    with its cluster, and the decoys' own index per pixel (1, 2, ... within its cluster).
+
+    Decoys never touch the damage, the edge of the image or each other: every decoy pixel
+    lies more than GAP px from each (module docstring)."""
+    ny, nx = omega.shape
+    free = ndimage.distance_transform_edt(~omega) > GAP
+    free[: GAP + 1], free[ny - GAP - 1 :] = False, False
+    free[:, : GAP + 1], free[:, nx - GAP - 1 :] = False, False
+    owner = np.zeros(omega.shape, np.int64)
+    index = np.zeros(omega.shape, np.int64)
+    objects = ndimage.find_objects(np.where(omega, labels, 0))
+    for lab in order:
+        if lab > len(objects) or objects[lab - 1] is None:
+            continue
+        sl = objects[lab - 1]
+        ly, lx = np.nonzero((labels[sl] == lab) & omega[sl])
+        ys, xs = ly + sl[0].start, lx + sl[1].start
+        h, w = int(ly.max()) + 1, int(lx.max()) + 1
+        reach = max(WINDOW * max(h, w), MIN_WINDOW)
+        placed = 0
+        for dy, dx in zip(*_offsets(h, w, reach), strict=True):
+            y, x = ys + dy, xs + dx
+            inside = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
+            ok = inside.copy()
+            ok[inside] = free[y[inside], x[inside]]
+            if ok.sum() < KEEP * ys.size:
+                continue
+            y, x = y[ok], x[ok]
+            placed += 1
+            owner[y, x], index[y, x] = lab, placed
+            # no later decoy within GAP px of this one
+            free[_grown(y, x, omega.shape)] = False
+            if placed == count:
+                break
+    return owner, index
+
+
+def _grown(ys, xs, shape):
+    """The pixels (ys, xs) grown by GAP px (Euclidean), as a mask of `shape`: a distance
+    transform over their bounding box only."""
+    y0, x0 = max(int(ys.min()) - GAP, 0), max(int(xs.min()) - GAP, 0)
+    y1 = min(int(ys.max()) + GAP + 1, shape[0])
+    x1 = min(int(xs.max()) + GAP + 1, shape[1])
+    local = np.ones((y1 - y0, x1 - x0), bool)
+    local[ys - y0, xs - x0] = False
+    out = np.zeros(shape, bool)
+    out[y0:y1, x0:x1] = ndimage.distance_transform_edt(local) <= GAP
+    return out
