@@ -49,8 +49,11 @@ DEFAULT = "spectral"
 # Decoys per cluster (decoys.py).
 DECOYS = decoy_module.COUNT
 # A cluster's scores are its own decoys' errors pulled towards the box's, as if the box's
-# decoys added PRIOR values to the cluster's own.
-PRIOR = 300.0
+# decoys added PRIOR decoys to the cluster's own.
+PRIOR = 2.0
+# Added to each decoy's mean squared error before its log: a quarter of an 8-bit step's
+# square, so that exact fills (a periodic pattern's) do not weigh without bound.
+FLOOR = (0.25 / 255) ** 2
 # The best candidate replaces the default only where its lead exceeds TIE standard errors
 # of the decoys' paired differences (clusters with fewer than two decoys: any lead).
 TIE = 1.0
@@ -151,18 +154,24 @@ def _decoy_errors(names, data, omega, owner, index, runtime, dtype, seed, params
     return sse, values.astype(float), ids // (int(index.max()) + 1)
 
 
-def _decide(names, sse, values, of, lab, pooled, prior, tie):
-    """One cluster's choice from its decoys (module docstring, 4): (index, why, scores)."""
-    mine = of == lab
-    n = values[mine].sum()
-    own = sse[:, mine].sum(axis=1) / n
-    score = own if pooled is None else (n * own + prior * pooled) / (n + prior)
+def _decide(names, sse, values, of, lab, prior, tie):
+    """One cluster's choice from the decoys' errors (module docstring, 4): (index, why,
+    scores). Each decoy's error per candidate is taken as its log mean squared error, so
+    that every decoy weighs alike however hard its content; the cluster's own decoys weigh
+    1 each, every decoy of the box PRIOR decoys' worth in all (a cluster without decoys
+    of its own, lab 0: the box's alone)."""
+    logs = np.log(sse / values + FLOOR)  # (k, decoys)
+    mine = (of == lab).astype(float)
+    n = mine.sum()
+    box = np.full(of.size, 1 / of.size)  # every decoy of the box, its own included
+    w = box if np.isinf(prior) else (mine + prior * box) / (n + prior)
+    score = logs @ w
     best = int(np.argmin(score))
     default = names.index(DEFAULT) if DEFAULT in names else len(names) - 1
-    if best != default and mine.sum() >= 2:
-        per = sse[:, mine] / values[mine]  # (k, decoys): each decoy's mean squared error
-        diff = per[default] - per[best]
-        if diff.mean() <= tie * diff.std(ddof=1) / np.sqrt(diff.size):
+    if best != default and np.count_nonzero(w) >= 2:
+        diff = logs[default] - logs[best]
+        spread = np.sqrt(np.sum(w**2 * (diff - diff @ w) ** 2))
+        if diff @ w <= tie * spread:
             return default, "decoys tie: default", score
     return best, "decoy vote", score
 
@@ -209,33 +218,33 @@ def choose(
     if vote.any():
         voting = np.flatnonzero(vote)
         order = voting[np.argsort([-members[lab].size for lab in voting], kind="stable")]
-        owner, index = decoy_module.place(omega, clusters, order, decoys)
+        texture = decoy_module.detail(data, omega)
+        owner, index = decoy_module.place(omega, clusters, order, decoys, texture)
         decoy_pixels = int((owner > 0).sum())
-        sse = values = of = pooled = None
+        sse = values = of = None
         if decoy_pixels and (known & (owner == 0)).any():
             sse, values, of = _decoy_errors(
                 names, data, omega, owner, index, runtime, dtype, seed, params
             )
-            if prior > 0:  # the box's scores: every voting cluster's decoys at once
-                pooled = sse.sum(axis=1) / values.sum()
         for lab in voting:
             pixels = int(members[lab].size)
-            if sse is None or not np.any(of == lab):
+            if sse is None:
                 k, why, score = len(names) - 1, "no decoy fits", None
-                if pooled is not None:  # the box's decoys speak for it
-                    k, why, score = int(np.argmin(pooled)), "the box's decoys", pooled
-                elif DEFAULT in names:
+                if DEFAULT in names:
                     k = names.index(DEFAULT)
+            elif not np.any(of == lab):  # the box's decoys speak for it
+                k, why, score = _decide(names, sse, values, of, 0, np.inf, tie)
+                why = "the box's decoys" if why == "decoy vote" else why
             else:
-                k, why, score = _decide(names, sse, values, of, lab, pooled, prior, tie)
+                k, why, score = _decide(names, sse, values, of, lab, prior, tie)
             choices[lab - 1] = {
                 "pixels": pixels,
                 "why": why,
                 "chosen": names[k],
                 "weights": {names[k]: 1.0},
             }
-            if score is not None:
-                rmse = np.sqrt(score)
+            if score is not None:  # the geometric mean of the decoys' RMS errors
+                rmse = np.exp(score / 2)
                 choices[lab - 1]["decoy_rmse"] = dict(zip(names, rmse.tolist(), strict=True))
     # assemble: each cluster's hole pixels from its weights
     weights = np.zeros((len(names), count + 1))

@@ -26,8 +26,13 @@ COUNT = 4
 GAP = 3
 # How far decoys may lie from their cluster, in cluster sizes (its bounding box's longer
 # side), and at least MIN_WINDOW px: near enough to share its surroundings.
-WINDOW = 3
-MIN_WINDOW = 24
+WINDOW = 4
+MIN_WINDOW = 32
+# The surround whose detail a decoy's should match: RING px around the shape (less the
+# first, whose differences read the damage); FLOOR: detail added before the ratio (an
+# 8-bit step's square), so that flat surroundings match each other.
+RING = 4
+FLOOR = (1 / 255) ** 2
 # The least share of a cluster's pixels a decoy keeps (the rest land on damage or off
 # the box).
 KEEP = 0.5
@@ -44,10 +49,34 @@ def _offsets(h, w, reach):
     return dy[order], dx[order]
 
 
-def place(omega, labels, order, count=COUNT):
+def detail(data, omega):
+    """Each pixel's detail: its squared gradient (central differences), summed over the
+    channels; NaN where a difference reads the damage."""
+    g = sum(sum(d**2 for d in np.gradient(c)) for c in np.asarray(data, np.float64))
+    return np.where(ndimage.binary_dilation(omega), np.nan, g)
+
+
+def _surround(ys, xs, shape):
+    """The pixels within RING px of (ys, xs) but not within 1 px, as coordinates."""
+    near = _grown(ys, xs, shape, 1)
+    return np.nonzero(_grown(ys, xs, shape, RING) & ~near)
+
+
+def _mean(values, y, x):
+    """The mean of `values` at (y, x) inside it, NaN where none (or all NaN)."""
+    ny, nx = values.shape
+    inside = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
+    v = values[y[inside], x[inside]]
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else np.nan
+
+
+def place(omega, labels, order, count=COUNT, texture=None):
     """Decoys of the clusters `order` (labels of the hole's pixels in `labels`, an int
     image), tried in that order: a label image (0: no decoy), each decoy pixel labelled
     with its cluster, and the decoys' own index per pixel (1, 2, ... within its cluster).
+    With `texture` (`detail`'s map), the places whose surround's mean detail is nearest
+    the cluster's (in ratio) come first, else the nearest places.
 
     Decoys never touch the damage, the edge of the image or each other: every decoy pixel
     lies more than GAP px from each (module docstring)."""
@@ -67,7 +96,15 @@ def place(omega, labels, order, count=COUNT):
         h, w = int(ly.max()) + 1, int(lx.max()) + 1
         reach = max(WINDOW * max(h, w), MIN_WINDOW)
         placed = 0
-        for dy, dx in zip(*_offsets(h, w, reach), strict=True):
+        dys, dxs = _offsets(h, w, reach)
+        if texture is not None:  # surroundings like the cluster's first
+            ry, rx = _surround(ys, xs, omega.shape)
+            own = _mean(texture, ry, rx)
+            cost = np.array([_mean(texture, ry + a, rx + b) for a, b in zip(dys, dxs, strict=True)])
+            cost = np.abs(np.log((cost + FLOOR) / (own + FLOOR)))
+            rank = np.argsort(np.where(np.isfinite(cost), cost, np.inf), kind="stable")
+            dys, dxs = dys[rank], dxs[rank]
+        for dy, dx in zip(dys, dxs, strict=True):
             y, x = ys + dy, xs + dx
             inside = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
             ok = inside.copy()
@@ -78,20 +115,20 @@ def place(omega, labels, order, count=COUNT):
             placed += 1
             owner[y, x], index[y, x] = lab, placed
             # no later decoy within GAP px of this one
-            free[_grown(y, x, omega.shape)] = False
+            free[_grown(y, x, omega.shape, GAP)] = False
             if placed == count:
                 break
     return owner, index
 
 
-def _grown(ys, xs, shape):
-    """The pixels (ys, xs) grown by GAP px (Euclidean), as a mask of `shape`: a distance
+def _grown(ys, xs, shape, by):
+    """The pixels (ys, xs) grown by `by` px (Euclidean), as a mask of `shape`: a distance
     transform over their bounding box only."""
-    y0, x0 = max(int(ys.min()) - GAP, 0), max(int(xs.min()) - GAP, 0)
-    y1 = min(int(ys.max()) + GAP + 1, shape[0])
-    x1 = min(int(xs.max()) + GAP + 1, shape[1])
+    y0, x0 = max(int(ys.min()) - by, 0), max(int(xs.min()) - by, 0)
+    y1 = min(int(ys.max()) + by + 1, shape[0])
+    x1 = min(int(xs.max()) + by + 1, shape[1])
     local = np.ones((y1 - y0, x1 - x0), bool)
     local[ys - y0, xs - x0] = False
     out = np.zeros(shape, bool)
-    out[y0:y1, x0:x1] = ndimage.distance_transform_edt(local) <= GAP
+    out[y0:y1, x0:x1] = ndimage.distance_transform_edt(local) <= by
     return out
