@@ -418,12 +418,12 @@ def main(argv=None):
     parser.add_argument("--real", action="store_true", help="run auto.choose itself (its defaults)")
     parser.add_argument("--only", default=None, help="--real: case names containing these, ','")
     parser.add_argument("--prior", type=float, default=None, help="--real: choose's prior")
-    parser.add_argument("--tie", type=float, default=None, help="--real: choose's tie")
+    parser.add_argument("--snap", type=float, default=None, help="--real: choose's snap")
     parser.add_argument("--decoys", type=int, default=None, help="--real: choose's decoys")
     args = parser.parse_args(argv)
     if args.real:
         only = args.only.split(",") if args.only else None
-        return real(args.half, only, prior=args.prior, tie=args.tie, decoys=args.decoys)
+        return real(args.half, only, prior=args.prior, snap=args.snap, decoys=args.decoys)
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = load(halves, names)

@@ -15,14 +15,15 @@ fitted to named cases learns those cases. Here each box of damage measures it in
    A decoy has the hole's thickness at every pixel, so a candidate's error there is a
    sample of its error in the hole itself (a ring hidden around the hole is not: a thin
    one rewards fills good next to the border, a wide one penalises the texture methods).
-4. Each cluster's score per candidate is its mean squared error over the cluster's decoys,
-   pulled towards the same over every voting cluster's decoys of the box, as if those
-   added PRIOR values to the cluster's own (a speck of dust's decoys hold a few dozen
-   values). The lowest score wins, unless the default candidate (DEFAULT) is within TIE
-   standard errors of it across the cluster's decoys (their paired differences): then the
-   default, the method measured best on average, keeps the cluster.
+4. Each cluster gets the blend of the candidates' fills whose weights, non-negative and
+   summing to one, minimise the squared error on its decoys (the benchmark's metric),
+   pulled towards the weights that fit every voting cluster's decoys of the box at once,
+   as if those added PRIOR values to the cluster's own (a speck of dust's decoys hold a
+   few dozen values, too few for five weights). A blend that gives one candidate at least
+   SNAP is that candidate alone: blending an exact fill (a periodic pattern's exemplar)
+   with a little of another costs far more than it can gain.
 
-The candidate set, the decoys' count, the prior and the tie were chosen on the calibration
+The candidate set, the decoys' count, the prior and SNAP were chosen on the calibration
 half of tests/cases/inpaint_corpus.py's corpus (benchmarks/inpaint_vote_sound.py;
 docs/inpainting.md has the tables), and nothing else was fitted. `choices` in the returned
 report says, per cluster, what was chosen and why, with the candidates' decoy errors.
@@ -33,7 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
+from scipy import ndimage, optimize
 
 from ..errors import InputError
 from . import decoys as decoy_module
@@ -48,15 +49,11 @@ CANDIDATES = ("biharmonic", "coherence", "navier-stokes", "exemplar", "spectral"
 DEFAULT = "spectral"
 # Decoys per cluster (decoys.py).
 DECOYS = decoy_module.COUNT
-# A cluster's scores are its own decoys' errors pulled towards the box's, as if the box's
-# decoys added PRIOR decoys to the cluster's own.
-PRIOR = 2.0
-# Added to each decoy's mean squared error before its log: a quarter of an 8-bit step's
-# square, so that exact fills (a periodic pattern's) do not weigh without bound.
-FLOOR = (0.25 / 255) ** 2
-# The best candidate replaces the default only where its lead exceeds TIE standard errors
-# of the decoys' paired differences (clusters with fewer than two decoys: any lead).
-TIE = 1.0
+# A cluster's weights are its own decoys' fit pulled towards the box's, as if the box's
+# decoys added PRIOR values to the cluster's own.
+PRIOR = 1000.0
+# A blend giving one candidate at least SNAP of the weight is that candidate alone.
+SNAP = 0.8
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
 
 
@@ -137,43 +134,46 @@ def _settled(names, stack, members, thin, radius, count):
     return choices, vote
 
 
-def _decoy_errors(names, data, omega, owner, index, runtime, dtype, seed, params):
-    """Each candidate's squared error summed per decoy, with the decoys' value counts:
-    sse (k, d) and values (d,), and each decoy's cluster (d,), where the decoys are the
-    distinct (owner, index) pairs."""
+def _weights(fills, truth):
+    """Non-negative weights summing to one that minimise |sum_k w_k fills_k - truth|^2
+    (fills: (k, n), truth: (n,))."""
+    k = fills.shape[0]
+    if k == 1:
+        return np.ones(1)
+    # eliminate the sum constraint: w_last = 1 - sum(others); bounded least squares
+    res = optimize.lsq_linear((fills[:-1] - fills[-1]).T, truth - fills[-1], bounds=(0, 1))
+    w = np.clip(np.append(res.x, 1 - res.x.sum()), 0, None)  # the bounds allow a sum > 1
+    return w / w.sum()
+
+
+def _decoy_tests(names, data, omega, owner, runtime, dtype, seed, params):
+    """Every candidate's fill of the decoys (the hole hidden too, as in its own fill), the
+    true values there and each value's cluster: (k, n), (n,), (n,) over pixels and
+    channels."""
     test = owner > 0
     hidden = omega | test
-    key = owner[test] * (int(index.max()) + 1) + index[test]
-    ids, inverse = np.unique(key, return_inverse=True)
-    truth = data[:, test]
-    sse = np.zeros((len(names), ids.size))
-    for k, n in enumerate(names):
-        err = ((_fill(n, data, hidden, runtime, dtype, seed, params)[:, test] - truth) ** 2).sum(0)
-        sse[k] = np.bincount(inverse, err, ids.size)
-    values = np.bincount(inverse, minlength=ids.size) * data.shape[0]
-    return sse, values.astype(float), ids // (int(index.max()) + 1)
+    fills = [_fill(n, data, hidden, runtime, dtype, seed, params)[:, test] for n in names]
+    lab = np.broadcast_to(owner[test], (data.shape[0], int(test.sum())))
+    return np.stack([f.reshape(-1) for f in fills]), data[:, test].reshape(-1), lab.reshape(-1)
 
 
-def _decide(names, sse, values, of, lab, prior, tie):
-    """One cluster's choice from the decoys' errors (module docstring, 4): (index, why,
-    scores). Each decoy's error per candidate is taken as its log mean squared error, so
-    that every decoy weighs alike however hard its content; the cluster's own decoys weigh
-    1 each, every decoy of the box PRIOR decoys' worth in all (a cluster without decoys
-    of its own, lab 0: the box's alone)."""
-    logs = np.log(sse / values + FLOOR)  # (k, decoys)
-    mine = (of == lab).astype(float)
-    n = mine.sum()
-    box = np.full(of.size, 1 / of.size)  # every decoy of the box, its own included
-    w = box if np.isinf(prior) else (mine + prior * box) / (n + prior)
-    score = logs @ w
-    best = int(np.argmin(score))
-    default = names.index(DEFAULT) if DEFAULT in names else len(names) - 1
-    if best != default and np.count_nonzero(w) >= 2:
-        diff = logs[default] - logs[best]
-        spread = np.sqrt(np.sum(w**2 * (diff - diff @ w) ** 2))
-        if diff @ w <= tie * spread:
-            return default, "decoys tie: default", score
-    return best, "decoy vote", score
+def _vote(names, tests, lab, prior, box, snap):
+    """One cluster's weights from the decoys (module docstring, 4): its own decoys' blend
+    pulled towards the box's (`box`) by `prior` values; the box's alone where it has no
+    decoy; a blend within SNAP of one candidate is that candidate. (weights, why, RMS
+    error of each candidate on its decoys or None)."""
+    fills, truth, of = tests
+    mine = of == lab
+    if not mine.any():
+        w, why, rmse = box, "the box's decoys", None
+    else:
+        f, t = fills[:, mine], truth[mine]
+        w = _weights(f, t)
+        w = box if np.isinf(prior) else (t.size * w + prior * box) / (t.size + prior)
+        why, rmse = "decoy vote", np.sqrt(((f - t) ** 2).mean(axis=1))
+    if w.max() >= snap:
+        w = np.eye(len(names))[int(np.argmax(w))]
+    return w, why, rmse
 
 
 def choose(
@@ -184,7 +184,7 @@ def choose(
     names=None,
     decoys: int | None = None,
     prior: float | None = None,
-    tie: float | None = None,
+    snap: float | None = None,
     thin: float = 0.0,
     dtype=np.float32,
     seed=None,
@@ -200,7 +200,7 @@ def choose(
     params = params or {}
     decoys = DECOYS if decoys is None else decoys
     prior = PRIOR if prior is None else prior
-    tie = TIE if tie is None else tie
+    snap = SNAP if snap is None else snap
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
@@ -221,30 +221,24 @@ def choose(
         texture = decoy_module.detail(data, omega)
         owner, index = decoy_module.place(omega, clusters, order, decoys, texture)
         decoy_pixels = int((owner > 0).sum())
-        sse = values = of = None
+        tests = None
         if decoy_pixels and (known & (owner == 0)).any():
-            sse, values, of = _decoy_errors(
-                names, data, omega, owner, index, runtime, dtype, seed, params
-            )
+            tests = _decoy_tests(names, data, omega, owner, runtime, dtype, seed, params)
+            box = _weights(tests[0], tests[1])  # every voting cluster's decoys at once
         for lab in voting:
             pixels = int(members[lab].size)
-            if sse is None:
-                k, why, score = len(names) - 1, "no decoy fits", None
-                if DEFAULT in names:
-                    k = names.index(DEFAULT)
-            elif not np.any(of == lab):  # the box's decoys speak for it
-                k, why, score = _decide(names, sse, values, of, 0, np.inf, tie)
-                why = "the box's decoys" if why == "decoy vote" else why
+            if tests is None:
+                k = names.index(DEFAULT) if DEFAULT in names else len(names) - 1
+                w, why, rmse = np.eye(len(names))[k], "no decoy fits", None
             else:
-                k, why, score = _decide(names, sse, values, of, lab, prior, tie)
+                w, why, rmse = _vote(names, tests, lab, prior, box, snap)
             choices[lab - 1] = {
                 "pixels": pixels,
                 "why": why,
-                "chosen": names[k],
-                "weights": {names[k]: 1.0},
+                "chosen": names[int(np.argmax(w))],
+                "weights": {n: float(x) for n, x in zip(names, w, strict=True) if x > 0},
             }
-            if score is not None:  # the geometric mean of the decoys' RMS errors
-                rmse = np.exp(score / 2)
+            if rmse is not None:
                 choices[lab - 1]["decoy_rmse"] = dict(zip(names, rmse.tolist(), strict=True))
     # assemble: each cluster's hole pixels from its weights
     weights = np.zeros((len(names), count + 1))
@@ -278,10 +272,10 @@ class AutoOptions:
         Decoys (copies of a cluster's shape on known pixels nearby) per cluster (None:
         DECOYS).
     prior : float, optional
-        The box's weight in each cluster's scores, in values (None: PRIOR).
-    tie : float, optional
-        The standard errors by which the best candidate must lead the default on the
-        decoys to replace it (None: TIE).
+        The box's weight in each cluster's fit, in values (None: PRIOR).
+    snap : float, optional
+        A blend giving one candidate at least this weight is that candidate alone (None:
+        SNAP; above 1: never).
     thin : float
         Clusters at most this thick take the last candidate without a vote.
     candidate_options : tuple
@@ -292,7 +286,7 @@ class AutoOptions:
     names: tuple | None = None
     decoys: int | None = None
     prior: float | None = None
-    tie: float | None = None
+    snap: float | None = None
     thin: float = 0.0
     candidate_options: tuple = ()
 
@@ -309,7 +303,7 @@ class AutoOptions:
             isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1
         ):
             raise InputError(f"decoys must be an integer >= 1 or None, not {self.decoys!r}")
-        for name in ("prior", "tie", "thin"):
+        for name in ("prior", "snap", "thin"):
             value = getattr(self, name)
             if value is not None and not value >= 0:  # NaN too; inf is allowed
                 raise InputError(f"{name} must be a number >= 0, not {value!r}")
@@ -345,7 +339,7 @@ class VoteRun:
             names=o.names,
             decoys=o.decoys,
             prior=o.prior,
-            tie=o.tie,
+            snap=o.snap,
             thin=o.thin,
             dtype=self.dtype,
             seed=self.seed,

@@ -21,7 +21,7 @@ from scipy import ndimage
 
 # Decoys per cluster; the spread of the candidates' errors across them is what tells a
 # real difference from chance (auto.py).
-COUNT = 4
+COUNT = 8
 # Known pixels between a decoy and the damage, the box's edge or another decoy.
 GAP = 3
 # How far decoys may lie from their cluster, in cluster sizes (its bounding box's longer
