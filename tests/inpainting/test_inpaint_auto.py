@@ -170,7 +170,8 @@ def test_stripes_go_to_the_exemplar_and_a_ramp_to_the_biharmonic_fill():
 
 def test_decoys_keep_clear_of_the_damage_the_edge_and_each_other():
     """Decoys of every cluster (a disc, a long scratch, specks) lie more than GAP px from
-    the damage, from the image's edge and from every other decoy, and copy the shape."""
+    the damage, from the image's edge and from every other decoy, and copy the shape; COUNT
+    of each where there is room."""
     rng = np.random.default_rng(2)
     omega = _disc((120, 150), 40, 60, 8)
     omega[90:92, 10:140] = True
@@ -189,6 +190,7 @@ def test_decoys_keep_clear_of_the_damage_the_edge_and_each_other():
     for a in ids:  # each decoy keeps its distance from every other
         d = ndimage.distance_transform_edt(key != a)
         assert d[(owner > 0) & (key != a)].min() > gap
-    disc_label = labels[40, 60]  # the disc's decoys are whole copies of it
-    for i in np.unique(index[owner == disc_label]):
-        assert ((owner == disc_label) & (index == i)).sum() == omega[labels == disc_label].sum()
+    disc_label = labels[40, 60]  # the disc's decoys copy it, whole or at least KEEP of it
+    size = omega[labels == disc_label].sum()
+    kept = [((owner == disc_label) & (index == i)).sum() for i in range(1, decoys.COUNT + 1)]
+    assert max(kept) == size and min(kept) >= decoys.KEEP * size
