@@ -136,7 +136,13 @@ def _settled(names, stack, members, thin, radius, count):
 
 def _weights(fills, truth):
     """Non-negative weights summing to one that minimise |sum_k w_k fills_k - truth|^2
-    (fills: (k, n), truth: (n,))."""
+    (fills: (k, n), truth: (n,)); a candidate whose fills are NaN (it could not fill the
+    decoys) gets none."""
+    ok = np.isfinite(fills[:, 0]) if fills.shape[1] else np.ones(fills.shape[0], bool)
+    if not ok.all():
+        w = np.zeros(fills.shape[0])
+        w[ok] = _weights(fills[ok], truth)
+        return w
     k = fills.shape[0]
     if k == 1:
         return np.ones(1)
@@ -149,10 +155,16 @@ def _weights(fills, truth):
 def _decoy_tests(names, data, omega, owner, runtime, dtype, seed, params):
     """Every candidate's fill of the decoys (the hole hidden too, as in its own fill), the
     true values there and each value's cluster: (k, n), (n,), (n,) over pixels and
-    channels."""
+    channels; NaN for a candidate that cannot fill them (an exemplar left without whole
+    patches to copy), which the vote then leaves out."""
     test = owner > 0
     hidden = omega | test
-    fills = [_fill(n, data, hidden, runtime, dtype, seed, params)[:, test] for n in names]
+    fills = []
+    for n in names:
+        try:
+            fills.append(_fill(n, data, hidden, runtime, dtype, seed, params)[:, test])
+        except InputError:
+            fills.append(np.full((data.shape[0], int(test.sum())), np.nan))
     lab = np.broadcast_to(owner[test], (data.shape[0], int(test.sum())))
     return np.stack([f.reshape(-1) for f in fills]), data[:, test].reshape(-1), lab.reshape(-1)
 
@@ -170,7 +182,7 @@ def _vote(names, tests, lab, prior, box, snap):
         f, t = fills[:, mine], truth[mine]
         w = _weights(f, t)
         w = box if np.isinf(prior) else (t.size * w + prior * box) / (t.size + prior)
-        why, rmse = "decoy vote", np.sqrt(((f - t) ** 2).mean(axis=1))
+        why, rmse = "decoy vote", np.sqrt(((f - t) ** 2).mean(axis=1))  # NaN: no fill
     if w.max() >= snap:
         w = np.eye(len(names))[int(np.argmax(w))]
     return w, why, rmse
