@@ -36,6 +36,9 @@ FLOOR = (1 / 255) ** 2
 # The least share of a cluster's pixels a decoy keeps (the rest land on damage or off
 # the box).
 KEEP = 0.5
+# A cluster that no decoy can copy KEEP of (a crack network across the image) takes
+# copies that keep at least LAST of it: its thickness, at least, is the hole's.
+LAST = 0.1
 
 
 def _offsets(h, w, reach):
@@ -104,19 +107,22 @@ def place(omega, labels, order, count=COUNT, texture=None):
             cost = np.abs(np.log((cost + FLOOR) / (own + FLOOR)))
             rank = np.argsort(np.where(np.isfinite(cost), cost, np.inf), kind="stable")
             dys, dxs = dys[rank], dxs[rank]
-        for dy, dx in zip(dys, dxs, strict=True):
-            y, x = ys + dy, xs + dx
-            inside = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
-            ok = inside.copy()
-            ok[inside] = free[y[inside], x[inside]]
-            if ok.sum() < KEEP * ys.size:
-                continue
-            y, x = y[ok], x[ok]
-            placed += 1
-            owner[y, x], index[y, x] = lab, placed
-            # no later decoy within GAP px of this one
-            free[_grown(y, x, omega.shape, GAP)] = False
-            if placed == count:
+        for keep in (KEEP, LAST):  # LAST: only where no decoy kept KEEP
+            for dy, dx in zip(dys, dxs, strict=True):
+                if placed == count:
+                    break
+                y, x = ys + dy, xs + dx
+                inside = (y >= 0) & (y < ny) & (x >= 0) & (x < nx)
+                ok = inside.copy()
+                ok[inside] = free[y[inside], x[inside]]
+                if ok.sum() < max(keep * ys.size, 1):
+                    continue
+                y, x = y[ok], x[ok]
+                placed += 1
+                owner[y, x], index[y, x] = lab, placed
+                # no later decoy within GAP px of this one
+                free[_grown(y, x, omega.shape, GAP)] = False
+            if placed:
                 break
     return owner, index
 
