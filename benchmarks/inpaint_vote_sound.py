@@ -4,6 +4,10 @@ against the best single candidate.
 
     python benchmarks/inpaint_vote_cache.py --half both      # first: the fills (long)
     python benchmarks/inpaint_vote_sound.py [--half calibration|test|both] [--cases]
+    python benchmarks/inpaint_vote_sound.py --real [--vote rings|decoys] [--only NAMES]
+
+--real runs a vote itself (auto.choose's rings, or inpaint_vote_decoys.choose) on the
+cached hole fills, its test fills memoised in benchmarks/results/decoy_cache/.
 
 A rule is: which test pixels score each cluster (its ring, as wide as SCALE x its
 half-thickness between 1 and 8 px and rounded up to a cached width; and/or its own shape
@@ -346,13 +350,20 @@ def _cached_fill(original, case_name, seconds):
     return fill
 
 
-def real(half, cases=None, **options):
-    """auto.choose as it is (the hole's fills from the cache, the decoys' memoised in
-    DECOY_CACHE), case by case against the best single candidate; per class mean PSNR,
-    the cases more than 0.2 dB below it, and auto's fill time against the spectral fill's
-    (the hole's fills' cached seconds plus the decoys' fills)."""
+def real(half, cases=None, vote="rings", **options):
+    """auto.choose as it is (vote "rings"), or the vote on decoys of the hole's own shape
+    (vote "decoys": inpaint_vote_decoys.choose), case by case against the best single
+    candidate; the hole's fills from the cache, the others memoised in DECOY_CACHE. Per
+    class mean PSNR, the cases more than 0.2 dB below the best candidate, and the vote's
+    fill time against the spectral fill's (the hole's fills' cached seconds plus the test
+    fills')."""
+    import inpaint_vote_decoys
+
     from clpde.inpainting import auto
     from clpde.runtime import get_runtime
+
+    chooser = inpaint_vote_decoys.choose if vote == "decoys" else auto.choose
+    options = {k: v for k, v in options.items() if v is not None}
 
     runtime = get_runtime()
     names = auto.candidates()
@@ -376,7 +387,7 @@ def real(half, cases=None, **options):
 
             auto._fill = cached
             try:
-                filled, report = auto.choose(c.data, c.omega, runtime, seed=0, **options)
+                filled, report = chooser(c.data, c.omega, runtime, seed=0, **options)
             finally:
                 auto._fill = original
             p = c.score(filled[:, c.omega])
@@ -399,7 +410,7 @@ def real(half, cases=None, **options):
             by.setdefault(d, []).append(p)
         below = sorted((m, n) for _, n, _, m in rows if m < -0.2)
         print(
-            f"\n{h}: auto.choose {options}, mean over classes "
+            f"\n{h}: vote on {vote} {options}, mean over classes "
             f"{np.mean([np.mean(v) for v in by.values()]):.2f}, {len(below)} of {len(rows)} "
             f"cases more than 0.2 dB below the best candidate (shortfalls sum "
             f"{-sum(m for m, _ in below):.2f} dB): " + "; ".join(f"{n} {m:+.2f}" for m, n in below)
@@ -417,13 +428,16 @@ def main(argv=None):
     parser.add_argument("--cases", action="store_true", help="list the cases below -0.2 dB")
     parser.add_argument("--real", action="store_true", help="run auto.choose itself (its defaults)")
     parser.add_argument("--only", default=None, help="--real: case names containing these, ','")
-    parser.add_argument("--prior", type=float, default=None, help="--real: choose's prior")
-    parser.add_argument("--snap", type=float, default=None, help="--real: choose's snap")
-    parser.add_argument("--decoys", type=int, default=None, help="--real: choose's decoys")
+    parser.add_argument("--vote", default="rings", choices=("rings", "decoys"), help="--real")
+    parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
+    parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
+    parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
     if args.real:
         only = args.only.split(",") if args.only else None
-        return real(args.half, only, prior=args.prior, snap=args.snap, decoys=args.decoys)
+        return real(
+            args.half, only, args.vote, prior=args.prior, snap=args.snap, decoys=args.decoys
+        )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = load(halves, names)

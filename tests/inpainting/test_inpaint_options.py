@@ -45,7 +45,7 @@ def test_each_method_registers_a_frozen_options_class(method):
         ("exemplar", {"patch": 4}, "patch must be"),
         ("structure-texture", {"tv_weight": -1.0}, "tv_weight must be"),
         ("spectral", {"block": 7}, "must be even"),
-        ("auto", {"decoys": 0}, "decoys must be"),
+        ("auto", {"ring": 0}, "ring must be"),
     ],
 )
 def test_bad_options_fail_on_construction_in_one_line(method, bad, match):
