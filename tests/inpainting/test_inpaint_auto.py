@@ -170,3 +170,62 @@ def test_a_thick_cluster_votes_on_two_rings_and_takes_their_mean():
     assert pixels == wide_pixels + narrow_pixels and wide_pixels > narrow_pixels > 0
     assert not np.allclose(wide, narrow)  # the two depths disagree here
     assert np.allclose(both, (wide + narrow) / 2, atol=1e-9)
+
+
+def _decoy_module():
+    """benchmarks/inpaint_vote_decoys.py: the vote on decoys, measured and not taken."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "inpaint_vote_decoys.py"
+    spec = importlib.util.spec_from_file_location("inpaint_vote_decoys", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_decoys_keep_clear_of_the_damage_the_edge_and_each_other():
+    """Decoys of every cluster (a disc, a long scratch, specks) lie more than GAP px from
+    the damage, from the image's edge and from every other decoy, and copy the shape: the
+    disc whole at least once, and every copy keeps at least KEEP of it."""
+    decoys = _decoy_module()
+    rng = np.random.default_rng(2)
+    omega = _disc((120, 150), 40, 60, 8)
+    omega[90:92, 10:140] = True
+    omega[rng.integers(0, 120, 12), rng.integers(0, 150, 12)] = True
+    labels, count = ndimage.label(ndimage.distance_transform_edt(~omega) <= 1, np.ones((3, 3)))
+    owner, index = decoys.place(omega, labels, list(range(1, count + 1)))
+    assert owner.max() > 0 and not (owner > 0)[omega].any()
+    gap = decoys.GAP
+    assert ndimage.distance_transform_edt(~omega)[owner > 0].min() > gap
+    ys, xs = np.nonzero(owner)
+    assert ys.min() > gap and xs.min() > gap
+    assert ys.max() < 120 - 1 - gap and xs.max() < 150 - 1 - gap
+    key = owner * 100 + index
+    ids = np.unique(key[owner > 0])
+    assert len(ids) > count  # several decoys per cluster
+    for a in ids:  # each decoy keeps its distance from every other
+        d = ndimage.distance_transform_edt(key != a)
+        assert d[(owner > 0) & (key != a)].min() > gap
+    disc_label = labels[40, 60]
+    size = omega[labels == disc_label].sum()
+    kept = [((owner == disc_label) & (index == i)).sum() for i in range(1, decoys.COUNT + 1)]
+    assert max(kept) == size and min(kept) >= decoys.KEEP * size
+
+
+def test_the_decoy_vote_takes_the_exemplar_on_stripes_and_biharmonic_on_a_ramp():
+    """Where one candidate is clearly best, the decoys find it: vertical stripes of period
+    6 (only the exemplar copies them), a smooth slow wave on a ramp (the biharmonic fill
+    is nearly exact)."""
+    decoys = _decoy_module()
+    names = ("biharmonic", "exemplar", "spectral")
+    y, x = np.mgrid[0:96, 0:96]
+    mask = _disc((96, 96), 48, 48, 6)
+    for image, best in (
+        (0.2 + 0.6 * ((x % 6) < 3), "exemplar"),
+        (0.3 + 0.2 * np.sin(x / 9) * np.cos(y / 11) + 0.2 * y / 96, "biharmonic"),
+    ):
+        _, report = decoys.choose(image[None], mask, get_runtime(), names=names, seed=0)
+        (choice,) = report["choices"]
+        assert choice["why"] == "decoy vote" and choice["chosen"] == best, choice
+        assert report["decoy_pixels"] >= decoys.COUNT * mask.sum() * decoys.KEEP
