@@ -430,13 +430,20 @@ def main(argv=None):
     parser.add_argument("--only", default=None, help="--real: case names containing these, ','")
     parser.add_argument("--vote", default="rings", choices=("rings", "decoys"), help="--real")
     parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
+    parser.add_argument("--narrow", type=int, default=None, help="--real --vote rings: narrow")
     parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
     parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
     if args.real:
         only = args.only.split(",") if args.only else None
         return real(
-            args.half, only, args.vote, prior=args.prior, snap=args.snap, decoys=args.decoys
+            args.half,
+            only,
+            args.vote,
+            prior=args.prior,
+            snap=args.snap,
+            decoys=args.decoys,
+            narrow=None if args.narrow is None else bool(args.narrow),
         )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
