@@ -253,6 +253,7 @@ def choose(
         order = voting[np.argsort([-members[lab].size for lab in voting], kind="stable")]
         texture = detail(data, omega)
         owner, index = place(omega, clusters, order, decoys, texture)
+        check(omega, owner, index, decoys)
         decoy_pixels = int((owner > 0).sum())
         tests = None
         if decoy_pixels and (known & (owner == 0)).any():
@@ -287,3 +288,58 @@ def choose(
         "choices": [c for c in choices if c is not None],
     }
     return out, report
+
+
+def check(omega, owner, index, count=COUNT):
+    """Raise AssertionError unless the decoys (place's owner, index) keep more than GAP px
+    from the damage, the image's edge and each other, at most `count` per cluster; every
+    vote here runs it."""
+    test = owner > 0
+    if not test.any():
+        return
+    ny, nx = omega.shape
+    assert not test[omega].any(), "a decoy on the damage"
+    assert ndimage.distance_transform_edt(~omega)[test].min() > GAP, "a decoy by the damage"
+    ys, xs = np.nonzero(test)
+    assert min(ys.min(), xs.min(), ny - 1 - ys.max(), nx - 1 - xs.max()) > GAP, "by the edge"
+    key = owner * (int(index.max()) + 1) + index
+    assert np.unique(key[test]).size <= count * np.unique(owner[test]).size
+    for a in np.unique(key[test]):
+        near = ndimage.distance_transform_edt(key != a)[test & (key != a)]
+        assert not near.size or near.min() > GAP, "two decoys touch"
+
+
+def main():
+    """Self-checks (tests/ may not import benchmarks/): the placement's rules on a disc, a
+    long scratch and specks, and the vote's choice where one candidate is clearly best:
+    vertical stripes of period 6 (only the exemplar copies them) and a slow smooth wave on a
+    ramp (the biharmonic fill is nearly exact)."""
+    from clpde.runtime import get_runtime
+
+    rng = np.random.default_rng(2)
+    y, x = np.mgrid[0:120, 0:150]
+    omega = np.hypot(y - 40, x - 60) <= 8
+    omega[90:92, 10:140] = True
+    omega[rng.integers(0, 120, 12), rng.integers(0, 150, 12)] = True
+    labels, count = ndimage.label(ndimage.distance_transform_edt(~omega) <= 1, np.ones((3, 3)))
+    owner, index = place(omega, labels, list(range(1, count + 1)))
+    check(omega, owner, index)
+    disc = omega & (labels == labels[40, 60])
+    kept = [((owner == labels[40, 60]) & (index == i)).sum() for i in range(1, COUNT + 1)]
+    assert max(kept) == disc.sum() and min(kept) >= KEEP * disc.sum(), kept
+    print(f"placement: {np.unique(owner * 100 + index).size - 1} decoys of {count} clusters ok")
+    y, x = np.mgrid[0:96, 0:96]
+    mask = np.hypot(y - 48, x - 48) <= 6
+    names = ("biharmonic", "exemplar", "spectral")
+    for image, best in (
+        (0.2 + 0.6 * ((x % 6) < 3), "exemplar"),
+        (0.3 + 0.2 * np.sin(x / 9) * np.cos(y / 11) + 0.2 * y / 96, "biharmonic"),
+    ):
+        _, report = choose(image[None], mask, get_runtime(), names=names, seed=0)
+        (c,) = report["choices"]
+        assert c["why"] == "decoy vote" and c["chosen"] == best, c
+        print(f"{best}: chosen ({c['weights']})")
+
+
+if __name__ == "__main__":
+    main()
