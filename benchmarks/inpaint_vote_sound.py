@@ -4,6 +4,10 @@ against the best single candidate.
 
     python benchmarks/inpaint_vote_cache.py --half both      # first: the fills (long)
     python benchmarks/inpaint_vote_sound.py [--half calibration|test|both] [--cases]
+    python benchmarks/inpaint_vote_sound.py --real [--vote rings|decoys] [--only NAMES]
+
+--real runs a vote itself (auto.choose's rings, or inpaint_vote_decoys.choose) on the
+cached hole fills, its test fills memoised in benchmarks/results/decoy_cache/.
 
 A rule is: which test pixels score each cluster (its ring, as wide as SCALE x its
 half-thickness between 1 and 8 px and rounded up to a cached width; and/or its own shape
@@ -314,49 +318,105 @@ def load(halves, names):
     return cases
 
 
-def real(half, narrow=None):
-    """auto.choose as it is (its ring fills made here; the hole's fills from the cache),
-    case by case against the best single candidate; per class mean PSNR and the cases more
-    than 0.2 dB below it."""
+DECOY_CACHE = CACHE.parent / "decoy_cache"
+
+
+def _cached_fill(original, case_name, seconds):
+    """auto._fill memoised on disk by (case, candidate, hidden mask): the decoy fills, so
+    that the vote's parameters can be varied without filling again; `seconds` collects
+    each fill's time (as measured when it was first made)."""
+    import hashlib
     import time
+
+    def fill(name, data, omega, *rest):
+        digest = hashlib.sha1(np.packbits(omega).tobytes()).hexdigest()[:16]
+        path = DECOY_CACHE / f"{case_name.replace('/', '_')}-{name}-{digest}.npz"
+        if path.exists():
+            z = np.load(path)
+            seconds.append(float(z["sec"]))
+            out = np.array(data, np.float64, copy=True)
+            out[:, omega] = z["fill"]
+            return out
+        start = time.perf_counter()
+        out = original(name, data, omega, *rest)
+        sec = time.perf_counter() - start
+        seconds.append(sec)
+        DECOY_CACHE.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp.npz")
+        np.savez(tmp, fill=out[:, omega].astype(np.float32), sec=sec)
+        tmp.replace(path)
+        return out
+
+    return fill
+
+
+def real(half, cases=None, vote="rings", **options):
+    """auto.choose as it is (vote "rings"), or the vote on decoys of the hole's own shape
+    (vote "decoys": inpaint_vote_decoys.choose), case by case against the best single
+    candidate; the hole's fills from the cache, the others memoised in DECOY_CACHE. Per
+    class mean PSNR, the cases more than 0.2 dB below the best candidate, and the vote's
+    fill time against the spectral fill's (the hole's fills' cached seconds plus the test
+    fills')."""
+    import inpaint_vote_decoys
 
     from clpde.inpainting import auto
     from clpde.runtime import get_runtime
+
+    chooser = inpaint_vote_decoys.choose if vote == "decoys" else auto.choose
+    options = {k: v for k, v in options.items() if v is not None}
 
     runtime = get_runtime()
     names = auto.candidates()
     halves = ("calibration", "test") if half == "both" else (half,)
     original = auto._fill
     for h in halves:
-        rows = []
+        rows, t_auto, t_spectral = [], 0.0, 0.0
         for c in load((h,), names):
+            if cases and not any(p in c.case.name for p in cases):
+                continue
             hole = {n: c.hole[k] for k, n in enumerate(names)}
+            seconds = []
+            decoy_fill = _cached_fill(original, c.case.name, seconds)
 
-            def cached(name, data, omega, *rest, c=c, hole=hole):
+            def cached(name, data, omega, *rest, c=c, hole=hole, decoy_fill=decoy_fill):
                 if np.array_equal(omega, c.omega):
                     out = c.data.copy()
                     out[:, omega] = hole[name]
                     return out
-                return original(name, data, omega, *rest)
+                return decoy_fill(name, data, omega, *rest)
 
             auto._fill = cached
-            start = time.perf_counter()
-            filled, _ = auto.choose(c.data, c.omega, runtime, seed=0, narrow=narrow)
-            auto._fill = original
+            try:
+                filled, report = chooser(c.data, c.omega, runtime, seed=0, **options)
+            finally:
+                auto._fill = original
             p = c.score(filled[:, c.omega])
+            sec = sum(c.seconds.values()) + sum(seconds)
+            t_auto += sec
+            t_spectral += c.seconds["spectral"]
+            why = {}
+            for ch in report["choices"]:
+                key = f"{ch['why']}:{ch['chosen']}"
+                why[key] = why.get(key, 0) + ch["pixels"]
             rows.append((c.case.damage, c.case.name, p, p - c.best))
-            print(f"{c.case.name} {p:.2f} {p - c.best:+.2f} {time.perf_counter() - start:.1f} s")
+            print(
+                f"{c.case.name} {p:.2f} {p - c.best:+.2f} {sec:.1f} s "
+                f"best={max(c.single, key=c.single.get)} "
+                + " ".join(f"{k}={v}" for k, v in sorted(why.items(), key=lambda kv: -kv[1])[:3]),
+                flush=True,
+            )
         by = {}
         for d, _, p, _ in rows:
             by.setdefault(d, []).append(p)
         below = sorted((m, n) for _, n, _, m in rows if m < -0.2)
         print(
-            f"\n{h}: auto.choose (narrow={narrow}), mean over classes "
+            f"\n{h}: vote on {vote} {options}, mean over classes "
             f"{np.mean([np.mean(v) for v in by.values()]):.2f}, {len(below)} of {len(rows)} "
-            "cases more than 0.2 dB below the best candidate: "
-            + "; ".join(f"{n} {m:+.2f}" for m, n in below)
+            f"cases more than 0.2 dB below the best candidate (shortfalls sum "
+            f"{-sum(m for m, _ in below):.2f} dB): " + "; ".join(f"{n} {m:+.2f}" for m, n in below)
         )
         print(" ".join(f"{d}={np.mean(by[d]):.2f}" for d in corpus.CLASSES if d in by))
+        print(f"time: auto {t_auto:.1f} s, spectral {t_spectral:.1f} s, x{t_auto / t_spectral:.2f}")
 
 
 def main(argv=None):
@@ -367,10 +427,24 @@ def main(argv=None):
     parser.add_argument("--rules", default=None, help="names of RULES, ';'-separated")
     parser.add_argument("--cases", action="store_true", help="list the cases below -0.2 dB")
     parser.add_argument("--real", action="store_true", help="run auto.choose itself (its defaults)")
-    parser.add_argument("--narrow", type=int, default=None, help="--real: choose's narrow")
+    parser.add_argument("--only", default=None, help="--real: case names containing these, ','")
+    parser.add_argument("--vote", default="rings", choices=("rings", "decoys"), help="--real")
+    parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
+    parser.add_argument("--narrow", type=int, default=None, help="--real --vote rings: narrow")
+    parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
+    parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
     if args.real:
-        return real(args.half, None if args.narrow is None else bool(args.narrow))
+        only = args.only.split(",") if args.only else None
+        return real(
+            args.half,
+            only,
+            args.vote,
+            prior=args.prior,
+            snap=args.snap,
+            decoys=args.decoys,
+            narrow=None if args.narrow is None else bool(args.narrow),
+        )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
     cases = load(halves, names)
