@@ -107,9 +107,12 @@ def match_shift(
     y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
     weight = weight[y0:y1, x0:x1]
     prev = np.asarray(prev)[:, y0:y1, x0:x1]
-    cur = np.pad(np.asarray(cur), ((0, 0), (r, r), (r, r)), mode="edge")[
-        :, y0 : y1 + 2 * r, x0 : x1 + 2 * r
-    ]
+    # (the rows and columns of cur padded by r edge values, read at the box's: no padded
+    # copy of the whole frame)
+    cur = np.asarray(cur)
+    rows = np.clip(np.arange(y0 - r, y1 + r), 0, cur.shape[1] - 1)
+    cols = np.clip(np.arange(x0 - r, x1 + r), 0, cur.shape[2] - 1)
+    cur = cur[:, rows[:, None], cols[None, :]]
     h, w = weight.shape
     # room for every shift within reach without wrapping, rounded up to a fast FFT length
     shape = tuple(sfft.next_fast_len(n + 3 * r, real=True) for n in (h, w))
