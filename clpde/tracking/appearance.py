@@ -58,6 +58,41 @@ SEPARATION = 1.5
 BRIGHT_TOP = 99
 
 
+def box(mask: np.ndarray, margin: int):
+    """The slices of `mask`'s bounding box grown by `margin` px, within the frame; None for
+    an empty mask."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if not len(rows):
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    h, w = mask.shape
+    return (
+        slice(max(rows[0] - margin, 0), min(rows[-1] + 1 + margin, h)),
+        slice(max(cols[0] - margin, 0), min(cols[-1] + 1 + margin, w)),
+    )
+
+
+def dilate(mask: np.ndarray, iterations: int) -> np.ndarray:
+    """ndimage.binary_dilation(mask, iterations=iterations), computed over the mask's box
+    grown by `iterations` px only (the cross reaches no farther): the same result, at a
+    cost that grows with the object, not the frame."""
+    out = np.zeros(mask.shape, bool)
+    where = box(mask, iterations)
+    if where is not None:
+        out[where] = ndimage.binary_dilation(mask[where], iterations=iterations)
+    return out
+
+
+def erode(mask: np.ndarray, iterations: int = 1) -> np.ndarray:
+    """ndimage.binary_erosion(mask, iterations=iterations) over the mask's box grown by 1
+    px: the same result (outside the box, and on the frame's border, it is 0 either way)."""
+    out = np.zeros(mask.shape, bool)
+    where = box(mask, 1)
+    if where is not None:
+        out[where] = ndimage.binary_erosion(mask[where], iterations=iterations)
+    return out
+
+
 def match_shift(
     prev, cur, weight, reach: int = REACH, prior=(0.0, 0.0), within: float | None = None
 ) -> np.ndarray:
@@ -72,9 +107,12 @@ def match_shift(
     y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
     weight = weight[y0:y1, x0:x1]
     prev = np.asarray(prev)[:, y0:y1, x0:x1]
-    cur = np.pad(np.asarray(cur), ((0, 0), (r, r), (r, r)), mode="edge")[
-        :, y0 : y1 + 2 * r, x0 : x1 + 2 * r
-    ]
+    # (the rows and columns of cur padded by r edge values, read at the box's: no padded
+    # copy of the whole frame)
+    cur = np.asarray(cur)
+    rows = np.clip(np.arange(y0 - r, y1 + r), 0, cur.shape[1] - 1)
+    cols = np.clip(np.arange(x0 - r, x1 + r), 0, cur.shape[2] - 1)
+    cur = cur[:, rows[:, None], cols[None, :]]
     h, w = weight.shape
     # room for every shift within reach without wrapping, rounded up to a fast FFT length
     shape = tuple(sfft.next_fast_len(n + 3 * r, real=True) for n in (h, w))
@@ -200,16 +238,21 @@ def _refine(prev, cur, rim, d, steps):
     # cur's coordinates), the grey levels averaged over the channels; the affine part
     # about the object's centre, so that turning and shifting are not confounded.
     gp, gc = prev.mean(axis=0), cur.mean(axis=0)
-    yy, xx = np.mgrid[: gc.shape[0], : gc.shape[1]] + 0.0
     gy, gx = np.gradient(gp)
     centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
     # one set of pixels for every step and for the costs compared: cur's pixels where the
-    # shift puts the object
-    where = _warp(rim * 1.0, shifted, 1) > 0.5
+    # shift puts the object (a whole-pixel shift, the edge repeated: an index shift)
+    h, w = rim.shape
+    if np.array_equal(d, np.round(d)):
+        rows = np.clip(np.arange(h) - int(d[0]), 0, h - 1)
+        cols = np.clip(np.arange(w) - int(d[1]), 0, w - 1)
+        where = rim[np.ix_(rows, cols)]
+    else:
+        where = _warp(rim * 1.0, shifted, 1) > 0.5
     if where.sum() < 12:
         return shifted
-    y, x = yy[where] - centre[0], xx[where] - centre[1]
-    pts = np.stack([yy[where], xx[where]])
+    pts = np.array(np.nonzero(where), np.float64)
+    y, x = pts[0] - centre[0], pts[1] - centre[1]
 
     stack = np.stack([gp, gy, gx])
 
@@ -222,8 +265,8 @@ def _refine(prev, cur, rim, d, steps):
     ref = at(shifted)[0]
     target = (target - target.mean()) * (ref.std() / max(target.std(), 1e-6)) + ref.mean()
 
-    def cost(a):
-        return float(np.mean((at(a)[0] - target) ** 2))
+    def cost(a, values=None):
+        return float(np.mean(((at(a)[0] if values is None else values) - target) ** 2))
 
     def fit(a, columns, steps=steps):  # Gauss-Newton steps on the parameters `columns` of a
         for _ in range(steps):
@@ -242,18 +285,19 @@ def _refine(prev, cur, rim, d, steps):
                 break
         return a
 
-    start = cost(shifted)
+    start = cost(shifted, ref)
     moved = fit(shifted, [2, 5], 3)  # the sub-pixel shift
     if not (np.all(np.isfinite(moved)) and np.abs(moved - shifted).max() < 1.5):
         moved = shifted
-    if not cost(moved) < start:
-        moved = shifted
+    moved_cost = cost(moved) if moved is not shifted else start
+    if not moved_cost < start:
+        moved, moved_cost = shifted, start
     a = fit(moved, list(range(6)))
     lin = a[:, :2]
     sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
     # the turn and scaling only where they explain the object clearly better than the
     # shift: fitted to noise, a slight shrink each frame adds up to a lost object
-    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < AFFINE_GAIN * cost(moved):
+    if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < AFFINE_GAIN * moved_cost:
         a = moved
     return a
 
@@ -315,7 +359,7 @@ class AppearanceModel:
     def learn(self, bins: np.ndarray, mask: np.ndarray) -> None:
         """The object's histogram from its mask in a frame (`bins` of that frame), as a
         running mean over the frames."""
-        inner = ndimage.binary_erosion(mask) if mask.sum() > 60 else mask
+        inner = erode(mask) if mask.sum() > 60 else mask
         if inner.sum() < 4:
             return
         h = self._histogram(bins, inner)
@@ -324,8 +368,8 @@ class AppearanceModel:
     def log_ratio(self, bins: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         """(H, W) log p(surroundings) / p(object) per pixel, the surroundings' histogram
         taken from the ring RING around `predicted` in this frame."""
-        near = ndimage.binary_dilation(predicted, iterations=RING[0])
-        far = ndimage.binary_dilation(near, iterations=RING[1] - RING[0])
+        near = dilate(predicted, RING[0])
+        far = dilate(near, RING[1] - RING[0])
         ring = far & ~near
         if ring.sum() < 16 or self.object is None:
             return np.zeros(bins.shape)

@@ -20,7 +20,16 @@ import numpy as np
 from scipy import ndimage
 
 from .adaptive import noise_variance
-from .appearance import MATCH_FLOOR, AppearanceModel, AppearanceTerm, bilinear, object_motion
+from .appearance import (
+    MATCH_FLOOR,
+    AppearanceModel,
+    AppearanceTerm,
+    bilinear,
+    box,
+    dilate,
+    erode,
+    object_motion,
+)
 from .levelset import LevelSet, signed_distance
 from .motion_filter import local_contrast
 
@@ -83,9 +92,9 @@ def _reliability(ratio: np.ndarray, mask: np.ndarray) -> float:
     it: its pixels look like something else, and the evidence would erode it.)"""
     if not RELIABLE_ERROR:
         return 1.0
-    inner = ndimage.binary_erosion(mask, iterations=2)
-    near = ndimage.binary_dilation(mask, iterations=2)
-    ring = ndimage.binary_dilation(near, iterations=6) & ~near
+    inner = erode(mask, 2)
+    near = dilate(mask, 2)
+    ring = dilate(near, 6) & ~near
     if not inner.any() or not ring.any():
         return 1.0
     error = float((ratio[inner] > 0).mean() + (ratio[ring] < 0).mean())
@@ -119,9 +128,9 @@ def _ring_miss(prev, cur, a, predicted) -> float:
     against how well over the object (2 px in): the median absolute residuals' ratio. About
     1 where the background moves with the object or is flat; large where it moves
     otherwise, and the image term drags the contour off."""
-    inner = ndimage.binary_erosion(predicted, iterations=2)
-    near = ndimage.binary_dilation(predicted, iterations=3)
-    ring = ndimage.binary_dilation(near, iterations=5) & ~near
+    inner = erode(predicted, 2)
+    near = dilate(predicted, 3)
+    ring = dilate(near, 5) & ~near
     if inner.sum() < 8 or not ring.any():
         return 1.0
     where = inner | ring
@@ -138,6 +147,19 @@ def _change(before: np.ndarray, after: np.ndarray, where: np.ndarray) -> float:
     changed. (C, H, W) frames."""
     expected = 2.0 * np.sqrt(noise_variance(after)) / np.sqrt(np.pi)
     return float(np.abs(after - before).sum(axis=0)[where].mean() / max(expected, 1e-6))
+
+
+def _prior(predicted: np.ndarray) -> np.ndarray:
+    """The prediction's log prior odds of the surroundings: the signed distance to the
+    predicted shape over PRIOR_SCALE px, within +-PRIOR_CAP. The distances are found over
+    the shape's box grown by `reach` px only: a pixel outside it is farther than that from
+    the shape (the cap), and one inside it is no nearer to a pixel outside the box than to
+    the box's rim, which is outside the shape too (the same values as over the frame)."""
+    reach = int(np.ceil(PRIOR_SCALE * PRIOR_CAP)) + 1
+    prior = np.full(predicted.shape, float(PRIOR_CAP))
+    where = box(predicted, reach)
+    prior[where] = np.clip(signed_distance(predicted[where]) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
+    return prior
 
 
 def _centroid(mask: np.ndarray) -> np.ndarray:
@@ -218,7 +240,7 @@ class ObjectFollower:
             predicted, predicted_u = self.shape, self.shape_u
         self.predicted, self._predicted_u = predicted, predicted_u
         # F1: the previous frame carried with the object near its predicted place
-        near = ndimage.binary_dilation(predicted, iterations=int(np.ceil(self.band)) + 4)
+        near = dilate(predicted, int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
         for c in range(out.shape[0]):
             out[c][near] = _at(prepared_prev[c], a, near)
@@ -241,8 +263,7 @@ class ObjectFollower:
         # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
         # and only clear evidence carves it or grows it
-        sd = signed_distance(predicted)
-        prior = np.clip(sd / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
+        prior = _prior(predicted)
         self._looks_ratio = self.model.log_ratio(self._bins, predicted)
         # (no evidence from the motion-compensated residual: a talking mouth or a turning
         # face does not move with the object either, and on the calibration half, 0.827 ->
@@ -280,9 +301,12 @@ class ObjectFollower:
         surroundings there (an occluder, the background it moved off), so that the contour
         need not carve a hidden strip out from the edge; the whole prediction where the
         appearance tells too little (less than VISIBLE of it would remain)."""
-        looks = ndimage.gaussian_filter(self._ratio, 1.0) < 0
-
-        start = ndimage.binary_opening(predicted & looks)
+        # over the prediction's box grown by the filter's radius (4 px) and the opening's
+        # (1 px): the same values there as over the frame, at the object's cost
+        where = box(predicted, 5)
+        looks = ndimage.gaussian_filter(self._ratio[where], 1.0) < 0
+        start = np.zeros(predicted.shape, bool)
+        start[where] = ndimage.binary_opening(predicted[where] & looks)
         labels, n = ndimage.label(start, structure=np.ones((3, 3)))
         if n > 1:
             sizes = np.bincount(labels.ravel())[1:]
@@ -294,9 +318,7 @@ class ObjectFollower:
         pieces; the models learn."""
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
-        mask = _drop_strays(
-            mask & ndimage.binary_dilation(self.predicted, iterations=GROW), self.predicted
-        )
+        mask = _drop_strays(mask & dilate(self.predicted, GROW), self.predicted)
         if self.term is not None and mask.any():
             self.reliability = _reliability(self._looks_ratio, mask)
             # the object's model learns the pixels that did not look clearly like the

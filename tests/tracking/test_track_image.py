@@ -7,7 +7,9 @@ import pytest
 from scipy import ndimage
 from test_track import iou, synthetic_sequence
 
-from clpde.tracking.appearance import AppearanceModel, match_shift, object_motion
+from clpde.tracking.appearance import AppearanceModel, dilate, erode, match_shift, object_motion
+from clpde.tracking.follow import PRIOR_CAP, PRIOR_SCALE, _prior
+from clpde.tracking.levelset import signed_distance
 from clpde.tracking.tracker import track
 
 H, W = 64, 96
@@ -151,3 +153,33 @@ def test_image_motion_keeps_a_still_contour():
     frames, truth = synthetic_sequence("translate", frames=1)
     masks = track(np.repeat(frames, 3, axis=0), truth[0], motion="image", progress=False)
     assert all((m == truth[0]).all() for m in masks)
+
+
+def _blobs(rng):
+    """Random masks, some touching the frame's edges, some far from them."""
+    for k in range(40):
+        h, w = rng.integers(8, 50, 2)
+        if k % 2:
+            m = ndimage.gaussian_filter(rng.random((h, w)), 2.0) > 0.52
+        else:
+            m = np.zeros((h, w), bool)
+            y, x = rng.integers(0, h), rng.integers(0, w)
+            m[y : y + rng.integers(1, 15), x : x + rng.integers(1, 15)] = True
+        if m.any() and not m.all():
+            yield m
+
+
+def test_box_restricted_work_matches_the_whole_frame():
+    """The dilations, erosions and distances computed over the object's box give the
+    whole frame's values exactly (a margin one short of the reach would not)."""
+    rng = np.random.default_rng(5)
+    for m in _blobs(rng):
+        for n in (1, 3, 6):
+            assert np.array_equal(dilate(m, n), ndimage.binary_dilation(m, iterations=n))
+            assert np.array_equal(erode(m, n), ndimage.binary_erosion(m, iterations=n))
+        inside = ndimage.distance_transform_edt(m)
+        outside = ndimage.distance_transform_edt(~m)
+        whole = np.where(m, 0.5 - inside, outside - 0.5)
+        assert np.array_equal(signed_distance(m), whole)
+        prior = np.clip(whole / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
+        assert np.array_equal(_prior(m), prior)
