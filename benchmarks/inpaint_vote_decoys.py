@@ -274,14 +274,7 @@ def choose(
             }
             if rmse is not None:
                 choices[lab - 1]["decoy_rmse"] = dict(zip(names, rmse.tolist(), strict=True))
-    # assemble: each cluster's hole pixels from its weights
-    weights = np.zeros((len(names), count + 1))
-    for lab, ch in enumerate(choices, start=1):
-        if ch is not None:
-            for n, w in ch["weights"].items():
-                weights[names.index(n), lab] = w
-    per_pixel = weights[:, hole_label]  # (k, n)
-    out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack)
+    out[:, omega] = auto._assemble(names, choices, count, hole_label, stack)
     report = {
         "candidates": names,
         "decoy_pixels": decoy_pixels,

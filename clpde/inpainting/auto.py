@@ -264,6 +264,17 @@ def _votes(tests, vote, count, names, blend, prior):
     return out
 
 
+def _assemble(names, choices, count, hole_label, stack):
+    """The hole's values (c, n): each cluster's pixels mixed from the candidates' fills
+    `stack` (k, c, n) by its choice's weights."""
+    weights = np.zeros((len(names), count + 1))
+    for lab, ch in enumerate(choices, start=1):
+        if ch is not None:
+            for n, w in ch["weights"].items():
+                weights[names.index(n), lab] = w
+    return np.einsum("kn,kcn->cn", weights[:, hole_label], stack)
+
+
 def choose(
     data,
     omega,
@@ -349,14 +360,7 @@ def choose(
                 "weights": {n: float(x) for n, x in zip(names, w, strict=True) if x > 0},
                 "ring_rmse": {n: float(x) for n, x in zip(names, cast[0][1], strict=True)},
             }
-    # assemble: each cluster's hole pixels from its weights
-    weights = np.zeros((len(names), count + 1))
-    for lab, ch in enumerate(choices, start=1):
-        if ch is not None:
-            for n, w in ch["weights"].items():
-                weights[names.index(n), lab] = w
-    per_pixel = weights[:, hole_label]  # (k, n)
-    out[:, omega] = np.einsum("kn,kcn->cn", per_pixel, stack)
+    out[:, omega] = _assemble(names, choices, count, hole_label, stack)
     report = {
         "candidates": names,
         "ring": ring,

@@ -110,6 +110,20 @@
     select((REALV)-1, (score), convert_int8(vload8(0, (half_x) + (j0))) >= 0)
 #endif
 
+// a vector of 8 candidates' residual transform (rr, ri) stored at j0, their scores stored
+// in sc (spare slots losing) and folded into the lane-wise maximum top: the first pass and
+// every update after a pick score alike
+#define STORE_AND_SCORE(rr, ri, j0, top)                                                    \
+    do {                                                                                  \
+        vstore8((rr), 0, rre + (j0));                                                     \
+        vstore8((ri), 0, rim + (j0));                                                     \
+        const REALV score_ = (vload8(0, qa + (j0)) * (rr) + vload8(0, qb + (j0)) * (ri)) * (rr) \
+                             + vload8(0, qc + (j0)) * (ri) * (ri);                        \
+        const REALV kept_ = SPARE_LOSES(score_, half_x, (j0));                            \
+        vstore8(kept_, 0, sc + (j0));                                                     \
+        (top) = fmax((top), kept_);                                                       \
+    } while (0)
+
 // (bs, bi): the largest of an item's scores sc (vectors lid, lid + GROUP, ... of nv), top
 // their lane-wise maximum, and the first slot that holds it; (-1, 0) where none exceeds -1.
 // The same choice as a running argmax (a larger score, or an equal one earlier, wins), in a
@@ -431,13 +445,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 rr += ar * c + ai * s;
                 ri += ai * c - ar * s;
             }
-            vstore8(rr, 0, rre + j0);
-            vstore8(ri, 0, rim + j0);
-            const REALV score = (vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
-                                + vload8(0, qc + j0) * ri * ri;
-            const REALV kept = SPARE_LOSES(score, half_x, j0);
-            vstore8(kept, 0, sc + j0);
-            top = fmax(top, kept);
+            STORE_AND_SCORE(rr, ri, j0, top);
         }
         first_best(sc, NC / 8, lid, top, &bs, &bi);
 #else
@@ -553,13 +561,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         ui += cr * pi - ci * pr;
                     }
                     const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
-                    vstore8(rr, 0, rre + j0);
-                    vstore8(ri, 0, rim + j0);
-                    const REALV score = (vload8(0, qa + j0) * rr + vload8(0, qb + j0) * ri) * rr
-                                        + vload8(0, qc + j0) * ri * ri;
-                    const REALV kept = SPARE_LOSES(score, half_x, j0);
-                    vstore8(kept, 0, sc + j0);
-                    top = fmax(top, kept);
+                    STORE_AND_SCORE(rr, ri, j0, top);
                 }
                 first_best(sc, NC / 8, lid, top, &bs, &bi);
 #else
