@@ -50,7 +50,7 @@ def device_paths(index: int) -> list[str]:
             continue
         name = np.dtype(dtype).name
         try:
-            kernel, spill = spectral.fitting_kernel(rt, np.dtype(dtype))
+            kernel, spill, _ = spectral.fitting_kernel(rt, np.dtype(dtype))
         except ClpdeError as exc:
             lines.append(f"spectral ({name}): cannot run: {exc}")
             continue

@@ -1,12 +1,10 @@
 """Line scratches: thin, long, near-vertical lines, found in a residual or in the frames.
 
-Two detectors share this module.
-
-The line response of a residual (kernels/film/detect.cl), which the temporal detector of
-clpde.film.detect runs on each frame minus its compensated neighbours and a single image's
-detector on the image minus its horizontal median: a column mean of the clamped residual,
-a thin-line response across it in robust noise units, summed with the matching response of
-the previous and next frames within a pixel of drift (`LineKernels`); then the long
+Two detectors share this module. The line response of a residual (kernels/film/detect.cl),
+which the temporal detector of clpde.film.detect runs on each frame minus its compensated
+neighbours and a single image's detector on the image minus its horizontal median: a column
+mean of the clamped residual, a thin-line response across it in robust noise units, summed
+with the previous and next frames' within a pixel of drift (`LineKernels`); then the long
 vertical runs of it whose rows mostly show the line (`scratch_runs`).
 
 Scratches found in the frames themselves (`film_scratches`). The temporal detector sees a
@@ -84,8 +82,8 @@ RUN_SUPPORT = 0.5  # share of a scratch run's rows whose residual shows the line
 def robust_scale(a: np.ndarray) -> float:
     """The median absolute deviation of a's finite values, as a Gaussian's deviation."""
     a = a[np.isfinite(a)]
-    if a.size == 0:
-        return float(1.4826 * np.median(a)) + 1e-9  # NaN, as ever
+    if a.size == 0:  # NaN, as np.median of nothing gave (without its warning)
+        return float("nan")
     return float(1.4826 * median_of(np.abs(a - median_of(a)))) + 1e-9
 
 

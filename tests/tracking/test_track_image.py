@@ -183,3 +183,40 @@ def test_box_restricted_work_matches_the_whole_frame():
         assert np.array_equal(signed_distance(m), whole)
         prior = np.clip(whole / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
         assert np.array_equal(_prior(m), prior)
+
+
+def _touching_lookalike():
+    """A disc (0.8) drifting 1 px a frame that meets a larger blob nearly as bright (0.75,
+    moving otherwise) at frame 0, over grainy ground (noise 0.03): the scene of the napari
+    widget's test before it was given distinct discs."""
+    rng = np.random.default_rng(0)
+    y, x = np.mgrid[:64, :64].astype(np.float32)
+    ground = rng.normal(0.3, 0.08, (64, 64))
+    frames, truth = [], []
+    for t in range(5):
+        cy, cx = 32 + 6 * np.sin(t / 5), 19.2 + 2.0 * t
+        ry, rx = 10.24 * (1 + 0.2 * np.sin(t / 3)), 12.8
+        blob = ((y - cy) / ry) ** 2 + ((x - cx) / rx) ** 2 < 1
+        disc = (y - 20) ** 2 + (x - 18 - t) ** 2 < 64
+        frame = np.where(blob, 0.75, ground) + rng.normal(0, 0.03, (64, 64))
+        frames.append(np.where(disc, 0.8, frame))
+        truth.append(disc)
+    return np.asarray(frames, np.float32)[::-1], np.asarray(truth)[::-1]
+
+
+def test_checked_motion_keeps_a_disc_off_a_touching_lookalike():
+    frames, truth = _touching_lookalike()
+    masks = track(frames, truth[0], motion="checked")
+    assert min(_iou(m, g) for m, g in zip(masks, truth, strict=True)) > 0.7
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="known (issue 35): with motion='image' (the default) the contour leaks into a "
+    "touching blob of nearly the object's grey (0.8 vs 0.75, noise 0.03) and slides onto it "
+    "(min IoU 0.58 here, 0.07 with a second disc in the frames; 'checked' holds 0.96)",
+)
+def test_image_motion_keeps_a_disc_off_a_touching_lookalike():
+    frames, truth = _touching_lookalike()
+    masks = track(frames, truth[0])
+    assert min(_iou(m, g) for m, g in zip(masks, truth, strict=True)) > 0.7
