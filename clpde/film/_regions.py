@@ -39,6 +39,17 @@ def _components(labels: np.ndarray, pad: int):
         yield idx, win, labels[win] == idx
 
 
+def _kept(mask: np.ndarray, pad: int, test) -> np.ndarray:
+    """The components of mask for which test(win, own, labels_win) holds: win, the
+    component's box grown by pad px; own, its pixels there; labels_win, every component's
+    labels there (a ring must leave the others out)."""
+    labels, _ = ndimage.label(mask)
+    keep = np.zeros(labels.max() + 1, bool)
+    for idx, win, own in _components(labels, pad):
+        keep[idx] = test(win, own, labels[win])
+    return keep[labels]
+
+
 def _ring(own: np.ndarray, labels_win: np.ndarray, inner: int, outer: int) -> np.ndarray:
     """The pixels inner+1 to outer px from `own` that belong to no component."""
     ring = ndimage.binary_dilation(own, iterations=outer)
@@ -81,13 +92,9 @@ def _motion_check(
     surroundings say damage at the blotch `threshold` (_spatially_damage). Flat ones at the
     ends keep ROD's say: asking the spatial test of them too cost 4% of the calibration
     half's blotch recall (0.601 -> 0.559) and no frame there got better."""
-    labels, n = ndimage.label(comp_mask)
-    if n == 0:
-        return comp_mask
     T, ny, nx = G.shape
-    keep = np.ones(n + 1, bool)
-    keep[0] = False
-    for idx, win, own in _components(labels, 4):
+
+    def damage(win, own, labels_win) -> bool:
         (y0, y1), (x0, x1) = (win[0].start, win[0].stop), (win[1].start, win[1].stop)
         region = ndimage.binary_dilation(own, iterations=2)
         r2 = resid[y0:y1, x0:x1] ** 2
@@ -95,7 +102,7 @@ def _motion_check(
         e_own = float(np.median(r2[own]))
         templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
         th, tw = templ.shape
-        ring = _ring(own, labels[win], 1, 4)
+        ring = _ring(own, labels_win, 1, 4)
         ys, xs = np.nonzero(own)
         edge = min(ys.min() + y0, xs.min() + x0, ny - 1 - ys.max() - y0, nx - 1 - xs.max() - x0)
         flat = robust_scale(templ[own]) < MOTION_TEXTURE * sigma
@@ -105,45 +112,35 @@ def _motion_check(
             # missed from damage (a region with structure may be either); the frame's own
             # surroundings decide (_spatially_damage, at the blotch threshold)
             side = float(np.median(resid[win][own]))
-            keep[idx] = ring.sum() >= 4 and _spatially_damage(
+            return bool(ring.sum() >= 4) and _spatially_damage(
                 G, t, win, own, ring, side, threshold * sigma, search
             )
-            continue
         # a flat spot (dirt is mostly flat) matches any dark or bright place of the
         # neighbours: it is an object only where it is found again on both sides at places
         # one steady velocity explains (a flat object the flow did not follow)
         if flat:
-            if ring.sum() >= 4:
-                g = templ[own]
-                bar = float(np.mean((g - np.median(templ[ring])) ** 2)) / 4
-                box = ((y0, y1), (x0, x1))
-                keep[idx] = not _moves_steadily(G, t, box, own, search, bar)
-            continue
-        found = []
-        # the frames each side; at the film's ends the next two on the one side
-        pair = (t - 1, t + 1)
-        for s in pair:
+            if ring.sum() < 4:
+                return True
+            g = templ[own]
+            bar = float(np.mean((g - np.median(templ[ring])) ** 2)) / 4
+            return not _moves_steadily(G, t, ((y0, y1), (x0, x1)), own, search, bar)
+        found = []  # the median squared difference at the best place in each neighbour
+        for s in (t - 1, t + 1):
             if not 0 <= s < T:
                 continue
             wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
             wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
-            win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
-            if win.shape[0] < th or win.shape[1] < tw:
+            area = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
+            if area.shape[0] < th or area.shape[1] < tw:
                 continue
-            res = _masked_ssd(win, templ, region.astype(np.float64))
+            res = _masked_ssd(area, templ, region.astype(np.float64))
             my, mx = np.unravel_index(int(np.argmin(res)), res.shape)
-            diff = (templ - win[my : my + th, mx : mx + tw]) ** 2
-            found.append(
-                (
-                    float(np.median(diff[own])),
-                    float(diff[region].mean()),
-                    np.array([my + wy0 - y0, mx + wx0 - x0], float) / (s - t),
-                )
-            )
+            found.append(float(np.median((templ - area[my : my + th, mx : mx + tw])[own] ** 2)))
         # found in either neighbour, at any displacement (zero included: a flow that
         # wandered off a still region warps the wrong pixels onto it): not damage
-        keep[idx] = not any(f[0] < MATCH_RATIO * e_own for f in found)
-    return keep[labels]
+        return not any(f < MATCH_RATIO * e_own for f in found)
+
+    return _kept(comp_mask, 4, damage)
 
 
 def _ring_check(
@@ -157,18 +154,15 @@ def _ring_check(
     flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
     px out, an occluded or revealed region would pass for damage (at a film's ends
     nothing else tells them apart); both flows, as damage disturbs the flow around it."""
-    labels, n = ndimage.label(mask)
-    if n == 0:
-        return mask
-    keep = np.zeros(n + 1, bool)
-    for idx, win, own in _components(labels, 7):
-        ring = _ring(own, labels[win], 1, 4)
+
+    def explained(win, own, labels_win) -> bool:
+        ring = _ring(own, labels_win, 1, 4)
         if ring.sum() < 4:
-            continue
+            return False
         trusted = both[win][ring]
         quiet = np.abs(res[win][ring]) <= RING_LIMIT * sigma
         if not (trusted.mean() >= RING_TRUSTED and (trusted & quiet).mean() >= RING_QUIET):
-            continue
+            return False
         outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
             own, iterations=2
         )
@@ -178,8 +172,9 @@ def _ring_check(
         for f in flows[(slice(None), *win)][:, outer]:  # (pixels, 2) per neighbour
             lo, hi = np.percentile(f, [5, 95], axis=0)
             spread = min(spread, float((hi - lo).max()))
-        keep[idx] = spread <= EDGE_SPREAD
-    return keep[labels]
+        return spread <= EDGE_SPREAD
+
+    return _kept(mask, 7, explained)
 
 
 def _local_noise_check(
@@ -191,18 +186,16 @@ def _local_noise_check(
     of RESIDUAL_UNITS sigma under grain alone; more where the flow is off), must still
     reach the threshold. Flow and warp errors come in clusters, and a small region of them
     lies among others; a blotch lies on a scene the neighbours compensate."""
-    labels, n = ndimage.label(mask)
-    if n == 0:
-        return mask
-    keep = np.zeros(n + 1, bool)
-    for idx, win, own in _components(labels, 4):
-        ring = _ring(own, labels[win], 1, 3)
+
+    def stands_out(win, own, labels_win) -> bool:
+        ring = _ring(own, labels_win, 1, 3)
         if not ring.any():
-            continue
+            return False
         level = 1.4826 * float(np.median(np.abs(res[win][ring])))
         local = max(1.0, level / (RESIDUAL_UNITS * sigma))
-        keep[idx] = float(a[win][own].max()) >= threshold * local
-    return keep[labels]
+        return float(a[win][own].max()) >= threshold * local
+
+    return _kept(mask, 4, stands_out)
 
 
 def _tail_check(
@@ -219,23 +212,20 @@ def _tail_check(
     of places sets the bar (multiple testing). On the calibration half it takes the small
     false alarms on textured, motion-blurred foliage that made frames worse than their
     input (benchmarks/film_worse.py)."""
-    labels, n = ndimage.label(mask)
-    if n == 0:
-        return mask
-    keep = np.zeros(n + 1, bool)
-    for idx, win, own in _components(labels, TAIL_REACH):
+
+    def unexplained(win, own, labels_win) -> bool:
         around = ndimage.binary_dilation(own, iterations=TAIL_REACH)
         around &= ~ndimage.binary_dilation(own, iterations=2) & ~busy[win] & valid[win]
         if not around.any():
-            keep[idx] = True
-            continue
+            return True
         r = np.abs(res[win])
         count = int(own.sum())
         share = float((r[around] >= np.median(r[own])).mean())
         cells = max(1, round(count / area))
         chance = float(stats.binom.sf(np.ceil(cells / 2) - 1, cells, share))
-        keep[idx] = chance <= count / mask.size
-    return keep[labels]
+        return chance <= count / mask.size
+
+    return _kept(mask, TAIL_REACH, unexplained)
 
 
 def _best_place(G: np.ndarray, t: int, s: int, box, own: np.ndarray, search: int):
@@ -324,20 +314,17 @@ def _spatial_blotches(
       dirt is not.
 
     Returns the bool mask of the regions kept (at least `smallest` px)."""
-    T, ny, nx = G.shape
-    labels, n = ndimage.label((z > low) & ~taken)
-    if n == 0:
-        return labels > 0
-    keep = np.zeros(n + 1, bool)
-    for idx, win, own in _components(labels, 4):
+
+    def damage(win, own, labels_win) -> bool:
         if own.sum() < smallest or np.median(z[win][own]) < threshold:
-            continue
-        ring = _ring(own, labels[win], 1, 4) & ~taken[win]
+            return False
+        ring = _ring(own, labels_win, 1, 4) & ~taken[win]
         if ring.sum() < 4:
-            continue
+            return False
         side = np.median(sign[win][own])
-        keep[idx] = _spatially_damage(G, t, win, own, ring, side, threshold * sigma, search)
-    return keep[labels]
+        return _spatially_damage(G, t, win, own, ring, side, threshold * sigma, search)
+
+    return _kept((z > low) & ~taken, 4, damage)
 
 
 def _spatially_damage(G: np.ndarray, t: int, win, own, ring, side: float, bar: float, search: int):
