@@ -176,6 +176,14 @@ def _ncc_at(prev, cur, weight, d) -> float:
     return float((p * c).sum() / np.sqrt(max((p * p).sum() * (c * c).sum(), 1e-12)))
 
 
+def _flat(image, mask) -> bool:
+    """Whether most of the object's pixels hold one value in every channel (their median
+    absolute deviation is 0): no texture inside it, noise included."""
+    values = np.asarray(image)[:, mask]
+    med = np.median(values, axis=1, keepdims=True)
+    return bool((np.median(np.abs(values - med), axis=1) == 0).all())
+
+
 def object_motion(
     prev,
     cur,
@@ -195,8 +203,10 @@ def object_motion(
     light-blind features (local contrast), whose match is taken where the frames' own
     correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
     frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more."""
-    # the object alone: a rim takes in more of an occluder's still edge
-    rim = mask
+    # the object alone: a rim takes in more of an occluder's still edge. But an object most
+    # of whose pixels hold one value (a flat graphic, a saturated highlight) has nothing
+    # inside to correlate: it is found by its outline, with 2 px of its surroundings
+    rim = dilate(mask, 2) if _flat(prev, mask) else mask
     weight = rim.astype(np.float64)
     d = match_shift(prev, cur, weight, reach, prior, within)
     peak = match_shift.peak

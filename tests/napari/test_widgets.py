@@ -124,10 +124,7 @@ def test_track_widget_carries_two_labels_both_ways(viewer, qtbot):
     for t in range(8):
         truth[t][(y - 20) ** 2 + (x - 18 - t) ** 2 < 64] = 1
         truth[t][(y - 46) ** 2 + (x - 46 + t) ** 2 < 49] = 2
-    # discs brighter than the sample's own blob (0.75): at 0.8 the first disc meets that
-    # blob at frame 0 and the default tracker slides onto it (a known failure, recorded in
-    # tests/tracking/test_track_image.py); this test is about the widget's two labels
-    frames = np.where(truth > 0, 0.95, frames).astype(np.float32)
+    frames = np.where(truth > 0, 0.8, frames).astype(np.float32)
     image = viewer.add_image(frames, **fattrs)
     seeds = np.zeros_like(truth)
     seeds[4] = truth[4]
