@@ -78,6 +78,23 @@ def _inpaint(method, size=16, dtype=np.float32, **options):
     return run
 
 
+def _cpu_path(run):
+    """run with the spectral kernel in its CPUs' shape (one item a block, candidates in
+    vectors of 8), which the simulated device, a GPU, would not take by itself."""
+
+    def cpu_run():
+        from clpde.inpainting import spectral
+
+        shape = spectral.work_shape
+        spectral.work_shape = lambda runtime: (1, spectral.CPU_VECTOR)
+        try:
+            return run()
+        finally:
+            spectral.work_shape = shape
+
+    return cpu_run
+
+
 def _track(**options):
     def run():
         import clpde
@@ -165,6 +182,7 @@ CASES = {
     "track_region_term": _track(region_weight=1.0, storage="bricks16x4"),
     "inpaint_spectral": _inpaint("spectral", iterations=8, shifts=1),
     "inpaint_spectral_f64": _inpaint("spectral", dtype=np.float64, iterations=4, shifts=1),
+    "inpaint_spectral_cpu_path": _cpu_path(_inpaint("spectral", iterations=8, shifts=1)),
     "inpaint_exemplar": _inpaint("exemplar"),
     "surface_lists": _surface("lists"),
     "surface_bricks": _surface("bricks"),
