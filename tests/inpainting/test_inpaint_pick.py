@@ -142,6 +142,54 @@ def test_the_smooth_vote_gives_a_smooth_field_to_the_biharmonic_fill():
     assert error["smooth"] < 0.7 * error["spectral"], error
 
 
+def _voids(seed=5):
+    """A smooth field (no period, no edge) with three thick voids: the smooth vote's case."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    field = ndimage.gaussian_filter(rng.standard_normal((112, 112)), 10)
+    image = ((field - field.min()) / np.ptp(field)).astype(np.float32)
+    mask = _disc(image.shape, 30, 30, 8) | _disc(image.shape, 75, 40, 6)
+    return image, mask | _disc(image.shape, 60, 85, 10)
+
+
+def test_the_quick_ring_test_chooses_as_the_full_one_in_fewer_iterations(monkeypatch):
+    from clpde.inpainting import poisson
+    from clpde.runtime import get_runtime
+
+    image, mask = _voids()
+    runtime = get_runtime()
+    parts = pick.clusters_of(mask)
+    filled = clpde.inpaint(image, mask, method="spectral", progress=False, seed=0)[None]
+    labels = np.arange(1, parts[1] + 1)
+    common = {"dtype": np.float32, "progress": None, "seed": 0}
+    iterations = []
+    solve = poisson.PoissonSolver.solve
+
+    def counted(self, *args, **kwargs):
+        iterations.append(solve(self, *args, **kwargs))
+        return iterations[-1]
+
+    monkeypatch.setattr(poisson.PoissonSolver, "solve", counted)
+    args = (filled.astype(np.float64), mask, parts[0], labels, runtime, common)
+    quick = pick._ring_test(*args, pick.SpectralOptions())
+    quick_iterations = sum(iterations)
+    iterations.clear()
+    # the vote as it was: both grids and every pick, the biharmonic solve to tol 1e-5
+    monkeypatch.setattr(pick, "RING_SPECTRAL", {})
+    monkeypatch.setattr(pick, "RING_TOL", 1e-5)
+    monkeypatch.setattr(pick, "RING_MAX_ITER", 20000)
+    full = pick._ring_test(*args, pick.SpectralOptions())
+    assert len(full) >= 2  # the smooth field's voids
+    print(quick, full, quick_iterations, iterations)
+    assert quick == full and quick_iterations < 0.6 * sum(iterations), (
+        quick,
+        full,
+        quick_iterations,
+        iterations,
+    )
+
+
 def test_the_smooth_vote_leaves_a_hole_on_an_edge_to_the_spectral_fill():
     image = _two_colours()
     mask = _disc(image.shape[:2], 48, 48, 7)
