@@ -21,8 +21,13 @@ thick and not on a clear edge (edge_contrast: its border splits into two sides o
 colour) is tested: a ring of RING known pixels around it is hidden, and the spectral
 fill and the biharmonic fill predict it; where the biharmonic's error is below
 SMOOTH_RATIO times the spectral's, the biharmonic fill takes the cluster. On the corpus
-it gains on smooth fields and texture and ties elsewhere, but costs about 3x the spectral
-fill's time on thick damage, against a budget of 1.2x: so it is opt-in. Clusters on a
+it gains on smooth fields and texture and ties elsewhere, but costs 3-4x the spectral
+fill's CPU time on thick damage (2.3x / 2.6x over the calibration / test half), against a
+budget of 1.2x: so it is opt-in. What it costs, each about the spectral fill's own time:
+the spectral prediction of the ring (a fill of the holes grown by the ring, which a
+cheaper fill misjudges: one block grid lost 0.35 dB on the calibration blobs, 20 picks
+0.3 dB), and the biharmonic prediction (conjugate gradients, 300-1000 iterations of a few
+launches each, which tol 1e-3 misjudged on a smooth field). Clusters on a
 clear edge are left out because there the spectral fill, which continues the edge, beat
 the biharmonic one on the calibration half (sending them to the biharmonic fill lost up
 to 0.3 dB on the structure class).
