@@ -21,7 +21,7 @@ thick and not on a clear edge (edge_contrast: its border splits into two sides o
 colour) is tested: a ring of RING known pixels around it is hidden, and the spectral
 fill and the biharmonic fill predict it; where the biharmonic's error is below
 SMOOTH_RATIO times the spectral's, the biharmonic fill takes the cluster. On the corpus
-it gains on smooth fields and texture and ties elsewhere, but costs 3-4x the spectral
+it gains on smooth fields and texture and ties elsewhere, but costs 3-4.3x the spectral
 fill's CPU time on thick damage (2.3x / 2.6x over the calibration / test half), against a
 budget of 1.2x: so it is opt-in. What it costs, each about the spectral fill's own time:
 the spectral prediction of the ring (a fill of the holes grown by the ring, which a
@@ -264,7 +264,8 @@ def solve(
     if not candidates.any():  # (thin damage: no edge test, no ring test)
         return out
     gap, separation = edge_contrast(data, omega, parts)
-    labels = 1 + np.flatnonzero(candidates & ~((gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)))
+    edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
+    labels = 1 + np.flatnonzero(candidates & ~edge)
     if not labels.size:
         return out
     out = np.asarray(out, np.float64)
