@@ -21,8 +21,13 @@ thick and not on a clear edge (edge_contrast: its border splits into two sides o
 colour) is tested: a ring of RING known pixels around it is hidden, and the spectral
 fill and the biharmonic fill predict it; where the biharmonic's error is below
 SMOOTH_RATIO times the spectral's, the biharmonic fill takes the cluster. On the corpus
-it gains on smooth fields and texture and ties elsewhere, but costs about 3x the spectral
-fill's time on thick damage, against a budget of 1.2x: so it is opt-in. Clusters on a
+it gains on smooth fields and texture and ties elsewhere, but costs 3-4.3x the spectral
+fill's CPU time on thick damage (2.3x / 2.6x over the calibration / test half), against a
+budget of 1.2x: so it is opt-in. What it costs, each about the spectral fill's own time:
+the spectral prediction of the ring (a fill of the holes grown by the ring, which a
+cheaper fill misjudges: one block grid lost 0.35 dB on the calibration blobs, 20 picks
+0.3 dB), and the biharmonic prediction (conjugate gradients, 300-1000 iterations of a few
+launches each, which tol 1e-3 misjudged on a smooth field). Clusters on a
 clear edge are left out because there the spectral fill, which continues the edge, beat
 the biharmonic one on the calibration half (sending them to the biharmonic fill lost up
 to 0.3 dB on the structure class).
@@ -66,6 +71,14 @@ SMOOTH_RADIUS = 3.0  # the thinnest cluster tested (half-thickness, px)
 SMOOTH_RATIO = 0.8
 EDGE_GAP = 0.1
 EDGE_SEPARATION = 3.0
+# The ring test's spectral prediction takes 40 picks a block instead of 100 (profiled: the
+# vote's time on thick damage was a second spectral fill, of the grown holes, a biharmonic
+# solve of 300-1000 iterations and the chosen clusters' biharmonic fill, each about the
+# first spectral fill's time; one block grid instead of two lost 0.35 dB on the calibration
+# blobs). The biharmonic prediction stays at tol 1e-5: stopped at 1e-3 from the ring's mean
+# it misjudged a smooth field's 15 px hole, and from the spectral prediction it saved 10%.
+RING_SPECTRAL = {"iterations": 40}
+FINAL_TOL = 1e-3  # the chosen clusters' biharmonic fill, from the spectral fill
 
 
 @dataclass(frozen=True)
@@ -113,11 +126,11 @@ def clusters_of(omega):
     return clusters, count, radius
 
 
-def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY):
+def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY, parts=None):
     """The hole's pixels whose cluster sits in a periodic surround (module docstring): a
-    bool mask, within omega."""
+    bool mask, within omega. parts: clusters_of(omega), if already known."""
     omega = np.asarray(omega, bool)
-    clusters, count, radius = clusters_of(omega)
+    clusters, count, radius = clusters_of(omega) if parts is None else parts
     thick = np.flatnonzero(radius >= MIN_RADIUS)
     if not thick.size:
         return np.zeros_like(omega)
@@ -133,7 +146,7 @@ def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY):
     return np.isin(clusters, chosen) & omega
 
 
-def edge_contrast(data, omega):
+def edge_contrast(data, omega, parts=None):
     """Per cluster (label 1..count of clusters_of), how clearly its border splits into two
     sides of distinct colour: the border's known pixels (within BORDER px of the hole,
     each its nearest cluster's) projected on their colours' principal axis and split in
@@ -141,9 +154,10 @@ def edge_contrast(data, omega):
     two arrays: the gap between the groups' means (in data units), and that gap over the
     sum of the groups' standard deviations (about 1.7 for noise or a shading without
     sides); both 0 for a cluster with too few border pixels. A hole on an edge between two flat
-    regions scores high; texture, and a gradient that merely shades across, low."""
+    regions scores high; texture, and a gradient that merely shades across, low. parts:
+    clusters_of(omega), if already known."""
     omega = np.asarray(omega, bool)
-    clusters, count, _ = clusters_of(omega)
+    clusters, count, _ = clusters_of(omega) if parts is None else parts
     known = ~omega
     dist, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
     ring = known & (dist <= BORDER)
@@ -181,7 +195,9 @@ def _ring_test(filled, omega, clusters, labels, runtime, common, spectral):
     """The labels among `labels` whose ring (the known pixels within RING px, each its
     nearest cluster's) the biharmonic fill predicts better than SMOOTH_RATIO times the
     spectral fill does, both filling the clusters and their rings hidden at once in
-    `filled` (the box with every hole filled, so that the other clusters cost nothing)."""
+    `filled` (the box with every hole filled, so that the other clusters cost nothing).
+    The spectral prediction is cheaper than the fill it stands for (RING_SPECTRAL): the
+    vote needs the ratio of the errors, not their last digits."""
     known = ~omega
     dist, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
     owner = np.where(known & (dist <= RING), clusters[iy, ix], 0)
@@ -191,10 +207,8 @@ def _ring_test(filled, omega, clusters, labels, runtime, common, spectral):
     hidden = ring | (np.isin(clusters, labels) & omega)
     truth = filled[:, ring]
     errors = []
-    # (a quicker spectral fill here, one grid and 40 picks, and a biharmonic fill stopped
-    # at tol 1e-3 took 2x the spectral fill's time instead of 3x, but lost 0.35 dB on the
-    # calibration half's blobs: it ranks the spectral fill too low)
-    guess = load("spectral").solve(filled, hidden, runtime, **common, **keywords(spectral))
+    quick = {**keywords(spectral), **RING_SPECTRAL}
+    guess = load("spectral").solve(filled, hidden, runtime, **common, **quick)
     guess = np.asarray(guess, np.float64)
     smooth = poisson.fill(filled, hidden, runtime, "biharmonic", dtype=common["dtype"])
     for out in (guess, np.asarray(smooth, np.float64)):
@@ -227,7 +241,8 @@ def solve(
     exemplar = ExemplarOptions() if exemplar is None else exemplar
     omega = np.asarray(omega, bool)
     common = {"dtype": dtype, "progress": progress, "seed": seed}
-    periodic = periodic_clusters(data, omega, periodicity)
+    parts = clusters_of(omega)
+    periodic = periodic_clusters(data, omega, periodicity, parts)
     fill_spectral = load("spectral").solve
     if not periodic.any():
         out = fill_spectral(data, omega, runtime, **common, **keywords(spectral))
@@ -242,17 +257,21 @@ def solve(
             )
     if not smooth:
         return out
-    clusters, count, radius = clusters_of(omega)
-    gap, separation = edge_contrast(data, omega)
-    edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
+    clusters, count, radius = parts
     in_period = np.zeros(count + 1, bool)
     in_period[np.unique(clusters[periodic])] = True
-    labels = 1 + np.flatnonzero((radius >= SMOOTH_RADIUS) & ~edge & ~in_period[1:])
+    candidates = (radius >= SMOOTH_RADIUS) & ~in_period[1:]
+    if not candidates.any():  # (thin damage: no edge test, no ring test)
+        return out
+    gap, separation = edge_contrast(data, omega, parts)
+    edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
+    labels = 1 + np.flatnonzero(candidates & ~edge)
     if not labels.size:
         return out
     out = np.asarray(out, np.float64)
     chosen = _ring_test(out, omega, clusters, labels, runtime, common, spectral)
     if chosen:
         hole = np.isin(clusters, chosen) & omega
-        out = np.asarray(poisson.fill(out, hole, runtime, dtype=dtype, start=out), np.float64)
+        out = poisson.fill(out, hole, runtime, dtype=dtype, start=out, tol=FINAL_TOL)
+        out = np.asarray(out, np.float64)
     return out

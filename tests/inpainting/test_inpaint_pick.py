@@ -142,6 +142,43 @@ def test_the_smooth_vote_gives_a_smooth_field_to_the_biharmonic_fill():
     assert error["smooth"] < 0.7 * error["spectral"], error
 
 
+def _voids(seed=5):
+    """A smooth field (no period, no edge) with three thick voids: the smooth vote's case."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    field = ndimage.gaussian_filter(rng.standard_normal((112, 112)), 10)
+    image = ((field - field.min()) / np.ptp(field)).astype(np.float32)
+    mask = _disc(image.shape, 30, 30, 8) | _disc(image.shape, 75, 40, 6)
+    return image, mask | _disc(image.shape, 60, 85, 10)
+
+
+def test_the_quick_ring_test_chooses_as_the_full_one_with_fewer_picks(monkeypatch):
+    from clpde.inpainting import registry
+    from clpde.runtime import get_runtime
+
+    image, mask = _voids()
+    clusters, count, _ = pick.clusters_of(mask)
+    filled = clpde.inpaint(image, mask, method="spectral", progress=False, seed=0)[None]
+    common = {"dtype": np.float32, "progress": None, "seed": 0}
+    args = (filled.astype(np.float64), mask, clusters, np.arange(1, count + 1), get_runtime())
+    spectral = registry.load("spectral")
+    picks = []
+    solve = spectral.solve
+
+    def counted(*a, **kw):
+        picks.append(kw["iterations"])
+        return solve(*a, **kw)
+
+    monkeypatch.setattr(spectral, "solve", counted)
+    quick = pick._ring_test(*args, common, pick.SpectralOptions())
+    # the vote as it was: the spectral prediction with every pick of the fill
+    monkeypatch.setattr(pick, "RING_SPECTRAL", {})
+    full = pick._ring_test(*args, common, pick.SpectralOptions())
+    assert len(full) >= 2  # the smooth field's voids go to the biharmonic fill
+    assert quick == full and picks == [40, pick.SpectralOptions().iterations], (quick, full)
+
+
 def test_the_smooth_vote_leaves_a_hole_on_an_edge_to_the_spectral_fill():
     image = _two_colours()
     mask = _disc(image.shape[:2], 48, 48, 7)
