@@ -27,7 +27,7 @@ from ..motion.dis import to_u8
 from ._compensate import fit_gain
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
-from .detect import SIGMA_FLOOR, _partner
+from .detect import SCRATCH, SIGMA_FLOOR, _partner
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
 # warp of a bool mask spreads it over a pixel's rim).
@@ -175,8 +175,70 @@ def _temporal(
     return out.astype(np.float32), hole & ~filled, resid2
 
 
+def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """The squared deviation of each pixel of a frame's detected line scratches against the
+    line's flanks: the spatial counterpart of the temporal residual, for a line whose
+    neighbours carry it too (so that no clean neighbour shows what it covers).
+
+    Per row, each run of line pixels is compared with its flanks, the mean of the two
+    columns 2-3 px beyond either end of the run; the line's sign is its region's median
+    deviation from the flanks' mean, and the evidence is the deviation beyond the *worse*
+    flank in that sign, 0 where the pixel does not pass it (as the detector's line contrast,
+    clpde.film.lines: an edge, or a pixel between two flanks, shows no line).
+
+    Parameters
+    ----------
+    frame : numpy.ndarray
+        One grey frame (H, W), float.
+    lines : numpy.ndarray
+        Bool (H, W): the line scratches' pixels.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 (H, W): the squared deviation on `lines`, 0 elsewhere.
+
+    Examples
+    --------
+    >>> g = np.full((6, 12), 0.5, np.float32); g[:, 5:7] = 0.3  # a dark line, 2 px wide
+    >>> lines = np.zeros(g.shape, bool); lines[:, 5:7] = True
+    >>> bool(np.allclose(line_evidence(g, lines)[lines], 0.04))
+    True
+    """
+    ny, nx = frame.shape
+    out = np.zeros((ny, nx), np.float32)
+    if not lines.any():
+        return out
+    x = np.broadcast_to(np.arange(nx), (ny, nx))
+    before = np.zeros_like(lines)
+    before[:, 1:] = lines[:, :-1]
+    after = np.zeros_like(lines)
+    after[:, :-1] = lines[:, 1:]
+    # each line pixel's run: its first and last columns in the row
+    first = np.maximum.accumulate(np.where(lines & ~before, x, -1), axis=1)
+    last = np.minimum.accumulate(np.where(lines & ~after, x, nx)[:, ::-1], axis=1)[:, ::-1]
+
+    def at(cols: np.ndarray) -> np.ndarray:
+        return np.take_along_axis(frame, np.clip(cols, 0, nx - 1), axis=1)
+
+    left = 0.5 * (at(first - 3) + at(first - 2))
+    right = 0.5 * (at(last + 2) + at(last + 3))
+    labels, n = ndimage.label(lines)
+    dev = frame - 0.5 * (left + right)
+    sign = np.sign(np.concatenate([[0.0], ndimage.median(dev, labels, np.arange(1, n + 1))]))
+    s = sign[labels]
+    e = np.maximum(s * frame - np.maximum(s * left, s * right), 0.0)
+    out[lines] = (e**2)[lines]
+    return out
+
+
 def _self_check(
-    restored: np.ndarray, frame: np.ndarray, hole: np.ndarray, resid2: np.ndarray, sigma: float
+    restored: np.ndarray,
+    frame: np.ndarray,
+    hole: np.ndarray,
+    resid2: np.ndarray,
+    sigma: float,
+    lines: np.ndarray | None = None,
 ) -> np.ndarray:
     """The regions of `hole` whose repair the data does not explain: where the mean squared
     change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
@@ -189,8 +251,15 @@ def _self_check(
     residual shows plus as much again for the noise of a ratio of two means (E^2 >= 2
     sigma^2: a region's mean E^2 is never below one noise pair); a region without a trusted
     neighbour is granted the noise alone (E^2 = 2 sigma^2: no evidence of damage but the
-    detector's). Returns the bool (H, W) pixels whose repair is refused."""
-    resid2 = np.where(np.isfinite(resid2), resid2, 2 * sigma**2)
+    detector's). On a detected line scratch (`lines`) without a trusted clean neighbour
+    (its neighbours carry the line, flagged) the evidence is the line's own deviation
+    against its flanks (`line_evidence`): there the temporal residual says nothing, and
+    the noise alone would refuse every repair of such a scratch. Returns the bool (H, W)
+    pixels whose repair is refused."""
+    floor = np.float32(2 * sigma**2)
+    if lines is not None and lines.any():
+        floor = np.where(lines, line_evidence(frame, lines), floor)
+    resid2 = np.where(np.isfinite(resid2), resid2, floor)
     d2 = (restored - frame) ** 2
     labels, n = ndimage.label(hole)
     if n == 0:
@@ -213,6 +282,7 @@ def inpaint_video(
     spatial: dict | None = None,
     device: str | int | None = None,
     keep: float = 0.0,
+    kinds: ArrayLike | None = None,
     return_unfilled: bool = False,
     progress: Progress = None,
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -289,6 +359,8 @@ def inpaint_video(
     if not isinstance(radius, (int, np.integer)) or radius < 1:
         raise InputError(f"radius must be a positive integer, not {radius!r}")
     options = {} if spatial is None else dict(spatial)
+    if kinds is not None:
+        kinds = np.asarray(kinds).reshape(T, ny, nx)
     G = grey(planes)
     out = planes.copy()
     unfilled = np.zeros((T, ny, nx), bool)
@@ -339,7 +411,8 @@ def inpaint_video(
             close = np.abs(restored - G[t]) <= keep * sigma
             if T > 1:
                 kept = np.where(close, G[t], restored)  # the repair as it will stand
-                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma)
+                lines = None if kinds is None else kinds[t] == SCRATCH
+                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines)
             frame = np.where(close[None], planes[t], frame)
         return frame
 
