@@ -27,7 +27,7 @@ from ..motion.dis import to_u8
 from ._compensate import fit_gain
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
-from .detect import SCRATCH, SIGMA_FLOOR, _partner
+from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
 # warp of a bool mask spreads it over a pixel's rim).
@@ -232,6 +232,49 @@ def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
     return out
 
 
+def ring_evidence(frame: np.ndarray, spots: np.ndarray, hole: np.ndarray) -> np.ndarray:
+    """The squared distance of each pixel of a frame's detected blotches outside the range
+    (5th to 95th percentile) of its region's ring, 2-4 px out and off the damage: the
+    spatial counterpart of the temporal residual where no neighbour is trusted, as the
+    detector's spatial test (clpde.film._regions._spatially_damage).
+
+    Parameters
+    ----------
+    frame : numpy.ndarray
+        One grey frame (H, W), float.
+    spots : numpy.ndarray
+        Bool (H, W): the blotches' pixels.
+    hole : numpy.ndarray
+        Bool (H, W): all the frame's damage (left out of the rings).
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 (H, W): the squared distance on `spots`, 0 elsewhere.
+
+    Examples
+    --------
+    >>> g = np.full((20, 20), 0.5, np.float32); g[8:12, 8:12] = 0.2  # a dark blotch
+    >>> spots = g < 0.3
+    >>> bool(np.allclose(ring_evidence(g, spots, spots)[spots], 0.09))
+    True
+    """
+    out = np.zeros(frame.shape, np.float32)
+    labels, _ = ndimage.label(spots)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        win = tuple(slice(max(s.start - 4, 0), s.stop + 4) for s in sl)
+        own = labels[win] == idx
+        ring = ndimage.binary_dilation(own, iterations=4)
+        ring &= ~ndimage.binary_dilation(own, iterations=1) & ~hole[win]
+        if ring.sum() < 4:
+            continue
+        g = frame[win]
+        lo, hi = np.percentile(g[ring], [5, 95])
+        e = np.maximum(np.maximum(lo - g, g - hi), 0.0)
+        out[win][own] = (e**2)[own]
+    return out
+
+
 def _self_check(
     restored: np.ndarray,
     frame: np.ndarray,
@@ -239,6 +282,7 @@ def _self_check(
     resid2: np.ndarray,
     sigma: float,
     lines: np.ndarray | None = None,
+    spots: np.ndarray | None = None,
 ) -> np.ndarray:
     """The regions of `hole` whose repair the data does not explain: where the mean squared
     change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
@@ -251,14 +295,18 @@ def _self_check(
     residual shows plus as much again for the noise of a ratio of two means (E^2 >= 2
     sigma^2: a region's mean E^2 is never below one noise pair); a region without a trusted
     neighbour is granted the noise alone (E^2 = 2 sigma^2: no evidence of damage but the
-    detector's). On a detected line scratch (`lines`) without a trusted clean neighbour
-    (its neighbours carry the line, flagged) the evidence is the line's own deviation
-    against its flanks (`line_evidence`): there the temporal residual says nothing, and
-    the noise alone would refuse every repair of such a scratch. Returns the bool (H, W)
-    pixels whose repair is refused."""
+    detector's). Without a trusted clean neighbour, the detection's own spatial evidence
+    stands in: on a line scratch (`lines`; its neighbours carry it, flagged) the line's
+    deviation beyond its flanks (`line_evidence`), on a blotch (`spots`; the motion not
+    trusted) its distance outside its ring's range (`ring_evidence`): there the temporal
+    residual says nothing, and the noise alone would refuse every such repair. A false
+    alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
+    its values. Returns the bool (H, W) pixels whose repair is refused."""
     floor = np.float32(2 * sigma**2)
     if lines is not None and lines.any():
         floor = np.where(lines, line_evidence(frame, lines), floor)
+    if spots is not None and spots.any():
+        floor = np.where(spots, ring_evidence(frame, spots, hole), floor)
     resid2 = np.where(np.isfinite(resid2), resid2, floor)
     d2 = (restored - frame) ** 2
     labels, n = ndimage.label(hole)
@@ -323,6 +371,13 @@ def inpaint_video(
         of the mask whose repair changes it more than its residual against the trusted
         neighbours explains (mean squares, D^2 > 2 E^2) keeps its own values. 0: fill every
         masked pixel. `clpde restore` uses 3.
+    kinds : array, (T, H, W), optional
+        The defect kinds of detected masks (clpde.detect_defects' return_kinds: 1 blotch,
+        2 line scratch). With `keep`, where no trusted neighbour sees a pixel clean, the
+        residual E^2 of a scratch is its deviation beyond its flanks, and of a blotch its
+        distance outside its ring's range, instead of the noise alone: a scratch that
+        every neighbour carries is repaired. None: every region as a blotch without such
+        evidence (given masks).
     return_unfilled : bool
         Also return the bool (T, H, W) mask of the pixels the spatial fill took.
     progress : bool or callable, optional
@@ -411,8 +466,10 @@ def inpaint_video(
             close = np.abs(restored - G[t]) <= keep * sigma
             if T > 1:
                 kept = np.where(close, G[t], restored)  # the repair as it will stand
-                lines = None if kinds is None else kinds[t] == SCRATCH
-                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines)
+                lines = spots = None
+                if kinds is not None:
+                    lines, spots = kinds[t] == SCRATCH, kinds[t] == BLOTCH
+                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots)
             frame = np.where(close[None], planes[t], frame)
         return frame
 
