@@ -5,8 +5,8 @@ frame next to them, with one neighbour on its short side), the temporal residual
 scratch detector reads (clpde.film._order.second_least) can be the frame against two
 neighbours on one side that both carry a scratch: a frame without one then shows the
 scratch in its residual with the opposite sign (the frame before a scratch begins at a
-film's start). Such a run of the residual's line is a ghost where the frame beside it,
-towards the film's inside, shows a line of the opposite sign at the run's place (a scratch
+film's start). Such a run of the residual's line is a ghost where a frame beside it shows
+a line of the opposite sign at the run's place, along the motion (a scratch
 drifts a pixel a frame at most, clpde.film.lines.LINE_DRIFT); a scratch of the frame itself
 leaves no line of the other sign there. The lines are the frames' own
 (clpde.film.lines.frame_lines), at the level a neighbouring frame's line needs to vote for
@@ -18,7 +18,14 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .lines import LINE_DRIFT, LINE_SCALE, LINE_SEEN, RUN_SUPPORT, frame_lines, scratch_runs
+from .lines import (
+    LINE_DRIFT,
+    LINE_SCALE,
+    LINE_SEEN,
+    RUN_SUPPORT,
+    frame_lines,
+    scratch_runs,
+)
 
 
 def one_sided(t: int, count: int, radius: int) -> bool:
@@ -63,7 +70,7 @@ def drop_ghosts(runs: np.ndarray, beside: list[np.ndarray]) -> np.ndarray:
     """The signed scratch runs of a frame (+1, -1, 0; clpde.film.lines.scratch_runs with
     signed=True) without those that are ghosts: runs of which at least RUN_SUPPORT of the
     pixels lie within LINE_DRIFT + 1 columns of a line of the opposite sign in one of the
-    frames `beside` (their `own_lines`).
+    frames `beside` (their `own_lines`, at the frame's place).
 
     Parameters
     ----------
@@ -85,20 +92,22 @@ def drop_ghosts(runs: np.ndarray, beside: list[np.ndarray]) -> np.ndarray:
     (0, 40)
     """
     out = runs.copy()
-    wide = np.ones((1, 2 * (LINE_DRIFT + 1) + 1), bool)
+    drift = np.ones((1, 2 * (LINE_DRIFT + 1) + 1), bool)
     for sgn in (1, -1):
-        mine = runs == sgn
-        if not mine.any():
-            continue
         other = np.zeros(runs.shape, bool)
         for lines in beside:
-            other |= ndimage.binary_dilation(lines == -sgn, structure=wide)
-        labels, n = ndimage.label(mine, structure=np.ones((3, 3), bool))
-        index = np.arange(1, n + 1)
-        share = ndimage.mean(other, labels, index)
-        ghost = np.concatenate([[False], share >= RUN_SUPPORT])
-        out[ghost[labels]] = 0
+            other |= ndimage.binary_dilation(lines == -sgn, structure=drift)
+        out[_mostly_on(runs == sgn, other)] = 0
     return out
+
+
+def _mostly_on(mask: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """The components of mask (8-connected) of which at least RUN_SUPPORT lie on `where`."""
+    labels, n = ndimage.label(mask, structure=np.ones((3, 3), bool))
+    if n == 0:
+        return mask
+    share = ndimage.mean(where, labels, np.arange(1, n + 1))
+    return np.concatenate([[False], share >= RUN_SUPPORT])[labels]
 
 
 def residual_runs(
@@ -107,14 +116,39 @@ def residual_runs(
     """Frame t's scratch runs in its temporal residual (clpde.film.lines.scratch_runs on
     clpde.film.detect.film_scores' evidence), and the runs dropped as ghosts (`drop_ghosts`,
     where the frame is `one_sided`; the frames beside it read their own lines only, so a
-    frame's runs read frames t - 1 .. t + 1 beyond its scores): bool (H, W) each. A
-    ghost's residual is explained (a neighbour's scratch): no blotch is sought there."""
+    frame's runs read frames t - 1 .. t + 1 beyond its scores, their lines pulled onto
+    frame t by its flows to them), with the runs there that the frame does not show as a
+    line of its own: bool (H, W) each. A ghost's residual is explained (a neighbour's
+    scratch): no blotch is sought there."""
     sigmas, T = scores["sigma"], len(G)
     runs = scratch_runs(
         scores["zc"][t], scores["least"][t], sigmas[t], threshold, min_length, signed=True
     )
     kept = runs
     if one_sided(t, T, scores["radius"]) and runs.any():
-        near = [u for u in (t - 1, t + 1) if 0 <= u < T]
-        kept = drop_ghosts(runs, [own_lines(G[u], sigmas[u], threshold) for u in near])
+        # a run counts only where the frame shows a line of its sign: near an end the
+        # line score sums the next frame's in (clpde.film.lines.LineKernels.continuity),
+        # whose scratch would otherwise carry over to a frame without one
+        own = own_lines(G[t], sigmas[t], threshold)
+        kept = scratch_runs(
+            scores["zc"][t], scores["least"][t], sigmas[t], threshold, min_length, own, True
+        )
+        # the frames beside t, their lines brought to where frame t's flow to them puts
+        # each pixel (the residual compares the frame with its compensated neighbours)
+        near = [t + k for k in (-1, 1) if 0 <= t + k < T]
+        beside = [
+            _pulled(own_lines(G[u], sigmas[u], threshold), flow)
+            for u, flow in zip(near, scores["flows"][t], strict=True)
+        ]
+        kept = drop_ghosts(kept, beside)
     return kept != 0, (runs != 0) & (kept == 0)
+
+
+def _pulled(a: np.ndarray, flow: np.ndarray) -> np.ndarray:
+    """a (H, W) of another frame read at each pixel's place there, by a flow (H, W, 2),
+    x first, to the nearest pixel (edges repeated)."""
+    ny, nx = a.shape
+    yy, xx = np.mgrid[0:ny, 0:nx]
+    y = np.clip(np.rint(yy + flow[..., 1]).astype(int), 0, ny - 1)
+    x = np.clip(np.rint(xx + flow[..., 0]).astype(int), 0, nx - 1)
+    return a[y, x]
