@@ -1,16 +1,21 @@
 """The ghosts of the neighbours' scratches in a frame's residual, near a film's ends.
 
 Where a frame's neighbours lie mostly on one side (a film's first and last frames, and the
-frame next to them, with one neighbour on its short side), the temporal residual the
-scratch detector reads (clpde.film._order.second_least) can be the frame against two
-neighbours on one side that both carry a scratch: a frame without one then shows the
-scratch in its residual with the opposite sign (the frame before a scratch begins at a
-film's start). Such a run of the residual's line is a ghost where a frame beside it shows
-a line of the opposite sign at the run's place, along the motion (a scratch
-drifts a pixel a frame at most, clpde.film.lines.LINE_DRIFT); a scratch of the frame itself
-leaves no line of the other sign there. The lines are the frames' own
-(clpde.film.lines.frame_lines), at the level a neighbouring frame's line needs to vote for
-a scratch (clpde.film.lines.film_scratches).
+frame next to them, with one neighbour on its short side), the temporal scratch detector
+(clpde.film.lines.scratch_runs) can find a scratch a frame does not have: its residual
+(clpde.film._order.second_least) may be the frame against two neighbours on one side that
+both carry a scratch, showing it with the opposite sign (the frame before a scratch begins
+at a film's start); and its line score sums the next frame's in (LineKernels.continuity),
+showing the neighbour's scratch itself. So there a run counts only
+
+- where the frame shows a line of the run's sign itself (a scratch is a line in the frame),
+- and not where a frame beside it shows a line of the opposite sign at the run's place,
+  along the motion, within LINE_DRIFT + 1 px (a scratch of the frame itself leaves no
+  line of the other sign there).
+
+The lines are the frames' own (clpde.film.lines.frame_lines), at the level a neighbouring
+frame's line needs to vote for a scratch (clpde.film.lines.film_scratches). The runs
+dropped are the ghosts: their residual is explained, and no blotch is sought there.
 """
 
 from __future__ import annotations

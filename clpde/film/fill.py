@@ -28,6 +28,7 @@ from ._compensate import fit_gain
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
+from .lines import LINE_COVER
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
 # warp of a bool mask spreads it over a pixel's rim).
@@ -176,15 +177,18 @@ def _temporal(
 
 
 def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
-    """The squared deviation of each pixel of a frame's detected line scratches against the
-    line's flanks: the spatial counterpart of the temporal residual, for a line whose
+    """The squared deviation of a frame's detected line scratches against their flanks:
+    the spatial counterpart of the temporal residual, for a line whose
     neighbours carry it too (so that no clean neighbour shows what it covers).
 
     Per row, each run of line pixels is compared with its flanks, the mean of the two
     columns 2-3 px beyond either end of the run; the line's sign is its region's median
-    deviation from the flanks' mean, and the evidence is the deviation beyond the *worse*
-    flank in that sign, 0 where the pixel does not pass it (as the detector's line contrast,
-    clpde.film.lines: an edge, or a pixel between two flanks, shows no line).
+    deviation from the flanks' mean, and its deviation is each pixel's beyond the *worse*
+    flank in that sign (as the detector's line contrast, clpde.film.lines: an edge, or a
+    pixel between two flanks, shows no line), 0 where the pixel does not pass it; and 0
+    over the whole line unless in at least LINE_COVER of its rows the run passes its
+    worse flank on average (as the detector asks of a line's rows): a line's profile keeps
+    its sign along it, texture's and an edge's do not.
 
     Parameters
     ----------
@@ -224,10 +228,16 @@ def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
     left = 0.5 * (at(first - 3) + at(first - 2))
     right = 0.5 * (at(last + 2) + at(last + 3))
     labels, n = ndimage.label(lines)
+    index = np.arange(1, n + 1)
     dev = frame - 0.5 * (left + right)
-    sign = np.sign(np.concatenate([[0.0], ndimage.median(dev, labels, np.arange(1, n + 1))]))
-    s = sign[labels]
-    e = np.maximum(s * frame - np.maximum(s * left, s * right), 0.0)
+    s = np.sign(np.concatenate([[0.0], ndimage.median(dev, labels, index)]))[labels]
+    e = s * frame - np.maximum(s * left, s * right)
+    # a line shows in most of its rows (the detector's LINE_COVER): a row's run passes
+    # its worse flank on average; texture does so in a few rows, an edge in none
+    runs, m = ndimage.label(lines, structure=[[0, 0, 0], [1, 1, 1], [0, 0, 0]])
+    shows = np.concatenate([[False], ndimage.mean(e, runs, np.arange(1, m + 1)) > 0])[runs]
+    share = np.concatenate([[0.0], ndimage.mean(shows, labels, index)])[labels]
+    e = np.where(share >= LINE_COVER, np.maximum(e, 0.0), 0.0)
     out[lines] = (e**2)[lines]
     return out
 
