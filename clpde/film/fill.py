@@ -425,7 +425,13 @@ def inpaint_video(
         raise InputError(f"radius must be a positive integer, not {radius!r}")
     options = {} if spatial is None else dict(spatial)
     if kinds is not None:
-        kinds = np.asarray(kinds).reshape(T, ny, nx)
+        kinds = np.asarray(kinds)
+        if kinds.size != T * ny * nx:
+            raise InputError(
+                f"kinds are {kinds.shape}; give one kind per mask pixel, {(T, ny, nx)} "
+                "(detect_defects' return_kinds)"
+            )
+        kinds = kinds.reshape(T, ny, nx)
     G = grey(planes)
     out = planes.copy()
     unfilled = np.zeros((T, ny, nx), bool)

@@ -5,6 +5,7 @@ scratch of its own (the ghost of its neighbours'); the window machinery hands th
 detector's kinds to a filler that takes them."""
 
 import numpy as np
+import pytest
 from scipy.ndimage import gaussian_filter
 
 import clpde
@@ -115,3 +116,11 @@ def test_windows_hand_the_kinds_to_a_filler_that_takes_them():
     seen.clear()
     list(restore_stream(film, 7, work, masks=film > 100, block=3))
     assert seen == []  # given masks, none set: nothing to fill
+
+
+def test_kinds_of_the_wrong_size_are_refused(rng):
+    frames = rng.random((3, 16, 16)).astype(np.float32)
+    masks = np.zeros(frames.shape, bool)
+    masks[1, 4:8, 4:8] = True
+    with pytest.raises(clpde.InputError, match="one kind per mask pixel"):
+        clpde.inpaint_video(frames, masks, keep=KEEP, kinds=np.zeros((3, 16, 8), np.int8))
