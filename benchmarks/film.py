@@ -149,7 +149,7 @@ def run_half(half, frames):
         t0 = time.perf_counter()
         mask, kinds = clpde.detect_defects(d, channel_axis=-1, return_kinds=True)
         t1 = time.perf_counter()
-        out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP)
+        out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP, kinds=kinds)
         t2 = time.perf_counter()
         seconds["detect"] += t1 - t0
         seconds["fill"] += t2 - t1

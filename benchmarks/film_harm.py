@@ -34,7 +34,7 @@ def main():
             t0 = time.perf_counter()
             mask, kinds = clpde.detect_defects(d, channel_axis=-1, return_kinds=True)
             t1 = time.perf_counter()
-            out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP)
+            out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP, kinds=kinds)
             detect, fill = detect + t1 - t0, fill + time.perf_counter() - t1
             one = Quality()
             one.add(out, c)

@@ -74,7 +74,9 @@ def main():
         if args.fill:
             # found, but left as it was by the fill: refused by its self-check (or changed by
             # less than keep's noise units)
-            out = clpde.inpaint_video(c["dirty"], kinds > 0, channel_axis=-1, keep=KEEP)
+            out = clpde.inpaint_video(
+                c["dirty"], kinds > 0, channel_axis=-1, keep=KEEP, kinds=kinds
+            )
             same = (out == c["dirty"]).all(-1)
             kept_total += int((same & (kinds == 1) & (c["truth"] == 1) & ~c["spare"]).sum())
         cnt = Counter()

@@ -22,8 +22,8 @@ OUT = Path(__file__).resolve().parents[1] / "docs" / "images" / "film_people.png
 def main():
     c = corpus("test", frames=12)[0]
     d = c["dirty"]
-    mask = clpde.detect_defects(d, channel_axis=-1)
-    out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP)
+    mask, kinds = clpde.detect_defects(d, channel_axis=-1, return_kinds=True)
+    out = clpde.inpaint_video(d, mask, channel_axis=-1, keep=KEEP, kinds=kinds)
     rows = []
     for t in (0, 6, 11):  # the first, a middle and the last frame
         crop = (slice(40, 200), slice(100, 380))

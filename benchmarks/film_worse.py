@@ -31,7 +31,7 @@ def main():
     for c in corpus(args.half, frames=args.frames):
         clean, dirty, truth = c["clean"], c["dirty"], c["truth"]
         mask, kinds = clpde.detect_defects(dirty, channel_axis=-1, return_kinds=True)
-        out = clpde.inpaint_video(dirty, mask, channel_axis=-1, keep=KEEP)
+        out = clpde.inpaint_video(dirty, mask, channel_axis=-1, keep=KEEP, kinds=kinds)
         e_out = ((out.astype(float) - clean) ** 2).mean(-1)
         e_in = ((dirty.astype(float) - clean) ** 2).mean(-1)
         T = len(dirty)

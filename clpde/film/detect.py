@@ -40,6 +40,7 @@ from ..imagedata import growth
 from ..runtime import get_runtime
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
+from ._own_lines import residual_runs
 from ._planes import film_planes, grey
 from ._regions import (
     RESIDUAL_UNITS,
@@ -340,13 +341,13 @@ def _frame_kinds(
     gamma: float,
 ) -> np.ndarray:
     """Frame t's kinds (H, W) from film_scores' evidence (film_kinds, one frame)."""
-    zc, res, sigmas = scores["zc"], scores["res"], scores["sigma"]
-    scratch = (
-        scratch_runs(zc[t], scores["least"][t], sigmas[t], scratch_threshold, min_length) | still
-    )
+    res, sigmas = scores["res"], scores["sigma"]
+    # the residual's line runs; near a film's end, those that are a neighbour's ghost apart
+    runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
+    scratch = runs | still
     a, r = blotch_evidence(scores, t, gamma), res[t]
     blotch, a = _regions_found(a, r, scores["region_noise"][t], blotch_threshold)
-    blotch &= ~ndimage.binary_dilation(scratch)
+    blotch &= ~ndimage.binary_dilation(scratch | ghosts)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
     # blotch worth a fill
     smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
@@ -357,7 +358,7 @@ def _frame_kinds(
     busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
-    blotch |= _untrusted(G, scores, t, blotch, scratch, blotch_threshold, smallest, search)
+    blotch |= _untrusted(G, scores, t, blotch, scratch | ghosts, blotch_threshold, smallest, search)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)

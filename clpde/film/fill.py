@@ -27,7 +27,8 @@ from ..motion.dis import to_u8
 from ._compensate import fit_gain
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
-from .detect import SIGMA_FLOOR, _partner
+from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
+from .lines import LINE_COVER
 
 # A neighbour's warped place counts as clean below this degree of damage (the bilinear
 # warp of a bool mask spreads it over a pixel's rim).
@@ -175,8 +176,123 @@ def _temporal(
     return out.astype(np.float32), hole & ~filled, resid2
 
 
+def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """The squared deviation of a frame's detected line scratches against their flanks:
+    the spatial counterpart of the temporal residual, for a line whose
+    neighbours carry it too (so that no clean neighbour shows what it covers).
+
+    Per row, each run of line pixels is compared with its flanks, the mean of the two
+    columns 2-3 px beyond either end of the run; the line's sign is its region's median
+    deviation from the flanks' mean, and its deviation is each pixel's beyond the *worse*
+    flank in that sign (as the detector's line contrast, clpde.film.lines: an edge, or a
+    pixel between two flanks, shows no line), 0 where the pixel does not pass it; and 0
+    over the whole line unless in at least LINE_COVER of its rows the run passes its
+    worse flank on average (as the detector asks of a line's rows): a line's profile keeps
+    its sign along it, texture's and an edge's do not.
+
+    Parameters
+    ----------
+    frame : numpy.ndarray
+        One grey frame (H, W), float.
+    lines : numpy.ndarray
+        Bool (H, W): the line scratches' pixels.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 (H, W): the squared deviation on `lines`, 0 elsewhere.
+
+    Examples
+    --------
+    >>> g = np.full((6, 12), 0.5, np.float32); g[:, 5:7] = 0.3  # a dark line, 2 px wide
+    >>> lines = np.zeros(g.shape, bool); lines[:, 5:7] = True
+    >>> bool(np.allclose(line_evidence(g, lines)[lines], 0.04))
+    True
+    """
+    ny, nx = frame.shape
+    out = np.zeros((ny, nx), np.float32)
+    if not lines.any():
+        return out
+    x = np.broadcast_to(np.arange(nx), (ny, nx))
+    before = np.zeros_like(lines)
+    before[:, 1:] = lines[:, :-1]
+    after = np.zeros_like(lines)
+    after[:, :-1] = lines[:, 1:]
+    # each line pixel's run: its first and last columns in the row
+    first = np.maximum.accumulate(np.where(lines & ~before, x, -1), axis=1)
+    last = np.minimum.accumulate(np.where(lines & ~after, x, nx)[:, ::-1], axis=1)[:, ::-1]
+
+    def at(cols: np.ndarray) -> np.ndarray:
+        return np.take_along_axis(frame, np.clip(cols, 0, nx - 1), axis=1)
+
+    left = 0.5 * (at(first - 3) + at(first - 2))
+    right = 0.5 * (at(last + 2) + at(last + 3))
+    labels, n = ndimage.label(lines)
+    index = np.arange(1, n + 1)
+    dev = frame - 0.5 * (left + right)
+    s = np.sign(np.concatenate([[0.0], ndimage.median(dev, labels, index)]))[labels]
+    e = s * frame - np.maximum(s * left, s * right)
+    # a line shows in most of its rows (the detector's LINE_COVER): a row's run passes
+    # its worse flank on average; texture does so in a few rows, an edge in none
+    runs, m = ndimage.label(lines, structure=[[0, 0, 0], [1, 1, 1], [0, 0, 0]])
+    shows = np.concatenate([[False], ndimage.mean(e, runs, np.arange(1, m + 1)) > 0])[runs]
+    share = np.concatenate([[0.0], ndimage.mean(shows, labels, index)])[labels]
+    e = np.where(share >= LINE_COVER, np.maximum(e, 0.0), 0.0)
+    out[lines] = (e**2)[lines]
+    return out
+
+
+def ring_evidence(frame: np.ndarray, spots: np.ndarray, hole: np.ndarray) -> np.ndarray:
+    """The squared distance of each pixel of a frame's detected blotches outside the range
+    (5th to 95th percentile) of its region's ring, 2-4 px out and off the damage: the
+    spatial counterpart of the temporal residual where no neighbour is trusted, as the
+    detector's spatial test (clpde.film._regions._spatially_damage).
+
+    Parameters
+    ----------
+    frame : numpy.ndarray
+        One grey frame (H, W), float.
+    spots : numpy.ndarray
+        Bool (H, W): the blotches' pixels.
+    hole : numpy.ndarray
+        Bool (H, W): all the frame's damage (left out of the rings).
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 (H, W): the squared distance on `spots`, 0 elsewhere.
+
+    Examples
+    --------
+    >>> g = np.full((20, 20), 0.5, np.float32); g[8:12, 8:12] = 0.2  # a dark blotch
+    >>> spots = g < 0.3
+    >>> bool(np.allclose(ring_evidence(g, spots, spots)[spots], 0.09))
+    True
+    """
+    out = np.zeros(frame.shape, np.float32)
+    labels, _ = ndimage.label(spots)
+    for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
+        win = tuple(slice(max(s.start - 4, 0), s.stop + 4) for s in sl)
+        own = labels[win] == idx
+        ring = ndimage.binary_dilation(own, iterations=4)
+        ring &= ~ndimage.binary_dilation(own, iterations=1) & ~hole[win]
+        if ring.sum() < 4:
+            continue
+        g = frame[win]
+        lo, hi = np.percentile(g[ring], [5, 95])
+        e = np.maximum(np.maximum(lo - g, g - hi), 0.0)
+        out[win][own] = (e**2)[own]
+    return out
+
+
 def _self_check(
-    restored: np.ndarray, frame: np.ndarray, hole: np.ndarray, resid2: np.ndarray, sigma: float
+    restored: np.ndarray,
+    frame: np.ndarray,
+    hole: np.ndarray,
+    resid2: np.ndarray,
+    sigma: float,
+    lines: np.ndarray | None = None,
+    spots: np.ndarray | None = None,
 ) -> np.ndarray:
     """The regions of `hole` whose repair the data does not explain: where the mean squared
     change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
@@ -189,8 +305,19 @@ def _self_check(
     residual shows plus as much again for the noise of a ratio of two means (E^2 >= 2
     sigma^2: a region's mean E^2 is never below one noise pair); a region without a trusted
     neighbour is granted the noise alone (E^2 = 2 sigma^2: no evidence of damage but the
-    detector's). Returns the bool (H, W) pixels whose repair is refused."""
-    resid2 = np.where(np.isfinite(resid2), resid2, 2 * sigma**2)
+    detector's). Without a trusted clean neighbour, the detection's own spatial evidence
+    stands in: on a line scratch (`lines`; its neighbours carry it, flagged) the line's
+    deviation beyond its flanks (`line_evidence`), on a blotch (`spots`; the motion not
+    trusted) its distance outside its ring's range (`ring_evidence`): there the temporal
+    residual says nothing, and the noise alone would refuse every such repair. A false
+    alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
+    its values. Returns the bool (H, W) pixels whose repair is refused."""
+    floor = np.float32(2 * sigma**2)
+    if lines is not None and lines.any():
+        floor = np.where(lines, line_evidence(frame, lines), floor)
+    if spots is not None and spots.any():
+        floor = np.where(spots, ring_evidence(frame, spots, hole), floor)
+    resid2 = np.where(np.isfinite(resid2), resid2, floor)
     d2 = (restored - frame) ** 2
     labels, n = ndimage.label(hole)
     if n == 0:
@@ -213,6 +340,7 @@ def inpaint_video(
     spatial: dict | None = None,
     device: str | int | None = None,
     keep: float = 0.0,
+    kinds: ArrayLike | None = None,
     return_unfilled: bool = False,
     progress: Progress = None,
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -253,6 +381,13 @@ def inpaint_video(
         of the mask whose repair changes it more than its residual against the trusted
         neighbours explains (mean squares, D^2 > 2 E^2) keeps its own values. 0: fill every
         masked pixel. `clpde restore` uses 3.
+    kinds : array, (T, H, W), optional
+        The defect kinds of detected masks (clpde.detect_defects' return_kinds: 1 blotch,
+        2 line scratch). With `keep`, where no trusted neighbour sees a pixel clean, the
+        residual E^2 of a scratch is its deviation beyond its flanks, and of a blotch its
+        distance outside its ring's range, instead of the noise alone: a scratch that
+        every neighbour carries is repaired. None: every region as a blotch without such
+        evidence (given masks).
     return_unfilled : bool
         Also return the bool (T, H, W) mask of the pixels the spatial fill took.
     progress : bool or callable, optional
@@ -289,6 +424,14 @@ def inpaint_video(
     if not isinstance(radius, (int, np.integer)) or radius < 1:
         raise InputError(f"radius must be a positive integer, not {radius!r}")
     options = {} if spatial is None else dict(spatial)
+    if kinds is not None:
+        kinds = np.asarray(kinds)
+        if kinds.size != T * ny * nx:
+            raise InputError(
+                f"kinds are {kinds.shape}; give one kind per mask pixel, {(T, ny, nx)} "
+                "(detect_defects' return_kinds)"
+            )
+        kinds = kinds.reshape(T, ny, nx)
     G = grey(planes)
     out = planes.copy()
     unfilled = np.zeros((T, ny, nx), bool)
@@ -339,7 +482,10 @@ def inpaint_video(
             close = np.abs(restored - G[t]) <= keep * sigma
             if T > 1:
                 kept = np.where(close, G[t], restored)  # the repair as it will stand
-                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma)
+                lines = spots = None
+                if kinds is not None:
+                    lines, spots = kinds[t] == SCRATCH, kinds[t] == BLOTCH
+                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots)
             frame = np.where(close[None], planes[t], frame)
         return frame
 

@@ -12,6 +12,7 @@ leaves none of them.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import time
 from collections.abc import Iterator
@@ -330,7 +331,7 @@ def restore_film(
     if work is None:
         work = film_work(grow=grow, detect_options=detect_options, fill_options=fill_options)
     elif grow and not work.grow:
-        work = WindowWork(work.fill, work.detect, work.fill_radius, work.detect_radius, grow)
+        work = dataclasses.replace(work, grow=grow)  # every other field as given
     if given is None and work.detect is None:
         raise InputError("give the masks (--mask): this restoration has no detector")
     if cluster is not None and client is not None:

@@ -15,8 +15,9 @@ blocks on Dask's workers (clpde.film.chunks), whose windows are the same arrays 
 same functions; so a chunked run gives the frames of one process, bit for bit.
 
 The per-window work is a :class:`WindowWork`: a detector (frames -> masks, or masks and
-kinds) and a filler ((frames, masks) -> frames), both plain picklable callables, so the
-window machinery can be run and tested with any of them.
+kinds) and a filler ((frames, masks) -> frames, given the detector's kinds too where it
+says it takes them), both plain picklable callables, so the window machinery can be run
+and tested with any of them.
 """
 
 from __future__ import annotations
@@ -142,6 +143,10 @@ class WindowWork:
     grow : float
         Pixels by which given masks are grown before filling (detected masks are grown by
         the detector itself).
+    fill_kinds : bool
+        The filler takes the detector's kinds, ``fill(frames, masks, channel_axis=...,
+        kinds=...)`` with kinds int8 (n, H, W), where the detector reports them (never
+        with given masks).
 
     Examples
     --------
@@ -157,6 +162,7 @@ class WindowWork:
     fill_radius: int = 0
     detect_radius: int = 0
     grow: float = 0
+    fill_kinds: bool = False
 
     def context(self, detecting: bool) -> int:
         """Frames of context either side of a block."""
@@ -224,10 +230,15 @@ def restore_window(
     keep = slice(block.start - block.first, block.stop - block.first)
     inner = slice(keep.start - lo, keep.stop - lo)
     if masks[lo:hi].any():
+        # the kinds of the same frames as the masks: a frame's fill reads its own
+        extra = {}
+        if work.fill_kinds and kinds is not None:
+            extra["kinds"] = np.ascontiguousarray(np.asarray(kinds, np.int8)[lo:hi])
         filled = work.fill(
             np.ascontiguousarray(frames[lo:hi]),
             np.ascontiguousarray(masks[lo:hi]),
             channel_axis=axis,
+            **extra,
         )
         filled = np.asarray(filled)
         if filled.shape != frames[lo:hi].shape:
@@ -436,4 +447,5 @@ def film_work(
         fill_radius=int(fill_radius),
         detect_radius=int(detect_radius),
         grow=grow,
+        fill_kinds=True,
     )
