@@ -38,6 +38,7 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
+from ._grow import grow_blotches
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
 from ._planes import film_planes, grey
@@ -357,6 +358,8 @@ def _frame_kinds(
     busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
+    low = HYSTERESIS_LOW * blotch_threshold
+    blotch = grow_blotches(blotch, scratch, scores["d"][t], r, scores["n"][t] > 0, sigmas[t], low)
     blotch |= _untrusted(G, scores, t, blotch, scratch, blotch_threshold, smallest, search)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
