@@ -144,7 +144,12 @@ def _motion_check(
 
 
 def _ring_check(
-    mask: np.ndarray, both: np.ndarray, res: np.ndarray, sigma: float, flows: np.ndarray
+    mask: np.ndarray,
+    both: np.ndarray,
+    res: np.ndarray,
+    sigma: float,
+    flows: np.ndarray,
+    bridge: np.ndarray | None = None,
 ) -> np.ndarray:
     """Keep the components of mask whose surroundings the motion explains: on a ring 2-4
     px out, most pixels have a trusted neighbour on each side and the frame matches them
@@ -153,7 +158,11 @@ def _ring_check(
     there nothing is called a blotch (do no harm). Nor next to a motion boundary: where the
     flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
     px out, an occluded or revealed region would pass for damage (at a film's ends
-    nothing else tells them apart); both flows, as damage disturbs the flow around it."""
+    nothing else tells them apart); both flows, as damage disturbs the flow around it.
+    A large blotch disturbs both (both are estimated from its frame): `bridge`, the flow
+    between the two nearest neighbours (None at a film's ends), carries none of the
+    frame's damage and has the scene's own boundaries; its spread on the ring (taken where
+    the flow to the previous frame puts it) counts as a third."""
 
     def explained(win, own, labels_win) -> bool:
         ring = _ring(own, labels_win, 1, 4)
@@ -168,13 +177,30 @@ def _ring_check(
         )
         # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
         # flows around it too, but rarely both (the least spread decides)
-        spread = np.inf
-        for f in flows[(slice(None), *win)][:, outer]:  # (pixels, 2) per neighbour
-            lo, hi = np.percentile(f, [5, 95], axis=0)
-            spread = min(spread, float((hi - lo).max()))
+        spread = min(_spread(f) for f in flows[(slice(None), *win)][:, outer])
+        if bridge is not None and spread > EDGE_SPREAD:
+            spread = min(spread, _spread(_bridged(bridge, flows[0], win, outer)))
         return spread <= EDGE_SPREAD
 
     return _kept(mask, 7, explained)
+
+
+def _spread(f: np.ndarray) -> float:
+    """The larger of a set of flow vectors' (n, 2) 5-95% ranges in x and y."""
+    lo, hi = np.percentile(f, [5, 95], axis=0)
+    return float((hi - lo).max())
+
+
+def _bridged(bridge: np.ndarray, back: np.ndarray, win, where: np.ndarray) -> np.ndarray:
+    """The bridge flow's vectors (n, 2) at the window's pixels `where`, moved into the
+    previous frame by the median of the flow `back` to it there (one shift: the flow to
+    the previous frame is the damaged frame's, sound on the ring's majority)."""
+    ny, nx = bridge.shape[:2]
+    ys, xs = np.nonzero(where)
+    dx, dy = np.median(back[win][where], axis=0)
+    yy = np.clip(ys + win[0].start + int(round(float(dy))), 0, ny - 1)
+    xx = np.clip(xs + win[1].start + int(round(float(dx))), 0, nx - 1)
+    return bridge[yy, xx]
 
 
 def _local_noise_check(

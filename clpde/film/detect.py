@@ -253,6 +253,8 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
         "flows": np.stack([motion.flow(t, t + k) for k in (-1, 1) if 0 <= t + k < T]),
+        # and the flow between those two, which carry none of frame t's damage
+        "bridge": motion.flow(t - 1, t + 1) if 0 < t < T - 1 else None,
     }
 
 
@@ -267,6 +269,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
+    stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
     q = kern.rt.queue
@@ -352,7 +355,8 @@ def _frame_kinds(
     # blotch worth a fill
     smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
     blotch = _no_singletons(blotch, smallest)
-    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
+    flows = (scores["flows"][t], scores["bridge"][t])
+    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], *flows)
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     # the surroundings' tail is read outside all candidates and their rims
     busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
