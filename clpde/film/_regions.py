@@ -19,6 +19,10 @@ RING_QUIET = 0.5  # share of the ring that is trusted and matches
 # px by which two displacements of a moving region may differ (integer placements of the
 # search, and a little acceleration) and still be one velocity
 STEADY = 2.0
+# the ring (px out) a region's values are compared with by the spatial test: past the soft
+# rim that a blotch's evidence stops short of (its darkened or brightened pixels would
+# widen the ring's range towards the blotch's own values)
+RIM_CLEAR = (2, 5)
 EDGE = 2  # px from the frame's border within which the warp's stencil leaves the frame
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
 TAIL_REACH = 8  # px around a region whose residuals are its own surroundings' (tail check)
@@ -119,8 +123,9 @@ def _motion_check(
             # missed from damage (a region with structure may be either); the frame's own
             # surroundings decide (_spatially_damage, at the blotch threshold)
             side = float(np.median(resid[win][own]))
-            return bool(ring.sum() >= 4) and _spatially_damage(
-                G, t, win, own, ring, side, threshold * sigma, search
+            beyond = _ring(own, labels_win, *RIM_CLEAR)
+            return bool(beyond.sum() >= 4) and _spatially_damage(
+                G, t, win, own, beyond, side, threshold * sigma, search
             )
         # a flat spot (dirt is mostly flat) matches any dark or bright place of the
         # neighbours: it is an object only where it is found again on both sides at places
@@ -147,7 +152,7 @@ def _motion_check(
         # wandered off a still region warps the wrong pixels onto it): not damage
         return not any(f < MATCH_RATIO * e_own for f in found)
 
-    return _kept(comp_mask, 4, damage)
+    return _kept(comp_mask, RIM_CLEAR[1], damage)
 
 
 def _ring_check(
@@ -351,13 +356,13 @@ def _spatial_blotches(
     def damage(win, own, labels_win) -> bool:
         if own.sum() < smallest or np.median(z[win][own]) < threshold:
             return False
-        ring = _ring(own, labels_win, 1, 4) & ~taken[win]
+        ring = _ring(own, labels_win, *RIM_CLEAR) & ~taken[win]
         if ring.sum() < 4:
             return False
         side = np.median(sign[win][own])
         return _spatially_damage(G, t, win, own, ring, side, threshold * sigma, search)
 
-    return _kept((z > low) & ~taken, 4, damage)
+    return _kept((z > low) & ~taken, RIM_CLEAR[1], damage)
 
 
 def _spatially_damage(G: np.ndarray, t: int, win, own, ring, side: float, bar: float, search: int):
