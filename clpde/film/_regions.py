@@ -90,11 +90,11 @@ def _motion_check(
     it moved if, at the best place in either, its own pixels differ by less than
     MATCH_RATIO of their difference from the compensated neighbours (medians of squares).
     A flat one (dirt is mostly flat) moved if it is found on both sides at places one
-    steady velocity explains (_moves_steadily); flat is judged on the component's core (1
-    px in from its edge, where it has 4 px), as a soft rim blends the dirt into the scene
-    and gives it the scene's texture (on the calibration half, the flat test on the whole
-    component sent 300 px of dirt at the film's ends to the spatial test, which failed
-    them). Within EDGE px of the frame's border
+    steady velocity explains (_moves_steadily); flat is judged on the component's core (2
+    px in from its edge, or 1, where 4 px remain), as a soft rim blends the dirt into the
+    scene and gives it the scene's texture (on the calibration half, the flat test on the
+    whole component sent about 400 px of dirt at the film's ends to the spatial test, which
+    failed them). Within EDGE px of the frame's border
     (content enters and leaves there), and at a film's first and last frames (one side
     only) for a component with structure, it is kept only where the frame's own
     surroundings say damage at the blotch `threshold` (_spatially_damage). Flat ones at the
@@ -114,8 +114,12 @@ def _motion_check(
         ys, xs = np.nonzero(own)
         edge = min(ys.min() + y0, xs.min() + x0, ny - 1 - ys.max() - y0, nx - 1 - xs.max() - x0)
         # the dirt's own texture: its core (a soft rim carries the scene's)
-        core = ndimage.binary_erosion(own)
-        core = core if core.sum() >= 4 else own
+        core = own
+        for _ in range(2):
+            inner = ndimage.binary_erosion(core)
+            if inner.sum() < 4:
+                break
+            core = inner
         flat = robust_scale(templ[core]) < MOTION_TEXTURE * sigma
         if (not 0 < t < T - 1 and not flat) or edge < EDGE:
             # at the frame's edge content enters and leaves (the flow there is extrapolated),
