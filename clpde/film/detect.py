@@ -10,7 +10,8 @@ Films (T >= 2): each frame is compared with its motion-compensated neighbours, u
   by a per-neighbour gain and offset; the noise (grain) level is a robust estimate from
   the temporal residual. Hysteresis keeps weak pixels joined to strong ones. A candidate
   region that reappears displaced in the previous or next frame (block matching within
-  `search` pixels) is a moving object, not dirt, and is dropped.
+  `search` pixels) is a moving object, not dirt, and is dropped. A region that passes
+  every check grows into its own inside and soft rim (clpde.film._grow).
 - line scratches: thin, near-vertical, long lines in the temporal residual (the frame
   minus the median of its compensated neighbours), so that scene structure that moves
   with the camera (poles, door frames, text) cancels: the line response of
