@@ -176,9 +176,10 @@ def _ring_check(
     px out, an occluded or revealed region would pass for damage (at a film's ends
     nothing else tells them apart); both flows, as damage disturbs the flow around it.
     A large blotch disturbs both (both are estimated from its frame): `bridge`, the flow
-    between the two nearest neighbours (None at a film's ends), carries none of the
-    frame's damage and has the scene's own boundaries; its spread on the ring (taken where
-    the flow to the previous frame puts it) counts as a third."""
+    between the two nearest neighbours (at a film's ends both on its one side; None with
+    one neighbour), carries none of the frame's damage and has the scene's own boundaries;
+    its spread on the ring (taken where the flow to the nearest neighbour puts it) counts
+    as a third."""
 
     def explained(win, own, labels_win) -> bool:
         ring = _ring(own, labels_win, 1, 4)
@@ -209,8 +210,8 @@ def _spread(f: np.ndarray) -> float:
 
 def _bridged(bridge: np.ndarray, back: np.ndarray, win, where: np.ndarray) -> np.ndarray:
     """The bridge flow's vectors (n, 2) at the window's pixels `where`, moved into the
-    previous frame by the median of the flow `back` to it there (one shift: the flow to
-    the previous frame is the damaged frame's, sound on the ring's majority)."""
+    nearest neighbour's frame by the median of the flow `back` to it there (one shift: the
+    flow to it is the damaged frame's, sound on the ring's majority)."""
     ny, nx = bridge.shape[:2]
     ys, xs = np.nonzero(where)
     dx, dy = np.median(back[win][where], axis=0)

@@ -189,6 +189,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     G = motion.G
     T, ny, nx = G.shape
     offs, sides = _window(t, T, radius)
+    near = sorted(offs, key=lambda k: (abs(k), k))[:2]
     nbs = [motion.neighbour(t, k) for k in offs]
     vals = np.stack([n.grey for n in nbs])
     v = G[t]
@@ -254,8 +255,9 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
         "flows": np.stack([motion.flow(t, t + k) for k in (-1, 1) if 0 <= t + k < T]),
-        # and the flow between those two, which carry none of frame t's damage
-        "bridge": motion.flow(t - 1, t + 1) if 0 < t < T - 1 else None,
+        # and the flow between the two nearest neighbours (at a film's end, both on its one
+        # side), which carry none of frame t's damage
+        "bridge": motion.flow(t + near[0], t + near[1]) if len(near) == 2 else None,
     }
 
 
