@@ -43,7 +43,7 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     out["scratch"] = b
     b = fdet._no_singletons(b, max(fdet.SMALLEST, fdet.CELLS * sc["region_noise"][t][1]))
     out["single"] = b
-    b = regions._ring_check(b, sc["both"][t], r, sig[t], sc["flows"][t])
+    b = regions._ring_check(b, sc["both"][t], r, sig[t], sc["flows"][t], sc["bridge"][t])
     out["ring"] = b
     b = regions._local_noise_check(b, a, r, sig[t], bthr)
     out["local"] = b

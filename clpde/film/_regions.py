@@ -19,6 +19,10 @@ RING_QUIET = 0.5  # share of the ring that is trusted and matches
 # px by which two displacements of a moving region may differ (integer placements of the
 # search, and a little acceleration) and still be one velocity
 STEADY = 2.0
+# the ring (px out) a region's values are compared with by the spatial test: past the soft
+# rim that a blotch's evidence stops short of (its darkened or brightened pixels would
+# widen the ring's range towards the blotch's own values)
+RIM_CLEAR = (2, 5)
 EDGE = 2  # px from the frame's border within which the warp's stencil leaves the frame
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
 TAIL_REACH = 8  # px around a region whose residuals are its own surroundings' (tail check)
@@ -86,7 +90,11 @@ def _motion_check(
     it moved if, at the best place in either, its own pixels differ by less than
     MATCH_RATIO of their difference from the compensated neighbours (medians of squares).
     A flat one (dirt is mostly flat) moved if it is found on both sides at places one
-    steady velocity explains (_moves_steadily). Within EDGE px of the frame's border
+    steady velocity explains (_moves_steadily); flat is judged on the component's core (2
+    px in from its edge, or 1, where 4 px remain), as a soft rim blends the dirt into the
+    scene and gives it the scene's texture (on the calibration half, the flat test on the
+    whole component sent about 400 px of dirt at the film's ends to the spatial test, which
+    failed them). Within EDGE px of the frame's border
     (content enters and leaves there), and at a film's first and last frames (one side
     only) for a component with structure, it is kept only where the frame's own
     surroundings say damage at the blotch `threshold` (_spatially_damage). Flat ones at the
@@ -105,15 +113,23 @@ def _motion_check(
         ring = _ring(own, labels_win, 1, 4)
         ys, xs = np.nonzero(own)
         edge = min(ys.min() + y0, xs.min() + x0, ny - 1 - ys.max() - y0, nx - 1 - xs.max() - x0)
-        flat = robust_scale(templ[own]) < MOTION_TEXTURE * sigma
+        # the dirt's own texture: its core (a soft rim carries the scene's)
+        core = own
+        for _ in range(2):
+            inner = ndimage.binary_erosion(core)
+            if inner.sum() < 4:
+                break
+            core = inner
+        flat = robust_scale(templ[core]) < MOTION_TEXTURE * sigma
         if (not 0 < t < T - 1 and not flat) or edge < EDGE:
             # at the frame's edge content enters and leaves (the flow there is extrapolated),
             # and a film's ends have one side only: ROD cannot tell an object the flow
             # missed from damage (a region with structure may be either); the frame's own
             # surroundings decide (_spatially_damage, at the blotch threshold)
             side = float(np.median(resid[win][own]))
-            return bool(ring.sum() >= 4) and _spatially_damage(
-                G, t, win, own, ring, side, threshold * sigma, search
+            beyond = _ring(own, labels_win, *RIM_CLEAR)
+            return bool(beyond.sum() >= 4) and _spatially_damage(
+                G, t, win, own, beyond, side, threshold * sigma, search
             )
         # a flat spot (dirt is mostly flat) matches any dark or bright place of the
         # neighbours: it is an object only where it is found again on both sides at places
@@ -140,11 +156,16 @@ def _motion_check(
         # wandered off a still region warps the wrong pixels onto it): not damage
         return not any(f < MATCH_RATIO * e_own for f in found)
 
-    return _kept(comp_mask, 4, damage)
+    return _kept(comp_mask, RIM_CLEAR[1], damage)
 
 
 def _ring_check(
-    mask: np.ndarray, both: np.ndarray, res: np.ndarray, sigma: float, flows: np.ndarray
+    mask: np.ndarray,
+    both: np.ndarray,
+    res: np.ndarray,
+    sigma: float,
+    flows: np.ndarray,
+    bridge: np.ndarray | None = None,
 ) -> np.ndarray:
     """Keep the components of mask whose surroundings the motion explains: on a ring 2-4
     px out, most pixels have a trusted neighbour on each side and the frame matches them
@@ -153,7 +174,12 @@ def _ring_check(
     there nothing is called a blotch (do no harm). Nor next to a motion boundary: where the
     flows to both nearest neighbours spread by more than EDGE_SPREAD px over a ring 3-6
     px out, an occluded or revealed region would pass for damage (at a film's ends
-    nothing else tells them apart); both flows, as damage disturbs the flow around it."""
+    nothing else tells them apart); both flows, as damage disturbs the flow around it.
+    A large blotch disturbs both (both are estimated from its frame): `bridge`, the flow
+    between the two nearest neighbours (at a film's ends both on its one side; None with
+    one neighbour), carries none of the frame's damage and has the scene's own boundaries;
+    its spread on the ring (taken where the flow to the nearest neighbour puts it) counts
+    as a third."""
 
     def explained(win, own, labels_win) -> bool:
         ring = _ring(own, labels_win, 1, 4)
@@ -168,13 +194,30 @@ def _ring_check(
         )
         # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
         # flows around it too, but rarely both (the least spread decides)
-        spread = np.inf
-        for f in flows[(slice(None), *win)][:, outer]:  # (pixels, 2) per neighbour
-            lo, hi = np.percentile(f, [5, 95], axis=0)
-            spread = min(spread, float((hi - lo).max()))
+        spread = min(_spread(f) for f in flows[(slice(None), *win)][:, outer])
+        if bridge is not None and spread > EDGE_SPREAD:
+            spread = min(spread, _spread(_bridged(bridge, flows[0], win, outer)))
         return spread <= EDGE_SPREAD
 
     return _kept(mask, 7, explained)
+
+
+def _spread(f: np.ndarray) -> float:
+    """The larger of a set of flow vectors' (n, 2) 5-95% ranges in x and y."""
+    lo, hi = np.percentile(f, [5, 95], axis=0)
+    return float((hi - lo).max())
+
+
+def _bridged(bridge: np.ndarray, back: np.ndarray, win, where: np.ndarray) -> np.ndarray:
+    """The bridge flow's vectors (n, 2) at the window's pixels `where`, moved into the
+    nearest neighbour's frame by the median of the flow `back` to it there (one shift: the
+    flow to it is the damaged frame's, sound on the ring's majority)."""
+    ny, nx = bridge.shape[:2]
+    ys, xs = np.nonzero(where)
+    dx, dy = np.median(back[win][where], axis=0)
+    yy = np.clip(ys + win[0].start + int(round(float(dy))), 0, ny - 1)
+    xx = np.clip(xs + win[1].start + int(round(float(dx))), 0, nx - 1)
+    return bridge[yy, xx]
 
 
 def _local_noise_check(
@@ -318,13 +361,13 @@ def _spatial_blotches(
     def damage(win, own, labels_win) -> bool:
         if own.sum() < smallest or np.median(z[win][own]) < threshold:
             return False
-        ring = _ring(own, labels_win, 1, 4) & ~taken[win]
+        ring = _ring(own, labels_win, *RIM_CLEAR) & ~taken[win]
         if ring.sum() < 4:
             return False
         side = np.median(sign[win][own])
         return _spatially_damage(G, t, win, own, ring, side, threshold * sigma, search)
 
-    return _kept((z > low) & ~taken, 4, damage)
+    return _kept((z > low) & ~taken, RIM_CLEAR[1], damage)
 
 
 def _spatially_damage(G: np.ndarray, t: int, win, own, ring, side: float, bar: float, search: int):

@@ -10,7 +10,8 @@ Films (T >= 2): each frame is compared with its motion-compensated neighbours, u
   by a per-neighbour gain and offset; the noise (grain) level is a robust estimate from
   the temporal residual. Hysteresis keeps weak pixels joined to strong ones. A candidate
   region that reappears displaced in the previous or next frame (block matching within
-  `search` pixels) is a moving object, not dirt, and is dropped.
+  `search` pixels) is a moving object, not dirt, and is dropped. A region that passes
+  every check grows into its own inside and soft rim (clpde.film._grow).
 - line scratches: thin, near-vertical, long lines in the temporal residual (the frame
   minus the median of its compensated neighbours), so that scene structure that moves
   with the camera (poles, door frames, text) cancels: the line response of
@@ -38,6 +39,7 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
+from ._grow import grow_blotches
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
 from ._own_lines import residual_runs
@@ -188,6 +190,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     G = motion.G
     T, ny, nx = G.shape
     offs, sides = _window(t, T, radius)
+    near = sorted(offs, key=lambda k: (abs(k), k))[:2]
     nbs = [motion.neighbour(t, k) for k in offs]
     vals = np.stack([n.grey for n in nbs])
     v = G[t]
@@ -253,6 +256,9 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
         "flows": np.stack([motion.flow(t, t + k) for k in (-1, 1) if 0 <= t + k < T]),
+        # and the flow between the two nearest neighbours (at a film's end, both on its one
+        # side), which carry none of frame t's damage
+        "bridge": motion.flow(t + near[0], t + near[1]) if len(near) == 2 else None,
     }
 
 
@@ -267,6 +273,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
     stack = {key: np.stack([p[key] for p in per]) for key in keys}
     stack["flows"] = [p["flows"] for p in per]
+    stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
     q = kern.rt.queue
@@ -352,13 +359,17 @@ def _frame_kinds(
     # blotch worth a fill
     smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
     blotch = _no_singletons(blotch, smallest)
-    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], scores["flows"][t])
+    flows = (scores["flows"][t], scores["bridge"][t])
+    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], *flows)
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     # the surroundings' tail is read outside all candidates and their rims
     busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
-    blotch |= _untrusted(G, scores, t, blotch, scratch | ghosts, blotch_threshold, smallest, search)
+    low = HYSTERESIS_LOW * blotch_threshold
+    taken = scratch | ghosts
+    blotch = grow_blotches(blotch, taken, scores["d"][t], r, scores["n"][t] > 0, sigmas[t], low)
+    blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)

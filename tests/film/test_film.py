@@ -175,10 +175,12 @@ def test_blotches_found(runtime, rng, step):
     hit = (kinds == BLOTCH) & truth
     # 0.89 on the pan: the guards of do-no-harm drop a blotch whose flow is disturbed
     assert hit.sum() >= 0.85 * truth.sum()
-    # 0.26 on the static scene (0.23 before the grain's range allowance of issue 34 lowered
-    # the scale where 4 neighbours spread as grain does): clean pixels beside these hard-edged
-    # discs, whose flow the discs disturb
-    assert (mask & ~truth).sum() <= 0.3 * truth.sum()
+    # 0.30 on the static scene (0.23 before the grain's range allowance of issue 34 lowered
+    # the scale where 4 neighbours spread as grain does, 0.26 before the rim growth of
+    # clpde/film/_grow.py: a hard-edged disc has no rim, and the clean pixels around it
+    # join at the rim test's rate, the frame's top 5% of residuals): clean pixels beside
+    # these hard-edged discs, whose flow the discs disturb
+    assert (mask & ~truth).sum() <= 0.32 * truth.sum()
 
 
 def test_fast_object_is_not_a_blotch(runtime, rng):
