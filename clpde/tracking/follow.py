@@ -33,7 +33,15 @@ from .appearance import (
 )
 from .levelset import LevelSet, signed_distance
 from .motion_filter import local_contrast
-from .occlusion import LOST, STILL, hidden_by_still, lost_part, still_share, visible_pieces
+from .occlusion import (
+    LOST,
+    STILL,
+    align,
+    hidden_by_still,
+    lost_part,
+    still_share,
+    visible_pieces,
+)
 
 # A result keeping less than this share of the predicted area is taken as hidden in part.
 HIDDEN = 0.85
@@ -383,7 +391,9 @@ class ObjectFollower:
         if lost.sum() < LOST * self.predicted.sum():
             self.hidden, self._whole_u = False, None
         else:
-            if self.hidden:  # stays hidden while what hides it stays still
+            if not mask.any():  # nothing in sight: the whole shape goes on with its velocity
+                still = True
+            elif self.hidden:  # stays hidden while what hides it stays still
                 noise = float(np.sqrt(noise_variance(self.looks[t])))
                 still = still_share(self.looks[t - 1], self.looks[t], lost, noise) >= STILL
             else:
@@ -396,7 +406,14 @@ class ObjectFollower:
                 )
             # the whole shape: the prediction with the result (and the loss of the frame
             # before, where this frame tells it was hidden too)
-            whole_u = np.minimum(shape_u, self._predicted_u)
+            predicted_u = self._predicted_u
+            if self.hidden:  # laid on the visible outline: the fitted motion can miss
+                d = align(self.predicted, mask, lost)
+                if d.any():
+                    predicted_u = ndimage.shift(predicted_u, d, order=0, mode="nearest")
+                    self.velocity = self.velocity + d
+                    lost = lost_part(predicted_u < 0, mask)
+            whole_u = np.minimum(shape_u, predicted_u)
             if still and not self.hidden and self._predicted_whole_u is not None:
                 whole_u = np.minimum(whole_u, self._predicted_whole_u)
             self.hidden = still
