@@ -21,7 +21,7 @@ from .appearance import dilate, erode
 LOST = 0.04
 # The share of the cut (the result's pixels next to the lost part) that must lie within
 # 1 px of the last frame's outline: the cut stays where it was.
-STILL_CUT = 0.5
+STILL_CUT = 0.4
 # A hidden object stays hidden while at least STILL of its lost part is still (its pixels
 # change by less than STILL_NOISE times the noise): the occluder is still there.
 STILL, STILL_NOISE = 0.8, 3.0
