@@ -9,9 +9,13 @@ the morphing's region speed, believed as far as it classified the last result (u
 background around the object moves otherwise than it, where the image term cannot hold the
 contour either), and not at all on a still frame; after the morphing, small pieces that
 split off a larger one are dropped (a piece caught on an occluder) and the models learn
-the frame. The whole shape is the result, unless the result lost much of the prediction's
-area at once (the object went behind something): then the prediction is kept as the whole
-shape, so that the contour grows back where the object reappears.
+the frame. The whole shape is the result, unless the evidence says that the part it lost
+is hidden by something still (occlusion.py): then the prediction, laid on the visible
+outline, is kept as the whole shape, the motion is searched near the velocity, and the
+result is the whole shape's visible part (the pieces that look like the object), so that
+the contour grows back where the object reappears and leaves nothing on the occluder. A
+moving object's match far off its velocity is taken only where it is clearly better than
+the best near it (a bar over part of the object lowers the true match).
 """
 
 from __future__ import annotations
@@ -43,8 +47,6 @@ from .occlusion import (
     visible_pieces,
 )
 
-# A result keeping less than this share of the predicted area is taken as hidden in part.
-HIDDEN = 0.85
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
 # The largest change of velocity (px a frame) searched while the object is hidden in part.
@@ -387,40 +389,40 @@ class ObjectFollower:
             shape_u = np.asarray(u, np.float64)
         else:
             shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
-        lost = lost_part(self.predicted, mask)
-        if lost.sum() < LOST * self.predicted.sum():
-            self.hidden, self._whole_u = False, None
-        else:
-            if not mask.any():  # nothing in sight: the whole shape goes on with its velocity
-                still = True
-            elif self.hidden:  # stays hidden while what hides it stays still
-                noise = float(np.sqrt(noise_variance(self.looks[t])))
-                still = still_share(self.looks[t - 1], self.looks[t], lost, noise) >= STILL
-            else:
-                still = hidden_by_still(
-                    lost,
-                    mask,
-                    self.visible,
-                    self._looks_ratio if self.term is not None else None,
-                    self.velocity,
-                )
-            # the whole shape: the prediction with the result (and the loss of the frame
-            # before, where this frame tells it was hidden too)
-            predicted_u = self._predicted_u
-            if self.hidden:  # laid on the visible outline: the fitted motion can miss
-                d = align(self.predicted, mask, lost)
-                if d.any():
-                    predicted_u = ndimage.shift(predicted_u, d, order=0, mode="nearest")
-                    self.velocity = self.velocity + d
-                    lost = lost_part(predicted_u < 0, mask)
-            whole_u = np.minimum(shape_u, predicted_u)
-            if still and not self.hidden and self._predicted_whole_u is not None:
-                whole_u = np.minimum(whole_u, self._predicted_whole_u)
-            self.hidden = still
-            self._whole_u = None if self.hidden else whole_u
-            if self.hidden:
-                shape_u = whole_u
+        shape_u = self._whole(t, mask, shape_u)
         self.visible = mask
         self.shape_u = shape_u
         self.shape = shape_u < 0
         return mask
+
+    def _whole(self, t, mask: np.ndarray, shape_u: np.ndarray) -> np.ndarray:
+        """The shape to carry on from frame t's result `mask` (its level set `shape_u`):
+        the result itself, or the whole shape where the evidence says the part lost is
+        hidden by something still (occlusion.py); `hidden` updated."""
+        lost = lost_part(self.predicted, mask)
+        if lost.sum() < LOST * self.predicted.sum():
+            self.hidden, self._whole_u = False, None
+            return shape_u
+        if not mask.any():  # nothing in sight: the whole shape goes on with its velocity
+            still = True
+        elif self.hidden:  # stays hidden while what hides it stays still
+            noise = float(np.sqrt(noise_variance(self.looks[t])))
+            still = still_share(self.looks[t - 1], self.looks[t], lost, noise) >= STILL
+        else:
+            ratio = self._looks_ratio if self.term is not None else None
+            still = hidden_by_still(lost, mask, self.visible, ratio, self.velocity)
+        # the whole shape: the prediction with the result (and the loss of the frame
+        # before, where this frame tells it was hidden too)
+        predicted_u = self._predicted_u
+        if self.hidden:  # laid on the visible outline: the fitted motion can miss
+            d = align(self.predicted, mask, lost)
+            if d.any():
+                predicted_u = ndimage.shift(predicted_u, d, order=0, mode="nearest")
+                self.velocity = self.velocity + d
+        whole_u = np.minimum(shape_u, predicted_u)
+        if still and not self.hidden and self._predicted_whole_u is not None:
+            whole_u = np.minimum(whole_u, self._predicted_whole_u)
+        self.hidden = still
+        # not (yet) hidden: kept a frame, in case the next one tells it was
+        self._whole_u = None if still else whole_u
+        return whole_u if still else shape_u
