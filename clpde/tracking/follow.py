@@ -55,6 +55,9 @@ HIDDEN_CHANGE = 3.0  # chosen on the calibration half
 # velocity is taken only where its correlation beats the best within JUMP px of the
 # velocity by JUMP_MARGIN (`_clearly_better`).
 JUMP_MOVING, JUMP, JUMP_MARGIN = 1.0, 3.0, 0.15
+# ... and does not land where the frame looks unlike the object (the appearance's mean
+# log odds of the surroundings there above LOOKS_AWAY; `_looks_away`).
+LOOKS_AWAY = 0.0
 # Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
 PIECE_SHARE, MIN_PIECE = 0.08, 10
 # The result stays within this many px of the predicted whole shape.
@@ -241,7 +244,7 @@ class ObjectFollower:
             bins = self.model.bins(self.looks[0])
             self.model.learn(bins, self.shape)
             self.reliability = _reliability(self.model.log_ratio(bins, self.shape), self.shape)
-        self._bins = None
+        self._bins, self._bins_t = None, None  # frame _bins_t's bins
         self._match_cache = {}
         self._ratio = None  # the last frame's log odds (surroundings over object)
         self._looks_ratio = None  # the same from the looks alone
@@ -274,7 +277,9 @@ class ObjectFollower:
                 light=light,
             )
             if within is None and _jumped(a, self.shape, self.velocity):
-                if not _clearly_better(self.looks[t - 1], self.looks[t], pixels, self.velocity):
+                if self._looks_away(t, a) or not _clearly_better(
+                    self.looks[t - 1], self.looks[t], pixels, self.velocity
+                ):
                     a = object_motion(
                         self.looks[t - 1],
                         self.looks[t],
@@ -312,10 +317,23 @@ class ObjectFollower:
         self.ls.assign(predicted_u if start is predicted else signed_distance(start))
         return out, (float(shift[0]), float(shift[1]))
 
+    def _looks_away(self, t, a) -> bool:
+        """Whether the shape carried by the motion `a` lands where frame t does not look
+        like the object (the appearance's mean log odds there above LOOKS_AWAY): a jump
+        onto the background, not the object's."""
+        if self.term is None:
+            return False
+        landed = _warp_values(self.shape_u, a) < 0
+        if not landed.any():
+            return False
+        self._bins, self._bins_t = self.model.bins(self.looks[t]), t
+        return float(self.model.log_ratio(self._bins, landed)[landed].mean()) > LOOKS_AWAY
+
     def _appearance(self, t, a, predicted, still):
         """Set the appearance term of frame t around the predicted whole shape; returns the
         morphing's start."""
-        self._bins = self.model.bins(self.looks[t])
+        if self._bins_t != t:  # (`_looks_away` may have binned the frame)
+            self._bins, self._bins_t = self.model.bins(self.looks[t]), t
         # the appearance's evidence and the prediction's: the log prior odds of the
         # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is

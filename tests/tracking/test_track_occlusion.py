@@ -14,26 +14,27 @@ def _disc(cy, cx, radius=9):
     return np.hypot(yy - cy, xx - cx) < radius
 
 
-@pytest.mark.parametrize("width", [6, 12])
-def test_disc_passes_behind_a_bar_and_out_again(width):
-    # the textured disc (radius 9) moves 4 px a frame through a bar, wholly behind it
-    # or across it, and out on the other side: after it is out, the contour is on it
+@pytest.mark.parametrize(("width", "radius", "speed"), [(6, 9, 4), (12, 9, 4), (20, 7, 5)])
+def test_disc_passes_behind_a_bar_and_out_again(width, radius, speed):
+    # a textured disc moves through a bar (across it, or for the 20 px bar wholly hidden
+    # for two frames) and out on the other side: once it is out, the contour is on it
     # again and nothing of it stays on the bar
     rng = np.random.default_rng(5)
     bar = np.zeros((H, W), bool)
     bar[:, 46 : 46 + width] = True
-    centres = [(32, 20 + 4 * t) for t in range(16)]
-    frames, truth = _disc_frames(rng, centres, colour=True, occluder=bar)
+    centres = [(32, 20 + speed * t) for t in range(16)]
+    frames, truth = _disc_frames(rng, centres, radius=radius, colour=True, occluder=bar)
     masks = track(frames, truth[0], progress=False)
-    out = [t for t, (cy, cx) in enumerate(centres) if cx - 9 > 46 + width]
+    out = [t for t, (cy, cx) in enumerate(centres) if 46 + width < cx - radius < W - 2 * radius]
     assert len(out) >= 3
     for t in out:
         assert _iou(masks[t], truth[t]) >= 0.8
         assert not (masks[t] & bar).any()
-    # while it passes, the contour keeps to its visible part
+    # while it passes, the contour keeps to its visible part (where a fair part shows)
     for t in range(1, len(masks)):
         assert (masks[t] & bar).sum() <= 0.1 * truth[0].sum()
-        assert _iou(masks[t], truth[t]) >= 0.6
+        if truth[t].sum() >= 0.3 * truth[0].sum():
+            assert _iou(masks[t], truth[t]) >= 0.6
 
 
 def test_hidden_by_a_still_cut_not_by_a_shrink():
@@ -56,15 +57,18 @@ def test_hidden_by_a_still_cut_not_by_a_shrink():
 
 def test_visible_pieces_drop_the_occluder_and_strays():
     whole = _disc(32, 44)
-    mask = whole.copy()
-    mask[:, 46:52] = False  # the object on both sides of a bar
+    bar = np.zeros((H, W), bool)
+    bar[:, 46:52] = True
+    mask = whole & ~bar  # the object on both sides of the bar
     stray = np.zeros((H, W), bool)
     stray[5:9, 80:84] = True  # off the whole shape
     on_bar = np.zeros((H, W), bool)
-    on_bar[30:34, 47:51] = True  # on the bar, within the whole shape, looking like the bar
-    ratio = np.where(on_bar | stray, 2.0, -2.0)
+    on_bar[28:36, 46:49] = True  # a strip of the bar taken in with the object
+    ratio = np.where(bar | stray, 2.0, -2.0)  # the bar and the stray look unlike the object
     kept = visible_pieces(mask | stray | on_bar, whole, ratio)
     assert (kept == mask).all()
+    # without the appearance, pieces off the whole shape go, the rest stays
+    assert (visible_pieces(mask | stray | on_bar, whole, None) == (mask | on_bar)).all()
 
 
 def test_align_lays_the_whole_shape_on_the_visible_outline():
