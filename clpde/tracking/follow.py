@@ -417,8 +417,10 @@ class ObjectFollower:
         """The shape to carry on from frame t's result `mask` (its level set `shape_u`):
         the result itself, or the whole shape where the evidence says the part lost is
         hidden by something still (occlusion.py); `hidden` updated."""
-        lost = lost_part(self.predicted, mask)
-        if lost.sum() < LOST * self.predicted.sum():
+        least = LOST * self.predicted.sum()
+        # (the lost part lies within the prediction less the result: most frames stop here)
+        lost = None if (self.predicted & ~mask).sum() < least else lost_part(self.predicted, mask)
+        if lost is None or lost.sum() < least:
             self.hidden, self._whole_u = False, None
             return shape_u
         if not mask.any():  # nothing in sight: the whole shape goes on with its velocity
