@@ -9,9 +9,13 @@ the morphing's region speed, believed as far as it classified the last result (u
 background around the object moves otherwise than it, where the image term cannot hold the
 contour either), and not at all on a still frame; after the morphing, small pieces that
 split off a larger one are dropped (a piece caught on an occluder) and the models learn
-the frame. The whole shape is the result, unless the result lost much of the prediction's
-area at once (the object went behind something): then the prediction is kept as the whole
-shape, so that the contour grows back where the object reappears.
+the frame. The whole shape is the result, unless the evidence says that the part it lost
+is hidden by something still (occlusion.py): then the prediction, laid on the visible
+outline, is kept as the whole shape, the motion is searched near the velocity, and the
+result is the whole shape's visible part (the pieces that look like the object), so that
+the contour grows back where the object reappears and leaves nothing on the occluder. A
+moving object's match far off its velocity is taken only where it is clearly better than
+the best near it (a bar over part of the object lowers the true match).
 """
 
 from __future__ import annotations
@@ -28,17 +32,32 @@ from .appearance import (
     box,
     dilate,
     erode,
+    match_shift,
     object_motion,
 )
 from .levelset import LevelSet, signed_distance
 from .motion_filter import local_contrast
+from .occlusion import (
+    LOST,
+    STILL,
+    align,
+    hidden_by_still,
+    lost_part,
+    still_share,
+    visible_pieces,
+)
 
-# A result keeping less than this share of the predicted area is taken as hidden in part.
-HIDDEN = 0.85
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
 # The largest change of velocity (px a frame) searched while the object is hidden in part.
-HIDDEN_CHANGE = None  # chosen on the calibration half: 3 px lost one occlusion clip
+HIDDEN_CHANGE = 3.0  # chosen on the calibration half: occlusion 0.565 with it, 0.533 without
+# A moving object's (JUMP_MOVING px a frame or more) match more than JUMP px off its
+# velocity is taken only where its correlation beats the best within JUMP px of the
+# velocity by JUMP_MARGIN (`_clearly_better`).
+JUMP_MOVING, JUMP, JUMP_MARGIN = 1.0, 3.0, 0.15
+# ... and does not land where the frame looks unlike the object (the appearance's mean
+# log odds of the surroundings there above LOOKS_AWAY; `_looks_away`).
+LOOKS_AWAY = 0.0
 # Pieces smaller than this share of the largest (or than MIN_PIECE px) are dropped.
 PIECE_SHARE, MIN_PIECE = 0.08, 10
 # The result stays within this many px of the predicted whole shape.
@@ -162,6 +181,27 @@ def _prior(predicted: np.ndarray) -> np.ndarray:
     return prior
 
 
+def _jumped(a: np.ndarray, shape: np.ndarray, velocity: np.ndarray) -> bool:
+    """Whether the motion `a` takes the object's centre more than JUMP px off where its
+    velocity (at least JUMP_MOVING px a frame) would."""
+    if np.hypot(*velocity) < JUMP_MOVING:
+        return False
+    centre = _centroid(shape)
+    shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
+    return bool(np.abs(shift - velocity).max() > JUMP)
+
+
+def _clearly_better(prev, cur, pixels, velocity) -> bool:
+    """Whether the object's best match beats its best within JUMP px of its velocity by
+    JUMP_MARGIN of correlation: a moving object's jump must be clear (a bar over part of
+    it lowers the true match, and a look-alike elsewhere can score as high)."""
+    weight = pixels.astype(np.float64)
+    match_shift(prev, cur, weight, prior=velocity)
+    best = match_shift.peak
+    match_shift(prev, cur, weight, prior=velocity, within=JUMP)
+    return best >= match_shift.peak + JUMP_MARGIN
+
+
 def _centroid(mask: np.ndarray) -> np.ndarray:
     return np.array(ndimage.center_of_mass(mask)) if mask.any() else np.zeros(2)
 
@@ -188,6 +228,14 @@ class ObjectFollower:
         self.predicted = self.shape
         self._predicted_u = self.shape_u
         self.velocity = np.zeros(2)
+        # hidden in part by something still (occlusion.py): the shape is then the whole
+        # shape, the result its visible part
+        self.hidden = False
+        self.visible = self.shape
+        # the whole shape if the loss of the last frame turns out to be hidden (the first
+        # frame behind an occluder: its cut was not there the frame before)
+        self._whole_u = None
+        self._predicted_whole_u = None
         weight = tracker.options.appearance_weight
         self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
         self.term = AppearanceTerm(ls, weight) if weight else None
@@ -196,7 +244,7 @@ class ObjectFollower:
             bins = self.model.bins(self.looks[0])
             self.model.learn(bins, self.shape)
             self.reliability = _reliability(self.model.log_ratio(bins, self.shape), self.shape)
-        self._bins = None
+        self._bins, self._bins_t = None, None  # frame _bins_t's bins
         self._match_cache = {}
         self._ratio = None  # the last frame's log odds (surroundings over object)
         self._looks_ratio = None  # the same from the looks alone
@@ -214,7 +262,7 @@ class ObjectFollower:
             pixels = mask
         # Much of the object out of sight: what is left must match clearly to override
         # the velocity (a sliver matches anywhere; a hidden object does not turn at once).
-        hidden = mask.sum() < HIDDEN * self.shape.sum()
+        hidden = self.hidden
         floor = HIDDEN_FLOOR if hidden else MATCH_FLOOR
         within = HIDDEN_CHANGE if hidden else None
         if pixels.sum() >= MIN_PIECE:
@@ -228,6 +276,19 @@ class ObjectFollower:
                 within=within,
                 light=light,
             )
+            if within is None and _jumped(a, self.shape, self.velocity):
+                if self._looks_away(t, a) or not _clearly_better(
+                    self.looks[t - 1], self.looks[t], pixels, self.velocity
+                ):
+                    a = object_motion(
+                        self.looks[t - 1],
+                        self.looks[t],
+                        pixels,
+                        self.velocity,
+                        floor=floor,
+                        within=JUMP,
+                        light=light,
+                    )
         else:  # nothing in sight: the object keeps its velocity
             a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
         # the velocity: where the motion takes the whole shape's centre
@@ -239,6 +300,7 @@ class ObjectFollower:
         if not predicted.any() or predicted.all():  # carried out of the frame: it stays
             predicted, predicted_u = self.shape, self.shape_u
         self.predicted, self._predicted_u = predicted, predicted_u
+        self._predicted_whole_u = None if self._whole_u is None else _warp_values(self._whole_u, a)
         # F1: the previous frame carried with the object near its predicted place
         near = dilate(predicted, int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
@@ -255,10 +317,23 @@ class ObjectFollower:
         self.ls.assign(predicted_u if start is predicted else signed_distance(start))
         return out, (float(shift[0]), float(shift[1]))
 
+    def _looks_away(self, t, a) -> bool:
+        """Whether the shape carried by the motion `a` lands where frame t does not look
+        like the object (the appearance's mean log odds there above LOOKS_AWAY): a jump
+        onto the background, not the object's."""
+        if self.term is None:
+            return False
+        landed = _warp_values(self.shape_u, a) < 0
+        if not landed.any():
+            return False
+        self._bins, self._bins_t = self.model.bins(self.looks[t]), t
+        return float(self.model.log_ratio(self._bins, landed)[landed].mean()) > LOOKS_AWAY
+
     def _appearance(self, t, a, predicted, still):
         """Set the appearance term of frame t around the predicted whole shape; returns the
         morphing's start."""
-        self._bins = self.model.bins(self.looks[t])
+        if self._bins_t != t:  # (`_looks_away` may have binned the frame)
+            self._bins, self._bins_t = self.model.bins(self.looks[t]), t
         # the appearance's evidence and the prediction's: the log prior odds of the
         # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
@@ -308,7 +383,7 @@ class ObjectFollower:
         start = np.zeros(predicted.shape, bool)
         start[where] = ndimage.binary_opening(predicted[where] & looks)
         labels, n = ndimage.label(start, structure=np.ones((3, 3)))
-        if n > 1:
+        if n > 1 and not self.hidden:  # hidden, every piece that looks like the object
             sizes = np.bincount(labels.ravel())[1:]
             start = (sizes >= max(MIN_PIECE, PIECE_SHARE * sizes.max()))[labels - 1] & (labels > 0)
         return start if start.sum() >= max(VISIBLE * predicted.sum(), 1) else predicted
@@ -318,19 +393,56 @@ class ObjectFollower:
         pieces; the models learn."""
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
-        mask = _drop_strays(mask & dilate(self.predicted, GROW), self.predicted)
+        mask = mask & dilate(self.predicted, GROW)
+        if self.hidden:
+            mask = visible_pieces(mask, self.predicted, self._looks_ratio)
+        else:
+            mask = _drop_strays(mask, self.predicted)
         if self.term is not None and mask.any():
             self.reliability = _reliability(self._looks_ratio, mask)
             # the object's model learns the pixels that did not look clearly like the
             # surroundings: a strip of an occluder taken in by mistake is not learned
             self.model.learn(self._bins, mask & (self._looks_ratio < LEARN_BELOW))
-        hidden = mask.sum() < HIDDEN * self.predicted.sum()
         if mask.any() and (mask == (u < 0)).all():
             shape_u = np.asarray(u, np.float64)
         else:
             shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
-        if hidden:
-            shape_u = np.minimum(shape_u, self._predicted_u)
+        shape_u = self._whole(t, mask, shape_u)
+        self.visible = mask
         self.shape_u = shape_u
         self.shape = shape_u < 0
         return mask
+
+    def _whole(self, t, mask: np.ndarray, shape_u: np.ndarray) -> np.ndarray:
+        """The shape to carry on from frame t's result `mask` (its level set `shape_u`):
+        the result itself, or the whole shape where the evidence says the part lost is
+        hidden by something still (occlusion.py); `hidden` updated."""
+        least = LOST * self.predicted.sum()
+        # (the lost part lies within the prediction less the result: most frames stop here)
+        lost = None if (self.predicted & ~mask).sum() < least else lost_part(self.predicted, mask)
+        if lost is None or lost.sum() < least:
+            self.hidden, self._whole_u = False, None
+            return shape_u
+        if not mask.any():  # nothing in sight: the whole shape goes on with its velocity
+            still = True
+        elif self.hidden:  # stays hidden while what hides it stays still
+            noise = float(np.sqrt(noise_variance(self.looks[t])))
+            still = still_share(self.looks[t - 1], self.looks[t], lost, noise) >= STILL
+        else:
+            ratio = self._looks_ratio if self.term is not None else None
+            still = hidden_by_still(lost, mask, self.visible, ratio, self.velocity)
+        # the whole shape: the prediction with the result (and the loss of the frame
+        # before, where this frame tells it was hidden too)
+        predicted_u = self._predicted_u
+        if self.hidden:  # laid on the visible outline: the fitted motion can miss
+            d = align(self.predicted, mask, lost)
+            if d.any():
+                predicted_u = ndimage.shift(predicted_u, d, order=0, mode="nearest")
+                self.velocity = self.velocity + d
+        whole_u = np.minimum(shape_u, predicted_u)
+        if still and not self.hidden and self._predicted_whole_u is not None:
+            whole_u = np.minimum(whole_u, self._predicted_whole_u)
+        self.hidden = still
+        # not (yet) hidden: kept a frame, in case the next one tells it was
+        self._whole_u = None if still else whole_u
+        return whole_u if still else shape_u
