@@ -24,7 +24,15 @@ Classes:
   (truth: its visible part), 3-6 px a frame.
 - ``clutter``: the object over a busy, many-coloured background (fruits, stuff,
   starry_night, baboon), 3-10 px a frame, turning slowly.
-- ``grey``: as ``fast`` and ``occlude`` alternately, but grey frames (no colour to lean on).
+- ``grey``: as ``fast`` (seeds 0, 2: calibration) and ``occlude`` (seeds 1, 3: test), but
+  grey frames (no colour to lean on); and six more calibration sequences, ``grey-4`` to
+  ``grey-14`` (even seeds, `GREY_MORE`), from photographs used nowhere else in the corpus
+  (opencv-doc's aero3, chicky_512, squirrel_cls, board, rubberwhale1, aloeL, messi5,
+  ela_original, leuvenB, box_in_scene; scikit-image's cat, moon, camera, coins): grey-4
+  behind a bar, grey-6 a look-alike (its grey levels moved near the ground's) at 10-20 px
+  a frame, grey-8 over a panning and dimming ground, grey-10 over a circuit board, grey-12
+  a look-alike over a patterned wall, grey-14 a dark look-alike behind bars, dimming. The
+  test half's grey sequences are unchanged.
 - ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
   9-26 px a frame (benchmarks/track_footage.py; clip 0 calibration, clip 1 test; their
   masks by background subtraction, checked by eye).
