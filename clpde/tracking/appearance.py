@@ -357,7 +357,7 @@ class AppearanceModel:
         self._grey: np.ndarray | None = None
         self._predicted: np.ndarray | None = None
         self.seen: np.ndarray | None = None  # the background's last seen grey, NaN: never
-        self._noise = 0.0  # the noise variance of that grey
+        self._noise: float | None = None  # the noise variance of that grey
 
     def bins(self, frame: np.ndarray) -> np.ndarray:
         """(H, W) bin index of every pixel of `frame` (C, H, W) in [0, 1]: its colour, or
@@ -439,14 +439,15 @@ class AppearanceModel:
         hidden = mask if self._predicted is None else mask | self._predicted
         away = ~dilate(hidden, 3)
         self.seen[away] = grey[away]
-        self._noise = noise_variance(grey)
+        if self._noise is None:  # the first frame's (the grey is normalised per frame)
+            self._noise = noise_variance(grey)
 
     def _seen_evidence(self, predicted: np.ndarray) -> np.ndarray:
         """(H, W): SEEN_EVIDENCE where a patch of the predicted shape matches the seen
         background to the noise, fading to 0 at SEEN_NOISE times the noise's squared
         difference; 0 elsewhere (nothing seen there, or the ground moved since)."""
         out = np.zeros(predicted.shape)
-        if self.seen is None or self._grey is None:
+        if self.seen is None or self._grey is None or self._noise is None:
             return out
         where = box(predicted, SEEN_PATCH)
         if where is None:
