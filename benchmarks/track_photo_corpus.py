@@ -24,7 +24,15 @@ Classes:
   (truth: its visible part), 3-6 px a frame.
 - ``clutter``: the object over a busy, many-coloured background (fruits, stuff,
   starry_night, baboon), 3-10 px a frame, turning slowly.
-- ``grey``: as ``fast`` and ``occlude`` alternately, but grey frames (no colour to lean on).
+- ``grey``: as ``fast`` (seeds 0, 2: calibration) and ``occlude`` (seeds 1, 3: test), but
+  grey frames (no colour to lean on); and six more calibration sequences, ``grey-4`` to
+  ``grey-14`` (even seeds, `GREY_MORE`), from photographs used nowhere else in the corpus
+  (opencv-doc's aero3, chicky_512, squirrel_cls, board, rubberwhale1, aloeL, messi5,
+  ela_original, leuvenB, box_in_scene; scikit-image's cat, moon, camera, coins): grey-4
+  behind a bar, grey-6 a look-alike (its grey levels moved near the ground's) at 10-20 px
+  a frame, grey-8 over a panning and dimming ground, grey-10 over a circuit board, grey-12
+  a look-alike over a patterned wall, grey-14 a dark look-alike behind bars, dimming. The
+  test half's grey sequences are unchanged.
 - ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
   9-26 px a frame (benchmarks/track_footage.py; clip 0 calibration, clip 1 test; their
   masks by background subtraction, checked by eye).
@@ -58,10 +66,10 @@ def photo(name: str) -> np.ndarray:
 
         from skimage.io import imread
 
-        path = OPENCV / f"{name}.jpg"
+        path = OPENCV / (name if "." in name else f"{name}.jpg")
         if not path.exists():
             gz = path.with_name(path.name + ".gz")
-            path = Path(f"/tmp/clpde_photo_{name}.jpg")
+            path = Path(f"/tmp/clpde_photo_{path.name}")
             if not path.exists():
                 path.write_bytes(gzip.decompress(gz.read_bytes()))
         img = imread(path)
@@ -118,8 +126,17 @@ def _sequence(
     dim=1.0,
     bars=None,
     radius=None,
+    look=None,
 ):
     obj_img, ground_img = photo(obj_name), photo(ground_name)
+    if look is not None:
+        # a look-alike object: its photograph's grey levels moved to the ground's mean plus
+        # `offset`, its contrast `scale` times the ground's
+        offset, scale = look
+        o, g = obj_img.mean(axis=2), ground_img.mean(axis=2)
+        obj_img = np.clip(
+            g.mean() + offset + (obj_img - o.mean()) * scale * g.std() / max(o.std(), 1e-6), 0, 1
+        )
     radius = radius or rng.uniform(13, 18)
     star = _star(rng)
     # where in the object photograph the object is cut from
@@ -251,7 +268,41 @@ def seq_clutter(seed):
 
 def seq_grey(seed):
     rng = np.random.default_rng(4000 + seed)
+    if seed in GREY_MORE:
+        return _grey_more(seed, rng)
     frames, masks = (seq_fast if seed % 2 == 0 else seq_occlude)(seed + 10, rng)
+    return frames @ np.array([0.299, 0.587, 0.114]), masks
+
+
+# The grey class' further calibration sequences (seeds 4-14, even: the calibration half
+# only), with what a user of grey footage sees: an occluder, a look-alike object (its grey
+# levels moved near the ground's, `look`), a panning and dimming ground, textured grey
+# grounds; photographs used nowhere else in the corpus. seed: (object, ground, bars or
+# None, speeds (low, high), pan, dim, look (offset, scale) or None)
+GREY_MORE = {
+    4: ("cat", "aero3", "leuvenB", (3, 6), False, False, None),
+    6: ("chicky_512.png", "moon", None, (10, 20), False, False, (0.08, 0.8)),
+    8: ("squirrel_cls", "camera", None, (2, 6), True, True, None),
+    10: ("coins", "board", None, (3, 10), False, False, None),
+    12: ("rubberwhale1.png", "aloeL", None, (4, 12), False, False, (-0.06, 0.9)),
+    14: ("messi5", "ela_original", "box_in_scene.png", (3, 6), False, True, (0.1, 1.0)),
+}
+
+
+def _grey_more(seed, rng):
+    obj, ground, bar, (low, high), pan, dim, look = GREY_MORE[seed]
+    kw = {"look": look}
+    if pan:
+        kw["pan"] = tuple(rng.uniform(-3, 3, 2))
+    if dim:
+        kw["dim"] = rng.uniform(0.55, 0.7)
+    frames = masks = None
+    bars = _bars(rng, bar) if bar else None
+    for _ in range(20):  # with bars: the object hidden by at least a fifth at some frame
+        frames, masks = _sequence(rng, obj, ground, _speeds(rng, low, high), bars=bars, **kw)
+        full = masks.sum((1, 2)).max()
+        if bars is None or (masks[0].sum() > 0.8 * full and masks.sum((1, 2)).min() < 0.8 * full):
+            break
     return frames @ np.array([0.299, 0.587, 0.114]), masks
 
 
@@ -281,7 +332,8 @@ def corpus(half: str | None = None, classes=CLASSES, seqs: int = SEQS):
     """{name: (frames, masks, class)} of one half ('calibration', 'test') or both (None)."""
     out = {}
     for cls in classes:
-        for seed in range(seqs):
+        extra = sorted(GREY_MORE) if cls == "grey" and seqs == SEQS else []
+        for seed in list(range(seqs)) + extra:
             if half is not None and half_of(seed) != half:
                 continue
             if cls == "footage" and seed >= FOOTAGE_CLIPS:
