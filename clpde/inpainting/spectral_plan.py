@@ -142,17 +142,19 @@ def _waves(hole_sat, pixels, pairs, border: int, delta: float):
         rank[idx[np.lexsort((-idx, score))]] = np.arange(idx.size)
         live = pending[pi] & pending[pj]
         pi, pj, overlap = pi[live], pj[live], overlap[live]
-        best_near = np.full(n, -1, np.int64)
-        np.maximum.at(best_near, pi, rank[pj])
+        # a block comes first unless a pending neighbour outranks it
+        outranked = np.zeros(n, bool)
+        outranked[pi[rank[pj] > rank[pi]]] = True
         ok = (score > 0) | (score.max() <= 0)
-        chosen = idx[(rank[idx] > best_near[idx]) & ok]
+        chosen = idx[~outranked[idx] & ok]
         block_wave[chosen] = len(waves)
         waves.append((first, chosen.size))
         order.append(chosen)
         first += chosen.size
         pending[chosen] = False
         done = ~pending[pj]
-        np.add.at(filled_n, pi[done], overlap[done])
+        # (exact: whole numbers summed in float64)
+        filled_n += np.bincount(pi[done], overlap[done], n).astype(np.int64)
     return np.concatenate(order), waves, block_wave
 
 
@@ -233,26 +235,20 @@ def launch_table(plans, omega, origin, shape, picking):
     iterations, per_pixel, minor = picking
     y0, x0 = origin
     wave_of = np.full((len(plans),) + tuple(shape), -1, np.int32)
-    per_wave = {}
+    rows, wave_ids = [], []
     for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
         wave_of[c, cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = w_of
         moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
         picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
         minor_picks = minor_iterations(picks, minor)
-        for w, (first, count) in enumerate(waves):
-            rows = np.concatenate(
-                [
-                    moved[first : first + count],
-                    np.full((count, 1), c, np.int32),
-                    picks[first : first + count, None],
-                    minor_picks[first : first + count, None],
-                ],
-                1,
-            )
-            per_wave.setdefault(w, []).append(rows)
-    order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
-    all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
-    starts = np.cumsum([0] + [len(o) for o in order])
+        copy = np.full((len(blocks), 1), c, np.int32)
+        rows.append(np.concatenate([moved, copy, picks[:, None], minor_picks[:, None]], 1))
+        wave_ids.append(np.repeat(np.arange(len(waves)), [count for _, count in waves]))
+    # wave by wave, each wave's blocks copy by copy (a stable sort keeps the copies' order)
+    wave_ids = np.concatenate(wave_ids)
+    by_wave = np.argsort(wave_ids, kind="stable")
+    all_blocks = np.ascontiguousarray(np.concatenate(rows)[by_wave], np.int32)
+    starts = np.concatenate([[0], np.cumsum(np.bincount(wave_ids))]).astype(np.int64)
     return wave_of, all_blocks, starts
 
 
