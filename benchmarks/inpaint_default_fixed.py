@@ -4,14 +4,18 @@
     PYTHONPATH=. python benchmarks/inpaint_default_fixed.py compare DIR_A DIR_B
     PYTHONPATH=. python benchmarks/inpaint_default_fixed.py time [--every N] [--runs R]
     PYTHONPATH=. python benchmarks/inpaint_default_fixed.py profile [--every N] [--top K]
+    PYTHONPATH=. python benchmarks/inpaint_default_fixed.py peers [--every N] [--runs R]
 
 `save` runs the default (`clpde.inpaint(image, mask, channel_axis=..., seed=0)`, no options)
 on every N-th case of tests/cases/inpaint_corpus.py's corpus (both halves, every class) and
 saves each output; `compare` says whether two saved sets are bit for bit the same. `time`
 prints the default's CPU time (time.process_time: the machine is shared) per class, the best
 of R runs per case; `profile` runs cProfile over one pass and prints the costliest
-functions by their own and cumulative time. A warm-up call on a grey and a colour case keeps
-the program builds out of both.
+functions by their own and cumulative time. `peers` times the default, scikit-image's
+biharmonic and OpenCV's FSR fast as benchmarks/inpaint_generalise.py calls them, in CPU
+time (best of R per case), and prints per class and half the default's time over each
+peer's (ratios of the class's sums, as inpaint_generalise.py's columns). A warm-up call
+on a grey and a colour case keeps the program builds out of all of them.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.cases
 from tests.cases import inpaint_corpus as corpus  # noqa: E402
 
@@ -93,6 +98,38 @@ def timing(every: int, runs: int) -> None:
     print(f"total {total:.2f} s CPU over {sum(map(len, per.values()))} cases")
 
 
+def peers(every: int, runs: int) -> None:
+    import inpaint_generalise as gen
+
+    cases = _cases(every)
+    _warm(cases)
+    calls = {
+        "default": gen.clpde_method("default"),
+        "biharmonic": gen.biharmonic,
+        "fsr-fast": gen.fsr("INPAINT_FSR_FAST"),
+    }
+    sums = {}
+    for case in cases:
+        image = case.damaged()
+        for name, call in calls.items():
+            best = np.inf
+            for _ in range(runs):
+                start = time.process_time()
+                call(image, case.mask, case)
+                best = min(best, time.process_time() - start)
+            per = sums.setdefault((case.damage, case.half), {})
+            per[name] = per.get(name, 0.0) + best
+    print("class        half          default s  biharmonic s  x biharmonic  x FSR-fast (CPU)")
+    for damage in corpus.CLASSES:
+        for half in ("test", "calibration"):
+            t = sums.get((damage, half))
+            if t:
+                print(
+                    f"{damage:12s} {half:12s} {t['default']:9.3f} {t['biharmonic']:12.3f} "
+                    f"{t['default'] / t['biharmonic']:12.2f} {t['default'] / t['fsr-fast']:10.3f}"
+                )
+
+
 def profile(every: int, top: int) -> None:
     cases = _cases(every)
     _warm(cases)
@@ -110,7 +147,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    p.add_argument("mode", choices=("save", "compare", "time", "profile"))
+    p.add_argument("mode", choices=("save", "compare", "time", "profile", "peers"))
     p.add_argument("dirs", nargs="*", type=Path)
     p.add_argument("--every", type=int, default=1, help="every N-th case of the corpus")
     p.add_argument("--runs", type=int, default=3)
@@ -123,6 +160,8 @@ def main(argv=None) -> int:
         return compare(*a.dirs[:2])
     elif a.mode == "time":
         timing(a.every, a.runs)
+    elif a.mode == "peers":
+        peers(a.every, a.runs)
     else:
         profile(a.every, a.top)
     return 0
