@@ -48,7 +48,6 @@ def limit(fill, data, omega, damage=None, ring: int | None = None, hull: bool = 
     # each known pixel within the ring goes to the cluster of its nearest hole pixel
     near = ~omega & (dist <= ring)
     owner = np.where(near, labels[iy, ix], 0)
-    index = np.arange(1, count + 1)
     known = np.asarray(data, np.float64)
     nc = known.shape[0]
     hole = labels[omega]  # each hole pixel's cluster
@@ -59,10 +58,19 @@ def limit(fill, data, omega, damage=None, ring: int | None = None, hull: bool = 
     # per channel: the ring's range per cluster; a cluster without ring pixels of its own
     # (every one nearer another cluster) takes the box's known range
     whole = ~omega
-    empty = np.bincount(owner.ravel(), minlength=count + 1)[1:] == 0
+    # the ring's pixels grouped by cluster, by one sort, for every channel's range
+    flat = owner.ravel()
+    ring_at = np.flatnonzero(flat)
+    order = ring_at[np.argsort(flat[ring_at], kind="stable")]
+    sizes = np.bincount(flat[ring_at], minlength=count + 1)[1:]
+    empty = sizes == 0
+    starts = (np.cumsum(sizes) - sizes)[~empty]
     for c in range(nc):
-        lo = np.asarray(ndimage.minimum(known[c], owner, index), np.float64).reshape(-1)
-        hi = np.asarray(ndimage.maximum(known[c], owner, index), np.float64).reshape(-1)
+        ring_values = known[c].ravel()[order]
+        lo, hi = np.empty(count), np.empty(count)
+        if starts.size:
+            lo[~empty] = np.minimum.reduceat(ring_values, starts)
+            hi[~empty] = np.maximum.reduceat(ring_values, starts)
         lo[empty], hi[empty] = known[c][whole].min(), known[c][whole].max()
         lo_p, hi_p = lo[hole - 1], hi[hole - 1]
         if partly is not None:  # the blend with the observed value stays possible

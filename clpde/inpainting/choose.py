@@ -20,6 +20,8 @@ measured on the damage itself: inpainting/auto.py.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy import fft as sfft
 from scipy import ndimage
@@ -62,21 +64,32 @@ def _autocorrelation(detail, ok):
     hi = LAGS[1]
     # zero padding by the largest lag: no wrap-around within the lags looked at
     shape = (sfft.next_fast_len(H + hi + 1, True), sfft.next_fast_len(W + hi + 1, True))
-    fd, fd2, fk = (sfft.rfft2(a, shape) for a in (d, d * d, k))
-
-    def corr(fa, fb):
-        return sfft.irfft2(fa * np.conj(fb), shape)
-
-    num, e1, e2, count = corr(fd, fd), corr(fd2, fk), corr(fk, fd2), corr(fk, fk)
-    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
-    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
-    ly, lx = np.broadcast_arrays(ty, tx)
-    lag = np.maximum(np.abs(ly), np.abs(lx))
+    # the transforms in one call each way (a batch: the same values as one by one)
+    fd, fd2, fk = sfft.rfft2(np.stack([d, d * d, k]), shape)
+    # corr(a, b): sum over p of a(p + lag) b(p)
+    num, e1, e2, count = sfft.irfft2(
+        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fd2), fk * np.conj(fk)]),
+        shape,
+    )
+    ly, lx, lag = _lags(shape)
     # lags whose overlap holds at least a quarter of the known pixels, and some detail
     use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
     use &= np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1)
     lags = np.stack([ly[use], lx[use]], -1).astype(np.int64)
     return lags, num[use] / np.sqrt(e1[use] * e2[use])
+
+
+@functools.lru_cache(maxsize=64)
+def _lags(shape):
+    """(ly, lx, lag) over a transform of `shape`: each entry's lag (rows, columns) and its
+    chessboard length (read-only: shared by every call of that shape)."""
+    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
+    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    ly, lx = (np.array(a) for a in np.broadcast_arrays(ty, tx))
+    lag = np.maximum(np.abs(ly), np.abs(lx))
+    for a in (ly, lx, lag):
+        a.flags.writeable = False
+    return ly, lx, lag
 
 
 def repeat(detail, ok) -> float:

@@ -117,13 +117,23 @@ class PickOptions:
 def clusters_of(omega):
     """The hole's clusters (components of the hole grown by 1 px, 8-connected): (labels,
     count, radius per cluster: its deepest hole pixel's distance to the known ones)."""
-    known = ~omega
-    clusters, count = ndimage.label(
-        ndimage.distance_transform_edt(known) <= 1, np.ones((3, 3), bool)
-    )
+    # grown by 1 px: the hole and its 4-neighbours (the known pixels at distance 1)
+    grown = ndimage.binary_dilation(omega, ndimage.generate_binary_structure(2, 1))
+    clusters, count = ndimage.label(grown, np.ones((3, 3), bool))
     depth = ndimage.distance_transform_edt(omega)
-    radius = np.asarray(ndimage.maximum(depth, clusters, np.arange(1, count + 1))).reshape(-1)
-    return clusters, count, radius
+    radius = np.zeros(count + 1)
+    np.maximum.at(radius, clusters.ravel(), depth.ravel())  # (depth >= 0, known: 0)
+    return clusters, count, radius[1:]
+
+
+def has_thick(omega) -> bool:
+    """Whether a pixel of omega lies at least MIN_RADIUS from every known pixel (the test
+    of clusters_of's radius, without labelling: thin damage needs no periodicity test)."""
+    r = int(np.ceil(MIN_RADIUS))
+    y, x = np.mgrid[-r : r + 1, -r : r + 1]
+    # the known pixels nearer than MIN_RADIUS (squared distances are whole numbers)
+    near = y**2 + x**2 < MIN_RADIUS**2
+    return bool(ndimage.binary_erosion(omega, near, border_value=1).any())
 
 
 def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY, parts=None):
@@ -241,8 +251,12 @@ def solve(
     exemplar = ExemplarOptions() if exemplar is None else exemplar
     omega = np.asarray(omega, bool)
     common = {"dtype": dtype, "progress": progress, "seed": seed}
-    parts = clusters_of(omega)
-    periodic = periodic_clusters(data, omega, periodicity, parts)
+    parts = clusters_of(omega) if smooth or has_thick(omega) else None
+    periodic = (
+        np.zeros_like(omega)
+        if parts is None
+        else periodic_clusters(data, omega, periodicity, parts)
+    )
     fill_spectral = load("spectral").solve
     if not periodic.any():
         out = fill_spectral(data, omega, runtime, **common, **keywords(spectral))

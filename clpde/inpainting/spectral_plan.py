@@ -18,22 +18,36 @@ import numpy as np
 MAXL = 32  # kernels/inpainting/spectral.cl's SPECTRAL_MAXL: the widest window
 
 
-def _table(weight: np.ndarray, border: int) -> np.ndarray:
-    """The summed-area table of `weight` padded so that every window of _window_sums lies
-    inside it."""
-    pad = border + MAXL + 1  # windows of blocks past the array's end stay inside
-    return np.pad(weight, pad).cumsum(0).cumsum(1)
+def _table(weight: np.ndarray) -> np.ndarray:
+    """The summed-area table of `weight` ((rows, cols) integers) with a row and a column of
+    zeros before it: entry [y, x] sums weight[:y, :x]."""
+    sat = np.zeros((weight.shape[0] + 1, weight.shape[1] + 1), np.int64)
+    np.cumsum(weight, 0, dtype=np.int64, out=sat[1:, 1:])
+    np.cumsum(sat[1:, 1:], 1, out=sat[1:, 1:])
+    return sat
 
 
-def _window_sums(sat: np.ndarray, border: int, ys, xs, sizes) -> np.ndarray:
-    """Sum of a weight over each block's window (the block at (ys, xs), `sizes` wide, grown
-    by `border`; outside the array counts 0), from the weight's _table `sat`."""
-    pad = border + MAXL + 1
-    # the window's rows [y - border, y + size + border) are pad's [a, b) with a = y - border +
-    # pad; sat is inclusive, so the sum is sat[b - 1] - sat[a - 1] (likewise for columns)
-    a_y, a_x = ys - border + pad - 1, xs - border + pad - 1
-    b_y, b_x = ys + sizes + border + pad - 1, xs + sizes + border + pad - 1
-    return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
+def _box_sums(sat: np.ndarray, y0, y1, x0, x1):
+    """Sums over rows [y0, y1), columns [x0, x1) of the array whose _table is `sat`, and
+    the count of those pixels inside the array (outside counts 0; an empty range sums to
+    0): integers, exact."""
+    ny, nx = sat.shape[0] - 1, sat.shape[1] - 1
+    y1, x1 = np.maximum(y1, y0), np.maximum(x1, x0)
+    # (np.minimum of np.maximum: np.clip's checks cost more than the sums here)
+    a_y, b_y = np.minimum(np.maximum(y0, 0), ny), np.minimum(np.maximum(y1, 0), ny)
+    a_x, b_x = np.minimum(np.maximum(x0, 0), nx), np.minimum(np.maximum(x1, 0), nx)
+    sums = sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
+    return sums, (b_y - a_y) * (b_x - a_x)
+
+
+def _known_sums(hole_sat: np.ndarray, border: int, ys, xs, sizes):
+    """Known pixels in each block's window (the block at (ys, xs), `sizes` wide, grown by
+    `border`; outside the array counts 0), from the hole's _table: the window's pixels
+    inside the array less its hole pixels."""
+    holes, inside = _box_sums(
+        hole_sat, ys - border, ys + sizes + border, xs - border, xs + sizes + border
+    )
+    return inside - holes
 
 
 def _hole_cells(hole: np.ndarray, origin, cells_shape, cell: int) -> np.ndarray:
@@ -48,46 +62,40 @@ def _hole_cells(hole: np.ndarray, origin, cells_shape, cell: int) -> np.ndarray:
     return grid.reshape(ncy, cell, ncx, cell).any((1, 3))
 
 
-def _block_sizes(cells, known, origin, tops, top: int, cell: int, border: int, split: float):
-    """[(cell row, cell column, size in cells)] of the blocks holding hole cells: the grid's
-    `tops` top blocks (`top` cells wide), each cut in four while its window holds less than
-    `split` of known pixels (down to one cell)."""
+def _block_sizes(cells, hole_sat, origin, tops, top: int, cell: int, border: int, split: float):
+    """(cell rows, cell columns, sizes in cells) of the blocks holding hole cells: the
+    grid's `tops` top blocks (`top` cells wide), each cut in four while its window holds
+    less than `split` of known pixels (down to one cell); the blocks of each size in turn,
+    each size's in the order of their parents."""
     oy, ox = origin
+    cells_sat = _table(cells)
+    a, b = (g.ravel() * top for g in np.indices(tops))
+    s = np.full(a.size, top, np.int64)
     found = []
-    sat = _table(known, border)
-    cells_sat = np.pad(cells.astype(np.int64), ((1, 0), (1, 0))).cumsum(0).cumsum(1)
-    todo = [(i * top, j * top, top) for i in range(tops[0]) for j in range(tops[1])]
-    while todo:
-        cys, cxs, sz = np.array(todo).T
-        has = (
-            cells_sat[cys + sz, cxs + sz]
-            - cells_sat[cys, cxs + sz]
-            - cells_sat[cys + sz, cxs]
-            + cells_sat[cys, cxs]
-        ) > 0
-        area = (sz * cell + 2 * border) ** 2
-        share = _window_sums(sat, border, oy + cys * cell, ox + cxs * cell, sz * cell) / area
-        nxt = []
-        for (a, b, s), h, sh in zip(todo, has, share, strict=True):
-            if not h:
-                continue
-            if sh < split and s > 1:
-                h2 = s // 2
-                nxt += [(a, b, h2), (a, b + h2, h2), (a + h2, b, h2), (a + h2, b + h2, h2)]
-            else:
-                found.append((a, b, s))
-        todo = nxt
-    return found
+    while a.size:
+        has = _box_sums(cells_sat, a, a + s, b, b + s)[0] > 0
+        area = (s * cell + 2 * border) ** 2
+        known = _known_sums(hole_sat, border, oy + a * cell, ox + b * cell, s * cell)
+        # the share as a float64, as the float table of the known pixels gave it (exact)
+        cut = has & (known.astype(np.float64) / area < split) & (s > 1)
+        keep = has & ~cut
+        found.append((a[keep], b[keep], s[keep]))
+        h = s[cut] // 2
+        # each cut block's four quarters, in the order (0, 0), (0, h), (h, 0), (h, h)
+        a = (a[cut][:, None] + h[:, None] * np.array([0, 0, 1, 1])).ravel()
+        b = (b[cut][:, None] + h[:, None] * np.array([0, 1, 0, 1])).ravel()
+        s = np.repeat(h, 4)
+    return tuple(np.concatenate([f[k] for f in found]).astype(np.int64) for k in range(3))
 
 
 def _neighbours(found, reach: int, chunk: int = 1024):
     """(pi, pj): the pairs of blocks where j's cells lie in i's window (and i's in j's: the
-    relation is symmetric); `found` holds (cell row, cell column, size in cells) of each
-    block, `reach` is how many cells a window reaches beyond its block. Blocks are compared
+    relation is symmetric); `found` holds (cell rows, cell columns, sizes in cells) of the
+    blocks, `reach` is how many cells a window reaches beyond its block. Blocks are compared
     `chunk` at a time against all, so that memory stays chunk x blocks."""
-    a, b, s = (np.array([f[k] for f in found], np.int64) for k in range(3))
+    a, b, s = found
     pi, pj = [], []
-    for c0 in range(0, len(found), chunk):
+    for c0 in range(0, len(a), chunk):
         i = slice(c0, c0 + chunk)
         near = (
             (a[None, :] < (a[i] + s[i] + reach)[:, None])
@@ -103,61 +111,51 @@ def _neighbours(found, reach: int, chunk: int = 1024):
     return np.concatenate(pi).astype(np.int64), np.concatenate(pj).astype(np.int64)
 
 
-def _box_sums(sat, pad: int, y0, y1, x0, x1):
-    """Sums over rows [y0, y1), columns [x0, x1) of the crop from its summed-area table
-    (padded by `pad`); an empty range sums to 0."""
-    y1, x1 = np.maximum(y1, y0), np.maximum(x1, x0)
-    a_y, a_x, b_y, b_x = y0 + pad - 1, x0 + pad - 1, y1 + pad - 1, x1 + pad - 1
-    return sat[b_y, b_x] - sat[a_y, b_x] - sat[b_y, a_x] + sat[a_y, a_x]
-
-
-def _waves(hole, pixels, pairs, border: int, delta: float):
+def _waves(hole_sat, pixels, pairs, border: int, delta: float):
     """(order, waves, block_wave): the blocks wave by wave, (first, count) of each wave in
     `order`, and each block's wave. `pixels` is (rows, columns, sizes) of the blocks in the
-    crop; `pairs` their neighbours. Neighbours never share a wave, and a filled block adds
-    its hole pixels in a neighbour's window, times delta, to that neighbour's score."""
+    crop, `hole_sat` the crop's hole's _table; `pairs` their neighbours. Neighbours never
+    share a wave, and a filled block adds its hole pixels in a neighbour's window, times
+    delta, to that neighbour's score."""
     py, px, ps = pixels
     pi, pj = pairs
     n = len(py)
-    pad = border + MAXL + 1
-    hole_sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
-    known_sat = np.pad((~hole).astype(np.int64), pad).cumsum(0).cumsum(1)
-    known_n = _box_sums(
-        known_sat, pad, py - border, py + ps + border, px - border, px + ps + border
-    )
+    known_n = _known_sums(hole_sat, border, py, px, ps)
     # hole pixels of j inside i's window: they count delta once j is filled
     overlap = _box_sums(
         hole_sat,
-        pad,
         np.maximum(py[pj], py[pi] - border),
         np.minimum(py[pj] + ps[pj], py[pi] + ps[pi] + border),
         np.maximum(px[pj], px[pi] - border),
         np.minimum(px[pj] + ps[pj], px[pi] + ps[pi] + border),
-    )
+    )[0]
     area = (ps + 2 * border) ** 2
     filled_n = np.zeros(n, np.int64)
     block_wave = np.full(n, -1, np.int64)
     pending = np.ones(n, bool)
-    order, waves = [], []
+    rank = np.full(n, -1, np.int64)
+    order, waves, first = [], [], 0
     while pending.any():
         idx = np.flatnonzero(pending)
         score = (known_n[idx] + delta * filled_n[idx]) / area[idx]
         # unique ranks: the larger score first, then the lower index
-        rank = np.full(n, -1, np.int64)
         rank[idx[np.lexsort((-idx, score))]] = np.arange(idx.size)
         live = pending[pi] & pending[pj]
         pi, pj, overlap = pi[live], pj[live], overlap[live]
-        best_near = np.full(n, -1, np.int64)
-        np.maximum.at(best_near, pi, rank[pj])
+        # a block comes first unless a pending neighbour outranks it
+        outranked = np.zeros(n, bool)
+        outranked[pi[rank[pj] > rank[pi]]] = True
         ok = (score > 0) | (score.max() <= 0)
-        chosen = idx[(rank[idx] > best_near[idx]) & ok]
+        chosen = idx[~outranked[idx] & ok]
         block_wave[chosen] = len(waves)
-        waves.append((len(order), chosen.size))
-        order.extend(chosen.tolist())
+        waves.append((first, chosen.size))
+        order.append(chosen)
+        first += chosen.size
         pending[chosen] = False
         done = ~pending[pj]
-        np.add.at(filled_n, pi[done], overlap[done])
-    return np.array(order, np.int64), waves, block_wave
+        # (exact: whole numbers summed in float64)
+        filled_n += np.bincount(pi[done], overlap[done], n).astype(np.int64)
+    return np.concatenate(order), waves, block_wave
 
 
 def plan(
@@ -209,18 +207,19 @@ def plan(
     cell, top = min_block, block // min_block
     ncy, ncx = gy * top, gx * top
     cells = _hole_cells(hole, (oy, ox), (ncy, ncx), cell)
-    known = (~hole).astype(np.float64)
-    found = _block_sizes(cells, known, (oy, ox), (gy, gx), top, cell, border, split)
-    fy = np.array([f[0] for f in found])
-    fx = np.array([f[1] for f in found])
-    fs = np.array([f[2] for f in found])
+    hole_sat = _table(hole)
+    found = _block_sizes(cells, hole_sat, (oy, ox), (gy, gx), top, cell, border, split)
+    fy, fx, fs = found
     label = np.full((ncy, ncx), -1, np.int64)  # which block owns each cell
-    for i, (a, b, s) in enumerate(found):
-        label[a : a + s, b : b + s] = i
+    for size in np.unique(fs):  # blocks never overlap: each size's cells at once
+        i = np.flatnonzero(fs == size)
+        for dy in range(size):
+            for dx in range(size):
+                label[fy[i] + dy, fx[i] + dx] = i
     reach = -(-border // cell)  # cells a window reaches beyond its block
     py, px, ps = oy + fy * cell, ox + fx * cell, fs * cell
     pairs = _neighbours(found, reach)
-    order, waves, block_wave = _waves(hole, (py, px, ps), pairs, border, delta)
+    order, waves, block_wave = _waves(hole_sat, (py, px, ps), pairs, border, delta)
     blocks = np.stack([py[order], px[order], ps[order], ps[order] + 2 * border], 1)
     wave_of = np.full(hole.shape, -1, np.int32)
     hy, hx = np.nonzero(hole)
@@ -236,26 +235,20 @@ def launch_table(plans, omega, origin, shape, picking):
     iterations, per_pixel, minor = picking
     y0, x0 = origin
     wave_of = np.full((len(plans),) + tuple(shape), -1, np.int32)
-    per_wave = {}
+    rows, wave_ids = [], []
     for c, ((cy0, cy1, cx0, cx1), blocks, waves, w_of) in enumerate(plans):
         wave_of[c, cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0] = w_of
         moved = blocks + np.array([cy0 - y0, cx0 - x0, 0, 0], np.int32)
         picks = block_iterations(blocks, omega[cy0:cy1, cx0:cx1], iterations, per_pixel)
         minor_picks = minor_iterations(picks, minor)
-        for w, (first, count) in enumerate(waves):
-            rows = np.concatenate(
-                [
-                    moved[first : first + count],
-                    np.full((count, 1), c, np.int32),
-                    picks[first : first + count, None],
-                    minor_picks[first : first + count, None],
-                ],
-                1,
-            )
-            per_wave.setdefault(w, []).append(rows)
-    order = [np.concatenate(per_wave[w]) for w in range(len(per_wave))]
-    all_blocks = np.ascontiguousarray(np.concatenate(order), np.int32)
-    starts = np.cumsum([0] + [len(o) for o in order])
+        copy = np.full((len(blocks), 1), c, np.int32)
+        rows.append(np.concatenate([moved, copy, picks[:, None], minor_picks[:, None]], 1))
+        wave_ids.append(np.repeat(np.arange(len(waves)), [count for _, count in waves]))
+    # wave by wave, each wave's blocks copy by copy (a stable sort keeps the copies' order)
+    wave_ids = np.concatenate(wave_ids)
+    by_wave = np.argsort(wave_ids, kind="stable")
+    all_blocks = np.ascontiguousarray(np.concatenate(rows)[by_wave], np.int32)
+    starts = np.concatenate([[0], np.cumsum(np.bincount(wave_ids))]).astype(np.int64)
     return wave_of, all_blocks, starts
 
 
@@ -265,10 +258,8 @@ def block_iterations(blocks, hole, iterations: int, per_pixel: float) -> np.ndar
     block-wide hole."""
     if per_pixel <= 0:
         return np.full(len(blocks), iterations, np.int32)
-    pad = MAXL
-    sat = np.pad(hole.astype(np.int64), pad).cumsum(0).cumsum(1)
-    y, x, s = blocks[:, 0] + pad - 1, blocks[:, 1] + pad - 1, blocks[:, 2]
-    holes = sat[y + s, x + s] - sat[y, x + s] - sat[y + s, x] + sat[y, x]
+    y, x, s = (blocks[:, k].astype(np.int64) for k in range(3))
+    holes = _box_sums(_table(hole), y, y + s, x, x + s)[0]
     return np.minimum(iterations, np.maximum(4, np.ceil(per_pixel * holes))).astype(np.int32)
 
 
