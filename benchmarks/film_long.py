@@ -34,7 +34,10 @@ Reported: frames per second, peak resident memory (VmHWM) of the process and of 
 worker, and the speed-up of 2 workers. Memory flat in length is shown by two lengths; the
 2-minute film (3000 frames) is run with --full, else its time is extrapolated from the
 throughput and said to be. ``--work spatial`` fills given masks frame by frame with
-clpde.inpaint (no detection) to time the streaming and I/O alone.
+clpde.inpaint (no detection) to time the streaming and I/O alone. On a shared machine the
+wall time says more about the other jobs: ``one`` also reports the CPU seconds of the
+calling thread (reading, writing and the restoration's serial steps) and film_speed.py's
+estimate of the cores the run keeps busy given two free ones.
 """
 
 from __future__ import annotations
@@ -208,12 +211,20 @@ def child(args) -> None:
     mask = args.masks if args.work == "spatial" else None
     record = {"mode": args.mode}
     if args.mode == "one":
-        start, cpu = time.perf_counter(), time.process_time()
-        result = restore_film(
-            args.film, args.out, mask=mask, work=work, block=args.block, progress=False
-        )
+        from film_speed import Demand
+
+        start, cpu, own = time.perf_counter(), time.process_time(), time.thread_time()
+        with Demand() as demand:
+            result = restore_film(
+                args.film, args.out, mask=mask, work=work, block=args.block, progress=False
+            )
         record["seconds"] = time.perf_counter() - start
         record["cpu_seconds"] = time.process_time() - cpu  # every thread of the process
+        # what a shared machine does not change (film_speed.py): the calling thread's own
+        # CPU (reading, writing and the serial steps) and the cores busy if given 2
+        record["serial_cpu_seconds"] = time.thread_time() - own
+        record["cores_if_given_2"] = demand.cores_if_given(2)
+        record["load_average"] = os.getloadavg()[0]
     else:
         from clpde.scale.cluster import connect
 
@@ -345,10 +356,18 @@ def main() -> None:
                 out.unlink()
                 rows.append(row)
                 workers = row.get("worker_peak_mib")
+                given = row.get("cores_if_given_2")
                 print(
                     f"{length:5d} frames {mode:4s}: {row['fps']:6.3f} frames/s, "
                     f"{row['seconds']:8.1f} s, CPU {row['cpu_seconds']:8.1f} s, "
                     f"peak {row['peak_mib']:7.0f} MiB"
+                    + (
+                        f", serial CPU {row['serial_cpu_seconds']:.1f} s, {given:.2f} cores "
+                        f"busy if given 2 (so {given * length / row['cpu_seconds']:.3f} "
+                        f"frames/s, estimated), load average {row['load_average']:.1f}"
+                        if given
+                        else ""
+                    )
                     + (
                         f", workers {', '.join(f'{w:.0f}' for w in workers)} MiB" if workers else ""
                     ),
