@@ -529,10 +529,8 @@ def film_scratches(
     (True, 0)
     """
     T, ny, nx = G.shape
-    if grain is None:
-        grain = [noise_std(G[t].astype(np.float64)) for t in range(T)]
-    # the frames in threads (map_frames): each frame's lines and runs are its own
-    ev = map_frames(lambda t: frame_lines(G[t], float(grain[t])), range(T))
+    grain = [noise_std(G[t].astype(np.float64)) for t in range(T)] if grain is None else grain
+    ev = map_frames(lambda t: frame_lines(G[t], float(grain[t])), range(T))  # frames in threads
     level = LINE_SCALE * threshold
     # seen[dt - 1][u][sign]: frame u's lines, widened by the drift over dt frames
     seen = [
@@ -545,10 +543,8 @@ def film_scratches(
         ]
         for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
     ]
-    span = min(2, radius)
-    kept = map_frames(
-        lambda t: _frame_scratches(t, ev, seen, level, min_length, flows, span), range(T)
-    )
+    args = (ev, seen, level, min_length, flows, min(2, radius))  # min(2, radius): the span
+    kept = map_frames(lambda t: _frame_scratches(t, *args), range(T))
     out = np.zeros((T, ny, nx), bool)
     xs = np.arange(nx)[None, :]
     for t in range(T):
