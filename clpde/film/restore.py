@@ -15,7 +15,7 @@ import contextlib
 import hashlib
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
@@ -330,7 +330,7 @@ def restore_film(
     if work is None:
         work = film_work(grow=grow, detect_options=detect_options, fill_options=fill_options)
     elif grow and not work.grow:
-        work = replace(work, grow=grow)  # every other field of the work as given
+        work = WindowWork(work.fill, work.detect, work.fill_radius, work.detect_radius, grow)
     if given is None and work.detect is None:
         raise InputError("give the masks (--mask): this restoration has no detector")
     if cluster is not None and client is not None:
