@@ -26,6 +26,7 @@ meant for speed leaves the results bit for bit as they were.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import hashlib
 import os
 import threading
@@ -36,7 +37,7 @@ import numpy as np
 from film_corpus import damage_clip, grain_flicker, read_clip
 
 import clpde
-from clpde.film.stream import DEFAULT_BLOCK, WindowWork, film_work, restore_stream
+from clpde.film.stream import DEFAULT_BLOCK, film_work, restore_stream
 from clpde.motion import dis
 
 
@@ -115,13 +116,13 @@ def main():
         spent["detect"] += time.perf_counter() - t0
         return out
 
-    def fill(frames, masks, channel_axis=None):
+    def fill(frames, masks, channel_axis=None, **given):  # the kinds, where the work takes them
         t0 = time.perf_counter()
-        out = base.fill(frames, masks, channel_axis=channel_axis)
+        out = base.fill(frames, masks, channel_axis=channel_axis, **given)
         spent["fill"] += time.perf_counter() - t0
         return out
 
-    work = WindowWork(fill, detect, base.fill_radius, base.detect_radius)
+    work = dataclasses.replace(base, fill=fill, detect=detect)  # clpde restore's work, timed
     digest = hashlib.sha256()
     load0 = load()
     t0, c0, m0 = time.perf_counter(), time.process_time(), time.thread_time()
