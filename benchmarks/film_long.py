@@ -17,9 +17,10 @@ The film is made here: 720x576 at 25 fps, H.264 with an AAC tone, from one of tw
   soft edges, 35-100 % opacity) and a 2-px vertical scratch that drifts and is present 50
   frames out of 100. It is generated frame by frame, never held whole.
 - ``corpus`` (issue 34's long film): real footage, the clips of benchmarks/film_corpus.py
-  (both halves, at their first frames) read at their own size, --clip-frames frames each,
-  scaled to fit the frame (aspect kept) and centred on black bars, with the corpus's grain,
-  flicker and damage drawn on the picture (film_corpus.make_clip's generator and seeds);
+  (both halves), --clip-frames frames of each from the clip's first frame, read at the
+  source film's own size, scaled to fit the frame (aspect kept) and centred on black bars,
+  with the corpus's grain, flicker and damage drawn on the picture (film_corpus.make_clip's
+  generator and seeds);
   the clips follow each other (a cut between them) and the sequence repeats to the length
   asked. The damaged clips are held while the film is written (about 250 MB at PAL).
 
