@@ -1,13 +1,28 @@
 """A long PAL film restored with bounded memory, in one process and on 2 Dask workers.
 
     python benchmarks/film_long.py [--lengths 150,300] [--full] [--work film|spatial]
+                                   [--source pan|corpus] [--clip-frames 24]
                                    [--block 16] [--chunk-frames 64] [--json PATH]
 
-The film is made here: 720x576 at 25 fps, H.264 with an AAC tone, a pan (bouncing, 1-2 px
-a frame, with a slow vertical drift) over a panorama of three scikit-image photos (coffee,
-chelsea, astronaut), with damage: 12 blotches a PAL frame, the same density at other sizes
-(dark and bright, 1-6 px radius, soft edges, 35-100 % opacity) and a 2-px vertical scratch
-that drifts and is present 50 frames out of 100. It is generated frame by frame, never held whole.
+The 2-minute PAL film of issue 34, on the corpus, through ``clpde restore``'s defaults:
+
+    python benchmarks/film_long.py --source corpus --lengths 3000 --modes one --block 32
+
+The film is made here: 720x576 at 25 fps, H.264 with an AAC tone, from one of two sources
+(--source):
+
+- ``pan`` (the default): a pan (bouncing, 1-2 px a frame, with a slow vertical drift) over a
+  panorama of three scikit-image photos (coffee, chelsea, astronaut), with damage: 12
+  blotches a PAL frame, the same density at other sizes (dark and bright, 1-6 px radius,
+  soft edges, 35-100 % opacity) and a 2-px vertical scratch that drifts and is present 50
+  frames out of 100. It is generated frame by frame, never held whole.
+- ``corpus`` (issue 34's long film): real footage, the clips of benchmarks/film_corpus.py
+  (both halves), --clip-frames frames of each from the clip's first frame, read at the
+  source film's own size, scaled to fit the frame (aspect kept) and centred on black bars,
+  with the corpus's grain, flicker and damage drawn on the picture (film_corpus.make_clip's
+  generator and seeds);
+  the clips follow each other (a cut between them) and the sequence repeats to the length
+  asked. The damaged clips are held while the film is written (about 250 MB at PAL).
 
 For each length (frames), ``clpde restore FILM -o OUT.mp4`` runs (through
 clpde.film.restore.restore_film) in a fresh process:
@@ -20,7 +35,10 @@ Reported: frames per second, peak resident memory (VmHWM) of the process and of 
 worker, and the speed-up of 2 workers. Memory flat in length is shown by two lengths; the
 2-minute film (3000 frames) is run with --full, else its time is extrapolated from the
 throughput and said to be. ``--work spatial`` fills given masks frame by frame with
-clpde.inpaint (no detection) to time the streaming and I/O alone.
+clpde.inpaint (no detection) to time the streaming and I/O alone. On a shared machine the
+wall time says more about the other jobs: ``one`` also reports the CPU seconds of the
+calling thread (reading, writing and the restoration's serial steps) and film_speed.py's
+estimate of the cores the run keeps busy given two free ones.
 """
 
 from __future__ import annotations
@@ -80,14 +98,64 @@ def damage(frame: np.ndarray, t: int, rng) -> tuple[np.ndarray, np.ndarray]:
     return out.round().astype(np.uint8), mask
 
 
-def make_film(path: Path, frames: int, mask_dir: Path | None = None) -> None:
+def _fit(frame: np.ndarray) -> np.ndarray:
+    """A frame scaled to fit WIDTH x HEIGHT, its aspect kept."""
+    import cv2
+
+    h, w = frame.shape[:2]
+    scale = min(WIDTH / w, HEIGHT / h)
+    size = (min(WIDTH, round(w * scale)), min(HEIGHT, round(h * scale)))
+    how = cv2.INTER_AREA if scale < 1 else cv2.INTER_CUBIC
+    return cv2.resize(frame, size, interpolation=how)
+
+
+def corpus_clips(count: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The corpus's clips as (damaged frames (T, HEIGHT, WIDTH, 3) uint8, true masks), each
+    of `count` frames scaled to fit and centred on black bars; grain, flicker and damage
+    drawn on the picture alone, by film_corpus's generator with make_clip's seeds."""
+    from film_corpus import CALIBRATION, TEST, damage_clip, grain_flicker, read_clip
+
+    clips = []
+    for name, source, start, _ in CALIBRATION + TEST:
+        rng = np.random.default_rng([0, sum(map(ord, name))])
+        picture = np.stack([_fit(f) for f in read_clip(source, start, count)])
+        dirty, truth, _ = damage_clip(grain_flicker(picture, rng), rng)
+        _, h, w, _ = picture.shape
+        y, x = (HEIGHT - h) // 2, (WIDTH - w) // 2
+        frames = np.zeros((count, HEIGHT, WIDTH, 3), np.uint8)
+        masks = np.zeros((count, HEIGHT, WIDTH), bool)
+        frames[:, y : y + h, x : x + w] = dirty
+        masks[:, y : y + h, x : x + w] = truth > 0
+        clips.append((frames, masks))
+    return clips
+
+
+def film_frames(frames: int, source: str, clip_frames: int):
+    """(frame, true mask) of the damaged film in order, from the pan or the corpus."""
+    if source == "corpus":
+        clips = corpus_clips(clip_frames)
+        for t in range(frames):
+            frames_of, masks_of = clips[(t // clip_frames) % len(clips)]
+            yield frames_of[t % clip_frames], masks_of[t % clip_frames]
+        return
+    pano = panorama()
+    rng = np.random.default_rng(2026)
+    for t in range(frames):
+        yield damage(clean_frame(pano, t), t, rng)
+
+
+def make_film(
+    path: Path,
+    frames: int,
+    mask_dir: Path | None = None,
+    source: str = "pan",
+    clip_frames: int = 24,
+) -> None:
     """The damaged film (and, for --work spatial, its true masks as PNGs)."""
     import av
 
     from clpde.io import write_image
 
-    pano = panorama()
-    rng = np.random.default_rng(2026)
     with av.open(str(path), "w") as out:
         video = out.add_stream("libx264", rate=RATE)
         video.width, video.height, video.pix_fmt = WIDTH, HEIGHT, "yuv420p"
@@ -95,8 +163,7 @@ def make_film(path: Path, frames: int, mask_dir: Path | None = None) -> None:
         sound = out.add_stream("aac", rate=48000)
         sound.layout = "stereo"
         samples = 0
-        for t in range(frames):
-            frame, mask = damage(clean_frame(pano, t), t, rng)
+        for t, (frame, mask) in enumerate(film_frames(frames, source, clip_frames)):
             if mask_dir is not None:
                 write_image(mask_dir / f"m{t:05d}.png", mask.astype(np.uint8) * 255)
             picture = av.VideoFrame.from_ndarray(frame, format="rgb24")
@@ -145,12 +212,20 @@ def child(args) -> None:
     mask = args.masks if args.work == "spatial" else None
     record = {"mode": args.mode}
     if args.mode == "one":
-        start, cpu = time.perf_counter(), time.process_time()
-        result = restore_film(
-            args.film, args.out, mask=mask, work=work, block=args.block, progress=False
-        )
+        from film_speed import Demand
+
+        start, cpu, own = time.perf_counter(), time.process_time(), time.thread_time()
+        with Demand() as demand:
+            result = restore_film(
+                args.film, args.out, mask=mask, work=work, block=args.block, progress=False
+            )
         record["seconds"] = time.perf_counter() - start
         record["cpu_seconds"] = time.process_time() - cpu  # every thread of the process
+        # what a shared machine does not change (film_speed.py): the calling thread's own
+        # CPU (reading, writing and the serial steps) and the cores busy if given 2
+        record["serial_cpu_seconds"] = time.thread_time() - own
+        record["cores_if_given_2"] = demand.cores_if_given(2)
+        record["load_average"] = os.getloadavg()[0]
     else:
         from clpde.scale.cluster import connect
 
@@ -237,6 +312,10 @@ def main() -> None:
         help="frame size WxH (default PAL 720x576; smaller to show memory flat "
         "in length on long runs quickly)",
     )
+    parser.add_argument("--source", choices=("pan", "corpus"), default="pan")
+    parser.add_argument(
+        "--clip-frames", type=int, default=24, help="frames of each corpus clip (--source corpus)"
+    )
     parser.add_argument("--json", default=str(RESULTS))
     # the measured run itself
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
@@ -258,23 +337,38 @@ def main() -> None:
             film, masks = tmp / f"pal_{length}.mp4", tmp / f"masks_{length}"
             masks.mkdir()
             start = time.perf_counter()
-            make_film(film, length, masks if args.work == "spatial" else None)
+            make_film(
+                film,
+                length,
+                masks if args.work == "spatial" else None,
+                args.source,
+                args.clip_frames,
+            )
             made = time.perf_counter() - start
             for mode in args.modes.split(","):
                 out = tmp / f"out_{length}_{mode}.mp4"
                 row = {
                     "length": length,
                     "size": args.size,
+                    "source": args.source,
                     "make_seconds": made,
                     **measure(film, masks, out, mode, args),
                 }
                 out.unlink()
                 rows.append(row)
                 workers = row.get("worker_peak_mib")
+                given = row.get("cores_if_given_2")
                 print(
                     f"{length:5d} frames {mode:4s}: {row['fps']:6.3f} frames/s, "
                     f"{row['seconds']:8.1f} s, CPU {row['cpu_seconds']:8.1f} s, "
                     f"peak {row['peak_mib']:7.0f} MiB"
+                    + (
+                        f", serial CPU {row['serial_cpu_seconds']:.1f} s, {given:.2f} cores "
+                        f"busy if given 2 (so {given * length / row['cpu_seconds']:.3f} "
+                        f"frames/s, estimated), load average {row['load_average']:.1f}"
+                        if given
+                        else ""
+                    )
                     + (
                         f", workers {', '.join(f'{w:.0f}' for w in workers)} MiB" if workers else ""
                     ),

@@ -45,6 +45,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from ..imagedata import noise_std
+from ._motion import map_frames
 from ._order import median_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -528,9 +529,8 @@ def film_scratches(
     (True, 0)
     """
     T, ny, nx = G.shape
-    if grain is None:
-        grain = [noise_std(G[t].astype(np.float64)) for t in range(T)]
-    ev = [frame_lines(G[t], float(grain[t])) for t in range(T)]
+    grain = [noise_std(G[t].astype(np.float64)) for t in range(T)] if grain is None else grain
+    ev = map_frames(lambda t: frame_lines(G[t], float(grain[t])), range(T))  # frames in threads
     level = LINE_SCALE * threshold
     # seen[dt - 1][u][sign]: frame u's lines, widened by the drift over dt frames
     seen = [
@@ -543,8 +543,8 @@ def film_scratches(
         ]
         for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
     ]
-    span = min(2, radius)
-    kept = [_frame_scratches(t, ev, seen, level, min_length, flows, span) for t in range(T)]
+    args = (ev, seen, level, min_length, flows, min(2, radius))  # min(2, radius): the span
+    kept = map_frames(lambda t: _frame_scratches(t, *args), range(T))
     out = np.zeros((T, ny, nx), bool)
     xs = np.arange(nx)[None, :]
     for t in range(T):
