@@ -267,28 +267,19 @@ class ObjectFollower:
         within = HIDDEN_CHANGE if hidden else None
         if pixels.sum() >= MIN_PIECE:
             light = (self._light(t - 1), self._light(t)) if MATCH_CONTRAST else None
-            a = object_motion(
-                self.looks[t - 1],
-                self.looks[t],
-                pixels,
-                self.velocity,
-                floor=floor,
-                within=within,
-                light=light,
-            )
+            before, now = self.looks[t - 1], self.looks[t]
+
+            def match(bound):
+                return object_motion(
+                    before, now, pixels, self.velocity, floor=floor, within=bound, light=light
+                )
+
+            a = match(within)
             if within is None and _jumped(a, self.shape, self.velocity):
                 if self._looks_away(t, a) or not _clearly_better(
-                    self.looks[t - 1], self.looks[t], pixels, self.velocity
+                    before, now, pixels, self.velocity
                 ):
-                    a = object_motion(
-                        self.looks[t - 1],
-                        self.looks[t],
-                        pixels,
-                        self.velocity,
-                        floor=floor,
-                        within=JUMP,
-                        light=light,
-                    )
+                    a = match(JUMP)
         else:  # nothing in sight: the object keeps its velocity
             a = np.array([[1.0, 0.0, -self.velocity[0]], [0.0, 1.0, -self.velocity[1]]])
         # the velocity: where the motion takes the whole shape's centre

@@ -2,32 +2,16 @@
 camera): motion is never taken for damage, the film's ends included, and any window of the
 film gives the same frames as the whole film at once."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import clpde
 from clpde.film.stream import KEEP, film_work, restore_stream
+from tests.cases.footage import VTEST
+from tests.cases.footage import people as _people
 
 cv2 = pytest.importorskip("cv2")
-VTEST = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
 pytestmark = pytest.mark.skipif(not VTEST.exists(), reason="opencv-doc's vtest.avi is absent")
-
-
-def _people(count=8, start=60):
-    """Frames of vtest.avi around walking people, downscaled to 192x144 and cropped."""
-    cap = cv2.VideoCapture(str(VTEST))
-    for _ in range(start):
-        cap.grab()
-    frames = []
-    for _ in range(count):
-        ok, f = cap.read()
-        assert ok
-        f = cv2.resize(f, (192, 144), interpolation=cv2.INTER_AREA)
-        frames.append(cv2.cvtColor(f, cv2.COLOR_BGR2RGB)[40:136, 16:176])
-    cap.release()
-    return np.stack(frames)
 
 
 def _scratched(frames, x0=60.0, drift=-0.25, rows=(4, 92), width=2.0, delta=-30.0):
