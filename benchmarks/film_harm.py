@@ -2,7 +2,7 @@
 per half, PSNR whole / damaged pixels, harm (worst frame, worst end frame), frames made
 worse than their damaged input, and blotch and scratch precision / recall.
 
-    PYTHONPATH=. python benchmarks/film_harm.py [--frames 12]
+    PYTHONPATH=. python benchmarks/film_harm.py [--frames 12] [--half calibration]
 
 (PYTHONPATH=.: from a checkout, the checkout's clpde rather than an installed one.)
 
@@ -25,8 +25,9 @@ from clpde.film.stream import KEEP
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--frames", type=int, default=12)
+    ap.add_argument("--half", choices=("test", "calibration"), help="one half only")
     args = ap.parse_args()
-    for half in ("test", "calibration"):
+    for half in (args.half,) if args.half else ("test", "calibration"):
         q, cb, cs = Quality(), Counts(), Counts()
         detect = fill = 0.0
         for c in corpus(half, frames=args.frames):
