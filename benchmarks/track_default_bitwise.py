@@ -6,8 +6,8 @@ change meant to make the default faster without changing what it returns.
     PYTHONPATH=<tree B> python benchmarks/track_default_bitwise.py save out/tdbit/b
     python benchmarks/track_default_bitwise.py compare out/tdbit/a out/tdbit/b
 
-Saved: masks, level sets, discrepancy and confidence of `clpde.track` for carphone (colour,
-default and checked), carphone in grey (default), and seed 0 of each photo corpus class
+Saved: masks, level sets, discrepancy and confidence of `clpde.track` for carphone (colour
+footage: default, checked and colour=True), carphone in grey (default), and seed 0 of each photo corpus class
 (default). track_storage_bitwise.py covers the storages and the other discrepancies.
 """
 
@@ -26,6 +26,7 @@ def _cases():
     grey = frames.astype(np.float64) @ np.array([0.299, 0.587, 0.114])
     yield "carphone_default", frames, truth[0], {}
     yield "carphone_checked", frames, truth[0], {"motion": "checked"}
+    yield "carphone_colour_default", frames, truth[0], {"colour": True}
     yield "carphone_grey_default", grey, truth[0], {}
     for cls in CLASSES:
         f, masks = MAKERS[cls](0)
