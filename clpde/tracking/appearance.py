@@ -85,13 +85,15 @@ def box(mask: np.ndarray, margin: int):
 
 
 def dilate(mask: np.ndarray, iterations: int) -> np.ndarray:
-    """ndimage.binary_dilation(mask, iterations=iterations), computed over the mask's box
-    grown by `iterations` px only (the cross reaches no farther): the same result, at a
-    cost that grows with the object, not the frame."""
+    """ndimage.binary_dilation(mask, iterations=iterations) (iterations >= 1), computed over
+    the mask's box grown by `iterations` px only (the cross reaches no farther): the same
+    result, at a cost that grows with the object, not the frame."""
     out = np.zeros(mask.shape, bool)
     where = box(mask, iterations)
     if where is not None:
-        out[where] = ndimage.binary_dilation(mask[where], iterations=iterations)
+        # (the cross iterated k times reaches the pixels within taxicab distance k: one
+        # chamfer pass instead of k dilations)
+        out[where] = ndimage.distance_transform_cdt(~mask[where], metric="taxicab") <= iterations
     return out
 
 
@@ -247,8 +249,10 @@ def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
     dy, dx = (w if h > 1 else 0), (1 if w > 1 else 0)
     flat = stack.reshape(k, -1)
     i = y0 * w + x0
-    top = flat[:, i] * (1 - fx) + flat[:, i + dx] * fx
-    bottom = flat[:, i + dy] * (1 - fx) + flat[:, i + dy + dx] * fx
+    # (take: the same gather as flat[:, i], several times faster)
+    gx = 1 - fx
+    top = flat.take(i, axis=1) * gx + flat.take(i + dx, axis=1) * fx
+    bottom = flat.take(i + dy, axis=1) * gx + flat.take(i + (dy + dx), axis=1) * fx
     return top * (1 - fy) + bottom * fy
 
 
