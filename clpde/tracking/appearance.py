@@ -136,20 +136,26 @@ def match_shift(
     den_t = 0.0
     var_c = np.zeros(shape)
     fw = np.conj(sfft.rfft2(wp, shape))
+    # every channel's frame, its squares and its template, transformed in one call (the
+    # same values as one call each, less the calls' overhead)
+    k = len(prev)
+    padded = np.zeros((3 * k,) + shape)
+    padded[:k, : h + 2 * r, : w + 2 * r] = cur
+    np.multiply(padded[:k], padded[:k], out=padded[k : 2 * k])
+    for i, p in enumerate(prev):
+        t = padded[2 * k + i]
+        t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
+        den_t += (t * t).sum()
+    spectra = sfft.rfft2(padded, shape, axes=(-2, -1))
+    fcs, fsq, fts = spectra[:k], spectra[k : 2 * k], spectra[2 * k :]
+    s1s = sfft.irfft2(fw * fcs, shape, axes=(-2, -1))
     # the cross-correlations and the sums of squares summed over the channels before the
     # inverse transforms (linear): 2 inverse transforms a frame, and one per channel
     fscore, fsquares = 0.0, 0.0
-    for p, c in zip(prev, cur, strict=True):
-        t = np.zeros(shape)
-        t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
-        den_t += (t * t).sum()
-        cp = np.zeros(shape)
-        cp[: h + 2 * r, : w + 2 * r] = c
-        fc = sfft.rfft2(cp, shape)
-        s1 = sfft.irfft2(fw * fc, shape)
+    for fc, squares, ft, s1 in zip(fcs, fsq, fts, s1s, strict=True):
         var_c -= s1 * s1 / n
-        fsquares = fsquares + sfft.rfft2(cp * cp, shape)
-        fscore = fscore + np.conj(sfft.rfft2(t, shape)) * fc
+        fsquares = fsquares + squares
+        fscore = fscore + np.conj(ft) * fc
     var_c = np.maximum(var_c + sfft.irfft2(fw * fsquares, shape), 0)
     score = sfft.irfft2(fscore, shape)
     ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
