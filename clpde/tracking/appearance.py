@@ -304,7 +304,13 @@ def _refine(prev, cur, rim, d, steps):
         for _ in range(steps):
             r, wy, wx = at(a, 3)
             r = r - target
-            jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])[:, columns]
+            # (the shift's columns without the products; all six not selected: the same
+            # Jacobian, with less work)
+            if columns == [2, 5]:
+                jac = np.column_stack([wy, wx])
+            else:
+                jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
+                jac = jac if columns == [0, 1, 2, 3, 4, 5] else jac[:, columns]
             jtj = jac.T @ jac
             jtj += 1e-3 * np.trace(jtj) / len(columns) * np.eye(len(columns))  # a little damping
             step = np.zeros(6)
