@@ -214,6 +214,7 @@ def object_motion(
     floor=MATCH_FLOOR,
     within=None,
     light=None,
+    grey=None,
 ):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
@@ -222,7 +223,9 @@ def object_motion(
     change of velocity searched (None: any shift within `reach`). `light`: the two frames'
     light-blind features (local contrast), whose match is taken where the frames' own
     correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
-    frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more."""
+    frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more.
+    `grey`: prev's `gradients` and cur's grey level where the caller keeps them (else
+    found here)."""
     # the object alone: a rim takes in more of an occluder's still edge. But an object most
     # of whose pixels hold one value (a flat graphic, a saturated highlight) has nothing
     # inside to correlate: it is found by its outline, with 2 px of its surroundings
@@ -239,7 +242,14 @@ def object_motion(
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
-    return _refine(prev, cur, rim, d, steps)
+    return _refine(prev, cur, rim, d, steps, grey)
+
+
+def gradients(frame: np.ndarray) -> np.ndarray:
+    """(3, H, W): the grey level of `frame` (C, H, W), the channels' mean, and its
+    gradient along y and x (np.gradient)."""
+    g = frame.mean(axis=0)
+    return np.stack([g, *np.gradient(g)])
 
 
 def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
@@ -262,15 +272,17 @@ def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
     return top * (1 - fy) + bottom * fy
 
 
-def _refine(prev, cur, rim, d, steps):
+def _refine(prev, cur, rim, d, steps, grey=None):
     """Lucas-Kanade from the whole-pixel shift d: first the sub-pixel shift, then the
-    affine map where it explains the object clearly better (AFFINE_GAIN)."""
+    affine map where it explains the object clearly better (AFFINE_GAIN). `grey`: prev's
+    `gradients` and cur's grey level (H, W), or None."""
     shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
     # cur's coordinates), the grey levels averaged over the channels; the affine part
     # about the object's centre, so that turning and shifting are not confounded.
-    gp, gc = prev.mean(axis=0), cur.mean(axis=0)
-    gy, gx = np.gradient(gp)
+    # (a frame's grey levels and gradients found once where the caller keeps them: a frame
+    # is the pair's second, then its first)
+    stack, gc = grey if grey is not None else (gradients(prev), cur.mean(axis=0))
     centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
     # one set of pixels for every step and for the costs compared: cur's pixels where the
     # shift puts the object (a whole-pixel shift, the edge repeated: an index shift)
@@ -285,8 +297,6 @@ def _refine(prev, cur, rim, d, steps):
         return shifted
     pts = np.array(np.nonzero(where), np.float64)
     y, x = pts[0] - centre[0], pts[1] - centre[1]
-
-    stack = np.stack([gp, gy, gx])
 
     def at(a, k=1):  # the first k of gp, gy, gx read at A x for the pixels x of `where`
         return bilinear(stack[:k], np.tensordot(a[:, :2], pts, 1) + a[:, 2:])
