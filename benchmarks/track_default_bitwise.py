@@ -8,7 +8,8 @@ change meant to make the default faster without changing what it returns.
 
 Saved: masks, level sets, discrepancy and confidence of `clpde.track` for carphone (colour
 footage: default, checked and colour=True), carphone in grey (default), and seed 0 of each
-photo corpus class (default). track_storage_bitwise.py covers the storages and the other discrepancies.
+photo corpus class (default). track_storage_bitwise.py covers the storages and the other
+discrepancies.
 """
 
 import warnings
