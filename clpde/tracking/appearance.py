@@ -85,13 +85,15 @@ def box(mask: np.ndarray, margin: int):
 
 
 def dilate(mask: np.ndarray, iterations: int) -> np.ndarray:
-    """ndimage.binary_dilation(mask, iterations=iterations), computed over the mask's box
-    grown by `iterations` px only (the cross reaches no farther): the same result, at a
-    cost that grows with the object, not the frame."""
+    """ndimage.binary_dilation(mask, iterations=iterations) (iterations >= 1), computed over
+    the mask's box grown by `iterations` px only (the cross reaches no farther): the same
+    result, at a cost that grows with the object, not the frame."""
     out = np.zeros(mask.shape, bool)
     where = box(mask, iterations)
     if where is not None:
-        out[where] = ndimage.binary_dilation(mask[where], iterations=iterations)
+        # (the cross iterated k times reaches the pixels within taxicab distance k: one
+        # chamfer pass instead of k dilations)
+        out[where] = ndimage.distance_transform_cdt(~mask[where], metric="taxicab") <= iterations
     return out
 
 
@@ -134,20 +136,26 @@ def match_shift(
     den_t = 0.0
     var_c = np.zeros(shape)
     fw = np.conj(sfft.rfft2(wp, shape))
+    # every channel's frame, its squares and its template, transformed in one call (the
+    # same values as one call each, less the calls' overhead)
+    k = len(prev)
+    padded = np.zeros((3 * k,) + shape)
+    padded[:k, : h + 2 * r, : w + 2 * r] = cur
+    np.multiply(padded[:k], padded[:k], out=padded[k : 2 * k])
+    for i, p in enumerate(prev):
+        t = padded[2 * k + i]
+        t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
+        den_t += (t * t).sum()
+    spectra = sfft.rfft2(padded, shape, axes=(-2, -1))
+    fcs, fsq, fts = spectra[:k], spectra[k : 2 * k], spectra[2 * k :]
+    s1s = sfft.irfft2(fw * fcs, shape, axes=(-2, -1))
     # the cross-correlations and the sums of squares summed over the channels before the
     # inverse transforms (linear): 2 inverse transforms a frame, and one per channel
     fscore, fsquares = 0.0, 0.0
-    for p, c in zip(prev, cur, strict=True):
-        t = np.zeros(shape)
-        t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
-        den_t += (t * t).sum()
-        cp = np.zeros(shape)
-        cp[: h + 2 * r, : w + 2 * r] = c
-        fc = sfft.rfft2(cp, shape)
-        s1 = sfft.irfft2(fw * fc, shape)
+    for fc, squares, ft, s1 in zip(fcs, fsq, fts, s1s, strict=True):
         var_c -= s1 * s1 / n
-        fsquares = fsquares + sfft.rfft2(cp * cp, shape)
-        fscore = fscore + np.conj(sfft.rfft2(t, shape)) * fc
+        fsquares = fsquares + squares
+        fscore = fscore + np.conj(ft) * fc
     var_c = np.maximum(var_c + sfft.irfft2(fw * fsquares, shape), 0)
     score = sfft.irfft2(fscore, shape)
     ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
@@ -206,6 +214,7 @@ def object_motion(
     floor=MATCH_FLOOR,
     within=None,
     light=None,
+    grey=None,
 ):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
@@ -214,7 +223,9 @@ def object_motion(
     change of velocity searched (None: any shift within `reach`). `light`: the two frames'
     light-blind features (local contrast), whose match is taken where the frames' own
     correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
-    frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more."""
+    frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more.
+    `grey`: prev's `gradients` and cur's grey level where the caller keeps them (else
+    found here)."""
     # the object alone: a rim takes in more of an occluder's still edge. But an object most
     # of whose pixels hold one value (a flat graphic, a saturated highlight) has nothing
     # inside to correlate: it is found by its outline, with 2 px of its surroundings
@@ -231,7 +242,14 @@ def object_motion(
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
-    return _refine(prev, cur, rim, d, steps)
+    return _refine(prev, cur, rim, d, steps, grey)
+
+
+def gradients(frame: np.ndarray) -> np.ndarray:
+    """(3, H, W): the grey level of `frame` (C, H, W), the channels' mean, and its
+    gradient along y and x (np.gradient)."""
+    g = frame.mean(axis=0)
+    return np.stack([g, *np.gradient(g)])
 
 
 def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
@@ -247,20 +265,24 @@ def bilinear(stack: np.ndarray, coords: np.ndarray) -> np.ndarray:
     dy, dx = (w if h > 1 else 0), (1 if w > 1 else 0)
     flat = stack.reshape(k, -1)
     i = y0 * w + x0
-    top = flat[:, i] * (1 - fx) + flat[:, i + dx] * fx
-    bottom = flat[:, i + dy] * (1 - fx) + flat[:, i + dy + dx] * fx
+    # (take: the same gather as flat[:, i], several times faster)
+    gx = 1 - fx
+    top = flat.take(i, axis=1) * gx + flat.take(i + dx, axis=1) * fx
+    bottom = flat.take(i + dy, axis=1) * gx + flat.take(i + (dy + dx), axis=1) * fx
     return top * (1 - fy) + bottom * fy
 
 
-def _refine(prev, cur, rim, d, steps):
+def _refine(prev, cur, rim, d, steps, grey=None):
     """Lucas-Kanade from the whole-pixel shift d: first the sub-pixel shift, then the
-    affine map where it explains the object clearly better (AFFINE_GAIN)."""
+    affine map where it explains the object clearly better (AFFINE_GAIN). `grey`: prev's
+    `gradients` and cur's grey level (H, W), or None."""
     shifted = np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     # Lucas-Kanade on prev(A x) = cur(x) over the object's predicted place (inverse warp:
     # cur's coordinates), the grey levels averaged over the channels; the affine part
     # about the object's centre, so that turning and shifting are not confounded.
-    gp, gc = prev.mean(axis=0), cur.mean(axis=0)
-    gy, gx = np.gradient(gp)
+    # (a frame's grey levels and gradients found once where the caller keeps them: a frame
+    # is the pair's second, then its first)
+    stack, gc = grey if grey is not None else (gradients(prev), cur.mean(axis=0))
     centre = np.array(ndimage.center_of_mass(rim)) + d  # in cur's coordinates
     # one set of pixels for every step and for the costs compared: cur's pixels where the
     # shift puts the object (a whole-pixel shift, the edge repeated: an index shift)
@@ -275,8 +297,6 @@ def _refine(prev, cur, rim, d, steps):
         return shifted
     pts = np.array(np.nonzero(where), np.float64)
     y, x = pts[0] - centre[0], pts[1] - centre[1]
-
-    stack = np.stack([gp, gy, gx])
 
     def at(a, k=1):  # the first k of gp, gy, gx read at A x for the pixels x of `where`
         return bilinear(stack[:k], np.tensordot(a[:, :2], pts, 1) + a[:, 2:])
@@ -294,7 +314,13 @@ def _refine(prev, cur, rim, d, steps):
         for _ in range(steps):
             r, wy, wx = at(a, 3)
             r = r - target
-            jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])[:, columns]
+            # (the shift's columns without the products; all six not selected: the same
+            # Jacobian, with less work)
+            if columns == [2, 5]:
+                jac = np.column_stack([wy, wx])
+            else:
+                jac = np.column_stack([wy * y, wy * x, wy, wx * y, wx * x, wx])
+                jac = jac if columns == [0, 1, 2, 3, 4, 5] else jac[:, columns]
             jtj = jac.T @ jac
             jtj += 1e-3 * np.trace(jtj) / len(columns) * np.eye(len(columns))  # a little damping
             step = np.zeros(6)

@@ -32,6 +32,7 @@ from .appearance import (
     box,
     dilate,
     erode,
+    gradients,
     match_shift,
     object_motion,
 )
@@ -246,6 +247,7 @@ class ObjectFollower:
             self.reliability = _reliability(self.model.log_ratio(bins, self.shape), self.shape)
         self._bins, self._bins_t = None, None  # frame _bins_t's bins
         self._match_cache = {}
+        self._grey_t = {}  # frames' appearance.gradients, the pair in use
         self._ratio = None  # the last frame's log odds (surroundings over object)
         self._looks_ratio = None  # the same from the looks alone
 
@@ -268,10 +270,18 @@ class ObjectFollower:
         if pixels.sum() >= MIN_PIECE:
             light = (self._light(t - 1), self._light(t)) if MATCH_CONTRAST else None
             before, now = self.looks[t - 1], self.looks[t]
+            grey = (self._gradients(t - 1), self._gradients(t)[0])
 
             def match(bound):
                 return object_motion(
-                    before, now, pixels, self.velocity, floor=floor, within=bound, light=light
+                    before,
+                    now,
+                    pixels,
+                    self.velocity,
+                    floor=floor,
+                    within=bound,
+                    light=light,
+                    grey=grey,
                 )
 
             a = match(within)
@@ -361,6 +371,14 @@ class ObjectFollower:
             self._match_cache = {k: v for k, v in self._match_cache.items() if k >= t - 1}
             self._match_cache[t] = cached
         return cached
+
+    def _gradients(self, t):
+        """Frame t's grey level and gradients (appearance.gradients), found once: the
+        frame is the motion's second frame, then its first."""
+        if self._grey_t.get(t) is None:
+            self._grey_t = {k: v for k, v in self._grey_t.items() if k >= t - 1}
+            self._grey_t[t] = gradients(self.looks[t])
+        return self._grey_t[t]
 
     def _visible(self, predicted: np.ndarray) -> np.ndarray:
         """The morphing's start: the predicted whole shape less what looks like the

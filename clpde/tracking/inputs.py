@@ -100,15 +100,27 @@ def user_features(features, frames: list[np.ndarray]) -> np.ndarray:
 def scaled_frames(frames: list[np.ndarray], colour: bool) -> np.ndarray:
     """(T, C, H, W) float64 in [0, 1], one scale for the whole sequence: every channel of
     colour frames with `colour`, else their grey level (Rec. 601 luma)."""
-    stack = np.stack([f.astype(np.float64) for f in frames])
+    # stacked in the frames' own dtype (float64 where they differ), then converted once:
+    # the same values as each frame converted
+    same = all(f.dtype == frames[0].dtype for f in frames)
+    stack = np.stack(frames, dtype=None if same else np.float64)
     if stack.ndim == 4:
+        # each frame's channels contiguous: interleaved, every read of a frame's (C, H, W)
+        # strides through memory, and a mean over the channels is ten times slower
         stack = (
-            np.moveaxis(stack[..., :3], -1, 1)
+            np.moveaxis(stack[..., :3], -1, 1).astype(np.float64, order="C")
             if colour
-            else (stack[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis]
+            else (stack.astype(np.float64)[..., :3] @ np.array([0.299, 0.587, 0.114]))[
+                :, np.newaxis
+            ]
         )
     else:
-        stack = stack[:, np.newaxis]
+        stack = stack.astype(np.float64)[:, np.newaxis]
     lo, hi = float(stack.min()), float(stack.max())
     value_range(lo, hi, "frames")  # refuses a span that overflows float64
-    return (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
+    if not hi > lo:
+        return np.zeros_like(stack)
+    # in place (a copy of the frames already): the same values as (stack - lo) / (hi - lo)
+    stack -= lo
+    stack /= hi - lo
+    return stack
