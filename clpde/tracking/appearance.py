@@ -222,6 +222,7 @@ def object_motion(
     within=None,
     light=None,
     grey=None,
+    outline=True,
 ):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
@@ -232,8 +233,9 @@ def object_motion(
     correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
     frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more.
     `grey`: prev's `gradients` and cur's grey level where the caller keeps them (else
-    found here). Where nothing inside the object matches (the peak below `floor`), its
-    outline is matched (`_outline_motion`) before the velocity is kept."""
+    found here). `outline`: where nothing inside the object matches (the peak below
+    `floor`), its outline is matched (`_outline_motion`) before the velocity is kept (False:
+    a low peak means the object is hidden)."""
     # the object alone: a rim takes in more of an occluder's still edge. But an object most
     # of whose pixels hold one value (a flat graphic, a saturated highlight) has nothing
     # inside to correlate: it is found by its outline, with 2 px of its surroundings
@@ -247,9 +249,13 @@ def object_motion(
             if _ncc_at(prev, cur, rim, d_light) >= peak - LIGHT_SLACK:
                 d = d_light
     if peak < floor:
-        outline = _outline_motion(prev, cur, mask, prior, reach, steps, floor, within)
-        if outline is not None:
-            return outline
+        a = (
+            _outline_motion(prev, cur, mask, prior, reach, steps, floor, within)
+            if outline
+            else None
+        )
+        if a is not None:
+            return a
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
