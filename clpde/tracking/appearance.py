@@ -248,14 +248,12 @@ def object_motion(
         if match_shift.peak >= floor and np.abs(d_light - d).max() > 0:
             if _ncc_at(prev, cur, rim, d_light) >= peak - LIGHT_SLACK:
                 d = d_light
+    a = None
+    if peak < floor and outline:
+        a = _outline_motion(prev, cur, mask, prior, reach, steps, floor, within)
+    if a is not None:
+        return a
     if peak < floor:
-        a = (
-            _outline_motion(prev, cur, mask, prior, reach, steps, floor, within)
-            if outline
-            else None
-        )
-        if a is not None:
-            return a
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
