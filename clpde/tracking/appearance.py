@@ -6,6 +6,8 @@ image, and what it looks like against its surroundings.
   (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past),
   then Lucas-Kanade's Gauss-Newton steps on the six affine parameters over the object and
   a 2 px rim (turns, scaling). The object's own pixels decide, not the contour's past.
+  Where nothing inside the object matches (a faint flat object, a region over a still
+  texture), its outline on frames smoothed of the noise (`_outline_motion`).
   Measured against dense flow (benchmarks/track_motion_compare.py, docs/tracking.md): the
   median of clpde.motion.optical_flow or of OpenCV's DIS over the object misses the
   object's centre by more than 3 px on 8% and 12% of the frame pairs at 10-26 px a frame
