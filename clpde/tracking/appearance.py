@@ -6,6 +6,8 @@ image, and what it looks like against its surroundings.
   (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past),
   then Lucas-Kanade's Gauss-Newton steps on the six affine parameters over the object and
   a 2 px rim (turns, scaling). The object's own pixels decide, not the contour's past.
+  Where nothing inside the object matches (a faint flat object, a region over a still
+  texture), its outline on frames smoothed of the noise (`_outline_motion`).
   Measured against dense flow (benchmarks/track_motion_compare.py, docs/tracking.md): the
   median of clpde.motion.optical_flow or of OpenCV's DIS over the object misses the
   object's centre by more than 3 px on 8% and 12% of the frame pairs at 10-26 px a frame
@@ -46,6 +48,13 @@ LIGHT_SLACK = 0.05
 # ... unless the frames' own correlation peak is at least this: so clear a match leaves
 # nothing for a change of light to have moved (and one correlation a frame is saved)
 LIGHT_CLEAR = 0.9
+# Where nothing inside the object matches (its peak below the floor), its outline is matched:
+# the object dilated by OUTLINE_RIM px on frames smoothed by a Gaussian of OUTLINE_SMOOTH px
+# (object_motion). Chosen on the calibration half of benchmarks/track_corpus.py among rims
+# 2, 3, 4, 6 and smoothings 0, 0.7, 1, 1.5: mean of class means 0.706 -> 0.769 (flat 0.510
+# -> 0.873, slices 0.529 -> 0.584, no class lower); unsmoothed, the noise drowns a faint
+# step (flat 0.578).
+OUTLINE_RIM, OUTLINE_SMOOTH = 3, 1.5
 APPEARANCE_WEIGHT = 1.0  # the appearance speed's largest value, px per unit time
 RING = (3, 16)  # px: the surroundings' ring around the predicted contour
 MEMORY = 0.5  # the object model's running mean: this share of the new frame's histogram
@@ -215,6 +224,7 @@ def object_motion(
     within=None,
     light=None,
     grey=None,
+    outline=True,
 ):
     """The affine map (2, 3) taking frame coordinates of `cur` to those of `prev` (cur(x)
     ~ prev(A x) on the object), from the object `mask` of `prev`; prev, cur (C, H, W).
@@ -225,7 +235,9 @@ def object_motion(
     correlation there is within LIGHT_SLACK of their best (a shadow or a flicker moves the
     frames' own best, not this one), unless the frames' own peak is LIGHT_CLEAR or more.
     `grey`: prev's `gradients` and cur's grey level where the caller keeps them (else
-    found here)."""
+    found here). `outline`: where nothing inside the object matches (the peak below
+    `floor`), its outline is matched (`_outline_motion`) before the velocity is kept (False:
+    a low peak means the object is hidden)."""
     # the object alone: a rim takes in more of an occluder's still edge. But an object most
     # of whose pixels hold one value (a flat graphic, a saturated highlight) has nothing
     # inside to correlate: it is found by its outline, with 2 px of its surroundings
@@ -238,11 +250,29 @@ def object_motion(
         if match_shift.peak >= floor and np.abs(d_light - d).max() > 0:
             if _ncc_at(prev, cur, rim, d_light) >= peak - LIGHT_SLACK:
                 d = d_light
+    a = None
+    if peak < floor and outline:
+        a = _outline_motion(prev, cur, mask, prior, reach, steps, floor, within)
+    if a is not None:
+        return a
     if peak < floor:
         # nothing matches (the object went behind something): it keeps its velocity
         d = np.asarray(prior, np.float64)
         return np.array([[1.0, 0.0, -d[0]], [0.0, 1.0, -d[1]]])
     return _refine(prev, cur, rim, d, steps, grey)
+
+
+def _outline_motion(prev, cur, mask, prior, reach, steps, floor, within):
+    """object_motion by the object's outline (None where that does not match either): the
+    mask dilated by OUTLINE_RIM px, on frames smoothed by OUTLINE_SMOOTH px. An object whose
+    inside holds nothing the noise does not drown (a faint flat object) or a texture that
+    stays where it is (a region moving over a still texture, a blob through a volume's
+    slices) matches nothing inside; its edge, freed of the noise, still locates it."""
+    sigma = (0, OUTLINE_SMOOTH, OUTLINE_SMOOTH)
+    prev, cur = (ndimage.gaussian_filter(np.asarray(f, np.float64), sigma) for f in (prev, cur))
+    rim = dilate(mask, OUTLINE_RIM)
+    d = match_shift(prev, cur, rim.astype(np.float64), reach, prior, within)
+    return _refine(prev, cur, rim, d, steps) if match_shift.peak >= floor else None
 
 
 def gradients(frame: np.ndarray) -> np.ndarray:

@@ -271,6 +271,13 @@ class ObjectFollower:
             light = (self._light(t - 1), self._light(t)) if MATCH_CONTRAST else None
             before, now = self.looks[t - 1], self.looks[t]
             grey = (self._gradients(t - 1), self._gradients(t)[0])
+            # An object that the appearance tells from its surroundings and whose inside
+            # matches nothing is hidden: it keeps its velocity. One it does not tell apart
+            # at all (a faint flat object, a region over the same texture) has nothing
+            # inside to match: its outline finds it (on the calibration halves, with the
+            # outline whatever the appearance, the photo corpus' occlusion 0.947 -> 0.293:
+            # the occluder's still edge holds the outline).
+            outline = self.term is not None and self.reliability == 0
 
             def match(bound):
                 return object_motion(
@@ -282,6 +289,7 @@ class ObjectFollower:
                     within=bound,
                     light=light,
                     grey=grey,
+                    outline=outline,
                 )
 
             a = match(within)
