@@ -5,6 +5,7 @@ against the best single candidate.
     python benchmarks/inpaint_vote_cache.py --half both      # first: the fills (long)
     python benchmarks/inpaint_vote_sound.py [--half calibration|test|both] [--cases]
     python benchmarks/inpaint_vote_sound.py --real [--vote rings|decoys] [--only NAMES]
+        [--guard Z] [--agreed cheapest|box]
 
 --real runs a vote itself (auto.choose's rings, or inpaint_vote_decoys.choose) on the
 cached hole fills, its test fills memoised in benchmarks/results/decoy_cache/.
@@ -431,6 +432,8 @@ def main(argv=None):
     parser.add_argument("--vote", default="rings", choices=("rings", "decoys"), help="--real")
     parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
     parser.add_argument("--narrow", type=int, default=None, help="--real --vote rings: narrow")
+    parser.add_argument("--guard", type=float, default=None, help="--real --vote rings: guard")
+    parser.add_argument("--agreed", default=None, help="--real --vote rings: agreed")
     parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
     parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
@@ -444,6 +447,8 @@ def main(argv=None):
             snap=args.snap,
             decoys=args.decoys,
             narrow=None if args.narrow is None else bool(args.narrow),
+            guard=args.guard,
+            agreed=args.agreed,
         )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)

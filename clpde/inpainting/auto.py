@@ -85,6 +85,14 @@ SHIFT = False
 GAP = 3
 DIRECTIONS = ((1, 0), (0, -1))  # down and left, each its own fill
 AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is needed
+# GUARD: a voting cluster keeps its own vote only where, on every test, its best candidate
+# leads the box's single candidate (the least error over every voting ring of the box) by
+# GUARD standard errors of their paired squared errors; elsewhere it takes that candidate
+# (0: no guard).
+GUARD = 0.0
+# AGREED: what the clusters whose candidates agree take: "cheapest" (the first candidate)
+# or "box" (the mean over the tests of the weights that fit every voting ring of the box).
+AGREED = "cheapest"
 
 
 def _solver(name):
@@ -240,16 +248,16 @@ def _settled(names, stack, members, radius, thin, count):
 
 
 def _votes(tests, vote, count, names, blend, prior):
-    """{cluster: (weights, ring RMSE per candidate)} of one test (_ring_tests' result):
-    each voting cluster's fit on its own test pixels, pulled towards the box's fit over
-    every cluster's by `prior` (module docstring)."""
+    """One test's vote (_ring_tests' result): ({cluster: (weights, squared errors (k, m)
+    of each candidate on its test values)}, the box's weights or None): each voting
+    cluster's fit on its own test pixels, pulled towards the box's fit over every
+    cluster's by `prior` (module docstring)."""
     tests, truth, test_owner = tests
     if tests is None:
-        return {}
+        return {}, None
     ring_members = _groups(test_owner, count)
-    pooled = None
-    if prior > 0:  # the box's weights: every voting ring at once
-        pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
+    # the box's weights: every voting ring at once
+    pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
     out = {}
     for lab in np.flatnonzero(vote):
         sel = ring_members[lab]
@@ -258,10 +266,33 @@ def _votes(tests, vote, count, names, blend, prior):
         f = tests[:, :, sel].reshape(len(names), -1)
         t = truth[:, sel].reshape(-1)
         w = _fit(f, t, blend)
-        if pooled is not None:  # a small ring's own fit leans on the box's
+        if prior > 0:  # a small ring's own fit leans on the box's
             w = pooled if np.isinf(prior) else (t.size * w + prior * pooled) / (t.size + prior)
-        out[lab] = (w, np.sqrt(((f - t) ** 2).mean(axis=1)))
-    return out
+        out[lab] = (w, (f - t) ** 2)
+    return out, pooled
+
+
+def _box_single(votes) -> int | None:
+    """The box's single candidate: the least squared error over every voting cluster's test
+    values, relative to the best candidate's and averaged over the tests (None: no test)."""
+    rel = []
+    for vote in votes:
+        if vote:
+            mse = sum(se.sum(axis=1) for _, se in vote.values())
+            rel.append(mse / max(float(mse.min()), 1e-30))
+    return int(np.argmin(np.mean(rel, axis=0))) if rel else None
+
+
+def _lead(se, ref) -> float:
+    """How clearly a cluster's best candidate on one test beats candidate `ref` there: the
+    mean of the paired differences of their squared errors over its standard error
+    (infinite where `ref` is the best)."""
+    best = int(np.argmin(se.mean(axis=1)))
+    if best == ref:
+        return np.inf
+    d = se[ref] - se[best]
+    spread = d.std() / np.sqrt(d.size)
+    return float(d.mean() / spread) if spread > 0 else np.inf
 
 
 def _assemble(names, choices, count, hole_label, stack):
@@ -273,6 +304,52 @@ def _assemble(names, choices, count, hole_label, stack):
             for n, w in ch["weights"].items():
                 weights[names.index(n), lab] = w
     return np.einsum("kn,kcn->cn", weights[:, hole_label], stack)
+
+
+def _choice(names, pixels, why, w, se=None):
+    """One cluster's entry of the report: its weights (k,), and its candidates' RMS errors
+    on its first test where it had one."""
+    out = {
+        "pixels": pixels,
+        "why": why,
+        "chosen": names[int(np.argmax(w))],
+        "weights": {n: float(x) for n, x in zip(names, w, strict=True) if x > 0},
+    }
+    if se is not None:
+        out["ring_rmse"] = {
+            n: float(x) for n, x in zip(names, np.sqrt(se.mean(axis=1)), strict=True)
+        }
+    return out
+
+
+def _decide(names, votes, vote, members, choices, guard, agreed):
+    """Each voting cluster's choice from the tests' votes (_votes' results): the mean of
+    its votes' weights where its own best candidate on every test leads the box's single
+    candidate by `guard` standard errors or more, the box's single candidate elsewhere
+    (GUARD); and, with `agreed` "box", the clusters whose candidates agree take the mean
+    of the box's weights over the tests (AGREED)."""
+    own = [v for v, _ in votes]
+    single = _box_single(own)
+    for lab in np.flatnonzero(vote):
+        cast = [v[lab] for v in own if lab in v]
+        pixels = int(members[lab].size)
+        if not cast:
+            choices[lab - 1] = _choice(names, pixels, "no ring to test on", np.eye(len(names))[0])
+            continue
+        w = np.mean([c[0] for c in cast], axis=0)
+        why = "ring vote"
+        if guard > 0 and min(_lead(se, single) for _, se in cast) < guard:
+            w, why = np.eye(len(names))[single], "box's candidate"
+        choices[lab - 1] = _choice(names, pixels, why, w, cast[0][1])
+    boxes = [b for v, b in votes if v and b is not None]
+    if agreed == "box" and boxes:
+        w = np.mean(boxes, axis=0)
+        for lab, ch in enumerate(choices, start=1):
+            if ch is not None and ch["why"] == "candidates agree":
+                choices[lab - 1] = {
+                    **_choice(names, ch["pixels"], ch["why"], w),
+                    **{k: v for k, v in ch.items() if k == "spread"},
+                }
 
 
 def choose(
@@ -288,6 +365,8 @@ def choose(
     thin: float = 0.0,
     shift: bool | None = None,
     narrow: bool | None = None,
+    guard: float | None = None,
+    agreed: str | None = None,
     dtype=np.float32,
     seed=None,
     params=None,
@@ -306,6 +385,8 @@ def choose(
     scale = SCALE if scale is None else scale
     shift = SHIFT if shift is None else shift
     narrow = NARROW if narrow is None else narrow
+    guard = GUARD if guard is None else guard
+    agreed = AGREED if agreed is None else agreed
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
@@ -341,25 +422,8 @@ def choose(
             tests = _ring_tests(owners, names, data, omega, runtime, dtype, seed, params)
             ring_pixels += int(tests[2].size)
             votes.append(_votes(tests, vote, count, names, blend, prior))
-        for lab in np.flatnonzero(vote):
-            cast = [v[lab] for v in votes if lab in v]
-            pixels = int(members[lab].size)
-            if not cast:
-                choices[lab - 1] = {
-                    "pixels": pixels,
-                    "why": "no ring to test on",
-                    "chosen": names[0],
-                    "weights": {names[0]: 1.0},
-                }
-                continue
-            w = np.mean([c[0] for c in cast], axis=0)
-            choices[lab - 1] = {
-                "pixels": pixels,
-                "why": "ring vote",
-                "chosen": names[int(np.argmax(w))],
-                "weights": {n: float(x) for n, x in zip(names, w, strict=True) if x > 0},
-                "ring_rmse": {n: float(x) for n, x in zip(names, cast[0][1], strict=True)},
-            }
+
+        _decide(names, votes, vote, members, choices, guard, agreed)
     out[:, omega] = _assemble(names, choices, count, hole_label, stack)
     report = {
         "candidates": names,
@@ -397,6 +461,13 @@ class AutoOptions:
     narrow : bool, optional
         Also vote on a ring of `ring` px around every cluster, and average the two votes'
         weights (None: NARROW).
+    guard : float, optional
+        A voting cluster keeps its own vote only where its best candidate leads the box's
+        single candidate by this many standard errors on every ring; elsewhere it takes
+        that candidate (0: no guard; None: GUARD).
+    agreed : str, optional
+        What the clusters whose candidates agree take: "cheapest" (the first candidate) or
+        "box" (the box's vote: the weights that fit every voting ring; None: AGREED).
     candidate_options : tuple
         Candidates' own options objects (such as CoherenceOptions(epsilon=4)), each for the
         candidate whose class it is; the others keep their defaults.
@@ -410,6 +481,8 @@ class AutoOptions:
     thin: float = 0.0
     shift: bool | None = None
     narrow: bool | None = None
+    guard: float | None = None
+    agreed: str | None = None
     candidate_options: tuple = ()
 
     def __post_init__(self) -> None:
@@ -425,7 +498,9 @@ class AutoOptions:
             isinstance(ring, bool) or not isinstance(ring, (int, np.integer)) or ring < 1
         ):
             raise InputError(f"ring must be an integer >= 1 or None, not {self.ring!r}")
-        for name in ("prior", "scale", "thin"):
+        if self.agreed not in (None, "cheapest", "box"):
+            raise InputError(f'agreed must be "cheapest", "box" or None, not {self.agreed!r}')
+        for name in ("prior", "scale", "thin", "guard"):
             value = getattr(self, name)
             if value is not None and not value >= 0:  # NaN too; inf is allowed
                 raise InputError(f"{name} must be a number >= 0, not {value!r}")
@@ -466,6 +541,8 @@ class VoteRun:
             thin=o.thin,
             shift=o.shift,
             narrow=o.narrow,
+            guard=o.guard,
+            agreed=o.agreed,
             dtype=self.dtype,
             seed=self.seed,
             params=params,
