@@ -201,3 +201,9 @@ def test_clusters_that_agree_take_the_box_s_vote():
     _, report = _vote(image / 255.0, mask, names=None)
     assert "candidates agree" in [c["why"] for c in report["choices"]]
     assert psnr() >= best - 0.2
+
+
+def test_agreed_is_checked():
+    with pytest.raises(clpde.InputError, match="agreed must be"):
+        auto.AutoOptions(agreed="spectral")
+    assert auto.AutoOptions(agreed="cheapest").agreed == "cheapest"
