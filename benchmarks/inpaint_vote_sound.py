@@ -5,6 +5,8 @@ against the best single candidate.
     python benchmarks/inpaint_vote_cache.py --half both      # first: the fills (long)
     python benchmarks/inpaint_vote_sound.py [--half calibration|test|both] [--cases]
     python benchmarks/inpaint_vote_sound.py --real [--vote rings|decoys] [--only NAMES]
+        [--prior P] [--narrow 0|1] [--agreed cheapest|box]
+    python benchmarks/inpaint_vote_sound.py --time [--half ...]   # auto's time / default's
 
 --real runs a vote itself (auto.choose's rings, or inpaint_vote_decoys.choose) on the
 cached hole fills, its test fills memoised in benchmarks/results/decoy_cache/.
@@ -419,6 +421,44 @@ def real(half, cases=None, vote="rings", **options):
         print(f"time: auto {t_auto:.1f} s, spectral {t_spectral:.1f} s, x{t_auto / t_spectral:.2f}")
 
 
+def timed(half):
+    """clpde.inpaint's time with method="auto" against the default's, per class: each
+    method once on the first case to build its kernels, then one run of each per case."""
+    import time
+
+    import clpde
+
+    halves = ("test", "calibration") if half == "both" else (half,)
+    warm = False
+    for h in halves:
+        by = {}
+        for case in corpus.build():
+            if case.half != h:
+                continue
+            damaged = case.damaged()
+            seconds = []
+            for method in (None, "auto"):
+                kw = dict(channel_axis=case.channel_axis, method=method, progress=False, seed=0)
+                if not warm:
+                    clpde.inpaint(damaged, case.mask, **kw)
+                start = time.perf_counter()
+                clpde.inpaint(damaged, case.mask, **kw)
+                seconds.append(time.perf_counter() - start)
+            warm = True
+            by.setdefault(case.damage, []).append(seconds)
+            print(f"{case.name} default {seconds[0]:.2f} s, auto {seconds[1]:.2f} s", flush=True)
+        total = np.sum([s for v in by.values() for s in v], axis=0)
+        print(f"\n{h}: auto {total[1]:.1f} s, default {total[0]:.1f} s, x{total[1] / total[0]:.2f}")
+        print(
+            " ".join(
+                f"{d}=x{np.sum([s[1] for s in by[d]]) / np.sum([s[0] for s in by[d]]):.1f}"
+                for d in corpus.CLASSES
+                if d in by
+            ),
+            flush=True,
+        )
+
+
 def main(argv=None):
     from clpde.inpainting import auto
 
@@ -427,13 +467,17 @@ def main(argv=None):
     parser.add_argument("--rules", default=None, help="names of RULES, ';'-separated")
     parser.add_argument("--cases", action="store_true", help="list the cases below -0.2 dB")
     parser.add_argument("--real", action="store_true", help="run auto.choose itself (its defaults)")
+    parser.add_argument("--time", action="store_true", help="auto's time against the default's")
     parser.add_argument("--only", default=None, help="--real: case names containing these, ','")
     parser.add_argument("--vote", default="rings", choices=("rings", "decoys"), help="--real")
     parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
     parser.add_argument("--narrow", type=int, default=None, help="--real --vote rings: narrow")
+    parser.add_argument("--agreed", default=None, help="--real --vote rings: agreed")
     parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
     parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
+    if args.time:
+        return timed(args.half)
     if args.real:
         only = args.only.split(",") if args.only else None
         return real(
@@ -444,6 +488,7 @@ def main(argv=None):
             snap=args.snap,
             decoys=args.decoys,
             narrow=None if args.narrow is None else bool(args.narrow),
+            agreed=args.agreed,
         )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
