@@ -222,23 +222,31 @@ def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
     first = np.maximum.accumulate(np.where(lines & ~before, x, -1), axis=1)
     last = np.minimum.accumulate(np.where(lines & ~after, x, nx)[:, ::-1], axis=1)[:, ::-1]
 
-    def at(cols: np.ndarray) -> np.ndarray:
-        return np.take_along_axis(frame, np.clip(cols, 0, nx - 1), axis=1)
+    # from here on, vectors over the line pixels only (in the frame's order): every step
+    # is per pixel or per labelled region, so the values are the whole frame's
+    ys, xs = np.nonzero(lines)
+    f = frame[ys, xs]
 
-    left = 0.5 * (at(first - 3) + at(first - 2))
-    right = 0.5 * (at(last + 2) + at(last + 3))
+    def at(cols: np.ndarray) -> np.ndarray:
+        return frame[ys, np.clip(cols, 0, nx - 1)]
+
+    firsts, lasts = first[ys, xs], last[ys, xs]
+    left = 0.5 * (at(firsts - 3) + at(firsts - 2))
+    right = 0.5 * (at(lasts + 2) + at(lasts + 3))
     labels, n = ndimage.label(lines)
+    labels = labels[ys, xs]
     index = np.arange(1, n + 1)
-    dev = frame - 0.5 * (left + right)
+    dev = f - 0.5 * (left + right)
     s = np.sign(np.concatenate([[0.0], ndimage.median(dev, labels, index)]))[labels]
-    e = s * frame - np.maximum(s * left, s * right)
+    e = s * f - np.maximum(s * left, s * right)
     # a line shows in most of its rows (the detector's LINE_COVER): a row's run passes
     # its worse flank on average; texture does so in a few rows, an edge in none
     runs, m = ndimage.label(lines, structure=[[0, 0, 0], [1, 1, 1], [0, 0, 0]])
+    runs = runs[ys, xs]
     shows = np.concatenate([[False], ndimage.mean(e, runs, np.arange(1, m + 1)) > 0])[runs]
     share = np.concatenate([[0.0], ndimage.mean(shows, labels, index)])[labels]
     e = np.where(share >= LINE_COVER, np.maximum(e, 0.0), 0.0)
-    out[lines] = (e**2)[lines]
+    out[ys, xs] = e**2
     return out
 
 
@@ -312,19 +320,22 @@ def _self_check(
     residual says nothing, and the noise alone would refuse every such repair. A false
     alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
     its values. Returns the bool (H, W) pixels whose repair is refused."""
-    floor = np.float32(2 * sigma**2)
-    if lines is not None and lines.any():
-        floor = np.where(lines, line_evidence(frame, lines), floor)
-    if spots is not None and spots.any():
-        floor = np.where(spots, ring_evidence(frame, spots, hole), floor)
-    resid2 = np.where(np.isfinite(resid2), resid2, floor)
-    d2 = (restored - frame) ** 2
     labels, n = ndimage.label(hole)
     if n == 0:
         return np.zeros(hole.shape, bool)
+    # the regions' means read their own pixels only: vectors over the hole's pixels
+    where = np.nonzero(hole)
+    floor = np.full(len(where[0]), 2 * sigma**2, np.float32)
+    if lines is not None and lines.any():
+        floor = np.where(lines[where], line_evidence(frame, lines)[where], floor)
+    if spots is not None and spots.any():
+        floor = np.where(spots[where], ring_evidence(frame, spots, hole)[where], floor)
+    e2 = resid2[where]
+    e2 = np.where(np.isfinite(e2), e2, floor)
+    d2 = (restored[where] - frame[where]) ** 2
     index = np.arange(1, n + 1)
-    mean_d2 = ndimage.mean(d2, labels, index)
-    mean_e2 = ndimage.mean(resid2, labels, index)
+    mean_d2 = ndimage.mean(d2, labels[where], index)
+    mean_e2 = ndimage.mean(e2, labels[where], index)
     refuse = np.concatenate([[False], mean_d2 > 2 * mean_e2])
     return refuse[labels]
 
