@@ -183,18 +183,20 @@ def scratch_runs(
         labels, n = ndimage.label(hit, structure=np.array([[0, 1, 0]] * 3, bool))
         if n == 0:
             continue
-        sizes = np.bincount(labels.ravel())
-        shown = sgn * resid
-        shown3 = np.maximum(
-            np.maximum(shown, np.roll(shown, 1, axis=1)), np.roll(shown, -1, axis=1)
-        )
-        support = np.bincount(labels.ravel(), weights=(shown3 > 2.0 * sigma).ravel())
+        # the runs' counts read their own pixels only (ys, xs; columns wrap as np.roll's)
+        ys, xs = np.nonzero(labels)
+        lab = labels[ys, xs]
+        sizes = np.bincount(lab, minlength=n + 1)
+        # np.roll(resid, off, axis=1) at the pixels
+        beside = {off: resid[ys, (xs - off) % nx] for off in (-5, -4, -3, -1, 0, 1, 3, 4, 5)}
+        shown3 = np.maximum(np.maximum(sgn * beside[0], sgn * beside[1]), sgn * beside[-1])
+        support = np.bincount(lab, weights=shown3 > 2.0 * sigma, minlength=n + 1)
         # a scratch is thin: beside it, 3 to 5 columns away on both sides, the residual is
         # quiet in most rows; an object the flow missed leaves a broad residual
-        quiet = np.ones((ny, nx), bool)
+        quiet = np.ones(len(ys), bool)
         for off in (-5, -4, -3, 3, 4, 5):
-            quiet &= np.abs(np.roll(resid, off, axis=1)) < 2.0 * sigma
-        calm = np.bincount(labels.ravel(), weights=quiet.ravel())
+            quiet &= np.abs(beside[off]) < 2.0 * sigma
+        calm = np.bincount(lab, weights=quiet, minlength=n + 1)
         good = (sizes >= min_length) & (support >= RUN_SUPPORT * np.maximum(sizes, min_length))
         if thin:
             good &= calm >= RUN_SUPPORT * sizes
