@@ -50,7 +50,10 @@ def _count(ok: np.ndarray) -> np.ndarray:
 
 def median(vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """The median over k of vals[k] where ok[k] (NaN where none): the values not trusted
-    are pushed to the end as +inf, and the middle of the n trusted ones is taken."""
+    are pushed to the end as +inf, and the middle of the n trusted ones is taken (NaN
+    everywhere for an empty stack)."""
+    if len(vals) == 0:
+        return np.full(vals.shape[1:], np.nan, np.float32)
     s = sorted_planes(np.where(ok, vals, np.inf))
     n = _count(ok)
     lo = _pick((np.maximum(n, 1) - 1) >> 1, s)  # (n - 1) // 2, 0 for none

@@ -28,6 +28,7 @@ scratches from the same line detector run on the image minus its horizontal medi
 from __future__ import annotations
 
 import functools
+import threading
 
 import numpy as np
 import pyopencl.array as cla
@@ -214,8 +215,10 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     both = (ok & (side < 0)).any(0) & (ok & (side > 0)).any(0)
     n_ok = ok.sum(0)
     med = median(vals, ok)
-    med_p = median(vals, ok & (side < 0))
-    med_n = median(vals, ok & (side > 0))
+    # each side's median over its own neighbours' planes (the others' would sort as +inf)
+    before, after = ([i for i, sd in enumerate(sides) if sd == one] for one in (-1, 1))
+    med_p = median(vals[before], ok[before])
+    med_n = median(vals[after], ok[after])
     res = np.where(n_ok > 0, v - med, 0.0).astype(np.float32)
     d = np.where(v > hi, v - hi, np.where(v < lo, v - lo, 0.0))
     spread = np.where(n_ok > 0, hi - lo, 0.0)
@@ -269,9 +272,22 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     T, ny, nx = G.shape
     kern = LineKernels(get_runtime(device))
     motion = FilmMotion(G)
-    per = map_frames(lambda t: frame_scores(motion, t, radius), range(T))
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
-    stack = {key: np.stack([p[key] for p in per]) for key in keys}
+    stack: dict = {}
+    lock = threading.Lock()
+
+    def scores_of(t: int) -> dict:
+        """Frame t's scores, its planes copied into the stacks (in the frames' threads)."""
+        got = frame_scores(motion, t, radius)
+        with lock:  # the stacks made by the first frame done
+            for key in keys:
+                if key not in stack:
+                    stack[key] = np.empty((T, *got[key].shape), got[key].dtype)
+        for key in keys:
+            stack[key][t] = got.pop(key)
+        return got
+
+    per = map_frames(scores_of, range(T))
     stack["flows"] = [p["flows"] for p in per]
     stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]

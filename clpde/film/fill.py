@@ -92,11 +92,14 @@ def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
     import cv2
 
     out = G.copy()
-    for t in range(len(G)):
+
+    def one(t: int) -> None:  # the frames in threads: each writes its own plane
         hole = m[t] > 0
         if hole.any():
             u8 = to_u8(G[t])
             out[t] = cv2.inpaint(u8, hole.astype(np.uint8), 3, cv2.INPAINT_TELEA) / np.float32(255)
+
+    map_frames(one, range(len(G)))
     return out
 
 
