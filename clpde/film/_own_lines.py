@@ -153,7 +153,9 @@ def _pulled(a: np.ndarray, flow: np.ndarray) -> np.ndarray:
     """a (H, W) of another frame read at each pixel's place there, by a flow (H, W, 2),
     x first, to the nearest pixel (edges repeated)."""
     ny, nx = a.shape
-    yy, xx = np.mgrid[0:ny, 0:nx]
-    y = np.clip(np.rint(yy + flow[..., 1]).astype(int), 0, ny - 1)
-    x = np.clip(np.rint(xx + flow[..., 0]).astype(int), 0, nx - 1)
-    return a[y, x]
+    # the places in float64 (a pixel index plus a float32 flow), rounded half to even
+    y = np.rint(np.arange(ny, dtype=np.float64)[:, None] + flow[..., 1])
+    x = np.rint(np.arange(nx, dtype=np.float64)[None, :] + flow[..., 0])
+    y = np.clip(y, 0, ny - 1).astype(np.intp)
+    x = np.clip(x, 0, nx - 1).astype(np.intp)
+    return a.ravel()[y * nx + x]
