@@ -271,7 +271,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     are trusted (the thresholds come after, in film_kinds)."""
     T, ny, nx = G.shape
     kern = LineKernels(get_runtime(device))
-    motion = FilmMotion(G)
+    motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
     stack: dict = {}
     lock = threading.Lock()
