@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from ._morph import dilate
 from .lines import (
     LINE_DRIFT,
     LINE_SCALE,
@@ -101,7 +102,7 @@ def drop_ghosts(runs: np.ndarray, beside: list[np.ndarray]) -> np.ndarray:
     for sgn in (1, -1):
         other = np.zeros(runs.shape, bool)
         for lines in beside:
-            other |= ndimage.binary_dilation(lines == -sgn, structure=drift)
+            other |= dilate(lines == -sgn, structure=drift)
         out[_mostly_on(runs == sgn, other)] = 0
     return out
 

@@ -41,6 +41,7 @@ from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
 from ._grow import grow_blotches
+from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._order import median, second_least
 from ._own_lines import residual_runs
@@ -343,11 +344,11 @@ def _untrusted(
     that distance; the fill takes them spatially (no two trusted candidates agree there)."""
     sigma, d_any = scores["sigma"][t], scores["d_any"][t]
     z = np.where(scores["both"][t], 0.0, np.abs(d_any) / sigma)
-    taken = ndimage.binary_dilation(blotch | scratch)
+    taken = dilate(blotch | scratch)
     low = HYSTERESIS_LOW * threshold
     sign = np.sign(d_any)
     found = _spatial_blotches(G, t, z, sign, threshold, low, smallest, sigma, search, taken)
-    busy = ndimage.binary_dilation(found | taken, iterations=2)
+    busy = dilate(found | taken, 2)
     area = scores["region_noise"][t][1]
     return _tail_check(found, busy, d_any, area, scores["any_in"][t])
 
@@ -370,7 +371,7 @@ def _frame_kinds(
     scratch = runs | still
     a, r = blotch_evidence(scores, t, gamma), res[t]
     blotch, a = _regions_found(a, r, scores["region_noise"][t], blotch_threshold)
-    blotch &= ~ndimage.binary_dilation(scratch | ghosts)
+    blotch &= ~dilate(scratch | ghosts)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
     # blotch worth a fill
     smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
@@ -379,7 +380,7 @@ def _frame_kinds(
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], *flows)
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     # the surroundings' tail is read outside all candidates and their rims
-    busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
+    busy = dilate(blotch | scratch, 2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
     low = HYSTERESIS_LOW * blotch_threshold
@@ -428,9 +429,7 @@ def film_kinds(
     if T >= 3:
         wide = np.ones((1, 5), bool)
         for end, inner in ((0, 1), (T - 1, T - 2)):
-            lone = (kinds[end] == SCRATCH) & ~ndimage.binary_dilation(
-                kinds[inner] == SCRATCH, structure=wide
-            )
+            lone = (kinds[end] == SCRATCH) & ~dilate(kinds[inner] == SCRATCH, structure=wide)
             kinds[end][lone] = CLEAN
     return kinds
 
@@ -460,7 +459,7 @@ def _photo(
                 continue
             # a speck steps off its surroundings; a smooth bump fades into them
             comp = labels == idx
-            ring = ndimage.binary_dilation(comp, iterations=2) & ~comp
+            ring = dilate(comp, 2) & ~comp
             step = abs(float(G[comp].mean()) - float(np.median(G[ring])))
             keep[idx] = step > speck_threshold * sigma
         specks |= keep[labels]

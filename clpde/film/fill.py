@@ -25,6 +25,7 @@ from ..imagedata import grow_mask, noise_std
 from ..inpainting.api import inpaint
 from ..motion.dis import to_u8
 from ._compensate import fit_gain
+from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
@@ -57,7 +58,7 @@ def _spatial_crops(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.nda
     fill its context. Outside the holes the frame is returned as it was."""
     out = frame.copy()
     ny, nx = hole.shape
-    groups, _ = ndimage.label(ndimage.binary_dilation(hole, iterations=CROP_MARGIN))
+    groups, _ = ndimage.label(dilate(hole, CROP_MARGIN))
     for sl in ndimage.find_objects(groups):
         y0, y1 = max(sl[0].start, 0), min(sl[0].stop, ny)
         x0, x1 = max(sl[1].start, 0), min(sl[1].stop, nx)
@@ -285,8 +286,8 @@ def ring_evidence(frame: np.ndarray, spots: np.ndarray, hole: np.ndarray) -> np.
     for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
         win = tuple(slice(max(s.start - 4, 0), s.stop + 4) for s in sl)
         own = labels[win] == idx
-        ring = ndimage.binary_dilation(own, iterations=4)
-        ring &= ~ndimage.binary_dilation(own, iterations=1) & ~hole[win]
+        ring = dilate(own, 4)
+        ring &= ~dilate(own) & ~hole[win]
         if ring.sum() < 4:
             continue
         g = frame[win]

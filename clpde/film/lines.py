@@ -45,6 +45,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from ..imagedata import noise_std
+from ._morph import dilate
 from ._motion import map_frames
 from ._order import median_of
 
@@ -174,7 +175,7 @@ def scratch_runs(
         s = sgn * zc
         hit = s > threshold
         if lines is not None:
-            own = ndimage.binary_dilation(lines == sgn, structure=np.ones((1, 3), bool))
+            own = dilate(lines == sgn, structure=np.ones((1, 3), bool))
             hit &= own
         if not hit.any():
             continue
@@ -209,7 +210,7 @@ def scratch_runs(
         # a few rows bridged, as above)
         shows = sgn * resid > sigma
         rows = ndimage.binary_closing(shows, structure=np.ones((9, 1), bool)) | shows
-        wide = ndimage.binary_dilation(core, structure=np.ones((1, 3), bool))
+        wide = dilate(core, structure=np.ones((1, 3), bool))
         out[(core & rows) | (wide & (s > 0.5 * threshold) & shows)] = int(sgn)
     return out if signed else out != 0
 

@@ -1,0 +1,63 @@
+"""Binary dilation of masks by OpenCV, with scipy.ndimage.binary_dilation's result bit for bit.
+
+The film detector grows whole-frame masks by a few pixels many times a frame (the rims
+kept clear around candidates, the regions' growth, the crops of the spatial fill). ndimage
+repeats its dilation `iterations` times in its own loop; OpenCV's morphology runs
+vectorised, at a tenth of the time or less at 640x360. Binary dilation by a structure
+whose centre is set is a maximum filter over the structure: the same pixels whichever
+library computes it, with nothing outside the frame taken as set in both (ndimage's
+border_value 0, OpenCV's default border for dilation).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# ndimage's default structure: the 4-connected cross
+_CROSS = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], np.uint8)
+
+
+def dilate(
+    mask: np.ndarray,
+    iterations: int = 1,
+    structure: np.ndarray | None = None,
+    within: np.ndarray | None = None,
+) -> np.ndarray:
+    """``scipy.ndimage.binary_dilation(mask, structure, iterations, mask=within)`` of a 2-D
+    bool mask, by OpenCV.
+
+    Parameters
+    ----------
+    mask : numpy.ndarray
+        Bool (H, W).
+    iterations : int
+        Times the dilation is repeated (at least 1).
+    structure : numpy.ndarray, optional
+        A symmetric structure of odd sides whose centre is set (default: the 4-connected
+        cross, ndimage's).
+    within : numpy.ndarray, optional
+        Bool (H, W): only these pixels may be set by each step (ndimage's `mask`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Bool (H, W), a new array.
+
+    Examples
+    --------
+    >>> m = np.zeros((5, 5), bool); m[2, 2] = True
+    >>> int(dilate(m).sum()), int(dilate(m, 2).sum())
+    (5, 13)
+    """
+    import cv2
+
+    kernel = _CROSS if structure is None else np.asarray(structure, np.uint8)
+    src = np.ascontiguousarray(mask, bool).view(np.uint8)
+    if within is None:
+        return cv2.dilate(src, kernel, iterations=iterations).view(bool)
+    # ndimage's mask: each step sets only pixels within it, and keeps every pixel it had
+    allowed = np.ascontiguousarray(within, bool).view(np.uint8)
+    out = src.copy()
+    for _ in range(iterations):
+        out |= cv2.dilate(out, kernel) & allowed
+    return out.view(bool)
