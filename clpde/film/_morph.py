@@ -61,3 +61,33 @@ def dilate(
     for _ in range(iterations):
         out |= cv2.dilate(out, kernel) & allowed
     return out.view(bool)
+
+
+def close(mask: np.ndarray, structure: np.ndarray) -> np.ndarray:
+    """``scipy.ndimage.binary_closing(mask, structure)`` of a 2-D bool mask, by OpenCV: the
+    dilation, then the erosion with nothing outside the frame taken as set (ndimage's
+    border_value 0 for both).
+
+    Parameters
+    ----------
+    mask : numpy.ndarray
+        Bool (H, W).
+    structure : numpy.ndarray
+        A symmetric structure of odd sides whose centre is set.
+
+    Returns
+    -------
+    numpy.ndarray
+        Bool (H, W), a new array.
+
+    Examples
+    --------
+    >>> m = np.zeros((9, 3), bool); m[2:4, 1] = m[5:7, 1] = True  # a gap of one row
+    >>> close(m, np.ones((3, 1), bool))[:, 1].astype(int).tolist()
+    [0, 0, 1, 1, 1, 1, 1, 0, 0]
+    """
+    import cv2
+
+    kernel = np.asarray(structure, np.uint8)
+    grown = cv2.dilate(np.ascontiguousarray(mask, bool).view(np.uint8), kernel)
+    return cv2.erode(grown, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0).view(bool)

@@ -45,7 +45,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from ..imagedata import noise_std
-from ._morph import dilate
+from ._morph import close, dilate
 from ._motion import map_frames
 from ._order import median_of
 
@@ -180,7 +180,7 @@ def scratch_runs(
         if not hit.any():
             continue
         # bridge gaps of a few rows (a scratch fades in places)
-        hit = ndimage.binary_closing(hit, structure=np.ones((7, 1), bool)) | hit
+        hit = close(hit, np.ones((7, 1), bool)) | hit
         labels, n = ndimage.label(hit, structure=np.array([[0, 1, 0]] * 3, bool))
         if n == 0:
             continue
@@ -209,7 +209,7 @@ def scratch_runs(
         # beside it: keep the rows and columns whose own residual shows the line (gaps of
         # a few rows bridged, as above)
         shows = sgn * resid > sigma
-        rows = ndimage.binary_closing(shows, structure=np.ones((9, 1), bool)) | shows
+        rows = close(shows, np.ones((9, 1), bool)) | shows
         wide = dilate(core, structure=np.ones((1, 3), bool))
         out[(core & rows) | (wide & (s > 0.5 * threshold) & shows)] = int(sgn)
     return out if signed else out != 0
