@@ -21,7 +21,7 @@ from scipy import ndimage
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
-from ..imagedata import grow_mask, noise_std
+from ..imagedata import noise_std
 from ..inpainting.api import inpaint
 from ..motion.dis import to_u8
 from ._compensate import fit_gain
@@ -137,7 +137,7 @@ def _temporal(
     # candidates only the damaged pixels: from here on, vectors over those (the same
     # values as whole planes: every step is per pixel).
     vals, cols, cand, dist, trust = [], [], [], [], []
-    ctx_t = ~grow_mask(hole, 1.0)
+    ctx_t = ~dilate(hole)  # grow_mask(hole, 1.0): the disc of radius 1 is the cross
     for k in offs:
         s = t + k
         clean = motion.warp(m[s], t, s, "linear") <= _CLEAN
@@ -477,7 +477,7 @@ def inpaint_video(
         frame = out[t]
         if unfilled[t].any():
             # one pixel more, so the spatial fill starts from pixels the frame holds clean
-            hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
+            hole = dilate(unfilled[t]) & (m[t] > 0) | unfilled[t]  # grow_mask by 1 px
             if hole.all():  # a lost frame: nothing in it to fill from spatially
                 filled = _neighbour_mean(planes, m, t, radius)
             else:
