@@ -91,3 +91,43 @@ def close(mask: np.ndarray, structure: np.ndarray) -> np.ndarray:
     kernel = np.asarray(structure, np.uint8)
     grown = cv2.dilate(np.ascontiguousarray(mask, bool).view(np.uint8), kernel)
     return cv2.erode(grown, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0).view(bool)
+
+
+def extreme1d(a: np.ndarray, size: int, axis: int, mode: str = "reflect", lowest=False):
+    """``scipy.ndimage.maximum_filter1d(a, size, axis, mode=mode)`` (or minimum_filter1d
+    with lowest) of a 2-D uint8 or float32 array, by OpenCV's dilation (erosion) with a
+    line of `size` (odd) pixels: a maximum is the same number whichever computes it.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        (H, W) uint8 or float32.
+    size : int
+        The odd length of the filter.
+    axis : int
+        0 (along columns) or 1 (along rows).
+    mode : {'reflect', 'nearest', 'constant'}
+        ndimage's border mode ('constant': 0 outside).
+    lowest : bool
+        The minimum instead of the maximum.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered array, a's shape and dtype.
+
+    Examples
+    --------
+    >>> extreme1d(np.array([[0, 3, 0, 0, 1]], np.uint8), 3, 1).tolist()
+    [[3, 3, 3, 1, 1]]
+    """
+    import cv2
+
+    kernel = np.ones((size, 1) if axis == 0 else (1, size), np.uint8)
+    border = {
+        "reflect": {"borderType": cv2.BORDER_REFLECT},
+        "nearest": {"borderType": cv2.BORDER_REPLICATE},
+        "constant": {"borderType": cv2.BORDER_CONSTANT, "borderValue": 0},
+    }[mode]
+    op = cv2.erode if lowest else cv2.dilate
+    return op(np.ascontiguousarray(a), kernel, **border)

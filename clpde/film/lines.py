@@ -45,7 +45,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from ..imagedata import noise_std
-from ._morph import close, dilate
+from ._morph import close, dilate, extreme1d
 from ._motion import map_frames
 from ._order import median_of
 
@@ -282,7 +282,7 @@ def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray, np
         half = 0.5 * sgn * prof
         above = sum((sgn * near(k) > half).astype(np.int8) for k in range(-3, 4))
         r = np.where((c > 0) & (above <= LINE_WIDTH), np.minimum(c, LINE_CLIP), -LINE_MISS)
-        r = ndimage.maximum_filter1d(r, 3, axis=1, mode="nearest")  # a column of wander
+        r = extreme1d(r, 3, 1, "nearest")  # a column of wander
         m = ndimage.uniform_filter1d(r, 2 * LINE_HALF + 1, axis=0, mode="constant", cval=-LINE_MISS)
         beside = _columns(m, 1)
         peak = (m >= beside(-1)) & (m > beside(1))
@@ -294,11 +294,9 @@ def _runs(hit: np.ndarray, ps: np.ndarray, min_length: int) -> list[tuple[int, i
     """The long, straight, nearly vertical runs of a frame's line hits: (first row, stop
     row, the fitted line's (slope, intercept) in columns per row); ps: the profile, signed
     so that the line is positive."""
-    wide = ndimage.maximum_filter1d(hit.view(np.uint8), 3, axis=1)
+    wide = extreme1d(hit.view(np.uint8), 3, 1)
     # gaps of up to LINE_GAP rows closed (a maximum, then a minimum along y)
-    closed = ndimage.minimum_filter1d(
-        ndimage.maximum_filter1d(wide, LINE_GAP, axis=0, mode="constant"), LINE_GAP, axis=0
-    )
+    closed = extreme1d(extreme1d(wide, LINE_GAP, 0, "constant"), LINE_GAP, 0, lowest=True)
     closed = (closed | wide).view(bool)
     wide = wide.view(bool)
     labels, _ = ndimage.label(closed, structure=np.ones((3, 3), bool))
@@ -541,10 +539,7 @@ def film_scratches(
         got = frame_lines(G[t], float(grain[t]))
         m = got[0]
         return got, [
-            [
-                ndimage.maximum_filter1d((m[i] > LINE_SEEN * level).view(np.uint8), w, axis=1)
-                for i in (0, 1)
-            ]
+            [extreme1d((m[i] > LINE_SEEN * level).view(np.uint8), w, 1) for i in (0, 1)]
             for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
         ]
 
