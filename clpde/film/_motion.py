@@ -112,6 +112,27 @@ def map_frames(function: Callable, items: Iterable, done: Callable | None = None
     return results
 
 
+def map_stacked(function: Callable, items: Iterable, keys: tuple) -> tuple[dict, list]:
+    """map_frames(function, items) for a function returning a dict: the arrays under
+    `keys` are copied into stacks (n, ...), in the items' threads, as each result comes
+    (the first one done makes them); returns (the stacks, the results without those)."""
+    items = list(items)
+    stacks: dict = {}
+    lock = threading.Lock()
+
+    def one(k: int) -> dict:
+        got = function(items[k])
+        with lock:
+            for key in keys:
+                if key not in stacks:
+                    stacks[key] = np.empty((len(items), *got[key].shape), got[key].dtype)
+        for key in keys:
+            stacks[key][k] = got.pop(key)
+        return got
+
+    return stacks, map_frames(one, range(len(items)))
+
+
 class _FlowMemo:
     """Flows kept from one window of a film to the next: a block's window re-reads the
     frames of context that the window before it held, and would estimate their flows again

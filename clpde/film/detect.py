@@ -28,7 +28,6 @@ scratches from the same line detector run on the image minus its horizontal medi
 from __future__ import annotations
 
 import functools
-import threading
 
 import numpy as np
 import pyopencl.array as cla
@@ -42,7 +41,7 @@ from ..imagedata import growth
 from ..runtime import get_runtime
 from ._grow import grow_blotches
 from ._morph import dilate
-from ._motion import FilmMotion, map_frames
+from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
 from ._planes import film_planes, grey
@@ -274,21 +273,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     kern = LineKernels(get_runtime(device))
     motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
-    stack: dict = {}
-    lock = threading.Lock()
-
-    def scores_of(t: int) -> dict:
-        """Frame t's scores, its planes copied into the stacks (in the frames' threads)."""
-        got = frame_scores(motion, t, radius)
-        with lock:  # the stacks made by the first frame done
-            for key in keys:
-                if key not in stack:
-                    stack[key] = np.empty((T, *got[key].shape), got[key].dtype)
-        for key in keys:
-            stack[key][t] = got.pop(key)
-        return got
-
-    per = map_frames(scores_of, range(T))
+    stack, per = map_stacked(lambda t: frame_scores(motion, t, radius), range(T), keys)
     stack["flows"] = [p["flows"] for p in per]
     stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]

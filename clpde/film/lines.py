@@ -533,17 +533,14 @@ def film_scratches(
     grain = [noise_std(G[t].astype(np.float64)) for t in range(T)] if grain is None else grain
     level = LINE_SCALE * threshold
 
-    def lines_of(t: int) -> tuple:
-        """Frame t's lines, and per drift width (dt = 1, 2 frames) and sign where they are
-        seen (widened by the drift over dt frames)."""
-        got = frame_lines(G[t], float(grain[t]))
-        m = got[0]
+    def lines_of(t: int) -> tuple:  # frame t's lines, and where seen per drift width, sign
+        m = (got := frame_lines(G[t], float(grain[t])))[0]
         return got, [
             [extreme1d((m[i] > LINE_SEEN * level).view(np.uint8), w, 1) for i in (0, 1)]
             for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
         ]
 
-    ev, wide = zip(*map_frames(lines_of, range(T)), strict=True) if T else ((), ())  # threads
+    ev, wide = zip(*map_frames(lines_of, range(T)), strict=True)  # frames in threads
     # seen[dt - 1][u][sign]: frame u's lines, widened by the drift over dt frames
     seen = [[w[dt] for w in wide] for dt in (0, 1)]
     args = (ev, seen, level, min_length, flows, min(2, radius))  # min(2, radius): the span
