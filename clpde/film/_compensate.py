@@ -46,9 +46,9 @@ def fit_gain(g: np.ndarray, w: np.ndarray, ok: np.ndarray) -> tuple[float, float
     if gs.size < 16 or ws.std() < 1e-6:
         return 1.0, 0.0
     a, b = 1.0, 0.0
-    keep = np.ones(gs.size, bool)
+    keep = None  # all, the first time
     for _ in range(2):
-        wk, gk = ws[keep], gs[keep]
+        wk, gk = (ws, gs) if keep is None else (ws[keep], gs[keep])
         mw, mg = wk.mean(), gk.mean()
         dw = wk - mw
         # numpy's own sums, not BLAS's dot: OpenBLAS splits a dot over its threads, which

@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from ._morph import dilate
+
 # one-sided share of the frame's residuals a rim pixel must stand in (the level is the
 # 1 - 2 * GROW_SHARE quantile of |residual|): chosen on the calibration half
 GROW_SHARE = 0.05
@@ -33,8 +35,8 @@ INSIDE_REACH = 8  # px a region may grow into pixels outside all its neighbours'
 
 def _geodesic(seed: np.ndarray, allowed: np.ndarray, reach: int) -> np.ndarray:
     """seed grown by up to `reach` steps of 4-connected dilation within seed | allowed
-    (one call: binary_dilation changes only pixels inside its mask at each step)."""
-    return ndimage.binary_dilation(seed, iterations=reach, mask=seed | allowed)
+    (one call: each step sets only pixels inside seed | allowed, as binary_dilation's mask does)."""
+    return dilate(seed, reach, within=seed | allowed)
 
 
 def grow_blotches(
@@ -60,7 +62,7 @@ def grow_blotches(
     sign = np.sign(votes)
     sign[0] = 0.0
     sign = sign[labels]
-    clean = has_nb & ~taken & ~ndimage.binary_dilation(blotch, iterations=2)
+    clean = has_nb & ~taken & ~dilate(blotch, 2)
     r = np.abs(res[clean])
     level = float(np.quantile(r, 1.0 - 2.0 * GROW_SHARE)) if r.size else np.inf
     grown = blotch.copy()

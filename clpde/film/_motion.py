@@ -14,14 +14,18 @@ Everything depends only on the two frames of a pair, never on the rest of the wi
 any window or chunk of a film gives the same values, and the frames of a window can be
 worked on in threads (`map_frames`: OpenCV and numpy release the GIL) in any order: each
 thread has its own DIS instance, and each flow or warp is computed once, by the first
-thread that asks for it.
+thread that asks for it. While a film runs through its sliding window (clpde.film.stream),
+the detector's flows are also kept from one window to the next (`keep_flows`): a window
+re-reads the frames of context the window before it held.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import threading
+from collections import OrderedDict
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
@@ -108,15 +112,89 @@ def map_frames(function: Callable, items: Iterable, done: Callable | None = None
     return results
 
 
+def map_stacked(function: Callable, items: Iterable, keys: tuple) -> tuple[dict, list]:
+    """map_frames(function, items) for a function returning a dict: the arrays under
+    `keys` are copied into stacks (n, ...), in the items' threads, as each result comes
+    (the first one done makes them); returns (the stacks, the results without those)."""
+    items = list(items)
+    stacks: dict = {}
+    lock = threading.Lock()
+
+    def one(k: int) -> dict:
+        got = function(items[k])
+        with lock:
+            for key in keys:
+                if key not in stacks:
+                    stacks[key] = np.empty((len(items), *got[key].shape), got[key].dtype)
+        for key in keys:
+            stacks[key][k] = got.pop(key)
+        return got
+
+    return stacks, map_frames(one, range(len(items)))
+
+
+class _FlowMemo:
+    """Flows kept from one window of a film to the next: a block's window re-reads the
+    frames of context that the window before it held, and would estimate their flows again
+    from the same frames. Keyed by the DIS preset and the two frames' uint8 contents (their
+    digests), so a flow is reused only for the very pair of frames it was estimated on,
+    which gives it the same values (DIS depends on its two frames only). The `size` most
+    recently used flows are kept while a film runs (`keep_flows`), none otherwise."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.kept: OrderedDict = OrderedDict()
+        self.sizes: list[int] = []  # one per film running
+
+    def get(self, key) -> np.ndarray | None:
+        with self.lock:
+            flow = self.kept.get(key)
+            if flow is not None:
+                self.kept.move_to_end(key)
+            return flow
+
+    def put(self, key, flow: np.ndarray) -> None:
+        with self.lock:
+            size = max(self.sizes, default=0)
+            if size:
+                flow.flags.writeable = False  # shared by windows: read only
+                self.kept[key] = flow
+            while len(self.kept) > size:
+                self.kept.popitem(last=False)
+
+
+_memo = _FlowMemo()
+
+
+@contextlib.contextmanager
+def keep_flows(size: int) -> Iterator[None]:
+    """While a film runs, keep the `size` most recently used flows of the detector's
+    windows for the next window (`_FlowMemo`); on leaving, drop them (once the last film
+    running in the process ends: counted, and the largest size holds meanwhile)."""
+    with _memo.lock:
+        _memo.sizes.append(int(size))
+    try:
+        yield
+    finally:
+        with _memo.lock:
+            _memo.sizes.remove(int(size))
+            if not _memo.sizes:
+                _memo.kept.clear()
+
+
 class FilmMotion:
     """DIS flows between the frames of one window, and their neighbours.
 
     G: (T, H, W) float32 grey frames in [0, 1]; flow_grey, optional: the frames the flows
-    are estimated on (the damage filled in roughly), G by default.
+    are estimated on (the damage filled in roughly), G by default; keep: the flows go into
+    the film's memo for the next window (`keep_flows`), and are read from it in any case.
     """
 
-    def __init__(self, G: np.ndarray, flow_grey: np.ndarray | None = None) -> None:
+    def __init__(
+        self, G: np.ndarray, flow_grey: np.ndarray | None = None, keep: bool = False
+    ) -> None:
         self.G = G
+        self.keep = keep
         self.T, self.ny, self.nx = G.shape
         src = G if flow_grey is None else flow_grey
         self.u8 = [to_u8(g) for g in src]
@@ -150,7 +228,24 @@ class FilmMotion:
         return kept.result()
 
     def flow(self, t: int, s: int) -> np.ndarray:
-        return self._once((t, s), lambda: self.dis.flow(self.u8[t], self.u8[s]))
+        return self._once((t, s), lambda: self._estimate(t, s))
+
+    def _digest(self, t: int) -> bytes:
+        """Frame t's uint8 contents' digest (kept): its flows' key in the film's memo."""
+        return self._once(("d", t), lambda: hashlib.blake2b(self.u8[t].data).digest())
+
+    def _estimate(self, t: int, s: int) -> np.ndarray:
+        """The flow (t, s): from the film's memo where a window before estimated it on the
+        same two frames, else by DIS (and kept, for the detector's motion)."""
+        if not _memo.sizes:
+            return self.dis.flow(self.u8[t], self.u8[s])
+        key = (self.dis.preset, self.u8[t].shape, self._digest(t), self._digest(s))
+        flow = _memo.get(key)
+        if flow is None:
+            flow = self.dis.flow(self.u8[t], self.u8[s])
+            if self.keep:
+                _memo.put(key, flow)
+        return flow
 
     def coords(self, t: int, s: int) -> tuple[np.ndarray, np.ndarray]:
         """(x + u, y + v): where frame t's pixels lie in frame s (kept: every warp along

@@ -50,7 +50,10 @@ def _count(ok: np.ndarray) -> np.ndarray:
 
 def median(vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """The median over k of vals[k] where ok[k] (NaN where none): the values not trusted
-    are pushed to the end as +inf, and the middle of the n trusted ones is taken."""
+    are pushed to the end as +inf, and the middle of the n trusted ones is taken (NaN
+    everywhere for an empty stack)."""
+    if len(vals) == 0:
+        return np.full(vals.shape[1:], np.nan, np.float32)
     s = sorted_planes(np.where(ok, vals, np.inf))
     n = _count(ok)
     lo = _pick((np.maximum(n, 1) - 1) >> 1, s)  # (n - 1) // 2, 0 for none
@@ -64,22 +67,21 @@ def second_least(v: np.ndarray, vals: np.ndarray, ok: np.ndarray) -> np.ndarray:
     least with fewer than 3; 0 with none): the residual the scratch detector reads. A
     scratch fixed on the film differs from every neighbour but perhaps the nearest in a slow
     pan; beside it, where one neighbour's own scratch lands, the others agree: no ghost.
-    Ties go to the earlier neighbour."""
-    first = second = None
-    a1 = a2 = None
-    for k in range(len(vals)):
-        d = np.where(ok[k], v - vals[k], np.inf)
-        a = np.abs(d)
-        if first is None:
-            first, a1 = d, a
-            second, a2 = np.full_like(d, np.inf), np.full_like(a, np.inf)
-            continue
-        better = a < a1
-        between = ~better & (a < a2)
-        second = np.where(better, first, np.where(between, d, second))
-        a2 = np.where(better, a1, np.where(between, a, a2))
-        first = np.where(better, d, first)
-        a1 = np.where(better, a, a1)
+    Ties go to the earlier neighbour: each difference's place in a stable sort by magnitude
+    is the count of those before it (K(K-1)/2 comparisons of planes), and the one at the
+    place wanted is copied."""
+    K = len(vals)
+    d = [np.where(ok[k], v - vals[k], np.float32(np.inf)) for k in range(K)]
+    mag = [np.abs(x) for x in d]
+    place = [np.zeros(v.shape, np.uint8) for _ in range(K)]
+    for j in range(K):
+        for k in range(j + 1, K):
+            first = mag[j] <= mag[k]  # j sorts before k (a tie: the earlier)
+            place[k] += first
+            place[j] += ~first
     n = _count(ok)
-    out = np.where(n >= 3, second, first) if len(vals) > 1 else first
-    return np.where(n > 0, out, 0.0).astype(np.float32)
+    want = (n >= 3).view(np.uint8)  # the second least with 3 or more, else the least
+    out = np.zeros(v.shape, np.float32)
+    for k in range(K):
+        np.copyto(out, d[k], where=(place[k] == want) & (n > 0))
+    return out

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from ._morph import dilate
 from .lines import (
     LINE_DRIFT,
     LINE_SCALE,
@@ -101,7 +102,7 @@ def drop_ghosts(runs: np.ndarray, beside: list[np.ndarray]) -> np.ndarray:
     for sgn in (1, -1):
         other = np.zeros(runs.shape, bool)
         for lines in beside:
-            other |= ndimage.binary_dilation(lines == -sgn, structure=drift)
+            other |= dilate(lines == -sgn, structure=drift)
         out[_mostly_on(runs == sgn, other)] = 0
     return out
 
@@ -153,7 +154,9 @@ def _pulled(a: np.ndarray, flow: np.ndarray) -> np.ndarray:
     """a (H, W) of another frame read at each pixel's place there, by a flow (H, W, 2),
     x first, to the nearest pixel (edges repeated)."""
     ny, nx = a.shape
-    yy, xx = np.mgrid[0:ny, 0:nx]
-    y = np.clip(np.rint(yy + flow[..., 1]).astype(int), 0, ny - 1)
-    x = np.clip(np.rint(xx + flow[..., 0]).astype(int), 0, nx - 1)
-    return a[y, x]
+    # the places in float64 (a pixel index plus a float32 flow), rounded half to even
+    y = np.rint(np.arange(ny, dtype=np.float64)[:, None] + flow[..., 1])
+    x = np.rint(np.arange(nx, dtype=np.float64)[None, :] + flow[..., 0])
+    y = np.clip(y, 0, ny - 1).astype(np.intp)
+    x = np.clip(x, 0, nx - 1).astype(np.intp)
+    return a.ravel()[y * nx + x]

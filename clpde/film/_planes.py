@@ -120,7 +120,14 @@ def film_planes(
     else:
         offset = float(array.min())
         scale = float(array.max()) - offset or 1.0
-    planes = ((data.astype(np.float64) - offset) / scale).astype(np.float32)
+    if np.issubdtype(array.dtype, np.integer) and array.dtype.itemsize <= 2:
+        # integers of up to 16 bits: each value's plane value once, in a table (the same
+        # formula's numbers as below, without a float64 copy of the whole film)
+        values = np.arange(info.min, info.max + 1, dtype=np.float64)
+        table = ((values - offset) / scale).astype(np.float32)
+        planes = table[data if info.min == 0 else data.astype(np.int32) - info.min]
+    else:
+        planes = ((data.astype(np.float64) - offset) / scale).astype(np.float32)
     layout = FilmLayout(array.shape, array.dtype, axis, photo, offset, scale, array)
     return np.ascontiguousarray(planes), layout
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage, signal, stats
 
+from ._morph import dilate
 from .lines import robust_scale
 
 MATCH_RATIO = 0.1  # a displaced match this much better than the compensated one: motion
@@ -56,8 +57,8 @@ def _kept(mask: np.ndarray, pad: int, test) -> np.ndarray:
 
 def _ring(own: np.ndarray, labels_win: np.ndarray, inner: int, outer: int) -> np.ndarray:
     """The pixels inner+1 to outer px from `own` that belong to no component."""
-    ring = ndimage.binary_dilation(own, iterations=outer)
-    ring &= ~ndimage.binary_dilation(own, iterations=inner)
+    ring = dilate(own, outer)
+    ring &= ~dilate(own, inner)
     return ring & (labels_win == 0)
 
 
@@ -104,7 +105,7 @@ def _motion_check(
 
     def damage(win, own, labels_win) -> bool:
         (y0, y1), (x0, x1) = (win[0].start, win[0].stop), (win[1].start, win[1].stop)
-        region = ndimage.binary_dilation(own, iterations=2)
+        region = dilate(own, 2)
         r2 = resid[y0:y1, x0:x1] ** 2
         # medians: a component may carry some clean pixels or a trail beside the object
         e_own = float(np.median(r2[own]))
@@ -189,9 +190,7 @@ def _ring_check(
         quiet = np.abs(res[win][ring]) <= RING_LIMIT * sigma
         if not (trusted.mean() >= RING_TRUSTED and (trusted & quiet).mean() >= RING_QUIET):
             return False
-        outer = ndimage.binary_dilation(own, iterations=6) & ~ndimage.binary_dilation(
-            own, iterations=2
-        )
+        outer = dilate(own, 6) & ~dilate(own, 2)
         # a motion boundary is the frame's own: both flows show it; a blotch disturbs the
         # flows around it too, but rarely both (the least spread decides)
         spread = min(_spread(f) for f in flows[(slice(None), *win)][:, outer])
@@ -261,8 +260,8 @@ def _tail_check(
     (benchmarks/film_worse.py: tree b frame 5's 12 and 8 px, on white flowers)."""
 
     def unexplained(win, own, labels_win) -> bool:
-        around = ndimage.binary_dilation(own, iterations=TAIL_REACH)
-        around &= ~ndimage.binary_dilation(own, iterations=2) & ~busy[win] & valid[win]
+        around = dilate(own, TAIL_REACH)
+        around &= ~dilate(own, 2) & ~busy[win] & valid[win]
         if not around.any():
             return True
         r = np.abs(res[win])

@@ -40,7 +40,8 @@ from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
 from ._grow import grow_blotches
-from ._motion import FilmMotion, map_frames
+from ._morph import dilate
+from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
 from ._planes import film_planes, grey
@@ -214,8 +215,10 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     both = (ok & (side < 0)).any(0) & (ok & (side > 0)).any(0)
     n_ok = ok.sum(0)
     med = median(vals, ok)
-    med_p = median(vals, ok & (side < 0))
-    med_n = median(vals, ok & (side > 0))
+    # each side's median over its own neighbours' planes (the others' would sort as +inf)
+    before, after = ([i for i, sd in enumerate(sides) if sd == one] for one in (-1, 1))
+    med_p = median(vals[before], ok[before])
+    med_n = median(vals[after], ok[after])
     res = np.where(n_ok > 0, v - med, 0.0).astype(np.float32)
     d = np.where(v > hi, v - hi, np.where(v < lo, v - lo, 0.0))
     spread = np.where(n_ok > 0, hi - lo, 0.0)
@@ -268,10 +271,9 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     are trusted (the thresholds come after, in film_kinds)."""
     T, ny, nx = G.shape
     kern = LineKernels(get_runtime(device))
-    motion = FilmMotion(G)
-    per = map_frames(lambda t: frame_scores(motion, t, radius), range(T))
+    motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
-    stack = {key: np.stack([p[key] for p in per]) for key in keys}
+    stack, per = map_stacked(lambda t: frame_scores(motion, t, radius), range(T), keys)
     stack["flows"] = [p["flows"] for p in per]
     stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]
@@ -327,11 +329,11 @@ def _untrusted(
     that distance; the fill takes them spatially (no two trusted candidates agree there)."""
     sigma, d_any = scores["sigma"][t], scores["d_any"][t]
     z = np.where(scores["both"][t], 0.0, np.abs(d_any) / sigma)
-    taken = ndimage.binary_dilation(blotch | scratch)
+    taken = dilate(blotch | scratch)
     low = HYSTERESIS_LOW * threshold
     sign = np.sign(d_any)
     found = _spatial_blotches(G, t, z, sign, threshold, low, smallest, sigma, search, taken)
-    busy = ndimage.binary_dilation(found | taken, iterations=2)
+    busy = dilate(found | taken, 2)
     area = scores["region_noise"][t][1]
     return _tail_check(found, busy, d_any, area, scores["any_in"][t])
 
@@ -354,7 +356,7 @@ def _frame_kinds(
     scratch = runs | still
     a, r = blotch_evidence(scores, t, gamma), res[t]
     blotch, a = _regions_found(a, r, scores["region_noise"][t], blotch_threshold)
-    blotch &= ~ndimage.binary_dilation(scratch | ghosts)
+    blotch &= ~dilate(scratch | ghosts)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
     # blotch worth a fill
     smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
@@ -363,7 +365,7 @@ def _frame_kinds(
     blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], *flows)
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     # the surroundings' tail is read outside all candidates and their rims
-    busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
+    busy = dilate(blotch | scratch, 2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
     low = HYSTERESIS_LOW * blotch_threshold
@@ -412,9 +414,7 @@ def film_kinds(
     if T >= 3:
         wide = np.ones((1, 5), bool)
         for end, inner in ((0, 1), (T - 1, T - 2)):
-            lone = (kinds[end] == SCRATCH) & ~ndimage.binary_dilation(
-                kinds[inner] == SCRATCH, structure=wide
-            )
+            lone = (kinds[end] == SCRATCH) & ~dilate(kinds[inner] == SCRATCH, structure=wide)
             kinds[end][lone] = CLEAN
     return kinds
 
@@ -444,7 +444,7 @@ def _photo(
                 continue
             # a speck steps off its surroundings; a smooth bump fades into them
             comp = labels == idx
-            ring = ndimage.binary_dilation(comp, iterations=2) & ~comp
+            ring = dilate(comp, 2) & ~comp
             step = abs(float(G[comp].mean()) - float(np.median(G[ring])))
             keep[idx] = step > speck_threshold * sigma
         specks |= keep[labels]

@@ -21,10 +21,11 @@ from scipy import ndimage
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
-from ..imagedata import grow_mask, noise_std
+from ..imagedata import noise_std
 from ..inpainting.api import inpaint
 from ..motion.dis import to_u8
 from ._compensate import fit_gain
+from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
@@ -57,7 +58,7 @@ def _spatial_crops(frame: np.ndarray, hole: np.ndarray, options: dict) -> np.nda
     fill its context. Outside the holes the frame is returned as it was."""
     out = frame.copy()
     ny, nx = hole.shape
-    groups, _ = ndimage.label(ndimage.binary_dilation(hole, iterations=CROP_MARGIN))
+    groups, _ = ndimage.label(dilate(hole, CROP_MARGIN))
     for sl in ndimage.find_objects(groups):
         y0, y1 = max(sl[0].start, 0), min(sl[0].stop, ny)
         x0, x1 = max(sl[1].start, 0), min(sl[1].stop, nx)
@@ -92,11 +93,14 @@ def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
     import cv2
 
     out = G.copy()
-    for t in range(len(G)):
+
+    def one(t: int) -> None:  # the frames in threads: each writes its own plane
         hole = m[t] > 0
         if hole.any():
             u8 = to_u8(G[t])
             out[t] = cv2.inpaint(u8, hole.astype(np.uint8), 3, cv2.INPAINT_TELEA) / np.float32(255)
+
+    map_frames(one, range(len(G)))
     return out
 
 
@@ -133,7 +137,7 @@ def _temporal(
     # candidates only the damaged pixels: from here on, vectors over those (the same
     # values as whole planes: every step is per pixel).
     vals, cols, cand, dist, trust = [], [], [], [], []
-    ctx_t = ~grow_mask(hole, 1.0)
+    ctx_t = ~dilate(hole)  # grow_mask(hole, 1.0): the disc of radius 1 is the cross
     for k in offs:
         s = t + k
         clean = motion.warp(m[s], t, s, "linear") <= _CLEAN
@@ -222,23 +226,31 @@ def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
     first = np.maximum.accumulate(np.where(lines & ~before, x, -1), axis=1)
     last = np.minimum.accumulate(np.where(lines & ~after, x, nx)[:, ::-1], axis=1)[:, ::-1]
 
-    def at(cols: np.ndarray) -> np.ndarray:
-        return np.take_along_axis(frame, np.clip(cols, 0, nx - 1), axis=1)
+    # from here on, vectors over the line pixels only (in the frame's order): every step
+    # is per pixel or per labelled region, so the values are the whole frame's
+    ys, xs = np.nonzero(lines)
+    f = frame[ys, xs]
 
-    left = 0.5 * (at(first - 3) + at(first - 2))
-    right = 0.5 * (at(last + 2) + at(last + 3))
+    def at(cols: np.ndarray) -> np.ndarray:
+        return frame[ys, np.clip(cols, 0, nx - 1)]
+
+    firsts, lasts = first[ys, xs], last[ys, xs]
+    left = 0.5 * (at(firsts - 3) + at(firsts - 2))
+    right = 0.5 * (at(lasts + 2) + at(lasts + 3))
     labels, n = ndimage.label(lines)
+    labels = labels[ys, xs]
     index = np.arange(1, n + 1)
-    dev = frame - 0.5 * (left + right)
+    dev = f - 0.5 * (left + right)
     s = np.sign(np.concatenate([[0.0], ndimage.median(dev, labels, index)]))[labels]
-    e = s * frame - np.maximum(s * left, s * right)
+    e = s * f - np.maximum(s * left, s * right)
     # a line shows in most of its rows (the detector's LINE_COVER): a row's run passes
     # its worse flank on average; texture does so in a few rows, an edge in none
     runs, m = ndimage.label(lines, structure=[[0, 0, 0], [1, 1, 1], [0, 0, 0]])
+    runs = runs[ys, xs]
     shows = np.concatenate([[False], ndimage.mean(e, runs, np.arange(1, m + 1)) > 0])[runs]
     share = np.concatenate([[0.0], ndimage.mean(shows, labels, index)])[labels]
     e = np.where(share >= LINE_COVER, np.maximum(e, 0.0), 0.0)
-    out[lines] = (e**2)[lines]
+    out[ys, xs] = e**2
     return out
 
 
@@ -274,8 +286,8 @@ def ring_evidence(frame: np.ndarray, spots: np.ndarray, hole: np.ndarray) -> np.
     for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
         win = tuple(slice(max(s.start - 4, 0), s.stop + 4) for s in sl)
         own = labels[win] == idx
-        ring = ndimage.binary_dilation(own, iterations=4)
-        ring &= ~ndimage.binary_dilation(own, iterations=1) & ~hole[win]
+        ring = dilate(own, 4)
+        ring &= ~dilate(own) & ~hole[win]
         if ring.sum() < 4:
             continue
         g = frame[win]
@@ -312,19 +324,22 @@ def _self_check(
     residual says nothing, and the noise alone would refuse every such repair. A false
     alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
     its values. Returns the bool (H, W) pixels whose repair is refused."""
-    floor = np.float32(2 * sigma**2)
-    if lines is not None and lines.any():
-        floor = np.where(lines, line_evidence(frame, lines), floor)
-    if spots is not None and spots.any():
-        floor = np.where(spots, ring_evidence(frame, spots, hole), floor)
-    resid2 = np.where(np.isfinite(resid2), resid2, floor)
-    d2 = (restored - frame) ** 2
     labels, n = ndimage.label(hole)
     if n == 0:
         return np.zeros(hole.shape, bool)
+    # the regions' means read their own pixels only: vectors over the hole's pixels
+    where = np.nonzero(hole)
+    floor = np.full(len(where[0]), 2 * sigma**2, np.float32)
+    if lines is not None and lines.any():
+        floor = np.where(lines[where], line_evidence(frame, lines)[where], floor)
+    if spots is not None and spots.any():
+        floor = np.where(spots[where], ring_evidence(frame, spots, hole)[where], floor)
+    e2 = resid2[where]
+    e2 = np.where(np.isfinite(e2), e2, floor)
+    d2 = (restored[where] - frame[where]) ** 2
     index = np.arange(1, n + 1)
-    mean_d2 = ndimage.mean(d2, labels, index)
-    mean_e2 = ndimage.mean(resid2, labels, index)
+    mean_d2 = ndimage.mean(d2, labels[where], index)
+    mean_e2 = ndimage.mean(e2, labels[where], index)
     refuse = np.concatenate([[False], mean_d2 > 2 * mean_e2])
     return refuse[labels]
 
@@ -462,7 +477,7 @@ def inpaint_video(
         frame = out[t]
         if unfilled[t].any():
             # one pixel more, so the spatial fill starts from pixels the frame holds clean
-            hole = grow_mask(unfilled[t], 1.0) & (m[t] > 0) | unfilled[t]
+            hole = dilate(unfilled[t]) & (m[t] > 0) | unfilled[t]  # grow_mask by 1 px
             if hole.all():  # a lost frame: nothing in it to fill from spatially
                 filled = _neighbour_mean(planes, m, t, radius)
             else:

@@ -45,6 +45,7 @@ import pyopencl.array as cla
 from scipy import ndimage
 
 from ..imagedata import noise_std
+from ._morph import close, dilate, extreme1d
 from ._motion import map_frames
 from ._order import median_of
 
@@ -174,27 +175,29 @@ def scratch_runs(
         s = sgn * zc
         hit = s > threshold
         if lines is not None:
-            own = ndimage.binary_dilation(lines == sgn, structure=np.ones((1, 3), bool))
+            own = dilate(lines == sgn, structure=np.ones((1, 3), bool))
             hit &= own
         if not hit.any():
             continue
         # bridge gaps of a few rows (a scratch fades in places)
-        hit = ndimage.binary_closing(hit, structure=np.ones((7, 1), bool)) | hit
+        hit = close(hit, np.ones((7, 1), bool)) | hit
         labels, n = ndimage.label(hit, structure=np.array([[0, 1, 0]] * 3, bool))
         if n == 0:
             continue
-        sizes = np.bincount(labels.ravel())
-        shown = sgn * resid
-        shown3 = np.maximum(
-            np.maximum(shown, np.roll(shown, 1, axis=1)), np.roll(shown, -1, axis=1)
-        )
-        support = np.bincount(labels.ravel(), weights=(shown3 > 2.0 * sigma).ravel())
+        # the runs' counts read their own pixels only (ys, xs; columns wrap as np.roll's)
+        ys, xs = np.nonzero(labels)
+        lab = labels[ys, xs]
+        sizes = np.bincount(lab, minlength=n + 1)
+        # np.roll(resid, off, axis=1) at the pixels
+        beside = {off: resid[ys, (xs - off) % nx] for off in (-5, -4, -3, -1, 0, 1, 3, 4, 5)}
+        shown3 = np.maximum(np.maximum(sgn * beside[0], sgn * beside[1]), sgn * beside[-1])
+        support = np.bincount(lab, weights=shown3 > 2.0 * sigma, minlength=n + 1)
         # a scratch is thin: beside it, 3 to 5 columns away on both sides, the residual is
         # quiet in most rows; an object the flow missed leaves a broad residual
-        quiet = np.ones((ny, nx), bool)
+        quiet = np.ones(len(ys), bool)
         for off in (-5, -4, -3, 3, 4, 5):
-            quiet &= np.abs(np.roll(resid, off, axis=1)) < 2.0 * sigma
-        calm = np.bincount(labels.ravel(), weights=quiet.ravel())
+            quiet &= np.abs(beside[off]) < 2.0 * sigma
+        calm = np.bincount(lab, weights=quiet, minlength=n + 1)
         good = (sizes >= min_length) & (support >= RUN_SUPPORT * np.maximum(sizes, min_length))
         if thin:
             good &= calm >= RUN_SUPPORT * sizes
@@ -206,8 +209,8 @@ def scratch_runs(
         # beside it: keep the rows and columns whose own residual shows the line (gaps of
         # a few rows bridged, as above)
         shows = sgn * resid > sigma
-        rows = ndimage.binary_closing(shows, structure=np.ones((9, 1), bool)) | shows
-        wide = ndimage.binary_dilation(core, structure=np.ones((1, 3), bool))
+        rows = close(shows, np.ones((9, 1), bool)) | shows
+        wide = dilate(core, structure=np.ones((1, 3), bool))
         out[(core & rows) | (wide & (s > 0.5 * threshold) & shows)] = int(sgn)
     return out if signed else out != 0
 
@@ -279,7 +282,7 @@ def frame_lines(g: np.ndarray, grain: float) -> tuple[np.ndarray, np.ndarray, np
         half = 0.5 * sgn * prof
         above = sum((sgn * near(k) > half).astype(np.int8) for k in range(-3, 4))
         r = np.where((c > 0) & (above <= LINE_WIDTH), np.minimum(c, LINE_CLIP), -LINE_MISS)
-        r = ndimage.maximum_filter1d(r, 3, axis=1, mode="nearest")  # a column of wander
+        r = extreme1d(r, 3, 1, "nearest")  # a column of wander
         m = ndimage.uniform_filter1d(r, 2 * LINE_HALF + 1, axis=0, mode="constant", cval=-LINE_MISS)
         beside = _columns(m, 1)
         peak = (m >= beside(-1)) & (m > beside(1))
@@ -291,11 +294,9 @@ def _runs(hit: np.ndarray, ps: np.ndarray, min_length: int) -> list[tuple[int, i
     """The long, straight, nearly vertical runs of a frame's line hits: (first row, stop
     row, the fitted line's (slope, intercept) in columns per row); ps: the profile, signed
     so that the line is positive."""
-    wide = ndimage.maximum_filter1d(hit.view(np.uint8), 3, axis=1)
+    wide = extreme1d(hit.view(np.uint8), 3, 1)
     # gaps of up to LINE_GAP rows closed (a maximum, then a minimum along y)
-    closed = ndimage.minimum_filter1d(
-        ndimage.maximum_filter1d(wide, LINE_GAP, axis=0, mode="constant"), LINE_GAP, axis=0
-    )
+    closed = extreme1d(extreme1d(wide, LINE_GAP, 0, "constant"), LINE_GAP, 0, lowest=True)
     closed = (closed | wide).view(bool)
     wide = wide.view(bool)
     labels, _ = ndimage.label(closed, structure=np.ones((3, 3), bool))
@@ -530,19 +531,18 @@ def film_scratches(
     """
     T, ny, nx = G.shape
     grain = [noise_std(G[t].astype(np.float64)) for t in range(T)] if grain is None else grain
-    ev = map_frames(lambda t: frame_lines(G[t], float(grain[t])), range(T))  # frames in threads
     level = LINE_SCALE * threshold
-    # seen[dt - 1][u][sign]: frame u's lines, widened by the drift over dt frames
-    seen = [
-        [
-            [
-                ndimage.maximum_filter1d((m[i] > LINE_SEEN * level).view(np.uint8), w, axis=1)
-                for i in (0, 1)
-            ]
-            for m, *_ in ev
+
+    def lines_of(t: int) -> tuple:  # frame t's lines, and where seen per drift width, sign
+        m = (got := frame_lines(G[t], float(grain[t])))[0]
+        return got, [
+            [extreme1d((m[i] > LINE_SEEN * level).view(np.uint8), w, 1) for i in (0, 1)]
+            for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
         ]
-        for w in (2 * LINE_DRIFT + 1, 4 * LINE_DRIFT + 1)
-    ]
+
+    ev, wide = zip(*map_frames(lines_of, range(T)), strict=True)  # frames in threads
+    # seen[dt - 1][u][sign]: frame u's lines, widened by the drift over dt frames
+    seen = [[w[dt] for w in wide] for dt in (0, 1)]
     args = (ev, seen, level, min_length, flows, min(2, radius))  # min(2, radius): the span
     kept = map_frames(lambda t: _frame_scratches(t, *args), range(T))
     out = np.zeros((T, ny, nx), bool)

@@ -32,11 +32,15 @@ import numpy as np
 
 from ..errors import InputError
 from ..imagedata import grow_mask
+from ._motion import keep_flows
 from .detect import detect_defects
 from .fill import inpaint_video
 
 KEEP = 3.0  # inpaint_video's keep for detected masks (noise units)
 DEFAULT_BLOCK = 32  # frames restored per window: the context re-read per block is 2R/block
+# flows per frame of the context two windows share, kept for the next window (the detector
+# estimates 6 per frame: to the 4 neighbours, and 2 loops through them)
+FLOWS_KEPT = 6
 
 
 @dataclass(frozen=True)
@@ -355,12 +359,21 @@ def restore_stream(
     >>> [r.shape for r, _, _ in restore_stream(film, 3, work, masks=film > 0, block=2)]
     [(4, 4), (4, 4), (4, 4)]
     """
-    plan = plan_blocks(count, block, work.context(masks is None), span)
+    context = work.context(masks is None)
+    plan = plan_blocks(count, block, context, span)
     spans = [(b.first, b.last) for b in plan]
-    for blk, (window, window_masks) in zip(plan, iter_spans(frames, spans, masks), strict=True):
-        restored, found, kinds = restore_window(work, window, window_masks, blk)
-        for k in range(len(restored)):
-            yield restored[k], found[k], None if kinds is None else kinds[k]
+    with keep_flows(_kept_flows(context)):
+        for blk, (window, window_masks) in zip(plan, iter_spans(frames, spans, masks), strict=True):
+            restored, found, kinds = restore_window(work, window, window_masks, blk)
+            for k in range(len(restored)):
+                yield restored[k], found[k], None if kinds is None else kinds[k]
+
+
+def _kept_flows(context: int) -> int:
+    """How many flows the detector's motion keeps for the next window (clpde.film._motion's
+    keep_flows): the flows among the 2 * context frames two windows share, about FLOWS_KEPT
+    per frame."""
+    return FLOWS_KEPT * 2 * context
 
 
 def run_chunk(
@@ -386,16 +399,17 @@ def run_chunk(
     """
     offset = blocks[0].first
     parts = []
-    for blk in blocks:
-        window = slice(blk.first - offset, blk.last - offset)
-        parts.append(
-            restore_window(
-                work,
-                np.ascontiguousarray(frames[window]),
-                None if masks is None else np.ascontiguousarray(masks[window]),
-                blk,
+    with keep_flows(_kept_flows(work.context(masks is None))):
+        for blk in blocks:
+            window = slice(blk.first - offset, blk.last - offset)
+            parts.append(
+                restore_window(
+                    work,
+                    np.ascontiguousarray(frames[window]),
+                    None if masks is None else np.ascontiguousarray(masks[window]),
+                    blk,
+                )
             )
-        )
     kinds = None if parts[0][2] is None else np.concatenate([p[2] for p in parts])
     return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]), kinds)
 

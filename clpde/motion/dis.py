@@ -70,6 +70,7 @@ class DisFlow:
 
     def __init__(self, preset: str = PRESET) -> None:
         self.cv2 = _cv2()
+        self.preset = preset
         self.dis = _dis(preset)
         self._grid = None
 

@@ -391,6 +391,34 @@ def test_order_statistics_match_a_sort(rng):
         assert np.array_equal(second_least(v, vals, ok), least)
 
 
+def test_opencv_morphology_is_ndimage_bit_for_bit(rng):
+    """clpde.film._morph's dilation (with iterations and a mask), closing and 1-D extrema
+    by OpenCV against scipy.ndimage's, at the frame's edges too."""
+    from scipy import ndimage
+
+    from clpde.film._morph import close, dilate, extreme1d
+
+    lines = [np.ones((1, 3), bool), np.ones((1, 5), bool), np.ones((7, 1), bool)]
+    for trial in range(40):
+        m = rng.random((rng.integers(8, 40), rng.integers(8, 40))) < (0.02, 0.3)[trial % 2]
+        m[0, : m.shape[1] // 2] = True  # on the edge
+        allowed = rng.random(m.shape) < 0.6
+        for it in (1, 2, 8):
+            assert np.array_equal(dilate(m, it), ndimage.binary_dilation(m, iterations=it))
+            assert np.array_equal(
+                dilate(m, it, within=allowed),
+                ndimage.binary_dilation(m, iterations=it, mask=allowed),
+            )
+        for st in lines:
+            assert np.array_equal(dilate(m, structure=st), ndimage.binary_dilation(m, st))
+            assert np.array_equal(close(m, st), ndimage.binary_closing(m, st))
+        a = m.view(np.uint8) if trial % 2 else rng.standard_normal(m.shape).astype(np.float32)
+        for size, axis, mode in ((3, 1, "nearest"), (5, 1, "reflect"), (31, 0, "constant")):
+            for lowest, f in ((False, ndimage.maximum_filter1d), (True, ndimage.minimum_filter1d)):
+                got = extreme1d(a, size, axis, mode, lowest)
+                assert np.array_equal(got, f(a, size, axis=axis, mode=mode))
+
+
 def test_median_of_is_numpy_median(rng):
     """The flicker fit's median (one partition) is np.median's value, odd and even counts,
     with ties."""

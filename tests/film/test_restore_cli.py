@@ -167,6 +167,35 @@ def test_the_window_gives_the_whole_film_at_once():
     assert np.array_equal(np.stack([r for r, _, _ in streamed]), expected)
 
 
+def test_the_windows_reuse_the_flows_they_share(monkeypatch):
+    """The detector's flows are kept from one window to the next (clpde.film._motion's
+    keep_flows): the windows estimate fewer flows and give the same frames, masks and kinds
+    as without the memo, and nothing stays kept once the film has run."""
+    from clpde.film import _motion, stream
+    from clpde.film.stream import film_work, restore_stream
+    from clpde.motion import dis
+
+    damaged, _ = damage(clean_frames(16))
+    estimated = []
+    real = dis.DisFlow.flow
+
+    def counted(self, a, b):
+        estimated.append((a.shape, b.shape))
+        return real(self, a, b)
+
+    monkeypatch.setattr(dis.DisFlow, "flow", counted)
+    runs, counts = [], []
+    for kept in (0, stream.FLOWS_KEPT):
+        monkeypatch.setattr(stream, "FLOWS_KEPT", kept)
+        estimated.clear()
+        runs.append(list(restore_stream(damaged, 16, film_work(), block=4)))
+        counts.append(len(estimated))
+        assert not _motion._memo.kept and not _motion._memo.sizes
+    assert counts[1] < 0.8 * counts[0]
+    for without, with_memo in zip(*runs, strict=True):
+        assert all(np.array_equal(a, b) for a, b in zip(without, with_memo, strict=True))
+
+
 def test_restore_on_two_dask_workers_equals_one_process(tmp_path, film, capsys):
     """clpde's own cluster (2 spawned workers, one PoCL thread each) in chunks of 4 frames
     against this process: the same lossless film and masks."""
