@@ -234,7 +234,12 @@ def _local_noise_check(
         ring = _ring(own, labels_win, 1, 3)
         if not ring.any():
             return False
-        level = 1.4826 * float(np.median(np.abs(res[win][ring])))
+        r = res[win]
+        side = np.sign(np.median(r[own]))
+        other = r[ring][np.sign(r[ring]) == -side]
+        level = 1.4826 * float(np.median(np.abs(r[ring])))
+        if other.size >= 4:
+            level = min(level, 1.4826 * float(np.median(np.abs(other))))
         local = max(1.0, level / (RESIDUAL_UNITS * sigma))
         return float(a[win][own].max()) >= threshold * local
 
