@@ -36,7 +36,7 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     """_frame_kinds' blotch masks after each stage (the same calls, in the same order)."""
     zc, res, sig = sc["zc"], sc["res"], sc["sigma"]
     scratch = scratch_runs(zc[t], sc["least"][t], sig[t], sthr, min_length)
-    (a, zr), r = fdet.blotch_evidence(sc, t, gamma), res[t]
+    (a, zr), r = fdet.blotch_evidence(sc, t, gamma, fdet.HYSTERESIS_LOW * bthr), res[t]
     low = (a > fdet.HYSTERESIS_LOW * bthr) | (zr > REGION_LOW * bthr)
     out = {"a": a, "low": low}
     b, a = fdet._regions_found(a, zr, r, sc["region_noise"][t], bthr)

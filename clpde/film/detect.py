@@ -271,23 +271,26 @@ def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
     return keep[labels]
 
 
-def blotch_evidence(scores: dict, t: int, gamma: float) -> tuple[np.ndarray, np.ndarray]:
+def blotch_evidence(
+    scores: dict, t: int, gamma: float, low: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Frame t's blotch evidence per pixel (film_scores' evidence), in noise units that grow
     with the neighbours' disagreement among themselves beyond what the grain explains
     (pathological motion: the flow does not follow the scene there): the pixel's own
     score, or its region's where the pixel owns it; and that region evidence alone (0 where
     not owned). A pixel owns its square's region score where its own residual shows the
-    same sign beyond the noise and carries at least half the square's mean residual (the
-    nearer of the two: the region's shift or none): beside a blotch, a pixel of grain or of
-    the flow's halo around it has the blotch in its square but not in itself, and a strong
-    blotch's region score does not spill past its edge."""
+    same sign beyond the noise and either reaches the `low` level (noise units) by itself
+    or carries at least half the square's mean residual (the nearer of the two: the
+    region's shift or none): beside a blotch, a pixel of grain or of the flow's halo around
+    it has the blotch in its square but not in itself, and a strong blotch's region score
+    does not spill past its edge."""
     sigma, r = scores["sigma"][t], scores["res"][t]
     allowed = spread_allowance(scores["n"][t], sigma)
     scale = sigma + gamma * np.maximum(scores["spread"][t] - allowed, 0.0)
     zb = scores["d"][t] / scale
     zr = scores["zr"][t] * (sigma / scale)
     own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigma)
-    own &= np.abs(r) >= 0.5 * np.abs(_box(r, REGION_HALF))
+    own &= (np.abs(r) >= low * sigma) | (np.abs(r) >= 0.5 * np.abs(_box(r, REGION_HALF)))
     zr = np.where(own, np.abs(zr), 0.0).astype(np.float32)
     return np.maximum(np.abs(zb), zr), zr
 
@@ -333,7 +336,8 @@ def _frame_kinds(
     # the residual's line runs; near a film's end, those that are a neighbour's ghost apart
     runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
     scratch = runs | still
-    (a, zr), r = blotch_evidence(scores, t, gamma), res[t]
+    low = HYSTERESIS_LOW * blotch_threshold
+    (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
     blotch, a = _regions_found(a, zr, r, scores["region_noise"][t], blotch_threshold)
     blotch &= ~ndimage.binary_dilation(scratch | ghosts)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
@@ -347,7 +351,6 @@ def _frame_kinds(
     busy = ndimage.binary_dilation(blotch | scratch, iterations=2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
-    low = HYSTERESIS_LOW * blotch_threshold
     taken = scratch | ghosts
     blotch = grow_blotches(blotch, taken, scores["d"][t], r, scores["n"][t] > 0, sigmas[t], low)
     blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search)
