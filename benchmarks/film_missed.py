@@ -26,6 +26,7 @@ from scipy import ndimage
 import clpde
 from clpde.film import _regions as regions
 from clpde.film import detect as fdet
+from clpde.film._grow import REGION_LOW
 from clpde.film._planes import film_planes, grey
 from clpde.film.lines import scratch_runs
 from clpde.film.stream import KEEP
@@ -35,9 +36,10 @@ def stages(G, sc, t, bthr, sthr, search, min_length, gamma):
     """_frame_kinds' blotch masks after each stage (the same calls, in the same order)."""
     zc, res, sig = sc["zc"], sc["res"], sc["sigma"]
     scratch = scratch_runs(zc[t], sc["least"][t], sig[t], sthr, min_length)
-    a, r = fdet.blotch_evidence(sc, t, gamma), res[t]
-    out = {"a": a, "low": a > fdet.HYSTERESIS_LOW * bthr}
-    b, a = fdet._regions_found(a, r, sc["region_noise"][t], bthr)
+    (a, zr), r = fdet.blotch_evidence(sc, t, gamma, fdet.HYSTERESIS_LOW * bthr), res[t]
+    low = (a > fdet.HYSTERESIS_LOW * bthr) | (zr > REGION_LOW * bthr)
+    out = {"a": a, "low": low}
+    b, a = fdet._regions_found(a, zr, r, sc["region_noise"][t], bthr)
     out["hyst"] = b
     b = b & ~ndimage.binary_dilation(scratch)
     out["scratch"] = b

@@ -1,5 +1,6 @@
-"""Growing the film detector's confirmed blotches into their own pixels that the first
-pass left out (clpde.film.detect): hysteresis from confident seeds.
+"""The film detector's hysteresis (clpde.film.detect): the candidate regions that reach the
+blotch threshold (_regions_found), and, once confirmed, their growth into their own pixels
+that the first pass left out: hysteresis from confident seeds.
 
 A blotch that passed every check (clpde.film._regions) is damage; what the first pass
 misses of it is its rim and its inside where the neighbours disagree among themselves:
@@ -26,6 +27,11 @@ from scipy import ndimage
 
 from ._morph import dilate
 
+HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
+# share of the blotch threshold the owned region evidence (clpde.film.detect.blotch_evidence)
+# joins a region at: 3 noise units at the default 7 (chosen on the calibration half:
+# benchmarks/film_missed.py; 3.5, the pixels' low level, found 1.7% less of its blotches)
+REGION_LOW = 3.0 / 7.0
 # one-sided share of the frame's residuals a rim pixel must stand in (the level is the
 # 1 - 2 * GROW_SHARE quantile of |residual|): chosen on the calibration half
 GROW_SHARE = 0.05
@@ -74,3 +80,33 @@ def grow_blotches(
         seed = _geodesic(seed, (s * res >= level) & has_nb & ~taken, RIM_REACH)
         grown |= seed
     return grown
+
+
+def _regions_found(
+    a: np.ndarray,
+    zr: np.ndarray,
+    res: np.ndarray,
+    region_noise: tuple[float, float],
+    threshold: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blotch candidates and their evidence: the connected regions of a > the low level
+    (HYSTERESIS_LOW of the threshold), or of the owned region evidence zr > REGION_LOW of
+    it (a faint blotch's pixels, each within the grain, in a square whose mean stands out),
+    that reach the threshold somewhere (hysteresis), or,
+    a faint blotch, whose mean residual does as a whole: in noise units of a mean over the
+    region's n pixels, level * sqrt(area / n), with the residual's level and the grain's
+    correlation area measured on the frame (film_scores). The evidence returned is the
+    larger of the pixel's own and its region's."""
+    labels, n = ndimage.label((a > HYSTERESIS_LOW * threshold) | (zr > REGION_LOW * threshold))
+    if n == 0:
+        return labels > 0, a
+    idx = np.arange(1, n + 1)
+    level, area = region_noise
+    size = ndimage.sum_labels(np.ones_like(a), labels, idx)
+    z = np.abs(ndimage.mean(res, labels, idx)) / (level * np.sqrt(area / size))
+    region = np.concatenate([[0.0], z]).astype(np.float32)[labels]
+    strong = np.zeros(n + 1, bool)
+    strong[np.unique(labels[a > threshold])] = True
+    strong[1:] |= z >= threshold
+    strong[0] = False
+    return strong[labels], np.maximum(a, region)

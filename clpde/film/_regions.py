@@ -226,14 +226,22 @@ def _local_noise_check(
     own surroundings: the peak evidence, divided by the ring's (2-3 px out) residual level
     in units of the grain's (the residual against the neighbours' median has a deviation
     of RESIDUAL_UNITS sigma under grain alone; more where the flow is off), must still
-    reach the threshold. Flow and warp errors come in clusters, and a small region of them
+    reach the threshold. The level is read from the ring's residuals of the other sign
+    where that is lower (at least 4 of them): a faint blotch's own rim, one-signed, lies
+    in the ring of its first-pass core and is no compensation error, which comes with
+    both signs. Flow and warp errors come in clusters, and a small region of them
     lies among others; a blotch lies on a scene the neighbours compensate."""
 
     def stands_out(win, own, labels_win) -> bool:
         ring = _ring(own, labels_win, 1, 3)
         if not ring.any():
             return False
-        level = 1.4826 * float(np.median(np.abs(res[win][ring])))
+        r = res[win]
+        side = np.sign(np.median(r[own]))
+        other = r[ring][np.sign(r[ring]) == -side]
+        level = 1.4826 * float(np.median(np.abs(r[ring])))
+        if other.size >= 4:
+            level = min(level, 1.4826 * float(np.median(np.abs(other))))
         local = max(1.0, level / (RESIDUAL_UNITS * sigma))
         return float(a[win][own].max()) >= threshold * local
 

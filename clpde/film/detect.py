@@ -39,7 +39,7 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
-from ._grow import grow_blotches
+from ._grow import HYSTERESIS_LOW, _regions_found, grow_blotches
 from ._morph import dilate
 from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
@@ -75,7 +75,6 @@ REGION_HALF = 2  # the region evidence's square: 5x5
 # whose codec noise correlates over 7-16 px).
 SMALLEST = 3
 CELLS = 1.0
-HYSTERESIS_LOW = 0.5  # share of the blotch threshold a region grows into
 # The noise floor, 1.5 grey levels: 8-bit footage without grain (a codec's flat areas) has a
 # residual whose median deviation is 0, and a level or two of quantisation is not damage.
 SIGMA_FLOOR = 1.5 / 255
@@ -114,30 +113,6 @@ def spread_allowance(n_ok: np.ndarray, sigma: float) -> np.ndarray:
     count, in grey: each neighbour carries its own grain of level sigma)."""
     table = np.array([range_quantile(k) for k in range(int(n_ok.max(initial=0)) + 1)])
     return (table[n_ok] * sigma).astype(np.float32)
-
-
-def _regions_found(
-    a: np.ndarray, res: np.ndarray, region_noise: tuple[float, float], threshold: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The blotch candidates and their evidence: the connected regions of a > the low level
-    (HYSTERESIS_LOW of the threshold) that reach the threshold somewhere (hysteresis), or,
-    a faint blotch, whose mean residual does as a whole: in noise units of a mean over the
-    region's n pixels, level * sqrt(area / n), with the residual's level and the grain's
-    correlation area measured on the frame (film_scores). The evidence returned is the
-    larger of the pixel's own and its region's."""
-    labels, n = ndimage.label(a > HYSTERESIS_LOW * threshold)
-    if n == 0:
-        return labels > 0, a
-    idx = np.arange(1, n + 1)
-    level, area = region_noise
-    size = ndimage.sum_labels(np.ones_like(a), labels, idx)
-    z = np.abs(ndimage.mean(res, labels, idx)) / (level * np.sqrt(area / size))
-    region = np.concatenate([[0.0], z]).astype(np.float32)[labels]
-    strong = np.zeros(n + 1, bool)
-    strong[np.unique(labels[a > threshold])] = True
-    strong[1:] |= z >= threshold
-    strong[0] = False
-    return strong[labels], np.maximum(a, region)
 
 
 class _Kernels(LineKernels):
@@ -298,19 +273,28 @@ def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
     return keep[labels]
 
 
-def blotch_evidence(scores: dict, t: int, gamma: float) -> np.ndarray:
+def blotch_evidence(
+    scores: dict, t: int, gamma: float, low: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Frame t's blotch evidence per pixel (film_scores' evidence), in noise units that grow
     with the neighbours' disagreement among themselves beyond what the grain explains
     (pathological motion: the flow does not follow the scene there): the pixel's own
-    score, or its region's where its own residual shows the same sign beyond the noise (so
-    a strong blotch's region score does not spill past its edge)."""
+    score, or its region's where the pixel owns it; and that region evidence alone (0 where
+    not owned). A pixel owns its square's region score where its own residual shows the
+    same sign beyond the noise and either reaches the `low` level (noise units) by itself
+    or carries at least half the square's mean residual (the nearer of the two: the
+    region's shift or none): beside a blotch, a pixel of grain or of the flow's halo around
+    it has the blotch in its square but not in itself, and a strong blotch's region score
+    does not spill past its edge."""
     sigma, r = scores["sigma"][t], scores["res"][t]
     allowed = spread_allowance(scores["n"][t], sigma)
     scale = sigma + gamma * np.maximum(scores["spread"][t] - allowed, 0.0)
     zb = scores["d"][t] / scale
     zr = scores["zr"][t] * (sigma / scale)
     own = (np.sign(r) == np.sign(zr)) & (np.abs(r) > 1.5 * sigma)
-    return np.maximum(np.abs(zb), np.where(own, np.abs(zr), 0.0))
+    own &= (np.abs(r) >= low * sigma) | (np.abs(r) >= 0.5 * np.abs(_box(r, REGION_HALF)))
+    zr = np.where(own, np.abs(zr), 0.0).astype(np.float32)
+    return np.maximum(np.abs(zb), zr), zr
 
 
 def _untrusted(
@@ -354,8 +338,9 @@ def _frame_kinds(
     # the residual's line runs; near a film's end, those that are a neighbour's ghost apart
     runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
     scratch = runs | still
-    a, r = blotch_evidence(scores, t, gamma), res[t]
-    blotch, a = _regions_found(a, r, scores["region_noise"][t], blotch_threshold)
+    low = HYSTERESIS_LOW * blotch_threshold
+    (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
+    blotch, a = _regions_found(a, zr, r, scores["region_noise"][t], blotch_threshold)
     blotch &= ~dilate(scratch | ghosts)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
     # blotch worth a fill
@@ -368,10 +353,15 @@ def _frame_kinds(
     busy = dilate(blotch | scratch, 2)
     blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
-    low = HYSTERESIS_LOW * blotch_threshold
     taken = scratch | ghosts
     blotch = grow_blotches(blotch, taken, scores["d"][t], r, scores["n"][t] > 0, sigmas[t], low)
     blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search)
+    # two witnesses at the low level: where both sides are trusted, a region whose temporal
+    # evidence reaches only the low level is damage where the frame's own surroundings say so
+    # at that level too and it is not found again nearby (the spatial test of _untrusted)
+    weak = np.where(scores["both"][t], a, 0.0)
+    busy = dilate(blotch | taken)
+    blotch |= _spatial_blotches(G, t, weak, np.sign(r), low, low, smallest, sigmas[t], search, busy)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
