@@ -239,13 +239,22 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     // twc[n CS + k] = cos(2 pi k n / L) (and tws, sin), rows rounded up to whole vectors
     const int CS = (L + 7) / 8 * 8, HS = (H + 7) / 8 * 8;
     barrier(FENCE);
-    for (int i = lid; i < L * CS; i += SPECTRAL_GROUP) {
-        const int n = i / CS, k = i - n * CS;
-        const int t = (k * n) % L;
-        twc[i] = tw[t];
-        tws[i] = tw[SPECTRAL_MAXL + t];
-    }
+    for (int n = lid; n < L; n += SPECTRAL_GROUP)  // k n mod L by steps of n: no division
+        for (int k = 0, t = 0; k < CS; ++k, t = t + n < L ? t + n : t + n - L) {
+            twc[n * CS + k] = tw[t];
+            tws[n * CS + k] = tw[SPECTRAL_MAXL + t];
+        }
 #endif
+    // rho^d, d the distance to the window's centre, on a quarter of the window (d is
+    // symmetric about the centre: the same values for a quarter of the exponentials), in T
+    // until W's transform
+    const int Q = L / 2;
+    for (int i = lid; i < Q * Q; i += SPECTRAL_GROUP) {
+        const int a = i / Q, c = i - a * Q;
+        const REAL dy = (REAL)(Q + a) - centre, dx = (REAL)(Q + c) - centre;
+        T[i] = exp(log_rho * sqrt(dx * dx + dy * dy));
+    }
+    barrier(FENCE);
     // the weights, X[LL, 2 LL)
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
         const int m = i / L, n = i - m * L;
@@ -255,8 +264,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             const int s = state[y * nx + x];
             w = s < 0 ? (REAL)1 : (s < wave ? delta : (REAL)0);
             if (w > 0) {
-                const REAL dy = (REAL)m - centre, dx = (REAL)n - centre;
-                w *= exp(log_rho * sqrt(dx * dx + dy * dy));
+                const int a = m < Q ? Q - 1 - m : m - Q, c = n < Q ? Q - 1 - n : n - Q;
+                w *= T[a * Q + c];
             }
         }
         X[LL + i] = w;
