@@ -48,9 +48,10 @@
 // vector's W(l - k) and W(l + k) are 8 consecutive values, and the transforms take 8
 // frequencies at a time from twiddle tables. (Columns, not rows: a column of L candidates
 // fills whole vectors where L is a multiple of 8, a row's L / 2 + 1 never does; a thin
-// fill's 20 px windows hold 264 slots, not 320, its 16 px windows 144, not 256.) Each sum runs in the same
-// order as the scalar code's: with as many items, vectors give the scalar fill bit for bit
-// (the item count orders the plane's partial sums, a difference of rounding).
+// fill's 20 px windows hold 264 slots, not 320, its 16 px windows 144, not 256.) Each sum
+// runs in the same order as the scalar code's: with as many items, vectors give the scalar
+// fill bit for bit (the item count orders the plane's partial sums, a difference of
+// rounding).
 //
 // Local memory: X = (w (f - plane), w | W re, W im, columns WS apart); T = (row transforms, or
 // the picks' coefficients | qa, qb, qc, R re, R im (and, with vectors, the scores) on the
@@ -106,27 +107,18 @@
 #endif
 
 #if SPECTRAL_VW > 1
-// a vector's scores with its spare slots (half_x < 0) at -1, which never win
-#ifdef REAL_IS_DOUBLE
-#define SPARE_LOSES(score, half_x, j0) \
-    select((REALV)-1, (score), convert_long8(convert_int8(vload8(0, (half_x) + (j0))) >= 0))
-#else
-#define SPARE_LOSES(score, half_x, j0) \
-    select((REALV)-1, (score), convert_int8(vload8(0, (half_x) + (j0))) >= 0)
-#endif
-
 // a vector of 8 candidates' residual transform (rr, ri) stored at j0, their scores stored
-// in sc (spare slots losing) and folded into the lane-wise maximum top: the first pass and
-// every update after a pick score alike
+// in sc and folded into the lane-wise maximum top: the first pass and every update after a
+// pick score alike. A spare slot's score is NaN (its qa), which never wins: fmax keeps the
+// other operand, and NaN equals nothing.
 #define STORE_AND_SCORE(rr, ri, j0, top)                                                    \
     do {                                                                                  \
         vstore8((rr), 0, rre + (j0));                                                     \
         vstore8((ri), 0, rim + (j0));                                                     \
         const REALV score_ = (vload8(0, qa + (j0)) * (rr) + vload8(0, qb + (j0)) * (ri)) * (rr) \
                              + vload8(0, qc + (j0)) * (ri) * (ri);                        \
-        const REALV kept_ = SPARE_LOSES(score_, half_x, (j0));                            \
-        vstore8(kept_, 0, sc + (j0));                                                     \
-        (top) = fmax((top), kept_);                                                       \
+        vstore8(score_, 0, sc + (j0));                                                    \
+        (top) = fmax((top), score_);                                                      \
     } while (0)
 
 // (bs, bi): the largest of an item's scores sc (vectors lid, lid + GROUP, ... of nv), top
@@ -191,9 +183,6 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL pick_c[2];
     __local int pick_k[2];
     __local short half_y[SPECTRAL_SLOTS], half_x[SPECTRAL_SLOTS];
-#if SPECTRAL_VW > 1
-    __local short vec_x[SPECTRAL_SLOTS / SPECTRAL_VW];  // each vector's column kx
-#endif
     __local int picks[SPECTRAL_MAXK];
     __local REAL sums[9 * SPECTRAL_GROUP];
     __local REAL fit[3];
@@ -337,9 +326,6 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const int fy = ky <= L / 2 ? ky : ky - L;
                 const bool in = ky < L && (REAL)(fy * fy + kx * kx) <= limit * limit;
                 if (SPECTRAL_VW == 1 && !in) continue;
-#if SPECTRAL_VW > 1
-                if (ky % SPECTRAL_VW == 0) vec_x[count_h / SPECTRAL_VW] = (short)kx;
-#endif
                 half_y[count_h] = (short)ky;
                 half_x[count_h] = (short)(in ? kx : -1);
                 ++count_h;
@@ -367,7 +353,10 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
         const REAL prior = alpha == 0 ? (REAL)1 : power((REAL)1 - nu, alpha);
         const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L, k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
-        if (!(W0 > 0) || kx < 0) {  // kx < 0: a vector's spare slot
+        if (kx < 0) {  // a vector's spare slot: its score NaN, never the best
+            qa[j] = (REAL)NAN;
+            qb[j] = qc[j] = 0;
+        } else if (!(W0 > 0)) {
             qa[j] = qb[j] = qc[j] = 0;
         } else if (k2y == 0 && k2x == 0) {  // self-conjugate: one real coefficient
             qa[j] = prior / W0;
@@ -460,7 +449,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         barrier(FENCE);
         REALV top = -1;
         for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
-            const int j0 = 8 * v, ky = half_y[j0], kx = vec_x[v];  // 8 ky from ky
+            const int kx = v / (CS / 8), ky = 8 * v - kx * CS, j0 = 8 * v;  // 8 ky from ky
             REALV rr = 0, ri = 0;
             for (int m = 0; m < L; ++m) {
                 const REAL ar = rows[m * HS + kx], ai = rows[L * HS + m * HS + kx];
@@ -570,21 +559,27 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 // W's continued columns, and the scores' argmax in a pass of its own (a running
                 // argmax kept the compiler from vectorising the loop). The same arithmetic.
                 REALV top = -1;
-                for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
-                    const int j0 = 8 * v, ly = half_y[j0], lx = vec_x[v];
+                // column by column (CS / 8 vectors each), so that the column's offsets into
+                // W are found once; the item's vectors of a column, v = lid mod GROUP
+                for (int lx = 0, v0 = 0; v0 < NC / 8; ++lx, v0 += CS / 8) {
                     const int dx = lx - kx < 0 ? lx - kx + L : lx - kx;
-                    const int dm = dx * WS + ly - ky + L;  // lanes (ly - ky + i) mod L
-                    const REALV ar = vload8(0, wre + dm), ai = vload8(0, wim + dm);
-                    REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
-                    if (!self) {
-                        const int sx = lx + kx >= L ? lx + kx - L : lx + kx;
-                        const int dp = sx * WS + ly + ky;
-                        const REALV pr = vload8(0, wre + dp), pi = vload8(0, wim + dp);
-                        ur += cr * pr + ci * pi;
-                        ui += cr * pi - ci * pr;
+                    const int sx = lx + kx >= L ? lx + kx - L : lx + kx;
+                    const int dm0 = dx * WS - ky + L;  // + ly: lanes (ly - ky + i) mod L
+                    const int dp0 = sx * WS + ky;      // + ly: lanes ly + ky + i
+                    const int mine = (lid + SPECTRAL_GROUP - v0 % SPECTRAL_GROUP) % SPECTRAL_GROUP;
+                    for (int v = v0 + mine; v < v0 + CS / 8; v += SPECTRAL_GROUP) {
+                        const int j0 = 8 * v, ly = j0 - 8 * v0;
+                        const REALV ar = vload8(0, wre + dm0 + ly), ai = vload8(0, wim + dm0 + ly);
+                        REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
+                        if (!self) {
+                            const REALV pr = vload8(0, wre + dp0 + ly);
+                            const REALV pi = vload8(0, wim + dp0 + ly);
+                            ur += cr * pr + ci * pi;
+                            ui += cr * pi - ci * pr;
+                        }
+                        const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
+                        STORE_AND_SCORE(rr, ri, j0, top);
                     }
-                    const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
-                    STORE_AND_SCORE(rr, ri, j0, top);
                 }
                 first_best(sc, NC / 8, lid, top, &bs, &bi);
 #else
