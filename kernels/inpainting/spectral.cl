@@ -158,6 +158,17 @@ inline REAL power(const REAL x, const REAL alpha)
     return pow(x, alpha);
 }
 
+// x mod L for 0 <= x < 2 L^2 (L <= SPECTRAL_MAXL) without a division (the model's terms
+// take one each): the quotient from the float reciprocal inv_l is off by at most one, which
+// the two corrections mend (checked for every such x and L)
+inline int mod_l(const int x, const int L, const float inv_l)
+{
+    int r = x - (int)((float)x * inv_l) * L;
+    r += r < 0 ? L : 0;
+    r -= r >= L ? L : 0;
+    return r;
+}
+
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
 void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      __global const int* blocks, const int first, const int wave,
@@ -183,7 +194,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL pick_c[2];
     __local int pick_k[2];
     __local short half_y[SPECTRAL_SLOTS], half_x[SPECTRAL_SLOTS];
-    __local int picks[SPECTRAL_MAXK];
+    __local int picks[SPECTRAL_MAXK];  // ky 64 + kx of each pick (self-conjugate: -1 - that)
     __local REAL sums[9 * SPECTRAL_GROUP];
     __local REAL fit[3];
 
@@ -201,6 +212,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     const REAL two_pi_l = (REAL)6.283185307179586 / (REAL)L;
     const REAL centre = (REAL)0.5 * (REAL)(L - 1);
     const REAL log_rho = log(rho);
+    const float inv_l = 1.0f / (float)L;
     SPACE REAL* const rows = T;                 // row transforms; then the picks' coefficients
     SPACE REAL* const coef_r = T;
     SPACE REAL* const coef_i = T + SPECTRAL_MAXK;
@@ -538,7 +550,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         pick_k[1] = self;
                         pick_c[0] = gamma * cr;
                         pick_c[1] = gamma * ci;
-                        picks[it] = self ? -1 - (ky * L + kx) : ky * L + kx;
+                        picks[it] = self ? -1 - (ky * 64 + kx) : ky * 64 + kx;
                         coef_r[it] = gamma * cr;
                         coef_i[it] = gamma * ci;
                         // a step gamma along the best pair lowers the error by
@@ -630,8 +642,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             for (int t = 0; t < count; ++t) {
                 const int code = picks[t];
                 const int k = code < 0 ? -1 - code : code;
-                const int ky = k / L, kx = k - ky * L;
-                const int e = (ky * m + kx * n) % L;
+                const int ky = k >> 6, kx = k & 63;
+                const int e = mod_l(ky * m + kx * n, L, inv_l);
                 const REAL cr = coef_r[t], ci = coef_i[t];
                 g += code < 0 ? cr * tw[e] : 2 * (cr * tw[e] - ci * tw[SPECTRAL_MAXL + e]);
             }
