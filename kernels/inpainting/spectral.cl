@@ -158,15 +158,23 @@ inline REAL power(const REAL x, const REAL alpha)
     return pow(x, alpha);
 }
 
-// x mod L for 0 <= x < 2 L^2 (L <= SPECTRAL_MAXL) without a division (the model's terms
-// take one each): the quotient from the float reciprocal inv_l is off by at most one, which
-// the two corrections mend (checked for every such x and L)
-inline int mod_l(const int x, const int L, const float inv_l)
+// x / L, and x mod L in *rest, for 0 <= x < 2 L^2 (L <= SPECTRAL_MAXL) without a division
+// (a window's pixels and the model's terms take one each; PoCL's integer division costs
+// tens of cycles): the quotient from the float reciprocal inv_l is off by at most one,
+// which the two corrections mend (checked for every such x and L)
+inline int div_l(const int x, const int L, const float inv_l, int* rest)
 {
-    int r = x - (int)((float)x * inv_l) * L;
-    r += r < 0 ? L : 0;
-    r -= r >= L ? L : 0;
-    return r;
+    int q = (int)((float)x * inv_l), r = x - q * L;
+    if (r < 0) {
+        r += L;
+        --q;
+    }
+    if (r >= L) {
+        r -= L;
+        ++q;
+    }
+    *rest = r;
+    return q;
 }
 
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
@@ -258,7 +266,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     barrier(FENCE);
     // the weights, X[LL, 2 LL)
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
-        const int m = i / L, n = i - m * L;
+        int n;
+        const int m = div_l(i, L, inv_l, &n);
         const int y = oy + m, x = ox + n;
         REAL w = 0;
         if (y >= 0 && y < ny && x >= 0 && x < nx) {
@@ -348,11 +357,11 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     barrier(FENCE);
 #if SPECTRAL_VW > 1
     // W's columns continued past L, periodically (read by the picks' update only)
-    for (int i = lid; i < L * (WS - L); i += SPECTRAL_GROUP) {
-        const int y = i / (WS - L), x = L + i - y * (WS - L);
-        wre[y * WS + x] = wre[y * WS + x % L];
-        wim[y * WS + x] = wim[y * WS + x % L];
-    }
+    for (int y = lid; y < L; y += SPECTRAL_GROUP)
+        for (int x = L; x < WS; ++x) {  // (x - L: itself an original or continued value)
+            wre[y * WS + x] = wre[y * WS + x - L];
+            wim[y * WS + x] = wim[y * WS + x - L];
+        }
 #endif
     const int NC = pick_k[0];
     const REAL W0 = wre[0];
@@ -390,7 +399,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REAL acc[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};  // w, wu, wv, wuu, wuv, wvv, wf, wfu, wfv
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
             const REAL w = X[LL + i];
-            const int m = i / L, n = i - m * L;
+            int n;
+            const int m = div_l(i, L, inv_l, &n);
             const REAL f = w > 0 ? plane[(oy + m) * nx + ox + n] : (REAL)0;
             const REAL u = uv[m], v = uv[n];
             const REAL wf = w * f;
@@ -430,7 +440,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         barrier(FENCE);
         REAL e = 0;  // the weighted squared residual w (f - plane)^2 over the window
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
-            const int m = i / L, n = i - m * L;
+            int n;
+            const int m = div_l(i, L, inv_l, &n);
             const REAL u = uv[m], v = uv[n];
             const REAL r = X[i] - (fit[0] + fit[1] * u + fit[2] * v);
             const REAL wr = X[LL + i] * r;
@@ -643,7 +654,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const int code = picks[t];
                 const int k = code < 0 ? -1 - code : code;
                 const int ky = k >> 6, kx = k & 63;
-                const int e = mod_l(ky * m + kx * n, L, inv_l);
+                int e;
+                div_l(ky * m + kx * n, L, inv_l, &e);
                 const REAL cr = coef_r[t], ci = coef_i[t];
                 g += code < 0 ? cr * tw[e] : 2 * (cr * tw[e] - ci * tw[SPECTRAL_MAXL + e]);
             }
