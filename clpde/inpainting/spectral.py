@@ -84,12 +84,13 @@ MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP on GPUs (work_shape)
 CPU_VECTOR = 8  # its SPECTRAL_VW on CPUs: candidates per vector (the only width it takes)
 # its SPECTRAL_SCRATCH with vectors (the larger): the REALs of one work-group's windows and
-# transforms (W's rows continued to 2 MAXL + 8; R's rows and the candidates' rows rounded up
-# to whole vectors), which live in global memory where local memory is too small
+# transforms (W's columns continued to 2 MAXL + 8; R's rows and the candidates' columns
+# rounded up to whole vectors), which live in global memory where local memory is too small
 # (SPECTRAL_SPILL)
 _ROW = (MAXL // 2 + CPU_VECTOR) // CPU_VECTOR * CPU_VECTOR  # a half plane's row, in vectors
+_SLOTS = (MAXL // 2 + 1) * (-(-MAXL // CPU_VECTOR) * CPU_VECTOR)  # its columns, in vectors
 SCRATCH = 2 * MAXL * MAXL + 2 * MAXL * (2 * MAXL + CPU_VECTOR) + 2 * MAXL * _ROW
-SCRATCH += 6 * MAXL * _ROW
+SCRATCH += 6 * _SLOTS
 SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
 COLOURS = ("pca", "channels")
 THIN = 4  # px: damage this thin (half-thickness) takes thin_border (text, cracks, dust)

@@ -42,14 +42,18 @@
 // Work-group shape (the host's work_shape): on GPUs SPECTRAL_GROUP = 64 items share a block's
 // candidates, one at a time (SPECTRAL_VW = 1). On CPUs (SPECTRAL_GROUP = 1, SPECTRAL_VW = 8)
 // one item walks them in vectors of 8: PoCL runs a work-group's items one after the other,
-// and its compiler left the scalar loops unvectorised. There the candidates lie in rows of
-// whole vectors (spare slots, half_x -1, are updated but never scored), W's rows continue
-// periodically past L, so that a vector's W(l - k) and W(l + k) are 8 consecutive values, and
-// the transforms take 8 frequencies at a time from twiddle tables. Each sum runs in the same
-// order as the scalar code's: with as many items, vectors give the scalar fill bit for bit
-// (the item count orders the plane's partial sums, a difference of rounding).
+// and its compiler left the scalar loops unvectorised. There the candidates lie in columns
+// (one kx, ky from 0 to L - 1) of whole vectors (spare slots, half_x -1, are updated but
+// never scored), W is stored by columns, each continued periodically past L, so that a
+// vector's W(l - k) and W(l + k) are 8 consecutive values, and the transforms take 8
+// frequencies at a time from twiddle tables. (Columns, not rows: a column of L candidates
+// fills whole vectors where L is a multiple of 8, a row's L / 2 + 1 never does; a thin
+// fill's 20 px windows hold 264 slots, not 320, its 16 px windows 144, not 256.) Each sum
+// runs in the same order as the scalar code's: with as many items, vectors give the scalar
+// fill bit for bit (the item count orders the plane's partial sums, a difference of
+// rounding).
 //
-// Local memory: X = (w (f - plane), w | W re, W im, rows WS apart); T = (row transforms, or
+// Local memory: X = (w (f - plane), w | W re, W im, columns WS apart); T = (row transforms, or
 // the picks' coefficients | qa, qb, qc, R re, R im (and, with vectors, the scores) on the
 // candidates' slots). With one candidate at a time X and T are 31 KB in float, 62 KB in
 // double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
@@ -74,11 +78,13 @@
 #error "SPECTRAL_VW must be 1 or 8"
 #endif
 #define SPECTRAL_MAXH (SPECTRAL_MAXL * (SPECTRAL_MAXL / 2 + 1))  // the half plane's size
-// the candidates' slots: each row of the half plane rounded up to whole vectors
+// the candidates' slots: the half plane's columns (kx from 0 to L / 2), each rounded up to
+// whole vectors
 #define SPECTRAL_SLOTS \
-    (SPECTRAL_MAXL * ((SPECTRAL_MAXL / 2 + SPECTRAL_VW) / SPECTRAL_VW * SPECTRAL_VW))
-// W's row stride: with vectors, each row goes on past L (W periodic), so that a vector's
-// W(l - k) and W(l + k) are SPECTRAL_VW consecutive values
+    ((SPECTRAL_MAXL / 2 + 1) * ((SPECTRAL_MAXL + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW))
+// W's column stride (W is stored by columns: W(ky, kx) at kx W_STRIDE + ky): with vectors,
+// each column goes on past L (W periodic), so that a vector's W(l - k) and W(l + k) are
+// SPECTRAL_VW consecutive values
 #define W_STRIDE(L) (SPECTRAL_VW > 1 ? 2 * (L) + SPECTRAL_VW : (L))
 #define SPECTRAL_XN \
     (2 * SPECTRAL_MAXL * SPECTRAL_MAXL + 2 * SPECTRAL_MAXL * W_STRIDE(SPECTRAL_MAXL))
@@ -101,33 +107,25 @@
 #endif
 
 #if SPECTRAL_VW > 1
-// a vector's scores with its spare slots (half_x < 0) at -1, which never win
-#ifdef REAL_IS_DOUBLE
-#define SPARE_LOSES(score, half_x, j0) \
-    select((REALV)-1, (score), convert_long8(convert_int8(vload8(0, (half_x) + (j0))) >= 0))
-#else
-#define SPARE_LOSES(score, half_x, j0) \
-    select((REALV)-1, (score), convert_int8(vload8(0, (half_x) + (j0))) >= 0)
-#endif
-
 // a vector of 8 candidates' residual transform (rr, ri) stored at j0, their scores stored
-// in sc (spare slots losing) and folded into the lane-wise maximum top: the first pass and
-// every update after a pick score alike
+// in sc and folded into the lane-wise maximum top: the first pass and every update after a
+// pick score alike. A spare slot's score is NaN (its qa), which never wins: fmax keeps the
+// other operand, and NaN equals nothing.
 #define STORE_AND_SCORE(rr, ri, j0, top)                                                    \
     do {                                                                                  \
         vstore8((rr), 0, rre + (j0));                                                     \
         vstore8((ri), 0, rim + (j0));                                                     \
         const REALV score_ = (vload8(0, qa + (j0)) * (rr) + vload8(0, qb + (j0)) * (ri)) * (rr) \
                              + vload8(0, qc + (j0)) * (ri) * (ri);                        \
-        const REALV kept_ = SPARE_LOSES(score_, half_x, (j0));                            \
-        vstore8(kept_, 0, sc + (j0));                                                     \
-        (top) = fmax((top), kept_);                                                       \
+        vstore8(score_, 0, sc + (j0));                                                    \
+        (top) = fmax((top), score_);                                                      \
     } while (0)
 
 // (bs, bi): the largest of an item's scores sc (vectors lid, lid + GROUP, ... of nv), top
 // their lane-wise maximum, and the first slot that holds it; (-1, 0) where none exceeds -1.
 // The same choice as a running argmax (a larger score, or an equal one earlier, wins), in a
-// maximum the compiler vectorises and a search that ends at the first hit.
+// maximum the compiler vectorises and a search that ends at the first hit: vector by vector,
+// then in the vector that holds it.
 inline void first_best(SPACE const REAL* sc, const int nv, const int lid, const REALV top,
                        REAL* bs, int* bi)
 {
@@ -136,13 +134,15 @@ inline void first_best(SPACE const REAL* sc, const int nv, const int lid, const 
     *bs = -1;
     *bi = 0;
     if (!(m > -1)) return;
-    for (int v = lid; v < nv; v += SPECTRAL_GROUP)
+    for (int v = lid; v < nv; v += SPECTRAL_GROUP) {
+        if (!any(vload8(v, sc) == m)) continue;
         for (int j = 8 * v; j < 8 * v + 8; ++j)
             if (sc[j] == m) {
                 *bs = m;
                 *bi = j;
                 return;
             }
+    }
 }
 #endif
 
@@ -156,6 +156,25 @@ inline REAL power(const REAL x, const REAL alpha)
         return p;
     }
     return pow(x, alpha);
+}
+
+// x / L, and x mod L in *rest, for 0 <= x < 2 L^2 (L <= SPECTRAL_MAXL) without a division
+// (a window's pixels and the model's terms take one each; PoCL's integer division costs
+// tens of cycles): the quotient from the float reciprocal inv_l is off by at most one,
+// which the two corrections mend (checked for every such x and L)
+inline int div_l(const int x, const int L, const float inv_l, int* rest)
+{
+    int q = (int)((float)x * inv_l), r = x - q * L;
+    if (r < 0) {
+        r += L;
+        --q;
+    }
+    if (r >= L) {
+        r -= L;
+        ++q;
+    }
+    *rest = r;
+    return q;
 }
 
 __kernel __attribute__((reqd_work_group_size(SPECTRAL_GROUP, 1, 1)))
@@ -183,7 +202,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     __local REAL pick_c[2];
     __local int pick_k[2];
     __local short half_y[SPECTRAL_SLOTS], half_x[SPECTRAL_SLOTS];
-    __local int picks[SPECTRAL_MAXK];
+    __local int picks[SPECTRAL_MAXK];  // ky 64 + kx of each pick (self-conjugate: -1 - that)
     __local REAL sums[9 * SPECTRAL_GROUP];
     __local REAL fit[3];
 
@@ -201,6 +220,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     const REAL two_pi_l = (REAL)6.283185307179586 / (REAL)L;
     const REAL centre = (REAL)0.5 * (REAL)(L - 1);
     const REAL log_rho = log(rho);
+    const float inv_l = 1.0f / (float)L;
     SPACE REAL* const rows = T;                 // row transforms; then the picks' coefficients
     SPACE REAL* const coef_r = T;
     SPACE REAL* const coef_i = T + SPECTRAL_MAXK;
@@ -213,7 +233,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     SPACE REAL* const sc = rim + SPECTRAL_SLOTS;  // the candidates' scores
 #endif
     const int WS = W_STRIDE(L);
-    SPACE REAL* const wre = X + 2 * LL;  // W, rows WS apart
+    SPACE REAL* const wre = X + 2 * LL;  // W, columns WS apart
     SPACE REAL* const wim = wre + L * WS;
 
     for (int j = lid; j < L; j += SPECTRAL_GROUP) {
@@ -228,24 +248,34 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     // twc[n CS + k] = cos(2 pi k n / L) (and tws, sin), rows rounded up to whole vectors
     const int CS = (L + 7) / 8 * 8, HS = (H + 7) / 8 * 8;
     barrier(FENCE);
-    for (int i = lid; i < L * CS; i += SPECTRAL_GROUP) {
-        const int n = i / CS, k = i - n * CS;
-        const int t = (k * n) % L;
-        twc[i] = tw[t];
-        tws[i] = tw[SPECTRAL_MAXL + t];
-    }
+    for (int n = lid; n < L; n += SPECTRAL_GROUP)  // k n mod L by steps of n: no division
+        for (int k = 0, t = 0; k < CS; ++k, t = t + n < L ? t + n : t + n - L) {
+            twc[n * CS + k] = tw[t];
+            tws[n * CS + k] = tw[SPECTRAL_MAXL + t];
+        }
 #endif
+    // rho^d, d the distance to the window's centre, on a quarter of the window (d is
+    // symmetric about the centre: the same values for a quarter of the exponentials), in T
+    // until W's transform
+    const int Q = L / 2;
+    for (int i = lid; i < Q * Q; i += SPECTRAL_GROUP) {
+        const int a = i / Q, c = i - a * Q;
+        const REAL dy = (REAL)(Q + a) - centre, dx = (REAL)(Q + c) - centre;
+        T[i] = exp(log_rho * sqrt(dx * dx + dy * dy));
+    }
+    barrier(FENCE);
     // the weights, X[LL, 2 LL)
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
-        const int m = i / L, n = i - m * L;
+        int n;
+        const int m = div_l(i, L, inv_l, &n);
         const int y = oy + m, x = ox + n;
         REAL w = 0;
         if (y >= 0 && y < ny && x >= 0 && x < nx) {
             const int s = state[y * nx + x];
             w = s < 0 ? (REAL)1 : (s < wave ? delta : (REAL)0);
             if (w > 0) {
-                const REAL dy = (REAL)m - centre, dx = (REAL)n - centre;
-                w *= exp(log_rho * sqrt(dx * dx + dy * dy));
+                const int a = m < Q ? Q - 1 - m : m - Q, c = n < Q ? Q - 1 - n : n - Q;
+                w *= T[a * Q + c];
             }
         }
         X[LL + i] = w;
@@ -267,17 +297,17 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     }
     barrier(FENCE);
     for (int i = lid; i < L * (CS / 8); i += SPECTRAL_GROUP) {
-        const int ky = i / (CS / 8), k0 = 8 * (i - ky * (CS / 8));
+        const int kx = i / (CS / 8), k0 = 8 * (i - kx * (CS / 8));  // 8 ky from k0
         REALV wr = 0, wi = 0;
-        for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
-            const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
-            const REALV a = vload8(0, T + m * CS + k0), b = vload8(0, T + L * CS + m * CS + k0);
+        for (int m = 0; m < L; ++m) {
+            const REAL a = T[m * CS + kx], b = T[L * CS + m * CS + kx];
+            const REALV c = vload8(0, twc + m * CS + k0), s = vload8(0, tws + m * CS + k0);
             wr += a * c + b * s;
             wi += b * c - a * s;
         }
-        // lanes past L land in the rows' continuation, written after the next barrier
-        vstore8(wr, 0, wre + ky * WS + k0);
-        vstore8(wi, 0, wim + ky * WS + k0);
+        // lanes past L land in the columns' continuation, written after the next barrier
+        vstore8(wr, 0, wre + kx * WS + k0);
+        vstore8(wi, 0, wim + kx * WS + k0);
     }
 #else
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
@@ -301,23 +331,24 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             wr += T[q] * c + T[LL + q] * s;
             wi += T[LL + q] * c - T[q] * s;
         }
-        wre[ky * WS + kx] = wr;
-        wim[ky * WS + kx] = wi;
+        wre[kx * WS + ky] = wr;
+        wim[kx * WS + ky] = wi;
     }
 #endif
-    // the candidates, row by row (|k| <= limit: kx from 0 to the row's last), each row
-    // rounded up to whole vectors by slots that are never scored (half_x -1)
+    // the candidates (|k| <= limit), column by column: kx from 0 to L / 2, ky from 0 to
+    // L - 1. With vectors each column is rounded up to whole vectors, and its slots past L or
+    // out of the disc are spare (half_x -1, never scored); without, they are left out.
     if (lid == 0) {
         const REAL limit = cutoff * (REAL)0.5 * (REAL)L;
+        const int CL = (L + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW;
         int count_h = 0;
-        for (int ky = 0; ky < L; ++ky) {
-            const int fy = ky <= L / 2 ? ky : ky - L;
-            int n = 0;
-            while (n < H && (REAL)(fy * fy + n * n) <= limit * limit) ++n;
-            const int slots = (n + SPECTRAL_VW - 1) / SPECTRAL_VW * SPECTRAL_VW;
-            for (int kx = 0; kx < slots; ++kx) {
+        for (int kx = 0; kx < H && (REAL)(kx * kx) <= limit * limit; ++kx) {
+            for (int ky = 0; ky < CL; ++ky) {
+                const int fy = ky <= L / 2 ? ky : ky - L;
+                const bool in = ky < L && (REAL)(fy * fy + kx * kx) <= limit * limit;
+                if (SPECTRAL_VW == 1 && !in) continue;
                 half_y[count_h] = (short)ky;
-                half_x[count_h] = (short)(kx < n ? kx : -1);
+                half_x[count_h] = (short)(in ? kx : -1);
                 ++count_h;
             }
         }
@@ -325,12 +356,12 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     }
     barrier(FENCE);
 #if SPECTRAL_VW > 1
-    // W's rows continued past L, periodically (read by the picks' update only)
-    for (int i = lid; i < L * (WS - L); i += SPECTRAL_GROUP) {
-        const int y = i / (WS - L), x = L + i - y * (WS - L);
-        wre[y * WS + x] = wre[y * WS + x % L];
-        wim[y * WS + x] = wim[y * WS + x % L];
-    }
+    // W's columns continued past L, periodically (read by the picks' update only)
+    for (int y = lid; y < L; y += SPECTRAL_GROUP)
+        for (int x = L; x < WS; ++x) {  // (x - L: itself an original or continued value)
+            wre[y * WS + x] = wre[y * WS + x - L];
+            wim[y * WS + x] = wim[y * WS + x - L];
+        }
 #endif
     const int NC = pick_k[0];
     const REAL W0 = wre[0];
@@ -343,13 +374,16 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         const REAL nu = fmin(sqrt(fy * fy + (REAL)(kx * kx)) * inv_kmax, (REAL)1);
         const REAL prior = alpha == 0 ? (REAL)1 : power((REAL)1 - nu, alpha);
         const int k2y = 2 * ky < L ? 2 * ky : 2 * ky - L, k2x = 2 * kx < L ? 2 * kx : 2 * kx - L;
-        if (!(W0 > 0) || kx < 0) {  // kx < 0: a vector's spare slot
+        if (kx < 0) {  // a vector's spare slot: its score NaN, never the best
+            qa[j] = (REAL)NAN;
+            qb[j] = qc[j] = 0;
+        } else if (!(W0 > 0)) {
             qa[j] = qb[j] = qc[j] = 0;
         } else if (k2y == 0 && k2x == 0) {  // self-conjugate: one real coefficient
             qa[j] = prior / W0;
             qb[j] = qc[j] = 0;
         } else {
-            const REAL vr = wre[k2y * WS + k2x], vi = wim[k2y * WS + k2x];
+            const REAL vr = wre[k2x * WS + k2y], vi = wim[k2x * WS + k2y];
             const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi), (REAL)1e-3 * W0 * W0);
             const REAL pd = prior / den;
             qa[j] = 2 * (W0 - vr) * pd;
@@ -365,7 +399,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REAL acc[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};  // w, wu, wv, wuu, wuv, wvv, wf, wfu, wfv
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
             const REAL w = X[LL + i];
-            const int m = i / L, n = i - m * L;
+            int n;
+            const int m = div_l(i, L, inv_l, &n);
             const REAL f = w > 0 ? plane[(oy + m) * nx + ox + n] : (REAL)0;
             const REAL u = uv[m], v = uv[n];
             const REAL wf = w * f;
@@ -405,7 +440,8 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         barrier(FENCE);
         REAL e = 0;  // the weighted squared residual w (f - plane)^2 over the window
         for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
-            const int m = i / L, n = i - m * L;
+            int n;
+            const int m = div_l(i, L, inv_l, &n);
             const REAL u = uv[m], v = uv[n];
             const REAL r = X[i] - (fit[0] + fit[1] * u + fit[2] * v);
             const REAL wr = X[LL + i] * r;
@@ -436,12 +472,11 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         barrier(FENCE);
         REALV top = -1;
         for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
-            const int j0 = 8 * v, ky = half_y[j0], kx = half_x[j0];
+            const int kx = v / (CS / 8), ky = 8 * v - kx * CS, j0 = 8 * v;  // 8 ky from ky
             REALV rr = 0, ri = 0;
-            for (int m = 0, t = 0; m < L; ++m, t = t + ky < L ? t + ky : t + ky - L) {
-                const REAL c = tw[t], s = tw[SPECTRAL_MAXL + t];
-                const REALV ar = vload8(0, rows + m * HS + kx);
-                const REALV ai = vload8(0, rows + L * HS + m * HS + kx);
+            for (int m = 0; m < L; ++m) {
+                const REAL ar = rows[m * HS + kx], ai = rows[L * HS + m * HS + kx];
+                const REALV c = vload8(0, twc + m * CS + ky), s = vload8(0, tws + m * CS + ky);
                 rr += ar * c + ai * s;
                 ri += ai * c - ar * s;
             }
@@ -508,7 +543,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         cr = rr / W0;
                         gain = rr * cr;
                     } else {
-                        const REAL vr = wre[k2y * WS + k2x], vi = wim[k2y * WS + k2x];
+                        const REAL vr = wre[k2x * WS + k2y], vi = wim[k2x * WS + k2y];
                         const REAL den = fmax(W0 * W0 - (vr * vr + vi * vi),
                                               (REAL)1e-3 * W0 * W0);
                         cr = (rr * W0 - (vr * rr + vi * ri)) / den;
@@ -526,7 +561,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                         pick_k[1] = self;
                         pick_c[0] = gamma * cr;
                         pick_c[1] = gamma * ci;
-                        picks[it] = self ? -1 - (ky * L + kx) : ky * L + kx;
+                        picks[it] = self ? -1 - (ky * 64 + kx) : ky * 64 + kx;
                         coef_r[it] = gamma * cr;
                         coef_i[it] = gamma * ci;
                         // a step gamma along the best pair lowers the error by
@@ -542,26 +577,32 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 const REAL cr = pick_c[0], ci = pick_c[1];
                 const int self = pick_k[1];
 #if SPECTRAL_VW > 1
-                // CPUs: vectors of 8 candidates of one row (item lid takes vectors lid, lid +
-                // GROUP, ...), whose W(l - k) and W(l + k) are 8 consecutive values of W's
-                // continued rows, and the scores' argmax in a pass of its own (a running
+                // CPUs: vectors of 8 candidates of one column (item lid takes vectors lid,
+                // lid + GROUP, ...), whose W(l - k) and W(l + k) are 8 consecutive values of
+                // W's continued columns, and the scores' argmax in a pass of its own (a running
                 // argmax kept the compiler from vectorising the loop). The same arithmetic.
                 REALV top = -1;
-                for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
-                    const int j0 = 8 * v, ly = half_y[j0], lx = half_x[j0];
-                    const int dy = ly - ky < 0 ? ly - ky + L : ly - ky;
-                    const int dm = dy * WS + lx - kx + L;  // lanes (lx - kx + i) mod L
-                    const REALV ar = vload8(0, wre + dm), ai = vload8(0, wim + dm);
-                    REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
-                    if (!self) {
-                        const int sy = ly + ky >= L ? ly + ky - L : ly + ky;
-                        const int dp = sy * WS + lx + kx;
-                        const REALV pr = vload8(0, wre + dp), pi = vload8(0, wim + dp);
-                        ur += cr * pr + ci * pi;
-                        ui += cr * pi - ci * pr;
+                // column by column (CS / 8 vectors each), so that the column's offsets into
+                // W are found once; the item's vectors of a column, v = lid mod GROUP
+                for (int lx = 0, v0 = 0; v0 < NC / 8; ++lx, v0 += CS / 8) {
+                    const int dx = lx - kx < 0 ? lx - kx + L : lx - kx;
+                    const int sx = lx + kx >= L ? lx + kx - L : lx + kx;
+                    const int dm0 = dx * WS - ky + L;  // + ly: lanes (ly - ky + i) mod L
+                    const int dp0 = sx * WS + ky;      // + ly: lanes ly + ky + i
+                    const int mine = (lid + SPECTRAL_GROUP - v0 % SPECTRAL_GROUP) % SPECTRAL_GROUP;
+                    for (int v = v0 + mine; v < v0 + CS / 8; v += SPECTRAL_GROUP) {
+                        const int j0 = 8 * v, ly = j0 - 8 * v0;
+                        const REALV ar = vload8(0, wre + dm0 + ly), ai = vload8(0, wim + dm0 + ly);
+                        REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
+                        if (!self) {
+                            const REALV pr = vload8(0, wre + dp0 + ly);
+                            const REALV pi = vload8(0, wim + dp0 + ly);
+                            ur += cr * pr + ci * pi;
+                            ui += cr * pi - ci * pr;
+                        }
+                        const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
+                        STORE_AND_SCORE(rr, ri, j0, top);
                     }
-                    const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
-                    STORE_AND_SCORE(rr, ri, j0, top);
                 }
                 first_best(sc, NC / 8, lid, top, &bs, &bi);
 #else
@@ -572,14 +613,14 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     int dy = ly - ky, dx = lx - kx;
                     dy += dy < 0 ? L : 0;
                     dx += dx < 0 ? L : 0;
-                    const int dm = dy * WS + dx;
+                    const int dm = dx * WS + dy;
                     const REAL ar = wre[dm], ai = wim[dm];
                     REAL ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;  // c W(l - k)
                     if (!self) {
                         int sy = ly + ky, sx = lx + kx;
                         sy -= sy >= L ? L : 0;
                         sx -= sx >= L ? L : 0;
-                        const int dp = sy * WS + sx;
+                        const int dp = sx * WS + sy;
                         const REAL pr = wre[dp], pi = wim[dp];
                         ur += cr * pr + ci * pi;  // conj(c) W(l + k)
                         ui += cr * pi - ci * pr;
@@ -612,8 +653,9 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             for (int t = 0; t < count; ++t) {
                 const int code = picks[t];
                 const int k = code < 0 ? -1 - code : code;
-                const int ky = k / L, kx = k - ky * L;
-                const int e = (ky * m + kx * n) % L;
+                const int ky = k >> 6, kx = k & 63;
+                int e;
+                div_l(ky * m + kx * n, L, inv_l, &e);
                 const REAL cr = coef_r[t], ci = coef_i[t];
                 g += code < 0 ? cr * tw[e] : 2 * (cr * tw[e] - ci * tw[SPECTRAL_MAXL + e]);
             }

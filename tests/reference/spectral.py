@@ -44,9 +44,9 @@ def fit_block(
         r = R[:, :H]
         c_pair = (r * W0 - V * np.conj(r)) / den
         gain = np.where(self_conj, r.real**2 / W0, 2 * (np.conj(c_pair) * r).real)
-        # the first of equal scores, as the kernel
-        j = int(np.argmax(np.where(candidate, gain * prior, -np.inf).ravel()))
-        a, b = divmod(j, H)
+        # the first of equal scores in the kernel's order, column by column (kx, then ky)
+        j = int(np.argmax(np.where(candidate, gain * prior, -np.inf).T.ravel()))
+        b, a = divmod(j, L)
         g = gain[a, b]
         if first is None:
             first = g
