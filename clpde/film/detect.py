@@ -45,6 +45,7 @@ from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
 from ._planes import film_planes, grey
+from ._refine import refine_blotches
 from ._regions import (
     RESIDUAL_UNITS,
     _local_noise_check,
@@ -240,13 +241,14 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     }
 
 
-def film_scores(G: np.ndarray, device, radius: int) -> dict:
+def film_scores(G: np.ndarray, device, radius: int, motion: FilmMotion | None = None) -> dict:
     """The per-pixel evidence of every frame: blotch scores zb, region scores zr, line
     scores with their continuity zc, temporal residuals, noise levels and where both sides
     are trusted (the thresholds come after, in film_kinds)."""
     T, ny, nx = G.shape
     kern = LineKernels(get_runtime(device))
-    motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
+    if motion is None:
+        motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
     stack, per = map_stacked(lambda t: frame_scores(motion, t, radius), range(T), keys)
     stack["flows"] = [p["flows"] for p in per]
@@ -260,7 +262,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
             for t, s in enumerate(sigmas)
         ]
     )
-    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
+    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius, "motion": motion}
 
 
 def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
@@ -577,6 +579,12 @@ def detect_defects(
             scores = film_scores(G, device, int(radius))
             bar.update(1)
             kinds = film_kinds(G, scores, bthr, sthr, int(search), int(min_length))
+
+            def rescore(motion: FilmMotion) -> np.ndarray:
+                again = film_scores(G, device, int(radius), motion)
+                return film_kinds(G, again, bthr, sthr, int(search), int(min_length))
+
+            kinds = refine_blotches(G, kinds, scores["motion"], rescore, BLOTCH)
             bar.update(1)
     kinds = _grow_kinds(kinds, px)
     if layout.photo:
