@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from scipy import ndimage
 
 from ..motion.dis import to_u8
 from ._morph import dilate
@@ -22,6 +23,8 @@ from ._motion import FilmMotion, map_frames
 # How far from a first-pass blotch the second pass's kinds are taken (pixels): the halo
 # lies within 3 px of the damage; the flow's disturbance reaches a little further.
 REFINE_GROW = 6
+# First-pass blotch pixels within this many pixels of a second-pass blotch are kept.
+KEEP_TOUCHING = 1
 # The rough fill covers the blotch and its rim (the grown region's soft edge).
 ROUGH_GROW = 2
 
@@ -63,5 +66,16 @@ def refine_blotches(
         if len(key) == 2 and not hit.intersection(key):
             motion._kept[key] = flow
     again = rescore(motion)
-    near = np.stack([dilate(f, REFINE_GROW) if f.any() else f for f in found])
-    return np.where(near, again, kinds).astype(kinds.dtype)
+    out = kinds.copy()
+    for t in hit:
+        # a first-pass blotch the second pass finds nothing of keeps its first-pass kinds
+        # (the second pass's flows may miss it for other reasons); one it confirms takes
+        # the second pass's kinds around it
+        labels, _ = ndimage.label(dilate(found[t], REFINE_GROW))
+        confirmed = np.unique(labels[again[t] == blotch])
+        take = np.isin(labels, confirmed[confirmed > 0])
+        out[t][take] = again[t][take]
+        # a first-pass pixel touching the second pass's blotch stays: the halo lies beyond
+        keep = take & found[t] & dilate(again[t] == blotch, KEEP_TOUCHING) & (out[t] == 0)
+        out[t][keep] = blotch
+    return out
