@@ -23,8 +23,6 @@ from ._motion import FilmMotion, map_frames
 # How far from a first-pass blotch the second pass's kinds are taken (pixels): the halo
 # lies within 3 px of the damage; the flow's disturbance reaches a little further.
 REFINE_GROW = 6
-# First-pass blotch pixels within this many pixels of a second-pass blotch are kept.
-KEEP_TOUCHING = 1
 # The rough fill covers the blotch and its rim (the grown region's soft edge).
 ROUGH_GROW = 2
 
@@ -50,11 +48,11 @@ def refine_blotches(
     G: np.ndarray,
     kinds: np.ndarray,
     first: FilmMotion,
-    rescore: Callable[[FilmMotion], np.ndarray],
+    rescore: Callable[[FilmMotion], tuple[np.ndarray, np.ndarray]],
     blotch: int,
 ) -> np.ndarray:
     """kinds (T, H, W) with the kinds near its `blotch` pixels found again by
-    rescore(motion), motion's flows estimated on the frames with those blotches filled
+    rescore(motion) (the kinds, and where the residual is strong), motion's flows estimated on the frames with those blotches filled
     roughly (reusing `first`'s flows between frames without any)."""
     found = kinds == blotch
     hit = {t for t in range(len(G)) if found[t].any()}
@@ -65,7 +63,7 @@ def refine_blotches(
     for key, flow in list(first._kept.items()):
         if len(key) == 2 and not hit.intersection(key):
             motion._kept[key] = flow
-    again = rescore(motion)
+    again, strong = rescore(motion)
     out = kinds.copy()
     for t in hit:
         # a first-pass blotch the second pass finds nothing of keeps its first-pass kinds
@@ -75,7 +73,8 @@ def refine_blotches(
         confirmed = np.unique(labels[again[t] == blotch])
         take = np.isin(labels, confirmed[confirmed > 0])
         out[t][take] = again[t][take]
-        # a first-pass pixel touching the second pass's blotch stays: the halo lies beyond
-        keep = take & found[t] & dilate(again[t] == blotch, KEEP_TOUCHING) & (out[t] == 0)
+        # a first-pass pixel whose residual stays beyond the low level with the repaired
+        # flows stays: a halo's residual was the flow's error, and goes with it
+        keep = take & found[t] & strong[t] & (out[t] == 0)
         out[t][keep] = blotch
     return out

@@ -580,9 +580,10 @@ def detect_defects(
             bar.update(1)
             kinds = film_kinds(G, scores, bthr, sthr, int(search), int(min_length))
 
-            def rescore(motion: FilmMotion) -> np.ndarray:
-                again = film_scores(G, device, int(radius), motion)
-                return film_kinds(G, again, bthr, sthr, int(search), int(min_length))
+            def rescore(motion: FilmMotion) -> tuple[np.ndarray, np.ndarray]:
+                sc = film_scores(G, device, int(radius), motion)
+                strong = np.abs(sc["res"]) > HYSTERESIS_LOW * bthr * sc["sigma"][:, None, None]
+                return film_kinds(G, sc, bthr, sthr, int(search), int(min_length)), strong
 
             kinds = refine_blotches(G, kinds, scores["motion"], rescore, BLOTCH)
             bar.update(1)
