@@ -52,8 +52,9 @@ def refine_blotches(
     blotch: int,
 ) -> np.ndarray:
     """kinds (T, H, W) with the kinds near its `blotch` pixels found again by
-    rescore(motion) (the kinds, and where the residual is strong), motion's flows estimated on the frames with those blotches filled
-    roughly (reusing `first`'s flows between frames without any)."""
+    rescore(motion) (the kinds, and where the residual is strong), motion's flows
+    estimated on the frames with those blotches filled roughly (reusing `first`'s flows
+    between frames without any)."""
     found = kinds == blotch
     hit = {t for t in range(len(G)) if found[t].any()}
     if not hit:

@@ -582,7 +582,7 @@ def detect_defects(
 
             def rescore(motion: FilmMotion) -> tuple[np.ndarray, np.ndarray]:
                 sc = film_scores(G, device, int(radius), motion)
-                strong = np.abs(sc["res"]) > HYSTERESIS_LOW * bthr * sc["sigma"][:, None, None]
+                strong = np.abs(sc["res"]) > bthr * sc["sigma"][:, None, None]
                 return film_kinds(G, sc, bthr, sthr, int(search), int(min_length)), strong
 
             kinds = refine_blotches(G, kinds, scores["motion"], rescore, BLOTCH)
