@@ -45,7 +45,6 @@ from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
 from ._planes import film_planes, grey
-from ._refine import refine_blotches
 from ._regions import (
     RESIDUAL_UNITS,
     _local_noise_check,
@@ -241,14 +240,13 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     }
 
 
-def film_scores(G: np.ndarray, device, radius: int, motion: FilmMotion | None = None) -> dict:
+def film_scores(G: np.ndarray, device, radius: int) -> dict:
     """The per-pixel evidence of every frame: blotch scores zb, region scores zr, line
     scores with their continuity zc, temporal residuals, noise levels and where both sides
     are trusted (the thresholds come after, in film_kinds)."""
     T, ny, nx = G.shape
     kern = LineKernels(get_runtime(device))
-    if motion is None:
-        motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
+    motion = FilmMotion(G, keep=True)  # the next window re-reads its context's flows
     keys = ("d", "d_any", "any_in", "spread", "zr", "res", "least", "both", "n")
     stack, per = map_stacked(lambda t: frame_scores(motion, t, radius), range(T), keys)
     stack["flows"] = [p["flows"] for p in per]
@@ -262,7 +260,7 @@ def film_scores(G: np.ndarray, device, radius: int, motion: FilmMotion | None = 
             for t, s in enumerate(sigmas)
         ]
     )
-    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius, "motion": motion}
+    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
 
 
 def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
@@ -579,13 +577,6 @@ def detect_defects(
             scores = film_scores(G, device, int(radius))
             bar.update(1)
             kinds = film_kinds(G, scores, bthr, sthr, int(search), int(min_length))
-
-            def rescore(motion: FilmMotion) -> tuple[np.ndarray, np.ndarray]:
-                sc = film_scores(G, device, int(radius), motion)
-                strong = np.abs(sc["res"]) > bthr * sc["sigma"][:, None, None]
-                return film_kinds(G, sc, bthr, sthr, int(search), int(min_length)), strong
-
-            kinds = refine_blotches(G, kinds, scores["motion"], rescore, BLOTCH)
             bar.update(1)
     kinds = _grow_kinds(kinds, px)
     if layout.photo:

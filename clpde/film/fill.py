@@ -23,11 +23,11 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import noise_std
 from ..inpainting.api import inpaint
+from ..motion.dis import to_u8
 from ._compensate import fit_gain
 from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
-from ._refine import rough
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
 from .lines import LINE_COVER
 
@@ -85,6 +85,23 @@ def _neighbour_mean(planes: np.ndarray, m: np.ndarray, t: int, radius: int) -> n
         f"frame {t} is marked damaged everywhere and its neighbours within {radius} frames "
         "are damaged too, so nothing is left to fill it from; check the masks or raise radius"
     )
+
+
+def _rough(G: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """The grey frames with their damage filled roughly (OpenCV's Telea), for the flows
+    only: DIS cannot be told to ignore pixels, and a blotch would drag the flow around it."""
+    import cv2
+
+    out = G.copy()
+
+    def one(t: int) -> None:  # the frames in threads: each writes its own plane
+        hole = m[t] > 0
+        if hole.any():
+            u8 = to_u8(G[t])
+            out[t] = cv2.inpaint(u8, hole.astype(np.uint8), 3, cv2.INPAINT_TELEA) / np.float32(255)
+
+    map_frames(one, range(len(G)))
+    return out
 
 
 def _temporal(
@@ -441,7 +458,7 @@ def inpaint_video(
     levels = map_frames(lambda t: noise_std(G[t].astype(np.float64)), damaged)
     noise = dict(zip(damaged, levels, strict=True))
     if T > 1 and damaged:
-        motion = FilmMotion(G, rough(G, m))
+        motion = FilmMotion(G, _rough(G, m))
         hwc = np.ascontiguousarray(np.moveaxis(planes, 1, -1))  # each frame warped 2-4 times
         # the damaged frames in threads: each reads the shared flows and the input only
         results = map_frames(
