@@ -66,7 +66,6 @@ SCRATCH_THRESHOLD = 3.0  # robust noise units of the line response
 PHOTO_SPECK_THRESHOLD = 12.0  # noise units of the top-hats (single images)
 GAMMA = 2.0  # how much the neighbours' disagreement raises the blotch scale (calibrated)
 CANDIDATE_THRESHOLD = 3.0  # spatial line candidates kept out of the flows
-FIRST_PASS_LEVEL = 2.0  # blotch score of the first pass masked out of the second's flows
 REGION_HALF = 2  # the region evidence's square: 5x5
 # The smallest blotch: SMALLEST pixels, and CELLS of the grain's correlation areas (measured
 # per frame, film_scores): a region of a pixel or two, or smaller than the grain's clumps, is
