@@ -90,11 +90,15 @@ def seen_still(
         return seen
     r = SEEN_REACH
     h, w = after.shape[1:]
-    for dy in range(-r, r + 1):
-        for dx in range(-r, r + 1):
-            near = carried[:, r + dy : r + dy + h, r + dx : r + dx + w]
-            miss = ndimage.uniform_filter(np.abs(after - near).sum(axis=0), 3)
-            seen &= miss > SEEN_MISS * expected
+    shifts = [(dy, dx) for dy in range(-r, r + 1) for dx in range(-r, r + 1)]
+    misses = np.stack(
+        [
+            np.abs(after - carried[:, r + dy : r + dy + h, r + dx : r + dx + w]).sum(axis=0)
+            for dy, dx in shifts
+        ]
+    )
+    miss = ndimage.uniform_filter(misses, (1, 3, 3)).min(axis=0)
+    seen &= miss > SEEN_MISS * expected
     return seen | (still & hidden) if hidden is not None else seen
 
 
