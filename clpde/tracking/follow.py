@@ -13,9 +13,13 @@ the frame. The whole shape is the result, unless the evidence says that the part
 is hidden by something still (occlusion.py): then the prediction, laid on the visible
 outline, is kept as the whole shape, the motion is searched near the velocity, and the
 result is the whole shape's visible part (the pieces that look like the object), so that
-the contour grows back where the object reappears and leaves nothing on the occluder. A
-moving object's match far off its velocity is taken only where it is clearly better than
-the best near it (a bar over part of the object lowers the true match).
+the contour grows back where the object reappears and leaves nothing on the occluder.
+Pixels of the prediction that the frames show still while the object moved, and that
+its motion does not explain (occlusion.seen_still), are an occluder even where they look
+like the object: carved from the result where the appearance left them, remembered while
+they stay still, and kept out of the next frame's match. A moving object's match far off
+its velocity is taken only where it is clearly better than the best near it (a bar over
+part of the object lowers the true match).
 """
 
 from __future__ import annotations

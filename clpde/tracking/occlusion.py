@@ -8,6 +8,10 @@ moved (an occluder's edge does not move with the object; a shrinking or deformin
 object's outline does). While hidden, the whole shape is carried by the motion fitted on
 the visible part and only its visible part is the result (`visible_pieces`): pieces that
 look like the object within the whole shape, none on the occluder.
+
+Where the appearance cannot tell the occluder from the object (grey footage: a bar of the
+object's grey level), the frames can (`seen_still`): an occluder's pixels stay the same
+from one frame to the next while the object's motion does not explain them.
 """
 
 from __future__ import annotations
