@@ -46,8 +46,9 @@ def test_disc_passes_behind_a_bar_and_out_again(width, radius, speed):
 
 def _grey_look_alike_bar(seed, speed=4, width=6, radius=9):
     """Grey frames: a textured disc over a smooth dark ground passes behind a still bar of
-    its own grey level and texture (the appearance cannot tell them apart); the truth is
-    the disc's visible part."""
+    its mean grey level and texture scale, at twice its contrast (the grey histograms
+    overlap: the appearance barely tells them apart); the truth is the disc's visible
+    part."""
     rng = np.random.default_rng(seed)
     yy, xx = np.mgrid[:H, :W]
     bar = np.zeros((H, W), bool)
