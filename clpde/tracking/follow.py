@@ -13,9 +13,13 @@ the frame. The whole shape is the result, unless the evidence says that the part
 is hidden by something still (occlusion.py): then the prediction, laid on the visible
 outline, is kept as the whole shape, the motion is searched near the velocity, and the
 result is the whole shape's visible part (the pieces that look like the object), so that
-the contour grows back where the object reappears and leaves nothing on the occluder. A
-moving object's match far off its velocity is taken only where it is clearly better than
-the best near it (a bar over part of the object lowers the true match).
+the contour grows back where the object reappears and leaves nothing on the occluder.
+Pixels of the prediction that the frames show still while the object moved, and that
+its motion does not explain (occlusion.seen_still), are an occluder even where they look
+like the object: carved from the result where the appearance left them, remembered while
+they stay still, and kept out of the next frame's match. A moving object's match far off
+its velocity is taken only where it is clearly better than the best near it (a bar over
+part of the object lowers the true match).
 """
 
 from __future__ import annotations
@@ -40,10 +44,12 @@ from .levelset import LevelSet, signed_distance
 from .motion_filter import local_contrast
 from .occlusion import (
     LOST,
+    SEEN_REACH,
     STILL,
     align,
     hidden_by_still,
     lost_part,
+    seen_still,
     still_share,
     visible_pieces,
 )
@@ -52,6 +58,11 @@ from .occlusion import (
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
 # The largest change of velocity (px a frame) searched while the object is hidden in part.
 HIDDEN_CHANGE = 3.0  # chosen on the calibration half: occlusion 0.565 with it, 0.533 without
+# A hidden object's fitted motion farther than this (px a frame) from its velocity is not
+# taken (the fit on a sliver runs off; a still bar drags it): the velocity is kept.
+# Chosen on the calibration half's occlusions: 2 and 4 the same with the noise over the
+# frame, 4 lost occlude-2 (0.933 -> 0.165) with the noise over the box.
+HIDDEN_RUNOFF = 2.0
 # A moving object's (JUMP_MOVING px a frame or more) match more than JUMP px off its
 # velocity is taken only where its correlation beats the best within JUMP px of the
 # velocity by JUMP_MARGIN (`_clearly_better`).
@@ -97,6 +108,18 @@ VISIBLE = 0.3
 # half-width (a shadow or a flicker does not move that match; object_motion's `light`);
 # 0: on the frames themselves only.
 MATCH_CONTRAST = 4
+# Occluders seen by the frames, not the appearance (occlusion.seen_still; in grey footage
+# a bar can look like the object): looked for where the object moved at least SEEN_MOVED
+# px (a bar drags the measured motion of a 3-6 px a frame object below 3 px); pixels whose
+# appearance's log odds of the surroundings is below -SEEN_LOOKS (clearly the object) are
+# not taken for one; the motion is matched on the object's pixels farther than SEEN_NEAR
+# px from those seen still the frame before (an occluder's edge held the match still).
+# Chosen on the calibration half's occlusions (docs/tracking.md, "Occluders seen still").
+SEEN_MOVED, SEEN_LOOKS, SEEN_NEAR = 1.5, 1.0, 2
+# While hidden, the prediction's prior is 0 outside it within BESIDE px of the occluder
+# seen (calibration occlusions: occlude-2 0.933 without, 0.945 / 0.954 / 0.935 at 3 / 6 /
+# 9 px).
+BESIDE = 6
 # A frame pair whose difference near the unmoved object is below this many times the
 # noise's is still (`_change`).
 STILL_CHANGE = 2.0
@@ -261,6 +284,9 @@ class ObjectFollower:
         self._grey_t = {}  # frames' appearance.gradients, the pair in use
         self._ratio = None  # the last frame's log odds (surroundings over object)
         self._looks_ratio = None  # the same from the looks alone
+        self._seen = None  # the prediction's pixels seen still (occlusion.seen_still)
+        # what was seen still near the object, and stayed still since (an occluder)
+        self._occluder = None
 
     def move(self, t, prepared_prev, prepared, mask):
         """Predict frame t: move the level set to the whole shape's predicted place and set
@@ -271,6 +297,8 @@ class ObjectFollower:
         # The object's pixels that look like it: a piece of an occluder or of the
         # background the contour took in would pull the match to its own (lack of) motion.
         pixels = mask & (self._looks_ratio < 0) if self._looks_ratio is not None else mask
+        if self._seen is not None:  # nor the pixels next to what was seen still
+            pixels = pixels & ~dilate(self._seen, SEEN_NEAR)
         if pixels.sum() < 0.3 * mask.sum():
             pixels = mask
         # Much of the object out of sight: what is left must match clearly to override
@@ -314,12 +342,21 @@ class ObjectFollower:
         # the velocity: where the motion takes the whole shape's centre
         centre = _centroid(self.shape)
         shift = np.linalg.solve(a[:, :2], centre - a[:, 2]) - centre
+        if hidden and np.abs(shift - self.velocity).max() > HIDDEN_RUNOFF:
+            # the fit on what is left in sight ran off: a hidden object keeps its velocity
+            shift = self.velocity.copy()
+            a = np.array([[1.0, 0.0, -shift[0]], [0.0, 1.0, -shift[1]]])
         self.velocity = shift
         predicted_u = _warp_values(self.shape_u, a)
         predicted = predicted_u < 0
         if not predicted.any() or predicted.all():  # carried out of the frame: it stays
             predicted, predicted_u = self.shape, self.shape_u
         self.predicted, self._predicted_u = predicted, predicted_u
+        self._seen = None
+        if np.hypot(*shift) >= SEEN_MOVED:
+            self._seen = self._seen_still(t, a, predicted)
+        else:
+            self._occluder = None
         self._predicted_whole_u = None if self._whole_u is None else _warp_values(self._whole_u, a)
         # F1: the previous frame carried with the object near its predicted place
         near = dilate(predicted, int(np.ceil(self.band)) + 4)
@@ -336,6 +373,39 @@ class ObjectFollower:
             start = self._appearance(t, a, predicted, still)
         self.ls.assign(predicted_u if start is predicted else signed_distance(start))
         return out, (float(shift[0]), float(shift[1]))
+
+    def _seen_still(self, t, a, predicted) -> np.ndarray:
+        """The predicted shape's pixels that show something still in frame t, not the
+        object that moved by `a` (occlusion.seen_still), over the prediction's box; the
+        occluders seen there are remembered."""
+        where = box(predicted, 1)
+        r = SEEN_REACH
+        # the previous frame carried by the motion over the box grown by r px (edge
+        # values beyond the frame)
+        rows = np.clip(np.arange(where[0].start - r, where[0].stop + r), 0, predicted.shape[0] - 1)
+        cols = np.clip(np.arange(where[1].start - r, where[1].stop + r), 0, predicted.shape[1] - 1)
+        pts = np.array([np.repeat(rows, len(cols)), np.tile(cols, len(rows))], np.float64)
+        coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
+        before, after = self.looks[t - 1], self.looks[t]
+        carried = bilinear(np.asarray(before, np.float64), coords).reshape(
+            (len(before), len(rows), len(cols))
+        )
+        # (the noise over the box: over the frame it would cost more than the rest; on the
+        # calibration occlusions the same but for grey-4, 0.943 over the frame, 0.951)
+        noise = float(np.sqrt(noise_variance(after[:, where[0], where[1]])))
+        known = None if self._occluder is None else self._occluder[where]
+        seen = np.zeros(predicted.shape, bool)
+        seen[where] = seen_still(
+            before[:, where[0], where[1]], after[:, where[0], where[1]], carried, noise, known
+        )
+        self._occluder = seen
+        return seen & predicted
+
+    def _seen_counts(self, mask) -> bool:
+        """Whether the pixels seen still say what the appearance did not: at least LOST of
+        the prediction is seen still and left in the morphing's result `mask` (in colour
+        the appearance carves an occluder by itself, and the still evidence stays out)."""
+        return (self._seen & mask).sum() >= max(LOST * self.predicted.sum(), 1)
 
     def _looks_away(self, t, a) -> bool:
         """Whether the shape carried by the motion `a` lands where frame t does not look
@@ -359,6 +429,11 @@ class ObjectFollower:
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
         # and only clear evidence carves it or grows it
         prior = _prior(predicted)
+        if self.hidden and self._occluder is not None and self._occluder.any():
+            # next to an occluder the object's extent is not known (it comes out from
+            # behind it): the prediction does not hold the contour back there
+            beside = dilate(self._occluder, BESIDE) & ~self._occluder & (prior > 0)
+            prior[beside] = 0.0
         self._looks_ratio = self.model.log_ratio(self._bins, predicted)
         # (no evidence from the motion-compensated residual: a talking mouth or a turning
         # face does not move with the object either, and on the calibration half, 0.827 ->
@@ -422,6 +497,17 @@ class ObjectFollower:
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
         mask = mask & dilate(self.predicted, GROW)
+        if self._seen is not None and self._looks_ratio is not None:
+            # what clearly looks like the object is not an occluder: a smooth part of it
+            # coming out from behind one is still, and the frame before showed the
+            # occluder where it came from
+            clear = self._looks_ratio < -SEEN_LOOKS
+            self._seen &= ~clear
+            self._occluder &= ~clear
+        if self._seen is not None and not self._seen_counts(mask):
+            self._seen = None
+        if self._seen is not None:  # what shows something still is not the object
+            mask = mask & ~self._seen
         if self.hidden:
             mask = visible_pieces(mask, self.predicted, self._looks_ratio)
         else:
@@ -436,6 +522,9 @@ class ObjectFollower:
         else:
             shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
         shape_u = self._whole(t, mask, shape_u)
+        if self.hidden and self._occluder is not None:
+            # the whole shape's part out of sight stays so where it stays still
+            self._occluder = self._occluder | ((shape_u < 0) & ~mask)
         self.visible = mask
         self.shape_u = shape_u
         self.shape = shape_u < 0
@@ -463,7 +552,10 @@ class ObjectFollower:
         # before, where this frame tells it was hidden too)
         predicted_u = self._predicted_u
         if self.hidden:  # laid on the visible outline: the fitted motion can miss
-            d = align(self.predicted, mask, lost)
+            # (away from the cut, and from the occluder seen by the frames: its still edge
+            # is no outline of the object's)
+            cut = lost if self._occluder is None else lost | self._occluder
+            d = align(self.predicted, mask, cut)
             if d.any():
                 predicted_u = ndimage.shift(predicted_u, d, order=0, mode="nearest")
                 self.velocity = self.velocity + d

@@ -8,6 +8,10 @@ moved (an occluder's edge does not move with the object; a shrinking or deformin
 object's outline does). While hidden, the whole shape is carried by the motion fitted on
 the visible part and only its visible part is the result (`visible_pieces`): pieces that
 look like the object within the whole shape, none on the occluder.
+
+Where the appearance cannot tell the occluder from the object (grey footage: a bar of the
+object's grey level), the frames can (`seen_still`): an occluder's pixels stay the same
+from one frame to the next while the object's motion does not explain them.
 """
 
 from __future__ import annotations
@@ -31,6 +35,12 @@ ALIGN = 3
 # (chosen on the calibration halves: 1.5 took a synthetic textured object's loss for an
 # occlusion, textured class 0.731 -> 0.690; photo occlusion 0.935 either way).
 MOVED = 3.0
+# A pixel of the prediction shows something still, not the moving object (`seen_still`),
+# where over its 3x3 patch the two frames differ by less than SEEN_STILL times what the
+# noise alone gives, while the previous frame carried by the object's motion misses it by
+# more than SEEN_MISS times that: a still occluder in front of the object, or the ground
+# it moved off. It needs no appearance (in grey footage a bar can look like the object).
+SEEN_STILL, SEEN_MISS, SEEN_REACH = 2.0, 4.0, 2
 
 
 def lost_part(predicted: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -59,6 +69,41 @@ def hidden_by_still(
         return False
     outline = previous & ~erode(previous)
     return float((cut & dilate(outline, 1)).sum()) >= STILL_CUT * float(cut.sum())
+
+
+def seen_still(
+    before: np.ndarray,
+    after: np.ndarray,
+    carried: np.ndarray,
+    noise: float,
+    hidden: np.ndarray | None = None,
+) -> np.ndarray:
+    """Where frame `after` shows something still, not the moving object: the 3x3 patches
+    that differ from frame `before` by less than SEEN_STILL times what noise of standard
+    deviation `noise` gives, and by more than SEEN_MISS times that from `carried` (`before`
+    carried by the object's motion, over the same box grown by SEEN_REACH px) at every
+    shift within SEEN_REACH px (the motion fitted on a sliver can be off by a px or two; a
+    smooth patch of the object then matches nearby). Also the still patches of what was
+    seen still before (`hidden`, (h, w)): an occluder stays where it was, and the
+    object behind it has not come out there. (C, h, w) arrays."""
+    expected = 2.0 * noise / np.sqrt(np.pi) * after.shape[0]
+    still = ndimage.uniform_filter(np.abs(after - before).sum(axis=0), 3)
+    still = still < SEEN_STILL * expected
+    seen = still.copy()
+    if not seen.any():
+        return seen
+    r = SEEN_REACH
+    h, w = after.shape[1:]
+    shifts = [(dy, dx) for dy in range(-r, r + 1) for dx in range(-r, r + 1)]
+    misses = np.stack(
+        [
+            np.abs(after - carried[:, r + dy : r + dy + h, r + dx : r + dx + w]).sum(axis=0)
+            for dy, dx in shifts
+        ]
+    )
+    miss = ndimage.uniform_filter(misses, (1, 3, 3)).min(axis=0)
+    seen &= miss > SEEN_MISS * expected
+    return seen | (still & hidden) if hidden is not None else seen
 
 
 def still_share(before: np.ndarray, after: np.ndarray, where: np.ndarray, noise: float) -> float:
