@@ -45,6 +45,7 @@ from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
 from ._planes import film_planes, grey
+from ._reflow import look_again
 from ._regions import (
     RESIDUAL_UNITS,
     _local_noise_check,
@@ -150,7 +151,7 @@ def _partner(k: int, offs: list[int]) -> int:
     return min(same, key=abs) if same else k
 
 
-def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
+def frame_scores(motion: FilmMotion, t: int, radius: int, fixed: dict | None = None) -> dict:
     """Frame t's evidence against its compensated neighbours (numpy; see the module text).
 
     d: how far the pixel lies outside the range of all trusted neighbours (signed), where
@@ -161,7 +162,9 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         explains for n neighbours)).
     zr: the region evidence of faint blotches (5x5 means of each side's residual).
     res: the frame minus the median of its trusted neighbours; least: the scratch residual;
-    trusted_both: where both sides have a trusted neighbour."""
+    trusted_both: where both sides have a trusted neighbour. fixed: the grain's level
+    `sigma` and the region evidence's scale `zr_scale` measured before on the whole frame
+    (a window of it scored again: clpde.film._reflow)."""
     G = motion.G
     T, ny, nx = G.shape
     offs, sides = _window(t, T, radius)
@@ -175,6 +178,8 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     med0 = median(vals, inside)
     r0 = (v - med0)[inside.any(0)]
     sigma = max(robust_scale(r0) / RESIDUAL_UNITS if r0.size else 0.0, SIGMA_FLOOR)
+    if fixed is not None:
+        sigma = fixed["sigma"]
     # at a film's ends all neighbours lie on one side: an occluded pixel could find two
     # that agree with each other, so the flow back must agree too
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
@@ -207,9 +212,8 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     med = np.where(np.isfinite(med), med, v)
     bp, bn = _box(rp, REGION_HALF), _box(rn, REGION_HALF)
     same = (np.sign(bp) == np.sign(bn)) & (bp != 0) & both
-    zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / max(
-        robust_scale(bp), SIGMA_FLOOR
-    )
+    zr_scale = max(robust_scale(bp), SIGMA_FLOOR) if fixed is None else fixed["zr_scale"]
+    zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / zr_scale
     # the residual's level and its grain's correlation area (pixels), measured on the frame:
     # a region of n pixels has a mean residual whose deviation is level * sqrt(area / n)
     # (footage without grain, its residual's level at the floor, has no grain to correlate:
@@ -229,6 +233,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "res": res,
         "least": second_least(v, vals, ok),
         "sigma": sigma,
+        "zr_scale": zr_scale,
         "both": both,
         "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
@@ -251,6 +256,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     stack["flows"] = [p["flows"] for p in per]
     stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]
+    stack["zr_scale"] = [p["zr_scale"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
     q = kern.rt.queue
     zs = np.stack(
@@ -259,7 +265,9 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
             for t, s in enumerate(sigmas)
         ]
     )
-    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
+    # the motion stays for a second look at the frames' blotches (clpde.film._reflow)
+    out = {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
+    return {**out, "motion": motion}
 
 
 def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
@@ -321,22 +329,18 @@ def _untrusted(
     return _tail_check(found, busy, d_any, area, scores["any_in"][t])
 
 
-def _frame_kinds(
+def _frame_blotches(
     G: np.ndarray,
     scores: dict,
     t: int,
-    still: np.ndarray,
+    scratch: np.ndarray,
+    ghosts: np.ndarray,
     blotch_threshold: float,
-    scratch_threshold: float,
     search: int,
-    min_length: int,
     gamma: float,
 ) -> np.ndarray:
-    """Frame t's kinds (H, W) from film_scores' evidence (film_kinds, one frame)."""
+    """Frame t's blotches (H, W) from film_scores' evidence, scratch and ghosts taken."""
     res, sigmas = scores["res"], scores["sigma"]
-    # the residual's line runs; near a film's end, those that are a neighbour's ghost apart
-    runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
-    scratch = runs | still
     low = HYSTERESIS_LOW * blotch_threshold
     (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
     blotch, a = _regions_found(a, zr, r, scores["region_noise"][t], blotch_threshold)
@@ -361,6 +365,32 @@ def _frame_kinds(
     weak = np.where(scores["both"][t], a, 0.0)
     busy = dilate(blotch | taken)
     blotch |= _spatial_blotches(G, t, weak, np.sign(r), low, low, smallest, sigmas[t], search, busy)
+    return blotch
+
+
+def _frame_kinds(
+    G: np.ndarray,
+    scores: dict,
+    t: int,
+    still: np.ndarray,
+    blotch_threshold: float,
+    scratch_threshold: float,
+    search: int,
+    min_length: int,
+    gamma: float,
+) -> np.ndarray:
+    """Frame t's kinds (H, W) from film_scores' evidence (film_kinds, one frame)."""
+    # the residual's line runs; near a film's end, those that are a neighbour's ghost apart
+    runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
+    scratch = runs | still
+
+    def blotches(sc: dict) -> np.ndarray:
+        return _frame_blotches(G, sc, t, scratch, ghosts, blotch_threshold, search, gamma)
+
+    blotch = blotches(scores)
+    if "motion" in scores and blotch.any():
+        # a second look around the blotches, with flows their damage does not drag
+        blotch = look_again(scores, t, blotch, blotches, blotch_threshold, frame_scores)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
