@@ -31,6 +31,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..motion.dis import DisFlow
+from ._grow import rim_level
 from ._morph import dilate
 from ._motion import FilmMotion
 
@@ -45,6 +46,8 @@ REACH = 12
 FEATHER = 4
 MARGIN = 16
 MIN_SIDE = 64
+EXPLAINED = 0.5  # share of a pixel's residual the repaired flows must take away
+MEND = True  # the flows mended from their surroundings (else estimated again by DIS)
 SCORED = ("d", "d_any", "any_in", "spread", "zr", "res", "both", "n")
 
 _local = threading.local()
@@ -227,50 +230,122 @@ def _repaired_flows(motion: FilmMotion, t: int, offs: list[int], blotch: np.ndar
     return flows
 
 
+def _mend(
+    first: np.ndarray, a: np.ndarray, b: np.ndarray, crop: tuple, hole: np.ndarray, bad: np.ndarray
+) -> np.ndarray:
+    """The flow `first` on crop from frame a (its crop) to frame b (whole), mended: in the
+    hole, the value of the nearest pixel outside `bad`; in the rest of `bad`, that value
+    where it brings b's pixel nearer a's own (3x3 means of the absolute differences)."""
+    import cv2
+
+    filled = _surroundings(first, bad)
+    gy, gx = np.mgrid[crop[0], crop[1]].astype(np.float32)
+
+    def err(f: np.ndarray) -> np.ndarray:
+        w = cv2.remap(
+            b, gx + f[..., 0], gy + f[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
+        return cv2.blur(np.abs(a - w), (3, 3))
+
+    use = hole | (bad & (err(filled) < err(first)))
+    return np.where(use[..., None], filled, first)
+
+
+def _mended_flows(motion: FilmMotion, t: int, offs: list[int], blotch: np.ndarray, wins) -> dict:
+    """Frame t's flows to its neighbours (and, at a film's ends, theirs back) mended around
+    its blotches from their surroundings (_mend): no flow estimated again."""
+    hole = dilate(blotch, ROUGH_GROW)
+    bad = dilate(blotch, DRAG)
+    G = motion.G
+    one_sided = all(k > 0 for k in offs) or all(k < 0 for k in offs)
+    flows = {}
+    for k in offs:
+        s = t + k
+        ahead = motion.flow(t, s).copy()
+        back = motion.flow(s, t).copy() if one_sided else None
+        for _, crop in wins:
+            first = motion.flow(t, s)[crop]
+            g = np.ascontiguousarray(G[t][crop])
+            ahead[crop] = _mend(first, g, G[s], crop, hole[crop], bad[crop])
+            if back is not None:
+                # the neighbour's pixels that land on the blotch: its window displaced by
+                # the flow's median there
+                dx, dy = (int(np.rint(np.median(first[..., i]))) for i in (0, 1))
+                (sy, sx), (h, w) = crop, first.shape[:2]
+                y0 = min(max(sy.start + dy, 0), G.shape[1] - h)
+                x0 = min(max(sx.start + dx, 0), G.shape[2] - w)
+                there = (slice(y0, y0 + h), slice(x0, x0 + w))
+                g = np.ascontiguousarray(G[s][there])
+                part = _mend(motion.flow(s, t)[there], g, G[t], there, hole[crop], bad[crop])
+                back[there] = part
+        flows[(t, s)] = ahead
+        if back is not None:
+            flows[(s, t)] = back
+    return flows
+
+
 def look_again(
     scores: dict,
     t: int,
     blotch: np.ndarray,
-    blotches: Callable[[dict], np.ndarray],
+    marks: tuple[np.ndarray, np.ndarray],
+    blotches: Callable,
     threshold: float,
     frame_scores: Callable,
 ) -> np.ndarray:
     """Frame t's blotches after a second look around `blotch` (see the module text).
 
-    scores: clpde.film.detect.film_scores' (with its "motion"); blotches(scores): the blotch
-    checks on such scores for frame t; frame_scores: clpde.film.detect.frame_scores."""
+    scores: clpde.film.detect.film_scores' (with its "motion"); marks: the frame's
+    scratches and their ghosts (never blotches); blotches(G, scores, scratch, ghosts, size,
+    level): the blotch checks on such scores for frame t (clpde.film.detect._frame_blotches);
+    frame_scores: clpde.film.detect.frame_scores."""
     motion: FilmMotion = scores["motion"]
-    T = motion.T
+    T, ny, nx = motion.G.shape
     wins = windows(blotch)
     radius = int(scores["radius"])
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
     if not wins or len(offs) < 2:
         return blotch
-    flows = _repaired_flows(motion, t, offs, blotch, wins)
+    flows = (_mended_flows if MEND else _repaired_flows)(motion, t, offs, blotch, wins)
     fixed = {"sigma": scores["sigma"][t], "zr_scale": scores["zr_scale"][t]}
-    patched = {key: scores[key][t].copy() for key in SCORED}
-    where = np.zeros(blotch.shape, bool)
+    # the frame's own levels, which a window cannot measure: the rim's, from the first look
+    scratch, ghosts = marks
+    level = rim_level(blotch, scratch | ghosts, scores["res"][t], scores["n"][t] > 0)
+    second = np.zeros_like(blotch)
+    res = scores["res"][t].copy()
     for inner, crop in wins:
         got = frame_scores(WindowMotion(motion, flows, crop), t, radius, fixed)
         rel = tuple(
             slice(i.start - c.start, i.stop - c.start) for i, c in zip(inner, crop, strict=True)
         )
-        for key in SCORED:
-            patched[key][inner] = got[key][rel]
-        where[inner] = True
-    # candidates only inside the windows: the rest of the frame keeps its first look
-    for key in ("d", "d_any", "zr"):
-        patched[key][~where] = 0
-    again = dict(scores)
-    for key in SCORED:
-        again[key] = {t: patched[key]}
-    near = [flows[(t, t + k)] for k in (-1, 1) if (t, t + k) in flows]
-    again["flows"] = {t: np.stack(near) if near else scores["flows"][t]}
-    second = blotches(again)
+        # candidates only in the interior: the margin's flows are the first look's
+        outside = np.ones(got["d"].shape, bool)
+        outside[rel] = False
+        for key in ("d", "d_any", "zr"):
+            got[key][outside] = 0
+        again = dict(scores)
+        for key in (*SCORED, "flows", "bridge"):
+            again[key] = {t: got[key]}
+        found = blotches(
+            motion.G[:, crop[0], crop[1]], again, scratch[crop], ghosts[crop], ny * nx, level
+        )
+        second[inner] |= found[rel]
+        res[inner] = got["res"][rel]
+    # the second look's regions that meet a first-pass blotch (one apart from them, within
+    # TAKE px, is the flow's error the first look had no reason to see, or motion)
+    parts, _ = ndimage.label(second)
+    met = np.unique(parts[blotch])
+    second = np.isin(parts, met[met > 0])
     labels, _ = ndimage.label(dilate(blotch, TAKE))
     confirmed = np.unique(labels[second])
     take = np.isin(labels, confirmed[confirmed > 0])
-    # a first-pass pixel whose residual stays beyond the threshold with the repaired flows
-    # stays: a halo's residual was the flow's error, and goes with it
-    strong = np.abs(patched["res"]) > threshold * scores["sigma"][t]
-    return np.where(take, second | (blotch & strong), blotch)
+    # a first-pass pixel the second look does not take goes only where the repaired flows
+    # took EXPLAINED of its residual away: a halo's residual was the flow's error, a faint
+    # rim's is the damage's and stays
+    # rim's is the damage's and stays; a pixel the first look did not take joins only
+    # where they raised its residual (the drag hid it): elsewhere the first look saw the
+    # same evidence and decided
+    first = np.abs(scores["res"][t])
+    explained = np.abs(res) < (1.0 - EXPLAINED) * first
+    revealed = np.abs(res) > first
+    return np.where(take, (second & (blotch | revealed)) | (blotch & ~explained), blotch)

@@ -313,6 +313,7 @@ def _untrusted(
     threshold: float,
     smallest: float,
     search: int,
+    size: int | None = None,
 ) -> np.ndarray:
     """Frame t's blotches where a trusted neighbour is missing on one side (the motion is
     not trusted there, or a film's end), found spatially and against all the neighbours'
@@ -326,7 +327,7 @@ def _untrusted(
     found = _spatial_blotches(G, t, z, sign, threshold, low, smallest, sigma, search, taken)
     busy = dilate(found | taken, 2)
     area = scores["region_noise"][t][1]
-    return _tail_check(found, busy, d_any, area, scores["any_in"][t])
+    return _tail_check(found, busy, d_any, area, scores["any_in"][t], size)
 
 
 def _frame_blotches(
@@ -338,8 +339,12 @@ def _frame_blotches(
     blotch_threshold: float,
     search: int,
     gamma: float,
+    size: int | None = None,
+    level: float | None = None,
 ) -> np.ndarray:
-    """Frame t's blotches (H, W) from film_scores' evidence, scratch and ghosts taken."""
+    """Frame t's blotches (H, W) from film_scores' evidence, scratch and ghosts taken.
+    size, level: the frame's pixel count and rim level (clpde.film._grow.rim_level) where
+    G, the scores and the masks are a window of the frame (clpde.film._reflow)."""
     res, sigmas = scores["res"], scores["sigma"]
     low = HYSTERESIS_LOW * blotch_threshold
     (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
@@ -354,11 +359,12 @@ def _frame_blotches(
     blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
     # the surroundings' tail is read outside all candidates and their rims
     busy = dilate(blotch | scratch, 2)
-    blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
+    blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t], size)
     blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
     taken = scratch | ghosts
-    blotch = grow_blotches(blotch, taken, scores["d"][t], r, scores["n"][t] > 0, sigmas[t], low)
-    blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search)
+    has_nb = scores["n"][t] > 0
+    blotch = grow_blotches(blotch, taken, scores["d"][t], r, has_nb, sigmas[t], low, level)
+    blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search, size)
     # two witnesses at the low level: where both sides are trusted, a region whose temporal
     # evidence reaches only the low level is damage where the frame's own surroundings say so
     # at that level too and it is not found again nearby (the spatial test of _untrusted)
@@ -384,13 +390,16 @@ def _frame_kinds(
     runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
     scratch = runs | still
 
-    def blotches(sc: dict) -> np.ndarray:
-        return _frame_blotches(G, sc, t, scratch, ghosts, blotch_threshold, search, gamma)
+    def blotches(Gw, sc, scratch, ghosts, size=None, level=None) -> np.ndarray:
+        return _frame_blotches(
+            Gw, sc, t, scratch, ghosts, blotch_threshold, search, gamma, size, level
+        )
 
-    blotch = blotches(scores)
+    blotch = blotches(G, scores, scratch, ghosts)
     if "motion" in scores and blotch.any():
         # a second look around the blotches, with flows their damage does not drag
-        blotch = look_again(scores, t, blotch, blotches, blotch_threshold, frame_scores)
+        marks = (scratch, ghosts)
+        blotch = look_again(scores, t, blotch, marks, blotches, blotch_threshold, frame_scores)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
