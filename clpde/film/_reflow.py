@@ -31,22 +31,23 @@ import numpy as np
 from scipy import ndimage
 
 from ..motion.dis import DisFlow
-from ._grow import rim_level
+from ._grow import HYSTERESIS_LOW, rim_level
 from ._morph import dilate
 from ._motion import FilmMotion
 
 ROUGH_GROW = 2  # px of rim filled roughly with the blotch (its soft edge)
 DRAG = 4  # px around a blotch whose first flow is taken as dragged (DIS's start)
 TAKE = 6  # px around a first-pass blotch within which the second look decides
-# The window's interior reaches REACH px past the blotches (TAKE, the flow's disturbance
-# beyond it and the feather); DIS and the scores see MARGIN px more of context, and at
-# least MIN_SIDE px a side (DIS then keeps its preset's scales: a smaller image makes
+# The window's interior reaches REACH px past the blotches (TAKE and the second look's
+# growth); the scores and the checks see MARGIN px more of context. DIS (not MEND) sees
+# at least MIN_SIDE px a side (DIS then keeps its preset's scales: a smaller image makes
 # OpenCV choose other ones, and keep them for the instance's next images).
-REACH = 12
+REACH = 10
 FEATHER = 4
-MARGIN = 16
+MARGIN = 12
 MIN_SIDE = 64
 EXPLAINED = 0.5  # share of a pixel's residual the repaired flows must take away
+CHAIN = True  # the blotch checks run again in the windows (else: evidence only)
 MEND = True  # the flows mended from their surroundings (else estimated again by DIS)
 SCORED = ("d", "d_any", "any_in", "spread", "zr", "res", "both", "n")
 
@@ -63,39 +64,48 @@ def _dis() -> DisFlow:
     return dis
 
 
-def _span(start: int, stop: int, grow: int, size: int) -> slice:
-    """[start - grow, stop + grow) within [0, size), widened to MIN_SIDE where it fits."""
+def _span(start: int, stop: int, grow: int, size: int, side: int) -> slice:
+    """[start - grow, stop + grow) within [0, size), widened to `side` where it fits."""
     lo, hi = max(start - grow, 0), min(stop + grow, size)
-    short = MIN_SIDE - (hi - lo)
+    short = side - (hi - lo)
     if short > 0:
         lo = max(lo - (short + 1) // 2, 0)
-        hi = min(lo + MIN_SIDE, size)
-        lo = max(hi - MIN_SIDE, 0)
+        hi = min(lo + side, size)
+        lo = max(hi - side, 0)
     return slice(lo, hi)
 
 
-def windows(blotch: np.ndarray) -> list[tuple[tuple[slice, slice], tuple[slice, slice]]]:
+def windows(blotch: np.ndarray, side: int = 0) -> list[tuple[tuple[slice, slice], tuple]]:
     """(interior, crop) per group of blotches within 2 REACH px of each other: the box
-    REACH px around them, and that box with MARGIN px more (none in a frame smaller than
-    MIN_SIDE px a side)."""
+    REACH px around them, and that box with MARGIN px more, at least `side` px a side
+    (none in a frame smaller than that)."""
     ny, nx = blotch.shape
-    if ny < MIN_SIDE or nx < MIN_SIDE:
+    if ny < side or nx < side:
         return []
     labels, _ = ndimage.label(dilate(blotch, REACH))
     out = []
     for sy, sx in ndimage.find_objects(labels):
         inner = (slice(sy.start, sy.stop), slice(sx.start, sx.stop))
-        crop = (_span(sy.start, sy.stop, MARGIN, ny), _span(sx.start, sx.stop, MARGIN, nx))
+        crop = tuple(
+            _span(sl.start, sl.stop, MARGIN, size, side) for sl, size in ((sy, ny), (sx, nx))
+        )
         out.append((inner, crop))
     return out
 
 
-def _surroundings(flow: np.ndarray, bad: np.ndarray) -> np.ndarray:
-    """flow with its `bad` pixels given their nearest good pixel's value."""
+def _nearest(bad: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Each pixel's nearest pixel outside `bad` (itself outside it); None if bad is empty
+    or everything."""
     if not bad.any() or bad.all():
-        return flow.copy()
-    _, (iy, ix) = ndimage.distance_transform_edt(bad, return_indices=True)
-    return flow[iy, ix]
+        return None
+    return ndimage.distance_transform_edt(bad, return_indices=True)[1]
+
+
+def _surroundings(flow: np.ndarray, bad: np.ndarray, near=False) -> np.ndarray:
+    """flow with its `bad` pixels given their nearest good pixel's value (near: _nearest's,
+    given)."""
+    near = _nearest(bad) if near is False else near
+    return flow.copy() if near is None else flow[near[0], near[1]]
 
 
 def _window_flow(
@@ -230,16 +240,21 @@ def _repaired_flows(motion: FilmMotion, t: int, offs: list[int], blotch: np.ndar
     return flows
 
 
+def _grid(crop: tuple) -> tuple[np.ndarray, np.ndarray]:
+    gy, gx = np.mgrid[crop[0], crop[1]]
+    return gy.astype(np.float32), gx.astype(np.float32)
+
+
 def _mend(
-    first: np.ndarray, a: np.ndarray, b: np.ndarray, crop: tuple, hole: np.ndarray, bad: np.ndarray
+    first: np.ndarray, a: np.ndarray, b: np.ndarray, grid: tuple, hole: np.ndarray, bad, near
 ) -> np.ndarray:
     """The flow `first` on crop from frame a (its crop) to frame b (whole), mended: in the
     hole, the value of the nearest pixel outside `bad`; in the rest of `bad`, that value
     where it brings b's pixel nearer a's own (3x3 means of the absolute differences)."""
     import cv2
 
-    filled = _surroundings(first, bad)
-    gy, gx = np.mgrid[crop[0], crop[1]].astype(np.float32)
+    filled = _surroundings(first, bad, near)
+    gy, gx = grid
 
     def err(f: np.ndarray) -> np.ndarray:
         w = cv2.remap(
@@ -257,16 +272,18 @@ def _mended_flows(motion: FilmMotion, t: int, offs: list[int], blotch: np.ndarra
     hole = dilate(blotch, ROUGH_GROW)
     bad = dilate(blotch, DRAG)
     G = motion.G
+    nears = [_nearest(bad[crop]) for _, crop in wins]
     one_sided = all(k > 0 for k in offs) or all(k < 0 for k in offs)
     flows = {}
     for k in offs:
         s = t + k
         ahead = motion.flow(t, s).copy()
         back = motion.flow(s, t).copy() if one_sided else None
-        for _, crop in wins:
+        for (_, crop), near in zip(wins, nears, strict=True):
             first = motion.flow(t, s)[crop]
             g = np.ascontiguousarray(G[t][crop])
-            ahead[crop] = _mend(first, g, G[s], crop, hole[crop], bad[crop])
+            grid = _grid(crop)
+            ahead[crop] = _mend(first, g, G[s], grid, hole[crop], bad[crop], near)
             if back is not None:
                 # the neighbour's pixels that land on the blotch: its window displaced by
                 # the flow's median there
@@ -276,8 +293,8 @@ def _mended_flows(motion: FilmMotion, t: int, offs: list[int], blotch: np.ndarra
                 x0 = min(max(sx.start + dx, 0), G.shape[2] - w)
                 there = (slice(y0, y0 + h), slice(x0, x0 + w))
                 g = np.ascontiguousarray(G[s][there])
-                part = _mend(motion.flow(s, t)[there], g, G[t], there, hole[crop], bad[crop])
-                back[there] = part
+                args = (hole[crop], bad[crop], near)
+                back[there] = _mend(motion.flow(s, t)[there], g, G[t], _grid(there), *args)
         flows[(t, s)] = ahead
         if back is not None:
             flows[(s, t)] = back
@@ -289,19 +306,20 @@ def look_again(
     t: int,
     blotch: np.ndarray,
     marks: tuple[np.ndarray, np.ndarray],
-    blotches: Callable,
+    checks: tuple[Callable, Callable],
     threshold: float,
     frame_scores: Callable,
 ) -> np.ndarray:
     """Frame t's blotches after a second look around `blotch` (see the module text).
 
     scores: clpde.film.detect.film_scores' (with its "motion"); marks: the frame's
-    scratches and their ghosts (never blotches); blotches(G, scores, scratch, ghosts, size,
-    level): the blotch checks on such scores for frame t (clpde.film.detect._frame_blotches);
-    frame_scores: clpde.film.detect.frame_scores."""
+    scratches and their ghosts (never blotches); checks: blotches(G, scores, scratch,
+    ghosts, size, level), the blotch checks on such scores for frame t
+    (clpde.film.detect._frame_blotches), and evidence(scores), frame t's blotch evidence
+    (clpde.film.detect.blotch_evidence); frame_scores: clpde.film.detect.frame_scores."""
     motion: FilmMotion = scores["motion"]
     T, ny, nx = motion.G.shape
-    wins = windows(blotch)
+    wins = windows(blotch, 0 if MEND else MIN_SIDE)
     radius = int(scores["radius"])
     offs = [k for k in range(-radius, radius + 1) if k != 0 and 0 <= t + k < T]
     if not wins or len(offs) < 2:
@@ -310,27 +328,44 @@ def look_again(
     fixed = {"sigma": scores["sigma"][t], "zr_scale": scores["zr_scale"][t]}
     # the frame's own levels, which a window cannot measure: the rim's, from the first look
     scratch, ghosts = marks
-    level = rim_level(blotch, scratch | ghosts, scores["res"][t], scores["n"][t] > 0)
+    blotches, evidence = checks
+    if CHAIN:
+        level = rim_level(blotch, scratch | ghosts, scores["res"][t], scores["n"][t] > 0)
     second = np.zeros_like(blotch)
+    strength = np.zeros(blotch.shape, np.float32)
     res = scores["res"][t].copy()
     for inner, crop in wins:
         got = frame_scores(WindowMotion(motion, flows, crop), t, radius, fixed)
         rel = tuple(
             slice(i.start - c.start, i.stop - c.start) for i, c in zip(inner, crop, strict=True)
         )
+        res[inner] = got["res"][rel]
+        again = dict(scores)
+        for key in (*SCORED, "flows", "bridge"):
+            again[key] = {t: got[key]}
+        if not CHAIN:
+            strength[inner] = evidence(again)[rel]
+            continue
         # candidates only in the interior: the margin's flows are the first look's
         outside = np.ones(got["d"].shape, bool)
         outside[rel] = False
         for key in ("d", "d_any", "zr"):
             got[key][outside] = 0
-        again = dict(scores)
-        for key in (*SCORED, "flows", "bridge"):
-            again[key] = {t: got[key]}
         found = blotches(
             motion.G[:, crop[0], crop[1]], again, scratch[crop], ghosts[crop], ny * nx, level
         )
         second[inner] |= found[rel]
-        res[inner] = got["res"][rel]
+    first = np.abs(scores["res"][t])
+    # a first-pass pixel goes only where the mended flows took EXPLAINED of its residual
+    # away (a halo's residual was the flow's error; a faint rim's is the damage's and
+    # stays); a pixel the first look did not take joins only where they raised its residual
+    # (the drag hid it): elsewhere the first look saw the same evidence and decided
+    explained = np.abs(res) < (1.0 - EXPLAINED) * first
+    revealed = np.abs(res) > first
+    if not CHAIN:
+        low = strength > HYSTERESIS_LOW * threshold
+        grown = dilate(blotch, TAKE, within=blotch | (low & revealed & ~(scratch | ghosts)))
+        return (blotch & ~(explained & ~low)) | grown
     # the second look's regions that meet a first-pass blotch (one apart from them, within
     # TAKE px, is the flow's error the first look had no reason to see, or motion)
     parts, _ = ndimage.label(second)
@@ -339,13 +374,4 @@ def look_again(
     labels, _ = ndimage.label(dilate(blotch, TAKE))
     confirmed = np.unique(labels[second])
     take = np.isin(labels, confirmed[confirmed > 0])
-    # a first-pass pixel the second look does not take goes only where the repaired flows
-    # took EXPLAINED of its residual away: a halo's residual was the flow's error, a faint
-    # rim's is the damage's and stays
-    # rim's is the damage's and stays; a pixel the first look did not take joins only
-    # where they raised its residual (the drag hid it): elsewhere the first look saw the
-    # same evidence and decided
-    first = np.abs(scores["res"][t])
-    explained = np.abs(res) < (1.0 - EXPLAINED) * first
-    revealed = np.abs(res) > first
     return np.where(take, (second & (blotch | revealed)) | (blotch & ~explained), blotch)

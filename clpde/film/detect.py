@@ -399,7 +399,13 @@ def _frame_kinds(
     if "motion" in scores and blotch.any():
         # a second look around the blotches, with flows their damage does not drag
         marks = (scratch, ghosts)
-        blotch = look_again(scores, t, blotch, marks, blotches, blotch_threshold, frame_scores)
+        low = HYSTERESIS_LOW * blotch_threshold
+
+        def evidence(sc: dict) -> np.ndarray:
+            return blotch_evidence(sc, t, gamma, low)[0]
+
+        checks = (blotches, evidence)
+        blotch = look_again(scores, t, blotch, marks, checks, blotch_threshold, frame_scores)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
