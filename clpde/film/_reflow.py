@@ -332,19 +332,22 @@ def look_again(
     if CHAIN:
         level = rim_level(blotch, scratch | ghosts, scores["res"][t], scores["n"][t] > 0)
     second = np.zeros_like(blotch)
-    strength = np.zeros(blotch.shape, np.float32)
-    res = scores["res"][t].copy()
+    # the blotch evidence with the first flows and with the mended ones
+    before = np.zeros(blotch.shape, np.float32)
+    after = np.zeros(blotch.shape, np.float32)
     for inner, crop in wins:
         got = frame_scores(WindowMotion(motion, flows, crop), t, radius, fixed)
         rel = tuple(
             slice(i.start - c.start, i.stop - c.start) for i, c in zip(inner, crop, strict=True)
         )
-        res[inner] = got["res"][rel]
-        again = dict(scores)
+        again, first = dict(scores), dict(scores)
         for key in (*SCORED, "flows", "bridge"):
             again[key] = {t: got[key]}
+        for key in SCORED:
+            first[key] = {t: scores[key][t][crop]}
+        before[inner] = evidence(first)[rel]
+        after[inner] = evidence(again)[rel]
         if not CHAIN:
-            strength[inner] = evidence(again)[rel]
             continue
         # candidates only in the interior: the margin's flows are the first look's
         outside = np.ones(got["d"].shape, bool)
@@ -355,15 +358,15 @@ def look_again(
             motion.G[:, crop[0], crop[1]], again, scratch[crop], ghosts[crop], ny * nx, level
         )
         second[inner] |= found[rel]
-    first = np.abs(scores["res"][t])
-    # a first-pass pixel goes only where the mended flows took EXPLAINED of its residual
+    # a first-pass pixel goes only where the mended flows took EXPLAINED of its evidence
     # away (a halo's residual was the flow's error; a faint rim's is the damage's and
-    # stays); a pixel the first look did not take joins only where they raised its residual
-    # (the drag hid it): elsewhere the first look saw the same evidence and decided
-    explained = np.abs(res) < (1.0 - EXPLAINED) * first
-    revealed = np.abs(res) > first
+    # stays); a pixel the first look did not take joins only where they raised its evidence
+    # (the drag hid it: its residual, or the neighbours' spread that scales it): elsewhere
+    # the first look saw the same evidence and decided
+    explained = after < (1.0 - EXPLAINED) * before
+    revealed = after > before
     if not CHAIN:
-        low = strength > HYSTERESIS_LOW * threshold
+        low = after > HYSTERESIS_LOW * threshold
         grown = dilate(blotch, TAKE, within=blotch | (low & revealed & ~(scratch | ghosts)))
         return (blotch & ~(explained & ~low)) | grown
     # the second look's regions that meet a first-pass blotch (one apart from them, within
