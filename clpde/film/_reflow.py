@@ -46,6 +46,7 @@ REACH = 10
 FEATHER = 4
 MARGIN = 12
 MIN_SIDE = 64
+MOVED = 0.25  # px a mended flow must move somewhere for its window to be scored again
 EXPLAINED = 0.5  # share of a pixel's residual the repaired flows must take away
 CHAIN = True  # the blotch checks run again in the windows (else: evidence only)
 MEND = True  # the flows mended from their surroundings (else estimated again by DIS)
@@ -336,6 +337,12 @@ def look_again(
     before = np.zeros(blotch.shape, np.float32)
     after = np.zeros(blotch.shape, np.float32)
     for inner, crop in wins:
+        moved = max(
+            float(np.abs(flows[(t, t + k)][inner] - motion.flow(t, t + k)[inner]).max())
+            for k in offs
+        )
+        if moved < MOVED:
+            continue  # the same evidence as the first look's
         got = frame_scores(WindowMotion(motion, flows, crop), t, radius, fixed)
         rel = tuple(
             slice(i.start - c.start, i.stop - c.start) for i, c in zip(inner, crop, strict=True)
