@@ -6,16 +6,18 @@ damage while the same disturbance hides some of its pixels. Once the detector ha
 frame t's blotches, it looks again in a window around each, and only there (a second DIS
 round over whole frames cost 58% more CPU a frame):
 
-- DIS is run on the window of frame t with its blotches filled roughly (OpenCV's Telea)
-  and the window of each neighbour displaced by the flow around it, started from the first
-  flow with its dragged part replaced by its surroundings' values; the result replaces the
-  first flow in the window's interior (feathered into it at the interior's edge);
+- frame t's flows (and at a film's ends its neighbours' flows back) are mended around the
+  blotches: within DRAG px of one, a flow takes the value of the nearest pixel beyond,
+  inside the blotch always, around it where that brings the neighbour nearer the frame
+  (no flow is estimated again; DIS on the window of the roughly filled frame, MEND False,
+  is kept for comparison);
 - frame t's evidence is scored again in the window with those flows, the grain's level
-  and the flicker fits of the whole frame kept, and the blotch checks run again on the
-  frame with candidates inside the windows only;
-- near a first-pass blotch that the second look confirms, the second look's blotches
-  replace the first's; a first-pass pixel whose repaired residual still reaches the
-  threshold stays.
+  and the flicker fits of the whole frame kept, and the blotch checks run again in the
+  window, with candidates in its interior only and the frame's own levels (CHAIN; else
+  the evidence alone decides);
+- the second look changes a pixel only where the mended flows changed its evidence: a
+  first-pass pixel goes where they took EXPLAINED of it away (the drag made it), a new
+  pixel joins a blotch where they raised it (the drag hid it).
 
 It reads frame t, its neighbours' frames and flows, and frame t's first-pass blotches only,
 which every window and chunk of a film holding frame t computes alike: one result however

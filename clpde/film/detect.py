@@ -33,7 +33,6 @@ import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
 from scipy import integrate, ndimage, optimize, special
-from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
@@ -44,6 +43,7 @@ from ._morph import dilate
 from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
+from ._photo import photo_damage
 from ._planes import film_planes, grey
 from ._reflow import look_again
 from ._regions import (
@@ -54,7 +54,7 @@ from ._regions import (
     _spatial_blotches,
     _tail_check,
 )
-from .lines import LineKernels, film_scratches, robust_scale, scratch_runs
+from .lines import LineKernels, film_scratches, robust_scale
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -453,48 +453,6 @@ def film_kinds(
     return kinds
 
 
-def _photo(
-    G: np.ndarray, speck_threshold: float, scratch_threshold: float, min_length: int, device
-) -> np.ndarray:
-    ny, nx = G.shape
-    # the grain's level from the image minus its 5x5 median: film grain is correlated over
-    # a pixel or two, which the finest-scale estimate of denoising misses
-    sigma = max(robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")), 0.5 / 255)
-    specks = np.zeros((ny, nx), bool)
-    for rad in (1, 2, 4, 8):
-        # at each scale, the components that stand out and fit in its disc: a speck, not
-        # a stroke, an edge or a broad bump
-        white = white_tophat(G, footprint=disk(rad))
-        black = black_tophat(G, footprint=disk(rad))
-        found = np.maximum(white, black) > speck_threshold * sigma
-        labels, n = ndimage.label(found)
-        keep = np.zeros(n + 1, bool)
-        for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-            h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
-            area = int((labels[sl] == idx).sum())
-            if not (
-                max(h, w) <= 2 * rad + 1 and max(h, w) <= 3 * min(h, w) + 1 and area >= 0.3 * h * w
-            ):
-                continue
-            # a speck steps off its surroundings; a smooth bump fades into them
-            comp = labels == idx
-            ring = dilate(comp, 2) & ~comp
-            step = abs(float(G[comp].mean()) - float(np.median(G[ring])))
-            keep[idx] = step > speck_threshold * sigma
-        specks |= keep[labels]
-    resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
-    rt = get_runtime(device)
-    kern = LineKernels(rt)
-    zs = kern.line_score(
-        cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma
-    )
-    scratch = scratch_runs(zs, resid, sigma, scratch_threshold, min_length, thin=False)
-    kinds = np.zeros((ny, nx), np.int8)
-    kinds[specks & ~scratch] = BLOTCH
-    kinds[scratch] = SCRATCH
-    return kinds[np.newaxis]
-
-
 def _grow_kinds(kinds: np.ndarray, px: float) -> np.ndarray:
     if px <= 0:
         return kinds
@@ -614,7 +572,10 @@ def detect_defects(
     sthr = SCRATCH_THRESHOLD if scratch_threshold is None else float(scratch_threshold)
     if T == 1:
         bthr = PHOTO_SPECK_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
-        kinds = _photo(G[0], bthr, sthr, int(min_length), device)
+        specks, scratch = photo_damage(G[0], bthr, sthr, int(min_length), device)
+        kinds = np.zeros((1, *G.shape[1:]), np.int8)
+        kinds[0][specks & ~scratch] = BLOTCH
+        kinds[0][scratch] = SCRATCH
     else:
         bthr = BLOTCH_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
         with progress_bar(progress, 2, "clpde detect_defects", unit="stage") as bar:
