@@ -51,6 +51,8 @@ MIN_SIDE = 64
 MOVED = 0.25  # px a mended flow must move somewhere for its window to be scored again
 EXPLAINED = 0.5  # share of a pixel's residual the repaired flows must take away
 CHAIN = True  # the blotch checks run again in the windows (else: evidence only)
+WHOLE = False  # the whole DRAG band takes its surroundings' flow (else where it fits better)
+FREE = False  # the second look decides near its blotches, whatever the evidence did
 MEND = True  # the flows mended from their surroundings (else estimated again by DIS)
 SCORED = ("d", "d_any", "any_in", "spread", "zr", "res", "both", "n")
 
@@ -265,7 +267,7 @@ def _mend(
         )
         return cv2.blur(np.abs(a - w), (3, 3))
 
-    use = hole | (bad & (err(filled) < err(first)))
+    use = bad if WHOLE else hole | (bad & (err(filled) < err(first)))
     return np.where(use[..., None], filled, first)
 
 
@@ -338,6 +340,8 @@ def look_again(
     # the blotch evidence with the first flows and with the mended ones
     before = np.zeros(blotch.shape, np.float32)
     after = np.zeros(blotch.shape, np.float32)
+    res = scores["res"][t].copy()
+    seen = scores["n"][t] > 0
     for inner, crop in wins:
         moved = max(
             float(np.abs(flows[(t, t + k)][inner] - motion.flow(t, t + k)[inner]).max())
@@ -356,6 +360,7 @@ def look_again(
             first[key] = {t: scores[key][t][crop]}
         before[inner] = evidence(first)[rel]
         after[inner] = evidence(again)[rel]
+        res[inner], seen[inner] = got["res"][rel], got["n"][rel] > 0
         if not CHAIN:
             continue
         # candidates only in the interior: the margin's flows are the first look's
@@ -372,7 +377,8 @@ def look_again(
     # stays); a pixel the first look did not take joins only where they raised its evidence
     # (the drag hid it: its residual, or the neighbours' spread that scales it): elsewhere
     # the first look saw the same evidence and decided
-    explained = after < (1.0 - EXPLAINED) * before
+    # (the residual's: the evidence is 0 where a side lost its trust, which says nothing)
+    explained = seen & (np.abs(res) < (1.0 - EXPLAINED) * np.abs(scores["res"][t]))
     revealed = after > before
     if not CHAIN:
         low = after > HYSTERESIS_LOW * threshold
@@ -386,4 +392,7 @@ def look_again(
     labels, _ = ndimage.label(dilate(blotch, TAKE))
     confirmed = np.unique(labels[second])
     take = np.isin(labels, confirmed[confirmed > 0])
+    if FREE:
+        strong = np.abs(res) > threshold * scores["sigma"][t]
+        return np.where(take, second | (blotch & strong), blotch)
     return np.where(take, (second & (blotch | revealed)) | (blotch & ~explained), blotch)
