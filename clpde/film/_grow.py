@@ -45,14 +45,6 @@ def _geodesic(seed: np.ndarray, allowed: np.ndarray, reach: int) -> np.ndarray:
     return dilate(seed, reach, within=seed | allowed)
 
 
-def rim_level(blotch: np.ndarray, taken: np.ndarray, res: np.ndarray, has_nb: np.ndarray) -> float:
-    """The frame's own top GROW_SHARE of |residual| on each side, measured outside the
-    candidates and their rims: the rim a region may grow into (grow_blotches)."""
-    clean = has_nb & ~taken & ~dilate(blotch, 2)
-    r = np.abs(res[clean])
-    return float(np.quantile(r, 1.0 - 2.0 * GROW_SHARE)) if r.size else np.inf
-
-
 def grow_blotches(
     blotch: np.ndarray,
     taken: np.ndarray,
@@ -61,15 +53,13 @@ def grow_blotches(
     has_nb: np.ndarray,
     sigma: float,
     low: float,
-    level: float | None = None,
 ) -> np.ndarray:
     """blotch (H, W) grown into its own inside and rim (see the module text).
 
     taken: pixels never to take (scratches); d: the signed distance outside the range of
     the trusted neighbours (0 where a side is untrusted); res: the frame minus its trusted
     neighbours' median; has_nb: where res is defined; sigma: the grain's level; low: the
-    hysteresis low level in noise units; level: the rim's residual level (rim_level) where
-    the arrays are a window of the frame (clpde.film._reflow)."""
+    hysteresis low level in noise units."""
     if not blotch.any():
         return blotch
     # each region's side: the sign most of its pixels' residuals take
@@ -78,8 +68,9 @@ def grow_blotches(
     sign = np.sign(votes)
     sign[0] = 0.0
     sign = sign[labels]
-    if level is None:
-        level = rim_level(blotch, taken, res, has_nb)
+    clean = has_nb & ~taken & ~dilate(blotch, 2)
+    r = np.abs(res[clean])
+    level = float(np.quantile(r, 1.0 - 2.0 * GROW_SHARE)) if r.size else np.inf
     grown = blotch.copy()
     for s in (-1.0, 1.0):
         seed = blotch & (sign == s)

@@ -249,12 +249,7 @@ def _local_noise_check(
 
 
 def _tail_check(
-    mask: np.ndarray,
-    busy: np.ndarray,
-    res: np.ndarray,
-    area: float,
-    valid: np.ndarray,
-    size: int | None = None,
+    mask: np.ndarray, busy: np.ndarray, res: np.ndarray, area: float, valid: np.ndarray
 ) -> np.ndarray:
     """Keep the components of mask that the residual of their own surroundings does not
     explain (heavy tails included: foliage, motion blur, a codec's blocks): with f the share
@@ -270,9 +265,7 @@ def _tail_check(
     about 1/e), so a region of one or two cells cannot rise above its surroundings at the
     frame's bar. On the calibration half it takes the small false alarms on textured,
     motion-blurred foliage that made frames worse than their input
-    (benchmarks/film_worse.py: tree b frame 5's 12 and 8 px, on white flowers). size: the
-    frame's pixel count H W where mask is a window of it (clpde.film._reflow)."""
-    places = mask.size if size is None else size
+    (benchmarks/film_worse.py: tree b frame 5's 12 and 8 px, on white flowers)."""
 
     def unexplained(win, own, labels_win) -> bool:
         around = dilate(own, TAIL_REACH)
@@ -285,7 +278,7 @@ def _tail_check(
         share = (reach + 0.5) / (int(around.sum()) + 1.0)
         cells = max(1, round(count / area))
         chance = float(stats.binom.sf(np.ceil(cells / 2) - 1, cells, share))
-        return chance <= count / places
+        return chance <= count / mask.size
 
     return _kept(mask, TAIL_REACH, unexplained)
 

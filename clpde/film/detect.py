@@ -313,7 +313,6 @@ def _untrusted(
     threshold: float,
     smallest: float,
     search: int,
-    size: int | None = None,
 ) -> np.ndarray:
     """Frame t's blotches where a trusted neighbour is missing on one side (the motion is
     not trusted there, or a film's end), found spatially and against all the neighbours'
@@ -327,51 +326,7 @@ def _untrusted(
     found = _spatial_blotches(G, t, z, sign, threshold, low, smallest, sigma, search, taken)
     busy = dilate(found | taken, 2)
     area = scores["region_noise"][t][1]
-    return _tail_check(found, busy, d_any, area, scores["any_in"][t], size)
-
-
-def _frame_blotches(
-    G: np.ndarray,
-    scores: dict,
-    t: int,
-    scratch: np.ndarray,
-    ghosts: np.ndarray,
-    blotch_threshold: float,
-    search: int,
-    gamma: float,
-    size: int | None = None,
-    level: float | None = None,
-) -> np.ndarray:
-    """Frame t's blotches (H, W) from film_scores' evidence, scratch and ghosts taken.
-    size, level: the frame's pixel count and rim level (clpde.film._grow.rim_level) where
-    G, the scores and the masks are a window of the frame (clpde.film._reflow)."""
-    res, sigmas = scores["res"], scores["sigma"]
-    low = HYSTERESIS_LOW * blotch_threshold
-    (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
-    blotch, a = _regions_found(a, zr, r, scores["region_noise"][t], blotch_threshold)
-    blotch &= ~dilate(scratch | ghosts)
-    # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
-    # blotch worth a fill
-    smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
-    blotch = _no_singletons(blotch, smallest)
-    flows = (scores["flows"][t], scores["bridge"][t])
-    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], *flows)
-    blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
-    # the surroundings' tail is read outside all candidates and their rims
-    busy = dilate(blotch | scratch, 2)
-    blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t], size)
-    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
-    taken = scratch | ghosts
-    has_nb = scores["n"][t] > 0
-    blotch = grow_blotches(blotch, taken, scores["d"][t], r, has_nb, sigmas[t], low, level)
-    blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search, size)
-    # two witnesses at the low level: where both sides are trusted, a region whose temporal
-    # evidence reaches only the low level is damage where the frame's own surroundings say so
-    # at that level too and it is not found again nearby (the spatial test of _untrusted)
-    weak = np.where(scores["both"][t], a, 0.0)
-    busy = dilate(blotch | taken)
-    blotch |= _spatial_blotches(G, t, weak, np.sign(r), low, low, smallest, sigmas[t], search, busy)
-    return blotch
+    return _tail_check(found, busy, d_any, area, scores["any_in"][t])
 
 
 def _frame_kinds(
@@ -386,26 +341,40 @@ def _frame_kinds(
     gamma: float,
 ) -> np.ndarray:
     """Frame t's kinds (H, W) from film_scores' evidence (film_kinds, one frame)."""
+    res, sigmas = scores["res"], scores["sigma"]
     # the residual's line runs; near a film's end, those that are a neighbour's ghost apart
     runs, ghosts = residual_runs(G, scores, t, scratch_threshold, min_length)
     scratch = runs | still
-
-    def blotches(Gw, sc, scratch, ghosts, size=None, level=None) -> np.ndarray:
-        return _frame_blotches(
-            Gw, sc, t, scratch, ghosts, blotch_threshold, search, gamma, size, level
-        )
-
-    blotch = blotches(G, scores, scratch, ghosts)
+    low = HYSTERESIS_LOW * blotch_threshold
+    (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
+    blotch, a = _regions_found(a, zr, r, scores["region_noise"][t], blotch_threshold)
+    blotch &= ~dilate(scratch | ghosts)
+    # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
+    # blotch worth a fill
+    smallest = max(SMALLEST, CELLS * scores["region_noise"][t][1])
+    blotch = _no_singletons(blotch, smallest)
+    flows = (scores["flows"][t], scores["bridge"][t])
+    blotch = _ring_check(blotch, scores["both"][t], r, sigmas[t], *flows)
+    blotch = _local_noise_check(blotch, a, r, sigmas[t], blotch_threshold)
+    # the surroundings' tail is read outside all candidates and their rims
+    busy = dilate(blotch | scratch, 2)
+    blotch = _tail_check(blotch, busy, r, scores["region_noise"][t][1], scores["both"][t])
+    blotch = _motion_check(blotch, G, t, res[t], search, sigmas[t], blotch_threshold)
+    taken = scratch | ghosts
+    blotch = grow_blotches(blotch, taken, scores["d"][t], r, scores["n"][t] > 0, sigmas[t], low)
+    blotch |= _untrusted(G, scores, t, blotch, taken, blotch_threshold, smallest, search)
+    # two witnesses at the low level: where both sides are trusted, a region whose temporal
+    # evidence reaches only the low level is damage where the frame's own surroundings say so
+    # at that level too and it is not found again nearby (the spatial test of _untrusted)
+    weak = np.where(scores["both"][t], a, 0.0)
+    busy = dilate(blotch | taken)
+    blotch |= _spatial_blotches(G, t, weak, np.sign(r), low, low, smallest, sigmas[t], search, busy)
     if "motion" in scores and blotch.any():
         # a second look around the blotches, with flows their damage does not drag
-        marks = (scratch, ghosts)
-        low = HYSTERESIS_LOW * blotch_threshold
-
         def evidence(sc: dict) -> np.ndarray:
             return blotch_evidence(sc, t, gamma, low)[0]
 
-        checks = (blotches, evidence)
-        blotch = look_again(scores, t, blotch, marks, checks, blotch_threshold, frame_scores)
+        blotch = look_again(scores, t, blotch, taken, evidence, blotch_threshold, frame_scores)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
