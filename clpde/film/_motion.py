@@ -340,6 +340,13 @@ class FilmMotion:
             fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1]
         )
 
+    def gain(self, t: int, s: int) -> tuple[float, float]:
+        """Frame s's flicker against frame t, fitted on the whole frame (kept: a second look
+        at a window of the frame, clpde.film._reflow, keeps the whole frame's)."""
+        return self._once(
+            ("g", t, s), lambda: fit_gain(self.G[t], self.warped(t, s), self.inside(t, s))
+        )
+
     def neighbour(self, t: int, k: int, fit_on: np.ndarray | None = None) -> Neighbour:
         """Frame t + k warped onto t, its flicker (a gain and offset) fitted robustly on the
         pixels whose match is inside (and fit_on, when given: pixels known clean)."""
@@ -347,7 +354,6 @@ class FilmMotion:
         f = self.flow(t, s)
         w = self.warped(t, s)
         ok = self.inside(t, s)
-        sel = ok if fit_on is None else ok & fit_on
-        a, b = fit_gain(self.G[t], w, sel)
+        a, b = self.gain(t, s) if fit_on is None else fit_gain(self.G[t], w, ok & fit_on)
         grey = (a * w + b).astype(np.float32)
         return Neighbour(k, grey, ok, f, a, b)

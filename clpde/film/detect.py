@@ -33,7 +33,6 @@ import numpy as np
 import pyopencl.array as cla
 from numpy.typing import ArrayLike
 from scipy import integrate, ndimage, optimize, special
-from skimage.morphology import black_tophat, disk, white_tophat
 
 from .._progress import Progress, progress_bar
 from ..errors import InputError
@@ -44,7 +43,9 @@ from ._morph import dilate
 from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
 from ._own_lines import residual_runs
+from ._photo import photo_damage
 from ._planes import film_planes, grey
+from ._reflow import look_again
 from ._regions import (
     RESIDUAL_UNITS,
     _local_noise_check,
@@ -53,7 +54,7 @@ from ._regions import (
     _spatial_blotches,
     _tail_check,
 )
-from .lines import LineKernels, film_scratches, robust_scale, scratch_runs
+from .lines import LineKernels, film_scratches, robust_scale
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
 KERNEL_FILES = ("film/detect.cl",)
@@ -150,7 +151,7 @@ def _partner(k: int, offs: list[int]) -> int:
     return min(same, key=abs) if same else k
 
 
-def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
+def frame_scores(motion: FilmMotion, t: int, radius: int, fixed: dict | None = None) -> dict:
     """Frame t's evidence against its compensated neighbours (numpy; see the module text).
 
     d: how far the pixel lies outside the range of all trusted neighbours (signed), where
@@ -161,7 +162,9 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         explains for n neighbours)).
     zr: the region evidence of faint blotches (5x5 means of each side's residual).
     res: the frame minus the median of its trusted neighbours; least: the scratch residual;
-    trusted_both: where both sides have a trusted neighbour."""
+    trusted_both: where both sides have a trusted neighbour. fixed: the grain's level
+    `sigma` and the region evidence's scale `zr_scale` measured before on the whole frame
+    (a window of it scored again: clpde.film._reflow)."""
     G = motion.G
     T, ny, nx = G.shape
     offs, sides = _window(t, T, radius)
@@ -175,6 +178,8 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     med0 = median(vals, inside)
     r0 = (v - med0)[inside.any(0)]
     sigma = max(robust_scale(r0) / RESIDUAL_UNITS if r0.size else 0.0, SIGMA_FLOOR)
+    if fixed is not None:
+        sigma = fixed["sigma"]
     # at a film's ends all neighbours lie on one side: an occluded pixel could find two
     # that agree with each other, so the flow back must agree too
     one_sided = all(o > 0 for o in offs) or all(o < 0 for o in offs)
@@ -207,9 +212,8 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
     med = np.where(np.isfinite(med), med, v)
     bp, bn = _box(rp, REGION_HALF), _box(rn, REGION_HALF)
     same = (np.sign(bp) == np.sign(bn)) & (bp != 0) & both
-    zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / max(
-        robust_scale(bp), SIGMA_FLOOR
-    )
+    zr_scale = max(robust_scale(bp), SIGMA_FLOOR) if fixed is None else fixed["zr_scale"]
+    zr = np.where(same, np.sign(bp) * np.minimum(np.abs(bp), np.abs(bn)), 0.0) / zr_scale
     # the residual's level and its grain's correlation area (pixels), measured on the frame:
     # a region of n pixels has a mean residual whose deviation is level * sqrt(area / n)
     # (footage without grain, its residual's level at the floor, has no grain to correlate:
@@ -229,6 +233,7 @@ def frame_scores(motion: FilmMotion, t: int, radius: int) -> dict:
         "res": res,
         "least": second_least(v, vals, ok),
         "sigma": sigma,
+        "zr_scale": zr_scale,
         "both": both,
         "n": n_ok.astype(np.int8),
         # the flows to the nearest neighbour each side: the ring check reads their spread
@@ -251,6 +256,7 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
     stack["flows"] = [p["flows"] for p in per]
     stack["bridge"] = [p["bridge"] for p in per]
     stack["region_noise"] = [p["region_noise"] for p in per]
+    stack["zr_scale"] = [p["zr_scale"] for p in per]
     sigmas = np.array([p["sigma"] for p in per])
     q = kern.rt.queue
     zs = np.stack(
@@ -259,7 +265,9 @@ def film_scores(G: np.ndarray, device, radius: int) -> dict:
             for t, s in enumerate(sigmas)
         ]
     )
-    return {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
+    # the motion stays for a second look at the frames' blotches (clpde.film._reflow)
+    out = {**stack, "zc": kern.continuity(zs), "sigma": sigmas, "radius": radius}
+    return {**out, "motion": motion}
 
 
 def _no_singletons(mask: np.ndarray, smallest: float = 2) -> np.ndarray:
@@ -361,6 +369,12 @@ def _frame_kinds(
     weak = np.where(scores["both"][t], a, 0.0)
     busy = dilate(blotch | taken)
     blotch |= _spatial_blotches(G, t, weak, np.sign(r), low, low, smallest, sigmas[t], search, busy)
+    if "motion" in scores and blotch.any():
+        # a second look around the blotches, with flows their damage does not drag
+        def evidence(sc: dict) -> np.ndarray:
+            return blotch_evidence(sc, t, gamma, low)[0]
+
+        blotch = look_again(scores, t, blotch, taken, evidence, blotch_threshold, frame_scores)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
@@ -406,48 +420,6 @@ def film_kinds(
             lone = (kinds[end] == SCRATCH) & ~dilate(kinds[inner] == SCRATCH, structure=wide)
             kinds[end][lone] = CLEAN
     return kinds
-
-
-def _photo(
-    G: np.ndarray, speck_threshold: float, scratch_threshold: float, min_length: int, device
-) -> np.ndarray:
-    ny, nx = G.shape
-    # the grain's level from the image minus its 5x5 median: film grain is correlated over
-    # a pixel or two, which the finest-scale estimate of denoising misses
-    sigma = max(robust_scale(G - ndimage.median_filter(G, size=5, mode="nearest")), 0.5 / 255)
-    specks = np.zeros((ny, nx), bool)
-    for rad in (1, 2, 4, 8):
-        # at each scale, the components that stand out and fit in its disc: a speck, not
-        # a stroke, an edge or a broad bump
-        white = white_tophat(G, footprint=disk(rad))
-        black = black_tophat(G, footprint=disk(rad))
-        found = np.maximum(white, black) > speck_threshold * sigma
-        labels, n = ndimage.label(found)
-        keep = np.zeros(n + 1, bool)
-        for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-            h, w = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
-            area = int((labels[sl] == idx).sum())
-            if not (
-                max(h, w) <= 2 * rad + 1 and max(h, w) <= 3 * min(h, w) + 1 and area >= 0.3 * h * w
-            ):
-                continue
-            # a speck steps off its surroundings; a smooth bump fades into them
-            comp = labels == idx
-            ring = dilate(comp, 2) & ~comp
-            step = abs(float(G[comp].mean()) - float(np.median(G[ring])))
-            keep[idx] = step > speck_threshold * sigma
-        specks |= keep[labels]
-    resid = G - ndimage.median_filter(G, size=(1, 9), mode="nearest")
-    rt = get_runtime(device)
-    kern = LineKernels(rt)
-    zs = kern.line_score(
-        cla.to_device(rt.queue, np.ascontiguousarray(resid, np.float32)), 3.0 * sigma
-    )
-    scratch = scratch_runs(zs, resid, sigma, scratch_threshold, min_length, thin=False)
-    kinds = np.zeros((ny, nx), np.int8)
-    kinds[specks & ~scratch] = BLOTCH
-    kinds[scratch] = SCRATCH
-    return kinds[np.newaxis]
 
 
 def _grow_kinds(kinds: np.ndarray, px: float) -> np.ndarray:
@@ -569,7 +541,10 @@ def detect_defects(
     sthr = SCRATCH_THRESHOLD if scratch_threshold is None else float(scratch_threshold)
     if T == 1:
         bthr = PHOTO_SPECK_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
-        kinds = _photo(G[0], bthr, sthr, int(min_length), device)
+        specks, scratch = photo_damage(G[0], bthr, sthr, int(min_length), device)
+        kinds = np.zeros((1, *G.shape[1:]), np.int8)
+        kinds[0][specks & ~scratch] = BLOTCH
+        kinds[0][scratch] = SCRATCH
     else:
         bthr = BLOTCH_THRESHOLD if blotch_threshold is None else float(blotch_threshold)
         with progress_bar(progress, 2, "clpde detect_defects", unit="stage") as bar:
