@@ -513,9 +513,7 @@ def fitting_kernel(runtime, real) -> tuple:
     problem = None
     group, vector = work_shape(runtime)
     if np.dtype(real) == np.float64 and vector > 1:
-        # PoCL's LLVM 14 spent minutes in its instruction combiner on the double8 vectors,
-        # and was seen never to finish, on an AMD EPYC (2026-12-07; float8 built in
-        # seconds): in double the candidates go one at a time (the same fill, bit for bit)
+        # (PoCL's LLVM 14 never built double8 on an AMD EPYC; docs/portability.md)
         vector = 1
     for spill in (0, 1):
         defines = {"SPECTRAL_GROUP": group, "SPECTRAL_VW": vector}
