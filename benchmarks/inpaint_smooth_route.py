@@ -167,6 +167,12 @@ class Scored:
             w = pick._window(slices[k])
             lag = int(np.clip(round(radius[k]), 1, 32))
             rho[k] = autocorrelation_at(detail[w], ok[w], lag)
+        # the same over the 8 px ring's own spread instead of the window's
+        grey = data.mean(axis=0)
+        g1 = np.asarray(ndimage.mean(grey, ring8, labels), float)
+        g2 = np.asarray(ndimage.mean(grey**2, ring8, labels), float)
+        spread8 = np.sqrt(np.maximum(np.nan_to_num(g2 - g1**2), 1e-24))
+        m["rough2"] = texture / spread8
         m["rho"], m["rough"] = rho, rough
         # ring errors: the host's biharmonic fill (smooth.ring_errors), the spectral fill's
         # from the cache
@@ -221,6 +227,8 @@ def rules():
         out[f"rho < {t}"] = lambda m, t=t: m["rho"] < t
     for t in (0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5):
         out[f"rough < {t}"] = lambda m, t=t: m["rough"] < t
+    for t in (0.1, 0.2, 0.3, 0.4, 0.5):
+        out[f"rough2 < {t}"] = lambda m, t=t: m["rough2"] < t
     for t in (0.2, 0.3):
         for q in (3, 5):
             out[f"rough < {t} & fit < {q}"] = lambda m, t=t, q=q: (m["rough"] < t) & (m["fit"] < q)
@@ -270,6 +278,7 @@ def main(argv=None):
                 print(
                     f"{s.case.half[:3]} {s.case.name:30s} {k + 1:3d} r={m['radius'][k]:4.1f} "
                     f"tex={m['texture'][k]:.4f} rho={m['rho'][k]:5.2f} rough={m['rough'][k]:.3f} "
+                    f"r2={m['rough2'][k]:.3f} "
                     f"fit={m['fit'][k]:6.2f} fv={m['fitvar'][k]:.3f} ratio={m['ratio'][k]:5.2f} "
                     f"gap={m['gap'][k]:.2f} "
                     f"sep={m['sep'][k]:4.1f}  bih-pick={gain:+6.2f} dB"

@@ -207,6 +207,15 @@ def test_a_smooth_field_s_voids_take_the_smooth_route():
     assert error["pick"] < 0.7 * error["spectral"], error
 
 
+def test_a_large_routed_cluster_is_solved_on_the_device_alike(monkeypatch):
+    image, mask = _voids()
+    host = _run(image, mask, "pick")
+    monkeypatch.setattr(pick, "HOST_MAX", 100)  # every void over it: the device's solve
+    device = _run(image, mask, "pick")
+    assert not np.array_equal(host, device)
+    assert np.abs(host[mask] - device[mask]).max() < 0.01 * np.ptp(image)
+
+
 def _texture(ny=96, nx=96, seed=2):
     """Fine-grained texture: noise blurred by 1 px over a gentle shading, as 8-bit data."""
     from scipy import ndimage
