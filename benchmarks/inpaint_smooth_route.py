@@ -123,6 +123,27 @@ def autocorrelation_at(detail, ok, lag):
     return float(np.mean(num[use] / np.sqrt(e1[use] * e2[use])))
 
 
+def autocorrelation_curve(detail, ok, top=32):
+    """autocorrelation_at for every chessboard length 0..top (an array; 0 where no lag of
+    that length overlaps enough)."""
+    d = np.where(ok, detail, 0).astype(np.float64)
+    k = ok.astype(np.float64)
+    shape = (sfft.next_fast_len(d.shape[0] + top + 1), sfft.next_fast_len(d.shape[1] + top + 1))
+    fd, fd2, fk = sfft.rfft2(np.stack([d, d * d, k]), shape)
+    num, e1, e2, count = sfft.irfft2(
+        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fd2), fk * np.conj(fk)]), shape
+    )
+    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
+    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
+    length = np.broadcast_to(np.maximum(np.abs(ty), np.abs(tx)), num.shape)
+    use = (length <= top) & (count > 0.25 * k.sum()) & (np.minimum(e1, e2) > 1e-12)
+    corr = np.zeros(num.shape)
+    corr[use] = num[use] / np.sqrt(e1[use] * e2[use])
+    total = np.bincount(length[use].astype(int), corr[use], minlength=top + 1)
+    n = np.bincount(length[use].astype(int), minlength=top + 1)
+    return np.where(n > 0, total / np.maximum(n, 1), 0.0)[: top + 1]
+
+
 class Scored:
     """One cached case: each candidate's output, its clusters and their measures."""
 
@@ -163,10 +184,13 @@ class Scored:
         t0 = time.process_time()
         rough[cand - 1] = pick.roughness(data, omega, parts, cand)
         self.seconds["roughness"] = time.process_time() - t0
+        self.curves = np.zeros((count, 33))
         for k in cand - 1:
             w = pick._window(slices[k])
             lag = int(np.clip(round(radius[k]), 1, 32))
-            rho[k] = autocorrelation_at(detail[w], ok[w], lag)
+            self.curves[k] = autocorrelation_curve(detail[w], ok[w])
+            rho[k] = self.curves[k][lag]
+        self.depth = ndimage.distance_transform_edt(omega)
         # the same over the 8 px ring's own spread instead of the window's
         grey = data.mean(axis=0)
         g1 = np.asarray(ndimage.mean(grey, ring8, labels), float)
@@ -208,12 +232,30 @@ class Scored:
 
     def route(self, smooth):
         """The case's PSNR with the clusters in `smooth` (bool per cluster) taken from the
-        biharmonic fill."""
+        biharmonic fill; or, float per cluster, the biharmonic fill's weight in a blend with
+        the default's; or ("depth", allowed) per pixel, the biharmonic fill's weight one
+        minus the detail's autocorrelation at the pixel's depth (clipped to [0, 1]) on the
+        clusters `allowed`."""
+        omega = self.case.mask
+        lab = self.clusters[omega]
+        if isinstance(smooth, tuple):
+            allowed = smooth[1] & self.candidate
+            depth = np.minimum(np.rint(self.depth[omega]).astype(int), 32)
+            rho = self.curves[lab - 1, depth]
+            w = np.where(allowed[lab - 1], 1 - np.clip(rho, 0, 1), 0.0)
+            if len(smooth) > 2:  # these clusters whole
+                w = np.where((smooth[2] & self.candidate)[lab - 1], 1.0, w)
+        else:
+            w = np.where(self.candidate, np.asarray(smooth, float), 0.0)[lab - 1]
+        a = self.outs["pick"][omega].astype(float)
+        b = self.outs["biharmonic"][omega].astype(float)
+        if a.ndim > 1:
+            w = w[:, None]
+        mix = a + w * (b - a)
         img = self.outs["pick"].copy()
-        chosen = (
-            np.isin(self.clusters, 1 + np.flatnonzero(smooth & self.candidate)) & self.case.mask
-        )
-        img[chosen] = self.outs["biharmonic"][chosen]
+        if np.issubdtype(img.dtype, np.integer):
+            mix = np.rint(mix)
+        img[omega] = mix.astype(img.dtype)
         return corpus.psnr(self.case, img)
 
 
@@ -236,6 +278,15 @@ def rules():
         out[f"fit < {q}"] = lambda m, q=q: m["fit"] < q
     for q in (0.01, 0.03, 0.1, 0.3):
         out[f"fitvar < {q}"] = lambda m, q=q: m["fitvar"] < q
+    for w in (0.3, 0.5, 0.7):
+        out[f"blend {w} biharmonic"] = lambda m, w=w: np.full(m["radius"].shape, w)
+    out["blend by depth's rho"] = lambda m: ("depth", np.ones(m["radius"].shape, bool))
+    for t in (0.2, 0.3):
+        out[f"rough < {t}, else blend by depth"] = lambda m, t=t: (
+            "depth",
+            np.ones(m["radius"].shape, bool),
+            m["rough"] < t,
+        )
     for r in (4, 6, 8, 10):
         out[f"radius >= {r}"] = lambda m, r=r: m["radius"] >= r
     for r in (4, 6, 8):
@@ -290,12 +341,15 @@ def main(argv=None):
             by, routed = {}, {}
             for s in sel:
                 smooth = rule(s.m)
-                if args.not_edge:
-                    smooth = smooth & ~(
-                        (s.m["gap"] >= pick.EDGE_GAP) & (s.m["sep"] >= pick.EDGE_SEPARATION)
-                    )
+                edge = (s.m["gap"] >= pick.EDGE_GAP) & (s.m["sep"] >= pick.EDGE_SEPARATION)
+                if isinstance(smooth, tuple):
+                    keep = ~edge if args.not_edge else np.ones_like(edge)
+                    smooth = tuple(x if isinstance(x, str) else x & keep for x in smooth)
+                    n = int((smooth[1] & s.candidate).sum())
+                else:
+                    smooth = np.where(edge, 0, smooth) if args.not_edge else smooth
+                    n = int(((np.asarray(smooth, float) > 0) & s.candidate).sum())
                 by.setdefault(s.case.damage, []).append(s.route(smooth))
-                n = int((smooth & s.candidate).sum())
                 routed[s.case.damage[:2]] = routed.get(s.case.damage[:2], 0) + n
             means = {d: np.mean(v) for d, v in by.items()}
             print(
