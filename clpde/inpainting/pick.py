@@ -94,10 +94,12 @@ EDGE_SEPARATION = 3.0
 # blobs). The biharmonic prediction stays at tol 1e-5: stopped at 1e-3 from the ring's mean
 # it misjudged a smooth field's 15 px hole, and from the spectral prediction it saved 10%.
 RING_SPECTRAL = {"iterations": 40}
-# The smooth route (module docstring): a thick cluster whose surround's roughness is below
-# ROUGH goes to the host's biharmonic fill (smooth.py). Chosen on the calibration half
-# (benchmarks/inpaint_smooth_route.py).
-ROUGH = 0.3
+# The smooth route (module docstring): a cluster at least ROUTE_RADIUS thick whose
+# surround's roughness is below ROUGH goes to the host's biharmonic fill (smooth.py).
+# Chosen on the calibration half (benchmarks/inpaint_smooth_route.py; docs/inpainting.md,
+# "A smooth route"): thinner clusters or rougher surrounds lost on blobs and thick holes.
+ROUGH = 0.15
+ROUTE_RADIUS = 6.0
 ROUTE_EDGES = False  # clusters on a clear edge (edge_contrast) are not routed
 # A routed cluster of more hole pixels than this is solved on the device (poisson.py): the
 # host's direct solve grows faster than its size (2,800 px: 0.02 s, 11,000: 0.17 s,
@@ -220,12 +222,12 @@ def roughness(data, omega, parts, labels, detail=None):
 
 def smooth_clusters(data, omega, parts, periodic, detail=None):
     """The labels of the clusters that the smooth route gives to the biharmonic fill
-    (module docstring): at least SMOOTH_RADIUS thick, not periodic, and a surround of
-    roughness below ROUGH."""
+    (module docstring): at least ROUTE_RADIUS thick, not periodic, not on a clear edge, and
+    a surround of roughness below ROUGH."""
     clusters, count, radius = parts
     in_period = np.zeros(count + 1, bool)
     in_period[np.unique(clusters[periodic])] = True
-    labels = 1 + np.flatnonzero((radius >= SMOOTH_RADIUS) & ~in_period[1:])
+    labels = 1 + np.flatnonzero((radius >= ROUTE_RADIUS) & ~in_period[1:])
     if not labels.size:
         return labels
     labels = labels[roughness(data, omega, parts, labels, detail) < ROUGH]
