@@ -5,10 +5,11 @@ each cluster's surround against what the two fills score there, on the corpus.
     PYTHONPATH=. python benchmarks/inpaint_smooth_route.py rules [--half both] [--clusters]
 
 `cache` fills every case of tests/cases/inpaint_corpus.py once (the whole image one box) by
-the default as it is (method "pick") and by the device's biharmonic fill, and each with a
-ring of RING px of known pixels hidden around the hole as well (the spectral fill as the
-opt-in smooth vote predicts it, pick.RING_SPECTRAL, and the biharmonic fill); stored in
-benchmarks/results/smooth_route/<case>.npz with each fill's seconds.
+the default as it was before the smooth route (method "pick", route=False) and by the
+host's biharmonic fill of every cluster (clpde/inpainting/smooth.py), and by the spectral
+fill with a ring of RING px of known pixels hidden around the hole as well (as the opt-in
+smooth vote predicts it, pick.RING_SPECTRAL); stored in
+benchmarks/results/smooth_route/<case>.npz with each fill's CPU seconds.
 
 `rules` scores routes from that cache: per cluster at least pick.SMOOTH_RADIUS thick that
 is not periodic, the biharmonic fill where a rule on the cluster's measures says so, the
@@ -21,10 +22,15 @@ pick.WINDOW, as the periodicity test's; detail: choose._detail, grey minus its l
   length round(radius) (mean over those lags): how far the fine detail stays predictable;
 - rough: texture over the standard deviation of the grey known pixels in the window;
 - gap, sep: pick.edge_contrast;
-- fit: the biharmonic fill's mean squared error on the cluster's hidden ring over the
-  ring's detail energy (texture on the ring, squared): about 1 where the smooth fill misses
-  only the fine detail;
+- fit: the host biharmonic fill's mean squared error on the cluster's hidden ring
+  (smooth.ring_errors) over the ring's detail energy: about 1 where the smooth fill misses
+  only the fine detail; fitvar: the same over the ring's variance;
+- rough2: texture over the 8 px ring's own standard deviation;
 - ratio: the biharmonic ring error over the spectral one (the opt-in smooth vote's test).
+
+Rules also blend the two fills (a fixed weight, or per pixel one minus the detail's
+autocorrelation at the pixel's depth). `--not-edge` leaves the clusters on a clear edge
+(pick.EDGE_GAP, pick.EDGE_SEPARATION) to the default, as the route does.
 """
 
 from __future__ import annotations
@@ -104,28 +110,10 @@ def cache(halves, only=None):
         print(f"[{i + 1}/{len(cases)}] {case.name}", flush=True)
 
 
-def autocorrelation_at(detail, ok, lag):
-    """The detail's normalised autocorrelation over the known pixels, averaged over the lags
-    of chessboard length `lag` whose overlap holds a quarter of the known pixels."""
-    d = np.where(ok, detail, 0).astype(np.float64)
-    k = ok.astype(np.float64)
-    shape = (sfft.next_fast_len(d.shape[0] + lag + 1), sfft.next_fast_len(d.shape[1] + lag + 1))
-    fd, fd2, fk = sfft.rfft2(np.stack([d, d * d, k]), shape)
-    num, e1, e2, count = sfft.irfft2(
-        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fd2), fk * np.conj(fk)]), shape
-    )
-    ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
-    tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
-    length = np.maximum(np.abs(ty), np.abs(tx))
-    use = (length == lag) & (count > 0.25 * k.sum()) & (np.minimum(e1, e2) > 1e-12)
-    if not use.any():
-        return 0.0
-    return float(np.mean(num[use] / np.sqrt(e1[use] * e2[use])))
-
-
 def autocorrelation_curve(detail, ok, top=32):
-    """autocorrelation_at for every chessboard length 0..top (an array; 0 where no lag of
-    that length overlaps enough)."""
+    """The detail's normalised autocorrelation over the known pixels, averaged over the lags
+    of each chessboard length 0..top whose overlap holds a quarter of the known pixels (an
+    array; 0 where no lag of that length does)."""
     d = np.where(ok, detail, 0).astype(np.float64)
     k = ok.astype(np.float64)
     shape = (sfft.next_fast_len(d.shape[0] + top + 1), sfft.next_fast_len(d.shape[1] + top + 1))

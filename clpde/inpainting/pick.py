@@ -15,21 +15,24 @@ A cluster whose surround repeats at least as well as choose.MIN_PERIODICITY (the
 exemplar's own threshold for copying without a structure guide) takes the exemplar's fill;
 every other takes the spectral fill. (The largest autocorrelation alone, choose.periodicity,
 sent blobs on straight edges to the exemplar: -0.42 dB on the test half's blobs.) A box
-without such a cluster is filled by the spectral fill alone, exactly as method="spectral".
+without such a cluster, or a routed one (below), is filled by the spectral fill alone,
+exactly as method="spectral".
 
-The smooth route (`route=True`, the default): a cluster at least SMOOTH_RADIUS thick, not
+The smooth route (`route=True`, the default): a cluster at least ROUTE_RADIUS thick, not
 periodic and not on a clear edge (edge_contrast), whose surround varies smoothly takes the
 biharmonic fill, solved per cluster on the host (smooth.py: a direct sparse solve, a few
 ms for a cluster of hundreds of pixels) before the spectral fill fills the rest, which
 then reads those clusters as known. "Smoothly": the surround's roughness (`roughness`:
 the RMS of the fine detail, grey minus its local mean, on the known pixels within 8 px,
 over the standard deviation of the grey known pixels in the cluster's window) is below
-ROUGH. Where the surround's variation is mostly at scales above the hole's border (a
+ROUGH (both chosen on the calibration half: docs/inpainting.md, "A smooth route for smooth
+surrounds"). Where the surround's variation is mostly at scales above the hole's border (a
 smooth field), a smooth fill continues it, and the spectral fill's sparse Fourier model
 adds detail that is not there; where fine detail dominates it, the spectral fill keeps
-the cluster. What it costs: one distance transform of the box and a window's standard
-deviation per thick cluster; the routed clusters' host fill replaces the spectral fill's
-work there.
+the cluster. Thinner clusters (3-6 px) in smooth surrounds lost on the calibration half's
+blobs (-0.42 dB), rougher surrounds on its thick holes. What it costs: one distance
+transform of the box and a window's standard deviation per cluster at least ROUTE_RADIUS
+thick; the routed clusters' host fill replaces the spectral fill's work there.
 
 The smooth vote (`smooth=True`, off by default): each other cluster at least SMOOTH_RADIUS
 thick and not on a clear edge (edge_contrast: its border splits into two sides of distinct
@@ -72,7 +75,10 @@ from .spectral import SpectralOptions
 # api._cold, reads it); the exemplar's and the biharmonic fill's only on some clusters.
 KERNEL_FILES = ("inpainting/spectral.cl",)
 
-DESCRIPTION = "the spectral fill, and the exemplar's where a cluster sits in a periodic pattern"
+DESCRIPTION = (
+    "the spectral fill, the exemplar's where a cluster sits in a periodic pattern, and the "
+    "biharmonic fill's on thick clusters in a smooth surround"
+)
 
 MIN_RADIUS = 3.0  # thinner clusters: the spectral fill (a scratch needs no period copied)
 WINDOW = 24  # px of surround measured around each cluster's bounding box
