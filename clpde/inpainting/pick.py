@@ -1,6 +1,7 @@
 """method="pick": the spectral fill, except where a cluster of damage sits in a periodic
-pattern, which the exemplar copies instead (and, with the smooth vote, where the biharmonic
-fill predicts a hidden ring around a cluster better).
+pattern, which the exemplar copies instead, or in a smoothly varying surround, which the
+biharmonic fill takes (and, with the smooth vote, where the biharmonic fill predicts a
+hidden ring around a cluster better).
 
 The spectral fill (spectral.py) leads on thin damage and photos but cannot continue a
 periodic pattern across a hole of several periods (issue 37: 7.85 dB behind FSR-best on the
@@ -14,7 +15,24 @@ A cluster whose surround repeats at least as well as choose.MIN_PERIODICITY (the
 exemplar's own threshold for copying without a structure guide) takes the exemplar's fill;
 every other takes the spectral fill. (The largest autocorrelation alone, choose.periodicity,
 sent blobs on straight edges to the exemplar: -0.42 dB on the test half's blobs.) A box
-without such a cluster is filled by the spectral fill alone, exactly as method="spectral".
+without such a cluster, or a routed one (below), is filled by the spectral fill alone,
+exactly as method="spectral".
+
+The smooth route (`route=True`, the default): a cluster at least ROUTE_RADIUS thick, not
+periodic and not on a clear edge (edge_contrast), whose surround varies smoothly takes the
+biharmonic fill, solved per cluster on the host (smooth.py: a direct sparse solve, a few
+ms for a cluster of hundreds of pixels) before the spectral fill fills the rest, which
+then reads those clusters as known. "Smoothly": the surround's roughness (`roughness`:
+the RMS of the fine detail, grey minus its local mean, on the known pixels within 8 px,
+over the standard deviation of the grey known pixels in the cluster's window) is below
+ROUGH (both chosen on the calibration half: docs/inpainting.md, "A smooth route for smooth
+surrounds"). Where the surround's variation is mostly at scales above the hole's border (a
+smooth field), a smooth fill continues it, and the spectral fill's sparse Fourier model
+adds detail that is not there; where fine detail dominates it, the spectral fill keeps
+the cluster. Thinner clusters (3-6 px) in smooth surrounds lost on the calibration half's
+blobs (-0.42 dB), rougher surrounds on its thick holes. What it costs: one distance
+transform of the box and a window's standard deviation per cluster at least ROUTE_RADIUS
+thick; the routed clusters' host fill replaces the spectral fill's work there.
 
 The smooth vote (`smooth=True`, off by default): each other cluster at least SMOOTH_RADIUS
 thick and not on a clear edge (edge_contrast: its border splits into two sides of distinct
@@ -49,6 +67,7 @@ from ..errors import InputError
 from . import choose, poisson
 from .exemplar import ExemplarOptions
 from .registry import keywords, load, register
+from .smooth import fill as smooth_fill
 from .spectral import MARGIN as SPECTRAL_MARGIN
 from .spectral import SpectralOptions
 
@@ -56,7 +75,10 @@ from .spectral import SpectralOptions
 # api._cold, reads it); the exemplar's and the biharmonic fill's only on some clusters.
 KERNEL_FILES = ("inpainting/spectral.cl",)
 
-DESCRIPTION = "the spectral fill, and the exemplar's where a cluster sits in a periodic pattern"
+DESCRIPTION = (
+    "the spectral fill, the exemplar's where a cluster sits in a periodic pattern, and the "
+    "biharmonic fill's on thick clusters in a smooth surround"
+)
 
 MIN_RADIUS = 3.0  # thinner clusters: the spectral fill (a scratch needs no period copied)
 WINDOW = 24  # px of surround measured around each cluster's bounding box
@@ -78,6 +100,17 @@ EDGE_SEPARATION = 3.0
 # blobs). The biharmonic prediction stays at tol 1e-5: stopped at 1e-3 from the ring's mean
 # it misjudged a smooth field's 15 px hole, and from the spectral prediction it saved 10%.
 RING_SPECTRAL = {"iterations": 40}
+# The smooth route (module docstring): a cluster at least ROUTE_RADIUS thick whose
+# surround's roughness is below ROUGH goes to the host's biharmonic fill (smooth.py).
+# Chosen on the calibration half (benchmarks/inpaint_smooth_route.py; docs/inpainting.md,
+# "A smooth route"): thinner clusters or rougher surrounds lost on blobs and thick holes.
+ROUGH = 0.15
+ROUTE_RADIUS = 6.0
+ROUTE_EDGES = False  # clusters on a clear edge (edge_contrast) are not routed
+# A routed cluster of more hole pixels than this is solved on the device (poisson.py): the
+# host's direct solve grows faster than its size (2,800 px: 0.02 s, 11,000: 0.17 s,
+# 31,000: 1.3 s on the 2-core VM)
+HOST_MAX = 12000
 FINAL_TOL = 1e-3  # the chosen clusters' biharmonic fill, from the spectral fill
 
 
@@ -96,12 +129,16 @@ class PickOptions:
     smooth : bool
         Let the biharmonic fill take the thick clusters whose ring it predicts better
         (the smooth vote; False: the spectral fill keeps them).
+    route : bool
+        Give the thick clusters in a smoothly varying surround to the biharmonic fill (the
+        smooth route; False: the spectral fill keeps them).
     """
 
     spectral: SpectralOptions = field(default_factory=SpectralOptions)
     exemplar: ExemplarOptions = field(default_factory=ExemplarOptions)
     periodicity: float = choose.MIN_PERIODICITY
     smooth: bool = False
+    route: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.spectral, SpectralOptions):
@@ -112,6 +149,8 @@ class PickOptions:
             raise InputError(f"periodicity must be in [0, 1], not {self.periodicity!r}")
         if not isinstance(self.smooth, bool):
             raise InputError(f"smooth must be True or False, not {self.smooth!r}")
+        if not isinstance(self.route, bool):
+            raise InputError(f"route must be True or False, not {self.route!r}")
 
 
 def clusters_of(omega):
@@ -136,27 +175,77 @@ def has_thick(omega) -> bool:
     return bool(ndimage.binary_erosion(omega, near, border_value=1).any())
 
 
-def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY, parts=None):
+def _window(s, shape=None):
+    """A cluster's measured window: its bounding box `s` grown by WINDOW px."""
+    y1, x1 = s[0].stop + WINDOW, s[1].stop + WINDOW
+    if shape is not None:
+        y1, x1 = min(y1, shape[0]), min(x1, shape[1])
+    return slice(max(s[0].start - WINDOW, 0), y1), slice(max(s[1].start - WINDOW, 0), x1)
+
+
+def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY, parts=None, detail=None):
     """The hole's pixels whose cluster sits in a periodic surround (module docstring): a
-    bool mask, within omega. parts: clusters_of(omega), if already known."""
+    bool mask, within omega. parts: clusters_of(omega), detail: choose._detail(data,
+    ~omega), if already known."""
     omega = np.asarray(omega, bool)
     clusters, count, radius = clusters_of(omega) if parts is None else parts
     thick = np.flatnonzero(radius >= MIN_RADIUS)
     if not thick.size:
         return np.zeros_like(omega)
-    detail, ok = choose._detail(data, ~omega)
+    detail, ok = choose._detail(data, ~omega) if detail is None else detail
     slices = ndimage.find_objects(clusters)
     chosen = []
     for k in thick:
-        s = slices[k]
-        y0, y1 = max(s[0].start - WINDOW, 0), s[0].stop + WINDOW
-        x0, x1 = max(s[1].start - WINDOW, 0), s[1].stop + WINDOW
-        if choose.repeat(detail[y0:y1, x0:x1], ok[y0:y1, x0:x1]) >= periodicity:
+        w = _window(slices[k])
+        if choose.repeat(detail[w], ok[w]) >= periodicity:
             chosen.append(k + 1)
     return np.isin(clusters, chosen) & omega
 
 
-def edge_contrast(data, omega, parts=None):
+def roughness(data, omega, parts, labels, detail=None):
+    """Per cluster in `labels`, how much of its surround's variation is fine detail: the RMS
+    of the detail (choose._detail) on the known pixels within choose.RING px that are
+    nearest to it, over the standard deviation of the grey known pixels in its window (its
+    box grown by WINDOW). Low: the surround varies smoothly (a smooth fill continues it);
+    about 1: the surround is texture or noise at the scale of a few pixels."""
+    omega = np.asarray(omega, bool)
+    clusters = parts[0]
+    known = ~omega
+    d = (choose._detail(data, known) if detail is None else detail)[0]
+    dist, (iy, ix) = ndimage.distance_transform_edt(known, return_indices=True)
+    owner = np.where(known & (dist <= choose.RING), clusters[iy, ix], 0)
+    energy = np.asarray(ndimage.mean(d.astype(np.float64) ** 2, owner, labels), float)
+    grey = np.asarray(data, np.float64).mean(axis=0)
+    slices = ndimage.find_objects(clusters)
+    out = np.full(len(labels), np.inf)
+    for i, lab in enumerate(labels):
+        w = _window(slices[lab - 1])
+        g = grey[w][known[w]]
+        if g.size > 1 and np.isfinite(energy[i]):
+            out[i] = np.sqrt(energy[i]) / max(float(g.std()), 1e-12)
+    return out
+
+
+def smooth_clusters(data, omega, parts, periodic, detail=None):
+    """The labels of the clusters that the smooth route gives to the biharmonic fill
+    (module docstring): at least ROUTE_RADIUS thick, not periodic, not on a clear edge, and
+    a surround of roughness below ROUGH."""
+    clusters, count, radius = parts
+    in_period = np.zeros(count + 1, bool)
+    in_period[np.unique(clusters[periodic])] = True
+    labels = 1 + np.flatnonzero((radius >= ROUTE_RADIUS) & ~in_period[1:])
+    if not labels.size:
+        return labels
+    labels = labels[roughness(data, omega, parts, labels, detail) < ROUGH]
+    if labels.size and ROUTE_EDGES is False:
+        # a clear edge across the hole: the spectral fill continues it, a smooth one blurs it
+        gap, separation = edge_contrast(data, omega, parts, labels)
+        edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
+        labels = labels[~edge[labels - 1]]
+    return labels
+
+
+def edge_contrast(data, omega, parts=None, labels=None):
     """Per cluster (label 1..count of clusters_of), how clearly its border splits into two
     sides of distinct colour: the border's known pixels (within BORDER px of the hole,
     each its nearest cluster's) projected on their colours' principal axis and split in
@@ -165,7 +254,8 @@ def edge_contrast(data, omega, parts=None):
     sum of the groups' standard deviations (about 1.7 for noise or a shading without
     sides); both 0 for a cluster with too few border pixels. A hole on an edge between two flat
     regions scores high; texture, and a gradient that merely shades across, low. parts:
-    clusters_of(omega), if already known."""
+    clusters_of(omega), if already known; labels: only these clusters are measured (the
+    others score 0)."""
     omega = np.asarray(omega, bool)
     clusters, count, _ = clusters_of(omega) if parts is None else parts
     known = ~omega
@@ -176,7 +266,7 @@ def edge_contrast(data, omega, parts=None):
     order = np.argsort(owner, kind="stable")
     bounds = np.searchsorted(owner[order], np.arange(1, count + 2))
     gap, separation = np.zeros(count), np.zeros(count)
-    for k in range(count):
+    for k in range(count) if labels is None else np.asarray(labels) - 1:
         v = values[:, order[bounds[k] : bounds[k + 1]]]
         if v.shape[1] < 8:
             continue
@@ -245,6 +335,7 @@ def solve(
     exemplar=None,
     periodicity=choose.MIN_PERIODICITY,
     smooth=False,
+    route=True,
 ):
     """The picked fill of one box (module docstring; registry.py's protocol)."""
     spectral = SpectralOptions() if spectral is None else spectral
@@ -252,29 +343,46 @@ def solve(
     omega = np.asarray(omega, bool)
     common = {"dtype": dtype, "progress": progress, "seed": seed}
     parts = clusters_of(omega) if smooth or has_thick(omega) else None
+    detail = None if parts is None else choose._detail(data, ~omega)
     periodic = (
         np.zeros_like(omega)
         if parts is None
-        else periodic_clusters(data, omega, periodicity, parts)
+        else periodic_clusters(data, omega, periodicity, parts, detail)
     )
+    routed = np.zeros(1 if parts is None else parts[1] + 1, bool)
+    rest = omega
+    if route and parts is not None:
+        labels = smooth_clusters(data, omega, parts, periodic, detail)
+        if labels.size:
+            # the smooth clusters first: the spectral fill then reads them as known
+            size = np.bincount(parts[0][omega], minlength=parts[1] + 1)[labels]
+            data = smooth_fill(data, omega, parts[0], labels[size <= HOST_MAX])
+            if (size > HOST_MAX).any():  # (the device's solve: its stencil reads only known
+                # pixels and the cluster's own, clusters being 3 px apart)
+                big = np.isin(parts[0], labels[size > HOST_MAX]) & omega
+                data = np.asarray(poisson.fill(data, big, runtime, dtype=dtype), np.float64)
+            routed[labels] = True
+            rest = omega & ~routed[parts[0]]
     fill_spectral = load("spectral").solve
-    if not periodic.any():
-        out = fill_spectral(data, omega, runtime, **common, **keywords(spectral))
+    if not rest.any():
+        out = data
+    elif not periodic.any():
+        out = fill_spectral(data, rest, runtime, **common, **keywords(spectral))
     else:
         # the exemplar fills every hole (the others must not be copied from as if known)
         # and keeps its fill of the periodic clusters; the spectral fill does the rest
-        out = load("exemplar").solve(data, omega, runtime, **common, **keywords(exemplar))
-        rest = omega & ~periodic
-        if rest.any():
+        out = load("exemplar").solve(data, rest, runtime, **common, **keywords(exemplar))
+        others = rest & ~periodic
+        if others.any():
             out = fill_spectral(
-                np.asarray(out, np.float64), rest, runtime, **common, **keywords(spectral)
+                np.asarray(out, np.float64), others, runtime, **common, **keywords(spectral)
             )
     if not smooth:
         return out
     clusters, count, radius = parts
     in_period = np.zeros(count + 1, bool)
     in_period[np.unique(clusters[periodic])] = True
-    candidates = (radius >= SMOOTH_RADIUS) & ~in_period[1:]
+    candidates = (radius >= SMOOTH_RADIUS) & ~in_period[1:] & ~routed[1:]
     if not candidates.any():  # (thin damage: no edge test, no ring test)
         return out
     gap, separation = edge_contrast(data, omega, parts)

@@ -68,7 +68,8 @@ METHODS = {
 # auto.py's candidates (a method of its own, registered there).
 AUTO_MODULE = "clpde.inpainting.auto"
 # method=None: "pick", the frequency-selective fill ("spectral") except on the clusters of
-# damage in a periodic surround, which the exemplar copies (pick.py). The spectral fill was
+# damage in a periodic surround, which the exemplar copies, and on thick clusters in a
+# smoothly varying surround, which the biharmonic fill takes (pick.py). The spectral fill was
 # chosen on the calibration half of benchmarks/inpaint_corpus.py's corpus among coherence,
 # spectral and the self-validated votes, as the candidate leading the best peer in the most
 # classes within a time budget of FSR-fast's, the strongest peer; "pick" ties it in every
