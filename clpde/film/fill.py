@@ -305,6 +305,7 @@ def _self_check(
     sigma: float,
     lines: np.ndarray | None = None,
     spots: np.ndarray | None = None,
+    one_sided: bool = False,
 ) -> np.ndarray:
     """The regions of `hole` whose repair the data does not explain: where the mean squared
     change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
@@ -323,7 +324,12 @@ def _self_check(
     trusted) its distance outside its ring's range (`ring_evidence`): there the temporal
     residual says nothing, and the noise alone would refuse every such repair. A false
     alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
-    its values. Returns the bool (H, W) pixels whose repair is refused."""
+    its values. one_sided (a film's first or last frame: every neighbour on one side): a
+    change of the scene that lasts from the next frame on (an eye that closes, an object
+    that begins to cover another) shows in all the neighbours alike, as damage of this
+    frame would; their residual cannot tell the two apart, so a blotch's E^2 is at most its
+    spatial evidence there (the smaller of the two per pixel). Returns the bool (H, W)
+    pixels whose repair is refused."""
     labels, n = ndimage.label(hole)
     if n == 0:
         return np.zeros(hole.shape, bool)
@@ -332,10 +338,14 @@ def _self_check(
     floor = np.full(len(where[0]), 2 * sigma**2, np.float32)
     if lines is not None and lines.any():
         floor = np.where(lines[where], line_evidence(frame, lines)[where], floor)
+    ring = None
     if spots is not None and spots.any():
-        floor = np.where(spots[where], ring_evidence(frame, spots, hole)[where], floor)
+        ring = ring_evidence(frame, spots, hole)[where]
+        floor = np.where(spots[where], ring, floor)
     e2 = resid2[where]
     e2 = np.where(np.isfinite(e2), e2, floor)
+    if one_sided and ring is not None:
+        e2 = np.where(spots[where], np.minimum(e2, ring), e2)
     d2 = (restored[where] - frame[where]) ** 2
     index = np.arange(1, n + 1)
     mean_d2 = ndimage.mean(d2, labels[where], index)
@@ -500,7 +510,11 @@ def inpaint_video(
                 lines = spots = None
                 if kinds is not None:
                     lines, spots = kinds[t] == SCRATCH, kinds[t] == BLOTCH
-                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots)
+                # at a film's ends every neighbour lies on one side (_temporal's offsets)
+                one_sided = t in (0, T - 1)
+                close |= _self_check(
+                    kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots, one_sided
+                )
             frame = np.where(close[None], planes[t], frame)
         return frame
 
