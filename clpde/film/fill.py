@@ -327,9 +327,10 @@ def _self_check(
     its values. one_sided (a film's first or last frame: every neighbour on one side): a
     change of the scene that lasts from the next frame on (an eye that closes, an object
     that begins to cover another) shows in all the neighbours alike, as damage of this
-    frame would; their residual cannot tell the two apart, so a blotch's E^2 is at most its
-    spatial evidence there (the smaller of the two per pixel). Returns the bool (H, W)
-    pixels whose repair is refused."""
+    frame would; their residual cannot tell the two apart, so there a region of blotches
+    none of whose pixels lies outside its ring's range (`ring_evidence` 0 throughout: no
+    spatial evidence at all) keeps its values. Returns the bool (H, W) pixels whose repair
+    is refused."""
     labels, n = ndimage.label(hole)
     if n == 0:
         return np.zeros(hole.shape, bool)
@@ -344,13 +345,16 @@ def _self_check(
         floor = np.where(spots[where], ring, floor)
     e2 = resid2[where]
     e2 = np.where(np.isfinite(e2), e2, floor)
-    if one_sided and ring is not None:
-        e2 = np.where(spots[where], np.minimum(e2, ring), e2)
     d2 = (restored[where] - frame[where]) ** 2
     index = np.arange(1, n + 1)
     mean_d2 = ndimage.mean(d2, labels[where], index)
     mean_e2 = ndimage.mean(e2, labels[where], index)
-    refuse = np.concatenate([[False], mean_d2 > 2 * mean_e2])
+    refuse = mean_d2 > 2 * mean_e2
+    if one_sided and ring is not None:
+        # a blotch with no pixel outside its ring's range has no spatial evidence at all
+        shows = ndimage.maximum(np.where(spots[where], ring, 1.0), labels[where], index) > 0
+        refuse |= ~shows
+    refuse = np.concatenate([[False], refuse])
     return refuse[labels]
 
 

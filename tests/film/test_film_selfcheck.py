@@ -61,8 +61,8 @@ def test_scratch_every_neighbour_carries_is_repaired_and_a_false_alarm_is_not(rn
 
 
 def test_a_lasting_change_at_a_films_start_is_not_repaired_as_a_blotch(rng):
-    """A still shot; frame 0 shows a patch of texture (an open eye) that frames 1-4 no
-    longer show (it closed), flagged as a blotch in frame 0, and a dark blotch on a calm
+    """A still shot; frame 0 shows a patch (an eye) that frames 1-4 no longer show (it
+    opened on the texture behind), flagged as a blotch in frame 0, and a dark blotch on a calm
     part of frame 0. Frame 0's neighbours lie on one side and agree with each other: their
     residual speaks for both regions alike, and the fill would copy the closed eye in. The
     eye stands within its ring's range and keeps its values; the dirt, outside it, is
@@ -72,7 +72,7 @@ def test_a_lasting_change_at_a_films_start_is_not_repaired_as_a_blotch(rng):
     scene[:, :30] = 0.5 + 0.2 * (scene[:, :30] - 0.5)  # the calm part, where the dirt is
     frames = np.repeat(scene[None], T, axis=0)
     eye, dirt = (slice(30, 38), slice(50, 58)), (slice(10, 17), slice(10, 17))
-    frames[0][eye] = scene[eye][::-1, ::-1]
+    frames[0][eye] = 0.5  # a lid over the eye's texture, mid-grey: inside its ring's range
     clean = _grainy(frames, rng)
     dirty = clean.copy()
     dirty[0][dirt] -= 0.3
