@@ -305,7 +305,6 @@ def _self_check(
     sigma: float,
     lines: np.ndarray | None = None,
     spots: np.ndarray | None = None,
-    one_sided: bool = False,
 ) -> np.ndarray:
     """The regions of `hole` whose repair the data does not explain: where the mean squared
     change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
@@ -324,13 +323,7 @@ def _self_check(
     trusted) its distance outside its ring's range (`ring_evidence`): there the temporal
     residual says nothing, and the noise alone would refuse every such repair. A false
     alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
-    its values. one_sided (a film's first or last frame: every neighbour on one side): a
-    change of the scene that lasts from the next frame on (an eye that closes, an object
-    that begins to cover another) shows in all the neighbours alike, as damage of this
-    frame would; their residual cannot tell the two apart, so there a region of blotches
-    none of whose pixels lies outside its ring's range (`ring_evidence` 0 throughout: no
-    spatial evidence at all) keeps its values. Returns the bool (H, W) pixels whose repair
-    is refused."""
+    its values. Returns the bool (H, W) pixels whose repair is refused."""
     labels, n = ndimage.label(hole)
     if n == 0:
         return np.zeros(hole.shape, bool)
@@ -339,22 +332,15 @@ def _self_check(
     floor = np.full(len(where[0]), 2 * sigma**2, np.float32)
     if lines is not None and lines.any():
         floor = np.where(lines[where], line_evidence(frame, lines)[where], floor)
-    ring = None
     if spots is not None and spots.any():
-        ring = ring_evidence(frame, spots, hole)[where]
-        floor = np.where(spots[where], ring, floor)
+        floor = np.where(spots[where], ring_evidence(frame, spots, hole)[where], floor)
     e2 = resid2[where]
     e2 = np.where(np.isfinite(e2), e2, floor)
     d2 = (restored[where] - frame[where]) ** 2
     index = np.arange(1, n + 1)
     mean_d2 = ndimage.mean(d2, labels[where], index)
     mean_e2 = ndimage.mean(e2, labels[where], index)
-    refuse = mean_d2 > 2 * mean_e2
-    if one_sided and ring is not None:
-        # a blotch with no pixel outside its ring's range has no spatial evidence at all
-        shows = ndimage.maximum(np.where(spots[where], ring, 1.0), labels[where], index) > 0
-        refuse |= ~shows
-    refuse = np.concatenate([[False], refuse])
+    refuse = np.concatenate([[False], mean_d2 > 2 * mean_e2])
     return refuse[labels]
 
 
@@ -514,11 +500,7 @@ def inpaint_video(
                 lines = spots = None
                 if kinds is not None:
                     lines, spots = kinds[t] == SCRATCH, kinds[t] == BLOTCH
-                # at a film's ends every neighbour lies on one side (_temporal's offsets)
-                one_sided = t in (0, T - 1)
-                close |= _self_check(
-                    kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots, one_sided
-                )
+                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots)
             frame = np.where(close[None], planes[t], frame)
         return frame
 

@@ -9,7 +9,7 @@ import pytest
 from scipy.ndimage import gaussian_filter
 
 import clpde
-from clpde.film import BLOTCH, SCRATCH
+from clpde.film import SCRATCH
 from clpde.film.fill import line_evidence
 from clpde.film.stream import KEEP, WindowWork, restore_stream
 
@@ -58,30 +58,6 @@ def test_scratch_every_neighbour_carries_is_repaired_and_a_false_alarm_is_not(rn
     for t in range(1, T):
         before = np.abs(dirty[t][band] - clean[t][band]).mean()
         assert np.abs(old[t][band] - clean[t][band]).mean() > 0.5 * before, t
-
-
-def test_a_lasting_change_at_a_films_start_is_not_repaired_as_a_blotch(rng):
-    """A still shot; frame 0 shows a patch (an eye) that frames 1-4 no longer show (it
-    opened on the texture behind), flagged as a blotch in frame 0, and a dark blotch on a calm
-    part of frame 0. Frame 0's neighbours lie on one side and agree with each other: their
-    residual speaks for both regions alike, and the fill would copy the closed eye in. The
-    eye stands within its ring's range and keeps its values; the dirt, outside it, is
-    repaired."""
-    s = gaussian_filter(rng.random((NY, NX)), 1.0)
-    scene = 0.2 + 0.6 * (s - s.min()) / (s.max() - s.min())
-    scene[:, :30] = 0.5 + 0.2 * (scene[:, :30] - 0.5)  # the calm part, where the dirt is
-    frames = np.repeat(scene[None], T, axis=0)
-    eye, dirt = (slice(30, 38), slice(50, 58)), (slice(10, 17), slice(10, 17))
-    frames[0][eye] = 0.5  # a lid over the eye's texture, mid-grey: inside its ring's range
-    clean = _grainy(frames, rng)
-    dirty = clean.copy()
-    dirty[0][dirt] -= 0.3
-    masks = np.zeros((T, NY, NX), bool)
-    masks[0][eye] = masks[0, 9:18, 9:18] = True
-    kinds = np.where(masks, BLOTCH, 0).astype(np.int8)
-    out = clpde.inpaint_video(dirty, masks, keep=KEEP, kinds=kinds)
-    assert np.abs(out[0][eye] - dirty[0][eye]).max() < 1e-6
-    assert np.abs(out[0][dirt] - clean[0][dirt]).mean() < 0.1 * 0.3
 
 
 def test_line_evidence_reads_no_line_on_an_edge():
