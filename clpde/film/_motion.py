@@ -182,6 +182,18 @@ def keep_flows(size: int) -> Iterator[None]:
                 _memo.kept.clear()
 
 
+def fb_error(f: np.ndarray, back: np.ndarray) -> np.ndarray:
+    """The forward-backward check's error: |f + back|, back the return flow carried to f's
+    pixels (0 where the two flows agree)."""
+    return np.hypot(f[..., 0] + back[..., 0], f[..., 1] + back[..., 1])
+
+
+def loop_error(fa: np.ndarray, fab: np.ndarray, fb: np.ndarray) -> np.ndarray:
+    """The loop check's error: |fa + fab - fb|, t -> a -> b against t -> b directly (fab, a's
+    flow to b, carried to t's pixels)."""
+    return np.hypot(fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1])
+
+
 class FilmMotion:
     """DIS flows between the frames of one window, and their neighbours.
 
@@ -329,16 +341,11 @@ class FilmMotion:
         return cv2.resize(small, (self.nx, self.ny), interpolation=cv2.INTER_LINEAR)
 
     def fb_error(self, t: int, s: int) -> np.ndarray:
-        f = self.flow(t, s)
-        back = self.warp(self.flow(s, t), t, s, "linear")
-        return np.hypot(f[..., 0] + back[..., 0], f[..., 1] + back[..., 1])
+        return fb_error(self.flow(t, s), self.warp(self.flow(s, t), t, s, "linear"))
 
     def loop_error(self, t: int, a: int, b: int) -> np.ndarray:
-        fa, fb = self.flow(t, a), self.flow(t, b)
         fab = self.warp(self.flow(a, b), t, a, "linear")
-        return np.hypot(
-            fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1]
-        )
+        return loop_error(self.flow(t, a), fab, self.flow(t, b))
 
     def gain(self, t: int, s: int) -> tuple[float, float]:
         """Frame s's flicker against frame t, fitted on the whole frame (kept: a second look

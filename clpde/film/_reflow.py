@@ -32,7 +32,7 @@ from scipy import ndimage
 
 from ._grow import HYSTERESIS_LOW
 from ._morph import dilate
-from ._motion import FilmMotion
+from ._motion import FilmMotion, fb_error, loop_error
 
 # px around a blotch whose flows are mended (chosen on the calibration half: 4, 8, 12 and
 # 16 px gave 37.73, 37.89, 37.80 and 38.03 dB; 8 for its smaller windows)
@@ -145,16 +145,11 @@ class WindowMotion(FilmMotion):
         return self.full.gain(t, s)
 
     def fb_error(self, t: int, s: int) -> np.ndarray:
-        f = self.flow(t, s)
-        back = self.warp(self.whole(s, t), t, s, "linear")
-        return np.hypot(f[..., 0] + back[..., 0], f[..., 1] + back[..., 1])
+        return fb_error(self.flow(t, s), self.warp(self.whole(s, t), t, s, "linear"))
 
     def loop_error(self, t: int, a: int, b: int) -> np.ndarray:
-        fa, fb = self.flow(t, a), self.flow(t, b)
         fab = self.warp(self.whole(a, b), t, a, "linear")
-        return np.hypot(
-            fa[..., 0] + fab[..., 0] - fb[..., 0], fa[..., 1] + fab[..., 1] - fb[..., 1]
-        )
+        return loop_error(self.flow(t, a), fab, self.flow(t, b))
 
 
 def look_again(
