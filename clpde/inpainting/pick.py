@@ -106,7 +106,6 @@ RING_SPECTRAL = {"iterations": 40}
 # "A smooth route"): thinner clusters or rougher surrounds lost on blobs and thick holes.
 ROUGH = 0.15
 ROUTE_RADIUS = 6.0
-ROUTE_EDGES = False  # clusters on a clear edge (edge_contrast) are not routed
 # A routed cluster of more hole pixels than this is solved on the device (poisson.py): the
 # host's direct solve grows faster than its size (2,800 px: 0.02 s, 11,000: 0.17 s,
 # 31,000: 1.3 s on the 2-core VM)
@@ -237,7 +236,7 @@ def smooth_clusters(data, omega, parts, periodic, detail=None):
     if not labels.size:
         return labels
     labels = labels[roughness(data, omega, parts, labels, detail) < ROUGH]
-    if labels.size and ROUTE_EDGES is False:
+    if labels.size:
         # a clear edge across the hole: the spectral fill continues it, a smooth one blurs it
         gap, separation = edge_contrast(data, omega, parts, labels)
         edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
