@@ -82,6 +82,7 @@ from ._device import (  # noqa: E402
     DeviceInfo,
     Kernel,
     build_failure,
+    fetch_kernel,
     group_problem,
     has_fp64,
     not_pocl,
@@ -425,7 +426,8 @@ class Runtime:
                 k = self._kernels.get(key)
                 if k is None:
                     program = self.program(filename, dtype, **defines)
-                    k = self._kernels[key] = Kernel(getattr(program, name), self, key)
+                    fetched = fetch_kernel(program, filename, name, self.platform.name)
+                    k = self._kernels[key] = Kernel(fetched, self, key)
         return k
 
     def _build(self, filename: str, dtype: np.dtype, defines: dict) -> cl.Program:

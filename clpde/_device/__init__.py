@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from ..errors import ClpdeError, DeviceLimitError
+from ..errors import ClpdeError, DeviceLimitError, KernelBuildError
 
 
 @dataclass(frozen=True)
@@ -320,3 +320,20 @@ def build_failure(platform: cl.Platform, device: cl.Device, source: str) -> str 
         f"{device.name.strip()} ({platform.name.strip()}) cannot compile "
         f"kernels: {first.strip()[:200]}"
     )
+
+
+def fetch_kernel(program: cl.Program, filename: str, name: str, platform: str) -> cl.Kernel:
+    """Kernel `name` of a built program, or one line that says why the device has none:
+    with PoCL a build killed half-way can leave its cache entry without the kernels (seen
+    2026-12-07: every later run then failed with CL_INVALID_KERNEL_NAME)."""
+    try:
+        return cl.Kernel(program, name)
+    except cl.LogicError:
+        text = f"kernels/{filename} built, but the device finds no kernel {name!r} in it"
+        cache = os.environ.get("POCL_CACHE_DIR")
+        if cache and "portable computing language" in platform.lower():
+            text += (
+                f"; where the file defines it, PoCL's kernel cache holds a broken build (a "
+                f"run stopped while building): delete {cache} and run again"
+            )
+        raise KernelBuildError(text) from None

@@ -130,6 +130,14 @@ def test_missing_kernel_file(runtime):
         runtime.program("no_such_file.cl")
 
 
+def test_a_kernel_the_program_lacks_is_one_clear_line(runtime):
+    # the program builds; the name is not in it (as when a killed build left PoCL's cache
+    # entry without its kernels): clpde's own error, naming the file and the kernel
+    with pytest.raises(KernelBuildError, match="no kernel 'no_such_kernel'") as info:
+        runtime.kernel("planar/planar.cl", "no_such_kernel")
+    assert "planar/planar.cl" in str(info.value) and "\n" not in str(info.value)
+
+
 def test_oversized_field_is_refused_before_allocation(runtime):
     side = int(np.sqrt(runtime.device.max_mem_alloc_size / 4)) + 16
     grid = Grid(runtime, side, side)
