@@ -54,7 +54,6 @@ from ._regions import (
     _spatial_blotches,
     _tail_check,
 )
-from ._rim import ring_rims
 from .lines import LineKernels, film_scratches, robust_scale
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -376,10 +375,6 @@ def _frame_kinds(
             return blotch_evidence(sc, t, gamma, low)[0]
 
         blotch = look_again(scores, t, blotch, taken, evidence, blotch_threshold, frame_scores)
-        # the soft rim the per-pixel tests leave: taken ring by ring's mean (clpde.film._rim)
-        blotch = ring_rims(
-            blotch, taken, r, scores["n"][t] > 0, sigmas[t], scores["region_noise"][t]
-        )
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
