@@ -120,6 +120,14 @@ SEEN_MOVED, SEEN_LOOKS, SEEN_NEAR = 1.5, 1.0, 2
 # seen (calibration occlusions: occlude-2 0.933 without, 0.945 / 0.954 / 0.935 at 3 / 6 /
 # 9 px).
 BESIDE = 6
+# Parts that move otherwise than the whole (a walker's swinging leg): where the appearance
+# clearly says object (its believed log odds, smoothed over 1 px, below -PART_LOOKS) on a
+# piece next to the prediction, thicker than 2 px (an opening) and reaching at least
+# PART_FAR px out of it, within PART_REACH px, the prediction grows by that piece: its prior
+# and the result's bound (GROW) start from the grown shape (`grow_parts`). (A 1-2 px rim of
+# a blurred edge would otherwise grow the contour a little every frame.) Chosen on the
+# calibration half of the photo corpus (docs/tracking.md, "Parts that move otherwise").
+PART_REACH, PART_LOOKS, PART_FAR = 12, 1.0, 3
 # A frame pair whose difference near the unmoved object is below this many times the
 # noise's is still (`_change`).
 STILL_CHANGE = 2.0
@@ -216,6 +224,29 @@ def _prior(predicted: np.ndarray) -> np.ndarray:
     return prior
 
 
+def grow_parts(predicted: np.ndarray, evidence: np.ndarray) -> np.ndarray:
+    """The predicted shape with the pieces next to it that clearly look like the object
+    (`evidence`: log odds of the surroundings, the appearance's as far as it is believed):
+    what the object's overall motion did not carry there (a limb that swings). A piece is
+    taken where, smoothed over 1 px and opened by 1 px, it lies below -PART_LOOKS, touches
+    the prediction and reaches PART_FAR px or more out of it, within PART_REACH px."""
+    if not PART_REACH or not predicted.any():
+        return predicted
+    where = box(predicted, PART_REACH + 4)
+    part = predicted[where]
+    looks = ndimage.gaussian_filter(evidence[where], 1.0) < -PART_LOOKS
+    clear = ndimage.binary_opening(looks & dilate(part, PART_REACH) & ~part)
+    labels, n = ndimage.label(clear, structure=np.ones((3, 3)))
+    if not n:
+        return predicted
+    touch = np.unique(labels[dilate(part, 1)])
+    far = np.unique(labels[~dilate(part, PART_FAR - 1)])
+    keep = np.intersect1d(touch, far)
+    grown = predicted.copy()
+    grown[where] |= np.isin(labels, keep[keep > 0])
+    return grown
+
+
 def _jumped(a: np.ndarray, shape: np.ndarray, velocity: np.ndarray) -> bool:
     """Whether the motion `a` takes the object's centre more than JUMP px off where its
     velocity (at least JUMP_MOVING px a frame) would."""
@@ -261,6 +292,7 @@ class ObjectFollower:
         # its level set (negative inside), carried with it: the contour's sub-pixel place
         self.shape_u = signed_distance(self.shape)
         self.predicted = self.shape
+        self._grown = self.shape  # the prediction with the parts that moved otherwise
         self._predicted_u = self.shape_u
         self.velocity = np.zeros(2)
         # hidden in part by something still (occlusion.py): the shape is then the whole
@@ -352,6 +384,7 @@ class ObjectFollower:
         if not predicted.any() or predicted.all():  # carried out of the frame: it stays
             predicted, predicted_u = self.shape, self.shape_u
         self.predicted, self._predicted_u = predicted, predicted_u
+        self._grown = predicted
         self._seen = None
         if np.hypot(*shift) >= SEEN_MOVED:
             self._seen = self._seen_still(t, a, predicted)
@@ -428,17 +461,21 @@ class ObjectFollower:
         # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
         # and only clear evidence carves it or grows it
-        prior = _prior(predicted)
+        self._looks_ratio = self.model.log_ratio(self._bins, predicted)
+        trust = self._trust(t, a, predicted)
+        if still or self.hidden or trust <= 0:  # (hidden: the occluder's rules hold)
+            self._grown = predicted
+        else:
+            self._grown = grow_parts(predicted, trust * self._looks_ratio)
+        prior = _prior(self._grown)
         if self.hidden and self._occluder is not None and self._occluder.any():
             # next to an occluder the object's extent is not known (it comes out from
             # behind it): the prediction does not hold the contour back there
             beside = dilate(self._occluder, BESIDE) & ~self._occluder & (prior > 0)
             prior[beside] = 0.0
-        self._looks_ratio = self.model.log_ratio(self._bins, predicted)
         # (no evidence from the motion-compensated residual: a talking mouth or a turning
         # face does not move with the object either, and on the calibration half, 0.827 ->
         # 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
-        trust = self._trust(t, a, predicted)
         self._ratio = prior if still else trust * self._looks_ratio + prior
         # doubted, the whole term yields to the image's (the prior alone would hold the
         # contour at the predicted place against the frames' evidence)
@@ -496,7 +533,7 @@ class ObjectFollower:
         pieces; the models learn."""
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
-        mask = mask & dilate(self.predicted, GROW)
+        mask = mask & dilate(self._grown, GROW)
         if self._seen is not None and self._looks_ratio is not None:
             # what clearly looks like the object is not an occluder: a smooth part of it
             # coming out from behind one is still, and the frame before showed the
