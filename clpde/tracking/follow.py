@@ -4,8 +4,10 @@ object went, and an appearance term keeps it on the object (appearance.py).
 Per frame: the object's motion from the previous frame (`appearance.object_motion`, with a
 light-blind match on local contrast beside the frames' own) carries the object's whole
 shape, hidden parts included, as a level set (its contour's sub-pixel place kept) to its
-predicted place, where the morphing starts; the appearance model's log ratio there becomes
-the morphing's region speed, believed as far as it classified the last result (unless the
+predicted place, where the morphing starts; the prediction grows by the pieces next to it
+that clearly look like the object (parts.py: a swinging leg the motion did not carry); the
+appearance model's log ratio there, with the grown prediction's prior, becomes the
+morphing's region speed, believed as far as it classified the last result (unless the
 background around the object moves otherwise than it, where the image term cannot hold the
 contour either), and not at all on a still frame; after the morphing, small pieces that
 split off a larger one are dropped (a piece caught on an occluder) and the models learn
@@ -53,6 +55,7 @@ from .occlusion import (
     still_share,
     visible_pieces,
 )
+from .parts import grow_parts
 
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
@@ -120,14 +123,6 @@ SEEN_MOVED, SEEN_LOOKS, SEEN_NEAR = 1.5, 1.0, 2
 # seen (calibration occlusions: occlude-2 0.933 without, 0.945 / 0.954 / 0.935 at 3 / 6 /
 # 9 px).
 BESIDE = 6
-# Parts that move otherwise than the whole (a walker's swinging leg): where the appearance
-# clearly says object (its believed log odds, smoothed over 1 px, below -PART_LOOKS) on a
-# piece next to the prediction, thicker than 2 px (an opening) and reaching at least
-# PART_FAR px out of it, within PART_REACH px, the prediction grows by that piece: its prior
-# and the result's bound (GROW) start from the grown shape (`grow_parts`). (A 1-2 px rim of
-# a blurred edge would otherwise grow the contour a little every frame.) Chosen on the
-# calibration half of the photo corpus (docs/tracking.md, "Parts that move otherwise").
-PART_REACH, PART_LOOKS, PART_FAR = 12, 1.0, 3
 # A frame pair whose difference near the unmoved object is below this many times the
 # noise's is still (`_change`).
 STILL_CHANGE = 2.0
@@ -222,29 +217,6 @@ def _prior(predicted: np.ndarray) -> np.ndarray:
     where = box(predicted, reach)
     prior[where] = np.clip(signed_distance(predicted[where]) / PRIOR_SCALE, -PRIOR_CAP, PRIOR_CAP)
     return prior
-
-
-def grow_parts(predicted: np.ndarray, evidence: np.ndarray) -> np.ndarray:
-    """The predicted shape with the pieces next to it that clearly look like the object
-    (`evidence`: log odds of the surroundings, the appearance's as far as it is believed):
-    what the object's overall motion did not carry there (a limb that swings). A piece is
-    taken where, smoothed over 1 px and opened by 1 px, it lies below -PART_LOOKS, touches
-    the prediction and reaches PART_FAR px or more out of it, within PART_REACH px."""
-    if not PART_REACH or not predicted.any():
-        return predicted
-    where = box(predicted, PART_REACH + 4)
-    part = predicted[where]
-    looks = ndimage.gaussian_filter(evidence[where], 1.0) < -PART_LOOKS
-    clear = ndimage.binary_opening(looks & dilate(part, PART_REACH) & ~part)
-    labels, n = ndimage.label(clear, structure=np.ones((3, 3)))
-    if not n:
-        return predicted
-    touch = np.unique(labels[dilate(part, 1)])
-    far = np.unique(labels[~dilate(part, PART_FAR - 1)])
-    keep = np.intersect1d(touch, far)
-    grown = predicted.copy()
-    grown[where] |= np.isin(labels, keep[keep > 0])
-    return grown
 
 
 def _jumped(a: np.ndarray, shape: np.ndarray, velocity: np.ndarray) -> bool:

@@ -2,16 +2,9 @@
 swings ahead of the body that the object's motion carries; where the appearance clearly
 says object next to the prediction, the prediction grows by that piece."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
-import pytest
 
-from clpde.tracking.follow import PART_FAR, PART_REACH, grow_parts
-
-ROOT = Path(__file__).resolve().parents[2]
-VTEST = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
+from clpde.tracking.parts import PART_FAR, PART_REACH, grow_parts
 
 
 def _scene():
@@ -57,21 +50,3 @@ def test_nothing_is_taken_where_the_evidence_is_mild_or_far():
     grown = grow_parts(body, far)
     assert (grown & long_leg & ~body).any()
     assert not (grown & (yy > 42 + PART_REACH)).any()
-
-
-@pytest.mark.skipif(not VTEST.exists(), reason="opencv-doc's vtest.avi is absent")
-def test_walker_keeps_his_legs():
-    # the calibration half's vtest walker (benchmarks/track_footage.py clip 0): his legs
-    # swing 10-25 px a frame off the body's motion; without the parts the contour lost a
-    # leg on most frames (min IoU 0.63, mean 0.77; with them 0.79 / 0.84)
-    pytest.importorskip("cv2")
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    import track_footage
-
-    from clpde.tracking.tracker import track
-
-    frames, truth = track_footage.clip(0)
-    masks = track(frames, truth[0], progress=False)
-    iou = [(m & t).sum() / (m | t).sum() for m, t in zip(masks[1:], truth[1:], strict=True)]
-    assert min(iou) >= 0.75
-    assert np.mean(iou) >= 0.82
