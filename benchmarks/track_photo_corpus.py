@@ -34,8 +34,8 @@ Classes:
   a look-alike over a patterned wall, grey-14 a dark look-alike behind bars, dimming. The
   test half's grey sequences are unchanged.
 - ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
-  9-26 px a frame (benchmarks/track_footage.py; clip 0 calibration, clip 1 test; their
-  masks by background subtraction, checked by eye).
+  9-26 px a frame (benchmarks/track_footage.py; clips 0 and 2 calibration, clip 1 test;
+  their masks by background subtraction, checked by eye).
 """
 
 from __future__ import annotations
@@ -321,7 +321,7 @@ MAKERS = {
     "grey": seq_grey,
     "footage": seq_footage,
 }
-FOOTAGE_CLIPS = 2  # the footage class' clips (seeds 0, 1)
+FOOTAGE_CLIPS = 3  # the footage class' clips (seeds 0, 1, 2)
 
 
 def half_of(seed: int) -> str:

@@ -4,8 +4,10 @@ object went, and an appearance term keeps it on the object (appearance.py).
 Per frame: the object's motion from the previous frame (`appearance.object_motion`, with a
 light-blind match on local contrast beside the frames' own) carries the object's whole
 shape, hidden parts included, as a level set (its contour's sub-pixel place kept) to its
-predicted place, where the morphing starts; the appearance model's log ratio there becomes
-the morphing's region speed, believed as far as it classified the last result (unless the
+predicted place, where the morphing starts; the prediction grows by the pieces next to it
+that clearly look like the object (parts.py: a swinging leg the motion did not carry); the
+appearance model's log ratio there, with the grown prediction's prior, becomes the
+morphing's region speed, believed as far as it classified the last result (unless the
 background around the object moves otherwise than it, where the image term cannot hold the
 contour either), and not at all on a still frame; after the morphing, small pieces that
 split off a larger one are dropped (a piece caught on an occluder) and the models learn
@@ -53,6 +55,7 @@ from .occlusion import (
     still_share,
     visible_pieces,
 )
+from .parts import grow_parts
 
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
@@ -261,6 +264,7 @@ class ObjectFollower:
         # its level set (negative inside), carried with it: the contour's sub-pixel place
         self.shape_u = signed_distance(self.shape)
         self.predicted = self.shape
+        self._grown = self.shape  # the prediction with the parts that moved otherwise
         self._predicted_u = self.shape_u
         self.velocity = np.zeros(2)
         # hidden in part by something still (occlusion.py): the shape is then the whole
@@ -352,6 +356,7 @@ class ObjectFollower:
         if not predicted.any() or predicted.all():  # carried out of the frame: it stays
             predicted, predicted_u = self.shape, self.shape_u
         self.predicted, self._predicted_u = predicted, predicted_u
+        self._grown = predicted
         self._seen = None
         if np.hypot(*shift) >= SEEN_MOVED:
             self._seen = self._seen_still(t, a, predicted)
@@ -428,17 +433,21 @@ class ObjectFollower:
         # surroundings, the signed distance to the predicted shape over PRIOR_SCALE px
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
         # and only clear evidence carves it or grows it
-        prior = _prior(predicted)
+        self._looks_ratio = self.model.log_ratio(self._bins, predicted)
+        trust = self._trust(t, a, predicted)
+        if still or self.hidden or trust <= 0:  # (hidden: the occluder's rules hold)
+            self._grown = predicted
+        else:
+            self._grown = grow_parts(predicted, trust * self._looks_ratio)
+        prior = _prior(self._grown)
         if self.hidden and self._occluder is not None and self._occluder.any():
             # next to an occluder the object's extent is not known (it comes out from
             # behind it): the prediction does not hold the contour back there
             beside = dilate(self._occluder, BESIDE) & ~self._occluder & (prior > 0)
             prior[beside] = 0.0
-        self._looks_ratio = self.model.log_ratio(self._bins, predicted)
         # (no evidence from the motion-compensated residual: a talking mouth or a turning
         # face does not move with the object either, and on the calibration half, 0.827 ->
         # 0.851 mean IoU without it, carphone J 0.824 -> 0.850)
-        trust = self._trust(t, a, predicted)
         self._ratio = prior if still else trust * self._looks_ratio + prior
         # doubted, the whole term yields to the image's (the prior alone would hold the
         # contour at the predicted place against the frames' evidence)
@@ -496,7 +505,7 @@ class ObjectFollower:
         pieces; the models learn."""
         # no farther than GROW px from the prediction: the motion is accounted for, and a
         # frame's deformation is small; a leak along a look-alike stops there
-        mask = mask & dilate(self.predicted, GROW)
+        mask = mask & dilate(self._grown, GROW)
         if self._seen is not None and self._looks_ratio is not None:
             # what clearly looks like the object is not an occluder: a smooth part of it
             # coming out from behind one is still, and the frame before showed the
