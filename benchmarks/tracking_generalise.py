@@ -458,7 +458,9 @@ def main(argv=None):
             args.save_masks.mkdir(parents=True, exist_ok=True)
             np.savez_compressed(
                 args.save_masks / f"{half}.npz",
-                **{f"{k:03d} {label}": m for k, (_, m, _, label, _) in enumerate(sets)},
+                **{
+                    f"{k:03d} {name} {label}": m for k, (_, m, _, label, _, name) in enumerate(sets)
+                },
             )
         per = {}
         for _frames, masks, truth, label, cls, name in sets:
