@@ -43,7 +43,7 @@ def _detail(x: np.ndarray) -> np.ndarray:
 
 
 def hides_detail(frame: np.ndarray, neighbours: list, mask: np.ndarray) -> np.ndarray:
-    """The components of mask over which the frame keeps at most HIDDEN of its compensated
+    """The components of mask over which the frame keeps less than HIDDEN of its compensated
     neighbours' fine detail (neighbours: (grey, inside) pairs; the median of their energies,
     each over the component's pixels whose match is inside)."""
     own_d = _detail(frame) ** 2
@@ -58,7 +58,8 @@ def hides_detail(frame: np.ndarray, neighbours: list, mask: np.ndarray) -> np.nd
         energies = [float(e[win][own & ok[win]].mean()) for e, ok in nbs if ok[win][own].any()]
         if not energies:
             return False
-        return float(own_d[win][own].mean()) <= HIDDEN * float(np.median(energies))
+        # strictly less: a region as flat as neighbours without detail hides nothing
+        return float(own_d[win][own].mean()) < HIDDEN * float(np.median(energies))
 
     return _kept(mask, 1, hidden)
 
