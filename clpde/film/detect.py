@@ -382,7 +382,10 @@ def _frame_kinds(
         motion, offs = scores["motion"], _window(t, G.shape[0], scores["radius"])[0]
 
         def neighbours() -> list:
-            return [(motion.neighbour(t, k).grey, motion.inside(t, t + k)) for k in offs]
+            return [
+                (motion.warped(t, t + k), motion.inside(t, t + k), motion.gain(t, t + k)[0])
+                for k in offs
+            ]
 
         found = blotch | taken
         args = (fragments, found, smallest, blotch_threshold, search, neighbours)

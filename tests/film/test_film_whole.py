@@ -45,9 +45,9 @@ def test_hides_detail_keeps_flat_regions_over_texture_only():
     mask = np.zeros(scene.shape, bool)
     mask[10:20, 10:20] = mask[10:20, 35:45] = True
     inside = np.ones(scene.shape, bool)
-    kept = hides_detail(frame, [(scene, inside), (scene, inside)], mask)
+    kept = hides_detail(frame, [(scene, inside, 1.0), (scene, inside, 1.0)], mask)
     assert kept[10:20, 10:20].all() and not kept[10:20, 35:45].any()
     # against neighbours without detail, nothing is hidden: not the flat region either
-    kept = hides_detail(frame, [(flat, inside)], mask)
+    kept = hides_detail(frame, [(flat, inside, 1.0)], mask)
     assert not kept.any()
     assert 0 < HIDDEN < 1
