@@ -38,7 +38,7 @@ from .._progress import Progress, progress_bar
 from ..errors import InputError
 from ..imagedata import growth
 from ..runtime import get_runtime
-from ._grow import HYSTERESIS_LOW, _regions_found, grow_blotches
+from ._grow import HYSTERESIS_LOW, REGION_LOW, _regions_found, grow_blotches
 from ._morph import dilate
 from ._motion import FilmMotion, map_frames, map_stacked
 from ._order import median, second_least
@@ -54,6 +54,7 @@ from ._regions import (
     _spatial_blotches,
     _tail_check,
 )
+from ._whole import whole_blotches
 from .lines import LineKernels, film_scratches, robust_scale
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -347,6 +348,7 @@ def _frame_kinds(
     scratch = runs | still
     low = HYSTERESIS_LOW * blotch_threshold
     (a, zr), r = blotch_evidence(scores, t, gamma, low), res[t]
+    fragments = (a > low) | (zr > REGION_LOW * blotch_threshold)
     blotch, a = _regions_found(a, zr, r, scores["region_noise"][t], blotch_threshold)
     blotch &= ~dilate(scratch | ghosts)
     # a lone pixel, or a clump of a few, is within what a codec or the grain does: never a
@@ -375,6 +377,19 @@ def _frame_kinds(
             return blotch_evidence(sc, t, gamma, low)[0]
 
         blotch = look_again(scores, t, blotch, taken, evidence, blotch_threshold, frame_scores)
+    if "motion" in scores and 0 < t < G.shape[0] - 1:
+        # whole faint blotches whose fragments the first pass dropped (clpde.film._whole)
+        motion, offs = scores["motion"], _window(t, G.shape[0], scores["radius"])[0]
+
+        def neighbours() -> list:
+            return [
+                (motion.warped(t, t + k), motion.inside(t, t + k), motion.gain(t, t + k)[0])
+                for k in offs
+            ]
+
+        found = blotch | taken
+        args = (fragments, found, smallest, blotch_threshold, search, neighbours)
+        blotch |= whole_blotches(G, scores, t, *args)
     # a tall thin "blotch" is a scratch the line detector missed (too short or faint
     # for its run test in this frame)
     labels, _ = ndimage.label(blotch)
