@@ -98,7 +98,7 @@ def feature_field(image: np.ndarray, ls: LevelSet, options: TrackOptions) -> Fie
     """The (C, H, W) prepared frame's features on the level set's grid (ghosts filled):
     the frame itself, its gradient magnitude ('edges') or its local contrast ('contrast')."""
     grid = replace(ls.grid, nc=len(image))
-    f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
+    f = Field.from_host(grid, ls.pad(image))
     if options.features not in ("edges", "contrast"):
         return f
     out = Field.empty(grid)
