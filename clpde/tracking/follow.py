@@ -131,9 +131,15 @@ STILL_CHANGE = 2.0
 def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
     """image read at A x for the pixels x of `where` (the affine map of object_motion):
     the warp at the pixels needed only."""
+    return _at_channels(np.asarray(image, np.float64)[np.newaxis], a, where)[0]
+
+
+def _at_channels(stack: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """(C, n): `_at` of every image of the (C, H, W) stack (the points and weights found
+    once: the same values as `_at` of each)."""
     pts = np.array(np.nonzero(where), np.float64)
     coords = np.tensordot(a[:, :2], pts, 1) + a[:, 2:]
-    return bilinear(np.asarray(image, np.float64)[np.newaxis], coords)[0]
+    return bilinear(np.asarray(stack, np.float64), coords)
 
 
 def _warp_values(u: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -366,8 +372,7 @@ class ObjectFollower:
         # F1: the previous frame carried with the object near its predicted place
         near = dilate(predicted, int(np.ceil(self.band)) + 4)
         out = np.array(prepared_prev, np.float64, copy=True)
-        for c in range(out.shape[0]):
-            out[c][near] = _at(prepared_prev[c], a, near)
+        out[:, near] = _at_channels(out, a, near)
         start = predicted
         if self.term is not None:
             # a still object in a still scene (no motion, and the frames differ near it by

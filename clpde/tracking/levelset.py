@@ -115,8 +115,10 @@ class LevelSet:
 
     @staticmethod
     def pad(values: np.ndarray) -> np.ndarray:
-        """(ny, nx) data to the level set's grid: the frozen margin replicates the edge."""
-        return np.pad(np.asarray(values, np.float64), MARGIN, mode="edge")
+        """(ny, nx) data, or (C, ny, nx) channels, to the level set's grid: the frozen margin
+        replicates the edge."""
+        values = np.asarray(values, np.float64)
+        return np.pad(values, ((0, 0),) * (values.ndim - 2) + ((MARGIN, MARGIN),) * 2, mode="edge")
 
     def assign(self, u) -> None:
         """Replace u by new (ny, nx) values (a signed distance, e.g. a shifted one) in the

@@ -10,7 +10,9 @@ import numpy as np
 from skimage.exposure import equalize_hist
 
 from ..fields import Field
-from ..planar.flows import diffuse
+from ..imagedata import value_range
+from ..planar import bounded
+from ..planar.flows import PlanarFlow, diffuse
 from ..runtime import Runtime
 from .levelset import LevelSet
 from .options import TrackOptions
@@ -51,30 +53,52 @@ def prepare_frame(
     elif options.equalize == "global":
         img = np.stack([equalize_hist(c) for c in img])
     if options.smooth and options.smooth_steps > 0:
-        # The rational edge-stopping function: as anisotropic as the exponential one
-        # and faster on PoCL, where exp() does not vectorise (docs/tracking.md).
-        img = np.stack(
+        img = smooth_channels(img, options, runtime)
+    return np.asarray(img, np.float64)
+
+
+def smooth_channels(img: np.ndarray, options: TrackOptions, runtime: Runtime) -> np.ndarray:
+    """The Perona-Malik pre-smoothing of each channel of (C, H, W) data, each scaled by its
+    own range as `diffuse` scales a grey image: bit for bit `diffuse` channel by channel,
+    in one flow over the C channels (planar.cl's steps act on each channel alone, with the
+    same arithmetic per cell), so that colour=True pays one upload, one launch a step and
+    one download a frame, not C of each (issue 35, docs/tracking.md)."""
+    # The rational edge-stopping function: as anisotropic as the exponential one and
+    # faster on PoCL, where exp() does not vectorise (docs/tracking.md).
+    params = {"kappa": options.smooth_kappa, "edge": "rational"}
+    steps = options.smooth_steps
+
+    def by_channel():
+        return np.stack(
             [
-                diffuse(
-                    c,
-                    "perona-malik",
-                    steps=options.smooth_steps,
-                    kappa=options.smooth_kappa,
-                    edge="rational",
-                    device=runtime,
-                    progress=False,
-                )
+                diffuse(c, "perona-malik", steps=steps, device=runtime, progress=False, **params)
                 for c in img
             ]
         )
-    return np.asarray(img, np.float64)
+
+    if len(img) == 1 or bounded.is_large(img):  # (large: diffuse goes a channel at a time)
+        return by_channel()
+    img = np.asarray(img, np.float64)
+    ranges = [value_range(float(c.min()), float(c.max())) for c in img]
+    # each channel in [0, 1] as to_kernel_layout puts a grey image: its minimum 0 and its
+    # maximum 1 exactly (0 where flat), so that the flow's own scaling of the stack is
+    # the identity
+    scaled = np.stack([(c - lo) / scale for c, (lo, scale) in zip(img, ranges, strict=True)])
+    flow = PlanarFlow(scaled, "perona-malik", channel_axis=0, device=runtime, **params)
+    if flow.layout.offset != 0.0 or flow.layout.scale != 1.0:  # (a guard: never seen)
+        return by_channel()
+    out = flow.run(steps, progress=False).pair.cur.to_host()
+    # back to each channel's range as ImageLayout.restore does
+    return np.stack(
+        [np.asarray(o, np.float64) * scale + lo for o, (lo, scale) in zip(out, ranges, strict=True)]
+    )
 
 
 def feature_field(image: np.ndarray, ls: LevelSet, options: TrackOptions) -> Field:
     """The (C, H, W) prepared frame's features on the level set's grid (ghosts filled):
     the frame itself, its gradient magnitude ('edges') or its local contrast ('contrast')."""
     grid = replace(ls.grid, nc=len(image))
-    f = Field.from_host(grid, np.stack([ls.pad(c) for c in image]))
+    f = Field.from_host(grid, ls.pad(image))
     if options.features not in ("edges", "contrast"):
         return f
     out = Field.empty(grid)

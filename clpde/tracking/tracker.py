@@ -146,9 +146,13 @@ class MorphingTracker:
         )
         self._scaled = scaled_frames(self.frames, colour)
         self.channels = (self._user if self._user is not None else self._scaled).shape[1]
-        # the appearance model's frames: colour where the footage has it
+        # the appearance model's frames: colour where the footage has it (the same array
+        # where the discrepancy's frames are in colour too, or the footage is grey)
         image = self.options.motion == "image"
-        self._looks = scaled_frames(self.frames, True) if image else None
+        same = colour or self.frames[0].ndim == 2
+        self._looks = (
+            (self._scaled if same else scaled_frames(self.frames, True)) if image else None
+        )
 
     def __len__(self) -> int:
         return len(self.frames)

@@ -32,6 +32,22 @@
 // the windows' smaller variance against the frame's noise variance: a patch with contrast
 // well above the noise is compared by its correlation (blind to light), a flat or noisy
 // one by its grey levels (the correlation of noise is noise).
+INLINE REAL adaptive_beta_of_sums(const REAL s1, const REAL s2, const REAL s11, const REAL s22,
+                                  const REAL s12, const REAL a, const REAL b, const REAL delta,
+                                  const REAL noise2)
+{
+    const REAL n = (REAL)((2 * WIN + 1) * (2 * WIN + 1));
+    const REAL m1 = s1 / n, m2 = s2 / n;
+    const REAL c1 = FMAX(s11 / n - m1 * m1, (REAL)0), c2 = FMAX(s22 / n - m2 * m2, (REAL)0);
+    const REAL v1 = c1 + delta * delta, v2 = c2 + delta * delta;
+    const REAL rho = (s12 / n - m1 * m2) * RSQRT(v1 * v2);
+    const REAL ncc = SQRT(v1 / v2) * (b - m2) - rho * (a - m1);
+    const REAL s = FMIN(c1, c2);
+    const REAL w = s / (s + noise2);
+    return w * ncc + ((REAL)1 - w) * (b - a);
+}
+
+// (the window's sums s1, s2, s11, s22, s12 of F1, F2, F1^2, F2^2, F1 F2, then the formula)
 INLINE REAL adaptive_beta(__global const REAL* f1, __global const REAL* f2, const int i,
                           const int sx, const REAL delta, const REAL noise2)
 {
@@ -43,16 +59,50 @@ INLINE REAL adaptive_beta(__global const REAL* f1, __global const REAL* f2, cons
             s1 += a; s2 += b; s11 += a * a; s22 += b * b; s12 += a * b;
         }
     }
-    const REAL n = (REAL)((2 * WIN + 1) * (2 * WIN + 1));
-    const REAL m1 = s1 / n, m2 = s2 / n;
-    const REAL c1 = FMAX(s11 / n - m1 * m1, (REAL)0), c2 = FMAX(s22 / n - m2 * m2, (REAL)0);
-    const REAL v1 = c1 + delta * delta, v2 = c2 + delta * delta;
-    const REAL rho = (s12 / n - m1 * m2) * RSQRT(v1 * v2);
-    const REAL ncc = SQRT(v1 / v2) * (f2[i] - m2) - rho * (f1[i] - m1);
-    const REAL s = FMIN(c1, c2);
-    const REAL w = s / (s + noise2);
-    return w * ncc + ((REAL)1 - w) * (f2[i] - f1[i]);
+    return adaptive_beta_of_sums(s1, s2, s11, s22, s12, f1[i], f2[i], delta, noise2);
 }
+
+#if NCH > 1 && NCH <= 4
+#ifdef REAL_IS_DOUBLE
+#define REALV double4
+#else
+#define REALV float4
+#endif
+// adaptive_beta of NCH (2 to 4) channels at once, planes `fplane` apart, into beta[c]: the
+// channels' window sums in the lanes of 4-vectors, each lane's in adaptive_beta's order
+// (the same values), so that the channels' chains of dependent additions run side by side,
+// not one after another (colour=True's step 1.5x faster on PoCL; issue 35, docs/tracking.md).
+INLINE void adaptive_betas(__global const REAL* f1, __global const REAL* f2, const int i,
+                           const int sx, const int fplane, const REAL delta, const REAL noise2,
+                           REAL* beta)
+{
+    REALV s1 = 0, s2 = 0, s11 = 0, s22 = 0, s12 = 0;
+    for (int dy = -WIN; dy <= WIN; ++dy) {
+        for (int dx = -WIN; dx <= WIN; ++dx) {
+            const int j = i + dy * sx + dx;
+            REALV a = 0, b = 0;
+            a.s0 = f1[j]; b.s0 = f2[j];
+            a.s1 = f1[j + fplane]; b.s1 = f2[j + fplane];
+#if NCH > 2
+            a.s2 = f1[j + 2 * fplane]; b.s2 = f2[j + 2 * fplane];
+#endif
+#if NCH > 3
+            a.s3 = f1[j + 3 * fplane]; b.s3 = f2[j + 3 * fplane];
+#endif
+            s1 += a; s2 += b; s11 += a * a; s22 += b * b; s12 += a * b;
+        }
+    }
+    const REAL t1[4] = {s1.s0, s1.s1, s1.s2, s1.s3}, t2[4] = {s2.s0, s2.s1, s2.s2, s2.s3};
+    const REAL t11[4] = {s11.s0, s11.s1, s11.s2, s11.s3};
+    const REAL t22[4] = {s22.s0, s22.s1, s22.s2, s22.s3};
+    const REAL t12[4] = {s12.s0, s12.s1, s12.s2, s12.s3};
+    for (int c = 0; c < NCH; ++c) {
+        const int k = i + c * fplane;
+        beta[c] = adaptive_beta_of_sums(t1[c], t2[c], t11[c], t22[c], t12[c], f1[k], f2[k],
+                                        delta, noise2);
+    }
+}
+#endif
 
 typedef struct {
     REAL fastest, beta_max, grad_max, beta_sum, cells;
@@ -76,9 +126,17 @@ INLINE void adaptive_cell(__global const REAL* restrict u, __global const REAL* 
     const REAL ux = (REAL)0.5 * (u[i + 1] - u[i - 1]);
     const REAL uy = (REAL)0.5 * (u[i + sx] - u[i - sx]);
     REAL proj = 0, gsum = 0, babs = 0;
+#if NCH > 1 && NCH <= 4
+    REAL betas[NCH];
+    adaptive_betas(f1, f2, i, sx, fplane, delta, noise2, betas);
+#endif
     for (int c = 0; c < NCH; ++c) {
         const int j = i + c * fplane;
+#if NCH > 1 && NCH <= 4
+        const REAL beta = betas[c];
+#else
         const REAL beta = adaptive_beta(f1 + c * fplane, f2 + c * fplane, i, sx, delta, noise2);
+#endif
         const REAL grad_f = upwind_norm_2d(f1 + c * fplane, i, sx, beta);
         f1_out[j] = f1[j] + dt * beta * grad_f;
         const REAL fx = (REAL)0.5 * (f1[j + 1] - f1[j - 1]);

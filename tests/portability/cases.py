@@ -105,6 +105,19 @@ def _track(**options):
     return run
 
 
+def _track_colour(storage):
+    # colour=True: the adaptive step's channels summed side by side (adaptive_betas)
+    def run():
+        import clpde
+
+        grey = _disc_frames()
+        frames = np.stack([grey, 1 - grey, 0.5 + 0.3 * grey], axis=-1)
+        masks = clpde.track(frames, grey[0] > 0.5, max_iterations=3, colour=True, storage=storage)
+        return {"masks": masks}
+
+    return run
+
+
 def _surface(storage):
     def run():
         from clpde.surface import ImplicitSurface
@@ -180,6 +193,8 @@ CASES = {
     "track_ncc_contrast": _track(discrepancy="ncc", features="contrast"),
     "track_huber_edges": _track(discrepancy="huber", features="edges", storage="bricks8x8"),
     "track_region_term": _track(region_weight=1.0, storage="bricks16x4"),
+    "track_colour_lists": _track_colour("lists"),
+    "track_colour_bricks": _track_colour("bricks8x8"),
     "inpaint_spectral": _inpaint("spectral", iterations=8, shifts=1),
     "inpaint_spectral_f64": _inpaint("spectral", dtype=np.float64, iterations=4, shifts=1),
     "inpaint_spectral_cpu_path": _cpu_path(_inpaint("spectral", iterations=8, shifts=1)),
