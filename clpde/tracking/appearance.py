@@ -3,7 +3,9 @@ image, and what it looks like against its surroundings.
 
 - `object_motion`: the previous mask's motion between two frames, an affine map found in
   two steps: a masked normalised cross-correlation over every shift within `reach` px
-  (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past),
+  (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past; where
+  its peak is not clear, another local maximum that a trimmed correlation finds a clear
+  match, robust_match.py: a swinging leg lowers the true match),
   then Lucas-Kanade's Gauss-Newton steps on the six affine parameters over the object and
   a 2 px rim (turns, scaling). The object's own pixels decide, not the contour's past.
   Where nothing inside the object matches (a faint flat object, a region over a still
