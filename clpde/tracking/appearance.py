@@ -3,7 +3,9 @@ image, and what it looks like against its surroundings.
 
 - `object_motion`: the previous mask's motion between two frames, an affine map found in
   two steps: a masked normalised cross-correlation over every shift within `reach` px
-  (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past),
+  (FFT, so a 25 px-a-frame object is found from the first frame, whatever its past; where
+  its peak is not clear, another local maximum that a trimmed correlation finds a clear
+  match, robust_match.py: a swinging leg lowers the true match),
   then Lucas-Kanade's Gauss-Newton steps on the six affine parameters over the object and
   a 2 px rim (turns, scaling). The object's own pixels decide, not the contour's past.
   Where nothing inside the object matches (a faint flat object, a region over a still
@@ -34,9 +36,14 @@ from scipy import ndimage
 
 from ..fields import Field
 from .levelset import LevelSet
+from .robust_match import robust_shift
 
 # motion='image''s settings, chosen on the calibration half of benchmarks/track_photo_corpus.py
 # (benchmarks/track_image_search.py).
+# object_motion's whole-pixel shift, where the peak is below LIGHT_CLEAR: another local
+# maximum of the correlation where a trimmed correlation finds it a clear match and better
+# (robust_match.py: a part that moves otherwise lowered the true match); False: the peak
+ROBUST = True
 REACH = 32  # px: the widest shift per frame the correlation searches
 MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is kept
 # the affine fit replaces the sub-pixel shift only where its cost is below this share of
@@ -177,6 +184,7 @@ def match_shift(
         ncc[(np.abs(dy - prior[0]) > within) | (np.abs(dx - prior[1]) > within)] = -np.inf
     k = np.unravel_index(int(np.argmax(ncc)), shape)
     match_shift.peak = float(ncc[k])  # the match's quality, read by object_motion
+    match_shift.scores = (ncc, dy, dx)  # the whole map, for robust_match.robust_shift
     return np.array([float(dy[k[0], 0]), float(dx[0, k[1]])])
 
 
@@ -245,6 +253,10 @@ def object_motion(
     weight = rim.astype(np.float64)
     d = match_shift(prev, cur, weight, reach, prior, within)
     peak = match_shift.peak
+    if ROBUST and floor <= peak < LIGHT_CLEAR:
+        # a part that moves otherwise does not decide (robust_match.py); a clear peak has
+        # no such part to have lowered it
+        d = robust_shift(prev, cur, rim, *match_shift.scores)
     if light is not None and floor <= peak < LIGHT_CLEAR:
         d_light = match_shift(light[0], light[1], weight, reach, prior, within)
         if match_shift.peak >= floor and np.abs(d_light - d).max() > 0:
