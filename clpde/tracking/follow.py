@@ -43,6 +43,7 @@ from .appearance import (
     object_motion,
 )
 from .levelset import LevelSet, signed_distance
+from .matched import matched_pixels
 from .motion_filter import local_contrast
 from .occlusion import (
     LOST,
@@ -126,10 +127,6 @@ BESIDE = 6
 # A frame pair whose difference near the unmoved object is below this many times the
 # noise's is still (`_change`).
 STILL_CHANGE = 2.0
-# The match leaves out the result's pixels whose log odds of the surroundings are above 0,
-# or above this where the appearance's reliability is 0 (`move`). Chosen on the photo
-# corpus' calibration half (docs/tracking.md, "A look-alike ground"): 0.5 grey-14 0.638.
-UNRELIABLE_CLEAR = 1.0
 
 
 def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
@@ -308,16 +305,9 @@ class ObjectFollower:
         (near it) and the displacement (dy, dx) of the object's centre."""
         # matched in colour where the footage has it: a red object on a blue sky can have
         # the sky's grey level
-        # The object's pixels that look like it: a piece of an occluder or of the
-        # background the contour took in would pull the match to its own (lack of) motion.
-        # Where the appearance classified none of the last result right (reliability 0),
-        # its mild preferences say nothing: only the pixels that clearly look like the
-        # surroundings are left out (a choice by grey level biases the fit: on a graded
-        # object it takes a stretch for the shift).
-        pixels = mask
-        if self._looks_ratio is not None:
-            level = 0.0 if self.reliability > 0 else UNRELIABLE_CLEAR
-            pixels = mask & (self._looks_ratio < level)
+        # The object's pixels that look like it (matched.py): a piece of an occluder or of
+        # the background taken in would pull the match to its own (lack of) motion.
+        pixels = matched_pixels(mask, self._looks_ratio, self.reliability)
         if self._seen is not None:  # nor the pixels next to what was seen still
             pixels = pixels & ~dilate(self._seen, SEEN_NEAR)
         if pixels.sum() < 0.3 * mask.sum():

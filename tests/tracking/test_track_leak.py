@@ -7,6 +7,7 @@ from scipy import ndimage
 
 from clpde.tracking import appearance
 from clpde.tracking.appearance import object_motion
+from clpde.tracking.matched import matched_pixels
 
 H, W = 80, 80
 
@@ -52,3 +53,18 @@ def test_the_stretch_is_the_still_grounds(monkeypatch):
     monkeypatch.setattr(appearance, "MOVING", 0)
     stretches = [_stretch(object_motion(b[None], a[None], m)) for b, a, m in map(_frames, range(3))]
     assert min(stretches) > 0.08
+
+
+def test_an_unreliable_appearance_leaves_out_only_what_clearly_looks_otherwise():
+    # a graded object whose bottom the appearance mildly takes for the surroundings
+    mask = np.zeros((20, 20), bool)
+    mask[4:16, 4:16] = True
+    ratio = np.full((20, 20), -0.3)  # mildly the object
+    ratio[10:16] = 0.4  # mild: ambiguous bins
+    ratio[15, 4:16] = 2.0  # clear: a strip of the ground
+    believed = matched_pixels(mask, ratio, 0.5)
+    assert believed.sum() == 6 * 12  # the mild preference decides
+    unreliable = matched_pixels(mask, ratio, 0.0)
+    assert unreliable.sum() == 11 * 12  # the clear strip alone is left out
+    assert not unreliable[15].any()
+    assert matched_pixels(mask, None, 0.0) is mask
