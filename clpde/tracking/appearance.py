@@ -49,14 +49,6 @@ MATCH_FLOOR = 0.3  # a correlation peak below this is no match: the velocity is 
 # the affine fit replaces the sub-pixel shift only where its cost is below this share of
 # the shift's
 AFFINE_GAIN = 0.95
-# ... the turn and scaling fitted on the object's pixels that standing still does not
-# explain clearly better than its motion (`_moving`: over the 3x3 patch, the frame pair's
-# difference at least MOVING times the difference left after the shift; 0: on all of the
-# match's pixels), where at least 12 are left. Chosen on the calibration halves
-# (docs/tracking.md, "A look-alike ground"): 1.2-2.0 dropped the synthetic corpus' textured
-# and flat classes (a flat inside changes by the noise either way), 0.4-0.6 the same on
-# the photo corpus, 0.6 the best on the synthetic one
-MOVING = 0.6
 # object_motion takes the light-blind features' shift where the frames' own correlation
 # there is within this of their best
 LIGHT_SLACK = 0.05
@@ -390,15 +382,6 @@ def _refine(prev, cur, rim, d, steps, grey=None):
     moved_cost = cost(moved) if moved is not shifted else start
     if not moved_cost < start:
         moved, moved_cost = shifted, start
-    if MOVING:
-        # the turn and stretch fitted without the pixels that stood still: a still part
-        # in the mask (the ground it leaked into, an occluder's edge) holds its side back,
-        # and the fit takes that for a stretch
-        moving = _moving(stack[0], gc, where, moved)
-        if moving.sum() >= 12 and not moving.all():
-            sel = moving[where]
-            pts, y, x, target = pts[:, sel], y[sel], x[sel], target[sel]
-            moved_cost = cost(moved)
     a = fit(moved, list(range(6)))
     lin = a[:, :2]
     sane = np.all(np.isfinite(a)) and 0.8 < abs(np.linalg.det(lin)) < 1.25
@@ -407,22 +390,6 @@ def _refine(prev, cur, rim, d, steps, grey=None):
     if not sane or np.abs(lin - np.eye(2)).max() > 0.35 or not cost(a) < AFFINE_GAIN * moved_cost:
         a = moved
     return a
-
-
-def _moving(prev: np.ndarray, cur: np.ndarray, where: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """The pixels of `where` (cur's coordinates) that standing still does not explain
-    clearly better than the object's motion `a`: over its 3x3 patch, cur differs from prev
-    where it is by at least MOVING times what it differs from prev carried by `a` (grey
-    levels, (H, W)). A still ground the mask took in is left out; a flat inside is not."""
-    sl = box(where, 2)
-    rows, cols = np.mgrid[sl]
-    coords = np.tensordot(a[:, :2], np.array([rows.ravel(), cols.ravel()], np.float64), 1)
-    carried = bilinear(prev[np.newaxis] * 1.0, coords + a[:, 2:])[0].reshape(rows.shape)
-    still = ndimage.uniform_filter(np.abs(cur[sl] - prev[sl]), 3)
-    moved = ndimage.uniform_filter(np.abs(cur[sl] - carried), 3)
-    out = np.zeros(where.shape, bool)
-    out[sl] = where[sl] & (still >= MOVING * moved)
-    return out
 
 
 def move_mask(mask: np.ndarray, a: np.ndarray) -> np.ndarray:

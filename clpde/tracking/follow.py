@@ -43,7 +43,6 @@ from .appearance import (
     object_motion,
 )
 from .levelset import LevelSet, signed_distance
-from .matched import matched_pixels
 from .motion_filter import local_contrast
 from .occlusion import (
     LOST,
@@ -305,9 +304,9 @@ class ObjectFollower:
         (near it) and the displacement (dy, dx) of the object's centre."""
         # matched in colour where the footage has it: a red object on a blue sky can have
         # the sky's grey level
-        # The object's pixels that look like it (matched.py): a piece of an occluder or of
-        # the background taken in would pull the match to its own (lack of) motion.
-        pixels = matched_pixels(mask, self._looks_ratio, self.reliability)
+        # The object's pixels that look like it: a piece of an occluder or of the
+        # background the contour took in would pull the match to its own (lack of) motion.
+        pixels = mask & (self._looks_ratio < 0) if self._looks_ratio is not None else mask
         if self._seen is not None:  # nor the pixels next to what was seen still
             pixels = pixels & ~dilate(self._seen, SEEN_NEAR)
         if pixels.sum() < 0.3 * mask.sum():
