@@ -174,7 +174,7 @@ class Scored:
         self.seconds["roughness"] = time.process_time() - t0
         self.curves = np.zeros((count, 33))
         for k in cand - 1:
-            w = pick._window(slices[k])
+            w = smooth.grown_box(slices[k], pick.WINDOW, omega.shape)
             lag = int(np.clip(round(radius[k]), 1, 32))
             self.curves[k] = autocorrelation_curve(detail[w], ok[w])
             rho[k] = self.curves[k][lag]

@@ -68,6 +68,7 @@ from . import choose, poisson
 from .exemplar import ExemplarOptions
 from .registry import keywords, load, register
 from .smooth import fill as smooth_fill
+from .smooth import grown_box
 from .spectral import MARGIN as SPECTRAL_MARGIN
 from .spectral import SpectralOptions
 
@@ -174,14 +175,6 @@ def has_thick(omega) -> bool:
     return bool(ndimage.binary_erosion(omega, near, border_value=1).any())
 
 
-def _window(s, shape=None):
-    """A cluster's measured window: its bounding box `s` grown by WINDOW px."""
-    y1, x1 = s[0].stop + WINDOW, s[1].stop + WINDOW
-    if shape is not None:
-        y1, x1 = min(y1, shape[0]), min(x1, shape[1])
-    return slice(max(s[0].start - WINDOW, 0), y1), slice(max(s[1].start - WINDOW, 0), x1)
-
-
 def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY, parts=None, detail=None):
     """The hole's pixels whose cluster sits in a periodic surround (module docstring): a
     bool mask, within omega. parts: clusters_of(omega), detail: choose._detail(data,
@@ -195,7 +188,7 @@ def periodic_clusters(data, omega, periodicity=choose.MIN_PERIODICITY, parts=Non
     slices = ndimage.find_objects(clusters)
     chosen = []
     for k in thick:
-        w = _window(slices[k])
+        w = grown_box(slices[k], WINDOW, omega.shape)
         if choose.repeat(detail[w], ok[w]) >= periodicity:
             chosen.append(k + 1)
     return np.isin(clusters, chosen) & omega
@@ -218,7 +211,7 @@ def roughness(data, omega, parts, labels, detail=None):
     slices = ndimage.find_objects(clusters)
     out = np.full(len(labels), np.inf)
     for i, lab in enumerate(labels):
-        w = _window(slices[lab - 1])
+        w = grown_box(slices[lab - 1], WINDOW, omega.shape)
         g = grey[w][known[w]]
         if g.size > 1 and np.isfinite(energy[i]):
             out[i] = np.sqrt(energy[i]) / max(float(g.std()), 1e-12)

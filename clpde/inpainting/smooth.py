@@ -55,7 +55,8 @@ def _solve(planes, origin, hole, full):
         plane[hole] = solve(-(coupling @ plane.ravel()[known]))
 
 
-def _window(s, grow, full):
+def grown_box(s, grow, full):
+    """The box `s` (a pair of slices) grown by `grow` px, within an image of shape `full`."""
     return (
         slice(max(s[0].start - grow, 0), min(s[0].stop + grow, full[0])),
         slice(max(s[1].start - grow, 0), min(s[1].stop + grow, full[1])),
@@ -69,7 +70,7 @@ def fill(data, omega, clusters, labels):
     out = np.array(data, np.float64, copy=True)
     slices = ndimage.find_objects(clusters)
     for lab in labels:
-        window = _window(slices[lab - 1], MARGIN, omega.shape)
+        window = grown_box(slices[lab - 1], MARGIN, omega.shape)
         hole = (clusters[window] == lab) & omega[window]
         if hole.any():
             origin = (window[0].start, window[1].start)
@@ -93,7 +94,7 @@ def ring_errors(data, omega, clusters, labels, width, ring=None):
     slices = ndimage.find_objects(clusters)
     errors, spread = np.zeros(len(labels)), np.zeros(len(labels))
     for k, lab in enumerate(labels):
-        window = _window(slices[lab - 1], width + MARGIN, omega.shape)
+        window = grown_box(slices[lab - 1], width + MARGIN, omega.shape)
         band = (owner[window] == lab) & (dist[window] <= width)
         if not band.any():
             continue
