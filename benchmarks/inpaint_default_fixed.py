@@ -5,6 +5,7 @@
     PYTHONPATH=. python benchmarks/inpaint_default_fixed.py time [--every N] [--runs R]
     PYTHONPATH=. python benchmarks/inpaint_default_fixed.py profile [--every N] [--top K]
     PYTHONPATH=. python benchmarks/inpaint_default_fixed.py peers [--every N] [--runs R]
+    PYTHONPATH=. python benchmarks/inpaint_default_fixed.py stages [--every N] [--runs R]
 
 `save` runs the default (`clpde.inpaint(image, mask, channel_axis=..., seed=0)`, no options)
 on every N-th case of tests/cases/inpaint_corpus.py's corpus (both halves, every class) and
@@ -15,7 +16,11 @@ functions by their own and cumulative time. `peers` times the default, scikit-im
 biharmonic and OpenCV's FSR fast as benchmarks/inpaint_generalise.py calls them, in CPU
 time (best of R per case), and prints per class and half the default's time over each
 peer's (ratios of the class's sums, as inpaint_generalise.py's columns). A warm-up call
-on a grey and a colour case keeps the program builds out of all of them.
+on a grey and a colour case keeps the program builds out of all of them. `stages` prints
+per class and half the CPU time of the default's stages (the spectral kernel's launches,
+the periodicity test, the plan, ...), summed over R passes: wrappers around a dozen
+functions, not cProfile, whose cost per Python call swells the host's many small steps
+(it put the periodicity test at 16% of blobs' time, where it is 10%).
 """
 
 from __future__ import annotations
@@ -130,6 +135,62 @@ def peers(every: int, runs: int) -> None:
                 )
 
 
+# (module, function, label) of the default's stages; a label's time includes the stages
+# called inside it (the spectral fill's holds its plan and its kernel's launches)
+STAGES = (
+    ("clpde.inpainting.pick", "clusters_of", "pick: clusters"),
+    ("clpde.inpainting.choose", "_detail", "pick: detail"),
+    ("clpde.inpainting.pick", "periodic_clusters", "pick: periodicity test"),
+    ("clpde.inpainting.pick", "smooth_clusters", "pick: smooth route test"),
+    ("clpde.inpainting.pick", "smooth_fill", "pick: host biharmonic fill"),
+    ("clpde.inpainting.exemplar", "solve", "exemplar fill"),
+    ("clpde.inpainting.spectral", "fill", "spectral fill"),
+    ("clpde.inpainting.spectral", "plan", "  its plan"),
+    ("clpde.inpainting.spectral", "_run_waves", "  its kernel's launches"),
+    ("clpde.inpainting.bounds", "limit", "bounds"),
+    ("clpde.inpainting.boxes", "boxes", "boxes"),
+)
+
+
+def stages(every: int, runs: int) -> None:
+    import importlib
+
+    spent = {}
+
+    def timed(f, key):
+        def call(*args, **kwargs):
+            start = time.process_time()
+            try:
+                return f(*args, **kwargs)
+            finally:
+                spent[key] = spent.get(key, 0.0) + time.process_time() - start
+
+        return call
+
+    cases = _cases(every)
+    _warm(cases)
+    for module, name, label in STAGES:
+        m = importlib.import_module(module)
+        setattr(m, name, timed(getattr(m, name), label))
+    for damage in corpus.CLASSES:
+        for half in ("test", "calibration"):
+            group = [c for c in cases if c.damage == damage and c.half == half]
+            if not group:
+                continue
+            spent.clear()
+            start = time.process_time()
+            for _ in range(runs):
+                for case in group:
+                    _run(case)
+            total = time.process_time() - start
+            shares = "  ".join(
+                f"{label.strip()} {100 * spent[label] / total:.0f}%"
+                for _, _, label in STAGES
+                if spent.get(label, 0) >= 0.01 * total
+            )
+            print(f"{damage:11s} {half:12s} {1e3 * total / runs:7.1f} ms CPU a pass  {shares}")
+
+
 def profile(every: int, top: int) -> None:
     cases = _cases(every)
     _warm(cases)
@@ -147,7 +208,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    p.add_argument("mode", choices=("save", "compare", "time", "profile", "peers"))
+    p.add_argument("mode", choices=("save", "compare", "time", "profile", "peers", "stages"))
     p.add_argument("dirs", nargs="*", type=Path)
     p.add_argument("--every", type=int, default=1, help="every N-th case of the corpus")
     p.add_argument("--runs", type=int, default=3)
@@ -162,6 +223,8 @@ def main(argv=None) -> int:
         timing(a.every, a.runs)
     elif a.mode == "peers":
         peers(a.every, a.runs)
+    elif a.mode == "stages":
+        stages(a.every, a.runs)
     else:
         profile(a.every, a.top)
     return 0
