@@ -50,6 +50,7 @@ from clpde.tracking.options import CURVATURE, REGION_WEIGHT  # noqa: E402
 RESULTS = ROOT / "benchmarks" / "results"
 CORPUS = track_corpus  # the corpus of the run (--corpus)
 CALIBRATION = RESULTS / "track_calibration.json"
+CLASSES_RUN = None  # the classes of the run (--classes), None: all of the corpus'
 
 ADAPTIVE = {
     "motion": "components",
@@ -249,7 +250,9 @@ def track_sets(half, table):
     """[(frames, masks, truth, source)] of every method's tracks and of forced jumps."""
     rng = np.random.default_rng(0 if half == "calibration" else 1)
     sets = []
-    for name, (frames, truth, cls) in CORPUS.corpus(half).items():
+    for name, (frames, truth, cls) in CORPUS.corpus(
+        half, classes=CLASSES_RUN or CORPUS.CLASSES
+    ).items():
         for label, method in table.items():
             sets.append((frames, method(frames, truth[0]), truth, label, cls, name))
         sets.append(
@@ -419,6 +422,13 @@ def main(argv=None):
         help="the corpus halves to report (default: both)",
     )
     parser.add_argument(
+        "--classes",
+        nargs="*",
+        default=None,
+        metavar="CLASS",
+        help="run only these classes of the corpus (default: all)",
+    )
+    parser.add_argument(
         "--save-masks",
         type=Path,
         default=None,
@@ -438,8 +448,9 @@ def main(argv=None):
         help="benchmarks/track_corpus.py (synthetic) or track_photo_corpus.py (photographs)",
     )
     args = parser.parse_args(argv)
-    global CORPUS
+    global CORPUS, CLASSES_RUN
     CORPUS = track_photo_corpus if args.corpus == "photo" else track_corpus
+    CLASSES_RUN = args.classes
     if args.corpus == "photo" and args.methods is None:
         args.methods = ["default (motion=image", "motion=checked", "MCV", "GrabCut"]
     if args.calibrate is not None:
@@ -489,7 +500,7 @@ def main(argv=None):
         }
         print(f"\n{half} half: min / mean IoU (J), mean boundary F")
         print(f"{'class':11s} " + " | ".join(f"{m:>27s}" for m in table))
-        for c in CORPUS.CLASSES:
+        for c in (c for c in CORPUS.CLASSES if c in rows):
             print(
                 f"{c:11s} "
                 + " | ".join(

@@ -55,6 +55,13 @@ LIGHT_SLACK = 0.05
 # ... unless the frames' own correlation peak is at least this: so clear a match leaves
 # nothing for a change of light to have moved (and one correlation a frame is saved)
 LIGHT_CLEAR = 0.9
+# Below LIGHT_CLEAR, the object's interior (INSIDE px in from the mask's edge, where it
+# keeps INSIDE_SHARE of the mask) is matched too, and its shift taken where its peak beats
+# the whole mask's by INSIDE_MARGIN and the floor (object_motion); INSIDE 0: not. Chosen on
+# the calibration halves (docs/tracking.md, "Smooth objects over a busy ground"): margin
+# 0.1 lost grey-4 (0.950 -> 0.92), 0.15 the synthetic textured-2 (0.790 -> 0.731), 0.3
+# fast-12 (0.52); 1 px in, deform-4 stayed lost.
+INSIDE, INSIDE_SHARE, INSIDE_MARGIN = 2, 0.3, 0.2
 # Where nothing inside the object matches (its peak below the floor), its outline is matched:
 # the object dilated by OUTLINE_RIM px on frames smoothed by a Gaussian of OUTLINE_SMOOTH px
 # (object_motion). Chosen on the calibration half of benchmarks/track_corpus.py among rims
@@ -253,6 +260,21 @@ def object_motion(
     weight = rim.astype(np.float64)
     d = match_shift(prev, cur, weight, reach, prior, within)
     peak = match_shift.peak
+    object_motion.pixels = mask  # the pixels matched, read by the caller's checks
+    if INSIDE and rim is mask and peak < LIGHT_CLEAR and within is None:
+        # A smooth object over a busy ground: a strip of ground the mask took in at its
+        # edge outweighs the object's own faint texture in the correlation, and its match
+        # (or, below the floor, none) wins. The interior alone decides where it matches
+        # clearly better. (Not while hidden, `within` given: a sliver's inside is small.)
+        inner = erode(mask, INSIDE)
+        scores = match_shift.scores
+        if inner.sum() >= INSIDE_SHARE * mask.sum():
+            d_in = match_shift(prev, cur, inner.astype(np.float64), reach, prior, within)
+            if match_shift.peak >= max(peak + INSIDE_MARGIN, floor):
+                rim, d, peak = inner, d_in, match_shift.peak
+                weight, scores = rim.astype(np.float64), match_shift.scores
+                object_motion.pixels = rim
+        match_shift.peak, match_shift.scores = peak, scores
     if ROBUST and floor <= peak < LIGHT_CLEAR:
         # a part that moves otherwise does not decide (robust_match.py); a clear peak has
         # no such part to have lowered it

@@ -344,7 +344,7 @@ class ObjectFollower:
             a = match(within)
             if within is None and _jumped(a, self.shape, self.velocity):
                 if self._looks_away(t, a) or not _clearly_better(
-                    before, now, pixels, self.velocity
+                    before, now, object_motion.pixels, self.velocity
                 ):
                     a = match(JUMP)
         else:  # nothing in sight: the object keeps its velocity
