@@ -102,6 +102,12 @@ AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is n
 AGREED = "box"
 
 
+# Candidates' options the vote sets unless given: Navier-Stokes keeps its own stop (no
+# held-out ring of its own, holdout.py), as the vote was measured: the vote already tests
+# each candidate on hidden rings, and a second ring inside would double its cost.
+OWN_STOP = {"navier-stokes": {"holdout": 0}}
+
+
 def _solver(name):
     """solve(data, omega, runtime, dtype=, seed=) of a candidate; None if not installed."""
     if name == "biharmonic":
@@ -353,7 +359,7 @@ def choose(
     "chosen"} per cluster], "ring_pixels": int}; with two rings (`narrow`), the weights
     are the mean of their votes', ring_rmse the wide ring's and ring_pixels both rings'.
     """
-    params = params or {}
+    params = {n: {**OWN_STOP.get(n, {}), **params.get(n, {})} for n in {*OWN_STOP, *(params or {})}}
     ring = RING if ring is None else ring
     prior = PRIOR if prior is None else prior
     scale = SCALE if scale is None else scale

@@ -336,8 +336,11 @@ def _held_out_stop(data, omega, runtime, width, nu, contrast, dtype, max_iter, s
 
 
 def _margin(omega, options: NavierStokesOptions) -> int:
-    """MARGIN, and the hidden ring's width on top where the hole is deep enough for it."""
-    return MARGIN + (options.holdout if holdout.ring(omega, options.holdout) is not None else 0)
+    """MARGIN, and the hidden ring's width on top where the hole is deep enough for it
+    (omega None: any hole)."""
+    if omega is None or holdout.ring(np.asarray(omega, bool), options.holdout) is not None:
+        return MARGIN + options.holdout
+    return MARGIN
 
 
 @register("navier-stokes", NavierStokesOptions, margin=_margin)
