@@ -146,7 +146,8 @@ def _by_method(options) -> dict:
 
 
 def _fill(name, data, omega, runtime, dtype, seed, params):
-    solved = _solver(name)(data, omega, runtime, dtype=dtype, seed=seed, **params.get(name, {}))
+    given = {**OWN_STOP.get(name, {}), **params.get(name, {})}
+    solved = _solver(name)(data, omega, runtime, dtype=dtype, seed=seed, **given)
     return np.asarray(solved, np.float64)
 
 
@@ -359,7 +360,7 @@ def choose(
     "chosen"} per cluster], "ring_pixels": int}; with two rings (`narrow`), the weights
     are the mean of their votes', ring_rmse the wide ring's and ring_pixels both rings'.
     """
-    params = {n: {**OWN_STOP.get(n, {}), **params.get(n, {})} for n in {*OWN_STOP, *(params or {})}}
+    params = params or {}
     ring = RING if ring is None else ring
     prior = PRIOR if prior is None else prior
     scale = SCALE if scale is None else scale
