@@ -405,7 +405,9 @@ class TransportRun:
         hidden = self.data.copy()
         hidden[:, band] = 0.0
         options = replace(self.p, holdout=0, levels=self.levels)
-        probe = TransportRun(self.runtime, hidden, self.omega | band, options, dtype=self.dtype)
+        probe = TransportRun(
+            self.runtime, hidden, self.omega | band, options, dtype=self.dtype, progress=False
+        )
         tracker = holdout.Tracker(self.data, band)
         for steps, _, state in probe.states(every=1):
             tracker.add(steps, state)
