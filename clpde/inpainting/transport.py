@@ -40,10 +40,11 @@ How this implementation runs it (all on the OpenCL device):
   device; the run stops once the largest falls below `tol` or the mean below `mean_tol` (or
   after `max_steps`). The mean test is the one that ends runs on photos, where a few pixels
   never settle (see `inpaint`'s docstring).
-- On holes at least `holdout` (4) px deep the finest level stops earlier where the same
-  scheme, run with a ring of known pixels hidden too, filled that ring clearly better at an
-  earlier step (holdout.py): the steady state continues a pattern that repeats within the
-  hole's depth with a phase nothing fixes, and falls 2-4 dB below its biharmonic start there.
+- With `holdout=4` (off by default), on holes at least 4 px deep the finest level stops
+  earlier where the same scheme, run with a ring of known pixels hidden too, filled that
+  ring clearly better at an earlier step (holdout.py): the steady state continues a pattern
+  that repeats within the hole's depth with a phase nothing fixes, and falls 2-4 dB below
+  its biharmonic start there.
 - Multiresolution: one level for thin masks (half-width up to 8 px), two for thicker ones
   (docs/inpainting.md has the measurements).
 - The output equals the input bit for bit outside the mask.
