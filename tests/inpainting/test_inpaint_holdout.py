@@ -1,0 +1,83 @@
+"""The held-out stop (clpde/inpainting/holdout.py) of the transport (an option there) and of
+Navier-Stokes (its default): on a periodic pattern with holes deeper than its period neither
+falls far below its own biharmonic start (at their own steady state they did, by 1.5-4 dB),
+and thin damage keeps the method's own stop bit for bit."""
+
+import numpy as np
+import pytest
+
+import clpde
+from clpde.inpainting import holdout
+from tests.cases import inpaint_corpus as corpus
+
+
+def _periodic_case(seed):
+    """A case of the inpainting corpus's periodic class: 6 holes 8-20 px across."""
+    rng = np.random.default_rng(corpus._seed(f"periodic-{seed}", "periodic"))
+    truth = corpus.periodic(seed)
+    return truth, corpus.damage("periodic", truth, rng)
+
+
+def _psnr(truth, result, mask):
+    d = result.astype(float)[mask] - truth.astype(float)[mask]
+    return 10 * np.log10(255.0**2 / np.mean(d * d))
+
+
+# crossed gratings for the transport, a brick lattice for Navier-Stokes: where each fell
+# furthest below its start
+@pytest.mark.parametrize("method,seed", [("transport", 0), ("navier-stokes", 4)])
+def test_periodic_pattern_stays_near_the_smooth_start(method, seed):
+    truth, mask = _periodic_case(seed)
+    damaged = np.where(mask, 0, truth).astype(np.uint8)
+
+    def fill(method, **options):
+        out = clpde.inpaint(damaged, mask, method=method, progress=False, **options)
+        return _psnr(truth, out, mask)
+
+    # the biharmonic fill both methods start from: the transport without a step
+    start = fill("transport", max_steps=0, levels=1)
+    own_stop = fill(method, holdout=0)
+    held_out = fill(method, holdout=holdout.WIDTH)  # the transport's default is 0
+    assert own_stop < start - 1.0, (own_stop, start)  # what the held-out stop repairs
+    assert held_out > start - 0.5, (held_out, start)
+    assert held_out > own_stop + 1.0, (held_out, own_stop)
+
+
+@pytest.mark.parametrize("method", ["transport", "navier-stokes"])
+def test_thin_damage_keeps_the_methods_own_stop(method):
+    truth = corpus.periodic(0, size=64)
+    mask = np.zeros(truth.shape, bool)
+    mask[20:23, 5:60] = True  # 3 px: thinner than the hidden ring
+    mask[40:60, 30] = True
+    damaged = np.where(mask, 0, truth).astype(np.uint8)
+    a = clpde.inpaint(damaged, mask, method=method, progress=False, holdout=holdout.WIDTH)
+    b = clpde.inpaint(damaged, mask, method=method, progress=False, holdout=0)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_ring_only_around_holes_at_least_its_width_deep():
+    omega = np.zeros((40, 40), bool)
+    omega[10:13, 5:35] = True  # 3 px thick: deepest pixel 2 px from a known one
+    assert holdout.ring(omega, 4) is None
+    omega[20:32, 10:22] = True  # 12 px: deep enough
+    band = holdout.ring(omega, 4)
+    assert band is not None and not (band & omega).any()
+    from scipy import ndimage
+
+    dist = ndimage.distance_transform_edt(~omega)
+    assert band.sum() == ((dist > 0) & (dist <= 4)).sum()
+    assert holdout.ring(omega, 0) is None
+
+
+def test_tracker_keeps_the_own_stop_unless_clearly_better():
+    band = np.zeros((4, 4), bool)
+    band[1, 1:3] = True
+    truth = np.zeros((1, 4, 4))
+    tracker = holdout.Tracker(truth, band)
+    for steps, err in ((0, 0.3), (34, 0.2), (68, 0.1)):
+        tracker.add(steps, np.full((1, 4, 4), err))
+    assert tracker.best() is None  # the last state fills the ring best
+    tracker.add(102, np.full((1, 4, 4), 0.1 / np.sqrt(holdout.GAIN) * 0.999))
+    assert tracker.best() is None  # better by less than the margin
+    tracker.add(136, np.full((1, 4, 4), 0.2))
+    assert tracker.best() == 68
