@@ -3,7 +3,9 @@ benchmarks/film_corpus.py, detect_defects + inpaint_video (keep as `clpde restor
 for every frame each detected component whose repair raised the squared error against the
 clean frame, with its size, the share of it that is true damage and its kind.
 
-    PYTHONPATH=. python benchmarks/film_worse.py [--half calibration] [--frames 12]
+    PYTHONPATH=. python benchmarks/film_worse.py [--half calibration] [--frames 12] [--more]
+
+(--more: the calibration half widened with film_corpus.CALIBRATION_MORE.)
 
 (The frames worse than their input on the calibration half lost to small false alarms,
 4-23 px, on tree.avi's textured, motion-blurred foliage: what the tail check of
@@ -27,8 +29,9 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--half", default="calibration")
     ap.add_argument("--frames", type=int, default=12)
+    ap.add_argument("--more", action="store_true")
     args = ap.parse_args()
-    for c in corpus(args.half, frames=args.frames):
+    for c in corpus(args.half, frames=args.frames, more=args.more):
         clean, dirty, truth = c["clean"], c["dirty"], c["truth"]
         mask, kinds = clpde.detect_defects(dirty, channel_axis=-1, return_kinds=True)
         out = clpde.inpaint_video(dirty, mask, channel_axis=-1, keep=KEEP, kinds=kinds)
