@@ -55,6 +55,17 @@ CALIBRATION_MORE = [
     ("carphone f", "carphone", 88, None),
     ("carphone g", "carphone", 104, None),
 ]
+
+
+def calibration_scan(step: int = 3) -> list[tuple]:
+    """Windows of the calibration sources at every `step`-th start frame (12 frames each
+    fit), named "carphone sN" / "tree sN" (their damage seeds): a wide look at clip ends
+    for benchmarks/film_worse.py --scan, beyond CALIBRATION_MORE."""
+    return [(f"carphone s{s}", "carphone", s, None) for s in range(0, 109, step)] + [
+        (f"tree s{s}", "tree.avi", s, None) for s in range(0, 57, step)
+    ]
+
+
 TEST = [
     ("vtest a (people)", "vtest.avi", 60, (384, 288)),
     ("vtest b (people)", "vtest.avi", 500, (384, 288)),

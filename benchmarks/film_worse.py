@@ -5,7 +5,8 @@ clean frame, with its size, the share of it that is true damage and its kind.
 
     PYTHONPATH=. python benchmarks/film_worse.py [--half calibration] [--frames 12] [--more]
 
-(--more: the calibration half widened with film_corpus.CALIBRATION_MORE.)
+(--more: the calibration half widened with film_corpus.CALIBRATION_MORE; --scan: instead,
+film_corpus.calibration_scan()'s 56 windows of the calibration sources, 12 frames each fit.)
 
 (The frames worse than their input on the calibration half lost to small false alarms,
 4-23 px, on tree.avi's textured, motion-blurred foliage: what the tail check of
@@ -18,7 +19,7 @@ import argparse
 
 import numpy as np
 from film import psnr
-from film_corpus import corpus
+from film_corpus import calibration_scan, corpus, make_clip
 from scipy import ndimage
 
 import clpde
@@ -30,8 +31,13 @@ def main():
     ap.add_argument("--half", default="calibration")
     ap.add_argument("--frames", type=int, default=12)
     ap.add_argument("--more", action="store_true")
+    ap.add_argument("--scan", action="store_true")
     args = ap.parse_args()
-    for c in corpus(args.half, frames=args.frames, more=args.more):
+    if args.scan:
+        clips = (make_clip(*spec, frames=args.frames) for spec in calibration_scan())
+    else:
+        clips = corpus(args.half, frames=args.frames, more=args.more)
+    for c in clips:
         clean, dirty, truth = c["clean"], c["dirty"], c["truth"]
         mask, kinds = clpde.detect_defects(dirty, channel_axis=-1, return_kinds=True)
         out = clpde.inpaint_video(dirty, mask, channel_axis=-1, keep=KEEP, kinds=kinds)
