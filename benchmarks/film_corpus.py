@@ -41,6 +41,31 @@ CALIBRATION = [
     ("carphone a", "carphone", 10, None),
     ("carphone b", "carphone", 70, None),
 ]
+# More windows of the calibration sources (opt-in: `corpus(..., more=True)`, the benchmarks'
+# --more), so the default table stays comparable. More clip ends: carphone's passenger
+# talks and blinks, and a scene change at a clip's first or last frame is what only the
+# ends' one-sided neighbours can mistake for damage. Other start frames than the four
+# above (some windows overlap theirs); each clip draws its damage from its own name's seed.
+CALIBRATION_MORE = [
+    ("tree c", "tree.avi", 20, None),
+    ("tree d", "tree.avi", 52, None),
+    ("carphone c", "carphone", 0, None),
+    ("carphone d", "carphone", 28, None),
+    ("carphone e", "carphone", 44, None),
+    ("carphone f", "carphone", 88, None),
+    ("carphone g", "carphone", 104, None),
+]
+
+
+def calibration_scan(step: int = 3) -> list[tuple]:
+    """Windows of the calibration sources at every `step`-th start frame (12 frames each
+    fit), named "carphone sN" / "tree sN" (their damage seeds): a wide look at clip ends
+    for benchmarks/film_worse.py --scan, beyond CALIBRATION_MORE."""
+    return [(f"carphone s{s}", "carphone", s, None) for s in range(0, 109, step)] + [
+        (f"tree s{s}", "tree.avi", s, None) for s in range(0, 57, step)
+    ]
+
+
 TEST = [
     ("vtest a (people)", "vtest.avi", 60, (384, 288)),
     ("vtest b (people)", "vtest.avi", 500, (384, 288)),
@@ -189,6 +214,10 @@ def make_clip(name, source, start, size, frames=16, seed=0):
     return {"name": name, "clean": clean, "dirty": dirty, "truth": truth, "spare": spare}
 
 
-def corpus(half: str, frames: int = 16, seed: int = 0) -> list[dict]:
+def corpus(half: str, frames: int = 16, seed: int = 0, more: bool = False) -> list[dict]:
+    """One half's clips; `more` adds CALIBRATION_MORE to the calibration half (never to the
+    test half)."""
     specs = CALIBRATION if half == "calibration" else TEST
+    if more and half == "calibration":
+        specs = specs + CALIBRATION_MORE
     return [make_clip(n, s, a, z, frames, seed) for n, s, a, z in specs]

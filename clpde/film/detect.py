@@ -54,6 +54,7 @@ from ._regions import (
     _spatial_blotches,
     _tail_check,
 )
+from ._tilt import at_border, leaning
 from ._whole import whole_blotches
 from .lines import LineKernels, film_scratches, robust_scale
 
@@ -398,6 +399,10 @@ def _frame_kinds(
         if h >= 0.5 * min_length and (labels[sl] == idx).sum() <= 4 * h:
             scratch[sl] |= labels[sl] == idx
             blotch[sl] &= labels[sl] != idx
+    # a long thin line leaning off the vertical is neither, a line at the frame's left or
+    # right border no scratch (clpde.film._tilt)
+    blotch &= ~leaning(blotch)
+    scratch &= ~(leaning(scratch) | at_border(scratch))
     kinds = np.zeros(G.shape[1:], np.int8)
     kinds[blotch] = BLOTCH
     kinds[scratch] = SCRATCH
