@@ -35,6 +35,7 @@ from scipy import fft as sfft
 from scipy import ndimage
 
 from ..fields import Field
+from .fft_rows import irfft2_rows, rfft2_rows
 from .levelset import LevelSet
 from .robust_match import robust_shift
 
@@ -157,10 +158,11 @@ def match_shift(
     wp = np.zeros(shape)
     wp[r : r + h, r : r + w] = weight
     den_t = 0.0
-    var_c = np.zeros(shape)
-    fw = np.conj(sfft.rfft2(wp, shape))
-    # every channel's frame, its squares and its template, transformed in one call (the
-    # same values as one call each, less the calls' overhead)
+    # (the transforms skip the rows that are zero, and the inverse ones find the rows of
+    # the shifts within reach only: fft_rows.py, the same bits as rfft2 / irfft2)
+    fw = np.conj(rfft2_rows(wp, slice(r, r + h)))
+    # every channel's frame and its squares transformed in one call, the templates in
+    # another (the same values as one call each, less the calls' overhead)
     k = len(prev)
     padded = np.zeros((3 * k,) + shape)
     padded[:k, : h + 2 * r, : w + 2 * r] = cur
@@ -169,9 +171,13 @@ def match_shift(
         t = padded[2 * k + i]
         t[r : r + h, r : r + w] = (p - (p * weight).sum() / n) * weight
         den_t += (t * t).sum()
-    spectra = sfft.rfft2(padded, shape, axes=(-2, -1))
-    fcs, fsq, fts = spectra[:k], spectra[k : 2 * k], spectra[2 * k :]
-    s1s = sfft.irfft2(fw * fcs, shape, axes=(-2, -1))
+    fcs, fsq = np.split(rfft2_rows(padded[: 2 * k], slice(0, h + 2 * r)), 2)
+    fts = rfft2_rows(padded[2 * k :], slice(r, r + h))
+    # correlation index k is the shift k, negative shifts wrapped around: the rows of the
+    # shifts within reach
+    near = np.r_[0 : r + 1, shape[0] - r : shape[0]]
+    s1s = irfft2_rows(fw * fcs, near, shape)
+    var_c = np.zeros(s1s.shape[1:])
     # the cross-correlations and the sums of squares summed over the channels before the
     # inverse transforms (linear): 2 inverse transforms a frame, and one per channel
     fscore, fsquares = 0.0, 0.0
@@ -179,14 +185,16 @@ def match_shift(
         var_c -= s1 * s1 / n
         fsquares = fsquares + squares
         fscore = fscore + np.conj(ft) * fc
-    var_c = np.maximum(var_c + sfft.irfft2(fw * fsquares, shape), 0)
-    score = sfft.irfft2(fscore, shape)
-    ncc = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
-    # correlation index k is the shift k, negative shifts wrapped around
+    var_c = np.maximum(var_c + irfft2_rows(fw * fsquares, near, shape), 0)
+    score = irfft2_rows(fscore, near, shape)
+    ncc = np.full(shape, -np.inf)  # (the rows beyond reach: not searched)
+    ncc[near] = score / np.sqrt(np.maximum(var_c * den_t, 1e-12))
+    flat = np.ones(shape, bool)  # where cur's window holds no variance
+    flat[near] = var_c < 1e-9 * n
     dy = np.rint(np.fft.fftfreq(shape[0], 1 / shape[0]))[:, None]
     dx = np.rint(np.fft.fftfreq(shape[1], 1 / shape[1]))[None, :]
     ncc = ncc - 0.05 * ((dy - prior[0]) ** 2 + (dx - prior[1]) ** 2) / reach**2
-    ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | (var_c < 1e-9 * n)] = -np.inf
+    ncc[(np.abs(dy) > reach) | (np.abs(dx) > reach) | flat] = -np.inf
     if within is not None:
         ncc[(np.abs(dy - prior[0]) > within) | (np.abs(dx - prior[1]) > within)] = -np.inf
     k = np.unravel_index(int(np.argmax(ncc)), shape)
