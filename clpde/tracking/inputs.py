@@ -97,23 +97,24 @@ def user_features(features, frames: list[np.ndarray]) -> np.ndarray:
     return (stack - lo) / (hi - lo) if hi > lo else np.zeros_like(stack)
 
 
-def scaled_frames(frames: list[np.ndarray], colour: bool) -> np.ndarray:
+def scaled_frames(frames: list[np.ndarray], colour: bool) -> np.ndarray | ColourFrames:
     """(T, C, H, W) float64 in [0, 1], one scale for the whole sequence: every channel of
-    colour frames with `colour`, else their grey level (Rec. 601 luma)."""
+    colour frames with `colour` (a ColourFrames, read frame by frame), else their grey level
+    (Rec. 601 luma)."""
     # stacked in the frames' own dtype (float64 where they differ), then converted once:
     # the same values as each frame converted
     same = all(f.dtype == frames[0].dtype for f in frames)
     stack = np.stack(frames, dtype=None if same else np.float64)
+    if stack.ndim == 4 and colour:
+        # the range of the values that ColourFrames converts: the extremes of the frames' own
+        # dtype, converted (exactly) to float64 as the values are
+        lo, hi = float(stack[..., :3].min()), float(stack[..., :3].max())
+        value_range(lo, hi, "frames")  # refuses a span that overflows float64
+        if hi > lo:
+            return ColourFrames(stack, lo, hi)
+        return np.zeros((len(stack), 3) + stack.shape[1:3])
     if stack.ndim == 4:
-        # each frame's channels contiguous: interleaved, every read of a frame's (C, H, W)
-        # strides through memory, and a mean over the channels is ten times slower
-        stack = (
-            np.moveaxis(stack[..., :3], -1, 1).astype(np.float64, order="C")
-            if colour
-            else (stack.astype(np.float64)[..., :3] @ np.array([0.299, 0.587, 0.114]))[
-                :, np.newaxis
-            ]
-        )
+        stack = (stack.astype(np.float64)[..., :3] @ np.array([0.299, 0.587, 0.114]))[:, np.newaxis]
     else:
         stack = stack.astype(np.float64)[:, np.newaxis]
     lo, hi = float(stack.min()), float(stack.max())
@@ -124,3 +125,55 @@ def scaled_frames(frames: list[np.ndarray], colour: bool) -> np.ndarray:
     stack -= lo
     stack /= hi - lo
     return stack
+
+
+class ColourFrames:
+    """The (T, 3, H, W) float64 colour frames in [0, 1] of scaled_frames, each frame
+    converted from the clip's own dtype when it is read (the last few kept): the same values
+    as the whole clip converted at once, (x - lo) / (hi - lo), without the clip's float64
+    copy, 8 times uint8 footage's bytes, whose pages cost more to fault in than the tracker's
+    reads of it (carphone, colour=True: 0.11-0.17 s a call against 0.02 s; issue 35,
+    docs/tracking.md). Reads by an index; anything else converts the whole clip."""
+
+    ndim = 4
+    dtype = np.dtype(np.float64)
+    KEEP = 4  # frames kept converted: the tracker reads frames t - 1 and t, and frame 0
+
+    def __init__(self, stack: np.ndarray, lo: float, hi: float):
+        self._stack, self._lo, self._span = stack, lo, hi - lo
+        self.shape = (len(stack), 3) + stack.shape[1:3]
+        self._kept: dict[int, np.ndarray] = {}
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def _convert(self, frames: np.ndarray) -> np.ndarray:
+        # (the channels first and contiguous: interleaved, every read of a frame's (C, H, W)
+        # strides through memory, and a mean over the channels is ten times slower)
+        out = np.moveaxis(frames[..., :3], -1, -3).astype(np.float64, order="C")
+        out -= self._lo
+        out /= self._span
+        return out
+
+    def __getitem__(self, index):
+        if not isinstance(index, (int, np.integer)):
+            return np.asarray(self)[index]
+        t = range(len(self))[index]  # (IndexError beyond the clip, as an array's)
+        frame = self._kept.get(t)
+        if frame is None:
+            frame = self._convert(self._stack[t])
+            if len(self._kept) >= self.KEEP:
+                del self._kept[max((k for k in self._kept if k), key=lambda k: abs(k - t))]
+            self._kept[t] = frame
+        return frame
+
+    def __array__(self, dtype=None, copy=None):
+        whole = self._convert(self._stack)
+        return whole if dtype is None else whole.astype(dtype)
+
+    def mean(self, axis: int) -> np.ndarray:
+        """The clip's mean over `axis` 1 (the channels), frame by frame: the same values as
+        over the whole array (the channels added in turn either way)."""
+        if axis != 1:
+            return np.asarray(self).mean(axis=axis)
+        return np.stack([self._convert(f).mean(axis=0) for f in self._stack])
