@@ -132,7 +132,7 @@ class ColourFrames:
     converted from the clip's own dtype when it is read (the last few kept): the same values
     as the whole clip converted at once, (x - lo) / (hi - lo), without the clip's float64
     copy, 8 times uint8 footage's bytes, whose pages cost more to fault in than the tracker's
-    reads of it (carphone, colour=True: 0.11-0.17 s a call against 0.02 s; issue 35,
+    reads of it (carphone, colour=True: 0.11-0.17 s a call against 2-9 ms; issue 35,
     docs/tracking.md). Reads by an index; anything else converts the whole clip."""
 
     ndim = 4
