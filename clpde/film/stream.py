@@ -445,7 +445,7 @@ def film_work(
     Examples
     --------
     >>> film_work(grow=2).context(detecting=True)
-    5
+    7
     """
     detect_options = {"return_kinds": True, "grow": grow, **(detect_options or {})}
     # detected masks: a pixel the fill would barely change keeps its value (do no harm)

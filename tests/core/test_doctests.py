@@ -31,6 +31,19 @@ MODULES = [
     "clpde.film.stream",
     "clpde.film.chunks",
     "clpde.io.video_probe",
+    "clpde.volumes.inpaint",
+    "clpde.film._morph",
+    "clpde.film._tilt",
+    "clpde.film.lines",
+    "clpde.film._own_lines",
+    "clpde.film.fill",
+    "clpde.film.detect",
+    "clpde.motion.flow",
+    "clpde.motion.dis",
+    "clpde.io.volumes",
+    "clpde.inpainting.spectral",
+    "clpde.surface.inpainting",
+    "clpde.surface.shapes",
 ]
 
 
