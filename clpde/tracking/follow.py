@@ -56,7 +56,7 @@ from .occlusion import (
     visible_pieces,
 )
 from .parts import grow_parts
-from .residual import residual_carry
+from .residual import raw_carry, residual_carry
 
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
@@ -368,7 +368,12 @@ class ObjectFollower:
         free = self._occluder is None or not self._occluder.any() or gate != "occ"
         if RESIDUAL and free and not hidden and np.hypot(*shift) >= SEEN_MOVED:
             visible = _warp_values(mask.astype(np.float64), a)
-            flowed_u = residual_carry(self.looks[t - 1], self.looks[t], a, predicted_u, visible)
+            if __import__("os").environ.get("RF_MODE") == "raw":  # EXPLORE
+                flowed_u = raw_carry(
+                    self.looks[t - 1], self.looks[t], a, predicted_u, mask, self.shape_u
+                )
+            else:
+                flowed_u = residual_carry(self.looks[t - 1], self.looks[t], a, predicted_u, visible)
             if PRIOR_ONLY:
                 flowed = flowed_u < 0
             else:

@@ -172,3 +172,51 @@ def _splat(predicted_u, where, carried, now, g, f, flow):
     full = predicted_u < 0
     full[where] = new
     return signed_distance(full)
+
+
+def raw_carry(before, after, a, predicted_u, prev_mask, prev_u):
+    """EXPLORE: DIS between the frames themselves (the ground still on a still camera, so
+    measured), the residual being the flow less the object's motion: where it differs from
+    it by more than RF_BG px, within REACH px, and is trusted, a pixel is the object's if
+    its source was in the previous visible mask, the surroundings' if outside the whole
+    shape; elsewhere the rigid prediction stands."""
+    flow = _flow()
+    predicted = predicted_u < 0
+    if flow is None or not predicted.any():
+        return predicted_u
+    where = box(predicted | prev_mask, MARGIN)
+    now = np.asarray(after, np.float64).mean(axis=0)[where]
+    was = np.asarray(before, np.float64).mean(axis=0)[where]
+    if min(now.shape) < 16:
+        return predicted_u
+    n8, p8 = _u8(now), _u8(was)
+    f = flow.flow(n8, p8).astype(np.float32)  # now(x) ~ was(x + f)
+    g = flow.flow(p8, n8).astype(np.float32)
+    trusted = np.hypot(*(f + flow.warp(g, f, "linear")).transpose(2, 0, 1)) <= CONSISTENT
+    ys, xs = np.mgrid[where[0], where[1]].astype(np.float64)
+    # the object's motion as a flow: x -> A x
+    rx = a[1, 0] * ys + a[1, 1] * xs + a[1, 2] - xs
+    ry = a[0, 0] * ys + a[0, 1] * xs + a[0, 2] - ys
+    off = np.hypot(f[..., 0] - rx, f[..., 1] - ry)
+    trusted &= (off > float(os.environ.get("RF_BG", 2.0))) & (off <= REACH)
+    if MIN_PART > 1:
+        labels, n = ndimage.label(trusted)
+        if n:
+            sizes = ndimage.sum(trusted, labels, np.arange(1, n + 1))
+            trusted = np.isin(labels, 1 + np.flatnonzero(sizes >= MIN_PART))
+    if not trusted.any():
+        return predicted_u
+    seen = flow.warp(np.ascontiguousarray(prev_mask[where], np.float32), f, "linear") > 0.5
+    whole = flow.warp(np.ascontiguousarray(prev_u[where], np.float32), f, "linear") < 0
+    part = predicted[where]
+    new = part.copy()
+    new[trusted & seen] = True
+    if not os.environ.get("RF_NOREMOVE"):
+        new[trusted & ~whole] = False
+    if (new == part).all():
+        return predicted_u
+    full = predicted.copy()
+    full[where] = new
+    if full.sum() < 0.5 * predicted.sum():  # EXPLORE: the flow took the object away
+        return predicted_u
+    return signed_distance(full)
