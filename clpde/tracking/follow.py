@@ -56,7 +56,6 @@ from .occlusion import (
     visible_pieces,
 )
 from .parts import grow_parts
-from .residual import raw_carry, residual_carry
 
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
@@ -127,9 +126,6 @@ BESIDE = 6
 # A frame pair whose difference near the unmoved object is below this many times the
 # noise's is still (`_change`).
 STILL_CHANGE = 2.0
-# A part's residual motion off the object's, by dense flow (residual.py; trackflow).
-PRIOR_ONLY = bool(__import__("os").environ.get("RF_PRIOR"))  # EXPLORE
-RESIDUAL = not __import__("os").environ.get("RF_OFF")  # EXPLORE
 
 
 def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
@@ -275,7 +271,6 @@ class ObjectFollower:
         self.shape_u = signed_distance(self.shape)
         self.predicted = self.shape
         self._grown = self.shape  # the prediction with the parts that moved otherwise
-        self._flowed = self.shape
         self._predicted_u = self.shape_u
         self.velocity = np.zeros(2)
         # hidden in part by something still (occlusion.py): the shape is then the whole
@@ -363,27 +358,11 @@ class ObjectFollower:
             a = np.array([[1.0, 0.0, -shift[0]], [0.0, 1.0, -shift[1]]])
         self.velocity = shift
         predicted_u = _warp_values(self.shape_u, a)
-        flowed = None
-        gate = __import__("os").environ.get("RF_GATE", "")  # EXPLORE
-        free = self._occluder is None or not self._occluder.any() or gate != "occ"
-        if RESIDUAL and free and not hidden and np.hypot(*shift) >= SEEN_MOVED:
-            visible = _warp_values(mask.astype(np.float64), a)
-            if __import__("os").environ.get("RF_MODE") == "raw":  # EXPLORE
-                flowed_u = raw_carry(
-                    self.looks[t - 1], self.looks[t], a, predicted_u, mask, self.shape_u
-                )
-            else:
-                flowed_u = residual_carry(self.looks[t - 1], self.looks[t], a, predicted_u, visible)
-            if PRIOR_ONLY:
-                flowed = flowed_u < 0
-            else:
-                predicted_u = flowed_u
         predicted = predicted_u < 0
         if not predicted.any() or predicted.all():  # carried out of the frame: it stays
             predicted, predicted_u = self.shape, self.shape_u
         self.predicted, self._predicted_u = predicted, predicted_u
         self._grown = predicted
-        self._flowed = flowed if flowed is not None and flowed.any() else predicted
         self._seen = None
         if np.hypot(*shift) >= SEEN_MOVED:
             self._seen = self._seen_still(t, a, predicted)
@@ -464,7 +443,7 @@ class ObjectFollower:
         if still or self.hidden or trust <= 0:  # (hidden: the occluder's rules hold)
             self._grown = predicted
         else:
-            self._grown = grow_parts(self._flowed, trust * self._looks_ratio)
+            self._grown = grow_parts(predicted, trust * self._looks_ratio)
         prior = _prior(self._grown)
         if self.hidden and self._occluder is not None and self._occluder.any():
             # next to an occluder the object's extent is not known (it comes out from
