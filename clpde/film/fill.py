@@ -139,9 +139,9 @@ def _temporal(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame t's damaged pixels from its neighbours where the motion is trusted; returns the
     frame (C, H, W), the pixels left to the spatial fill, and the squared residual of the
-    frame against its trusted, clean compensated neighbours (the smallest; inf where none
-    is trusted): what the data says the damage changed (`_self_check`). hwc: the planes
-    as (T, H, W, C), the layout the warp reads; noise: frame t's grain level (noise_std).
+    frame against its candidates (below; the smallest; inf where there is none): what the
+    data says the damage changed (`_self_check`). hwc: the planes as (T, H, W, C), the
+    layout the warp reads; noise: frame t's grain level (noise_std).
 
     A neighbour is a candidate at a pixel where its match is trusted (clpde.film._motion:
     inside, the flow loop consistent within the noise), clean in its own mask, and it agrees
@@ -161,7 +161,7 @@ def _temporal(
     # The fit and the agreement windows read the whole frame; the choice among the
     # candidates only the damaged pixels: from here on, vectors over those (the same
     # values as whole planes: every step is per pixel).
-    vals, cols, cand, dist, trust = [], [], [], [], []
+    vals, cols, cand, dist = [], [], [], []
     ctx_t = ~dilate(hole)  # grow_mask(hole, 1.0): the disc of radius 1 is the cross
     for k in offs:
         s = t + k
@@ -175,11 +175,14 @@ def _temporal(
         vals.append(wg[hole])
         cols.append(a * motion.warp_at(hwc[s], t, s, hole) + b)  # (n, C)
         cand.append(ok[hole] & (e <= AGREE * sigma))
-        trust.append(ok[hole])
         dist.append(abs(k) + (0.5 if k > 0 else 0.0))
     vals, cand = np.stack(vals), np.stack(cand)  # (K, n)
     resid2 = np.full((ny, nx), np.inf, np.float32)
-    resid2[hole] = np.where(np.stack(trust), (G[t][hole][None] - vals) ** 2, np.inf).min(0)
+    # E^2 from the candidates only (their window agrees with the frame's own): a trusted
+    # neighbour that disagrees around the pixel is misaligned there, and its difference
+    # from the frame is the motion's error, not damage (filmharm2: on tree d's fast motion
+    # such neighbours passed false alarms' repairs)
+    resid2[hole] = np.where(cand, (G[t][hole][None] - vals) ** 2, np.inf).min(0)
     e_ok = cand
     # agreement among the candidates: the medoid's cost, and how many agree with it
     K, n = vals.shape
@@ -358,6 +361,7 @@ def _self_check(
     sigma: float,
     lines: np.ndarray | None = None,
     spots: np.ndarray | None = None,
+    spatial: np.ndarray | None = None,
 ) -> np.ndarray:
     """The regions of `hole` whose repair the data does not explain: where the mean squared
     change D^2 of the repair (grey) exceeds twice the mean squared residual E^2 of the frame
@@ -376,10 +380,15 @@ def _self_check(
     trusted) its distance outside its ring's range (`ring_evidence`): there the temporal
     residual says nothing, and the noise alone would refuse every such repair. A false
     alarm shows no such deviation (the frame before a scratch begins, texture), and keeps
-    its values. Returns the bool (H, W) pixels whose repair is refused."""
+    its values. With `spatial` (the pixels the spatial fill took), each region's spatially
+    and temporally filled parts are tested apart: a spatial repair the ring does not
+    explain does not ride on its region's temporal residual. Returns the bool (H, W)
+    pixels whose repair is refused."""
     labels, n = ndimage.label(hole)
     if n == 0:
         return np.zeros(hole.shape, bool)
+    if spatial is not None:  # each region's spatially filled part apart (filmharm2)
+        labels = np.where(spatial & hole, labels + n, labels)
     # the regions' means read their own pixels only: vectors over the hole's pixels
     where = np.nonzero(hole)
     floor = np.full(len(where[0]), 2 * sigma**2, np.float32)
@@ -390,11 +399,10 @@ def _self_check(
     e2 = resid2[where]
     e2 = np.where(np.isfinite(e2), e2, floor)
     d2 = (restored[where] - frame[where]) ** 2
-    index = np.arange(1, n + 1)
-    mean_d2 = ndimage.mean(d2, labels[where], index)
-    mean_e2 = ndimage.mean(e2, labels[where], index)
-    refuse = np.concatenate([[False], mean_d2 > 2 * mean_e2])
-    return refuse[labels]
+    # the ratio of the means is that of the sums (a part with no pixels sums to 0: kept)
+    sum_d2 = np.bincount(labels[where], d2, minlength=2 * n + 1)
+    sum_e2 = np.bincount(labels[where], e2, minlength=2 * n + 1)
+    return (sum_d2 > 2 * sum_e2)[labels]
 
 
 def inpaint_video(
@@ -556,7 +564,9 @@ def inpaint_video(
                 lines = spots = None
                 if kinds is not None:
                     lines, spots = kinds[t] == SCRATCH, kinds[t] == BLOTCH
-                close |= _self_check(kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots)
+                close |= _self_check(
+                    kept, G[t], m[t] > 0, resid2[t], sigma, lines, spots, unfilled[t]
+                )
             frame = np.where(close[None], planes[t], frame)
         return frame
 
