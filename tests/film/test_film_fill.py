@@ -71,3 +71,30 @@ def test_spatial_fallback_leaves_the_temporal_fills_beside_it(runtime, rng):
     assert beside[20:36].sum() >= 16  # along the scratch, both sides
     np.testing.assert_array_equal(out[3][beside], other[3][beside])
     assert np.abs(out[3] - clean[3])[beside].mean() < 0.03
+
+
+def test_the_self_check_tests_a_regions_spatial_part_apart():
+    """One masked region, a true blotch on its left half (the frame 0.3 off its neighbours,
+    the temporal repair takes it back) and nothing on its right half, which no neighbour
+    saw (the spatial fill moved it by 0.1; no evidence but the noise). Tested as one region,
+    the left half's residual explained the right half's change too (filmharm2: tree d's
+    false alarms, repaired); tested apart, the right half keeps its values and the left
+    half its repair."""
+    from clpde.film.fill import _self_check
+
+    rng = np.random.default_rng(1)
+    sigma = 0.01
+    frame = 0.5 + sigma * rng.standard_normal((30, 40))
+    hole = np.zeros(frame.shape, bool)
+    hole[10:20, 10:30] = True
+    spatial = np.zeros(frame.shape, bool)
+    spatial[10:20, 20:30] = True
+    resid2 = np.full(frame.shape, np.inf)
+    frame[10:20, 10:20] += 0.3
+    resid2[10:20, 10:20] = (0.3 + sigma * rng.standard_normal((10, 10))) ** 2
+    restored = frame.copy()
+    restored[10:20, 10:20] -= 0.3
+    restored[10:20, 20:30] += 0.1
+    assert not _self_check(restored, frame, hole, resid2, sigma).any()  # one region: passed
+    refused = _self_check(restored, frame, hole, resid2, sigma, spatial=spatial)
+    assert (refused == spatial).all()
