@@ -5,7 +5,7 @@ against the best single candidate.
     python benchmarks/inpaint_vote_cache.py --half both      # first: the fills (long)
     python benchmarks/inpaint_vote_sound.py [--half calibration|test|both] [--cases]
     python benchmarks/inpaint_vote_sound.py --real [--vote rings|decoys] [--only NAMES]
-        [--prior P] [--narrow 0|1] [--agreed cheapest|box]
+        [--prior P] [--narrow 0|1] [--agreed cheapest|box] [--power P]
     python benchmarks/inpaint_vote_sound.py --time [--half ...]   # auto's time / default's
 
 --real runs a vote itself (auto.choose's rings, or inpaint_vote_decoys.choose) on the
@@ -473,6 +473,7 @@ def main(argv=None):
     parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
     parser.add_argument("--narrow", type=int, default=None, help="--real --vote rings: narrow")
     parser.add_argument("--agreed", default=None, help="--real --vote rings: agreed")
+    parser.add_argument("--power", type=float, default=None, help="--real --vote rings: power")
     parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
     parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
@@ -489,6 +490,7 @@ def main(argv=None):
             decoys=args.decoys,
             narrow=None if args.narrow is None else bool(args.narrow),
             agreed=args.agreed,
+            power=args.power,
         )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)
