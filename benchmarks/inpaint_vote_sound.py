@@ -5,8 +5,9 @@ against the best single candidate.
     python benchmarks/inpaint_vote_cache.py --half both      # first: the fills (long)
     python benchmarks/inpaint_vote_sound.py [--half calibration|test|both] [--cases]
     python benchmarks/inpaint_vote_sound.py --real [--vote rings|decoys] [--only NAMES]
-        [--prior P] [--narrow 0|1] [--agreed cheapest|box]
+        [--prior P] [--narrow 0|1] [--agreed cheapest|box] [--power P]
     python benchmarks/inpaint_vote_sound.py --time [--half ...]   # auto's time / default's
+    python benchmarks/inpaint_vote_sound.py --vote-time [--half ...]  # the vote's own time
 
 --real runs a vote itself (auto.choose's rings, or inpaint_vote_decoys.choose) on the
 cached hole fills, its test fills memoised in benchmarks/results/decoy_cache/.
@@ -421,6 +422,41 @@ def real(half, cases=None, vote="rings", **options):
         print(f"time: auto {t_auto:.1f} s, spectral {t_spectral:.1f} s, x{t_auto / t_spectral:.2f}")
 
 
+def vote_seconds(half):
+    """The vote's own CPU seconds (auto.choose with every fill read from the caches, so that
+    only the weighing is timed), the least-squares blend (power 0, prior 1000) against the
+    soft vote (auto's defaults), each run once to read its files first."""
+    import time
+
+    from clpde.inpainting import auto
+    from clpde.runtime import get_runtime
+
+    runtime, names, original = get_runtime(), auto.candidates(), auto._fill
+    total = {"least-squares": 0.0, "soft": 0.0}
+    rules = {"least-squares": dict(power=0.0, prior=1000.0), "soft": {}}
+    for c in load(("calibration", "test") if half == "both" else (half,), names):
+        hole = {n: c.hole[k] for k, n in enumerate(names)}
+        memo = _cached_fill(original, c.case.name, [])
+
+        def cached(name, data, omega, *rest, c=c, hole=hole, memo=memo):
+            if np.array_equal(omega, c.omega):
+                out = c.data.copy()
+                out[:, omega] = hole[name]
+                return out
+            return memo(name, data, omega, *rest)
+
+        auto._fill = cached
+        try:
+            for label, rule in rules.items():
+                auto.choose(c.data, c.omega, runtime, seed=0, **rule)
+                start = time.process_time()
+                auto.choose(c.data, c.omega, runtime, seed=0, **rule)
+                total[label] += time.process_time() - start
+        finally:
+            auto._fill = original
+    print(" ".join(f"{k} {v:.2f} s" for k, v in total.items()))
+
+
 def timed(half):
     """clpde.inpaint's time with method="auto" against the default's, per class: each
     method once on the first case to build its kernels, then one run of each per case."""
@@ -468,16 +504,20 @@ def main(argv=None):
     parser.add_argument("--cases", action="store_true", help="list the cases below -0.2 dB")
     parser.add_argument("--real", action="store_true", help="run auto.choose itself (its defaults)")
     parser.add_argument("--time", action="store_true", help="auto's time against the default's")
+    parser.add_argument("--vote-time", action="store_true", help="the vote's own CPU time")
     parser.add_argument("--only", default=None, help="--real: case names containing these, ','")
     parser.add_argument("--vote", default="rings", choices=("rings", "decoys"), help="--real")
     parser.add_argument("--prior", type=float, default=None, help="--real: the vote's prior")
     parser.add_argument("--narrow", type=int, default=None, help="--real --vote rings: narrow")
     parser.add_argument("--agreed", default=None, help="--real --vote rings: agreed")
+    parser.add_argument("--power", type=float, default=None, help="--real --vote rings: power")
     parser.add_argument("--snap", type=float, default=None, help="--real --vote decoys: snap")
     parser.add_argument("--decoys", type=int, default=None, help="--real --vote decoys: count")
     args = parser.parse_args(argv)
     if args.time:
         return timed(args.half)
+    if args.vote_time:
+        return vote_seconds(args.half)
     if args.real:
         only = args.only.split(",") if args.only else None
         return real(
@@ -489,6 +529,7 @@ def main(argv=None):
             decoys=args.decoys,
             narrow=None if args.narrow is None else bool(args.narrow),
             agreed=args.agreed,
+            power=args.power,
         )
     names = auto.candidates()
     halves = ("calibration", "test") if args.half == "both" else (args.half,)

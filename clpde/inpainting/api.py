@@ -383,8 +383,8 @@ def inpaint(
     method : str, optional
         'auto' (self-validated, per cluster of damage: the candidate methods of
         clpde/inpainting/auto.py fill the hole; where they disagree, a ring of known
-        pixels around the cluster is hidden and filled too, and the blend of the candidates
-        that fits that ring best fills the cluster; info.choices says what chose what and
+        pixels around the cluster is hidden and filled too, and the candidates' blend that
+        their errors there weigh fills the cluster; info.choices says what chose what and
         why, info.box_methods names each box's methods by share, info.chosen the candidate
         with the largest share), 'transport' (the thesis's scheme), 'coherence',
         'navier-stokes', 'exemplar' (texture, periodic patterns), 'structure-texture' or

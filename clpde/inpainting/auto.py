@@ -17,13 +17,13 @@ fitted to named cases learns those cases. Here each box of damage measures it in
    around every cluster, is hidden and filled on its own too: a wide ring makes the hole
    thicker than it is, a narrow one tests only the border, and the hole's pixels lie at
    every depth between.
-4. Each cluster gets the blend of the candidates' fills whose weights, non-negative and
-   summing to one, minimise the ring's squared error (a least-squares fit over a handful of
-   weights; `blend=False` keeps the single best candidate), pulled towards the weights
-   that fit every voting ring of the box at once, as if those added PRIOR values to the
-   cluster's own: a speck of dust's ring holds a few dozen values, too few for five
-   weights. With two rings, each votes so, and the cluster takes the mean of the weights.
-   The clusters that did not vote take the mean over the rings of the box's weights.
+4. Each cluster gets a blend of the candidates' fills, by a soft vote: each candidate's
+   weight is (e_min / e_k) ** POWER, e_k its mean squared error on the ring (POWER 0: the
+   least-squares blend, as before stop 49; `blend=False` keeps the single best
+   candidate), pulled towards the weights of every voting ring of the box at once, as if
+   those added PRIOR values to the cluster's own: a speck of dust's ring holds a few
+   dozen values. With two rings, each votes so, and the cluster takes the mean of the
+   weights. The clusters that did not vote take the mean over the rings of the box's.
 
 The candidate set, the ring's widths, the prior and blend or pick are the module's
 parameters; all were chosen on the calibration half of benchmarks/inpaint_corpus.py's
@@ -31,10 +31,8 @@ corpus (benchmarks/inpaint_validate_calibrate.py for the candidates,
 benchmarks/inpaint_vote_rules.py and benchmarks/inpaint_vote_sound.py for the rest;
 docs/inpainting.md has the tables), and nothing else was fitted. `choices` in the returned
 report says, per cluster, what was chosen, with which weights, and why. The vote is not
-yet sound on every case: on the calibration half 11 of 62 cases fall more than 0.2 dB
-below their best candidate (the worst by 2.0 dB; their shortfalls sum to 5.9 dB), 14 of
-73 on the test half (the worst by 5.0 dB, 14.0 dB summed), against 14 and 16 before
-AGREED and this PRIOR (6.3 and 15.1 dB).
+yet sound on every case: docs/inpainting.md ("A soft vote") has the cases that still fall
+more than 0.2 dB below their best candidate on each half.
 """
 
 from __future__ import annotations
@@ -55,14 +53,12 @@ from .registry import METHODS, available, get, keywords, load, method_of, regist
 # the best candidate, 11 of 62 against 18; docs/inpainting.md has the tables)
 CANDIDATES = ("biharmonic", "coherence", "navier-stokes", "exemplar", "spectral")
 RING = 1
-# A cluster's weights are its own ring's fit pulled towards the fit of every voting ring of
-# the box, as if the box's ring added PRIOR values to the cluster's own: a speck of dust's
-# ring holds a few dozen values, too few to fit five weights on noise. 1000 (was 300):
-# chosen with AGREED on the calibration half (benchmarks/inpaint_vote_sound.py --real;
-# docs/inpainting.md, "Clusters that agree"): 11 of 62 cases more than 0.2 dB below the
-# best candidate against 13 with 300, 11 with 3000 or the box's weights alone (their
-# shortfalls 5.87 dB against 6.05, 6.11 and 6.40).
-PRIOR = 1000.0
+# A cluster's weights are its own ring's vote pulled towards the vote of every voting ring
+# of the box, as if the box's ring added PRIOR values to the cluster's own: a speck of
+# dust's ring holds a few dozen values. 100 with the soft vote (POWER; 1000 with the
+# least-squares blend): chosen with POWER on the calibration half
+# (benchmarks/inpaint_vote_sound.py --real; docs/inpainting.md, "A soft vote").
+PRIOR = 100.0
 # A ring as thin as RING tells how well a candidate fills a thin hole: a smooth fill always
 # wins there, and loses deep in a thick hole. Each cluster's ring is as wide as SCALE times
 # its hole's half-thickness (its deepest pixel's distance to the known ones), between RING
@@ -100,6 +96,15 @@ AGREE = 0.5 / 255  # RMS disagreement (in [0, 1] units) below which no vote is n
 # calibration half "box" takes edges-0/blobs (53 dB) from -0.27 to within 0.2 dB of its
 # best candidate, 14 -> 13 cases below the bound with PRIOR 300.
 AGREED = "box"
+# POWER: how a ring's errors become weights. 0: the least-squares blend (before stop 49),
+# which trusts the ring as if it were the hole: it fits the ring's noise and, where the
+# candidates are close on the ring, puts all the weight where the ring's draw happened to
+# lean. > 0: the soft vote, each candidate weighted by (e_min / e_k) ** POWER, its ring's
+# likelihood under Gaussian errors of 2 POWER independent values (the ring's values are
+# far from independent: neighbours share their errors). A clear winner still takes nearly
+# all the weight (an error twice the best's gets 2 ** -8 of it), near-ties are hedged.
+# Chosen on the calibration half with PRIOR (docs/inpainting.md, "A soft vote").
+POWER = 8.0
 
 
 # Candidates' options the vote sets unless given: Navier-Stokes keeps its own stop (no
@@ -196,9 +201,21 @@ def _shifted(omega, dist, members, radius, vote, direction):
     return owner
 
 
-def _fit(f, t, blend):
+def _soft(f, t, power):
+    """Each candidate's weight (e_min / e_k) ** power, normalised (e_k: its mean squared
+    error on the test values t): the ring's likelihood of each candidate under Gaussian
+    errors with `2 * power` independent values, as a Bayesian average of the candidates
+    (module docstring, POWER)."""
+    e = np.maximum(((f - t) ** 2).mean(axis=1), 1e-20)  # an exact one takes all the weight
+    w = (e.min() / e) ** power
+    return w / w.sum()
+
+
+def _fit(f, t, blend, power=0.0):
     """The weights of the candidates' ring fills f ((k, n)) that fit the truth t ((n,)):
-    the least-squares blend, or the single best candidate."""
+    the soft vote (power > 0), the least-squares blend, or the single best candidate."""
+    if blend and power > 0:
+        return _soft(f, t, power)
     if blend:
         return _weights(f, t)
     w = np.zeros(f.shape[0])
@@ -261,7 +278,7 @@ def _settled(names, stack, members, radius, thin, count):
     return choices, vote
 
 
-def _votes(tests, vote, count, names, blend, prior):
+def _votes(tests, vote, count, names, blend, prior, power=0.0):
     """One test's vote (_ring_tests' result): ({cluster: (weights, squared errors (k, m)
     of each candidate on its test values)}, the box's weights or None): each voting
     cluster's fit on its own test pixels, pulled towards the box's fit over every
@@ -271,7 +288,7 @@ def _votes(tests, vote, count, names, blend, prior):
         return {}, None
     ring_members = _groups(test_owner, count)
     # the box's weights: every voting ring at once
-    pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend)
+    pooled = _fit(tests.reshape(len(names), -1), truth.reshape(-1), blend, power)
     out = {}
     for lab in np.flatnonzero(vote):
         sel = ring_members[lab]
@@ -279,7 +296,7 @@ def _votes(tests, vote, count, names, blend, prior):
             continue
         f = tests[:, :, sel].reshape(len(names), -1)
         t = truth[:, sel].reshape(-1)
-        w = _fit(f, t, blend)
+        w = _fit(f, t, blend, power)
         if prior > 0:  # a small ring's own fit leans on the box's
             w = pooled if np.isinf(prior) else (t.size * w + prior * pooled) / (t.size + prior)
         out[lab] = (w, (f - t) ** 2)
@@ -348,6 +365,7 @@ def choose(
     shift: bool | None = None,
     narrow: bool | None = None,
     agreed: str | None = None,
+    power: float | None = None,
     dtype=np.float32,
     seed=None,
     params=None,
@@ -367,6 +385,7 @@ def choose(
     shift = SHIFT if shift is None else shift
     narrow = NARROW if narrow is None else narrow
     agreed = AGREED if agreed is None else agreed
+    power = POWER if power is None else power
     omega = np.asarray(omega, bool)
     names = candidates(names)
     fills = {n: _fill(n, data, omega, runtime, dtype, seed, params) for n in names}
@@ -401,7 +420,7 @@ def choose(
                 owners += [_shifted(omega, dist, members, radius, vote, d) for d in DIRECTIONS]
             tests = _ring_tests(owners, names, data, omega, runtime, dtype, seed, params)
             ring_pixels += int(tests[2].size)
-            votes.append(_votes(tests, vote, count, names, blend, prior))
+            votes.append(_votes(tests, vote, count, names, blend, prior, power))
 
         _decide(names, votes, vote, members, choices, agreed)
     out[:, omega] = _assemble(names, choices, count, hole_label, stack)
@@ -444,6 +463,8 @@ class AutoOptions:
     agreed : str, optional
         What the clusters whose candidates agree take: "cheapest" (the first candidate) or
         "box" (the box's vote: the weights that fit every voting ring; None: AGREED).
+    power : float, optional
+        The soft vote's power (0: the least-squares blend; None: POWER).
     candidate_options : tuple
         Candidates' own options objects (such as CoherenceOptions(epsilon=4)), each for the
         candidate whose class it is; the others keep their defaults.
@@ -458,6 +479,7 @@ class AutoOptions:
     shift: bool | None = None
     narrow: bool | None = None
     agreed: str | None = None
+    power: float | None = None
     candidate_options: tuple = ()
 
     def __post_init__(self) -> None:
@@ -475,7 +497,7 @@ class AutoOptions:
             raise InputError(f"ring must be an integer >= 1 or None, not {self.ring!r}")
         if self.agreed not in (None, "cheapest", "box"):
             raise InputError(f'agreed must be "cheapest", "box" or None, not {self.agreed!r}')
-        for name in ("prior", "scale", "thin"):
+        for name in ("prior", "scale", "thin", "power"):
             value = getattr(self, name)
             if value is not None and not value >= 0:  # NaN too; inf is allowed
                 raise InputError(f"{name} must be a number >= 0, not {value!r}")
@@ -517,6 +539,7 @@ class VoteRun:
             shift=o.shift,
             narrow=o.narrow,
             agreed=o.agreed,
+            power=o.power,
             dtype=self.dtype,
             seed=self.seed,
             params=params,

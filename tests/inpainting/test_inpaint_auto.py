@@ -207,3 +207,38 @@ def test_agreed_is_checked():
     with pytest.raises(clpde.InputError, match="agreed must be"):
         auto.AutoOptions(agreed="spectral")
     assert auto.AutoOptions(agreed="cheapest").agreed == "cheapest"
+
+
+def test_soft_vote_weights_follow_the_ring_errors():
+    """auto._soft: each candidate's weight is (e_min / e_k) ** power, normalised; an exact
+    candidate takes all the weight, equal errors share it."""
+    t = np.zeros(4)
+    f = np.array([np.full(4, 0.1), np.full(4, 0.2), np.full(4, 0.1)])  # errors 1 : 4 : 1
+    w = auto._soft(f, t, 2.0)
+    assert np.allclose(w, np.array([1, 1 / 16, 1]) / (2 + 1 / 16))
+    assert np.allclose(auto._soft(np.array([t, t + 0.5]), t, 8.0), [1, 0])
+    with pytest.raises(clpde.InputError, match="power must be"):
+        auto.AutoOptions(power=-1)
+
+
+def test_soft_vote_on_voids_is_not_below_its_best_candidate():
+    """The corpus's ridged-0/voids (calibration half): large voids in a ridged float field.
+    The least-squares blend of the rings (before stop 49: power 0, prior 1000) gave most of
+    the voids to navier-stokes, 0.58 dB below the biharmonic fill alone; the soft vote
+    (auto.POWER) hedges where the rings' errors are close and stays within 0.2 dB."""
+    from tests.cases import inpaint_corpus as corpus
+
+    field = corpus.ridged(10).astype(np.float64)
+    data = ((field - field.min()) / np.ptp(field))[None]
+    omega = corpus.damage("voids", field, np.random.default_rng(corpus._seed("ridged-0", "voids")))
+    runtime = get_runtime()
+
+    def psnr(filled):
+        return 10 * np.log10(1 / np.mean((filled[0][omega] - data[0][omega]) ** 2))
+
+    best = max(
+        psnr(auto._fill(n, data, omega, runtime, np.float32, 0, {})) for n in auto.candidates()
+    )
+    old = psnr(auto.choose(data, omega, runtime, seed=0, power=0.0, prior=1000.0)[0])
+    assert old < best - 0.3  # the test can fail: the least-squares vote does here
+    assert psnr(auto.choose(data, omega, runtime, seed=0)[0]) >= best - 0.2
