@@ -6,6 +6,7 @@ they move 16-22 px a frame, in crops around their paths.
     python benchmarks/track_footage.py --sheet P   # a contact sheet to check them by eye
     python benchmarks/track_footage.py --masks --keep-shadow --out DIR  # the old truth
     TRACK_FOOTAGE_MASKS=DIR python benchmarks/tracking_generalise.py ...  # scored on it
+    python benchmarks/track_footage.py --truth-picture DIR P  # old against new, for the docs
 
 The masks in benchmarks/data/vtest/<clip>/NNN.png (one per frame of the clip, the walker
 white) were made by background subtraction, not by hand: the camera does not move, so the
@@ -140,14 +141,15 @@ def build_masks(seeds=None, keep_shadow: bool = False, out: Path = MASKS) -> Non
         print(f"clip {seed}: {len(clip)} masks in {folder}")
 
 
-def clip(seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Clip `seed`'s frames (T, H, W, 3) float64 in [0, 1] and masks (T, H, W) bool."""
+def clip(seed: int, masks: Path | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Clip `seed`'s frames (T, H, W, 3) float64 in [0, 1] and masks (T, H, W) bool (from
+    the folder `masks`, else $TRACK_FOOTAGE_MASKS, else the corpus' own)."""
     import os
 
     from skimage.io import imread
 
     f = frames(seed)
-    folder = Path(os.environ.get(MASKS_ENV) or MASKS) / f"clip{seed}"
+    folder = Path(masks or os.environ.get(MASKS_ENV) or MASKS) / f"clip{seed}"
     masks = np.array([imread(folder / f"{t:03d}.png") > 127 for t in range(len(f))])
     return f, masks
 
@@ -172,6 +174,52 @@ def sheet(path: Path) -> None:
     imsave(path, (np.concatenate(rows) * 255).astype(np.uint8), check_contrast=False)
 
 
+# the docs' picture: frames of the calibration clips where the shadow was (footage-0) and
+# where the rule finds none (footage-2, the lawn)
+PICTURE = ((0, (1, 3, 6, 7)), (2, (5, 12)))
+
+
+def truth_picture(path: Path, old: Path, scale: int = 2) -> None:
+    """The lower half of the walker in the frames of PICTURE at `scale`x, a row per clip:
+    the frame, then what the shadow rule took out of the old masks (in folder `old`, made
+    with --keep-shadow) in red and the new mask's outline in green."""
+    from skimage.io import imsave
+    from skimage.segmentation import find_boundaries
+
+    rows = []
+    for seed, picked in PICTURE:
+        f, new = clip(seed)
+        _, before = clip(seed, old)
+        tiles = []
+        for t in picked:
+            r, c = np.nonzero(before[t])
+            r0, r1 = (r.min() + r.max()) // 2, min(r.max() + 6, f.shape[1])
+            c0, c1 = max(c.min() - 6, 0), c.max() + 7
+            up = np.ones((scale, scale))
+            frame = np.kron(f[t, r0:r1, c0:c1], up[..., None])
+            shown = frame.copy()
+            cut = np.kron(before[t, r0:r1, c0:c1] & ~new[t, r0:r1, c0:c1], up) > 0
+            shown[cut] = 0.4 * shown[cut] + 0.6 * np.array((1.0, 0.1, 0.1))
+            edge = find_boundaries(np.kron(new[t, r0:r1, c0:c1], up) > 0, mode="inner")
+            shown[edge] = (0.1, 1.0, 0.1)
+            gap = np.ones((frame.shape[0], 2, 3))
+            tiles.append(
+                np.pad(
+                    np.concatenate([frame, gap, shown], axis=1),
+                    ((0, 0), (0, 8), (0, 0)),
+                    constant_values=1,
+                )
+            )
+        height = max(t.shape[0] for t in tiles)
+        tiles = [
+            np.pad(t, ((0, height - t.shape[0]), (0, 0), (0, 0)), constant_values=1) for t in tiles
+        ]
+        rows.append(np.concatenate(tiles, axis=1))
+    width = max(r.shape[1] for r in rows)
+    rows = [np.pad(r, ((0, 6), (0, width - r.shape[1]), (0, 0)), constant_values=1) for r in rows]
+    imsave(path, (np.concatenate(rows) * 255).astype(np.uint8), check_contrast=False)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -182,11 +230,20 @@ def main(argv=None):
     )
     parser.add_argument("--out", type=Path, default=MASKS, help="where --masks writes")
     parser.add_argument("--sheet", type=Path, default=None, help="write a contact sheet")
+    parser.add_argument(
+        "--truth-picture",
+        nargs=2,
+        type=Path,
+        metavar=("OLD", "PNG"),
+        help="the docs' picture of the shadow rule, against the --keep-shadow masks in OLD",
+    )
     args = parser.parse_args(argv)
     if args.masks is not None:
         build_masks(args.masks or None, args.keep_shadow, args.out)
     if args.sheet:
         sheet(args.sheet)
+    if args.truth_picture:
+        truth_picture(args.truth_picture[1], args.truth_picture[0])
     for seed in CLIPS:
         _f, masks = clip(seed)
         c = [np.array(np.nonzero(m)).mean(axis=1) for m in masks]
