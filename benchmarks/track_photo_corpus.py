@@ -36,7 +36,7 @@ Classes:
   test half's grey sequences are unchanged.
 - ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
   9-26 px a frame (benchmarks/track_footage.py; clips 0 and 2 calibration, clip 1 test;
-  their masks by background subtraction, checked by eye).
+  their masks by background subtraction less the walkers' cast shadow, checked by eye).
 """
 
 from __future__ import annotations
