@@ -10,7 +10,8 @@ work slows them alike.
 Cases: tests/cases/inpaint_corpus.py's, of the damage classes given (the thin ones by
 default), on the half given. --variants '{"base": {}, "s1": {"shifts": 1}}' names option sets
 of clpde.inpaint(..., method="spectral", **options); the default runs the defaults alone. A
-variant's "work_shape": [items, vector] sets the kernel's work-group shape
+variant's "method": "default" runs the default (method="pick") with those spectral
+options instead; a variant's "work_shape": [items, vector] sets the kernel's work-group shape
 (spectral.work_shape): [64, 1], the GPUs', with "minor": 1 is the fill before issue 37's
 CPU path and minor picks, on any device.
 Per class and variant: mean PSNR in the hole, and the summed wall time and CPU time (the
@@ -42,6 +43,7 @@ def spectral(options):
     [64, 1] on a CPU measures the CPUs' vector path against it)."""
     options = dict(options)
     shape = options.pop("work_shape", None)
+    method = options.pop("method", "spectral")
 
     def run(image, mask, case):
         import clpde
@@ -51,6 +53,9 @@ def spectral(options):
         if shape is not None:
             module.work_shape = lambda runtime: tuple(shape)
         try:
+            if method == "default":  # the default (method="pick"), its spectral options set
+                keywords = {"spectral": module.SpectralOptions(**options)} if options else {}
+                return clpde.inpaint(image, mask, channel_axis=case.channel_axis, **keywords)
             return clpde.inpaint(
                 image, mask, channel_axis=case.channel_axis, method="spectral", **options
             )

@@ -23,8 +23,9 @@ own and runs on the OpenCL device (kernels/inpainting/spectral.cl has the maths)
   adds only gamma of its coefficient (orthogonality-deficiency compensation: the basis is
   not orthogonal under the weights, so a full step overshoots); the residual's transform is
   updated in the frequency domain by a convolution with the weight's transform, so that an
-  iteration costs O(L^2), not a new transform. A channel's picks end once the window's
-  weighted residual RMS is at most `floor` (where the rest is finer than the data).
+  iteration costs O(L^2), not a new transform. A channel's picks end once the best pick
+  would lower the window's weighted squared residual by less than `stall` of it (the model
+  has stalled on what looks like noise), or once that residual's RMS is at most `floor`.
 - Order: blocks with the larger share of known pixels in their windows go first (filled
   pixels count delta); a wave is every pending block that comes first among the blocks its
   window touches, so the blocks of a wave are independent and run in one launch, one
@@ -54,13 +55,14 @@ the thin border (6: where no damaged pixel is farther than THIN = 4 px from a kn
 benchmarks/inpaint_spectral_thin.py: on thin damage it takes 2-3x less time at the same
 PSNR there; minor 0.3 likewise (every class of the calibration half within 0.015 dB). The
 floor is off: 0.004 (one 8-bit level) cost nothing on the calibration half but up to 2 dB
-on smooth images of the test half (errors themselves near one level).
+on smooth images of the test half (errors themselves near one level). stall 0.005 was
+chosen on the calibration half (docs/inpainting.md, "Picks that stall"): about a fifth
+fewer picks, every class within -0.014 / +0.12 dB; 0.01 lost 0.2-0.3 dB on thin damage.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import pyopencl as cl
@@ -70,6 +72,8 @@ from ..errors import DeviceLimitError
 from ..imagedata import InputError
 from ..runtime import enqueue_bare
 from .registry import register
+from .spectral_options import SpectralOptions
+from .spectral_options import check as _check
 from .spectral_plan import MAXL, launch_table, plan, shifts_of
 
 # The kernels/ files this module's kernel lookups name (tests/core/test_kernel_names.py checks).
@@ -80,7 +84,6 @@ DESCRIPTION = (
     "functions fitted to the known pixels around it"
 )
 
-MAXK = 512  # kernels/inpainting/spectral.cl's SPECTRAL_MAXK
 GROUP = 64  # its SPECTRAL_GROUP on GPUs (work_shape)
 CPU_VECTOR = 8  # its SPECTRAL_VW on CPUs: candidates per vector (the only width it takes)
 # its SPECTRAL_SCRATCH with vectors (the larger): the REALs of one work-group's windows and
@@ -92,7 +95,6 @@ _SLOTS = (MAXL // 2 + 1) * (-(-MAXL // CPU_VECTOR) * CPU_VECTOR)  # its columns,
 SCRATCH = 2 * MAXL * MAXL + 2 * MAXL * (2 * MAXL + CPU_VECTOR) + 2 * MAXL * _ROW
 SCRATCH += 6 * _SLOTS
 SCRATCH_BYTES = 32 * 2**20  # at most this much scratch: larger waves run in several launches
-COLOURS = ("pca", "channels")
 THIN = 4  # px: damage this thin (half-thickness) takes thin_border (text, cracks, dust)
 _y, _x = np.mgrid[-THIN : THIN + 1, -THIN : THIN + 1]
 DISC = _y**2 + _x**2 <= THIN**2  # a pixel of omega farther than THIN from known survives it
@@ -108,129 +110,6 @@ def MARGIN(omega=None, block: int = 8, border: int = 12, **_params) -> int:
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise InputError(f"{name} must be an integer >= 1, not {v!r}")
     return int(block) + int(border)
-
-
-@dataclass(frozen=True)
-class SpectralOptions:
-    """method="spectral"'s options (solve's docstring has their meaning), checked on
-    construction."""
-
-    block: int = 8
-    min_block: int = 4
-    border: int = 12
-    split: float = 0.3
-    rho: float = 0.6
-    delta: float = 1.0
-    gamma: float = 0.7
-    alpha: float = 2.0
-    iterations: int = 100
-    stop: float = 0.0
-    floor: float = 0.0
-    colour: str = "pca"
-    detrend: bool = True
-    shifts: int = 2
-    cutoff: float = 1.5
-    per_pixel: float = 0.0
-    thin_border: int = 6
-    minor: float = 0.3
-
-    def __post_init__(self) -> None:
-        _check(
-            self.block,
-            self.min_block,
-            self.border,
-            self.split,
-            self.rho,
-            self.delta,
-            self.gamma,
-            self.alpha,
-            self.iterations,
-            self.stop,
-            self.floor,
-            self.colour,
-            self.cutoff,
-            self.per_pixel,
-            self.shifts,
-            self.thin_border,
-            self.minor,
-        )
-
-
-def _check(
-    block,
-    min_block,
-    border,
-    split,
-    rho,
-    delta,
-    gamma,
-    alpha,
-    iterations,
-    stop,
-    floor,
-    colour,
-    cutoff,
-    per_pixel,
-    shifts,
-    thin_border=0,
-    minor=1.0,
-):
-    """InputError for an option of `fill` out of its range."""
-    for name, v in (
-        ("block", block),
-        ("min_block", min_block),
-        ("border", border),
-        ("iterations", iterations),
-    ):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-            raise InputError(f"{name} must be an integer >= 1, not {v!r}")
-    if block % 2 or min_block % 2:
-        raise InputError(
-            f"block and min_block must be even (the window's centre), not {block} and {min_block}"
-        )
-    if min_block > block or block % min_block or (block // min_block) & (block // min_block - 1):
-        raise InputError(
-            f"min_block={min_block} must be block={block} halved zero or more "
-            "times (blocks are split in four)"
-        )
-    if block + 2 * border > MAXL:
-        raise InputError(
-            f"block + 2 * border = {block + 2 * border} exceeds the largest window "
-            f"{MAXL}; use a smaller block or border"
-        )
-    if iterations > MAXK:
-        raise InputError(f"iterations={iterations} exceeds {MAXK}; use fewer")
-    for name, v, lo, hi in (
-        ("rho", rho, 0.0, 1.0),
-        ("delta", delta, 0.0, 1.0),
-        ("gamma", gamma, 0.0, 1.0),
-        ("split", split, 0.0, 1.0),
-        ("minor", minor, 0.0, 1.0),
-    ):
-        if not (np.isfinite(v) and lo <= v <= hi) or (name in ("rho", "gamma", "minor") and v == 0):
-            raise InputError(f"{name} must be a number in ({lo:g}, {hi:g}], not {v!r}")
-    if not (np.isfinite(alpha) and alpha >= 0):
-        raise InputError(f"alpha must be a number >= 0, not {alpha!r}")
-    if not (np.isfinite(stop) and 0 <= stop < 1):
-        raise InputError(f"stop must be a number in [0, 1), not {stop!r}")
-    if not (np.isfinite(floor) and floor >= 0):
-        raise InputError(f"floor must be a number >= 0 (a residual's RMS), not {floor!r}")
-    if colour not in COLOURS:
-        raise InputError(f"colour must be one of {', '.join(COLOURS)}, not {colour!r}")
-    if not (np.isfinite(cutoff) and cutoff > 0):
-        raise InputError(
-            f"cutoff must be a number > 0 (a share of the Nyquist frequency), not {cutoff!r}"
-        )
-    if not (np.isfinite(per_pixel) and per_pixel >= 0):
-        raise InputError(f"per_pixel must be a number >= 0, not {per_pixel!r}")
-    if (
-        isinstance(thin_border, bool)
-        or not isinstance(thin_border, (int, np.integer))
-        or thin_border < 0
-    ):
-        raise InputError(f"thin_border must be an integer >= 0 (0: off), not {thin_border!r}")
-    if shifts not in (1, 2, 4):
-        raise InputError(f"shifts must be 1, 2 or 4 (block grids averaged), not {shifts!r}")
 
 
 # ---------------------------------------------------------------------------------------
@@ -280,6 +159,7 @@ def fill(
     per_pixel: float = 0.0,
     thin_border: int = 6,
     minor: float = 0.3,
+    stall: float = 0.005,
     timings: dict | None = None,
 ) -> np.ndarray:
     """Frequency-selective fill of (channels, rows, cols) float data (the module docstring has
@@ -317,6 +197,9 @@ def fill(
         End a block's channel once the weighted RMS of its window's residual is at most
         this, in the data's units (clpde.inpaint scales data to [0, 1]): picks past it fit
         detail finer than the data's precision.
+    stall : float
+        End a block's channel once the best pick would lower its window's weighted squared
+        residual by less than this share of it, in [0, 1) (0: off).
     colour : str
         'pca' fits the principal axes of the known colours, 'channels' the channels as given.
     detrend : bool
@@ -377,6 +260,7 @@ def fill(
         shifts,
         thin_border,
         minor,
+        stall,
     )
     data = np.asarray(data)
     omega = np.asarray(omega, bool)
@@ -414,7 +298,7 @@ def fill(
     host = np.array(np.broadcast_to(work, (len(plans),) + work.shape), real, order="C")
     table = launch_table(plans, omega, (y0, x0), hole.shape, (iterations, per_pixel, minor))
     t["plan"] = time.perf_counter() - t0
-    options = (rho, delta, gamma, alpha, stop, floor, bool(detrend), cutoff)
+    options = (rho, delta, gamma, alpha, stop, floor, stall, bool(detrend), cutoff)
     _run_waves(runtime, host, table, options, t)
     model = host.astype(np.float64).mean(0)  # the grids' average
     filled = np.einsum("ji,jyx->iyx", axes, model) + mean[:, None, None]
@@ -432,7 +316,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
     (one work-group per block) and read the copies back into `host`; `t` receives the
     seconds of each stage and the counts of blocks and launches."""
     wave_of, all_blocks, starts = table
-    rho, delta, gamma, alpha, stop, floor, detrend, cutoff = options
+    rho, delta, gamma, alpha, stop, floor, stall, detrend, cutoff = options
     real = host.dtype
     t0 = time.perf_counter()
     kernel, spill, group = fitting_kernel(runtime, real)
@@ -462,7 +346,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
         for first in range(int(starts[w]), int(starts[w + 1]), per_launch)
     ]
     # an instance of its own, its arguments set once: a launch sets only its first block and
-    # its wave (pyopencl's call sets all 17 each time)
+    # its wave (pyopencl's call sets all 18 each time)
     bare = cl.Kernel(kernel.cl_kernel.program, "spectral_blocks")
     bare.set_args(
         img,
@@ -479,6 +363,7 @@ def _run_waves(runtime, host: np.ndarray, table, options, t: dict) -> None:
         s(alpha),
         s(stop),
         s(floor * floor),
+        s(stall),
         np.int32(detrend),
         s(cutoff),
         scratch,
@@ -556,6 +441,7 @@ def solve(
     per_pixel=SpectralOptions.per_pixel,
     thin_border=SpectralOptions.thin_border,
     minor=SpectralOptions.minor,
+    stall=SpectralOptions.stall,
 ):
     """Registry entry point: frequency-selective inpainting (see the module docstring).
 
@@ -572,7 +458,8 @@ def solve(
     frequency; 1.5 takes all), per_pixel (> 0: a block's picks are at most this many per hole
     pixel in it, at least 4), thin_border (> 0: the border where no damaged pixel lies farther
     than THIN = 4 px from a known one), minor (share of the picks that the channels after the
-    first take: the principal axes of smaller variance).
+    first take: the principal axes of smaller variance), stall (end a block's channel once the best
+    pick would lower its window's weighted squared residual by less than this share of it).
     """
     return fill(
         data,
@@ -597,4 +484,5 @@ def solve(
         per_pixel=per_pixel,
         thin_border=thin_border,
         minor=minor,
+        stall=stall,
     )

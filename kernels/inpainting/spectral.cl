@@ -32,9 +32,10 @@
 // |k| <= cutoff L / 2; R is only read there, so it is only kept there. W (the whole plane),
 // the candidates and their scores' factors depend on the weights alone: once per block.
 // The loop stops after the block's most picks (the channels after the first: its minor picks),
-// once a pick's reduction falls below `stop` times
-// the first one's, or once the weighted squared residual E is at most floor2 W(0) (its weighted
-// mean square at most floor^2: the rest is finer than the data). E starts as
+// once a pick's reduction falls below `stop` times the first one's, once the weighted squared
+// residual E is at most floor2 W(0) (its weighted mean square at most floor^2: the rest is
+// finer than the data), or once the best pick's reduction is below `stall` times E (the model
+// has stalled: no pair explains much of what is left, which looks like noise). E starts as
 // sum w (f - plane)^2 and a step gamma c lowers it by gamma (2 - gamma) times the pick's
 // reduction. Each item scores its own candidates as it updates them, so a pick costs one pass
 // over the candidates and two barriers.
@@ -182,7 +183,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                      __global const int* blocks, const int first, const int wave,
                      const int nx, const int ny, const int nc, const REAL rho,
                      const REAL delta, const REAL gamma, const REAL alpha,
-                     const REAL stop, const REAL floor2, const int detrend,
+                     const REAL stop, const REAL floor2, const REAL stall, const int detrend,
                      const REAL cutoff, __global REAL* scratch)
 {
 #if SPECTRAL_SPILL
@@ -552,9 +553,12 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     }
                     if (it == 0) first_gain = gain;
                     // the residual already small (the weighted mean of its square at most
-                    // floor2), or a pick that would gain too little, ends the block's channel
+                    // floor2), or a pick that would gain too little (against the first pick's,
+                    // or against the residual left: the model has stalled, a pick would fit
+                    // the window's noise), ends the block's channel
                     if (!(gain > 0) || gain < stop * first_gain
-                        || (floor2 > 0 && energy <= floor2 * W0)) {
+                        || (floor2 > 0 && energy <= floor2 * W0)
+                        || gain < stall * energy) {
                         pick_k[0] = -1;
                     } else {
                         pick_k[0] = ky * L + kx;

@@ -204,7 +204,9 @@ def test_a_smooth_field_s_voids_take_the_smooth_route():
     routed_off = clpde.inpaint(image, mask, method="pick", progress=False, seed=0, route=False)
     assert np.array_equal(routed_off, out["spectral"])
     error = {k: np.sqrt(np.mean((v[mask] - image[mask]) ** 2)) for k, v in out.items()}
-    assert error["pick"] < 0.7 * error["spectral"], error
+    # (0.67 with the spectral fill's every pick, 0.73 since its picks stall at 0.005: the
+    # smooth field's windows end early, and better; unrouted, the ratio would be 1)
+    assert error["pick"] < 0.8 * error["spectral"], error
 
 
 def test_a_large_routed_cluster_is_solved_on_the_device_alike(monkeypatch):

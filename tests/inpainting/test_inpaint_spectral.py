@@ -46,6 +46,7 @@ def test_device_matches_numpy_reference(runtime, kind, nc):
         dict(split=0.3, shifts=2, cutoff=0.8),
         dict(per_pixel=0.5),
         dict(floor=0.05),  # high enough that most windows end early
+        dict(stall=0.02),  # most windows end early, each by its own residual
         dict(minor=1.0),  # every channel takes every pick
     ):
         options = dict(SMALL, **extra)
@@ -203,6 +204,31 @@ def test_bad_options_are_refused():
         clpde.inpaint(image, mask, method="spectral", block=32, border=8)
     with pytest.raises(clpde.InputError, match="rho"):
         clpde.inpaint(image, mask, method="spectral", rho=1.5)
+    with pytest.raises(clpde.InputError, match="stall"):
+        clpde.inpaint(image, mask, method="spectral", stall=1.0)
+
+
+def test_stall_ends_the_picks_on_noise_and_keeps_a_cosine():
+    # stall: a window's picks end once the best pair would explain less than this share of
+    # the weighted residual left. On white noise every pair explains little, so the picks
+    # end early; a basis cosine is one pair that explains nearly all of it, so it is kept.
+    L = 32
+    weight = 0.6 ** np.hypot(*(np.mgrid[0:L, 0:L] - (L - 1) / 2))
+    weight[12:20, 12:20] = 0  # the block's hole
+
+    def model(values, stall, iterations=100):
+        return ref.fit_block(
+            values, weight, iterations=iterations, gamma=0.7, alpha=2.0, stop=0.0, stall=stall
+        )
+
+    noise = np.random.default_rng(3).standard_normal((L, L))
+    stalled = model(noise, 0.005)
+    # the picks it took: the fewest whose full fill (no stall) is the stalled one
+    taken = next(n for n in range(101) if np.array_equal(model(noise, 0.0, n), stalled))
+    assert 0 < taken < 100, taken
+    y, x = np.mgrid[0:L, 0:L]
+    cosine = np.cos(2 * np.pi * (2 * y + 3 * x) / L + 0.4)
+    assert np.abs(model(cosine, 0.005) - cosine)[weight == 0].max() < 0.05
 
 
 def test_small_holes_in_a_large_image_are_solved_in_small_boxes():

@@ -7,7 +7,17 @@ import numpy as np
 
 
 def fit_block(
-    values, weight, *, iterations, gamma, alpha, stop, detrend=True, cutoff=1.5, floor=0.0
+    values,
+    weight,
+    *,
+    iterations,
+    gamma,
+    alpha,
+    stop,
+    detrend=True,
+    cutoff=1.5,
+    floor=0.0,
+    stall=0.0,
 ):
     """The model of one window: values and weight (L, L) -> the model's (L, L) values."""
     L = values.shape[0]
@@ -50,7 +60,12 @@ def fit_block(
         g = gain[a, b]
         if first is None:
             first = g
-        if not g > 0 or g < stop * first or (floor > 0 and energy <= floor**2 * W0):
+        if (
+            not g > 0
+            or g < stop * first
+            or (floor > 0 and energy <= floor**2 * W0)
+            or g < stall * energy
+        ):
             break
         energy -= gamma * (2 - gamma) * g  # a step gamma along the pair's best coefficient
         phase = np.exp(2j * np.pi * (a * m + b * n) / L)
@@ -155,6 +170,7 @@ def fill(
     iterations=100,
     stop=0.0,
     floor=0.0,
+    stall=0.005,
     colour="pca",
     detrend=True,
     shifts=2,
@@ -242,6 +258,7 @@ def fill(
                         alpha=alpha,
                         stop=stop,
                         floor=floor,
+                        stall=stall,
                         detrend=detrend,
                         cutoff=cutoff,
                     )

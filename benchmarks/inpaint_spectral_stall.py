@@ -1,0 +1,162 @@
+"""Where a spectral window's picks could end: the numpy reference (tests/reference/spectral.py)
+with every pick recorded, on grey 8-bit cases of the corpus's calibration half; each block's
+own fill of its hole after each pick, against the truth, and stopping tests scored by it.
+
+    PYTHONPATH=. python benchmarks/inpaint_spectral_stall.py [--cases NAME,...]
+
+Prints, per test, the share of the picks kept and the change of the blocks' summed squared
+error in dB (+: better), summed over all blocks and per case. Slow (the reference is a
+Python loop): about a minute a case.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.cases, tests.reference
+from tests.cases import inpaint_corpus as corpus  # noqa: E402
+from tests.reference import spectral as ref  # noqa: E402
+
+CASES = (
+    "camera-0/craquelure,camera-0/dust,camera-0/blobs,camera-1/thick,brick-0/text,"
+    "gravel-0/blobs,grass-0/scratches,edges-0/structure,camera-1/texture"
+)
+LAST: dict = {}
+RECORDS: list = []
+TRUTH: dict = {}
+
+
+def fit_block(values, weight, *, iterations, gamma, alpha, cutoff=1.5, detrend=True, **_):
+    """The reference's fit_block without its stopping tests, keeping the model after each
+    pick and each pick's gain and the residual E before it (LAST)."""
+    L = values.shape[0]
+    centre = (L - 1) / 2
+    u, v = np.mgrid[0:L, 0:L]
+    u, v = (u - centre) / L, (v - centre) / L
+    plane = np.zeros((L, L))
+    total = weight.sum()
+    if detrend and total > 0:
+        basis = np.stack([np.ones_like(u), u, v]).reshape(3, -1)
+        wb = basis * weight.ravel()
+        a = wb @ basis.T + np.diag([0, 1e-3 * total, 1e-3 * total])
+        plane = (np.linalg.solve(a, wb @ values.ravel()) @ basis).reshape(L, L)
+    energy = float((weight * (values - plane) ** 2).sum())
+    R = np.fft.fft2(weight * (values - plane))
+    W = np.fft.fft2(weight)
+    W0 = W[0, 0].real
+    model = plane.copy()
+    LAST.update(hist=[model.copy()], gains=[], energies=[])
+    if W0 <= 0:
+        return model
+    H = L // 2 + 1
+    ky, kx = np.meshgrid(np.arange(L), np.arange(H), indexing="ij")
+    fy = np.where(ky <= L // 2, ky, ky - L)
+    prior = (1 - np.minimum(np.sqrt(fy**2 + kx**2) / (0.5 * L * np.sqrt(2)), 1.0)) ** alpha
+    candidate = fy**2 + kx**2 <= (cutoff * 0.5 * L) ** 2
+    self_conj = ((2 * ky) % L == 0) & ((2 * kx) % L == 0)
+    V = W[(2 * ky) % L, (2 * kx) % L]
+    den = np.maximum(W0**2 - np.abs(V) ** 2, 1e-3 * W0**2)
+    m, n = np.mgrid[0:L, 0:L]
+    for _ in range(iterations):
+        r = R[:, :H]
+        c_pair = (r * W0 - V * np.conj(r)) / den
+        gain = np.where(self_conj, r.real**2 / W0, 2 * (np.conj(c_pair) * r).real)
+        j = int(np.argmax(np.where(candidate, gain * prior, -np.inf).T.ravel()))
+        b, a = divmod(j, L)
+        if not gain[a, b] > 0:
+            break
+        LAST["gains"].append(gain[a, b])
+        LAST["energies"].append(energy)
+        energy -= gamma * (2 - gamma) * gain[a, b]
+        phase = np.exp(2j * np.pi * (a * m + b * n) / L)
+        if self_conj[a, b]:
+            c = gamma * r[a, b].real / W0
+            model += c * phase.real
+            R -= c * np.roll(W, (a, b), (0, 1))
+        else:
+            c = gamma * c_pair[a, b]
+            model += 2 * (c * phase).real
+            R -= c * np.roll(W, (a, b), (0, 1)) + np.conj(c) * np.roll(W, (-a, -b), (0, 1))
+        LAST["hist"].append(model.copy())
+    return model
+
+
+def hook(c, yc, xc, target):
+    truth = TRUTH["crop"][c, yc[target], xc[target]]
+    RECORDS.append(
+        {
+            "case": TRUTH["name"],
+            "n": int(target.sum()),
+            "err": np.array([((h[target] - truth) ** 2).sum() for h in LAST["hist"]]),
+            "gains": np.array(LAST["gains"]),
+            "energies": np.array(LAST["energies"]),
+        }
+    )
+
+
+def recording_fill():
+    """ref.fill with fit_block above and hook() after each block's channel: the reference's
+    own source, two lines added, so that its plan and order stay the reference's."""
+    src = inspect.getsource(ref.fill)
+    fill_line = "work[c, yc[target], xc[target]] = model[target]"
+    crop_line = "    part = out[:, y0:y1, x0:x1]\n"
+    assert fill_line in src and crop_line in src
+    src = src.replace(fill_line, fill_line + "\n" + " " * 20 + "hook(c, yc, xc, target)")
+    src = src.replace(crop_line, crop_line + "    TRUTH['crop'] = TRUTH['full'][:, y0:y1, x0:x1]\n")
+    space = dict(vars(ref), fit_block=fit_block, hook=hook, TRUTH=TRUTH)
+    exec(src, space)  # noqa: S102 (the reference's own source)
+    return space["fill"]
+
+
+def stopped_at(r, test):
+    g, e = r["gains"], r["energies"]
+    return next((t for t in range(len(g)) if test(g, e, t)), len(g))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", default=CASES)
+    args = parser.parse_args()
+    from clpde.inpainting import spectral
+
+    fill = recording_fill()
+    cases = {c.name: c for c in corpus.build() if c.half == "calibration"}
+    for name in args.cases.split(","):
+        case = cases[name]
+        if case.truth.ndim != 2 or case.kind != "uint8":
+            raise SystemExit(f"{name}: grey 8-bit cases only")
+        TRUTH.update(full=case.truth[None] / 255.0, name=name)
+        border = 6 if spectral.thin(case.mask) else 12  # the thin border, as the fill's
+        fill(TRUTH["full"], case.mask, border=border)
+        print(f"{name}: {len(RECORDS)} block channels", file=sys.stderr, flush=True)
+    rows = [r for r in RECORDS if r["n"] > 0]
+    base = {r["case"]: 0.0 for r in rows}
+    for r in rows:
+        base[r["case"]] += r["err"][-1]
+    total_picks = sum(len(r["gains"]) for r in rows)
+    best = [int(np.argmin(r["err"])) for r in rows]
+    print(f"{len(rows)} block channels; error least after picks (quartiles)", end=" ")
+    print(np.quantile(best, [0.25, 0.5, 0.75]))
+    tests = {f"gain < {s} E": lambda g, e, t, s=s: g[t] < s * e[t] for s in (0.005, 0.01, 0.02)}
+    tests |= {f"E < {s} E0": lambda g, e, t, s=s: e[t] < s * e[0] for s in (0.01, 0.001)}
+    tests |= {f"gain < {s} first": lambda g, e, t, s=s: g[t] < s * g[0] for s in (1e-3, 1e-4)}
+    tests |= {f"{k} picks": lambda g, e, t, k=k: t >= k for k in (40, 60, 80)}
+    for label, test in tests.items():
+        err = {c: 0.0 for c in base}
+        kept = 0
+        for r in rows:
+            t = stopped_at(r, test)
+            err[r["case"]] += r["err"][min(t, len(r["err"]) - 1)]
+            kept += t
+        whole = 10 * np.log10(sum(base.values()) / sum(err.values()))
+        per = ", ".join(f"{c} {10 * np.log10(base[c] / err[c]):+.3f}" for c in base)
+        print(f"{label}: picks kept {kept / total_picks:.2f}, {whole:+.3f} dB; {per}")
+
+
+if __name__ == "__main__":
+    main()
