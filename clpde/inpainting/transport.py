@@ -418,6 +418,8 @@ class TransportRun:
         tracker = holdout.Tracker(self.data, band)
         for steps, _, state in probe.states(every=1):
             tracker.add(steps, state)
+            if tracker.risen():
+                break
         return tracker.best()
 
     def states(self, every=None):
