@@ -17,6 +17,9 @@ is `width` px wide, and only holes at least that deep are validated: a thinner h
 the ring would be a problem of another kind (a 2 px scratch becomes a 10 px band), and thin
 damage keeps the method's own stop.
 
+The probe need not run to its own stop: once its ring error is RISE times the least so
+far, that least is the choice (Tracker.risen), and it stops there.
+
 The transport validates only boxes whose surround repeats (periodic_surround, its default
 `holdout_where="periodic"`): on photos the ring, filled from a hole 8 px deeper than the
 real one, favoured the smooth start more often than the real hole did (docs/inpainting.md).

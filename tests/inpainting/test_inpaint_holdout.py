@@ -116,3 +116,16 @@ def test_tracker_keeps_the_own_stop_unless_clearly_better():
     assert tracker.best() is None  # better by less than the margin
     tracker.add(136, np.full((1, 4, 4), 0.2))
     assert tracker.best() == 68
+
+
+def test_tracker_risen_once_clearly_above_its_least():
+    band = np.zeros((4, 4), bool)
+    band[1, 1:3] = True
+    tracker = holdout.Tracker(np.zeros((1, 4, 4)), band)
+    tracker.add(0, np.full((1, 4, 4), 0.1))
+    assert not tracker.risen()  # one state: nothing to compare
+    tracker.add(34, np.full((1, 4, 4), 0.1 * np.sqrt(holdout.RISE) * 0.999))
+    assert not tracker.risen()  # above its least by less than RISE
+    tracker.add(68, np.full((1, 4, 4), 0.1 * np.sqrt(holdout.RISE) * 1.001))
+    assert tracker.risen()
+    assert tracker.best() == 0  # where it stops, the least is the choice
