@@ -129,3 +129,21 @@ def test_tracker_risen_once_clearly_above_its_least():
     tracker.add(68, np.full((1, 4, 4), 0.1 * np.sqrt(holdout.RISE) * 1.001))
     assert tracker.risen()
     assert tracker.best() == 0  # where it stops, the least is the choice
+
+
+def test_navier_stokes_run_stops_where_its_watch_says():
+    from clpde.inpainting.navier_stokes import NavierStokesSolver
+    from clpde.runtime import get_runtime
+
+    truth = corpus.periodic(0, size=48)[None] / 255.0
+    omega = np.zeros((48, 48), bool)
+    omega[16:32, 16:32] = True
+    seen = []
+
+    def watch(iterations, image):
+        seen.append(iterations)
+        return len(seen) == 3  # the start, two checks
+
+    solver = NavierStokesSolver(get_runtime(), truth, omega)
+    solver.run(max_iter=1000, tol=0, mean_tol=0, check_every=5, watch=watch)
+    assert seen == [0, 5, 10] and solver.iterations == 10 and not solver.converged
