@@ -21,8 +21,8 @@ The probe need not run to its own stop: once its ring error is RISE times the le
 far, that least is the choice (Tracker.risen), and it stops there.
 
 The transport validates only boxes whose surround repeats (periodic_surround, its default
-`holdout_where="periodic"`): on photos the ring, filled from a hole 8 px deeper than the
-real one, favoured the smooth start more often than the real hole did (docs/inpainting.md).
+`holdout_where="periodic"`): on photos the ring, filled from the hole grown by it,
+favoured the smooth start more often than the real hole did (docs/inpainting.md).
 """
 
 from __future__ import annotations
