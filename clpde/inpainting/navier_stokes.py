@@ -239,7 +239,8 @@ class NavierStokesSolver:
     ):
         """Iterate until the largest change of I in the hole over `check_every` iterations
         is below tol, or the mean change below mean_tol (0 turns a test off), or max_iter.
-        watch(iterations, image), if given, sees the start and every checked state."""
+        watch(iterations, image), if given, sees the start and every checked state; the
+        run stops where it returns True."""
         self.converged = False
         if watch is not None:
             watch(self.iterations, self.result())
@@ -251,8 +252,8 @@ class NavierStokesSolver:
                 raise ClpdeError("the Navier-Stokes inpainting diverged; use a smaller nu")
             self.changes.append(largest)
             self.mean_changes.append(mean)
-            if watch is not None:
-                watch(self.iterations, self.result())
+            if watch is not None and watch(self.iterations, self.result()):
+                break
             if largest < tol or mean < mean_tol:
                 self.converged = True
                 break
@@ -334,7 +335,12 @@ def _held_out_stop(data, omega, runtime, width, nu, contrast, dtype, max_iter, s
     probe = NavierStokesSolver(
         runtime, hidden, (omega | band)[rows, cols], nu=nu, contrast=contrast, dtype=dtype
     )
-    probe.run(max_iter=max_iter, watch=tracker.add, **stops)
+
+    def watch(iterations, image):
+        tracker.add(iterations, image)
+        return tracker.risen()
+
+    probe.run(max_iter=max_iter, watch=watch, **stops)
     return tracker.best()
 
 
