@@ -30,6 +30,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from .pick import periodic_clusters
+
 WIDTH = 4  # px; 2 and 4 measured on the corpus's calibration half (docs/inpainting.md)
 GAIN = 0.95  # an earlier state replaces the method's own stop where its ring error is below
 # GAIN times the last state's: a few per cent is within what the ring's draw varies by
@@ -41,8 +43,6 @@ RISE = 1.2  # the probe stops once its ring error is RISE times its least so far
 def periodic_surround(data: np.ndarray, omega: np.ndarray) -> bool:
     """Whether a cluster of omega at least pick.MIN_RADIUS thick sits in a surround that
     repeats (pick.periodic_clusters, the default's test for the exemplar's clusters)."""
-    from .pick import periodic_clusters  # pick imports the spectral fill: only when needed
-
     return bool(periodic_clusters(data, omega).any())
 
 
