@@ -31,59 +31,19 @@ RECORDS: list = []
 TRUTH: dict = {}
 
 
-def fit_block(values, weight, *, iterations, gamma, alpha, cutoff=1.5, detrend=True, **_):
-    """The reference's fit_block without its stopping tests, keeping the model after each
-    pick and each pick's gain and the residual E before it (LAST)."""
-    L = values.shape[0]
-    centre = (L - 1) / 2
-    u, v = np.mgrid[0:L, 0:L]
-    u, v = (u - centre) / L, (v - centre) / L
-    plane = np.zeros((L, L))
-    total = weight.sum()
-    if detrend and total > 0:
-        basis = np.stack([np.ones_like(u), u, v]).reshape(3, -1)
-        wb = basis * weight.ravel()
-        a = wb @ basis.T + np.diag([0, 1e-3 * total, 1e-3 * total])
-        plane = (np.linalg.solve(a, wb @ values.ravel()) @ basis).reshape(L, L)
-    energy = float((weight * (values - plane) ** 2).sum())
-    R = np.fft.fft2(weight * (values - plane))
-    W = np.fft.fft2(weight)
-    W0 = W[0, 0].real
-    model = plane.copy()
-    LAST.update(hist=[model.copy()], gains=[], energies=[])
-    if W0 <= 0:
-        return model
-    H = L // 2 + 1
-    ky, kx = np.meshgrid(np.arange(L), np.arange(H), indexing="ij")
-    fy = np.where(ky <= L // 2, ky, ky - L)
-    prior = (1 - np.minimum(np.sqrt(fy**2 + kx**2) / (0.5 * L * np.sqrt(2)), 1.0)) ** alpha
-    candidate = fy**2 + kx**2 <= (cutoff * 0.5 * L) ** 2
-    self_conj = ((2 * ky) % L == 0) & ((2 * kx) % L == 0)
-    V = W[(2 * ky) % L, (2 * kx) % L]
-    den = np.maximum(W0**2 - np.abs(V) ** 2, 1e-3 * W0**2)
-    m, n = np.mgrid[0:L, 0:L]
-    for _ in range(iterations):
-        r = R[:, :H]
-        c_pair = (r * W0 - V * np.conj(r)) / den
-        gain = np.where(self_conj, r.real**2 / W0, 2 * (np.conj(c_pair) * r).real)
-        j = int(np.argmax(np.where(candidate, gain * prior, -np.inf).T.ravel()))
-        b, a = divmod(j, L)
-        if not gain[a, b] > 0:
-            break
-        LAST["gains"].append(gain[a, b])
-        LAST["energies"].append(energy)
-        energy -= gamma * (2 - gamma) * gain[a, b]
-        phase = np.exp(2j * np.pi * (a * m + b * n) / L)
-        if self_conj[a, b]:
-            c = gamma * r[a, b].real / W0
-            model += c * phase.real
-            R -= c * np.roll(W, (a, b), (0, 1))
-        else:
-            c = gamma * c_pair[a, b]
-            model += 2 * (c * phase).real
-            R -= c * np.roll(W, (a, b), (0, 1)) + np.conj(c) * np.roll(W, (-a, -b), (0, 1))
+def fit_block(values, weight, **options):
+    """The reference's fit_block without its stopping tests (stop, floor, stall), keeping
+    the model after each pick and each pick's gain and the residual E before it (LAST)."""
+    LAST.update(hist=[], gains=[], energies=[])
+
+    def record(gain, energy, model):
         LAST["hist"].append(model.copy())
-    return model
+        if gain is not None:
+            LAST["gains"].append(gain)
+            LAST["energies"].append(energy)
+
+    options.update(stop=0.0, floor=0.0, stall=0.0, record=record)
+    return ref.fit_block(values, weight, **options)
 
 
 def hook(c, yc, xc, target):

@@ -18,8 +18,11 @@ def fit_block(
     cutoff=1.5,
     floor=0.0,
     stall=0.0,
+    record=None,
 ):
-    """The model of one window: values and weight (L, L) -> the model's (L, L) values."""
+    """The model of one window: values and weight (L, L) -> the model's (L, L) values.
+    record(gain, energy, model), if given, sees the plane (gain None) and each pick's gain,
+    the residual before it and the model after it (benchmarks/inpaint_spectral_stall.py)."""
     L = values.shape[0]
     centre = (L - 1) / 2
     u, v = np.mgrid[0:L, 0:L]
@@ -37,6 +40,8 @@ def fit_block(
     W = np.fft.fft2(weight)
     W0 = W[0, 0].real
     model = plane.copy()
+    if record is not None:
+        record(None, energy, model)
     if W0 <= 0:
         return model
     H = L // 2 + 1
@@ -67,6 +72,7 @@ def fit_block(
             or g < stall * energy
         ):
             break
+        before = energy
         energy -= gamma * (2 - gamma) * g  # a step gamma along the pair's best coefficient
         phase = np.exp(2j * np.pi * (a * m + b * n) / L)
         if self_conj[a, b]:
@@ -77,6 +83,8 @@ def fit_block(
             c = gamma * c_pair[a, b]
             model += 2 * (c * phase).real
             R -= c * np.roll(W, (a, b), (0, 1)) + np.conj(c) * np.roll(W, (-a, -b), (0, 1))
+        if record is not None:
+            record(g, before, model)
     return model
 
 
