@@ -124,3 +124,27 @@ def test_kinds_of_the_wrong_size_are_refused(rng):
     masks[1, 4:8, 4:8] = True
     with pytest.raises(clpde.InputError, match="one kind per mask pixel"):
         clpde.inpaint_video(frames, masks, keep=KEEP, kinds=np.zeros((3, 16, 8), np.int8))
+
+
+def test_scratch_a_neighbour_carries_unflagged_is_repaired(rng):
+    """A still textured shot; a dark scratch in frames 2 and 3 at one place, flagged in
+    frame 2 only (the detector missed it in frame 3), and frames 0, 1 and 4 flagged there
+    for damage of their own: frame 3 is frame 2's only candidate, and it carries the
+    scratch, so no two candidates agree, the spatial fill takes the line, and the residual
+    against frame 3 says nothing changed. The line's deviation beyond its flanks says it
+    did: frame 2 is repaired (before filmbudget the whole scratch was kept: its E^2 was
+    frame 3's residual alone), and frame 3, unflagged, is left as it was."""
+    scene = _scene(rng)
+    scene[:, 28:44] += 0.1 * rng.random((NY, 16))
+    clean = _grainy(np.repeat(scene[None], T, axis=0), rng)
+    dirty = clean.copy()
+    dirty[2:4, 4:68, 35:37] -= 0.2
+    masks = np.zeros((T, NY, NX), bool)
+    masks[[0, 1, 2, 4], 4:68, 34:38] = True
+    kinds = np.where(masks, SCRATCH, 0).astype(np.int8)
+    kinds[[0, 1, 4]] = np.where(masks[[0, 1, 4]], 1, 0)  # their own blotches, no line
+    out = clpde.inpaint_video(dirty, masks, keep=KEEP, kinds=kinds)
+    band = (slice(4, 68), slice(35, 37))
+    before = np.abs(dirty[2][band] - clean[2][band]).mean()
+    assert np.abs(out[2][band] - clean[2][band]).mean() < 0.25 * before
+    assert np.abs(out[3] - dirty[3]).max() < 1e-6  # unflagged: left as it was
