@@ -393,7 +393,7 @@ class ObjectFollower:
 
     def _parts(self, t, a, pixels, predicted_u, predicted):
         """The prediction with the parts that move otherwise (turns.predict), if believed."""
-        u = None if self.reliability <= 0 else turns.predict(self, t, a, pixels, predicted, _warp_values)
+        u = None if self.reliability <= 0 and not turns.UNREL else turns.predict(self, t, a, pixels, predicted, _warp_values)
         if u is None:
             return predicted_u, predicted
         self._seen = None if self._seen is None else self._seen & (u < 0)

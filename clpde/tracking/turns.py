@@ -44,6 +44,8 @@ MARGIN = float(_E.get("TT_MARGIN", MARGIN))
 MOVED = float(_E.get("TT_MOVED", MOVED))
 LOOK = int(_E.get("TT_LOOK", 1))
 OWN = int(_E.get("TT_OWN", 1))
+FLOOR = float(_E.get("TT_FLOOR", 9))
+UNREL = int(_E.get("TT_UNREL", 0))
 
 
 def split_parts(shape: np.ndarray, bands: int = BANDS, cols: int = COLS) -> np.ndarray:
@@ -141,7 +143,7 @@ def part_maps(prev, cur, shape, pixels, a, grey=None):
             s = ncc_by(prev, cur, use, b)
             if s > score:
                 best, score = b, s
-        if not score >= max(at_whole + MARGIN, whole):
+        if not score >= max(at_whole + MARGIN, min(whole, FLOOR)):
             continue
         pts = np.array(np.nonzero(part), np.float64)
         mine = np.tensordot(inverse(best)[:, :2], pts, 1) + inverse(best)[:, 2:]
@@ -197,7 +199,7 @@ def predict(follower, t, a, pixels, predicted, warp):
         return None
     grey = (f._gradients(t - 1), f._gradients(t)[0])
     parts = part_maps(f.looks[t - 1], f.looks[t], f.shape, pixels, a, grey)
-    if parts and LOOK:
+    if parts and LOOK and f.reliability > 0:
         # the frame's log odds (the ring is learned by the follower's own call after)
         f._bins, f._bins_t, back = f.model.bins(f.looks[t]), t, f.model.back
         ratio, f.model.back = f.model.log_ratio(f._bins, predicted), back
