@@ -128,9 +128,6 @@ BESIDE = 6
 # A frame pair whose difference near the unmoved object is below this many times the
 # noise's is still (`_change`).
 STILL_CHANGE = 2.0
-import os as _os  # EXPLORATION ONLY
-
-TURNS = int(_os.environ.get('TT_ON', 1))
 
 
 def _at(image: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndarray:
@@ -371,7 +368,7 @@ class ObjectFollower:
             self._seen = self._seen_still(t, a, predicted)
         else:
             self._occluder = None
-        if TURNS and not hidden and pixels.sum() >= MIN_PIECE and self.term is not None:
+        if not hidden and pixels.sum() >= MIN_PIECE and self.term is not None:
             predicted_u, predicted = self._parts(t, a, pixels, predicted_u, predicted)
         self.predicted, self._predicted_u = predicted, predicted_u
         self._grown = predicted
@@ -393,7 +390,11 @@ class ObjectFollower:
 
     def _parts(self, t, a, pixels, predicted_u, predicted):
         """The prediction with the parts that move otherwise (turns.predict), if believed."""
-        u = None if self.reliability <= 0 and not turns.UNREL else turns.predict(self, t, a, pixels, predicted, _warp_values)
+        u = (
+            None
+            if self.reliability <= 0
+            else turns.predict(self, t, a, pixels, predicted, _warp_values)
+        )
         if u is None:
             return predicted_u, predicted
         self._seen = None if self._seen is None else self._seen & (u < 0)
