@@ -4,7 +4,8 @@ object went, and an appearance term keeps it on the object (appearance.py).
 Per frame: the object's motion from the previous frame (`appearance.object_motion`, with a
 light-blind match on local contrast beside the frames' own) carries the object's whole
 shape, hidden parts included, as a level set (its contour's sub-pixel place kept) to its
-predicted place, where the morphing starts; the prediction grows by the pieces next to it
+predicted place, where the morphing starts (a part whose own motion, a turn included,
+clearly explains it better carried by it, turns.py); the prediction grows by the pieces next to it
 that clearly look like the object (parts.py: a swinging leg the motion did not carry); the
 appearance model's log ratio there, with the grown prediction's prior, becomes the
 morphing's region speed, believed as far as it classified the last result (unless the
@@ -29,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from . import turns
 from .adaptive import noise_variance
 from .appearance import (
     MATCH_FLOOR,
@@ -361,13 +363,15 @@ class ObjectFollower:
         predicted = predicted_u < 0
         if not predicted.any() or predicted.all():  # carried out of the frame: it stays
             predicted, predicted_u = self.shape, self.shape_u
-        self.predicted, self._predicted_u = predicted, predicted_u
-        self._grown = predicted
         self._seen = None
         if np.hypot(*shift) >= SEEN_MOVED:
             self._seen = self._seen_still(t, a, predicted)
         else:
             self._occluder = None
+        if not hidden and pixels.sum() >= MIN_PIECE and self.term is not None:
+            predicted_u, predicted = self._parts(t, a, pixels, predicted_u, predicted)
+        self.predicted, self._predicted_u = predicted, predicted_u
+        self._grown = predicted
         self._predicted_whole_u = None if self._whole_u is None else _warp_values(self._whole_u, a)
         # F1: the previous frame carried with the object near its predicted place
         near = dilate(predicted, int(np.ceil(self.band)) + 4)
@@ -383,6 +387,18 @@ class ObjectFollower:
             start = self._appearance(t, a, predicted, still)
         self.ls.assign(predicted_u if start is predicted else signed_distance(start))
         return out, (float(shift[0]), float(shift[1]))
+
+    def _parts(self, t, a, pixels, predicted_u, predicted):
+        """The prediction with the parts that move otherwise (turns.predict), if believed."""
+        u = (
+            None
+            if self.reliability <= 0
+            else turns.predict(self, t, a, pixels, predicted, _warp_values)
+        )
+        if u is None:
+            return predicted_u, predicted
+        self._seen = None if self._seen is None else self._seen & (u < 0)
+        return u, u < 0
 
     def _seen_still(self, t, a, predicted) -> np.ndarray:
         """The predicted shape's pixels that show something still in frame t, not the
