@@ -436,4 +436,3 @@ def _spatially_damage(G: np.ndarray, t: int, win, own, ring, side: float, bar: f
     contrast = float(np.mean((g[own] - np.median(g[ring])) ** 2))
     box = ((win[0].start, win[0].stop), (win[1].start, win[1].stop))
     return not _found_nearby(G, t, near, box, own, search, contrast / 4)
-
