@@ -26,7 +26,7 @@ STEADY = 2.0
 RIM_CLEAR = (2, 5)
 # px a region needs for its rim to be asked too where it is found again nearby
 # (_found_with_rim): on the calibration half the scene regions the rim test alone would
-# have called dirt were all 4-7 px, the dirt it recovered 15-167 px
+# have called dirt were all 4-7 px, the dirt it recovered 15-111 px
 RIM_SMALLEST = 8
 EDGE = 2  # px from the frame's border within which the warp's stencil leaves the frame
 EDGE_SPREAD = 2.0  # pixels the flow may spread around a blotch (more: a motion boundary)
