@@ -354,7 +354,7 @@ MORE = {
 
 
 # The widened calibration half (`corpus(..., wider=True)`, tracking_generalise.py --more,
-# issue 35 trackwide): twelve more even seeds each of fast, deform and grey, so that a guard
+# issue 35 trackwide): 32 more even seeds each of fast and deform, 12 of grey, so that a guard
 # against a mislocked match can be chosen on more than one or two failures. The same makers
 # and so the same photographs as the calibration half already uses (even seeds: none of the
 # same class's test half's, none of the reserved sets); grey's seeds alternate the grey
@@ -362,8 +362,8 @@ MORE = {
 # half that no test grey sequence uses (`_grey_wider`). Off by default: the standard corpus
 # is unchanged.
 WIDER = {
-    "fast": tuple(range(16, 40, 2)),
-    "deform": tuple(range(16, 40, 2)),
+    "fast": tuple(range(16, 80, 2)),
+    "deform": tuple(range(16, 80, 2)),
     "grey": tuple(range(16, 40, 2)),
 }
 
