@@ -34,6 +34,10 @@ Classes:
   a frame, grey-8 over a panning and dimming ground, grey-10 over a circuit board, grey-12
   a look-alike over a patterned wall, grey-14 a dark look-alike behind bars, dimming. The
   test half's grey sequences are unchanged.
+- ``--more`` (`corpus(..., wider=True)`, `WIDER`; tracking_generalise.py --more): a
+  widened calibration half, 32 more sequences each of ``fast`` and ``deform`` (seeds
+  16-78, even) and 12 of ``grey`` (seeds 16-38, even: grey fast and grey behind bars by
+  turns), from the calibration half's photographs. Off by default.
 - ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
   9-26 px a frame (benchmarks/track_footage.py; clips 0 and 2 calibration, clip 1 test;
   their masks by background subtraction less the walkers' cast shadow, checked by eye).
