@@ -553,8 +553,7 @@ class ObjectFollower:
         else:
             shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
         shape_u = self._whole(t, mask, shape_u)
-        # a match a few px off that the result corrected does not set the velocity
-        self.velocity = corrected(self.velocity, self.predicted, mask, self.hidden)
+        self.velocity = corrected(self.velocity, self.predicted, mask, self.hidden)  # a mislock
         if self.hidden and self._occluder is not None:
             # the whole shape's part out of sight stays so where it stays still
             self._occluder = self._occluder | ((shape_u < 0) & ~mask)
