@@ -1,7 +1,7 @@
 """Tracking corpus of real-photograph composites with exact truth, in classes, split by
 sequence (issue 35).
 
-    python benchmarks/track_photo_corpus.py      # prints the sequences and halves
+    python benchmarks/track_photo_corpus.py [--more]  # prints the sequences and halves
 
 `corpus(half)` returns {name: (frames, masks, class)} like benchmarks/track_corpus.py:
 every class has SEQS sequences from seeds 0..SEQS-1, even seeds the calibration half, odd
@@ -34,6 +34,10 @@ Classes:
   a frame, grey-8 over a panning and dimming ground, grey-10 over a circuit board, grey-12
   a look-alike over a patterned wall, grey-14 a dark look-alike behind bars, dimming. The
   test half's grey sequences are unchanged.
+- ``--more`` (`corpus(..., wider=True)`, `WIDER`; tracking_generalise.py --more): a
+  widened calibration half, 32 more sequences each of ``fast`` and ``deform`` (seeds
+  16-78, even) and 12 of ``grey`` (seeds 16-38, even: grey fast and grey behind bars by
+  turns), from the calibration half's photographs. Off by default.
 - ``footage``: real footage, not a composite: walkers in opencv-doc's vtest.avi moving
   9-26 px a frame (benchmarks/track_footage.py; clips 0 and 2 calibration, clip 1 test;
   their masks by background subtraction less the walkers' cast shadow, checked by eye).
@@ -271,6 +275,8 @@ def seq_grey(seed):
     rng = np.random.default_rng(4000 + seed)
     if seed in GREY_MORE:
         return _grey_more(seed, rng)
+    if seed in WIDER["grey"]:
+        return _grey_wider(seed, rng)
     frames, masks = (seq_fast if seed % 2 == 0 else seq_occlude)(seed + 10, rng)
     return frames @ np.array([0.299, 0.587, 0.114]), masks
 
@@ -307,6 +313,22 @@ def _grey_more(seed, rng):
     return frames @ np.array([0.299, 0.587, 0.114]), masks
 
 
+def _grey_wider(seed, rng):
+    """A WIDER grey sequence: fast (seed % 4 == 0) or behind bars (seed % 4 == 2), from
+    photographs of the calibration half that no test grey sequence uses (the test grey
+    sequences are baboon and HappyFish over astronaut and brick, behind brick and coffee)."""
+    k = seed // 4
+    if seed % 4 == 0:
+        obj = OBJECTS[2 * (k % 4)]  # fruits, butterfly, orange, coffee
+        ground = ("building", "aero1", "rocket", "grass")[(k // 2) % 4]
+        frames, masks = _sequence(rng, obj, ground, _speeds(rng, 10, 26))
+    else:
+        # seq_occlude's even seeds: gravel bars, even objects, grounds home, leuvenA,
+        # rocket, grass
+        frames, masks = seq_occlude(seed + 10, rng)
+    return frames @ np.array([0.299, 0.587, 0.114]), masks
+
+
 def seq_footage(seed):
     import track_footage
 
@@ -335,15 +357,32 @@ MORE = {
 }
 
 
+# The widened calibration half (`corpus(..., wider=True)`, tracking_generalise.py --more,
+# issue 35 trackwide): 32 more even seeds each of fast and deform, 12 of grey, so that a guard
+# against a mislocked match can be chosen on more than one or two failures. The same makers
+# and so the same photographs as the calibration half already uses (even seeds: none of the
+# same class's test half's, none of the reserved sets); grey's seeds alternate the grey
+# fast (seed % 4 == 0) and grey occlude (seed % 4 == 2), from photographs of the calibration
+# half that no test grey sequence uses (`_grey_wider`). Off by default: the standard corpus
+# is unchanged.
+WIDER = {
+    "fast": tuple(range(16, 80, 2)),
+    "deform": tuple(range(16, 80, 2)),
+    "grey": tuple(range(16, 40, 2)),
+}
+
+
 def half_of(seed: int) -> str:
     return "calibration" if seed % 2 == 0 else "test"
 
 
-def corpus(half: str | None = None, classes=CLASSES, seqs: int = SEQS):
-    """{name: (frames, masks, class)} of one half ('calibration', 'test') or both (None)."""
+def corpus(half: str | None = None, classes=CLASSES, seqs: int = SEQS, wider: bool = False):
+    """{name: (frames, masks, class)} of one half ('calibration', 'test') or both (None);
+    `wider`: with the WIDER calibration sequences too."""
     out = {}
     for cls in classes:
         extra = list(MORE.get(cls, ())) if seqs == SEQS else []
+        extra += list(WIDER.get(cls, ())) if wider else []
         for seed in list(range(seqs)) + extra:
             if half is not None and half_of(seed) != half:
                 continue
@@ -355,7 +394,9 @@ def corpus(half: str | None = None, classes=CLASSES, seqs: int = SEQS):
 
 
 def main():
-    for name, (frames, masks, _cls) in corpus().items():
+    import sys
+
+    for name, (frames, masks, _cls) in corpus(wider="--more" in sys.argv).items():
         c = [ndimage.center_of_mass(m) for m in masks]
         step = [np.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(c, c[1:], strict=False)]
         print(

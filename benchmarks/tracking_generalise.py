@@ -51,6 +51,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 CORPUS = track_corpus  # the corpus of the run (--corpus)
 CALIBRATION = RESULTS / "track_calibration.json"
 CLASSES_RUN = None  # the classes of the run (--classes), None: all of the corpus'
+MORE = {}  # {"wider": True} with --more: the photo corpus' WIDER calibration sequences too
 
 ADAPTIVE = {
     "motion": "components",
@@ -251,7 +252,7 @@ def track_sets(half, table):
     rng = np.random.default_rng(0 if half == "calibration" else 1)
     sets = []
     for name, (frames, truth, cls) in CORPUS.corpus(
-        half, classes=CLASSES_RUN or CORPUS.CLASSES
+        half, classes=CLASSES_RUN or CORPUS.CLASSES, **MORE
     ).items():
         for label, method in table.items():
             sets.append((frames, method(frames, truth[0]), truth, label, cls, name))
@@ -447,10 +448,19 @@ def main(argv=None):
         default="synthetic",
         help="benchmarks/track_corpus.py (synthetic) or track_photo_corpus.py (photographs)",
     )
+    parser.add_argument(
+        "--more",
+        action="store_true",
+        help="photo corpus: the widened calibration half too (track_photo_corpus.WIDER)",
+    )
     args = parser.parse_args(argv)
-    global CORPUS, CLASSES_RUN
+    global CORPUS, CLASSES_RUN, MORE
     CORPUS = track_photo_corpus if args.corpus == "photo" else track_corpus
     CLASSES_RUN = args.classes
+    if args.more:
+        if args.corpus != "photo":
+            parser.error("--more is the photo corpus' option")
+        MORE = {"wider": True}
     if args.corpus == "photo" and args.methods is None:
         args.methods = ["default (motion=image", "motion=checked", "MCV", "GrabCut"]
     if args.calibrate is not None:

@@ -58,6 +58,7 @@ from .occlusion import (
     visible_pieces,
 )
 from .parts import grow_parts
+from .velocity import corrected
 
 # The correlation's peak that overrides the velocity while the object is hidden in part.
 HIDDEN_FLOOR = MATCH_FLOOR  # chosen on the calibration half: 0.6 lost more than it kept
@@ -552,6 +553,7 @@ class ObjectFollower:
         else:
             shape_u = signed_distance(mask) if mask.any() else np.abs(u) + 1.0
         shape_u = self._whole(t, mask, shape_u)
+        self.velocity = corrected(self.velocity, self.predicted, mask, self.hidden)  # a mislock
         if self.hidden and self._occluder is not None:
             # the whole shape's part out of sight stays so where it stays still
             self._occluder = self._occluder | ((shape_u < 0) & ~mask)
