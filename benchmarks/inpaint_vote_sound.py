@@ -324,6 +324,20 @@ def load(halves, names):
 DECOY_CACHE = CACHE.parent / "decoy_cache"
 
 
+def _hole_first(c, hole, fill):
+    """auto._fill for case c: the hole's own fills from the cache (`hole`: {candidate: its
+    hole pixels}), any other mask (a hidden ring, a decoy) through `fill`."""
+
+    def cached(name, data, omega, *rest):
+        if np.array_equal(omega, c.omega):
+            out = c.data.copy()
+            out[:, omega] = hole[name]
+            return out
+        return fill(name, data, omega, *rest)
+
+    return cached
+
+
 def _cached_fill(original, case_name, seconds):
     """auto._fill memoised on disk by (case, candidate, hidden mask): the decoy fills, so
     that the vote's parameters can be varied without filling again; `seconds` collects
@@ -379,16 +393,7 @@ def real(half, cases=None, vote="rings", **options):
                 continue
             hole = {n: c.hole[k] for k, n in enumerate(names)}
             seconds = []
-            decoy_fill = _cached_fill(original, c.case.name, seconds)
-
-            def cached(name, data, omega, *rest, c=c, hole=hole, decoy_fill=decoy_fill):
-                if np.array_equal(omega, c.omega):
-                    out = c.data.copy()
-                    out[:, omega] = hole[name]
-                    return out
-                return decoy_fill(name, data, omega, *rest)
-
-            auto._fill = cached
+            auto._fill = _hole_first(c, hole, _cached_fill(original, c.case.name, seconds))
             try:
                 filled, report = chooser(c.data, c.omega, runtime, seed=0, **options)
             finally:
@@ -436,16 +441,7 @@ def vote_seconds(half):
     rules = {"least-squares": dict(power=0.0, prior=1000.0), "soft": {}}
     for c in load(("calibration", "test") if half == "both" else (half,), names):
         hole = {n: c.hole[k] for k, n in enumerate(names)}
-        memo = _cached_fill(original, c.case.name, [])
-
-        def cached(name, data, omega, *rest, c=c, hole=hole, memo=memo):
-            if np.array_equal(omega, c.omega):
-                out = c.data.copy()
-                out[:, omega] = hole[name]
-                return out
-            return memo(name, data, omega, *rest)
-
-        auto._fill = cached
+        auto._fill = _hole_first(c, hole, _cached_fill(original, c.case.name, []))
         try:
             for label, rule in rules.items():
                 auto.choose(c.data, c.omega, runtime, seed=0, **rule)

@@ -287,11 +287,11 @@ def _tail_check(
     return _kept(mask, TAIL_REACH, unexplained)
 
 
-def _best_place(G: np.ndarray, t: int, s: int, box, own: np.ndarray, search: int):
-    """The best placement, within `search` px, of frame t's pixels `own` (in the window
-    box) in frame s, by their values alone (no context: a flat region is sought as such):
-    (the mean squared difference there, the displacement (dy, dx)); None if the window
-    does not fit."""
+def _best_window(G: np.ndarray, t: int, s: int, box, weight: np.ndarray, search: int):
+    """Frame t's window `box` sought in frame s within `search` px, each pixel's squared
+    difference weighing `weight` (_masked_ssd): (the weighted sum at the best placement,
+    the displacement (dy, dx), frame s's pixels there); None if the search window does not
+    fit."""
     T, ny, nx = G.shape
     (y0, y1), (x0, x1) = box
     templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
@@ -301,9 +301,19 @@ def _best_place(G: np.ndarray, t: int, s: int, box, own: np.ndarray, search: int
     win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
     if win.shape[0] < th or win.shape[1] < tw:
         return None
-    ssd = _masked_ssd(win, templ, own.astype(np.float64))
+    ssd = _masked_ssd(win, templ, weight)
     my, mx = np.unravel_index(int(np.argmin(ssd)), ssd.shape)
-    return float(ssd[my, mx]) / own.sum(), np.array([my + wy0 - y0, mx + wx0 - x0], float)
+    shift = np.array([my + wy0 - y0, mx + wx0 - x0], float)
+    return float(ssd[my, mx]), shift, win[my : my + th, mx : mx + tw]
+
+
+def _best_place(G: np.ndarray, t: int, s: int, box, own: np.ndarray, search: int):
+    """The best placement, within `search` px, of frame t's pixels `own` (in the window
+    box) in frame s, by their values alone (no context: a flat region is sought as such):
+    (the mean squared difference there, the displacement (dy, dx)); None if the window
+    does not fit."""
+    found = _best_window(G, t, s, box, own.astype(np.float64), search)
+    return None if found is None else (found[0] / own.sum(), found[1])
 
 
 def _found_nearby(G: np.ndarray, t: int, frames, box, own: np.ndarray, search: int, bar: float):
@@ -328,22 +338,14 @@ def _found_with_rim(G: np.ndarray, t: int, s: int, box, own: np.ndarray, search:
     scene (on the calibration half, strong dirt 14 and 31 noise units outside its ring was
     dropped so on carphone); scene content moves with its surroundings and is found with
     them, dirt lies on a scene it does not belong to."""
-    T, ny, nx = G.shape
-    (y0, y1), (x0, x1) = box
-    templ = np.ascontiguousarray(G[t, y0:y1, x0:x1])
     rim = dilate(own, RIM_CLEAR[1] - 1) & ~own
     if not rim.any():
         return True
-    weight = own / own.sum() + rim / rim.sum()
-    th, tw = templ.shape
-    wy0, wy1 = max(y0 - search, 0), min(y1 + search, ny)
-    wx0, wx1 = max(x0 - search, 0), min(x1 + search, nx)
-    win = np.ascontiguousarray(G[s, wy0:wy1, wx0:wx1])
-    if win.shape[0] < th or win.shape[1] < tw:
+    found = _best_window(G, t, s, box, own / own.sum() + rim / rim.sum(), search)
+    if found is None:
         return True
-    ssd = _masked_ssd(win, templ, weight)
-    my, mx = np.unravel_index(int(np.argmin(ssd)), ssd.shape)
-    diff = (win[my : my + th, mx : mx + tw] - templ) ** 2
+    (y0, y1), (x0, x1) = box
+    diff = (found[2] - G[t, y0:y1, x0:x1]) ** 2
     return bool(diff[own].mean() <= bar and diff[rim].mean() <= bar)
 
 
