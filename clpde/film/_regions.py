@@ -402,9 +402,10 @@ def _spatial_blotches(
 
     - temporal: the region (connected z > low, outside `taken`) has a median z of at least
       `threshold` (more than half its pixels, not a peak: one-sided evidence is weaker);
-    - spatial: more than half its pixels lie outside the range (5th to 95th percentile) of
-      its ring (2-4 px out) by `threshold` noise units, on the side of its temporal sign:
-      an outlier against its own surroundings, as dirt is and an object's part seldom is;
+    - spatial: more than half its core lies outside the range (5th to 95th percentile) of
+      its ring (RIM_CLEAR px out) by `threshold` noise units, on the side of its temporal
+      sign, and more than half its pixels outside it at all (_spatially_damage): an
+      outlier against its own surroundings, as dirt is and an object's part seldom is;
     - not found again: its values alone are not found within `search` px, at any
       displacement, in the nearest frame each side (at a film's ends the two nearest on
       its one side) closer than halfway between them and their ring's level (the nearer
