@@ -54,7 +54,7 @@ def _kurtosis(d) -> float:
     d = d - d.mean()
     d2 = d * d  # (d**4 would call pow: several times slower)
     m2 = float(d2.mean())
-    return float(np.dot(d2, d2)) / d2.size / m2**2 if m2 > 0 else np.inf
+    return float((d2 * d2).mean()) / m2**2 if m2 > 0 else np.inf
 
 
 def gaussian(grey, ok) -> bool:
@@ -78,7 +78,7 @@ def variogram(grey, ok):
         d = _differences(grey, ok, lag)
         if d.size < MIN_PAIRS // 4:
             return None
-        g.append(float(np.dot(d, d)) / d.size)
+        g.append(float((d * d).mean()))
     return np.asarray(g) if min(g) > 0 else None
 
 
