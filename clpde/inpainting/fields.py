@@ -14,9 +14,10 @@ biharmonic fill) that at H -> 1, a smooth field. A cluster takes the harmonic fi
 alpha is below SMOOTH_ALPHA (H below 1/2), else the biharmonic fill; both solved on the host
 per cluster (smooth.py). A variogram that stops growing at the largest lags (below
 MIN_GROWTH: a texture correlated over a few pixels, not a power law) leaves the cluster to
-the spectral fill. (Ordinary kriging with the fitted power law did as well as the
-harmonic fill on the calibration half's fractal voids, 22.52 against 22.59 dB over their
-two cases, at 30x the time: docs/inpainting.md, "Voids in Gaussian fields".)
+the spectral fill. (Ordinary kriging with the fitted power law did no better than the
+harmonic fill on the calibration half's fractal voids, 20.36 / 22.31 dB against 20.31 /
+22.64, and its dense solves took 3.3x the default's time on those voids:
+docs/inpainting.md, "Voids in Gaussian fields".)
 
 "Gaussian": the kurtosis (4th moment over the squared 2nd) of the grey known pixels'
 differences between 4-neighbours, and of those between the means of neighbouring 2 x 2
