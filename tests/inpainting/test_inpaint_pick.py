@@ -328,3 +328,15 @@ def test_the_host_harmonic_fill_keeps_a_plane_not_a_quadratic():
     assert np.abs(out - bowl)[0][mask].max() > 1e-3  # (the biharmonic fill keeps it)
     out = smooth.fill(np.where(mask, 0.0, bowl), mask, clusters, [1])
     assert np.abs(out - bowl)[0][mask].max() < 1e-9
+
+
+def test_a_large_harmonic_cluster_is_solved_on_the_device_alike(monkeypatch):
+    from tests.cases.inpaint_corpus import fractal
+
+    image = fractal(1, 96)
+    mask = _disc(image.shape, 40, 44, 9)
+    host = _run(image, mask, "pick")
+    monkeypatch.setattr(pick, "HOST_MAX", 100)  # the void over it: the device's solve
+    device = _run(image, mask, "pick")
+    assert not np.array_equal(host, device)
+    assert np.abs(host[mask] - device[mask]).max() < 0.01 * np.ptp(image)
