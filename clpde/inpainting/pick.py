@@ -34,6 +34,16 @@ blobs (-0.42 dB), rougher surrounds on its thick holes. What it costs: one dista
 transform of the box and a window's standard deviation per cluster at least ROUTE_RADIUS
 thick; the routed clusters' host fill replaces the spectral fill's work there.
 
+The Gaussian-field route (part of `route`, before the smooth route): a cluster at least
+MIN_RADIUS thick, not periodic and not on a clear edge, whose window is a Gaussian random
+field (fields.py: neighbours' differences Gaussian at two scales, a power-law variogram)
+takes the harmonic fill where the variogram's exponent is below 1 (a rough, fractal-like
+field), the biharmonic fill above (a smooth one), both on the host per cluster: there the
+spectral fill fits the field's fine detail as if it were structure (issue 37's voids).
+Photos, microscopy and binned 16-bit data are not Gaussian fields: on the calibration half
+it moves only the voids (23.99 -> 24.61 dB; docs/inpainting.md, "Voids in Gaussian
+fields").
+
 The smooth vote (`smooth=True`, off by default): each other cluster at least SMOOTH_RADIUS
 thick and not on a clear edge (edge_contrast: its border splits into two sides of distinct
 colour) is tested: a ring of RING known pixels around it is hidden, and the spectral
@@ -64,7 +74,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
-from . import choose, poisson
+from . import choose, fields, poisson
 from .exemplar import ExemplarOptions
 from .registry import keywords, load, register
 from .smooth import fill as smooth_fill
@@ -78,7 +88,8 @@ KERNEL_FILES = ("inpainting/spectral.cl",)
 
 DESCRIPTION = (
     "the spectral fill, the exemplar's where a cluster sits in a periodic pattern, and the "
-    "biharmonic fill's on thick clusters in a smooth surround"
+    "biharmonic fill's on thick clusters in a smooth surround, the harmonic fill's on thick "
+    "clusters in a rough Gaussian field"
 )
 
 MIN_RADIUS = 3.0  # thinner clusters: the spectral fill (a scratch needs no period copied)
@@ -277,6 +288,35 @@ def edge_contrast(data, omega, parts=None, labels=None):
     return gap, separation
 
 
+def _gaussian_route(data, omega, parts, periodic, runtime, dtype):
+    """The clusters at least MIN_RADIUS thick, not periodic and not on a clear edge, whose
+    surround is a Gaussian field (fields.py): (data with those of them that take the
+    harmonic fill filled, the labels of them all, the labels left to the biharmonic fill)."""
+    clusters, count, radius = parts
+    in_period = np.zeros(count + 1, bool)
+    in_period[np.unique(clusters[periodic])] = True
+    labels = 1 + np.flatnonzero((radius >= MIN_RADIUS) & ~in_period[1:])
+    none = np.zeros(0, int)
+    if not labels.size:
+        return data, none, none
+    rough, smooth = fields.gaussian_clusters(data, omega, clusters, labels, WINDOW)
+    both = np.union1d(rough, smooth)
+    if not both.size:
+        return data, none, none
+    # a clear edge across the hole: the spectral fill continues it (as the smooth route)
+    gap, separation = edge_contrast(data, omega, parts, both)
+    edge = 1 + np.flatnonzero((gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION))
+    rough, smooth = np.setdiff1d(rough, edge), np.setdiff1d(smooth, edge)
+    if rough.size:
+        size = np.bincount(clusters[omega], minlength=count + 1)[rough]
+        data = smooth_fill(data, omega, clusters, rough[size <= HOST_MAX], order=1)
+        if (size > HOST_MAX).any():  # (the device's solve, as the smooth route's)
+            big = np.isin(clusters, rough[size > HOST_MAX]) & omega
+            data = poisson.fill(data, big, runtime, "harmonic", dtype=dtype)
+            data = np.asarray(data, np.float64)
+    return data, np.union1d(rough, smooth), smooth
+
+
 def _margin(omega, o: PickOptions) -> int:
     # the spectral fill's boxes, so that a box without a periodic cluster is filled
     # exactly as method="spectral" fills it; the exemplar searches the box
@@ -344,7 +384,11 @@ def solve(
     routed = np.zeros(1 if parts is None else parts[1] + 1, bool)
     rest = omega
     if route and parts is not None:
-        labels = smooth_clusters(data, omega, parts, periodic, detail)
+        data, gauss, labels = _gaussian_route(data, omega, parts, periodic, runtime, dtype)
+        labels = np.union1d(
+            labels, np.setdiff1d(smooth_clusters(data, omega, parts, periodic, detail), gauss)
+        )
+        routed[gauss] = True
         if labels.size:
             # the smooth clusters first: the spectral fill then reads them as known
             size = np.bincount(parts[0][omega], minlength=parts[1] + 1)[labels]
@@ -354,7 +398,7 @@ def solve(
                 big = np.isin(parts[0], labels[size > HOST_MAX]) & omega
                 data = np.asarray(poisson.fill(data, big, runtime, dtype=dtype), np.float64)
             routed[labels] = True
-            rest = omega & ~routed[parts[0]]
+        rest = omega & ~routed[parts[0]]
     fill_spectral = load("spectral").solve
     if not rest.any():
         out = data

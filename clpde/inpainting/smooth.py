@@ -40,12 +40,13 @@ def _laplacian(shape, y0, x0, full):
     return adjacency - sparse.diags(degree.ravel().astype(np.float64))
 
 
-def _solve(planes, origin, hole, full):
+def _solve(planes, origin, hole, full, order=2):
     """Fill `hole` (a bool mask of a window at `origin` (row, col) in an image of shape
     `full`) of `planes` (the window's (channels, rows, cols), written in place) by the
-    biharmonic fill, every other pixel of the window known."""
+    biharmonic fill (order 2), or the harmonic one (order 1: Laplacian zero), every other
+    pixel of the window known."""
     g = _laplacian(hole.shape, origin[0], origin[1], full)
-    g2 = (g @ g).tocsr()
+    g2 = (g @ g).tocsr() if order == 2 else g.tocsr()
     flat = hole.ravel()
     unknown, known = np.flatnonzero(flat), np.flatnonzero(~flat)
     rows = g2[unknown]
@@ -63,10 +64,11 @@ def grown_box(s, grow, full):
     )
 
 
-def fill(data, omega, clusters, labels):
+def fill(data, omega, clusters, labels, order=2):
     """`data` ((channels, rows, cols) floats) with the hole pixels of each cluster in
     `labels` (labels of the image `clusters`) filled by the biharmonic fill of that cluster
-    alone (module docstring); every other pixel as given. A float64 copy."""
+    alone (module docstring; order 1: the harmonic fill); every other pixel as given. A
+    float64 copy."""
     out = np.array(data, np.float64, copy=True)
     slices = ndimage.find_objects(clusters)
     for lab in labels:
@@ -74,7 +76,7 @@ def fill(data, omega, clusters, labels):
         hole = (clusters[window] == lab) & omega[window]
         if hole.any():
             origin = (window[0].start, window[1].start)
-            _solve(out[:, window[0], window[1]], origin, hole, omega.shape)
+            _solve(out[:, window[0], window[1]], origin, hole, omega.shape, order)
     return out
 
 

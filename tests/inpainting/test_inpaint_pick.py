@@ -269,3 +269,74 @@ def test_options_are_checked():
         PickOptions(route=1)
     with pytest.raises(InputError, match="spectral must be SpectralOptions"):
         PickOptions(spectral=3)
+
+
+def test_a_gaussian_field_is_told_from_texture_and_edges():
+    from scipy import ndimage
+
+    from clpde.inpainting import fields
+    from tests.cases.inpaint_corpus import fractal
+
+    ok = np.ones((96, 96), bool)
+    rough = fractal(0, 96).astype(float)
+    assert fields.gaussian(rough, ok)
+    assert fields.power_law(rough, ok) < fields.SMOOTH_ALPHA  # 0.68
+    smooth = ndimage.gaussian_filter(np.random.default_rng(0).standard_normal((96, 96)), 6)
+    assert fields.gaussian(smooth, ok)
+    assert fields.power_law(smooth, ok) >= fields.SMOOTH_ALPHA  # 1.94
+    # fine texture: Gaussian, but its variogram stops growing within a few pixels
+    assert fields.gaussian(_texture().astype(float), ok)
+    assert np.isnan(fields.power_law(_texture().astype(float), ok))
+    # an edge under noise: Gaussian differences between pixels (kurtosis 2.96), but not
+    # between 2 x 2 bins (3.68), where the noise is halved and the edge stays
+    y, x = np.mgrid[0:96, 0:96]
+    step = 50.0 * (x > 0.6 * y + 20) + np.random.default_rng(0).normal(0, 20, (96, 96))
+    assert abs(fields._kurtosis(fields._differences(step, ok)) - 3) < fields.KURTOSIS_BAND
+    assert not fields.gaussian(step, ok)
+    assert not fields.gaussian(_tiles().astype(float), ok)
+
+
+def test_voids_in_a_rough_gaussian_field_take_the_harmonic_fill():
+    from clpde.inpainting import smooth
+    from tests.cases.inpaint_corpus import fractal
+
+    image = fractal(1, 96)
+    mask = _disc(image.shape, 40, 44, 9) | _disc(image.shape, 75, 20, 6)
+    clusters, count, _ = pick.clusters_of(mask)
+    host = smooth.fill(np.where(mask, 0.0, image)[None], mask, clusters, [1, 2], order=1)[0]
+    out = _run(np.where(mask, np.nan, image), mask, "pick")
+    assert np.allclose(out[mask], host[mask], rtol=0, atol=1e-3)
+    spectral = clpde.inpaint(image, mask, method="pick", progress=False, seed=0, route=False)
+    error = {
+        k: np.sqrt(np.mean((v[mask] - image[mask]) ** 2))
+        for k, v in (("pick", out), ("spectral", spectral))
+    }
+    assert error["pick"] < error["spectral"], error
+
+
+def test_the_host_harmonic_fill_keeps_a_plane_not_a_quadratic():
+    from clpde.inpainting import smooth
+
+    y, x = np.mgrid[0:64, 0:72] / 64.0
+    mask = _disc((64, 72), 30, 30, 9)
+    clusters, _, _ = pick.clusters_of(mask)
+    plane = (0.3 + 0.2 * x - 0.1 * y)[None]
+    out = smooth.fill(np.where(mask, 0.0, plane), mask, clusters, [1], order=1)
+    assert np.abs(out - plane).max() < 1e-9
+    bowl = (0.3 + 0.2 * x**2 + 0.2 * y**2)[None]
+    out = smooth.fill(np.where(mask, 0.0, bowl), mask, clusters, [1], order=1)
+    assert np.abs(out - bowl)[0][mask].max() > 1e-3  # (the biharmonic fill keeps it)
+    out = smooth.fill(np.where(mask, 0.0, bowl), mask, clusters, [1])
+    assert np.abs(out - bowl)[0][mask].max() < 1e-9
+
+
+def test_a_large_harmonic_cluster_is_solved_on_the_device_alike(monkeypatch):
+    from tests.cases.inpaint_corpus import fractal
+
+    image = fractal(1, 96)
+    mask = _disc(image.shape, 40, 44, 9)
+    host = _run(image, mask, "pick")
+    monkeypatch.setattr(pick, "HOST_MAX", 100)  # the void over it: the device's solve
+    device = _run(image, mask, "pick")
+    assert not np.array_equal(host, device)
+    assert np.abs(host[mask] - device[mask]).max() < 0.01 * np.ptp(image)
