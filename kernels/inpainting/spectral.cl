@@ -115,10 +115,10 @@
 #define IDXV int8
 #endif
 #define LANES ((IDXV)(0, 1, 2, 3, 4, 5, 6, 7))
-// LOAD8 and STORE8: 8 consecutive REALs at p as a vector, in plain element accesses (PoCL's
-// CPU compiler left vload8 and vstore8, and select and fmax on vectors, as calls to its
-// library, about half of a pick's time; element accesses at consecutive addresses become
-// one vector load or store)
+// LOAD8 and STORE8: 8 consecutive REALs at p as a vector, in plain element accesses. PoCL's
+// CPU compiler left vload8 and vstore8 (and select and fmax on vectors) as calls into its
+// library, each vector spilled to the stack around the call: the kernel took 3.4x its time
+// now. Element accesses at consecutive addresses become one unaligned vector load or store.
 #define LOAD8(p) \
     ((REALV)((p)[0], (p)[1], (p)[2], (p)[3], (p)[4], (p)[5], (p)[6], (p)[7]))
 #define STORE8(v, p)                                                                       \
