@@ -133,18 +133,18 @@ def _waves(hole_sat, pixels, pairs, border: int, delta: float):
     filled_n = np.zeros(n, np.int64)
     block_wave = np.full(n, -1, np.int64)
     pending = np.ones(n, bool)
+    rank = np.full(n, -1, np.int64)
     order, waves, first = [], [], 0
     while pending.any():
         idx = np.flatnonzero(pending)
-        every = (known_n + delta * filled_n) / area  # (the pending blocks' are read)
-        score = every[idx]
+        score = (known_n[idx] + delta * filled_n[idx]) / area[idx]
+        # unique ranks: the larger score first, then the lower index
+        rank[idx[np.lexsort((-idx, score))]] = np.arange(idx.size)
         live = pending[pi] & pending[pj]
         pi, pj, overlap = pi[live], pj[live], overlap[live]
-        # a block comes first unless a pending neighbour outranks it: a larger score, or an
-        # equal one and a lower index (a ranking by sort cost more than these comparisons)
-        si, sj = every[pi], every[pj]
+        # a block comes first unless a pending neighbour outranks it
         outranked = np.zeros(n, bool)
-        outranked[pi[(sj > si) | ((sj == si) & (pj < pi))]] = True
+        outranked[pi[rank[pj] > rank[pi]]] = True
         ok = (score > 0) | (score.max() <= 0)
         chosen = idx[~outranked[idx] & ok]
         block_wave[chosen] = len(waves)
