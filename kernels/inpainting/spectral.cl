@@ -55,11 +55,12 @@
 // rounding).
 //
 // Local memory: X = (w (f - plane), w | W re, W im, columns WS apart); T = (row transforms, or
-// the picks' coefficients | qa, qb, qc, R re, R im on the
-// candidates' slots). With one candidate at a time X and T are 31 KB in float, 62 KB in
-// double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
-// too small) they live in `scratch`, SPECTRAL_SCRATCH REALs per work-group of global
-// memory, and the barriers fence global memory too; the arithmetic is the same.
+// the picks' coefficients | qa, qb, qc, R re, R im on the candidates' slots). With one
+// candidate at a time X and T are 31 KB in float, 62 KB in double: more than the 32 KB that
+// OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host
+// where the device's local memory is too small) they live in `scratch`, SPECTRAL_SCRATCH REALs
+// per work-group of global memory, and the barriers fence global memory too; the arithmetic is
+// the same.
 #include "common.h"
 
 #define SPECTRAL_MAXL 32    // largest window
@@ -139,22 +140,23 @@
 // (in the lane) that holds it (a larger score replaces it, an equal one does not). The first
 // pass and every update after a pick score alike. A spare slot's score is NaN (its qa),
 // which never wins: NaN is greater than nothing.
-#define STORE_AND_SCORE(rr, ri, j0, top, at)                                                \
+#define STORE_AND_SCORE(rr, ri, j0, top, at)                                              \
     do {                                                                                  \
-        STORE8((rr), rre + (j0));                                                     \
-        STORE8((ri), rim + (j0));                                                     \
-        const REALV score_ = (LOAD8(qa + (j0)) * (rr) + LOAD8(qb + (j0)) * (ri)) * (rr) \
-                             + LOAD8(qc + (j0)) * (ri) * (ri);                        \
+        STORE8((rr), rre + (j0));                                                         \
+        STORE8((ri), rim + (j0));                                                         \
+        const REALV score_ = (LOAD8(qa + (j0)) * (rr) + LOAD8(qb + (j0)) * (ri)) * (rr)   \
+                             + LOAD8(qc + (j0)) * (ri) * (ri);                            \
         const IDXV better_ = score_ > (top);                                              \
-        (top) = better_ ? score_ : (top);                                           \
-        (at) = better_ ? (IDXV)(j0) + LANES : (at);                                 \
+        (top) = better_ ? score_ : (top);                                                 \
+        (at) = better_ ? (IDXV)(j0) + LANES : (at);                                       \
     } while (0)
 
 // (bs, bi): the largest of an item's scores, from its lanes' running argmax (top, at), and
 // the first slot that holds it; (-1, 0) where none exceeds -1. The same choice as a running
 // argmax over the slots in order (a larger score, or an equal one earlier, wins): each
 // lane's first slot of its largest score, then the first of the lanes that reach the
-// maximum. (A pass of its own over stored scores cost a tenth of a pick.)
+// maximum. (Storing the scores and a pass of its own to find the slot cost a fifth of a
+// thin fill's time on PoCL.)
 inline void first_best(const REALV top, const IDXV at, REAL* bs, int* bi)
 {
     // (ternaries: no NaN reaches top, and PoCL calls its library for fmax and min)
