@@ -28,6 +28,7 @@ from ._compensate import fit_gain
 from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
+from ._scratch_fill import mend_scratches
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
 from .lines import LINE_COVER
 
@@ -547,11 +548,14 @@ def inpaint_video(
         """Frame t after the spatial fallback, its grain and the keep (one frame's inputs
         and fill only: the frames run in threads)."""
         frame = out[t]
-        if unfilled[t].any():
+        hole = unfilled[t]
+        if kinds is not None and T > 1:  # detected scratches: their profile taken out
+            lines = (kinds[t] == SCRATCH) & (m[t] > 0)
+            frame, hole = mend_scratches(frame, planes[t], m[t], lines, hole)
+        if hole.any():
             # only the pixels no neighbour filled: the temporal fills around them are its
             # context (before filmfill the hole grew by 1 px into them, and on calibration
             # the 12% of damaged pixels so overwritten lost 4.5 dB: 27.4 -> 22.9)
-            hole = unfilled[t]
             if hole.all():  # a lost frame: nothing in it to fill from spatially
                 filled = _neighbour_mean(planes, m, t, radius)
             else:

@@ -52,8 +52,9 @@ def test_scratch_every_neighbour_carries_is_repaired_and_a_false_alarm_is_not(rn
         before = np.abs(dirty[t][band] - clean[t][band]).mean()
         assert np.abs(out[t][band] - clean[t][band]).mean() < 0.25 * before, t
     assert _harm(out[0], dirty[0]) == 0
-    # the test's false alarm is one a fill without the self-check harms
-    assert _harm(clpde.inpaint_video(dirty, masks, kinds=kinds)[0], dirty[0]) > 0.005
+    # the test's false alarm is one a fill without the self-check harms (the spatial
+    # fill: since filmfill2 a scratch's own fill takes out a profile, which frame 0 lacks)
+    assert _harm(clpde.inpaint_video(dirty, masks)[0], dirty[0]) > 0.005
     old = clpde.inpaint_video(dirty, masks, keep=KEEP)
     for t in range(1, T):
         before = np.abs(dirty[t][band] - clean[t][band]).mean()
