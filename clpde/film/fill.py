@@ -28,6 +28,7 @@ from ._compensate import fit_gain
 from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
+from ._regions import RIM_CLEAR
 from ._scratch_fill import mend_scratches
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
 from .lines import LINE_COVER
@@ -313,7 +314,7 @@ def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
 
 def ring_evidence(frame: np.ndarray, spots: np.ndarray, hole: np.ndarray) -> np.ndarray:
     """The squared distance of each pixel of a frame's detected blotches outside the range
-    (5th to 95th percentile) of its region's ring, 2-4 px out and off the damage: the
+    (5th to 95th percentile) of its region's ring, 3-5 px out and off the damage: the
     spatial counterpart of the temporal residual where no neighbour is trusted, as the
     detector's spatial test (clpde.film._regions._spatially_damage).
 
@@ -341,10 +342,11 @@ def ring_evidence(frame: np.ndarray, spots: np.ndarray, hole: np.ndarray) -> np.
     out = np.zeros(frame.shape, np.float32)
     labels, _ = ndimage.label(spots)
     for idx, sl in enumerate(ndimage.find_objects(labels), start=1):
-        win = tuple(slice(max(s.start - 4, 0), s.stop + 4) for s in sl)
+        win = tuple(slice(max(s.start - RIM_CLEAR[1], 0), s.stop + RIM_CLEAR[1]) for s in sl)
         own = labels[win] == idx
-        ring = dilate(own, 4)
-        ring &= ~dilate(own) & ~hole[win]
+        # the detector's ring: nearer in, a soft rim blends the dirt into the scene
+        ring = dilate(own, RIM_CLEAR[1])
+        ring &= ~dilate(own, RIM_CLEAR[0]) & ~hole[win]
         if ring.sum() < 4:
             continue
         g = frame[win]

@@ -6,11 +6,12 @@ detector's kinds to a filler that takes them."""
 
 import numpy as np
 import pytest
+from scipy import ndimage
 from scipy.ndimage import gaussian_filter
 
 import clpde
 from clpde.film import SCRATCH
-from clpde.film.fill import line_evidence
+from clpde.film.fill import line_evidence, ring_evidence
 from clpde.film.stream import KEEP, WindowWork, restore_stream
 
 T, NY, NX = 5, 72, 96
@@ -149,3 +150,17 @@ def test_scratch_a_neighbour_carries_unflagged_is_repaired(rng):
     before = np.abs(dirty[2][band] - clean[2][band]).mean()
     assert np.abs(out[2][band] - clean[2][band]).mean() < 0.25 * before
     assert np.abs(out[3] - dirty[3]).max() < 1e-6  # unflagged: left as it was
+
+
+def test_ring_evidence_reads_beyond_a_soft_rim():
+    """A blotch's soft rim (dirt blended into the scene, 1-2 px beyond what was detected)
+    must not count as the scene: the evidence is read on the detector's ring, 3-5 px out,
+    so the core's full distance outside the scene's range is kept (a ring 2-4 px out reads
+    the rim's 0.4 and keeps less than half)."""
+    spots = np.zeros((40, 40), bool)
+    spots[16:24, 16:24] = True
+    # the steps out from the blotch, as the rings count them (4-connected)
+    d = ndimage.distance_transform_cdt(~spots, metric="taxicab")
+    g = np.select([spots, d == 1, d == 2], [0.2, 0.3, 0.4], 0.5).astype(np.float32)
+    ev = ring_evidence(g, spots, spots)
+    assert np.allclose(ev[spots], 0.09, atol=1e-6)
