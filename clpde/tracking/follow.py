@@ -45,6 +45,7 @@ from .appearance import (
     object_motion,
 )
 from .levelset import LevelSet, signed_distance
+from .local_trust import believed, trust_map
 from .motion_filter import local_contrast
 from .occlusion import (
     LOST,
@@ -83,7 +84,7 @@ GROW = 6
 # The prediction's prior: log odds of the surroundings = signed distance / PRIOR_SCALE,
 # within +-PRIOR_CAP.
 PRIOR_SCALE, PRIOR_CAP = 2.0, 3.0
-# The appearance's evidence is scaled by 1 - e / RELIABLE_ERROR (`_reliability`); 0: not.
+# The appearance's evidence is scaled by 1 - e / RELIABLE_ERROR (local_trust.believed); 0: not.
 # RELIABLE_ERROR and RING_LO, RING_HI: chosen on the calibration half of
 # benchmarks/track_photo_corpus.py among the settings with which every promise of
 # tests/tracking holds (docs/tracking.md, "One default").
@@ -148,23 +149,6 @@ def _at_channels(stack: np.ndarray, a: np.ndarray, where: np.ndarray) -> np.ndar
 def _warp_values(u: np.ndarray, a: np.ndarray) -> np.ndarray:
     """The level set u carried by the motion `a` (object_motion's map): u read at A x."""
     return ndimage.affine_transform(u, a[:, :2], a[:, 2], order=1, mode="nearest")
-
-
-def _reliability(ratio: np.ndarray, mask: np.ndarray) -> float:
-    """How far the appearance's log ratio can be believed, from how it classified a
-    frame's result: its error, the share of the mask's interior (2 px in) that looks like
-    the surroundings plus the share of the ring 2-8 px out that looks like the object, e;
-    1 - e / RELIABLE_ERROR, within [0, 1]. (A look-alike beside the object, a shadow over
-    it: its pixels look like something else, and the evidence would erode it.)"""
-    if not RELIABLE_ERROR:
-        return 1.0
-    inner = erode(mask, 2)
-    near = dilate(mask, 2)
-    ring = dilate(near, 6) & ~near
-    if not inner.any() or not ring.any():
-        return 1.0
-    error = float((ratio[inner] > 0).mean() + (ratio[ring] < 0).mean())
-    return float(np.clip(1 - error / RELIABLE_ERROR, 0, 1))
 
 
 def _drop_strays(mask: np.ndarray, predicted: np.ndarray) -> np.ndarray:
@@ -287,11 +271,12 @@ class ObjectFollower:
         weight = tracker.options.appearance_weight
         self.model = AppearanceModel(colour=self.looks is not None and self.looks.shape[1] >= 3)
         self.term = AppearanceTerm(ls, weight) if weight else None
-        self.reliability = 1.0  # the share of the appearance's evidence believed
+        self.reliability, self._errors = 1.0, None  # the share believed (and local_trust's)
         if self.term is not None:
             bins = self.model.bins(self.looks[0])
             self.model.learn(bins, self.shape)
-            self.reliability = _reliability(self.model.log_ratio(bins, self.shape), self.shape)
+            ratio = self.model.log_ratio(bins, self.shape)
+            self.reliability, self._errors = believed(ratio, self.shape, RELIABLE_ERROR)
         self._bins, self._bins_t = None, None  # frame _bins_t's bins
         self._match_cache = {}
         self._grey_t = {}  # frames' appearance.gradients, the pair in use
@@ -456,8 +441,10 @@ class ObjectFollower:
         # (capped at PRIOR_CAP), so that ambiguous looks leave the predicted shape as it is
         # and only clear evidence carves it or grows it
         self._looks_ratio = self.model.log_ratio(self._bins, predicted)
-        trust = self._trust(t, a, predicted)
-        if still or self.hidden or trust <= 0:  # (hidden: the occluder's rules hold)
+        # believed where the last result's neighbourhood earned it (not while hidden)
+        errors = None if self.hidden else self._errors
+        trust = trust_map(self._trust(t, a, predicted), errors, RELIABLE_ERROR)
+        if still or self.hidden or np.max(trust) <= 0:  # (hidden: the occluder's rules hold)
             self._grown = predicted
         else:
             self._grown = grow_parts(predicted, trust * self._looks_ratio)
@@ -544,7 +531,7 @@ class ObjectFollower:
         else:
             mask = _drop_strays(mask, self.predicted)
         if self.term is not None and mask.any():
-            self.reliability = _reliability(self._looks_ratio, mask)
+            self.reliability, self._errors = believed(self._looks_ratio, mask, RELIABLE_ERROR)
             # the object's model learns the pixels that did not look clearly like the
             # surroundings: a strip of an occluder taken in by mistake is not learned
             self.model.learn(self._bins, mask & (self._looks_ratio < LEARN_BELOW))

@@ -55,11 +55,12 @@
 // rounding).
 //
 // Local memory: X = (w (f - plane), w | W re, W im, columns WS apart); T = (row transforms, or
-// the picks' coefficients | qa, qb, qc, R re, R im (and, with vectors, the scores) on the
-// candidates' slots). With one candidate at a time X and T are 31 KB in float, 62 KB in
-// double: more than the 32 KB that OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host where the device's local memory is
-// too small) they live in `scratch`, SPECTRAL_SCRATCH REALs per work-group of global
-// memory, and the barriers fence global memory too; the arithmetic is the same.
+// the picks' coefficients | qa, qb, qc, R re, R im on the candidates' slots). With one
+// candidate at a time X and T are 31 KB in float, 62 KB in double: more than the 32 KB that
+// OpenCL promises (and NVIDIA's 48 KB per kernel). With SPECTRAL_SPILL=1 (chosen by the host
+// where the device's local memory is too small) they live in `scratch`, SPECTRAL_SCRATCH REALs
+// per work-group of global memory, and the barriers fence global memory too; the arithmetic is
+// the same.
 #include "common.h"
 
 #define SPECTRAL_MAXL 32    // largest window
@@ -93,7 +94,7 @@
 // vectors), then the picks' coefficients
 #define SPECTRAL_T0 \
     (SPECTRAL_VW > 1 ? 2 * SPECTRAL_MAXL * ((SPECTRAL_MAXL / 2 + 8) / 8 * 8) : 2 * SPECTRAL_MAXH)
-#define SPECTRAL_TN (SPECTRAL_T0 + (SPECTRAL_VW > 1 ? 6 : 5) * SPECTRAL_SLOTS)
+#define SPECTRAL_TN (SPECTRAL_T0 + 5 * SPECTRAL_SLOTS)
 #define SPECTRAL_SCRATCH (SPECTRAL_XN + SPECTRAL_TN)
 
 #ifndef SPECTRAL_SPILL
@@ -108,42 +109,71 @@
 #endif
 
 #if SPECTRAL_VW > 1
-// a vector of 8 candidates' residual transform (rr, ri) stored at j0, their scores stored
-// in sc and folded into the lane-wise maximum top: the first pass and every update after a
-// pick score alike. A spare slot's score is NaN (its qa), which never wins: fmax keeps the
-// other operand, and NaN equals nothing.
-#define STORE_AND_SCORE(rr, ri, j0, top)                                                    \
+// the lanes' slot indices (the comparisons of two REALVs give this type)
+#ifdef REAL_IS_DOUBLE
+#define IDXV long8
+#else
+#define IDXV int8
+#endif
+#define LANES ((IDXV)(0, 1, 2, 3, 4, 5, 6, 7))
+// LOAD8 and STORE8: 8 consecutive REALs at p as a vector, in plain element accesses. PoCL's
+// CPU compiler left vload8 and vstore8 (and select and fmax on vectors) as calls into its
+// library, each vector spilled to the stack around the call: the kernel took 3.4x its time
+// now. Element accesses at consecutive addresses become one unaligned vector load or store.
+#define LOAD8(p) \
+    ((REALV)((p)[0], (p)[1], (p)[2], (p)[3], (p)[4], (p)[5], (p)[6], (p)[7]))
+#define STORE8(v, p)                                                                       \
     do {                                                                                  \
-        vstore8((rr), 0, rre + (j0));                                                     \
-        vstore8((ri), 0, rim + (j0));                                                     \
-        const REALV score_ = (vload8(0, qa + (j0)) * (rr) + vload8(0, qb + (j0)) * (ri)) * (rr) \
-                             + vload8(0, qc + (j0)) * (ri) * (ri);                        \
-        vstore8(score_, 0, sc + (j0));                                                    \
-        (top) = fmax((top), score_);                                                      \
+        const REALV v_ = (v);                                                             \
+        SPACE REAL* const p_ = (p);                                                       \
+        p_[0] = v_.s0;                                                                    \
+        p_[1] = v_.s1;                                                                    \
+        p_[2] = v_.s2;                                                                    \
+        p_[3] = v_.s3;                                                                    \
+        p_[4] = v_.s4;                                                                    \
+        p_[5] = v_.s5;                                                                    \
+        p_[6] = v_.s6;                                                                    \
+        p_[7] = v_.s7;                                                                    \
+    } while (0)
+// a vector of 8 candidates' residual transform (rr, ri) stored at j0, their scores folded
+// into a lane-wise running argmax: top, each lane's largest score, and at, the first slot
+// (in the lane) that holds it (a larger score replaces it, an equal one does not). The first
+// pass and every update after a pick score alike. A spare slot's score is NaN (its qa),
+// which never wins: NaN is greater than nothing.
+#define STORE_AND_SCORE(rr, ri, j0, top, at)                                              \
+    do {                                                                                  \
+        STORE8((rr), rre + (j0));                                                         \
+        STORE8((ri), rim + (j0));                                                         \
+        const REALV score_ = (LOAD8(qa + (j0)) * (rr) + LOAD8(qb + (j0)) * (ri)) * (rr)   \
+                             + LOAD8(qc + (j0)) * (ri) * (ri);                            \
+        const IDXV better_ = score_ > (top);                                              \
+        (top) = better_ ? score_ : (top);                                                 \
+        (at) = better_ ? (IDXV)(j0) + LANES : (at);                                       \
     } while (0)
 
-// (bs, bi): the largest of an item's scores sc (vectors lid, lid + GROUP, ... of nv), top
-// their lane-wise maximum, and the first slot that holds it; (-1, 0) where none exceeds -1.
-// The same choice as a running argmax (a larger score, or an equal one earlier, wins), in a
-// maximum the compiler vectorises and a search that ends at the first hit: vector by vector,
-// then in the vector that holds it.
-inline void first_best(SPACE const REAL* sc, const int nv, const int lid, const REALV top,
-                       REAL* bs, int* bi)
+// (bs, bi): the largest of an item's scores, from its lanes' running argmax (top, at), and
+// the first slot that holds it; (-1, 0) where none exceeds -1. The same choice as a running
+// argmax over the slots in order (a larger score, or an equal one earlier, wins): each
+// lane's first slot of its largest score, then the first of the lanes that reach the
+// maximum. (Storing the scores and a pass of its own to find the slot cost a fifth of a
+// thin fill's time on PoCL.)
+inline void first_best(const REALV top, const IDXV at, REAL* bs, int* bi)
 {
-    const REAL m = fmax(fmax(fmax(top.s0, top.s1), fmax(top.s2, top.s3)),
-                        fmax(fmax(top.s4, top.s5), fmax(top.s6, top.s7)));
+    // (ternaries: no NaN reaches top, and PoCL calls its library for fmax and min)
+#define HI(a, b) ((a) > (b) ? (a) : (b))
+#define LO(a, b) ((a) < (b) ? (a) : (b))
+    const REAL m = HI(HI(HI(top.s0, top.s1), HI(top.s2, top.s3)),
+                      HI(HI(top.s4, top.s5), HI(top.s6, top.s7)));
     *bs = -1;
     *bi = 0;
     if (!(m > -1)) return;
-    for (int v = lid; v < nv; v += SPECTRAL_GROUP) {
-        if (!any(vload8(v, sc) == m)) continue;
-        for (int j = 8 * v; j < 8 * v + 8; ++j)
-            if (sc[j] == m) {
-                *bs = m;
-                *bi = j;
-                return;
-            }
-    }
+    const IDXV far = (IDXV)(0x7fffffff);
+    const IDXV cand = top == m ? at : far;
+    *bs = m;
+    *bi = (int)LO(LO(LO(cand.s0, cand.s1), LO(cand.s2, cand.s3)),
+                  LO(LO(cand.s4, cand.s5), LO(cand.s6, cand.s7)));
+#undef HI
+#undef LO
 }
 #endif
 
@@ -230,9 +260,6 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
     SPACE REAL* const qc = qb + SPECTRAL_SLOTS;
     SPACE REAL* const rre = qc + SPECTRAL_SLOTS;
     SPACE REAL* const rim = rre + SPECTRAL_SLOTS;
-#if SPECTRAL_VW > 1
-    SPACE REAL* const sc = rim + SPECTRAL_SLOTS;  // the candidates' scores
-#endif
     const int WS = W_STRIDE(L);
     SPACE REAL* const wre = X + 2 * LL;  // W, columns WS apart
     SPACE REAL* const wim = wre + L * WS;
@@ -290,11 +317,11 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REALV wr = 0, wi = 0;
         for (int n = 0; n < L; ++n) {
             const REAL w = X[LL + m * L + n];
-            wr += w * vload8(0, twc + n * CS + k0);
-            wi -= w * vload8(0, tws + n * CS + k0);
+            wr += w * LOAD8(twc + n * CS + k0);
+            wi -= w * LOAD8(tws + n * CS + k0);
         }
-        vstore8(wr, 0, T + m * CS + k0);
-        vstore8(wi, 0, T + L * CS + m * CS + k0);
+        STORE8(wr, T + m * CS + k0);
+        STORE8(wi, T + L * CS + m * CS + k0);
     }
     barrier(FENCE);
     for (int i = lid; i < L * (CS / 8); i += SPECTRAL_GROUP) {
@@ -302,13 +329,13 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
         REALV wr = 0, wi = 0;
         for (int m = 0; m < L; ++m) {
             const REAL a = T[m * CS + kx], b = T[L * CS + m * CS + kx];
-            const REALV c = vload8(0, twc + m * CS + k0), s = vload8(0, tws + m * CS + k0);
+            const REALV c = LOAD8(twc + m * CS + k0), s = LOAD8(tws + m * CS + k0);
             wr += a * c + b * s;
             wi += b * c - a * s;
         }
         // lanes past L land in the columns' continuation, written after the next barrier
-        vstore8(wr, 0, wre + kx * WS + k0);
-        vstore8(wi, 0, wim + kx * WS + k0);
+        STORE8(wr, wre + kx * WS + k0);
+        STORE8(wi, wim + kx * WS + k0);
     }
 #else
     for (int i = lid; i < LL; i += SPECTRAL_GROUP) {
@@ -464,26 +491,27 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
             REALV ar = 0, ai = 0;
             for (int n = 0; n < L; ++n) {
                 const REAL a = X[m * L + n];
-                ar += a * vload8(0, twc + n * CS + k0);
-                ai -= a * vload8(0, tws + n * CS + k0);
+                ar += a * LOAD8(twc + n * CS + k0);
+                ai -= a * LOAD8(tws + n * CS + k0);
             }
-            vstore8(ar, 0, rows + m * HS + k0);
-            vstore8(ai, 0, rows + L * HS + m * HS + k0);
+            STORE8(ar, rows + m * HS + k0);
+            STORE8(ai, rows + L * HS + m * HS + k0);
         }
         barrier(FENCE);
         REALV top = -1;
+        IDXV at = 0;
         for (int v = lid; v < NC / 8; v += SPECTRAL_GROUP) {
             const int kx = v / (CS / 8), ky = 8 * v - kx * CS, j0 = 8 * v;  // 8 ky from ky
             REALV rr = 0, ri = 0;
             for (int m = 0; m < L; ++m) {
                 const REAL ar = rows[m * HS + kx], ai = rows[L * HS + m * HS + kx];
-                const REALV c = vload8(0, twc + m * CS + ky), s = vload8(0, tws + m * CS + ky);
+                const REALV c = LOAD8(twc + m * CS + ky), s = LOAD8(tws + m * CS + ky);
                 rr += ar * c + ai * s;
                 ri += ai * c - ar * s;
             }
-            STORE_AND_SCORE(rr, ri, j0, top);
+            STORE_AND_SCORE(rr, ri, j0, top, at);
         }
-        first_best(sc, NC / 8, lid, top, &bs, &bi);
+        first_best(top, at, &bs, &bi);
 #else
         for (int i = lid; i < L * H; i += SPECTRAL_GROUP) {
             const int m = i / H, k = i - m * H;
@@ -586,6 +614,7 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                 // W's continued columns, and the scores' argmax in a pass of its own (a running
                 // argmax kept the compiler from vectorising the loop). The same arithmetic.
                 REALV top = -1;
+                IDXV at = 0;
                 // column by column (CS / 8 vectors each), so that the column's offsets into
                 // W are found once; the item's vectors of a column, v = lid mod GROUP
                 for (int lx = 0, v0 = 0; v0 < NC / 8; ++lx, v0 += CS / 8) {
@@ -596,19 +625,19 @@ void spectral_blocks(__global REAL* img, __global const int* wave_of,
                     const int mine = (lid + SPECTRAL_GROUP - v0 % SPECTRAL_GROUP) % SPECTRAL_GROUP;
                     for (int v = v0 + mine; v < v0 + CS / 8; v += SPECTRAL_GROUP) {
                         const int j0 = 8 * v, ly = j0 - 8 * v0;
-                        const REALV ar = vload8(0, wre + dm0 + ly), ai = vload8(0, wim + dm0 + ly);
+                        const REALV ar = LOAD8(wre + dm0 + ly), ai = LOAD8(wim + dm0 + ly);
                         REALV ur = cr * ar - ci * ai, ui = cr * ai + ci * ar;
                         if (!self) {
-                            const REALV pr = vload8(0, wre + dp0 + ly);
-                            const REALV pi = vload8(0, wim + dp0 + ly);
+                            const REALV pr = LOAD8(wre + dp0 + ly);
+                            const REALV pi = LOAD8(wim + dp0 + ly);
                             ur += cr * pr + ci * pi;
                             ui += cr * pi - ci * pr;
                         }
-                        const REALV rr = vload8(0, rre + j0) - ur, ri = vload8(0, rim + j0) - ui;
-                        STORE_AND_SCORE(rr, ri, j0, top);
+                        const REALV rr = LOAD8(rre + j0) - ur, ri = LOAD8(rim + j0) - ui;
+                        STORE_AND_SCORE(rr, ri, j0, top, at);
                     }
                 }
-                first_best(sc, NC / 8, lid, top, &bs, &bi);
+                first_best(top, at, &bs, &bi);
 #else
                 bs = -1;
                 bi = 0;

@@ -196,6 +196,37 @@ def test_new_size_and_channel_count_build_no_program(runtime, monkeypatch):
     assert builds == []
 
 
+def test_fills_in_two_threads_at_once_match_their_own_fills(runtime):
+    # each thread launches its own kept instance of the kernel (spectral._bare_kernel): one
+    # instance shared between threads would launch one fill's blocks on the other's buffers
+    import threading
+
+    rng = np.random.default_rng(4)
+    jobs = [(rng.random((c, 40, 48)), _scratches(40, 48, seed=c)) for c in (1, 3)]
+    alone = [spectral.fill(d, m, runtime, **SMALL) for d, m in jobs]
+    got = [[], []]
+
+    def run(k):
+        for _ in range(4):
+            got[k].append(spectral.fill(*jobs[k], runtime, **SMALL))
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in (0, 1)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for k in (0, 1):
+        assert len(got[k]) == 4
+        assert all(np.array_equal(g, alone[k]) for g in got[k])
+    program = spectral.fitting_kernel(runtime, np.dtype(np.float32))[0].cl_kernel.program
+    mine = spectral._bare_kernel(program)
+    theirs = []
+    other = threading.Thread(target=lambda: theirs.append(spectral._bare_kernel(program)))
+    other.start()
+    other.join()
+    assert spectral._bare_kernel(program) is mine and theirs[0] is not mine
+
+
 def test_bad_options_are_refused():
     image = np.zeros((20, 20), np.uint8)
     mask = np.zeros((20, 20), bool)
