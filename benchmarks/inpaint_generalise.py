@@ -4,6 +4,7 @@ one run, on both halves of tests/cases/inpaint_corpus.py's corpus.
     python benchmarks/inpaint_generalise.py [--quick] [--half test|calibration|both]
                                             [--only NAME,...] [--skip NAME,...] [--slice A:B]
                                             [--extra NAME,...] [--json PATH]
+                                            [--damage CLASS,...] [--more]
                                             [--log PATH] [--from-log LOG ...]
 
 Methods (every peer's settings fixed before any result was looked at):
@@ -123,6 +124,20 @@ def biharmonic(image, mask, case):
     return cast(inpaint_biharmonic(data, mask, channel_axis=case.channel_axis), image.dtype)
 
 
+def harmonic(image, mask, case):
+    """The harmonic fill (Laplacian zero) of each cluster of the hole, on the host: the fill
+    pick's Gaussian route gives rough fields (clpde/inpainting/smooth.py, order 1)."""
+    from clpde.inpainting import pick, smooth
+
+    planes = np.asarray(image, np.float64)
+    planes = planes[None] if planes.ndim == 2 else np.moveaxis(planes, -1, 0)
+    planes = np.where(mask, 0.0, planes)
+    clusters, count, _ = pick.clusters_of(mask)
+    out = smooth.fill(planes, mask, clusters, np.arange(1, count + 1), order=1)
+    out = out[0] if np.asarray(image).ndim == 2 else np.moveaxis(out, 0, -1)
+    return cast(np.clip(out, *_range(case)), case.truth.dtype)
+
+
 def opencv(flag):
     def run(image, mask, case):
         import cv2
@@ -220,7 +235,7 @@ def methods():
 
     found = {f"clpde-{name}": clpde_method(name) for name in inpainting.available()}
     found["default"] = clpde_method("default")
-    found.update({"biharmonic": biharmonic})
+    found.update({"biharmonic": biharmonic, "harmonic": harmonic})
     try:
         import cv2
 
@@ -512,6 +527,12 @@ def main(argv=None):
     parser.add_argument(
         "--extra", default="", help=f"comma-separated extra columns: {', '.join(EXTRA)}"
     )
+    parser.add_argument("--damage", default=None, help="comma-separated classes only")
+    parser.add_argument(
+        "--more",
+        action="store_true",
+        help="add tests/cases/inpaint_depth.py's rendered disparity maps (calibration only)",
+    )
     parser.add_argument("--json", type=Path, default=RESULTS)
     parser.add_argument("--log", type=Path, default=None, help="JSON lines, one per result")
     parser.add_argument(
@@ -541,7 +562,14 @@ def main(argv=None):
             found = {k: v for k, v in found.items() if k not in args.skip.split(",")}
         print("methods:", ", ".join(found))
         warm_up(found)
-        cases = interleaved([c for c in corpus.build(args.quick) if c.half in halves])
+        built = corpus.build(args.quick)
+        if args.more:  # (every one on the calibration half: never the test half's cases)
+            from tests.cases import inpaint_depth
+
+            built += inpaint_depth.build()
+        if args.damage:
+            built = [c for c in built if c.damage in args.damage.split(",")]
+        cases = interleaved([c for c in built if c.half in halves])
         if args.slice:
             start, stop = (int(v) if v else None for v in args.slice.split(":"))
             cases = cases[start:stop]

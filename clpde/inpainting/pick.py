@@ -33,6 +33,9 @@ the cluster. Thinner clusters (3-6 px) in smooth surrounds lost on the calibrati
 blobs (-0.42 dB), rougher surrounds on its thick holes. What it costs: one distance
 transform of the box and a window's standard deviation per cluster at least ROUTE_RADIUS
 thick; the routed clusters' host fill replaces the spectral fill's work there.
+A cluster whose window is piecewise smooth (depth.py: a depth map's flat or planar surfaces
+and the jumps between them) is not routed: the biharmonic fill bends the surfaces across the
+jumps, which the spectral fill continues as edges (calibration: rendered disparity maps).
 
 The Gaussian-field route (part of `route`, before the smooth route): a cluster at least
 MIN_RADIUS thick, not periodic and not on a clear edge, whose window is a Gaussian random
@@ -74,7 +77,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
-from . import choose, fields, poisson
+from . import choose, depth, fields, poisson
 from .exemplar import ExemplarOptions
 from .registry import keywords, load, register
 from .smooth import fill as smooth_fill
@@ -231,8 +234,8 @@ def roughness(data, omega, parts, labels, detail=None):
 
 def smooth_clusters(data, omega, parts, periodic, detail=None):
     """The labels of the clusters that the smooth route gives to the biharmonic fill
-    (module docstring): at least ROUTE_RADIUS thick, not periodic, not on a clear edge, and
-    a surround of roughness below ROUGH."""
+    (module docstring): at least ROUTE_RADIUS thick, not periodic, not on a clear edge, a
+    surround of roughness below ROUGH, and not piecewise smooth (depth.py)."""
     clusters, count, radius = parts
     in_period = np.zeros(count + 1, bool)
     in_period[np.unique(clusters[periodic])] = True
@@ -245,6 +248,10 @@ def smooth_clusters(data, omega, parts, periodic, detail=None):
         gap, separation = edge_contrast(data, omega, parts, labels)
         edge = (gap >= EDGE_GAP) & (separation >= EDGE_SEPARATION)
         labels = labels[~edge[labels - 1]]
+    if labels.size:
+        # a piecewise-smooth surround (a depth map's surfaces and jumps): the spectral fill
+        # continues the jumps, the biharmonic one bends the surfaces across them (depth.py)
+        labels = np.setdiff1d(labels, depth.piecewise_smooth(data, omega, clusters, labels, WINDOW))
     return labels
 
 
