@@ -130,16 +130,16 @@ def lattice_offsets(
     k = known.astype(np.float64)
     H, W = k.shape
     shape = (sfft.next_fast_len(H + max_lag + 1, True), sfft.next_fast_len(W + max_lag + 1, True))
-    fk = sfft.rfft2(k, shape)
-
-    def corr(fa, fb):  # sum over p of a(p + lag) b(p)
-        return sfft.irfft2(fa * np.conj(fb), shape)
-
-    sq = np.zeros(shape)
-    for xc in x:
-        fx, fx2 = sfft.rfft2(xc, shape), sfft.rfft2(xc * xc, shape)
-        sq += corr(fx2, fk) + corr(fk, fx2) - 2 * corr(fx, fx)
-    count = corr(fk, fk)
+    # corr(a, b), the sum over p of a(p + lag) b(p), is linear in a and b: the squared
+    # differences summed over the channels, sum_c corr(x_c^2, k) + corr(k, x_c^2) - 2
+    # corr(x_c, x_c), are one inverse transform of a sum of products (with the overlap's
+    # count, two in one call, and the forward ones batched): 2 + channels transforms, not
+    # 4 + 5 per channel (3.3 ms of the exemplar's 6 on the periodic cases, stop 51)
+    f = sfft.rfft2(np.concatenate([k[None], (x * x).sum(axis=0)[None], x]), shape)
+    fk, fx2, fx = f[0], f[1], f[2:]
+    cross = fx2 * np.conj(fk)
+    spec = cross + np.conj(cross) - 2 * (fx * np.conj(fx)).sum(axis=0)
+    sq, count = sfft.irfft2(np.stack([spec, fk * np.conj(fk)]), shape)
     ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
     tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
     ly, lx = np.broadcast_arrays(ty, tx)
