@@ -67,10 +67,12 @@ def _autocorrelation(detail, ok):
     # the transforms in one call each way (a batch: the same values as one by one)
     fd, fd2, fk = sfft.rfft2(np.stack([d, d * d, k]), shape)
     # corr(a, b): sum over p of a(p + lag) b(p)
-    num, e1, e2, count = sfft.irfft2(
-        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fd2), fk * np.conj(fk)]),
-        shape,
+    num, e1, count = sfft.irfft2(
+        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fk)]), shape
     )
+    # corr(k, d^2) at a lag is corr(d^2, k) at the opposite lag (indices mod the shape):
+    # one inverse transform fewer
+    e2 = np.roll(e1[::-1, ::-1], 1, axis=(0, 1))
     ly, lx, lag = _lags(shape)
     # lags whose overlap holds at least a quarter of the known pixels, and some detail
     use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
