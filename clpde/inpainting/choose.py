@@ -67,29 +67,37 @@ def _autocorrelation(detail, ok):
     # the transforms in one call each way (a batch: the same values as one by one)
     fd, fd2, fk = sfft.rfft2(np.stack([d, d * d, k]), shape)
     # corr(a, b): sum over p of a(p + lag) b(p)
-    num, e1, e2, count = sfft.irfft2(
-        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fd2), fk * np.conj(fk)]),
-        shape,
+    num, e1, count = sfft.irfft2(
+        np.stack([fd * np.conj(fd), fd2 * np.conj(fk), fk * np.conj(fk)]), shape
     )
-    ly, lx, lag = _lags(shape)
+    # only the lags looked at (the corners of the transform, in its row-major order: the
+    # same lags in the same order as masking the whole of it, a third of the work); corr(k,
+    # d^2) at a lag is corr(d^2, k) at the opposite lag: one inverse transform fewer
+    idx, opposite, ly, lx = _lags(shape)
+    e2 = e1.ravel()[opposite]
+    num, e1, count = (a.ravel()[idx] for a in (num, e1, count))
     # lags whose overlap holds at least a quarter of the known pixels, and some detail
-    use = (lag >= LAGS[0]) & (lag <= LAGS[1]) & (count > 0.25 * k.sum())
-    use &= np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1)
-    lags = np.stack([ly[use], lx[use]], -1).astype(np.int64)
-    return lags, num[use] / np.sqrt(e1[use] * e2[use])
+    use = (count > 0.25 * k.sum()) & (np.minimum(e1, e2) > 1e-12 * np.maximum(count, 1))
+    return np.stack([ly[use], lx[use]], -1), num[use] / np.sqrt(e1[use] * e2[use])
 
 
 @functools.lru_cache(maxsize=64)
 def _lags(shape):
-    """(ly, lx, lag) over a transform of `shape`: each entry's lag (rows, columns) and its
-    chessboard length (read-only: shared by every call of that shape)."""
+    """(idx, opposite, ly, lx) over a transform of `shape`: the flat indices, in row-major
+    order, of the entries whose lag's chessboard length is within LAGS, those of the
+    opposite lags (mod the shape), and the lags (rows, columns; int64) (read-only: shared
+    by every call of that shape)."""
     ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
     tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
     ly, lx = (np.array(a) for a in np.broadcast_arrays(ty, tx))
     lag = np.maximum(np.abs(ly), np.abs(lx))
-    for a in (ly, lx, lag):
+    idx = np.flatnonzero((lag >= LAGS[0]) & (lag <= LAGS[1]))
+    ly, lx = (a.ravel()[idx].astype(np.int64) for a in (ly, lx))
+    opposite = (-ly % shape[0]) * shape[1] + (-lx % shape[1])
+    out = (idx, opposite, ly, lx)
+    for a in out:
         a.flags.writeable = False
-    return ly, lx, lag
+    return out
 
 
 def repeat(detail, ok) -> float:
@@ -130,16 +138,16 @@ def lattice_offsets(
     k = known.astype(np.float64)
     H, W = k.shape
     shape = (sfft.next_fast_len(H + max_lag + 1, True), sfft.next_fast_len(W + max_lag + 1, True))
-    fk = sfft.rfft2(k, shape)
-
-    def corr(fa, fb):  # sum over p of a(p + lag) b(p)
-        return sfft.irfft2(fa * np.conj(fb), shape)
-
-    sq = np.zeros(shape)
-    for xc in x:
-        fx, fx2 = sfft.rfft2(xc, shape), sfft.rfft2(xc * xc, shape)
-        sq += corr(fx2, fk) + corr(fk, fx2) - 2 * corr(fx, fx)
-    count = corr(fk, fk)
+    # corr(a, b), the sum over p of a(p + lag) b(p), is linear in a and b: the squared
+    # differences summed over the channels, sum_c corr(x_c^2, k) + corr(k, x_c^2) - 2
+    # corr(x_c, x_c), are one inverse transform of a sum of products (with the overlap's
+    # count, two in one call, and the forward ones batched): 2 + channels transforms, not
+    # 4 + 5 per channel (3.3 ms of the exemplar's 6 on the periodic cases, stop 51)
+    f = sfft.rfft2(np.concatenate([k[None], (x * x).sum(axis=0)[None], x]), shape)
+    fk, fx2, fx = f[0], f[1], f[2:]
+    cross = fx2 * np.conj(fk)
+    spec = cross + np.conj(cross) - 2 * (fx * np.conj(fx)).sum(axis=0)
+    sq, count = sfft.irfft2(np.stack([spec, fk * np.conj(fk)]), shape)
     ty = sfft.fftfreq(shape[0], 1 / shape[0])[:, None]
     tx = sfft.fftfreq(shape[1], 1 / shape[1])[None, :]
     ly, lx = np.broadcast_arrays(ty, tx)

@@ -43,21 +43,22 @@ def vote_sources(
     H, W = hole.shape
     py, px = np.nonzero(hole)
     inv = 1.0 / (2 * max(float(sigma2), 1e-10))
-    best = np.full(py.size, np.inf)
-    src = np.full(py.size, -1, np.int64)
-    offy = np.zeros(py.size, np.int64)
-    offx = np.zeros(py.size, np.int64)
-    for oy in range(-r, r + 1):
-        for ox in range(-r, r + 1):
-            qy, qx = py - oy, px - ox
-            ok = (qy >= 0) & (qy < H) & (qx >= 0) & (qx < W)
-            qy_, qx_ = np.where(ok, qy, 0), np.where(ok, qx, 0)
-            e = np.where(ok, dist[qy_, qx_] * inv + pen[qy_, qx_], np.inf)
-            better = e < best
-            best = np.where(better, e, best)
-            s = nnf[qy_, qx_]
-            src = np.where(better, (s[:, 1] + oy) * W + s[:, 0] + ox, src)
-            offy, offx = np.where(better, oy, offy), np.where(better, ox, offx)
+    side = 2 * r + 1
+    # each target's score once, padded by r with inf (no covering patch beyond the box);
+    # NaN never wins either (a strict comparison)
+    e = dist * inv + pen
+    e = np.pad(np.where(np.isnan(e), np.inf, e), r, constant_values=np.inf)
+    # every offset's score at once, in the kernel's loop order: argmin keeps the first of
+    # equal scores, as a loop taking only strictly better ones does (one gather, not 49
+    # rounds of where; 3 ms of a periodic call's 45, stop 51)
+    oy, ox = (o - r for o in np.divmod(np.arange(side * side), side))
+    scores = e[py[None] - oy[:, None] + r, px[None] - ox[:, None] + r]
+    k = np.argmin(scores, axis=0)
+    found = np.isfinite(scores[k, np.arange(py.size)])
+    offy, offx = np.where(found, oy[k], 0), np.where(found, ox[k], 0)
+    qy, qx = np.clip(py - offy, 0, H - 1), np.clip(px - offx, 0, W - 1)
+    s = nnf[qy, qx].astype(np.int64)
+    src = np.where(found, (s[:, 1] + offy) * W + s[:, 0] + offx, -1)
     return src, offy, offx
 
 

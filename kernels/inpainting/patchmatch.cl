@@ -54,6 +54,9 @@ inline REAL patch_distance(const __global REAL* img, const __global uchar* use, 
     REAL sum = 0;
     if (!masked) {
         const REAL limit = bound * (REAL)((ox1 - ox0 + 1) * (oy1 - oy0 + 1));
+        // A row that lies wholly inside takes a loop of constant bounds (unrolled once
+        // compiled); the sums are taken in the same order, so the distance is the same.
+        const int full = ox0 == -PR && ox1 == PR;
         for (int oy = oy0; oy <= oy1; ++oy) {
             const int tp = (py + oy) * W + px;
             const int sp = (sy + oy) * W + sx;
@@ -61,9 +64,16 @@ inline REAL patch_distance(const __global REAL* img, const __global uchar* use, 
                 const __global REAL* a = img + c * plane + tp;
                 const __global REAL* b = img + c * plane + sp;
                 REAL row = 0;
-                for (int ox = ox0; ox <= ox1; ++ox) {
-                    const REAL d = a[ox] - b[ox];
-                    row += d * d;
+                if (full) {
+                    for (int ox = -PR; ox <= PR; ++ox) {
+                        const REAL d = a[ox] - b[ox];
+                        row += d * d;
+                    }
+                } else {
+                    for (int ox = ox0; ox <= ox1; ++ox) {
+                        const REAL d = a[ox] - b[ox];
+                        row += d * d;
+                    }
                 }
                 sum += chw[c] * row;
             }
