@@ -152,13 +152,14 @@ def test_batch_restore_takes_many_films(tmp_path, capsys):
 
 def test_the_window_gives_the_whole_film_at_once():
     """Blocks of 4 frames, each with its context, give what clpde.detect_defects and
-    clpde.inpaint_video give on all 16 frames at once: the context covers their reach."""
+    clpde.inpaint_video (handed the detector's kinds, as `clpde restore` and the windows
+    hand them on) give on all 16 frames at once: the context covers their reach."""
     import clpde
     from clpde.film.stream import KEEP, film_work, restore_stream
 
     damaged, _ = damage(clean_frames(16))
     masks, kinds = clpde.detect_defects(damaged, channel_axis=-1, grow=1, return_kinds=True)
-    filled = clpde.inpaint_video(damaged, masks, channel_axis=-1, keep=KEEP)
+    filled = clpde.inpaint_video(damaged, masks, channel_axis=-1, keep=KEEP, kinds=kinds)
     expected = np.where(masks[..., None], filled, damaged)
     streamed = list(restore_stream(damaged, 16, film_work(grow=1), block=4))
     assert masks.any()
