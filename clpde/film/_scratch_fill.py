@@ -35,7 +35,7 @@ END = 0.3
 GAPS = (1, 2, 3)
 
 
-def _run_ends(lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def run_ends(lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's first and last column of its row's run of `lines` (H, W)."""
     ny, nx = lines.shape
     x = np.broadcast_to(np.arange(nx), (ny, nx))
@@ -53,7 +53,7 @@ def _profile(img: np.ndarray, own: np.ndarray, half: int, gap: int):
     `gap` px beyond each run; its grey in the component's sign (n,); and whether each pixel
     is at an end of its run (n,)."""
     ys, xs = np.nonzero(own)
-    first, last = _run_ends(own)
+    first, last = run_ends(own)
     f, e = first[ys, xs] - gap, last[ys, xs] + gap
     left = img[:, ys, np.clip(f, 0, own.shape[1] - 1)]
     right = img[:, ys, np.clip(e, 0, own.shape[1] - 1)]

@@ -29,7 +29,7 @@ from ._morph import dilate
 from ._motion import FilmMotion, map_frames
 from ._planes import film_masks, film_planes, grey
 from ._regions import RIM_CLEAR
-from ._scratch_fill import mend_scratches
+from ._scratch_fill import mend_scratches, run_ends
 from .detect import BLOTCH, SCRATCH, SIGMA_FLOOR, _partner
 from .lines import LINE_COVER
 
@@ -275,14 +275,8 @@ def line_evidence(frame: np.ndarray, lines: np.ndarray) -> np.ndarray:
     out = np.zeros((ny, nx), np.float32)
     if not lines.any():
         return out
-    x = np.broadcast_to(np.arange(nx), (ny, nx))
-    before = np.zeros_like(lines)
-    before[:, 1:] = lines[:, :-1]
-    after = np.zeros_like(lines)
-    after[:, :-1] = lines[:, 1:]
     # each line pixel's run: its first and last columns in the row
-    first = np.maximum.accumulate(np.where(lines & ~before, x, -1), axis=1)
-    last = np.minimum.accumulate(np.where(lines & ~after, x, nx)[:, ::-1], axis=1)[:, ::-1]
+    first, last = run_ends(lines)
 
     # from here on, vectors over the line pixels only (in the frame's order): every step
     # is per pixel or per labelled region, so the values are the whole frame's
